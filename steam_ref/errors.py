@@ -1,0 +1,28 @@
+"""The one exception family of steam_ref.
+
+Every check of user input raises a subclass of :class:`SteamError`, and the message names the
+offending value, so a caller can catch ``steam_ref.SteamError`` and show it as it is.
+"""
+
+
+class SteamError(ValueError):
+    """Base class of every error steam_ref raises on bad input or an ill-posed problem."""
+
+
+class ShapeError(SteamError):
+    """An array has the wrong shape or holds NaN/inf."""
+
+
+class DataError(SteamError):
+    """A data file is missing, malformed or inconsistent (unknown landmark, time going backwards...)."""
+
+
+class UnknownVariableError(SteamError, KeyError):
+    """A factor or query names a variable that has no estimate."""
+
+    def __str__(self) -> str:  # KeyError would quote the message
+        return str(self.args[0]) if self.args else ""
+
+
+class UnderdeterminedError(SteamError):
+    """The information matrix is singular: some variable is not constrained by the factors."""
