@@ -1,1 +1,37 @@
-"""steam_ref: incremental sparse GP regression for continuous-time STEAM (Yan, Indelman, Boots)."""
+"""steam_ref: incremental sparse GP regression for continuous-time STEAM.
+
+A reference implementation of Yan, Indelman and Boots, "Incremental Sparse GP Regression for
+Continuous-time Trajectory Estimation & Mapping": the GP motion prior, its factors and
+interpolation, batch Gauss-Newton (PB, PBVR), and the Bayes tree (BTGP). Equations are cited in
+the code as [YIB Eq. n]; see docs/references.md.
+"""
+
+from .batch import BatchResult, batch_solve, gauss_newton, levenberg_marquardt
+from .errors import DataError, ShapeError, SteamError, UnderdeterminedError, UnknownVariableError
+from .factors import (
+    BearingFactor,
+    BearingRangeFactor,
+    Factor,
+    GPPriorFactor,
+    InterpolatedFactor,
+    OdometryFactor,
+    PriorFactor,
+    RangeFactor,
+    VelocityFactor,
+    gp_prior_factors,
+)
+from .graph import FactorGraph, Key, L, Values, X
+from .linear import LinearSystem, amd_ordering, marginal_covariances, xl_ordering
+from .robust import Huber, Tukey
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "SteamError", "ShapeError", "DataError", "UnknownVariableError", "UnderdeterminedError",
+    "Key", "X", "L", "Values", "FactorGraph",
+    "Factor", "GPPriorFactor", "PriorFactor", "OdometryFactor", "VelocityFactor", "RangeFactor",
+    "BearingFactor", "BearingRangeFactor", "InterpolatedFactor", "gp_prior_factors",
+    "Huber", "Tukey",
+    "LinearSystem", "xl_ordering", "amd_ordering", "marginal_covariances",
+    "gauss_newton", "levenberg_marquardt", "batch_solve", "BatchResult",
+]

@@ -1,7 +1,15 @@
 """The GP motion prior: transition, process noise, interpolation.  [YIB Sec. II-A, II-B]"""
 
-from .interpolate import interpolate_state, interpolation_matrices
+from .interpolate import (
+    interpolate_covariance,
+    interpolate_covariance_sde,
+    interpolate_state,
+    interpolate_state_sde,
+    interpolation_matrices,
+    interpolation_matrices_sde,
+)
 from .prior import process_noise, process_noise_inverse, transition
+from .sde import LinearSDE, dense_kernel
 
 __all__ = [
     "transition",
@@ -9,4 +17,10 @@ __all__ = [
     "process_noise_inverse",
     "interpolation_matrices",
     "interpolate_state",
+    "interpolate_covariance",
+    "LinearSDE",
+    "dense_kernel",
+    "interpolation_matrices_sde",
+    "interpolate_state_sde",
+    "interpolate_covariance_sde",
 ]

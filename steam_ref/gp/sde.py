@@ -1,0 +1,169 @@
+"""A general linear time-invariant SDE and its exact discretisation.  [YIB Eq. 14, 17, 22-23]
+
+    ẋ(t) = A x(t) + v + F w(t),   w(t) ~ GP(0, Qc δ(t - t'))                        [YIB Eq. 14]
+
+with constant A (n, n), F (n, m), Qc (m, m) and a constant exogenous input v (n,). Between two
+times t_{i-1} < t_i the state obeys exactly
+
+    x(t_i) = Φ(t_i, t_{i-1}) x(t_{i-1}) + v_i + w_i,   w_i ~ N(0, Q_i)                  [YIB Eq. 22]
+
+with Φ(t, s) = exp(A (t - s)), Q_i of [YIB Eq. 17] and v_i of [YIB Eq. 23]. All three come from
+matrix exponentials, so any (A, F) works; ``steam_ref.gp.prior`` has the closed forms of the WNOA
+prior [YIB Eq. 30-31], and the tests check the two against each other and against quadrature.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg
+from numpy.typing import ArrayLike, NDArray
+
+from ..errors import ShapeError, SteamError
+from .prior import check_qc
+
+__all__ = ["LinearSDE", "dense_kernel"]
+
+
+def _finite_matrix(name: str, a: ArrayLike, ndim: int) -> NDArray:
+    a = np.array(a, dtype=float)  # a private copy, made read-only below
+    if a.ndim != ndim or not np.all(np.isfinite(a)):
+        raise ShapeError(f"{name} must be a finite {ndim}-d array, got shape {a.shape}")
+    a.setflags(write=False)
+    return a
+
+
+def _check_dt(dt: float, name: str = "dt") -> float:
+    dt = float(dt)
+    if not np.isfinite(dt) or dt <= 0:
+        raise SteamError(f"time step must be positive and finite, got {name}={dt}")
+    return dt
+
+
+@dataclass(frozen=True, eq=False)
+class LinearSDE:
+    """ẋ = A x + v + F w,  w ~ GP(0, Qc δ), all coefficients constant.  [YIB Eq. 14]
+
+    Arrays are copied to read-only float arrays on construction; v defaults to zero.
+    """
+
+    A: NDArray                # (n, n) system matrix
+    F: NDArray                # (n, m) noise input matrix
+    qc: NDArray               # (m, m) power spectral density of w, symmetric positive definite
+    v: NDArray | None = None  # (n,) constant exogenous input; zero gives a zero-mean GP
+
+    def __post_init__(self) -> None:
+        A, F = _finite_matrix("A", self.A, 2), _finite_matrix("F", self.F, 2)
+        n = A.shape[0]
+        if A.shape != (n, n):
+            raise ShapeError(f"A must be square (n, n), got shape {A.shape}")
+        if F.shape[0] != n:
+            raise ShapeError(f"F must be (n, m) = ({n}, m) to match A, got shape {F.shape}")
+        qc = _finite_matrix("Qc", check_qc(self.qc), 2)
+        if qc.shape != (F.shape[1], F.shape[1]):
+            raise ShapeError(f"Qc must be (m, m) = {(F.shape[1],) * 2} to match F, got shape {qc.shape}")
+        v = _finite_matrix("v", np.zeros(n) if self.v is None else self.v, 1)
+        if v.shape != (n,):
+            raise ShapeError(f"v must be ({n},) to match A, got shape {v.shape}")
+        for name, value in (("A", A), ("F", F), ("qc", qc), ("v", v)):
+            object.__setattr__(self, name, value)
+
+    @classmethod
+    def wnoa(cls, qc: ArrayLike, v: ArrayLike | None = None) -> LinearSDE:
+        """The white-noise-on-acceleration prior p̈ = w for p of size d = len(Qc).  [YIB Eq. 30-31]"""
+        qc = check_qc(qc)
+        d = qc.shape[0]
+        I, O = np.eye(d), np.zeros((d, d))
+        A = np.block([[O, I], [O, O]])  # [YIB Eq. 31]
+        F = np.vstack([O, I])  # [YIB Eq. 31]
+        return cls(A, F, qc, v)
+
+    @property
+    def n(self) -> int:
+        """Size of the state x."""
+        return self.A.shape[0]
+
+    def transition(self, dt: float) -> NDArray:
+        """Φ(t + dt, t) = exp(A dt): (n, n). Any finite dt; Φ(t, s)⁻¹ = Φ(s, t).  [YIB Eq. 16]"""
+        dt = float(dt)
+        if not np.isfinite(dt):
+            raise SteamError(f"time step must be finite, got dt={dt}")
+        return scipy.linalg.expm(self.A * dt)
+
+    def process_noise(self, dt: float) -> NDArray:
+        """Q(dt) = ∫₀^dt Φ(dt, s) F Qc Fᵀ Φ(dt, s)ᵀ ds by Van Loan's method: (n, n).  [YIB Eq. 17]
+
+        With C = [[-A, F Qc Fᵀ], [0, Aᵀ]] dt, expm(C) = [[·, E₁₂], [0, Φᵀ]] and
+        E₁₂ = ∫₀^dt e^{-A(dt-s)} F Qc Fᵀ e^{Aᵀs} ds, so Q = Φ E₁₂ (C. F. Van Loan, IEEE TAC 1978).
+        """
+        dt, n = _check_dt(dt), self.n
+        G = self.F @ self.qc @ self.F.T
+        C = np.block([[-self.A, G], [np.zeros((n, n)), self.A.T]]) * dt
+        E = scipy.linalg.expm(C)
+        Q = E[n:, n:].T @ E[:n, n:]  # Φ(dt) E₁₂ = ∫ Φ F Qc Fᵀ Φᵀ ds  [YIB Eq. 17]
+        return (Q + Q.T) / 2
+
+    def input_integral(self, dt: float) -> NDArray:
+        """v_i = ∫₀^dt Φ(dt, s) v ds, the mean drift over one step: (n,).  [YIB Eq. 23]
+
+        expm([[A, v], [0, 0]] dt) has top-right column ∫₀^dt e^{A(dt-s)} v ds.
+        """
+        dt, n = _check_dt(dt), self.n
+        C = np.zeros((n + 1, n + 1))
+        C[:n, :n], C[:n, n] = self.A, self.v
+        return scipy.linalg.expm(C * dt)[:n, n]  # [YIB Eq. 23]
+
+    def mean(self, times: ArrayLike, t0: float, mu0: ArrayLike) -> NDArray:
+        """μ(t) for each t in `times` (any order, all ≥ t0), given μ(t0) = mu0: (len(times), n).
+
+        Propagates μ_k = Φ(t_k, t_{k-1}) μ_{k-1} + v_k over the sorted times  [YIB Eq. 22-23].
+        """
+        times = np.asarray(times, dtype=float)
+        mu0 = np.asarray(mu0, dtype=float)
+        if times.ndim != 1 or not np.all(np.isfinite(times)):
+            raise ShapeError(f"times must be a finite 1-d array, got shape {times.shape}")
+        if mu0.shape != (self.n,):
+            raise ShapeError(f"mu0 must be ({self.n},), got shape {mu0.shape}")
+        if times.size and times.min() < t0:
+            raise SteamError(f"the mean is defined for t >= t0 = {t0}, got t = {times.min()}")
+        order = np.argsort(times, kind="stable")
+        out = np.empty((times.size, self.n))
+        t_prev, mu = float(t0), mu0
+        for k in order:
+            if times[k] > t_prev:
+                dt = times[k] - t_prev
+                mu = self.transition(dt) @ mu + self.input_integral(dt)  # [YIB Eq. 22-23]
+                t_prev = times[k]
+            out[k] = mu
+        return out
+
+
+def dense_kernel(sde: LinearSDE, times: ArrayLike, P0: ArrayLike) -> NDArray:
+    """The kernel matrix K of [YIB Eq. 3] for x(times[0]) ~ N(·, P0): (M n, M n), dense.
+
+    times must be strictly increasing. Marginals follow P_k = Φ_k P_{k-1} Φ_kᵀ + Q_k and, for
+    t_j ≥ t_k, K(t_j, t_k) = Φ(t_j, t_k) P_k. O(M² n³): for figures and checks, not for solvers.
+    """
+    times = np.asarray(times, dtype=float)
+    P0 = np.asarray(P0, dtype=float)
+    n, M = sde.n, times.size
+    if times.ndim != 1 or M == 0 or not np.all(np.isfinite(times)):
+        raise ShapeError(f"times must be a finite non-empty 1-d array, got shape {times.shape}")
+    if np.any(np.diff(times) <= 0):
+        raise SteamError(f"times must be strictly increasing, got {times.tolist()}")
+    if P0.shape != (n, n):
+        raise ShapeError(f"P0 must be ({n}, {n}), got shape {P0.shape}")
+    Phi = [sde.transition(dt) for dt in np.diff(times)]
+    K = np.zeros((M * n, M * n))
+    P = P0
+    for k in range(M):
+        if k > 0:
+            P = Phi[k - 1] @ P @ Phi[k - 1].T + sde.process_noise(times[k] - times[k - 1])
+        C = P  # K(t_j, t_k), j = k, k+1, ...
+        for j in range(k, M):
+            if j > k:
+                C = Phi[j - 1] @ C
+            K[j * n:(j + 1) * n, k * n:(k + 1) * n] = C
+            K[k * n:(k + 1) * n, j * n:(j + 1) * n] = C.T
+    return K

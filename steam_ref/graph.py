@@ -1,0 +1,163 @@
+"""Variables, their current estimates, and the factor graph.  [YIB Sec. III-A, Eq. 20]
+
+Variables are named by small keys: ``X(i)`` is the trajectory state x(tᵢ) = [p; ṗ] (the i-th
+*estimated* state, whatever its time) and ``L(j)`` is landmark ℓⱼ. :class:`Values` maps keys
+to estimates (1-D float arrays); :class:`FactorGraph` is the list of factors f_i(θ_i) whose
+product is the joint density of Eq. 20.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Iterator, Mapping
+from typing import TYPE_CHECKING, NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .errors import ShapeError, SteamError, UnknownVariableError
+
+if TYPE_CHECKING:
+    from .factors import Factor
+
+__all__ = ["Key", "X", "L", "Values", "FactorGraph"]
+
+
+class Key(NamedTuple):
+    """The name of a variable: a kind ('x' for states, 'l' for landmarks) and an integer index."""
+
+    kind: str
+    index: int
+
+    def __repr__(self) -> str:
+        return f"{self.kind}{self.index}"
+
+    __str__ = __repr__
+
+
+def X(i: int) -> Key:
+    """The key of trajectory state number i."""
+    return Key("x", int(i))
+
+
+def L(j: int) -> Key:
+    """The key of landmark number j."""
+    return Key("l", int(j))
+
+
+class Values(Mapping):
+    """Current estimates: key → 1-D float64 array. Unknown keys raise :class:`UnknownVariableError`."""
+
+    def __init__(self, items: Mapping[Key, NDArray] | Iterable[tuple[Key, NDArray]] = ()):
+        self._data: dict[Key, NDArray] = {}
+        pairs = items.items() if isinstance(items, Mapping) else items
+        for key, value in pairs:
+            self.insert(key, value)
+
+    def insert(self, key: Key, value: NDArray) -> None:
+        """Add (or replace) the estimate of one variable; checks it is a finite vector."""
+        v = np.array(value, dtype=float).reshape(-1)
+        if not np.all(np.isfinite(v)):
+            raise ShapeError(f"estimate of {key} is not finite: {v}")
+        old = self._data.get(key)
+        if old is not None and old.shape != v.shape:
+            raise ShapeError(f"estimate of {key} changes size from {old.shape[0]} to {v.shape[0]}")
+        self._data[key] = v
+
+    def __getitem__(self, key: Key) -> NDArray:
+        try:
+            return self._data[key]
+        except KeyError:
+            raise UnknownVariableError(f"no estimate for variable {key!r}") from None
+
+    def __iter__(self) -> Iterator[Key]:
+        return iter(self._data)
+
+    def __len__(self) -> int:
+        return len(self._data)
+
+    def __contains__(self, key: object) -> bool:
+        return key in self._data
+
+    def copy(self) -> Values:
+        """An independent copy (the arrays are copied too)."""
+        out = Values()
+        out._data = {k: v.copy() for k, v in self._data.items()}
+        return out
+
+    def dim(self, key: Key) -> int:
+        """Size of one variable."""
+        return self[key].shape[0]
+
+    def stack(self, keys: Iterable[Key]) -> NDArray:
+        """Estimates of several variables of one size as rows of an (n, dim) array."""
+        return np.stack([self[k] for k in keys])
+
+    def retract(self, delta: Mapping[Key, NDArray]) -> Values:
+        """θ̄ + δθ: a new Values with the increments added (the state space is a vector space)."""
+        out = self.copy()
+        for key, step in delta.items():
+            out._data[key] = self[key] + step
+        return out
+
+    def states(self) -> list[Key]:
+        """The trajectory-state keys, in index order."""
+        return sorted((k for k in self._data if k.kind == "x"), key=lambda k: k.index)
+
+    def landmarks(self) -> list[Key]:
+        """The landmark keys, in index order."""
+        return sorted((k for k in self._data if k.kind == "l"), key=lambda k: k.index)
+
+    def __repr__(self) -> str:
+        return f"Values({len(self)} variables)"
+
+
+class FactorGraph:
+    """A list of factors; the variables are the keys the factors name.  [YIB Eq. 20]"""
+
+    def __init__(self, factors: Iterable[Factor] = ()):
+        self.factors: list[Factor] = []
+        self.add(factors)
+
+    def add(self, factors: Factor | Iterable[Factor]) -> None:
+        """Append one factor or several."""
+        from .factors import Factor
+
+        if isinstance(factors, Factor):
+            factors = [factors]
+        for f in factors:
+            if not isinstance(f, Factor):
+                raise SteamError(f"FactorGraph.add expects factors, got {type(f).__name__}")
+            self.factors.append(f)
+
+    def __len__(self) -> int:
+        return len(self.factors)
+
+    def __iter__(self) -> Iterator[Factor]:
+        return iter(self.factors)
+
+    def __getitem__(self, i: int) -> Factor:
+        return self.factors[i]
+
+    def keys(self) -> list[Key]:
+        """Every variable some factor names, in first-seen order."""
+        seen: dict[Key, None] = {}
+        for f in self.factors:
+            for k in f.keys:
+                seen.setdefault(k)
+        return list(seen)
+
+    def check_values(self, values: Values) -> None:
+        """Raise if a factor names a variable without an estimate, or of the wrong size."""
+        for f in self.factors:
+            for k, d in zip(f.keys, f.key_dims):
+                if values.dim(k) != d:
+                    raise ShapeError(f"{type(f).__name__} expects {k} of size {d}, estimate has {values.dim(k)}")
+
+    def error(self, values: Values) -> float:
+        """The cost ½ Σ ρ(‖eᵢ‖²) of Eq. 6 (robust losses applied) at the given estimates."""
+        from .linear.system import linearize
+
+        return sum(group.cost for group in linearize(self.factors, values, jacobians=False))
+
+    def __repr__(self) -> str:
+        return f"FactorGraph({len(self)} factors)"

@@ -1,0 +1,151 @@
+"""Linearization and the sparse least-squares system of Eq. 10-11.  [YIB Eq. 9-11, 21]
+
+``linearize`` evaluates factors in batches of one type and returns whitened Jacobian blocks and
+right-hand sides: each factor i contributes ‖Aᵢ δθᵢ - bᵢ‖² with Aᵢ = √wᵢ Wᵢ Hᵢ and bᵢ = -√wᵢ Wᵢ eᵢ
+(W the whitening, w the robust weight). ``LinearSystem`` stacks them into the sparse A and b of
+Eq. 21 under a variable ordering; I = AᵀA is the information matrix of Eq. 11 and Aᵀb its
+right-hand side (with the prior written as factors, η - θ̄ and Hᵀ R⁻¹ (y - h̄) both live in Aᵀb).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+from numpy.typing import NDArray
+
+from ..errors import ShapeError, UnknownVariableError
+from ..factors import Factor
+from ..graph import Key, Values
+from .ordering import Ordering
+
+__all__ = ["LinearizedGroup", "linearize", "LinearSystem", "GaussianFactor"]
+
+
+@dataclass(frozen=True)
+class GaussianFactor:
+    """One linearized factor: ‖Σₖ Aₖ δθₖ - b‖².  [YIB Eq. 21]"""
+
+    keys: tuple[Key, ...]  # variables, in the factor's own order
+    blocks: tuple[NDArray, ...]  # Aₖ, each (m, dₖ)
+    rhs: NDArray  # b, (m,)
+
+
+@dataclass(frozen=True)
+class LinearizedGroup:
+    """Factors of one type linearized together."""
+
+    factor_ids: NDArray  # (n,) positions in the list given to ``linearize``
+    keys: list[tuple[Key, ...]]  # keys of each factor
+    jacobians: tuple[NDArray, ...] | None  # per key slot: (n, m, dₖ), whitened and robust-weighted
+    rhs: NDArray  # (n, m): b = -√w W e
+    costs: NDArray  # (n,): ½‖We‖², or ρ(‖We‖) for a robust factor
+
+    @property
+    def cost(self) -> float:
+        """Sum of the factors' costs."""
+        return float(self.costs.sum())
+
+    def gaussian_factors(self) -> list[GaussianFactor]:
+        """The group as one GaussianFactor per factor."""
+        return [
+            GaussianFactor(keys, tuple(J[i] for J in self.jacobians), self.rhs[i])
+            for i, keys in enumerate(self.keys)
+        ]
+
+
+def _group_by_type(factors: Sequence[Factor]) -> dict[tuple, list[int]]:
+    groups: dict[tuple, list[int]] = {}
+    for i, f in enumerate(factors):
+        groups.setdefault(f.batch_signature(), []).append(i)
+    return groups
+
+
+def _variables(values: Values, group: list[Factor]) -> list[NDArray]:
+    """The estimates each key slot of a group of factors reads, as (n, dₖ) arrays."""
+    xs = []
+    for slot, dim in enumerate(group[0].key_dims):
+        keys = [f.keys[slot] for f in group]
+        try:
+            x = values.stack(keys)
+        except ValueError:  # estimates of different sizes
+            x = None
+        if x is None or x.shape[1] != dim:
+            bad = next(k for k in keys if values.dim(k) != dim)
+            raise ShapeError(f"{type(group[0]).__name__} expects {bad} of size {dim}, its estimate has size {values.dim(bad)}")
+        xs.append(x)
+    return xs
+
+
+def linearize(factors: Sequence[Factor], values: Values, *, jacobians: bool = True) -> list[LinearizedGroup]:
+    """Whitened Jacobians and right-hand sides of ``factors`` at ``values``.  [YIB Eq. 9, 21]"""
+    out = []
+    for ids in _group_by_type(factors).values():
+        group = [factors[i] for i in ids]
+        batch = type(group[0]).stack(group)
+        xs = _variables(values, group)
+        W = batch.sqrt_information
+        e = np.einsum("nij,nj->ni", W, batch.error(*xs))
+        s = np.linalg.norm(e, axis=1)
+        if batch.loss is None:
+            scale, costs = np.ones_like(s), 0.5 * s**2
+        else:
+            scale, costs = np.sqrt(batch.loss.weight(s)), batch.loss.rho(s)
+        Js = None
+        if jacobians:
+            Js = tuple(scale[:, None, None] * (W @ J) for J in batch.jacobians(*xs))
+        out.append(LinearizedGroup(np.asarray(ids), [f.keys for f in group], Js, -scale[:, None] * e, costs))
+    return out
+
+
+@dataclass(frozen=True)
+class LinearSystem:
+    """The stacked, whitened system ‖A δθ - b‖² under a variable ordering.  [YIB Eq. 10, 21]"""
+
+    A: sp.csr_matrix  # (rows, n) sparse whitened Jacobian; column blocks follow ``ordering``
+    b: NDArray  # (rows,)
+    ordering: Ordering  # variable order of the columns
+
+    @classmethod
+    def from_groups(cls, groups: list[LinearizedGroup], ordering: Ordering) -> LinearSystem:
+        """Assemble the sparse A, b from linearized groups (vectorized per group and key slot)."""
+        rows, cols, data, rhs = [], [], [], []
+        row0 = 0
+        for g in groups:
+            n, m = g.rhs.shape
+            starts = row0 + m * np.arange(n)
+            for slot, J in enumerate(g.jacobians):
+                try:
+                    col_starts = np.array([ordering.offset_of[keys[slot]] for keys in g.keys])
+                except KeyError as exc:
+                    raise UnknownVariableError(f"variable {exc.args[0]!r} is not in the ordering") from None
+                d = J.shape[2]
+                rows.append(np.broadcast_to(starts[:, None, None] + np.arange(m)[None, :, None], J.shape).ravel())
+                cols.append(np.broadcast_to(col_starts[:, None, None] + np.arange(d)[None, None, :], J.shape).ravel())
+                data.append(J.ravel())
+            rhs.append(g.rhs.ravel())
+            row0 += n * m
+        A = sp.csr_matrix(
+            (np.concatenate(data), (np.concatenate(rows), np.concatenate(cols))), shape=(row0, ordering.total_dim)
+        )
+        return cls(A, np.concatenate(rhs), ordering)
+
+    @classmethod
+    def build(cls, factors: Sequence[Factor], values: Values, ordering: Ordering) -> LinearSystem:
+        """Linearize ``factors`` at ``values`` and assemble them under ``ordering``."""
+        return cls.from_groups(linearize(factors, values), ordering)
+
+    def information(self) -> tuple[sp.csc_matrix, NDArray]:
+        """The information matrix 𝓘 = AᵀA and right-hand side Aᵀb of Eq. 11."""
+        At = self.A.T.tocsr()
+        return (At @ self.A).tocsc(), At @ self.b
+
+    def to_dense(self) -> tuple[NDArray, NDArray]:
+        """Dense A and b, for checking small problems with numpy.linalg."""
+        return self.A.toarray(), self.b.copy()
+
+    def split(self, x: NDArray) -> dict[Key, NDArray]:
+        """A stacked solution vector as key → block."""
+        return {k: x[o : o + d] for k, o, d in zip(self.ordering.keys, self.ordering.offsets, self.ordering.dims)}
