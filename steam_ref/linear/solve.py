@@ -60,7 +60,10 @@ class SparseCholesky:
             except CholmodNotPositiveDefiniteError as exc:
                 raise UnderdeterminedError(_unconstrained_variable(info, ordering) + f" ({exc})") from None
             return cls(backend, int(f.L().nnz), f)
-        lu = spla.splu(info, permc_spec="NATURAL", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
+        try:
+            lu = spla.splu(info, permc_spec="NATURAL", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
+        except RuntimeError as exc:  # "Factor is exactly singular"
+            raise UnderdeterminedError(_unconstrained_variable(info, ordering) + f" ({exc})") from None
         u = lu.U.diagonal()
         tiny = np.flatnonzero(~(u > 1e-13 * np.max(np.abs(u))))
         if len(tiny) or np.any(lu.perm_r != np.arange(len(u))):

@@ -1,0 +1,73 @@
+"""Gauss-Newton and Levenberg-Marquardt reach a stationary point of Eq. 6, whatever the ordering."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from problems import small_problem
+
+import steam_ref as sr
+from steam_ref.batch import make_ordering
+from steam_ref.linear import LinearSystem
+
+
+def gradient_norm(problem, values):
+    """‖Aᵀb‖ at ``values``: zero at a stationary point of the (IRLS-weighted) cost."""
+    order = make_ordering(problem.graph, values, "xl")
+    A, b = LinearSystem.build(problem.graph.factors, values, order).to_dense()
+    return np.linalg.norm(A.T @ b), np.linalg.norm(A.T @ A, 2)
+
+
+@pytest.mark.parametrize("method", [sr.gauss_newton, sr.levenberg_marquardt])
+@pytest.mark.parametrize("ordering", ["xl", "amd"])
+def test_converges_to_stationary_point(rng, method, ordering):
+    p = small_problem(rng, n_states=15, n_landmarks=4, interpolated=6, robust=False)
+    result = method(p.graph, p.initial, ordering=ordering, relative_tolerance=1e-14, step_tolerance=1e-12)
+    assert result.converged, result.reason
+    g, scale = gradient_norm(p, result.values)
+    assert g < 1e-8 * scale
+    assert result.cost < result.initial_cost
+    assert all(it.cost <= result.initial_cost for it in result.iterations if it.accepted)
+
+
+def test_gn_and_lm_agree(rng):
+    p = small_problem(rng, n_states=10, n_landmarks=3, interpolated=3, robust=False)
+    gn = sr.gauss_newton(p.graph, p.initial, relative_tolerance=1e-14, step_tolerance=1e-12).values
+    lm = sr.levenberg_marquardt(p.graph, p.initial, relative_tolerance=1e-14, step_tolerance=1e-12).values
+    for k in gn:
+        np.testing.assert_allclose(lm[k], gn[k], rtol=1e-7, atol=1e-9)
+
+
+def test_first_gn_step_is_the_dense_newton_step(rng):
+    p = small_problem(rng, n_states=6, n_landmarks=2)
+    result = sr.gauss_newton(p.graph, p.initial, max_iterations=1)
+    order = make_ordering(p.graph, p.initial, "xl")
+    system = LinearSystem.build(p.graph.factors, p.initial, order)
+    A, b = system.to_dense()
+    step = system.split(np.linalg.solve(A.T @ A, A.T @ b))
+    for k in step:
+        np.testing.assert_allclose(result.values[k], p.initial[k] + step[k], rtol=1e-10, atol=1e-12)
+    assert result.reason == "max_iterations" and not result.converged
+
+
+def test_perturbed_start_reaches_the_optimum_found_from_the_truth(rng):
+    p = small_problem(rng, n_states=20, n_landmarks=4, noise=0.3, robust=False)
+    tight = dict(relative_tolerance=1e-14, step_tolerance=1e-12)
+    from_start = sr.levenberg_marquardt(p.graph, p.initial, **tight).values
+    from_truth = sr.levenberg_marquardt(p.graph, sr.Values(p.truth), **tight).values
+    for k in p.truth:
+        np.testing.assert_allclose(from_start[k], from_truth[k], rtol=1e-6, atol=1e-8)
+
+
+def test_lm_reports_rejected_steps_and_damping(rng):
+    p = small_problem(rng, n_states=8, n_landmarks=3, noise=2.0)
+    result = sr.levenberg_marquardt(p.graph, p.initial, initial_damping=1e-9)
+    costs = [it.cost for it in result.iterations]
+    assert all(b <= a + 1e-12 for a, b in zip(costs, costs[1:]))  # the kept cost never increases
+    assert all(it.damping > 0 for it in result.iterations)
+
+
+def test_batch_solve_rejects_unknown_method(rng):
+    p = small_problem(rng, n_states=3, n_landmarks=1)
+    with pytest.raises(sr.SteamError, match="newton"):
+        sr.batch_solve(p.graph, p.initial, method="newton")

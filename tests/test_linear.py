@@ -1,0 +1,149 @@
+"""The sparse system and its solution against numpy.linalg, under each ordering and backend."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from problems import small_problem
+
+import steam_ref as sr
+from steam_ref.batch import make_ordering
+from steam_ref.linear import LinearSystem, SparseCholesky, have_cholmod, marginal_covariances, solve
+
+BACKENDS = ["superlu", pytest.param("cholmod", marks=pytest.mark.skipif(not have_cholmod(), reason="scikit-sparse not installed"))]
+
+
+@pytest.fixture
+def problem(rng):
+    return small_problem(rng, n_states=12, n_landmarks=4, interpolated=5)
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+@pytest.mark.parametrize("ordering", ["xl", "amd"])
+def test_sparse_step_equals_dense(problem, ordering, backend):
+    order = make_ordering(problem.graph, problem.initial, ordering, backend)
+    system = LinearSystem.build(problem.graph.factors, problem.initial, order)
+    A, b = system.to_dense()
+    reference = np.linalg.solve(A.T @ A, A.T @ b)
+    step, chol = solve(system, backend)
+    assert chol.backend == backend
+    np.testing.assert_allclose(step, reference, rtol=1e-9, atol=1e-12 * np.abs(reference).max())
+
+
+def test_step_is_ordering_independent(problem):
+    steps = {}
+    for name in ["xl", "amd"]:
+        order = make_ordering(problem.graph, problem.initial, name)
+        steps[name] = LinearSystem.build(problem.graph.factors, problem.initial, order).split(
+            solve(LinearSystem.build(problem.graph.factors, problem.initial, order))[0]
+        )
+    for k in steps["xl"]:
+        np.testing.assert_allclose(steps["amd"][k], steps["xl"][k], rtol=1e-9, atol=1e-12)
+
+
+def test_dense_A_rows_are_whitened_factors(rng):
+    """A and b built by hand from each factor's own Jacobians and whitening, for one small graph."""
+    p = small_problem(rng, n_states=3, n_landmarks=1, robust=False)
+    order = make_ordering(p.graph, p.initial, "xl")
+    A, b = LinearSystem.build(p.graph.factors, p.initial, order).to_dense()
+    rows, rhs = [], []
+    for f in p.graph.factors:
+        xs = [p.initial[k] for k in f.keys]
+        block = np.zeros((f.dim, order.total_dim))
+        for k, J in zip(f.keys, f.jacobians(*xs)):
+            o = order.offset_of[k]
+            block[:, o : o + J.shape[1]] = f.sqrt_information @ J
+        rows.append(block)
+        rhs.append(-f.sqrt_information @ f.error(*xs))
+    np.testing.assert_allclose(np.sort(A, axis=0), np.sort(np.vstack(rows), axis=0), rtol=1e-12, atol=1e-14)
+    np.testing.assert_allclose(A.T @ b, np.vstack(rows).T @ np.concatenate(rhs), rtol=1e-12, atol=1e-12)
+
+
+def test_xl_information_has_eq15_structure(rng):
+    """Eq. 15: 𝓘ₓₓ block-tridiagonal, 𝓘ₗₗ block-diagonal, under XL ordering."""
+    p = small_problem(rng, n_states=10, n_landmarks=3)
+    order = make_ordering(p.graph, p.initial, "xl")
+    info = LinearSystem.build(p.graph.factors, p.initial, order).information()[0].toarray()
+    n_x = 10 * 6
+    for i in range(10):
+        for j in range(10):
+            block = info[6 * i : 6 * i + 6, 6 * j : 6 * j + 6]
+            assert (np.abs(block).max() > 0) == (abs(i - j) <= 1), (i, j)
+    ll = info[n_x:, n_x:]
+    for i in range(3):
+        for j in range(3):
+            assert (np.abs(ll[2 * i : 2 * i + 2, 2 * j : 2 * j + 2]).max() > 0) == (i == j)
+    assert order.keys[:10] == tuple(sr.X(i) for i in range(10))
+
+
+def _many_landmark_problem(rng, n_states=60, n_landmarks=30):
+    """Each landmark seen from several distant states: XL ordering fills the landmark block."""
+    p = small_problem(rng, n_states=n_states, n_landmarks=n_landmarks, robust=False)
+    for i in range(n_states):
+        lk = sr.L(int(rng.integers(0, n_landmarks)))
+        p.graph.add(sr.RangeFactor.create(sr.X(i), lk, 4.0, 0.5))
+    return p
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_amd_is_a_permutation_with_less_fill_than_xl(rng, backend):
+    p = _many_landmark_problem(rng)
+    nnz = {}
+    for name in ["xl", "amd"]:
+        order = make_ordering(p.graph, p.initial, name, backend)
+        assert sorted(order.keys) == sorted(p.graph.keys())
+        info = LinearSystem.build(p.graph.factors, p.initial, order).information()[0]
+        nnz[name] = SparseCholesky.factor(info, order, backend).nnz
+        dense_L = np.linalg.cholesky(info.toarray())
+        assert nnz[name] >= np.count_nonzero(np.abs(dense_L) > 1e-300)  # the factor holds at least L's nonzeros
+    assert nnz["amd"] < nnz["xl"]
+
+
+@pytest.mark.skipif(not have_cholmod(), reason="scikit-sparse not installed")
+def test_superlu_minimum_degree_fill_close_to_cholmod_amd(rng):
+    p = _many_landmark_problem(rng, n_states=150, n_landmarks=60)
+    nnz = {}
+    for backend in ["cholmod", "superlu"]:
+        order = make_ordering(p.graph, p.initial, "amd", backend)
+        info = LinearSystem.build(p.graph.factors, p.initial, order).information()[0]
+        nnz[backend] = SparseCholesky.factor(info, order, "cholmod").nnz
+    assert nnz["superlu"] <= 1.15 * nnz["cholmod"]
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_marginal_covariances_equal_dense_inverse(problem, backend):
+    order = make_ordering(problem.graph, problem.initial, "amd", backend)
+    system = LinearSystem.build(problem.graph.factors, problem.initial, order)
+    keys = [sr.X(0), sr.X(7), sr.L(2)]
+    cov = marginal_covariances(system, keys, backend)
+    A, _ = system.to_dense()
+    dense = np.linalg.inv(A.T @ A)
+    for k in keys:
+        o, d = order.offset_of[k], problem.initial.dim(k)
+        np.testing.assert_allclose(cov[k], dense[o : o + d, o : o + d], rtol=1e-9, atol=1e-12)
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_unconstrained_variable_is_named(rng, backend):
+    qc = np.diag([0.1, 0.1, 0.1])
+    graph = sr.FactorGraph(sr.gp_prior_factors([sr.X(0), sr.X(1)], [0.0, 1.0], qc))
+    graph.add(sr.PriorFactor.create(sr.X(0), np.zeros(6), np.ones(6)))
+    graph.add(sr.RangeFactor.create(sr.X(1), sr.L(5), 3.0, 0.5))  # one range cannot fix a 2-D landmark
+    values = sr.Values({sr.X(0): rng.normal(size=6), sr.X(1): rng.normal(size=6), sr.L(5): np.array([3.0, 1.0])})
+    with pytest.raises(sr.UnderdeterminedError):
+        sr.gauss_newton(graph, values, backend=backend)
+    graph2 = sr.FactorGraph([sr.VelocityFactor.create(sr.X(3), [1, 0, 0], 1.0)])  # positions free
+    with pytest.raises(sr.UnderdeterminedError, match="x3"):
+        sr.gauss_newton(graph2, sr.Values({sr.X(3): rng.normal(size=6)}), backend=backend)
+
+
+def test_bad_values_raise(rng):
+    graph = sr.FactorGraph([sr.RangeFactor.create(sr.X(0), sr.L(1), 3.0, 0.5)])
+    with pytest.raises(sr.UnknownVariableError, match="l1"):
+        sr.gauss_newton(graph, sr.Values({sr.X(0): rng.normal(size=6)}))
+    with pytest.raises(sr.ShapeError, match="l1"):
+        sr.gauss_newton(graph, sr.Values({sr.X(0): rng.normal(size=6), sr.L(1): np.zeros(3)}))
+    with pytest.raises(sr.ShapeError, match="not finite"):
+        sr.Values({sr.X(0): np.array([np.nan] * 6)})
+    with pytest.raises(sr.SteamError, match="unknown ordering"):
+        sr.gauss_newton(graph, sr.Values({sr.X(0): rng.normal(size=6), sr.L(1): np.zeros(2)}), ordering="colamd")
