@@ -1,0 +1,227 @@
+"""GP interpolation between estimated states against the dense GP.  [YIB Eq. 12, 16, 18]"""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from oracles import condition_gaussian, gp_kernel, gp_mean, random_lti, random_spd
+from steam_ref.errors import ShapeError, SteamError
+from steam_ref.gp import (
+    LinearSDE,
+    interpolate_covariance,
+    interpolate_covariance_sde,
+    interpolate_state,
+    interpolate_state_sde,
+    interpolation_matrices,
+    interpolation_matrices_sde,
+    process_noise,
+    transition,
+)
+
+
+def dense_problem(rng, kind, M=5):
+    """Estimated times, one query τ in each of three intervals, and the dense prior over all of them.
+
+    Returns (sde, qc, est_times, taus, intervals, all_times, K, mu) where intervals[k] = i means
+    est_times[i-1] < taus[k] < est_times[i]; K and mu are over all_times (sorted union).
+    """
+    if kind == "wnoa":
+        qc = random_spd(rng, 2)
+        sde = LinearSDE.wnoa(qc, v=rng.normal(size=4))
+    else:
+        qc, sde = None, LinearSDE(**random_lti(rng, n=4, m=2))
+    est_times = 0.2 + np.concatenate([[0.0], np.cumsum(rng.uniform(0.3, 1.0, size=M - 1))])
+    intervals = np.array([1, M // 2 + 1, M - 1])  # first, a middle one and the last
+    lo, hi = est_times[intervals - 1], est_times[intervals]
+    taus = lo + rng.uniform(0.1, 0.9, size=3) * (hi - lo)
+    all_times = np.sort(np.concatenate([est_times, taus]))
+    K = gp_kernel(all_times, sde, random_spd(rng, sde.n))
+    mu = gp_mean(all_times, sde, rng.normal(size=sde.n))
+    return sde, qc, est_times, taus, intervals, all_times, K, mu
+
+
+def block_index(all_times, times, n):
+    """Row indices into K of the states at `times`."""
+    pos = np.searchsorted(all_times, times)
+    return (pos[:, None] * n + np.arange(n)).ravel()
+
+
+def matrices(kind, sde, qc, t1, t2, tau):
+    if kind == "wnoa":  # the closed forms, which must equal the general ones (checked below)
+        return interpolation_matrices(t1, t2, tau, qc)
+    return interpolation_matrices_sde(sde, t1, t2, tau)
+
+
+# --- Λ, Ψ: the only nonzero blocks of K(τ)K⁻¹  [YIB Eq. 12, 16] ---------------------------------
+
+
+@pytest.mark.parametrize("kind", ["wnoa", "random"])
+def test_lambda_psi_are_the_blocks_of_dense_k_tau_k_inv(rng, kind):
+    sde, qc, est, taus, intervals, all_times, K, _ = dense_problem(rng, kind)
+    n, M = sde.n, est.size
+    E = block_index(all_times, est, n)
+    K_EE = K[np.ix_(E, E)]
+    for tau, i in zip(taus, intervals):
+        T = block_index(all_times, [tau], n)
+        G = np.linalg.solve(K_EE, K[np.ix_(E, T)]).T  # K(τ) K⁻¹, (n, M n)  [YIB Eq. 12]
+        lam, psi = matrices(kind, sde, qc, est[i - 1], est[i], tau)
+        tol = 1e-13 * np.linalg.cond(K_EE) * np.abs(G).max()  # solve is accurate to about cond·eps
+        expected = np.zeros((n, M * n))
+        expected[:, (i - 1) * n:i * n], expected[:, i * n:(i + 1) * n] = lam, psi  # [YIB Eq. 16]
+        np.testing.assert_allclose(G, expected, rtol=1e-8, atol=tol)
+
+
+@pytest.mark.parametrize("d", [1, 3])
+def test_wnoa_closed_form_interpolation_equals_sde(rng, d):
+    qc = random_spd(rng, d)
+    sde = LinearSDE.wnoa(qc)
+    t1, tau, t2 = np.sort(rng.uniform(0.5, 4.0, size=3))
+    for closed, general in zip(interpolation_matrices(t1, t2, tau, qc), interpolation_matrices_sde(sde, t1, t2, tau)):
+        np.testing.assert_allclose(closed, general, rtol=1e-9, atol=1e-11)
+    x1, x2 = rng.normal(size=2 * d), rng.normal(size=2 * d)
+    np.testing.assert_allclose(
+        interpolate_state(t1, x1, t2, x2, tau, qc), interpolate_state_sde(sde, t1, x1, t2, x2, tau), rtol=1e-9, atol=1e-11
+    )
+    P = random_spd(rng, 4 * d)
+    np.testing.assert_allclose(
+        interpolate_covariance(t1, t2, tau, qc, P), interpolate_covariance_sde(sde, t1, t2, tau, P), rtol=1e-9, atol=1e-11
+    )
+
+
+# --- the mean: Eq. 18 equals the dense Eq. 12 -----------------------------------------------------
+
+
+@pytest.mark.parametrize("kind", ["wnoa", "random"])
+def test_interpolate_state_sde_equals_dense_posterior_mean(rng, kind):
+    """Nonzero μ (v ≠ 0, μ₀ ≠ 0): x̄(τ) = μ(τ) + K(τ)K⁻¹(x̄ - μ)  [YIB Eq. 12]."""
+    sde, _, est, taus, intervals, all_times, K, mu = dense_problem(rng, kind)
+    n = sde.n
+    E = block_index(all_times, est, n)
+    x_bar = rng.normal(size=(est.size, n)) * 3.0
+    for tau, i in zip(taus, intervals):
+        T = block_index(all_times, [tau], n)
+        dense = mu[T] + K[np.ix_(T, E)] @ np.linalg.solve(K[np.ix_(E, E)], x_bar.ravel() - mu[E])  # [YIB Eq. 12]
+        got = interpolate_state_sde(sde, est[i - 1], x_bar[i - 1], est[i], x_bar[i], tau)
+        np.testing.assert_allclose(got, dense, rtol=1e-7, atol=1e-8 * np.abs(dense).max())
+
+
+def test_interpolate_state_equals_dense_zero_mean_wnoa(rng):
+    qc = random_spd(rng, 3)
+    sde = LinearSDE.wnoa(qc)
+    est = np.array([0.3, 1.0, 1.4, 2.6])
+    tau = 1.93
+    all_times = np.sort(np.append(est, tau))
+    K = gp_kernel(all_times, sde, random_spd(rng, 6))
+    E, T = block_index(all_times, est, 6), block_index(all_times, [tau], 6)
+    x_bar = rng.normal(size=(4, 6))
+    dense = K[np.ix_(T, E)] @ np.linalg.solve(K[np.ix_(E, E)], x_bar.ravel())  # [YIB Eq. 12], μ = 0
+    got = interpolate_state(1.4, x_bar[2], 2.6, x_bar[3], tau, qc)
+    np.testing.assert_allclose(got, dense, rtol=1e-8, atol=1e-9 * np.abs(dense).max())
+
+
+# --- the covariance at τ against dense marginalisation ------------------------------------------
+
+
+@pytest.mark.parametrize("kind", ["wnoa", "random"])
+def test_interpolate_covariance_equals_dense_posterior(rng, kind):
+    """Random linear measurements of the estimated states only; condition the whole joint densely."""
+    sde, qc, est, taus, intervals, all_times, K, mu = dense_problem(rng, kind)
+    n = sde.n
+    E = block_index(all_times, est, n)
+    H = np.zeros((3 * est.size, all_times.size * n))
+    H[:, E] = rng.normal(size=(3 * est.size, E.size))  # no column touches a query time
+    R = random_spd(rng, H.shape[0], scale=0.1)
+    y = rng.normal(size=H.shape[0])
+    post_mean, post_cov = condition_gaussian(mu, K, H, R, y)
+    for tau, i in zip(taus, intervals):
+        T = block_index(all_times, [tau], n)
+        pair = block_index(all_times, est[[i - 1, i]], n)
+        joint_cov = post_cov[np.ix_(pair, pair)]
+        if kind == "wnoa":
+            got = interpolate_covariance(est[i - 1], est[i], tau, qc, joint_cov)
+        else:
+            got = interpolate_covariance_sde(sde, est[i - 1], est[i], tau, joint_cov)
+        expected = post_cov[np.ix_(T, T)]
+        np.testing.assert_allclose(got, expected, rtol=1e-7, atol=1e-9 * np.abs(expected).max())
+        x1, x2 = post_mean[pair[:n]], post_mean[pair[n:]]
+        got_mean = interpolate_state_sde(sde, est[i - 1], x1, est[i], x2, tau)
+        np.testing.assert_allclose(got_mean, post_mean[T], rtol=1e-7, atol=1e-9 * np.abs(post_mean).max())
+
+
+def test_interpolate_covariance_of_exact_states_is_dense_conditional(rng):
+    """joint_cov = 0: Cov(x(τ) | all states) = K_ττ - K_τE K_EE⁻¹ K_Eτ, and it is positive definite."""
+    sde = LinearSDE(**random_lti(rng, n=4, m=4))
+    est = np.array([0.1, 0.7, 1.5, 2.0])
+    tau = 1.21
+    all_times = np.sort(np.append(est, tau))
+    K = gp_kernel(all_times, sde, random_spd(rng, 4))
+    E, T = block_index(all_times, est, 4), block_index(all_times, [tau], 4)
+    expected = K[np.ix_(T, T)] - K[np.ix_(T, E)] @ np.linalg.solve(K[np.ix_(E, E)], K[np.ix_(E, T)])
+    got = interpolate_covariance_sde(sde, 0.7, 1.5, tau, np.zeros((8, 8)))
+    np.testing.assert_allclose(got, expected, rtol=1e-7, atol=1e-10 * np.abs(expected).max())
+    assert np.all(np.linalg.eigvalsh(got) > 0)
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    t1=st.floats(-50.0, 50.0),
+    length=st.floats(0.05, 10.0),
+    frac=st.floats(0.01, 0.99),
+    seed=st.integers(0, 2**32 - 1),
+)
+def test_wnoa_interpolation_properties(t1, length, frac, seed):
+    """Constant-velocity motion is interpolated exactly; the conditional covariance is PSD and ≤ Q_τ."""
+    rng = np.random.default_rng(seed)
+    qc = random_spd(rng, 2)
+    t2, tau = t1 + length, t1 + frac * length
+    x1 = rng.normal(size=4)
+    x2 = transition(length, 2) @ x1  # no acceleration between t₁ and t₂
+    got = interpolate_state(t1, x1, t2, x2, tau, qc)
+    np.testing.assert_allclose(got, transition(tau - t1, 2) @ x1, rtol=1e-8, atol=1e-8 * (1 + np.abs(x1).max() * length))
+    cond = interpolate_covariance(t1, t2, tau, qc, np.zeros((8, 8)))
+    scale = np.abs(process_noise(tau - t1, qc)).max()
+    np.testing.assert_allclose(cond, cond.T, rtol=0, atol=0)
+    assert np.linalg.eigvalsh(cond).min() > -1e-9 * scale
+    assert np.linalg.eigvalsh(process_noise(tau - t1, qc) - cond).min() > -1e-9 * scale
+
+
+# --- errors ---------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("t1, t2, tau", [(1.0, 2.0, 1.0), (1.0, 2.0, 2.0), (1.0, 2.0, 0.5), (1.0, 2.0, 2.5), (2.0, 1.0, 1.5)])
+def test_tau_outside_interval_raises(rng, t1, t2, tau):
+    qc = random_spd(rng, 2)
+    sde = LinearSDE.wnoa(qc)
+    x, P = np.ones(4), np.eye(8)
+    for call in (
+        lambda: interpolation_matrices(t1, t2, tau, qc),
+        lambda: interpolate_state(t1, x, t2, x, tau, qc),
+        lambda: interpolate_covariance(t1, t2, tau, qc, P),
+        lambda: interpolation_matrices_sde(sde, t1, t2, tau),
+        lambda: interpolate_state_sde(sde, t1, x, t2, x, tau),
+        lambda: interpolate_covariance_sde(sde, t1, t2, tau, P),
+    ):
+        with pytest.raises(SteamError, match="t1 < tau < t2"):
+            call()
+
+
+def test_non_spd_qc_raises_in_interpolation():
+    qc = np.array([[1.0, 0.0], [0.0, -2.0]])
+    with pytest.raises(SteamError, match="positive definite"):
+        interpolation_matrices(0.0, 1.0, 0.5, qc)
+    with pytest.raises(SteamError, match="positive definite"):
+        interpolate_covariance(0.0, 1.0, 0.5, qc, np.eye(8))
+
+
+def test_wrong_shapes_raise_in_interpolation(rng):
+    qc = random_spd(rng, 2)
+    sde = LinearSDE.wnoa(qc)
+    with pytest.raises(ShapeError, match=r"joint_cov.*\(8, 8\).*\(4, 4\)"):
+        interpolate_covariance(0.0, 1.0, 0.5, qc, np.eye(4))
+    with pytest.raises(ShapeError, match=r"joint_cov.*\(8, 8\).*\(8, 7\)"):
+        interpolate_covariance_sde(sde, 0.0, 1.0, 0.5, np.ones((8, 7)))
+    with pytest.raises(ShapeError, match=r"x1.*\(3,\)"):
+        interpolate_state(0.0, np.ones(3), 1.0, np.ones(4), 0.5, qc)
+    with pytest.raises(ShapeError, match=r"x2.*\(4, 1\)"):
+        interpolate_state_sde(sde, 0.0, np.ones(4), 1.0, np.ones((4, 1)), 0.5)
