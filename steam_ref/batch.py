@@ -158,7 +158,7 @@ def levenberg_marquardt(
             print(f"LM {len(iterations):3d}: cost {new_cost:.9g} λ {lam:.1e} {'ok' if accepted else 'rejected'}")
         if accepted:
             reason = _converged(cost, new_cost, step, relative_tolerance, absolute_tolerance, step_tolerance)
-            values, cost, lam = trial, new_cost, lam / damping_factor
+            values, cost, lam = trial, new_cost, max(lam / damping_factor, 1e-12)
         else:
             lam *= damping_factor
             if lam > max_damping:
