@@ -294,9 +294,29 @@ class VelocityFactor(Factor):
 
 
 def _offset(x: NDArray, l: NDArray) -> tuple[NDArray, NDArray, NDArray]:
-    """Landmark position relative to the robot: dx, dy, and the distance r."""
+    """Landmark position relative to the robot: dx, dy, and the distance r (r = 0 is an error)."""
     dx, dy = l[..., 0] - x[..., 0], l[..., 1] - x[..., 1]
-    return dx, dy, np.hypot(dx, dy)
+    r = np.hypot(dx, dy)
+    if np.any(r == 0):
+        raise SteamError("robot position coincides with a landmark: range and bearing are not differentiable there")
+    return dx, dy, r
+
+
+def _range_row(x: NDArray, l: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+    """r = ‖[x y]ᵀ - ℓ‖ and its rows of ∂r/∂x (..., 6), ∂r/∂ℓ (..., 2).  [YIB Eq. 33]"""
+    dx, dy, r = _offset(x, l)
+    Jx = np.zeros(x.shape)
+    Jx[..., 0], Jx[..., 1] = -dx / r, -dy / r
+    return r, Jx, np.stack([dx / r, dy / r], axis=-1)
+
+
+def _bearing_row(x: NDArray, l: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+    """b = atan2(ℓy - y, ℓx - x) - θ and its rows of ∂b/∂x (..., 6), ∂b/∂ℓ (..., 2)."""
+    dx, dy, r = _offset(x, l)
+    r2 = r**2
+    Jx = np.zeros(x.shape)
+    Jx[..., 0], Jx[..., 1], Jx[..., 2] = dy / r2, -dx / r2, -1.0
+    return np.arctan2(dy, dx) - x[..., 2], Jx, np.stack([-dy / r2, dx / r2], axis=-1)
 
 
 @dataclass(frozen=True, eq=False)
@@ -314,17 +334,11 @@ class RangeFactor(Factor):
         return cls((state, landmark), sqrt_information(sigma, 1), measured=_vector(measured, 1, "range"), loss=loss)
 
     def error(self, x: NDArray, l: NDArray) -> NDArray:
-        _, _, r = _offset(x, l)
-        return r[..., None] - self.measured  # [YIB Eq. 33]
+        return _range_row(x, l)[0][..., None] - self.measured  # [YIB Eq. 33]
 
     def jacobians(self, x: NDArray, l: NDArray) -> tuple[NDArray, NDArray]:
-        dx, dy, r = _offset(x, l)
-        if np.any(r == 0):
-            raise SteamError("range Jacobian undefined: robot position coincides with the landmark")
-        Jx = _jacobian(x, 1)
-        Jx[..., 0, 0], Jx[..., 0, 1] = -dx / r, -dy / r
-        Jl = np.stack([dx / r, dy / r], axis=-1)[..., None, :]
-        return Jx, Jl
+        _, Jx, Jl = _range_row(x, l)
+        return Jx[..., None, :], Jl[..., None, :]
 
 
 @dataclass(frozen=True, eq=False)
@@ -342,18 +356,11 @@ class BearingFactor(Factor):
         return cls((state, landmark), sqrt_information(sigma, 1), measured=_vector(measured, 1, "bearing"), loss=loss)
 
     def error(self, x: NDArray, l: NDArray) -> NDArray:
-        dx, dy, _ = _offset(x, l)
-        return wrap_angle(np.arctan2(dy, dx) - x[..., 2] - self.measured[..., 0])[..., None]
+        return wrap_angle(_bearing_row(x, l)[0] - self.measured[..., 0])[..., None]
 
     def jacobians(self, x: NDArray, l: NDArray) -> tuple[NDArray, NDArray]:
-        dx, dy, r = _offset(x, l)
-        if np.any(r == 0):
-            raise SteamError("bearing Jacobian undefined: robot position coincides with the landmark")
-        r2 = r**2
-        Jx = _jacobian(x, 1)
-        Jx[..., 0, 0], Jx[..., 0, 1], Jx[..., 0, 2] = dy / r2, -dx / r2, -1.0
-        Jl = np.stack([-dy / r2, dx / r2], axis=-1)[..., None, :]
-        return Jx, Jl
+        _, Jx, Jl = _bearing_row(x, l)
+        return Jx[..., None, :], Jl[..., None, :]
 
 
 @dataclass(frozen=True, eq=False)
@@ -371,22 +378,12 @@ class BearingRangeFactor(Factor):
         return cls((state, landmark), sqrt_information(noise, 2), measured=_vector([bearing, range_], 2, "bearing-range"), loss=loss)
 
     def error(self, x: NDArray, l: NDArray) -> NDArray:
-        dx, dy, r = _offset(x, l)
-        bearing = wrap_angle(np.arctan2(dy, dx) - x[..., 2] - self.measured[..., 0])
-        return np.stack([bearing, r - self.measured[..., 1]], axis=-1)
+        b, r = _bearing_row(x, l)[0], _range_row(x, l)[0]
+        return np.stack([wrap_angle(b - self.measured[..., 0]), r - self.measured[..., 1]], axis=-1)
 
     def jacobians(self, x: NDArray, l: NDArray) -> tuple[NDArray, NDArray]:
-        dx, dy, r = _offset(x, l)
-        if np.any(r == 0):
-            raise SteamError("bearing-range Jacobian undefined: robot position coincides with the landmark")
-        r2 = r**2
-        Jx = _jacobian(x, 2)
-        Jx[..., 0, 0], Jx[..., 0, 1], Jx[..., 0, 2] = dy / r2, -dx / r2, -1.0
-        Jx[..., 1, 0], Jx[..., 1, 1] = -dx / r, -dy / r
-        Jl = np.zeros(x.shape[:-1] + (2, 2))
-        Jl[..., 0, 0], Jl[..., 0, 1] = -dy / r2, dx / r2
-        Jl[..., 1, 0], Jl[..., 1, 1] = dx / r, dy / r
-        return Jx, Jl
+        (_, bx, bl), (_, rx, rl) = _bearing_row(x, l), _range_row(x, l)
+        return np.stack([bx, rx], axis=-2), np.stack([bl, rl], axis=-2)
 
 
 # --- Measurements at a missing (interpolated) state ---------------------------------------------

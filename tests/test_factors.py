@@ -198,3 +198,8 @@ def test_bad_factor_input_raises():
         sr.gp_prior_factors([X1, X2], [1.0, 1.0], QC)
     with pytest.raises(sr.SteamError, match="dt=-1"):
         sr.GPPriorFactor.wnoa(X1, X2, -1.0, QC)
+
+
+def test_landmark_on_the_robot_is_an_error():
+    with pytest.raises(sr.SteamError, match="coincides"):
+        sr.BearingRangeFactor.create(X1, LM, 0.0, 1.0, [0.1, 0.1]).jacobians(np.ones(6), np.ones(2))
