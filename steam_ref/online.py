@@ -192,8 +192,13 @@ class BayesTreeSolver(OnlineSolver):
     def __init__(self, relinearize_threshold: float | dict = 0.1, relinearize_skip: int = 1, wildfire_threshold: float = 1e-3):
         try:
             from .bayes_tree import IncrementalSolver
-        except ImportError as exc:
-            raise SteamError(f"method 'btgp' needs steam_ref.bayes_tree.IncrementalSolver, not available: {exc}") from None
+        except ImportError:
+            try:
+                from .bayes_tree.isam import IncrementalSolver
+            except ImportError as exc:
+                raise SteamError(f"method 'btgp' needs steam_ref.bayes_tree.IncrementalSolver, not available: {exc}") from None
+        if not isinstance(relinearize_threshold, dict):
+            relinearize_threshold = float(relinearize_threshold)
         self.inner = IncrementalSolver(
             relinearize_threshold=relinearize_threshold,
             relinearize_skip=relinearize_skip,

@@ -1,0 +1,177 @@
+"""The ``steam-ref`` command: stream a data set through BTGP, PB or PBVR, or reproduce Fig. 3/4.
+
+    steam-ref run [--dataset NAME_OR_PATH] [--method {btgp,pb,pbvr}] [--every N] [--skip K]
+                  [--interpolate/--no-interpolate] [--preset {synthetic,plaza}] [--data-dir DIR]
+                  [--json] [--save-estimates FILE.npz] [--plot FILE.png]
+    steam-ref reproduce [--quick] [--out DIR]
+
+With no options ``steam-ref run`` runs BTGP/1 on the generated synthetic task. Bad arguments and
+missing or malformed data files give a one-line error and exit code 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from .errors import SteamError
+
+__all__ = ["main", "build_parser"]
+
+_PRESET_OF = {"synthetic": "synthetic", "paper-synthetic": "synthetic", "plaza": "plaza"}
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse that reports a usage error as one line and exit code 2."""
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        raise SteamError(f"{message} (see '{self.prog} --help')")
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
+    return value
+
+
+def _positive_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}") from None
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
+    return value
+
+
+def _add_run_arguments(run: argparse.ArgumentParser) -> None:
+    run.add_argument("--dataset", default="synthetic", help="synthetic (generated), paper-synthetic, plaza, or a PATH (.mat or CMU text folder)")
+    run.add_argument("--method", choices=("btgp", "pb", "pbvr"), default="btgp")
+    run.add_argument("--every", type=_positive_int, default=1, help="update after every N range readings (1 or 10 in the paper)")
+    run.add_argument("--skip", type=_positive_int, default=1, help="time steps between estimated states")
+    run.add_argument("--interpolate", action=argparse.BooleanOptionalAction, default=True, help="interpolate readings between states (Eq. 29) or drop them")
+    run.add_argument("--range-states", action="store_true", help="also estimate a state at every pose with a range reading")
+    run.add_argument("--preset", choices=("synthetic", "plaza"), default=None, help="parameter set (default: by data set; plaza for a PATH)")
+    run.add_argument("--data-dir", default=None, help="folder searched first for data files")
+    run.add_argument("--seed", type=int, default=0, help="seed of the generated synthetic task")
+    run.add_argument("--max-poses", type=_positive_int, default=None, help="process only the first N poses")
+    run.add_argument("--time-budget", type=_positive_float, default=None, help="stop after this many seconds (reported)")
+    run.add_argument("--progress", action="store_true", help="show a progress bar")
+    run.add_argument("--json", action="store_true", help="print one JSON line of figures")
+    run.add_argument("--save-estimates", metavar="FILE.npz", default=None, help="write times, x, y, theta and landmarks")
+    run.add_argument("--plot", metavar="FILE.png", default=None, help="draw estimate, ground truth, dead reckoning, landmarks")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of ``steam-ref``."""
+    parser = _Parser(prog="steam-ref", description="Incremental sparse GP regression for continuous-time STEAM (Yan, Indelman, Boots).")
+    sub = parser.add_subparsers(dest="command", parser_class=_Parser)
+    _add_run_arguments(sub.add_parser("run", help="stream a data set through one solver"))
+    rep = sub.add_parser("reproduce", help="the experiments of Fig. 3 and Fig. 4, plots and a results table")
+    rep.add_argument("--quick", action="store_true", help="small prefixes and budgets: minutes, not hours")
+    rep.add_argument("--out", default="results", help="folder for plots and the table (default: results)")
+    rep.add_argument("--data-dir", default=None, help="folder searched first for data files")
+    return parser
+
+
+def _check_output(path: str | None, suffix: str, option: str) -> None:
+    if path is None:
+        return
+    if not path.endswith(suffix):
+        raise SteamError(f"{option} expects a {suffix} file name, got {path!r}")
+    parent = Path(path).resolve().parent
+    if not parent.is_dir():
+        raise SteamError(f"{option}: folder {str(parent)!r} does not exist")
+
+
+def _run(args: argparse.Namespace) -> int:
+    from .datasets import load_dataset
+    from .online import default_options, run_online
+    from .problem import PaperSetup
+
+    _check_output(args.save_estimates, ".npz", "--save-estimates")
+    _check_output(args.plot, ".png", "--plot")
+    preset = args.preset or _PRESET_OF.get(args.dataset, "plaza")
+    setup = PaperSetup.named(preset)
+    options = default_options(
+        setup, method=args.method, every=args.every, skip=args.skip, interpolate=args.interpolate,
+        range_states=args.range_states, max_poses=args.max_poses, time_budget_s=args.time_budget,
+        progress=args.progress,
+    )
+    data = load_dataset(args.dataset, data_dir=args.data_dir, seed=args.seed)
+    result = run_online(data, setup, options)
+    summary = result.summary(args.dataset)
+    if args.json:
+        print(json.dumps(summary))
+    else:
+        _print_summary(summary)
+    if args.save_estimates:
+        save_estimates(args.save_estimates, result)
+    if args.plot:
+        from .experiments import plot_run
+
+        plot_run(args.plot, data, result)
+    return 0
+
+
+def _print_summary(summary: dict) -> None:
+    state = "" if summary["completed"] else "  (cut short: time budget or --max-poses)"
+    print(
+        f"{summary['method'].upper()}/{summary['every']} on {summary['dataset']}: skip {summary['skip']}, "
+        f"{'with' if summary['interpolate'] else 'without'} interpolation, {summary['n_estimated_states']} states\n"
+        f"  RMSE {summary['rmse_m']} m over {summary['n_poses']} time steps, total {summary['total_s']:.2f} s, "
+        f"update median {summary['update_s_median']} s, p95 {summary['update_s_p95']} s, peak RSS {summary['peak_rss_mb']} MB{state}"
+    )
+
+
+def save_estimates(path: str, result) -> None:
+    """Write ``times``, ``x``, ``y``, ``theta`` (every covered time step), ``estimated`` (pose
+    indices of the states), ``landmark_ids`` and ``landmarks`` (n, 2) to an .npz file."""
+    ids = np.array(sorted(result.landmarks), dtype=int)
+    marks = np.array([result.landmarks[i] for i in ids]).reshape(-1, 2)
+    np.savez(
+        path, times=result.times, x=result.estimates[:, 0], y=result.estimates[:, 1], theta=result.estimates[:, 2],
+        estimated=result.estimated, landmark_ids=ids, landmarks=marks,
+    )
+
+
+def _reproduce(args: argparse.Namespace) -> int:
+    from .experiments import reproduce
+
+    table = reproduce(args.out, quick=args.quick, data_dir=args.data_dir)
+    print(table)
+    return 0
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``steam-ref`` console script; returns the exit code."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    try:
+        args = build_parser().parse_args(argv or ["run"])
+        if args.command in (None, "run"):
+            if args.command is None:
+                args = build_parser().parse_args(["run"])
+            return _run(args)
+        return _reproduce(args)
+    except SteamError as exc:
+        print(f"steam-ref: error: {exc}", file=sys.stderr)
+        return 2
+    except (OSError, MemoryError) as exc:
+        print(f"steam-ref: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("steam-ref: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())
