@@ -1,0 +1,22 @@
+"""The Bayes tree and the incremental solver built on it.  [YIB Sec. III, K12]
+
+- :mod:`.symbolic`: orderings → cliques, and clique surgery, structure only;
+- :mod:`.tree`: :class:`Clique` (a Gaussian conditional), :class:`BayesTree`, elimination and
+  back-substitution;
+- :mod:`.isam`: :class:`IncrementalSolver`, the update of Algorithm 1 (steps 2-7).
+"""
+
+from .symbolic import CliqueTree, SymbolicClique, build_cliques, constrained_min_degree, symbolic_elimination
+from .tree import BayesTree, Clique, eliminate, eliminate_clique
+
+__all__ = [
+    "SymbolicClique",
+    "CliqueTree",
+    "constrained_min_degree",
+    "symbolic_elimination",
+    "build_cliques",
+    "Clique",
+    "BayesTree",
+    "eliminate",
+    "eliminate_clique",
+]

@@ -1,0 +1,322 @@
+"""The structure of a Bayes tree: orderings → cliques, and clique surgery.  [KBT, K12 Alg. 1-4]
+
+Nothing here knows a number. Variables are any hashable names (the tests use letters, the solver
+uses :class:`~steam_ref.graph.Key`); a factor is just the tuple of variables it touches.
+
+- :func:`constrained_min_degree` picks an elimination order: greedy minimum degree on the
+  variable graph, with a chosen group of variables forced last (the role CCOLAMD plays in iSAM2).
+- :func:`symbolic_elimination` plays the elimination game [K12 Alg. 1]: eliminating θᵢ joins all
+  factors adjacent to it into one on its separator sᵢ  [YIB Eq. 24-25].
+- :func:`build_cliques` groups the conditionals P(θᵢ | sᵢ) into cliques [K12 Alg. 2].
+- :class:`CliqueTree` links cliques into a forest and edits it: remove the cliques on the paths
+  from some variables to the root, leaving orphaned subtrees, and reattach them [K12 Alg. 3-4].
+"""
+
+from __future__ import annotations
+
+import heapq
+from collections.abc import Hashable, Iterable, Sequence
+from dataclasses import dataclass
+from typing import Generic, Protocol, TypeVar
+
+from ..errors import SteamError, UnknownVariableError
+
+__all__ = [
+    "SymbolicClique",
+    "CliqueTree",
+    "constrained_min_degree",
+    "symbolic_elimination",
+    "build_cliques",
+]
+
+V = Hashable
+
+
+@dataclass(frozen=True)
+class SymbolicClique:
+    """One clique of an elimination: P(frontals | separator), structure only."""
+
+    frontals: tuple  # variables eliminated here, in elimination order
+    separator: tuple  # variables shared with the parent clique, in elimination order
+    parent: int | None  # index of the parent in the clique list; None for a root
+    factors: tuple[int, ...]  # indices of the input factors eliminated here (first variable frontal here)
+
+
+def constrained_min_degree(variables: Sequence[V], factor_keys: Iterable[Sequence[V]], last: Iterable[V] = ()) -> list:
+    """A greedy minimum-degree elimination order with the variables in ``last`` eliminated last.
+
+    The degree of a variable is its number of neighbours in the current elimination graph (the
+    variable graph after the eliminations so far, fill included), so this is exact minimum degree,
+    not AMD's approximation. Ties go to the variable listed first in ``variables``. Variables in
+    ``last`` are ordered among themselves by minimum degree too, after all others: this is the
+    constrained ordering iSAM2 obtains from CCOLAMD, which keeps the variables touched by new
+    factors near the root so the next update removes little of the tree.  [K12 Sec. 5]
+    """
+    index = {v: i for i, v in enumerate(variables)}
+    adj: dict = {v: set() for v in variables}
+    for keys in factor_keys:
+        for k in keys:
+            if k not in adj:
+                raise UnknownVariableError(f"a factor names {k!r}, which is not among the variables to order")
+            adj[k].update(keys)
+    last_set = set(last)
+    group = {v: (1 if v in last_set else 0) for v in variables}
+    heap = []
+    for v, a in adj.items():
+        a.discard(v)
+        heap.append((group[v], len(a), index[v]))
+    heapq.heapify(heap)
+    order: list = []
+    while heap:
+        _, deg, i = heapq.heappop(heap)
+        v = variables[i]
+        a = adj.get(v)
+        if a is None or len(a) != deg:  # already eliminated, or a stale degree
+            continue
+        order.append(v)
+        del adj[v]
+        for u in a:  # eliminating v joins its neighbours into a clique (fill)
+            au = adj[u]
+            au.discard(v)
+            au |= a
+            au.discard(u)
+            heapq.heappush(heap, (group[u], len(au), index[u]))
+    return order
+
+
+def symbolic_elimination(order: Sequence[V], factor_keys: Sequence[Sequence[V]]) -> tuple[dict, list]:
+    """The separator sᵢ of every variable, and which variable eliminates each factor.  [K12 Alg. 1]
+
+    Eliminating θᵢ takes every factor adjacent to it, the original ones and those left by earlier
+    eliminations, and leaves one new factor on sᵢ = (their variables) − {θᵢ}  [YIB Eq. 24]. The new
+    factor is in turn adjacent to the first-eliminated variable of sᵢ, θᵢ's parent.
+    Returns ``(separators, owner)``: variable → sᵢ (in elimination order), and for each factor the
+    first of its variables in ``order``.
+    """
+    pos = {v: i for i, v in enumerate(order)}
+    if len(pos) != len(order):
+        raise SteamError("an elimination order lists a variable twice")
+    pending: dict = {}  # variable → the variables of the factors waiting for it
+    owner = []
+    for keys in factor_keys:
+        try:
+            first = min(keys, key=pos.__getitem__)
+        except KeyError as exc:
+            raise UnknownVariableError(f"a factor names {exc.args[0]!r}, which is not in the elimination order") from None
+        owner.append(first)
+        pending.setdefault(first, set()).update(keys)
+    separators = {}
+    for v in order:
+        s = pending.pop(v, set())
+        s.discard(v)
+        sep = tuple(sorted(s, key=pos.__getitem__))
+        separators[v] = sep
+        if sep:  # the new factor f(sᵢ) waits for the first variable of sᵢ  [YIB Eq. 24]
+            pending.setdefault(sep[0], set()).update(sep)
+    return separators, owner
+
+
+def build_cliques(order: Sequence[V], factor_keys: Sequence[Sequence[V]]) -> list[SymbolicClique]:
+    """Cliques of the Bayes tree of ``order``, children before parents.  [K12 Alg. 2]
+
+    Conditionals are visited in reverse elimination order. P(θᵢ | sᵢ) joins the clique C of its
+    parent (the clique holding sᵢ's first variable as a frontal) when sᵢ equals all of C's
+    variables; otherwise it starts a new child clique of C (or a new root when sᵢ is empty).
+    """
+    separators, owner = symbolic_elimination(order, factor_keys)
+    clique_of: dict = {}
+    frontals: list[list] = []  # per clique, frontals in reverse elimination order
+    variables: list[set] = []
+    seps: list[tuple] = []
+    parents: list[int | None] = []
+    for v in reversed(order):
+        sep = separators[v]
+        parent = clique_of[sep[0]] if sep else None
+        if parent is not None and len(sep) == len(variables[parent]) and variables[parent].issuperset(sep):
+            frontals[parent].append(v)  # [K12 Alg. 2]: sᵢ = F_p ∪ S_p, θᵢ joins the parent clique
+            variables[parent].add(v)
+            clique_of[v] = parent
+            continue
+        clique_of[v] = len(frontals)
+        frontals.append([v])
+        variables.append(set(sep) | {v})
+        seps.append(sep)
+        parents.append(parent)
+    n = len(frontals)  # cliques were made parents first; reverse so children come first
+    owned: list[list[int]] = [[] for _ in range(n)]
+    for j, v in enumerate(owner):
+        owned[clique_of[v]].append(j)
+    return [
+        SymbolicClique(tuple(reversed(frontals[c])), seps[c], None if parents[c] is None else n - 1 - parents[c], tuple(owned[c]))
+        for c in reversed(range(n))
+    ]
+
+
+class _HasVariables(Protocol):
+    frontals: tuple
+    separator: tuple
+
+
+C = TypeVar("C", bound=_HasVariables)
+
+
+class CliqueTree(Generic[C]):
+    """A forest of cliques with integer ids, and the edits iSAM2 makes to it.  [K12 Alg. 3-4]
+
+    Holds any clique objects with ``frontals`` and ``separator`` (symbolic or numeric). Each edit
+    costs time proportional to the cliques it touches, never to the size of the tree.
+    """
+
+    def __init__(self) -> None:
+        self.cliques: dict[int, C] = {}  # id → clique
+        self.parent: dict[int, int | None] = {}  # id → parent id (None for a root)
+        self.children: dict[int, list[int]] = {}  # id → child ids
+        self.frontal_of: dict = {}  # variable → id of the clique that eliminates it
+        self.roots: dict[int, None] = {}  # ids of the roots (an ordered set)
+        self._next_id = 0
+
+    def __len__(self) -> int:
+        return len(self.cliques)
+
+    def add(self, clique: C, parent: int | None) -> int:
+        """Insert a clique under ``parent`` (None: as a root); returns its id."""
+        cid = self._next_id
+        self._next_id += 1
+        self.cliques[cid] = clique
+        self.children[cid] = []
+        for v in clique.frontals:
+            if v in self.frontal_of:
+                raise SteamError(f"variable {v!r} is already frontal in clique {self.frontal_of[v]}")
+            self.frontal_of[v] = cid
+        self.attach(cid, parent)
+        return cid
+
+    def attach(self, cid: int, parent: int | None) -> None:
+        """Hang clique ``cid`` (a detached subtree) under ``parent`` (None: make it a root)."""
+        self.parent[cid] = parent
+        if parent is None:
+            self.roots[cid] = None
+        else:
+            self.children[parent].append(cid)
+
+    def insert_eliminated(self, cliques: Sequence[C], parents: Sequence[int | None]) -> list[int]:
+        """Add the cliques of one elimination (children first; ``parents`` index into the list); returns ids."""
+        ids: list[int | None] = [None] * len(cliques)
+        for i in reversed(range(len(cliques))):  # parents before children
+            p = parents[i]
+            ids[i] = self.add(cliques[i], None if p is None else ids[p])
+        return ids  # type: ignore[return-value]
+
+    def clique_containing(self, variable: V) -> int:
+        """Id of the clique where ``variable`` is frontal."""
+        try:
+            return self.frontal_of[variable]
+        except KeyError:
+            raise UnknownVariableError(f"variable {variable!r} is not in the Bayes tree") from None
+
+    def cliques_involving(self, variable: V) -> list[int]:
+        """Every clique holding ``variable``, frontal or in its separator.  [K12 Alg. 5]
+
+        They form a subtree rooted at the clique where it is frontal (running intersection), so
+        a walk down from there that stops at cliques without it finds them all.
+        """
+        top = self.clique_containing(variable)
+        found, stack = [], [top]
+        while stack:
+            c = stack.pop()
+            found.append(c)
+            stack.extend(ch for ch in self.children[c] if variable in self.cliques[ch].separator)
+        return found
+
+    def remove_top(self, start: Iterable[int]) -> tuple[dict[int, C], list[int]]:
+        """Remove the cliques ``start`` and all their ascendants up to the root.  [K12 Alg. 3-4]
+
+        Returns ``(removed, orphans)``: id → clique of each removed clique (in the order found),
+        and the ids of the children of removed cliques that were not removed. Orphans stay in the
+        tree, detached (parent None, not roots), until :meth:`attach` hangs them back.
+        """
+        removed: dict[int, C] = {}
+        for c in start:
+            while c is not None and c not in removed:
+                removed[c] = self.cliques[c]
+                c = self.parent[c]
+        orphans = [ch for c in removed for ch in self.children[c] if ch not in removed]
+        for c, clique in removed.items():
+            del self.cliques[c], self.parent[c], self.children[c]
+            self.roots.pop(c, None)
+            for v in clique.frontals:
+                del self.frontal_of[v]
+        for o in orphans:
+            self.parent[o] = None
+        return removed, orphans
+
+    def path_to_root(self, cid: int) -> list[int]:
+        """Ids from ``cid`` up to its root, inclusive."""
+        path = []
+        c: int | None = cid
+        while c is not None:
+            path.append(c)
+            c = self.parent[c]
+        return path
+
+    def postorder(self) -> list[int]:
+        """All clique ids, every child before its parent (a valid elimination order of the cliques)."""
+        out: list[int] = []
+        stack = [(r, False) for r in reversed(list(self.roots))]
+        while stack:
+            c, expanded = stack.pop()
+            if expanded:
+                out.append(c)
+                continue
+            stack.append((c, True))
+            stack.extend((ch, False) for ch in reversed(self.children[c]))
+        return out
+
+    def elimination_order(self) -> list:
+        """Variables in an order that eliminates into this tree: cliques in postorder, frontals in order."""
+        return [v for c in self.postorder() for v in self.cliques[c].frontals]
+
+    def problems(self) -> list[str]:
+        """What is wrong with the structure (empty when valid).  Visits the whole tree: for tests.
+
+        Checks: links are consistent; each variable is frontal in exactly one clique; each
+        separator lies within the parent clique's variables; the cliques holding any one
+        variable form a connected subtree (running intersection); roots have empty separators.
+        """
+        out: list[str] = []
+        frontal_count: dict = {}
+        for cid, clique in self.cliques.items():
+            for v in clique.frontals:
+                frontal_count[v] = frontal_count.get(v, 0) + 1
+                if self.frontal_of.get(v) != cid:
+                    out.append(f"frontal_of[{v!r}] is {self.frontal_of.get(v)}, but {v!r} is frontal in clique {cid}")
+            if set(clique.frontals) & set(clique.separator):
+                out.append(f"clique {cid} has a variable both frontal and in its separator")
+            p = self.parent.get(cid)
+            if p is None:
+                if cid not in self.roots:
+                    out.append(f"clique {cid} has no parent but is not a root (an unattached orphan?)")
+                if clique.separator:
+                    out.append(f"root clique {cid} has a non-empty separator {clique.separator}")
+                continue
+            if cid not in self.children.get(p, []):
+                out.append(f"clique {cid} is not among the children of its parent {p}")
+            pvars = set(self.cliques[p].frontals) | set(self.cliques[p].separator)
+            if not set(clique.separator) <= pvars:
+                out.append(f"separator {clique.separator} of clique {cid} is not within its parent {p}'s variables")
+        out.extend(f"variable {v!r} is frontal in {n} cliques" for v, n in frontal_count.items() if n != 1)
+        if len(self.frontal_of) != len(frontal_count):
+            out.append("frontal_of names variables that are in no clique")
+        out.extend(self._running_intersection_problems())
+        return out
+
+    def _running_intersection_problems(self) -> list[str]:
+        """Each variable's cliques are connected: exactly one of them has no parent holding the variable."""
+        tops: dict = {}
+        for cid, clique in self.cliques.items():
+            p = self.parent.get(cid)
+            pvars = set() if p is None else set(self.cliques[p].frontals) | set(self.cliques[p].separator)
+            for v in tuple(clique.frontals) + tuple(clique.separator):
+                if v not in pvars:
+                    tops.setdefault(v, []).append(cid)
+        return [f"the cliques holding {v!r} are not connected (tops {t})" for v, t in tops.items() if len(t) != 1]
