@@ -1,0 +1,255 @@
+"""The experiments of Fig. 3 (synthetic) and Fig. 4 (Plaza), and a results table.  [YIB Sec. IV]
+
+- left panels (:func:`timing_experiment`): cumulative computation time against time step for
+  PB/1, PB/10, PBVR/1, PBVR/10, BTGP/1 and BTGP/10 (all states estimated, as in the paper);
+  the periodic batch methods may run under a time budget, i.e. on a prefix, and are reported so;
+- right panels (:func:`interpolation_experiment`): position RMSE and total time of BTGP/1 against
+  the time-step difference between estimated states (1, 2, 3, 5, 10, 20), with interpolation
+  (Eq. 29) and without (readings between states dropped);
+- :func:`results_table`: Markdown, the paper's claims beside our figures;
+- :func:`reproduce`: all of it, written to a folder (the ``steam-ref reproduce`` command).
+
+matplotlib is imported inside the plotting functions only.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .datasets import RangeDataset, load_dataset
+from .errors import DataError
+from .online import RunResult, StreamOptions, default_options, run_online
+from .problem import PaperSetup
+
+__all__ = [
+    "SKIPS",
+    "TIMING_RUNS",
+    "Experiment",
+    "timing_experiment",
+    "interpolation_experiment",
+    "speedup_on_prefix",
+    "results_table",
+    "plot_timing",
+    "plot_interpolation",
+    "plot_run",
+    "reproduce",
+]
+
+SKIPS = (1, 2, 3, 5, 10, 20)  # time-step differences between estimated states (Fig. 3/4, right)
+TIMING_RUNS = (("pb", 1), ("pb", 10), ("pbvr", 1), ("pbvr", 10), ("btgp", 1), ("btgp", 10))
+
+
+@dataclass
+class Experiment:
+    """The runs of one data set."""
+
+    name: str  # label of the data set
+    data: RangeDataset = field(repr=False)
+    setup: PaperSetup = field(repr=False)
+    timing: dict[str, RunResult] = field(default_factory=dict)  # 'PB/1' → run
+    with_interp: dict[int, RunResult] = field(default_factory=dict)  # skip → BTGP/1 with interpolation
+    without_interp: dict[int, RunResult] = field(default_factory=dict)  # skip → BTGP/1 without
+
+
+def timing_experiment(exp: Experiment, *, batch_budget_s: float | None = 120.0, max_poses: int | None = None, progress: bool = False) -> None:
+    """Fig. 3/4 left: every (method, schedule) of :data:`TIMING_RUNS`; PB and PBVR under a budget."""
+    for method, every in TIMING_RUNS:
+        budget = batch_budget_s if method != "btgp" else None
+        opts = default_options(exp.setup, method=method, every=every, max_poses=max_poses, time_budget_s=budget, progress=progress)
+        exp.timing[f"{method.upper()}/{every}"] = run_online(exp.data, exp.setup, opts)
+
+
+def interpolation_experiment(exp: Experiment, *, skips: tuple[int, ...] = SKIPS, max_poses: int | None = None, progress: bool = False) -> None:
+    """Fig. 3/4 right: BTGP/1 at each skip, with and without interpolation."""
+    for skip in skips:
+        for interpolate, store in ((True, exp.with_interp), (False, exp.without_interp)):
+            opts = default_options(exp.setup, skip=skip, interpolate=interpolate, max_poses=max_poses, progress=progress)
+            store[skip] = run_online(exp.data, exp.setup, opts)
+
+
+def speedup_on_prefix(slow: RunResult, fast: RunResult) -> tuple[float, int]:
+    """How many times faster ``fast`` covered the steps ``slow`` covered: (ratio, steps)."""
+    n = min(len(slow.step_seconds), len(fast.step_seconds))
+    t_slow, t_fast = float(np.sum(slow.step_seconds[:n])), float(np.sum(fast.step_seconds[:n]))
+    return (t_slow / t_fast if t_fast > 0 else float("inf")), n
+
+
+def _fmt(x: float | None, unit: str = "", digits: int = 3) -> str:
+    return "–" if x is None or not np.isfinite(x) else f"{x:.{digits}f}{unit}"
+
+
+def _timing_rows(exp: Experiment) -> list[str]:
+    rows = []
+    for label, r in exp.timing.items():
+        cut = "" if r.completed else f" (stopped at step {r.n_steps_processed} of {r.n_poses_total})"
+        rows.append(f"| {exp.name} | {label} | {r.n_steps_processed} | {_fmt(r.total_s, ' s', 2)}{cut} | {_fmt(r.rmse_m, ' m')} |")
+    return rows
+
+
+def _claims(exp: Experiment, paper: dict[str, str]) -> list[str]:
+    """Our figures beside the paper's claims for one data set."""
+    out = []
+    bt = exp.timing.get("BTGP/1")
+    for slow in ("PB/1", "PBVR/1"):
+        if bt is not None and slow in exp.timing:
+            ratio, n = speedup_on_prefix(exp.timing[slow], bt)
+            out.append(f"| {exp.name} | BTGP/1 vs {slow} | far faster | {ratio:.0f}× faster over the first {n} steps |")
+    if "PB/1" in exp.timing and "PBVR/1" in exp.timing:
+        ratio, n = speedup_on_prefix(exp.timing["PB/1"], exp.timing["PBVR/1"])
+        out.append(f"| {exp.name} | PBVR/1 vs PB/1 (reordering) | {paper['reorder']} | PBVR {ratio:.2f}× PB's speed over the first {n} steps |")
+    base = exp.with_interp.get(1)
+    for skip, r in sorted(exp.with_interp.items()):
+        if base is None or skip == 1:
+            continue
+        frac = 1 - r.n_estimated_states / max(len(r.times), 1)
+        saved = 1 - r.total_s / base.total_s
+        drmse = (r.rmse_m - base.rmse_m) * 100
+        out.append(
+            f"| {exp.name} | interpolation, skip {skip} ({frac:.0%} of states interpolated) | {paper['interp']} | "
+            f"time saved {saved:.0%}, RMSE {r.rmse_m:.3f} m ({drmse:+.1f} cm) |"
+        )
+    return out
+
+
+PAPER_CLAIMS = {
+    "synthetic": {"reorder": "reordering helps (298 landmarks)", "interp": "~90% interpolated: ~33% time saved, accuracy kept"},
+    "plaza": {"reorder": "no gain from reordering (4 landmarks)", "interp": "~80% interpolated: ~68% time saved, RMSE +~8 cm"},
+}
+
+
+def results_table(experiments: list[Experiment], notes: list[str] = ()) -> str:
+    """Markdown: timing runs, interpolation sweeps, and the paper's claims beside ours."""
+    lines = ["# Fig. 3 / Fig. 4 reproduced", "", "## Cumulative time (left panels)", "",
+             "| data | run | steps | total time | RMSE |", "|---|---|---|---|---|"]
+    for exp in experiments:
+        lines += _timing_rows(exp)
+    lines += ["", "## Interpolation trade-off (right panels), BTGP/1", "",
+              "| data | skip | states | RMSE with | time with | RMSE without | time without |", "|---|---|---|---|---|---|---|"]
+    for exp in experiments:
+        for skip in sorted(exp.with_interp):
+            w, o = exp.with_interp[skip], exp.without_interp.get(skip)
+            lines.append(
+                f"| {exp.name} | {skip} | {w.n_estimated_states} | {_fmt(w.rmse_m, ' m')} | {_fmt(w.total_s, ' s', 2)} | "
+                f"{_fmt(o.rmse_m if o else None, ' m')} | {_fmt(o.total_s if o else None, ' s', 2)} |"
+            )
+    lines += ["", "## The paper's claims beside ours", "", "| data | claim | paper | ours |", "|---|---|---|---|"]
+    for exp in experiments:
+        lines += _claims(exp, PAPER_CLAIMS["plaza" if exp.setup.name == "plaza" else "synthetic"])
+    if notes:
+        lines += ["", "## Notes", ""] + [f"- {n}" for n in notes]
+    return "\n".join(lines) + "\n"
+
+
+# --- Plots --------------------------------------------------------------------------------------
+
+
+def plot_timing(exp: Experiment, ax: Any = None) -> Any:
+    """Cumulative time against time step, one line per run (Fig. 3/4, left)."""
+    import matplotlib.pyplot as plt
+
+    ax = plt.subplots(figsize=(5, 4))[1] if ax is None else ax
+    for label, r in exp.timing.items():
+        ax.plot(np.arange(len(r.step_seconds)), r.cumulative_s, label=label + ("" if r.completed else " (budget)"))
+    ax.set(xlabel="time step", ylabel="cumulative time (s)", title=f"{exp.name}: computation time", yscale="log")
+    ax.legend(fontsize=8)
+    return ax
+
+
+def plot_interpolation(exp: Experiment, axes: Any = None) -> Any:
+    """RMSE and total time against the time-step difference between states (Fig. 3/4, right)."""
+    import matplotlib.pyplot as plt
+
+    axes = plt.subplots(1, 2, figsize=(9, 4))[1] if axes is None else axes
+    for store, style, label in ((exp.without_interp, "gs-", "without interpolation"), (exp.with_interp, "rd--", "with interpolation")):
+        skips = sorted(store)
+        axes[0].plot(skips, [store[k].rmse_m for k in skips], style, label=label)
+        axes[1].plot(skips, [store[k].total_s for k in skips], style, label=label)
+    axes[0].set(xlabel="time steps between estimated states", ylabel="RMSE (m)", title=f"{exp.name}: RMSE")
+    axes[1].set(xlabel="time steps between estimated states", ylabel="time (s)", title=f"{exp.name}: computation time")
+    for ax in axes:
+        ax.legend(fontsize=8)
+        ax.grid(True, alpha=0.3)
+    return axes
+
+
+def plot_run(path: str | None, data: RangeDataset, result: RunResult, ax: Any = None) -> Any:
+    """Estimate, landmarks, ground truth and dead reckoning (as Fig. 2); saved to ``path`` if given."""
+    import matplotlib
+
+    if path is not None:
+        matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6, 6)) if ax is None else (ax.figure, ax)
+    ax.plot(data.ground_truth[:, 1], data.ground_truth[:, 2], "g-", lw=1.5, label="ground truth")
+    ax.plot(data.dead_reckoning[:, 1], data.dead_reckoning[:, 2], "y-", lw=1, label="dead reckoning")
+    ax.plot(result.estimates[:, 0], result.estimates[:, 1], "b-", lw=1, label=f"{result.method.upper()} estimate")
+    ax.plot(data.landmarks[:, 1], data.landmarks[:, 2], "g*", ms=9, label="landmarks (surveyed)")
+    if result.landmarks:
+        marks = np.array(list(result.landmarks.values()))
+        ax.plot(marks[:, 0], marks[:, 1], "k+", ms=9, label="landmarks (estimated)")
+    ax.set(aspect="equal", xlabel="x (m)", ylabel="y (m)")
+    ax.legend(fontsize=8)
+    if path is not None:
+        fig.savefig(path, dpi=120, bbox_inches="tight")
+        plt.close(fig)
+    return ax
+
+
+# --- Everything ---------------------------------------------------------------------------------
+
+
+def _datasets(quick: bool, data_dir: str | None) -> tuple[list[tuple[str, RangeDataset, PaperSetup]], list[str]]:
+    """paper-synthetic (else the generated task) and Plaza (if found)."""
+    notes, out = [], []
+    try:
+        out.append(("paper-synthetic", load_dataset("paper-synthetic", data_dir), PaperSetup.synthetic()))
+    except DataError as exc:
+        notes.append(f"paper-synthetic not found ({exc}); the generated task is used instead")
+        out.append(("synthetic", load_dataset("synthetic"), PaperSetup.synthetic()))
+    try:
+        out.append(("plaza", load_dataset("plaza", data_dir), PaperSetup.plaza()))
+    except DataError as exc:
+        notes.append(f"Plaza skipped: {exc}")
+    return out, notes
+
+
+def reproduce(out: str | Path, *, quick: bool = False, data_dir: str | None = None, progress: bool = True) -> str:
+    """Run Fig. 3/4's experiments; write ``fig3.png``/``fig4.png``, ``runs.jsonl`` and ``results.md``
+    to ``out``; return the Markdown table. ``quick``: 1,000-pose prefixes and 20 s budgets."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    sets, notes = _datasets(quick, data_dir)
+    prefix, budget = (1000, 20.0) if quick else (None, 300.0)
+    notes.append(f"PB and PBVR run under a {budget:g} s budget per run; speed ratios are taken over the steps both covered")
+    if quick:
+        notes.append(f"quick mode: only the first {prefix} poses of each data set")
+    experiments = []
+    with open(out / "runs.jsonl", "w") as log:
+        for (name, data, setup), fig in zip(sets, ("fig3", "fig4")):
+            exp = Experiment(name, data, setup)
+            timing_experiment(exp, batch_budget_s=budget, max_poses=prefix, progress=progress)
+            interpolation_experiment(exp, max_poses=prefix, progress=progress)
+            for r in list(exp.timing.values()) + list(exp.with_interp.values()) + list(exp.without_interp.values()):
+                log.write(json.dumps(r.summary(name)) + "\n")
+            fig_, axes = plt.subplots(1, 3, figsize=(15, 4))
+            plot_timing(exp, axes[0])
+            plot_interpolation(exp, axes[1:])
+            fig_.tight_layout()
+            fig_.savefig(out / f"{fig}.png", dpi=110)
+            plt.close(fig_)
+            plot_run(str(out / f"{fig}_trajectory.png"), data, exp.with_interp[1])
+            experiments.append(exp)
+    table = results_table(experiments, notes)
+    (out / "results.md").write_text(table)
+    return table
