@@ -1,0 +1,109 @@
+"""The steam-ref command: options, --json keys, --save-estimates, one-line errors with exit 2."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+import scipy.io
+
+from steam_ref.cli import main
+from steam_ref.datasets import generate_synthetic
+
+JSON_KEYS = {"dataset", "method", "every", "skip", "interpolate", "n_estimated_states", "rmse_m", "total_s",
+             "update_s_median", "update_s_p95", "peak_rss_mb"}
+
+
+@pytest.fixture(scope="module")
+def small_mat(tmp_path_factory):
+    """A small generated task written as a CMU .mat file."""
+    data = generate_synthetic(n_steps=60, n_landmarks=10, seed=2, range_sigma=0.3)
+    path = tmp_path_factory.mktemp("data") / "small.mat"
+    scipy.io.savemat(path, data.to_cmu_arrays())
+    return path, data
+
+
+def _run(capsys, *argv):
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_json_line_has_the_keys_and_sane_values(capsys, small_mat):
+    path, data = small_mat
+    code, out, err = _run(capsys, "run", "--dataset", str(path), "--preset", "synthetic", "--method", "pb", "--skip", "3", "--json")
+    assert code == 0, err
+    lines = out.strip().splitlines()
+    assert len(lines) == 1
+    row = json.loads(lines[0])
+    assert JSON_KEYS <= set(row)
+    assert row["method"] == "pb" and row["skip"] == 3 and row["every"] == 1 and row["interpolate"] is True
+    assert row["n_estimated_states"] == len(set(range(0, data.n_poses, 3)) | {data.n_poses - 1})
+    assert 0 < row["rmse_m"] < 1.0
+    assert row["total_s"] > 0 and 0 < row["update_s_median"] <= row["update_s_p95"]
+    assert 10 < row["peak_rss_mb"] < 4000
+
+
+def test_no_interpolate_flag_reaches_the_run(capsys, small_mat):
+    path, _ = small_mat
+    code, out, _ = _run(capsys, "run", "--dataset", str(path), "--preset", "synthetic", "--method", "pbvr",
+                        "--skip", "4", "--no-interpolate", "--every", "10", "--json")
+    row = json.loads(out)
+    assert code == 0 and row["interpolate"] is False and row["every"] == 10 and row["method"] == "pbvr"
+
+
+def test_save_estimates_writes_every_time_step(capsys, small_mat, tmp_path):
+    path, data = small_mat
+    target = tmp_path / "est.npz"
+    code, _, err = _run(capsys, "run", "--dataset", str(path), "--preset", "synthetic", "--method", "pb", "--skip", "2",
+                        "--save-estimates", str(target))
+    assert code == 0, err
+    saved = np.load(target)
+    n = data.n_poses
+    assert saved["times"].shape == saved["x"].shape == saved["y"].shape == saved["theta"].shape == (n,)
+    np.testing.assert_array_equal(saved["times"], np.arange(n))
+    err_xy = np.hypot(saved["x"] - data.ground_truth[:, 1], saved["y"] - data.ground_truth[:, 2])
+    assert np.sqrt(np.mean(err_xy**2)) < 1.0
+    assert sorted(saved["landmark_ids"].tolist()) == sorted(np.unique(data.ranges[:, 2]).astype(int).tolist())
+    assert saved["landmarks"].shape == (len(saved["landmark_ids"]), 2)
+
+
+@pytest.mark.parametrize(
+    "argv,needle",
+    [
+        (["run", "--skip", "0"], "--skip"),
+        (["run", "--every", "x"], "--every"),
+        (["run", "--method", "gtsam"], "gtsam"),
+        (["run", "--dataset", "no-such-thing.mat"], "no-such-thing.mat"),
+        (["run", "--preset", "moon"], "moon"),
+        (["run", "--save-estimates", "out.txt"], "out.txt"),
+        (["frobnicate"], "frobnicate"),
+    ],
+)
+def test_errors_are_one_line_and_exit_2(capsys, argv, needle):
+    code, out, err = _run(capsys, *argv)
+    assert code == 2
+    assert out == ""
+    assert len(err.strip().splitlines()) == 1 and needle in err and "Traceback" not in err
+
+
+def test_malformed_data_file_is_one_line_exit_2(capsys, tmp_path):
+    bad = tmp_path / "bad.mat"
+    bad.write_bytes(b"this is not a MATLAB file")
+    code, _, err = _run(capsys, "run", "--dataset", str(bad))
+    assert code == 2 and len(err.strip().splitlines()) == 1 and "bad.mat" in err
+
+
+def test_module_entry_point_runs(small_mat):
+    path, _ = small_mat
+    proc = subprocess.run(
+        [sys.executable, "-m", "steam_ref", "run", "--dataset", str(path), "--preset", "synthetic", "--method", "pb", "--skip", "5", "--json"],
+        capture_output=True, text=True, timeout=120,
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert JSON_KEYS <= set(json.loads(proc.stdout))
+    proc = subprocess.run([sys.executable, "-m", "steam_ref", "run", "--skip", "-1"], capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 2 and len(proc.stderr.strip().splitlines()) == 1
