@@ -337,7 +337,8 @@ class StreamingEstimator:
         self._started = False  # the solver has had its first update
         self._pose = readings.first_pose.copy()  # predicted [x, y, θ] of the current pose
         self._velocity = np.zeros(3)  # predicted velocity over the last step
-        self._anchor_values = Values()  # all initial guesses (for the Plaza batch start)
+        self._prior_cache: dict[float, GPPriorFactor] = {}  # gap → a GP prior factor with its W, Φ
+        self._interp_cache: dict[tuple[float, float], tuple[NDArray, NDArray]] = {}  # (τ - t₁, t₂ - t₁) → Λ, Ψ
         self.step_seconds: list[float] = []
         self.update_steps: list[int] = []
         self.update_seconds: list[float] = []
@@ -414,14 +415,32 @@ class StreamingEstimator:
         prev = self.states[-1]
         times = self.readings.times
         self._pending_values.insert(X(i), np.concatenate([self._pose, self._velocity]))
-        self._pending.append(GPPriorFactor.wnoa(X(prev), X(i), times[i] - times[prev], self.setup.qc))  # [YIB Eq. 22]
+        self._pending.append(self._gp_prior(prev, i))
         for pose, inner in self._buffer:
-            self._release(InterpolatedFactor.create(inner, X(prev), X(i), times[prev], times[i], times[pose], self.setup.qc))  # [YIB Eq. 29]
+            self._release(self._interpolated(inner, prev, i, pose))
         self._buffer = []
         self._release(self._velocity_at(i, interpolated=False))
         for inner in self._ranges_at(i):
             self._release(inner)
         self.states.append(i)
+
+    def _gp_prior(self, a: int, b: int) -> GPPriorFactor:
+        """The GP prior factor between states a and b; W and Φ cached per gap.  [YIB Eq. 22]"""
+        dt = float(self.readings.times[b] - self.readings.times[a])
+        if dt not in self._prior_cache:
+            self._prior_cache[dt] = GPPriorFactor.wnoa(X(a), X(b), dt, self.setup.qc)
+        proto = self._prior_cache[dt]
+        return GPPriorFactor((X(a), X(b)), proto.sqrt_information, phi=proto.phi, v=proto.v)
+
+    def _interpolated(self, inner: Factor, a: int, b: int, pose: int) -> InterpolatedFactor:
+        """``inner`` (a reading at the missing pose) on states a and b; Λ, Ψ cached per gap shape.  [YIB Eq. 29]"""
+        t = self.readings.times
+        shape = (float(t[pose] - t[a]), float(t[b] - t[a]))
+        if shape not in self._interp_cache:
+            self._interp_cache[shape] = interpolation_matrices(0.0, shape[1], shape[0], self.setup.qc)  # [YIB Eq. 16]
+        lam, psi = self._interp_cache[shape]
+        keys = (X(a), X(b)) + tuple(inner.keys[1:])
+        return InterpolatedFactor(keys, inner.sqrt_information, inner=inner, lam=lam, psi=psi, loss=inner.loss)
 
     def _release(self, factor: Factor) -> None:
         """A factor joins the new-factor set; a landmark seen for the first time gets its prior."""
