@@ -28,7 +28,7 @@ import numpy as np
 import steam_ref as sr
 from steam_ref.bayes_tree.isam import IncrementalSolver
 from steam_ref.gp import transition
-from steam_ref.linear import LinearSystem, Ordering
+from steam_ref.linear import LinearSystem, amd_ordering
 from steam_ref.linear.solve import solve
 
 QC = np.diag([0.01, 0.01, 0.01])  # Qc of the WNOA prior [YIB Eq. 31]
@@ -95,7 +95,8 @@ def batch_difference(solver: IncrementalSolver) -> tuple[float, float]:
     """Max |δ_tree - δ_batch| and max |estimate - (θ̄ + δ_batch)| on the same linear system."""
     theta = solver.linearization_point
     keys = list(theta)
-    system = LinearSystem.build(solver.factors, theta, Ordering(tuple(keys), tuple(theta.dim(k) for k in keys)))
+    ordering = amd_ordering(keys, {k: theta.dim(k) for k in keys}, (f.keys for f in solver.factors))
+    system = LinearSystem.build(solver.factors, theta, ordering)
     x, _ = solve(system)
     batch = system.split(x)
     tree = solver.tree.solve()

@@ -19,6 +19,8 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 from scipy.linalg import lapack
 
@@ -109,7 +111,7 @@ def eliminate_clique(
         small = np.flatnonzero(np.abs(np.diagonal(R[:nf, :nf])) <= RANK_TOLERANCE * max(np.abs(M).max(), 1.0))
         free = int(small[0]) if len(small) else None
     if free is not None:
-        bad = _variable_at(frontals, dims, free)
+        bad = _free_variable(M, frontals, dims, free)
         raise UnderdeterminedError(f"variable {bad!r} is not constrained by the factors (pivot {free} of its clique vanishes)")
     ns = ncol - 1 - nf
     below = R[nf : nf + ns, nf:].copy()  # f(S): the rows left after eliminating F  [YIB Eq. 24]
@@ -131,13 +133,17 @@ def eliminate_clique(
     )
 
 
-def _variable_at(keys: tuple[Key, ...], dims: Mapping[Key, int], col: int) -> Key:
-    o = 0
-    for k in keys:
-        o += dims[k]
-        if col < o:
+def _free_variable(M: NDArray, frontals: tuple[Key, ...], dims: Mapping[Key, int], col: int) -> Key:
+    """Name a frontal variable left free: one whose own columns have rank below its size, else the pivot's."""
+    o, at_pivot = 0, frontals[-1]
+    for k in frontals:
+        block = M[:, o : o + dims[k]]
+        if np.linalg.matrix_rank(block) < dims[k]:
             return k
-    return keys[-1]
+        if o <= col < o + dims[k]:
+            at_pivot = k
+        o += dims[k]
+    return at_pivot
 
 
 def eliminate(
@@ -207,19 +213,74 @@ class BayesTree(CliqueTree[Clique]):
         order = self.elimination_order()
         dims = self.dims()
         ordering = Ordering(tuple(order), tuple(dims[k] for k in order))
-        n = ordering.total_dim
-        R, d = np.zeros((n, n)), np.zeros(n)
+        R, d = self._assemble(ordering, list(self.cliques.values())), np.zeros(ordering.total_dim)
         for clique in self.cliques.values():
+            r0 = ordering.offset_of[clique.frontals[0]]
+            d[r0 : r0 + clique.R.shape[0]] = clique.d
+        return R, d, ordering
+
+    def joint_marginal_covariance(self, keys: Sequence[Key]) -> NDArray:
+        """Joint covariance of several variables, stacked in the order given: (Σdₖ, Σdₖ).
+
+        When one clique holds them all, its joint covariance from the root walk is used.
+        Otherwise: the cliques on the paths from the variables to the root are closed under
+        taking parents, so their conditionals alone are the joint density of their variables
+        [KBT Sec. 3], and the covariance is (R_Uᵀ R_U)⁻¹ restricted to ``keys``, found by two sparse
+        triangular solves.
+        """
+        keys = list(keys)
+        for k in keys:
+            clique = self.cliques[self.clique_containing(k)]
+            if set(keys) <= set(clique.frontals) | set(clique.separator):
+                joint, index = self._path_covariance(self.frontal_of[k])
+                idx = np.concatenate([np.arange(index[j][0], index[j][0] + index[j][1]) for j in keys])
+                block = joint[np.ix_(idx, idx)]
+                return 0.5 * (block + block.T)
+        return self._upper_closed_covariance(keys)
+
+    def _path_covariance(self, cid: int) -> tuple[NDArray, dict[Key, tuple[int, int]]]:
+        """Joint covariance of clique ``cid``'s variables (F then S), walking from the root."""
+        joint, index = np.zeros((0, 0)), {}
+        for c in self.path_to_root(cid)[::-1]:
+            joint, index = _clique_covariance(self.cliques[c], joint, index)
+        return joint, index
+
+    def _upper_closed_covariance(self, keys: list[Key]) -> NDArray:
+        """Cov of ``keys`` from R_U of the cliques on their root paths (sparse solves)."""
+        depth: dict[int, int] = {}
+        for k in keys:
+            path = self.path_to_root(self.clique_containing(k))
+            for i, c in enumerate(path):
+                depth[c] = len(path) - 1 - i
+        cids = sorted(depth, key=lambda c: -depth[c])  # children before parents
+        order = [v for c in cids for v in self.cliques[c].frontals]
+        dims = {v: d for c in cids for v, d in zip(self.cliques[c].frontals, self.cliques[c].frontal_dims)}
+        ordering = Ordering(tuple(order), tuple(dims[v] for v in order))
+        R = self._assemble(ordering, [self.cliques[c] for c in cids])
+        cols = np.concatenate([np.arange(ordering.offset_of[k], ordering.offset_of[k] + dims[k]) for k in keys])
+        E = np.zeros((ordering.total_dim, len(cols)))
+        E[cols, np.arange(len(cols))] = 1.0
+        Rs = sp.csr_matrix(R)
+        Y = spla.spsolve_triangular(Rs.T.tocsr(), E, lower=True)  # Rᵀ Y = E
+        X = spla.spsolve_triangular(Rs, Y, lower=False)  # R X = Y: X = (RᵀR)⁻¹ E
+        block = X[cols]
+        return 0.5 * (block + block.T)
+
+    @staticmethod
+    def _assemble(ordering: Ordering, cliques: Sequence[Clique]) -> NDArray:
+        """Dense upper-triangular R of the given cliques, rows and columns in ``ordering``."""
+        n = ordering.total_dim
+        R = np.zeros((n, n))
+        for clique in cliques:
             r0 = ordering.offset_of[clique.frontals[0]]
             nf = clique.R.shape[0]
             R[r0 : r0 + nf, r0 : r0 + nf] = clique.R
-            d[r0 : r0 + nf] = clique.d
             o = 0
             for k, dim in zip(clique.separator, clique.separator_dims):
                 c0 = ordering.offset_of[k]
                 R[r0 : r0 + nf, c0 : c0 + dim] = clique.S[:, o : o + dim]
                 o += dim
-        return R, d, ordering
+        return R
 
     def marginal_covariance(self, key: Key) -> NDArray:
         """Cov(δθ_key) = (𝓘⁻¹)_key,key from the tree, walking down from the root.  [KBT Sec. 3]
@@ -228,10 +289,7 @@ class BayesTree(CliqueTree[Clique]):
         Cov(F, S) = -R⁻¹S Σ_SS and Cov(F, F) = R⁻¹R⁻ᵀ + R⁻¹S Σ_SS (R⁻¹S)ᵀ. Costs one small dense
         step per clique on the path from the root to the variable's clique.
         """
-        path = self.path_to_root(self.clique_containing(key))[::-1]
-        joint, index = np.zeros((0, 0)), {}
-        for c in path:
-            joint, index = _clique_covariance(self.cliques[c], joint, index)
+        joint, index = self._path_covariance(self.clique_containing(key))
         o, dim = index[key]
         block = joint[o : o + dim, o : o + dim]
         return 0.5 * (block + block.T)
