@@ -86,7 +86,8 @@ def _fmt(x: float | None, unit: str = "", digits: int = 3) -> str:
 def _timing_rows(exp: Experiment) -> list[str]:
     rows = []
     for label, r in exp.timing.items():
-        cut = "" if r.completed else f" (stopped at step {r.n_steps_processed} of {r.n_poses_total})"
+        prefix = r.options.max_poses is not None and r.n_steps_processed >= r.options.max_poses
+        cut = "" if r.completed else f" ({'prefix' if prefix else 'time budget'}: {r.n_steps_processed} of {r.n_poses_total} steps)"
         rows.append(f"| {exp.name} | {label} | {r.n_steps_processed} | {_fmt(r.total_s, ' s', 2)}{cut} | {_fmt(r.rmse_m, ' m')} |")
     return rows
 
