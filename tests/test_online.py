@@ -208,3 +208,15 @@ def test_query_outside_the_span_names_the_time(data):
     est = _stream(data, method="pb", max_poses=10)
     with pytest.raises(SteamError, match="t=25.0"):
         est.estimate_at(25.0)
+
+
+@needs_btgp
+def test_btgp_time_query_covariance_matches_the_sparse_solve(data):
+    """BTGP's joint covariance (from the tree) equals a sparse solve of all its factors at θ̄."""
+    est = _stream(data, method="btgp", skip=4)
+    inner = est.solver.inner
+    keys = [X(8), X(12)]
+    reference = joint_covariance(list(inner.factors), inner.linearization_point, keys)
+    np.testing.assert_allclose(est.solver.joint_covariance(keys), reference, rtol=1e-8, atol=1e-12)
+    _, cov = est.estimate_at(9.5, covariance=True)
+    np.testing.assert_allclose(cov, interpolate_covariance(8.0, 12.0, 9.5, SETUP.qc, reference), rtol=1e-8, atol=1e-12)
