@@ -6,10 +6,13 @@
 - :mod:`.isam`: :class:`IncrementalSolver`, the update of Algorithm 1 (steps 2-7).
 """
 
+from .isam import IncrementalSolver, UpdateReport
 from .symbolic import CliqueTree, SymbolicClique, build_cliques, constrained_min_degree, symbolic_elimination
 from .tree import BayesTree, Clique, eliminate, eliminate_clique
 
 __all__ = [
+    "IncrementalSolver",
+    "UpdateReport",
     "SymbolicClique",
     "CliqueTree",
     "constrained_min_degree",

@@ -128,6 +128,10 @@ class IncrementalSolver:
         """Cov(δθ_key) of the current linear system, from the Bayes tree."""
         return self.tree.marginal_covariance(key)
 
+    def joint_marginal_covariance(self, keys: Iterable[Key]) -> NDArray:
+        """Joint covariance of several variables (stacked in the order given), from the tree."""
+        return self.tree.joint_marginal_covariance(list(keys))
+
     def __len__(self) -> int:
         return len(self._dims)
 
