@@ -98,3 +98,27 @@ def plot_interpolation(
     if label:
         ax.set_ylabel(label)
     return ax
+
+
+def plot_estimate(
+    path: str, truth: ArrayLike, estimate: ArrayLike, landmarks: ArrayLike | None = None, title: str | None = None
+) -> None:
+    """Save a top view of an estimated path (n, 2) against ground truth (n, 2), with landmarks (k, 2)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6, 6))
+    ax.plot(*np.asarray(truth).T, "g-", lw=1, label="ground truth")
+    ax.plot(*np.asarray(estimate).T, "b-", lw=0.8, label="estimate")
+    if landmarks is not None:
+        ax.plot(*np.asarray(landmarks).T, "g*", label="landmarks")
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    if title:
+        ax.set_title(title)
+    ax.legend(loc="best", fontsize=8)
+    fig.savefig(path, dpi=120, bbox_inches="tight")
+    plt.close(fig)

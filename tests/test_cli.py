@@ -107,3 +107,22 @@ def test_module_entry_point_runs(small_mat):
     assert JSON_KEYS <= set(json.loads(proc.stdout))
     proc = subprocess.run([sys.executable, "-m", "steam_ref", "run", "--skip", "-1"], capture_output=True, text=True, timeout=60)
     assert proc.returncode == 2 and len(proc.stderr.strip().splitlines()) == 1
+
+
+def test_batch_command_matches_a_direct_gauss_newton(capsys, small_mat, tmp_path):
+    """`steam-ref batch` reports the RMSE of the converged batch, which the library reproduces."""
+    import steam_ref as sr
+    from steam_ref.datasets import load_cmu_mat
+    from steam_ref.problem import PaperSetup, build_problem, position_rmse, sequential_batch
+
+    path, data = small_mat
+    plot = tmp_path / "b.png"
+    code, out, err = _run(capsys, "batch", "--dataset", str(path), "--preset", "synthetic", "--ordering", "xl", "--json", "--plot", str(plot))
+    assert code == 0, err
+    row = json.loads(out.strip())
+    problem = build_problem(load_cmu_mat(path), PaperSetup.synthetic())
+    values = sr.gauss_newton(problem.graph, sequential_batch(problem, ordering="amd").values, ordering="xl").values
+    positions = np.array([values[sr.X(i)][:2] for i in range(data.n_poses)])
+    assert row["ordering"] == "xl" and row["n_states"] == data.n_poses
+    assert abs(row["rmse_m"] - position_rmse(positions, data.ground_truth[:, 1:3])) < 1e-4
+    assert plot.stat().st_size > 1000
