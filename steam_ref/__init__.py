@@ -6,6 +6,7 @@ interpolation, batch Gauss-Newton (PB, PBVR), and the Bayes tree (BTGP). Equatio
 the code as [YIB Eq. n]; see docs/references.md.
 """
 
+from .bayes_tree import BayesTree, IncrementalSolver
 from .batch import BatchResult, batch_solve, gauss_newton, levenberg_marquardt
 from .errors import DataError, ShapeError, SteamError, UnderdeterminedError, UnknownVariableError
 from .factors import (
@@ -23,6 +24,9 @@ from .factors import (
 from .graph import FactorGraph, Key, L, Values, X
 from .linear import LinearSystem, amd_ordering, marginal_covariances, xl_ordering
 from .robust import Huber, Tukey
+from .datasets import RangeDataset, generate_synthetic, load_dataset
+from .problem import PaperSetup
+from .online import StreamOptions, run_online
 
 __version__ = "0.1.0"
 
@@ -34,4 +38,6 @@ __all__ = [
     "Huber", "Tukey",
     "LinearSystem", "xl_ordering", "amd_ordering", "marginal_covariances",
     "gauss_newton", "levenberg_marquardt", "batch_solve", "BatchResult",
+    "BayesTree", "IncrementalSolver",
+    "RangeDataset", "load_dataset", "generate_synthetic", "PaperSetup", "StreamOptions", "run_online",
 ]
