@@ -322,6 +322,25 @@ def test_bad_updates_are_rejected_and_leave_the_solver_intact(rng):
     assert_matches_dense(solver, exact_delta=True)
 
 
+def test_failed_elimination_rolls_the_update_back(rng):
+    """A new landmark seen by one range only is free (1 equation, 2 unknowns): the update fails,
+    naming it, and leaves tree, linearization point and estimate exactly as they were."""
+    stream = Stream(rng, n_states=8, noise=0.2)
+    solver = IncrementalSolver(relinearize_threshold=0.0, relinearize_skip=1, wildfire_threshold=0.0)
+    run(stream, solver, ["state"] * 5)
+    theta, estimate, n_cliques = solver.linearization_point, solver.estimate(), len(solver.tree)
+    lonely = sr.RangeFactor.create(sr.X(2), sr.L(9), 4.0, 0.3)
+    with pytest.raises(UnderdeterminedError, match="l9"):
+        solver.update([stream.velocity(4), lonely], {sr.L(9): np.array([3.0, 1.0])})
+    assert len(solver.tree) == n_cliques and sr.L(9) not in solver.estimate()
+    for k in theta:
+        np.testing.assert_array_equal(solver.linearization_point[k], theta[k])
+        np.testing.assert_array_equal(solver.estimate_of(k), estimate[k])
+    assert_matches_dense(solver, exact_delta=True)
+    run(stream, solver, ["state", "extra", "state"])
+    assert_matches_dense(solver, exact_delta=True)
+
+
 def test_bad_options_are_rejected():
     with pytest.raises(SteamError, match="relinearize_threshold"):
         IncrementalSolver(relinearize_threshold=-1.0)

@@ -67,6 +67,19 @@ def _check_threshold(value: Threshold, name: str) -> Threshold:
     return dict(value) if isinstance(value, Mapping) else float(value)
 
 
+@dataclass
+class _Undo:
+    """What an update changed before re-elimination succeeded, to put back if it fails."""
+
+    n_factors: int  # number of factors before the update
+    new_keys: list[Key]  # variables the update added
+    dirty: dict[Key, None]  # the dirty set before relinearization emptied it
+    relinearized: dict[Key, tuple[NDArray, NDArray]] = field(default_factory=dict)  # key → old (θ̄, δ)
+    linear: dict[int, GaussianFactor] = field(default_factory=dict)  # factor id → old cached linearization
+    removed: bool = False  # the top of the tree was removed
+    committed: bool = False  # elimination succeeded: nothing to undo any more
+
+
 class IncrementalSolver:
     """iSAM2 on the Bayes tree: BTGP's incremental solver.  [YIB Alg. 1, K12 Alg. 6]
 
@@ -153,27 +166,42 @@ class IncrementalSolver:
         *,
         relinearize: bool = True,
     ) -> UpdateReport:
-        """Add factors and variables, and update the tree and the estimate.  [YIB Alg. 1, K12 Alg. 6]"""
+        """Add factors and variables, and update the tree and the estimate.  [YIB Alg. 1, K12 Alg. 6]
+
+        Raises :class:`SteamError` subclasses on bad input (a new value for an existing variable, a
+        factor naming a variable with no value, a variable left unconstrained, ...); the solver is
+        then as it was before the call.
+        """
         t0 = time.perf_counter()
         new_factors = [new_factors] if isinstance(new_factors, Factor) else list(new_factors)
         new_values = self._checked_update(new_factors, {} if new_values is None else new_values)
+        undo = _Undo(len(self.factors), list(new_values), self._dirty)
+        try:
+            return self._update(new_factors, new_values, relinearize, undo, t0)
+        except Exception:
+            if not undo.committed:
+                self._rollback(undo)
+            raise
+
+    def _update(self, new_factors: list[Factor], new_values: dict[Key, NDArray], relinearize: bool, undo: _Undo, t0: float) -> UpdateReport:
         self._steps += 1
         # 1. Add the new factors and the new variables.                     [YIB Alg. 1 step 1]
         new_ids = self._add(new_factors, new_values)
         touched = list(dict.fromkeys(k for f in new_factors for k in f.keys))
         # 7. Fluid relinearization, from the previous round's δ.      [YIB Alg. 1 step 7, K12 Alg. 5]
-        relin = self._fluid_relinearization() if relinearize and self._steps % self.relinearize_skip == 0 else []
+        relin = self._fluid_relinearization(undo) if relinearize and self._steps % self.relinearize_skip == 0 else []
         t1 = time.perf_counter()
         # 2. Remove the cliques of the affected variables and their ascendants.   [K12 Alg. 4]
         start = [self.tree.frontal_of[k] for k in touched if k in self.tree.frontal_of]
         for k in relin:
             start.extend(self.tree.cliques_involving(k))
         removed, orphans = self.tree.remove_top(start)
+        undo.removed = True
         variables = [k for c in removed.values() for k in c.frontals] + list(new_values)
         fids = [j for c in removed.values() for j in c.factors] + new_ids
         # 3. Re-linearize the factors of the removed part that touch a relinearized variable.
         t2 = time.perf_counter()
-        n_linearized = self._relinearize(fids, set(relin))
+        n_linearized = self._relinearize(fids, set(relin), undo)
         t3 = time.perf_counter()
         # 4. Add the cached marginal factors f(S) of the orphaned subtrees.
         linear = [self._linear[j] for j in fids] + [self.tree.cliques[o].marginal for o in orphans]
@@ -181,6 +209,7 @@ class IncrementalSolver:
         order = constrained_min_degree(variables, [f.keys for f in linear], last=touched)
         t4 = time.perf_counter()
         cliques, parents, owner = eliminate(order, linear, self._dims, fids + [None] * len(orphans))
+        undo.committed = True
         new_cids = self.tree.insert_eliminated(cliques, parents)
         for i, o in enumerate(orphans):  # under the clique eliminating its separator's first variable
             self.tree.attach(o, new_cids[owner[len(fids) + i]])
@@ -193,6 +222,26 @@ class IncrementalSolver:
             self._steps, tuple(removed), tuple(new_cids), tuple(orphans), tuple(relin), tuple(order),
             tuple(updated), n_linearized, visited, t6 - t0, timings,
         )
+
+    def _rollback(self, undo: _Undo) -> None:
+        """Put everything back as it was before a failed update (the failure came before re-insertion)."""
+        if undo.removed:
+            self.tree.restore_top()
+        for j, gf in undo.linear.items():
+            self._linear[j] = gf
+        for k, (theta, delta) in undo.relinearized.items():
+            self._theta_bar.insert(k, theta)
+            self._delta[k] = delta
+            self._set_estimate(k)
+        for k in undo.new_keys:
+            for store in (self._theta_bar._data, self._dims, self._delta, self._estimate):
+                store.pop(k, None)
+        del self.factors[undo.n_factors :], self._linear[undo.n_factors :]
+        undo.dirty.update(self._dirty)
+        self._dirty = undo.dirty
+        for k in undo.new_keys:
+            self._dirty.pop(k, None)
+        self._steps -= 1
 
     def _checked_update(self, new_factors: list[Factor], new_values: Mapping[Key, NDArray]) -> dict[Key, NDArray]:
         """Validate an update before anything changes; returns the new values as float vectors."""
@@ -236,21 +285,20 @@ class IncrementalSolver:
         e.flags.writeable = False
         self._estimate[key] = e
 
-    def _fluid_relinearization(self) -> list[Key]:
+    def _fluid_relinearization(self, undo: _Undo) -> list[Key]:
         """Move θ̄ to θ̄ + δ where max |δ| ≥ threshold; only recomputed δ can have grown.  [K12 Alg. 5]"""
-        relin = []
-        for k in self._dirty:
-            if np.max(np.abs(self._delta[k])) >= self._kind_threshold(k):
-                relin.append(k)
-        self._dirty.clear()
+        relin = [k for k in self._dirty if np.max(np.abs(self._delta[k])) >= self._kind_threshold(k)]
+        self._dirty = {}  # the old set stays with ``undo``
         for k in relin:
+            undo.relinearized[k] = (self._theta_bar[k], self._delta[k])
             self._theta_bar.insert(k, self._estimate[k])  # θ̄ ← θ̄ + δ; the estimate is unchanged
             self._delta[k] = np.zeros(self._dims[k])
         return relin
 
-    def _relinearize(self, fids: list[int], relin: set[Key]) -> int:
+    def _relinearize(self, fids: list[int], relin: set[Key], undo: _Undo) -> int:
         """Linearize, at θ̄, the factors among ``fids`` that are new or touch ``relin``.  [YIB Eq. 9]"""
         need = [j for j in fids if self._linear[j] is None or (relin and not relin.isdisjoint(self.factors[j].keys))]
+        undo.linear.update((j, self._linear[j]) for j in need if self._linear[j] is not None)
         if need:
             for group in linearize([self.factors[j] for j in need], self._theta_bar):
                 for i, gf in zip(group.factor_ids, group.gaussian_factors()):

@@ -174,6 +174,7 @@ class CliqueTree(Generic[C]):
         self.frontal_of: dict = {}  # variable → id of the clique that eliminates it
         self.roots: dict[int, None] = {}  # ids of the roots (an ordered set)
         self._next_id = 0
+        self._undo: list = []  # what the last remove_top took away, for restore_top
 
     def __len__(self) -> int:
         return len(self.cliques)
@@ -241,6 +242,7 @@ class CliqueTree(Generic[C]):
                 removed[c] = self.cliques[c]
                 c = self.parent[c]
         orphans = [ch for c in removed for ch in self.children[c] if ch not in removed]
+        self._undo = [(c, clique, self.parent[c], self.children[c]) for c, clique in removed.items()]
         for c, clique in removed.items():
             del self.cliques[c], self.parent[c], self.children[c]
             self.roots.pop(c, None)
@@ -249,6 +251,18 @@ class CliqueTree(Generic[C]):
         for o in orphans:
             self.parent[o] = None
         return removed, orphans
+
+    def restore_top(self) -> None:
+        """Undo the last :meth:`remove_top`, before anything was inserted in its place."""
+        for c, clique, parent, children in self._undo:
+            self.cliques[c], self.parent[c], self.children[c] = clique, parent, children
+            if parent is None:
+                self.roots[c] = None
+            for v in clique.frontals:
+                self.frontal_of[v] = c
+            for ch in children:
+                self.parent[ch] = c
+        self._undo = []
 
     def path_to_root(self, cid: int) -> list[int]:
         """Ids from ``cid`` up to its root, inclusive."""
