@@ -1,4 +1,4 @@
-"""The structure of a Bayes tree: orderings → cliques, and clique surgery.  [KBT, K12 Alg. 1-4]
+"""The structure of a Bayes tree: orderings → cliques, and clique surgery.  [K11, K12 Alg. 1-4]
 
 Nothing here knows a number. Variables are any hashable names (the tests use letters, the solver
 uses :class:`~steam_ref.graph.Key`); a factor is just the tuple of variables it touches.

@@ -176,7 +176,7 @@ def eliminate(
 
 
 class BayesTree(CliqueTree[Clique]):
-    """A Bayes tree of Gaussian conditionals.  [YIB Sec. III-A, KBT]"""
+    """A Bayes tree of Gaussian conditionals.  [YIB Sec. III-A, K11]"""
 
     @classmethod
     def from_factors(cls, factors: Sequence[GaussianFactor], ordering: Ordering | Sequence[Key]) -> BayesTree:
@@ -225,7 +225,7 @@ class BayesTree(CliqueTree[Clique]):
         When one clique holds them all, its joint covariance from the root walk is used.
         Otherwise: the cliques on the paths from the variables to the root are closed under
         taking parents, so their conditionals alone are the joint density of their variables
-        [KBT Sec. 3], and the covariance is (R_Uᵀ R_U)⁻¹ restricted to ``keys``, found by two sparse
+        [K11 Sec. 3], and the covariance is (R_Uᵀ R_U)⁻¹ restricted to ``keys``, found by two sparse
         triangular solves.
         """
         keys = list(keys)
@@ -283,7 +283,7 @@ class BayesTree(CliqueTree[Clique]):
         return R
 
     def marginal_covariance(self, key: Key) -> NDArray:
-        """Cov(δθ_key) = (𝓘⁻¹)_key,key from the tree, walking down from the root.  [KBT Sec. 3]
+        """Cov(δθ_key) = (𝓘⁻¹)_key,key from the tree, walking down from the root.  [K11 Sec. 3]
 
         Each clique gives P(F | S); with Σ_SS from the parent's joint covariance,
         Cov(F, S) = -R⁻¹S Σ_SS and Cov(F, F) = R⁻¹R⁻ᵀ + R⁻¹S Σ_SS (R⁻¹S)ᵀ. Costs one small dense
@@ -298,7 +298,7 @@ class BayesTree(CliqueTree[Clique]):
 def _clique_covariance(
     clique: Clique, parent_joint: NDArray, parent_index: dict[Key, tuple[int, int]]
 ) -> tuple[NDArray, dict[Key, tuple[int, int]]]:
-    """Joint covariance of the clique's variables (F then S) from its parent's.  [KBT Sec. 3]"""
+    """Joint covariance of the clique's variables (F then S) from its parent's.  [K11 Sec. 3]"""
     sel = np.concatenate([np.arange(o, o + dim) for o, dim in (parent_index[k] for k in clique.separator)]) if clique.separator else np.zeros(0, int)
     Sigma_SS = parent_joint[np.ix_(sel, sel)]
     nf = clique.R.shape[0]
