@@ -355,9 +355,9 @@ def test_bad_options_are_rejected():
 def test_threshold_dict_without_a_kind_is_named(rng):
     stream = Stream(rng, n_states=4)
     solver = IncrementalSolver(relinearize_threshold={"x": 0.0}, relinearize_skip=1)
-    solver.update(*stream.step("state"))
     with pytest.raises(SteamError, match="'l'"):
-        solver.update(*stream.step("state"))
+        solver.update(*stream.step("state"))  # brings x0 and the first landmark
+    assert len(solver) == 0 and len(solver.tree) == 0 and solver.factors == []
 
 
 def test_unknown_key_queries_are_named():

@@ -73,7 +73,6 @@ class _Undo:
 
     n_factors: int  # number of factors before the update
     new_keys: list[Key]  # variables the update added
-    dirty: dict[Key, None]  # the dirty set before relinearization emptied it
     relinearized: dict[Key, tuple[NDArray, NDArray]] = field(default_factory=dict)  # key → old (θ̄, δ)
     linear: dict[int, GaussianFactor] = field(default_factory=dict)  # factor id → old cached linearization
     removed: bool = False  # the top of the tree was removed
@@ -108,25 +107,41 @@ class IncrementalSolver:
         self._linear: list[GaussianFactor | None] = []  # cached linearization of each factor at θ̄
         self._theta_bar = Values()  # linearization point θ̄
         self._dims: dict[Key, int] = {}  # size of each variable
-        self._delta: dict[Key, NDArray] = {}  # current increment δ, relative to θ̄
-        self._estimate: dict[Key, NDArray] = {}  # θ̄ + δ, read-only arrays, kept up to date
-        self._dirty: dict[Key, None] = {}  # variables whose δ was recomputed since the last relinearization check
+        self._threshold: dict[Key, float] = {}  # relinearization threshold of each variable (by kind)
+        self._delta: dict[Key, NDArray] = {}  # current increment δ, relative to θ̄ (never written in place)
+        self._estimate: dict[Key, NDArray] = {}  # θ̄ + δ, read-only arrays, refreshed for ``_stale`` keys
+        self._stale: dict[Key, None] = {}  # variables whose δ or θ̄ moved since their estimate was formed
+        self._over: dict[Key, None] = {}  # variables whose latest δ has max |δ| ≥ their threshold
         self._steps = 0
 
     # --- queries ----------------------------------------------------------------------------
 
     def estimate(self) -> Values:
-        """The current estimate θ̄ + δ of every variable (a snapshot; the arrays are read-only)."""
+        """The current estimate θ̄ + δ of every variable (a snapshot; the arrays are read-only).
+
+        Only the variables whose δ changed since the last call are recomputed.
+        """
+        for k in self._stale:
+            self._form_estimate(k)
+        self._stale.clear()
         out = Values()
         out._data = dict(self._estimate)  # shallow: the solver never writes into these arrays
         return out
 
     def estimate_of(self, key: Key) -> NDArray:
         """The current estimate θ̄ + δ of one variable (read-only)."""
+        if key in self._stale:
+            del self._stale[key]
+            self._form_estimate(key)
         try:
             return self._estimate[key]
         except KeyError:
             raise UnknownVariableError(f"variable {key!r} is not in the solver") from None
+
+    def _form_estimate(self, key: Key) -> None:
+        e = self._theta_bar[key] + self._delta[key]
+        e.flags.writeable = False
+        self._estimate[key] = e
 
     @property
     def linearization_point(self) -> Values:
@@ -153,7 +168,7 @@ class IncrementalSolver:
         if isinstance(t, float):
             return t
         try:
-            return t[key.kind]
+            return float(t[key.kind])
         except KeyError:
             raise SteamError(f"relinearize_threshold has no entry for variables of kind {key.kind!r} ({key!r})") from None
 
@@ -175,7 +190,7 @@ class IncrementalSolver:
         t0 = time.perf_counter()
         new_factors = [new_factors] if isinstance(new_factors, Factor) else list(new_factors)
         new_values = self._checked_update(new_factors, {} if new_values is None else new_values)
-        undo = _Undo(len(self.factors), list(new_values), self._dirty)
+        undo = _Undo(len(self.factors), list(new_values))
         try:
             return self._update(new_factors, new_values, relinearize, undo, t0)
         except Exception:
@@ -232,15 +247,12 @@ class IncrementalSolver:
         for k, (theta, delta) in undo.relinearized.items():
             self._theta_bar.insert(k, theta)
             self._delta[k] = delta
-            self._set_estimate(k)
+            self._stale[k] = None
+            self._over[k] = None
         for k in undo.new_keys:
-            for store in (self._theta_bar._data, self._dims, self._delta, self._estimate):
+            for store in (self._theta_bar._data, self._dims, self._threshold, self._delta, self._estimate, self._stale):
                 store.pop(k, None)
         del self.factors[undo.n_factors :], self._linear[undo.n_factors :]
-        undo.dirty.update(self._dirty)
-        self._dirty = undo.dirty
-        for k in undo.new_keys:
-            self._dirty.pop(k, None)
         self._steps -= 1
 
     def _checked_update(self, new_factors: list[Factor], new_values: Mapping[Key, NDArray]) -> dict[Key, NDArray]:
@@ -252,6 +264,7 @@ class IncrementalSolver:
             x = np.array(v, dtype=float).reshape(-1)
             if not np.all(np.isfinite(x)):
                 raise ShapeError(f"new value of {k!r} is not finite: {x}")
+            self._kind_threshold(k)  # a dict of thresholds must name every kind
             values[k] = x
         for f in new_factors:
             if not isinstance(f, Factor):
@@ -276,22 +289,21 @@ class IncrementalSolver:
         for k, x in new_values.items():
             self._theta_bar.insert(k, x)
             self._dims[k] = x.shape[0]
+            self._threshold[k] = self._kind_threshold(k)
             self._delta[k] = np.zeros_like(x)
-            self._set_estimate(k)
+            self._stale[k] = None
         return list(range(first, len(self.factors)))
 
-    def _set_estimate(self, key: Key) -> None:
-        e = self._theta_bar[key] + self._delta[key]
-        e.flags.writeable = False
-        self._estimate[key] = e
-
     def _fluid_relinearization(self, undo: _Undo) -> list[Key]:
-        """Move θ̄ to θ̄ + δ where max |δ| ≥ threshold; only recomputed δ can have grown.  [K12 Alg. 5]"""
-        relin = [k for k in self._dirty if np.max(np.abs(self._delta[k])) >= self._kind_threshold(k)]
-        self._dirty = {}  # the old set stays with ``undo``
+        """θ̄ ← θ̄ + δ where max |δ| ≥ threshold.  [K12 Alg. 5]
+
+        The candidates are kept up to date by back-substitution, which is the only place δ changes.
+        """
+        relin = list(self._over)
+        self._over.clear()
         for k in relin:
             undo.relinearized[k] = (self._theta_bar[k], self._delta[k])
-            self._theta_bar.insert(k, self._estimate[k])  # θ̄ ← θ̄ + δ; the estimate is unchanged
+            self._theta_bar.insert(k, self.estimate_of(k))  # the estimate is unchanged
             self._delta[k] = np.zeros(self._dims[k])
         return relin
 
@@ -308,10 +320,13 @@ class IncrementalSolver:
     def _backsubstitute(self, new_cliques: set[int]) -> tuple[list[Key], int]:
         """δ_F = R⁻¹(d - S δ_S) from the roots of the new part down, while it changes.  [K12 Alg. 7]
 
-        A re-made clique is always solved; an old one only when some separator variable changed
+        A re-made clique is always solved; an old one only when a variable of its separator changed
         by at least the wildfire threshold (with threshold 0, always: full back-substitution).
+        Changes are judged per variable: a root clique holding the newest state and the landmarks
+        must not mark the landmarks changed because the newest state moved.
         """
         tree, delta, threshold = self.tree, self._delta, self.wildfire_threshold
+        stale, over, limit = self._stale, self._over, self._threshold
         changed: set[Key] = set()
         updated: list[Key] = []
         stack = [c for c in new_cliques if tree.parent[c] is None]
@@ -321,13 +336,18 @@ class IncrementalSolver:
             clique = tree.cliques[c]
             visited += 1
             sep = np.concatenate([delta[k] for k in clique.separator]) if clique.separator else None
-            for k, x in zip(clique.frontals, clique.split_frontals(clique.solve(sep))):
-                if threshold == 0 or np.max(np.abs(x - delta[k])) >= threshold:
+            x = clique.solve(sep)  # [YIB Eq. 25]
+            frontals = clique.frontals
+            for k, xk in zip(frontals, (x,) if len(frontals) == 1 else clique.split_frontals(x)):
+                if threshold == 0 or abs(xk - delta[k]).max() >= threshold:
                     changed.add(k)
-                delta[k] = x
-                self._set_estimate(k)
-                self._dirty[k] = None
-                updated.append(k)
+                delta[k] = xk
+                stale[k] = None
+                if abs(xk).max() >= limit[k]:  # a candidate for the next relinearization [K12 Alg. 5]
+                    over[k] = None
+                elif k in over:
+                    del over[k]
+            updated.extend(frontals)
             for ch in tree.children[c]:
                 if ch in new_cliques or not changed.isdisjoint(tree.cliques[ch].separator):
                     stack.append(ch)

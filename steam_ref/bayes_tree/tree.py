@@ -85,12 +85,12 @@ def _gather(keys: tuple[Key, ...], dims: Mapping[Key, int], factors: Sequence[Ga
     M = np.zeros((rows, n + 1), order="F")
     r = 0
     for f in factors:
-        m = f.rhs.shape[0]
-        for k, block in zip(f.keys, f.blocks):
+        end = r + f.rhs.shape[0]
+        for k, block in zip(f.keys, f.blocks):  # a factor names each variable once
             o = offset[k]
-            M[r : r + m, o : o + block.shape[1]] += block
-        M[r : r + m, n] = f.rhs
-        r += m
+            M[r:end, o : o + block.shape[1]] = block
+        M[r:end, n] = f.rhs
+        r = end
     return M
 
 
