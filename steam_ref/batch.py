@@ -74,6 +74,13 @@ def _step(graph: FactorGraph, values: Values, ordering: Ordering, backend: str, 
     return system.split(chol.solve(rhs)), sum(g.cost for g in groups), chol.nnz
 
 
+def _prepare(graph: FactorGraph, initial: Values, ordering: str | Ordering, backend: str | None) -> tuple[str, Ordering, float]:
+    """Checks shared by both solvers: the backend, the estimates' sizes, the ordering, the start cost."""
+    backend = sparse_backend(backend)
+    graph.check_values(initial)
+    return backend, make_ordering(graph, initial, ordering, backend), graph.error(initial)
+
+
 def _converged(old: float, new: float, step: float, rtol: float, atol: float, steptol: float) -> str:
     if new <= atol:
         return f"cost {new:.3g} below absolute tolerance {atol:g}"
@@ -101,11 +108,8 @@ def gauss_newton(
     Stops when the cost falls below ``absolute_tolerance``, decreases by less than
     ``relative_tolerance`` times itself, or the step norm is below ``step_tolerance``.
     """
-    backend = sparse_backend(backend)
-    graph.check_values(initial)
-    order = make_ordering(graph, initial, ordering, backend)
-    values, iterations, reason, nnz = initial.copy(), [], "", 0
-    cost0 = cost = graph.error(values)
+    backend, order, cost0 = _prepare(graph, initial, ordering, backend)
+    values, iterations, reason, nnz, cost = initial.copy(), [], "", 0, cost0
     for _ in range(max_iterations):
         delta, _, nnz = _step(graph, values, order, backend, 0.0)
         values = values.retract(delta)
@@ -142,11 +146,8 @@ def levenberg_marquardt(
     multiplied by it and the step retried. Stops on the Gauss-Newton rules, or when λ exceeds
     ``max_damping``.
     """
-    backend = sparse_backend(backend)
-    graph.check_values(initial)
-    order = make_ordering(graph, initial, ordering, backend)
-    values, iterations, reason, nnz, lam = initial.copy(), [], "", 0, initial_damping
-    cost0 = cost = graph.error(values)
+    backend, order, cost0 = _prepare(graph, initial, ordering, backend)
+    values, iterations, reason, nnz, lam, cost = initial.copy(), [], "", 0, initial_damping, cost0
     while len(iterations) < max_iterations and not reason:
         delta, _, nnz = _step(graph, values, order, backend, lam)
         trial = values.retract(delta)
