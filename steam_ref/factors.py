@@ -23,7 +23,7 @@ from numpy.typing import NDArray
 
 from .errors import ShapeError, SteamError
 from .gp.interpolate import interpolation_matrices
-from .gp.prior import check_qc, process_noise_inverse, transition
+from .gp.prior import process_noise_sqrt_information, transition
 from .graph import Key
 from .robust import RobustLoss
 
@@ -152,9 +152,8 @@ class GPPriorFactor(Factor):
     @classmethod
     def wnoa(cls, key1: Key, key2: Key, dt: float, qc: NDArray) -> GPPriorFactor:
         """The white-noise-on-acceleration prior over a gap dt.  [YIB Eq. 22, 30-31]"""
-        qc = check_qc(qc)
-        d = qc.shape[0]
-        w = np.linalg.cholesky(process_noise_inverse(dt, qc)).T  # WᵀW = Qᵢ⁻¹
+        w = process_noise_sqrt_information(dt, qc)  # WᵀW = Qᵢ⁻¹, memoised per (dt, Qc)
+        d = w.shape[0] // 2
         return cls((key1, key2), w, phi=transition(dt, d), v=np.zeros(2 * d))
 
     @classmethod

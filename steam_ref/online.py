@@ -337,8 +337,6 @@ class StreamingEstimator:
         self._started = False  # the solver has had its first update
         self._pose = readings.first_pose.copy()  # predicted [x, y, θ] of the current pose
         self._velocity = np.zeros(3)  # predicted velocity over the last step
-        self._prior_cache: dict[float, GPPriorFactor] = {}  # gap → a GP prior factor with its W, Φ
-        self._interp_cache: dict[tuple[float, float], tuple[NDArray, NDArray]] = {}  # (τ - t₁, t₂ - t₁) → Λ, Ψ
         self.step_seconds: list[float] = []
         self.update_steps: list[int] = []
         self.update_seconds: list[float] = []
@@ -425,22 +423,14 @@ class StreamingEstimator:
         self.states.append(i)
 
     def _gp_prior(self, a: int, b: int) -> GPPriorFactor:
-        """The GP prior factor between states a and b; W and Φ cached per gap.  [YIB Eq. 22]"""
-        dt = float(self.readings.times[b] - self.readings.times[a])
-        if dt not in self._prior_cache:
-            self._prior_cache[dt] = GPPriorFactor.wnoa(X(a), X(b), dt, self.setup.qc)
-        proto = self._prior_cache[dt]
-        return GPPriorFactor((X(a), X(b)), proto.sqrt_information, phi=proto.phi, v=proto.v)
+        """The GP prior factor between states a and b.  [YIB Eq. 22]"""
+        times = self.readings.times
+        return GPPriorFactor.wnoa(X(a), X(b), times[b] - times[a], self.setup.qc)
 
     def _interpolated(self, inner: Factor, a: int, b: int, pose: int) -> InterpolatedFactor:
-        """``inner`` (a reading at the missing pose) on states a and b; Λ, Ψ cached per gap shape.  [YIB Eq. 29]"""
+        """``inner`` (a reading at the missing pose) on states a and b.  [YIB Eq. 29]"""
         t = self.readings.times
-        shape = (float(t[pose] - t[a]), float(t[b] - t[a]))
-        if shape not in self._interp_cache:
-            self._interp_cache[shape] = interpolation_matrices(0.0, shape[1], shape[0], self.setup.qc)  # [YIB Eq. 16]
-        lam, psi = self._interp_cache[shape]
-        keys = (X(a), X(b)) + tuple(inner.keys[1:])
-        return InterpolatedFactor(keys, inner.sqrt_information, inner=inner, lam=lam, psi=psi, loss=inner.loss)
+        return InterpolatedFactor.create(inner, X(a), X(b), t[a], t[b], t[pose], self.setup.qc)
 
     def _release(self, factor: Factor) -> None:
         """A factor joins the new-factor set; a landmark seen for the first time gets its prior."""
@@ -518,22 +508,18 @@ class StreamingEstimator:
 
     def trajectory(self) -> tuple[NDArray, NDArray]:
         """Times (n,) and states (n, 6) at every pose of the solved span, interpolated between
-        states by Eq. 18 (Λ, Ψ cached per gap shape). Reads the solver's whole estimate once."""
+        states by Eq. 18. Reads the solver's whole estimate once."""
         solved = self.states[: self.solved_states]
         if not solved:
             return np.zeros(0), np.zeros((0, 6))
         values = self.solver.estimate()
         times = self.readings.times
         out = np.empty((solved[-1] + 1, 6))
-        cache: dict[tuple[float, float], tuple[NDArray, NDArray]] = {}
         for a, b in zip(solved, solved[1:]):
             xa, xb = values[X(a)], values[X(b)]
             out[a] = xa
             for p in range(a + 1, b):
-                shape = (times[p] - times[a], times[b] - times[a])
-                if shape not in cache:
-                    cache[shape] = interpolation_matrices(0.0, shape[1], shape[0], self.setup.qc)
-                lam, psi = cache[shape]
+                lam, psi = interpolation_matrices(times[a], times[b], times[p], self.setup.qc)  # [YIB Eq. 16]
                 out[p] = lam @ xa + psi @ xb  # [YIB Eq. 18]
         out[solved[-1]] = values[X(solved[-1])]
         return times[: solved[-1] + 1].copy(), out

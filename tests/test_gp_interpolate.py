@@ -225,3 +225,19 @@ def test_wrong_shapes_raise_in_interpolation(rng):
         interpolate_state(0.0, np.ones(3), 1.0, np.ones(4), 0.5, qc)
     with pytest.raises(ShapeError, match=r"x2.*\(4, 1\)"):
         interpolate_state_sde(sde, 0.0, np.ones(4), 1.0, np.ones((4, 1)), 0.5)
+
+
+def test_interpolation_matrices_depend_on_gaps_and_qc_only(rng):
+    """Memoised on (τ - t₁, t₂ - t₁, Qc): a shifted interval gives the same Λ, Ψ; a Qc of another size
+    gets its own (for the WNOA prior Λ and Ψ do not depend on Qc's values, only on its size)."""
+    qc = random_spd(rng, 2)
+    sde = LinearSDE.wnoa(qc)
+    lam, psi = interpolation_matrices(10.0, 12.0, 10.5, qc)
+    for closed, general in zip((lam, psi), interpolation_matrices_sde(sde, 3.0, 5.0, 3.5)):
+        np.testing.assert_allclose(closed, general, rtol=1e-9, atol=1e-12)
+    assert not lam.flags.writeable and not psi.flags.writeable
+    qc3 = random_spd(rng, 3)
+    lam3, psi3 = interpolation_matrices(10.0, 12.0, 10.5, qc3)
+    assert lam3.shape == (6, 6)
+    for closed, general in zip((lam3, psi3), interpolation_matrices_sde(LinearSDE.wnoa(qc3), 0.0, 2.0, 0.5)):
+        np.testing.assert_allclose(closed, general, rtol=1e-9, atol=1e-12)

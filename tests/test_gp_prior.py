@@ -256,3 +256,31 @@ def test_bad_times_raise(rng):
         sde.mean([0.5, 1.0], 0.7, np.zeros(4))
     with pytest.raises(SteamError, match="strictly increasing"):
         dense_kernel(sde, [0.0, 1.0, 1.0], np.eye(4))
+
+
+# --- memoisation by value ---------------------------------------------------------------------
+
+
+def test_sqrt_information_is_memoised_by_value_and_read_only(rng):
+    from steam_ref.gp import process_noise_sqrt_information
+
+    qc = random_spd(rng, 3)
+    W = process_noise_sqrt_information(0.7, qc)
+    np.testing.assert_allclose(W.T @ W, process_noise_inverse(0.7, qc), rtol=1e-10)
+    assert np.allclose(np.triu(W), W)
+    with pytest.raises(ValueError):
+        W[0, 0] = 1.0  # shared between factors: must not be writable
+    # a different Qc (or gap) with the same shape gets its own matrix, not the memoised one
+    W2 = process_noise_sqrt_information(0.7, 2.0 * qc)
+    np.testing.assert_allclose(W2.T @ W2, process_noise_inverse(0.7, 2.0 * qc), rtol=1e-10)
+    W3 = process_noise_sqrt_information(0.8, qc)
+    np.testing.assert_allclose(W3.T @ W3, process_noise_inverse(0.8, qc), rtol=1e-10)
+
+
+def test_bad_qc_raises_every_time_not_once():
+    bad = np.diag([1.0, -1.0])
+    for _ in range(2):  # a failed check must not be memoised as a success
+        with pytest.raises(SteamError, match="positive definite"):
+            process_noise(0.5, bad)
+    with pytest.raises(ShapeError, match="finite"):
+        process_noise(0.5, np.array([[1.0, np.nan], [np.nan, 1.0]]))

@@ -8,13 +8,14 @@ from .interpolate import (
     interpolation_matrices,
     interpolation_matrices_sde,
 )
-from .prior import process_noise, process_noise_inverse, transition
+from .prior import process_noise, process_noise_inverse, process_noise_sqrt_information, transition
 from .sde import LinearSDE, dense_kernel
 
 __all__ = [
     "transition",
     "process_noise",
     "process_noise_inverse",
+    "process_noise_sqrt_information",
     "interpolation_matrices",
     "interpolate_state",
     "interpolate_covariance",

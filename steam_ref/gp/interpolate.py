@@ -11,12 +11,14 @@ The ``*_sde`` functions do the same for any ``LinearSDE`` (A, F, Qc, v), and
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 import scipy.linalg
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import ShapeError, SteamError
-from .prior import check_qc, process_noise, process_noise_inverse, transition
+from .prior import _read_only, check_qc, process_noise, process_noise_inverse, qc_key, transition
 from .sde import LinearSDE
 
 __all__ = [
@@ -47,14 +49,20 @@ def interpolation_matrices(t1: float, t2: float, tau: float, qc: NDArray) -> tup
     Λ(τ) = Φ(τ, t₁) - Q_τ Φ(t₂, τ)ᵀ Q₂⁻¹ Φ(t₂, t₁)
     Ψ(τ) = Q_τ Φ(t₂, τ)ᵀ Q₂⁻¹
     where Q_τ = Q(τ - t₁) and Q₂ = Q(t₂ - t₁) are the integrals of [YIB Eq. 17].
+    The pair depends only on (τ - t₁, t₂ - t₁, Qc); it is memoised on those, and read-only.
     """
     _check_tau(t1, t2, tau)
-    qc = check_qc(qc)
-    d = qc.shape[0]
-    q_tau = process_noise(tau - t1, qc)
-    q2_inv = process_noise_inverse(t2 - t1, qc)
-    psi = q_tau @ transition(t2 - tau, d).T @ q2_inv  # [YIB Eq. 16]
-    lam = transition(tau - t1, d) - psi @ transition(t2 - t1, d)  # [YIB Eq. 16]
+    return _interpolation_matrices(float(tau - t1), float(t2 - t1), *qc_key(qc))
+
+
+@lru_cache(maxsize=4096)
+def _interpolation_matrices(dtau: float, dt: float, d: int, qc_bytes: bytes) -> tuple[NDArray, NDArray]:
+    qc = np.frombuffer(qc_bytes, dtype=float).reshape(d, d)
+    q_tau = process_noise(dtau, qc)
+    q2_inv = process_noise_inverse(dt, qc)
+    psi = q_tau @ transition(dt - dtau, d).T @ q2_inv  # [YIB Eq. 16]
+    lam = transition(dtau, d) - psi @ transition(dt, d)  # [YIB Eq. 16]
+    _read_only(lam, psi)
     return lam, psi
 
 

@@ -12,22 +12,47 @@ exponentials; the tests check that the two agree.
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import ShapeError, SteamError
 
-__all__ = ["check_qc", "transition", "process_noise", "process_noise_inverse"]
+__all__ = ["check_qc", "transition", "process_noise", "process_noise_inverse", "process_noise_sqrt_information"]
+
+# A run builds thousands of prior and interpolated factors from one Qc and a few distinct gaps, so
+# the checks and matrices below are memoised by value: (d, Qc's bytes) and dt. Memoised arrays are
+# read-only, so no caller can change what another one gets.
 
 
 def check_qc(qc: NDArray) -> NDArray:
-    """Return Qc as a float (d, d) array, or raise if it is not symmetric positive definite."""
+    """Return Qc as a read-only float (d, d) array, or raise if it is not symmetric positive definite."""
     qc = np.asarray(qc, dtype=float)
-    if qc.ndim != 2 or qc.shape[0] != qc.shape[1] or not np.all(np.isfinite(qc)):
+    if qc.ndim != 2 or qc.shape[0] != qc.shape[1]:
         raise ShapeError(f"Qc must be a finite square matrix, got shape {qc.shape}")
+    return _checked_qc(qc.shape[0], qc.tobytes())
+
+
+@lru_cache(maxsize=64)
+def _checked_qc(d: int, data: bytes) -> NDArray:
+    qc = np.frombuffer(data, dtype=float).reshape(d, d)  # read-only view of the bytes
+    if not np.all(np.isfinite(qc)):
+        raise ShapeError(f"Qc must be a finite square matrix, got {qc.tolist()}")
     if not np.allclose(qc, qc.T) or np.any(np.linalg.eigvalsh(qc) <= 0):
         raise SteamError(f"Qc must be symmetric positive definite, got {qc.tolist()}")
     return qc
+
+
+def qc_key(qc: NDArray) -> tuple[int, bytes]:
+    """A hashable key of a checked Qc, for memoising what depends on it."""
+    qc = check_qc(qc)
+    return qc.shape[0], qc.tobytes()
+
+
+def _read_only(*arrays: NDArray) -> None:
+    for a in arrays:
+        a.flags.writeable = False
 
 
 def _check_dt(dt: float) -> float:
@@ -54,3 +79,16 @@ def process_noise_inverse(dt: float, qc: NDArray) -> NDArray:
     dt, qc = _check_dt(dt), check_qc(qc)
     qi = np.linalg.inv(qc)
     return np.block([[12 / dt**3 * qi, -6 / dt**2 * qi], [-6 / dt**2 * qi, 4 / dt * qi]])
+
+
+def process_noise_sqrt_information(dt: float, qc: NDArray) -> NDArray:
+    """Upper-triangular W with WᵀW = Q(dt)⁻¹, read-only: (2d, 2d). Memoised per (dt, Qc).  [YIB Eq. 22]"""
+    return _sqrt_information(_check_dt(dt), *qc_key(qc))
+
+
+@lru_cache(maxsize=1024)
+def _sqrt_information(dt: float, d: int, qc_bytes: bytes) -> NDArray:
+    qc = np.frombuffer(qc_bytes, dtype=float).reshape(d, d)
+    w = np.linalg.cholesky(process_noise_inverse(dt, qc)).T
+    _read_only(w)
+    return w
