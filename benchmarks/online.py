@@ -3,13 +3,22 @@
 Prints one JSON line per (dataset, method, every, skip, interpolate) with the keys of
 ``steam-ref run --json`` (dataset, method, every, skip, interpolate, n_estimated_states, rmse_m,
 total_s, update_s_median, update_s_p95, peak_rss_mb, ...), where total_s and the update times are
-medians over ``--repeat`` runs (each run in a fresh process, so peak_rss_mb is per run). PB and
-PBVR run under ``--batch-budget`` seconds (completed: false, n_poses = the prefix they covered);
-``speedup_vs_btgp`` is then the ratio of their time to BTGP's over that same prefix.
+medians over ``--repeat`` runs (each run in a fresh process, so peak_rss_mb is per run).
+
+``speedup_vs_btgp`` is PB's (PBVR's) time over BTGP's. With ``--max-poses N`` every method runs
+the same N-pose prefix ``--repeat`` times and the ratio is of the median totals. Otherwise PB and
+PBVR run once under ``--batch-budget`` seconds (completed: false, n_poses = the prefix they
+covered) and the ratio is over the steps both covered. The median cumulative times are drawn in
+benchmarks/out/online_<dataset>.png.
 
     python benchmarks/online.py [--datasets paper-synthetic plaza synthetic] [--repeat 3]
                                 [--methods btgp pb pbvr] [--every 1 10] [--skips 1]
-                                [--no-interpolate] [--batch-budget 60]
+                                [--no-interpolate] [--range-states] [--max-poses N] [--batch-budget S]
+
+The speed-up figures of docs/experiments.md:
+
+    python benchmarks/online.py --datasets paper-synthetic --methods btgp pb --max-poses 600
+    python benchmarks/online.py --datasets plaza --methods btgp pb --max-poses 4000
 """
 
 from __future__ import annotations
@@ -19,8 +28,11 @@ import json
 import statistics
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
+
+OUT = Path(__file__).resolve().parent / "out"
 
 _CHILD = r"""
 import json, sys
@@ -61,6 +73,25 @@ def median_run(dataset: str, options: dict, repeat: int) -> dict:
     return row
 
 
+def _plot(dataset: str, curves: list[tuple[str, list[float]]]) -> Path:
+    """Cumulative time against time step for every run of one data set (Fig. 3/4 left)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6, 4))
+    for label, steps in curves:
+        ax.plot(np.cumsum(steps), label=label)
+    ax.set(xlabel="time step", ylabel="cumulative time [s]", title=f"{dataset}: median step times", yscale="log")
+    ax.legend()
+    OUT.mkdir(exist_ok=True)
+    path = OUT / f"online_{dataset}.png"
+    fig.savefig(path, dpi=120, bbox_inches="tight")
+    plt.close(fig)
+    return path
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--datasets", nargs="+", default=["paper-synthetic", "plaza"])
@@ -68,29 +99,41 @@ def main() -> None:
     parser.add_argument("--every", nargs="+", type=int, default=[1])
     parser.add_argument("--skips", nargs="+", type=int, default=[1])
     parser.add_argument("--no-interpolate", action="store_true", help="also run each skip > 1 without interpolation")
+    parser.add_argument("--range-states", action="store_true", help="also a state at every range reading (the paper's Plaza layout with --skips 5)")
     parser.add_argument("--repeat", type=int, default=3)
-    parser.add_argument("--batch-budget", type=float, default=60.0, help="seconds per PB/PBVR run")
+    parser.add_argument("--max-poses", type=int, default=None, help="run every method on this prefix (PB/PBVR then repeat too)")
+    parser.add_argument("--batch-budget", type=float, default=None, help="seconds per PB/PBVR run (default: 60 without --max-poses, none with it)")
     args = parser.parse_args()
+    budget = args.batch_budget if args.batch_budget is not None or args.max_poses else 60.0
     for dataset in args.datasets:
+        curves = []
         for skip in args.skips:
             for interpolate in ([True, False] if args.no_interpolate and skip > 1 else [True]):
-                btgp_steps = None
+                btgp = None
                 for method in sorted(args.methods, key=lambda m: m != "btgp"):
                     for every in args.every:
-                        options = dict(method=method, every=every, skip=skip, interpolate=interpolate)
+                        options = dict(method=method, every=every, skip=skip, interpolate=interpolate, range_states=args.range_states)
+                        if args.max_poses:
+                            options["max_poses"] = args.max_poses
                         repeat = args.repeat
-                        if method != "btgp":
-                            options["time_budget_s"] = args.batch_budget
+                        if method != "btgp" and budget is not None:
+                            options["time_budget_s"] = budget
                             repeat = 1  # budget-bound: one run
                         row = median_run(dataset, options, repeat)
                         steps = row.pop("step_seconds")
+                        curves.append((f"{method.upper()}/{every} skip {skip}{'' if interpolate else ' no interp.'}", steps))
                         if method == "btgp" and every == args.every[0]:
-                            btgp_steps = steps
-                        elif btgp_steps is not None:
-                            n = min(len(steps), len(btgp_steps))
-                            row["speedup_vs_btgp"] = round(sum(steps[:n]) / sum(btgp_steps[:n]), 1)
-                            row["prefix_steps"] = n
+                            btgp = (row, steps)
+                        elif btgp is not None:
+                            if len(steps) == len(btgp[1]):  # both ran the whole stream or prefix
+                                row["speedup_vs_btgp"] = round(row["total_s"] / btgp[0]["total_s"], 1)  # ratio of medians
+                                row["prefix_steps"] = len(steps)
+                            else:  # budget cut: compare the step times over the prefix both covered
+                                n = min(len(steps), len(btgp[1]))
+                                row["speedup_vs_btgp"] = round(sum(steps[:n]) / sum(btgp[1][:n]), 1)
+                                row["prefix_steps"] = n
                         print(json.dumps(row), flush=True)
+        print(f"# plot: {_plot(dataset, curves)}", file=sys.stderr)
 
 
 if __name__ == "__main__":

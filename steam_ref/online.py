@@ -1,8 +1,9 @@
 """The streaming front end of BTGP and its batch competitors.  [YIB Alg. 1 step 1, Sec. III-B, IV]
 
 Readings arrive in time order, one time step (pose) at a time, as from a robot. The front end
-decides which poses get an estimated state x(tᵢ): every ``skip``-th pose, plus (when
-``range_states``) every pose with a range reading, plus the last one. A reading at an estimated
+decides which poses get an estimated state x(tᵢ): a pose ``skip`` steps after the previous state,
+plus (when ``range_states``) every pose with a range reading, plus the last one; without range
+states that is every ``skip``-th pose, with them and skip 5 it is the paper's Plaza script. A reading at an estimated
 pose becomes an ordinary factor on it; a reading at any other pose is buffered until the next
 estimated state exists and then enters as an interpolated factor on its two neighbours (Eq. 29),
 or is dropped when ``interpolate=False`` (the paper's "without interpolation"). Each new state
@@ -68,7 +69,7 @@ class StreamOptions:
 
     method: str = "btgp"  # 'btgp', 'pb' or 'pbvr'
     every: int = 1  # update after this many range readings ('/1', '/10')
-    skip: int = 1  # every skip-th pose gets an estimated state
+    skip: int = 1  # a state at most skip poses after the previous one (every skip-th pose)
     interpolate: bool = True  # readings between states: interpolated (Eq. 29) or dropped
     range_states: bool = False  # also estimate every pose that has a range reading
     start_after_ranges: int | None = None  # None: the set-up's (Plaza 50, synthetic 0)
@@ -368,8 +369,9 @@ class StreamingEstimator:
         self.step_seconds.append(time.perf_counter() - start)
 
     def _is_state(self, i: int) -> bool:
-        """Pose i gets an estimated state: every skip-th, range poses if asked, and the last."""
-        if i % self.options.skip == 0 or i == self.n_poses - 1:
+        """Pose i gets an estimated state: ``skip`` steps after the last one, at a range reading if
+        asked, and the last pose (the rule of ``problem.estimated_poses``, decided as the stream goes)."""
+        if i - self.states[-1] >= self.options.skip or i == self.n_poses - 1:
             return True
         return self.options.range_states and self._range_bounds[i + 1] > self._range_bounds[i]
 

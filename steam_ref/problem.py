@@ -23,7 +23,7 @@ from .factors import Factor, GPPriorFactor, InterpolatedFactor, PriorFactor, Ran
 from .graph import FactorGraph, Values, X, L
 from .robust import Tukey
 
-__all__ = ["PaperSetup", "Readings", "SteamProblem", "build_problem", "dead_reckoning_values", "position_rmse"]
+__all__ = ["PaperSetup", "Readings", "SteamProblem", "build_problem", "dead_reckoning_values", "estimated_poses", "position_rmse"]
 
 
 @dataclass(frozen=True)
@@ -177,18 +177,14 @@ def build_problem(
 ) -> SteamProblem:
     """The batch problem over all of ``data``: priors, GP prior factors and every reading.
 
-    Every ``skip``-th pose (and the last) gets an estimated state, plus each pose with a range
-    reading if ``range_states``. Readings at other poses are interpolated (Eq. 29) when
+    The poses with an estimated state are :func:`estimated_poses` (``range_states`` adds every pose
+    with a range reading). Readings at other poses are interpolated (Eq. 29) when
     ``interpolate``, otherwise dropped (the paper's "without interpolation").
     """
-    if skip < 1:
-        raise SteamError(f"skip must be a positive integer, got {skip}")
     readings = Readings.from_dataset(data, setup)
     n = readings.n_poses
-    chosen = set(range(0, n, skip)) | {n - 1}
-    if range_states:
-        chosen |= set(readings.range_pose.tolist())
-    estimated = np.array(sorted(chosen))
+    estimated = estimated_poses(n, skip, readings.range_pose if range_states else None)
+    chosen = set(estimated.tolist())
     times = readings.times
     graph = FactorGraph(prior_factors(readings, setup))
     graph.add(GPPriorFactor.wnoa(X(a), X(b), times[b] - times[a], setup.qc) for a, b in zip(estimated, estimated[1:]))
@@ -206,6 +202,27 @@ def build_problem(
                 graph.add(f)
     initial = dead_reckoning_values(readings, data, estimated)
     return SteamProblem(graph, initial, estimated, times, setup)
+
+
+def estimated_poses(n_poses: int, skip: int, range_poses: NDArray | None = None) -> NDArray:
+    """The poses that get an estimated state, in the order a stream meets them: (M,) sorted.
+
+    Pose 0, the last pose, any pose ``skip`` steps after the previous state, and, when
+    ``range_poses`` is given, every pose in it. Without range poses this is every ``skip``-th pose,
+    the "time-step difference between estimated states" of [YIB Sec. IV]. With them it is the
+    layout of the paper's Plaza script (``skip`` = 5: a state at every range reading and at
+    most 5 steps apart), whose estimate the paper publishes.
+    """
+    if isinstance(skip, bool) or int(skip) != skip or skip < 1:
+        raise SteamError(f"skip must be a positive integer, got {skip!r}")
+    has_range = np.zeros(n_poses, dtype=bool)
+    if range_poses is not None:
+        has_range[np.asarray(range_poses, dtype=int)] = True
+    chosen = [0]
+    for i in range(1, n_poses):
+        if has_range[i] or i - chosen[-1] >= skip or i == n_poses - 1:
+            chosen.append(i)
+    return np.array(chosen)
 
 
 def prior_factors(readings: Readings, setup: PaperSetup) -> list[Factor]:

@@ -13,7 +13,7 @@ from steam_ref.factors import InterpolatedFactor, RangeFactor, VelocityFactor
 from steam_ref.gp.interpolate import interpolate_covariance, interpolation_matrices
 from steam_ref.graph import FactorGraph, Values, X
 from steam_ref.online import StreamingEstimator, StreamOptions, joint_covariance, run_online
-from steam_ref.problem import PaperSetup, Readings, build_problem
+from steam_ref.problem import PaperSetup, Readings, build_problem, estimated_poses
 
 try:
     from steam_ref.online import BayesTreeSolver
@@ -48,11 +48,11 @@ def _batch_optimum(data, skip: int, interpolate: bool) -> tuple[Values, np.ndarr
     return result.values, problem.estimated
 
 
-@pytest.mark.parametrize("skip,interpolate", [(1, True), (3, True), (3, False)])
-def test_stream_factors_equal_the_batch_problem(data, skip, interpolate):
+@pytest.mark.parametrize("skip,interpolate,range_states", [(1, True, False), (3, True, False), (3, False, False), (5, False, True), (4, True, True)])
+def test_stream_factors_equal_the_batch_problem(data, skip, interpolate, range_states):
     """The stream's factors have the batch problem's cost at any point: the same factor graph."""
-    est = _stream(data, method="pb", skip=skip, interpolate=interpolate)
-    problem = build_problem(data, SETUP, skip=skip, interpolate=interpolate)
+    est = _stream(data, method="pb", skip=skip, interpolate=interpolate, range_states=range_states)
+    problem = build_problem(data, SETUP, skip=skip, interpolate=interpolate, range_states=range_states)
     assert est.states == problem.estimated.tolist()
     values = est.solver.estimate().copy()
     rng = np.random.default_rng(0)
@@ -220,3 +220,26 @@ def test_btgp_time_query_covariance_matches_the_sparse_solve(data):
     np.testing.assert_allclose(est.solver.joint_covariance(keys), reference, rtol=1e-8, atol=1e-12)
     _, cov = est.estimate_at(9.5, covariance=True)
     np.testing.assert_allclose(cov, interpolate_covariance(8.0, 12.0, 9.5, SETUP.qc, reference), rtol=1e-8, atol=1e-12)
+
+
+@pytest.mark.parametrize("skip", [1, 2, 5, 7])
+def test_estimated_poses_follow_the_papers_rule(rng, skip):
+    """Pose 0, the last pose and every range pose are states; consecutive states are at most skip
+    apart, and a state that is none of those comes exactly skip after the previous one."""
+    n = 60
+    range_poses = np.unique(rng.integers(1, n, size=12))
+    states = estimated_poses(n, skip, range_poses)
+    assert states[0] == 0 and states[-1] == n - 1
+    assert set(range_poses.tolist()) <= set(states.tolist())
+    gaps = np.diff(states)
+    assert np.all((gaps >= 1) & (gaps <= skip))
+    forced = set(range_poses.tolist()) | {n - 1}
+    assert all(gap == skip for s, gap in zip(states[1:], gaps) if s not in forced)
+    # no range poses: plain every-skip-th pose, the time-step difference of Fig. 3/4
+    np.testing.assert_array_equal(estimated_poses(n, skip), sorted(set(range(0, n, skip)) | {n - 1}))
+
+
+def test_estimated_poses_rejects_a_bad_skip():
+    for bad in (0, -2, 1.5, True):
+        with pytest.raises(SteamError, match="skip"):
+            estimated_poses(10, bad)
