@@ -1,0 +1,106 @@
+"""The experiments of Fig. 3/4 and their results table, on a small generated task.  [YIB Sec. IV]
+
+The figures in the table are checked against the runs they summarise, recomputed here from the
+runs' own step times and estimates; the published-layout run against a direct streamed run.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+
+import numpy as np
+import pytest
+
+from steam_ref.datasets import generate_synthetic
+from steam_ref.experiments import (
+    PUBLISHED_RUNS,
+    SKIPS,
+    TIMING_RUNS,
+    Experiment,
+    published_run_experiment,
+    reproduce,
+    results_table,
+    speedup_on_prefix,
+)
+from steam_ref.online import default_options, run_online
+from steam_ref.problem import PaperSetup, position_rmse
+
+SETUP = PaperSetup.synthetic()
+
+
+@pytest.fixture(scope="module")
+def small():
+    return generate_synthetic(n_steps=45, n_landmarks=10, seed=5, range_sigma=0.2)
+
+
+@pytest.fixture(scope="module")
+def reproduced(small, tmp_path_factory):
+    out = tmp_path_factory.mktemp("reproduce")
+    table = reproduce(out, progress=False, data_sets=[("small", small, SETUP)])
+    return out, table
+
+
+def test_reproduce_writes_plots_runs_and_table(reproduced):
+    out, table = reproduced
+    for name in ("fig3.png", "fig3_trajectory.png", "results.md"):
+        assert (out / name).stat().st_size > 0, name
+    assert (out / "results.md").read_text() == table
+    runs = [json.loads(line) for line in (out / "runs.jsonl").read_text().splitlines()]
+    assert len(runs) == len(TIMING_RUNS) + 2 * len(SKIPS) + 1  # timing, with/without interpolation, published
+    assert {(r["method"], r["every"]) for r in runs} >= set(TIMING_RUNS)
+    # every run covered the whole stream (no budget was hit) and scored its own RMSE
+    assert all(r["completed"] and r["n_poses"] == 46 and np.isfinite(r["rmse_m"]) for r in runs)
+    for method, every in TIMING_RUNS:
+        assert re.search(rf"\| small \| {method.upper()}/{every} \| 46 \| ", table), (method, every)
+    for skip in SKIPS:
+        assert re.search(rf"\| small \| {skip} \| ", table), skip
+
+
+def test_table_figures_match_the_runs(small):
+    """Speed ratios, interpolated fractions, time saved and RMSE changes recomputed from the runs."""
+    exp = Experiment("small", small, SETUP)
+    for label, (method, every) in (("PB/1", ("pb", 1)), ("BTGP/1", ("btgp", 1))):
+        exp.timing[label] = run_online(small, SETUP, default_options(SETUP, method=method, every=every))
+    for skip in (1, 5):
+        exp.with_interp[skip] = run_online(small, SETUP, default_options(SETUP, skip=skip))
+    table = results_table([exp])
+    pb, bt = exp.timing["PB/1"], exp.timing["BTGP/1"]
+    ratio = pb.step_seconds.sum() / bt.step_seconds.sum()  # both covered all 46 steps
+    assert speedup_on_prefix(pb, bt) == (pytest.approx(ratio), 46)
+    assert f"| small | BTGP/1 vs PB/1 | far faster | {ratio:.0f}× faster over the first 46 steps |" in table
+    base, coarse = exp.with_interp[1], exp.with_interp[5]
+    assert coarse.n_estimated_states == 10  # poses 0, 5, ..., 45
+    frac, saved = 1 - 10 / 46, 1 - coarse.total_s / base.total_s
+    drmse = 100 * (coarse.rmse_m - base.rmse_m)
+    row = f"| small | interpolation, skip 5 ({frac:.0%} of states interpolated) |"
+    line = next(ln for ln in table.splitlines() if ln.startswith(row))
+    assert line.endswith(f"time saved {saved:.0%}, RMSE {coarse.rmse_m:.3f} m ({drmse:+.1f} cm) |")
+    # the RMSE a run reports is the RMSE of its estimates against ground truth
+    np.testing.assert_allclose(coarse.rmse_m, position_rmse(coarse.estimates[:, :2], small.ground_truth[:, 1:3]))
+
+
+def test_budget_cut_is_reported_as_such(small):
+    exp = Experiment("small", small, SETUP)
+    exp.timing["PB/1"] = run_online(small, SETUP, default_options(SETUP, method="pb", time_budget_s=1e-9))
+    r = exp.timing["PB/1"]
+    assert not r.completed and r.n_steps_processed < 46
+    assert f"(time budget: {r.n_steps_processed} of 46 steps)" in results_table([exp])
+
+
+@pytest.mark.parametrize("preset", ["synthetic", "plaza"])
+def test_published_run_uses_the_papers_layout(small, preset):
+    """The accuracy row is BTGP/1 in the layout of PUBLISHED_RUNS, scored at the estimated states."""
+    setup = PaperSetup.named(preset).replace(start_after_ranges=0, range_correction_steps=0)
+    exp = Experiment("small", small, setup)
+    published_run_experiment(exp)
+    layout, paper_rmse = PUBLISHED_RUNS[preset]
+    direct = run_online(small, setup, default_options(setup, **layout))
+    np.testing.assert_array_equal(exp.published.estimated, direct.estimated)
+    assert exp.published.rmse_estimated_m == direct.rmse_estimated_m
+    at_states = position_rmse(direct.estimates[direct.estimated, :2], small.ground_truth[direct.estimated, 1:3])
+    np.testing.assert_allclose(direct.rmse_estimated_m, at_states)
+    assert f"| {paper_rmse} m | {at_states:.4f} m" in results_table([exp])
+    if preset == "plaza":  # a state at every range reading, and at most 5 steps apart
+        assert set(np.unique(small.range_state_indices()).tolist()) <= set(direct.estimated.tolist())
+        assert np.diff(direct.estimated).max() <= 5
