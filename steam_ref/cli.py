@@ -53,6 +53,16 @@ def _positive_float(text: str) -> float:
     return value
 
 
+def _non_negative_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}") from None
+    if not value >= 0 or value == float("inf"):
+        raise argparse.ArgumentTypeError(f"expected a finite number >= 0, got {text!r}")
+    return value
+
+
 def _add_run_arguments(run: argparse.ArgumentParser) -> None:
     run.add_argument("--dataset", default="synthetic", help="synthetic (generated), paper-synthetic, plaza, or a PATH (.mat or CMU text folder)")
     run.add_argument("--method", choices=("btgp", "pb", "pbvr"), default="btgp")
@@ -63,6 +73,8 @@ def _add_run_arguments(run: argparse.ArgumentParser) -> None:
     run.add_argument("--preset", choices=("synthetic", "plaza"), default=None, help="parameter set (default: by data set; plaza for a PATH)")
     run.add_argument("--data-dir", default=None, help="folder searched first for data files")
     run.add_argument("--seed", type=int, default=0, help="seed of the generated synthetic task")
+    run.add_argument("--relinearize-threshold", type=_non_negative_float, default=None, help="BTGP: relinearize a variable whose increment exceeds this (default 0.1)")
+    run.add_argument("--relinearize-skip", type=_positive_int, default=None, help="BTGP: check relinearization every N-th update (default 10, GTSAM's)")
     run.add_argument("--max-poses", type=_positive_int, default=None, help="process only the first N poses")
     run.add_argument("--time-budget", type=_positive_float, default=None, help="stop after this many seconds (reported)")
     run.add_argument("--progress", action="store_true", help="show a progress bar")
@@ -114,6 +126,7 @@ def _run(args: argparse.Namespace) -> int:
         setup, method=args.method, every=args.every, skip=args.skip, interpolate=args.interpolate,
         range_states=args.range_states, max_poses=args.max_poses, time_budget_s=args.time_budget,
         progress=args.progress,
+        **{name: value for name, value in (("relinearize_threshold", args.relinearize_threshold), ("relinearize_skip", args.relinearize_skip)) if value is not None},
     )
     data = load_dataset(args.dataset, data_dir=args.data_dir, seed=args.seed)
     result = run_online(data, setup, options)
