@@ -121,7 +121,8 @@ def _claims(exp: Experiment, paper: dict[str, str]) -> list[str]:
         where = ", ".join(f"{k}={v}" for k, v in layout.items())
         out.append(
             f"| {exp.name} | accuracy of BTGP/1 as published ({where}), at the estimated states | {paper_rmse} m | "
-            f"{r.rmse_estimated_m:.4f} m ({r.n_estimated_states} states; {r.rmse_m:.3f} m over all steps) |"
+            f"{r.rmse_estimated_m:.4f} m ({r.n_estimated_states} states; {r.rmse_m:.3f} m over all steps"
+            f"{'' if r.completed else f'; first {r.n_steps_processed} steps only, not comparable'}) |"
         )
     bt = exp.timing.get("BTGP/1")
     for slow in ("PB/1", "PBVR/1"):

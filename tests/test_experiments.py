@@ -104,3 +104,9 @@ def test_published_run_uses_the_papers_layout(small, preset):
     if preset == "plaza":  # a state at every range reading, and at most 5 steps apart
         assert set(np.unique(small.range_state_indices()).tolist()) <= set(direct.estimated.tolist())
         assert np.diff(direct.estimated).max() <= 5
+
+
+def test_published_row_of_a_prefix_says_so(small):
+    exp = Experiment("small", small, SETUP)
+    published_run_experiment(exp, max_poses=20)
+    assert "first 20 steps only, not comparable" in results_table([exp])
