@@ -154,7 +154,8 @@ class FactorGraph:
                     raise ShapeError(f"{type(f).__name__} expects {k} of size {d}, estimate has {values.dim(k)}")
 
     def error(self, values: Values) -> float:
-        """The cost ½ Σ ρ(‖eᵢ‖²) of Eq. 6 (robust losses applied) at the given estimates."""
+        """The cost Σ ρᵢ(‖Wᵢeᵢ‖) of Eq. 6 at the given estimates: ρ(s) = s²/2 for a plain factor,
+        its robust loss otherwise (GTSAM's convention)."""
         from .linear.system import linearize
 
         return sum(group.cost for group in linearize(self.factors, values, jacobians=False))
