@@ -58,7 +58,7 @@ def measure(name: str, repeat: int, backend: str) -> dict:
     for key, order in orders.items():
         system = LinearSystem.from_groups(linearize(graph.factors, values), order)
 
-        def factor_and_solve():
+        def factor_and_solve(system=system, order=order):
             info, rhs = system.information()
             chol = SparseCholesky.factor(info, order, backend)
             chol.solve(rhs)

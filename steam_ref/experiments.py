@@ -25,7 +25,7 @@ import numpy as np
 
 from .datasets import RangeDataset, load_dataset
 from .errors import DataError
-from .online import RunResult, StreamOptions, default_options, run_online
+from .online import RunResult, default_options, run_online
 from .problem import PaperSetup
 
 __all__ = [

@@ -405,7 +405,6 @@ class StreamingEstimator:
     def _add_state(self, i: int) -> None:
         """New state X(i): GP prior to the previous state, its readings, the buffered readings."""
         prev = self.states[-1]
-        times = self.readings.times
         self._pending_values.insert(X(i), np.concatenate([self._pose, self._velocity]))
         self._pending.append(self._gp_prior(prev, i))
         for pose, inner in self._buffer:
