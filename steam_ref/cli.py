@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -20,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import SteamError
+from .online import StreamOptions
 
 __all__ = ["main", "build_parser"]
 
@@ -33,34 +35,25 @@ class _Parser(argparse.ArgumentParser):
         raise SteamError(f"{message} (see '{self.prog} --help')")
 
 
-def _positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
-    return value
+def _number(convert: type, lower: float, *, strict: bool):
+    """An argparse type: ``convert(text)``, finite, and above ``lower`` (``strict``) or at least it."""
+    what = f"{'an integer' if convert is int else 'a finite number'} {'>' if strict else '>='} {lower:g}"
+
+    def parse(text: str):
+        try:
+            value = convert(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}") from None
+        if not math.isfinite(value) or value < lower or (strict and value == lower):
+            raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}")
+        return value
+
+    return parse
 
 
-def _positive_float(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}") from None
-    if not value > 0:
-        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
-    return value
-
-
-def _non_negative_float(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}") from None
-    if not value >= 0 or value == float("inf"):
-        raise argparse.ArgumentTypeError(f"expected a finite number >= 0, got {text!r}")
-    return value
+_positive_int = _number(int, 0, strict=True)
+_positive_float = _number(float, 0, strict=True)
+_non_negative_float = _number(float, 0, strict=False)
 
 
 def _add_run_arguments(run: argparse.ArgumentParser) -> None:
@@ -73,8 +66,10 @@ def _add_run_arguments(run: argparse.ArgumentParser) -> None:
     run.add_argument("--preset", choices=("synthetic", "plaza"), default=None, help="parameter set (default: by data set; plaza for a PATH)")
     run.add_argument("--data-dir", default=None, help="folder searched first for data files")
     run.add_argument("--seed", type=int, default=0, help="seed of the generated synthetic task")
-    run.add_argument("--relinearize-threshold", type=_non_negative_float, default=None, help="BTGP: relinearize a variable whose increment exceeds this (default 0.1)")
-    run.add_argument("--relinearize-skip", type=_positive_int, default=None, help="BTGP: check relinearization every N-th update (default 10, GTSAM's)")
+    run.add_argument("--relinearize-threshold", type=_non_negative_float, default=StreamOptions.relinearize_threshold,
+                     help="BTGP: relinearize a variable whose increment exceeds this (default %(default)s)")
+    run.add_argument("--relinearize-skip", type=_positive_int, default=StreamOptions.relinearize_skip,
+                     help="BTGP: check relinearization every N-th update (default %(default)s, GTSAM's)")
     run.add_argument("--max-poses", type=_positive_int, default=None, help="process only the first N poses")
     run.add_argument("--time-budget", type=_positive_float, default=None, help="stop after this many seconds (reported)")
     run.add_argument("--progress", action="store_true", help="show a progress bar")
@@ -125,8 +120,7 @@ def _run(args: argparse.Namespace) -> int:
     options = default_options(
         setup, method=args.method, every=args.every, skip=args.skip, interpolate=args.interpolate,
         range_states=args.range_states, max_poses=args.max_poses, time_budget_s=args.time_budget,
-        progress=args.progress,
-        **{name: value for name, value in (("relinearize_threshold", args.relinearize_threshold), ("relinearize_skip", args.relinearize_skip)) if value is not None},
+        progress=args.progress, relinearize_threshold=args.relinearize_threshold, relinearize_skip=args.relinearize_skip,
     )
     data = load_dataset(args.dataset, data_dir=args.data_dir, seed=args.seed)
     result = run_online(data, setup, options)

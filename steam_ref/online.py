@@ -2,9 +2,8 @@
 
 Readings arrive in time order, one time step (pose) at a time, as from a robot. The front end
 decides which poses get an estimated state x(tᵢ): a pose ``skip`` steps after the previous state,
-plus (when ``range_states``) every pose with a range reading, plus the last one; without range
-states that is every ``skip``-th pose, with them and skip 5 it is the paper's Plaza script. A reading at an estimated
-pose becomes an ordinary factor on it; a reading at any other pose is buffered until the next
+plus (when ``range_states``) every pose with a range reading, plus the last one
+(:func:`~steam_ref.problem.estimated_poses`). A reading at an estimated pose becomes an ordinary factor on it; a reading at any other pose is buffered until the next
 estimated state exists and then enters as an interpolated factor on its two neighbours (Eq. 29),
 or is dropped when ``interpolate=False`` (the paper's "without interpolation"). Each new state
 brings a GP prior factor (Eq. 22) to the previous one, and an initial guess made by composing
@@ -29,7 +28,7 @@ from __future__ import annotations
 import resource
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
@@ -75,7 +74,7 @@ class StreamOptions:
     range_states: bool = False  # also estimate every pose that has a range reading
     start_after_ranges: int | None = None  # None: the set-up's (Plaza 50, synthetic 0)
     final_updates: int = 0  # extra solver updates with no new factors after the last pose
-    relinearize_threshold: float | dict[str, float] = field(default_factory=lambda: {"x": 0.1, "l": 0.1})
+    relinearize_threshold: float | dict[str, float] = 0.1  # BTGP: one threshold, or one per kind {'x': …, 'l': …}
     relinearize_skip: int = 10  # BTGP: check relinearization every this many updates (GTSAM's default)
     wildfire_threshold: float = 1e-3  # BTGP: stop back-substitution below this change
     pb_relative_tolerance: float = 1e-5  # PB/PBVR Gauss-Newton stopping rule (GTSAM's default)

@@ -28,10 +28,17 @@ __all__ = ["check_qc", "transition", "process_noise", "process_noise_inverse", "
 
 def check_qc(qc: NDArray) -> NDArray:
     """Return Qc as a read-only float (d, d) array, or raise if it is not symmetric positive definite."""
+    return _checked_qc(*qc_key(qc))
+
+
+def qc_key(qc: NDArray) -> tuple[int, bytes]:
+    """(d, Qc's bytes): a hashable key of a checked Qc, for memoising what depends on it."""
     qc = np.asarray(qc, dtype=float)
     if qc.ndim != 2 or qc.shape[0] != qc.shape[1]:
         raise ShapeError(f"Qc must be a finite square matrix, got shape {qc.shape}")
-    return _checked_qc(qc.shape[0], qc.tobytes())
+    key = qc.shape[0], qc.tobytes()
+    _checked_qc(*key)  # raises for a bad Qc; a good one is checked once
+    return key
 
 
 @lru_cache(maxsize=64)
@@ -42,12 +49,6 @@ def _checked_qc(d: int, data: bytes) -> NDArray:
     if not np.allclose(qc, qc.T) or np.any(np.linalg.eigvalsh(qc) <= 0):
         raise SteamError(f"Qc must be symmetric positive definite, got {qc.tolist()}")
     return qc
-
-
-def qc_key(qc: NDArray) -> tuple[int, bytes]:
-    """A hashable key of a checked Qc, for memoising what depends on it."""
-    qc = check_qc(qc)
-    return qc.shape[0], qc.tobytes()
 
 
 def _read_only(*arrays: NDArray) -> None:
