@@ -105,35 +105,38 @@ def main() -> None:
     parser.add_argument("--batch-budget", type=float, default=None, help="seconds per PB/PBVR run (default: 60 without --max-poses, none with it)")
     args = parser.parse_args()
     budget = args.batch_budget if args.batch_budget is not None or args.max_poses else 60.0
+    layouts = [(skip, interp) for skip in args.skips for interp in ([True, False] if args.no_interpolate and skip > 1 else [True])]
+    runs = [(method, every) for method in sorted(args.methods, key=lambda m: m != "btgp") for every in args.every]
     for dataset in args.datasets:
         curves = []
-        for skip in args.skips:
-            for interpolate in ([True, False] if args.no_interpolate and skip > 1 else [True]):
-                btgp = None
-                for method in sorted(args.methods, key=lambda m: m != "btgp"):
-                    for every in args.every:
-                        options = dict(method=method, every=every, skip=skip, interpolate=interpolate, range_states=args.range_states)
-                        if args.max_poses:
-                            options["max_poses"] = args.max_poses
-                        repeat = args.repeat
-                        if method != "btgp" and budget is not None:
-                            options["time_budget_s"] = budget
-                            repeat = 1  # budget-bound: one run
-                        row = median_run(dataset, options, repeat)
-                        steps = row.pop("step_seconds")
-                        curves.append((f"{method.upper()}/{every} skip {skip}{'' if interpolate else ' no interp.'}", steps))
-                        if method == "btgp" and every == args.every[0]:
-                            btgp = (row, steps)
-                        elif btgp is not None:
-                            if len(steps) == len(btgp[1]):  # both ran the whole stream or prefix
-                                row["speedup_vs_btgp"] = round(row["total_s"] / btgp[0]["total_s"], 1)  # ratio of medians
-                                row["prefix_steps"] = len(steps)
-                            else:  # budget cut: compare the step times over the prefix both covered
-                                n = min(len(steps), len(btgp[1]))
-                                row["speedup_vs_btgp"] = round(sum(steps[:n]) / sum(btgp[1][:n]), 1)
-                                row["prefix_steps"] = n
-                        print(json.dumps(row), flush=True)
+        for skip, interpolate in layouts:
+            btgp = None  # (row, step times) of the BTGP run the others are compared with
+            for method, every in runs:
+                options = dict(method=method, every=every, skip=skip, interpolate=interpolate, range_states=args.range_states)
+                if args.max_poses:
+                    options["max_poses"] = args.max_poses
+                repeat = args.repeat
+                if method != "btgp" and budget is not None:
+                    options["time_budget_s"] = budget
+                    repeat = 1  # budget-bound: one run
+                row = median_run(dataset, options, repeat)
+                steps = row.pop("step_seconds")
+                curves.append((f"{method.upper()}/{every} skip {skip}{'' if interpolate else ' no interp.'}", steps))
+                if method == "btgp" and every == args.every[0]:
+                    btgp = (row, steps)
+                elif btgp is not None:
+                    row["speedup_vs_btgp"], row["prefix_steps"] = speedup(row, steps, *btgp)
+                print(json.dumps(row), flush=True)
         print(f"# plot: {_plot(dataset, curves)}", file=sys.stderr)
+
+
+def speedup(row: dict, steps: list[float], btgp_row: dict, btgp_steps: list[float]) -> tuple[float, int]:
+    """(time ratio to BTGP, steps compared): of the median totals when both covered the same steps,
+    else of the step times over the prefix both covered (a budget cut the slower run)."""
+    if len(steps) == len(btgp_steps):
+        return round(row["total_s"] / btgp_row["total_s"], 1), len(steps)
+    n = min(len(steps), len(btgp_steps))
+    return round(sum(steps[:n]) / sum(btgp_steps[:n]), 1), n
 
 
 if __name__ == "__main__":

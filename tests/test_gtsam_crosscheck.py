@@ -96,7 +96,7 @@ def gtsam_problem(data):
     sde = LinearSDE.wnoa(SETUP.qc)
     n = r.n_poses
     states = sorted(set(range(0, n, SKIP)) | {n - 1})
-    sigmas = partial(gtsam.noiseModel.Diagonal.Sigmas)
+    sigmas = gtsam.noiseModel.Diagonal.Sigmas
     tukey = gtsam.noiseModel.mEstimator.Tukey.Create(SETUP.tukey_c)
     range_noise = gtsam.noiseModel.Robust.Create(tukey, gtsam.noiseModel.Isotropic.Sigma(1, SETUP.range_sigma))
     graph = gtsam.NonlinearFactorGraph()
