@@ -21,7 +21,8 @@ from .factors import (
     VelocityFactor,
     gp_prior_factors,
 )
-from .graph import FactorGraph, Key, L, Values, X
+from .graph import FactorGraph
+from .variables import Key, L, Values, X
 from .linear import LinearSystem, amd_ordering, marginal_covariances, xl_ordering
 from .robust import Huber, Tukey
 from .datasets import RangeDataset, generate_synthetic, load_dataset

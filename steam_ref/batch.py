@@ -13,7 +13,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from .errors import SteamError
-from .graph import FactorGraph, Values
+from .graph import FactorGraph
+from .variables import Values
 from .linear.ordering import Ordering, amd_ordering, sparse_backend, xl_ordering
 from .linear.solve import SparseCholesky
 from .linear.system import LinearSystem, linearize

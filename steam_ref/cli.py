@@ -166,7 +166,7 @@ def _batch(args: argparse.Namespace) -> int:
     import time
 
     from .datasets import load_dataset
-    from .graph import X
+    from .variables import X
     from .problem import PaperSetup, build_problem, position_rmse, sequential_batch
 
     _check_output(args.plot, ".png", "--plot")

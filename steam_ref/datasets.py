@@ -46,10 +46,10 @@ from scipy.spatial import cKDTree
 
 from .errors import DataError, ShapeError, SteamError
 from .gp.prior import check_qc, process_noise, transition
+from .pose2 import integrate_odometry, wrap_angle
 
 __all__ = [
     "RangeDataset",
-    "integrate_odometry",
     "load_cmu_mat",
     "load_cmu_text",
     "gtsam_data_dir",
@@ -74,11 +74,6 @@ _FILES = {"paper-synthetic": "Syn_theta_Plaza.mat", "plaza": "Plaza1_thrown_away
 
 def _num(value: float) -> str:
     return repr(float(value))
-
-
-def _wrap(angle: NDArray) -> NDArray:
-    """Angles wrapped to [-π, π)."""
-    return (angle + np.pi) % (2 * np.pi) - np.pi
 
 
 # --------------------------------------------------------------------------------------------
@@ -265,23 +260,6 @@ def _frozen_table(name: str, value: ArrayLike, columns: tuple[str, ...]) -> NDAr
         raise DataError(f"{name}[{r}, {c}] ({columns[c]}) is {table[r, c]}: every value must be finite")
     table.setflags(write=False)
     return table
-
-
-def integrate_odometry(start: ArrayLike, odometry: ArrayLike) -> NDArray:
-    """Dead reckoning from a start pose: (n + 1, 4) rows time, x, y, heading.
-
-    start: (4,) time, x, y, heading of pose 0; odometry: (n, 3) time, distance, heading change.
-    Each step moves along the heading held before the turn, then turns; the heading is not wrapped.
-    """
-    start = np.asarray(start, dtype=float)
-    odometry = np.asarray(odometry, dtype=float).reshape(-1, 3)
-    if start.shape != (4,):
-        raise ShapeError(f"start must be (4,) time, x, y, heading; got shape {start.shape}")
-    heading = start[3] + np.concatenate([[0.0], np.cumsum(odometry[:, 2])])
-    steps = odometry[:, 1, None] * np.column_stack([np.cos(heading[:-1]), np.sin(heading[:-1])])
-    xy = start[1:3] + np.concatenate([np.zeros((1, 2)), np.cumsum(steps, axis=0)])
-    times = np.concatenate([[start[0]], odometry[:, 0]])
-    return np.column_stack([times, xy, heading])
 
 
 # --------------------------------------------------------------------------------------------
@@ -555,7 +533,7 @@ def _noisy_odometry(rng: np.random.Generator, gt: NDArray, sigmas: NDArray) -> N
     distance = np.hypot(*np.diff(gt[:, 1:3], axis=0).T)
     turn = np.diff(gt[:, 3])
     noise = rng.standard_normal((len(distance), 2)) * sigmas
-    return np.column_stack([gt[1:, 0], distance + noise[:, 0], _wrap(turn + noise[:, 1])])
+    return np.column_stack([gt[1:, 0], distance + noise[:, 0], wrap_angle(turn + noise[:, 1])])
 
 
 def _scatter_landmarks(

@@ -24,7 +24,8 @@ from numpy.typing import NDArray
 from .errors import ShapeError, SteamError
 from .gp.interpolate import interpolation_matrices
 from .gp.prior import process_noise_sqrt_information, transition
-from .graph import Key
+from .pose2 import wrap_angle
+from .variables import Key
 from .robust import RobustLoss
 
 __all__ = [
@@ -39,16 +40,10 @@ __all__ = [
     "InterpolatedFactor",
     "gp_prior_factors",
     "sqrt_information",
-    "wrap_angle",
 ]
 
 STATE_DIM = 6  # [x, y, θ, ẋ, ẏ, θ̇]
 LANDMARK_DIM = 2
-
-
-def wrap_angle(a: NDArray) -> NDArray:
-    """Angles mapped to [-π, π)."""
-    return (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi
 
 
 def sqrt_information(noise: NDArray | float, m: int) -> NDArray:

@@ -1,114 +1,20 @@
-"""Variables, their current estimates, and the factor graph.  [YIB Sec. III-A, Eq. 20]
+"""The factor graph: the factors f_i(θ_i) whose product is the joint density.  [YIB Eq. 20]
 
-Variables are named by small keys: ``X(i)`` is the trajectory state x(tᵢ) = [p; ṗ] (the i-th
-*estimated* state, whatever its time) and ``L(j)`` is landmark ℓⱼ. :class:`Values` maps keys
-to estimates (1-D float arrays); :class:`FactorGraph` is the list of factors f_i(θ_i) whose
-product is the joint density of Eq. 20.
+A :class:`FactorGraph` is a list of factors; its variables are the keys the factors name
+(:mod:`steam_ref.variables`), and its cost at an estimate is the sum of the factors' costs,
+evaluated by the linearization layer (:func:`steam_ref.linear.system.linearize`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Iterator, Mapping
-from typing import TYPE_CHECKING, NamedTuple
+from collections.abc import Iterable, Iterator
 
-import numpy as np
-from numpy.typing import NDArray
+from .errors import ShapeError, SteamError
+from .factors import Factor
+from .linear.system import linearize
+from .variables import Key, Values
 
-from .errors import ShapeError, SteamError, UnknownVariableError
-
-if TYPE_CHECKING:
-    from .factors import Factor
-
-__all__ = ["Key", "X", "L", "Values", "FactorGraph"]
-
-
-class Key(NamedTuple):
-    """The name of a variable: a kind ('x' for states, 'l' for landmarks) and an integer index."""
-
-    kind: str
-    index: int
-
-    def __repr__(self) -> str:
-        return f"{self.kind}{self.index}"
-
-    __str__ = __repr__
-
-
-def X(i: int) -> Key:
-    """The key of trajectory state number i."""
-    return Key("x", int(i))
-
-
-def L(j: int) -> Key:
-    """The key of landmark number j."""
-    return Key("l", int(j))
-
-
-class Values(Mapping):
-    """Current estimates: key → 1-D float64 array. Unknown keys raise :class:`UnknownVariableError`."""
-
-    def __init__(self, items: Mapping[Key, NDArray] | Iterable[tuple[Key, NDArray]] = ()):
-        self._data: dict[Key, NDArray] = {}
-        pairs = items.items() if isinstance(items, Mapping) else items
-        for key, value in pairs:
-            self.insert(key, value)
-
-    def insert(self, key: Key, value: NDArray) -> None:
-        """Add (or replace) the estimate of one variable; checks it is a finite vector."""
-        v = np.array(value, dtype=float).reshape(-1)
-        if not np.all(np.isfinite(v)):
-            raise ShapeError(f"estimate of {key} is not finite: {v}")
-        old = self._data.get(key)
-        if old is not None and old.shape != v.shape:
-            raise ShapeError(f"estimate of {key} changes size from {old.shape[0]} to {v.shape[0]}")
-        self._data[key] = v
-
-    def __getitem__(self, key: Key) -> NDArray:
-        try:
-            return self._data[key]
-        except KeyError:
-            raise UnknownVariableError(f"no estimate for variable {key!r}") from None
-
-    def __iter__(self) -> Iterator[Key]:
-        return iter(self._data)
-
-    def __len__(self) -> int:
-        return len(self._data)
-
-    def __contains__(self, key: object) -> bool:
-        return key in self._data
-
-    def copy(self) -> Values:
-        """An independent copy (the arrays are copied too)."""
-        out = Values()
-        out._data = {k: v.copy() for k, v in self._data.items()}
-        return out
-
-    def dim(self, key: Key) -> int:
-        """Size of one variable."""
-        return self[key].shape[0]
-
-    def stack(self, keys: Iterable[Key]) -> NDArray:
-        """Estimates of several variables of one size as rows of an (n, dim) array."""
-        return np.stack([self[k] for k in keys])
-
-    def retract(self, delta: Mapping[Key, NDArray]) -> Values:
-        """θ̄ + δθ: a new Values with the increments added (the state space is a vector space)."""
-        out = self.copy()
-        for key, step in delta.items():
-            out._data[key] = self[key] + step
-        return out
-
-    def states(self) -> list[Key]:
-        """The trajectory-state keys, in index order."""
-        return sorted((k for k in self._data if k.kind == "x"), key=lambda k: k.index)
-
-    def landmarks(self) -> list[Key]:
-        """The landmark keys, in index order."""
-        return sorted((k for k in self._data if k.kind == "l"), key=lambda k: k.index)
-
-    def __repr__(self) -> str:
-        return f"Values({len(self)} variables)"
+__all__ = ["FactorGraph"]
 
 
 class FactorGraph:
@@ -120,8 +26,6 @@ class FactorGraph:
 
     def add(self, factors: Factor | Iterable[Factor]) -> None:
         """Append one factor or several."""
-        from .factors import Factor
-
         if isinstance(factors, Factor):
             factors = [factors]
         for f in factors:
@@ -156,8 +60,6 @@ class FactorGraph:
     def error(self, values: Values) -> float:
         """The cost Σ ρᵢ(‖Wᵢeᵢ‖) of Eq. 6 at the given estimates: ρ(s) = s²/2 for a plain factor,
         its robust loss otherwise (GTSAM's convention)."""
-        from .linear.system import linearize
-
         return sum(group.cost for group in linearize(self.factors, values, jacobians=False))
 
     def __repr__(self) -> str:

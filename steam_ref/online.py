@@ -38,9 +38,11 @@ from .bayes_tree import IncrementalSolver
 from .errors import SteamError
 from .factors import Factor, GPPriorFactor, InterpolatedFactor, RangeFactor, VelocityFactor
 from .gp.interpolate import interpolate_covariance, interpolation_matrices
-from .graph import FactorGraph, Key, L, Values, X
+from .graph import FactorGraph
+from .variables import Key, L, Values, X
 from .linear.solve import SparseCholesky
 from .linear.system import LinearSystem
+from .pose2 import compose
 from .problem import PaperSetup, Readings, landmark_prior, position_rmse, prior_factors
 
 __all__ = [
@@ -295,12 +297,6 @@ def peak_rss_mb() -> float:
 # --- The front end ------------------------------------------------------------------------------
 
 
-def _compose(pose: NDArray, distance: float, turn: float) -> NDArray:
-    """pose ⊕ (distance, 0, turn): move along the current heading, then turn (Pose2.compose)."""
-    x, y, th = pose
-    return np.array([x + distance * np.cos(th), y + distance * np.sin(th), th + turn])
-
-
 class StreamingEstimator:
     """Algorithm 1 step 1 on a :class:`Readings` stream, feeding an :class:`OnlineSolver`.
 
@@ -378,7 +374,7 @@ class StreamingEstimator:
     def _predict(self, i: int) -> None:
         """Initial guess of pose i: compose odometry row i-1 onto the latest pose (paper's scripts)."""
         distance, _, turn = self.readings.velocity[i]
-        new = _compose(self._pose, distance, turn)
+        new = compose(self._pose, distance, turn)
         self._velocity = new - self._pose  # dt = 1
         self._pose = new
 

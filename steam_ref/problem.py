@@ -18,9 +18,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .datasets import RangeDataset
+from .pose2 import integrate_odometry
 from .errors import SteamError
 from .factors import Factor, GPPriorFactor, InterpolatedFactor, PriorFactor, RangeFactor, VelocityFactor
-from .graph import FactorGraph, Values, X, L
+from .graph import FactorGraph
+from .variables import L, Values, X
 from .robust import Tukey
 
 __all__ = ["PaperSetup", "Readings", "SteamProblem", "build_problem", "dead_reckoning_values", "estimated_poses", "position_rmse"]
@@ -243,8 +245,6 @@ def dead_reckoning_values(readings: Readings, data: RangeDataset, estimated: NDA
     Landmarks start at their surveyed positions.
     """
     start = np.concatenate([[data.ground_truth[0, 0]], readings.first_pose])
-    from .datasets import integrate_odometry
-
     path = integrate_odometry(start, data.odometry)[:, 1:4]
     vel = np.vstack([np.diff(path, axis=0), np.zeros((1, 3))])  # velocity over the next step, dt = 1
     values = Values({X(i): np.concatenate([path[i], vel[i]]) for i in estimated})

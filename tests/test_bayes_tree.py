@@ -13,7 +13,7 @@ from problems import small_problem
 import steam_ref as sr
 from steam_ref.bayes_tree import BayesTree, constrained_min_degree, eliminate_clique
 from steam_ref.errors import UnderdeterminedError
-from steam_ref.graph import Key
+from steam_ref.variables import Key
 from steam_ref.linear import LinearSystem, Ordering, amd_ordering, xl_ordering
 from steam_ref.linear.system import GaussianFactor, linearize
 

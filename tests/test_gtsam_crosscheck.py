@@ -23,7 +23,7 @@ from oracles import gp_kernel, sde_process_noise, sde_transition  # noqa: E402
 from steam_ref.batch import gauss_newton  # noqa: E402
 from steam_ref.datasets import generate_synthetic  # noqa: E402
 from steam_ref.gp import LinearSDE  # noqa: E402
-from steam_ref.graph import Key, L, Values, X  # noqa: E402
+from steam_ref.variables import Key, L, Values, X  # noqa: E402
 from steam_ref.online import BayesTreeSolver, StreamingEstimator, StreamOptions  # noqa: E402
 from steam_ref.problem import PaperSetup, Readings, build_problem  # noqa: E402
 

@@ -11,7 +11,8 @@ from steam_ref.datasets import generate_synthetic
 from steam_ref.errors import SteamError
 from steam_ref.factors import InterpolatedFactor, RangeFactor, VelocityFactor
 from steam_ref.gp.interpolate import interpolate_covariance, interpolation_matrices
-from steam_ref.graph import FactorGraph, Values, X
+from steam_ref.graph import FactorGraph
+from steam_ref.variables import Values, X
 from steam_ref.online import StreamingEstimator, StreamOptions, joint_covariance, run_online
 from steam_ref.problem import PaperSetup, Readings, build_problem, estimated_poses
 

@@ -32,7 +32,7 @@ from numpy.typing import NDArray
 
 from ..errors import ShapeError, SteamError, UnderdeterminedError, UnknownVariableError
 from ..factors import Factor
-from ..graph import Key, Values
+from ..variables import Key, Values
 from ..linear.system import GaussianFactor, linearize
 from .symbolic import constrained_min_degree
 from .tree import BayesTree, eliminate

@@ -1,7 +1,7 @@
 """The structure of a Bayes tree: orderings → cliques, and clique surgery.  [K11, K12 Alg. 1-4]
 
 Nothing here knows a number. Variables are any hashable names (the tests use letters, the solver
-uses :class:`~steam_ref.graph.Key`); a factor is just the tuple of variables it touches.
+uses :class:`~steam_ref.variables.Key`); a factor is just the tuple of variables it touches.
 
 - :func:`constrained_min_degree` picks an elimination order: greedy minimum degree on the
   variable graph, with a chosen group of variables forced last (the role CCOLAMD plays in iSAM2).

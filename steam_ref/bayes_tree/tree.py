@@ -25,7 +25,7 @@ from numpy.typing import NDArray
 from scipy.linalg import lapack
 
 from ..errors import SteamError, UnderdeterminedError
-from ..graph import Key
+from ..variables import Key
 from ..linear.ordering import Ordering
 from ..linear.system import GaussianFactor
 from .symbolic import CliqueTree, build_cliques

@@ -23,7 +23,7 @@ import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 
 from ..errors import SteamError
-from ..graph import Key
+from ..variables import Key
 
 __all__ = ["Ordering", "xl_ordering", "amd_ordering", "variable_adjacency", "sparse_backend", "have_cholmod"]
 

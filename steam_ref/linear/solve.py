@@ -19,7 +19,7 @@ import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 
 from ..errors import UnderdeterminedError
-from ..graph import Key
+from ..variables import Key
 from .ordering import Ordering, sparse_backend
 from .system import LinearSystem
 

@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 
 from ..errors import ShapeError, UnknownVariableError
 from ..factors import Factor
-from ..graph import Key, Values
+from ..variables import Key, Values
 from .ordering import Ordering
 
 __all__ = ["LinearizedGroup", "linearize", "LinearSystem", "GaussianFactor"]
