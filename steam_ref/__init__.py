@@ -26,7 +26,7 @@ from .variables import Key, L, Values, X
 from .linear import LinearSystem, amd_ordering, marginal_covariances, xl_ordering
 from .robust import Huber, Tukey
 from .datasets import RangeDataset, generate_synthetic, load_dataset
-from .problem import PaperSetup
+from .readings import PaperSetup
 from .online import StreamOptions, run_online
 
 __version__ = "0.1.0"

@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import SteamError
-from .online import StreamOptions
+from .online import ISAM2_DEFAULTS
 
 __all__ = ["main", "build_parser"]
 
@@ -66,9 +66,9 @@ def _add_run_arguments(run: argparse.ArgumentParser) -> None:
     run.add_argument("--preset", choices=("synthetic", "plaza"), default=None, help="parameter set (default: by data set; plaza for a PATH)")
     run.add_argument("--data-dir", default=None, help="folder searched first for data files")
     run.add_argument("--seed", type=int, default=0, help="seed of the generated synthetic task")
-    run.add_argument("--relinearize-threshold", type=_non_negative_float, default=StreamOptions.relinearize_threshold,
+    run.add_argument("--relinearize-threshold", type=_non_negative_float, default=ISAM2_DEFAULTS["relinearize_threshold"],
                      help="BTGP: relinearize a variable whose increment exceeds this (default %(default)s)")
-    run.add_argument("--relinearize-skip", type=_positive_int, default=StreamOptions.relinearize_skip,
+    run.add_argument("--relinearize-skip", type=_positive_int, default=ISAM2_DEFAULTS["relinearize_skip"],
                      help="BTGP: check relinearization every N-th update (default %(default)s, GTSAM's)")
     run.add_argument("--max-poses", type=_positive_int, default=None, help="process only the first N poses")
     run.add_argument("--time-budget", type=_positive_float, default=None, help="stop after this many seconds (reported)")
@@ -111,7 +111,7 @@ def _check_output(path: str | None, suffix: str, option: str) -> None:
 def _run(args: argparse.Namespace) -> int:
     from .datasets import load_dataset
     from .online import default_options, run_online
-    from .problem import PaperSetup
+    from .readings import PaperSetup
 
     _check_output(args.save_estimates, ".npz", "--save-estimates")
     _check_output(args.plot, ".png", "--plot")
@@ -120,10 +120,11 @@ def _run(args: argparse.Namespace) -> int:
     options = default_options(
         setup, method=args.method, every=args.every, skip=args.skip, interpolate=args.interpolate,
         range_states=args.range_states, max_poses=args.max_poses, time_budget_s=args.time_budget,
-        progress=args.progress, relinearize_threshold=args.relinearize_threshold, relinearize_skip=args.relinearize_skip,
+        progress=args.progress,
+        isam2=dict(relinearize_threshold=args.relinearize_threshold, relinearize_skip=args.relinearize_skip),
     )
     data = load_dataset(args.dataset, data_dir=args.data_dir, seed=args.seed)
-    result = run_online(data, setup, options)
+    result = run_online(data, setup, options, covariances=args.save_estimates is not None)
     summary = result.summary(args.dataset)
     if args.json:
         print(json.dumps(summary))
@@ -151,14 +152,20 @@ def _print_summary(summary: dict) -> None:
 
 
 def save_estimates(path: str, result) -> None:
-    """Write ``times``, ``x``, ``y``, ``theta`` (every covered time step), ``estimated`` (pose
-    indices of the states), ``landmark_ids`` and ``landmarks`` (n, 2) to an .npz file."""
+    """Write a run to an .npz file: ``times``, ``x``, ``y``, ``theta`` and ``xdot``, ``ydot``,
+    ``thetadot`` at every covered time step, ``state_poses`` (pose indices with a state),
+    ``landmark_ids`` and ``landmarks`` (m, 2), and, when the run has them, the final marginal
+    covariances ``pose_covariance`` (n, 3, 3), ``velocity_covariance`` (n, 3, 3) and
+    ``landmark_covariance`` (m, 2, 2), in the order of ``times`` and ``landmark_ids``."""
     ids = np.array(sorted(result.landmarks), dtype=int)
     marks = np.array([result.landmarks[i] for i in ids]).reshape(-1, 2)
-    np.savez(
-        path, times=result.times, x=result.estimates[:, 0], y=result.estimates[:, 1], theta=result.estimates[:, 2],
-        estimated=result.estimated, landmark_ids=ids, landmarks=marks,
-    )
+    tr = result.trajectory
+    arrays = dict(times=result.times, x=tr[:, 0], y=tr[:, 1], theta=tr[:, 2], xdot=tr[:, 3], ydot=tr[:, 4], thetadot=tr[:, 5],
+                  state_poses=result.state_poses, landmark_ids=ids, landmarks=marks)
+    if result.covariances is not None:
+        c = result.covariances
+        arrays.update(pose_covariance=c.pose, velocity_covariance=c.velocity, landmark_covariance=c.landmark)
+    np.savez(path, **arrays)
 
 
 def _batch(args: argparse.Namespace) -> int:
@@ -167,7 +174,9 @@ def _batch(args: argparse.Namespace) -> int:
 
     from .datasets import load_dataset
     from .variables import X
-    from .problem import PaperSetup, build_problem, position_rmse, sequential_batch
+    from .problem import build_problem, sequential_batch
+    from .readings import PaperSetup
+    from .results import position_rmse
 
     _check_output(args.plot, ".png", "--plot")
     setup = PaperSetup.named(args.preset or _PRESET_OF.get(args.dataset, "plaza"))
@@ -178,7 +187,7 @@ def _batch(args: argparse.Namespace) -> int:
     seconds = time.perf_counter() - t0
     positions = np.array([result.values[X(i)][:2] for i in range(data.n_poses)])
     summary = {
-        "dataset": args.dataset, "ordering": args.ordering, "n_states": len(problem.estimated),
+        "dataset": args.dataset, "ordering": args.ordering, "n_states": len(problem.states),
         "rmse_m": round(position_rmse(positions, data.ground_truth[:, 1:3]), 6), "total_s": round(seconds, 3),
         "iterations": len(result.iterations), "factor_nnz": result.factor_nnz, "backend": result.backend,
     }

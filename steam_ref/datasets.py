@@ -14,8 +14,8 @@ Conventions, checked on the reference files (see ``data/README.md`` for the figu
   holds the distance travelled and the heading change from pose k to pose k + 1. Both CMU .mat
   files (paper-synthetic and Plaza, cleaned or original) follow this exactly; a file that does
   not is rejected with a :class:`DataError`, never re-aligned.
-- A range reading belongs to the first pose whose time is at or after its own, i.e. to the
-  odometry row that closes the interval holding it (pose 0 only when it is not later than pose 0).
+- Which pose a range reading belongs to is the front end's rule, not the data set's
+  (:func:`steam_ref.readings.attach_ranges`).
 - Dead reckoning, when recomputed (:func:`integrate_odometry`), moves along the heading *before*
   the turn: p[k+1] = p[k] + d_k [cos θ_k, sin θ_k], θ[k+1] = θ[k] + Δθ_k, from ground-truth row 0.
   That reproduces the paper-synthetic file's DRp to the last bit. Plaza's DRp is kept as given:
@@ -23,11 +23,11 @@ Conventions, checked on the reference files (see ``data/README.md`` for the figu
   positions follow a drifting heading that is not in the files, so it cannot be recomputed.
 - The original Plaza ranges (all 3,529) and the cleaned file's 3,363 contain two blocks of
   readings whose time stamps go back by about 64 s and 50 s (their ranges match ground truth at
-  their own time stamps, not at their row position). The loaders sort range rows by time
-  (stably) and say so in ``source``; pass ``sort_ranges=False`` to get a :class:`DataError` instead.
+  their own time stamps, not at their row position). The loaders keep the rows in file order, as
+  the paper's scripts read them, and name the rows that go back in ``source``.
 
 Errors: a table of the wrong shape given to :class:`RangeDataset` raises :class:`ShapeError`;
-bad content (NaN, times going backwards, unknown landmark ids) raises :class:`DataError`; the
+bad content (NaN, pose times not increasing, unknown landmark ids) raises :class:`DataError`; the
 loaders re-raise either as :class:`DataError` prefixed with the file name. Rows are 0-based in
 ``array[row, column]`` messages and 1-based as "line N" for text files.
 """
@@ -87,7 +87,7 @@ class RangeDataset:
 
     Checked on construction: table shapes (ShapeError); finite values, strictly increasing pose
     times, odometry row k stamped with the time of pose k + 1 (to 1 µs), one dead-reckoning row
-    per pose, non-decreasing range times, integer and unique landmark ids, integer sender ids,
+    per pose, integer and unique landmark ids, integer sender ids,
     and every ranged landmark id present in ``landmarks`` (DataError). Dead-reckoning times are
     not compared with pose times: Plaza's DRp row 0 is stamped 0.0226 s after GT row 0.
     """
@@ -145,27 +145,9 @@ class RangeDataset:
             )
         return rows
 
-    def range_state_indices(self) -> NDArray:
-        """(n_ranges,) int: the first pose i with ``times[i] >= t`` for each range time t.
-
-        Raises DataError for a range later than the last pose.
-        """
-        t = self.ranges[:, 0]
-        index = np.searchsorted(self.times, t, side="left")
-        late = np.flatnonzero(index >= self.n_poses)
-        if late.size:
-            k = int(late[0])
-            raise DataError(
-                f"ranges row {k} at t={_num(t[k])} is after the last pose (t={_num(self.times[-1])}) "
-                f"of data set {self.name!r}: no pose to attach it to"
-            )
-        return index
-
-    def gt_ranges(self) -> NDArray:
-        """(n_ranges,) true range of each reading: ground-truth pose it belongs to → surveyed landmark."""
-        poses = self.ground_truth[self.range_state_indices(), 1:3]
-        marks = self.landmarks[self.landmark_rows(self.ranges[:, 2]), 1:3]
-        return np.hypot(*(poses - marks).T)
+    def ranges_going_back(self) -> NDArray:
+        """(k,) rows of ``ranges`` whose time is earlier than the row before's (kept in file order)."""
+        return np.flatnonzero(np.diff(self.ranges[:, 0]) < 0) + 1
 
     def to_cmu_arrays(self) -> dict[str, NDArray]:
         """Writable copies under the CMU names GT, DR, DRp, TL, TD (for ``scipy.io.savemat``)."""
@@ -194,13 +176,6 @@ class RangeDataset:
             raise DataError(
                 f"odometry row {k} has t={_num(self.odometry[k, 0])} but pose {k + 1} has "
                 f"t={_num(t[k + 1])}: odometry row k must end at pose k+1"
-            )
-        back = np.flatnonzero(np.diff(self.ranges[:, 0]) < 0)
-        if back.size:
-            k = int(back[0]) + 1
-            raise DataError(
-                f"range times must not decrease: ranges row {k} has t={_num(self.ranges[k, 0])} "
-                f"after t={_num(self.ranges[k - 1, 0])} at row {k - 1}"
             )
 
     def _check_ids(self) -> None:
@@ -267,17 +242,16 @@ def _frozen_table(name: str, value: ArrayLike, columns: tuple[str, ...]) -> NDAr
 # --------------------------------------------------------------------------------------------
 
 
-def _sorted_ranges(ranges: NDArray, sort: bool) -> tuple[NDArray, str]:
-    """Ranges stably sorted by time, and a note naming the rows that went back in time."""
+def _order_note(ranges: NDArray) -> str:
+    """A note naming the range rows that go back in time (kept in file order), or ''."""
     back = np.flatnonzero(np.diff(ranges[:, 0]) < 0) + 1 if len(ranges) else np.zeros(0, int)
-    if not back.size or not sort:
-        return ranges, ""
+    if not back.size:
+        return ""
     rows = ", ".join(str(int(k)) for k in back[:5]) + (", ..." if back.size > 5 else "")
-    note = f"TD rows sorted by time (stable): row(s) {rows} of the file went back in time"
-    return ranges[np.argsort(ranges[:, 0], kind="stable")], note
+    return f"TD kept in file order: row(s) {rows} go back in time"
 
 
-def _assemble(name: str, where: str, tables: dict[str, NDArray], sort_ranges: bool) -> RangeDataset:
+def _assemble(name: str, where: str, tables: dict[str, NDArray]) -> RangeDataset:
     """RangeDataset from CMU tables (DRp may be absent); any error is re-raised naming ``where``."""
     notes = []
     try:
@@ -290,7 +264,7 @@ def _assemble(name: str, where: str, tables: dict[str, NDArray], sort_ranges: bo
             notes.append(f"DRp recomputed from DR ({got})")
             drp = integrate_odometry(gt[0], dr)
         td = _frozen_table("TD", tables["TD"], _COLUMNS["ranges"][1])
-        td, note = _sorted_ranges(td, sort_ranges)
+        note = _order_note(td)
         notes += [note] if note else []
         source = "; ".join([where] + notes)
         return RangeDataset(name, gt, dr, drp, tl, td, source)
@@ -321,14 +295,12 @@ def _mat_table(content: dict[str, NDArray], key: str, path: Path, required: bool
     return value.astype(float)
 
 
-def load_cmu_mat(
-    path: str | os.PathLike, name: str | None = None, *, sort_ranges: bool = True
-) -> RangeDataset:
+def load_cmu_mat(path: str | os.PathLike, name: str | None = None) -> RangeDataset:
     """A CMU-layout .mat (GT, DR, TL, TD, optional DRp), e.g. ``Syn_theta_Plaza.mat``.
 
     DRp is recomputed with :func:`integrate_odometry` when the file lacks it or its row count
     differs from GT's (``source`` says so). Other arrays (``usefulRangeInd``, ``addedK``) are
-    ignored. Ranges out of time order are sorted (noted in ``source``) unless ``sort_ranges`` is False.
+    ignored. Range rows keep the file's order (rows going back in time are noted in ``source``).
     """
     path = Path(path)
     content = _read_mat(path)
@@ -336,7 +308,7 @@ def load_cmu_mat(
     drp = _mat_table(content, "DRp", path, required=False)
     if drp is not None:
         tables["DRp"] = drp
-    return _assemble(name or path.stem, str(path), tables, sort_ranges)
+    return _assemble(name or path.stem, str(path), tables)
 
 
 def _read_text_table(path: Path, columns: tuple[str, ...]) -> NDArray:
@@ -391,7 +363,6 @@ def load_cmu_text(
     prefix: str | None = None,
     *,
     name: str | None = None,
-    sort_ranges: bool = True,
 ) -> RangeDataset:
     """The original CMU text release: ``<prefix>_DR.txt``, ``<prefix>_TD.txt`` and ``<prefix>_.mat``.
 
@@ -424,7 +395,7 @@ def load_cmu_text(
     if "DRp" in content:
         tables["DRp"] = _mat_table(content, "DRp", mats[0])
     where = f"{dr_path}, {td_path}, {mats[0]}"
-    return _assemble(name or prefix, where, tables, sort_ranges)
+    return _assemble(name or prefix, where, tables)
 
 
 # --------------------------------------------------------------------------------------------

@@ -26,7 +26,7 @@ import numpy as np
 from .datasets import RangeDataset, load_dataset
 from .errors import DataError
 from .online import RunResult, default_options, run_online
-from .problem import PaperSetup
+from .readings import PaperSetup
 
 __all__ = [
     "SKIPS",
@@ -121,7 +121,7 @@ def _claims(exp: Experiment, paper: dict[str, str]) -> list[str]:
         where = ", ".join(f"{k}={v}" for k, v in layout.items())
         out.append(
             f"| {exp.name} | accuracy of BTGP/1 as published ({where}), at the estimated states | {paper_rmse} m | "
-            f"{r.rmse_estimated_m:.4f} m ({r.n_estimated_states} states; {r.rmse_m:.3f} m over all steps"
+            f"{r.rmse_states_m:.4f} m ({r.n_states} states; {r.rmse_m:.3f} m over all steps"
             f"{'' if r.completed else f'; first {r.n_steps_processed} steps only, not comparable'}) |"
         )
     bt = exp.timing.get("BTGP/1")
@@ -136,7 +136,7 @@ def _claims(exp: Experiment, paper: dict[str, str]) -> list[str]:
     for skip, r in sorted(exp.with_interp.items()):
         if base is None or skip == 1:
             continue
-        frac = 1 - r.n_estimated_states / max(len(r.times), 1)
+        frac = 1 - r.n_states / max(len(r.times), 1)
         saved = 1 - r.total_s / base.total_s
         drmse = (r.rmse_m - base.rmse_m) * 100
         out.append(
@@ -164,7 +164,7 @@ def results_table(experiments: list[Experiment], notes: list[str] = ()) -> str:
         for skip in sorted(exp.with_interp):
             w, o = exp.with_interp[skip], exp.without_interp.get(skip)
             lines.append(
-                f"| {exp.name} | {skip} | {w.n_estimated_states} | {_fmt(w.rmse_m, ' m')} | {_fmt(w.total_s, ' s', 2)} | "
+                f"| {exp.name} | {skip} | {w.n_states} | {_fmt(w.rmse_m, ' m')} | {_fmt(w.total_s, ' s', 2)} | "
                 f"{_fmt(o.rmse_m if o else None, ' m')} | {_fmt(o.total_s if o else None, ' s', 2)} |"
             )
     lines += ["", "## The paper's claims beside ours", "", "| data | claim | paper | ours |", "|---|---|---|---|"]
@@ -218,7 +218,7 @@ def plot_run(path: str | None, data: RangeDataset, result: RunResult, ax: Any = 
     fig, ax = plt.subplots(figsize=(6, 6)) if ax is None else (ax.figure, ax)
     ax.plot(data.ground_truth[:, 1], data.ground_truth[:, 2], "g-", lw=1.5, label="ground truth")
     ax.plot(data.dead_reckoning[:, 1], data.dead_reckoning[:, 2], "y-", lw=1, label="dead reckoning")
-    ax.plot(result.estimates[:, 0], result.estimates[:, 1], "b-", lw=1, label=f"{result.method.upper()} estimate")
+    ax.plot(result.trajectory[:, 0], result.trajectory[:, 1], "b-", lw=1, label=f"{result.method.upper()} estimate")
     ax.plot(data.landmarks[:, 1], data.landmarks[:, 2], "g*", ms=9, label="landmarks (surveyed)")
     if result.landmarks:
         marks = np.array(list(result.landmarks.values()))

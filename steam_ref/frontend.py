@@ -1,0 +1,205 @@
+"""Algorithm 1 step 1: readings in, new variables, initial values and factors out.  [YIB Alg. 1]
+
+The one home of the rules that turn a data set's readings into a factor graph, pose by pose, as a
+robot would meet them:
+
+- **Layout** (:class:`Layout`): which poses get an estimated state x(tᵢ): pose 0, any pose ``skip``
+  steps after the previous state, every pose with a range reading when ``range_states``, and the
+  last pose.
+- **Readings → factors**: a projected-velocity reading is a :class:`~steam_ref.factors.VelocityFactor`
+  of its pose, a range a :class:`~steam_ref.factors.RangeFactor` to its landmark (Eq. 33), with the
+  set-up's noise and robust loss.
+- **Readings between states** are buffered until the next state exists, then enter as interpolated
+  factors on the two neighbouring states (Eq. 29), velocity readings with the looser
+  ``interpolated_velocity_sigmas``; with ``interpolate=False`` they are dropped.
+- **GP prior**: each new state brings the prior factor to the previous one (Eq. 22).
+- **Landmarks**: a landmark variable enters with its prior at its surveyed position (Eq. 4), at its
+  first sighting or, when the set-up says so (Plaza), all of them at pose 0.
+- **Initial values** (as the paper's scripts make them): a new pose is the previous pose composed
+  with the odometry (:func:`steam_ref.pose2.compose`); its velocity is the backward difference over
+  the last step, (pᵢ - pᵢ₋₁)/dt, the only velocity a causal front end knows when the state is made.
+  After a solver update the caller hands the front end the latest state's estimate
+  (:meth:`FrontEnd.rebase`), so predictions compose from the estimate, not from dead reckoning.
+
+The batch problem is everything the front end yields (:func:`steam_ref.problem.build_problem`); the
+streaming solvers (PB, PBVR, BTGP) consume the same steps, so the two agree by construction.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .errors import SteamError
+from .factors import Factor, GPPriorFactor, InterpolatedFactor, PriorFactor, RangeFactor, VelocityFactor
+from .pose2 import compose
+from .readings import PaperSetup, Readings
+from .variables import Key, L, X
+
+__all__ = ["Layout", "NewStep", "FrontEnd"]
+
+
+@dataclass(frozen=True)
+class Layout:
+    """Which poses get an estimated state, and what happens to readings between states."""
+
+    skip: int = 1  # a state at most ``skip`` steps after the previous one (the time-step difference of Fig. 3/4)
+    range_states: bool = False  # also a state at every pose with a range reading (the Plaza scripts)
+    interpolate: bool = True  # readings between states: interpolated (Eq. 29) or dropped
+
+    def __post_init__(self) -> None:
+        if isinstance(self.skip, bool) or int(self.skip) != self.skip or self.skip < 1:
+            raise SteamError(f"skip must be a positive integer, got {self.skip!r}")
+
+    def is_state(self, pose: int, last_state: int, has_range: bool, last_pose: int) -> bool:
+        """Pose ``pose`` gets a state, given the previous state and whether it has a range reading."""
+        return pose == 0 or pose - last_state >= self.skip or pose == last_pose or (self.range_states and has_range)
+
+    def state_poses(self, n_poses: int, range_poses: NDArray | None = None) -> NDArray:
+        """(M,) the poses that get a state, in order, for a stream of ``n_poses`` poses."""
+        has_range = np.zeros(n_poses, dtype=bool)
+        if range_poses is not None:
+            has_range[np.asarray(range_poses, dtype=int)] = True
+        chosen = [0]
+        for i in range(1, n_poses):
+            if self.is_state(i, chosen[-1], bool(has_range[i]), n_poses - 1):
+                chosen.append(i)
+        return np.array(chosen)
+
+
+@dataclass
+class NewStep:
+    """What one pose of the stream adds to the problem (filled by the front end, read by the caller)."""
+
+    pose: int  # the pose (time step) processed
+    is_state: bool  # the pose got an estimated state X(pose)
+    factors: list[Factor]  # the new factors released at this pose
+    values: dict[Key, NDArray] = field(default_factory=dict)  # initial values of the new variables
+    n_ranges: int = 0  # range factors among ``factors`` (plain or interpolated)
+
+
+class FrontEnd:
+    """Algorithm 1 step 1 over a :class:`Readings` stream: :meth:`step` once per pose, in order."""
+
+    def __init__(self, readings: Readings, setup: PaperSetup, layout: Layout = Layout(), n_poses: int | None = None):
+        self.readings, self.setup, self.layout = readings, setup, layout
+        self.n_poses = readings.n_poses if n_poses is None else min(int(n_poses), readings.n_poses)  # poses to process
+        self.states: list[int] = []  # poses with a state so far, increasing
+        self.landmarks: set[int] = set()  # landmark ids with a variable
+        self._bounds = readings.range_rows()
+        self._next = 0  # the pose step() processes next
+        self._buffer: list[tuple[int, Factor]] = []  # readings at poses after the last state
+        self._pose = readings.first_pose.copy()  # predicted [x, y, θ] of the latest pose
+        self._velocity = setup.first_velocity.copy()  # predicted velocity over the latest step
+
+    @property
+    def n_processed(self) -> int:
+        """Poses processed so far."""
+        return self._next
+
+    @property
+    def done(self) -> bool:
+        """True when every pose has been processed."""
+        return self._next >= self.n_poses
+
+    def __iter__(self) -> Iterator[NewStep]:
+        while not self.done:
+            yield self.step()
+
+    def rebase(self, pose_estimate: NDArray) -> None:
+        """The latest state's estimate [x, y, θ, ...]: the next prediction composes from it."""
+        self._pose = np.array(pose_estimate[:3], dtype=float)
+
+    def step(self) -> NewStep:
+        """Process the readings of the next pose."""
+        if self.done:
+            raise SteamError(f"the stream has ended: all {self.n_poses} poses processed")
+        i = self._next
+        self._next += 1
+        if i > 0:
+            self._predict(i)
+        has_range = self._bounds[i + 1] > self._bounds[i]
+        if not self.layout.is_state(i, self.states[-1] if self.states else 0, has_range, self.n_poses - 1):
+            if self.layout.interpolate:
+                self._buffer.append((i, self._velocity_factor(i, interpolated=True)))
+                self._buffer.extend((i, f) for f in self._range_factors(i))
+            return NewStep(i, False, [])
+        return self._new_state(i)
+
+    # -- the pieces --
+
+    def _predict(self, i: int) -> None:
+        """Initial guess of pose i: odometry row i - 1 composed onto the latest pose (dt = 1)."""
+        distance, _, turn = self.readings.velocity[i]
+        new = compose(self._pose, distance, turn)
+        self._velocity = new - self._pose  # backward difference over the step just made
+        self._pose = new
+
+    def _new_state(self, i: int) -> NewStep:
+        """X(i): its value, the GP prior to the previous state, the buffered and its own readings."""
+        out = NewStep(i, True, [], {X(i): np.concatenate([self._pose, self._velocity])})
+        if i == 0:
+            out.factors.append(self._first_state_prior())
+            if self.setup.landmarks_up_front:
+                for lid in self.readings.landmarks:
+                    self._landmark(lid, out)
+        else:
+            prev = self.states[-1]
+            out.factors.append(self._gp_prior(prev, i))
+            for pose, inner in self._buffer:
+                self._release(self._interpolated(inner, prev, i, pose), out)
+            self._buffer = []
+            self._release(self._velocity_factor(i, interpolated=False), out)
+        for f in self._range_factors(i):
+            self._release(f, out)
+        self.states.append(i)
+        return out
+
+    def _release(self, factor: Factor, out: NewStep) -> None:
+        """A factor joins the step's new factors; a landmark seen for the first time gets its prior."""
+        inner = factor.inner if isinstance(factor, InterpolatedFactor) else factor
+        if isinstance(inner, RangeFactor):
+            self._landmark(factor.keys[-1].index, out)
+            out.n_ranges += 1
+        out.factors.append(factor)
+
+    def _landmark(self, lid: int, out: NewStep) -> None:
+        """Landmark ``lid``'s variable and its prior at the surveyed position (Eq. 4), once."""
+        if lid in self.landmarks:
+            return
+        self.landmarks.add(lid)
+        mark = self.readings.landmarks[lid]
+        out.factors.append(PriorFactor.create(L(lid), mark, self.setup.landmark_prior_sigma))
+        out.values[L(lid)] = mark.copy()
+
+    def _first_state_prior(self) -> PriorFactor:
+        """Priors on pose 0 (at ground truth) and on velocity 0, as one prior on X(0)."""
+        s = self.setup
+        mean = np.concatenate([self.readings.first_pose, s.first_velocity])
+        return PriorFactor.create(X(0), mean, np.concatenate([s.first_pose_sigmas, s.first_velocity_sigmas]))
+
+    def _gp_prior(self, a: int, b: int) -> GPPriorFactor:
+        """The GP prior factor between states a and b.  [YIB Eq. 22]"""
+        t = self.readings.times
+        return GPPriorFactor.wnoa(X(a), X(b), t[b] - t[a], self.setup.qc)
+
+    def _interpolated(self, inner: Factor, a: int, b: int, pose: int) -> InterpolatedFactor:
+        """``inner`` (a reading at the pose without a state) on states a and b.  [YIB Eq. 29]"""
+        t = self.readings.times
+        return InterpolatedFactor.create(inner, X(a), X(b), t[a], t[b], t[pose], self.setup.qc)
+
+    def _velocity_factor(self, i: int, interpolated: bool) -> VelocityFactor:
+        """Odometry row i - 1 as the projected velocity of pose i."""
+        sigmas = self.setup.interpolated_velocity_sigmas if interpolated else self.setup.velocity_sigmas
+        return VelocityFactor.create(X(i), self.readings.velocity[i], sigmas)
+
+    def _range_factors(self, i: int) -> list[RangeFactor]:
+        """The range readings of pose i as factors on X(i) (X(i) may be a pose without a state)."""
+        r, s = self.readings, self.setup
+        return [
+            RangeFactor.create(X(i), L(r.range_landmark[k]), r.range_value[k], s.range_sigma, loss=s.range_loss)
+            for k in range(self._bounds[i], self._bounds[i + 1])
+        ]

@@ -1,0 +1,199 @@
+"""The paper's set-up, and a data set's readings in the solver's terms.  [YIB Sec. IV]
+
+:class:`PaperSetup` holds every parameter of the paper's experiments, taken from the authors'
+public scripts (``matlab/GP/synthetic_isam2.m``, ``plaza_isam2.m`` and ``range_measure_fit.m`` in
+``XinyanGT/online-gpslam-code``; summarised in ``shared/data/README.md``). ``PaperSetup.synthetic()``
+and ``PaperSetup.plaza()`` are the documented defaults: they do what the scripts did. Any field can be
+changed with :meth:`PaperSetup.replace`; the fields that depart from the scripts on purpose say so.
+
+:class:`Readings` turns a :class:`~steam_ref.datasets.RangeDataset` into the measurement stream the
+front end consumes: time is the odometry row index (dt = 1), pose i is ground-truth row i, odometry
+row k is a projected-velocity reading of pose k + 1, and each range reading is attached to a pose by
+:func:`attach_ranges`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .datasets import RangeDataset
+from .errors import DataError, SteamError
+from .robust import Tukey
+
+__all__ = ["PaperSetup", "Readings", "attach_ranges", "range_correction", "RANGE_ATTACHMENTS"]
+
+RANGE_ATTACHMENTS = ("file-order", "time")
+
+
+@dataclass(frozen=True)
+class PaperSetup:
+    """Parameters of one of the paper's experiments."""
+
+    name: str  # 'synthetic' or 'plaza'
+    qc: NDArray  # (3, 3) power spectral density of the WNOA prior [YIB Eq. 31]
+    velocity_sigmas: NDArray  # (3,) projected-velocity noise at an estimated state
+    interpolated_velocity_sigmas: NDArray  # (3,) the same reading when interpolated (Eq. 29)
+    range_sigma: float  # [m]
+    tukey_c: float | None  # Tukey threshold on whitened range errors; None: plain least squares
+    landmark_prior_sigma: float  # [m] prior on landmarks at their surveyed positions (Eq. 4)
+    first_pose_sigmas: NDArray  # (3,) prior on pose 0 at ground truth
+    first_velocity_sigmas: NDArray  # (3,) prior on velocity 0 at ``first_velocity``
+    first_velocity: NDArray = field(default_factory=lambda: np.full(3, 1e-4))  # (3,)
+    range_correction_steps: int = 0  # fit r' = a r + b on ranges of the first N poses; 0: none
+    start_after_ranges: int = 0  # incremental solvers start after this many ranges (batch LM first)
+    landmarks_up_front: bool = False  # True: every landmark and its prior enter at pose 0; else at first sighting
+    range_attachment: str = "file-order"  # 'file-order': the scripts' scan; 'time': by time stamp (a departure)
+
+    def __post_init__(self) -> None:
+        if self.range_attachment not in RANGE_ATTACHMENTS:
+            raise SteamError(f"range_attachment must be one of {RANGE_ATTACHMENTS}, got {self.range_attachment!r}")
+
+    @classmethod
+    def synthetic(cls) -> PaperSetup:
+        """The synthetic exploration task (Sec. IV-A), as ``synthetic_isam2.m`` runs it."""
+        return cls(
+            name="synthetic",
+            qc=0.01 * np.diag([1.0, 1.0, 25.0]),
+            velocity_sigmas=np.array([0.5, 0.5, 1.0]),
+            interpolated_velocity_sigmas=np.array([0.5, 0.5, 1.0]),
+            range_sigma=1.0,
+            tukey_c=15.0,
+            landmark_prior_sigma=1.0,
+            first_pose_sigmas=np.array([1.0, 1.0, np.pi]),
+            first_velocity_sigmas=np.array([1.0, 1.0, np.pi]),
+        )
+
+    @classmethod
+    def plaza(cls) -> PaperSetup:
+        """The Autonomous Lawnmower 'Plaza' run (Sec. IV-B), as ``plaza_isam2.m`` runs it."""
+        return cls(
+            name="plaza",
+            qc=0.05 * np.diag([1.0, 1.0, 2.0]),
+            velocity_sigmas=np.array([0.05, 0.01, 0.02]),
+            interpolated_velocity_sigmas=np.array([0.5, 0.01, 0.02]),
+            range_sigma=20.0,
+            tukey_c=15.0,
+            landmark_prior_sigma=1.0,
+            first_pose_sigmas=np.array([1.0, 1.0, np.pi]),
+            first_velocity_sigmas=np.array([1.0, 1.0, np.pi]),
+            range_correction_steps=3000,
+            start_after_ranges=50,
+            landmarks_up_front=True,
+        )
+
+    @classmethod
+    def named(cls, name: str) -> PaperSetup:
+        """The preset called 'synthetic' or 'plaza'."""
+        if name not in ("synthetic", "plaza"):
+            raise SteamError(f"unknown preset {name!r}; use 'synthetic' or 'plaza'")
+        return cls.synthetic() if name == "synthetic" else cls.plaza()
+
+    def replace(self, **changes) -> PaperSetup:
+        """A copy with some fields changed."""
+        return replace(self, **changes)
+
+    @property
+    def range_loss(self) -> Tukey | None:
+        """The robust loss on ranges."""
+        return None if self.tukey_c is None else Tukey(self.tukey_c)
+
+
+def attach_ranges(pose_times: NDArray, range_times: NDArray, rule: str = "file-order") -> NDArray:
+    """The pose each range reading belongs to: (n_ranges,) int, in the rows' order.
+
+    'file-order' is the paper's scripts: a scan that walks the readings in file order and, at pose i,
+    takes every next reading stamped at or before tᵢ (``while t >= TD(k,1)``). A reading whose time
+    stamp goes back (Plaza's file does so twice) is taken at the pose the scan has reached, later
+    than its own time. 'time' attaches every reading to the first pose at or after its time stamp.
+    A reading later than the last pose raises :class:`DataError`.
+    """
+    pose_times, range_times = np.asarray(pose_times, float), np.asarray(range_times, float)
+    if rule == "time":
+        pose = np.searchsorted(pose_times, range_times, side="left")
+    elif rule == "file-order":
+        # The scan's pose is the first pose at or after the running maximum of the time stamps.
+        pose = np.searchsorted(pose_times, np.maximum.accumulate(range_times), side="left") if len(range_times) else np.zeros(0, int)
+    else:
+        raise SteamError(f"unknown range attachment rule {rule!r}; use one of {RANGE_ATTACHMENTS}")
+    late = np.flatnonzero(pose >= len(pose_times))
+    if late.size:
+        k = int(late[0])
+        raise DataError(f"range row {k} at t={range_times[k]!r} is after the last pose (t={pose_times[-1]!r}): no pose to attach it to")
+    return pose.astype(int)
+
+
+def range_correction(data: RangeDataset, n_steps: int) -> tuple[float, float]:
+    """(a, b) of the affine range correction r' = a r + b, fitted as ``range_measure_fit.m`` does.
+
+    The readings are walked in file order with a pose index that only moves forward over the first
+    ``n_steps`` ground-truth rows; each is paired with the nearer in time of the two poses around
+    its time stamp, and the walk stops at the first reading later than pose ``n_steps - 1``. Then
+    a, b solve min Σ (a r + b - ‖p - ℓ‖)² over the pairs (p the paired ground-truth position).
+    """
+    t_pose, t_range = data.times[:n_steps], data.ranges[:, 0]
+    poses, rows, p = [], [], 0
+    for k, t in enumerate(t_range):
+        while p < len(t_pose) and t_pose[p] < t:
+            p += 1
+        if p == len(t_pose):
+            break
+        nearer = p - 1 if p > 0 and abs(t_pose[p - 1] - t) <= abs(t_pose[p] - t) else p
+        poses.append(nearer)
+        rows.append(k)
+    if len(rows) < 2:
+        raise SteamError(f"range correction needs at least 2 readings in its window of {n_steps} poses, got {len(rows)}")
+    rows = np.array(rows)
+    marks = data.landmarks[data.landmark_rows(data.ranges[rows, 2]), 1:3]
+    true = np.hypot(*(data.ground_truth[poses, 1:3] - marks).T)
+    M = np.column_stack([data.ranges[rows, 3], np.ones(len(rows))])
+    (a, b), *_ = np.linalg.lstsq(M, true, rcond=None)
+    return float(a), float(b)
+
+
+@dataclass(frozen=True)
+class Readings:
+    """The measurement stream of a data set, in solver terms (time = pose index, dt = 1).
+
+    Ranges are listed in the order the front end meets them: by pose, and at one pose in the
+    order of the file (or of time, with the 'time' attachment rule).
+    """
+
+    times: NDArray  # (n_poses,) time of pose i: i
+    velocity: NDArray  # (n_poses, 3) projected velocity reading of pose i; row 0 unused (NaN)
+    range_pose: NDArray  # (n_ranges,) pose each range belongs to, non-decreasing
+    range_landmark: NDArray  # (n_ranges,) landmark id
+    range_value: NDArray  # (n_ranges,) range [m], corrected if the set-up says so
+    range_correction: tuple[float, float]  # (a, b) of r' = a r + b; (1, 0) when not corrected
+    first_pose: NDArray  # (3,) ground-truth pose 0 [x, y, θ]
+    landmarks: dict[int, NDArray]  # id → surveyed position (2,), in the data set's row order
+
+    @classmethod
+    def from_dataset(cls, data: RangeDataset, setup: PaperSetup) -> Readings:
+        """Convert a data set following the paper's scripts (see the module docstring)."""
+        n = data.n_poses
+        velocity = np.full((n, 3), np.nan)
+        velocity[1:, 0] = data.odometry[:, 1]  # distance / dt with dt = 1
+        velocity[1:, 1] = 0.0  # no lateral motion
+        velocity[1:, 2] = data.odometry[:, 2]  # heading change / dt
+        t = data.ranges[:, 0]
+        pose = attach_ranges(data.times, t, setup.range_attachment)
+        order = np.lexsort((t, pose)) if setup.range_attachment == "time" else np.arange(len(pose))
+        a, b = range_correction(data, setup.range_correction_steps) if setup.range_correction_steps > 0 else (1.0, 0.0)
+        value = a * data.ranges[order, 3] + b if setup.range_correction_steps > 0 else data.ranges[order, 3].astype(float)
+        marks = {int(i): np.array([x, y]) for i, x, y in data.landmarks}
+        return cls(
+            np.arange(n, dtype=float), velocity, pose[order], data.ranges[order, 2].astype(int), value, (a, b),
+            data.ground_truth[0, 1:4].copy(), marks,
+        )
+
+    @property
+    def n_poses(self) -> int:
+        """Number of poses (time steps + 1)."""
+        return len(self.times)
+
+    def range_rows(self) -> NDArray:
+        """(n_poses + 1,) bounds: the ranges of pose i are rows ``bounds[i]:bounds[i + 1]``."""
+        return np.searchsorted(self.range_pose, np.arange(self.n_poses + 1), side="left")

@@ -1,0 +1,90 @@
+"""What a streamed run produced, and the figures it reports.  [YIB Sec. IV, Table I]"""
+
+from __future__ import annotations
+
+import resource
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .trajectory import Covariances
+
+__all__ = ["RunResult", "position_rmse", "peak_rss_mb"]
+
+
+def position_rmse(positions: NDArray, truth: NDArray) -> float:
+    """Root-mean-square distance between estimated and true positions, both (n, 2)."""
+    return float(np.sqrt(np.mean(np.sum((np.asarray(positions) - np.asarray(truth)) ** 2, axis=1))))
+
+
+def peak_rss_mb() -> float:
+    """Peak resident set size of this process in MB (Linux reports KB)."""
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+
+
+def _json_float(x: float) -> float | None:
+    return None if not np.isfinite(x) else round(float(x), 6)
+
+
+@dataclass(frozen=True)
+class RunResult:
+    """What one streamed run did and produced."""
+
+    method: str  # 'btgp', 'pb' or 'pbvr'
+    options: object  # the StreamOptions the run was configured with
+    times: NDArray  # (n,) time of every pose covered by the estimate
+    trajectory: NDArray  # (n, 6) [x, y, θ, ẋ, ẏ, θ̇] at every covered pose (Eq. 18 between states)
+    state_poses: NDArray  # (M,) pose indices that have an estimated state
+    landmarks: dict[int, NDArray]  # landmark id → estimate (2,)
+    step_seconds: NDArray  # (n_steps,) wall time of each processed step (front end + solver)
+    update_steps: NDArray  # (U,) pose index at which each solver update ran
+    update_seconds: NDArray  # (U,) wall time of each solver update
+    n_poses_total: int  # poses in the data set
+    n_steps_processed: int  # poses the stream reached (all of them unless cut short)
+    completed: bool  # False when the time budget or max_poses cut the run short
+    rmse_m: float  # position RMSE over every covered pose against ground truth (NaN without it)
+    rmse_states_m: float  # the same over the poses with a state only
+    covariances: Covariances | None  # final marginals, when asked for
+    peak_rss_mb: float  # peak resident memory of the process so far
+
+    @classmethod
+    def of(cls, options, times, trajectory, state_poses, landmarks, step_seconds, update_steps, update_seconds,
+           n_poses_total, n_steps_processed, completed, ground_truth, covariances, peak_rss) -> RunResult:
+        """Package a run, scoring it against ``ground_truth`` (CMU GT layout, x, y in columns 1-2) if given."""
+        rmse = rmse_states = float("nan")
+        if ground_truth is not None and len(times):
+            truth = np.asarray(ground_truth)[: len(times), 1:3]
+            rmse = position_rmse(trajectory[:, :2], truth)
+            rmse_states = position_rmse(trajectory[state_poses, :2], truth[state_poses])
+        return cls(options.method, options, times, trajectory, state_poses, landmarks, step_seconds, update_steps,
+                   update_seconds, n_poses_total, n_steps_processed, completed, rmse, rmse_states, covariances, peak_rss)
+
+    @property
+    def n_states(self) -> int:
+        """Number of estimated states M."""
+        return len(self.state_poses)
+
+    @property
+    def cumulative_s(self) -> NDArray:
+        """(n_steps,) cumulative computation time against time step (Fig. 3/4, left)."""
+        return np.cumsum(self.step_seconds)
+
+    @property
+    def total_s(self) -> float:
+        """Total computation time of the streamed run."""
+        return float(np.sum(self.step_seconds))
+
+    def summary(self, dataset: str = "") -> dict:
+        """The figures the CLI's ``--json`` prints."""
+        u, o = self.update_seconds, self.options
+        return {
+            "dataset": dataset, "method": self.method, "every": o.every, "skip": o.skip,
+            "interpolate": o.interpolate, "range_states": o.range_states,
+            "n_estimated_states": self.n_states, "n_poses": int(len(self.times)), "n_updates": int(len(u)),
+            "rmse_m": _json_float(self.rmse_m), "rmse_estimated_m": _json_float(self.rmse_states_m),
+            "total_s": round(self.total_s, 4),
+            "update_s_median": round(float(np.median(u)), 6) if len(u) else None,
+            "update_s_p95": round(float(np.percentile(u, 95)), 6) if len(u) else None,
+            "peak_rss_mb": round(self.peak_rss_mb, 1), "completed": self.completed,
+        }

@@ -1,0 +1,129 @@
+"""The three solvers a stream can feed: PB, PBVR and BTGP, behind one small interface.  [YIB Sec. IV]
+
+- ``pb``: periodic batch Gauss-Newton over everything so far, XL ordering, warm-started;
+- ``pbvr``: the same with AMD reordering at every update;
+- ``btgp``: the Bayes tree (:class:`steam_ref.bayes_tree.IncrementalSolver`, Alg. 1 steps 2-7).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .batch import gauss_newton, make_ordering
+from .bayes_tree import IncrementalSolver
+from .factors import Factor
+from .graph import FactorGraph
+from .linear.solve import SparseCholesky
+from .linear.system import LinearSystem
+from .variables import Key, Values
+
+__all__ = ["METHODS", "OnlineSolver", "PeriodicBatchSolver", "BayesTreeSolver", "make_solver", "joint_covariance"]
+
+METHODS = ("btgp", "pb", "pbvr")
+
+
+class OnlineSolver:
+    """What a stream needs from a solver."""
+
+    name: str = ""
+
+    def update(self, factors: list[Factor], values: Values) -> None:
+        """Add new factors and the initial estimates of new variables, then re-solve."""
+        raise NotImplementedError
+
+    def estimate_of(self, key: Key) -> NDArray:
+        """Current estimate of one variable."""
+        raise NotImplementedError
+
+    def estimate(self) -> Values:
+        """Current estimate of every variable."""
+        raise NotImplementedError
+
+    def joint_covariance(self, keys: Sequence[Key]) -> NDArray:
+        """Joint marginal covariance of ``keys``, (Σdₖ, Σdₖ), in the order given."""
+        raise NotImplementedError
+
+    def marginals(self, keys: Sequence[Key]) -> dict[Key, NDArray]:
+        """Marginal covariance of each of ``keys``."""
+        raise NotImplementedError
+
+
+def joint_covariance(factors: Sequence[Factor], values: Values, keys: Sequence[Key]) -> NDArray:
+    """Joint block of 𝓘⁻¹ for ``keys``, linearized at ``values``.  [YIB Eq. 11: cov δθ* = 𝓘⁻¹]"""
+    graph = FactorGraph(factors)
+    order = make_ordering(graph, values, "amd")
+    system = LinearSystem.build(graph.factors, values, order)
+    info, _ = system.information()
+    chol = SparseCholesky.factor(info, order)
+    cols = np.concatenate([order.offset_of[k] + np.arange(values.dim(k)) for k in keys])
+    E = np.zeros((info.shape[0], len(cols)))
+    E[cols, np.arange(len(cols))] = 1.0
+    block = np.asarray(chol.solve(E))[cols]
+    return 0.5 * (block + block.T)
+
+
+class PeriodicBatchSolver(OnlineSolver):
+    """PB (XL ordering) or PBVR (AMD): Gauss-Newton over everything, warm-started.  [YIB Sec. IV]"""
+
+    def __init__(self, ordering: str = "xl", relative_tolerance: float = 1e-5, max_iterations: int = 100):
+        self.name = "pb" if ordering == "xl" else "pbvr"
+        self.ordering = ordering
+        self.options = dict(relative_tolerance=relative_tolerance, max_iterations=max_iterations)
+        self.graph = FactorGraph()
+        self.values = Values()
+        self.iterations: list[int] = []  # Gauss-Newton iterations of each update
+
+    def update(self, factors: list[Factor], values: Values) -> None:
+        self.graph.add(factors)
+        for k in values:
+            self.values.insert(k, values[k])
+        result = gauss_newton(self.graph, self.values, ordering=self.ordering, **self.options)
+        self.values = result.values
+        self.iterations.append(len(result.iterations))
+
+    def estimate_of(self, key: Key) -> NDArray:
+        return self.values[key]
+
+    def estimate(self) -> Values:
+        return self.values
+
+    def joint_covariance(self, keys: Sequence[Key]) -> NDArray:
+        return joint_covariance(self.graph.factors, self.values, keys)
+
+    def marginals(self, keys: Sequence[Key]) -> dict[Key, NDArray]:
+        return {k: joint_covariance(self.graph.factors, self.values, [k]) for k in keys}
+
+
+class BayesTreeSolver(OnlineSolver):
+    """BTGP: the incremental solver of :mod:`steam_ref.bayes_tree`.  [YIB Alg. 1 steps 2-7]"""
+
+    name = "btgp"
+
+    def __init__(self, **isam2):
+        self.inner = IncrementalSolver(**isam2)
+        self.reports: list = []  # UpdateReport of each update
+
+    def update(self, factors: list[Factor], values: Values) -> None:
+        self.reports.append(self.inner.update(factors, values))
+
+    def estimate_of(self, key: Key) -> NDArray:
+        return self.inner.estimate_of(key)
+
+    def estimate(self) -> Values:
+        return self.inner.estimate()
+
+    def joint_covariance(self, keys: Sequence[Key]) -> NDArray:
+        return self.inner.joint_marginal_covariance(list(keys))  # from the tree's cliques
+
+    def marginals(self, keys: Sequence[Key]) -> dict[Key, NDArray]:
+        return {k: self.inner.marginal_covariance(k) for k in keys}
+
+
+def make_solver(method: str, *, isam2: dict | None = None, pb_relative_tolerance: float = 1e-5, pb_max_iterations: int = 100) -> OnlineSolver:
+    """The solver ``method`` names ('btgp', 'pb' or 'pbvr')."""
+    if method == "btgp":
+        return BayesTreeSolver(**(isam2 or {}))
+    return PeriodicBatchSolver("xl" if method == "pb" else "amd", pb_relative_tolerance, pb_max_iterations)

@@ -1,0 +1,96 @@
+"""The estimated trajectory as a function of time: states, Eq. 18 between them, covariances.
+
+A :class:`Trajectory` reads a solver's current estimate of the states at the poses ``states``. At a
+state it returns the solver's estimate and marginal covariance; between states tᵢ < t < tⱼ,
+x̄(t) = Λ(t) x̄ᵢ + Ψ(t) x̄ⱼ [YIB Eq. 18] and the covariance from the joint covariance of (xᵢ, xⱼ)
+(:func:`steam_ref.gp.interpolate.interpolate_covariance`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .errors import SteamError
+from .gp.interpolate import interpolate_covariance, interpolation_matrices
+from .variables import Key, X
+
+__all__ = ["Trajectory", "Covariances"]
+
+
+@dataclass(frozen=True)
+class Covariances:
+    """Final marginal covariances of a run, in the order of its times and landmark ids."""
+
+    pose: NDArray  # (n, 3, 3) of [x, y, θ] at every covered pose
+    velocity: NDArray  # (n, 3, 3) of [ẋ, ẏ, θ̇] at every covered pose
+    landmark: NDArray  # (m, 2, 2) of each landmark
+
+
+class Trajectory:
+    """A solver's states at poses ``states`` (sorted), queried at any time in their span."""
+
+    def __init__(self, solver, states: Sequence[int], times: NDArray, qc: NDArray):
+        self.solver = solver  # anything with estimate_of, estimate, joint_covariance, marginals
+        self.states = list(states)  # poses with a state, increasing
+        self.times = times  # (n_poses,) time of every pose
+        self.qc = qc  # (3, 3) Qc of the WNOA prior
+
+    def neighbours(self, t: float) -> tuple[int, int] | int:
+        """The state at time t, or the two states around it."""
+        times, solved = self.times, self.states
+        if not solved or not times[solved[0]] <= t <= times[solved[-1]]:
+            span = "no solved state yet" if not solved else f"[{times[solved[0]]:g}, {times[solved[-1]]:g}]"
+            raise SteamError(f"time t={t!r} is outside the estimated span {span}")
+        j = int(np.searchsorted(times[solved], t))
+        return solved[j] if times[solved[j]] == t else (solved[j - 1], solved[j])
+
+    def at(self, t: float, *, covariance: bool = False) -> NDArray | tuple[NDArray, NDArray]:
+        """The state x(t) (6,), with its covariance (6, 6) if asked."""
+        near = self.neighbours(float(t))
+        if isinstance(near, int):
+            mean = self.solver.estimate_of(X(near)).copy()
+            return (mean, self.solver.joint_covariance([X(near)])) if covariance else mean
+        a, b = near
+        ta, tb = self.times[a], self.times[b]
+        lam, psi = interpolation_matrices(ta, tb, t, self.qc)
+        mean = lam @ self.solver.estimate_of(X(a)) + psi @ self.solver.estimate_of(X(b))  # [YIB Eq. 18]
+        if not covariance:
+            return mean
+        return mean, interpolate_covariance(ta, tb, t, self.qc, self.solver.joint_covariance([X(a), X(b)]))
+
+    def at_every_pose(self) -> tuple[NDArray, NDArray]:
+        """Times (n,) and states (n, 6) at every pose of the span; reads the whole estimate once."""
+        solved = self.states
+        if not solved:
+            return np.zeros(0), np.zeros((0, 6))
+        values, times = self.solver.estimate(), self.times
+        out = np.empty((solved[-1] + 1, 6))
+        for a, b in zip(solved, solved[1:]):
+            xa, xb = values[X(a)], values[X(b)]
+            out[a] = xa
+            for p in range(a + 1, b):
+                lam, psi = interpolation_matrices(times[a], times[b], times[p], self.qc)  # [YIB Eq. 16]
+                out[p] = lam @ xa + psi @ xb  # [YIB Eq. 18]
+        out[solved[-1]] = values[X(solved[-1])]
+        return times[: solved[-1] + 1].copy(), out
+
+    def covariances(self, landmarks: Sequence[Key]) -> Covariances:
+        """Marginal covariances at every pose of the span (interpolated between states) and of ``landmarks``."""
+        solved = self.states
+        marg = self.solver.marginals([X(i) for i in solved] + list(landmarks))
+        n = solved[-1] + 1 if solved else 0
+        full = np.empty((n, 6, 6))
+        for a, b in zip(solved, solved[1:]):
+            full[a] = marg[X(a)]
+            if b > a + 1:
+                joint = self.solver.joint_covariance([X(a), X(b)])
+                for p in range(a + 1, b):
+                    full[p] = interpolate_covariance(self.times[a], self.times[b], self.times[p], self.qc, joint)
+        if solved:
+            full[solved[-1]] = marg[X(solved[-1])]
+        marks = np.array([marg[k] for k in landmarks]).reshape(-1, 2, 2)
+        return Covariances(full[:, :3, :3].copy(), full[:, 3:, 3:].copy(), marks)
