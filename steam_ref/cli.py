@@ -133,9 +133,13 @@ def _run(args: argparse.Namespace) -> int:
     if args.save_estimates:
         save_estimates(args.save_estimates, result)
     if args.plot:
-        from .experiments import plot_run
+        from .plot import plot_trajectory
 
-        plot_run(args.plot, data, result)
+        plot_trajectory(
+            data.ground_truth[:, 1:3], result.estimates[:, :2], landmarks_true=data.landmarks[:, 1:3],
+            landmarks_estimated=result.landmarks, dead_reckoning=data.dead_reckoning[:, 1:3],
+            estimate_label=f"{result.method.upper()} estimate", path=args.plot,
+        )
     return 0
 
 
@@ -197,9 +201,12 @@ def _batch(args: argparse.Namespace) -> int:
         print(f"batch ({args.ordering.upper()}) on {args.dataset}: RMSE {summary['rmse_m']} m over {data.n_poses} poses, "
               f"{summary['total_s']:.2f} s, Cholesky factor {summary['factor_nnz']} nonzeros ({summary['backend']})")
     if args.plot:
-        from .plot import plot_estimate
+        from .plot import plot_trajectory
 
-        plot_estimate(args.plot, data.ground_truth[:, 1:3], positions, data.landmarks[:, 1:3], title=f"batch on {args.dataset}")
+        plot_trajectory(
+            data.ground_truth[:, 1:3], positions, landmarks_true=data.landmarks[:, 1:3],
+            title=f"batch on {args.dataset}", path=args.plot,
+        )
     return 0
 
 

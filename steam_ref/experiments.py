@@ -11,7 +11,7 @@
 - :func:`results_table`: Markdown, the paper's claims beside our figures;
 - :func:`reproduce`: all of it, written to a folder (the ``steam-ref reproduce`` command).
 
-matplotlib is imported inside the plotting functions only.
+The figures are drawn by :mod:`steam_ref.plot`, which imports matplotlib inside its functions only.
 """
 
 from __future__ import annotations
@@ -19,13 +19,13 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
 from .datasets import RangeDataset, load_dataset
 from .errors import DataError
 from .online import RunResult, default_options, run_online
+from .plot import plot_interpolation_tradeoff, plot_timing, plot_trajectory
 from .readings import PaperSetup
 
 __all__ = [
@@ -38,9 +38,6 @@ __all__ = [
     "PUBLISHED_RUNS",
     "speedup_on_prefix",
     "results_table",
-    "plot_timing",
-    "plot_interpolation",
-    "plot_run",
     "reproduce",
 ]
 
@@ -175,62 +172,6 @@ def results_table(experiments: list[Experiment], notes: list[str] = ()) -> str:
     return "\n".join(lines) + "\n"
 
 
-# --- Plots --------------------------------------------------------------------------------------
-
-
-def plot_timing(exp: Experiment, ax: Any = None) -> Any:
-    """Cumulative time against time step, one line per run (Fig. 3/4, left)."""
-    import matplotlib.pyplot as plt
-
-    ax = plt.subplots(figsize=(5, 4))[1] if ax is None else ax
-    for label, r in exp.timing.items():
-        ax.plot(np.arange(len(r.step_seconds)), r.cumulative_s, label=label + ("" if r.completed else " (budget)"))
-    ax.set(xlabel="time step", ylabel="cumulative time (s)", title=f"{exp.name}: computation time", yscale="log")
-    ax.legend(fontsize=8)
-    return ax
-
-
-def plot_interpolation(exp: Experiment, axes: Any = None) -> Any:
-    """RMSE and total time against the time-step difference between states (Fig. 3/4, right)."""
-    import matplotlib.pyplot as plt
-
-    axes = plt.subplots(1, 2, figsize=(9, 4))[1] if axes is None else axes
-    for store, style, label in ((exp.without_interp, "gs-", "without interpolation"), (exp.with_interp, "rd--", "with interpolation")):
-        skips = sorted(store)
-        axes[0].plot(skips, [store[k].rmse_m for k in skips], style, label=label)
-        axes[1].plot(skips, [store[k].total_s for k in skips], style, label=label)
-    axes[0].set(xlabel="time steps between estimated states", ylabel="RMSE (m)", title=f"{exp.name}: RMSE")
-    axes[1].set(xlabel="time steps between estimated states", ylabel="time (s)", title=f"{exp.name}: computation time")
-    for ax in axes:
-        ax.legend(fontsize=8)
-        ax.grid(True, alpha=0.3)
-    return axes
-
-
-def plot_run(path: str | None, data: RangeDataset, result: RunResult, ax: Any = None) -> Any:
-    """Estimate, landmarks, ground truth and dead reckoning (as Fig. 2); saved to ``path`` if given."""
-    import matplotlib
-
-    if path is not None:
-        matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(6, 6)) if ax is None else (ax.figure, ax)
-    ax.plot(data.ground_truth[:, 1], data.ground_truth[:, 2], "g-", lw=1.5, label="ground truth")
-    ax.plot(data.dead_reckoning[:, 1], data.dead_reckoning[:, 2], "y-", lw=1, label="dead reckoning")
-    ax.plot(result.trajectory[:, 0], result.trajectory[:, 1], "b-", lw=1, label=f"{result.method.upper()} estimate")
-    ax.plot(data.landmarks[:, 1], data.landmarks[:, 2], "g*", ms=9, label="landmarks (surveyed)")
-    if result.landmarks:
-        marks = np.array(list(result.landmarks.values()))
-        ax.plot(marks[:, 0], marks[:, 1], "k+", ms=9, label="landmarks (estimated)")
-    ax.set(aspect="equal", xlabel="x (m)", ylabel="y (m)")
-    ax.legend(fontsize=8)
-    if path is not None:
-        fig.savefig(path, dpi=120, bbox_inches="tight")
-        plt.close(fig)
-    return ax
-
-
 # --- Everything ---------------------------------------------------------------------------------
 
 
@@ -282,12 +223,17 @@ def reproduce(
             for r in [*exp.timing.values(), *exp.with_interp.values(), *exp.without_interp.values(), exp.published]:
                 log.write(json.dumps(r.summary(name)) + "\n")
             fig_, axes = plt.subplots(1, 3, figsize=(15, 4))
-            plot_timing(exp, axes[0])
-            plot_interpolation(exp, axes[1:])
+            plot_timing(exp.timing, axes[0], title=f"{name}: computation time")
+            plot_interpolation_tradeoff(exp.with_interp, exp.without_interp, axes[1:], name=name)
             fig_.tight_layout()
             fig_.savefig(out / f"{fig}.png", dpi=110)
             plt.close(fig_)
-            plot_run(str(out / f"{fig}_trajectory.png"), data, exp.with_interp[1])
+            run = exp.with_interp[1]
+            plot_trajectory(
+                data.ground_truth[:, 1:3], run.trajectory[:, :2], landmarks_true=data.landmarks[:, 1:3],
+                landmarks_estimated=run.landmarks, dead_reckoning=data.dead_reckoning[:, 1:3],
+                estimate_label=f"{run.method.upper()} estimate", path=str(out / f"{fig}_trajectory.png"),
+            )
             experiments.append(exp)
     table = results_table(experiments, notes)
     (out / "results.md").write_text(table)

@@ -264,6 +264,18 @@ class CliqueTree(Generic[C]):
                 self.parent[ch] = c
         self._undo = []
 
+    def snapshot(self) -> CliqueTree[C]:
+        """A structural copy (cliques shared, links copied), e.g. the tree "before" an update to draw.
+
+        Later edits of this tree leave the copy as it was; the copy is a plain :class:`CliqueTree`.
+        """
+        out: CliqueTree[C] = CliqueTree()
+        out.cliques, out.parent, out.roots = dict(self.cliques), dict(self.parent), dict(self.roots)
+        out.children = {c: list(ch) for c, ch in self.children.items()}
+        out.frontal_of = dict(self.frontal_of)
+        out._next_id = self._next_id
+        return out
+
     def path_to_root(self, cid: int) -> list[int]:
         """Ids from ``cid`` up to its root, inclusive."""
         path = []

@@ -1,0 +1,214 @@
+"""steam_ref.plot, the one home of every figure: each draws the data it is given, on the axes it is
+given, and saves a PNG when asked.  The Bayes tree toy is the one of test_bayes_tree_symbolic.py:
+
+            [d e f]            root
+               |
+            [c : d]
+            /     \\
+       [a : c]   [b : c]
+"""
+
+from __future__ import annotations
+
+import ast
+import subprocess
+import sys
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+matplotlib = pytest.importorskip("matplotlib")
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+from matplotlib.colors import to_rgba  # noqa: E402
+
+from steam_ref import plot  # noqa: E402
+from steam_ref.bayes_tree.symbolic import CliqueTree, build_cliques  # noqa: E402
+
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+TOY = [("a", "c"), ("b", "c"), ("c", "d"), ("d", "e"), ("d", "f"), ("e", "f")]
+
+
+def toy_tree() -> CliqueTree:
+    tree: CliqueTree = CliqueTree()
+    cliques = build_cliques(list("abcdef"), TOY)
+    tree.insert_eliminated(cliques, [c.parent for c in cliques])
+    return tree
+
+
+def line(ax, label: str) -> np.ndarray:
+    """(n, 2) data of the one line labelled ``label``."""
+    (found,) = [ln for ln in ax.lines if ln.get_label() == label]
+    return np.asarray(found.get_xydata())
+
+
+@pytest.fixture(autouse=True)
+def close_figures():
+    yield
+    plt.close("all")
+
+
+# --- imports ----------------------------------------------------------------------------------
+
+
+def test_importing_steam_ref_does_not_import_matplotlib():
+    code = "import sys, steam_ref, steam_ref.plot, steam_ref.experiments, steam_ref.cli; assert 'matplotlib' not in sys.modules"
+    subprocess.run([sys.executable, "-c", code], check=True)
+
+
+def test_plot_imports_nothing_from_steam_ref_at_run_time():
+    """Only under TYPE_CHECKING may plot.py name steam_ref's types: it takes plain data."""
+    tree = ast.parse(Path(plot.__file__).read_text())
+    type_only = {id(n) for node in ast.walk(tree) if isinstance(node, ast.If) and getattr(node.test, "id", "") == "TYPE_CHECKING" for n in ast.walk(node)}
+    runtime = [
+        node.module for node in ast.walk(tree)
+        if isinstance(node, ast.ImportFrom) and id(node) not in type_only and (node.level > 0 or (node.module or "").startswith("steam_ref"))
+    ]
+    assert runtime == []
+
+
+# --- a run ------------------------------------------------------------------------------------
+
+
+def test_plot_trajectory_draws_the_given_arrays(rng):
+    truth, estimate, dr = (rng.normal(size=(7, 2)) for _ in range(3))
+    marks, marks_est = rng.normal(size=(3, 2)), {4: rng.normal(size=2), 9: rng.normal(size=2)}
+    ax = plot.plot_trajectory(
+        truth, estimate, landmarks_true=marks, landmarks_estimated=marks_est, dead_reckoning=dr, estimate_label="BTGP estimate", title="t"
+    )
+    np.testing.assert_array_equal(line(ax, "ground truth"), truth)
+    np.testing.assert_array_equal(line(ax, "BTGP estimate"), estimate)
+    np.testing.assert_array_equal(line(ax, "dead reckoning"), dr)
+    np.testing.assert_array_equal(line(ax, "landmarks (true)"), marks)
+    np.testing.assert_array_equal(line(ax, "landmarks (estimated)"), np.array([marks_est[4], marks_est[9]]))
+    assert ax.get_title() == "t"
+
+
+def test_plot_trajectory_draws_only_what_it_is_given(rng):
+    fig, ax = plt.subplots()
+    out = plot.plot_trajectory(None, rng.normal(size=(5, 2)), landmarks_estimated={}, ax=ax)
+    assert out is ax
+    assert [ln.get_label() for ln in ax.lines] == ["estimate"]
+
+
+def test_plot_timing_draws_each_runs_cumulative_time(rng):
+    runs = {
+        "PB/1": SimpleNamespace(cumulative_s=np.cumsum(rng.uniform(0.1, 1, 6)), completed=False),
+        "BTGP/1": SimpleNamespace(cumulative_s=np.cumsum(rng.uniform(0.1, 1, 9)), completed=True),
+    }
+    ax = plot.plot_timing(runs, title="data: computation time")
+    np.testing.assert_array_equal(line(ax, "PB/1 (budget)"), np.column_stack([np.arange(6), runs["PB/1"].cumulative_s]))
+    np.testing.assert_array_equal(line(ax, "BTGP/1"), np.column_stack([np.arange(9), runs["BTGP/1"].cumulative_s]))
+    assert ax.get_yscale() == "log"
+
+
+def test_plot_interpolation_tradeoff_plots_the_values_it_was_given(rng):
+    skips = [10, 1, 3]  # unsorted: drawn in increasing skip
+    with_, without = ({k: SimpleNamespace(rmse_m=rng.uniform(), total_s=rng.uniform(1, 9)) for k in skips} for _ in range(2))
+    rmse_ax, time_ax = plot.plot_interpolation_tradeoff(with_, without, name="plaza")
+    for runs, label in ((with_, "with interpolation"), (without, "without interpolation")):
+        ks = sorted(runs)
+        np.testing.assert_array_equal(line(rmse_ax, label), [[k, runs[k].rmse_m] for k in ks])
+        np.testing.assert_array_equal(line(time_ax, label), [[k, runs[k].total_s] for k in ks])
+    assert rmse_ax.get_title() == "plaza: RMSE"
+
+
+# --- the Bayes tree ---------------------------------------------------------------------------
+
+
+def test_tree_layout_puts_parents_above_their_childrens_middle():
+    tree = toy_tree()
+    pos = plot.tree_layout(tree)
+    assert set(pos) == set(tree.cliques)
+    for c, kids in tree.children.items():
+        for k in kids:
+            assert pos[c][1] == pos[k][1] + 1.0
+        if kids:
+            assert pos[c][0] == pytest.approx(np.mean([pos[k][0] for k in kids]), abs=1e-12)
+    leaves = [pos[c][0] for c, kids in tree.children.items() if not kids]
+    assert sorted(leaves) == [0.0, 1.0]
+    assert [pos[r][1] for r in tree.roots] == [0.0]
+
+
+def test_draw_tree_puts_one_box_per_clique_labelled_frontals_separator():
+    tree = toy_tree()
+    ax = plot.draw_tree(tree, title="toy")
+    assert sorted(t.get_text() for t in ax.texts) == sorted(["d e f", "c : d", "a : c", "b : c"])
+    pos = plot.tree_layout(tree)
+    for t in ax.texts:
+        (c,) = [c for c, cl in tree.cliques.items() if t.get_text().split(" : ")[0] == " ".join(cl.frontals)]
+        assert t.get_position() == pytest.approx(pos[c])
+    assert len(ax.lines) == len(tree) - 1  # one link per non-root clique
+
+
+def test_snapshot_keeps_the_tree_as_it_was():
+    tree = toy_tree()
+    before = tree.snapshot()
+    tree.remove_top([tree.frontal_of["a"]])
+    assert before.problems() == []
+    assert len(before) == 4 and len(tree) == 1
+    assert plot.tree_layout(before) == plot.tree_layout(toy_tree())
+
+
+def test_draw_update_colours_removed_new_and_orphan_cliques():
+    tree = toy_tree()
+    before = tree.snapshot()
+    a, b, c, root = (tree.frontal_of[v] for v in "abcd")
+    report = SimpleNamespace(step=3, removed_cliques=[a, c, root], orphans=[b], new_cliques=[root])
+    left, right = plot.draw_update(before, tree, report)
+    facecolour = {t.get_text(): t.get_bbox_patch().get_facecolor() for t in left.texts}
+    edgecolour = {t.get_text(): t.get_bbox_patch().get_edgecolor() for t in left.texts}
+    for label in ("a : c", "c : d", "d e f"):
+        assert facecolour[label] == to_rgba("#e45756")
+    assert facecolour["b : c"] != to_rgba("#e45756") and edgecolour["b : c"] == to_rgba("#4c78a8")
+    new = {t.get_text() for t in right.texts if t.get_bbox_patch().get_facecolor() == to_rgba("#f58518")}
+    assert new == {"d e f"}
+    assert left.get_title().startswith("before update 3")
+
+
+def test_draw_spy_shows_the_pattern_of_R_and_highlights_rows(rng):
+    R = np.triu(rng.normal(size=(5, 5)))
+    R[0, 3] = R[1, 4] = 0.0
+    keys, dims = ("x0", "x1", "l0"), (2, 2, 1)
+    ordering = SimpleNamespace(keys=keys, dims=dims, offsets=np.array([0, 2, 4]), offset_of=dict(zip(keys, (0, 2, 4))), position={k: i for i, k in enumerate(keys)})
+    tree = SimpleNamespace(to_dense=lambda: (R, None, ordering))
+    ax = plot.draw_spy(tree, highlight=["x1"])
+    (marks,) = ax.lines  # spy with markers: one marker at (column, row) of each nonzero
+    drawn = {(int(y), int(x)) for x, y in marks.get_xydata()}
+    assert drawn == set(zip(*np.nonzero(np.abs(R) > 1e-12)))
+    (band,) = ax.patches
+    ys = band.get_path().transformed(band.get_patch_transform()).vertices[:, 1]  # y in data units
+    assert (ys.min(), ys.max()) == (1.5, 3.5)  # rows 2 and 3, x1's
+    assert [t.get_text() for t in ax.get_xticklabels()] == list(keys)
+
+
+# --- saving -----------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "draw",
+    [
+        lambda path: plot.plot_trajectory(np.zeros((3, 2)), np.ones((3, 2)), path=path),
+        lambda path: plot.plot_timing({"BTGP/1": SimpleNamespace(cumulative_s=[1.0, 2.0], completed=True)}, path=path),
+        lambda path: plot.plot_interpolation_tradeoff({1: SimpleNamespace(rmse_m=0.1, total_s=2.0)}, path=path),
+        lambda path: plot.draw_tree(toy_tree(), path=path),
+        lambda path: plot.plot_matrix(np.eye(4) + 0.1, path=path),
+        lambda path: plot.plot_state_samples(np.arange(3.0), np.ones((2, 3, 4)), path=path),
+    ],
+    ids=["trajectory", "timing", "tradeoff", "tree", "matrix", "samples"],
+)
+def test_saving_writes_a_png_and_leaves_no_figure_open(tmp_path, draw):
+    path = tmp_path / "figure.png"
+    open_before = plt.get_fignums()
+    draw(str(path))
+    assert path.read_bytes()[:8] == PNG_SIGNATURE
+    assert plt.get_fignums() == open_before
+
+
+def test_saving_given_axes_closes_their_figure(tmp_path):
+    fig, ax = plt.subplots()
+    plot.plot_trajectory(np.zeros((3, 2)), np.ones((3, 2)), ax=ax, path=str(tmp_path / "t.png"))
+    assert fig.number not in plt.get_fignums()
+    assert (tmp_path / "t.png").read_bytes()[:8] == PNG_SIGNATURE
