@@ -136,7 +136,7 @@ def _run(args: argparse.Namespace) -> int:
         from .plot import plot_trajectory
 
         plot_trajectory(
-            data.ground_truth[:, 1:3], result.estimates[:, :2], landmarks_true=data.landmarks[:, 1:3],
+            data.ground_truth[:, 1:3], result.trajectory[:, :2], landmarks_true=data.landmarks[:, 1:3],
             landmarks_estimated=result.landmarks, dead_reckoning=data.dead_reckoning[:, 1:3],
             estimate_label=f"{result.method.upper()} estimate", path=args.plot,
         )
