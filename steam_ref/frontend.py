@@ -17,7 +17,9 @@ robot would meet them:
   first sighting or, when the set-up says so (Plaza), all of them at pose 0.
 - **Initial values** (as the paper's scripts make them): a new pose is the previous pose composed
   with the odometry (:func:`steam_ref.pose2.compose`); its velocity is the backward difference over
-  the last step, (pᵢ - pᵢ₋₁)/dt, the only velocity a causal front end knows when the state is made.
+  the last step, (pᵢ - pᵢ₋₁)/dt, the only velocity a causal front end knows when the state is made
+  (the scripts take the heading part as the difference of two GTSAM ``Pose2`` headings, each wrapped
+  to (-π, π], so it is off by ±2π where the heading crosses ±π; ``PaperSetup.pose2_heading_rate_guess``).
   After a solver update the caller hands the front end the latest state's estimate
   (:meth:`FrontEnd.rebase`), so predictions compose from the estimate, not from dead reckoning.
 
@@ -35,7 +37,7 @@ from numpy.typing import NDArray
 
 from .errors import SteamError
 from .factors import Factor, GPPriorFactor, InterpolatedFactor, PriorFactor, RangeFactor, VelocityFactor
-from .pose2 import compose
+from .pose2 import compose, wrap_angle
 from .readings import PaperSetup, Readings
 from .variables import Key, L, X
 
@@ -136,6 +138,8 @@ class FrontEnd:
         distance, _, turn = self.readings.velocity[i]
         new = compose(self._pose, distance, turn)
         self._velocity = new - self._pose  # backward difference over the step just made
+        if self.setup.pose2_heading_rate_guess:  # the scripts difference GTSAM Pose2 headings, each in (-π, π]
+            self._velocity[2] = wrap_angle(new[2]) - wrap_angle(self._pose[2])
         self._pose = new
 
     def _new_state(self, i: int) -> NewStep:

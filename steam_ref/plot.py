@@ -8,7 +8,8 @@ them; with ``path`` it also saves the figure there (PNG by the suffix) and close
 - the GP prior and its interpolation: :func:`plot_state_samples`, :func:`plot_matrix`,
   :func:`plot_sparsity`, :func:`plot_interpolation`;
 - a run: :func:`plot_trajectory` (top view, as Fig. 2), :func:`plot_timing` (Fig. 3/4, left),
-  :func:`plot_interpolation_tradeoff` (Fig. 3/4, right);
+  :func:`plot_interpolation_tradeoff` (Fig. 3/4, right), :func:`plot_fidelity` (distance to the
+  authors' estimate, pose by pose);
 - the Bayes tree: :func:`tree_layout`, :func:`draw_tree`, :func:`draw_update` (an update as
   before/after [K12 Fig. 3-4]), :func:`draw_spy` (its R factor).
 """
@@ -34,6 +35,7 @@ __all__ = [
     "plot_trajectory",
     "plot_timing",
     "plot_interpolation_tradeoff",
+    "plot_fidelity",
     "tree_layout",
     "draw_tree",
     "draw_update",
@@ -255,6 +257,21 @@ def plot_interpolation_tradeoff(
         ax.legend(fontsize=8)
         ax.grid(True, alpha=0.3)
     return _save(axes, path)
+
+
+def plot_fidelity(distances: Mapping[str, ArrayLike], ax: Any = None, *, tolerance_m: float | None = 0.02, path: str | None = None) -> Any:
+    """Distance from a run's estimate to the authors' saved estimate at every pose, one line per
+    data set (name → (n,) metres, pose by pose), with the tolerance drawn as a dashed line."""
+    ax = _axes(ax, path, figsize=(7, 3))
+    for name, d in distances.items():
+        d = 1000 * np.asarray(d, dtype=float)
+        ax.plot(np.arange(len(d)), d, lw=0.8, label=name)
+    if tolerance_m is not None:
+        ax.axhline(1000 * tolerance_m, color="0.4", ls="--", lw=0.8, label=f"{1000 * tolerance_m:g} mm")
+    ax.set(xlabel="pose", ylabel="distance to the authors' estimate (mm)")
+    ax.legend(fontsize=8)
+    ax.grid(True, alpha=0.3)
+    return _save(ax, path)
 
 
 # --- The Bayes tree  [K12 Fig. 3-4] -------------------------------------------------------------

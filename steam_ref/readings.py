@@ -46,6 +46,7 @@ class PaperSetup:
     start_after_ranges: int = 0  # incremental solvers start after this many ranges (batch LM first)
     landmarks_up_front: bool = False  # True: every landmark and its prior enter at pose 0; else at first sighting
     range_attachment: str = "file-order"  # 'file-order': the scripts' scan; 'time': by time stamp (a departure)
+    pose2_heading_rate_guess: bool = True  # initial θ̇ as the scripts' Pose2 difference (±2π at the ±π crossing); False: the plain change
 
     def __post_init__(self) -> None:
         if self.range_attachment not in RANGE_ATTACHMENTS:
