@@ -13,8 +13,11 @@ from steam_ref.factors import InterpolatedFactor, RangeFactor, VelocityFactor
 from steam_ref.gp.interpolate import interpolate_covariance, interpolation_matrices
 from steam_ref.graph import FactorGraph
 from steam_ref.variables import Values, X
-from steam_ref.online import StreamingEstimator, StreamOptions, joint_covariance, run_online
-from steam_ref.problem import PaperSetup, Readings, build_problem, estimated_poses
+from steam_ref.frontend import Layout
+from steam_ref.online import StreamingEstimator, StreamOptions, run_online
+from steam_ref.problem import build_problem
+from steam_ref.readings import PaperSetup, Readings
+from steam_ref.solvers import joint_covariance
 
 SETUP = PaperSetup.synthetic()
 
@@ -36,7 +39,7 @@ def _batch_optimum(data, skip: int, interpolate: bool) -> tuple[Values, np.ndarr
     problem = build_problem(data, SETUP, skip=skip, interpolate=interpolate)
     warm = _stream(data, method="pb", skip=skip, interpolate=interpolate, pb_relative_tolerance=1e-12).solver.estimate()
     result = gauss_newton(problem.graph, warm, ordering="amd", relative_tolerance=1e-14, step_tolerance=1e-12)
-    return result.values, problem.estimated
+    return result.values, problem.states
 
 
 @pytest.mark.parametrize("skip,interpolate,range_states", [(1, True, False), (3, True, False), (3, False, False), (5, False, True), (4, True, True)])
@@ -44,7 +47,7 @@ def test_stream_factors_equal_the_batch_problem(data, skip, interpolate, range_s
     """The stream's factors have the batch problem's cost at any point: the same factor graph."""
     est = _stream(data, method="pb", skip=skip, interpolate=interpolate, range_states=range_states)
     problem = build_problem(data, SETUP, skip=skip, interpolate=interpolate, range_states=range_states)
-    assert est.states == problem.estimated.tolist()
+    assert est.states == problem.states.tolist()
     values = est.solver.estimate().copy()
     rng = np.random.default_rng(0)
     for k in values:
@@ -68,7 +71,7 @@ def test_btgp_with_zero_thresholds_equals_pb(data, every):
     differentiated), so a cost-based stopping rule ends ~1e-5 short: PB stops on its step norm
     instead, and BTGP gets 60 empty updates (each one Gauss-Newton step with these thresholds)."""
     common = dict(skip=2, every=every, final_updates=60)
-    bt = _stream(data, method="btgp", relinearize_threshold=0.0, relinearize_skip=1, wildfire_threshold=0.0, **common)
+    bt = _stream(data, method="btgp", isam2=dict(relinearize_threshold=0.0, relinearize_skip=1, wildfire_threshold=0.0), **common)
     pb = _stream(data, method="pb", pb_relative_tolerance=0.0, **common)
     assert bt.update_steps == pb.update_steps
     a, b = bt.solver.estimate(), pb.solver.estimate()
@@ -167,10 +170,10 @@ def test_time_query_matches_the_dense_gp_posterior_with_a_linear_measurement():
 def test_run_result_figures(data):
     result = run_online(data, SETUP, StreamOptions(method="pbvr", skip=3))
     n = data.n_poses
-    assert result.estimates.shape == (n, 6) and len(result.times) == n
-    assert result.n_estimated_states == len(range(0, n, 3)) + (0 if (n - 1) % 3 == 0 else 1)
+    assert result.trajectory.shape == (n, 6) and len(result.times) == n
+    assert result.n_states == len(range(0, n, 3)) + (0 if (n - 1) % 3 == 0 else 1)
     truth = data.ground_truth[:, 1:3]
-    assert result.rmse_m == pytest.approx(np.sqrt(np.mean(np.sum((result.estimates[:, :2] - truth) ** 2, axis=1))))
+    assert result.rmse_m == pytest.approx(np.sqrt(np.mean(np.sum((result.trajectory[:, :2] - truth) ** 2, axis=1))))
     assert result.rmse_m < 0.5  # the stream converges to a good estimate, far below dead reckoning's
     assert len(result.step_seconds) == n and np.all(np.diff(result.cumulative_s) >= 0)
     assert set(result.landmarks) == set(np.unique(data.ranges[:, 2]).astype(int))
@@ -217,7 +220,7 @@ def test_estimated_poses_follow_the_papers_rule(rng, skip):
     apart, and a state that is none of those comes exactly skip after the previous one."""
     n = 60
     range_poses = np.unique(rng.integers(1, n, size=12))
-    states = estimated_poses(n, skip, range_poses)
+    states = Layout(skip, range_states=True).state_poses(n, range_poses)
     assert states[0] == 0 and states[-1] == n - 1
     assert set(range_poses.tolist()) <= set(states.tolist())
     gaps = np.diff(states)
@@ -225,10 +228,10 @@ def test_estimated_poses_follow_the_papers_rule(rng, skip):
     forced = set(range_poses.tolist()) | {n - 1}
     assert all(gap == skip for s, gap in zip(states[1:], gaps) if s not in forced)
     # no range poses: plain every-skip-th pose, the time-step difference of Fig. 3/4
-    np.testing.assert_array_equal(estimated_poses(n, skip), sorted(set(range(0, n, skip)) | {n - 1}))
+    np.testing.assert_array_equal(Layout(skip).state_poses(n), sorted(set(range(0, n, skip)) | {n - 1}))
 
 
-def test_estimated_poses_rejects_a_bad_skip():
+def test_layout_rejects_a_bad_skip():
     for bad in (0, -2, 1.5, True):
         with pytest.raises(SteamError, match="skip"):
-            estimated_poses(10, bad)
+            Layout(bad)
