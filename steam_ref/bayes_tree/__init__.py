@@ -3,15 +3,18 @@
 - :mod:`.symbolic`: orderings → cliques, and clique surgery, structure only;
 - :mod:`.tree`: :class:`Clique` (a Gaussian conditional), :class:`BayesTree`, elimination and
   back-substitution;
+- :mod:`.params`: :class:`ISAM2Params`, the solver's thresholds (GTSAM's defaults);
 - :mod:`.isam`: :class:`IncrementalSolver`, the update of Algorithm 1 (steps 2-7).
 """
 
 from .isam import IncrementalSolver, UpdateReport
+from .params import ISAM2Params
 from .symbolic import CliqueTree, SymbolicClique, build_cliques, constrained_min_degree, symbolic_elimination
 from .tree import BayesTree, Clique, eliminate, eliminate_clique
 
 __all__ = [
     "IncrementalSolver",
+    "ISAM2Params",
     "UpdateReport",
     "SymbolicClique",
     "CliqueTree",

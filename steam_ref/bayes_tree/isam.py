@@ -34,13 +34,11 @@ from ..errors import ShapeError, SteamError, UnderdeterminedError, UnknownVariab
 from ..factors import Factor
 from ..variables import Key, Values
 from ..linear.system import GaussianFactor, linearize
+from .params import ISAM2Params
 from .symbolic import constrained_min_degree
 from .tree import BayesTree, eliminate
 
 __all__ = ["IncrementalSolver", "UpdateReport"]
-
-Threshold = float | Mapping[str, float]
-
 
 @dataclass(frozen=True)
 class UpdateReport:
@@ -59,14 +57,6 @@ class UpdateReport:
     timings: dict[str, float] = field(default_factory=dict)  # seconds per phase
 
 
-def _check_threshold(value: Threshold, name: str) -> Threshold:
-    items = value.items() if isinstance(value, Mapping) else [("", value)]
-    for kind, t in items:
-        if not (float(t) >= 0):  # also rejects NaN
-            raise SteamError(f"{name} must be >= 0, got {t!r}" + (f" for kind {kind!r}" if kind else ""))
-    return dict(value) if isinstance(value, Mapping) else float(value)
-
-
 @dataclass
 class _Undo:
     """What an update changed before re-elimination succeeded, to put back if it fails."""
@@ -82,26 +72,14 @@ class _Undo:
 class IncrementalSolver:
     """iSAM2 on the Bayes tree: BTGP's incremental solver.  [YIB Alg. 1, K12 Alg. 6]
 
-    ``relinearize_threshold``: a variable is relinearized when max |δ| ≥ this (a float, or a dict
-    kind → float such as ``{'x': 0.1, 'l': 0.5}``); 0 relinearizes every variable whose increment
-    was recomputed. ``relinearize_skip``: check for relinearization every k-th update only.
-    ``wildfire_threshold``: back-substitution stops descending where the increments change by less
-    than this; 0 gives the full back-substitution. With both thresholds 0 and skip 1, each update
-    is one Gauss-Newton step on all factors so far.
+    ``params`` (default :class:`ISAM2Params`, GTSAM's defaults) sets the relinearization and
+    wildfire thresholds; keyword ``changes`` override its fields, so
+    ``IncrementalSolver(relinearize_skip=1, wildfire_threshold=0)`` works as well.
     """
 
-    def __init__(
-        self,
-        *,
-        relinearize_threshold: Threshold = 0.1,
-        relinearize_skip: int = 10,
-        wildfire_threshold: float = 0.001,
-    ) -> None:
-        self.relinearize_threshold = _check_threshold(relinearize_threshold, "relinearize_threshold")
-        if int(relinearize_skip) != relinearize_skip or relinearize_skip < 1:
-            raise SteamError(f"relinearize_skip must be a positive integer, got {relinearize_skip!r}")
-        self.relinearize_skip = int(relinearize_skip)
-        self.wildfire_threshold = float(_check_threshold(wildfire_threshold, "wildfire_threshold"))
+    def __init__(self, params: ISAM2Params | None = None, **changes: object) -> None:
+        params = ISAM2Params() if params is None else params
+        self.params = params.replace(**changes) if changes else params  # the settings, validated
         self.tree = BayesTree()  # the current Bayes tree
         self.factors: list[Factor] = []  # every factor so far; a factor's id is its position
         self._linear: list[GaussianFactor | None] = []  # cached linearization of each factor at θ̄
@@ -163,15 +141,6 @@ class IncrementalSolver:
     def __len__(self) -> int:
         return len(self._dims)
 
-    def _kind_threshold(self, key: Key) -> float:
-        t = self.relinearize_threshold
-        if isinstance(t, float):
-            return t
-        try:
-            return float(t[key.kind])
-        except KeyError:
-            raise SteamError(f"relinearize_threshold has no entry for variables of kind {key.kind!r} ({key!r})") from None
-
     # --- the update -------------------------------------------------------------------------
 
     def update(
@@ -204,7 +173,7 @@ class IncrementalSolver:
         new_ids = self._add(new_factors, new_values)
         touched = list(dict.fromkeys(k for f in new_factors for k in f.keys))
         # 7. Fluid relinearization, from the previous round's δ.      [YIB Alg. 1 step 7, K12 Alg. 5]
-        relin = self._fluid_relinearization(undo) if relinearize and self._steps % self.relinearize_skip == 0 else []
+        relin = self._fluid_relinearization(undo) if relinearize and self._steps % self.params.relinearize_skip == 0 else []
         t1 = time.perf_counter()
         # 2. Remove the cliques of the affected variables and their ascendants.   [K12 Alg. 4]
         start = [self.tree.frontal_of[k] for k in touched if k in self.tree.frontal_of]
@@ -264,7 +233,7 @@ class IncrementalSolver:
             x = np.array(v, dtype=float).reshape(-1)
             if not np.all(np.isfinite(x)):
                 raise ShapeError(f"new value of {k!r} is not finite: {x}")
-            self._kind_threshold(k)  # a dict of thresholds must name every kind
+            self.params.threshold_for(k.kind)  # a dict of thresholds must name every kind
             values[k] = x
         for f in new_factors:
             if not isinstance(f, Factor):
@@ -289,7 +258,7 @@ class IncrementalSolver:
         for k, x in new_values.items():
             self._theta_bar.insert(k, x)
             self._dims[k] = x.shape[0]
-            self._threshold[k] = self._kind_threshold(k)
+            self._threshold[k] = self.params.threshold_for(k.kind)
             self._delta[k] = np.zeros_like(x)
             self._stale[k] = None
         return list(range(first, len(self.factors)))
@@ -325,7 +294,7 @@ class IncrementalSolver:
         Changes are judged per variable: a root clique holding the newest state and the landmarks
         must not mark the landmarks changed because the newest state moved.
         """
-        tree, delta, threshold = self.tree, self._delta, self.wildfire_threshold
+        tree, delta, threshold = self.tree, self._delta, self.params.wildfire_threshold
         stale, over, limit = self._stale, self._over, self._threshold
         changed: set[Key] = set()
         updated: list[Key] = []
