@@ -11,10 +11,10 @@ import pytest
 from problems import small_problem
 
 import steam_ref as sr
-from steam_ref.bayes_tree import BayesTree, constrained_min_degree, eliminate_clique
+from steam_ref.bayes_tree import BayesTree, eliminate_clique
 from steam_ref.errors import UnderdeterminedError
 from steam_ref.variables import Key
-from steam_ref.linear import LinearSystem, Ordering, amd_ordering, xl_ordering
+from steam_ref.linear import LinearSystem, Ordering, amd_ordering, constrained_min_degree, xl_ordering
 from steam_ref.linear.system import GaussianFactor, linearize
 
 

@@ -1,6 +1,7 @@
 """The Bayes tree and the incremental solver built on it.  [YIB Sec. III, K12]
 
-- :mod:`.symbolic`: orderings → cliques, and clique surgery, structure only;
+- :mod:`.symbolic`: orderings → cliques, and clique surgery, structure only (the orderings
+  themselves, iSAM2's constrained minimum degree included, are in :mod:`steam_ref.linear.ordering`);
 - :mod:`.tree`: :class:`Clique` (a Gaussian conditional), :class:`BayesTree`, elimination and
   back-substitution;
 - :mod:`.params`: :class:`ISAM2Params`, the solver's thresholds (GTSAM's defaults);
@@ -9,7 +10,7 @@
 
 from .isam import IncrementalSolver, UpdateReport
 from .params import ISAM2Params
-from .symbolic import CliqueTree, SymbolicClique, build_cliques, constrained_min_degree, symbolic_elimination
+from .symbolic import CliqueTree, SymbolicClique, build_cliques, symbolic_elimination
 from .tree import BayesTree, Clique, eliminate, eliminate_clique
 
 __all__ = [
@@ -18,7 +19,6 @@ __all__ = [
     "UpdateReport",
     "SymbolicClique",
     "CliqueTree",
-    "constrained_min_degree",
     "symbolic_elimination",
     "build_cliques",
     "Clique",

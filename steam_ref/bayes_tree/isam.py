@@ -33,9 +33,9 @@ from numpy.typing import NDArray
 from ..errors import ShapeError, SteamError, UnderdeterminedError, UnknownVariableError
 from ..factors import Factor
 from ..variables import Key, Values
+from ..linear.ordering import constrained_min_degree
 from ..linear.system import GaussianFactor, linearize
 from .params import ISAM2Params
-from .symbolic import constrained_min_degree
 from .tree import BayesTree, eliminate
 
 __all__ = ["IncrementalSolver", "UpdateReport"]
