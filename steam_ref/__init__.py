@@ -23,7 +23,8 @@ from .factors import (
 )
 from .graph import FactorGraph
 from .variables import Key, L, Values, X
-from .linear import LinearSystem, amd_ordering, marginal_covariances, xl_ordering
+from .linear import LinearSystem, amd_ordering, xl_ordering
+from .covariance import marginal_covariances
 from .robust import Huber, Tukey
 from .datasets import RangeDataset, generate_synthetic, load_dataset
 from .problem import PaperSetup

@@ -9,7 +9,7 @@ from problems import small_problem
 import steam_ref as sr
 from steam_ref.batch import make_ordering
 from steam_ref.linear import ordering as orderings
-from steam_ref.linear import LinearSystem, SparseCholesky, have_cholmod, marginal_covariances, solve
+from steam_ref.linear import LinearSystem, SparseCholesky, have_cholmod, solve
 
 BACKENDS = ["superlu", pytest.param("cholmod", marks=pytest.mark.skipif(not have_cholmod(), reason="scikit-sparse not installed"))]
 
@@ -109,19 +109,6 @@ def test_superlu_minimum_degree_fill_close_to_cholmod_amd(rng):
         info = LinearSystem.build(p.graph.factors, p.initial, order).information()[0]
         nnz[backend] = SparseCholesky.factor(info, order, "cholmod").nnz
     assert nnz["superlu"] <= 1.15 * nnz["cholmod"]
-
-
-@pytest.mark.parametrize("backend", BACKENDS)
-def test_marginal_covariances_equal_dense_inverse(problem, backend):
-    order = make_ordering(problem.graph, problem.initial, "amd", backend)
-    system = LinearSystem.build(problem.graph.factors, problem.initial, order)
-    keys = [sr.X(0), sr.X(7), sr.L(2)]
-    cov = marginal_covariances(system, keys, backend)
-    A, _ = system.to_dense()
-    dense = np.linalg.inv(A.T @ A)
-    for k in keys:
-        o, d = order.offset_of[k], problem.initial.dim(k)
-        np.testing.assert_allclose(cov[k], dense[o : o + d, o : o + d], rtol=1e-9, atol=1e-12)
 
 
 @pytest.mark.parametrize("backend", BACKENDS)

@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from ..covariance import tree_joint_covariance, tree_marginal_covariance, tree_marginals
 from ..errors import ShapeError, SteamError, UnderdeterminedError, UnknownVariableError
 from ..factors import Factor
 from ..variables import Key, Values
@@ -131,12 +132,16 @@ class IncrementalSolver:
         return {k: v.copy() for k, v in self._delta.items()}
 
     def marginal_covariance(self, key: Key) -> NDArray:
-        """Cov(δθ_key) of the current linear system, from the Bayes tree."""
-        return self.tree.marginal_covariance(key)
+        """Cov(δθ_key) (d, d) of the current linear system, from the Bayes tree.  [K11 Sec. 3]"""
+        return tree_marginal_covariance(self.tree, key)
 
     def joint_marginal_covariance(self, keys: Iterable[Key]) -> NDArray:
-        """Joint covariance of several variables (stacked in the order given), from the tree."""
-        return self.tree.joint_marginal_covariance(list(keys))
+        """Joint covariance (Σdₖ, Σdₖ) of several variables, stacked in the order given, from the tree."""
+        return tree_joint_covariance(self.tree, list(keys))
+
+    def marginals(self, keys: Iterable[Key] | None = None) -> dict[Key, NDArray]:
+        """Marginal covariance (dₖ, dₖ) of each of ``keys`` (every variable when None), in one pass down the tree."""
+        return tree_marginals(self.tree, keys)
 
     def __len__(self) -> int:
         return len(self._dims)

@@ -1,4 +1,4 @@
-"""The linear least-squares layer: linearization, orderings, sparse Cholesky.  [YIB Eq. 9-11, 15, 21]"""
+"""The linear least-squares layer: linearization, orderings, sparse Cholesky, conditionals.  [YIB Eq. 9-11, 15, 21]"""
 
 from .ordering import (
     Ordering,
@@ -10,7 +10,7 @@ from .ordering import (
     sparse_backend,
     xl_ordering,
 )
-from .solve import SparseCholesky, marginal_covariances, solve
+from .solve import SparseCholesky, solve
 from .system import GaussianFactor, LinearizedGroup, LinearSystem, linearize
 
 __all__ = [
@@ -24,7 +24,6 @@ __all__ = [
     "sparse_backend",
     "SparseCholesky",
     "solve",
-    "marginal_covariances",
     "GaussianFactor",
     "LinearizedGroup",
     "LinearSystem",
