@@ -442,3 +442,12 @@ def test_bad_params_are_named(changes, named):
         sr.ISAM2Params().replace(**changes)
     with pytest.raises(SteamError, match=named):
         IncrementalSolver(**changes)
+
+
+def test_report_times_every_phase_within_the_total(rng):
+    stream = Stream(rng, n_states=5)
+    solver = IncrementalSolver(relinearize_skip=1)
+    for report in run(stream, solver, ["state"] * 5):
+        assert list(report.timings) == ["check", "add", "relinearize", "remove", "linearize", "order", "eliminate", "backsubstitute"]
+        assert all(t >= 0 for t in report.timings.values())
+        assert sum(report.timings.values()) <= report.time_s
