@@ -52,13 +52,11 @@ class UpdateReport:
     linearized_factors: int  # factors linearized in this update (the new ones included)
     backsubstituted_cliques: int  # cliques whose conditional was solved
     time_s: float  # wall time of the whole update
-    timings: dict[str, float] = field(default_factory=dict)  # seconds per phase, see _PhaseTimer.PHASES
+    timings: dict[str, float] = field(default_factory=dict)  # seconds per phase: check, add, relinearize, remove, linearize, order, eliminate, backsubstitute
 
 
 class _PhaseTimer:
     """Wall time of each phase of one update: ``with timer("remove"): ...``."""
-
-    PHASES = ("check", "add", "relinearize", "remove", "linearize", "order", "eliminate", "backsubstitute")
 
     def __init__(self) -> None:
         self.start = time.perf_counter()  # when the update began
@@ -104,9 +102,11 @@ class _Journal:
             self.old_linear[fid] = old
 
     def removed_top(self) -> None:
+        """The tree's top was removed (``BayesTree.restore_top`` puts it back)."""
         self.top_removed = True
 
     def close(self) -> None:
+        """The new cliques are going in: from here on nothing is undone."""
         self.closed = True
 
 
