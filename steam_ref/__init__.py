@@ -6,7 +6,7 @@ interpolation, batch Gauss-Newton (PB, PBVR), and the Bayes tree (BTGP). Equatio
 the code as [YIB Eq. n]; see docs/references.md.
 """
 
-from .bayes_tree import BayesTree, IncrementalSolver
+from .bayes_tree import BayesTree, IncrementalSolver, ISAM2Params
 from .batch import BatchResult, batch_solve, gauss_newton, levenberg_marquardt
 from .errors import DataError, ShapeError, SteamError, UnderdeterminedError, UnknownVariableError
 from .factors import (
@@ -23,7 +23,8 @@ from .factors import (
 )
 from .graph import FactorGraph
 from .variables import Key, L, Values, X
-from .linear import LinearSystem, amd_ordering, marginal_covariances, xl_ordering
+from .linear import LinearSystem, amd_ordering, xl_ordering
+from .covariance import marginal_covariances
 from .robust import Huber, Tukey
 from .datasets import RangeDataset, generate_synthetic, load_dataset
 from .readings import PaperSetup
@@ -39,6 +40,6 @@ __all__ = [
     "Huber", "Tukey",
     "LinearSystem", "xl_ordering", "amd_ordering", "marginal_covariances",
     "gauss_newton", "levenberg_marquardt", "batch_solve", "BatchResult",
-    "BayesTree", "IncrementalSolver",
+    "BayesTree", "IncrementalSolver", "ISAM2Params",
     "RangeDataset", "load_dataset", "generate_synthetic", "PaperSetup", "StreamOptions", "run_online",
 ]

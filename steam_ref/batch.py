@@ -1,7 +1,8 @@
 """Batch Gauss-Newton and Levenberg-Marquardt on the STEAM problem.  [YIB Eq. 6-11]
 
 Each iteration linearizes every factor at θ̄ (Eq. 9), solves 𝓘 δθ* = Aᵀb (Eq. 11) by sparse
-Cholesky under the chosen ordering ('xl': the paper's PB, 'amd': PBVR), and updates
+Cholesky under the chosen ordering ('xl': the paper's PB, 'amd': PBVR, 'natural'; see
+:mod:`steam_ref.linear.ordering`), and updates
 θ̄ ← θ̄ + δθ*. The ordering depends only on which variables share factors, so it is computed once.
 """
 
@@ -15,7 +16,8 @@ import scipy.sparse as sp
 from .errors import SteamError
 from .graph import FactorGraph
 from .variables import Values
-from .linear.ordering import Ordering, amd_ordering, sparse_backend, xl_ordering
+from .linear import ordering as linear_ordering
+from .linear.ordering import Ordering, sparse_backend
 from .linear.solve import SparseCholesky
 from .linear.system import LinearSystem, linearize
 
@@ -52,16 +54,10 @@ class BatchResult:
 
 
 def make_ordering(graph: FactorGraph, values: Values, ordering: str | Ordering, backend: str | None = None) -> Ordering:
-    """'xl', 'amd' or an explicit :class:`Ordering` for the variables of ``graph``."""
-    if isinstance(ordering, Ordering):
-        return ordering
+    """:func:`steam_ref.linear.ordering.make_ordering` for the variables of ``graph`` (first-seen order)."""
     keys = graph.keys()
     dims = {k: values.dim(k) for k in keys}
-    if ordering == "xl":
-        return xl_ordering(keys, dims)
-    if ordering == "amd":
-        return amd_ordering(keys, dims, (f.keys for f in graph), backend)
-    raise SteamError(f"unknown ordering {ordering!r}; use 'xl', 'amd' or an Ordering")
+    return linear_ordering.make_ordering(ordering, keys, dims, (f.keys for f in graph), backend)
 
 
 def _step(graph: FactorGraph, values: Values, ordering: Ordering, backend: str, damping: float):

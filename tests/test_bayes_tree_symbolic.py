@@ -21,10 +21,10 @@ from steam_ref.bayes_tree.symbolic import (
     CliqueTree,
     SymbolicClique,
     build_cliques,
-    constrained_min_degree,
     symbolic_elimination,
 )
 from steam_ref.errors import SteamError, UnknownVariableError
+from steam_ref.linear.ordering import constrained_min_degree
 
 TOY = [("a", "c"), ("b", "c"), ("c", "d"), ("d", "e"), ("d", "f"), ("e", "f")]
 ORDER = list("abcdef")

@@ -295,6 +295,12 @@ def test_marginal_covariance_matches_dense_inverse(rng):
         o, d = ordering.offset_of[k], ordering.dims[ordering.position[k]]
         block = cov[o : o + d, o : o + d]
         np.testing.assert_allclose(solver.marginal_covariance(k), block, rtol=1e-9, atol=1e-12 * np.abs(block).max())
+    marginals = solver.marginals()  # one pass down the tree
+    assert set(marginals) == set(ordering.keys)
+    for k in ordering.keys:
+        o, d = ordering.offset_of[k], ordering.dims[ordering.position[k]]
+        block = cov[o : o + d, o : o + d]
+        np.testing.assert_allclose(marginals[k], block, rtol=1e-9, atol=1e-12 * np.abs(block).max())
     group = [sr.X(0), sr.X(9)]
     idx = np.concatenate([np.arange(ordering.offset_of[k], ordering.offset_of[k] + 6) for k in group])
     np.testing.assert_allclose(solver.joint_marginal_covariance(group), cov[np.ix_(idx, idx)], rtol=1e-9, atol=1e-12)
@@ -389,3 +395,59 @@ def test_new_states_reeliminate_a_bounded_number_of_variables(rng):
     assert counts[-500:].mean() <= counts[warm_up : warm_up + 500].mean() + 0.5
     assert len(solver.tree) >= n // 2  # the tree really is long: most states have their own clique
     assert solver.tree.problems() == []
+
+
+# --- parameters -----------------------------------------------------------------------------
+
+
+def test_params_defaults_are_gtsams_and_keyword_changes_override_them():
+    params = sr.ISAM2Params()
+    assert (params.relinearize_threshold, params.relinearize_skip, params.wildfire_threshold) == (0.1, 10, 0.001)
+    assert IncrementalSolver().params == params
+    solver = IncrementalSolver(params.replace(relinearize_skip=3), wildfire_threshold=0)
+    assert solver.params == sr.ISAM2Params(0.1, 3, 0.0)
+    assert params.relinearize_skip == 10  # replace made a copy
+
+
+def test_params_per_kind_threshold_is_a_plain_copy():
+    given = {"x": 0.1, "l": 1}
+    params = sr.ISAM2Params(relinearize_threshold=given)
+    given["x"] = 5.0
+    assert params.threshold_for("x") == 0.1 and params.threshold_for("l") == 1.0
+    assert type(params.relinearize_threshold) is dict
+    assert isinstance(params.threshold_for("l"), float)
+    with pytest.raises(SteamError, match="'v'"):
+        params.threshold_for("v")
+    assert sr.ISAM2Params(relinearize_threshold=0.3).threshold_for("anything") == 0.3
+
+
+@pytest.mark.parametrize(
+    "changes, named",
+    [
+        (dict(relinearize_threshold=-0.5), "-0.5"),
+        (dict(relinearize_threshold=float("nan")), "nan"),
+        (dict(relinearize_threshold=True), "True"),
+        (dict(relinearize_threshold={"x": -1.0}), "'x'"),
+        (dict(relinearize_threshold="big"), "'big'"),
+        (dict(relinearize_skip=0), "0"),
+        (dict(relinearize_skip=2.5), "2.5"),
+        (dict(relinearize_skip=True), "True"),
+        (dict(wildfire_threshold=-1e-3), "-0.001"),
+        (dict(wildfire_threshold=False), "False"),
+        (dict(wildfire=0.1), "'wildfire'"),
+    ],
+)
+def test_bad_params_are_named(changes, named):
+    with pytest.raises(SteamError, match=named):
+        sr.ISAM2Params().replace(**changes)
+    with pytest.raises(SteamError, match=named):
+        IncrementalSolver(**changes)
+
+
+def test_report_times_every_phase_within_the_total(rng):
+    stream = Stream(rng, n_states=5)
+    solver = IncrementalSolver(relinearize_skip=1)
+    for report in run(stream, solver, ["state"] * 5):
+        assert list(report.timings) == ["check", "add", "relinearize", "remove", "linearize", "order", "eliminate", "backsubstitute"]
+        assert all(t >= 0 for t in report.timings.values())
+        assert sum(report.timings.values()) <= report.time_s

@@ -1,21 +1,24 @@
 """The Bayes tree and the incremental solver built on it.  [YIB Sec. III, K12]
 
-- :mod:`.symbolic`: orderings → cliques, and clique surgery, structure only;
+- :mod:`.symbolic`: orderings → cliques, and clique surgery, structure only (the orderings
+  themselves, iSAM2's constrained minimum degree included, are in :mod:`steam_ref.linear.ordering`);
 - :mod:`.tree`: :class:`Clique` (a Gaussian conditional), :class:`BayesTree`, elimination and
   back-substitution;
+- :mod:`.params`: :class:`ISAM2Params`, the solver's thresholds (GTSAM's defaults);
 - :mod:`.isam`: :class:`IncrementalSolver`, the update of Algorithm 1 (steps 2-7).
 """
 
 from .isam import IncrementalSolver, UpdateReport
-from .symbolic import CliqueTree, SymbolicClique, build_cliques, constrained_min_degree, symbolic_elimination
+from .params import ISAM2Params
+from .symbolic import CliqueTree, SymbolicClique, build_cliques, symbolic_elimination
 from .tree import BayesTree, Clique, eliminate, eliminate_clique
 
 __all__ = [
     "IncrementalSolver",
+    "ISAM2Params",
     "UpdateReport",
     "SymbolicClique",
     "CliqueTree",
-    "constrained_min_degree",
     "symbolic_elimination",
     "build_cliques",
     "Clique",

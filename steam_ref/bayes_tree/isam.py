@@ -1,24 +1,20 @@
-"""Incremental updates of the Bayes tree: iSAM2, the paper's Algorithm 1 steps 2-7.  [YIB Alg. 1, K12]
+"""Incremental updates of the Bayes tree: iSAM2, the paper's Algorithm 1.  [YIB Alg. 1, K12 Alg. 6]
 
-One :meth:`IncrementalSolver.update` does, in the numbering of [YIB Alg. 1]:
-
-1. add the new factors and the new variables (with their initial values);
-7. (the previous round's step 7, done first as in [K12 Alg. 6]) fluid relinearization: variables
-   whose increment δ moved them at least a threshold from their linearization point θ̄ get
-   θ̄ ← θ̄ + δ [K12 Alg. 5];
-2. remove the cliques holding an affected variable (one named by a new factor, or relinearized:
-   every clique holding it) and all their ascendants up to the root [K12 Alg. 4];
-3. re-linearize only the factors of the removed part that touch a relinearized variable; the
-   others keep their cached linearization (θ̄ did not move for them);
-4. add the cached marginal factors f(S) of the orphaned subtrees;
-5. eliminate this small factor graph with a constrained minimum-degree ordering (variables touched
-   by the new factors last) and reattach each orphan under the clique that eliminates the first
-   variable of its separator [K12 Alg. 4];
-6. back-substitute from the root, descending only while the increments change by at least the
-   wildfire threshold [K12 Alg. 7].
+One :meth:`IncrementalSolver.update` is one step of [K12 Alg. 6], and ``_update`` lists its steps
+in that numbering, each with its step of [YIB Alg. 1]: (1-2) store the new factors F′ and
+variables; (3) fluid relinearization [K12 Alg. 5] of θ_rl, the variables whose δ reached the
+threshold β, which [YIB] numbers 7, the end of the previous round: iSAM2 collects the candidates
+while computing δ and moves θ̄ at the start of the next update (every ``relinearize_skip``-th);
+(4) redo the top of the tree for θ_aff = θ_nf ∪ θ_rl [K12 Alg. 4, YIB steps 2-5]: remove the
+cliques holding θ_aff and their ascendants, linearize the factors of the removed part that are
+new or touch θ_rl (the others keep their cached linearization), add the orphans' cached marginal
+factors f(S), order with the variables of F′ last, eliminate, attach back the orphans; (5) partial
+back-substitution, descending only where δ changes by at least the wildfire threshold α
+[K12 Alg. 7, YIB step 6]; (6) the estimate θ̄ ⊕ δ, formed lazily when asked for.
 
 Every step costs time in proportion to the removed part and the cliques back-substitution visits:
-nothing walks the whole tree, and the estimate θ̄ + δ is kept up to date variable by variable.
+nothing walks the whole tree. Timing (:class:`_PhaseTimer`) and undo (:class:`_Journal`, told by
+the steps what they change, so a failed update leaves the solver as it was) stay out of the steps.
 """
 
 from __future__ import annotations
@@ -30,16 +26,16 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from ..covariance import tree_joint_covariance, tree_marginal_covariance, tree_marginals
 from ..errors import ShapeError, SteamError, UnderdeterminedError, UnknownVariableError
 from ..factors import Factor
-from ..variables import Key, Values
+from ..linear.ordering import constrained_min_degree
 from ..linear.system import GaussianFactor, linearize
-from .symbolic import constrained_min_degree
-from .tree import BayesTree, eliminate
+from ..variables import Key, Values
+from .params import ISAM2Params
+from .tree import BayesTree, Clique, eliminate
 
 __all__ = ["IncrementalSolver", "UpdateReport"]
-
-Threshold = float | Mapping[str, float]
 
 
 @dataclass(frozen=True)
@@ -50,58 +46,81 @@ class UpdateReport:
     removed_cliques: tuple[int, ...]  # ids of the cliques taken off the top (ids of the tree before)
     new_cliques: tuple[int, ...]  # ids of the cliques made by re-elimination
     orphans: tuple[int, ...]  # ids of the subtrees kept and reattached
-    relinearized: tuple[Key, ...]  # variables whose linearization point moved
-    reeliminated: tuple[Key, ...]  # variables eliminated anew (frontals of the new cliques)
+    relinearized: tuple[Key, ...]  # θ_rl: variables whose linearization point moved
+    reeliminated: tuple[Key, ...]  # variables eliminated anew, in elimination order (frontals of the new cliques)
     updated: tuple[Key, ...]  # variables whose increment δ (hence estimate) was recomputed
     linearized_factors: int  # factors linearized in this update (the new ones included)
     backsubstituted_cliques: int  # cliques whose conditional was solved
     time_s: float  # wall time of the whole update
-    timings: dict[str, float] = field(default_factory=dict)  # seconds per phase
+    timings: dict[str, float] = field(default_factory=dict)  # seconds per phase: check, add, relinearize, remove, linearize, order, eliminate, backsubstitute
 
 
-def _check_threshold(value: Threshold, name: str) -> Threshold:
-    items = value.items() if isinstance(value, Mapping) else [("", value)]
-    for kind, t in items:
-        if not (float(t) >= 0):  # also rejects NaN
-            raise SteamError(f"{name} must be >= 0, got {t!r}" + (f" for kind {kind!r}" if kind else ""))
-    return dict(value) if isinstance(value, Mapping) else float(value)
+class _PhaseTimer:
+    """Wall time of each phase of one update: ``with timer("remove"): ...``."""
+
+    def __init__(self) -> None:
+        self.start = time.perf_counter()  # when the update began
+        self.seconds: dict[str, float] = {}  # phase → seconds
+        self._phase, self._t = "", 0.0
+
+    def __call__(self, phase: str) -> _PhaseTimer:
+        self._phase = phase
+        return self
+
+    def __enter__(self) -> None:
+        self._t = time.perf_counter()
+
+    def __exit__(self, *exc: object) -> None:
+        self.seconds[self._phase] = time.perf_counter() - self._t
+
+    def total(self) -> float:
+        """Seconds since the update began."""
+        return time.perf_counter() - self.start
 
 
 @dataclass
-class _Undo:
-    """What an update changed before re-elimination succeeded, to put back if it fails."""
+class _Journal:
+    """What a running update changed, so that a failure can put it back (mutable: filled as it runs).
+
+    Valid until the new cliques go into the tree (:meth:`close`); a failure after that is a bug.
+    """
 
     n_factors: int  # number of factors before the update
-    new_keys: list[Key]  # variables the update added
-    relinearized: dict[Key, tuple[NDArray, NDArray]] = field(default_factory=dict)  # key → old (θ̄, δ)
-    linear: dict[int, GaussianFactor] = field(default_factory=dict)  # factor id → old cached linearization
-    removed: bool = False  # the top of the tree was removed
-    committed: bool = False  # elimination succeeded: nothing to undo any more
+    new_keys: list[Key]  # variables the update adds
+    old_points: dict[Key, tuple[NDArray, NDArray]] = field(default_factory=dict)  # relinearized key → old (θ̄, δ)
+    old_linear: dict[int, GaussianFactor] = field(default_factory=dict)  # factor id → old cached linearization
+    top_removed: bool = False  # the top of the tree was removed (the tree can restore it)
+    closed: bool = False  # the new cliques are in: nothing to undo any more
+
+    def moved(self, key: Key, theta_bar: NDArray, delta: NDArray) -> None:
+        """``key``'s θ̄ and δ are about to change from these."""
+        self.old_points[key] = (theta_bar, delta)
+
+    def relinearized(self, fid: int, old: GaussianFactor | None) -> None:
+        """Factor ``fid``'s cached linearization is about to be replaced (None: it had none)."""
+        if old is not None:
+            self.old_linear[fid] = old
+
+    def removed_top(self) -> None:
+        """The tree's top was removed (``BayesTree.restore_top`` puts it back)."""
+        self.top_removed = True
+
+    def close(self) -> None:
+        """The new cliques are going in: from here on nothing is undone."""
+        self.closed = True
 
 
 class IncrementalSolver:
     """iSAM2 on the Bayes tree: BTGP's incremental solver.  [YIB Alg. 1, K12 Alg. 6]
 
-    ``relinearize_threshold``: a variable is relinearized when max |δ| ≥ this (a float, or a dict
-    kind → float such as ``{'x': 0.1, 'l': 0.5}``); 0 relinearizes every variable whose increment
-    was recomputed. ``relinearize_skip``: check for relinearization every k-th update only.
-    ``wildfire_threshold``: back-substitution stops descending where the increments change by less
-    than this; 0 gives the full back-substitution. With both thresholds 0 and skip 1, each update
-    is one Gauss-Newton step on all factors so far.
+    ``params`` (default :class:`ISAM2Params`, GTSAM's defaults) sets the relinearization and
+    wildfire thresholds; keyword ``changes`` override its fields, so
+    ``IncrementalSolver(relinearize_skip=1, wildfire_threshold=0)`` works as well.
     """
 
-    def __init__(
-        self,
-        *,
-        relinearize_threshold: Threshold = 0.1,
-        relinearize_skip: int = 10,
-        wildfire_threshold: float = 0.001,
-    ) -> None:
-        self.relinearize_threshold = _check_threshold(relinearize_threshold, "relinearize_threshold")
-        if int(relinearize_skip) != relinearize_skip or relinearize_skip < 1:
-            raise SteamError(f"relinearize_skip must be a positive integer, got {relinearize_skip!r}")
-        self.relinearize_skip = int(relinearize_skip)
-        self.wildfire_threshold = float(_check_threshold(wildfire_threshold, "wildfire_threshold"))
+    def __init__(self, params: ISAM2Params | None = None, **changes: object) -> None:
+        params = ISAM2Params() if params is None else params
+        self.params = params.replace(**changes) if changes else params  # the settings, validated
         self.tree = BayesTree()  # the current Bayes tree
         self.factors: list[Factor] = []  # every factor so far; a factor's id is its position
         self._linear: list[GaussianFactor | None] = []  # cached linearization of each factor at θ̄
@@ -153,24 +172,19 @@ class IncrementalSolver:
         return {k: v.copy() for k, v in self._delta.items()}
 
     def marginal_covariance(self, key: Key) -> NDArray:
-        """Cov(δθ_key) of the current linear system, from the Bayes tree."""
-        return self.tree.marginal_covariance(key)
+        """Cov(δθ_key) (d, d) of the current linear system, from the Bayes tree.  [K11 Sec. 3]"""
+        return tree_marginal_covariance(self.tree, key)
 
     def joint_marginal_covariance(self, keys: Iterable[Key]) -> NDArray:
-        """Joint covariance of several variables (stacked in the order given), from the tree."""
-        return self.tree.joint_marginal_covariance(list(keys))
+        """Joint covariance (Σdₖ, Σdₖ) of several variables, stacked in the order given, from the tree."""
+        return tree_joint_covariance(self.tree, list(keys))
+
+    def marginals(self, keys: Iterable[Key] | None = None) -> dict[Key, NDArray]:
+        """Marginal covariance (dₖ, dₖ) of each of ``keys`` (every variable when None), in one pass down the tree."""
+        return tree_marginals(self.tree, keys)
 
     def __len__(self) -> int:
         return len(self._dims)
-
-    def _kind_threshold(self, key: Key) -> float:
-        t = self.relinearize_threshold
-        if isinstance(t, float):
-            return t
-        try:
-            return float(t[key.kind])
-        except KeyError:
-            raise SteamError(f"relinearize_threshold has no entry for variables of kind {key.kind!r} ({key!r})") from None
 
     # --- the update -------------------------------------------------------------------------
 
@@ -183,76 +197,78 @@ class IncrementalSolver:
     ) -> UpdateReport:
         """Add factors and variables, and update the tree and the estimate.  [YIB Alg. 1, K12 Alg. 6]
 
-        Raises :class:`SteamError` subclasses on bad input (a new value for an existing variable, a
-        factor naming a variable with no value, a variable left unconstrained, ...); the solver is
-        then as it was before the call.
+        ``relinearize=False`` skips this update's fluid relinearization. Raises
+        :class:`SteamError` subclasses on bad input (a new value for an existing variable, a factor
+        naming a variable with no value, a variable left unconstrained, ...); the solver is then as
+        it was before the call.
         """
-        t0 = time.perf_counter()
-        new_factors = [new_factors] if isinstance(new_factors, Factor) else list(new_factors)
-        new_values = self._checked_update(new_factors, {} if new_values is None else new_values)
-        undo = _Undo(len(self.factors), list(new_values))
+        timer = _PhaseTimer()
+        with timer("check"):
+            F_new = [new_factors] if isinstance(new_factors, Factor) else list(new_factors)
+            theta_new = self._checked_update(F_new, {} if new_values is None else new_values)
+        journal = _Journal(len(self.factors), list(theta_new))
         try:
-            return self._update(new_factors, new_values, relinearize, undo, t0)
+            return self._update(F_new, theta_new, relinearize, journal, timer)
         except Exception:
-            if not undo.committed:
-                self._rollback(undo)
+            if not journal.closed:
+                self._rollback(journal)
             raise
 
-    def _update(self, new_factors: list[Factor], new_values: dict[Key, NDArray], relinearize: bool, undo: _Undo, t0: float) -> UpdateReport:
+    def _update(
+        self, F_new: list[Factor], theta_new: dict[Key, NDArray], relinearize: bool, journal: _Journal, timer: _PhaseTimer
+    ) -> UpdateReport:
+        """One step of iSAM2, numbered as [K12 Alg. 6], with the steps of [YIB Alg. 1] (module docstring)."""
         self._steps += 1
-        # 1. Add the new factors and the new variables.                     [YIB Alg. 1 step 1]
-        new_ids = self._add(new_factors, new_values)
-        touched = list(dict.fromkeys(k for f in new_factors for k in f.keys))
-        # 7. Fluid relinearization, from the previous round's δ.      [YIB Alg. 1 step 7, K12 Alg. 5]
-        relin = self._fluid_relinearization(undo) if relinearize and self._steps % self.relinearize_skip == 0 else []
-        t1 = time.perf_counter()
-        # 2. Remove the cliques of the affected variables and their ascendants.   [K12 Alg. 4]
-        start = [self.tree.frontal_of[k] for k in touched if k in self.tree.frontal_of]
-        for k in relin:
-            start.extend(self.tree.cliques_involving(k))
-        removed, orphans = self.tree.remove_top(start)
-        undo.removed = True
-        variables = [k for c in removed.values() for k in c.frontals] + list(new_values)
-        fids = [j for c in removed.values() for j in c.factors] + new_ids
-        # 3. Re-linearize the factors of the removed part that touch a relinearized variable.
-        t2 = time.perf_counter()
-        n_linearized = self._relinearize(fids, set(relin), undo)
-        t3 = time.perf_counter()
-        # 4. Add the cached marginal factors f(S) of the orphaned subtrees.
-        linear = [self._linear[j] for j in fids] + [self.tree.cliques[o].marginal for o in orphans]
-        # 5. Eliminate with the touched variables last; reattach the orphans.  [YIB Eq. 24-25]
-        order = constrained_min_degree(variables, [f.keys for f in linear], last=touched)
-        t4 = time.perf_counter()
-        cliques, parents, owner = eliminate(order, linear, self._dims, fids + [None] * len(orphans))
-        undo.committed = True
-        new_cids = self.tree.insert_eliminated(cliques, parents)
-        for i, o in enumerate(orphans):  # under the clique eliminating its separator's first variable
-            self.tree.attach(o, new_cids[owner[len(fids) + i]])
-        t5 = time.perf_counter()
-        # 6. Partial back-substitution from the root.                      [K12 Alg. 7]
-        updated, visited = self._backsubstitute(set(new_cids))
-        t6 = time.perf_counter()
-        timings = dict(relinearize=t1 - t0, remove=t2 - t1, linearize=t3 - t2, order=t4 - t3, eliminate=t5 - t4, backsubstitute=t6 - t5)
+        # 1-2. F ← F ∪ F′, Θ ← Θ ∪ Θ′ (θ̄ = initial value, δ = 0); θ_nf: the variables of F′.   [YIB step 1]
+        with timer("add"):
+            new_ids = self._add(F_new, theta_new)
+            theta_nf = list(dict.fromkeys(k for f in F_new for k in f.keys))
+        # 3. Fluid relinearization, θ̄ ← θ̄ + δ for θ_rl, with the δ of the last update: [YIB] step 7
+        #    of the previous round, which iSAM2 does here, every relinearize_skip-th update. [K12 Alg. 5]
+        with timer("relinearize"):
+            due = relinearize and self._steps % self.params.relinearize_skip == 0
+            theta_rl = self._fluid_relinearization(journal) if due else []
+        # 4. Redo the top of the tree for θ_aff = θ_nf ∪ θ_rl.                  [K12 Alg. 4; YIB steps 2-5]
+        # 4a. Remove the cliques of θ_aff and their ascendants; the orphans stay. [YIB step 2]
+        with timer("remove"):
+            removed, orphans = self._remove_top(theta_nf, theta_rl, journal)
+        # 4b. Linearize the factors of the removed part that are new or touch θ_rl. [YIB step 3, Eq. 9]
+        with timer("linearize"):
+            fids = [j for c in removed.values() for j in c.factors] + new_ids
+            n_linearized = self._relinearize(fids, set(theta_rl), journal)
+        # 4c. Add the cached marginal factors f(S) of the orphans.                [YIB step 4]
+        # 4d. Order the removed part by constrained minimum degree, θ_nf last.    [K12 Sec. 5]
+        with timer("order"):
+            linear = [self._linear[j] for j in fids] + [self.tree.cliques[o].marginal for o in orphans]
+            variables = [k for c in removed.values() for k in c.frontals] + list(theta_new)
+            order = constrained_min_degree(variables, [f.keys for f in linear], last=theta_nf)
+        # 4e. Eliminate into new cliques and attach back the orphans.   [YIB step 5, Eq. 24-25]
+        with timer("eliminate"):
+            cliques, parents, owner = eliminate(order, linear, self._dims, fids + [None] * len(orphans))
+            new_cids = self._insert(cliques, parents, orphans, owner[len(fids) :], journal)
+        # 5. Partial back-substitution from the root, stopping below α.  [K12 Alg. 7; YIB step 6]
+        with timer("backsubstitute"):
+            updated, visited = self._backsubstitute(set(new_cids))
         return UpdateReport(
-            self._steps, tuple(removed), tuple(new_cids), tuple(orphans), tuple(relin), tuple(order),
-            tuple(updated), n_linearized, visited, t6 - t0, timings,
+            self._steps, tuple(removed), tuple(new_cids), tuple(orphans), tuple(theta_rl), tuple(order),
+            tuple(updated), n_linearized, visited, timer.total(), timer.seconds,
         )
 
-    def _rollback(self, undo: _Undo) -> None:
+    def _rollback(self, journal: _Journal) -> None:
         """Put everything back as it was before a failed update (the failure came before re-insertion)."""
-        if undo.removed:
+        if journal.top_removed:
             self.tree.restore_top()
-        for j, gf in undo.linear.items():
+        for j, gf in journal.old_linear.items():
             self._linear[j] = gf
-        for k, (theta, delta) in undo.relinearized.items():
+        for k, (theta, delta) in journal.old_points.items():
             self._theta_bar.insert(k, theta)
             self._delta[k] = delta
             self._stale[k] = None
             self._over[k] = None
-        for k in undo.new_keys:
+        for k in journal.new_keys:
             for store in (self._theta_bar._data, self._dims, self._threshold, self._delta, self._estimate, self._stale):
                 store.pop(k, None)
-        del self.factors[undo.n_factors :], self._linear[undo.n_factors :]
+        del self.factors[journal.n_factors :], self._linear[journal.n_factors :]
         self._steps -= 1
 
     def _checked_update(self, new_factors: list[Factor], new_values: Mapping[Key, NDArray]) -> dict[Key, NDArray]:
@@ -264,7 +280,7 @@ class IncrementalSolver:
             x = np.array(v, dtype=float).reshape(-1)
             if not np.all(np.isfinite(x)):
                 raise ShapeError(f"new value of {k!r} is not finite: {x}")
-            self._kind_threshold(k)  # a dict of thresholds must name every kind
+            self.params.threshold_for(k.kind)  # a dict of thresholds must name every kind
             values[k] = x
         for f in new_factors:
             if not isinstance(f, Factor):
@@ -289,33 +305,62 @@ class IncrementalSolver:
         for k, x in new_values.items():
             self._theta_bar.insert(k, x)
             self._dims[k] = x.shape[0]
-            self._threshold[k] = self._kind_threshold(k)
+            self._threshold[k] = self.params.threshold_for(k.kind)
             self._delta[k] = np.zeros_like(x)
             self._stale[k] = None
         return list(range(first, len(self.factors)))
 
-    def _fluid_relinearization(self, undo: _Undo) -> list[Key]:
-        """θ̄ ← θ̄ + δ where max |δ| ≥ threshold.  [K12 Alg. 5]
+    def _fluid_relinearization(self, journal: _Journal) -> list[Key]:
+        """θ̄ ← θ̄ + δ, δ ← 0 for θ_rl, the variables whose max |δ| ≥ β; returns θ_rl.  [K12 Alg. 5]
 
-        The candidates are kept up to date by back-substitution, which is the only place δ changes.
+        The candidates are kept up to date by back-substitution, which is the only place δ changes
+        ([YIB Alg. 1 step 7]: collect them into θ_rl).
         """
-        relin = list(self._over)
+        theta_rl = list(self._over)
         self._over.clear()
-        for k in relin:
-            undo.relinearized[k] = (self._theta_bar[k], self._delta[k])
+        for k in theta_rl:
+            journal.moved(k, self._theta_bar[k], self._delta[k])
             self._theta_bar.insert(k, self.estimate_of(k))  # the estimate is unchanged
             self._delta[k] = np.zeros(self._dims[k])
-        return relin
+        return theta_rl
 
-    def _relinearize(self, fids: list[int], relin: set[Key], undo: _Undo) -> int:
-        """Linearize, at θ̄, the factors among ``fids`` that are new or touch ``relin``.  [YIB Eq. 9]"""
-        need = [j for j in fids if self._linear[j] is None or (relin and not relin.isdisjoint(self.factors[j].keys))]
-        undo.linear.update((j, self._linear[j]) for j in need if self._linear[j] is not None)
+    def _remove_top(self, theta_nf: list[Key], theta_rl: list[Key], journal: _Journal) -> tuple[dict[int, Clique], list[int]]:
+        """Remove the cliques of θ_aff = θ_nf ∪ θ_rl and their ascendants: ``(removed, orphans)``.  [K12 Alg. 4]
+
+        A variable of θ_nf affects the clique where it is frontal (a new variable is in none yet);
+        a relinearized one every clique holding it, whose conditionals were computed at its old θ̄.
+        """
+        start = [self.tree.frontal_of[k] for k in theta_nf if k in self.tree.frontal_of]
+        for k in theta_rl:
+            start.extend(self.tree.cliques_involving(k))
+        removed, orphans = self.tree.remove_top(start)
+        journal.removed_top()
+        return removed, orphans
+
+    def _relinearize(self, fids: list[int], theta_rl: set[Key], journal: _Journal) -> int:
+        """Linearize, at θ̄, the factors among ``fids`` that are new or touch θ_rl; returns how many.  [YIB Eq. 9]"""
+        need = [j for j in fids if self._linear[j] is None or (theta_rl and not theta_rl.isdisjoint(self.factors[j].keys))]
+        for j in need:
+            journal.relinearized(j, self._linear[j])
         if need:
             for group in linearize([self.factors[j] for j in need], self._theta_bar):
                 for i, gf in zip(group.factor_ids, group.gaussian_factors()):
                     self._linear[need[i]] = gf
         return len(need)
+
+    def _insert(
+        self, cliques: list[Clique], parents: list[int | None], orphans: list[int], owners: list[int], journal: _Journal
+    ) -> list[int]:
+        """Put the new cliques in the tree and hang each orphan under ``cliques[owner]``; returns the new ids.
+
+        The owner of an orphan is the new clique that eliminated its cached f(S), i.e. the first
+        variable of its separator [K12 Alg. 4 step 5].
+        """
+        journal.close()  # the old top is replaced from here on
+        new_cids = self.tree.insert_eliminated(cliques, parents)
+        for o, owner in zip(orphans, owners):
+            self.tree.attach(o, new_cids[owner])
+        return new_cids
 
     def _backsubstitute(self, new_cliques: set[int]) -> tuple[list[Key], int]:
         """δ_F = R⁻¹(d - S δ_S) from the roots of the new part down, while it changes.  [K12 Alg. 7]
@@ -325,7 +370,7 @@ class IncrementalSolver:
         Changes are judged per variable: a root clique holding the newest state and the landmarks
         must not mark the landmarks changed because the newest state moved.
         """
-        tree, delta, threshold = self.tree, self._delta, self.wildfire_threshold
+        tree, delta, threshold = self.tree, self._delta, self.params.wildfire_threshold
         stale, over, limit = self._stale, self._over, self._threshold
         changed: set[Key] = set()
         updated: list[Key] = []

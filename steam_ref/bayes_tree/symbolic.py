@@ -3,8 +3,9 @@
 Nothing here knows a number. Variables are any hashable names (the tests use letters, the solver
 uses :class:`~steam_ref.variables.Key`); a factor is just the tuple of variables it touches.
 
-- :func:`constrained_min_degree` picks an elimination order: greedy minimum degree on the
-  variable graph, with a chosen group of variables forced last (the role CCOLAMD plays in iSAM2).
+The elimination order comes from :mod:`steam_ref.linear.ordering` (for iSAM2,
+:func:`~steam_ref.linear.ordering.constrained_min_degree`).
+
 - :func:`symbolic_elimination` plays the elimination game [K12 Alg. 1]: eliminating θᵢ joins all
   factors adjacent to it into one on its separator sᵢ  [YIB Eq. 24-25].
 - :func:`build_cliques` groups the conditionals P(θᵢ | sᵢ) into cliques [K12 Alg. 2].
@@ -14,7 +15,6 @@ uses :class:`~steam_ref.variables.Key`); a factor is just the tuple of variables
 
 from __future__ import annotations
 
-import heapq
 from collections.abc import Hashable, Iterable, Sequence
 from dataclasses import dataclass
 from typing import Generic, Protocol, TypeVar
@@ -24,7 +24,6 @@ from ..errors import SteamError, UnknownVariableError
 __all__ = [
     "SymbolicClique",
     "CliqueTree",
-    "constrained_min_degree",
     "symbolic_elimination",
     "build_cliques",
 ]
@@ -40,48 +39,6 @@ class SymbolicClique:
     separator: tuple  # variables shared with the parent clique, in elimination order
     parent: int | None  # index of the parent in the clique list; None for a root
     factors: tuple[int, ...]  # indices of the input factors eliminated here (first variable frontal here)
-
-
-def constrained_min_degree(variables: Sequence[V], factor_keys: Iterable[Sequence[V]], last: Iterable[V] = ()) -> list:
-    """A greedy minimum-degree elimination order with the variables in ``last`` eliminated last.
-
-    The degree of a variable is its number of neighbours in the current elimination graph (the
-    variable graph after the eliminations so far, fill included), so this is exact minimum degree,
-    not AMD's approximation. Ties go to the variable listed first in ``variables``. Variables in
-    ``last`` are ordered among themselves by minimum degree too, after all others: this is the
-    constrained ordering iSAM2 obtains from CCOLAMD, which keeps the variables touched by new
-    factors near the root so the next update removes little of the tree.  [K12 Sec. 5]
-    """
-    index = {v: i for i, v in enumerate(variables)}
-    adj: dict = {v: set() for v in variables}
-    for keys in factor_keys:
-        for k in keys:
-            if k not in adj:
-                raise UnknownVariableError(f"a factor names {k!r}, which is not among the variables to order")
-            adj[k].update(keys)
-    last_set = set(last)
-    group = {v: (1 if v in last_set else 0) for v in variables}
-    heap = []
-    for v, a in adj.items():
-        a.discard(v)
-        heap.append((group[v], len(a), index[v]))
-    heapq.heapify(heap)
-    order: list = []
-    while heap:
-        _, deg, i = heapq.heappop(heap)
-        v = variables[i]
-        a = adj.get(v)
-        if a is None or len(a) != deg:  # already eliminated, or a stale degree
-            continue
-        order.append(v)
-        del adj[v]
-        for u in a:  # eliminating v joins its neighbours into a clique (fill)
-            au = adj[u]
-            au.discard(v)
-            au |= a
-            au.discard(u)
-            heapq.heappush(heap, (group[u], len(au), index[u]))
-    return order
 
 
 def symbolic_elimination(order: Sequence[V], factor_keys: Sequence[Sequence[V]]) -> tuple[dict, list]:

@@ -10,7 +10,8 @@ once: R⁻¹S is the paper's rᵀ, R⁻¹d its d), and the rows below give the n
 separator, f(S) ∝ exp(-½ ‖A' δ_S - b'‖²), which is passed to the parent clique and cached, so an
 incremental update can reuse it when this clique's subtree is orphaned [K12 Sec. 4]. Stacking the
 conditionals' rows in elimination order gives the upper-triangular R of A = QR, with RᵀR = AᵀA = 𝓘
-[YIB Eq. 11, 21]. The solution is found from the root down: δ_F = R⁻¹(d - S δ_S).
+[YIB Eq. 11, 21]. The solution is found from the root down: δ_F = R⁻¹(d - S δ_S). Covariances
+from the tree are computed in :mod:`steam_ref.covariance`.
 """
 
 from __future__ import annotations
@@ -19,13 +20,12 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 from scipy.linalg import lapack
 
 from ..errors import SteamError, UnderdeterminedError
 from ..variables import Key
+from ..linear.conditional import assemble_sqrt_information
 from ..linear.ordering import Ordering
 from ..linear.system import GaussianFactor
 from .symbolic import CliqueTree, build_cliques
@@ -213,102 +213,8 @@ class BayesTree(CliqueTree[Clique]):
         order = self.elimination_order()
         dims = self.dims()
         ordering = Ordering(tuple(order), tuple(dims[k] for k in order))
-        R, d = self._assemble(ordering, list(self.cliques.values())), np.zeros(ordering.total_dim)
+        R, d = assemble_sqrt_information(ordering, list(self.cliques.values())), np.zeros(ordering.total_dim)
         for clique in self.cliques.values():
             r0 = ordering.offset_of[clique.frontals[0]]
             d[r0 : r0 + clique.R.shape[0]] = clique.d
         return R, d, ordering
-
-    def joint_marginal_covariance(self, keys: Sequence[Key]) -> NDArray:
-        """Joint covariance of several variables, stacked in the order given: (Σdₖ, Σdₖ).
-
-        When one clique holds them all, its joint covariance from the root walk is used.
-        Otherwise: the cliques on the paths from the variables to the root are closed under
-        taking parents, so their conditionals alone are the joint density of their variables
-        [K11 Sec. 3], and the covariance is (R_Uᵀ R_U)⁻¹ restricted to ``keys``, found by two sparse
-        triangular solves.
-        """
-        keys = list(keys)
-        for k in keys:
-            clique = self.cliques[self.clique_containing(k)]
-            if set(keys) <= set(clique.frontals) | set(clique.separator):
-                joint, index = self._path_covariance(self.frontal_of[k])
-                idx = np.concatenate([np.arange(index[j][0], index[j][0] + index[j][1]) for j in keys])
-                block = joint[np.ix_(idx, idx)]
-                return 0.5 * (block + block.T)
-        return self._upper_closed_covariance(keys)
-
-    def _path_covariance(self, cid: int) -> tuple[NDArray, dict[Key, tuple[int, int]]]:
-        """Joint covariance of clique ``cid``'s variables (F then S), walking from the root."""
-        joint, index = np.zeros((0, 0)), {}
-        for c in self.path_to_root(cid)[::-1]:
-            joint, index = _clique_covariance(self.cliques[c], joint, index)
-        return joint, index
-
-    def _upper_closed_covariance(self, keys: list[Key]) -> NDArray:
-        """Cov of ``keys`` from R_U of the cliques on their root paths (sparse solves)."""
-        depth: dict[int, int] = {}
-        for k in keys:
-            path = self.path_to_root(self.clique_containing(k))
-            for i, c in enumerate(path):
-                depth[c] = len(path) - 1 - i
-        cids = sorted(depth, key=lambda c: -depth[c])  # children before parents
-        order = [v for c in cids for v in self.cliques[c].frontals]
-        dims = {v: d for c in cids for v, d in zip(self.cliques[c].frontals, self.cliques[c].frontal_dims)}
-        ordering = Ordering(tuple(order), tuple(dims[v] for v in order))
-        R = self._assemble(ordering, [self.cliques[c] for c in cids])
-        cols = np.concatenate([np.arange(ordering.offset_of[k], ordering.offset_of[k] + dims[k]) for k in keys])
-        E = np.zeros((ordering.total_dim, len(cols)))
-        E[cols, np.arange(len(cols))] = 1.0
-        Rs = sp.csr_matrix(R)
-        Y = spla.spsolve_triangular(Rs.T.tocsr(), E, lower=True)  # Rᵀ Y = E
-        X = spla.spsolve_triangular(Rs, Y, lower=False)  # R X = Y: X = (RᵀR)⁻¹ E
-        block = X[cols]
-        return 0.5 * (block + block.T)
-
-    @staticmethod
-    def _assemble(ordering: Ordering, cliques: Sequence[Clique]) -> NDArray:
-        """Dense upper-triangular R of the given cliques, rows and columns in ``ordering``."""
-        n = ordering.total_dim
-        R = np.zeros((n, n))
-        for clique in cliques:
-            r0 = ordering.offset_of[clique.frontals[0]]
-            nf = clique.R.shape[0]
-            R[r0 : r0 + nf, r0 : r0 + nf] = clique.R
-            o = 0
-            for k, dim in zip(clique.separator, clique.separator_dims):
-                c0 = ordering.offset_of[k]
-                R[r0 : r0 + nf, c0 : c0 + dim] = clique.S[:, o : o + dim]
-                o += dim
-        return R
-
-    def marginal_covariance(self, key: Key) -> NDArray:
-        """Cov(δθ_key) = (𝓘⁻¹)_key,key from the tree, walking down from the root.  [K11 Sec. 3]
-
-        Each clique gives P(F | S); with Σ_SS from the parent's joint covariance,
-        Cov(F, S) = -R⁻¹S Σ_SS and Cov(F, F) = R⁻¹R⁻ᵀ + R⁻¹S Σ_SS (R⁻¹S)ᵀ. Costs one small dense
-        step per clique on the path from the root to the variable's clique.
-        """
-        joint, index = self._path_covariance(self.clique_containing(key))
-        o, dim = index[key]
-        block = joint[o : o + dim, o : o + dim]
-        return 0.5 * (block + block.T)
-
-
-def _clique_covariance(
-    clique: Clique, parent_joint: NDArray, parent_index: dict[Key, tuple[int, int]]
-) -> tuple[NDArray, dict[Key, tuple[int, int]]]:
-    """Joint covariance of the clique's variables (F then S) from its parent's.  [K11 Sec. 3]"""
-    sel = np.concatenate([np.arange(o, o + dim) for o, dim in (parent_index[k] for k in clique.separator)]) if clique.separator else np.zeros(0, int)
-    Sigma_SS = parent_joint[np.ix_(sel, sel)]
-    nf = clique.R.shape[0]
-    Rinv = lapack.dtrtrs(clique.R, np.eye(nf))[0]  # R⁻¹ by triangular solves
-    RinvS = Rinv @ clique.S
-    cov_FS = -RinvS @ Sigma_SS
-    cov_FF = Rinv @ Rinv.T - cov_FS @ RinvS.T
-    joint = np.block([[cov_FF, cov_FS], [cov_FS.T, Sigma_SS]])
-    index, o = {}, 0
-    for k, dim in zip(clique.frontals + clique.separator, clique.frontal_dims + clique.separator_dims):
-        index[k] = (o, dim)
-        o += dim
-    return joint, index

@@ -1,18 +1,29 @@
-"""The linear least-squares layer: linearization, orderings, sparse Cholesky.  [YIB Eq. 9-11, 15, 21]"""
+"""The linear least-squares layer: linearization, orderings, sparse Cholesky, conditionals.  [YIB Eq. 9-11, 15, 21]"""
 
-from .ordering import Ordering, amd_ordering, have_cholmod, sparse_backend, xl_ordering
-from .solve import SparseCholesky, marginal_covariances, solve
+from .ordering import (
+    Ordering,
+    amd_ordering,
+    constrained_min_degree,
+    have_cholmod,
+    make_ordering,
+    natural_ordering,
+    sparse_backend,
+    xl_ordering,
+)
+from .solve import SparseCholesky, solve
 from .system import GaussianFactor, LinearizedGroup, LinearSystem, linearize
 
 __all__ = [
     "Ordering",
+    "natural_ordering",
     "xl_ordering",
     "amd_ordering",
+    "constrained_min_degree",
+    "make_ordering",
     "have_cholmod",
     "sparse_backend",
     "SparseCholesky",
     "solve",
-    "marginal_covariances",
     "GaussianFactor",
     "LinearizedGroup",
     "LinearSystem",

@@ -1,9 +1,12 @@
-"""Variable orderings: XL (the paper's PB) and AMD (PBVR), and the fill they cause.  [YIB Sec. III, IV]
+"""Every variable ordering of steam_ref: natural, XL (the paper's PB), AMD (PBVR) and the
+constrained minimum degree of iSAM2.  [YIB Sec. III, IV, K12 Sec. 5]
 
 An ordering is the order in which variables are eliminated, i.e. the order of the column blocks
-of A and of the rows/columns of 𝓘. XL puts every trajectory state before every landmark
-(footnote 1 of [YIB]); AMD (approximate minimum degree) permutes the variables to keep the
-Cholesky factor sparse. Orderings act on *variables* (blocks), as in GTSAM, not on scalars.
+of A and of the rows/columns of 𝓘. Natural keeps the order given; XL puts every trajectory state
+before every landmark (footnote 1 of [YIB]); AMD (approximate minimum degree) permutes the
+variables to keep the Cholesky factor sparse; :func:`constrained_min_degree` is exact greedy
+minimum degree with a chosen group forced last (the Bayes tree's re-elimination). Orderings act on
+*variables* (blocks), as in GTSAM, not on scalars. :func:`make_ordering` picks one by name.
 
 AMD backends: CHOLMOD's AMD when scikit-sparse is installed, otherwise SciPy's SuperLU
 minimum-degree ordering on AᵀA (``MMD_AT_PLUS_A``), whose fill is within about 1% of AMD's on
@@ -13,8 +16,9 @@ fallback.
 
 from __future__ import annotations
 
+import heapq
 import os
-from collections.abc import Iterable, Sequence
+from collections.abc import Hashable, Iterable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -22,10 +26,22 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 
-from ..errors import SteamError
+from ..errors import SteamError, UnknownVariableError
 from ..variables import Key
 
-__all__ = ["Ordering", "xl_ordering", "amd_ordering", "variable_adjacency", "sparse_backend", "have_cholmod"]
+__all__ = [
+    "Ordering",
+    "natural_ordering",
+    "xl_ordering",
+    "amd_ordering",
+    "constrained_min_degree",
+    "make_ordering",
+    "variable_adjacency",
+    "sparse_backend",
+    "have_cholmod",
+]
+
+ORDERING_NAMES = ("natural", "xl", "amd")  # the names make_ordering knows
 
 
 def have_cholmod() -> bool:
@@ -81,6 +97,12 @@ class Ordering:
         return len(self.keys)
 
 
+def natural_ordering(keys: Iterable[Key], dims: dict[Key, int]) -> Ordering:
+    """The variables in the order given (for a graph: first-seen order)."""
+    keys = tuple(keys)
+    return Ordering(keys, tuple(dims[k] for k in keys))
+
+
 def xl_ordering(keys: Iterable[Key], dims: dict[Key, int]) -> Ordering:
     """Trajectory states first (by index), then landmarks (by index): the paper's PB.  [YIB Eq. 15]"""
     keys = list(keys)
@@ -127,3 +149,68 @@ def amd_ordering(
     perm = _amd_permutation(variable_adjacency(keys, factor_keys), sparse_backend(backend))
     ordered = [keys[i] for i in perm]
     return Ordering(tuple(ordered), tuple(dims[k] for k in ordered))
+
+
+def constrained_min_degree(variables: Sequence[Hashable], factor_keys: Iterable[Sequence[Hashable]], last: Iterable[Hashable] = ()) -> list:
+    """A greedy minimum-degree elimination order with the variables in ``last`` eliminated last.
+
+    The degree of a variable is its number of neighbours in the current elimination graph (the
+    variable graph after the eliminations so far, fill included), so this is exact minimum degree,
+    not AMD's approximation. Ties go to the variable listed first in ``variables``. Variables in
+    ``last`` are ordered among themselves by minimum degree too, after all others: this is the
+    constrained ordering iSAM2 obtains from CCOLAMD, which keeps the variables touched by new
+    factors near the root so the next update removes little of the tree.  [K12 Sec. 5]
+    """
+    index = {v: i for i, v in enumerate(variables)}
+    adj: dict = {v: set() for v in variables}
+    for keys in factor_keys:
+        for k in keys:
+            if k not in adj:
+                raise UnknownVariableError(f"a factor names {k!r}, which is not among the variables to order")
+            adj[k].update(keys)
+    last_set = set(last)
+    group = {v: (1 if v in last_set else 0) for v in variables}
+    heap = []
+    for v, a in adj.items():
+        a.discard(v)
+        heap.append((group[v], len(a), index[v]))
+    heapq.heapify(heap)
+    order: list = []
+    while heap:
+        _, deg, i = heapq.heappop(heap)
+        v = variables[i]
+        a = adj.get(v)
+        if a is None or len(a) != deg:  # already eliminated, or a stale degree
+            continue
+        order.append(v)
+        del adj[v]
+        for u in a:  # eliminating v joins its neighbours into a clique (fill)
+            au = adj[u]
+            au.discard(v)
+            au |= a
+            au.discard(u)
+            heapq.heappush(heap, (group[u], len(au), index[u]))
+    return order
+
+
+def make_ordering(
+    name_or_ordering: str | Ordering,
+    keys: Sequence[Key],
+    dims: dict[Key, int],
+    factor_keys: Iterable[tuple[Key, ...]],
+    backend: str | None = None,
+) -> Ordering:
+    """'natural', 'xl', 'amd' or an explicit :class:`Ordering` (returned as it is) for ``keys``.
+
+    ``dims``: size of each variable; ``factor_keys``: the variables of each factor (read by AMD
+    only); ``backend``: AMD's sparse backend (see :func:`sparse_backend`).
+    """
+    if isinstance(name_or_ordering, Ordering):
+        return name_or_ordering
+    if name_or_ordering == "natural":
+        return natural_ordering(keys, dims)
+    if name_or_ordering == "xl":
+        return xl_ordering(keys, dims)
+    if name_or_ordering == "amd":
+        return amd_ordering(keys, dims, factor_keys, backend)
+    raise SteamError(f"unknown ordering {name_or_ordering!r}; use one of {ORDERING_NAMES} or an Ordering")

@@ -1,4 +1,4 @@
-"""Sparse Cholesky solution of 𝓘 δθ = Aᵀb (Eq. 11), marginal covariances, fill-in counts.
+"""Sparse Cholesky solution of 𝓘 δθ = Aᵀb (Eq. 11) and fill-in counts (covariances: :mod:`steam_ref.covariance`).
 
 The matrix is factored *in the order the LinearSystem's columns already have* (the ordering was
 chosen before assembly), so the fill of 𝓛 is the fill of that ordering. Backends:
@@ -19,11 +19,10 @@ import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 
 from ..errors import UnderdeterminedError
-from ..variables import Key
 from .ordering import Ordering, sparse_backend
 from .system import LinearSystem
 
-__all__ = ["SparseCholesky", "solve", "marginal_covariances"]
+__all__ = ["SparseCholesky", "solve"]
 
 
 def _unconstrained_variable(info: sp.csc_matrix, ordering: Ordering, column: int | None = None) -> str:
@@ -82,17 +81,3 @@ def solve(system: LinearSystem, backend: str | None = None) -> tuple[NDArray, Sp
     info, rhs = system.information()
     chol = SparseCholesky.factor(info, system.ordering, backend)
     return chol.solve(rhs), chol
-
-
-def marginal_covariances(system: LinearSystem, keys: list[Key], backend: str | None = None) -> dict[Key, NDArray]:
-    """Marginal covariance blocks (𝓘⁻¹)ₖₖ of chosen variables.  [YIB Eq. 11: cov δθ* = 𝓘⁻¹]"""
-    info, _ = system.information()
-    chol = SparseCholesky.factor(info, system.ordering, backend)
-    out = {}
-    for k in keys:
-        o, d = system.ordering.offset_of[k], system.ordering.dims[system.ordering.position[k]]
-        E = np.zeros((info.shape[0], d))
-        E[o : o + d] = np.eye(d)
-        block = chol.solve(E)[o : o + d]
-        out[k] = 0.5 * (block + block.T)
-    return out

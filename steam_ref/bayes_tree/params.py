@@ -1,0 +1,77 @@
+"""The settings of iSAM2, in one place.  [K12 Sec. 5, Alg. 5, Alg. 7]
+
+The defaults are GTSAM's ``ISAM2Params`` defaults (relinearization threshold 0.1, checked every
+10th update, wildfire threshold 0.001), which the paper's scripts use [YIB Sec. IV].
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import numbers
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+from ..errors import SteamError
+
+__all__ = ["ISAM2Params"]
+
+
+def _threshold(value: object, name: str) -> float:
+    """``value`` as a float ≥ 0 (inf allowed); SteamError naming it otherwise (bool, NaN, < 0, not a number)."""
+    if isinstance(value, bool):
+        raise SteamError(f"{name} must be a number >= 0, got the bool {value!r}")
+    try:
+        t = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        raise SteamError(f"{name} must be a number >= 0, got {value!r}") from None
+    if math.isnan(t) or t < 0:
+        raise SteamError(f"{name} must be >= 0, got {value!r}")
+    return t
+
+
+@dataclass(frozen=True)
+class ISAM2Params:
+    """How an :class:`~steam_ref.bayes_tree.IncrementalSolver` relinearizes and back-substitutes.
+
+    With both thresholds 0 and skip 1, each update is one Gauss-Newton step on all factors so far.
+    The defaults are GTSAM's ISAM2Params defaults, which the paper's scripts use.
+    """
+
+    # β of [K12 Alg. 5]: relinearize a variable when max |δ| ≥ β; one float, or one per kind {'x': 0.1, 'l': 0.5}
+    relinearize_threshold: float | Mapping[str, float] = 0.1
+    # check for relinearization every k-th update only (GTSAM's relinearizeSkip)
+    relinearize_skip: int = 10
+    # α of [K12 Alg. 7]: back-substitution descends only where δ changed by at least α (0: full)
+    wildfire_threshold: float = 1e-3
+
+    def __post_init__(self) -> None:
+        t = self.relinearize_threshold
+        if isinstance(t, Mapping):
+            t = {kind: _threshold(v, f"relinearize_threshold[{kind!r}]") for kind, v in t.items()}
+        else:
+            t = _threshold(t, "relinearize_threshold")
+        object.__setattr__(self, "relinearize_threshold", t)
+        skip = self.relinearize_skip
+        if isinstance(skip, bool) or not isinstance(skip, numbers.Real) or skip != int(skip) or skip < 1:
+            raise SteamError(f"relinearize_skip must be a positive integer, got {skip!r}")
+        object.__setattr__(self, "relinearize_skip", int(skip))
+        object.__setattr__(self, "wildfire_threshold", _threshold(self.wildfire_threshold, "wildfire_threshold"))
+
+    def threshold_for(self, kind: str) -> float:
+        """β for variables of ``kind`` ('x', 'l', ...); SteamError when a per-kind dict lacks it."""
+        t = self.relinearize_threshold
+        if not isinstance(t, dict):
+            return t  # type: ignore[return-value]
+        try:
+            return t[kind]
+        except KeyError:
+            raise SteamError(f"relinearize_threshold {t!r} has no entry for variables of kind {kind!r}") from None
+
+    def replace(self, **changes: object) -> ISAM2Params:
+        """A copy with some fields changed (validated again); SteamError names an unknown field."""
+        names = {f.name for f in dataclasses.fields(self)}
+        unknown = sorted(set(changes) - names)
+        if unknown:
+            raise SteamError(f"ISAM2Params has no field {unknown[0]!r}; the fields are {sorted(names)}")
+        return dataclasses.replace(self, **changes)

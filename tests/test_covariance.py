@@ -1,0 +1,137 @@
+"""Covariance recovery against dense inverses.  [YIB Eq. 11: cov δθ* = 𝓘⁻¹, K11 Sec. 3]
+
+Oracles: numpy.linalg.inv of AᵀA (built from the factors) and of RᵀR (the tree's own square-root
+information matrix, assembled densely). The one-pass :func:`tree_marginals` is also checked
+against the per-variable root walk and counted: it visits each clique once.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from problems import small_problem
+from test_bayes_tree import dense_system, random_sparse_factors
+from test_linear import BACKENDS
+
+import steam_ref as sr
+from steam_ref import covariance
+from steam_ref.bayes_tree import BayesTree
+from steam_ref.covariance import (
+    marginal_covariances,
+    sparse_joint_covariance,
+    tree_joint_covariance,
+    tree_marginal_covariance,
+    tree_marginals,
+)
+from steam_ref.errors import UnknownVariableError
+from steam_ref.linear import LinearSystem, Ordering, constrained_min_degree, make_ordering, natural_ordering
+from steam_ref.linear.system import linearize
+
+
+def block_of(cov: np.ndarray, ordering: Ordering, keys) -> np.ndarray:
+    idx = np.concatenate([ordering.offset_of[k] + np.arange(ordering.dims[ordering.position[k]]) for k in keys])
+    return cov[np.ix_(idx, idx)]
+
+
+def random_tree(rng, trial: int) -> tuple[BayesTree, list, dict]:
+    """A tree of random linear factors, eliminated in a random or a min-degree order."""
+    factors, dims = random_sparse_factors(rng, n_vars=12, n_factors=18)
+    keys = list(dims)
+    order = [keys[i] for i in rng.permutation(len(keys))] if trial % 2 else constrained_min_degree(keys, [f.keys for f in factors])
+    return BayesTree.from_factors(factors, order), factors, dims
+
+
+@pytest.mark.parametrize("trial", range(6))
+def test_tree_marginals_equal_dense_inverse(rng, trial):
+    tree, factors, dims = random_tree(rng, trial)
+    R, _, tree_order = tree.to_dense()
+    from_R = np.linalg.inv(R.T @ R)
+    natural = natural_ordering(list(dims), dims)
+    A, _ = dense_system(factors, natural)
+    from_A = np.linalg.inv(A.T @ A)
+    marginals = tree_marginals(tree)
+    assert set(marginals) == set(dims)
+    for k, got in marginals.items():
+        for cov, ordering in [(from_R, tree_order), (from_A, natural)]:
+            block = block_of(cov, ordering, [k])
+            np.testing.assert_allclose(got, block, rtol=1e-9, atol=1e-12 * np.abs(block).max())
+        np.testing.assert_allclose(got, tree_marginal_covariance(tree, k), rtol=1e-12, atol=0)
+
+
+@pytest.mark.parametrize("trial", range(4))
+def test_tree_joint_covariance_equals_dense_inverse(rng, trial):
+    tree, factors, dims = random_tree(rng, trial)
+    natural = natural_ordering(list(dims), dims)
+    A, _ = dense_system(factors, natural)
+    cov = np.linalg.inv(A.T @ A)
+    keys = list(dims)
+    root = tree.cliques[next(iter(tree.roots))]
+    groups = [keys[:2], [keys[5], keys[0], keys[9]], list(root.frontals), keys]
+    for group in groups:
+        block = block_of(cov, natural, group)
+        np.testing.assert_allclose(tree_joint_covariance(tree, group), block, rtol=1e-9, atol=1e-12 * np.abs(block).max())
+
+
+def test_tree_marginals_of_some_keys_visit_only_their_root_paths(rng, monkeypatch):
+    """A chain of 300 states: all marginals cost one clique step per clique; a few keys, their paths."""
+    problem = small_problem(rng, n_states=300, n_landmarks=2)
+    keys = problem.graph.keys()
+    order = constrained_min_degree(keys, [f.keys for f in problem.graph])
+    dims = {k: problem.initial.dim(k) for k in keys}
+    gaussian = [gf for g in linearize(problem.graph.factors, problem.initial) for gf in g.gaussian_factors()]
+    tree = BayesTree.from_factors(gaussian, Ordering(tuple(order), tuple(dims[k] for k in order)))
+    calls = []
+    step = covariance._clique_covariance
+    monkeypatch.setattr(covariance, "_clique_covariance", lambda clique, S: calls.append(clique) or step(clique, S))
+    everything = tree_marginals(tree)
+    assert len(calls) == len(tree) and len(everything) == len(keys)
+    calls.clear()
+    some = [sr.X(150), sr.L(1), sr.X(3)]
+    got = tree_marginals(tree, some)
+    assert list(got) == some
+    paths = {c for k in some for c in tree.path_to_root(tree.clique_containing(k))}
+    assert len(calls) == len(paths) < len(tree)
+    for k in some:
+        np.testing.assert_array_equal(got[k], everything[k])
+
+
+def test_unknown_keys_are_named(rng):
+    tree, factors, dims = random_tree(rng, 0)
+    with pytest.raises(UnknownVariableError, match="x7"):
+        tree_marginals(tree, [sr.X(7)])
+    with pytest.raises(UnknownVariableError, match="x7"):
+        tree_joint_covariance(tree, [next(iter(dims)), sr.X(7)])
+    problem = small_problem(rng, n_states=4, n_landmarks=1)
+    with pytest.raises(UnknownVariableError, match="x9"):
+        sparse_joint_covariance(problem.graph.factors, problem.initial, [sr.X(9)])
+
+
+@pytest.fixture
+def problem(rng):
+    return small_problem(rng, n_states=12, n_landmarks=4, interpolated=5)
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_marginal_covariances_equal_dense_inverse(problem, backend):
+    keys = problem.graph.keys()
+    dims = {k: problem.initial.dim(k) for k in keys}
+    order = make_ordering("amd", keys, dims, [f.keys for f in problem.graph], backend)
+    system = LinearSystem.build(problem.graph.factors, problem.initial, order)
+    chosen = [sr.X(0), sr.X(7), sr.L(2)]
+    cov = marginal_covariances(system, chosen, backend)
+    A, _ = system.to_dense()
+    dense = np.linalg.inv(A.T @ A)
+    for k in chosen:
+        np.testing.assert_allclose(cov[k], block_of(dense, order, [k]), rtol=1e-9, atol=1e-12)
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_sparse_joint_covariance_equals_dense_inverse(problem, backend):
+    keys = problem.graph.keys()
+    natural = natural_ordering(keys, {k: problem.initial.dim(k) for k in keys})
+    A, _ = LinearSystem.build(problem.graph.factors, problem.initial, natural).to_dense()
+    dense = np.linalg.inv(A.T @ A)
+    for group in [[sr.X(3)], [sr.X(11), sr.X(0), sr.L(3)], keys]:
+        got = sparse_joint_covariance(problem.graph.factors, problem.initial, group, backend)
+        block = block_of(dense, natural, group)
+        np.testing.assert_allclose(got, block, rtol=1e-9, atol=1e-12 * np.abs(block).max())
