@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import SteamError
-from .online import ISAM2_DEFAULTS
+from .bayes_tree import ISAM2Params
 
 __all__ = ["main", "build_parser"]
 
@@ -68,9 +68,9 @@ def _add_run_arguments(run: argparse.ArgumentParser) -> None:
     run.add_argument("--preset", choices=("synthetic", "plaza"), default=None, help="parameter set (default: by data set; plaza for a PATH)")
     run.add_argument("--data-dir", default=None, help="folder searched first for data files")
     run.add_argument("--seed", type=int, default=0, help="seed of the generated synthetic task")
-    run.add_argument("--relinearize-threshold", type=_non_negative_float, default=ISAM2_DEFAULTS["relinearize_threshold"],
+    run.add_argument("--relinearize-threshold", type=_non_negative_float, default=ISAM2Params.relinearize_threshold,
                      help="BTGP: relinearize a variable whose increment exceeds this (default %(default)s)")
-    run.add_argument("--relinearize-skip", type=_positive_int, default=ISAM2_DEFAULTS["relinearize_skip"],
+    run.add_argument("--relinearize-skip", type=_positive_int, default=ISAM2Params.relinearize_skip,
                      help="BTGP: check relinearization every N-th update (default %(default)s, GTSAM's)")
     run.add_argument("--max-poses", type=_positive_int, default=None, help="process only the first N poses")
     run.add_argument("--time-budget", type=_positive_float, default=None, help="stop after this many seconds (reported)")
@@ -128,7 +128,7 @@ def _run(args: argparse.Namespace) -> int:
         setup, method=args.method, every=args.every, skip=args.skip, interpolate=args.interpolate,
         range_states=args.range_states, max_poses=args.max_poses, time_budget_s=args.time_budget,
         progress=args.progress,
-        isam2=dict(relinearize_threshold=args.relinearize_threshold, relinearize_skip=args.relinearize_skip),
+        isam2=ISAM2Params(relinearize_threshold=args.relinearize_threshold, relinearize_skip=args.relinearize_skip),
     )
     data = load_dataset(args.dataset, data_dir=args.data_dir, seed=args.seed)
     result = run_online(data, setup, options, covariances=args.save_estimates is not None)

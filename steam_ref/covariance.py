@@ -42,6 +42,7 @@ if TYPE_CHECKING:
 __all__ = [
     "marginal_covariances",
     "sparse_joint_covariance",
+    "sparse_marginals",
     "tree_marginal_covariance",
     "tree_joint_covariance",
     "tree_marginals",
@@ -64,16 +65,35 @@ def _unit_columns(ordering: Ordering, keys: Sequence[Key]) -> tuple[NDArray, NDA
     return cols, E
 
 
+def _blocks_of_inverse(chol: SparseCholesky, ordering: Ordering, keys: Sequence[Key], chunk: int = 256) -> dict[Key, NDArray]:
+    """Diagonal blocks (𝓘⁻¹)ₖₖ of ``keys`` from one factorization, solving ``chunk`` keys at a time."""
+    out = {}
+    for i in range(0, len(keys), chunk):
+        part = list(keys[i : i + chunk])
+        cols, E = _unit_columns(ordering, part)
+        X = np.asarray(chol.solve(E))[cols]
+        o = 0
+        for k in part:
+            d = ordering.dims[ordering.position[k]]
+            block = X[o : o + d, o : o + d]
+            out[k] = 0.5 * (block + block.T)
+            o += d
+    return out
+
+
 def marginal_covariances(system: LinearSystem, keys: list[Key], backend: str | None = None) -> dict[Key, NDArray]:
     """Marginal covariance blocks (𝓘⁻¹)ₖₖ (dₖ, dₖ) of chosen variables.  [YIB Eq. 11: cov δθ* = 𝓘⁻¹]"""
     info, _ = system.information()
-    chol = SparseCholesky.factor(info, system.ordering, backend)
-    out = {}
-    for k in keys:
-        cols, E = _unit_columns(system.ordering, [k])
-        block = chol.solve(E)[cols]
-        out[k] = 0.5 * (block + block.T)
-    return out
+    return _blocks_of_inverse(SparseCholesky.factor(info, system.ordering, backend), system.ordering, keys)
+
+
+def _factor_at(factors: Sequence[Factor], values: Values, backend: str | None) -> tuple[Ordering, SparseCholesky]:
+    """𝓘 of ``factors`` linearized at ``values``, factored in AMD order."""
+    variables = list(dict.fromkeys(k for f in factors for k in f.keys))  # first-seen order
+    dims = {k: values.dim(k) for k in variables}
+    order = make_ordering("amd", variables, dims, (f.keys for f in factors), backend)
+    info, _ = LinearSystem.build(factors, values, order).information()
+    return order, SparseCholesky.factor(info, order, backend)
 
 
 def sparse_joint_covariance(
@@ -84,15 +104,18 @@ def sparse_joint_covariance(
     One sparse Cholesky factorization (AMD order) and one solve with Σdₖ right-hand sides.
     [YIB Eq. 11: cov δθ* = 𝓘⁻¹]
     """
-    variables = list(dict.fromkeys(k for f in factors for k in f.keys))  # first-seen order
-    dims = {k: values.dim(k) for k in variables}
-    order = make_ordering("amd", variables, dims, (f.keys for f in factors), backend)
-    system = LinearSystem.build(factors, values, order)
-    info, _ = system.information()
-    chol = SparseCholesky.factor(info, order, backend)
+    order, chol = _factor_at(factors, values, backend)
     cols, E = _unit_columns(order, keys)
     block = np.asarray(chol.solve(E))[cols]
     return 0.5 * (block + block.T)
+
+
+def sparse_marginals(
+    factors: Sequence[Factor], values: Values, keys: Sequence[Key], backend: str | None = None
+) -> dict[Key, NDArray]:
+    """Marginal covariance (dₖ, dₖ) of each of ``keys``, linearized at ``values``: one factorization."""
+    order, chol = _factor_at(factors, values, backend)
+    return _blocks_of_inverse(chol, order, list(keys))
 
 
 # --- from the Bayes tree ------------------------------------------------------------------------

@@ -47,6 +47,7 @@ class PaperSetup:
     landmarks_up_front: bool = False  # True: every landmark and its prior enter at pose 0; else at first sighting
     range_attachment: str = "file-order"  # 'file-order': the scripts' scan; 'time': by time stamp (a departure)
     pose2_heading_rate_guess: bool = True  # initial θ̇ as the scripts' Pose2 difference (±2π at the ±π crossing); False: the plain change
+    relinearize_blocks: tuple[int, ...] | None = (3, 3)  # BTGP relinearizes pose and velocity on their own (GTSAM variables P, V); None: the whole state
 
     def __post_init__(self) -> None:
         if self.range_attachment not in RANGE_ATTACHMENTS:

@@ -9,18 +9,16 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-import numpy as np
 from numpy.typing import NDArray
 
-from .batch import gauss_newton, make_ordering
-from .bayes_tree import IncrementalSolver
+from .batch import gauss_newton
+from .bayes_tree import IncrementalSolver, ISAM2Params
+from .covariance import sparse_joint_covariance, sparse_marginals
 from .factors import Factor
 from .graph import FactorGraph
-from .linear.solve import SparseCholesky
-from .linear.system import LinearSystem
 from .variables import Key, Values
 
-__all__ = ["METHODS", "OnlineSolver", "PeriodicBatchSolver", "BayesTreeSolver", "make_solver", "joint_covariance"]
+__all__ = ["METHODS", "OnlineSolver", "PeriodicBatchSolver", "BayesTreeSolver", "make_solver"]
 
 METHODS = ("btgp", "pb", "pbvr")
 
@@ -51,20 +49,6 @@ class OnlineSolver:
         raise NotImplementedError
 
 
-def joint_covariance(factors: Sequence[Factor], values: Values, keys: Sequence[Key]) -> NDArray:
-    """Joint block of 𝓘⁻¹ for ``keys``, linearized at ``values``.  [YIB Eq. 11: cov δθ* = 𝓘⁻¹]"""
-    graph = FactorGraph(factors)
-    order = make_ordering(graph, values, "amd")
-    system = LinearSystem.build(graph.factors, values, order)
-    info, _ = system.information()
-    chol = SparseCholesky.factor(info, order)
-    cols = np.concatenate([order.offset_of[k] + np.arange(values.dim(k)) for k in keys])
-    E = np.zeros((info.shape[0], len(cols)))
-    E[cols, np.arange(len(cols))] = 1.0
-    block = np.asarray(chol.solve(E))[cols]
-    return 0.5 * (block + block.T)
-
-
 class PeriodicBatchSolver(OnlineSolver):
     """PB (XL ordering) or PBVR (AMD): Gauss-Newton over everything, warm-started.  [YIB Sec. IV]"""
 
@@ -91,10 +75,10 @@ class PeriodicBatchSolver(OnlineSolver):
         return self.values
 
     def joint_covariance(self, keys: Sequence[Key]) -> NDArray:
-        return joint_covariance(self.graph.factors, self.values, keys)
+        return sparse_joint_covariance(self.graph.factors, self.values, keys)  # at the estimate
 
     def marginals(self, keys: Sequence[Key]) -> dict[Key, NDArray]:
-        return {k: joint_covariance(self.graph.factors, self.values, [k]) for k in keys}
+        return sparse_marginals(self.graph.factors, self.values, keys)  # at the estimate
 
 
 class BayesTreeSolver(OnlineSolver):
@@ -102,8 +86,8 @@ class BayesTreeSolver(OnlineSolver):
 
     name = "btgp"
 
-    def __init__(self, **isam2):
-        self.inner = IncrementalSolver(**isam2)
+    def __init__(self, params: ISAM2Params | None = None):
+        self.inner = IncrementalSolver(params)
         self.reports: list = []  # UpdateReport of each update
 
     def update(self, factors: list[Factor], values: Values) -> None:
@@ -119,11 +103,11 @@ class BayesTreeSolver(OnlineSolver):
         return self.inner.joint_marginal_covariance(list(keys))  # from the tree's cliques
 
     def marginals(self, keys: Sequence[Key]) -> dict[Key, NDArray]:
-        return {k: self.inner.marginal_covariance(k) for k in keys}
+        return self.inner.marginals(keys)  # one pass down the tree
 
 
-def make_solver(method: str, *, isam2: dict | None = None, pb_relative_tolerance: float = 1e-5, pb_max_iterations: int = 100) -> OnlineSolver:
+def make_solver(method: str, *, isam2: ISAM2Params | None = None, pb_relative_tolerance: float = 1e-5, pb_max_iterations: int = 100) -> OnlineSolver:
     """The solver ``method`` names ('btgp', 'pb' or 'pbvr')."""
     if method == "btgp":
-        return BayesTreeSolver(**(isam2 or {}))
+        return BayesTreeSolver(isam2)
     return PeriodicBatchSolver("xl" if method == "pb" else "amd", pb_relative_tolerance, pb_max_iterations)

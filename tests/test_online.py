@@ -17,7 +17,8 @@ from steam_ref.frontend import Layout
 from steam_ref.online import StreamingEstimator, StreamOptions, run_online
 from steam_ref.problem import build_problem
 from steam_ref.readings import PaperSetup, Readings
-from steam_ref.solvers import joint_covariance
+from steam_ref.bayes_tree import ISAM2Params
+from steam_ref.covariance import sparse_joint_covariance as joint_covariance
 
 SETUP = PaperSetup.synthetic()
 
@@ -71,7 +72,7 @@ def test_btgp_with_zero_thresholds_equals_pb(data, every):
     differentiated), so a cost-based stopping rule ends ~1e-5 short: PB stops on its step norm
     instead, and BTGP gets 60 empty updates (each one Gauss-Newton step with these thresholds)."""
     common = dict(skip=2, every=every, final_updates=60)
-    bt = _stream(data, method="btgp", isam2=dict(relinearize_threshold=0.0, relinearize_skip=1, wildfire_threshold=0.0), **common)
+    bt = _stream(data, method="btgp", isam2=ISAM2Params(relinearize_threshold=0.0, relinearize_skip=1, wildfire_threshold=0.0), **common)
     pb = _stream(data, method="pb", pb_relative_tolerance=0.0, **common)
     assert bt.update_steps == pb.update_steps
     a, b = bt.solver.estimate(), pb.solver.estimate()

@@ -13,13 +13,12 @@ back-substitution, descending only where δ changes by at least the wildfire thr
 [K12 Alg. 7, YIB step 6]; (6) the estimate θ̄ ⊕ δ, formed lazily when asked for.
 
 Every step costs time in proportion to the removed part and the cliques back-substitution visits:
-nothing walks the whole tree. Timing (:class:`_PhaseTimer`) and undo (:class:`_Journal`, told by
-the steps what they change, so a failed update leaves the solver as it was) stay out of the steps.
+nothing walks the whole tree. Timing and undo (:mod:`.journal`: the steps tell a journal what they
+change, so a failed update leaves the solver as it was) stay out of the steps.
 """
 
 from __future__ import annotations
 
-import time
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 
@@ -32,6 +31,7 @@ from ..factors import Factor
 from ..linear.ordering import constrained_min_degree
 from ..linear.system import GaussianFactor, linearize
 from ..variables import Key, Values
+from .journal import Journal, PhaseTimer
 from .params import ISAM2Params
 from .tree import BayesTree, Clique, eliminate
 
@@ -53,61 +53,6 @@ class UpdateReport:
     backsubstituted_cliques: int  # cliques whose conditional was solved
     time_s: float  # wall time of the whole update
     timings: dict[str, float] = field(default_factory=dict)  # seconds per phase: check, add, relinearize, remove, linearize, order, eliminate, backsubstitute
-
-
-class _PhaseTimer:
-    """Wall time of each phase of one update: ``with timer("remove"): ...``."""
-
-    def __init__(self) -> None:
-        self.start = time.perf_counter()  # when the update began
-        self.seconds: dict[str, float] = {}  # phase → seconds
-        self._phase, self._t = "", 0.0
-
-    def __call__(self, phase: str) -> _PhaseTimer:
-        self._phase = phase
-        return self
-
-    def __enter__(self) -> None:
-        self._t = time.perf_counter()
-
-    def __exit__(self, *exc: object) -> None:
-        self.seconds[self._phase] = time.perf_counter() - self._t
-
-    def total(self) -> float:
-        """Seconds since the update began."""
-        return time.perf_counter() - self.start
-
-
-@dataclass
-class _Journal:
-    """What a running update changed, so that a failure can put it back (mutable: filled as it runs).
-
-    Valid until the new cliques go into the tree (:meth:`close`); a failure after that is a bug.
-    """
-
-    n_factors: int  # number of factors before the update
-    new_keys: list[Key]  # variables the update adds
-    old_points: dict[Key, tuple[NDArray, NDArray]] = field(default_factory=dict)  # relinearized key → old (θ̄, δ)
-    old_linear: dict[int, GaussianFactor] = field(default_factory=dict)  # factor id → old cached linearization
-    top_removed: bool = False  # the top of the tree was removed (the tree can restore it)
-    closed: bool = False  # the new cliques are in: nothing to undo any more
-
-    def moved(self, key: Key, theta_bar: NDArray, delta: NDArray) -> None:
-        """``key``'s θ̄ and δ are about to change from these."""
-        self.old_points[key] = (theta_bar, delta)
-
-    def relinearized(self, fid: int, old: GaussianFactor | None) -> None:
-        """Factor ``fid``'s cached linearization is about to be replaced (None: it had none)."""
-        if old is not None:
-            self.old_linear[fid] = old
-
-    def removed_top(self) -> None:
-        """The tree's top was removed (``BayesTree.restore_top`` puts it back)."""
-        self.top_removed = True
-
-    def close(self) -> None:
-        """The new cliques are going in: from here on nothing is undone."""
-        self.closed = True
 
 
 class IncrementalSolver:
@@ -202,11 +147,11 @@ class IncrementalSolver:
         naming a variable with no value, a variable left unconstrained, ...); the solver is then as
         it was before the call.
         """
-        timer = _PhaseTimer()
+        timer = PhaseTimer()
         with timer("check"):
             F_new = [new_factors] if isinstance(new_factors, Factor) else list(new_factors)
             theta_new = self._checked_update(F_new, {} if new_values is None else new_values)
-        journal = _Journal(len(self.factors), list(theta_new))
+        journal = Journal(len(self.factors), list(theta_new))
         try:
             return self._update(F_new, theta_new, relinearize, journal, timer)
         except Exception:
@@ -215,7 +160,7 @@ class IncrementalSolver:
             raise
 
     def _update(
-        self, F_new: list[Factor], theta_new: dict[Key, NDArray], relinearize: bool, journal: _Journal, timer: _PhaseTimer
+        self, F_new: list[Factor], theta_new: dict[Key, NDArray], relinearize: bool, journal: Journal, timer: PhaseTimer
     ) -> UpdateReport:
         """One step of iSAM2, numbered as [K12 Alg. 6], with the steps of [YIB Alg. 1] (module docstring)."""
         self._steps += 1
@@ -254,7 +199,7 @@ class IncrementalSolver:
             tuple(updated), n_linearized, visited, timer.total(), timer.seconds,
         )
 
-    def _rollback(self, journal: _Journal) -> None:
+    def _rollback(self, journal: Journal) -> None:
         """Put everything back as it was before a failed update (the failure came before re-insertion)."""
         if journal.top_removed:
             self.tree.restore_top()
@@ -310,8 +255,10 @@ class IncrementalSolver:
             self._stale[k] = None
         return list(range(first, len(self.factors)))
 
-    def _fluid_relinearization(self, journal: _Journal) -> list[Key]:
+    def _fluid_relinearization(self, journal: Journal) -> list[Key]:
         """θ̄ ← θ̄ + δ, δ ← 0 for θ_rl, the variables whose max |δ| ≥ β; returns θ_rl.  [K12 Alg. 5]
+
+        With ``relinearize_blocks``, only the blocks of a variable whose own max |δ| ≥ β move.
 
         The candidates are kept up to date by back-substitution, which is the only place δ changes
         ([YIB Alg. 1 step 7]: collect them into θ_rl).
@@ -319,12 +266,14 @@ class IncrementalSolver:
         theta_rl = list(self._over)
         self._over.clear()
         for k in theta_rl:
-            journal.moved(k, self._theta_bar[k], self._delta[k])
-            self._theta_bar.insert(k, self.estimate_of(k))  # the estimate is unchanged
-            self._delta[k] = np.zeros(self._dims[k])
+            theta_bar, delta = self._theta_bar[k], self._delta[k]
+            journal.moved(k, theta_bar, delta)
+            move = self.params.blocks_to_move(k.kind, delta, self._threshold[k])  # (d,) bool
+            self._theta_bar.insert(k, theta_bar + np.where(move, delta, 0.0))  # the estimate is unchanged
+            self._delta[k] = np.where(move, 0.0, delta)
         return theta_rl
 
-    def _remove_top(self, theta_nf: list[Key], theta_rl: list[Key], journal: _Journal) -> tuple[dict[int, Clique], list[int]]:
+    def _remove_top(self, theta_nf: list[Key], theta_rl: list[Key], journal: Journal) -> tuple[dict[int, Clique], list[int]]:
         """Remove the cliques of θ_aff = θ_nf ∪ θ_rl and their ascendants: ``(removed, orphans)``.  [K12 Alg. 4]
 
         A variable of θ_nf affects the clique where it is frontal (a new variable is in none yet);
@@ -337,7 +286,7 @@ class IncrementalSolver:
         journal.removed_top()
         return removed, orphans
 
-    def _relinearize(self, fids: list[int], theta_rl: set[Key], journal: _Journal) -> int:
+    def _relinearize(self, fids: list[int], theta_rl: set[Key], journal: Journal) -> int:
         """Linearize, at θ̄, the factors among ``fids`` that are new or touch θ_rl; returns how many.  [YIB Eq. 9]"""
         need = [j for j in fids if self._linear[j] is None or (theta_rl and not theta_rl.isdisjoint(self.factors[j].keys))]
         for j in need:
@@ -349,7 +298,7 @@ class IncrementalSolver:
         return len(need)
 
     def _insert(
-        self, cliques: list[Clique], parents: list[int | None], orphans: list[int], owners: list[int], journal: _Journal
+        self, cliques: list[Clique], parents: list[int | None], orphans: list[int], owners: list[int], journal: Journal
     ) -> list[int]:
         """Put the new cliques in the tree and hang each orphan under ``cliques[owner]``; returns the new ids.
 

@@ -12,9 +12,23 @@ import numbers
 from collections.abc import Mapping
 from dataclasses import dataclass
 
+import numpy as np
+from numpy.typing import NDArray
+
 from ..errors import SteamError
 
 __all__ = ["ISAM2Params"]
+
+
+def _blocks(kind: str, sizes: object) -> tuple[int, ...]:
+    """Block sizes as a tuple of positive ints; SteamError naming them otherwise."""
+    try:
+        out = tuple(int(n) for n in sizes)  # type: ignore[union-attr]
+    except (TypeError, ValueError):
+        raise SteamError(f"relinearize_blocks[{kind!r}] must be a sequence of block sizes, got {sizes!r}") from None
+    if not out or any(n < 1 for n in out) or tuple(sizes) != out:  # type: ignore[arg-type]
+        raise SteamError(f"relinearize_blocks[{kind!r}] must be positive integer block sizes, got {sizes!r}")
+    return out
 
 
 def _threshold(value: object, name: str) -> float:
@@ -44,6 +58,10 @@ class ISAM2Params:
     relinearize_skip: int = 10
     # α of [K12 Alg. 7]: back-substitution descends only where δ changed by at least α (0: full)
     wildfire_threshold: float = 1e-3
+    # kind → block sizes: relinearize each block of such a variable on its own, as GTSAM would if it
+    # held the blocks as separate variables (the paper's scripts hold a state as pose P and velocity
+    # V: {'x': (3, 3)}); None: every variable is one block
+    relinearize_blocks: Mapping[str, tuple[int, ...]] | None = None
 
     def __post_init__(self) -> None:
         t = self.relinearize_threshold
@@ -57,6 +75,16 @@ class ISAM2Params:
             raise SteamError(f"relinearize_skip must be a positive integer, got {skip!r}")
         object.__setattr__(self, "relinearize_skip", int(skip))
         object.__setattr__(self, "wildfire_threshold", _threshold(self.wildfire_threshold, "wildfire_threshold"))
+        if self.relinearize_blocks is not None:
+            object.__setattr__(self, "relinearize_blocks", {k: _blocks(k, v) for k, v in dict(self.relinearize_blocks).items()})
+
+    def blocks_to_move(self, kind: str, delta: NDArray, threshold: float) -> NDArray:
+        """(d,) bool: the entries of a variable of ``kind`` whose block has max |δ| ≥ ``threshold``."""
+        sizes = (self.relinearize_blocks or {}).get(kind, (len(delta),))
+        if sum(sizes) != len(delta):
+            raise SteamError(f"relinearize_blocks {sizes} for kind {kind!r} do not add up to its size {len(delta)}")
+        bounds = np.cumsum((0, *sizes))
+        return np.repeat([np.abs(delta[a:b]).max() >= threshold for a, b in zip(bounds, bounds[1:])], sizes)
 
     def threshold_for(self, kind: str) -> float:
         """β for variables of ``kind`` ('x', 'l', ...); SteamError when a per-kind dict lacks it."""
