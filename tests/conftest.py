@@ -4,14 +4,14 @@ The reference data (the paper's .mat files) are read through $STEAM_REF_DATA_DIR
 would. If it is unset and ``<repository>/../shared/data`` exists (CI's layout), it is set to that
 folder here, before any test runs. Tests that read the files use the ``shared_data`` fixture or
 the ``needs_data`` marker; both skip with one line saying where to put the files, or fail when
-STEAM_REF_REQUIRE_DATA=1 (see ``requirements.py``).
+STEAM_REF_REQUIRE_DATA=1 (see ``requirements.py``, which also handles the optional packages).
 """
 
 import os
 
 import numpy as np
 import pytest
-from requirements import DATA_DIR_ENV, SHARED_DATA, reference_data_dir
+from requirements import DATA_DIR_ENV, SHARED_DATA, optional_import, reference_data_dir
 
 if not os.environ.get(DATA_DIR_ENV) and SHARED_DATA.is_dir():
     os.environ[DATA_DIR_ENV] = str(SHARED_DATA.resolve())
@@ -37,6 +37,12 @@ def pytest_collection_modifyitems(items):
 
 
 def pytest_runtest_setup(item):
-    """``@pytest.mark.needs_data`` tests (e.g. a notebook that loads "plaza") check for the files."""
+    """Markers checked before a test runs (skip, or fail when required; see requirements.py).
+
+    ``needs_data``: the paper's files (e.g. a notebook that loads "plaza");
+    ``needs_cholmod``: scikit-sparse's CHOLMOD (STEAM_REF_REQUIRE_CHOLMOD=1 makes it required).
+    """
     if item.get_closest_marker("needs_data"):
         reference_data_dir()
+    if item.get_closest_marker("needs_cholmod"):
+        optional_import("sksparse.cholmod", "cholmod", kind="cholmod")
