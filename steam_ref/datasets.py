@@ -491,7 +491,7 @@ def load_dataset(
     if key == "synthetic":
         return generate_synthetic(seed=seed)
     folders = default_data_dirs(data_dir)
-    hint = f"Put the file in a folder and pass it as --data-dir (data_dir=) or set ${DATA_DIR_ENV} to it"
+    hint = f"Put the file in a folder and pass that folder as --data-dir (data_dir= in Python) or set ${DATA_DIR_ENV} to it"
     if key in _FILES:
         found = _find((_FILES[key],), folders)
         if found is not None:
