@@ -60,7 +60,6 @@ __all__ = [
 ]
 
 DATA_DIR_ENV = "STEAM_REF_DATA_DIR"
-_SHARED_DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
 _TIME_TOL = 1e-6  # [s] odometry row k and pose k + 1 must agree to this
 _COLUMNS = {  # field -> (CMU array name, column names)
     "ground_truth": ("GT", ("time", "x", "y", "heading")),
@@ -419,14 +418,13 @@ def gtsam_data_dir() -> Path | None:
 def default_data_dirs(data_dir: str | os.PathLike | None = None) -> list[Path]:
     """Folders searched for data files, in order, without duplicates; they need not exist.
 
-    ``data_dir``, then $STEAM_REF_DATA_DIR, then ``<repo root>/../shared/data``, then
-    ``./../shared/data`` from the working directory, then the installed gtsam's Data folder.
+    Exactly three places: ``data_dir`` (the CLI's ``--data-dir``), then ``$STEAM_REF_DATA_DIR``,
+    then the ``Data/`` folder of an installed gtsam wheel. Nothing relative to the working
+    directory or to this package's location is searched.
     """
     env = os.environ.get(DATA_DIR_ENV) or None
-    cwd_shared = Path.cwd() / ".." / "shared" / "data"
-    candidates = [data_dir, env, _SHARED_DATA, cwd_shared, gtsam_data_dir()]
     folders: list[Path] = []
-    for candidate in candidates:
+    for candidate in (data_dir, env, gtsam_data_dir()):
         if candidate is not None and Path(candidate).resolve() not in folders:
             folders.append(Path(candidate).resolve())
     return folders
@@ -441,7 +439,8 @@ def _find(file_names: tuple[str, ...], folders: list[Path]) -> Path | None:
 
 
 def _not_found(what: str, folders: list[Path], hint: str) -> DataError:
-    looked = ", ".join(str(f) for f in folders)
+    """One line: what is missing, every folder searched, and where to put the file."""
+    looked = ", ".join(str(f) for f in folders) or f"nowhere (no --data-dir, ${DATA_DIR_ENV} unset, no gtsam)"
     return DataError(f"{what} not found; looked in: {looked}. {hint}")
 
 
@@ -453,14 +452,17 @@ def load_dataset(
     Names: "synthetic" (generated, see :func:`generate_synthetic`; ``seed`` applies),
     "paper-synthetic" (``Syn_theta_Plaza.mat``), "plaza" (``Plaza1_thrown_away_some_range.mat``,
     else the original Plaza1 text files with all 3,529 ranges, e.g. from an installed gtsam).
-    Anything else is a path: a CMU .mat file or a folder of CMU text files; a bare file name is
-    also looked up in :func:`default_data_dirs`.
+    Named files are searched for in :func:`default_data_dirs`: ``data_dir`` (``--data-dir``),
+    ``$STEAM_REF_DATA_DIR``, the installed gtsam's ``Data/``. Anything else is a path: a CMU .mat
+    file or a folder of CMU text files; a bare file name that is not in the working directory is
+    also searched for there. A missing file raises DataError naming the folders searched and
+    where to put it.
     """
     key = str(name_or_path)
     if key == "synthetic":
         return generate_synthetic(seed=seed)
     folders = default_data_dirs(data_dir)
-    hint = f"Put the file in --data-dir or ${DATA_DIR_ENV}"
+    hint = f"Put the file in a folder and pass that folder as --data-dir (data_dir= in Python) or set ${DATA_DIR_ENV} to it"
     if key in _FILES:
         found = _find((_FILES[key],), folders)
         if found is not None:

@@ -1,8 +1,48 @@
+"""Fixtures shared by every test file, and where the reference data are found.
+
+The reference data (the paper's .mat files) are read through $STEAM_REF_DATA_DIR, as a user's run
+would. If it is unset and ``<repository>/../shared/data`` exists (CI's layout), it is set to that
+folder here, before any test runs. Tests that read the files use the ``shared_data`` fixture or
+the ``needs_data`` marker; both skip with one line saying where to put the files, or fail when
+STEAM_REF_REQUIRE_DATA=1 (see ``requirements.py``, which also handles the optional packages).
+"""
+
+import os
+
 import numpy as np
 import pytest
+from requirements import DATA_DIR_ENV, SHARED_DATA, optional_import, reference_data_dir
+
+if not os.environ.get(DATA_DIR_ENV) and SHARED_DATA.is_dir():
+    os.environ[DATA_DIR_ENV] = str(SHARED_DATA.resolve())
 
 
 @pytest.fixture
 def rng() -> np.random.Generator:
     """The one seeded generator every test draws from."""
     return np.random.default_rng(12345)
+
+
+@pytest.fixture(scope="session")
+def shared_data():
+    """The folder holding the paper's files (Syn_theta_Plaza.mat, Plaza1_..., authors/*.mat)."""
+    return reference_data_dir()
+
+
+def pytest_collection_modifyitems(items):
+    """A test that uses ``shared_data`` is a ``needs_data`` test, so ``-m "not needs_data"`` works."""
+    for item in items:
+        if "shared_data" in getattr(item, "fixturenames", ()) and not item.get_closest_marker("needs_data"):
+            item.add_marker(pytest.mark.needs_data)
+
+
+def pytest_runtest_setup(item):
+    """Markers checked before a test runs (skip, or fail when required; see requirements.py).
+
+    ``needs_data``: the paper's files (e.g. a notebook that loads "plaza");
+    ``needs_cholmod``: scikit-sparse's CHOLMOD (STEAM_REF_REQUIRE_CHOLMOD=1 makes it required).
+    """
+    if item.get_closest_marker("needs_data"):
+        reference_data_dir()
+    if item.get_closest_marker("needs_cholmod"):
+        optional_import("sksparse.cholmod", "cholmod", kind="cholmod")

@@ -59,12 +59,36 @@ def test_perturbed_start_reaches_the_optimum_found_from_the_truth(rng):
         np.testing.assert_allclose(from_start[k], from_truth[k], rtol=1e-6, atol=1e-8)
 
 
-def test_lm_reports_rejected_steps_and_damping(rng):
-    p = small_problem(rng, n_states=8, n_landmarks=3, noise=2.0)
-    result = sr.levenberg_marquardt(p.graph, p.initial, initial_damping=1e-9)
-    costs = [it.cost for it in result.iterations]
-    assert all(b <= a + 1e-12 for a, b in zip(costs, costs[1:]))  # the kept cost never increases
-    assert all(it.damping > 0 for it in result.iterations)
+def _heading_problem(theta0: float) -> tuple[sr.FactorGraph, sr.Values]:
+    """One state whose velocity is pinned to (1, 0) by a tight prior, and a projected-velocity
+    reading of (3, 0): the cost in θ is ½|R(θ)ᵀv - z|² = 5 - 3 cos θ (plus tiny priors), minimal
+    at θ = 0 with cost 2. Its Gauss-Newton step is δθ = -3 sin θ, so from θ = 1 it jumps to
+    θ ≈ -1.52, where cos θ is smaller: the undamped step raises the cost."""
+    graph = sr.FactorGraph([])
+    graph.add(sr.PriorFactor.create(sr.X(0), [0, 0, 0, 1, 0, 0], [1e-3, 1e-3, 1e3, 1e-3, 1e-3, 1e-3]))
+    graph.add(sr.VelocityFactor.create(sr.X(0), [3.0, 0.0, 0.0], [1.0, 1.0, 1.0]))
+    return graph, sr.Values({sr.X(0): np.array([0, 0, theta0, 1, 0, 0.0])})
+
+
+def test_lm_rejects_an_overshooting_step_and_raises_the_damping():
+    graph, initial = _heading_problem(theta0=1.0)
+    gn_step = sr.gauss_newton(graph, initial, max_iterations=1)
+    assert gn_step.cost > gn_step.initial_cost  # the premise: the undamped step overshoots
+    factor, lam0 = 10.0, 1e-9
+    result = sr.levenberg_marquardt(graph, initial, initial_damping=lam0, damping_factor=factor)
+    its = result.iterations
+    assert not its[0].accepted and its[0].damping == lam0 and its[0].cost == result.initial_cost
+    assert any(it.accepted for it in its)
+    for before, after in zip(its, its[1:]):
+        if before.accepted:
+            assert after.damping == pytest.approx(max(before.damping / factor, 1e-12), rel=1e-12)
+        else:
+            assert after.damping == pytest.approx(before.damping * factor, rel=1e-12)
+    kept = [result.initial_cost] + [it.cost for it in its]
+    assert all(b <= a for a, b in zip(kept, kept[1:]))  # the kept cost never increases
+    assert all(it.cost < prev for prev, it in zip(kept, its) if it.accepted)  # an accepted step lowers it
+    assert result.converged, result.reason
+    assert abs(result.values[sr.X(0)][2]) < 1e-3 and result.cost == pytest.approx(2.0, abs=1e-4)
 
 
 def test_batch_solve_rejects_unknown_method(rng):

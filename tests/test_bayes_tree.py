@@ -97,15 +97,67 @@ def test_gp_trajectory_with_landmarks_matches_dense_solve(rng, ordering_name):
     np.testing.assert_allclose(R.T @ R, info, rtol=1e-9, atol=1e-12 * np.abs(info).max())
 
 
-def test_xl_ordering_makes_a_bigger_root_than_min_degree(rng):
-    """With landmarks last (XL), the root clique holds every landmark; min degree spreads them."""
+def _root_frontals(tree: BayesTree) -> tuple[Key, ...]:
+    (root,) = tree.roots
+    return tree.cliques[root].frontals
+
+
+def _min_degree_orderings(keys: list[Key], dims: dict, factor_keys: list) -> dict[str, Ordering | list[Key]]:
+    return {"amd": amd_ordering(keys, dims, factor_keys), "constrained": constrained_min_degree(keys, factor_keys)}
+
+
+def test_landmarks_seen_all_along_the_path_end_in_the_root_under_any_ordering(rng):
+    """small_problem ranges landmark i % 4 from state i, so each landmark is tied to states from
+    one end of the path to the other: eliminating the states, in whatever order, joins all four
+    landmarks, and XL and both minimum-degree orderings all put them in the root (of equal size)."""
     problem = small_problem(rng, n_states=20, n_landmarks=4)
     keys = problem.graph.keys()
     dims = {k: problem.initial.dim(k) for k in keys}
+    factor_keys = [f.keys for f in problem.graph]
     gaussian = [gf for group in linearize(problem.graph.factors, problem.initial) for gf in group.gaussian_factors()]
-    xl = BayesTree.from_factors(gaussian, xl_ordering(keys, dims))
-    (root,) = xl.roots
-    assert {k for k in xl.cliques[root].frontals if k.kind == "l"} == {sr.L(j) for j in range(4)}
+    orderings = {"xl": xl_ordering(keys, dims), **_min_degree_orderings(keys, dims, factor_keys)}
+    for name, ordering in orderings.items():
+        frontals = _root_frontals(BayesTree.from_factors(gaussian, ordering))
+        assert {k for k in frontals if k.kind == "l"} == {sr.L(j) for j in range(4)}, name
+        assert sum(dims[k] for k in frontals) == 4 * 2 + 2 * 6, name  # the landmarks and two states
+
+
+def local_landmark_factors(rng: np.random.Generator, n_states: int = 40, per: int = 5) -> tuple[list[GaussianFactor], dict]:
+    """Random linear factors with the paper's exploration structure: a chain of 6-d states, each
+    state ranged to the one 2-d landmark of its stretch (states per*j ... per*j + per - 1 see l_j)."""
+    dims = {**{Key("x", i): 6 for i in range(n_states)}, **{Key("l", j): 2 for j in range(n_states // per)}}
+
+    def factor(*keys: Key) -> GaussianFactor:
+        m = sum(dims[k] for k in keys)
+        return GaussianFactor(keys, tuple(rng.normal(size=(m, dims[k])) for k in keys), rng.normal(size=m))
+
+    factors = [factor(Key("x", 0))] + [factor(Key("l", j)) for j in range(n_states // per)]
+    factors += [factor(Key("x", i), Key("x", i + 1)) for i in range(n_states - 1)]
+    factors += [factor(Key("x", i), Key("l", i // per)) for i in range(n_states)]
+    return factors, dims
+
+
+def test_min_degree_spreads_local_landmarks_that_xl_puts_in_the_root(rng):
+    """When each landmark is seen from one stretch of the path only, minimum degree eliminates it
+    with its stretch, so the root holds at most one landmark (and two states); XL eliminates every
+    state first, which joins all landmarks along the chain, so its root holds all eight (28 columns)."""
+    factors, dims = local_landmark_factors(rng)
+    keys = list(dims)
+    landmarks = {k for k in keys if k.kind == "l"}
+    factor_keys = [f.keys for f in factors]
+    natural = Ordering(tuple(keys), tuple(dims[k] for k in keys))
+    A, b = dense_system(factors, natural)
+    reference = np.linalg.solve(A.T @ A, A.T @ b)
+    xl = BayesTree.from_factors(factors, xl_ordering(keys, dims))
+    assert {k for k in _root_frontals(xl) if k.kind == "l"} == landmarks and len(landmarks) == 8
+    xl_root = sum(dims[k] for k in _root_frontals(xl))
+    for name, ordering in _min_degree_orderings(keys, dims, factor_keys).items():
+        tree = BayesTree.from_factors(factors, ordering)
+        assert tree.problems() == [], name
+        np.testing.assert_allclose(stacked(tree.solve(), natural), reference, rtol=1e-9, atol=1e-12 * np.abs(reference).max())
+        frontals = _root_frontals(tree)
+        assert len(landmarks & set(frontals)) <= 1, (name, frontals)
+        assert sum(dims[k] for k in frontals) <= 2 * 6 + 2 < xl_root, (name, frontals)  # two states, one landmark
 
 
 def test_one_scalar_elimination_is_eq_25(rng):

@@ -1,7 +1,8 @@
 """Tests of steam_ref.datasets: the CMU loaders, the checks of RangeDataset, the synthetic generator.
 
 Sizes asserted for the reference files are those of /work/shared/data/README.md and the paper
-(Table I); every other expected value is computed here by a slow, obvious loop.
+(Table I); every other expected value is computed here by a slow, obvious loop. The reference files
+come from the ``shared_data`` fixture (conftest.py: $STEAM_REF_DATA_DIR; skip or fail if absent).
 """
 
 from __future__ import annotations
@@ -14,7 +15,8 @@ import numpy as np
 import pytest
 import scipy.io
 
-import steam_ref
+from requirements import optional_import
+
 from steam_ref import datasets
 from steam_ref.pose2 import integrate_odometry
 from steam_ref.datasets import (
@@ -28,7 +30,6 @@ from steam_ref.datasets import (
 )
 from steam_ref.errors import DataError, ShapeError, SteamError
 
-SHARED = Path(steam_ref.__file__).resolve().parents[1].parent / "shared" / "data"
 SYN_FILE, PLAZA_FILE = "Syn_theta_Plaza.mat", "Plaza1_thrown_away_some_range.mat"
 FIELDS = ("ground_truth", "odometry", "dead_reckoning", "landmarks", "ranges")
 
@@ -36,13 +37,6 @@ FIELDS = ("ground_truth", "odometry", "dead_reckoning", "landmarks", "ranges")
 # ---------------------------------------------------------------------------------------------
 # Fixtures and slow oracles
 # ---------------------------------------------------------------------------------------------
-
-
-@pytest.fixture(scope="module")
-def shared_data() -> Path:
-    """The reference data folder; CI always has it, so its absence is a failure, not a skip."""
-    assert SHARED.is_dir(), f"reference data folder {SHARED} is missing"
-    return SHARED
 
 
 @pytest.fixture(scope="module")
@@ -63,14 +57,22 @@ def small() -> RangeDataset:
 
 @pytest.fixture
 def isolated(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
-    """No shared folder, no gtsam, no $STEAM_REF_DATA_DIR, cwd in an empty folder."""
+    """No gtsam, no $STEAM_REF_DATA_DIR, cwd in an empty folder beside a ../shared/data holding the files."""
     empty = tmp_path / "nothing_here"
     (empty / "cwd").mkdir(parents=True)
-    monkeypatch.setattr(datasets, "_SHARED_DATA", empty / "shared")
+    _decoy_shared(empty)
     monkeypatch.setattr(datasets, "gtsam_data_dir", lambda: None)
     monkeypatch.delenv(datasets.DATA_DIR_ENV, raising=False)
     monkeypatch.chdir(empty / "cwd")
     return tmp_path
+
+
+def _decoy_shared(root: Path) -> None:
+    """``root/shared/data`` holding both named files: a repository-relative search would find them."""
+    (root / "shared" / "data").mkdir(parents=True)
+    ds = generate_synthetic(n_steps=5, n_landmarks=2, seed=1)
+    for name in (SYN_FILE, PLAZA_FILE):
+        _save_mat(root / "shared" / "data" / name, **ds.to_cmu_arrays())
 
 
 def _fields(ds: RangeDataset) -> dict[str, np.ndarray]:
@@ -208,7 +210,7 @@ def test_gt_ranges_match_a_loop(which: str, request: pytest.FixtureRequest) -> N
 
 
 def test_gtsam_text_files_hold_all_plaza_ranges(plaza: RangeDataset) -> None:
-    pytest.importorskip("gtsam")
+    optional_import("gtsam", "gtsam")
     folder = gtsam_data_dir()
     assert folder is not None and (folder / "Plaza1_DR.txt").is_file()
     text = load_cmu_text(folder, "Plaza1")
@@ -224,10 +226,9 @@ def test_gtsam_text_files_hold_all_plaza_ranges(plaza: RangeDataset) -> None:
 
 
 def test_plaza_falls_back_to_the_gtsam_text_files(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    pytest.importorskip("gtsam")
+    optional_import("gtsam", "gtsam")
     (tmp_path / "cwd").mkdir()
-    monkeypatch.setattr(datasets, "_SHARED_DATA", tmp_path / "shared")  # hide the cleaned file
-    monkeypatch.delenv(datasets.DATA_DIR_ENV, raising=False)
+    monkeypatch.delenv(datasets.DATA_DIR_ENV, raising=False)  # hide the cleaned file
     monkeypatch.chdir(tmp_path / "cwd")
     ds = load_dataset("plaza", data_dir=tmp_path)
     assert ds.name == "plaza" and ds.n_ranges == 3529 and "Plaza1_TD.txt" in ds.source
@@ -481,36 +482,47 @@ def test_load_dataset_names(paper_synthetic: RangeDataset, plaza: RangeDataset) 
     assert loaded.name == "plaza"
 
 
-def test_search_order_data_dir_then_env_then_shared(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, shared_data: Path
-) -> None:
-    mine, env = generate_synthetic(n_steps=10, n_landmarks=3, seed=1), generate_synthetic(n_steps=12, seed=2)
-    (tmp_path / "mine").mkdir()
-    (tmp_path / "env").mkdir()
-    _save_mat(tmp_path / "mine" / SYN_FILE, **mine.to_cmu_arrays())
-    _save_mat(tmp_path / "env" / SYN_FILE, **env.to_cmu_arrays())
-    monkeypatch.delenv(datasets.DATA_DIR_ENV, raising=False)
-    assert load_dataset("paper-synthetic").n_poses == 1501  # the shared folder
+def test_search_order_data_dir_then_env_then_gtsam(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Each of the three places wins over the ones after it, and is used when those before lack the file."""
+    sets = {where: generate_synthetic(n_steps=8 + i, n_landmarks=3, seed=i) for i, where in enumerate(("mine", "env", "gtsam"))}
+    for where, ds in sets.items():
+        (tmp_path / where).mkdir()
+        _save_mat(tmp_path / where / SYN_FILE, **ds.to_cmu_arrays())
+    monkeypatch.setattr(datasets, "gtsam_data_dir", lambda: tmp_path / "gtsam")
     monkeypatch.setenv(datasets.DATA_DIR_ENV, str(tmp_path / "env"))
-    np.testing.assert_array_equal(load_dataset("paper-synthetic").ground_truth, env.ground_truth)
+
+    def n_poses(**kwargs: Path) -> int:
+        return load_dataset("paper-synthetic", **kwargs).n_poses
+
     found = load_dataset("paper-synthetic", data_dir=tmp_path / "mine")
-    np.testing.assert_array_equal(found.ground_truth, mine.ground_truth)
+    assert found.n_poses == sets["mine"].n_poses
     assert found.source == str((tmp_path / "mine" / SYN_FILE).resolve())
+    assert n_poses(data_dir=tmp_path / "empty") == sets["env"].n_poses  # data_dir lacks it: env next
+    assert n_poses() == sets["env"].n_poses
+    monkeypatch.delenv(datasets.DATA_DIR_ENV)
+    assert n_poses() == sets["gtsam"].n_poses  # then the gtsam wheel's Data/
+    (tmp_path / "gtsam" / SYN_FILE).unlink()
+    with pytest.raises(DataError, match=r"Syn_theta_Plaza\.mat"):
+        load_dataset("paper-synthetic")
 
 
-def test_default_data_dirs_order(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_default_data_dirs_are_exactly_data_dir_env_gtsam(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """No folder relative to the working directory or the package, even when ../shared/data exists there."""
     fake_gtsam = tmp_path / "gtsam" / "Data"
     monkeypatch.setattr(datasets, "gtsam_data_dir", lambda: fake_gtsam)
     monkeypatch.setenv(datasets.DATA_DIR_ENV, str(tmp_path / "env"))
     (tmp_path / "work" / "cwd").mkdir(parents=True)
+    _decoy_shared(tmp_path / "work")
     monkeypatch.chdir(tmp_path / "work" / "cwd")
-    repo_shared = Path(datasets.__file__).resolve().parents[1].parent / "shared" / "data"
-    cwd_shared = tmp_path / "work" / "shared" / "data"
-    expected = [tmp_path / "given", tmp_path / "env", repo_shared, cwd_shared, fake_gtsam]
+    expected = [tmp_path / "given", tmp_path / "env", fake_gtsam]
     assert default_data_dirs(tmp_path / "given") == [p.resolve() for p in expected]
-    monkeypatch.setenv(datasets.DATA_DIR_ENV, "")
-    assert default_data_dirs()[0] == repo_shared.resolve()
-    assert default_data_dirs(repo_shared) == default_data_dirs()  # no duplicates
+    assert default_data_dirs() == [p.resolve() for p in expected[1:]]
+    assert default_data_dirs(tmp_path / "env") == default_data_dirs()  # no duplicates
+    monkeypatch.setenv(datasets.DATA_DIR_ENV, "")  # empty means unset
+    assert default_data_dirs() == [fake_gtsam.resolve()]
+    monkeypatch.setattr(datasets, "gtsam_data_dir", lambda: None)
+    assert default_data_dirs() == []
+    assert not hasattr(datasets, "_SHARED_DATA")
 
 
 def test_not_found_message_lists_where_it_looked(isolated: Path) -> None:
@@ -520,8 +532,11 @@ def test_not_found_message_lists_where_it_looked(isolated: Path) -> None:
     message = str(caught.value)
     assert "\n" not in message
     assert str(given.resolve()) in message
-    assert str((isolated / "nothing_here" / "shared").resolve()) in message
-    assert PLAZA_FILE in message and "pip install gtsam" in message and "--data-dir" in message
+    assert "shared" not in message  # the decoy ../shared/data beside the cwd is not searched
+    assert PLAZA_FILE in message and "pip install gtsam" in message
+    assert "--data-dir" in message and "$STEAM_REF_DATA_DIR" in message  # where to put the file
+    with pytest.raises(DataError, match=r"looked in: nowhere .*STEAM_REF_DATA_DIR unset.*--data-dir"):
+        load_dataset("paper-synthetic")
     with pytest.raises(DataError, match=r"'plazza' \(not one of synthetic, paper-synthetic, plaza"):
         load_dataset("plazza", data_dir=given)
 

@@ -2,19 +2,39 @@
 
 from __future__ import annotations
 
+import importlib
 import os
 import subprocess
 import sys
 import textwrap
 
-from steam_ref.linear import have_cholmod
+import pytest
+from requirements import REQUIRE_ENV, required
+
+from steam_ref.linear import have_cholmod, sparse_backend
+
+
+def _cholmod_imports() -> bool:
+    """The oracle: does ``import sksparse.cholmod`` succeed in this interpreter?"""
+    try:
+        importlib.import_module("sksparse.cholmod")
+    except ImportError:
+        return False
+    return True
 
 
 def test_cholmod_present_when_required():
-    if os.environ.get("STEAM_REF_REQUIRE_CHOLMOD") == "1":
-        assert have_cholmod(), "CI requires scikit-sparse (CHOLMOD) but it does not import"
-    else:
-        assert isinstance(have_cholmod(), bool)
+    if required("cholmod"):
+        assert _cholmod_imports(), f"{REQUIRE_ENV['cholmod']}=1 but scikit-sparse (CHOLMOD) does not import"
+
+
+def test_have_cholmod_and_the_default_backend_follow_what_imports(monkeypatch: pytest.MonkeyPatch):
+    importable = _cholmod_imports()
+    assert have_cholmod() is importable
+    monkeypatch.delenv("STEAM_REF_SPARSE_BACKEND", raising=False)
+    assert sparse_backend() == ("cholmod" if importable else "superlu")
+    monkeypatch.setenv("STEAM_REF_SPARSE_BACKEND", "superlu")
+    assert sparse_backend() == "superlu"  # the variable overrides the default
 
 
 def test_core_runs_with_scikit_sparse_hidden():

@@ -9,9 +9,9 @@ from problems import small_problem
 import steam_ref as sr
 from steam_ref.batch import make_ordering
 from steam_ref.linear import ordering as orderings
-from steam_ref.linear import LinearSystem, SparseCholesky, have_cholmod, solve
+from steam_ref.linear import LinearSystem, SparseCholesky, solve
 
-BACKENDS = ["superlu", pytest.param("cholmod", marks=pytest.mark.skipif(not have_cholmod(), reason="scikit-sparse not installed"))]
+BACKENDS = ["superlu", pytest.param("cholmod", marks=pytest.mark.needs_cholmod)]
 
 
 @pytest.fixture
@@ -100,7 +100,7 @@ def test_amd_is_a_permutation_with_less_fill_than_xl(rng, backend):
     assert nnz["amd"] < nnz["xl"]
 
 
-@pytest.mark.skipif(not have_cholmod(), reason="scikit-sparse not installed")
+@pytest.mark.needs_cholmod
 def test_superlu_minimum_degree_fill_close_to_cholmod_amd(rng):
     p = _many_landmark_problem(rng, n_states=150, n_landmarks=60)
     nnz = {}

@@ -1,0 +1,40 @@
+"""The README says what runs: its code example executes and gives what it claims, and its test
+command is the one `.ci/run` runs."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+README = (ROOT / "README.md").read_text()
+
+
+def _python_blocks() -> list[str]:
+    return re.findall(r"```python\n(.*?)```", README, flags=re.S)
+
+
+def test_readme_example_runs_and_its_two_solvers_agree():
+    """The example's batch Gauss-Newton converges; the Bayes tree's estimate after its one update
+    has every variable of the graph and is one Gauss-Newton step from ``initial`` (the oracle: a
+    batch solve with one iteration), which lands within 1e-3 of the converged batch optimum."""
+    (block,) = _python_blocks()
+    scope: dict = {"__name__": "readme_example"}
+    exec(compile(block, "README.md (The common case in code)", "exec"), scope)
+    sr, graph, initial = scope["sr"], scope["graph"], scope["initial"]
+    result, estimate = scope["result"], scope["estimate"]
+    assert result.converged, result.reason
+    assert set(estimate.keys()) == set(graph.keys()) == set(initial.keys())
+    one_step = sr.gauss_newton(graph, initial, max_iterations=1).values
+    for key in graph.keys():
+        np.testing.assert_allclose(estimate[key], one_step[key], rtol=1e-8, atol=1e-10)
+        np.testing.assert_allclose(estimate[key], result.values[key], atol=1e-3)
+
+
+def test_readme_test_command_is_the_one_ci_runs():
+    commands = re.findall(r"^    (.*pytest.*)$", README, flags=re.M)
+    assert len(commands) == 1, commands
+    ci = (ROOT / ".ci" / "run").read_text().splitlines()
+    assert commands[0] in ci, f"README's {commands[0]!r} is not a line of .ci/run"
