@@ -32,7 +32,9 @@ import steam_ref as sr
 from steam_ref.batch import make_ordering
 from steam_ref.datasets import load_dataset
 from steam_ref.linear import LinearSystem, SparseCholesky, linearize, sparse_backend
-from steam_ref.problem import PaperSetup, build_problem, position_rmse, sequential_batch
+from steam_ref.problem import build_problem, sequential_batch
+from steam_ref.readings import PaperSetup
+from steam_ref.results import position_rmse
 
 OUT = Path(__file__).resolve().parent / "out"
 
@@ -73,7 +75,7 @@ def measure(name: str, repeat: int, backend: str) -> dict:
     plot(name, data, positions, problem)
     return {
         "dataset": name,
-        "n_states": len(problem.estimated),
+        "n_states": len(problem.states),
         "n_landmarks": len(values.landmarks()),
         "n_factors": len(graph),
         "linearize_s": round(linearize_s, 4),
@@ -97,7 +99,7 @@ def plot(name: str, data, positions: np.ndarray, problem) -> None:
     OUT.mkdir(exist_ok=True)
     fig, ax = plt.subplots(figsize=(6, 6))
     ax.plot(*data.ground_truth[:, 1:3].T, "g-", lw=1, label="ground truth")
-    dr = np.array([problem.initial[sr.X(i)][:2] for i in problem.estimated])
+    dr = np.array([problem.initial[sr.X(i)][:2] for i in problem.states])
     ax.plot(*dr.T, ":", color="gray", lw=1, label="dead reckoning")
     ax.plot(*positions.T, "b-", lw=0.8, label="batch estimate")
     ax.plot(*data.landmarks[:, 1:3].T, "g*", label="landmarks")

@@ -39,7 +39,7 @@ import json, sys
 import numpy as np
 from steam_ref.datasets import load_dataset
 from steam_ref.online import default_options, run_online
-from steam_ref.problem import PaperSetup
+from steam_ref.readings import PaperSetup
 name, preset, kw = sys.argv[1], sys.argv[2], json.loads(sys.argv[3])
 data = load_dataset(name)
 setup = PaperSetup.named(preset)

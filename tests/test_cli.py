@@ -58,14 +58,14 @@ def test_no_interpolate_flag_reaches_the_run(capsys, small_mat):
 def test_relinearization_flags_reach_the_run(capsys, small_mat):
     """--relinearize-threshold/--relinearize-skip give the library's run with those options."""
     from steam_ref.online import default_options, run_online
-    from steam_ref.problem import PaperSetup
+    from steam_ref.readings import PaperSetup
 
     path, data = small_mat
     setup = PaperSetup.synthetic()
     code, out, err = _run(capsys, "run", "--dataset", str(path), "--preset", "synthetic",
                           "--relinearize-threshold", "0", "--relinearize-skip", "1", "--json")
     assert code == 0, err
-    direct = run_online(data, setup, default_options(setup, relinearize_threshold=0.0, relinearize_skip=1))
+    direct = run_online(data, setup, default_options(setup, isam2=ISAM2Params(relinearize_threshold=0.0, relinearize_skip=1)))
     default = run_online(data, setup, default_options(setup))
     assert direct.rmse_m != default.rmse_m  # the flags change the run, so the comparison below means something
     assert json.loads(out)["rmse_m"] == round(direct.rmse_m, 6)
@@ -131,7 +131,9 @@ def test_batch_command_matches_a_direct_gauss_newton(capsys, small_mat, tmp_path
     """`steam-ref batch` reports the RMSE of the converged batch, which the library reproduces."""
     import steam_ref as sr
     from steam_ref.datasets import load_cmu_mat
-    from steam_ref.problem import PaperSetup, build_problem, position_rmse, sequential_batch
+    from steam_ref.problem import build_problem, sequential_batch
+    from steam_ref.readings import PaperSetup
+    from steam_ref.results import position_rmse
 
     path, data = small_mat
     plot = tmp_path / "b.png"

@@ -24,7 +24,8 @@ from steam_ref.experiments import (
     speedup_on_prefix,
 )
 from steam_ref.online import default_options, run_online
-from steam_ref.problem import PaperSetup, position_rmse
+from steam_ref.readings import PaperSetup, Readings
+from steam_ref.results import position_rmse
 
 SETUP = PaperSetup.synthetic()
 
@@ -70,14 +71,14 @@ def test_table_figures_match_the_runs(small):
     assert speedup_on_prefix(pb, bt) == (pytest.approx(ratio), 46)
     assert f"| small | BTGP/1 vs PB/1 | far faster | {ratio:.0f}× faster over the first 46 steps |" in table
     base, coarse = exp.with_interp[1], exp.with_interp[5]
-    assert coarse.n_estimated_states == 10  # poses 0, 5, ..., 45
+    assert coarse.n_states == 10  # poses 0, 5, ..., 45
     frac, saved = 1 - 10 / 46, 1 - coarse.total_s / base.total_s
     drmse = 100 * (coarse.rmse_m - base.rmse_m)
     row = f"| small | interpolation, skip 5 ({frac:.0%} of states interpolated) |"
     line = next(ln for ln in table.splitlines() if ln.startswith(row))
     assert line.endswith(f"time saved {saved:.0%}, RMSE {coarse.rmse_m:.3f} m ({drmse:+.1f} cm) |")
     # the RMSE a run reports is the RMSE of its estimates against ground truth
-    np.testing.assert_allclose(coarse.rmse_m, position_rmse(coarse.estimates[:, :2], small.ground_truth[:, 1:3]))
+    np.testing.assert_allclose(coarse.rmse_m, position_rmse(coarse.trajectory[:, :2], small.ground_truth[:, 1:3]))
 
 
 def test_budget_cut_is_reported_as_such(small):
@@ -96,14 +97,14 @@ def test_published_run_uses_the_papers_layout(small, preset):
     published_run_experiment(exp)
     layout, paper_rmse = PUBLISHED_RUNS[preset]
     direct = run_online(small, setup, default_options(setup, **layout))
-    np.testing.assert_array_equal(exp.published.estimated, direct.estimated)
-    assert exp.published.rmse_estimated_m == direct.rmse_estimated_m
-    at_states = position_rmse(direct.estimates[direct.estimated, :2], small.ground_truth[direct.estimated, 1:3])
-    np.testing.assert_allclose(direct.rmse_estimated_m, at_states)
+    np.testing.assert_array_equal(exp.published.state_poses, direct.state_poses)
+    assert exp.published.rmse_states_m == direct.rmse_states_m
+    at_states = position_rmse(direct.trajectory[direct.state_poses, :2], small.ground_truth[direct.state_poses, 1:3])
+    np.testing.assert_allclose(direct.rmse_states_m, at_states)
     assert f"| {paper_rmse} m | {at_states:.4f} m" in results_table([exp])
     if preset == "plaza":  # a state at every range reading, and at most 5 steps apart
-        assert set(np.unique(small.range_state_indices()).tolist()) <= set(direct.estimated.tolist())
-        assert np.diff(direct.estimated).max() <= 5
+        assert set(np.unique(Readings.from_dataset(small, setup).range_pose).tolist()) <= set(direct.state_poses.tolist())
+        assert np.diff(direct.state_poses).max() <= 5
 
 
 def test_published_row_of_a_prefix_says_so(small):

@@ -27,7 +27,8 @@ from steam_ref.datasets import generate_synthetic  # noqa: E402
 from steam_ref.gp import LinearSDE  # noqa: E402
 from steam_ref.variables import Key, L, Values, X  # noqa: E402
 from steam_ref.online import BayesTreeSolver, StreamingEstimator, StreamOptions  # noqa: E402
-from steam_ref.problem import PaperSetup, Readings, build_problem  # noqa: E402
+from steam_ref.problem import build_problem  # noqa: E402
+from steam_ref.readings import PaperSetup, Readings  # noqa: E402
 
 SETUP = PaperSetup.synthetic()
 SKIP = 3
@@ -139,7 +140,7 @@ def to_gtsam(values: Values):
 def test_batch_optimum_equals_gtsam(data):
     problem = build_problem(data, SETUP, skip=SKIP)
     graph, states = gtsam_problem(data)
-    assert problem.estimated.tolist() == states
+    assert problem.states.tolist() == states
     assert graph.size() == len(problem.graph)
     # the same cost at the starting point: the same factors, whitening and Tukey loss
     start = to_gtsam(problem.initial)
@@ -178,7 +179,7 @@ class BothSolvers(BayesTreeSolver):
     """Our Bayes tree, with GTSAM's ISAM2 fed the same updates alongside."""
 
     def __init__(self):
-        super().__init__(relinearize_threshold=0.0, relinearize_skip=1, wildfire_threshold=0.0)
+        super().__init__(ISAM2Params(relinearize_threshold=0.0, relinearize_skip=1, wildfire_threshold=0.0))
         params = gtsam.ISAM2Params()
         params.setRelinearizeThreshold(0.0)
         params.relinearizeSkip = 1
