@@ -83,10 +83,10 @@ def published_run_experiment(exp: Experiment, *, max_poses: int | None = None, p
     (:mod:`steam_ref.fidelity`). A prefix run (``max_poses``) is not comparable and says so."""
     exp.published = run_online(exp.data, exp.setup, default_options(exp.setup, max_poses=max_poses, progress=progress),
                                covariances=max_poses is None)
-    if exp.name not in AUTHORS_RUNS:
-        exp.note = f"no saved authors' run for {exp.name!r}"
-    elif not exp.published.completed:
+    if not exp.published.completed:
         exp.note = f"first {exp.published.n_steps_processed} steps only, not comparable with the authors' run"
+    elif exp.name not in AUTHORS_RUNS:
+        exp.note = f"no saved authors' run for {exp.name!r}"
     else:
         try:
             exp.fidelity = compare(exp.published, load_authors_run(exp.name, exp.data, data_dir), exp.data.ground_truth)[0]

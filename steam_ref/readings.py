@@ -123,7 +123,7 @@ def attach_ranges(pose_times: NDArray, range_times: NDArray, rule: str = "file-o
     late = np.flatnonzero(pose >= len(pose_times))
     if late.size:
         k = int(late[0])
-        raise DataError(f"range row {k} at t={range_times[k]!r} is after the last pose (t={pose_times[-1]!r}): no pose to attach it to")
+        raise DataError(f"range row {k} at t={float(range_times[k])!r} is after the last pose (t={float(pose_times[-1])!r}): no pose to attach it to")
     return pose.astype(int)
 
 

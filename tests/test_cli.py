@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 import scipy.io
 
+from steam_ref.bayes_tree import ISAM2Params
 from steam_ref.cli import main
 from steam_ref.datasets import generate_synthetic
 

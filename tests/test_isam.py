@@ -451,3 +451,37 @@ def test_report_times_every_phase_within_the_total(rng):
         assert list(report.timings) == ["check", "add", "relinearize", "remove", "linearize", "order", "eliminate", "backsubstitute"]
         assert all(t >= 0 for t in report.timings.values())
         assert sum(report.timings.values()) <= report.time_s
+
+
+def test_relinearize_blocks_move_only_the_blocks_over_the_threshold(rng):
+    """With {'x': (3, 3)} (pose and velocity as GTSAM would hold them, two variables), a relinearized
+    state moves θ̄ by δ on the blocks whose own max |δ| ≥ β and keeps the rest of δ, and the tree
+    stays the dense solve of its factors."""
+    stream = Stream(rng, n_states=14, noise=0.3)
+    beta = 0.02
+    solver = IncrementalSolver(relinearize_threshold=beta, relinearize_skip=1, wildfire_threshold=0.0,
+                               relinearize_blocks={"x": (3, 3)})
+    partial = 0
+    for action in ["state"] * 14:
+        theta, delta = solver.linearization_point, solver.delta()
+        report = solver.update(*stream.step(action))
+        for k in report.relinearized:
+            blocks = [slice(0, 3), slice(3, 6)] if k.kind == "x" else [slice(0, 2)]
+            moved = solver.linearization_point[k] - theta[k]
+            for b in blocks:
+                over = np.abs(delta[k][b]).max() >= beta
+                np.testing.assert_allclose(moved[b], delta[k][b] if over else 0.0, rtol=0, atol=1e-12)
+            partial += k.kind == "x" and (np.abs(delta[k][:3]).max() >= beta) != (np.abs(delta[k][3:]).max() >= beta)
+        assert_matches_dense(solver, exact_delta=True)
+    assert partial > 0  # some state relinearized one block and not the other
+
+
+def test_relinearize_blocks_are_checked():
+    with pytest.raises(SteamError, match=r"relinearize_blocks\['x'\]"):
+        sr.ISAM2Params(relinearize_blocks={"x": (3, -3)})
+    params = sr.ISAM2Params(relinearize_blocks={"x": [3, 3]})
+    assert params.relinearize_blocks == {"x": (3, 3)}
+    np.testing.assert_array_equal(params.blocks_to_move("x", np.array([0.0, 0.2, 0, 0, 0, 0.01]), 0.1), [1, 1, 1, 0, 0, 0])
+    np.testing.assert_array_equal(params.blocks_to_move("l", np.array([0.0, 0.01]), 0.1), [0, 0])
+    with pytest.raises(SteamError, match="do not add up"):
+        params.blocks_to_move("x", np.zeros(4), 0.1)
