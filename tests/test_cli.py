@@ -88,6 +88,64 @@ def test_save_estimates_writes_every_time_step(capsys, small_mat, tmp_path):
     assert saved["landmarks"].shape == (len(saved["landmark_ids"]), 2)
 
 
+@pytest.mark.parametrize("method", ["pb", "btgp"])
+def test_save_estimates_writes_the_final_marginals(capsys, small_mat, tmp_path, method):
+    """pose/velocity covariance at every time step and each landmark's: against a dense inverse of the
+    information matrix of all the run's factors, linearized where the solver holds them (PB: at its
+    estimate; BTGP: at its linearization point), interpolated between states (gp.interpolate_covariance)."""
+    from steam_ref.gp.interpolate import interpolate_covariance
+    from steam_ref.graph import FactorGraph
+    from steam_ref.linear import LinearSystem
+    from steam_ref.linear.ordering import xl_ordering
+    from steam_ref.online import StreamingEstimator, default_options
+    from steam_ref.readings import PaperSetup, Readings
+    from steam_ref.variables import L, X
+
+    path, data = small_mat
+    target = tmp_path / "est.npz"
+    code, _, err = _run(capsys, "run", "--dataset", str(path), "--preset", "synthetic", "--method", method,
+                        "--skip", "3", "--save-estimates", str(target))
+    assert code == 0, err
+    saved = np.load(target)
+    setup = PaperSetup.synthetic()
+    est = StreamingEstimator(Readings.from_dataset(data, setup), setup, default_options(setup, method=method, skip=3))
+    while not est.done:
+        est.step()
+    if method == "pb":
+        factors, point = est.solver.graph.factors, est.solver.estimate()
+    else:
+        factors, point = est.solver.inner.factors, est.solver.inner.linearization_point
+    keys = FactorGraph(factors).keys()
+    order = xl_ordering(keys, {k: point.dim(k) for k in keys})
+    A, _ = LinearSystem.build(factors, point, order).to_dense()
+    cov = np.linalg.inv(A.T @ A)
+
+    def block(*ks):
+        idx = np.concatenate([order.offset_of[k] + np.arange(point.dim(k)) for k in ks])
+        return cov[np.ix_(idx, idx)]
+
+    states = est.states
+    for p in range(data.n_poses):
+        if p in states:
+            expected = block(X(p))
+        else:
+            a, b = max(s for s in states if s < p), min(s for s in states if s > p)
+            expected = interpolate_covariance(a, b, p, setup.qc, block(X(a), X(b)))
+        np.testing.assert_allclose(saved["pose_covariance"][p], expected[:3, :3], rtol=1e-6, atol=1e-10)
+        np.testing.assert_allclose(saved["velocity_covariance"][p], expected[3:, 3:], rtol=1e-6, atol=1e-10)
+    for i, lid in enumerate(saved["landmark_ids"]):
+        np.testing.assert_allclose(saved["landmark_covariance"][i], block(L(int(lid))), rtol=1e-6, atol=1e-10)
+
+
+def test_fidelity_command_prints_the_distance_to_the_authors_run(capsys, shared_data):
+    code, out, err = _run(capsys, "fidelity", "--dataset", "paper-synthetic", "--data-dir", str(shared_data), "--json")
+    assert code == 0, err
+    row = json.loads(out)
+    assert row["dataset"] == "paper-synthetic" and row["n_states"] == 1501
+    assert row["pose_max_m"] < 0.01 and row["pose_rms_m"] <= row["pose_max_m"]
+    assert row["authors_rmse_m"] == pytest.approx(0.0697, abs=5e-5)
+
+
 @pytest.mark.parametrize(
     "argv,needle",
     [
@@ -96,6 +154,8 @@ def test_save_estimates_writes_every_time_step(capsys, small_mat, tmp_path):
         (["run", "--relinearize-threshold", "-1"], "--relinearize-threshold"),
         (["run", "--relinearize-skip", "0"], "--relinearize-skip"),
         (["run", "--method", "gtsam"], "gtsam"),
+        (["fidelity", "--dataset", "moon"], "moon"),
+        (["fidelity", "--plot", "out.txt"], "out.txt"),
         (["run", "--dataset", "no-such-thing.mat"], "no-such-thing.mat"),
         (["run", "--preset", "moon"], "moon"),
         (["run", "--save-estimates", "out.txt"], "out.txt"),
@@ -147,3 +207,13 @@ def test_batch_command_matches_a_direct_gauss_newton(capsys, small_mat, tmp_path
     assert row["ordering"] == "xl" and row["n_states"] == data.n_poses
     assert abs(row["rmse_m"] - position_rmse(positions, data.ground_truth[:, 1:3])) < 1e-4
     assert plot.stat().st_size > 1000
+
+
+def test_fidelity_without_the_authors_files_is_one_line_and_exit_2(capsys, tmp_path, monkeypatch, shared_data):
+    import shutil
+
+    monkeypatch.delenv("STEAM_REF_DATA_DIR", raising=False)
+    shutil.copy(shared_data / "Syn_theta_Plaza.mat", tmp_path)  # the data set, but no authors/ folder
+    code, out, err = _run(capsys, "fidelity", "--dataset", "paper-synthetic", "--data-dir", str(tmp_path))
+    assert code == 2 and out == ""
+    assert len(err.strip().splitlines()) == 1 and "authors/Syn_full_data_run.mat not found" in err
