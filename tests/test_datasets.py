@@ -18,6 +18,7 @@ import scipy.io
 from requirements import optional_import
 
 from steam_ref import datasets
+from steam_ref.datasets import search
 from steam_ref.pose2 import integrate_odometry
 from steam_ref.datasets import (
     RangeDataset,
@@ -61,7 +62,7 @@ def isolated(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
     empty = tmp_path / "nothing_here"
     (empty / "cwd").mkdir(parents=True)
     _decoy_shared(empty)
-    monkeypatch.setattr(datasets, "gtsam_data_dir", lambda: None)
+    monkeypatch.setattr(search, "gtsam_data_dir", lambda: None)  # patched where default_data_dirs looks it up
     monkeypatch.delenv(datasets.DATA_DIR_ENV, raising=False)
     monkeypatch.chdir(empty / "cwd")
     return tmp_path
@@ -488,7 +489,7 @@ def test_search_order_data_dir_then_env_then_gtsam(tmp_path: Path, monkeypatch: 
     for where, ds in sets.items():
         (tmp_path / where).mkdir()
         _save_mat(tmp_path / where / SYN_FILE, **ds.to_cmu_arrays())
-    monkeypatch.setattr(datasets, "gtsam_data_dir", lambda: tmp_path / "gtsam")
+    monkeypatch.setattr(search, "gtsam_data_dir", lambda: tmp_path / "gtsam")
     monkeypatch.setenv(datasets.DATA_DIR_ENV, str(tmp_path / "env"))
 
     def n_poses(**kwargs: Path) -> int:
@@ -509,7 +510,7 @@ def test_search_order_data_dir_then_env_then_gtsam(tmp_path: Path, monkeypatch: 
 def test_default_data_dirs_are_exactly_data_dir_env_gtsam(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """No folder relative to the working directory or the package, even when ../shared/data exists there."""
     fake_gtsam = tmp_path / "gtsam" / "Data"
-    monkeypatch.setattr(datasets, "gtsam_data_dir", lambda: fake_gtsam)
+    monkeypatch.setattr(search, "gtsam_data_dir", lambda: fake_gtsam)
     monkeypatch.setenv(datasets.DATA_DIR_ENV, str(tmp_path / "env"))
     (tmp_path / "work" / "cwd").mkdir(parents=True)
     _decoy_shared(tmp_path / "work")
@@ -520,9 +521,9 @@ def test_default_data_dirs_are_exactly_data_dir_env_gtsam(tmp_path: Path, monkey
     assert default_data_dirs(tmp_path / "env") == default_data_dirs()  # no duplicates
     monkeypatch.setenv(datasets.DATA_DIR_ENV, "")  # empty means unset
     assert default_data_dirs() == [fake_gtsam.resolve()]
-    monkeypatch.setattr(datasets, "gtsam_data_dir", lambda: None)
+    monkeypatch.setattr(search, "gtsam_data_dir", lambda: None)
     assert default_data_dirs() == []
-    assert not hasattr(datasets, "_SHARED_DATA")
+    assert not hasattr(datasets, "_SHARED_DATA") and not hasattr(search, "_SHARED_DATA")
 
 
 def test_not_found_message_lists_where_it_looked(isolated: Path) -> None:
