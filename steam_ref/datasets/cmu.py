@@ -8,8 +8,9 @@ Conventions, checked on the reference files (see ``data/README.md`` for the figu
   its heading column equals GT's heading, its step lengths equal DR's distances, but its
   positions follow a drifting heading that is not in the files, so it cannot be recomputed.
 - The original Plaza ranges (all 3,529) and the cleaned file's 3,363 contain two blocks of
-  readings whose time stamps go back by about 64 s and 50 s (their ranges match ground truth at
-  their own time stamps, not at their row position). The loaders keep the rows in file order, as
+  readings whose time stamps go back (by 64 s and 50 s in the original, 18 s and 50 s in the
+  cleaned file); their ranges match ground truth at their own time stamps, not at their row
+  position. The loaders keep the rows in file order, as
   the paper's scripts read them, and name the rows that go back in ``source``.
 
 Errors: any failure to read a file, and any :class:`ShapeError` or :class:`DataError` of
