@@ -18,6 +18,7 @@ import scipy.io
 from requirements import optional_import
 
 from steam_ref import datasets
+from steam_ref.datasets import search
 from steam_ref.pose2 import integrate_odometry
 from steam_ref.datasets import (
     RangeDataset,
@@ -61,7 +62,7 @@ def isolated(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
     empty = tmp_path / "nothing_here"
     (empty / "cwd").mkdir(parents=True)
     _decoy_shared(empty)
-    monkeypatch.setattr(datasets, "gtsam_data_dir", lambda: None)
+    monkeypatch.setattr(search, "gtsam_data_dir", lambda: None)  # patched where default_data_dirs looks it up
     monkeypatch.delenv(datasets.DATA_DIR_ENV, raising=False)
     monkeypatch.chdir(empty / "cwd")
     return tmp_path
@@ -95,15 +96,9 @@ def _integrate_loop(start: np.ndarray, odometry: np.ndarray) -> np.ndarray:
     return np.array(rows)
 
 
-def _state_indices_walk(times: np.ndarray, range_times: np.ndarray) -> np.ndarray:
-    """The paper scripts' sequential reading: at each pose, take the ranges not later than it."""
-    out, k = [], 0
-    for i, t in enumerate(times):
-        while k < len(range_times) and range_times[k] <= t:
-            out.append(i)
-            k += 1
-    assert k == len(range_times), "a range after the last pose"
-    return np.array(out)
+def _rows_going_back_loop(times: np.ndarray) -> list[int]:
+    """Rows whose time is earlier than the row before's, one comparison at a time."""
+    return [k for k in range(1, len(times)) if times[k] < times[k - 1]]
 
 
 def _true_ranges_loop(ds: RangeDataset, states: np.ndarray) -> np.ndarray:
@@ -152,6 +147,9 @@ def test_paper_synthetic_has_the_readme_sizes(paper_synthetic: RangeDataset) -> 
     assert (ds.n_poses, len(ds.odometry), ds.n_landmarks, ds.n_ranges) == (1501, 1500, 298, 1501)
     assert ds.dead_reckoning.shape == (1501, 4)
     assert "Syn_theta_Plaza.mat" in ds.source
+    # One range per pose, stamped with the pose's time: nothing goes back, nothing is noted.
+    np.testing.assert_array_equal(ds.ranges[:, 0], ds.times)
+    assert ds.ranges_going_back().size == 0 and "file order" not in ds.source
 
 
 def test_plaza_has_the_readme_sizes_and_the_file_content(plaza: RangeDataset, shared_data: Path) -> None:
@@ -161,15 +159,16 @@ def test_plaza_has_the_readme_sizes_and_the_file_content(plaza: RangeDataset, sh
         np.testing.assert_array_equal(getattr(plaza, field_name), raw[key])
     np.testing.assert_array_equal(plaza.landmarks, raw["TL"])  # TL keeps its (unsorted) order
     assert list(plaza.landmark_ids) == [int(i) for i in raw["TL"][:, 0]]
-    # The file's TD goes back in time twice; the loader sorts it stably and says so.
-    assert np.any(np.diff(raw["TD"][:, 0]) < 0)
-    np.testing.assert_array_equal(plaza.ranges, raw["TD"][np.argsort(raw["TD"][:, 0], kind="stable")])
-    assert "sorted" in plaza.source
+    # TD is kept exactly as in the file, in file order, as the paper's scripts read it.
+    np.testing.assert_array_equal(plaza.ranges, raw["TD"])
 
 
-def test_plaza_unsorted_ranges_raise_when_sorting_is_off(shared_data: Path) -> None:
-    with pytest.raises(DataError, match=r"Plaza1_thrown_away_some_range\.mat.*ranges row \d+ has t="):
-        load_cmu_mat(shared_data / PLAZA_FILE, sort_ranges=False)
+def test_plaza_ranges_going_back_are_the_files_backward_jumps(plaza: RangeDataset, shared_data: Path) -> None:
+    back = _rows_going_back_loop(scipy.io.loadmat(shared_data / PLAZA_FILE)["TD"][:, 0])
+    assert len(back) == 2  # two blocks go back in time (data/README.md)
+    assert list(plaza.ranges_going_back()) == back
+    rows = ", ".join(str(k) for k in back)
+    assert plaza.source.endswith(f"; TD kept in file order: row(s) {rows} go back in time")
 
 
 @pytest.mark.parametrize("which", ["paper_synthetic", "plaza"])
@@ -186,29 +185,6 @@ def test_paper_synthetic_dead_reckoning_is_its_odometry_integrated(paper_synthet
                                rtol=0, atol=1e-9)
 
 
-@pytest.mark.parametrize("which", ["paper_synthetic", "plaza"])
-def test_range_state_indices_agree_with_a_brute_force_search(
-    which: str, request: pytest.FixtureRequest
-) -> None:
-    ds = request.getfixturevalue(which)
-    got = ds.range_state_indices()
-    np.testing.assert_array_equal(got, _state_indices_walk(ds.times, ds.ranges[:, 0]))
-    sample = np.linspace(0, ds.n_ranges - 1, 120).astype(int)
-    first_at_or_after = [next(i for i, t in enumerate(ds.times) if t >= ds.ranges[k, 0]) for k in sample]
-    np.testing.assert_array_equal(got[sample], first_at_or_after)
-
-
-def test_paper_synthetic_ranges_sit_on_their_poses(paper_synthetic: RangeDataset) -> None:
-    np.testing.assert_array_equal(paper_synthetic.range_state_indices(), np.arange(1501))
-
-
-@pytest.mark.parametrize("which", ["paper_synthetic", "plaza"])
-def test_gt_ranges_match_a_loop(which: str, request: pytest.FixtureRequest) -> None:
-    ds = request.getfixturevalue(which)
-    oracle = _true_ranges_loop(ds, ds.range_state_indices())
-    np.testing.assert_allclose(ds.gt_ranges(), oracle, rtol=1e-12, atol=1e-12)
-
-
 def test_gtsam_text_files_hold_all_plaza_ranges(plaza: RangeDataset) -> None:
     optional_import("gtsam", "gtsam")
     folder = gtsam_data_dir()
@@ -218,7 +194,8 @@ def test_gtsam_text_files_hold_all_plaza_ranges(plaza: RangeDataset) -> None:
     for name in ("ground_truth", "odometry", "dead_reckoning", "landmarks"):
         np.testing.assert_array_equal(getattr(text, name), getattr(plaza, name), err_msg=name)
     raw_td = np.loadtxt(folder / "Plaza1_TD.txt")
-    assert Counter(map(tuple, text.ranges)) == Counter(map(tuple, raw_td))
+    np.testing.assert_array_equal(text.ranges, raw_td)  # in file order
+    assert list(text.ranges_going_back()) == _rows_going_back_loop(raw_td[:, 0])
     np.testing.assert_array_equal(text.odometry, np.loadtxt(folder / "Plaza1_DR.txt"))
     # The cleaned file's ranges are a sub-multiset of the originals, row for row, time for time.
     assert not Counter(map(tuple, plaza.ranges)) - Counter(map(tuple, text.ranges))
@@ -298,11 +275,25 @@ def test_pose_times_must_increase(small: RangeDataset) -> None:
         _rebuild(small, ground_truth=gt)
 
 
-def test_range_times_must_not_decrease(small: RangeDataset) -> None:
+def test_a_range_going_back_in_time_is_kept_in_place(small: RangeDataset, tmp_path: Path) -> None:
     td = np.array(small.ranges)
     td[[7, 8]] = td[[8, 7]]
-    with pytest.raises(DataError, match=rf"ranges row 8 has t={_t(td[8, 0])} after t={_t(td[7, 0])}"):
-        _rebuild(small, ranges=td)
+    ds = _rebuild(small, ranges=td)
+    np.testing.assert_array_equal(ds.ranges, td)
+    assert list(ds.ranges_going_back()) == _rows_going_back_loop(td[:, 0]) == [8]
+    arrays = small.to_cmu_arrays()
+    arrays["TD"] = td
+    loaded = load_cmu_mat(_save_mat(tmp_path / "swapped.mat", **arrays))
+    np.testing.assert_array_equal(loaded.ranges, td)
+    assert loaded.source == f"{tmp_path / 'swapped.mat'}; TD kept in file order: row(s) 8 go back in time"
+
+
+def test_the_source_note_names_at_most_five_rows(small: RangeDataset, tmp_path: Path) -> None:
+    arrays = small.to_cmu_arrays()
+    arrays["TD"] = arrays["TD"][::-1]  # every row after the first goes back
+    loaded = load_cmu_mat(_save_mat(tmp_path / "reversed.mat", **arrays))
+    assert list(loaded.ranges_going_back()) == list(range(1, small.n_ranges))
+    assert loaded.source.endswith("; TD kept in file order: row(s) 1, 2, 3, 4, 5, ... go back in time")
 
 
 def test_odometry_must_line_up_with_poses(small: RangeDataset) -> None:
@@ -322,23 +313,6 @@ def test_wrong_columns_raise_shape_error(small: RangeDataset) -> None:
         _rebuild(small, ground_truth=np.array(small.ground_truth)[:, :3])
     with pytest.raises(ShapeError, match=r"ranges must have shape \(n, 4\).*\(84,\)"):
         _rebuild(small, ranges=np.array(small.ranges).ravel())
-
-
-def test_range_after_last_pose_raises(small: RangeDataset) -> None:
-    td = np.array(small.ranges)
-    td[-1, 0] = small.times[-1] + 0.25
-    ds = _rebuild(small, ranges=td)
-    expected = rf"ranges row {len(td) - 1} at t={_t(td[-1, 0])} is after the last pose"
-    with pytest.raises(DataError, match=expected):
-        ds.range_state_indices()
-
-
-def test_range_at_or_before_pose_0_belongs_to_pose_0(small: RangeDataset) -> None:
-    td = np.array(small.ranges)
-    td[0, 0] = small.times[0] - 3.0
-    td[1, 0] = small.times[0]
-    td[2, 0] = small.times[0] + 1e-3
-    assert list(_rebuild(small, ranges=td).range_state_indices()[:3]) == [0, 0, 1]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -488,7 +462,7 @@ def test_search_order_data_dir_then_env_then_gtsam(tmp_path: Path, monkeypatch: 
     for where, ds in sets.items():
         (tmp_path / where).mkdir()
         _save_mat(tmp_path / where / SYN_FILE, **ds.to_cmu_arrays())
-    monkeypatch.setattr(datasets, "gtsam_data_dir", lambda: tmp_path / "gtsam")
+    monkeypatch.setattr(search, "gtsam_data_dir", lambda: tmp_path / "gtsam")
     monkeypatch.setenv(datasets.DATA_DIR_ENV, str(tmp_path / "env"))
 
     def n_poses(**kwargs: Path) -> int:
@@ -509,7 +483,7 @@ def test_search_order_data_dir_then_env_then_gtsam(tmp_path: Path, monkeypatch: 
 def test_default_data_dirs_are_exactly_data_dir_env_gtsam(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """No folder relative to the working directory or the package, even when ../shared/data exists there."""
     fake_gtsam = tmp_path / "gtsam" / "Data"
-    monkeypatch.setattr(datasets, "gtsam_data_dir", lambda: fake_gtsam)
+    monkeypatch.setattr(search, "gtsam_data_dir", lambda: fake_gtsam)
     monkeypatch.setenv(datasets.DATA_DIR_ENV, str(tmp_path / "env"))
     (tmp_path / "work" / "cwd").mkdir(parents=True)
     _decoy_shared(tmp_path / "work")
@@ -520,9 +494,9 @@ def test_default_data_dirs_are_exactly_data_dir_env_gtsam(tmp_path: Path, monkey
     assert default_data_dirs(tmp_path / "env") == default_data_dirs()  # no duplicates
     monkeypatch.setenv(datasets.DATA_DIR_ENV, "")  # empty means unset
     assert default_data_dirs() == [fake_gtsam.resolve()]
-    monkeypatch.setattr(datasets, "gtsam_data_dir", lambda: None)
+    monkeypatch.setattr(search, "gtsam_data_dir", lambda: None)
     assert default_data_dirs() == []
-    assert not hasattr(datasets, "_SHARED_DATA")
+    assert not hasattr(datasets, "_SHARED_DATA") and not hasattr(search, "_SHARED_DATA")
 
 
 def test_not_found_message_lists_where_it_looked(isolated: Path) -> None:
@@ -570,7 +544,7 @@ def test_generator_default_size_is_the_papers() -> None:
     ds = generate_synthetic()
     assert (ds.n_poses, len(ds.odometry), ds.n_landmarks, ds.n_ranges) == (1501, 1500, 298, 1501)
     np.testing.assert_array_equal(ds.times, np.arange(1, 1502))
-    np.testing.assert_array_equal(ds.range_state_indices(), np.arange(1501))
+    np.testing.assert_array_equal(ds.ranges[:, 0], ds.times)  # one range per pose, at its time
     travel = np.hypot(*np.diff(ds.ground_truth[:, 1:3], axis=0).T).sum()
     assert 50 < travel < 600  # "about 0.2 km" (Table I); the default Qc's 10-90 % band is 0.11-0.30 km
     assert ds.source.startswith("generated(seed=0")

@@ -1,0 +1,29 @@
+"""Range-only SLAM data sets: one dataclass, the CMU loaders, the synthetic generator.  [YIB Sec. IV]
+
+- :mod:`.table`: :class:`RangeDataset`, the CMU range-only layout (GT, DR, DRp, TL, TD) and its
+  checks; the conventions every source follows are in its docstring.
+- :mod:`.cmu`: :func:`load_cmu_mat` and :func:`load_cmu_text`, readers of the CMU files.
+- :mod:`.synthetic`: :func:`generate_synthetic`, a task like the paper's Section IV-A.
+- :mod:`.search`: :func:`load_dataset` by name or path, searching :func:`default_data_dirs`
+  (``data_dir``, ``$STEAM_REF_DATA_DIR``, gtsam's ``Data/``).
+
+Errors: a table of the wrong shape given to :class:`RangeDataset` raises :class:`ShapeError`;
+bad content (NaN, pose times not increasing, unknown landmark ids) raises :class:`DataError`; the
+loaders re-raise either as :class:`DataError` prefixed with the file name.
+"""
+
+from .cmu import load_cmu_mat, load_cmu_text
+from .search import DATA_DIR_ENV, default_data_dirs, gtsam_data_dir, load_dataset
+from .synthetic import generate_synthetic
+from .table import RangeDataset
+
+__all__ = [
+    "RangeDataset",
+    "load_cmu_mat",
+    "load_cmu_text",
+    "gtsam_data_dir",
+    "default_data_dirs",
+    "load_dataset",
+    "generate_synthetic",
+    "DATA_DIR_ENV",
+]

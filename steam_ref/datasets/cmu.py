@@ -1,0 +1,190 @@
+"""Loaders of the CMU range-only files: a .mat (GT, DR, TL, TD, optional DRp) or the text release.
+
+Conventions, checked on the reference files (see ``data/README.md`` for the figures):
+
+- Dead reckoning, when recomputed (:func:`integrate_odometry`), moves along the heading *before*
+  the turn: p[k+1] = p[k] + d_k [cos θ_k, sin θ_k], θ[k+1] = θ[k] + Δθ_k, from ground-truth row 0.
+  That reproduces the paper-synthetic file's DRp to the last bit. Plaza's DRp is kept as given:
+  its heading column equals GT's heading, its step lengths equal DR's distances, but its
+  positions follow a drifting heading that is not in the files, so it cannot be recomputed.
+- The original Plaza ranges (all 3,529) and the cleaned file's 3,363 contain two blocks of
+  readings whose time stamps go back (by 64 s and 50 s in the original, 18 s and 50 s in the
+  cleaned file); their ranges match ground truth at their own time stamps, not at their row
+  position. The loaders keep the rows in file order, as
+  the paper's scripts read them, and name the rows that go back in ``source``.
+
+Errors: any failure to read a file, and any :class:`ShapeError` or :class:`DataError` of
+:class:`RangeDataset`, is raised as :class:`DataError` prefixed with the file name. Rows are
+0-based in ``array[row, column]`` messages and 1-based as "line N" for text files.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+import scipy.io
+from numpy.typing import NDArray
+
+from ..errors import DataError, SteamError
+from ..pose2 import integrate_odometry
+from .table import _COLUMNS, RangeDataset, _frozen_table
+
+__all__ = ["load_cmu_mat", "load_cmu_text"]
+
+
+def _order_note(ranges: NDArray) -> str:
+    """A note naming the range rows that go back in time (kept in file order), or ''."""
+    back = np.flatnonzero(np.diff(ranges[:, 0]) < 0) + 1 if len(ranges) else np.zeros(0, int)
+    if not back.size:
+        return ""
+    rows = ", ".join(str(int(k)) for k in back[:5]) + (", ..." if back.size > 5 else "")
+    return f"TD kept in file order: row(s) {rows} go back in time"
+
+
+def _assemble(name: str, where: str, tables: dict[str, NDArray]) -> RangeDataset:
+    """RangeDataset from CMU tables (DRp may be absent); any error is re-raised naming ``where``."""
+    notes = []
+    try:
+        gt = _frozen_table("GT", tables["GT"], _COLUMNS["ground_truth"][1])
+        tl = _frozen_table("TL", tables["TL"], _COLUMNS["landmarks"][1])
+        dr = _frozen_table("DR", tables["DR"], _COLUMNS["odometry"][1])
+        drp = tables.get("DRp")
+        if drp is None or np.shape(drp)[0] != gt.shape[0]:
+            got = "no DRp" if drp is None else f"DRp has {np.shape(drp)[0]} rows, GT {gt.shape[0]}"
+            notes.append(f"DRp recomputed from DR ({got})")
+            drp = integrate_odometry(gt[0], dr)
+        td = _frozen_table("TD", tables["TD"], _COLUMNS["ranges"][1])
+        note = _order_note(td)
+        notes += [note] if note else []
+        source = "; ".join([where] + notes)
+        return RangeDataset(name, gt, dr, drp, tl, td, source)
+    except SteamError as err:
+        raise DataError(f"{where}: {err}") from None
+
+
+def _read_mat(path: Path) -> dict[str, NDArray]:
+    """The arrays of a MATLAB v5 file; any failure (missing, truncated, corrupt) → DataError."""
+    if not path.is_file():
+        raise DataError(f"{path}: no such file")
+    try:
+        content = scipy.io.loadmat(path)
+    except Exception as err:  # scipy raises ValueError, OSError, TypeError, zlib errors...
+        reason = f"{type(err).__name__}: {err}"
+        raise DataError(f"{path}: cannot read it as a MATLAB .mat file ({reason})") from None
+    return {k: v for k, v in content.items() if not k.startswith("__")}
+
+
+def _mat_table(content: dict[str, NDArray], key: str, path: Path, required: bool = True) -> NDArray | None:
+    if key not in content:
+        if not required:
+            return None
+        raise DataError(f"{path}: no array {key!r} (it holds {sorted(content) or 'nothing'})")
+    value = content[key]
+    if not isinstance(value, np.ndarray) or value.dtype.kind not in "biuf":
+        raise DataError(f"{path}: {key} is not a numeric matrix (got {getattr(value, 'dtype', type(value))})")
+    return value.astype(float)
+
+
+def load_cmu_mat(path: str | os.PathLike, name: str | None = None) -> RangeDataset:
+    """A CMU-layout .mat (GT, DR, TL, TD, optional DRp), e.g. ``Syn_theta_Plaza.mat``.
+
+    DRp is recomputed with :func:`integrate_odometry` when the file lacks it or its row count
+    differs from GT's (``source`` says so). Other arrays (``usefulRangeInd``, ``addedK``) are
+    ignored. Range rows keep the file's order (rows going back in time are noted in ``source``).
+    """
+    path = Path(path)
+    content = _read_mat(path)
+    tables = {key: _mat_table(content, key, path) for key in ("GT", "DR", "TL", "TD")}
+    drp = _mat_table(content, "DRp", path, required=False)
+    if drp is not None:
+        tables["DRp"] = drp
+    return _assemble(name or path.stem, str(path), tables)
+
+
+def _read_text_table(path: Path, columns: tuple[str, ...]) -> NDArray:
+    """(n, len(columns)) numbers of a whitespace-separated text file; DataError naming file and line."""
+    try:
+        text = path.read_text()
+    except (OSError, UnicodeDecodeError) as err:
+        raise DataError(f"{path}: cannot read it as text ({type(err).__name__}: {err})") from None
+    rows = []
+    for line_no, line in enumerate(text.splitlines(), start=1):
+        fields = line.split()
+        if not fields:
+            continue
+        try:
+            row = [float(f) for f in fields]
+        except ValueError:
+            raise DataError(f"{path} line {line_no}: not a number in {line.strip()!r}") from None
+        if len(row) != len(columns) or not np.all(np.isfinite(row)):
+            raise DataError(
+                f"{path} line {line_no}: expected {len(columns)} finite numbers "
+                f"({', '.join(columns)}), got {line.strip()!r}"
+            )
+        rows.append(row)
+    if not rows:
+        raise DataError(f"{path}: the file holds no rows")
+    return np.array(rows)
+
+
+def _text_prefix(folder: Path) -> str:
+    prefixes = sorted(p.name[: -len("_DR.txt")] for p in folder.glob("*_DR.txt"))
+    if len(prefixes) != 1:
+        found = f"several ({', '.join(prefixes)}): pass prefix=" if prefixes else "none"
+        raise DataError(f"{folder}: expected one *_DR.txt file to pick the data set, found {found}")
+    return prefixes[0]
+
+
+def _check_same(text: NDArray, content: dict[str, NDArray], key: str, txt: Path, mat: Path) -> None:
+    """The .mat's copy of DR or TD, when it has one, must equal the text file exactly."""
+    if key not in content:
+        return
+    other = _mat_table(content, key, mat)
+    if other.shape != text.shape:
+        raise DataError(f"{mat}: {key} has shape {other.shape} but {txt} holds {text.shape}")
+    diff = np.flatnonzero(np.any(other != text, axis=1))
+    if diff.size:
+        k = int(diff[0])
+        raise DataError(f"{mat}: {key} row {k} differs from {txt} line {k + 1}")
+
+
+def load_cmu_text(
+    folder: str | os.PathLike,
+    prefix: str | None = None,
+    *,
+    name: str | None = None,
+) -> RangeDataset:
+    """The original CMU text release: ``<prefix>_DR.txt``, ``<prefix>_TD.txt`` and ``<prefix>_.mat``.
+
+    As shipped in the gtsam wheel's ``Data/`` folder (Plaza1, Plaza2). The text files give DR
+    (odometry, no header, tab separated) and TD (all ranges); the .mat gives GT and TL, and usually
+    also DRp, DR and TD: when it holds DR or TD they must equal the text files, else DataError.
+    ``folder`` may also be the ``*_DR.txt`` file itself. In Plaza1, GT row 0 (t = 3856.857 s) has no
+    odometry row; DR row k carries GT row k+1's time stamp, so it ends at pose k + 1.
+    """
+    folder = Path(folder)
+    if folder.is_file() and folder.name.endswith("_DR.txt"):
+        folder, prefix = folder.parent, folder.name[: -len("_DR.txt")]
+    if not folder.is_dir():
+        raise DataError(f"{folder}: no such folder")
+    prefix = prefix or _text_prefix(folder)
+    dr_path, td_path = folder / f"{prefix}_DR.txt", folder / f"{prefix}_TD.txt"
+    mats = [p for p in (folder / f"{prefix}_.mat", folder / f"{prefix}.mat") if p.is_file()]
+    for path in (dr_path, td_path):
+        if not path.is_file():
+            raise DataError(f"{path}: no such file (needed with {dr_path.name})")
+    if not mats:
+        raise DataError(f"{folder}: no {prefix}_.mat holding GT and TL next to {dr_path.name}")
+    content = _read_mat(mats[0])
+    dr = _read_text_table(dr_path, _COLUMNS["odometry"][1])
+    td = _read_text_table(td_path, _COLUMNS["ranges"][1])
+    _check_same(dr, content, "DR", dr_path, mats[0])
+    _check_same(td, content, "TD", td_path, mats[0])
+    tables = {"GT": _mat_table(content, "GT", mats[0]), "TL": _mat_table(content, "TL", mats[0])}
+    tables.update(DR=dr, TD=td)
+    if "DRp" in content:
+        tables["DRp"] = _mat_table(content, "DRp", mats[0])
+    where = f"{dr_path}, {td_path}, {mats[0]}"
+    return _assemble(name or prefix, where, tables)

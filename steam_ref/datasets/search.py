@@ -1,0 +1,103 @@
+"""Finding data: a data set by name or path, and the folders searched for named files.
+
+Named files are searched for in exactly three places, in order: the ``data_dir`` argument (the
+CLI's ``--data-dir``), ``$STEAM_REF_DATA_DIR``, the ``Data/`` folder of an installed gtsam wheel.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import os
+from pathlib import Path
+
+from ..errors import DataError
+from .cmu import load_cmu_mat, load_cmu_text
+from .synthetic import generate_synthetic
+from .table import RangeDataset
+
+__all__ = ["DATA_DIR_ENV", "gtsam_data_dir", "default_data_dirs", "load_dataset"]
+
+DATA_DIR_ENV = "STEAM_REF_DATA_DIR"
+_FILES = {"paper-synthetic": "Syn_theta_Plaza.mat", "plaza": "Plaza1_thrown_away_some_range.mat"}
+
+
+def gtsam_data_dir() -> Path | None:
+    """The ``Data/`` folder of an installed gtsam wheel, or None (gtsam is found, not imported)."""
+    try:
+        spec = importlib.util.find_spec("gtsam")
+    except (ImportError, ValueError):
+        return None
+    for location in (spec.submodule_search_locations or []) if spec else []:
+        folder = Path(location) / "Data"
+        if folder.is_dir():
+            return folder
+    return None
+
+
+def default_data_dirs(data_dir: str | os.PathLike | None = None) -> list[Path]:
+    """Folders searched for data files, in order, without duplicates; they need not exist.
+
+    Exactly three places: ``data_dir`` (the CLI's ``--data-dir``), then ``$STEAM_REF_DATA_DIR``,
+    then the ``Data/`` folder of an installed gtsam wheel. Nothing relative to the working
+    directory or to this package's location is searched.
+    """
+    env = os.environ.get(DATA_DIR_ENV) or None
+    folders: list[Path] = []
+    for candidate in (data_dir, env, gtsam_data_dir()):
+        if candidate is not None and Path(candidate).resolve() not in folders:
+            folders.append(Path(candidate).resolve())
+    return folders
+
+
+def _find(file_names: tuple[str, ...], folders: list[Path]) -> Path | None:
+    """The first folder holding all of ``file_names`` (joined to the first name), or None."""
+    for folder in folders:
+        if all((folder / f).is_file() for f in file_names):
+            return folder / file_names[0]
+    return None
+
+
+def _not_found(what: str, folders: list[Path], hint: str) -> DataError:
+    """One line: what is missing, every folder searched, and where to put the file."""
+    looked = ", ".join(str(f) for f in folders) or f"nowhere (no --data-dir, ${DATA_DIR_ENV} unset, no gtsam)"
+    return DataError(f"{what} not found; looked in: {looked}. {hint}")
+
+
+def load_dataset(
+    name_or_path: str | os.PathLike, data_dir: str | os.PathLike | None = None, seed: int = 0
+) -> RangeDataset:
+    """A data set by name or path.
+
+    Names: "synthetic" (generated, see :func:`generate_synthetic`; ``seed`` applies),
+    "paper-synthetic" (``Syn_theta_Plaza.mat``), "plaza" (``Plaza1_thrown_away_some_range.mat``,
+    else the original Plaza1 text files with all 3,529 ranges, e.g. from an installed gtsam).
+    Named files are searched for in :func:`default_data_dirs`: ``data_dir`` (``--data-dir``),
+    ``$STEAM_REF_DATA_DIR``, the installed gtsam's ``Data/``. Anything else is a path: a CMU .mat
+    file or a folder of CMU text files; a bare file name that is not in the working directory is
+    also searched for there. A missing file raises DataError naming the folders searched and
+    where to put it.
+    """
+    key = str(name_or_path)
+    if key == "synthetic":
+        return generate_synthetic(seed=seed)
+    folders = default_data_dirs(data_dir)
+    hint = f"Put the file in a folder and pass that folder as --data-dir (data_dir= in Python) or set ${DATA_DIR_ENV} to it"
+    if key in _FILES:
+        found = _find((_FILES[key],), folders)
+        if found is not None:
+            return load_cmu_mat(found, name=key)
+        if key == "plaza":
+            text = _find(("Plaza1_DR.txt", "Plaza1_TD.txt", "Plaza1_.mat"), folders)
+            if text is not None:
+                return load_cmu_text(text.parent, "Plaza1", name=key)
+            hint += " (or `pip install gtsam`: its Data/ has Plaza1_DR.txt, Plaza1_TD.txt, Plaza1_.mat)"
+        raise _not_found(f"data set {key!r} ({_FILES[key]})", folders, hint + ".")
+    path = Path(name_or_path)
+    if not path.exists() and not path.is_absolute() and len(path.parts) == 1:
+        path = _find((path.name,), folders) or path
+    if path.is_dir() or path.name.endswith("_DR.txt"):
+        return load_cmu_text(path)
+    if path.is_file():
+        return load_cmu_mat(path)
+    names = ", ".join(["synthetic", *_FILES])
+    raise _not_found(f"data set {key!r} (not one of {names}, nor a file or folder)", folders, hint + ".")

@@ -1,0 +1,38 @@
+"""Factors of the STEAM factor graph: the GP prior, measurements and priors.  [YIB Eq. 2, 22, 26-33]
+
+- :mod:`.base`: :class:`Factor` (keys, unwhitened error and Jacobians, whitening, stacking into
+  batches) and :func:`sqrt_information`.
+- :mod:`.gp`: :class:`GPPriorFactor` and :func:`gp_prior_factors` (Eq. 22), and
+  :class:`InterpolatedFactor`, a measurement at a time with no state (Eq. 29).
+- :mod:`.measurements`: :class:`PriorFactor`, :class:`OdometryFactor` (Eq. 32),
+  :class:`VelocityFactor`, :class:`RangeFactor` (Eq. 33), :class:`BearingFactor`,
+  :class:`BearingRangeFactor`.
+
+The trajectory state is x = [x, y, θ, ẋ, ẏ, θ̇] (d = 3, so 6 numbers); the GP prior factor works for
+any d. Landmarks are ℓ = [x, y].
+"""
+
+from .base import LANDMARK_DIM, STATE_DIM, Factor, sqrt_information
+from .gp import GPPriorFactor, InterpolatedFactor, gp_prior_factors
+from .measurements import (
+    BearingFactor,
+    BearingRangeFactor,
+    OdometryFactor,
+    PriorFactor,
+    RangeFactor,
+    VelocityFactor,
+)
+
+__all__ = [
+    "Factor",
+    "GPPriorFactor",
+    "PriorFactor",
+    "OdometryFactor",
+    "VelocityFactor",
+    "RangeFactor",
+    "BearingFactor",
+    "BearingRangeFactor",
+    "InterpolatedFactor",
+    "gp_prior_factors",
+    "sqrt_information",
+]

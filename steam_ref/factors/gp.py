@@ -1,0 +1,131 @@
+"""Factors of the GP motion prior: between consecutive states, and at a time with no state.  [YIB Eq. 22, 29]
+
+:class:`GPPriorFactor` links two consecutive estimated states (Eq. 22-23); :class:`InterpolatedFactor`
+moves a measurement taken at a time τ between two states onto those states through the GP
+interpolation Λ(τ), Ψ(τ) (Eq. 18-19, 29). Both work for any state size 2d.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import ClassVar
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import ShapeError, SteamError
+from ..gp.interpolate import interpolation_matrices
+from ..gp.prior import process_noise_sqrt_information, transition
+from ..variables import Key
+from .base import Factor, _vector, sqrt_information
+
+__all__ = ["GPPriorFactor", "gp_prior_factors", "InterpolatedFactor"]
+
+
+# --- The GP motion prior ------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, eq=False)
+class GPPriorFactor(Factor):
+    """The GP prior between consecutive estimated states.  [YIB Eq. 22-23]
+
+    e = x(tᵢ) - Φ(tᵢ, tᵢ₋₁) x(tᵢ₋₁) - vᵢ,   Σ = Qᵢ.
+    Build it with :meth:`wnoa` (the paper's prior) or :meth:`from_matrices` (any LTI SDE).
+    """
+
+    phi: NDArray = None  # Φ(tᵢ, tᵢ₋₁), (2d, 2d)
+    v: NDArray = None  # vᵢ of Eq. 23, (2d,)
+
+    _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "phi", "v")
+
+    @classmethod
+    def wnoa(cls, key1: Key, key2: Key, dt: float, qc: NDArray) -> GPPriorFactor:
+        """The white-noise-on-acceleration prior over a gap dt.  [YIB Eq. 22, 30-31]"""
+        w = process_noise_sqrt_information(dt, qc)  # WᵀW = Qᵢ⁻¹, memoised per (dt, Qc)
+        d = w.shape[0] // 2
+        return cls((key1, key2), w, phi=transition(dt, d), v=np.zeros(2 * d))
+
+    @classmethod
+    def from_matrices(cls, key1: Key, key2: Key, phi: NDArray, q: NDArray, v: NDArray | None = None) -> GPPriorFactor:
+        """From Φ(tᵢ, tᵢ₋₁), Qᵢ and vᵢ of any LTI SDE (see ``steam_ref.gp.sde``).  [YIB Eq. 22]"""
+        phi = np.asarray(phi, dtype=float)
+        n = phi.shape[0]
+        if phi.shape != (n, n):
+            raise ShapeError(f"Φ must be square, got {phi.shape}")
+        v = np.zeros(n) if v is None else _vector(v, n, "v_i")
+        return cls((key1, key2), sqrt_information(q, n), phi=phi, v=v)
+
+    @property
+    def key_dims(self) -> tuple[int, int]:  # type: ignore[override]
+        n = self.phi.shape[-1]
+        return (n, n)
+
+    def error(self, x1: NDArray, x2: NDArray) -> NDArray:
+        return x2 - np.einsum("...ij,...j->...i", self.phi, x1) - self.v  # [YIB Eq. 22]
+
+    def jacobians(self, x1: NDArray, x2: NDArray) -> tuple[NDArray, NDArray]:
+        eye = np.broadcast_to(np.eye(self.phi.shape[-1]), self.phi.shape)
+        return -self.phi, eye
+
+
+def gp_prior_factors(keys: list[Key], times: NDArray, qc: NDArray) -> list[GPPriorFactor]:
+    """The M - 1 WNOA prior factors linking consecutive states at strictly increasing times."""
+    times = np.asarray(times, dtype=float)
+    if times.ndim != 1 or len(times) != len(keys):
+        raise ShapeError(f"need one time per key: {len(keys)} keys, times of shape {times.shape}")
+    gaps = np.diff(times)
+    if np.any(~(gaps > 0)):
+        i = int(np.flatnonzero(~(gaps > 0))[0])
+        raise SteamError(f"times must increase strictly: t[{i}]={times[i]} then t[{i + 1}]={times[i + 1]}")
+    return [GPPriorFactor.wnoa(keys[i], keys[i + 1], gaps[i], qc) for i in range(len(gaps))]
+
+# --- Measurements at a missing (interpolated) state ---------------------------------------------
+
+
+@dataclass(frozen=True, eq=False)
+class InterpolatedFactor(Factor):
+    """A measurement at a time τ with no estimated state, moved onto its two neighbours.  [YIB Eq. 29]
+
+    The wrapped ``inner`` factor's first key stands for the missing state x(τ) (it is not a variable
+    of the graph); its other keys (a landmark, say) are kept. With the zero-mean prior,
+    x̄(τ) = Λ(τ) x̄(tᵢ₋₁) + Ψ(τ) x̄(tᵢ)  [YIB Eq. 18], so
+
+        e(xᵢ₋₁, xᵢ, …) = e_inner(Λ xᵢ₋₁ + Ψ xᵢ, …),   ∂e/∂xᵢ₋₁ = H Λ,  ∂e/∂xᵢ = H Ψ   [YIB Eq. 19, 29]
+    """
+
+    inner: Factor = None  # the measurement at x(τ)
+    lam: NDArray = None  # Λ(τ), (6, 6)
+    psi: NDArray = None  # Ψ(τ), (6, 6)
+
+    _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "lam", "psi")
+    _batched_factors: ClassVar[tuple[str, ...]] = ("inner",)
+
+    @classmethod
+    def create(cls, inner: Factor, key1: Key, key2: Key, t1: float, t2: float, tau: float, qc: NDArray) -> InterpolatedFactor:
+        """Move ``inner`` (a factor on x(τ), t1 < τ < t2) onto the states ``key1`` at t1 and ``key2`` at t2."""
+        if isinstance(inner, InterpolatedFactor):
+            raise SteamError("an interpolated factor cannot wrap another interpolated factor")
+        lam, psi = interpolation_matrices(t1, t2, tau, qc)  # [YIB Eq. 16]
+        if lam.shape[0] != inner.key_dims[0]:
+            raise ShapeError(f"Qc gives states of size {lam.shape[0]}, {type(inner).__name__} expects {inner.key_dims[0]}")
+        keys = (key1, key2) + tuple(inner.keys[1:])
+        return cls(keys, inner.sqrt_information, inner=inner, lam=lam, psi=psi, loss=inner.loss)
+
+    @property
+    def key_dims(self) -> tuple[int, ...]:  # type: ignore[override]
+        d = self.inner.key_dims[0]
+        return (d, d) + tuple(self.inner.key_dims[1:])
+
+    def batch_signature(self) -> tuple:
+        return (type(self), self.inner.batch_signature())
+
+    def interpolated_state(self, x1: NDArray, x2: NDArray) -> NDArray:
+        """x̄(τ) = Λ x̄₁ + Ψ x̄₂  [YIB Eq. 18]."""
+        return np.einsum("...ij,...j->...i", self.lam, x1) + np.einsum("...ij,...j->...i", self.psi, x2)
+
+    def error(self, x1: NDArray, x2: NDArray, *rest: NDArray) -> NDArray:
+        return self.inner.error(self.interpolated_state(x1, x2), *rest)  # [YIB Eq. 29]
+
+    def jacobians(self, x1: NDArray, x2: NDArray, *rest: NDArray) -> tuple[NDArray, ...]:
+        H, *others = self.inner.jacobians(self.interpolated_state(x1, x2), *rest)
+        return (H @ self.lam, H @ self.psi, *others)  # [YIB Eq. 19, 29]

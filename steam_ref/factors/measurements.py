@@ -1,0 +1,222 @@
+"""Priors and measurement factors: odometry, projected velocity, range, bearing.  [YIB Eq. 4, 32-33]
+
+The trajectory state is x = [x, y, θ, ẋ, ẏ, θ̇] (d = 3, so 6 numbers); landmarks are ℓ = [x, y].
+A :class:`PriorFactor` works for a variable of any size.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import ClassVar
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import SteamError
+from ..pose2 import wrap_angle
+from ..robust import RobustLoss
+from ..variables import Key
+from .base import LANDMARK_DIM, STATE_DIM, Factor, _jacobian, _vector, sqrt_information
+
+__all__ = [
+    "PriorFactor",
+    "OdometryFactor",
+    "VelocityFactor",
+    "RangeFactor",
+    "BearingFactor",
+    "BearingRangeFactor",
+]
+
+
+# --- Priors -------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, eq=False)
+class PriorFactor(Factor):
+    """A Gaussian prior on one variable, e = θ - mean (a state, or a landmark as in Eq. 4)."""
+
+    mean: NDArray = None  # (d,)
+
+    _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "mean")
+
+    @classmethod
+    def create(cls, key: Key, mean: NDArray, noise: NDArray | float, *, loss: RobustLoss | None = None) -> PriorFactor:
+        """Prior N(mean, Σ) on ``key``; noise is sigmas (d,) or a covariance (d, d)."""
+        mean = np.array(mean, dtype=float).reshape(-1)
+        mean = _vector(mean, mean.shape[0], f"prior mean of {key}")
+        return cls((key,), sqrt_information(noise, mean.shape[0]), mean=mean, loss=loss)
+
+    @property
+    def key_dims(self) -> tuple[int]:  # type: ignore[override]
+        return (self.mean.shape[-1],)
+
+    def error(self, x: NDArray) -> NDArray:
+        return x - self.mean
+
+    def jacobians(self, x: NDArray) -> tuple[NDArray]:
+        return (np.broadcast_to(np.eye(x.shape[-1]), x.shape[:-1] + (x.shape[-1], x.shape[-1])),)
+
+
+# --- Measurements of one state ------------------------------------------------------------------
+
+
+@dataclass(frozen=True, eq=False)
+class OdometryFactor(Factor):
+    """Odometry as in [YIB Eq. 32]: forward speed and yaw rate of the state.
+
+    h(x) = [cos θ ẋ + sin θ ẏ,  θ̇].
+    """
+
+    measured: NDArray = None  # (2,) [forward speed, yaw rate]
+
+    _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "measured")
+    key_dims: ClassVar[tuple[int, ...]] = (STATE_DIM,)
+
+    @classmethod
+    def create(cls, key: Key, measured: NDArray, noise: NDArray | float, *, loss: RobustLoss | None = None) -> OdometryFactor:
+        """Odometry reading ``measured`` = [v, θ̇] on state ``key``."""
+        return cls((key,), sqrt_information(noise, 2), measured=_vector(measured, 2, "odometry"), loss=loss)
+
+    def error(self, x: NDArray) -> NDArray:
+        th, xd, yd, thd = x[..., 2], x[..., 3], x[..., 4], x[..., 5]
+        h = np.stack([np.cos(th) * xd + np.sin(th) * yd, thd], axis=-1)  # [YIB Eq. 32]
+        return h - self.measured
+
+    def jacobians(self, x: NDArray) -> tuple[NDArray]:
+        th, xd, yd = x[..., 2], x[..., 3], x[..., 4]
+        c, s = np.cos(th), np.sin(th)
+        J = _jacobian(x, 2)
+        J[..., 0, 2] = -s * xd + c * yd
+        J[..., 0, 3] = c
+        J[..., 0, 4] = s
+        J[..., 1, 5] = 1.0
+        return (J,)
+
+
+@dataclass(frozen=True, eq=False)
+class VelocityFactor(Factor):
+    """Odometry as the paper's scripts use it: the velocity projected into the body frame.
+
+    h(x) = [cos θ ẋ + sin θ ẏ,  -sin θ ẋ + cos θ ẏ,  θ̇]  ≈  [distance/dt, 0, heading change/dt].
+    """
+
+    measured: NDArray = None  # (3,) [forward, lateral, yaw rate]
+
+    _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "measured")
+    key_dims: ClassVar[tuple[int, ...]] = (STATE_DIM,)
+
+    @classmethod
+    def create(cls, key: Key, measured: NDArray, noise: NDArray | float, *, loss: RobustLoss | None = None) -> VelocityFactor:
+        """Projected-velocity reading [forward, lateral, yaw rate] on state ``key``."""
+        return cls((key,), sqrt_information(noise, 3), measured=_vector(measured, 3, "projected velocity"), loss=loss)
+
+    def error(self, x: NDArray) -> NDArray:
+        th, xd, yd, thd = x[..., 2], x[..., 3], x[..., 4], x[..., 5]
+        c, s = np.cos(th), np.sin(th)
+        h = np.stack([c * xd + s * yd, -s * xd + c * yd, thd], axis=-1)
+        return h - self.measured
+
+    def jacobians(self, x: NDArray) -> tuple[NDArray]:
+        th, xd, yd = x[..., 2], x[..., 3], x[..., 4]
+        c, s = np.cos(th), np.sin(th)
+        J = _jacobian(x, 3)
+        J[..., 0, 2], J[..., 0, 3], J[..., 0, 4] = -s * xd + c * yd, c, s
+        J[..., 1, 2], J[..., 1, 3], J[..., 1, 4] = -c * xd - s * yd, -s, c
+        J[..., 2, 5] = 1.0
+        return (J,)
+
+
+# --- Measurements of a state and a landmark -----------------------------------------------------
+
+
+def _offset(x: NDArray, l: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+    """Landmark position relative to the robot: dx, dy, and the distance r (r = 0 is an error)."""
+    dx, dy = l[..., 0] - x[..., 0], l[..., 1] - x[..., 1]
+    r = np.hypot(dx, dy)
+    if np.any(r == 0):
+        raise SteamError("robot position coincides with a landmark: range and bearing are not differentiable there")
+    return dx, dy, r
+
+
+def _range_row(x: NDArray, l: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+    """r = ‖[x y]ᵀ - ℓ‖ and its rows of ∂r/∂x (..., 6), ∂r/∂ℓ (..., 2).  [YIB Eq. 33]"""
+    dx, dy, r = _offset(x, l)
+    Jx = np.zeros(x.shape)
+    Jx[..., 0], Jx[..., 1] = -dx / r, -dy / r
+    return r, Jx, np.stack([dx / r, dy / r], axis=-1)
+
+
+def _bearing_row(x: NDArray, l: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+    """b = atan2(ℓy - y, ℓx - x) - θ and its rows of ∂b/∂x (..., 6), ∂b/∂ℓ (..., 2)."""
+    dx, dy, r = _offset(x, l)
+    r2 = r**2
+    Jx = np.zeros(x.shape)
+    Jx[..., 0], Jx[..., 1], Jx[..., 2] = dy / r2, -dx / r2, -1.0
+    return np.arctan2(dy, dx) - x[..., 2], Jx, np.stack([-dy / r2, dx / r2], axis=-1)
+
+
+@dataclass(frozen=True, eq=False)
+class RangeFactor(Factor):
+    """Range from the robot's position to a landmark, ‖[x y]ᵀ - ℓ‖₂.  [YIB Eq. 33]"""
+
+    measured: NDArray = None  # (1,) range [m]
+
+    _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "measured")
+    key_dims: ClassVar[tuple[int, ...]] = (STATE_DIM, LANDMARK_DIM)
+
+    @classmethod
+    def create(cls, state: Key, landmark: Key, measured: float, sigma: float, *, loss: RobustLoss | None = None) -> RangeFactor:
+        """Range reading ``measured`` from state ``state`` to landmark ``landmark``."""
+        return cls((state, landmark), sqrt_information(sigma, 1), measured=_vector(measured, 1, "range"), loss=loss)
+
+    def error(self, x: NDArray, l: NDArray) -> NDArray:
+        return _range_row(x, l)[0][..., None] - self.measured  # [YIB Eq. 33]
+
+    def jacobians(self, x: NDArray, l: NDArray) -> tuple[NDArray, NDArray]:
+        _, Jx, Jl = _range_row(x, l)
+        return Jx[..., None, :], Jl[..., None, :]
+
+
+@dataclass(frozen=True, eq=False)
+class BearingFactor(Factor):
+    """Bearing of a landmark in the robot frame, atan2(ℓy - y, ℓx - x) - θ, error wrapped to [-π, π)."""
+
+    measured: NDArray = None  # (1,) bearing [rad]
+
+    _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "measured")
+    key_dims: ClassVar[tuple[int, ...]] = (STATE_DIM, LANDMARK_DIM)
+
+    @classmethod
+    def create(cls, state: Key, landmark: Key, measured: float, sigma: float, *, loss: RobustLoss | None = None) -> BearingFactor:
+        """Bearing reading ``measured`` (rad) from ``state`` to ``landmark``."""
+        return cls((state, landmark), sqrt_information(sigma, 1), measured=_vector(measured, 1, "bearing"), loss=loss)
+
+    def error(self, x: NDArray, l: NDArray) -> NDArray:
+        return wrap_angle(_bearing_row(x, l)[0] - self.measured[..., 0])[..., None]
+
+    def jacobians(self, x: NDArray, l: NDArray) -> tuple[NDArray, NDArray]:
+        _, Jx, Jl = _bearing_row(x, l)
+        return Jx[..., None, :], Jl[..., None, :]
+
+
+@dataclass(frozen=True, eq=False)
+class BearingRangeFactor(Factor):
+    """Bearing and range of a landmark together: e = [bearing error (wrapped), range error]."""
+
+    measured: NDArray = None  # (2,) [bearing rad, range m]
+
+    _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "measured")
+    key_dims: ClassVar[tuple[int, ...]] = (STATE_DIM, LANDMARK_DIM)
+
+    @classmethod
+    def create(cls, state: Key, landmark: Key, bearing: float, range_: float, noise: NDArray, *, loss: RobustLoss | None = None) -> BearingRangeFactor:
+        """Bearing-range reading; noise is sigmas (2,) or a covariance (2, 2) for [bearing, range]."""
+        return cls((state, landmark), sqrt_information(noise, 2), measured=_vector([bearing, range_], 2, "bearing-range"), loss=loss)
+
+    def error(self, x: NDArray, l: NDArray) -> NDArray:
+        b, r = _bearing_row(x, l)[0], _range_row(x, l)[0]
+        return np.stack([wrap_angle(b - self.measured[..., 0]), r - self.measured[..., 1]], axis=-1)
+
+    def jacobians(self, x: NDArray, l: NDArray) -> tuple[NDArray, NDArray]:
+        (_, bx, bl), (_, rx, rl) = _bearing_row(x, l), _range_row(x, l)
+        return np.stack([bx, rx], axis=-2), np.stack([bl, rl], axis=-2)
