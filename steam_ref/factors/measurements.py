@@ -62,9 +62,11 @@ class PriorFactor(Factor):
 
 @dataclass(frozen=True, eq=False)
 class OdometryFactor(Factor):
-    """Odometry as in [YIB Eq. 32]: forward speed and yaw rate of the state.
+    """Odometry as the paper writes it [YIB Eq. 32]: forward speed and yaw rate of the state.
 
-    h(x) = [cos θ ẋ + sin θ ẏ,  θ̇].
+    h(x) = [cos θ ẋ + sin θ ẏ,  θ̇]. The paper's scripts, and so every run of steam_ref's front end,
+    use the three-component :class:`VelocityFactor` instead (the lateral speed measured as zero);
+    this factor is here for a reader checking Eq. 32 and for users whose odometry has two components.
     """
 
     measured: NDArray = None  # (2,) [forward speed, yaw rate]
