@@ -99,8 +99,8 @@ class Schedule:
         self.since_update += step.n_ranges
         if step.pose == self.last_pose:
             return True
-        if not step.is_state or (not self.started and self.released < self.start_after):
-            return False
+        if step.pose == 0 or not step.is_state or (not self.started and self.released < self.start_after):
+            return False  # the scripts loop over odometry rows: pose 0's factors go with pose 1's update
         return self.since_update >= self.every
 
     def updated(self) -> None:

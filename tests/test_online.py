@@ -236,3 +236,11 @@ def test_layout_rejects_a_bad_skip():
     for bad in (0, -2, 1.5, True):
         with pytest.raises(SteamError, match="skip"):
             Layout(bad)
+
+
+def test_pose_0_goes_to_the_solver_with_pose_1(data):
+    """As in the scripts, whose loop runs over odometry rows: no update at pose 0, even with a range there."""
+    est = _stream(data, method="pb")
+    assert Readings.from_dataset(data, SETUP).range_pose[0] == 0
+    assert est.update_steps[0] == 1
+    assert est.solver.iterations and len(est.update_steps) == data.n_poses - 1
