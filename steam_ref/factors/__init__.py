@@ -35,4 +35,6 @@ __all__ = [
     "InterpolatedFactor",
     "gp_prior_factors",
     "sqrt_information",
+    "STATE_DIM",
+    "LANDMARK_DIM",
 ]
