@@ -24,6 +24,7 @@ import numpy as np
 
 from .errors import SteamError
 from .bayes_tree import ISAM2Params
+from .readings import DEPARTURES
 
 __all__ = ["main", "build_parser"]
 
@@ -65,6 +66,8 @@ def _add_run_arguments(run: argparse.ArgumentParser) -> None:
     run.add_argument("--skip", type=_positive_int, default=1, help="time steps between estimated states")
     run.add_argument("--interpolate", action=argparse.BooleanOptionalAction, default=True, help="interpolate readings between states (Eq. 29) or drop them")
     run.add_argument("--range-states", action="store_true", help="also estimate a state at every pose with a range reading (with --skip 5 --no-interpolate: the paper's published Plaza run)")
+    run.add_argument("--departure", action="append", choices=list(DEPARTURES), default=[],
+                     help="depart from the paper's scripts in this named way (repeatable; docs/experiments.md gives each one's effect)")
     run.add_argument("--preset", choices=("synthetic", "plaza"), default=None, help="parameter set (default: by data set; plaza for a PATH)")
     run.add_argument("--data-dir", default=None, help="folder searched first for data files")
     run.add_argument("--seed", type=int, default=0, help="seed of the generated synthetic task")
@@ -123,7 +126,7 @@ def _run(args: argparse.Namespace) -> int:
     _check_output(args.save_estimates, ".npz", "--save-estimates")
     _check_output(args.plot, ".png", "--plot")
     preset = args.preset or _PRESET_OF.get(args.dataset, "plaza")
-    setup = PaperSetup.named(preset)
+    setup = PaperSetup.named(preset).departing(*args.departure)
     options = default_options(
         setup, method=args.method, every=args.every, skip=args.skip, interpolate=args.interpolate,
         range_states=args.range_states, max_poses=args.max_poses, time_budget_s=args.time_budget,
@@ -132,7 +135,7 @@ def _run(args: argparse.Namespace) -> int:
     )
     data = load_dataset(args.dataset, data_dir=args.data_dir, seed=args.seed)
     result = run_online(data, setup, options, covariances=args.save_estimates is not None)
-    summary = result.summary(args.dataset)
+    summary = result.summary(args.dataset) | {"departures": args.departure}
     if args.json:
         print(json.dumps(summary))
     else:

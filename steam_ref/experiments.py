@@ -35,7 +35,7 @@ __all__ = [
     "Experiment",
     "timing_experiment",
     "interpolation_experiment",
-    "INTERPOLATION_SETUP_CHANGES",
+    "INTERPOLATION_DEPARTURES",
     "published_run_experiment",
     "speedup_on_prefix",
     "results_table",
@@ -71,17 +71,17 @@ def timing_experiment(exp: Experiment, *, batch_budget_s: float | None = 120.0, 
 
 
 # The interpolation sweep starts a state's heading rate from the plain heading change, not from the
-# scripts' Pose2 difference (PaperSetup.pose2_heading_rate_guess): a state made just after the heading
+# scripts' Pose2 difference (the departure 'plain-heading-rate'): a state made just after the heading
 # crosses ±π then starts 2π off in θ̇, which interpolated factors feel through Λ and Ψ (a state's own
 # factors are linear in θ̇), and BTGP/1 on Plaza goes astray at skip 20 (RMSE 8.8 m against 0.91 m;
 # docs/experiments.md). The scripts' Plaza layout never interpolates a range, so they never met this.
-INTERPOLATION_SETUP_CHANGES = dict(pose2_heading_rate_guess=False)
+INTERPOLATION_DEPARTURES = ("plain-heading-rate",)
 
 
 def interpolation_experiment(exp: Experiment, *, skips: tuple[int, ...] = SKIPS, max_poses: int | None = None, progress: bool = False) -> None:
-    """Fig. 3/4 right: BTGP/1 at each skip, with and without interpolation (set-up changed by
-    :data:`INTERPOLATION_SETUP_CHANGES`)."""
-    setup = exp.setup.replace(**INTERPOLATION_SETUP_CHANGES)
+    """Fig. 3/4 right: BTGP/1 at each skip, with and without interpolation (the set-up departing
+    from the scripts by :data:`INTERPOLATION_DEPARTURES`)."""
+    setup = exp.setup.departing(*INTERPOLATION_DEPARTURES)
     for skip in skips:
         for interpolate, store in ((True, exp.with_interp), (False, exp.without_interp)):
             opts = default_options(setup, skip=skip, interpolate=interpolate, max_poses=max_poses, progress=progress)
@@ -232,7 +232,7 @@ def reproduce(
     prefix, budget = (1000, 20.0) if quick else (None, 300.0)
     notes.append(f"PB and PBVR run under a {budget:g} s budget per run; speed ratios are taken over the steps both covered")
     notes.append("the interpolation sweep starts each state's heading rate from the plain heading change "
-                 "(INTERPOLATION_SETUP_CHANGES), not the scripts' Pose2 difference; see docs/experiments.md")
+                 "(departure plain-heading-rate), not the scripts' Pose2 difference; see docs/experiments.md")
     if quick:
         notes.append(f"quick mode: only the first {prefix} poses of each data set")
     experiments = []

@@ -23,9 +23,18 @@ from .datasets import RangeDataset
 from .errors import DataError, SteamError
 from .robust import Tukey
 
-__all__ = ["PaperSetup", "Readings", "attach_ranges", "range_correction", "RANGE_ATTACHMENTS"]
+__all__ = ["PaperSetup", "Readings", "attach_ranges", "range_correction", "RANGE_ATTACHMENTS", "DEPARTURES"]
 
 RANGE_ATTACHMENTS = ("file-order", "time")
+
+# The deliberate departures from the scripts, by name: the PaperSetup fields each one changes
+# (docs/experiments.md gives each one's measured effect on the Plaza run).
+DEPARTURES = {
+    "time-attachment": dict(range_attachment="time"),  # a range goes to the first pose at or after its time stamp
+    "plain-heading-rate": dict(pose2_heading_rate_guess=False),  # a new state's θ̇ starts from the plain heading change
+    "whole-state-relinearization": dict(relinearize_blocks=None),  # iSAM2 relinearizes the 6-vector state at once
+    "landmarks-at-sighting": dict(landmarks_up_front=False),  # a landmark enters with its first range reading
+}
 
 
 @dataclass(frozen=True)
@@ -96,6 +105,15 @@ class PaperSetup:
     def replace(self, **changes) -> PaperSetup:
         """A copy with some fields changed."""
         return replace(self, **changes)
+
+    def departing(self, *names: str) -> PaperSetup:
+        """A copy with the named departures from the scripts (:data:`DEPARTURES`) applied."""
+        changes = {}
+        for name in names:
+            if name not in DEPARTURES:
+                raise SteamError(f"unknown departure {name!r}; use one of {', '.join(DEPARTURES)}")
+            changes.update(DEPARTURES[name])
+        return self.replace(**changes)
 
     @property
     def range_loss(self) -> Tukey | None:

@@ -217,3 +217,20 @@ def test_fidelity_without_the_authors_files_is_one_line_and_exit_2(capsys, tmp_p
     code, out, err = _run(capsys, "fidelity", "--dataset", "paper-synthetic", "--data-dir", str(tmp_path))
     assert code == 2 and out == ""
     assert len(err.strip().splitlines()) == 1 and "authors/Syn_full_data_run.mat not found" in err
+
+
+def test_departure_flags_reach_the_set_up(capsys, small_mat):
+    """--departure NAME runs the preset departing from the scripts in that named way."""
+    from steam_ref.online import default_options, run_online
+    from steam_ref.readings import PaperSetup
+
+    path, data = small_mat
+    code, out, err = _run(capsys, "run", "--dataset", str(path), "--preset", "synthetic", "--skip", "3",
+                          "--departure", "plain-heading-rate", "--departure", "whole-state-relinearization", "--json")
+    assert code == 0, err
+    row = json.loads(out)
+    assert row["departures"] == ["plain-heading-rate", "whole-state-relinearization"]
+    setup = PaperSetup.synthetic().replace(pose2_heading_rate_guess=False, relinearize_blocks=None)
+    assert row["rmse_m"] == round(run_online(data, setup, default_options(setup, skip=3)).rmse_m, 6)
+    code, _, err = _run(capsys, "run", "--departure", "sorted-ranges")
+    assert code == 2 and "sorted-ranges" in err

@@ -124,14 +124,14 @@ def test_published_row_of_a_prefix_says_so(small):
 
 
 def test_interpolation_sweep_runs_with_its_documented_set_up(small):
-    """Each sweep run is the set-up changed by INTERPOLATION_SETUP_CHANGES, at its skip, with and without
+    """Each sweep run is the set-up with the plain heading-rate guess, at its skip, with and without
     interpolation: the same estimate as a direct run of that set-up, not of the preset."""
-    from steam_ref.experiments import INTERPOLATION_SETUP_CHANGES, interpolation_experiment
+    from steam_ref.experiments import INTERPOLATION_DEPARTURES, interpolation_experiment
 
-    assert INTERPOLATION_SETUP_CHANGES == {"pose2_heading_rate_guess": False}
+    assert INTERPOLATION_DEPARTURES == ("plain-heading-rate",)
     exp = Experiment("small", small, SETUP)
     interpolation_experiment(exp, skips=(3,))
-    setup = SETUP.replace(**INTERPOLATION_SETUP_CHANGES)
+    setup = SETUP.replace(pose2_heading_rate_guess=False)
     for interpolate, store in ((True, exp.with_interp), (False, exp.without_interp)):
         direct = run_online(small, setup, default_options(setup, skip=3, interpolate=interpolate))
         np.testing.assert_array_equal(store[3].trajectory, direct.trajectory)

@@ -151,3 +151,17 @@ def test_rebase_composes_the_next_guess_from_the_estimate():
     front.rebase(estimate)
     step = front.step()
     np.testing.assert_allclose(step.values[X(3)][:3], compose(estimate[:3], ds.odometry[2, 1], ds.odometry[2, 2]), atol=1e-12)
+
+
+def test_departures_are_named_and_change_only_their_fields():
+    from steam_ref.readings import DEPARTURES
+
+    base = PaperSetup.plaza()
+    for name, changes in DEPARTURES.items():
+        departed = base.departing(name)
+        for field, value in changes.items():
+            assert getattr(departed, field) == value != getattr(base, field), (name, field)
+    both = base.departing("time-attachment", "landmarks-at-sighting")
+    assert both.range_attachment == "time" and not both.landmarks_up_front and both.relinearize_blocks == (3, 3)
+    with pytest.raises(SteamError, match="'sorted-ranges'"):
+        base.departing("sorted-ranges")
