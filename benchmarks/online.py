@@ -38,12 +38,12 @@ _CHILD = r"""
 import json, sys
 import numpy as np
 from steam_ref.datasets import load_dataset
-from steam_ref.online import default_options, run_online
+from steam_ref.online import StreamOptions, run_online
 from steam_ref.readings import PaperSetup
 name, preset, kw = sys.argv[1], sys.argv[2], json.loads(sys.argv[3])
 data = load_dataset(name)
 setup = PaperSetup.named(preset)
-result = run_online(data, setup, default_options(setup, **kw))
+result = run_online(data, setup, StreamOptions(**kw))
 row = result.summary(name)
 row["step_seconds"] = result.step_seconds.tolist()
 print(json.dumps(row))

@@ -65,11 +65,11 @@ def _add_run_arguments(run: argparse.ArgumentParser) -> None:
     run.add_argument("--every", type=_positive_int, default=1, help="update after every N range readings (1 or 10 in the paper)")
     run.add_argument("--skip", type=_positive_int, default=1, help="time steps between estimated states")
     run.add_argument("--interpolate", action=argparse.BooleanOptionalAction, default=True, help="interpolate readings between states (Eq. 29) or drop them")
-    run.add_argument("--range-states", action="store_true", help="also estimate a state at every pose with a range reading (with --skip 5 --no-interpolate: the paper's published Plaza run)")
+    run.add_argument("--range-states", action="store_true", help="also estimate a state at every pose with a range reading (the layout of the Plaza script, plaza_isam2.m)")
     run.add_argument("--departure", action="append", choices=list(DEPARTURES), default=[],
                      help="depart from the paper's scripts in this named way (repeatable; docs/experiments.md gives each one's effect)")
     run.add_argument("--preset", choices=("synthetic", "plaza"), default=None, help="parameter set (default: by data set; plaza for a PATH)")
-    run.add_argument("--data-dir", default=None, help="folder searched first for data files")
+    run.add_argument("--data-dir", default=None, help="folder searched for data files before $STEAM_REF_DATA_DIR and gtsam's Data/")
     run.add_argument("--seed", type=int, default=0, help="seed of the generated synthetic task")
     run.add_argument("--relinearize-threshold", type=_non_negative_float, default=ISAM2Params.relinearize_threshold,
                      help="BTGP: relinearize a variable whose increment exceeds this (default %(default)s)")
@@ -79,7 +79,7 @@ def _add_run_arguments(run: argparse.ArgumentParser) -> None:
     run.add_argument("--time-budget", type=_positive_float, default=None, help="stop after this many seconds (reported)")
     run.add_argument("--progress", action="store_true", help="show a progress bar")
     run.add_argument("--json", action="store_true", help="print one JSON line of figures")
-    run.add_argument("--save-estimates", metavar="FILE.npz", default=None, help="write times, x, y, theta and landmarks")
+    run.add_argument("--save-estimates", metavar="FILE.npz", default=None, help="write the estimate at every time step (pose and velocity), the landmarks, and their final marginal covariances")
     run.add_argument("--plot", metavar="FILE.png", default=None, help="draw estimate, ground truth, dead reckoning, landmarks")
 
 
@@ -92,19 +92,19 @@ def build_parser() -> argparse.ArgumentParser:
     bat.add_argument("--dataset", default="paper-synthetic", help="synthetic, paper-synthetic, plaza or a PATH")
     bat.add_argument("--ordering", choices=("xl", "amd"), default="amd", help="xl: the paper's PB; amd: PBVR")
     bat.add_argument("--preset", choices=("synthetic", "plaza"), default=None, help="parameter set (default: by data set)")
-    bat.add_argument("--data-dir", default=None, help="folder searched first for data files")
+    bat.add_argument("--data-dir", default=None, help="folder searched for data files before $STEAM_REF_DATA_DIR and gtsam's Data/")
     bat.add_argument("--seed", type=int, default=0, help="seed of the generated synthetic task")
     bat.add_argument("--json", action="store_true", help="print one JSON line of figures")
     bat.add_argument("--plot", metavar="FILE.png", default=None, help="draw estimate, ground truth, landmarks")
     fid = sub.add_parser("fidelity", help="BTGP/1 against the authors' saved runs, pose by pose, covariances included")
     fid.add_argument("--dataset", choices=("plaza", "paper-synthetic", "all"), default="all")
-    fid.add_argument("--data-dir", default=None, help="folder searched first for data files (and its authors/ folder)")
+    fid.add_argument("--data-dir", default=None, help="folder searched for data files (and its authors/ folder) before $STEAM_REF_DATA_DIR and gtsam's Data/")
     fid.add_argument("--json", action="store_true", help="print one JSON line per data set")
     fid.add_argument("--plot", metavar="FILE.png", default=None, help="draw the per-pose distance to the authors' estimate")
     rep = sub.add_parser("reproduce", help="the experiments of Fig. 3 and Fig. 4, plots and a results table")
     rep.add_argument("--quick", action="store_true", help="small prefixes and budgets: minutes, not hours")
     rep.add_argument("--out", default="results", help="folder for plots and the table (default: results)")
-    rep.add_argument("--data-dir", default=None, help="folder searched first for data files")
+    rep.add_argument("--data-dir", default=None, help="folder searched for data files before $STEAM_REF_DATA_DIR and gtsam's Data/")
     return parser
 
 
@@ -120,18 +120,17 @@ def _check_output(path: str | None, suffix: str, option: str) -> None:
 
 def _run(args: argparse.Namespace) -> int:
     from .datasets import load_dataset
-    from .online import default_options, run_online
+    from .online import StreamOptions, run_online
     from .readings import PaperSetup
 
     _check_output(args.save_estimates, ".npz", "--save-estimates")
     _check_output(args.plot, ".png", "--plot")
     preset = args.preset or _PRESET_OF.get(args.dataset, "plaza")
     setup = PaperSetup.named(preset).departing(*args.departure)
-    options = default_options(
-        setup, method=args.method, every=args.every, skip=args.skip, interpolate=args.interpolate,
+    options = StreamOptions(method=args.method, every=args.every, skip=args.skip, interpolate=args.interpolate,
         range_states=args.range_states, max_poses=args.max_poses, time_budget_s=args.time_budget,
         progress=args.progress,
-        isam2=ISAM2Params(relinearize_threshold=args.relinearize_threshold, relinearize_skip=args.relinearize_skip),
+        isam2=setup.isam2_params().replace(relinearize_threshold=args.relinearize_threshold, relinearize_skip=args.relinearize_skip),
     )
     data = load_dataset(args.dataset, data_dir=args.data_dir, seed=args.seed)
     result = run_online(data, setup, options, covariances=args.save_estimates is not None)
@@ -178,7 +177,8 @@ def save_estimates(path: str, result) -> None:
                   state_poses=result.state_poses, landmark_ids=ids, landmarks=marks)
     if result.covariances is not None:
         c = result.covariances
-        arrays.update(pose_covariance=c.pose, velocity_covariance=c.velocity, landmark_covariance=c.landmark)
+        landmark_covariance = c.landmark[[c.landmark_ids.index(i) for i in ids]].reshape(-1, 2, 2)
+        arrays.update(pose_covariance=c.pose, velocity_covariance=c.velocity, landmark_covariance=landmark_covariance)
     np.savez(path, **arrays)
 
 

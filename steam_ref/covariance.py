@@ -19,7 +19,7 @@ the :class:`~steam_ref.bayes_tree.tree.BayesTree` attributes used below.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Iterator, Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -65,18 +65,31 @@ def _unit_columns(ordering: Ordering, keys: Sequence[Key]) -> tuple[NDArray, NDA
     return cols, E
 
 
-def _blocks_of_inverse(chol: SparseCholesky, ordering: Ordering, keys: Sequence[Key], chunk: int = 256) -> dict[Key, NDArray]:
-    """Diagonal blocks (𝓘⁻¹)ₖₖ of ``keys`` from one factorization, solving ``chunk`` keys at a time."""
-    out = {}
-    for i in range(0, len(keys), chunk):
-        part = list(keys[i : i + chunk])
-        cols, E = _unit_columns(ordering, part)
-        X = np.asarray(chol.solve(E))[cols]
-        o = 0
-        for k in part:
+def _chunks(ordering: Ordering, keys: Sequence[Key], columns: int) -> Iterator[list[Key]]:
+    """``keys`` in consecutive groups of at most ``columns`` scalar columns (at least one key each)."""
+    chunk: list[Key] = []
+    width = 0
+    for k in keys:
+        d = ordering.dims[ordering.position[k]] if k in ordering.position else 0  # unknown: named later
+        if chunk and width + d > columns:
+            yield chunk
+            chunk, width = [], 0
+        chunk.append(k)
+        width += d
+    if chunk:
+        yield chunk
+
+
+def _blocks_of_inverse(chol: SparseCholesky, ordering: Ordering, keys: Sequence[Key], max_entries: int = 4_000_000) -> dict[Key, NDArray]:
+    """Diagonal blocks (𝓘⁻¹)ₖₖ of ``keys`` from one factorization, solving for as many keys at a time as
+    keep the dense right-hand side within ``max_entries`` numbers (32 MB by default)."""
+    out: dict[Key, NDArray] = {}
+    for chunk in _chunks(ordering, list(keys), max(max_entries // max(ordering.total_dim, 1), 1)):
+        cols, E = _unit_columns(ordering, chunk)
+        X, o = np.asarray(chol.solve(E))[cols], 0
+        for k in chunk:
             d = ordering.dims[ordering.position[k]]
-            block = X[o : o + d, o : o + d]
-            out[k] = 0.5 * (block + block.T)
+            out[k] = _symmetric(X[o : o + d, o : o + d])
             o += d
     return out
 

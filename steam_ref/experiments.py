@@ -25,7 +25,7 @@ import numpy as np
 from .datasets import RangeDataset, load_dataset
 from .errors import DataError
 from .fidelity import AUTHORS_RUNS, Fidelity, compare, load_authors_run
-from .online import RunResult, default_options, run_online
+from .online import RunResult, StreamOptions, run_online
 from .plot import plot_interpolation_tradeoff, plot_timing, plot_trajectory
 from .readings import PaperSetup
 
@@ -66,7 +66,7 @@ def timing_experiment(exp: Experiment, *, batch_budget_s: float | None = 120.0, 
     """Fig. 3/4 left: every (method, schedule) of :data:`TIMING_RUNS`; PB and PBVR under a budget."""
     for method, every in TIMING_RUNS:
         budget = batch_budget_s if method != "btgp" else None
-        opts = default_options(exp.setup, method=method, every=every, max_poses=max_poses, time_budget_s=budget, progress=progress)
+        opts = StreamOptions(method=method, every=every, max_poses=max_poses, time_budget_s=budget, progress=progress)
         exp.timing[f"{method.upper()}/{every}"] = run_online(exp.data, exp.setup, opts)
 
 
@@ -84,7 +84,7 @@ def interpolation_experiment(exp: Experiment, *, skips: tuple[int, ...] = SKIPS,
     setup = exp.setup.departing(*INTERPOLATION_DEPARTURES)
     for skip in skips:
         for interpolate, store in ((True, exp.with_interp), (False, exp.without_interp)):
-            opts = default_options(setup, skip=skip, interpolate=interpolate, max_poses=max_poses, progress=progress)
+            opts = StreamOptions(skip=skip, interpolate=interpolate, max_poses=max_poses, progress=progress)
             store[skip] = run_online(exp.data, setup, opts)
 
 
@@ -92,7 +92,7 @@ def published_run_experiment(exp: Experiment, *, max_poses: int | None = None, p
     """BTGP/1 as the authors ran it for their saved runs (every pose a state, the set-up's defaults),
     with its final marginals, compared with the authors' saved run when one is found for ``exp.name``
     (:mod:`steam_ref.fidelity`). A prefix run (``max_poses``) is not comparable and says so."""
-    exp.published = run_online(exp.data, exp.setup, default_options(exp.setup, max_poses=max_poses, progress=progress),
+    exp.published = run_online(exp.data, exp.setup, StreamOptions(max_poses=max_poses, progress=progress),
                                covariances=max_poses is None)
     if not exp.published.completed:
         exp.note = f"first {exp.published.n_steps_processed} steps only, not comparable with the authors' run"

@@ -58,21 +58,49 @@ def _find_authors_file(file: str, data_dir: str | os.PathLike | None) -> Path:
                     f"(from XinyanGT/online-gpslam-code matlab/Data) in --data-dir or ${DATA_DIR_ENV}.")
 
 
+def _read(path: Path) -> dict:
+    """The arrays of a saved run; DataError when it cannot be read or lacks one."""
+    try:
+        m = scipy.io.loadmat(path)
+    except Exception as err:  # scipy raises ValueError, OSError, MatReadError, zlib errors...
+        raise DataError(f"{path}: cannot read it as a MATLAB .mat file ({type(err).__name__}: {err})") from None
+    missing = [k for k in ("estStateInds", "XYT", "XYT_dot", "XY", "diff", "step_t") if k not in m]
+    if missing:
+        raise DataError(f"{path}: no array {missing[0]!r}; is it one of the authors' *_full_data_run.mat files?")
+    return m
+
+
+def _check_same_data(path: Path, m: dict, data: RangeDataset) -> NDArray:
+    """The saved run's state poses, after checking it was run on ``data``: its ``diff`` (ground truth
+    minus estimate) plus its estimate must be ``data``'s ground truth at those poses."""
+    poses = m["estStateInds"].ravel().astype(int)
+    if poses.max(initial=-1) >= data.n_poses or m["XY"].shape != (data.n_landmarks, 2):
+        raise DataError(f"{path} was run on a data set with states up to pose {poses.max()} and {m['XY'].shape[0]} "
+                        f"landmarks; {data.name!r} has {data.n_poses} poses and {data.n_landmarks} landmarks")
+    truth = m["diff"] + m["XYT"][:, :2]
+    if not np.allclose(truth, data.ground_truth[poses, 1:3], rtol=0, atol=1e-6):
+        raise DataError(f"{path} was not run on this data set ({data.source}): its ground truth differs")
+    saved = m.get("nNonInterpRangeMeasurements")
+    if isinstance(saved, np.ndarray) and saved.dtype.kind in "iuf" and int(saved.ravel()[0]) != data.n_ranges:
+        raise DataError(f"{path} used {int(saved.ravel()[0])} range readings, {data.name!r} has {data.n_ranges} "
+                        "(the original Plaza files, not the cleaned one?)")
+    return poses
+
+
 def load_authors_run(name: str, data: RangeDataset, data_dir: str | os.PathLike | None = None) -> AuthorsRun:
-    """The authors' saved run on data set ``name`` ('plaza' or 'paper-synthetic'), matched to ``data``."""
+    """The authors' saved run on data set ``name`` ('plaza' or 'paper-synthetic'), checked against ``data``."""
     if name not in AUTHORS_RUNS:
         raise DataError(f"no saved authors' run for data set {name!r}; there is one for {', '.join(AUTHORS_RUNS)}")
     path = _find_authors_file(AUTHORS_RUNS[name], data_dir)
-    m = scipy.io.loadmat(path)
+    m = _read(path)
+    poses = _check_same_data(path, m, data)
     ids = sorted(int(i) for i in data.landmarks[:, 0])
     tl_ids = [int(i) for i in data.landmarks[:, 0]]
-    if m["XY"].shape != (len(ids), 2):
-        raise DataError(f"{path}: XY has shape {m['XY'].shape}, the data set has {len(ids)} landmarks")
     cov = m.get("stateMarginal")
     has_cov = isinstance(cov, np.ndarray) and cov.dtype == object
     marks_cov = {i: np.asarray(m["landmarkMarginal"][k, 0], float) for k, i in enumerate(tl_ids)} if has_cov else None
     return AuthorsRun(
-        name, m["estStateInds"].ravel().astype(int), m["XYT"].astype(float), m["XYT_dot"].astype(float),
+        name, poses, m["XYT"].astype(float), m["XYT_dot"].astype(float),
         {i: m["XY"][k].astype(float) for k, i in enumerate(ids)},
         np.stack([np.asarray(c, float) for c in cov[:, 0]]) if has_cov else None,
         np.stack([np.asarray(c, float) for c in cov[:, 1]]) if has_cov else None,
@@ -114,6 +142,11 @@ def compare(result: RunResult, authors: AuthorsRun, ground_truth: NDArray) -> tu
     if not np.array_equal(result.state_poses, authors.state_poses):
         raise DataError(f"the run has {result.n_states} states, the authors' {len(authors.state_poses)}: "
                         "compare runs with the same state layout (every pose a state)")
+    missing = sorted(set(authors.landmarks) - set(result.landmarks))
+    if missing:
+        raise DataError(f"the run has no estimate of landmark {missing[0]}, which the authors' run has")
+    if len(ground_truth) <= result.state_poses.max(initial=0):
+        raise DataError(f"ground truth has {len(ground_truth)} rows, the run's states reach pose {result.state_poses.max()}")
     ours = result.trajectory[result.state_poses]
     dist = np.hypot(*(ours[:, :2] - authors.poses[:, :2]).T)
     truth = np.asarray(ground_truth)[result.state_poses, 1:3]
@@ -123,8 +156,8 @@ def compare(result: RunResult, authors: AuthorsRun, ground_truth: NDArray) -> tu
         c = result.covariances
         p = _relative_frobenius(c.pose[result.state_poses], authors.pose_covariance)
         v = _relative_frobenius(c.velocity[result.state_poses], authors.velocity_covariance)
-        ids = sorted(result.landmarks)
-        lm = _relative_frobenius(c.landmark, np.stack([authors.landmark_covariance[i] for i in ids]))
+        theirs = np.stack([authors.landmark_covariance[i] for i in c.landmark_ids])
+        lm = _relative_frobenius(c.landmark, theirs)
         cov = dict(pose_cov_median=float(np.median(p)), pose_cov_max=float(p.max()), velocity_cov_median=float(np.median(v)),
                    velocity_cov_max=float(v.max()), landmark_cov_max=float(lm.max()))
     fid = Fidelity(

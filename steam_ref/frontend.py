@@ -53,7 +53,7 @@ class Layout:
     interpolate: bool = True  # readings between states: interpolated (Eq. 29) or dropped
 
     def __post_init__(self) -> None:
-        if isinstance(self.skip, bool) or int(self.skip) != self.skip or self.skip < 1:
+        if isinstance(self.skip, bool) or not isinstance(self.skip, (int, np.integer)) or self.skip < 1:
             raise SteamError(f"skip must be a positive integer, got {self.skip!r}")
 
     def is_state(self, pose: int, last_state: int, has_range: bool, last_pose: int) -> bool:
@@ -64,7 +64,10 @@ class Layout:
         """(M,) the poses that get a state, in order, for a stream of ``n_poses`` poses."""
         has_range = np.zeros(n_poses, dtype=bool)
         if range_poses is not None:
-            has_range[np.asarray(range_poses, dtype=int)] = True
+            range_poses = np.asarray(range_poses, dtype=int)
+            if range_poses.size and not (0 <= range_poses.min() and range_poses.max() < n_poses):
+                raise SteamError(f"range poses must lie in [0, {n_poses}), got {range_poses.min()}..{range_poses.max()}")
+            has_range[range_poses] = True
         chosen = [0]
         for i in range(1, n_poses):
             if self.is_state(i, chosen[-1], bool(has_range[i]), n_poses - 1):
@@ -83,10 +86,17 @@ class NewStep:
     n_ranges: int = 0  # range factors among ``factors`` (plain or interpolated)
 
 
+def _pose2_heading(theta: float) -> float:
+    """θ as GTSAM's ``Pose2.theta()`` returns it: wrapped to (-π, π]."""
+    return float(-wrap_angle(-theta))
+
+
 class FrontEnd:
     """Algorithm 1 step 1 over a :class:`Readings` stream: :meth:`step` once per pose, in order."""
 
     def __init__(self, readings: Readings, setup: PaperSetup, layout: Layout = Layout(), n_poses: int | None = None):
+        if n_poses is not None and (isinstance(n_poses, bool) or not isinstance(n_poses, (int, np.integer)) or n_poses < 1):
+            raise SteamError(f"n_poses must be a positive integer (or None for all), got {n_poses!r}")
         self.readings, self.setup, self.layout = readings, setup, layout
         self.n_poses = readings.n_poses if n_poses is None else min(int(n_poses), readings.n_poses)  # poses to process
         self.states: list[int] = []  # poses with a state so far, increasing
@@ -139,7 +149,7 @@ class FrontEnd:
         new = compose(self._pose, distance, turn)
         self._velocity = new - self._pose  # backward difference over the step just made
         if self.setup.pose2_heading_rate_guess:  # the scripts difference GTSAM Pose2 headings, each in (-π, π]
-            self._velocity[2] = wrap_angle(new[2]) - wrap_angle(self._pose[2])
+            self._velocity[2] = _pose2_heading(new[2]) - _pose2_heading(self._pose[2])
         self._pose = new
 
     def _new_state(self, i: int) -> NewStep:

@@ -15,7 +15,7 @@ Time queries between states use Eq. 18 (:mod:`steam_ref.trajectory`).
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -27,11 +27,11 @@ from .frontend import FrontEnd, Layout, NewStep
 from .graph import FactorGraph
 from .readings import PaperSetup, Readings
 from .results import RunResult, peak_rss_mb
-from .solvers import METHODS, OnlineSolver, make_solver
+from .solvers import METHODS, PB_MAX_ITERATIONS, PB_RELATIVE_TOLERANCE, OnlineSolver, make_solver
 from .trajectory import Trajectory
 from .variables import L, Values, X
 
-__all__ = ["StreamOptions", "default_options", "Schedule", "StreamingEstimator", "run_online", "INITIAL_SOLVE"]
+__all__ = ["StreamOptions", "Schedule", "StreamingEstimator", "run_online", "INITIAL_SOLVE"]
 
 # The first batch solve on Plaza: GTSAM's LevenbergMarquardtParams defaults, which the scripts use.
 INITIAL_SOLVE = dict(ordering="amd", relative_tolerance=1e-5, absolute_tolerance=1e-5)
@@ -47,10 +47,10 @@ class StreamOptions:
     interpolate: bool = True  # readings between states: interpolated (Eq. 29) or dropped
     range_states: bool = False  # also estimate every pose that has a range reading
     start_after_ranges: int | None = None  # None: the set-up's (Plaza 50, synthetic 0)
-    final_updates: int = 0  # extra solver updates with no new factors after the last pose
-    isam2: ISAM2Params = field(default_factory=ISAM2Params)  # BTGP's iSAM2 settings (GTSAM's defaults)
-    pb_relative_tolerance: float = 1e-5  # PB/PBVR Gauss-Newton stopping rule (GTSAM's default)
-    pb_max_iterations: int = 100  # PB/PBVR iterations per update
+    final_updates: int | None = None  # extra solver updates after the last pose; None: the set-up's (synthetic 10)
+    isam2: ISAM2Params | None = None  # BTGP's iSAM2 settings; None: the set-up's (PaperSetup.isam2_params)
+    pb_relative_tolerance: float = PB_RELATIVE_TOLERANCE  # PB/PBVR Gauss-Newton stopping rule
+    pb_max_iterations: int = PB_MAX_ITERATIONS  # PB/PBVR iterations per update
     max_poses: int | None = None  # process only this prefix of the poses
     time_budget_s: float | None = None  # stop when the run has taken this long (reported)
     progress: bool = False  # tqdm progress bar
@@ -61,12 +61,14 @@ class StreamOptions:
         if isinstance(self.every, bool) or int(self.every) != self.every or self.every < 1:
             raise SteamError(f"every must be a positive integer, got {self.every!r}")
         Layout(self.skip, self.range_states, self.interpolate)  # checks skip
-        if self.max_poses is not None and self.max_poses < 2:
-            raise SteamError(f"max_poses must be at least 2, got {self.max_poses!r}")
-        if self.time_budget_s is not None and not self.time_budget_s > 0:
-            raise SteamError(f"time_budget_s must be positive, got {self.time_budget_s!r}")
-        if self.start_after_ranges is not None and self.start_after_ranges < 0:
-            raise SteamError(f"start_after_ranges must be >= 0, got {self.start_after_ranges!r}")
+        _check_count("max_poses", self.max_poses, 2)
+        _check_count("start_after_ranges", self.start_after_ranges, 0)
+        _check_count("final_updates", self.final_updates, 0)
+        _check_count("pb_max_iterations", self.pb_max_iterations, 1)
+        if self.time_budget_s is not None and not (isinstance(self.time_budget_s, (int, float)) and self.time_budget_s > 0):
+            raise SteamError(f"time_budget_s must be a positive number, got {self.time_budget_s!r}")
+        if self.isam2 is not None and not isinstance(self.isam2, ISAM2Params):
+            raise SteamError(f"isam2 must be an ISAM2Params (or None for the set-up's), got {self.isam2!r}")
 
     @property
     def layout(self) -> Layout:
@@ -78,10 +80,12 @@ class StreamOptions:
         return replace(self, **changes)
 
 
-def default_options(setup: PaperSetup, **changes) -> StreamOptions:
-    """The documented defaults for a preset: the synthetic script ends with 10 extra updates."""
-    base = StreamOptions(final_updates=10 if setup.name == "synthetic" else 0)
-    return base.replace(**changes) if changes else base
+def _check_count(name: str, value: object, lowest: int) -> None:
+    """None, or an integer >= ``lowest``; SteamError naming the value otherwise."""
+    if value is None:
+        return
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < lowest:
+        raise SteamError(f"{name} must be an integer >= {lowest}, got {value!r}")
 
 
 class Schedule:
@@ -120,9 +124,10 @@ class StreamingEstimator:
         self.front = FrontEnd(readings, setup, options.layout, options.max_poses)
         start = setup.start_after_ranges if options.start_after_ranges is None else options.start_after_ranges
         self.schedule = Schedule(options.every, start, self.front.n_poses - 1)
+        self.final_updates = setup.final_updates if options.final_updates is None else options.final_updates
         self.solver = solver if solver is not None else make_solver(
-            options.method, isam2=_isam2_params(options.isam2, setup), pb_relative_tolerance=options.pb_relative_tolerance,
-            pb_max_iterations=options.pb_max_iterations,
+            options.method, isam2=setup.isam2_params() if options.isam2 is None else options.isam2,
+            pb_relative_tolerance=options.pb_relative_tolerance, pb_max_iterations=options.pb_max_iterations,
         )
         self.n_solved = 0  # how many of ``states`` the solver holds
         self._pending: list = []  # new factors not yet given to the solver
@@ -165,7 +170,7 @@ class StreamingEstimator:
             values = levenberg_marquardt(FactorGraph(self._pending), values, **INITIAL_SOLVE).values
         self.solver.update(self._pending, values)
         if pose == self.schedule.last_pose:
-            for _ in range(self.options.final_updates):
+            for _ in range(self.final_updates):
                 self.solver.update([], Values())
         self.schedule.updated()
         self._pending, self._pending_values = [], Values()
@@ -225,20 +230,12 @@ class StreamingEstimator:
         )
 
 
-def _isam2_params(params: ISAM2Params, setup: PaperSetup) -> ISAM2Params:
-    """The options' iSAM2 settings, relinearizing pose and velocity on their own as the set-up says
-    (the scripts hold a state as two GTSAM variables), unless the options choose blocks themselves."""
-    if params.relinearize_blocks is not None or setup.relinearize_blocks is None:
-        return params
-    return params.replace(relinearize_blocks={"x": setup.relinearize_blocks})
-
-
 def run_online(data, setup: PaperSetup, options: StreamOptions | None = None, *, covariances: bool = False, **changes) -> RunResult:
     """Stream a :class:`~steam_ref.datasets.RangeDataset` through the chosen solver.
 
-    ``options`` default to :func:`default_options` for ``setup``; keyword ``changes`` override fields.
+    ``options`` default to :class:`StreamOptions`'s defaults; keyword ``changes`` override fields.
     """
-    options = default_options(setup) if options is None else options
+    options = StreamOptions() if options is None else options
     options = options.replace(**changes) if changes else options
     readings = Readings.from_dataset(data, setup)
     return StreamingEstimator(readings, setup, options).run(data.ground_truth, covariances=covariances)

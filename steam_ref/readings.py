@@ -14,11 +14,12 @@ row k is a projected-velocity reading of pose k + 1, and each range reading is a
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
 from numpy.typing import NDArray
 
+from .bayes_tree.params import ISAM2Params
 from .datasets import RangeDataset
 from .errors import DataError, SteamError
 from .robust import Tukey
@@ -57,6 +58,7 @@ class PaperSetup:
     range_attachment: str = "file-order"  # 'file-order': the scripts' scan; 'time': by time stamp (a departure)
     pose2_heading_rate_guess: bool = True  # initial θ̇ as the scripts' Pose2 difference (±2π at the ±π crossing); False: the plain change
     relinearize_blocks: tuple[int, ...] | None = (3, 3)  # BTGP relinearizes pose and velocity on their own (GTSAM variables P, V); None: the whole state
+    final_updates: int = 0  # extra solver updates with no new factors after the last pose (synthetic script: 10)
 
     def __post_init__(self) -> None:
         if self.range_attachment not in RANGE_ATTACHMENTS:
@@ -75,6 +77,7 @@ class PaperSetup:
             landmark_prior_sigma=1.0,
             first_pose_sigmas=np.array([1.0, 1.0, np.pi]),
             first_velocity_sigmas=np.array([1.0, 1.0, np.pi]),
+            final_updates=10,
         )
 
     @classmethod
@@ -103,14 +106,21 @@ class PaperSetup:
         return cls.synthetic() if name == "synthetic" else cls.plaza()
 
     def replace(self, **changes) -> PaperSetup:
-        """A copy with some fields changed."""
+        """A copy with some fields changed; SteamError names an unknown field."""
+        unknown = sorted(set(changes) - {f.name for f in fields(self)})
+        if unknown:
+            raise SteamError(f"PaperSetup has no field {unknown[0]!r}")
         return replace(self, **changes)
+
+    def isam2_params(self) -> ISAM2Params:
+        """BTGP's iSAM2 settings for this set-up: GTSAM's defaults, with the state's relinearization blocks."""
+        return ISAM2Params(relinearize_blocks=None if self.relinearize_blocks is None else {"x": self.relinearize_blocks})
 
     def departing(self, *names: str) -> PaperSetup:
         """A copy with the named departures from the scripts (:data:`DEPARTURES`) applied."""
         changes = {}
         for name in names:
-            if name not in DEPARTURES:
+            if not isinstance(name, str) or name not in DEPARTURES:
                 raise SteamError(f"unknown departure {name!r}; use one of {', '.join(DEPARTURES)}")
             changes.update(DEPARTURES[name])
         return self.replace(**changes)

@@ -13,14 +13,17 @@ from numpy.typing import NDArray
 
 from .batch import gauss_newton
 from .bayes_tree import IncrementalSolver, ISAM2Params
+from .errors import SteamError
 from .covariance import sparse_joint_covariance, sparse_marginals
 from .factors import Factor
 from .graph import FactorGraph
 from .variables import Key, Values
 
-__all__ = ["METHODS", "OnlineSolver", "PeriodicBatchSolver", "BayesTreeSolver", "make_solver"]
+__all__ = ["METHODS", "PB_RELATIVE_TOLERANCE", "PB_MAX_ITERATIONS", "OnlineSolver", "PeriodicBatchSolver", "BayesTreeSolver", "make_solver"]
 
 METHODS = ("btgp", "pb", "pbvr")
+PB_RELATIVE_TOLERANCE = 1e-5  # PB/PBVR stop when the cost falls by less than this fraction (GTSAM's default)
+PB_MAX_ITERATIONS = 100  # PB/PBVR Gauss-Newton iterations per update at most (GTSAM's default)
 
 
 class OnlineSolver:
@@ -52,7 +55,7 @@ class OnlineSolver:
 class PeriodicBatchSolver(OnlineSolver):
     """PB (XL ordering) or PBVR (AMD): Gauss-Newton over everything, warm-started.  [YIB Sec. IV]"""
 
-    def __init__(self, ordering: str = "xl", relative_tolerance: float = 1e-5, max_iterations: int = 100):
+    def __init__(self, ordering: str = "xl", relative_tolerance: float = PB_RELATIVE_TOLERANCE, max_iterations: int = PB_MAX_ITERATIONS):
         self.name = "pb" if ordering == "xl" else "pbvr"
         self.ordering = ordering
         self.options = dict(relative_tolerance=relative_tolerance, max_iterations=max_iterations)
@@ -106,8 +109,13 @@ class BayesTreeSolver(OnlineSolver):
         return self.inner.marginals(keys)  # one pass down the tree
 
 
-def make_solver(method: str, *, isam2: ISAM2Params | None = None, pb_relative_tolerance: float = 1e-5, pb_max_iterations: int = 100) -> OnlineSolver:
+def make_solver(
+    method: str, *, isam2: ISAM2Params | None = None, pb_relative_tolerance: float = PB_RELATIVE_TOLERANCE,
+    pb_max_iterations: int = PB_MAX_ITERATIONS,
+) -> OnlineSolver:
     """The solver ``method`` names ('btgp', 'pb' or 'pbvr')."""
+    if method not in METHODS:
+        raise SteamError(f"unknown method {method!r}; use one of {', '.join(METHODS)}")
     if method == "btgp":
         return BayesTreeSolver(isam2)
     return PeriodicBatchSolver("xl" if method == "pb" else "amd", pb_relative_tolerance, pb_max_iterations)

@@ -27,7 +27,8 @@ class Covariances:
 
     pose: NDArray  # (n, 3, 3) of [x, y, θ] at every covered pose
     velocity: NDArray  # (n, 3, 3) of [ẋ, ẏ, θ̇] at every covered pose
-    landmark: NDArray  # (m, 2, 2) of each landmark
+    landmark: NDArray  # (m, 2, 2) of each landmark, in the order of ``landmark_ids``
+    landmark_ids: tuple[int, ...]  # (m,) the landmarks' ids
 
 
 class Trajectory:
@@ -93,4 +94,4 @@ class Trajectory:
         if solved:
             full[solved[-1]] = marg[X(solved[-1])]
         marks = np.array([marg[k] for k in landmarks]).reshape(-1, 2, 2)
-        return Covariances(full[:, :3, :3].copy(), full[:, 3:, 3:].copy(), marks)
+        return Covariances(full[:, :3, :3].copy(), full[:, 3:, 3:].copy(), marks, tuple(k.index for k in landmarks))

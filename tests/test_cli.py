@@ -58,7 +58,7 @@ def test_no_interpolate_flag_reaches_the_run(capsys, small_mat):
 
 def test_relinearization_flags_reach_the_run(capsys, small_mat):
     """--relinearize-threshold/--relinearize-skip give the library's run with those options."""
-    from steam_ref.online import default_options, run_online
+    from steam_ref.online import StreamOptions, run_online
     from steam_ref.readings import PaperSetup
 
     path, data = small_mat
@@ -66,8 +66,8 @@ def test_relinearization_flags_reach_the_run(capsys, small_mat):
     code, out, err = _run(capsys, "run", "--dataset", str(path), "--preset", "synthetic",
                           "--relinearize-threshold", "0", "--relinearize-skip", "1", "--json")
     assert code == 0, err
-    direct = run_online(data, setup, default_options(setup, isam2=ISAM2Params(relinearize_threshold=0.0, relinearize_skip=1)))
-    default = run_online(data, setup, default_options(setup))
+    direct = run_online(data, setup, StreamOptions(isam2=ISAM2Params(relinearize_threshold=0.0, relinearize_skip=1)))
+    default = run_online(data, setup, StreamOptions())
     assert direct.rmse_m != default.rmse_m  # the flags change the run, so the comparison below means something
     assert json.loads(out)["rmse_m"] == round(direct.rmse_m, 6)
 
@@ -97,7 +97,7 @@ def test_save_estimates_writes_the_final_marginals(capsys, small_mat, tmp_path, 
     from steam_ref.graph import FactorGraph
     from steam_ref.linear import LinearSystem
     from steam_ref.linear.ordering import xl_ordering
-    from steam_ref.online import StreamingEstimator, default_options
+    from steam_ref.online import StreamingEstimator, StreamOptions
     from steam_ref.readings import PaperSetup, Readings
     from steam_ref.variables import L, X
 
@@ -108,7 +108,7 @@ def test_save_estimates_writes_the_final_marginals(capsys, small_mat, tmp_path, 
     assert code == 0, err
     saved = np.load(target)
     setup = PaperSetup.synthetic()
-    est = StreamingEstimator(Readings.from_dataset(data, setup), setup, default_options(setup, method=method, skip=3))
+    est = StreamingEstimator(Readings.from_dataset(data, setup), setup, StreamOptions(method=method, skip=3))
     while not est.done:
         est.step()
     if method == "pb":
@@ -221,7 +221,7 @@ def test_fidelity_without_the_authors_files_is_one_line_and_exit_2(capsys, tmp_p
 
 def test_departure_flags_reach_the_set_up(capsys, small_mat):
     """--departure NAME runs the preset departing from the scripts in that named way."""
-    from steam_ref.online import default_options, run_online
+    from steam_ref.online import StreamOptions, run_online
     from steam_ref.readings import PaperSetup
 
     path, data = small_mat
@@ -231,6 +231,11 @@ def test_departure_flags_reach_the_set_up(capsys, small_mat):
     row = json.loads(out)
     assert row["departures"] == ["plain-heading-rate", "whole-state-relinearization"]
     setup = PaperSetup.synthetic().replace(pose2_heading_rate_guess=False, relinearize_blocks=None)
-    assert row["rmse_m"] == round(run_online(data, setup, default_options(setup, skip=3)).rmse_m, 6)
+    assert row["rmse_m"] == round(run_online(data, setup, StreamOptions(skip=3)).rmse_m, 6)
+    for departure in ("plain-heading-rate", "whole-state-relinearization"):  # each one on its own reaches the run
+        _, out, _ = _run(capsys, "run", "--dataset", str(path), "--preset", "synthetic", "--skip", "3",
+                         "--departure", departure, "--json")
+        setup = PaperSetup.synthetic().departing(departure)
+        assert json.loads(out)["rmse_m"] == round(run_online(data, setup, StreamOptions(skip=3)).rmse_m, 6)
     code, _, err = _run(capsys, "run", "--departure", "sorted-ranges")
     assert code == 2 and "sorted-ranges" in err

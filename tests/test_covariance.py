@@ -135,3 +135,19 @@ def test_sparse_joint_covariance_equals_dense_inverse(problem, backend):
         got = sparse_joint_covariance(problem.graph.factors, problem.initial, group, backend)
         block = block_of(dense, natural, group)
         np.testing.assert_allclose(got, block, rtol=1e-9, atol=1e-12 * np.abs(block).max())
+
+
+@pytest.mark.parametrize("max_entries", [1, 100, 10**9])
+def test_sparse_marginals_in_chunks_equal_dense_inverse(problem, max_entries, monkeypatch):
+    """Every key's block, whether the solves take one key at a time (tiny budget), a few, or all at once."""
+    from steam_ref.covariance import _blocks_of_inverse, sparse_marginals
+
+    monkeypatch.setattr(covariance, "_blocks_of_inverse", lambda c, o, k: _blocks_of_inverse(c, o, k, max_entries))
+    keys = problem.graph.keys()
+    natural = natural_ordering(keys, {k: problem.initial.dim(k) for k in keys})
+    A, _ = LinearSystem.build(problem.graph.factors, problem.initial, natural).to_dense()
+    dense = np.linalg.inv(A.T @ A)
+    got = sparse_marginals(problem.graph.factors, problem.initial, keys)
+    assert list(got) == keys
+    for k in keys:
+        np.testing.assert_allclose(got[k], block_of(dense, natural, [k]), rtol=1e-9, atol=1e-12)

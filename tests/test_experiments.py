@@ -22,7 +22,7 @@ from steam_ref.experiments import (
     results_table,
     speedup_on_prefix,
 )
-from steam_ref.online import default_options, run_online
+from steam_ref.online import StreamOptions, run_online
 from steam_ref.readings import PaperSetup
 from steam_ref.results import position_rmse
 
@@ -61,9 +61,9 @@ def test_table_figures_match_the_runs(small):
     """Speed ratios, interpolated fractions, time saved and RMSE changes recomputed from the runs."""
     exp = Experiment("small", small, SETUP)
     for label, (method, every) in (("PB/1", ("pb", 1)), ("BTGP/1", ("btgp", 1))):
-        exp.timing[label] = run_online(small, SETUP, default_options(SETUP, method=method, every=every))
+        exp.timing[label] = run_online(small, SETUP, StreamOptions(method=method, every=every))
     for skip in (1, 5):
-        exp.with_interp[skip] = run_online(small, SETUP, default_options(SETUP, skip=skip))
+        exp.with_interp[skip] = run_online(small, SETUP, StreamOptions(skip=skip))
     table = results_table([exp])
     pb, bt = exp.timing["PB/1"], exp.timing["BTGP/1"]
     ratio = pb.step_seconds.sum() / bt.step_seconds.sum()  # both covered all 46 steps
@@ -82,7 +82,7 @@ def test_table_figures_match_the_runs(small):
 
 def test_budget_cut_is_reported_as_such(small):
     exp = Experiment("small", small, SETUP)
-    exp.timing["PB/1"] = run_online(small, SETUP, default_options(SETUP, method="pb", time_budget_s=1e-9))
+    exp.timing["PB/1"] = run_online(small, SETUP, StreamOptions(method="pb", time_budget_s=1e-9))
     r = exp.timing["PB/1"]
     assert not r.completed and r.n_steps_processed < 46
     assert f"(time budget: {r.n_steps_processed} of 46 steps)" in results_table([exp])
@@ -93,7 +93,7 @@ def test_published_run_is_btgp1_with_every_pose_a_state_and_its_marginals(small)
     saved authors' run for this data set the row gives our RMSE and says why there is no comparison."""
     exp = Experiment("small", small, SETUP)
     published_run_experiment(exp)
-    direct = run_online(small, SETUP, default_options(SETUP))
+    direct = run_online(small, SETUP, StreamOptions())
     np.testing.assert_array_equal(exp.published.state_poses, np.arange(small.n_poses))
     np.testing.assert_allclose(exp.published.trajectory, direct.trajectory, rtol=0, atol=0)
     cov = exp.published.covariances
@@ -133,5 +133,5 @@ def test_interpolation_sweep_runs_with_its_documented_set_up(small):
     interpolation_experiment(exp, skips=(3,))
     setup = SETUP.replace(pose2_heading_rate_guess=False)
     for interpolate, store in ((True, exp.with_interp), (False, exp.without_interp)):
-        direct = run_online(small, setup, default_options(setup, skip=3, interpolate=interpolate))
+        direct = run_online(small, setup, StreamOptions(skip=3, interpolate=interpolate))
         np.testing.assert_array_equal(store[3].trajectory, direct.trajectory)

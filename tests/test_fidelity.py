@@ -9,6 +9,8 @@ the position RMSE 0.338 ± 0.001 m, every landmark within 2 cm, marginal covaria
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -59,3 +61,20 @@ def test_synthetic_btgp_lands_on_the_authors_run(shared_data):
     assert fid.pose_cov_median is None  # the synthetic run saved no marginals
     with pytest.raises(DataError, match="same state layout"):
         compare(run_online(data, PaperSetup.synthetic(), skip=2), load_authors_run("paper-synthetic", data), data.ground_truth)
+    lid = sorted(result.landmarks)[3]
+    fewer = dataclasses.replace(result, landmarks={i: v for i, v in result.landmarks.items() if i != lid})
+    with pytest.raises(DataError, match=f"no estimate of landmark {lid}"):
+        compare(fewer, load_authors_run("paper-synthetic", data), data.ground_truth)
+
+
+def test_a_saved_run_is_only_matched_with_its_own_data_set(shared_data):
+    """The generated synthetic task has the paper-synthetic file's sizes, and gtsam's original Plaza files
+    its poses and landmarks: neither is the data set the authors ran on."""
+    from steam_ref.datasets import generate_synthetic, load_cmu_text
+    from steam_ref.datasets.search import gtsam_data_dir
+
+    with pytest.raises(DataError, match="not run on this data set"):
+        load_authors_run("paper-synthetic", generate_synthetic())
+    original = load_cmu_text(gtsam_data_dir(), "Plaza1", name="plaza")
+    with pytest.raises(DataError, match="3363 range readings, 'plaza' has 3529"):
+        load_authors_run("plaza", original)

@@ -38,14 +38,15 @@ def _stream(data, setup: PaperSetup = SETUP, **options) -> StreamingEstimator:
 def _batch_optimum(data, skip: int, interpolate: bool) -> tuple[Values, np.ndarray]:
     """Gauss-Newton to convergence on build_problem's graph, started from a converged stream."""
     problem = build_problem(data, SETUP, skip=skip, interpolate=interpolate)
-    warm = _stream(data, method="pb", skip=skip, interpolate=interpolate, pb_relative_tolerance=1e-12).solver.estimate()
+    warm = _stream(data, method="pb", skip=skip, interpolate=interpolate, pb_relative_tolerance=1e-12, final_updates=0).solver.estimate()
     result = gauss_newton(problem.graph, warm, ordering="amd", relative_tolerance=1e-14, step_tolerance=1e-12)
     return result.values, problem.states
 
 
 @pytest.mark.parametrize("skip,interpolate,range_states", [(1, True, False), (3, True, False), (3, False, False), (5, False, True), (4, True, True)])
-def test_stream_factors_equal_the_batch_problem(data, skip, interpolate, range_states):
-    """The stream's factors have the batch problem's cost at any point: the same factor graph."""
+def test_the_solver_receives_every_factor_of_the_batch_problem(data, skip, interpolate, range_states):
+    """Both come from the one front end; the run loop (schedule, pending factors, first solve) must hand
+    the solver all of them: the solver's graph has the batch problem's cost at any point."""
     est = _stream(data, method="pb", skip=skip, interpolate=interpolate, range_states=range_states)
     problem = build_problem(data, SETUP, skip=skip, interpolate=interpolate, range_states=range_states)
     assert est.states == problem.states.tolist()
@@ -244,3 +245,40 @@ def test_pose_0_goes_to_the_solver_with_pose_1(data):
     assert Readings.from_dataset(data, SETUP).range_pose[0] == 0
     assert est.update_steps[0] == 1
     assert est.solver.iterations and len(est.update_steps) == data.n_poses - 1
+
+
+def test_schedule_updates_at_states_after_every_ranges_and_at_the_last_pose():
+    """The rule of online.Schedule, step by step: (pose, is_state, ranges) → update?"""
+    from steam_ref.frontend import NewStep
+    from steam_ref.online import Schedule
+
+    schedule = Schedule(every=2, start_after=3, last_pose=9)
+    steps = [(0, True, 1, False), (1, True, 1, False), (2, False, 1, False), (3, True, 0, True),
+             (4, True, 1, False), (5, True, 1, True), (6, False, 5, False), (7, True, 0, True), (9, True, 0, True)]
+    for pose, is_state, n_ranges, expected in steps:
+        due = schedule.due(NewStep(pose, is_state, [], {}, n_ranges))
+        assert due == expected, pose
+        if due:
+            schedule.updated()
+    assert schedule.released == 10
+
+
+def test_bad_stream_inputs_raise_steam_errors(data):
+    from steam_ref.frontend import FrontEnd
+    from steam_ref.solvers import make_solver
+
+    for bad, needle in [(dict(isam2={}), "isam2"), (dict(max_poses="10"), "max_poses"), (dict(final_updates=-3), "final_updates"),
+                        (dict(max_poses=2.5), "max_poses"), (dict(start_after_ranges="1"), "start_after_ranges")]:
+        with pytest.raises(SteamError, match=needle):
+            StreamOptions(**bad)
+    readings = Readings.from_dataset(data, SETUP)
+    for n in (0, -1, "x"):
+        with pytest.raises(SteamError, match="n_poses"):
+            FrontEnd(readings, SETUP, Layout(), n)
+    for skip in (None, "a", 2.5):
+        with pytest.raises(SteamError, match="skip"):
+            Layout(skip)
+    with pytest.raises(SteamError, match="range poses"):
+        Layout().state_poses(5, [7])
+    with pytest.raises(SteamError, match="'bogus'"):
+        make_solver("bogus")

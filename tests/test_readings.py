@@ -17,8 +17,9 @@ from steam_ref.variables import L, X
 
 
 def scripts_scan(pose_times: np.ndarray, range_times: np.ndarray) -> np.ndarray:
-    """``while k<=K && t>=TD(k,1)`` at every pose i, in file order (pose 0 included, as the synthetic
-    script attaches TD's first row to pose 0)."""
+    """``while k<=K && t>=TD(k,1)`` at every pose i, in file order. The scripts loop from pose 1 (the
+    synthetic one attaches TD's first row to pose 0 by hand); starting at pose 0 is the same on both
+    files, whose first reading is not later than pose 0 (synthetic) or later than pose 1 (Plaza)."""
     out, k = np.full(len(range_times), -1), 0
     for i, t in enumerate(pose_times):
         while k < len(range_times) and t >= range_times[k]:
@@ -95,8 +96,11 @@ def test_readings_list_ranges_by_pose_in_file_order():
     np.testing.assert_array_equal(r.range_pose, scripts_scan(ds.times, ds.ranges[:, 0]))
     np.testing.assert_array_equal(r.range_value, ds.ranges[:, 3])
     t = Readings.from_dataset(ds, PaperSetup.synthetic().replace(range_attachment="time"))
-    assert np.all(np.diff(t.range_pose) >= 0)
-    assert sorted(t.range_value.tolist()) == sorted(ds.ranges[:, 3].tolist())
+    pose = [int(np.argmax(ds.times >= t)) for t in ds.ranges[:, 0]]
+    order = np.array(sorted(range(len(pose)), key=lambda k: (pose[k], ds.ranges[k, 0])))  # by pose, then time
+    np.testing.assert_array_equal(t.range_value, ds.ranges[order, 3])
+    np.testing.assert_array_equal(t.range_pose, np.sort(attach_ranges(ds.times, ds.ranges[:, 0], "time")))
+    assert not np.array_equal(order, np.arange(len(order)))  # the file's order is not the time order
 
 
 # --- the front end's initial guesses and landmarks ----------------------------------------------

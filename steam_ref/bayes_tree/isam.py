@@ -226,6 +226,7 @@ class IncrementalSolver:
             if not np.all(np.isfinite(x)):
                 raise ShapeError(f"new value of {k!r} is not finite: {x}")
             self.params.threshold_for(k.kind)  # a dict of thresholds must name every kind
+            self.params.blocks_of(k.kind, x.shape[0])  # relinearization blocks must fit the variable
             values[k] = x
         for f in new_factors:
             if not isinstance(f, Factor):
@@ -264,11 +265,11 @@ class IncrementalSolver:
         ([YIB Alg. 1 step 7]: collect them into θ_rl).
         """
         theta_rl = list(self._over)
+        moves = {k: self.params.blocks_to_move(k.kind, self._delta[k], self._threshold[k]) for k in theta_rl}  # (d,) bool
         self._over.clear()
-        for k in theta_rl:
+        for k, move in moves.items():
             theta_bar, delta = self._theta_bar[k], self._delta[k]
             journal.moved(k, theta_bar, delta)
-            move = self.params.blocks_to_move(k.kind, delta, self._threshold[k])  # (d,) bool
             self._theta_bar.insert(k, theta_bar + np.where(move, delta, 0.0))  # the estimate is unchanged
             self._delta[k] = np.where(move, 0.0, delta)
         return theta_rl

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import SteamError
+from ..errors import ShapeError, SteamError
 
 __all__ = ["ISAM2Params"]
 
@@ -76,13 +76,20 @@ class ISAM2Params:
         object.__setattr__(self, "relinearize_skip", int(skip))
         object.__setattr__(self, "wildfire_threshold", _threshold(self.wildfire_threshold, "wildfire_threshold"))
         if self.relinearize_blocks is not None:
-            object.__setattr__(self, "relinearize_blocks", {k: _blocks(k, v) for k, v in dict(self.relinearize_blocks).items()})
+            if not isinstance(self.relinearize_blocks, Mapping):
+                raise SteamError(f"relinearize_blocks must map a variable kind to block sizes, e.g. {{'x': (3, 3)}}; got {self.relinearize_blocks!r}")
+            object.__setattr__(self, "relinearize_blocks", {k: _blocks(k, v) for k, v in self.relinearize_blocks.items()})
+
+    def blocks_of(self, kind: str, size: int) -> tuple[int, ...]:
+        """Block sizes of a variable of ``kind`` and ``size``; ShapeError when its blocks do not fit it."""
+        sizes = (self.relinearize_blocks or {}).get(kind, (size,))
+        if sum(sizes) != size:
+            raise ShapeError(f"relinearize_blocks {sizes} for kind {kind!r} do not add up to its size {size}")
+        return sizes
 
     def blocks_to_move(self, kind: str, delta: NDArray, threshold: float) -> NDArray:
         """(d,) bool: the entries of a variable of ``kind`` whose block has max |δ| ≥ ``threshold``."""
-        sizes = (self.relinearize_blocks or {}).get(kind, (len(delta),))
-        if sum(sizes) != len(delta):
-            raise SteamError(f"relinearize_blocks {sizes} for kind {kind!r} do not add up to its size {len(delta)}")
+        sizes = self.blocks_of(kind, len(delta))
         bounds = np.cumsum((0, *sizes))
         return np.repeat([np.abs(delta[a:b]).max() >= threshold for a, b in zip(bounds, bounds[1:])], sizes)
 
