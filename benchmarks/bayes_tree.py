@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 import steam_ref as sr
-from steam_ref.bayes_tree.isam import IncrementalSolver
+from steam_ref.bayes_tree import IncrementalSolver, ISAM2Params
 from steam_ref.gp import transition
 from steam_ref.linear import LinearSystem, amd_ordering
 from steam_ref.linear.solve import solve
@@ -162,9 +162,9 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--states", type=int, default=10_000)
     p.add_argument("--landmarks", type=int, default=6)
     p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--relinearize-threshold", type=float, default=0.1)
-    p.add_argument("--relinearize-skip", type=int, default=10)
-    p.add_argument("--wildfire-threshold", type=float, default=0.001)
+    p.add_argument("--relinearize-threshold", type=float, default=ISAM2Params.relinearize_threshold)
+    p.add_argument("--relinearize-skip", type=int, default=ISAM2Params.relinearize_skip)
+    p.add_argument("--wildfire-threshold", type=float, default=ISAM2Params.wildfire_threshold)
     p.add_argument("--plot", action="store_true", help="write benchmarks/out/bayes_tree.png")
     a = p.parse_args(argv)
     options = dict(relinearize_threshold=a.relinearize_threshold, relinearize_skip=a.relinearize_skip, wildfire_threshold=a.wildfire_threshold)
