@@ -22,9 +22,17 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import SteamError
 from .bayes_tree import ISAM2Params
-from .readings import DEPARTURES
+from .datasets import load_dataset
+from .errors import SteamError
+from .experiments import reproduce
+from .fidelity import AUTHORS_RUNS, compare, load_authors_run
+from .online import StreamOptions, run_online
+from .plot import plot_fidelity, plot_trajectory
+from .problem import build_problem, sequential_batch
+from .readings import DEPARTURES, PaperSetup
+from .results import position_rmse
+from .variables import X
 
 __all__ = ["main", "build_parser"]
 
@@ -119,15 +127,12 @@ def _check_output(path: str | None, suffix: str, option: str) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from .datasets import load_dataset
-    from .online import StreamOptions, run_online
-    from .readings import PaperSetup
-
     _check_output(args.save_estimates, ".npz", "--save-estimates")
     _check_output(args.plot, ".png", "--plot")
     preset = args.preset or _PRESET_OF.get(args.dataset, "plaza")
     setup = PaperSetup.named(preset).departing(*args.departure)
-    options = StreamOptions(method=args.method, every=args.every, skip=args.skip, interpolate=args.interpolate,
+    options = StreamOptions(
+        method=args.method, every=args.every, skip=args.skip, interpolate=args.interpolate,
         range_states=args.range_states, max_poses=args.max_poses, time_budget_s=args.time_budget,
         progress=args.progress,
         isam2=setup.isam2_params().replace(relinearize_threshold=args.relinearize_threshold, relinearize_skip=args.relinearize_skip),
@@ -142,8 +147,6 @@ def _run(args: argparse.Namespace) -> int:
     if args.save_estimates:
         save_estimates(args.save_estimates, result)
     if args.plot:
-        from .plot import plot_trajectory
-
         plot_trajectory(
             data.ground_truth[:, 1:3], result.trajectory[:, :2], landmarks_true=data.landmarks[:, 1:3],
             landmarks_estimated=result.landmarks, dead_reckoning=data.dead_reckoning[:, 1:3],
@@ -186,11 +189,6 @@ def _batch(args: argparse.Namespace) -> int:
     """Batch solve of a whole data set (started chunk by chunk, see ``sequential_batch``)."""
     import time
 
-    from .datasets import load_dataset
-    from .variables import X
-    from .problem import build_problem, sequential_batch
-    from .readings import PaperSetup
-    from .results import position_rmse
 
     _check_output(args.plot, ".png", "--plot")
     setup = PaperSetup.named(args.preset or _PRESET_OF.get(args.dataset, "plaza"))
@@ -211,8 +209,6 @@ def _batch(args: argparse.Namespace) -> int:
         print(f"batch ({args.ordering.upper()}) on {args.dataset}: RMSE {summary['rmse_m']} m over {data.n_poses} poses, "
               f"{summary['total_s']:.2f} s, Cholesky factor {summary['factor_nnz']} nonzeros ({summary['backend']})")
     if args.plot:
-        from .plot import plot_trajectory
-
         plot_trajectory(
             data.ground_truth[:, 1:3], positions, landmarks_true=data.landmarks[:, 1:3],
             title=f"batch on {args.dataset}", path=args.plot,
@@ -222,10 +218,6 @@ def _batch(args: argparse.Namespace) -> int:
 
 def _fidelity(args: argparse.Namespace) -> int:
     """BTGP/1 with the paper's set-up against the authors' saved run of each data set."""
-    from .datasets import load_dataset
-    from .fidelity import AUTHORS_RUNS, compare, load_authors_run
-    from .online import run_online
-    from .readings import PaperSetup
 
     _check_output(args.plot, ".png", "--plot")
     distances = {}
@@ -238,8 +230,6 @@ def _fidelity(args: argparse.Namespace) -> int:
         row = fid.to_dict() | {"total_s": round(result.total_s, 2), "authors_total_s": round(float(authors.step_seconds.sum()), 2)}
         print(json.dumps(row) if args.json else _fidelity_text(row))
     if args.plot:
-        from .plot import plot_fidelity
-
         plot_fidelity(distances, path=args.plot)
     return 0
 
@@ -259,8 +249,6 @@ def _fidelity_text(row: dict) -> str:
 
 
 def _reproduce(args: argparse.Namespace) -> int:
-    from .experiments import reproduce
-
     table = reproduce(args.out, quick=args.quick, data_dir=args.data_dir)
     print(table)
     return 0

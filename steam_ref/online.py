@@ -43,9 +43,9 @@ class StreamOptions:
 
     method: str = "btgp"  # 'btgp', 'pb' or 'pbvr'
     every: int = 1  # update after this many range readings ('/1', '/10')
-    skip: int = 1  # a state at most skip poses after the previous one (see frontend.Layout)
-    interpolate: bool = True  # readings between states: interpolated (Eq. 29) or dropped
-    range_states: bool = False  # also estimate every pose that has a range reading
+    skip: int = Layout.skip  # a state at most skip poses after the previous one (see frontend.Layout)
+    interpolate: bool = Layout.interpolate  # readings between states: interpolated (Eq. 29) or dropped
+    range_states: bool = Layout.range_states  # also estimate every pose that has a range reading
     start_after_ranges: int | None = None  # None: the set-up's (Plaza 50, synthetic 0)
     final_updates: int | None = None  # extra solver updates after the last pose; None: the set-up's (synthetic 10)
     isam2: ISAM2Params | None = None  # BTGP's iSAM2 settings; None: the set-up's (PaperSetup.isam2_params)
