@@ -26,7 +26,7 @@ from .bayes_tree import ISAM2Params
 from .datasets import load_dataset
 from .errors import SteamError
 from .experiments import reproduce
-from .fidelity import AUTHORS_RUNS, compare, load_authors_run
+from .fidelity import AUTHORS_RUNS, compare, find_authors_file, load_authors_run
 from .online import StreamOptions, run_online
 from .plot import plot_fidelity, plot_trajectory
 from .problem import build_problem, sequential_batch
@@ -222,6 +222,7 @@ def _fidelity(args: argparse.Namespace) -> int:
     _check_output(args.plot, ".png", "--plot")
     distances = {}
     for name in AUTHORS_RUNS if args.dataset == "all" else [args.dataset]:
+        find_authors_file(name, args.data_dir)  # before loading: gtsam's Plaza files are not the authors' data
         data = load_dataset(name, data_dir=args.data_dir)
         authors = load_authors_run(name, data, args.data_dir)
         setup = PaperSetup.named(_PRESET_OF[name])

@@ -27,7 +27,7 @@ from .datasets import DATA_DIR_ENV, RangeDataset, default_data_dirs
 from .errors import DataError
 from .results import RunResult, position_rmse
 
-__all__ = ["AUTHORS_RUNS", "AuthorsRun", "Fidelity", "load_authors_run", "compare"]
+__all__ = ["AUTHORS_RUNS", "AuthorsRun", "Fidelity", "find_authors_file", "load_authors_run", "compare"]
 
 AUTHORS_RUNS = {"plaza": "Plaza1_full_data_run.mat", "paper-synthetic": "Syn_full_data_run.mat"}  # data set → file in authors/
 
@@ -48,7 +48,11 @@ class AuthorsRun:
     source: Path  # the file read
 
 
-def _find_authors_file(file: str, data_dir: str | os.PathLike | None) -> Path:
+def find_authors_file(name: str, data_dir: str | os.PathLike | None = None) -> Path:
+    """The authors' saved run of data set ``name`` in the data search path; DataError saying where to put it."""
+    if name not in AUTHORS_RUNS:
+        raise DataError(f"no saved authors' run for data set {name!r}; there is one for {', '.join(AUTHORS_RUNS)}")
+    file = AUTHORS_RUNS[name]
     folders = default_data_dirs(data_dir)
     for folder in folders:
         if (folder / "authors" / file).is_file():
@@ -89,9 +93,7 @@ def _check_same_data(path: Path, m: dict, data: RangeDataset) -> NDArray:
 
 def load_authors_run(name: str, data: RangeDataset, data_dir: str | os.PathLike | None = None) -> AuthorsRun:
     """The authors' saved run on data set ``name`` ('plaza' or 'paper-synthetic'), checked against ``data``."""
-    if name not in AUTHORS_RUNS:
-        raise DataError(f"no saved authors' run for data set {name!r}; there is one for {', '.join(AUTHORS_RUNS)}")
-    path = _find_authors_file(AUTHORS_RUNS[name], data_dir)
+    path = find_authors_file(name, data_dir)
     m = _read(path)
     poses = _check_same_data(path, m, data)
     ids = sorted(int(i) for i in data.landmarks[:, 0])
