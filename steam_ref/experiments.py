@@ -130,7 +130,7 @@ def _published_row(exp: Experiment) -> str:
     r, f = exp.published, exp.fidelity
     if f is None:
         return f"| {exp.name} | BTGP/1, every pose a state: position RMSE | – | {r.rmse_m:.5f} m ({exp.note}) |"
-    cov = "" if f.pose_cov_median is None else f"; marginals {f.pose_cov_median:.2%} apart (median)"
+    cov = "" if f.pose_cov_median is None else f"; pose marginals {f.pose_cov_median:.3%} apart (median)"
     return (f"| {exp.name} | BTGP/1, every pose a state: position RMSE (authors' saved run) | {f.authors_rmse_m:.5f} m | "
             f"{f.rmse_m:.5f} m; within {1000 * f.pose_max_m:.1f} mm of the authors' estimate at every pose "
             f"(RMS {1000 * f.pose_rms_m:.2f} mm), landmarks within {1000 * f.landmark_max_m:.2f} mm{cov} |")
