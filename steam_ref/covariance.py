@@ -43,9 +43,11 @@ __all__ = [
     "marginal_covariances",
     "sparse_joint_covariance",
     "sparse_marginals",
+    "sparse_joint_marginals",
     "tree_marginal_covariance",
     "tree_joint_covariance",
     "tree_marginals",
+    "tree_joint_marginals",
 ]
 
 Index = dict[Key, tuple[int, int]]  # variable → (first row, size) in a joint covariance
@@ -65,31 +67,31 @@ def _unit_columns(ordering: Ordering, keys: Sequence[Key]) -> tuple[NDArray, NDA
     return cols, E
 
 
-def _chunks(ordering: Ordering, keys: Sequence[Key], columns: int) -> Iterator[list[Key]]:
-    """``keys`` in consecutive groups of at most ``columns`` scalar columns (at least one key each)."""
-    chunk: list[Key] = []
+def _chunks(ordering: Ordering, groups: Sequence[Sequence[Key]], columns: int) -> Iterator[list[int]]:
+    """Indices of ``groups`` in consecutive runs of at most ``columns`` scalar columns (one group at least)."""
+    chunk: list[int] = []
     width = 0
-    for k in keys:
-        d = ordering.dims[ordering.position[k]] if k in ordering.position else 0  # unknown: named later
+    for g, keys in enumerate(groups):
+        d = sum(ordering.dims[ordering.position[k]] for k in keys if k in ordering.position)  # unknown: named later
         if chunk and width + d > columns:
             yield chunk
             chunk, width = [], 0
-        chunk.append(k)
+        chunk.append(g)
         width += d
     if chunk:
         yield chunk
 
 
-def _blocks_of_inverse(chol: SparseCholesky, ordering: Ordering, keys: Sequence[Key], max_entries: int = 4_000_000) -> dict[Key, NDArray]:
-    """Diagonal blocks (𝓘⁻¹)ₖₖ of ``keys`` from one factorization, solving for as many keys at a time as
-    keep the dense right-hand side within ``max_entries`` numbers (32 MB by default)."""
-    out: dict[Key, NDArray] = {}
-    for chunk in _chunks(ordering, list(keys), max(max_entries // max(ordering.total_dim, 1), 1)):
-        cols, E = _unit_columns(ordering, chunk)
+def _blocks_of_inverse(chol: SparseCholesky, ordering: Ordering, groups: Sequence[Sequence[Key]], max_entries: int = 4_000_000) -> list[NDArray]:
+    """The block of 𝓘⁻¹ of each group of keys, from one factorization, solving for as many groups at a
+    time as keep the dense right-hand side within ``max_entries`` numbers (32 MB by default)."""
+    out: list[NDArray] = []
+    for chunk in _chunks(ordering, groups, max(max_entries // max(ordering.total_dim, 1), 1)):
+        cols, E = _unit_columns(ordering, [k for g in chunk for k in groups[g]])
         X, o = np.asarray(chol.solve(E))[cols], 0
-        for k in chunk:
-            d = ordering.dims[ordering.position[k]]
-            out[k] = _symmetric(X[o : o + d, o : o + d])
+        for g in chunk:
+            d = sum(ordering.dims[ordering.position[k]] for k in groups[g])
+            out.append(_symmetric(X[o : o + d, o : o + d]))
             o += d
     return out
 
@@ -97,7 +99,8 @@ def _blocks_of_inverse(chol: SparseCholesky, ordering: Ordering, keys: Sequence[
 def marginal_covariances(system: LinearSystem, keys: list[Key], backend: str | None = None) -> dict[Key, NDArray]:
     """Marginal covariance blocks (𝓘⁻¹)ₖₖ (dₖ, dₖ) of chosen variables.  [YIB Eq. 11: cov δθ* = 𝓘⁻¹]"""
     info, _ = system.information()
-    return _blocks_of_inverse(SparseCholesky.factor(info, system.ordering, backend), system.ordering, keys)
+    chol = SparseCholesky.factor(info, system.ordering, backend)
+    return dict(zip(keys, _blocks_of_inverse(chol, system.ordering, [[k] for k in keys])))
 
 
 def _factor_at(factors: Sequence[Factor], values: Values, backend: str | None) -> tuple[Ordering, SparseCholesky]:
@@ -128,7 +131,17 @@ def sparse_marginals(
 ) -> dict[Key, NDArray]:
     """Marginal covariance (dₖ, dₖ) of each of ``keys``, linearized at ``values``: one factorization."""
     order, chol = _factor_at(factors, values, backend)
-    return _blocks_of_inverse(chol, order, list(keys))
+    keys = list(keys)
+    return dict(zip(keys, _blocks_of_inverse(chol, order, [[k] for k in keys])))
+
+
+def sparse_joint_marginals(
+    factors: Sequence[Factor], values: Values, groups: Sequence[Sequence[Key]], backend: str | None = None
+) -> list[NDArray]:
+    """Joint covariance of each group of ``keys`` (stacked in the order given), linearized at ``values``:
+    one factorization for all groups."""
+    order, chol = _factor_at(factors, values, backend)
+    return _blocks_of_inverse(chol, order, [list(g) for g in groups])
 
 
 # --- from the Bayes tree ------------------------------------------------------------------------
@@ -224,26 +237,56 @@ def _cliques_on_root_paths(tree: BayesTree, keys: Iterable[Key]) -> set[int]:
     return needed
 
 
-def tree_marginals(tree: BayesTree, keys: Iterable[Key] | None = None) -> dict[Key, NDArray]:
-    """Marginal covariance (dₖ, dₖ) of every variable in ``keys`` (all when None), in one pass.  [K11 Sec. 3]
+def _walk_down(tree: BayesTree, needed: set[int] | None) -> Iterator[tuple[int, NDArray, Index]]:
+    """Each clique of ``needed`` (all when None), parents first, with its joint covariance of F ∪ S.
 
-    One walk down the tree: each clique's joint covariance of F ∪ S follows from Σ_SS, the block of
-    its parent's joint, and the frontal blocks are the marginals. The stack holds, for each clique
-    still to visit, only its Σ_SS; a clique's own joint is dropped once its children's blocks are
-    cut out. Only the cliques on the root paths of ``keys`` are visited: O(cliques), not
-    O(variables × depth) as one :func:`tree_marginal_covariance` per variable would cost.
+    One walk down the tree [K11 Sec. 3]: a clique's joint follows from Σ_SS, the block of its parent's
+    joint; the stack holds, for each clique still to visit, only its Σ_SS.
     """
-    wanted = None if keys is None else list(dict.fromkeys(keys))
-    needed = None if wanted is None else _cliques_on_root_paths(tree, wanted)
     stack = [(r, np.zeros((0, 0))) for r in tree.roots if needed is None or r in needed]
-    out: dict[Key, NDArray] = {}
     while stack:
         c, Sigma_SS = stack.pop()
-        clique = tree.cliques[c]
-        joint, index = _clique_covariance(clique, Sigma_SS)
-        for k in clique.frontals:
-            out[k] = _symmetric(_block(joint, index, [k]))
+        joint, index = _clique_covariance(tree.cliques[c], Sigma_SS)
+        yield c, joint, index
         for ch in tree.children[c]:
             if needed is None or ch in needed:
                 stack.append((ch, _block(joint, index, tree.cliques[ch].separator)))
+
+
+def tree_marginals(tree: BayesTree, keys: Iterable[Key] | None = None) -> dict[Key, NDArray]:
+    """Marginal covariance (dₖ, dₖ) of every variable in ``keys`` (all when None), in one pass.  [K11 Sec. 3]
+
+    The frontal blocks of each clique's joint covariance (:func:`_walk_down`) are the marginals. Only
+    the cliques on the root paths of ``keys`` are visited: O(cliques), not O(variables × depth) as one
+    :func:`tree_marginal_covariance` per variable would cost.
+    """
+    wanted = None if keys is None else list(dict.fromkeys(keys))
+    needed = None if wanted is None else _cliques_on_root_paths(tree, wanted)
+    out: dict[Key, NDArray] = {}
+    for c, joint, index in _walk_down(tree, needed):
+        for k in tree.cliques[c].frontals:
+            out[k] = _symmetric(_block(joint, index, [k]))
     return out if wanted is None else {k: out[k] for k in wanted}
+
+
+def tree_joint_marginals(tree: BayesTree, groups: Sequence[Sequence[Key]]) -> list[NDArray]:
+    """Joint covariance of each group of variables (stacked in the order given), from the tree.
+
+    A group that one clique holds whole (two consecutive states of a trajectory, say) is cut from that
+    clique's joint in one walk down the tree (:func:`_walk_down`); any other group goes through
+    :func:`tree_joint_covariance`.
+    """
+    home: dict[int, list[int]] = {}  # clique id → the groups it holds whole
+    out: list[NDArray | None] = [None] * len(groups)
+    for g, keys in enumerate(groups):
+        holders = (tree.clique_containing(k) for k in keys)
+        c = next((c for c in holders if set(keys) <= set(tree.cliques[c].frontals) | set(tree.cliques[c].separator)), None)
+        if c is None:
+            out[g] = tree_joint_covariance(tree, keys)
+        else:
+            home.setdefault(c, []).append(g)
+    needed = _cliques_on_root_paths(tree, (tree.cliques[c].frontals[0] for c in home))
+    for c, joint, index in _walk_down(tree, needed):
+        for g in home.get(c, ()):
+            out[g] = _symmetric(_block(joint, index, groups[g]))
+    return out  # type: ignore[return-value]

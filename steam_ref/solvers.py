@@ -14,7 +14,7 @@ from numpy.typing import NDArray
 from .batch import gauss_newton
 from .bayes_tree import IncrementalSolver, ISAM2Params
 from .errors import SteamError
-from .covariance import sparse_joint_covariance, sparse_marginals
+from .covariance import sparse_joint_covariance, sparse_joint_marginals, sparse_marginals
 from .factors import Factor
 from .graph import FactorGraph
 from .variables import Key, Values
@@ -51,6 +51,10 @@ class OnlineSolver:
         """Marginal covariance of each of ``keys``."""
         raise NotImplementedError
 
+    def joint_covariances(self, groups: Sequence[Sequence[Key]]) -> list[NDArray]:
+        """Joint marginal covariance of each group of keys, stacked in the order given."""
+        raise NotImplementedError
+
 
 class PeriodicBatchSolver(OnlineSolver):
     """PB (XL ordering) or PBVR (AMD): Gauss-Newton over everything, warm-started.  [YIB Sec. IV]"""
@@ -83,6 +87,9 @@ class PeriodicBatchSolver(OnlineSolver):
     def marginals(self, keys: Sequence[Key]) -> dict[Key, NDArray]:
         return sparse_marginals(self.graph.factors, self.values, keys)  # at the estimate
 
+    def joint_covariances(self, groups: Sequence[Sequence[Key]]) -> list[NDArray]:
+        return sparse_joint_marginals(self.graph.factors, self.values, groups)  # at the estimate
+
 
 class BayesTreeSolver(OnlineSolver):
     """BTGP: the incremental solver of :mod:`steam_ref.bayes_tree`.  [YIB Alg. 1 steps 2-7]"""
@@ -107,6 +114,9 @@ class BayesTreeSolver(OnlineSolver):
 
     def marginals(self, keys: Sequence[Key]) -> dict[Key, NDArray]:
         return self.inner.marginals(keys)  # one pass down the tree
+
+    def joint_covariances(self, groups: Sequence[Sequence[Key]]) -> list[NDArray]:
+        return self.inner.joint_marginals(groups)  # one pass down the tree where a clique holds a group
 
 
 def make_solver(

@@ -35,7 +35,7 @@ class Trajectory:
     """A solver's states at poses ``states`` (sorted), queried at any time in their span."""
 
     def __init__(self, solver, states: Sequence[int], times: NDArray, qc: NDArray):
-        self.solver = solver  # anything with estimate_of, estimate, joint_covariance, marginals
+        self.solver = solver  # anything with estimate_of, estimate, joint_covariance(s), marginals
         self.states = list(states)  # poses with a state, increasing
         self.times = times  # (n_poses,) time of every pose
         self.qc = qc  # (3, 3) Qc of the WNOA prior
@@ -83,14 +83,14 @@ class Trajectory:
         """Marginal covariances at every pose of the span (interpolated between states) and of ``landmarks``."""
         solved = self.states
         marg = self.solver.marginals([X(i) for i in solved] + list(landmarks))
+        gaps = [(a, b) for a, b in zip(solved, solved[1:]) if b > a + 1]
+        joints = dict(zip(gaps, self.solver.joint_covariances([(X(a), X(b)) for a, b in gaps]))) if gaps else {}
         n = solved[-1] + 1 if solved else 0
         full = np.empty((n, 6, 6))
         for a, b in zip(solved, solved[1:]):
             full[a] = marg[X(a)]
-            if b > a + 1:
-                joint = self.solver.joint_covariance([X(a), X(b)])
-                for p in range(a + 1, b):
-                    full[p] = interpolate_covariance(self.times[a], self.times[b], self.times[p], self.qc, joint)
+            for p in range(a + 1, b):
+                full[p] = interpolate_covariance(self.times[a], self.times[b], self.times[p], self.qc, joints[(a, b)])
         if solved:
             full[solved[-1]] = marg[X(solved[-1])]
         marks = np.array([marg[k] for k in landmarks]).reshape(-1, 2, 2)

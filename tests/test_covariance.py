@@ -151,3 +151,36 @@ def test_sparse_marginals_in_chunks_equal_dense_inverse(problem, max_entries, mo
     assert list(got) == keys
     for k in keys:
         np.testing.assert_allclose(got[k], block_of(dense, natural, [k]), rtol=1e-9, atol=1e-12)
+
+
+@pytest.mark.parametrize("trial", range(4))
+def test_tree_joint_marginals_equal_dense_inverse(rng, trial):
+    """Groups a clique holds whole (a clique's frontal and a separator variable) and groups it does not."""
+    from steam_ref.covariance import tree_joint_marginals
+
+    tree, factors, dims = random_tree(rng, trial)
+    natural = natural_ordering(list(dims), dims)
+    A, _ = dense_system(factors, natural)
+    cov = np.linalg.inv(A.T @ A)
+    keys = list(dims)
+    held = [[c.frontals[0], c.separator[-1]] for c in tree.cliques.values() if c.separator]
+    groups = held + [keys[:3], [keys[7], keys[1]], [keys[4]]]
+    got = tree_joint_marginals(tree, groups)
+    assert len(got) == len(groups) and len(held) > 0
+    for group, block in zip(groups, got):
+        expected = block_of(cov, natural, group)
+        np.testing.assert_allclose(block, expected, rtol=1e-9, atol=1e-12 * np.abs(expected).max())
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_sparse_joint_marginals_equal_dense_inverse(problem, backend):
+    from steam_ref.covariance import sparse_joint_marginals
+
+    keys = problem.graph.keys()
+    natural = natural_ordering(keys, {k: problem.initial.dim(k) for k in keys})
+    A, _ = LinearSystem.build(problem.graph.factors, problem.initial, natural).to_dense()
+    dense = np.linalg.inv(A.T @ A)
+    groups = [[sr.X(3), sr.X(4)], [sr.X(11), sr.X(0), sr.L(3)], [sr.L(1)]]
+    for group, got in zip(groups, sparse_joint_marginals(problem.graph.factors, problem.initial, groups, backend)):
+        block = block_of(dense, natural, group)
+        np.testing.assert_allclose(got, block, rtol=1e-9, atol=1e-12 * np.abs(block).max())

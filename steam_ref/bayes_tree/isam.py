@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from ..covariance import tree_joint_covariance, tree_marginal_covariance, tree_marginals
+from ..covariance import tree_joint_covariance, tree_joint_marginals, tree_marginal_covariance, tree_marginals
 from ..errors import ShapeError, SteamError, UnderdeterminedError, UnknownVariableError
 from ..factors import Factor
 from ..linear.ordering import constrained_min_degree
@@ -123,6 +123,10 @@ class IncrementalSolver:
     def joint_marginal_covariance(self, keys: Iterable[Key]) -> NDArray:
         """Joint covariance (Σdₖ, Σdₖ) of several variables, stacked in the order given, from the tree."""
         return tree_joint_covariance(self.tree, list(keys))
+
+    def joint_marginals(self, groups: Iterable[Iterable[Key]]) -> list[NDArray]:
+        """Joint covariance of each group of variables (stacked in the order given), from the tree."""
+        return tree_joint_marginals(self.tree, [list(g) for g in groups])
 
     def marginals(self, keys: Iterable[Key] | None = None) -> dict[Key, NDArray]:
         """Marginal covariance (dₖ, dₖ) of each of ``keys`` (every variable when None), in one pass down the tree."""
