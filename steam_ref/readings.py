@@ -40,18 +40,18 @@ DEPARTURES = {
 
 @dataclass(frozen=True)
 class PaperSetup:
-    """Parameters of one of the paper's experiments."""
+    """Parameters of one of the paper's experiments; a field's default is what both scripts share."""
 
     name: str  # 'synthetic' or 'plaza'
     qc: NDArray  # (3, 3) power spectral density of the WNOA prior [YIB Eq. 31]
     velocity_sigmas: NDArray  # (3,) projected-velocity noise at an estimated state
     interpolated_velocity_sigmas: NDArray  # (3,) the same reading when interpolated (Eq. 29)
     range_sigma: float  # [m]
-    tukey_c: float | None  # Tukey threshold on whitened range errors; None: plain least squares
-    landmark_prior_sigma: float  # [m] prior on landmarks at their surveyed positions (Eq. 4)
-    first_pose_sigmas: NDArray  # (3,) prior on pose 0 at ground truth
-    first_velocity_sigmas: NDArray  # (3,) prior on velocity 0 at ``first_velocity``
-    first_velocity: NDArray = field(default_factory=lambda: np.full(3, 1e-4))  # (3,)
+    tukey_c: float | None = 15.0  # Tukey threshold on whitened range errors (both scripts); None: plain least squares
+    landmark_prior_sigma: float = 1.0  # [m] prior on landmarks at their surveyed positions (Eq. 4)
+    first_pose_sigmas: NDArray = field(default_factory=lambda: np.array([1.0, 1.0, np.pi]))  # (3,) prior on pose 0 at ground truth
+    first_velocity_sigmas: NDArray = field(default_factory=lambda: np.array([1.0, 1.0, np.pi]))  # (3,) prior on velocity 0
+    first_velocity: NDArray = field(default_factory=lambda: np.full(3, 1e-4))  # (3,) its mean
     range_correction_steps: int = 0  # fit r' = a r + b on ranges of the first N poses; 0: none
     start_after_ranges: int = 0  # incremental solvers start after this many ranges (batch LM first)
     landmarks_up_front: bool = False  # True: every landmark and its prior enter at pose 0; else at first sighting
@@ -73,10 +73,6 @@ class PaperSetup:
             velocity_sigmas=np.array([0.5, 0.5, 1.0]),
             interpolated_velocity_sigmas=np.array([0.5, 0.5, 1.0]),
             range_sigma=1.0,
-            tukey_c=15.0,
-            landmark_prior_sigma=1.0,
-            first_pose_sigmas=np.array([1.0, 1.0, np.pi]),
-            first_velocity_sigmas=np.array([1.0, 1.0, np.pi]),
             final_updates=10,
         )
 
@@ -89,10 +85,6 @@ class PaperSetup:
             velocity_sigmas=np.array([0.05, 0.01, 0.02]),
             interpolated_velocity_sigmas=np.array([0.5, 0.01, 0.02]),
             range_sigma=20.0,
-            tukey_c=15.0,
-            landmark_prior_sigma=1.0,
-            first_pose_sigmas=np.array([1.0, 1.0, np.pi]),
-            first_velocity_sigmas=np.array([1.0, 1.0, np.pi]),
             range_correction_steps=3000,
             start_after_ranges=50,
             landmarks_up_front=True,
