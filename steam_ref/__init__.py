@@ -8,7 +8,15 @@ the code as [YIB Eq. n]; see docs/references.md.
 
 from .bayes_tree import BayesTree, IncrementalSolver, ISAM2Params
 from .batch import BatchResult, batch_solve, gauss_newton, levenberg_marquardt
-from .errors import DataError, ShapeError, SteamError, UnderdeterminedError, UnknownVariableError
+from .errors import (
+    DataError,
+    IllConditionedWarning,
+    NumericalError,
+    ShapeError,
+    SteamError,
+    UnderdeterminedError,
+    UnknownVariableError,
+)
 from .factors import (
     BearingFactor,
     BearingRangeFactor,
@@ -34,6 +42,7 @@ __version__ = "0.1.0"
 
 __all__ = [
     "SteamError", "ShapeError", "DataError", "UnknownVariableError", "UnderdeterminedError",
+    "NumericalError", "IllConditionedWarning",
     "Key", "X", "L", "Values", "FactorGraph",
     "Factor", "GPPriorFactor", "PriorFactor", "OdometryFactor", "VelocityFactor", "RangeFactor",
     "BearingFactor", "BearingRangeFactor", "InterpolatedFactor", "gp_prior_factors",

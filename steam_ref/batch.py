@@ -4,16 +4,25 @@ Each iteration linearizes every factor at θ̄ (Eq. 9), solves 𝓘 δθ* = Aᵀ
 Cholesky under the chosen ordering ('xl': the paper's PB, 'amd': PBVR, 'natural'; see
 :mod:`steam_ref.linear.ordering`), and updates
 θ̄ ← θ̄ + δθ*. The ordering depends only on which variables share factors, so it is computed once.
+
+Iterations stop on GTSAM's rules (the cost, or its relative decrease, below a tolerance) or on a
+small step. A stopping rule is not a proof, so before a result says ``converged`` the returned
+estimate is checked (:func:`check_stationarity`): one more Gauss-Newton step from it must promise
+to lower the cost by no more than the tolerance, and 𝓘 there must be well enough conditioned for
+float64 to compute that step at all.
 """
 
 from __future__ import annotations
 
+import math
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 
-from .errors import SteamError
+from .errors import IllConditionedWarning, NumericalError, SteamError
 from .graph import FactorGraph
 from .variables import Values
 from .linear import ordering as linear_ordering
@@ -21,7 +30,17 @@ from .linear.ordering import Ordering, sparse_backend
 from .linear.solve import SparseCholesky
 from .linear.system import LinearSystem, linearize
 
-__all__ = ["Iteration", "BatchResult", "make_ordering", "gauss_newton", "levenberg_marquardt", "batch_solve"]
+__all__ = [
+    "Iteration", "Stationarity", "BatchResult", "MAX_CONDITION", "make_ordering", "check_stationarity",
+    "gauss_newton", "levenberg_marquardt", "batch_solve",
+]
+
+# Largest condition number of the scaled information matrix for which a result may say "converged".
+# Sparse Cholesky's relative error in the step is about cond · ε (ε = 2.2e-16 in float64) [Higham,
+# Accuracy and Stability of Numerical Algorithms, Thm. 10.6 with van der Sluis's scaling]; at 1e12 that
+# is 2e-4, still enough for the step to tell a stationary point from a slope. Beyond it the check
+# itself cannot be trusted.
+MAX_CONDITION = 1e12
 
 
 @dataclass(frozen=True)
@@ -35,17 +54,37 @@ class Iteration:
 
 
 @dataclass(frozen=True)
+class Stationarity:
+    """What :func:`check_stationarity` found at an estimate θ̄ (A, b linearized there, 𝓘 = AᵀA)."""
+
+    cost: float  # the cost at θ̄
+    predicted_decrease: float  # ½ (Aᵀb)ᵀ 𝓘⁻¹ (Aᵀb): what one more Gauss-Newton step would gain
+    gradient_norm: float  # ‖Aᵀb‖∞, the cost's gradient (zero at a stationary point)
+    condition: float  # 1-norm condition estimate of D^-½ 𝓘 D^-½, D = diag 𝓘 (units do not matter)
+
+    @property
+    def well_conditioned(self) -> bool:
+        """Whether float64 resolves the Gauss-Newton step here (condition ≤ :data:`MAX_CONDITION`)."""
+        return self.condition <= MAX_CONDITION
+
+    def holds(self, relative_tolerance: float, absolute_tolerance: float) -> bool:
+        """Well conditioned, and one more step would lower the cost by at most the tolerance."""
+        return self.well_conditioned and self.predicted_decrease <= max(relative_tolerance * self.cost, absolute_tolerance)
+
+
+@dataclass(frozen=True)
 class BatchResult:
     """The outcome of a batch solve."""
 
     values: Values  # final estimate
     initial_cost: float  # cost at the initial estimate
     iterations: list[Iteration] = field(default_factory=list)  # one per iteration
-    converged: bool = False  # a stopping rule was met before max_iterations
-    reason: str = ""  # which rule stopped it
+    converged: bool = False  # a stopping rule was met AND the returned estimate passed the stationarity check
+    reason: str = ""  # which rule stopped it, and what the check found
     ordering: Ordering | None = None  # elimination order used
     factor_nnz: int = 0  # nonzeros of the Cholesky factor under that ordering
     backend: str = ""  # sparse Cholesky backend
+    stationarity: Stationarity | None = None  # the check at the returned estimate (None: not checked)
 
     @property
     def cost(self) -> float:
@@ -68,13 +107,87 @@ def _step(graph: FactorGraph, values: Values, ordering: Ordering, backend: str, 
     if damping > 0:
         info = info + damping * sp.diags(info.diagonal())
     chol = SparseCholesky.factor(info.tocsc(), ordering, backend)
-    return system.split(chol.solve(rhs)), sum(g.cost for g in groups), chol.nnz
+    delta = chol.solve(rhs)
+    if not np.all(np.isfinite(delta)):
+        bad = int(np.flatnonzero(~np.isfinite(delta))[0])
+        key = ordering.keys[int(np.searchsorted(ordering.offsets, bad, side="right") - 1)]
+        raise NumericalError(f"the Gauss-Newton step of {key!r} is not finite (the information matrix overflows)")
+    return system.split(delta), sum(g.cost for g in groups), chol.nnz
 
 
-def _prepare(graph: FactorGraph, initial: Values, ordering: str | Ordering, backend: str | None) -> tuple[str, Ordering, float]:
-    """Checks shared by both solvers: the backend, the estimates' sizes, the ordering, the start cost."""
+def _scaled_condition(info: sp.csc_matrix, chol: SparseCholesky) -> float:
+    """1-norm condition estimate of S 𝓘 S, S = diag(𝓘)^-½, from the factor of 𝓘 [Higham & Tisseur 2000]."""
+    s = 1.0 / np.sqrt(info.diagonal())
+    scaled = sp.diags(s) @ info @ sp.diags(s)
+    n = info.shape[0]
+    apply = lambda v: chol.solve(np.ravel(v) / s) / s  # noqa: E731  (S 𝓘 S)⁻¹ = S⁻¹ 𝓘⁻¹ S⁻¹
+    inverse = spla.LinearOperator((n, n), matvec=apply, rmatvec=apply, dtype=float)  # symmetric
+    return float(abs(scaled).sum(axis=0).max() * spla.onenormest(inverse))
+
+
+def check_stationarity(graph: FactorGraph, values: Values, ordering: Ordering, backend: str | None = None) -> Stationarity:
+    """How far ``values`` is from a stationary point of the cost, and whether float64 can tell.
+
+    Linearizes at θ̄ and computes the Gauss-Newton step δ = 𝓘⁻¹Aᵀb: its model decrease ½ (Aᵀb)ᵀδ is
+    what one more iteration would gain, a scale-free measure of the gradient Aᵀb (zero exactly at a
+    stationary point). The condition estimate says whether that step means anything.
+    """
+    backend = sparse_backend(backend)
+    groups = linearize(graph.factors, values)
+    system = LinearSystem.from_groups(groups, ordering)
+    info, rhs = system.information()
+    chol = SparseCholesky.factor(info, ordering, backend)
+    delta = chol.solve(rhs)
+    return Stationarity(
+        cost=sum(g.cost for g in groups),
+        predicted_decrease=0.5 * float(rhs @ delta),
+        gradient_norm=float(np.max(np.abs(rhs))) if len(rhs) else 0.0,
+        condition=_scaled_condition(info, chol),
+    )
+
+
+def _certify(graph, values, order, backend, rule: str, tolerances: tuple[float, float], check: bool) -> tuple[bool, str, Stationarity | None]:
+    """(converged, reason, check) for an estimate where ``rule`` ('' for none) stopped the iterations."""
+    if not check:
+        return False, f"{rule or 'max_iterations'} (stationarity not checked)", None
+    found = check_stationarity(graph, values, order, backend)
+    if not found.well_conditioned:
+        message = (
+            f"{rule or 'max_iterations'}; the information matrix is too ill-conditioned to trust the answer: condition ≈ "
+            f"{found.condition:.1e} > {MAX_CONDITION:.0e} (see docs/derivations.md, 'The smallest time gap')"
+        )
+        warnings.warn(message, IllConditionedWarning, stacklevel=3)
+        return False, message, found
+    if not rule:
+        return False, "max_iterations", found
+    if not found.holds(*tolerances):
+        return False, f"{rule}, but one more Gauss-Newton step would lower the cost by {found.predicted_decrease:.3g}: not a stationary point", found
+    return True, f"{rule}; stationary (one more step would gain {found.predicted_decrease:.2g})", found
+
+
+def _check_options(**options: float) -> None:
+    """Every tolerance and damping option a finite number ≥ 0 (the damping ones > 0), named on failure."""
+    for name, value in options.items():
+        if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)) or not math.isfinite(value) or value < 0:
+            raise SteamError(f"{name} must be a finite number ≥ 0, got {value!r}")
+        if name in ("initial_damping", "max_damping") and value == 0:
+            raise SteamError(f"{name} must be > 0, got {value!r}")
+        if name == "damping_factor" and value <= 1:
+            raise SteamError(f"damping_factor must be > 1, got {value!r}")
+
+
+def _prepare(graph: FactorGraph, initial: Values, ordering: str | Ordering, backend: str | None, max_iterations: int) -> tuple[str, Ordering, float]:
+    """Checks shared by both solvers: the graph and estimates, the backend, the ordering, the start cost."""
+    if isinstance(max_iterations, bool) or not isinstance(max_iterations, (int, np.integer)) or max_iterations < 0:
+        raise SteamError(f"max_iterations must be an integer ≥ 0, got {max_iterations!r}")
+    if len(graph) == 0:
+        raise SteamError("the factor graph is empty: there is nothing to solve")
     backend = sparse_backend(backend)
     graph.check_values(initial)
+    named = set(graph.keys())
+    unconstrained = [k for k in initial if k not in named]
+    if unconstrained:
+        raise SteamError(f"variable {unconstrained[0]!r} has an initial value but no factor names it, so nothing estimates it")
     return backend, make_ordering(graph, initial, ordering, backend), graph.error(initial)
 
 
@@ -88,6 +201,10 @@ def _converged(old: float, new: float, step: float, rtol: float, atol: float, st
     return ""
 
 
+def _norm(delta: dict) -> float:
+    return float(np.sqrt(sum(float(v @ v) for v in delta.values())))
+
+
 def gauss_newton(
     graph: FactorGraph,
     initial: Values,
@@ -98,28 +215,35 @@ def gauss_newton(
     absolute_tolerance: float = 1e-12,
     step_tolerance: float = 1e-9,
     backend: str | None = None,
+    check: bool = True,
     verbose: bool = False,
 ) -> BatchResult:
     """Gauss-Newton: θ̄ ← θ̄ + δθ* with δθ* from Eq. 11, until a stopping rule holds.
 
     Stops when the cost falls below ``absolute_tolerance``, decreases by less than
-    ``relative_tolerance`` times itself, or the step norm is below ``step_tolerance``.
+    ``relative_tolerance`` times itself, or the step norm is below ``step_tolerance``. With ``check``
+    (the default) the result is ``converged`` only if the returned estimate also passes
+    :func:`check_stationarity` with the same tolerances (one more linearization and factorization);
+    an ill-conditioned system gives an :class:`~steam_ref.errors.IllConditionedWarning`. A NaN or inf
+    anywhere raises :class:`~steam_ref.errors.NumericalError` naming the factor or variable.
     """
-    backend, order, cost0 = _prepare(graph, initial, ordering, backend)
-    values, iterations, reason, nnz, cost = initial.copy(), [], "", 0, cost0
+    _check_options(relative_tolerance=relative_tolerance, absolute_tolerance=absolute_tolerance, step_tolerance=step_tolerance)
+    backend, order, cost0 = _prepare(graph, initial, ordering, backend, max_iterations)
+    values, iterations, rule, nnz, cost = initial.copy(), [], "", 0, cost0
     for _ in range(max_iterations):
         delta, _, nnz = _step(graph, values, order, backend, 0.0)
         values = values.retract(delta)
         new_cost = graph.error(values)
-        step = float(np.sqrt(sum(float(v @ v) for v in delta.values())))
+        step = _norm(delta)
         iterations.append(Iteration(new_cost, step))
         if verbose:
             print(f"GN {len(iterations):3d}: cost {new_cost:.9g}  |step| {step:.3g}")
-        reason = _converged(cost, new_cost, step, relative_tolerance, absolute_tolerance, step_tolerance)
+        rule = _converged(cost, new_cost, step, relative_tolerance, absolute_tolerance, step_tolerance)
         cost = new_cost
-        if reason:
+        if rule:
             break
-    return BatchResult(values, cost0, iterations, bool(reason), reason or "max_iterations", order, nnz, backend)
+    converged, reason, found = _certify(graph, values, order, backend, rule, (relative_tolerance, absolute_tolerance), check)
+    return BatchResult(values, cost0, iterations, converged, reason, order, nnz, backend, found)
 
 
 def levenberg_marquardt(
@@ -135,39 +259,53 @@ def levenberg_marquardt(
     damping_factor: float = 10.0,
     max_damping: float = 1e10,
     backend: str | None = None,
+    check: bool = True,
     verbose: bool = False,
 ) -> BatchResult:
     """Levenberg-Marquardt with Marquardt's scaling: (𝓘 + λ diag 𝓘) δ = Aᵀb.
 
     A step that lowers the cost is taken and λ divided by ``damping_factor``; otherwise λ is
     multiplied by it and the step retried. Stops on the Gauss-Newton rules, or when λ exceeds
-    ``max_damping``.
+    ``max_damping`` (no step lowers the cost). ``converged`` as in :func:`gauss_newton`.
     """
-    backend, order, cost0 = _prepare(graph, initial, ordering, backend)
-    values, iterations, reason, nnz, lam, cost = initial.copy(), [], "", 0, initial_damping, cost0
-    while len(iterations) < max_iterations and not reason:
+    _check_options(
+        relative_tolerance=relative_tolerance, absolute_tolerance=absolute_tolerance, step_tolerance=step_tolerance,
+        initial_damping=initial_damping, damping_factor=damping_factor, max_damping=max_damping,
+    )
+    backend, order, cost0 = _prepare(graph, initial, ordering, backend, max_iterations)
+    values, iterations, rule, nnz, lam, cost = initial.copy(), [], "", 0, initial_damping, cost0
+    while len(iterations) < max_iterations and not rule:
         delta, _, nnz = _step(graph, values, order, backend, lam)
         trial = values.retract(delta)
         new_cost = graph.error(trial)
-        step = float(np.sqrt(sum(float(v @ v) for v in delta.values())))
+        step = _norm(delta)
         accepted = new_cost < cost
         iterations.append(Iteration(new_cost if accepted else cost, step, lam, accepted))
         if verbose:
             print(f"LM {len(iterations):3d}: cost {new_cost:.9g} λ {lam:.1e} {'ok' if accepted else 'rejected'}")
         if accepted:
-            reason = _converged(cost, new_cost, step, relative_tolerance, absolute_tolerance, step_tolerance)
+            rule = _converged(cost, new_cost, step, relative_tolerance, absolute_tolerance, step_tolerance)
             values, cost, lam = trial, new_cost, max(lam / damping_factor, 1e-12)
         else:
             lam *= damping_factor
             if lam > max_damping:
-                reason = f"damping {lam:.1e} above {max_damping:.1e}: no step lowers the cost"
-    return BatchResult(values, cost0, iterations, bool(reason), reason or "max_iterations", order, nnz, backend)
+                rule = f"damping {lam:.1e} above {max_damping:.1e}: no step lowers the cost"
+    converged, reason, found = _certify(graph, values, order, backend, rule, (relative_tolerance, absolute_tolerance), check)
+    return BatchResult(values, cost0, iterations, converged, reason, order, nnz, backend, found)
 
 
 def batch_solve(graph: FactorGraph, initial: Values, *, method: str = "gn", **options) -> Values:
-    """The MAP estimate of Eq. 6 by Gauss-Newton ('gn') or Levenberg-Marquardt ('lm')."""
+    """The MAP estimate of Eq. 6 by Gauss-Newton ('gn') or Levenberg-Marquardt ('lm').
+
+    Raises :class:`~steam_ref.errors.NumericalError` unless the result is ``converged`` (checked):
+    this short form returns only the estimate, so it returns only one it has checked.
+    """
     if method == "gn":
-        return gauss_newton(graph, initial, **options).values
-    if method == "lm":
-        return levenberg_marquardt(graph, initial, **options).values
-    raise SteamError(f"unknown method {method!r}; use 'gn' or 'lm'")
+        result = gauss_newton(graph, initial, **options)
+    elif method == "lm":
+        result = levenberg_marquardt(graph, initial, **options)
+    else:
+        raise SteamError(f"unknown method {method!r}; use 'gn' or 'lm'")
+    if not result.converged:
+        raise NumericalError(f"{method.upper()} did not converge: {result.reason}")
+    return result.values

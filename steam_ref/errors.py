@@ -26,3 +26,11 @@ class UnknownVariableError(SteamError, KeyError):
 
 class UnderdeterminedError(SteamError):
     """The information matrix is singular: some variable is not constrained by the factors."""
+
+
+class NumericalError(SteamError):
+    """A computation gave NaN or inf (an overflowing reading, say), or lost the precision its answer needs."""
+
+
+class IllConditionedWarning(UserWarning):
+    """The information matrix is so ill-conditioned that float64 cannot resolve the answer to the tolerance asked."""

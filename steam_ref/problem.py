@@ -64,7 +64,8 @@ def sequential_batch(problem: SteamProblem, *, chunk: int = 100, ordering: str =
     Gauss-Newton on everything at once, which then stops in a local minimum. So the batch is
     initialised as a robot would do it: the front end streams the first ``chunk`` poses, they are
     solved (at most 10 Gauss-Newton iterations), the next poses are predicted from that estimate,
-    and so on; the last solve is a full Gauss-Newton on all the data. Returns its result.
+    and so on; the last solve is a full Gauss-Newton on all the data. Returns its result (only that
+    one is checked for stationarity).
     """
     front = FrontEnd(problem.readings, problem.setup, problem.layout)
     graph, values, stop = FactorGraph(), Values(), chunk
@@ -75,7 +76,7 @@ def sequential_batch(problem: SteamProblem, *, chunk: int = 100, ordering: str =
             values.insert(k, v)
         if step.is_state and (step.pose >= stop or front.done):
             its = final_iterations if front.done else 10
-            result = gauss_newton(graph, values, ordering=ordering, max_iterations=its, **options)
+            result = gauss_newton(graph, values, ordering=ordering, max_iterations=its, check=front.done, **options)
             values = result.values
             front.rebase(values[X(step.pose)])
             stop = (step.pose // chunk + 1) * chunk

@@ -71,7 +71,8 @@ class PeriodicBatchSolver(OnlineSolver):
         self.graph.add(factors)
         for k in values:
             self.values.insert(k, values[k])
-        result = gauss_newton(self.graph, self.values, ordering=self.ordering, **self.options)
+        # check=False: the paper's PB stops on GTSAM's rule alone, and timing it is the point.
+        result = gauss_newton(self.graph, self.values, ordering=self.ordering, check=False, **self.options)
         self.values = result.values
         self.iterations.append(len(result.iterations))
 

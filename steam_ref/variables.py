@@ -14,7 +14,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from .errors import ShapeError, UnknownVariableError
+from .errors import NumericalError, ShapeError, SteamError, UnknownVariableError
 
 __all__ = ["Key", "X", "L", "Values"]
 
@@ -48,11 +48,17 @@ class Values(Mapping):
         self._data: dict[Key, NDArray] = {}
         pairs = items.items() if isinstance(items, Mapping) else items
         for key, value in pairs:
+            if key in self._data:
+                raise SteamError(f"Values given two estimates of {key!r}")
             self.insert(key, value)
 
     def insert(self, key: Key, value: NDArray) -> None:
-        """Add (or replace) the estimate of one variable; checks it is a finite vector."""
-        v = np.array(value, dtype=float).reshape(-1)
+        """Add (or replace) the estimate of one variable; checks the key and that the value is a finite vector."""
+        if not isinstance(key, Key):
+            raise SteamError(f"{key!r} is not a variable key (make one with X(i) or L(j))")
+        v = np.array(value, dtype=float)
+        if v.ndim != 1 or v.shape[0] == 0:
+            raise ShapeError(f"estimate of {key} must be a non-empty 1-D vector, got shape {v.shape}")
         if not np.all(np.isfinite(v)):
             raise ShapeError(f"estimate of {key} is not finite: {v}")
         old = self._data.get(key)
@@ -93,7 +99,10 @@ class Values(Mapping):
         """θ̄ + δθ: a new Values with the increments added (the state space is a vector space)."""
         out = self.copy()
         for key, step in delta.items():
-            out._data[key] = self[key] + step
+            x = self[key] + step
+            if not np.all(np.isfinite(x)):
+                raise NumericalError(f"the update of {key!r} is not finite: {self[key]} + {np.asarray(step)}")
+            out._data[key] = x
         return out
 
     def states(self) -> list[Key]:

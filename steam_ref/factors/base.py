@@ -40,6 +40,11 @@ def sqrt_information(noise: NDArray | float, m: int) -> NDArray:
             raise SteamError(f"sigmas must be positive, got {noise.tolist()}")
         return np.diag(1.0 / noise)
     if noise.shape == (m, m):
+        if not np.allclose(noise, noise.T, rtol=0.0, atol=1e-12 * np.max(np.abs(noise))):
+            i, j = np.unravel_index(np.argmax(np.abs(noise - noise.T)), noise.shape)
+            raise SteamError(
+                f"noise covariance is not symmetric: entry ({i}, {j}) = {float(noise[i, j])!r} but ({j}, {i}) = {float(noise[j, i])!r}"
+            )
         try:
             # Σ⁻¹ = Wᵀ W with W upper triangular: W = chol(Σ⁻¹)ᵀ.
             return np.linalg.cholesky(np.linalg.inv(noise)).T
@@ -74,6 +79,16 @@ class Factor:
     _batched: ClassVar[tuple[str, ...]] = ("sqrt_information",)  # per-factor arrays
     _batched_factors: ClassVar[tuple[str, ...]] = ()  # wrapped factors, stacked by their own class
     key_dims: ClassVar[tuple[int, ...]] = ()
+
+    def __post_init__(self) -> None:
+        """Every factor names each variable once: two Jacobian blocks of one variable would be added by
+        a batch solve but overwrite each other in a clique, so the two would solve different problems."""
+        for k in self.keys:
+            if not isinstance(k, Key):
+                raise SteamError(f"{type(self).__name__}: {k!r} is not a variable key (make one with X(i) or L(j))")
+        repeated = [k for i, k in enumerate(self.keys) if k in self.keys[:i]]
+        if repeated:
+            raise SteamError(f"{type(self).__name__} names variable {repeated[0]!r} twice (keys {self.keys})")
 
     @property
     def dim(self) -> int:

@@ -157,6 +157,13 @@ def _bearing_row(x: NDArray, l: NDArray) -> tuple[NDArray, NDArray, NDArray]:
     return np.arctan2(dy, dx) - x[..., 2], Jx, np.stack([-dy / r2, dx / r2], axis=-1)
 
 
+def _check_range(measured: float) -> None:
+    """A range is a distance: a negative one is a bad reading, not a far landmark."""
+    r = np.asarray(measured, dtype=float)
+    if np.any(r < 0):
+        raise SteamError(f"a range cannot be negative, got {float(r.reshape(-1)[0])!r}")
+
+
 @dataclass(frozen=True, eq=False)
 class RangeFactor(Factor):
     """Range from the robot's position to a landmark, ‖[x y]ᵀ - ℓ‖₂.  [YIB Eq. 33]"""
@@ -168,7 +175,8 @@ class RangeFactor(Factor):
 
     @classmethod
     def create(cls, state: Key, landmark: Key, measured: float, sigma: float, *, loss: RobustLoss | None = None) -> RangeFactor:
-        """Range reading ``measured`` from state ``state`` to landmark ``landmark``."""
+        """Range reading ``measured`` (m, not negative) from state ``state`` to landmark ``landmark``."""
+        _check_range(measured)
         return cls((state, landmark), sqrt_information(sigma, 1), measured=_vector(measured, 1, "range"), loss=loss)
 
     def error(self, x: NDArray, l: NDArray) -> NDArray:
@@ -213,6 +221,7 @@ class BearingRangeFactor(Factor):
     @classmethod
     def create(cls, state: Key, landmark: Key, bearing: float, range_: float, noise: NDArray, *, loss: RobustLoss | None = None) -> BearingRangeFactor:
         """Bearing-range reading; noise is sigmas (2,) or a covariance (2, 2) for [bearing, range]."""
+        _check_range(range_)
         return cls((state, landmark), sqrt_information(noise, 2), measured=_vector([bearing, range_], 2, "bearing-range"), loss=loss)
 
     def error(self, x: NDArray, l: NDArray) -> NDArray:

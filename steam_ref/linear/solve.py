@@ -31,9 +31,37 @@ def _unconstrained_variable(info: sp.csc_matrix, ordering: Ordering, column: int
     zero = np.flatnonzero(diag <= 0)
     col = int(zero[0]) if len(zero) else column
     if col is None:
-        return "the information matrix is singular (the factors leave some combination of variables free)"
+        return (
+            "the information matrix is not positive definite in float64: the factors leave some combination of "
+            f"variables free, or it is too ill-conditioned (its diagonal spans {float(diag.max() / diag.min()):.1e})"
+        )
     pos = int(np.searchsorted(ordering.offsets, col, side="right") - 1)
-    return f"variable {ordering.keys[pos]!r} (column {col}) is not constrained by the factors"
+    if len(zero):
+        return f"variable {ordering.keys[pos]!r} (column {col}) is not constrained by the factors"
+    spread = float(diag.max() / diag.min())
+    return (
+        f"elimination breaks down at variable {ordering.keys[pos]!r} (column {col}): the factors leave it free, "
+        f"or the information matrix is too ill-conditioned for float64 (its diagonal spans {spread:.1e})"
+    )
+
+
+def _superlu(info: sp.csc_matrix) -> tuple[spla.SuperLU | None, int | None]:
+    """SuperLU in natural order without pivoting: (the factor, None), or (None, first failing column or None)."""
+    options = dict(permc_spec="NATURAL", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
+    try:
+        lu = spla.splu(info, **options)
+    except RuntimeError:  # "Factor is exactly singular": find where, on 𝓘 + 10⁻¹² diag 𝓘
+        try:
+            nudged = spla.splu(sp.csc_matrix(info + 1e-12 * sp.diags(info.diagonal())), **options)
+        except RuntimeError:
+            return None, None
+        small = np.flatnonzero(nudged.U.diagonal() < 1e-9 * info.diagonal())
+        return None, int(small[0]) if len(small) else None
+    u = lu.U.diagonal()
+    tiny = np.flatnonzero(~(u > 1e-13 * np.max(np.abs(u))))
+    if len(tiny) or np.any(lu.perm_r != np.arange(len(u))):
+        return None, int(tiny[0]) if len(tiny) else None
+    return lu, None
 
 
 @dataclass
@@ -56,17 +84,16 @@ class SparseCholesky:
 
             try:
                 f = cholesky(info, ordering_method="natural")
+                nnz = int(f.L().nnz)  # CHOLMOD may find the failure only here, when it converts the factor
             except CholmodNotPositiveDefiniteError as exc:
-                raise UnderdeterminedError(_unconstrained_variable(info, ordering) + f" ({exc})") from None
-            return cls(backend, int(f.L().nnz), f)
-        try:
-            lu = spla.splu(info, permc_spec="NATURAL", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
-        except RuntimeError as exc:  # "Factor is exactly singular"
-            raise UnderdeterminedError(_unconstrained_variable(info, ordering) + f" ({exc})") from None
-        u = lu.U.diagonal()
-        tiny = np.flatnonzero(~(u > 1e-13 * np.max(np.abs(u))))
-        if len(tiny) or np.any(lu.perm_r != np.arange(len(u))):
-            raise UnderdeterminedError(_unconstrained_variable(info, ordering, int(tiny[0]) if len(tiny) else None))
+                column = getattr(exc, "column", None)
+                if column is None:  # simplicial CHOLMOD does not say where: find it by SuperLU
+                    column = _superlu(info)[1]
+                raise UnderdeterminedError(_unconstrained_variable(info, ordering, column) + f" (CHOLMOD: {exc})") from None
+            return cls(backend, nnz, f)
+        lu, column = _superlu(info)
+        if lu is None:
+            raise UnderdeterminedError(_unconstrained_variable(info, ordering, column))
         return cls(backend, int(lu.L.nnz), lu)
 
     def solve(self, rhs: NDArray) -> NDArray:

@@ -16,7 +16,7 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
-from ..errors import ShapeError, UnknownVariableError
+from ..errors import NumericalError, ShapeError, UnknownVariableError
 from ..factors import Factor
 from ..variables import Key, Values
 from .ordering import Ordering
@@ -79,24 +79,46 @@ def _variables(values: Values, group: list[Factor]) -> list[NDArray]:
     return xs
 
 
+def _first_non_finite(ids: list[int], e: NDArray, costs: NDArray, Js: tuple[NDArray, ...] | None) -> tuple[int, str] | None:
+    """(position in ``ids``, what) of the first factor whose error, cost or a Jacobian is NaN or inf."""
+    bad = {"error": ~np.isfinite(e).all(axis=1) | ~np.isfinite(costs)}
+    for slot, J in enumerate(Js or ()):
+        bad[f"Jacobian for its key {slot}"] = ~np.isfinite(J).all(axis=(1, 2))
+    hits = [(int(np.argmax(b)), what) for what, b in bad.items() if b.any()]
+    return min(hits) if hits else None
+
+
 def linearize(factors: Sequence[Factor], values: Values, *, jacobians: bool = True) -> list[LinearizedGroup]:
-    """Whitened Jacobians and right-hand sides of ``factors`` at ``values``.  [YIB Eq. 9, 21]"""
-    out = []
+    """Whitened Jacobians and right-hand sides of ``factors`` at ``values``.  [YIB Eq. 9, 21]
+
+    Raises :class:`~steam_ref.errors.NumericalError` naming the first factor (in the order given)
+    whose error or Jacobian is NaN or inf at ``values``: an overflowing reading, say.
+    """
+    out, failures = [], []
     for ids in _group_by_type(factors).values():
         group = [factors[i] for i in ids]
         batch = type(group[0]).stack(group)
         xs = _variables(values, group)
         W = batch.sqrt_information
-        e = np.einsum("nij,nj->ni", W, batch.error(*xs))
-        s = np.linalg.norm(e, axis=1)
-        if batch.loss is None:
-            scale, costs = np.ones_like(s), 0.5 * s**2
-        else:
-            scale, costs = np.sqrt(batch.loss.weight(s)), batch.loss.rho(s)
-        Js = None
-        if jacobians:
-            Js = tuple(scale[:, None, None] * (W @ J) for J in batch.jacobians(*xs))
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # checked just below
+            e = np.einsum("nij,nj->ni", W, batch.error(*xs))
+            s = np.linalg.norm(e, axis=1)
+            if batch.loss is None:
+                scale, costs = np.ones_like(s), 0.5 * s**2
+            else:
+                scale, costs = np.sqrt(batch.loss.weight(s)), batch.loss.rho(s)
+            Js = None
+            if jacobians:
+                Js = tuple(scale[:, None, None] * (W @ J) for J in batch.jacobians(*xs))
+        hit = _first_non_finite(ids, e, costs, Js)
+        if hit is not None:
+            failures.append((ids[hit[0]], hit[1]))
         out.append(LinearizedGroup(np.asarray(ids), [f.keys for f in group], Js, -scale[:, None] * e, costs))
+    if failures:
+        i, what = min(failures)
+        f = factors[i]
+        at = ", ".join(f"{k!r} = {values[k].tolist()}" for k in f.keys)
+        raise NumericalError(f"factor {i} ({type(f).__name__} on {', '.join(map(repr, f.keys))}) has a non-finite {what} at {at}")
     return out
 
 
