@@ -2,13 +2,18 @@
 
 Oracles: numpy.linalg.inv of AᵀA (built from the factors) and of RᵀR (the tree's own square-root
 information matrix, assembled densely). The one-pass :func:`tree_marginals` is also checked
-against the per-variable root walk and counted: it visits each clique once.
+against the per-variable root walk and counted: it visits each clique once. Joint covariances of
+variables far apart in a few-hundred-state tree are checked against the dense inverse, and their
+memory (tracemalloc) against what any n × n, or even n × k, dense array would take.
 """
 
 from __future__ import annotations
 
+import tracemalloc
+
 import numpy as np
 import pytest
+import scipy.sparse as sp
 from problems import small_problem
 from test_bayes_tree import dense_system, random_sparse_factors
 from test_linear import BACKENDS
@@ -184,3 +189,82 @@ def test_sparse_joint_marginals_equal_dense_inverse(problem, backend):
     for group, got in zip(groups, sparse_joint_marginals(problem.graph.factors, problem.initial, groups, backend)):
         block = block_of(dense, natural, group)
         np.testing.assert_allclose(got, block, rtol=1e-9, atol=1e-12 * np.abs(block).max())
+
+
+def trajectory_tree(rng, n_states: int, ordering: str) -> tuple[BayesTree, object]:
+    """A GP trajectory with 3 landmarks, linearized at its initial guess and eliminated into a tree in
+    constrained minimum-degree order (deep: the first state ~n/2 cliques below the root) or AMD's."""
+    problem = small_problem(rng, n_states=n_states, n_landmarks=3)
+    keys = problem.graph.keys()
+    dims = {k: problem.initial.dim(k) for k in keys}
+    if ordering == "amd":
+        order = make_ordering("amd", keys, dims, [f.keys for f in problem.graph])
+    else:
+        cmd = constrained_min_degree(keys, [f.keys for f in problem.graph])
+        order = Ordering(tuple(cmd), tuple(dims[k] for k in cmd))
+    gaussian = [gf for g in linearize(problem.graph.factors, problem.initial) for gf in g.gaussian_factors()]
+    return BayesTree.from_factors(gaussian, order), problem
+
+
+def _held_together(tree: BayesTree, keys) -> bool:
+    """True when one clique holds every one of ``keys`` (frontal or separator)."""
+    return any(set(keys) <= set(c.frontals) | set(c.separator) for c in tree.cliques.values())
+
+
+@pytest.mark.parametrize("ordering", ["min_degree", "amd"])
+def test_joint_covariance_of_far_apart_variables_equals_dense_inverse(rng, ordering):
+    """First and last of 300 states, a landmark with a state, three states in three cliques."""
+    n = 300
+    tree, problem = trajectory_tree(rng, n, ordering)
+    keys = problem.graph.keys()
+    natural = natural_ordering(keys, {k: problem.initial.dim(k) for k in keys})
+    A, _ = LinearSystem.build(problem.graph.factors, problem.initial, natural).to_dense()
+    dense = np.linalg.inv(A.T @ A)
+    first, middle, last = sr.X(0), sr.X(n // 2), sr.X(n - 1)
+    assert len(tree.path_to_root(tree.clique_containing(first))) > n // 4  # far below the root
+    assert len({tree.clique_containing(k) for k in (first, middle, last)}) == 3
+    groups = [[first, last], [sr.L(1), first], [last, middle, first], [sr.X(77), sr.L(0), last, sr.X(201), first]]
+    for group in groups:
+        assert not _held_together(tree, group)
+        block = block_of(dense, natural, group)
+        got = tree_joint_covariance(tree, group)
+        np.testing.assert_allclose(got, block, rtol=1e-8, atol=1e-10 * np.abs(block).max())
+    assert np.abs(block_of(dense, natural, [first, last])[:6, 6:]).max() > 1e-8  # the cross block is not trivially zero
+
+
+def test_joint_covariance_memory_does_not_grow_with_distance(rng):
+    """2,000 states: the joint of the first and the last state takes no more memory than that of the
+    first and its neighbour, both a walk of ~1,000 cliques, and far less than one dense (n, 12) block
+    (1.2 MB; an n × n matrix would take 1.2 GB, the former R of the ~1,000 cliques' variables 0.3 GB)."""
+    n = 2000
+    tree, problem = trajectory_tree(rng, n, "min_degree")
+    first, last = sr.X(0), sr.X(n - 1)
+    paths = [set(tree.path_to_root(tree.clique_containing(k))) for k in (first, last)]
+    assert len(paths[0]) >= n // 3 and not (paths[0] <= paths[1] or paths[1] <= paths[0])  # deep, in two branches
+    n_scalar = sum(problem.initial.dim(k) for k in problem.graph.keys())
+
+    def peak_bytes(keys) -> int:
+        tracemalloc.start()
+        try:
+            tree_joint_covariance(tree, keys)
+            return tracemalloc.get_traced_memory()[1]
+        finally:
+            tracemalloc.stop()
+
+    near, far = peak_bytes([first, sr.X(1)]), peak_bytes([first, last])
+    bound = 8 * n_scalar * 12  # float64 (n, 12): the right-hand side of two triangular solves with R
+    assert far < bound / 2 and near < bound / 2, (far, near, bound)
+    assert far < 2 * near + 64_000, (far, near)  # ~ constant in the distance: not even O(n · distance)
+
+
+def test_sqrt_information_is_sparse_and_squares_to_the_information(rng):
+    """The tree's assembled R (scipy.sparse, upper triangular): RᵀR = AᵀA in the tree's order, and its
+    nonzeros fit in the cliques' [R S] blocks."""
+    tree, factors, _ = random_tree(rng, 1)
+    R, _, tree_order = tree.to_sparse()
+    assert sp.issparse(R) and sp.triu(R).nnz == R.nnz
+    assert R.nnz <= sum(c.R.shape[0] * (c.R.shape[1] + c.S.shape[1]) for c in tree.cliques.values())
+    A, _ = dense_system(factors, tree_order)
+    dense = R.toarray()
+    np.testing.assert_allclose(dense.T @ dense, A.T @ A, rtol=1e-9, atol=1e-12 * np.abs(A.T @ A).max())
+    np.testing.assert_array_equal(tree.to_dense()[0], dense)

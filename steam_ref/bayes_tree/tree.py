@@ -20,6 +20,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse as sp
 from numpy.typing import NDArray
 from scipy.linalg import lapack
 
@@ -204,8 +205,8 @@ class BayesTree(CliqueTree[Clique]):
             stack.extend(self.children[c])
         return delta
 
-    def to_dense(self) -> tuple[NDArray, NDArray, Ordering]:
-        """The assembled square-root information matrix: ``(R, d, ordering)``.
+    def to_sparse(self) -> tuple[sp.csr_matrix, NDArray, Ordering]:
+        """The assembled square-root information matrix: ``(R, d, ordering)``, R sparse.
 
         R (n, n) is upper triangular in ``ordering`` (cliques in postorder, frontals in order);
         RᵀR equals AᵀA = 𝓘 with rows and columns in that order, and R δ = d gives the solution.
@@ -218,3 +219,8 @@ class BayesTree(CliqueTree[Clique]):
             r0 = ordering.offset_of[clique.frontals[0]]
             d[r0 : r0 + clique.R.shape[0]] = clique.d
         return R, d, ordering
+
+    def to_dense(self) -> tuple[NDArray, NDArray, Ordering]:
+        """:meth:`to_sparse` with R as a dense (n, n) array (for tests and figures of small trees)."""
+        R, d, ordering = self.to_sparse()
+        return R.toarray(), d, ordering

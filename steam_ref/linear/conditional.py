@@ -2,7 +2,8 @@
 information matrix R, with RᵀR = AᵀA = 𝓘.  [YIB Eq. 11, 21, 25]
 
 A Bayes tree's cliques are such conditionals; stacking their rows in elimination order gives the
-upper-triangular R of A = QR. Used by the tree's ``to_dense`` and by covariance recovery.
+upper-triangular R of A = QR, sparse: only the conditionals' blocks are stored. Used by the tree's
+``to_sparse`` and ``to_dense`` (covariances come from the cliques themselves, :mod:`steam_ref.covariance`).
 """
 
 from __future__ import annotations
@@ -11,6 +12,7 @@ from collections.abc import Sequence
 from typing import Protocol
 
 import numpy as np
+import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from ..variables import Key
@@ -30,21 +32,24 @@ class Conditional(Protocol):
     S: NDArray  # (n_f, n_s)
 
 
-def assemble_sqrt_information(ordering: Ordering, conditionals: Sequence[Conditional]) -> NDArray:
-    """Dense upper-triangular R (n, n) of the conditionals, rows and columns in ``ordering``.
+def assemble_sqrt_information(ordering: Ordering, conditionals: Sequence[Conditional]) -> sp.csr_matrix:
+    """Sparse upper-triangular R (n, n) of the conditionals, rows and columns in ``ordering``.
 
     Every frontal and separator variable must be in ``ordering``, frontals in the order the
     conditional lists them, so each conditional's rows start at the column of its first frontal.
+    Memory is that of the conditionals' blocks [R S], never n × n.
     """
-    n = ordering.total_dim
-    R = np.zeros((n, n))
+    rows, cols, vals = [], [], []
     for c in conditionals:
         r0 = ordering.offset_of[c.frontals[0]]
         nf = c.R.shape[0]
-        R[r0 : r0 + nf, r0 : r0 + nf] = c.R
-        o = 0
-        for k, dim in zip(c.separator, c.separator_dims):
-            c0 = ordering.offset_of[k]
-            R[r0 : r0 + nf, c0 : c0 + dim] = c.S[:, o : o + dim]
-            o += dim
-    return R
+        col = [r0 + np.arange(nf)] + [ordering.offset_of[k] + np.arange(dim) for k, dim in zip(c.separator, c.separator_dims)]
+        block = np.hstack([np.triu(c.R), c.S])  # (n_f, n_f + n_s): its columns are ``col``
+        r, j = np.nonzero(block)
+        rows.append(r0 + r)
+        cols.append(np.concatenate(col)[j])
+        vals.append(block[r, j])
+    n = ordering.total_dim
+    if not rows:
+        return sp.csr_matrix((n, n))
+    return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n, n))
