@@ -75,7 +75,7 @@ def test_lambda_psi_are_the_blocks_of_dense_k_tau_k_inv(rng, kind):
 @pytest.mark.parametrize("d", [1, 3])
 def test_wnoa_closed_form_interpolation_equals_sde(rng, d):
     qc = random_spd(rng, d)
-    sde = LinearSDE.wnoa(qc)
+    sde = LinearSDE.wnoa(qc).general()  # Φ by expm, Q by Van Loan: independent of the closed forms
     t1, tau, t2 = np.sort(rng.uniform(0.5, 4.0, size=3))
     for closed, general in zip(interpolation_matrices(t1, t2, tau, qc), interpolation_matrices_sde(sde, t1, t2, tau)):
         np.testing.assert_allclose(closed, general, rtol=1e-9, atol=1e-11)
@@ -231,7 +231,7 @@ def test_interpolation_matrices_depend_on_gaps_and_qc_only(rng):
     """Memoised on (τ - t₁, t₂ - t₁, Qc): a shifted interval gives the same Λ, Ψ; a Qc of another size
     gets its own (for the WNOA prior Λ and Ψ do not depend on Qc's values, only on its size)."""
     qc = random_spd(rng, 2)
-    sde = LinearSDE.wnoa(qc)
+    sde = LinearSDE.wnoa(qc).general()
     lam, psi = interpolation_matrices(10.0, 12.0, 10.5, qc)
     for closed, general in zip((lam, psi), interpolation_matrices_sde(sde, 3.0, 5.0, 3.5)):
         np.testing.assert_allclose(closed, general, rtol=1e-9, atol=1e-12)
@@ -239,5 +239,5 @@ def test_interpolation_matrices_depend_on_gaps_and_qc_only(rng):
     qc3 = random_spd(rng, 3)
     lam3, psi3 = interpolation_matrices(10.0, 12.0, 10.5, qc3)
     assert lam3.shape == (6, 6)
-    for closed, general in zip((lam3, psi3), interpolation_matrices_sde(LinearSDE.wnoa(qc3), 0.0, 2.0, 0.5)):
+    for closed, general in zip((lam3, psi3), interpolation_matrices_sde(LinearSDE.wnoa(qc3).general(), 0.0, 2.0, 0.5)):
         np.testing.assert_allclose(closed, general, rtol=1e-9, atol=1e-12)
