@@ -144,7 +144,9 @@ class LinearSDE:
         """Q(dt) = ∫₀^dt Φ(dt, s) F Qc Fᵀ Φ(dt, s)ᵀ ds by Van Loan's method: (n, n).  [YIB Eq. 17]
 
         With C = [[-A, F Qc Fᵀ], [0, Aᵀ]] dt, expm(C) = [[·, E₁₂], [0, Φᵀ]] and
-        E₁₂ = ∫₀^dt e^{-A(dt-s)} F Qc Fᵀ e^{Aᵀs} ds, so Q = Φ E₁₂ (C. F. Van Loan, IEEE TAC 1978).
+        E₁₂ = ∫₀^dt e^{-A(dt-s)} F Qc Fᵀ e^{Aᵀs} ds, so Q = Φ E₁₂ [VL78]. expm(C) holds
+        e^{-A dt}, which grows for a decaying mode, and Φ E₁₂ cancels it: for Singer's αdt ≳ 10 only the
+        closed form is accurate (docs/derivations.md, section 6).
         """
         dt, n = _check_dt(dt), self.n
         G = self.F @ self.qc @ self.F.T
