@@ -193,7 +193,8 @@ class StreamingEstimator:
         return Trajectory(self.solver, self.states[: self.n_solved], self.readings.times, self.setup.qc)
 
     def estimate_at(self, t: float, *, covariance: bool = False) -> NDArray | tuple[NDArray, NDArray]:
-        """The state x(t) (6,) at any time within the solved span, with its covariance (6, 6) if asked."""
+        """The state x(t) (6,) at any time from the first solved state on, with its covariance (6, 6) if asked:
+        [YIB Eq. 18] between states, the prior's prediction after the last one (``Trajectory.at``)."""
         return self.solved().at(t, covariance=covariance)
 
     def trajectory(self) -> tuple[NDArray, NDArray]:

@@ -3,7 +3,10 @@
 A :class:`Trajectory` reads a solver's current estimate of the states at the poses ``states``. At a
 state it returns the solver's estimate and marginal covariance; between states tᵢ < t < tⱼ,
 x̄(t) = Λ(t) x̄ᵢ + Ψ(t) x̄ⱼ [YIB Eq. 18] and the covariance from the joint covariance of (xᵢ, xⱼ)
-(:func:`steam_ref.gp.interpolate.interpolate_covariance`).
+(:func:`steam_ref.gp.interpolate.interpolate_covariance`). After the last state t_N it predicts
+by the prior, x̄(t) = Φ(t, t_N) x̄_N and Φ P_N Φᵀ + Q(t - t_N)
+(:func:`steam_ref.gp.interpolate.extrapolate_state_sde`); before the first state there is no
+prior to speak of (the GP starts there, [YIB Eq. 14]) and a query is an error.
 """
 
 from __future__ import annotations
@@ -15,7 +18,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .errors import SteamError
-from .gp.interpolate import interpolate_covariance, interpolation_matrices
+from .gp.interpolate import (
+    extrapolate_covariance_sde,
+    extrapolate_state_sde,
+    interpolate_covariance,
+    interpolation_matrices,
+)
+from .gp.sde import LinearSDE
 from .variables import Key, X
 
 __all__ = ["Trajectory", "Covariances"]
@@ -32,13 +41,14 @@ class Covariances:
 
 
 class Trajectory:
-    """A solver's states at poses ``states`` (sorted), queried at any time in their span."""
+    """A solver's states at poses ``states`` (sorted), queried at any time from the first state on."""
 
     def __init__(self, solver, states: Sequence[int], times: NDArray, qc: NDArray):
         self.solver = solver  # anything with estimate_of, estimate, joint_covariance(s), marginals
         self.states = list(states)  # poses with a state, increasing
         self.times = times  # (n_poses,) time of every pose
         self.qc = qc  # (3, 3) Qc of the WNOA prior
+        self.prior = LinearSDE.wnoa(qc)  # the same prior as an SDE, for prediction after the last state
 
     def neighbours(self, t: float) -> tuple[int, int] | int:
         """The state at time t, or the two states around it."""
@@ -50,8 +60,25 @@ class Trajectory:
         return solved[j] if times[solved[j]] == t else (solved[j - 1], solved[j])
 
     def at(self, t: float, *, covariance: bool = False) -> NDArray | tuple[NDArray, NDArray]:
-        """The state x(t) (6,), with its covariance (6, 6) if asked."""
-        near = self.neighbours(float(t))
+        """The state x(t) (6,), with its covariance (6, 6) if asked, for any t from the first state on.
+
+        Between states: [YIB Eq. 18]; after the last state t_N: the prior's prediction from x̄_N, P_N.
+        """
+        t = float(t)
+        solved, times = self.states, self.times
+        if solved and t < times[solved[0]]:
+            raise SteamError(
+                f"time t={t!r} is before the first estimated state at t={times[solved[0]]:g}: the GP prior starts "
+                f"there, so queries need t >= {times[solved[0]]:g} (after the last state, at t={times[solved[-1]]:g}, "
+                "the prior extrapolates)"
+            )
+        if solved and t > times[solved[-1]]:
+            last, key = times[solved[-1]], X(solved[-1])
+            mean = extrapolate_state_sde(self.prior, last, self.solver.estimate_of(key), t)
+            if not covariance:
+                return mean
+            return mean, extrapolate_covariance_sde(self.prior, last, t, self.solver.joint_covariance([key]))
+        near = self.neighbours(t)
         if isinstance(near, int):
             mean = self.solver.estimate_of(X(near)).copy()
             return (mean, self.solver.joint_covariance([X(near)])) if covariance else mean

@@ -9,6 +9,8 @@ from oracles import condition_gaussian, gp_kernel, gp_mean, random_lti, random_s
 from steam_ref.errors import ShapeError, SteamError
 from steam_ref.gp import (
     LinearSDE,
+    extrapolate_covariance_sde,
+    extrapolate_state_sde,
     interpolate_covariance,
     interpolate_covariance_sde,
     interpolate_state,
@@ -75,7 +77,7 @@ def test_lambda_psi_are_the_blocks_of_dense_k_tau_k_inv(rng, kind):
 @pytest.mark.parametrize("d", [1, 3])
 def test_wnoa_closed_form_interpolation_equals_sde(rng, d):
     qc = random_spd(rng, d)
-    sde = LinearSDE.wnoa(qc)
+    sde = LinearSDE.wnoa(qc).general()  # Φ by expm, Q by Van Loan: independent of the closed forms
     t1, tau, t2 = np.sort(rng.uniform(0.5, 4.0, size=3))
     for closed, general in zip(interpolation_matrices(t1, t2, tau, qc), interpolation_matrices_sde(sde, t1, t2, tau)):
         np.testing.assert_allclose(closed, general, rtol=1e-9, atol=1e-11)
@@ -186,6 +188,71 @@ def test_wnoa_interpolation_properties(t1, length, frac, seed):
     assert np.linalg.eigvalsh(process_noise(tau - t1, qc) - cond).min() > -1e-9 * scale
 
 
+# --- after the last state: the prior's prediction against the dense GP posterior ---------------
+
+
+def extrapolation_sde(rng, kind):
+    """An SDE of each kind with a nonzero input v."""
+    if kind == "random":
+        return LinearSDE(**random_lti(rng, n=4, m=2))
+    qc = random_spd(rng, 2)
+    make = {"wnoa": LinearSDE.wnoa, "wnoj": LinearSDE.wnoj, "singer": lambda q, v: LinearSDE.singer(q, 0.8, v=v)}[kind]
+    return make(qc, v=rng.normal(size=(2 if kind == "wnoa" else 3) * 2))
+
+
+@pytest.mark.parametrize("kind", ["wnoa", "wnoj", "singer", "random"])
+def test_extrapolation_equals_dense_posterior(rng, kind):
+    """Linear measurements of the states only; the dense joint over states and two later times,
+    conditioned on them, has at each later time the mean Φ x̄_N + v and covariance Φ P_N Φᵀ + Q."""
+    sde = extrapolation_sde(rng, kind)
+    n = sde.n
+    est = 0.3 + np.concatenate([[0.0], np.cumsum(rng.uniform(0.3, 1.0, size=3))])
+    later = est[-1] + np.array([0.4, 1.9])
+    all_times = np.concatenate([est, later])
+    K, mu = gp_kernel(all_times, sde, random_spd(rng, n)), gp_mean(all_times, sde, rng.normal(size=n))
+    E = block_index(all_times, est, n)
+    H = np.zeros((2 * est.size, all_times.size * n))
+    H[:, E] = rng.normal(size=(2 * est.size, E.size))  # no column touches a later time
+    post_mean, post_cov = condition_gaussian(mu, K, H, random_spd(rng, H.shape[0], scale=0.1), rng.normal(size=H.shape[0]))
+    last = block_index(all_times, est[-1:], n)
+    for t in later:
+        T = block_index(all_times, [t], n)
+        got = extrapolate_state_sde(sde, est[-1], post_mean[last], t)
+        np.testing.assert_allclose(got, post_mean[T], rtol=1e-7, atol=1e-9 * np.abs(post_mean).max())
+        got_cov = extrapolate_covariance_sde(sde, est[-1], t, post_cov[np.ix_(last, last)])
+        expected = post_cov[np.ix_(T, T)]
+        np.testing.assert_allclose(got_cov, expected, rtol=1e-7, atol=1e-9 * np.abs(expected).max())
+
+
+def test_extrapolation_of_an_exact_state_is_the_dense_conditional(rng):
+    """cov1 = 0: Cov(x(t) | all states) = K_tt - K_tE K_EE⁻¹ K_Et, which is Q(t - t_N) alone."""
+    sde = LinearSDE.singer(random_spd(rng, 2), time_constant=0.6)
+    est, t = np.array([0.1, 0.7, 1.5]), 2.35
+    all_times = np.append(est, t)
+    K = gp_kernel(all_times, sde, random_spd(rng, 6))
+    E, T = block_index(all_times, est, 6), block_index(all_times, [t], 6)
+    expected = K[np.ix_(T, T)] - K[np.ix_(T, E)] @ np.linalg.solve(K[np.ix_(E, E)], K[np.ix_(E, T)])
+    got = extrapolate_covariance_sde(sde, 1.5, t, np.zeros((6, 6)))
+    np.testing.assert_allclose(got, expected, rtol=1e-7, atol=1e-10 * np.abs(expected).max())
+
+
+@pytest.mark.parametrize("t", [1.0, 0.5, np.nan, np.inf])
+def test_extrapolation_needs_a_later_time(rng, t):
+    sde = LinearSDE.wnoa(random_spd(rng, 2))
+    with pytest.raises(SteamError, match=f"t1=1.0, t={t}"):
+        extrapolate_state_sde(sde, 1.0, np.ones(4), t)
+    with pytest.raises(SteamError, match="t > t1"):
+        extrapolate_covariance_sde(sde, 1.0, t, np.eye(4))
+
+
+def test_extrapolation_shapes_are_checked(rng):
+    sde = LinearSDE.wnoa(random_spd(rng, 2))
+    with pytest.raises(ShapeError, match=r"x1.*\(3,\)"):
+        extrapolate_state_sde(sde, 0.0, np.ones(3), 1.0)
+    with pytest.raises(ShapeError, match=r"cov1.*\(4, 4\).*\(4, 3\)"):
+        extrapolate_covariance_sde(sde, 0.0, 1.0, np.ones((4, 3)))
+
+
 # --- errors ---------------------------------------------------------------------------------
 
 
@@ -231,7 +298,7 @@ def test_interpolation_matrices_depend_on_gaps_and_qc_only(rng):
     """Memoised on (τ - t₁, t₂ - t₁, Qc): a shifted interval gives the same Λ, Ψ; a Qc of another size
     gets its own (for the WNOA prior Λ and Ψ do not depend on Qc's values, only on its size)."""
     qc = random_spd(rng, 2)
-    sde = LinearSDE.wnoa(qc)
+    sde = LinearSDE.wnoa(qc).general()
     lam, psi = interpolation_matrices(10.0, 12.0, 10.5, qc)
     for closed, general in zip((lam, psi), interpolation_matrices_sde(sde, 3.0, 5.0, 3.5)):
         np.testing.assert_allclose(closed, general, rtol=1e-9, atol=1e-12)
@@ -239,5 +306,5 @@ def test_interpolation_matrices_depend_on_gaps_and_qc_only(rng):
     qc3 = random_spd(rng, 3)
     lam3, psi3 = interpolation_matrices(10.0, 12.0, 10.5, qc3)
     assert lam3.shape == (6, 6)
-    for closed, general in zip((lam3, psi3), interpolation_matrices_sde(LinearSDE.wnoa(qc3), 0.0, 2.0, 0.5)):
+    for closed, general in zip((lam3, psi3), interpolation_matrices_sde(LinearSDE.wnoa(qc3).general(), 0.0, 2.0, 0.5)):
         np.testing.assert_allclose(closed, general, rtol=1e-9, atol=1e-12)

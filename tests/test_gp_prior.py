@@ -33,8 +33,9 @@ def test_closed_forms_equal_wnoa_sde(rng, d):
     qc = random_spd(rng, d)
     sde = LinearSDE.wnoa(qc)
     for dt in rng.uniform(0.05, 4.0, size=3):
-        np.testing.assert_allclose(transition(dt, d), sde.transition(dt), rtol=1e-12, atol=1e-12)
-        Q = sde.process_noise(dt)
+        np.testing.assert_allclose(transition(dt, d), sde.transition_expm(dt), rtol=1e-12, atol=1e-12)
+        Q = sde.process_noise_van_loan(dt)
+        np.testing.assert_array_equal(sde.process_noise(dt), process_noise(dt, qc))  # the SDE uses the closed form
         np.testing.assert_allclose(process_noise(dt, qc), Q, rtol=1e-10, atol=1e-12 * np.abs(Q).max())
         Qi = process_noise_inverse(dt, qc)
         np.testing.assert_allclose(Qi, np.linalg.inv(Q), rtol=1e-7, atol=1e-9 * np.abs(Qi).max())

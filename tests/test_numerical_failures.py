@@ -157,7 +157,7 @@ def test_condition_estimate_matches_the_dense_one(rng, dt):
 
 def test_condition_grows_as_the_cube_of_the_inverse_gap(rng):
     conds = [dense_scaled_condition(*chain(np.random.default_rng(7), dt)) for dt in (1e-2, 1e-3)]
-    assert 500 < conds[1] / conds[0] < 2000  # Δt⁻³: docs/derivations.md §6
+    assert 500 < conds[1] / conds[0] < 2000  # Δt⁻³: docs/derivations.md §8
 
 
 @pytest.mark.parametrize("method", [sr.gauss_newton, sr.levenberg_marquardt])

@@ -9,7 +9,7 @@ import pytest
 from steam_ref.batch import gauss_newton
 from steam_ref.datasets import generate_synthetic
 from steam_ref.errors import SteamError
-from steam_ref.factors import InterpolatedFactor, RangeFactor, VelocityFactor
+from steam_ref.factors import GPPriorFactor, InterpolatedFactor, RangeFactor, VelocityFactor
 from steam_ref.gp.interpolate import interpolate_covariance, interpolation_matrices
 from steam_ref.graph import FactorGraph
 from steam_ref.variables import Values, X
@@ -199,10 +199,25 @@ def test_bad_options_raise_steam_errors():
         StreamOptions(every=2.5)
 
 
-def test_query_outside_the_span_names_the_time(data):
+def test_query_before_the_first_state_names_the_time_and_the_range(data):
     est = _stream(data, method="pb", max_poses=10)
-    with pytest.raises(SteamError, match="t=25.0"):
-        est.estimate_at(25.0)
+    with pytest.raises(SteamError, match=r"t=-1.5.*t >= 0"):
+        est.estimate_at(-1.5)
+
+
+def test_query_after_the_last_state_is_a_state_with_only_its_gp_prior(data):
+    """Oracle: add an explicit state at t > t_N joined to x_N by the GP prior factor alone and solve the
+    whole problem again; its estimate and marginal are what estimate_at predicts."""
+    est = _stream(data, method="pb", max_poses=10, pb_relative_tolerance=1e-12)
+    assert est.states[-1] == 9
+    t, new = 11.7, X(1000)
+    graph = FactorGraph(list(est.solver.graph.factors) + [GPPriorFactor.wnoa(X(9), new, t - 9.0, SETUP.qc)])
+    start = est.solver.estimate().copy()
+    start.insert(new, np.zeros(6))
+    sol = gauss_newton(graph, start, ordering="amd", relative_tolerance=1e-14, step_tolerance=1e-12).values
+    mean, cov = est.estimate_at(t, covariance=True)
+    np.testing.assert_allclose(mean, sol[new], rtol=1e-8, atol=1e-8)
+    np.testing.assert_allclose(cov, _dense_joint(graph, sol, [new]), rtol=1e-6, atol=1e-10)
 
 
 def test_btgp_time_query_covariance_matches_the_sparse_solve(data):

@@ -1,4 +1,4 @@
-"""GP interpolation between two estimated states, [YIB Eq. 12, 16, 18].
+"""GP interpolation between two estimated states, [YIB Eq. 12, 16, 18], and prediction after the last.
 
 For t₁ < τ < t₂ the posterior mean at τ depends on the two neighbouring states only:
 
@@ -28,6 +28,8 @@ __all__ = [
     "interpolation_matrices_sde",
     "interpolate_state_sde",
     "interpolate_covariance_sde",
+    "extrapolate_state_sde",
+    "extrapolate_covariance_sde",
 ]
 
 
@@ -159,3 +161,35 @@ def interpolate_covariance_sde(
     lam, psi = interpolation_matrices_sde(sde, t1, t2, tau)
     q_tau = sde.process_noise(tau - t1)  # [YIB Eq. 17]
     return _posterior_covariance(lam, psi, q_tau, sde.transition(t2 - tau), joint_cov)
+
+
+# --- beyond the last state: prediction by the prior ---------------------------------------------
+
+
+def _check_after(t1: float, t: float) -> float:
+    t1, t = float(t1), float(t)
+    if not t > t1 or not np.isfinite(t):
+        raise SteamError(f"extrapolation needs a finite t > t1, got t1={t1}, t={t}")
+    return t - t1
+
+
+def extrapolate_state_sde(sde: LinearSDE, t1: float, x1: ArrayLike, t: float) -> NDArray:
+    """x̄(t) = Φ(t, t₁) x̄₁ + v(t, t₁) for t > t₁, the last state: (n,).  [YIB Eq. 22-23]
+
+    With no state after t₁, nothing measured constrains the noise w(s), s > t₁, which is
+    independent of everything up to t₁; so the posterior mean of x(t) is the prior's prediction
+    from the posterior mean x̄₁ of x(t₁). Derivation: docs/derivations.md, section 7.
+    """
+    dt = _check_after(t1, t)
+    return sde.transition(dt) @ _state("x1", x1, sde.n) + sde.input_integral(dt)  # [YIB Eq. 22-23]
+
+
+def extrapolate_covariance_sde(sde: LinearSDE, t1: float, t: float, cov1: ArrayLike) -> NDArray:
+    """Cov x(t) = Φ(t, t₁) P₁ Φ(t, t₁)ᵀ + Q(t - t₁) for t > t₁, P₁ (n, n) the last state's: (n, n).  [YIB Eq. 17, 22]"""
+    dt = _check_after(t1, t)
+    P = np.asarray(cov1, dtype=float)
+    if P.shape != (sde.n, sde.n) or not np.all(np.isfinite(P)):
+        raise ShapeError(f"cov1 must be a finite ({sde.n}, {sde.n}) matrix, got shape {P.shape}")
+    Phi = sde.transition(dt)
+    cov = Phi @ P @ Phi.T + sde.process_noise(dt)  # [YIB Eq. 17, 22]
+    return (cov + cov.T) / 2

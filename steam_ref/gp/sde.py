@@ -8,19 +8,23 @@ times t_{i-1} < t_i the state obeys exactly
     x(t_i) = Φ(t_i, t_{i-1}) x(t_{i-1}) + v_i + w_i,   w_i ~ N(0, Q_i)                  [YIB Eq. 22]
 
 with Φ(t, s) = exp(A (t - s)), Q_i of [YIB Eq. 17] and v_i of [YIB Eq. 23]. All three come from
-matrix exponentials, so any (A, F) works; ``steam_ref.gp.prior`` has the closed forms of the WNOA
-prior [YIB Eq. 30-31], and the tests check the two against each other and against quadrature.
+matrix exponentials, so any (A, F) works. The named priors (``LinearSDE.wnoa``, ``.wnoj``,
+``.singer``) carry a ``ClosedForm`` and ``transition`` / ``process_noise`` then use its closed
+forms (``steam_ref.gp.prior`` for WNOA [YIB Eq. 30-31], ``steam_ref.gp.models`` for WNOJ and
+Singer); ``transition_expm`` / ``process_noise_van_loan`` (or ``general()``) keep the matrix
+exponential route, and the tests check the two against each other and against quadrature.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import scipy.linalg
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import ShapeError, SteamError
+from .models import ClosedForm, check_alpha
 from .prior import check_qc
 
 __all__ = ["LinearSDE", "dense_kernel"]
@@ -45,13 +49,15 @@ def _check_dt(dt: float, name: str = "dt") -> float:
 class LinearSDE:
     """ẋ = A x + v + F w,  w ~ GP(0, Qc δ), all coefficients constant.  [YIB Eq. 14]
 
-    Arrays are copied to read-only float arrays on construction; v defaults to zero.
+    Arrays are copied to read-only float arrays on construction; v defaults to zero. With a
+    ``model``, A and F must be that model's, and Φ and Q come from its closed forms.
     """
 
     A: NDArray                # (n, n) system matrix
     F: NDArray                # (n, m) noise input matrix
     qc: NDArray               # (m, m) power spectral density of w, symmetric positive definite
     v: NDArray | None = None  # (n,) constant exogenous input; zero gives a zero-mean GP
+    model: ClosedForm | None = None  # a prior known in closed form, or None: matrix exponentials
 
     def __post_init__(self) -> None:
         A, F = _finite_matrix("A", self.A, 2), _finite_matrix("F", self.F, 2)
@@ -66,18 +72,49 @@ class LinearSDE:
         v = _finite_matrix("v", np.zeros(n) if self.v is None else self.v, 1)
         if v.shape != (n,):
             raise ShapeError(f"v must be ({n},) to match A, got shape {v.shape}")
+        if self.model is not None:
+            if not isinstance(self.model, ClosedForm):
+                raise SteamError(f"model must be a ClosedForm or None, got model={self.model!r}")
+            mA, mF = self.model.matrices(qc.shape[0])
+            if mA.shape != A.shape or mF.shape != F.shape or not (np.array_equal(mA, A) and np.array_equal(mF, F)):
+                raise SteamError(f"A and F are not those of model={self.model!r} with d={qc.shape[0]}")
         for name, value in (("A", A), ("F", F), ("qc", qc), ("v", v)):
             object.__setattr__(self, name, value)
 
     @classmethod
-    def wnoa(cls, qc: ArrayLike, v: ArrayLike | None = None) -> LinearSDE:
-        """The white-noise-on-acceleration prior p̈ = w for p of size d = len(Qc).  [YIB Eq. 30-31]"""
+    def _known(cls, model: ClosedForm, qc: ArrayLike, v: ArrayLike | None) -> LinearSDE:
         qc = check_qc(qc)
-        d = qc.shape[0]
-        I, O = np.eye(d), np.zeros((d, d))
-        A = np.block([[O, I], [O, O]])  # [YIB Eq. 31]
-        F = np.vstack([O, I])  # [YIB Eq. 31]
-        return cls(A, F, qc, v)
+        A, F = model.matrices(qc.shape[0])
+        return cls(A, F, qc, v, model)
+
+    @classmethod
+    def wnoa(cls, qc: ArrayLike, v: ArrayLike | None = None) -> LinearSDE:
+        """The white-noise-on-acceleration prior p̈ = w, x = [p; ṗ], p of size d = len(Qc).  [YIB Eq. 30-31]"""
+        return cls._known(ClosedForm("wnoa"), qc, v)
+
+    @classmethod
+    def wnoj(cls, qc: ArrayLike, v: ArrayLike | None = None) -> LinearSDE:
+        """White noise on jerk p⃛ = w, x = [p; ṗ; p̈], p of size d = len(Qc): (3d)-state.  [YIB Eq. 14]"""
+        return cls._known(ClosedForm("wnoj"), qc, v)
+
+    @classmethod
+    def singer(
+        cls, qc: ArrayLike, alpha: float | None = None, *, time_constant: float | None = None, v: ArrayLike | None = None
+    ) -> LinearSDE:
+        """Singer's model p⃛ = -α p̈ + w, x = [p; ṗ; p̈], p of size d = len(Qc).  [YIB Eq. 14], [S70]
+
+        Give exactly one of ``alpha`` (> 0, 1/s) and ``time_constant`` = 1/α (> 0, s), the
+        correlation time of the acceleration. Qc = 2α σ² gives a stationary acceleration
+        variance σ² per axis (Singer's σ_m²). α → 0 is WNOJ.
+        """
+        if (alpha is None) == (time_constant is None):
+            raise SteamError(f"give exactly one of alpha and time_constant, got alpha={alpha!r}, time_constant={time_constant!r}")
+        a = check_alpha(alpha) if alpha is not None else 1.0 / check_alpha(time_constant, "time_constant")
+        return cls._known(ClosedForm("singer", a), qc, v)
+
+    def general(self) -> LinearSDE:
+        """The same SDE without its closed forms: Φ by expm, Q by Van Loan's method."""
+        return replace(self, model=None)
 
     @property
     def n(self) -> int:
@@ -85,17 +122,31 @@ class LinearSDE:
         return self.A.shape[0]
 
     def transition(self, dt: float) -> NDArray:
-        """Φ(t + dt, t) = exp(A dt): (n, n). Any finite dt; Φ(t, s)⁻¹ = Φ(s, t).  [YIB Eq. 16]"""
+        """Φ(t + dt, t) = exp(A dt): (n, n), in closed form for a known model. Any finite dt.  [YIB Eq. 16]"""
+        if self.model is not None:
+            return self.model.transition(dt, self.qc.shape[0])
+        return self.transition_expm(dt)
+
+    def process_noise(self, dt: float) -> NDArray:
+        """Q(dt) of [YIB Eq. 17]: (n, n), in closed form for a known model, else by Van Loan's method."""
+        if self.model is not None:
+            return self.model.process_noise(dt, self.qc)
+        return self.process_noise_van_loan(dt)
+
+    def transition_expm(self, dt: float) -> NDArray:
+        """Φ(t + dt, t) = exp(A dt) by scipy's expm: (n, n). Any finite dt; Φ(t, s)⁻¹ = Φ(s, t).  [YIB Eq. 16]"""
         dt = float(dt)
         if not np.isfinite(dt):
             raise SteamError(f"time step must be finite, got dt={dt}")
         return scipy.linalg.expm(self.A * dt)
 
-    def process_noise(self, dt: float) -> NDArray:
+    def process_noise_van_loan(self, dt: float) -> NDArray:
         """Q(dt) = ∫₀^dt Φ(dt, s) F Qc Fᵀ Φ(dt, s)ᵀ ds by Van Loan's method: (n, n).  [YIB Eq. 17]
 
         With C = [[-A, F Qc Fᵀ], [0, Aᵀ]] dt, expm(C) = [[·, E₁₂], [0, Φᵀ]] and
-        E₁₂ = ∫₀^dt e^{-A(dt-s)} F Qc Fᵀ e^{Aᵀs} ds, so Q = Φ E₁₂ (C. F. Van Loan, IEEE TAC 1978).
+        E₁₂ = ∫₀^dt e^{-A(dt-s)} F Qc Fᵀ e^{Aᵀs} ds, so Q = Φ E₁₂ [VL78]. expm(C) holds
+        e^{-A dt}, which grows for a decaying mode, and Φ E₁₂ cancels it: for Singer's αdt ≳ 10 only the
+        closed form is accurate (docs/derivations.md, section 6).
         """
         dt, n = _check_dt(dt), self.n
         G = self.F @ self.qc @ self.F.T
@@ -110,6 +161,8 @@ class LinearSDE:
         expm([[A, v], [0, 0]] dt) has top-right column ∫₀^dt e^{A(dt-s)} v ds.
         """
         dt, n = _check_dt(dt), self.n
+        if not np.any(self.v):
+            return np.zeros(n)
         C = np.zeros((n + 1, n + 1))
         C[:n, :n], C[:n, n] = self.A, self.v
         return scipy.linalg.expm(C * dt)[:n, n]  # [YIB Eq. 23]

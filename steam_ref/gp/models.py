@@ -1,0 +1,211 @@
+"""Motion priors beyond WNOA with Φ(Δt) and Q(Δt) in closed form: WNOJ and Singer.  [YIB Eq. 14, 17]
+
+Both have the state x(t) = [p(t); ṗ(t); p̈(t)] with p of any dimension d and are LTI SDEs of
+[YIB Eq. 14] driven by white noise w(t) ~ GP(0, Qc δ(t - t')) on the jerk:
+
+    WNOJ (white noise on jerk):    p⃛ = w,          A = [[0, I, 0], [0, 0, I], [0, 0, 0]],  F = [0; 0; I]
+    Singer [S70] (α > 0):          p⃛ = -α p̈ + w,   A = [[0, I, 0], [0, 0, I], [0, 0, -αI]], F = [0; 0; I]
+
+In Singer's model the acceleration is a first-order Gauss-Markov (Ornstein-Uhlenbeck) process
+with time constant 1/α; its stationary covariance is Qc / (2α), so Singer's σ_m² per axis is
+Qc = 2α σ_m². As α → 0 it becomes WNOJ. Derivations: docs/derivations.md, section 6.
+
+Every matrix is a 3 × 3 scalar pattern Kronecker-multiplied with I (Φ) or Qc (Q), because each
+axis obeys the same scalar SDE and all axes share one w. With x = αΔt, Φ and Q are written with
+the functions φ_k(z) = Σₙ zⁿ / (n + k)! (φ₀ = eᶻ, φ₁ = (eᶻ - 1)/z, φ₂ = (eᶻ - 1 - z)/z²):
+
+    Φ(Δt) = [[1, Δt, Δt² φ₂(-x)], [0, 1, Δt φ₁(-x)], [0, 0, e⁻ˣ]] ⊗ I
+    Q(Δt)_rc = Δt^(k_r + k_c + 1) S_rc(x) ⊗ Qc,   k = (2, 1, 0) for (p, ṗ, p̈)
+
+where S(x) is given below in closed form (|x| > 1) and as its power series (|x| ≤ 1), which has no
+cancellation for small αΔt; S(0) is WNOJ's matrix. ``LinearSDE.wnoj`` / ``LinearSDE.singer``
+build the SDEs and use these forms; ``steam_ref.gp.prior`` holds WNOA's.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from math import factorial
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..errors import SteamError
+from .prior import check_qc
+from .prior import process_noise as wnoa_process_noise
+from .prior import transition as wnoa_transition
+
+__all__ = [
+    "check_alpha",
+    "wnoj_matrices",
+    "wnoj_transition",
+    "wnoj_process_noise",
+    "wnoj_process_noise_inverse",
+    "singer_matrices",
+    "singer_transition",
+    "singer_process_noise",
+    "ClosedForm",
+]
+
+_SERIES_TERMS = 24  # |x| ≤ 1: the n-th term is below 2ⁿ / (n + 4)!, under 1e-18 of S at n = 24
+_SERIES_RADIUS = 1.0  # beyond it the closed forms lose at most ~30 ulp to cancellation
+
+# φ_k(z) = Σₙ zⁿ / (n + k)!, k = 0, 1, 2
+_PHI_SERIES = np.array([[1.0 / factorial(n + k) for n in range(_SERIES_TERMS)] for k in range(3)])
+# S_rc(x) = ∫₀¹ u^(k_r + k_c) φ_{k_r}(-xu) φ_{k_c}(-xu) du = Σₙ (-x)ⁿ c_n / (k_r + k_c + n + 1),
+# c_n = Σᵢ 1 / ((i + k_r)! (n - i + k_c)!)  (Cauchy product of the two series, then ∫ u^(k + n) du)
+_K = (2, 1, 0)
+_S_SERIES = np.array([[[sum(1.0 / (factorial(i + kr) * factorial(n - i + kc)) for i in range(n + 1)) / (kr + kc + n + 1)
+                        for n in range(_SERIES_TERMS)] for kc in _K] for kr in _K])
+_WNOJ_S = np.array([[1 / 20, 1 / 8, 1 / 6], [1 / 8, 1 / 3, 1 / 2], [1 / 6, 1 / 2, 1.0]])  # ∫₀¹ uᵏʳ⁺ᵏᶜ/(k_r! k_c!) du
+
+
+def check_alpha(alpha: float, name: str = "alpha") -> float:
+    """α as a float, or raise if it is not positive and finite."""
+    try:
+        value = float(alpha)
+    except (TypeError, ValueError):
+        raise SteamError(f"{name} must be a positive finite number, got {name}={alpha!r}") from None
+    if not np.isfinite(value) or value <= 0:
+        raise SteamError(f"{name} must be a positive finite number, got {name}={value}")
+    return value
+
+
+def _finite_dt(dt: float) -> float:
+    dt = float(dt)
+    if not np.isfinite(dt):
+        raise SteamError(f"time step must be finite, got dt={dt}")
+    return dt
+
+
+def _positive_dt(dt: float) -> float:
+    dt = float(dt)
+    if not np.isfinite(dt) or dt <= 0:
+        raise SteamError(f"time step must be positive and finite, got dt={dt}")
+    return dt
+
+
+
+# --- WNOJ -----------------------------------------------------------------------------------------
+
+
+def wnoj_matrices(d: int) -> tuple[NDArray, NDArray]:
+    """A (3d, 3d) and F (3d, d) of p⃛ = w."""
+    A = np.kron(np.eye(3, k=1), np.eye(d))  # [[0, I, 0], [0, 0, I], [0, 0, 0]]
+    F = np.kron(np.array([[0.0], [0.0], [1.0]]), np.eye(d))
+    return A, F
+
+
+def wnoj_transition(dt: float, d: int) -> NDArray:
+    """Φ(t + Δt, t) = exp(A Δt) of WNOJ, any finite Δt: (3d, 3d).  [YIB Eq. 16]"""
+    dt = _finite_dt(dt)
+    return np.kron(np.array([[1.0, dt, dt**2 / 2], [0.0, 1.0, dt], [0.0, 0.0, 1.0]]), np.eye(d))
+
+
+def wnoj_process_noise(dt: float, qc: ArrayLike) -> NDArray:
+    """Q(Δt) of WNOJ: [[Δt⁵/20, Δt⁴/8, Δt³/6], [Δt⁴/8, Δt³/3, Δt²/2], [Δt³/6, Δt²/2, Δt]] ⊗ Qc.  [YIB Eq. 17]"""
+    dt, qc = _positive_dt(dt), check_qc(qc)
+    D = np.array([dt**2, dt, 1.0])
+    return np.kron(dt * _WNOJ_S * np.outer(D, D), qc)
+
+
+def wnoj_process_noise_inverse(dt: float, qc: ArrayLike) -> NDArray:
+    """Q(Δt)⁻¹ of WNOJ: [[720/Δt⁵, -360/Δt⁴, 60/Δt³], [-360/Δt⁴, 192/Δt³, -36/Δt²], [60/Δt³, -36/Δt², 9/Δt]] ⊗ Qc⁻¹."""
+    dt, qc = _positive_dt(dt), check_qc(qc)
+    Di = np.array([dt**-2, dt**-1, 1.0])
+    pattern = np.array([[720.0, -360.0, 60.0], [-360.0, 192.0, -36.0], [60.0, -36.0, 9.0]])
+    return np.kron(pattern * np.outer(Di, Di) / dt, np.linalg.inv(qc))
+
+
+# --- Singer ---------------------------------------------------------------------------------------
+
+
+def singer_matrices(d: int, alpha: float) -> tuple[NDArray, NDArray]:
+    """A (3d, 3d) and F (3d, d) of p⃛ = -α p̈ + w."""
+    alpha = check_alpha(alpha)
+    A = np.kron(np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.0, 0.0, -alpha]]), np.eye(d))
+    return A, wnoj_matrices(d)[1]
+
+
+def _phi12(x: float) -> tuple[float, float]:
+    """φ₁(-x), φ₂(-x) without cancellation at small |x|."""
+    if abs(x) <= _SERIES_RADIUS:
+        z = -x
+        return float(np.polynomial.polynomial.polyval(z, _PHI_SERIES[1])), float(np.polynomial.polynomial.polyval(z, _PHI_SERIES[2]))
+    em1 = np.expm1(-x)  # e⁻ˣ - 1
+    return -em1 / x, (x + em1) / x**2
+
+
+def singer_transition(dt: float, alpha: float, d: int) -> NDArray:
+    """Φ(t + Δt, t) = exp(A Δt) of Singer's model, any finite Δt: (3d, 3d).  [YIB Eq. 16]
+
+    [[1, Δt, (αΔt - 1 + e^{-αΔt})/α²], [0, 1, (1 - e^{-αΔt})/α], [0, 0, e^{-αΔt}]] ⊗ I.
+    """
+    dt, alpha = _finite_dt(dt), check_alpha(alpha)
+    x = alpha * dt
+    phi1, phi2 = _phi12(x)
+    return np.kron(np.array([[1.0, dt, dt**2 * phi2], [0.0, 1.0, dt * phi1], [0.0, 0.0, np.exp(-x)]]), np.eye(d))
+
+
+def _singer_s(x: float) -> NDArray:
+    """S(x), x = αΔt > 0: Q_rc = Δt^(k_r + k_c + 1) S_rc(x) ⊗ Qc. See docs/derivations.md, section 6."""
+    if x <= _SERIES_RADIUS:
+        return np.polynomial.polynomial.polyval(-x, _S_SERIES.transpose(2, 0, 1))
+    E, em1, em2 = np.exp(-x), np.expm1(-x), np.expm1(-2 * x)  # e⁻ˣ, e⁻ˣ - 1, e⁻²ˣ - 1
+    pp = (x**3 / 3 - x**2 + x - 2 * x * E - em2 / 2) / x**5
+    pv = (x + em1) ** 2 / (2 * x**4)
+    pa = (-em2 / 2 - x * E) / x**3
+    vv = (x + 2 * em1 - em2 / 2) / x**3
+    va = em1**2 / (2 * x**2)
+    aa = -em2 / (2 * x)
+    return np.array([[pp, pv, pa], [pv, vv, va], [pa, va, aa]])
+
+
+def singer_process_noise(dt: float, alpha: float, qc: ArrayLike) -> NDArray:
+    """Q(Δt) of Singer's model: (3d, 3d).  [YIB Eq. 17]
+
+    Entries (× Qc), x = αΔt, E = e⁻ˣ:  Q_pp = (x³/3 - x² + x - 2xE + (1 - E²)/2)/α⁵,
+    Q_pv = (x - 1 + E)²/(2α⁴), Q_pa = ((1 - E²)/2 - xE)/α³, Q_vv = (x - 3/2 + 2E - E²/2)/α³,
+    Q_va = (1 - E)²/(2α²), Q_aa = (1 - E²)/(2α); evaluated by a series for x ≤ 1.
+    """
+    dt, alpha, qc = _positive_dt(dt), check_alpha(alpha), check_qc(qc)
+    D = np.array([dt**2, dt, 1.0])
+    return np.kron(dt * _singer_s(alpha * dt) * np.outer(D, D), qc)
+
+
+# --- the models LinearSDE knows in closed form ----------------------------------------------------
+
+
+@dataclass(frozen=True)
+class ClosedForm:
+    """A motion prior with Φ and Q in closed form: 'wnoa' [YIB Eq. 30-31], 'wnoj' or 'singer' (α)."""
+
+    name: str
+    alpha: float | None = None  # Singer's α; None for the others
+
+    def __post_init__(self) -> None:
+        if self.name not in ("wnoa", "wnoj", "singer"):
+            raise SteamError(f"unknown closed-form model name={self.name!r}; use 'wnoa', 'wnoj' or 'singer'")
+        if self.name == "singer":
+            object.__setattr__(self, "alpha", check_alpha(self.alpha))
+        elif self.alpha is not None:
+            raise SteamError(f"only the 'singer' model has an alpha, got alpha={self.alpha!r} for {self.name!r}")
+
+    def matrices(self, d: int) -> tuple[NDArray, NDArray]:
+        """A and F of the model for p of dimension d."""
+        if self.name == "wnoa":
+            I, O = np.eye(d), np.zeros((d, d))
+            return np.block([[O, I], [O, O]]), np.vstack([O, I])  # [YIB Eq. 31]
+        return wnoj_matrices(d) if self.name == "wnoj" else singer_matrices(d, self.alpha)
+
+    def transition(self, dt: float, d: int) -> NDArray:
+        """Φ(t + Δt, t), any finite Δt."""
+        if self.name == "wnoa":
+            return wnoa_transition(_finite_dt(dt), d)
+        return wnoj_transition(dt, d) if self.name == "wnoj" else singer_transition(dt, self.alpha, d)
+
+    def process_noise(self, dt: float, qc: ArrayLike) -> NDArray:
+        """Q(Δt), Δt > 0."""
+        if self.name == "wnoa":
+            return wnoa_process_noise(dt, qc)
+        return wnoj_process_noise(dt, qc) if self.name == "wnoj" else singer_process_noise(dt, self.alpha, qc)
