@@ -8,8 +8,10 @@
   :class:`VelocityFactor`, :class:`RangeFactor` (Eq. 33), :class:`BearingFactor`,
   :class:`BearingRangeFactor`.
 
-The trajectory state is x = [x, y, θ, ẋ, ẏ, θ̇] (d = 3, so 6 numbers); the GP prior factor works for
-any d. Landmarks are ℓ = [x, y].
+The paper's trajectory state is x = [x, y, θ, ẋ, ẏ, θ̇] (d = 3, so 6 numbers); the WNOJ and Singer
+priors append [ẍ, ÿ, θ̈]. The GP factors take any LTI prior (a Qc for WNOA, or a
+:class:`~steam_ref.gp.LinearSDE`) and measurements read the pose and velocity from the front of the
+state (``state_dim``). Landmarks are ℓ = [x, y].
 """
 
 from .base import LANDMARK_DIM, STATE_DIM, Factor, sqrt_information
@@ -20,6 +22,7 @@ from .measurements import (
     OdometryFactor,
     PriorFactor,
     RangeFactor,
+    StateMeasurement,
     VelocityFactor,
 )
 
@@ -33,6 +36,7 @@ __all__ = [
     "BearingFactor",
     "BearingRangeFactor",
     "InterpolatedFactor",
+    "StateMeasurement",
     "gp_prior_factors",
     "sqrt_information",
     "STATE_DIM",

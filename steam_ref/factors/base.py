@@ -12,7 +12,7 @@ twenty thousand factors fast without a second, "vectorized" copy of any measurem
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from typing import ClassVar
 
 import numpy as np
@@ -116,6 +116,9 @@ class Factor:
         for name in cls._batched_factors:
             inner = [getattr(f, name) for f in factors]
             object.__setattr__(batch, name, type(inner[0]).stack(inner))
+        for f in fields(cls):  # the rest (a state size, say) is equal across a signature: take the first's
+            if f.name not in cls._batched and f.name not in cls._batched_factors and f.name not in ("keys", "loss"):
+                object.__setattr__(batch, f.name, getattr(factors[0], f.name))
         object.__setattr__(batch, "keys", None)
         object.__setattr__(batch, "loss", factors[0].loss)
         return batch

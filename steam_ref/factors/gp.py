@@ -14,8 +14,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import ShapeError, SteamError
-from ..gp.interpolate import interpolation_matrices
+from ..gp.interpolate import interpolation_matrices, interpolation_matrices_sde
 from ..gp.prior import process_noise_sqrt_information, transition
+from ..gp.sde import LinearSDE
 from ..variables import Key
 from .base import Factor, _vector, sqrt_information
 
@@ -30,7 +31,8 @@ class GPPriorFactor(Factor):
     """The GP prior between consecutive estimated states.  [YIB Eq. 22-23]
 
     e = x(tᵢ) - Φ(tᵢ, tᵢ₋₁) x(tᵢ₋₁) - vᵢ,   Σ = Qᵢ.
-    Build it with :meth:`wnoa` (the paper's prior) or :meth:`from_matrices` (any LTI SDE).
+    Build it with :meth:`wnoa` (the paper's prior), :meth:`from_sde` (WNOJ, Singer, any LTI SDE) or
+    :meth:`from_matrices`.
     """
 
     phi: NDArray = None  # Φ(tᵢ, tᵢ₋₁), (2d, 2d)
@@ -55,6 +57,13 @@ class GPPriorFactor(Factor):
         v = np.zeros(n) if v is None else _vector(v, n, "v_i")
         return cls((key1, key2), sqrt_information(q, n), phi=phi, v=v)
 
+    @classmethod
+    def from_sde(cls, key1: Key, key2: Key, dt: float, sde: LinearSDE) -> GPPriorFactor:
+        """The prior of ``sde`` over a gap dt: Φ, Qᵢ and vᵢ from its (closed-form or general) discretisation."""
+        if sde.model is not None and sde.model.name == "wnoa" and not np.any(sde.v):
+            return cls.wnoa(key1, key2, dt, sde.qc)  # the memoised closed form
+        return cls.from_matrices(key1, key2, sde.transition(dt), sde.process_noise(dt), sde.input_integral(dt))
+
     @property
     def key_dims(self) -> tuple[int, int]:  # type: ignore[override]
         n = self.phi.shape[-1]
@@ -68,8 +77,11 @@ class GPPriorFactor(Factor):
         return -self.phi, eye
 
 
-def gp_prior_factors(keys: list[Key], times: NDArray, qc: NDArray) -> list[GPPriorFactor]:
-    """The M - 1 WNOA prior factors linking consecutive states at strictly increasing times."""
+def gp_prior_factors(keys: list[Key], times: NDArray, prior: NDArray | LinearSDE) -> list[GPPriorFactor]:
+    """The M - 1 prior factors linking consecutive states at strictly increasing times.
+
+    ``prior`` is Qc (the paper's WNOA prior) or any :class:`~steam_ref.gp.LinearSDE`.
+    """
     times = np.asarray(times, dtype=float)
     if times.ndim != 1 or len(times) != len(keys):
         raise ShapeError(f"need one time per key: {len(keys)} keys, times of shape {times.shape}")
@@ -77,7 +89,9 @@ def gp_prior_factors(keys: list[Key], times: NDArray, qc: NDArray) -> list[GPPri
     if np.any(~(gaps > 0)):
         i = int(np.flatnonzero(~(gaps > 0))[0])
         raise SteamError(f"times must increase strictly: t[{i}]={times[i]} then t[{i + 1}]={times[i + 1]}")
-    return [GPPriorFactor.wnoa(keys[i], keys[i + 1], gaps[i], qc) for i in range(len(gaps))]
+    if isinstance(prior, LinearSDE):
+        return [GPPriorFactor.from_sde(keys[i], keys[i + 1], gaps[i], prior) for i in range(len(gaps))]
+    return [GPPriorFactor.wnoa(keys[i], keys[i + 1], gaps[i], prior) for i in range(len(gaps))]
 
 # --- Measurements at a missing (interpolated) state ---------------------------------------------
 
@@ -87,29 +101,41 @@ class InterpolatedFactor(Factor):
     """A measurement at a time τ with no estimated state, moved onto its two neighbours.  [YIB Eq. 29]
 
     The wrapped ``inner`` factor's first key stands for the missing state x(τ) (it is not a variable
-    of the graph); its other keys (a landmark, say) are kept. With the zero-mean prior,
-    x̄(τ) = Λ(τ) x̄(tᵢ₋₁) + Ψ(τ) x̄(tᵢ)  [YIB Eq. 18], so
+    of the graph); its other keys (a landmark, say) are kept. x̄(τ) = Λ(τ) x̄(tᵢ₋₁) + Ψ(τ) x̄(tᵢ) + c
+    [YIB Eq. 18], where c = v(τ, tᵢ₋₁) - Ψ v(tᵢ, tᵢ₋₁) carries a prior's exogenous input [YIB Eq. 23]
+    (zero for the paper's zero-mean prior; derivation in ``gp.interpolate.interpolate_state_sde``), so
 
-        e(xᵢ₋₁, xᵢ, …) = e_inner(Λ xᵢ₋₁ + Ψ xᵢ, …),   ∂e/∂xᵢ₋₁ = H Λ,  ∂e/∂xᵢ = H Ψ   [YIB Eq. 19, 29]
+        e(xᵢ₋₁, xᵢ, …) = e_inner(Λ xᵢ₋₁ + Ψ xᵢ + c, …),   ∂e/∂xᵢ₋₁ = H Λ,  ∂e/∂xᵢ = H Ψ   [YIB Eq. 19, 29]
     """
 
     inner: Factor = None  # the measurement at x(τ)
-    lam: NDArray = None  # Λ(τ), (6, 6)
-    psi: NDArray = None  # Ψ(τ), (6, 6)
+    lam: NDArray = None  # Λ(τ), (n, n)
+    psi: NDArray = None  # Ψ(τ), (n, n)
+    offset: NDArray = None  # c, (n,): the prior mean's part [YIB Eq. 23]
 
-    _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "lam", "psi")
+    _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "lam", "psi", "offset")
     _batched_factors: ClassVar[tuple[str, ...]] = ("inner",)
 
     @classmethod
-    def create(cls, inner: Factor, key1: Key, key2: Key, t1: float, t2: float, tau: float, qc: NDArray) -> InterpolatedFactor:
-        """Move ``inner`` (a factor on x(τ), t1 < τ < t2) onto the states ``key1`` at t1 and ``key2`` at t2."""
+    def create(
+        cls, inner: Factor, key1: Key, key2: Key, t1: float, t2: float, tau: float, prior: NDArray | LinearSDE
+    ) -> InterpolatedFactor:
+        """Move ``inner`` (a factor on x(τ), t1 < τ < t2) onto the states ``key1`` at t1 and ``key2`` at t2.
+
+        ``prior`` is Qc (the paper's WNOA prior) or any :class:`~steam_ref.gp.LinearSDE`.
+        """
         if isinstance(inner, InterpolatedFactor):
             raise SteamError("an interpolated factor cannot wrap another interpolated factor")
-        lam, psi = interpolation_matrices(t1, t2, tau, qc)  # [YIB Eq. 16]
+        if isinstance(prior, LinearSDE):
+            lam, psi = interpolation_matrices_sde(prior, t1, t2, tau)  # [YIB Eq. 16]
+            offset = prior.input_integral(tau - t1) - psi @ prior.input_integral(t2 - t1)  # [YIB Eq. 23]
+        else:
+            lam, psi = interpolation_matrices(t1, t2, tau, prior)  # [YIB Eq. 16]
+            offset = np.zeros(lam.shape[0])
         if lam.shape[0] != inner.key_dims[0]:
-            raise ShapeError(f"Qc gives states of size {lam.shape[0]}, {type(inner).__name__} expects {inner.key_dims[0]}")
+            raise ShapeError(f"the prior gives states of size {lam.shape[0]}, {type(inner).__name__} expects {inner.key_dims[0]}")
         keys = (key1, key2) + tuple(inner.keys[1:])
-        return cls(keys, inner.sqrt_information, inner=inner, lam=lam, psi=psi, loss=inner.loss)
+        return cls(keys, inner.sqrt_information, inner=inner, lam=lam, psi=psi, offset=offset, loss=inner.loss)
 
     @property
     def key_dims(self) -> tuple[int, ...]:  # type: ignore[override]
@@ -120,8 +146,8 @@ class InterpolatedFactor(Factor):
         return (type(self), self.inner.batch_signature())
 
     def interpolated_state(self, x1: NDArray, x2: NDArray) -> NDArray:
-        """x̄(τ) = Λ x̄₁ + Ψ x̄₂  [YIB Eq. 18]."""
-        return np.einsum("...ij,...j->...i", self.lam, x1) + np.einsum("...ij,...j->...i", self.psi, x2)
+        """x̄(τ) = Λ x̄₁ + Ψ x̄₂ + c  [YIB Eq. 18, 23]."""
+        return np.einsum("...ij,...j->...i", self.lam, x1) + np.einsum("...ij,...j->...i", self.psi, x2) + self.offset
 
     def error(self, x1: NDArray, x2: NDArray, *rest: NDArray) -> NDArray:
         return self.inner.error(self.interpolated_state(x1, x2), *rest)  # [YIB Eq. 29]

@@ -1,12 +1,15 @@
 """Priors and measurement factors: odometry, projected velocity, range, bearing.  [YIB Eq. 4, 32-33]
 
-The trajectory state is x = [x, y, θ, ẋ, ẏ, θ̇] (d = 3, so 6 numbers); landmarks are ℓ = [x, y].
-A :class:`PriorFactor` works for a variable of any size.
+Every motion prior of steam_ref lays a state out as [p; ṗ; ...] with p = [x, y, θ]: the paper's
+WNOA state is [x, y, θ, ẋ, ẏ, θ̇] (6 numbers), the WNOJ and Singer states add [ẍ, ÿ, θ̈] (9). So a
+measurement reads the pose from x[0:3] and the velocity from x[3:6] whatever the prior, and its
+Jacobian is zero on the rest; ``state_dim`` (6 by default) says how long the state is.
+Landmarks are ℓ = [x, y]. A :class:`PriorFactor` works for a variable of any size.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import ClassVar
 
 import numpy as np
@@ -19,6 +22,7 @@ from ..variables import Key
 from .base import LANDMARK_DIM, STATE_DIM, Factor, _jacobian, _vector, sqrt_information
 
 __all__ = [
+    "StateMeasurement",
     "PriorFactor",
     "OdometryFactor",
     "VelocityFactor",
@@ -60,8 +64,35 @@ class PriorFactor(Factor):
 # --- Measurements of one state ------------------------------------------------------------------
 
 
+def _check_state_dim(state_dim: int) -> int:
+    """A state [p; ṗ; ...] with p = [x, y, θ]: a whole number of 3-blocks, at least pose and velocity."""
+    if isinstance(state_dim, bool) or not isinstance(state_dim, (int, np.integer)) or state_dim < 6 or state_dim % 3:
+        raise SteamError(f"state_dim must be a multiple of 3, at least 6 ([p; ṗ; ...], p = [x, y, θ]); got {state_dim!r}")
+    return int(state_dim)
+
+
 @dataclass(frozen=True, eq=False)
-class OdometryFactor(Factor):
+class StateMeasurement(Factor):
+    """Base of the factors that read a state's pose x[0:3] (and velocity x[3:6]), first key."""
+
+    state_dim: int = field(default=STATE_DIM, kw_only=True)  # 6 (WNOA) or 9 (WNOJ, Singer)
+
+    other_dims: ClassVar[tuple[int, ...]] = ()  # sizes of the keys after the state
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        _check_state_dim(self.state_dim)
+
+    @property
+    def key_dims(self) -> tuple[int, ...]:  # type: ignore[override]
+        return (self.state_dim,) + self.other_dims
+
+    def batch_signature(self) -> tuple:
+        return super().batch_signature() + (self.state_dim,)
+
+
+@dataclass(frozen=True, eq=False)
+class OdometryFactor(StateMeasurement):
     """Odometry as the paper writes it [YIB Eq. 32]: forward speed and yaw rate of the state.
 
     h(x) = [cos θ ẋ + sin θ ẏ,  θ̇]. The paper's scripts, and so every run of steam_ref's front end,
@@ -72,12 +103,13 @@ class OdometryFactor(Factor):
     measured: NDArray = None  # (2,) [forward speed, yaw rate]
 
     _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "measured")
-    key_dims: ClassVar[tuple[int, ...]] = (STATE_DIM,)
 
     @classmethod
-    def create(cls, key: Key, measured: NDArray, noise: NDArray | float, *, loss: RobustLoss | None = None) -> OdometryFactor:
+    def create(
+        cls, key: Key, measured: NDArray, noise: NDArray | float, *, loss: RobustLoss | None = None, state_dim: int = STATE_DIM
+    ) -> OdometryFactor:
         """Odometry reading ``measured`` = [v, θ̇] on state ``key``."""
-        return cls((key,), sqrt_information(noise, 2), measured=_vector(measured, 2, "odometry"), loss=loss)
+        return cls((key,), sqrt_information(noise, 2), measured=_vector(measured, 2, "odometry"), loss=loss, state_dim=state_dim)
 
     def error(self, x: NDArray) -> NDArray:
         th, xd, yd, thd = x[..., 2], x[..., 3], x[..., 4], x[..., 5]
@@ -96,7 +128,7 @@ class OdometryFactor(Factor):
 
 
 @dataclass(frozen=True, eq=False)
-class VelocityFactor(Factor):
+class VelocityFactor(StateMeasurement):
     """Odometry as the paper's scripts use it: the velocity projected into the body frame.
 
     h(x) = [cos θ ẋ + sin θ ẏ,  -sin θ ẋ + cos θ ẏ,  θ̇]  ≈  [distance/dt, 0, heading change/dt].
@@ -105,12 +137,14 @@ class VelocityFactor(Factor):
     measured: NDArray = None  # (3,) [forward, lateral, yaw rate]
 
     _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "measured")
-    key_dims: ClassVar[tuple[int, ...]] = (STATE_DIM,)
 
     @classmethod
-    def create(cls, key: Key, measured: NDArray, noise: NDArray | float, *, loss: RobustLoss | None = None) -> VelocityFactor:
+    def create(
+        cls, key: Key, measured: NDArray, noise: NDArray | float, *, loss: RobustLoss | None = None, state_dim: int = STATE_DIM
+    ) -> VelocityFactor:
         """Projected-velocity reading [forward, lateral, yaw rate] on state ``key``."""
-        return cls((key,), sqrt_information(noise, 3), measured=_vector(measured, 3, "projected velocity"), loss=loss)
+        measured = _vector(measured, 3, "projected velocity")
+        return cls((key,), sqrt_information(noise, 3), measured=measured, loss=loss, state_dim=state_dim)
 
     def error(self, x: NDArray) -> NDArray:
         th, xd, yd, thd = x[..., 2], x[..., 3], x[..., 4], x[..., 5]
@@ -141,7 +175,7 @@ def _offset(x: NDArray, l: NDArray) -> tuple[NDArray, NDArray, NDArray]:
 
 
 def _range_row(x: NDArray, l: NDArray) -> tuple[NDArray, NDArray, NDArray]:
-    """r = ‖[x y]ᵀ - ℓ‖ and its rows of ∂r/∂x (..., 6), ∂r/∂ℓ (..., 2).  [YIB Eq. 33]"""
+    """r = ‖[x y]ᵀ - ℓ‖ and its rows of ∂r/∂x (..., state size), ∂r/∂ℓ (..., 2).  [YIB Eq. 33]"""
     dx, dy, r = _offset(x, l)
     Jx = np.zeros(x.shape)
     Jx[..., 0], Jx[..., 1] = -dx / r, -dy / r
@@ -149,7 +183,7 @@ def _range_row(x: NDArray, l: NDArray) -> tuple[NDArray, NDArray, NDArray]:
 
 
 def _bearing_row(x: NDArray, l: NDArray) -> tuple[NDArray, NDArray, NDArray]:
-    """b = atan2(ℓy - y, ℓx - x) - θ and its rows of ∂b/∂x (..., 6), ∂b/∂ℓ (..., 2)."""
+    """b = atan2(ℓy - y, ℓx - x) - θ and its rows of ∂b/∂x (..., state size), ∂b/∂ℓ (..., 2)."""
     dx, dy, r = _offset(x, l)
     r2 = r**2
     Jx = np.zeros(x.shape)
@@ -165,19 +199,22 @@ def _check_range(measured: float) -> None:
 
 
 @dataclass(frozen=True, eq=False)
-class RangeFactor(Factor):
+class RangeFactor(StateMeasurement):
     """Range from the robot's position to a landmark, ‖[x y]ᵀ - ℓ‖₂.  [YIB Eq. 33]"""
 
     measured: NDArray = None  # (1,) range [m]
 
     _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "measured")
-    key_dims: ClassVar[tuple[int, ...]] = (STATE_DIM, LANDMARK_DIM)
+    other_dims: ClassVar[tuple[int, ...]] = (LANDMARK_DIM,)
 
     @classmethod
-    def create(cls, state: Key, landmark: Key, measured: float, sigma: float, *, loss: RobustLoss | None = None) -> RangeFactor:
+    def create(
+        cls, state: Key, landmark: Key, measured: float, sigma: float, *, loss: RobustLoss | None = None, state_dim: int = STATE_DIM
+    ) -> RangeFactor:
         """Range reading ``measured`` (m, not negative) from state ``state`` to landmark ``landmark``."""
         _check_range(measured)
-        return cls((state, landmark), sqrt_information(sigma, 1), measured=_vector(measured, 1, "range"), loss=loss)
+        measured = _vector(measured, 1, "range")
+        return cls((state, landmark), sqrt_information(sigma, 1), measured=measured, loss=loss, state_dim=state_dim)
 
     def error(self, x: NDArray, l: NDArray) -> NDArray:
         return _range_row(x, l)[0][..., None] - self.measured  # [YIB Eq. 33]
@@ -188,18 +225,21 @@ class RangeFactor(Factor):
 
 
 @dataclass(frozen=True, eq=False)
-class BearingFactor(Factor):
+class BearingFactor(StateMeasurement):
     """Bearing of a landmark in the robot frame, atan2(ℓy - y, ℓx - x) - θ, error wrapped to [-π, π)."""
 
     measured: NDArray = None  # (1,) bearing [rad]
 
     _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "measured")
-    key_dims: ClassVar[tuple[int, ...]] = (STATE_DIM, LANDMARK_DIM)
+    other_dims: ClassVar[tuple[int, ...]] = (LANDMARK_DIM,)
 
     @classmethod
-    def create(cls, state: Key, landmark: Key, measured: float, sigma: float, *, loss: RobustLoss | None = None) -> BearingFactor:
+    def create(
+        cls, state: Key, landmark: Key, measured: float, sigma: float, *, loss: RobustLoss | None = None, state_dim: int = STATE_DIM
+    ) -> BearingFactor:
         """Bearing reading ``measured`` (rad) from ``state`` to ``landmark``."""
-        return cls((state, landmark), sqrt_information(sigma, 1), measured=_vector(measured, 1, "bearing"), loss=loss)
+        measured = _vector(measured, 1, "bearing")
+        return cls((state, landmark), sqrt_information(sigma, 1), measured=measured, loss=loss, state_dim=state_dim)
 
     def error(self, x: NDArray, l: NDArray) -> NDArray:
         return wrap_angle(_bearing_row(x, l)[0] - self.measured[..., 0])[..., None]
@@ -210,19 +250,23 @@ class BearingFactor(Factor):
 
 
 @dataclass(frozen=True, eq=False)
-class BearingRangeFactor(Factor):
+class BearingRangeFactor(StateMeasurement):
     """Bearing and range of a landmark together: e = [bearing error (wrapped), range error]."""
 
     measured: NDArray = None  # (2,) [bearing rad, range m]
 
     _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "measured")
-    key_dims: ClassVar[tuple[int, ...]] = (STATE_DIM, LANDMARK_DIM)
+    other_dims: ClassVar[tuple[int, ...]] = (LANDMARK_DIM,)
 
     @classmethod
-    def create(cls, state: Key, landmark: Key, bearing: float, range_: float, noise: NDArray, *, loss: RobustLoss | None = None) -> BearingRangeFactor:
+    def create(
+        cls, state: Key, landmark: Key, bearing: float, range_: float, noise: NDArray, *,
+        loss: RobustLoss | None = None, state_dim: int = STATE_DIM,
+    ) -> BearingRangeFactor:
         """Bearing-range reading; noise is sigmas (2,) or a covariance (2, 2) for [bearing, range]."""
         _check_range(range_)
-        return cls((state, landmark), sqrt_information(noise, 2), measured=_vector([bearing, range_], 2, "bearing-range"), loss=loss)
+        measured = _vector([bearing, range_], 2, "bearing-range")
+        return cls((state, landmark), sqrt_information(noise, 2), measured=measured, loss=loss, state_dim=state_dim)
 
     def error(self, x: NDArray, l: NDArray) -> NDArray:
         b, r = _bearing_row(x, l)[0], _range_row(x, l)[0]
