@@ -12,7 +12,9 @@ robot would meet them:
 - **Readings between states** are buffered until the next state exists, then enter as interpolated
   factors on the two neighbouring states (Eq. 29), velocity readings with the looser
   ``interpolated_velocity_sigmas``; with ``interpolate=False`` they are dropped.
-- **GP prior**: each new state brings the prior factor to the previous one (Eq. 22).
+- **GP prior**: each new state brings the prior factor to the previous one (Eq. 22), of the set-up's
+  motion prior (``PaperSetup.prior``: the paper's WNOA, or WNOJ / Singer with states of 9 numbers,
+  whose acceleration starts at zero).
 - **Landmarks**: a landmark variable enters with its prior at its surveyed position (Eq. 4), at its
   first sighting or, when the set-up says so (Plaza), all of them at pose 0.
 - **Initial values** (as the paper's scripts make them): a new pose is the previous pose composed
@@ -154,7 +156,8 @@ class FrontEnd:
 
     def _new_state(self, i: int) -> NewStep:
         """X(i): its value, the GP prior to the previous state, the buffered and its own readings."""
-        out = NewStep(i, True, [], {X(i): np.concatenate([self._pose, self._velocity])})
+        extra = np.zeros(self.setup.state_dim - 6)  # WNOJ / Singer: acceleration starts at zero
+        out = NewStep(i, True, [], {X(i): np.concatenate([self._pose, self._velocity, extra])})
         if i == 0:
             out.factors.append(self._first_state_prior())
             if self.setup.landmarks_up_front:
@@ -190,30 +193,35 @@ class FrontEnd:
         out.values[L(lid)] = mark.copy()
 
     def _first_state_prior(self) -> PriorFactor:
-        """Priors on pose 0 (at ground truth) and on velocity 0, as one prior on X(0)."""
+        """Priors on pose 0 (at ground truth) and on velocity 0 (and acceleration 0), as one prior on X(0)."""
         s = self.setup
-        mean = np.concatenate([self.readings.first_pose, s.first_velocity])
-        return PriorFactor.create(X(0), mean, np.concatenate([s.first_pose_sigmas, s.first_velocity_sigmas]))
+        extra = s.state_dim - 6
+        mean = np.concatenate([self.readings.first_pose, s.first_velocity, np.zeros(extra)])
+        sigmas = np.concatenate([s.first_pose_sigmas, s.first_velocity_sigmas, s.first_acceleration_sigmas[:extra]])
+        return PriorFactor.create(X(0), mean, sigmas)
 
     def _gp_prior(self, a: int, b: int) -> GPPriorFactor:
         """The GP prior factor between states a and b.  [YIB Eq. 22]"""
         t = self.readings.times
-        return GPPriorFactor.wnoa(X(a), X(b), t[b] - t[a], self.setup.qc)
+        prior = self.setup.motion_prior()
+        if isinstance(prior, np.ndarray):
+            return GPPriorFactor.wnoa(X(a), X(b), t[b] - t[a], prior)
+        return GPPriorFactor.from_sde(X(a), X(b), t[b] - t[a], prior)
 
     def _interpolated(self, inner: Factor, a: int, b: int, pose: int) -> InterpolatedFactor:
         """``inner`` (a reading at the pose without a state) on states a and b.  [YIB Eq. 29]"""
         t = self.readings.times
-        return InterpolatedFactor.create(inner, X(a), X(b), t[a], t[b], t[pose], self.setup.qc)
+        return InterpolatedFactor.create(inner, X(a), X(b), t[a], t[b], t[pose], self.setup.motion_prior())
 
     def _velocity_factor(self, i: int, interpolated: bool) -> VelocityFactor:
         """Odometry row i - 1 as the projected velocity of pose i."""
         sigmas = self.setup.interpolated_velocity_sigmas if interpolated else self.setup.velocity_sigmas
-        return VelocityFactor.create(X(i), self.readings.velocity[i], sigmas)
+        return VelocityFactor.create(X(i), self.readings.velocity[i], sigmas, state_dim=self.setup.state_dim)
 
     def _range_factors(self, i: int) -> list[RangeFactor]:
         """The range readings of pose i as factors on X(i) (X(i) may be a pose without a state)."""
         r, s = self.readings, self.setup
         return [
-            RangeFactor.create(X(i), L(r.range_landmark[k]), r.range_value[k], s.range_sigma, loss=s.range_loss)
+            RangeFactor.create(X(i), L(r.range_landmark[k]), r.range_value[k], s.range_sigma, loss=s.range_loss, state_dim=s.state_dim)
             for k in range(self._bounds[i], self._bounds[i + 1])
         ]

@@ -190,7 +190,7 @@ class StreamingEstimator:
 
     def solved(self) -> Trajectory:
         """The trajectory the solver holds: its states, queried at any time (Eq. 18)."""
-        return Trajectory(self.solver, self.states[: self.n_solved], self.readings.times, self.setup.qc)
+        return Trajectory(self.solver, self.states[: self.n_solved], self.readings.times, self.setup.motion_prior())
 
     def estimate_at(self, t: float, *, covariance: bool = False) -> NDArray | tuple[NDArray, NDArray]:
         """The state x(t) (6,) at any time from the first solved state on, with its covariance (6, 6) if asked:

@@ -22,11 +22,13 @@ from numpy.typing import NDArray
 from .bayes_tree.params import ISAM2Params
 from .datasets import RangeDataset
 from .errors import DataError, SteamError
+from .gp.sde import LinearSDE
 from .robust import Tukey
 
-__all__ = ["PaperSetup", "Readings", "attach_ranges", "range_correction", "RANGE_ATTACHMENTS", "DEPARTURES"]
+__all__ = ["PaperSetup", "Readings", "attach_ranges", "range_correction", "RANGE_ATTACHMENTS", "DEPARTURES", "PRIORS"]
 
 RANGE_ATTACHMENTS = ("file-order", "time")
+PRIORS = ("wnoa", "wnoj", "singer")  # the paper's prior, and two extensions (docs/derivations.md §6)
 
 # The deliberate departures from the scripts, by name: the PaperSetup fields each one changes
 # (docs/experiments.md gives each one's measured effect on the Plaza run).
@@ -59,10 +61,16 @@ class PaperSetup:
     pose2_heading_rate_guess: bool = True  # initial θ̇ as the scripts' Pose2 difference (±2π at the ±π crossing); False: the plain change
     relinearize_blocks: tuple[int, ...] | None = (3, 3)  # BTGP relinearizes pose and velocity on their own (GTSAM variables P, V); None: the whole state
     final_updates: int = 0  # extra solver updates with no new factors after the last pose (synthetic script: 10)
+    prior: str = "wnoa"  # motion prior: the paper's 'wnoa', or 'wnoj' / 'singer' (then qc is the PSD of jerk)
+    singer_time_constant: float = 1.0  # [s] 1/α of the Singer prior
+    first_acceleration_sigmas: NDArray = field(default_factory=lambda: np.array([1.0, 1.0, np.pi]))  # (3,) prior on acceleration 0 (mean 0), WNOJ and Singer
 
     def __post_init__(self) -> None:
         if self.range_attachment not in RANGE_ATTACHMENTS:
             raise SteamError(f"range_attachment must be one of {RANGE_ATTACHMENTS}, got {self.range_attachment!r}")
+        if self.prior not in PRIORS:
+            raise SteamError(f"prior must be one of {PRIORS}, got {self.prior!r}")
+        self.motion_prior()  # checks Qc and the time constant, naming the bad one
 
     @classmethod
     def synthetic(cls) -> PaperSetup:
@@ -104,9 +112,28 @@ class PaperSetup:
             raise SteamError(f"PaperSetup has no field {unknown[0]!r}")
         return replace(self, **changes)
 
+    def motion_prior(self) -> NDArray | LinearSDE:
+        """The GP prior of the states: Qc for the paper's WNOA (its memoised closed forms), else a LinearSDE."""
+        if self.prior == "wnoa":
+            return self.qc
+        if self.prior == "wnoj":
+            return LinearSDE.wnoj(self.qc)
+        return LinearSDE.singer(self.qc, time_constant=self.singer_time_constant)
+
+    @property
+    def state_dim(self) -> int:
+        """Size of a state: [p; ṗ] (6) for WNOA, [p; ṗ; p̈] (9) for WNOJ and Singer."""
+        return 6 if self.prior == "wnoa" else 9
+
     def isam2_params(self) -> ISAM2Params:
-        """BTGP's iSAM2 settings for this set-up: GTSAM's defaults, with the state's relinearization blocks."""
-        return ISAM2Params(relinearize_blocks=None if self.relinearize_blocks is None else {"x": self.relinearize_blocks})
+        """BTGP's iSAM2 settings for this set-up: GTSAM's defaults, with the state's relinearization blocks.
+
+        ``relinearize_blocks`` (3, 3) is pose and velocity on their own; a 9-number state adds its acceleration.
+        """
+        blocks = self.relinearize_blocks
+        if blocks is not None and sum(blocks) < self.state_dim:
+            blocks = tuple(blocks) + (3,) * ((self.state_dim - sum(blocks)) // 3)
+        return ISAM2Params(relinearize_blocks=None if blocks is None else {"x": blocks})
 
     def departing(self, *names: str) -> PaperSetup:
         """A copy with the named departures from the scripts (:data:`DEPARTURES`) applied."""

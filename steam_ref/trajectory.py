@@ -22,6 +22,8 @@ from .gp.interpolate import (
     extrapolate_covariance_sde,
     extrapolate_state_sde,
     interpolate_covariance,
+    interpolate_covariance_sde,
+    interpolate_state_sde,
     interpolation_matrices,
 )
 from .gp.sde import LinearSDE
@@ -41,14 +43,34 @@ class Covariances:
 
 
 class Trajectory:
-    """A solver's states at poses ``states`` (sorted), queried at any time from the first state on."""
+    """A solver's states at poses ``states`` (sorted), queried at any time from the first state on.
 
-    def __init__(self, solver, states: Sequence[int], times: NDArray, qc: NDArray):
+    ``prior`` is the motion prior the states were estimated with: Qc (3, 3) of the paper's WNOA prior,
+    or any :class:`~steam_ref.gp.LinearSDE` (WNOJ, Singer: states of 9 numbers).
+    """
+
+    def __init__(self, solver, states: Sequence[int], times: NDArray, prior: NDArray | LinearSDE):
         self.solver = solver  # anything with estimate_of, estimate, joint_covariance(s), marginals
         self.states = list(states)  # poses with a state, increasing
         self.times = times  # (n_poses,) time of every pose
-        self.qc = qc  # (3, 3) Qc of the WNOA prior
-        self.prior = LinearSDE.wnoa(qc)  # the same prior as an SDE, for prediction after the last state
+        # Qc of a WNOA prior uses the memoised closed forms; any other prior goes through its LinearSDE.
+        self.qc = None if isinstance(prior, LinearSDE) else np.asarray(prior, dtype=float)
+        self.prior = prior if isinstance(prior, LinearSDE) else LinearSDE.wnoa(prior)
+        self.n = self.prior.n  # size of a state
+
+    def _between(self, a: int, b: int, t: float, xa: NDArray, xb: NDArray) -> NDArray:
+        """x̄(t) between the states at poses a and b.  [YIB Eq. 18]"""
+        ta, tb = self.times[a], self.times[b]
+        if self.qc is None:
+            return interpolate_state_sde(self.prior, ta, xa, tb, xb, t)
+        lam, psi = interpolation_matrices(ta, tb, t, self.qc)  # [YIB Eq. 16]
+        return lam @ xa + psi @ xb
+
+    def _between_covariance(self, a: int, b: int, t: float, joint: NDArray) -> NDArray:
+        ta, tb = self.times[a], self.times[b]
+        if self.qc is None:
+            return interpolate_covariance_sde(self.prior, ta, tb, t, joint)
+        return interpolate_covariance(ta, tb, t, self.qc, joint)
 
     def neighbours(self, t: float) -> tuple[int, int] | int:
         """The state at time t, or the two states around it."""
@@ -60,7 +82,7 @@ class Trajectory:
         return solved[j] if times[solved[j]] == t else (solved[j - 1], solved[j])
 
     def at(self, t: float, *, covariance: bool = False) -> NDArray | tuple[NDArray, NDArray]:
-        """The state x(t) (6,), with its covariance (6, 6) if asked, for any t from the first state on.
+        """The state x(t) (n,), with its covariance (n, n) if asked, for any t from the first state on.
 
         Between states: [YIB Eq. 18]; after the last state t_N: the prior's prediction from x̄_N, P_N.
         """
@@ -83,26 +105,23 @@ class Trajectory:
             mean = self.solver.estimate_of(X(near)).copy()
             return (mean, self.solver.joint_covariance([X(near)])) if covariance else mean
         a, b = near
-        ta, tb = self.times[a], self.times[b]
-        lam, psi = interpolation_matrices(ta, tb, t, self.qc)
-        mean = lam @ self.solver.estimate_of(X(a)) + psi @ self.solver.estimate_of(X(b))  # [YIB Eq. 18]
+        mean = self._between(a, b, t, self.solver.estimate_of(X(a)), self.solver.estimate_of(X(b)))
         if not covariance:
             return mean
-        return mean, interpolate_covariance(ta, tb, t, self.qc, self.solver.joint_covariance([X(a), X(b)]))
+        return mean, self._between_covariance(a, b, t, self.solver.joint_covariance([X(a), X(b)]))
 
     def at_every_pose(self) -> tuple[NDArray, NDArray]:
-        """Times (n,) and states (n, 6) at every pose of the span; reads the whole estimate once."""
+        """Times (n_poses,) and states (n_poses, n) at every pose of the span; reads the whole estimate once."""
         solved = self.states
         if not solved:
-            return np.zeros(0), np.zeros((0, 6))
+            return np.zeros(0), np.zeros((0, self.n))
         values, times = self.solver.estimate(), self.times
-        out = np.empty((solved[-1] + 1, 6))
+        out = np.empty((solved[-1] + 1, self.n))
         for a, b in zip(solved, solved[1:]):
             xa, xb = values[X(a)], values[X(b)]
             out[a] = xa
             for p in range(a + 1, b):
-                lam, psi = interpolation_matrices(times[a], times[b], times[p], self.qc)  # [YIB Eq. 16]
-                out[p] = lam @ xa + psi @ xb  # [YIB Eq. 18]
+                out[p] = self._between(a, b, times[p], xa, xb)  # [YIB Eq. 18]
         out[solved[-1]] = values[X(solved[-1])]
         return times[: solved[-1] + 1].copy(), out
 
@@ -113,12 +132,12 @@ class Trajectory:
         gaps = [(a, b) for a, b in zip(solved, solved[1:]) if b > a + 1]
         joints = dict(zip(gaps, self.solver.joint_covariances([(X(a), X(b)) for a, b in gaps]))) if gaps else {}
         n = solved[-1] + 1 if solved else 0
-        full = np.empty((n, 6, 6))
+        full = np.empty((n, self.n, self.n))
         for a, b in zip(solved, solved[1:]):
             full[a] = marg[X(a)]
             for p in range(a + 1, b):
-                full[p] = interpolate_covariance(self.times[a], self.times[b], self.times[p], self.qc, joints[(a, b)])
+                full[p] = self._between_covariance(a, b, self.times[p], joints[(a, b)])
         if solved:
             full[solved[-1]] = marg[X(solved[-1])]
         marks = np.array([marg[k] for k in landmarks]).reshape(-1, 2, 2)
-        return Covariances(full[:, :3, :3].copy(), full[:, 3:, 3:].copy(), marks, tuple(k.index for k in landmarks))
+        return Covariances(full[:, :3, :3].copy(), full[:, 3:6, 3:6].copy(), marks, tuple(k.index for k in landmarks))
