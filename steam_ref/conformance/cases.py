@@ -73,9 +73,10 @@ def _gp() -> list[Case]:
         cases.append(Case(f"singer_a{alpha:g}_dt{dt}", "[YIB Eq. 14, 16-17]",
                           f"Singer's model p⃛ = -α p̈ + w, α = {alpha}: Φ and Q over Δt = {dt} (αΔt = {alpha * dt:g})",
                           {"kind": "singer", "alpha": alpha, "dt": dt, "qc": QC_DIAG}, {"Phi": tol(1e-13), "Q": tol(1e-11)}, True, ORACLE_GP))
-    for tau in (1.1, 1.3, 1.55):
-        cases.append(Case(f"interp_tau{tau}", "[YIB Eq. 16, 18]", f"Λ(τ), Ψ(τ) and x̄(τ) = Λ x̄₁ + Ψ x̄₂ for t₁ = 1, t₂ = 1.6, τ = {tau}",
-                          {"kind": "interpolation", "t1": 1.0, "t2": 1.6, "tau": tau, "qc": QC_FULL, "x1": X1, "x2": X2},
+    for tau, qc, which in ((1.1, QC_DIAG, "diagonal"), (1.3, QC_FULL, "full"), (1.55, QC_DIAG, "diagonal")):
+        cases.append(Case(f"interp_tau{tau}", "[YIB Eq. 16, 18]",
+                          f"Λ(τ), Ψ(τ) and x̄(τ) = Λ x̄₁ + Ψ x̄₂ for t₁ = 1, t₂ = 1.6, τ = {tau}, {which} Qc",
+                          {"kind": "interpolation", "t1": 1.0, "t2": 1.6, "tau": tau, "qc": qc, "x1": X1, "x2": X2},
                           {"Lambda": tol(1e-9), "Psi": tol(1e-9), "x_tau": tol(1e-9)}, True, ORACLE_KERNEL))
     for tau in (1.1, 1.45):
         cases.append(Case(f"interp_cov_tau{tau}", "[YIB Eq. 16-18]",
