@@ -213,6 +213,8 @@ def _blocks(A: np.ndarray, keys, names) -> list[np.ndarray]:
 
 
 def gp_case(inputs: dict) -> dict:
+    if inputs["kind"] not in ("wnoa", "interpolation"):
+        raise Unsupported(f"no {inputs['kind']} prior in GTSAM")
     qc = np.asarray(inputs["qc"], float)
     if np.any(qc != np.diag(np.diag(qc))) or qc.shape != (3, 3):
         raise Unsupported("diagonal 3x3 Qc only")
@@ -224,8 +226,6 @@ def gp_case(inputs: dict) -> dict:
         A, _ = f.linearize(vals).jacobian()
         H0, _ = _blocks(np.linalg.solve(W, A), f.keys(), ["x0", "x1"])
         return {"Phi": -H0, "Q": np.linalg.inv(W.T @ W), "Qinv": W.T @ W, "W": W}
-    if inputs["kind"] != "interpolation":
-        raise Unsupported(inputs["kind"])
     rows = []
     for part in (0, 1):  # unit priors on p(τ) and on v(τ), interpolated: their rows are [Λ Ψ]
         pt, vt = gtsam.symbol("q", 0), gtsam.symbol("w", 0)
