@@ -96,7 +96,7 @@ def test_selftest_passes_on_the_installed_code(capsys):
     code, out, _ = cli(capsys, "selftest")
     last = out.strip().splitlines()[-1]
     assert code == 0 and last.endswith(" passed, 0 failed") and int(last.split()[0]) >= 45, out
-    assert "paper/plaza_btgp1" in out  # not run by default, and said so
+    assert "paper suite not run (synthetic_btgp1, plaza_btgp1" in out  # not by default, and it says so
 
 
 def test_export_writes_the_kit_and_a_readme_and_refuses_a_non_empty_folder(tmp_path, capsys):

@@ -49,6 +49,7 @@ class Report:
     outcomes: list[Outcome] = field(default_factory=list)
     not_run: list[str] = field(default_factory=list)  # 'suite/case'
     unknown: list[str] = field(default_factory=list)  # results for cases the kit does not have
+    notes: list[str] = field(default_factory=list)  # anything else to say before the count
 
     @property
     def passed(self) -> int:
@@ -66,6 +67,7 @@ class Report:
             out.append(f"not run: {len(self.not_run)} cases of these suites have no result ({shown})")
         if self.unknown:
             out.append(f"ignored: results for {len(self.unknown)} cases the kit does not have ({', '.join(self.unknown[:8])})")
+        out += self.notes
         out.append(f"{self.passed} passed, {self.failed} failed")
         return out
 
