@@ -34,7 +34,7 @@ class Case:
     notes: dict = field(default_factory=dict)
 
 
-ORACLE_GP = ("oracle: Φ = expm(AΔt) (SciPy); Q and vᵢ by composite Gauss-Legendre quadrature of their integrals; "
+ORACLE_GP = ("oracle: Φ = expm(AΔt) (SciPy); Q and vᵢ by 24-node Gauss-Legendre quadrature of their integrals; "
              "Q⁻¹ by a dense inverse; W = U⁻¹ for Σ = UUᵀ, U upper")
 ORACLE_KERNEL = "oracle: [Λ Ψ] = K(τ)K⁻¹ and the conditional covariance by conditioning the dense prior of [x(t₁); x(τ); x(t₂)] (Eq. 12)"
 ORACLE_FACTOR = "oracle: the error written out from its equation; Jacobians by complex-step differentiation; Λ, Ψ by the dense kernel"

@@ -4,7 +4,7 @@ Nothing here calls steam_ref's GP, factor or solver code (only its errors): ever
 computed a second way, from the equation it stands for, so the kit's "independent" cases check
 steam_ref rather than restate it.
 
-- Φ(Δt) = expm(A Δt) by SciPy [YIB Eq. 16]; Q(Δt) and vᵢ by composite Gauss-Legendre quadrature of
+- Φ(Δt) = expm(A Δt) by SciPy [YIB Eq. 16]; Q(Δt) and vᵢ by 24-node Gauss-Legendre quadrature of
   their integrals [YIB Eq. 17, 23] (exact up to rounding for WNOA's and WNOJ's polynomial
   integrands, converged to rounding for Singer's and the general SDE's exponentials).
 - Λ(τ), Ψ(τ) and the covariance at τ by conditioning the dense prior of [x(t₁); x(τ); x(t₂)]
