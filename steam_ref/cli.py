@@ -6,6 +6,7 @@
     steam-ref batch [--dataset NAME_OR_PATH] [--ordering {xl,amd}] [--json] [--plot FILE.png]
     steam-ref fidelity [--dataset {plaza,paper-synthetic,all}] [--json] [--plot FILE.png]
     steam-ref reproduce [--quick] [--out DIR]
+    steam-ref conformance {export DIR, check RESULTS_DIR [--suite NAME], selftest [--paper], build}
 
 With no options ``steam-ref run`` runs BTGP/1 on the generated synthetic task. Bad arguments and
 missing or malformed data files give a one-line error and exit code 2.
@@ -23,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from .bayes_tree import ISAM2Params
+from .conformance import command as conformance_command
 from .datasets import load_dataset
 from .errors import SteamError
 from .experiments import reproduce
@@ -113,6 +115,7 @@ def build_parser() -> argparse.ArgumentParser:
     rep.add_argument("--quick", action="store_true", help="small prefixes and budgets: minutes, not hours")
     rep.add_argument("--out", default="results", help="folder for plots and the table (default: results)")
     rep.add_argument("--data-dir", default=None, help="folder searched for data files before $STEAM_REF_DATA_DIR and gtsam's Data/")
+    conformance_command.add_parser(sub)
     return parser
 
 
@@ -264,7 +267,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             if args.command is None:
                 args = build_parser().parse_args(["run"])
             return _run(args)
-        commands = {"batch": _batch, "fidelity": _fidelity, "reproduce": _reproduce}
+        commands = {"batch": _batch, "fidelity": _fidelity, "reproduce": _reproduce, "conformance": conformance_command.run}
         return commands[args.command](args)
     except SteamError as exc:
         print(f"steam-ref: error: {exc}", file=sys.stderr)

@@ -1,0 +1,168 @@
+"""Build the kit, and check the installed code against the shipped one (``selftest``).
+
+:func:`build_kit` computes every case's expected values (the oracle's for an independent case,
+steam_ref's otherwise), refuses to write a kit that steam_ref fails, and writes ``<suite>/cases.json``,
+``<suite>/expected.npz`` and ``index.json``. Regenerating the shipped kit is
+
+    steam-ref conformance build --paper          (from a source checkout, with the paper's data files)
+
+:func:`selftest` regenerates every case from the shipped inputs with the installed code and checks
+it against the shipped expected values: steam_ref's results, the oracle's (for independent cases),
+and that the inputs defined in :mod:`.cases` are still the shipped ones. The paper suite runs only
+when asked (two full runs, about a minute).
+"""
+
+from __future__ import annotations
+
+import importlib.metadata
+import os
+import platform
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import scipy
+
+from ..errors import SteamError
+from .cases import SUITE_DOCS, Case, suite_cases
+from .checker import Outcome, Report, check_cases, compare_quantity
+from .conventions import CONVENTIONS, RESULTS_LAYOUT
+from .expected import oracle_case
+from .kitio import KIT_VERSION, SHIPPED, SUITES, kit_files, plain, read_index, read_json, read_suite, sha256, write_json, write_npz
+from .paper import paper_cases, run_paper_case
+from .runner import run_case
+
+__all__ = ["build_kit", "selftest", "case_record"]
+
+
+def _roundtrip(value):
+    """``value`` as the kit stores it (JSON types; floats exact)."""
+    return plain(value)
+
+
+def case_record(case: Case, expected: dict) -> dict:
+    """A case as cases.json lists it."""
+    return {
+        "name": case.name, "equation": case.equation, "description": case.description,
+        "independent": case.independent, "source": case.source, "tolerance": case.tolerance,
+        "inputs": _roundtrip(case.inputs), "expected": _roundtrip(expected), **({"notes": case.notes} if case.notes else {}),
+    }
+
+
+def _suite_records(suite: str) -> list[dict]:
+    records = []
+    for case in suite_cases(suite):
+        inputs = _roundtrip(case.inputs)
+        ours = _roundtrip(run_case(suite, case.name, inputs))
+        expected = _roundtrip(oracle_case(suite, case.name, inputs)) if case.independent else ours
+        record = case_record(case, expected)
+        verdict = check_cases(suite, [record], {case.name: ours})
+        if verdict.failed:
+            raise SteamError(f"steam_ref fails its own kit, so it is not written: {verdict.outcomes[0].line()}")
+        records.append(record)
+    return records
+
+
+def _version() -> str:
+    try:
+        return importlib.metadata.version("steam_ref")
+    except importlib.metadata.PackageNotFoundError:
+        return "unknown"
+
+
+def _commit() -> str:
+    """The git commit of the source tree the package runs from, or 'unknown' (an installed wheel)."""
+    root = Path(__file__).resolve().parents[2]
+    try:
+        out = subprocess.run(["git", "-C", str(root), "rev-parse", "HEAD"], capture_output=True, text=True, timeout=10)
+        dirty = subprocess.run(["git", "-C", str(root), "status", "--porcelain", "--", "steam_ref"], capture_output=True, text=True, timeout=10)
+    except (OSError, subprocess.SubprocessError):
+        return "unknown"
+    if out.returncode != 0:
+        return "unknown"
+    return out.stdout.strip() + ("+modified" if dirty.stdout.strip() else "")
+
+
+def _write_suite(out: Path, suite: str, records: list[dict]) -> None:
+    write_json(out / suite / "cases.json", {"suite": suite, "kit_version": KIT_VERSION, "description": SUITE_DOCS[suite], "cases": records})
+    write_npz(out / suite / "expected.npz", records)
+
+
+def build_kit(out: str | os.PathLike | None = None, *, paper: bool = False, data_dir: str | os.PathLike | None = None) -> dict:
+    """Write the kit to ``out`` (default: the package's own folder); returns its index.
+
+    ``paper``: rebuild the paper suite from the data files; otherwise keep the one in ``out``, or
+    copy the shipped one.
+    """
+    out = Path(SHIPPED if out is None else out)
+    out.mkdir(parents=True, exist_ok=True)
+    for suite in SUITES[:-1]:
+        _write_suite(out, suite, _suite_records(suite))
+    if paper:
+        _write_suite(out, "paper", [case_record(c, e) for c, e in paper_cases(data_dir)])
+    elif not (out / "paper" / "cases.json").is_file():
+        if not (SHIPPED / "paper" / "cases.json").is_file():
+            raise SteamError("no paper suite to keep: build with --paper (needs the paper's data files)")
+        shutil.copytree(SHIPPED / "paper", out / "paper", dirs_exist_ok=True)
+    suites = {}
+    for suite in SUITES:
+        cases = read_suite(out, suite)["cases"]
+        suites[suite] = {
+            "description": SUITE_DOCS[suite], "files": [f"{suite}/cases.json", f"{suite}/expected.npz"], "cases": len(cases),
+            "independent": [c["name"] for c in cases if c["independent"]],
+            "produced_by_steam_ref": [c["name"] for c in cases if not c["independent"]],
+        }
+    index = {
+        "kit": "steam_ref conformance kit", "kit_version": KIT_VERSION,
+        "paper": "Yan, Indelman, Boots: Incremental Sparse GP Regression for Continuous-time Trajectory Estimation & Mapping",
+        "generated_by": {"steam_ref": _version(), "commit": _commit(), "numpy": np.__version__, "scipy": scipy.__version__,
+                         "python": platform.python_version()},
+        "conventions": CONVENTIONS, "results_layout": RESULTS_LAYOUT, "suites": suites,
+        "files": {name: sha256(out / name) for name in kit_files(out) if name != "README.md"},
+    }
+    write_json(out / "index.json", index)
+    return index
+
+
+def _selftest_suite(kit: Path, suite: str, report: Report) -> None:
+    shipped = read_suite(kit, suite)["cases"]
+    defined = {c.name: c for c in suite_cases(suite)}
+    for name in sorted(set(defined) - {c["name"] for c in shipped}):
+        report.outcomes.append(Outcome(suite, name, ((np.inf, "defined in cases.py but not in the shipped kit: regenerate it"),)))
+    for case in shipped:
+        name, failures = case["name"], []
+        mine = defined.get(name)
+        if mine is None:
+            failures.append((np.inf, "in the shipped kit but no longer defined in cases.py: regenerate the kit"))
+        elif (_roundtrip(mine.inputs), mine.tolerance, mine.independent) != (case["inputs"], case["tolerance"], case["independent"]):
+            failures.append((np.inf, "its inputs, tolerances or provenance in cases.py differ from the shipped kit: regenerate it"))
+        ours = _roundtrip(run_case(suite, name, case["inputs"]))
+        sources = [("steam_ref: ", ours)]
+        if case["independent"]:
+            sources.append(("oracle: ", _roundtrip(oracle_case(suite, name, case["inputs"]))))
+        for prefix, got in sources:
+            for q, tolerance in case["tolerance"].items():
+                failures += [(r, prefix + m) for r, m in compare_quantity(case["expected"][q], got.get(q), tolerance, q)]
+        report.outcomes.append(Outcome(suite, name, tuple(sorted(failures, key=lambda f: -f[0]))))
+
+
+def selftest(kit: str | os.PathLike | None = None, *, paper: bool = False, data_dir: str | os.PathLike | None = None) -> Report:
+    """Regenerate every case from the kit's inputs with the installed code and check it against the kit."""
+    kit = Path(SHIPPED if kit is None else kit)
+    read_index(kit)  # version and sha256 of every file
+    report = Report()
+    for suite in SUITES[:-1]:
+        _selftest_suite(kit, suite, report)
+    cases = read_suite(kit, "paper")["cases"]
+    if paper:
+        results = {c["name"]: _roundtrip(run_paper_case(c["name"], c["inputs"], data_dir)) for c in cases}
+        check_cases("paper", cases, results, report)
+    else:
+        report.notes.append(f"paper suite not run ({', '.join(c['name'] for c in cases)}: two full BTGP/1 runs, about a minute): add --paper")
+    return report
+
+
+def shipped_index() -> dict:
+    """The shipped kit's index.json (not verified)."""
+    return read_json(SHIPPED / "index.json")

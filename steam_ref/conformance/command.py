@@ -1,0 +1,77 @@
+"""``steam-ref conformance``: export the kit, check results against it, check the installed code.
+
+    steam-ref conformance export DIR                      the kit and a README on producing results
+    steam-ref conformance check RESULTS_DIR [--suite NAME] [--kit DIR]
+    steam-ref conformance selftest [--paper] [--data-dir DIR]
+    steam-ref conformance build [--out DIR] [--paper] [--data-dir DIR]   regenerate the kit
+
+``check`` prints one line per failing case and ends with ``N passed, N failed``; it exits 0 only
+when none failed (1 otherwise, 2 on bad input). ``selftest`` does the same for the installed code.
+"""
+
+from __future__ import annotations
+
+import argparse
+import shutil
+from pathlib import Path
+
+from ..errors import SteamError
+from .build import build_kit, selftest
+from .checker import Report, check_directory
+from .conventions import EXPORT_README
+from .kitio import KIT_VERSION, SHIPPED, SUITES, read_index
+
+__all__ = ["add_parser", "run"]
+
+
+def add_parser(sub) -> argparse.ArgumentParser:
+    """Add ``conformance`` and its subcommands to ``sub`` (an argparse subparsers object)."""
+    conf = sub.add_parser("conformance", help="the conformance kit: export it, check results against it, check this install")
+    commands = conf.add_subparsers(dest="conformance_command", parser_class=type(conf), required=True, metavar="{export,check,selftest,build}")
+    exp = commands.add_parser("export", help="write the kit (inputs, expected outputs, conventions) and a README to DIR")
+    exp.add_argument("dir", metavar="DIR", help="a new or empty folder")
+    chk = commands.add_parser("check", help="compare results laid out like the kit with its expected values")
+    chk.add_argument("results", metavar="RESULTS_DIR", help="a folder with <suite>/results.json")
+    chk.add_argument("--suite", choices=SUITES, default=None, help="check this suite only")
+    chk.add_argument("--kit", default=None, help="check against this exported kit instead of the shipped one")
+    st = commands.add_parser("selftest", help="regenerate every case with the installed code and check it against the shipped kit")
+    st.add_argument("--paper", action="store_true", help="also run the paper suite (BTGP/1 on both data sets, about a minute)")
+    st.add_argument("--data-dir", default=None, help="folder with the paper's data files (else $STEAM_REF_DATA_DIR)")
+    bld = commands.add_parser("build", help="regenerate the kit (default: the package's own copy)")
+    bld.add_argument("--out", default=None, help="write the kit here instead of into the package")
+    bld.add_argument("--paper", action="store_true", help="rebuild the paper suite from the data files (else keep the existing one)")
+    bld.add_argument("--data-dir", default=None, help="folder with the paper's data files (else $STEAM_REF_DATA_DIR)")
+    return conf
+
+
+def _print(report: Report) -> int:
+    for line in report.lines():
+        print(line)
+    return 0 if report.failed == 0 else 1
+
+
+def _export(target: Path) -> int:
+    if target.exists() and (not target.is_dir() or any(target.iterdir())):
+        raise SteamError(f"export needs a new or empty folder, and {str(target)!r} is not one")
+    read_index(SHIPPED)  # refuse to export a damaged kit
+    shutil.copytree(SHIPPED, target, dirs_exist_ok=True, ignore=shutil.ignore_patterns("__pycache__"))
+    (target / "README.md").write_text(EXPORT_README.format(version=KIT_VERSION), encoding="utf-8")
+    print(f"wrote the conformance kit v{KIT_VERSION} to {target} (index.json, {len(SUITES)} suites, README.md)")
+    return 0
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run a parsed ``steam-ref conformance ...`` command; returns the exit code."""
+    command = args.conformance_command
+    if command == "export":
+        return _export(Path(args.dir))
+    if command == "check":
+        kit = Path(args.kit) if args.kit else SHIPPED
+        read_index(kit)
+        return _print(check_directory(kit, Path(args.results), args.suite))
+    if command == "selftest":
+        return _print(selftest(paper=args.paper, data_dir=args.data_dir))
+    index = build_kit(args.out, paper=args.paper, data_dir=args.data_dir)
+    counts = ", ".join(f"{s} {v['cases']}" for s, v in index["suites"].items())
+    print(f"wrote the conformance kit v{KIT_VERSION} to {args.out or SHIPPED}: {counts} cases")
+    return 0
