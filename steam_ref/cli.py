@@ -1,5 +1,7 @@
 """The ``steam-ref`` command: stream a data set through BTGP, PB or PBVR, or reproduce Fig. 3/4.
 
+Usage::
+
     steam-ref run [--dataset NAME_OR_PATH] [--method {btgp,pb,pbvr}] [--every N] [--skip K]
                   [--interpolate/--no-interpolate] [--preset {synthetic,plaza}] [--data-dir DIR]
                   [--json] [--save-estimates FILE.npz] [--plot FILE.png]
