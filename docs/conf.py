@@ -11,9 +11,9 @@ layer table of ``architecture.md``, and the command's own ``--help``.
 
 from __future__ import annotations
 
+import importlib.metadata
 import os
 import sys
-import importlib.metadata
 from pathlib import Path
 
 DOCS = Path(__file__).resolve().parent
@@ -31,7 +31,7 @@ os.environ.pop("MPLBACKEND", None)
 
 project = "steam_ref"
 author = "the steam_ref developers"
-copyright = "2026, the steam_ref developers"  # noqa: A001  (Sphinx's name for it)
+copyright = "2026, the steam_ref developers"
 try:
     release = importlib.metadata.version("steam_ref")
 except importlib.metadata.PackageNotFoundError:  # a checkout on sys.path without an install
@@ -40,7 +40,7 @@ except importlib.metadata.PackageNotFoundError:  # a checkout on sys.path withou
 extensions = [
     "myst_nb",
     "sphinx.ext.autodoc",
-    "sphinx.ext.napoleon",
+    "numpydoc",
     "sphinx.ext.mathjax",
     "sphinx.ext.viewcode",
     "sphinx_copybutton",
@@ -60,17 +60,21 @@ nb_execution_show_tb = True
 nb_execution_excludepatterns = pages.notebooks_without_their_data(ROOT / "tutorials")
 nb_merge_streams = True
 
-# Docstrings are prose with Sphinx roles (no numpydoc or Google sections today); napoleon leaves
-# such prose as written and renders a numpydoc section if one is added.
+# Docstrings are prose with Sphinx roles, with no numpydoc sections so far. numpydoc renders such prose
+# as written (napoleon would read a property's "θ̄: what it is" as a type) and renders numpydoc
+# sections where one is added. Class members are documented by autodoc's :members:, so numpydoc's
+# own member tables are off.
 autodoc_member_order = "bysource"
 autodoc_typehints = "signature"
 autodoc_preserve_defaults = True
-napoleon_google_docstring = False
-napoleon_numpy_docstring = True
+numpydoc_show_class_members = False
+numpydoc_class_members_toctree = False
 
 # Math from a local copy of MathJax 3 (SVG output: one file, no web fonts, every TeX package).
 html_static_path = [str(pages.local_mathjax())]
 mathjax_path = pages.MATHJAX_FILE
+# Its context menu could switch on speech, which fetches data from a CDN: leave the menu out.
+mathjax3_config = {"options": {"enableMenu": False}}
 
 html_theme = "pydata_sphinx_theme"
 html_title = f"steam_ref {release}"

@@ -37,7 +37,9 @@ MATHJAX_FILE = "tex-svg-full.js"
 OPTIONAL_PAGES = ("conformance",)
 PAGES_LISTING_THEM = ("background",)
 # Files a notebook needs when its code names them (the same rule as tests/test_notebooks.py).
-READS_REFERENCE_DATA = re.compile(r"""load_dataset\(\s*["'](plaza|paper-synthetic)["']|Syn_theta_Plaza|Plaza1_thrown|load_authors_run""")
+READS_REFERENCE_DATA = re.compile(
+    r"""load_dataset\(\s*["'](plaza|paper-synthetic)["']|Syn_theta_Plaza|Plaza1_thrown|load_authors_run"""
+)
 DATA_FILES = ("Syn_theta_Plaza.mat", "Plaza1_thrown_away_some_range.mat",
               "authors/Syn_full_data_run.mat", "authors/Plaza1_full_data_run.mat")
 
@@ -63,8 +65,8 @@ def notebooks_without_their_data(folder: Path) -> list[str]:
         raise RuntimeError(f"STEAM_REF_REQUIRE_DATA=1 but the paper's files are missing ({missing[0]} in "
                            f"{where or '$STEAM_REF_DATA_DIR (unset)'}); {', '.join(readers)} need them")
     if readers:
-        print(f"steam_ref docs: {', '.join(readers)} not executed (the paper's files are missing: "
-              f"set STEAM_REF_DATA_DIR, see data/README.md)")
+        LOG.info("steam_ref docs: %s not executed (the paper's files are missing: set STEAM_REF_DATA_DIR, "
+                 "see data/README.md)", ", ".join(readers))
     return [f"*{name}" for name in readers]
 
 
@@ -96,16 +98,15 @@ def modules_of(entry: str) -> list[str]:
         files = [path / "__init__.py"] + sorted(p for p in path.rglob("*.py") if p.name != "__init__.py")
     else:
         files = [path]
-    return [".".join(("steam_ref", *f.relative_to(PACKAGE).with_suffix("").parts)).removesuffix(".__init__") for f in files if f.is_file()]
+    return [_dotted(f) for f in files if f.is_file()]
+
+
+def _dotted(path: Path) -> str:
+    return ".".join(("steam_ref", *path.relative_to(PACKAGE).with_suffix("").parts)).removesuffix(".__init__")
 
 
 def all_modules() -> list[str]:
-    names = []
-    for f in sorted(PACKAGE.rglob("*.py")):
-        parts = f.relative_to(PACKAGE).with_suffix("").parts
-        if parts[-1] != "__main__":
-            names.append(".".join(("steam_ref", *parts)).removesuffix(".__init__"))
-    return names
+    return [_dotted(f) for f in sorted(PACKAGE.rglob("*.py")) if f.name != "__main__.py"]
 
 
 def _write(path: Path, text: str) -> None:
@@ -120,11 +121,10 @@ def write_reference(out: Path) -> list[str]:
     for layer, entries, owns in layers((DOCS / "architecture.md").read_text()):
         by_layer.setdefault(layer, []).append((entries, owns))
     placed: list[str] = []
-    index = ["# API reference", "",
-             "Generated from the docstrings, one page per layer of [the architecture](../architecture.md): "
+    intro = ("Generated from the docstrings, one page per layer of [the architecture](../architecture.md): "
              "a module imports only from the layers above it in this list. `import steam_ref as sr` "
-             "gives the names a user types ([Public API](../api.md)).", "",
-             "```{toctree}", ":maxdepth: 2", ""]
+             "gives the names a user types ([Public API](../api.md)).")
+    index = ["# API reference", "", intro, "", "```{toctree}", ":maxdepth: 2", ""]
     for layer, rows in by_layer.items():
         slug = f"layer-{layer}"
         index.append(slug)
@@ -171,14 +171,14 @@ def write_cli(out: Path) -> None:
 # --- Sphinx hooks ----------------------------------------------------------------------------------
 
 
-def _generate(app: Sphinx) -> None:
+def _generate(_app: Sphinx) -> None:
     unplaced = write_reference(DOCS / "modules")
     for module in unplaced:
         LOG.warning("%s is in no layer of docs/architecture.md's table: add it there", module)
     write_cli(DOCS / "cli")
 
 
-def _drop_absent_optional_pages(app: Sphinx, docname: str, source: list[str]) -> None:
+def _drop_absent_optional_pages(_app: Sphinx, docname: str, source: list[str]) -> None:
     if docname in PAGES_LISTING_THEM:
         for page in OPTIONAL_PAGES:
             if not (DOCS / f"{page}.md").is_file():
