@@ -149,10 +149,22 @@ def write_reference(out: Path) -> list[str]:
 
 
 def _help(parser: argparse.ArgumentParser) -> str:
-    os.environ["COLUMNS"] = "100"  # argparse wraps to the terminal's width; fix it for the page
-    with contextlib.redirect_stdout(io.StringIO()) as text:
-        parser.print_help()
+    """``parser``'s ``--help`` text, wrapped at 100 columns whatever the terminal."""
+    columns = os.environ.get("COLUMNS")
+    os.environ["COLUMNS"] = "100"  # argparse wraps to the terminal's width
+    try:
+        with contextlib.redirect_stdout(io.StringIO()) as text:
+            parser.print_help()
+    finally:
+        if columns is None:
+            del os.environ["COLUMNS"]
+        else:
+            os.environ["COLUMNS"] = columns
     return text.getvalue()
+
+
+def _sentence(text: str) -> str:
+    return f"{text[:1].upper()}{text[1:]}." if text else ""
 
 
 def write_cli(out: Path) -> None:
@@ -163,7 +175,7 @@ def write_cli(out: Path) -> None:
              "```text", _help(parser).rstrip(), "```", "", "```{toctree}", ":maxdepth: 1", ""]
     for name, command in sub.choices.items():
         index.append(name)
-        _write(out / f"{name}.md", "\n".join([f"# `steam-ref {name}`", "", f"{helps.get(name, '')}.", "",
+        _write(out / f"{name}.md", "\n".join([f"# `steam-ref {name}`", "", _sentence(helps.get(name) or ""), "",
                                               "```text", _help(command).rstrip(), "```", ""]))
     _write(out / "index.md", "\n".join([*index, "```", ""]))
 
