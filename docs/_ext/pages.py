@@ -62,8 +62,9 @@ def notebooks_without_their_data(folder: Path) -> list[str]:
         return []
     readers = sorted(p.name for p in folder.glob("*.ipynb") if READS_REFERENCE_DATA.search(p.read_text()))
     if readers and os.environ.get("STEAM_REF_REQUIRE_DATA") == "1":
-        raise RuntimeError(f"STEAM_REF_REQUIRE_DATA=1 but the paper's files are missing ({missing[0]} in "
-                           f"{where or '$STEAM_REF_DATA_DIR (unset)'}); {', '.join(readers)} need them")
+        folder = where or "$STEAM_REF_DATA_DIR (unset)"
+        raise RuntimeError(f"STEAM_REF_REQUIRE_DATA=1 but the paper's files are missing ({missing[0]} in {folder}), "
+                           f"which these tutorials read: {', '.join(readers)}")
     if readers:
         LOG.info("steam_ref docs: %s not executed (the paper's files are missing: set STEAM_REF_DATA_DIR, "
                  "see data/README.md)", ", ".join(readers))
