@@ -60,8 +60,11 @@ def _browser() -> str:
 
 def _site() -> Path:
     if not (SITE / "index.html").is_file():
-        skip_or_fail(f"the site is not built ({SITE} has no index.html): "
-                     "pip install -e '.[docs]' && python3 -m sphinx -W docs docs/_build/html", "docs")
+        skip_or_fail(
+            f"the site is not built ({SITE} has no index.html): "
+            "pip install -e '.[docs]' && python3 -m sphinx -W docs docs/_build/html",
+            "docs",
+        )
     return SITE
 
 
@@ -93,10 +96,22 @@ def read_page(page: str) -> dict:
     copy.write_text(source.read_text().replace("</body>", PROBE + "</body>"))
     try:
         out = subprocess.run(
-            [browser, "--headless", "--no-sandbox", "--disable-gpu", "--no-first-run",
-             "--proxy-server=http://127.0.0.1:9", "--host-resolver-rules=MAP * ~NOTFOUND",
-             "--window-size=1300,1000", "--virtual-time-budget=20000", "--dump-dom", copy.as_uri()],
-            capture_output=True, text=True, timeout=120,
+            [
+                browser,
+                "--headless",
+                "--no-sandbox",
+                "--disable-gpu",
+                "--no-first-run",
+                "--proxy-server=http://127.0.0.1:9",
+                "--host-resolver-rules=MAP * ~NOTFOUND",
+                "--window-size=1300,1000",
+                "--virtual-time-budget=20000",
+                "--dump-dom",
+                copy.as_uri(),
+            ],
+            capture_output=True,
+            text=True,
+            timeout=120,
         )
     finally:
         copy.unlink()

@@ -20,7 +20,7 @@ PROJECT = PYPROJECT["project"]
 
 def test_the_version_is_written_once_and_read_from_the_metadata():
     assert steam_ref.__version__ == importlib.metadata.version("steam_ref") == PROJECT["version"]
-    literal = re.compile(rf"""["']{re.escape(PROJECT['version'])}["']""")
+    literal = re.compile(rf"""["']{re.escape(PROJECT["version"])}["']""")
     sources = (REPO_ROOT / "steam_ref").rglob("*.py")
     written = [str(p.relative_to(REPO_ROOT)) for p in sources if literal.search(p.read_text())]
     assert not written, f"the version is written again in {written}; read steam_ref.__version__"

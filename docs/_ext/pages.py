@@ -40,8 +40,12 @@ PAGES_LISTING_THEM = ("background",)
 READS_REFERENCE_DATA = re.compile(
     r"""load_dataset\(\s*["'](plaza|paper-synthetic)["']|Syn_theta_Plaza|Plaza1_thrown|load_authors_run"""
 )
-DATA_FILES = ("Syn_theta_Plaza.mat", "Plaza1_thrown_away_some_range.mat",
-              "authors/Syn_full_data_run.mat", "authors/Plaza1_full_data_run.mat")
+DATA_FILES = (
+    "Syn_theta_Plaza.mat",
+    "Plaza1_thrown_away_some_range.mat",
+    "authors/Syn_full_data_run.mat",
+    "authors/Plaza1_full_data_run.mat",
+)
 
 
 # --- build-time choices (called from conf.py) -----------------------------------------------------
@@ -63,11 +67,16 @@ def notebooks_without_their_data(folder: Path) -> list[str]:
     readers = sorted(p.name for p in folder.glob("*.ipynb") if READS_REFERENCE_DATA.search(p.read_text()))
     if readers and os.environ.get("STEAM_REF_REQUIRE_DATA") == "1":
         folder = where or "$STEAM_REF_DATA_DIR (unset)"
-        raise RuntimeError(f"STEAM_REF_REQUIRE_DATA=1 but the paper's files are missing ({missing[0]} in {folder}), "
-                           f"which these tutorials read: {', '.join(readers)}")
+        raise RuntimeError(
+            f"STEAM_REF_REQUIRE_DATA=1 but the paper's files are missing ({missing[0]} in {folder}), "
+            f"which these tutorials read: {', '.join(readers)}"
+        )
     if readers:
-        LOG.info("steam_ref docs: %s not executed (the paper's files are missing: set STEAM_REF_DATA_DIR, "
-                 "see data/README.md)", ", ".join(readers))
+        LOG.info(
+            "steam_ref docs: %s not executed (the paper's files are missing: set STEAM_REF_DATA_DIR, "
+            "see data/README.md)",
+            ", ".join(readers),
+        )
     return [f"*{name}" for name in readers]
 
 
@@ -122,9 +131,11 @@ def write_reference(out: Path) -> list[str]:
     for layer, entries, owns in layers((DOCS / "architecture.md").read_text()):
         by_layer.setdefault(layer, []).append((entries, owns))
     placed: list[str] = []
-    intro = ("Generated from the docstrings, one page per layer of [the architecture](../architecture.md): "
-             "a module imports only from the layers above it in this list. `import steam_ref as sr` "
-             "gives the names a user types ([Public API](../api.md)).")
+    intro = (
+        "Generated from the docstrings, one page per layer of [the architecture](../architecture.md): "
+        "a module imports only from the layers above it in this list. `import steam_ref as sr` "
+        "gives the names a user types ([Public API](../api.md))."
+    )
     index = ["# API reference", "", intro, "", "```{toctree}", ":maxdepth: 2", ""]
     for layer, rows in by_layer.items():
         slug = f"layer-{layer}"
@@ -172,12 +183,36 @@ def write_cli(out: Path) -> None:
     parser = build_parser()
     (sub,) = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
     helps = {a.dest: a.help for a in sub._choices_actions}
-    index = ["# The `steam-ref` command", "", "Each page is the command's own `--help`.", "",
-             "```text", _help(parser).rstrip(), "```", "", "```{toctree}", ":maxdepth: 1", ""]
+    index = [
+        "# The `steam-ref` command",
+        "",
+        "Each page is the command's own `--help`.",
+        "",
+        "```text",
+        _help(parser).rstrip(),
+        "```",
+        "",
+        "```{toctree}",
+        ":maxdepth: 1",
+        "",
+    ]
     for name, command in sub.choices.items():
         index.append(name)
-        _write(out / f"{name}.md", "\n".join([f"# `steam-ref {name}`", "", _sentence(helps.get(name) or ""), "",
-                                              "```text", _help(command).rstrip(), "```", ""]))
+        _write(
+            out / f"{name}.md",
+            "\n".join(
+                [
+                    f"# `steam-ref {name}`",
+                    "",
+                    _sentence(helps.get(name) or ""),
+                    "",
+                    "```text",
+                    _help(command).rstrip(),
+                    "```",
+                    "",
+                ]
+            ),
+        )
     _write(out / "index.md", "\n".join([*index, "```", ""]))
 
 
