@@ -1,6 +1,6 @@
 """Sphinx configuration of the steam_ref site.
 
-Build it from the repository root with ``sphinx-build -W docs docs/_build/html`` (README). The build
+Build it from the repository root with ``python3 -m sphinx -W docs docs/_build/html`` (README). The build
 needs nothing from the network: no intersphinx, MathJax served from a local copy, the theme's own
 assets. The tutorials in ``tutorials/`` are the pages under ``tutorials/`` here (``docs/tutorials``
 is a symbolic link to that folder, which Sphinx follows); they run at build time and their outputs
