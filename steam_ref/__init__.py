@@ -6,6 +6,8 @@ interpolation, batch Gauss-Newton (PB, PBVR), and the Bayes tree (BTGP). Equatio
 the code as [YIB Eq. n]; see docs/references.md.
 """
 
+from importlib import metadata as _metadata
+
 from .bayes_tree import BayesTree, IncrementalSolver, ISAM2Params
 from .batch import BatchResult, batch_solve, gauss_newton, levenberg_marquardt
 from .errors import (
@@ -38,7 +40,10 @@ from .datasets import RangeDataset, generate_synthetic, load_dataset
 from .readings import PaperSetup
 from .online import StreamOptions, run_online
 
-__version__ = "0.1.0"
+try:
+    __version__ = _metadata.version("steam_ref")  # written once, in pyproject.toml
+except _metadata.PackageNotFoundError:  # the source folder on sys.path, never installed
+    __version__ = "0+unknown"
 
 __all__ = [
     "SteamError", "ShapeError", "DataError", "UnknownVariableError", "UnderdeterminedError",

@@ -1,5 +1,7 @@
 """The ``steam-ref`` command: stream a data set through BTGP, PB or PBVR, or reproduce Fig. 3/4.
 
+Usage::
+
     steam-ref run [--dataset NAME_OR_PATH] [--method {btgp,pb,pbvr}] [--every N] [--skip K]
                   [--interpolate/--no-interpolate] [--preset {synthetic,plaza}] [--data-dir DIR]
                   [--json] [--save-estimates FILE.npz] [--plot FILE.png]
@@ -23,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
+from . import __version__
 from .bayes_tree import ISAM2Params
 from .conformance import command as conformance_command
 from .datasets import load_dataset
@@ -96,6 +99,7 @@ def _add_run_arguments(run: argparse.ArgumentParser) -> None:
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``steam-ref``."""
     parser = _Parser(prog="steam-ref", description="Incremental sparse GP regression for continuous-time STEAM (Yan, Indelman, Boots).")
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = parser.add_subparsers(dest="command", parser_class=_Parser)
     _add_run_arguments(sub.add_parser("run", help="stream a data set through one solver"))
     bat = sub.add_parser("batch", help="batch Gauss-Newton on all of a data set (PB or PBVR): RMSE and a plot")

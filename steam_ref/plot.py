@@ -123,7 +123,7 @@ def plot_sparsity(
     title: str | None = None,
     path: str | None = None,
 ) -> Any:
-    """Spy plot of the entries with |M_ij| > rel_tol·max|M|, grid lines every `block`."""
+    """Spy plot of the entries with abs(M_ij) > rel_tol · max abs(M), grid lines every `block`."""
     M = np.abs(np.asarray(M, dtype=float))
     ax = _axes(ax, path, figsize=(4, 4))
     ax.spy(M > rel_tol * M.max(), markersize=2)

@@ -29,7 +29,7 @@ class RobustLoss:
 
 @dataclass(frozen=True)
 class Huber(RobustLoss):
-    """ρ(s) = s²/2 for |s| ≤ k, k|s| - k²/2 beyond: quadratic core, linear tails."""
+    """ρ(s) = s²/2 for abs(s) ≤ k, k abs(s) - k²/2 beyond: quadratic core, linear tails."""
 
     k: float = 1.345  # threshold on the whitened error
 
@@ -48,7 +48,7 @@ class Huber(RobustLoss):
 
 @dataclass(frozen=True)
 class Tukey(RobustLoss):
-    """Tukey's biweight: ρ(s) = c²/6 (1 - (1 - (s/c)²)³) for |s| ≤ c, constant c²/6 beyond."""
+    """Tukey's biweight: ρ(s) = c²/6 (1 - (1 - (s/c)²)³) for abs(s) ≤ c, constant c²/6 beyond."""
 
     c: float = 4.685  # errors beyond c whitened sigmas get zero weight
 

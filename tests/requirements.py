@@ -7,6 +7,7 @@ below to 1, and then the same absence is a failure, so nothing is skipped there:
     STEAM_REF_REQUIRE_DATA=1      the paper's files (see DATA_FILES) must be in $STEAM_REF_DATA_DIR
     STEAM_REF_REQUIRE_OPTIONAL=1  gtsam, nbformat and nbclient must import
     STEAM_REF_REQUIRE_CHOLMOD=1   scikit-sparse (CHOLMOD) must import
+    STEAM_REF_REQUIRE_DOCS=1      the built site (docs/_build/html) and a headless Chromium must be there
 
 ``conftest.py`` points $STEAM_REF_DATA_DIR at ``<repository>/../shared/data`` when it is unset and
 that folder exists (test code may know the repository's layout; library code may not).
@@ -26,6 +27,7 @@ REQUIRE_ENV = {
     "data": "STEAM_REF_REQUIRE_DATA",
     "optional": "STEAM_REF_REQUIRE_OPTIONAL",
     "cholmod": "STEAM_REF_REQUIRE_CHOLMOD",
+    "docs": "STEAM_REF_REQUIRE_DOCS",
 }
 # The paper's files, as the authors published them; all in one folder.
 DATA_FILES = (
@@ -39,7 +41,7 @@ SHARED_DATA = REPO_ROOT.parent / "shared" / "data"  # where CI keeps the files, 
 
 
 def required(kind: str) -> bool:
-    """True when the environment says ``kind`` ("data", "optional", "cholmod") must be present."""
+    """True when the environment says ``kind`` ("data", "optional", "cholmod", "docs") must be present."""
     return os.environ.get(REQUIRE_ENV[kind]) == "1"
 
 

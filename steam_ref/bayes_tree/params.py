@@ -88,7 +88,7 @@ class ISAM2Params:
         return sizes
 
     def blocks_to_move(self, kind: str, delta: NDArray, threshold: float) -> NDArray:
-        """(d,) bool: the entries of a variable of ``kind`` whose block has max |δ| ≥ ``threshold``."""
+        """(d,) bool: the entries of a variable of ``kind`` whose block has max abs(δ) ≥ ``threshold``."""
         sizes = self.blocks_of(kind, len(delta))
         bounds = np.cumsum((0, *sizes))
         return np.repeat([np.abs(delta[a:b]).max() >= threshold for a, b in zip(bounds, bounds[1:])], sizes)

@@ -143,7 +143,7 @@ def generate_synthetic(
       [YIB Eq. 32] has zero lateral velocity. The default Qc gives a median travel of about
       0.17 km (10-90 %: 0.11-0.30 km over seeds), like the file's 172 m (Table I: 0.2 km);
       the file's local wiggle suggests Qc ≈ 1e-4, which would make the path ~0.45 km long.
-    - Odometry row k (time of pose k+1): distance |p[k+1] - p[k]| and heading change
+    - Odometry row k (time of pose k+1): distance ‖p[k+1] - p[k]‖ and heading change
       θ[k+1] - θ[k] wrapped to [-π, π), plus N(0, σ²) noise, σ = ``odometry_sigmas``
       (default 0.023 m and 0.023 rad: the file's residual stds). Distances may come out negative.
     - Dead reckoning: :func:`integrate_odometry` from ground-truth pose 0, as in the file.
@@ -155,7 +155,7 @@ def generate_synthetic(
       the ``n_nearest`` = 10 nearest (in the file the observed landmark's rank among the nearest
       is uniform on 0..9), except that each landmark is the one ranged at its own anchor pose, so
       every landmark is seen. Ids run 1..n in order of first sighting, as in the file. Noise is
-      N(0, ``range_sigma``²), default 0.1 m: the file's residual std is 0.10 m. (The paper's
+      N(0, σ²), σ = ``range_sigma``, default 0.1 m: the file's residual std is 0.10 m. (The paper's
       solver assumes 1 m; pass range_sigma=1.0 for data that match that model.)
 
     Draws come from ``np.random.default_rng(seed)``, so a seed gives the same data set everywhere.

@@ -108,7 +108,7 @@ def interpolate_covariance(t1: float, t2: float, tau: float, qc: NDArray, joint_
        (this is [YIB Eq. 18]) and Cov(x(τ) | x₁, x₂) = Q_τ - Q_τ Φ(t₂,τ)ᵀ Q₂⁻¹ Φ(t₂,τ) Q_τ.
     3. If no measurement involves x(τ) except through the states (so y and x(τ) are independent
        given the states), the posterior of x(τ) is this conditional averaged over the posterior
-       N(x̄, P) of [x₁; x₂]. The law of total covariance, Cov = E[Cov(·|x₁,x₂)] + Cov(E[·|x₁,x₂]),
+       N(x̄, P) of [x₁; x₂]. The law of total covariance, Cov = E[Cov(· | x₁,x₂)] + Cov(E[· | x₁,x₂]),
        gives the formula above.
 
     When measurements at τ are folded in through [Λ Ψ] as in [YIB Eq. 29], step 3 treats them the

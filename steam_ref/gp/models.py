@@ -17,7 +17,7 @@ the functions φ_k(z) = Σₙ zⁿ / (n + k)! (φ₀ = eᶻ, φ₁ = (eᶻ - 1)/
     Φ(Δt) = [[1, Δt, Δt² φ₂(-x)], [0, 1, Δt φ₁(-x)], [0, 0, e⁻ˣ]] ⊗ I
     Q(Δt)_rc = Δt^(k_r + k_c + 1) S_rc(x) ⊗ Qc,   k = (2, 1, 0) for (p, ṗ, p̈)
 
-where S(x) is given below in closed form (|x| > 1) and as its power series (|x| ≤ 1), which has no
+where S(x) is given below in closed form (for x outside [-1, 1]) and as its power series (on [-1, 1]), which has no
 cancellation for small αΔt; S(0) is WNOJ's matrix. ``LinearSDE.wnoj`` / ``LinearSDE.singer``
 build the SDEs and use these forms; ``steam_ref.gp.prior`` holds WNOA's.
 """

@@ -1,0 +1,165 @@
+"""The built site, read as a reader reads it: in a browser with no network.
+
+The site is built by the README's docs command into ``docs/_build/html`` (or the folder
+$STEAM_REF_DOCS_HTML names). Each page below is opened in headless Chromium with every remote address
+made unreachable; a script added to a copy of the page waits for the page and its math, then records
+what the browser shows: each image and whether it decoded (its natural width), the rendered formulas,
+and the links of the navigation. Without a built site or Chromium these tests skip, saying what to do;
+STEAM_REF_REQUIRE_DOCS=1 (CI, after building the site) makes that a failure.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import shutil
+import subprocess
+from html.parser import HTMLParser
+from pathlib import Path
+
+import pytest
+from requirements import REPO_ROOT, skip_or_fail
+
+pytestmark = pytest.mark.slow
+
+SITE = Path(os.environ.get("STEAM_REF_DOCS_HTML") or REPO_ROOT / "docs" / "_build" / "html")
+BROWSERS = ("chromium", "chromium-browser", "google-chrome")
+TUTORIALS = sorted(p.stem for p in (REPO_ROOT / "tutorials").glob("*.ipynb"))
+README = (REPO_ROOT / "README.md").read_text()
+
+# Appended to a copy of a page: once the page has loaded and MathJax has typeset it, write what the
+# browser sees into the document, where --dump-dom prints it.
+PROBE = """
+<script>
+window.addEventListener("load", async () => {
+  if (window.MathJax && MathJax.startup && MathJax.startup.promise) { await MathJax.startup.promise; }
+  const seen = {
+    images: [...document.images].map(i => ({src: i.getAttribute("src"), width: i.naturalWidth})),
+    formulas: document.querySelectorAll("mjx-container svg").length,
+    untypeset: [...document.querySelectorAll(".math")].filter(e => !e.querySelector("mjx-container svg")).length,
+    errors: document.querySelectorAll("mjx-merror, [data-mjx-error]").length,
+    navbar: [...document.querySelectorAll(".bd-header .navbar-nav a")].map(a => a.textContent.trim()),
+    sidebar: [...document.querySelectorAll(".bd-sidenav a")].map(a => a.textContent.trim()),
+  };
+  const out = document.createElement("pre");
+  out.id = "reader-probe";
+  out.textContent = JSON.stringify(seen);
+  document.body.appendChild(out);
+});
+</script>
+"""
+
+
+def _browser() -> str:
+    found = next((shutil.which(b) for b in BROWSERS if shutil.which(b)), None)
+    if found is None:
+        skip_or_fail("no headless browser to open the site with: apt-get install chromium", "docs")
+    return found
+
+
+def _site() -> Path:
+    if not (SITE / "index.html").is_file():
+        skip_or_fail(
+            f"the site is not built ({SITE} has no index.html): "
+            "pip install -e '.[docs]' && python3 -m sphinx -W docs docs/_build/html",
+            "docs",
+        )
+    return SITE
+
+
+class _Probe(HTMLParser):
+    """The text of the element with id ``reader-probe``."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.inside, self.text = False, ""
+
+    def handle_starttag(self, tag, attrs):
+        self.inside = self.inside or dict(attrs).get("id") == "reader-probe"
+
+    def handle_endtag(self, tag):
+        if self.inside and tag == "pre":
+            self.inside = False
+
+    def handle_data(self, data):
+        if self.inside:
+            self.text += data
+
+
+def read_page(page: str) -> dict:
+    """What headless Chromium shows of ``page`` (a path inside the site), with the network cut off."""
+    browser, site = _browser(), _site()
+    source = site / page
+    assert source.is_file(), f"{page} is not in the site"
+    copy = source.with_name(f"_reader_probe_{source.name}")  # same folder: relative links resolve alike
+    copy.write_text(source.read_text().replace("</body>", PROBE + "</body>"))
+    try:
+        out = subprocess.run(
+            [
+                browser,
+                "--headless",
+                "--no-sandbox",
+                "--disable-gpu",
+                "--no-first-run",
+                "--proxy-server=http://127.0.0.1:9",
+                "--host-resolver-rules=MAP * ~NOTFOUND",
+                "--window-size=1300,1000",
+                "--virtual-time-budget=20000",
+                "--dump-dom",
+                copy.as_uri(),
+            ],
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
+    finally:
+        copy.unlink()
+    probe = _Probe()
+    probe.feed(out.stdout)
+    assert probe.text, f"the browser recorded nothing for {page} (exit {out.returncode}): {out.stderr[-2000:]}"
+    return json.loads(probe.text)
+
+
+def _has_latex(tutorial: str) -> bool:
+    cells = json.loads((REPO_ROOT / "tutorials" / f"{tutorial}.ipynb").read_text())["cells"]
+    return any("$" in "".join(c["source"]) for c in cells if c["cell_type"] == "markdown")
+
+
+def _decoded_pngs(seen: dict) -> list[str]:
+    return [i["src"] for i in seen["images"] if i["src"].endswith(".png") and i["width"] > 0]
+
+
+def test_the_landing_page_shows_its_figure_and_the_sections():
+    seen = read_page("index.html")
+    broken = [i["src"] for i in seen["images"] if i["width"] == 0]
+    assert not broken, f"images that did not load: {broken}"
+    assert any("fig4" in src for src in _decoded_pngs(seen)), seen["images"]
+    assert {"Tutorials", "Background", "Reference"} <= set(seen["navbar"]), seen["navbar"]
+
+
+@pytest.mark.parametrize("name", TUTORIALS)
+def test_each_tutorial_page_shows_figures_math_and_its_neighbours(name):
+    """Every tutorial was run at build time: its page has plots (decoded PNGs), its LaTeX typeset by
+    the local MathJax, and the section's navigation listing every tutorial."""
+    seen = read_page(f"tutorials/{name}.html")
+    broken = [i["src"] for i in seen["images"] if i["width"] == 0]
+    assert not broken, f"images that did not load: {broken}"
+    assert _decoded_pngs(seen), f"{name}: no figure on the page (was the notebook executed?)"
+    assert seen["untypeset"] == 0 and seen["errors"] == 0, seen
+    if _has_latex(name):
+        assert seen["formulas"] > 0, f"{name}'s LaTeX was not typeset"
+    assert len(seen["sidebar"]) >= len(TUTORIALS), seen["sidebar"]
+    assert {"Tutorials", "Background", "Reference"} <= set(seen["navbar"]), seen["navbar"]
+
+
+def test_no_page_loads_anything_from_the_network():
+    """No script, style sheet, image or frame of any page points off the site."""
+    remote = re.compile(r"<(?:script|link|img|iframe|source)\b[^>]*\b(?:src|href)=[\"']((?:https?:)?//[^\"']*)", re.I)
+    found = {str(p.relative_to(_site())): remote.findall(p.read_text()) for p in _site().rglob("*.html")}
+    assert not {page: urls for page, urls in found.items() if urls}
+
+
+def test_the_readme_docs_command_is_a_line_of_ci():
+    (command,) = re.findall(r"^    (.*-m sphinx.*)$", README, flags=re.M)
+    assert command in (REPO_ROOT / ".ci" / "run").read_text().splitlines()
