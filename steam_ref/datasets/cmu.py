@@ -12,15 +12,22 @@ Conventions, checked on the reference files (see ``data/README.md`` for the figu
   cleaned file); their ranges match ground truth at their own time stamps, not at their row
   position. The loaders keep the rows in file order, as
   the paper's scripts read them, and name the rows that go back in ``source``.
+- A text table (``*_DR.txt``, ``*_TD.txt``) follows :data:`TEXT_TABLE_RULE`. Its last line must end
+  with a newline: a file cut inside its last number keeps its field count and still parses
+  (``5.29560000000000031e+01`` cut after ``5.2956`` reads as 5.2956), so the missing newline is the
+  only sign of the cut. A file cut exactly at a line end loses whole rows and cannot be told from a
+  shorter file; DR's rows are counted against GT's, and TD's against the .mat's copy when it has
+  one (the Plaza files do), so only a TD with no copy in the .mat can lose rows unnoticed.
 
 Errors: any failure to read a file, and any :class:`ShapeError` or :class:`DataError` of
 :class:`RangeDataset`, is raised as :class:`DataError` prefixed with the file name. Rows are
-0-based in ``array[row, column]`` messages and 1-based as "line N" for text files.
+0-based in ``array[row, column]`` messages; text files give "line N, column C", both 1-based.
 """
 
 from __future__ import annotations
 
 import os
+import re
 from pathlib import Path
 
 import numpy as np
@@ -31,7 +38,13 @@ from ..errors import DataError, SteamError
 from ..pose2 import integrate_odometry
 from .table import _COLUMNS, RangeDataset, _frozen_table
 
-__all__ = ["load_cmu_mat", "load_cmu_text"]
+__all__ = ["load_cmu_mat", "load_cmu_text", "TEXT_TABLE_RULE"]
+
+TEXT_TABLE_RULE = (
+    "ASCII; every line ends with a newline, the last one too (a file cut inside its last number would "
+    "otherwise load that number cut short); fields separated by spaces or tabs; each a finite plain "
+    "decimal number; the same number of fields on every non-blank line"
+)
 
 
 def _order_note(ranges: NDArray) -> str:
@@ -103,27 +116,50 @@ def load_cmu_mat(path: str | os.PathLike, name: str | None = None) -> RangeDatas
     return _assemble(name or path.stem, str(path), tables)
 
 
+_NUMBER = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")  # a plain decimal number
+_BLANKS = re.compile(r"[ \t]+")
+
+
 def _read_text_table(path: Path, columns: tuple[str, ...]) -> NDArray:
-    """(n, len(columns)) numbers of a whitespace-separated text file; DataError naming file and line."""
+    """(n, len(columns)) numbers of a text table; DataError naming the file, line and column.
+
+    The rule (:data:`TEXT_TABLE_RULE`): ASCII; every line ends with a newline (``\\n`` or
+    ``\\r\\n``), the last one too; fields are separated by spaces or tabs; each field is a plain
+    decimal number (no nan, inf, hex, ``_`` or non-ASCII digits) that is finite; every non-blank
+    line has exactly ``len(columns)`` fields; blank lines are skipped.
+    """
     try:
-        text = path.read_text()
-    except (OSError, UnicodeDecodeError) as err:
-        raise DataError(f"{path}: cannot read it as text ({type(err).__name__}: {err})") from None
+        raw = path.read_bytes()
+    except OSError as err:
+        raise DataError(f"{path}: cannot read it ({type(err).__name__}: {err})") from None
+    try:
+        text = raw.decode("ascii")
+    except UnicodeDecodeError as err:
+        line = raw.count(b"\n", 0, err.start) + 1
+        raise DataError(f"{path} line {line}: byte {raw[err.start]:#04x} is not ASCII; a text table holds plain numbers") from None
+    lines = text.split("\n")
+    if lines[-1].strip(" \t\r"):
+        raise DataError(
+            f"{path} line {len(lines)}: the last line does not end with a newline, so the file may be cut short "
+            f"(a number cut short still reads as a number); if that line is whole, end the file with a newline"
+        )
     rows = []
-    for line_no, line in enumerate(text.splitlines(), start=1):
-        fields = line.split()
+    for line_no, line in enumerate(lines[:-1], start=1):
+        body = line[:-1] if line.endswith("\r") else line
+        fields = [f for f in _BLANKS.split(body) if f]
         if not fields:
             continue
-        try:
-            row = [float(f) for f in fields]
-        except ValueError:
-            raise DataError(f"{path} line {line_no}: not a number in {line.strip()!r}") from None
-        if len(row) != len(columns) or not np.all(np.isfinite(row)):
+        if len(fields) != len(columns):
             raise DataError(
-                f"{path} line {line_no}: expected {len(columns)} finite numbers "
-                f"({', '.join(columns)}), got {line.strip()!r}"
+                f"{path} line {line_no}: expected {len(columns)} numbers ({', '.join(columns)}), "
+                f"got {len(fields)}: {body.strip()!r}"
             )
-        rows.append(row)
+        for c, f in enumerate(fields):
+            if not _NUMBER.fullmatch(f) or not np.isfinite(float(f)):
+                raise DataError(
+                    f"{path} line {line_no}, column {c + 1} ({columns[c]}): {f!r} is not a finite decimal number"
+                )
+        rows.append([float(f) for f in fields])
     if not rows:
         raise DataError(f"{path}: the file holds no rows")
     return np.array(rows)
@@ -168,7 +204,7 @@ def load_cmu_text(
     if folder.is_file() and folder.name.endswith("_DR.txt"):
         folder, prefix = folder.parent, folder.name[: -len("_DR.txt")]
     if not folder.is_dir():
-        raise DataError(f"{folder}: no such folder")
+        raise DataError(f"{folder}: {'not a folder (nor a *_DR.txt file)' if folder.exists() else 'no such folder'}")
     prefix = prefix or _text_prefix(folder)
     dr_path, td_path = folder / f"{prefix}_DR.txt", folder / f"{prefix}_TD.txt"
     mats = [p for p in (folder / f"{prefix}_.mat", folder / f"{prefix}.mat") if p.is_file()]
