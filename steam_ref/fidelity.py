@@ -20,10 +20,9 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
-import scipy.io
 from numpy.typing import NDArray
 
-from .datasets import DATA_DIR_ENV, RangeDataset, default_data_dirs
+from .datasets import DATA_DIR_ENV, RangeDataset, default_data_dirs, read_mat
 from .errors import DataError
 from .results import RunResult, position_rmse
 
@@ -64,10 +63,7 @@ def find_authors_file(name: str, data_dir: str | os.PathLike | None = None) -> P
 
 def _read(path: Path) -> dict:
     """The arrays of a saved run; DataError when it cannot be read or lacks one."""
-    try:
-        m = scipy.io.loadmat(path)
-    except Exception as err:  # scipy raises ValueError, OSError, MatReadError, zlib errors...
-        raise DataError(f"{path}: cannot read it as a MATLAB .mat file ({type(err).__name__}: {err})") from None
+    m = read_mat(path)
     missing = [k for k in ("estStateInds", "XYT", "XYT_dot", "XY", "diff", "step_t") if k not in m]
     if missing:
         raise DataError(f"{path}: no array {missing[0]!r}; is it one of the authors' *_full_data_run.mat files?")

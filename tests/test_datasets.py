@@ -327,15 +327,16 @@ def test_mat_round_trip(small: RangeDataset, tmp_path: Path) -> None:
     assert loaded.name == "toy" and loaded.source == str(path)
 
 
-def test_mat_without_drp_recomputes_it_and_says_so(small: RangeDataset, tmp_path: Path) -> None:
+def test_mat_without_drp_recomputes_it_and_says_so_a_short_one_is_refused(small: RangeDataset, tmp_path: Path) -> None:
     arrays = small.to_cmu_arrays()
     del arrays["DRp"]
     loaded = load_cmu_mat(_save_mat(tmp_path / "no_drp.mat", **arrays))
     np.testing.assert_allclose(loaded.dead_reckoning, _integrate_loop(small.ground_truth[0], small.odometry),
                                rtol=0, atol=1e-12)
     assert "DRp recomputed" in loaded.source
-    arrays["DRp"] = np.array(small.dead_reckoning)[:-2]
-    assert "DRp recomputed" in load_cmu_mat(_save_mat(tmp_path / "short.mat", **arrays)).source
+    arrays["DRp"] = np.array(small.dead_reckoning)[:-2]  # present but short: refused, not replaced
+    with pytest.raises(DataError, match=r"short\.mat: DRp has 19 rows but GT has 21"):
+        load_cmu_mat(_save_mat(tmp_path / "short.mat", **arrays))
 
 
 def test_mat_missing_array(small: RangeDataset, tmp_path: Path) -> None:
@@ -377,7 +378,7 @@ def test_truncated_mat(small: RangeDataset, tmp_path: Path, keep: float) -> None
 def test_corrupt_or_missing_mat(tmp_path: Path) -> None:
     path = tmp_path / "noise.mat"
     path.write_bytes(np.random.default_rng(0).bytes(2000))
-    with pytest.raises(DataError, match=r"noise\.mat: cannot read"):
+    with pytest.raises(DataError, match=r"noise\.mat: not a MATLAB v5 \.mat file"):
         load_cmu_mat(path)
     with pytest.raises(DataError, match=r"absent\.mat: no such file"):
         load_cmu_mat(tmp_path / "absent.mat")

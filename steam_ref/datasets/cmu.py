@@ -31,11 +31,11 @@ import re
 from pathlib import Path
 
 import numpy as np
-import scipy.io
 from numpy.typing import NDArray
 
 from ..errors import DataError, SteamError
 from ..pose2 import integrate_odometry
+from .matfile import read_mat
 from .table import _COLUMNS, RangeDataset, _frozen_table
 
 __all__ = ["load_cmu_mat", "load_cmu_text", "TEXT_TABLE_RULE"]
@@ -64,9 +64,13 @@ def _assemble(name: str, where: str, tables: dict[str, NDArray]) -> RangeDataset
         tl = _frozen_table("TL", tables["TL"], _COLUMNS["landmarks"][1])
         dr = _frozen_table("DR", tables["DR"], _COLUMNS["odometry"][1])
         drp = tables.get("DRp")
-        if drp is None or np.shape(drp)[0] != gt.shape[0]:
-            got = "no DRp" if drp is None else f"DRp has {np.shape(drp)[0]} rows, GT {gt.shape[0]}"
-            notes.append(f"DRp recomputed from DR ({got})")
+        if drp is not None:
+            drp = _frozen_table("DRp", drp, _COLUMNS["dead_reckoning"][1])
+            if drp.shape[0] != gt.shape[0]:
+                raise DataError(f"DRp has {drp.shape[0]} rows but GT has {gt.shape[0]}: expected one per pose "
+                                "(a file without DRp has it recomputed from DR)")
+        else:
+            notes.append("DRp recomputed from DR (the file has none)")
             drp = integrate_odometry(gt[0], dr)
         td = _frozen_table("TD", tables["TD"], _COLUMNS["ranges"][1])
         note = _order_note(td)
@@ -77,18 +81,6 @@ def _assemble(name: str, where: str, tables: dict[str, NDArray]) -> RangeDataset
         raise DataError(f"{where}: {err}") from None
 
 
-def _read_mat(path: Path) -> dict[str, NDArray]:
-    """The arrays of a MATLAB v5 file; any failure (missing, truncated, corrupt) → DataError."""
-    if not path.is_file():
-        raise DataError(f"{path}: no such file")
-    try:
-        content = scipy.io.loadmat(path)
-    except Exception as err:  # scipy raises ValueError, OSError, TypeError, zlib errors...
-        reason = f"{type(err).__name__}: {err}"
-        raise DataError(f"{path}: cannot read it as a MATLAB .mat file ({reason})") from None
-    return {k: v for k, v in content.items() if not k.startswith("__")}
-
-
 def _mat_table(content: dict[str, NDArray], key: str, path: Path, required: bool = True) -> NDArray | None:
     if key not in content:
         if not required:
@@ -96,19 +88,20 @@ def _mat_table(content: dict[str, NDArray], key: str, path: Path, required: bool
         raise DataError(f"{path}: no array {key!r} (it holds {sorted(content) or 'nothing'})")
     value = content[key]
     if not isinstance(value, np.ndarray) or value.dtype.kind not in "biuf":
-        raise DataError(f"{path}: {key} is not a numeric matrix (got {getattr(value, 'dtype', type(value))})")
+        got = f"an array of {value.dtype}" if isinstance(value, np.ndarray) else f"a {type(value).__name__}"
+        raise DataError(f"{path}: {key} is not a numeric matrix (got {got})")
     return value.astype(float)
 
 
 def load_cmu_mat(path: str | os.PathLike, name: str | None = None) -> RangeDataset:
     """A CMU-layout .mat (GT, DR, TL, TD, optional DRp), e.g. ``Syn_theta_Plaza.mat``.
 
-    DRp is recomputed with :func:`integrate_odometry` when the file lacks it or its row count
-    differs from GT's (``source`` says so). Other arrays (``usefulRangeInd``, ``addedK``) are
+    DRp is recomputed with :func:`integrate_odometry` when the file lacks it (``source`` says
+    so); a DRp whose row count differs from GT's is refused, not replaced. Other arrays (``usefulRangeInd``, ``addedK``) are
     ignored. Range rows keep the file's order (rows going back in time are noted in ``source``).
     """
     path = Path(path)
-    content = _read_mat(path)
+    content = read_mat(path)
     tables = {key: _mat_table(content, key, path) for key in ("GT", "DR", "TL", "TD")}
     drp = _mat_table(content, "DRp", path, required=False)
     if drp is not None:
@@ -210,10 +203,10 @@ def load_cmu_text(
     mats = [p for p in (folder / f"{prefix}_.mat", folder / f"{prefix}.mat") if p.is_file()]
     for path in (dr_path, td_path):
         if not path.is_file():
-            raise DataError(f"{path}: no such file (needed with {dr_path.name})")
+            raise DataError(f"{path}: {'not a file' if path.exists() else 'no such file'} (needed with {dr_path.name})")
     if not mats:
         raise DataError(f"{folder}: no {prefix}_.mat holding GT and TL next to {dr_path.name}")
-    content = _read_mat(mats[0])
+    content = read_mat(mats[0])
     dr = _read_text_table(dr_path, _COLUMNS["odometry"][1])
     td = _read_text_table(td_path, _COLUMNS["ranges"][1])
     _check_same(dr, content, "DR", dr_path, mats[0])
