@@ -304,6 +304,11 @@ def _reproduce(args: argparse.Namespace) -> int:
     return 0
 
 
+def _one_line(message: str) -> str:
+    """``message`` with its line breaks escaped: an error is one line however odd the input it quotes."""
+    return "".join(c if c.isprintable() or c == "\t" else repr(c)[1:-1] for c in message) or "(no message)"
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``steam-ref`` console script; returns the exit code."""
     argv = list(sys.argv[1:] if argv is None else argv)
@@ -315,11 +320,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _run(args)
         commands = {"batch": _batch, "fidelity": _fidelity, "reproduce": _reproduce}
         return commands[args.command](args)
-    except SteamError as exc:
-        print(f"steam-ref: error: {exc}", file=sys.stderr)
-        return 2
-    except (OSError, MemoryError) as exc:
-        print(f"steam-ref: error: {exc}", file=sys.stderr)
+    except (SteamError, OSError, MemoryError) as exc:
+        print(f"steam-ref: error: {_one_line(str(exc))}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("steam-ref: interrupted", file=sys.stderr)
