@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numbers
 import time
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -83,7 +83,10 @@ class StreamOptions:
         return Layout(self.skip, self.range_states, self.interpolate)
 
     def replace(self, **changes) -> StreamOptions:
-        """A copy with some fields changed."""
+        """A copy with some fields changed; SteamError names an unknown field."""
+        unknown = sorted(set(changes) - {f.name for f in fields(self)})
+        if unknown:
+            raise SteamError(f"StreamOptions has no field {unknown[0]!r}")
         return replace(self, **changes)
 
 

@@ -72,6 +72,13 @@ def test_stream_options_refuse_a_bad_field(field: str, value) -> None:
         StreamOptions(**{field: value})
 
 
+def test_unknown_fields_are_named() -> None:
+    with pytest.raises(SteamError, match=r"StreamOptions has no field 'evry'"):
+        StreamOptions().replace(evry=10)
+    with pytest.raises(SteamError, match=r"PaperSetup has no field 'range_correction'"):
+        PaperSetup.plaza().replace(range_correction=0)
+
+
 @pytest.mark.parametrize("field,value", [("chunk", 0), ("chunk", -100), ("final_iterations", 0), ("chunk", 2.0)])
 def test_sequential_batch_refuses_bad_counts(field: str, value) -> None:
     problem = build_problem(generate_synthetic(n_steps=5, n_landmarks=2, seed=0), PaperSetup.synthetic())
