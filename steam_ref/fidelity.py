@@ -54,8 +54,11 @@ def find_authors_file(name: str, data_dir: str | os.PathLike | None = None) -> P
     file = AUTHORS_RUNS[name]
     folders = default_data_dirs(data_dir)
     for folder in folders:
-        if (folder / "authors" / file).is_file():
-            return folder / "authors" / file
+        path = folder / "authors" / file
+        if path.exists() and not path.is_file():
+            raise DataError(f"{path}: not a file")
+        if path.is_file():
+            return path
     looked = ", ".join(str(f) for f in folders) or "nowhere"
     raise DataError(f"the authors' run authors/{file} not found; looked in: {looked}. Put the authors/ folder "
                     f"(from XinyanGT/online-gpslam-code matlab/Data) in --data-dir or ${DATA_DIR_ENV}.")

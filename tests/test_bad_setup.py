@@ -179,6 +179,12 @@ def test_data_folders_that_are_not_there(tmp_path: Path, monkeypatch: pytest.Mon
         load_dataset("paper-synthetic", data_dir=tmp_path / "a_file")
     with pytest.raises(DataError, match=r"data_dir \(--data-dir\) is empty"):
         load_dataset("plaza", data_dir="")
+    (tmp_path / "Syn_theta_Plaza.mat").mkdir()  # a folder where the file should be is not passed over
+    with pytest.raises(DataError, match=r"Syn_theta_Plaza\.mat: not a file"):
+        load_dataset("paper-synthetic", data_dir=tmp_path)
+    (tmp_path / "authors" / "Plaza1_full_data_run.mat").mkdir(parents=True)
+    with pytest.raises(DataError, match=r"authors/Plaza1_full_data_run\.mat: not a file"):
+        load_authors_run("plaza", SMALL, tmp_path)
     monkeypatch.setenv(datasets.DATA_DIR_ENV, str(tmp_path / "typo"))
     with pytest.raises(DataError, match=r"\$STEAM_REF_DATA_DIR '.*typo' does not exist"):
         load_dataset("plaza")

@@ -65,8 +65,12 @@ def default_data_dirs(data_dir: str | os.PathLike | None = None) -> list[Path]:
 
 
 def _find(file_names: tuple[str, ...], folders: list[Path]) -> Path | None:
-    """The first folder holding all of ``file_names`` (joined to the first name), or None."""
+    """The first folder holding all of ``file_names`` (joined to the first name), or None.
+    DataError when one of them is there but is not a file (a folder of that name is not passed over)."""
     for folder in folders:
+        for f in file_names:
+            if (folder / f).exists() and not (folder / f).is_file():
+                raise DataError(f"{folder / f}: not a file")
         if all((folder / f).is_file() for f in file_names):
             return folder / file_names[0]
     return None
