@@ -17,9 +17,12 @@ missing or malformed data files give a one-line error and exit code 2.
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import json
 import math
 import sys
+import tempfile
+import time
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -68,12 +71,29 @@ def _number(convert: type, lower: float, *, strict: bool):
 
 
 _positive_int = _number(int, 0, strict=True)
+_non_negative_int = _number(int, 0, strict=False)
 _positive_float = _number(float, 0, strict=True)
 _non_negative_float = _number(float, 0, strict=False)
 
 
+def _dataset(text: str) -> str:
+    """An argparse type: a data set name or path, not empty (an empty path would be the working folder)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("expected a data set name or a path, got an empty string")
+    return text
+
+
+def _folder(text: str) -> str:
+    """An argparse type: an existing folder (a mistyped --data-dir must not be passed over in silence)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("expected a folder, got an empty string")
+    if not Path(text).is_dir():
+        raise argparse.ArgumentTypeError(f"{text!r} {'is not a folder' if Path(text).exists() else 'does not exist'}")
+    return text
+
+
 def _add_run_arguments(run: argparse.ArgumentParser) -> None:
-    run.add_argument("--dataset", default="synthetic", help="synthetic (generated), paper-synthetic, plaza, or a PATH (.mat or CMU text folder)")
+    run.add_argument("--dataset", type=_dataset, default="synthetic", help="synthetic (generated), paper-synthetic, plaza, or a PATH (.mat or CMU text folder)")
     run.add_argument("--method", choices=("btgp", "pb", "pbvr"), default="btgp")
     run.add_argument("--every", type=_positive_int, default=1, help="update after every N range readings (1 or 10 in the paper)")
     run.add_argument("--skip", type=_positive_int, default=1, help="time steps between estimated states")
@@ -82,13 +102,13 @@ def _add_run_arguments(run: argparse.ArgumentParser) -> None:
     run.add_argument("--departure", action="append", choices=list(DEPARTURES), default=[],
                      help="depart from the paper's scripts in this named way (repeatable; docs/experiments.md gives each one's effect)")
     run.add_argument("--preset", choices=("synthetic", "plaza"), default=None, help="parameter set (default: by data set; plaza for a PATH)")
-    run.add_argument("--data-dir", default=None, help="folder searched for data files before $STEAM_REF_DATA_DIR and gtsam's Data/")
-    run.add_argument("--seed", type=int, default=0, help="seed of the generated synthetic task")
+    run.add_argument("--data-dir", type=_folder, default=None, help="folder searched for data files before $STEAM_REF_DATA_DIR and gtsam's Data/")
+    run.add_argument("--seed", type=_non_negative_int, default=0, help="seed of the generated synthetic task")
     run.add_argument("--relinearize-threshold", type=_non_negative_float, default=ISAM2Params.relinearize_threshold,
                      help="BTGP: relinearize a variable whose increment exceeds this (default %(default)s)")
     run.add_argument("--relinearize-skip", type=_positive_int, default=ISAM2Params.relinearize_skip,
                      help="BTGP: check relinearization every N-th update (default %(default)s, GTSAM's)")
-    run.add_argument("--max-poses", type=_positive_int, default=None, help="process only the first N poses")
+    run.add_argument("--max-poses", type=_number(int, 2, strict=False), default=None, help="process only the first N poses")
     run.add_argument("--time-budget", type=_positive_float, default=None, help="stop after this many seconds (reported)")
     run.add_argument("--progress", action="store_true", help="show a progress bar")
     run.add_argument("--json", action="store_true", help="print one JSON line of figures")
@@ -103,34 +123,65 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", parser_class=_Parser)
     _add_run_arguments(sub.add_parser("run", help="stream a data set through one solver"))
     bat = sub.add_parser("batch", help="batch Gauss-Newton on all of a data set (PB or PBVR): RMSE and a plot")
-    bat.add_argument("--dataset", default="paper-synthetic", help="synthetic, paper-synthetic, plaza or a PATH")
+    bat.add_argument("--dataset", type=_dataset, default="paper-synthetic", help="synthetic, paper-synthetic, plaza or a PATH")
     bat.add_argument("--ordering", choices=("xl", "amd"), default="amd", help="xl: the paper's PB; amd: PBVR")
     bat.add_argument("--preset", choices=("synthetic", "plaza"), default=None, help="parameter set (default: by data set)")
-    bat.add_argument("--data-dir", default=None, help="folder searched for data files before $STEAM_REF_DATA_DIR and gtsam's Data/")
-    bat.add_argument("--seed", type=int, default=0, help="seed of the generated synthetic task")
+    bat.add_argument("--data-dir", type=_folder, default=None, help="folder searched for data files before $STEAM_REF_DATA_DIR and gtsam's Data/")
+    bat.add_argument("--seed", type=_non_negative_int, default=0, help="seed of the generated synthetic task")
     bat.add_argument("--json", action="store_true", help="print one JSON line of figures")
     bat.add_argument("--plot", metavar="FILE.png", default=None, help="draw estimate, ground truth, landmarks")
     fid = sub.add_parser("fidelity", help="BTGP/1 against the authors' saved runs, pose by pose, covariances included")
     fid.add_argument("--dataset", choices=("plaza", "paper-synthetic", "all"), default="all")
-    fid.add_argument("--data-dir", default=None, help="folder searched for data files (and its authors/ folder) before $STEAM_REF_DATA_DIR and gtsam's Data/")
+    fid.add_argument("--data-dir", type=_folder, default=None, help="folder searched for data files (and its authors/ folder) before $STEAM_REF_DATA_DIR and gtsam's Data/")
     fid.add_argument("--json", action="store_true", help="print one JSON line per data set")
     fid.add_argument("--plot", metavar="FILE.png", default=None, help="draw the per-pose distance to the authors' estimate")
     rep = sub.add_parser("reproduce", help="the experiments of Fig. 3 and Fig. 4, plots and a results table")
     rep.add_argument("--quick", action="store_true", help="small prefixes and budgets: minutes, not hours")
     rep.add_argument("--out", default="results", help="folder for plots and the table (default: results)")
-    rep.add_argument("--data-dir", default=None, help="folder searched for data files before $STEAM_REF_DATA_DIR and gtsam's Data/")
+    rep.add_argument("--data-dir", type=_folder, default=None, help="folder searched for data files before $STEAM_REF_DATA_DIR and gtsam's Data/")
     conformance_command.add_parser(sub)
     return parser
 
 
 def _check_output(path: str | None, suffix: str, option: str) -> None:
+    """Before the run: ``path`` ends in ``suffix`` and can be written (tried, and left as it was)."""
     if path is None:
         return
     if not path.endswith(suffix):
         raise SteamError(f"{option} expects a {suffix} file name, got {path!r}")
-    parent = Path(path).resolve().parent
+    target = Path(path)
+    if target.is_dir():
+        raise SteamError(f"{option}: {path!r} is a folder, not a file")
+    parent = target.resolve().parent
     if not parent.is_dir():
         raise SteamError(f"{option}: folder {str(parent)!r} does not exist")
+    existed = target.exists()
+    try:
+        with open(target, "ab"):
+            pass
+    except OSError as err:
+        raise SteamError(f"{option}: cannot write {path!r} ({err.strerror or err})") from None
+    if not existed:
+        target.unlink()
+    if suffix == ".png" and importlib.util.find_spec("matplotlib") is None:
+        raise SteamError(f"{option} needs matplotlib, which is not installed (pip install matplotlib)")
+
+
+def _check_out_folder(path: str, option: str) -> None:
+    """Before the runs: ``path`` is a folder that exists and can be written, or can be made."""
+    if not path.strip():
+        raise SteamError(f"{option}: expected a folder, got an empty string")
+    target = Path(path).resolve()
+    if target.exists() and not target.is_dir():
+        raise SteamError(f"{option}: {path!r} is a file, not a folder")
+    existing = next(p for p in (target, *target.parents) if p.exists())
+    if not existing.is_dir():
+        raise SteamError(f"{option}: cannot make folder {path!r}: {str(existing)!r} is a file")
+    try:
+        with tempfile.TemporaryFile(dir=existing):
+            pass
+    except OSError as err:
+        raise SteamError(f"{option}: cannot write in {str(existing)!r} ({err.strerror or err})") from None
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -194,9 +245,6 @@ def save_estimates(path: str, result) -> None:
 
 def _batch(args: argparse.Namespace) -> int:
     """Batch solve of a whole data set (started chunk by chunk, see ``sequential_batch``)."""
-    import time
-
-
     _check_output(args.plot, ".png", "--plot")
     setup = PaperSetup.named(args.preset or _PRESET_OF.get(args.dataset, "plaza"))
     data = load_dataset(args.dataset, data_dir=args.data_dir, seed=args.seed)
@@ -257,9 +305,15 @@ def _fidelity_text(row: dict) -> str:
 
 
 def _reproduce(args: argparse.Namespace) -> int:
+    _check_out_folder(args.out, "--out")
     table = reproduce(args.out, quick=args.quick, data_dir=args.data_dir)
     print(table)
     return 0
+
+
+def _one_line(message: str) -> str:
+    """``message`` with its line breaks escaped: an error is one line however odd the input it quotes."""
+    return "".join(c if c.isprintable() or c == "\t" else repr(c)[1:-1] for c in message) or "(no message)"
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -273,11 +327,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _run(args)
         commands = {"batch": _batch, "fidelity": _fidelity, "reproduce": _reproduce, "conformance": conformance_command.run}
         return commands[args.command](args)
-    except SteamError as exc:
-        print(f"steam-ref: error: {exc}", file=sys.stderr)
-        return 2
-    except (OSError, MemoryError) as exc:
-        print(f"steam-ref: error: {exc}", file=sys.stderr)
+    except (SteamError, OSError, MemoryError) as exc:
+        print(f"steam-ref: error: {_one_line(str(exc))}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("steam-ref: interrupted", file=sys.stderr)

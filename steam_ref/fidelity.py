@@ -20,14 +20,13 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
-import scipy.io
 from numpy.typing import NDArray
 
-from .datasets import DATA_DIR_ENV, RangeDataset, default_data_dirs
+from .datasets import DATA_DIR_ENV, RangeDataset, default_data_dirs, read_mat
 from .errors import DataError
 from .results import RunResult, position_rmse
 
-__all__ = ["AUTHORS_RUNS", "AuthorsRun", "Fidelity", "find_authors_file", "load_authors_run", "compare"]
+__all__ = ["AUTHORS_RUNS", "COVARIANCE_SYMMETRY", "AuthorsRun", "Fidelity", "find_authors_file", "load_authors_run", "compare"]
 
 AUTHORS_RUNS = {"plaza": "Plaza1_full_data_run.mat", "paper-synthetic": "Syn_full_data_run.mat"}  # data set → file in authors/
 
@@ -55,8 +54,11 @@ def find_authors_file(name: str, data_dir: str | os.PathLike | None = None) -> P
     file = AUTHORS_RUNS[name]
     folders = default_data_dirs(data_dir)
     for folder in folders:
-        if (folder / "authors" / file).is_file():
-            return folder / "authors" / file
+        path = folder / "authors" / file
+        if path.exists() and not path.is_file():
+            raise DataError(f"{path}: not a file")
+        if path.is_file():
+            return path
     looked = ", ".join(str(f) for f in folders) or "nowhere"
     raise DataError(f"the authors' run authors/{file} not found; looked in: {looked}. Put the authors/ folder "
                     f"(from XinyanGT/online-gpslam-code matlab/Data) in --data-dir or ${DATA_DIR_ENV}.")
@@ -64,35 +66,78 @@ def find_authors_file(name: str, data_dir: str | os.PathLike | None = None) -> P
 
 def _read(path: Path) -> dict:
     """The arrays of a saved run; DataError when it cannot be read or lacks one."""
-    try:
-        m = scipy.io.loadmat(path)
-    except Exception as err:  # scipy raises ValueError, OSError, MatReadError, zlib errors...
-        raise DataError(f"{path}: cannot read it as a MATLAB .mat file ({type(err).__name__}: {err})") from None
+    m = read_mat(path)
     missing = [k for k in ("estStateInds", "XYT", "XYT_dot", "XY", "diff", "step_t") if k not in m]
     if missing:
         raise DataError(f"{path}: no array {missing[0]!r}; is it one of the authors' *_full_data_run.mat files?")
     return m
 
 
+def _table(path: Path, m: dict, key: str, columns: int, rows: int | None = None) -> NDArray:
+    """``m[key]`` as a finite float (rows, columns) array; DataError naming the file, array and entry."""
+    value = m[key]
+    if not isinstance(value, np.ndarray) or value.dtype.kind not in "biuf":
+        raise DataError(f"{path}: {key} is not a numeric matrix (got {getattr(value, 'dtype', type(value))})")
+    if value.ndim != 2 or value.shape[1] < columns or (rows is not None and value.shape[0] != rows):
+        want = f"({'n' if rows is None else rows}, {columns})"
+        raise DataError(f"{path}: {key} has shape {value.shape}, expected {want}")
+    value = value[:, :columns].astype(float)
+    bad = np.argwhere(~np.isfinite(value))
+    if bad.size:
+        raise DataError(f"{path}: {key}[{bad[0][0]}, {bad[0][1]}] is {value[tuple(bad[0])]}: every value must be finite")
+    return value
+
+
+COVARIANCE_SYMMETRY = 1e-9  # |C - Cᵀ| allowed, relative to max |C| (the authors' files: below 1e-15)
+
+
+def _covariances(path: Path, cells: NDArray, what: str, d: int) -> NDArray:
+    """(n, d, d) from a column of MATLAB cells, each a finite, symmetric, positive definite d x d."""
+    for k, cell in enumerate(cells):
+        c = np.asarray(cell)
+        if c.dtype.kind not in "biuf" or c.shape != (d, d) or not np.all(np.isfinite(c)):
+            raise DataError(f"{path}: {what} {k} must be a finite {d}x{d} matrix, got {c.dtype} of shape {c.shape}")
+    out = np.stack([np.asarray(c, dtype=float) for c in cells]) if len(cells) else np.zeros((0, d, d))
+    size = np.abs(out).max(axis=(1, 2), initial=0.0)
+    asym = np.abs(out - out.transpose(0, 2, 1)).max(axis=(1, 2), initial=0.0)
+    bad = np.flatnonzero(asym > COVARIANCE_SYMMETRY * size)
+    if bad.size:
+        k = int(bad[0])
+        raise DataError(f"{path}: {what} {k} is not symmetric (|C - Cᵀ| up to {asym[k]:.3g}, |C| up to {size[k]:.3g}): "
+                        "not a covariance")
+    low = np.linalg.eigvalsh(out).min(axis=1, initial=np.inf) if len(out) else np.zeros(0)
+    bad = np.flatnonzero(low <= 0)
+    if bad.size:
+        k = int(bad[0])
+        raise DataError(f"{path}: {what} {k} is not positive definite (smallest eigenvalue {low[k]:.3g}): not a covariance")
+    return out
+
+
 def _check_same_data(path: Path, m: dict, data: RangeDataset) -> NDArray:
     """The saved run's state poses, after checking it was run on ``data``: its ``diff`` (ground truth
     minus estimate) plus its estimate must be ``data``'s ground truth at those poses."""
-    poses = m["estStateInds"].ravel().astype(int)
-    if poses.max(initial=-1) >= data.n_poses or m["XY"].shape != (data.n_landmarks, 2):
-        raise DataError(f"{path} was run on a data set with states up to pose {poses.max()} and {m['XY'].shape[0]} "
+    inds = _table(path, {"estStateInds": np.reshape(m["estStateInds"], (-1, 1))}, "estStateInds", 1)[:, 0]
+    poses = inds.astype(int)
+    if np.any(inds != poses) or np.any(poses < 0) or np.any(np.diff(poses) <= 0):
+        raise DataError(f"{path}: estStateInds must be increasing pose indices >= 0")
+    if poses.max(initial=-1) >= data.n_poses or np.shape(m["XY"]) != (data.n_landmarks, 2):
+        raise DataError(f"{path} was run on a data set with states up to pose {poses.max(initial=-1)} and {np.shape(m['XY'])[0]} "
                         f"landmarks; {data.name!r} has {data.n_poses} poses and {data.n_landmarks} landmarks")
-    truth = m["diff"] + m["XYT"][:, :2]
+    truth = _table(path, m, "diff", 2, len(poses)) + _table(path, m, "XYT", 3, len(poses))[:, :2]
     if not np.allclose(truth, data.ground_truth[poses, 1:3], rtol=0, atol=1e-6):
         raise DataError(f"{path} was not run on this data set ({data.source}): its ground truth differs")
     saved = m.get("nNonInterpRangeMeasurements")
-    if isinstance(saved, np.ndarray) and saved.dtype.kind in "iuf" and int(saved.ravel()[0]) != data.n_ranges:
+    if isinstance(saved, np.ndarray) and saved.dtype.kind in "iuf" and saved.size and int(saved.ravel()[0]) != data.n_ranges:
         raise DataError(f"{path} used {int(saved.ravel()[0])} range readings, {data.name!r} has {data.n_ranges} "
                         "(the original Plaza files, not the cleaned one?)")
     return poses
 
 
 def load_authors_run(name: str, data: RangeDataset, data_dir: str | os.PathLike | None = None) -> AuthorsRun:
-    """The authors' saved run on data set ``name`` ('plaza' or 'paper-synthetic'), checked against ``data``."""
+    """The authors' saved run on data set ``name`` ('plaza' or 'paper-synthetic'), checked against ``data``.
+
+    Every array must be numeric, finite and of the expected shape, and each saved marginal a
+    symmetric (to :data:`COVARIANCE_SYMMETRY`) positive definite matrix; else DataError naming it."""
     path = find_authors_file(name, data_dir)
     m = _read(path)
     poses = _check_same_data(path, m, data)
@@ -100,13 +145,18 @@ def load_authors_run(name: str, data: RangeDataset, data_dir: str | os.PathLike 
     tl_ids = [int(i) for i in data.landmarks[:, 0]]
     cov = m.get("stateMarginal")
     has_cov = isinstance(cov, np.ndarray) and cov.dtype == object
-    marks_cov = {i: np.asarray(m["landmarkMarginal"][k, 0], float) for k, i in enumerate(tl_ids)} if has_cov else None
+    if has_cov and (cov.shape != (len(poses), 2) or np.shape(m.get("landmarkMarginal")) != (data.n_landmarks, 1)):
+        raise DataError(f"{path}: stateMarginal has shape {cov.shape} and landmarkMarginal {np.shape(m.get('landmarkMarginal'))}; "
+                        f"expected ({len(poses)}, 2) and ({data.n_landmarks}, 1)")
+    marks = _table(path, m, "XY", 2, data.n_landmarks)
+    landmark_cov = _covariances(path, m["landmarkMarginal"][:, 0], "landmarkMarginal", 2) if has_cov else None
     return AuthorsRun(
-        name, poses, m["XYT"].astype(float), m["XYT_dot"].astype(float),
-        {i: m["XY"][k].astype(float) for k, i in enumerate(ids)},
-        np.stack([np.asarray(c, float) for c in cov[:, 0]]) if has_cov else None,
-        np.stack([np.asarray(c, float) for c in cov[:, 1]]) if has_cov else None,
-        marks_cov, m["step_t"][:, 0].astype(float), path,
+        name, poses, _table(path, m, "XYT", 3, len(poses)), _table(path, m, "XYT_dot", 3, len(poses)),
+        {i: marks[k] for k, i in enumerate(ids)},
+        _covariances(path, cov[:, 0], "stateMarginal pose", 3) if has_cov else None,
+        _covariances(path, cov[:, 1], "stateMarginal velocity", 3) if has_cov else None,
+        {i: landmark_cov[k] for k, i in enumerate(tl_ids)} if has_cov else None,
+        _table(path, m, "step_t", 1)[:, 0], path,
     )
 
 

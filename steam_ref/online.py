@@ -14,8 +14,9 @@ Time queries between states use Eq. 18 (:mod:`steam_ref.trajectory`).
 
 from __future__ import annotations
 
+import numbers
 import time
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -58,15 +59,21 @@ class StreamOptions:
     def __post_init__(self) -> None:
         if self.method not in METHODS:
             raise SteamError(f"unknown method {self.method!r}; use one of {', '.join(METHODS)}")
-        if isinstance(self.every, bool) or int(self.every) != self.every or self.every < 1:
-            raise SteamError(f"every must be a positive integer, got {self.every!r}")
+        if self.every is None:
+            raise SteamError("every must be a positive integer, got None")
+        _check_count("every", self.every, 1)
+        for name in ("interpolate", "range_states", "progress"):
+            if not isinstance(getattr(self, name), bool):
+                raise SteamError(f"{name} must be True or False, got {getattr(self, name)!r}")
         Layout(self.skip, self.range_states, self.interpolate)  # checks skip
         _check_count("max_poses", self.max_poses, 2)
         _check_count("start_after_ranges", self.start_after_ranges, 0)
         _check_count("final_updates", self.final_updates, 0)
         _check_count("pb_max_iterations", self.pb_max_iterations, 1)
-        if self.time_budget_s is not None and not (isinstance(self.time_budget_s, (int, float)) and self.time_budget_s > 0):
-            raise SteamError(f"time_budget_s must be a positive number, got {self.time_budget_s!r}")
+        if self.time_budget_s is not None and not (_is_real(self.time_budget_s) and self.time_budget_s > 0):
+            raise SteamError(f"time_budget_s must be a number > 0 (or None), got {self.time_budget_s!r}")
+        if not (_is_real(self.pb_relative_tolerance) and 0 <= self.pb_relative_tolerance < np.inf):
+            raise SteamError(f"pb_relative_tolerance must be a finite number >= 0, got {self.pb_relative_tolerance!r}")
         if self.isam2 is not None and not isinstance(self.isam2, ISAM2Params):
             raise SteamError(f"isam2 must be an ISAM2Params (or None for the set-up's), got {self.isam2!r}")
 
@@ -76,8 +83,16 @@ class StreamOptions:
         return Layout(self.skip, self.range_states, self.interpolate)
 
     def replace(self, **changes) -> StreamOptions:
-        """A copy with some fields changed."""
+        """A copy with some fields changed; SteamError names an unknown field."""
+        unknown = sorted(set(changes) - {f.name for f in fields(self)})
+        if unknown:
+            raise SteamError(f"StreamOptions has no field {unknown[0]!r}")
         return replace(self, **changes)
+
+
+def _is_real(value: object) -> bool:
+    """A real number (NaN included: callers compare it), never a bool."""
+    return not isinstance(value, bool) and isinstance(value, numbers.Real)
 
 
 def _check_count(name: str, value: object, lowest: int) -> None:

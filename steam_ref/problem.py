@@ -15,6 +15,7 @@ from numpy.typing import NDArray
 
 from .batch import BatchResult, gauss_newton
 from .datasets import RangeDataset
+from .errors import SteamError
 from .frontend import FrontEnd, Layout
 from .graph import FactorGraph
 from .readings import PaperSetup, Readings
@@ -67,6 +68,9 @@ def sequential_batch(problem: SteamProblem, *, chunk: int = 100, ordering: str =
     and so on; the last solve is a full Gauss-Newton on all the data. Returns its result (only that
     one is checked for stationarity).
     """
+    for name, value in (("chunk", chunk), ("final_iterations", final_iterations)):
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+            raise SteamError(f"{name} must be a positive integer, got {value!r}")
     front = FrontEnd(problem.readings, problem.setup, problem.layout)
     graph, values, stop = FactorGraph(), Values(), chunk
     result = None
@@ -80,4 +84,6 @@ def sequential_batch(problem: SteamProblem, *, chunk: int = 100, ordering: str =
             values = result.values
             front.rebase(values[X(step.pose)])
             stop = (step.pose // chunk + 1) * chunk
+    if result is None:
+        raise SteamError(f"the problem has {problem.readings.n_poses} pose(s): a batch needs at least two")
     return result

@@ -14,6 +14,8 @@ row k is a projected-velocity reading of pose k + 1, and each range reading is a
 
 from __future__ import annotations
 
+import math
+import numbers
 from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
@@ -21,11 +23,15 @@ from numpy.typing import NDArray
 
 from .bayes_tree.params import ISAM2Params
 from .datasets import RangeDataset
-from .errors import DataError, SteamError
+from .errors import DataError, ShapeError, SteamError
+from .gp.prior import check_qc
 from .gp.sde import LinearSDE
 from .robust import Tukey
 
-__all__ = ["PaperSetup", "Readings", "attach_ranges", "range_correction", "RANGE_ATTACHMENTS", "DEPARTURES", "PRIORS"]
+__all__ = [
+    "PaperSetup", "Readings", "attach_ranges", "range_correction", "RANGE_ATTACHMENTS", "RANGE_CORRECTION_SLOPES",
+    "DEPARTURES", "PRIORS",
+]
 
 RANGE_ATTACHMENTS = ("file-order", "time")
 PRIORS = ("wnoa", "wnoj", "singer")  # the paper's prior, and two extensions (docs/derivations.md §6)
@@ -66,8 +72,33 @@ class PaperSetup:
     first_acceleration_sigmas: NDArray = field(default_factory=lambda: np.array([1.0, 1.0, np.pi]))  # (3,) prior on acceleration 0 (mean 0), WNOJ and Singer
 
     def __post_init__(self) -> None:
+        """Check every field where it enters; SteamError naming the field and the value."""
+        if not isinstance(self.name, str) or not self.name:
+            raise SteamError(f"PaperSetup.name must be a non-empty string, got {self.name!r}")
+        qc = np.asarray(self.qc, dtype=float) if _numeric(self.qc) else None
+        if qc is None or qc.shape != (3, 3):
+            raise ShapeError(f"PaperSetup.qc must be a (3, 3) matrix for x, y, θ; got {_show(self.qc)}")
+        object.__setattr__(self, "qc", check_qc(qc))
+        for name in ("velocity_sigmas", "interpolated_velocity_sigmas", "first_pose_sigmas", "first_velocity_sigmas", "first_velocity",
+                     "first_acceleration_sigmas"):
+            object.__setattr__(self, name, _vector3(name, getattr(self, name), positive=name != "first_velocity"))
+        for name in ("range_sigma", "landmark_prior_sigma") + (("tukey_c",) if self.tukey_c is not None else ()):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, numbers.Real) or not (math.isfinite(value) and value > 0):
+                raise SteamError(f"PaperSetup.{name} must be a finite number > 0, got {value!r}")
+        for name in ("range_correction_steps", "start_after_ranges", "final_updates"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0:
+                raise SteamError(f"PaperSetup.{name} must be an integer >= 0, got {value!r}")
+        for name in ("landmarks_up_front", "pose2_heading_rate_guess"):
+            if not isinstance(getattr(self, name), bool):
+                raise SteamError(f"PaperSetup.{name} must be True or False, got {getattr(self, name)!r}")
         if self.range_attachment not in RANGE_ATTACHMENTS:
             raise SteamError(f"range_attachment must be one of {RANGE_ATTACHMENTS}, got {self.range_attachment!r}")
+        blocks = self.relinearize_blocks
+        if blocks is not None and not (isinstance(blocks, tuple) and all(_is_int(b) and b >= 1 for b in blocks) and sum(blocks) == 6):
+            raise SteamError(f"PaperSetup.relinearize_blocks must be None or a tuple of positive integers adding up to 6 "
+                             f"(pose and velocity; a 9-number state adds its acceleration's block), got {blocks!r}")
         if self.prior not in PRIORS:
             raise SteamError(f"prior must be one of {PRIORS}, got {self.prior!r}")
         self.motion_prior()  # checks Qc and the time constant, naming the bad one
@@ -150,6 +181,32 @@ class PaperSetup:
         return None if self.tukey_c is None else Tukey(self.tukey_c)
 
 
+def _is_int(value: object) -> bool:
+    return not isinstance(value, bool) and isinstance(value, (int, np.integer))
+
+
+def _numeric(value: object) -> bool:
+    """True when ``value`` converts to a float array (numbers, not strings or objects)."""
+    try:
+        return np.asarray(value).dtype.kind in "biuf"
+    except (TypeError, ValueError):
+        return False
+
+
+def _show(value: object) -> str:
+    """A value on one line: numbers as a (nested) list, anything else as its repr."""
+    return repr(np.asarray(value).tolist()) if _numeric(value) else repr(value)
+
+
+def _vector3(name: str, value: object, positive: bool) -> NDArray:
+    """``value`` as a read-only float (3,), finite (and > 0 when ``positive``); else SteamError naming it."""
+    v = np.array(value, dtype=float) if _numeric(value) else None
+    if v is None or v.shape != (3,) or not np.all(np.isfinite(v)) or (positive and np.any(v <= 0)):
+        raise SteamError(f"PaperSetup.{name} must be 3 finite numbers{' > 0' if positive else ''} (x, y, θ), got {_show(value)}")
+    v.setflags(write=False)
+    return v
+
+
 def attach_ranges(pose_times: NDArray, range_times: NDArray, rule: str = "file-order") -> NDArray:
     """The pose each range reading belongs to: (n_ranges,) int, in the rows' order.
 
@@ -174,6 +231,9 @@ def attach_ranges(pose_times: NDArray, range_times: NDArray, rule: str = "file-o
     return pose.astype(int)
 
 
+RANGE_CORRECTION_SLOPES = (0.5, 2.0)  # a fitted slope a outside this is refused (see range_correction)
+
+
 def range_correction(data: RangeDataset, n_steps: int) -> tuple[float, float]:
     """(a, b) of the affine range correction r' = a r + b, fitted as ``range_measure_fit.m`` does.
 
@@ -181,6 +241,18 @@ def range_correction(data: RangeDataset, n_steps: int) -> tuple[float, float]:
     ``n_steps`` ground-truth rows; each is paired with the nearer in time of the two poses around
     its time stamp, and the walk stops at the first reading later than pose ``n_steps - 1``. Then
     a, b solve min Σ (a r + b - ‖p - ℓ‖)² over the pairs (p the paired ground-truth position).
+
+    The fit is plain least squares, as the script's (``A \\ b``), so one wild reading moves it: a
+    single 1e6 m range in Plaza's window turns the slope negative and every corrected range into
+    about 3.5 m. The script has no check (its file had the outliers thrown away); here the fit is
+    checked, not made robust (that would change the paper's correction on the clean file): a
+    slope outside :data:`RANGE_CORRECTION_SLOPES` = [0.5, 2], a fit that is not finite, or
+    readings that cannot fix a slope (fewer than 2, or all equal) raise :class:`DataError` naming
+    the fit (slope, offset, number of readings) and the reading farthest from its true range.
+    Plaza's clean file fits a = 0.935, b = -0.016 m over 3,000 poses. The bound is wide on
+    purpose: least squares of true on measured ranges pulls the slope below 1 by
+    var(true) / (var(true) + σ²) (0.66 for 0.3 m of noise on ranges spread over 2-5 m), and a
+    slope of 0.5 already halves every range's distance from the mean.
     """
     t_pose, t_range = data.times[:n_steps], data.ranges[:, 0]
     poses, rows, p = [], [], 0
@@ -192,13 +264,27 @@ def range_correction(data: RangeDataset, n_steps: int) -> tuple[float, float]:
         nearer = p - 1 if p > 0 and abs(t_pose[p - 1] - t) <= abs(t_pose[p] - t) else p
         poses.append(nearer)
         rows.append(k)
+    where = f"range correction over the first {n_steps} poses"
     if len(rows) < 2:
-        raise SteamError(f"range correction needs at least 2 readings in its window of {n_steps} poses, got {len(rows)}")
+        raise DataError(f"{where} needs at least 2 readings in its window, got {len(rows)}")
     rows = np.array(rows)
     marks = data.landmarks[data.landmark_rows(data.ranges[rows, 2]), 1:3]
     true = np.hypot(*(data.ground_truth[poses, 1:3] - marks).T)
-    M = np.column_stack([data.ranges[rows, 3], np.ones(len(rows))])
+    measured = data.ranges[rows, 3]
+    if np.ptp(measured) == 0:
+        raise DataError(f"{where}: all {len(rows)} readings are {float(measured[0])!r} m, which cannot fix a slope")
+    M = np.column_stack([measured, np.ones(len(rows))])
     (a, b), *_ = np.linalg.lstsq(M, true, rcond=None)
+    lo, hi = RANGE_CORRECTION_SLOPES
+    if not (np.isfinite(a) and np.isfinite(b) and lo <= a <= hi):
+        k = int(np.argmax(np.abs(measured - true)))
+        raise DataError(
+            f"{where}: the least-squares fit r' = a r + b has slope a = {float(a)!r}, offset b = {float(b)!r} over {len(rows)} "
+            f"readings; a slope outside [{lo:g}, {hi:g}] means the readings do not match the ground truth (an outlier, "
+            f"or too little spread against their noise); the farthest is ranges row {int(rows[k])}, {float(measured[k])!r} m "
+            f"against {float(true[k])!r} m. Without a correction (range_correction_steps=0, as the synthetic preset) "
+            f"the ranges are used as they are"
+        )
     return float(a), float(b)
 
 
@@ -232,6 +318,11 @@ class Readings:
         order = np.lexsort((t, pose)) if setup.range_attachment == "time" else np.arange(len(pose))
         a, b = range_correction(data, setup.range_correction_steps) if setup.range_correction_steps > 0 else (1.0, 0.0)
         value = a * data.ranges[order, 3] + b if setup.range_correction_steps > 0 else data.ranges[order, 3].astype(float)
+        negative = np.flatnonzero(value < 0)
+        if negative.size:
+            k = int(order[negative[0]])
+            raise DataError(f"ranges row {k}: {float(data.ranges[k, 3])!r} m corrected to {a!r} r + {b!r} = "
+                            f"{float(value[negative[0]])!r} m, a negative range ({negative.size} in all)")
         marks = {int(i): np.array([x, y]) for i, x, y in data.landmarks}
         return cls(
             np.arange(n, dtype=float), velocity, pose[order], data.ranges[order, 2].astype(int), value, (a, b),

@@ -2,6 +2,8 @@
 
 - :mod:`.table`: :class:`RangeDataset`, the CMU range-only layout (GT, DR, DRp, TL, TD) and its
   checks; the conventions every source follows are in its docstring.
+- :mod:`.matfile`: :func:`read_mat`, a .mat file's arrays after a walk of its structure (a
+  corrupted tag would crash scipy's reader, not raise).
 - :mod:`.cmu`: :func:`load_cmu_mat` and :func:`load_cmu_text`, readers of the CMU files.
 - :mod:`.synthetic`: :func:`generate_synthetic`, a task like the paper's Section IV-A.
 - :mod:`.search`: :func:`load_dataset` by name or path, searching :func:`default_data_dirs`
@@ -13,6 +15,7 @@ loaders re-raise either as :class:`DataError` prefixed with the file name.
 """
 
 from .cmu import load_cmu_mat, load_cmu_text
+from .matfile import read_mat
 from .search import DATA_DIR_ENV, default_data_dirs, gtsam_data_dir, load_dataset
 from .synthetic import generate_synthetic
 from .table import RangeDataset
@@ -21,6 +24,7 @@ __all__ = [
     "RangeDataset",
     "load_cmu_mat",
     "load_cmu_text",
+    "read_mat",
     "gtsam_data_dir",
     "default_data_dirs",
     "load_dataset",

@@ -12,26 +12,39 @@ Conventions, checked on the reference files (see ``data/README.md`` for the figu
   cleaned file); their ranges match ground truth at their own time stamps, not at their row
   position. The loaders keep the rows in file order, as
   the paper's scripts read them, and name the rows that go back in ``source``.
+- A text table (``*_DR.txt``, ``*_TD.txt``) follows :data:`TEXT_TABLE_RULE`. Its last line must end
+  with a newline: a file cut inside its last number keeps its field count and still parses
+  (``5.29560000000000031e+01`` cut after ``5.2956`` reads as 5.2956), so the missing newline is the
+  only sign of the cut. A file cut exactly at a line end loses whole rows and cannot be told from a
+  shorter file; DR's rows are counted against GT's, and TD's against the .mat's copy when it has
+  one (the Plaza files do), so only a TD with no copy in the .mat can lose rows unnoticed.
 
 Errors: any failure to read a file, and any :class:`ShapeError` or :class:`DataError` of
 :class:`RangeDataset`, is raised as :class:`DataError` prefixed with the file name. Rows are
-0-based in ``array[row, column]`` messages and 1-based as "line N" for text files.
+0-based in ``array[row, column]`` messages; text files give "line N, column C", both 1-based.
 """
 
 from __future__ import annotations
 
 import os
+import re
 from pathlib import Path
 
 import numpy as np
-import scipy.io
 from numpy.typing import NDArray
 
 from ..errors import DataError, SteamError
 from ..pose2 import integrate_odometry
+from .matfile import read_mat
 from .table import _COLUMNS, RangeDataset, _frozen_table
 
-__all__ = ["load_cmu_mat", "load_cmu_text"]
+__all__ = ["load_cmu_mat", "load_cmu_text", "TEXT_TABLE_RULE"]
+
+TEXT_TABLE_RULE = (
+    "ASCII; every line ends with a newline, the last one too (a file cut inside its last number would "
+    "otherwise load that number cut short); fields separated by spaces or tabs; each a finite plain "
+    "decimal number; the same number of fields on every non-blank line"
+)
 
 
 def _order_note(ranges: NDArray) -> str:
@@ -51,9 +64,13 @@ def _assemble(name: str, where: str, tables: dict[str, NDArray]) -> RangeDataset
         tl = _frozen_table("TL", tables["TL"], _COLUMNS["landmarks"][1])
         dr = _frozen_table("DR", tables["DR"], _COLUMNS["odometry"][1])
         drp = tables.get("DRp")
-        if drp is None or np.shape(drp)[0] != gt.shape[0]:
-            got = "no DRp" if drp is None else f"DRp has {np.shape(drp)[0]} rows, GT {gt.shape[0]}"
-            notes.append(f"DRp recomputed from DR ({got})")
+        if drp is not None:
+            drp = _frozen_table("DRp", drp, _COLUMNS["dead_reckoning"][1])
+            if drp.shape[0] != gt.shape[0]:
+                raise DataError(f"DRp has {drp.shape[0]} rows but GT has {gt.shape[0]}: expected one per pose "
+                                "(a file without DRp has it recomputed from DR)")
+        else:
+            notes.append("DRp recomputed from DR (the file has none)")
             drp = integrate_odometry(gt[0], dr)
         td = _frozen_table("TD", tables["TD"], _COLUMNS["ranges"][1])
         note = _order_note(td)
@@ -64,18 +81,6 @@ def _assemble(name: str, where: str, tables: dict[str, NDArray]) -> RangeDataset
         raise DataError(f"{where}: {err}") from None
 
 
-def _read_mat(path: Path) -> dict[str, NDArray]:
-    """The arrays of a MATLAB v5 file; any failure (missing, truncated, corrupt) → DataError."""
-    if not path.is_file():
-        raise DataError(f"{path}: no such file")
-    try:
-        content = scipy.io.loadmat(path)
-    except Exception as err:  # scipy raises ValueError, OSError, TypeError, zlib errors...
-        reason = f"{type(err).__name__}: {err}"
-        raise DataError(f"{path}: cannot read it as a MATLAB .mat file ({reason})") from None
-    return {k: v for k, v in content.items() if not k.startswith("__")}
-
-
 def _mat_table(content: dict[str, NDArray], key: str, path: Path, required: bool = True) -> NDArray | None:
     if key not in content:
         if not required:
@@ -83,19 +88,20 @@ def _mat_table(content: dict[str, NDArray], key: str, path: Path, required: bool
         raise DataError(f"{path}: no array {key!r} (it holds {sorted(content) or 'nothing'})")
     value = content[key]
     if not isinstance(value, np.ndarray) or value.dtype.kind not in "biuf":
-        raise DataError(f"{path}: {key} is not a numeric matrix (got {getattr(value, 'dtype', type(value))})")
+        got = f"an array of {value.dtype}" if isinstance(value, np.ndarray) else f"a {type(value).__name__}"
+        raise DataError(f"{path}: {key} is not a numeric matrix (got {got})")
     return value.astype(float)
 
 
 def load_cmu_mat(path: str | os.PathLike, name: str | None = None) -> RangeDataset:
     """A CMU-layout .mat (GT, DR, TL, TD, optional DRp), e.g. ``Syn_theta_Plaza.mat``.
 
-    DRp is recomputed with :func:`integrate_odometry` when the file lacks it or its row count
-    differs from GT's (``source`` says so). Other arrays (``usefulRangeInd``, ``addedK``) are
+    DRp is recomputed with :func:`integrate_odometry` when the file lacks it (``source`` says
+    so); a DRp whose row count differs from GT's is refused, not replaced. Other arrays (``usefulRangeInd``, ``addedK``) are
     ignored. Range rows keep the file's order (rows going back in time are noted in ``source``).
     """
     path = Path(path)
-    content = _read_mat(path)
+    content = read_mat(path)
     tables = {key: _mat_table(content, key, path) for key in ("GT", "DR", "TL", "TD")}
     drp = _mat_table(content, "DRp", path, required=False)
     if drp is not None:
@@ -103,27 +109,50 @@ def load_cmu_mat(path: str | os.PathLike, name: str | None = None) -> RangeDatas
     return _assemble(name or path.stem, str(path), tables)
 
 
+_NUMBER = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")  # a plain decimal number
+_BLANKS = re.compile(r"[ \t]+")
+
+
 def _read_text_table(path: Path, columns: tuple[str, ...]) -> NDArray:
-    """(n, len(columns)) numbers of a whitespace-separated text file; DataError naming file and line."""
+    """(n, len(columns)) numbers of a text table; DataError naming the file, line and column.
+
+    The rule (:data:`TEXT_TABLE_RULE`): ASCII; every line ends with a newline (``\\n`` or
+    ``\\r\\n``), the last one too; fields are separated by spaces or tabs; each field is a plain
+    decimal number (no nan, inf, hex, ``_`` or non-ASCII digits) that is finite; every non-blank
+    line has exactly ``len(columns)`` fields; blank lines are skipped.
+    """
     try:
-        text = path.read_text()
-    except (OSError, UnicodeDecodeError) as err:
-        raise DataError(f"{path}: cannot read it as text ({type(err).__name__}: {err})") from None
+        raw = path.read_bytes()
+    except OSError as err:
+        raise DataError(f"{path}: cannot read it ({type(err).__name__}: {err})") from None
+    try:
+        text = raw.decode("ascii")
+    except UnicodeDecodeError as err:
+        line = raw.count(b"\n", 0, err.start) + 1
+        raise DataError(f"{path} line {line}: byte {raw[err.start]:#04x} is not ASCII; a text table holds plain numbers") from None
+    lines = text.split("\n")
+    if lines[-1].strip(" \t\r"):
+        raise DataError(
+            f"{path} line {len(lines)}: the last line does not end with a newline, so the file may be cut short "
+            f"(a number cut short still reads as a number); if that line is whole, end the file with a newline"
+        )
     rows = []
-    for line_no, line in enumerate(text.splitlines(), start=1):
-        fields = line.split()
+    for line_no, line in enumerate(lines[:-1], start=1):
+        body = line[:-1] if line.endswith("\r") else line
+        fields = [f for f in _BLANKS.split(body) if f]
         if not fields:
             continue
-        try:
-            row = [float(f) for f in fields]
-        except ValueError:
-            raise DataError(f"{path} line {line_no}: not a number in {line.strip()!r}") from None
-        if len(row) != len(columns) or not np.all(np.isfinite(row)):
+        if len(fields) != len(columns):
             raise DataError(
-                f"{path} line {line_no}: expected {len(columns)} finite numbers "
-                f"({', '.join(columns)}), got {line.strip()!r}"
+                f"{path} line {line_no}: expected {len(columns)} numbers ({', '.join(columns)}), "
+                f"got {len(fields)}: {body.strip()!r}"
             )
-        rows.append(row)
+        for c, f in enumerate(fields):
+            if not _NUMBER.fullmatch(f) or not np.isfinite(float(f)):
+                raise DataError(
+                    f"{path} line {line_no}, column {c + 1} ({columns[c]}): {f!r} is not a finite decimal number"
+                )
+        rows.append([float(f) for f in fields])
     if not rows:
         raise DataError(f"{path}: the file holds no rows")
     return np.array(rows)
@@ -168,16 +197,16 @@ def load_cmu_text(
     if folder.is_file() and folder.name.endswith("_DR.txt"):
         folder, prefix = folder.parent, folder.name[: -len("_DR.txt")]
     if not folder.is_dir():
-        raise DataError(f"{folder}: no such folder")
+        raise DataError(f"{folder}: {'not a folder (nor a *_DR.txt file)' if folder.exists() else 'no such folder'}")
     prefix = prefix or _text_prefix(folder)
     dr_path, td_path = folder / f"{prefix}_DR.txt", folder / f"{prefix}_TD.txt"
     mats = [p for p in (folder / f"{prefix}_.mat", folder / f"{prefix}.mat") if p.is_file()]
     for path in (dr_path, td_path):
         if not path.is_file():
-            raise DataError(f"{path}: no such file (needed with {dr_path.name})")
+            raise DataError(f"{path}: {'not a file' if path.exists() else 'no such file'} (needed with {dr_path.name})")
     if not mats:
         raise DataError(f"{folder}: no {prefix}_.mat holding GT and TL next to {dr_path.name}")
-    content = _read_mat(mats[0])
+    content = read_mat(mats[0])
     dr = _read_text_table(dr_path, _COLUMNS["odometry"][1])
     td = _read_text_table(td_path, _COLUMNS["ranges"][1])
     _check_same(dr, content, "DR", dr_path, mats[0])

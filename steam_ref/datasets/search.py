@@ -34,24 +34,43 @@ def gtsam_data_dir() -> Path | None:
     return None
 
 
+def _named_folder(value: str | os.PathLike | None, what: str) -> Path | None:
+    """``value`` as a folder, or None when not given; DataError when it is empty or not a folder."""
+    if value is None:
+        return None
+    if not str(value):
+        raise DataError(f"{what} is empty: give a folder")
+    if not Path(value).is_dir():
+        state = "is not a folder" if Path(value).exists() else "does not exist"
+        raise DataError(f"{what} {str(value)!r} {state}")
+    return Path(value)
+
+
 def default_data_dirs(data_dir: str | os.PathLike | None = None) -> list[Path]:
-    """Folders searched for data files, in order, without duplicates; they need not exist.
+    """Folders searched for data files, in order, without duplicates.
 
     Exactly three places: ``data_dir`` (the CLI's ``--data-dir``), then ``$STEAM_REF_DATA_DIR``,
     then the ``Data/`` folder of an installed gtsam wheel. Nothing relative to the working
-    directory or to this package's location is searched.
+    directory or to this package's location is searched. A ``data_dir`` given, or a
+    ``$STEAM_REF_DATA_DIR`` set (an empty one counts as unset), must be an existing folder, else
+    DataError: a mistyped folder would otherwise be passed over for the next place in silence.
     """
-    env = os.environ.get(DATA_DIR_ENV) or None
+    given = _named_folder(data_dir, "data_dir (--data-dir)")
+    env = _named_folder(os.environ.get(DATA_DIR_ENV) or None, f"${DATA_DIR_ENV}")
     folders: list[Path] = []
-    for candidate in (data_dir, env, gtsam_data_dir()):
+    for candidate in (given, env, gtsam_data_dir()):
         if candidate is not None and Path(candidate).resolve() not in folders:
             folders.append(Path(candidate).resolve())
     return folders
 
 
 def _find(file_names: tuple[str, ...], folders: list[Path]) -> Path | None:
-    """The first folder holding all of ``file_names`` (joined to the first name), or None."""
+    """The first folder holding all of ``file_names`` (joined to the first name), or None.
+    DataError when one of them is there but is not a file (a folder of that name is not passed over)."""
     for folder in folders:
+        for f in file_names:
+            if (folder / f).exists() and not (folder / f).is_file():
+                raise DataError(f"{folder / f}: not a file")
         if all((folder / f).is_file() for f in file_names):
             return folder / file_names[0]
     return None
@@ -75,12 +94,15 @@ def load_dataset(
     ``$STEAM_REF_DATA_DIR``, the installed gtsam's ``Data/``. Anything else is a path: a CMU .mat
     file or a folder of CMU text files; a bare file name that is not in the working directory is
     also searched for there. A missing file raises DataError naming the folders searched and
-    where to put it.
+    where to put it; so does an empty name, and a ``data_dir`` that is not a folder (even for
+    "synthetic", which reads no file: the caller meant something else).
     """
     key = str(name_or_path)
+    if not key.strip():
+        raise DataError("the data set name is empty: give synthetic, paper-synthetic, plaza, or a file or folder")
+    folders = default_data_dirs(data_dir)
     if key == "synthetic":
         return generate_synthetic(seed=seed)
-    folders = default_data_dirs(data_dir)
     hint = f"Put the file in a folder and pass that folder as --data-dir (data_dir= in Python) or set ${DATA_DIR_ENV} to it"
     if key in _FILES:
         found = _find((_FILES[key],), folders)

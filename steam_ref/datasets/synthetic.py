@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import math
+import numbers
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
@@ -87,27 +90,50 @@ def _landmarks_and_ranges(
     xy = _scatter_landmarks(rng, path, anchors, reach)
     pick = _observed_landmarks(rng, path, xy, anchors, n_nearest)
     ids = _ids_by_first_sighting(pick, n)
-    measured = np.hypot(*(path - xy[pick]).T) + sigma * rng.standard_normal(len(gt))  # [YIB Eq. 33]
+    true = np.hypot(*(path - xy[pick]).T)
+    measured = true + sigma * rng.standard_normal(len(gt))  # [YIB Eq. 33]
+    negative = np.flatnonzero(measured < 0)
+    while negative.size:  # a range is a distance: its noise is redrawn (N(0, σ²) truncated at -true)
+        measured[negative] = true[negative] + sigma * rng.standard_normal(negative.size)
+        negative = negative[measured[negative] < 0]
     ranges = np.column_stack([gt[:, 0], np.ones(len(gt)), ids[pick], measured])
     return np.column_stack([ids, xy])[np.argsort(ids)], ranges
 
 
+def _is_count(value: object, lowest: int) -> bool:
+    """An integer (or an integer-valued float) >= ``lowest``; never a bool, NaN or inf."""
+    return (not isinstance(value, bool) and isinstance(value, numbers.Real) and math.isfinite(value)
+            and value == int(value) and value >= lowest)
+
+
+def _is_number(value: object, lowest: float, strict: bool) -> bool:
+    """A finite real above ``lowest`` (``strict``) or at least ``lowest``; never a bool."""
+    return (not isinstance(value, bool) and isinstance(value, numbers.Real) and math.isfinite(value)
+            and (value > lowest if strict else value >= lowest))
+
+
 def _check_generator_args(
-    n_steps: int, n_landmarks: int, sigmas: NDArray, range_sigma: float, reach: tuple[float, float],
-    n_nearest: int,
-) -> None:
-    if int(n_steps) != n_steps or n_steps < 1:
-        raise SteamError(f"n_steps must be a positive integer, got {n_steps!r}")
-    if int(n_landmarks) != n_landmarks or n_landmarks < 1:
-        raise SteamError(f"n_landmarks must be a positive integer, got {n_landmarks!r}")
+    n_steps: int, n_landmarks: int, sigmas: object, range_sigma: float, reach: object,
+    n_nearest: int, seed: int,
+) -> NDArray:
+    """The odometry sigmas (2,) after checking every argument (SteamError naming the bad one)."""
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise SteamError(f"seed must be an integer >= 0, got {seed!r}")
+    for name, value in (("n_steps", n_steps), ("n_landmarks", n_landmarks), ("n_nearest", n_nearest)):
+        if not _is_count(value, 1):
+            raise SteamError(f"{name} must be a positive integer, got {value!r}")
+    try:
+        sigmas = np.asarray(sigmas, dtype=float).ravel()
+    except (TypeError, ValueError):
+        raise SteamError(f"odometry_sigmas must be two finite values >= 0, got {sigmas!r}") from None
     if sigmas.shape != (2,) or not np.all(np.isfinite(sigmas)) or np.any(sigmas < 0):
         raise SteamError(f"odometry_sigmas must be two finite values >= 0, got {sigmas.tolist()}")
-    if not (np.isfinite(range_sigma) and range_sigma >= 0):
+    if not _is_number(range_sigma, 0, strict=False):
         raise SteamError(f"range_sigma must be finite and >= 0, got {range_sigma!r}")
-    if not (0 < reach[0] <= reach[1] < np.inf):
-        raise SteamError(f"landmark_distance must be (lo, hi) with 0 < lo <= hi, got {reach!r}")
-    if int(n_nearest) != n_nearest or n_nearest < 1:
-        raise SteamError(f"n_nearest must be a positive integer, got {n_nearest!r}")
+    if not (isinstance(reach, (tuple, list)) and len(reach) == 2 and all(_is_number(r, 0, strict=True) for r in reach)
+            and reach[0] <= reach[1]):
+        raise SteamError(f"landmark_distance must be (lo, hi) with 0 < lo <= hi, both finite; got {reach!r}")
+    return sigmas
 
 
 def _generator_qc(qc: ArrayLike | None) -> NDArray:
@@ -156,12 +182,14 @@ def generate_synthetic(
       is uniform on 0..9), except that each landmark is the one ranged at its own anchor pose, so
       every landmark is seen. Ids run 1..n in order of first sighting, as in the file. Noise is
       N(0, σ²), σ = ``range_sigma``, default 0.1 m: the file's residual std is 0.10 m. (The paper's
-      solver assumes 1 m; pass range_sigma=1.0 for data that match that model.)
+      solver assumes 1 m; pass range_sigma=1.0 for data that match that model.) A reading whose
+      noise would make it negative has its noise drawn again (landmarks are at least 2 m away, so
+      this needs range_sigma of about 0.5 m or more to happen at all).
 
     Draws come from ``np.random.default_rng(seed)``, so a seed gives the same data set everywhere.
     """
-    sigmas = np.asarray(odometry_sigmas, dtype=float).ravel()
-    _check_generator_args(n_steps, n_landmarks, sigmas, range_sigma, landmark_distance, n_nearest)
+    sigmas = _check_generator_args(n_steps, n_landmarks, odometry_sigmas, range_sigma, landmark_distance, n_nearest, seed)
+    n_steps, n_landmarks, n_nearest = int(n_steps), int(n_landmarks), int(n_nearest)
     qc = _generator_qc(qc)
     rng = np.random.default_rng(seed)
     states = _sample_wnoa(rng, n_steps + 1, qc)

@@ -19,9 +19,9 @@ Conventions, checked on the reference files (see ``data/README.md`` for the figu
 - Range rows are kept in the order given, even where their time goes back
   (:meth:`RangeDataset.ranges_going_back` names those rows).
 
-Errors: a table of the wrong shape raises :class:`ShapeError`; bad content (NaN, pose times not
-increasing, unknown landmark ids) raises :class:`DataError`. Rows are 0-based in
-``array[row, column]`` messages.
+Errors: a table of the wrong shape raises :class:`ShapeError`; bad content (NaN or inf, fewer than
+two poses, pose times not increasing, unknown landmark ids, a negative range) raises
+:class:`DataError`. Rows are 0-based in ``array[row, column]`` messages.
 """
 
 from __future__ import annotations
@@ -53,11 +53,13 @@ def _num(value: float) -> str:
 class RangeDataset:
     """A 2-D range-only SLAM data set in the CMU layout; arrays are read-only float64 copies.
 
-    Checked on construction: table shapes (ShapeError); finite values, strictly increasing pose
-    times, odometry row k stamped with the time of pose k + 1 (to 1 µs), one dead-reckoning row
-    per pose, integer and unique landmark ids, integer sender ids,
-    and every ranged landmark id present in ``landmarks`` (DataError). Dead-reckoning times are
-    not compared with pose times: Plaza's DRp row 0 is stamped 0.0226 s after GT row 0.
+    Checked on construction: table shapes (ShapeError); finite values, at least two poses (one
+    odometry step), strictly increasing pose times (in ground truth and in dead reckoning),
+    odometry row k stamped with the time of pose k + 1 (to 1 µs), one dead-reckoning row per
+    pose, integer and unique landmark ids, integer sender ids, every ranged landmark id present
+    in ``landmarks``, and no negative range (DataError). Dead-reckoning times are not compared
+    with pose times: Plaza's DRp row 0 is stamped 0.0226 s after GT row 0 (and Plaza2's 0.0106 s,
+    more than its shortest step).
     """
 
     name: str  # short label, e.g. "plaza"
@@ -73,6 +75,7 @@ class RangeDataset:
             object.__setattr__(self, name, _frozen_table(name, getattr(self, name), columns))
         self._check_times()
         self._check_ids()
+        self._check_ranges()
 
     def __repr__(self) -> str:
         return (
@@ -123,20 +126,21 @@ class RangeDataset:
 
     def _check_times(self) -> None:
         t, n = self.times, self.n_poses
-        if n == 0:
-            raise DataError("ground_truth has no rows: a data set needs at least one pose")
-        bad = np.flatnonzero(np.diff(t) <= 0)
-        if bad.size:
-            k = int(bad[0]) + 1
-            raise DataError(
-                f"pose times must increase strictly: ground_truth row {k} has t={_num(t[k])} "
-                f"after t={_num(t[k - 1])} at row {k - 1}"
-            )
+        if n < 2:
+            raise DataError(f"ground_truth has {n} row(s): a data set needs at least two poses (one odometry step)")
         for name, rows in (("odometry", n - 1), ("dead_reckoning", n)):
             if getattr(self, name).shape[0] != rows:
                 raise DataError(
                     f"{name} has {getattr(self, name).shape[0]} rows but ground_truth has {n} poses: "
                     f"expected {rows}"
+                )
+        for name, times in (("ground_truth", t), ("dead_reckoning", self.dead_reckoning[:, 0])):
+            bad = np.flatnonzero(np.diff(times) <= 0)
+            if bad.size:
+                k = int(bad[0]) + 1
+                raise DataError(
+                    f"pose times must increase strictly: {name} row {k} has t={_num(times[k])} "
+                    f"after t={_num(times[k - 1])} at row {k - 1}"
                 )
         off = np.flatnonzero(np.abs(self.odometry[:, 0] - t[1:]) > _TIME_TOL)
         if off.size:
@@ -165,6 +169,16 @@ class RangeDataset:
             raise DataError(
                 f"ranges row {missing} (t={_num(self.ranges[missing, 0])}) names landmark id "
                 f"{self.ranges[missing, 2]:g}, which is not in landmarks; known ids: {_ids_text(ids)}"
+            )
+
+
+    def _check_ranges(self) -> None:
+        negative = np.flatnonzero(self.ranges[:, 3] < 0)
+        if negative.size:
+            k = int(negative[0])
+            raise DataError(
+                f"ranges[{k}, 3] (range) = {_num(self.ranges[k, 3])} at t={_num(self.ranges[k, 0])} is negative: "
+                f"a range is a distance ({negative.size} negative range(s) in all)"
             )
 
 
