@@ -38,7 +38,7 @@ from .fidelity import AUTHORS_RUNS, compare, find_authors_file, load_authors_run
 from .online import StreamOptions, run_online
 from .plot import plot_fidelity, plot_trajectory
 from .problem import build_problem, sequential_batch
-from .readings import DEPARTURES, PaperSetup
+from .readings import DEPARTURES, PRIORS, PaperSetup
 from .results import position_rmse
 from .variables import X
 
@@ -102,6 +102,12 @@ def _add_run_arguments(run: argparse.ArgumentParser) -> None:
     run.add_argument("--departure", action="append", choices=list(DEPARTURES), default=[],
                      help="depart from the paper's scripts in this named way (repeatable; docs/experiments.md gives each one's effect)")
     run.add_argument("--preset", choices=("synthetic", "plaza"), default=None, help="parameter set (default: by data set; plaza for a PATH)")
+    run.add_argument("--prior", choices=PRIORS, default="wnoa",
+                     help="motion prior: the paper's white noise on acceleration, or on jerk, or Singer's model (docs/derivations.md)")
+    run.add_argument("--qc-scale", type=_positive_float, default=1.0,
+                     help="multiply the preset's Qc by this (a jerk prior needs its own: tutorial 06 uses 100 on Plaza)")
+    run.add_argument("--singer-time-constant", type=_positive_float, default=PaperSetup.singer_time_constant,
+                     help="Singer prior: the acceleration's time constant 1/α in seconds (default %(default)s)")
     run.add_argument("--data-dir", type=_folder, default=None, help="folder searched for data files before $STEAM_REF_DATA_DIR and gtsam's Data/")
     run.add_argument("--seed", type=_non_negative_int, default=0, help="seed of the generated synthetic task")
     run.add_argument("--relinearize-threshold", type=_non_negative_float, default=ISAM2Params.relinearize_threshold,
@@ -189,6 +195,7 @@ def _run(args: argparse.Namespace) -> int:
     _check_output(args.plot, ".png", "--plot")
     preset = args.preset or _PRESET_OF.get(args.dataset, "plaza")
     setup = PaperSetup.named(preset).departing(*args.departure)
+    setup = setup.replace(prior=args.prior, qc=args.qc_scale * setup.qc, singer_time_constant=args.singer_time_constant)
     options = StreamOptions(
         method=args.method, every=args.every, skip=args.skip, interpolate=args.interpolate,
         range_states=args.range_states, max_poses=args.max_poses, time_budget_s=args.time_budget,
@@ -197,7 +204,7 @@ def _run(args: argparse.Namespace) -> int:
     )
     data = load_dataset(args.dataset, data_dir=args.data_dir, seed=args.seed)
     result = run_online(data, setup, options, covariances=args.save_estimates is not None)
-    summary = result.summary(args.dataset) | {"departures": args.departure}
+    summary = result.summary(args.dataset) | {"departures": args.departure, "prior": args.prior, "qc_scale": args.qc_scale}
     if args.json:
         print(json.dumps(summary))
     else:
@@ -227,7 +234,8 @@ def _print_summary(summary: dict) -> None:
 
 def save_estimates(path: str, result) -> None:
     """Write a run to an .npz file: ``times``, ``x``, ``y``, ``theta`` and ``xdot``, ``ydot``,
-    ``thetadot`` at every covered time step, ``state_poses`` (pose indices with a state),
+    ``thetadot`` at every covered time step (and ``xddot``, ``yddot``, ``thetaddot`` with a WNOJ or Singer
+    prior), ``state_poses`` (pose indices with a state),
     ``landmark_ids`` and ``landmarks`` (m, 2), and, when the run has them, the final marginal
     covariances ``pose_covariance`` (n, 3, 3), ``velocity_covariance`` (n, 3, 3) and
     ``landmark_covariance`` (m, 2, 2), in the order of ``times`` and ``landmark_ids``."""
@@ -236,6 +244,8 @@ def save_estimates(path: str, result) -> None:
     tr = result.trajectory
     arrays = dict(times=result.times, x=tr[:, 0], y=tr[:, 1], theta=tr[:, 2], xdot=tr[:, 3], ydot=tr[:, 4], thetadot=tr[:, 5],
                   state_poses=result.state_poses, landmark_ids=ids, landmarks=marks)
+    if tr.shape[1] == 9:
+        arrays.update(xddot=tr[:, 6], yddot=tr[:, 7], thetaddot=tr[:, 8])
     if result.covariances is not None:
         c = result.covariances
         landmark_covariance = c.landmark[[c.landmark_ids.index(i) for i in ids]].reshape(-1, 2, 2)

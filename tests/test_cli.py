@@ -13,6 +13,8 @@ import scipy.io
 from steam_ref.bayes_tree import ISAM2Params
 from steam_ref.cli import main
 from steam_ref.datasets import generate_synthetic
+from steam_ref.online import run_online
+from steam_ref.readings import PaperSetup
 
 JSON_KEYS = {"dataset", "method", "every", "skip", "interpolate", "n_estimated_states", "rmse_m", "total_s",
              "update_s_median", "update_s_p95", "peak_rss_mb"}
@@ -239,3 +241,21 @@ def test_departure_flags_reach_the_set_up(capsys, small_mat):
         assert json.loads(out)["rmse_m"] == round(run_online(data, setup, StreamOptions(skip=3)).rmse_m, 6)
     code, _, err = _run(capsys, "run", "--departure", "sorted-ranges")
     assert code == 2 and "sorted-ranges" in err
+
+
+def test_prior_flags_reach_the_setup(capsys, small_mat, tmp_path):
+    """--prior singer with --qc-scale is the same run as the API with that set-up, and saves accelerations."""
+    path, data = small_mat
+    out_file = tmp_path / "singer.npz"
+    code, out, err = _run(capsys, "run", "--dataset", str(path), "--preset", "synthetic", "--method", "pb", "--skip", "2",
+                          "--prior", "singer", "--qc-scale", "10", "--singer-time-constant", "3", "--json", "--save-estimates", str(out_file))
+    assert code == 0, err
+    row = json.loads(out)
+    assert row["prior"] == "singer" and row["qc_scale"] == 10.0
+    base = PaperSetup.synthetic()
+    setup = base.replace(prior="singer", qc=10 * base.qc, singer_time_constant=3.0)
+    direct = run_online(data, setup, method="pb", skip=2)
+    saved = np.load(out_file)
+    np.testing.assert_allclose(saved["x"], direct.trajectory[:, 0], rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(saved["thetaddot"], direct.trajectory[:, 8], rtol=1e-9, atol=1e-9)
+    assert row["rmse_m"] == pytest.approx(direct.rmse_m, abs=1e-6)
