@@ -28,7 +28,7 @@ from ..errors import ShapeError, SteamError
 from .models import ClosedForm, check_alpha
 from .prior import check_qc, finite_result
 
-__all__ = ["LinearSDE", "dense_kernel"]
+__all__ = ["LinearSDE", "check_prior", "dense_kernel"]
 
 
 def _finite_matrix(name: str, a: ArrayLike, ndim: int) -> NDArray:
@@ -185,6 +185,16 @@ class LinearSDE:
                 t_prev = times[k]
             out[k] = mu
         return out
+
+
+def check_prior(prior: ArrayLike | LinearSDE, name: str = "prior") -> NDArray | LinearSDE:
+    """A motion prior argument: a LinearSDE as it is, or Qc of the WNOA prior checked (a read-only (d, d) array)."""
+    if isinstance(prior, LinearSDE):
+        return prior
+    try:
+        return check_qc(prior)
+    except SteamError as exc:
+        raise type(exc)(f"{name} must be a LinearSDE or Qc, a (d, d) matrix: {exc}") from None
 
 
 def dense_kernel(sde: LinearSDE, times: ArrayLike, P0: ArrayLike) -> NDArray:
