@@ -29,7 +29,7 @@ from .errors import ShapeError, SteamError
 from .variables import Key, Values
 
 __all__ = [
-    "number", "time_step", "integer", "real_array", "finite", "check_covariance", "key", "key_list", "as_values",
+    "number", "time_step", "integer", "real_array", "finite", "check_covariance", "check_key", "key_list", "as_values",
 ]
 
 
@@ -110,15 +110,15 @@ def check_covariance(name: str, P: NDArray, n: int) -> NDArray:
     asymmetry = np.abs(P - P.T)
     if asymmetry.max() > 1e-10 * np.abs(P).max():
         i, j = np.unravel_index(int(np.argmax(asymmetry)), P.shape)
-        raise SteamError(f"{name} must be symmetric, but {name}[{i}, {j}] = {P[i, j]!r} and {name}[{j}, {i}] = {P[j, i]!r}")
+        raise SteamError(f"{name} must be symmetric, but {name}[{i}, {j}] = {float(P[i, j])!r} and {name}[{j}, {i}] = {float(P[j, i])!r}")
     diagonal = np.diagonal(P)
     if np.any(diagonal < 0):
         i = int(np.flatnonzero(diagonal < 0)[0])
-        raise SteamError(f"{name} has a negative variance: {name}[{i}, {i}] = {diagonal[i]!r}")
+        raise SteamError(f"{name} has a negative variance: {name}[{i}, {i}] = {float(diagonal[i])!r}")
     return P
 
 
-def key(name: str, value: object) -> Key:
+def check_key(name: str, value: object) -> Key:
     """``value`` itself if it is a variable key."""
     if not isinstance(value, Key):
         raise SteamError(f"{name} must be a variable key (make one with X(i) or L(j)), got {name}={_show(value)}")

@@ -22,6 +22,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from .arguments import as_values
 from .errors import IllConditionedWarning, NumericalError, SteamError
 from .graph import FactorGraph
 from .variables import Values
@@ -176,6 +177,13 @@ def _check_options(**options: float) -> None:
             raise SteamError(f"damping_factor must be > 1, got {value!r}")
 
 
+def _arguments(graph: FactorGraph, initial: Values) -> tuple[FactorGraph, Values]:
+    """The graph (a FactorGraph, or any iterable of factors) and the initial estimate (a Values or a mapping)."""
+    if not isinstance(graph, FactorGraph):
+        graph = FactorGraph(graph)
+    return graph, as_values("initial", initial)
+
+
 def _prepare(graph: FactorGraph, initial: Values, ordering: str | Ordering, backend: str | None, max_iterations: int) -> tuple[str, Ordering, float]:
     """Checks shared by both solvers: the graph and estimates, the backend, the ordering, the start cost."""
     if isinstance(max_iterations, bool) or not isinstance(max_iterations, (int, np.integer)) or max_iterations < 0:
@@ -220,6 +228,8 @@ def gauss_newton(
 ) -> BatchResult:
     """Gauss-Newton: θ̄ ← θ̄ + δθ* with δθ* from Eq. 11, until a stopping rule holds.
 
+    ``graph``: a FactorGraph or any iterable of factors; ``initial``: a Values or any mapping key → vector.
+
     Stops when the cost falls below ``absolute_tolerance``, decreases by less than
     ``relative_tolerance`` times itself, or the step norm is below ``step_tolerance``. With ``check``
     (the default) the result is ``converged`` only if the returned estimate also passes
@@ -228,6 +238,7 @@ def gauss_newton(
     anywhere raises :class:`~steam_ref.errors.NumericalError` naming the factor or variable.
     """
     _check_options(relative_tolerance=relative_tolerance, absolute_tolerance=absolute_tolerance, step_tolerance=step_tolerance)
+    graph, initial = _arguments(graph, initial)
     backend, order, cost0 = _prepare(graph, initial, ordering, backend, max_iterations)
     values, iterations, rule, nnz, cost = initial.copy(), [], "", 0, cost0
     for _ in range(max_iterations):
@@ -272,6 +283,7 @@ def levenberg_marquardt(
         relative_tolerance=relative_tolerance, absolute_tolerance=absolute_tolerance, step_tolerance=step_tolerance,
         initial_damping=initial_damping, damping_factor=damping_factor, max_damping=max_damping,
     )
+    graph, initial = _arguments(graph, initial)
     backend, order, cost0 = _prepare(graph, initial, ordering, backend, max_iterations)
     values, iterations, rule, nnz, lam, cost = initial.copy(), [], "", 0, initial_damping, cost0
     while len(iterations) < max_iterations and not rule:

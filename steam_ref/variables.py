@@ -111,7 +111,12 @@ class Values(Mapping):
 
     def stack(self, keys: Iterable[Key]) -> NDArray:
         """Estimates of several variables of one size as rows of an (n, dim) array."""
-        return np.stack([self[k] for k in keys])
+        rows = [self[k] for k in keys]
+        try:
+            return np.stack(rows)
+        except ValueError:  # sizes differ (or no keys): name them only then, at no cost to a good call
+            sizes = sorted({r.shape[0] for r in rows})
+            raise ShapeError(f"Values.stack needs variables of one size, got sizes {sizes}") from None
 
     def retract(self, delta: Mapping[Key, NDArray]) -> Values:
         """θ̄ + δθ: a new Values with the increments added (the state space is a vector space)."""

@@ -84,7 +84,7 @@ def _checked_information(info: sp.spmatrix | NDArray, ordering: Ordering) -> sp.
         bad = np.abs(diff.data) > 1e-10 * scale[diff.row] * scale[diff.col]
         if bad.any():
             i, j = int(diff.row[bad][0]), int(diff.col[bad][0])
-            raise SteamError(f"the information matrix is not symmetric: entry ({i}, {j}) = {info[i, j]!r} but ({j}, {i}) = {info[j, i]!r}")
+            raise SteamError(f"the information matrix is not symmetric: entry ({i}, {j}) = {float(info[i, j])!r} but ({j}, {i}) = {float(info[j, i])!r}")
     return info
 
 
