@@ -1,4 +1,4 @@
-"""Checks of the arguments the public API takes, in one place, so every entry point accepts the same things.
+"""Checks of the numbers and arrays the public API takes, in one place, so every entry point accepts the same things.
 
 What counts as what (raising a :class:`~steam_ref.errors.SteamError` subclass that names the argument
 and its value otherwise):
@@ -9,11 +9,10 @@ and its value otherwise):
 - an **integer**: ``int`` or a NumPy integer, never a ``bool`` nor a float (``2.0`` included);
 - an **array**: anything NumPy reads as integers or floats (lists, tuples, arrays), copied to
   float64; never strings, booleans, complex numbers, ``None`` entries or ragged lists;
-- a **list of keys**: any iterable of :class:`~steam_ref.variables.Key` (a list, a tuple, a
-  generator); a single key is refused with a hint, because iterating it would read its kind and
-  index as two keys;
-- **estimates**: a :class:`~steam_ref.variables.Values`, or any mapping key → vector, which is copied
-  into one (so its checks apply).
+- a **covariance**: a finite symmetric (n, n) array with no negative variance.
+
+Keys, lists of keys and estimates are checked in :mod:`steam_ref.variables` (``check_key``,
+``key_list``, ``as_values``). This module imports nothing of steam_ref but its errors.
 """
 
 from __future__ import annotations
@@ -26,11 +25,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .errors import ShapeError, SteamError
-from .variables import Key, Values
 
-__all__ = [
-    "number", "time_step", "integer", "real_array", "finite", "check_covariance", "check_key", "key_list", "as_values",
-]
+__all__ = ["number", "time_step", "integer", "real_array", "finite", "check_covariance"]
 
 
 def _show(value: object, limit: int = 80) -> str:
@@ -116,32 +112,3 @@ def check_covariance(name: str, P: NDArray, n: int) -> NDArray:
         i = int(np.flatnonzero(diagonal < 0)[0])
         raise SteamError(f"{name} has a negative variance: {name}[{i}, {i}] = {float(diagonal[i])!r}")
     return P
-
-
-def check_key(name: str, value: object) -> Key:
-    """``value`` itself if it is a variable key."""
-    if not isinstance(value, Key):
-        raise SteamError(f"{name} must be a variable key (make one with X(i) or L(j)), got {name}={_show(value)}")
-    return value
-
-
-def key_list(name: str, keys: object) -> list[Key]:
-    """The keys of an iterable, as a list; a single key, a string or a non-key entry is an error."""
-    if isinstance(keys, Key):
-        raise SteamError(f"{name} must be a list of keys, got the single key {keys!r}: write [{keys!r}]")
-    if isinstance(keys, (str, bytes, Mapping)) or not isinstance(keys, Iterable):
-        raise SteamError(f"{name} must be a list of variable keys, got {name}={_show(keys)}")
-    out = list(keys)
-    for i, k in enumerate(out):
-        if not isinstance(k, Key):
-            raise SteamError(f"{name}[{i}] = {_show(k)} is not a variable key (make one with X(i) or L(j))")
-    return out
-
-
-def as_values(name: str, values: object) -> Values:
-    """``values`` if it is a Values; a mapping key → vector copied into one; an error otherwise."""
-    if isinstance(values, Values):
-        return values
-    if isinstance(values, Mapping):
-        return Values(values)
-    raise SteamError(f"{name} must be a Values or a mapping key -> vector, got {name}={_show(values)}")

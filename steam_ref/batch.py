@@ -22,10 +22,9 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from .arguments import as_values
 from .errors import IllConditionedWarning, NumericalError, SteamError
 from .graph import FactorGraph
-from .variables import Values
+from .variables import Values, as_values
 from .linear import ordering as linear_ordering
 from .linear.ordering import Ordering, sparse_backend
 from .linear.solve import SparseCholesky

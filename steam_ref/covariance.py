@@ -28,14 +28,13 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.linalg import lapack
 
-from .arguments import as_values, check_key, key_list
 from .errors import SteamError, UnknownVariableError
 from .factors import Factor, check_factors
 from .linear.conditional import Conditional
 from .linear.ordering import Ordering, make_ordering
 from .linear.solve import SparseCholesky
 from .linear.system import LinearSystem
-from .variables import Key, Values
+from .variables import Key, Values, as_values, check_key, key_list
 
 if TYPE_CHECKING:
     from .bayes_tree.tree import BayesTree

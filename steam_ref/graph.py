@@ -9,11 +9,10 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Iterator
 
-from .arguments import as_values
 from .errors import ShapeError, UnknownVariableError
 from .factors import Factor, check_factors
 from .linear.system import linearize
-from .variables import Key, Values
+from .variables import Key, Values, as_values
 
 __all__ = ["FactorGraph"]
 

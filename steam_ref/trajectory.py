@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from .arguments import finite, key_list, number, real_array
+from .arguments import finite, number, real_array
 from .errors import ShapeError, SteamError
 from .gp.interpolate import (
     extrapolate_covariance_sde,
@@ -28,7 +28,7 @@ from .gp.interpolate import (
     interpolation_matrices,
 )
 from .gp.sde import LinearSDE, check_prior
-from .variables import Key, X
+from .variables import Key, X, key_list
 
 __all__ = ["Trajectory", "Covariances"]
 

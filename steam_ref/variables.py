@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 
 from .errors import NumericalError, ShapeError, SteamError, UnknownVariableError
 
-__all__ = ["Key", "X", "L", "Values"]
+__all__ = ["Key", "X", "L", "Values", "check_key", "key_list", "as_values"]
 
 
 class Key(NamedTuple):
@@ -140,3 +140,36 @@ class Values(Mapping):
 
     def __repr__(self) -> str:
         return f"Values({len(self)} variables)"
+
+
+# --- checks of the keys and estimates the public API takes -------------------------------------------
+
+
+def check_key(name: str, value: object) -> Key:
+    """``value`` itself if it is a variable key."""
+    if not isinstance(value, Key):
+        raise SteamError(f"{name} must be a variable key (make one with X(i) or L(j)), got {name}={value!r:.80}")
+    return value
+
+
+def key_list(name: str, keys: object) -> list[Key]:
+    """The keys of any iterable (a list, a tuple, a generator, a mapping's keys), as a list. A single key
+    is refused with a hint, since iterating it would read its kind and index as two keys."""
+    if isinstance(keys, Key):
+        raise SteamError(f"{name} must be a list of keys, got the single key {keys!r}: write [{keys!r}]")
+    if isinstance(keys, (str, bytes)) or not isinstance(keys, Iterable):
+        raise SteamError(f"{name} must be a list of variable keys, got {name}={keys!r:.80}")
+    out = list(keys)
+    for i, k in enumerate(out):
+        if not isinstance(k, Key):
+            raise SteamError(f"{name}[{i}] = {k!r:.80} is not a variable key (make one with X(i) or L(j))")
+    return out
+
+
+def as_values(name: str, values: object) -> Values:
+    """``values`` if it is a Values; a mapping key → vector copied into one (so its checks apply); an error otherwise."""
+    if isinstance(values, Values):
+        return values
+    if isinstance(values, Mapping):
+        return Values(values)
+    raise SteamError(f"{name} must be a Values or a mapping key -> vector, got {name}={values!r:.80}")

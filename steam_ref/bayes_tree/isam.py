@@ -25,13 +25,13 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from ..arguments import check_key, real_array
+from ..arguments import real_array
 from ..covariance import tree_joint_covariance, tree_joint_marginals, tree_marginal_covariance, tree_marginals
 from ..errors import ShapeError, SteamError, UnderdeterminedError, UnknownVariableError
 from ..factors import Factor, check_factors
 from ..linear.ordering import constrained_min_degree
 from ..linear.system import GaussianFactor, linearize
-from ..variables import Key, Values
+from ..variables import Key, Values, check_key
 from .journal import Journal, PhaseTimer
 from .params import ISAM2Params
 from .tree import BayesTree, Clique, eliminate

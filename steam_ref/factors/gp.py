@@ -13,12 +13,12 @@ from typing import ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
-from ..arguments import finite, key_list, real_array
+from ..arguments import finite, real_array
 from ..errors import NumericalError, ShapeError, SteamError
 from ..gp.interpolate import interpolation_matrices, interpolation_matrices_sde
 from ..gp.prior import process_noise_sqrt_information, transition
 from ..gp.sde import LinearSDE, check_prior
-from ..variables import Key
+from ..variables import Key, key_list
 from .base import Factor, _vector, sqrt_information
 
 __all__ = ["GPPriorFactor", "gp_prior_factors", "InterpolatedFactor"]

@@ -26,9 +26,8 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 
-from ..arguments import key_list
 from ..errors import ShapeError, SteamError, UnknownVariableError
-from ..variables import Key
+from ..variables import Key, key_list
 
 __all__ = [
     "Ordering",

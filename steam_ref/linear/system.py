@@ -16,10 +16,9 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
-from ..arguments import as_values
 from ..errors import NumericalError, ShapeError, SteamError, UnknownVariableError
 from ..factors import Factor, check_factors
-from ..variables import Key, Values
+from ..variables import Key, Values, as_values
 from .ordering import Ordering
 
 __all__ = ["LinearizedGroup", "linearize", "LinearSystem", "GaussianFactor"]
