@@ -106,7 +106,7 @@ def _step(graph: FactorGraph, values: Values, ordering: Ordering, backend: str, 
     info, rhs = system.information()
     if damping > 0:
         info = info + damping * sp.diags(info.diagonal())
-    chol = SparseCholesky.factor(info.tocsc(), ordering, backend)
+    chol = SparseCholesky.factor(info.tocsc(), ordering, backend, check_symmetry=False)  # AᵀA + λ diag
     delta = chol.solve(rhs)
     if not np.all(np.isfinite(delta)):
         bad = int(np.flatnonzero(~np.isfinite(delta))[0])
@@ -136,7 +136,7 @@ def check_stationarity(graph: FactorGraph, values: Values, ordering: Ordering, b
     groups = linearize(graph.factors, values)
     system = LinearSystem.from_groups(groups, ordering)
     info, rhs = system.information()
-    chol = SparseCholesky.factor(info, ordering, backend)
+    chol = SparseCholesky.factor(info, ordering, backend, check_symmetry=False)  # AᵀA
     delta = chol.solve(rhs)
     return Stationarity(
         cost=sum(g.cost for g in groups),
