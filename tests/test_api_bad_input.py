@@ -23,7 +23,7 @@ import steam_ref as sr
 from steam_ref import L, X, covariance, gp, plot, pose2
 from steam_ref.errors import NumericalError, ShapeError, SteamError, UnderdeterminedError, UnknownVariableError
 from steam_ref.gp import LinearSDE
-from steam_ref.linear import LinearSystem, Ordering, SparseCholesky, constrained_min_degree, make_ordering
+from steam_ref.linear import LinearSystem, Ordering, SparseCholesky, constrained_min_degree, linearize, make_ordering
 from steam_ref.results import position_rmse
 from steam_ref.trajectory import Trajectory
 
@@ -53,6 +53,12 @@ def solver() -> sr.IncrementalSolver:
 def system() -> LinearSystem:
     factors, values = two_states()
     return LinearSystem.build(factors, values, Ordering(tuple(KEYS), (6, 6)))
+
+
+def gaussian() -> list:
+    """The linearized factors of ``two_states``."""
+    factors, values = two_states()
+    return [gf for group in linearize(factors, values) for gf in group.gaussian_factors()]
 
 
 def trajectory(**changes) -> Trajectory:
@@ -208,7 +214,10 @@ CASES = [
     ("marginal_covariances None", lambda: covariance.marginal_covariances(system(), None), SteamError, r"got keys=None"),
     ("marginal_covariances strings", lambda: covariance.marginal_covariances(system(), ["x0"]), SteamError, r"keys\[0\] = 'x0' is not a variable key"),
     ("sparse_joint_marginals a flat group", lambda: covariance.sparse_joint_marginals(*two_states(), [X(0)]), SteamError, r"groups\[0\] must be a list of keys, got the single key x0"),
-    # --- iSAM2 --------------------------------------------------------------------------------------
+    # --- the Bayes tree and iSAM2 -------------------------------------------------------------------
+    ("BayesTree.from_factors nonlinear factors AttributeError", lambda: sr.BayesTree.from_factors(two_states()[0], KEYS), SteamError, r"factors\[0\] is a GPPriorFactor, not a GaussianFactor"),
+    ("BayesTree.from_factors ordering a string", lambda: sr.BayesTree.from_factors(gaussian(), "x0"), SteamError, r"ordering must be a list of variable keys, got ordering='x0'"),
+    ("BayesTree.from_factors extra key KeyError", lambda: sr.BayesTree.from_factors(gaussian(), [*KEYS, X(2)]), UnderdeterminedError, r"variable x2 of the ordering is named by no factor"),
     ("IncrementalSolver params string", lambda: sr.IncrementalSolver("fast"), SteamError, r"params must be an ISAM2Params or None, got params='fast'"),
     ("update(None)", lambda: solver().update(None), SteamError, r"new_factors must be a factor or an iterable of factors, got new_factors=None"),
     ("update names the non-factor", lambda: solver().update([sr.PriorFactor.create(X(2), ONES, 1.0), 3]), SteamError, r"new_factors\[1\] is a int \(3\)"),
