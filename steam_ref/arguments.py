@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import math
 import numbers
-from collections.abc import Iterable, Mapping
 
 import numpy as np
 from numpy.typing import NDArray

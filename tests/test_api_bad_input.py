@@ -21,9 +21,22 @@ from hypothesis import strategies as st
 
 import steam_ref as sr
 from steam_ref import L, X, covariance, gp, plot, pose2
-from steam_ref.errors import NumericalError, ShapeError, SteamError, UnderdeterminedError, UnknownVariableError
+from steam_ref.errors import (
+    NumericalError,
+    ShapeError,
+    SteamError,
+    UnderdeterminedError,
+    UnknownVariableError,
+)
 from steam_ref.gp import LinearSDE
-from steam_ref.linear import LinearSystem, Ordering, SparseCholesky, constrained_min_degree, linearize, make_ordering
+from steam_ref.linear import (
+    LinearSystem,
+    Ordering,
+    SparseCholesky,
+    constrained_min_degree,
+    linearize,
+    make_ordering,
+)
 from steam_ref.results import position_rmse
 from steam_ref.trajectory import Trajectory
 
@@ -62,7 +75,7 @@ def gaussian() -> list:
 
 
 def trajectory(**changes) -> Trajectory:
-    args = dict(solver=solver(), states=[0, 1], times=np.array([0.0, 1.0]), prior=QC) | changes
+    args = {"solver": solver(), "states": [0, 1], "times": np.array([0.0, 1.0]), "prior": QC} | changes
     return Trajectory(**args)
 
 
@@ -308,7 +321,7 @@ def test_what_is_accepted_still_works():
     dup = s.joint_marginal_covariance([X(0), X(0)])  # a repeated key repeats its block: [[P, P], [P, P]]
     np.testing.assert_allclose(dup[:6, :6], dup[6:, :6])
     np.testing.assert_allclose(
-        s.joint_marginal_covariance((k for k in KEYS)), covariance.sparse_joint_covariance(factors, values, KEYS), atol=1e-9
+        s.joint_marginal_covariance(k for k in KEYS), covariance.sparse_joint_covariance(factors, values, KEYS), atol=1e-9
     )
     assert LinearSystem.build([], values, Ordering(tuple(KEYS), (6, 6))).A.shape == (0, 12)
 
@@ -377,7 +390,7 @@ def overflowing_reading(i: int):
 
 def overflowing_value(i: int):
     """A new state at 1e200 m: the range to it overflows."""
-    factors, values = chain_step(i)
+    factors, _ = chain_step(i)
     return factors, {X(i): np.full(6, 1e200)}
 
 
@@ -397,7 +410,7 @@ def checked_input(i: int):
 def test_a_failed_update_rolls_back_exactly(make_failure, error, relinearize_skip):
     """The failing update leaves every estimate, increment, linearization point, clique and marginal
     as it was; the next good update then gives exactly what a solver that never saw it gives."""
-    params = dict(relinearize_threshold=0.0, relinearize_skip=relinearize_skip, wildfire_threshold=0.0)
+    params = {"relinearize_threshold": 0.0, "relinearize_skip": relinearize_skip, "wildfire_threshold": 0.0}
     s, twin = sr.IncrementalSolver(**params), sr.IncrementalSolver(**params)
     for i in range(4):
         for solver_ in (s, twin):
@@ -459,7 +472,7 @@ GP_CALLS = [
 @given(dt=TIMES)
 def test_gp_functions_of_one_time_step_give_finite_arrays_or_a_steam_error(dt):
     for call in GP_CALLS:
-        finite_or_steam_error(lambda: call(dt))
+        finite_or_steam_error(lambda call=call: call(dt))
 
 
 @settings(max_examples=60, deadline=None)

@@ -19,7 +19,15 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..arguments import check_covariance, finite, number, real_array
 from ..errors import NumericalError, ShapeError, SteamError
-from .prior import _read_only, check_qc, finite_result, process_noise, process_noise_inverse, qc_key, transition
+from .prior import (
+    _read_only,
+    check_qc,
+    finite_result,
+    process_noise,
+    process_noise_inverse,
+    qc_key,
+    transition,
+)
 from .sde import LinearSDE
 
 __all__ = [
