@@ -24,7 +24,7 @@ import scipy.sparse.linalg as spla
 
 from .errors import IllConditionedWarning, NumericalError, SteamError
 from .graph import FactorGraph
-from .variables import Values
+from .variables import Values, as_values
 from .linear import ordering as linear_ordering
 from .linear.ordering import Ordering, sparse_backend
 from .linear.solve import SparseCholesky
@@ -106,7 +106,7 @@ def _step(graph: FactorGraph, values: Values, ordering: Ordering, backend: str, 
     info, rhs = system.information()
     if damping > 0:
         info = info + damping * sp.diags(info.diagonal())
-    chol = SparseCholesky.factor(info.tocsc(), ordering, backend)
+    chol = SparseCholesky.factor(info.tocsc(), ordering, backend, check_symmetry=False)  # AᵀA + λ diag
     delta = chol.solve(rhs)
     if not np.all(np.isfinite(delta)):
         bad = int(np.flatnonzero(~np.isfinite(delta))[0])
@@ -136,7 +136,7 @@ def check_stationarity(graph: FactorGraph, values: Values, ordering: Ordering, b
     groups = linearize(graph.factors, values)
     system = LinearSystem.from_groups(groups, ordering)
     info, rhs = system.information()
-    chol = SparseCholesky.factor(info, ordering, backend)
+    chol = SparseCholesky.factor(info, ordering, backend, check_symmetry=False)  # AᵀA
     delta = chol.solve(rhs)
     return Stationarity(
         cost=sum(g.cost for g in groups),
@@ -174,6 +174,13 @@ def _check_options(**options: float) -> None:
             raise SteamError(f"{name} must be > 0, got {value!r}")
         if name == "damping_factor" and value <= 1:
             raise SteamError(f"damping_factor must be > 1, got {value!r}")
+
+
+def _arguments(graph: FactorGraph, initial: Values) -> tuple[FactorGraph, Values]:
+    """The graph (a FactorGraph, or any iterable of factors) and the initial estimate (a Values or a mapping)."""
+    if not isinstance(graph, FactorGraph):
+        graph = FactorGraph(graph)
+    return graph, as_values("initial", initial)
 
 
 def _prepare(graph: FactorGraph, initial: Values, ordering: str | Ordering, backend: str | None, max_iterations: int) -> tuple[str, Ordering, float]:
@@ -220,6 +227,8 @@ def gauss_newton(
 ) -> BatchResult:
     """Gauss-Newton: θ̄ ← θ̄ + δθ* with δθ* from Eq. 11, until a stopping rule holds.
 
+    ``graph``: a FactorGraph or any iterable of factors; ``initial``: a Values or any mapping key → vector.
+
     Stops when the cost falls below ``absolute_tolerance``, decreases by less than
     ``relative_tolerance`` times itself, or the step norm is below ``step_tolerance``. With ``check``
     (the default) the result is ``converged`` only if the returned estimate also passes
@@ -228,6 +237,7 @@ def gauss_newton(
     anywhere raises :class:`~steam_ref.errors.NumericalError` naming the factor or variable.
     """
     _check_options(relative_tolerance=relative_tolerance, absolute_tolerance=absolute_tolerance, step_tolerance=step_tolerance)
+    graph, initial = _arguments(graph, initial)
     backend, order, cost0 = _prepare(graph, initial, ordering, backend, max_iterations)
     values, iterations, rule, nnz, cost = initial.copy(), [], "", 0, cost0
     for _ in range(max_iterations):
@@ -272,6 +282,7 @@ def levenberg_marquardt(
         relative_tolerance=relative_tolerance, absolute_tolerance=absolute_tolerance, step_tolerance=step_tolerance,
         initial_damping=initial_damping, damping_factor=damping_factor, max_damping=max_damping,
     )
+    graph, initial = _arguments(graph, initial)
     backend, order, cost0 = _prepare(graph, initial, ordering, backend, max_iterations)
     values, iterations, rule, nnz, lam, cost = initial.copy(), [], "", 0, initial_damping, cost0
     while len(iterations) < max_iterations and not rule:

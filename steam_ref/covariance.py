@@ -28,13 +28,13 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.linalg import lapack
 
-from .errors import UnknownVariableError
-from .factors import Factor
+from .errors import SteamError, UnknownVariableError
+from .factors import Factor, check_factors
 from .linear.conditional import Conditional
 from .linear.ordering import Ordering, make_ordering
 from .linear.solve import SparseCholesky
 from .linear.system import LinearSystem
-from .variables import Key, Values
+from .variables import Key, Values, as_values, check_key, key_list
 
 if TYPE_CHECKING:
     from .bayes_tree.tree import BayesTree
@@ -61,7 +61,7 @@ def _unit_columns(ordering: Ordering, keys: Sequence[Key]) -> tuple[NDArray, NDA
     for k in keys:
         if k not in ordering.offset_of:
             raise UnknownVariableError(f"variable {k!r} is not in the system")
-    cols = np.concatenate([ordering.offset_of[k] + np.arange(ordering.dims[ordering.position[k]]) for k in keys])
+    cols = np.concatenate([ordering.offset_of[k] + np.arange(ordering.dims[ordering.position[k]]) for k in keys] or [np.zeros(0, int)])
     E = np.zeros((ordering.total_dim, len(cols)))
     E[cols, np.arange(len(cols))] = 1.0
     return cols, E
@@ -98,18 +98,20 @@ def _blocks_of_inverse(chol: SparseCholesky, ordering: Ordering, groups: Sequenc
 
 def marginal_covariances(system: LinearSystem, keys: list[Key], backend: str | None = None) -> dict[Key, NDArray]:
     """Marginal covariance blocks (𝓘⁻¹)ₖₖ (dₖ, dₖ) of chosen variables.  [YIB Eq. 11: cov δθ* = 𝓘⁻¹]"""
+    keys = key_list("keys", keys)
     info, _ = system.information()
-    chol = SparseCholesky.factor(info, system.ordering, backend)
+    chol = SparseCholesky.factor(info, system.ordering, backend, check_symmetry=False)  # AᵀA
     return dict(zip(keys, _blocks_of_inverse(chol, system.ordering, [[k] for k in keys])))
 
 
 def _factor_at(factors: Sequence[Factor], values: Values, backend: str | None) -> tuple[Ordering, SparseCholesky]:
-    """𝓘 of ``factors`` linearized at ``values``, factored in AMD order."""
+    """𝓘 of ``factors`` linearized at ``values`` (a Values or a mapping), factored in AMD order."""
+    factors, values = check_factors("factors", factors), as_values("values", values)
     variables = list(dict.fromkeys(k for f in factors for k in f.keys))  # first-seen order
     dims = {k: values.dim(k) for k in variables}
     order = make_ordering("amd", variables, dims, (f.keys for f in factors), backend)
     info, _ = LinearSystem.build(factors, values, order).information()
-    return order, SparseCholesky.factor(info, order, backend)
+    return order, SparseCholesky.factor(info, order, backend, check_symmetry=False)  # AᵀA
 
 
 def sparse_joint_covariance(
@@ -120,6 +122,7 @@ def sparse_joint_covariance(
     One sparse Cholesky factorization (AMD order) and one solve with Σdₖ right-hand sides.
     [YIB Eq. 11: cov δθ* = 𝓘⁻¹]
     """
+    keys = key_list("keys", keys)
     order, chol = _factor_at(factors, values, backend)
     cols, E = _unit_columns(order, keys)
     block = np.asarray(chol.solve(E))[cols]
@@ -130,8 +133,8 @@ def sparse_marginals(
     factors: Sequence[Factor], values: Values, keys: Sequence[Key], backend: str | None = None
 ) -> dict[Key, NDArray]:
     """Marginal covariance (dₖ, dₖ) of each of ``keys``, linearized at ``values``: one factorization."""
+    keys = key_list("keys", keys)
     order, chol = _factor_at(factors, values, backend)
-    keys = list(keys)
     return dict(zip(keys, _blocks_of_inverse(chol, order, [[k] for k in keys])))
 
 
@@ -140,8 +143,16 @@ def sparse_joint_marginals(
 ) -> list[NDArray]:
     """Joint covariance of each group of ``keys`` (stacked in the order given), linearized at ``values``:
     one factorization for all groups."""
+    groups = _groups(groups)
     order, chol = _factor_at(factors, values, backend)
-    return _blocks_of_inverse(chol, order, [list(g) for g in groups])
+    return _blocks_of_inverse(chol, order, groups)
+
+
+def _groups(groups: Iterable[Iterable[Key]]) -> list[list[Key]]:
+    """Each group of keys as a list; a group that is a single key (not a list of keys) is an error."""
+    if isinstance(groups, (str, bytes, Key)) or not isinstance(groups, Iterable):
+        raise SteamError(f"groups must be a list of lists of keys, got groups={groups!r}")
+    return [key_list(f"groups[{g}]", keys) for g, keys in enumerate(groups)]
 
 
 # --- from the Bayes tree ------------------------------------------------------------------------
@@ -205,7 +216,7 @@ def tree_marginal_covariance(tree: BayesTree, key: Key) -> NDArray:
 
     Costs one small dense step per clique on the path from the root to the variable's clique.
     """
-    return tree_joint_covariance(tree, [key])
+    return tree_joint_covariance(tree, [check_key("key", key)])
 
 
 def tree_joint_covariance(tree: BayesTree, keys: Sequence[Key]) -> NDArray:
@@ -217,7 +228,7 @@ def tree_joint_covariance(tree: BayesTree, keys: Sequence[Key]) -> NDArray:
     clique on those paths; memory is the carried joint, whose size depends on the number of
     requested variables and the separators' sizes, not on how far apart the variables are.
     """
-    keys = list(keys)
+    keys = key_list("keys", keys)
     wanted = set(keys)
     needed = _cliques_on_root_paths(tree, keys)  # names an unknown key
     joint, index = np.zeros((0, 0)), {}
@@ -264,7 +275,7 @@ def tree_marginals(tree: BayesTree, keys: Iterable[Key] | None = None) -> dict[K
     the cliques on the root paths of ``keys`` are visited: O(cliques), not O(variables × depth) as one
     :func:`tree_marginal_covariance` per variable would cost.
     """
-    wanted = None if keys is None else list(dict.fromkeys(keys))
+    wanted = None if keys is None else list(dict.fromkeys(key_list("keys", keys)))
     needed = None if wanted is None else _cliques_on_root_paths(tree, wanted)
     out: dict[Key, NDArray] = {}
     for c, joint, index in _walk_down(tree, needed):
@@ -280,6 +291,7 @@ def tree_joint_marginals(tree: BayesTree, groups: Sequence[Sequence[Key]]) -> li
     clique's joint in one walk down the tree (:func:`_walk_down`); any other group goes through
     :func:`tree_joint_covariance`.
     """
+    groups = _groups(groups)
     home: dict[int, list[int]] = {}  # clique id → the groups it holds whole
     out: list[NDArray | None] = [None] * len(groups)
     for g, keys in enumerate(groups):

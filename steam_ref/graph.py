@@ -9,10 +9,10 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Iterator
 
-from .errors import ShapeError, SteamError
-from .factors import Factor
+from .errors import ShapeError, UnknownVariableError
+from .factors import Factor, check_factors
 from .linear.system import linearize
-from .variables import Key, Values
+from .variables import Key, Values, as_values
 
 __all__ = ["FactorGraph"]
 
@@ -25,13 +25,8 @@ class FactorGraph:
         self.add(factors)
 
     def add(self, factors: Factor | Iterable[Factor]) -> None:
-        """Append one factor or several."""
-        if isinstance(factors, Factor):
-            factors = [factors]
-        for f in factors:
-            if not isinstance(f, Factor):
-                raise SteamError(f"FactorGraph.add expects factors, got {type(f).__name__}")
-            self.factors.append(f)
+        """Append one factor or several (any iterable of factors); nothing is added if one is not a factor."""
+        self.factors.extend(check_factors("factors", factors))
 
     def __len__(self) -> int:
         return len(self.factors)
@@ -51,15 +46,21 @@ class FactorGraph:
         return list(seen)
 
     def check_values(self, values: Values) -> None:
-        """Raise if a factor names a variable without an estimate, or of the wrong size."""
-        for f in self.factors:
+        """Raise if a factor names a variable without an estimate, or of the wrong size.
+
+        ``values``: a Values or any mapping key → vector.
+        """
+        values = as_values("values", values)
+        for i, f in enumerate(self.factors):
             for k, d in zip(f.keys, f.key_dims):
+                if k not in values:
+                    raise UnknownVariableError(f"factor {i} ({type(f).__name__}) names {k!r}, which has no estimate")
                 if values.dim(k) != d:
                     raise ShapeError(f"{type(f).__name__} expects {k} of size {d}, estimate has {values.dim(k)}")
 
     def error(self, values: Values) -> float:
         """The cost Σ ρᵢ(‖Wᵢeᵢ‖) of Eq. 6 at the given estimates: ρ(s) = s²/2 for a plain factor,
-        its robust loss otherwise (GTSAM's convention)."""
+        its robust loss otherwise (GTSAM's convention). ``values``: a Values or any mapping key → vector."""
         return sum(group.cost for group in linearize(self.factors, values, jacobians=False))
 
     def __repr__(self) -> str:

@@ -1,8 +1,9 @@
 """Every figure of steam_ref: the tutorials', the experiments' (Fig. 2-4) and the Bayes tree's.
 
 matplotlib is imported inside each function, so importing steam_ref never needs it, and nothing
-from steam_ref is imported at run time: the functions take plain arrays, or objects described by
-the attributes they read. Every function draws on the axes it is given (or on new ones) and returns
+from steam_ref but its exceptions is imported at run time: the functions take plain arrays, or
+objects described by the attributes they read, and a bad array raises a
+:class:`~steam_ref.errors.ShapeError` naming the argument. Every function draws on the axes it is given (or on new ones) and returns
 them; with ``path`` it also saves the figure there (PNG by the suffix) and closes it.
 
 - the GP prior and its interpolation: :func:`plot_state_samples`, :func:`plot_matrix`,
@@ -21,6 +22,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike
+
+from .errors import ShapeError, SteamError, UnknownVariableError
 
 if TYPE_CHECKING:
     from .bayes_tree.isam import UpdateReport
@@ -73,6 +76,25 @@ def _save(axes: Any, path: str | None) -> Any:
     return axes
 
 
+def _array(name: str, a: ArrayLike, ndim: int, columns: int | None = None) -> np.ndarray:
+    """``a`` as a non-empty float array of ``ndim`` dimensions (and ``columns`` columns); ShapeError naming it."""
+    try:
+        out = np.asarray(a, dtype=float)
+    except (TypeError, ValueError):
+        raise ShapeError(f"{name} must be an array of numbers, got {a!r:.80}") from None
+    if out.ndim != ndim or out.size == 0 or (columns is not None and out.shape[-1] != columns):
+        want = f"(n, {columns})" if columns else f"{ndim}-d"
+        raise ShapeError(f"{name} must be a non-empty {want} array, got shape {out.shape}")
+    return out
+
+
+def _attributes(name: str, obj: Any, *attributes: str) -> None:
+    """Raise naming ``name`` when ``obj`` lacks one of ``attributes`` (a duck-typed run, say)."""
+    missing = [a for a in attributes if not hasattr(obj, a)]
+    if missing:
+        raise SteamError(f"{name} has no {missing[0]!r}: it must have {', '.join(attributes)} (e.g. a RunResult), got {obj!r:.80}")
+
+
 def _block_grid(ax: Any, shape: tuple[int, int], block: int | None) -> None:
     if not block:
         return
@@ -89,7 +111,7 @@ def plot_state_samples(
 
     samples: (S, M, n) for S trajectories at M times. One subplot per component. Returns the axes.
     """
-    samples = np.asarray(samples, dtype=float)
+    samples = _array("samples", samples, 3)
     labels = list(labels) if labels is not None else [f"x[{k}]" for k in range(samples.shape[2] // 2)]
     axes = _axes(axes, path, ncols=len(labels), figsize=(4 * len(labels), 3), sharex=True, layout="constrained")
     for k, (ax, label) in enumerate(zip(np.atleast_1d(axes), labels)):
@@ -103,8 +125,8 @@ def plot_state_samples(
 def plot_matrix(
     M: ArrayLike, ax: Any = None, block: int | None = None, title: str | None = None, path: str | None = None
 ) -> Any:
-    """Image of log₁₀|M| (entries below 1e-16·max shown as the floor), grid lines every `block`."""
-    M = np.abs(np.asarray(M, dtype=float))
+    """Image of log₁₀|M| (entries below 1e-16·max shown as the floor, NaN blank), grid lines every `block`."""
+    M = np.abs(_array("M", M, 2))
     ax = _axes(ax, path, figsize=(4, 4))
     floor = 1e-16 * max(M.max(), np.finfo(float).tiny)
     im = ax.imshow(np.log10(np.maximum(M, floor)), cmap="viridis", interpolation="nearest")
@@ -124,7 +146,7 @@ def plot_sparsity(
     path: str | None = None,
 ) -> Any:
     """Spy plot of the entries with abs(M_ij) > rel_tol · max abs(M), grid lines every `block`."""
-    M = np.abs(np.asarray(M, dtype=float))
+    M = np.abs(_array("M", M, 2))
     ax = _axes(ax, path, figsize=(4, 4))
     ax.spy(M > rel_tol * M.max(), markersize=2)
     _block_grid(ax, M.shape, block)
@@ -147,8 +169,10 @@ def plot_interpolation(
 ) -> Any:
     """One scalar component: interpolated mean with a ±2σ band, and the estimated states as dots
     with ±2σ error bars. All arrays are 1-d."""
+    t_query, mean, std = _array("t_query", t_query, 1), _array("mean", mean, 1), _array("std", std, 1)
+    if not len(t_query) == len(mean) == len(std):
+        raise ShapeError(f"t_query, mean and std must have one entry per time, got lengths {len(t_query)}, {len(mean)}, {len(std)}")
     ax = _axes(ax, path, figsize=(6, 3))
-    t_query, mean, std = (np.asarray(a, dtype=float) for a in (t_query, mean, std))
     ax.fill_between(t_query, mean - 2 * std, mean + 2 * std, color=color, alpha=0.25, lw=0, label="±2σ")
     ax.plot(t_query, mean, color=color, lw=1.2, label="interpolated mean")
     if t_est is not None and x_est is not None:
@@ -163,14 +187,15 @@ def plot_interpolation(
 # --- A run: trajectory, timing, interpolation trade-off  [YIB Fig. 2-4] -----------------------
 
 
-def _xy(points: ArrayLike | Mapping[Any, ArrayLike] | None) -> np.ndarray | None:
+def _xy(name: str, points: ArrayLike | Mapping[Any, ArrayLike] | None) -> np.ndarray | None:
     """(n, 2) float array of points given as an array or as a mapping id → (2,); None if empty."""
     if points is None:
         return None
     if isinstance(points, Mapping):
         points = list(points.values())
-    xy = np.asarray(points, dtype=float).reshape(-1, 2)
-    return xy if len(xy) else None
+    if len(points) == 0:
+        return None
+    return _array(name, points, 2, columns=2)
 
 
 def plot_trajectory(
@@ -191,13 +216,16 @@ def plot_trajectory(
     truth_xy, estimate_xy, dead_reckoning: (n, 2) positions (truth may be None);
     landmarks_true: (k, 2); landmarks_estimated: (k, 2), or a mapping landmark id → (2,).
     """
+    estimate_xy = _array("estimate_xy", estimate_xy, 2, columns=2)
+    truth_xy = None if truth_xy is None else _array("truth_xy", truth_xy, 2, columns=2)
+    dead_reckoning = None if dead_reckoning is None else _array("dead_reckoning", dead_reckoning, 2, columns=2)
+    marks_true, marks_est = _xy("landmarks_true", landmarks_true), _xy("landmarks_estimated", landmarks_estimated)
     ax = _axes(ax, path, figsize=(6, 6))
     if truth_xy is not None:
-        ax.plot(*np.asarray(truth_xy, dtype=float).T, "g-", lw=1.5, label="ground truth")
+        ax.plot(*truth_xy.T, "g-", lw=1.5, label="ground truth")
     if dead_reckoning is not None:
-        ax.plot(*np.asarray(dead_reckoning, dtype=float).T, "y-", lw=1, label="dead reckoning")
-    ax.plot(*np.asarray(estimate_xy, dtype=float).T, "b-", lw=1, label=estimate_label)
-    marks_true, marks_est = _xy(landmarks_true), _xy(landmarks_estimated)
+        ax.plot(*dead_reckoning.T, "y-", lw=1, label="dead reckoning")
+    ax.plot(*estimate_xy.T, "b-", lw=1, label=estimate_label)
     if marks_true is not None:
         ax.plot(*marks_true.T, "g*", ms=9, label="landmarks (true)")
     if marks_est is not None:
@@ -216,6 +244,8 @@ def plot_timing(runs: Mapping[str, Any], ax: Any = None, *, title: str | None = 
     step) and ``completed`` (False: cut short by a time budget, marked "(budget)" in the legend),
     e.g. :class:`steam_ref.online.RunResult`.
     """
+    for label, run in runs.items():
+        _attributes(f"runs[{label!r}]", run, "cumulative_s", "completed")
     ax = _axes(ax, path, figsize=(5, 4))
     for label, run in runs.items():
         cumulative = np.asarray(run.cumulative_s, dtype=float)
@@ -242,6 +272,8 @@ def plot_interpolation_tradeoff(
     with ``rmse_m`` (position RMSE, m) and ``total_s`` (computation time, s), e.g.
     :class:`steam_ref.online.RunResult`. ``name`` (the data set) heads the panel titles.
     """
+    for skip, run in [*with_interpolation.items(), *(without_interpolation or {}).items()]:
+        _attributes(f"the run at skip {skip!r}", run, "rmse_m", "total_s")
     axes = _axes(axes, path, ncols=2, figsize=(9, 4))
     curves = ((without_interpolation or {}, "gs-", "without interpolation"), (with_interpolation, "rd--", "with interpolation"))
     for runs, style, label in curves:
@@ -262,9 +294,10 @@ def plot_interpolation_tradeoff(
 def plot_fidelity(distances: Mapping[str, ArrayLike], ax: Any = None, *, tolerance_m: float | None = 0.02, path: str | None = None) -> Any:
     """Distance from a run's estimate to the authors' saved estimate at every pose, one line per
     data set (name → (n,) metres, pose by pose), with the tolerance drawn as a dashed line."""
+    distances = {name: _array(f"distances[{name!r}]", d, 1) for name, d in distances.items()}
     ax = _axes(ax, path, figsize=(7, 3))
     for name, d in distances.items():
-        d = 1000 * np.asarray(d, dtype=float)
+        d = 1000 * d
         ax.plot(np.arange(len(d)), d, lw=0.8, label=name)
     if tolerance_m is not None:
         ax.axhline(1000 * tolerance_m, color="0.4", ls="--", lw=0.8, label=f"{1000 * tolerance_m:g} mm")
@@ -350,8 +383,11 @@ def draw_update(before: CliqueTree, after: CliqueTree, report: UpdateReport, axe
 def draw_spy(tree: BayesTree, ax: Any = None, *, highlight: Collection = (), title: str = "R", path: str | None = None) -> Any:
     """Spy plot of the tree's assembled R (cliques in postorder), the rows of the ``highlight``
     variables in orange. tree: anything with ``to_dense() -> (R, _, ordering)``, e.g. a BayesTree."""
-    ax = _axes(ax, path, figsize=(4, 4))
     R, _, ordering = tree.to_dense()
+    unknown = [k for k in highlight if k not in ordering.offset_of]
+    if unknown:
+        raise UnknownVariableError(f"highlight names {unknown[0]!r}, which is not in the tree")
+    ax = _axes(ax, path, figsize=(4, 4))
     ax.spy(np.abs(R) > 1e-12, markersize=2, color="0.3")
     for k in highlight:
         o, d = ordering.offset_of[k], ordering.dims[ordering.position[k]]

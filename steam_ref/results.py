@@ -8,14 +8,23 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from .arguments import finite, real_array
+from .errors import ShapeError
 from .trajectory import Covariances
 
 __all__ = ["RunResult", "position_rmse", "peak_rss_mb"]
 
 
 def position_rmse(positions: NDArray, truth: NDArray) -> float:
-    """Root-mean-square distance between estimated and true positions, both (n, 2)."""
-    return float(np.sqrt(np.mean(np.sum((np.asarray(positions) - np.asarray(truth)) ** 2, axis=1))))
+    """Root-mean-square distance between estimated and true positions, both (n, 2), n ≥ 1, finite."""
+    positions, truth = real_array("positions", positions), real_array("truth", truth)
+    for name, a in (("positions", positions), ("truth", truth)):
+        if a.ndim != 2 or a.shape[1] != 2 or a.shape[0] == 0:
+            raise ShapeError(f"{name} must be (n, 2) positions, n >= 1, got shape {a.shape}")
+        finite(name, a)
+    if positions.shape != truth.shape:
+        raise ShapeError(f"positions and truth must have the same shape, got {positions.shape} and {truth.shape}")
+    return float(np.sqrt(np.mean(np.sum((positions - truth) ** 2, axis=1))))
 
 
 def peak_rss_mb() -> float:

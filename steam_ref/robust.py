@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from .arguments import number
 from .errors import SteamError
 
 __all__ = ["RobustLoss", "Huber", "Tukey"]
@@ -27,6 +28,18 @@ class RobustLoss:
         raise NotImplementedError
 
 
+def _threshold(loss: str, name: str, value: object) -> float:
+    """A loss's threshold as a float: a positive finite number. An infinite one would be plain least
+    squares for Huber and NaN for Tukey (c² · 0); use ``loss=None`` for plain least squares."""
+    try:
+        t = number(name, value)
+    except SteamError as exc:
+        raise SteamError(f"{loss} threshold: {exc}") from None
+    if t <= 0:
+        raise SteamError(f"{loss} threshold must be positive, got {name}={t}")
+    return t
+
+
 @dataclass(frozen=True)
 class Huber(RobustLoss):
     """ρ(s) = s²/2 for abs(s) ≤ k, k abs(s) - k²/2 beyond: quadratic core, linear tails."""
@@ -34,8 +47,7 @@ class Huber(RobustLoss):
     k: float = 1.345  # threshold on the whitened error
 
     def __post_init__(self) -> None:
-        if not self.k > 0:
-            raise SteamError(f"Huber threshold must be positive, got k={self.k}")
+        object.__setattr__(self, "k", _threshold("Huber", "k", self.k))
 
     def rho(self, s: NDArray) -> NDArray:
         a = np.abs(s)
@@ -53,8 +65,7 @@ class Tukey(RobustLoss):
     c: float = 4.685  # errors beyond c whitened sigmas get zero weight
 
     def __post_init__(self) -> None:
-        if not self.c > 0:
-            raise SteamError(f"Tukey threshold must be positive, got c={self.c}")
+        object.__setattr__(self, "c", _threshold("Tukey", "c", self.c))
 
     def rho(self, s: NDArray) -> NDArray:
         u = np.minimum(np.abs(s) / self.c, 1.0)

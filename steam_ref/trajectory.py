@@ -11,13 +11,14 @@ prior to speak of (the GP starts there, [YIB Eq. 14]) and a query is an error.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
 
-from .errors import SteamError
+from .arguments import finite, number, real_array
+from .errors import ShapeError, SteamError
 from .gp.interpolate import (
     extrapolate_covariance_sde,
     extrapolate_state_sde,
@@ -26,8 +27,8 @@ from .gp.interpolate import (
     interpolate_state_sde,
     interpolation_matrices,
 )
-from .gp.sde import LinearSDE
-from .variables import Key, X
+from .gp.sde import LinearSDE, check_prior
+from .variables import Key, X, key_list
 
 __all__ = ["Trajectory", "Covariances"]
 
@@ -42,21 +43,58 @@ class Covariances:
     landmark_ids: tuple[int, ...]  # (m,) the landmarks' ids
 
 
+def _pose_indices(states: Sequence[int]) -> list[int]:
+    """Pose indices as a list of ints, strictly increasing."""
+    if isinstance(states, (str, bytes)) or not isinstance(states, Iterable):
+        raise SteamError(f"states must be a list of pose indices, got states={states!r}")
+    out = np.asarray(list(states))
+    if out.size and (out.ndim != 1 or out.dtype.kind not in "iu" or out.min() < 0):
+        raise SteamError(f"states must be pose indices (integers >= 0), got states={out.tolist()!r:.120}")
+    if np.any(np.diff(out) <= 0):
+        i = int(np.flatnonzero(np.diff(out) <= 0)[0])
+        raise SteamError(f"states must increase strictly, but states[{i}] = {out[i]} and states[{i + 1}] = {out[i + 1]}")
+    return out.tolist()
+
+
+def _pose_times(times: NDArray, states: list[int]) -> NDArray:
+    """The time of every pose: finite, non-decreasing, covering every state, strictly increasing at the states."""
+    times = real_array("times", times)
+    if times.ndim != 1:
+        raise ShapeError(f"times must be a 1-d array, one time per pose, got shape {times.shape}")
+    if np.any(np.diff(finite("times", times)) < 0):
+        i = int(np.flatnonzero(np.diff(times) < 0)[0])
+        raise SteamError(f"times must not decrease, but times[{i}] = {times[i]} and times[{i + 1}] = {times[i + 1]}")
+    if states and states[-1] >= len(times):
+        raise SteamError(f"states names pose {states[-1]}, but times has {len(times)} poses")
+    at = times[states]
+    if np.any(np.diff(at) <= 0):
+        i = int(np.flatnonzero(np.diff(at) <= 0)[0])
+        raise SteamError(f"two states share the time {at[i]}: poses {states[i]} and {states[i + 1]}")
+    return times
+
+
 class Trajectory:
     """A solver's states at poses ``states`` (sorted), queried at any time from the first state on.
 
     ``prior`` is the motion prior the states were estimated with: Qc (3, 3) of the paper's WNOA prior,
-    or any :class:`~steam_ref.gp.LinearSDE` (WNOJ, Singer: states of 9 numbers).
+    or any :class:`~steam_ref.gp.LinearSDE` (WNOJ, Singer: states of 9 numbers). ``times`` (n_poses,)
+    must be finite and non-decreasing, ``states`` strictly increasing pose indices into it at strictly
+    increasing times.
     """
 
     def __init__(self, solver, states: Sequence[int], times: NDArray, prior: NDArray | LinearSDE):
         self.solver = solver  # anything with estimate_of, estimate, joint_covariance(s), marginals
-        self.states = list(states)  # poses with a state, increasing
-        self.times = times  # (n_poses,) time of every pose
+        self.states = _pose_indices(states)  # poses with a state, increasing
+        self.times = _pose_times(times, self.states)  # (n_poses,) time of every pose
+        prior = check_prior(prior)
         # Qc of a WNOA prior uses the memoised closed forms; any other prior goes through its LinearSDE.
-        self.qc = None if isinstance(prior, LinearSDE) else np.asarray(prior, dtype=float)
+        self.qc = None if isinstance(prior, LinearSDE) else prior
         self.prior = prior if isinstance(prior, LinearSDE) else LinearSDE.wnoa(prior)
         self.n = self.prior.n  # size of a state
+        if self.states:
+            size = np.shape(solver.estimate_of(X(self.states[0])))
+            if size != (self.n,):
+                raise ShapeError(f"the prior has states of {self.n} numbers, the solver's {X(self.states[0])!r} has shape {size}")
 
     def _between(self, a: int, b: int, t: float, xa: NDArray, xb: NDArray) -> NDArray:
         """x̄(t) between the states at poses a and b.  [YIB Eq. 18]"""
@@ -86,7 +124,9 @@ class Trajectory:
 
         Between states: [YIB Eq. 18]; after the last state t_N: the prior's prediction from x̄_N, P_N.
         """
-        t = float(t)
+        t = number("t", t)
+        if not isinstance(covariance, (bool, np.bool_)):
+            raise SteamError(f"covariance must be True or False, got covariance={covariance!r}")
         solved, times = self.states, self.times
         if solved and t < times[solved[0]]:
             raise SteamError(
@@ -127,8 +167,11 @@ class Trajectory:
 
     def covariances(self, landmarks: Sequence[Key]) -> Covariances:
         """Marginal covariances at every pose of the span (interpolated between states) and of ``landmarks``."""
-        solved = self.states
-        marg = self.solver.marginals([X(i) for i in solved] + list(landmarks))
+        solved, landmarks = self.states, key_list("landmarks", landmarks)
+        marg = self.solver.marginals([X(i) for i in solved] + landmarks)
+        for k in landmarks:
+            if marg[k].shape != (2, 2):
+                raise ShapeError(f"landmarks names {k!r}, a variable of size {marg[k].shape[0]}; a landmark has 2 numbers")
         gaps = [(a, b) for a, b in zip(solved, solved[1:]) if b > a + 1]
         joints = dict(zip(gaps, self.solver.joint_covariances([(X(a), X(b)) for a, b in gaps]))) if gaps else {}
         n = solved[-1] + 1 if solved else 0

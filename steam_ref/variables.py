@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 
 from .errors import NumericalError, ShapeError, SteamError, UnknownVariableError
 
-__all__ = ["Key", "X", "L", "Values"]
+__all__ = ["Key", "X", "L", "Values", "check_key", "key_list", "as_values"]
 
 
 class Key(NamedTuple):
@@ -31,14 +31,21 @@ class Key(NamedTuple):
     __str__ = __repr__
 
 
+def _index(name: str, i: int) -> int:
+    """A key's index: an int or a NumPy integer (a bool, a float, even 2.0, or a string is refused)."""
+    if isinstance(i, (bool, np.bool_)) or not isinstance(i, (int, np.integer)):
+        raise SteamError(f"{name} takes an integer index, got {i!r}")
+    return int(i)
+
+
 def X(i: int) -> Key:
     """The key of trajectory state number i."""
-    return Key("x", int(i))
+    return Key("x", _index("X", i))
 
 
 def L(j: int) -> Key:
     """The key of landmark number j."""
-    return Key("l", int(j))
+    return Key("l", _index("L", j))
 
 
 class Values(Mapping):
@@ -47,7 +54,12 @@ class Values(Mapping):
     def __init__(self, items: Mapping[Key, NDArray] | Iterable[tuple[Key, NDArray]] = ()):
         self._data: dict[Key, NDArray] = {}
         pairs = items.items() if isinstance(items, Mapping) else items
-        for key, value in pairs:
+        if isinstance(pairs, (str, bytes)) or not isinstance(pairs, Iterable):
+            raise SteamError(f"Values takes a mapping key -> vector or (key, vector) pairs, got {items!r}")
+        for pair in pairs:
+            if not isinstance(pair, tuple) or len(pair) != 2:
+                raise SteamError(f"Values takes (key, vector) pairs, got the item {pair!r}")
+            key, value = pair
             if key in self._data:
                 raise SteamError(f"Values given two estimates of {key!r}")
             self.insert(key, value)
@@ -56,7 +68,13 @@ class Values(Mapping):
         """Add (or replace) the estimate of one variable; checks the key and that the value is a finite vector."""
         if not isinstance(key, Key):
             raise SteamError(f"{key!r} is not a variable key (make one with X(i) or L(j))")
-        v = np.array(value, dtype=float)
+        try:
+            a = np.asarray(value)
+        except (TypeError, ValueError):  # a ragged list
+            a = np.asarray(None)
+        if a.dtype.kind not in "iuf":  # not strings, bools, None or objects
+            raise ShapeError(f"estimate of {key} must be a vector of numbers, got {value!r}")
+        v = np.array(a, dtype=float)
         if v.ndim != 1 or v.shape[0] == 0:
             raise ShapeError(f"estimate of {key} must be a non-empty 1-D vector, got shape {v.shape}")
         if not np.all(np.isfinite(v)):
@@ -93,12 +111,19 @@ class Values(Mapping):
 
     def stack(self, keys: Iterable[Key]) -> NDArray:
         """Estimates of several variables of one size as rows of an (n, dim) array."""
-        return np.stack([self[k] for k in keys])
+        rows = [self[k] for k in keys]
+        try:
+            return np.stack(rows)
+        except ValueError:  # sizes differ (or no keys): name them only then, at no cost to a good call
+            sizes = sorted({r.shape[0] for r in rows})
+            raise ShapeError(f"Values.stack needs variables of one size, got sizes {sizes}") from None
 
     def retract(self, delta: Mapping[Key, NDArray]) -> Values:
         """θ̄ + δθ: a new Values with the increments added (the state space is a vector space)."""
         out = self.copy()
         for key, step in delta.items():
+            if np.shape(step) != self[key].shape:
+                raise ShapeError(f"the update of {key!r} has shape {np.shape(step)}, its estimate {self[key].shape}")
             x = self[key] + step
             if not np.all(np.isfinite(x)):
                 raise NumericalError(f"the update of {key!r} is not finite: {self[key]} + {np.asarray(step)}")
@@ -115,3 +140,36 @@ class Values(Mapping):
 
     def __repr__(self) -> str:
         return f"Values({len(self)} variables)"
+
+
+# --- checks of the keys and estimates the public API takes -------------------------------------------
+
+
+def check_key(name: str, value: object) -> Key:
+    """``value`` itself if it is a variable key."""
+    if not isinstance(value, Key):
+        raise SteamError(f"{name} must be a variable key (make one with X(i) or L(j)), got {name}={value!r:.80}")
+    return value
+
+
+def key_list(name: str, keys: object) -> list[Key]:
+    """The keys of any iterable (a list, a tuple, a generator, a mapping's keys), as a list. A single key
+    is refused with a hint, since iterating it would read its kind and index as two keys."""
+    if isinstance(keys, Key):
+        raise SteamError(f"{name} must be a list of keys, got the single key {keys!r}: write [{keys!r}]")
+    if isinstance(keys, (str, bytes)) or not isinstance(keys, Iterable):
+        raise SteamError(f"{name} must be a list of variable keys, got {name}={keys!r:.80}")
+    out = list(keys)
+    for i, k in enumerate(out):
+        if not isinstance(k, Key):
+            raise SteamError(f"{name}[{i}] = {k!r:.80} is not a variable key (make one with X(i) or L(j))")
+    return out
+
+
+def as_values(name: str, values: object) -> Values:
+    """``values`` if it is a Values; a mapping key → vector copied into one (so its checks apply); an error otherwise."""
+    if isinstance(values, Values):
+        return values
+    if isinstance(values, Mapping):
+        return Values(values)
+    raise SteamError(f"{name} must be a Values or a mapping key -> vector, got {name}={values!r:.80}")

@@ -239,9 +239,9 @@ def test_extrapolation_of_an_exact_state_is_the_dense_conditional(rng):
 @pytest.mark.parametrize("t", [1.0, 0.5, np.nan, np.inf])
 def test_extrapolation_needs_a_later_time(rng, t):
     sde = LinearSDE.wnoa(random_spd(rng, 2))
-    with pytest.raises(SteamError, match=f"t1=1.0, t={t}"):
+    with pytest.raises(SteamError, match=f"t={t}"):  # a finite t before t1, or a t that is not finite
         extrapolate_state_sde(sde, 1.0, np.ones(4), t)
-    with pytest.raises(SteamError, match="t > t1"):
+    with pytest.raises(SteamError, match=f"t={t}"):
         extrapolate_covariance_sde(sde, 1.0, t, np.eye(4))
 
 

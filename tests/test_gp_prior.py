@@ -237,7 +237,7 @@ def test_wrong_shapes_raise(rng):
         (dict(good, F=np.ones((3, 2))), r"F.*\(3, 2\)"),
         (dict(good, qc=np.eye(3)), r"Qc.*\(3, 3\)"),
         (dict(good, v=np.ones(3)), r"v.*\(3,\)"),
-        (dict(good, A=np.full((4, 4), np.nan)), r"A.*\(4, 4\)"),
+        (dict(good, A=np.full((4, 4), np.nan)), r"A\[0, 0\] = nan"),
     ]
     for kwargs, pattern in bad:
         with pytest.raises(ShapeError, match=pattern):

@@ -25,12 +25,13 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from ..arguments import real_array
 from ..covariance import tree_joint_covariance, tree_joint_marginals, tree_marginal_covariance, tree_marginals
 from ..errors import ShapeError, SteamError, UnderdeterminedError, UnknownVariableError
-from ..factors import Factor
+from ..factors import Factor, check_factors
 from ..linear.ordering import constrained_min_degree
 from ..linear.system import GaussianFactor, linearize
-from ..variables import Key, Values
+from ..variables import Key, Values, check_key
 from .journal import Journal, PhaseTimer
 from .params import ISAM2Params
 from .tree import BayesTree, Clique, eliminate
@@ -65,6 +66,8 @@ class IncrementalSolver:
 
     def __init__(self, params: ISAM2Params | None = None, **changes: object) -> None:
         params = ISAM2Params() if params is None else params
+        if not isinstance(params, ISAM2Params):
+            raise SteamError(f"params must be an ISAM2Params or None, got params={params!r}")
         self.params = params.replace(**changes) if changes else params  # the settings, validated
         self.tree = BayesTree()  # the current Bayes tree
         self.factors: list[Factor] = []  # every factor so far; a factor's id is its position
@@ -94,6 +97,7 @@ class IncrementalSolver:
 
     def estimate_of(self, key: Key) -> NDArray:
         """The current estimate θ̄ + δ of one variable (read-only)."""
+        check_key("key", key)
         if key in self._stale:
             del self._stale[key]
             self._form_estimate(key)
@@ -122,11 +126,11 @@ class IncrementalSolver:
 
     def joint_marginal_covariance(self, keys: Iterable[Key]) -> NDArray:
         """Joint covariance (Σdₖ, Σdₖ) of several variables, stacked in the order given, from the tree."""
-        return tree_joint_covariance(self.tree, list(keys))
+        return tree_joint_covariance(self.tree, keys)
 
     def joint_marginals(self, groups: Iterable[Iterable[Key]]) -> list[NDArray]:
         """Joint covariance of each group of variables (stacked in the order given), from the tree."""
-        return tree_joint_marginals(self.tree, [list(g) for g in groups])
+        return tree_joint_marginals(self.tree, groups)
 
     def marginals(self, keys: Iterable[Key] | None = None) -> dict[Key, NDArray]:
         """Marginal covariance (dₖ, dₖ) of each of ``keys`` (every variable when None), in one pass down the tree."""
@@ -153,7 +157,11 @@ class IncrementalSolver:
         """
         timer = PhaseTimer()
         with timer("check"):
-            F_new = [new_factors] if isinstance(new_factors, Factor) else list(new_factors)
+            if not isinstance(relinearize, (bool, np.bool_)):
+                raise SteamError(f"relinearize must be True or False, got relinearize={relinearize!r}")
+            F_new = check_factors("new_factors", new_factors)
+            if new_values is not None and not isinstance(new_values, Mapping):
+                raise SteamError(f"new_values must be a mapping key -> vector (a dict or a Values) or None, got {new_values!r}")
             theta_new = self._checked_update(F_new, {} if new_values is None else new_values)
         journal = Journal(len(self.factors), list(theta_new))
         try:
@@ -224,17 +232,19 @@ class IncrementalSolver:
         """Validate an update before anything changes; returns the new values as float vectors."""
         values: dict[Key, NDArray] = {}
         for k, v in new_values.items():
+            if not isinstance(k, Key):
+                raise SteamError(f"new_values has the key {k!r}, which is not a variable key (make one with X(i) or L(j))")
             if k in self._dims:
                 raise SteamError(f"variable {k!r} already has a value; an update cannot give it a new one")
-            x = np.array(v, dtype=float).reshape(-1)
+            x = real_array(f"new_values[{k!r}]", v)
+            if x.ndim != 1 or x.shape[0] == 0:
+                raise ShapeError(f"new_values[{k!r}] must be a non-empty 1-D vector, got shape {x.shape}")
             if not np.all(np.isfinite(x)):
                 raise ShapeError(f"new value of {k!r} is not finite: {x}")
             self.params.threshold_for(k.kind)  # a dict of thresholds must name every kind
             self.params.blocks_of(k.kind, x.shape[0])  # relinearization blocks must fit the variable
             values[k] = x
         for f in new_factors:
-            if not isinstance(f, Factor):
-                raise SteamError(f"update expects factors, got {type(f).__name__}")
             for k, dim in zip(f.keys, f.key_dims):
                 have = values[k].shape[0] if k in values else self._dims.get(k)
                 if have is None:

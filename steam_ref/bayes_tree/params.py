@@ -7,14 +7,13 @@ The defaults are GTSAM's ``ISAM2Params`` defaults (relinearization threshold 0.1
 from __future__ import annotations
 
 import dataclasses
-import math
-import numbers
 from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
 
+from ..arguments import integer, number
 from ..errors import ShapeError, SteamError
 
 __all__ = ["ISAM2Params"]
@@ -22,24 +21,32 @@ __all__ = ["ISAM2Params"]
 
 def _blocks(kind: str, sizes: object) -> tuple[int, ...]:
     """Block sizes as a tuple of positive ints; SteamError naming them otherwise."""
+    _kind("relinearize_blocks", kind)
+    if isinstance(sizes, (str, bytes)) or not isinstance(sizes, (tuple, list, np.ndarray)):
+        raise SteamError(f"relinearize_blocks[{kind!r}] must be a sequence of block sizes, got {sizes!r}")
     try:
-        out = tuple(int(n) for n in sizes)  # type: ignore[union-attr]
-    except (TypeError, ValueError):
-        raise SteamError(f"relinearize_blocks[{kind!r}] must be a sequence of block sizes, got {sizes!r}") from None
-    if not out or any(n < 1 for n in out) or tuple(sizes) != out:  # type: ignore[arg-type]
+        out = tuple(integer("a block size", n, minimum=1) for n in sizes)
+    except SteamError:
+        raise SteamError(f"relinearize_blocks[{kind!r}] must be positive integer block sizes, got {sizes!r}") from None
+    if not out:
         raise SteamError(f"relinearize_blocks[{kind!r}] must be positive integer block sizes, got {sizes!r}")
     return out
 
 
+def _kind(field: str, kind: object) -> str:
+    """A variable kind, the ``kind`` of a Key ('x', 'l'): a string, else the entry would never match."""
+    if not isinstance(kind, str):
+        raise SteamError(f"{field} is keyed by variable kind, a string such as 'x' or 'l'; got the key {kind!r}")
+    return kind
+
+
 def _threshold(value: object, name: str) -> float:
-    """``value`` as a float ≥ 0 (inf allowed); SteamError naming it otherwise (bool, NaN, < 0, not a number)."""
-    if isinstance(value, bool):
-        raise SteamError(f"{name} must be a number >= 0, got the bool {value!r}")
+    """``value`` as a float ≥ 0 (inf allowed); SteamError naming it otherwise (bool, string, NaN, < 0)."""
     try:
-        t = float(value)  # type: ignore[arg-type]
-    except (TypeError, ValueError):
+        t = number(name, value, finite=False)
+    except SteamError:
         raise SteamError(f"{name} must be a number >= 0, got {value!r}") from None
-    if math.isnan(t) or t < 0:
+    if t < 0:
         raise SteamError(f"{name} must be >= 0, got {value!r}")
     return t
 
@@ -66,12 +73,12 @@ class ISAM2Params:
     def __post_init__(self) -> None:
         t = self.relinearize_threshold
         if isinstance(t, Mapping):
-            t = {kind: _threshold(v, f"relinearize_threshold[{kind!r}]") for kind, v in t.items()}
+            t = {_kind("relinearize_threshold", kind): _threshold(v, f"relinearize_threshold[{kind!r}]") for kind, v in t.items()}
         else:
             t = _threshold(t, "relinearize_threshold")
         object.__setattr__(self, "relinearize_threshold", t)
         skip = self.relinearize_skip
-        if isinstance(skip, bool) or not isinstance(skip, numbers.Real) or skip != int(skip) or skip < 1:
+        if isinstance(skip, (bool, np.bool_)) or not isinstance(skip, (int, np.integer)) or skip < 1:
             raise SteamError(f"relinearize_skip must be a positive integer, got {skip!r}")
         object.__setattr__(self, "relinearize_skip", int(skip))
         object.__setattr__(self, "wildfire_threshold", _threshold(self.wildfire_threshold, "wildfire_threshold"))

@@ -25,7 +25,7 @@ from numpy.typing import NDArray
 from scipy.linalg import lapack
 
 from ..errors import SteamError, UnderdeterminedError
-from ..variables import Key
+from ..variables import Key, key_list
 from ..linear.conditional import assemble_sqrt_information
 from ..linear.ordering import Ordering
 from ..linear.system import GaussianFactor
@@ -181,8 +181,16 @@ class BayesTree(CliqueTree[Clique]):
 
     @classmethod
     def from_factors(cls, factors: Sequence[GaussianFactor], ordering: Ordering | Sequence[Key]) -> BayesTree:
-        """Eliminate linear factors in the given order into a new tree."""
-        order = ordering.keys if isinstance(ordering, Ordering) else tuple(ordering)
+        """Eliminate linear factors in the given order (an Ordering or a list of keys) into a new tree."""
+        order = ordering.keys if isinstance(ordering, Ordering) else tuple(key_list("ordering", ordering))
+        factors = list(factors)
+        for i, f in enumerate(factors):
+            if not isinstance(f, GaussianFactor):
+                raise SteamError(f"factors[{i}] is a {type(f).__name__}, not a GaussianFactor (linearize a factor first)")
+        named = {k for f in factors for k in f.keys}
+        free = next((k for k in order if k not in named), None)
+        if free is not None:
+            raise UnderdeterminedError(f"variable {free!r} of the ordering is named by no factor, so nothing constrains it")
         tree = cls()
         cliques, parents, _ = eliminate(order, factors)
         tree.insert_eliminated(cliques, parents)

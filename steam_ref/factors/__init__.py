@@ -14,7 +14,7 @@ priors append [ẍ, ÿ, θ̈]. The GP factors take any LTI prior (a Qc for WNOA,
 state (``state_dim``). Landmarks are ℓ = [x, y].
 """
 
-from .base import LANDMARK_DIM, STATE_DIM, Factor, sqrt_information
+from .base import LANDMARK_DIM, STATE_DIM, Factor, check_factors, sqrt_information
 from .gp import GPPriorFactor, InterpolatedFactor, gp_prior_factors
 from .measurements import (
     BearingFactor,
@@ -39,6 +39,7 @@ __all__ = [
     "StateMeasurement",
     "gp_prior_factors",
     "sqrt_information",
+    "check_factors",
     "STATE_DIM",
     "LANDMARK_DIM",
 ]

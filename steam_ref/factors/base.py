@@ -12,52 +12,71 @@ twenty thousand factors fast without a second, "vectorized" copy of any measurem
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass, field, fields
 from typing import ClassVar
 
 import numpy as np
 from numpy.typing import NDArray
 
+from ..arguments import finite, real_array
 from ..errors import ShapeError, SteamError
 from ..robust import RobustLoss
 from ..variables import Key
 
-__all__ = ["Factor", "sqrt_information", "STATE_DIM", "LANDMARK_DIM"]
+__all__ = ["Factor", "sqrt_information", "check_factors", "STATE_DIM", "LANDMARK_DIM"]
 
 STATE_DIM = 6  # [x, y, θ, ẋ, ẏ, θ̇]
 LANDMARK_DIM = 2
 
 
-def sqrt_information(noise: NDArray | float, m: int) -> NDArray:
-    """Upper-triangular W with WᵀW = Σ⁻¹, from sigmas (m,) / a scalar sigma, or a covariance (m, m)."""
-    noise = np.asarray(noise, dtype=float)
+def sqrt_information(noise: NDArray | float, m: int, name: str = "noise") -> NDArray:
+    """Upper-triangular W with WᵀW = Σ⁻¹, from sigmas (m,) / a scalar sigma, or a covariance (m, m).
+
+    ``name`` is the argument the noise came in as, for the error messages.
+    """
+    noise = real_array(name, noise)
     if noise.ndim == 0:
         noise = np.full(m, float(noise))
-    if not np.all(np.isfinite(noise)):
-        raise ShapeError(f"noise must be finite, got {noise.tolist()}")
+    finite(name, noise)
     if noise.shape == (m,):
         if np.any(noise <= 0):
-            raise SteamError(f"sigmas must be positive, got {noise.tolist()}")
+            shown = noise.tolist() if m > 1 else noise[0]
+            raise SteamError(f"{name} (standard deviation{'s' if m > 1 else ''}) must be positive, got {name}={shown}")
         return np.diag(1.0 / noise)
     if noise.shape == (m, m):
         if not np.allclose(noise, noise.T, rtol=0.0, atol=1e-12 * np.max(np.abs(noise))):
             i, j = np.unravel_index(np.argmax(np.abs(noise - noise.T)), noise.shape)
             raise SteamError(
-                f"noise covariance is not symmetric: entry ({i}, {j}) = {float(noise[i, j])!r} but ({j}, {i}) = {float(noise[j, i])!r}"
+                f"{name} (a covariance) is not symmetric: entry ({i}, {j}) = {float(noise[i, j])!r} but ({j}, {i}) = {float(noise[j, i])!r}"
             )
         try:
             # Σ⁻¹ = Wᵀ W with W upper triangular: W = chol(Σ⁻¹)ᵀ.
             return np.linalg.cholesky(np.linalg.inv(noise)).T
         except np.linalg.LinAlgError:
-            raise SteamError(f"noise covariance is not positive definite: {noise.tolist()}") from None
-    raise ShapeError(f"noise must be a scalar, sigmas of shape ({m},) or a covariance ({m}, {m}); got {noise.shape}")
+            raise SteamError(f"{name} (a covariance) is not positive definite: {noise.tolist()}") from None
+    raise ShapeError(f"{name} must be a scalar, sigmas of shape ({m},) or a covariance ({m}, {m}); got shape {noise.shape}")
 
 
 def _vector(value: NDArray | float, m: int, what: str) -> NDArray:
-    v = np.array(value, dtype=float).reshape(-1)
-    if v.shape != (m,) or not np.all(np.isfinite(v)):
-        raise ShapeError(f"{what} must be {m} finite numbers, got {np.asarray(value).tolist()}")
-    return v
+    """``value`` as a float vector (m,): a 1-d array of m finite numbers, or a number when m = 1."""
+    v = real_array(what, value)
+    if v.shape != (m,) and not (m == 1 and v.ndim == 0):
+        raise ShapeError(f"{what} must be {m} finite number{'s' if m > 1 else ''} (shape ({m},)), got {np.asarray(value).tolist()}")
+    return finite(what, v.reshape(m))
+
+
+def check_factors(name: str, factors: object) -> list[Factor]:
+    """The factors of a Factor or an iterable of factors, as a list; SteamError naming the first non-factor."""
+    if isinstance(factors, Factor):
+        return [factors]
+    if isinstance(factors, (str, bytes)) or not isinstance(factors, Iterable):
+        raise SteamError(f"{name} must be a factor or an iterable of factors, got {name}={factors!r}")
+    out = list(factors)
+    for i, f in enumerate(out):
+        if not isinstance(f, Factor):
+            raise SteamError(f"{name}[{i}] is a {type(f).__name__} ({f!r}), not a Factor")
+    return out
 
 
 def _jacobian(x: NDArray, m: int) -> NDArray:
@@ -83,6 +102,8 @@ class Factor:
     def __post_init__(self) -> None:
         """Every factor names each variable once: two Jacobian blocks of one variable would be added by
         a batch solve but overwrite each other in a clique, so the two would solve different problems."""
+        if self.loss is not None and not isinstance(self.loss, RobustLoss):
+            raise SteamError(f"{type(self).__name__}: loss must be a RobustLoss (Huber(k), Tukey(c)) or None, got loss={self.loss!r}")
         for k in self.keys:
             if not isinstance(k, Key):
                 raise SteamError(f"{type(self).__name__}: {k!r} is not a variable key (make one with X(i) or L(j))")

@@ -13,11 +13,12 @@ from typing import ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import ShapeError, SteamError
+from ..arguments import finite, real_array
+from ..errors import NumericalError, ShapeError, SteamError
 from ..gp.interpolate import interpolation_matrices, interpolation_matrices_sde
 from ..gp.prior import process_noise_sqrt_information, transition
-from ..gp.sde import LinearSDE
-from ..variables import Key
+from ..gp.sde import LinearSDE, check_prior
+from ..variables import Key, key_list
 from .base import Factor, _vector, sqrt_information
 
 __all__ = ["GPPriorFactor", "gp_prior_factors", "InterpolatedFactor"]
@@ -49,20 +50,30 @@ class GPPriorFactor(Factor):
 
     @classmethod
     def from_matrices(cls, key1: Key, key2: Key, phi: NDArray, q: NDArray, v: NDArray | None = None) -> GPPriorFactor:
-        """From Φ(tᵢ, tᵢ₋₁), Qᵢ and vᵢ of any LTI SDE (see ``steam_ref.gp.sde``).  [YIB Eq. 22]"""
-        phi = np.asarray(phi, dtype=float)
+        """From Φ(tᵢ, tᵢ₋₁) (n, n), Qᵢ (n, n) and vᵢ (n,) of any LTI SDE (see ``steam_ref.gp.sde``).  [YIB Eq. 22]"""
+        phi = real_array("phi", phi)
+        if phi.ndim != 2 or phi.shape[0] != phi.shape[1] or phi.shape[0] == 0:
+            raise ShapeError(f"phi (Φ) must be a square (n, n) matrix, n >= 1, got shape {phi.shape}")
         n = phi.shape[0]
-        if phi.shape != (n, n):
-            raise ShapeError(f"Φ must be square, got {phi.shape}")
-        v = np.zeros(n) if v is None else _vector(v, n, "v_i")
-        return cls((key1, key2), sqrt_information(q, n), phi=phi, v=v)
+        q = real_array("q", q)
+        if q.shape != (n, n):  # a covariance: not a sigma, nor sigmas, as sqrt_information would read them
+            raise ShapeError(f"q (Qᵢ) must be a ({n}, {n}) covariance to match phi, got shape {q.shape}")
+        v = np.zeros(n) if v is None else _vector(v, n, "v")
+        return cls((key1, key2), sqrt_information(q, n, "q"), phi=finite("phi", phi), v=v)
 
     @classmethod
     def from_sde(cls, key1: Key, key2: Key, dt: float, sde: LinearSDE) -> GPPriorFactor:
         """The prior of ``sde`` over a gap dt: Φ, Qᵢ and vᵢ from its (closed-form or general) discretisation."""
+        if not isinstance(sde, LinearSDE):
+            raise SteamError(f"sde must be a LinearSDE (for Qc of the WNOA prior use GPPriorFactor.wnoa), got sde={sde!r}")
         if sde.model is not None and sde.model.name == "wnoa" and not np.any(sde.v):
             return cls.wnoa(key1, key2, dt, sde.qc)  # the memoised closed form
-        return cls.from_matrices(key1, key2, sde.transition(dt), sde.process_noise(dt), sde.input_integral(dt))
+        q = sde.process_noise(dt)
+        try:
+            np.linalg.cholesky(q)
+        except np.linalg.LinAlgError:
+            raise NumericalError(f"Q(dt) of this prior is not positive definite in float64 at dt={dt!r}: the gap is too small (or too large)") from None
+        return cls.from_matrices(key1, key2, sde.transition(dt), q, sde.input_integral(dt))
 
     @property
     def key_dims(self) -> tuple[int, int]:  # type: ignore[override]
@@ -80,12 +91,12 @@ class GPPriorFactor(Factor):
 def gp_prior_factors(keys: list[Key], times: NDArray, prior: NDArray | LinearSDE) -> list[GPPriorFactor]:
     """The M - 1 prior factors linking consecutive states at strictly increasing times.
 
-    ``prior`` is Qc (the paper's WNOA prior) or any :class:`~steam_ref.gp.LinearSDE`.
+    ``keys``: any iterable of M keys; ``prior`` is Qc (the paper's WNOA prior) or any :class:`~steam_ref.gp.LinearSDE`.
     """
-    times = np.asarray(times, dtype=float)
+    keys, times, prior = key_list("keys", keys), real_array("times", times), check_prior(prior)
     if times.ndim != 1 or len(times) != len(keys):
         raise ShapeError(f"need one time per key: {len(keys)} keys, times of shape {times.shape}")
-    gaps = np.diff(times)
+    gaps = np.diff(finite("times", times))
     if np.any(~(gaps > 0)):
         i = int(np.flatnonzero(~(gaps > 0))[0])
         raise SteamError(f"times must increase strictly: t[{i}]={times[i]} then t[{i + 1}]={times[i + 1]}")
@@ -124,8 +135,11 @@ class InterpolatedFactor(Factor):
 
         ``prior`` is Qc (the paper's WNOA prior) or any :class:`~steam_ref.gp.LinearSDE`.
         """
+        if not isinstance(inner, Factor):
+            raise SteamError(f"inner must be a Factor (the measurement at tau), got inner={inner!r}")
         if isinstance(inner, InterpolatedFactor):
             raise SteamError("an interpolated factor cannot wrap another interpolated factor")
+        prior = check_prior(prior)
         if isinstance(prior, LinearSDE):
             lam, psi = interpolation_matrices_sde(prior, t1, t2, tau)  # [YIB Eq. 16]
             offset = prior.input_integral(tau - t1) - psi @ prior.input_integral(t2 - t1)  # [YIB Eq. 23]

@@ -15,7 +15,8 @@ from typing import ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import SteamError
+from ..arguments import real_array
+from ..errors import ShapeError, SteamError
 from ..pose2 import wrap_angle
 from ..robust import RobustLoss
 from ..variables import Key
@@ -45,9 +46,11 @@ class PriorFactor(Factor):
 
     @classmethod
     def create(cls, key: Key, mean: NDArray, noise: NDArray | float, *, loss: RobustLoss | None = None) -> PriorFactor:
-        """Prior N(mean, Σ) on ``key``; noise is sigmas (d,) or a covariance (d, d)."""
-        mean = np.array(mean, dtype=float).reshape(-1)
-        mean = _vector(mean, mean.shape[0], f"prior mean of {key}")
+        """Prior N(mean, Σ) on ``key``; mean is a vector (d,), noise a sigma, sigmas (d,) or a covariance (d, d)."""
+        mean = real_array("mean", mean)
+        if mean.ndim != 1 or mean.shape[0] == 0:
+            raise ShapeError(f"mean (of the prior on {key!r}) must be a non-empty 1-D vector, got shape {mean.shape}")
+        mean = _vector(mean, mean.shape[0], "mean")
         return cls((key,), sqrt_information(noise, mean.shape[0]), mean=mean, loss=loss)
 
     @property
@@ -109,7 +112,7 @@ class OdometryFactor(StateMeasurement):
         cls, key: Key, measured: NDArray, noise: NDArray | float, *, loss: RobustLoss | None = None, state_dim: int = STATE_DIM
     ) -> OdometryFactor:
         """Odometry reading ``measured`` = [v, θ̇] on state ``key``."""
-        return cls((key,), sqrt_information(noise, 2), measured=_vector(measured, 2, "odometry"), loss=loss, state_dim=state_dim)
+        return cls((key,), sqrt_information(noise, 2), measured=_vector(measured, 2, "measured"), loss=loss, state_dim=state_dim)
 
     def error(self, x: NDArray) -> NDArray:
         th, xd, yd, thd = x[..., 2], x[..., 3], x[..., 4], x[..., 5]
@@ -143,7 +146,7 @@ class VelocityFactor(StateMeasurement):
         cls, key: Key, measured: NDArray, noise: NDArray | float, *, loss: RobustLoss | None = None, state_dim: int = STATE_DIM
     ) -> VelocityFactor:
         """Projected-velocity reading [forward, lateral, yaw rate] on state ``key``."""
-        measured = _vector(measured, 3, "projected velocity")
+        measured = _vector(measured, 3, "measured")
         return cls((key,), sqrt_information(noise, 3), measured=measured, loss=loss, state_dim=state_dim)
 
     def error(self, x: NDArray) -> NDArray:
@@ -191,11 +194,12 @@ def _bearing_row(x: NDArray, l: NDArray) -> tuple[NDArray, NDArray, NDArray]:
     return np.arctan2(dy, dx) - x[..., 2], Jx, np.stack([-dy / r2, dx / r2], axis=-1)
 
 
-def _check_range(measured: float) -> None:
-    """A range is a distance: a negative one is a bad reading, not a far landmark."""
-    r = np.asarray(measured, dtype=float)
-    if np.any(r < 0):
-        raise SteamError(f"a range cannot be negative, got {float(r.reshape(-1)[0])!r}")
+def _range(name: str, measured: float) -> NDArray:
+    """A range reading as a (1,) vector: a finite distance; a negative one is a bad reading, not a far landmark."""
+    r = _vector(measured, 1, name)
+    if r[0] < 0:
+        raise SteamError(f"a range cannot be negative, got {name}={float(r[0])!r}")
+    return r
 
 
 @dataclass(frozen=True, eq=False)
@@ -212,9 +216,8 @@ class RangeFactor(StateMeasurement):
         cls, state: Key, landmark: Key, measured: float, sigma: float, *, loss: RobustLoss | None = None, state_dim: int = STATE_DIM
     ) -> RangeFactor:
         """Range reading ``measured`` (m, not negative) from state ``state`` to landmark ``landmark``."""
-        _check_range(measured)
-        measured = _vector(measured, 1, "range")
-        return cls((state, landmark), sqrt_information(sigma, 1), measured=measured, loss=loss, state_dim=state_dim)
+        measured = _range("measured", measured)
+        return cls((state, landmark), sqrt_information(sigma, 1, "sigma"), measured=measured, loss=loss, state_dim=state_dim)
 
     def error(self, x: NDArray, l: NDArray) -> NDArray:
         return _range_row(x, l)[0][..., None] - self.measured  # [YIB Eq. 33]
@@ -238,8 +241,8 @@ class BearingFactor(StateMeasurement):
         cls, state: Key, landmark: Key, measured: float, sigma: float, *, loss: RobustLoss | None = None, state_dim: int = STATE_DIM
     ) -> BearingFactor:
         """Bearing reading ``measured`` (rad) from ``state`` to ``landmark``."""
-        measured = _vector(measured, 1, "bearing")
-        return cls((state, landmark), sqrt_information(sigma, 1), measured=measured, loss=loss, state_dim=state_dim)
+        measured = _vector(measured, 1, "measured")
+        return cls((state, landmark), sqrt_information(sigma, 1, "sigma"), measured=measured, loss=loss, state_dim=state_dim)
 
     def error(self, x: NDArray, l: NDArray) -> NDArray:
         return wrap_angle(_bearing_row(x, l)[0] - self.measured[..., 0])[..., None]
@@ -264,8 +267,7 @@ class BearingRangeFactor(StateMeasurement):
         loss: RobustLoss | None = None, state_dim: int = STATE_DIM,
     ) -> BearingRangeFactor:
         """Bearing-range reading; noise is sigmas (2,) or a covariance (2, 2) for [bearing, range]."""
-        _check_range(range_)
-        measured = _vector([bearing, range_], 2, "bearing-range")
+        measured = np.concatenate([_vector(bearing, 1, "bearing"), _range("range_", range_)])
         return cls((state, landmark), sqrt_information(noise, 2), measured=measured, loss=loss, state_dim=state_dim)
 
     def error(self, x: NDArray, l: NDArray) -> NDArray:

@@ -17,8 +17,17 @@ import numpy as np
 import scipy.linalg
 from numpy.typing import ArrayLike, NDArray
 
-from ..errors import ShapeError, SteamError
-from .prior import _read_only, check_qc, process_noise, process_noise_inverse, qc_key, transition
+from ..arguments import check_covariance, finite, number, real_array
+from ..errors import NumericalError, ShapeError, SteamError
+from .prior import (
+    _read_only,
+    check_qc,
+    finite_result,
+    process_noise,
+    process_noise_inverse,
+    qc_key,
+    transition,
+)
 from .sde import LinearSDE
 
 __all__ = [
@@ -33,16 +42,19 @@ __all__ = [
 ]
 
 
-def _check_tau(t1: float, t2: float, tau: float) -> None:
+def _check_tau(t1: float, t2: float, tau: float) -> tuple[float, float, float]:
+    """(t1, t2, tau) as finite floats with t1 < tau < t2."""
+    t1, t2, tau = number("t1", t1), number("t2", t2), number("tau", tau)
     if not (t1 < tau < t2):
         raise SteamError(f"interpolation needs t1 < tau < t2, got t1={t1}, tau={tau}, t2={t2}")
+    return t1, t2, tau
 
 
 def _state(name: str, x: ArrayLike, n: int) -> NDArray:
-    x = np.asarray(x, dtype=float)
-    if x.shape != (n,) or not np.all(np.isfinite(x)):
+    x = real_array(name, x)
+    if x.shape != (n,):
         raise ShapeError(f"{name} must be a finite ({n},) vector, got shape {x.shape}")
-    return x
+    return finite(name, x)
 
 
 def interpolation_matrices(t1: float, t2: float, tau: float, qc: NDArray) -> tuple[NDArray, NDArray]:
@@ -53,8 +65,8 @@ def interpolation_matrices(t1: float, t2: float, tau: float, qc: NDArray) -> tup
     where Q_τ = Q(τ - t₁) and Q₂ = Q(t₂ - t₁) are the integrals of [YIB Eq. 17].
     The pair depends only on (τ - t₁, t₂ - t₁, Qc); it is memoised on those, and read-only.
     """
-    _check_tau(t1, t2, tau)
-    return _interpolation_matrices(float(tau - t1), float(t2 - t1), *qc_key(qc))
+    t1, t2, tau = _check_tau(t1, t2, tau)
+    return _interpolation_matrices(tau - t1, t2 - t1, *qc_key(qc))
 
 
 @lru_cache(maxsize=4096)
@@ -62,8 +74,10 @@ def _interpolation_matrices(dtau: float, dt: float, d: int, qc_bytes: bytes) -> 
     qc = np.frombuffer(qc_bytes, dtype=float).reshape(d, d)
     q_tau = process_noise(dtau, qc)
     q2_inv = process_noise_inverse(dt, qc)
-    psi = q_tau @ transition(dt - dtau, d).T @ q2_inv  # [YIB Eq. 16]
-    lam = transition(dtau, d) - psi @ transition(dt, d)  # [YIB Eq. 16]
+    with np.errstate(over="ignore", invalid="ignore"):
+        psi = q_tau @ transition(dt - dtau, d).T @ q2_inv  # [YIB Eq. 16]
+        lam = transition(dtau, d) - psi @ transition(dt, d)  # [YIB Eq. 16]
+    finite_result("Λ(τ), Ψ(τ)", np.hstack([lam, psi]), tau_minus_t1=dtau, t2_minus_t1=dt)
     _read_only(lam, psi)
     return lam, psi
 
@@ -74,7 +88,10 @@ def interpolate_state(
     """x̄(τ) from the neighbouring estimates x̄(t₁), x̄(t₂) of the zero-mean WNOA prior.  [YIB Eq. 18]"""
     lam, psi = interpolation_matrices(t1, t2, tau, qc)
     n = lam.shape[0]
-    return lam @ _state("x1", x1, n) + psi @ _state("x2", x2, n)  # [YIB Eq. 18]
+    x1, x2 = _state("x1", x1, n), _state("x2", x2, n)
+    with np.errstate(over="ignore", invalid="ignore"):
+        x = lam @ x1 + psi @ x2  # [YIB Eq. 18]
+    return finite_result("the interpolated state", x, tau=tau)
 
 
 def _posterior_covariance(
@@ -82,12 +99,11 @@ def _posterior_covariance(
 ) -> NDArray:
     """[Λ Ψ] P [Λ Ψ]ᵀ + Q_τ - Ψ Φ(t₂, τ) Q_τ, symmetrised: (n, n). See interpolate_covariance."""
     n = lam.shape[0]
-    P = np.asarray(joint_cov, dtype=float)
-    if P.shape != (2 * n, 2 * n) or not np.all(np.isfinite(P)):
-        raise ShapeError(f"joint_cov must be a finite ({2 * n}, {2 * n}) matrix, got shape {P.shape}")
+    P = check_covariance("joint_cov", real_array("joint_cov", joint_cov), 2 * n)
     G = np.hstack([lam, psi])
-    cond = q_tau - psi @ phi_2tau @ q_tau  # Cov(x(τ) | x₁, x₂) = Q_τ - Q_τ Φ(t₂,τ)ᵀ Q₂⁻¹ Φ(t₂,τ) Q_τ
-    cov = G @ P @ G.T + cond  # law of total covariance
+    with np.errstate(over="ignore", invalid="ignore"):
+        cond = q_tau - psi @ phi_2tau @ q_tau  # Cov(x(τ) | x₁, x₂) = Q_τ - Q_τ Φ(t₂,τ)ᵀ Q₂⁻¹ Φ(t₂,τ) Q_τ
+        cov = G @ P @ G.T + cond  # law of total covariance
     return (cov + cov.T) / 2
 
 
@@ -114,11 +130,12 @@ def interpolate_covariance(t1: float, t2: float, tau: float, qc: NDArray, joint_
     When measurements at τ are folded in through [Λ Ψ] as in [YIB Eq. 29], step 3 treats them the
     same way the estimator does, so the result is the covariance consistent with that estimate.
     """
-    _check_tau(t1, t2, tau)
+    t1, t2, tau = _check_tau(t1, t2, tau)
     qc = check_qc(qc)
     lam, psi = interpolation_matrices(t1, t2, tau, qc)
     q_tau = process_noise(tau - t1, qc)  # [YIB Eq. 17]
-    return _posterior_covariance(lam, psi, q_tau, transition(t2 - tau, qc.shape[0]), joint_cov)
+    cov = _posterior_covariance(lam, psi, q_tau, transition(t2 - tau, qc.shape[0]), joint_cov)
+    return finite_result("the interpolated covariance", cov, t1=t1, t2=t2, tau=tau)
 
 
 def interpolation_matrices_sde(sde: LinearSDE, t1: float, t2: float, tau: float) -> tuple[NDArray, NDArray]:
@@ -127,11 +144,16 @@ def interpolation_matrices_sde(sde: LinearSDE, t1: float, t2: float, tau: float)
     Same formula as ``interpolation_matrices`` with Φ = expm and Q from Van Loan; Q₂⁻¹ is
     applied by a Cholesky solve.
     """
-    _check_tau(t1, t2, tau)
+    t1, t2, tau = _check_tau(t1, t2, tau)
     q_tau = sde.process_noise(tau - t1)  # [YIB Eq. 17]
-    q2 = scipy.linalg.cho_factor(sde.process_noise(t2 - t1))  # [YIB Eq. 17]
-    psi = scipy.linalg.cho_solve(q2, sde.transition(t2 - tau) @ q_tau).T  # Q_τ Φ(t₂,τ)ᵀ Q₂⁻¹  [YIB Eq. 16]
-    lam = sde.transition(tau - t1) - psi @ sde.transition(t2 - t1)  # [YIB Eq. 16]
+    try:
+        q2 = scipy.linalg.cho_factor(sde.process_noise(t2 - t1))  # [YIB Eq. 17]
+    except np.linalg.LinAlgError:
+        raise NumericalError(f"Q(t2 - t1) is not positive definite in float64 at t2 - t1 = {t2 - t1!r}: the gap is too small for this prior") from None
+    with np.errstate(over="ignore", invalid="ignore"):
+        psi = scipy.linalg.cho_solve(q2, sde.transition(t2 - tau) @ q_tau).T  # Q_τ Φ(t₂,τ)ᵀ Q₂⁻¹  [YIB Eq. 16]
+        lam = sde.transition(tau - t1) - psi @ sde.transition(t2 - t1)  # [YIB Eq. 16]
+    finite_result("Λ(τ), Ψ(τ)", np.hstack([lam, psi]), t1=t1, t2=t2, tau=tau)
     return lam, psi
 
 
@@ -147,7 +169,9 @@ def interpolate_state_sde(
     lam, psi = interpolation_matrices_sde(sde, t1, t2, tau)
     x1, x2 = _state("x1", x1, sde.n), _state("x2", x2, sde.n)
     v_tau, v_2 = sde.input_integral(tau - t1), sde.input_integral(t2 - t1)  # [YIB Eq. 23]
-    return v_tau + lam @ x1 + psi @ (x2 - v_2)  # [YIB Eq. 18] with μ₁ = 0, μ(τ) = v_τ, μ₂ = v₂
+    with np.errstate(over="ignore", invalid="ignore"):
+        x = v_tau + lam @ x1 + psi @ (x2 - v_2)  # [YIB Eq. 18] with μ₁ = 0, μ(τ) = v_τ, μ₂ = v₂
+    return finite_result("the interpolated state", x, tau=tau)
 
 
 def interpolate_covariance_sde(
@@ -160,15 +184,16 @@ def interpolate_covariance_sde(
     """
     lam, psi = interpolation_matrices_sde(sde, t1, t2, tau)
     q_tau = sde.process_noise(tau - t1)  # [YIB Eq. 17]
-    return _posterior_covariance(lam, psi, q_tau, sde.transition(t2 - tau), joint_cov)
+    cov = _posterior_covariance(lam, psi, q_tau, sde.transition(t2 - tau), joint_cov)
+    return finite_result("the interpolated covariance", cov, t1=t1, t2=t2, tau=tau)
 
 
 # --- beyond the last state: prediction by the prior ---------------------------------------------
 
 
 def _check_after(t1: float, t: float) -> float:
-    t1, t = float(t1), float(t)
-    if not t > t1 or not np.isfinite(t):
+    t1, t = number("t1", t1), number("t", t)
+    if not t > t1:
         raise SteamError(f"extrapolation needs a finite t > t1, got t1={t1}, t={t}")
     return t - t1
 
@@ -181,15 +206,17 @@ def extrapolate_state_sde(sde: LinearSDE, t1: float, x1: ArrayLike, t: float) ->
     from the posterior mean x̄₁ of x(t₁). Derivation: docs/derivations.md, section 7.
     """
     dt = _check_after(t1, t)
-    return sde.transition(dt) @ _state("x1", x1, sde.n) + sde.input_integral(dt)  # [YIB Eq. 22-23]
+    x1 = _state("x1", x1, sde.n)
+    with np.errstate(over="ignore", invalid="ignore"):
+        x = sde.transition(dt) @ x1 + sde.input_integral(dt)  # [YIB Eq. 22-23]
+    return finite_result("the extrapolated state", x, t_minus_t1=dt)
 
 
 def extrapolate_covariance_sde(sde: LinearSDE, t1: float, t: float, cov1: ArrayLike) -> NDArray:
     """Cov x(t) = Φ(t, t₁) P₁ Φ(t, t₁)ᵀ + Q(t - t₁) for t > t₁, P₁ (n, n) the last state's: (n, n).  [YIB Eq. 17, 22]"""
     dt = _check_after(t1, t)
-    P = np.asarray(cov1, dtype=float)
-    if P.shape != (sde.n, sde.n) or not np.all(np.isfinite(P)):
-        raise ShapeError(f"cov1 must be a finite ({sde.n}, {sde.n}) matrix, got shape {P.shape}")
+    P = check_covariance("cov1", real_array("cov1", cov1), sde.n)
     Phi = sde.transition(dt)
-    cov = Phi @ P @ Phi.T + sde.process_noise(dt)  # [YIB Eq. 17, 22]
-    return (cov + cov.T) / 2
+    with np.errstate(over="ignore", invalid="ignore"):
+        cov = Phi @ P @ Phi.T + sde.process_noise(dt)  # [YIB Eq. 17, 22]
+    return finite_result("the extrapolated covariance", (cov + cov.T) / 2, t_minus_t1=dt)

@@ -30,8 +30,9 @@ from math import factorial
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..arguments import number, time_step
 from ..errors import SteamError
-from .prior import check_qc
+from .prior import check_d, check_qc, finite_result
 from .prior import process_noise as wnoa_process_noise
 from .prior import transition as wnoa_transition
 
@@ -61,28 +62,11 @@ _WNOJ_S = np.array([[1 / 20, 1 / 8, 1 / 6], [1 / 8, 1 / 3, 1 / 2], [1 / 6, 1 / 2
 
 
 def check_alpha(alpha: float, name: str = "alpha") -> float:
-    """α as a float, or raise if it is not positive and finite."""
-    try:
-        value = float(alpha)
-    except (TypeError, ValueError):
-        raise SteamError(f"{name} must be a positive finite number, got {name}={alpha!r}") from None
-    if not np.isfinite(value) or value <= 0:
+    """α as a float, or raise if it is not a positive finite number (a bool or a string is not one)."""
+    value = number(name, alpha)
+    if value <= 0:
         raise SteamError(f"{name} must be a positive finite number, got {name}={value}")
     return value
-
-
-def _finite_dt(dt: float) -> float:
-    dt = float(dt)
-    if not np.isfinite(dt):
-        raise SteamError(f"time step must be finite, got dt={dt}")
-    return dt
-
-
-def _positive_dt(dt: float) -> float:
-    dt = float(dt)
-    if not np.isfinite(dt) or dt <= 0:
-        raise SteamError(f"time step must be positive and finite, got dt={dt}")
-    return dt
 
 
 
@@ -91,6 +75,7 @@ def _positive_dt(dt: float) -> float:
 
 def wnoj_matrices(d: int) -> tuple[NDArray, NDArray]:
     """A (3d, 3d) and F (3d, d) of p⃛ = w."""
+    d = check_d(d)
     A = np.kron(np.eye(3, k=1), np.eye(d))  # [[0, I, 0], [0, 0, I], [0, 0, 0]]
     F = np.kron(np.array([[0.0], [0.0], [1.0]]), np.eye(d))
     return A, F
@@ -98,23 +83,32 @@ def wnoj_matrices(d: int) -> tuple[NDArray, NDArray]:
 
 def wnoj_transition(dt: float, d: int) -> NDArray:
     """Φ(t + Δt, t) = exp(A Δt) of WNOJ, any finite Δt: (3d, 3d).  [YIB Eq. 16]"""
-    dt = _finite_dt(dt)
-    return np.kron(np.array([[1.0, dt, dt**2 / 2], [0.0, 1.0, dt], [0.0, 0.0, 1.0]]), np.eye(d))
+    dt, d = time_step(dt, positive=False), check_d(d)
+    t = np.float64(dt)  # NumPy arithmetic: an overflow gives inf (checked), not Python's OverflowError
+    with np.errstate(over="ignore", invalid="ignore"):
+        phi = np.kron(np.array([[1.0, t, t**2 / 2], [0.0, 1.0, t], [0.0, 0.0, 1.0]]), np.eye(d))
+    return finite_result("Φ(dt) of WNOJ", phi, dt=dt)
 
 
 def wnoj_process_noise(dt: float, qc: ArrayLike) -> NDArray:
     """Q(Δt) of WNOJ: [[Δt⁵/20, Δt⁴/8, Δt³/6], [Δt⁴/8, Δt³/3, Δt²/2], [Δt³/6, Δt²/2, Δt]] ⊗ Qc.  [YIB Eq. 17]"""
-    dt, qc = _positive_dt(dt), check_qc(qc)
-    D = np.array([dt**2, dt, 1.0])
-    return np.kron(dt * _WNOJ_S * np.outer(D, D), qc)
+    dt, qc = time_step(dt), check_qc(qc)
+    t = np.float64(dt)
+    with np.errstate(over="ignore", invalid="ignore"):
+        D = np.array([t**2, t, 1.0])
+        q = np.kron(t * _WNOJ_S * np.outer(D, D), qc)
+    return finite_result("Q(dt) of WNOJ", q, dt=dt)
 
 
 def wnoj_process_noise_inverse(dt: float, qc: ArrayLike) -> NDArray:
     """Q(Δt)⁻¹ of WNOJ: [[720/Δt⁵, -360/Δt⁴, 60/Δt³], [-360/Δt⁴, 192/Δt³, -36/Δt²], [60/Δt³, -36/Δt², 9/Δt]] ⊗ Qc⁻¹."""
-    dt, qc = _positive_dt(dt), check_qc(qc)
-    Di = np.array([dt**-2, dt**-1, 1.0])
+    dt, qc = time_step(dt), check_qc(qc)
     pattern = np.array([[720.0, -360.0, 60.0], [-360.0, 192.0, -36.0], [60.0, -36.0, 9.0]])
-    return np.kron(pattern * np.outer(Di, Di) / dt, np.linalg.inv(qc))
+    t = np.float64(dt)
+    with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
+        Di = np.array([t**-2, t**-1, 1.0])
+        q_inv = np.kron(pattern * np.outer(Di, Di) / t, np.linalg.inv(qc))
+    return finite_result("Q(dt)⁻¹ of WNOJ", q_inv, dt=dt)
 
 
 # --- Singer ---------------------------------------------------------------------------------------
@@ -122,7 +116,7 @@ def wnoj_process_noise_inverse(dt: float, qc: ArrayLike) -> NDArray:
 
 def singer_matrices(d: int, alpha: float) -> tuple[NDArray, NDArray]:
     """A (3d, 3d) and F (3d, d) of p⃛ = -α p̈ + w."""
-    alpha = check_alpha(alpha)
+    alpha, d = check_alpha(alpha), check_d(d)
     A = np.kron(np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.0, 0.0, -alpha]]), np.eye(d))
     return A, wnoj_matrices(d)[1]
 
@@ -133,7 +127,7 @@ def _phi12(x: float) -> tuple[float, float]:
         z = -x
         return float(np.polynomial.polynomial.polyval(z, _PHI_SERIES[1])), float(np.polynomial.polynomial.polyval(z, _PHI_SERIES[2]))
     em1 = np.expm1(-x)  # e⁻ˣ - 1
-    return -em1 / x, (x + em1) / x**2
+    return -em1 / x, (x + em1) / x / x  # not / x²: that overflows for αΔt > 1e154
 
 
 def singer_transition(dt: float, alpha: float, d: int) -> NDArray:
@@ -141,10 +135,13 @@ def singer_transition(dt: float, alpha: float, d: int) -> NDArray:
 
     [[1, Δt, (αΔt - 1 + e^{-αΔt})/α²], [0, 1, (1 - e^{-αΔt})/α], [0, 0, e^{-αΔt}]] ⊗ I.
     """
-    dt, alpha = _finite_dt(dt), check_alpha(alpha)
-    x = alpha * dt
-    phi1, phi2 = _phi12(x)
-    return np.kron(np.array([[1.0, dt, dt**2 * phi2], [0.0, 1.0, dt * phi1], [0.0, 0.0, np.exp(-x)]]), np.eye(d))
+    dt, alpha, d = time_step(dt, positive=False), check_alpha(alpha), check_d(d)
+    t = np.float64(dt)  # NumPy arithmetic: an overflow gives inf (checked), not Python's OverflowError
+    with np.errstate(over="ignore", invalid="ignore"):
+        x = alpha * t
+        phi1, phi2 = _phi12(x)
+        phi = np.kron(np.array([[1.0, t, t**2 * phi2], [0.0, 1.0, t * phi1], [0.0, 0.0, np.exp(-x)]]), np.eye(d))
+    return finite_result("Φ(dt) of Singer's model", phi, dt=dt, alpha=alpha)
 
 
 def _singer_s(x: float) -> NDArray:
@@ -168,9 +165,12 @@ def singer_process_noise(dt: float, alpha: float, qc: ArrayLike) -> NDArray:
     Q_pv = (x - 1 + E)²/(2α⁴), Q_pa = ((1 - E²)/2 - xE)/α³, Q_vv = (x - 3/2 + 2E - E²/2)/α³,
     Q_va = (1 - E)²/(2α²), Q_aa = (1 - E²)/(2α); evaluated by a series for x ≤ 1.
     """
-    dt, alpha, qc = _positive_dt(dt), check_alpha(alpha), check_qc(qc)
-    D = np.array([dt**2, dt, 1.0])
-    return np.kron(dt * _singer_s(alpha * dt) * np.outer(D, D), qc)
+    dt, alpha, qc = time_step(dt), check_alpha(alpha), check_qc(qc)
+    t = np.float64(dt)
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        D = np.array([t**2, t, 1.0])
+        q = np.kron(t * _singer_s(alpha * t) * np.outer(D, D), qc)
+    return finite_result("Q(dt) of Singer's model", q, dt=dt, alpha=alpha)
 
 
 # --- the models LinearSDE knows in closed form ----------------------------------------------------
@@ -201,7 +201,7 @@ class ClosedForm:
     def transition(self, dt: float, d: int) -> NDArray:
         """Φ(t + Δt, t), any finite Δt."""
         if self.name == "wnoa":
-            return wnoa_transition(_finite_dt(dt), d)
+            return wnoa_transition(dt, d)
         return wnoj_transition(dt, d) if self.name == "wnoj" else singer_transition(dt, self.alpha, d)
 
     def process_noise(self, dt: float, qc: ArrayLike) -> NDArray:

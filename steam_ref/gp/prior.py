@@ -17,9 +17,12 @@ from functools import lru_cache
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import ShapeError, SteamError
+from ..arguments import integer, real_array, time_step
+from ..errors import NumericalError, ShapeError, SteamError
 
-__all__ = ["check_qc", "transition", "process_noise", "process_noise_inverse", "process_noise_sqrt_information"]
+__all__ = [
+    "check_qc", "check_d", "transition", "process_noise", "process_noise_inverse", "process_noise_sqrt_information",
+]
 
 # A run builds thousands of prior and interpolated factors from one Qc and a few distinct gaps, so
 # the checks and matrices below are memoised by value: (d, Qc's bytes) and dt. Memoised arrays are
@@ -33,9 +36,9 @@ def check_qc(qc: NDArray) -> NDArray:
 
 def qc_key(qc: NDArray) -> tuple[int, bytes]:
     """(d, Qc's bytes): a hashable key of a checked Qc, for memoising what depends on it."""
-    qc = np.asarray(qc, dtype=float)
-    if qc.ndim != 2 or qc.shape[0] != qc.shape[1]:
-        raise ShapeError(f"Qc must be a finite square matrix, got shape {qc.shape}")
+    qc = real_array("Qc", qc)
+    if qc.ndim != 2 or qc.shape[0] != qc.shape[1] or qc.shape[0] == 0:
+        raise ShapeError(f"Qc must be a finite square matrix of size at least 1, got shape {qc.shape}")
     key = qc.shape[0], qc.tobytes()
     _checked_qc(*key)  # raises for a bad Qc; a good one is checked once
     return key
@@ -56,40 +59,58 @@ def _read_only(*arrays: NDArray) -> None:
         a.flags.writeable = False
 
 
-def _check_dt(dt: float) -> float:
-    dt = float(dt)
-    if not np.isfinite(dt) or dt <= 0:
-        raise SteamError(f"time step must be positive and finite, got dt={dt}")
-    return dt
+def check_d(d: int) -> int:
+    """The dimension d of p as an int ≥ 1."""
+    return integer("d", d, minimum=1)
+
+
+def finite_result(what: str, a: NDArray, **at: float) -> NDArray:
+    """``a`` itself if finite; else NumericalError: ``what`` overflows float64 at the arguments ``at``."""
+    if not np.isfinite(a).all():
+        args = ", ".join(f"{name}={value!r}" for name, value in at.items())
+        raise NumericalError(
+            f"{what} is not finite in float64 at {args}: the time step is too large or too small for "
+            "float64 to represent this prior"
+        )
+    return a
 
 
 def transition(dt: float, d: int) -> NDArray:
-    """Φ(t + dt, t) of the WNOA prior for p of dimension d: (2d, 2d).  [YIB Eq. 16, 30-31]"""
+    """Φ(t + dt, t) of the WNOA prior for p of dimension d, any finite dt: (2d, 2d).  [YIB Eq. 16, 30-31]"""
+    dt, d = time_step(dt, positive=False), check_d(d)
     I, O = np.eye(d), np.zeros((d, d))
     return np.block([[I, dt * I], [O, I]])
 
 
 def process_noise(dt: float, qc: NDArray) -> NDArray:
     """Q(dt) = ∫₀^dt Φ(dt, s) F Qc Fᵀ Φ(dt, s)ᵀ ds for the WNOA prior: (2d, 2d).  [YIB Eq. 17]"""
-    dt, qc = _check_dt(dt), check_qc(qc)
-    return np.block([[dt**3 / 3 * qc, dt**2 / 2 * qc], [dt**2 / 2 * qc, dt * qc]])
+    dt, qc = time_step(dt), check_qc(qc)
+    t = np.float64(dt)  # NumPy arithmetic: an overflow gives inf (checked), not Python's OverflowError
+    with np.errstate(over="ignore", invalid="ignore"):
+        q = np.block([[t**3 / 3 * qc, t**2 / 2 * qc], [t**2 / 2 * qc, t * qc]])
+    return finite_result("Q(dt) of the WNOA prior", q, dt=dt)
 
 
 def process_noise_inverse(dt: float, qc: NDArray) -> NDArray:
     """Q(dt)⁻¹ in closed form: (2d, 2d).  [BTS]"""
-    dt, qc = _check_dt(dt), check_qc(qc)
-    qi = np.linalg.inv(qc)
-    return np.block([[12 / dt**3 * qi, -6 / dt**2 * qi], [-6 / dt**2 * qi, 4 / dt * qi]])
+    dt, qc = time_step(dt), check_qc(qc)
+    qi, t = np.linalg.inv(qc), np.float64(dt)
+    with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
+        q_inv = np.block([[12 / t**3 * qi, -6 / t**2 * qi], [-6 / t**2 * qi, 4 / t * qi]])
+    return finite_result("Q(dt)⁻¹ of the WNOA prior", q_inv, dt=dt)
 
 
 def process_noise_sqrt_information(dt: float, qc: NDArray) -> NDArray:
     """Upper-triangular W with WᵀW = Q(dt)⁻¹, read-only: (2d, 2d). Memoised per (dt, Qc).  [YIB Eq. 22]"""
-    return _sqrt_information(_check_dt(dt), *qc_key(qc))
+    return _sqrt_information(time_step(dt), *qc_key(qc))
 
 
 @lru_cache(maxsize=1024)
 def _sqrt_information(dt: float, d: int, qc_bytes: bytes) -> NDArray:
     qc = np.frombuffer(qc_bytes, dtype=float).reshape(d, d)
-    w = np.linalg.cholesky(process_noise_inverse(dt, qc)).T
+    try:
+        w = np.linalg.cholesky(process_noise_inverse(dt, qc)).T
+    except np.linalg.LinAlgError:
+        raise NumericalError(f"Q(dt)⁻¹ of the WNOA prior is not positive definite in float64 at dt={dt!r}") from None
     _read_only(w)
-    return w
+    return finite_result("the square-root information of Q(dt)", w, dt=dt)

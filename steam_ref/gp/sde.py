@@ -23,26 +23,20 @@ import numpy as np
 import scipy.linalg
 from numpy.typing import ArrayLike, NDArray
 
+from ..arguments import check_covariance, finite, number, real_array, time_step
 from ..errors import ShapeError, SteamError
 from .models import ClosedForm, check_alpha
-from .prior import check_qc
+from .prior import check_qc, finite_result
 
-__all__ = ["LinearSDE", "dense_kernel"]
+__all__ = ["LinearSDE", "check_prior", "dense_kernel"]
 
 
 def _finite_matrix(name: str, a: ArrayLike, ndim: int) -> NDArray:
-    a = np.array(a, dtype=float)  # a private copy, made read-only below
-    if a.ndim != ndim or not np.all(np.isfinite(a)):
-        raise ShapeError(f"{name} must be a finite {ndim}-d array, got shape {a.shape}")
-    a.setflags(write=False)
+    a = real_array(name, a)  # a private copy, made read-only below
+    if a.ndim != ndim or a.size == 0:
+        raise ShapeError(f"{name} must be a non-empty {ndim}-d array, got shape {a.shape}")
+    finite(name, a).setflags(write=False)
     return a
-
-
-def _check_dt(dt: float, name: str = "dt") -> float:
-    dt = float(dt)
-    if not np.isfinite(dt) or dt <= 0:
-        raise SteamError(f"time step must be positive and finite, got {name}={dt}")
-    return dt
 
 
 @dataclass(frozen=True, eq=False)
@@ -135,10 +129,8 @@ class LinearSDE:
 
     def transition_expm(self, dt: float) -> NDArray:
         """Φ(t + dt, t) = exp(A dt) by scipy's expm: (n, n). Any finite dt; Φ(t, s)⁻¹ = Φ(s, t).  [YIB Eq. 16]"""
-        dt = float(dt)
-        if not np.isfinite(dt):
-            raise SteamError(f"time step must be finite, got dt={dt}")
-        return scipy.linalg.expm(self.A * dt)
+        dt = time_step(dt, positive=False)
+        return finite_result("Φ(dt) = expm(A dt)", scipy.linalg.expm(self.A * dt), dt=dt)
 
     def process_noise_van_loan(self, dt: float) -> NDArray:
         """Q(dt) = ∫₀^dt Φ(dt, s) F Qc Fᵀ Φ(dt, s)ᵀ ds by Van Loan's method: (n, n).  [YIB Eq. 17]
@@ -148,36 +140,39 @@ class LinearSDE:
         e^{-A dt}, which grows for a decaying mode, and Φ E₁₂ cancels it: for Singer's αdt ≳ 10 only the
         closed form is accurate (docs/derivations.md, section 6).
         """
-        dt, n = _check_dt(dt), self.n
+        dt, n = time_step(dt), self.n
         G = self.F @ self.qc @ self.F.T
         C = np.block([[-self.A, G], [np.zeros((n, n)), self.A.T]]) * dt
-        E = scipy.linalg.expm(C)
-        Q = E[n:, n:].T @ E[:n, n:]  # Φ(dt) E₁₂ = ∫ Φ F Qc Fᵀ Φᵀ ds  [YIB Eq. 17]
-        return (Q + Q.T) / 2
+        with np.errstate(over="ignore", invalid="ignore"):
+            E = scipy.linalg.expm(C)
+            Q = E[n:, n:].T @ E[:n, n:]  # Φ(dt) E₁₂ = ∫ Φ F Qc Fᵀ Φᵀ ds  [YIB Eq. 17]
+        return finite_result("Q(dt) by Van Loan's method", (Q + Q.T) / 2, dt=dt)
 
     def input_integral(self, dt: float) -> NDArray:
         """v_i = ∫₀^dt Φ(dt, s) v ds, the mean drift over one step: (n,).  [YIB Eq. 23]
 
         expm([[A, v], [0, 0]] dt) has top-right column ∫₀^dt e^{A(dt-s)} v ds.
         """
-        dt, n = _check_dt(dt), self.n
+        dt, n = time_step(dt), self.n
         if not np.any(self.v):
             return np.zeros(n)
         C = np.zeros((n + 1, n + 1))
         C[:n, :n], C[:n, n] = self.A, self.v
-        return scipy.linalg.expm(C * dt)[:n, n]  # [YIB Eq. 23]
+        with np.errstate(over="ignore", invalid="ignore"):
+            v_dt = scipy.linalg.expm(C * dt)[:n, n]  # [YIB Eq. 23]
+        return finite_result("the input integral v(dt)", v_dt, dt=dt)
 
     def mean(self, times: ArrayLike, t0: float, mu0: ArrayLike) -> NDArray:
         """μ(t) for each t in `times` (any order, all ≥ t0), given μ(t0) = mu0: (len(times), n).
 
         Propagates μ_k = Φ(t_k, t_{k-1}) μ_{k-1} + v_k over the sorted times  [YIB Eq. 22-23].
         """
-        times = np.asarray(times, dtype=float)
-        mu0 = np.asarray(mu0, dtype=float)
-        if times.ndim != 1 or not np.all(np.isfinite(times)):
+        times, mu0, t0 = real_array("times", times), real_array("mu0", mu0), number("t0", t0)
+        if times.ndim != 1:
             raise ShapeError(f"times must be a finite 1-d array, got shape {times.shape}")
         if mu0.shape != (self.n,):
             raise ShapeError(f"mu0 must be ({self.n},), got shape {mu0.shape}")
+        finite("times", times), finite("mu0", mu0)
         if times.size and times.min() < t0:
             raise SteamError(f"the mean is defined for t >= t0 = {t0}, got t = {times.min()}")
         order = np.argsort(times, kind="stable")
@@ -192,21 +187,29 @@ class LinearSDE:
         return out
 
 
+def check_prior(prior: ArrayLike | LinearSDE, name: str = "prior") -> NDArray | LinearSDE:
+    """A motion prior argument: a LinearSDE as it is, or Qc of the WNOA prior checked (a read-only (d, d) array)."""
+    if isinstance(prior, LinearSDE):
+        return prior
+    try:
+        return check_qc(prior)
+    except SteamError as exc:
+        raise type(exc)(f"{name} must be a LinearSDE or Qc, a (d, d) matrix: {exc}") from None
+
+
 def dense_kernel(sde: LinearSDE, times: ArrayLike, P0: ArrayLike) -> NDArray:
     """The kernel matrix K of [YIB Eq. 3] for x(times[0]) ~ N(·, P0): (M n, M n), dense.
 
     times must be strictly increasing. Marginals follow P_k = Φ_k P_{k-1} Φ_kᵀ + Q_k and, for
     t_j ≥ t_k, K(t_j, t_k) = Φ(t_j, t_k) P_k. O(M² n³): for figures and checks, not for solvers.
     """
-    times = np.asarray(times, dtype=float)
-    P0 = np.asarray(P0, dtype=float)
+    times, P0 = real_array("times", times), real_array("P0", P0)
     n, M = sde.n, times.size
-    if times.ndim != 1 or M == 0 or not np.all(np.isfinite(times)):
+    if times.ndim != 1 or M == 0:
         raise ShapeError(f"times must be a finite non-empty 1-d array, got shape {times.shape}")
-    if np.any(np.diff(times) <= 0):
+    if np.any(~(np.diff(finite("times", times)) > 0)):
         raise SteamError(f"times must be strictly increasing, got {times.tolist()}")
-    if P0.shape != (n, n):
-        raise ShapeError(f"P0 must be ({n}, {n}), got shape {P0.shape}")
+    check_covariance("P0", P0, n)
     Phi = [sde.transition(dt) for dt in np.diff(times)]
     K = np.zeros((M * n, M * n))
     P = P0

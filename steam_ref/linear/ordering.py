@@ -26,8 +26,8 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 
-from ..errors import SteamError, UnknownVariableError
-from ..variables import Key
+from ..errors import ShapeError, SteamError, UnknownVariableError
+from ..variables import Key, key_list
 
 __all__ = [
     "Ordering",
@@ -75,14 +75,26 @@ class Ordering:
     offsets: NDArray = field(init=False)  # first column of each variable, (n,)
     offset_of: dict[Key, int] = field(init=False, repr=False)  # key → first column
     position: dict[Key, int] = field(init=False, repr=False)  # key → place in the order
+    dim_array: NDArray = field(init=False, repr=False)  # ``dims`` as an int array, (n,)
 
     def __post_init__(self) -> None:
-        if len(set(self.keys)) != len(self.keys):
-            raise SteamError("an ordering lists a variable twice")
+        keys, dims = tuple(self.keys), tuple(self.dims)
+        if len(keys) != len(dims):
+            raise ShapeError(f"an ordering needs one size per variable: {len(keys)} keys, {len(dims)} dims")
+        seen: set[Key] = set()
+        for k, d in zip(keys, dims):
+            if k in seen:
+                raise SteamError(f"an ordering lists variable {k!r} twice")
+            seen.add(k)
+            if isinstance(d, (bool, np.bool_)) or not isinstance(d, (int, np.integer)) or d < 1:
+                raise ShapeError(f"the size of variable {k!r} in an ordering must be a positive integer, got {d!r}")
+        object.__setattr__(self, "keys", keys)
+        object.__setattr__(self, "dims", tuple(int(d) for d in dims))
         offsets = np.concatenate([[0], np.cumsum(self.dims)[:-1]]).astype(int) if self.keys else np.zeros(0, int)
         object.__setattr__(self, "offsets", offsets)
         object.__setattr__(self, "offset_of", dict(zip(self.keys, offsets.tolist())))
         object.__setattr__(self, "position", {k: i for i, k in enumerate(self.keys)})
+        object.__setattr__(self, "dim_array", np.array(self.dims, dtype=int))
 
     @property
     def total_dim(self) -> int:
@@ -97,27 +109,38 @@ class Ordering:
         return len(self.keys)
 
 
+def _sizes(keys: Sequence[Key], dims: dict[Key, int]) -> tuple[int, ...]:
+    """The size of each key, read from ``dims``; UnknownVariableError naming a key it lacks."""
+    try:
+        return tuple(dims[k] for k in keys)
+    except KeyError as exc:
+        raise UnknownVariableError(f"dims gives no size for variable {exc.args[0]!r}") from None
+
+
 def natural_ordering(keys: Iterable[Key], dims: dict[Key, int]) -> Ordering:
     """The variables in the order given (for a graph: first-seen order)."""
-    keys = tuple(keys)
-    return Ordering(keys, tuple(dims[k] for k in keys))
+    keys = tuple(key_list("keys", keys))
+    return Ordering(keys, _sizes(keys, dims))
 
 
 def xl_ordering(keys: Iterable[Key], dims: dict[Key, int]) -> Ordering:
     """Trajectory states first (by index), then landmarks (by index): the paper's PB.  [YIB Eq. 15]"""
-    keys = list(keys)
+    keys = key_list("keys", keys)
     states = sorted((k for k in keys if k.kind == "x"), key=lambda k: k.index)
     others = sorted((k for k in keys if k.kind != "x"), key=lambda k: (k.kind, k.index))
     ordered = states + others
-    return Ordering(tuple(ordered), tuple(dims[k] for k in ordered))
+    return Ordering(tuple(ordered), _sizes(ordered, dims))
 
 
 def variable_adjacency(keys: Sequence[Key], factor_keys: Iterable[tuple[Key, ...]]) -> sp.csc_matrix:
     """The symmetric variable-level pattern of 𝓘 (1 where two variables share a factor), (n, n)."""
     index = {k: i for i, k in enumerate(keys)}
     rows, cols = [np.arange(len(keys))], [np.arange(len(keys))]
-    for fk in factor_keys:
-        ids = [index[k] for k in fk]
+    for i, fk in enumerate(factor_keys):
+        try:
+            ids = [index[k] for k in fk]
+        except KeyError as exc:
+            raise UnknownVariableError(f"factor_keys[{i}] = {fk!r} names {exc.args[0]!r}, which is not among the keys to order") from None
         for a in ids:
             rows.append(np.full(len(ids), a))
             cols.append(np.array(ids))
@@ -143,12 +166,12 @@ def amd_ordering(
     keys: Sequence[Key], dims: dict[Key, int], factor_keys: Iterable[tuple[Key, ...]], backend: str | None = None
 ) -> Ordering:
     """An approximate-minimum-degree elimination order of the variables: the paper's PBVR."""
-    keys = list(keys)
+    keys = key_list("keys", keys)
+    sizes = _sizes(keys, dims)
     if not keys:
         return Ordering((), ())
     perm = _amd_permutation(variable_adjacency(keys, factor_keys), sparse_backend(backend))
-    ordered = [keys[i] for i in perm]
-    return Ordering(tuple(ordered), tuple(dims[k] for k in ordered))
+    return Ordering(tuple(keys[i] for i in perm), tuple(sizes[i] for i in perm))
 
 
 def constrained_min_degree(variables: Sequence[Hashable], factor_keys: Iterable[Sequence[Hashable]], last: Iterable[Hashable] = ()) -> list:
@@ -161,14 +184,23 @@ def constrained_min_degree(variables: Sequence[Hashable], factor_keys: Iterable[
     constrained ordering iSAM2 obtains from CCOLAMD, which keeps the variables touched by new
     factors near the root so the next update removes little of the tree.  [K12 Sec. 5]
     """
+    variables = list(variables)
     index = {v: i for i, v in enumerate(variables)}
+    if len(index) != len(variables):
+        twice = next(v for i, v in enumerate(variables) if index[v] != i)
+        raise SteamError(f"variables lists {twice!r} twice")
     adj: dict = {v: set() for v in variables}
-    for keys in factor_keys:
+    for i, keys in enumerate(factor_keys):
         for k in keys:
             if k not in adj:
-                raise UnknownVariableError(f"a factor names {k!r}, which is not among the variables to order")
+                raise UnknownVariableError(f"factor_keys[{i}] = {keys!r} names {k!r}, which is not among the variables to order")
             adj[k].update(keys)
+    if isinstance(last, Key):
+        raise SteamError(f"last must be a collection of variables, got the single key {last!r}: write [{last!r}]")
     last_set = set(last)
+    unknown = [v for v in last_set if v not in adj]
+    if unknown:
+        raise UnknownVariableError(f"last names {unknown[0]!r}, which is not among the variables to order")
     group = {v: (1 if v in last_set else 0) for v in variables}
     heap = []
     for v, a in adj.items():
@@ -206,7 +238,7 @@ def make_ordering(
     only); ``backend``: AMD's sparse backend (see :func:`sparse_backend`).
     """
     if isinstance(name_or_ordering, Ordering):
-        return name_or_ordering
+        return _check_given(name_or_ordering, keys, dims)
     if name_or_ordering == "natural":
         return natural_ordering(keys, dims)
     if name_or_ordering == "xl":
@@ -214,3 +246,17 @@ def make_ordering(
     if name_or_ordering == "amd":
         return amd_ordering(keys, dims, factor_keys, backend)
     raise SteamError(f"unknown ordering {name_or_ordering!r}; use one of {ORDERING_NAMES} or an Ordering")
+
+
+def _check_given(ordering: Ordering, keys: Sequence[Key], dims: dict[Key, int]) -> Ordering:
+    """An explicit ordering, if it orders exactly ``keys`` with the sizes of ``dims``."""
+    for k in keys:
+        if k not in ordering.position:
+            raise UnknownVariableError(f"the ordering given lacks variable {k!r}")
+        size = ordering.dims[ordering.position[k]]
+        if k in dims and dims[k] != size:
+            raise ShapeError(f"the ordering given has variable {k!r} of size {size}, its estimate has size {dims[k]}")
+    if len(ordering) != len(set(keys)):
+        extra = next(k for k in ordering.keys if k not in set(keys))
+        raise UnknownVariableError(f"the ordering given has variable {extra!r}, which is not among the variables to order")
+    return ordering

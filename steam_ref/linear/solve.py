@@ -18,7 +18,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 
-from ..errors import UnderdeterminedError
+from ..errors import NumericalError, ShapeError, SteamError, UnderdeterminedError
 from .ordering import Ordering, sparse_backend
 from .system import LinearSystem
 
@@ -64,6 +64,30 @@ def _superlu(info: sp.csc_matrix) -> tuple[spla.SuperLU | None, int | None]:
     return lu, None
 
 
+def _checked_information(info: sp.spmatrix | NDArray, ordering: Ordering, symmetry: bool) -> sp.csc_matrix:
+    """``info`` as a CSC matrix, if it is square, of the ordering's size, finite and (if ``symmetry``) symmetric.
+
+    Symmetry is judged entry by entry against √(𝓘ᵢᵢ 𝓘ⱼⱼ), which bounds |𝓘ᵢⱼ| in a positive definite
+    matrix: a relative test whatever the units. It needs a transpose, about 6% of a factorization.
+    """
+    info = sp.csc_matrix(info)
+    n = ordering.total_dim
+    if info.shape != (n, n):
+        raise ShapeError(f"the information matrix must be square ({n}, {n}) to match the ordering, got shape {info.shape}")
+    if not np.isfinite(info.data).all():
+        col = int(info.tocoo().col[~np.isfinite(info.tocoo().data)][0])
+        key = ordering.keys[int(np.searchsorted(ordering.offsets, col, side="right") - 1)]
+        raise NumericalError(f"the information matrix holds NaN or inf in column {col}, of variable {key!r}")
+    diff = (info - info.T).tocoo() if symmetry else sp.coo_matrix(info.shape)
+    if diff.nnz:
+        scale = np.sqrt(np.abs(info.diagonal()))
+        bad = np.abs(diff.data) > 1e-10 * scale[diff.row] * scale[diff.col]
+        if bad.any():
+            i, j = int(diff.row[bad][0]), int(diff.col[bad][0])
+            raise SteamError(f"the information matrix is not symmetric: entry ({i}, {j}) = {float(info[i, j])!r} but ({j}, {i}) = {float(info[j, i])!r}")
+    return info
+
+
 @dataclass
 class SparseCholesky:
     """𝓛𝓛ᵀ = 𝓘 in the given order, with solves.  [YIB Eq. 11]"""
@@ -71,12 +95,18 @@ class SparseCholesky:
     backend: str  # 'cholmod' or 'superlu'
     nnz: int  # nonzeros of the lower-triangular factor 𝓛 (diagonal included)
     _factor: object  # the backend's factor object
+    n: int = 0  # size of 𝓘
 
     @classmethod
-    def factor(cls, info: sp.csc_matrix, ordering: Ordering, backend: str | None = None) -> SparseCholesky:
-        """Factor 𝓘 (sparse, symmetric positive definite) without reordering it."""
+    def factor(
+        cls, info: sp.csc_matrix, ordering: Ordering, backend: str | None = None, *, check_symmetry: bool = True
+    ) -> SparseCholesky:
+        """Factor 𝓘 (sparse or dense, symmetric positive definite, of the size of ``ordering``) without reordering it.
+
+        ``check_symmetry=False`` skips the symmetry check, for a caller whose 𝓘 is AᵀA by construction.
+        """
         backend = sparse_backend(backend)
-        info = sp.csc_matrix(info)
+        info = _checked_information(info, ordering, check_symmetry)
         if np.any(info.diagonal() <= 0):
             raise UnderdeterminedError(_unconstrained_variable(info, ordering))
         if backend == "cholmod":
@@ -90,14 +120,16 @@ class SparseCholesky:
                 if column is None:  # simplicial CHOLMOD does not say where: find it by SuperLU
                     column = _superlu(info)[1]
                 raise UnderdeterminedError(_unconstrained_variable(info, ordering, column) + f" (CHOLMOD: {exc})") from None
-            return cls(backend, nnz, f)
+            return cls(backend, nnz, f, info.shape[0])
         lu, column = _superlu(info)
         if lu is None:
             raise UnderdeterminedError(_unconstrained_variable(info, ordering, column))
-        return cls(backend, int(lu.L.nnz), lu)
+        return cls(backend, int(lu.L.nnz), lu, info.shape[0])
 
     def solve(self, rhs: NDArray) -> NDArray:
         """𝓘⁻¹ rhs for a vector (n,) or a matrix (n, k)."""
+        if np.ndim(rhs) not in (1, 2) or np.shape(rhs)[0] != self.n:
+            raise ShapeError(f"rhs must be a vector ({self.n},) or a matrix ({self.n}, k) to match 𝓘, got shape {np.shape(rhs)}")
         if self.backend == "cholmod":
             return self._factor(rhs)
         return self._factor.solve(np.asarray(rhs, dtype=float))
@@ -106,5 +138,5 @@ class SparseCholesky:
 def solve(system: LinearSystem, backend: str | None = None) -> tuple[NDArray, SparseCholesky]:
     """The Gauss-Newton step δθ* of Eq. 11 (in the system's column order) and the factor used."""
     info, rhs = system.information()
-    chol = SparseCholesky.factor(info, system.ordering, backend)
+    chol = SparseCholesky.factor(info, system.ordering, backend, check_symmetry=False)  # AᵀA
     return chol.solve(rhs), chol

@@ -16,9 +16,9 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
-from ..errors import NumericalError, ShapeError, UnknownVariableError
-from ..factors import Factor
-from ..variables import Key, Values
+from ..errors import NumericalError, ShapeError, SteamError, UnknownVariableError
+from ..factors import Factor, check_factors
+from ..variables import Key, Values, as_values
 from .ordering import Ordering
 
 __all__ = ["LinearizedGroup", "linearize", "LinearSystem", "GaussianFactor"]
@@ -58,8 +58,12 @@ class LinearizedGroup:
 
 def _group_by_type(factors: Sequence[Factor]) -> dict[tuple, list[int]]:
     groups: dict[tuple, list[int]] = {}
-    for i, f in enumerate(factors):
-        groups.setdefault(f.batch_signature(), []).append(i)
+    try:
+        for i, f in enumerate(factors):
+            groups.setdefault(f.batch_signature(), []).append(i)
+    except AttributeError:  # checked only on failure, so a batch linearization pays nothing for it
+        check_factors("factors", factors)
+        raise
     return groups
 
 
@@ -94,6 +98,7 @@ def linearize(factors: Sequence[Factor], values: Values, *, jacobians: bool = Tr
     Raises :class:`~steam_ref.errors.NumericalError` naming the first factor (in the order given)
     whose error or Jacobian is NaN or inf at ``values``: an overflowing reading, say.
     """
+    values = as_values("values", values)
     out, failures = [], []
     for ids in _group_by_type(factors).values():
         group = [factors[i] for i in ids]
@@ -133,6 +138,8 @@ class LinearSystem:
     @classmethod
     def from_groups(cls, groups: list[LinearizedGroup], ordering: Ordering) -> LinearSystem:
         """Assemble the sparse A, b from linearized groups (vectorized per group and key slot)."""
+        if not isinstance(ordering, Ordering):
+            raise SteamError(f"ordering must be an Ordering (see steam_ref.linear.make_ordering), got ordering={ordering!r}")
         rows, cols, data, rhs = [], [], [], []
         row0 = 0
         for g in groups:
@@ -140,24 +147,31 @@ class LinearSystem:
             starts = row0 + m * np.arange(n)
             for slot, J in enumerate(g.jacobians):
                 try:
-                    col_starts = np.array([ordering.offset_of[keys[slot]] for keys in g.keys])
+                    at = np.array([ordering.position[keys[slot]] for keys in g.keys], dtype=int)
                 except KeyError as exc:
                     raise UnknownVariableError(f"variable {exc.args[0]!r} is not in the ordering") from None
                 d = J.shape[2]
+                if np.any(ordering.dim_array[at] != d):  # else the blocks would overlap their neighbours'
+                    k = g.keys[int(np.flatnonzero(ordering.dim_array[at] != d)[0])][slot]
+                    raise ShapeError(f"the ordering gives variable {k!r} size {ordering.dims[ordering.position[k]]}, its factors' blocks have {d} columns")
+                col_starts = ordering.offsets[at]
                 rows.append(np.broadcast_to(starts[:, None, None] + np.arange(m)[None, :, None], J.shape).ravel())
                 cols.append(np.broadcast_to(col_starts[:, None, None] + np.arange(d)[None, None, :], J.shape).ravel())
                 data.append(J.ravel())
             rhs.append(g.rhs.ravel())
             row0 += n * m
-        A = sp.csr_matrix(
-            (np.concatenate(data), (np.concatenate(rows), np.concatenate(cols))), shape=(row0, ordering.total_dim)
-        )
+        shape = (row0, ordering.total_dim)
+        if not data:  # no factors: an empty system
+            return cls(sp.csr_matrix(shape), np.zeros(0), ordering)
+        A = sp.csr_matrix((np.concatenate(data), (np.concatenate(rows), np.concatenate(cols))), shape=shape)
         return cls(A, np.concatenate(rhs), ordering)
 
     @classmethod
     def build(cls, factors: Sequence[Factor], values: Values, ordering: Ordering) -> LinearSystem:
         """Linearize ``factors`` at ``values`` and assemble them under ``ordering``."""
-        return cls.from_groups(linearize(factors, values), ordering)
+        if not isinstance(ordering, Ordering):
+            raise SteamError(f"ordering must be an Ordering (see steam_ref.linear.make_ordering), got ordering={ordering!r}")
+        return cls.from_groups(linearize(check_factors("factors", factors), values), ordering)
 
     def information(self) -> tuple[sp.csc_matrix, NDArray]:
         """The information matrix 𝓘 = AᵀA and right-hand side Aᵀb of Eq. 11."""

@@ -1,0 +1,113 @@
+"""Checks of the numbers and arrays the public API takes, in one place, so every entry point accepts the same things.
+
+What counts as what (raising a :class:`~steam_ref.errors.SteamError` subclass that names the argument
+and its value otherwise):
+
+- a **number**: a Python ``int`` or ``float``, a NumPy integer or floating scalar, or a 0-d array of
+  one; never a ``bool`` (``True`` is not a time step), a string (``"1"`` is not parsed), ``None``, a
+  complex number or a sequence (``[1.0]`` is not ``1.0``);
+- an **integer**: ``int`` or a NumPy integer, never a ``bool`` nor a float (``2.0`` included);
+- an **array**: anything NumPy reads as integers or floats (lists, tuples, arrays), copied to
+  float64; never strings, booleans, complex numbers, ``None`` entries or ragged lists;
+- a **covariance**: a finite symmetric (n, n) array with no negative variance.
+
+Keys, lists of keys and estimates are checked in :mod:`steam_ref.variables` (``check_key``,
+``key_list``, ``as_values``). This module imports nothing of steam_ref but its errors.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .errors import ShapeError, SteamError
+
+__all__ = ["number", "time_step", "integer", "real_array", "finite", "check_covariance"]
+
+
+def _show(value: object, limit: int = 80) -> str:
+    """repr of a value, cut to ``limit`` characters."""
+    text = repr(value)
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def _real(value: object) -> float | None:
+    """``value`` as a float if it is a real number (not a bool, a string, a sequence...), else None."""
+    if isinstance(value, np.ndarray) and value.ndim == 0:
+        value = value[()]
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        return None
+    return float(value)
+
+
+def number(name: str, value: object, *, finite: bool = True) -> float:
+    """``value`` as a float; SteamError naming ``name`` for a bool, a string, a sequence, NaN (and ±inf if ``finite``)."""
+    x = _real(value)
+    if x is None:
+        raise SteamError(f"{name} must be a real number, got {name}={_show(value)}")
+    if math.isnan(x) or (finite and math.isinf(x)):
+        raise SteamError(f"{name} must be a finite number, got {name}={x}")
+    return x
+
+
+def time_step(value: object, name: str = "dt", *, positive: bool = True) -> float:
+    """A finite time step (> 0 when ``positive``) as a float."""
+    what = "positive and finite" if positive else "finite"
+    x = _real(value)
+    if x is None:
+        raise SteamError(f"time step must be a {what} number, got {name}={_show(value)}")
+    if not math.isfinite(x) or (positive and x <= 0):
+        raise SteamError(f"time step must be {what}, got {name}={x}")
+    return x
+
+
+def integer(name: str, value: object, minimum: int | None = None) -> int:
+    """``value`` as an int (int or NumPy integer, not bool nor float), at least ``minimum``."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+        raise SteamError(f"{name} must be an integer, got {name}={_show(value)}")
+    if minimum is not None and value < minimum:
+        raise SteamError(f"{name} must be an integer >= {minimum}, got {name}={int(value)}")
+    return int(value)
+
+
+def real_array(name: str, value: object) -> NDArray:
+    """A float64 copy of ``value``, which must hold integers or floats only (any shape)."""
+    if isinstance(value, (str, bytes)):
+        raise ShapeError(f"{name} must be an array of numbers, got the string {name}={_show(value)}")
+    try:
+        a = np.asarray(value)
+    except (TypeError, ValueError):  # a ragged list
+        raise ShapeError(f"{name} must be an array of numbers, got {name}={_show(value)}") from None
+    if a.dtype.kind not in "iuf":
+        raise ShapeError(f"{name} must be an array of numbers, got {name}={_show(value)} (dtype {a.dtype})")
+    return np.array(a, dtype=float)
+
+
+def finite(name: str, a: NDArray) -> NDArray:
+    """``a`` itself; ShapeError naming the first NaN or inf entry otherwise."""
+    if not np.isfinite(a).all():
+        where = np.unravel_index(int(np.flatnonzero(~np.isfinite(a))[0]), a.shape)
+        at = ", ".join(map(str, where))
+        raise ShapeError(f"{name} must be finite, but {name}[{at}] = {a[where]}")
+    return a
+
+
+def check_covariance(name: str, P: NDArray, n: int) -> NDArray:
+    """``P`` itself if it can be a covariance: (n, n), finite, symmetric (to 1e-10 of its largest entry),
+    no negative variance. Positive definiteness is not checked: a computed covariance may be
+    semidefinite to rounding."""
+    if P.shape != (n, n):
+        raise ShapeError(f"{name} must be a finite ({n}, {n}) matrix, got shape {P.shape}")
+    finite(name, P)
+    asymmetry = np.abs(P - P.T)
+    if asymmetry.max() > 1e-10 * np.abs(P).max():
+        i, j = np.unravel_index(int(np.argmax(asymmetry)), P.shape)
+        raise SteamError(f"{name} must be symmetric, but {name}[{i}, {j}] = {float(P[i, j])!r} and {name}[{j}, {i}] = {float(P[j, i])!r}")
+    diagonal = np.diagonal(P)
+    if np.any(diagonal < 0):
+        i = int(np.flatnonzero(diagonal < 0)[0])
+        raise SteamError(f"{name} has a negative variance: {name}[{i}, {i}] = {float(diagonal[i])!r}")
+    return P
