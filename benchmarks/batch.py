@@ -55,7 +55,9 @@ def measure(name: str, repeat: int, backend: str) -> dict:
     graph, values = problem.graph, problem.initial
     orders = {"xl": make_ordering(graph, values, "xl")}
     ordering_s, orders["amd"] = median_time(lambda: make_ordering(graph, values, "amd", backend), repeat)
-    linearize_s, _ = median_time(lambda: LinearSystem.from_groups(linearize(graph.factors, values), orders["xl"]), repeat)
+    linearize_s, _ = median_time(
+        lambda: LinearSystem.from_groups(linearize(graph.factors, values), orders["xl"]), repeat
+    )
     solve_s, nnz = {}, {}
     for key, order in orders.items():
         system = LinearSystem.from_groups(linearize(graph.factors, values), order)

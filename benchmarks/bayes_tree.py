@@ -79,7 +79,9 @@ def step_data(rng, i, xs, landmarks, known, estimate_prev):
         factors.append(sr.GPPriorFactor.wnoa(sr.X(i - 1), key, DT, QC))
         values[key] = transition(DT, 3) @ estimate_prev  # predicted by the prior mean
     factors.append(sr.VelocityFactor.create(key, body_velocity(xs[i]) + rng.normal(size=3) * VEL_SIGMA, VEL_SIGMA))
-    for j in range(len(landmarks)) if RANGES_PER_STEP is None else [(i + k) % len(landmarks) for k in range(RANGES_PER_STEP)]:
+    for j in (
+        range(len(landmarks)) if RANGES_PER_STEP is None else [(i + k) % len(landmarks) for k in range(RANGES_PER_STEP)]
+    ):
         lm = sr.L(j)
         if lm not in known:
             guess = landmarks[j] + rng.normal(scale=LANDMARK_PRIOR_SIGMA, size=2)
@@ -125,7 +127,9 @@ def run(n_states: int, n_landmarks: int, seed: int, solver_options: dict) -> tup
     total = time.perf_counter() - start
     d_tree, d_est = batch_difference(solver)
     k = min(1000, n_states)
-    rmse = float(np.sqrt(np.mean([np.sum((solver.estimate_of(sr.X(i))[:2] - xs[i, :2]) ** 2) for i in range(n_states)])))
+    rmse = float(
+        np.sqrt(np.mean([np.sum((solver.estimate_of(sr.X(i))[:2] - xs[i, :2]) ** 2) for i in range(n_states)]))
+    )
     out = dict(
         n_states=n_states,
         total_s=round(total, 3),
@@ -167,7 +171,11 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--wildfire-threshold", type=float, default=ISAM2Params.wildfire_threshold)
     p.add_argument("--plot", action="store_true", help="write benchmarks/out/bayes_tree.png")
     a = p.parse_args(argv)
-    options = dict(relinearize_threshold=a.relinearize_threshold, relinearize_skip=a.relinearize_skip, wildfire_threshold=a.wildfire_threshold)
+    options = dict(
+        relinearize_threshold=a.relinearize_threshold,
+        relinearize_skip=a.relinearize_skip,
+        wildfire_threshold=a.wildfire_threshold,
+    )
     out, times = run(a.states, a.landmarks, a.seed, options)
     if a.plot:
         plot(times, Path(__file__).parent / "out" / "bayes_tree.png")

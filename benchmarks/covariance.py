@@ -39,7 +39,11 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--repeat", type=int, default=5, help="timed queries (the median is reported)")
     a = p.parse_args(argv)
     setup = PaperSetup.named(PRESET[a.dataset])
-    estimator = StreamingEstimator(Readings.from_dataset(load_dataset(a.dataset), setup), setup, StreamOptions(method="btgp", every=1, max_poses=a.max_poses))
+    estimator = StreamingEstimator(
+        Readings.from_dataset(load_dataset(a.dataset), setup),
+        setup,
+        StreamOptions(method="btgp", every=1, max_poses=a.max_poses),
+    )
     start = time.perf_counter()
     estimator.run()
     run_s = time.perf_counter() - start

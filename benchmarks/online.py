@@ -69,7 +69,9 @@ def median_run(dataset: str, options: dict, repeat: int) -> dict:
     for key in ("total_s", "update_s_median", "update_s_p95", "peak_rss_mb"):
         row[key] = statistics.median(r[key] for r in runs)
     row["repeat"] = repeat
-    row["step_seconds"] = np.median(np.array([r["step_seconds"] for r in runs if len(r["step_seconds"]) == len(runs[0]["step_seconds"])]), axis=0).tolist()
+    row["step_seconds"] = np.median(
+        np.array([r["step_seconds"] for r in runs if len(r["step_seconds"]) == len(runs[0]["step_seconds"])]), axis=0
+    ).tolist()
     return row
 
 
@@ -99,20 +101,37 @@ def main() -> None:
     parser.add_argument("--every", nargs="+", type=int, default=[1])
     parser.add_argument("--skips", nargs="+", type=int, default=[1])
     parser.add_argument("--no-interpolate", action="store_true", help="also run each skip > 1 without interpolation")
-    parser.add_argument("--range-states", action="store_true", help="also a state at every range reading (the paper's Plaza layout with --skips 5)")
+    parser.add_argument(
+        "--range-states",
+        action="store_true",
+        help="also a state at every range reading (the paper's Plaza layout with --skips 5)",
+    )
     parser.add_argument("--repeat", type=int, default=3)
-    parser.add_argument("--max-poses", type=int, default=None, help="run every method on this prefix (PB/PBVR then repeat too)")
-    parser.add_argument("--batch-budget", type=float, default=None, help="seconds per PB/PBVR run (default: 60 without --max-poses, none with it)")
+    parser.add_argument(
+        "--max-poses", type=int, default=None, help="run every method on this prefix (PB/PBVR then repeat too)"
+    )
+    parser.add_argument(
+        "--batch-budget",
+        type=float,
+        default=None,
+        help="seconds per PB/PBVR run (default: 60 without --max-poses, none with it)",
+    )
     args = parser.parse_args()
     budget = args.batch_budget if args.batch_budget is not None or args.max_poses else 60.0
-    layouts = [(skip, interp) for skip in args.skips for interp in ([True, False] if args.no_interpolate and skip > 1 else [True])]
+    layouts = [
+        (skip, interp)
+        for skip in args.skips
+        for interp in ([True, False] if args.no_interpolate and skip > 1 else [True])
+    ]
     runs = [(method, every) for method in sorted(args.methods, key=lambda m: m != "btgp") for every in args.every]
     for dataset in args.datasets:
         curves = []
         for skip, interpolate in layouts:
             btgp = None  # (row, step times) of the BTGP run the others are compared with
             for method, every in runs:
-                options = dict(method=method, every=every, skip=skip, interpolate=interpolate, range_states=args.range_states)
+                options = dict(
+                    method=method, every=every, skip=skip, interpolate=interpolate, range_states=args.range_states
+                )
                 if args.max_poses:
                     options["max_poses"] = args.max_poses
                 repeat = args.repeat

@@ -108,7 +108,11 @@ def measurement(kind: str, measured, p, v, l):
     r2 = dx * dx + dy * dy
     r = np.sqrt(r2)
     rng = (np.array([r]), np.array([[-dx / r, -dy / r, 0.0]]), np.array([[dx / r, dy / r]]))
-    brg = (np.array([np.arctan2(dy, dx) - p[2]]), np.array([[dy / r2, -dx / r2, -1.0]]), np.array([[-dy / r2, dx / r2]]))
+    brg = (
+        np.array([np.arctan2(dy, dx) - p[2]]),
+        np.array([[dy / r2, -dx / r2, -1.0]]),
+        np.array([[-dy / r2, dx / r2]]),
+    )
     if kind == "range":
         (h, Jp, Jl), e = rng, rng[0] - y
     elif kind == "bearing":
@@ -130,7 +134,11 @@ def noise(spec: dict, m: int, unit: bool = False):
     loss = spec.get("loss")
     if loss is None:
         return base
-    est = gtsam.noiseModel.mEstimator.Huber.Create(loss["k"]) if loss["type"] == "huber" else gtsam.noiseModel.mEstimator.Tukey.Create(loss["c"])
+    est = (
+        gtsam.noiseModel.mEstimator.Huber.Create(loss["k"])
+        if loss["type"] == "huber"
+        else gtsam.noiseModel.mEstimator.Tukey.Create(loss["c"])
+    )
     return gtsam.noiseModel.Robust.Create(est, base)
 
 
@@ -168,7 +176,10 @@ def make(spec: dict, unit: bool = False) -> list:
         if "sigmas" not in spec:
             raise Unsupported("a state prior is two GTSAM priors: it needs sigmas")
         (pk, vk), sig = gkeys(names[0]), np.asarray(spec["sigmas"], float)
-        return [gtsam.PriorFactorPoint3(k, mean[i:i + 3], noise({"sigmas": sig[i:i + 3]}, 3, unit)) for k, i in ((pk, 0), (vk, 3))]
+        return [
+            gtsam.PriorFactorPoint3(k, mean[i : i + 3], noise({"sigmas": sig[i : i + 3]}, 3, unit))
+            for k, i in ((pk, 0), (vk, 3))
+        ]
     if kind == "interpolated":
         if "loss" in spec["inner"]:  # GTSAM 4.3's WnoaInterpFactor crashes (segfault) linearizing a robust inner factor
             raise Unsupported("WnoaInterpFactor with a robust inner noise model")
@@ -207,7 +218,7 @@ def _blocks(A: np.ndarray, keys, names) -> list[np.ndarray]:
     """Split a Jacobian whose columns follow GTSAM ``keys`` into one block per kit variable."""
     cols, o = {}, 0
     for k in keys:
-        cols[k] = A[:, o:o + dim(k)]
+        cols[k] = A[:, o : o + dim(k)]
         o += dim(k)
     return [np.hstack([cols[k] if k in cols else np.zeros((A.shape[0], dim(k))) for k in gkeys(n)]) for n in names]
 
@@ -252,13 +263,17 @@ def factor_case(inputs: dict) -> dict:
         Af, bf = f.linearize(vals).jacobian()
         A.append(_blocks(Af, f.keys(), names))
         b.append(bf)
-        Hu = u.linearize(vals).jacobian()[0] if u is not f and not isinstance(f, gtsam.WnoaMotionFactorPoint3) else np.linalg.solve(W[-1], Af)
+        Hu = (
+            u.linearize(vals).jacobian()[0]
+            if u is not f and not isinstance(f, gtsam.WnoaMotionFactorPoint3)
+            else np.linalg.solve(W[-1], Af)
+        )
         H.append(_blocks(Hu, u.keys(), names))
         cost += f.error(vals)
     Wd = np.zeros((len(e), len(e)))
     o = 0
     for w in W:
-        Wd[o:o + len(w), o:o + len(w)] = w
+        Wd[o : o + len(w), o : o + len(w)] = w
         o += len(w)
     we = Wd @ e
     out = {"error": e, "whitened_error": we, "b": np.concatenate(b), "cost": cost}
@@ -306,8 +321,15 @@ def linear_case(inputs: dict) -> dict:
     R, d = _sqrt_information(lin.eliminateSequential(o), [k for n in order for k in gkeys(n)])
     s = np.sign(np.diag(R))
     delta = lin.optimize()
-    return {"A": A, "b": b, "information": info, "rhs": rhs, "R": R * s[:, None], "d": d * s,
-            "delta": np.concatenate([delta.at(k) for n in order for k in gkeys(n)])}
+    return {
+        "A": A,
+        "b": b,
+        "information": info,
+        "rhs": rhs,
+        "R": R * s[:, None],
+        "d": d * s,
+        "delta": np.concatenate([delta.at(k) for n in order for k in gkeys(n)]),
+    }
 
 
 def batch_case(inputs: dict) -> dict:
@@ -357,7 +379,7 @@ def bayes_tree_case(name: str, inputs: dict) -> dict:
         R, d = cond.R(), cond.d()
         S_cols, o = {}, 0
         for k in parents:
-            S_cols[k] = cond.S()[:, o:o + dim(k)]
+            S_cols[k] = cond.S()[:, o : o + dim(k)]
             o += dim(k)
         S = np.hstack([S_cols[k] for n in sep for k in gkeys(n)]) if parents else np.zeros((rows, 0))
         s = np.sign(np.diag(R))
@@ -435,7 +457,10 @@ def main(argv=None) -> int:
         out = Path(args.results) / suite / "results.json"
         out.parent.mkdir(parents=True, exist_ok=True)
         out.write_text(json.dumps({"cases": results}, indent=1))
-        print(f"{suite}: {len(results)} cases computed with GTSAM, {len(skipped)} left out" + (f": {'; '.join(skipped)}" if skipped else ""))
+        print(
+            f"{suite}: {len(results)} cases computed with GTSAM, {len(skipped)} left out"
+            + (f": {'; '.join(skipped)}" if skipped else "")
+        )
     return 0
 
 

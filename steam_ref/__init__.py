@@ -8,8 +8,10 @@ the code as [YIB Eq. n]; see docs/references.md.
 
 from importlib import metadata as _metadata
 
-from .bayes_tree import BayesTree, IncrementalSolver, ISAM2Params
 from .batch import BatchResult, batch_solve, gauss_newton, levenberg_marquardt
+from .bayes_tree import BayesTree, IncrementalSolver, ISAM2Params
+from .covariance import marginal_covariances
+from .datasets import RangeDataset, generate_synthetic, load_dataset
 from .errors import (
     DataError,
     IllConditionedWarning,
@@ -32,13 +34,11 @@ from .factors import (
     gp_prior_factors,
 )
 from .graph import FactorGraph
-from .variables import Key, L, Values, X
 from .linear import LinearSystem, amd_ordering, xl_ordering
-from .covariance import marginal_covariances
-from .robust import Huber, Tukey
-from .datasets import RangeDataset, generate_synthetic, load_dataset
-from .readings import PaperSetup
 from .online import StreamOptions, run_online
+from .readings import PaperSetup
+from .robust import Huber, Tukey
+from .variables import Key, L, Values, X
 
 try:
     __version__ = _metadata.version("steam_ref")  # written once, in pyproject.toml
@@ -46,14 +46,45 @@ except _metadata.PackageNotFoundError:  # the source folder on sys.path, never i
     __version__ = "0+unknown"
 
 __all__ = [
-    "SteamError", "ShapeError", "DataError", "UnknownVariableError", "UnderdeterminedError",
-    "NumericalError", "IllConditionedWarning",
-    "Key", "X", "L", "Values", "FactorGraph",
-    "Factor", "GPPriorFactor", "PriorFactor", "OdometryFactor", "VelocityFactor", "RangeFactor",
-    "BearingFactor", "BearingRangeFactor", "InterpolatedFactor", "gp_prior_factors",
-    "Huber", "Tukey",
-    "LinearSystem", "xl_ordering", "amd_ordering", "marginal_covariances",
-    "gauss_newton", "levenberg_marquardt", "batch_solve", "BatchResult",
-    "BayesTree", "IncrementalSolver", "ISAM2Params",
-    "RangeDataset", "load_dataset", "generate_synthetic", "PaperSetup", "StreamOptions", "run_online",
+    "SteamError",
+    "ShapeError",
+    "DataError",
+    "UnknownVariableError",
+    "UnderdeterminedError",
+    "NumericalError",
+    "IllConditionedWarning",
+    "Key",
+    "X",
+    "L",
+    "Values",
+    "FactorGraph",
+    "Factor",
+    "GPPriorFactor",
+    "PriorFactor",
+    "OdometryFactor",
+    "VelocityFactor",
+    "RangeFactor",
+    "BearingFactor",
+    "BearingRangeFactor",
+    "InterpolatedFactor",
+    "gp_prior_factors",
+    "Huber",
+    "Tukey",
+    "LinearSystem",
+    "xl_ordering",
+    "amd_ordering",
+    "marginal_covariances",
+    "gauss_newton",
+    "levenberg_marquardt",
+    "batch_solve",
+    "BatchResult",
+    "BayesTree",
+    "IncrementalSolver",
+    "ISAM2Params",
+    "RangeDataset",
+    "load_dataset",
+    "generate_synthetic",
+    "PaperSetup",
+    "StreamOptions",
+    "run_online",
 ]

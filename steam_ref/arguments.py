@@ -105,7 +105,9 @@ def check_covariance(name: str, P: NDArray, n: int) -> NDArray:
     asymmetry = np.abs(P - P.T)
     if asymmetry.max() > 1e-10 * np.abs(P).max():
         i, j = np.unravel_index(int(np.argmax(asymmetry)), P.shape)
-        raise SteamError(f"{name} must be symmetric, but {name}[{i}, {j}] = {float(P[i, j])!r} and {name}[{j}, {i}] = {float(P[j, i])!r}")
+        raise SteamError(
+            f"{name} must be symmetric, but {name}[{i}, {j}] = {float(P[i, j])!r} and {name}[{j}, {i}] = {float(P[j, i])!r}"
+        )
     diagonal = np.diagonal(P)
     if np.any(diagonal < 0):
         i = int(np.flatnonzero(diagonal < 0)[0])

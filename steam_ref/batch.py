@@ -24,15 +24,22 @@ import scipy.sparse.linalg as spla
 
 from .errors import IllConditionedWarning, NumericalError, SteamError
 from .graph import FactorGraph
-from .variables import Values, as_values
 from .linear import ordering as linear_ordering
 from .linear.ordering import Ordering, sparse_backend
 from .linear.solve import SparseCholesky
 from .linear.system import LinearSystem, linearize
+from .variables import Values, as_values
 
 __all__ = [
-    "Iteration", "Stationarity", "BatchResult", "MAX_CONDITION", "make_ordering", "check_stationarity",
-    "gauss_newton", "levenberg_marquardt", "batch_solve",
+    "Iteration",
+    "Stationarity",
+    "BatchResult",
+    "MAX_CONDITION",
+    "make_ordering",
+    "check_stationarity",
+    "gauss_newton",
+    "levenberg_marquardt",
+    "batch_solve",
 ]
 
 # Largest condition number of the scaled information matrix for which a result may say "converged".
@@ -69,7 +76,9 @@ class Stationarity:
 
     def holds(self, relative_tolerance: float, absolute_tolerance: float) -> bool:
         """Well conditioned, and one more step would lower the cost by at most the tolerance."""
-        return self.well_conditioned and self.predicted_decrease <= max(relative_tolerance * self.cost, absolute_tolerance)
+        return self.well_conditioned and self.predicted_decrease <= max(
+            relative_tolerance * self.cost, absolute_tolerance
+        )
 
 
 @dataclass(frozen=True)
@@ -120,12 +129,14 @@ def _scaled_condition(info: sp.csc_matrix, chol: SparseCholesky) -> float:
     s = 1.0 / np.sqrt(info.diagonal())
     scaled = sp.diags(s) @ info @ sp.diags(s)
     n = info.shape[0]
-    apply = lambda v: chol.solve(np.ravel(v) / s) / s  # noqa: E731  (S 𝓘 S)⁻¹ = S⁻¹ 𝓘⁻¹ S⁻¹
+    apply = lambda v: chol.solve(np.ravel(v) / s) / s
     inverse = spla.LinearOperator((n, n), matvec=apply, rmatvec=apply, dtype=float)  # symmetric
     return float(abs(scaled).sum(axis=0).max() * spla.onenormest(inverse))
 
 
-def check_stationarity(graph: FactorGraph, values: Values, ordering: Ordering, backend: str | None = None) -> Stationarity:
+def check_stationarity(
+    graph: FactorGraph, values: Values, ordering: Ordering, backend: str | None = None
+) -> Stationarity:
     """How far ``values`` is from a stationary point of the cost, and whether float64 can tell.
 
     Linearizes at θ̄ and computes the Gauss-Newton step δ = 𝓘⁻¹Aᵀb: its model decrease ½ (Aᵀb)ᵀδ is
@@ -146,7 +157,9 @@ def check_stationarity(graph: FactorGraph, values: Values, ordering: Ordering, b
     )
 
 
-def _certify(graph, values, order, backend, rule: str, tolerances: tuple[float, float], check: bool) -> tuple[bool, str, Stationarity | None]:
+def _certify(
+    graph, values, order, backend, rule: str, tolerances: tuple[float, float], check: bool
+) -> tuple[bool, str, Stationarity | None]:
     """(converged, reason, check) for an estimate where ``rule`` ('' for none) stopped the iterations."""
     if not check:
         return False, f"{rule or 'max_iterations'} (stationarity not checked)", None
@@ -161,14 +174,23 @@ def _certify(graph, values, order, backend, rule: str, tolerances: tuple[float, 
     if not rule:
         return False, "max_iterations", found
     if not found.holds(*tolerances):
-        return False, f"{rule}, but one more Gauss-Newton step would lower the cost by {found.predicted_decrease:.3g}: not a stationary point", found
+        return (
+            False,
+            f"{rule}, but one more Gauss-Newton step would lower the cost by {found.predicted_decrease:.3g}: not a stationary point",
+            found,
+        )
     return True, f"{rule}; stationary (one more step would gain {found.predicted_decrease:.2g})", found
 
 
 def _check_options(**options: float) -> None:
     """Every tolerance and damping option a finite number ≥ 0 (the damping ones > 0), named on failure."""
     for name, value in options.items():
-        if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)) or not math.isfinite(value) or value < 0:
+        if (
+            isinstance(value, bool)
+            or not isinstance(value, (int, float, np.integer, np.floating))
+            or not math.isfinite(value)
+            or value < 0
+        ):
             raise SteamError(f"{name} must be a finite number ≥ 0, got {value!r}")
         if name in ("initial_damping", "max_damping") and value == 0:
             raise SteamError(f"{name} must be > 0, got {value!r}")
@@ -183,7 +205,9 @@ def _arguments(graph: FactorGraph, initial: Values) -> tuple[FactorGraph, Values
     return graph, as_values("initial", initial)
 
 
-def _prepare(graph: FactorGraph, initial: Values, ordering: str | Ordering, backend: str | None, max_iterations: int) -> tuple[str, Ordering, float]:
+def _prepare(
+    graph: FactorGraph, initial: Values, ordering: str | Ordering, backend: str | None, max_iterations: int
+) -> tuple[str, Ordering, float]:
     """Checks shared by both solvers: the graph and estimates, the backend, the ordering, the start cost."""
     if isinstance(max_iterations, bool) or not isinstance(max_iterations, (int, np.integer)) or max_iterations < 0:
         raise SteamError(f"max_iterations must be an integer ≥ 0, got {max_iterations!r}")
@@ -194,7 +218,9 @@ def _prepare(graph: FactorGraph, initial: Values, ordering: str | Ordering, back
     named = set(graph.keys())
     unconstrained = [k for k in initial if k not in named]
     if unconstrained:
-        raise SteamError(f"variable {unconstrained[0]!r} has an initial value but no factor names it, so nothing estimates it")
+        raise SteamError(
+            f"variable {unconstrained[0]!r} has an initial value but no factor names it, so nothing estimates it"
+        )
     return backend, make_ordering(graph, initial, ordering, backend), graph.error(initial)
 
 
@@ -236,7 +262,9 @@ def gauss_newton(
     an ill-conditioned system gives an :class:`~steam_ref.errors.IllConditionedWarning`. A NaN or inf
     anywhere raises :class:`~steam_ref.errors.NumericalError` naming the factor or variable.
     """
-    _check_options(relative_tolerance=relative_tolerance, absolute_tolerance=absolute_tolerance, step_tolerance=step_tolerance)
+    _check_options(
+        relative_tolerance=relative_tolerance, absolute_tolerance=absolute_tolerance, step_tolerance=step_tolerance
+    )
     graph, initial = _arguments(graph, initial)
     backend, order, cost0 = _prepare(graph, initial, ordering, backend, max_iterations)
     values, iterations, rule, nnz, cost = initial.copy(), [], "", 0, cost0
@@ -252,7 +280,9 @@ def gauss_newton(
         cost = new_cost
         if rule:
             break
-    converged, reason, found = _certify(graph, values, order, backend, rule, (relative_tolerance, absolute_tolerance), check)
+    converged, reason, found = _certify(
+        graph, values, order, backend, rule, (relative_tolerance, absolute_tolerance), check
+    )
     return BatchResult(values, cost0, iterations, converged, reason, order, nnz, backend, found)
 
 
@@ -279,8 +309,12 @@ def levenberg_marquardt(
     ``max_damping`` (no step lowers the cost). ``converged`` as in :func:`gauss_newton`.
     """
     _check_options(
-        relative_tolerance=relative_tolerance, absolute_tolerance=absolute_tolerance, step_tolerance=step_tolerance,
-        initial_damping=initial_damping, damping_factor=damping_factor, max_damping=max_damping,
+        relative_tolerance=relative_tolerance,
+        absolute_tolerance=absolute_tolerance,
+        step_tolerance=step_tolerance,
+        initial_damping=initial_damping,
+        damping_factor=damping_factor,
+        max_damping=max_damping,
     )
     graph, initial = _arguments(graph, initial)
     backend, order, cost0 = _prepare(graph, initial, ordering, backend, max_iterations)
@@ -301,7 +335,9 @@ def levenberg_marquardt(
             lam *= damping_factor
             if lam > max_damping:
                 rule = f"damping {lam:.1e} above {max_damping:.1e}: no step lowers the cost"
-    converged, reason, found = _certify(graph, values, order, backend, rule, (relative_tolerance, absolute_tolerance), check)
+    converged, reason, found = _certify(
+        graph, values, order, backend, rule, (relative_tolerance, absolute_tolerance), check
+    )
     return BatchResult(values, cost0, iterations, converged, reason, order, nnz, backend, found)
 
 

@@ -61,7 +61,9 @@ def _unit_columns(ordering: Ordering, keys: Sequence[Key]) -> tuple[NDArray, NDA
     for k in keys:
         if k not in ordering.offset_of:
             raise UnknownVariableError(f"variable {k!r} is not in the system")
-    cols = np.concatenate([ordering.offset_of[k] + np.arange(ordering.dims[ordering.position[k]]) for k in keys] or [np.zeros(0, int)])
+    cols = np.concatenate(
+        [ordering.offset_of[k] + np.arange(ordering.dims[ordering.position[k]]) for k in keys] or [np.zeros(0, int)]
+    )
     E = np.zeros((ordering.total_dim, len(cols)))
     E[cols, np.arange(len(cols))] = 1.0
     return cols, E
@@ -82,7 +84,9 @@ def _chunks(ordering: Ordering, groups: Sequence[Sequence[Key]], columns: int) -
         yield chunk
 
 
-def _blocks_of_inverse(chol: SparseCholesky, ordering: Ordering, groups: Sequence[Sequence[Key]], max_entries: int = 4_000_000) -> list[NDArray]:
+def _blocks_of_inverse(
+    chol: SparseCholesky, ordering: Ordering, groups: Sequence[Sequence[Key]], max_entries: int = 4_000_000
+) -> list[NDArray]:
     """The block of 𝓘⁻¹ of each group of keys, from one factorization, solving for as many groups at a
     time as keep the dense right-hand side within ``max_entries`` numbers (32 MB by default)."""
     out: list[NDArray] = []
@@ -296,7 +300,9 @@ def tree_joint_marginals(tree: BayesTree, groups: Sequence[Sequence[Key]]) -> li
     out: list[NDArray | None] = [None] * len(groups)
     for g, keys in enumerate(groups):
         holders = (tree.clique_containing(k) for k in keys)
-        c = next((c for c in holders if set(keys) <= set(tree.cliques[c].frontals) | set(tree.cliques[c].separator)), None)
+        c = next(
+            (c for c in holders if set(keys) <= set(tree.cliques[c].frontals) | set(tree.cliques[c].separator)), None
+        )
         if c is None:
             out[g] = tree_joint_covariance(tree, keys)
         else:

@@ -46,7 +46,6 @@ SKIPS = (1, 2, 3, 5, 10, 20)  # time-step differences between estimated states (
 TIMING_RUNS = (("pb", 1), ("pb", 10), ("pbvr", 1), ("pbvr", 10), ("btgp", 1), ("btgp", 10))
 
 
-
 @dataclass
 class Experiment:
     """The runs of one data set."""
@@ -62,7 +61,9 @@ class Experiment:
     note: str = ""  # why there is no fidelity comparison, if there is none
 
 
-def timing_experiment(exp: Experiment, *, batch_budget_s: float | None = 120.0, max_poses: int | None = None, progress: bool = False) -> None:
+def timing_experiment(
+    exp: Experiment, *, batch_budget_s: float | None = 120.0, max_poses: int | None = None, progress: bool = False
+) -> None:
     """Fig. 3/4 left: every (method, schedule) of :data:`TIMING_RUNS`; PB and PBVR under a budget."""
     for method, every in TIMING_RUNS:
         budget = batch_budget_s if method != "btgp" else None
@@ -78,7 +79,9 @@ def timing_experiment(exp: Experiment, *, batch_budget_s: float | None = 120.0, 
 INTERPOLATION_DEPARTURES = ("plain-heading-rate",)
 
 
-def interpolation_experiment(exp: Experiment, *, skips: tuple[int, ...] = SKIPS, max_poses: int | None = None, progress: bool = False) -> None:
+def interpolation_experiment(
+    exp: Experiment, *, skips: tuple[int, ...] = SKIPS, max_poses: int | None = None, progress: bool = False
+) -> None:
     """Fig. 3/4 right: BTGP/1 at each skip, with and without interpolation (the set-up departing
     from the scripts by :data:`INTERPOLATION_DEPARTURES`)."""
     setup = exp.setup.departing(*INTERPOLATION_DEPARTURES)
@@ -88,19 +91,24 @@ def interpolation_experiment(exp: Experiment, *, skips: tuple[int, ...] = SKIPS,
             store[skip] = run_online(exp.data, setup, opts)
 
 
-def published_run_experiment(exp: Experiment, *, max_poses: int | None = None, progress: bool = False, data_dir: str | None = None) -> None:
+def published_run_experiment(
+    exp: Experiment, *, max_poses: int | None = None, progress: bool = False, data_dir: str | None = None
+) -> None:
     """BTGP/1 as the authors ran it for their saved runs (every pose a state, the set-up's defaults),
     with its final marginals, compared with the authors' saved run when one is found for ``exp.name``
     (:mod:`steam_ref.fidelity`). A prefix run (``max_poses``) is not comparable and says so."""
-    exp.published = run_online(exp.data, exp.setup, StreamOptions(max_poses=max_poses, progress=progress),
-                               covariances=max_poses is None)
+    exp.published = run_online(
+        exp.data, exp.setup, StreamOptions(max_poses=max_poses, progress=progress), covariances=max_poses is None
+    )
     if not exp.published.completed:
         exp.note = f"first {exp.published.n_steps_processed} steps only, not comparable with the authors' run"
     elif exp.name not in AUTHORS_RUNS:
         exp.note = f"no saved authors' run for {exp.name!r}"
     else:
         try:
-            exp.fidelity = compare(exp.published, load_authors_run(exp.name, exp.data, data_dir), exp.data.ground_truth)[0]
+            exp.fidelity = compare(
+                exp.published, load_authors_run(exp.name, exp.data, data_dir), exp.data.ground_truth
+            )[0]
         except DataError as err:
             exp.note = str(err)
 
@@ -120,8 +128,14 @@ def _timing_rows(exp: Experiment) -> list[str]:
     rows = []
     for label, r in exp.timing.items():
         prefix = r.options.max_poses is not None and r.n_steps_processed >= r.options.max_poses
-        cut = "" if r.completed else f" ({'prefix' if prefix else 'time budget'}: {r.n_steps_processed} of {r.n_poses_total} steps)"
-        rows.append(f"| {exp.name} | {label} | {r.n_steps_processed} | {_fmt(r.total_s, ' s', 2)}{cut} | {_fmt(r.rmse_m, ' m')} |")
+        cut = (
+            ""
+            if r.completed
+            else f" ({'prefix' if prefix else 'time budget'}: {r.n_steps_processed} of {r.n_poses_total} steps)"
+        )
+        rows.append(
+            f"| {exp.name} | {label} | {r.n_steps_processed} | {_fmt(r.total_s, ' s', 2)}{cut} | {_fmt(r.rmse_m, ' m')} |"
+        )
     return rows
 
 
@@ -131,9 +145,11 @@ def _published_row(exp: Experiment) -> str:
     if f is None:
         return f"| {exp.name} | BTGP/1, every pose a state: position RMSE | – | {r.rmse_m:.5f} m ({exp.note}) |"
     cov = "" if f.pose_cov_median is None else f"; pose marginals {f.pose_cov_median:.3%} apart (median)"
-    return (f"| {exp.name} | BTGP/1, every pose a state: position RMSE (authors' saved run) | {f.authors_rmse_m:.5f} m | "
-            f"{f.rmse_m:.5f} m; within {1000 * f.pose_max_m:.1f} mm of the authors' estimate at every pose "
-            f"(RMS {1000 * f.pose_rms_m:.2f} mm), landmarks within {1000 * f.landmark_max_m:.2f} mm{cov} |")
+    return (
+        f"| {exp.name} | BTGP/1, every pose a state: position RMSE (authors' saved run) | {f.authors_rmse_m:.5f} m | "
+        f"{f.rmse_m:.5f} m; within {1000 * f.pose_max_m:.1f} mm of the authors' estimate at every pose "
+        f"(RMS {1000 * f.pose_rms_m:.2f} mm), landmarks within {1000 * f.landmark_max_m:.2f} mm{cov} |"
+    )
 
 
 def _claims(exp: Experiment, paper: dict[str, str]) -> list[str]:
@@ -148,7 +164,9 @@ def _claims(exp: Experiment, paper: dict[str, str]) -> list[str]:
             out.append(f"| {exp.name} | BTGP/1 vs {slow} | far faster | {ratio:.0f}× faster over the first {n} steps |")
     if "PB/1" in exp.timing and "PBVR/1" in exp.timing:
         ratio, n = speedup_on_prefix(exp.timing["PB/1"], exp.timing["PBVR/1"])
-        out.append(f"| {exp.name} | PBVR/1 vs PB/1 (reordering) | {paper['reorder']} | PBVR {ratio:.2f}× PB's speed over the first {n} steps |")
+        out.append(
+            f"| {exp.name} | PBVR/1 vs PB/1 (reordering) | {paper['reorder']} | PBVR {ratio:.2f}× PB's speed over the first {n} steps |"
+        )
     base = exp.with_interp.get(1)
     for skip, r in sorted(exp.with_interp.items()):
         if base is None or skip == 1:
@@ -164,19 +182,36 @@ def _claims(exp: Experiment, paper: dict[str, str]) -> list[str]:
 
 
 PAPER_CLAIMS = {
-    "synthetic": {"reorder": "reordering helps (298 landmarks)", "interp": "~90% interpolated: ~33% time saved, accuracy kept"},
-    "plaza": {"reorder": "no gain from reordering (4 landmarks)", "interp": "~80% interpolated: ~68% time saved, RMSE +~8 cm"},
+    "synthetic": {
+        "reorder": "reordering helps (298 landmarks)",
+        "interp": "~90% interpolated: ~33% time saved, accuracy kept",
+    },
+    "plaza": {
+        "reorder": "no gain from reordering (4 landmarks)",
+        "interp": "~80% interpolated: ~68% time saved, RMSE +~8 cm",
+    },
 }
 
 
 def results_table(experiments: list[Experiment], notes: list[str] = ()) -> str:
     """Markdown: timing runs, interpolation sweeps, and the paper's claims beside ours."""
-    lines = ["# Fig. 3 / Fig. 4 reproduced", "", "## Cumulative time (left panels)", "",
-             "| data | run | steps | total time | RMSE |", "|---|---|---|---|---|"]
+    lines = [
+        "# Fig. 3 / Fig. 4 reproduced",
+        "",
+        "## Cumulative time (left panels)",
+        "",
+        "| data | run | steps | total time | RMSE |",
+        "|---|---|---|---|---|",
+    ]
     for exp in experiments:
         lines += _timing_rows(exp)
-    lines += ["", "## Interpolation trade-off (right panels), BTGP/1", "",
-              "| data | skip | states | RMSE with | time with | RMSE without | time without |", "|---|---|---|---|---|---|---|"]
+    lines += [
+        "",
+        "## Interpolation trade-off (right panels), BTGP/1",
+        "",
+        "| data | skip | states | RMSE with | time with | RMSE without | time without |",
+        "|---|---|---|---|---|---|---|",
+    ]
     for exp in experiments:
         for skip in sorted(exp.with_interp):
             w, o = exp.with_interp[skip], exp.without_interp.get(skip)
@@ -230,9 +265,13 @@ def reproduce(
     out.mkdir(parents=True, exist_ok=True)
     sets, notes = _datasets(quick, data_dir) if data_sets is None else (list(data_sets), [])
     prefix, budget = (1000, 20.0) if quick else (None, 300.0)
-    notes.append(f"PB and PBVR run under a {budget:g} s budget per run; speed ratios are taken over the steps both covered")
-    notes.append("the interpolation sweep starts each state's heading rate from the plain heading change "
-                 "(departure plain-heading-rate), not the scripts' Pose2 difference; see docs/experiments.md")
+    notes.append(
+        f"PB and PBVR run under a {budget:g} s budget per run; speed ratios are taken over the steps both covered"
+    )
+    notes.append(
+        "the interpolation sweep starts each state's heading rate from the plain heading change "
+        "(departure plain-heading-rate), not the scripts' Pose2 difference; see docs/experiments.md"
+    )
     if quick:
         notes.append(f"quick mode: only the first {prefix} poses of each data set")
     experiments = []
@@ -252,9 +291,13 @@ def reproduce(
             plt.close(fig_)
             run = exp.with_interp[1]
             plot_trajectory(
-                data.ground_truth[:, 1:3], run.trajectory[:, :2], landmarks_true=data.landmarks[:, 1:3],
-                landmarks_estimated=run.landmarks, dead_reckoning=data.dead_reckoning[:, 1:3],
-                estimate_label=f"{run.method.upper()} estimate", path=str(out / f"{fig}_trajectory.png"),
+                data.ground_truth[:, 1:3],
+                run.trajectory[:, :2],
+                landmarks_true=data.landmarks[:, 1:3],
+                landmarks_estimated=run.landmarks,
+                dead_reckoning=data.dead_reckoning[:, 1:3],
+                estimate_label=f"{run.method.upper()} estimate",
+                path=str(out / f"{fig}_trajectory.png"),
             )
             experiments.append(exp)
     table = results_table(experiments, notes)

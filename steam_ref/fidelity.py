@@ -26,9 +26,20 @@ from .datasets import DATA_DIR_ENV, RangeDataset, default_data_dirs, read_mat
 from .errors import DataError
 from .results import RunResult, position_rmse
 
-__all__ = ["AUTHORS_RUNS", "COVARIANCE_SYMMETRY", "AuthorsRun", "Fidelity", "find_authors_file", "load_authors_run", "compare"]
+__all__ = [
+    "AUTHORS_RUNS",
+    "COVARIANCE_SYMMETRY",
+    "AuthorsRun",
+    "Fidelity",
+    "find_authors_file",
+    "load_authors_run",
+    "compare",
+]
 
-AUTHORS_RUNS = {"plaza": "Plaza1_full_data_run.mat", "paper-synthetic": "Syn_full_data_run.mat"}  # data set → file in authors/
+AUTHORS_RUNS = {
+    "plaza": "Plaza1_full_data_run.mat",
+    "paper-synthetic": "Syn_full_data_run.mat",
+}  # data set → file in authors/
 
 
 @dataclass(frozen=True)
@@ -60,8 +71,10 @@ def find_authors_file(name: str, data_dir: str | os.PathLike | None = None) -> P
         if path.is_file():
             return path
     looked = ", ".join(str(f) for f in folders) or "nowhere"
-    raise DataError(f"the authors' run authors/{file} not found; looked in: {looked}. Put the authors/ folder "
-                    f"(from XinyanGT/online-gpslam-code matlab/Data) in --data-dir or ${DATA_DIR_ENV}.")
+    raise DataError(
+        f"the authors' run authors/{file} not found; looked in: {looked}. Put the authors/ folder "
+        f"(from XinyanGT/online-gpslam-code matlab/Data) in --data-dir or ${DATA_DIR_ENV}."
+    )
 
 
 def _read(path: Path) -> dict:
@@ -84,7 +97,9 @@ def _table(path: Path, m: dict, key: str, columns: int, rows: int | None = None)
     value = value[:, :columns].astype(float)
     bad = np.argwhere(~np.isfinite(value))
     if bad.size:
-        raise DataError(f"{path}: {key}[{bad[0][0]}, {bad[0][1]}] is {value[tuple(bad[0])]}: every value must be finite")
+        raise DataError(
+            f"{path}: {key}[{bad[0][0]}, {bad[0][1]}] is {value[tuple(bad[0])]}: every value must be finite"
+        )
     return value
 
 
@@ -103,13 +118,17 @@ def _covariances(path: Path, cells: NDArray, what: str, d: int) -> NDArray:
     bad = np.flatnonzero(asym > COVARIANCE_SYMMETRY * size)
     if bad.size:
         k = int(bad[0])
-        raise DataError(f"{path}: {what} {k} is not symmetric (|C - Cᵀ| up to {asym[k]:.3g}, |C| up to {size[k]:.3g}): "
-                        "not a covariance")
+        raise DataError(
+            f"{path}: {what} {k} is not symmetric (|C - Cᵀ| up to {asym[k]:.3g}, |C| up to {size[k]:.3g}): "
+            "not a covariance"
+        )
     low = np.linalg.eigvalsh(out).min(axis=1, initial=np.inf) if len(out) else np.zeros(0)
     bad = np.flatnonzero(low <= 0)
     if bad.size:
         k = int(bad[0])
-        raise DataError(f"{path}: {what} {k} is not positive definite (smallest eigenvalue {low[k]:.3g}): not a covariance")
+        raise DataError(
+            f"{path}: {what} {k} is not positive definite (smallest eigenvalue {low[k]:.3g}): not a covariance"
+        )
     return out
 
 
@@ -121,15 +140,24 @@ def _check_same_data(path: Path, m: dict, data: RangeDataset) -> NDArray:
     if np.any(inds != poses) or np.any(poses < 0) or np.any(np.diff(poses) <= 0):
         raise DataError(f"{path}: estStateInds must be increasing pose indices >= 0")
     if poses.max(initial=-1) >= data.n_poses or np.shape(m["XY"]) != (data.n_landmarks, 2):
-        raise DataError(f"{path} was run on a data set with states up to pose {poses.max(initial=-1)} and {np.shape(m['XY'])[0]} "
-                        f"landmarks; {data.name!r} has {data.n_poses} poses and {data.n_landmarks} landmarks")
+        raise DataError(
+            f"{path} was run on a data set with states up to pose {poses.max(initial=-1)} and {np.shape(m['XY'])[0]} "
+            f"landmarks; {data.name!r} has {data.n_poses} poses and {data.n_landmarks} landmarks"
+        )
     truth = _table(path, m, "diff", 2, len(poses)) + _table(path, m, "XYT", 3, len(poses))[:, :2]
     if not np.allclose(truth, data.ground_truth[poses, 1:3], rtol=0, atol=1e-6):
         raise DataError(f"{path} was not run on this data set ({data.source}): its ground truth differs")
     saved = m.get("nNonInterpRangeMeasurements")
-    if isinstance(saved, np.ndarray) and saved.dtype.kind in "iuf" and saved.size and int(saved.ravel()[0]) != data.n_ranges:
-        raise DataError(f"{path} used {int(saved.ravel()[0])} range readings, {data.name!r} has {data.n_ranges} "
-                        "(the original Plaza files, not the cleaned one?)")
+    if (
+        isinstance(saved, np.ndarray)
+        and saved.dtype.kind in "iuf"
+        and saved.size
+        and int(saved.ravel()[0]) != data.n_ranges
+    ):
+        raise DataError(
+            f"{path} used {int(saved.ravel()[0])} range readings, {data.name!r} has {data.n_ranges} "
+            "(the original Plaza files, not the cleaned one?)"
+        )
     return poses
 
 
@@ -146,17 +174,23 @@ def load_authors_run(name: str, data: RangeDataset, data_dir: str | os.PathLike 
     cov = m.get("stateMarginal")
     has_cov = isinstance(cov, np.ndarray) and cov.dtype == object
     if has_cov and (cov.shape != (len(poses), 2) or np.shape(m.get("landmarkMarginal")) != (data.n_landmarks, 1)):
-        raise DataError(f"{path}: stateMarginal has shape {cov.shape} and landmarkMarginal {np.shape(m.get('landmarkMarginal'))}; "
-                        f"expected ({len(poses)}, 2) and ({data.n_landmarks}, 1)")
+        raise DataError(
+            f"{path}: stateMarginal has shape {cov.shape} and landmarkMarginal {np.shape(m.get('landmarkMarginal'))}; "
+            f"expected ({len(poses)}, 2) and ({data.n_landmarks}, 1)"
+        )
     marks = _table(path, m, "XY", 2, data.n_landmarks)
     landmark_cov = _covariances(path, m["landmarkMarginal"][:, 0], "landmarkMarginal", 2) if has_cov else None
     return AuthorsRun(
-        name, poses, _table(path, m, "XYT", 3, len(poses)), _table(path, m, "XYT_dot", 3, len(poses)),
+        name,
+        poses,
+        _table(path, m, "XYT", 3, len(poses)),
+        _table(path, m, "XYT_dot", 3, len(poses)),
         {i: marks[k] for k, i in enumerate(ids)},
         _covariances(path, cov[:, 0], "stateMarginal pose", 3) if has_cov else None,
         _covariances(path, cov[:, 1], "stateMarginal velocity", 3) if has_cov else None,
         {i: landmark_cov[k] for k, i in enumerate(tl_ids)} if has_cov else None,
-        _table(path, m, "step_t", 1)[:, 0], path,
+        _table(path, m, "step_t", 1)[:, 0],
+        path,
     )
 
 
@@ -192,13 +226,17 @@ class Fidelity:
 def compare(result: RunResult, authors: AuthorsRun, ground_truth: NDArray) -> tuple[Fidelity, NDArray]:
     """Figures of ``result`` against ``authors`` and the per-state distances (M,) [m]."""
     if not np.array_equal(result.state_poses, authors.state_poses):
-        raise DataError(f"the run has {result.n_states} states, the authors' {len(authors.state_poses)}: "
-                        "compare runs with the same state layout (every pose a state)")
+        raise DataError(
+            f"the run has {result.n_states} states, the authors' {len(authors.state_poses)}: "
+            "compare runs with the same state layout (every pose a state)"
+        )
     missing = sorted(set(authors.landmarks) - set(result.landmarks))
     if missing:
         raise DataError(f"the run has no estimate of landmark {missing[0]}, which the authors' run has")
     if len(ground_truth) <= result.state_poses.max(initial=0):
-        raise DataError(f"ground truth has {len(ground_truth)} rows, the run's states reach pose {result.state_poses.max()}")
+        raise DataError(
+            f"ground truth has {len(ground_truth)} rows, the run's states reach pose {result.state_poses.max()}"
+        )
     ours = result.trajectory[result.state_poses]
     dist = np.hypot(*(ours[:, :2] - authors.poses[:, :2]).T)
     truth = np.asarray(ground_truth)[result.state_poses, 1:3]
@@ -210,12 +248,26 @@ def compare(result: RunResult, authors: AuthorsRun, ground_truth: NDArray) -> tu
         v = _relative_frobenius(c.velocity[result.state_poses], authors.velocity_covariance)
         theirs = np.stack([authors.landmark_covariance[i] for i in c.landmark_ids])
         lm = _relative_frobenius(c.landmark, theirs)
-        cov = dict(pose_cov_median=float(np.median(p)), pose_cov_max=float(p.max()), velocity_cov_median=float(np.median(v)),
-                   velocity_cov_max=float(v.max()), landmark_cov_max=float(lm.max()))
+        cov = dict(
+            pose_cov_median=float(np.median(p)),
+            pose_cov_max=float(p.max()),
+            velocity_cov_median=float(np.median(v)),
+            velocity_cov_max=float(v.max()),
+            landmark_cov_max=float(lm.max()),
+        )
     fid = Fidelity(
-        authors.name, len(dist), float(np.sqrt(np.mean(dist**2))), float(dist.max()), int(result.state_poses[dist.argmax()]),
-        float(np.abs(ours[:, 2] - authors.poses[:, 2]).max()), float(max(marks)),
-        position_rmse(ours[:, :2], truth), position_rmse(authors.poses[:, :2], truth),
-        **{k: cov.get(k) for k in ("pose_cov_median", "pose_cov_max", "velocity_cov_median", "velocity_cov_max", "landmark_cov_max")},
+        authors.name,
+        len(dist),
+        float(np.sqrt(np.mean(dist**2))),
+        float(dist.max()),
+        int(result.state_poses[dist.argmax()]),
+        float(np.abs(ours[:, 2] - authors.poses[:, 2]).max()),
+        float(max(marks)),
+        position_rmse(ours[:, :2], truth),
+        position_rmse(authors.poses[:, :2], truth),
+        **{
+            k: cov.get(k)
+            for k in ("pose_cov_median", "pose_cov_max", "velocity_cov_median", "velocity_cov_max", "landmark_cov_max")
+        },
     )
     return fid, dist

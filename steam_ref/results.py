@@ -58,16 +58,47 @@ class RunResult:
     peak_rss_mb: float  # peak resident memory of the process so far
 
     @classmethod
-    def of(cls, options, times, trajectory, state_poses, landmarks, step_seconds, update_steps, update_seconds,
-           n_poses_total, n_steps_processed, completed, ground_truth, covariances, peak_rss) -> RunResult:
+    def of(
+        cls,
+        options,
+        times,
+        trajectory,
+        state_poses,
+        landmarks,
+        step_seconds,
+        update_steps,
+        update_seconds,
+        n_poses_total,
+        n_steps_processed,
+        completed,
+        ground_truth,
+        covariances,
+        peak_rss,
+    ) -> RunResult:
         """Package a run, scoring it against ``ground_truth`` (CMU GT layout, x, y in columns 1-2) if given."""
         rmse = rmse_states = float("nan")
         if ground_truth is not None and len(times):
             truth = np.asarray(ground_truth)[: len(times), 1:3]
             rmse = position_rmse(trajectory[:, :2], truth)
             rmse_states = position_rmse(trajectory[state_poses, :2], truth[state_poses])
-        return cls(options.method, options, times, trajectory, state_poses, landmarks, step_seconds, update_steps,
-                   update_seconds, n_poses_total, n_steps_processed, completed, rmse, rmse_states, covariances, peak_rss)
+        return cls(
+            options.method,
+            options,
+            times,
+            trajectory,
+            state_poses,
+            landmarks,
+            step_seconds,
+            update_steps,
+            update_seconds,
+            n_poses_total,
+            n_steps_processed,
+            completed,
+            rmse,
+            rmse_states,
+            covariances,
+            peak_rss,
+        )
 
     @property
     def n_states(self) -> int:
@@ -88,12 +119,20 @@ class RunResult:
         """The figures the CLI's ``--json`` prints."""
         u, o = self.update_seconds, self.options
         return {
-            "dataset": dataset, "method": self.method, "every": o.every, "skip": o.skip,
-            "interpolate": o.interpolate, "range_states": o.range_states,
-            "n_estimated_states": self.n_states, "n_poses": int(len(self.times)), "n_updates": int(len(u)),
-            "rmse_m": _json_float(self.rmse_m), "rmse_estimated_m": _json_float(self.rmse_states_m),
+            "dataset": dataset,
+            "method": self.method,
+            "every": o.every,
+            "skip": o.skip,
+            "interpolate": o.interpolate,
+            "range_states": o.range_states,
+            "n_estimated_states": self.n_states,
+            "n_poses": len(self.times),
+            "n_updates": len(u),
+            "rmse_m": _json_float(self.rmse_m),
+            "rmse_estimated_m": _json_float(self.rmse_states_m),
             "total_s": round(self.total_s, 4),
             "update_s_median": round(float(np.median(u)), 6) if len(u) else None,
             "update_s_p95": round(float(np.percentile(u, 95)), 6) if len(u) else None,
-            "peak_rss_mb": round(self.peak_rss_mb, 1), "completed": self.completed,
+            "peak_rss_mb": round(self.peak_rss_mb, 1),
+            "completed": self.completed,
         }

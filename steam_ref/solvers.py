@@ -13,13 +13,21 @@ from numpy.typing import NDArray
 
 from .batch import gauss_newton
 from .bayes_tree import IncrementalSolver, ISAM2Params
-from .errors import SteamError
 from .covariance import sparse_joint_covariance, sparse_joint_marginals, sparse_marginals
+from .errors import SteamError
 from .factors import Factor
 from .graph import FactorGraph
 from .variables import Key, Values
 
-__all__ = ["METHODS", "PB_RELATIVE_TOLERANCE", "PB_MAX_ITERATIONS", "OnlineSolver", "PeriodicBatchSolver", "BayesTreeSolver", "make_solver"]
+__all__ = [
+    "METHODS",
+    "PB_RELATIVE_TOLERANCE",
+    "PB_MAX_ITERATIONS",
+    "OnlineSolver",
+    "PeriodicBatchSolver",
+    "BayesTreeSolver",
+    "make_solver",
+]
 
 METHODS = ("btgp", "pb", "pbvr")
 PB_RELATIVE_TOLERANCE = 1e-5  # PB/PBVR stop when the cost falls by less than this fraction (GTSAM's default)
@@ -59,7 +67,12 @@ class OnlineSolver:
 class PeriodicBatchSolver(OnlineSolver):
     """PB (XL ordering) or PBVR (AMD): Gauss-Newton over everything, warm-started.  [YIB Sec. IV]"""
 
-    def __init__(self, ordering: str = "xl", relative_tolerance: float = PB_RELATIVE_TOLERANCE, max_iterations: int = PB_MAX_ITERATIONS):
+    def __init__(
+        self,
+        ordering: str = "xl",
+        relative_tolerance: float = PB_RELATIVE_TOLERANCE,
+        max_iterations: int = PB_MAX_ITERATIONS,
+    ):
         self.name = "pb" if ordering == "xl" else "pbvr"
         self.ordering = ordering
         self.options = dict(relative_tolerance=relative_tolerance, max_iterations=max_iterations)
@@ -121,7 +134,10 @@ class BayesTreeSolver(OnlineSolver):
 
 
 def make_solver(
-    method: str, *, isam2: ISAM2Params | None = None, pb_relative_tolerance: float = PB_RELATIVE_TOLERANCE,
+    method: str,
+    *,
+    isam2: ISAM2Params | None = None,
+    pb_relative_tolerance: float = PB_RELATIVE_TOLERANCE,
     pb_max_iterations: int = PB_MAX_ITERATIONS,
 ) -> OnlineSolver:
     """The solver ``method`` names ('btgp', 'pb' or 'pbvr')."""

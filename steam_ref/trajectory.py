@@ -52,7 +52,9 @@ def _pose_indices(states: Sequence[int]) -> list[int]:
         raise SteamError(f"states must be pose indices (integers >= 0), got states={out.tolist()!r:.120}")
     if np.any(np.diff(out) <= 0):
         i = int(np.flatnonzero(np.diff(out) <= 0)[0])
-        raise SteamError(f"states must increase strictly, but states[{i}] = {out[i]} and states[{i + 1}] = {out[i + 1]}")
+        raise SteamError(
+            f"states must increase strictly, but states[{i}] = {out[i]} and states[{i + 1}] = {out[i + 1]}"
+        )
     return out.tolist()
 
 
@@ -94,7 +96,9 @@ class Trajectory:
         if self.states:
             size = np.shape(solver.estimate_of(X(self.states[0])))
             if size != (self.n,):
-                raise ShapeError(f"the prior has states of {self.n} numbers, the solver's {X(self.states[0])!r} has shape {size}")
+                raise ShapeError(
+                    f"the prior has states of {self.n} numbers, the solver's {X(self.states[0])!r} has shape {size}"
+                )
 
     def _between(self, a: int, b: int, t: float, xa: NDArray, xb: NDArray) -> NDArray:
         """x̄(t) between the states at poses a and b.  [YIB Eq. 18]"""
@@ -171,7 +175,9 @@ class Trajectory:
         marg = self.solver.marginals([X(i) for i in solved] + landmarks)
         for k in landmarks:
             if marg[k].shape != (2, 2):
-                raise ShapeError(f"landmarks names {k!r}, a variable of size {marg[k].shape[0]}; a landmark has 2 numbers")
+                raise ShapeError(
+                    f"landmarks names {k!r}, a variable of size {marg[k].shape[0]}; a landmark has 2 numbers"
+                )
         gaps = [(a, b) for a, b in zip(solved, solved[1:]) if b > a + 1]
         joints = dict(zip(gaps, self.solver.joint_covariances([(X(a), X(b)) for a, b in gaps]))) if gaps else {}
         n = solved[-1] + 1 if solved else 0

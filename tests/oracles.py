@@ -51,9 +51,7 @@ def sde_process_noise(sde, dt: float) -> NDArray:
 def sde_input_integral(sde, dt: float) -> NDArray:
     """v_i = ∫₀^dt Φ(dt, s) v ds by adaptive quadrature.  [YIB Eq. 23]"""
     A, v = np.asarray(sde.A, float), np.asarray(sde.v, float)
-    vi, _ = scipy.integrate.quad_vec(
-        lambda s: scipy.linalg.expm(A * (dt - s)) @ v, 0.0, dt, epsabs=1e-13, epsrel=1e-12
-    )
+    vi, _ = scipy.integrate.quad_vec(lambda s: scipy.linalg.expm(A * (dt - s)) @ v, 0.0, dt, epsabs=1e-13, epsrel=1e-12)
     return vi
 
 
@@ -76,8 +74,8 @@ def gp_kernel(times: NDArray, sde, P0: NDArray) -> NDArray:
     for j in range(M):
         for k in range(j + 1):
             block = sde_transition(sde, times[j] - times[k]) @ P[k]  # Cov(x_j, x_k), t_j ≥ t_k
-            K[j * n:(j + 1) * n, k * n:(k + 1) * n] = block
-            K[k * n:(k + 1) * n, j * n:(j + 1) * n] = block.T
+            K[j * n : (j + 1) * n, k * n : (k + 1) * n] = block
+            K[k * n : (k + 1) * n, j * n : (j + 1) * n] = block.T
     return K
 
 
@@ -93,9 +91,7 @@ def gp_mean(times: NDArray, sde, mu0: NDArray) -> NDArray:
     return np.concatenate(mu)
 
 
-def condition_gaussian(
-    mean: NDArray, cov: NDArray, H: NDArray, R: NDArray, y: NDArray
-) -> tuple[NDArray, NDArray]:
+def condition_gaussian(mean: NDArray, cov: NDArray, H: NDArray, R: NDArray, y: NDArray) -> tuple[NDArray, NDArray]:
     """Posterior of x ~ N(mean, cov) given y = H x + n, n ~ N(0, R), in covariance form."""
     S = H @ cov @ H.T + R
     gain = np.linalg.solve(S, H @ cov).T  # cov Hᵀ S⁻¹

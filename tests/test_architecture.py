@@ -156,8 +156,13 @@ def module_graph(sites: list[ImportSite]) -> dict[str, set[str]]:
 
 
 def test_the_import_parser_resolves_relative_imports_and_skips_type_checking():
-    files = {"steam_ref": "__init__.py", "steam_ref.a": "a.py", "steam_ref.pkg": "__init__.py",
-             "steam_ref.pkg.b": "b.py", "steam_ref.pkg.c": "c.py"}
+    files = {
+        "steam_ref": "__init__.py",
+        "steam_ref.a": "a.py",
+        "steam_ref.pkg": "__init__.py",
+        "steam_ref.pkg.b": "b.py",
+        "steam_ref.pkg.c": "c.py",
+    }
     modules = {name: Path(file) for name, file in files.items()}
     source = (
         "from typing import TYPE_CHECKING\nimport numpy\nfrom . import c\nfrom .. import a\nfrom ..a import f\n"
@@ -166,8 +171,13 @@ def test_the_import_parser_resolves_relative_imports_and_skips_type_checking():
     )
     sites = import_sites("steam_ref.pkg.b", ast.parse(source), modules)
     got = {(s.target, s.local) for s in sites}
-    assert got == {("steam_ref.pkg.c", False), ("steam_ref.a", False), ("steam_ref.pkg.b", False),
-                   ("steam_ref.pkg", False), ("steam_ref.a", True)}
+    assert got == {
+        ("steam_ref.pkg.c", False),
+        ("steam_ref.a", False),
+        ("steam_ref.pkg.b", False),
+        ("steam_ref.pkg", False),
+        ("steam_ref.a", True),
+    }
     assert [s.line for s in sites if s.local] == [13]
 
 

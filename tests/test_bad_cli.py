@@ -56,8 +56,17 @@ def places(tmp_path_factory) -> dict[str, str]:
     td = "".join("\t".join(f"{float(v)!r}" for v in row) + "\n" for row in SMALL.ranges)
     (cut / "T_TD.txt").write_text(td[: len(td) - 5])
     scipy.io.savemat(cut / "T_.mat", dict(GT=arrays["GT"], TL=arrays["TL"]))
-    files = {"a_file": "a_file", "dir_png": "dir.png", "dir_npz": "dir.npz", "good": "good.mat", "one": "one.mat",
-             "negative": "negative.mat", "nan": "nan.mat", "crash": "crash.mat", "cut": "cut"}
+    files = {
+        "a_file": "a_file",
+        "dir_png": "dir.png",
+        "dir_npz": "dir.npz",
+        "good": "good.mat",
+        "one": "one.mat",
+        "negative": "negative.mat",
+        "nan": "nan.mat",
+        "crash": "crash.mat",
+        "cut": "cut",
+    }
     return {k: str(root / v) for k, v in files.items()} | {"root": str(root), "missing": str(root / "missing")}
 
 
@@ -135,11 +144,27 @@ def test_an_output_check_leaves_no_file_behind(capsys, places) -> None:
 
 
 VALUE = st.one_of(
-    st.text(max_size=8), st.integers(-10**30, 10**30).map(str), st.floats(allow_nan=True, allow_infinity=True).map(repr),
+    st.text(max_size=8),
+    st.integers(-(10**30), 10**30).map(str),
+    st.floats(allow_nan=True, allow_infinity=True).map(repr),
     st.sampled_from(["0", "-0", "1e400", "nan", "-inf", "1_000", "0x10", "", " ", "--", "-1", "2.0"]),
 )
-OPTION = st.sampled_from(["--every", "--skip", "--max-poses", "--seed", "--time-budget", "--relinearize-threshold",
-                          "--relinearize-skip", "--method", "--preset", "--departure", "--dataset", "--data-dir"])
+OPTION = st.sampled_from(
+    [
+        "--every",
+        "--skip",
+        "--max-poses",
+        "--seed",
+        "--time-budget",
+        "--relinearize-threshold",
+        "--relinearize-skip",
+        "--method",
+        "--preset",
+        "--departure",
+        "--dataset",
+        "--data-dir",
+    ]
+)
 
 
 @settings(max_examples=80, deadline=None, database=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
@@ -151,7 +176,9 @@ def test_any_value_of_any_option_gives_one_line_and_exit_2(capsys, places, optio
     _assert_one_line_exit_2(code, out, err, "")
 
 
-@pytest.mark.parametrize("argv,needle", [(["run", "--seed", "-1"], "--seed"), (["batch", "--dataset", "one.mat"], "at least two poses")])
+@pytest.mark.parametrize(
+    "argv,needle", [(["run", "--seed", "-1"], "--seed"), (["batch", "--dataset", "one.mat"], "at least two poses")]
+)
 def test_the_module_as_a_user_runs_it(places, argv, needle) -> None:
     argv = [places["one"] if a == "one.mat" else a for a in argv]
     proc = subprocess.run([sys.executable, "-m", "steam_ref", *argv], capture_output=True, text=True, timeout=120)

@@ -28,12 +28,17 @@ from steam_ref.errors import DataError
 FIELDS = ("ground_truth", "odometry", "dead_reckoning", "landmarks", "ranges")
 CMU = {"GT": "ground_truth", "DR": "odometry", "DRp": "dead_reckoning", "TL": "landmarks", "TD": "ranges"}
 COLUMNS = {
-    "GT": ("time", "x", "y", "heading"), "DR": ("time", "distance", "heading change"),
-    "DRp": ("time", "x", "y", "heading"), "TL": ("id", "x", "y"), "TD": ("time", "sender id", "landmark id", "range"),
+    "GT": ("time", "x", "y", "heading"),
+    "DR": ("time", "distance", "heading change"),
+    "DRp": ("time", "x", "y", "heading"),
+    "TL": ("id", "x", "y"),
+    "TD": ("time", "sender id", "landmark id", "range"),
 }
 # 5 poses, 4 odometry rows, 2 landmarks, 5 ranges: no table is square, so a transposed one never fits.
 SMALL = generate_synthetic(n_steps=4, n_landmarks=2, seed=3, range_sigma=0.3)
-FAST = settings(max_examples=60, deadline=None, database=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+FAST = settings(
+    max_examples=60, deadline=None, database=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
 
 
 def _save(path: Path, compress: bool = False, **tables: np.ndarray) -> Path:
@@ -101,8 +106,12 @@ def _check_text_file(folder: Path, which: str, raw: bytes) -> None:
     except DataError as err:
         assert str(path) in str(err), str(err)
         if expected is not None:  # the rule reads the file, so the data set's own checks must refuse it
-            tables = dict(GT=np.array(SMALL.ground_truth), TL=np.array(SMALL.landmarks), DR=np.array(SMALL.odometry),
-                          TD=np.array(SMALL.ranges))
+            tables = dict(
+                GT=np.array(SMALL.ground_truth),
+                TL=np.array(SMALL.landmarks),
+                DR=np.array(SMALL.odometry),
+                TD=np.array(SMALL.ranges),
+            )
             tables[which] = expected
             with pytest.raises(DataError):
                 load_cmu_mat(_save(folder.parent / "cross-check.mat", **tables))
@@ -144,7 +153,9 @@ def test_a_text_table_cut_at_every_byte(tmp_path: Path, which: str, copies: bool
                 load_cmu_text(folder)
         else:
             line = cut.count(b"\n") + 1
-            with pytest.raises(DataError, match=rf"{re.escape(str(path))} line {line}: the last line does not end with a newline"):
+            with pytest.raises(
+                DataError, match=rf"{re.escape(str(path))} line {line}: the last line does not end with a newline"
+            ):
                 load_cmu_text(folder)
 
 
@@ -222,7 +233,9 @@ def test_each_mat_table_transposed(tmp_path: Path, table: str) -> None:
     arrays[table] = arrays[table].T
     path = _save(tmp_path / "t.mat", **arrays)
     shape = re.escape(str(arrays[table].shape))
-    with pytest.raises(DataError, match=rf"{re.escape(str(path))}: {table} must have shape \(n, {len(COLUMNS[table])}\).*{shape}"):
+    with pytest.raises(
+        DataError, match=rf"{re.escape(str(path))}: {table} must have shape \(n, {len(COLUMNS[table])}\).*{shape}"
+    ):
         load_cmu_mat(path)
 
 
@@ -231,7 +244,9 @@ def test_each_text_table_transposed(tmp_path: Path, which: str) -> None:
     folder = _text_set(tmp_path / "set", copies=False)
     np.savetxt(folder / f"T_{which}.txt", getattr(SMALL, CMU[which]).T, fmt="%.17g", delimiter="\t")
     n = len(COLUMNS[which])
-    with pytest.raises(DataError, match=rf"T_{which}\.txt line 1: expected {n} numbers .*got {len(getattr(SMALL, CMU[which]))}"):
+    with pytest.raises(
+        DataError, match=rf"T_{which}\.txt line 1: expected {n} numbers .*got {len(getattr(SMALL, CMU[which]))}"
+    ):
         load_cmu_text(folder)
 
 
@@ -239,8 +254,11 @@ def test_shuffled_rows(tmp_path: Path) -> None:
     """Poses, odometry and dead reckoning out of order are refused; ranges are kept in file order
     and their going back noted (the scripts read them so); landmarks may come in any order."""
     order = [0, 2, 1, 3, 4]
-    expect = {"GT": r"ground_truth row 2 has t=2\.0 after t=3\.0", "DR": r"odometry row 0 has t=3\.0 but pose 1 has t=2\.0",
-              "DRp": r"dead_reckoning row 2 has t=2\.0 after t=3\.0"}
+    expect = {
+        "GT": r"ground_truth row 2 has t=2\.0 after t=3\.0",
+        "DR": r"odometry row 0 has t=3\.0 but pose 1 has t=2\.0",
+        "DRp": r"dead_reckoning row 2 has t=2\.0 after t=3\.0",
+    }
     for table, message in expect.items():
         arrays = SMALL.to_cmu_arrays()
         arrays[table] = arrays[table][order[: len(arrays[table])]] if table != "DR" else arrays[table][[1, 0, 2, 3]]
@@ -258,7 +276,13 @@ def test_shuffled_rows(tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     "table,row,column,value,message",
     [
-        ("TD", 3, 2, 99.0, r"ranges row 3 \(t=4\.0\) names landmark id 99, which is not in landmarks; known ids: \[1, 2\]"),
+        (
+            "TD",
+            3,
+            2,
+            99.0,
+            r"ranges row 3 \(t=4\.0\) names landmark id 99, which is not in landmarks; known ids: \[1, 2\]",
+        ),
         ("TD", 1, 2, 1.5, r"ranges\[1, 2\] \(landmark id\) = 1\.5 is not an integer"),
         ("TD", 4, 1, 0.25, r"ranges\[4, 1\] \(sender id\) = 0\.25 is not an integer"),
         ("TL", 1, 0, 1.0, r"landmark id 1 appears twice, in landmarks rows 0 and 1"),
@@ -285,9 +309,13 @@ def test_a_negative_range_in_a_text_file_names_file_row_and_value(tmp_path: Path
 @pytest.mark.parametrize("n_poses", [0, 1])
 def test_a_set_needs_two_poses(tmp_path: Path, n_poses: int) -> None:
     arrays = SMALL.to_cmu_arrays()
-    arrays.update(GT=arrays["GT"][:n_poses], DR=arrays["DR"][:0], DRp=arrays["DRp"][:n_poses], TD=arrays["TD"][:n_poses])
+    arrays.update(
+        GT=arrays["GT"][:n_poses], DR=arrays["DR"][:0], DRp=arrays["DRp"][:n_poses], TD=arrays["TD"][:n_poses]
+    )
     path = _save(tmp_path / "few.mat", **arrays)
-    with pytest.raises(DataError, match=rf"few\.mat: ground_truth has {n_poses} row\(s\): a data set needs at least two poses"):
+    with pytest.raises(
+        DataError, match=rf"few\.mat: ground_truth has {n_poses} row\(s\): a data set needs at least two poses"
+    ):
         load_cmu_mat(path)
     with pytest.raises(DataError, match=r"at least two poses"):
         RangeDataset("few", arrays["GT"], arrays["DR"], arrays["DRp"], arrays["TL"], arrays["TD"])
@@ -308,8 +336,12 @@ _EDIT = st.one_of(
     st.tuples(st.just("cut"), st.integers(0, 10**6), st.none()),
     st.tuples(st.just("flip"), st.integers(0, 10**6), st.integers(1, 255)),
     st.tuples(st.just("delete"), st.integers(0, 10**6), st.integers(1, 6)),
-    st.tuples(st.just("insert"), st.integers(0, 10**6),
-              st.binary(min_size=1, max_size=3) | st.sampled_from([b"nan", b"inf", b"-", b".", b"e", b"\n", b"\t", b" ", b"\r", b"1_0", b"0x1"])),
+    st.tuples(
+        st.just("insert"),
+        st.integers(0, 10**6),
+        st.binary(min_size=1, max_size=3)
+        | st.sampled_from([b"nan", b"inf", b"-", b".", b"e", b"\n", b"\t", b" ", b"\r", b"1_0", b"0x1"]),
+    ),
 )
 
 

@@ -35,12 +35,28 @@ def _with_ranges(data: RangeDataset, ranges: np.ndarray) -> RangeDataset:
 @pytest.mark.parametrize(
     "field,value",
     [
-        ("final_updates", -1), ("final_updates", 2.5), ("final_updates", True), ("range_correction_steps", -3000),
-        ("range_correction_steps", "3000"), ("start_after_ranges", -50), ("start_after_ranges", None),
-        ("range_sigma", 0.0), ("range_sigma", math.nan), ("range_sigma", -20.0), ("tukey_c", math.inf), ("tukey_c", 0),
-        ("landmark_prior_sigma", -1.0), ("velocity_sigmas", [0.05, 0.01]), ("interpolated_velocity_sigmas", [0.5, 0.0, 0.02]),
-        ("first_pose_sigmas", [1.0, math.nan, 3.0]), ("first_velocity", "zero"), ("landmarks_up_front", 1),
-        ("pose2_heading_rate_guess", "yes"), ("relinearize_blocks", (3, 2)), ("relinearize_blocks", (6.0,)), ("name", ""),
+        ("final_updates", -1),
+        ("final_updates", 2.5),
+        ("final_updates", True),
+        ("range_correction_steps", -3000),
+        ("range_correction_steps", "3000"),
+        ("start_after_ranges", -50),
+        ("start_after_ranges", None),
+        ("range_sigma", 0.0),
+        ("range_sigma", math.nan),
+        ("range_sigma", -20.0),
+        ("tukey_c", math.inf),
+        ("tukey_c", 0),
+        ("landmark_prior_sigma", -1.0),
+        ("velocity_sigmas", [0.05, 0.01]),
+        ("interpolated_velocity_sigmas", [0.5, 0.0, 0.02]),
+        ("first_pose_sigmas", [1.0, math.nan, 3.0]),
+        ("first_velocity", "zero"),
+        ("landmarks_up_front", 1),
+        ("pose2_heading_rate_guess", "yes"),
+        ("relinearize_blocks", (3, 2)),
+        ("relinearize_blocks", (6.0,)),
+        ("name", ""),
     ],
 )
 def test_paper_setup_refuses_a_bad_field(field: str, value) -> None:
@@ -50,7 +66,9 @@ def test_paper_setup_refuses_a_bad_field(field: str, value) -> None:
 
 
 def test_paper_setup_qc_is_checked() -> None:
-    with pytest.raises(ShapeError, match=r"PaperSetup\.qc must be a \(3, 3\) matrix.*got \[\[1\.0, 0\.0\], \[0\.0, 1\.0\]\]"):
+    with pytest.raises(
+        ShapeError, match=r"PaperSetup\.qc must be a \(3, 3\) matrix.*got \[\[1\.0, 0\.0\], \[0\.0, 1\.0\]\]"
+    ):
         PaperSetup.plaza().replace(qc=np.eye(2))
     with pytest.raises(SteamError, match=r"Qc must be symmetric positive definite"):
         PaperSetup.plaza().replace(qc=-np.eye(3))
@@ -61,10 +79,23 @@ def test_paper_setup_qc_is_checked() -> None:
 @pytest.mark.parametrize(
     "field,value",
     [
-        ("every", math.nan), ("every", "3"), ("every", 0), ("every", None), ("final_updates", -1), ("start_after_ranges", -1),
-        ("max_poses", 1), ("max_poses", 2.5), ("pb_max_iterations", 0), ("time_budget_s", True), ("time_budget_s", math.nan),
-        ("time_budget_s", -1.0), ("pb_relative_tolerance", None), ("pb_relative_tolerance", math.inf), ("interpolate", 1),
-        ("range_states", "no"), ("progress", None),
+        ("every", math.nan),
+        ("every", "3"),
+        ("every", 0),
+        ("every", None),
+        ("final_updates", -1),
+        ("start_after_ranges", -1),
+        ("max_poses", 1),
+        ("max_poses", 2.5),
+        ("pb_max_iterations", 0),
+        ("time_budget_s", True),
+        ("time_budget_s", math.nan),
+        ("time_budget_s", -1.0),
+        ("pb_relative_tolerance", None),
+        ("pb_relative_tolerance", math.inf),
+        ("interpolate", 1),
+        ("range_states", "no"),
+        ("progress", None),
     ],
 )
 def test_stream_options_refuse_a_bad_field(field: str, value) -> None:
@@ -101,8 +132,10 @@ def test_one_absurd_range_is_refused_naming_the_fit_and_the_reading() -> None:
     ranges = np.array(DATA.ranges)
     ranges[7, 3] = 1e6
     bad = _with_ranges(DATA, ranges)
-    expected = (r"range correction over the first 40 poses: the least-squares fit r' = a r \+ b has slope a = -?[0-9.e-]+, "
-                r"offset b = [0-9.e-]+ over 40 readings; a slope outside \[0\.5, 2\] .*ranges row 7, 1000000\.0 m")
+    expected = (
+        r"range correction over the first 40 poses: the least-squares fit r' = a r \+ b has slope a = -?[0-9.e-]+, "
+        r"offset b = [0-9.e-]+ over 40 readings; a slope outside \[0\.5, 2\] .*ranges row 7, 1000000\.0 m"
+    )
     with pytest.raises(DataError, match=expected):
         range_correction(bad, 40)
     with pytest.raises(DataError, match=r"ranges row 7, 1000000\.0 m"):  # the way a run meets it
@@ -126,7 +159,10 @@ def test_a_corrected_range_below_zero_is_refused() -> None:
     ranges[:, 3] = (truth + 10) / 1.5
     ranges[30, 3] = 1.0
     setup = PaperSetup.plaza().replace(range_correction_steps=20)
-    with pytest.raises(DataError, match=r"ranges row 30: 1\.0 m corrected to 1\.(5|49)\d* r \+ -(10\.0|9\.9)\d* = -8\.(5|49)\d* m, a negative range"):
+    with pytest.raises(
+        DataError,
+        match=r"ranges row 30: 1\.0 m corrected to 1\.(5|49)\d* r \+ -(10\.0|9\.9)\d* = -8\.(5|49)\d* m, a negative range",
+    ):
         Readings.from_dataset(_with_ranges(DATA, ranges), setup)
 
 
@@ -138,7 +174,9 @@ def test_plaza_with_one_absurd_range(shared_data: Path) -> None:
     assert a == pytest.approx(0.934999, abs=1e-6) and b == pytest.approx(-0.016448, abs=1e-6)
     ranges = np.array(plaza.ranges)
     ranges[10, 3] = 1e6
-    with pytest.raises(DataError, match=r"slope a = -8\.4\d*e-06, offset b = 41\.2\d* over 1092 readings.*ranges row 10, 1000000\.0 m"):
+    with pytest.raises(
+        DataError, match=r"slope a = -8\.4\d*e-06, offset b = 41\.2\d* over 1092 readings.*ranges row 10, 1000000\.0 m"
+    ):
         range_correction(_with_ranges(plaza, ranges), 3000)
 
 
@@ -150,11 +188,16 @@ def test_plaza_with_one_absurd_range(shared_data: Path) -> None:
 @pytest.mark.parametrize(
     "kwargs,message",
     [
-        (dict(seed=-1), r"seed must be an integer >= 0, got -1"), (dict(seed=1.5), r"seed .* got 1\.5"),
-        (dict(seed=True), r"seed .* got True"), (dict(n_steps=math.nan), r"n_steps must be a positive integer, got nan"),
-        (dict(n_steps=math.inf), r"n_steps .* got inf"), (dict(n_landmarks=0), r"n_landmarks .* got 0"),
-        (dict(range_sigma="1"), r"range_sigma .* got '1'"), (dict(landmark_distance=(1, "b")), r"landmark_distance"),
-        (dict(odometry_sigmas="x"), r"odometry_sigmas .* got 'x'"), (dict(n_nearest=2.5), r"n_nearest .* got 2\.5"),
+        (dict(seed=-1), r"seed must be an integer >= 0, got -1"),
+        (dict(seed=1.5), r"seed .* got 1\.5"),
+        (dict(seed=True), r"seed .* got True"),
+        (dict(n_steps=math.nan), r"n_steps must be a positive integer, got nan"),
+        (dict(n_steps=math.inf), r"n_steps .* got inf"),
+        (dict(n_landmarks=0), r"n_landmarks .* got 0"),
+        (dict(range_sigma="1"), r"range_sigma .* got '1'"),
+        (dict(landmark_distance=(1, "b")), r"landmark_distance"),
+        (dict(odometry_sigmas="x"), r"odometry_sigmas .* got 'x'"),
+        (dict(n_nearest=2.5), r"n_nearest .* got 2\.5"),
     ],
 )
 def test_generator_refuses_bad_arguments(kwargs, message) -> None:
@@ -173,7 +216,9 @@ def test_data_folders_that_are_not_there(tmp_path: Path, monkeypatch: pytest.Mon
     (tmp_path / "a_file").write_text("x")
     with pytest.raises(DataError, match=r"the data set name is empty"):
         load_dataset("")
-    with pytest.raises(DataError, match=rf"data_dir \(--data-dir\) '{re.escape(str(tmp_path / 'nowhere'))}' does not exist"):
+    with pytest.raises(
+        DataError, match=rf"data_dir \(--data-dir\) '{re.escape(str(tmp_path / 'nowhere'))}' does not exist"
+    ):
         load_dataset("synthetic", data_dir=tmp_path / "nowhere")
     with pytest.raises(DataError, match=r"'.*a_file' is not a folder"):
         load_dataset("paper-synthetic", data_dir=tmp_path / "a_file")
@@ -212,8 +257,16 @@ def _authors_run(folder: Path, **changes) -> Path:
     marks = np.empty((SMALL.n_landmarks, 1), dtype=object)
     for k in range(SMALL.n_landmarks):
         marks[k, 0] = spd(2)
-    run = dict(estStateInds=np.arange(n).reshape(-1, 1), XYT=xyt, XYT_dot=np.zeros((n, 3)), XY=SMALL.landmarks[:, 1:3],
-               diff=SMALL.ground_truth[:, 1:3] - xyt[:, :2], step_t=np.ones((n - 1, 2)), stateMarginal=state, landmarkMarginal=marks)
+    run = dict(
+        estStateInds=np.arange(n).reshape(-1, 1),
+        XYT=xyt,
+        XYT_dot=np.zeros((n, 3)),
+        XY=SMALL.landmarks[:, 1:3],
+        diff=SMALL.ground_truth[:, 1:3] - xyt[:, :2],
+        step_t=np.ones((n - 1, 2)),
+        stateMarginal=state,
+        landmarkMarginal=marks,
+    )
     for key, edit in changes.items():
         run[key] = edit(run[key])
     (folder / "authors").mkdir(parents=True, exist_ok=True)
@@ -227,6 +280,7 @@ def _edit_cell(row: int, column: int, change):
         cells = cells.copy()
         cells[row, column] = change(np.array(cells[row, column]))
         return cells
+
     return edit
 
 
@@ -253,14 +307,28 @@ def _negative(c: np.ndarray) -> np.ndarray:
         (dict(stateMarginal=_edit_cell(4, 1, _skew)), r"stateMarginal velocity 4 is not symmetric"),
         (dict(landmarkMarginal=_edit_cell(1, 0, _skew)), r"landmarkMarginal 1 is not symmetric"),
         (dict(stateMarginal=_edit_cell(3, 0, _negative)), r"stateMarginal pose 3 is not positive definite"),
-        (dict(stateMarginal=_edit_cell(0, 1, lambda c: c[:2, :2])), r"stateMarginal velocity 0 must be a finite 3x3 matrix"),
+        (
+            dict(stateMarginal=_edit_cell(0, 1, lambda c: c[:2, :2])),
+            r"stateMarginal velocity 0 must be a finite 3x3 matrix",
+        ),
         (dict(landmarkMarginal=_edit_cell(0, 0, lambda c: c * np.nan)), r"landmarkMarginal 0 must be a finite 2x2"),
         (dict(XYT_dot=lambda a: a * np.nan), r"XYT_dot\[0, 0\] is nan"),
         (dict(XYT=lambda a: a[:, :2]), r"XYT has shape \(7, 2\), expected \(7, 3\)"),
         (dict(estStateInds=lambda a: a + 0.5), r"estStateInds must be increasing pose indices"),
         (dict(stateMarginal=lambda a: a[:-1]), r"stateMarginal has shape \(6, 2\)"),
     ],
-    ids=["pose-skew", "velocity-skew", "landmark-skew", "not-pd", "2x2", "nan-cov", "nan", "columns", "fractional", "rows"],
+    ids=[
+        "pose-skew",
+        "velocity-skew",
+        "landmark-skew",
+        "not-pd",
+        "2x2",
+        "nan-cov",
+        "nan",
+        "columns",
+        "fractional",
+        "rows",
+    ],
 )
 def test_a_bad_saved_run_is_refused(tmp_path: Path, changes, message) -> None:
     path = _authors_run(tmp_path, **changes)

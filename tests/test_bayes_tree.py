@@ -13,12 +13,14 @@ from problems import small_problem
 import steam_ref as sr
 from steam_ref.bayes_tree import BayesTree, eliminate_clique
 from steam_ref.errors import UnderdeterminedError
-from steam_ref.variables import Key
 from steam_ref.linear import LinearSystem, Ordering, amd_ordering, constrained_min_degree, xl_ordering
 from steam_ref.linear.system import GaussianFactor, linearize
+from steam_ref.variables import Key
 
 
-def random_sparse_factors(rng: np.random.Generator, n_vars: int = 9, n_factors: int = 14) -> tuple[list[GaussianFactor], dict]:
+def random_sparse_factors(
+    rng: np.random.Generator, n_vars: int = 9, n_factors: int = 14
+) -> tuple[list[GaussianFactor], dict]:
     """Random linear factors on variables of sizes 1-3, each variable with a full-rank prior."""
     dims = {Key("v", i): int(rng.integers(1, 4)) for i in range(n_vars)}
     keys = list(dims)
@@ -26,9 +28,13 @@ def random_sparse_factors(rng: np.random.Generator, n_vars: int = 9, n_factors: 
     for _ in range(n_factors):
         chosen = [keys[i] for i in rng.choice(n_vars, size=int(rng.integers(1, 4)), replace=False)]
         m = int(rng.integers(1, 5))
-        factors.append(GaussianFactor(tuple(chosen), tuple(rng.normal(size=(m, dims[k])) for k in chosen), rng.normal(size=m)))
+        factors.append(
+            GaussianFactor(tuple(chosen), tuple(rng.normal(size=(m, dims[k])) for k in chosen), rng.normal(size=m))
+        )
     for k in keys:  # keep the problem well posed
-        factors.append(GaussianFactor((k,), (rng.normal(size=(dims[k], dims[k])) + 3 * np.eye(dims[k]),), rng.normal(size=dims[k])))
+        factors.append(
+            GaussianFactor((k,), (rng.normal(size=(dims[k], dims[k])) + 3 * np.eye(dims[k]),), rng.normal(size=dims[k]))
+        )
     return factors, dims
 
 
@@ -54,13 +60,19 @@ def stacked(delta: dict, ordering: Ordering) -> np.ndarray:
 def test_random_sparse_problem_matches_dense_solve(rng, trial):
     factors, dims = random_sparse_factors(rng)
     keys = list(dims)
-    order = [keys[i] for i in rng.permutation(len(keys))] if trial % 2 else constrained_min_degree(keys, [f.keys for f in factors])
+    order = (
+        [keys[i] for i in rng.permutation(len(keys))]
+        if trial % 2
+        else constrained_min_degree(keys, [f.keys for f in factors])
+    )
     tree = BayesTree.from_factors(factors, order)
     assert tree.problems() == []
     natural = Ordering(tuple(keys), tuple(dims[k] for k in keys))
     A, b = dense_system(factors, natural)
     reference = np.linalg.solve(A.T @ A, A.T @ b)
-    np.testing.assert_allclose(stacked(tree.solve(), natural), reference, rtol=1e-9, atol=1e-12 * np.abs(reference).max())
+    np.testing.assert_allclose(
+        stacked(tree.solve(), natural), reference, rtol=1e-9, atol=1e-12 * np.abs(reference).max()
+    )
     # RᵀR is AᵀA permuted into the tree's elimination order  [YIB Eq. 11, 21]
     R, d, ordering = tree.to_dense()
     assert np.allclose(R, np.triu(R), rtol=0, atol=0)
@@ -90,7 +102,9 @@ def test_gp_trajectory_with_landmarks_matches_dense_solve(rng, ordering_name):
     system = LinearSystem.build(problem.graph.factors, values, ordering)
     A, b = system.to_dense()
     reference = np.linalg.solve(A.T @ A, A.T @ b)
-    np.testing.assert_allclose(stacked(tree.solve(), ordering), reference, rtol=1e-9, atol=1e-12 * np.abs(reference).max())
+    np.testing.assert_allclose(
+        stacked(tree.solve(), ordering), reference, rtol=1e-9, atol=1e-12 * np.abs(reference).max()
+    )
     R, _, tree_order = tree.to_dense()
     p = tree_order.scalar_permutation(ordering)
     info = (A.T @ A)[np.ix_(p, p)]
@@ -122,7 +136,9 @@ def test_landmarks_seen_all_along_the_path_end_in_the_root_under_any_ordering(rn
         assert sum(dims[k] for k in frontals) == 4 * 2 + 2 * 6, name  # the landmarks and two states
 
 
-def local_landmark_factors(rng: np.random.Generator, n_states: int = 40, per: int = 5) -> tuple[list[GaussianFactor], dict]:
+def local_landmark_factors(
+    rng: np.random.Generator, n_states: int = 40, per: int = 5
+) -> tuple[list[GaussianFactor], dict]:
     """Random linear factors with the paper's exploration structure: a chain of 6-d states, each
     state ranged to the one 2-d landmark of its stretch (states per*j ... per*j + per - 1 see l_j)."""
     dims = {**{Key("x", i): 6 for i in range(n_states)}, **{Key("l", j): 2 for j in range(n_states // per)}}
@@ -154,7 +170,9 @@ def test_min_degree_spreads_local_landmarks_that_xl_puts_in_the_root(rng):
     for name, ordering in _min_degree_orderings(keys, dims, factor_keys).items():
         tree = BayesTree.from_factors(factors, ordering)
         assert tree.problems() == [], name
-        np.testing.assert_allclose(stacked(tree.solve(), natural), reference, rtol=1e-9, atol=1e-12 * np.abs(reference).max())
+        np.testing.assert_allclose(
+            stacked(tree.solve(), natural), reference, rtol=1e-9, atol=1e-12 * np.abs(reference).max()
+        )
         frontals = _root_frontals(tree)
         assert len(landmarks & set(frontals)) <= 1, (name, frontals)
         assert sum(dims[k] for k in frontals) <= 2 * 6 + 2 < xl_root, (name, frontals)  # two states, one landmark
@@ -164,7 +182,9 @@ def test_one_scalar_elimination_is_eq_25(rng):
     """θ scalar, separator s (3 scalars): r = (a†A_s)ᵀ, d = a†b with a† = (aᵀa)⁻¹aᵀ.  [YIB Eq. 25]"""
     theta, s1, s2 = Key("t", 0), Key("s", 1), Key("s", 2)
     a, A1, A2, b = rng.normal(size=(5, 1)), rng.normal(size=(5, 1)), rng.normal(size=(5, 2)), rng.normal(size=5)
-    clique = eliminate_clique((theta,), (s1, s2), {theta: 1, s1: 1, s2: 2}, [GaussianFactor((theta, s1, s2), (a, A1, A2), b)])
+    clique = eliminate_clique(
+        (theta,), (s1, s2), {theta: 1, s1: 1, s2: 2}, [GaussianFactor((theta, s1, s2), (a, A1, A2), b)]
+    )
     a_dagger = np.linalg.solve(a.T @ a, a.T)
     r = (a_dagger @ np.hstack([A1, A2])).ravel()
     np.testing.assert_allclose(clique.S.ravel() / clique.R[0, 0], r, rtol=1e-12)
@@ -180,7 +200,9 @@ def test_unconstrained_variable_is_named(rng):
     x, lm = Key("x", 0), Key("l", 7)
     factors = [
         GaussianFactor((x,), (np.eye(2),), rng.normal(size=2)),
-        GaussianFactor((x, lm), (rng.normal(size=(1, 2)), rng.normal(size=(1, 2))), rng.normal(size=1)),  # one range: l7 free
+        GaussianFactor(
+            (x, lm), (rng.normal(size=(1, 2)), rng.normal(size=(1, 2))), rng.normal(size=1)
+        ),  # one range: l7 free
     ]
     with pytest.raises(UnderdeterminedError, match="l7"):
         BayesTree.from_factors(factors, [lm, x])

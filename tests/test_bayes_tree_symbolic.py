@@ -134,7 +134,7 @@ def test_every_order_gives_a_valid_tree(order):
     assert tree.problems() == []
     # the tree's own elimination order reproduces it: same frontal/separator sets
     again, _ = toy_tree(tree.elimination_order())
-    sets = lambda t: sorted((tuple(sorted(c.frontals)), tuple(sorted(c.separator))) for c in t.cliques.values())  # noqa: E731
+    sets = lambda t: sorted((tuple(sorted(c.frontals)), tuple(sorted(c.separator))) for c in t.cliques.values())
     assert sets(again) == sets(tree)
 
 

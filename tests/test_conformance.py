@@ -14,12 +14,12 @@ import fnmatch
 import json
 import subprocess
 import sys
-import tomllib
 from pathlib import Path
 
 import numpy as np
 import pytest
 import scipy.io
+import tomllib
 from requirements import optional_import
 
 from steam_ref.cli import main
@@ -44,8 +44,10 @@ def write_results(folder: Path, suite: str, results: dict) -> None:
 @pytest.fixture(scope="module")
 def ours() -> dict:
     """steam_ref's results for the gp, factors and batch suites, from the shipped inputs (they pass)."""
-    return {s: {c["name"]: json.loads(dumps(run_case(s, c["name"], c["inputs"]))) for c in read_suite(SHIPPED, s)["cases"]}
-            for s in ("gp", "factors", "batch")}
+    return {
+        s: {c["name"]: json.loads(dumps(run_case(s, c["name"], c["inputs"]))) for c in read_suite(SHIPPED, s)["cases"]}
+        for s in ("gp", "factors", "batch")
+    }
 
 
 # --- the kit as shipped ---------------------------------------------------------------------------
@@ -63,7 +65,9 @@ def test_index_lists_every_file_with_its_sha256_the_conventions_and_the_provenan
         listed = index["suites"][suite]
         assert sorted(listed["independent"] + listed["produced_by_steam_ref"]) == sorted(c["name"] for c in cases)
         for c in cases:
-            assert isinstance(c["independent"], bool) and c["source"] and set(c["tolerance"]) <= set(c["expected"]), c["name"]
+            assert isinstance(c["independent"], bool) and c["source"] and set(c["tolerance"]) <= set(c["expected"]), c[
+                "name"
+            ]
     assert index["suites"]["incremental"]["produced_by_steam_ref"] == ["no_relinearization_tree_edits"]
     assert sum(p.stat().st_size for p in SHIPPED.rglob("*") if p.is_file()) < 5e6
 
@@ -77,7 +81,12 @@ def test_pyproject_ships_every_kit_file_as_package_data():
 
 
 def test_kit_json_reads_back_every_double_exactly(rng):
-    x = np.concatenate([rng.normal(size=200) * 10.0 ** rng.integers(-300, 300, size=200), [0.1, 1 / 3, 5e-324, -0.0, 1.7976931348623157e308]])
+    x = np.concatenate(
+        [
+            rng.normal(size=200) * 10.0 ** rng.integers(-300, 300, size=200),
+            [0.1, 1 / 3, 5e-324, -0.0, 1.7976931348623157e308],
+        ]
+    )
     back = np.array(json.loads(dumps({"x": x}))["x"])
     assert np.array_equal(back.view(np.int64), x.view(np.int64))
 
@@ -108,15 +117,18 @@ def test_export_writes_the_kit_and_a_readme_and_refuses_a_non_empty_folder(tmp_p
     assert code == 2 and out == "" and len(err.strip().splitlines()) == 1 and "empty" in err
 
 
-@pytest.mark.parametrize("args, words", [
-    (("check", "{tmp}/nowhere"), "does not exist"),
-    (("check", "{tmp}"), "no results"),
-    (("check", "{tmp}", "--suite", "gp"), "no results for suite"),
-    (("check", "{tmp}", "--suite", "nope"), "invalid choice"),
-    (("check", "{bad}"), "not readable as JSON"),
-    (("check", "{tmp}", "--kit", "{tmp}/nowhere"), "index.json"),
-    ((), "required"),
-])
+@pytest.mark.parametrize(
+    "args, words",
+    [
+        (("check", "{tmp}/nowhere"), "does not exist"),
+        (("check", "{tmp}"), "no results"),
+        (("check", "{tmp}", "--suite", "gp"), "no results for suite"),
+        (("check", "{tmp}", "--suite", "nope"), "invalid choice"),
+        (("check", "{bad}"), "not readable as JSON"),
+        (("check", "{tmp}", "--kit", "{tmp}/nowhere"), "index.json"),
+        ((), "required"),
+    ],
+)
 def test_check_answers_bad_input_with_one_line_and_exit_2(tmp_path, capsys, args, words):
     bad = tmp_path / "bad"
     (bad / "gp").mkdir(parents=True)
@@ -183,7 +195,9 @@ def test_the_cost_without_its_half_fails_every_factor_and_batch_case(tmp_path, c
     for name in bad:
         bad[name]["cost"] = float(np.sum(np.square(bad[name]["whitened_error"])))  # ‖We‖² instead of ½‖We‖² (or ρ)
     failed = failing_cases(tmp_path, capsys, "factors", bad)
-    assert set(failed) == {f"factors/{n}" for n in bad} and all(": cost worst" in line for line in failed.values()), failed
+    assert set(failed) == {f"factors/{n}" for n in bad} and all(": cost worst" in line for line in failed.values()), (
+        failed
+    )
     batch = copy.deepcopy(ours["batch"])
     for result in batch.values():
         result["costs"] = (2 * np.array(result["costs"])).tolist()
@@ -196,7 +210,10 @@ def test_compare_is_normwise_and_exact_quantities_ignore_the_order_of_cliques():
     assert compare_quantity([10.0, 1.0], [10.0, 1.1], tol, "q") == []
     (fail,) = compare_quantity([10.0, 1.0], [10.0, 1.102], tol, "q")
     assert "q worst |diff| 0.102 at (1,)" in fail[1]
-    a = [{"frontals": ["x1", "x2"], "separator": [], "parent": None}, {"frontals": ["x0"], "separator": ["x1"], "parent": "x1"}]
+    a = [
+        {"frontals": ["x1", "x2"], "separator": [], "parent": None},
+        {"frontals": ["x0"], "separator": ["x1"], "parent": "x1"},
+    ]
     assert compare_quantity(a, a[::-1], "exact", "cliques") == []
     swapped = [dict(a[0], frontals=["x2", "x1"]), a[1]]
     assert compare_quantity(a, swapped, "exact", "cliques")  # frontal order is elimination order
@@ -207,16 +224,27 @@ def test_compare_is_normwise_and_exact_quantities_ignore_the_order_of_cliques():
 
 def test_gtsam_passes_every_case_it_computes(tmp_path, capsys):
     optional_import("gtsam", "gtsam")  # skips here, fails in CI (STEAM_REF_REQUIRE_OPTIONAL=1)
-    run = subprocess.run([sys.executable, str(ROOT / "examples" / "conformance_gtsam.py"), str(tmp_path), "--kit", str(SHIPPED)],
-                         capture_output=True, text=True, timeout=300, cwd=ROOT)
+    run = subprocess.run(
+        [sys.executable, str(ROOT / "examples" / "conformance_gtsam.py"), str(tmp_path), "--kit", str(SHIPPED)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        cwd=ROOT,
+    )
     assert run.returncode == 0, run.stderr
     code, out, _ = cli(capsys, "check", tmp_path)
     last = out.strip().splitlines()[-1]
     assert code == 0 and last.endswith(" passed, 0 failed") and int(last.split()[0]) >= 35, out
     computed = {s: set(json.loads((tmp_path / s / "results.json").read_text())["cases"]) for s in SUITES[:-1]}
-    assert {"trajectory_xl_cliques", "trajectory_interleaved_conditionals", "beacons_states_first_covariances"} <= computed["bayes_tree"]
+    assert {
+        "trajectory_xl_cliques",
+        "trajectory_interleaved_conditionals",
+        "beacons_states_first_covariances",
+    } <= computed["bayes_tree"]
     assert computed["incremental"] == {"relinearize_every_update_estimates", "no_relinearization_estimates"}
-    assert {"wnoa_dt0.1", "interp_tau1.1", "interp_tau1.55"} <= computed["gp"] and "interpolated_range" in computed["factors"]
+    assert {"wnoa_dt0.1", "interp_tau1.1", "interp_tau1.55"} <= computed["gp"] and "interpolated_range" in computed[
+        "factors"
+    ]
 
 
 @pytest.mark.needs_data
@@ -227,6 +255,8 @@ def test_the_paper_suite_holds_the_authors_saved_runs(shared_data):
         np.testing.assert_array_equal(saved["estStateInds"].ravel()[rows], case["inputs"]["state_poses"])
         np.testing.assert_array_equal(np.array(case["expected"]["poses"]), saved["XYT"][rows])
         np.testing.assert_array_equal(np.array(case["expected"]["velocities"]), saved["XYT_dot"][rows])
-        rmse = np.sqrt(np.mean(np.sum(saved["diff"] ** 2, axis=1)))  # 'diff' is ground truth minus estimate at the states
+        rmse = np.sqrt(
+            np.mean(np.sum(saved["diff"] ** 2, axis=1))
+        )  # 'diff' is ground truth minus estimate at the states
         assert case["expected"]["rmse_m"] == pytest.approx(rmse, rel=1e-12)
         assert case["independent"] and "authors" in case["source"]

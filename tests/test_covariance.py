@@ -42,7 +42,11 @@ def random_tree(rng, trial: int) -> tuple[BayesTree, list, dict]:
     """A tree of random linear factors, eliminated in a random or a min-degree order."""
     factors, dims = random_sparse_factors(rng, n_vars=12, n_factors=18)
     keys = list(dims)
-    order = [keys[i] for i in rng.permutation(len(keys))] if trial % 2 else constrained_min_degree(keys, [f.keys for f in factors])
+    order = (
+        [keys[i] for i in rng.permutation(len(keys))]
+        if trial % 2
+        else constrained_min_degree(keys, [f.keys for f in factors])
+    )
     return BayesTree.from_factors(factors, order), factors, dims
 
 
@@ -74,7 +78,9 @@ def test_tree_joint_covariance_equals_dense_inverse(rng, trial):
     groups = [keys[:2], [keys[5], keys[0], keys[9]], list(root.frontals), keys]
     for group in groups:
         block = block_of(cov, natural, group)
-        np.testing.assert_allclose(tree_joint_covariance(tree, group), block, rtol=1e-9, atol=1e-12 * np.abs(block).max())
+        np.testing.assert_allclose(
+            tree_joint_covariance(tree, group), block, rtol=1e-9, atol=1e-12 * np.abs(block).max()
+        )
 
 
 def test_tree_marginals_of_some_keys_visit_only_their_root_paths(rng, monkeypatch):

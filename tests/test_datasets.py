@@ -14,12 +14,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 import scipy.io
-
 from requirements import optional_import
 
 from steam_ref import datasets
-from steam_ref.datasets import search
-from steam_ref.pose2 import integrate_odometry
 from steam_ref.datasets import (
     RangeDataset,
     default_data_dirs,
@@ -28,8 +25,10 @@ from steam_ref.datasets import (
     load_cmu_mat,
     load_cmu_text,
     load_dataset,
+    search,
 )
 from steam_ref.errors import DataError, ShapeError, SteamError
+from steam_ref.pose2 import integrate_odometry
 
 SYN_FILE, PLAZA_FILE = "Syn_theta_Plaza.mat", "Plaza1_thrown_away_some_range.mat"
 FIELDS = ("ground_truth", "odometry", "dead_reckoning", "landmarks", "ranges")
@@ -104,8 +103,10 @@ def _rows_going_back_loop(times: np.ndarray) -> list[int]:
 def _true_ranges_loop(ds: RangeDataset, states: np.ndarray) -> np.ndarray:
     where = {int(i): (x, y) for i, x, y in ds.landmarks}
     return np.array(
-        [np.hypot(ds.ground_truth[s, 1] - where[int(j)][0], ds.ground_truth[s, 2] - where[int(j)][1])
-         for s, j in zip(states, ds.ranges[:, 2])]
+        [
+            np.hypot(ds.ground_truth[s, 1] - where[int(j)][0], ds.ground_truth[s, 2] - where[int(j)][1])
+            for s, j in zip(states, ds.ranges[:, 2])
+        ]
     )
 
 
@@ -181,8 +182,7 @@ def test_paper_synthetic_dead_reckoning_is_its_odometry_integrated(paper_synthet
     ds = paper_synthetic
     oracle = _integrate_loop(ds.ground_truth[0], ds.odometry)
     np.testing.assert_allclose(ds.dead_reckoning, oracle, rtol=0, atol=1e-9)
-    np.testing.assert_allclose(integrate_odometry(ds.ground_truth[0], ds.odometry), oracle,
-                               rtol=0, atol=1e-9)
+    np.testing.assert_allclose(integrate_odometry(ds.ground_truth[0], ds.odometry), oracle, rtol=0, atol=1e-9)
 
 
 def test_gtsam_text_files_hold_all_plaza_ranges(plaza: RangeDataset) -> None:
@@ -331,8 +331,9 @@ def test_mat_without_drp_recomputes_it_and_says_so_a_short_one_is_refused(small:
     arrays = small.to_cmu_arrays()
     del arrays["DRp"]
     loaded = load_cmu_mat(_save_mat(tmp_path / "no_drp.mat", **arrays))
-    np.testing.assert_allclose(loaded.dead_reckoning, _integrate_loop(small.ground_truth[0], small.odometry),
-                               rtol=0, atol=1e-12)
+    np.testing.assert_allclose(
+        loaded.dead_reckoning, _integrate_loop(small.ground_truth[0], small.odometry), rtol=0, atol=1e-12
+    )
     assert "DRp recomputed" in loaded.source
     arrays["DRp"] = np.array(small.dead_reckoning)[:-2]  # present but short: refused, not replaced
     with pytest.raises(DataError, match=r"short\.mat: DRp has 19 rows but GT has 21"):
@@ -382,8 +383,9 @@ def test_corrupt_or_missing_mat(tmp_path: Path) -> None:
         load_cmu_mat(path)
     with pytest.raises(DataError, match=r"absent\.mat: no such file"):
         load_cmu_mat(tmp_path / "absent.mat")
-    text_as_mat = _save_mat(tmp_path / "strings.mat", GT="hello", DR=np.zeros((0, 3)), TL=np.zeros((1, 3)),
-                            TD=np.zeros((0, 4)))
+    text_as_mat = _save_mat(
+        tmp_path / "strings.mat", GT="hello", DR=np.zeros((0, 3)), TL=np.zeros((1, 3)), TD=np.zeros((0, 4))
+    )
     with pytest.raises(DataError, match=r"strings\.mat: GT is not a numeric matrix"):
         load_cmu_mat(text_as_mat)
 
@@ -402,10 +404,14 @@ def test_text_bad_lines_name_file_and_line(small: RangeDataset, tmp_path: Path) 
     lines = (folder / "Toy_DR.txt").read_text().splitlines()
     two_numbers = "\t".join(lines[4].split()[:2])
     (folder / "Toy_DR.txt").write_text("\n".join(lines[:4] + [two_numbers] + lines[5:]) + "\n")
-    with pytest.raises(DataError, match=r"Toy_DR\.txt line 5: expected 3 numbers \(time, distance, heading change\), got 2"):
+    with pytest.raises(
+        DataError, match=r"Toy_DR\.txt line 5: expected 3 numbers \(time, distance, heading change\), got 2"
+    ):
         load_cmu_text(folder)
     (folder / "Toy_DR.txt").write_text("\n".join(lines[:2] + ["1.0 x 2.0"] + lines[3:]) + "\n")
-    with pytest.raises(DataError, match=r"Toy_DR\.txt line 3, column 2 \(distance\): 'x' is not a finite decimal number"):
+    with pytest.raises(
+        DataError, match=r"Toy_DR\.txt line 3, column 2 \(distance\): 'x' is not a finite decimal number"
+    ):
         load_cmu_text(folder)
     (folder / "Toy_DR.txt").write_text("")
     with pytest.raises(DataError, match=r"Toy_DR\.txt: the file holds no rows"):
@@ -459,7 +465,10 @@ def test_load_dataset_names(paper_synthetic: RangeDataset, plaza: RangeDataset) 
 
 def test_search_order_data_dir_then_env_then_gtsam(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """Each of the three places wins over the ones after it, and is used when those before lack the file."""
-    sets = {where: generate_synthetic(n_steps=8 + i, n_landmarks=3, seed=i) for i, where in enumerate(("mine", "env", "gtsam"))}
+    sets = {
+        where: generate_synthetic(n_steps=8 + i, n_landmarks=3, seed=i)
+        for i, where in enumerate(("mine", "env", "gtsam"))
+    }
     for where, ds in sets.items():
         (tmp_path / where).mkdir()
         _save_mat(tmp_path / where / SYN_FILE, **ds.to_cmu_arrays())
@@ -579,8 +588,7 @@ def test_generator_odometry_and_ranges_carry_the_stated_noise() -> None:
 
 def test_generator_dead_reckoning_integrates_its_odometry() -> None:
     ds = generate_synthetic(n_steps=300, n_landmarks=60, seed=2)
-    np.testing.assert_allclose(ds.dead_reckoning, _integrate_loop(ds.ground_truth[0], ds.odometry),
-                               rtol=0, atol=1e-9)
+    np.testing.assert_allclose(ds.dead_reckoning, _integrate_loop(ds.ground_truth[0], ds.odometry), rtol=0, atol=1e-9)
 
 
 def test_generator_path_is_a_wnoa_sample_heading_along_velocity() -> None:
@@ -626,4 +634,3 @@ def test_generator_rejects_bad_arguments() -> None:
         generate_synthetic(qc=np.eye(3))
     with pytest.raises(SteamError, match=r"landmark_distance"):
         generate_synthetic(landmark_distance=(5.0, 2.0))
-

@@ -149,7 +149,10 @@ def test_interpolated_factor_equals_dense_marginalisation(rng, measurement):
     xt = lam @ x1 + psi @ x2
     landmark = xt[:2] + np.array([3.0, -2.0])
     values = sr.Values({X1: x1, X2: x2, XT: xt, LM: landmark})
-    anchor = [sr.PriorFactor.create(X1, rng.normal(size=6), np.ones(6)), sr.PriorFactor.create(LM, landmark, [2.0, 2.0])]
+    anchor = [
+        sr.PriorFactor.create(X1, rng.normal(size=6), np.ones(6)),
+        sr.PriorFactor.create(LM, landmark, [2.0, 2.0]),
+    ]
 
     # P_τ from the GP prior alone: the inverse of x(τ)'s block in the information of the two GP factors.
     gp3 = [sr.GPPriorFactor.wnoa(X1, XT, tau - t1, QC), sr.GPPriorFactor.wnoa(XT, X2, t2 - tau, QC)]

@@ -73,7 +73,7 @@ def test_interpolated_state_is_the_dense_gp_conditional_mean(rng, name):
     P0 = np.eye(n) * 2.0
     K, mu = gp_kernel(times, sde, P0), gp_mean(times, sde, mu0)  # order: x1, x(τ), x2
     x1, x2 = rng.normal(size=n), rng.normal(size=n)
-    ends = np.r_[0:n, 2 * n:3 * n]
+    ends = np.r_[0:n, 2 * n : 3 * n]
     mid = np.arange(n, 2 * n)
     gain = K[np.ix_(mid, ends)] @ np.linalg.inv(K[np.ix_(ends, ends)])
     expected = mu[mid] + gain @ (np.r_[x1, x2] - mu[ends])
@@ -91,10 +91,15 @@ def test_gp_prior_factor_of_any_sde_whitens_by_q(rng, name):
     sde = PRIORS[name]
     dt = 0.6
     K = gp_kernel(np.array([0.0, dt]), sde, np.zeros((sde.n, sde.n)) + 1e-300 * np.eye(sde.n))
-    Q = K[sde.n:, sde.n:]  # Cov x(dt) from a known x(0): Q(dt) by quadrature
+    Q = K[sde.n :, sde.n :]  # Cov x(dt) from a known x(0): Q(dt) by quadrature
     mu = gp_mean(np.array([0.0, dt]), sde, np.zeros(sde.n))
     (factor,) = sr.gp_prior_factors([X1, X2], [0.0, dt], sde)
     W = factor.sqrt_information
     np.testing.assert_allclose(W.T @ W, np.linalg.inv(Q), rtol=1e-7)
     x1 = rng.normal(size=sde.n)
-    np.testing.assert_allclose(factor.error(x1, np.zeros(sde.n)), -(scipy.linalg.expm(np.asarray(sde.A) * dt) @ x1) - mu[sde.n:], rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(
+        factor.error(x1, np.zeros(sde.n)),
+        -(scipy.linalg.expm(np.asarray(sde.A) * dt) @ x1) - mu[sde.n :],
+        rtol=1e-9,
+        atol=1e-12,
+    )

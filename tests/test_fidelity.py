@@ -49,7 +49,9 @@ def test_the_authors_saved_diff_is_what_we_score(plaza, shared_data):
 
     data, authors, _ = plaza
     saved = scipy.io.loadmat(shared_data / "authors" / "Plaza1_full_data_run.mat")["diff"]
-    np.testing.assert_allclose(data.ground_truth[authors.state_poses, 1:3] - authors.poses[:, :2], saved, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(
+        data.ground_truth[authors.state_poses, 1:3] - authors.poses[:, :2], saved, rtol=0, atol=1e-12
+    )
 
 
 def test_synthetic_btgp_lands_on_the_authors_run(shared_data):
@@ -60,7 +62,11 @@ def test_synthetic_btgp_lands_on_the_authors_run(shared_data):
     assert fid.pose_max_m < 0.01
     assert fid.pose_cov_median is None  # the synthetic run saved no marginals
     with pytest.raises(DataError, match="same state layout"):
-        compare(run_online(data, PaperSetup.synthetic(), skip=2), load_authors_run("paper-synthetic", data), data.ground_truth)
+        compare(
+            run_online(data, PaperSetup.synthetic(), skip=2),
+            load_authors_run("paper-synthetic", data),
+            data.ground_truth,
+        )
     lid = sorted(result.landmarks)[3]
     fewer = dataclasses.replace(result, landmarks={i: v for i, v in result.landmarks.items() if i != lid})
     with pytest.raises(DataError, match=f"no estimate of landmark {lid}"):

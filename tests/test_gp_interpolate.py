@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-
 from oracles import condition_gaussian, gp_kernel, gp_mean, random_lti, random_spd
+
 from steam_ref.errors import ShapeError, SteamError
 from steam_ref.gp import (
     LinearSDE,
@@ -70,7 +70,7 @@ def test_lambda_psi_are_the_blocks_of_dense_k_tau_k_inv(rng, kind):
         lam, psi = matrices(kind, sde, qc, est[i - 1], est[i], tau)
         tol = 1e-13 * np.linalg.cond(K_EE) * np.abs(G).max()  # solve is accurate to about cond·eps
         expected = np.zeros((n, M * n))
-        expected[:, (i - 1) * n:i * n], expected[:, i * n:(i + 1) * n] = lam, psi  # [YIB Eq. 16]
+        expected[:, (i - 1) * n : i * n], expected[:, i * n : (i + 1) * n] = lam, psi  # [YIB Eq. 16]
         np.testing.assert_allclose(G, expected, rtol=1e-8, atol=tol)
 
 
@@ -83,11 +83,17 @@ def test_wnoa_closed_form_interpolation_equals_sde(rng, d):
         np.testing.assert_allclose(closed, general, rtol=1e-9, atol=1e-11)
     x1, x2 = rng.normal(size=2 * d), rng.normal(size=2 * d)
     np.testing.assert_allclose(
-        interpolate_state(t1, x1, t2, x2, tau, qc), interpolate_state_sde(sde, t1, x1, t2, x2, tau), rtol=1e-9, atol=1e-11
+        interpolate_state(t1, x1, t2, x2, tau, qc),
+        interpolate_state_sde(sde, t1, x1, t2, x2, tau),
+        rtol=1e-9,
+        atol=1e-11,
     )
     P = random_spd(rng, 4 * d)
     np.testing.assert_allclose(
-        interpolate_covariance(t1, t2, tau, qc, P), interpolate_covariance_sde(sde, t1, t2, tau, P), rtol=1e-9, atol=1e-11
+        interpolate_covariance(t1, t2, tau, qc, P),
+        interpolate_covariance_sde(sde, t1, t2, tau, P),
+        rtol=1e-9,
+        atol=1e-11,
     )
 
 
@@ -180,7 +186,9 @@ def test_wnoa_interpolation_properties(t1, length, frac, seed):
     x1 = rng.normal(size=4)
     x2 = transition(length, 2) @ x1  # no acceleration between t₁ and t₂
     got = interpolate_state(t1, x1, t2, x2, tau, qc)
-    np.testing.assert_allclose(got, transition(tau - t1, 2) @ x1, rtol=1e-8, atol=1e-8 * (1 + np.abs(x1).max() * length))
+    np.testing.assert_allclose(
+        got, transition(tau - t1, 2) @ x1, rtol=1e-8, atol=1e-8 * (1 + np.abs(x1).max() * length)
+    )
     cond = interpolate_covariance(t1, t2, tau, qc, np.zeros((8, 8)))
     scale = np.abs(process_noise(tau - t1, qc)).max()
     np.testing.assert_allclose(cond, cond.T, rtol=0, atol=0)
@@ -213,7 +221,9 @@ def test_extrapolation_equals_dense_posterior(rng, kind):
     E = block_index(all_times, est, n)
     H = np.zeros((2 * est.size, all_times.size * n))
     H[:, E] = rng.normal(size=(2 * est.size, E.size))  # no column touches a later time
-    post_mean, post_cov = condition_gaussian(mu, K, H, random_spd(rng, H.shape[0], scale=0.1), rng.normal(size=H.shape[0]))
+    post_mean, post_cov = condition_gaussian(
+        mu, K, H, random_spd(rng, H.shape[0], scale=0.1), rng.normal(size=H.shape[0])
+    )
     last = block_index(all_times, est[-1:], n)
     for t in later:
         T = block_index(all_times, [t], n)
@@ -256,7 +266,9 @@ def test_extrapolation_shapes_are_checked(rng):
 # --- errors ---------------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("t1, t2, tau", [(1.0, 2.0, 1.0), (1.0, 2.0, 2.0), (1.0, 2.0, 0.5), (1.0, 2.0, 2.5), (2.0, 1.0, 1.5)])
+@pytest.mark.parametrize(
+    "t1, t2, tau", [(1.0, 2.0, 1.0), (1.0, 2.0, 2.0), (1.0, 2.0, 0.5), (1.0, 2.0, 2.5), (2.0, 1.0, 1.5)]
+)
 def test_tau_outside_interval_raises(rng, t1, t2, tau):
     qc = random_spd(rng, 2)
     sde = LinearSDE.wnoa(qc)

@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-
 from oracles import gp_kernel, random_spd, sde_process_noise, sde_transition
+
 from steam_ref.errors import ShapeError, SteamError
 from steam_ref.gp import (
     ClosedForm,
@@ -88,8 +88,9 @@ def test_singer_q_at_large_alpha_dt_equals_quadrature(rng, x):
     """Where Van Loan loses digits (≈ e^{2αΔt}·eps relative), the closed form still equals Eq. 17."""
     sde, dt = LinearSDE.singer(random_spd(rng, 2), x / 1.1), 1.1
     reference = sde_process_noise(sde, dt)  # [YIB Eq. 17] by quad_vec
-    np.testing.assert_allclose(normalised(sde.process_noise(dt), reference), normalised(reference, reference),
-                               rtol=0, atol=1e-12)
+    np.testing.assert_allclose(
+        normalised(sde.process_noise(dt), reference), normalised(reference, reference), rtol=0, atol=1e-12
+    )
 
 
 def test_transition_closed_form_for_negative_and_zero_dt(rng):
@@ -102,8 +103,9 @@ def test_closed_form_q_equals_quadrature(rng):
     for sde in sdes(rng, 2):
         for dt in (0.21, 1.7):
             reference = sde_process_noise(sde, dt)  # [YIB Eq. 17] by quad_vec
-            np.testing.assert_allclose(normalised(sde.process_noise(dt), reference), normalised(reference, reference),
-                                       rtol=0, atol=1e-10)
+            np.testing.assert_allclose(
+                normalised(sde.process_noise(dt), reference), normalised(reference, reference), rtol=0, atol=1e-10
+            )
             np.testing.assert_allclose(sde.transition(dt), sde_transition(sde, dt), rtol=1e-12, atol=1e-13)
 
 
@@ -131,8 +133,10 @@ def test_singer_small_alpha_dt_is_stable(rng, x):
     np.testing.assert_allclose(normalised(Q, series), normalised(series, series), rtol=0, atol=5 * x**2 + 1e-14)
     Phi = sde.transition(dt)
     np.testing.assert_allclose(Phi, sde.transition_expm(dt), rtol=1e-14, atol=1e-15)
-    np.testing.assert_allclose(Phi[:d, 2 * d:], dt**2 * (1 / 2 - x / 6 + x**2 / 24 - x**3 / 120) * np.eye(d), rtol=1e-14)
-    np.testing.assert_allclose(Phi[d:2 * d, 2 * d:], dt * (1 - x / 2 + x**2 / 6 - x**3 / 24) * np.eye(d), rtol=1e-14)
+    np.testing.assert_allclose(
+        Phi[:d, 2 * d :], dt**2 * (1 / 2 - x / 6 + x**2 / 24 - x**3 / 120) * np.eye(d), rtol=1e-14
+    )
+    np.testing.assert_allclose(Phi[d : 2 * d, 2 * d :], dt * (1 - x / 2 + x**2 / 6 - x**3 / 24) * np.eye(d), rtol=1e-14)
 
 
 @pytest.mark.parametrize("x", [0.999, 1.0, 1.001, 1.5])
@@ -150,7 +154,9 @@ def test_singer_tends_to_wnoj_linearly_in_alpha(rng):
     qc = random_spd(rng, d)
     np.testing.assert_allclose(singer_transition(dt, 1e-12, d), wnoj_transition(dt, d), rtol=0, atol=1e-11)
     wnoj = wnoj_process_noise(dt, qc)
-    np.testing.assert_allclose(normalised(singer_process_noise(dt, 1e-12, qc), wnoj), normalised(wnoj, wnoj), rtol=0, atol=1e-11)
+    np.testing.assert_allclose(
+        normalised(singer_process_noise(dt, 1e-12, qc), wnoj), normalised(wnoj, wnoj), rtol=0, atol=1e-11
+    )
     for alpha in (1e-3, 1e-5):
         diff = singer_process_noise(dt, alpha, qc) - wnoj
         first_order = -alpha * dt * np.kron(S1, qc) * scale_of(dt, d)
@@ -188,7 +194,7 @@ def test_inverse_kernel_from_closed_forms_equals_dense_kernel_inverse(rng, model
     for i in range(1, M):
         dt = times[i] - times[i - 1]
         J = np.zeros((n, M * n))
-        J[:, (i - 1) * n:i * n], J[:, i * n:(i + 1) * n] = -sde.transition(dt), np.eye(n)  # [YIB Eq. 22]
+        J[:, (i - 1) * n : i * n], J[:, i * n : (i + 1) * n] = -sde.transition(dt), np.eye(n)  # [YIB Eq. 22]
         Qi = wnoj_process_noise_inverse(dt, qc) if model == "wnoj" else np.linalg.inv(sde.process_noise(dt))
         info += J.T @ Qi @ J
     K_inv = np.linalg.inv(K)
@@ -218,16 +224,24 @@ def test_alpha_and_time_constant_exactly_one():
 
 @pytest.mark.parametrize("qc", [np.diag([1.0, -1.0]), np.array([[1.0, 2.0], [0.0, 1.0]])])
 def test_non_spd_qc_raises(qc):
-    for call in (lambda: LinearSDE.wnoj(qc), lambda: LinearSDE.singer(qc, 1.0),
-                 lambda: wnoj_process_noise(0.5, qc), lambda: singer_process_noise(0.5, 1.0, qc)):
+    for call in (
+        lambda: LinearSDE.wnoj(qc),
+        lambda: LinearSDE.singer(qc, 1.0),
+        lambda: wnoj_process_noise(0.5, qc),
+        lambda: singer_process_noise(0.5, 1.0, qc),
+    ):
         with pytest.raises(SteamError, match="positive definite"):
             call()
 
 
 @pytest.mark.parametrize("dt", [0.0, -0.3, np.inf, np.nan])
 def test_bad_dt_raises(dt):
-    for call in (lambda: wnoj_process_noise(dt, np.eye(2)), lambda: singer_process_noise(dt, 1.0, np.eye(2)),
-                 lambda: LinearSDE.singer(np.eye(2), 1.0).process_noise(dt), lambda: wnoj_process_noise_inverse(dt, np.eye(2))):
+    for call in (
+        lambda: wnoj_process_noise(dt, np.eye(2)),
+        lambda: singer_process_noise(dt, 1.0, np.eye(2)),
+        lambda: LinearSDE.singer(np.eye(2), 1.0).process_noise(dt),
+        lambda: wnoj_process_noise_inverse(dt, np.eye(2)),
+    ):
         with pytest.raises(SteamError, match="time step"):
             call()
     if not np.isfinite(dt):

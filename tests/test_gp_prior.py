@@ -5,8 +5,8 @@ import pytest
 import scipy.integrate
 from hypothesis import given, settings
 from hypothesis import strategies as st
-
 from oracles import gp_kernel, gp_mean, random_lti, random_spd, sde_input_integral, sde_process_noise
+
 from steam_ref.errors import ShapeError, SteamError
 from steam_ref.gp import LinearSDE, dense_kernel, process_noise, process_noise_inverse, transition
 
@@ -162,7 +162,7 @@ def test_kernel_inverse_is_block_tridiagonal(rng, kind):
         band = 0.0
         for j in range(M):
             for k in range(M):
-                block = K_inv[j * n:(j + 1) * n, k * n:(k + 1) * n]
+                block = K_inv[j * n : (j + 1) * n, k * n : (k + 1) * n]
                 if abs(j - k) > 1:
                     np.testing.assert_allclose(block, 0.0, rtol=0, atol=tol)
                 elif abs(j - k) == 1:
@@ -180,8 +180,8 @@ def prior_factor_system(sde, times, P0, mu0):
     for i in range(1, M):
         dt = times[i] - times[i - 1]
         J = np.zeros((n, M * n))  # residual x_i - Φ x_{i-1} - v_i  [YIB Eq. 22]
-        J[:, (i - 1) * n:i * n] = -sde.transition(dt)
-        J[:, i * n:(i + 1) * n] = np.eye(n)
+        J[:, (i - 1) * n : i * n] = -sde.transition(dt)
+        J[:, i * n : (i + 1) * n] = np.eye(n)
         terms.append((J, sde.input_integral(dt), sde.process_noise(dt)))
     for J, b, cov in terms:
         info += J.T @ np.linalg.solve(cov, J)
@@ -200,7 +200,9 @@ def test_prior_factor_information_equals_kernel_inverse(rng, kind):
     np.testing.assert_allclose(info, K_inv, rtol=1e-9, atol=tol)
     # the factors' least-squares minimiser is the prior mean μ  [YIB Eq. 3, 22-23]
     mu = gp_mean(times, sde, mu0)
-    np.testing.assert_allclose(np.linalg.solve(info, rhs), mu, rtol=1e-9, atol=1e-13 * np.linalg.cond(info) * np.abs(mu).max())
+    np.testing.assert_allclose(
+        np.linalg.solve(info, rhs), mu, rtol=1e-9, atol=1e-13 * np.linalg.cond(info) * np.abs(mu).max()
+    )
 
 
 # --- errors ---------------------------------------------------------------------------------

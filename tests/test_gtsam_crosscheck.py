@@ -15,22 +15,22 @@ from functools import partial
 
 import numpy as np
 import pytest
-
 from requirements import optional_import
 
 gtsam = optional_import("gtsam", "gtsam")  # skips here, fails in CI (STEAM_REF_REQUIRE_OPTIONAL=1)
 
 from finite_differences import numerical_jacobians  # noqa: E402
 from oracles import gp_kernel, sde_process_noise, sde_transition  # noqa: E402
+
 from steam_ref.batch import gauss_newton  # noqa: E402
+from steam_ref.bayes_tree import ISAM2Params  # noqa: E402
 from steam_ref.datasets import generate_synthetic  # noqa: E402
 from steam_ref.gp import LinearSDE  # noqa: E402
-from steam_ref.variables import Key, L, Values, X  # noqa: E402
-from steam_ref.bayes_tree import ISAM2Params  # noqa: E402
 from steam_ref.online import StreamingEstimator, StreamOptions  # noqa: E402
-from steam_ref.solvers import BayesTreeSolver  # noqa: E402
 from steam_ref.problem import build_problem  # noqa: E402
 from steam_ref.readings import PaperSetup, Readings  # noqa: E402
+from steam_ref.solvers import BayesTreeSolver  # noqa: E402
+from steam_ref.variables import Key, L, Values, X  # noqa: E402
 
 SETUP = PaperSetup.synthetic()
 SKIP = 3
@@ -113,7 +113,11 @@ def gtsam_problem(data):
         noise = gtsam.noiseModel.Gaussian.Covariance(sde_process_noise(sde, dt))
         graph.add(custom_factor(noise, [X(a), X(b)], partial(gp_prior_error, sde_transition(sde, dt))))
     for lid in sorted(set(r.range_landmark.tolist())):
-        graph.add(custom_factor(sigmas(np.full(2, SETUP.landmark_prior_sigma)), [L(lid)], partial(prior_error, r.landmarks[lid])))
+        graph.add(
+            custom_factor(
+                sigmas(np.full(2, SETUP.landmark_prior_sigma)), [L(lid)], partial(prior_error, r.landmarks[lid])
+            )
+        )
 
     def add(pose, error, noise, others=()):
         if pose in states:
@@ -148,7 +152,14 @@ def test_batch_optimum_equals_gtsam(data):
     start = to_gtsam(problem.initial)
     np.testing.assert_allclose(problem.graph.error(problem.initial), graph.error(start), rtol=1e-7)
 
-    ours = gauss_newton(problem.graph, problem.initial, relative_tolerance=1e-15, absolute_tolerance=0, step_tolerance=1e-11, max_iterations=100)
+    ours = gauss_newton(
+        problem.graph,
+        problem.initial,
+        relative_tolerance=1e-15,
+        absolute_tolerance=0,
+        step_tolerance=1e-11,
+        max_iterations=100,
+    )
     params = gtsam.LevenbergMarquardtParams()
     params.setRelativeErrorTol(1e-15)
     params.setAbsoluteErrorTol(0.0)
@@ -165,7 +176,11 @@ def test_batch_optimum_equals_gtsam(data):
 def wrap(factor):
     """One of our factors as a GTSAM factor (its error and Jacobians; the solvers are what is compared)."""
     base = gtsam.noiseModel.Gaussian.SqrtInformation(np.asarray(factor.sqrt_information))
-    noise = base if factor.loss is None else gtsam.noiseModel.Robust.Create(gtsam.noiseModel.mEstimator.Tukey.Create(factor.loss.c), base)
+    noise = (
+        base
+        if factor.loss is None
+        else gtsam.noiseModel.Robust.Create(gtsam.noiseModel.mEstimator.Tukey.Create(factor.loss.c), base)
+    )
 
     def evaluate(this, values, H):
         xs = [values.atVector(k) for k in this.keys()]
@@ -206,7 +221,9 @@ class BothSolvers(BayesTreeSolver):
 @pytest.mark.parametrize("every", [1, 10])
 def test_bayes_tree_equals_gtsam_isam2_on_a_stream(data, every):
     solver = BothSolvers()
-    est = StreamingEstimator(Readings.from_dataset(data, SETUP), SETUP, StreamOptions(skip=2, every=every), solver=solver)
+    est = StreamingEstimator(
+        Readings.from_dataset(data, SETUP), SETUP, StreamOptions(skip=2, every=every), solver=solver
+    )
     while not est.done:
         est.step()
     assert len(solver.reports) > (1 if every == 10 else 10)

@@ -103,10 +103,14 @@ def assert_matches_dense(solver: IncrementalSolver, *, exact_delta: bool) -> Non
     # 𝓘⁻¹ carries into δ. Near the optimum δ itself is ~0 (b ⟂ range J) and is no scale at all.
     scale = max(np.abs(reference).max(), np.abs(np.linalg.solve(info, np.abs(J.T) @ np.abs(b))).max())
     tree = solver.tree.solve()
-    np.testing.assert_allclose(np.concatenate([tree[k] for k in ordering.keys]), reference, rtol=1e-9, atol=1e-9 * scale)
+    np.testing.assert_allclose(
+        np.concatenate([tree[k] for k in ordering.keys]), reference, rtol=1e-9, atol=1e-9 * scale
+    )
     delta = solver.delta()
     if exact_delta:
-        np.testing.assert_allclose(np.concatenate([delta[k] for k in ordering.keys]), reference, rtol=1e-9, atol=1e-9 * scale)
+        np.testing.assert_allclose(
+            np.concatenate([delta[k] for k in ordering.keys]), reference, rtol=1e-9, atol=1e-9 * scale
+        )
     assert solver.tree.problems() == []
     R, _, tree_order = solver.tree.to_dense()
     p = tree_order.scalar_permutation(ordering)
@@ -118,7 +122,9 @@ def assert_matches_dense(solver: IncrementalSolver, *, exact_delta: bool) -> Non
 
 # --- property: every update of a random sequence -------------------------------------------
 
-ACTIONS = st.lists(st.sampled_from(["state", "state", "state", "two", "extra", "both", "empty"]), min_size=2, max_size=30)
+ACTIONS = st.lists(
+    st.sampled_from(["state", "state", "state", "two", "extra", "both", "empty"]), min_size=2, max_size=30
+)
 THRESHOLDS = st.sampled_from([0.0, 0.02, 0.2, INF, {"x": 0.02, "l": INF}, {"x": INF, "l": 0.0}])
 
 
@@ -131,10 +137,14 @@ THRESHOLDS = st.sampled_from([0.0, 0.02, 0.2, INF, {"x": 0.02, "l": INF}, {"x": 
     relinearize_skip=st.integers(1, 3),
     wildfire_threshold=st.sampled_from([0.0, 1e-3, 0.1]),
 )
-def test_every_update_matches_dense_solve(seed, n_landmarks, actions, relinearize_threshold, relinearize_skip, wildfire_threshold):
+def test_every_update_matches_dense_solve(
+    seed, n_landmarks, actions, relinearize_threshold, relinearize_skip, wildfire_threshold
+):
     stream = Stream(np.random.default_rng(seed), n_states=20, n_landmarks=n_landmarks)
     solver = IncrementalSolver(
-        relinearize_threshold=relinearize_threshold, relinearize_skip=relinearize_skip, wildfire_threshold=wildfire_threshold
+        relinearize_threshold=relinearize_threshold,
+        relinearize_skip=relinearize_skip,
+        wildfire_threshold=wildfire_threshold,
     )
     for action in ["state"] + actions:
         factors, values = stream.step(action)
@@ -144,7 +154,9 @@ def test_every_update_matches_dense_solve(seed, n_landmarks, actions, relineariz
         # the report is consistent with the tree: new cliques exist, removed ones are gone
         assert all(c in solver.tree.cliques for c in report.new_cliques)
         assert not any(c in solver.tree.cliques for c in report.removed_cliques)
-        assert sorted(report.reeliminated) == sorted(k for c in report.new_cliques for k in solver.tree.cliques[c].frontals)
+        assert sorted(report.reeliminated) == sorted(
+            k for c in report.new_cliques for k in solver.tree.cliques[c].frontals
+        )
         assert all(solver.tree.parent[o] in report.new_cliques for o in report.orphans)
 
 
@@ -450,7 +462,16 @@ def test_report_times_every_phase_within_the_total(rng):
     stream = Stream(rng, n_states=5)
     solver = IncrementalSolver(relinearize_skip=1)
     for report in run(stream, solver, ["state"] * 5):
-        assert list(report.timings) == ["check", "add", "relinearize", "remove", "linearize", "order", "eliminate", "backsubstitute"]
+        assert list(report.timings) == [
+            "check",
+            "add",
+            "relinearize",
+            "remove",
+            "linearize",
+            "order",
+            "eliminate",
+            "backsubstitute",
+        ]
         assert all(t >= 0 for t in report.timings.values())
         assert sum(report.timings.values()) <= report.time_s
 
@@ -461,8 +482,9 @@ def test_relinearize_blocks_move_only_the_blocks_over_the_threshold(rng):
     stays the dense solve of its factors."""
     stream = Stream(rng, n_states=14, noise=0.3)
     beta = 0.02
-    solver = IncrementalSolver(relinearize_threshold=beta, relinearize_skip=1, wildfire_threshold=0.0,
-                               relinearize_blocks={"x": (3, 3)})
+    solver = IncrementalSolver(
+        relinearize_threshold=beta, relinearize_skip=1, wildfire_threshold=0.0, relinearize_blocks={"x": (3, 3)}
+    )
     partial = 0
     for action in ["state"] * 14:
         theta, delta = solver.linearization_point, solver.delta()
@@ -483,7 +505,9 @@ def test_relinearize_blocks_are_checked():
         sr.ISAM2Params(relinearize_blocks={"x": (3, -3)})
     params = sr.ISAM2Params(relinearize_blocks={"x": [3, 3]})
     assert params.relinearize_blocks == {"x": (3, 3)}
-    np.testing.assert_array_equal(params.blocks_to_move("x", np.array([0.0, 0.2, 0, 0, 0, 0.01]), 0.1), [1, 1, 1, 0, 0, 0])
+    np.testing.assert_array_equal(
+        params.blocks_to_move("x", np.array([0.0, 0.2, 0, 0, 0, 0.01]), 0.1), [1, 1, 1, 0, 0, 0]
+    )
     np.testing.assert_array_equal(params.blocks_to_move("l", np.array([0.0, 0.01]), 0.1), [0, 0])
     with pytest.raises(SteamError, match="do not add up"):
         params.blocks_to_move("x", np.zeros(4), 0.1)

@@ -8,8 +8,8 @@ from problems import small_problem
 
 import steam_ref as sr
 from steam_ref.batch import make_ordering
-from steam_ref.linear import ordering as orderings
 from steam_ref.linear import LinearSystem, SparseCholesky, solve
+from steam_ref.linear import ordering as orderings
 
 BACKENDS = ["superlu", pytest.param("cholmod", marks=pytest.mark.needs_cholmod)]
 

@@ -129,10 +129,21 @@ def test_valid_files_of_every_kind_read_as_scipy_reads_them(tmp_path: Path, comp
     arrays = dict(
         sparse=scipy.sparse.random(5, 4, density=0.3, format="csc", random_state=1),
         csparse=scipy.sparse.random(5, 4, density=0.3, format="csc", random_state=2) * (1 + 2j),
-        esparse=scipy.sparse.csc_matrix((3, 0)), chars=np.array(["ab", "cd"]), empty_text="", text="naïve ☃",
-        cplx=np.array([[1 + 2j, 3]]), st=structs, es=np.zeros((0, 0), dtype=[("a", "O")]), cells=cells,
-        empty=np.zeros((0, 0)), cube=np.arange(24.0).reshape(2, 3, 4), i8=np.int8([1, -2]), u64=np.uint64([2**63]),
-        f32=np.float32([1.5]), flag=True, **SMALL.to_cmu_arrays(),
+        esparse=scipy.sparse.csc_matrix((3, 0)),
+        chars=np.array(["ab", "cd"]),
+        empty_text="",
+        text="naïve ☃",
+        cplx=np.array([[1 + 2j, 3]]),
+        st=structs,
+        es=np.zeros((0, 0), dtype=[("a", "O")]),
+        cells=cells,
+        empty=np.zeros((0, 0)),
+        cube=np.arange(24.0).reshape(2, 3, 4),
+        i8=np.int8([1, -2]),
+        u64=np.uint64([2**63]),
+        f32=np.float32([1.5]),
+        flag=True,
+        **SMALL.to_cmu_arrays(),
     )
     path = tmp_path / "kinds.mat"
     scipy.io.savemat(path, arrays, do_compression=compress)

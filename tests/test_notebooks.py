@@ -21,7 +21,11 @@ READS_REFERENCE_DATA = re.compile(r"""load_dataset\(\s*["'](plaza|paper-syntheti
 
 def _code_cells(path: Path) -> list[str]:
     cells = json.loads(path.read_text())["cells"]
-    return ["".join(c["source"]) if isinstance(c["source"], list) else c["source"] for c in cells if c["cell_type"] == "code"]
+    return [
+        "".join(c["source"]) if isinstance(c["source"], list) else c["source"]
+        for c in cells
+        if c["cell_type"] == "code"
+    ]
 
 
 def _param(path: Path):
@@ -35,9 +39,16 @@ def _asserts(tree: ast.AST) -> list[str]:
     for node in ast.walk(tree):
         if isinstance(node, ast.Assert):
             found.append("assert")
-        elif isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr.startswith("assert_"):
+        elif (
+            isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr.startswith("assert_")
+        ):
             owner = node.func.value
-            if isinstance(owner, ast.Attribute) and owner.attr == "testing" and isinstance(owner.value, ast.Name) and owner.value.id in ("np", "numpy"):
+            if (
+                isinstance(owner, ast.Attribute)
+                and owner.attr == "testing"
+                and isinstance(owner.value, ast.Name)
+                and owner.value.id in ("np", "numpy")
+            ):
                 found.append(f"np.testing.{node.func.attr}")
     return found
 
@@ -49,7 +60,10 @@ def test_tutorials_exist():
 
 def test_assertion_finder_tells_a_check_from_a_print():
     """The oracle below: it must see both kinds of check, and nothing in code that only prints."""
-    assert sorted(_asserts(ast.parse("np.testing.assert_allclose(a, b)\nassert x < 1"))) == ["assert", "np.testing.assert_allclose"]
+    assert sorted(_asserts(ast.parse("np.testing.assert_allclose(a, b)\nassert x < 1"))) == [
+        "assert",
+        "np.testing.assert_allclose",
+    ]
     assert _asserts(ast.parse("print('all checks passed')\nx.assert_ok()\nself.assertEqual(a, b)")) == []
 
 
@@ -67,6 +81,10 @@ def test_notebook_executes(path):
     nbclient = optional_import("nbclient", "notebooks")
     optional_import("ipykernel", "notebooks")
     nb = nbformat.read(path, as_version=4)
-    assert all(not cell.get("outputs") for cell in nb.cells if cell.cell_type == "code"), "commit notebooks with outputs stripped"
-    client = nbclient.NotebookClient(nb, timeout=300, kernel_name="python3", resources={"metadata": {"path": str(path.parent)}})
+    assert all(not cell.get("outputs") for cell in nb.cells if cell.cell_type == "code"), (
+        "commit notebooks with outputs stripped"
+    )
+    client = nbclient.NotebookClient(
+        nb, timeout=300, kernel_name="python3", resources={"metadata": {"path": str(path.parent)}}
+    )
     client.execute()  # raises CellExecutionError on the first failing cell, the final assertions included

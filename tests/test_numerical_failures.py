@@ -27,7 +27,9 @@ def chain(rng, dt: float, n: int = 8):
     landmarks = {sr.L(j): rng.normal(size=2) * 5 for j in range(3)}
     for key, position in landmarks.items():
         factors.append(sr.PriorFactor.create(key, position, 0.5))
-        factors += [sr.RangeFactor.create(k, key, np.linalg.norm(position) + 0.05 * rng.normal(), 0.05) for k in keys[::2]]
+        factors += [
+            sr.RangeFactor.create(k, key, np.linalg.norm(position) + 0.05 * rng.normal(), 0.05) for k in keys[::2]
+        ]
     initial = sr.Values({k: 0.3 * rng.normal(size=6) for k in keys} | {k: p + 0.1 for k, p in landmarks.items()})
     return sr.FactorGraph(factors), initial
 
@@ -63,10 +65,13 @@ def test_noise_covariance_must_be_symmetric():
     np.testing.assert_allclose(W.T @ W, np.linalg.inv([[1.0, 0.2], [0.2, 1.0]]), rtol=1e-12)
 
 
-@pytest.mark.parametrize("make", [
-    lambda r: sr.RangeFactor.create(sr.X(0), sr.L(0), r, 0.5),
-    lambda r: sr.BearingRangeFactor.create(sr.X(0), sr.L(0), 0.1, r, [0.1, 0.5]),
-])
+@pytest.mark.parametrize(
+    "make",
+    [
+        lambda r: sr.RangeFactor.create(sr.X(0), sr.L(0), r, 0.5),
+        lambda r: sr.BearingRangeFactor.create(sr.X(0), sr.L(0), 0.1, r, [0.1, 0.5]),
+    ],
+)
 def test_negative_ranges_are_refused(make):
     with pytest.raises(sr.SteamError, match=r"cannot be negative, got (measured|range_)=-0.5"):
         make(-0.5)
@@ -91,11 +96,13 @@ def test_values_refuse_what_they_would_otherwise_guess():
 
 
 def overflowing_problem():
-    graph = sr.FactorGraph([
-        sr.PriorFactor.create(sr.X(0), np.zeros(6), 1.0),
-        sr.RangeFactor.create(sr.X(0), sr.L(0), 1e200, 1.0),
-        sr.PriorFactor.create(sr.L(0), np.ones(2), 1.0),
-    ])
+    graph = sr.FactorGraph(
+        [
+            sr.PriorFactor.create(sr.X(0), np.zeros(6), 1.0),
+            sr.RangeFactor.create(sr.X(0), sr.L(0), 1e200, 1.0),
+            sr.PriorFactor.create(sr.L(0), np.ones(2), 1.0),
+        ]
+    )
     return graph, sr.Values({sr.X(0): np.zeros(6), sr.L(0): np.ones(2)})
 
 
@@ -168,10 +175,9 @@ def test_tiny_time_gaps_are_refused_not_claimed(rng, method):
     assert not result.converged
     assert result.stationarity.condition > MAX_CONDITION
     assert dense_scaled_condition(graph, result.values) > MAX_CONDITION  # the claim holds densely too
-    with pytest.raises(sr.UnderdeterminedError, match="too ill-conditioned for float64"):
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", sr.IllConditionedWarning)
-            method(*chain(rng, 1e-9))
+    with pytest.raises(sr.UnderdeterminedError, match="too ill-conditioned for float64"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", sr.IllConditionedWarning)
+        method(*chain(rng, 1e-9))
 
 
 def test_well_spaced_states_still_converge(rng):
@@ -199,14 +205,17 @@ def test_a_landmark_seen_by_one_range_is_named(rng, backend, ordering):
 # --- arguments ------------------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("options, message", [
-    (dict(max_iterations=-1), "max_iterations must be an integer ≥ 0, got -1"),
-    (dict(max_iterations=2.5), "max_iterations must be an integer ≥ 0, got 2.5"),
-    (dict(max_iterations=True), "max_iterations must be an integer ≥ 0, got True"),
-    (dict(relative_tolerance=float("nan")), "relative_tolerance must be a finite number ≥ 0, got nan"),
-    (dict(absolute_tolerance=-1e-3), "absolute_tolerance must be a finite number ≥ 0, got -0.001"),
-    (dict(step_tolerance="small"), "step_tolerance must be a finite number ≥ 0, got 'small'"),
-])
+@pytest.mark.parametrize(
+    "options, message",
+    [
+        (dict(max_iterations=-1), "max_iterations must be an integer ≥ 0, got -1"),
+        (dict(max_iterations=2.5), "max_iterations must be an integer ≥ 0, got 2.5"),
+        (dict(max_iterations=True), "max_iterations must be an integer ≥ 0, got True"),
+        (dict(relative_tolerance=float("nan")), "relative_tolerance must be a finite number ≥ 0, got nan"),
+        (dict(absolute_tolerance=-1e-3), "absolute_tolerance must be a finite number ≥ 0, got -0.001"),
+        (dict(step_tolerance="small"), "step_tolerance must be a finite number ≥ 0, got 'small'"),
+    ],
+)
 @pytest.mark.parametrize("method", [sr.gauss_newton, sr.levenberg_marquardt])
 def test_solver_options_are_checked(rng, method, options, message):
     p = small_problem(rng, n_states=4, n_landmarks=1)
@@ -214,12 +223,15 @@ def test_solver_options_are_checked(rng, method, options, message):
         method(p.graph, p.initial, **options)
 
 
-@pytest.mark.parametrize("options, message", [
-    (dict(initial_damping=-1.0), "initial_damping must be a finite number ≥ 0, got -1.0"),
-    (dict(initial_damping=0.0), "initial_damping must be > 0, got 0.0"),
-    (dict(damping_factor=1.0), "damping_factor must be > 1, got 1.0"),
-    (dict(max_damping=float("inf")), "max_damping must be a finite number ≥ 0, got inf"),
-])
+@pytest.mark.parametrize(
+    "options, message",
+    [
+        (dict(initial_damping=-1.0), "initial_damping must be a finite number ≥ 0, got -1.0"),
+        (dict(initial_damping=0.0), "initial_damping must be > 0, got 0.0"),
+        (dict(damping_factor=1.0), "damping_factor must be > 1, got 1.0"),
+        (dict(max_damping=float("inf")), "max_damping must be a finite number ≥ 0, got inf"),
+    ],
+)
 def test_damping_options_are_checked(rng, options, message):
     p = small_problem(rng, n_states=4, n_landmarks=1)
     with pytest.raises(sr.SteamError, match=message):

@@ -62,10 +62,18 @@ def test_plot_imports_nothing_from_steam_ref_at_run_time():
     """Only under TYPE_CHECKING may plot.py name steam_ref's types: it takes plain data. Its one run-time
     import is the exceptions (steam_ref.errors, which imports nothing), so a bad array raises a SteamError."""
     tree = ast.parse(Path(plot.__file__).read_text())
-    type_only = {id(n) for node in ast.walk(tree) if isinstance(node, ast.If) and getattr(node.test, "id", "") == "TYPE_CHECKING" for n in ast.walk(node)}
+    type_only = {
+        id(n)
+        for node in ast.walk(tree)
+        if isinstance(node, ast.If) and getattr(node.test, "id", "") == "TYPE_CHECKING"
+        for n in ast.walk(node)
+    }
     runtime = [
-        node.module for node in ast.walk(tree)
-        if isinstance(node, ast.ImportFrom) and id(node) not in type_only and (node.level > 0 or (node.module or "").startswith("steam_ref"))
+        node.module
+        for node in ast.walk(tree)
+        if isinstance(node, ast.ImportFrom)
+        and id(node) not in type_only
+        and (node.level > 0 or (node.module or "").startswith("steam_ref"))
     ]
     assert runtime == ["errors"]
 
@@ -77,7 +85,13 @@ def test_plot_trajectory_draws_the_given_arrays(rng):
     truth, estimate, dr = (rng.normal(size=(7, 2)) for _ in range(3))
     marks, marks_est = rng.normal(size=(3, 2)), {4: rng.normal(size=2), 9: rng.normal(size=2)}
     ax = plot.plot_trajectory(
-        truth, estimate, landmarks_true=marks, landmarks_estimated=marks_est, dead_reckoning=dr, estimate_label="BTGP estimate", title="t"
+        truth,
+        estimate,
+        landmarks_true=marks,
+        landmarks_estimated=marks_est,
+        dead_reckoning=dr,
+        estimate_label="BTGP estimate",
+        title="t",
     )
     np.testing.assert_array_equal(line(ax, "ground truth"), truth)
     np.testing.assert_array_equal(line(ax, "BTGP estimate"), estimate)
@@ -107,7 +121,9 @@ def test_plot_timing_draws_each_runs_cumulative_time(rng):
 
 def test_plot_interpolation_tradeoff_plots_the_values_it_was_given(rng):
     skips = [10, 1, 3]  # unsorted: drawn in increasing skip
-    with_, without = ({k: SimpleNamespace(rmse_m=rng.uniform(), total_s=rng.uniform(1, 9)) for k in skips} for _ in range(2))
+    with_, without = (
+        {k: SimpleNamespace(rmse_m=rng.uniform(), total_s=rng.uniform(1, 9)) for k in skips} for _ in range(2)
+    )
     rmse_ax, time_ax = plot.plot_interpolation_tradeoff(with_, without, name="plaza")
     for runs, label in ((with_, "with interpolation"), (without, "without interpolation")):
         ks = sorted(runs)
@@ -173,7 +189,13 @@ def test_draw_spy_shows_the_pattern_of_R_and_highlights_rows(rng):
     R = np.triu(rng.normal(size=(5, 5)))
     R[0, 3] = R[1, 4] = 0.0
     keys, dims = ("x0", "x1", "l0"), (2, 2, 1)
-    ordering = SimpleNamespace(keys=keys, dims=dims, offsets=np.array([0, 2, 4]), offset_of=dict(zip(keys, (0, 2, 4))), position={k: i for i, k in enumerate(keys)})
+    ordering = SimpleNamespace(
+        keys=keys,
+        dims=dims,
+        offsets=np.array([0, 2, 4]),
+        offset_of=dict(zip(keys, (0, 2, 4))),
+        position={k: i for i, k in enumerate(keys)},
+    )
     tree = SimpleNamespace(to_dense=lambda: (R, None, ordering))
     ax = plot.draw_spy(tree, highlight=["x1"])
     (marks,) = ax.lines  # spy with markers: one marker at (column, row) of each nonzero

@@ -79,11 +79,14 @@ def test_relinearization_blocks_follow_the_state():
     assert PaperSetup.synthetic().isam2_params().relinearize_blocks == {"x": (3, 3)}
 
 
-@pytest.mark.parametrize("changes, message", [
-    (dict(prior="cv"), "prior must be one of"),
-    (dict(prior="singer", singer_time_constant=0.0), "time_constant"),
-    (dict(prior="singer", singer_time_constant=float("nan")), "time_constant"),
-])
+@pytest.mark.parametrize(
+    "changes, message",
+    [
+        (dict(prior="cv"), "prior must be one of"),
+        (dict(prior="singer", singer_time_constant=0.0), "time_constant"),
+        (dict(prior="singer", singer_time_constant=float("nan")), "time_constant"),
+    ],
+)
 def test_bad_prior_settings_are_named(changes, message):
     with pytest.raises(SteamError, match=message):
         PaperSetup.synthetic().replace(**changes)

@@ -154,7 +154,9 @@ def test_rebase_composes_the_next_guess_from_the_estimate():
     estimate = np.array([4.0, -2.0, 0.3, 0.0, 0.0, 0.0])
     front.rebase(estimate)
     step = front.step()
-    np.testing.assert_allclose(step.values[X(3)][:3], compose(estimate[:3], ds.odometry[2, 1], ds.odometry[2, 2]), atol=1e-12)
+    np.testing.assert_allclose(
+        step.values[X(3)][:3], compose(estimate[:3], ds.odometry[2, 1], ds.odometry[2, 2]), atol=1e-12
+    )
 
 
 def test_departures_are_named_and_change_only_their_fields():

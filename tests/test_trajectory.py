@@ -3,8 +3,8 @@ last state (the prior's prediction); before the first state it is an error."""
 
 import numpy as np
 import pytest
-
 from oracles import condition_gaussian, gp_kernel, gp_mean, random_spd
+
 from steam_ref.errors import SteamError
 from steam_ref.gp import LinearSDE
 from steam_ref.trajectory import Trajectory

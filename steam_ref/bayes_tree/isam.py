@@ -53,7 +53,9 @@ class UpdateReport:
     linearized_factors: int  # factors linearized in this update (the new ones included)
     backsubstituted_cliques: int  # cliques whose conditional was solved
     time_s: float  # wall time of the whole update
-    timings: dict[str, float] = field(default_factory=dict)  # seconds per phase: check, add, relinearize, remove, linearize, order, eliminate, backsubstitute
+    timings: dict[str, float] = field(
+        default_factory=dict
+    )  # seconds per phase: check, add, relinearize, remove, linearize, order, eliminate, backsubstitute
 
 
 class IncrementalSolver:
@@ -161,7 +163,9 @@ class IncrementalSolver:
                 raise SteamError(f"relinearize must be True or False, got relinearize={relinearize!r}")
             F_new = check_factors("new_factors", new_factors)
             if new_values is not None and not isinstance(new_values, Mapping):
-                raise SteamError(f"new_values must be a mapping key -> vector (a dict or a Values) or None, got {new_values!r}")
+                raise SteamError(
+                    f"new_values must be a mapping key -> vector (a dict or a Values) or None, got {new_values!r}"
+                )
             theta_new = self._checked_update(F_new, {} if new_values is None else new_values)
         journal = Journal(len(self.factors), list(theta_new))
         try:
@@ -207,8 +211,17 @@ class IncrementalSolver:
         with timer("backsubstitute"):
             updated, visited = self._backsubstitute(set(new_cids))
         return UpdateReport(
-            self._steps, tuple(removed), tuple(new_cids), tuple(orphans), tuple(theta_rl), tuple(order),
-            tuple(updated), n_linearized, visited, timer.total(), timer.seconds,
+            self._steps,
+            tuple(removed),
+            tuple(new_cids),
+            tuple(orphans),
+            tuple(theta_rl),
+            tuple(order),
+            tuple(updated),
+            n_linearized,
+            visited,
+            timer.total(),
+            timer.seconds,
         )
 
     def _rollback(self, journal: Journal) -> None:
@@ -233,7 +246,9 @@ class IncrementalSolver:
         values: dict[Key, NDArray] = {}
         for k, v in new_values.items():
             if not isinstance(k, Key):
-                raise SteamError(f"new_values has the key {k!r}, which is not a variable key (make one with X(i) or L(j))")
+                raise SteamError(
+                    f"new_values has the key {k!r}, which is not a variable key (make one with X(i) or L(j))"
+                )
             if k in self._dims:
                 raise SteamError(f"variable {k!r} already has a value; an update cannot give it a new one")
             x = real_array(f"new_values[{k!r}]", v)
@@ -248,7 +263,9 @@ class IncrementalSolver:
             for k, dim in zip(f.keys, f.key_dims):
                 have = values[k].shape[0] if k in values else self._dims.get(k)
                 if have is None:
-                    raise UnknownVariableError(f"{type(f).__name__} names {k!r}, which has no value: give it one in new_values")
+                    raise UnknownVariableError(
+                        f"{type(f).__name__} names {k!r}, which has no value: give it one in new_values"
+                    )
                 if have != dim:
                     raise ShapeError(f"{type(f).__name__} expects {k!r} of size {dim}, its value has size {have}")
         named = {k for f in new_factors for k in f.keys}
@@ -279,7 +296,9 @@ class IncrementalSolver:
         ([YIB Alg. 1 step 7]: collect them into θ_rl).
         """
         theta_rl = list(self._over)
-        moves = {k: self.params.blocks_to_move(k.kind, self._delta[k], self._threshold[k]) for k in theta_rl}  # (d,) bool
+        moves = {
+            k: self.params.blocks_to_move(k.kind, self._delta[k], self._threshold[k]) for k in theta_rl
+        }  # (d,) bool
         self._over.clear()
         for k, move in moves.items():
             theta_bar, delta = self._theta_bar[k], self._delta[k]
@@ -288,7 +307,9 @@ class IncrementalSolver:
             self._delta[k] = np.where(move, 0.0, delta)
         return theta_rl
 
-    def _remove_top(self, theta_nf: list[Key], theta_rl: list[Key], journal: Journal) -> tuple[dict[int, Clique], list[int]]:
+    def _remove_top(
+        self, theta_nf: list[Key], theta_rl: list[Key], journal: Journal
+    ) -> tuple[dict[int, Clique], list[int]]:
         """Remove the cliques of θ_aff = θ_nf ∪ θ_rl and their ascendants: ``(removed, orphans)``.  [K12 Alg. 4]
 
         A variable of θ_nf affects the clique where it is frontal (a new variable is in none yet);
@@ -303,7 +324,9 @@ class IncrementalSolver:
 
     def _relinearize(self, fids: list[int], theta_rl: set[Key], journal: Journal) -> int:
         """Linearize, at θ̄, the factors among ``fids`` that are new or touch θ_rl; returns how many.  [YIB Eq. 9]"""
-        need = [j for j in fids if self._linear[j] is None or (theta_rl and not theta_rl.isdisjoint(self.factors[j].keys))]
+        need = [
+            j for j in fids if self._linear[j] is None or (theta_rl and not theta_rl.isdisjoint(self.factors[j].keys))
+        ]
         for j in need:
             journal.relinearized(j, self._linear[j])
         if need:

@@ -73,7 +73,10 @@ class ISAM2Params:
     def __post_init__(self) -> None:
         t = self.relinearize_threshold
         if isinstance(t, Mapping):
-            t = {_kind("relinearize_threshold", kind): _threshold(v, f"relinearize_threshold[{kind!r}]") for kind, v in t.items()}
+            t = {
+                _kind("relinearize_threshold", kind): _threshold(v, f"relinearize_threshold[{kind!r}]")
+                for kind, v in t.items()
+            }
         else:
             t = _threshold(t, "relinearize_threshold")
         object.__setattr__(self, "relinearize_threshold", t)
@@ -84,8 +87,12 @@ class ISAM2Params:
         object.__setattr__(self, "wildfire_threshold", _threshold(self.wildfire_threshold, "wildfire_threshold"))
         if self.relinearize_blocks is not None:
             if not isinstance(self.relinearize_blocks, Mapping):
-                raise SteamError(f"relinearize_blocks must map a variable kind to block sizes, e.g. {{'x': (3, 3)}}; got {self.relinearize_blocks!r}")
-            object.__setattr__(self, "relinearize_blocks", {k: _blocks(k, v) for k, v in self.relinearize_blocks.items()})
+                raise SteamError(
+                    f"relinearize_blocks must map a variable kind to block sizes, e.g. {{'x': (3, 3)}}; got {self.relinearize_blocks!r}"
+                )
+            object.__setattr__(
+                self, "relinearize_blocks", {k: _blocks(k, v) for k, v in self.relinearize_blocks.items()}
+            )
 
     def blocks_of(self, kind: str, size: int) -> tuple[int, ...]:
         """Block sizes of a variable of ``kind`` and ``size``; ShapeError when its blocks do not fit it."""

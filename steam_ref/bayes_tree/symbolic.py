@@ -59,7 +59,9 @@ def symbolic_elimination(order: Sequence[V], factor_keys: Sequence[Sequence[V]])
         try:
             first = min(keys, key=pos.__getitem__)
         except KeyError as exc:
-            raise UnknownVariableError(f"a factor names {exc.args[0]!r}, which is not in the elimination order") from None
+            raise UnknownVariableError(
+                f"a factor names {exc.args[0]!r}, which is not in the elimination order"
+            ) from None
         owner.append(first)
         pending.setdefault(first, set()).update(keys)
     separators = {}
@@ -104,7 +106,9 @@ def build_cliques(order: Sequence[V], factor_keys: Sequence[Sequence[V]]) -> lis
     for j, v in enumerate(owner):
         owned[clique_of[v]].append(j)
     return [
-        SymbolicClique(tuple(reversed(frontals[c])), seps[c], None if parents[c] is None else n - 1 - parents[c], tuple(owned[c]))
+        SymbolicClique(
+            tuple(reversed(frontals[c])), seps[c], None if parents[c] is None else n - 1 - parents[c], tuple(owned[c])
+        )
         for c in reversed(range(n))
     ]
 

@@ -25,10 +25,10 @@ from numpy.typing import NDArray
 from scipy.linalg import lapack
 
 from ..errors import SteamError, UnderdeterminedError
-from ..variables import Key, key_list
 from ..linear.conditional import assemble_sqrt_information
 from ..linear.ordering import Ordering
 from ..linear.system import GaussianFactor
+from ..variables import Key, key_list
 from .symbolic import CliqueTree, build_cliques
 
 __all__ = ["Clique", "BayesTree", "eliminate", "eliminate_clique", "factor_dims"]
@@ -113,7 +113,9 @@ def eliminate_clique(
         free = int(small[0]) if len(small) else None
     if free is not None:
         bad = _free_variable(M, frontals, dims, free)
-        raise UnderdeterminedError(f"variable {bad!r} is not constrained by the factors (pivot {free} of its clique vanishes)")
+        raise UnderdeterminedError(
+            f"variable {bad!r} is not constrained by the factors (pivot {free} of its clique vanishes)"
+        )
     ns = ncol - 1 - nf
     below = R[nf : nf + ns, nf:].copy()  # f(S): the rows left after eliminating F  [YIB Eq. 24]
     blocks, o = [], 0
@@ -186,11 +188,15 @@ class BayesTree(CliqueTree[Clique]):
         factors = list(factors)
         for i, f in enumerate(factors):
             if not isinstance(f, GaussianFactor):
-                raise SteamError(f"factors[{i}] is a {type(f).__name__}, not a GaussianFactor (linearize a factor first)")
+                raise SteamError(
+                    f"factors[{i}] is a {type(f).__name__}, not a GaussianFactor (linearize a factor first)"
+                )
         named = {k for f in factors for k in f.keys}
         free = next((k for k in order if k not in named), None)
         if free is not None:
-            raise UnderdeterminedError(f"variable {free!r} of the ordering is named by no factor, so nothing constrains it")
+            raise UnderdeterminedError(
+                f"variable {free!r} of the ordering is named by no factor, so nothing constrains it"
+            )
         tree = cls()
         cliques, parents, _ = eliminate(order, factors)
         tree.insert_eliminated(cliques, parents)

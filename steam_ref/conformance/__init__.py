@@ -19,4 +19,14 @@ from .checker import Report, check_cases, check_directory
 from .kitio import KIT_VERSION, SHIPPED, SUITES
 from .runner import run_case
 
-__all__ = ["KIT_VERSION", "SHIPPED", "SUITES", "build_kit", "selftest", "check_directory", "check_cases", "Report", "run_case"]
+__all__ = [
+    "KIT_VERSION",
+    "SHIPPED",
+    "SUITES",
+    "build_kit",
+    "selftest",
+    "check_directory",
+    "check_cases",
+    "Report",
+    "run_case",
+]

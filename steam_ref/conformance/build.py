@@ -29,7 +29,19 @@ from .cases import SUITE_DOCS, Case, suite_cases
 from .checker import Outcome, Report, check_cases, compare_quantity
 from .conventions import CONVENTIONS, RESULTS_LAYOUT
 from .expected import oracle_case
-from .kitio import KIT_VERSION, SHIPPED, SUITES, kit_files, plain, read_index, read_json, read_suite, sha256, write_json, write_npz
+from .kitio import (
+    KIT_VERSION,
+    SHIPPED,
+    SUITES,
+    kit_files,
+    plain,
+    read_index,
+    read_json,
+    read_suite,
+    sha256,
+    write_json,
+    write_npz,
+)
 from .paper import paper_cases, run_paper_case
 from .runner import run_case
 
@@ -44,9 +56,15 @@ def _roundtrip(value):
 def case_record(case: Case, expected: dict) -> dict:
     """A case as cases.json lists it."""
     return {
-        "name": case.name, "equation": case.equation, "description": case.description,
-        "independent": case.independent, "source": case.source, "tolerance": case.tolerance,
-        "inputs": _roundtrip(case.inputs), "expected": _roundtrip(expected), **({"notes": case.notes} if case.notes else {}),
+        "name": case.name,
+        "equation": case.equation,
+        "description": case.description,
+        "independent": case.independent,
+        "source": case.source,
+        "tolerance": case.tolerance,
+        "inputs": _roundtrip(case.inputs),
+        "expected": _roundtrip(expected),
+        **({"notes": case.notes} if case.notes else {}),
     }
 
 
@@ -76,7 +94,12 @@ def _commit() -> str:
     root = Path(__file__).resolve().parents[2]
     try:
         out = subprocess.run(["git", "-C", str(root), "rev-parse", "HEAD"], capture_output=True, text=True, timeout=10)
-        dirty = subprocess.run(["git", "-C", str(root), "status", "--porcelain", "--", "steam_ref"], capture_output=True, text=True, timeout=10)
+        dirty = subprocess.run(
+            ["git", "-C", str(root), "status", "--porcelain", "--", "steam_ref"],
+            capture_output=True,
+            text=True,
+            timeout=10,
+        )
     except (OSError, subprocess.SubprocessError):
         return "unknown"
     if out.returncode != 0:
@@ -85,11 +108,16 @@ def _commit() -> str:
 
 
 def _write_suite(out: Path, suite: str, records: list[dict]) -> None:
-    write_json(out / suite / "cases.json", {"suite": suite, "kit_version": KIT_VERSION, "description": SUITE_DOCS[suite], "cases": records})
+    write_json(
+        out / suite / "cases.json",
+        {"suite": suite, "kit_version": KIT_VERSION, "description": SUITE_DOCS[suite], "cases": records},
+    )
     write_npz(out / suite / "expected.npz", records)
 
 
-def build_kit(out: str | os.PathLike | None = None, *, paper: bool = False, data_dir: str | os.PathLike | None = None) -> dict:
+def build_kit(
+    out: str | os.PathLike | None = None, *, paper: bool = False, data_dir: str | os.PathLike | None = None
+) -> dict:
     """Write the kit to ``out`` (default: the package's own folder); returns its index.
 
     ``paper``: rebuild the paper suite from the data files; otherwise keep the one in ``out``, or
@@ -109,16 +137,26 @@ def build_kit(out: str | os.PathLike | None = None, *, paper: bool = False, data
     for suite in SUITES:
         cases = read_suite(out, suite)["cases"]
         suites[suite] = {
-            "description": SUITE_DOCS[suite], "files": [f"{suite}/cases.json", f"{suite}/expected.npz"], "cases": len(cases),
+            "description": SUITE_DOCS[suite],
+            "files": [f"{suite}/cases.json", f"{suite}/expected.npz"],
+            "cases": len(cases),
             "independent": [c["name"] for c in cases if c["independent"]],
             "produced_by_steam_ref": [c["name"] for c in cases if not c["independent"]],
         }
     index = {
-        "kit": "steam_ref conformance kit", "kit_version": KIT_VERSION,
+        "kit": "steam_ref conformance kit",
+        "kit_version": KIT_VERSION,
         "paper": "Yan, Indelman, Boots: Incremental Sparse GP Regression for Continuous-time Trajectory Estimation & Mapping",
-        "generated_by": {"steam_ref": _version(), "commit": _commit(), "numpy": np.__version__, "scipy": scipy.__version__,
-                         "python": platform.python_version()},
-        "conventions": CONVENTIONS, "results_layout": RESULTS_LAYOUT, "suites": suites,
+        "generated_by": {
+            "steam_ref": _version(),
+            "commit": _commit(),
+            "numpy": np.__version__,
+            "scipy": scipy.__version__,
+            "python": platform.python_version(),
+        },
+        "conventions": CONVENTIONS,
+        "results_layout": RESULTS_LAYOUT,
+        "suites": suites,
         "files": {name: sha256(out / name) for name in kit_files(out) if name != "README.md"},
     }
     write_json(out / "index.json", index)
@@ -129,25 +167,37 @@ def _selftest_suite(kit: Path, suite: str, report: Report) -> None:
     shipped = read_suite(kit, suite)["cases"]
     defined = {c.name: c for c in suite_cases(suite)}
     for name in sorted(set(defined) - {c["name"] for c in shipped}):
-        report.outcomes.append(Outcome(suite, name, ((np.inf, "defined in cases.py but not in the shipped kit: regenerate it"),)))
+        report.outcomes.append(
+            Outcome(suite, name, ((np.inf, "defined in cases.py but not in the shipped kit: regenerate it"),))
+        )
     for case in shipped:
         name, failures = case["name"], []
         mine = defined.get(name)
         if mine is None:
             failures.append((np.inf, "in the shipped kit but no longer defined in cases.py: regenerate the kit"))
-        elif (_roundtrip(mine.inputs), mine.tolerance, mine.independent) != (case["inputs"], case["tolerance"], case["independent"]):
-            failures.append((np.inf, "its inputs, tolerances or provenance in cases.py differ from the shipped kit: regenerate it"))
+        elif (_roundtrip(mine.inputs), mine.tolerance, mine.independent) != (
+            case["inputs"],
+            case["tolerance"],
+            case["independent"],
+        ):
+            failures.append(
+                (np.inf, "its inputs, tolerances or provenance in cases.py differ from the shipped kit: regenerate it")
+            )
         ours = _roundtrip(run_case(suite, name, case["inputs"]))
         sources = [("steam_ref: ", ours)]
         if case["independent"]:
             sources.append(("oracle: ", _roundtrip(oracle_case(suite, name, case["inputs"]))))
         for prefix, got in sources:
             for q, tolerance in case["tolerance"].items():
-                failures += [(r, prefix + m) for r, m in compare_quantity(case["expected"][q], got.get(q), tolerance, q)]
+                failures += [
+                    (r, prefix + m) for r, m in compare_quantity(case["expected"][q], got.get(q), tolerance, q)
+                ]
         report.outcomes.append(Outcome(suite, name, tuple(sorted(failures, key=lambda f: -f[0]))))
 
 
-def selftest(kit: str | os.PathLike | None = None, *, paper: bool = False, data_dir: str | os.PathLike | None = None) -> Report:
+def selftest(
+    kit: str | os.PathLike | None = None, *, paper: bool = False, data_dir: str | os.PathLike | None = None
+) -> Report:
     """Regenerate every case from the kit's inputs with the installed code and check it against the kit."""
     kit = Path(SHIPPED if kit is None else kit)
     read_index(kit)  # version and sha256 of every file
@@ -159,7 +209,9 @@ def selftest(kit: str | os.PathLike | None = None, *, paper: bool = False, data_
         results = {c["name"]: _roundtrip(run_paper_case(c["name"], c["inputs"], data_dir)) for c in cases}
         check_cases("paper", cases, results, report)
     else:
-        report.notes.append(f"paper suite not run ({', '.join(c['name'] for c in cases)}: two full BTGP/1 runs, about a minute): add --paper")
+        report.notes.append(
+            f"paper suite not run ({', '.join(c['name'] for c in cases)}: two full BTGP/1 runs, about a minute): add --paper"
+        )
     return report
 
 

@@ -29,7 +29,9 @@ class Outcome:
 
     suite: str
     case: str
-    failures: tuple[tuple[float, str], ...] = ()  # (how far past its tolerance, message) per failing quantity, worst first
+    failures: tuple[
+        tuple[float, str], ...
+    ] = ()  # (how far past its tolerance, message) per failing quantity, worst first
 
     @property
     def passed(self) -> bool:
@@ -66,7 +68,9 @@ class Report:
             shown = ", ".join(self.not_run[:8]) + (", ..." if len(self.not_run) > 8 else "")
             out.append(f"not run: {len(self.not_run)} cases of these suites have no result ({shown})")
         if self.unknown:
-            out.append(f"ignored: results for {len(self.unknown)} cases the kit does not have ({', '.join(self.unknown[:8])})")
+            out.append(
+                f"ignored: results for {len(self.unknown)} cases the kit does not have ({', '.join(self.unknown[:8])})"
+            )
         out += self.notes
         out.append(f"{self.passed} passed, {self.failed} failed")
         return out
@@ -121,12 +125,18 @@ def compare_quantity(expected, got, tolerance, name: str) -> list[tuple[float, s
         return []
     where = np.unravel_index(int(diff.argmax()), diff.shape) if diff.ndim else ()
     at = f" at {tuple(int(i) for i in where)}" if where else ""
-    return [(worst / allowed if allowed > 0 else math.inf,
-             f"{name} worst |diff| {worst:.3g}{at} > tolerance {allowed:.3g} "
-             f"(atol {float(tolerance['atol']):g} + rtol {float(tolerance['rtol']):g} x max|expected| {scale:.3g})")]
+    return [
+        (
+            worst / allowed if allowed > 0 else math.inf,
+            f"{name} worst |diff| {worst:.3g}{at} > tolerance {allowed:.3g} "
+            f"(atol {float(tolerance['atol']):g} + rtol {float(tolerance['rtol']):g} x max|expected| {scale:.3g})",
+        )
+    ]
 
 
-def check_cases(suite: str, kit_cases: Sequence[Mapping], results: Mapping[str, Mapping], report: Report | None = None) -> Report:
+def check_cases(
+    suite: str, kit_cases: Sequence[Mapping], results: Mapping[str, Mapping], report: Report | None = None
+) -> Report:
     """Check ``results`` (case name → quantity → value) against a suite's kit cases."""
     report = Report() if report is None else report
     known = {c["name"] for c in kit_cases}
@@ -136,7 +146,9 @@ def check_cases(suite: str, kit_cases: Sequence[Mapping], results: Mapping[str, 
             report.not_run.append(f"{suite}/{case['name']}")
             continue
         if not isinstance(got, Mapping):
-            report.outcomes.append(Outcome(suite, case["name"], ((math.inf, "its result is not an object of quantities"),)))
+            report.outcomes.append(
+                Outcome(suite, case["name"], ((math.inf, "its result is not an object of quantities"),))
+            )
             continue
         failures = []
         for q, tolerance in case["tolerance"].items():
@@ -173,7 +185,9 @@ def check_directory(kit: Path, results_dir: Path, suite: str | None = None) -> R
             raise SteamError(f"no results for suite {suite!r}: expected {results_dir / suite / 'results.json'}")
         present = [suite]
     if not present:
-        raise SteamError(f"no results in {str(results_dir)!r}: expected <suite>/results.json for a suite of {', '.join(SUITES)}")
+        raise SteamError(
+            f"no results in {str(results_dir)!r}: expected <suite>/results.json for a suite of {', '.join(SUITES)}"
+        )
     report = Report()
     for s in present:
         check_cases(s, read_suite(kit, s)["cases"], load_results(results_dir, s), report)

@@ -26,20 +26,32 @@ __all__ = ["add_parser", "run"]
 
 def add_parser(sub) -> argparse.ArgumentParser:
     """Add ``conformance`` and its subcommands to ``sub`` (an argparse subparsers object)."""
-    conf = sub.add_parser("conformance", help="the conformance kit: export it, check results against it, check this install")
-    commands = conf.add_subparsers(dest="conformance_command", parser_class=type(conf), required=True, metavar="{export,check,selftest,build}")
-    exp = commands.add_parser("export", help="write the kit (inputs, expected outputs, conventions) and a README to DIR")
+    conf = sub.add_parser(
+        "conformance", help="the conformance kit: export it, check results against it, check this install"
+    )
+    commands = conf.add_subparsers(
+        dest="conformance_command", parser_class=type(conf), required=True, metavar="{export,check,selftest,build}"
+    )
+    exp = commands.add_parser(
+        "export", help="write the kit (inputs, expected outputs, conventions) and a README to DIR"
+    )
     exp.add_argument("dir", metavar="DIR", help="a new or empty folder")
     chk = commands.add_parser("check", help="compare results laid out like the kit with its expected values")
     chk.add_argument("results", metavar="RESULTS_DIR", help="a folder with <suite>/results.json")
     chk.add_argument("--suite", choices=SUITES, default=None, help="check this suite only")
     chk.add_argument("--kit", default=None, help="check against this exported kit instead of the shipped one")
-    st = commands.add_parser("selftest", help="regenerate every case with the installed code and check it against the shipped kit")
-    st.add_argument("--paper", action="store_true", help="also run the paper suite (BTGP/1 on both data sets, about a minute)")
+    st = commands.add_parser(
+        "selftest", help="regenerate every case with the installed code and check it against the shipped kit"
+    )
+    st.add_argument(
+        "--paper", action="store_true", help="also run the paper suite (BTGP/1 on both data sets, about a minute)"
+    )
     st.add_argument("--data-dir", default=None, help="folder with the paper's data files (else $STEAM_REF_DATA_DIR)")
     bld = commands.add_parser("build", help="regenerate the kit (default: the package's own copy)")
     bld.add_argument("--out", default=None, help="write the kit here instead of into the package")
-    bld.add_argument("--paper", action="store_true", help="rebuild the paper suite from the data files (else keep the existing one)")
+    bld.add_argument(
+        "--paper", action="store_true", help="rebuild the paper suite from the data files (else keep the existing one)"
+    )
     bld.add_argument("--data-dir", default=None, help="folder with the paper's data files (else $STEAM_REF_DATA_DIR)")
     return conf
 

@@ -28,7 +28,12 @@ def _gp(inputs: Mapping) -> dict:
             out["W"] = o.sqrt_information(Q)
         return out
     if kind == "lti":
-        A, F, v, dt = np.asarray(inputs["A"], float), np.asarray(inputs["F"], float), np.asarray(inputs["v"], float), float(inputs["dt"])
+        A, F, v, dt = (
+            np.asarray(inputs["A"], float),
+            np.asarray(inputs["F"], float),
+            np.asarray(inputs["v"], float),
+            float(inputs["dt"]),
+        )
         return {"Phi": o.transition(A, dt), "Q": o.process_noise(A, F, qc, dt), "v_i": o.input_integral(A, v, dt)}
     t1 = float(inputs["t1"])
     if kind == "extrapolation":
@@ -42,7 +47,11 @@ def _gp(inputs: Mapping) -> dict:
         cov = G @ np.asarray(inputs["joint_cov"], float) @ G.T + cond
         return {"cov_tau": (cov + cov.T) / 2}
     if kind in ("interpolation", "singer_interpolation"):
-        return {"Lambda": lam, "Psi": psi, "x_tau": lam @ np.asarray(inputs["x1"], float) + psi @ np.asarray(inputs["x2"], float)}
+        return {
+            "Lambda": lam,
+            "Psi": psi,
+            "x_tau": lam @ np.asarray(inputs["x1"], float) + psi @ np.asarray(inputs["x2"], float),
+        }
     raise SteamError(f"unknown gp case kind {kind!r}")
 
 

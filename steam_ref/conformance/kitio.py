@@ -22,8 +22,18 @@ import numpy as np
 from ..errors import DataError, NumericalError
 
 __all__ = [
-    "KIT_VERSION", "SUITES", "SHIPPED", "plain", "dumps", "read_json", "write_json", "write_npz", "sha256",
-    "read_index", "read_suite", "kit_files",
+    "KIT_VERSION",
+    "SUITES",
+    "SHIPPED",
+    "plain",
+    "dumps",
+    "read_json",
+    "write_json",
+    "write_npz",
+    "sha256",
+    "read_index",
+    "read_suite",
+    "kit_files",
 ]
 
 KIT_VERSION = 1
@@ -69,7 +79,11 @@ def _dump(v, indent: int) -> str:
         items = [f"{inner}{json.dumps(k, ensure_ascii=False)}: {_dump(x, indent + 1)}" for k, x in v.items()]
         return "{\n" + ",\n".join(items) + "\n" + pad + "}"
     if _is_row(v) or (isinstance(v, list) and all(isinstance(x, str) or x is None for x in v)):
-        return "[" + ", ".join(_number(x) if isinstance(x, (int, float)) else json.dumps(x, ensure_ascii=False) for x in v) + "]"
+        return (
+            "["
+            + ", ".join(_number(x) if isinstance(x, (int, float)) else json.dumps(x, ensure_ascii=False) for x in v)
+            + "]"
+        )
     if isinstance(v, list):
         return "[\n" + ",\n".join(inner + _dump(x, indent + 1) for x in v) + "\n" + pad + "]"
     if isinstance(v, float):

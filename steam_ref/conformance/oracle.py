@@ -20,8 +20,8 @@ kit's own format.
 from __future__ import annotations
 
 import math
-from functools import lru_cache
 from collections.abc import Mapping, Sequence
+from functools import lru_cache
 
 import numpy as np
 import scipy.linalg
@@ -30,8 +30,18 @@ from numpy.typing import NDArray
 from ..errors import SteamError
 
 __all__ = [
-    "model_matrices", "transition", "process_noise", "input_integral", "sqrt_information", "noise_covariance",
-    "interpolation", "extrapolation", "factor_error", "linearize_factor", "loss_rho", "loss_weight",
+    "model_matrices",
+    "transition",
+    "process_noise",
+    "input_integral",
+    "sqrt_information",
+    "noise_covariance",
+    "interpolation",
+    "extrapolation",
+    "factor_error",
+    "linearize_factor",
+    "loss_rho",
+    "loss_weight",
 ]
 
 _GAUSS = np.polynomial.legendre.leggauss(24)  # nodes and weights on [-1, 1]
@@ -112,12 +122,14 @@ def _gaussian_blocks(A: NDArray, F: NDArray, qc: NDArray, times: Sequence[float]
     for j in range(M):
         for k in range(j + 1):
             block = transition(A, times[j] - times[k]) @ marg[k]  # Cov(x_j, x_k), t_j ≥ t_k
-            K[j * n:(j + 1) * n, k * n:(k + 1) * n] = block
-            K[k * n:(k + 1) * n, j * n:(j + 1) * n] = block.T
+            K[j * n : (j + 1) * n, k * n : (k + 1) * n] = block
+            K[k * n : (k + 1) * n, j * n : (j + 1) * n] = block.T
     return K
 
 
-def interpolation(A: NDArray, F: NDArray, qc: NDArray, t1: float, t2: float, tau: float) -> tuple[NDArray, NDArray, NDArray]:
+def interpolation(
+    A: NDArray, F: NDArray, qc: NDArray, t1: float, t2: float, tau: float
+) -> tuple[NDArray, NDArray, NDArray]:
     """Λ(τ), Ψ(τ) and Cov(x(τ) | x(t₁), x(t₂)) by conditioning the dense prior of the three states.
 
     [Λ Ψ] = K(τ) K⁻¹ of [YIB Eq. 12]: Cov(x(τ), [x₁; x₂]) Cov([x₁; x₂])⁻¹. The SDE is Markov, so
@@ -126,7 +138,7 @@ def interpolation(A: NDArray, F: NDArray, qc: NDArray, t1: float, t2: float, tau
     A = np.asarray(A, float)
     n = A.shape[0]
     K = _gaussian_blocks(A, np.asarray(F, float), np.asarray(qc, float), [t1, tau, t2])
-    ends = np.r_[0:n, 2 * n:3 * n]
+    ends = np.r_[0:n, 2 * n : 3 * n]
     mid = np.arange(n, 2 * n)
     K_ee = K[np.ix_(ends, ends)]
     K_me = K[np.ix_(mid, ends)]
@@ -135,7 +147,9 @@ def interpolation(A: NDArray, F: NDArray, qc: NDArray, t1: float, t2: float, tau
     return G[:, :n], G[:, n:], (C + C.T) / 2
 
 
-def extrapolation(A: NDArray, F: NDArray, qc: NDArray, dt: float, x1: NDArray, cov1: NDArray) -> tuple[NDArray, NDArray]:
+def extrapolation(
+    A: NDArray, F: NDArray, qc: NDArray, dt: float, x1: NDArray, cov1: NDArray
+) -> tuple[NDArray, NDArray]:
     """Mean and covariance of x(t₁ + Δt) from the last state's N(x₁, P₁): the prior's prediction.  [YIB Eq. 17, 22]"""
     P = transition(A, dt)
     cov = P @ np.asarray(cov1, float) @ P.T + process_noise(A, F, qc, dt)

@@ -45,7 +45,9 @@ class Problem:
         return out
 
 
-def dense_system(problem: Problem, values: Mapping[str, NDArray], order: Sequence[str]) -> tuple[NDArray, NDArray, float]:
+def dense_system(
+    problem: Problem, values: Mapping[str, NDArray], order: Sequence[str]
+) -> tuple[NDArray, NDArray, float]:
     """Dense A (rows in factor order, columns in ``order``), b and the cost at ``values``."""
     off = problem.offsets(order)
     n = sum(problem.dims[k] for k in order)
@@ -54,7 +56,7 @@ def dense_system(problem: Problem, values: Mapping[str, NDArray], order: Sequenc
         lin = linearize_factor(spec, [values[k] for k in spec["keys"]])
         block = np.zeros((len(lin["b"]), n))
         for slot, key in enumerate(spec["keys"]):
-            block[:, off[key]:off[key] + problem.dims[key]] = lin[f"A_{slot}"]
+            block[:, off[key] : off[key] + problem.dims[key]] = lin[f"A_{slot}"]
         rows.append(block)
         rhs.append(lin["b"])
         cost += lin["cost"]
@@ -72,10 +74,12 @@ def factorize(A: NDArray, b: NDArray) -> dict[str, NDArray]:
 
 def _split(problem: Problem, order: Sequence[str], x: NDArray) -> dict[str, NDArray]:
     off = problem.offsets(order)
-    return {k: x[off[k]:off[k] + problem.dims[k]] for k in order}
+    return {k: x[off[k] : off[k] + problem.dims[k]] for k in order}
 
 
-def gauss_newton(problem: Problem, order: Sequence[str], iterations: int) -> tuple[list[dict[str, NDArray]], list[float]]:
+def gauss_newton(
+    problem: Problem, order: Sequence[str], iterations: int
+) -> tuple[list[dict[str, NDArray]], list[float]]:
     """The start and ``iterations`` Gauss-Newton iterates, and the cost at each."""
     values = dict(problem.values)
     iterates, costs = [values], []
@@ -141,7 +145,9 @@ def conditionals(problem: Problem, order: Sequence[str], R: NDArray, d: NDArray,
     return out
 
 
-def covariances(problem: Problem, order: Sequence[str], info: NDArray, groups: Sequence[Sequence[str]]) -> dict[str, NDArray]:
+def covariances(
+    problem: Problem, order: Sequence[str], info: NDArray, groups: Sequence[Sequence[str]]
+) -> dict[str, NDArray]:
     """The block of 𝓘⁻¹ of each group of keys (stacked in the order given), named 'k1,k2,...'."""
     cov = np.linalg.inv(info)
     cov = (cov + cov.T) / 2

@@ -12,8 +12,8 @@ The tolerances are what steam_ref's own runs must meet against the authors' (doc
 from __future__ import annotations
 
 import os
-from pathlib import Path
 from dataclasses import asdict
+from pathlib import Path
 
 import numpy as np
 
@@ -30,10 +30,18 @@ __all__ = ["PAPER_RUNS", "paper_cases", "run_paper_case"]
 
 # case → (data set, preset, stride of the states kept, tolerances)
 PAPER_RUNS = {
-    "synthetic_btgp1": ("paper-synthetic", "synthetic", 1,
-                        {"poses": tol(0.0, 0.01), "velocities": tol(0.0, 0.01), "landmarks": tol(0.0, 0.02), "rmse_m": tol(0.0, 1e-3)}),
-    "plaza_btgp1": ("plaza", "plaza", 10,
-                    {"poses": tol(0.0, 0.02), "velocities": tol(0.0, 0.02), "landmarks": tol(0.0, 0.02), "rmse_m": tol(0.0, 1e-3)}),
+    "synthetic_btgp1": (
+        "paper-synthetic",
+        "synthetic",
+        1,
+        {"poses": tol(0.0, 0.01), "velocities": tol(0.0, 0.01), "landmarks": tol(0.0, 0.02), "rmse_m": tol(0.0, 1e-3)},
+    ),
+    "plaza_btgp1": (
+        "plaza",
+        "plaza",
+        10,
+        {"poses": tol(0.0, 0.02), "velocities": tol(0.0, 0.02), "landmarks": tol(0.0, 0.02), "rmse_m": tol(0.0, 1e-3)},
+    ),
 }
 
 
@@ -61,23 +69,37 @@ def paper_cases(data_dir: str | os.PathLike | None = None) -> list[tuple[Case, d
         rows = _kept(len(authors.state_poses), stride)
         setup = PaperSetup.named(preset)
         inputs = {
-            "dataset": dataset, "file": DATA_FILES[dataset], "sha256": sha256(_data_file(dataset, data_dir)),
-            "authors_file": f"authors/{authors.source.name}", "authors_sha256": sha256(authors.source),
-            "method": "btgp", "every": 1, "setup": plain({k: v for k, v in asdict(setup).items()}),
-            "state_poses": authors.state_poses[rows], "state_poses_total": len(authors.state_poses),
+            "dataset": dataset,
+            "file": DATA_FILES[dataset],
+            "sha256": sha256(_data_file(dataset, data_dir)),
+            "authors_file": f"authors/{authors.source.name}",
+            "authors_sha256": sha256(authors.source),
+            "method": "btgp",
+            "every": 1,
+            "setup": plain({k: v for k, v in asdict(setup).items()}),
+            "state_poses": authors.state_poses[rows],
+            "state_poses_total": len(authors.state_poses),
         }
         truth = data.ground_truth[authors.state_poses, 1:3]
         expected = {
-            "poses": authors.poses[rows], "velocities": authors.velocities[rows],
+            "poses": authors.poses[rows],
+            "velocities": authors.velocities[rows],
             "landmarks": {str(i): authors.landmarks[i] for i in sorted(authors.landmarks)},
             "rmse_m": position_rmse(authors.poses[:, :2], truth),
         }
-        kept = "every state" if stride == 1 else f"every {stride}th state and the last ({len(rows)} of {len(authors.state_poses)})"
+        kept = (
+            "every state"
+            if stride == 1
+            else f"every {stride}th state and the last ({len(rows)} of {len(authors.state_poses)})"
+        )
         case = Case(
-            name, "[YIB Alg. 1, Sec. IV]",
+            name,
+            "[YIB Alg. 1, Sec. IV]",
             f"BTGP/1 on {dataset} with the paper's set-up (every pose a state): the final [x, y, θ] and [ẋ, ẏ, θ̇] at "
             f"{kept}, the final landmarks (by id), and the position RMSE against ground truth over all states",
-            inputs, tolerance, True,
+            inputs,
+            tolerance,
+            True,
             f"the authors' saved run {inputs['authors_file']} (MATLAB + GTSAM 3.2, XinyanGT/online-gpslam-code matlab/Data)",
         )
         out.append((case, expected))
@@ -91,7 +113,8 @@ def run_paper_case(name: str, inputs: dict, data_dir: str | os.PathLike | None =
     result = run_online(data, PaperSetup.named(preset))
     poses = np.asarray(inputs["state_poses"], dtype=int)
     return {
-        "poses": result.trajectory[poses, :3], "velocities": result.trajectory[poses, 3:6],
+        "poses": result.trajectory[poses, :3],
+        "velocities": result.trajectory[poses, 3:6],
         "landmarks": {str(i): result.landmarks[i] for i in sorted(result.landmarks)},
         "rmse_m": result.rmse_states_m,
     }

@@ -13,8 +13,8 @@ from collections.abc import Mapping
 import numpy as np
 from numpy.typing import NDArray
 
-from ..bayes_tree import BayesTree, IncrementalSolver
 from ..batch import gauss_newton
+from ..bayes_tree import BayesTree, IncrementalSolver
 from ..covariance import tree_joint_covariance
 from ..errors import SteamError
 from ..gp import (
@@ -60,22 +60,35 @@ def _gp(inputs: Mapping) -> dict:
     d = qc.shape[0]
     if kind == "wnoa":
         dt = float(inputs["dt"])
-        return {"Phi": transition(dt, d), "Q": process_noise(dt, qc), "Qinv": process_noise_inverse(dt, qc),
-                "W": process_noise_sqrt_information(dt, qc)}
+        return {
+            "Phi": transition(dt, d),
+            "Q": process_noise(dt, qc),
+            "Qinv": process_noise_inverse(dt, qc),
+            "W": process_noise_sqrt_information(dt, qc),
+        }
     if kind == "lti":
-        sde = LinearSDE(np.asarray(inputs["A"], float), np.asarray(inputs["F"], float), qc, np.asarray(inputs["v"], float)).general()
+        sde = LinearSDE(
+            np.asarray(inputs["A"], float), np.asarray(inputs["F"], float), qc, np.asarray(inputs["v"], float)
+        ).general()
         dt = float(inputs["dt"])
         return {"Phi": sde.transition(dt), "Q": sde.process_noise(dt), "v_i": sde.input_integral(dt)}
     if kind == "wnoj":
         dt = float(inputs["dt"])
-        return {"Phi": wnoj_transition(dt, d), "Q": wnoj_process_noise(dt, qc), "Qinv": wnoj_process_noise_inverse(dt, qc)}
+        return {
+            "Phi": wnoj_transition(dt, d),
+            "Q": wnoj_process_noise(dt, qc),
+            "Qinv": wnoj_process_noise_inverse(dt, qc),
+        }
     if kind == "singer":
         dt, alpha = float(inputs["dt"]), float(inputs["alpha"])
         return {"Phi": singer_transition(dt, alpha, d), "Q": singer_process_noise(dt, alpha, qc)}
     t1 = float(inputs["t1"])
     if kind == "extrapolation":
         sde, t = LinearSDE.wnoa(qc), float(inputs["t"])
-        return {"x_t": extrapolate_state_sde(sde, t1, inputs["x1"], t), "cov_t": extrapolate_covariance_sde(sde, t1, t, inputs["cov1"])}
+        return {
+            "x_t": extrapolate_state_sde(sde, t1, inputs["x1"], t),
+            "cov_t": extrapolate_covariance_sde(sde, t1, t, inputs["cov1"]),
+        }
     t2, tau = float(inputs["t2"]), float(inputs["tau"])
     if kind == "interpolation":
         lam, psi = interpolation_matrices(t1, t2, tau, qc)
@@ -132,7 +145,12 @@ def _assemble_R(tree: BayesTree, ordering: Ordering) -> tuple[NDArray, NDArray]:
     n = ordering.total_dim
     R, d = np.zeros((n, n)), np.zeros(n)
     for c in tree.cliques.values():
-        cols = np.concatenate([ordering.offset_of[k] + np.arange(dim) for k, dim in zip(c.frontals + c.separator, c.frontal_dims + c.separator_dims)])
+        cols = np.concatenate(
+            [
+                ordering.offset_of[k] + np.arange(dim)
+                for k, dim in zip(c.frontals + c.separator, c.frontal_dims + c.separator_dims)
+            ]
+        )
         block = np.hstack([np.triu(c.R), c.S])
         rows = cols[: c.R.shape[0]]  # a frontal's rows sit at its own columns
         R[np.ix_(rows, cols)] = block
@@ -154,7 +172,15 @@ def _linear(inputs: Mapping) -> dict:
     info, rhs = system.information()
     R, d = _assemble_R(BayesTree.from_factors(gfs, ordering), ordering)
     delta, _ = solve(system)
-    return {"A": system.A.toarray()[perm], "b": system.b[perm], "information": info.toarray(), "rhs": rhs, "R": R, "d": d, "delta": delta}
+    return {
+        "A": system.A.toarray()[perm],
+        "b": system.b[perm],
+        "information": info.toarray(),
+        "rhs": rhs,
+        "R": R,
+        "d": d,
+        "delta": delta,
+    }
 
 
 def _batch(inputs: Mapping) -> dict:
@@ -177,8 +203,13 @@ def _clique_list(tree: BayesTree, order: list[str]) -> list[dict]:
     out = []
     for cid, c in tree.cliques.items():
         parent = tree.parent[cid]
-        out.append({"frontals": [spec.key_name(k) for k in c.frontals], "separator": [spec.key_name(k) for k in c.separator],
-                    "parent": None if parent is None else spec.key_name(tree.cliques[parent].frontals[0])})
+        out.append(
+            {
+                "frontals": [spec.key_name(k) for k in c.frontals],
+                "separator": [spec.key_name(k) for k in c.separator],
+                "parent": None if parent is None else spec.key_name(tree.cliques[parent].frontals[0]),
+            }
+        )
     return sorted(out, key=lambda c: pos[c["frontals"][0]])
 
 
@@ -194,7 +225,9 @@ def _bayes_tree(name: str, inputs: Mapping) -> dict:
             R, S, d = positive_rows(c.R, c.S, c.d)
             out[spec.key_name(c.frontals[0])] = {"R": np.triu(R), "S": S, "d": d}
         return {"conditionals": out}
-    return {"covariances": {",".join(g): tree_joint_covariance(tree, [spec.key(k) for k in g]) for g in inputs["groups"]}}
+    return {
+        "covariances": {",".join(g): tree_joint_covariance(tree, [spec.key(k) for k in g]) for g in inputs["groups"]}
+    }
 
 
 def _incremental(name: str, inputs: Mapping) -> dict:
@@ -203,9 +236,14 @@ def _incremental(name: str, inputs: Mapping) -> dict:
     out = {}
     for k, u in enumerate(inputs["stream"]["updates"], start=1):
         before = {cid: [spec.key_name(v) for v in c.frontals] for cid, c in solver.tree.cliques.items()}
-        report = solver.update([spec.factor(f) for f in u["factors"]], {spec.key(n): np.asarray(v, float) for n, v in u["values"].items()})
+        report = solver.update(
+            [spec.factor(f) for f in u["factors"]], {spec.key(n): np.asarray(v, float) for n, v in u["values"].items()}
+        )
         if name.endswith("_tree_edits"):
-            out[f"update_{k}"] = {"removed": sorted(before[c] for c in report.removed_cliques), "orphans": sorted(before[o] for o in report.orphans)}
+            out[f"update_{k}"] = {
+                "removed": sorted(before[c] for c in report.removed_cliques),
+                "orphans": sorted(before[o] for o in report.orphans),
+            }
         else:
             estimate = solver.estimate()
             out[f"estimate_{k}"] = {spec.key_name(key): np.asarray(estimate[key]) for key in estimate}

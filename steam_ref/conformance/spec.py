@@ -103,7 +103,13 @@ def factor(spec: Mapping) -> Factor:
         stand_in = X(10**9)  # the missing state x(τ): not a variable of any graph
         inner = _measurement(spec["inner"], [stand_in, *keys[2:]])
         return InterpolatedFactor.create(
-            inner, keys[0], keys[1], float(spec["t1"]), float(spec["t2"]), float(spec["tau"]), np.asarray(spec["qc"], float)
+            inner,
+            keys[0],
+            keys[1],
+            float(spec["t1"]),
+            float(spec["t2"]),
+            float(spec["tau"]),
+            np.asarray(spec["qc"], float),
         )
     return _measurement(spec, keys)
 

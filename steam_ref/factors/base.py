@@ -55,14 +55,18 @@ def sqrt_information(noise: NDArray | float, m: int, name: str = "noise") -> NDA
             return np.linalg.cholesky(np.linalg.inv(noise)).T
         except np.linalg.LinAlgError:
             raise SteamError(f"{name} (a covariance) is not positive definite: {noise.tolist()}") from None
-    raise ShapeError(f"{name} must be a scalar, sigmas of shape ({m},) or a covariance ({m}, {m}); got shape {noise.shape}")
+    raise ShapeError(
+        f"{name} must be a scalar, sigmas of shape ({m},) or a covariance ({m}, {m}); got shape {noise.shape}"
+    )
 
 
 def _vector(value: NDArray | float, m: int, what: str) -> NDArray:
     """``value`` as a float vector (m,): a 1-d array of m finite numbers, or a number when m = 1."""
     v = real_array(what, value)
     if v.shape != (m,) and not (m == 1 and v.ndim == 0):
-        raise ShapeError(f"{what} must be {m} finite number{'s' if m > 1 else ''} (shape ({m},)), got {np.asarray(value).tolist()}")
+        raise ShapeError(
+            f"{what} must be {m} finite number{'s' if m > 1 else ''} (shape ({m},)), got {np.asarray(value).tolist()}"
+        )
     return finite(what, v.reshape(m))
 
 
@@ -103,7 +107,9 @@ class Factor:
         """Every factor names each variable once: two Jacobian blocks of one variable would be added by
         a batch solve but overwrite each other in a clique, so the two would solve different problems."""
         if self.loss is not None and not isinstance(self.loss, RobustLoss):
-            raise SteamError(f"{type(self).__name__}: loss must be a RobustLoss (Huber(k), Tukey(c)) or None, got loss={self.loss!r}")
+            raise SteamError(
+                f"{type(self).__name__}: loss must be a RobustLoss (Huber(k), Tukey(c)) or None, got loss={self.loss!r}"
+            )
         for k in self.keys:
             if not isinstance(k, Key):
                 raise SteamError(f"{type(self).__name__}: {k!r} is not a variable key (make one with X(i) or L(j))")

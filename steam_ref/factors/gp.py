@@ -65,14 +65,18 @@ class GPPriorFactor(Factor):
     def from_sde(cls, key1: Key, key2: Key, dt: float, sde: LinearSDE) -> GPPriorFactor:
         """The prior of ``sde`` over a gap dt: Φ, Qᵢ and vᵢ from its (closed-form or general) discretisation."""
         if not isinstance(sde, LinearSDE):
-            raise SteamError(f"sde must be a LinearSDE (for Qc of the WNOA prior use GPPriorFactor.wnoa), got sde={sde!r}")
+            raise SteamError(
+                f"sde must be a LinearSDE (for Qc of the WNOA prior use GPPriorFactor.wnoa), got sde={sde!r}"
+            )
         if sde.model is not None and sde.model.name == "wnoa" and not np.any(sde.v):
             return cls.wnoa(key1, key2, dt, sde.qc)  # the memoised closed form
         q = sde.process_noise(dt)
         try:
             np.linalg.cholesky(q)
         except np.linalg.LinAlgError:
-            raise NumericalError(f"Q(dt) of this prior is not positive definite in float64 at dt={dt!r}: the gap is too small (or too large)") from None
+            raise NumericalError(
+                f"Q(dt) of this prior is not positive definite in float64 at dt={dt!r}: the gap is too small (or too large)"
+            ) from None
         return cls.from_matrices(key1, key2, sde.transition(dt), q, sde.input_integral(dt))
 
     @property
@@ -103,6 +107,7 @@ def gp_prior_factors(keys: list[Key], times: NDArray, prior: NDArray | LinearSDE
     if isinstance(prior, LinearSDE):
         return [GPPriorFactor.from_sde(keys[i], keys[i + 1], gaps[i], prior) for i in range(len(gaps))]
     return [GPPriorFactor.wnoa(keys[i], keys[i + 1], gaps[i], prior) for i in range(len(gaps))]
+
 
 # --- Measurements at a missing (interpolated) state ---------------------------------------------
 
@@ -147,7 +152,9 @@ class InterpolatedFactor(Factor):
             lam, psi = interpolation_matrices(t1, t2, tau, prior)  # [YIB Eq. 16]
             offset = np.zeros(lam.shape[0])
         if lam.shape[0] != inner.key_dims[0]:
-            raise ShapeError(f"the prior gives states of size {lam.shape[0]}, {type(inner).__name__} expects {inner.key_dims[0]}")
+            raise ShapeError(
+                f"the prior gives states of size {lam.shape[0]}, {type(inner).__name__} expects {inner.key_dims[0]}"
+            )
         keys = (key1, key2) + tuple(inner.keys[1:])
         return cls(keys, inner.sqrt_information, inner=inner, lam=lam, psi=psi, offset=offset, loss=inner.loss)
 

@@ -70,7 +70,9 @@ class PriorFactor(Factor):
 def _check_state_dim(state_dim: int) -> int:
     """A state [p; ṗ; ...] with p = [x, y, θ]: a whole number of 3-blocks, at least pose and velocity."""
     if isinstance(state_dim, bool) or not isinstance(state_dim, (int, np.integer)) or state_dim < 6 or state_dim % 3:
-        raise SteamError(f"state_dim must be a multiple of 3, at least 6 ([p; ṗ; ...], p = [x, y, θ]); got {state_dim!r}")
+        raise SteamError(
+            f"state_dim must be a multiple of 3, at least 6 ([p; ṗ; ...], p = [x, y, θ]); got {state_dim!r}"
+        )
     return int(state_dim)
 
 
@@ -109,10 +111,22 @@ class OdometryFactor(StateMeasurement):
 
     @classmethod
     def create(
-        cls, key: Key, measured: NDArray, noise: NDArray | float, *, loss: RobustLoss | None = None, state_dim: int = STATE_DIM
+        cls,
+        key: Key,
+        measured: NDArray,
+        noise: NDArray | float,
+        *,
+        loss: RobustLoss | None = None,
+        state_dim: int = STATE_DIM,
     ) -> OdometryFactor:
         """Odometry reading ``measured`` = [v, θ̇] on state ``key``."""
-        return cls((key,), sqrt_information(noise, 2), measured=_vector(measured, 2, "measured"), loss=loss, state_dim=state_dim)
+        return cls(
+            (key,),
+            sqrt_information(noise, 2),
+            measured=_vector(measured, 2, "measured"),
+            loss=loss,
+            state_dim=state_dim,
+        )
 
     def error(self, x: NDArray) -> NDArray:
         th, xd, yd, thd = x[..., 2], x[..., 3], x[..., 4], x[..., 5]
@@ -143,7 +157,13 @@ class VelocityFactor(StateMeasurement):
 
     @classmethod
     def create(
-        cls, key: Key, measured: NDArray, noise: NDArray | float, *, loss: RobustLoss | None = None, state_dim: int = STATE_DIM
+        cls,
+        key: Key,
+        measured: NDArray,
+        noise: NDArray | float,
+        *,
+        loss: RobustLoss | None = None,
+        state_dim: int = STATE_DIM,
     ) -> VelocityFactor:
         """Projected-velocity reading [forward, lateral, yaw rate] on state ``key``."""
         measured = _vector(measured, 3, "measured")
@@ -213,11 +233,20 @@ class RangeFactor(StateMeasurement):
 
     @classmethod
     def create(
-        cls, state: Key, landmark: Key, measured: float, sigma: float, *, loss: RobustLoss | None = None, state_dim: int = STATE_DIM
+        cls,
+        state: Key,
+        landmark: Key,
+        measured: float,
+        sigma: float,
+        *,
+        loss: RobustLoss | None = None,
+        state_dim: int = STATE_DIM,
     ) -> RangeFactor:
         """Range reading ``measured`` (m, not negative) from state ``state`` to landmark ``landmark``."""
         measured = _range("measured", measured)
-        return cls((state, landmark), sqrt_information(sigma, 1, "sigma"), measured=measured, loss=loss, state_dim=state_dim)
+        return cls(
+            (state, landmark), sqrt_information(sigma, 1, "sigma"), measured=measured, loss=loss, state_dim=state_dim
+        )
 
     def error(self, x: NDArray, l: NDArray) -> NDArray:
         return _range_row(x, l)[0][..., None] - self.measured  # [YIB Eq. 33]
@@ -238,11 +267,20 @@ class BearingFactor(StateMeasurement):
 
     @classmethod
     def create(
-        cls, state: Key, landmark: Key, measured: float, sigma: float, *, loss: RobustLoss | None = None, state_dim: int = STATE_DIM
+        cls,
+        state: Key,
+        landmark: Key,
+        measured: float,
+        sigma: float,
+        *,
+        loss: RobustLoss | None = None,
+        state_dim: int = STATE_DIM,
     ) -> BearingFactor:
         """Bearing reading ``measured`` (rad) from ``state`` to ``landmark``."""
         measured = _vector(measured, 1, "measured")
-        return cls((state, landmark), sqrt_information(sigma, 1, "sigma"), measured=measured, loss=loss, state_dim=state_dim)
+        return cls(
+            (state, landmark), sqrt_information(sigma, 1, "sigma"), measured=measured, loss=loss, state_dim=state_dim
+        )
 
     def error(self, x: NDArray, l: NDArray) -> NDArray:
         return wrap_angle(_bearing_row(x, l)[0] - self.measured[..., 0])[..., None]
@@ -263,8 +301,15 @@ class BearingRangeFactor(StateMeasurement):
 
     @classmethod
     def create(
-        cls, state: Key, landmark: Key, bearing: float, range_: float, noise: NDArray, *,
-        loss: RobustLoss | None = None, state_dim: int = STATE_DIM,
+        cls,
+        state: Key,
+        landmark: Key,
+        bearing: float,
+        range_: float,
+        noise: NDArray,
+        *,
+        loss: RobustLoss | None = None,
+        state_dim: int = STATE_DIM,
     ) -> BearingRangeFactor:
         """Bearing-range reading; noise is sigmas (2,) or a covariance (2, 2) for [bearing, range]."""
         measured = np.concatenate([_vector(bearing, 1, "bearing"), _range("range_", range_)])

@@ -82,9 +82,7 @@ def _interpolation_matrices(dtau: float, dt: float, d: int, qc_bytes: bytes) -> 
     return lam, psi
 
 
-def interpolate_state(
-    t1: float, x1: NDArray, t2: float, x2: NDArray, tau: float, qc: NDArray
-) -> NDArray:
+def interpolate_state(t1: float, x1: NDArray, t2: float, x2: NDArray, tau: float, qc: NDArray) -> NDArray:
     """x̄(τ) from the neighbouring estimates x̄(t₁), x̄(t₂) of the zero-mean WNOA prior.  [YIB Eq. 18]"""
     lam, psi = interpolation_matrices(t1, t2, tau, qc)
     n = lam.shape[0]
@@ -149,7 +147,9 @@ def interpolation_matrices_sde(sde: LinearSDE, t1: float, t2: float, tau: float)
     try:
         q2 = scipy.linalg.cho_factor(sde.process_noise(t2 - t1))  # [YIB Eq. 17]
     except np.linalg.LinAlgError:
-        raise NumericalError(f"Q(t2 - t1) is not positive definite in float64 at t2 - t1 = {t2 - t1!r}: the gap is too small for this prior") from None
+        raise NumericalError(
+            f"Q(t2 - t1) is not positive definite in float64 at t2 - t1 = {t2 - t1!r}: the gap is too small for this prior"
+        ) from None
     with np.errstate(over="ignore", invalid="ignore"):
         psi = scipy.linalg.cho_solve(q2, sde.transition(t2 - tau) @ q_tau).T  # Q_τ Φ(t₂,τ)ᵀ Q₂⁻¹  [YIB Eq. 16]
         lam = sde.transition(tau - t1) - psi @ sde.transition(t2 - t1)  # [YIB Eq. 16]
@@ -157,9 +157,7 @@ def interpolation_matrices_sde(sde: LinearSDE, t1: float, t2: float, tau: float)
     return lam, psi
 
 
-def interpolate_state_sde(
-    sde: LinearSDE, t1: float, x1: ArrayLike, t2: float, x2: ArrayLike, tau: float
-) -> NDArray:
+def interpolate_state_sde(sde: LinearSDE, t1: float, x1: ArrayLike, t2: float, x2: ArrayLike, tau: float) -> NDArray:
     """x̄(τ) from the estimates x̄(t₁), x̄(t₂), including the mean of the SDE: (n,).  [YIB Eq. 18]
 
     x̄(τ) = μ(τ) + [Λ Ψ]([x̄₁; x̄₂] - [μ₁; μ₂]). The mean obeys μ(τ) = Φ(τ,t₁) μ₁ + v_τ and
@@ -174,9 +172,7 @@ def interpolate_state_sde(
     return finite_result("the interpolated state", x, tau=tau)
 
 
-def interpolate_covariance_sde(
-    sde: LinearSDE, t1: float, t2: float, tau: float, joint_cov: ArrayLike
-) -> NDArray:
+def interpolate_covariance_sde(sde: LinearSDE, t1: float, t2: float, tau: float, joint_cov: ArrayLike) -> NDArray:
     """Posterior covariance of x(τ) for any LinearSDE; joint_cov is (2n, 2n): (n, n).
 
     Cov x(τ) = [Λ Ψ] P [Λ Ψ]ᵀ + Q_τ - Q_τ Φ(t₂,τ)ᵀ Q₂⁻¹ Φ(t₂,τ) Q_τ; derivation in

@@ -56,8 +56,18 @@ _PHI_SERIES = np.array([[1.0 / factorial(n + k) for n in range(_SERIES_TERMS)] f
 # S_rc(x) = ∫₀¹ u^(k_r + k_c) φ_{k_r}(-xu) φ_{k_c}(-xu) du = Σₙ (-x)ⁿ c_n / (k_r + k_c + n + 1),
 # c_n = Σᵢ 1 / ((i + k_r)! (n - i + k_c)!)  (Cauchy product of the two series, then ∫ u^(k + n) du)
 _K = (2, 1, 0)
-_S_SERIES = np.array([[[sum(1.0 / (factorial(i + kr) * factorial(n - i + kc)) for i in range(n + 1)) / (kr + kc + n + 1)
-                        for n in range(_SERIES_TERMS)] for kc in _K] for kr in _K])
+_S_SERIES = np.array(
+    [
+        [
+            [
+                sum(1.0 / (factorial(i + kr) * factorial(n - i + kc)) for i in range(n + 1)) / (kr + kc + n + 1)
+                for n in range(_SERIES_TERMS)
+            ]
+            for kc in _K
+        ]
+        for kr in _K
+    ]
+)
 _WNOJ_S = np.array([[1 / 20, 1 / 8, 1 / 6], [1 / 8, 1 / 3, 1 / 2], [1 / 6, 1 / 2, 1.0]])  # ∫₀¹ uᵏʳ⁺ᵏᶜ/(k_r! k_c!) du
 
 
@@ -67,7 +77,6 @@ def check_alpha(alpha: float, name: str = "alpha") -> float:
     if value <= 0:
         raise SteamError(f"{name} must be a positive finite number, got {name}={value}")
     return value
-
 
 
 # --- WNOJ -----------------------------------------------------------------------------------------
@@ -125,7 +134,9 @@ def _phi12(x: float) -> tuple[float, float]:
     """φ₁(-x), φ₂(-x) without cancellation at small |x|."""
     if abs(x) <= _SERIES_RADIUS:
         z = -x
-        return float(np.polynomial.polynomial.polyval(z, _PHI_SERIES[1])), float(np.polynomial.polynomial.polyval(z, _PHI_SERIES[2]))
+        return float(np.polynomial.polynomial.polyval(z, _PHI_SERIES[1])), float(
+            np.polynomial.polynomial.polyval(z, _PHI_SERIES[2])
+        )
     em1 = np.expm1(-x)  # e⁻ˣ - 1
     return -em1 / x, (x + em1) / x / x  # not / x²: that overflows for αΔt > 1e154
 

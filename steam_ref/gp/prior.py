@@ -21,7 +21,12 @@ from ..arguments import integer, real_array, time_step
 from ..errors import NumericalError, ShapeError, SteamError
 
 __all__ = [
-    "check_qc", "check_d", "transition", "process_noise", "process_noise_inverse", "process_noise_sqrt_information",
+    "check_qc",
+    "check_d",
+    "transition",
+    "process_noise",
+    "process_noise_inverse",
+    "process_noise_sqrt_information",
 ]
 
 # A run builds thousands of prior and interpolated factors from one Qc and a few distinct gaps, so

@@ -47,9 +47,9 @@ class LinearSDE:
     ``model``, A and F must be that model's, and Φ and Q come from its closed forms.
     """
 
-    A: NDArray                # (n, n) system matrix
-    F: NDArray                # (n, m) noise input matrix
-    qc: NDArray               # (m, m) power spectral density of w, symmetric positive definite
+    A: NDArray  # (n, n) system matrix
+    F: NDArray  # (n, m) noise input matrix
+    qc: NDArray  # (m, m) power spectral density of w, symmetric positive definite
     v: NDArray | None = None  # (n,) constant exogenous input; zero gives a zero-mean GP
     model: ClosedForm | None = None  # a prior known in closed form, or None: matrix exponentials
 
@@ -93,7 +93,12 @@ class LinearSDE:
 
     @classmethod
     def singer(
-        cls, qc: ArrayLike, alpha: float | None = None, *, time_constant: float | None = None, v: ArrayLike | None = None
+        cls,
+        qc: ArrayLike,
+        alpha: float | None = None,
+        *,
+        time_constant: float | None = None,
+        v: ArrayLike | None = None,
     ) -> LinearSDE:
         """Singer's model p⃛ = -α p̈ + w, x = [p; ṗ; p̈], p of size d = len(Qc).  [YIB Eq. 14], [S70]
 
@@ -102,7 +107,9 @@ class LinearSDE:
         variance σ² per axis (Singer's σ_m²). α → 0 is WNOJ.
         """
         if (alpha is None) == (time_constant is None):
-            raise SteamError(f"give exactly one of alpha and time_constant, got alpha={alpha!r}, time_constant={time_constant!r}")
+            raise SteamError(
+                f"give exactly one of alpha and time_constant, got alpha={alpha!r}, time_constant={time_constant!r}"
+            )
         a = check_alpha(alpha) if alpha is not None else 1.0 / check_alpha(time_constant, "time_constant")
         return cls._known(ClosedForm("singer", a), qc, v)
 
@@ -220,6 +227,6 @@ def dense_kernel(sde: LinearSDE, times: ArrayLike, P0: ArrayLike) -> NDArray:
         for j in range(k, M):
             if j > k:
                 C = Phi[j - 1] @ C
-            K[j * n:(j + 1) * n, k * n:(k + 1) * n] = C
-            K[k * n:(k + 1) * n, j * n:(j + 1) * n] = C.T
+            K[j * n : (j + 1) * n, k * n : (k + 1) * n] = C
+            K[k * n : (k + 1) * n, j * n : (j + 1) * n] = C.T
     return K

@@ -62,7 +62,9 @@ def sparse_backend(backend: str | None = None) -> str:
     if choice not in ("cholmod", "superlu"):
         raise SteamError(f"unknown sparse backend {choice!r}; use 'cholmod' or 'superlu'")
     if choice == "cholmod" and not have_cholmod():
-        raise SteamError("sparse backend 'cholmod' asked for but scikit-sparse is not installed (pip install steam_ref[cholmod])")
+        raise SteamError(
+            "sparse backend 'cholmod' asked for but scikit-sparse is not installed (pip install steam_ref[cholmod])"
+        )
     return choice
 
 
@@ -140,7 +142,9 @@ def variable_adjacency(keys: Sequence[Key], factor_keys: Iterable[tuple[Key, ...
         try:
             ids = [index[k] for k in fk]
         except KeyError as exc:
-            raise UnknownVariableError(f"factor_keys[{i}] = {fk!r} names {exc.args[0]!r}, which is not among the keys to order") from None
+            raise UnknownVariableError(
+                f"factor_keys[{i}] = {fk!r} names {exc.args[0]!r}, which is not among the keys to order"
+            ) from None
         for a in ids:
             rows.append(np.full(len(ids), a))
             cols.append(np.array(ids))
@@ -174,7 +178,9 @@ def amd_ordering(
     return Ordering(tuple(keys[i] for i in perm), tuple(sizes[i] for i in perm))
 
 
-def constrained_min_degree(variables: Sequence[Hashable], factor_keys: Iterable[Sequence[Hashable]], last: Iterable[Hashable] = ()) -> list:
+def constrained_min_degree(
+    variables: Sequence[Hashable], factor_keys: Iterable[Sequence[Hashable]], last: Iterable[Hashable] = ()
+) -> list:
     """A greedy minimum-degree elimination order with the variables in ``last`` eliminated last.
 
     The degree of a variable is its number of neighbours in the current elimination graph (the
@@ -193,7 +199,9 @@ def constrained_min_degree(variables: Sequence[Hashable], factor_keys: Iterable[
     for i, keys in enumerate(factor_keys):
         for k in keys:
             if k not in adj:
-                raise UnknownVariableError(f"factor_keys[{i}] = {keys!r} names {k!r}, which is not among the variables to order")
+                raise UnknownVariableError(
+                    f"factor_keys[{i}] = {keys!r} names {k!r}, which is not among the variables to order"
+                )
             adj[k].update(keys)
     if isinstance(last, Key):
         raise SteamError(f"last must be a collection of variables, got the single key {last!r}: write [{last!r}]")
@@ -258,5 +266,7 @@ def _check_given(ordering: Ordering, keys: Sequence[Key], dims: dict[Key, int]) 
             raise ShapeError(f"the ordering given has variable {k!r} of size {size}, its estimate has size {dims[k]}")
     if len(ordering) != len(set(keys)):
         extra = next(k for k in ordering.keys if k not in set(keys))
-        raise UnknownVariableError(f"the ordering given has variable {extra!r}, which is not among the variables to order")
+        raise UnknownVariableError(
+            f"the ordering given has variable {extra!r}, which is not among the variables to order"
+        )
     return ordering

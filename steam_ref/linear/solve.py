@@ -73,7 +73,9 @@ def _checked_information(info: sp.spmatrix | NDArray, ordering: Ordering, symmet
     info = sp.csc_matrix(info)
     n = ordering.total_dim
     if info.shape != (n, n):
-        raise ShapeError(f"the information matrix must be square ({n}, {n}) to match the ordering, got shape {info.shape}")
+        raise ShapeError(
+            f"the information matrix must be square ({n}, {n}) to match the ordering, got shape {info.shape}"
+        )
     if not np.isfinite(info.data).all():
         col = int(info.tocoo().col[~np.isfinite(info.tocoo().data)][0])
         key = ordering.keys[int(np.searchsorted(ordering.offsets, col, side="right") - 1)]
@@ -84,7 +86,9 @@ def _checked_information(info: sp.spmatrix | NDArray, ordering: Ordering, symmet
         bad = np.abs(diff.data) > 1e-10 * scale[diff.row] * scale[diff.col]
         if bad.any():
             i, j = int(diff.row[bad][0]), int(diff.col[bad][0])
-            raise SteamError(f"the information matrix is not symmetric: entry ({i}, {j}) = {float(info[i, j])!r} but ({j}, {i}) = {float(info[j, i])!r}")
+            raise SteamError(
+                f"the information matrix is not symmetric: entry ({i}, {j}) = {float(info[i, j])!r} but ({j}, {i}) = {float(info[j, i])!r}"
+            )
     return info
 
 
@@ -119,7 +123,9 @@ class SparseCholesky:
                 column = getattr(exc, "column", None)
                 if column is None:  # simplicial CHOLMOD does not say where: find it by SuperLU
                     column = _superlu(info)[1]
-                raise UnderdeterminedError(_unconstrained_variable(info, ordering, column) + f" (CHOLMOD: {exc})") from None
+                raise UnderdeterminedError(
+                    _unconstrained_variable(info, ordering, column) + f" (CHOLMOD: {exc})"
+                ) from None
             return cls(backend, nnz, f, info.shape[0])
         lu, column = _superlu(info)
         if lu is None:
@@ -129,7 +135,9 @@ class SparseCholesky:
     def solve(self, rhs: NDArray) -> NDArray:
         """𝓘⁻¹ rhs for a vector (n,) or a matrix (n, k)."""
         if np.ndim(rhs) not in (1, 2) or np.shape(rhs)[0] != self.n:
-            raise ShapeError(f"rhs must be a vector ({self.n},) or a matrix ({self.n}, k) to match 𝓘, got shape {np.shape(rhs)}")
+            raise ShapeError(
+                f"rhs must be a vector ({self.n},) or a matrix ({self.n}, k) to match 𝓘, got shape {np.shape(rhs)}"
+            )
         if self.backend == "cholmod":
             return self._factor(rhs)
         return self._factor.solve(np.asarray(rhs, dtype=float))

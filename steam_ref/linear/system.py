@@ -51,8 +51,7 @@ class LinearizedGroup:
     def gaussian_factors(self) -> list[GaussianFactor]:
         """The group as one GaussianFactor per factor."""
         return [
-            GaussianFactor(keys, tuple(J[i] for J in self.jacobians), self.rhs[i])
-            for i, keys in enumerate(self.keys)
+            GaussianFactor(keys, tuple(J[i] for J in self.jacobians), self.rhs[i]) for i, keys in enumerate(self.keys)
         ]
 
 
@@ -78,12 +77,16 @@ def _variables(values: Values, group: list[Factor]) -> list[NDArray]:
             x = None
         if x is None or x.shape[1] != dim:
             bad = next(k for k in keys if values.dim(k) != dim)
-            raise ShapeError(f"{type(group[0]).__name__} expects {bad} of size {dim}, its estimate has size {values.dim(bad)}")
+            raise ShapeError(
+                f"{type(group[0]).__name__} expects {bad} of size {dim}, its estimate has size {values.dim(bad)}"
+            )
         xs.append(x)
     return xs
 
 
-def _first_non_finite(ids: list[int], e: NDArray, costs: NDArray, Js: tuple[NDArray, ...] | None) -> tuple[int, str] | None:
+def _first_non_finite(
+    ids: list[int], e: NDArray, costs: NDArray, Js: tuple[NDArray, ...] | None
+) -> tuple[int, str] | None:
     """(position in ``ids``, what) of the first factor whose error, cost or a Jacobian is NaN or inf."""
     bad = {"error": ~np.isfinite(e).all(axis=1) | ~np.isfinite(costs)}
     for slot, J in enumerate(Js or ()):
@@ -123,7 +126,9 @@ def linearize(factors: Sequence[Factor], values: Values, *, jacobians: bool = Tr
         i, what = min(failures)
         f = factors[i]
         at = ", ".join(f"{k!r} = {values[k].tolist()}" for k in f.keys)
-        raise NumericalError(f"factor {i} ({type(f).__name__} on {', '.join(map(repr, f.keys))}) has a non-finite {what} at {at}")
+        raise NumericalError(
+            f"factor {i} ({type(f).__name__} on {', '.join(map(repr, f.keys))}) has a non-finite {what} at {at}"
+        )
     return out
 
 
@@ -139,7 +144,9 @@ class LinearSystem:
     def from_groups(cls, groups: list[LinearizedGroup], ordering: Ordering) -> LinearSystem:
         """Assemble the sparse A, b from linearized groups (vectorized per group and key slot)."""
         if not isinstance(ordering, Ordering):
-            raise SteamError(f"ordering must be an Ordering (see steam_ref.linear.make_ordering), got ordering={ordering!r}")
+            raise SteamError(
+                f"ordering must be an Ordering (see steam_ref.linear.make_ordering), got ordering={ordering!r}"
+            )
         rows, cols, data, rhs = [], [], [], []
         row0 = 0
         for g in groups:
@@ -153,7 +160,9 @@ class LinearSystem:
                 d = J.shape[2]
                 if np.any(ordering.dim_array[at] != d):  # else the blocks would overlap their neighbours'
                     k = g.keys[int(np.flatnonzero(ordering.dim_array[at] != d)[0])][slot]
-                    raise ShapeError(f"the ordering gives variable {k!r} size {ordering.dims[ordering.position[k]]}, its factors' blocks have {d} columns")
+                    raise ShapeError(
+                        f"the ordering gives variable {k!r} size {ordering.dims[ordering.position[k]]}, its factors' blocks have {d} columns"
+                    )
                 col_starts = ordering.offsets[at]
                 rows.append(np.broadcast_to(starts[:, None, None] + np.arange(m)[None, :, None], J.shape).ravel())
                 cols.append(np.broadcast_to(col_starts[:, None, None] + np.arange(d)[None, None, :], J.shape).ravel())
@@ -170,7 +179,9 @@ class LinearSystem:
     def build(cls, factors: Sequence[Factor], values: Values, ordering: Ordering) -> LinearSystem:
         """Linearize ``factors`` at ``values`` and assemble them under ``ordering``."""
         if not isinstance(ordering, Ordering):
-            raise SteamError(f"ordering must be an Ordering (see steam_ref.linear.make_ordering), got ordering={ordering!r}")
+            raise SteamError(
+                f"ordering must be an Ordering (see steam_ref.linear.make_ordering), got ordering={ordering!r}"
+            )
         return cls.from_groups(linearize(check_factors("factors", factors), values), ordering)
 
     def information(self) -> tuple[sp.csc_matrix, NDArray]:
