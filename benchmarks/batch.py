@@ -93,9 +93,9 @@ def measure(name: str, repeat: int, backend: str) -> dict:
 
 
 def plot(name: str, data, positions: np.ndarray, problem) -> None:
-    import matplotlib
+    import matplotlib as mpl
 
-    matplotlib.use("Agg")
+    mpl.use("Agg")
     import matplotlib.pyplot as plt
 
     OUT.mkdir(exist_ok=True)

@@ -148,9 +148,9 @@ def run(n_states: int, n_landmarks: int, seed: int, solver_options: dict) -> tup
 
 
 def plot(times: np.ndarray, path: Path) -> None:
-    import matplotlib
+    import matplotlib as mpl
 
-    matplotlib.use("Agg")
+    mpl.use("Agg")
     import matplotlib.pyplot as plt
 
     path.parent.mkdir(parents=True, exist_ok=True)

@@ -77,9 +77,9 @@ def median_run(dataset: str, options: dict, repeat: int) -> dict:
 
 def _plot(dataset: str, curves: list[tuple[str, list[float]]]) -> Path:
     """Cumulative time against time step for every run of one data set (Fig. 3/4 left)."""
-    import matplotlib
+    import matplotlib as mpl
 
-    matplotlib.use("Agg")
+    mpl.use("Agg")
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(6, 4))

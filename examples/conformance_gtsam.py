@@ -118,7 +118,7 @@ def measurement(kind: str, measured, p, v, l):
     elif kind == "bearing":
         (h, Jp, Jl), e = brg, np.array([_wrap(brg[0][0] - y[0])])
     else:
-        h, Jp, Jl = (np.concatenate(a) for a in zip(brg, rng))
+        h, Jp, Jl = (np.concatenate(a) for a in zip(brg, rng, strict=True))
         e = np.array([_wrap(h[0] - y[0]), h[1] - y[1]])
     return e, Jp, np.zeros((len(e), 3)), Jl
 
@@ -146,7 +146,7 @@ def custom(spec: dict, pk: int, vk: int, lk: int | None, unit: bool) -> gtsam.Cu
     kind = spec["type"]
     keys = [pk, vk] if kind in ("velocity", "odometry") else [pk, lk]
 
-    def error(this, values, H):
+    def error(_this, values, H):
         p = get(values, pk)
         other = get(values, keys[1])
         v, l = (other, None) if kind in ("velocity", "odometry") else (np.zeros(3), other)
@@ -244,7 +244,7 @@ def gp_case(inputs: dict) -> dict:
         _ALIVE.append(inner)
         states = {state(*gkeys("x0"), float(inputs["t1"])), state(*gkeys("x1"), float(inputs["t2"]))}
         f = gtsam.WnoaInterpFactorPoint3(inner, states, {state(pt, vt, float(inputs["tau"]))}, np.diag(qc), True)
-        A, b = f.linearize(vals).jacobian()
+        A, _b = f.linearize(vals).jacobian()
         rows.append((np.hstack(_blocks(A, f.keys(), ["x0", "x1"])), f.unwhitenedError(vals)))
     G = np.vstack([r[0] for r in rows])
     return {"Lambda": G[:, :6], "Psi": G[:, 6:], "x_tau": np.concatenate([r[1] for r in rows])}
@@ -256,7 +256,7 @@ def factor_case(inputs: dict) -> dict:
     fs, units = make(spec), make(spec, unit=True)
     e = np.concatenate([f.unwhitenedError(vals) for f in fs])
     A, b, H, W, cost = [], [], [], [], 0.0
-    for f, u in zip(fs, units):
+    for f, u in zip(fs, units, strict=True):
         model = f.noiseModel()
         base = model.noise() if isinstance(model, gtsam.noiseModel.Robust) else model
         W.append(base.R())

@@ -105,7 +105,7 @@ def marginal_covariances(system: LinearSystem, keys: list[Key], backend: str | N
     keys = key_list("keys", keys)
     info, _ = system.information()
     chol = SparseCholesky.factor(info, system.ordering, backend, check_symmetry=False)  # AᵀA
-    return dict(zip(keys, _blocks_of_inverse(chol, system.ordering, [[k] for k in keys])))
+    return dict(zip(keys, _blocks_of_inverse(chol, system.ordering, [[k] for k in keys]), strict=True))
 
 
 def _factor_at(factors: Sequence[Factor], values: Values, backend: str | None) -> tuple[Ordering, SparseCholesky]:
@@ -139,7 +139,7 @@ def sparse_marginals(
     """Marginal covariance (dₖ, dₖ) of each of ``keys``, linearized at ``values``: one factorization."""
     keys = key_list("keys", keys)
     order, chol = _factor_at(factors, values, backend)
-    return dict(zip(keys, _blocks_of_inverse(chol, order, [[k] for k in keys])))
+    return dict(zip(keys, _blocks_of_inverse(chol, order, [[k] for k in keys]), strict=True))
 
 
 def sparse_joint_marginals(
@@ -184,7 +184,9 @@ def _extend(clique: Conditional, joint: NDArray, index: Index, keep: set[Key] | 
     out[:m, m:] = out[m:, :m].T
     out[m:, m:] = cov_FF
     new_index, o = {}, 0
-    for k, dim in zip(kept + list(clique.frontals), [index[k][1] for k in kept] + list(clique.frontal_dims)):
+    for k, dim in zip(
+        kept + list(clique.frontals), [index[k][1] for k in kept] + list(clique.frontal_dims), strict=True
+    ):
         new_index[k] = (o, dim)
         o += dim
     return out, new_index
@@ -193,7 +195,7 @@ def _extend(clique: Conditional, joint: NDArray, index: Index, keep: set[Key] | 
 def _clique_covariance(clique: Conditional, Sigma_SS: NDArray) -> tuple[NDArray, Index]:
     """Joint covariance (n_s + n_f, n_s + n_f) of the clique's variables, S then F, from Σ_SS.  [K11 Sec. 3]"""
     index, o = {}, 0
-    for k, dim in zip(clique.separator, clique.separator_dims):
+    for k, dim in zip(clique.separator, clique.separator_dims, strict=True):
         index[k] = (o, dim)
         o += dim
     return _extend(clique, Sigma_SS, index)

@@ -230,7 +230,7 @@ def results_table(experiments: list[Experiment], notes: list[str] = ()) -> str:
 # --- Everything ---------------------------------------------------------------------------------
 
 
-def _datasets(quick: bool, data_dir: str | None) -> tuple[list[tuple[str, RangeDataset, PaperSetup]], list[str]]:
+def _datasets(data_dir: str | None) -> tuple[list[tuple[str, RangeDataset, PaperSetup]], list[str]]:
     """paper-synthetic (else the generated task) and Plaza (if found)."""
     notes, out = [], []
     try:
@@ -256,14 +256,14 @@ def reproduce(
     """Run Fig. 3/4's experiments; write ``fig3.png``/``fig4.png``, ``runs.jsonl`` and ``results.md``
     to ``out``; return the Markdown table. ``quick``: 1,000-pose prefixes and 20 s budgets.
     ``data_sets`` (name, data, set-up) replaces the paper's two data sets."""
-    import matplotlib
+    import matplotlib as mpl
 
-    matplotlib.use("Agg")
+    mpl.use("Agg")
     import matplotlib.pyplot as plt
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    sets, notes = _datasets(quick, data_dir) if data_sets is None else (list(data_sets), [])
+    sets, notes = _datasets(data_dir) if data_sets is None else (list(data_sets), [])
     prefix, budget = (1000, 20.0) if quick else (None, 300.0)
     notes.append(
         f"PB and PBVR run under a {budget:g} s budget per run; speed ratios are taken over the steps both covered"
@@ -276,7 +276,8 @@ def reproduce(
         notes.append(f"quick mode: only the first {prefix} poses of each data set")
     experiments = []
     with open(out / "runs.jsonl", "w") as log:
-        for (name, data, setup), fig in zip(sets, ("fig3", "fig4")):
+        # not strict: data_sets may hold a single set (then no fig4)
+        for (name, data, setup), fig in zip(sets, ("fig3", "fig4"), strict=False):
             exp = Experiment(name, data, setup)
             timing_experiment(exp, batch_budget_s=budget, max_poses=prefix, progress=progress)
             interpolation_experiment(exp, max_poses=prefix, progress=progress)

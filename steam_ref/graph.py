@@ -52,7 +52,7 @@ class FactorGraph:
         """
         values = as_values("values", values)
         for i, f in enumerate(self.factors):
-            for k, d in zip(f.keys, f.key_dims):
+            for k, d in zip(f.keys, f.key_dims, strict=True):
                 if k not in values:
                     raise UnknownVariableError(f"factor {i} ({type(f).__name__}) names {k!r}, which has no estimate")
                 if values.dim(k) != d:

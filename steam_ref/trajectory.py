@@ -11,6 +11,7 @@ prior to speak of (the GP starts there, [YIB Eq. 14]) and a query is an error.
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
@@ -161,7 +162,7 @@ class Trajectory:
             return np.zeros(0), np.zeros((0, self.n))
         values, times = self.solver.estimate(), self.times
         out = np.empty((solved[-1] + 1, self.n))
-        for a, b in zip(solved, solved[1:]):
+        for a, b in itertools.pairwise(solved):
             xa, xb = values[X(a)], values[X(b)]
             out[a] = xa
             for p in range(a + 1, b):
@@ -178,11 +179,13 @@ class Trajectory:
                 raise ShapeError(
                     f"landmarks names {k!r}, a variable of size {marg[k].shape[0]}; a landmark has 2 numbers"
                 )
-        gaps = [(a, b) for a, b in zip(solved, solved[1:]) if b > a + 1]
-        joints = dict(zip(gaps, self.solver.joint_covariances([(X(a), X(b)) for a, b in gaps]))) if gaps else {}
+        gaps = [(a, b) for a, b in itertools.pairwise(solved) if b > a + 1]
+        joints = (
+            dict(zip(gaps, self.solver.joint_covariances([(X(a), X(b)) for a, b in gaps]), strict=True)) if gaps else {}
+        )
         n = solved[-1] + 1 if solved else 0
         full = np.empty((n, self.n, self.n))
-        for a, b in zip(solved, solved[1:]):
+        for a, b in itertools.pairwise(solved):
             full[a] = marg[X(a)]
             for p in range(a + 1, b):
                 full[p] = self._between_covariance(a, b, self.times[p], joints[(a, b)])

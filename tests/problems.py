@@ -36,7 +36,7 @@ def small_problem(rng, n_states=8, n_landmarks=3, noise=0.05, robust=True, inter
     keys = [sr.X(i) for i in range(n_states)]
     times = np.cumsum(rng.uniform(0.5, 1.5, n_states))
     xs = sample_trajectory(rng, times, qc, [0.3, -0.2, 0.3, 1.0, 0.5, 0.1])
-    truth = dict(zip(keys, xs))
+    truth = dict(zip(keys, xs, strict=True))
     lms = {sr.L(j): rng.normal(size=2) * 5 for j in range(n_landmarks)}
     truth.update(lms)
     loss = sr.Tukey(15.0) if robust else None
@@ -44,7 +44,7 @@ def small_problem(rng, n_states=8, n_landmarks=3, noise=0.05, robust=True, inter
     graph.add(sr.PriorFactor.create(keys[0], xs[0] + rng.normal(size=6) * 0.1, np.ones(6)))
     for k, l in lms.items():
         graph.add(sr.PriorFactor.create(k, l + rng.normal(size=2) * 0.1, [1.0, 1.0]))
-    for i, (key, x) in enumerate(zip(keys, xs)):
+    for i, (key, x) in enumerate(zip(keys, xs, strict=True)):
         th = x[2]
         body = [np.cos(th) * x[3] + np.sin(th) * x[4], -np.sin(th) * x[3] + np.cos(th) * x[4], x[5]]
         graph.add(sr.VelocityFactor.create(key, np.array(body) + rng.normal(size=3) * 0.05, [0.5, 0.5, 1.0]))

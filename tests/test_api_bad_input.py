@@ -968,7 +968,7 @@ CASES = [
 ]
 
 
-@pytest.mark.parametrize("call, error, message", [pytest.param(c, e, m, id=i) for i, c, e, m in CASES])
+@pytest.mark.parametrize(("call", "error", "message"), [pytest.param(c, e, m, id=i) for i, c, e, m in CASES])
 def test_bad_input_raises_the_named_error(call, error, message):
     with pytest.raises(error, match=message):
         call()
@@ -1083,7 +1083,7 @@ def checked_input(i: int):
 
 
 @pytest.mark.parametrize(
-    "make_failure, error",
+    ("make_failure", "error"),
     [
         (lonely_landmark, UnderdeterminedError),
         (overflowing_reading, NumericalError),

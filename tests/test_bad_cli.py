@@ -177,7 +177,7 @@ def test_any_value_of_any_option_gives_one_line_and_exit_2(capsys, places, optio
 
 
 @pytest.mark.parametrize(
-    "argv,needle", [(["run", "--seed", "-1"], "--seed"), (["batch", "--dataset", "one.mat"], "at least two poses")]
+    ("argv", "needle"), [(["run", "--seed", "-1"], "--seed"), (["batch", "--dataset", "one.mat"], "at least two poses")]
 )
 def test_the_module_as_a_user_runs_it(places, argv, needle) -> None:
     argv = [places["one"] if a == "one.mat" else a for a in argv]

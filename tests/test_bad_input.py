@@ -274,7 +274,7 @@ def test_shuffled_rows(tmp_path: Path) -> None:
 
 
 @pytest.mark.parametrize(
-    "table,row,column,value,message",
+    ("table", "row", "column", "value", "message"),
     [
         (
             "TD",

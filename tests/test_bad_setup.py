@@ -33,7 +33,7 @@ def _with_ranges(data: RangeDataset, ranges: np.ndarray) -> RangeDataset:
 
 
 @pytest.mark.parametrize(
-    "field,value",
+    ("field", "value"),
     [
         ("final_updates", -1),
         ("final_updates", 2.5),
@@ -77,7 +77,7 @@ def test_paper_setup_qc_is_checked() -> None:
 
 
 @pytest.mark.parametrize(
-    "field,value",
+    ("field", "value"),
     [
         ("every", math.nan),
         ("every", "3"),
@@ -110,7 +110,7 @@ def test_unknown_fields_are_named() -> None:
         PaperSetup.plaza().replace(range_correction=0)
 
 
-@pytest.mark.parametrize("field,value", [("chunk", 0), ("chunk", -100), ("final_iterations", 0), ("chunk", 2.0)])
+@pytest.mark.parametrize(("field", "value"), [("chunk", 0), ("chunk", -100), ("final_iterations", 0), ("chunk", 2.0)])
 def test_sequential_batch_refuses_bad_counts(field: str, value) -> None:
     problem = build_problem(generate_synthetic(n_steps=5, n_landmarks=2, seed=0), PaperSetup.synthetic())
     with pytest.raises(SteamError, match=rf"{field} must be a positive integer, got {re.escape(repr(value))}"):
@@ -186,7 +186,7 @@ def test_plaza_with_one_absurd_range(shared_data: Path) -> None:
 
 
 @pytest.mark.parametrize(
-    "kwargs,message",
+    ("kwargs", "message"),
     [
         (dict(seed=-1), r"seed must be an integer >= 0, got -1"),
         (dict(seed=1.5), r"seed .* got 1\.5"),
@@ -301,7 +301,7 @@ def _negative(c: np.ndarray) -> np.ndarray:
 
 
 @pytest.mark.parametrize(
-    "changes,message",
+    ("changes", "message"),
     [
         (dict(stateMarginal=_edit_cell(2, 0, _skew)), r"stateMarginal pose 2 is not symmetric"),
         (dict(stateMarginal=_edit_cell(4, 1, _skew)), r"stateMarginal velocity 4 is not symmetric"),

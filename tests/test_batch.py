@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pytest
 from problems import small_problem
@@ -79,14 +81,15 @@ def test_lm_rejects_an_overshooting_step_and_raises_the_damping():
     its = result.iterations
     assert not its[0].accepted and its[0].damping == lam0 and its[0].cost == result.initial_cost
     assert any(it.accepted for it in its)
-    for before, after in zip(its, its[1:]):
+    for before, after in itertools.pairwise(its):
         if before.accepted:
             assert after.damping == pytest.approx(max(before.damping / factor, 1e-12), rel=1e-12)
         else:
             assert after.damping == pytest.approx(before.damping * factor, rel=1e-12)
     kept = [result.initial_cost] + [it.cost for it in its]
-    assert all(b <= a for a, b in zip(kept, kept[1:]))  # the kept cost never increases
-    assert all(it.cost < prev for prev, it in zip(kept, its) if it.accepted)  # an accepted step lowers it
+    assert all(b <= a for a, b in itertools.pairwise(kept))  # the kept cost never increases
+    # an accepted step lowers it (not strict: kept has one more entry, the initial cost)
+    assert all(it.cost < prev for prev, it in zip(kept, its, strict=False) if it.accepted)
     assert result.converged, result.reason
     assert abs(result.values[sr.X(0)][2]) < 1e-3 and result.cost == pytest.approx(2.0, abs=1e-4)
 

@@ -44,7 +44,7 @@ def dense_system(factors: list[GaussianFactor], ordering: Ordering) -> tuple[np.
     b, r = np.zeros(A.shape[0]), 0
     for f in factors:
         m = f.rhs.shape[0]
-        for k, block in zip(f.keys, f.blocks):
+        for k, block in zip(f.keys, f.blocks, strict=True):
             o = ordering.offset_of[k]
             A[r : r + m, o : o + block.shape[1]] += block
         b[r : r + m] = f.rhs

@@ -82,7 +82,7 @@ def test_min_degree_is_a_permutation_with_constrained_variables_last(rng):
 def test_min_degree_eliminates_a_path_without_fill():
     # a - b - c - d - e - f - g, given in a scrambled order: eliminating from the ends costs no fill.
     variables = list("dgbfaec")
-    factors = [(x, y) for x, y in zip("abcdef", "bcdefg")]
+    factors = [(x, y) for x, y in zip("abcdef", "bcdefg", strict=True)]
     order = constrained_min_degree(variables, factors)
     assert fill(order, factors) == len(factors)
 
@@ -90,7 +90,7 @@ def test_min_degree_eliminates_a_path_without_fill():
 def test_min_degree_no_worse_than_natural_on_a_loop_closure():
     """A chain x0..x9 with a loop closure x0-x9 and two landmarks seen from many states."""
     xs = [f"x{i}" for i in range(10)]
-    factors = [(a, b) for a, b in zip(xs, xs[1:])] + [("x0", "x9")]
+    factors = [(a, b) for a, b in itertools.pairwise(xs)] + [("x0", "x9")]
     factors += [(x, "l0") for x in xs[::2]] + [(x, "l1") for x in xs[1::3]]
     variables = xs + ["l0", "l1"]
     natural = fill(variables, factors)

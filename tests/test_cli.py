@@ -211,7 +211,7 @@ def test_fidelity_command_prints_the_distance_to_the_authors_run(capsys, shared_
 
 
 @pytest.mark.parametrize(
-    "argv,needle",
+    ("argv", "needle"),
     [
         (["run", "--skip", "0"], "--skip"),
         (["run", "--every", "x"], "--every"),

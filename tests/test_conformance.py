@@ -118,7 +118,7 @@ def test_export_writes_the_kit_and_a_readme_and_refuses_a_non_empty_folder(tmp_p
 
 
 @pytest.mark.parametrize(
-    "args, words",
+    ("args", "words"),
     [
         (("check", "{tmp}/nowhere"), "does not exist"),
         (("check", "{tmp}"), "no results"),
@@ -134,7 +134,7 @@ def test_check_answers_bad_input_with_one_line_and_exit_2(tmp_path, capsys, args
     (bad / "gp").mkdir(parents=True)
     (bad / "gp" / "results.json").write_text("{not json")
     (tmp_path / "empty").mkdir()
-    code, out, err = cli(capsys, *(a.format(tmp=tmp_path / "empty", bad=bad) for a in args))
+    code, _out, err = cli(capsys, *(a.format(tmp=tmp_path / "empty", bad=bad) for a in args))
     assert code == 2 and len(err.strip().splitlines()) == 1 and words in err and "Traceback" not in err, err
 
 

@@ -107,7 +107,7 @@ def test_tree_marginals_of_some_keys_visit_only_their_root_paths(rng, monkeypatc
 
 
 def test_unknown_keys_are_named(rng):
-    tree, factors, dims = random_tree(rng, 0)
+    tree, _factors, dims = random_tree(rng, 0)
     with pytest.raises(UnknownVariableError, match="x7"):
         tree_marginals(tree, [sr.X(7)])
     with pytest.raises(UnknownVariableError, match="x7"):
@@ -178,7 +178,7 @@ def test_tree_joint_marginals_equal_dense_inverse(rng, trial):
     groups = held + [keys[:3], [keys[7], keys[1]], [keys[4]]]
     got = tree_joint_marginals(tree, groups)
     assert len(got) == len(groups) and len(held) > 0
-    for group, block in zip(groups, got):
+    for group, block in zip(groups, got, strict=True):
         expected = block_of(cov, natural, group)
         np.testing.assert_allclose(block, expected, rtol=1e-9, atol=1e-12 * np.abs(expected).max())
 
@@ -192,7 +192,9 @@ def test_sparse_joint_marginals_equal_dense_inverse(problem, backend):
     A, _ = LinearSystem.build(problem.graph.factors, problem.initial, natural).to_dense()
     dense = np.linalg.inv(A.T @ A)
     groups = [[sr.X(3), sr.X(4)], [sr.X(11), sr.X(0), sr.L(3)], [sr.L(1)]]
-    for group, got in zip(groups, sparse_joint_marginals(problem.graph.factors, problem.initial, groups, backend)):
+    for group, got in zip(
+        groups, sparse_joint_marginals(problem.graph.factors, problem.initial, groups, backend), strict=True
+    ):
         block = block_of(dense, natural, group)
         np.testing.assert_allclose(got, block, rtol=1e-9, atol=1e-12 * np.abs(block).max())
 

@@ -105,7 +105,7 @@ def _true_ranges_loop(ds: RangeDataset, states: np.ndarray) -> np.ndarray:
     return np.array(
         [
             np.hypot(ds.ground_truth[s, 1] - where[int(j)][0], ds.ground_truth[s, 2] - where[int(j)][1])
-            for s, j in zip(states, ds.ranges[:, 2])
+            for s, j in zip(states, ds.ranges[:, 2], strict=True)
         ]
     )
 
@@ -222,9 +222,9 @@ def test_arrays_are_read_only_copies(small: RangeDataset) -> None:
     arrays["ground_truth"][0, 1] = 1e6
     assert ds.ground_truth[0, 1] != 1e6
     for name in FIELDS:
-        with pytest.raises(ValueError):
+        with pytest.raises(ValueError, match="read-only"):
             getattr(ds, name)[0, 0] = 0.0
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match="read-only"):
         ds.times[0] = 0.0
 
 

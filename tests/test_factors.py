@@ -48,7 +48,7 @@ def test_jacobians_match_central_differences(rng, index):
         analytic = factor.jacobians(*xs)
         numeric = numerical_jacobians(factor.error, *xs)
         assert len(analytic) == len(factor.keys)
-        for a, n in zip(analytic, numeric):
+        for a, n in zip(analytic, numeric, strict=True):
             np.testing.assert_allclose(a, n, rtol=1e-6, atol=1e-8)
 
 
@@ -60,9 +60,9 @@ def test_stacked_batch_equals_one_by_one(rng, index):
     batch = type(proto).stack(factors)
     xs = [np.stack([p[k] for p in points]) for k in range(len(proto.key_dims))]
     errors, jacs = batch.error(*xs), batch.jacobians(*xs)
-    for i, (f, p) in enumerate(zip(factors, points)):
+    for i, (f, p) in enumerate(zip(factors, points, strict=True)):
         np.testing.assert_allclose(errors[i], f.error(*p), rtol=1e-13, atol=1e-13)
-        for J, Ji in zip(jacs, f.jacobians(*p)):
+        for J, Ji in zip(jacs, f.jacobians(*p), strict=True):
             np.testing.assert_allclose(J[i], Ji, rtol=1e-13, atol=1e-13)
 
 

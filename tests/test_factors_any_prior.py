@@ -45,7 +45,7 @@ def test_a_measurement_reads_pose_and_velocity_from_the_front_of_any_state(rng, 
         rest = [rng.normal(size=d) * 3 for d in nine.key_dims[1:]]
         np.testing.assert_array_equal(nine.error(x9, *rest), six.error(x9[:6], *rest))
         analytic = nine.jacobians(x9, *rest)
-        for a, n in zip(analytic, numerical_jacobians(nine.error, x9, *rest)):
+        for a, n in zip(analytic, numerical_jacobians(nine.error, x9, *rest), strict=True):
             np.testing.assert_allclose(a, n, rtol=1e-6, atol=1e-8)
         np.testing.assert_array_equal(analytic[0][..., 6:], 0.0)  # acceleration is not measured
 
@@ -82,7 +82,7 @@ def test_interpolated_state_is_the_dense_gp_conditional_mean(rng, name):
     np.testing.assert_allclose(factor.interpolated_state(x1, x2), expected, rtol=1e-8, atol=1e-9)
     lm = rng.normal(size=2) * 4
     np.testing.assert_allclose(factor.error(x1, x2, lm), inner.error(expected, lm), rtol=1e-8, atol=1e-9)
-    for a, num in zip(factor.jacobians(x1, x2, lm), numerical_jacobians(factor.error, x1, x2, lm)):
+    for a, num in zip(factor.jacobians(x1, x2, lm), numerical_jacobians(factor.error, x1, x2, lm), strict=True):
         np.testing.assert_allclose(a, num, rtol=1e-6, atol=1e-8)
 
 

@@ -64,7 +64,7 @@ def test_lambda_psi_are_the_blocks_of_dense_k_tau_k_inv(rng, kind):
     n, M = sde.n, est.size
     E = block_index(all_times, est, n)
     K_EE = K[np.ix_(E, E)]
-    for tau, i in zip(taus, intervals):
+    for tau, i in zip(taus, intervals, strict=True):
         T = block_index(all_times, [tau], n)
         G = np.linalg.solve(K_EE, K[np.ix_(E, T)]).T  # K(τ) K⁻¹, (n, M n)  [YIB Eq. 12]
         lam, psi = matrices(kind, sde, qc, est[i - 1], est[i], tau)
@@ -79,7 +79,9 @@ def test_wnoa_closed_form_interpolation_equals_sde(rng, d):
     qc = random_spd(rng, d)
     sde = LinearSDE.wnoa(qc).general()  # Φ by expm, Q by Van Loan: independent of the closed forms
     t1, tau, t2 = np.sort(rng.uniform(0.5, 4.0, size=3))
-    for closed, general in zip(interpolation_matrices(t1, t2, tau, qc), interpolation_matrices_sde(sde, t1, t2, tau)):
+    for closed, general in zip(
+        interpolation_matrices(t1, t2, tau, qc), interpolation_matrices_sde(sde, t1, t2, tau), strict=True
+    ):
         np.testing.assert_allclose(closed, general, rtol=1e-9, atol=1e-11)
     x1, x2 = rng.normal(size=2 * d), rng.normal(size=2 * d)
     np.testing.assert_allclose(
@@ -107,7 +109,7 @@ def test_interpolate_state_sde_equals_dense_posterior_mean(rng, kind):
     n = sde.n
     E = block_index(all_times, est, n)
     x_bar = rng.normal(size=(est.size, n)) * 3.0
-    for tau, i in zip(taus, intervals):
+    for tau, i in zip(taus, intervals, strict=True):
         T = block_index(all_times, [tau], n)
         dense = mu[T] + K[np.ix_(T, E)] @ np.linalg.solve(K[np.ix_(E, E)], x_bar.ravel() - mu[E])  # [YIB Eq. 12]
         got = interpolate_state_sde(sde, est[i - 1], x_bar[i - 1], est[i], x_bar[i], tau)
@@ -142,7 +144,7 @@ def test_interpolate_covariance_equals_dense_posterior(rng, kind):
     R = random_spd(rng, H.shape[0], scale=0.1)
     y = rng.normal(size=H.shape[0])
     post_mean, post_cov = condition_gaussian(mu, K, H, R, y)
-    for tau, i in zip(taus, intervals):
+    for tau, i in zip(taus, intervals, strict=True):
         T = block_index(all_times, [tau], n)
         pair = block_index(all_times, est[[i - 1, i]], n)
         joint_cov = post_cov[np.ix_(pair, pair)]
@@ -267,7 +269,7 @@ def test_extrapolation_shapes_are_checked(rng):
 
 
 @pytest.mark.parametrize(
-    "t1, t2, tau", [(1.0, 2.0, 1.0), (1.0, 2.0, 2.0), (1.0, 2.0, 0.5), (1.0, 2.0, 2.5), (2.0, 1.0, 1.5)]
+    ("t1", "t2", "tau"), [(1.0, 2.0, 1.0), (1.0, 2.0, 2.0), (1.0, 2.0, 0.5), (1.0, 2.0, 2.5), (2.0, 1.0, 1.5)]
 )
 def test_tau_outside_interval_raises(rng, t1, t2, tau):
     qc = random_spd(rng, 2)
@@ -312,11 +314,13 @@ def test_interpolation_matrices_depend_on_gaps_and_qc_only(rng):
     qc = random_spd(rng, 2)
     sde = LinearSDE.wnoa(qc).general()
     lam, psi = interpolation_matrices(10.0, 12.0, 10.5, qc)
-    for closed, general in zip((lam, psi), interpolation_matrices_sde(sde, 3.0, 5.0, 3.5)):
+    for closed, general in zip((lam, psi), interpolation_matrices_sde(sde, 3.0, 5.0, 3.5), strict=True):
         np.testing.assert_allclose(closed, general, rtol=1e-9, atol=1e-12)
     assert not lam.flags.writeable and not psi.flags.writeable
     qc3 = random_spd(rng, 3)
     lam3, psi3 = interpolation_matrices(10.0, 12.0, 10.5, qc3)
     assert lam3.shape == (6, 6)
-    for closed, general in zip((lam3, psi3), interpolation_matrices_sde(LinearSDE.wnoa(qc3).general(), 0.0, 2.0, 0.5)):
+    for closed, general in zip(
+        (lam3, psi3), interpolation_matrices_sde(LinearSDE.wnoa(qc3).general(), 0.0, 2.0, 0.5), strict=True
+    ):
         np.testing.assert_allclose(closed, general, rtol=1e-9, atol=1e-12)

@@ -259,7 +259,7 @@ def test_model_must_match_a_and_f(rng):
         LinearSDE(sde.A, sde.F, sde.qc, model="singer")
     with pytest.raises(SteamError, match="name='cv'"):
         ClosedForm("cv")
-    with pytest.raises(SteamError, match="alpha=1.0"):
+    with pytest.raises(SteamError, match=r"alpha=1\.0"):
         ClosedForm("wnoj", 1.0)
     with pytest.raises(ShapeError, match=r"Qc.*\(3, 3\)"):
         LinearSDE(sde.A, sde.F, np.eye(3), model=ClosedForm("singer", 0.5))

@@ -271,7 +271,7 @@ def test_sqrt_information_is_memoised_by_value_and_read_only(rng):
     W = process_noise_sqrt_information(0.7, qc)
     np.testing.assert_allclose(W.T @ W, process_noise_inverse(0.7, qc), rtol=1e-10)
     assert np.allclose(np.triu(W), W)
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match="read-only"):
         W[0, 0] = 1.0  # shared between factors: must not be writable
     # a different Qc (or gap) with the same shape gets its own matrix, not the memoised one
     W2 = process_noise_sqrt_information(0.7, 2.0 * qc)

@@ -11,6 +11,7 @@
 
 from __future__ import annotations
 
+import itertools
 from functools import partial
 
 import numpy as np
@@ -108,7 +109,7 @@ def gtsam_problem(data):
     prior_mean = np.concatenate([r.first_pose, SETUP.first_velocity])
     prior_sigmas = np.concatenate([SETUP.first_pose_sigmas, SETUP.first_velocity_sigmas])
     graph.add(custom_factor(sigmas(prior_sigmas), [X(0)], partial(prior_error, prior_mean)))
-    for a, b in zip(states, states[1:]):
+    for a, b in itertools.pairwise(states):
         dt = r.times[b] - r.times[a]
         noise = gtsam.noiseModel.Gaussian.Covariance(sde_process_noise(sde, dt))
         graph.add(custom_factor(noise, [X(a), X(b)], partial(gp_prior_error, sde_transition(sde, dt))))
@@ -131,7 +132,7 @@ def gtsam_problem(data):
     for p in range(1, n):
         vel_sigmas = SETUP.velocity_sigmas if p in states else SETUP.interpolated_velocity_sigmas
         add(p, partial(velocity_error, r.velocity[p]), sigmas(vel_sigmas))
-    for p, lid, rng in zip(r.range_pose, r.range_landmark, r.range_value):
+    for p, lid, rng in zip(r.range_pose, r.range_landmark, r.range_value, strict=True):
         add(int(p), partial(range_error, rng), range_noise, [L(int(lid))])
     return graph, states
 

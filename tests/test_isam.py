@@ -436,7 +436,7 @@ def test_params_per_kind_threshold_is_a_plain_copy():
 
 
 @pytest.mark.parametrize(
-    "changes, named",
+    ("changes", "named"),
     [
         (dict(relinearize_threshold=-0.5), "-0.5"),
         (dict(relinearize_threshold=float("nan")), "nan"),

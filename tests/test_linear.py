@@ -51,7 +51,7 @@ def test_dense_A_rows_are_whitened_factors(rng):
     for f in p.graph.factors:
         xs = [p.initial[k] for k in f.keys]
         block = np.zeros((f.dim, order.total_dim))
-        for k, J in zip(f.keys, f.jacobians(*xs)):
+        for k, J in zip(f.keys, f.jacobians(*xs), strict=True):
             o = order.offset_of[k]
             block[:, o : o + J.shape[1]] = f.sqrt_information @ J
         rows.append(block)

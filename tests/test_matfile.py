@@ -87,7 +87,7 @@ def test_dimensions_that_do_not_match_the_data(tmp_path: Path) -> None:
 
 
 @pytest.mark.parametrize(
-    "edit,message",
+    ("edit", "message"),
     [
         (lambda raw: raw[:100], r"100 bytes, shorter than a MATLAB v5 header"),
         (lambda raw: raw[:126] + b"XX" + raw[128:], r"no endian mark"),

@@ -102,7 +102,7 @@ def test_plot_trajectory_draws_the_given_arrays(rng):
 
 
 def test_plot_trajectory_draws_only_what_it_is_given(rng):
-    fig, ax = plt.subplots()
+    _fig, ax = plt.subplots()
     out = plot.plot_trajectory(None, rng.normal(size=(5, 2)), landmarks_estimated={}, ax=ax)
     assert out is ax
     assert [ln.get_label() for ln in ax.lines] == ["estimate"]
@@ -193,14 +193,14 @@ def test_draw_spy_shows_the_pattern_of_R_and_highlights_rows(rng):
         keys=keys,
         dims=dims,
         offsets=np.array([0, 2, 4]),
-        offset_of=dict(zip(keys, (0, 2, 4))),
+        offset_of=dict(zip(keys, (0, 2, 4), strict=True)),
         position={k: i for i, k in enumerate(keys)},
     )
     tree = SimpleNamespace(to_dense=lambda: (R, None, ordering))
     ax = plot.draw_spy(tree, highlight=["x1"])
     (marks,) = ax.lines  # spy with markers: one marker at (column, row) of each nonzero
     drawn = {(int(y), int(x)) for x, y in marks.get_xydata()}
-    assert drawn == set(zip(*np.nonzero(np.abs(R) > 1e-12)))
+    assert drawn == set(zip(*np.nonzero(np.abs(R) > 1e-12), strict=True))
     (band,) = ax.patches
     ys = band.get_path().transformed(band.get_patch_transform()).vertices[:, 1]  # y in data units
     assert (ys.min(), ys.max()) == (1.5, 3.5)  # rows 2 and 3, x1's

@@ -80,7 +80,7 @@ def test_relinearization_blocks_follow_the_state():
 
 
 @pytest.mark.parametrize(
-    "changes, message",
+    ("changes", "message"),
     [
         (dict(prior="cv"), "prior must be one of"),
         (dict(prior="singer", singer_time_constant=0.0), "time_constant"),

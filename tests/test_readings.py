@@ -82,7 +82,7 @@ def test_range_correction_is_the_scripts_fit():
 
 
 def test_a_range_after_the_last_pose_is_an_error():
-    with pytest.raises(DataError, match="range row 2 at t=9.5"):
+    with pytest.raises(DataError, match=r"range row 2 at t=9\.5"):
         attach_ranges(np.arange(5.0), np.array([1.0, 2.0, 9.5]))
     with pytest.raises(SteamError, match="'sorted'"):
         attach_ranges(np.arange(5.0), np.array([1.0]), "sorted")

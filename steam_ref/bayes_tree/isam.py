@@ -260,7 +260,7 @@ class IncrementalSolver:
             self.params.blocks_of(k.kind, x.shape[0])  # relinearization blocks must fit the variable
             values[k] = x
         for f in new_factors:
-            for k, dim in zip(f.keys, f.key_dims):
+            for k, dim in zip(f.keys, f.key_dims, strict=True):
                 have = values[k].shape[0] if k in values else self._dims.get(k)
                 if have is None:
                     raise UnknownVariableError(
@@ -331,7 +331,7 @@ class IncrementalSolver:
             journal.relinearized(j, self._linear[j])
         if need:
             for group in linearize([self.factors[j] for j in need], self._theta_bar):
-                for i, gf in zip(group.factor_ids, group.gaussian_factors()):
+                for i, gf in zip(group.factor_ids, group.gaussian_factors(), strict=True):
                     self._linear[need[i]] = gf
         return len(need)
 
@@ -345,7 +345,7 @@ class IncrementalSolver:
         """
         journal.close()  # the old top is replaced from here on
         new_cids = self.tree.insert_eliminated(cliques, parents)
-        for o, owner in zip(orphans, owners):
+        for o, owner in zip(orphans, owners, strict=True):
             self.tree.attach(o, new_cids[owner])
         return new_cids
 
@@ -370,7 +370,7 @@ class IncrementalSolver:
             sep = np.concatenate([delta[k] for k in clique.separator]) if clique.separator else None
             x = clique.solve(sep)  # [YIB Eq. 25]
             frontals = clique.frontals
-            for k, xk in zip(frontals, (x,) if len(frontals) == 1 else clique.split_frontals(x)):
+            for k, xk in zip(frontals, (x,) if len(frontals) == 1 else clique.split_frontals(x), strict=True):
                 if threshold == 0 or abs(xk - delta[k]).max() >= threshold:
                     changed.add(k)
                 delta[k] = xk

@@ -7,6 +7,7 @@ The defaults are GTSAM's ``ISAM2Params`` defaults (relinearization threshold 0.1
 from __future__ import annotations
 
 import dataclasses
+import itertools
 from collections.abc import Mapping
 from dataclasses import dataclass
 
@@ -105,7 +106,7 @@ class ISAM2Params:
         """(d,) bool: the entries of a variable of ``kind`` whose block has max abs(δ) ≥ ``threshold``."""
         sizes = self.blocks_of(kind, len(delta))
         bounds = np.cumsum((0, *sizes))
-        return np.repeat([np.abs(delta[a:b]).max() >= threshold for a, b in zip(bounds, bounds[1:])], sizes)
+        return np.repeat([np.abs(delta[a:b]).max() >= threshold for a, b in itertools.pairwise(bounds)], sizes)
 
     def threshold_for(self, kind: str) -> float:
         """β for variables of ``kind`` ('x', 'l', ...); SteamError when a per-kind dict lacks it."""

@@ -71,7 +71,7 @@ def factor_dims(factors: Sequence[GaussianFactor]) -> dict[Key, int]:
     """Size of each variable, read off the factors' blocks."""
     dims: dict[Key, int] = {}
     for f in factors:
-        for k, block in zip(f.keys, f.blocks):
+        for k, block in zip(f.keys, f.blocks, strict=True):
             dims[k] = block.shape[1]
     return dims
 
@@ -87,7 +87,7 @@ def _gather(keys: tuple[Key, ...], dims: Mapping[Key, int], factors: Sequence[Ga
     r = 0
     for f in factors:
         end = r + f.rhs.shape[0]
-        for k, block in zip(f.keys, f.blocks):  # a factor names each variable once
+        for k, block in zip(f.keys, f.blocks, strict=True):  # a factor names each variable once
             o = offset[k]
             M[r:end, o : o + block.shape[1]] = block
         M[r:end, n] = f.rhs
@@ -204,7 +204,7 @@ class BayesTree(CliqueTree[Clique]):
 
     def dims(self) -> dict[Key, int]:
         """Size of every variable (visits the whole tree)."""
-        return {k: d for c in self.cliques.values() for k, d in zip(c.frontals, c.frontal_dims)}
+        return {k: d for c in self.cliques.values() for k, d in zip(c.frontals, c.frontal_dims, strict=True)}
 
     def solve(self) -> dict[Key, NDArray]:
         """Full back-substitution from the roots: δ for every variable.  [YIB Sec. III-A]"""
@@ -214,7 +214,7 @@ class BayesTree(CliqueTree[Clique]):
             c = stack.pop()
             clique = self.cliques[c]
             sep = np.concatenate([delta[k] for k in clique.separator]) if clique.separator else np.zeros(0)
-            for k, x in zip(clique.frontals, clique.split_frontals(clique.solve(sep))):
+            for k, x in zip(clique.frontals, clique.split_frontals(clique.solve(sep)), strict=True):
                 delta[k] = x
             stack.extend(self.children[c])
         return delta

@@ -128,8 +128,10 @@ def compare_quantity(expected, got, tolerance, name: str) -> list[tuple[float, s
     return [
         (
             worst / allowed if allowed > 0 else math.inf,
-            f"{name} worst |diff| {worst:.3g}{at} > tolerance {allowed:.3g} "
-            f"(atol {float(tolerance['atol']):g} + rtol {float(tolerance['rtol']):g} x max|expected| {scale:.3g})",
+            (
+                f"{name} worst |diff| {worst:.3g}{at} > tolerance {allowed:.3g} "
+                f"(atol {float(tolerance['atol']):g} + rtol {float(tolerance['rtol']):g} x max|expected| {scale:.3g})"
+            ),
         )
     ]
 

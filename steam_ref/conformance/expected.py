@@ -79,7 +79,7 @@ def _bayes_tree(name: str, inputs: Mapping) -> dict:
     return {"covariances": g.covariances(problem, order, f["information"], inputs["groups"])}
 
 
-def _incremental(name: str, inputs: Mapping) -> dict:
+def _incremental(inputs: Mapping) -> dict:
     relinearize = float(inputs["isam2"]["relinearize_threshold"]) == 0.0
     estimates = g.stream(inputs["stream"]["variables"], inputs["stream"]["updates"], relinearize)
     return {f"estimate_{k}": e for k, e in enumerate(estimates, start=1)}
@@ -99,5 +99,5 @@ def oracle_case(suite: str, name: str, inputs: Mapping) -> dict:
     if suite == "bayes_tree":
         return _bayes_tree(name, inputs)
     if suite == "incremental":
-        return _incremental(name, inputs)
+        return _incremental(inputs)
     raise SteamError(f"no oracle for suite {suite!r}")

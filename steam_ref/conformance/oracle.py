@@ -74,7 +74,7 @@ def _quadrature(f, dt: float) -> NDArray:
     the error bound (|λ|Δt/2)⁴⁸/48! is far below rounding."""
     x, w = _GAUSS
     total = 0.0
-    for xi, wi in zip(x, w):
+    for xi, wi in zip(x, w, strict=True):
         total = total + (dt / 2) * wi * f((xi + 1) * dt / 2)
     return total
 

@@ -76,7 +76,7 @@ def paper_cases(data_dir: str | os.PathLike | None = None) -> list[tuple[Case, d
             "authors_sha256": sha256(authors.source),
             "method": "btgp",
             "every": 1,
-            "setup": plain({k: v for k, v in asdict(setup).items()}),
+            "setup": plain(dict(asdict(setup).items())),
             "state_poses": authors.state_poses[rows],
             "state_poses_total": len(authors.state_poses),
         }

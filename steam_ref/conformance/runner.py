@@ -135,7 +135,7 @@ def _gaussian_factors(factors, values) -> tuple[list[GaussianFactor], list]:
     groups = linearize(factors, values)
     out: list = [None] * len(factors)
     for g in groups:
-        for i, gf in zip(g.factor_ids, g.gaussian_factors()):
+        for i, gf in zip(g.factor_ids, g.gaussian_factors(), strict=True):
             out[int(i)] = gf
     return out, groups
 
@@ -148,7 +148,7 @@ def _assemble_R(tree: BayesTree, ordering: Ordering) -> tuple[NDArray, NDArray]:
         cols = np.concatenate(
             [
                 ordering.offset_of[k] + np.arange(dim)
-                for k, dim in zip(c.frontals + c.separator, c.frontal_dims + c.separator_dims)
+                for k, dim in zip(c.frontals + c.separator, c.frontal_dims + c.separator_dims, strict=True)
             ]
         )
         block = np.hstack([np.triu(c.R), c.S])
@@ -159,7 +159,7 @@ def _assemble_R(tree: BayesTree, ordering: Ordering) -> tuple[NDArray, NDArray]:
 
 
 def _linear(inputs: Mapping) -> dict:
-    p, factors, values, ordering = _problem(inputs)
+    _p, factors, values, ordering = _problem(inputs)
     gfs, groups = _gaussian_factors(factors, values)
     system = LinearSystem.from_groups(groups, ordering)
     perm, r = [None] * len(factors), 0
@@ -214,7 +214,7 @@ def _clique_list(tree: BayesTree, order: list[str]) -> list[dict]:
 
 
 def _bayes_tree(name: str, inputs: Mapping) -> dict:
-    p, factors, values, ordering = _problem(inputs)
+    _p, factors, values, ordering = _problem(inputs)
     gfs, _ = _gaussian_factors(factors, values)
     tree = BayesTree.from_factors(gfs, ordering)
     if name.endswith("_cliques"):

@@ -87,7 +87,7 @@ class GPPriorFactor(Factor):
     def error(self, x1: NDArray, x2: NDArray) -> NDArray:
         return x2 - np.einsum("...ij,...j->...i", self.phi, x1) - self.v  # [YIB Eq. 22]
 
-    def jacobians(self, x1: NDArray, x2: NDArray) -> tuple[NDArray, NDArray]:
+    def jacobians(self, x1: NDArray, x2: NDArray) -> tuple[NDArray, NDArray]:  # noqa: ARG002 (linear: constant)
         eye = np.broadcast_to(np.eye(self.phi.shape[-1]), self.phi.shape)
         return -self.phi, eye
 

@@ -44,7 +44,7 @@ def assemble_sqrt_information(ordering: Ordering, conditionals: Sequence[Conditi
         r0 = ordering.offset_of[c.frontals[0]]
         nf = c.R.shape[0]
         col = [r0 + np.arange(nf)] + [
-            ordering.offset_of[k] + np.arange(dim) for k, dim in zip(c.separator, c.separator_dims)
+            ordering.offset_of[k] + np.arange(dim) for k, dim in zip(c.separator, c.separator_dims, strict=True)
         ]
         block = np.hstack([np.triu(c.R), c.S])  # (n_f, n_f + n_s): its columns are ``col``
         r, j = np.nonzero(block)

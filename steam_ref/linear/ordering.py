@@ -84,7 +84,7 @@ class Ordering:
         if len(keys) != len(dims):
             raise ShapeError(f"an ordering needs one size per variable: {len(keys)} keys, {len(dims)} dims")
         seen: set[Key] = set()
-        for k, d in zip(keys, dims):
+        for k, d in zip(keys, dims, strict=True):
             if k in seen:
                 raise SteamError(f"an ordering lists variable {k!r} twice")
             seen.add(k)
@@ -94,7 +94,7 @@ class Ordering:
         object.__setattr__(self, "dims", tuple(int(d) for d in dims))
         offsets = np.concatenate([[0], np.cumsum(self.dims)[:-1]]).astype(int) if self.keys else np.zeros(0, int)
         object.__setattr__(self, "offsets", offsets)
-        object.__setattr__(self, "offset_of", dict(zip(self.keys, offsets.tolist())))
+        object.__setattr__(self, "offset_of", dict(zip(self.keys, offsets.tolist(), strict=True)))
         object.__setattr__(self, "position", {k: i for i, k in enumerate(self.keys)})
         object.__setattr__(self, "dim_array", np.array(self.dims, dtype=int))
 
@@ -105,7 +105,7 @@ class Ordering:
 
     def scalar_permutation(self, other: Ordering) -> NDArray:
         """Indices p such that a vector in ``other``'s order, indexed by p, is in this order."""
-        return np.concatenate([np.arange(d) + other.offset_of[k] for k, d in zip(self.keys, self.dims)])
+        return np.concatenate([np.arange(d) + other.offset_of[k] for k, d in zip(self.keys, self.dims, strict=True)])
 
     def __len__(self) -> int:
         return len(self.keys)

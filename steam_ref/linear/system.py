@@ -84,10 +84,8 @@ def _variables(values: Values, group: list[Factor]) -> list[NDArray]:
     return xs
 
 
-def _first_non_finite(
-    ids: list[int], e: NDArray, costs: NDArray, Js: tuple[NDArray, ...] | None
-) -> tuple[int, str] | None:
-    """(position in ``ids``, what) of the first factor whose error, cost or a Jacobian is NaN or inf."""
+def _first_non_finite(e: NDArray, costs: NDArray, Js: tuple[NDArray, ...] | None) -> tuple[int, str] | None:
+    """(row in the group, what) of the first factor whose error, cost or a Jacobian is NaN or inf."""
     bad = {"error": ~np.isfinite(e).all(axis=1) | ~np.isfinite(costs)}
     for slot, J in enumerate(Js or ()):
         bad[f"Jacobian for its key {slot}"] = ~np.isfinite(J).all(axis=(1, 2))
@@ -118,7 +116,7 @@ def linearize(factors: Sequence[Factor], values: Values, *, jacobians: bool = Tr
             Js = None
             if jacobians:
                 Js = tuple(scale[:, None, None] * (W @ J) for J in batch.jacobians(*xs))
-        hit = _first_non_finite(ids, e, costs, Js)
+        hit = _first_non_finite(e, costs, Js)
         if hit is not None:
             failures.append((ids[hit[0]], hit[1]))
         out.append(LinearizedGroup(np.asarray(ids), [f.keys for f in group], Js, -scale[:, None] * e, costs))
@@ -195,4 +193,7 @@ class LinearSystem:
 
     def split(self, x: NDArray) -> dict[Key, NDArray]:
         """A stacked solution vector as key → block."""
-        return {k: x[o : o + d] for k, o, d in zip(self.ordering.keys, self.ordering.offsets, self.ordering.dims)}
+        return {
+            k: x[o : o + d]
+            for k, o, d in zip(self.ordering.keys, self.ordering.offsets, self.ordering.dims, strict=True)
+        }
