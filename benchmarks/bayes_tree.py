@@ -1,9 +1,9 @@
 """Benchmark of the incremental solver (BTGP, [YIB Alg. 1]) on a growing synthetic trajectory.
 
 A robot drives ``--states`` steps along a smooth loop in a bounded field with a handful of range
-beacons (the setting of the paper's lawnmower data, where every beacon is heard all along). Each step adds one state with its GP prior factor [YIB Eq. 22], a
-projected-velocity reading and one range reading [YIB Eq. 33], then calls
-``IncrementalSolver.update`` once. Prints one JSON line:
+beacons (the setting of the paper's lawnmower data, where every beacon is heard all along). Each
+step adds one state with its GP prior factor [YIB Eq. 22], a projected-velocity reading and one
+range reading [YIB Eq. 33], then calls ``IncrementalSolver.update`` once. Prints one JSON line:
 
     n_states, total_s, update_s_median_first1000, update_s_median_last1000,
     update_s_p95_last1000, reeliminated_mean, max_abs_diff_vs_batch, peak_rss_mb, ...

@@ -190,7 +190,8 @@ def make(spec: dict, unit: bool = False) -> list:
         inner = custom(spec["inner"], pt, vt, lk, unit)
         _ALIVE.append(inner)
         states = {state(p1, v1, float(spec["t1"])), state(p2, v2, float(spec["t2"]))}
-        # fixed_noise_model=True: the inner noise R_k alone, as [YIB Eq. 29] (False would add the interpolation's own uncertainty)
+        # fixed_noise_model=True: the inner noise R_k alone, as [YIB Eq. 29] (False would add the
+        # interpolation's own uncertainty)
         return [gtsam.WnoaInterpFactorPoint3(inner, states, {state(pt, vt, float(spec["tau"]))}, np.diag(qc), True)]
     pk, vk = gkeys(names[0])
     return [custom(spec, pk, vk, gkeys(names[1])[0] if len(names) > 1 else None, unit)]

@@ -44,7 +44,8 @@ def _real(value: object) -> float | None:
 
 
 def number(name: str, value: object, *, finite: bool = True) -> float:
-    """``value`` as a float; SteamError naming ``name`` for a bool, a string, a sequence, NaN (and ±inf if ``finite``)."""
+    """``value`` as a float; SteamError naming ``name`` for a bool, a string, a sequence, NaN (and ±inf if
+    ``finite``)."""
     x = _real(value)
     if x is None:
         raise SteamError(f"{name} must be a real number, got {name}={_show(value)}")
@@ -106,7 +107,8 @@ def check_covariance(name: str, P: NDArray, n: int) -> NDArray:
     if asymmetry.max() > 1e-10 * np.abs(P).max():
         i, j = np.unravel_index(int(np.argmax(asymmetry)), P.shape)
         raise SteamError(
-            f"{name} must be symmetric, but {name}[{i}, {j}] = {float(P[i, j])!r} and {name}[{j}, {i}] = {float(P[j, i])!r}"
+            f"{name} must be symmetric, but {name}[{i}, {j}] = {float(P[i, j])!r} "
+            f"and {name}[{j}, {i}] = {float(P[j, i])!r}"
         )
     diagonal = np.diagonal(P)
     if np.any(diagonal < 0):

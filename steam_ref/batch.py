@@ -166,7 +166,8 @@ def _certify(
     found = check_stationarity(graph, values, order, backend)
     if not found.well_conditioned:
         message = (
-            f"{rule or 'max_iterations'}; the information matrix is too ill-conditioned to trust the answer: condition ≈ "
+            f"{rule or 'max_iterations'}; the information matrix is too ill-conditioned to trust the answer: "
+            "condition ≈ "
             f"{found.condition:.1e} > {MAX_CONDITION:.0e} (see docs/derivations.md, 'The smallest time gap')"
         )
         warnings.warn(message, IllConditionedWarning, stacklevel=3)
@@ -176,7 +177,10 @@ def _certify(
     if not found.holds(*tolerances):
         return (
             False,
-            f"{rule}, but one more Gauss-Newton step would lower the cost by {found.predicted_decrease:.3g}: not a stationary point",
+            (
+                f"{rule}, but one more Gauss-Newton step would lower the cost by {found.predicted_decrease:.3g}: "
+                "not a stationary point"
+            ),
             found,
         )
     return True, f"{rule}; stationary (one more step would gain {found.predicted_decrease:.2g})", found

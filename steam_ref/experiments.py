@@ -134,7 +134,8 @@ def _timing_rows(exp: Experiment) -> list[str]:
             else f" ({'prefix' if prefix else 'time budget'}: {r.n_steps_processed} of {r.n_poses_total} steps)"
         )
         rows.append(
-            f"| {exp.name} | {label} | {r.n_steps_processed} | {_fmt(r.total_s, ' s', 2)}{cut} | {_fmt(r.rmse_m, ' m')} |"
+            f"| {exp.name} | {label} | {r.n_steps_processed} | {_fmt(r.total_s, ' s', 2)}{cut} "
+            f"| {_fmt(r.rmse_m, ' m')} |"
         )
     return rows
 
@@ -165,7 +166,8 @@ def _claims(exp: Experiment, paper: dict[str, str]) -> list[str]:
     if "PB/1" in exp.timing and "PBVR/1" in exp.timing:
         ratio, n = speedup_on_prefix(exp.timing["PB/1"], exp.timing["PBVR/1"])
         out.append(
-            f"| {exp.name} | PBVR/1 vs PB/1 (reordering) | {paper['reorder']} | PBVR {ratio:.2f}× PB's speed over the first {n} steps |"
+            f"| {exp.name} | PBVR/1 vs PB/1 (reordering) | {paper['reorder']} "
+            f"| PBVR {ratio:.2f}× PB's speed over the first {n} steps |"
         )
     base = exp.with_interp.get(1)
     for skip, r in sorted(exp.with_interp.items()):

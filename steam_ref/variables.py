@@ -167,7 +167,8 @@ def key_list(name: str, keys: object) -> list[Key]:
 
 
 def as_values(name: str, values: object) -> Values:
-    """``values`` if it is a Values; a mapping key → vector copied into one (so its checks apply); an error otherwise."""
+    """``values`` if it is a Values; a mapping key → vector copied into one (so its checks apply); an error
+    otherwise."""
     if isinstance(values, Values):
         return values
     if isinstance(values, Mapping):

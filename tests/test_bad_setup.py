@@ -161,7 +161,10 @@ def test_a_corrected_range_below_zero_is_refused() -> None:
     setup = PaperSetup.plaza().replace(range_correction_steps=20)
     with pytest.raises(
         DataError,
-        match=r"ranges row 30: 1\.0 m corrected to 1\.(5|49)\d* r \+ -(10\.0|9\.9)\d* = -8\.(5|49)\d* m, a negative range",
+        match=(
+            r"ranges row 30: 1\.0 m corrected to 1\.(5|49)\d* r \+ -(10\.0|9\.9)\d* = -8\.(5|49)\d* m, "
+            "a negative range"
+        ),
     ):
         Readings.from_dataset(_with_ranges(DATA, ranges), setup)
 

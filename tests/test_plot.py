@@ -54,7 +54,10 @@ def close_figures():
 
 
 def test_importing_steam_ref_does_not_import_matplotlib():
-    code = "import sys, steam_ref, steam_ref.plot, steam_ref.experiments, steam_ref.cli; assert 'matplotlib' not in sys.modules"
+    code = (
+        "import sys, steam_ref, steam_ref.plot, steam_ref.experiments, steam_ref.cli; "
+        "assert 'matplotlib' not in sys.modules"
+    )
     subprocess.run([sys.executable, "-c", code], check=True)
 
 

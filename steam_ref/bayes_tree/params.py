@@ -89,7 +89,8 @@ class ISAM2Params:
         if self.relinearize_blocks is not None:
             if not isinstance(self.relinearize_blocks, Mapping):
                 raise SteamError(
-                    f"relinearize_blocks must map a variable kind to block sizes, e.g. {{'x': (3, 3)}}; got {self.relinearize_blocks!r}"
+                    "relinearize_blocks must map a variable kind to block sizes, e.g. {'x': (3, 3)}; "
+                    f"got {self.relinearize_blocks!r}"
                 )
             object.__setattr__(
                 self, "relinearize_blocks", {k: _blocks(k, v) for k, v in self.relinearize_blocks.items()}

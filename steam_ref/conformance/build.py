@@ -146,7 +146,9 @@ def build_kit(
     index = {
         "kit": "steam_ref conformance kit",
         "kit_version": KIT_VERSION,
-        "paper": "Yan, Indelman, Boots: Incremental Sparse GP Regression for Continuous-time Trajectory Estimation & Mapping",
+        "paper": (
+            "Yan, Indelman, Boots: Incremental Sparse GP Regression for Continuous-time Trajectory Estimation & Mapping"
+        ),
         "generated_by": {
             "steam_ref": _version(),
             "commit": _commit(),
@@ -210,7 +212,8 @@ def selftest(
         check_cases("paper", cases, results, report)
     else:
         report.notes.append(
-            f"paper suite not run ({', '.join(c['name'] for c in cases)}: two full BTGP/1 runs, about a minute): add --paper"
+            f"paper suite not run ({', '.join(c['name'] for c in cases)}: two full BTGP/1 runs, about a minute): "
+            "add --paper"
         )
     return report
 

@@ -5,9 +5,10 @@ from __future__ import annotations
 __all__ = ["CONVENTIONS", "RESULTS_LAYOUT", "EXPORT_README"]
 
 CONVENTIONS = {
-    "state": "x = [x, y, theta, x_dot, y_dot, theta_dot]: p = [x, y, theta] then its rate (x = [p; p_dot], [YIB Eq. 30]); "
-    "WNOJ and Singer cases use x = [p; p_dot; p_ddot]; a landmark is l = [x, y]",
-    "keys": "'x<i>' names trajectory state i, 'l<j>' landmark j; a problem lists its variables and their sizes in 'variables'",
+    "state": "x = [x, y, theta, x_dot, y_dot, theta_dot]: p = [x, y, theta] then its rate "
+    "(x = [p; p_dot], [YIB Eq. 30]); WNOJ and Singer cases use x = [p; p_dot; p_ddot]; a landmark is l = [x, y]",
+    "keys": "'x<i>' names trajectory state i, 'l<j>' landmark j; a problem lists its variables and their sizes "
+    "in 'variables'",
     "units": "time in seconds, distances in metres, angles in radians; Qc is the power spectral density of w(t) "
     "(units of p squared per cubic second)",
     "gp_prior": "zero-mean white noise on acceleration: x_dot = A x + F w, A = [[0, I], [0, 0]], F = [0; I], "
@@ -26,11 +27,11 @@ CONVENTIONS = {
     "jacobians": "H_k = de/dx_k in the vector space of the variables (theta is a plain coordinate: no manifold); "
     "A_k = sqrt(w) W H_k; k counts the factor's keys in order",
     "angles": "bearing errors are wrapped to [-pi, pi); nothing else is wrapped (headings in states are continuous)",
-    "linear_system": "minimize ||A delta - b||^2: A stacks each factor's rows A_k in factor order, columns in the case's "
-    "ordering, one block per variable; b = -sqrt(w) W e; information I = A^T A, rhs = A^T b, "
+    "linear_system": "minimize ||A delta - b||^2: A stacks each factor's rows A_k in factor order, columns in "
+    "the case's ordering, one block per variable; b = -sqrt(w) W e; information I = A^T A, rhs = A^T b, "
     "delta = I^-1 A^T b, and the new estimate is theta + delta [YIB Eq. 9-11]",
-    "R_factor": "R is upper triangular with positive diagonal and R^T R = I in the case's ordering (unique); d = R^-T A^T b, "
-    "so R delta = d [YIB Eq. 21]",
+    "R_factor": "R is upper triangular with positive diagonal and R^T R = I in the case's ordering (unique); "
+    "d = R^-T A^T b, so R delta = d [YIB Eq. 21]",
     "cliques": "eliminating in a given order: each variable's separator by the elimination game; walking the order "
     "backwards, a variable whose separator equals all variables of its parent's clique joins it, any other "
     "starts a child clique (GTSAM's rule). Frontals and separators are listed in elimination order; the "
@@ -39,11 +40,12 @@ CONVENTIONS = {
     "diag R > 0: the rows of the R factor (and d) that belong to F [YIB Eq. 25]",
     "covariances": "blocks of I^-1 at the case's linearization point; a group 'k1,k2' is the joint covariance of the "
     "stacked variables [YIB Eq. 11]",
-    "incremental": "iSAM2 as GTSAM 4.3: new factors and values per update; relinearization (threshold beta on max |delta|, "
-    "checked every relinearize_skip updates) happens at the start of an update with the previous delta; "
-    "wildfire threshold 0 is a full back-substitution; 'inf' means never relinearize",
-    "floats": "JSON numbers are the shortest decimal that reads back to the same IEEE-754 double (at most 17 significant "
-    "digits, so reading with strtod is exact); no NaN or inf. Arrays are nested lists, row-major",
+    "incremental": "iSAM2 as GTSAM 4.3: new factors and values per update; relinearization "
+    "(threshold beta on max |delta|, checked every relinearize_skip updates) happens at the start of an update "
+    "with the previous delta; wildfire threshold 0 is a full back-substitution; 'inf' means never relinearize",
+    "floats": "JSON numbers are the shortest decimal that reads back to the same IEEE-754 double "
+    "(at most 17 significant digits, so reading with strtod is exact); no NaN or inf. "
+    "Arrays are nested lists, row-major",
     "tolerance": "a numeric quantity passes when max|got - expected| <= atol + rtol * max|expected| over its entries "
     "(normwise; an object's leaves one by one); 'exact' quantities must be equal",
     "independent": "true: the expected values come from a computation that shares no code with steam_ref's (a dense "

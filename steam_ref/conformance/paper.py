@@ -100,7 +100,8 @@ def paper_cases(data_dir: str | os.PathLike | None = None) -> list[tuple[Case, d
             inputs,
             tolerance,
             True,
-            f"the authors' saved run {inputs['authors_file']} (MATLAB + GTSAM 3.2, XinyanGT/online-gpslam-code matlab/Data)",
+            f"the authors' saved run {inputs['authors_file']} "
+            "(MATLAB + GTSAM 3.2, XinyanGT/online-gpslam-code matlab/Data)",
         )
         out.append((case, expected))
     return out

@@ -48,7 +48,8 @@ def sqrt_information(noise: NDArray | float, m: int, name: str = "noise") -> NDA
         if not np.allclose(noise, noise.T, rtol=0.0, atol=1e-12 * np.max(np.abs(noise))):
             i, j = np.unravel_index(np.argmax(np.abs(noise - noise.T)), noise.shape)
             raise SteamError(
-                f"{name} (a covariance) is not symmetric: entry ({i}, {j}) = {float(noise[i, j])!r} but ({j}, {i}) = {float(noise[j, i])!r}"
+                f"{name} (a covariance) is not symmetric: entry ({i}, {j}) = {float(noise[i, j])!r} "
+                f"but ({j}, {i}) = {float(noise[j, i])!r}"
             )
         try:
             # Σ⁻¹ = Wᵀ W with W upper triangular: W = chol(Σ⁻¹)ᵀ.

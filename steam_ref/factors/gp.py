@@ -75,7 +75,8 @@ class GPPriorFactor(Factor):
             np.linalg.cholesky(q)
         except np.linalg.LinAlgError:
             raise NumericalError(
-                f"Q(dt) of this prior is not positive definite in float64 at dt={dt!r}: the gap is too small (or too large)"
+                f"Q(dt) of this prior is not positive definite in float64 at dt={dt!r}: "
+                "the gap is too small (or too large)"
             ) from None
         return cls.from_matrices(key1, key2, sde.transition(dt), q, sde.input_integral(dt))
 

@@ -148,7 +148,8 @@ def interpolation_matrices_sde(sde: LinearSDE, t1: float, t2: float, tau: float)
         q2 = scipy.linalg.cho_factor(sde.process_noise(t2 - t1))  # [YIB Eq. 17]
     except np.linalg.LinAlgError:
         raise NumericalError(
-            f"Q(t2 - t1) is not positive definite in float64 at t2 - t1 = {t2 - t1!r}: the gap is too small for this prior"
+            f"Q(t2 - t1) is not positive definite in float64 at t2 - t1 = {t2 - t1!r}: "
+            "the gap is too small for this prior"
         ) from None
     with np.errstate(over="ignore", invalid="ignore"):
         psi = scipy.linalg.cho_solve(q2, sde.transition(t2 - tau) @ q_tau).T  # Q_τ Φ(t₂,τ)ᵀ Q₂⁻¹  [YIB Eq. 16]

@@ -87,7 +87,8 @@ def _checked_information(info: sp.spmatrix | NDArray, ordering: Ordering, symmet
         if bad.any():
             i, j = int(diff.row[bad][0]), int(diff.col[bad][0])
             raise SteamError(
-                f"the information matrix is not symmetric: entry ({i}, {j}) = {float(info[i, j])!r} but ({j}, {i}) = {float(info[j, i])!r}"
+                f"the information matrix is not symmetric: entry ({i}, {j}) = {float(info[i, j])!r} "
+                f"but ({j}, {i}) = {float(info[j, i])!r}"
             )
     return info
 

@@ -159,7 +159,8 @@ class LinearSystem:
                 if np.any(ordering.dim_array[at] != d):  # else the blocks would overlap their neighbours'
                     k = g.keys[int(np.flatnonzero(ordering.dim_array[at] != d)[0])][slot]
                     raise ShapeError(
-                        f"the ordering gives variable {k!r} size {ordering.dims[ordering.position[k]]}, its factors' blocks have {d} columns"
+                        f"the ordering gives variable {k!r} size {ordering.dims[ordering.position[k]]}, "
+                        f"its factors' blocks have {d} columns"
                     )
                 col_starts = ordering.offsets[at]
                 rows.append(np.broadcast_to(starts[:, None, None] + np.arange(m)[None, :, None], J.shape).ravel())
