@@ -170,20 +170,20 @@ def _selftest_suite(kit: Path, suite: str, report: Report) -> None:
     defined = {c.name: c for c in suite_cases(suite)}
     for name in sorted(set(defined) - {c["name"] for c in shipped}):
         report.outcomes.append(
-            Outcome(suite, name, ((np.inf, "defined in cases.py but not in the shipped kit: regenerate it"),))
+            Outcome(suite, name, ((np.inf, "defined in cases/ but not in the shipped kit: regenerate it"),))
         )
     for case in shipped:
         name, failures = case["name"], []
         mine = defined.get(name)
         if mine is None:
-            failures.append((np.inf, "in the shipped kit but no longer defined in cases.py: regenerate the kit"))
+            failures.append((np.inf, "in the shipped kit but no longer defined in cases/: regenerate the kit"))
         elif (_roundtrip(mine.inputs), mine.tolerance, mine.independent) != (
             case["inputs"],
             case["tolerance"],
             case["independent"],
         ):
             failures.append(
-                (np.inf, "its inputs, tolerances or provenance in cases.py differ from the shipped kit: regenerate it")
+                (np.inf, "its inputs, tolerances or provenance in cases/ differ from the shipped kit: regenerate it")
             )
         ours = _roundtrip(run_case(suite, name, case["inputs"]))
         sources = [("steam_ref: ", ours)]

@@ -1,0 +1,46 @@
+"""The kit's cases, one module per suite, inputs written out as literal numbers (no random draws:
+the kit stores them).
+
+Each :class:`Case` says what it computes ([YIB Eq. n]), its inputs, the tolerance of each output
+quantity, and whether its expected values come from the independent oracle
+(:mod:`steam_ref.conformance.oracle`, :mod:`steam_ref.conformance.oracle_graph`) or from steam_ref
+itself. The expected values are computed by :mod:`steam_ref.conformance.build`. The ``paper``
+suite's cases are made from the data files by :mod:`steam_ref.conformance.paper`.
+"""
+
+from __future__ import annotations
+
+from .base import EXACT, Case, tol
+from .factors import factor_cases
+from .gp import gp_cases
+from .graphs import batch_cases, bayes_tree_cases, incremental_cases, linear_cases
+
+__all__ = ["Case", "tol", "EXACT", "suite_cases", "SUITE_DOCS"]
+
+SUITE_DOCS = {
+    "gp": (
+        "the GP prior: Φ, Q, Q⁻¹, W of WNOA (and WNOJ, Singer, a general LTI SDE); Λ, Ψ, the mean and covariance "
+        "at τ; prediction"
+    ),
+    "factors": (
+        "every factor type at given points: error, whitened error, Jacobians (unwhitened H_k, whitened and "
+        "weighted A_k), b, cost, robust weight"
+    ),
+    "linear": "small problems under given orderings: A, b, 𝓘, Aᵀb, R, d and the Gauss-Newton step δ",
+    "batch": "Gauss-Newton iterates and costs from a given start",
+    "bayes_tree": "cliques and conditionals of given elimination orders; marginal and joint covariances",
+    "incremental": "a stream of five iSAM2 updates: the estimate after each; the cliques removed and the orphans",
+    "paper": "the paper's runs (BTGP/1 on the synthetic set and on Plaza): final estimates and RMSE",
+}
+
+
+def suite_cases(suite: str) -> list[Case]:
+    """The cases of a suite defined here (not 'paper', which needs the data files)."""
+    return {
+        "gp": gp_cases,
+        "factors": factor_cases,
+        "linear": linear_cases,
+        "batch": batch_cases,
+        "bayes_tree": bayes_tree_cases,
+        "incremental": incremental_cases,
+    }[suite]()
