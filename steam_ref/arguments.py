@@ -112,6 +112,6 @@ def check_covariance(name: str, P: NDArray, n: int) -> NDArray:
         )
     diagonal = np.diagonal(P)
     if np.any(diagonal < 0):
-        i = int(np.flatnonzero(diagonal < 0)[0])
-        raise SteamError(f"{name} has a negative variance: {name}[{i}, {i}] = {float(diagonal[i])!r}")
+        k = int(np.flatnonzero(diagonal < 0)[0])
+        raise SteamError(f"{name} has a negative variance: {name}[{k}, {k}] = {float(diagonal[k])!r}")
     return P

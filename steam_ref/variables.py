@@ -19,16 +19,22 @@ from .errors import NumericalError, ShapeError, SteamError, UnknownVariableError
 __all__ = ["Key", "X", "L", "Values", "check_key", "key_list", "as_values"]
 
 
-class Key(NamedTuple):
+# The field `index` shadows tuple.index on purpose (a key's index is the paper's subscript). mypy reports
+# that shadowing, in the class syntax of NamedTuple, as an incompatible override; in the functional
+# syntax it does not, hence the functional syntax here (and UP014 off for this line).
+_KeyFields = NamedTuple("_KeyFields", [("kind", str), ("index", int)])  # noqa: UP014
+
+
+class Key(_KeyFields):
     """The name of a variable: a kind ('x' for states, 'l' for landmarks) and an integer index."""
 
-    kind: str
-    index: int
+    __slots__ = ()
 
     def __repr__(self) -> str:
         return f"{self.kind}{self.index}"
 
-    __str__ = __repr__
+    def __str__(self) -> str:
+        return f"{self.kind}{self.index}"
 
 
 def _index(name: str, i: int) -> int:
@@ -53,7 +59,7 @@ class Values(Mapping):
 
     def __init__(self, items: Mapping[Key, NDArray] | Iterable[tuple[Key, NDArray]] = ()):
         self._data: dict[Key, NDArray] = {}
-        pairs = items.items() if isinstance(items, Mapping) else items
+        pairs: object = items.items() if isinstance(items, Mapping) else items  # checked, as given at run time
         if isinstance(pairs, (str, bytes)) or not isinstance(pairs, Iterable):
             raise SteamError(f"Values takes a mapping key -> vector or (key, vector) pairs, got {items!r}")
         for pair in pairs:

@@ -10,6 +10,7 @@ import dataclasses
 import itertools
 from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -81,7 +82,7 @@ class ISAM2Params:
         else:
             t = _threshold(t, "relinearize_threshold")
         object.__setattr__(self, "relinearize_threshold", t)
-        skip = self.relinearize_skip
+        skip: object = self.relinearize_skip  # as given: checked here
         if isinstance(skip, (bool, np.bool_)) or not isinstance(skip, (int, np.integer)) or skip < 1:
             raise SteamError(f"relinearize_skip must be a positive integer, got {skip!r}")
         object.__setattr__(self, "relinearize_skip", int(skip))
@@ -112,14 +113,14 @@ class ISAM2Params:
     def threshold_for(self, kind: str) -> float:
         """β for variables of ``kind`` ('x', 'l', ...); SteamError when a per-kind dict lacks it."""
         t = self.relinearize_threshold
-        if not isinstance(t, dict):
-            return t  # type: ignore[return-value]
+        if not isinstance(t, Mapping):  # a dict after __post_init__
+            return t
         try:
             return t[kind]
         except KeyError:
             raise SteamError(f"relinearize_threshold {t!r} has no entry for variables of kind {kind!r}") from None
 
-    def replace(self, **changes: object) -> ISAM2Params:
+    def replace(self, **changes: Any) -> ISAM2Params:
         """A copy with some fields changed (validated again); SteamError names an unknown field."""
         names = {f.name for f in dataclasses.fields(self)}
         unknown = sorted(set(changes) - names)

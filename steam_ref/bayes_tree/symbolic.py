@@ -106,10 +106,8 @@ def build_cliques(order: Sequence[V], factor_keys: Sequence[Sequence[V]]) -> lis
     for j, v in enumerate(owner):
         owned[clique_of[v]].append(j)
     return [
-        SymbolicClique(
-            tuple(reversed(frontals[c])), seps[c], None if parents[c] is None else n - 1 - parents[c], tuple(owned[c])
-        )
-        for c in reversed(range(n))
+        SymbolicClique(tuple(reversed(frontals[c])), seps[c], None if p is None else n - 1 - p, tuple(owned[c]))
+        for c, p in reversed(list(enumerate(parents)))
     ]
 
 
@@ -198,7 +196,8 @@ class CliqueTree(Generic[C]):
         tree, detached (parent None, not roots), until :meth:`attach` hangs them back.
         """
         removed: dict[int, C] = {}
-        for c in start:
+        for first in start:
+            c: int | None = first
             while c is not None and c not in removed:
                 removed[c] = self.cliques[c]
                 c = self.parent[c]

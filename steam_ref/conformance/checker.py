@@ -137,7 +137,7 @@ def compare_quantity(expected, got, tolerance, name: str) -> list[tuple[float, s
 
 
 def check_cases(
-    suite: str, kit_cases: Sequence[Mapping], results: Mapping[str, Mapping], report: Report | None = None
+    suite: str, kit_cases: Sequence[Mapping], results: Mapping[str, object], report: Report | None = None
 ) -> Report:
     """Check ``results`` (case name → quantity → value) against a suite's kit cases."""
     report = Report() if report is None else report

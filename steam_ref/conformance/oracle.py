@@ -57,7 +57,9 @@ def model_matrices(model: str, d: int, alpha: float | None = None) -> tuple[NDAr
     if model == "wnoa":
         return np.block([[O, I], [O, O]]), np.vstack([O, I])  # [YIB Eq. 31]
     if model in ("wnoj", "singer"):
-        a = 0.0 if model == "wnoj" else float(alpha)
+        if model == "singer" and alpha is None:
+            raise SteamError("the singer model needs alpha")
+        a = 0.0 if alpha is None or model == "wnoj" else float(alpha)
         A = np.block([[O, I, O], [O, O, I], [O, O, -a * I]])
         return A, np.vstack([O, O, I])
     raise SteamError(f"unknown model {model!r}")
@@ -73,7 +75,7 @@ def _quadrature(f, dt: float) -> NDArray:
     integrands have degree ≤ 4), and for the exponentials of the kit's Singer and LTI cases (|eigenvalue| Δt ≤ 5)
     the error bound (|λ|Δt/2)⁴⁸/48! is far below rounding."""
     x, w = _GAUSS
-    total = 0.0
+    total: NDArray = np.zeros(())
     for xi, wi in zip(x, w, strict=True):
         total = total + (dt / 2) * wi * f((xi + 1) * dt / 2)
     return total

@@ -108,7 +108,7 @@ def cliques(order: Sequence[str], factor_keys: Sequence[Sequence[str]]) -> list[
             adj[k].update(set(keys) - {k})
     sep = {}
     for v in order:  # eliminate v: its later neighbours become a clique (fill)
-        later = sorted((u for u in adj[v] if pos[u] > pos[v]), key=pos.get)
+        later = sorted((u for u in adj[v] if pos[u] > pos[v]), key=lambda u: pos[u])
         sep[v] = later
         for u in later:
             adj[u].update(set(later) - {u})

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 from dataclasses import dataclass, field, fields
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -123,11 +123,13 @@ class Factor:
         """Size m of the error."""
         return self.sqrt_information.shape[-1]
 
-    def error(self, *xs: NDArray) -> NDArray:
+    # error and jacobians take one array per key, named by each subclass (x, l; x1, x2): the base's
+    # (*xs: Any, **kwargs: Any) is how a type checker is told that any such signature overrides it.
+    def error(self, *xs: Any, **kwargs: Any) -> NDArray:
         """Unwhitened error e = h(θ) - y: (..., m)."""
         raise NotImplementedError
 
-    def jacobians(self, *xs: NDArray) -> tuple[NDArray, ...]:
+    def jacobians(self, *xs: Any, **kwargs: Any) -> tuple[NDArray, ...]:
         """∂e/∂xₖ for each key: each (..., m, dₖ)."""
         raise NotImplementedError
 

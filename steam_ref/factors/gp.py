@@ -36,8 +36,8 @@ class GPPriorFactor(Factor):
     :meth:`from_matrices`.
     """
 
-    phi: NDArray = None  # Φ(tᵢ, tᵢ₋₁), (2d, 2d)
-    v: NDArray = None  # vᵢ of Eq. 23, (2d,)
+    phi: NDArray  # Φ(tᵢ, tᵢ₋₁), (2d, 2d)
+    v: NDArray  # vᵢ of Eq. 23, (2d,)
 
     _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "phi", "v")
 
@@ -125,10 +125,10 @@ class InterpolatedFactor(Factor):
         e(xᵢ₋₁, xᵢ, …) = e_inner(Λ xᵢ₋₁ + Ψ xᵢ + c, …),   ∂e/∂xᵢ₋₁ = H Λ,  ∂e/∂xᵢ = H Ψ   [YIB Eq. 19, 29]
     """
 
-    inner: Factor = None  # the measurement at x(τ)
-    lam: NDArray = None  # Λ(τ), (n, n)
-    psi: NDArray = None  # Ψ(τ), (n, n)
-    offset: NDArray = None  # c, (n,): the prior mean's part [YIB Eq. 23]
+    inner: Factor  # the measurement at x(τ)
+    lam: NDArray  # Λ(τ), (n, n)
+    psi: NDArray  # Ψ(τ), (n, n)
+    offset: NDArray  # c, (n,): the prior mean's part [YIB Eq. 23]
 
     _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "lam", "psi", "offset")
     _batched_factors: ClassVar[tuple[str, ...]] = ("inner",)

@@ -40,7 +40,7 @@ __all__ = [
 class PriorFactor(Factor):
     """A Gaussian prior on one variable, e = θ - mean (a state, or a landmark as in Eq. 4)."""
 
-    mean: NDArray = None  # (d,)
+    mean: NDArray  # (d,)
 
     _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "mean")
 
@@ -67,7 +67,7 @@ class PriorFactor(Factor):
 # --- Measurements of one state ------------------------------------------------------------------
 
 
-def _check_state_dim(state_dim: int) -> int:
+def _check_state_dim(state_dim: object) -> int:
     """A state [p; ṗ; ...] with p = [x, y, θ]: a whole number of 3-blocks, at least pose and velocity."""
     if isinstance(state_dim, bool) or not isinstance(state_dim, (int, np.integer)) or state_dim < 6 or state_dim % 3:
         raise SteamError(
@@ -105,7 +105,7 @@ class OdometryFactor(StateMeasurement):
     this factor is here for a reader checking Eq. 32 and for users whose odometry has two components.
     """
 
-    measured: NDArray = None  # (2,) [forward speed, yaw rate]
+    measured: NDArray  # (2,) [forward speed, yaw rate]
 
     _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "measured")
 
@@ -151,7 +151,7 @@ class VelocityFactor(StateMeasurement):
     h(x) = [cos θ ẋ + sin θ ẏ,  -sin θ ẋ + cos θ ẏ,  θ̇]  ≈  [distance/dt, 0, heading change/dt].
     """
 
-    measured: NDArray = None  # (3,) [forward, lateral, yaw rate]
+    measured: NDArray  # (3,) [forward, lateral, yaw rate]
 
     _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "measured")
 
@@ -226,7 +226,7 @@ def _range(name: str, measured: float) -> NDArray:
 class RangeFactor(StateMeasurement):
     """Range from the robot's position to a landmark, ‖[x y]ᵀ - ℓ‖₂.  [YIB Eq. 33]"""
 
-    measured: NDArray = None  # (1,) range [m]
+    measured: NDArray  # (1,) range [m]
 
     _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "measured")
     other_dims: ClassVar[tuple[int, ...]] = (LANDMARK_DIM,)
@@ -243,9 +243,9 @@ class RangeFactor(StateMeasurement):
         state_dim: int = STATE_DIM,
     ) -> RangeFactor:
         """Range reading ``measured`` (m, not negative) from state ``state`` to landmark ``landmark``."""
-        measured = _range("measured", measured)
+        reading = _range("measured", measured)
         return cls(
-            (state, landmark), sqrt_information(sigma, 1, "sigma"), measured=measured, loss=loss, state_dim=state_dim
+            (state, landmark), sqrt_information(sigma, 1, "sigma"), measured=reading, loss=loss, state_dim=state_dim
         )
 
     def error(self, x: NDArray, l: NDArray) -> NDArray:
@@ -260,7 +260,7 @@ class RangeFactor(StateMeasurement):
 class BearingFactor(StateMeasurement):
     """Bearing of a landmark in the robot frame, atan2(ℓy - y, ℓx - x) - θ, error wrapped to [-π, π)."""
 
-    measured: NDArray = None  # (1,) bearing [rad]
+    measured: NDArray  # (1,) bearing [rad]
 
     _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "measured")
     other_dims: ClassVar[tuple[int, ...]] = (LANDMARK_DIM,)
@@ -277,9 +277,9 @@ class BearingFactor(StateMeasurement):
         state_dim: int = STATE_DIM,
     ) -> BearingFactor:
         """Bearing reading ``measured`` (rad) from ``state`` to ``landmark``."""
-        measured = _vector(measured, 1, "measured")
+        reading = _vector(measured, 1, "measured")
         return cls(
-            (state, landmark), sqrt_information(sigma, 1, "sigma"), measured=measured, loss=loss, state_dim=state_dim
+            (state, landmark), sqrt_information(sigma, 1, "sigma"), measured=reading, loss=loss, state_dim=state_dim
         )
 
     def error(self, x: NDArray, l: NDArray) -> NDArray:
@@ -294,7 +294,7 @@ class BearingFactor(StateMeasurement):
 class BearingRangeFactor(StateMeasurement):
     """Bearing and range of a landmark together: e = [bearing error (wrapped), range error]."""
 
-    measured: NDArray = None  # (2,) [bearing rad, range m]
+    measured: NDArray  # (2,) [bearing rad, range m]
 
     _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "measured")
     other_dims: ClassVar[tuple[int, ...]] = (LANDMARK_DIM,)

@@ -71,7 +71,7 @@ _S_SERIES = np.array(
 _WNOJ_S = np.array([[1 / 20, 1 / 8, 1 / 6], [1 / 8, 1 / 3, 1 / 2], [1 / 6, 1 / 2, 1.0]])  # ∫₀¹ uᵏʳ⁺ᵏᶜ/(k_r! k_c!) du
 
 
-def check_alpha(alpha: float, name: str = "alpha") -> float:
+def check_alpha(alpha: object, name: str = "alpha") -> float:
     """α as a float, or raise if it is not a positive finite number (a bool or a string is not one)."""
     value = number(name, alpha)
     if value <= 0:
@@ -202,21 +202,27 @@ class ClosedForm:
         elif self.alpha is not None:
             raise SteamError(f"only the 'singer' model has an alpha, got alpha={self.alpha!r} for {self.name!r}")
 
+    def _singer_alpha(self) -> float:
+        """α of 'singer' (set and checked by ``__post_init__``)."""
+        if self.alpha is None:
+            raise SteamError(f"the {self.name!r} model has no alpha")
+        return self.alpha
+
     def matrices(self, d: int) -> tuple[NDArray, NDArray]:
         """A and F of the model for p of dimension d."""
         if self.name == "wnoa":
             I, O = np.eye(d), np.zeros((d, d))
             return np.block([[O, I], [O, O]]), np.vstack([O, I])  # [YIB Eq. 31]
-        return wnoj_matrices(d) if self.name == "wnoj" else singer_matrices(d, self.alpha)
+        return wnoj_matrices(d) if self.name == "wnoj" else singer_matrices(d, self._singer_alpha())
 
     def transition(self, dt: float, d: int) -> NDArray:
         """Φ(t + Δt, t), any finite Δt."""
         if self.name == "wnoa":
             return wnoa_transition(dt, d)
-        return wnoj_transition(dt, d) if self.name == "wnoj" else singer_transition(dt, self.alpha, d)
+        return wnoj_transition(dt, d) if self.name == "wnoj" else singer_transition(dt, self._singer_alpha(), d)
 
     def process_noise(self, dt: float, qc: ArrayLike) -> NDArray:
         """Q(Δt), Δt > 0."""
         if self.name == "wnoa":
             return wnoa_process_noise(dt, qc)
-        return wnoj_process_noise(dt, qc) if self.name == "wnoj" else singer_process_noise(dt, self.alpha, qc)
+        return wnoj_process_noise(dt, qc) if self.name == "wnoj" else singer_process_noise(dt, self._singer_alpha(), qc)

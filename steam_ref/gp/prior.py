@@ -15,7 +15,7 @@ from __future__ import annotations
 from functools import lru_cache
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from ..arguments import integer, real_array, time_step
 from ..errors import NumericalError, ShapeError, SteamError
@@ -34,12 +34,12 @@ __all__ = [
 # read-only, so no caller can change what another one gets.
 
 
-def check_qc(qc: NDArray) -> NDArray:
+def check_qc(qc: ArrayLike) -> NDArray:
     """Return Qc as a read-only float (d, d) array, or raise if it is not symmetric positive definite."""
     return _checked_qc(*qc_key(qc))
 
 
-def qc_key(qc: NDArray) -> tuple[int, bytes]:
+def qc_key(qc: ArrayLike) -> tuple[int, bytes]:
     """(d, Qc's bytes): a hashable key of a checked Qc, for memoising what depends on it."""
     qc = real_array("Qc", qc)
     if qc.ndim != 2 or qc.shape[0] != qc.shape[1] or qc.shape[0] == 0:
@@ -87,7 +87,7 @@ def transition(dt: float, d: int) -> NDArray:
     return np.block([[I, dt * I], [O, I]])
 
 
-def process_noise(dt: float, qc: NDArray) -> NDArray:
+def process_noise(dt: float, qc: ArrayLike) -> NDArray:
     """Q(dt) = ∫₀^dt Φ(dt, s) F Qc Fᵀ Φ(dt, s)ᵀ ds for the WNOA prior: (2d, 2d).  [YIB Eq. 17]"""
     dt, qc = time_step(dt), check_qc(qc)
     t = np.float64(dt)  # NumPy arithmetic: an overflow gives inf (checked), not Python's OverflowError
@@ -96,7 +96,7 @@ def process_noise(dt: float, qc: NDArray) -> NDArray:
     return finite_result("Q(dt) of the WNOA prior", q, dt=dt)
 
 
-def process_noise_inverse(dt: float, qc: NDArray) -> NDArray:
+def process_noise_inverse(dt: float, qc: ArrayLike) -> NDArray:
     """Q(dt)⁻¹ in closed form: (2d, 2d).  [BTS]"""
     dt, qc = time_step(dt), check_qc(qc)
     qi, t = np.linalg.inv(qc), np.float64(dt)
@@ -105,7 +105,7 @@ def process_noise_inverse(dt: float, qc: NDArray) -> NDArray:
     return finite_result("Q(dt)⁻¹ of the WNOA prior", q_inv, dt=dt)
 
 
-def process_noise_sqrt_information(dt: float, qc: NDArray) -> NDArray:
+def process_noise_sqrt_information(dt: float, qc: ArrayLike) -> NDArray:
     """Upper-triangular W with WᵀW = Q(dt)⁻¹, read-only: (2d, 2d). Memoised per (dt, Qc).  [YIB Eq. 22]"""
     return _sqrt_information(time_step(dt), *qc_key(qc))
 

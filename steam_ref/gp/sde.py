@@ -79,7 +79,7 @@ class LinearSDE:
     def _known(cls, model: ClosedForm, qc: ArrayLike, v: ArrayLike | None) -> LinearSDE:
         qc = check_qc(qc)
         A, F = model.matrices(qc.shape[0])
-        return cls(A, F, qc, v, model)
+        return cls(A, F, qc, None if v is None else _finite_matrix("v", v, 1), model)
 
     @classmethod
     def wnoa(cls, qc: ArrayLike, v: ArrayLike | None = None) -> LinearSDE:

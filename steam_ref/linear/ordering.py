@@ -68,6 +68,13 @@ def sparse_backend(backend: str | None = None) -> str:
     return choice
 
 
+def _positive_size(k: Key, d: object) -> int:
+    """The size ``d`` of variable ``k`` as given (any object) as an int; ShapeError unless a positive integer."""
+    if isinstance(d, (bool, np.bool_)) or not isinstance(d, (int, np.integer)) or d < 1:
+        raise ShapeError(f"the size of variable {k!r} in an ordering must be a positive integer, got {d!r}")
+    return int(d)
+
+
 @dataclass(frozen=True)
 class Ordering:
     """An elimination order of variables and where each one's columns start."""
@@ -84,14 +91,14 @@ class Ordering:
         if len(keys) != len(dims):
             raise ShapeError(f"an ordering needs one size per variable: {len(keys)} keys, {len(dims)} dims")
         seen: set[Key] = set()
+        sizes = []
         for k, d in zip(keys, dims, strict=True):
             if k in seen:
                 raise SteamError(f"an ordering lists variable {k!r} twice")
             seen.add(k)
-            if isinstance(d, (bool, np.bool_)) or not isinstance(d, (int, np.integer)) or d < 1:
-                raise ShapeError(f"the size of variable {k!r} in an ordering must be a positive integer, got {d!r}")
+            sizes.append(_positive_size(k, d))
         object.__setattr__(self, "keys", keys)
-        object.__setattr__(self, "dims", tuple(int(d) for d in dims))
+        object.__setattr__(self, "dims", tuple(sizes))
         offsets = np.concatenate([[0], np.cumsum(self.dims)[:-1]]).astype(int) if self.keys else np.zeros(0, int)
         object.__setattr__(self, "offsets", offsets)
         object.__setattr__(self, "offset_of", dict(zip(self.keys, offsets.tolist(), strict=True)))
