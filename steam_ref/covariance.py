@@ -152,7 +152,7 @@ def sparse_joint_marginals(
     return _blocks_of_inverse(chol, order, groups)
 
 
-def _groups(groups: Iterable[Iterable[Key]]) -> list[list[Key]]:
+def _groups(groups: object) -> list[list[Key]]:
     """Each group of keys as a list; a group that is a single key (not a list of keys) is an error."""
     if isinstance(groups, (str, bytes, Key)) or not isinstance(groups, Iterable):
         raise SteamError(f"groups must be a list of lists of keys, got groups={groups!r}")
@@ -225,7 +225,7 @@ def tree_marginal_covariance(tree: BayesTree, key: Key) -> NDArray:
     return tree_joint_covariance(tree, [check_key("key", key)])
 
 
-def tree_joint_covariance(tree: BayesTree, keys: Sequence[Key]) -> NDArray:
+def tree_joint_covariance(tree: BayesTree, keys: Iterable[Key]) -> NDArray:
     """Joint covariance of several variables (Σdₖ, Σdₖ), stacked in the order given, from the tree.
 
     One walk down the cliques on the variables' root paths [K11 Sec. 3], carrying the joint
@@ -237,7 +237,7 @@ def tree_joint_covariance(tree: BayesTree, keys: Sequence[Key]) -> NDArray:
     keys = key_list("keys", keys)
     wanted = set(keys)
     needed = _cliques_on_root_paths(tree, keys)  # names an unknown key
-    joint, index = np.zeros((0, 0)), {}
+    joint, index = np.zeros((0, 0)), Index()
     stack = [r for r in tree.roots if r in needed]
     while stack:
         c = stack.pop()
@@ -290,7 +290,7 @@ def tree_marginals(tree: BayesTree, keys: Iterable[Key] | None = None) -> dict[K
     return out if wanted is None else {k: out[k] for k in wanted}
 
 
-def tree_joint_marginals(tree: BayesTree, groups: Sequence[Sequence[Key]]) -> list[NDArray]:
+def tree_joint_marginals(tree: BayesTree, groups: Iterable[Iterable[Key]]) -> list[NDArray]:
     """Joint covariance of each group of variables (stacked in the order given), from the tree.
 
     A group that one clique holds whole (two consecutive states of a trajectory, say) is cut from that

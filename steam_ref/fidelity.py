@@ -171,24 +171,25 @@ def load_authors_run(name: str, data: RangeDataset, data_dir: str | os.PathLike 
     poses = _check_same_data(path, m, data)
     ids = sorted(int(i) for i in data.landmarks[:, 0])
     tl_ids = [int(i) for i in data.landmarks[:, 0]]
-    cov = m.get("stateMarginal")
-    has_cov = isinstance(cov, np.ndarray) and cov.dtype == object
-    if has_cov and (cov.shape != (len(poses), 2) or np.shape(m.get("landmarkMarginal")) != (data.n_landmarks, 1)):
+    saved = m.get("stateMarginal")
+    cov = saved if isinstance(saved, np.ndarray) and saved.dtype == object else None
+    landmark_shape = () if m.get("landmarkMarginal") is None else np.shape(m["landmarkMarginal"])
+    if cov is not None and (cov.shape != (len(poses), 2) or landmark_shape != (data.n_landmarks, 1)):
         raise DataError(
-            f"{path}: stateMarginal has shape {cov.shape} and landmarkMarginal {np.shape(m.get('landmarkMarginal'))}; "
+            f"{path}: stateMarginal has shape {cov.shape} and landmarkMarginal {landmark_shape}; "
             f"expected ({len(poses)}, 2) and ({data.n_landmarks}, 1)"
         )
     marks = _table(path, m, "XY", 2, data.n_landmarks)
-    landmark_cov = _covariances(path, m["landmarkMarginal"][:, 0], "landmarkMarginal", 2) if has_cov else None
+    landmark_cov = _covariances(path, m["landmarkMarginal"][:, 0], "landmarkMarginal", 2) if cov is not None else None
     return AuthorsRun(
         name,
         poses,
         _table(path, m, "XYT", 3, len(poses)),
         _table(path, m, "XYT_dot", 3, len(poses)),
         {i: marks[k] for k, i in enumerate(ids)},
-        _covariances(path, cov[:, 0], "stateMarginal pose", 3) if has_cov else None,
-        _covariances(path, cov[:, 1], "stateMarginal velocity", 3) if has_cov else None,
-        {i: landmark_cov[k] for k, i in enumerate(tl_ids)} if has_cov else None,
+        _covariances(path, cov[:, 0], "stateMarginal pose", 3) if cov is not None else None,
+        _covariances(path, cov[:, 1], "stateMarginal velocity", 3) if cov is not None else None,
+        {i: landmark_cov[k] for k, i in enumerate(tl_ids)} if landmark_cov is not None else None,
         _table(path, m, "step_t", 1)[:, 0],
         path,
     )
@@ -242,11 +243,22 @@ def compare(result: RunResult, authors: AuthorsRun, ground_truth: NDArray) -> tu
     truth = np.asarray(ground_truth)[result.state_poses, 1:3]
     marks = [np.hypot(*(result.landmarks[i] - p)) for i, p in authors.landmarks.items()]
     cov = {}
-    if authors.pose_covariance is not None and result.covariances is not None:
+    # the authors' three kinds of marginal are saved together, or none of them
+    pose_cov, velocity_cov, landmark_cov = (
+        authors.pose_covariance,
+        authors.velocity_covariance,
+        authors.landmark_covariance,
+    )
+    if (
+        pose_cov is not None
+        and velocity_cov is not None
+        and landmark_cov is not None
+        and result.covariances is not None
+    ):
         c = result.covariances
-        p = _relative_frobenius(c.pose[result.state_poses], authors.pose_covariance)
-        v = _relative_frobenius(c.velocity[result.state_poses], authors.velocity_covariance)
-        theirs = np.stack([authors.landmark_covariance[i] for i in c.landmark_ids])
+        p = _relative_frobenius(c.pose[result.state_poses], pose_cov)
+        v = _relative_frobenius(c.velocity[result.state_poses], velocity_cov)
+        theirs = np.stack([landmark_cov[i] for i in c.landmark_ids])
         lm = _relative_frobenius(c.landmark, theirs)
         cov = dict(
             pose_cov_median=float(np.median(p)),

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import resource
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
@@ -11,6 +12,9 @@ from numpy.typing import NDArray
 from .arguments import finite, real_array
 from .errors import ShapeError
 from .trajectory import Covariances
+
+if TYPE_CHECKING:  # online imports this module
+    from .online import StreamOptions
 
 __all__ = ["RunResult", "position_rmse", "peak_rss_mb"]
 
@@ -41,7 +45,7 @@ class RunResult:
     """What one streamed run did and produced."""
 
     method: str  # 'btgp', 'pb' or 'pbvr'
-    options: object  # the StreamOptions the run was configured with
+    options: StreamOptions  # what the run was configured with
     times: NDArray  # (n,) time of every pose covered by the estimate
     trajectory: NDArray  # (n, 6) [x, y, θ, ẋ, ẏ, θ̇] at every covered pose (Eq. 18 between states)
     state_poses: NDArray  # (M,) pose indices that have an estimated state

@@ -112,8 +112,11 @@ def build_cliques(order: Sequence[V], factor_keys: Sequence[Sequence[V]]) -> lis
 
 
 class _HasVariables(Protocol):
-    frontals: tuple
-    separator: tuple
+    # read-only members, so that a frozen dataclass (the Bayes tree's Clique) is one
+    @property
+    def frontals(self) -> tuple: ...
+    @property
+    def separator(self) -> tuple: ...
 
 
 C = TypeVar("C", bound=_HasVariables)

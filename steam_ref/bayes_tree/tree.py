@@ -169,7 +169,7 @@ def eliminate(
     for i, sc in enumerate(symbolic):
         for j in sc.factors:
             owner[j] = i
-        ids = () if factor_ids is None else tuple(factor_ids[j] for j in sc.factors if factor_ids[j] is not None)
+        ids = () if factor_ids is None else tuple(i for i in (factor_ids[j] for j in sc.factors) if i is not None)
         gathered = [factors[j] for j in sc.factors] + incoming[i]
         clique = eliminate_clique(sc.frontals, sc.separator, dims, gathered, ids)
         if sc.parent is not None:

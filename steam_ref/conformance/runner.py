@@ -114,7 +114,7 @@ def _factor(inputs: Mapping) -> dict:
     (group,) = linearize([f], values)
     out = {"error": e, "whitened_error": we}
     out.update({f"H_{k}": H for k, H in enumerate(f.jacobians(*xs))})
-    out.update({f"A_{k}": J[0] for k, J in enumerate(group.jacobians)})
+    out.update({f"A_{k}": J[0] for k, J in enumerate(group.jacobian_blocks())})
     out["b"], out["cost"] = group.rhs[0], float(group.costs[0])
     if f.loss is not None:
         out["weight"] = float(f.loss.weight(np.linalg.norm(we)))

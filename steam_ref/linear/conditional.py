@@ -22,14 +22,21 @@ __all__ = ["Conditional", "assemble_sqrt_information"]
 
 
 class Conditional(Protocol):
-    """What a conditional P(F | S) offers (a Bayes tree clique is one)."""
+    """What a conditional P(F | S) offers (a Bayes tree clique is one). Read-only members, so that a
+    frozen dataclass is one."""
 
-    frontals: tuple[Key, ...]  # F, in elimination order
-    separator: tuple[Key, ...]  # S, in elimination order
-    frontal_dims: tuple[int, ...]  # size of each frontal variable
-    separator_dims: tuple[int, ...]  # size of each separator variable
-    R: NDArray  # (n_f, n_f) upper triangular
-    S: NDArray  # (n_f, n_s)
+    @property
+    def frontals(self) -> tuple[Key, ...]: ...  # F, in elimination order
+    @property
+    def separator(self) -> tuple[Key, ...]: ...  # S, in elimination order
+    @property
+    def frontal_dims(self) -> tuple[int, ...]: ...  # size of each frontal variable
+    @property
+    def separator_dims(self) -> tuple[int, ...]: ...  # size of each separator variable
+    @property
+    def R(self) -> NDArray: ...  # (n_f, n_f) upper triangular
+    @property
+    def S(self) -> NDArray: ...  # (n_f, n_s)
 
 
 def assemble_sqrt_information(ordering: Ordering, conditionals: Sequence[Conditional]) -> sp.csr_matrix:

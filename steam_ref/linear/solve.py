@@ -12,6 +12,7 @@ chosen before assembly), so the fill of 𝓛 is the fill of that ordering. Backe
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -99,7 +100,7 @@ class SparseCholesky:
 
     backend: str  # 'cholmod' or 'superlu'
     nnz: int  # nonzeros of the lower-triangular factor 𝓛 (diagonal included)
-    _factor: object  # the backend's factor object
+    _factor: Any  # the backend's factor: CHOLMOD's Factor (called) or SciPy's SuperLU (.solve)
     n: int = 0  # size of 𝓘
 
     @classmethod

@@ -48,11 +48,16 @@ class LinearizedGroup:
         """Sum of the factors' costs."""
         return float(self.costs.sum())
 
+    def jacobian_blocks(self) -> tuple[NDArray, ...]:
+        """``jacobians``; SteamError for a group linearized with ``jacobians=False``, which has none."""
+        if self.jacobians is None:
+            raise SteamError("this group was linearized with jacobians=False: it has costs but no Jacobians")
+        return self.jacobians
+
     def gaussian_factors(self) -> list[GaussianFactor]:
         """The group as one GaussianFactor per factor."""
-        return [
-            GaussianFactor(keys, tuple(J[i] for J in self.jacobians), self.rhs[i]) for i, keys in enumerate(self.keys)
-        ]
+        blocks = self.jacobian_blocks()
+        return [GaussianFactor(keys, tuple(J[i] for J in blocks), self.rhs[i]) for i, keys in enumerate(self.keys)]
 
 
 def _group_by_type(factors: Sequence[Factor]) -> dict[tuple, list[int]]:
@@ -150,7 +155,7 @@ class LinearSystem:
         for g in groups:
             n, m = g.rhs.shape
             starts = row0 + m * np.arange(n)
-            for slot, J in enumerate(g.jacobians):
+            for slot, J in enumerate(g.jacobian_blocks()):
                 try:
                     at = np.array([ordering.position[keys[slot]] for keys in g.keys], dtype=int)
                 except KeyError as exc:
