@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -23,6 +24,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from .errors import IllConditionedWarning, NumericalError, SteamError
+from .factors import Factor
 from .graph import FactorGraph
 from .linear import ordering as linear_ordering
 from .linear.ordering import Ordering, sparse_backend
@@ -186,7 +188,7 @@ def _certify(
     return True, f"{rule}; stationary (one more step would gain {found.predicted_decrease:.2g})", found
 
 
-def _check_options(**options: float) -> None:
+def _check_options(**options: object) -> None:
     """Every tolerance and damping option a finite number ≥ 0 (the damping ones > 0), named on failure."""
     for name, value in options.items():
         if (
@@ -202,7 +204,7 @@ def _check_options(**options: float) -> None:
             raise SteamError(f"damping_factor must be > 1, got {value!r}")
 
 
-def _arguments(graph: FactorGraph, initial: Values) -> tuple[FactorGraph, Values]:
+def _arguments(graph: FactorGraph | Iterable[Factor], initial: Values) -> tuple[FactorGraph, Values]:
     """The graph (a FactorGraph, or any iterable of factors) and the initial estimate (a Values or a mapping)."""
     if not isinstance(graph, FactorGraph):
         graph = FactorGraph(graph)
@@ -210,7 +212,7 @@ def _arguments(graph: FactorGraph, initial: Values) -> tuple[FactorGraph, Values
 
 
 def _prepare(
-    graph: FactorGraph, initial: Values, ordering: str | Ordering, backend: str | None, max_iterations: int
+    graph: FactorGraph, initial: Values, ordering: str | Ordering, backend: str | None, max_iterations: object
 ) -> tuple[str, Ordering, float]:
     """Checks shared by both solvers: the graph and estimates, the backend, the ordering, the start cost."""
     if isinstance(max_iterations, bool) or not isinstance(max_iterations, (int, np.integer)) or max_iterations < 0:
@@ -271,7 +273,8 @@ def gauss_newton(
     )
     graph, initial = _arguments(graph, initial)
     backend, order, cost0 = _prepare(graph, initial, ordering, backend, max_iterations)
-    values, iterations, rule, nnz, cost = initial.copy(), [], "", 0, cost0
+    iterations: list[Iteration] = []
+    values, rule, nnz, cost = initial.copy(), "", 0, cost0
     for _ in range(max_iterations):
         delta, _, nnz = _step(graph, values, order, backend, 0.0)
         values = values.retract(delta)
@@ -322,7 +325,8 @@ def levenberg_marquardt(
     )
     graph, initial = _arguments(graph, initial)
     backend, order, cost0 = _prepare(graph, initial, ordering, backend, max_iterations)
-    values, iterations, rule, nnz, lam, cost = initial.copy(), [], "", 0, initial_damping, cost0
+    iterations: list[Iteration] = []
+    values, rule, nnz, lam, cost = initial.copy(), "", 0, initial_damping, cost0
     while len(iterations) < max_iterations and not rule:
         delta, _, nnz = _step(graph, values, order, backend, lam)
         trial = values.retract(delta)

@@ -17,6 +17,7 @@ The figures are drawn by :mod:`steam_ref.plot`, which imports matplotlib inside 
 from __future__ import annotations
 
 import json
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -93,24 +94,25 @@ def interpolation_experiment(
 
 def published_run_experiment(
     exp: Experiment, *, max_poses: int | None = None, progress: bool = False, data_dir: str | None = None
-) -> None:
+) -> RunResult:
     """BTGP/1 as the authors ran it for their saved runs (every pose a state, the set-up's defaults),
     with its final marginals, compared with the authors' saved run when one is found for ``exp.name``
-    (:mod:`steam_ref.fidelity`). A prefix run (``max_poses``) is not comparable and says so."""
-    exp.published = run_online(
+    (:mod:`steam_ref.fidelity`). A prefix run (``max_poses``) is not comparable and says so. Returns
+    the run (also ``exp.published``)."""
+    run = run_online(
         exp.data, exp.setup, StreamOptions(max_poses=max_poses, progress=progress), covariances=max_poses is None
     )
-    if not exp.published.completed:
-        exp.note = f"first {exp.published.n_steps_processed} steps only, not comparable with the authors' run"
+    exp.published = run
+    if not run.completed:
+        exp.note = f"first {run.n_steps_processed} steps only, not comparable with the authors' run"
     elif exp.name not in AUTHORS_RUNS:
         exp.note = f"no saved authors' run for {exp.name!r}"
     else:
         try:
-            exp.fidelity = compare(
-                exp.published, load_authors_run(exp.name, exp.data, data_dir), exp.data.ground_truth
-            )[0]
+            exp.fidelity = compare(run, load_authors_run(exp.name, exp.data, data_dir), exp.data.ground_truth)[0]
         except DataError as err:
             exp.note = str(err)
+    return run
 
 
 def speedup_on_prefix(slow: RunResult, fast: RunResult) -> tuple[float, int]:
@@ -140,9 +142,9 @@ def _timing_rows(exp: Experiment) -> list[str]:
     return rows
 
 
-def _published_row(exp: Experiment) -> str:
-    """BTGP/1 as the authors ran it, beside their saved run: RMSE and the distance pose by pose."""
-    r, f = exp.published, exp.fidelity
+def _published_row(exp: Experiment, r: RunResult) -> str:
+    """BTGP/1 as the authors ran it (``r``), beside their saved run: RMSE and the distance pose by pose."""
+    f = exp.fidelity
     if f is None:
         return f"| {exp.name} | BTGP/1, every pose a state: position RMSE | – | {r.rmse_m:.5f} m ({exp.note}) |"
     cov = "" if f.pose_cov_median is None else f"; pose marginals {f.pose_cov_median:.3%} apart (median)"
@@ -157,7 +159,7 @@ def _claims(exp: Experiment, paper: dict[str, str]) -> list[str]:
     """Our figures beside the paper's claims for one data set."""
     out = []
     if exp.published is not None:
-        out.append(_published_row(exp))
+        out.append(_published_row(exp, exp.published))
     bt = exp.timing.get("BTGP/1")
     for slow in ("PB/1", "PBVR/1"):
         if bt is not None and slow in exp.timing:
@@ -195,7 +197,7 @@ PAPER_CLAIMS = {
 }
 
 
-def results_table(experiments: list[Experiment], notes: list[str] = ()) -> str:
+def results_table(experiments: list[Experiment], notes: Sequence[str] = ()) -> str:
     """Markdown: timing runs, interpolation sweeps, and the paper's claims beside ours."""
     lines = [
         "# Fig. 3 / Fig. 4 reproduced",
@@ -283,8 +285,8 @@ def reproduce(
             exp = Experiment(name, data, setup)
             timing_experiment(exp, batch_budget_s=budget, max_poses=prefix, progress=progress)
             interpolation_experiment(exp, max_poses=prefix, progress=progress)
-            published_run_experiment(exp, max_poses=prefix, progress=progress, data_dir=data_dir)
-            for r in [*exp.timing.values(), *exp.with_interp.values(), *exp.without_interp.values(), exp.published]:
+            published = published_run_experiment(exp, max_poses=prefix, progress=progress, data_dir=data_dir)
+            for r in [*exp.timing.values(), *exp.with_interp.values(), *exp.without_interp.values(), published]:
                 log.write(json.dumps(r.summary(name)) + "\n")
             fig_, axes = plt.subplots(1, 3, figsize=(15, 4))
             plot_timing(exp.timing, axes[0], title=f"{name}: computation time")

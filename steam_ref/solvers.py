@@ -75,7 +75,7 @@ class PeriodicBatchSolver(OnlineSolver):
     ):
         self.name = "pb" if ordering == "xl" else "pbvr"
         self.ordering = ordering
-        self.options = dict(relative_tolerance=relative_tolerance, max_iterations=max_iterations)
+        self.relative_tolerance, self.max_iterations = relative_tolerance, max_iterations
         self.graph = FactorGraph()
         self.values = Values()
         self.iterations: list[int] = []  # Gauss-Newton iterations of each update
@@ -85,7 +85,14 @@ class PeriodicBatchSolver(OnlineSolver):
         for k in values:
             self.values.insert(k, values[k])
         # check=False: the paper's PB stops on GTSAM's rule alone, and timing it is the point.
-        result = gauss_newton(self.graph, self.values, ordering=self.ordering, check=False, **self.options)
+        result = gauss_newton(
+            self.graph,
+            self.values,
+            ordering=self.ordering,
+            check=False,
+            relative_tolerance=self.relative_tolerance,
+            max_iterations=self.max_iterations,
+        )
         self.values = result.values
         self.iterations.append(len(result.iterations))
 

@@ -200,7 +200,7 @@ class IncrementalSolver:
         # 4c. Add the cached marginal factors f(S) of the orphans.                [YIB step 4]
         # 4d. Order the removed part by constrained minimum degree, θ_nf last.    [K12 Sec. 5]
         with timer("order"):
-            linear = [self._linear[j] for j in fids] + [self.tree.cliques[o].marginal for o in orphans]
+            linear = [self._cached(j) for j in fids] + [self.tree.cliques[o].marginal for o in orphans]
             variables = [k for c in removed.values() for k in c.frontals] + list(theta_new)
             order = constrained_min_degree(variables, [f.keys for f in linear], last=theta_nf)
         # 4e. Eliminate into new cliques and attach back the orphans.   [YIB step 5, Eq. 24-25]
@@ -335,6 +335,13 @@ class IncrementalSolver:
                     self._linear[need[i]] = gf
         return len(need)
 
+    def _cached(self, j: int) -> GaussianFactor:
+        """The linearization of factor ``j`` that :meth:`_relinearize` made."""
+        gf = self._linear[j]
+        if gf is None:
+            raise SteamError(f"factor {j} has not been linearized")
+        return gf
+
     def _insert(
         self, cliques: list[Clique], parents: list[int | None], orphans: list[int], owners: list[int], journal: Journal
     ) -> list[int]:
@@ -367,7 +374,7 @@ class IncrementalSolver:
             c = stack.pop()
             clique = tree.cliques[c]
             visited += 1
-            sep = np.concatenate([delta[k] for k in clique.separator]) if clique.separator else None
+            sep = np.concatenate([delta[k] for k in clique.separator]) if clique.separator else np.zeros(0)
             x = clique.solve(sep)  # [YIB Eq. 25]
             frontals = clique.frontals
             for k, xk in zip(frontals, (x,) if len(frontals) == 1 else clique.split_frontals(x), strict=True):

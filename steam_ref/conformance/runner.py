@@ -112,12 +112,12 @@ def _factor(inputs: Mapping) -> dict:
     e = f.error(*xs)
     we = f.whitened_error(*xs)
     (group,) = linearize([f], values)
-    out = {"error": e, "whitened_error": we}
+    out: dict[str, NDArray | float] = {"error": e, "whitened_error": we}
     out.update({f"H_{k}": H for k, H in enumerate(f.jacobians(*xs))})
     out.update({f"A_{k}": J[0] for k, J in enumerate(group.jacobian_blocks())})
     out["b"], out["cost"] = group.rhs[0], float(group.costs[0])
     if f.loss is not None:
-        out["weight"] = float(f.loss.weight(np.linalg.norm(we)))
+        out["weight"] = float(f.loss.weight(np.asarray(np.linalg.norm(we))))
     return out
 
 
@@ -155,20 +155,22 @@ def _assemble_R(tree: BayesTree, ordering: Ordering) -> tuple[NDArray, NDArray]:
         rows = cols[: c.R.shape[0]]  # a frontal's rows sit at its own columns
         R[np.ix_(rows, cols)] = block
         d[rows] = c.d
-    return positive_rows(R, d)
+    R, d = positive_rows(R, d)
+    return R, d
 
 
 def _linear(inputs: Mapping) -> dict:
     _p, factors, values, ordering = _problem(inputs)
     gfs, groups = _gaussian_factors(factors, values)
     system = LinearSystem.from_groups(groups, ordering)
-    perm, r = [None] * len(factors), 0
+    rows_of: dict[int, NDArray] = {}  # factor → its rows of A
+    r = 0
     for g in groups:
         n, m = g.rhs.shape
         for i, fid in enumerate(g.factor_ids):
-            perm[int(fid)] = np.arange(r + i * m, r + (i + 1) * m)
+            rows_of[int(fid)] = np.arange(r + i * m, r + (i + 1) * m)
         r += n * m
-    perm = np.concatenate(perm)
+    perm = np.concatenate([rows_of[j] for j in range(len(factors))])
     info, rhs = system.information()
     R, d = _assemble_R(BayesTree.from_factors(gfs, ordering), ordering)
     delta, _ = solve(system)
@@ -188,7 +190,8 @@ def _batch(inputs: Mapping) -> dict:
     graph, n = FactorGraph(factors), int(inputs["iterations"])
     options = dict(ordering=ordering, relative_tolerance=0.0, absolute_tolerance=0.0, step_tolerance=0.0, check=False)
     iterates = {k: [np.asarray(v, float)] for k, v in p["values"].items()}
-    result = None
+    if n < 1:
+        raise SteamError(f"a batch case runs at least one iteration, got iterations={n}")
     for k in range(1, n + 1):
         result = gauss_newton(graph, values, max_iterations=k, **options)
         for name in iterates:
@@ -232,8 +235,8 @@ def _bayes_tree(name: str, inputs: Mapping) -> dict:
 
 def _incremental(name: str, inputs: Mapping) -> dict:
     params = {k: (float(v) if k != "relinearize_skip" else int(v)) for k, v in inputs["isam2"].items()}
-    solver = IncrementalSolver(**params)
-    out = {}
+    solver = IncrementalSolver(None, **params)
+    out: dict[str, object] = {}
     for k, u in enumerate(inputs["stream"]["updates"], start=1):
         before = {cid: [spec.key_name(v) for v in c.frontals] for cid, c in solver.tree.cliques.items()}
         report = solver.update(
