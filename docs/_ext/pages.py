@@ -102,10 +102,11 @@ def layers(architecture: str) -> list[tuple[str, list[str], str]]:
 
 
 def modules_of(entry: str) -> list[str]:
-    """Dotted module names of ``errors.py`` or a folder ``gp/`` (its ``__init__`` first), in steam_ref."""
+    """Dotted module names of ``errors.py`` or a folder ``gp/`` (its ``__init__`` first, and a sub-package's
+    before its modules), in steam_ref."""
     path = PACKAGE / entry
     if entry.endswith("/"):
-        files = [path / "__init__.py"] + sorted(p for p in path.rglob("*.py") if p.name != "__init__.py")
+        files = [path / "__init__.py"] + sorted(p for p in path.rglob("*.py") if p != path / "__init__.py")
     else:
         files = [path]
     return [_dotted(f) for f in files if f.is_file()]
