@@ -6,8 +6,8 @@ they go to the solver (:mod:`steam_ref.solvers`: PB, PBVR or BTGP, steps 2-7), a
 then predicts from the solver's latest estimate.
 
 The schedule (:class:`Schedule`, the paper's '/1' and '/10'): the new factors go to the solver at an
-estimated state once ``every`` range readings have been released since the last update, and at the
-last pose. On Plaza nothing is solved until ``start_after_ranges`` (50) ranges have arrived; then one
+estimated state once ``every`` landmark readings (ranges, bearings, bearing-ranges) have been released
+since the last update, and at the last pose. On Plaza nothing is solved until ``start_after_ranges`` (50) ranges have arrived; then one
 batch Levenberg-Marquardt solve of everything so far seeds the solver, as in the paper's scripts.
 Time queries between states use Eq. 18 (:mod:`steam_ref.trajectory`).
 """
@@ -42,7 +42,7 @@ class StreamOptions:
     """How a run is streamed and solved; every field can be overridden."""
 
     method: str = "btgp"  # 'btgp', 'pb' or 'pbvr'
-    every: int = 1  # update after this many range readings ('/1', '/10')
+    every: int = 1  # update after this many landmark readings ('/1', '/10')
     skip: int = Layout.skip  # a state at most skip poses after the previous one (see frontend.Layout)
     interpolate: bool = Layout.interpolate  # readings between states: interpolated (Eq. 29) or dropped
     range_states: bool = Layout.range_states  # also estimate every pose that has a range reading
@@ -93,14 +93,14 @@ class Schedule:
 
     def __init__(self, every: int, start_after: int, last_pose: int):
         self.every, self.start_after, self.last_pose = every, start_after, last_pose
-        self.released = 0  # range factors released so far
-        self.since_update = 0  # range factors released since the last update
+        self.released = 0  # landmark readings (ranges, bearings, bearing-ranges) released so far
+        self.since_update = 0  # landmark readings released since the last update
         self.started = False  # the solver has had its first update
 
     def due(self, step: NewStep) -> bool:
         """Count the step's ranges; True when the solver should update now."""
-        self.released += step.n_ranges
-        self.since_update += step.n_ranges
+        self.released += step.n_landmark_readings
+        self.since_update += step.n_landmark_readings
         if step.pose == self.last_pose:
             return True
         if step.pose == 0 or not step.is_state or (not self.started and self.released < self.start_after):

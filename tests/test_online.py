@@ -270,8 +270,8 @@ def test_schedule_updates_at_states_after_every_ranges_and_at_the_last_pose():
     schedule = Schedule(every=2, start_after=3, last_pose=9)
     steps = [(0, True, 1, False), (1, True, 1, False), (2, False, 1, False), (3, True, 0, True),
              (4, True, 1, False), (5, True, 1, True), (6, False, 5, False), (7, True, 0, True), (9, True, 0, True)]
-    for pose, is_state, n_ranges, expected in steps:
-        due = schedule.due(NewStep(pose, is_state, [], {}, n_ranges))
+    for pose, is_state, n_readings, expected in steps:
+        due = schedule.due(NewStep(pose, is_state, [], {}, n_readings))
         assert due == expected, pose
         if due:
             schedule.updated()
