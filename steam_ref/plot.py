@@ -181,6 +181,7 @@ def plot_trajectory(
     landmarks_estimated: ArrayLike | Mapping[Any, ArrayLike] | None = None,
     dead_reckoning: ArrayLike | None = None,
     estimate_label: str = "estimate",
+    truth_label: str = "ground truth",
     title: str | None = None,
     ax: Any = None,
     path: str | None = None,
@@ -188,12 +189,13 @@ def plot_trajectory(
     """Top view of a run, as Fig. 2: estimated positions against ground truth and dead reckoning,
     true and estimated landmarks.
 
-    truth_xy, estimate_xy, dead_reckoning: (n, 2) positions (truth may be None);
-    landmarks_true: (k, 2); landmarks_estimated: (k, 2), or a mapping landmark id → (2,).
+    truth_xy, estimate_xy, dead_reckoning: (n, 2) positions (truth may be None, or another reference:
+    ``truth_label`` names it, e.g. "batch optimum"); landmarks_true: (k, 2); landmarks_estimated:
+    (k, 2), or a mapping landmark id → (2,).
     """
     ax = _axes(ax, path, figsize=(6, 6))
     if truth_xy is not None:
-        ax.plot(*np.asarray(truth_xy, dtype=float).T, "g-", lw=1.5, label="ground truth")
+        ax.plot(*np.asarray(truth_xy, dtype=float).T, "g-", lw=1.5, label=truth_label)
     if dead_reckoning is not None:
         ax.plot(*np.asarray(dead_reckoning, dtype=float).T, "y-", lw=1, label="dead reckoning")
     ax.plot(*np.asarray(estimate_xy, dtype=float).T, "b-", lw=1, label=estimate_label)

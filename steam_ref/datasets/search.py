@@ -89,7 +89,7 @@ def load_dataset(
     :class:`LandmarkDataset` read by :func:`load_gtsam_2d`), both as an installed gtsam ships them.
     Named files are searched for in :func:`default_data_dirs`: ``data_dir`` (``--data-dir``),
     ``$STEAM_REF_DATA_DIR``, the installed gtsam's ``Data/``. Anything else is a path: a CMU .mat
-    file or a folder of CMU text files; a bare file name that is not in the working directory is
+    file, a folder of CMU text files, or a GTSAM planar text file (``.txt``); a bare file name that is not in the working directory is
     also searched for there. A missing file raises DataError naming the folders searched and
     where to put it.
     """
@@ -115,6 +115,8 @@ def load_dataset(
         path = _find((path.name,), folders) or path
     if path.is_dir() or path.name.endswith("_DR.txt"):
         return load_cmu_text(path)
+    if path.is_file() and path.suffix == ".txt":
+        return load_gtsam_2d(path)
     if path.is_file():
         return load_cmu_mat(path)
     names = ", ".join(["synthetic", *_FILES, *_GTSAM_SETS])
