@@ -261,16 +261,20 @@ def plot_interpolation_tradeoff(
     return _save(axes, path)
 
 
-def plot_fidelity(distances: Mapping[str, ArrayLike], ax: Any = None, *, tolerance_m: float | None = 0.02, path: str | None = None) -> Any:
-    """Distance from a run's estimate to the authors' saved estimate at every pose, one line per
-    data set (name → (n,) metres, pose by pose), with the tolerance drawn as a dashed line."""
+def plot_fidelity(
+    distances: Mapping[str, ArrayLike], ax: Any = None, *, tolerance_m: float | None = 0.02, reference: str = "the authors' estimate",
+    log: bool = False, path: str | None = None,
+) -> Any:
+    """Distance from a run's estimate to the authors' saved estimate (or another ``reference``, e.g. "the
+    batch optimum") at every pose, one line per data set or run (name → (n,) metres, pose by pose), with
+    the tolerance drawn as a dashed line; ``log`` for a logarithmic axis."""
     ax = _axes(ax, path, figsize=(7, 3))
     for name, d in distances.items():
         d = 1000 * np.asarray(d, dtype=float)
         ax.plot(np.arange(len(d)), d, lw=0.8, label=name)
     if tolerance_m is not None:
         ax.axhline(1000 * tolerance_m, color="0.4", ls="--", lw=0.8, label=f"{1000 * tolerance_m:g} mm")
-    ax.set(xlabel="pose", ylabel="distance to the authors' estimate (mm)")
+    ax.set(xlabel="pose", ylabel=f"distance to {reference} (mm)", yscale="log" if log else "linear")
     ax.legend(fontsize=8)
     ax.grid(True, alpha=0.3)
     return _save(ax, path)

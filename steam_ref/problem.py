@@ -22,9 +22,9 @@ from .datasets import LandmarkDataset, RangeDataset
 from .frontend import FrontEnd, Layout
 from .graph import FactorGraph
 from .readings import PaperSetup, Readings
-from .variables import Values, X
+from .variables import L, Values, X
 
-__all__ = ["SteamProblem", "build_problem", "sequential_batch", "converged_batch", "rotated", "BatchScore", "score_against_batch"]
+__all__ = ["SteamProblem", "build_problem", "sequential_batch", "converged_batch", "rotated", "BatchScore", "score_estimate", "score_against_batch"]
 
 
 @dataclass(frozen=True)
@@ -105,7 +105,7 @@ def rotated(values: Values, angle: float) -> Values:
 
 
 def converged_batch(
-    problem: SteamProblem, *, step_tolerance: float = 1e-5, max_rounds: int = 20, chunk: int = 100, ordering: str = "amd"
+    problem: SteamProblem, *, step_tolerance: float = 1e-5, max_rounds: int = 20, chunk: int = 500, ordering: str = "amd"
 ) -> BatchResult:
     """The optimum of ``problem`` to a Gauss-Newton step below ``step_tolerance``: the batch reference.
 
@@ -138,12 +138,13 @@ def converged_batch(
 
 @dataclass(frozen=True)
 class BatchScore:
-    """A run against the converged batch solution of the same problem (no ground truth needed)."""
+    """An estimate against the converged batch solution of the same problem (no ground truth needed)."""
 
-    poses: NDArray  # (n,) the run's states compared
+    poses: NDArray  # (n,) the states compared
     distance: NDArray  # (n,) position distance to the batch optimum at each [m]
-    distance_unrotated: NDArray  # (n,) the same once the run is turned about the origin onto the optimum (the weak gauge removed)
+    distance_unrotated: NDArray  # (n,) the same once the estimate is turned about the origin onto the optimum (the weak gauge removed)
     rotation: float  # that turn [rad]
+    cost_gap: float  # the estimate's cost minus the optimum's
     batch: BatchResult  # the batch solve
     batch_seconds: float  # its wall time
 
@@ -152,22 +153,32 @@ class BatchScore:
         d, u = self.distance, self.distance_unrotated
         return {
             "batch_distance_median_m": round(float(np.median(d)), 6), "batch_distance_max_m": round(float(np.max(d)), 6),
-            "batch_distance_unrotated_median_m": round(float(np.median(u)), 6), "batch_rotation_rad": float(f"{self.rotation:.3g}"),
-            "batch_converged": self.batch.converged, "batch_s": round(self.batch_seconds, 2),
+            "batch_distance_unrotated_median_m": round(float(np.median(u)), 6),
+            "batch_distance_unrotated_max_m": round(float(np.max(u)), 6), "batch_rotation_rad": float(f"{self.rotation:.3g}"),
+            "batch_cost_gap": float(f"{self.cost_gap:.4g}"), "batch_converged": self.batch.converged, "batch_s": round(self.batch_seconds, 2),
         }
 
 
-def score_against_batch(result, readings: Readings, setup: PaperSetup) -> BatchScore:
-    """Distance of a streamed run (:class:`~steam_ref.results.RunResult`) to the converged batch solution of
-    the same problem: the poses the run processed, its layout, the same set-up; compared at its states."""
-    prefix = readings if result.n_steps_processed == readings.n_poses else readings.prefix(result.n_steps_processed)
-    start = time.perf_counter()
-    batch = converged_batch(build_problem(prefix, setup, result.options.layout))
-    seconds = time.perf_counter() - start
-    poses = np.asarray(result.state_poses, dtype=int)
-    ours = np.asarray(result.trajectory)[poses, :2]
+def score_estimate(problem: SteamProblem, batch: BatchResult, estimate: Values, batch_seconds: float = 0.0) -> BatchScore:
+    """``estimate`` (every variable of ``problem``) against ``batch``, its solution: distances at the states."""
+    poses = np.asarray(problem.states, dtype=int)
+    ours = np.array([estimate[X(int(i))][:2] for i in poses])
     best = np.array([batch.values[X(int(i))][:2] for i in poses])
     angle = float(np.arctan2(np.sum(ours[:, 0] * best[:, 1] - ours[:, 1] * best[:, 0]), np.sum(ours * best)))
     c, s = np.cos(angle), np.sin(angle)
     turned = ours @ np.array([[c, s], [-s, c]])
-    return BatchScore(poses, np.hypot(*(ours - best).T), np.hypot(*(turned - best).T), angle, batch, seconds)
+    gap = problem.graph.error(estimate) - problem.graph.error(batch.values)
+    return BatchScore(poses, np.hypot(*(ours - best).T), np.hypot(*(turned - best).T), angle, gap, batch, batch_seconds)
+
+
+def score_against_batch(result, readings: Readings, setup: PaperSetup) -> BatchScore:
+    """A streamed run (:class:`~steam_ref.results.RunResult`) against the converged batch solution of the same
+    problem: the same set-up and layout, the poses up to the run's last solved state, compared at its states."""
+    states = np.asarray(result.state_poses, dtype=int)
+    last = int(states[-1]) + 1
+    problem = build_problem(readings if last == readings.n_poses else readings.prefix(last), setup, result.options.layout)
+    start = time.perf_counter()
+    batch = converged_batch(problem)
+    seconds = time.perf_counter() - start
+    estimate = Values({X(int(i)): np.asarray(result.trajectory[i]) for i in states} | {L(j): np.asarray(p) for j, p in result.landmarks.items()})
+    return score_estimate(problem, batch, estimate, seconds)

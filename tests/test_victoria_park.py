@@ -6,6 +6,7 @@ stationarity check of the batch solve."""
 
 from __future__ import annotations
 
+import json
 import math
 from pathlib import Path
 
@@ -15,12 +16,14 @@ import pytest
 from requirements import optional_import, skip_or_fail
 
 from steam_ref.bayes_tree import ISAM2Params
+from steam_ref.cli import main
 from steam_ref.datasets import LandmarkDataset, gtsam_data_dir, load_dataset, load_gtsam_2d
 from steam_ref.errors import DataError, SteamError
+from steam_ref.experiments import Experiment, interpolation_experiment, results_table, timing_experiment
 from steam_ref.factors import BearingRangeFactor, InterpolatedFactor, PriorFactor
 from steam_ref.frontend import FrontEnd, Layout
 from steam_ref.online import StreamingEstimator, StreamOptions
-from steam_ref.problem import build_problem, converged_batch, rotated
+from steam_ref.problem import build_problem, converged_batch, rotated, score_estimate
 from steam_ref.readings import PaperSetup, Readings
 from steam_ref.variables import L, X
 
@@ -285,3 +288,49 @@ def test_plaza2_loads_by_name_and_runs_with_the_plaza_preset():
     while not est.done:
         est.step()
     assert est.n_solved > 0
+
+
+# --- scoring, the CLI and the experiments -------------------------------------------------------------
+
+
+def test_a_turned_estimate_scores_its_turn_and_nothing_else(prefix_problem):
+    """The optimum turned by 0.01 rad about the origin: the score finds the turn, the raw distance is the
+    chord 2 sin(0.005) |p| at each pose, and once turned back nothing is left."""
+    _, problem, best = prefix_problem
+    score = score_estimate(problem, best, rotated(best.values, 0.01))
+    xy = np.array([best.values[X(int(i))][:2] for i in problem.states])
+    np.testing.assert_allclose(score.distance, 2 * np.sin(0.005) * np.hypot(*xy.T), rtol=1e-9, atol=1e-12)
+    assert score.rotation == pytest.approx(-0.01, abs=1e-12)
+    assert np.max(score.distance_unrotated) < 1e-9 and score.cost_gap > 0
+
+
+def test_cli_runs_victoria_park_and_scores_it_against_the_batch(capsys, tmp_path):
+    _gtsam_file("victoria_park.txt")
+    plot = tmp_path / "vp.png"
+    code = main(["run", "--dataset", "victoria-park", "--max-poses", "150", "--json", "--plot", str(plot)])
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    row = json.loads(out)
+    assert row["every"] == 10 and row["rmse_m"] is None and row["batch_converged"] is True
+    assert 0 <= row["batch_distance_unrotated_median_m"] and 0 <= row["batch_distance_median_m"] <= row["batch_distance_max_m"]
+    assert row["n_updates"] > 0
+    assert plot.stat().st_size > 10_000
+
+
+def test_cli_names_the_bad_line_of_a_gtsam_text_file(capsys, tmp_path):
+    path = tmp_path / "bad.txt"
+    path.write_text("ODOMETRY 0 1 1 0 0 1 0 0 1 0 1\nLANDMARK 7 5 3.0 -4.0 0.9 0 0.9\n")
+    code = main(["run", "--dataset", str(path), "--preset", "victoria-park"])
+    _, err = capsys.readouterr()
+    assert code == 2 and len(err.strip().splitlines()) == 1
+    assert f"{path} line 2: LANDMARK seen from pose id 7" in err
+
+
+def test_the_experiments_run_on_victoria_park(victoria):
+    exp = Experiment("victoria-park", victoria, VP)
+    timing_experiment(exp, batch_budget_s=None, max_poses=60)
+    interpolation_experiment(exp, skips=(1, 3), max_poses=60)
+    runs = [*exp.timing.values(), *exp.with_interp.values(), *exp.without_interp.values()]
+    assert len(runs) == 10 and all(r.n_steps_processed == 60 and np.isnan(r.rmse_m) for r in runs)
+    assert exp.with_interp[3].n_states < exp.with_interp[1].n_states == 60
+    assert "| victoria-park | BTGP/10 | 60 |" in results_table([exp])
