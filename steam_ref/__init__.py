@@ -34,7 +34,7 @@ from .variables import Key, L, Values, X
 from .linear import LinearSystem, amd_ordering, xl_ordering
 from .covariance import marginal_covariances
 from .robust import Huber, Tukey
-from .datasets import RangeDataset, generate_synthetic, load_dataset
+from .datasets import LandmarkDataset, RangeDataset, generate_synthetic, load_dataset
 from .readings import PaperSetup
 from .online import StreamOptions, run_online
 
@@ -50,5 +50,5 @@ __all__ = [
     "LinearSystem", "xl_ordering", "amd_ordering", "marginal_covariances",
     "gauss_newton", "levenberg_marquardt", "batch_solve", "BatchResult",
     "BayesTree", "IncrementalSolver", "ISAM2Params",
-    "RangeDataset", "load_dataset", "generate_synthetic", "PaperSetup", "StreamOptions", "run_online",
+    "RangeDataset", "LandmarkDataset", "load_dataset", "generate_synthetic", "PaperSetup", "StreamOptions", "run_online",
 ]
