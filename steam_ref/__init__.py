@@ -11,7 +11,7 @@ from importlib import metadata as _metadata
 from .batch import BatchResult, batch_solve, gauss_newton, levenberg_marquardt
 from .bayes_tree import BayesTree, IncrementalSolver, ISAM2Params
 from .covariance import marginal_covariances
-from .datasets import RangeDataset, generate_synthetic, load_dataset
+from .datasets import LandmarkDataset, RangeDataset, generate_synthetic, load_dataset
 from .errors import (
     DataError,
     IllConditionedWarning,
@@ -82,6 +82,7 @@ __all__ = [
     "IncrementalSolver",
     "ISAM2Params",
     "RangeDataset",
+    "LandmarkDataset",
     "load_dataset",
     "generate_synthetic",
     "PaperSetup",

@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .datasets import RangeDataset, load_dataset
+from .datasets import LandmarkDataset, RangeDataset, load_dataset
 from .errors import DataError
 from .fidelity import AUTHORS_RUNS, Fidelity, compare, load_authors_run
 from .online import RunResult, StreamOptions, run_online
@@ -52,7 +52,7 @@ class Experiment:
     """The runs of one data set."""
 
     name: str  # label of the data set
-    data: RangeDataset = field(repr=False)
+    data: RangeDataset | LandmarkDataset = field(repr=False)  # a set without ground truth has no RMSE ('–')
     setup: PaperSetup = field(repr=False)
     timing: dict[str, RunResult] = field(default_factory=dict)  # 'PB/1' → run
     with_interp: dict[int, RunResult] = field(default_factory=dict)  # skip → BTGP/1 with interpolation
@@ -255,7 +255,7 @@ def reproduce(
     quick: bool = False,
     data_dir: str | None = None,
     progress: bool = True,
-    data_sets: list[tuple[str, RangeDataset, PaperSetup]] | None = None,
+    data_sets: list[tuple[str, RangeDataset | LandmarkDataset, PaperSetup]] | None = None,
 ) -> str:
     """Run Fig. 3/4's experiments; write ``fig3.png``/``fig4.png``, ``runs.jsonl`` and ``results.md``
     to ``out``; return the Markdown table. ``quick``: 1,000-pose prefixes and 20 s budgets.
@@ -296,9 +296,9 @@ def reproduce(
             plt.close(fig_)
             run = exp.with_interp[1]
             plot_trajectory(
-                data.ground_truth[:, 1:3],
+                None if data.ground_truth is None else data.ground_truth[:, 1:3],
                 run.trajectory[:, :2],
-                landmarks_true=data.landmarks[:, 1:3],
+                landmarks_true=data.landmarks[:, 1:3] if len(data.landmarks) else None,
                 landmarks_estimated=run.landmarks,
                 dead_reckoning=data.dead_reckoning[:, 1:3],
                 estimate_label=f"{run.method.upper()} estimate",

@@ -4,21 +4,25 @@ The one home of the rules that turn a data set's readings into a factor graph, p
 robot would meet them:
 
 - **Layout** (:class:`Layout`): which poses get an estimated state x(tᵢ): pose 0, any pose ``skip``
-  steps after the previous state, every pose with a range reading when ``range_states``, and the
+  steps after the previous state, every pose with a landmark reading when ``range_states``, and the
   last pose.
 - **Readings → factors**: a projected-velocity reading is a :class:`~steam_ref.factors.VelocityFactor`
   of its pose, a range a :class:`~steam_ref.factors.RangeFactor` to its landmark (Eq. 33), with the
-  set-up's noise and robust loss.
+  set-up's noise and robust loss; a bearing a :class:`~steam_ref.factors.BearingFactor`, a
+  bearing-range a :class:`~steam_ref.factors.BearingRangeFactor`, each with its own sigmas.
 - **Readings between states** are buffered until the next state exists, then enter as interpolated
   factors on the two neighbouring states (Eq. 29), velocity readings with the looser
   ``interpolated_velocity_sigmas``; with ``interpolate=False`` they are dropped.
 - **GP prior**: each new state brings the prior factor to the previous one (Eq. 22), of the set-up's
   motion prior (``PaperSetup.prior``: the paper's WNOA, or WNOJ / Singer with states of 9 numbers,
   whose acceleration starts at zero).
-- **Landmarks**: a landmark variable enters with its prior at its surveyed position (Eq. 4), at its
-  first sighting or, when the set-up says so (Plaza), all of them at pose 0.
+- **Landmarks**: a surveyed landmark enters with its prior at its surveyed position (Eq. 4), at its
+  first sighting or, when the set-up says so (Plaza), all of them at pose 0. A landmark nobody
+  surveyed (Victoria Park's trees) enters at its first sighting with no prior, placed where its first
+  bearing-range reading puts it seen from the pose predicted at that reading (the script's
+  ``lastPose.transform_from(...)``); a range or a bearing alone cannot place it (SteamError).
 - **Initial values** (as the paper's scripts make them): a new pose is the previous pose composed
-  with the odometry (:func:`steam_ref.pose2.compose`); its velocity is the backward difference over
+  with the odometry (:func:`steam_ref.pose2.compose`; [dx, dy, dθ] = velocity × dt); its velocity is the backward difference over
   the last step, (pᵢ - pᵢ₋₁)/dt, the only velocity a causal front end knows when the state is made
   (the scripts take the heading part as the difference of two GTSAM ``Pose2`` headings, each wrapped
   to (-π, π], so it is off by ±2π where the heading crosses ±π; ``PaperSetup.pose2_heading_rate_guess``).
@@ -38,8 +42,17 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .errors import SteamError
-from .factors import Factor, GPPriorFactor, InterpolatedFactor, PriorFactor, RangeFactor, VelocityFactor
-from .pose2 import compose, wrap_angle
+from .factors import (
+    BearingFactor,
+    BearingRangeFactor,
+    Factor,
+    GPPriorFactor,
+    InterpolatedFactor,
+    PriorFactor,
+    RangeFactor,
+    VelocityFactor,
+)
+from .pose2 import compose, transform_from, wrap_angle
 from .readings import PaperSetup, Readings
 from .variables import Key, L, X
 
@@ -51,7 +64,7 @@ class Layout:
     """Which poses get an estimated state, and what happens to readings between states."""
 
     skip: int = 1  # a state at most ``skip`` steps after the previous one (the time-step difference of Fig. 3/4)
-    range_states: bool = False  # also a state at every pose with a range reading (the Plaza scripts)
+    range_states: bool = False  # also a state at every pose with a landmark reading (the Plaza scripts)
     interpolate: bool = True  # readings between states: interpolated (Eq. 29) or dropped
 
     def __post_init__(self) -> None:
@@ -67,8 +80,10 @@ class Layout:
         has_range = np.zeros(n_poses, dtype=bool)
         if range_poses is not None:
             range_poses = np.asarray(range_poses, dtype=int)
-            if range_poses.size and not (0 <= range_poses.min() and range_poses.max() < n_poses):
-                raise SteamError(f"range poses must lie in [0, {n_poses}), got {range_poses.min()}..{range_poses.max()}")
+            if range_poses.size and not (range_poses.min() >= 0 and range_poses.max() < n_poses):
+                raise SteamError(
+                    f"range poses must lie in [0, {n_poses}), got {range_poses.min()}..{range_poses.max()}"
+                )
             has_range[range_poses] = True
         chosen = [0]
         for i in range(1, n_poses):
@@ -85,7 +100,7 @@ class NewStep:
     is_state: bool  # the pose got an estimated state X(pose)
     factors: list[Factor]  # the new factors released at this pose
     values: dict[Key, NDArray] = field(default_factory=dict)  # initial values of the new variables
-    n_ranges: int = 0  # range factors among ``factors`` (plain or interpolated)
+    n_landmark_readings: int = 0  # range, bearing and bearing-range factors among ``factors`` (plain or interpolated)
 
 
 def _pose2_heading(theta: float) -> float:
@@ -97,13 +112,18 @@ class FrontEnd:
     """Algorithm 1 step 1 over a :class:`Readings` stream: :meth:`step` once per pose, in order."""
 
     def __init__(self, readings: Readings, setup: PaperSetup, layout: Layout = Layout(), n_poses: int | None = None):
-        if n_poses is not None and (isinstance(n_poses, bool) or not isinstance(n_poses, (int, np.integer)) or n_poses < 1):
+        if n_poses is not None and (
+            isinstance(n_poses, bool) or not isinstance(n_poses, (int, np.integer)) or n_poses < 1
+        ):
             raise SteamError(f"n_poses must be a positive integer (or None for all), got {n_poses!r}")
         self.readings, self.setup, self.layout = readings, setup, layout
         self.n_poses = readings.n_poses if n_poses is None else min(int(n_poses), readings.n_poses)  # poses to process
         self.states: list[int] = []  # poses with a state so far, increasing
         self.landmarks: set[int] = set()  # landmark ids with a variable
         self._bounds = readings.range_rows()
+        self._bearing_bounds = readings.bearings.rows(readings.n_poses)
+        self._bearing_range_bounds = readings.bearing_ranges.rows(readings.n_poses)
+        self._placed: dict[int, NDArray] = {}  # an unsurveyed landmark's position from its first bearing-range reading
         self._next = 0  # the pose step() processes next
         self._buffer: list[tuple[int, Factor]] = []  # readings at poses after the last state
         self._pose = readings.first_pose.copy()  # predicted [x, y, θ] of the latest pose
@@ -135,23 +155,24 @@ class FrontEnd:
         self._next += 1
         if i > 0:
             self._predict(i)
-        has_range = self._bounds[i + 1] > self._bounds[i]
-        if not self.layout.is_state(i, self.states[-1] if self.states else 0, has_range, self.n_poses - 1):
+        has_reading = any(b[i + 1] > b[i] for b in (self._bounds, self._bearing_bounds, self._bearing_range_bounds))
+        if not self.layout.is_state(i, self.states[-1] if self.states else 0, has_reading, self.n_poses - 1):
             if self.layout.interpolate:
                 self._buffer.append((i, self._velocity_factor(i, interpolated=True)))
-                self._buffer.extend((i, f) for f in self._range_factors(i))
+                self._buffer.extend((i, f) for f in self._landmark_factors(i))
             return NewStep(i, False, [])
         return self._new_state(i)
 
     # -- the pieces --
 
     def _predict(self, i: int) -> None:
-        """Initial guess of pose i: odometry row i - 1 composed onto the latest pose (dt = 1)."""
-        distance, _, turn = self.readings.velocity[i]
-        new = compose(self._pose, distance, turn)
-        self._velocity = new - self._pose  # backward difference over the step just made
+        """Initial guess of pose i: odometry row i - 1 composed onto the latest pose."""
+        dt = self.readings.times[i] - self.readings.times[i - 1]  # 1 in the CMU and Victoria Park sets
+        forward, lateral, turn = self.readings.velocity[i] * dt
+        new = compose(self._pose, forward, turn, lateral)
+        self._velocity = (new - self._pose) / dt  # backward difference over the step just made
         if self.setup.pose2_heading_rate_guess:  # the scripts difference GTSAM Pose2 headings, each in (-π, π]
-            self._velocity[2] = _pose2_heading(new[2]) - _pose2_heading(self._pose[2])
+            self._velocity[2] = (_pose2_heading(new[2]) - _pose2_heading(self._pose[2])) / dt
         self._pose = new
 
     def _new_state(self, i: int) -> NewStep:
@@ -170,27 +191,36 @@ class FrontEnd:
                 self._release(self._interpolated(inner, prev, i, pose), out)
             self._buffer = []
             self._release(self._velocity_factor(i, interpolated=False), out)
-        for f in self._range_factors(i):
+        for f in self._landmark_factors(i):
             self._release(f, out)
         self.states.append(i)
         return out
 
     def _release(self, factor: Factor, out: NewStep) -> None:
-        """A factor joins the step's new factors; a landmark seen for the first time gets its prior."""
+        """A factor joins the step's new factors; a landmark seen for the first time enters (:meth:`_landmark`)."""
         inner = factor.inner if isinstance(factor, InterpolatedFactor) else factor
-        if isinstance(inner, RangeFactor):
+        if isinstance(inner, (RangeFactor, BearingFactor, BearingRangeFactor)):
             self._landmark(factor.keys[-1].index, out)
-            out.n_ranges += 1
+            out.n_landmark_readings += 1
         out.factors.append(factor)
 
     def _landmark(self, lid: int, out: NewStep) -> None:
-        """Landmark ``lid``'s variable and its prior at the surveyed position (Eq. 4), once."""
+        """Landmark ``lid``'s variable, once: at its surveyed position with a prior there (Eq. 4), or,
+        not surveyed, where its first bearing-range reading placed it, with no prior."""
         if lid in self.landmarks:
             return
+        if lid in self.readings.landmarks:
+            mark = self.readings.landmarks[lid]
+            out.factors.append(PriorFactor.create(L(lid), mark, self.setup.landmark_prior_sigma))
+            out.values[L(lid)] = mark.copy()
+        elif lid in self._placed:
+            out.values[L(lid)] = self._placed.pop(lid)
+        else:
+            raise SteamError(
+                f"landmark {lid} is not surveyed and its first reading is a range or a bearing alone, "
+                f"which cannot place it: it needs a surveyed position or a bearing-range reading first"
+            )
         self.landmarks.add(lid)
-        mark = self.readings.landmarks[lid]
-        out.factors.append(PriorFactor.create(L(lid), mark, self.setup.landmark_prior_sigma))
-        out.values[L(lid)] = mark.copy()
 
     def _first_state_prior(self) -> PriorFactor:
         """Priors on pose 0 (at ground truth) and on velocity 0 (and acceleration 0), as one prior on X(0)."""
@@ -218,10 +248,30 @@ class FrontEnd:
         sigmas = self.setup.interpolated_velocity_sigmas if interpolated else self.setup.velocity_sigmas
         return VelocityFactor.create(X(i), self.readings.velocity[i], sigmas, state_dim=self.setup.state_dim)
 
-    def _range_factors(self, i: int) -> list[RangeFactor]:
-        """The range readings of pose i as factors on X(i) (X(i) may be a pose without a state)."""
+    def _landmark_factors(self, i: int) -> list[Factor]:
+        """The landmark readings of pose i as factors on X(i) (X(i) may be a pose without a state): its
+        ranges, bearings, then bearing-ranges; a bearing-range places a landmark not met before."""
         r, s = self.readings, self.setup
-        return [
-            RangeFactor.create(X(i), L(r.range_landmark[k]), r.range_value[k], s.range_sigma, loss=s.range_loss, state_dim=s.state_dim)
+        out: list[Factor] = [
+            RangeFactor.create(
+                X(i),
+                L(r.range_landmark[k]),
+                r.range_value[k],
+                s.range_sigma if r.range_sigma is None else r.range_sigma[k],
+                loss=s.range_loss,
+                state_dim=s.state_dim,
+            )
             for k in range(self._bounds[i], self._bounds[i + 1])
         ]
+        b = r.bearings
+        for k in range(self._bearing_bounds[i], self._bearing_bounds[i + 1]):
+            out.append(
+                BearingFactor.create(X(i), L(b.landmark[k]), b.value[k, 0], b.sigma[k, 0], state_dim=s.state_dim)
+            )
+        br = r.bearing_ranges
+        for k in range(self._bearing_range_bounds[i], self._bearing_range_bounds[i + 1]):
+            lid, (bearing, distance) = int(br.landmark[k]), br.value[k]
+            out.append(BearingRangeFactor.create(X(i), L(lid), bearing, distance, br.sigma[k], state_dim=s.state_dim))
+            if lid not in r.landmarks and lid not in self.landmarks and lid not in self._placed:
+                self._placed[lid] = transform_from(self._pose, distance * np.array([np.cos(bearing), np.sin(bearing)]))
+        return out

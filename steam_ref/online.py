@@ -6,8 +6,8 @@ they go to the solver (:mod:`steam_ref.solvers`: PB, PBVR or BTGP, steps 2-7), a
 then predicts from the solver's latest estimate.
 
 The schedule (:class:`Schedule`, the paper's '/1' and '/10'): the new factors go to the solver at an
-estimated state once ``every`` range readings have been released since the last update, and at the
-last pose. On Plaza nothing is solved until ``start_after_ranges`` (50) ranges have arrived; then one
+estimated state once ``every`` landmark readings (ranges, bearings, bearing-ranges) have been released
+since the last update, and at the last pose. On Plaza nothing is solved until ``start_after_ranges`` (50) ranges have arrived; then one
 batch Levenberg-Marquardt solve of everything so far seeds the solver, as in the paper's scripts.
 Time queries between states use Eq. 18 (:mod:`steam_ref.trajectory`).
 """
@@ -43,7 +43,7 @@ class StreamOptions:
     """How a run is streamed and solved; every field can be overridden."""
 
     method: str = "btgp"  # 'btgp', 'pb' or 'pbvr'
-    every: int = 1  # update after this many range readings ('/1', '/10')
+    every: int = 1  # update after this many landmark readings ('/1', '/10')
     skip: int = Layout.skip  # a state at most skip poses after the previous one (see frontend.Layout)
     interpolate: bool = Layout.interpolate  # readings between states: interpolated (Eq. 29) or dropped
     range_states: bool = Layout.range_states  # also estimate every pose that has a range reading
@@ -108,14 +108,14 @@ class Schedule:
 
     def __init__(self, every: int, start_after: int, last_pose: int):
         self.every, self.start_after, self.last_pose = every, start_after, last_pose
-        self.released = 0  # range factors released so far
-        self.since_update = 0  # range factors released since the last update
+        self.released = 0  # landmark readings (ranges, bearings, bearing-ranges) released so far
+        self.since_update = 0  # landmark readings released since the last update
         self.started = False  # the solver has had its first update
 
     def due(self, step: NewStep) -> bool:
         """Count the step's ranges; True when the solver should update now."""
-        self.released += step.n_ranges
-        self.since_update += step.n_ranges
+        self.released += step.n_landmark_readings
+        self.since_update += step.n_landmark_readings
         if step.pose == self.last_pose:
             return True
         if step.pose == 0 or not step.is_state or (not self.started and self.released < self.start_after):
@@ -134,15 +134,23 @@ class StreamingEstimator:
     :meth:`trajectory` and :meth:`landmark_estimates` at any moment.
     """
 
-    def __init__(self, readings: Readings, setup: PaperSetup, options: StreamOptions, solver: OnlineSolver | None = None):
+    def __init__(
+        self, readings: Readings, setup: PaperSetup, options: StreamOptions, solver: OnlineSolver | None = None
+    ):
         self.readings, self.setup, self.options = readings, setup, options
         self.front = FrontEnd(readings, setup, options.layout, options.max_poses)
         start = setup.start_after_ranges if options.start_after_ranges is None else options.start_after_ranges
         self.schedule = Schedule(options.every, start, self.front.n_poses - 1)
         self.final_updates = setup.final_updates if options.final_updates is None else options.final_updates
-        self.solver = solver if solver is not None else make_solver(
-            options.method, isam2=setup.isam2_params() if options.isam2 is None else options.isam2,
-            pb_relative_tolerance=options.pb_relative_tolerance, pb_max_iterations=options.pb_max_iterations,
+        self.solver = (
+            solver
+            if solver is not None
+            else make_solver(
+                options.method,
+                isam2=setup.isam2_params() if options.isam2 is None else options.isam2,
+                pb_relative_tolerance=options.pb_relative_tolerance,
+                pb_max_iterations=options.pb_max_iterations,
+            )
         )
         self.n_solved = 0  # how many of ``states`` the solver holds
         self._pending: list = []  # new factors not yet given to the solver
@@ -224,7 +232,9 @@ class StreamingEstimator:
         from tqdm import tqdm
 
         budget, completed = self.options.time_budget_s, True
-        with tqdm(total=self.n_poses, disable=not self.options.progress, desc=self.options.method, mininterval=0.5) as bar:
+        with tqdm(
+            total=self.n_poses, disable=not self.options.progress, desc=self.options.method, mininterval=0.5
+        ) as bar:
             while not self.done:
                 self.step()
                 bar.update(1)
@@ -233,20 +243,34 @@ class StreamingEstimator:
                     break
         return self.result(ground_truth, completed and self.n_poses == self.readings.n_poses, covariances=covariances)
 
-    def result(self, ground_truth: NDArray | None = None, completed: bool = True, *, covariances: bool = False) -> RunResult:
+    def result(
+        self, ground_truth: NDArray | None = None, completed: bool = True, *, covariances: bool = False
+    ) -> RunResult:
         """A :class:`RunResult` of what has been processed so far."""
         solved = self.solved()
         times, states = solved.at_every_pose()
         marks = self.landmark_estimates()
         return RunResult.of(
-            self.options, times, states, np.array(solved.states, dtype=int), marks,
-            np.array(self.step_seconds), np.array(self.update_steps, dtype=int), np.array(self.update_seconds),
-            self.readings.n_poses, self.front.n_processed, completed, ground_truth,
-            solved.covariances([L(i) for i in marks]) if covariances else None, peak_rss_mb(),
+            self.options,
+            times,
+            states,
+            np.array(solved.states, dtype=int),
+            marks,
+            np.array(self.step_seconds),
+            np.array(self.update_steps, dtype=int),
+            np.array(self.update_seconds),
+            self.readings.n_poses,
+            self.front.n_processed,
+            completed,
+            ground_truth,
+            solved.covariances([L(i) for i in marks]) if covariances else None,
+            peak_rss_mb(),
         )
 
 
-def run_online(data, setup: PaperSetup, options: StreamOptions | None = None, *, covariances: bool = False, **changes) -> RunResult:
+def run_online(
+    data, setup: PaperSetup, options: StreamOptions | None = None, *, covariances: bool = False, **changes
+) -> RunResult:
     """Stream a :class:`~steam_ref.datasets.RangeDataset` through the chosen solver.
 
     ``options`` default to :class:`StreamOptions`'s defaults; keyword ``changes`` override fields.

@@ -12,23 +12,24 @@ them; with ``path`` it also saves the figure there (PNG by the suffix) and close
   :func:`plot_interpolation_tradeoff` (Fig. 3/4, right), :func:`plot_fidelity` (distance to the
   authors' estimate, pose by pose);
 - the Bayes tree: :func:`tree_layout`, :func:`draw_tree`, :func:`draw_update` (an update as
-  before/after [K12 Fig. 3-4]), :func:`draw_spy` (its R factor).
+  before/after [K12 Fig. 3-4]), :func:`draw_spy` (its R factor), written in :mod:`steam_ref.plot_tree`.
 """
 
 from __future__ import annotations
 
-from collections.abc import Collection, Mapping, Sequence
-from typing import TYPE_CHECKING, Any
+from collections.abc import Mapping, Sequence
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .errors import ShapeError, SteamError, UnknownVariableError
-
-if TYPE_CHECKING:
-    from .bayes_tree.isam import UpdateReport
-    from .bayes_tree.symbolic import CliqueTree
-    from .bayes_tree.tree import BayesTree
+from .errors import ShapeError
+from .plot_base import array as _array
+from .plot_base import attributes as _attributes
+from .plot_base import axes as _axes
+from .plot_base import block_grid as _block_grid
+from .plot_base import save as _save
+from .plot_tree import draw_spy, draw_tree, draw_update, tree_layout
 
 __all__ = [
     "plot_state_samples",
@@ -45,64 +46,6 @@ __all__ = [
     "draw_spy",
 ]
 
-# clique colours of a Bayes tree update [K12 Fig. 3-4]
-_REMOVED, _NEW, _ORPHAN, _PLAIN = "#e45756", "#f58518", "#4c78a8", "#eeeeee"
-
-
-def _axes(ax: Any, path: str | None = None, **subplots: Any) -> Any:
-    """``ax`` if given; else new axes: a pyplot figure, or, when only saving to ``path``, a bare
-    Figure (no GUI backend needed)."""
-    if ax is not None:
-        return ax
-    if path is not None:
-        from matplotlib.figure import Figure
-
-        figsize = subplots.pop("figsize", None)
-        layout = subplots.pop("layout", None)
-        return Figure(figsize=figsize, layout=layout).subplots(**subplots)
-    import matplotlib.pyplot as plt
-
-    return plt.subplots(**subplots)[1]
-
-
-def _save(axes: Any, path: str | None) -> Any:
-    """Save the figure holding ``axes`` to ``path`` (if given) and close it; returns ``axes``."""
-    if path is not None:
-        import matplotlib.pyplot as plt
-
-        fig = np.ravel(axes)[0].figure
-        fig.savefig(path, dpi=120, bbox_inches="tight")
-        plt.close(fig)
-    return axes
-
-
-def _array(name: str, a: ArrayLike, ndim: int, columns: int | None = None) -> np.ndarray:
-    """``a`` as a non-empty float array of ``ndim`` dimensions (and ``columns`` columns); ShapeError naming it."""
-    try:
-        out = np.asarray(a, dtype=float)
-    except (TypeError, ValueError):
-        raise ShapeError(f"{name} must be an array of numbers, got {a!r:.80}") from None
-    if out.ndim != ndim or out.size == 0 or (columns is not None and out.shape[-1] != columns):
-        want = f"(n, {columns})" if columns else f"{ndim}-d"
-        raise ShapeError(f"{name} must be a non-empty {want} array, got shape {out.shape}")
-    return out
-
-
-def _attributes(name: str, obj: Any, *attributes: str) -> None:
-    """Raise naming ``name`` when ``obj`` lacks one of ``attributes`` (a duck-typed run, say)."""
-    missing = [a for a in attributes if not hasattr(obj, a)]
-    if missing:
-        raise SteamError(f"{name} has no {missing[0]!r}: it must have {', '.join(attributes)} (e.g. a RunResult), got {obj!r:.80}")
-
-
-def _block_grid(ax: Any, shape: tuple[int, int], block: int | None) -> None:
-    if not block:
-        return
-    for k in range(block, shape[0], block):
-        ax.axhline(k - 0.5, color="0.6", lw=0.4)
-    for k in range(block, shape[1], block):
-        ax.axvline(k - 0.5, color="0.6", lw=0.4)
-
 
 def plot_state_samples(
     times: ArrayLike, samples: ArrayLike, labels: Sequence[str] | None = None, axes: Any = None, path: str | None = None
@@ -114,7 +57,7 @@ def plot_state_samples(
     samples = _array("samples", samples, 3)
     labels = list(labels) if labels is not None else [f"x[{k}]" for k in range(samples.shape[2] // 2)]
     axes = _axes(axes, path, ncols=len(labels), figsize=(4 * len(labels), 3), sharex=True, layout="constrained")
-    for k, (ax, label) in enumerate(zip(np.atleast_1d(axes), labels)):
+    for k, (ax, label) in enumerate(zip(np.atleast_1d(axes), labels, strict=True)):
         for s in samples:
             ax.plot(times, s[:, k], lw=1)
         ax.set_xlabel("t [s]")
@@ -148,7 +91,7 @@ def plot_sparsity(
     """Spy plot of the entries with abs(M_ij) > rel_tol · max abs(M), grid lines every `block`."""
     M = np.abs(_array("M", M, 2))
     ax = _axes(ax, path, figsize=(4, 4))
-    ax.spy(M > rel_tol * M.max(), markersize=2)
+    ax.spy(rel_tol * M.max() < M, markersize=2)
     _block_grid(ax, M.shape, block)
     if title:
         ax.set_title(title)
@@ -171,7 +114,9 @@ def plot_interpolation(
     with ±2σ error bars. All arrays are 1-d."""
     t_query, mean, std = _array("t_query", t_query, 1), _array("mean", mean, 1), _array("std", std, 1)
     if not len(t_query) == len(mean) == len(std):
-        raise ShapeError(f"t_query, mean and std must have one entry per time, got lengths {len(t_query)}, {len(mean)}, {len(std)}")
+        raise ShapeError(
+            f"t_query, mean and std must have one entry per time, got lengths {len(t_query)}, {len(mean)}, {len(std)}"
+        )
     ax = _axes(ax, path, figsize=(6, 3))
     ax.fill_between(t_query, mean - 2 * std, mean + 2 * std, color=color, alpha=0.25, lw=0, label="±2σ")
     ax.plot(t_query, mean, color=color, lw=1.2, label="interpolated mean")
@@ -206,6 +151,7 @@ def plot_trajectory(
     landmarks_estimated: ArrayLike | Mapping[Any, ArrayLike] | None = None,
     dead_reckoning: ArrayLike | None = None,
     estimate_label: str = "estimate",
+    truth_label: str = "ground truth",
     title: str | None = None,
     ax: Any = None,
     path: str | None = None,
@@ -213,8 +159,9 @@ def plot_trajectory(
     """Top view of a run, as Fig. 2: estimated positions against ground truth and dead reckoning,
     true and estimated landmarks.
 
-    truth_xy, estimate_xy, dead_reckoning: (n, 2) positions (truth may be None);
-    landmarks_true: (k, 2); landmarks_estimated: (k, 2), or a mapping landmark id → (2,).
+    truth_xy, estimate_xy, dead_reckoning: (n, 2) positions (truth may be None, or another reference:
+    ``truth_label`` names it, e.g. "batch optimum"); landmarks_true: (k, 2); landmarks_estimated:
+    (k, 2), or a mapping landmark id → (2,).
     """
     estimate_xy = _array("estimate_xy", estimate_xy, 2, columns=2)
     truth_xy = None if truth_xy is None else _array("truth_xy", truth_xy, 2, columns=2)
@@ -222,7 +169,7 @@ def plot_trajectory(
     marks_true, marks_est = _xy("landmarks_true", landmarks_true), _xy("landmarks_estimated", landmarks_estimated)
     ax = _axes(ax, path, figsize=(6, 6))
     if truth_xy is not None:
-        ax.plot(*truth_xy.T, "g-", lw=1.5, label="ground truth")
+        ax.plot(*truth_xy.T, "g-", lw=1.5, label=truth_label)
     if dead_reckoning is not None:
         ax.plot(*dead_reckoning.T, "y-", lw=1, label="dead reckoning")
     ax.plot(*estimate_xy.T, "b-", lw=1, label=estimate_label)
@@ -275,7 +222,10 @@ def plot_interpolation_tradeoff(
     for skip, run in [*with_interpolation.items(), *(without_interpolation or {}).items()]:
         _attributes(f"the run at skip {skip!r}", run, "rmse_m", "total_s")
     axes = _axes(axes, path, ncols=2, figsize=(9, 4))
-    curves = ((without_interpolation or {}, "gs-", "without interpolation"), (with_interpolation, "rd--", "with interpolation"))
+    curves = (
+        (without_interpolation or {}, "gs-", "without interpolation"),
+        (with_interpolation, "rd--", "with interpolation"),
+    )
     for runs, style, label in curves:
         if not runs:
             continue
@@ -291,9 +241,18 @@ def plot_interpolation_tradeoff(
     return _save(axes, path)
 
 
-def plot_fidelity(distances: Mapping[str, ArrayLike], ax: Any = None, *, tolerance_m: float | None = 0.02, path: str | None = None) -> Any:
-    """Distance from a run's estimate to the authors' saved estimate at every pose, one line per
-    data set (name → (n,) metres, pose by pose), with the tolerance drawn as a dashed line."""
+def plot_fidelity(
+    distances: Mapping[str, ArrayLike],
+    ax: Any = None,
+    *,
+    tolerance_m: float | None = 0.02,
+    reference: str = "the authors' estimate",
+    log: bool = False,
+    path: str | None = None,
+) -> Any:
+    """Distance from a run's estimate to the authors' saved estimate (or another ``reference``, e.g. "the
+    batch optimum") at every pose, one line per data set or run (name → (n,) metres, pose by pose), with
+    the tolerance drawn as a dashed line; ``log`` for a logarithmic axis."""
     distances = {name: _array(f"distances[{name!r}]", d, 1) for name, d in distances.items()}
     ax = _axes(ax, path, figsize=(7, 3))
     for name, d in distances.items():
@@ -301,99 +260,7 @@ def plot_fidelity(distances: Mapping[str, ArrayLike], ax: Any = None, *, toleran
         ax.plot(np.arange(len(d)), d, lw=0.8, label=name)
     if tolerance_m is not None:
         ax.axhline(1000 * tolerance_m, color="0.4", ls="--", lw=0.8, label=f"{1000 * tolerance_m:g} mm")
-    ax.set(xlabel="pose", ylabel="distance to the authors' estimate (mm)")
+    ax.set(xlabel="pose", ylabel=f"distance to {reference} (mm)", yscale="log" if log else "linear")
     ax.legend(fontsize=8)
     ax.grid(True, alpha=0.3)
-    return _save(ax, path)
-
-
-# --- The Bayes tree  [K12 Fig. 3-4] -------------------------------------------------------------
-
-
-def tree_layout(tree: CliqueTree) -> dict[int, tuple[float, float]]:
-    """(x, y) of every clique: leaves spread evenly left to right, a parent above its children's
-    middle; y = -depth, so the roots are at y = 0."""
-    pos: dict[int, tuple[float, float]] = {}
-    next_x = 0.0
-    for c in tree.postorder():  # children first
-        depth = len(tree.path_to_root(c)) - 1
-        kids = tree.children[c]
-        if kids:
-            x = float(np.mean([pos[k][0] for k in kids]))
-        else:
-            x, next_x = next_x, next_x + 1.0
-        pos[c] = (x, -float(depth))
-    return pos
-
-
-def _clique_label(clique: Any) -> str:
-    """ "frontals : separator", or just the frontals for a root."""
-    front = " ".join(map(str, clique.frontals))
-    return f"{front} : {' '.join(map(str, clique.separator))}" if clique.separator else front
-
-
-def draw_tree(
-    tree: CliqueTree,
-    ax: Any = None,
-    *,
-    fill: Mapping[int, str] | None = None,
-    edge: Mapping[int, str] | None = None,
-    title: str = "",
-    path: str | None = None,
-) -> Any:
-    """Each clique a box "frontals : separator" linked to its parent, the roots on top.
-
-    tree: a :class:`~steam_ref.bayes_tree.symbolic.CliqueTree` (a BayesTree, or a snapshot of one);
-    fill, edge: clique id → colour of its box and of its outline.
-    """
-    ax = _axes(ax, path, figsize=(8, 4))
-    fill, edge = fill or {}, edge or {}
-    pos = tree_layout(tree)
-    for c, (x, y) in pos.items():
-        p = tree.parent[c]
-        if p is not None:
-            ax.plot([x, pos[p][0]], [y, pos[p][1]], color="0.6", lw=1, zorder=1)
-    for c, (x, y) in pos.items():
-        box = dict(boxstyle="round,pad=0.3", fc=fill.get(c, _PLAIN), ec=edge.get(c, "0.3"), lw=2.5 if c in edge else 0.8)
-        ax.text(x, y, _clique_label(tree.cliques[c]), ha="center", va="center", fontsize=8, bbox=box, zorder=2)
-    xs = [x for x, _ in pos.values()] or [0.0]
-    ys = [y for _, y in pos.values()] or [0.0]
-    ax.set_xlim(min(xs) - 0.8, max(xs) + 0.8)
-    ax.set_ylim(min(ys) - 0.6, 0.6)
-    ax.set_axis_off()
-    ax.set_title(title, fontsize=10)
-    return _save(ax, path)
-
-
-def draw_update(before: CliqueTree, after: CliqueTree, report: UpdateReport, axes: Any = None, path: str | None = None) -> Any:
-    """Two panels: the tree before an update (removed cliques red) and after it (re-made cliques
-    orange, orphans outlined blue).  [K12 Fig. 3-4]
-
-    before: ``tree.snapshot()`` taken before the update; report: any object with ``step``,
-    ``removed_cliques``, ``orphans`` and ``new_cliques`` (clique ids), e.g. an UpdateReport.
-    """
-    axes = _axes(axes, path, ncols=2, figsize=(12, 4))
-    removed, orphans = set(report.removed_cliques), set(report.orphans)
-    outline = {c: _ORPHAN for c in orphans}
-    draw_tree(before, axes[0], fill={c: _REMOVED for c in removed}, edge=outline, title=f"before update {report.step}: removed in red")
-    draw_tree(after, axes[1], fill={c: _NEW for c in report.new_cliques}, edge=outline, title="after: re-made in orange, orphans outlined blue")
-    return _save(axes, path)
-
-
-def draw_spy(tree: BayesTree, ax: Any = None, *, highlight: Collection = (), title: str = "R", path: str | None = None) -> Any:
-    """Spy plot of the tree's assembled R (cliques in postorder), the rows of the ``highlight``
-    variables in orange. tree: anything with ``to_dense() -> (R, _, ordering)``, e.g. a BayesTree."""
-    R, _, ordering = tree.to_dense()
-    unknown = [k for k in highlight if k not in ordering.offset_of]
-    if unknown:
-        raise UnknownVariableError(f"highlight names {unknown[0]!r}, which is not in the tree")
-    ax = _axes(ax, path, figsize=(4, 4))
-    ax.spy(np.abs(R) > 1e-12, markersize=2, color="0.3")
-    for k in highlight:
-        o, d = ordering.offset_of[k], ordering.dims[ordering.position[k]]
-        ax.axhspan(o - 0.5, o + d - 0.5, color=_NEW, alpha=0.3, lw=0)
-    ticks = ordering.offsets + np.asarray(ordering.dims) / 2 - 0.5
-    ax.set_xticks(ticks, [str(k) for k in ordering.keys], rotation=90, fontsize=6)
-    ax.set_yticks(ticks, [str(k) for k in ordering.keys], fontsize=6)
-    ax.set_title(title, fontsize=10)
     return _save(ax, path)

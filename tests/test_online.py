@@ -7,18 +7,18 @@ import numpy as np
 import pytest
 
 from steam_ref.batch import gauss_newton
+from steam_ref.bayes_tree import ISAM2Params
+from steam_ref.covariance import sparse_joint_covariance as joint_covariance
 from steam_ref.datasets import generate_synthetic
 from steam_ref.errors import SteamError
 from steam_ref.factors import GPPriorFactor, InterpolatedFactor, RangeFactor, VelocityFactor
+from steam_ref.frontend import Layout
 from steam_ref.gp.interpolate import interpolate_covariance, interpolation_matrices
 from steam_ref.graph import FactorGraph
-from steam_ref.variables import Values, X
-from steam_ref.frontend import Layout
 from steam_ref.online import StreamingEstimator, StreamOptions, run_online
 from steam_ref.problem import build_problem
 from steam_ref.readings import PaperSetup, Readings
-from steam_ref.bayes_tree import ISAM2Params
-from steam_ref.covariance import sparse_joint_covariance as joint_covariance
+from steam_ref.variables import Values, X
 
 SETUP = PaperSetup.synthetic()
 
@@ -38,12 +38,17 @@ def _stream(data, setup: PaperSetup = SETUP, **options) -> StreamingEstimator:
 def _batch_optimum(data, skip: int, interpolate: bool) -> tuple[Values, np.ndarray]:
     """Gauss-Newton to convergence on build_problem's graph, started from a converged stream."""
     problem = build_problem(data, SETUP, skip=skip, interpolate=interpolate)
-    warm = _stream(data, method="pb", skip=skip, interpolate=interpolate, pb_relative_tolerance=1e-12, final_updates=0).solver.estimate()
+    warm = _stream(
+        data, method="pb", skip=skip, interpolate=interpolate, pb_relative_tolerance=1e-12, final_updates=0
+    ).solver.estimate()
     result = gauss_newton(problem.graph, warm, ordering="amd", relative_tolerance=1e-14, step_tolerance=1e-12)
     return result.values, problem.states
 
 
-@pytest.mark.parametrize("skip,interpolate,range_states", [(1, True, False), (3, True, False), (3, False, False), (5, False, True), (4, True, True)])
+@pytest.mark.parametrize(
+    ("skip", "interpolate", "range_states"),
+    [(1, True, False), (3, True, False), (3, False, False), (5, False, True), (4, True, True)],
+)
 def test_the_solver_receives_every_factor_of_the_batch_problem(data, skip, interpolate, range_states):
     """Both come from the one front end; the run loop (schedule, pending factors, first solve) must hand
     the solver all of them: the solver's graph has the batch problem's cost at any point."""
@@ -73,7 +78,12 @@ def test_btgp_with_zero_thresholds_equals_pb(data, every):
     differentiated), so a cost-based stopping rule ends ~1e-5 short: PB stops on its step norm
     instead, and BTGP gets 60 empty updates (each one Gauss-Newton step with these thresholds)."""
     common = dict(skip=2, every=every, final_updates=60)
-    bt = _stream(data, method="btgp", isam2=ISAM2Params(relinearize_threshold=0.0, relinearize_skip=1, wildfire_threshold=0.0), **common)
+    bt = _stream(
+        data,
+        method="btgp",
+        isam2=ISAM2Params(relinearize_threshold=0.0, relinearize_skip=1, wildfire_threshold=0.0),
+        **common,
+    )
     pb = _stream(data, method="pb", pb_relative_tolerance=0.0, **common)
     assert bt.update_steps == pb.update_steps
     a, b = bt.solver.estimate(), pb.solver.estimate()
@@ -156,17 +166,33 @@ def test_time_query_matches_the_dense_gp_posterior_with_a_linear_measurement():
     from steam_ref.factors import GPPriorFactor, PriorFactor
 
     qc = SETUP.qc
-    coarse = FactorGraph([PriorFactor.create(X(0), np.zeros(6), 1.0), GPPriorFactor.wnoa(X(0), X(4), 4.0, qc),
-                          PriorFactor.create(X(4), np.arange(6.0), 0.5)])
-    fine = FactorGraph([PriorFactor.create(X(0), np.zeros(6), 1.0), GPPriorFactor.wnoa(X(0), X(1), 1.5, qc),
-                        GPPriorFactor.wnoa(X(1), X(4), 2.5, qc), PriorFactor.create(X(4), np.arange(6.0), 0.5)])
+    coarse = FactorGraph(
+        [
+            PriorFactor.create(X(0), np.zeros(6), 1.0),
+            GPPriorFactor.wnoa(X(0), X(4), 4.0, qc),
+            PriorFactor.create(X(4), np.arange(6.0), 0.5),
+        ]
+    )
+    fine = FactorGraph(
+        [
+            PriorFactor.create(X(0), np.zeros(6), 1.0),
+            GPPriorFactor.wnoa(X(0), X(1), 1.5, qc),
+            GPPriorFactor.wnoa(X(1), X(4), 2.5, qc),
+            PriorFactor.create(X(4), np.arange(6.0), 0.5),
+        ]
+    )
     v0 = Values({X(0): np.zeros(6), X(4): np.zeros(6)})
     sol = gauss_newton(coarse, v0).values
     joint = joint_covariance(coarse.factors, sol, [X(0), X(4)])
     lam, psi = interpolation_matrices(0.0, 4.0, 1.5, qc)
-    fsol = gauss_newton(fine, Values({**{k: v for k, v in v0.items()}, X(1): np.zeros(6)})).values
+    fsol = gauss_newton(fine, Values({**dict(v0.items()), X(1): np.zeros(6)})).values
     np.testing.assert_allclose(lam @ sol[X(0)] + psi @ sol[X(4)], fsol[X(1)], rtol=1e-9, atol=1e-9)
-    np.testing.assert_allclose(interpolate_covariance(0.0, 4.0, 1.5, qc, joint), joint_covariance(fine.factors, fsol, [X(1)]), rtol=1e-7, atol=1e-10)
+    np.testing.assert_allclose(
+        interpolate_covariance(0.0, 4.0, 1.5, qc, joint),
+        joint_covariance(fine.factors, fsol, [X(1)]),
+        rtol=1e-7,
+        atol=1e-10,
+    )
 
 
 def test_run_result_figures(data):
@@ -243,7 +269,7 @@ def test_estimated_poses_follow_the_papers_rule(rng, skip):
     gaps = np.diff(states)
     assert np.all((gaps >= 1) & (gaps <= skip))
     forced = set(range_poses.tolist()) | {n - 1}
-    assert all(gap == skip for s, gap in zip(states[1:], gaps) if s not in forced)
+    assert all(gap == skip for s, gap in zip(states[1:], gaps, strict=True) if s not in forced)
     # no range poses: plain every-skip-th pose, the time-step difference of Fig. 3/4
     np.testing.assert_array_equal(Layout(skip).state_poses(n), sorted(set(range(0, n, skip)) | {n - 1}))
 
@@ -268,10 +294,19 @@ def test_schedule_updates_at_states_after_every_ranges_and_at_the_last_pose():
     from steam_ref.online import Schedule
 
     schedule = Schedule(every=2, start_after=3, last_pose=9)
-    steps = [(0, True, 1, False), (1, True, 1, False), (2, False, 1, False), (3, True, 0, True),
-             (4, True, 1, False), (5, True, 1, True), (6, False, 5, False), (7, True, 0, True), (9, True, 0, True)]
-    for pose, is_state, n_ranges, expected in steps:
-        due = schedule.due(NewStep(pose, is_state, [], {}, n_ranges))
+    steps = [
+        (0, True, 1, False),
+        (1, True, 1, False),
+        (2, False, 1, False),
+        (3, True, 0, True),
+        (4, True, 1, False),
+        (5, True, 1, True),
+        (6, False, 5, False),
+        (7, True, 0, True),
+        (9, True, 0, True),
+    ]
+    for pose, is_state, n_readings, expected in steps:
+        due = schedule.due(NewStep(pose, is_state, [], {}, n_readings))
         assert due == expected, pose
         if due:
             schedule.updated()
@@ -282,8 +317,13 @@ def test_bad_stream_inputs_raise_steam_errors(data):
     from steam_ref.frontend import FrontEnd
     from steam_ref.solvers import make_solver
 
-    for bad, needle in [(dict(isam2={}), "isam2"), (dict(max_poses="10"), "max_poses"), (dict(final_updates=-3), "final_updates"),
-                        (dict(max_poses=2.5), "max_poses"), (dict(start_after_ranges="1"), "start_after_ranges")]:
+    for bad, needle in [
+        (dict(isam2={}), "isam2"),
+        (dict(max_poses="10"), "max_poses"),
+        (dict(final_updates=-3), "final_updates"),
+        (dict(max_poses=2.5), "max_poses"),
+        (dict(start_after_ranges="1"), "start_after_ranges"),
+    ]:
         with pytest.raises(SteamError, match=needle):
             StreamOptions(**bad)
     readings = Readings.from_dataset(data, SETUP)

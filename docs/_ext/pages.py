@@ -105,10 +105,11 @@ def modules_of(entry: str) -> list[str]:
     """Dotted module names of ``errors.py`` or a folder ``gp/`` (its ``__init__`` first, and a sub-package's
     before its modules), in steam_ref."""
     path = PACKAGE / entry
-    if entry.endswith("/"):
-        files = [path / "__init__.py"] + sorted(p for p in path.rglob("*.py") if p != path / "__init__.py")
-    else:
-        files = [path]
+    files = (
+        [path / "__init__.py"] + sorted(p for p in path.rglob("*.py") if p != path / "__init__.py")
+        if entry.endswith("/")
+        else [path]
+    )
     return [_dotted(f) for f in files if f.is_file()]
 
 

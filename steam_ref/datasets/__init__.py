@@ -1,10 +1,14 @@
-"""Range-only SLAM data sets: one dataclass, the CMU loaders, the synthetic generator.  [YIB Sec. IV]
+"""SLAM data sets: two dataclasses, their loaders, the synthetic generator.  [YIB Sec. IV]
 
 - :mod:`.table`: :class:`RangeDataset`, the CMU range-only layout (GT, DR, DRp, TL, TD) and its
   checks; the conventions every source follows are in its docstring.
 - :mod:`.matfile`: :func:`read_mat`, a .mat file's arrays after a walk of its structure (a
   corrupted tag would crash scipy's reader, not raise).
+- :mod:`.landmarks`: :class:`LandmarkDataset`, odometry with ranges, bearings and bearing-ranges,
+  landmarks surveyed or not, ground truth optional (Victoria Park); it shares the table checks.
 - :mod:`.cmu`: :func:`load_cmu_mat` and :func:`load_cmu_text`, readers of the CMU files.
+- :mod:`.gtsam_text`: :func:`load_gtsam_2d`, a reader of GTSAM's planar text format (ODOMETRY and
+  LANDMARK rows, as ``gtsam.load2D`` reads them).
 - :mod:`.synthetic`: :func:`generate_synthetic`, a task like the paper's Section IV-A.
 - :mod:`.search`: :func:`load_dataset` by name or path, searching :func:`default_data_dirs`
   (``data_dir``, ``$STEAM_REF_DATA_DIR``, gtsam's ``Data/``).
@@ -15,6 +19,8 @@ loaders re-raise either as :class:`DataError` prefixed with the file name.
 """
 
 from .cmu import load_cmu_mat, load_cmu_text
+from .gtsam_text import load_gtsam_2d
+from .landmarks import LandmarkDataset
 from .matfile import read_mat
 from .search import DATA_DIR_ENV, default_data_dirs, gtsam_data_dir, load_dataset
 from .synthetic import generate_synthetic
@@ -22,6 +28,8 @@ from .table import RangeDataset
 
 __all__ = [
     "RangeDataset",
+    "LandmarkDataset",
+    "load_gtsam_2d",
     "load_cmu_mat",
     "load_cmu_text",
     "read_mat",

@@ -67,8 +67,10 @@ def _assemble(name: str, where: str, tables: dict[str, NDArray]) -> RangeDataset
         if drp is not None:
             drp = _frozen_table("DRp", drp, _COLUMNS["dead_reckoning"][1])
             if drp.shape[0] != gt.shape[0]:
-                raise DataError(f"DRp has {drp.shape[0]} rows but GT has {gt.shape[0]}: expected one per pose "
-                                "(a file without DRp has it recomputed from DR)")
+                raise DataError(
+                    f"DRp has {drp.shape[0]} rows but GT has {gt.shape[0]}: expected one per pose "
+                    "(a file without DRp has it recomputed from DR)"
+                )
         else:
             notes.append("DRp recomputed from DR (the file has none)")
             drp = integrate_odometry(gt[0], dr)
@@ -129,7 +131,9 @@ def _read_text_table(path: Path, columns: tuple[str, ...]) -> NDArray:
         text = raw.decode("ascii")
     except UnicodeDecodeError as err:
         line = raw.count(b"\n", 0, err.start) + 1
-        raise DataError(f"{path} line {line}: byte {raw[err.start]:#04x} is not ASCII; a text table holds plain numbers") from None
+        raise DataError(
+            f"{path} line {line}: byte {raw[err.start]:#04x} is not ASCII; a text table holds plain numbers"
+        ) from None
     lines = text.split("\n")
     if lines[-1].strip(" \t\r"):
         raise DataError(

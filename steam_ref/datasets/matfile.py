@@ -15,6 +15,7 @@ files' compressed form, whose checksum covers the numbers, are what catch those)
 from __future__ import annotations
 
 import io
+import itertools
 import math
 import os
 import struct
@@ -88,8 +89,15 @@ def _check_matrix(buf: bytes, start: int, end: int, order: str, depth: int, wher
     if not parts:
         return  # an empty miMATRIX: an empty cell entry
     at = f"array at byte {start - 8}"
-    if len(parts) < 3 or parts[0][0] != _UINT32 or parts[0][2] != 8 or parts[1][0] != _INT32 or parts[1][2] % 4 \
-            or parts[1][2] < 8 or parts[2][0] != _INT8:
+    if (
+        len(parts) < 3
+        or parts[0][0] != _UINT32
+        or parts[0][2] != 8
+        or parts[1][0] != _INT32
+        or parts[1][2] % 4
+        or parts[1][2] < 8
+        or parts[2][0] != _INT8
+    ):
         raise DataError(f"{where}: {at} lacks its flags, dimensions or name")
     flags = struct.unpack_from(order + "I", buf, parts[0][1])[0]
     cls, n_complex = flags & 0xFF, int(bool(flags & 0x800))
@@ -102,8 +110,13 @@ def _check_matrix(buf: bytes, start: int, end: int, order: str, depth: int, wher
     if cls in _NUMERIC_CLASSES:
         ok = len(data) == 1 + n_complex and all(k in _NUMBERS and size == n * _ITEM[k] for k, _, size in data)
     elif cls == _SPARSE:
-        ok = len(data) == 3 + n_complex and kinds[:2] == [_INT32, _INT32] and len(dims) == 2 and \
-            all(k in _NUMBERS and size % _ITEM[k] == 0 for k, _, size in data[2:]) and _sparse_indices_fit(buf, order, dims, data)
+        ok = (
+            len(data) == 3 + n_complex
+            and kinds[:2] == [_INT32, _INT32]
+            and len(dims) == 2
+            and all(k in _NUMBERS and size % _ITEM[k] == 0 for k, _, size in data[2:])
+            and _sparse_indices_fit(buf, order, dims, data)
+        )
     elif cls == _CELL:
         ok = len(kinds) == n and all(k == _MATRIX for k in kinds)
     elif cls == _CHAR:
@@ -114,8 +127,10 @@ def _check_matrix(buf: bytes, start: int, end: int, order: str, depth: int, wher
         ok = True
     if not ok:
         sizes = [size for _, _, size in data]
-        raise DataError(f"{where}: {at} (class {cls}{', complex' if n_complex else ''}, dimensions {dims}) holds parts "
-                        f"of types {kinds} and sizes {sizes}: not what its class and dimensions call for")
+        raise DataError(
+            f"{where}: {at} (class {cls}{', complex' if n_complex else ''}, dimensions {dims}) holds parts "
+            f"of types {kinds} and sizes {sizes}: not what its class and dimensions call for"
+        )
 
 
 def _struct_fits(buf: bytes, order: str, n: int, data: list[tuple[int, int, int]]) -> bool:
@@ -136,7 +151,7 @@ def _sparse_indices_fit(buf: bytes, order: str, dims: tuple[int, ...], data: lis
     ir = struct.unpack_from(f"{order}{ir_size // 4}i", buf, ir_at)
     jc = struct.unpack_from(f"{order}{jc_size // 4}i", buf, jc_at)
     values = [size // _ITEM[kind] for kind, _, size in data[2:]]
-    if len(jc) != dims[1] + 1 or jc[0] != 0 or any(b < a for a, b in zip(jc, jc[1:])):
+    if len(jc) != dims[1] + 1 or jc[0] != 0 or any(b < a for a, b in itertools.pairwise(jc)):
         return False
     n = jc[-1]
     return n <= len(ir) and all(0 <= r < dims[0] for r in ir[:n]) and all(v >= n for v in values)
@@ -185,4 +200,3 @@ def read_mat(path: str | os.PathLike) -> dict[str, NDArray]:
         reason = f"{type(err).__name__}: {err}"
         raise DataError(f"{path}: cannot read it as a MATLAB .mat file ({reason})") from None
     return {k: v for k, v in content.items() if not k.startswith("__") and isinstance(k, str)}
-

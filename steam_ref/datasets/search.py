@@ -12,6 +12,8 @@ from pathlib import Path
 
 from ..errors import DataError
 from .cmu import load_cmu_mat, load_cmu_text
+from .gtsam_text import load_gtsam_2d
+from .landmarks import LandmarkDataset
 from .synthetic import generate_synthetic
 from .table import RangeDataset
 
@@ -19,6 +21,8 @@ __all__ = ["DATA_DIR_ENV", "gtsam_data_dir", "default_data_dirs", "load_dataset"
 
 DATA_DIR_ENV = "STEAM_REF_DATA_DIR"
 _FILES = {"paper-synthetic": "Syn_theta_Plaza.mat", "plaza": "Plaza1_thrown_away_some_range.mat"}
+# Named sets read from the files in gtsam's Data/ folder (found in any searched folder): the files, all in one folder.
+_GTSAM_SETS = {"victoria-park": ("victoria_park.txt",), "plaza2": ("Plaza2_DR.txt", "Plaza2_TD.txt", "Plaza2_.mat")}
 
 
 def gtsam_data_dir() -> Path | None:
@@ -82,17 +86,31 @@ def _not_found(what: str, folders: list[Path], hint: str) -> DataError:
     return DataError(f"{what} not found; looked in: {looked}. {hint}")
 
 
+def _load_gtsam_set(key: str, folders: list[Path], hint: str) -> RangeDataset | LandmarkDataset:
+    """'victoria-park' (GTSAM's text format) or 'plaza2' (the CMU text release), as gtsam's Data/ ships them."""
+    files = _GTSAM_SETS[key]
+    found = _find(files, folders)
+    if found is None:
+        raise _not_found(
+            f"data set {key!r} ({', '.join(files)})", folders, hint + " (or `pip install gtsam`: its Data/ has them)."
+        )
+    return load_gtsam_2d(found, name=key) if key == "victoria-park" else load_cmu_text(found.parent, "Plaza2", name=key)
+
+
 def load_dataset(
     name_or_path: str | os.PathLike, data_dir: str | os.PathLike | None = None, seed: int = 0
-) -> RangeDataset:
+) -> RangeDataset | LandmarkDataset:
     """A data set by name or path.
 
     Names: "synthetic" (generated, see :func:`generate_synthetic`; ``seed`` applies),
     "paper-synthetic" (``Syn_theta_Plaza.mat``), "plaza" (``Plaza1_thrown_away_some_range.mat``,
-    else the original Plaza1 text files with all 3,529 ranges, e.g. from an installed gtsam).
+    else the original Plaza1 text files with all 3,529 ranges, e.g. from an installed gtsam),
+    "plaza2" (the CMU text release ``Plaza2_DR.txt``, ``Plaza2_TD.txt``, ``Plaza2_.mat``: all its
+    1,816 ranges, none thrown away) and "victoria-park" (``victoria_park.txt``, a
+    :class:`LandmarkDataset` read by :func:`load_gtsam_2d`), both as an installed gtsam ships them.
     Named files are searched for in :func:`default_data_dirs`: ``data_dir`` (``--data-dir``),
     ``$STEAM_REF_DATA_DIR``, the installed gtsam's ``Data/``. Anything else is a path: a CMU .mat
-    file or a folder of CMU text files; a bare file name that is not in the working directory is
+    file, a folder of CMU text files, or a GTSAM planar text file (``.txt``); a bare file name that is not in the working directory is
     also searched for there. A missing file raises DataError naming the folders searched and
     where to put it; so does an empty name, and a ``data_dir`` that is not a folder (even for
     "synthetic", which reads no file: the caller meant something else).
@@ -114,12 +132,16 @@ def load_dataset(
                 return load_cmu_text(text.parent, "Plaza1", name=key)
             hint += " (or `pip install gtsam`: its Data/ has Plaza1_DR.txt, Plaza1_TD.txt, Plaza1_.mat)"
         raise _not_found(f"data set {key!r} ({_FILES[key]})", folders, hint + ".")
+    if key in _GTSAM_SETS:
+        return _load_gtsam_set(key, folders, hint)
     path = Path(name_or_path)
     if not path.exists() and not path.is_absolute() and len(path.parts) == 1:
         path = _find((path.name,), folders) or path
     if path.is_dir() or path.name.endswith("_DR.txt"):
         return load_cmu_text(path)
+    if path.is_file() and path.suffix == ".txt":
+        return load_gtsam_2d(path)
     if path.is_file():
         return load_cmu_mat(path)
-    names = ", ".join(["synthetic", *_FILES])
+    names = ", ".join(["synthetic", *_FILES, *_GTSAM_SETS])
     raise _not_found(f"data set {key!r} (not one of {names}, nor a file or folder)", folders, hint + ".")

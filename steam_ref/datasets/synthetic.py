@@ -81,7 +81,11 @@ def _ids_by_first_sighting(pick: NDArray, n: int) -> NDArray:
 
 
 def _landmarks_and_ranges(
-    rng: np.random.Generator, gt: NDArray, n: int, reach: tuple[float, float], n_nearest: int,
+    rng: np.random.Generator,
+    gt: NDArray,
+    n: int,
+    reach: tuple[float, float],
+    n_nearest: int,
     sigma: float,
 ) -> tuple[NDArray, NDArray]:
     """(n, 3) landmarks id, x, y and (n_poses, 4) ranges time, sender 1, id, range.  [YIB Eq. 33]"""
@@ -102,19 +106,33 @@ def _landmarks_and_ranges(
 
 def _is_count(value: object, lowest: int) -> bool:
     """An integer (or an integer-valued float) >= ``lowest``; never a bool, NaN or inf."""
-    return (not isinstance(value, bool) and isinstance(value, numbers.Real) and math.isfinite(value)
-            and value == int(value) and value >= lowest)
+    return (
+        not isinstance(value, bool)
+        and isinstance(value, numbers.Real)
+        and math.isfinite(value)
+        and value == int(value)
+        and value >= lowest
+    )
 
 
 def _is_number(value: object, lowest: float, strict: bool) -> bool:
     """A finite real above ``lowest`` (``strict``) or at least ``lowest``; never a bool."""
-    return (not isinstance(value, bool) and isinstance(value, numbers.Real) and math.isfinite(value)
-            and (value > lowest if strict else value >= lowest))
+    return (
+        not isinstance(value, bool)
+        and isinstance(value, numbers.Real)
+        and math.isfinite(value)
+        and (value > lowest if strict else value >= lowest)
+    )
 
 
 def _check_generator_args(
-    n_steps: int, n_landmarks: int, sigmas: object, range_sigma: float, reach: object,
-    n_nearest: int, seed: int,
+    n_steps: int,
+    n_landmarks: int,
+    sigmas: object,
+    range_sigma: float,
+    reach: object,
+    n_nearest: int,
+    seed: int,
 ) -> NDArray:
     """The odometry sigmas (2,) after checking every argument (SteamError naming the bad one)."""
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
@@ -130,8 +148,12 @@ def _check_generator_args(
         raise SteamError(f"odometry_sigmas must be two finite values >= 0, got {sigmas.tolist()}")
     if not _is_number(range_sigma, 0, strict=False):
         raise SteamError(f"range_sigma must be finite and >= 0, got {range_sigma!r}")
-    if not (isinstance(reach, (tuple, list)) and len(reach) == 2 and all(_is_number(r, 0, strict=True) for r in reach)
-            and reach[0] <= reach[1]):
+    if not (
+        isinstance(reach, (tuple, list))
+        and len(reach) == 2
+        and all(_is_number(r, 0, strict=True) for r in reach)
+        and reach[0] <= reach[1]
+    ):
         raise SteamError(f"landmark_distance must be (lo, hi) with 0 < lo <= hi, both finite; got {reach!r}")
     return sigmas
 
@@ -188,7 +210,9 @@ def generate_synthetic(
 
     Draws come from ``np.random.default_rng(seed)``, so a seed gives the same data set everywhere.
     """
-    sigmas = _check_generator_args(n_steps, n_landmarks, odometry_sigmas, range_sigma, landmark_distance, n_nearest, seed)
+    sigmas = _check_generator_args(
+        n_steps, n_landmarks, odometry_sigmas, range_sigma, landmark_distance, n_nearest, seed
+    )
     n_steps, n_landmarks, n_nearest = int(n_steps), int(n_landmarks), int(n_nearest)
     qc = _generator_qc(qc)
     rng = np.random.default_rng(seed)
@@ -196,8 +220,9 @@ def generate_synthetic(
     times = np.arange(1, n_steps + 2, dtype=float)
     gt = np.column_stack([times, states[:, :2], np.arctan2(states[:, 3], states[:, 2])])
     odometry = _noisy_odometry(rng, gt, sigmas)
-    landmarks, ranges = _landmarks_and_ranges(rng, gt, int(n_landmarks), landmark_distance,
-                                              int(n_nearest), float(range_sigma))
+    landmarks, ranges = _landmarks_and_ranges(
+        rng, gt, int(n_landmarks), landmark_distance, int(n_nearest), float(range_sigma)
+    )
     source = f"generated(seed={seed}, n_steps={n_steps}, n_landmarks={n_landmarks})"
     dead_reckoning = integrate_odometry(gt[0], odometry)
     return RangeDataset("synthetic", gt, odometry, dead_reckoning, landmarks, ranges, source)

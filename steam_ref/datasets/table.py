@@ -131,8 +131,7 @@ class RangeDataset:
         for name, rows in (("odometry", n - 1), ("dead_reckoning", n)):
             if getattr(self, name).shape[0] != rows:
                 raise DataError(
-                    f"{name} has {getattr(self, name).shape[0]} rows but ground_truth has {n} poses: "
-                    f"expected {rows}"
+                    f"{name} has {getattr(self, name).shape[0]} rows but ground_truth has {n} poses: expected {rows}"
                 )
         for name, times in (("ground_truth", t), ("dead_reckoning", self.dead_reckoning[:, 0])):
             bad = np.flatnonzero(np.diff(times) <= 0)
@@ -171,7 +170,6 @@ class RangeDataset:
                 f"{self.ranges[missing, 2]:g}, which is not in landmarks; known ids: {_ids_text(ids)}"
             )
 
-
     def _check_ranges(self) -> None:
         negative = np.flatnonzero(self.ranges[:, 3] < 0)
         if negative.size:
@@ -208,8 +206,7 @@ def _frozen_table(name: str, value: ArrayLike, columns: tuple[str, ...]) -> NDAr
         table = table.reshape(0, len(columns))
     if table.ndim != 2 or table.shape[1] != len(columns):
         raise ShapeError(
-            f"{name} must have shape (n, {len(columns)}) with columns {', '.join(columns)}; "
-            f"got shape {table.shape}"
+            f"{name} must have shape (n, {len(columns)}) with columns {', '.join(columns)}; got shape {table.shape}"
         )
     bad = np.argwhere(~np.isfinite(table))
     if bad.size:

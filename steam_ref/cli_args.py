@@ -1,0 +1,248 @@
+"""The ``steam-ref`` command line: its parser, the checks of every argument, and of output paths before a run.
+
+Every value is checked by its argparse type, so a bad one is a one-line error with exit code 2 before
+anything runs; :mod:`steam_ref.cli` holds what each command does.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import math
+import tempfile
+from pathlib import Path
+
+from . import __version__
+from .bayes_tree import ISAM2Params
+from .conformance import command as conformance_command
+from .errors import SteamError
+from .readings import DEPARTURES, PRESETS, PRIORS, PaperSetup
+
+__all__ = ["build_parser", "check_output", "check_out_folder"]
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse that reports a usage error as one line and exit code 2."""
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        raise SteamError(f"{message} (see '{self.prog} --help')")
+
+
+def _number(convert: type, lower: float, *, strict: bool):
+    """An argparse type: ``convert(text)``, finite, and above ``lower`` (``strict``) or at least it."""
+    what = f"{'an integer' if convert is int else 'a finite number'} {'>' if strict else '>='} {lower:g}"
+
+    def parse(text: str):
+        try:
+            value = convert(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}") from None
+        if not math.isfinite(value) or value < lower or (strict and value == lower):
+            raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}")
+        return value
+
+    return parse
+
+
+_positive_int = _number(int, 0, strict=True)
+_non_negative_int = _number(int, 0, strict=False)
+_positive_float = _number(float, 0, strict=True)
+_non_negative_float = _number(float, 0, strict=False)
+
+
+def _dataset(text: str) -> str:
+    """An argparse type: a data set name or path, not empty (an empty path would be the working folder)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("expected a data set name or a path, got an empty string")
+    return text
+
+
+def _folder(text: str) -> str:
+    """An argparse type: an existing folder (a mistyped --data-dir must not be passed over in silence)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("expected a folder, got an empty string")
+    if not Path(text).is_dir():
+        raise argparse.ArgumentTypeError(f"{text!r} {'is not a folder' if Path(text).exists() else 'does not exist'}")
+    return text
+
+
+def _add_run_arguments(run: argparse.ArgumentParser) -> None:
+    run.add_argument(
+        "--dataset",
+        type=_dataset,
+        default="synthetic",
+        help="synthetic (generated), paper-synthetic, plaza, or a PATH (.mat or CMU text folder)",
+    )
+    run.add_argument("--method", choices=("btgp", "pb", "pbvr"), default="btgp")
+    run.add_argument(
+        "--every",
+        type=_positive_int,
+        default=None,
+        help="update after every N landmark readings (1 or 10 in the paper; default: the preset's, 10 for victoria-park, else 1)",
+    )
+    run.add_argument("--skip", type=_positive_int, default=1, help="time steps between estimated states")
+    run.add_argument(
+        "--interpolate",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="interpolate readings between states (Eq. 29) or drop them",
+    )
+    run.add_argument(
+        "--range-states",
+        action="store_true",
+        help="also estimate a state at every pose with a range reading (the layout of the Plaza script, plaza_isam2.m)",
+    )
+    run.add_argument(
+        "--departure",
+        action="append",
+        choices=list(DEPARTURES),
+        default=[],
+        help="depart from the paper's scripts in this named way (repeatable; docs/experiments.md gives each one's effect)",
+    )
+    run.add_argument(
+        "--preset", choices=PRESETS, default=None, help="parameter set (default: by data set; plaza for a PATH)"
+    )
+    run.add_argument(
+        "--prior",
+        choices=PRIORS,
+        default="wnoa",
+        help="motion prior: the paper's white noise on acceleration, or on jerk, or Singer's model (docs/derivations.md)",
+    )
+    run.add_argument(
+        "--qc-scale",
+        type=_positive_float,
+        default=1.0,
+        help="multiply the preset's Qc by this (a jerk prior needs its own: tutorial 06 uses 100 on Plaza)",
+    )
+    run.add_argument(
+        "--singer-time-constant",
+        type=_positive_float,
+        default=PaperSetup.singer_time_constant,
+        help="Singer prior: the acceleration's time constant 1/α in seconds (default %(default)s)",
+    )
+    run.add_argument(
+        "--data-dir",
+        type=_folder,
+        default=None,
+        help="folder searched for data files before $STEAM_REF_DATA_DIR and gtsam's Data/",
+    )
+    run.add_argument("--seed", type=_non_negative_int, default=0, help="seed of the generated synthetic task")
+    run.add_argument(
+        "--relinearize-threshold",
+        type=_non_negative_float,
+        default=ISAM2Params.relinearize_threshold,
+        help="BTGP: relinearize a variable whose increment exceeds this (default %(default)s)",
+    )
+    run.add_argument(
+        "--relinearize-skip",
+        type=_positive_int,
+        default=ISAM2Params.relinearize_skip,
+        help="BTGP: check relinearization every N-th update (default %(default)s, GTSAM's)",
+    )
+    run.add_argument(
+        "--max-poses", type=_number(int, 2, strict=False), default=None, help="process only the first N poses"
+    )
+    run.add_argument(
+        "--time-budget", type=_positive_float, default=None, help="stop after this many seconds (reported)"
+    )
+    run.add_argument("--progress", action="store_true", help="show a progress bar")
+    run.add_argument("--json", action="store_true", help="print one JSON line of figures")
+    run.add_argument(
+        "--save-estimates",
+        metavar="FILE.npz",
+        default=None,
+        help="write the estimate at every time step (pose and velocity), the landmarks, and their final marginal covariances",
+    )
+    run.add_argument(
+        "--plot", metavar="FILE.png", default=None, help="draw estimate, ground truth, dead reckoning, landmarks"
+    )
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of ``steam-ref``."""
+    parser = _Parser(
+        prog="steam-ref",
+        description="Incremental sparse GP regression for continuous-time STEAM (Yan, Indelman, Boots).",
+    )
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
+    sub = parser.add_subparsers(dest="command", parser_class=_Parser)
+    _add_run_arguments(sub.add_parser("run", help="stream a data set through one solver"))
+    bat = sub.add_parser("batch", help="batch Gauss-Newton on all of a data set (PB or PBVR): RMSE and a plot")
+    bat.add_argument(
+        "--dataset", type=_dataset, default="paper-synthetic", help="synthetic, paper-synthetic, plaza or a PATH"
+    )
+    bat.add_argument("--ordering", choices=("xl", "amd"), default="amd", help="xl: the paper's PB; amd: PBVR")
+    bat.add_argument("--preset", choices=PRESETS, default=None, help="parameter set (default: by data set)")
+    bat.add_argument(
+        "--data-dir",
+        type=_folder,
+        default=None,
+        help="folder searched for data files before $STEAM_REF_DATA_DIR and gtsam's Data/",
+    )
+    bat.add_argument("--seed", type=_non_negative_int, default=0, help="seed of the generated synthetic task")
+    bat.add_argument("--json", action="store_true", help="print one JSON line of figures")
+    bat.add_argument("--plot", metavar="FILE.png", default=None, help="draw estimate, ground truth, landmarks")
+    fid = sub.add_parser("fidelity", help="BTGP/1 against the authors' saved runs, pose by pose, covariances included")
+    fid.add_argument("--dataset", choices=("plaza", "paper-synthetic", "all"), default="all")
+    fid.add_argument(
+        "--data-dir",
+        type=_folder,
+        default=None,
+        help="folder searched for data files (and its authors/ folder) before $STEAM_REF_DATA_DIR and gtsam's Data/",
+    )
+    fid.add_argument("--json", action="store_true", help="print one JSON line per data set")
+    fid.add_argument(
+        "--plot", metavar="FILE.png", default=None, help="draw the per-pose distance to the authors' estimate"
+    )
+    rep = sub.add_parser("reproduce", help="the experiments of Fig. 3 and Fig. 4, plots and a results table")
+    rep.add_argument("--quick", action="store_true", help="small prefixes and budgets: minutes, not hours")
+    rep.add_argument("--out", default="results", help="folder for plots and the table (default: results)")
+    rep.add_argument(
+        "--data-dir",
+        type=_folder,
+        default=None,
+        help="folder searched for data files before $STEAM_REF_DATA_DIR and gtsam's Data/",
+    )
+    conformance_command.add_parser(sub)
+    return parser
+
+
+def check_output(path: str | None, suffix: str, option: str) -> None:
+    """Before the run: ``path`` ends in ``suffix`` and can be written (tried, and left as it was)."""
+    if path is None:
+        return
+    if not path.endswith(suffix):
+        raise SteamError(f"{option} expects a {suffix} file name, got {path!r}")
+    target = Path(path)
+    if target.is_dir():
+        raise SteamError(f"{option}: {path!r} is a folder, not a file")
+    parent = target.resolve().parent
+    if not parent.is_dir():
+        raise SteamError(f"{option}: folder {str(parent)!r} does not exist")
+    existed = target.exists()
+    try:
+        with open(target, "ab"):
+            pass
+    except OSError as err:
+        raise SteamError(f"{option}: cannot write {path!r} ({err.strerror or err})") from None
+    if not existed:
+        target.unlink()
+    if suffix == ".png" and importlib.util.find_spec("matplotlib") is None:
+        raise SteamError(f"{option} needs matplotlib, which is not installed (pip install matplotlib)")
+
+
+def check_out_folder(path: str, option: str) -> None:
+    """Before the runs: ``path`` is a folder that exists and can be written, or can be made."""
+    if not path.strip():
+        raise SteamError(f"{option}: expected a folder, got an empty string")
+    target = Path(path).resolve()
+    if target.exists() and not target.is_dir():
+        raise SteamError(f"{option}: {path!r} is a file, not a folder")
+    existing = next(p for p in (target, *target.parents) if p.exists())
+    if not existing.is_dir():
+        raise SteamError(f"{option}: cannot make folder {path!r}: {str(existing)!r} is a file")
+    try:
+        with tempfile.TemporaryFile(dir=existing):
+            pass
+    except OSError as err:
+        raise SteamError(f"{option}: cannot write in {str(existing)!r} ({err.strerror or err})") from None
