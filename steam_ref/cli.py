@@ -30,7 +30,7 @@ from .cli_args import build_parser
 from .cli_args import check_out_folder as _check_out_folder
 from .cli_args import check_output as _check_output
 from .conformance import command as conformance_command
-from .datasets import load_dataset
+from .datasets import load_dataset, load_range_dataset
 from .errors import SteamError
 from .experiments import reproduce
 from .fidelity import AUTHORS_RUNS, compare, find_authors_file, load_authors_run
@@ -92,11 +92,11 @@ def _run(args: argparse.Namespace) -> int:
     if args.save_estimates:
         save_estimates(args.save_estimates, result)
     if args.plot:
-        reference = (
-            data.ground_truth[:, 1:3]
-            if score is None
-            else np.array([score.batch.values[X(int(i))][:2] for i in score.poses])
-        )
+        reference: np.ndarray | None
+        if score is not None:
+            reference = np.array([score.batch.values[X(int(i))][:2] for i in score.poses])
+        else:
+            reference = None if data.ground_truth is None else data.ground_truth[:, 1:3]
         plot_trajectory(
             reference,
             result.trajectory[:, :2],
@@ -214,7 +214,7 @@ def _fidelity(args: argparse.Namespace) -> int:
     distances = {}
     for name in AUTHORS_RUNS if args.dataset == "all" else [args.dataset]:
         find_authors_file(name, args.data_dir)  # before loading: gtsam's Plaza files are not the authors' data
-        data = load_dataset(name, data_dir=args.data_dir)
+        data = load_range_dataset(name, data_dir=args.data_dir)
         authors = load_authors_run(name, data, args.data_dir)
         setup = PaperSetup.named(_PRESET_OF[name])
         result = run_online(data, setup, covariances=authors.pose_covariance is not None)

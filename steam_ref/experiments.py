@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .datasets import LandmarkDataset, RangeDataset, load_dataset
+from .datasets import LandmarkDataset, RangeDataset, load_range_dataset
 from .errors import DataError
 from .fidelity import AUTHORS_RUNS, Fidelity, compare, load_authors_run
 from .online import RunResult, StreamOptions, run_online
@@ -105,7 +105,7 @@ def published_run_experiment(
     exp.published = run
     if not run.completed:
         exp.note = f"first {run.n_steps_processed} steps only, not comparable with the authors' run"
-    elif exp.name not in AUTHORS_RUNS:
+    elif exp.name not in AUTHORS_RUNS or not isinstance(exp.data, RangeDataset):
         exp.note = f"no saved authors' run for {exp.name!r}"
     else:
         try:
@@ -238,12 +238,12 @@ def _datasets(data_dir: str | None) -> tuple[list[tuple[str, RangeDataset, Paper
     """paper-synthetic (else the generated task) and Plaza (if found)."""
     notes, out = [], []
     try:
-        out.append(("paper-synthetic", load_dataset("paper-synthetic", data_dir), PaperSetup.synthetic()))
+        out.append(("paper-synthetic", load_range_dataset("paper-synthetic", data_dir), PaperSetup.synthetic()))
     except DataError as exc:
         notes.append(f"paper-synthetic not found ({exc}); the generated task is used instead")
-        out.append(("synthetic", load_dataset("synthetic"), PaperSetup.synthetic()))
+        out.append(("synthetic", load_range_dataset("synthetic"), PaperSetup.synthetic()))
     try:
-        out.append(("plaza", load_dataset("plaza", data_dir), PaperSetup.plaza()))
+        out.append(("plaza", load_range_dataset("plaza", data_dir), PaperSetup.plaza()))
     except DataError as exc:
         notes.append(f"Plaza skipped: {exc}")
     return out, notes
@@ -267,7 +267,13 @@ def reproduce(
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    sets, notes = _datasets(data_dir) if data_sets is None else (list(data_sets), [])
+    sets: list[tuple[str, RangeDataset | LandmarkDataset, PaperSetup]]
+    notes: list[str]
+    if data_sets is not None:
+        sets, notes = list(data_sets), []
+    else:
+        found, notes = _datasets(data_dir)
+        sets = [(name, data, setup) for name, data, setup in found]
     prefix, budget = (1000, 20.0) if quick else (None, 300.0)
     notes.append(
         f"PB and PBVR run under a {budget:g} s budget per run; speed ratios are taken over the steps both covered"

@@ -17,6 +17,7 @@ from __future__ import annotations
 import numbers
 import time
 from dataclasses import dataclass, fields, replace
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -35,7 +36,7 @@ from .variables import L, Values, X
 __all__ = ["StreamOptions", "Schedule", "StreamingEstimator", "run_online", "INITIAL_SOLVE"]
 
 # The first batch solve on Plaza: GTSAM's LevenbergMarquardtParams defaults, which the scripts use.
-INITIAL_SOLVE = dict(ordering="amd", relative_tolerance=1e-5, absolute_tolerance=1e-5)
+INITIAL_SOLVE: dict[str, Any] = dict(ordering="amd", relative_tolerance=1e-5, absolute_tolerance=1e-5)
 
 
 @dataclass(frozen=True)

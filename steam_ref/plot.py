@@ -69,12 +69,12 @@ def plot_matrix(
     M: ArrayLike, ax: Any = None, block: int | None = None, title: str | None = None, path: str | None = None
 ) -> Any:
     """Image of log₁₀|M| (entries below 1e-16·max shown as the floor, NaN blank), grid lines every `block`."""
-    M = np.abs(_array("M", M, 2))
+    magnitude = np.abs(_array("M", M, 2))
     ax = _axes(ax, path, figsize=(4, 4))
-    floor = 1e-16 * max(M.max(), np.finfo(float).tiny)
-    im = ax.imshow(np.log10(np.maximum(M, floor)), cmap="viridis", interpolation="nearest")
+    floor = 1e-16 * max(magnitude.max(), np.finfo(float).tiny)
+    im = ax.imshow(np.log10(np.maximum(magnitude, floor)), cmap="viridis", interpolation="nearest")
     ax.figure.colorbar(im, ax=ax, shrink=0.8, label="log₁₀|entry|")
-    _block_grid(ax, M.shape, block)
+    _block_grid(ax, magnitude.shape, block)
     if title:
         ax.set_title(title)
     return _save(ax, path)
@@ -89,10 +89,10 @@ def plot_sparsity(
     path: str | None = None,
 ) -> Any:
     """Spy plot of the entries with abs(M_ij) > rel_tol · max abs(M), grid lines every `block`."""
-    M = np.abs(_array("M", M, 2))
+    magnitude = np.abs(_array("M", M, 2))
     ax = _axes(ax, path, figsize=(4, 4))
-    ax.spy(rel_tol * M.max() < M, markersize=2)
-    _block_grid(ax, M.shape, block)
+    ax.spy(rel_tol * magnitude.max() < magnitude, markersize=2)
+    _block_grid(ax, magnitude.shape, block)
     if title:
         ax.set_title(title)
     return _save(ax, path)
@@ -136,11 +136,10 @@ def _xy(name: str, points: ArrayLike | Mapping[Any, ArrayLike] | None) -> np.nda
     """(n, 2) float array of points given as an array or as a mapping id → (2,); None if empty."""
     if points is None:
         return None
-    if isinstance(points, Mapping):
-        points = list(points.values())
-    if len(points) == 0:
+    listed = np.asarray(list(points.values()) if isinstance(points, Mapping) else points, dtype=object)
+    if listed.size == 0:
         return None
-    return _array(name, points, 2, columns=2)
+    return _array(name, listed.tolist(), 2, columns=2)
 
 
 def plot_trajectory(
@@ -253,10 +252,9 @@ def plot_fidelity(
     """Distance from a run's estimate to the authors' saved estimate (or another ``reference``, e.g. "the
     batch optimum") at every pose, one line per data set or run (name → (n,) metres, pose by pose), with
     the tolerance drawn as a dashed line; ``log`` for a logarithmic axis."""
-    distances = {name: _array(f"distances[{name!r}]", d, 1) for name, d in distances.items()}
+    millimetres = {name: 1000 * _array(f"distances[{name!r}]", d, 1) for name, d in distances.items()}
     ax = _axes(ax, path, figsize=(7, 3))
-    for name, d in distances.items():
-        d = 1000 * d
+    for name, d in millimetres.items():
         ax.plot(np.arange(len(d)), d, lw=0.8, label=name)
     if tolerance_m is not None:
         ax.axhline(1000 * tolerance_m, color="0.4", ls="--", lw=0.8, label=f"{1000 * tolerance_m:g} mm")

@@ -102,8 +102,8 @@ def range_correction(data: RangeDataset, n_steps: int) -> tuple[float, float]:
     where = f"range correction over the first {n_steps} poses"
     if len(rows) < 2:
         raise DataError(f"{where} needs at least 2 readings in its window, got {len(rows)}")
-    rows = np.array(rows)
-    marks = data.landmarks[data.landmark_rows(data.ranges[rows, 2]), 1:3]
+    kept = np.array(rows)
+    marks = data.landmarks[data.landmark_rows(data.ranges[kept, 2]), 1:3]
     true = np.hypot(*(data.ground_truth[poses, 1:3] - marks).T)
     measured = data.ranges[rows, 3]
     if np.ptp(measured) == 0:

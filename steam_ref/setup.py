@@ -12,7 +12,6 @@ from the scripts on purpose say so (:data:`DEPARTURES`), and the motion prior is
 from __future__ import annotations
 
 import math
-import numbers
 from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
@@ -32,7 +31,7 @@ PRESETS = ("synthetic", "plaza", "victoria-park")  # PaperSetup.named
 
 # The deliberate departures from the scripts, by name: the PaperSetup fields each one changes
 # (docs/experiments.md gives each one's measured effect on the Plaza run).
-DEPARTURES = {
+DEPARTURES: dict[str, dict[str, object]] = {
     "time-attachment": dict(range_attachment="time"),  # a range goes to the first pose at or after its time stamp
     "plain-heading-rate": dict(pose2_heading_rate_guess=False),  # a new state's θ̇ starts from the plain heading change
     "whole-state-relinearization": dict(relinearize_blocks=None),  # iSAM2 relinearizes the 6-vector state at once
@@ -98,7 +97,7 @@ class PaperSetup:
             value = getattr(self, name)
             if (
                 isinstance(value, bool)
-                or not isinstance(value, numbers.Real)
+                or not isinstance(value, (int, float, np.integer, np.floating))
                 or not (math.isfinite(value) and value > 0)
             ):
                 raise SteamError(f"PaperSetup.{name} must be a finite number > 0, got {value!r}")
@@ -213,7 +212,7 @@ class PaperSetup:
 
     def departing(self, *names: str) -> PaperSetup:
         """A copy with the named departures from the scripts (:data:`DEPARTURES`) applied."""
-        changes = {}
+        changes: dict[str, object] = {}
         for name in names:
             if not isinstance(name, str) or name not in DEPARTURES:
                 raise SteamError(f"unknown departure {name!r}; use one of {', '.join(DEPARTURES)}")

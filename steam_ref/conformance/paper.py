@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..datasets import default_data_dirs, load_dataset
+from ..datasets import default_data_dirs, load_dataset, load_range_dataset
 from ..errors import DataError
 from ..fidelity import load_authors_run
 from ..online import run_online
@@ -64,7 +64,7 @@ def paper_cases(data_dir: str | os.PathLike | None = None) -> list[tuple[Case, d
     """Each paper case with its expected values (the authors' saved run); needs the data files."""
     out = []
     for name, (dataset, preset, stride, tolerance) in PAPER_RUNS.items():
-        data = load_dataset(dataset, data_dir=data_dir)
+        data = load_range_dataset(dataset, data_dir=data_dir)
         authors = load_authors_run(dataset, data, data_dir)
         rows = _kept(len(authors.state_poses), stride)
         setup = PaperSetup.named(preset)

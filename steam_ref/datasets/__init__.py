@@ -22,7 +22,7 @@ from .cmu import load_cmu_mat, load_cmu_text
 from .gtsam_text import load_gtsam_2d
 from .landmarks import LandmarkDataset
 from .matfile import read_mat
-from .search import DATA_DIR_ENV, default_data_dirs, gtsam_data_dir, load_dataset
+from .search import DATA_DIR_ENV, default_data_dirs, gtsam_data_dir, load_dataset, load_range_dataset
 from .synthetic import generate_synthetic
 from .table import RangeDataset
 
@@ -36,6 +36,7 @@ __all__ = [
     "gtsam_data_dir",
     "default_data_dirs",
     "load_dataset",
+    "load_range_dataset",
     "generate_synthetic",
     "DATA_DIR_ENV",
 ]

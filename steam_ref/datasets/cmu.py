@@ -83,10 +83,8 @@ def _assemble(name: str, where: str, tables: dict[str, NDArray]) -> RangeDataset
         raise DataError(f"{where}: {err}") from None
 
 
-def _mat_table(content: dict[str, NDArray], key: str, path: Path, required: bool = True) -> NDArray | None:
+def _mat_table(content: dict[str, NDArray], key: str, path: Path) -> NDArray:
     if key not in content:
-        if not required:
-            return None
         raise DataError(f"{path}: no array {key!r} (it holds {sorted(content) or 'nothing'})")
     value = content[key]
     if not isinstance(value, np.ndarray) or value.dtype.kind not in "biuf":
@@ -105,9 +103,8 @@ def load_cmu_mat(path: str | os.PathLike, name: str | None = None) -> RangeDatas
     path = Path(path)
     content = read_mat(path)
     tables = {key: _mat_table(content, key, path) for key in ("GT", "DR", "TL", "TD")}
-    drp = _mat_table(content, "DRp", path, required=False)
-    if drp is not None:
-        tables["DRp"] = drp
+    if "DRp" in content:
+        tables["DRp"] = _mat_table(content, "DRp", path)
     return _assemble(name or path.stem, str(path), tables)
 
 
@@ -130,9 +127,9 @@ def _read_text_table(path: Path, columns: tuple[str, ...]) -> NDArray:
     try:
         text = raw.decode("ascii")
     except UnicodeDecodeError as err:
-        line = raw.count(b"\n", 0, err.start) + 1
+        where = raw.count(b"\n", 0, err.start) + 1
         raise DataError(
-            f"{path} line {line}: byte {raw[err.start]:#04x} is not ASCII; a text table holds plain numbers"
+            f"{path} line {where}: byte {raw[err.start]:#04x} is not ASCII; a text table holds plain numbers"
         ) from None
     lines = text.split("\n")
     if lines[-1].strip(" \t\r"):

@@ -131,7 +131,7 @@ def load_gtsam_2d(path: str | os.PathLike, name: str | None = None) -> LandmarkD
             sightings.append([float(pose_of[i]), float(j), math.atan2(y, x), r, math.sqrt(v1 / 10.0), math.sqrt(v1)])
     if not odometry:
         raise DataError(f"{path}: no ODOMETRY rows: a data set needs at least two poses")
-    ids = sorted(pose_of, key=pose_of.get)
+    ids = sorted(pose_of, key=lambda i: pose_of[i])
     poses = np.column_stack([np.arange(len(ids), dtype=float), np.array(ids, dtype=float)])
     marks = np.array(list(landmark_line), dtype=float)  # in the order of first sighting
     note = f"{path}; time = pose index (dt = 1), pose ids of the file in poses[:, 1]"

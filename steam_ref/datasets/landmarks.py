@@ -103,7 +103,7 @@ class LandmarkDataset:
 
     @property
     def n_landmarks(self) -> int:
-        return len(self.landmark_ids)
+        return 0 if self.landmark_ids is None else len(self.landmark_ids)
 
     @property
     def n_readings(self) -> int:
@@ -221,11 +221,12 @@ class LandmarkDataset:
         if frac.size:
             k = int(frac[0])
             raise DataError(f"{name}[{k}, 1] (landmark id) = {_num(ids[k])} is not an integer")
-        missing = _rows_of(self.landmark_ids.astype(float), ids)[1]
+        known = np.zeros(0) if self.landmark_ids is None else self.landmark_ids.astype(float)
+        missing = _rows_of(known, ids)[1]
         if missing is not None:
             raise DataError(
                 f"{name} row {missing} (t={_num(t[missing])}) names landmark id {ids[missing]:g}, "
-                f"which is not in landmark_ids ({_ids_text(self.landmark_ids.astype(float))})"
+                f"which is not in landmark_ids ({_ids_text(known)})"
             )
         for c in _SIGMAS[name]:
             bad = np.flatnonzero(table[:, c] <= 0)

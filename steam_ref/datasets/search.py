@@ -17,7 +17,7 @@ from .landmarks import LandmarkDataset
 from .synthetic import generate_synthetic
 from .table import RangeDataset
 
-__all__ = ["DATA_DIR_ENV", "gtsam_data_dir", "default_data_dirs", "load_dataset"]
+__all__ = ["DATA_DIR_ENV", "gtsam_data_dir", "default_data_dirs", "load_dataset", "load_range_dataset"]
 
 DATA_DIR_ENV = "STEAM_REF_DATA_DIR"
 _FILES = {"paper-synthetic": "Syn_theta_Plaza.mat", "plaza": "Plaza1_thrown_away_some_range.mat"}
@@ -145,3 +145,14 @@ def load_dataset(
         return load_cmu_mat(path)
     names = ", ".join(["synthetic", *_FILES, *_GTSAM_SETS])
     raise _not_found(f"data set {key!r} (not one of {names}, nor a file or folder)", folders, hint + ".")
+
+
+def load_range_dataset(
+    name_or_path: str | os.PathLike, data_dir: str | os.PathLike | None = None, seed: int = 0
+) -> RangeDataset:
+    """:func:`load_dataset` for a range-only data set in the CMU layout (the paper's, with ground truth);
+    DataError naming it when it is another kind (Victoria Park's bearing-ranges, say)."""
+    data = load_dataset(name_or_path, data_dir, seed)
+    if not isinstance(data, RangeDataset):
+        raise DataError(f"data set {str(name_or_path)!r} is a {type(data).__name__}, not a range-only CMU data set")
+    return data

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-import numbers
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -106,9 +105,9 @@ def _landmarks_and_ranges(
 
 def _is_count(value: object, lowest: int) -> bool:
     """An integer (or an integer-valued float) >= ``lowest``; never a bool, NaN or inf."""
-    return (
+    return bool(
         not isinstance(value, bool)
-        and isinstance(value, numbers.Real)
+        and isinstance(value, (int, float, np.integer, np.floating))
         and math.isfinite(value)
         and value == int(value)
         and value >= lowest
@@ -117,9 +116,9 @@ def _is_count(value: object, lowest: int) -> bool:
 
 def _is_number(value: object, lowest: float, strict: bool) -> bool:
     """A finite real above ``lowest`` (``strict``) or at least ``lowest``; never a bool."""
-    return (
+    return bool(
         not isinstance(value, bool)
-        and isinstance(value, numbers.Real)
+        and isinstance(value, (int, float, np.integer, np.floating))
         and math.isfinite(value)
         and (value > lowest if strict else value >= lowest)
     )
