@@ -19,7 +19,7 @@ How they are read, following GTSAM's ``load2D`` (a test checks bearing, range an
 - A sighting becomes a bearing-range reading at the time of its pose: bearing = atan2(y, x),
   range = hypot(x, y), sigmas sqrt(v1 / 10) rad and sqrt(v1) m. GTSAM's comment: the x-y
   covariance "is not very good, so assume it describes the uncertainty at a range of 10m". GTSAM
-  does this when |v1 - v3| < 1e-4 and silently uses sigmas 1, 1 otherwise; this loader refuses
+  does this when abs(v1 - v3) < 1e-4 and silently uses sigmas 1, 1 otherwise; this loader refuses
   such a row, and one with v2 ≠ 0 (which GTSAM ignores), naming the line.
 - The odometry covariance is kept as given (``odometry_covariance``); a set-up may use its own
   sigmas (Victoria Park's preset uses the script's, which equal the file's diagonal).
