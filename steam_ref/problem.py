@@ -32,6 +32,7 @@ __all__ = [
     "converged_batch",
     "rotated",
     "BatchScore",
+    "reference_batch",
     "score_estimate",
     "score_against_batch",
 ]
@@ -126,16 +127,20 @@ def rotated(values: Values, angle: float) -> Values:
 def converged_batch(
     problem: SteamProblem,
     *,
-    step_tolerance: float = 1e-5,
+    start: Values | None = None,
+    step_tolerance: float = 1e-4,
     max_rounds: int = 20,
-    chunk: int = 500,
+    chunk: int = 100,
     ordering: str = "amd",
 ) -> BatchResult:
-    """The optimum of ``problem`` to a Gauss-Newton step below ``step_tolerance``: the batch reference.
+    """A minimum of ``problem`` to a Gauss-Newton step below ``step_tolerance``: the batch reference.
 
-    Starts from :func:`sequential_batch` (``chunk``), then alternates Gauss-Newton (no stopping rule
-    but the step) with an exact line search over a rotation of the whole estimate about the origin
-    (:func:`rotated`); the result's stationarity is checked as usual.
+    Starts from ``start`` or else from :func:`sequential_batch` (``chunk``; larger chunks can end in a
+    worse minimum: on Victoria Park's first 1,500 poses chunks of 500 reach a cost of 661, of 100 one of
+    422), then alternates Gauss-Newton (no stopping rule but the step) with an exact line search over a
+    rotation of the whole estimate about the origin (:func:`rotated`); the result's stationarity is
+    checked as usual. A step below 1e-4 leaves the estimate within about 1e-3 (in the norm over every
+    variable) of the minimum on Victoria Park, where Gauss-Newton closes 10 % of the gap per step.
 
     Why the rotation: where nothing is surveyed (Victoria Park), only the prior on pose 0 (heading
     σ = π) fixes the map's orientation, and every other factor is unchanged by a rotation. The cost is
@@ -145,7 +150,7 @@ def converged_batch(
     the cost stop it with the map turned by up to 0.3 rad, tens of metres from the optimum. The line
     search finds the optimum along the rotation to about 1e-6 rad (the cost's rounding).
     """
-    values = sequential_batch(problem, chunk=chunk, ordering=ordering).values
+    values = sequential_batch(problem, chunk=chunk, ordering=ordering).values if start is None else start
     for _ in range(max_rounds):
         result = gauss_newton(
             problem.graph,
@@ -190,6 +195,7 @@ class BatchScore:
     cost_gap: float  # the estimate's cost minus the optimum's
     batch: BatchResult  # the batch solve
     batch_seconds: float  # its wall time
+    batch_start: str = "sequential"  # where the reference's descent started: 'sequential' (batch), or 'estimate' when that found the lower minimum
 
     def summary(self) -> dict:
         """The figures a JSON line reports."""
@@ -203,11 +209,16 @@ class BatchScore:
             "batch_cost_gap": float(f"{self.cost_gap:.4g}"),
             "batch_converged": self.batch.converged,
             "batch_s": round(self.batch_seconds, 2),
+            "batch_start": self.batch_start,
         }
 
 
 def score_estimate(
-    problem: SteamProblem, batch: BatchResult, estimate: Values, batch_seconds: float = 0.0
+    problem: SteamProblem,
+    batch: BatchResult,
+    estimate: Values,
+    batch_seconds: float = 0.0,
+    batch_start: str = "sequential",
 ) -> BatchScore:
     """``estimate`` (every variable of ``problem``) against ``batch``, its solution: distances at the states."""
     poses = np.asarray(problem.states, dtype=int)
@@ -217,22 +228,36 @@ def score_estimate(
     c, s = np.cos(angle), np.sin(angle)
     turned = ours @ np.array([[c, s], [-s, c]])
     gap = problem.graph.error(estimate) - problem.graph.error(batch.values)
-    return BatchScore(poses, np.hypot(*(ours - best).T), np.hypot(*(turned - best).T), angle, gap, batch, batch_seconds)
+    return BatchScore(
+        poses, np.hypot(*(ours - best).T), np.hypot(*(turned - best).T), angle, gap, batch, batch_seconds, batch_start
+    )
+
+
+def reference_batch(problem: SteamProblem, estimate: Values | None = None) -> tuple[BatchResult, str]:
+    """The batch reference for scoring ``estimate``: :func:`converged_batch` from the sequential batch and,
+    when an estimate is given, from it too, whichever minimum is lower: ``(result, 'sequential' | 'estimate')``.
+    A descent from the estimate guards against the batch stopping in a worse minimum than the run found."""
+    best, where = converged_batch(problem), "sequential"
+    if estimate is not None:
+        other = converged_batch(problem, start=estimate)
+        if other.cost < best.cost:
+            best, where = other, "estimate"
+    return best, where
 
 
 def score_against_batch(result, readings: Readings, setup: PaperSetup) -> BatchScore:
-    """A streamed run (:class:`~steam_ref.results.RunResult`) against the converged batch solution of the same
-    problem: the same set-up and layout, the poses up to the run's last solved state, compared at its states."""
+    """A streamed run (:class:`~steam_ref.results.RunResult`) against the batch optimum of the same problem
+    (:func:`reference_batch`): the same set-up and layout, the poses up to the run's last solved state,
+    compared at its states."""
     states = np.asarray(result.state_poses, dtype=int)
     last = int(states[-1]) + 1
     problem = build_problem(
         readings if last == readings.n_poses else readings.prefix(last), setup, result.options.layout
     )
-    start = time.perf_counter()
-    batch = converged_batch(problem)
-    seconds = time.perf_counter() - start
     estimate = Values(
         {X(int(i)): np.asarray(result.trajectory[i]) for i in states}
         | {L(j): np.asarray(p) for j, p in result.landmarks.items()}
     )
-    return score_estimate(problem, batch, estimate, seconds)
+    start = time.perf_counter()
+    batch, where = reference_batch(problem, estimate)
+    return score_estimate(problem, batch, estimate, time.perf_counter() - start, where)

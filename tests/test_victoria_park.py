@@ -305,6 +305,16 @@ def _xy(values, n):
     return np.array([values[X(i)][:2] for i in range(n)])
 
 
+def test_the_batch_descent_turns_a_turned_start_back(prefix_problem):
+    """From the optimum turned by 0.2 rad, Gauss-Newton alone would take thousands of steps back (a
+    thousandth of the way each); with the line search over the rotation the descent returns to it."""
+    _, problem, best = prefix_problem
+    again = converged_batch(problem, start=rotated(best.values, 0.2))
+    assert again.converged
+    n = problem.readings.n_poses
+    np.testing.assert_allclose(_xy(again.values, n), _xy(best.values, n), rtol=0, atol=1e-3)
+
+
 def test_btgp_with_zero_thresholds_reaches_the_batch_optimum(prefix_problem):
     """BTGP/10 on 300 poses, every variable relinearized at every update, then 100 updates with nothing
     new (Gauss-Newton steps): within 0.1 mm of the converged batch optimum at every pose. The heading of
