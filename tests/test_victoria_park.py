@@ -405,3 +405,20 @@ def test_the_experiments_run_on_victoria_park(victoria):
     assert len(runs) == 10 and all(r.n_steps_processed == 60 and np.isnan(r.rmse_m) for r in runs)
     assert exp.with_interp[3].n_states < exp.with_interp[1].n_states == 60
     assert "| victoria-park | BTGP/10 | 60 |" in results_table([exp])
+
+
+def test_cli_batch_and_pbvr_with_skip_on_a_prefix_file(capsys, tmp_path):
+    """The first 400 rows of the file are a data set too (a path): the batch command reports no RMSE, and
+    PBVR/10 with skip 3 (interpolated bearing-ranges) is scored against the batch optimum."""
+    path = tmp_path / "vp_prefix.txt"
+    path.write_text("".join(_gtsam_file("victoria_park.txt").read_text().splitlines(keepends=True)[:400]))
+    code = main(["batch", "--dataset", str(path), "--preset", "victoria-park", "--json"])
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    assert json.loads(out)["rmse_m"] is None
+    code = main(["run", "--dataset", str(path), "--preset", "victoria-park", "--method", "pbvr", "--skip", "3", "--json"])
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    row = json.loads(out)
+    assert row["method"] == "pbvr" and row["skip"] == 3 and row["every"] == 10 and row["n_estimated_states"] < row["n_poses"]
+    assert row["batch_converged"] is True and row["batch_distance_median_m"] >= 0
