@@ -416,9 +416,16 @@ def test_cli_batch_and_pbvr_with_skip_on_a_prefix_file(capsys, tmp_path):
     out, err = capsys.readouterr()
     assert code == 0, err
     assert json.loads(out)["rmse_m"] is None
-    code = main(["run", "--dataset", str(path), "--preset", "victoria-park", "--method", "pbvr", "--skip", "3", "--json"])
+    code = main(
+        ["run", "--dataset", str(path), "--preset", "victoria-park", "--method", "pbvr", "--skip", "3", "--json"]
+    )
     out, err = capsys.readouterr()
     assert code == 0, err
     row = json.loads(out)
-    assert row["method"] == "pbvr" and row["skip"] == 3 and row["every"] == 10 and row["n_estimated_states"] < row["n_poses"]
+    assert (
+        row["method"] == "pbvr"
+        and row["skip"] == 3
+        and row["every"] == 10
+        and row["n_estimated_states"] < row["n_poses"]
+    )
     assert row["batch_converged"] is True and row["batch_distance_median_m"] >= 0
