@@ -30,6 +30,7 @@ __all__ = [
     "build_problem",
     "sequential_batch",
     "converged_batch",
+    "SAME_MINIMUM",
     "rotated",
     "BatchScore",
     "reference_batch",
@@ -233,14 +234,19 @@ def score_estimate(
     )
 
 
+SAME_MINIMUM = 1e-6  # relative cost difference below which two converged descents count as one minimum
+
+
 def reference_batch(problem: SteamProblem, estimate: Values | None = None) -> tuple[BatchResult, str]:
     """The batch reference for scoring ``estimate``: :func:`converged_batch` from the sequential batch and,
     when an estimate is given, from it too, whichever minimum is lower: ``(result, 'sequential' | 'estimate')``.
-    A descent from the estimate guards against the batch stopping in a worse minimum than the run found."""
+    A descent from the estimate guards against the batch stopping in a worse minimum than the run found;
+    two descents into one minimum differ in cost by their tolerance only, so the estimate's must be lower
+    by more than :data:`SAME_MINIMUM` (relative) to be taken."""
     best, where = converged_batch(problem), "sequential"
     if estimate is not None:
         other = converged_batch(problem, start=estimate)
-        if other.cost < best.cost:
+        if other.cost < best.cost * (1 - SAME_MINIMUM):
             best, where = other, "estimate"
     return best, where
 
