@@ -1169,3 +1169,11 @@ def test_interpolation_gives_finite_arrays_or_a_steam_error(t1, t2, tau):
     finite_or_steam_error(lambda: gp.interpolate_covariance(t1, t2, tau, QC, np.eye(12)))
     finite_or_steam_error(lambda: gp.interpolate_covariance_sde(WNOJ, t1, t2, tau, np.eye(18)))
     finite_or_steam_error(lambda: sr.InterpolatedFactor.create(INNER, X(0), X(1), t1, t2, tau, QC).lam)
+
+
+def test_a_singer_prior_over_a_vanishing_gap_is_refused_not_infinite():
+    """Hypothesis found it: Q(6.7e-63) of a Singer prior is positive definite but its inverse overflows."""
+    with pytest.raises(sr.NumericalError, match="too small to invert"):
+        sr.GPPriorFactor.from_sde(X(0), X(1), 6.7e-63, LinearSDE.singer(QC, 0.3))
+    with pytest.raises(sr.NumericalError, match="too small to invert"):
+        sr.RangeFactor.create(X(0), sr.L(0), 1.0, 1e-320)

@@ -20,7 +20,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..arguments import finite, real_array
-from ..errors import ShapeError, SteamError
+from ..errors import NumericalError, ShapeError, SteamError
 from ..robust import RobustLoss
 from ..variables import Key
 
@@ -28,6 +28,13 @@ __all__ = ["Factor", "sqrt_information", "check_factors", "STATE_DIM", "LANDMARK
 
 STATE_DIM = 6  # [x, y, θ, ẋ, ẏ, θ̇]
 LANDMARK_DIM = 2
+
+
+def _finite_weight(name: str, W: NDArray, noise: NDArray) -> NDArray:
+    """W itself, unless inverting the noise overflowed float64 (a sigma or covariance near 1e-160 or below)."""
+    if not np.all(np.isfinite(W)):
+        raise NumericalError(f"{name} is too small to invert in float64 (its weight overflows): {noise.tolist()}")
+    return W
 
 
 def sqrt_information(noise: NDArray | float, m: int, name: str = "noise") -> NDArray:
@@ -43,7 +50,8 @@ def sqrt_information(noise: NDArray | float, m: int, name: str = "noise") -> NDA
         if np.any(noise <= 0):
             shown = noise.tolist() if m > 1 else noise[0]
             raise SteamError(f"{name} (standard deviation{'s' if m > 1 else ''}) must be positive, got {name}={shown}")
-        return np.diag(1.0 / noise)
+        with np.errstate(over="ignore", divide="ignore"):  # checked by _finite_weight
+            return _finite_weight(name, np.diag(1.0 / noise), noise)
     if noise.shape == (m, m):
         if not np.allclose(noise, noise.T, rtol=0.0, atol=1e-12 * np.max(np.abs(noise))):
             i, j = np.unravel_index(np.argmax(np.abs(noise - noise.T)), noise.shape)
@@ -53,7 +61,8 @@ def sqrt_information(noise: NDArray | float, m: int, name: str = "noise") -> NDA
             )
         try:
             # Σ⁻¹ = Wᵀ W with W upper triangular: W = chol(Σ⁻¹)ᵀ.
-            return np.linalg.cholesky(np.linalg.inv(noise)).T
+            with np.errstate(over="ignore", invalid="ignore"):  # checked by _finite_weight
+                return _finite_weight(name, np.linalg.cholesky(np.linalg.inv(noise)).T, noise)
         except np.linalg.LinAlgError:
             raise SteamError(f"{name} (a covariance) is not positive definite: {noise.tolist()}") from None
     raise ShapeError(
