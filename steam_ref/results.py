@@ -4,17 +4,31 @@ from __future__ import annotations
 
 import resource
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import numpy as np
 from numpy.typing import NDArray
 
 from .arguments import finite, real_array
 from .errors import ShapeError
+from .frontend import Layout
 from .trajectory import Covariances
 
-if TYPE_CHECKING:  # online imports this module
-    from .online import StreamOptions
+
+class RunOptions(Protocol):
+    """What a result reads of the options a run was configured with (``online.StreamOptions`` is one;
+    this module sits below ``online``, so it names the attributes instead of importing the class)."""
+
+    method: str
+    every: int
+    skip: int
+    interpolate: bool
+    range_states: bool
+    max_poses: int | None
+
+    @property
+    def layout(self) -> Layout: ...
+
 
 __all__ = ["RunResult", "position_rmse", "peak_rss_mb"]
 
@@ -45,7 +59,7 @@ class RunResult:
     """What one streamed run did and produced."""
 
     method: str  # 'btgp', 'pb' or 'pbvr'
-    options: StreamOptions  # what the run was configured with
+    options: RunOptions  # what the run was configured with (a StreamOptions)
     times: NDArray  # (n,) time of every pose covered by the estimate
     trajectory: NDArray  # (n, 6) [x, y, θ, ẋ, ẏ, θ̇] at every covered pose (Eq. 18 between states)
     state_poses: NDArray  # (M,) pose indices that have an estimated state

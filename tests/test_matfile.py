@@ -40,12 +40,19 @@ def _top_level(raw: bytes) -> dict[str, int]:
     return found
 
 
-def _expect_refusal(path: Path, raw: bytes, message: str) -> None:
+def _refusal(path: Path, raw: bytes) -> str:
+    """The DataError message read_mat gives for ``raw`` written to ``path`` ('' if it reads the file or its
+    message does not name the file); load_cmu_mat must refuse it too, naming the file."""
     path.write_bytes(bytes(raw))
-    with pytest.raises(DataError, match=rf"{re.escape(str(path))}.*{message}"):
+    try:
         read_mat(path)
+    except DataError as err:
+        message = str(err)
+    else:
+        message = ""
     with pytest.raises(DataError, match=re.escape(str(path))):
         load_cmu_mat(path)
+    return message if str(path) in message else ""  # a refusal must name the file
 
 
 def test_an_unknown_data_type_code(tmp_path: Path) -> None:
@@ -53,7 +60,9 @@ def test_an_unknown_data_type_code(tmp_path: Path) -> None:
     raw = _plain_mat(tmp_path / "ok.mat", **SMALL.to_cmu_arrays())
     data_tag = _top_level(raw)["TD"] + 48
     raw[data_tag + 1] ^= 0xF5
-    _expect_refusal(tmp_path / "bad.mat", raw, rf"unknown MAT data type {0xF509} at byte {data_tag}")
+    assert re.search(rf"unknown MAT data type {0xF509} at byte {data_tag}", _refusal(tmp_path / "bad.mat", raw)), (
+        "read_mat must refuse it, naming the fault"
+    )
 
 
 def test_the_complex_flag_on_a_real_array(tmp_path: Path) -> None:
@@ -61,14 +70,18 @@ def test_the_complex_flag_on_a_real_array(tmp_path: Path) -> None:
     raw = _plain_mat(tmp_path / "ok.mat", **SMALL.to_cmu_arrays())
     at = _top_level(raw)["GT"]
     raw[at + 17] ^= 0x08  # bit 0x0800 of the flags word
-    _expect_refusal(tmp_path / "bad.mat", raw, rf"array at byte {at} \(class 6, complex.*not what its class")
+    assert re.search(
+        rf"array at byte {at} \(class 6, complex.*not what its class", _refusal(tmp_path / "bad.mat", raw)
+    ), "read_mat must refuse it, naming the fault"
 
 
 def test_a_sparse_class_on_dense_data(tmp_path: Path) -> None:
     raw = _plain_mat(tmp_path / "ok.mat", **SMALL.to_cmu_arrays())
     at = _top_level(raw)["TL"]
     raw[at + 16] = 5  # mxSPARSE_CLASS
-    _expect_refusal(tmp_path / "bad.mat", raw, rf"array at byte {at} \(class 5")
+    assert re.search(rf"array at byte {at} \(class 5", _refusal(tmp_path / "bad.mat", raw)), (
+        "read_mat must refuse it, naming the fault"
+    )
 
 
 def test_dimensions_that_do_not_match_the_data(tmp_path: Path) -> None:
@@ -80,10 +93,14 @@ def test_dimensions_that_do_not_match_the_data(tmp_path: Path) -> None:
     at = _top_level(raw)
     bad = bytearray(raw)
     struct.pack_into("<i", bad, at["C"] + 36, 10**9)
-    _expect_refusal(tmp_path / "cells.mat", bad, r"class 1, dimensions \(1, 1000000000\)")
+    assert re.search(r"class 1, dimensions \(1, 1000000000\)", _refusal(tmp_path / "cells.mat", bad)), (
+        "read_mat must refuse it, naming the fault"
+    )
     bad = bytearray(raw)
     struct.pack_into("<i", bad, at["GT"] + 32, 6)  # 6 rows of GT, data for 5
-    _expect_refusal(tmp_path / "rows.mat", bad, r"class 6, dimensions \(6, 4\)")
+    assert re.search(r"class 6, dimensions \(6, 4\)", _refusal(tmp_path / "rows.mat", bad)), (
+        "read_mat must refuse it, naming the fault"
+    )
 
 
 @pytest.mark.parametrize(
@@ -99,7 +116,9 @@ def test_dimensions_that_do_not_match_the_data(tmp_path: Path) -> None:
 )
 def test_broken_containers(tmp_path: Path, edit, message) -> None:
     raw = _plain_mat(tmp_path / "ok.mat", **SMALL.to_cmu_arrays())
-    _expect_refusal(tmp_path / "bad.mat", edit(bytes(raw)), message)
+    assert re.search(message, _refusal(tmp_path / "bad.mat", edit(bytes(raw)))), (
+        "read_mat must refuse it, naming the fault"
+    )
 
 
 def test_a_corrupted_compressed_element(tmp_path: Path) -> None:
@@ -107,7 +126,9 @@ def test_a_corrupted_compressed_element(tmp_path: Path) -> None:
     scipy.io.savemat(path, SMALL.to_cmu_arrays(), do_compression=True)
     raw = bytearray(path.read_bytes())
     raw[128 + 8 + 20] ^= 0x40  # inside the first compressed stream
-    _expect_refusal(tmp_path / "bad.mat", raw, r"compressed element at byte 128")
+    assert re.search(r"compressed element at byte 128", _refusal(tmp_path / "bad.mat", raw)), (
+        "read_mat must refuse it, naming the fault"
+    )
 
 
 def test_missing_and_folder(tmp_path: Path) -> None:
