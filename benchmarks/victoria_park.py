@@ -94,7 +94,7 @@ if solver_name == "gtsam":
         def estimate_of(self, key):
             return self.isam.calculateEstimateVector(gkey(key))
     solver = GtsamISAM2()
-est = StreamingEstimator(readings, setup, StreamOptions(every=setup.every, max_poses=max_poses), solver=solver)
+est = StreamingEstimator(readings, setup, StreamOptions(max_poses=max_poses), solver=solver)
 while not est.done:
     est.step()
 n = est.front.n_poses

@@ -60,7 +60,7 @@ def _run(args: argparse.Namespace) -> int:
     setup = setup.replace(prior=args.prior, qc=args.qc_scale * setup.qc, singer_time_constant=args.singer_time_constant)
     options = StreamOptions(
         method=args.method,
-        every=setup.every if args.every is None else args.every,
+        every=args.every,
         skip=args.skip,
         interpolate=args.interpolate,
         range_states=args.range_states,

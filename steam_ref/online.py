@@ -44,7 +44,7 @@ class StreamOptions:
     """How a run is streamed and solved; every field can be overridden."""
 
     method: str = "btgp"  # 'btgp', 'pb' or 'pbvr'
-    every: int = 1  # update after this many landmark readings ('/1', '/10')
+    every: int | None = None  # update after this many landmark readings ('/1', '/10'); None: the set-up's
     skip: int = Layout.skip  # a state at most skip poses after the previous one (see frontend.Layout)
     interpolate: bool = Layout.interpolate  # readings between states: interpolated (Eq. 29) or dropped
     range_states: bool = Layout.range_states  # also estimate every pose that has a range reading
@@ -60,8 +60,6 @@ class StreamOptions:
     def __post_init__(self) -> None:
         if self.method not in METHODS:
             raise SteamError(f"unknown method {self.method!r}; use one of {', '.join(METHODS)}")
-        if self.every is None:
-            raise SteamError("every must be a positive integer, got None")
         _check_count("every", self.every, 1)
         for name in ("interpolate", "range_states", "progress"):
             if not isinstance(getattr(self, name), bool):
@@ -138,10 +136,12 @@ class StreamingEstimator:
     def __init__(
         self, readings: Readings, setup: PaperSetup, options: StreamOptions, solver: OnlineSolver | None = None
     ):
+        if options.every is None:
+            options = options.replace(every=setup.every)
         self.readings, self.setup, self.options = readings, setup, options
         self.front = FrontEnd(readings, setup, options.layout, options.max_poses)
         start = setup.start_after_ranges if options.start_after_ranges is None else options.start_after_ranges
-        self.schedule = Schedule(options.every, start, self.front.n_poses - 1)
+        self.schedule = Schedule(int(options.every), start, self.front.n_poses - 1)
         self.final_updates = setup.final_updates if options.final_updates is None else options.final_updates
         self.solver = (
             solver
@@ -272,11 +272,16 @@ class StreamingEstimator:
 def run_online(
     data, setup: PaperSetup, options: StreamOptions | None = None, *, covariances: bool = False, **changes
 ) -> RunResult:
-    """Stream a :class:`~steam_ref.datasets.RangeDataset` through the chosen solver.
+    """Stream ``data`` (a :class:`~steam_ref.datasets.RangeDataset` or
+    :class:`~steam_ref.datasets.LandmarkDataset`, or the :class:`Readings` made from one) through the chosen solver.
 
-    ``options`` default to :class:`StreamOptions`'s defaults; keyword ``changes`` override fields.
+    ``options`` default to :class:`StreamOptions`'s defaults; keyword ``changes`` override fields. A data
+    set's ground truth, when it has one, gives the RMSE; :class:`Readings` carry none.
     """
     options = StreamOptions() if options is None else options
     options = options.replace(**changes) if changes else options
-    readings = Readings.from_dataset(data, setup)
-    return StreamingEstimator(readings, setup, options).run(data.ground_truth, covariances=covariances)
+    if isinstance(data, Readings):
+        readings, truth = data, None
+    else:
+        readings, truth = Readings.from_dataset(data, setup), data.ground_truth
+    return StreamingEstimator(readings, setup, options).run(truth, covariances=covariances)

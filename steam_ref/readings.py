@@ -172,6 +172,8 @@ class Readings:
         """Convert a data set following the paper's scripts (see the module docstring)."""
         if isinstance(data, LandmarkDataset):
             return cls._from_landmark_dataset(data, setup)
+        if not isinstance(data, RangeDataset):
+            raise SteamError(f"expected a RangeDataset or LandmarkDataset, got {type(data).__name__}")
         n = data.n_poses
         velocity = np.full((n, 3), np.nan)
         velocity[1:, 0] = data.odometry[:, 1]  # distance / dt with dt = 1

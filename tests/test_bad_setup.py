@@ -82,7 +82,6 @@ def test_paper_setup_qc_is_checked() -> None:
         ("every", math.nan),
         ("every", "3"),
         ("every", 0),
-        ("every", None),
         ("final_updates", -1),
         ("start_after_ranges", -1),
         ("max_poses", 1),

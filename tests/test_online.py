@@ -126,6 +126,26 @@ def test_update_schedule_counts_range_readings(data, every):
     assert counts[0] >= every
 
 
+def test_every_defaults_to_the_set_ups_schedule(data):
+    """``every=None`` (the default) takes the set-up's: one home for a preset's schedule."""
+    setup = SETUP.replace(every=3)
+    est = StreamingEstimator(Readings.from_dataset(data, setup), setup, StreamOptions(method="pb"))
+    while not est.done:
+        est.step()
+    assert est.options.every == 3
+    assert est.update_steps == _stream(data, method="pb", every=3).update_steps
+    assert est.update_steps != _stream(data, method="pb", every=1).update_steps
+
+
+def test_run_online_takes_readings_as_well_as_a_data_set(data):
+    from_data = run_online(data, SETUP, method="pb")
+    from_readings = run_online(Readings.from_dataset(data, SETUP), SETUP, method="pb")
+    np.testing.assert_array_equal(from_readings.trajectory, from_data.trajectory)
+    assert np.isnan(from_readings.rmse_m) and from_data.rmse_m < 0.5  # readings carry no ground truth
+    with pytest.raises(SteamError, match="expected a RangeDataset or LandmarkDataset, got dict"):
+        run_online({"poses": []}, SETUP)
+
+
 def test_start_after_ranges_defers_the_first_update(data):
     est = _stream(data, method="pb", start_after_ranges=15)
     ranges = Readings.from_dataset(data, SETUP).range_pose
