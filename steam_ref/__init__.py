@@ -13,6 +13,7 @@ from .bayes_tree import BayesTree, IncrementalSolver, ISAM2Params
 from .covariance import marginal_covariances
 from .datasets import LandmarkDataset, RangeDataset, generate_synthetic, load_dataset
 from .errors import (
+    ConvergenceWarning,
     DataError,
     IllConditionedWarning,
     NumericalError,
@@ -53,6 +54,7 @@ __all__ = [
     "UnderdeterminedError",
     "NumericalError",
     "IllConditionedWarning",
+    "ConvergenceWarning",
     "Key",
     "X",
     "L",

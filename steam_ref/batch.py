@@ -40,6 +40,7 @@ __all__ = [
     "make_ordering",
     "check_stationarity",
     "gauss_newton",
+    "gauss_newton_step",
     "levenberg_marquardt",
     "batch_solve",
 ]
@@ -126,6 +127,14 @@ def _step(graph: FactorGraph, values: Values, ordering: Ordering, backend: str, 
     return system.split(delta), sum(g.cost for g in groups), chol.nnz
 
 
+def gauss_newton_step(
+    graph: FactorGraph, values: Values, ordering: Ordering, backend: str
+) -> tuple[Values, dict, float]:
+    """One Gauss-Newton step from ``values`` (Eq. 11): (θ̄ + δθ*, δθ* by key, the cost at θ̄)."""
+    delta, cost, _ = _step(graph, values, ordering, backend, 0.0)
+    return values.retract(delta), delta, cost
+
+
 def _scaled_condition(info: sp.csc_matrix, chol: SparseCholesky) -> float:
     """1-norm condition estimate of S 𝓘 S, S = diag(𝓘)^-½, from the factor of 𝓘 [Higham & Tisseur 2000]."""
     s = 1.0 / np.sqrt(info.diagonal())
@@ -159,7 +168,7 @@ def check_stationarity(
     )
 
 
-def _certify(
+def certify(
     graph, values, order, backend, rule: str, tolerances: tuple[float, float], check: bool
 ) -> tuple[bool, str, Stationarity | None]:
     """(converged, reason, check) for an estimate where ``rule`` ('' for none) stopped the iterations."""
@@ -188,7 +197,7 @@ def _certify(
     return True, f"{rule}; stationary (one more step would gain {found.predicted_decrease:.2g})", found
 
 
-def _check_options(**options: object) -> None:
+def check_options(**options: object) -> None:
     """Every tolerance and damping option a finite number ≥ 0 (the damping ones > 0), named on failure."""
     for name, value in options.items():
         if (
@@ -204,14 +213,14 @@ def _check_options(**options: object) -> None:
             raise SteamError(f"damping_factor must be > 1, got {value!r}")
 
 
-def _arguments(graph: FactorGraph | Iterable[Factor], initial: Values) -> tuple[FactorGraph, Values]:
+def graph_and_values(graph: FactorGraph | Iterable[Factor], initial: Values) -> tuple[FactorGraph, Values]:
     """The graph (a FactorGraph, or any iterable of factors) and the initial estimate (a Values or a mapping)."""
     if not isinstance(graph, FactorGraph):
         graph = FactorGraph(graph)
     return graph, as_values("initial", initial)
 
 
-def _prepare(
+def prepare(
     graph: FactorGraph, initial: Values, ordering: str | Ordering, backend: str | None, max_iterations: object
 ) -> tuple[str, Ordering, float]:
     """Checks shared by both solvers: the graph and estimates, the backend, the ordering, the start cost."""
@@ -268,11 +277,11 @@ def gauss_newton(
     an ill-conditioned system gives an :class:`~steam_ref.errors.IllConditionedWarning`. A NaN or inf
     anywhere raises :class:`~steam_ref.errors.NumericalError` naming the factor or variable.
     """
-    _check_options(
+    check_options(
         relative_tolerance=relative_tolerance, absolute_tolerance=absolute_tolerance, step_tolerance=step_tolerance
     )
-    graph, initial = _arguments(graph, initial)
-    backend, order, cost0 = _prepare(graph, initial, ordering, backend, max_iterations)
+    graph, initial = graph_and_values(graph, initial)
+    backend, order, cost0 = prepare(graph, initial, ordering, backend, max_iterations)
     iterations: list[Iteration] = []
     values, rule, nnz, cost = initial.copy(), "", 0, cost0
     for _ in range(max_iterations):
@@ -287,7 +296,7 @@ def gauss_newton(
         cost = new_cost
         if rule:
             break
-    converged, reason, found = _certify(
+    converged, reason, found = certify(
         graph, values, order, backend, rule, (relative_tolerance, absolute_tolerance), check
     )
     return BatchResult(values, cost0, iterations, converged, reason, order, nnz, backend, found)
@@ -315,7 +324,7 @@ def levenberg_marquardt(
     multiplied by it and the step retried. Stops on the Gauss-Newton rules, or when λ exceeds
     ``max_damping`` (no step lowers the cost). ``converged`` as in :func:`gauss_newton`.
     """
-    _check_options(
+    check_options(
         relative_tolerance=relative_tolerance,
         absolute_tolerance=absolute_tolerance,
         step_tolerance=step_tolerance,
@@ -323,8 +332,8 @@ def levenberg_marquardt(
         damping_factor=damping_factor,
         max_damping=max_damping,
     )
-    graph, initial = _arguments(graph, initial)
-    backend, order, cost0 = _prepare(graph, initial, ordering, backend, max_iterations)
+    graph, initial = graph_and_values(graph, initial)
+    backend, order, cost0 = prepare(graph, initial, ordering, backend, max_iterations)
     iterations: list[Iteration] = []
     values, rule, nnz, lam, cost = initial.copy(), "", 0, initial_damping, cost0
     while len(iterations) < max_iterations and not rule:
@@ -343,7 +352,7 @@ def levenberg_marquardt(
             lam *= damping_factor
             if lam > max_damping:
                 rule = f"damping {lam:.1e} above {max_damping:.1e}: no step lowers the cost"
-    converged, reason, found = _certify(
+    converged, reason, found = certify(
         graph, values, order, backend, rule, (relative_tolerance, absolute_tolerance), check
     )
     return BatchResult(values, cost0, iterations, converged, reason, order, nnz, backend, found)

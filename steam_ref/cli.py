@@ -4,7 +4,7 @@ Usage::
 
     steam-ref run [--dataset NAME_OR_PATH] [--method {btgp,pb,pbvr}] [--every N] [--skip K]
                   [--interpolate/--no-interpolate] [--preset {synthetic,plaza,victoria-park}] [--data-dir DIR]
-                  [--json] [--save-estimates FILE.npz] [--plot FILE.png]
+                  [--converge-at-end] [--json] [--save-estimates FILE.npz] [--plot FILE.png]
     steam-ref batch [--dataset NAME_OR_PATH] [--ordering {xl,amd}] [--json] [--plot FILE.png]
     steam-ref fidelity [--dataset {plaza,paper-synthetic,all}] [--json] [--plot FILE.png]
     steam-ref reproduce [--quick] [--out DIR]
@@ -67,6 +67,7 @@ def _run(args: argparse.Namespace) -> int:
         max_poses=args.max_poses,
         time_budget_s=args.time_budget,
         progress=args.progress,
+        converge_at_end=args.converge_at_end,
         isam2=setup.isam2_params().replace(
             relinearize_threshold=args.relinearize_threshold, relinearize_skip=args.relinearize_skip
         ),
@@ -132,7 +133,9 @@ def _print_summary(summary: dict) -> None:
         f"{summary['method'].upper()}/{summary['every']} on {summary['dataset']}: skip {summary['skip']}, "
         f"{'with' if summary['interpolate'] else 'without'} interpolation, {summary['n_estimated_states']} states\n"
         + score
-        + f" total {summary['total_s']:.2f} s, "
+        + f" total {summary['total_s']:.2f} s"
+        + ("" if "convergence_s" not in summary else f" (converging at the end {summary['convergence_s']:.2f} s: {'converged' if summary['converged_at_end'] else 'NOT converged'})")
+        + ", "
         f"update median {summary['update_s_median']} s, p95 {summary['update_s_p95']} s, peak RSS {summary['peak_rss_mb']} MB{state}"
     )
 

@@ -93,6 +93,11 @@ def _add_run_arguments(run: argparse.ArgumentParser) -> None:
         help="also estimate a state at every pose with a range reading (the layout of the Plaza script, plaza_isam2.m)",
     )
     run.add_argument(
+        "--converge-at-end",
+        action="store_true",
+        help="after the last pose, iterate everything to the batch optimum (steam_ref.converge) and report that estimate",
+    )
+    run.add_argument(
         "--departure",
         action="append",
         choices=list(DEPARTURES),

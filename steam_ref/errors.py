@@ -34,3 +34,7 @@ class NumericalError(SteamError):
 
 class IllConditionedWarning(UserWarning):
     """The information matrix is so ill-conditioned that float64 cannot resolve the answer to the tolerance asked."""
+
+
+class ConvergenceWarning(UserWarning):
+    """An iteration asked to converge stopped before its check passed; the result says why."""

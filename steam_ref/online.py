@@ -16,15 +16,17 @@ from __future__ import annotations
 
 import numbers
 import time
+import warnings
 from dataclasses import dataclass, fields, replace
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from .batch import levenberg_marquardt
+from .batch import BatchResult, levenberg_marquardt
 from .bayes_tree import ISAM2Params
-from .errors import SteamError
+from .converge import converge
+from .errors import ConvergenceWarning, SteamError
 from .frontend import FrontEnd, Layout, NewStep
 from .graph import FactorGraph
 from .readings import PaperSetup, Readings
@@ -50,6 +52,7 @@ class StreamOptions:
     range_states: bool = Layout.range_states  # also estimate every pose that has a range reading
     start_after_ranges: int | None = None  # None: the set-up's (Plaza 50, synthetic 0)
     final_updates: int | None = None  # extra solver updates after the last pose; None: the set-up's (synthetic 10)
+    converge_at_end: bool = False  # after the last pose, iterate everything to the batch optimum (converge.py)
     isam2: ISAM2Params | None = None  # BTGP's iSAM2 settings; None: the set-up's (PaperSetup.isam2_params)
     pb_relative_tolerance: float = PB_RELATIVE_TOLERANCE  # PB/PBVR Gauss-Newton stopping rule
     pb_max_iterations: int = PB_MAX_ITERATIONS  # PB/PBVR iterations per update
@@ -61,7 +64,7 @@ class StreamOptions:
         if self.method not in METHODS:
             raise SteamError(f"unknown method {self.method!r}; use one of {', '.join(METHODS)}")
         _check_count("every", self.every, 1)
-        for name in ("interpolate", "range_states", "progress"):
+        for name in ("interpolate", "range_states", "progress", "converge_at_end"):
             if not isinstance(getattr(self, name), bool):
                 raise SteamError(f"{name} must be True or False, got {getattr(self, name)!r}")
         Layout(self.skip, self.range_states, self.interpolate)  # checks skip
@@ -143,22 +146,23 @@ class StreamingEstimator:
         start = setup.start_after_ranges if options.start_after_ranges is None else options.start_after_ranges
         self.schedule = Schedule(int(options.every), start, self.front.n_poses - 1)
         self.final_updates = setup.final_updates if options.final_updates is None else options.final_updates
-        self.solver = (
-            solver
-            if solver is not None
-            else make_solver(
-                options.method,
-                isam2=setup.isam2_params() if options.isam2 is None else options.isam2,
-                pb_relative_tolerance=options.pb_relative_tolerance,
-                pb_max_iterations=options.pb_max_iterations,
-            )
-        )
+        self.solver = solver if solver is not None else self._new_solver()
+        self.factors: list = []  # every factor given to the solver so far
+        self.convergence: BatchResult | None = None  # what converge_at_end found
+        self.convergence_seconds = 0.0  # its wall time (within the last update's)
         self.n_solved = 0  # how many of ``states`` the solver holds
         self._pending: list = []  # new factors not yet given to the solver
         self._pending_values = Values()  # initial estimates of new variables not yet given
         self.step_seconds: list[float] = []  # wall time of each processed pose
         self.update_steps: list[int] = []  # pose at which each solver update ran
         self.update_seconds: list[float] = []  # wall time of each solver update
+
+    def _new_solver(self) -> OnlineSolver:
+        o = self.options
+        isam2 = self.setup.isam2_params() if o.isam2 is None else o.isam2
+        return make_solver(
+            o.method, isam2=isam2, pb_relative_tolerance=o.pb_relative_tolerance, pb_max_iterations=o.pb_max_iterations
+        )
 
     @property
     def n_poses(self) -> int:
@@ -193,15 +197,31 @@ class StreamingEstimator:
         if not self.schedule.started and self.schedule.start_after > 0:
             values = levenberg_marquardt(FactorGraph(self._pending), values, **INITIAL_SOLVE).values
         self.solver.update(self._pending, values)
+        self.factors.extend(self._pending)
         if pose == self.schedule.last_pose:
             for _ in range(self.final_updates):
                 self.solver.update([], Values())
+            if self.options.converge_at_end:
+                self._converge()
         self.schedule.updated()
         self._pending, self._pending_values = [], Values()
         self.n_solved = len(self.states)
         self.front.rebase(self.solver.estimate_of(X(pose)))  # predict from the estimate
         self.update_steps.append(pose)
         self.update_seconds.append(time.perf_counter() - start)
+
+    def _converge(self) -> None:
+        """Iterate the whole problem from the solver's estimate to the batch optimum
+        (:func:`~steam_ref.converge.converge`), then hand it to a new solver: one update with every
+        factor, linearized there (for BTGP a Bayes tree eliminated from scratch), so that its
+        estimate and covariances are those of the optimum. Warns when the optimum's check fails."""
+        start = time.perf_counter()
+        self.convergence = converge(FactorGraph(self.factors), self.solver.estimate())
+        if not self.convergence.converged:
+            warnings.warn(f"converge_at_end: {self.convergence.reason}", ConvergenceWarning, stacklevel=4)
+        self.solver = self._new_solver()
+        self.solver.update(self.factors, self.convergence.values)
+        self.convergence_seconds = time.perf_counter() - start
 
     # -- queries --
 
@@ -266,6 +286,8 @@ class StreamingEstimator:
             ground_truth,
             solved.covariances([L(i) for i in marks]) if covariances else None,
             peak_rss_mb(),
+            self.convergence_seconds if self.convergence is not None else None,
+            self.convergence.converged if self.convergence is not None else None,
         )
 
 

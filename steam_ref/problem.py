@@ -14,10 +14,10 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.optimize
 from numpy.typing import NDArray
 
 from .batch import BatchResult, gauss_newton
+from .converge import converge
 from .datasets import LandmarkDataset, RangeDataset
 from .errors import SteamError
 from .frontend import FrontEnd, Layout
@@ -31,7 +31,6 @@ __all__ = [
     "sequential_batch",
     "converged_batch",
     "SAME_MINIMUM",
-    "rotated",
     "BatchScore",
     "reference_batch",
     "score_estimate",
@@ -108,79 +107,24 @@ def sequential_batch(
     return result
 
 
-def rotated(values: Values, angle: float) -> Values:
-    """The whole estimate turned by ``angle`` about the origin: positions, velocities (and accelerations)
-    and landmarks rotated, headings shifted. Every factor but a prior on an absolute pose or velocity is
-    unchanged by it (a landmark prior is not), the near-symmetry :func:`converged_batch` follows."""
-    c, s = np.cos(angle), np.sin(angle)
-    out = Values()
-    for k in values:
-        x = np.array(values[k], dtype=float)
-        blocks = range(0, len(x), 3) if k.kind == "x" else (0,)
-        for b in blocks:
-            x[b], x[b + 1] = c * x[b] - s * x[b + 1], s * x[b] + c * x[b + 1]
-        if k.kind == "x":
-            x[2] += angle
-        out.insert(k, x)
-    return out
-
-
 def converged_batch(
     problem: SteamProblem,
     *,
     start: Values | None = None,
-    step_tolerance: float = 1e-4,
-    max_rounds: int = 20,
+    step_tolerance: float = 1e-6,
     chunk: int = 100,
     ordering: str = "amd",
 ) -> BatchResult:
-    """A minimum of ``problem`` to a Gauss-Newton step below ``step_tolerance``: the batch reference.
+    """A minimum of ``problem`` to where no variable moves by more than ``step_tolerance``: the batch
+    reference (:func:`~steam_ref.converge.converge`: Gauss-Newton with an exact line search along the
+    map's turn about the origin, and Anderson acceleration; its stationarity checked as usual).
 
     Starts from ``start`` or else from :func:`sequential_batch` (``chunk``; larger chunks can end in a
     worse minimum: on Victoria Park's first 1,500 poses chunks of 500 reach a cost of 661, of 100 one of
-    422), then alternates Gauss-Newton (no stopping rule but the step) with an exact line search over a
-    rotation of the whole estimate about the origin (:func:`rotated`); the result's stationarity is
-    checked as usual. A step below 1e-4 leaves the estimate within about 1e-3 (in the norm over every
-    variable) of the minimum on Victoria Park, where Gauss-Newton closes 10 % of the gap per step.
-
-    Why the rotation: where nothing is surveyed (Victoria Park), only the prior on pose 0 (heading
-    σ = π) fixes the map's orientation, and every other factor is unchanged by a rotation. The cost is
-    then nearly flat along it (curvature 1/π² per rad²), but each GP prior factor's error vector turns
-    with the map, so Gauss-Newton's curvature there, Σ‖e_xy‖² over the prior factors, is a thousand
-    times too large on Victoria Park: a step goes a thousandth of the way, and the stopping rules on
-    the cost stop it with the map turned by up to 0.3 rad, tens of metres from the optimum. The line
-    search finds the optimum along the rotation to about 1e-6 rad (the cost's rounding).
+    422).
     """
     values = sequential_batch(problem, chunk=chunk, ordering=ordering).values if start is None else start
-    for _ in range(max_rounds):
-        result = gauss_newton(
-            problem.graph,
-            values,
-            ordering=ordering,
-            max_iterations=20,
-            relative_tolerance=0.0,
-            absolute_tolerance=0.0,
-            step_tolerance=step_tolerance,
-            check=False,
-        )
-        values = result.values
-        found = scipy.optimize.minimize_scalar(
-            lambda a, at=values: problem.graph.error(rotated(at, a)), bracket=(-1e-3, 1e-3), tol=1e-12
-        )
-        turned = abs(found.x) > 1e-5 and problem.graph.error(rotated(values, found.x)) < problem.graph.error(values)
-        if turned:
-            values = rotated(values, found.x)
-        elif result.iterations[-1].step_norm < step_tolerance:
-            break
-    return gauss_newton(
-        problem.graph,
-        values,
-        ordering=ordering,
-        max_iterations=5,
-        relative_tolerance=1e-12,
-        absolute_tolerance=0.0,
-        step_tolerance=step_tolerance,
-    )
+    return converge(problem.graph, values, step_tolerance=step_tolerance, ordering=ordering)
 
 
 @dataclass(frozen=True)

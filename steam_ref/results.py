@@ -74,6 +74,8 @@ class RunResult:
     rmse_states_m: float  # the same over the poses with a state only
     covariances: Covariances | None  # final marginals, when asked for
     peak_rss_mb: float  # peak resident memory of the process so far
+    convergence_s: float | None = None  # converge_at_end: its wall time (within total_s); None: not asked for
+    converged_at_end: bool | None = None  # converge_at_end: whether the optimum passed its stationarity check
 
     @classmethod
     def of(
@@ -92,6 +94,8 @@ class RunResult:
         ground_truth,
         covariances,
         peak_rss,
+        convergence_s=None,
+        converged_at_end=None,
     ) -> RunResult:
         """Package a run, scoring it against ``ground_truth`` (CMU GT layout, x, y in columns 1-2) if given."""
         rmse = rmse_states = float("nan")
@@ -116,6 +120,8 @@ class RunResult:
             rmse_states,
             covariances,
             peak_rss,
+            convergence_s,
+            converged_at_end,
         )
 
     @property
@@ -153,4 +159,8 @@ class RunResult:
             "update_s_p95": round(float(np.percentile(u, 95)), 6) if len(u) else None,
             "peak_rss_mb": round(self.peak_rss_mb, 1),
             "completed": self.completed,
-        }
+        } | (
+            {}
+            if self.convergence_s is None
+            else {"convergence_s": round(self.convergence_s, 4), "converged_at_end": self.converged_at_end}
+        )

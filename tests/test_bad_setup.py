@@ -95,6 +95,7 @@ def test_paper_setup_qc_is_checked() -> None:
         ("interpolate", 1),
         ("range_states", "no"),
         ("progress", None),
+        ("converge_at_end", 1),
     ],
 )
 def test_stream_options_refuse_a_bad_field(field: str, value) -> None:
