@@ -64,7 +64,8 @@ from steam_ref.online import StreamingEstimator, StreamOptions
 from steam_ref.readings import PaperSetup, Readings
 from steam_ref.results import peak_rss_mb
 from steam_ref.variables import L, X
-solver_name, blocks, max_poses, out, every, at_end = sys.argv[1], json.loads(sys.argv[2]), json.loads(sys.argv[3]), sys.argv[4], int(sys.argv[5]), sys.argv[6] == "converge"
+solver_name, blocks, max_poses, out = sys.argv[1], json.loads(sys.argv[2]), json.loads(sys.argv[3]), sys.argv[4]
+every, at_end = int(sys.argv[5]), sys.argv[6] == "converge"
 setup = PaperSetup.victoria_park().replace(relinearize_blocks=None if blocks is None else tuple(blocks), every=every)
 readings = Readings.from_dataset(load_dataset("victoria-park"), setup)
 solver = None
@@ -119,7 +120,12 @@ print(json.dumps({"total_s": float(np.sum(est.step_seconds)), "peak_rss_mb": pea
 
 
 def run_child(
-    solver: str, blocks: tuple[int, ...] | None, max_poses: int | None, out: Path, every: int = 10, converge: bool = False
+    solver: str,
+    blocks: tuple[int, ...] | None,
+    max_poses: int | None,
+    out: Path,
+    every: int = 10,
+    converge: bool = False,
 ) -> dict:
     """One streamed run in a fresh, single-threaded Python process (``converge``: with ``converge_at_end``);
     its figures (the estimate goes to ``out``)."""

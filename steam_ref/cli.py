@@ -111,6 +111,14 @@ def _run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _convergence_note(summary: dict) -> str:
+    """What ``--converge-at-end`` did, for the human-readable summary ('' when it was not asked for)."""
+    if "convergence_s" not in summary:
+        return ""
+    verdict = "converged" if summary["converged_at_end"] else "NOT converged: see the warning"
+    return f" (of which converging at the end {summary['convergence_s']:.2f} s, {verdict})"
+
+
 def _print_summary(summary: dict) -> None:
     state = "" if summary["completed"] else "  (cut short: time budget or --max-poses)"
     if "batch_distance_median_m" in summary:
@@ -134,7 +142,7 @@ def _print_summary(summary: dict) -> None:
         f"{'with' if summary['interpolate'] else 'without'} interpolation, {summary['n_estimated_states']} states\n"
         + score
         + f" total {summary['total_s']:.2f} s"
-        + ("" if "convergence_s" not in summary else f" (converging at the end {summary['convergence_s']:.2f} s: {'converged' if summary['converged_at_end'] else 'NOT converged'})")
+        + _convergence_note(summary)
         + ", "
         f"update median {summary['update_s_median']} s, p95 {summary['update_s_p95']} s, peak RSS {summary['peak_rss_mb']} MB{state}"
     )

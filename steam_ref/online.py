@@ -139,12 +139,12 @@ class StreamingEstimator:
     def __init__(
         self, readings: Readings, setup: PaperSetup, options: StreamOptions, solver: OnlineSolver | None = None
     ):
-        if options.every is None:
-            options = options.replace(every=setup.every)
+        every = setup.every if options.every is None else options.every
+        options = options.replace(every=every)  # the result reports the schedule that ran
         self.readings, self.setup, self.options = readings, setup, options
         self.front = FrontEnd(readings, setup, options.layout, options.max_poses)
         start = setup.start_after_ranges if options.start_after_ranges is None else options.start_after_ranges
-        self.schedule = Schedule(int(options.every), start, self.front.n_poses - 1)
+        self.schedule = Schedule(every, start, self.front.n_poses - 1)
         self.final_updates = setup.final_updates if options.final_updates is None else options.final_updates
         self.solver = solver if solver is not None else self._new_solver()
         self.factors: list = []  # every factor given to the solver so far

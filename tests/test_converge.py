@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from requirements import optional_import
 
 from steam_ref.batch import gauss_newton
 from steam_ref.converge import Anderson, anchored_factors, converge, rotated
@@ -18,8 +19,6 @@ from steam_ref.online import StreamOptions, run_online
 from steam_ref.problem import build_problem, converged_batch
 from steam_ref.readings import PaperSetup, Readings
 from steam_ref.variables import X
-
-from requirements import optional_import
 
 VP = PaperSetup.victoria_park()
 N = 300

@@ -16,13 +16,13 @@ from requirements import optional_import, skip_or_fail
 
 from steam_ref.bayes_tree import ISAM2Params
 from steam_ref.cli import main
+from steam_ref.converge import rotated
 from steam_ref.datasets import LandmarkDataset, gtsam_data_dir, load_dataset, load_gtsam_2d
 from steam_ref.errors import DataError, SteamError
 from steam_ref.experiments import Experiment, interpolation_experiment, results_table, timing_experiment
 from steam_ref.factors import BearingRangeFactor, InterpolatedFactor, PriorFactor
 from steam_ref.frontend import FrontEnd, Layout
 from steam_ref.online import StreamingEstimator, StreamOptions
-from steam_ref.converge import rotated
 from steam_ref.problem import build_problem, converged_batch, score_estimate
 from steam_ref.readings import PaperSetup, Readings
 from steam_ref.variables import L, X
