@@ -72,6 +72,35 @@ def test_only_the_prior_on_pose_0_sees_the_turn(prefix):
     assert kinds == {PriorFactor, GPPriorFactor}
 
 
+def test_gauss_newton_turns_the_map_back_by_the_fraction_of_derivations_9(prefix):
+    """docs/derivations.md §9: one Gauss-Newton step from the optimum turned by 1e-3 rad goes back about
+    (1/π²) / (Σ‖W e⊥‖² + 1/π²) of the way, the model's curvature along the straight tangent against the
+    heading prior's; 'about' because other factors touch pose 0 (within a factor 1.5 on this prefix)."""
+    _, problem = prefix
+    best = converged_batch(problem).values
+    curvature = 0.0
+    for f in problem.graph:
+        if isinstance(f, GPPriorFactor):
+            e = f.error(*[best[k] for k in f.keys])
+            turned = e.copy()
+            turned[0::3], turned[1::3] = -e[1::3], e[0::3]  # every [x, y] pair turned by 90°
+            curvature += float(np.sum((f.sqrt_information @ turned) ** 2))
+    predicted = (1 / np.pi**2) / (curvature + 1 / np.pi**2)
+    phi = 1e-3
+    start = rotated(best, phi)
+    step = gauss_newton(
+        problem.graph,
+        start,
+        max_iterations=1,
+        relative_tolerance=0,
+        absolute_tolerance=0,
+        step_tolerance=0,
+        check=False,
+    ).values
+    back = -np.mean([step[X(int(i))][2] - start[X(int(i))][2] for i in problem.states]) / phi
+    assert predicted < 2e-3 and predicted / 1.5 < back < predicted * 1.5
+
+
 def test_descents_from_starts_half_a_radian_apart_meet(prefix):
     """From the sequential batch and from its estimate turned by 0.5 rad, converge ends at one minimum
     (stationary by the batch's check) within 0.1 mm at every pose; plain Gauss-Newton from the turned
