@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .arguments import integer
 from .batch import BatchResult, levenberg_marquardt
 from .bayes_tree import ISAM2Params
 from .converge import converge
@@ -98,11 +99,9 @@ def _is_real(value: object) -> bool:
 
 
 def _check_count(name: str, value: object, lowest: int) -> None:
-    """None, or an integer >= ``lowest``; SteamError naming the value otherwise."""
-    if value is None:
-        return
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < lowest:
-        raise SteamError(f"{name} must be an integer >= {lowest}, got {value!r}")
+    """None (the set-up's, or no limit), or an integer >= ``lowest``: :func:`~steam_ref.arguments.integer`."""
+    if value is not None:
+        integer(name, value, lowest)
 
 
 class Schedule:

@@ -11,12 +11,12 @@ from the scripts on purpose say so (:data:`DEPARTURES`), and the motion prior is
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
 from numpy.typing import NDArray
 
+from .arguments import integer, number
 from .bayes_tree.params import ISAM2Params
 from .errors import ShapeError, SteamError
 from .gp.prior import check_qc
@@ -94,17 +94,10 @@ class PaperSetup:
         ):
             object.__setattr__(self, name, _vector3(name, getattr(self, name), positive=name != "first_velocity"))
         for name in ("range_sigma", "landmark_prior_sigma") + (("tukey_c",) if self.tukey_c is not None else ()):
-            value = getattr(self, name)
-            if (
-                isinstance(value, bool)
-                or not isinstance(value, (int, float, np.integer, np.floating))
-                or not (math.isfinite(value) and value > 0)
-            ):
-                raise SteamError(f"PaperSetup.{name} must be a finite number > 0, got {value!r}")
+            if number(f"PaperSetup.{name}", getattr(self, name)) <= 0:
+                raise SteamError(f"PaperSetup.{name} must be a finite number > 0, got {getattr(self, name)!r}")
         for name in ("range_correction_steps", "start_after_ranges", "final_updates"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0:
-                raise SteamError(f"PaperSetup.{name} must be an integer >= 0, got {value!r}")
+            integer(f"PaperSetup.{name}", getattr(self, name), 0)
         for name in ("landmarks_up_front", "pose2_heading_rate_guess"):
             if not isinstance(getattr(self, name), bool):
                 raise SteamError(f"PaperSetup.{name} must be True or False, got {getattr(self, name)!r}")
@@ -121,8 +114,7 @@ class PaperSetup:
         if self.prior not in PRIORS:
             raise SteamError(f"prior must be one of {PRIORS}, got {self.prior!r}")
         self.motion_prior()  # checks Qc and the time constant, naming the bad one
-        if isinstance(self.every, bool) or not isinstance(self.every, (int, np.integer)) or self.every < 1:
-            raise SteamError(f"PaperSetup.every must be a positive integer, got {self.every!r}")
+        integer("PaperSetup.every", self.every, 1)
 
     @classmethod
     def synthetic(cls) -> PaperSetup:

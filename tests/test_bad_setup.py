@@ -61,7 +61,8 @@ def _with_ranges(data: RangeDataset, ranges: np.ndarray) -> RangeDataset:
 )
 def test_paper_setup_refuses_a_bad_field(field: str, value) -> None:
     shown = re.escape(repr(np.asarray(value).tolist() if isinstance(value, list) else value))
-    with pytest.raises(SteamError, match=rf"PaperSetup\.{field} must be .*, got {shown}"):
+    # the message names the field and the value: "got VALUE" or, from steam_ref.arguments, "got PaperSetup.FIELD=VALUE"
+    with pytest.raises(SteamError, match=rf"PaperSetup\.{field} must be .*, got (PaperSetup\.{field}=)?{shown}"):
         PaperSetup.plaza().replace(**{field: value})
 
 
@@ -99,7 +100,7 @@ def test_paper_setup_qc_is_checked() -> None:
     ],
 )
 def test_stream_options_refuse_a_bad_field(field: str, value) -> None:
-    with pytest.raises(SteamError, match=rf"{field} must be .*, got {re.escape(repr(value))}"):
+    with pytest.raises(SteamError, match=rf"{field} must be .*, got ({field}=)?{re.escape(repr(value))}"):
         StreamOptions(**{field: value})
 
 
