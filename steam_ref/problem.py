@@ -127,6 +127,11 @@ def converged_batch(
     return converge(problem.graph, values, step_tolerance=step_tolerance, ordering=ordering)
 
 
+def _significant(x: float) -> float:
+    """``x`` to 4 significant digits: distances span metres (the stream) to nanometres (converged runs)."""
+    return float(f"{float(x):.4g}")
+
+
 @dataclass(frozen=True)
 class BatchScore:
     """An estimate against the converged batch solution of the same problem (no ground truth needed)."""
@@ -146,10 +151,10 @@ class BatchScore:
         """The figures a JSON line reports."""
         d, u = self.distance, self.distance_unrotated
         return {
-            "batch_distance_median_m": round(float(np.median(d)), 6),
-            "batch_distance_max_m": round(float(np.max(d)), 6),
-            "batch_distance_unrotated_median_m": round(float(np.median(u)), 6),
-            "batch_distance_unrotated_max_m": round(float(np.max(u)), 6),
+            "batch_distance_median_m": _significant(np.median(d)),
+            "batch_distance_max_m": _significant(np.max(d)),
+            "batch_distance_unrotated_median_m": _significant(np.median(u)),
+            "batch_distance_unrotated_max_m": _significant(np.max(u)),
             "batch_rotation_rad": float(f"{self.rotation:.3g}"),
             "batch_cost_gap": float(f"{self.cost_gap:.4g}"),
             "batch_converged": self.batch.converged,
