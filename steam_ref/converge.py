@@ -4,15 +4,17 @@ line search along the global turn, and Anderson acceleration.  [issue 12]
 Where nothing is surveyed (Victoria Park), only the prior on pose 0 (heading σ = π) fixes the map's
 orientation: turning the whole estimate about the origin (:func:`rotated`: positions, velocities,
 accelerations and landmarks rotated, headings shifted) changes no other factor's cost. The cost is
-nearly flat along that turn (curvature 1/π² per rad²), but the turn is a curve in the state space, and
-each GP prior factor's error vector turns with the map, so along the straight tangent Gauss-Newton's
-model (exact for the linear GP prior) has curvature Σ‖e_xy‖² over the GP prior factors: on Victoria
-Park about a thousand times the cost's own along the curve. Each step then goes a thousandth of the way
-round, and a stopping rule on the cost stops Gauss-Newton with the map turned tenths of a radian from
-the optimum, tens of metres away at 100-200 m from the origin. :func:`converge` therefore
+nearly flat along that turn (curvature 1/π² per rad²), but each GP prior factor's error vector turns
+with the map, so Gauss-Newton's model, which keeps only the first-order change of each error, has
+curvature Σ‖W e⊥‖² over the GP prior factors along the turn's tangent; the second-order change of the
+odometry and sighting errors, which it drops, cancels that (docs/derivations.md §9). On Victoria Park
+the model's curvature is hundreds to thousands of times the cost's own: each step goes a thousandth of
+the way round, and a stopping rule on the cost stops Gauss-Newton with the map turned tenths of a radian
+from the optimum, tens of metres away at 100-200 m from the origin. A straight line leaves the turn at
+such angles, so :func:`converge`
 
 1. takes a Gauss-Newton step (Eq. 11),
-2. turns the result by the angle that minimizes the cost along the turn: an exact line search
+2. turns the result by the angle that minimizes the cost along the turn itself: an exact line search
    (Brent) on the few factors the turn changes, :func:`anchored_factors`, found once by turning the
    start; the turn is kept only if the whole cost falls,
 3. mixes the last few iterates by Anderson acceleration (:class:`Anderson`), kept only if that lowers

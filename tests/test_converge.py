@@ -74,7 +74,7 @@ def test_only_the_prior_on_pose_0_sees_the_turn(prefix):
 
 def test_gauss_newton_turns_the_map_back_by_the_fraction_of_derivations_9(prefix):
     """docs/derivations.md §9: one Gauss-Newton step from the optimum turned by 1e-3 rad goes back about
-    (1/π²) / (Σ‖W e⊥‖² + 1/π²) of the way, the model's curvature along the straight tangent against the
+    (1/π²) / (Σ‖W e⊥‖² + 1/π²) of the way, Gauss-Newton's model curvature along the turn against the
     heading prior's; 'about' because other factors touch pose 0 (within a factor 1.5 on this prefix)."""
     _, problem = prefix
     best = converged_batch(problem).values

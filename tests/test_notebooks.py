@@ -2,7 +2,9 @@
 
 Executing needs nbformat, nbclient and ipykernel (the ``notebooks``/``test`` extras): without them
 these tests skip, or fail when STEAM_REF_REQUIRE_OPTIONAL=1 (CI). A notebook that loads the
-paper's files (``load_dataset("plaza")`` or ``"paper-synthetic"``) is a ``needs_data`` test.
+paper's files (``load_dataset("plaza")`` or ``"paper-synthetic"``) is a ``needs_data`` test; one that
+loads a set from the gtsam wheel's ``Data/`` folder (``"victoria-park"``, ``"plaza2"``) needs gtsam, an
+optional package, by the same rule.
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ from requirements import optional_import
 
 TUTORIALS = sorted((Path(__file__).resolve().parents[1] / "tutorials").glob("*.ipynb"))
 READS_REFERENCE_DATA = re.compile(r"""load_dataset\(\s*["'](plaza|paper-synthetic)["']|Syn_theta_Plaza|Plaza1_thrown""")
+READS_GTSAM_DATA = re.compile(r"""load_dataset\(\s*["'](victoria-park|plaza2)["']""")
 
 
 def _code_cells(path: Path) -> list[str]:
@@ -80,6 +83,8 @@ def test_notebook_executes(path):
     nbformat = optional_import("nbformat", "notebooks")
     nbclient = optional_import("nbclient", "notebooks")
     optional_import("ipykernel", "notebooks")
+    if any(READS_GTSAM_DATA.search(src) for src in _code_cells(path)):
+        optional_import("gtsam", "gtsam")  # its wheel's Data/ folder holds the data set
     nb = nbformat.read(path, as_version=4)
     assert all(not cell.get("outputs") for cell in nb.cells if cell.cell_type == "code"), (
         "commit notebooks with outputs stripped"

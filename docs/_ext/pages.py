@@ -27,6 +27,7 @@ from sphinx.application import Sphinx
 from sphinx.util import logging
 
 from steam_ref.cli import build_parser
+from steam_ref.datasets import gtsam_data_dir
 
 LOG = logging.getLogger(__name__)
 
@@ -40,6 +41,8 @@ PAGES_LISTING_THEM = ("background",)
 READS_REFERENCE_DATA = re.compile(
     r"""load_dataset\(\s*["'](plaza|paper-synthetic)["']|Syn_theta_Plaza|Plaza1_thrown|load_authors_run"""
 )
+# ... and the sets that ship in the gtsam wheel's Data/ folder (tests/test_notebooks.py has the same rules).
+READS_GTSAM_DATA = re.compile(r"""load_dataset\(\s*["'](victoria-park|plaza2)["']""")
 DATA_FILES = (
     "Syn_theta_Plaza.mat",
     "Plaza1_thrown_away_some_range.mat",
@@ -59,7 +62,28 @@ def default_data_dir(root: Path) -> None:
 
 
 def notebooks_without_their_data(folder: Path) -> list[str]:
-    """Patterns of the notebooks not to execute: those reading the paper's files while they are absent."""
+    """Patterns of the notebooks not to execute: those reading the paper's files while they are absent,
+    and those reading a set from the gtsam wheel's ``Data/`` folder while gtsam is not installed."""
+    return _paper_readers_without_files(folder) + _gtsam_readers_without_gtsam(folder)
+
+
+def _gtsam_readers_without_gtsam(folder: Path) -> list[str]:
+    if gtsam_data_dir() is not None:
+        return []
+    readers = sorted(p.name for p in folder.glob("*.ipynb") if READS_GTSAM_DATA.search(p.read_text()))
+    if readers and os.environ.get("STEAM_REF_REQUIRE_OPTIONAL") == "1":
+        raise RuntimeError(
+            f"STEAM_REF_REQUIRE_OPTIONAL=1 but gtsam (its Data/ folder) is missing, which these tutorials read: "
+            f"{', '.join(readers)}"
+        )
+    if readers:
+        LOG.info(
+            "steam_ref docs: %s not executed (pip install gtsam: its Data/ folder has the set)", ", ".join(readers)
+        )
+    return [f"*{name}" for name in readers]
+
+
+def _paper_readers_without_files(folder: Path) -> list[str]:
     where = os.environ.get("STEAM_REF_DATA_DIR")
     missing = [f for f in DATA_FILES if not where or not (Path(where) / f).is_file()]
     if not missing:
