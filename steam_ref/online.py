@@ -138,6 +138,10 @@ class StreamingEstimator:
     def __init__(
         self, readings: Readings, setup: PaperSetup, options: StreamOptions, solver: OnlineSolver | None = None
     ):
+        if solver is not None and options.converge_at_end:
+            raise SteamError(
+                "converge_at_end rebuilds steam_ref's own solver at the optimum: it cannot finish a solver passed in"
+            )
         every = setup.every if options.every is None else options.every
         options = options.replace(every=every)  # the result reports the schedule that ran
         self.readings, self.setup, self.options = readings, setup, options

@@ -25,6 +25,7 @@ class RunOptions(Protocol):
     interpolate: bool
     range_states: bool
     max_poses: int | None
+    converge_at_end: bool
 
     @property
     def layout(self) -> Layout: ...
@@ -74,8 +75,10 @@ class RunResult:
     rmse_states_m: float  # the same over the poses with a state only
     covariances: Covariances | None  # final marginals, when asked for
     peak_rss_mb: float  # peak resident memory of the process so far
-    convergence_s: float | None = None  # converge_at_end: its wall time (within total_s); None: not asked for
-    converged_at_end: bool | None = None  # converge_at_end: whether the optimum passed its stationarity check
+    convergence_s: float | None = None  # converge_at_end: its wall time (within total_s); None: not run
+    converged_at_end: bool | None = (
+        None  # converge_at_end: whether the optimum passed its check; None: not run (not asked, or cut short)
+    )
 
     @classmethod
     def of(
@@ -160,7 +163,10 @@ class RunResult:
             "peak_rss_mb": round(self.peak_rss_mb, 1),
             "completed": self.completed,
         } | (
-            {}
-            if self.convergence_s is None
-            else {"convergence_s": round(self.convergence_s, 4), "converged_at_end": self.converged_at_end}
+            {
+                "convergence_s": None if self.convergence_s is None else round(self.convergence_s, 4),
+                "converged_at_end": self.converged_at_end,
+            }
+            if o.converge_at_end
+            else {}
         )

@@ -15,9 +15,10 @@ from steam_ref.converge import Anderson, anchored_factors, converge, rotated
 from steam_ref.datasets import load_dataset
 from steam_ref.errors import ConvergenceWarning, SteamError
 from steam_ref.factors import GPPriorFactor, PriorFactor
-from steam_ref.online import StreamOptions, run_online
+from steam_ref.online import StreamingEstimator, StreamOptions, run_online
 from steam_ref.problem import build_problem, converged_batch
 from steam_ref.readings import PaperSetup, Readings
+from steam_ref.solvers import make_solver
 from steam_ref.variables import X
 
 VP = PaperSetup.victoria_park()
@@ -147,6 +148,17 @@ def test_a_descent_cut_short_is_not_converged_and_the_stream_says_so(prefix, mon
     with pytest.warns(ConvergenceWarning, match="converge_at_end: max_iterations"):
         done = run_online(readings.prefix(60), VP, converge_at_end=True)
     assert done.converged_at_end is False and done.summary()["converged_at_end"] is False
+
+
+def test_a_run_cut_short_before_the_end_reports_no_convergence(prefix):
+    """converge_at_end runs after the last pose only: a run the time budget stops says it did not run
+    (``converged_at_end: None``), not that it converged; and a solver passed in cannot be finished."""
+    readings, _ = prefix
+    cut = run_online(readings, VP, converge_at_end=True, time_budget_s=1e-9)
+    assert not cut.completed and cut.converged_at_end is None
+    assert cut.summary()["converged_at_end"] is None and cut.summary()["convergence_s"] is None
+    with pytest.raises(SteamError, match="converge_at_end rebuilds"):
+        StreamingEstimator(readings, VP, StreamOptions(converge_at_end=True), solver=make_solver("btgp"))
 
 
 def test_bad_options_are_named(prefix):
