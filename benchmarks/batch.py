@@ -11,7 +11,7 @@ Prints one JSON line per data set:
   rmse_m                 position RMSE against ground truth of the converged batch on all the data
   batch_s, iterations    wall time and Gauss-Newton iterations of that converged solve
 
-The converged batch starts from dead reckoning extended chunk by chunk (steam_ref.problem.sequential_batch):
+The converged batch starts from dead reckoning extended chunk by chunk (steam_ref.paper.problem.sequential_batch):
 plain dead reckoning is about 21 m off on the synthetic set and Gauss-Newton from it stops in a local minimum.
 Plots of estimate against ground truth go to benchmarks/out/.
 
@@ -32,9 +32,9 @@ import steam_ref as sr
 from steam_ref.batch import make_ordering
 from steam_ref.datasets import load_dataset
 from steam_ref.linear import LinearSystem, SparseCholesky, linearize, sparse_backend
-from steam_ref.problem import build_problem, sequential_batch
-from steam_ref.readings import PaperSetup
-from steam_ref.results import position_rmse
+from steam_ref.paper.presets import PaperSetup
+from steam_ref.paper.problem import build_problem, sequential_batch
+from steam_ref.paper.results import position_rmse
 
 OUT = Path(__file__).resolve().parent / "out"
 

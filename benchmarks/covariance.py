@@ -24,8 +24,9 @@ import tracemalloc
 
 from steam_ref.covariance import tree_joint_covariance
 from steam_ref.datasets import load_dataset
-from steam_ref.online import StreamingEstimator, StreamOptions
-from steam_ref.readings import PaperSetup, Readings
+from steam_ref.paper.online import StreamingEstimator, StreamOptions
+from steam_ref.paper.presets import PaperSetup
+from steam_ref.paper.readings import Readings
 from steam_ref.variables import X
 
 PRESET = {"synthetic": "synthetic", "paper-synthetic": "synthetic", "plaza": "plaza"}

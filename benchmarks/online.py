@@ -38,8 +38,8 @@ _CHILD = r"""
 import json, sys
 import numpy as np
 from steam_ref.datasets import load_dataset
-from steam_ref.online import StreamOptions, run_online
-from steam_ref.readings import PaperSetup
+from steam_ref.paper.online import StreamOptions, run_online
+from steam_ref.paper.presets import PaperSetup
 name, preset, kw = sys.argv[1], sys.argv[2], json.loads(sys.argv[3])
 data = load_dataset(name)
 setup = PaperSetup.named(preset)

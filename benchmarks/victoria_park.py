@@ -7,7 +7,7 @@ figures are medians over ``--repeat`` runs:
 - ``btgp_total_s``, ``btgp_peak_rss_mb``: BTGP/10 with the ``victoria-park`` preset (the script's
   iSAM2: GTSAM's defaults, pose and velocity relinearized on their own);
 - ``batch_distance_*``, ``batch_rotation_rad``, ``batch_cost_gap``: its estimate against the converged
-  batch solution of the same problem (:func:`steam_ref.problem.reference_batch`: the lower of the minima
+  batch solution of the same problem (:func:`steam_ref.paper.problem.reference_batch`: the lower of the minima
   reached from the sequential batch and from the run's estimate, ``batch_start``; ``batch_s``), raw and
   once turned about the origin (only the σ = π prior on pose 0's heading fixes the map's orientation);
 - ``gtsam_total_s`` and ``speedup_vs_gtsam``: GTSAM's ISAM2 (C++, its defaults) fed the same factors on
@@ -17,7 +17,7 @@ figures are medians over ``--repeat`` runs:
   poses (3,000: GTSAM's run grows faster than ours and takes over 10 minutes on all 6,969);
   ``gtsam_max_distance_m``: the two estimates apart, pose by pose;
 - ``converged_*``: BTGP/10 with ``converge_at_end`` (``steam-ref run --converge-at-end``): the stream, then
-  everything iterated to the batch optimum from its estimate (:func:`steam_ref.converge.converge`) and the
+  everything iterated to the batch optimum from its estimate (:func:`steam_ref.paper.converge.converge`) and the
   solver rebuilt there; its total time (``converged_convergence_s`` of it), memory and distances;
 - ``targets``: the issue's (60 s, 500 MB, 1 cm at the median pose), measured on the ``converged_*`` run, and
   whether each is met (the stream alone, the ``btgp_*`` and ``batch_*`` figures, is 30-80 m away: see
@@ -48,9 +48,10 @@ from pathlib import Path
 import numpy as np
 
 from steam_ref.datasets import load_dataset
+from steam_ref.paper.presets import PaperSetup
+from steam_ref.paper.problem import build_problem, reference_batch, score_estimate
+from steam_ref.paper.readings import Readings
 from steam_ref.plot import plot_fidelity, plot_trajectory
-from steam_ref.problem import build_problem, reference_batch, score_estimate
-from steam_ref.readings import PaperSetup, Readings
 from steam_ref.variables import L, Values, X
 
 OUT = Path(__file__).resolve().parent / "out"
@@ -60,9 +61,10 @@ _CHILD = r"""
 import json, sys, time
 import numpy as np
 from steam_ref.datasets import load_dataset
-from steam_ref.online import StreamingEstimator, StreamOptions
-from steam_ref.readings import PaperSetup, Readings
-from steam_ref.results import peak_rss_mb
+from steam_ref.paper.online import StreamingEstimator, StreamOptions
+from steam_ref.paper.presets import PaperSetup
+from steam_ref.paper.readings import Readings
+from steam_ref.paper.results import peak_rss_mb
 from steam_ref.variables import L, X
 solver_name, blocks, max_poses, out = sys.argv[1], json.loads(sys.argv[2]), json.loads(sys.argv[3]), sys.argv[4]
 every, at_end = int(sys.argv[5]), sys.argv[6] == "converge"
@@ -71,7 +73,7 @@ readings = Readings.from_dataset(load_dataset("victoria-park"), setup)
 solver = None
 if solver_name == "gtsam":
     import gtsam
-    from steam_ref.solvers import OnlineSolver
+    from steam_ref.paper.solvers import OnlineSolver
 
     def gkey(key):
         return gtsam.symbol("x" if key.kind == "x" else "l", key.index)

@@ -6,12 +6,10 @@ interpolation, batch Gauss-Newton (PB, PBVR), and the Bayes tree (BTGP). Equatio
 the code as [YIB Eq. n]; see docs/references.md.
 """
 
-from importlib import metadata as _metadata
+import importlib
+from typing import TYPE_CHECKING, Any
 
-from .batch import BatchResult, batch_solve, gauss_newton, levenberg_marquardt
-from .bayes_tree import BayesTree, IncrementalSolver, ISAM2Params
-from .covariance import marginal_covariances
-from .datasets import LandmarkDataset, RangeDataset, generate_synthetic, load_dataset
+from ._version import __version__ as __version__
 from .errors import (
     ConvergenceWarning,
     DataError,
@@ -22,29 +20,87 @@ from .errors import (
     UnderdeterminedError,
     UnknownVariableError,
 )
-from .factors import (
-    BearingFactor,
-    BearingRangeFactor,
-    Factor,
-    GPPriorFactor,
-    InterpolatedFactor,
-    OdometryFactor,
-    PriorFactor,
-    RangeFactor,
-    VelocityFactor,
-    gp_prior_factors,
-)
-from .graph import FactorGraph
-from .linear import LinearSystem, amd_ordering, xl_ordering
-from .online import StreamOptions, run_online
-from .readings import PaperSetup
-from .robust import Huber, Tukey
-from .variables import Key, L, Values, X
 
-try:
-    __version__ = _metadata.version("steam_ref")  # written once, in pyproject.toml
-except _metadata.PackageNotFoundError:  # the source folder on sys.path, never installed
-    __version__ = "0+unknown"
+# Every other name a user types, and the module it lives in. They load when first touched (PEP 562), so
+# `import steam_ref` costs the exception family only; a user of the Bayes tree never loads the paper's
+# experiment machinery, its data loaders or matplotlib. tests/test_architecture.py checks this table
+# against __all__ and against each module's own __all__.
+_HOMES = {
+    "Key": "variables",
+    "X": "variables",
+    "L": "variables",
+    "Values": "variables",
+    "FactorGraph": "graph",
+    "Factor": "factors",
+    "GPPriorFactor": "factors",
+    "PriorFactor": "factors",
+    "OdometryFactor": "factors",
+    "VelocityFactor": "factors",
+    "RangeFactor": "factors",
+    "BearingFactor": "factors",
+    "BearingRangeFactor": "factors",
+    "InterpolatedFactor": "factors",
+    "gp_prior_factors": "factors",
+    "Huber": "robust",
+    "Tukey": "robust",
+    "LinearSystem": "linear",
+    "xl_ordering": "linear",
+    "amd_ordering": "linear",
+    "marginal_covariances": "covariance",
+    "gauss_newton": "batch",
+    "levenberg_marquardt": "batch",
+    "batch_solve": "batch",
+    "BatchResult": "batch",
+    "BayesTree": "bayes_tree",
+    "IncrementalSolver": "bayes_tree",
+    "ISAM2Params": "bayes_tree",
+    "RangeDataset": "datasets",
+    "LandmarkDataset": "datasets",
+    "load_dataset": "datasets",
+    "generate_synthetic": "datasets",
+    "PaperSetup": "paper.presets",
+    "StreamOptions": "paper.online",
+    "run_online": "paper.online",
+}
+
+
+def __getattr__(name: str) -> Any:
+    """Load a public name's module when the name is first used, and keep the name here."""
+    home = _HOMES.get(name)
+    if home is None:
+        raise AttributeError(f"module 'steam_ref' has no attribute {name!r}")
+    value = getattr(importlib.import_module(f".{home}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_HOMES))
+
+
+if TYPE_CHECKING:  # what a type checker and an IDE see: the same names, imported eagerly
+    from .batch import BatchResult, batch_solve, gauss_newton, levenberg_marquardt
+    from .bayes_tree import BayesTree, IncrementalSolver, ISAM2Params
+    from .covariance import marginal_covariances
+    from .datasets import LandmarkDataset, RangeDataset, generate_synthetic, load_dataset
+    from .factors import (
+        BearingFactor,
+        BearingRangeFactor,
+        Factor,
+        GPPriorFactor,
+        InterpolatedFactor,
+        OdometryFactor,
+        PriorFactor,
+        RangeFactor,
+        VelocityFactor,
+        gp_prior_factors,
+    )
+    from .graph import FactorGraph
+    from .linear import LinearSystem, amd_ordering, xl_ordering
+    from .paper.online import StreamOptions, run_online
+    from .paper.presets import PaperSetup
+    from .robust import Huber, Tukey
+    from .variables import Key, L, Values, X
 
 __all__ = [
     "SteamError",

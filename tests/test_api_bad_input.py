@@ -37,7 +37,7 @@ from steam_ref.linear import (
     linearize,
     make_ordering,
 )
-from steam_ref.results import position_rmse
+from steam_ref.paper.results import position_rmse
 from steam_ref.trajectory import Trajectory
 
 QC = np.diag([0.1, 0.2, 0.3])

@@ -1,6 +1,8 @@
-"""The package's shape, read from its source with ``ast`` (nothing is imported): no import cycle
-between steam_ref modules, no function-local import of a steam_ref module outside an explicit
-allow-list, and no module over 400 lines outside an explicit allow-list.
+"""The package's shape, read from its source with ``ast`` (nothing is imported): every module in a
+layer and no import of a higher layer (``LAYERS``, the table docs/architecture.md draws), no import
+cycle between steam_ref modules, no function-local import of a steam_ref module outside an explicit
+allow-list, no module over 400 lines outside an explicit allow-list, at most 12 modules at the top.
+And, in a fresh interpreter, that ``import steam_ref`` loads neither matplotlib nor the paper layer.
 
 Edges are module-level imports (``if TYPE_CHECKING:`` blocks excluded; class bodies and top-level
 ``if``/``try`` count, since they run on import). ``from . import x`` is an edge to module ``x``
@@ -10,6 +12,9 @@ when ``x`` is a module, else to the package; importing a package is an edge to i
 from __future__ import annotations
 
 import ast
+import importlib
+import subprocess
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -18,8 +23,51 @@ import pytest
 PACKAGE = Path(__file__).resolve().parents[1] / "steam_ref"
 MAX_LINES = 400
 
-# Modules allowed to import steam_ref modules inside functions, each with its reason (none today).
-LOCAL_IMPORTS_ALLOWED: dict[str, str] = {}
+# The layers, lowest first: a module may import its own layer's modules and lower layers', never a higher
+# one. A module's layer is that of the longest entry that is it or a package holding it. This table is
+# the one statement of the rule; docs/architecture.md draws it.
+LAYERS: dict[str, int] = {
+    # the algorithm
+    "steam_ref._version": 0,
+    "steam_ref.errors": 0,
+    "steam_ref.arguments": 0,
+    "steam_ref.plot": 1,  # a leaf: draws plain arrays, imports only errors, so any layer may draw
+    "steam_ref.variables": 1,
+    "steam_ref.pose2": 1,
+    "steam_ref.robust": 1,
+    "steam_ref.gp": 1,
+    "steam_ref.factors": 2,
+    "steam_ref.linear": 3,
+    "steam_ref.graph": 4,
+    "steam_ref.covariance": 4,
+    "steam_ref.batch": 5,
+    "steam_ref.bayes_tree": 5,
+    "steam_ref.trajectory": 5,
+    "steam_ref.datasets": 6,
+    # the paper's experiments, in the order data flows
+    "steam_ref.paper.presets": 7,
+    "steam_ref.paper.readings": 8,
+    "steam_ref.paper.converge": 8,
+    "steam_ref.paper.frontend": 9,
+    "steam_ref.paper.problem": 10,
+    "steam_ref.paper.solvers": 10,
+    "steam_ref.paper.results": 10,
+    "steam_ref.paper.online": 11,
+    "steam_ref.paper.fidelity": 11,
+    "steam_ref.paper.experiments": 12,
+    "steam_ref.paper": 12,  # its __init__ re-exports the layer's main names
+    # tools
+    "steam_ref.conformance": 13,
+    "steam_ref.cli": 14,
+    "steam_ref.__main__": 14,
+    "steam_ref": 15,  # the facade: names load lazily from the layers; nothing imports it
+}
+MAX_TOP_LEVEL_MODULES = 12
+
+# Modules allowed to import steam_ref modules inside functions, each with its reason.
+LOCAL_IMPORTS_ALLOWED: dict[str, str] = {
+    "steam_ref.cli": "the console script's entry point answers --version before the commands (and SciPy) load",
+}
 # Modules allowed over MAX_LINES, each with its reason (none today).
 LONG_MODULES_ALLOWED: dict[str, str] = {}
 
@@ -187,7 +235,80 @@ def test_the_cycle_finder_names_a_cycle_and_ignores_a_diamond():
     assert find_cycles({"a": {"a"}}) == [["a", "a"]]
 
 
+def layer(module: str) -> int:
+    """The layer of a module: that of the longest entry of LAYERS that is it or holds it."""
+    name = module
+    while name not in LAYERS:
+        if "." not in name:
+            raise KeyError(f"{module} is in no layer: add it to LAYERS (and to docs/architecture.md)")
+        name = name.rpartition(".")[0]
+    return LAYERS[name]
+
+
+def upward_imports(sites: list[ImportSite]) -> list[str]:
+    return [
+        f"{MODULES[s.module].relative_to(PACKAGE.parent)}:{s.line} imports {s.target} "
+        f"(layer {layer(s.target)} > {layer(s.module)})"
+        for s in sites
+        if layer(s.target) > layer(s.module)
+    ]
+
+
+def test_the_layer_check_catches_an_import_that_runs_back_up():
+    up = ImportSite("steam_ref.linear.system", "steam_ref.paper.online", 7, False)
+    down = ImportSite("steam_ref.paper.online", "steam_ref.linear.system", 7, False)
+    with_root = ImportSite("steam_ref.cli.args", "steam_ref", 3, False)
+    found = upward_imports([up, down, with_root])
+    assert len(found) == 2
+    assert "imports steam_ref.paper.online (layer 11 > 3)" in found[0]
+    assert "imports steam_ref (layer 15 > 14)" in found[1]
+
+
 # --- the package ----------------------------------------------------------------------------------
+
+
+def test_every_module_is_in_a_layer():
+    for module in MODULES:
+        layer(module)  # raises KeyError naming the module
+
+
+def test_no_import_of_a_higher_layer():
+    up = upward_imports(all_sites())
+    assert not up, "imports that run back up: " + "; ".join(up)
+
+
+def test_the_layer_table_names_only_modules_that_exist():
+    stale = [name for name in LAYERS if name not in MODULES]
+    assert not stale, f"LAYERS names modules that do not exist: {stale}"
+
+
+def test_the_top_of_the_package_holds_at_most_12_modules():
+    top = sorted(p.name for p in PACKAGE.glob("*.py") if p.name != "__init__.py")
+    assert len(top) <= MAX_TOP_LEVEL_MODULES, f"{len(top)} modules at the top: {top}"
+
+
+def test_import_steam_ref_loads_neither_matplotlib_nor_the_paper_layer():
+    code = (
+        "import sys, steam_ref\n"
+        "heavy = [m for m in sys.modules if m.split('.')[0] in ('matplotlib', 'tqdm') or m.startswith("
+        "('steam_ref.paper', 'steam_ref.conformance', 'steam_ref.datasets', 'steam_ref.plot', 'steam_ref.cli'))]\n"
+        "print(','.join(heavy))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "", f"import steam_ref loaded {out.stdout.strip()}"
+
+
+def test_the_lazy_names_of_the_package_are_its_public_names_and_resolve():
+    import steam_ref
+
+    assert set(steam_ref._HOMES) | {n for n in steam_ref.__all__ if n not in steam_ref._HOMES} == set(steam_ref.__all__)
+    eager = set(steam_ref.__all__) - set(steam_ref._HOMES)
+    assert all(hasattr(steam_ref.errors, n) for n in eager), eager
+    for name, home in steam_ref._HOMES.items():
+        module = importlib.import_module(f"steam_ref.{home}")
+        assert getattr(steam_ref, name) is getattr(module, name), name
+    with pytest.raises(AttributeError, match="no attribute 'nothing_here'"):
+        _ = steam_ref.nothing_here
 
 
 def test_no_import_cycle_between_steam_ref_modules():
@@ -215,3 +336,30 @@ def test_module_is_at_most_400_lines(path):
         assert n > MAX_LINES, f"{name} has {n} lines: remove it from LONG_MODULES_ALLOWED"
     else:
         assert n <= MAX_LINES, f"{name} has {n} lines (> {MAX_LINES}): split it by job"
+
+
+ORACLE = ("steam_ref.conformance.oracle", "steam_ref.conformance.oracle_graph", "steam_ref.conformance.expected")
+
+
+def test_the_conformance_oracle_imports_nothing_of_steam_ref_but_its_errors():
+    """Every import form counts: relative (``from . import x``, ``from ..errors import E``), absolute
+    (``import steam_ref.x``, ``from steam_ref.x import y``), in functions and class bodies too."""
+    allowed = {"steam_ref.errors", *ORACLE}
+    for module in ORACLE:
+        path = MODULES[module]
+        targets = {s.target for s in import_sites(module, ast.parse(path.read_text(), str(path)))}
+        assert targets <= allowed, f"{module} imports {sorted(targets - allowed)}"
+
+
+def test_the_oracle_check_sees_every_import_form():
+    forms = [
+        "from ..linear import system",
+        "from .. import batch",
+        "import steam_ref.graph",
+        "from steam_ref.factors import Factor",
+        "def f():\n    from ..covariance import tree_marginals",
+        "class C:\n    import steam_ref.gp.prior as p",
+    ]
+    for source in forms:
+        targets = {s.target for s in import_sites(ORACLE[0], ast.parse(source))}
+        assert targets and not targets <= {"steam_ref.errors", *ORACLE}, source

@@ -1,7 +1,7 @@
 """The steam-ref command on bad input (issue 10): every error is one line on stderr and exit code 2,
 never a traceback, and it comes before any run: the solver, the batch, the experiments and the
 comparison are replaced here by functions that fail the test if they are reached. Most calls run
-in-process (``steam_ref.cli.main``); two run the module as a user would."""
+in-process (``steam_ref.cli.commands.main``); two run the module as a user would."""
 
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ import scipy.io
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from steam_ref import cli
+from steam_ref.cli import commands as cli
 from steam_ref.datasets import generate_synthetic
 
 SMALL = generate_synthetic(n_steps=4, n_landmarks=2, seed=3, range_sigma=0.3)

@@ -15,10 +15,11 @@ import scipy.io
 from steam_ref import datasets
 from steam_ref.datasets import RangeDataset, generate_synthetic, load_cmu_mat, load_dataset
 from steam_ref.errors import DataError, ShapeError, SteamError
-from steam_ref.fidelity import load_authors_run
-from steam_ref.online import StreamOptions
-from steam_ref.problem import build_problem, sequential_batch
-from steam_ref.readings import RANGE_CORRECTION_SLOPES, PaperSetup, Readings, range_correction
+from steam_ref.paper.fidelity import load_authors_run
+from steam_ref.paper.online import StreamOptions
+from steam_ref.paper.presets import PaperSetup
+from steam_ref.paper.problem import build_problem, sequential_batch
+from steam_ref.paper.readings import RANGE_CORRECTION_SLOPES, Readings, range_correction
 
 DATA = generate_synthetic(n_steps=40, n_landmarks=5, seed=1, range_sigma=0.1, landmark_distance=(2.0, 30.0))
 

@@ -11,10 +11,10 @@ import pytest
 import scipy.io
 
 from steam_ref.bayes_tree import ISAM2Params
-from steam_ref.cli import main
+from steam_ref.cli.commands import main
 from steam_ref.datasets import generate_synthetic
-from steam_ref.online import run_online
-from steam_ref.readings import PaperSetup
+from steam_ref.paper.online import run_online
+from steam_ref.paper.presets import PaperSetup
 
 JSON_KEYS = {
     "dataset",
@@ -87,8 +87,8 @@ def test_no_interpolate_flag_reaches_the_run(capsys, small_mat):
 
 def test_relinearization_flags_reach_the_run(capsys, small_mat):
     """--relinearize-threshold/--relinearize-skip give the library's run with those options."""
-    from steam_ref.online import StreamOptions, run_online
-    from steam_ref.readings import PaperSetup
+    from steam_ref.paper.online import StreamOptions, run_online
+    from steam_ref.paper.presets import PaperSetup
 
     path, data = small_mat
     setup = PaperSetup.synthetic()
@@ -149,8 +149,9 @@ def test_save_estimates_writes_the_final_marginals(capsys, small_mat, tmp_path, 
     from steam_ref.graph import FactorGraph
     from steam_ref.linear import LinearSystem
     from steam_ref.linear.ordering import xl_ordering
-    from steam_ref.online import StreamingEstimator, StreamOptions
-    from steam_ref.readings import PaperSetup, Readings
+    from steam_ref.paper.online import StreamingEstimator, StreamOptions
+    from steam_ref.paper.presets import PaperSetup
+    from steam_ref.paper.readings import Readings
     from steam_ref.variables import L, X
 
     path, data = small_mat
@@ -274,9 +275,9 @@ def test_batch_command_matches_a_direct_gauss_newton(capsys, small_mat, tmp_path
     """`steam-ref batch` reports the RMSE of the converged batch, which the library reproduces."""
     import steam_ref as sr
     from steam_ref.datasets import load_cmu_mat
-    from steam_ref.problem import build_problem, sequential_batch
-    from steam_ref.readings import PaperSetup
-    from steam_ref.results import position_rmse
+    from steam_ref.paper.presets import PaperSetup
+    from steam_ref.paper.problem import build_problem, sequential_batch
+    from steam_ref.paper.results import position_rmse
 
     path, data = small_mat
     plot = tmp_path / "b.png"
@@ -315,8 +316,8 @@ def test_fidelity_without_the_authors_files_is_one_line_and_exit_2(capsys, tmp_p
 
 def test_departure_flags_reach_the_set_up(capsys, small_mat):
     """--departure NAME runs the preset departing from the scripts in that named way."""
-    from steam_ref.online import StreamOptions, run_online
-    from steam_ref.readings import PaperSetup
+    from steam_ref.paper.online import StreamOptions, run_online
+    from steam_ref.paper.presets import PaperSetup
 
     path, data = small_mat
     code, out, err = _run(

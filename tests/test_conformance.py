@@ -22,7 +22,7 @@ import scipy.io
 import tomllib
 from requirements import optional_import
 
-from steam_ref.cli import main
+from steam_ref.cli.commands import main
 from steam_ref.conformance import SHIPPED, SUITES, run_case
 from steam_ref.conformance.checker import compare_quantity
 from steam_ref.conformance.kitio import dumps, kit_files, read_index, read_suite

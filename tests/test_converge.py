@@ -11,14 +11,15 @@ import pytest
 from requirements import optional_import
 
 from steam_ref.batch import gauss_newton
-from steam_ref.converge import Anderson, anchored_factors, converge, rotated
 from steam_ref.datasets import load_dataset
 from steam_ref.errors import ConvergenceWarning, SteamError
 from steam_ref.factors import GPPriorFactor, PriorFactor
-from steam_ref.online import StreamingEstimator, StreamOptions, run_online
-from steam_ref.problem import build_problem, converged_batch
-from steam_ref.readings import PaperSetup, Readings
-from steam_ref.solvers import make_solver
+from steam_ref.paper.converge import Anderson, anchored_factors, converge, rotated
+from steam_ref.paper.online import StreamingEstimator, StreamOptions, run_online
+from steam_ref.paper.presets import PaperSetup
+from steam_ref.paper.problem import build_problem, converged_batch
+from steam_ref.paper.readings import Readings
+from steam_ref.paper.solvers import make_solver
 from steam_ref.variables import X
 
 VP = PaperSetup.victoria_park()
@@ -143,7 +144,7 @@ def test_a_descent_cut_short_is_not_converged_and_the_stream_says_so(prefix, mon
     short = converge(problem.graph, rotated(problem.initial, 0.5), max_iterations=1)
     assert not short.converged and "max_iterations" in short.reason
     monkeypatch.setattr(
-        "steam_ref.online.converge", lambda graph, values: converge(graph, rotated(values, 0.5), max_iterations=1)
+        "steam_ref.paper.online.converge", lambda graph, values: converge(graph, rotated(values, 0.5), max_iterations=1)
     )
     with pytest.warns(ConvergenceWarning, match="converge_at_end: max_iterations"):
         done = run_online(readings.prefix(60), VP, converge_at_end=True)

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from steam_ref.datasets import generate_synthetic
-from steam_ref.experiments import (
+from steam_ref.paper.experiments import (
     SKIPS,
     TIMING_RUNS,
     Experiment,
@@ -22,9 +22,9 @@ from steam_ref.experiments import (
     results_table,
     speedup_on_prefix,
 )
-from steam_ref.online import StreamOptions, run_online
-from steam_ref.readings import PaperSetup
-from steam_ref.results import position_rmse
+from steam_ref.paper.online import StreamOptions, run_online
+from steam_ref.paper.presets import PaperSetup
+from steam_ref.paper.results import position_rmse
 
 SETUP = PaperSetup.synthetic()
 
@@ -106,7 +106,7 @@ def test_published_run_is_btgp1_with_every_pose_a_state_and_its_marginals(small)
 def test_published_row_compares_with_the_authors_saved_run(shared_data):
     """On the paper's synthetic set the row sets our RMSE beside the authors' saved run's."""
     from steam_ref.datasets import load_cmu_mat
-    from steam_ref.fidelity import compare, load_authors_run
+    from steam_ref.paper.fidelity import compare, load_authors_run
 
     data = load_cmu_mat(shared_data / "Syn_theta_Plaza.mat")
     exp = Experiment("paper-synthetic", data, SETUP)
@@ -126,7 +126,7 @@ def test_published_row_of_a_prefix_says_so(small):
 def test_interpolation_sweep_runs_with_its_documented_set_up(small):
     """Each sweep run is the set-up with the plain heading-rate guess, at its skip, with and without
     interpolation: the same estimate as a direct run of that set-up, not of the preset."""
-    from steam_ref.experiments import INTERPOLATION_DEPARTURES, interpolation_experiment
+    from steam_ref.paper.experiments import INTERPOLATION_DEPARTURES, interpolation_experiment
 
     assert INTERPOLATION_DEPARTURES == ("plain-heading-rate",)
     exp = Experiment("small", small, SETUP)

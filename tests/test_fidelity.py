@@ -16,9 +16,9 @@ import pytest
 
 from steam_ref.datasets import load_cmu_mat
 from steam_ref.errors import DataError
-from steam_ref.fidelity import compare, load_authors_run
-from steam_ref.online import run_online
-from steam_ref.readings import PaperSetup
+from steam_ref.paper.fidelity import compare, load_authors_run
+from steam_ref.paper.online import run_online
+from steam_ref.paper.presets import PaperSetup
 
 pytestmark = pytest.mark.slow
 

@@ -27,10 +27,11 @@ from steam_ref.batch import gauss_newton  # noqa: E402
 from steam_ref.bayes_tree import ISAM2Params  # noqa: E402
 from steam_ref.datasets import generate_synthetic  # noqa: E402
 from steam_ref.gp import LinearSDE  # noqa: E402
-from steam_ref.online import StreamingEstimator, StreamOptions  # noqa: E402
-from steam_ref.problem import build_problem  # noqa: E402
-from steam_ref.readings import PaperSetup, Readings  # noqa: E402
-from steam_ref.solvers import BayesTreeSolver  # noqa: E402
+from steam_ref.paper.online import StreamingEstimator, StreamOptions  # noqa: E402
+from steam_ref.paper.presets import PaperSetup  # noqa: E402
+from steam_ref.paper.problem import build_problem  # noqa: E402
+from steam_ref.paper.readings import Readings  # noqa: E402
+from steam_ref.paper.solvers import BayesTreeSolver  # noqa: E402
 from steam_ref.variables import Key, L, Values, X  # noqa: E402
 
 SETUP = PaperSetup.synthetic()

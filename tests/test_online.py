@@ -12,12 +12,13 @@ from steam_ref.covariance import sparse_joint_covariance as joint_covariance
 from steam_ref.datasets import generate_synthetic
 from steam_ref.errors import SteamError
 from steam_ref.factors import GPPriorFactor, InterpolatedFactor, RangeFactor, VelocityFactor
-from steam_ref.frontend import Layout
 from steam_ref.gp.interpolate import interpolate_covariance, interpolation_matrices
 from steam_ref.graph import FactorGraph
-from steam_ref.online import StreamingEstimator, StreamOptions, run_online
-from steam_ref.problem import build_problem
-from steam_ref.readings import PaperSetup, Readings
+from steam_ref.paper.frontend import Layout
+from steam_ref.paper.online import StreamingEstimator, StreamOptions, run_online
+from steam_ref.paper.presets import PaperSetup
+from steam_ref.paper.problem import build_problem
+from steam_ref.paper.readings import Readings
 from steam_ref.variables import Values, X
 
 SETUP = PaperSetup.synthetic()
@@ -310,8 +311,8 @@ def test_pose_0_goes_to_the_solver_with_pose_1(data):
 
 def test_schedule_updates_at_states_after_every_ranges_and_at_the_last_pose():
     """The rule of online.Schedule, step by step: (pose, is_state, ranges) → update?"""
-    from steam_ref.frontend import NewStep
-    from steam_ref.online import Schedule
+    from steam_ref.paper.frontend import NewStep
+    from steam_ref.paper.online import Schedule
 
     schedule = Schedule(every=2, start_after=3, last_pose=9)
     steps = [
@@ -334,8 +335,8 @@ def test_schedule_updates_at_states_after_every_ranges_and_at_the_last_pose():
 
 
 def test_bad_stream_inputs_raise_steam_errors(data):
-    from steam_ref.frontend import FrontEnd
-    from steam_ref.solvers import make_solver
+    from steam_ref.paper.frontend import FrontEnd
+    from steam_ref.paper.solvers import make_solver
 
     for bad, needle in [
         (dict(isam2={}), "isam2"),

@@ -11,9 +11,10 @@ from steam_ref.bayes_tree import ISAM2Params
 from steam_ref.datasets import generate_synthetic
 from steam_ref.errors import SteamError
 from steam_ref.gp import LinearSDE
-from steam_ref.online import StreamingEstimator, StreamOptions
-from steam_ref.problem import build_problem
-from steam_ref.readings import PaperSetup, Readings
+from steam_ref.paper.online import StreamingEstimator, StreamOptions
+from steam_ref.paper.presets import PaperSetup
+from steam_ref.paper.problem import build_problem
+from steam_ref.paper.readings import Readings
 from steam_ref.variables import X
 
 SETUPS = {p: PaperSetup.synthetic().replace(prior=p, singer_time_constant=2.0) for p in ("wnoj", "singer")}

@@ -10,9 +10,10 @@ import pytest
 from steam_ref.datasets import RangeDataset, generate_synthetic, load_cmu_mat
 from steam_ref.errors import DataError, SteamError
 from steam_ref.factors import PriorFactor, RangeFactor
-from steam_ref.frontend import FrontEnd, Layout
+from steam_ref.paper.frontend import FrontEnd, Layout
+from steam_ref.paper.presets import PaperSetup
+from steam_ref.paper.readings import Readings, attach_ranges, range_correction
 from steam_ref.pose2 import compose
-from steam_ref.readings import PaperSetup, Readings, attach_ranges, range_correction
 from steam_ref.variables import L, X
 
 
@@ -160,7 +161,7 @@ def test_rebase_composes_the_next_guess_from_the_estimate():
 
 
 def test_departures_are_named_and_change_only_their_fields():
-    from steam_ref.readings import DEPARTURES
+    from steam_ref.paper.presets import DEPARTURES
 
     base = PaperSetup.plaza()
     for name, changes in DEPARTURES.items():

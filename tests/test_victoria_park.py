@@ -15,16 +15,17 @@ import pytest
 from requirements import optional_import, skip_or_fail
 
 from steam_ref.bayes_tree import ISAM2Params
-from steam_ref.cli import main
-from steam_ref.converge import rotated
+from steam_ref.cli.commands import main
 from steam_ref.datasets import LandmarkDataset, gtsam_data_dir, load_dataset, load_gtsam_2d
 from steam_ref.errors import DataError, SteamError
-from steam_ref.experiments import Experiment, interpolation_experiment, results_table, timing_experiment
 from steam_ref.factors import BearingRangeFactor, InterpolatedFactor, PriorFactor
-from steam_ref.frontend import FrontEnd, Layout
-from steam_ref.online import StreamingEstimator, StreamOptions
-from steam_ref.problem import build_problem, converged_batch, score_estimate
-from steam_ref.readings import PaperSetup, Readings
+from steam_ref.paper.converge import rotated
+from steam_ref.paper.experiments import Experiment, interpolation_experiment, results_table, timing_experiment
+from steam_ref.paper.frontend import FrontEnd, Layout
+from steam_ref.paper.online import StreamingEstimator, StreamOptions
+from steam_ref.paper.presets import PaperSetup
+from steam_ref.paper.problem import build_problem, converged_batch, score_estimate
+from steam_ref.paper.readings import Readings
 from steam_ref.variables import L, X
 
 VP = PaperSetup.victoria_park()

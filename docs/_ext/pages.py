@@ -3,7 +3,7 @@
 - ``modules/``: one page per layer of ``architecture.md``'s table, each module's docstrings by
   autodoc. A module of the package that the table does not place is a build warning (so, with
   ``-W``, an error): the table is the map a reader follows, and it stays complete.
-- ``cli/``: one page per ``steam-ref`` command holding its ``--help``, from ``steam_ref.cli``'s own
+- ``cli/``: one page per ``steam-ref`` command holding its ``--help``, from ``steam_ref.cli.commands``'s own
   parser.
 - Pages listed in ``OPTIONAL_PAGES`` leave the landing page's table of contents while absent.
 - Notebooks that read the paper's files are not executed when the files are missing (a note is
@@ -26,7 +26,7 @@ from pathlib import Path
 from sphinx.application import Sphinx
 from sphinx.util import logging
 
-from steam_ref.cli import build_parser
+from steam_ref.cli.commands import build_parser
 from steam_ref.datasets import gtsam_data_dir
 
 LOG = logging.getLogger(__name__)

@@ -19,10 +19,10 @@ import numpy as np
 
 from ..datasets import default_data_dirs, load_dataset, load_range_dataset
 from ..errors import DataError
-from ..fidelity import load_authors_run
-from ..online import run_online
-from ..readings import PaperSetup
-from ..results import position_rmse
+from ..paper.fidelity import load_authors_run
+from ..paper.online import run_online
+from ..paper.presets import PaperSetup
+from ..paper.results import position_rmse
 from .cases import Case, tol
 from .kitio import plain, sha256
 

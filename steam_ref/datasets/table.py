@@ -15,7 +15,7 @@ Conventions, checked on the reference files (see ``data/README.md`` for the figu
   files (paper-synthetic and Plaza, cleaned or original) follow this exactly; a file that does
   not is rejected with a :class:`DataError`, never re-aligned.
 - Which pose a range reading belongs to is the front end's rule, not the data set's
-  (:func:`steam_ref.readings.attach_ranges`).
+  (:func:`steam_ref.paper.readings.attach_ranges`).
 - Range rows are kept in the order given, even where their time goes back
   (:meth:`RangeDataset.ranges_going_back` names those rows).
 

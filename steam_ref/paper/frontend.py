@@ -29,7 +29,7 @@ robot would meet them:
   After a solver update the caller hands the front end the latest state's estimate
   (:meth:`FrontEnd.rebase`), so predictions compose from the estimate, not from dead reckoning.
 
-The batch problem is everything the front end yields (:func:`steam_ref.problem.build_problem`); the
+The batch problem is everything the front end yields (:func:`steam_ref.paper.problem.build_problem`); the
 streaming solvers (PB, PBVR, BTGP) consume the same steps, so the two agree by construction.
 """
 
@@ -41,8 +41,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from .errors import SteamError
-from .factors import (
+from ..errors import SteamError
+from ..factors import (
     BearingFactor,
     BearingRangeFactor,
     Factor,
@@ -52,9 +52,10 @@ from .factors import (
     RangeFactor,
     VelocityFactor,
 )
-from .pose2 import compose, transform_from, wrap_angle
-from .readings import PaperSetup, Readings
-from .variables import Key, L, X
+from ..pose2 import compose, transform_from, wrap_angle
+from ..variables import Key, L, X
+from .presets import PaperSetup
+from .readings import Readings
 
 __all__ = ["Layout", "NewStep", "FrontEnd"]
 

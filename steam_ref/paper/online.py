@@ -1,8 +1,8 @@
 """A streamed run: the front end feeds a solver on the paper's schedule.  [YIB Alg. 1, Sec. IV]
 
 :class:`StreamingEstimator` is the run loop of Algorithm 1: each pose, the front end
-(:mod:`steam_ref.frontend`, step 1) releases new variables and factors; when the schedule says so
-they go to the solver (:mod:`steam_ref.solvers`: PB, PBVR or BTGP, steps 2-7), and the front end
+(:mod:`steam_ref.paper.frontend`, step 1) releases new variables and factors; when the schedule says so
+they go to the solver (:mod:`steam_ref.paper.solvers`: PB, PBVR or BTGP, steps 2-7), and the front end
 then predicts from the solver's latest estimate.
 
 The schedule (:class:`Schedule`, the paper's '/1' and '/10'): the new factors go to the solver at an
@@ -23,18 +23,19 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from .arguments import integer
-from .batch import BatchResult, levenberg_marquardt
-from .bayes_tree import ISAM2Params
+from ..arguments import integer
+from ..batch import BatchResult, levenberg_marquardt
+from ..bayes_tree import ISAM2Params
+from ..errors import ConvergenceWarning, SteamError
+from ..graph import FactorGraph
+from ..trajectory import Trajectory
+from ..variables import L, Values, X
 from .converge import converge
-from .errors import ConvergenceWarning, SteamError
 from .frontend import FrontEnd, Layout, NewStep
-from .graph import FactorGraph
-from .readings import PaperSetup, Readings
+from .presets import PaperSetup
+from .readings import Readings
 from .results import RunResult, peak_rss_mb
 from .solvers import METHODS, PB_MAX_ITERATIONS, PB_RELATIVE_TOLERANCE, OnlineSolver, make_solver
-from .trajectory import Trajectory
-from .variables import L, Values, X
 
 __all__ = ["StreamOptions", "Schedule", "StreamingEstimator", "run_online", "INITIAL_SOLVE"]
 
@@ -215,7 +216,7 @@ class StreamingEstimator:
 
     def _converge(self) -> None:
         """Iterate the whole problem from the solver's estimate to the batch optimum
-        (:func:`~steam_ref.converge.converge`), then hand it to a new solver: one update with every
+        (:func:`~steam_ref.paper.converge.converge`), then hand it to a new solver: one update with every
         factor, linearized there (for BTGP a Bayes tree eliminated from scratch), so that its
         estimate and covariances are those of the optimum. Warns when the optimum's check fails."""
         start = time.perf_counter()

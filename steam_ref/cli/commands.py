@@ -12,7 +12,7 @@ Usage::
 
 With no options ``steam-ref run`` runs BTGP/1 on the generated synthetic task. A data set without
 ground truth (victoria-park) is scored against the converged batch solution of the same problem
-(:func:`~steam_ref.problem.score_against_batch`) instead of by RMSE. Bad arguments and missing or
+(:func:`~steam_ref.paper.problem.score_against_batch`) instead of by RMSE. Bad arguments and missing or
 malformed data files give a one-line error and exit code 2.
 """
 
@@ -26,20 +26,21 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from .cli_args import build_parser
-from .cli_args import check_out_folder as _check_out_folder
-from .cli_args import check_output as _check_output
-from .conformance import command as conformance_command
-from .datasets import load_dataset, load_range_dataset
-from .errors import SteamError
-from .experiments import reproduce
-from .fidelity import AUTHORS_RUNS, compare, find_authors_file, load_authors_run
-from .online import StreamOptions, run_online
-from .plot import plot_fidelity, plot_trajectory
-from .problem import build_problem, score_against_batch, sequential_batch
-from .readings import PaperSetup, Readings
-from .results import position_rmse
-from .variables import X
+from ..conformance import command as conformance_command
+from ..datasets import load_dataset, load_range_dataset
+from ..errors import SteamError
+from ..paper.experiments import reproduce
+from ..paper.fidelity import AUTHORS_RUNS, compare, find_authors_file, load_authors_run
+from ..paper.online import StreamOptions, run_online
+from ..paper.presets import PaperSetup
+from ..paper.problem import build_problem, score_against_batch, sequential_batch
+from ..paper.readings import Readings
+from ..paper.results import position_rmse
+from ..plot.figures import plot_fidelity, plot_trajectory
+from ..variables import X
+from .args import build_parser
+from .args import check_out_folder as _check_out_folder
+from .args import check_output as _check_output
 
 __all__ = ["main", "build_parser"]  # build_parser lives in cli_args
 

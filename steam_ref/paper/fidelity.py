@@ -6,7 +6,7 @@ outputs of BTGP/1 with every pose an estimated state: ``Plaza1_full_data_run.mat
 covariances of every pose and velocity, 2x2 of every landmark) and ``Syn_full_data_run.mat`` (the
 synthetic set; no covariances). They are read from ``authors/`` in the data search path
 (:func:`steam_ref.datasets.default_data_dirs`). :func:`compare` measures how far a
-:class:`~steam_ref.results.RunResult` lands from one of them.
+:class:`~steam_ref.paper.results.RunResult` lands from one of them.
 
 Conventions of the saved files: ``XYT``/``XYT_dot`` rows follow ``estStateInds`` (pose indices);
 ``XY`` rows are the landmarks in GTSAM key order, i.e. by increasing id; ``landmarkMarginal`` rows
@@ -22,8 +22,8 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from .datasets import DATA_DIR_ENV, RangeDataset, default_data_dirs, read_mat
-from .errors import DataError
+from ..datasets import DATA_DIR_ENV, RangeDataset, default_data_dirs, read_mat
+from ..errors import DataError
 from .results import RunResult, position_rmse
 
 __all__ = [

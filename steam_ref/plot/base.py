@@ -1,7 +1,7 @@
 """What every figure function shares: new axes or the given ones, saving, and the checks of its arrays.
 
 matplotlib is imported inside the functions, so importing steam_ref never needs it. Used by
-:mod:`steam_ref.plot` and :mod:`steam_ref.plot_tree`.
+:mod:`steam_ref.plot.figures` and :mod:`steam_ref.plot.tree`.
 """
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .errors import ShapeError, SteamError
+from ..errors import ShapeError, SteamError
 
 __all__: list[str] = []  # private helpers of the plot modules
 

@@ -1,8 +1,8 @@
 """The Bayes tree's figures: its cliques, an update before and after [K12 Fig. 3-4], its R factor.
 
-Like :mod:`steam_ref.plot`, nothing from steam_ref but its exceptions is imported at run time; each
+Like :mod:`steam_ref.plot.figures`, nothing from steam_ref but its exceptions is imported at run time; each
 function takes the tree (or anything with the attributes it reads), draws on the axes given (or new
-ones) and returns them, saving to ``path`` if given. :mod:`steam_ref.plot` re-exports them.
+ones) and returns them, saving to ``path`` if given. :mod:`steam_ref.plot.figures` re-exports them.
 """
 
 from __future__ import annotations
@@ -12,14 +12,14 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .errors import UnknownVariableError
-from .plot_base import axes as _axes
-from .plot_base import save as _save
+from ..errors import UnknownVariableError
+from .base import axes as _axes
+from .base import save as _save
 
 if TYPE_CHECKING:
-    from .bayes_tree.isam import UpdateReport
-    from .bayes_tree.symbolic import CliqueTree
-    from .bayes_tree.tree import BayesTree
+    from ..bayes_tree.isam import UpdateReport
+    from ..bayes_tree.symbolic import CliqueTree
+    from ..bayes_tree.tree import BayesTree
 
 __all__ = ["tree_layout", "draw_tree", "draw_update", "draw_spy"]
 

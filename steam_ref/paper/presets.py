@@ -6,7 +6,7 @@ public scripts (``matlab/GP/synthetic_isam2.m``, ``plaza_isam2.m``, ``victoria_p
 ``PaperSetup.synthetic()``, ``.plaza()`` and ``.victoria_park()`` are the documented defaults: they do
 what the scripts did. Any field can be changed with :meth:`PaperSetup.replace`; the fields that depart
 from the scripts on purpose say so (:data:`DEPARTURES`), and the motion prior is chosen here
-(``prior``, :meth:`PaperSetup.motion_prior`). :mod:`steam_ref.readings` re-exports all of it.
+(``prior``, :meth:`PaperSetup.motion_prior`). :mod:`steam_ref.paper.readings` re-exports all of it.
 """
 
 from __future__ import annotations
@@ -16,12 +16,12 @@ from dataclasses import dataclass, field, fields, replace
 import numpy as np
 from numpy.typing import NDArray
 
-from .arguments import integer, number
-from .bayes_tree.params import ISAM2Params
-from .errors import ShapeError, SteamError
-from .gp.prior import check_qc
-from .gp.sde import LinearSDE
-from .robust import Tukey
+from ..arguments import integer, number
+from ..bayes_tree.params import ISAM2Params
+from ..errors import ShapeError, SteamError
+from ..gp.prior import check_qc
+from ..gp.sde import LinearSDE
+from ..robust import Tukey
 
 __all__ = ["PaperSetup", "RANGE_ATTACHMENTS", "DEPARTURES", "PRIORS", "PRESETS"]
 

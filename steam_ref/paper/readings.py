@@ -1,7 +1,7 @@
 """A data set's readings in the solver's terms.  [YIB Sec. IV]
 
-The parameters (:class:`PaperSetup`, :data:`DEPARTURES`, :data:`PRIORS`, :data:`PRESETS`) live in
-:mod:`steam_ref.setup` and are re-exported here, where the rest of the package has always found them.
+The parameters of a run (:class:`~steam_ref.paper.presets.PaperSetup`) live in
+:mod:`steam_ref.paper.presets`.
 
 :class:`Readings` turns a :class:`~steam_ref.datasets.RangeDataset` into the measurement stream the
 front end consumes: time is the odometry row index (dt = 1), pose i is ground-truth row i, odometry
@@ -18,21 +18,16 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from numpy.typing import NDArray
 
-from .datasets import LandmarkDataset, RangeDataset
-from .errors import DataError, SteamError
-from .setup import DEPARTURES, PRESETS, PRIORS, RANGE_ATTACHMENTS, PaperSetup
+from ..datasets import LandmarkDataset, RangeDataset
+from ..errors import DataError, SteamError
+from .presets import RANGE_ATTACHMENTS, PaperSetup
 
 __all__ = [
-    "PaperSetup",
     "Readings",
     "Sightings",
     "attach_ranges",
     "range_correction",
-    "RANGE_ATTACHMENTS",
     "RANGE_CORRECTION_SLOPES",
-    "DEPARTURES",
-    "PRIORS",
-    "PRESETS",
 ]
 
 

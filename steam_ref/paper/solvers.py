@@ -11,13 +11,13 @@ from collections.abc import Sequence
 
 from numpy.typing import NDArray
 
-from .batch import gauss_newton
-from .bayes_tree import IncrementalSolver, ISAM2Params
-from .covariance import sparse_joint_covariance, sparse_joint_marginals, sparse_marginals
-from .errors import SteamError
-from .factors import Factor
-from .graph import FactorGraph
-from .variables import Key, Values
+from ..batch import gauss_newton
+from ..bayes_tree import IncrementalSolver, ISAM2Params
+from ..covariance import sparse_joint_covariance, sparse_joint_marginals, sparse_marginals
+from ..errors import SteamError
+from ..factors import Factor
+from ..graph import FactorGraph
+from ..variables import Key, Values
 
 __all__ = [
     "METHODS",

@@ -1,6 +1,6 @@
 """The batch STEAM problem of a data set: everything the front end yields.  [YIB Eq. 6, Sec. IV]
 
-:func:`build_problem` runs :class:`~steam_ref.frontend.FrontEnd` over the whole stream and
+:func:`build_problem` runs :class:`~steam_ref.paper.frontend.FrontEnd` over the whole stream and
 collects its factors and initial values; the streaming solvers consume the same steps, so the batch
 and the streamed problem are the same factor graph by construction. :func:`sequential_batch` solves
 it the way a robot would start: a growing batch, warm-started chunk by chunk. :func:`converged_batch`
@@ -16,14 +16,15 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from .batch import BatchResult, gauss_newton
+from ..batch import BatchResult, gauss_newton
+from ..datasets import LandmarkDataset, RangeDataset
+from ..errors import SteamError
+from ..graph import FactorGraph
+from ..variables import L, Values, X
 from .converge import converge
-from .datasets import LandmarkDataset, RangeDataset
-from .errors import SteamError
 from .frontend import FrontEnd, Layout
-from .graph import FactorGraph
-from .readings import PaperSetup, Readings
-from .variables import L, Values, X
+from .presets import PaperSetup
+from .readings import Readings
 
 __all__ = [
     "SteamProblem",
@@ -116,7 +117,7 @@ def converged_batch(
     ordering: str = "amd",
 ) -> BatchResult:
     """A minimum of ``problem`` to where no variable moves by more than ``step_tolerance``: the batch
-    reference (:func:`~steam_ref.converge.converge`: Gauss-Newton with an exact line search along the
+    reference (:func:`~steam_ref.paper.converge.converge`: Gauss-Newton with an exact line search along the
     map's turn about the origin, and Anderson acceleration; its stationarity checked as usual).
 
     Starts from ``start`` or else from :func:`sequential_batch` (``chunk``; larger chunks can end in a
@@ -201,7 +202,7 @@ def reference_batch(problem: SteamProblem, estimate: Values | None = None) -> tu
 
 
 def score_against_batch(result, readings: Readings, setup: PaperSetup) -> BatchScore:
-    """A streamed run (:class:`~steam_ref.results.RunResult`) against the batch optimum of the same problem
+    """A streamed run (:class:`~steam_ref.paper.results.RunResult`) against the batch optimum of the same problem
     (:func:`reference_batch`): the same set-up and layout, the poses up to the run's last solved state,
     compared at its states."""
     states = np.asarray(result.state_poses, dtype=int)

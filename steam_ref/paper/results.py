@@ -9,10 +9,10 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import NDArray
 
-from .arguments import finite, real_array
-from .errors import ShapeError
+from ..arguments import finite, real_array
+from ..errors import ShapeError
+from ..trajectory import Covariances
 from .frontend import Layout
-from .trajectory import Covariances
 
 
 class RunOptions(Protocol):

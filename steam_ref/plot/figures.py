@@ -12,7 +12,7 @@ them; with ``path`` it also saves the figure there (PNG by the suffix) and close
   :func:`plot_interpolation_tradeoff` (Fig. 3/4, right), :func:`plot_fidelity` (distance to the
   authors' estimate, pose by pose);
 - the Bayes tree: :func:`tree_layout`, :func:`draw_tree`, :func:`draw_update` (an update as
-  before/after [K12 Fig. 3-4]), :func:`draw_spy` (its R factor), written in :mod:`steam_ref.plot_tree`.
+  before/after [K12 Fig. 3-4]), :func:`draw_spy` (its R factor), in :mod:`steam_ref.plot.tree`.
 """
 
 from __future__ import annotations
@@ -23,13 +23,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .errors import ShapeError
-from .plot_base import array as _array
-from .plot_base import attributes as _attributes
-from .plot_base import axes as _axes
-from .plot_base import block_grid as _block_grid
-from .plot_base import save as _save
-from .plot_tree import draw_spy, draw_tree, draw_update, tree_layout
+from ..errors import ShapeError
+from .base import array as _array
+from .base import attributes as _attributes
+from .base import axes as _axes
+from .base import block_grid as _block_grid
+from .base import save as _save
 
 __all__ = [
     "plot_state_samples",
@@ -40,10 +39,6 @@ __all__ = [
     "plot_timing",
     "plot_interpolation_tradeoff",
     "plot_fidelity",
-    "tree_layout",
-    "draw_tree",
-    "draw_update",
-    "draw_spy",
 ]
 
 
@@ -188,7 +183,7 @@ def plot_timing(runs: Mapping[str, Any], ax: Any = None, *, title: str | None = 
 
     runs: label → run, any object with ``cumulative_s`` ((n_steps,) seconds after each processed
     step) and ``completed`` (False: cut short by a time budget, marked "(budget)" in the legend),
-    e.g. :class:`steam_ref.online.RunResult`.
+    e.g. :class:`steam_ref.paper.online.RunResult`.
     """
     for label, run in runs.items():
         _attributes(f"runs[{label!r}]", run, "cumulative_s", "completed")
@@ -216,7 +211,7 @@ def plot_interpolation_tradeoff(
 
     with_interpolation, without_interpolation: skip (time steps between states) → run, any object
     with ``rmse_m`` (position RMSE, m) and ``total_s`` (computation time, s), e.g.
-    :class:`steam_ref.online.RunResult`. ``name`` (the data set) heads the panel titles.
+    :class:`steam_ref.paper.online.RunResult`. ``name`` (the data set) heads the panel titles.
     """
     for skip, run in [*with_interpolation.items(), *(without_interpolation or {}).items()]:
         _attributes(f"the run at skip {skip!r}", run, "rmse_m", "total_s")

@@ -7,11 +7,11 @@
   the time-step difference between estimated states (1, 2, 3, 5, 10, 20), with interpolation
   (Eq. 29) and without (readings between states dropped);
 - accuracy (:func:`published_run_experiment`): BTGP/1 as the authors made their saved runs (every
-  pose a state), beside those runs pose by pose (:mod:`steam_ref.fidelity`);
+  pose a state), beside those runs pose by pose (:mod:`steam_ref.paper.fidelity`);
 - :func:`results_table`: Markdown, the paper's claims beside our figures;
 - :func:`reproduce`: all of it, written to a folder (the ``steam-ref reproduce`` command).
 
-The figures are drawn by :mod:`steam_ref.plot`, which imports matplotlib inside its functions only.
+The figures are drawn by :mod:`steam_ref.plot.figures`, which imports matplotlib inside its functions only.
 """
 
 from __future__ import annotations
@@ -23,12 +23,12 @@ from pathlib import Path
 
 import numpy as np
 
-from .datasets import LandmarkDataset, RangeDataset, load_range_dataset
-from .errors import DataError
+from ..datasets import LandmarkDataset, RangeDataset, load_range_dataset
+from ..errors import DataError
+from ..plot.figures import plot_interpolation_tradeoff, plot_timing, plot_trajectory
 from .fidelity import AUTHORS_RUNS, Fidelity, compare, load_authors_run
 from .online import RunResult, StreamOptions, run_online
-from .plot import plot_interpolation_tradeoff, plot_timing, plot_trajectory
-from .readings import PaperSetup
+from .presets import PaperSetup
 
 __all__ = [
     "SKIPS",
@@ -97,7 +97,7 @@ def published_run_experiment(
 ) -> RunResult:
     """BTGP/1 as the authors ran it for their saved runs (every pose a state, the set-up's defaults),
     with its final marginals, compared with the authors' saved run when one is found for ``exp.name``
-    (:mod:`steam_ref.fidelity`). A prefix run (``max_poses``) is not comparable and says so. Returns
+    (:mod:`steam_ref.paper.fidelity`). A prefix run (``max_poses``) is not comparable and says so. Returns
     the run (also ``exp.published``)."""
     run = run_online(
         exp.data, exp.setup, StreamOptions(max_poses=max_poses, progress=progress), covariances=max_poses is None

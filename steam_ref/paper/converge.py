@@ -33,12 +33,12 @@ import numpy as np
 import scipy.optimize
 from numpy.typing import NDArray
 
-from .arguments import integer
-from .batch import BatchResult, Iteration, certify, check_options, gauss_newton_step, graph_and_values, prepare
-from .errors import SteamError
-from .graph import FactorGraph
-from .linear.ordering import Ordering
-from .variables import Values
+from ..arguments import integer
+from ..batch import BatchResult, Iteration, certify, check_options, gauss_newton_step, graph_and_values, prepare
+from ..errors import SteamError
+from ..graph import FactorGraph
+from ..linear.ordering import Ordering
+from ..variables import Values
 
 __all__ = ["converge", "rotated", "anchored_factors", "Anderson", "PROBE_TURN"]
 

@@ -1,7 +1,7 @@
 """The ``steam-ref`` command line: its parser, the checks of every argument, and of output paths before a run.
 
 Every value is checked by its argparse type, so a bad one is a one-line error with exit code 2 before
-anything runs; :mod:`steam_ref.cli` holds what each command does.
+anything runs; :mod:`steam_ref.cli.commands` holds what each command does.
 """
 
 from __future__ import annotations
@@ -12,11 +12,11 @@ import math
 import tempfile
 from pathlib import Path
 
-from . import __version__
-from .bayes_tree import ISAM2Params
-from .conformance import command as conformance_command
-from .errors import SteamError
-from .readings import DEPARTURES, PRESETS, PRIORS, PaperSetup
+from .._version import __version__
+from ..bayes_tree import ISAM2Params
+from ..conformance import command as conformance_command
+from ..errors import SteamError
+from ..paper.presets import DEPARTURES, PRESETS, PRIORS, PaperSetup
 
 __all__ = ["build_parser", "check_output", "check_out_folder"]
 
@@ -95,7 +95,7 @@ def _add_run_arguments(run: argparse.ArgumentParser) -> None:
     run.add_argument(
         "--converge-at-end",
         action="store_true",
-        help="after the last pose, iterate everything to the batch optimum (steam_ref.converge) and report that estimate",
+        help="after the last pose, iterate everything to the batch optimum (steam_ref.paper.converge) and report that estimate",
     )
     run.add_argument(
         "--departure",

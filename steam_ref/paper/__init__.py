@@ -1,0 +1,22 @@
+"""The paper's experiments: its set-ups and Algorithm 1 on its data.  [YIB Sec. IV]
+
+Above the algorithm (which knows nothing of data sets or schedules), in the order data flows:
+
+- :mod:`~steam_ref.paper.presets`: :class:`PaperSetup`, every parameter of a run as the authors'
+  scripts set it (noise, Qc, the motion prior, Plaza's range correction, the schedule's defaults);
+- :mod:`~steam_ref.paper.readings`: a data set's readings in the solver's terms;
+- :mod:`~steam_ref.paper.frontend`: Algorithm 1 step 1, readings to factors (one front end for batch
+  and stream);
+- :mod:`~steam_ref.paper.problem`, :mod:`~steam_ref.paper.converge`: the batch problem and its optimum;
+- :mod:`~steam_ref.paper.solvers`: PB, PBVR and BTGP behind one interface;
+- :mod:`~steam_ref.paper.results`, :mod:`~steam_ref.paper.online`: a run's results, and the run loop;
+- :mod:`~steam_ref.paper.fidelity`, :mod:`~steam_ref.paper.experiments`: against the authors' saved
+  runs; Fig. 3 and 4.
+"""
+
+from .online import StreamOptions, run_online
+from .presets import PaperSetup
+from .readings import Readings
+from .results import RunResult
+
+__all__ = ["PaperSetup", "Readings", "StreamOptions", "RunResult", "run_online"]
