@@ -24,7 +24,8 @@ import tracemalloc
 
 from steam_ref.covariance import tree_joint_covariance
 from steam_ref.datasets import load_dataset
-from steam_ref.paper.online import StreamingEstimator, StreamOptions
+from steam_ref.paper.online import StreamingEstimator
+from steam_ref.paper.options import StreamOptions
 from steam_ref.paper.presets import PaperSetup
 from steam_ref.paper.readings import Readings
 from steam_ref.variables import X
@@ -39,11 +40,11 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--max-poses", type=int, default=None, help="run only this prefix of the poses")
     p.add_argument("--repeat", type=int, default=5, help="timed queries (the median is reported)")
     a = p.parse_args(argv)
-    setup = PaperSetup.named(PRESET[a.dataset])
+    setup = PaperSetup.named(PRESET[a.dataset]).with_schedule(every=1)
     estimator = StreamingEstimator(
         Readings.from_dataset(load_dataset(a.dataset), setup),
         setup,
-        StreamOptions(method="btgp", every=1, max_poses=a.max_poses),
+        StreamOptions(method="btgp", max_poses=a.max_poses),
     )
     start = time.perf_counter()
     estimator.run()

@@ -38,11 +38,12 @@ _CHILD = r"""
 import json, sys
 import numpy as np
 from steam_ref.datasets import load_dataset
-from steam_ref.paper.online import StreamOptions, run_online
+from steam_ref.paper.online import run_online
+from steam_ref.paper.options import StreamOptions
 from steam_ref.paper.presets import PaperSetup
 name, preset, kw = sys.argv[1], sys.argv[2], json.loads(sys.argv[3])
 data = load_dataset(name)
-setup = PaperSetup.named(preset)
+setup = PaperSetup.named(preset).with_schedule(every=kw.pop("every"))
 result = run_online(data, setup, StreamOptions(**kw))
 row = result.summary(name)
 row["step_seconds"] = result.step_seconds.tolist()

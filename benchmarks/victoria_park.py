@@ -61,14 +61,16 @@ _CHILD = r"""
 import json, sys, time
 import numpy as np
 from steam_ref.datasets import load_dataset
-from steam_ref.paper.online import StreamingEstimator, StreamOptions
+from steam_ref.paper.online import StreamingEstimator
+from steam_ref.paper.options import StreamOptions
 from steam_ref.paper.presets import PaperSetup
 from steam_ref.paper.readings import Readings
 from steam_ref.paper.results import peak_rss_mb
 from steam_ref.variables import L, X
 solver_name, blocks, max_poses, out = sys.argv[1], json.loads(sys.argv[2]), json.loads(sys.argv[3]), sys.argv[4]
 every, at_end = int(sys.argv[5]), sys.argv[6] == "converge"
-setup = PaperSetup.victoria_park().replace(relinearize_blocks=None if blocks is None else tuple(blocks), every=every)
+setup = PaperSetup.victoria_park().replace(relinearize_blocks=None if blocks is None else tuple(blocks))
+setup = setup.with_schedule(every=every)
 readings = Readings.from_dataset(load_dataset("victoria-park"), setup)
 solver = None
 if solver_name == "gtsam":

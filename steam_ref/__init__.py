@@ -59,7 +59,7 @@ _HOMES = {
     "load_dataset": "datasets",
     "generate_synthetic": "datasets",
     "PaperSetup": "paper.presets",
-    "StreamOptions": "paper.online",
+    "StreamOptions": "paper.options",
     "run_online": "paper.online",
 }
 
@@ -97,7 +97,8 @@ if TYPE_CHECKING:  # what a type checker and an IDE see: the same names, importe
     )
     from .graph import FactorGraph
     from .linear import LinearSystem, amd_ordering, xl_ordering
-    from .paper.online import StreamOptions, run_online
+    from .paper.online import run_online
+    from .paper.options import StreamOptions
     from .paper.presets import PaperSetup
     from .robust import Huber, Tukey
     from .variables import Key, L, Values, X

@@ -105,10 +105,15 @@ BAD = {
     "out-under-a-file": (["reproduce", "--out", "{a_file}/results"], "--out"),
     "out-empty": (["reproduce", "--out", ""], "--out"),
     "one-pose-run": (["run", "--dataset", "{one}", "--preset", "synthetic"], "at least two poses"),
-    "one-pose-batch": (["batch", "--dataset", "{one}"], "at least two poses"),
-    "negative-range": (["run", "--dataset", "{negative}"], "ranges[2, 3] (range) = -1.5"),
-    "nan": (["batch", "--dataset", "{nan}"], "GT[3, 2] (y) is nan"),
-    "crashed-scipy": (["run", "--dataset", "{crash}"], "unknown MAT data type"),
+    "one-pose-batch": (["batch", "--dataset", "{one}", "--preset", "plaza"], "at least two poses"),
+    "negative-range": (["run", "--dataset", "{negative}", "--preset", "plaza"], "ranges[2, 3] (range) = -1.5"),
+    "nan": (["batch", "--dataset", "{nan}", "--preset", "plaza"], "GT[3, 2] (y) is nan"),
+    "crashed-scipy": (["run", "--dataset", "{crash}", "--preset", "plaza"], "unknown MAT data type"),
+    "path-without-preset-run": (
+        ["run", "--dataset", "{good}"],
+        "is a path: say which parameters it runs with, --preset",
+    ),
+    "path-without-preset-batch": (["batch", "--dataset", "{good}"], "is a path: say which parameters"),
     "cut-text": (["run", "--dataset", "{cut}", "--preset", "synthetic"], "T_TD.txt line 5: the last line does not end"),
     "newline-in-value": (["run", "--every", "1", "x\ny"], "x\\ny"),
     "subcommand": (["frobnicate"], "frobnicate"),
@@ -177,7 +182,11 @@ def test_any_value_of_any_option_gives_one_line_and_exit_2(capsys, places, optio
 
 
 @pytest.mark.parametrize(
-    ("argv", "needle"), [(["run", "--seed", "-1"], "--seed"), (["batch", "--dataset", "one.mat"], "at least two poses")]
+    ("argv", "needle"),
+    [
+        (["run", "--seed", "-1"], "--seed"),
+        (["batch", "--dataset", "one.mat", "--preset", "plaza"], "at least two poses"),
+    ],
 )
 def test_the_module_as_a_user_runs_it(places, argv, needle) -> None:
     argv = [places["one"] if a == "one.mat" else a for a in argv]

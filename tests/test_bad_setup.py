@@ -16,7 +16,7 @@ from steam_ref import datasets
 from steam_ref.datasets import RangeDataset, generate_synthetic, load_cmu_mat, load_dataset
 from steam_ref.errors import DataError, ShapeError, SteamError
 from steam_ref.paper.fidelity import load_authors_run
-from steam_ref.paper.online import StreamOptions
+from steam_ref.paper.options import StreamOptions
 from steam_ref.paper.presets import PaperSetup
 from steam_ref.paper.problem import build_problem, sequential_batch
 from steam_ref.paper.readings import RANGE_CORRECTION_SLOPES, Readings, range_correction
@@ -36,13 +36,8 @@ def _with_ranges(data: RangeDataset, ranges: np.ndarray) -> RangeDataset:
 @pytest.mark.parametrize(
     ("field", "value"),
     [
-        ("final_updates", -1),
-        ("final_updates", 2.5),
-        ("final_updates", True),
         ("range_correction_steps", -3000),
         ("range_correction_steps", "3000"),
-        ("start_after_ranges", -50),
-        ("start_after_ranges", None),
         ("range_sigma", 0.0),
         ("range_sigma", math.nan),
         ("range_sigma", -20.0),
@@ -67,6 +62,28 @@ def test_paper_setup_refuses_a_bad_field(field: str, value) -> None:
         PaperSetup.plaza().replace(**{field: value})
 
 
+@pytest.mark.parametrize(
+    ("field", "value"),
+    [
+        ("every", math.nan),
+        ("every", "3"),
+        ("every", 0),
+        ("final_updates", -1),
+        ("final_updates", 2.5),
+        ("final_updates", True),
+        ("start_after_ranges", -50),
+        ("start_after_ranges", None),
+        ("initial_batch", 1),
+        ("initial_batch_tolerance", 0.0),
+        ("initial_batch_tolerance", math.nan),
+    ],
+)
+def test_schedule_refuses_a_bad_field(field: str, value) -> None:
+    shown = re.escape(repr(value))
+    with pytest.raises(SteamError, match=rf"Schedule\.{field} must be .*, got (Schedule\.{field}=)?{shown}"):
+        PaperSetup.plaza().with_schedule(**{field: value})
+
+
 def test_paper_setup_qc_is_checked() -> None:
     with pytest.raises(
         ShapeError, match=r"PaperSetup\.qc must be a \(3, 3\) matrix.*got \[\[1\.0, 0\.0\], \[0\.0, 1\.0\]\]"
@@ -81,11 +98,6 @@ def test_paper_setup_qc_is_checked() -> None:
 @pytest.mark.parametrize(
     ("field", "value"),
     [
-        ("every", math.nan),
-        ("every", "3"),
-        ("every", 0),
-        ("final_updates", -1),
-        ("start_after_ranges", -1),
         ("max_poses", 1),
         ("max_poses", 2.5),
         ("pb_max_iterations", 0),

@@ -10,7 +10,6 @@ import numpy as np
 import pytest
 import scipy.io
 
-from steam_ref.bayes_tree import ISAM2Params
 from steam_ref.cli.commands import main
 from steam_ref.datasets import generate_synthetic
 from steam_ref.paper.online import run_online
@@ -87,7 +86,8 @@ def test_no_interpolate_flag_reaches_the_run(capsys, small_mat):
 
 def test_relinearization_flags_reach_the_run(capsys, small_mat):
     """--relinearize-threshold/--relinearize-skip give the library's run with those options."""
-    from steam_ref.paper.online import StreamOptions, run_online
+    from steam_ref.paper.online import run_online
+    from steam_ref.paper.options import StreamOptions
     from steam_ref.paper.presets import PaperSetup
 
     path, data = small_mat
@@ -106,7 +106,7 @@ def test_relinearization_flags_reach_the_run(capsys, small_mat):
         "--json",
     )
     assert code == 0, err
-    direct = run_online(data, setup, StreamOptions(isam2=ISAM2Params(relinearize_threshold=0.0, relinearize_skip=1)))
+    direct = run_online(data, setup.with_isam2(relinearize_threshold=0.0, relinearize_skip=1), StreamOptions())
     default = run_online(data, setup, StreamOptions())
     assert direct.rmse_m != default.rmse_m  # the flags change the run, so the comparison below means something
     assert json.loads(out)["rmse_m"] == round(direct.rmse_m, 6)
@@ -149,7 +149,8 @@ def test_save_estimates_writes_the_final_marginals(capsys, small_mat, tmp_path, 
     from steam_ref.graph import FactorGraph
     from steam_ref.linear import LinearSystem
     from steam_ref.linear.ordering import xl_ordering
-    from steam_ref.paper.online import StreamingEstimator, StreamOptions
+    from steam_ref.paper.online import StreamingEstimator
+    from steam_ref.paper.options import StreamOptions
     from steam_ref.paper.presets import PaperSetup
     from steam_ref.paper.readings import Readings
     from steam_ref.variables import L, X
@@ -316,7 +317,8 @@ def test_fidelity_without_the_authors_files_is_one_line_and_exit_2(capsys, tmp_p
 
 def test_departure_flags_reach_the_set_up(capsys, small_mat):
     """--departure NAME runs the preset departing from the scripts in that named way."""
-    from steam_ref.paper.online import StreamOptions, run_online
+    from steam_ref.paper.online import run_online
+    from steam_ref.paper.options import StreamOptions
     from steam_ref.paper.presets import PaperSetup
 
     path, data = small_mat

@@ -15,7 +15,8 @@ from steam_ref.datasets import load_dataset
 from steam_ref.errors import ConvergenceWarning, SteamError
 from steam_ref.factors import GPPriorFactor, PriorFactor
 from steam_ref.paper.converge import Anderson, anchored_factors, converge, rotated
-from steam_ref.paper.online import StreamingEstimator, StreamOptions, run_online
+from steam_ref.paper.online import StreamingEstimator, run_online
+from steam_ref.paper.options import StreamOptions
 from steam_ref.paper.presets import PaperSetup
 from steam_ref.paper.problem import build_problem, converged_batch
 from steam_ref.paper.readings import Readings

@@ -22,7 +22,8 @@ from steam_ref.paper.experiments import (
     results_table,
     speedup_on_prefix,
 )
-from steam_ref.paper.online import StreamOptions, run_online
+from steam_ref.paper.online import run_online
+from steam_ref.paper.options import StreamOptions
 from steam_ref.paper.presets import PaperSetup
 from steam_ref.paper.results import position_rmse
 
@@ -61,7 +62,7 @@ def test_table_figures_match_the_runs(small):
     """Speed ratios, interpolated fractions, time saved and RMSE changes recomputed from the runs."""
     exp = Experiment("small", small, SETUP)
     for label, (method, every) in (("PB/1", ("pb", 1)), ("BTGP/1", ("btgp", 1))):
-        exp.timing[label] = run_online(small, SETUP, StreamOptions(method=method, every=every))
+        exp.timing[label] = run_online(small, SETUP.with_schedule(every=every), StreamOptions(method=method))
     for skip in (1, 5):
         exp.with_interp[skip] = run_online(small, SETUP, StreamOptions(skip=skip))
     table = results_table([exp])

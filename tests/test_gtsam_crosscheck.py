@@ -27,7 +27,8 @@ from steam_ref.batch import gauss_newton  # noqa: E402
 from steam_ref.bayes_tree import ISAM2Params  # noqa: E402
 from steam_ref.datasets import generate_synthetic  # noqa: E402
 from steam_ref.gp import LinearSDE  # noqa: E402
-from steam_ref.paper.online import StreamingEstimator, StreamOptions  # noqa: E402
+from steam_ref.paper.online import StreamingEstimator  # noqa: E402
+from steam_ref.paper.options import StreamOptions  # noqa: E402
 from steam_ref.paper.presets import PaperSetup  # noqa: E402
 from steam_ref.paper.problem import build_problem  # noqa: E402
 from steam_ref.paper.readings import Readings  # noqa: E402
@@ -224,7 +225,7 @@ class BothSolvers(BayesTreeSolver):
 def test_bayes_tree_equals_gtsam_isam2_on_a_stream(data, every):
     solver = BothSolvers()
     est = StreamingEstimator(
-        Readings.from_dataset(data, SETUP), SETUP, StreamOptions(skip=2, every=every), solver=solver
+        Readings.from_dataset(data, SETUP), SETUP.with_schedule(every=every), StreamOptions(skip=2), solver=solver
     )
     while not est.done:
         est.step()

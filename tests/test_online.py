@@ -15,8 +15,9 @@ from steam_ref.factors import GPPriorFactor, InterpolatedFactor, RangeFactor, Ve
 from steam_ref.gp.interpolate import interpolate_covariance, interpolation_matrices
 from steam_ref.graph import FactorGraph
 from steam_ref.paper.frontend import Layout
-from steam_ref.paper.online import StreamingEstimator, StreamOptions, run_online
-from steam_ref.paper.presets import PaperSetup
+from steam_ref.paper.online import StreamingEstimator, run_online
+from steam_ref.paper.options import StreamOptions
+from steam_ref.paper.presets import PaperSetup, Schedule
 from steam_ref.paper.problem import build_problem
 from steam_ref.paper.readings import Readings
 from steam_ref.variables import Values, X
@@ -29,7 +30,16 @@ def data():
     return generate_synthetic(n_steps=40, n_landmarks=8, seed=3, range_sigma=0.3)
 
 
+SCHEDULE_FIELDS = ("every", "start_after_ranges", "initial_batch", "final_updates")
+
+
 def _stream(data, setup: PaperSetup = SETUP, **options) -> StreamingEstimator:
+    """A whole stream; schedule fields and ``isam2`` go to the set-up (their one owner), the rest to StreamOptions."""
+    schedule = {k: options.pop(k) for k in SCHEDULE_FIELDS if k in options}
+    if schedule:
+        setup = setup.with_schedule(**schedule)
+    if "isam2" in options:
+        setup = setup.replace(isam2=options.pop("isam2"))
     est = StreamingEstimator(Readings.from_dataset(data, setup), setup, StreamOptions(**options))
     while not est.done:
         est.step()
@@ -127,15 +137,29 @@ def test_update_schedule_counts_range_readings(data, every):
     assert counts[0] >= every
 
 
-def test_every_defaults_to_the_set_ups_schedule(data):
-    """``every=None`` (the default) takes the set-up's: one home for a preset's schedule."""
-    setup = SETUP.replace(every=3)
+def test_the_schedule_is_the_set_ups(data):
+    """One owner for a schedule: the set-up's, and the result reports the one that ran."""
+    setup = SETUP.with_schedule(every=3)
     est = StreamingEstimator(Readings.from_dataset(data, setup), setup, StreamOptions(method="pb"))
     while not est.done:
         est.step()
-    assert est.options.every == 3
-    assert est.update_steps == _stream(data, method="pb", every=3).update_steps
+    assert est.result().schedule.every == 3 and est.result().summary()["every"] == 3
     assert est.update_steps != _stream(data, method="pb", every=1).update_steps
+    assert not hasattr(StreamOptions(), "every") and not hasattr(StreamOptions(), "isam2")
+
+
+def test_an_initial_batch_runs_only_when_the_schedule_says_so(data, monkeypatch):
+    """start_after_ranges defers the first update and nothing more; initial_batch is its own switch."""
+    from steam_ref.paper import online
+
+    calls = []
+    real = online.levenberg_marquardt
+    monkeypatch.setattr(online, "levenberg_marquardt", lambda *a, **k: calls.append(k) or real(*a, **k))
+    _stream(data, method="pb", start_after_ranges=15)
+    assert calls == []
+    _stream(data, method="pb", start_after_ranges=15, initial_batch=True)
+    assert calls == [dict(ordering="amd", relative_tolerance=1e-5, absolute_tolerance=1e-5)]
+    assert PaperSetup.plaza().schedule.initial_batch and not PaperSetup.synthetic().schedule.initial_batch
 
 
 def test_run_online_takes_readings_as_well_as_a_data_set(data):
@@ -242,8 +266,12 @@ def test_bad_options_raise_steam_errors():
         StreamOptions(skip=0)
     with pytest.raises(SteamError, match="'nope'"):
         StreamOptions(method="nope")
-    with pytest.raises(SteamError, match="every"):
-        StreamOptions(every=2.5)
+    with pytest.raises(SteamError, match=r"Schedule.every.*2\.5"):
+        Schedule(every=2.5)
+    with pytest.raises(SteamError, match="initial_batch"):
+        Schedule(initial_batch=1)
+    with pytest.raises(SteamError, match="Schedule has no field 'evrey'"):
+        Schedule().replace(evrey=2)
 
 
 def test_query_before_the_first_state_names_the_time_and_the_range(data):
@@ -310,11 +338,11 @@ def test_pose_0_goes_to_the_solver_with_pose_1(data):
 
 
 def test_schedule_updates_at_states_after_every_ranges_and_at_the_last_pose():
-    """The rule of online.Schedule, step by step: (pose, is_state, ranges) → update?"""
+    """The rule of online.ScheduleClock, step by step: (pose, is_state, ranges) → update?"""
     from steam_ref.paper.frontend import NewStep
-    from steam_ref.paper.online import Schedule
+    from steam_ref.paper.online import ScheduleClock
 
-    schedule = Schedule(every=2, start_after=3, last_pose=9)
+    schedule = ScheduleClock(Schedule(every=2, start_after_ranges=3), last_pose=9)
     steps = [
         (0, True, 1, False),
         (1, True, 1, False),
@@ -339,14 +367,19 @@ def test_bad_stream_inputs_raise_steam_errors(data):
     from steam_ref.paper.solvers import make_solver
 
     for bad, needle in [
-        (dict(isam2={}), "isam2"),
         (dict(max_poses="10"), "max_poses"),
-        (dict(final_updates=-3), "final_updates"),
         (dict(max_poses=2.5), "max_poses"),
-        (dict(start_after_ranges="1"), "start_after_ranges"),
     ]:
         with pytest.raises(SteamError, match=needle):
             StreamOptions(**bad)
+    for bad, needle in [
+        (dict(final_updates=-3), "final_updates"),
+        (dict(start_after_ranges="1"), "start_after_ranges"),
+    ]:
+        with pytest.raises(SteamError, match=needle):
+            Schedule(**bad)
+    with pytest.raises(SteamError, match=r"PaperSetup\.isam2 must be an ISAM2Params"):
+        SETUP.replace(isam2={})
     readings = Readings.from_dataset(data, SETUP)
     for n in (0, -1, "x"):
         with pytest.raises(SteamError, match="n_poses"):

@@ -11,7 +11,8 @@ from steam_ref.bayes_tree import ISAM2Params
 from steam_ref.datasets import generate_synthetic
 from steam_ref.errors import SteamError
 from steam_ref.gp import LinearSDE
-from steam_ref.paper.online import StreamingEstimator, StreamOptions
+from steam_ref.paper.online import StreamingEstimator
+from steam_ref.paper.options import StreamOptions
 from steam_ref.paper.presets import PaperSetup
 from steam_ref.paper.problem import build_problem
 from steam_ref.paper.readings import Readings
@@ -52,7 +53,7 @@ def test_the_batch_problem_has_nine_number_states_and_the_priors_factors(data, p
 def test_btgp_with_zero_thresholds_reaches_the_batch_optimum(data, prior):
     setup = SETUPS[prior]
     params = ISAM2Params(relinearize_threshold=0.0, relinearize_skip=1, wildfire_threshold=0.0)
-    bt = stream(data, setup, method="btgp", skip=3, final_updates=40, isam2=params)
+    bt = stream(data, setup.with_schedule(final_updates=40).replace(isam2=params), method="btgp", skip=3)
     problem = build_problem(data, setup, skip=3)
     optimum = gauss_newton(problem.graph, bt.solver.estimate(), relative_tolerance=1e-14, step_tolerance=0.0).values
     for k in optimum:

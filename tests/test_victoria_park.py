@@ -22,7 +22,8 @@ from steam_ref.factors import BearingRangeFactor, InterpolatedFactor, PriorFacto
 from steam_ref.paper.converge import rotated
 from steam_ref.paper.experiments import Experiment, interpolation_experiment, results_table, timing_experiment
 from steam_ref.paper.frontend import FrontEnd, Layout
-from steam_ref.paper.online import StreamingEstimator, StreamOptions
+from steam_ref.paper.online import StreamingEstimator
+from steam_ref.paper.options import StreamOptions
 from steam_ref.paper.presets import PaperSetup
 from steam_ref.paper.problem import build_problem, converged_batch, score_estimate
 from steam_ref.paper.readings import Readings
@@ -297,7 +298,8 @@ ZERO = ISAM2Params(
 
 
 def _stream(readings, setup, final_updates):
-    est = StreamingEstimator(readings, setup, StreamOptions(every=10, isam2=ZERO, final_updates=final_updates))
+    setup = setup.with_schedule(every=10, final_updates=final_updates).replace(isam2=ZERO)
+    est = StreamingEstimator(readings, setup, StreamOptions())
     while not est.done:
         est.step()
     return est.solver.estimate()
@@ -354,7 +356,7 @@ def test_plaza2_loads_by_name_and_runs_with_the_plaza_preset():
     readings = Readings.from_dataset(ds, PaperSetup.plaza())
     a, b = readings.range_correction
     assert 0.5 < a < 2 and abs(b) < 5  # fitted on Plaza2's own ground truth
-    est = StreamingEstimator(readings, PaperSetup.plaza(), StreamOptions(every=10, max_poses=400))
+    est = StreamingEstimator(readings, PaperSetup.plaza().with_schedule(every=10), StreamOptions(max_poses=400))
     while not est.done:
         est.step()
     assert est.n_solved > 0
@@ -377,11 +379,18 @@ def test_a_turned_estimate_scores_its_turn_and_nothing_else(prefix_problem):
 def test_cli_runs_victoria_park_and_scores_it_against_the_batch(capsys, tmp_path):
     _gtsam_file("victoria_park.txt")
     plot = tmp_path / "vp.png"
-    code = main(["run", "--dataset", "victoria-park", "--max-poses", "150", "--json", "--plot", str(plot)])
+    code = main(["run", "--dataset", "victoria-park", "--max-poses", "150", "--json"])
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    row = json.loads(out)  # without the flag: no silent batch solves, and the JSON says so
+    assert row["score_against_optimum"] is False and "batch_converged" not in row and "ground truth" in row["score"]
+    argv = ["run", "--dataset", "victoria-park", "--max-poses", "150", "--score-against-optimum", "--json"]
+    code = main([*argv, "--plot", str(plot)])
     out, err = capsys.readouterr()
     assert code == 0, err
     row = json.loads(out)
     assert row["every"] == 10 and row["rmse_m"] is None and row["batch_converged"] is True
+    assert row["score_against_optimum"] is True
     assert (
         row["batch_distance_unrotated_median_m"] >= 0
         and 0 <= row["batch_distance_median_m"] <= row["batch_distance_max_m"]
@@ -394,7 +403,8 @@ def test_cli_converge_at_end_lands_on_the_batch_optimum(capsys):
     """``--converge-at-end``: the run's estimate is the optimum the score is taken against (to 0.1 mm:
     two descents into one minimum differ by their tolerance), and the JSON line says it converged."""
     _gtsam_file("victoria_park.txt")
-    code = main(["run", "--dataset", "victoria-park", "--max-poses", "300", "--converge-at-end", "--json"])
+    argv = ["run", "--dataset", "victoria-park", "--max-poses", "300", "--converge-at-end"]
+    code = main([*argv, "--score-against-optimum", "--json"])
     out, err = capsys.readouterr()
     assert code == 0, err
     row = json.loads(out)
@@ -431,7 +441,8 @@ def test_cli_batch_and_pbvr_with_skip_on_a_prefix_file(capsys, tmp_path):
     assert code == 0, err
     assert json.loads(out)["rmse_m"] is None
     code = main(
-        ["run", "--dataset", str(path), "--preset", "victoria-park", "--method", "pbvr", "--skip", "3", "--json"]
+        ["run", "--dataset", str(path), "--preset", "victoria-park", "--method", "pbvr", "--skip", "3"]
+        + ["--score-against-optimum", "--json"]
     )
     out, err = capsys.readouterr()
     assert code == 0, err

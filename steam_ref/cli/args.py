@@ -105,7 +105,13 @@ def _add_run_arguments(run: argparse.ArgumentParser) -> None:
         help="depart from the paper's scripts in this named way (repeatable; docs/experiments.md gives each one's effect)",
     )
     run.add_argument(
-        "--preset", choices=PRESETS, default=None, help="parameter set (default: by data set; plaza for a PATH)"
+        "--preset", choices=PRESETS, default=None, help="parameter set (default: by data set; required for a PATH)"
+    )
+    run.add_argument(
+        "--score-against-optimum",
+        action="store_true",
+        help="a data set without ground truth (victoria-park): score the run against the converged batch optimum of "
+        "the same problem (two batch solves after the run: ~100 s on victoria-park)",
     )
     run.add_argument(
         "--prior",
@@ -170,14 +176,16 @@ def build_parser() -> argparse.ArgumentParser:
         description="Incremental sparse GP regression for continuous-time STEAM (Yan, Indelman, Boots).",
     )
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
-    sub = parser.add_subparsers(dest="command", parser_class=_Parser)
+    sub = parser.add_subparsers(dest="command", parser_class=_Parser, required=True)
     _add_run_arguments(sub.add_parser("run", help="stream a data set through one solver"))
     bat = sub.add_parser("batch", help="batch Gauss-Newton on all of a data set (PB or PBVR): RMSE and a plot")
     bat.add_argument(
         "--dataset", type=_dataset, default="paper-synthetic", help="synthetic, paper-synthetic, plaza or a PATH"
     )
     bat.add_argument("--ordering", choices=("xl", "amd"), default="amd", help="xl: the paper's PB; amd: PBVR")
-    bat.add_argument("--preset", choices=PRESETS, default=None, help="parameter set (default: by data set)")
+    bat.add_argument(
+        "--preset", choices=PRESETS, default=None, help="parameter set (default: by data set; required for a PATH)"
+    )
     bat.add_argument(
         "--data-dir",
         type=_folder,

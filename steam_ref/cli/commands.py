@@ -31,8 +31,9 @@ from ..datasets import load_dataset, load_range_dataset
 from ..errors import SteamError
 from ..paper.experiments import reproduce
 from ..paper.fidelity import AUTHORS_RUNS, compare, find_authors_file, load_authors_run
-from ..paper.online import StreamOptions, run_online
-from ..paper.presets import PaperSetup
+from ..paper.online import run_online
+from ..paper.options import StreamOptions
+from ..paper.presets import PRESETS, PaperSetup
 from ..paper.problem import build_problem, score_against_batch, sequential_batch
 from ..paper.readings import Readings
 from ..paper.results import position_rmse
@@ -56,12 +57,13 @@ _PRESET_OF = {
 def _run(args: argparse.Namespace) -> int:
     _check_output(args.save_estimates, ".npz", "--save-estimates")
     _check_output(args.plot, ".png", "--plot")
-    preset = args.preset or _PRESET_OF.get(args.dataset, "plaza")
-    setup = PaperSetup.named(preset).departing(*args.departure)
+    setup = PaperSetup.named(_preset(args)).departing(*args.departure)
     setup = setup.replace(prior=args.prior, qc=args.qc_scale * setup.qc, singer_time_constant=args.singer_time_constant)
+    setup = setup.with_isam2(relinearize_threshold=args.relinearize_threshold, relinearize_skip=args.relinearize_skip)
+    if args.every is not None:
+        setup = setup.with_schedule(every=args.every)
     options = StreamOptions(
         method=args.method,
-        every=args.every,
         skip=args.skip,
         interpolate=args.interpolate,
         range_states=args.range_states,
@@ -69,21 +71,24 @@ def _run(args: argparse.Namespace) -> int:
         time_budget_s=args.time_budget,
         progress=args.progress,
         converge_at_end=args.converge_at_end,
-        isam2=setup.isam2_params().replace(
-            relinearize_threshold=args.relinearize_threshold, relinearize_skip=args.relinearize_skip
-        ),
     )
     data = load_dataset(args.dataset, data_dir=args.data_dir, seed=args.seed)
     result = run_online(data, setup, options, covariances=args.save_estimates is not None)
     summary = result.summary(args.dataset) | {
+        "preset": setup.name,
+        "score_against_optimum": args.score_against_optimum,
         "departures": args.departure,
         "prior": args.prior,
         "qc_scale": args.qc_scale,
     }
+    if data.ground_truth is None and not args.score_against_optimum:
+        summary["score"] = (
+            "none: the data set has no ground truth; --score-against-optimum scores it against the converged batch optimum"
+        )
     score = (
-        None
-        if data.ground_truth is not None
-        else score_against_batch(result, Readings.from_dataset(data, setup), setup)
+        score_against_batch(result, Readings.from_dataset(data, setup), setup)
+        if data.ground_truth is None and args.score_against_optimum
+        else None
     )
     if score is not None:
         summary |= score.summary()
@@ -112,6 +117,19 @@ def _run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _preset(args: argparse.Namespace) -> str:
+    """The preset a command runs with: --preset, else the named data set's; a data file given by PATH needs
+    --preset (each preset changes what is done to the file: Plaza's fits a range correction to its truth)."""
+    if args.preset is not None:
+        return args.preset
+    if args.dataset not in _PRESET_OF:
+        raise SteamError(
+            f"--dataset {args.dataset!r} is a path: say which parameters it runs with, --preset {{{','.join(PRESETS)}}} "
+            "(plaza also fits a range correction to the file's own ground truth)"
+        )
+    return _PRESET_OF[args.dataset]
+
+
 def _convergence_note(summary: dict) -> str:
     """What ``--converge-at-end`` did, for the human-readable summary ('' when it was not asked for)."""
     if "convergence_s" not in summary:
@@ -122,7 +140,9 @@ def _convergence_note(summary: dict) -> str:
 
 def _print_summary(summary: dict) -> None:
     state = "" if summary["completed"] else "  (cut short: time budget or --max-poses)"
-    if "batch_distance_median_m" in summary:
+    if "score" in summary:
+        score = f"  not scored ({summary['score']}),"
+    elif "batch_distance_median_m" in summary:
         score = (
             f"  distance to the batch optimum: median {summary['batch_distance_median_m']} m, max {summary['batch_distance_max_m']} m "
             f"({summary['batch_distance_unrotated_median_m']} m once turned by {summary['batch_rotation_rad']} rad about the origin); "
@@ -183,7 +203,7 @@ def save_estimates(path: str, result) -> None:
 def _batch(args: argparse.Namespace) -> int:
     """Batch solve of a whole data set (started chunk by chunk, see ``sequential_batch``)."""
     _check_output(args.plot, ".png", "--plot")
-    setup = PaperSetup.named(args.preset or _PRESET_OF.get(args.dataset, "plaza"))
+    setup = PaperSetup.named(_preset(args))
     data = load_dataset(args.dataset, data_dir=args.data_dir, seed=args.seed)
     problem = build_problem(data, setup)
     t0 = time.perf_counter()
@@ -278,12 +298,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``steam-ref`` console script; returns the exit code."""
     argv = list(sys.argv[1:] if argv is None else argv)
     try:
-        args = build_parser().parse_args(argv or ["run"])
-        if args.command in (None, "run"):
-            if args.command is None:
-                args = build_parser().parse_args(["run"])
-            return _run(args)
+        args = build_parser().parse_args(argv or ["run"])  # no command at all runs the main job
         commands = {
+            "run": _run,
             "batch": _batch,
             "fidelity": _fidelity,
             "reproduce": _reproduce,
@@ -296,7 +313,3 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("steam-ref: interrupted", file=sys.stderr)
         return 130
-
-
-if __name__ == "__main__":
-    sys.exit(main())

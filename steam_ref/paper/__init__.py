@@ -14,9 +14,10 @@ Above the algorithm (which knows nothing of data sets or schedules), in the orde
   runs; Fig. 3 and 4.
 """
 
-from .online import StreamOptions, run_online
-from .presets import PaperSetup
+from .online import run_online
+from .options import StreamOptions
+from .presets import PaperSetup, Schedule
 from .readings import Readings
 from .results import RunResult
 
-__all__ = ["PaperSetup", "Readings", "StreamOptions", "RunResult", "run_online"]
+__all__ = ["PaperSetup", "Schedule", "Readings", "StreamOptions", "RunResult", "run_online"]

@@ -27,7 +27,8 @@ from ..datasets import LandmarkDataset, RangeDataset, load_range_dataset
 from ..errors import DataError
 from ..plot.figures import plot_interpolation_tradeoff, plot_timing, plot_trajectory
 from .fidelity import AUTHORS_RUNS, Fidelity, compare, load_authors_run
-from .online import RunResult, StreamOptions, run_online
+from .online import RunResult, run_online
+from .options import StreamOptions
 from .presets import PaperSetup
 
 __all__ = [
@@ -68,8 +69,8 @@ def timing_experiment(
     """Fig. 3/4 left: every (method, schedule) of :data:`TIMING_RUNS`; PB and PBVR under a budget."""
     for method, every in TIMING_RUNS:
         budget = batch_budget_s if method != "btgp" else None
-        opts = StreamOptions(method=method, every=every, max_poses=max_poses, time_budget_s=budget, progress=progress)
-        exp.timing[f"{method.upper()}/{every}"] = run_online(exp.data, exp.setup, opts)
+        opts = StreamOptions(method=method, max_poses=max_poses, time_budget_s=budget, progress=progress)
+        exp.timing[f"{method.upper()}/{every}"] = run_online(exp.data, exp.setup.with_schedule(every=every), opts)
 
 
 # The interpolation sweep starts a state's heading rate from the plain heading change, not from the

@@ -5,111 +5,43 @@
 they go to the solver (:mod:`steam_ref.paper.solvers`: PB, PBVR or BTGP, steps 2-7), and the front end
 then predicts from the solver's latest estimate.
 
-The schedule (:class:`Schedule`, the paper's '/1' and '/10'): the new factors go to the solver at an
-estimated state once ``every`` landmark readings (ranges, bearings, bearing-ranges) have been released
-since the last update, and at the last pose. On Plaza nothing is solved until ``start_after_ranges`` (50) ranges have arrived; then one
-batch Levenberg-Marquardt solve of everything so far seeds the solver, as in the paper's scripts.
-Time queries between states use Eq. 18 (:mod:`steam_ref.trajectory`).
+When the solver updates is the set-up's :class:`~steam_ref.paper.presets.Schedule` (the paper's '/1' and
+'/10', what starts the stream, Plaza's first batch solve); :class:`ScheduleClock` follows it as the
+readings arrive. What a run chooses on top is :class:`~steam_ref.paper.options.StreamOptions`. Time
+queries between states use Eq. 18 (:mod:`steam_ref.trajectory`).
 """
 
 from __future__ import annotations
 
-import numbers
 import time
 import warnings
-from dataclasses import dataclass, fields, replace
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from ..arguments import integer
 from ..batch import BatchResult, levenberg_marquardt
-from ..bayes_tree import ISAM2Params
 from ..errors import ConvergenceWarning, SteamError
 from ..graph import FactorGraph
 from ..trajectory import Trajectory
 from ..variables import L, Values, X
 from .converge import converge
-from .frontend import FrontEnd, Layout, NewStep
-from .presets import PaperSetup
+from .frontend import FrontEnd, NewStep
+from .options import StreamOptions
+from .presets import PaperSetup, Schedule
 from .readings import Readings
 from .results import RunResult, peak_rss_mb
-from .solvers import METHODS, PB_MAX_ITERATIONS, PB_RELATIVE_TOLERANCE, OnlineSolver, make_solver
+from .solvers import OnlineSolver, make_solver
 
-__all__ = ["StreamOptions", "Schedule", "StreamingEstimator", "run_online", "INITIAL_SOLVE"]
-
-# The first batch solve on Plaza: GTSAM's LevenbergMarquardtParams defaults, which the scripts use.
-INITIAL_SOLVE: dict[str, Any] = dict(ordering="amd", relative_tolerance=1e-5, absolute_tolerance=1e-5)
+__all__ = ["ScheduleClock", "StreamingEstimator", "run_online"]
 
 
-@dataclass(frozen=True)
-class StreamOptions:
-    """How a run is streamed and solved; every field can be overridden."""
+class ScheduleClock:
+    """A :class:`~steam_ref.paper.presets.Schedule` followed as the readings arrive: is an update due now?
+    [YIB Sec. IV: '/1', '/10']"""
 
-    method: str = "btgp"  # 'btgp', 'pb' or 'pbvr'
-    every: int | None = None  # update after this many landmark readings ('/1', '/10'); None: the set-up's
-    skip: int = Layout.skip  # a state at most skip poses after the previous one (see frontend.Layout)
-    interpolate: bool = Layout.interpolate  # readings between states: interpolated (Eq. 29) or dropped
-    range_states: bool = Layout.range_states  # also estimate every pose that has a range reading
-    start_after_ranges: int | None = None  # None: the set-up's (Plaza 50, synthetic 0)
-    final_updates: int | None = None  # extra solver updates after the last pose; None: the set-up's (synthetic 10)
-    converge_at_end: bool = False  # after the last pose, iterate everything to the batch optimum (converge.py)
-    isam2: ISAM2Params | None = None  # BTGP's iSAM2 settings; None: the set-up's (PaperSetup.isam2_params)
-    pb_relative_tolerance: float = PB_RELATIVE_TOLERANCE  # PB/PBVR Gauss-Newton stopping rule
-    pb_max_iterations: int = PB_MAX_ITERATIONS  # PB/PBVR iterations per update
-    max_poses: int | None = None  # process only this prefix of the poses
-    time_budget_s: float | None = None  # stop when the run has taken this long (reported)
-    progress: bool = False  # tqdm progress bar
-
-    def __post_init__(self) -> None:
-        if self.method not in METHODS:
-            raise SteamError(f"unknown method {self.method!r}; use one of {', '.join(METHODS)}")
-        _check_count("every", self.every, 1)
-        for name in ("interpolate", "range_states", "progress", "converge_at_end"):
-            if not isinstance(getattr(self, name), bool):
-                raise SteamError(f"{name} must be True or False, got {getattr(self, name)!r}")
-        Layout(self.skip, self.range_states, self.interpolate)  # checks skip
-        _check_count("max_poses", self.max_poses, 2)
-        _check_count("start_after_ranges", self.start_after_ranges, 0)
-        _check_count("final_updates", self.final_updates, 0)
-        _check_count("pb_max_iterations", self.pb_max_iterations, 1)
-        if self.time_budget_s is not None and not (_is_real(self.time_budget_s) and self.time_budget_s > 0):
-            raise SteamError(f"time_budget_s must be a number > 0 (or None), got {self.time_budget_s!r}")
-        if not (_is_real(self.pb_relative_tolerance) and 0 <= self.pb_relative_tolerance < np.inf):
-            raise SteamError(f"pb_relative_tolerance must be a finite number >= 0, got {self.pb_relative_tolerance!r}")
-        if self.isam2 is not None and not isinstance(self.isam2, ISAM2Params):
-            raise SteamError(f"isam2 must be an ISAM2Params (or None for the set-up's), got {self.isam2!r}")
-
-    @property
-    def layout(self) -> Layout:
-        """The state layout these options ask for."""
-        return Layout(self.skip, self.range_states, self.interpolate)
-
-    def replace(self, **changes) -> StreamOptions:
-        """A copy with some fields changed; SteamError names an unknown field."""
-        unknown = sorted(set(changes) - {f.name for f in fields(self)})
-        if unknown:
-            raise SteamError(f"StreamOptions has no field {unknown[0]!r}")
-        return replace(self, **changes)
-
-
-def _is_real(value: object) -> bool:
-    """A real number (NaN included: callers compare it), never a bool."""
-    return not isinstance(value, bool) and isinstance(value, numbers.Real)
-
-
-def _check_count(name: str, value: object, lowest: int) -> None:
-    """None (the set-up's, or no limit), or an integer >= ``lowest``: :func:`~steam_ref.arguments.integer`."""
-    if value is not None:
-        integer(name, value, lowest)
-
-
-class Schedule:
-    """When the new factors go to the solver.  [YIB Sec. IV: '/1', '/10']"""
-
-    def __init__(self, every: int, start_after: int, last_pose: int):
-        self.every, self.start_after, self.last_pose = every, start_after, last_pose
+    def __init__(self, schedule: Schedule, last_pose: int):
+        self.schedule, self.last_pose = schedule, last_pose
+        self.every, self.start_after = schedule.every, schedule.start_after_ranges
         self.released = 0  # landmark readings (ranges, bearings, bearing-ranges) released so far
         self.since_update = 0  # landmark readings released since the last update
         self.started = False  # the solver has had its first update
@@ -143,13 +75,9 @@ class StreamingEstimator:
             raise SteamError(
                 "converge_at_end rebuilds steam_ref's own solver at the optimum: it cannot finish a solver passed in"
             )
-        every = setup.every if options.every is None else options.every
-        options = options.replace(every=every)  # the result reports the schedule that ran
         self.readings, self.setup, self.options = readings, setup, options
         self.front = FrontEnd(readings, setup, options.layout, options.max_poses)
-        start = setup.start_after_ranges if options.start_after_ranges is None else options.start_after_ranges
-        self.schedule = Schedule(every, start, self.front.n_poses - 1)
-        self.final_updates = setup.final_updates if options.final_updates is None else options.final_updates
+        self.schedule = ScheduleClock(setup.schedule, self.front.n_poses - 1)
         self.solver = solver if solver is not None else self._new_solver()
         self.factors: list = []  # every factor given to the solver so far
         self.convergence: BatchResult | None = None  # what converge_at_end found
@@ -163,9 +91,11 @@ class StreamingEstimator:
 
     def _new_solver(self) -> OnlineSolver:
         o = self.options
-        isam2 = self.setup.isam2_params() if o.isam2 is None else o.isam2
         return make_solver(
-            o.method, isam2=isam2, pb_relative_tolerance=o.pb_relative_tolerance, pb_max_iterations=o.pb_max_iterations
+            o.method,
+            isam2=self.setup.isam2_params(),
+            pb_relative_tolerance=o.pb_relative_tolerance,
+            pb_max_iterations=o.pb_max_iterations,
         )
 
     @property
@@ -195,15 +125,18 @@ class StreamingEstimator:
         self.step_seconds.append(time.perf_counter() - start)
 
     def _update(self, pose: int) -> None:
-        """Give the new factors to the solver (after a first batch LM solve on Plaza)."""
+        """Give the new factors to the solver (the first time, from a batch LM solve if the schedule says so)."""
         start = time.perf_counter()
-        values = self._pending_values
-        if not self.schedule.started and self.schedule.start_after > 0:
-            values = levenberg_marquardt(FactorGraph(self._pending), values, **INITIAL_SOLVE).values
+        values, schedule = self._pending_values, self.setup.schedule
+        if not self.schedule.started and schedule.initial_batch:
+            tol = schedule.initial_batch_tolerance
+            values = levenberg_marquardt(
+                FactorGraph(self._pending), values, ordering="amd", relative_tolerance=tol, absolute_tolerance=tol
+            ).values
         self.solver.update(self._pending, values)
         self.factors.extend(self._pending)
         if pose == self.schedule.last_pose:
-            for _ in range(self.final_updates):
+            for _ in range(schedule.final_updates):
                 self.solver.update([], Values())
             if self.options.converge_at_end:
                 self._converge()
@@ -276,22 +209,23 @@ class StreamingEstimator:
         times, states = solved.at_every_pose()
         marks = self.landmark_estimates()
         return RunResult.of(
-            self.options,
-            times,
-            states,
-            np.array(solved.states, dtype=int),
-            marks,
-            np.array(self.step_seconds),
-            np.array(self.update_steps, dtype=int),
-            np.array(self.update_seconds),
-            self.readings.n_poses,
-            self.front.n_processed,
-            completed,
-            ground_truth,
-            solved.covariances([L(i) for i in marks]) if covariances else None,
-            peak_rss_mb(),
-            self.convergence_seconds if self.convergence is not None else None,
-            self.convergence.converged if self.convergence is not None else None,
+            options=self.options,
+            schedule=self.setup.schedule,
+            times=times,
+            trajectory=states,
+            state_poses=np.array(solved.states, dtype=int),
+            landmarks=marks,
+            step_seconds=np.array(self.step_seconds),
+            update_steps=np.array(self.update_steps, dtype=int),
+            update_seconds=np.array(self.update_seconds),
+            n_poses_total=self.readings.n_poses,
+            n_steps_processed=self.front.n_processed,
+            completed=completed,
+            ground_truth=ground_truth,
+            covariances=solved.covariances([L(i) for i in marks]) if covariances else None,
+            peak_rss=peak_rss_mb(),
+            convergence_s=self.convergence_seconds if self.convergence is not None else None,
+            converged_at_end=self.convergence.converged if self.convergence is not None else None,
         )
 
 

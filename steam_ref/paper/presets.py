@@ -6,7 +6,12 @@ public scripts (``matlab/GP/synthetic_isam2.m``, ``plaza_isam2.m``, ``victoria_p
 ``PaperSetup.synthetic()``, ``.plaza()`` and ``.victoria_park()`` are the documented defaults: they do
 what the scripts did. Any field can be changed with :meth:`PaperSetup.replace`; the fields that depart
 from the scripts on purpose say so (:data:`DEPARTURES`), and the motion prior is chosen here
-(``prior``, :meth:`PaperSetup.motion_prior`). :mod:`steam_ref.paper.readings` re-exports all of it.
+(``prior``, :meth:`PaperSetup.motion_prior`).
+
+A set-up owns the model (noise, Qc, priors, the motion prior), the preset's schedule (:class:`Schedule`:
+when the stream updates, what starts it, whether a batch solve seeds it, the updates after the last
+pose; every switch explicit) and its iSAM2 settings (``isam2``). What a single run chooses on top (the
+method, the state layout, a prefix, a time budget) is :class:`~steam_ref.paper.options.StreamOptions`.
 """
 
 from __future__ import annotations
@@ -23,7 +28,7 @@ from ..gp.prior import check_qc
 from ..gp.sde import LinearSDE
 from ..robust import Tukey
 
-__all__ = ["PaperSetup", "RANGE_ATTACHMENTS", "DEPARTURES", "PRIORS", "PRESETS"]
+__all__ = ["PaperSetup", "Schedule", "RANGE_ATTACHMENTS", "DEPARTURES", "PRIORS", "PRESETS"]
 
 RANGE_ATTACHMENTS = ("file-order", "time")
 PRIORS = ("wnoa", "wnoj", "singer")  # the paper's prior, and two extensions (docs/derivations.md §6)
@@ -37,6 +42,46 @@ DEPARTURES: dict[str, dict[str, object]] = {
     "whole-state-relinearization": dict(relinearize_blocks=None),  # iSAM2 relinearizes the 6-vector state at once
     "landmarks-at-sighting": dict(landmarks_up_front=False),  # a landmark enters with its first range reading
 }
+
+
+@dataclass(frozen=True)
+class Schedule:
+    """When a stream gives its new factors to the solver: every switch explicit.  [YIB Sec. IV: '/1', '/10']
+
+    The new factors go to the solver at an estimated state once ``every`` landmark readings (ranges,
+    bearings, bearing-ranges) have been released since the last update, and at the last pose. Nothing is
+    solved before ``start_after_ranges`` landmark readings have arrived. With ``initial_batch`` the first
+    update hands the solver the estimate of one batch Levenberg-Marquardt solve of everything so far
+    (AMD ordering; relative and absolute tolerance ``initial_batch_tolerance``, GTSAM's
+    ``LevenbergMarquardtParams`` defaults, which ``plaza_isam2.m`` uses); without it, the front end's
+    initial guesses. After the last pose the solver runs ``final_updates`` more updates with no new
+    factors (``synthetic_isam2.m``: 10).
+    """
+
+    every: int = 1
+    start_after_ranges: int = 0
+    initial_batch: bool = False
+    initial_batch_tolerance: float = 1e-5
+    final_updates: int = 0
+
+    def __post_init__(self) -> None:
+        integer("Schedule.every", self.every, 1)
+        integer("Schedule.start_after_ranges", self.start_after_ranges, 0)
+        integer("Schedule.final_updates", self.final_updates, 0)
+        if not isinstance(self.initial_batch, bool):
+            raise SteamError(f"Schedule.initial_batch must be True or False, got {self.initial_batch!r}")
+        tolerance = number("Schedule.initial_batch_tolerance", self.initial_batch_tolerance)
+        if not 0 < tolerance < 1:
+            raise SteamError(
+                f"Schedule.initial_batch_tolerance must be in (0, 1), got {self.initial_batch_tolerance!r}"
+            )
+
+    def replace(self, **changes) -> Schedule:
+        """A copy with some fields changed; SteamError names an unknown field."""
+        unknown = sorted(set(changes) - {f.name for f in fields(self)})
+        if unknown:
+            raise SteamError(f"Schedule has no field {unknown[0]!r}")
+        return replace(self, **changes)
 
 
 @dataclass(frozen=True)
@@ -58,7 +103,6 @@ class PaperSetup:
     )  # (3,) prior on velocity 0
     first_velocity: NDArray = field(default_factory=lambda: np.full(3, 1e-4))  # (3,) its mean
     range_correction_steps: int = 0  # fit r' = a r + b on ranges of the first N poses; 0: none
-    start_after_ranges: int = 0  # incremental solvers start after this many ranges (batch LM first)
     landmarks_up_front: bool = False  # True: every landmark and its prior enter at pose 0; else at first sighting
     range_attachment: str = "file-order"  # 'file-order': the scripts' scan; 'time': by time stamp (a departure)
     pose2_heading_rate_guess: bool = (
@@ -68,13 +112,15 @@ class PaperSetup:
         3,
         3,
     )  # BTGP relinearizes pose and velocity on their own (GTSAM variables P, V); None: the whole state
-    final_updates: int = 0  # extra solver updates with no new factors after the last pose (synthetic script: 10)
     prior: str = "wnoa"  # motion prior: the paper's 'wnoa', or 'wnoj' / 'singer' (then qc is the PSD of jerk)
     singer_time_constant: float = 1.0  # [s] 1/α of the Singer prior
     first_acceleration_sigmas: NDArray = field(
         default_factory=lambda: np.array([1.0, 1.0, np.pi])
     )  # (3,) prior on acceleration 0 (mean 0), WNOJ and Singer
-    every: int = 1  # the script's schedule: update after this many landmark readings (victoria_park_isam2.m: 10); the CLI's default --every
+    schedule: Schedule = field(default_factory=Schedule)  # when the stream updates (the script's '/1', '/10', ...)
+    isam2: ISAM2Params = field(
+        default_factory=ISAM2Params
+    )  # BTGP's iSAM2 (GTSAM's defaults); blocks: relinearize_blocks
 
     def __post_init__(self) -> None:
         """Check every field where it enters; SteamError naming the field and the value."""
@@ -96,8 +142,16 @@ class PaperSetup:
         for name in ("range_sigma", "landmark_prior_sigma") + (("tukey_c",) if self.tukey_c is not None else ()):
             if number(f"PaperSetup.{name}", getattr(self, name)) <= 0:
                 raise SteamError(f"PaperSetup.{name} must be a finite number > 0, got {getattr(self, name)!r}")
-        for name in ("range_correction_steps", "start_after_ranges", "final_updates"):
-            integer(f"PaperSetup.{name}", getattr(self, name), 0)
+        integer("PaperSetup.range_correction_steps", self.range_correction_steps, 0)
+        if not isinstance(self.schedule, Schedule):
+            raise SteamError(f"PaperSetup.schedule must be a Schedule, got {self.schedule!r}")
+        if not isinstance(self.isam2, ISAM2Params):
+            raise SteamError(f"PaperSetup.isam2 must be an ISAM2Params, got {self.isam2!r}")
+        if self.isam2.relinearize_blocks is not None:
+            raise SteamError(
+                "PaperSetup.isam2.relinearize_blocks must be None: a set-up's blocks are PaperSetup.relinearize_blocks "
+                f"(one owner), got {self.isam2.relinearize_blocks!r}"
+            )
         for name in ("landmarks_up_front", "pose2_heading_rate_guess"):
             if not isinstance(getattr(self, name), bool):
                 raise SteamError(f"PaperSetup.{name} must be True or False, got {getattr(self, name)!r}")
@@ -114,7 +168,6 @@ class PaperSetup:
         if self.prior not in PRIORS:
             raise SteamError(f"prior must be one of {PRIORS}, got {self.prior!r}")
         self.motion_prior()  # checks Qc and the time constant, naming the bad one
-        integer("PaperSetup.every", self.every, 1)
 
     @classmethod
     def synthetic(cls) -> PaperSetup:
@@ -125,7 +178,7 @@ class PaperSetup:
             velocity_sigmas=np.array([0.5, 0.5, 1.0]),
             interpolated_velocity_sigmas=np.array([0.5, 0.5, 1.0]),
             range_sigma=1.0,
-            final_updates=10,
+            schedule=Schedule(final_updates=10),
         )
 
     @classmethod
@@ -138,7 +191,7 @@ class PaperSetup:
             interpolated_velocity_sigmas=np.array([0.5, 0.01, 0.02]),
             range_sigma=20.0,
             range_correction_steps=3000,
-            start_after_ranges=50,
+            schedule=Schedule(start_after_ranges=50, initial_batch=True),
             landmarks_up_front=True,
         )
 
@@ -162,7 +215,7 @@ class PaperSetup:
             range_sigma=1.0,  # no ranges in the file; a LandmarkDataset's ranges carry their own sigmas anyway
             tukey_c=None,
             first_velocity_sigmas=np.array([0.1, 0.1, np.pi / 10]),
-            every=10,
+            schedule=Schedule(every=10),
         )
 
     @classmethod
@@ -179,6 +232,14 @@ class PaperSetup:
             raise SteamError(f"PaperSetup has no field {unknown[0]!r}")
         return replace(self, **changes)
 
+    def with_schedule(self, **changes) -> PaperSetup:
+        """A copy whose schedule has some fields changed (``setup.with_schedule(every=10)``)."""
+        return self.replace(schedule=self.schedule.replace(**changes))
+
+    def with_isam2(self, **changes) -> PaperSetup:
+        """A copy whose iSAM2 settings have some fields changed (``setup.with_isam2(relinearize_skip=1)``)."""
+        return self.replace(isam2=self.isam2.replace(**changes))
+
     def motion_prior(self) -> NDArray | LinearSDE:
         """The GP prior of the states: Qc for the paper's WNOA (its memoised closed forms), else a LinearSDE."""
         if self.prior == "wnoa":
@@ -193,14 +254,14 @@ class PaperSetup:
         return 6 if self.prior == "wnoa" else 9
 
     def isam2_params(self) -> ISAM2Params:
-        """BTGP's iSAM2 settings for this set-up: GTSAM's defaults, with the state's relinearization blocks.
+        """BTGP's iSAM2 settings for this set-up: ``isam2`` with the state's relinearization blocks.
 
         ``relinearize_blocks`` (3, 3) is pose and velocity on their own; a 9-number state adds its acceleration.
         """
         blocks = self.relinearize_blocks
         if blocks is not None and sum(blocks) < self.state_dim:
             blocks = tuple(blocks) + (3,) * ((self.state_dim - sum(blocks)) // 3)
-        return ISAM2Params(relinearize_blocks=None if blocks is None else {"x": blocks})
+        return self.isam2.replace(relinearize_blocks=None if blocks is None else {"x": blocks})
 
     def departing(self, *names: str) -> PaperSetup:
         """A copy with the named departures from the scripts (:data:`DEPARTURES`) applied."""

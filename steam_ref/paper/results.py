@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import resource
 from dataclasses import dataclass
-from typing import Protocol
 
 import numpy as np
 from numpy.typing import NDArray
@@ -12,24 +11,8 @@ from numpy.typing import NDArray
 from ..arguments import finite, real_array
 from ..errors import ShapeError
 from ..trajectory import Covariances
-from .frontend import Layout
-
-
-class RunOptions(Protocol):
-    """What a result reads of the options a run was configured with (``online.StreamOptions`` is one;
-    this module sits below ``online``, so it names the attributes instead of importing the class)."""
-
-    method: str
-    every: int
-    skip: int
-    interpolate: bool
-    range_states: bool
-    max_poses: int | None
-    converge_at_end: bool
-
-    @property
-    def layout(self) -> Layout: ...
-
+from .options import StreamOptions
+from .presets import Schedule
 
 __all__ = ["RunResult", "position_rmse", "peak_rss_mb"]
 
@@ -60,7 +43,8 @@ class RunResult:
     """What one streamed run did and produced."""
 
     method: str  # 'btgp', 'pb' or 'pbvr'
-    options: RunOptions  # what the run was configured with (a StreamOptions)
+    options: StreamOptions  # what the run chose
+    schedule: Schedule  # when its solver updated (the set-up's)
     times: NDArray  # (n,) time of every pose covered by the estimate
     trajectory: NDArray  # (n, 6) [x, y, θ, ẋ, ẏ, θ̇] at every covered pose (Eq. 18 between states)
     state_poses: NDArray  # (M,) pose indices that have an estimated state
@@ -83,22 +67,24 @@ class RunResult:
     @classmethod
     def of(
         cls,
-        options,
-        times,
-        trajectory,
-        state_poses,
-        landmarks,
-        step_seconds,
-        update_steps,
-        update_seconds,
-        n_poses_total,
-        n_steps_processed,
-        completed,
-        ground_truth,
-        covariances,
-        peak_rss,
-        convergence_s=None,
-        converged_at_end=None,
+        *,
+        options: StreamOptions,
+        schedule: Schedule,
+        times: NDArray,
+        trajectory: NDArray,
+        state_poses: NDArray,
+        landmarks: dict[int, NDArray],
+        step_seconds: NDArray,
+        update_steps: NDArray,
+        update_seconds: NDArray,
+        n_poses_total: int,
+        n_steps_processed: int,
+        completed: bool,
+        ground_truth: NDArray | None,
+        covariances: Covariances | None,
+        peak_rss: float,
+        convergence_s: float | None = None,
+        converged_at_end: bool | None = None,
     ) -> RunResult:
         """Package a run, scoring it against ``ground_truth`` (CMU GT layout, x, y in columns 1-2) if given."""
         rmse = rmse_states = float("nan")
@@ -107,24 +93,25 @@ class RunResult:
             rmse = position_rmse(trajectory[:, :2], truth)
             rmse_states = position_rmse(trajectory[state_poses, :2], truth[state_poses])
         return cls(
-            options.method,
-            options,
-            times,
-            trajectory,
-            state_poses,
-            landmarks,
-            step_seconds,
-            update_steps,
-            update_seconds,
-            n_poses_total,
-            n_steps_processed,
-            completed,
-            rmse,
-            rmse_states,
-            covariances,
-            peak_rss,
-            convergence_s,
-            converged_at_end,
+            method=options.method,
+            options=options,
+            schedule=schedule,
+            times=times,
+            trajectory=trajectory,
+            state_poses=state_poses,
+            landmarks=landmarks,
+            step_seconds=step_seconds,
+            update_steps=update_steps,
+            update_seconds=update_seconds,
+            n_poses_total=n_poses_total,
+            n_steps_processed=n_steps_processed,
+            completed=completed,
+            rmse_m=rmse,
+            rmse_states_m=rmse_states,
+            covariances=covariances,
+            peak_rss_mb=peak_rss,
+            convergence_s=convergence_s,
+            converged_at_end=converged_at_end,
         )
 
     @property
@@ -148,7 +135,7 @@ class RunResult:
         return {
             "dataset": dataset,
             "method": self.method,
-            "every": o.every,
+            "every": self.schedule.every,
             "skip": o.skip,
             "interpolate": o.interpolate,
             "range_states": o.range_states,

@@ -1,0 +1,78 @@
+"""What one streamed run chooses on top of its set-up.  [YIB Sec. IV]
+
+:class:`StreamOptions` holds the run-time choices only: which solver (PB, PBVR, BTGP) and its stopping
+rule, which poses get a state (:class:`~steam_ref.paper.frontend.Layout`), a prefix of the poses, a time
+budget, a progress bar, and whether to iterate to the batch optimum at the end. The model, the schedule
+and iSAM2's settings belong to the set-up (:class:`~steam_ref.paper.presets.PaperSetup`).
+"""
+
+from __future__ import annotations
+
+import numbers
+from dataclasses import dataclass, fields, replace
+
+import numpy as np
+
+from ..arguments import integer
+from ..errors import SteamError
+from .frontend import Layout
+from .solvers import METHODS, PB_MAX_ITERATIONS, PB_RELATIVE_TOLERANCE
+
+__all__ = ["StreamOptions"]
+
+
+@dataclass(frozen=True)
+class StreamOptions:
+    """What one run chooses on top of its set-up: the method, the state layout, a prefix, a time budget.
+
+    Run-time choices only: the model, the schedule and iSAM2's settings are the set-up's
+    (:class:`~steam_ref.paper.presets.PaperSetup`: ``schedule``, ``isam2``), each with one owner.
+    """
+
+    method: str = "btgp"  # 'btgp', 'pb' or 'pbvr'
+    skip: int = Layout.skip  # a state at most skip poses after the previous one (see frontend.Layout)
+    interpolate: bool = Layout.interpolate  # readings between states: interpolated (Eq. 29) or dropped
+    range_states: bool = Layout.range_states  # also estimate every pose that has a range reading
+    converge_at_end: bool = False  # after the last pose, iterate everything to the batch optimum (converge.py)
+    pb_relative_tolerance: float = PB_RELATIVE_TOLERANCE  # PB/PBVR Gauss-Newton stopping rule
+    pb_max_iterations: int = PB_MAX_ITERATIONS  # PB/PBVR iterations per update
+    max_poses: int | None = None  # process only this prefix of the poses
+    time_budget_s: float | None = None  # stop when the run has taken this long (reported)
+    progress: bool = False  # tqdm progress bar
+
+    def __post_init__(self) -> None:
+        if self.method not in METHODS:
+            raise SteamError(f"unknown method {self.method!r}; use one of {', '.join(METHODS)}")
+        for name in ("interpolate", "range_states", "progress", "converge_at_end"):
+            if not isinstance(getattr(self, name), bool):
+                raise SteamError(f"{name} must be True or False, got {getattr(self, name)!r}")
+        Layout(self.skip, self.range_states, self.interpolate)  # checks skip
+        _check_count("max_poses", self.max_poses, 2)
+        _check_count("pb_max_iterations", self.pb_max_iterations, 1)
+        if self.time_budget_s is not None and not (_is_real(self.time_budget_s) and self.time_budget_s > 0):
+            raise SteamError(f"time_budget_s must be a number > 0 (or None), got {self.time_budget_s!r}")
+        if not (_is_real(self.pb_relative_tolerance) and 0 <= self.pb_relative_tolerance < np.inf):
+            raise SteamError(f"pb_relative_tolerance must be a finite number >= 0, got {self.pb_relative_tolerance!r}")
+
+    @property
+    def layout(self) -> Layout:
+        """The state layout these options ask for."""
+        return Layout(self.skip, self.range_states, self.interpolate)
+
+    def replace(self, **changes) -> StreamOptions:
+        """A copy with some fields changed; SteamError names an unknown field."""
+        unknown = sorted(set(changes) - {f.name for f in fields(self)})
+        if unknown:
+            raise SteamError(f"StreamOptions has no field {unknown[0]!r}")
+        return replace(self, **changes)
+
+
+def _is_real(value: object) -> bool:
+    """A real number (NaN included: callers compare it), never a bool."""
+    return not isinstance(value, bool) and isinstance(value, numbers.Real)
+
+
+def _check_count(name: str, value: object, lowest: int) -> None:
+    """None (the set-up's, or no limit), or an integer >= ``lowest``: :func:`~steam_ref.arguments.integer`."""
+    if value is not None:
+        integer(name, value, lowest)
