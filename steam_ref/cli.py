@@ -8,7 +8,7 @@ Usage::
     steam-ref batch [--dataset NAME_OR_PATH] [--ordering {xl,amd}] [--json] [--plot FILE.png]
     steam-ref fidelity [--dataset {plaza,paper-synthetic,all}] [--json] [--plot FILE.png]
     steam-ref reproduce [--quick] [--out DIR]
-    steam-ref conformance {export DIR, check RESULTS_DIR [--suite NAME], selftest [--paper], build}
+    steam-ref conformance {export DIR, check RESULTS_DIR [--only SUITE...], selftest [--paper], build}
 
 With no options ``steam-ref run`` runs BTGP/1 on the generated synthetic task. A data set without
 ground truth (victoria-park) is scored against the converged batch solution of the same problem
@@ -23,6 +23,7 @@ import json
 import sys
 import time
 from collections.abc import Sequence
+from pathlib import Path
 
 import numpy as np
 
@@ -34,7 +35,7 @@ from .datasets import load_dataset, load_range_dataset
 from .errors import SteamError
 from .experiments import reproduce
 from .fidelity import AUTHORS_RUNS, compare, find_authors_file, load_authors_run
-from .online import StreamOptions, run_online
+from .online import StreamingEstimator, StreamOptions, run_online
 from .plot import plot_fidelity, plot_trajectory
 from .problem import build_problem, score_against_batch, sequential_batch
 from .readings import PaperSetup, Readings
@@ -55,6 +56,9 @@ _PRESET_OF = {
 def _run(args: argparse.Namespace) -> int:
     _check_output(args.save_estimates, ".npz", "--save-estimates")
     _check_output(args.plot, ".png", "--plot")
+    _check_output(args.tree_dot, ".dot", "--tree-dot")
+    if args.tree_dot and args.method != "btgp":
+        raise SteamError(f"--tree-dot writes BTGP's Bayes tree: it needs --method btgp, got --method {args.method}")
     preset = args.preset or _PRESET_OF.get(args.dataset, "plaza")
     setup = PaperSetup.named(preset).departing(*args.departure)
     setup = setup.replace(prior=args.prior, qc=args.qc_scale * setup.qc, singer_time_constant=args.singer_time_constant)
@@ -73,7 +77,8 @@ def _run(args: argparse.Namespace) -> int:
         ),
     )
     data = load_dataset(args.dataset, data_dir=args.data_dir, seed=args.seed)
-    result = run_online(data, setup, options, covariances=args.save_estimates is not None)
+    estimator = StreamingEstimator(Readings.from_dataset(data, setup), setup, options)
+    result = estimator.run(data.ground_truth, covariances=args.save_estimates is not None)
     summary = result.summary(args.dataset) | {
         "departures": args.departure,
         "prior": args.prior,
@@ -92,6 +97,8 @@ def _run(args: argparse.Namespace) -> int:
         _print_summary(summary)
     if args.save_estimates:
         save_estimates(args.save_estimates, result)
+    if args.tree_dot:  # the final Bayes tree as GTSAM's ISAM2.dot() writes it (bayes_tree/dot.py)
+        Path(args.tree_dot).write_text(estimator.solver.inner.tree.dot() + "\n", encoding="utf-8")
     if args.plot:
         reference: np.ndarray | None
         if score is not None:

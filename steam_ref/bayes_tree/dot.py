@@ -2,9 +2,12 @@
 
 :func:`tree_dot` writes a tree as GTSAM's ``BayesTree::dot`` (``ISAM2.dot()`` in Python) does: a
 Graphviz digraph whose nodes are named by the integer key of their first frontal variable (GTSAM's
-``Symbol``: the character in the top byte, the index below), labelled ``"frontals : separator"`` with
-the keys in elimination order (a root has no ``" : "``), each edge ``parent->child`` written just
-before the child's node, children in the tree's own order, depth first::
+``Symbol``: the character in the top byte, the index below), labelled ``"frontals : separator"``,
+frontals in elimination order, separator keys sorted by that integer key (GTSAM keeps a
+conditional's parents in a sorted key set), a root without ``" : "``; each edge ``parent->child``
+written just before the child's node, depth first, children in the tree's own order. GTSAM's
+child order comes from its junction tree and can differ where a clique has several children: the
+set of lines is then the same, their order not (tests/test_bayes_tree_dot.py compares both ways)::
 
     digraph G{
     8646911284551352322[label="x1, x2"];
@@ -47,7 +50,7 @@ def tree_dot(tree) -> str:
         label = _label(clique.frontals)
         if parent is not None:
             lines.append(f"{parent}->{node}\n")
-            label += " : " + _label(clique.separator)
+            label += " : " + _label(sorted(clique.separator, key=gtsam_key))
         lines.append(f'{node}[label="{label}"];\n')
         stack.extend((c, node) for c in reversed(tree.children[cid]))
     lines.append("}")
