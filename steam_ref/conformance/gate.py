@@ -61,6 +61,7 @@ def check_directory(
         raise SteamError(
             f"unknown convention {printable(bad[0])!r}; the alternatives are {', '.join(CONVENTION_NAMES)}"
         )
+    given = load_kit(Path(kit)) if kit is not None else None  # a kit named is checked first
     chosen = [s for s in SUITES if only is None or s in only]
     files = {s: results_dir / s / "results.json" for s in chosen if _present(results_dir / s / "results.json")}
     if not files:
@@ -79,7 +80,7 @@ def check_directory(
         )
     version = next(iter(named)) if named else 1
     kit_path = Path(kit) if kit is not None else KITS[version]
-    index, suites = load_kit(kit_path)
+    index, suites = given if given is not None else load_kit(kit_path)
     if index["kit_version"] != version:
         given = f"kit_version {version}" if named else "no kit_version (kit v1)"
         raise DataError(

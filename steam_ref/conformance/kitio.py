@@ -172,7 +172,7 @@ def _regular_file(path: Path) -> int:
     return info.st_size
 
 
-def read_json(path: Path, max_bytes: int = MAX_BYTES):
+def read_json(path: Path, max_bytes: int | None = None):
     """A kit or results JSON file; DataError naming the file and the problem when it is anything else.
 
     Refused: a missing file, a folder, a dangling link or a link loop, anything but a regular file,
@@ -180,6 +180,7 @@ def read_json(path: Path, max_bytes: int = MAX_BYTES):
     literals over 18 digits, a key given twice in one object, nesting deeper than 64.
     """
     path = Path(path)
+    max_bytes = MAX_BYTES if max_bytes is None else max_bytes
     size = _regular_file(path)
     if size > max_bytes:
         raise DataError(f"{printable(path)}: {size} bytes, more than the {max_bytes} a kit or results file may have")
