@@ -52,21 +52,21 @@ def check_directory(
     """Check every suite of the kit (or of ``only``) against ``results_dir``; see the module docstring."""
     results_dir = Path(results_dir)
     if not results_dir.is_dir():
-        raise SteamError(f"results folder {printable(results_dir)!r} does not exist (or is not a folder)")
+        raise SteamError(f"results folder '{printable(results_dir)}' does not exist (or is not a folder)")
     unknown = [s for s in (only or ()) if s not in SUITES]
     if unknown:
-        raise SteamError(f"unknown suite {printable(unknown[0])!r}; the suites are {', '.join(SUITES)}")
+        raise SteamError(f"unknown suite '{printable(unknown[0])}'; the suites are {', '.join(SUITES)}")
     bad = [c for c in conventions if c not in CONVENTION_NAMES]
     if bad:
         raise SteamError(
-            f"unknown convention {printable(bad[0])!r}; the alternatives are {', '.join(CONVENTION_NAMES)}"
+            f"unknown convention '{printable(bad[0])}'; the alternatives are {', '.join(CONVENTION_NAMES)}"
         )
     given = load_kit(Path(kit)) if kit is not None else None  # a kit named is checked first
     chosen = [s for s in SUITES if only is None or s in only]
     files = {s: results_dir / s / "results.json" for s in chosen if _present(results_dir / s / "results.json")}
     if not files:
         raise SteamError(
-            f"no results in {printable(results_dir)!r}: expected <suite>/results.json for "
+            f"no results in '{printable(results_dir)}': expected <suite>/results.json for "
             f"{'a suite of ' if only is None else ''}{', '.join(chosen)}"
         )
     data = {s: read_json(p) for s, p in files.items()}

@@ -120,7 +120,7 @@ def _no_duplicates(pairs: list) -> dict:
     out: dict = {}
     for k, v in pairs:
         if k in out:
-            raise DataError(f"the key {printable(k)!r} appears twice in one object")
+            raise DataError(f"the key '{printable(k)}' appears twice in one object")
         out[k] = v
     return out
 

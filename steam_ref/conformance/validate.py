@@ -38,26 +38,26 @@ def kit_cases(where: str, cases: object) -> list[dict]:
             raise DataError(f"{where}: cases[{i}] is not an object with a string 'name'")
         name = printable(case["name"])
         if case["name"] in seen:
-            raise DataError(f"{where}: the case {name!r} is listed twice")
+            raise DataError(f"{where}: the case '{name}' is listed twice")
         seen.add(case["name"])
         tolerance, expected = case.get("tolerance"), case.get("expected")
         if not isinstance(tolerance, Mapping) or not tolerance or not isinstance(expected, Mapping):
-            raise DataError(f"{where}: case {name!r} needs a 'tolerance' object and an 'expected' object")
+            raise DataError(f"{where}: case '{name}' needs a 'tolerance' object and an 'expected' object")
         for q, t in tolerance.items():
             numeric = (
                 isinstance(t, Mapping) and set(t) == {"atol", "rtol"} and all(map(_finite_nonnegative, t.values()))
             )
             if t != "exact" and not numeric:
                 raise DataError(
-                    f"{where}: case {name!r}, tolerance of {printable(q)!r} is {printable(repr(t))[:80]}: "
+                    f"{where}: case '{name}', tolerance of '{printable(q)}' is {printable(repr(t))[:80]}: "
                     'expected "exact" or {"atol": a, "rtol": r} with finite a, r >= 0'
                 )
             if q not in expected:
-                raise DataError(f"{where}: case {name!r} has a tolerance for {printable(q)!r} but no expected value")
+                raise DataError(f"{where}: case '{name}' has a tolerance for '{printable(q)}' but no expected value")
             if t != "exact":
                 problem = numeric_leaf_problem(expected[q])
                 if problem:
-                    raise DataError(f"{where}: case {name!r}, expected {printable(q)}{problem}")
+                    raise DataError(f"{where}: case '{name}', expected {printable(q)}{problem}")
     return [dict(c) for c in cases]
 
 
@@ -107,7 +107,7 @@ def results_cases(where: str, data: Mapping, kit: Sequence[Mapping]) -> dict:
             if q not in case["tolerance"]:
                 known = ", ".join(case["tolerance"])
                 raise DataError(
-                    f"{where}: cases/{printable(name)} has an unknown quantity {printable(q)!r} (it has {known})"
+                    f"{where}: cases/{printable(name)} has an unknown quantity '{printable(q)}' (it has {known})"
                 )
             if case["tolerance"][q] != "exact":
                 problem = numeric_leaf_problem(value)
