@@ -77,7 +77,7 @@ def test_a_nudged_number_prints_expected_and_got_and_the_first_failing_quantity_
     assert code == 1 and ": Lambda worst |diff| 0.001 at [0, 3]" in head and "likely cause" in head, out
     kit = {c["name"]: c for c in read_suite(SHIPPED, "gp")["cases"]}
     expected = kit["interp_tau1.1"]["expected"]["Lambda"][0][3]
-    assert f"    Lambda[0, 3]: expected {expected!r}, got {float(lam[0, 3])!r}" in lines
+    assert f"    Lambda[0, 3]: expected {expected!r}, got {float(lam[0, 3])!r} (|diff| 0.001)" in lines
     assert any(line.startswith("  x_tau worst |diff|") for line in lines)  # every failing quantity, listed after
     assert any(line.startswith("    x_tau[0]: expected ") for line in lines)
 
