@@ -40,6 +40,7 @@ from .plot import plot_fidelity, plot_trajectory
 from .problem import build_problem, score_against_batch, sequential_batch
 from .readings import PaperSetup, Readings
 from .results import position_rmse
+from .solvers import BayesTreeSolver
 from .variables import X
 
 __all__ = ["main", "build_parser"]  # build_parser lives in cli_args
@@ -97,7 +98,7 @@ def _run(args: argparse.Namespace) -> int:
         _print_summary(summary)
     if args.save_estimates:
         save_estimates(args.save_estimates, result)
-    if args.tree_dot:  # the final Bayes tree as GTSAM's ISAM2.dot() writes it (bayes_tree/dot.py)
+    if args.tree_dot and isinstance(estimator.solver, BayesTreeSolver):  # GTSAM's ISAM2.dot() text (bayes_tree/dot.py)
         Path(args.tree_dot).write_text(estimator.solver.inner.tree.dot() + "\n", encoding="utf-8")
     if args.plot:
         reference: np.ndarray | None

@@ -124,7 +124,16 @@ def test_selftest_passes_on_the_installed_code(capsys):
 
 def test_export_writes_the_kit_and_a_readme_and_refuses_a_non_empty_folder(tmp_path, capsys):
     code, _, _ = cli(capsys, "export", tmp_path / "kit")
-    assert code == 0 and "results.json" in (tmp_path / "kit" / "README.md").read_text()
+    readme = (tmp_path / "kit" / "README.md").read_text()
+    assert code == 0 and '"kit_version": 2' in readme and "--allow-missing" in readme
+    # self-contained: every factor type with its error, the details an outside port got wrong, the ordering rule
+    for factor in ("gp_prior", "prior", "odometry", "velocity", "range", "bearing", "bearing_range", "interpolated"):
+        assert f"| `{factor}` |" in readme, factor
+    assert "v_lat" in readme and "-sin(th) x_dot + cos(th) y_dot - v_lat" in readme  # the lateral row
+    assert "a constant input v" in readme and "times (key -> time stamp" in readme
+    assert "without the robust weight" in readme and "**paper-sign**" in readme
+    assert "Order: x0, l1, l0, x1, x2." in readme and "ties go to the variable earlier in the list" in readme
+    assert "**range_attachment**" in readme and "Outputs: the final [x, y, theta]" in readme.replace("\n", " ")
     for name in kit_files(SHIPPED) + ["index.json"]:
         assert (tmp_path / "kit" / name).read_bytes() == (SHIPPED / name).read_bytes(), name
     code, out, err = cli(capsys, "export", tmp_path / "kit")

@@ -82,9 +82,9 @@ def check_directory(
     kit_path = Path(kit) if kit is not None else KITS[version]
     index, suites = given if given is not None else load_kit(kit_path)
     if index["kit_version"] != version:
-        given = f"kit_version {version}" if named else "no kit_version (kit v1)"
+        said = f"kit_version {version}" if named else "no kit_version (kit v1)"
         raise DataError(
-            f"{printable(results_dir)}: the results name {given}, the kit {printable(kit_path)} is v{index['kit_version']}"
+            f"{printable(results_dir)}: the results name {said}, the kit {printable(kit_path)} is v{index['kit_version']}"
         )
     if conventions and not index.get("convention_alternatives"):
         raise SteamError(f"kit v{index['kit_version']} has no convention alternatives (kit v2 has them)")
