@@ -339,6 +339,11 @@ KIT_EDITS = {
         "\\x1b[31mred\\nFAIL",
     ),
     "an unknown kit version": (lambda i, g: i.__setitem__("kit_version", 99), "kit version 99"),
+    "alternatives that are a list": (lambda i, g: g["cases"][0].__setitem__("alternatives", [1]), "'alternatives'"),
+    "an alternative value as a string": (
+        lambda i, g: g["cases"][0].__setitem__("alternatives", {"symmetric-whitener": {"W": "0"}}),
+        "is a str, not a number",
+    ),
 }
 
 

@@ -58,7 +58,25 @@ def kit_cases(where: str, cases: object) -> list[dict]:
                 problem = numeric_leaf_problem(expected[q])
                 if problem:
                     raise DataError(f"{where}: case '{name}', expected {printable(q)}{problem}")
+        _alternatives(where, name, case)
     return [dict(c) for c in cases]
+
+
+def _alternatives(where: str, name: str, case: Mapping) -> None:
+    """A case's 'alternatives': convention name → quantity of the case → a value of the quantity's kind."""
+    alternatives = case.get("alternatives", {})
+    if not isinstance(alternatives, Mapping):
+        raise DataError(f"{where}: case '{name}', 'alternatives' must be an object")
+    for key, values in alternatives.items():
+        if not isinstance(values, Mapping):
+            raise DataError(f"{where}: case '{name}', alternatives/{printable(key)} must be an object")
+        for q, v in values.items():
+            t = case["tolerance"].get(q)
+            if t is None:
+                raise DataError(f"{where}: case '{name}', alternatives/{printable(key)} names an unknown quantity")
+            problem = "" if t == "exact" else numeric_leaf_problem(v)
+            if problem:
+                raise DataError(f"{where}: case '{name}', alternatives/{printable(key)}/{printable(q)}{problem}")
 
 
 def numeric_leaf_problem(value) -> str:
