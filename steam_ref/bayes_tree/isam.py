@@ -32,6 +32,7 @@ from ..factors import Factor, check_factors
 from ..linear.ordering import constrained_min_degree
 from ..linear.system import GaussianFactor, linearize
 from ..variables import Key, Values, check_key
+from .dot import tree_nnz
 from .journal import Journal, PhaseTimer
 from .params import ISAM2Params
 from .tree import BayesTree, Clique, eliminate
@@ -56,6 +57,7 @@ class UpdateReport:
     timings: dict[str, float] = field(
         default_factory=dict
     )  # seconds per phase: check, add, relinearize, remove, linearize, order, eliminate, backsubstitute
+    tree_nnz: int = 0  # nonzeros of R after the update, counted as GTSAM's ISAM2::treeNnz (bayes_tree/dot.py)
 
 
 class IncrementalSolver:
@@ -82,6 +84,7 @@ class IncrementalSolver:
         self._stale: dict[Key, None] = {}  # variables whose δ or θ̄ moved since their estimate was formed
         self._over: dict[Key, None] = {}  # variables whose latest δ has max |δ| ≥ their threshold
         self._steps = 0
+        self._tree_nnz = 0  # nonzeros of R (GTSAM's treeNnz), kept by each update
 
     # --- queries ----------------------------------------------------------------------------
 
@@ -210,6 +213,7 @@ class IncrementalSolver:
         # 5. Partial back-substitution from the root, stopping below α.  [K12 Alg. 7; YIB step 6]
         with timer("backsubstitute"):
             updated, visited = self._backsubstitute(set(new_cids))
+        self._tree_nnz += tree_nnz(cliques) - tree_nnz(removed.values())
         return UpdateReport(
             self._steps,
             tuple(removed),
@@ -222,6 +226,7 @@ class IncrementalSolver:
             visited,
             timer.total(),
             timer.seconds,
+            self._tree_nnz,
         )
 
     def _rollback(self, journal: Journal) -> None:

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 from typing import Generic, Protocol, TypeVar
 
 from ..errors import SteamError, UnknownVariableError
+from .dot import tree_dot
 
 __all__ = [
     "SymbolicClique",
@@ -140,6 +141,10 @@ class CliqueTree(Generic[C]):
 
     def __len__(self) -> int:
         return len(self.cliques)
+
+    def dot(self) -> str:
+        """The tree as GTSAM's ``ISAM2.dot()`` prints it: "frontals : separator" labels (:mod:`.dot`)."""
+        return tree_dot(self)
 
     def add(self, clique: C, parent: int | None) -> int:
         """Insert a clique under ``parent`` (None: as a root); returns its id."""

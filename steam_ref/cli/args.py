@@ -167,6 +167,12 @@ def _add_run_arguments(run: argparse.ArgumentParser) -> None:
     run.add_argument(
         "--plot", metavar="FILE.png", default=None, help="draw estimate, ground truth, dead reckoning, landmarks"
     )
+    run.add_argument(
+        "--tree-dot",
+        metavar="FILE.dot",
+        default=None,
+        help="write BTGP's final Bayes tree in the Graphviz format of GTSAM's ISAM2.dot() (\"frontals : separator\")",
+    )
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -8,7 +8,7 @@ Usage::
     steam-ref batch [--dataset NAME_OR_PATH] [--ordering {xl,amd}] [--json] [--plot FILE.png]
     steam-ref fidelity [--dataset {plaza,paper-synthetic,all}] [--json] [--plot FILE.png]
     steam-ref reproduce [--quick] [--out DIR]
-    steam-ref conformance {export DIR, check RESULTS_DIR [--suite NAME], selftest [--paper], build}
+    steam-ref conformance {export DIR, check RESULTS_DIR [--only SUITE...], selftest [--paper], build}
 
 With no options ``steam-ref run`` runs BTGP/1 on the generated synthetic task. A data set without
 ground truth (victoria-park) is scored against the converged batch solution of the same problem
@@ -23,6 +23,7 @@ import json
 import sys
 import time
 from collections.abc import Sequence
+from pathlib import Path
 
 import numpy as np
 
@@ -31,12 +32,13 @@ from ..datasets import load_dataset, load_range_dataset
 from ..errors import SteamError
 from ..paper.experiments import reproduce
 from ..paper.fidelity import AUTHORS_RUNS, compare, find_authors_file, load_authors_run
-from ..paper.online import run_online
+from ..paper.online import StreamingEstimator, run_online
 from ..paper.options import StreamOptions
 from ..paper.presets import PRESETS, PaperSetup
 from ..paper.problem import build_problem, score_against_batch, sequential_batch
 from ..paper.readings import Readings
 from ..paper.results import position_rmse
+from ..paper.solvers import BayesTreeSolver
 from ..plot.figures import plot_fidelity, plot_trajectory
 from ..variables import X
 from .args import build_parser
@@ -57,6 +59,9 @@ _PRESET_OF = {
 def _run(args: argparse.Namespace) -> int:
     _check_output(args.save_estimates, ".npz", "--save-estimates")
     _check_output(args.plot, ".png", "--plot")
+    _check_output(args.tree_dot, ".dot", "--tree-dot")
+    if args.tree_dot and args.method != "btgp":
+        raise SteamError(f"--tree-dot writes BTGP's Bayes tree: it needs --method btgp, got --method {args.method}")
     setup = PaperSetup.named(_preset(args)).departing(*args.departure)
     setup = setup.replace(prior=args.prior, qc=args.qc_scale * setup.qc, singer_time_constant=args.singer_time_constant)
     setup = setup.with_isam2(relinearize_threshold=args.relinearize_threshold, relinearize_skip=args.relinearize_skip)
@@ -73,7 +78,8 @@ def _run(args: argparse.Namespace) -> int:
         converge_at_end=args.converge_at_end,
     )
     data = load_dataset(args.dataset, data_dir=args.data_dir, seed=args.seed)
-    result = run_online(data, setup, options, covariances=args.save_estimates is not None)
+    estimator = StreamingEstimator(Readings.from_dataset(data, setup), setup, options)
+    result = estimator.run(data.ground_truth, covariances=args.save_estimates is not None)
     summary = result.summary(args.dataset) | {
         "preset": setup.name,
         "score_against_optimum": args.score_against_optimum,
@@ -98,6 +104,8 @@ def _run(args: argparse.Namespace) -> int:
         _print_summary(summary)
     if args.save_estimates:
         save_estimates(args.save_estimates, result)
+    if args.tree_dot and isinstance(estimator.solver, BayesTreeSolver):  # GTSAM's ISAM2.dot() text (bayes_tree/dot.py)
+        Path(args.tree_dot).write_text(estimator.solver.inner.tree.dot() + "\n", encoding="utf-8")
     if args.plot:
         reference: np.ndarray | None
         if score is not None:

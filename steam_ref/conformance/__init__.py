@@ -1,6 +1,6 @@
 """The conformance kit: golden inputs and expected outputs that other implementations check against.
 
-The kit (``v1/``, shipped in the package) has one folder per suite (gp, factors, linear, batch,
+The kit (``v2/``, shipped in the package beside the older ``v1/``, which stays checkable) has one folder per suite (gp, factors, linear, batch,
 bayes_tree, incremental, paper), each a ``cases.json`` any language reads and an ``expected.npz``,
 and an ``index.json`` with the conventions, provenance and sha256 sums. ``steam-ref conformance``
 exports it, checks results laid out like it, and checks the installed code against it
@@ -10,17 +10,21 @@ exports it, checks results laid out like it, and checks the installed code again
 - :mod:`.cases`: the cases and their inputs; :mod:`.paper`: the paper suite (from the data files);
 - :mod:`.oracle`, :mod:`.oracle_graph`, :mod:`.expected`: independent expected values;
 - :mod:`.spec`, :mod:`.runner`: steam_ref's own results for a case;
-- :mod:`.checker`: comparison within tolerance; :mod:`.build`: building the kit and ``selftest``;
+- :mod:`.checker`: comparison within tolerance; :mod:`.gate`: a results folder against a whole kit
+  (nothing missing); :mod:`.validate`: the form of kit and results files; :mod:`.readme`: the
+  exported README; :mod:`.build`: building the kit and ``selftest``;
 - :mod:`.command`: the ``steam-ref conformance`` subcommands.
 """
 
 from .build import build_kit, selftest
-from .checker import Report, check_cases, check_directory
-from .kitio import KIT_VERSION, SHIPPED, SUITES
+from .checker import Report, check_cases
+from .gate import check_directory
+from .kitio import KIT_VERSION, KITS, SHIPPED, SUITES
 from .runner import run_case
 
 __all__ = [
     "KIT_VERSION",
+    "KITS",
     "SHIPPED",
     "SUITES",
     "build_kit",

@@ -27,8 +27,8 @@ import scipy
 from ..errors import SteamError
 from .cases import SUITE_DOCS, Case, suite_cases
 from .checker import Outcome, Report, check_cases, compare_quantity
-from .conventions import CONVENTIONS, RESULTS_LAYOUT
-from .expected import oracle_case
+from .conventions import CONVENTION_ALTERNATIVES, CONVENTIONS, RESULTS_LAYOUT, depends_on
+from .expected import oracle_alternatives, oracle_case
 from .kitio import (
     KIT_VERSION,
     SHIPPED,
@@ -53,17 +53,20 @@ def _roundtrip(value):
     return plain(value)
 
 
-def case_record(case: Case, expected: dict) -> dict:
-    """A case as cases.json lists it."""
+def case_record(case: Case, expected: dict, suite: str = "", alternatives: dict | None = None) -> dict:
+    """A case as cases.json lists it: its quantities in computation order, each with the conventions it
+    depends on, and (for those) the expected values under the alternative conventions."""
     return {
         "name": case.name,
         "equation": case.equation,
         "description": case.description,
         "independent": case.independent,
         "source": case.source,
+        "quantities": [{"name": q, "depends_on": depends_on(suite, q)} for q in case.tolerance],
         "tolerance": case.tolerance,
         "inputs": _roundtrip(case.inputs),
         "expected": _roundtrip(expected),
+        **({"alternatives": _roundtrip(alternatives)} if alternatives else {}),
         **({"notes": case.notes} if case.notes else {}),
     }
 
@@ -74,7 +77,8 @@ def _suite_records(suite: str) -> list[dict]:
         inputs = _roundtrip(case.inputs)
         ours = _roundtrip(run_case(suite, case.name, inputs))
         expected = _roundtrip(oracle_case(suite, case.name, inputs)) if case.independent else ours
-        record = case_record(case, expected)
+        expected = {q: expected[q] for q in case.tolerance}
+        record = case_record(case, expected, suite, oracle_alternatives(suite, inputs) if case.independent else None)
         verdict = check_cases(suite, [record], {case.name: ours})
         if verdict.failed:
             raise SteamError(f"steam_ref fails its own kit, so it is not written: {verdict.outcomes[0].line()}")
@@ -128,7 +132,7 @@ def build_kit(
     for suite in SUITES[:-1]:
         _write_suite(out, suite, _suite_records(suite))
     if paper:
-        _write_suite(out, "paper", [case_record(c, e) for c, e in paper_cases(data_dir)])
+        _write_suite(out, "paper", [case_record(c, e, "paper") for c, e in paper_cases(data_dir)])
     elif not (out / "paper" / "cases.json").is_file():
         if not (SHIPPED / "paper" / "cases.json").is_file():
             raise SteamError("no paper suite to keep: build with --paper (needs the paper's data files)")
@@ -157,6 +161,7 @@ def build_kit(
             "python": platform.python_version(),
         },
         "conventions": CONVENTIONS,
+        "convention_alternatives": CONVENTION_ALTERNATIVES,
         "results_layout": RESULTS_LAYOUT,
         "suites": suites,
         "files": {name: sha256(out / name) for name in kit_files(out) if name != "README.md"},
@@ -170,7 +175,7 @@ def _selftest_suite(kit: Path, suite: str, report: Report) -> None:
     defined = {c.name: c for c in suite_cases(suite)}
     for name in sorted(set(defined) - {c["name"] for c in shipped}):
         report.outcomes.append(
-            Outcome(suite, name, ((np.inf, "defined in cases/ but not in the shipped kit: regenerate it"),))
+            Outcome(suite, name, ((np.inf, "defined in cases/ but not in the shipped kit: regenerate it", ()),))
         )
     for case in shipped:
         name, failures = case["name"], []
@@ -189,12 +194,23 @@ def _selftest_suite(kit: Path, suite: str, report: Report) -> None:
         sources = [("steam_ref: ", ours)]
         if case["independent"]:
             sources.append(("oracle: ", _roundtrip(oracle_case(suite, name, case["inputs"]))))
+            for key, alt in _roundtrip(oracle_alternatives(suite, case["inputs"])).items():
+                shipped_alt = case.get("alternatives", {}).get(key, {})
+                for q in sorted(set(alt) | set(shipped_alt)):
+                    if q not in alt or q not in shipped_alt:
+                        failures.append((np.inf, f"alternative {key}: {q} differs in kind from the shipped kit"))
+                        continue
+                    tolerance = case["tolerance"][q]
+                    failures += [
+                        (r, f"oracle, {key}: " + m)
+                        for r, m, *_ in compare_quantity(shipped_alt[q], alt[q], tolerance, q)
+                    ]
         for prefix, got in sources:
             for q, tolerance in case["tolerance"].items():
                 failures += [
-                    (r, prefix + m) for r, m in compare_quantity(case["expected"][q], got.get(q), tolerance, q)
+                    (r, prefix + m) for r, m, *_ in compare_quantity(case["expected"][q], got.get(q), tolerance, q)
                 ]
-        report.outcomes.append(Outcome(suite, name, tuple(sorted(failures, key=lambda f: -f[0]))))
+        report.outcomes.append(Outcome(suite, name, tuple((r, m, ()) for r, m in failures)))
 
 
 def selftest(

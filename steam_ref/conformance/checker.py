@@ -5,53 +5,73 @@ every leaf, ``max|got - expected| ≤ atol + rtol · max|expected|`` (normwise, 
 by the norm of the answer) and the shapes agree. An ``exact`` quantity (names, clique structure)
 must be equal; in it, lists of lists and lists of objects are compared as unordered collections,
 lists of names in order. A case passes when all its quantities do.
+
+Every failing quantity is reported with its worst entries (index, expected, got); the first one in
+the case's computation order (its ``quantities`` list, else its ``tolerance`` order) is flagged as
+the likely cause, since a wrong Φ also makes everything computed from it wrong. A structure that
+differs is printed in full: the items expected but not got, and got but not expected.
+
+With conventions (``paper-sign``, ``symmetric-whitener``), a quantity that depends on them is
+compared with the kit's ``alternatives`` for that combination instead (kit v2).
 """
 
 from __future__ import annotations
 
 import json
 import math
+from collections import Counter
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
-from ..errors import DataError, SteamError
-from .kitio import SUITES, read_json, read_suite
+from .kitio import printable
 
-__all__ = ["Outcome", "Report", "compare_quantity", "check_cases", "check_directory", "load_results"]
+__all__ = ["Outcome", "Report", "compare_quantity", "check_cases", "computation_order", "convention_key"]
+
+WORST = 3  # entries shown per failing numeric quantity
+WIDTH = 2000  # characters of one structure item shown at most
 
 
 @dataclass(frozen=True)
 class Outcome:
-    """The verdict on one case."""
+    """The verdict on one case: its failing quantities in computation order, the first the likely cause."""
 
     suite: str
     case: str
-    failures: tuple[
-        tuple[float, str], ...
-    ] = ()  # (how far past its tolerance, message) per failing quantity, worst first
+    failures: tuple[tuple[float, str, tuple[str, ...]], ...] = ()  # (how far past tolerance, headline, details)
 
     @property
     def passed(self) -> bool:
         return not self.failures
 
     def line(self) -> str:
-        """One line: suite, case, the worst quantity and its difference against its tolerance."""
-        worst = self.failures[0][1]
-        more = f" (and {len(self.failures) - 1} more quantities)" if len(self.failures) > 1 else ""
-        return f"FAIL {self.suite}/{self.case}: {worst}{more}"
+        """One line: suite, case, the first failing quantity in computation order, and how many more."""
+        first = self.failures[0][1]
+        more = len(self.failures) - 1
+        tail = f" (likely cause: first failing in computation order; {more} more failing)" if more else ""
+        return printable(f"FAIL {self.suite}/{self.case}: {first}{tail}")
+
+    def lines(self) -> list[str]:
+        """The headline, then every failing quantity with its worst entries."""
+        out = [self.line()]
+        for k, (_ratio, headline, details) in enumerate(self.failures):
+            if k:
+                out.append("  " + printable(headline))
+            out += ["    " + printable(d) for d in details]
+        return out
 
 
 @dataclass
 class Report:
-    """Outcomes of a check, and the cases that had no result."""
+    """Outcomes of a check, what had no result, and what was deliberately left out."""
 
     outcomes: list[Outcome] = field(default_factory=list)
-    not_run: list[str] = field(default_factory=list)  # 'suite/case'
+    not_run: list[str] = field(default_factory=list)  # 'suite/case' of the kit with no result
     unknown: list[str] = field(default_factory=list)  # results for cases the kit does not have
     notes: list[str] = field(default_factory=list)  # anything else to say before the count
+    allow_missing: bool = True  # missing results are not a failure (selftest, or --allow-missing)
+    excluded: list[str] = field(default_factory=list)  # suites left out with --only
 
     @property
     def passed(self) -> int:
@@ -61,18 +81,37 @@ class Report:
     def failed(self) -> int:
         return sum(not o.passed for o in self.outcomes)
 
+    @property
+    def ok(self) -> bool:
+        """No case failed, and nothing of the kit is missing unless that was allowed."""
+        return self.failed == 0 and (self.allow_missing or not self.not_run)
+
     def lines(self) -> list[str]:
-        """Failing cases, then what was not run or not known, then 'N passed, N failed'."""
-        out = [o.line() for o in self.outcomes if not o.passed]
+        """Failing cases in full, then what was missing, left out or unknown, then 'N passed, N failed'."""
+        out = [line for o in self.outcomes if not o.passed for line in o.lines()]
         if self.not_run:
-            shown = ", ".join(self.not_run[:8]) + (", ..." if len(self.not_run) > 8 else "")
-            out.append(f"not run: {len(self.not_run)} cases of these suites have no result ({shown})")
+            verdict = "skipped (allowed)" if self.allow_missing else "MISSING"
+            by_suite: dict[str, list[str]] = {}
+            for name in self.not_run:
+                suite, _, case = name.partition("/")
+                by_suite.setdefault(suite, []).append(case)
+            for suite, cases in by_suite.items():
+                out.append(printable(f"{verdict}: {len(cases)} cases of {suite} have no result: {', '.join(cases)}"))
+            if not self.allow_missing:
+                out.append(
+                    "every case of the kit must have a result: add them, or pass --only SUITE... / --allow-missing"
+                )
+        if self.excluded:
+            out.append(f"not checked (--only): {', '.join(self.excluded)}")
         if self.unknown:
             out.append(
-                f"ignored: results for {len(self.unknown)} cases the kit does not have ({', '.join(self.unknown[:8])})"
+                printable(
+                    f"ignored: results for {len(self.unknown)} cases the kit does not have ({', '.join(self.unknown[:8])})"
+                )
             )
-        out += self.notes
-        out.append(f"{self.passed} passed, {self.failed} failed")
+        out += [printable(n) for n in self.notes]
+        missing = f", {len(self.not_run)} missing" if self.not_run else ""
+        out.append(f"{self.passed} passed, {self.failed} failed{missing}")
         return out
 
 
@@ -87,61 +126,106 @@ def _canonical(v):
     return v
 
 
-def _short(v, width: int = 90) -> str:
-    text = json.dumps(v, sort_keys=True)
-    return text if len(text) <= width else text[: width - 3] + "..."
+def _text(v) -> str:
+    text = json.dumps(v, sort_keys=True, ensure_ascii=False)
+    return text if len(text) <= WIDTH else text[: WIDTH - 3] + "..."
 
 
-def compare_quantity(expected, got, tolerance, name: str) -> list[tuple[float, str]]:
-    """Failures (ratio past tolerance, message) of one quantity; empty when it passes."""
+def _exact(expected, got, name: str) -> list[tuple[float, str, tuple[str, ...]]]:
+    exp, g = _canonical(expected), _canonical(got)
+    if json.dumps(exp, sort_keys=True) == json.dumps(g, sort_keys=True):
+        return []
+    if isinstance(exp, list) and isinstance(g, list) and exp and all(isinstance(x, (dict, list)) for x in exp):
+        e_count = Counter(json.dumps(x, sort_keys=True) for x in exp)
+        g_count = Counter(json.dumps(x, sort_keys=True) for x in g)
+        only_e, only_g = e_count - g_count, g_count - e_count
+        details = tuple(f"expected, not got: {_text(json.loads(x))}" for x in only_e.elements())
+        details += tuple(f"got, not expected: {_text(json.loads(x))}" for x in only_g.elements())
+        head = f"{name} differs (compared exactly): {sum(only_e.values())} expected items not got, {sum(only_g.values())} got not expected"
+        return [(math.inf, head, details)]
+    return [(math.inf, f"{name} differs (compared exactly)", (f"expected {_text(expected)}", f"got      {_text(got)}"))]
+
+
+def _where(idx: tuple[int, ...]) -> str:
+    return "[" + ", ".join(map(str, idx)) + "]" if idx else ""
+
+
+Failure = tuple[float, str, tuple[str, ...]]  # (how far past tolerance, headline, detail lines)
+
+
+def compare_quantity(expected, got, tolerance, name: str) -> list[Failure]:
+    """Failures (ratio past tolerance, headline, detail lines) of one quantity; empty when it passes."""
     if tolerance == "exact":
-        if json.dumps(_canonical(expected), sort_keys=True) == json.dumps(_canonical(got), sort_keys=True):
-            return []
-        return [(math.inf, f"{name} differs (compared exactly): expected {_short(expected)}, got {_short(got)}")]
+        return _exact(expected, got, name)
     if isinstance(expected, Mapping):
         if not isinstance(got, Mapping):
-            return [(math.inf, f"{name} should be an object with keys {sorted(expected)}, got {_short(got, 40)}")]
-        out = [(math.inf, f"{name}/{k} is missing") for k in expected if k not in got]
-        out += [(math.inf, f"{name}/{k} is not an expected key") for k in got if k not in expected]
+            return [(math.inf, f"{name} should be an object with keys {sorted(expected)}, got {_text(got)[:60]}", ())]
+        out: list[Failure] = [(math.inf, f"{name}/{k} is missing", ()) for k in expected if k not in got]
+        out += [(math.inf, f"{name}/{k} is not an expected key", ()) for k in got if k not in expected]
         for k in expected:
             if k in got:
                 out += compare_quantity(expected[k], got[k], tolerance, f"{name}/{k}")
-        return sorted(out, key=lambda f: -f[0])
+        return out
     exp = np.asarray(expected, dtype=float)
     try:
         g = np.asarray(got, dtype=float)
-    except (TypeError, ValueError):
-        return [(math.inf, f"{name} is not numeric: {_short(got, 40)}")]
+    except (TypeError, ValueError, OverflowError):
+        return [(math.inf, f"{name} is not numeric: {_text(got)[:60]}", ())]
     if g.shape != exp.shape:
-        return [(math.inf, f"{name} has shape {g.shape}, expected {exp.shape}")]
+        return [(math.inf, f"{name} has shape {g.shape}, expected {exp.shape}", ())]
     if not np.all(np.isfinite(g)):
-        return [(math.inf, f"{name} holds NaN or inf")]
+        return [(math.inf, f"{name} holds NaN or inf", ())]
     if exp.size == 0:
         return []
     diff = np.abs(g - exp)
     worst, scale = float(diff.max()), float(np.abs(exp).max())
-    allowed = float(tolerance["atol"]) + float(tolerance["rtol"]) * scale
+    atol, rtol = float(tolerance["atol"]), float(tolerance["rtol"])
+    allowed = atol + rtol * scale
     if worst <= allowed:
         return []
-    where = np.unravel_index(int(diff.argmax()), diff.shape) if diff.ndim else ()
-    at = f" at {tuple(int(i) for i in where)}" if where else ""
-    return [
-        (
-            worst / allowed if allowed > 0 else math.inf,
-            (
-                f"{name} worst |diff| {worst:.3g}{at} > tolerance {allowed:.3g} "
-                f"(atol {float(tolerance['atol']):g} + rtol {float(tolerance['rtol']):g} x max|expected| {scale:.3g})"
-            ),
+    flat = np.argsort(-diff, axis=None, kind="stable")[:WORST]
+    details = []
+    for i in flat:
+        idx = tuple(int(j) for j in np.unravel_index(int(i), diff.shape)) if diff.ndim else ()
+        if diff[idx] <= allowed:
+            break
+        details.append(
+            f"{name}{_where(idx)}: expected {float(exp[idx])!r}, got {float(g[idx])!r} (|diff| {float(diff[idx]):.3g})"
         )
-    ]
+    at = _where(tuple(int(j) for j in np.unravel_index(int(flat[0]), diff.shape))) if diff.ndim else ""
+    bad = int(np.count_nonzero(diff > allowed))
+    head = (
+        f"{name} worst |diff| {worst:.3g}{' at ' + at if at else ''} > tolerance {allowed:.3g} "
+        f"(atol {atol:g} + rtol {rtol:g} x max|expected| {scale:.3g}); {bad} of {diff.size} entries past it"
+    )
+    return [(worst / allowed if allowed > 0 else math.inf, head, tuple(details))]
+
+
+def computation_order(case: Mapping) -> list[str]:
+    """The case's quantities in the order they are computed (its 'quantities' list in kit v2, else its tolerance order)."""
+    listed = case.get("quantities")
+    if isinstance(listed, list):
+        names = [q["name"] for q in listed if isinstance(q, Mapping) and q.get("name") in case["tolerance"]]
+        return names + [q for q in case["tolerance"] if q not in names]
+    return list(case["tolerance"])
+
+
+def convention_key(conventions: Sequence[str]) -> str:
+    """'paper-sign+symmetric-whitener': how the kit names the alternatives of a set of conventions."""
+    return "+".join(sorted(set(conventions)))
 
 
 def check_cases(
-    suite: str, kit_cases: Sequence[Mapping], results: Mapping[str, object], report: Report | None = None
+    suite: str,
+    kit_cases: Sequence[Mapping],
+    results: Mapping[str, object],
+    report: Report | None = None,
+    conventions: Sequence[str] = (),
 ) -> Report:
     """Check ``results`` (case name → quantity → value) against a suite's kit cases."""
     report = Report() if report is None else report
     known = {c["name"] for c in kit_cases}
+    key = convention_key(conventions)
     for case in kit_cases:
         got = results.get(case["name"])
         if got is None:
@@ -149,48 +233,17 @@ def check_cases(
             continue
         if not isinstance(got, Mapping):
             report.outcomes.append(
-                Outcome(suite, case["name"], ((math.inf, "its result is not an object of quantities"),))
+                Outcome(suite, case["name"], ((math.inf, "its result is not an object of quantities", ()),))
             )
             continue
-        failures = []
-        for q, tolerance in case["tolerance"].items():
+        alternative = case.get("alternatives", {}).get(key, {}) if key else {}
+        failures: list[Failure] = []
+        for q in computation_order(case):
             if q not in got:
-                failures.append((math.inf, f"{q} is missing from the results"))
+                failures.append((math.inf, f"{q} is missing from the results", ()))
             else:
-                failures += compare_quantity(case["expected"][q], got[q], tolerance, q)
-        failures.sort(key=lambda f: -f[0])
+                expected = alternative.get(q, case["expected"][q])
+                failures += compare_quantity(expected, got[q], case["tolerance"][q], q)
         report.outcomes.append(Outcome(suite, case["name"], tuple(failures)))
     report.unknown += [f"{suite}/{name}" for name in results if name not in known]
-    return report
-
-
-def load_results(results_dir: Path, suite: str) -> dict:
-    """``RESULTS_DIR/<suite>/results.json`` as case name → quantities; DataError when malformed."""
-    path = Path(results_dir) / suite / "results.json"
-    data = read_json(path)
-    cases = data.get("cases") if isinstance(data, Mapping) else None
-    if not isinstance(cases, Mapping):
-        raise DataError(f'{path}: expected an object {{"cases": {{case name: {{quantity: value}}}}}}')
-    return dict(cases)
-
-
-def check_directory(kit: Path, results_dir: Path, suite: str | None = None) -> Report:
-    """Check every suite that ``results_dir`` has results for (or just ``suite``) against the kit."""
-    results_dir = Path(results_dir)
-    if not results_dir.is_dir():
-        raise SteamError(f"results folder {str(results_dir)!r} does not exist")
-    if suite is not None and suite not in SUITES:
-        raise SteamError(f"unknown suite {suite!r}; the suites are {', '.join(SUITES)}")
-    present = [s for s in SUITES if (results_dir / s / "results.json").is_file()]
-    if suite is not None:
-        if suite not in present:
-            raise SteamError(f"no results for suite {suite!r}: expected {results_dir / suite / 'results.json'}")
-        present = [suite]
-    if not present:
-        raise SteamError(
-            f"no results in {str(results_dir)!r}: expected <suite>/results.json for a suite of {', '.join(SUITES)}"
-        )
-    report = Report()
-    for s in present:
-        check_cases(s, read_suite(kit, s)["cases"], load_results(results_dir, s), report)
     return report

@@ -1,12 +1,15 @@
 """``steam-ref conformance``: export the kit, check results against it, check the installed code.
 
     steam-ref conformance export DIR                      the kit and a README on producing results
-    steam-ref conformance check RESULTS_DIR [--suite NAME] [--kit DIR]
+    steam-ref conformance check RESULTS_DIR [--only SUITE...] [--allow-missing] [--conventions NAME...] [--kit DIR]
     steam-ref conformance selftest [--paper] [--data-dir DIR]
     steam-ref conformance build [--out DIR] [--paper] [--data-dir DIR]   regenerate the kit
 
-``check`` prints one line per failing case and ends with ``N passed, N failed``; it exits 0 only
-when none failed (1 otherwise, 2 on bad input). ``selftest`` does the same for the installed code.
+``check`` prints every failing case (each failing quantity with its worst entries, expected and
+got; the first in computation order flagged as the likely cause), what had no result, and ends
+with ``N passed, N failed``; it exits 0 only when none failed and no case of the kit (or of the
+suites ``--only`` names) is missing, unless ``--allow-missing`` (1 otherwise, 2 on bad input).
+``selftest`` does the same for the installed code.
 """
 
 from __future__ import annotations
@@ -17,9 +20,10 @@ from pathlib import Path
 
 from ..errors import SteamError
 from .build import build_kit, selftest
-from .checker import Report, check_directory
-from .conventions import EXPORT_README
+from .checker import Report
+from .gate import CONVENTION_NAMES, check_directory
 from .kitio import KIT_VERSION, SHIPPED, SUITES, read_index
+from .readme import export_readme
 
 __all__ = ["add_parser", "run"]
 
@@ -38,8 +42,21 @@ def add_parser(sub) -> argparse.ArgumentParser:
     exp.add_argument("dir", metavar="DIR", help="a new or empty folder")
     chk = commands.add_parser("check", help="compare results laid out like the kit with its expected values")
     chk.add_argument("results", metavar="RESULTS_DIR", help="a folder with <suite>/results.json")
-    chk.add_argument("--suite", choices=SUITES, default=None, help="check this suite only")
-    chk.add_argument("--kit", default=None, help="check against this exported kit instead of the shipped one")
+    chk.add_argument("--only", nargs="+", choices=SUITES, default=None, metavar="SUITE", help="check these suites only")
+    chk.add_argument("--suite", choices=SUITES, default=None, help="the same as --only SUITE (one suite)")
+    chk.add_argument("--allow-missing", action="store_true", help="cases without a result are listed, not a failure")
+    chk.add_argument(
+        "--conventions",
+        nargs="+",
+        choices=CONVENTION_NAMES,
+        default=(),
+        metavar="NAME",
+        help="compare convention-dependent quantities under these documented alternatives: "
+        + ", ".join(CONVENTION_NAMES),
+    )
+    chk.add_argument(
+        "--kit", default=None, help="check against this exported kit (default: the shipped kit of the results' version)"
+    )
     st = commands.add_parser(
         "selftest", help="regenerate every case with the installed code and check it against the shipped kit"
     )
@@ -59,7 +76,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
 def _print(report: Report) -> int:
     for line in report.lines():
         print(line)
-    return 0 if report.failed == 0 else 1
+    return 0 if report.ok else 1
 
 
 def _export(target: Path) -> int:
@@ -67,7 +84,7 @@ def _export(target: Path) -> int:
         raise SteamError(f"export needs a new or empty folder, and {str(target)!r} is not one")
     read_index(SHIPPED)  # refuse to export a damaged kit
     shutil.copytree(SHIPPED, target, dirs_exist_ok=True, ignore=shutil.ignore_patterns("__pycache__"))
-    (target / "README.md").write_text(EXPORT_README.format(version=KIT_VERSION), encoding="utf-8")
+    (target / "README.md").write_text(export_readme(), encoding="utf-8")
     print(f"wrote the conformance kit v{KIT_VERSION} to {target} (index.json, {len(SUITES)} suites, README.md)")
     return 0
 
@@ -78,9 +95,11 @@ def run(args: argparse.Namespace) -> int:
     if command == "export":
         return _export(Path(args.dir))
     if command == "check":
-        kit = Path(args.kit) if args.kit else SHIPPED
-        read_index(kit)
-        return _print(check_directory(kit, Path(args.results), args.suite))
+        only = list(args.only or []) + ([args.suite] if args.suite else []) or None
+        report = check_directory(
+            Path(args.results), args.kit, only=only, allow_missing=args.allow_missing, conventions=args.conventions
+        )
+        return _print(report)
     if command == "selftest":
         return _print(selftest(paper=args.paper, data_dir=args.data_dir))
     index = build_kit(args.out, paper=args.paper, data_dir=args.data_dir)

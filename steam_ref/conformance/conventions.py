@@ -1,8 +1,14 @@
-"""The conventions the kit's numbers follow, written once: into ``index.json`` and the exported README."""
+"""The conventions the kit's numbers follow, written once: into ``index.json`` and the exported README.
+
+Each quantity of a case is either convention-invariant (cost, 𝓘 = AᵀA, Aᵀb, R, d, δ, marginals,
+estimates) or depends on named conventions (:func:`depends_on`): ``residual`` (the sign of an
+error) and ``whitening`` (which W with WᵀW = Σ⁻¹). For those, the kit also stores the values under
+the documented alternatives (:data:`CONVENTION_ALTERNATIVES`), which ``check --conventions`` accepts.
+"""
 
 from __future__ import annotations
 
-__all__ = ["CONVENTIONS", "RESULTS_LAYOUT", "EXPORT_README"]
+__all__ = ["CONVENTIONS", "CONVENTION_ALTERNATIVES", "RESULTS_LAYOUT", "TREE_EDIT_EXAMPLE", "depends_on"]
 
 CONVENTIONS = {
     "state": "x = [x, y, theta, x_dot, y_dot, theta_dot]: p = [x, y, theta] then its rate "
@@ -18,7 +24,8 @@ CONVENTIONS = {
     "e = x_i - Phi(t_i, t_{i-1}) x_{i-1} - v_i, which is the negative of the expression inside [YIB Eq. 22] "
     "(the sign leaves the cost unchanged and flips H and b); GTSAM 4.3's WnoaMotionFactor uses this same sign",
     "whitening": "W is the upper-triangular factor with positive diagonal of the information: W^T W = Sigma^-1; "
-    "whitened error W e, whitened Jacobian W H; for the GP prior Sigma = Q(dt)",
+    "whitened error W e, whitened Jacobian W H; for the GP prior Sigma = Q(dt). whitened_error is W e without "
+    "the robust weight, also for a robust factor (A and b carry sqrt(w))",
     "cost": "cost = 1/2 sum_i ||W_i e_i||^2 (the factor graph's negative log density up to a constant, [YIB Eq. 21]); "
     "a robust factor contributes rho(||W e||) instead; [YIB Eq. 6] writes the sum without the 1/2",
     "robust": "iteratively reweighted least squares as GTSAM's noiseModel::Robust: s = ||W e||, weight w = rho'(s)/s, "
@@ -26,7 +33,9 @@ CONVENTIONS = {
     "w = 1, k/s. Tukey(c): rho = c^2/6 (1 - (1 - (s/c)^2)^3) for s <= c, c^2/6 beyond; w = (1 - (s/c)^2)^2, 0",
     "jacobians": "H_k = de/dx_k in the vector space of the variables (theta is a plain coordinate: no manifold); "
     "A_k = sqrt(w) W H_k; k counts the factor's keys in order",
-    "angles": "bearing errors are wrapped to [-pi, pi); nothing else is wrapped (headings in states are continuous)",
+    "angles": "bearing errors are wrapped to [-pi, pi); nothing else is wrapped: headings in states are continuous "
+    "coordinates, and the GP prior's heading error is used as computed even beyond pi (a heading stored 2 pi "
+    "lower is a different state)",
     "linear_system": "minimize ||A delta - b||^2: A stacks each factor's rows A_k in factor order, columns in "
     "the case's ordering, one block per variable; b = -sqrt(w) W e; information I = A^T A, rhs = A^T b, "
     "delta = I^-1 A^T b, and the new estimate is theta + delta [YIB Eq. 9-11]",
@@ -40,9 +49,27 @@ CONVENTIONS = {
     "diag R > 0: the rows of the R factor (and d) that belong to F [YIB Eq. 25]",
     "covariances": "blocks of I^-1 at the case's linearization point; a group 'k1,k2' is the joint covariance of the "
     "stacked variables [YIB Eq. 11]",
-    "incremental": "iSAM2 as GTSAM 4.3: new factors and values per update; relinearization "
-    "(threshold beta on max |delta|, checked every relinearize_skip updates) happens at the start of an update "
-    "with the previous delta; wildfire threshold 0 is a full back-substitution; 'inf' means never relinearize",
+    "incremental": "iSAM2 as GTSAM 4.3: new factors and values per update; relinearization happens at the start "
+    "of every relinearize_skip-th update (updates counted from 1: skip 2 checks at updates 2, 4, ...): each "
+    "variable whose last delta has max |delta_j| >= beta (relinearize_threshold) moves its linearization point "
+    "by delta_j, and every factor touching it is linearized again there; a new variable starts at its given value "
+    "with delta 0; wildfire threshold 0 is a full back-substitution (delta is the exact solution of the system); "
+    "'inf' means never relinearize. relinearized_k lists the variables moved at update k (sorted names)",
+    "tree_edits": "which cliques an update removes and orphans, and the fill of R, depend on the order the removed "
+    "part is eliminated in; the kit's is steam_ref's rule (GTSAM orders with CCOLAMD, so its trees can differ). "
+    "(1) The list: the frontal variables of the removed cliques, clique by clique in the order they were removed, "
+    "each clique's frontals in elimination order, then the update's new variables in the order its 'values' lists "
+    "them. A clique is removed when first reached walking up to the root from the clique of each variable the "
+    "update's factors name (in order of first appearance, factor by factor, keys in order), then from every "
+    "clique holding a relinearized variable. (2) The graph: two variables are adjacent when one factor of the "
+    "removed part (the factors eliminated in removed cliques, and the new ones) or one orphan's separator holds "
+    "both. (3) Repeatedly eliminate the variable of least degree (its number of adjacent variables not yet "
+    "eliminated; eliminating v makes all its neighbours adjacent: fill counts), taking the variables that no new "
+    "factor names before any that one does; ties go to the variable earlier in the list of (1). (4) Cliques by the "
+    "rule of 'cliques'; each orphan hangs under the new clique where the first variable of its separator (in "
+    "elimination order) is frontal. nnz_k = sum over cliques of n_f (n_f + 1)/2 + n_f n_s (frontal and separator "
+    "sizes): GTSAM's ISAM2::treeNnz. With relinearization, the relinearized variables are taken in the order "
+    "steam_ref's back-substitution found them over beta: those cases pin steam_ref's behaviour",
     "floats": "JSON numbers are the shortest decimal that reads back to the same IEEE-754 double "
     "(at most 17 significant digits, so reading with strtod is exact); no NaN or inf. "
     "Arrays are nested lists, row-major",
@@ -53,33 +80,52 @@ CONVENTIONS = {
     "steam_ref itself, to catch drift and to pin down choices the paper leaves open",
 }
 
+CONVENTION_ALTERNATIVES = {
+    "paper-sign": "residual: the GP prior's error as written in [YIB Eq. 22], e = Phi x_{i-1} + v_i - x_i (the "
+    "negative of the kit's); flips error, whitened_error, H_k, A_k and b of GP prior factors and the GP prior "
+    "rows of A and b; measurement errors keep h(theta) - y",
+    "symmetric-whitener": "whitening: W = Sigma^(-1/2), the symmetric positive-definite square root of the "
+    "information (W = U W_kit for an orthogonal U): changes whitened_error, A_k, b, the gp W and the rows of A "
+    "and b of factors with a non-diagonal Sigma",
+    "paper-sign+symmetric-whitener": "both of the above",
+}
+
+_DEPENDS = {
+    "residual": {"error", "whitened_error", "H", "A", "b"},
+    "whitening": {"whitened_error", "A", "b", "W"},
+}
+
+
+def depends_on(suite: str, quantity: str) -> list[str]:
+    """The conventions a quantity of a suite depends on ([] when invariant): 'residual', 'whitening'."""
+    if suite not in ("gp", "factors", "linear"):
+        return []
+    base = quantity.split("_")[0] if quantity[:2] in ("H_", "A_") else quantity
+    if suite == "gp":
+        return ["whitening"] if base == "W" else []
+    return [name for name, quantities in _DEPENDS.items() if base in quantities and base != "W"]
+
+
 RESULTS_LAYOUT = (
-    'RESULTS_DIR/<suite>/results.json = {"cases": {"<case name>": {"<quantity>": value, ...}, ...}}: '
-    "the quantities of each case named as in its 'tolerance', values shaped as in its 'expected'"
+    'RESULTS_DIR/<suite>/results.json = {"kit_version": 2, "cases": {"<case name>": {"<quantity>": value, ...}}}: '
+    "the quantities of each case named as in its 'tolerance', values shaped as in its 'expected'; every case of "
+    "the kit must have a result unless check is given --only SUITE... or --allow-missing"
 )
 
-EXPORT_README = """# steam_ref conformance kit, version {version}
+TREE_EDIT_EXAMPLE = """The stream of the incremental suite, relinearization off. After update 2 the tree is one clique
+{x0, l0, x1}. Update 3 brings x2 and l1 (values listed x2, l1) and the factors gp_prior(x1, x2),
+prior(l1), range(x2, l1), bearing(x2, l0).
 
-Golden inputs and expected outputs for checking an implementation of "Incremental Sparse GP
-Regression for Continuous-time Trajectory Estimation & Mapping" (Yan, Indelman, Boots) against
-steam_ref. Any language that reads JSON can use it; `*/expected.npz` repeats the arrays for NumPy.
-
-- `index.json`: kit version, what generated it, the conventions every number follows, the suites,
-  which cases are independent of steam_ref, and the sha256 of every file.
-- `<suite>/cases.json`: the suite's cases, each with `inputs`, `expected` (quantity -> value),
-  `tolerance` (quantity -> {{atol, rtol}} or "exact"), `equation` ([YIB Eq. n]), `independent` and `source`.
-
-To check your implementation, for every case you support read its `inputs`, compute each quantity
-named in its `tolerance`, and write
-
-    RESULTS_DIR/<suite>/results.json = {{"cases": {{"<case name>": {{"<quantity>": value, ...}}}}}}
-
-with values shaped like `expected` (numbers, nested lists, objects). Then
-
-    steam-ref conformance check RESULTS_DIR [--suite NAME]
-
-prints one line per failing case (suite, case, quantity, worst difference against its tolerance)
-and `N passed, N failed`; it exits 0 only when none failed. Cases you leave out are listed as not
-run. docs/conformance.md in steam_ref explains the conventions and has minimal readers in C++,
-Rust and JAX.
+(1) The factors name x1, x2, l1, l0 (first appearances). The clique of x1 is the root, so the
+    removed part is that clique; the list is its frontals x0, l0, x1, then the new x2, l1:
+    [x0, l0, x1, x2, l1]. No factor of the update names x0; every other variable is named.
+(2) Adjacent: x0-l0, x0-x1, x1-l0 (the removed clique's factors), x1-x2, x2-l1, x2-l0 (the new ones).
+(3) x0 goes first (the only variable no new factor names; eliminating it joins l0 and x1, already
+    adjacent). Then the degrees are l0 2 (x1, x2), x1 2 (l0, x2), x2 3 (x1, l1, l0), l1 1 (x2): l1.
+    Then l0, x1 and x2 all have degree 2: the tie goes to l0, earliest in the list; then x1, x2.
+    Order: x0, l1, l0, x1, x2.
+(4) Walking back: x2 starts the root; x1 (separator {x2}) and l0 (separator {x1, x2}) join it;
+    l1 (separator {x2}) starts a child; x0 (separator {l0, x1}) starts another. The tree after
+    update 3: root {l0, x1, x2}, children {l1 : x2} and {x0 : l0, x1}. With 6-dimensional states and
+    2-dimensional landmarks, nnz_3 = 14·15/2 + (2·3/2 + 2·6) + (6·7/2 + 6·8) = 105 + 15 + 69 = 189.
 """

@@ -10,7 +10,7 @@ from ..errors import SteamError
 from . import oracle as o
 from . import oracle_graph as g
 
-__all__ = ["oracle_case"]
+__all__ = ["oracle_case", "oracle_alternatives", "ALTERNATIVES"]
 
 
 def _gp(inputs: Mapping) -> dict:
@@ -79,10 +79,14 @@ def _bayes_tree(name: str, inputs: Mapping) -> dict:
     return {"covariances": g.covariances(problem, order, f["information"], inputs["groups"])}
 
 
-def _incremental(inputs: Mapping) -> dict:
-    relinearize = float(inputs["isam2"]["relinearize_threshold"]) == 0.0
-    estimates = g.stream(inputs["stream"]["variables"], inputs["stream"]["updates"], relinearize)
-    return {f"estimate_{k}": e for k, e in enumerate(estimates, start=1)}
+def _incremental(name: str, inputs: Mapping) -> dict:
+    isam2 = inputs["isam2"]
+    threshold, skip = float(isam2["relinearize_threshold"]), int(isam2["relinearize_skip"])
+    estimates, moved = g.stream(inputs["stream"]["variables"], inputs["stream"]["updates"], threshold, skip)
+    out: dict = {f"estimate_{k}": e for k, e in enumerate(estimates, start=1)}
+    if name.startswith("partial_"):
+        out = {**{f"relinearized_{k}": m for k, m in enumerate(moved, start=1)}, **out}
+    return out
 
 
 def oracle_case(suite: str, name: str, inputs: Mapping) -> dict:
@@ -99,5 +103,39 @@ def oracle_case(suite: str, name: str, inputs: Mapping) -> dict:
     if suite == "bayes_tree":
         return _bayes_tree(name, inputs)
     if suite == "incremental":
-        return _incremental(inputs)
+        return _incremental(name, inputs)
     raise SteamError(f"no oracle for suite {suite!r}")
+
+
+ALTERNATIVES = {  # how the kit names a combination of alternative conventions → oracle switches
+    "paper-sign": {"paper_sign": True},
+    "symmetric-whitener": {"symmetric": True},
+    "paper-sign+symmetric-whitener": {"paper_sign": True, "symmetric": True},
+}
+
+
+def oracle_alternatives(suite: str, inputs: Mapping) -> dict:
+    """The convention-dependent quantities of a case under each combination of the alternative conventions.
+
+    Only quantities whose values differ from the kit's own conventions are listed.
+    """
+    out: dict = {}
+    for name, switches in ALTERNATIVES.items():
+        alt: dict = {}
+        if suite == "gp" and inputs["kind"] == "wnoa" and switches.get("symmetric"):
+            qc = np.asarray(inputs["qc"], float)
+            A, F = o.model_matrices("wnoa", qc.shape[0])
+            alt["W"] = o.sqrt_information(o.process_noise(A, F, qc, float(inputs["dt"])), symmetric=True)
+        elif suite == "factors":
+            spec = inputs["factor"]
+            xs = [inputs["values"][k] for k in spec["keys"]]
+            mine, theirs = o.linearize_factor(spec, xs), o.linearize_factor(spec, xs, **switches)
+            alt = {q: v for q, v in theirs.items() if q not in ("cost", "weight") and not np.array_equal(v, mine[q])}
+        elif suite == "linear":
+            problem = g.Problem(inputs["problem"])
+            A, b, _ = g.dense_system(problem, problem.values, inputs["ordering"], **switches)
+            A0, b0, _ = g.dense_system(problem, problem.values, inputs["ordering"])
+            alt = {q: v for q, v, v0 in (("A", A, A0), ("b", b, b0)) if not np.array_equal(v, v0)}
+        if alt:
+            out[name] = alt
+    return out

@@ -13,6 +13,8 @@ import hashlib
 import io
 import json
 import math
+import os
+import stat
 import zipfile
 from collections.abc import Mapping
 from pathlib import Path
@@ -23,8 +25,12 @@ from ..errors import DataError, NumericalError
 
 __all__ = [
     "KIT_VERSION",
+    "KITS",
     "SUITES",
     "SHIPPED",
+    "MAX_BYTES",
+    "MAX_DEPTH",
+    "printable",
     "plain",
     "dumps",
     "read_json",
@@ -36,9 +42,18 @@ __all__ = [
     "kit_files",
 ]
 
-KIT_VERSION = 1
+KIT_VERSION = 2  # the version this steam_ref builds; older ones stay shipped and checkable
+KITS = {v: Path(__file__).resolve().parent / f"v{v}" for v in (1, 2)}  # every kit inside the installed package
+SHIPPED = KITS[KIT_VERSION]
 SUITES = ("gp", "factors", "linear", "batch", "bayes_tree", "incremental", "paper")
-SHIPPED = Path(__file__).resolve().parent / f"v{KIT_VERSION}"  # the kit inside the installed package
+MAX_BYTES = 64 * 2**20  # a kit or results file larger than this is refused, not read (the kit's largest is ~1 MB)
+MAX_DEPTH = 64  # JSON nesting deeper than this is refused (the kit's deepest is 8)
+MAX_DIGITS = 18  # an integer literal longer than this is refused (the kit's integers are counts and ids)
+
+
+def printable(text: object) -> str:
+    """``text`` with control characters and escapes written as ``\\xNN``: a name from a file cannot forge output."""
+    return "".join(c if c.isprintable() else c.encode("unicode_escape").decode("ascii") for c in str(text))
 
 
 def plain(value):
@@ -101,14 +116,95 @@ def write_json(path: Path, value) -> None:
     path.write_text(dumps(value), encoding="utf-8")
 
 
-def read_json(path: Path):
-    """A kit or results JSON file; DataError naming the file when it is missing or malformed."""
+def _no_duplicates(pairs: list) -> dict:
+    out: dict = {}
+    for k, v in pairs:
+        if k in out:
+            raise DataError(f"the key '{printable(k)}' appears twice in one object")
+        out[k] = v
+    return out
+
+
+def _integer(text: str) -> int:
+    if len(text.lstrip("-")) > MAX_DIGITS:
+        raise DataError(f"an integer literal of {len(text.lstrip('-'))} digits (at most {MAX_DIGITS})")
+    return int(text)
+
+
+def _float(text: str) -> float:
+    x = float(text)
+    if not math.isfinite(x):
+        raise DataError(f"the number {printable(text[:40])} is out of the range of a double")
+    return x
+
+
+def _constant(text: str):
+    raise DataError(f"{text} is not a JSON number (the kit holds finite numbers only)")
+
+
+def _depth(value) -> int:
+    """Deepest nesting of lists and objects, without recursion."""
+    deepest, stack = 0, [(value, 1)]
+    while stack:
+        v, d = stack.pop()
+        if isinstance(v, (list, dict)):
+            if d > MAX_DEPTH:
+                return d
+            deepest = max(deepest, d)
+            stack.extend((x, d + 1) for x in (v.values() if isinstance(v, dict) else v))
+    return deepest
+
+
+def _regular_file(path: Path) -> int:
+    """The size of ``path``; DataError unless it is a regular file (or a link to one)."""
     try:
-        return json.loads(Path(path).read_text(encoding="utf-8"))
+        info = os.stat(path)
     except FileNotFoundError:
-        raise DataError(f"{path}: no such file") from None
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as err:
-        raise DataError(f"{path}: not readable as JSON ({err})") from None
+        if os.path.lexists(path):
+            raise DataError(f"{printable(path)}: a symbolic link to nothing") from None
+        raise DataError(f"{printable(path)}: no such file") from None
+    except OSError as err:  # a link loop (ELOOP), a name too long, no permission
+        raise DataError(f"{printable(path)}: cannot be opened ({printable(err.strerror)})") from None
+    if stat.S_ISDIR(info.st_mode):
+        raise DataError(f"{printable(path)}: a folder, not a file")
+    if not stat.S_ISREG(info.st_mode):
+        raise DataError(f"{printable(path)}: not a regular file (a pipe, socket or device is not read)")
+    return info.st_size
+
+
+def read_json(path: Path, max_bytes: int | None = None):
+    """A kit or results JSON file; DataError naming the file and the problem when it is anything else.
+
+    Refused: a missing file, a folder, a dangling link or a link loop, anything but a regular file,
+    a file over ``max_bytes``, malformed JSON, NaN/Infinity, numbers beyond a double, integer
+    literals over 18 digits, a key given twice in one object, nesting deeper than 64.
+    """
+    path = Path(path)
+    max_bytes = MAX_BYTES if max_bytes is None else max_bytes
+    size = _regular_file(path)
+    if size > max_bytes:
+        raise DataError(f"{printable(path)}: {size} bytes, more than the {max_bytes} a kit or results file may have")
+    try:
+        with open(path, "rb") as f:
+            raw = f.read(max_bytes + 1)
+        if len(raw) > max_bytes:
+            raise DataError(f"{printable(path)}: more than the {max_bytes} bytes a kit or results file may have")
+        value = json.loads(
+            raw.decode("utf-8"),
+            object_pairs_hook=_no_duplicates,
+            parse_int=_integer,
+            parse_float=_float,
+            parse_constant=_constant,
+        )
+    except DataError as err:
+        raise DataError(f"{printable(path)}: {err}") from None
+    except RecursionError:
+        raise DataError(f"{printable(path)}: JSON nested too deeply (at most {MAX_DEPTH} levels)") from None
+    except (OSError, UnicodeDecodeError, ValueError) as err:  # JSONDecodeError is a ValueError
+        raise DataError(f"{printable(path)}: not readable as JSON ({printable(err)})") from None
+    if _depth(value) > MAX_DEPTH:
+        raise DataError(f"{printable(path)}: JSON nested too deeply (at most {MAX_DEPTH} levels)")
+    return value
 
 
 def _arrays(prefix: str, value, out: dict) -> None:
@@ -149,19 +245,41 @@ def kit_files(kit: Path) -> list[str]:
 
 
 def read_index(kit: Path) -> dict:
-    """A kit's index.json, after checking its version and every file's sha256."""
+    """A kit's index.json, after checking its form, its version and every file's sha256."""
     kit = Path(kit)
+    where = printable(kit / "index.json")
     index = read_json(kit / "index.json")
-    if index.get("kit_version") != KIT_VERSION:
-        raise DataError(f"{kit}: kit version {index.get('kit_version')!r}, this steam_ref reads version {KIT_VERSION}")
-    for name, digest in index.get("files", {}).items():
+    if not isinstance(index, Mapping):
+        raise DataError(f"{where}: expected a JSON object, got a {type(index).__name__}")
+    version = index.get("kit_version")
+    if isinstance(version, bool) or version not in KITS:
+        raise DataError(
+            f"{where}: kit version {printable(repr(version))}, this steam_ref reads versions {', '.join(map(str, KITS))}"
+        )
+    files = index.get("files")
+    if not isinstance(files, Mapping) or not files:
+        raise DataError(f"{where}: no 'files' object of file name -> sha256, so the kit cannot be verified")
+    for name, digest in files.items():
+        if not isinstance(digest, str) or Path(name).is_absolute() or ".." in Path(name).parts:
+            raise DataError(f"{where}: files/{printable(name)} is not a relative name with a sha256 string")
         if not (kit / name).is_file():
-            raise DataError(f"{kit}: {name} is listed in index.json but missing")
+            raise DataError(f"{printable(kit)}: {printable(name)} is listed in index.json but missing")
         if sha256(kit / name) != digest:
-            raise DataError(f"{kit}: {name} does not match its sha256 in index.json (edited or damaged)")
-    return index
+            raise DataError(
+                f"{printable(kit)}: {printable(name)} does not match its sha256 in index.json (edited or damaged)"
+            )
+    unlisted = [n for n in kit_files(kit) if n not in files and n != "README.md"]
+    if unlisted:
+        raise DataError(f"{printable(kit)}: {printable(unlisted[0])} is not listed in index.json")
+    suites = index.get("suites")
+    if not isinstance(suites, Mapping) or not suites or not set(suites) <= set(SUITES):
+        raise DataError(f"{where}: 'suites' must be an object naming suites of {', '.join(SUITES)}")
+    return dict(index)
 
 
 def read_suite(kit: Path, suite: str) -> dict:
-    """A suite's cases.json."""
-    return read_json(Path(kit) / suite / "cases.json")
+    """A suite's cases.json (its form is checked by :func:`steam_ref.conformance.validate.kit_cases`)."""
+    data = read_json(Path(kit) / suite / "cases.json")
+    if not isinstance(data, Mapping) or not isinstance(data.get("cases"), list):
+        raise DataError(f"{printable(Path(kit) / suite / 'cases.json')}: expected an object with a 'cases' list")
+    return dict(data)

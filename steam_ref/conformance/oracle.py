@@ -9,7 +9,10 @@ steam_ref rather than restate it.
   integrands, converged to rounding for Singer's and the general SDE's exponentials).
 - Λ(τ), Ψ(τ) and the covariance at τ by conditioning the dense prior of [x(t₁); x(τ); x(t₂)]
   (the kernel route of [YIB Eq. 12], K(τ) K⁻¹), not by the formula of [YIB Eq. 16].
-- W with WᵀW = Σ⁻¹ from the reversed Cholesky factor of Σ (Σ = U Uᵀ, U upper, W = U⁻¹).
+- W with WᵀW = Σ⁻¹ from the reversed Cholesky factor of Σ (Σ = U Uᵀ, U upper, W = U⁻¹); the
+  symmetric alternative Σ^(-1/2) from Σ's eigendecomposition.
+- The alternatives of the conventions (kit v2): the GP prior's error with the sign of [YIB Eq. 22]
+  (``paper_sign``), and the symmetric whitener (``symmetric``).
 - Factor errors written out from [YIB Eq. 22, 29, 32, 33] and the bearing model, and their
   Jacobians by complex-step differentiation (exact to rounding: no cancellation).
 
@@ -106,8 +109,15 @@ def noise_covariance(spec: Mapping, m: int) -> NDArray:
     return np.diag(sigmas**2)
 
 
-def sqrt_information(sigma: NDArray) -> NDArray:
-    """Upper-triangular W, positive diagonal, WᵀW = Σ⁻¹: Σ = U Uᵀ with U upper, W = U⁻¹."""
+def sqrt_information(sigma: NDArray, symmetric: bool = False) -> NDArray:
+    """Upper-triangular W, positive diagonal, WᵀW = Σ⁻¹: Σ = U Uᵀ with U upper, W = U⁻¹.
+
+    ``symmetric``: the other documented whitener, W = Σ^(-1/2) = V diag(λ^(-1/2)) Vᵀ for Σ = V diag(λ) Vᵀ.
+    """
+    if symmetric:
+        lam, V = np.linalg.eigh(np.asarray(sigma, float))
+        W = (V / np.sqrt(lam)) @ V.T
+        return (W + W.T) / 2
     J = np.eye(len(sigma))[::-1]
     U = J @ np.linalg.cholesky(J @ np.asarray(sigma, float) @ J) @ J  # upper, U Uᵀ = Σ
     return scipy.linalg.solve_triangular(U, np.eye(len(sigma)), lower=False)
@@ -196,15 +206,19 @@ def _measurement(kind: str, spec: Mapping, x, l=None):
     raise SteamError(f"unknown measurement type {kind!r}")
 
 
-def factor_error(spec: Mapping, xs: Sequence) -> NDArray:
-    """The unwhitened error e of a factor spec at its variables ``xs`` (in its key order)."""
+def factor_error(spec: Mapping, xs: Sequence, paper_sign: bool = False) -> NDArray:
+    """The unwhitened error e of a factor spec at its variables ``xs`` (in its key order).
+
+    ``paper_sign``: the GP prior's error as [YIB Eq. 22] writes it, Φ x₁ + vᵢ - x₂ (the kit's is its negative).
+    """
     kind = spec["type"]
     if kind == "prior":
         return xs[0] - np.asarray(spec["mean"], float)
     if kind == "gp_prior":  # e = x₂ - Φ x₁ - vᵢ, zero-mean WNOA  [YIB Eq. 22, 30-31]
         qc = np.asarray(spec["qc"], float)
         A, _ = model_matrices("wnoa", qc.shape[0])
-        return xs[1] - transition(A, float(spec["dt"])) @ xs[0]
+        e = xs[1] - transition(A, float(spec["dt"])) @ xs[0]
+        return -e if paper_sign else e
     if kind == "interpolated":  # e_inner(Λ x₁ + Ψ x₂, ...)  [YIB Eq. 18, 29]
         lam, psi = interpolated_matrices(spec)
         x_tau = lam @ xs[0] + psi @ xs[1]
@@ -252,17 +266,21 @@ def loss_weight(loss: Mapping | None, s: float) -> float:
     return (1 - (s / c) ** 2) ** 2 if s <= c else 0.0
 
 
-def linearize_factor(spec: Mapping, xs: Sequence[NDArray]) -> dict:
-    """Everything the kit records of one factor at ``xs``: e, W e, Hₖ, Aₖ, b, cost (and weight if robust)."""
+def linearize_factor(spec: Mapping, xs: Sequence[NDArray], paper_sign: bool = False, symmetric: bool = False) -> dict:
+    """Everything the kit records of one factor at ``xs``: e, W e, Hₖ, Aₖ, b, cost (and weight if robust).
+
+    ``paper_sign``, ``symmetric``: under the alternative conventions (see :func:`factor_error`,
+    :func:`sqrt_information`).
+    """
     xs = [np.asarray(x, float) for x in xs]
-    e = np.real(factor_error(spec, xs)).astype(float)
+    e = np.real(factor_error(spec, xs, paper_sign)).astype(float)
     H = []
     for k, x in enumerate(xs):
         cols = []
         for j in range(len(x)):
             shifted = [xx.astype(complex) for xx in xs]
             shifted[k][j] += 1j * _STEP
-            cols.append(np.imag(factor_error(spec, shifted)) / _STEP)
+            cols.append(np.imag(factor_error(spec, shifted, paper_sign)) / _STEP)
         H.append(np.stack(cols, axis=1))
     noise = _noise_spec(spec)
     if spec["type"] == "gp_prior":  # Σ = Q(Δt) of [YIB Eq. 17]
@@ -270,7 +288,7 @@ def linearize_factor(spec: Mapping, xs: Sequence[NDArray]) -> dict:
         sigma = process_noise(*model_matrices("wnoa", qc.shape[0]), qc, float(spec["dt"]))
     else:
         sigma = noise_covariance(noise, len(e))
-    W = sqrt_information(sigma)
+    W = sqrt_information(sigma, symmetric)
     we = W @ e
     s = float(np.linalg.norm(we))
     loss = noise.get("loss")

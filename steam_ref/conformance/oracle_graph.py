@@ -9,8 +9,9 @@ A problem is given in the kit's own format: ``variables`` (key → size, in a na
 - the cliques of an elimination order: the elimination game and the clique rule of [K12 Alg. 1-2],
   written here a second time; each clique's conditional read off the dense R [YIB Eq. 25];
 - covariances: blocks of the dense 𝓘⁻¹;
-- a stream of updates: with relinearization at every update, one Gauss-Newton step on all factors
-  so far per update; without relinearization, the linear solve at the first linearization point.
+- a stream of updates: per-variable linearization points moved when max|δ| reaches the threshold,
+  every factor linearized at them, a dense solve per update (threshold 0: one Gauss-Newton step on
+  all factors so far per update; inf: the linear solve at the first linearization point).
 
 Only NumPy/SciPy and :mod:`.oracle` are used: none of steam_ref's linear algebra or solvers.
 """
@@ -46,14 +47,17 @@ class Problem:
 
 
 def dense_system(
-    problem: Problem, values: Mapping[str, NDArray], order: Sequence[str]
+    problem: Problem, values: Mapping[str, NDArray], order: Sequence[str], **conventions: bool
 ) -> tuple[NDArray, NDArray, float]:
-    """Dense A (rows in factor order, columns in ``order``), b and the cost at ``values``."""
+    """Dense A (rows in factor order, columns in ``order``), b and the cost at ``values``.
+
+    ``conventions``: ``paper_sign``, ``symmetric`` of :func:`.oracle.linearize_factor`.
+    """
     off = problem.offsets(order)
     n = sum(problem.dims[k] for k in order)
     rows, rhs, cost = [], [], 0.0
     for spec in problem.factors:
-        lin = linearize_factor(spec, [values[k] for k in spec["keys"]])
+        lin = linearize_factor(spec, [values[k] for k in spec["keys"]], **conventions)
         block = np.zeros((len(lin["b"]), n))
         for slot, key in enumerate(spec["keys"]):
             block[:, off[key] : off[key] + problem.dims[key]] = lin[f"A_{slot}"]
@@ -159,28 +163,36 @@ def covariances(
     return out
 
 
-def stream(variables: Mapping[str, int], updates: Sequence[Mapping], relinearize: bool) -> list[dict[str, NDArray]]:
-    """The estimate after each update of a stream (new factors and new values per update).
+def stream(
+    variables: Mapping[str, int], updates: Sequence[Mapping], threshold: float, skip: int = 1
+) -> tuple[list[dict[str, NDArray]], list[list[str]]]:
+    """The estimate after each update of a stream, and the variables relinearized at each.
 
-    With ``relinearize``, each update is one Gauss-Newton step on every factor so far from the last
-    estimate (new variables at their given values): iSAM2 with relinearization threshold 0, every
-    update, and full back-substitution. Without, every factor stays linearized at the values first
-    given, and the estimate is that point plus the solution of the linear system.
+    iSAM2 with full back-substitution keeps a linearization point θ̄ⱼ per variable and the exact
+    solution δ of the system linearized there. At the start of every ``skip``-th update, each
+    variable whose last δⱼ has max|δⱼ| ≥ ``threshold`` moves: θ̄ⱼ ← θ̄ⱼ + δⱼ (a new variable starts
+    at its given value with δ = 0). A factor relinearized because one of its variables moved is
+    linearized at θ̄ of all its variables, and one whose variables did not move kept the linearization
+    at those same θ̄: so every factor is linearized at the current θ̄, and the estimate is θ̄ + δ.
+    ``threshold`` 0 is one Gauss-Newton step per update; inf never relinearizes.
     """
     factors: list = []
-    start: dict[str, NDArray] = {}
-    current: dict[str, NDArray] = {}
-    out = []
-    for u in updates:
+    theta: dict[str, NDArray] = {}
+    delta: dict[str, NDArray] = {}
+    out, moved_at = [], []
+    for step, u in enumerate(updates, start=1):
         factors.extend(u["factors"])
+        moved: list[str] = []
+        if step % skip == 0:
+            moved = [k for k in theta if float(np.max(np.abs(delta[k]))) >= threshold]
+            for k in moved:
+                theta[k] = theta[k] + delta[k]
         for k, v in u["values"].items():
-            start[k] = np.asarray(v, float)
-            current[k] = start[k]
-        order = [k for k in variables if k in start]
+            theta[k] = np.asarray(v, float)
+        order = [k for k in variables if k in theta]
         problem = Problem({"variables": {k: variables[k] for k in order}, "factors": factors})
-        point = current if relinearize else start
-        A, b, _ = dense_system(problem, point, order)
-        step = _split(problem, order, factorize(A, b)["delta"])
-        current = {k: point[k] + step[k] for k in order}
-        out.append(dict(current))
-    return out
+        A, b, _ = dense_system(problem, theta, order)
+        delta = _split(problem, order, factorize(A, b)["delta"])
+        out.append({k: theta[k] + delta[k] for k in order})
+        moved_at.append(sorted(moved))
+    return out, moved_at

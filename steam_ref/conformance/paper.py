@@ -25,6 +25,7 @@ from ..paper.presets import PaperSetup
 from ..paper.results import position_rmse
 from .cases import Case, tol
 from .kitio import plain, sha256
+from .paper_spec import PROCEDURE, SETUP_FIELDS
 
 __all__ = ["PAPER_RUNS", "paper_cases", "run_paper_case"]
 
@@ -77,6 +78,8 @@ def paper_cases(data_dir: str | os.PathLike | None = None) -> list[tuple[Case, d
             "method": "btgp",
             "every": 1,
             "setup": plain(dict(asdict(setup).items())),
+            "setup_fields": SETUP_FIELDS,
+            "procedure": PROCEDURE,
             "state_poses": authors.state_poses[rows],
             "state_poses_total": len(authors.state_poses),
         }

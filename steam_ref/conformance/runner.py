@@ -247,7 +247,10 @@ def _incremental(name: str, inputs: Mapping) -> dict:
                 "removed": sorted(before[c] for c in report.removed_cliques),
                 "orphans": sorted(before[o] for o in report.orphans),
             }
+            out[f"nnz_{k}"] = report.tree_nnz
         else:
+            if name.startswith("partial_"):
+                out[f"relinearized_{k}"] = sorted(spec.key_name(v) for v in report.relinearized)
             estimate = solver.estimate()
             out[f"estimate_{k}"] = {spec.key_name(key): np.asarray(estimate[key]) for key in estimate}
     return out

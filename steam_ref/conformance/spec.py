@@ -6,7 +6,7 @@ A key is a string: ``"x3"`` is trajectory state 3, ``"l1"`` landmark 1. A factor
     gp_prior       keys [x1, x2], dt, qc                      e = x₂ - Φ x₁      [YIB Eq. 22, 30-31]
     prior          keys [k], mean, noise                      e = θ - mean       [YIB Eq. 4]
     odometry       keys [x], measured [v, ω], noise           [YIB Eq. 32]
-    velocity       keys [x], measured [v, 0, ω], noise        the scripts' projected velocity
+    velocity       keys [x], measured [v, v_lat, ω], noise    the scripts' projected velocity (forward, lateral, yaw rate)
     range          keys [x, l], measured r, noise             [YIB Eq. 33]
     bearing        keys [x, l], measured b, noise             error wrapped to [-π, π)
     bearing_range  keys [x, l], measured [b, r], noise

@@ -14,6 +14,7 @@ from .base import EXACT, Case, tol
 from .factors import factor_cases
 from .gp import gp_cases
 from .graphs import batch_cases, bayes_tree_cases, incremental_cases, linear_cases
+from .graphs_v2 import batch_cases_v2, bayes_tree_cases_v2, incremental_cases_v2, linear_cases_v2
 
 __all__ = ["Case", "tol", "EXACT", "suite_cases", "SUITE_DOCS"]
 
@@ -28,8 +29,11 @@ SUITE_DOCS = {
     ),
     "linear": "small problems under given orderings: A, b, 𝓘, Aᵀb, R, d and the Gauss-Newton step δ",
     "batch": "Gauss-Newton iterates and costs from a given start",
-    "bayes_tree": "cliques and conditionals of given elimination orders; marginal and joint covariances",
-    "incremental": "a stream of five iSAM2 updates: the estimate after each; the cliques removed and the orphans",
+    "bayes_tree": "cliques and conditionals of given elimination orders (one a bushy tree); marginal and joint covariances",
+    "incremental": (
+        "a stream of five iSAM2 updates: the estimate after each (relinearizing every update, never, or partially), "
+        "the variables relinearized; the cliques removed, the orphans and the fill of R"
+    ),
     "paper": "the paper's runs (BTGP/1 on the synthetic set and on Plaza): final estimates and RMSE",
 }
 
@@ -39,8 +43,8 @@ def suite_cases(suite: str) -> list[Case]:
     return {
         "gp": gp_cases,
         "factors": factor_cases,
-        "linear": linear_cases,
-        "batch": batch_cases,
-        "bayes_tree": bayes_tree_cases,
-        "incremental": incremental_cases,
+        "linear": lambda: linear_cases() + linear_cases_v2(),
+        "batch": lambda: batch_cases() + batch_cases_v2(),
+        "bayes_tree": lambda: bayes_tree_cases() + bayes_tree_cases_v2(),
+        "incremental": lambda: incremental_cases() + incremental_cases_v2(),
     }[suite]()

@@ -184,5 +184,36 @@ def factor_cases() -> list[Case]:
             },
             {**xa, "l0": L0},
         ),
+        _factor_case(
+            "gp_prior_heading_past_pi",
+            "[YIB Eq. 22, 30-31]",
+            "GP prior between headings 3.05 and 3.35 (past π, continuous): nothing is wrapped, the states "
+            "are used as given",
+            {"type": "gp_prior", "keys": ["x0", "x1"], "dt": 0.5, "qc": QC_DIAG},
+            {"x0": [1.0, 2.0, 3.05, 0.8, -0.2, 0.5], "x1": [1.4, 1.92, 3.35, 0.78, -0.15, 0.55]},
+        ),
+        _factor_case(
+            "gp_prior_heading_jump",
+            "[YIB Eq. 22, 30-31]",
+            "GP prior between headings stored 3.05 and -3.0 (2π apart, less 0.23): the heading error is "
+            "-6.3, not wrapped (the conventions wrap bearing errors only); a port that wraps it gets -0.017",
+            {"type": "gp_prior", "keys": ["x0", "x1"], "dt": 0.5, "qc": QC_DIAG},
+            {"x0": [1.0, 2.0, 3.05, 0.8, -0.2, 0.5], "x1": [1.4, 1.92, -3.0, 0.78, -0.15, 0.55]},
+        ),
+        _factor_case(
+            "range_huber_at_threshold",
+            "[YIB Eq. 33]",
+            "Huber (k = 2) exactly at its threshold: range 5, measured 4.5, σ = 0.25, so ‖We‖ = 2 = k exactly "
+            "(every step exact in binary): weight 1, cost k²/2 (both branches agree there)",
+            rng(4.5, 0.25, loss={"type": "huber", "k": 2.0}),
+            {"x0": [1.0, 2.0, 0.3, 0.8, -0.2, 0.1], "l0": L0},
+        ),
+        _factor_case(
+            "range_tukey_at_threshold",
+            "[YIB Eq. 33]",
+            "Tukey (c = 2) exactly at its threshold: ‖We‖ = 2 = c exactly: weight 0, cost c²/6, A and b zero",
+            rng(4.5, 0.25, loss={"type": "tukey", "c": 2.0}),
+            {"x0": [1.0, 2.0, 0.3, 0.8, -0.2, 0.1], "l0": L0},
+        ),
     ]
     return c

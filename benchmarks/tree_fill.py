@@ -1,0 +1,77 @@
+"""Fill of R over a BTGP/1 run: ``UpdateReport.tree_nnz`` after every update, as GTSAM's ``ISAM2::treeNnz()``.
+
+Prints one JSON line per data set:
+  dataset, updates, states, landmarks
+  nnz_final                 nonzeros of R after the last update (per clique n_f(n_f + 1)/2 + n_f·n_s)
+  nnz_at {25, 50, 75, 100}  nnz after that percentage of the updates
+  nnz_per_state_final       nnz_final / states: bounded when the tree stays thin (the GP prior is a chain)
+  cliques_final             cliques in the final tree
+  largest_clique_dim        the largest frontal + separator size of a clique (a dense block of that side)
+  run_s                     wall time of the run
+and plots nnz over the updates to benchmarks/out/tree_fill_<dataset>.png.
+
+    python benchmarks/tree_fill.py [--datasets paper-synthetic plaza]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+
+import matplotlib as mpl
+
+mpl.use("Agg")
+import matplotlib.pyplot as plt
+
+from steam_ref.datasets import load_dataset
+from steam_ref.paper.online import StreamingEstimator
+from steam_ref.paper.options import StreamOptions
+from steam_ref.paper.presets import PaperSetup
+from steam_ref.paper.readings import Readings
+
+OUT = Path(__file__).resolve().parent / "out"
+PRESET = {"paper-synthetic": "synthetic", "plaza": "plaza"}
+
+
+def run(dataset: str) -> dict:
+    data = load_dataset(dataset)
+    setup = PaperSetup.named(PRESET[dataset]).with_schedule(every=1)  # BTGP/1
+    estimator = StreamingEstimator(Readings.from_dataset(data, setup), setup, StreamOptions(method="btgp"))
+    start = time.perf_counter()
+    estimator.run(data.ground_truth)
+    seconds = time.perf_counter() - start
+    nnz = [r.tree_nnz for r in estimator.solver.reports]  # type: ignore[attr-defined]
+    tree = estimator.solver.inner.tree  # type: ignore[attr-defined]
+    states = sum(1 for k in tree.frontal_of if k.kind == "x")
+    OUT.mkdir(exist_ok=True)
+    fig, ax = plt.subplots(figsize=(6, 3.5))
+    ax.plot(range(1, len(nnz) + 1), nnz, lw=1)
+    ax.set(xlabel="update", ylabel="nnz of R (GTSAM's treeNnz)", title=f"BTGP/1 on {dataset}: fill per update")
+    fig.tight_layout()
+    fig.savefig(OUT / f"tree_fill_{dataset}.png", dpi=120)
+    plt.close(fig)
+    return {
+        "dataset": dataset,
+        "updates": len(nnz),
+        "states": states,
+        "landmarks": sum(1 for k in tree.frontal_of if k.kind == "l"),
+        "nnz_final": nnz[-1],
+        "nnz_at": {p: nnz[max(0, round(p / 100 * len(nnz)) - 1)] for p in (25, 50, 75, 100)},
+        "nnz_per_state_final": round(nnz[-1] / states, 1),
+        "cliques_final": len(tree),
+        "largest_clique_dim": max(sum(c.frontal_dims) + sum(c.separator_dims) for c in tree.cliques.values()),
+        "run_s": round(seconds, 1),
+    }
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--datasets", nargs="+", default=list(PRESET), choices=list(PRESET))
+    for dataset in parser.parse_args().datasets:
+        print(json.dumps(run(dataset)), flush=True)
+
+
+if __name__ == "__main__":
+    main()

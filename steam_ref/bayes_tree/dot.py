@@ -1,0 +1,68 @@
+"""The Bayes tree in GTSAM's words: its ``dot()`` text and its fill, as GTSAM 4.3 reports them.
+
+:func:`tree_dot` writes a tree as GTSAM's ``BayesTree::dot`` (``ISAM2.dot()`` in Python) does: a
+Graphviz digraph whose nodes are named by the integer key of their first frontal variable (GTSAM's
+``Symbol``: the character in the top byte, the index below), labelled ``"frontals : separator"``,
+frontals in elimination order, separator keys sorted by that integer key (GTSAM keeps a
+conditional's parents in a sorted key set), a root without ``" : "``; each edge ``parent->child``
+written just before the child's node, depth first, children in the tree's own order. GTSAM's
+child order comes from its junction tree and can differ where a clique has several children: the
+set of lines is then the same, their order not (tests/test_bayes_tree_dot.py compares both ways)::
+
+    digraph G{
+    8646911284551352322[label="x1, x2"];
+    8646911284551352322->8646911284551352320
+    8646911284551352320[label="x0 : x1"];
+    }
+
+:func:`clique_nnz` and :func:`tree_nnz` count the nonzeros of R as GTSAM's ``ISAM2::treeNnz()``
+(and ``ISAM2Result::getTreeNnz()`` with detailed results) does: per clique the upper triangle of
+its frontal block and its whole separator block, n_f(n_f + 1)/2 + n_f·n_s for frontal and separator
+sizes n_f, n_s (structurally: entries that happen to be 0 count).  [YIB Eq. 21, 25]
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+
+from ..variables import Key
+
+__all__ = ["gtsam_key", "tree_dot", "clique_nnz", "tree_nnz"]
+
+
+def gtsam_key(key: Key) -> int:
+    """The integer GTSAM's ``Symbol(c, j)`` stands for: ord(c) << 56 | j."""
+    return (ord(key.kind) << 56) | int(key.index)
+
+
+def _label(keys: Iterable[Key]) -> str:
+    return ", ".join(f"{k.kind}{k.index}" for k in keys)
+
+
+def tree_dot(tree) -> str:
+    """The tree (a :class:`~steam_ref.bayes_tree.symbolic.CliqueTree`) as GTSAM's ``BayesTree::dot`` text."""
+    lines = ["digraph G{\n"]
+    stack: list[tuple[int, int | None]] = [(r, None) for r in reversed(list(tree.roots))]
+    while stack:
+        cid, parent = stack.pop()
+        clique = tree.cliques[cid]
+        node = gtsam_key(clique.frontals[0])
+        label = _label(clique.frontals)
+        if parent is not None:
+            lines.append(f"{parent}->{node}\n")
+            label += " : " + _label(sorted(clique.separator, key=gtsam_key))
+        lines.append(f'{node}[label="{label}"];\n')
+        stack.extend((c, node) for c in reversed(tree.children[cid]))
+    lines.append("}")
+    return "".join(lines)
+
+
+def clique_nnz(clique) -> int:
+    """Nonzeros of a clique's rows of R: n_f(n_f + 1)/2 + n_f·n_s (GTSAM's count)."""
+    nf, ns = sum(clique.frontal_dims), sum(clique.separator_dims)
+    return nf * (nf + 1) // 2 + nf * ns
+
+
+def tree_nnz(cliques: Iterable) -> int:
+    """Nonzeros of R over ``cliques`` (e.g. ``tree.cliques.values()``), as GTSAM's ``ISAM2::treeNnz()``."""
+    return sum(clique_nnz(c) for c in cliques)
