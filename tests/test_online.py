@@ -171,10 +171,10 @@ def test_time_query_is_eq18_with_the_interpolated_covariance(data):
 
 
 def _dense_joint(graph: FactorGraph, values: Values, keys) -> np.ndarray:
-    from steam_ref.batch import make_ordering
+    from steam_ref.linear.ordering import make_ordering
     from steam_ref.linear.system import LinearSystem
 
-    order = make_ordering(graph, values, "xl")
+    order = make_ordering("xl", graph.keys(), values.dims(), [f.keys for f in graph])
     A, _ = LinearSystem.build(graph.factors, values, order).to_dense()
     cov = np.linalg.inv(A.T @ A)
     idx = np.concatenate([order.offset_of[k] + np.arange(6) for k in keys])

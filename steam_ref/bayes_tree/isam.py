@@ -26,7 +26,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..arguments import real_array
-from ..covariance import tree_joint_covariance, tree_joint_marginals, tree_marginal_covariance, tree_marginals
+from ..covariance import (
+    tree_joint_covariance,
+    tree_joint_covariances,
+    tree_marginal_covariance,
+    tree_marginal_covariances,
+)
 from ..errors import ShapeError, SteamError, UnderdeterminedError, UnknownVariableError
 from ..factors import Factor, check_factors
 from ..linear.ordering import constrained_min_degree
@@ -93,9 +98,7 @@ class IncrementalSolver:
         for k in self._stale:
             self._form_estimate(k)
         self._stale.clear()
-        out = Values()
-        out._data = dict(self._estimate)  # shallow: the solver never writes into these arrays
-        return out
+        return Values.adopt(self._estimate)  # no copy: the solver never writes into these arrays
 
     def estimate_of(self, key: Key) -> NDArray:
         """The current estimate θ̄ + δ of one variable (read-only)."""
@@ -126,17 +129,17 @@ class IncrementalSolver:
         """Cov(δθ_key) (d, d) of the current linear system, from the Bayes tree.  [K11 Sec. 3]"""
         return tree_marginal_covariance(self.tree, key)
 
-    def joint_marginal_covariance(self, keys: Iterable[Key]) -> NDArray:
+    def marginal_covariances(self, keys: Iterable[Key] | None = None) -> dict[Key, NDArray]:
+        """Marginal covariance (dₖ, dₖ) of each of ``keys`` (every variable when None), in one pass down the tree."""
+        return tree_marginal_covariances(self.tree, keys)
+
+    def joint_covariance(self, keys: Iterable[Key]) -> NDArray:
         """Joint covariance (Σdₖ, Σdₖ) of several variables, stacked in the order given, from the tree."""
         return tree_joint_covariance(self.tree, keys)
 
-    def joint_marginals(self, groups: Iterable[Iterable[Key]]) -> list[NDArray]:
+    def joint_covariances(self, groups: Iterable[Iterable[Key]]) -> list[NDArray]:
         """Joint covariance of each group of variables (stacked in the order given), from the tree."""
-        return tree_joint_marginals(self.tree, groups)
-
-    def marginals(self, keys: Iterable[Key] | None = None) -> dict[Key, NDArray]:
-        """Marginal covariance (dₖ, dₖ) of each of ``keys`` (every variable when None), in one pass down the tree."""
-        return tree_marginals(self.tree, keys)
+        return tree_joint_covariances(self.tree, groups)
 
     def __len__(self) -> int:
         return len(self._dims)
@@ -202,7 +205,7 @@ class IncrementalSolver:
         with timer("order"):
             linear = [self._cached(j) for j in fids] + [self.tree.cliques[o].marginal for o in orphans]
             variables = [k for c in removed.values() for k in c.frontals] + list(theta_new)
-            order = constrained_min_degree(variables, [f.keys for f in linear], last=theta_nf)
+            order = constrained_min_degree(variables, self._dims, [f.keys for f in linear], last=theta_nf).keys
         # 4e. Eliminate into new cliques and attach back the orphans.   [YIB step 5, Eq. 24-25]
         with timer("eliminate"):
             cliques, parents, owner = eliminate(order, linear, self._dims, fids + [None] * len(orphans))
@@ -211,17 +214,17 @@ class IncrementalSolver:
         with timer("backsubstitute"):
             updated, visited = self._backsubstitute(set(new_cids))
         return UpdateReport(
-            self._steps,
-            tuple(removed),
-            tuple(new_cids),
-            tuple(orphans),
-            tuple(theta_rl),
-            tuple(order),
-            tuple(updated),
-            n_linearized,
-            visited,
-            timer.total(),
-            timer.seconds,
+            step=self._steps,
+            removed_cliques=tuple(removed),
+            new_cliques=tuple(new_cids),
+            orphans=tuple(orphans),
+            relinearized=tuple(theta_rl),
+            reeliminated=order,
+            updated=tuple(updated),
+            linearized_factors=n_linearized,
+            backsubstituted_cliques=visited,
+            time_s=timer.total(),
+            timings=timer.seconds,
         )
 
     def _rollback(self, journal: Journal) -> None:
@@ -236,7 +239,9 @@ class IncrementalSolver:
             self._stale[k] = None
             self._over[k] = None
         for k in journal.new_keys:
-            for store in (self._theta_bar._data, self._dims, self._threshold, self._delta, self._estimate, self._stale):
+            if k in self._theta_bar:
+                self._theta_bar.remove(k)
+            for store in (self._dims, self._threshold, self._delta, self._estimate, self._stale):
                 store.pop(k, None)
         del self.factors[journal.n_factors :], self._linear[journal.n_factors :]
         self._steps -= 1
