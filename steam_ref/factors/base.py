@@ -18,6 +18,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.linalg import solve_triangular
 
 from ..arguments import finite, real_array
 from ..errors import NumericalError, ShapeError, SteamError
@@ -60,9 +61,13 @@ def sqrt_information(noise: NDArray | float, m: int, name: str = "noise") -> NDA
                 f"but ({j}, {i}) = {float(noise[j, i])!r}"
             )
         try:
-            # Σ⁻¹ = Wᵀ W with W upper triangular: W = chol(Σ⁻¹)ᵀ.
-            with np.errstate(over="ignore", invalid="ignore"):  # checked by _finite_weight
-                return _finite_weight(name, np.linalg.cholesky(np.linalg.inv(noise)).T, noise)
+            # Σ = U Uᵀ with U upper triangular (the Cholesky factor of Σ with rows and columns reversed,
+            # reversed back), so Σ⁻¹ = U⁻ᵀ U⁻¹ and W = U⁻¹: one triangular solve, no inverse of Σ.
+            U = np.linalg.cholesky(noise[::-1, ::-1])[::-1, ::-1]
+            with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # checked by _finite_weight
+                W = solve_triangular(U, np.eye(m), lower=False, check_finite=False)
+                _finite_weight(name, np.einsum("ij,ij->j", W, W), noise)  # diag Σ⁻¹ = WᵀW must be finite too
+            return _finite_weight(name, W, noise)
         except np.linalg.LinAlgError:
             raise SteamError(f"{name} (a covariance) is not positive definite: {noise.tolist()}") from None
     raise ShapeError(
