@@ -51,7 +51,7 @@ def random_tree(rng, trial: int) -> tuple[BayesTree, list, dict]:
 
 
 @pytest.mark.parametrize("trial", range(6))
-def test_tree_marginals_equal_dense_inverse(rng, trial):
+def test_tree_marginal_covariances_equal_dense_inverse(rng, trial):
     tree, factors, dims = random_tree(rng, trial)
     R, _, tree_order = tree.to_dense()
     from_R = np.linalg.inv(R.T @ R)
@@ -83,7 +83,7 @@ def test_tree_joint_covariance_equals_dense_inverse(rng, trial):
         )
 
 
-def test_tree_marginals_of_some_keys_visit_only_their_root_paths(rng, monkeypatch):
+def test_tree_marginal_covariances_of_some_keys_visit_only_their_root_paths(rng, monkeypatch):
     """A chain of 300 states: all marginals cost one clique step per clique; a few keys, their paths."""
     problem = small_problem(rng, n_states=300, n_landmarks=2)
     keys = problem.graph.keys()
@@ -148,7 +148,7 @@ def test_sparse_joint_covariance_equals_dense_inverse(problem, backend):
 
 
 @pytest.mark.parametrize("max_entries", [1, 100, 10**9])
-def test_sparse_marginals_in_chunks_equal_dense_inverse(problem, max_entries, monkeypatch):
+def test_sparse_marginal_covariances_in_chunks_equal_dense_inverse(problem, max_entries, monkeypatch):
     """Every key's block, whether the solves take one key at a time (tiny budget), a few, or all at once."""
     from steam_ref.covariance import _blocks_of_inverse, sparse_marginal_covariances
 
