@@ -44,9 +44,9 @@ from .tree import BayesTree, Clique, eliminate
 __all__ = ["IncrementalSolver", "UpdateReport"]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class UpdateReport:
-    """What one update did, so a notebook can show the affected top of the tree."""
+    """What one update did, so a notebook can show the affected top of the tree (built by keyword only)."""
 
     step: int  # number of this update, from 1
     removed_cliques: tuple[int, ...]  # ids of the cliques taken off the top (ids of the tree before)
