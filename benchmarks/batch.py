@@ -29,9 +29,9 @@ from pathlib import Path
 import numpy as np
 
 import steam_ref as sr
-from steam_ref.batch import make_ordering
 from steam_ref.datasets import load_dataset
 from steam_ref.linear import LinearSystem, SparseCholesky, linearize, sparse_backend
+from steam_ref.linear.ordering import make_ordering
 from steam_ref.paper.presets import PaperSetup
 from steam_ref.paper.problem import build_problem, sequential_batch
 from steam_ref.paper.results import position_rmse
@@ -53,8 +53,10 @@ def measure(name: str, repeat: int, backend: str) -> dict:
     setup = PaperSetup.synthetic() if "synthetic" in name else PaperSetup.plaza()
     problem = build_problem(data, setup)
     graph, values = problem.graph, problem.initial
-    orders = {"xl": make_ordering(graph, values, "xl")}
-    ordering_s, orders["amd"] = median_time(lambda: make_ordering(graph, values, "amd", backend), repeat)
+    orders = {"xl": make_ordering("xl", graph.keys(), values.dims(), [f.keys for f in graph])}
+    ordering_s, orders["amd"] = median_time(
+        lambda: make_ordering("amd", graph.keys(), values.dims(), [f.keys for f in graph], backend), repeat
+    )
     linearize_s, _ = median_time(
         lambda: LinearSystem.from_groups(linearize(graph.factors, values), orders["xl"]), repeat
     )

@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING, Any
 
 from ._version import __version__ as __version__
 from .errors import (
+    ConvergenceError,
     ConvergenceWarning,
     DataError,
     IllConditionedWarning,
@@ -110,6 +111,7 @@ __all__ = [
     "UnknownVariableError",
     "UnderdeterminedError",
     "NumericalError",
+    "ConvergenceError",
     "IllConditionedWarning",
     "ConvergenceWarning",
     "Key",

@@ -10,39 +10,49 @@ small step. A stopping rule is not a proof, so before a result says ``converged`
 estimate is checked (:func:`check_stationarity`): one more Gauss-Newton step from it must promise
 to lower the cost by no more than the tolerance, and 𝓘 there must be well enough conditioned for
 float64 to compute that step at all.
+
+Besides the solvers, this module declares the steps a solver built on them reuses (the internal API
+of :mod:`steam_ref.paper.converge`, typed and kept stable with it): :func:`check_options`,
+:func:`graph_and_values` and :func:`prepare` (the checks and set-up both solvers share),
+:func:`gauss_newton_step` (one step of Eq. 11) and :func:`certify` (the stopping rule and the
+stationarity check that decide ``converged``).
 """
 
 from __future__ import annotations
 
 import math
 import warnings
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
+from numpy.typing import NDArray
 
-from .errors import IllConditionedWarning, NumericalError, SteamError
+from .errors import ConvergenceError, IllConditionedWarning, NumericalError, SteamError
 from .factors import Factor
 from .graph import FactorGraph
-from .linear import ordering as linear_ordering
-from .linear.ordering import Ordering, sparse_backend
+from .linear.ordering import Ordering, make_ordering, sparse_backend
 from .linear.solve import SparseCholesky
 from .linear.system import LinearSystem, linearize
-from .variables import Values, as_values
+from .variables import Key, Values, as_values
 
 __all__ = [
     "Iteration",
     "Stationarity",
     "BatchResult",
     "MAX_CONDITION",
-    "make_ordering",
     "check_stationarity",
     "gauss_newton",
-    "gauss_newton_step",
     "levenberg_marquardt",
     "batch_solve",
+    # internal API: the steps a solver built on these reuses (steam_ref.paper.converge)
+    "check_options",
+    "graph_and_values",
+    "prepare",
+    "gauss_newton_step",
+    "certify",
 ]
 
 # Largest condition number of the scaled information matrix for which a result may say "converged".
@@ -104,14 +114,9 @@ class BatchResult:
         return self.iterations[-1].cost if self.iterations else self.initial_cost
 
 
-def make_ordering(graph: FactorGraph, values: Values, ordering: str | Ordering, backend: str | None = None) -> Ordering:
-    """:func:`steam_ref.linear.ordering.make_ordering` for the variables of ``graph`` (first-seen order)."""
-    keys = graph.keys()
-    dims = {k: values.dim(k) for k in keys}
-    return linear_ordering.make_ordering(ordering, keys, dims, (f.keys for f in graph), backend)
-
-
-def _step(graph: FactorGraph, values: Values, ordering: Ordering, backend: str, damping: float):
+def _step(
+    graph: FactorGraph, values: Values, ordering: Ordering, backend: str, damping: float
+) -> tuple[dict[Key, NDArray], float, int]:
     """Linearize, solve (𝓘 + λ diag 𝓘) δ = Aᵀb; return δ (ordered), cost at θ̄, factor nnz."""
     groups = linearize(graph.factors, values)
     system = LinearSystem.from_groups(groups, ordering)
@@ -129,8 +134,8 @@ def _step(graph: FactorGraph, values: Values, ordering: Ordering, backend: str, 
 
 def gauss_newton_step(
     graph: FactorGraph, values: Values, ordering: Ordering, backend: str
-) -> tuple[Values, dict, float]:
-    """One Gauss-Newton step from ``values`` (Eq. 11): (θ̄ + δθ*, δθ* by key, the cost at θ̄)."""
+) -> tuple[Values, dict[Key, NDArray], float]:
+    """Internal API. One Gauss-Newton step from ``values`` (Eq. 11): (θ̄ + δθ*, δθ* by key, the cost at θ̄)."""
     delta, cost, _ = _step(graph, values, ordering, backend, 0.0)
     return values.retract(delta), delta, cost
 
@@ -169,9 +174,17 @@ def check_stationarity(
 
 
 def certify(
-    graph, values, order, backend, rule: str, tolerances: tuple[float, float], check: bool
+    graph: FactorGraph,
+    values: Values,
+    order: Ordering,
+    backend: str,
+    rule: str,
+    tolerances: tuple[float, float],
+    check: bool,
 ) -> tuple[bool, str, Stationarity | None]:
-    """(converged, reason, check) for an estimate where ``rule`` ('' for none) stopped the iterations."""
+    """Internal API. (converged, reason, the check) for ``values``, where ``rule`` ('' for none: the
+    iterations ran out) stopped the iterations; ``tolerances`` (relative, absolute) of the cost decrease
+    one more step may promise; ``check`` False skips :func:`check_stationarity` (never ``converged``)."""
     if not check:
         return False, f"{rule or 'max_iterations'} (stationarity not checked)", None
     found = check_stationarity(graph, values, order, backend)
@@ -198,7 +211,7 @@ def certify(
 
 
 def check_options(**options: object) -> None:
-    """Every tolerance and damping option a finite number ≥ 0 (the damping ones > 0), named on failure."""
+    """Internal API. Every tolerance and damping option a finite number ≥ 0 (the damping ones > 0), named on failure."""
     for name, value in options.items():
         if (
             isinstance(value, bool)
@@ -213,8 +226,11 @@ def check_options(**options: object) -> None:
             raise SteamError(f"damping_factor must be > 1, got {value!r}")
 
 
-def graph_and_values(graph: FactorGraph | Iterable[Factor], initial: Values) -> tuple[FactorGraph, Values]:
-    """The graph (a FactorGraph, or any iterable of factors) and the initial estimate (a Values or a mapping)."""
+def graph_and_values(
+    graph: FactorGraph | Iterable[Factor], initial: Values | Mapping[Key, NDArray]
+) -> tuple[FactorGraph, Values]:
+    """Internal API. The graph (a FactorGraph, or any iterable of factors) and the initial estimate (a Values or a
+    mapping)."""
     if not isinstance(graph, FactorGraph):
         graph = FactorGraph(graph)
     return graph, as_values("initial", initial)
@@ -223,7 +239,8 @@ def graph_and_values(graph: FactorGraph | Iterable[Factor], initial: Values) -> 
 def prepare(
     graph: FactorGraph, initial: Values, ordering: str | Ordering, backend: str | None, max_iterations: object
 ) -> tuple[str, Ordering, float]:
-    """Checks shared by both solvers: the graph and estimates, the backend, the ordering, the start cost."""
+    """Internal API. The checks both solvers share (the graph and estimates, the backend); returns
+    (backend, the ordering of the graph's variables, the cost at ``initial``)."""
     if isinstance(max_iterations, bool) or not isinstance(max_iterations, (int, np.integer)) or max_iterations < 0:
         raise SteamError(f"max_iterations must be an integer ≥ 0, got {max_iterations!r}")
     if len(graph) == 0:
@@ -236,7 +253,8 @@ def prepare(
         raise SteamError(
             f"variable {unconstrained[0]!r} has an initial value but no factor names it, so nothing estimates it"
         )
-    return backend, make_ordering(graph, initial, ordering, backend), graph.error(initial)
+    order = make_ordering(ordering, graph.keys(), initial.dims(), [f.keys for f in graph], backend)
+    return backend, order, graph.error(initial)
 
 
 def _converged(old: float, new: float, step: float, rtol: float, atol: float, steptol: float) -> str:
@@ -249,7 +267,7 @@ def _converged(old: float, new: float, step: float, rtol: float, atol: float, st
     return ""
 
 
-def _norm(delta: dict) -> float:
+def _norm(delta: dict[Key, NDArray]) -> float:
     return float(np.sqrt(sum(float(v @ v) for v in delta.values())))
 
 
@@ -361,7 +379,7 @@ def levenberg_marquardt(
 def batch_solve(graph: FactorGraph, initial: Values, *, method: str = "gn", **options) -> Values:
     """The MAP estimate of Eq. 6 by Gauss-Newton ('gn') or Levenberg-Marquardt ('lm').
 
-    Raises :class:`~steam_ref.errors.NumericalError` unless the result is ``converged`` (checked):
+    Raises :class:`~steam_ref.errors.ConvergenceError` unless the result is ``converged`` (checked):
     this short form returns only the estimate, so it returns only one it has checked.
     """
     if method == "gn":
@@ -371,5 +389,5 @@ def batch_solve(graph: FactorGraph, initial: Values, *, method: str = "gn", **op
     else:
         raise SteamError(f"unknown method {method!r}; use 'gn' or 'lm'")
     if not result.converged:
-        raise NumericalError(f"{method.upper()} did not converge: {result.reason}")
+        raise ConvergenceError(f"{method.upper()} did not converge: {result.reason}")
     return result.values

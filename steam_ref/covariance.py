@@ -9,11 +9,22 @@ cov δθ* = 𝓘⁻¹ = (AᵀA)⁻¹ [YIB Eq. 11]. Two sources:
 
       Cov(F, S) = -R⁻¹S Σ_SS,    Cov(F, F) = R⁻¹R⁻ᵀ + R⁻¹S Σ_SS (R⁻¹S)ᵀ,
 
-  and a walk down from the root gives any clique's joint covariance. :func:`tree_marginals` does
-  every clique in one such walk. :func:`tree_joint_covariance` serves any set of variables, in
+  and a walk down from the root gives any clique's joint covariance. :func:`tree_marginal_covariances`
+  does every clique in one such walk. :func:`tree_joint_covariance` serves any set of variables, in
   cliques however far apart, by one walk down their root paths: F is independent of every variable
   outside its clique's subtree given S, so Cov(F, C) = -R⁻¹S Σ_SC for any C already visited, and
   the walk carries the joint of only the variables still needed. Nothing of size n × n is formed.
+
+One vocabulary, GTSAM's (``marginalCovariance``, ``jointMarginalCovariance``), here and on every
+solver (``IncrementalSolver``, the stream solvers of :mod:`steam_ref.paper.solvers`):
+
+- ``marginal_covariance(key)``: the (d, d) block of one variable;
+- ``marginal_covariances(keys)``: that block for each of several variables, as a dict;
+- ``joint_covariance(keys)``: the joint (Σdₖ, Σdₖ) block of several variables, stacked in the order given;
+- ``joint_covariances(groups)``: the joint block of each group of variables, as a list.
+
+The functions below prefix them with their source: ``sparse_`` (factors linearized at an estimate),
+``tree_`` (a Bayes tree); :func:`marginal_covariances` reads a built :class:`LinearSystem`.
 
 Nothing here imports the Bayes tree package (which builds on this module); a tree is anything with
 the :class:`~steam_ref.bayes_tree.tree.BayesTree` attributes used below.
@@ -42,12 +53,12 @@ if TYPE_CHECKING:
 __all__ = [
     "marginal_covariances",
     "sparse_joint_covariance",
-    "sparse_marginals",
-    "sparse_joint_marginals",
+    "sparse_marginal_covariances",
+    "sparse_joint_covariances",
     "tree_marginal_covariance",
     "tree_joint_covariance",
-    "tree_marginals",
-    "tree_joint_marginals",
+    "tree_marginal_covariances",
+    "tree_joint_covariances",
 ]
 
 Index = dict[Key, tuple[int, int]]  # variable → (first row, size) in a joint covariance
@@ -133,7 +144,7 @@ def sparse_joint_covariance(
     return 0.5 * (block + block.T)
 
 
-def sparse_marginals(
+def sparse_marginal_covariances(
     factors: Sequence[Factor], values: Values, keys: Sequence[Key], backend: str | None = None
 ) -> dict[Key, NDArray]:
     """Marginal covariance (dₖ, dₖ) of each of ``keys``, linearized at ``values``: one factorization."""
@@ -142,7 +153,7 @@ def sparse_marginals(
     return dict(zip(keys, _blocks_of_inverse(chol, order, [[k] for k in keys]), strict=True))
 
 
-def sparse_joint_marginals(
+def sparse_joint_covariances(
     factors: Sequence[Factor], values: Values, groups: Sequence[Sequence[Key]], backend: str | None = None
 ) -> list[NDArray]:
     """Joint covariance of each group of ``keys`` (stacked in the order given), linearized at ``values``:
@@ -274,7 +285,7 @@ def _walk_down(tree: BayesTree, needed: set[int] | None) -> Iterator[tuple[int, 
                 stack.append((ch, _block(joint, index, tree.cliques[ch].separator)))
 
 
-def tree_marginals(tree: BayesTree, keys: Iterable[Key] | None = None) -> dict[Key, NDArray]:
+def tree_marginal_covariances(tree: BayesTree, keys: Iterable[Key] | None = None) -> dict[Key, NDArray]:
     """Marginal covariance (dₖ, dₖ) of every variable in ``keys`` (all when None), in one pass.  [K11 Sec. 3]
 
     The frontal blocks of each clique's joint covariance (:func:`_walk_down`) are the marginals. Only
@@ -290,7 +301,7 @@ def tree_marginals(tree: BayesTree, keys: Iterable[Key] | None = None) -> dict[K
     return out if wanted is None else {k: out[k] for k in wanted}
 
 
-def tree_joint_marginals(tree: BayesTree, groups: Iterable[Iterable[Key]]) -> list[NDArray]:
+def tree_joint_covariances(tree: BayesTree, groups: Iterable[Iterable[Key]]) -> list[NDArray]:
     """Joint covariance of each group of variables (stacked in the order given), from the tree.
 
     A group that one clique holds whole (two consecutive states of a trajectory, say) is cut from that

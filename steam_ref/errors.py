@@ -1,7 +1,20 @@
 """The one exception family of steam_ref.
 
 Every check of user input raises a subclass of :class:`SteamError`, and the message names the
-offending value, so a caller can catch ``steam_ref.SteamError`` and show it as it is.
+offending value, so a caller can catch ``steam_ref.SteamError`` and show it as it is. Each class has
+one meaning:
+
+- :class:`ShapeError`: an argument has the wrong shape, or holds NaN/inf as given;
+- :class:`DataError`: a data file is missing, malformed or inconsistent;
+- :class:`UnknownVariableError`: a variable is named that has no estimate;
+- :class:`UnderdeterminedError`: the factors leave a variable unconstrained;
+- :class:`NumericalError`: a computation on valid input overflowed to NaN/inf or lost the precision
+  its answer needs (never "the iterations stopped short": that is convergence);
+- :class:`ConvergenceError`: an iteration that must return a converged answer did not reach one.
+
+Two warnings flag a result that is returned anyway, with the reason in it:
+:class:`IllConditionedWarning` (float64 cannot resolve the answer) and :class:`ConvergenceWarning`
+(an iteration asked to converge stopped before its check passed).
 """
 
 
@@ -32,9 +45,15 @@ class NumericalError(SteamError):
     """A computation gave NaN or inf (an overflowing reading, say), or lost the precision its answer needs."""
 
 
+class ConvergenceError(SteamError):
+    """An iteration that returns only its answer (``batch_solve``) stopped before that answer passed its
+    convergence check; the message says which rule stopped it and what the check found."""
+
+
 class IllConditionedWarning(UserWarning):
     """The information matrix is so ill-conditioned that float64 cannot resolve the answer to the tolerance asked."""
 
 
 class ConvergenceWarning(UserWarning):
-    """An iteration asked to converge stopped before its check passed; the result says why."""
+    """An iteration asked to converge stopped before its check passed, and its result, returned flagged
+    (``converged=False``), says why."""

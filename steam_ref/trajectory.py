@@ -86,7 +86,7 @@ class Trajectory:
     """
 
     def __init__(self, solver, states: Sequence[int], times: NDArray, prior: NDArray | LinearSDE):
-        self.solver = solver  # anything with estimate_of, estimate, joint_covariance(s), marginals
+        self.solver = solver  # anything with estimate_of, estimate, marginal_covariances, joint_covariance(s)
         self.states = _pose_indices(states)  # poses with a state, increasing
         self.times = _pose_times(times, self.states)  # (n_poses,) time of every pose
         prior = check_prior(prior)
@@ -173,7 +173,7 @@ class Trajectory:
     def covariances(self, landmarks: Sequence[Key]) -> Covariances:
         """Marginal covariances at every pose of the span (interpolated between states) and of ``landmarks``."""
         solved, landmarks = self.states, key_list("landmarks", landmarks)
-        marg = self.solver.marginals([X(i) for i in solved] + landmarks)
+        marg = self.solver.marginal_covariances([X(i) for i in solved] + landmarks)
         for k in landmarks:
             if marg[k].shape != (2, 2):
                 raise ShapeError(

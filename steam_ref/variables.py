@@ -115,6 +115,25 @@ class Values(Mapping):
         """Size of one variable."""
         return self[key].shape[0]
 
+    def dims(self) -> dict[Key, int]:
+        """Size of every variable (what an ordering needs: :func:`steam_ref.linear.ordering.make_ordering`)."""
+        return {k: v.shape[0] for k, v in self._data.items()}
+
+    def remove(self, key: Key) -> None:
+        """Drop the estimate of one variable (UnknownVariableError if it has none)."""
+        if key not in self._data:
+            raise UnknownVariableError(f"no estimate for variable {key!r}")
+        del self._data[key]
+
+    @classmethod
+    def adopt(cls, arrays: Mapping[Key, NDArray]) -> Values:
+        """A Values holding ``arrays`` themselves: no copy, no check. Only for a caller whose arrays are
+        finite 1-D float vectors by construction and never written in place (a solver's read-only
+        estimates); anyone else builds a ``Values(mapping)``, which checks and copies."""
+        out = cls()
+        out._data = dict(arrays)
+        return out
+
     def stack(self, keys: Iterable[Key]) -> NDArray:
         """Estimates of several variables of one size as rows of an (n, dim) array."""
         rows = [self[k] for k in keys]

@@ -562,25 +562,25 @@ CASES = [
     ("Ordering one size short", lambda: Ordering(tuple(KEYS), (6,)), ShapeError, r"2 keys, 1 dims"),
     (
         "constrained_min_degree repeated variable dropped",
-        lambda: constrained_min_degree([X(0), X(0), X(1)], [KEYS]),
+        lambda: constrained_min_degree([X(0), X(0), X(1)], DIMS, [KEYS]),
         SteamError,
         r"variables lists x0 twice",
     ),
     (
         "constrained_min_degree last unknown ignored",
-        lambda: constrained_min_degree(KEYS, [KEYS], last=[X(7)]),
+        lambda: constrained_min_degree(KEYS, DIMS, [KEYS], last=[X(7)]),
         UnknownVariableError,
         r"last names x7",
     ),
     (
         "constrained_min_degree last a single key",
-        lambda: constrained_min_degree(KEYS, [KEYS], last=X(0)),
+        lambda: constrained_min_degree(KEYS, DIMS, [KEYS], last=X(0)),
         SteamError,
         r"single key x0: write \[x0\]",
     ),
     (
         "constrained_min_degree factor_keys flat",
-        lambda: constrained_min_degree(KEYS, tuple(KEYS)),
+        lambda: constrained_min_degree(KEYS, DIMS, tuple(KEYS)),
         UnknownVariableError,
         r"factor_keys\[0\] = x0 names 'x'",
     ),
@@ -677,8 +677,8 @@ CASES = [
         r"keys\[0\] = 'x0' is not a variable key",
     ),
     (
-        "sparse_joint_marginals a flat group",
-        lambda: covariance.sparse_joint_marginals(*two_states(), [X(0)]),
+        "sparse_joint_covariances a flat group",
+        lambda: covariance.sparse_joint_covariances(*two_states(), [X(0)]),
         SteamError,
         r"groups\[0\] must be a list of keys, got the single key x0",
     ),
@@ -763,18 +763,23 @@ CASES = [
     ),
     ("marginal_covariance a list", lambda: solver().marginal_covariance([X(0)]), SteamError, r"got key=\[x0\]"),
     (
-        "joint_marginal_covariance a single key",
-        lambda: solver().joint_marginal_covariance(X(0)),
+        "joint_covariance a single key",
+        lambda: solver().joint_covariance(X(0)),
         SteamError,
         r"got the single key x0: write \[x0\]",
     ),
     (
-        "joint_marginals a flat group",
-        lambda: solver().joint_marginals([X(0)]),
+        "joint_covariances a flat group",
+        lambda: solver().joint_covariances([X(0)]),
         SteamError,
         r"groups\[0\] must be a list of keys",
     ),
-    ("marginals a single key", lambda: solver().marginals(X(0)), SteamError, r"single key x0"),
+    (
+        "IncrementalSolver.marginal_covariances a single key",
+        lambda: solver().marginal_covariances(X(0)),
+        SteamError,
+        r"single key x0",
+    ),
     (
         "ISAM2Params threshold '0.1' parsed",
         lambda: sr.ISAM2Params(relinearize_threshold="0.1"),
@@ -996,12 +1001,12 @@ def test_what_is_accepted_still_works():
     assert sr.RangeFactor.create(X(0), L(0), 0, 1).measured[0] == 0.0  # a zero range is a reading
     assert sr.BearingRangeFactor.create(X(0), L(0), 0.1, [5.0], [0.1, 0.3]).measured.tolist() == [0.1, 5.0]
     s = solver()
-    assert s.joint_marginal_covariance([]).shape == (0, 0)  # the joint of no variable
+    assert s.joint_covariance([]).shape == (0, 0)  # the joint of no variable
     np.testing.assert_array_equal(covariance.sparse_joint_covariance(factors, values, []), np.zeros((0, 0)))
-    dup = s.joint_marginal_covariance([X(0), X(0)])  # a repeated key repeats its block: [[P, P], [P, P]]
+    dup = s.joint_covariance([X(0), X(0)])  # a repeated key repeats its block: [[P, P], [P, P]]
     np.testing.assert_allclose(dup[:6, :6], dup[6:, :6])
     np.testing.assert_allclose(
-        s.joint_marginal_covariance(k for k in KEYS),
+        s.joint_covariance(k for k in KEYS),
         covariance.sparse_joint_covariance(factors, values, KEYS),
         atol=1e-9,
     )
@@ -1038,7 +1043,7 @@ def state_of(s: sr.IncrementalSolver) -> dict:
         "n_variables": len(s),
         "cliques": {c: (q.frontals, q.separator, q.R.copy(), q.S.copy(), q.d.copy()) for c, q in tree.cliques.items()},
         "parents": dict(tree.parent),
-        "marginals": s.marginals(),
+        "marginals": s.marginal_covariances(),
     }
 
 

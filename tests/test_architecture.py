@@ -358,7 +358,7 @@ def test_the_oracle_check_sees_every_import_form():
         "from .. import batch",
         "import steam_ref.graph",
         "from steam_ref.factors import Factor",
-        "def f():\n    from ..covariance import tree_marginals",
+        "def f():\n    from ..covariance import tree_marginal_covariances",
         "class C:\n    import steam_ref.gp.prior as p",
     ]
     for source in forms:

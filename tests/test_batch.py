@@ -9,13 +9,13 @@ import pytest
 from problems import small_problem
 
 import steam_ref as sr
-from steam_ref.batch import make_ordering
 from steam_ref.linear import LinearSystem
+from steam_ref.linear.ordering import make_ordering
 
 
 def gradient_norm(problem, values):
     """‖Aᵀb‖ at ``values``: zero at a stationary point of the (IRLS-weighted) cost."""
-    order = make_ordering(problem.graph, values, "xl")
+    order = make_ordering("xl", problem.graph.keys(), values.dims(), [f.keys for f in problem.graph])
     A, b = LinearSystem.build(problem.graph.factors, values, order).to_dense()
     return np.linalg.norm(A.T @ b), np.linalg.norm(A.T @ A, 2)
 
@@ -43,7 +43,7 @@ def test_gn_and_lm_agree(rng):
 def test_first_gn_step_is_the_dense_newton_step(rng):
     p = small_problem(rng, n_states=6, n_landmarks=2)
     result = sr.gauss_newton(p.graph, p.initial, max_iterations=1)
-    order = make_ordering(p.graph, p.initial, "xl")
+    order = make_ordering("xl", p.graph.keys(), p.initial.dims(), [f.keys for f in p.graph])
     system = LinearSystem.build(p.graph.factors, p.initial, order)
     A, b = system.to_dense()
     step = system.split(np.linalg.solve(A.T @ A, A.T @ b))

@@ -13,6 +13,7 @@ a b c d e f, the separators are a:{c} b:{c} c:{d} d:{e,f} e:{f} f:{}, and the tr
 from __future__ import annotations
 
 import itertools
+from collections import defaultdict
 
 import numpy as np
 import pytest
@@ -28,6 +29,7 @@ from steam_ref.linear.ordering import constrained_min_degree
 
 TOY = [("a", "c"), ("b", "c"), ("c", "d"), ("d", "e"), ("d", "f"), ("e", "f")]
 ORDER = list("abcdef")
+UNIT: defaultdict = defaultdict(lambda: 1)  # every variable of size 1: these orderings are symbolic
 
 
 def toy_tree(order=ORDER, factors=TOY) -> tuple[CliqueTree, dict[str, int]]:
@@ -74,7 +76,7 @@ def test_min_degree_is_a_permutation_with_constrained_variables_last(rng):
     variables = list(range(12))
     factors = [tuple(rng.choice(12, size=2, replace=False).tolist()) for _ in range(20)] + [(i,) for i in range(12)]
     last = [3, 7, 0]
-    order = constrained_min_degree(variables, factors, last=last)
+    order = constrained_min_degree(variables, UNIT, factors, last=last)
     assert sorted(order) == variables
     assert set(order[-3:]) == set(last)
 
@@ -83,7 +85,7 @@ def test_min_degree_eliminates_a_path_without_fill():
     # a - b - c - d - e - f - g, given in a scrambled order: eliminating from the ends costs no fill.
     variables = list("dgbfaec")
     factors = [(x, y) for x, y in zip("abcdef", "bcdefg", strict=True)]
-    order = constrained_min_degree(variables, factors)
+    order = constrained_min_degree(variables, UNIT, factors)
     assert fill(order, factors) == len(factors)
 
 
@@ -94,15 +96,15 @@ def test_min_degree_no_worse_than_natural_on_a_loop_closure():
     factors += [(x, "l0") for x in xs[::2]] + [(x, "l1") for x in xs[1::3]]
     variables = xs + ["l0", "l1"]
     natural = fill(variables, factors)
-    md = fill(constrained_min_degree(variables, factors), factors)
+    md = fill(constrained_min_degree(variables, UNIT, factors), factors)
     assert md <= natural
-    constrained = constrained_min_degree(variables, factors, last=["x9"])
+    constrained = constrained_min_degree(variables, UNIT, factors, last=["x9"])
     assert constrained[-1] == "x9" and sorted(constrained) == sorted(variables)
 
 
 def test_unknown_variable_in_factor_is_named():
     with pytest.raises(UnknownVariableError, match="'z'"):
-        constrained_min_degree(list("ab"), [("a", "z")])
+        constrained_min_degree(list("ab"), UNIT, [("a", "z")])
     with pytest.raises(UnknownVariableError, match="'z'"):
         symbolic_elimination(list("ab"), [("a", "z")])
     with pytest.raises(SteamError, match="twice"):
@@ -185,7 +187,7 @@ def test_reeliminate_and_reattach_orphan():
     assert sorted(variables) == list("acdef")
     owned = [TOY[j] for c in removed.values() for j in c.factors]
     factors = owned + [("a", "e")] + [tree.cliques[o].separator for o in orphans]
-    order = constrained_min_degree(variables, factors, last=["a", "e"])
+    order = constrained_min_degree(variables, UNIT, factors, last=["a", "e"])
     assert set(order[-2:]) == {"a", "e"}
     cliques = build_cliques(order, factors)
     new_ids = tree.insert_eliminated(cliques, [c.parent for c in cliques])

@@ -1,7 +1,7 @@
 """Covariance recovery against dense inverses.  [YIB Eq. 11: cov δθ* = 𝓘⁻¹, K11 Sec. 3]
 
 Oracles: numpy.linalg.inv of AᵀA (built from the factors) and of RᵀR (the tree's own square-root
-information matrix, assembled densely). The one-pass :func:`tree_marginals` is also checked
+information matrix, assembled densely). The one-pass :func:`tree_marginal_covariances` is also checked
 against the per-variable root walk and counted: it visits each clique once. Joint covariances of
 variables far apart in a few-hundred-state tree are checked against the dense inverse, and their
 memory (tracemalloc) against what any n × n, or even n × k, dense array would take.
@@ -26,7 +26,7 @@ from steam_ref.covariance import (
     sparse_joint_covariance,
     tree_joint_covariance,
     tree_marginal_covariance,
-    tree_marginals,
+    tree_marginal_covariances,
 )
 from steam_ref.errors import UnknownVariableError
 from steam_ref.linear import LinearSystem, Ordering, constrained_min_degree, make_ordering, natural_ordering
@@ -45,20 +45,20 @@ def random_tree(rng, trial: int) -> tuple[BayesTree, list, dict]:
     order = (
         [keys[i] for i in rng.permutation(len(keys))]
         if trial % 2
-        else constrained_min_degree(keys, [f.keys for f in factors])
+        else constrained_min_degree(keys, dims, [f.keys for f in factors]).keys
     )
     return BayesTree.from_factors(factors, order), factors, dims
 
 
 @pytest.mark.parametrize("trial", range(6))
-def test_tree_marginals_equal_dense_inverse(rng, trial):
+def test_tree_marginal_covariances_equal_dense_inverse(rng, trial):
     tree, factors, dims = random_tree(rng, trial)
     R, _, tree_order = tree.to_dense()
     from_R = np.linalg.inv(R.T @ R)
     natural = natural_ordering(list(dims), dims)
     A, _ = dense_system(factors, natural)
     from_A = np.linalg.inv(A.T @ A)
-    marginals = tree_marginals(tree)
+    marginals = tree_marginal_covariances(tree)
     assert set(marginals) == set(dims)
     for k, got in marginals.items():
         for cov, ordering in [(from_R, tree_order), (from_A, natural)]:
@@ -83,22 +83,21 @@ def test_tree_joint_covariance_equals_dense_inverse(rng, trial):
         )
 
 
-def test_tree_marginals_of_some_keys_visit_only_their_root_paths(rng, monkeypatch):
+def test_tree_marginal_covariances_of_some_keys_visit_only_their_root_paths(rng, monkeypatch):
     """A chain of 300 states: all marginals cost one clique step per clique; a few keys, their paths."""
     problem = small_problem(rng, n_states=300, n_landmarks=2)
     keys = problem.graph.keys()
-    order = constrained_min_degree(keys, [f.keys for f in problem.graph])
-    dims = {k: problem.initial.dim(k) for k in keys}
+    order = constrained_min_degree(keys, problem.initial.dims(), [f.keys for f in problem.graph])
     gaussian = [gf for g in linearize(problem.graph.factors, problem.initial) for gf in g.gaussian_factors()]
-    tree = BayesTree.from_factors(gaussian, Ordering(tuple(order), tuple(dims[k] for k in order)))
+    tree = BayesTree.from_factors(gaussian, order)
     calls = []
     step = covariance._clique_covariance
     monkeypatch.setattr(covariance, "_clique_covariance", lambda clique, S: calls.append(clique) or step(clique, S))
-    everything = tree_marginals(tree)
+    everything = tree_marginal_covariances(tree)
     assert len(calls) == len(tree) and len(everything) == len(keys)
     calls.clear()
     some = [sr.X(150), sr.L(1), sr.X(3)]
-    got = tree_marginals(tree, some)
+    got = tree_marginal_covariances(tree, some)
     assert list(got) == some
     paths = {c for k in some for c in tree.path_to_root(tree.clique_containing(k))}
     assert len(calls) == len(paths) < len(tree)
@@ -109,7 +108,7 @@ def test_tree_marginals_of_some_keys_visit_only_their_root_paths(rng, monkeypatc
 def test_unknown_keys_are_named(rng):
     tree, _factors, dims = random_tree(rng, 0)
     with pytest.raises(UnknownVariableError, match="x7"):
-        tree_marginals(tree, [sr.X(7)])
+        tree_marginal_covariances(tree, [sr.X(7)])
     with pytest.raises(UnknownVariableError, match="x7"):
         tree_joint_covariance(tree, [next(iter(dims)), sr.X(7)])
     problem = small_problem(rng, n_states=4, n_landmarks=1)
@@ -149,25 +148,25 @@ def test_sparse_joint_covariance_equals_dense_inverse(problem, backend):
 
 
 @pytest.mark.parametrize("max_entries", [1, 100, 10**9])
-def test_sparse_marginals_in_chunks_equal_dense_inverse(problem, max_entries, monkeypatch):
+def test_sparse_marginal_covariances_in_chunks_equal_dense_inverse(problem, max_entries, monkeypatch):
     """Every key's block, whether the solves take one key at a time (tiny budget), a few, or all at once."""
-    from steam_ref.covariance import _blocks_of_inverse, sparse_marginals
+    from steam_ref.covariance import _blocks_of_inverse, sparse_marginal_covariances
 
     monkeypatch.setattr(covariance, "_blocks_of_inverse", lambda c, o, k: _blocks_of_inverse(c, o, k, max_entries))
     keys = problem.graph.keys()
     natural = natural_ordering(keys, {k: problem.initial.dim(k) for k in keys})
     A, _ = LinearSystem.build(problem.graph.factors, problem.initial, natural).to_dense()
     dense = np.linalg.inv(A.T @ A)
-    got = sparse_marginals(problem.graph.factors, problem.initial, keys)
+    got = sparse_marginal_covariances(problem.graph.factors, problem.initial, keys)
     assert list(got) == keys
     for k in keys:
         np.testing.assert_allclose(got[k], block_of(dense, natural, [k]), rtol=1e-9, atol=1e-12)
 
 
 @pytest.mark.parametrize("trial", range(4))
-def test_tree_joint_marginals_equal_dense_inverse(rng, trial):
+def test_tree_joint_covariances_equal_dense_inverse(rng, trial):
     """Groups a clique holds whole (a clique's frontal and a separator variable) and groups it does not."""
-    from steam_ref.covariance import tree_joint_marginals
+    from steam_ref.covariance import tree_joint_covariances
 
     tree, factors, dims = random_tree(rng, trial)
     natural = natural_ordering(list(dims), dims)
@@ -176,7 +175,7 @@ def test_tree_joint_marginals_equal_dense_inverse(rng, trial):
     keys = list(dims)
     held = [[c.frontals[0], c.separator[-1]] for c in tree.cliques.values() if c.separator]
     groups = held + [keys[:3], [keys[7], keys[1]], [keys[4]]]
-    got = tree_joint_marginals(tree, groups)
+    got = tree_joint_covariances(tree, groups)
     assert len(got) == len(groups) and len(held) > 0
     for group, block in zip(groups, got, strict=True):
         expected = block_of(cov, natural, group)
@@ -184,8 +183,8 @@ def test_tree_joint_marginals_equal_dense_inverse(rng, trial):
 
 
 @pytest.mark.parametrize("backend", BACKENDS)
-def test_sparse_joint_marginals_equal_dense_inverse(problem, backend):
-    from steam_ref.covariance import sparse_joint_marginals
+def test_sparse_joint_covariances_equal_dense_inverse(problem, backend):
+    from steam_ref.covariance import sparse_joint_covariances
 
     keys = problem.graph.keys()
     natural = natural_ordering(keys, {k: problem.initial.dim(k) for k in keys})
@@ -193,7 +192,7 @@ def test_sparse_joint_marginals_equal_dense_inverse(problem, backend):
     dense = np.linalg.inv(A.T @ A)
     groups = [[sr.X(3), sr.X(4)], [sr.X(11), sr.X(0), sr.L(3)], [sr.L(1)]]
     for group, got in zip(
-        groups, sparse_joint_marginals(problem.graph.factors, problem.initial, groups, backend), strict=True
+        groups, sparse_joint_covariances(problem.graph.factors, problem.initial, groups, backend), strict=True
     ):
         block = block_of(dense, natural, group)
         np.testing.assert_allclose(got, block, rtol=1e-9, atol=1e-12 * np.abs(block).max())
@@ -208,8 +207,7 @@ def trajectory_tree(rng, n_states: int, ordering: str) -> tuple[BayesTree, objec
     if ordering == "amd":
         order = make_ordering("amd", keys, dims, [f.keys for f in problem.graph])
     else:
-        cmd = constrained_min_degree(keys, [f.keys for f in problem.graph])
-        order = Ordering(tuple(cmd), tuple(dims[k] for k in cmd))
+        order = constrained_min_degree(keys, dims, [f.keys for f in problem.graph])
     gaussian = [gf for g in linearize(problem.graph.factors, problem.initial) for gf in g.gaussian_factors()]
     return BayesTree.from_factors(gaussian, order), problem
 

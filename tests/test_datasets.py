@@ -1,6 +1,6 @@
 """Tests of steam_ref.datasets: the CMU loaders, the checks of RangeDataset, the synthetic generator.
 
-Sizes asserted for the reference files are those of /work/shared/data/README.md and the paper
+Sizes asserted for the reference files are those of the data folder's README.md and the paper
 (Table I); every other expected value is computed here by a slow, obvious loop. The reference files
 come from the ``shared_data`` fixture (conftest.py: $STEAM_REF_DATA_DIR; skip or fail if absent).
 """

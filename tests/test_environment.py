@@ -61,8 +61,8 @@ def test_core_runs_with_scikit_sparse_hidden():
             v.insert(sr.L(j), np.array([10.0 * j, 5.0]))
         r = sr.gauss_newton(g, v, ordering="amd", max_iterations=1)
         assert r.backend == "superlu"
-        from steam_ref.batch import make_ordering
-        system = sr.LinearSystem.build(g.factors, v, make_ordering(g, v, "xl"))
+        from steam_ref.linear.ordering import make_ordering
+        system = sr.LinearSystem.build(g.factors, v, make_ordering("xl", g.keys(), v.dims(), [f.keys for f in g]))
         A, b = system.to_dense()
         step = system.split(np.linalg.solve(A.T @ A, A.T @ b))
         for k in step:

@@ -4,6 +4,9 @@ marginalisation of an explicit state at τ."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
+from typing import ClassVar
+
 import numpy as np
 import pytest
 from finite_differences import numerical_jacobians
@@ -206,3 +209,75 @@ def test_bad_factor_input_raises():
 def test_landmark_on_the_robot_is_an_error():
     with pytest.raises(sr.SteamError, match="coincides"):
         sr.BearingRangeFactor.create(X1, LM, 0.0, 1.0, [0.1, 0.1]).jacobians(np.ones(6), np.ones(2))
+
+
+# --- what a factor class declares for Factor.stack -------------------------------------------------
+
+
+def _prior(mean: float) -> sr.PriorFactor:
+    return sr.PriorFactor.create(sr.X(0), np.full(6, mean), 0.5)
+
+
+def test_a_field_declared_nowhere_is_caught_at_the_first_construction():
+    """Before: stack copied an undeclared field from the first factor for every factor, silently."""
+
+    @dataclass(frozen=True, eq=False)
+    class Scaled(sr.PriorFactor):
+        scale: float = field(default=1.0, kw_only=True)  # per factor, but listed in no tuple
+
+    p = _prior(0.0)
+    with pytest.raises(sr.SteamError, match=r"Scaled does not say how to stack its field 'scale'"):
+        Scaled(p.keys, p.sqrt_information, mean=p.mean, scale=2.0)
+    with pytest.raises(sr.SteamError, match=r"'scale'"):  # and stack refuses it too, however it was built
+        Scaled.stack([p, p])
+
+
+def test_a_shared_field_that_differs_is_named_with_the_factor():
+    @dataclass(frozen=True, eq=False)
+    class Scaled(sr.PriorFactor):
+        scale: float = field(default=1.0, kw_only=True)
+        _shared: ClassVar[tuple[str, ...]] = ("scale",)
+
+    p = _prior(0.0)
+    same = [Scaled(p.keys, p.sqrt_information, mean=p.mean + i, scale=2.0) for i in range(3)]
+    batch = Scaled.stack(same)
+    assert batch.scale == 2.0 and batch.mean.shape == (3, 6)
+    np.testing.assert_array_equal(batch.mean[:, 0], [0.0, 1.0, 2.0])  # batched: one row per factor
+    mixed = same + [Scaled(p.keys, p.sqrt_information, mean=p.mean, scale=3.0)]
+    with pytest.raises(sr.SteamError, match=r"factor 3 has scale=3.0, factor 0 scale=2.0"):
+        Scaled.stack(mixed)
+
+
+def test_a_declared_name_that_is_no_field_and_a_field_declared_twice_are_caught():
+    @dataclass(frozen=True, eq=False)
+    class Typo(sr.PriorFactor):
+        _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "maen")
+
+    @dataclass(frozen=True, eq=False)
+    class Twice(sr.PriorFactor):
+        _shared: ClassVar[tuple[str, ...]] = ("mean",)
+
+    p = _prior(0.0)
+    with pytest.raises(sr.SteamError, match=r"'mean'"):  # mean is a field no tuple lists now
+        Typo(p.keys, p.sqrt_information, mean=p.mean)
+    with pytest.raises(sr.SteamError, match=r"Twice declares field 'mean' twice"):
+        Twice(p.keys, p.sqrt_information, mean=p.mean)
+
+
+def test_every_factor_class_of_steam_ref_declares_every_field():
+    def subclasses(cls):
+        for sub in cls.__subclasses__():
+            yield sub
+            yield from subclasses(sub)
+
+    shipped = [c for c in subclasses(sr.Factor) if c.__module__.startswith("steam_ref.")]
+    assert len(shipped) >= 9
+    for cls in shipped:
+        cls._check_declared()  # raises on a field declared nowhere
+
+
+def test_stacking_factors_with_different_losses_is_refused():
+    a = sr.RangeFactor.create(sr.X(0), sr.L(0), 5.0, 0.1)
+    b = sr.RangeFactor.create(sr.X(1), sr.L(0), 5.0, 0.1, loss=sr.Huber(1.0))
+    with pytest.raises(sr.SteamError, match=r"factor 1 has loss=Huber"):
+        sr.RangeFactor.stack([a, b])

@@ -287,3 +287,14 @@ def test_bad_qc_raises_every_time_not_once():
             process_noise(0.5, bad)
     with pytest.raises(ShapeError, match="finite"):
         process_noise(0.5, np.array([[1.0, np.nan], [np.nan, 1.0]]))
+
+
+def test_qc_inverse_is_the_inverse_by_a_cholesky_solve_symmetric_and_read_only(rng):
+    from steam_ref.gp.prior import qc_inverse
+
+    a = rng.normal(size=(3, 3))
+    qc = a @ a.T + 0.3 * np.eye(3)
+    inverse = qc_inverse(qc)
+    np.testing.assert_allclose(inverse @ qc, np.eye(3), rtol=0, atol=1e-12)  # oracle: the definition
+    np.testing.assert_allclose(inverse, np.linalg.inv(qc), rtol=1e-12, atol=1e-14)
+    assert np.array_equal(inverse, inverse.T) and not inverse.flags.writeable

@@ -309,7 +309,7 @@ def test_marginal_covariance_matches_dense_inverse(rng):
         o, d = ordering.offset_of[k], ordering.dims[ordering.position[k]]
         block = cov[o : o + d, o : o + d]
         np.testing.assert_allclose(solver.marginal_covariance(k), block, rtol=1e-9, atol=1e-12 * np.abs(block).max())
-    marginals = solver.marginals()  # one pass down the tree
+    marginals = solver.marginal_covariances()  # one pass down the tree
     assert set(marginals) == set(ordering.keys)
     for k in ordering.keys:
         o, d = ordering.offset_of[k], ordering.dims[ordering.position[k]]
@@ -317,7 +317,7 @@ def test_marginal_covariance_matches_dense_inverse(rng):
         np.testing.assert_allclose(marginals[k], block, rtol=1e-9, atol=1e-12 * np.abs(block).max())
     group = [sr.X(0), sr.X(9)]
     idx = np.concatenate([np.arange(ordering.offset_of[k], ordering.offset_of[k] + 6) for k in group])
-    np.testing.assert_allclose(solver.joint_marginal_covariance(group), cov[np.ix_(idx, idx)], rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(solver.joint_covariance(group), cov[np.ix_(idx, idx)], rtol=1e-9, atol=1e-12)
 
 
 # --- bad input ------------------------------------------------------------------------------

@@ -7,9 +7,10 @@ import pytest
 from problems import small_problem
 
 import steam_ref as sr
-from steam_ref.batch import make_ordering
+import steam_ref.batch
 from steam_ref.linear import LinearSystem, SparseCholesky, solve
 from steam_ref.linear import ordering as orderings
+from steam_ref.linear.ordering import make_ordering
 
 BACKENDS = ["superlu", pytest.param("cholmod", marks=pytest.mark.needs_cholmod)]
 
@@ -22,7 +23,9 @@ def problem(rng):
 @pytest.mark.parametrize("backend", BACKENDS)
 @pytest.mark.parametrize("ordering", ["natural", "xl", "amd"])
 def test_sparse_step_equals_dense(problem, ordering, backend):
-    order = make_ordering(problem.graph, problem.initial, ordering, backend)
+    order = make_ordering(
+        ordering, problem.graph.keys(), problem.initial.dims(), [f.keys for f in problem.graph], backend
+    )
     system = LinearSystem.build(problem.graph.factors, problem.initial, order)
     A, b = system.to_dense()
     reference = np.linalg.solve(A.T @ A, A.T @ b)
@@ -34,7 +37,7 @@ def test_sparse_step_equals_dense(problem, ordering, backend):
 def test_step_is_ordering_independent(problem):
     steps = {}
     for name in ["xl", "amd"]:
-        order = make_ordering(problem.graph, problem.initial, name)
+        order = make_ordering(name, problem.graph.keys(), problem.initial.dims(), [f.keys for f in problem.graph])
         steps[name] = LinearSystem.build(problem.graph.factors, problem.initial, order).split(
             solve(LinearSystem.build(problem.graph.factors, problem.initial, order))[0]
         )
@@ -45,7 +48,7 @@ def test_step_is_ordering_independent(problem):
 def test_dense_A_rows_are_whitened_factors(rng):
     """A and b built by hand from each factor's own Jacobians and whitening, for one small graph."""
     p = small_problem(rng, n_states=3, n_landmarks=1, robust=False)
-    order = make_ordering(p.graph, p.initial, "xl")
+    order = make_ordering("xl", p.graph.keys(), p.initial.dims(), [f.keys for f in p.graph])
     A, b = LinearSystem.build(p.graph.factors, p.initial, order).to_dense()
     rows, rhs = [], []
     for f in p.graph.factors:
@@ -63,7 +66,7 @@ def test_dense_A_rows_are_whitened_factors(rng):
 def test_xl_information_has_eq15_structure(rng):
     """Eq. 15: 𝓘ₓₓ block-tridiagonal, 𝓘ₗₗ block-diagonal, under XL ordering."""
     p = small_problem(rng, n_states=10, n_landmarks=3)
-    order = make_ordering(p.graph, p.initial, "xl")
+    order = make_ordering("xl", p.graph.keys(), p.initial.dims(), [f.keys for f in p.graph])
     info = LinearSystem.build(p.graph.factors, p.initial, order).information()[0].toarray()
     n_x = 10 * 6
     for i in range(10):
@@ -91,7 +94,7 @@ def test_amd_is_a_permutation_with_less_fill_than_xl(rng, backend):
     p = _many_landmark_problem(rng)
     nnz = {}
     for name in ["xl", "amd"]:
-        order = make_ordering(p.graph, p.initial, name, backend)
+        order = make_ordering(name, p.graph.keys(), p.initial.dims(), [f.keys for f in p.graph], backend)
         assert sorted(order.keys) == sorted(p.graph.keys())
         info = LinearSystem.build(p.graph.factors, p.initial, order).information()[0]
         nnz[name] = SparseCholesky.factor(info, order, backend).nnz
@@ -105,7 +108,7 @@ def test_superlu_minimum_degree_fill_close_to_cholmod_amd(rng):
     p = _many_landmark_problem(rng, n_states=150, n_landmarks=60)
     nnz = {}
     for backend in ["cholmod", "superlu"]:
-        order = make_ordering(p.graph, p.initial, "amd", backend)
+        order = make_ordering("amd", p.graph.keys(), p.initial.dims(), [f.keys for f in p.graph], backend)
         info = LinearSystem.build(p.graph.factors, p.initial, order).information()[0]
         nnz[backend] = SparseCholesky.factor(info, order, "cholmod").nnz
     assert nnz["superlu"] <= 1.15 * nnz["cholmod"]
@@ -149,8 +152,28 @@ def test_make_ordering_by_name_is_a_permutation_with_the_right_sizes(problem, na
     if name == "xl":
         kinds = [k.kind for k in order.keys]
         assert kinds == sorted(kinds, key=lambda kind: kind != "x")  # every state before every landmark
-    via_graph = make_ordering(problem.graph, problem.initial, name)  # batch's front end: the same function
-    assert (via_graph.keys, via_graph.dims) == (order.keys, order.dims)
+    # the batch solvers order through the same function: their result records it
+    used = sr.gauss_newton(problem.graph, problem.initial, ordering=name, max_iterations=0, check=False).ordering
+    assert used is not None and (used.keys, used.dims) == (order.keys, order.dims)
+    assert steam_ref.batch.make_ordering is orderings.make_ordering  # one make_ordering: linear/ordering.py
+    assert "make_ordering" not in steam_ref.batch.__all__
+
+
+def test_every_ordering_function_returns_an_ordering(problem):
+    keys = problem.graph.keys()
+    dims = problem.initial.dims()
+    factor_keys = [f.keys for f in problem.graph]
+    made = [
+        orderings.natural_ordering(keys, dims),
+        orderings.xl_ordering(keys, dims),
+        orderings.amd_ordering(keys, dims, factor_keys),
+        orderings.constrained_min_degree(keys, dims, factor_keys, last=keys[-2:]),
+    ]
+    for order in made:
+        assert isinstance(order, orderings.Ordering)
+        assert sorted(order.keys) == sorted(keys) and order.dims == tuple(dims[k] for k in order.keys)
+        assert list(order) == list(order.keys) and order[0] == order.keys[0]  # it reads as its keys
+    assert set(made[-1].keys[-2:]) == set(keys[-2:])
 
 
 def test_make_ordering_passes_an_ordering_through_and_names_unknown_ones(problem):

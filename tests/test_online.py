@@ -3,9 +3,13 @@ behave, and the time query is Eq. 18 and the dense GP posterior."""
 
 from __future__ import annotations
 
+import itertools
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 
+import steam_ref.paper.online as online
 from steam_ref.batch import gauss_newton
 from steam_ref.bayes_tree import ISAM2Params
 from steam_ref.covariance import sparse_joint_covariance as joint_covariance
@@ -195,10 +199,10 @@ def test_time_query_is_eq18_with_the_interpolated_covariance(data):
 
 
 def _dense_joint(graph: FactorGraph, values: Values, keys) -> np.ndarray:
-    from steam_ref.batch import make_ordering
+    from steam_ref.linear.ordering import make_ordering
     from steam_ref.linear.system import LinearSystem
 
-    order = make_ordering(graph, values, "xl")
+    order = make_ordering("xl", graph.keys(), values.dims(), [f.keys for f in graph])
     A, _ = LinearSystem.build(graph.factors, values, order).to_dense()
     cov = np.linalg.inv(A.T @ A)
     idx = np.concatenate([order.offset_of[k] + np.arange(6) for k in keys])
@@ -253,11 +257,19 @@ def test_run_result_figures(data):
     assert result.completed
 
 
-def test_time_budget_stops_early_and_says_so():
+def test_time_budget_stops_early_and_says_so(monkeypatch):
+    """The run's clock is replaced by one that advances 0.1 s per reading of it, so each pose "takes" a
+    known time whatever the machine's load: the run must stop after the first pose that takes the total
+    past the budget, and not before."""
+    ticks = itertools.count()
+    monkeypatch.setattr(online, "time", SimpleNamespace(perf_counter=lambda: 0.1 * next(ticks)))
     data = generate_synthetic(n_steps=300, n_landmarks=30, seed=1)
-    result = run_online(data, SETUP, StreamOptions(method="pb", time_budget_s=0.3))
+    result = run_online(data, SETUP, StreamOptions(method="pb", time_budget_s=0.95))
     assert not result.completed
-    assert result.n_steps_processed < data.n_poses
+    spent = np.cumsum(result.step_seconds)
+    assert len(spent) == result.n_steps_processed < data.n_poses
+    assert spent[-1] > 0.95 and (len(spent) == 1 or spent[-2] <= 0.95)  # stopped at the first pose past it
+    assert np.all(result.step_seconds >= 0.1 - 1e-12)  # each pose read the fake clock at least twice
     assert len(result.times) <= result.n_steps_processed
 
 
@@ -391,3 +403,26 @@ def test_bad_stream_inputs_raise_steam_errors(data):
         Layout().state_poses(5, [7])
     with pytest.raises(SteamError, match="'bogus'"):
         make_solver("bogus")
+
+
+@pytest.mark.parametrize("method", ["pb", "pbvr", "btgp"])
+def test_every_solver_answers_the_same_four_covariance_queries(data, method):
+    """One vocabulary on every solver (GTSAM's marginalCovariance / jointMarginalCovariance): the four
+    queries agree with a sparse solve of the solver's own factors at its linearization point."""
+    solver = _stream(data, method=method, skip=4, max_poses=20).solver
+    if method == "btgp":
+        factors, point = list(solver.inner.factors), solver.inner.linearization_point
+    else:
+        factors, point = solver.graph.factors, solver.values
+    a, b = X(4), X(8)
+    reference = joint_covariance(factors, point, [a, b])  # oracle: (Σdₖ, Σdₖ) block of 𝓘⁻¹
+    tol = dict(rtol=1e-8, atol=1e-12 * np.abs(reference).max())
+    np.testing.assert_allclose(solver.joint_covariance([a, b]), reference, **tol)
+    joint_ab, joint_b = solver.joint_covariances([[a, b], [b]])
+    np.testing.assert_allclose(joint_ab, reference, **tol)
+    np.testing.assert_allclose(joint_b, reference[6:, 6:], **tol)
+    np.testing.assert_allclose(solver.marginal_covariance(b), reference[6:, 6:], **tol)
+    np.testing.assert_allclose(solver.marginal_covariances([a, b])[a], reference[:6, :6], **tol)
+    for owner in [solver] + ([solver.inner] if method == "btgp" else []):
+        for old in ("marginals", "joint_marginals", "joint_marginal_covariance"):
+            assert not hasattr(owner, old), (owner, old)  # renamed, no alias left behind

@@ -1,20 +1,18 @@
 """Incremental updates of the Bayes tree: iSAM2, the paper's Algorithm 1.  [YIB Alg. 1, K12 Alg. 6]
 
-One :meth:`IncrementalSolver.update` is one step of [K12 Alg. 6], and ``_update`` lists its steps
-in that numbering, each with its step of [YIB Alg. 1]: (1-2) store the new factors F′ and
-variables; (3) fluid relinearization [K12 Alg. 5] of θ_rl, the variables whose δ reached the
-threshold β, which [YIB] numbers 7, the end of the previous round: iSAM2 collects the candidates
-while computing δ and moves θ̄ at the start of the next update (every ``relinearize_skip``-th);
-(4) redo the top of the tree for θ_aff = θ_nf ∪ θ_rl [K12 Alg. 4, YIB steps 2-5]: remove the
-cliques holding θ_aff and their ascendants, linearize the factors of the removed part that are
-new or touch θ_rl (the others keep their cached linearization), add the orphans' cached marginal
-factors f(S), order with the variables of F′ last, eliminate, attach back the orphans; (5) partial
-back-substitution, descending only where δ changes by at least the wildfire threshold α
-[K12 Alg. 7, YIB step 6]; (6) the estimate θ̄ ⊕ δ, formed lazily when asked for.
+One :meth:`IncrementalSolver.update` is one step of [K12 Alg. 6], and ``_update`` lists its steps in that numbering,
+each with its step of [YIB Alg. 1]: (1-2) store the new factors F′ and variables; (3) fluid relinearization
+[K12 Alg. 5] of θ_rl, the variables whose δ reached the threshold β, which [YIB] numbers 7, the end of the previous round: iSAM2
+collects the candidates while computing δ and moves θ̄ at the start of the next update (every
+``relinearize_skip``-th); (4) redo the top of the tree for θ_aff = θ_nf ∪ θ_rl [K12 Alg. 4, YIB steps 2-5]: remove the
+cliques holding θ_aff and their ascendants, linearize the factors of the removed part that are new or touch θ_rl (the
+others keep their cached linearization), add the orphans' cached marginal factors f(S), order with the variables of F′
+last, eliminate, attach back the orphans; (5) partial back-substitution, descending only where δ changes by at least
+the wildfire threshold α [K12 Alg. 7, YIB step 6]; (6) the estimate θ̄ ⊕ δ, formed lazily when asked for.
 
-Every step costs time in proportion to the removed part and the cliques back-substitution visits:
-nothing walks the whole tree. Timing and undo (:mod:`.journal`: the steps tell a journal what they
-change, so a failed update leaves the solver as it was) stay out of the steps.
+Every step costs time in proportion to the removed part and the cliques back-substitution visits: nothing walks the
+whole tree. Timing and undo (:mod:`.journal`: the steps tell a journal what they change, so a failed update leaves the
+solver as it was) stay out of the steps.
 """
 
 from __future__ import annotations
@@ -26,7 +24,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..arguments import real_array
-from ..covariance import tree_joint_covariance, tree_joint_marginals, tree_marginal_covariance, tree_marginals
+from ..covariance import (
+    tree_joint_covariance,
+    tree_joint_covariances,
+    tree_marginal_covariance,
+    tree_marginal_covariances,
+)
 from ..errors import ShapeError, SteamError, UnderdeterminedError, UnknownVariableError
 from ..factors import Factor, check_factors
 from ..linear.ordering import constrained_min_degree
@@ -40,9 +43,9 @@ from .tree import BayesTree, Clique, eliminate
 __all__ = ["IncrementalSolver", "UpdateReport"]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class UpdateReport:
-    """What one update did, so a notebook can show the affected top of the tree."""
+    """What one update did, so a notebook can show the affected top of the tree (built by keyword only)."""
 
     step: int  # number of this update, from 1
     removed_cliques: tuple[int, ...]  # ids of the cliques taken off the top (ids of the tree before)
@@ -54,9 +57,7 @@ class UpdateReport:
     linearized_factors: int  # factors linearized in this update (the new ones included)
     backsubstituted_cliques: int  # cliques whose conditional was solved
     time_s: float  # wall time of the whole update
-    timings: dict[str, float] = field(
-        default_factory=dict
-    )  # seconds per phase: check, add, relinearize, remove, linearize, order, eliminate, backsubstitute
+    timings: dict[str, float] = field(default_factory=dict)  # seconds per phase (check, add, ..., backsubstitute)
     tree_nnz: int = 0  # nonzeros of R after the update, counted as GTSAM's ISAM2::treeNnz (bayes_tree/dot.py)
 
 
@@ -96,9 +97,7 @@ class IncrementalSolver:
         for k in self._stale:
             self._form_estimate(k)
         self._stale.clear()
-        out = Values()
-        out._data = dict(self._estimate)  # shallow: the solver never writes into these arrays
-        return out
+        return Values.adopt(self._estimate)  # no copy: the solver never writes into these arrays
 
     def estimate_of(self, key: Key) -> NDArray:
         """The current estimate θ̄ + δ of one variable (read-only)."""
@@ -129,17 +128,17 @@ class IncrementalSolver:
         """Cov(δθ_key) (d, d) of the current linear system, from the Bayes tree.  [K11 Sec. 3]"""
         return tree_marginal_covariance(self.tree, key)
 
-    def joint_marginal_covariance(self, keys: Iterable[Key]) -> NDArray:
+    def marginal_covariances(self, keys: Iterable[Key] | None = None) -> dict[Key, NDArray]:
+        """Marginal covariance (dₖ, dₖ) of each of ``keys`` (every variable when None), in one pass down the tree."""
+        return tree_marginal_covariances(self.tree, keys)
+
+    def joint_covariance(self, keys: Iterable[Key]) -> NDArray:
         """Joint covariance (Σdₖ, Σdₖ) of several variables, stacked in the order given, from the tree."""
         return tree_joint_covariance(self.tree, keys)
 
-    def joint_marginals(self, groups: Iterable[Iterable[Key]]) -> list[NDArray]:
+    def joint_covariances(self, groups: Iterable[Iterable[Key]]) -> list[NDArray]:
         """Joint covariance of each group of variables (stacked in the order given), from the tree."""
-        return tree_joint_marginals(self.tree, groups)
-
-    def marginals(self, keys: Iterable[Key] | None = None) -> dict[Key, NDArray]:
-        """Marginal covariance (dₖ, dₖ) of each of ``keys`` (every variable when None), in one pass down the tree."""
-        return tree_marginals(self.tree, keys)
+        return tree_joint_covariances(self.tree, groups)
 
     def __len__(self) -> int:
         return len(self._dims)
@@ -205,7 +204,7 @@ class IncrementalSolver:
         with timer("order"):
             linear = [self._cached(j) for j in fids] + [self.tree.cliques[o].marginal for o in orphans]
             variables = [k for c in removed.values() for k in c.frontals] + list(theta_new)
-            order = constrained_min_degree(variables, [f.keys for f in linear], last=theta_nf)
+            order = constrained_min_degree(variables, self._dims, [f.keys for f in linear], last=theta_nf).keys
         # 4e. Eliminate into new cliques and attach back the orphans.   [YIB step 5, Eq. 24-25]
         with timer("eliminate"):
             cliques, parents, owner = eliminate(order, linear, self._dims, fids + [None] * len(orphans))
@@ -215,18 +214,18 @@ class IncrementalSolver:
             updated, visited = self._backsubstitute(set(new_cids))
         self._tree_nnz += tree_nnz(cliques) - tree_nnz(removed.values())
         return UpdateReport(
-            self._steps,
-            tuple(removed),
-            tuple(new_cids),
-            tuple(orphans),
-            tuple(theta_rl),
-            tuple(order),
-            tuple(updated),
-            n_linearized,
-            visited,
-            timer.total(),
-            timer.seconds,
-            self._tree_nnz,
+            step=self._steps,
+            removed_cliques=tuple(removed),
+            new_cliques=tuple(new_cids),
+            orphans=tuple(orphans),
+            relinearized=tuple(theta_rl),
+            reeliminated=order,
+            updated=tuple(updated),
+            linearized_factors=n_linearized,
+            backsubstituted_cliques=visited,
+            time_s=timer.total(),
+            timings=timer.seconds,
+            tree_nnz=self._tree_nnz,
         )
 
     def _rollback(self, journal: Journal) -> None:
@@ -241,7 +240,9 @@ class IncrementalSolver:
             self._stale[k] = None
             self._over[k] = None
         for k in journal.new_keys:
-            for store in (self._theta_bar._data, self._dims, self._threshold, self._delta, self._estimate, self._stale):
+            if k in self._theta_bar:
+                self._theta_bar.remove(k)
+            for store in (self._dims, self._threshold, self._delta, self._estimate, self._stale):
                 store.pop(k, None)
         del self.factors[journal.n_factors :], self._linear[journal.n_factors :]
         self._steps -= 1

@@ -18,6 +18,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.linalg import lapack
 
 from ..arguments import finite, real_array
 from ..errors import NumericalError, ShapeError, SteamError
@@ -60,9 +61,15 @@ def sqrt_information(noise: NDArray | float, m: int, name: str = "noise") -> NDA
                 f"but ({j}, {i}) = {float(noise[j, i])!r}"
             )
         try:
-            # Σ⁻¹ = Wᵀ W with W upper triangular: W = chol(Σ⁻¹)ᵀ.
-            with np.errstate(over="ignore", invalid="ignore"):  # checked by _finite_weight
-                return _finite_weight(name, np.linalg.cholesky(np.linalg.inv(noise)).T, noise)
+            # Σ = U Uᵀ with U upper triangular (the Cholesky factor of Σ with rows and columns reversed,
+            # reversed back), so Σ⁻¹ = U⁻ᵀ U⁻¹ and W = U⁻¹: a triangular inverse, no inverse of Σ itself.
+            U = np.linalg.cholesky(noise[::-1, ::-1])[::-1, ::-1]
+            with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # checked by _finite_weight
+                # W = U⁻¹ by LAPACK's triangular inverse: not solve_triangular(U, I), whose ?trtrs OpenBLAS
+                # threads, ~40 ms a call on a busy machine (the same choice as covariance._extend)
+                W = lapack.dtrtri(U, lower=0)[0]
+                _finite_weight(name, np.einsum("ij,ij->j", W, W), noise)  # diag Σ⁻¹ = WᵀW must be finite too
+            return _finite_weight(name, W, noise)
         except np.linalg.LinAlgError:
             raise SteamError(f"{name} (a covariance) is not positive definite: {noise.tolist()}") from None
     raise ShapeError(
@@ -98,11 +105,25 @@ def _jacobian(x: NDArray, m: int) -> NDArray:
     return np.zeros(x.shape[:-1] + (m, x.shape[-1]))
 
 
+def _same(a: object, b: object) -> bool:
+    """Whether two values of a shared field are equal (arrays element by element)."""
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        return bool(np.array_equal(a, b))  # type: ignore[arg-type]
+    return a is b or bool(a == b)
+
+
+_DECLARED: set[type] = set()  # the factor classes whose fields :meth:`Factor._check_declared` has checked
+
+
 @dataclass(frozen=True, eq=False)
 class Factor:
     """Base class. Subclasses set ``keys``, ``key_dims``, ``sqrt_information`` and the model.
 
-    ``_batched`` lists the per-factor array fields that :meth:`stack` concatenates.
+    Every dataclass field a subclass adds is declared in exactly one of three class tuples, so that
+    :meth:`stack` knows what to do with it: ``_batched``, the per-factor arrays it stacks along a new
+    leading axis; ``_batched_factors``, the wrapped factors it stacks by their own class; ``_shared``,
+    the fields equal across a batch (a state size, say), checked equal when stacked. ``keys`` and
+    ``loss`` are the base's. A field declared nowhere raises at the first construction of the class.
     """
 
     keys: tuple[Key, ...]
@@ -111,11 +132,38 @@ class Factor:
 
     _batched: ClassVar[tuple[str, ...]] = ("sqrt_information",)  # per-factor arrays
     _batched_factors: ClassVar[tuple[str, ...]] = ()  # wrapped factors, stacked by their own class
+    _shared: ClassVar[tuple[str, ...]] = ()  # fields equal across a batch: checked equal, kept once
     key_dims: ClassVar[tuple[int, ...]] = ()
+
+    @classmethod
+    def _check_declared(cls) -> None:
+        """SteamError unless every dataclass field of ``cls`` is declared once (class docstring)."""
+        if cls in _DECLARED:
+            return
+        groups = {"_batched": cls._batched, "_batched_factors": cls._batched_factors, "_shared": cls._shared}
+        declared = [n for names in groups.values() for n in names] + ["keys", "loss"]
+        twice = sorted({n for n in declared if declared.count(n) > 1})
+        if twice:
+            raise SteamError(
+                f"{cls.__name__} declares field {twice[0]!r} twice among _batched, _batched_factors, _shared"
+            )
+        names = [f.name for f in fields(cls)]
+        for name in names:
+            if name not in declared:
+                raise SteamError(
+                    f"{cls.__name__} does not say how to stack its field {name!r}: list it in _batched (a per-factor "
+                    "array), _batched_factors (a wrapped factor) or _shared (equal across a batch)"
+                )
+        for group, listed in groups.items():
+            unknown = [n for n in listed if n not in names]
+            if unknown:
+                raise SteamError(f"{cls.__name__}.{group} names {unknown[0]!r}, which is not a field of the class")
+        _DECLARED.add(cls)
 
     def __post_init__(self) -> None:
         """Every factor names each variable once: two Jacobian blocks of one variable would be added by
         a batch solve but overwrite each other in a clique, so the two would solve different problems."""
+        type(self)._check_declared()
         if self.loss is not None and not isinstance(self.loss, RobustLoss):
             raise SteamError(
                 f"{type(self).__name__}: loss must be a RobustLoss (Huber(k), Tukey(c)) or None, got loss={self.loss!r}"
@@ -148,18 +196,29 @@ class Factor:
 
     @classmethod
     def stack(cls, factors: list[Factor]) -> Factor:
-        """One instance whose array fields have a leading axis over ``factors`` (same signature)."""
+        """One instance whose array fields have a leading axis over ``factors`` (same signature).
+
+        Every field is declared (class docstring); a ``_shared`` field, and the loss, must be equal
+        across ``factors``: SteamError naming the field and the first factor that differs otherwise.
+        """
+        cls._check_declared()
         batch = object.__new__(cls)
         for name in cls._batched:
             object.__setattr__(batch, name, np.stack([getattr(f, name) for f in factors]))
         for name in cls._batched_factors:
             inner = [getattr(f, name) for f in factors]
             object.__setattr__(batch, name, type(inner[0]).stack(inner))
-        for f in fields(cls):  # the rest (a state size, say) is equal across a signature: take the first's
-            if f.name not in cls._batched and f.name not in cls._batched_factors and f.name not in ("keys", "loss"):
-                object.__setattr__(batch, f.name, getattr(factors[0], f.name))
+        for name in ("loss", *cls._shared):
+            first, given = getattr(factors[0], name), [getattr(f, name) for f in factors]
+            same_object = all(v is first for v in given)  # the usual case (None, a small int), at no cost
+            differs = None if same_object else next((i for i, v in enumerate(given) if not _same(v, first)), None)
+            if differs is not None:
+                raise SteamError(
+                    f"{cls.__name__}.stack: factor {differs} has {name}={getattr(factors[differs], name)!r}, factor 0 "
+                    f"{name}={first!r}; a shared field must be equal across a batch (a varying one is _batched)"
+                )
+            object.__setattr__(batch, name, first)
         object.__setattr__(batch, "keys", None)
-        object.__setattr__(batch, "loss", factors[0].loss)
         return batch
 
     def whitened_error(self, *xs: NDArray) -> NDArray:

@@ -83,6 +83,7 @@ class StateMeasurement(Factor):
     state_dim: int = field(default=STATE_DIM, kw_only=True)  # 6 (WNOA) or 9 (WNOJ, Singer)
 
     other_dims: ClassVar[tuple[int, ...]] = ()  # sizes of the keys after the state
+    _shared: ClassVar[tuple[str, ...]] = ("state_dim",)  # one state size per batch (it is in the signature)
 
     def __post_init__(self) -> None:
         super().__post_init__()

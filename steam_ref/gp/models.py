@@ -32,7 +32,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..arguments import number, time_step
 from ..errors import SteamError
-from .prior import check_d, check_qc, finite_result
+from .prior import check_d, check_qc, finite_result, qc_inverse
 from .prior import process_noise as wnoa_process_noise
 from .prior import transition as wnoa_transition
 
@@ -111,12 +111,12 @@ def wnoj_process_noise(dt: float, qc: ArrayLike) -> NDArray:
 
 def wnoj_process_noise_inverse(dt: float, qc: ArrayLike) -> NDArray:
     """Q(Δt)⁻¹ of WNOJ: [[720/Δt⁵, -360/Δt⁴, 60/Δt³], [-360/Δt⁴, 192/Δt³, -36/Δt²], [60/Δt³, -36/Δt², 9/Δt]] ⊗ Qc⁻¹."""
-    dt, qc = time_step(dt), check_qc(qc)
+    dt, qi = time_step(dt), qc_inverse(qc)
     pattern = np.array([[720.0, -360.0, 60.0], [-360.0, 192.0, -36.0], [60.0, -36.0, 9.0]])
     t = np.float64(dt)
     with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
         Di = np.array([t**-2, t**-1, 1.0])
-        q_inv = np.kron(pattern * np.outer(Di, Di) / t, np.linalg.inv(qc))
+        q_inv = np.kron(pattern * np.outer(Di, Di) / t, qi)
     return finite_result("Q(dt)⁻¹ of WNOJ", q_inv, dt=dt)
 
 

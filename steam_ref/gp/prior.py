@@ -15,6 +15,7 @@ from __future__ import annotations
 from functools import lru_cache
 
 import numpy as np
+import scipy.linalg
 from numpy.typing import ArrayLike, NDArray
 
 from ..arguments import integer, real_array, time_step
@@ -22,6 +23,7 @@ from ..errors import NumericalError, ShapeError, SteamError
 
 __all__ = [
     "check_qc",
+    "qc_inverse",
     "check_d",
     "transition",
     "process_noise",
@@ -37,6 +39,20 @@ __all__ = [
 def check_qc(qc: ArrayLike) -> NDArray:
     """Return Qc as a read-only float (d, d) array, or raise if it is not symmetric positive definite."""
     return _checked_qc(*qc_key(qc))
+
+
+def qc_inverse(qc: ArrayLike) -> NDArray:
+    """Qc⁻¹ (d, d), read-only, by a Cholesky solve (Qc = LLᵀ, then LLᵀ X = I), not a general inverse.
+    Memoised per Qc."""
+    return _qc_inverse(*qc_key(qc))
+
+
+@lru_cache(maxsize=64)
+def _qc_inverse(d: int, data: bytes) -> NDArray:
+    inverse = scipy.linalg.cho_solve(scipy.linalg.cho_factor(_checked_qc(d, data), lower=True), np.eye(d))
+    inverse = 0.5 * (inverse + inverse.T)  # exactly symmetric, as the Q⁻¹ built from it must be
+    _read_only(inverse)
+    return inverse
 
 
 def qc_key(qc: ArrayLike) -> tuple[int, bytes]:
@@ -98,8 +114,8 @@ def process_noise(dt: float, qc: ArrayLike) -> NDArray:
 
 def process_noise_inverse(dt: float, qc: ArrayLike) -> NDArray:
     """Q(dt)⁻¹ in closed form: (2d, 2d).  [BTS]"""
-    dt, qc = time_step(dt), check_qc(qc)
-    qi, t = np.linalg.inv(qc), np.float64(dt)
+    dt, qi = time_step(dt), qc_inverse(qc)
+    t = np.float64(dt)
     with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
         q_inv = np.block([[12 / t**3 * qi, -6 / t**2 * qi], [-6 / t**2 * qi, 4 / t * qi]])
     return finite_result("Q(dt)⁻¹ of the WNOA prior", q_inv, dt=dt)

@@ -6,7 +6,10 @@ of A and of the rows/columns of 𝓘. Natural keeps the order given; XL puts eve
 before every landmark (footnote 1 of [YIB]); AMD (approximate minimum degree) permutes the
 variables to keep the Cholesky factor sparse; :func:`constrained_min_degree` is exact greedy
 minimum degree with a chosen group forced last (the Bayes tree's re-elimination). Orderings act on
-*variables* (blocks), as in GTSAM, not on scalars. :func:`make_ordering` picks one by name.
+*variables* (blocks), as in GTSAM, not on scalars. Every ordering function takes the variables and
+their sizes (and, where the pattern matters, the variables of each factor) and returns an
+:class:`Ordering`; :func:`make_ordering` is the one place that picks one by name, for the batch
+solvers, the covariance queries and the benchmarks alike.
 
 AMD backends: CHOLMOD's AMD when scikit-sparse is installed, otherwise SciPy's SuperLU
 minimum-degree ordering on AᵀA (``MMD_AT_PLUS_A``), whose fill is within about 1% of AMD's on
@@ -18,7 +21,7 @@ from __future__ import annotations
 
 import heapq
 import os
-from collections.abc import Hashable, Iterable, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -117,8 +120,15 @@ class Ordering:
     def __len__(self) -> int:
         return len(self.keys)
 
+    def __iter__(self) -> Iterator[Key]:
+        """The variables in elimination order (an Ordering reads as the sequence of its keys)."""
+        return iter(self.keys)
 
-def _sizes(keys: Sequence[Key], dims: dict[Key, int]) -> tuple[int, ...]:
+    def __getitem__(self, i: int) -> Key:
+        return self.keys[i]
+
+
+def _sizes(keys: Sequence[Key], dims: Mapping[Key, int]) -> tuple[int, ...]:
     """The size of each key, read from ``dims``; UnknownVariableError naming a key it lacks."""
     try:
         return tuple(dims[k] for k in keys)
@@ -126,13 +136,13 @@ def _sizes(keys: Sequence[Key], dims: dict[Key, int]) -> tuple[int, ...]:
         raise UnknownVariableError(f"dims gives no size for variable {exc.args[0]!r}") from None
 
 
-def natural_ordering(keys: Iterable[Key], dims: dict[Key, int]) -> Ordering:
+def natural_ordering(keys: Iterable[Key], dims: Mapping[Key, int]) -> Ordering:
     """The variables in the order given (for a graph: first-seen order)."""
     keys = tuple(key_list("keys", keys))
     return Ordering(keys, _sizes(keys, dims))
 
 
-def xl_ordering(keys: Iterable[Key], dims: dict[Key, int]) -> Ordering:
+def xl_ordering(keys: Iterable[Key], dims: Mapping[Key, int]) -> Ordering:
     """Trajectory states first (by index), then landmarks (by index): the paper's PB.  [YIB Eq. 15]"""
     keys = key_list("keys", keys)
     states = sorted((k for k in keys if k.kind == "x"), key=lambda k: k.index)
@@ -174,7 +184,7 @@ def _amd_permutation(pattern: sp.csc_matrix, backend: str) -> NDArray:
 
 
 def amd_ordering(
-    keys: Sequence[Key], dims: dict[Key, int], factor_keys: Iterable[tuple[Key, ...]], backend: str | None = None
+    keys: Sequence[Key], dims: Mapping[Key, int], factor_keys: Iterable[tuple[Key, ...]], backend: str | None = None
 ) -> Ordering:
     """An approximate-minimum-degree elimination order of the variables: the paper's PBVR."""
     keys = key_list("keys", keys)
@@ -186,9 +196,15 @@ def amd_ordering(
 
 
 def constrained_min_degree(
-    variables: Sequence[Hashable], factor_keys: Iterable[Sequence[Hashable]], last: Iterable[Hashable] = ()
-) -> list:
+    variables: Sequence[Key],
+    dims: Mapping[Key, int],
+    factor_keys: Iterable[Sequence[Key]],
+    last: Iterable[Key] = (),
+) -> Ordering:
     """A greedy minimum-degree elimination order with the variables in ``last`` eliminated last.
+
+    ``dims``: the size of each variable (the :class:`Ordering` carries them); ``factor_keys``: the
+    variables of each factor.
 
     The degree of a variable is its number of neighbours in the current elimination graph (the
     variable graph after the eliminations so far, fill included), so this is exact minimum degree,
@@ -202,6 +218,7 @@ def constrained_min_degree(
     if len(index) != len(variables):
         twice = next(v for i, v in enumerate(variables) if index[v] != i)
         raise SteamError(f"variables lists {twice!r} twice")
+    sizes = _sizes(variables, dims)  # names a variable dims lacks, before any work
     adj: dict = {v: set() for v in variables}
     for i, keys in enumerate(factor_keys):
         for k in keys:
@@ -237,20 +254,21 @@ def constrained_min_degree(
             au |= a
             au.discard(u)
             heapq.heappush(heap, (group[u], len(au), index[u]))
-    return order
+    return Ordering(tuple(order), tuple(sizes[index[v]] for v in order))
 
 
 def make_ordering(
     name_or_ordering: str | Ordering,
     keys: Sequence[Key],
-    dims: dict[Key, int],
+    dims: Mapping[Key, int],
     factor_keys: Iterable[tuple[Key, ...]],
     backend: str | None = None,
 ) -> Ordering:
     """'natural', 'xl', 'amd' or an explicit :class:`Ordering` (returned as it is) for ``keys``.
 
     ``dims``: size of each variable; ``factor_keys``: the variables of each factor (read by AMD
-    only); ``backend``: AMD's sparse backend (see :func:`sparse_backend`).
+    only); ``backend``: AMD's sparse backend (see :func:`sparse_backend`). For a factor graph and
+    its estimate: ``make_ordering(name, graph.keys(), values.dims(), [f.keys for f in graph])``.
     """
     if isinstance(name_or_ordering, Ordering):
         return _check_given(name_or_ordering, keys, dims)
@@ -263,7 +281,7 @@ def make_ordering(
     raise SteamError(f"unknown ordering {name_or_ordering!r}; use one of {ORDERING_NAMES} or an Ordering")
 
 
-def _check_given(ordering: Ordering, keys: Sequence[Key], dims: dict[Key, int]) -> Ordering:
+def _check_given(ordering: Ordering, keys: Sequence[Key], dims: Mapping[Key, int]) -> Ordering:
     """An explicit ordering, if it orders exactly ``keys`` with the sizes of ``dims``."""
     for k in keys:
         if k not in ordering.position:

@@ -35,7 +35,7 @@ from numpy.typing import NDArray
 
 from ..arguments import integer
 from ..batch import BatchResult, Iteration, certify, check_options, gauss_newton_step, graph_and_values, prepare
-from ..errors import SteamError
+from ..errors import NumericalError, SteamError
 from ..graph import FactorGraph
 from ..linear.ordering import Ordering
 from ..variables import Values
@@ -182,6 +182,6 @@ def converge(
             rule = f"largest move {largest:.3g} below {step_tolerance:g}"
             break
     if not np.isfinite(cost):
-        raise SteamError(f"converge: the cost became {cost} (the start is too far from a minimum)")
+        raise NumericalError(f"converge: the cost became {cost} (the start is too far from a minimum)")
     converged, reason, found = certify(graph, values, order, backend, rule, (relative_tolerance, 0.0), True)
     return BatchResult(values, cost0, iterations, converged, reason, order, 0, backend, found)

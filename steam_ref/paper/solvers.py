@@ -13,11 +13,11 @@ from numpy.typing import NDArray
 
 from ..batch import gauss_newton
 from ..bayes_tree import IncrementalSolver, ISAM2Params
-from ..covariance import sparse_joint_covariance, sparse_joint_marginals, sparse_marginals
+from ..covariance import sparse_joint_covariance, sparse_joint_covariances, sparse_marginal_covariances
 from ..errors import SteamError
 from ..factors import Factor
 from ..graph import FactorGraph
-from ..variables import Key, Values
+from ..variables import Key, Values, check_key
 
 __all__ = [
     "METHODS",
@@ -51,12 +51,16 @@ class OnlineSolver:
         """Current estimate of every variable."""
         raise NotImplementedError
 
-    def joint_covariance(self, keys: Sequence[Key]) -> NDArray:
-        """Joint marginal covariance of ``keys``, (Σdₖ, Σdₖ), in the order given."""
+    def marginal_covariance(self, key: Key) -> NDArray:
+        """Marginal covariance (d, d) of one variable (GTSAM's ``marginalCovariance``)."""
+        return self.marginal_covariances([check_key("key", key)])[key]
+
+    def marginal_covariances(self, keys: Sequence[Key]) -> dict[Key, NDArray]:
+        """Marginal covariance of each of ``keys``."""
         raise NotImplementedError
 
-    def marginals(self, keys: Sequence[Key]) -> dict[Key, NDArray]:
-        """Marginal covariance of each of ``keys``."""
+    def joint_covariance(self, keys: Sequence[Key]) -> NDArray:
+        """Joint marginal covariance of ``keys``, (Σdₖ, Σdₖ), in the order given (GTSAM's ``jointMarginalCovariance``)."""
         raise NotImplementedError
 
     def joint_covariances(self, groups: Sequence[Sequence[Key]]) -> list[NDArray]:
@@ -102,14 +106,14 @@ class PeriodicBatchSolver(OnlineSolver):
     def estimate(self) -> Values:
         return self.values
 
+    def marginal_covariances(self, keys: Sequence[Key]) -> dict[Key, NDArray]:
+        return sparse_marginal_covariances(self.graph.factors, self.values, keys)  # at the estimate
+
     def joint_covariance(self, keys: Sequence[Key]) -> NDArray:
         return sparse_joint_covariance(self.graph.factors, self.values, keys)  # at the estimate
 
-    def marginals(self, keys: Sequence[Key]) -> dict[Key, NDArray]:
-        return sparse_marginals(self.graph.factors, self.values, keys)  # at the estimate
-
     def joint_covariances(self, groups: Sequence[Sequence[Key]]) -> list[NDArray]:
-        return sparse_joint_marginals(self.graph.factors, self.values, groups)  # at the estimate
+        return sparse_joint_covariances(self.graph.factors, self.values, groups)  # at the estimate
 
 
 class BayesTreeSolver(OnlineSolver):
@@ -130,14 +134,17 @@ class BayesTreeSolver(OnlineSolver):
     def estimate(self) -> Values:
         return self.inner.estimate()
 
-    def joint_covariance(self, keys: Sequence[Key]) -> NDArray:
-        return self.inner.joint_marginal_covariance(list(keys))  # from the tree's cliques
+    def marginal_covariance(self, key: Key) -> NDArray:
+        return self.inner.marginal_covariance(key)  # one walk down the root path
 
-    def marginals(self, keys: Sequence[Key]) -> dict[Key, NDArray]:
-        return self.inner.marginals(keys)  # one pass down the tree
+    def marginal_covariances(self, keys: Sequence[Key]) -> dict[Key, NDArray]:
+        return self.inner.marginal_covariances(keys)  # one pass down the tree
+
+    def joint_covariance(self, keys: Sequence[Key]) -> NDArray:
+        return self.inner.joint_covariance(keys)  # from the tree's cliques
 
     def joint_covariances(self, groups: Sequence[Sequence[Key]]) -> list[NDArray]:
-        return self.inner.joint_marginals(groups)  # one pass down the tree where a clique holds a group
+        return self.inner.joint_covariances(groups)  # one pass down the tree where a clique holds a group
 
 
 def make_solver(
