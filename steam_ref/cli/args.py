@@ -17,6 +17,7 @@ from ..bayes_tree import ISAM2Params
 from ..conformance import command as conformance_command
 from ..errors import SteamError
 from ..paper.presets import DEPARTURES, PRESETS, PRIORS, PaperSetup
+from . import data as data_command
 
 __all__ = ["build_parser", "check_output", "check_out_folder"]
 
@@ -209,6 +210,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="folder searched for data files before $STEAM_REF_DATA_DIR and gtsam's Data/",
     )
     conformance_command.add_parser(sub)
+    data_command.add_parser(sub)
     return parser
 
 

@@ -38,6 +38,7 @@ from ..paper.readings import Readings
 from ..paper.results import position_rmse
 from ..plot.figures import plot_fidelity, plot_trajectory
 from ..variables import X
+from . import data as data_command
 from .args import build_parser
 from .args import check_out_folder as _check_out_folder
 from .args import check_output as _check_output
@@ -288,6 +289,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             "fidelity": _fidelity,
             "reproduce": _reproduce,
             "conformance": conformance_command.run,
+            "data": data_command.run,
         }
         return commands[args.command](args)
     except (SteamError, OSError, MemoryError) as exc:
