@@ -82,7 +82,7 @@ def notebooks_without_their_data(folder: Path) -> list[str]:
     for path in sorted(folder.glob("*.ipynb")):
         needs = notebook_needs(path)
         if needs is None:
-            LOG.warning("%s declares no needs: add \"steam_ref\": {\"needs\": [...]} to its metadata", path.name)
+            LOG.warning('%s declares no needs: add "steam_ref": {"needs": [...]} to its metadata', path.name)
             continue
         missing = missing_needs(needs)
         for need in missing:
