@@ -163,6 +163,22 @@ def _dotted(path: Path) -> str:
     return ".".join(("steam_ref", *path.relative_to(PACKAGE).with_suffix("").parts)).removesuffix(".__init__")
 
 
+def _folder_of(module: str) -> Path:
+    return PACKAGE.joinpath(*module.split(".")[1:])
+
+
+def _with_package(modules: list[str], placed: list[str]) -> list[str]:
+    """``modules``, each preceded by its package's ``__init__`` when the table lists the package's files
+    one by one (``paper/presets.py``): the package's docstring is documented with its first module."""
+    out: list[str] = []
+    for module in modules:
+        package = module.rpartition(".")[0]
+        if package not in ("", "steam_ref") and package not in placed and package not in out and package not in modules:
+            out.append(package)
+        out.append(module)
+    return out
+
+
 def all_modules() -> list[str]:
     return [_dotted(f) for f in sorted(PACKAGE.rglob("*.py")) if f.name != "__main__.py"]
 
@@ -193,9 +209,9 @@ def write_reference(out: Path) -> list[str]:
         for entries, owns in rows:
             page += [f"{', '.join(f'`{e}`' for e in entries)}: {owns}", ""]
         for entries, _ in rows:
-            for module in (m for e in entries for m in modules_of(e)):
+            for module in (m for e in entries for m in _with_package(modules_of(e), placed)):
                 placed.append(module)
-                package = (PACKAGE / module.removeprefix("steam_ref.").replace(".", "/") / "__init__.py").is_file()
+                package = module == "steam_ref" or (_folder_of(module) / "__init__.py").is_file()
                 # A package's __init__ re-exports its modules' names (its __all__): document only what
                 # it defines itself; each name is documented once, in the module that defines it.
                 options = ["   :members:", "   :show-inheritance:"] + (["   :ignore-module-all:"] if package else [])
