@@ -39,6 +39,7 @@ from ..paper.results import position_rmse
 from ..plot.figures import plot_fidelity, plot_trajectory
 from ..variables import X
 from . import data as data_command
+from . import explain
 from .args import build_parser
 from .args import check_out_folder as _check_out_folder
 from .args import check_output as _check_output
@@ -68,7 +69,7 @@ def _run(args: argparse.Namespace) -> int:
         range_states=args.range_states,
         max_poses=args.max_poses,
         time_budget_s=args.time_budget,
-        progress=args.progress,
+        progress=explain.progress_wanted(args.progress, args.json),
         converge_at_end=args.converge_at_end,
         isam2=setup.isam2_params().replace(
             relinearize_threshold=args.relinearize_threshold, relinearize_skip=args.relinearize_skip
@@ -81,17 +82,18 @@ def _run(args: argparse.Namespace) -> int:
         "prior": args.prior,
         "qc_scale": args.qc_scale,
     }
-    score = (
-        None
-        if data.ground_truth is not None
-        else score_against_batch(result, Readings.from_dataset(data, setup), setup)
-    )
+    summary |= {"what": explain.method_text(args.method, result.options.every)}
+    summary |= explain.data_figures(data, len(result.times))
+    score = None
+    if data.ground_truth is None:  # scored against the batch optimum: minutes on Victoria Park
+        with explain.working("scoring against the batch optimum", options.progress):
+            score = score_against_batch(result, Readings.from_dataset(data, setup), setup)
     if score is not None:
         summary |= score.summary()
     if args.json:
         print(json.dumps(summary))
     else:
-        _print_summary(summary)
+        print(explain.run_text(summary))
     if args.save_estimates:
         save_estimates(args.save_estimates, result)
     if args.plot:
@@ -111,43 +113,6 @@ def _run(args: argparse.Namespace) -> int:
             path=args.plot,
         )
     return 0
-
-
-def _convergence_note(summary: dict) -> str:
-    """What ``--converge-at-end`` did, for the human-readable summary ('' when it was not asked for)."""
-    if "convergence_s" not in summary:
-        return ""
-    verdict = "converged" if summary["converged_at_end"] else "NOT converged: see the warning"
-    return f" (of which converging at the end {summary['convergence_s']:.2f} s, {verdict})"
-
-
-def _print_summary(summary: dict) -> None:
-    state = "" if summary["completed"] else "  (cut short: time budget or --max-poses)"
-    if "batch_distance_median_m" in summary:
-        score = (
-            f"  distance to the batch optimum: median {summary['batch_distance_median_m']} m, max {summary['batch_distance_max_m']} m "
-            f"({summary['batch_distance_unrotated_median_m']} m once turned by {summary['batch_rotation_rad']} rad about the origin); "
-            f"batch {summary['batch_s']} s\n "
-        )
-    else:
-        score = (
-            f"  RMSE {summary['rmse_m']} m over {summary['n_poses']} time steps"
-            + (
-                ""
-                if summary["n_estimated_states"] == summary["n_poses"]
-                else f" ({summary['rmse_estimated_m']} m at the estimated states)"
-            )
-            + ","
-        )
-    print(
-        f"{summary['method'].upper()}/{summary['every']} on {summary['dataset']}: skip {summary['skip']}, "
-        f"{'with' if summary['interpolate'] else 'without'} interpolation, {summary['n_estimated_states']} states\n"
-        + score
-        + f" total {summary['total_s']:.2f} s"
-        + _convergence_note(summary)
-        + ", "
-        f"update median {summary['update_s_median']} s, p95 {summary['update_s_p95']} s, peak RSS {summary['peak_rss_mb']} MB{state}"
-    )
 
 
 def save_estimates(path: str, result) -> None:
