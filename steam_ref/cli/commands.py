@@ -166,13 +166,14 @@ def _batch(args: argparse.Namespace) -> int:
         "iterations": len(result.iterations),
         "factor_nnz": result.factor_nnz,
         "backend": result.backend,
-    }
+    } | explain.data_figures(data, data.n_poses)
     if args.json:
         print(json.dumps(summary))
     else:
         print(
             f"batch ({args.ordering.upper()}) on {args.dataset}: RMSE {summary['rmse_m']} m over {data.n_poses} poses, "
-            f"{summary['total_s']:.2f} s, Cholesky factor {summary['factor_nnz']} nonzeros ({summary['backend']})"
+            f"{summary['total_s']:.2f} s, Cholesky factor {summary['factor_nnz']} nonzeros ({summary['backend']})\n"
+            + explain.data_lines(summary)
         )
     if args.plot:
         plot_trajectory(
@@ -200,8 +201,12 @@ def _fidelity(args: argparse.Namespace) -> int:
         row = fid.to_dict() | {
             "total_s": round(result.total_s, 2),
             "authors_total_s": round(float(authors.step_seconds.sum()), 2),
+            "data_files": explain.data_figures(data, 0)["data_files"]
+            + [explain.file_entry(find_authors_file(name, args.data_dir))],
         }
-        print(json.dumps(row) if args.json else _fidelity_text(row))
+        print(
+            json.dumps(row) if args.json else _fidelity_text(row) + "\n" + explain.data_lines(row | {"data_note": None})
+        )
     if args.plot:
         plot_fidelity(distances, path=args.plot)
     return 0

@@ -23,7 +23,7 @@ from ..datasets import LandmarkDataset, RangeDataset
 from ..datasets.fetch import DATASETS, file_digest
 from ..paper.results import position_rmse
 
-__all__ = ["data_figures", "method_text", "progress_wanted", "run_text", "working"]
+__all__ = ["data_figures", "file_entry", "method_text", "progress_wanted", "run_text", "working"]
 
 SHORT_SHA = 12
 _METHODS = {
@@ -56,6 +56,11 @@ def _files_of(source: str) -> list[Path]:
     """The files named at the head of a data set's ``source`` ("path" or "path, path, path; notes")."""
     head = source.split("; ")[0]
     return [Path(p) for p in head.split(", ") if Path(p).is_file()]
+
+
+def file_entry(path: Path) -> dict:
+    """A file as the JSON names it: its path and a short sha256."""
+    return {"path": str(path), "sha256": file_digest(path)[:SHORT_SHA]}
 
 
 def data_figures(data: RangeDataset | LandmarkDataset, n_poses: int) -> dict:
