@@ -213,3 +213,14 @@ def test_every_tutorial_declares_what_it_needs_and_its_header_says_how_to_get_it
         for need in needs:
             data = need.removeprefix("data:")
             assert data in header or "gtsam" in header, f"{name}'s header does not say how to get {need}"
+
+
+def test_no_table_cell_of_the_docs_splits_inline_code():
+    """A ``|`` inside backticks ends a Markdown table cell: the page then shows raw backticks."""
+    broken = []
+    for page in sorted((REPO_ROOT / "docs").glob("*.md")) + [REPO_ROOT / "README.md"]:
+        for number, line in enumerate(page.read_text().splitlines(), 1):
+            if line.startswith("|"):
+                cells = re.split(r"(?<!\\)\|", line.strip().strip("|"))
+                broken += [f"{page.name}:{number}" for cell in cells if cell.count("`") % 2]
+    assert not broken, f"a table cell with an odd number of backticks: {broken}"

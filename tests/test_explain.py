@@ -101,3 +101,16 @@ def test_a_silent_step_shows_a_progress_line(capsys):
     with explain.working("nothing to show", enabled=False):
         pass
     assert capsys.readouterr().err == ""
+
+
+def test_run_plot_has_a_title_with_the_rmse(capsys, tmp_path, monkeypatch):
+    matplotlib = pytest.importorskip("matplotlib")
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    drawn = {}
+    monkeypatch.setattr(plt, "close", lambda fig=None: drawn.setdefault("title", fig.axes[0].get_title()))
+    out, _ = _run(capsys, "run", "--max-poses", "40", "--json", "--plot", str(tmp_path / "run.png"))
+    rmse = json.loads(out)["rmse_m"]
+    assert drawn["title"] == f"BTGP/1 on synthetic: position RMSE {rmse} m"
+    assert (tmp_path / "run.png").read_bytes()[:4] == b"\x89PNG"

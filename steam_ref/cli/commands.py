@@ -110,6 +110,7 @@ def _run(args: argparse.Namespace) -> int:
             dead_reckoning=data.dead_reckoning[:, 1:3],
             estimate_label=f"{result.method.upper()} estimate",
             truth_label="ground truth" if score is None else "batch optimum",
+            title=explain.plot_title(summary),
             path=args.plot,
         )
     return 0

@@ -23,7 +23,7 @@ from ..datasets import LandmarkDataset, RangeDataset
 from ..datasets.fetch import DATASETS, file_digest
 from ..paper.results import position_rmse
 
-__all__ = ["data_figures", "file_entry", "method_text", "progress_wanted", "run_text", "working"]
+__all__ = ["data_figures", "file_entry", "method_text", "plot_title", "progress_wanted", "run_text", "working"]
 
 SHORT_SHA = 12
 _METHODS = {
@@ -143,6 +143,14 @@ def run_text(s: dict) -> str:
         f"p95 {s['update_s_p95']} s, peak RSS {s['peak_rss_mb']} MB{state}"
     )
     return head + score + timing
+
+
+def plot_title(s: dict) -> str:
+    """The title of ``run --plot``: the run and its score."""
+    run = f"{s['method'].upper()}/{s['every']} on {s['dataset']}"
+    if "batch_distance_median_m" in s:
+        return f"{run}: median {s['batch_distance_unrotated_median_m']} m from the batch optimum (map turned)"
+    return f"{run}: position RMSE {s['rmse_m']} m"
 
 
 @contextlib.contextmanager
