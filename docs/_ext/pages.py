@@ -25,6 +25,7 @@ import json
 import os
 import re
 from pathlib import Path
+from typing import Any
 
 from sphinx.application import Sphinx
 from sphinx.util import logging
@@ -297,8 +298,20 @@ def _drop_absent_optional_pages(_app: Sphinx, docname: str, source: list[str]) -
                 source[0] = re.sub(rf"^{page}\n", "", source[0], flags=re.M)
 
 
+def _reread_when_needs_changed(_app: Sphinx, env: Any, _added: set, _changed: set, _removed: set) -> list[str]:
+    """Tutorials whose needs were met at the last build and not now, or the reverse: read them again (their
+    source did not change, so Sphinx would keep the page as it was, note or outputs)."""
+    now = {f"tutorials/{stem}": missing for stem, missing in UNEXECUTED.items()}
+    before = getattr(env, "steam_ref_unexecuted", None)
+    env.steam_ref_unexecuted = now
+    if before is None:
+        return []
+    return sorted(d for d in set(before) | set(now) if before.get(d) != now.get(d))
+
+
 def setup(app: Sphinx) -> dict[str, object]:
     app.connect("builder-inited", _generate)
     app.connect("source-read", _drop_absent_optional_pages)
     app.connect("source-read", _mark_unexecuted)
+    app.connect("env-get-outdated", _reread_when_needs_changed)
     return {"parallel_read_safe": True, "parallel_write_safe": True}

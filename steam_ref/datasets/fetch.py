@@ -173,8 +173,8 @@ def _importable(module: str) -> bool:
 def base_url(given: str | None = None) -> str:
     """``given``, else ``$STEAM_REF_DATA_URL``, else :data:`DEFAULT_BASE_URL`; with one trailing slash."""
     url = given or os.environ.get(DATA_URL_ENV) or DEFAULT_BASE_URL
-    if not url.startswith(("http://", "https://", "file://")):
-        raise DataError(f"the base URL {url!r} is not an http(s):// or file:// address")
+    if not url.startswith(("http://", "https://")):
+        raise DataError(f"the base URL {url!r} is not an http:// or https:// address")
     return url.rstrip("/") + "/"
 
 
