@@ -224,3 +224,30 @@ def test_no_table_cell_of_the_docs_splits_inline_code():
                 cells = re.split(r"(?<!\\)\|", line.strip().strip("|"))
                 broken += [f"{page.name}:{number}" for cell in cells if cell.count("`") % 2]
     assert not broken, f"a table cell with an odd number of backticks: {broken}"
+
+
+def test_the_build_leaves_unexecuted_exactly_the_tutorials_whose_data_are_absent(tmp_path, monkeypatch):
+    """The rule the docs build applies (docs/_ext/pages.py), without a build: with no data folder, an
+    empty cache and no gtsam, the tutorials declaring a data set are left unexecuted (the rule once
+    searched the raw .ipynb text, where quotes are escaped, and never matched load_dataset("plaza"))."""
+    from requirements import optional_import
+
+    optional_import("sphinx", "docs", kind="docs")
+    monkeypatch.syspath_prepend(str(REPO_ROOT / "docs" / "_ext"))
+    import pages
+
+    from steam_ref.datasets import search
+
+    for variable in ("STEAM_REF_DATA_DIR", "STEAM_REF_REQUIRE_DATA", "STEAM_REF_REQUIRE_OPTIONAL"):
+        monkeypatch.delenv(variable, raising=False)
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    monkeypatch.setattr(search, "gtsam_data_dir", lambda: None)
+    declared = {name: _declared_needs(name) for name in TUTORIALS}
+    expected = sorted(f"*{name}.ipynb" for name, needs in declared.items() if any(n.startswith("data:") for n in needs))
+    assert sorted(pages.notebooks_without_their_data(REPO_ROOT / "tutorials")) == expected
+    assert "*04_incremental.ipynb" in expected and "*06_motion_priors.ipynb" in expected
+    note = pages.needs_note(pages.UNEXECUTED["04_incremental"])
+    assert "steam-ref data fetch plaza authors-plaza" in note and pages.NEEDS_NOTE_CLASS in note
+    monkeypatch.setenv("STEAM_REF_REQUIRE_DATA", "1")
+    with pytest.raises(RuntimeError, match=r"STEAM_REF_REQUIRE_DATA=1 but 04_incremental\.ipynb needs data:plaza"):
+        pages.notebooks_without_their_data(REPO_ROOT / "tutorials")
