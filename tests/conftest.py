@@ -2,19 +2,29 @@
 
 The reference data (the paper's .mat files) are read through $STEAM_REF_DATA_DIR, as a user's run
 would. If it is unset and ``<repository>/../shared/data`` exists (CI's layout), it is set to that
-folder here, before any test runs. Tests that read the files use the ``shared_data`` fixture or
+folder here, before any test runs; else, when ``steam-ref data fetch`` has put every file in the
+user's cache folder, to that one. No test touches the user's cache: XDG_CACHE_HOME is a fresh
+folder. Tests that read the files use the ``shared_data`` fixture or
 the ``needs_data`` marker; both skip with one line saying where to put the files, or fail when
 STEAM_REF_REQUIRE_DATA=1 (see ``requirements.py``, which also handles the optional packages).
 """
 
 import os
+import tempfile
 
 import numpy as np
 import pytest
-from requirements import DATA_DIR_ENV, SHARED_DATA, optional_import, reference_data_dir
+from requirements import DATA_DIR_ENV, DATA_FILES, SHARED_DATA, optional_import, reference_data_dir
+
+from steam_ref.datasets.search import data_cache_dir
 
 if not os.environ.get(DATA_DIR_ENV) and SHARED_DATA.is_dir():
     os.environ[DATA_DIR_ENV] = str(SHARED_DATA.resolve())
+elif not os.environ.get(DATA_DIR_ENV) and all((data_cache_dir() / f).is_file() for f in DATA_FILES):
+    os.environ[DATA_DIR_ENV] = str(data_cache_dir())  # a newcomer's `steam-ref data fetch`
+# No test reads or writes the user's cache folder: XDG_CACHE_HOME is a fresh one (platformdirs on Linux).
+_CACHE = tempfile.TemporaryDirectory(prefix="steam_ref_test_cache_")
+os.environ["XDG_CACHE_HOME"] = _CACHE.name
 
 
 @pytest.fixture

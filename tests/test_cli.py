@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import json
 import subprocess
 import sys
@@ -210,6 +211,10 @@ def test_fidelity_command_prints_the_distance_to_the_authors_run(capsys, shared_
     assert row["dataset"] == "paper-synthetic" and row["n_states"] == 1501
     assert row["pose_max_m"] < 0.01 and row["pose_rms_m"] <= row["pose_max_m"]
     assert row["authors_rmse_m"] == pytest.approx(0.0697, abs=5e-5)
+    read = [shared_data / "Syn_theta_Plaza.mat", shared_data / "authors" / "Syn_full_data_run.mat"]
+    assert row["data_files"] == [
+        {"path": str(p), "sha256": hashlib.sha256(p.read_bytes()).hexdigest()[:12]} for p in read
+    ]  # which files were read, each with its hash
 
 
 @pytest.mark.parametrize(

@@ -1,6 +1,6 @@
 """Tests of steam_ref.datasets: the CMU loaders, the checks of RangeDataset, the synthetic generator.
 
-Sizes asserted for the reference files are those of the data folder's README.md and the paper
+Sizes asserted for the reference files are those of the README.md beside the files (``../shared/data/README.md``), data/README.md and the paper
 (Table I); every other expected value is computed here by a slow, obvious loop. The reference files
 come from the ``shared_data`` fixture (conftest.py: $STEAM_REF_DATA_DIR; skip or fail if absent).
 """
@@ -510,6 +510,20 @@ def test_default_data_dirs_are_exactly_data_dir_env_gtsam(tmp_path: Path, monkey
     monkeypatch.setattr(search, "gtsam_data_dir", lambda: None)
     assert default_data_dirs() == []
     assert not hasattr(datasets, "_SHARED_DATA") and not hasattr(search, "_SHARED_DATA")
+
+
+def test_fetched_files_come_after_env_and_before_gtsam(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The folder `steam-ref data fetch` fills is searched third, and only once it exists."""
+    fake_gtsam = tmp_path / "gtsam" / "Data"
+    (tmp_path / "env").mkdir()
+    monkeypatch.setattr(search, "gtsam_data_dir", lambda: fake_gtsam)
+    monkeypatch.setenv(datasets.DATA_DIR_ENV, str(tmp_path / "env"))
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
+    assert default_data_dirs() == [(tmp_path / "env").resolve(), fake_gtsam.resolve()]
+    cache = tmp_path / "xdg" / "steam_ref" / "data"
+    assert search.data_cache_dir() == cache
+    cache.mkdir(parents=True)
+    assert default_data_dirs() == [(tmp_path / "env").resolve(), cache.resolve(), fake_gtsam.resolve()]
 
 
 def test_not_found_message_lists_where_it_looked(isolated: Path) -> None:

@@ -19,7 +19,9 @@ from html.parser import HTMLParser
 from pathlib import Path
 
 import pytest
-from requirements import REPO_ROOT, skip_or_fail
+from requirements import REPO_ROOT, required, skip_or_fail
+
+from steam_ref.datasets.fetch import missing_needs
 
 pytestmark = pytest.mark.slow
 
@@ -41,6 +43,7 @@ window.addEventListener("load", async () => {
     errors: document.querySelectorAll("mjx-merror, [data-mjx-error]").length,
     navbar: [...document.querySelectorAll(".bd-header .navbar-nav a")].map(a => a.textContent.trim()),
     sidebar: [...document.querySelectorAll(".bd-sidenav a")].map(a => a.textContent.trim()),
+    needs: [...document.querySelectorAll(".steam-ref-needs")].map(e => e.textContent.trim()),
   };
   const out = document.createElement("pre");
   out.id = "reader-probe";
@@ -138,14 +141,37 @@ def test_the_landing_page_shows_its_figure_and_the_sections():
     assert {"Tutorials", "Background", "Reference"} <= set(seen["navbar"]), seen["navbar"]
 
 
+def _declared_needs(tutorial: str) -> list[str]:
+    metadata = json.loads((REPO_ROOT / "tutorials" / f"{tutorial}.ipynb").read_text())["metadata"]
+    return metadata["steam_ref"]["needs"]
+
+
+def _check_needs_note(name: str, note: str) -> None:
+    """A page built without what its tutorial needs is accepted only while those are absent here too,
+    and never in CI's build with the data (STEAM_REF_REQUIRE_DATA=1): it names each missing need and
+    the command that gets it."""
+    missing = missing_needs(_declared_needs(name))
+    assert missing, f"{name}: the page says it was built without its needs, but they are present: rebuild the site"
+    assert not required("data"), f"{name} was built without {missing} although STEAM_REF_REQUIRE_DATA=1"
+    for need in missing:
+        assert need in note, f"{name}'s note does not name {need}: {note!r}"
+    assert "steam-ref data fetch" in note or "pip install gtsam" in note, note
+
+
 @pytest.mark.parametrize("name", TUTORIALS)
 def test_each_tutorial_page_shows_figures_math_and_its_neighbours(name):
     """Every tutorial was run at build time: its page has plots (decoded PNGs), its LaTeX typeset by
-    the local MathJax, and the section's navigation listing every tutorial."""
+    the local MathJax, and the section's navigation listing every tutorial. A tutorial whose data were
+    absent at build time shows instead, without outputs, a note saying what it needs (accepted only
+    while they are absent)."""
     seen = read_page(f"tutorials/{name}.html")
     broken = [i["src"] for i in seen["images"] if i["width"] == 0]
     assert not broken, f"images that did not load: {broken}"
-    assert _decoded_pngs(seen), f"{name}: no figure on the page (was the notebook executed?)"
+    if seen["needs"]:
+        _check_needs_note(name, " ".join(seen["needs"]))
+        assert not _decoded_pngs(seen), f"{name}: outputs shown although the notebook was not run"
+    else:
+        assert _decoded_pngs(seen), f"{name}: no figure on the page and no note saying why (was it executed?)"
     assert seen["untypeset"] == 0 and seen["errors"] == 0, seen
     if _has_latex(name):
         assert seen["formulas"] > 0, f"{name}'s LaTeX was not typeset"
@@ -162,4 +188,66 @@ def test_no_page_loads_anything_from_the_network():
 
 def test_the_readme_docs_command_is_a_line_of_ci():
     (command,) = re.findall(r"^    (.*-m sphinx.*)$", README, flags=re.M)
-    assert command in (REPO_ROOT / ".ci" / "run").read_text().splitlines()
+    ci = (REPO_ROOT / ".ci" / "run").read_text()
+    assert command in ci.splitlines()
+    # ... and CI builds the site once more as a newcomer would: no data, gtsam hidden, then reads it
+    sphinx = command.rpartition("&& ")[2]
+    assert sum(line.strip().endswith(sphinx) for line in ci.splitlines()) == 2, ci
+    assert "unset STEAM_REF_DATA_DIR" in ci and "git clone" in ci and "tests/test_docs_site.py" in ci
+
+
+def test_every_tutorial_declares_what_it_needs_and_its_header_says_how_to_get_it():
+    """The rule the docs build and this file read: a notebook's ``steam_ref.needs`` metadata, checked
+    against its parsed code (a data set loaded by name is declared) and its title cell (how to get it)."""
+    loads = re.compile(r"""load_dataset\(\s*["']([\w-]+)["']""")
+    for name in TUTORIALS:
+        nb = json.loads((REPO_ROOT / "tutorials" / f"{name}.ipynb").read_text())
+        needs = _declared_needs(name)
+        code = "\n".join("".join(c["source"]) for c in nb["cells"] if c["cell_type"] == "code")
+        for data in set(loads.findall(code)) - {"synthetic"}:
+            assert f"data:{data}" in needs, f"{name} loads {data!r} but does not declare data:{data}"
+        if "load_authors_run" in code:
+            assert any(n.startswith("data:authors-") for n in needs), f"{name} reads an authors' run undeclared"
+        header = "".join(nb["cells"][0]["source"])
+        assert "**Needs.**" in header, f"{name}'s first cell does not say what it needs"
+        for need in needs:
+            data = need.removeprefix("data:")
+            assert data in header or "gtsam" in header, f"{name}'s header does not say how to get {need}"
+
+
+def test_no_table_cell_of_the_docs_splits_inline_code():
+    """A ``|`` inside backticks ends a Markdown table cell: the page then shows raw backticks."""
+    broken = []
+    for page in sorted((REPO_ROOT / "docs").glob("*.md")) + [REPO_ROOT / "README.md"]:
+        for number, line in enumerate(page.read_text().splitlines(), 1):
+            if line.startswith("|"):
+                cells = re.split(r"(?<!\\)\|", line.strip().strip("|"))
+                broken += [f"{page.name}:{number}" for cell in cells if cell.count("`") % 2]
+    assert not broken, f"a table cell with an odd number of backticks: {broken}"
+
+
+def test_the_build_leaves_unexecuted_exactly_the_tutorials_whose_data_are_absent(tmp_path, monkeypatch):
+    """The rule the docs build applies (docs/_ext/pages.py), without a build: with no data folder, an
+    empty cache and no gtsam, the tutorials declaring a data set are left unexecuted (the rule once
+    searched the raw .ipynb text, where quotes are escaped, and never matched load_dataset("plaza"))."""
+    from requirements import optional_import
+
+    optional_import("sphinx", "docs", kind="docs")
+    monkeypatch.syspath_prepend(str(REPO_ROOT / "docs" / "_ext"))
+    import pages
+
+    from steam_ref.datasets import search
+
+    for variable in ("STEAM_REF_DATA_DIR", "STEAM_REF_REQUIRE_DATA", "STEAM_REF_REQUIRE_OPTIONAL"):
+        monkeypatch.delenv(variable, raising=False)
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    monkeypatch.setattr(search, "gtsam_data_dir", lambda: None)
+    declared = {name: _declared_needs(name) for name in TUTORIALS}
+    expected = sorted(f"*{name}.ipynb" for name, needs in declared.items() if any(n.startswith("data:") for n in needs))
+    assert sorted(pages.notebooks_without_their_data(REPO_ROOT / "tutorials")) == expected
+    assert "*04_incremental.ipynb" in expected and "*06_motion_priors.ipynb" in expected
+    note = pages.needs_note(pages.UNEXECUTED["04_incremental"])
+    assert "steam-ref data fetch plaza authors-plaza" in note and pages.NEEDS_NOTE_CLASS in note
+    monkeypatch.setenv("STEAM_REF_REQUIRE_DATA", "1")
+    with pytest.raises(RuntimeError, match=r"STEAM_REF_REQUIRE_DATA=1 but 04_incremental\.ipynb needs data:plaza"):
+        pages.notebooks_without_their_data(REPO_ROOT / "tutorials")

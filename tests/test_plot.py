@@ -125,6 +125,30 @@ def test_plot_timing_draws_each_runs_cumulative_time(rng):
     assert ax.get_yscale() == "log"
 
 
+def test_plot_timing_tags_only_runs_cut_by_their_budget(rng):
+    """reproduce --quick runs stop at the prefix they were given: that is not a budget (every run was tagged)."""
+    cumulative = np.cumsum(rng.uniform(0.1, 1, 5))
+    prefix = SimpleNamespace(max_poses=6)
+    runs = {
+        "BTGP/1": SimpleNamespace(cumulative_s=cumulative, completed=False, n_steps_processed=6, options=prefix),
+        "PB/1": SimpleNamespace(cumulative_s=cumulative, completed=False, n_steps_processed=3, options=prefix),
+    }
+    ax = plot.plot_timing(runs)
+    assert [ln.get_label() for ln in ax.lines] == ["BTGP/1", "PB/1 (budget)"]
+
+
+def test_the_reference_is_drawn_over_the_estimate_and_true_landmarks_stand_out(rng):
+    truth = rng.normal(size=(7, 2))
+    ax = plot.plot_trajectory(
+        truth, truth + 1e-3, landmarks_true=rng.normal(size=(2, 2)), landmarks_estimated=rng.normal(size=(2, 2))
+    )
+    z = {ln.get_label(): ln.get_zorder() for ln in ax.lines}
+    assert z["ground truth"] > z["estimate"]  # the truth is not hidden under an estimate that lies on it
+    colours = {ln.get_label(): to_rgba(ln.get_color()) for ln in ax.lines}
+    assert colours["landmarks (true)"] != colours["ground truth"]
+    assert colours["landmarks (true)"] != colours["landmarks (estimated)"]
+
+
 def test_plot_interpolation_tradeoff_plots_the_values_it_was_given(rng):
     skips = [10, 1, 3]  # unsorted: drawn in increasing skip
     with_, without = (

@@ -6,8 +6,10 @@
 - ``cli/``: one page per ``steam-ref`` command holding its ``--help``, from ``steam_ref.cli.commands``'s own
   parser.
 - Pages listed in ``OPTIONAL_PAGES`` leave the landing page's table of contents while absent.
-- Notebooks that read the paper's files are not executed when the files are missing (a note is
-  logged), unless STEAM_REF_REQUIRE_DATA=1, when the build stops instead (CI).
+- Each tutorial declares what it needs in its metadata (``"steam_ref": {"needs": ["data:plaza"]}``).
+  One whose needs are missing is not executed: its page shows the code without outputs and a note
+  naming what is missing and the one command that gets it; STEAM_REF_REQUIRE_DATA=1 (or
+  STEAM_REF_REQUIRE_OPTIONAL=1, for gtsam) stops the build instead (CI).
 
 Generated files are written only when their text changes, so Sphinx rebuilds only what changed;
 ``modules/`` and ``cli/`` are not tracked by git.
@@ -19,15 +21,17 @@ import argparse
 import contextlib
 import importlib.util
 import io
+import json
 import os
 import re
 from pathlib import Path
+from typing import Any
 
 from sphinx.application import Sphinx
 from sphinx.util import logging
 
 from steam_ref.cli.commands import build_parser
-from steam_ref.datasets import gtsam_data_dir
+from steam_ref.datasets.fetch import DATASETS, missing_needs
 
 LOG = logging.getLogger(__name__)
 
@@ -37,18 +41,26 @@ MATHJAX_FILE = "tex-svg-full.js"
 # Pages that another line of work adds; listed in background.md, dropped from it while the file is absent.
 OPTIONAL_PAGES = ("conformance",)
 PAGES_LISTING_THEM = ("background",)
-# Files a notebook needs when its code names them (the same rule as tests/test_notebooks.py).
-READS_REFERENCE_DATA = re.compile(
-    r"""load_dataset\(\s*["'](plaza|paper-synthetic)["']|Syn_theta_Plaza|Plaza1_thrown|load_authors_run"""
-)
-# ... and the sets that ship in the gtsam wheel's Data/ folder (tests/test_notebooks.py has the same rules).
-READS_GTSAM_DATA = re.compile(r"""load_dataset\(\s*["'](victoria-park|plaza2)["']""")
-DATA_FILES = (
-    "Syn_theta_Plaza.mat",
-    "Plaza1_thrown_away_some_range.mat",
-    "authors/Syn_full_data_run.mat",
-    "authors/Plaza1_full_data_run.mat",
-)
+# Where a notebook's page says what it needs and how to get it (tests/test_docs_site.py looks for the class).
+NEEDS_NOTE_CLASS = "steam-ref-needs"
+# Notebooks left unexecuted by this build, by name, with the needs that were missing (set by conf.py).
+UNEXECUTED: dict[str, list[str]] = {}
+
+
+def notebook_needs(path: Path) -> list[str] | None:
+    """What a notebook declares it needs in its metadata (``"steam_ref": {"needs": [...]}``), or None
+    when it declares nothing: ``"data:NAME"`` (a data set of ``steam-ref data list``) or a package."""
+    declared = json.loads(path.read_text()).get("metadata", {}).get("steam_ref", {})
+    needs = declared.get("needs") if isinstance(declared, dict) else None
+    return [str(n) for n in needs] if isinstance(needs, list) else None
+
+
+def how_to_get(need: str) -> str:
+    """The one command that provides ``need``."""
+    kind, _, name = need.partition(":")
+    if kind == "data" and name in DATASETS and DATASETS[name].fetchable:
+        return f"steam-ref data fetch {name}"
+    return "pip install gtsam" if kind == "data" or need == "gtsam" else f"pip install {need}"
 
 
 # --- build-time choices (called from conf.py) -----------------------------------------------------
@@ -62,46 +74,57 @@ def default_data_dir(root: Path) -> None:
 
 
 def notebooks_without_their_data(folder: Path) -> list[str]:
-    """Patterns of the notebooks not to execute: those reading the paper's files while they are absent,
-    and those reading a set from the gtsam wheel's ``Data/`` folder while gtsam is not installed."""
-    return _paper_readers_without_files(folder) + _gtsam_readers_without_gtsam(folder)
+    """Patterns of the notebooks not to execute: those whose declared needs (their metadata) are absent.
+    Their pages show the code without outputs and a note naming what is missing and how to get it.
+
+    STEAM_REF_REQUIRE_DATA=1 makes a missing data set of the authors' repository stop the build, and
+    STEAM_REF_REQUIRE_OPTIONAL=1 a missing package or gtsam's data (CI)."""
+    UNEXECUTED.clear()
+    for path in sorted(folder.glob("*.ipynb")):
+        needs = notebook_needs(path)
+        if needs is None:
+            LOG.warning('%s declares no needs: add "steam_ref": {"needs": [...]} to its metadata', path.name)
+            continue
+        missing = missing_needs(needs)
+        for need in missing:
+            kind = "data" if how_to_get(need).startswith("steam-ref data fetch") else "optional"
+            variable = f"STEAM_REF_REQUIRE_{kind.upper()}"
+            if os.environ.get(variable) == "1":
+                raise RuntimeError(f"{variable}=1 but {path.name} needs {need}, which is missing ({how_to_get(need)})")
+        if missing:
+            UNEXECUTED[path.stem] = missing
+            LOG.info("steam_ref docs: %s not executed (missing %s)", path.name, ", ".join(missing))
+    return [f"*{name}.ipynb" for name in UNEXECUTED]
 
 
-def _gtsam_readers_without_gtsam(folder: Path) -> list[str]:
-    if gtsam_data_dir() is not None:
-        return []
-    readers = sorted(p.name for p in folder.glob("*.ipynb") if READS_GTSAM_DATA.search(p.read_text()))
-    if readers and os.environ.get("STEAM_REF_REQUIRE_OPTIONAL") == "1":
-        raise RuntimeError(
-            f"STEAM_REF_REQUIRE_OPTIONAL=1 but gtsam (its Data/ folder) is missing, which these tutorials read: "
-            f"{', '.join(readers)}"
-        )
-    if readers:
-        LOG.info(
-            "steam_ref docs: %s not executed (pip install gtsam: its Data/ folder has the set)", ", ".join(readers)
-        )
-    return [f"*{name}" for name in readers]
+def needs_note(missing: list[str]) -> str:
+    """The Markdown of the note put at the top of a notebook built without what it needs."""
+    what = ", ".join(f"`{n}`" for n in missing)
+    commands = list(dict.fromkeys(how_to_get(n) for n in missing))
+    fetch = [c for c in commands if c.startswith("steam-ref data fetch ")]
+    if len(fetch) > 1:
+        joined = "steam-ref data fetch " + " ".join(c.removeprefix("steam-ref data fetch ") for c in fetch)
+        commands = [joined] + [c for c in commands if c not in fetch]
+    lines = "\n".join(f"    {c}" for c in commands)
+    return (
+        f":::{{admonition}} Not run here: this build lacked {what}\n:class: warning {NEEDS_NOTE_CLASS}\n"
+        "This page shows the tutorial's code without its outputs: the site was built without what the "
+        f"tutorial needs ({what}). Get it with\n\n{lines}\n\nthen rebuild the site, or run the notebook.\n:::\n"
+    )
 
 
-def _paper_readers_without_files(folder: Path) -> list[str]:
-    where = os.environ.get("STEAM_REF_DATA_DIR")
-    missing = [f for f in DATA_FILES if not where or not (Path(where) / f).is_file()]
-    if not missing:
-        return []
-    readers = sorted(p.name for p in folder.glob("*.ipynb") if READS_REFERENCE_DATA.search(p.read_text()))
-    if readers and os.environ.get("STEAM_REF_REQUIRE_DATA") == "1":
-        folder = where or "$STEAM_REF_DATA_DIR (unset)"
-        raise RuntimeError(
-            f"STEAM_REF_REQUIRE_DATA=1 but the paper's files are missing ({missing[0]} in {folder}), "
-            f"which these tutorials read: {', '.join(readers)}"
-        )
-    if readers:
-        LOG.info(
-            "steam_ref docs: %s not executed (the paper's files are missing: set STEAM_REF_DATA_DIR, "
-            "see data/README.md)",
-            ", ".join(readers),
-        )
-    return [f"*{name}" for name in readers]
+def _mark_unexecuted(_app: Sphinx, docname: str, source: list[str]) -> None:
+    """A notebook left unexecuted: outputs dropped, and the note after its title cell."""
+    stem = docname.rpartition("/")[2]
+    if not docname.startswith("tutorials/") or stem not in UNEXECUTED:
+        return
+    nb = json.loads(source[0])
+    for cell in nb["cells"]:
+        if cell["cell_type"] == "code":
+            cell["outputs"], cell["execution_count"] = [], None
+    note = {"cell_type": "markdown", "id": "steam-ref-needs", "metadata": {}, "source": needs_note(UNEXECUTED[stem])}
+    nb["cells"].insert(1, note)
+    source[0] = json.dumps(nb)
 
 
 def local_mathjax() -> Path:
@@ -141,6 +164,22 @@ def _dotted(path: Path) -> str:
     return ".".join(("steam_ref", *path.relative_to(PACKAGE).with_suffix("").parts)).removesuffix(".__init__")
 
 
+def _folder_of(module: str) -> Path:
+    return PACKAGE.joinpath(*module.split(".")[1:])
+
+
+def _with_package(modules: list[str], placed: list[str]) -> list[str]:
+    """``modules``, each preceded by its package's ``__init__`` when the table lists the package's files
+    one by one (``paper/presets.py``): the package's docstring is documented with its first module."""
+    out: list[str] = []
+    for module in modules:
+        package = module.rpartition(".")[0]
+        if package not in ("", "steam_ref") and package not in placed and package not in out and package not in modules:
+            out.append(package)
+        out.append(module)
+    return out
+
+
 def all_modules() -> list[str]:
     return [_dotted(f) for f in sorted(PACKAGE.rglob("*.py")) if f.name != "__main__.py"]
 
@@ -171,9 +210,9 @@ def write_reference(out: Path) -> list[str]:
         for entries, owns in rows:
             page += [f"{', '.join(f'`{e}`' for e in entries)}: {owns}", ""]
         for entries, _ in rows:
-            for module in (m for e in entries for m in modules_of(e)):
+            for module in (m for e in entries for m in _with_package(modules_of(e), placed)):
                 placed.append(module)
-                package = (PACKAGE / module.removeprefix("steam_ref.").replace(".", "/") / "__init__.py").is_file()
+                package = module == "steam_ref" or (_folder_of(module) / "__init__.py").is_file()
                 # A package's __init__ re-exports its modules' names (its __all__): document only what
                 # it defines itself; each name is documented once, in the module that defines it.
                 options = ["   :members:", "   :show-inheritance:"] + (["   :ignore-module-all:"] if package else [])
@@ -259,7 +298,20 @@ def _drop_absent_optional_pages(_app: Sphinx, docname: str, source: list[str]) -
                 source[0] = re.sub(rf"^{page}\n", "", source[0], flags=re.M)
 
 
+def _reread_when_needs_changed(_app: Sphinx, env: Any, _added: set, _changed: set, _removed: set) -> list[str]:
+    """Tutorials whose needs were met at the last build and not now, or the reverse: read them again (their
+    source did not change, so Sphinx would keep the page as it was, note or outputs)."""
+    now = {f"tutorials/{stem}": missing for stem, missing in UNEXECUTED.items()}
+    before = getattr(env, "steam_ref_unexecuted", None)
+    env.steam_ref_unexecuted = now
+    if before is None:
+        return []
+    return sorted(d for d in set(before) | set(now) if before.get(d) != now.get(d))
+
+
 def setup(app: Sphinx) -> dict[str, object]:
     app.connect("builder-inited", _generate)
     app.connect("source-read", _drop_absent_optional_pages)
+    app.connect("source-read", _mark_unexecuted)
+    app.connect("env-get-outdated", _reread_when_needs_changed)
     return {"parallel_read_safe": True, "parallel_write_safe": True}

@@ -17,6 +17,7 @@ from ..bayes_tree import ISAM2Params
 from ..conformance import command as conformance_command
 from ..errors import SteamError
 from ..paper.presets import DEPARTURES, PRESETS, PRIORS, PaperSetup
+from . import data as data_command
 
 __all__ = ["build_parser", "check_output", "check_out_folder"]
 
@@ -71,9 +72,16 @@ def _add_run_arguments(run: argparse.ArgumentParser) -> None:
         "--dataset",
         type=_dataset,
         default="synthetic",
-        help="synthetic (generated), paper-synthetic, plaza, or a PATH (.mat or CMU text folder)",
+        help="synthetic (generated), paper-synthetic, plaza, plaza2, victoria-park, or a PATH (.mat, CMU text folder, "
+        "GTSAM .txt); `steam-ref data list` shows which are present",
     )
-    run.add_argument("--method", choices=("btgp", "pb", "pbvr"), default="btgp")
+    run.add_argument(
+        "--method",
+        choices=("btgp", "pb", "pbvr"),
+        default="btgp",
+        help="btgp: the incremental Bayes tree (the paper's Algorithm 1); pb: periodic batch (XL ordering); "
+        "pbvr: periodic batch with AMD variable reordering (default %(default)s)",
+    )
     run.add_argument(
         "--every",
         type=_positive_int,
@@ -156,7 +164,12 @@ def _add_run_arguments(run: argparse.ArgumentParser) -> None:
     run.add_argument(
         "--time-budget", type=_positive_float, default=None, help="stop after this many seconds (reported)"
     )
-    run.add_argument("--progress", action="store_true", help="show a progress bar")
+    run.add_argument(
+        "--progress",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="a progress bar on stderr (default: on when stderr is a terminal and without --json)",
+    )
     run.add_argument("--json", action="store_true", help="print one JSON line of figures")
     run.add_argument(
         "--save-estimates",
@@ -186,7 +199,10 @@ def build_parser() -> argparse.ArgumentParser:
     _add_run_arguments(sub.add_parser("run", help="stream a data set through one solver"))
     bat = sub.add_parser("batch", help="batch Gauss-Newton on all of a data set (PB or PBVR): RMSE and a plot")
     bat.add_argument(
-        "--dataset", type=_dataset, default="paper-synthetic", help="synthetic, paper-synthetic, plaza or a PATH"
+        "--dataset",
+        type=_dataset,
+        default="paper-synthetic",
+        help="synthetic, paper-synthetic, plaza, plaza2, victoria-park or a PATH",
     )
     bat.add_argument("--ordering", choices=("xl", "amd"), default="amd", help="xl: the paper's PB; amd: PBVR")
     bat.add_argument(
@@ -223,6 +239,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="folder searched for data files before $STEAM_REF_DATA_DIR and gtsam's Data/",
     )
     conformance_command.add_parser(sub)
+    data_command.add_parser(sub)
     return parser
 
 

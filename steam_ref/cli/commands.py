@@ -41,6 +41,8 @@ from ..paper.results import position_rmse
 from ..paper.solvers import BayesTreeSolver
 from ..plot.figures import plot_fidelity, plot_trajectory
 from ..variables import X
+from . import data as data_command
+from . import explain
 from .args import build_parser
 from .args import check_out_folder as _check_out_folder
 from .args import check_output as _check_output
@@ -74,7 +76,7 @@ def _run(args: argparse.Namespace) -> int:
         range_states=args.range_states,
         max_poses=args.max_poses,
         time_budget_s=args.time_budget,
-        progress=args.progress,
+        progress=explain.progress_wanted(args.progress, args.json),
         converge_at_end=args.converge_at_end,
     )
     data = load_dataset(args.dataset, data_dir=args.data_dir, seed=args.seed)
@@ -87,21 +89,22 @@ def _run(args: argparse.Namespace) -> int:
         "prior": args.prior,
         "qc_scale": args.qc_scale,
     }
+    summary |= {"what": explain.method_text(args.method, result.schedule.every)}
+    summary |= explain.data_figures(data, len(result.times))
     if data.ground_truth is None and not args.score_against_optimum:
         summary["score"] = (
             "none: the data set has no ground truth; --score-against-optimum scores it against the converged batch optimum"
         )
-    score = (
-        score_against_batch(result, Readings.from_dataset(data, setup), setup)
-        if data.ground_truth is None and args.score_against_optimum
-        else None
-    )
+    score = None
+    if data.ground_truth is None and args.score_against_optimum:  # minutes on Victoria Park
+        with explain.working("scoring against the batch optimum", options.progress):
+            score = score_against_batch(result, Readings.from_dataset(data, setup), setup)
     if score is not None:
         summary |= score.summary()
     if args.json:
         print(json.dumps(summary))
     else:
-        _print_summary(summary)
+        print(explain.run_text(summary))
     if args.save_estimates:
         save_estimates(args.save_estimates, result)
     if args.tree_dot and isinstance(estimator.solver, BayesTreeSolver):  # GTSAM's ISAM2.dot() text (bayes_tree/dot.py)
@@ -120,6 +123,7 @@ def _run(args: argparse.Namespace) -> int:
             dead_reckoning=data.dead_reckoning[:, 1:3],
             estimate_label=f"{result.method.upper()} estimate",
             truth_label="ground truth" if score is None else "batch optimum",
+            title=explain.plot_title(summary),
             path=args.plot,
         )
     return 0
@@ -136,45 +140,6 @@ def _preset(args: argparse.Namespace) -> str:
             "(plaza also fits a range correction to the file's own ground truth)"
         )
     return _PRESET_OF[args.dataset]
-
-
-def _convergence_note(summary: dict) -> str:
-    """What ``--converge-at-end`` did, for the human-readable summary ('' when it was not asked for)."""
-    if "convergence_s" not in summary:
-        return ""
-    verdict = "converged" if summary["converged_at_end"] else "NOT converged: see the warning"
-    return f" (of which converging at the end {summary['convergence_s']:.2f} s, {verdict})"
-
-
-def _print_summary(summary: dict) -> None:
-    state = "" if summary["completed"] else "  (cut short: time budget or --max-poses)"
-    if "score" in summary:
-        score = f"  not scored ({summary['score']}),"
-    elif "batch_distance_median_m" in summary:
-        score = (
-            f"  distance to the batch optimum: median {summary['batch_distance_median_m']} m, max {summary['batch_distance_max_m']} m "
-            f"({summary['batch_distance_unrotated_median_m']} m once turned by {summary['batch_rotation_rad']} rad about the origin); "
-            f"batch {summary['batch_s']} s\n "
-        )
-    else:
-        score = (
-            f"  RMSE {summary['rmse_m']} m over {summary['n_poses']} time steps"
-            + (
-                ""
-                if summary["n_estimated_states"] == summary["n_poses"]
-                else f" ({summary['rmse_estimated_m']} m at the estimated states)"
-            )
-            + ","
-        )
-    print(
-        f"{summary['method'].upper()}/{summary['every']} on {summary['dataset']}: skip {summary['skip']}, "
-        f"{'with' if summary['interpolate'] else 'without'} interpolation, {summary['n_estimated_states']} states\n"
-        + score
-        + f" total {summary['total_s']:.2f} s"
-        + _convergence_note(summary)
-        + ", "
-        f"update median {summary['update_s_median']} s, p95 {summary['update_s_p95']} s, peak RSS {summary['peak_rss_mb']} MB{state}"
-    )
 
 
 def save_estimates(path: str, result) -> None:
@@ -228,13 +193,14 @@ def _batch(args: argparse.Namespace) -> int:
         "iterations": len(result.iterations),
         "factor_nnz": result.factor_nnz,
         "backend": result.backend,
-    }
+    } | explain.data_figures(data, data.n_poses)
     if args.json:
         print(json.dumps(summary))
     else:
         print(
             f"batch ({args.ordering.upper()}) on {args.dataset}: RMSE {summary['rmse_m']} m over {data.n_poses} poses, "
-            f"{summary['total_s']:.2f} s, Cholesky factor {summary['factor_nnz']} nonzeros ({summary['backend']})"
+            f"{summary['total_s']:.2f} s, Cholesky factor {summary['factor_nnz']} nonzeros ({summary['backend']})\n"
+            + explain.data_lines(summary)
         )
     if args.plot:
         plot_trajectory(
@@ -262,8 +228,12 @@ def _fidelity(args: argparse.Namespace) -> int:
         row = fid.to_dict() | {
             "total_s": round(result.total_s, 2),
             "authors_total_s": round(float(authors.step_seconds.sum()), 2),
+            "data_files": explain.data_figures(data, 0)["data_files"]
+            + [explain.file_entry(find_authors_file(name, args.data_dir))],
         }
-        print(json.dumps(row) if args.json else _fidelity_text(row))
+        print(
+            json.dumps(row) if args.json else _fidelity_text(row) + "\n" + explain.data_lines(row | {"data_note": None})
+        )
     if args.plot:
         plot_fidelity(distances, path=args.plot)
     return 0
@@ -313,6 +283,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             "fidelity": _fidelity,
             "reproduce": _reproduce,
             "conformance": conformance_command.run,
+            "data": data_command.run,
         }
         return commands[args.command](args)
     except (SteamError, OSError, MemoryError) as exc:

@@ -11,7 +11,9 @@
   LANDMARK rows, as ``gtsam.load2D`` reads them).
 - :mod:`.synthetic`: :func:`generate_synthetic`, a task like the paper's Section IV-A.
 - :mod:`.search`: :func:`load_dataset` by name or path, searching :func:`default_data_dirs`
-  (``data_dir``, ``$STEAM_REF_DATA_DIR``, gtsam's ``Data/``).
+  (``data_dir``, ``$STEAM_REF_DATA_DIR``, the fetched files' cache folder, gtsam's ``Data/``).
+- :mod:`.fetch`: the paper's files by name, each with its source and sha256, fetched into the user's
+  cache folder (``steam-ref data fetch``); imported on its own (it loads pooch).
 
 Errors: a table of the wrong shape given to :class:`RangeDataset` raises :class:`ShapeError`;
 bad content (NaN, pose times not increasing, unknown landmark ids) raises :class:`DataError`; the

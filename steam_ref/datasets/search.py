@@ -1,7 +1,10 @@
 """Finding data: a data set by name or path, and the folders searched for named files.
 
-Named files are searched for in exactly three places, in order: the ``data_dir`` argument (the
-CLI's ``--data-dir``), ``$STEAM_REF_DATA_DIR``, the ``Data/`` folder of an installed gtsam wheel.
+Named files are searched for in exactly four places, in order: the ``data_dir`` argument (the
+CLI's ``--data-dir``), ``$STEAM_REF_DATA_DIR``, the user's cache folder where ``steam-ref data fetch``
+puts the files it downloads (:func:`data_cache_dir`), the ``Data/`` folder of an installed gtsam wheel.
+A folder the user names comes first; fetched files, verified by their sha256, before gtsam's, whose
+``plaza`` is the original uncleaned set.
 """
 
 from __future__ import annotations
@@ -10,6 +13,8 @@ import importlib.util
 import os
 from pathlib import Path
 
+import platformdirs
+
 from ..errors import DataError
 from .cmu import load_cmu_mat, load_cmu_text
 from .gtsam_text import load_gtsam_2d
@@ -17,12 +22,25 @@ from .landmarks import LandmarkDataset
 from .synthetic import generate_synthetic
 from .table import RangeDataset
 
-__all__ = ["DATA_DIR_ENV", "gtsam_data_dir", "default_data_dirs", "load_dataset", "load_range_dataset"]
+__all__ = [
+    "DATA_DIR_ENV",
+    "data_cache_dir",
+    "gtsam_data_dir",
+    "default_data_dirs",
+    "load_dataset",
+    "load_range_dataset",
+]
 
 DATA_DIR_ENV = "STEAM_REF_DATA_DIR"
 _FILES = {"paper-synthetic": "Syn_theta_Plaza.mat", "plaza": "Plaza1_thrown_away_some_range.mat"}
 # Named sets read from the files in gtsam's Data/ folder (found in any searched folder): the files, all in one folder.
 _GTSAM_SETS = {"victoria-park": ("victoria_park.txt",), "plaza2": ("Plaza2_DR.txt", "Plaza2_TD.txt", "Plaza2_.mat")}
+
+
+def data_cache_dir() -> Path:
+    """The folder ``steam-ref data fetch`` downloads into: ``data/`` in the user's cache folder
+    (platformdirs: ``~/.cache/steam_ref/data`` on Linux, ``$XDG_CACHE_HOME`` honoured). It may not exist."""
+    return Path(platformdirs.user_cache_dir("steam_ref")) / "data"
 
 
 def gtsam_data_dir() -> Path | None:
@@ -53,8 +71,9 @@ def _named_folder(value: str | os.PathLike | None, what: str) -> Path | None:
 def default_data_dirs(data_dir: str | os.PathLike | None = None) -> list[Path]:
     """Folders searched for data files, in order, without duplicates.
 
-    Exactly three places: ``data_dir`` (the CLI's ``--data-dir``), then ``$STEAM_REF_DATA_DIR``,
-    then the ``Data/`` folder of an installed gtsam wheel. Nothing relative to the working
+    Exactly four places: ``data_dir`` (the CLI's ``--data-dir``), then ``$STEAM_REF_DATA_DIR``, then
+    the fetched files' folder (:func:`data_cache_dir`, when it exists), then the ``Data/`` folder of an
+    installed gtsam wheel. Nothing relative to the working
     directory or to this package's location is searched. A ``data_dir`` given, or a
     ``$STEAM_REF_DATA_DIR`` set (an empty one counts as unset), must be an existing folder, else
     DataError: a mistyped folder would otherwise be passed over for the next place in silence.
@@ -62,7 +81,8 @@ def default_data_dirs(data_dir: str | os.PathLike | None = None) -> list[Path]:
     given = _named_folder(data_dir, "data_dir (--data-dir)")
     env = _named_folder(os.environ.get(DATA_DIR_ENV) or None, f"${DATA_DIR_ENV}")
     folders: list[Path] = []
-    for candidate in (given, env, gtsam_data_dir()):
+    cache = data_cache_dir() if data_cache_dir().is_dir() else None
+    for candidate in (given, env, cache, gtsam_data_dir()):
         if candidate is not None and Path(candidate).resolve() not in folders:
             folders.append(Path(candidate).resolve())
     return folders
@@ -82,7 +102,10 @@ def _find(file_names: tuple[str, ...], folders: list[Path]) -> Path | None:
 
 def _not_found(what: str, folders: list[Path], hint: str) -> DataError:
     """One line: what is missing, every folder searched, and where to put the file."""
-    looked = ", ".join(str(f) for f in folders) or f"nowhere (no --data-dir, ${DATA_DIR_ENV} unset, no gtsam)"
+    looked = (
+        ", ".join(str(f) for f in folders)
+        or f"nowhere (no --data-dir, ${DATA_DIR_ENV} unset, nothing fetched, no gtsam)"
+    )
     return DataError(f"{what} not found; looked in: {looked}. {hint}")
 
 
@@ -121,7 +144,10 @@ def load_dataset(
     folders = default_data_dirs(data_dir)
     if key == "synthetic":
         return generate_synthetic(seed=seed)
-    hint = f"Put the file in a folder and pass that folder as --data-dir (data_dir= in Python) or set ${DATA_DIR_ENV} to it"
+    hint = (
+        f"Fetch it with `steam-ref data fetch {key}`, or put the file in a folder and pass that folder as "
+        f"--data-dir (data_dir= in Python) or set ${DATA_DIR_ENV} to it"
+    )
     if key in _FILES:
         found = _find((_FILES[key],), folders)
         if found is not None:

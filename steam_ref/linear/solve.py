@@ -58,8 +58,11 @@ def _superlu(info: sp.csc_matrix) -> tuple[spla.SuperLU | None, int | None]:
             return None, None
         small = np.flatnonzero(nudged.U.diagonal() < 1e-9 * info.diagonal())
         return None, int(small[0]) if len(small) else None
+    # A pivot is judged against its own column's diagonal entry, which it can only lose to cancellation:
+    # scale-invariant, as CHOLMOD's test (pivot > 0) is. Against the largest pivot instead, a positive
+    # definite 𝓘 whose diagonal merely spans many decades (tiny time gaps) was refused.
     u = lu.U.diagonal()
-    tiny = np.flatnonzero(~(u > 1e-13 * np.max(np.abs(u))))
+    tiny = np.flatnonzero(~(u > 1e-13 * info.diagonal()))
     if len(tiny) or np.any(lu.perm_r != np.arange(len(u))):
         return None, int(tiny[0]) if len(tiny) else None
     return lu, None

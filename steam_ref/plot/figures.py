@@ -162,15 +162,17 @@ def plot_trajectory(
     dead_reckoning = None if dead_reckoning is None else _array("dead_reckoning", dead_reckoning, 2, columns=2)
     marks_true, marks_est = _xy("landmarks_true", landmarks_true), _xy("landmarks_estimated", landmarks_estimated)
     ax = _axes(ax, path, figsize=(6, 6))
-    if truth_xy is not None:
-        ax.plot(*truth_xy.T, "g-", lw=1.5, label=truth_label)
+    # The estimate is drawn first, the reference over it (thin, dashed, on top): where the two agree, both
+    # stay visible. True landmarks are red stars, estimated ones black crosses over them.
     if dead_reckoning is not None:
-        ax.plot(*dead_reckoning.T, "y-", lw=1, label="dead reckoning")
-    ax.plot(*estimate_xy.T, "b-", lw=1, label=estimate_label)
+        ax.plot(*dead_reckoning.T, "-", color="goldenrod", lw=1, label="dead reckoning", zorder=1)
+    ax.plot(*estimate_xy.T, "b-", lw=1.5, alpha=0.8, label=estimate_label, zorder=2)
+    if truth_xy is not None:
+        ax.plot(*truth_xy.T, "--", color="limegreen", lw=1, label=truth_label, zorder=3)
     if marks_true is not None:
-        ax.plot(*marks_true.T, "g*", ms=9, label="landmarks (true)")
+        ax.plot(*marks_true.T, "r*", ms=10, label="landmarks (true)", zorder=4)
     if marks_est is not None:
-        ax.plot(*marks_est.T, "k+", ms=9, label="landmarks (estimated)")
+        ax.plot(*marks_est.T, "k+", ms=9, label="landmarks (estimated)", zorder=5)
     ax.set(aspect="equal", xlabel="x (m)", ylabel="y (m)")
     if title:
         ax.set_title(title)
@@ -178,19 +180,27 @@ def plot_trajectory(
     return _save(ax, path)
 
 
+def _ran_its_course(run: Any) -> bool:
+    """Completed, or stopped at the prefix asked for (``options.max_poses``) rather than by a budget."""
+    limit = getattr(getattr(run, "options", None), "max_poses", None)
+    steps = getattr(run, "n_steps_processed", len(run.cumulative_s))
+    return bool(run.completed) or (limit is not None and steps >= limit)
+
+
 def plot_timing(runs: Mapping[str, Any], ax: Any = None, *, title: str | None = None, path: str | None = None) -> Any:
     """Cumulative computation time against time step, one line per run (Fig. 3/4, left).
 
     runs: label → run, any object with ``cumulative_s`` ((n_steps,) seconds after each processed
-    step) and ``completed`` (False: cut short by a time budget, marked "(budget)" in the legend),
-    e.g. :class:`steam_ref.paper.online.RunResult`.
+    step) and ``completed`` (False: cut short), e.g. :class:`steam_ref.paper.online.RunResult`. A run
+    cut short by its time budget is marked "(budget)" in the legend; one that stopped at the prefix it
+    was asked for (``options.max_poses``, as ``reproduce --quick`` runs) is not cut short by anything.
     """
     for label, run in runs.items():
         _attributes(f"runs[{label!r}]", run, "cumulative_s", "completed")
     ax = _axes(ax, path, figsize=(5, 4))
     for label, run in runs.items():
         cumulative = np.asarray(run.cumulative_s, dtype=float)
-        ax.plot(np.arange(len(cumulative)), cumulative, label=label + ("" if run.completed else " (budget)"))
+        ax.plot(np.arange(len(cumulative)), cumulative, label=label + ("" if _ran_its_course(run) else " (budget)"))
     ax.set(xlabel="time step", ylabel="cumulative time (s)", yscale="log")
     if title:
         ax.set_title(title)

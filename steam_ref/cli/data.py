@@ -1,0 +1,63 @@
+"""``steam-ref data list`` and ``steam-ref data fetch [NAME ...]``: the paper's data by name.
+
+``list`` shows each data set: what it is, where its files come from, the licence note, its size, and
+whether it is present and where (the first folder of the search path that holds it). ``fetch`` downloads
+the named sets (default: every one the authors' repository holds) into the user's cache folder,
+each file checked against its sha256 (:mod:`steam_ref.datasets.fetch`); the search path finds them there.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from ..datasets import fetch as fetching
+from ..datasets.search import data_cache_dir
+
+__all__ = ["add_parser", "run"]
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    """Add ``data`` with its ``list`` and ``fetch`` subcommands to the command's subparsers."""
+    data = sub.add_parser("data", help="the paper's data by name: list them, fetch them (sha256-checked)")
+    what = data.add_subparsers(dest="data_command", required=True, parser_class=type(data))
+    what.add_parser("list", help="each data set: source, licence note, size, present or not and where")
+    get = what.add_parser(
+        "fetch",
+        help="download data sets from the authors' repository (pinned commit) into the user's cache folder",
+    )
+    get.add_argument(
+        "names",
+        nargs="*",
+        metavar="NAME",
+        help=f"data sets to fetch (default: all of {', '.join(n for n, s in fetching.DATASETS.items() if s.fetchable)})",
+    )
+    get.add_argument(
+        "--base-url",
+        default=None,
+        help=f"a mirror to fetch the files from by name (default: ${fetching.DATA_URL_ENV}, else the authors' repository)",
+    )
+
+
+def _size(n: int) -> str:
+    return f"{n:,} B" if n else "-"
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.data_command == "list":
+        for name, s in fetching.DATASETS.items():
+            found = fetching.locate(name)
+            # the searched folder that holds it (an authors' run sits in its authors/ subfolder)
+            where = f"present  {found[0].parents[len(Path(s.files[0].local).parts) - 1]}" if found else "absent"
+            print(f"{name:<16} {_size(sum(f.size for f in s.files)):>12}  {where}")
+            print(f"{'':<16} {s.what}; from {s.source}; licence: {s.licence}")
+        print(f"fetched files go to {data_cache_dir()}; fetch them with `steam-ref data fetch [NAME ...]`")
+        return 0
+    progress = sys.stderr.isatty()
+    url = fetching.base_url(args.base_url)
+    for name in args.names or [n for n, s in fetching.DATASETS.items() if s.fetchable]:
+        (paths,) = fetching.fetch([name], base=url, progress=progress).values()
+        for p in paths:
+            print(f"{name}: {p} (sha256 {fetching.file_digest(p)[:12]}, verified)")
+    return 0

@@ -1,0 +1,71 @@
+"""A newcomer's first hour, as files the repository ships: each check is a friction one met (issue 20).
+
+The README read on a package index (links absolute, under the project's Source URL), the install that
+fails without SuiteSparse explained, the virtual environment ignored, the extras that the tutorials
+need, and the command's help naming every data set it accepts.
+"""
+
+from __future__ import annotations
+
+import re
+import subprocess
+
+import pytest
+from requirements import REPO_ROOT
+
+from steam_ref.cli.args import build_parser
+from steam_ref.datasets import fetch
+
+README = (REPO_ROOT / "README.md").read_text()
+PYPROJECT = (REPO_ROOT / "pyproject.toml").read_text()  # read as text: tomllib needs Python 3.11
+
+
+def _toml_list(key: str) -> str:
+    """The text of the TOML list ``key = [...]`` of pyproject.toml."""
+    (found,) = re.findall(rf"^{key} = \[(.*?)\]", PYPROJECT, flags=re.M | re.S)
+    return found
+
+
+def test_readme_links_work_on_a_package_index():
+    """The long description is shown away from the repository: a relative link there leads nowhere."""
+    links = re.findall(r"\]\(([^)]+)\)", README)
+    assert links
+    relative = [link for link in links if not re.match(r"https?://", link)]
+    assert not relative, f"relative links in README.md: {relative}"
+    (source,) = re.findall(r'^Source = "([^"]+)"', PYPROJECT, flags=re.M)
+    for link in links:
+        if "steam_ref" in link:
+            assert link.startswith(source), link
+
+
+def test_the_cholmod_build_failure_is_explained():
+    for page in (README, (REPO_ROOT / "CONTRIBUTING.md").read_text()):
+        assert "cholmod.h: No such file or directory" in " ".join(page.split())
+
+
+def test_a_virtual_environment_is_ignored(tmp_path):
+    if not (REPO_ROOT / ".git").exists():
+        pytest.skip("not a git checkout")
+    out = subprocess.run(["git", "check-ignore", "-q", ".venv/bin/python"], cwd=REPO_ROOT, check=False)
+    assert out.returncode == 0, ".venv is not in .gitignore"
+
+
+def test_the_notebooks_extra_installs_what_the_tutorials_need():
+    assert '"gtsam' in _toml_list("notebooks")  # tutorial 07 reads gtsam's Data/
+    core = _toml_list("dependencies")
+    assert '"pooch' in core and '"platformdirs' in core  # steam-ref data fetch after `pip install .`
+
+
+@pytest.mark.parametrize("command", ["run", "batch"])
+def test_the_dataset_help_names_every_data_set(command):
+    sub = next(a for a in build_parser()._actions if a.dest == "command")
+    option = next(a for a in sub.choices[command]._actions if a.dest == "dataset")
+    names = [n for n in fetch.DATASETS if not n.startswith("authors-")]
+    missing = [n for n in [*names, "synthetic"] if n not in option.help]
+    assert not missing, f"steam-ref {command} --dataset help omits {missing}"
+
+
+def test_every_option_of_run_has_help():
+    sub = next(a for a in build_parser()._actions if a.dest == "command")
+    bare = [a.option_strings[0] for a in sub.choices["run"]._actions if a.option_strings and not a.help]
+    assert not bare, f"options of steam-ref run without help: {bare}"
