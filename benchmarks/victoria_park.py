@@ -190,7 +190,7 @@ def main() -> None:
         row = {
             "dataset": "victoria-park",
             "method": "btgp",
-            "every": setup.every,
+            "every": setup.schedule.every,
             "n_poses": readings.n_poses,
             "repeat": args.repeat,
         }

@@ -109,6 +109,7 @@ BAD = {
     "negative-range": (["run", "--dataset", "{negative}", "--preset", "plaza"], "ranges[2, 3] (range) = -1.5"),
     "nan": (["batch", "--dataset", "{nan}", "--preset", "plaza"], "GT[3, 2] (y) is nan"),
     "crashed-scipy": (["run", "--dataset", "{crash}", "--preset", "plaza"], "unknown MAT data type"),
+    "score-with-ground-truth": (["run", "--score-against-optimum"], "'synthetic' has ground truth"),
     "path-without-preset-run": (
         ["run", "--dataset", "{good}"],
         "is a path: say which parameters it runs with, --preset",

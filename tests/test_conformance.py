@@ -26,6 +26,7 @@ from steam_ref.cli.commands import main
 from steam_ref.conformance import KITS, SHIPPED, SUITES, run_case
 from steam_ref.conformance.checker import compare_quantity
 from steam_ref.conformance.kitio import dumps, kit_files, read_index, read_suite
+from steam_ref.errors import SteamError
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -307,3 +308,21 @@ def test_the_paper_suite_holds_the_authors_saved_runs(shared_data):
         )  # 'diff' is ground truth minus estimate at the states
         assert case["expected"]["rmse_m"] == pytest.approx(rmse, rel=1e-12)
         assert case["independent"] and "authors" in case["source"]
+
+
+def test_the_paper_suites_set_up_is_written_as_the_kit_states_it():
+    """The builder writes the set-up flat, field for field as SETUP_FIELDS documents it, and equal to the
+    shipped kit's inputs: the schedule's fields are the set-up's schedule (issue 18 moved them)."""
+    from steam_ref.conformance.kitio import plain
+    from steam_ref.conformance.paper import setup_inputs
+    from steam_ref.conformance.paper_spec import SETUP_FIELDS
+    from steam_ref.paper.presets import PaperSetup
+
+    shipped = json.loads((KITS[2] / "paper" / "cases.json").read_text())["cases"]
+    assert len(shipped) == 2
+    for case in shipped:
+        written = plain(setup_inputs(PaperSetup.named(case["inputs"]["setup"]["name"])))
+        assert list(written) == list(SETUP_FIELDS)
+        assert json.loads(json.dumps(written)) == case["inputs"]["setup"]
+    with pytest.raises(SteamError, match="couples the seeding batch solve"):
+        setup_inputs(PaperSetup.plaza().with_schedule(initial_batch=False))

@@ -86,7 +86,7 @@ def _add_run_arguments(run: argparse.ArgumentParser) -> None:
         "--every",
         type=_positive_int,
         default=None,
-        help="update after every N landmark readings (1 or 10 in the paper; default: the preset's, 10 for victoria-park, else 1)",
+        help="update after every N landmark readings (1 or 10 in the paper; default: the preset's, PaperSetup.schedule.every)",
     )
     run.add_argument("--skip", type=_positive_int, default=1, help="time steps between estimated states")
     run.add_argument(
@@ -124,8 +124,9 @@ def _add_run_arguments(run: argparse.ArgumentParser) -> None:
     run.add_argument(
         "--prior",
         choices=PRIORS,
-        default="wnoa",
-        help="motion prior: the paper's white noise on acceleration, or on jerk, or Singer's model (docs/derivations.md)",
+        default=None,
+        help="motion prior: the paper's white noise on acceleration, or on jerk, or Singer's model (docs/derivations.md); "
+        "default: the preset's (wnoa)",
     )
     run.add_argument(
         "--qc-scale",
@@ -136,8 +137,8 @@ def _add_run_arguments(run: argparse.ArgumentParser) -> None:
     run.add_argument(
         "--singer-time-constant",
         type=_positive_float,
-        default=PaperSetup.singer_time_constant,
-        help="Singer prior: the acceleration's time constant 1/α in seconds (default %(default)s)",
+        default=None,
+        help=f"Singer prior: the acceleration's time constant 1/α in seconds (default: the preset's, {PaperSetup.singer_time_constant})",
     )
     run.add_argument(
         "--data-dir",
@@ -149,14 +150,14 @@ def _add_run_arguments(run: argparse.ArgumentParser) -> None:
     run.add_argument(
         "--relinearize-threshold",
         type=_non_negative_float,
-        default=ISAM2Params.relinearize_threshold,
-        help="BTGP: relinearize a variable whose increment exceeds this (default %(default)s)",
+        default=None,
+        help=f"BTGP: relinearize a variable whose increment exceeds this (default: the preset's; GTSAM's is {ISAM2Params.relinearize_threshold})",
     )
     run.add_argument(
         "--relinearize-skip",
         type=_positive_int,
-        default=ISAM2Params.relinearize_skip,
-        help="BTGP: check relinearization every N-th update (default %(default)s, GTSAM's)",
+        default=None,
+        help=f"BTGP: check relinearization every N-th update (default: the preset's; GTSAM's is {ISAM2Params.relinearize_skip})",
     )
     run.add_argument(
         "--max-poses", type=_number(int, 2, strict=False), default=None, help="process only the first N poses"

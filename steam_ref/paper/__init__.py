@@ -9,6 +9,7 @@ Above the algorithm (which knows nothing of data sets or schedules), in the orde
   and stream);
 - :mod:`~steam_ref.paper.problem`, :mod:`~steam_ref.paper.converge`: the batch problem and its optimum;
 - :mod:`~steam_ref.paper.solvers`: PB, PBVR and BTGP behind one interface;
+- :mod:`~steam_ref.paper.options`: :class:`StreamOptions`, what one run chooses on top of its set-up;
 - :mod:`~steam_ref.paper.results`, :mod:`~steam_ref.paper.online`: a run's results, and the run loop;
 - :mod:`~steam_ref.paper.fidelity`, :mod:`~steam_ref.paper.experiments`: against the authors' saved
   runs; Fig. 3 and 4.

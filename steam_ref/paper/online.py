@@ -41,7 +41,6 @@ class ScheduleClock:
 
     def __init__(self, schedule: Schedule, last_pose: int):
         self.schedule, self.last_pose = schedule, last_pose
-        self.every, self.start_after = schedule.every, schedule.start_after_ranges
         self.released = 0  # landmark readings (ranges, bearings, bearing-ranges) released so far
         self.since_update = 0  # landmark readings released since the last update
         self.started = False  # the solver has had its first update
@@ -52,9 +51,13 @@ class ScheduleClock:
         self.since_update += step.n_landmark_readings
         if step.pose == self.last_pose:
             return True
-        if step.pose == 0 or not step.is_state or (not self.started and self.released < self.start_after):
+        if (
+            step.pose == 0
+            or not step.is_state
+            or (not self.started and self.released < self.schedule.start_after_ranges)
+        ):
             return False  # the scripts loop over odometry rows: pose 0's factors go with pose 1's update
-        return self.since_update >= self.every
+        return self.since_update >= self.schedule.every
 
     def updated(self) -> None:
         """The solver has just been updated."""

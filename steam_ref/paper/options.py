@@ -73,6 +73,6 @@ def _is_real(value: object) -> bool:
 
 
 def _check_count(name: str, value: object, lowest: int) -> None:
-    """None (the set-up's, or no limit), or an integer >= ``lowest``: :func:`~steam_ref.arguments.integer`."""
+    """None (no limit), or an integer >= ``lowest``: :func:`~steam_ref.arguments.integer`."""
     if value is not None:
         integer(name, value, lowest)

@@ -38,11 +38,10 @@ def _json_float(x: float) -> float | None:
     return None if not np.isfinite(x) else round(float(x), 6)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class RunResult:
     """What one streamed run did and produced."""
 
-    method: str  # 'btgp', 'pb' or 'pbvr'
     options: StreamOptions  # what the run chose
     schedule: Schedule  # when its solver updated (the set-up's)
     times: NDArray  # (n,) time of every pose covered by the estimate
@@ -93,7 +92,6 @@ class RunResult:
             rmse = position_rmse(trajectory[:, :2], truth)
             rmse_states = position_rmse(trajectory[state_poses, :2], truth[state_poses])
         return cls(
-            method=options.method,
             options=options,
             schedule=schedule,
             times=times,
@@ -113,6 +111,11 @@ class RunResult:
             convergence_s=convergence_s,
             converged_at_end=converged_at_end,
         )
+
+    @property
+    def method(self) -> str:
+        """'btgp', 'pb' or 'pbvr' (the options')."""
+        return self.options.method
 
     @property
     def n_states(self) -> int:
