@@ -227,6 +227,25 @@ class CliqueTree(Generic[C]):
                 self.parent[ch] = c
         self._undo = []
 
+    def remove_subtrees(self, cids: Iterable[int]) -> None:
+        """Delete the cliques ``cids``, which must be whole subtrees (every child of one is among them).
+
+        Marginalizing leaves: the rest of the tree is left exactly as it was.  [bayes_tree.marginalize]
+        """
+        gone = set(cids)
+        for c in gone:
+            if not gone.issuperset(self.children[c]):
+                raise SteamError(f"clique {c} has children outside the cliques to delete: not a whole subtree")
+        for c in gone:
+            p = self.parent.pop(c)
+            if p is None:
+                self.roots.pop(c, None)
+            elif p not in gone:
+                self.children[p].remove(c)
+            for v in self.cliques.pop(c).frontals:
+                del self.frontal_of[v]
+            del self.children[c]
+
     def snapshot(self) -> CliqueTree[C]:
         """A structural copy (cliques shared, links copied), e.g. the tree "before" an update to draw.
 

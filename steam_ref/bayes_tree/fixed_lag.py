@@ -1,0 +1,157 @@
+"""Fixed-lag smoothing: iSAM2 that forgets the variables older than a lag.  [K12, derivations §10]
+
+:class:`FixedLagSmoother` is an :class:`~steam_ref.bayes_tree.IncrementalSolver` whose updates carry
+timestamps. After each update every variable whose timestamp is older than the newest one minus the
+lag (``t < t_newest - lag``, GTSAM's rule) is marginalized out of the Bayes tree by
+:func:`~steam_ref.bayes_tree.marginalize.marginalize`: its factors go, a :class:`MarginalFactor` on
+its separator stays, frozen at the linearization point of the moment. The tree, the factors and the
+estimate then hold only the window, so memory and time per update stay flat however long the run.
+
+A variable without a timestamp (a landmark, unless the caller gives one) is never marginalized; a
+timestamp may be refreshed (give a landmark the time it was last seen, and it is forgotten a lag
+after that). A marginalized variable given a value again (a landmark seen again) enters as a new
+variable: what was learnt of it before lives on only in the marginal factor on the window. Queries of a marginalized variable raise :class:`UnknownVariableError` naming the update
+that marginalized it; its estimate at that moment is in :attr:`FixedLagSmoother.last_marginalization`
+(the caller keeps it if it wants it: the smoother does not, so that memory stays flat).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Mapping
+
+from numpy.typing import NDArray
+
+from ..arguments import number
+from ..errors import SteamError, UnknownVariableError
+from ..factors import Factor, check_factors
+from ..variables import Key, Values
+from .isam import IncrementalSolver, UpdateReport
+from .marginalize import MarginalizationReport, marginalize
+from .params import ISAM2Params
+
+__all__ = ["FixedLagSmoother"]
+
+
+class FixedLagSmoother(IncrementalSolver):
+    """iSAM2 over a sliding window of ``lag`` seconds: older variables are marginalized after each update.
+
+    ``update(..., timestamps={key: t})`` gives new (or refreshed) timestamps in seconds.
+    """
+
+    def __init__(self, lag: float, params: ISAM2Params | None = None, **changes: object) -> None:
+        lag = number("lag", lag)
+        if not lag > 0:
+            raise SteamError(f"lag must be a number of seconds > 0, got lag={lag!r}")
+        super().__init__(params, **changes)
+        self.lag = float(lag)  # seconds of history kept
+        self._times: dict[Key, float] = {}  # timestamp of each timed variable in the window
+        self._gone: dict[Key, tuple[int, float]] = {}  # marginalized key → (update, its timestamp)
+        self.newest = -math.inf  # the latest timestamp seen
+        self.n_marginalized = 0  # variables marginalized so far
+        self.peak_window = 0  # most variables held at once (measured after each update, before marginalizing)
+        self.last_marginalization: MarginalizationReport | None = None  # what the last update forgot
+
+    def update(  # type: ignore[override]
+        self,
+        new_factors: Factor | Iterable[Factor] = (),
+        new_values: Mapping[Key, NDArray] | None = None,
+        *,
+        timestamps: Mapping[Key, float] | None = None,
+        relinearize: bool = True,
+    ) -> UpdateReport:
+        """:meth:`IncrementalSolver.update`, then marginalize the variables older than the lag.
+
+        Raises :class:`UnknownVariableError` for a factor or timestamp naming a marginalized variable
+        (the solver is then as it was). A failure of the marginalization itself leaves the update done
+        and nothing marginalized.
+        """
+        times = self._checked_times(timestamps, new_values)
+        factors = check_factors("new_factors", new_factors)
+        fresh = () if new_values is None else new_values
+        for f in factors:
+            for k in f.keys:
+                if k not in fresh:
+                    self._held("a new factor names", k)
+        report = super().update(factors, new_values, relinearize=relinearize)
+        for k in fresh:
+            self._gone.pop(k, None)  # a marginalized variable given anew is a new variable
+        self._times.update(times)
+        self.newest = max(self.newest, *times.values()) if times else self.newest
+        self.peak_window = max(self.peak_window, len(self))
+        cutoff = self.newest - self.lag
+        old = [k for k, t in self._times.items() if t < cutoff]
+        self.last_marginalization = None
+        if old:
+            done = marginalize(self, old)
+            for k in done.keys:
+                self._gone[k] = (self._steps, self._times.pop(k))
+            self.n_marginalized += len(done.keys)
+            self.last_marginalization = done
+        return report
+
+    def _checked_times(
+        self, timestamps: Mapping[Key, float] | None, new_values: Mapping[Key, NDArray] | None
+    ) -> dict[Key, float]:
+        """The timestamps as floats; each names a held variable or a new one."""
+        if timestamps is None:
+            return {}
+        if not isinstance(timestamps, Mapping):
+            raise SteamError(f"timestamps must be a mapping key -> seconds (or None), got {timestamps!r}")
+        out = {}
+        new = () if new_values is None else new_values
+        for k, t in timestamps.items():
+            if k not in new:
+                self._held("timestamps names", k)
+            if k not in self._dims and k not in new:
+                raise UnknownVariableError(f"timestamps names {k!r}, which is neither held nor in new_values")
+            out[k] = number(f"timestamps[{k!r}]", t)
+        return out
+
+    def _held(self, what: str, key: Key) -> None:
+        """UnknownVariableError when ``key`` was marginalized, saying when."""
+        gone = self._gone.get(key)
+        if gone is not None:
+            raise UnknownVariableError(
+                f"{what} {key!r}, which was marginalized at update {gone[0]} "
+                f"(its timestamp {gone[1]:g} s fell more than the lag {self.lag:g} s behind)"
+            )
+
+    def was_marginalized(self, key: Key) -> bool:
+        """True when ``key`` was held once and has been marginalized."""
+        return key in self._gone
+
+    @property
+    def timestamps(self) -> dict[Key, float]:
+        """The timestamp of each timed variable in the window (a copy)."""
+        return dict(self._times)
+
+    # --- queries: a marginalized variable is named as such -----------------------------------
+
+    def estimate_of(self, key: Key) -> NDArray:
+        self._held("the estimate of", key)
+        return super().estimate_of(key)
+
+    def marginal_covariance(self, key: Key) -> NDArray:
+        self._held("the covariance of", key)
+        return super().marginal_covariance(key)
+
+    def joint_marginal_covariance(self, keys: Iterable[Key]) -> NDArray:
+        keys = list(keys)
+        for k in keys:
+            self._held("the covariance of", k)
+        return super().joint_marginal_covariance(keys)
+
+    def joint_marginals(self, groups: Iterable[Iterable[Key]]) -> list[NDArray]:
+        groups = [list(g) for g in groups]
+        for g in groups:
+            for k in g:
+                self._held("the covariance of", k)
+        return super().joint_marginals(groups)
+
+    def marginals(self, keys: Iterable[Key] | None = None) -> dict[Key, NDArray]:
+        if keys is not None:
+            keys = list(keys)
+            for k in keys:
+                self._held("the covariance of", k)
+        return super().marginals(keys)
