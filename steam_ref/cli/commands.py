@@ -27,7 +27,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..conformance import command as conformance_command
-from ..datasets import load_dataset, load_range_dataset
+from ..datasets import generate_synthetic, load_dataset, load_range_dataset
 from ..errors import SteamError
 from ..paper.experiments import reproduce
 from ..paper.fidelity import AUTHORS_RUNS, compare, find_authors_file, load_authors_run
@@ -44,6 +44,7 @@ from .args import check_output as _check_output
 
 __all__ = ["main", "build_parser"]  # build_parser lives in cli_args
 
+DEFAULT_STEPS, DEFAULT_LANDMARKS = 1500, 298  # generate_synthetic's defaults: a landmark every ~5 steps
 _PRESET_OF = {
     "synthetic": "synthetic",
     "paper-synthetic": "synthetic",
@@ -72,8 +73,11 @@ def _run(args: argparse.Namespace) -> int:
         isam2=setup.isam2_params().replace(
             relinearize_threshold=args.relinearize_threshold, relinearize_skip=args.relinearize_skip
         ),
+        lag=args.lag,
     )
-    data = load_dataset(args.dataset, data_dir=args.data_dir, seed=args.seed)
+    if args.lag is not None and args.save_estimates is not None:
+        raise SteamError("--save-estimates writes every marginal covariance, which --lag forgets: drop one of them")
+    data = _run_dataset(args)
     result = run_online(data, setup, options, covariances=args.save_estimates is not None)
     summary = result.summary(args.dataset) | {
         "departures": args.departure,
@@ -110,6 +114,16 @@ def _run(args: argparse.Namespace) -> int:
             path=args.plot,
         )
     return 0
+
+
+def _run_dataset(args: argparse.Namespace):
+    """The data set of ``run``: by name or path, or the generated task of ``--steps`` steps."""
+    if args.steps is None:
+        return load_dataset(args.dataset, data_dir=args.data_dir, seed=args.seed)
+    if args.dataset != "synthetic":
+        raise SteamError(f"--steps generates the synthetic task: it needs --dataset synthetic, got {args.dataset!r}")
+    n_landmarks = max(1, round(args.steps * DEFAULT_LANDMARKS / DEFAULT_STEPS))  # the default task's density
+    return generate_synthetic(n_steps=args.steps, n_landmarks=n_landmarks, seed=args.seed)
 
 
 def _convergence_note(summary: dict) -> str:

@@ -35,7 +35,14 @@ from .frontend import FrontEnd, Layout, NewStep
 from .presets import PaperSetup
 from .readings import Readings
 from .results import RunResult, peak_rss_mb
-from .solvers import METHODS, PB_MAX_ITERATIONS, PB_RELATIVE_TOLERANCE, OnlineSolver, make_solver
+from .solvers import (
+    METHODS,
+    PB_MAX_ITERATIONS,
+    PB_RELATIVE_TOLERANCE,
+    FixedLagTreeSolver,
+    OnlineSolver,
+    make_solver,
+)
 
 __all__ = ["StreamOptions", "Schedule", "StreamingEstimator", "run_online", "INITIAL_SOLVE"]
 
@@ -61,6 +68,7 @@ class StreamOptions:
     max_poses: int | None = None  # process only this prefix of the poses
     time_budget_s: float | None = None  # stop when the run has taken this long (reported)
     progress: bool = False  # tqdm progress bar
+    lag: float | None = None  # BTGP only: fixed-lag smoothing, forget states older than this (seconds)
 
     def __post_init__(self) -> None:
         if self.method not in METHODS:
@@ -80,6 +88,7 @@ class StreamOptions:
             raise SteamError(f"pb_relative_tolerance must be a finite number >= 0, got {self.pb_relative_tolerance!r}")
         if self.isam2 is not None and not isinstance(self.isam2, ISAM2Params):
             raise SteamError(f"isam2 must be an ISAM2Params (or None for the set-up's), got {self.isam2!r}")
+        _check_lag(self)
 
     @property
     def layout(self) -> Layout:
@@ -92,6 +101,21 @@ class StreamOptions:
         if unknown:
             raise SteamError(f"StreamOptions has no field {unknown[0]!r}")
         return replace(self, **changes)
+
+
+def _check_lag(o: StreamOptions) -> None:
+    """A lag is a number of seconds > 0, for BTGP only, and not with converge_at_end (which needs every factor)."""
+    if o.lag is None:
+        return
+    if not (_is_real(o.lag) and 0 < o.lag < np.inf):
+        raise SteamError(f"lag must be a finite number of seconds > 0 (or None), got {o.lag!r}")
+    if o.method != "btgp":
+        raise SteamError(
+            f"lag (fixed-lag smoothing) is for BTGP only: {o.method.upper()} re-solves every state at every "
+            "update and has no tree to marginalize from; use method 'btgp'"
+        )
+    if o.converge_at_end:
+        raise SteamError("lag and converge_at_end cannot go together: converging at the end needs every factor kept")
 
 
 def _is_real(value: object) -> bool:
@@ -164,6 +188,8 @@ class StreamingEstimator:
     def _new_solver(self) -> OnlineSolver:
         o = self.options
         isam2 = self.setup.isam2_params() if o.isam2 is None else o.isam2
+        if o.lag is not None:
+            return FixedLagTreeSolver(isam2, o.lag, self.readings.times)
         return make_solver(
             o.method, isam2=isam2, pb_relative_tolerance=o.pb_relative_tolerance, pb_max_iterations=o.pb_max_iterations
         )
@@ -201,7 +227,11 @@ class StreamingEstimator:
         if not self.schedule.started and self.schedule.start_after > 0:
             values = levenberg_marquardt(FactorGraph(self._pending), values, **INITIAL_SOLVE).values
         self.solver.update(self._pending, values)
-        self.factors.extend(self._pending)
+        if isinstance(self.solver, FixedLagTreeSolver):  # keep no factor: the window forgets them
+            forgotten = (k.index for k in self.solver.forgotten if k.kind == "l")
+            self.front.landmarks.difference_update(forgotten)  # seen again, a landmark enters anew
+        else:
+            self.factors.extend(self._pending)
         if pose == self.schedule.last_pose:
             for _ in range(self.final_updates):
                 self.solver.update([], Values())
@@ -292,7 +322,14 @@ class StreamingEstimator:
             peak_rss_mb(),
             self.convergence_seconds if self.convergence is not None else None,
             self.convergence.converged if self.convergence is not None else None,
+            *self._lag_figures(),
         )
+
+    def _lag_figures(self) -> tuple[int | None, int | None]:
+        """With a lag: variables marginalized so far and the peak window; else (None, None)."""
+        if not isinstance(self.solver, FixedLagTreeSolver):
+            return None, None
+        return self.solver.inner.n_marginalized, self.solver.inner.peak_window
 
 
 def run_online(

@@ -26,6 +26,7 @@ class RunOptions(Protocol):
     range_states: bool
     max_poses: int | None
     converge_at_end: bool
+    lag: float | None
 
     @property
     def layout(self) -> Layout: ...
@@ -79,6 +80,8 @@ class RunResult:
     converged_at_end: bool | None = (
         None  # converge_at_end: whether the optimum passed its check; None: not run (not asked, or cut short)
     )
+    n_marginalized: int | None = None  # with a lag: variables marginalized (states and landmarks)
+    peak_window: int | None = None  # with a lag: most variables the solver held at once
 
     @classmethod
     def of(
@@ -99,6 +102,8 @@ class RunResult:
         peak_rss,
         convergence_s=None,
         converged_at_end=None,
+        n_marginalized=None,
+        peak_window=None,
     ) -> RunResult:
         """Package a run, scoring it against ``ground_truth`` (CMU GT layout, x, y in columns 1-2) if given."""
         rmse = rmse_states = float("nan")
@@ -125,6 +130,8 @@ class RunResult:
             peak_rss,
             convergence_s,
             converged_at_end,
+            n_marginalized,
+            peak_window,
         )
 
     @property
@@ -168,5 +175,9 @@ class RunResult:
                 "converged_at_end": self.converged_at_end,
             }
             if o.converge_at_end
+            else {}
+        ) | (
+            {"lag_s": o.lag, "n_marginalized": self.n_marginalized, "peak_window": self.peak_window}
+            if o.lag is not None
             else {}
         )

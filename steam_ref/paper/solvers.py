@@ -2,17 +2,19 @@
 
 - ``pb``: periodic batch Gauss-Newton over everything so far, XL ordering, warm-started;
 - ``pbvr``: the same with AMD reordering at every update;
-- ``btgp``: the Bayes tree (:class:`steam_ref.bayes_tree.IncrementalSolver`, Alg. 1 steps 2-7).
+- ``btgp``: the Bayes tree (:class:`steam_ref.bayes_tree.IncrementalSolver`, Alg. 1 steps 2-7);
+  with a lag, :class:`FixedLagTreeSolver` (:class:`steam_ref.bayes_tree.FixedLagSmoother`).
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 
+import numpy as np
 from numpy.typing import NDArray
 
 from ..batch import gauss_newton
-from ..bayes_tree import IncrementalSolver, ISAM2Params
+from ..bayes_tree import FixedLagSmoother, IncrementalSolver, ISAM2Params
 from ..covariance import sparse_joint_covariance, sparse_joint_marginals, sparse_marginals
 from ..errors import SteamError
 from ..factors import Factor
@@ -26,6 +28,7 @@ __all__ = [
     "OnlineSolver",
     "PeriodicBatchSolver",
     "BayesTreeSolver",
+    "FixedLagTreeSolver",
     "make_solver",
 ]
 
@@ -138,6 +141,49 @@ class BayesTreeSolver(OnlineSolver):
 
     def joint_covariances(self, groups: Sequence[Sequence[Key]]) -> list[NDArray]:
         return self.inner.joint_marginals(groups)  # one pass down the tree where a clique holds a group
+
+
+class FixedLagTreeSolver(BayesTreeSolver):
+    """BTGP over a window of ``lag`` seconds: :class:`~steam_ref.bayes_tree.FixedLagSmoother` in a stream.
+
+    A state is stamped with its pose's time (``times[pose]``), a landmark with the newest state's time
+    of each update whose factors name it, so it is forgotten a lag after it was last seen. The stream's
+    view of a marginalized variable is its estimate at the moment it was marginalized (the lagged
+    estimate, what a fixed-lag smoother reports); its covariance is no longer known and a query raises
+    the smoother's :class:`~steam_ref.errors.UnknownVariableError`.
+    """
+
+    name = "btgp"
+
+    def __init__(self, params: ISAM2Params | None, lag: float, times: NDArray):
+        self.inner: FixedLagSmoother = FixedLagSmoother(lag, params)
+        self.reports: list = []
+        self.times = np.asarray(times, dtype=float)  # time of each pose
+        self.retired: dict[Key, NDArray] = {}  # marginalized variable → its estimate then
+        self.forgotten: list[Key] = []  # the variables the last update marginalized
+
+    def update(self, factors: list[Factor], values: Values) -> None:
+        stamps = {k: float(self.times[k.index]) for k in values if k.kind == "x"}
+        newest = max(stamps.values(), default=self.inner.newest)
+        if np.isfinite(newest):
+            stamps |= {k: newest for f in factors for k in f.keys if k.kind != "x"}
+        self.reports.append(self.inner.update(factors, values, timestamps=stamps))
+        done = self.inner.last_marginalization
+        self.forgotten = [] if done is None else list(done.keys)
+        if done is not None:
+            self.retired.update(done.estimates)
+        for k in values:
+            self.retired.pop(k, None)  # entered again: the window's estimate is the one
+
+    def estimate_of(self, key: Key) -> NDArray:
+        retired = self.retired.get(key)
+        return self.inner.estimate_of(key) if retired is None else retired
+
+    def estimate(self) -> Values:
+        out = self.inner.estimate()
+        for k, v in self.retired.items():
+            out.insert(k, v)
+        return out
 
 
 def make_solver(
