@@ -79,7 +79,11 @@ def test_newest_state_as_gtsam_fixed_lag_smoothers(seed, lag):
         x = transition(dt, 3) @ x + np.linalg.cholesky(process_noise(dt, np.diag(QC))) @ rng.normal(size=6)
         init = x + rng.normal(size=6)
         graph, values = gtsam.NonlinearFactorGraph(), gtsam.Values()
-        graph.add(gtsam.WnoaMotionFactorPoint3(gtsam.StateData(P(i - 1), V(i - 1), t), gtsam.StateData(P(i), V(i), t + dt), QC))
+        graph.add(
+            gtsam.WnoaMotionFactorPoint3(
+                gtsam.StateData(P(i - 1), V(i - 1), t), gtsam.StateData(P(i), V(i), t + dt), QC
+            )
+        )
         factors = [GPPriorFactor.wnoa(X(i - 1), X(i), dt, np.diag(QC))]
         t += dt
         if i % 2 == 0:
@@ -94,6 +98,8 @@ def test_newest_state_as_gtsam_fixed_lag_smoothers(seed, lag):
         for name, s in theirs.items():
             mean, cov, held = newest(s, i)
             np.testing.assert_allclose(ours.estimate_of(X(i)), mean, rtol=0, atol=1e-9, err_msg=f"{name}, step {i}")
-            np.testing.assert_allclose(ours.marginal_covariance(X(i)), cov, rtol=0, atol=1e-9, err_msg=f"{name}, step {i}")
+            np.testing.assert_allclose(
+                ours.marginal_covariance(X(i)), cov, rtol=0, atol=1e-9, err_msg=f"{name}, step {i}"
+            )
             assert len(ours) == held, f"{name} holds {held} states, steam_ref {len(ours)}, step {i}"
     assert ours.n_marginalized > 0

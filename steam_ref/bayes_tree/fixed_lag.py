@@ -4,14 +4,17 @@
 timestamps. After each update every variable whose timestamp is older than the newest one minus the
 lag (``t < t_newest - lag``, GTSAM's rule) is marginalized out of the Bayes tree by
 :func:`~steam_ref.bayes_tree.marginalize.marginalize`: its factors go, a :class:`MarginalFactor` on
-its separator stays, frozen at the linearization point of the moment. The tree, the factors and the
-estimate then hold only the window, so memory and time per update stay flat however long the run.
+its separator stays, frozen at the linearization point of the moment. The tree, the factors and
+the estimate then hold only the window, so memory and time per update stay flat however long the
+run.
 
 A variable without a timestamp (a landmark, unless the caller gives one) is never marginalized; a
 timestamp may be refreshed (give a landmark the time it was last seen, and it is forgotten a lag
 after that). A marginalized variable given a value again (a landmark seen again) enters as a new
-variable: what was learnt of it before lives on only in the marginal factor on the window. Queries of a marginalized variable raise :class:`UnknownVariableError` naming the update
-that marginalized it; its estimate at that moment is in :attr:`FixedLagSmoother.last_marginalization`
+variable: what was learnt of it before lives on only in the marginal factor on the window.
+
+Queries of a marginalized variable raise :class:`UnknownVariableError` naming the update that
+marginalized it; its estimate at that moment is in :attr:`FixedLagSmoother.last_marginalization`
 (the caller keeps it if it wants it: the smoother does not, so that memory stays flat).
 """
 
@@ -25,7 +28,7 @@ from numpy.typing import NDArray
 from ..arguments import number
 from ..errors import SteamError, UnknownVariableError
 from ..factors import Factor, check_factors
-from ..variables import Key, Values
+from ..variables import Key
 from .isam import IncrementalSolver, UpdateReport
 from .marginalize import MarginalizationReport, marginalize
 from .params import ISAM2Params
@@ -46,13 +49,13 @@ class FixedLagSmoother(IncrementalSolver):
         super().__init__(params, **changes)
         self.lag = float(lag)  # seconds of history kept
         self._times: dict[Key, float] = {}  # timestamp of each timed variable in the window
-        self._gone: dict[Key, tuple[int, float]] = {}  # marginalized key → (update, its timestamp)
+        self._gone: dict[Key, int] = {}  # marginalized key → the update that marginalized it
         self.newest = -math.inf  # the latest timestamp seen
         self.n_marginalized = 0  # variables marginalized so far
         self.peak_window = 0  # most variables held at once (measured after each update, before marginalizing)
         self.last_marginalization: MarginalizationReport | None = None  # what the last update forgot
 
-    def update(  # type: ignore[override]
+    def update(
         self,
         new_factors: Factor | Iterable[Factor] = (),
         new_values: Mapping[Key, NDArray] | None = None,
@@ -85,7 +88,8 @@ class FixedLagSmoother(IncrementalSolver):
         if old:
             done = marginalize(self, old)
             for k in done.keys:
-                self._gone[k] = (self._steps, self._times.pop(k))
+                self._gone[k] = self._steps
+                del self._times[k]
             self.n_marginalized += len(done.keys)
             self.last_marginalization = done
         return report
@@ -113,8 +117,8 @@ class FixedLagSmoother(IncrementalSolver):
         gone = self._gone.get(key)
         if gone is not None:
             raise UnknownVariableError(
-                f"{what} {key!r}, which was marginalized at update {gone[0]} "
-                f"(its timestamp {gone[1]:g} s fell more than the lag {self.lag:g} s behind)"
+                f"{what} {key!r}, which was marginalized at update {gone} "
+                f"(its timestamp fell more than the lag, {self.lag:g} s, behind the newest)"
             )
 
     def was_marginalized(self, key: Key) -> bool:

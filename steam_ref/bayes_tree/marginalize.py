@@ -32,6 +32,7 @@ b_m - A_m (θ̄' - θ̄_S) (Eq. 10.4), GTSAM's ``LinearContainerFactor``.
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, ClassVar
@@ -87,11 +88,11 @@ class MarginalFactor(Factor):
         x = np.concatenate(xs, axis=-1)
         return np.einsum("...ij,...j->...i", self.A, x - self.theta0) - self.b  # [derivations Eq. 10.4]
 
-    def jacobians(self, *xs: NDArray) -> tuple[NDArray, ...]:  # noqa: ARG002 (linear: constant)
+    def jacobians(self, *xs: NDArray) -> tuple[NDArray, ...]:
         bounds = np.cumsum((0, *self.dims))
         shape = xs[0].shape[:-1] + self.A.shape[-2:]
         A = np.broadcast_to(self.A, shape)
-        return tuple(A[..., :, a:z] for a, z in zip(bounds[:-1], bounds[1:], strict=True))
+        return tuple(A[..., :, a:z] for a, z in itertools.pairwise(bounds))
 
 
 @dataclass(frozen=True)
@@ -140,9 +141,7 @@ def _cliques_of(solver: IncrementalSolver, drop: set[Key]) -> list[int]:
 def _are_leaves(solver: IncrementalSolver, cids: list[int], drop: set[Key]) -> bool:
     """True when ``cids`` are whole subtrees whose frontals are all in ``drop`` (step 2 applies)."""
     tree, inside = solver.tree, set(cids)
-    return all(
-        drop.issuperset(tree.cliques[c].frontals) and inside.issuperset(tree.children[c]) for c in cids
-    )
+    return all(drop.issuperset(tree.cliques[c].frontals) and inside.issuperset(tree.children[c]) for c in cids)
 
 
 def marginalize(solver: IncrementalSolver, keys: Iterable[Key]) -> MarginalizationReport:

@@ -84,6 +84,7 @@ def _run(args: argparse.Namespace) -> int:
         "prior": args.prior,
         "qc_scale": args.qc_scale,
     }
+    summary |= result.lag_summary()
     score = (
         None
         if data.ground_truth is not None

@@ -62,7 +62,7 @@ def _observed_landmarks(
 ) -> NDArray:
     """(n_poses,) index of the landmark ranged at each pose: one drawn among its n_nearest,
     except that at its anchor pose a landmark is the one ranged (so every landmark is seen)."""
-    k, chunk = min(n_nearest, len(xy)), max(1, 2_000_000 // len(xy))  # rows at a time: memory stays small
+    k, chunk = min(n_nearest, len(xy)), max(1, 200_000 // len(xy))  # rows at a time: memory stays small
     nearest = np.empty((len(path), k), dtype=int)
     for a in range(0, len(path), chunk):
         p = path[a : a + chunk]

@@ -176,8 +176,10 @@ class RunResult:
             }
             if o.converge_at_end
             else {}
-        ) | (
-            {"lag_s": o.lag, "n_marginalized": self.n_marginalized, "peak_window": self.peak_window}
-            if o.lag is not None
-            else {}
         )
+
+    def lag_summary(self) -> dict:
+        """With a lag, the figures of fixed-lag smoothing the CLI's ``--json`` adds; else nothing."""
+        if self.options.lag is None:
+            return {}
+        return {"lag_s": self.options.lag, "n_marginalized": self.n_marginalized, "peak_window": self.peak_window}

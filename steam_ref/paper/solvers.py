@@ -19,7 +19,7 @@ from ..covariance import sparse_joint_covariance, sparse_joint_marginals, sparse
 from ..errors import SteamError
 from ..factors import Factor
 from ..graph import FactorGraph
-from ..variables import Key, Values
+from ..variables import Key, Values, X
 
 __all__ = [
     "METHODS",
@@ -34,6 +34,7 @@ __all__ = [
 
 METHODS = ("btgp", "pb", "pbvr")
 PB_RELATIVE_TOLERANCE = 1e-5  # PB/PBVR stop when the cost falls by less than this fraction (GTSAM's default)
+KEPT_REPORTS = 100  # a lagged BTGP keeps the UpdateReports of its latest updates only
 PB_MAX_ITERATIONS = 100  # PB/PBVR Gauss-Newton iterations per update at most (GTSAM's default)
 
 
@@ -157,9 +158,11 @@ class FixedLagTreeSolver(BayesTreeSolver):
 
     def __init__(self, params: ISAM2Params | None, lag: float, times: NDArray):
         self.inner: FixedLagSmoother = FixedLagSmoother(lag, params)
-        self.reports: list = []
+        self.reports: list = []  # UpdateReport of the latest KEPT_REPORTS updates only: memory stays flat
         self.times = np.asarray(times, dtype=float)  # time of each pose
-        self.retired: dict[Key, NDArray] = {}  # marginalized variable → its estimate then
+        self._states = np.zeros((0, 0))  # (n_poses, n) estimate of each marginalized state X(pose), row by pose
+        self._retired_states: set[int] = set()  # poses of the marginalized states
+        self._landmarks: dict[Key, NDArray] = {}  # marginalized landmark → its estimate then
         self.forgotten: list[Key] = []  # the variables the last update marginalized
 
     def update(self, factors: list[Factor], values: Values) -> None:
@@ -168,20 +171,35 @@ class FixedLagTreeSolver(BayesTreeSolver):
         if np.isfinite(newest):
             stamps |= {k: newest for f in factors for k in f.keys if k.kind != "x"}
         self.reports.append(self.inner.update(factors, values, timestamps=stamps))
+        del self.reports[:-KEPT_REPORTS]
         done = self.inner.last_marginalization
         self.forgotten = [] if done is None else list(done.keys)
-        if done is not None:
-            self.retired.update(done.estimates)
+        for k, v in ({} if done is None else done.estimates).items():
+            if k.kind == "x":
+                if not self._states.size:
+                    self._states = np.zeros((len(self.times), len(v)))
+                self._states[k.index] = v
+                self._retired_states.add(k.index)
+            else:
+                self._landmarks[k] = v
         for k in values:
-            self.retired.pop(k, None)  # entered again: the window's estimate is the one
+            self._landmarks.pop(k, None)  # entered again: the window's estimate is the one
+
+    def retired(self, key: Key) -> NDArray | None:
+        """The estimate ``key`` had when it was marginalized (None while it is in the window, or never held)."""
+        if key.kind == "x":
+            return self._states[key.index] if key.index in self._retired_states else None
+        return self._landmarks.get(key)
 
     def estimate_of(self, key: Key) -> NDArray:
-        retired = self.retired.get(key)
+        retired = self.retired(key)
         return self.inner.estimate_of(key) if retired is None else retired
 
     def estimate(self) -> Values:
         out = self.inner.estimate()
-        for k, v in self.retired.items():
+        for i in sorted(self._retired_states):
+            out.insert(X(i), self._states[i])
+        for k, v in self._landmarks.items():
             out.insert(k, v)
         return out
 
