@@ -5,6 +5,7 @@ Usage::
     steam-ref run [--dataset NAME_OR_PATH] [--method {btgp,pb,pbvr}] [--every N] [--skip K]
                   [--interpolate/--no-interpolate] [--preset {synthetic,plaza,victoria-park}] [--data-dir DIR]
                   [--converge-at-end] [--json] [--save-estimates FILE.npz] [--plot FILE.png]
+                  [--lag SECONDS] [--steps N]
     steam-ref batch [--dataset NAME_OR_PATH] [--ordering {xl,amd}] [--json] [--plot FILE.png]
     steam-ref fidelity [--dataset {plaza,paper-synthetic,all}] [--json] [--plot FILE.png]
     steam-ref reproduce [--quick] [--out DIR]
