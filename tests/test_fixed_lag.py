@@ -10,6 +10,7 @@ tests/test_fixed_lag_gtsam.py.
 
 from __future__ import annotations
 
+import sys
 from dataclasses import dataclass, replace
 from typing import ClassVar
 
@@ -324,3 +325,29 @@ def test_a_failed_marginalization_changes_nothing():
     with pytest.raises(UnknownVariableError, match="x99"):
         marginalize(solver, [X(0), X(99)])
     assert solver.tree.cliques == tree and len(solver.factors) == n and solver._dims == held
+
+
+def test_a_failure_during_re_elimination_puts_the_tree_back(monkeypatch):
+    stream = LinearStream(8, 2, fix_every=2)
+    solver = IncrementalSolver(**EXACT)
+    everything = []
+    for factors, values, _ in [stream.initial()] + [stream.step() for _ in range(8)]:
+        everything += factors
+        solver.update(factors, values)
+    tree, parents, n, held = (
+        dict(solver.tree.cliques),
+        dict(solver.tree.parent),
+        len(solver.factors),
+        dict(solver._dims),
+    )
+
+    def broken(*args, **kwargs):
+        raise SteamError("interrupted")
+
+    monkeypatch.setattr(sys.modules["steam_ref.bayes_tree.marginalize"], "eliminate", broken)
+    with pytest.raises(SteamError, match="interrupted"):
+        marginalize(solver, [X(4)])
+    assert solver.tree.cliques == tree and solver.tree.parent == parents
+    assert len(solver.factors) == n and solver._dims == held and solver.tree.problems() == []
+    monkeypatch.undo()
+    check_window(solver, everything)
