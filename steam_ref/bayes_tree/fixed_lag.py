@@ -36,6 +36,8 @@ from .params import ISAM2Params
 
 __all__ = ["FixedLagSmoother"]
 
+OLD_PART = 0.0  # once the window is full, the variables older than newest - OLD_PART * lag go first, oldest first
+
 
 class _UpdateRecord:
     """For each kind of key, the update that marginalized key ``index`` (0: never), 4 bytes a key.
@@ -119,6 +121,26 @@ class FixedLagSmoother(IncrementalSolver):
             self.n_marginalized += len(done.keys)
             self.last_marginalization = done
         return report
+
+    def _elimination_order(self, variables: list[Key], factor_keys: list, last: list[Key]) -> list[Key]:
+        """Once the window is full: the timed variables older than newest - OLD_PART * lag (by default all but
+        the new ones) first, oldest first; then minimum degree with ``last`` last [K12 Sec. 5]. The states next to
+        leave the window then sit in leaf cliques, cut off with no re-elimination (marginalize step 2); minimum
+        degree alone puts the oldest state, which the marginal factor joins to many landmarks, above newer ones.
+        GTSAM's fixed-lag smoother constrains its ordering likewise (the keys to marginalize first)."""
+        if not self.n_marginalized:  # the window is not full yet: iSAM2's own order, as without a lag
+            return super()._elimination_order(variables, factor_keys, last)
+        half, times = self.newest - self.lag * OLD_PART, self._times
+        old = sorted((k for k in variables if times.get(k, math.inf) < half and k not in last), key=lambda k: times[k])
+        if not old:
+            return super()._elimination_order(variables, factor_keys, last)
+        groups = [set(keys) for keys in factor_keys]
+        for v in old:  # the elimination game on the keys [K12 Alg. 1]: v's factors become one on its neighbours
+            touching = [g for g in groups if v in g]
+            groups = [g for g in groups if v not in g] + [set().union(*touching) - {v}]
+        gone = set(old)
+        rest = [k for k in variables if k not in gone]
+        return old + super()._elimination_order(rest, [tuple(g) for g in groups if g], last)
 
     def _checked_times(
         self, timestamps: Mapping[Key, float] | None, new_values: Mapping[Key, NDArray] | None

@@ -202,7 +202,7 @@ class IncrementalSolver:
         with timer("order"):
             linear = [self._cached(j) for j in fids] + [self.tree.cliques[o].marginal for o in orphans]
             variables = [k for c in removed.values() for k in c.frontals] + list(theta_new)
-            order = constrained_min_degree(variables, [f.keys for f in linear], last=theta_nf)
+            order = self._elimination_order(variables, [f.keys for f in linear], theta_nf)
         # 4e. Eliminate into new cliques and attach back the orphans.   [YIB step 5, Eq. 24-25]
         with timer("eliminate"):
             cliques, parents, owner = eliminate(order, linear, self._dims, fids + [None] * len(orphans))
@@ -223,6 +223,10 @@ class IncrementalSolver:
             timer.total(),
             timer.seconds,
         )
+
+    def _elimination_order(self, variables: list[Key], factor_keys: list, last: list[Key]) -> list[Key]:
+        """Minimum degree with ``last`` eliminated last [K12 Sec. 5]; a subclass may order the ties."""
+        return constrained_min_degree(variables, factor_keys, last=last)
 
     def _rollback(self, journal: Journal) -> None:
         """Put everything back as it was before a failed update (the failure came before re-insertion)."""

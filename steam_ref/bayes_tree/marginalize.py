@@ -139,9 +139,26 @@ def _cliques_of(solver: IncrementalSolver, drop: set[Key]) -> list[int]:
 
 
 def _are_leaves(solver: IncrementalSolver, cids: list[int], drop: set[Key]) -> bool:
-    """True when ``cids`` are whole subtrees whose frontals are all in ``drop`` (step 2 applies)."""
-    tree, inside = solver.tree, set(cids)
-    return all(drop.issuperset(tree.cliques[c].frontals) and inside.issuperset(tree.children[c]) for c in cids)
+    """True when every clique holding ``drop`` is frontal only in ``drop`` (step 2 applies)."""
+    return all(drop.issuperset(solver.tree.cliques[c].frontals) for c in cids)
+
+
+def _home(solver: IncrementalSolver, keys: tuple[Key, ...], tops: list[int]) -> int:
+    """The clique that eliminates a factor on ``keys``: the deepest holding one of them as frontal.
+
+    The keys lie within the variables of the parent of one of the cut cliques' tops; walking up from
+    there, the first clique with one of them frontal holds them all.
+    """
+    tree, wanted = solver.tree, set(keys)
+    for t in tops:
+        c = tree.parent[t]
+        if c is None or not wanted <= set(tree.cliques[c].frontals) | set(tree.cliques[c].separator):
+            continue
+        while c is not None and wanted.isdisjoint(tree.cliques[c].frontals):
+            c = tree.parent[c]  # a root holds its variables as frontals: the walk ends there at the latest
+        if c is not None:
+            return c
+    raise SteamError(f"no clique holds the marginal factor's variables {keys}")
 
 
 def marginalize(solver: IncrementalSolver, keys: Iterable[Key]) -> MarginalizationReport:
@@ -169,15 +186,17 @@ def marginalize(solver: IncrementalSolver, keys: Iterable[Key]) -> Marginalizati
     order_drop = order[: len(drop)]
     estimates = {k: solver.estimate_of(k).copy() for k in order_drop}
     leaves = _are_leaves(solver, cids, drop)
-    if leaves:  # step 2: each top's cached f(S) is the marginal of its subtree (Eq. 10.3)
-        tops = [c for c in cids if tree.parent[c] not in set(cids)]
-        schur = [(tree.cliques[c].marginal, tree.parent[c]) for c in tops if tree.parent[c] is not None]
+    if leaves:  # step 2: cut the cliques of D off; the Schur complement of D's factors goes to their parents
+        inside = set(cids)
+        tops = [c for c in cids if tree.parent[c] not in inside]
+        schur_factors = eliminate_variables(order_drop, adjacent, solver._dims)  # (Eq. 10.1-10.3)
+        homes = [_home(solver, gf.keys, tops) for gf in schur_factors]
         removed = list(cids)
         new_cids: list[int] = []
-        factor_ids = _add_marginal_factors(solver, [gf for gf, _ in schur])
-        for (_, parent), j in zip(schur, factor_ids, strict=True):
-            _record_factor(solver, parent, j)  # type: ignore[arg-type]
-        tree.remove_subtrees(removed)
+        factor_ids = _add_marginal_factors(solver, schur_factors)
+        for home, j in zip(homes, factor_ids, strict=True):
+            _record_factor(solver, home, j)
+        tree.cut(removed)  # a child holding no variable of D hangs under the nearest clique left, its f(S) kept
     else:  # step 3: re-eliminate the affected part with D first
         schur_factors = eliminate_variables(order_drop, adjacent, solver._dims)
         removed_cliques, orphans, cliques, parents, owner, kept = _reeliminate(solver, cids, drop, schur_factors)
@@ -220,7 +239,7 @@ def _reeliminate(
         linear = [solver._cached(j) for j in kept] + schur + [tree.cliques[o].marginal for o in orphans]
         rest = [k for c in removed.values() for k in c.frontals if k not in drop]
         last = [k for c, cl in removed.items() if c in roots for k in cl.frontals if k not in drop]
-        order = constrained_min_degree(rest, [f.keys for f in linear], last=last)
+        order = solver._elimination_order(rest, [f.keys for f in linear], last)
         n_own = len(kept) + len(schur)
         cliques, parents, owner = eliminate(order, linear, solver._dims, list(range(n_own)) + [None] * len(orphans))
     except Exception:

@@ -227,15 +227,22 @@ class CliqueTree(Generic[C]):
                 self.parent[ch] = c
         self._undo = []
 
-    def remove_subtrees(self, cids: Iterable[int]) -> None:
-        """Delete the cliques ``cids``, which must be whole subtrees (every child of one is among them).
+    def cut(self, cids: Iterable[int]) -> dict[int, int | None]:
+        """Delete the cliques ``cids``; each child of one that is not deleted hangs under the nearest ancestor
+        that is not (a root when there is none). Returns child → its new parent.
 
-        Marginalizing leaves: the rest of the tree is left exactly as it was.  [bayes_tree.marginalize]
+        Marginalizing leaves [bayes_tree.marginalize]: the caller vouches that every such child's separator lies
+        within its new parent's variables (it holds none of the deleted frontals).
         """
         gone = set(cids)
+        moved: dict[int, int | None] = {}
         for c in gone:
-            if not gone.issuperset(self.children[c]):
-                raise SteamError(f"clique {c} has children outside the cliques to delete: not a whole subtree")
+            keep = [ch for ch in self.children[c] if ch not in gone]
+            if keep:
+                up = self.parent[c]
+                while up is not None and up in gone:
+                    up = self.parent[up]
+                moved.update(dict.fromkeys(keep, up))
         for c in gone:
             p = self.parent.pop(c)
             if p is None:
@@ -245,6 +252,9 @@ class CliqueTree(Generic[C]):
             for v in self.cliques.pop(c).frontals:
                 del self.frontal_of[v]
             del self.children[c]
+        for ch, up in moved.items():
+            self.attach(ch, up)
+        return moved
 
     def snapshot(self) -> CliqueTree[C]:
         """A structural copy (cliques shared, links copied), e.g. the tree "before" an update to draw.
