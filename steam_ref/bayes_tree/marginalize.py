@@ -13,11 +13,13 @@ one. :func:`marginalize` does it in the tree, in the update's style:
 
 1. *The cliques of D.* Every clique holding a variable of D (frontal or in a separator) is found by
    walking down from the clique where it is frontal [K12 Alg. 5].
-2. *Leaves: nothing to re-eliminate.* When those cliques form whole subtrees (each is frontal only in
-   D, and all its children hold D too), the tree minus them is already the Bayes tree of p(Θ): the
-   cliques above are conditionals of Θ only, and they were computed with the subtrees' cached
-   factor f(S) [YIB Eq. 24], which is exactly the marginal (Eq. 10.3). The subtrees are cut off, and
-   f(S) is kept as a :class:`MarginalFactor` eliminated in the parent, for its next re-elimination.
+2. *Leaves: nothing to re-eliminate.* When each of those cliques is frontal only in D, the tree minus
+   them is already the Bayes tree of p(Θ): the cliques above are conditionals of Θ only, computed with
+   the cut cliques' cached factor f(S) [YIB Eq. 24], the marginal (Eq. 10.3). They are cut off; a child
+   holding no variable of D hangs under the nearest clique left, with its own f(S); the Schur complement
+   of D's own factors (Eq. 10.1-10.2) becomes a :class:`MarginalFactor` of the clique that eliminates its
+   first variable, for that clique's next re-elimination. (When the cut cliques are whole subtrees it
+   equals their f(S).)
 3. *Otherwise: re-eliminate the affected part with D first.* (GTSAM's ``marginalizeLeaves`` needs D in
    leaves; an ordering with D first puts it there.) The cliques of D and their ascendants are removed,
    as an update removes its top [K12 Alg. 4]. D is eliminated first from the factors adjacent to it
