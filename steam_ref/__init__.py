@@ -55,6 +55,7 @@ _HOMES = {
     "BayesTree": "bayes_tree",
     "IncrementalSolver": "bayes_tree",
     "ISAM2Params": "bayes_tree",
+    "FixedLagSmoother": "bayes_tree",
     "RangeDataset": "datasets",
     "LandmarkDataset": "datasets",
     "load_dataset": "datasets",
@@ -81,7 +82,7 @@ def __dir__() -> list[str]:
 
 if TYPE_CHECKING:  # what a type checker and an IDE see: the same names, imported eagerly
     from .batch import BatchResult, batch_solve, gauss_newton, levenberg_marquardt
-    from .bayes_tree import BayesTree, IncrementalSolver, ISAM2Params
+    from .bayes_tree import BayesTree, FixedLagSmoother, IncrementalSolver, ISAM2Params
     from .covariance import marginal_covariances
     from .datasets import LandmarkDataset, RangeDataset, generate_synthetic, load_dataset
     from .factors import (
@@ -142,6 +143,7 @@ __all__ = [
     "BayesTree",
     "IncrementalSolver",
     "ISAM2Params",
+    "FixedLagSmoother",
     "RangeDataset",
     "LandmarkDataset",
     "load_dataset",

@@ -5,11 +5,16 @@
 - :mod:`.tree`: :class:`Clique` (a Gaussian conditional), :class:`BayesTree`, elimination and
   back-substitution;
 - :mod:`.params`: :class:`ISAM2Params`, the solver's thresholds (GTSAM's defaults);
-- :mod:`.isam`: :class:`IncrementalSolver`, the update of Algorithm 1 (steps 2-7).
+- :mod:`.isam`: :class:`IncrementalSolver`, the update of Algorithm 1 (steps 2-7);
+- :mod:`.marginalize`: :func:`marginalize`, variables out of the tree, leaving their marginal factor;
+- :mod:`.fixed_lag`: :class:`FixedLagSmoother`, iSAM2 over a sliding window of a lag in seconds.
 """
 
-from .isam import IncrementalSolver, UpdateReport
+from .fixed_lag import FixedLagSmoother
+from .isam import IncrementalSolver
+from .marginalize import MarginalFactor, MarginalizationReport, marginalize
 from .params import ISAM2Params
+from .report import UpdateReport
 from .symbolic import CliqueTree, SymbolicClique, build_cliques, symbolic_elimination
 from .tree import BayesTree, Clique, eliminate, eliminate_clique
 
@@ -25,4 +30,8 @@ __all__ = [
     "BayesTree",
     "eliminate",
     "eliminate_clique",
+    "FixedLagSmoother",
+    "MarginalFactor",
+    "MarginalizationReport",
+    "marginalize",
 ]

@@ -18,7 +18,6 @@ solver as it was) stay out of the steps.
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
@@ -38,27 +37,10 @@ from ..variables import Key, Values, check_key
 from .dot import tree_nnz
 from .journal import Journal, PhaseTimer
 from .params import ISAM2Params
+from .report import UpdateReport
 from .tree import BayesTree, Clique, eliminate
 
-__all__ = ["IncrementalSolver", "UpdateReport"]
-
-
-@dataclass(frozen=True, kw_only=True)
-class UpdateReport:
-    """What one update did, so a notebook can show the affected top of the tree (built by keyword only)."""
-
-    step: int  # number of this update, from 1
-    removed_cliques: tuple[int, ...]  # ids of the cliques taken off the top (ids of the tree before)
-    new_cliques: tuple[int, ...]  # ids of the cliques made by re-elimination
-    orphans: tuple[int, ...]  # ids of the subtrees kept and reattached
-    relinearized: tuple[Key, ...]  # θ_rl: variables whose linearization point moved
-    reeliminated: tuple[Key, ...]  # variables eliminated anew, in elimination order (frontals of the new cliques)
-    updated: tuple[Key, ...]  # variables whose increment δ (hence estimate) was recomputed
-    linearized_factors: int  # factors linearized in this update (the new ones included)
-    backsubstituted_cliques: int  # cliques whose conditional was solved
-    time_s: float  # wall time of the whole update
-    timings: dict[str, float] = field(default_factory=dict)  # seconds per phase (check, add, ..., backsubstitute)
-    tree_nnz: int = 0  # nonzeros of R after the update, counted as GTSAM's ISAM2::treeNnz (bayes_tree/dot.py)
+__all__ = ["IncrementalSolver"]
 
 
 class IncrementalSolver:
@@ -204,7 +186,7 @@ class IncrementalSolver:
         with timer("order"):
             linear = [self._cached(j) for j in fids] + [self.tree.cliques[o].marginal for o in orphans]
             variables = [k for c in removed.values() for k in c.frontals] + list(theta_new)
-            order = constrained_min_degree(variables, self._dims, [f.keys for f in linear], last=theta_nf).keys
+            order = self._elimination_order(variables, [f.keys for f in linear], theta_nf)
         # 4e. Eliminate into new cliques and attach back the orphans.   [YIB step 5, Eq. 24-25]
         with timer("eliminate"):
             cliques, parents, owner = eliminate(order, linear, self._dims, fids + [None] * len(orphans))
@@ -219,7 +201,7 @@ class IncrementalSolver:
             new_cliques=tuple(new_cids),
             orphans=tuple(orphans),
             relinearized=tuple(theta_rl),
-            reeliminated=order,
+            reeliminated=tuple(order),
             updated=tuple(updated),
             linearized_factors=n_linearized,
             backsubstituted_cliques=visited,
@@ -227,6 +209,10 @@ class IncrementalSolver:
             timings=timer.seconds,
             tree_nnz=self._tree_nnz,
         )
+
+    def _elimination_order(self, variables: list[Key], factor_keys: list, last: list[Key]) -> list[Key]:
+        """Minimum degree with ``last`` eliminated last [K12 Sec. 5]; a subclass may order the ties."""
+        return list(constrained_min_degree(variables, self._dims, factor_keys, last=last).keys)
 
     def _rollback(self, journal: Journal) -> None:
         """Put everything back as it was before a failed update (the failure came before re-insertion)."""

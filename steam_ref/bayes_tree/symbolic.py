@@ -232,6 +232,35 @@ class CliqueTree(Generic[C]):
                 self.parent[ch] = c
         self._undo = []
 
+    def cut(self, cids: Iterable[int]) -> dict[int, int | None]:
+        """Delete the cliques ``cids``; each child of one that is not deleted hangs under the nearest ancestor
+        that is not (a root when there is none). Returns child → its new parent.
+
+        Marginalizing leaves [bayes_tree.marginalize]: the caller vouches that every such child's separator lies
+        within its new parent's variables (it holds none of the deleted frontals).
+        """
+        gone = set(cids)
+        moved: dict[int, int | None] = {}
+        for c in gone:
+            keep = [ch for ch in self.children[c] if ch not in gone]
+            if keep:
+                up = self.parent[c]
+                while up is not None and up in gone:
+                    up = self.parent[up]
+                moved.update(dict.fromkeys(keep, up))
+        for c in gone:
+            p = self.parent.pop(c)
+            if p is None:
+                self.roots.pop(c, None)
+            elif p not in gone:
+                self.children[p].remove(c)
+            for v in self.cliques.pop(c).frontals:
+                del self.frontal_of[v]
+            del self.children[c]
+        for ch, up in moved.items():
+            self.attach(ch, up)
+        return moved
+
     def snapshot(self) -> CliqueTree[C]:
         """A structural copy (cliques shared, links copied), e.g. the tree "before" an update to draw.
 

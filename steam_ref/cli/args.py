@@ -171,6 +171,19 @@ def _add_run_arguments(run: argparse.ArgumentParser) -> None:
         default=None,
         help="a progress bar on stderr (default: on when stderr is a terminal and without --json)",
     )
+    run.add_argument(
+        "--lag",
+        type=_positive_float,
+        default=None,
+        metavar="SECONDS",
+        help="BTGP: fixed-lag smoothing, marginalize states (and landmarks) not seen for this long (docs/derivations.md §10)",
+    )
+    run.add_argument(
+        "--steps",
+        type=_positive_int,
+        default=None,
+        help="--dataset synthetic: generate N steps (N + 1 poses), with landmarks as dense as the default task's",
+    )
     run.add_argument("--json", action="store_true", help="print one JSON line of figures")
     run.add_argument(
         "--save-estimates",

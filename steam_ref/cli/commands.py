@@ -5,6 +5,7 @@ Usage::
     steam-ref run [--dataset NAME_OR_PATH] [--method {btgp,pb,pbvr}] [--every N] [--skip K]
                   [--interpolate/--no-interpolate] [--preset {synthetic,plaza,victoria-park}] [--data-dir DIR]
                   [--converge-at-end] [--json] [--save-estimates FILE.npz] [--plot FILE.png]
+                  [--lag SECONDS] [--steps N]
     steam-ref batch [--dataset NAME_OR_PATH] [--ordering {xl,amd}] [--json] [--plot FILE.png]
     steam-ref fidelity [--dataset {plaza,paper-synthetic,all}] [--json] [--plot FILE.png]
     steam-ref reproduce [--quick] [--out DIR]
@@ -28,7 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from ..conformance import command as conformance_command
-from ..datasets import load_dataset, load_range_dataset
+from ..datasets import generate_synthetic, load_dataset, load_range_dataset
 from ..errors import SteamError
 from ..paper.experiments import reproduce
 from ..paper.fidelity import AUTHORS_RUNS, compare, find_authors_file, load_authors_run
@@ -49,6 +50,7 @@ from .args import check_output as _check_output
 
 __all__ = ["main", "build_parser"]  # build_parser lives in cli/args.py
 
+DEFAULT_STEPS, DEFAULT_LANDMARKS = 1500, 298  # generate_synthetic's defaults: a landmark every ~5 steps
 _PRESET_OF = {
     "synthetic": "synthetic",
     "paper-synthetic": "synthetic",
@@ -81,8 +83,11 @@ def _run(args: argparse.Namespace) -> int:
         time_budget_s=args.time_budget,
         progress=explain.progress_wanted(args.progress, args.json),
         converge_at_end=args.converge_at_end,
+        lag=args.lag,
     )
-    data = load_dataset(args.dataset, data_dir=args.data_dir, seed=args.seed)
+    if args.lag is not None and args.save_estimates is not None:
+        raise SteamError("--save-estimates writes every marginal covariance, which --lag forgets: drop one of them")
+    data = _run_dataset(args)
     if args.score_against_optimum and data.ground_truth is not None:
         raise SteamError(
             f"--score-against-optimum: {args.dataset!r} has ground truth, and is scored by RMSE against it"
@@ -102,6 +107,7 @@ def _run(args: argparse.Namespace) -> int:
         summary["score"] = (
             "none: the data set has no ground truth; --score-against-optimum scores it against the converged batch optimum"
         )
+    summary |= result.lag_summary()
     score = None
     if data.ground_truth is None and args.score_against_optimum:  # minutes on Victoria Park
         with explain.working("scoring against the batch optimum", options.progress):
@@ -147,6 +153,16 @@ def _preset(args: argparse.Namespace) -> str:
             "(plaza also fits a range correction to the file's own ground truth)"
         )
     return _PRESET_OF[args.dataset]
+
+
+def _run_dataset(args: argparse.Namespace):
+    """The data set of ``run``: by name or path, or the generated task of ``--steps`` steps."""
+    if args.steps is None:
+        return load_dataset(args.dataset, data_dir=args.data_dir, seed=args.seed)
+    if args.dataset != "synthetic":
+        raise SteamError(f"--steps generates the synthetic task: it needs --dataset synthetic, got {args.dataset!r}")
+    n_landmarks = max(1, round(args.steps * DEFAULT_LANDMARKS / DEFAULT_STEPS))  # the default task's density
+    return generate_synthetic(n_steps=args.steps, n_landmarks=n_landmarks, seed=args.seed)
 
 
 def save_estimates(path: str, result) -> None:

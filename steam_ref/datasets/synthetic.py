@@ -62,8 +62,12 @@ def _observed_landmarks(
 ) -> NDArray:
     """(n_poses,) index of the landmark ranged at each pose: one drawn among its n_nearest,
     except that at its anchor pose a landmark is the one ranged (so every landmark is seen)."""
-    dist = np.hypot(path[:, None, 0] - xy[None, :, 0], path[:, None, 1] - xy[None, :, 1])
-    nearest = np.argsort(dist, axis=1, kind="stable")[:, : min(n_nearest, len(xy))]
+    k, chunk = min(n_nearest, len(xy)), max(1, 200_000 // len(xy))  # rows at a time: memory stays small
+    nearest = np.empty((len(path), k), dtype=int)
+    for a in range(0, len(path), chunk):
+        p = path[a : a + chunk]
+        dist = np.hypot(p[:, None, 0] - xy[None, :, 0], p[:, None, 1] - xy[None, :, 1])
+        nearest[a : a + chunk] = np.argsort(dist, axis=1, kind="stable")[:, :k]
     rows = np.arange(len(path))
     pick = nearest[rows, rng.integers(0, nearest.shape[1], len(path))]
     pick[anchors] = np.arange(len(xy))  # later anchors win if n_landmarks > n_poses

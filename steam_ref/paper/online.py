@@ -30,7 +30,7 @@ from .options import StreamOptions
 from .presets import PaperSetup, Schedule
 from .readings import Readings
 from .results import RunResult, peak_rss_mb
-from .solvers import OnlineSolver, make_solver
+from .solvers import FixedLagTreeSolver, OnlineSolver, make_solver
 
 __all__ = ["ScheduleClock", "StreamingEstimator", "run_online"]
 
@@ -94,6 +94,8 @@ class StreamingEstimator:
 
     def _new_solver(self) -> OnlineSolver:
         o = self.options
+        if o.lag is not None:
+            return FixedLagTreeSolver(self.setup.isam2_params(), o.lag, self.readings.times)
         return make_solver(
             o.method,
             isam2=self.setup.isam2_params(),
@@ -137,7 +139,11 @@ class StreamingEstimator:
                 FactorGraph(self._pending), values, ordering="amd", relative_tolerance=tol, absolute_tolerance=tol
             ).values
         self.solver.update(self._pending, values)
-        self.factors.extend(self._pending)
+        if isinstance(self.solver, FixedLagTreeSolver):  # keep no factor: the window forgets them
+            forgotten = (k.index for k in self.solver.forgotten if k.kind == "l")
+            self.front.landmarks.difference_update(forgotten)  # seen again, a landmark enters anew
+        else:
+            self.factors.extend(self._pending)
         if pose == self.schedule.last_pose:
             for _ in range(schedule.final_updates):
                 self.solver.update([], Values())
@@ -229,7 +235,14 @@ class StreamingEstimator:
             peak_rss=peak_rss_mb(),
             convergence_s=self.convergence_seconds if self.convergence is not None else None,
             converged_at_end=self.convergence.converged if self.convergence is not None else None,
+            **self._lag_figures(),
         )
+
+    def _lag_figures(self) -> dict[str, int | None]:
+        """With a lag: variables marginalized so far and the peak window; else nothing."""
+        if not isinstance(self.solver, FixedLagTreeSolver):
+            return {}
+        return {"n_marginalized": self.solver.inner.n_marginalized, "peak_window": self.solver.inner.peak_window}
 
 
 def run_online(

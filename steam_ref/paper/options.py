@@ -39,6 +39,7 @@ class StreamOptions:
     max_poses: int | None = None  # process only this prefix of the poses
     time_budget_s: float | None = None  # stop when the run has taken this long (reported)
     progress: bool = False  # tqdm progress bar
+    lag: float | None = None  # BTGP only: fixed-lag smoothing, forget states older than this (seconds)
 
     def __post_init__(self) -> None:
         if self.method not in METHODS:
@@ -53,6 +54,7 @@ class StreamOptions:
             raise SteamError(f"time_budget_s must be a number > 0 (or None), got {self.time_budget_s!r}")
         if not (_is_real(self.pb_relative_tolerance) and 0 <= self.pb_relative_tolerance < np.inf):
             raise SteamError(f"pb_relative_tolerance must be a finite number >= 0, got {self.pb_relative_tolerance!r}")
+        _check_lag(self)
 
     @property
     def layout(self) -> Layout:
@@ -65,6 +67,21 @@ class StreamOptions:
         if unknown:
             raise SteamError(f"StreamOptions has no field {unknown[0]!r}")
         return replace(self, **changes)
+
+
+def _check_lag(o: StreamOptions) -> None:
+    """A lag is a number of seconds > 0, for BTGP only, and not with converge_at_end (which needs every factor)."""
+    if o.lag is None:
+        return
+    if not (_is_real(o.lag) and 0 < o.lag < np.inf):
+        raise SteamError(f"lag must be a finite number of seconds > 0 (or None), got {o.lag!r}")
+    if o.method != "btgp":
+        raise SteamError(
+            f"lag (fixed-lag smoothing) is for BTGP only: {o.method.upper()} re-solves every state at every "
+            "update and has no tree to marginalize from; use method 'btgp'"
+        )
+    if o.converge_at_end:
+        raise SteamError("lag and converge_at_end cannot go together: converging at the end needs every factor kept")
 
 
 def _is_real(value: object) -> bool:

@@ -62,6 +62,8 @@ class RunResult:
     converged_at_end: bool | None = (
         None  # converge_at_end: whether the optimum passed its check; None: not run (not asked, or cut short)
     )
+    n_marginalized: int | None = None  # with a lag: variables marginalized (states and landmarks)
+    peak_window: int | None = None  # with a lag: most variables the solver held at once
 
     @classmethod
     def of(
@@ -84,6 +86,8 @@ class RunResult:
         peak_rss: float,
         convergence_s: float | None = None,
         converged_at_end: bool | None = None,
+        n_marginalized: int | None = None,
+        peak_window: int | None = None,
     ) -> RunResult:
         """Package a run, scoring it against ``ground_truth`` (CMU GT layout, x, y in columns 1-2) if given."""
         rmse = rmse_states = float("nan")
@@ -110,6 +114,8 @@ class RunResult:
             peak_rss_mb=peak_rss,
             convergence_s=convergence_s,
             converged_at_end=converged_at_end,
+            n_marginalized=n_marginalized,
+            peak_window=peak_window,
         )
 
     @property
@@ -160,3 +166,9 @@ class RunResult:
             if o.converge_at_end
             else {}
         )
+
+    def lag_summary(self) -> dict:
+        """With a lag, the figures of fixed-lag smoothing the CLI's ``--json`` adds; else nothing."""
+        if self.options.lag is None:
+            return {}
+        return {"lag_s": self.options.lag, "n_marginalized": self.n_marginalized, "peak_window": self.peak_window}

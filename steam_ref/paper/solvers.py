@@ -2,22 +2,24 @@
 
 - ``pb``: periodic batch Gauss-Newton over everything so far, XL ordering, warm-started;
 - ``pbvr``: the same with AMD reordering at every update;
-- ``btgp``: the Bayes tree (:class:`steam_ref.bayes_tree.IncrementalSolver`, Alg. 1 steps 2-7).
+- ``btgp``: the Bayes tree (:class:`steam_ref.bayes_tree.IncrementalSolver`, Alg. 1 steps 2-7);
+  with a lag, :class:`FixedLagTreeSolver` (:class:`steam_ref.bayes_tree.FixedLagSmoother`).
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 
+import numpy as np
 from numpy.typing import NDArray
 
 from ..batch import gauss_newton
-from ..bayes_tree import IncrementalSolver, ISAM2Params
+from ..bayes_tree import FixedLagSmoother, IncrementalSolver, ISAM2Params
 from ..covariance import sparse_joint_covariance, sparse_joint_covariances, sparse_marginal_covariances
 from ..errors import SteamError
 from ..factors import Factor
 from ..graph import FactorGraph
-from ..variables import Key, Values, check_key
+from ..variables import Key, Values, X, check_key
 
 __all__ = [
     "METHODS",
@@ -26,11 +28,13 @@ __all__ = [
     "OnlineSolver",
     "PeriodicBatchSolver",
     "BayesTreeSolver",
+    "FixedLagTreeSolver",
     "make_solver",
 ]
 
 METHODS = ("btgp", "pb", "pbvr")
 PB_RELATIVE_TOLERANCE = 1e-5  # PB/PBVR stop when the cost falls by less than this fraction (GTSAM's default)
+KEPT_REPORTS = 100  # a lagged BTGP keeps the UpdateReports of its latest updates only
 PB_MAX_ITERATIONS = 100  # PB/PBVR Gauss-Newton iterations per update at most (GTSAM's default)
 
 
@@ -145,6 +149,66 @@ class BayesTreeSolver(OnlineSolver):
 
     def joint_covariances(self, groups: Sequence[Sequence[Key]]) -> list[NDArray]:
         return self.inner.joint_covariances(groups)  # one pass down the tree where a clique holds a group
+
+
+class FixedLagTreeSolver(BayesTreeSolver):
+    """BTGP over a window of ``lag`` seconds: :class:`~steam_ref.bayes_tree.FixedLagSmoother` in a stream.
+
+    A state is stamped with its pose's time (``times[pose]``), a landmark with the newest state's time
+    of each update whose factors name it, so it is forgotten a lag after it was last seen. The stream's
+    view of a marginalized variable is its estimate at the moment it was marginalized (the lagged
+    estimate, what a fixed-lag smoother reports); its covariance is no longer known and a query raises
+    the smoother's :class:`~steam_ref.errors.UnknownVariableError`.
+    """
+
+    name = "btgp"
+
+    def __init__(self, params: ISAM2Params | None, lag: float, times: NDArray):
+        self.inner: FixedLagSmoother = FixedLagSmoother(lag, params)
+        self.reports: list = []  # UpdateReport of the latest KEPT_REPORTS updates only: memory stays flat
+        self.times = np.asarray(times, dtype=float)  # time of each pose
+        self._states = np.zeros((0, 0))  # (n_poses, n) estimate of each marginalized state X(pose), row by pose
+        self._retired_states: set[int] = set()  # poses of the marginalized states
+        self._landmarks: dict[Key, NDArray] = {}  # marginalized landmark → its estimate then
+        self.forgotten: list[Key] = []  # the variables the last update marginalized
+
+    def update(self, factors: list[Factor], values: Values) -> None:
+        stamps = {k: float(self.times[k.index]) for k in values if k.kind == "x"}
+        newest = max(stamps.values(), default=self.inner.newest)
+        if np.isfinite(newest):
+            stamps |= {k: newest for f in factors for k in f.keys if k.kind != "x"}
+        self.reports.append(self.inner.update(factors, values, timestamps=stamps))
+        del self.reports[:-KEPT_REPORTS]
+        done = self.inner.last_marginalization
+        self.forgotten = [] if done is None else list(done.keys)
+        for k, v in ({} if done is None else done.estimates).items():
+            if k.kind == "x":
+                if not self._states.size:
+                    self._states = np.zeros((len(self.times), len(v)))
+                self._states[k.index] = v
+                self._retired_states.add(k.index)
+            else:
+                self._landmarks[k] = v
+        for k in values:
+            self._landmarks.pop(k, None)  # entered again: the window's estimate is the one
+
+    def retired(self, key: Key) -> NDArray | None:
+        """The estimate ``key`` had when it was marginalized (None while it is in the window, or never held)."""
+        if key.kind == "x":
+            return self._states[key.index] if key.index in self._retired_states else None
+        return self._landmarks.get(key)
+
+    def estimate_of(self, key: Key) -> NDArray:
+        retired = self.retired(key)
+        return self.inner.estimate_of(key) if retired is None else retired
+
+    def estimate(self) -> Values:
+        out = self.inner.estimate()
+        for i in sorted(self._retired_states):
+            out.insert(X(i), self._states[i])
+        for k, v in self._landmarks.items():
+            out.insert(k, v)
+        return out
 
 
 def make_solver(

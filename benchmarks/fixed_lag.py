@@ -1,0 +1,191 @@
+"""Fixed-lag smoothing: memory and time per update that stay flat, and what the lag costs.  [issue 23]
+
+Every run is ``steam-ref run ... --json`` in a fresh, single-threaded Python process (the command itself,
+called in the child, which also keeps each update's wall time). One JSON line per run, then one line of
+targets:
+
+- ``synthetic``, ``--steps 2000`` and ``--steps 20000`` with ``--lag 30`` (and ``--steps 2000`` without a
+  lag, for reference): peak RSS (MB), update time medians of the first and the last 1,000 updates, RMSE,
+  states marginalized, peak window;
+- ``plaza`` BTGP/1 without a lag and with ``--lag 60``: RMSE and total time; and ``plaza, full smoother read
+  at the lag``: the full smoother's estimate of each state taken when it is 60 s old (what any smoother that
+  reports a state as it leaves a 60 s window can at best give), which separates the cost of reporting lagged
+  estimates from the cost of marginalization (first-estimate Jacobians);
+- ``targets``: peak memory 20,000 / 2,000 steps ≤ 1.2, last / first 1,000 updates' median ≤ 1.2 (both within
+  the 20,000-step run), Plaza's lagged RMSE within 2 cm of the full smoother's, and its time no higher
+  (ratios of medians over ``--repeat`` runs; the machine is shared, so single runs are noisy).
+
+Plot: benchmarks/out/fixed_lag.png (update time along the run, rolling median; peak memory by run).
+
+    python benchmarks/fixed_lag.py [--repeat 1] [--long 20000] [--short 2000] [--no-plaza]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+OUT = Path(__file__).resolve().parent / "out"
+TARGET_MEMORY, TARGET_FLAT, TARGET_RMSE_M = 1.2, 1.2, 0.02
+
+_LAGGED_READ = r"""
+import json, sys
+import numpy as np
+from steam_ref.datasets import load_dataset
+from steam_ref.paper.online import StreamingEstimator, StreamOptions
+from steam_ref.paper.presets import PaperSetup
+from steam_ref.paper.readings import Readings
+from steam_ref.variables import X
+lag = float(sys.argv[1])
+data, setup = load_dataset("plaza"), PaperSetup.plaza()
+readings = Readings.from_dataset(data, setup)
+est, read, t = StreamingEstimator(readings, setup, StreamOptions()), {}, readings.times
+while not est.done:
+    est.step()
+    solved = est.states[: est.n_solved]
+    for i in (i for i in solved if i not in read and t[i] < t[solved[-1]] - lag) if solved else ():
+        read[i] = est.solver.estimate_of(X(i))[:2].copy()
+xy = np.array([read.get(i, est.solver.estimate_of(X(i))[:2]) for i in est.states])
+truth = data.ground_truth[est.states, 1:3]
+print(json.dumps({"rmse_m": float(np.sqrt(np.mean(np.sum((xy - truth) ** 2, axis=1)))), "n_poses": len(est.states)}))
+"""
+
+_CHILD = r"""
+import json, sys
+import numpy as np
+import steam_ref.cli.commands as cli
+kept = {}
+def spy(*args, **kwargs):
+    kept["result"] = result = run_online(*args, **kwargs)
+    return result
+run_online, cli.run_online = cli.run_online, spy
+code = cli.main(json.loads(sys.argv[1]))
+np.save(sys.argv[2], kept["result"].update_seconds)
+sys.exit(code)
+"""
+
+
+def run(argv: list[str]) -> tuple[dict, np.ndarray]:
+    """``steam-ref run <argv> --json`` in a fresh process: its JSON line and each update's seconds."""
+    env = os.environ | {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+    with tempfile.TemporaryDirectory() as tmp:
+        times = Path(tmp) / "updates.npy"
+        proc = subprocess.run(
+            [sys.executable, "-c", _CHILD, json.dumps(["run", *argv, "--json"]), str(times)],
+            capture_output=True,
+            text=True,
+            env=env,
+        )
+        if proc.returncode != 0:
+            raise RuntimeError(f"steam-ref run {' '.join(argv)} failed: {proc.stderr.strip()[-400:]}")
+        return json.loads(proc.stdout.strip().splitlines()[-1]), np.load(times)
+
+
+def lagged_read(lag: float) -> dict:
+    """The full smoother on Plaza, each state's estimate read when it is ``lag`` seconds old (fresh process)."""
+    proc = subprocess.run([sys.executable, "-c", _LAGGED_READ, f"{lag:g}"], capture_output=True, text=True)
+    if proc.returncode != 0:
+        raise RuntimeError(f"the lagged read of the full smoother failed: {proc.stderr.strip()[-400:]}")
+    out = {"row": "plaza, full smoother read at the lag", "lag_s": lag} | json.loads(
+        proc.stdout.strip().splitlines()[-1]
+    )
+    print(json.dumps(out), flush=True)
+    return out
+
+
+def row(name: str, argv: list[str], repeat: int) -> tuple[dict, np.ndarray]:
+    """Medians over ``repeat`` runs of one command; the update times of the first run."""
+    runs = [run(argv) for _ in range(repeat)]
+    first, updates = runs[0]
+    out = {"row": name, "command": "steam-ref run " + " ".join(argv)}
+    for key in ("n_poses", "rmse_m", "n_marginalized", "peak_window", "lag_s"):
+        out[key] = first.get(key)
+    for key in ("peak_rss_mb", "total_s", "update_s_median"):
+        out[key] = statistics.median(r[key] for r, _ in runs)
+    if len(updates) >= 2000:
+        out["update_s_median_first_1000"] = statistics.median(float(np.median(u[:1000])) for _, u in runs)
+        out["update_s_median_last_1000"] = statistics.median(float(np.median(u[-1000:])) for _, u in runs)
+    print(json.dumps(out), flush=True)
+    return out, updates
+
+
+def main(argv: list[str] | None = None) -> None:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--repeat", type=int, default=1, help="runs per row (medians reported)")
+    p.add_argument("--long", type=int, default=20000, help="steps of the long generated run")
+    p.add_argument("--short", type=int, default=2000, help="steps of the short generated run")
+    p.add_argument("--lag", type=float, default=30.0, help="lag of the generated runs, seconds")
+    p.add_argument("--plaza-lag", type=float, default=60.0, help="lag of the Plaza run, seconds")
+    p.add_argument("--no-plaza", action="store_true", help="skip Plaza (needs the paper's data)")
+    a = p.parse_args(argv)
+    lag = ["--lag", f"{a.lag:g}"]
+    short, short_u = row("synthetic", ["--steps", str(a.short), *lag], a.repeat)
+    long, long_u = row("synthetic", ["--steps", str(a.long), *lag], a.repeat)
+    full, full_u = row("synthetic, no lag", ["--steps", str(a.short)], a.repeat)
+    targets: dict = {
+        "row": "targets",
+        "memory_ratio": round(long["peak_rss_mb"] / short["peak_rss_mb"], 3),
+        "update_time_ratio_last_first": round(
+            long["update_s_median_last_1000"] / long["update_s_median_first_1000"], 3
+        ),
+    }
+    targets["memory_meets"] = targets["memory_ratio"] <= TARGET_MEMORY
+    targets["flat_meets"] = targets["update_time_ratio_last_first"] <= TARGET_FLAT
+    plaza_rows = []
+    if not a.no_plaza:
+        base = ["--dataset", "plaza", "--method", "btgp", "--every", "1"]
+        plaza_full, _ = row("plaza", base, a.repeat)
+        plaza_lag, _ = row("plaza", [*base, "--lag", f"{a.plaza_lag:g}"], a.repeat)
+        plaza_rows = [plaza_full, plaza_lag]
+        read = lagged_read(a.plaza_lag)
+        targets["plaza_full_read_at_lag_rmse_m"] = read["rmse_m"]
+        targets["plaza_rmse_gap_m"] = round(plaza_lag["rmse_m"] - plaza_full["rmse_m"], 6)
+        targets["plaza_time_ratio"] = round(plaza_lag["total_s"] / plaza_full["total_s"], 3)
+        targets["plaza_rmse_meets"] = abs(targets["plaza_rmse_gap_m"]) <= TARGET_RMSE_M
+        targets["plaza_time_meets"] = targets["plaza_time_ratio"] <= 1.0
+    print(json.dumps(targets), flush=True)
+    plot([(short, short_u), (long, long_u), (full, full_u)], plaza_rows)
+
+
+def plot(runs: list[tuple[dict, np.ndarray]], plaza: list[dict]) -> None:
+    """Update time along each generated run (rolling median of 201) and peak memory by run."""
+    import matplotlib as mpl
+
+    mpl.use("Agg")
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(11, 4))
+    left, right = fig.subplots(1, 2)
+    for info, updates in runs:
+        k = min(201, len(updates))
+        rolling = np.array([np.median(updates[max(0, i - k // 2) : i + k // 2 + 1]) for i in range(len(updates))])
+        lag = info["lag_s"]
+        label = f"{info['n_poses']} poses, " + ("no lag" if lag is None else f"lag {lag:g} s")
+        left.plot(np.arange(1, len(updates) + 1), 1e3 * rolling, label=label)
+    left.set_xlabel("update")
+    left.set_ylabel("update time, ms (rolling median of 201)")
+    left.set_xscale("log")
+    left.legend()
+    bars = [
+        (f"{i['n_poses']} poses\n" + ("no lag" if i["lag_s"] is None else f"lag {i['lag_s']:g} s"), i) for i, _ in runs
+    ]
+    bars += [("Plaza\n" + ("no lag" if i["lag_s"] is None else f"lag {i['lag_s']:g} s"), i) for i in plaza]
+    right.bar(range(len(bars)), [i["peak_rss_mb"] for _, i in bars])
+    right.set_xticks(range(len(bars)), [name for name, _ in bars], fontsize=8)
+    right.set_ylabel("peak RSS, MB")
+    fig.tight_layout()
+    OUT.mkdir(exist_ok=True)
+    fig.savefig(OUT / "fixed_lag.png", dpi=110)
+    print(f"# plot: {OUT / 'fixed_lag.png'}", file=sys.stderr)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,353 @@
+"""Marginalization in the Bayes tree and the fixed-lag smoother, against the dense posterior.
+
+On linear Gaussian problems the marginal over the variables left after any sequence of updates and
+marginalizations is the whole problem's posterior marginal over them: mean and joint covariance of
+the window equal the dense batch solution's (every factor ever given, none forgotten), to 1e-10.
+The dense side is built here from the factors' error functions alone (a linear error's Jacobian is
+e(unit) - e(0)), so it shares no code with the tree. GTSAM's fixed-lag smoothers are in
+tests/test_fixed_lag_gtsam.py.
+"""
+
+from __future__ import annotations
+
+import sys
+from dataclasses import dataclass, replace
+from typing import ClassVar
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from steam_ref.bayes_tree import FixedLagSmoother, IncrementalSolver, MarginalFactor, marginalize
+from steam_ref.bayes_tree.marginalize import eliminate_variables
+from steam_ref.errors import SteamError, UnknownVariableError
+from steam_ref.factors import Factor, GPPriorFactor, PriorFactor
+from steam_ref.gp import process_noise, transition
+from steam_ref.linear.system import GaussianFactor
+from steam_ref.variables import L, X
+
+QC = np.diag([0.3, 0.2, 0.1])
+EXACT = dict(relinearize_skip=1, wildfire_threshold=0.0)  # full back-substitution: δ solves the system
+
+
+@dataclass(frozen=True, eq=False)
+class PositionFix(Factor):
+    """A linear reading of a state's position: e = x[:3] - z (test-local)."""
+
+    z: np.ndarray
+    _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "z")
+    key_dims: ClassVar[tuple[int, ...]] = (6,)
+
+    def error(self, x):
+        return x[..., :3] - self.z
+
+    def jacobians(self, x):
+        J = np.zeros(x.shape[:-1] + (3, 6))
+        J[..., :, :3] = np.eye(3)
+        return (J,)
+
+
+@dataclass(frozen=True, eq=False)
+class Offset(Factor):
+    """A linear reading of a landmark from a state: e = l - x[:3] - z (test-local)."""
+
+    z: np.ndarray
+    _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "z")
+    key_dims: ClassVar[tuple[int, ...]] = (6, 3)
+
+    def error(self, x, l):
+        return l - x[..., :3] - self.z
+
+    def jacobians(self, x, l):
+        Jx = np.zeros(x.shape[:-1] + (3, 6))
+        Jx[..., :, :3] = -np.eye(3)
+        return Jx, np.broadcast_to(np.eye(3), x.shape[:-1] + (3, 3)).copy()
+
+
+class LinearStream:
+    """A WNOA trajectory with position fixes and landmark offsets, revealed one state per update."""
+
+    def __init__(self, seed: int, n_landmarks: int = 2, fix_every: int = 3):
+        self.rng = np.random.default_rng(seed)
+        self.n_landmarks, self.fix_every = n_landmarks, fix_every
+        self.t = 0.0
+        self.x = np.array([0.0, 0.0, 0.0, 1.0, 0.5, -0.2])
+        self.landmarks = self.rng.normal(size=(n_landmarks, 3)) * 3
+        self.seen: set[int] = set()
+        self.i = 0
+        self.times: dict = {}
+        self.generation: dict[int, int] = {}  # landmark → how many times it entered, less one
+        self.smoother: FixedLagSmoother | None = None  # re-enter the landmarks it marginalized
+
+    def initial(self):
+        """The first update: a prior on X(0)."""
+        self.times[X(0)] = 0.0
+        prior = PriorFactor.create(X(0), self.x + self.rng.normal(size=6) * 0.1, 0.1)
+        return [prior], {X(0): self.x + self.rng.normal(size=6)}, {X(0): 0.0}
+
+    def step(self):
+        """The next update: the GP prior to the new state and its readings; values far from the truth."""
+        dt = float(self.rng.uniform(0.5, 1.5))
+        self.t += dt
+        self.x = transition(dt, 3) @ self.x + np.linalg.cholesky(process_noise(dt, QC)) @ self.rng.normal(size=6)
+        i = self.i = self.i + 1
+        self.times[X(i)] = self.t
+        factors: list[Factor] = [GPPriorFactor.wnoa(X(i - 1), X(i), dt, QC)]
+        values = {X(i): self.x + self.rng.normal(size=6)}
+        stamps = {X(i): self.t}
+        if i % self.fix_every == 0:
+            factors.append(PositionFix((X(i),), np.eye(3) / 0.2, z=self.x[:3] + self.rng.normal(size=3) * 0.2))
+        j = int(self.rng.integers(0, self.n_landmarks + 1))
+        if j < self.n_landmarks:
+            z = self.landmarks[j] - self.x[:3] + self.rng.normal(size=3) * 0.1
+            if j not in self.seen or (self.smoother is not None and self.smoother.was_marginalized(L(j))):
+                values[L(j)] = self.landmarks[j] + self.rng.normal(size=3)  # (again: a new variable)
+                self.generation[j] = self.generation.get(j, -1) + 1
+                self.seen.add(j)
+            factors.append(Offset((X(i), L(j)), np.eye(3) / 0.1, z=z))
+            stamps[L(j)] = self.t  # a landmark is forgotten a lag after it was last seen
+        return factors, values, stamps
+
+
+def oracle_key(stream: LinearStream, key):
+    """The dense side's name of a variable: a landmark that entered again is another variable."""
+    return L(1000 * stream.generation[key.index] + key.index) if key.kind == "l" else key
+
+
+def renamed(stream: LinearStream, factors: list[Factor]) -> list[Factor]:
+    return [replace(f, keys=tuple(oracle_key(stream, k) for k in f.keys)) for f in factors]
+
+
+def dense_posterior(factors: list[Factor], keys: list) -> tuple[dict, np.ndarray]:
+    """Mean and covariance of all ``keys`` from every factor: J from the errors (e(unit) - e(0))."""
+    dims = {k: d for f in factors for k, d in zip(f.keys, f.key_dims, strict=True)}
+    offset = dict(zip(keys, np.cumsum([0] + [dims[k] for k in keys])[:-1], strict=True))
+    n = sum(dims[k] for k in keys)
+    H, g = np.zeros((n, n)), np.zeros(n)
+    for f in factors:
+        zero = [np.zeros(dims[k]) for k in f.keys]
+        e0 = f.error(*zero)
+        cols = []
+        for slot, k in enumerate(f.keys):
+            for c in range(dims[k]):
+                xs = [z.copy() for z in zero]
+                xs[slot][c] = 1.0
+                cols.append((offset[k] + c, f.error(*xs) - e0))
+        idx = [c for c, _ in cols]
+        J = f.sqrt_information @ np.column_stack([col for _, col in cols])
+        H[np.ix_(idx, idx)] += J.T @ J
+        g[idx] -= J.T @ (f.sqrt_information @ e0)
+    cov = np.linalg.inv(H)
+    mean = cov @ g
+    return {k: mean[offset[k] : offset[k] + dims[k]] for k in keys}, {k: (offset[k], dims[k]) for k in keys} | {
+        "cov": cov
+    }
+
+
+def check_window(solver: IncrementalSolver, everything: list[Factor], stream: LinearStream | None = None) -> None:
+    """The solver's window equals the dense posterior's marginal over it, mean and joint covariance."""
+    name = (lambda k: k) if stream is None else (lambda k: oracle_key(stream, k))
+    all_keys = list(dict.fromkeys(k for f in everything for k in f.keys))
+    held = sorted(solver._dims, key=str)
+    mean, where = dense_posterior(everything, all_keys)
+    cov = where["cov"]
+    idx = np.concatenate([np.arange(where[name(k)][0], where[name(k)][0] + where[name(k)][1]) for k in held])
+    for k in held:
+        np.testing.assert_allclose(solver.estimate_of(k), mean[name(k)], rtol=0, atol=1e-10, err_msg=str(k))
+    np.testing.assert_allclose(solver.joint_covariance(held), cov[np.ix_(idx, idx)], rtol=0, atol=1e-10)
+    assert solver.tree.problems() == []
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    seed=st.integers(0, 10_000),
+    n=st.integers(4, 20),
+    lag=st.floats(0.6, 6.0),
+    landmarks=st.integers(0, 3),
+    threshold=st.sampled_from([0.0, 0.1, np.inf]),
+)
+def test_window_marginal_equals_dense_posterior(seed, n, lag, landmarks, threshold):
+    stream = LinearStream(seed, landmarks)
+    smoother = stream.smoother = FixedLagSmoother(lag, relinearize_threshold=threshold, **EXACT)
+    factors, values, stamps = stream.initial()
+    everything = list(factors)
+    smoother.update(factors, values, timestamps=stamps)
+    for _ in range(n):
+        factors, values, stamps = stream.step()
+        everything += renamed(stream, factors)
+        smoother.update(factors, values, timestamps=stamps)
+        check_window(smoother, everything, stream)
+        for k, t in smoother.timestamps.items():
+            assert t >= smoother.newest - lag, f"{k} at {t} is older than the lag"
+    entered = len(stream.times) + sum(g + 1 for g in stream.generation.values())
+    assert smoother.n_marginalized == entered - len(smoother)
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(seed=st.integers(0, 10_000), n=st.integers(5, 14), data=st.data())
+def test_marginalizing_any_variables_leaves_the_dense_marginal(seed, n, data):
+    """Any subset, middle states and landmarks included: the non-leaf path (re-elimination, D first)."""
+    stream = LinearStream(seed, 3, fix_every=2)
+    solver = IncrementalSolver(**EXACT)
+    factors, values, _ = stream.initial()
+    everything = list(factors)
+    solver.update(factors, values)
+    leaves_seen = set()
+    for _ in range(n):
+        factors, values, _ = stream.step()
+        if any(k not in solver._dims and k not in values for f in factors for k in f.keys):
+            continue  # a reading of a variable already marginalized: the stream's next step
+        everything += factors
+        solver.update(factors, values)
+        held = sorted(solver._dims, key=str)
+        if len(held) > 2 and data.draw(st.booleans()):
+            drop = data.draw(st.lists(st.sampled_from(held), min_size=1, max_size=len(held) - 1, unique=True))
+            report = marginalize(solver, drop)
+            leaves_seen.add(report.leaves)
+            assert set(report.keys) == set(drop)
+            check_window(solver, everything)
+
+
+def test_a_leaf_is_cut_off_without_re_elimination():
+    stream = LinearStream(3, 0)
+    solver = IncrementalSolver(**EXACT)
+    everything = []
+    for factors, values, _ in [stream.initial()] + [stream.step() for _ in range(6)]:
+        everything += factors
+        solver.update(factors, values)
+    before = dict(solver.tree.cliques)
+    report = marginalize(solver, [X(0)])
+    assert report.leaves and report.new_cliques == ()
+    assert set(solver.tree.cliques) == set(before) - set(report.removed_cliques)
+    for c, clique in solver.tree.cliques.items():  # the same conditionals; the parent holds the new factor
+        assert clique.R is before[c].R and clique.S is before[c].S and clique.d is before[c].d
+        assert clique.factors in (before[c].factors, before[c].factors + report.marginal_factors)
+    assert [type(solver.factors[j]) for j in report.marginal_factors] == [MarginalFactor]
+    check_window(solver, everything)
+
+
+def test_the_marginal_factor_is_the_schur_complement():
+    """eliminate_variables against Λ_SS - Λ_SD Λ_DD⁻¹ Λ_DS and its information vector, densely."""
+    rng = np.random.default_rng(4)
+    dims = {X(0): 2, X(1): 3, X(2): 2, X(3): 1}
+    factors = [
+        GaussianFactor(keys, tuple(rng.normal(size=(4, dims[k])) for k in keys), rng.normal(size=4))
+        for keys in [(X(0), X(1)), (X(1), X(2)), (X(0), X(3)), (X(2), X(3)), (X(0),)]
+    ]
+    order = [X(0), X(1), X(2), X(3)]
+    off = {k: sum(dims[o] for o in order[: order.index(k)]) for k in order}
+
+    def information(fs):
+        H, g = np.zeros((8, 8)), np.zeros(8)
+        for f in fs:
+            idx = np.concatenate([np.arange(off[k], off[k] + dims[k]) for k in f.keys])
+            A = np.hstack(f.blocks)
+            H[np.ix_(idx, idx)] += A.T @ A
+            g[idx] += A.T @ f.rhs
+        return H, g
+
+    H, g = information(factors)
+    D, S = np.arange(0, 5), np.arange(5, 8)  # X(0), X(1) | X(2), X(3)
+    schur = H[np.ix_(S, S)] - H[np.ix_(S, D)] @ np.linalg.solve(H[np.ix_(D, D)], H[np.ix_(D, S)])
+    vec = g[S] - H[np.ix_(S, D)] @ np.linalg.solve(H[np.ix_(D, D)], g[D])
+    left = eliminate_variables([X(0), X(1)], factors, dims)
+    assert all(X(0) not in f.keys and X(1) not in f.keys for f in left)
+    H2, g2 = information(left)
+    np.testing.assert_allclose(H2[np.ix_(S, S)], schur, atol=1e-12)
+    np.testing.assert_allclose(g2[S], vec, atol=1e-12)
+
+
+def test_the_marginal_factor_moves_its_right_hand_side_with_the_estimate():
+    """b' = b - A (θ - θ₀): the error of a MarginalFactor at θ is A (θ - θ₀) - b, its Jacobian A."""
+    rng = np.random.default_rng(1)
+    A1, A2, b = rng.normal(size=(3, 2)), rng.normal(size=(3, 1)), rng.normal(size=3)
+    t1, t2 = rng.normal(size=2), rng.normal(size=1)
+    f = MarginalFactor.frozen_at(GaussianFactor((X(1), X(2)), (A1, A2), b), {X(1): t1, X(2): t2})
+    x1, x2 = rng.normal(size=2), rng.normal(size=1)
+    np.testing.assert_allclose(f.error(x1, x2), A1 @ (x1 - t1) + A2 @ (x2 - t2) - b, atol=1e-14)
+    np.testing.assert_allclose(np.hstack(f.jacobians(x1, x2)), np.hstack([A1, A2]), atol=0)
+
+
+def test_queries_of_a_marginalized_state_say_when_it_went():
+    stream = LinearStream(5, 1)
+    smoother = FixedLagSmoother(2.0, **EXACT)
+    smoother.update(*stream.initial()[:2], timestamps={X(0): 0.0})
+    while not smoother.was_marginalized(X(0)):
+        f, v, s = stream.step()
+        smoother.update(f, v, timestamps=s)
+    for query in (
+        lambda: smoother.estimate_of(X(0)),
+        lambda: smoother.marginal_covariance(X(0)),
+        lambda: smoother.joint_covariance([X(0), X(stream.i)]),
+        lambda: smoother.marginal_covariances([X(0)]),
+    ):
+        with pytest.raises(UnknownVariableError, match=r"x0, which was marginalized at update \d+"):
+            query()
+    n = len(smoother.factors)
+    with pytest.raises(UnknownVariableError, match="marginalized"):
+        smoother.update([PositionFix((X(0),), np.eye(3), z=np.zeros(3))])
+    assert len(smoother.factors) == n  # nothing changed
+
+
+def test_bad_lag_and_timestamps_are_refused():
+    for lag in (0, -1.0, float("nan"), "3", True):
+        with pytest.raises(SteamError, match="lag"):
+            FixedLagSmoother(lag)
+    smoother = FixedLagSmoother(1.0)
+    with pytest.raises(UnknownVariableError, match="neither held nor in new_values"):
+        smoother.update([PriorFactor.create(X(0), np.zeros(6), 1.0)], {X(0): np.zeros(6)}, timestamps={X(1): 0.0})
+    with pytest.raises(SteamError, match="timestamps"):
+        smoother.update([PriorFactor.create(X(0), np.zeros(6), 1.0)], {X(0): np.zeros(6)}, timestamps={X(0): "now"})
+    assert len(smoother) == 0 and smoother.factors == []
+
+
+def test_a_middle_state_is_re_eliminated_first_and_the_rest_stays_exact():
+    stream = LinearStream(8, 2, fix_every=2)
+    solver = IncrementalSolver(**EXACT)
+    everything = []
+    for factors, values, _ in [stream.initial()] + [stream.step() for _ in range(8)]:
+        everything += factors
+        solver.update(factors, values)
+    report = marginalize(solver, [X(4)])
+    assert not report.leaves and report.new_cliques
+    assert X(4) not in solver._dims and all(X(4) not in c.separator for c in solver.tree.cliques.values())
+    check_window(solver, everything)
+    np.testing.assert_array_equal(report.estimates[X(4)].shape, (6,))
+
+
+def test_a_failed_marginalization_changes_nothing():
+    stream = LinearStream(2, 1)
+    solver = IncrementalSolver(**EXACT)
+    for factors, values, _ in [stream.initial()] + [stream.step() for _ in range(4)]:
+        solver.update(factors, values)
+    tree, n, held = dict(solver.tree.cliques), len(solver.factors), dict(solver._dims)
+    with pytest.raises(UnknownVariableError, match="x99"):
+        marginalize(solver, [X(0), X(99)])
+    assert solver.tree.cliques == tree and len(solver.factors) == n and solver._dims == held
+
+
+def test_a_failure_during_re_elimination_puts_the_tree_back(monkeypatch):
+    stream = LinearStream(8, 2, fix_every=2)
+    solver = IncrementalSolver(**EXACT)
+    everything = []
+    for factors, values, _ in [stream.initial()] + [stream.step() for _ in range(8)]:
+        everything += factors
+        solver.update(factors, values)
+    tree, parents, n, held = (
+        dict(solver.tree.cliques),
+        dict(solver.tree.parent),
+        len(solver.factors),
+        dict(solver._dims),
+    )
+
+    def broken(*args, **kwargs):
+        raise SteamError("interrupted")
+
+    monkeypatch.setattr(sys.modules["steam_ref.bayes_tree.marginalize"], "eliminate", broken)
+    with pytest.raises(SteamError, match="interrupted"):
+        marginalize(solver, [X(4)])
+    assert solver.tree.cliques == tree and solver.tree.parent == parents
+    assert len(solver.factors) == n and solver._dims == held and solver.tree.problems() == []
+    monkeypatch.undo()
+    check_window(solver, everything)

@@ -1,0 +1,114 @@
+"""Fixed-lag smoothing in a stream and on the command line: StreamOptions(lag=…), steam-ref run --lag.
+
+A lag longer than the run changes nothing (the same trajectory, bit for bit); a short one keeps the
+window to about lag / Δt states however long the run, reports what it forgot, lets landmarks leave
+and enter again, and keeps the lagged estimate close to the full smoother's. Bad combinations are
+refused before anything runs.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+
+import numpy as np
+import pytest
+
+from steam_ref.cli import commands as cli
+from steam_ref.datasets import generate_synthetic
+from steam_ref.errors import SteamError, UnknownVariableError
+from steam_ref.paper.online import StreamingEstimator, StreamOptions, run_online
+from steam_ref.paper.presets import PaperSetup
+from steam_ref.paper.readings import Readings
+from steam_ref.paper.solvers import FixedLagTreeSolver
+from steam_ref.variables import X
+
+SETUP = PaperSetup.synthetic()
+
+
+@pytest.fixture(scope="module")
+def data():
+    return generate_synthetic(n_steps=120, n_landmarks=24, seed=5)
+
+
+def test_a_lag_longer_than_the_run_changes_nothing(data):
+    full = run_online(data, SETUP, StreamOptions())
+    lagged = run_online(data, SETUP, StreamOptions(lag=1e6))
+    np.testing.assert_array_equal(lagged.trajectory, full.trajectory)
+    assert lagged.n_marginalized == 0 and lagged.peak_window == len(full.state_poses) + len(full.landmarks)
+    assert full.lag_summary() == {} and lagged.lag_summary()["n_marginalized"] == 0
+
+
+def test_a_short_lag_keeps_the_window_small_and_the_estimate_close(data):
+    full = run_online(data, SETUP, StreamOptions())
+    stream = StreamingEstimator(Readings.from_dataset(data, SETUP), SETUP, StreamOptions(lag=10.0))
+    result = stream.run(data.ground_truth)
+    smoother = stream.solver.inner
+    assert isinstance(stream.solver, FixedLagTreeSolver)
+    held_states = [k for k in smoother.estimate() if k.kind == "x"]
+    assert len(held_states) <= 12  # Δt = 1 s: t > t_newest - 10 s, and the newest
+    assert result.n_marginalized >= len(result.state_poses) - 12
+    assert result.peak_window < 40 and smoother.tree.problems() == []
+    assert abs(result.rmse_m - full.rmse_m) < 0.05, (result.rmse_m, full.rmse_m)
+    with pytest.raises(UnknownVariableError, match="x0, which was marginalized at update"):
+        smoother.marginal_covariance(X(0))
+    np.testing.assert_array_equal(stream.solver.estimate_of(X(0)), stream.solver.retired(X(0)))
+    assert len(stream.solver.reports) <= 100
+    summary = result.lag_summary()
+    assert summary["lag_s"] == 10.0 and summary["n_marginalized"] == result.n_marginalized
+
+
+def test_landmarks_leave_the_window_and_enter_again():
+    data = generate_synthetic(n_steps=150, n_landmarks=10, seed=2)  # few landmarks: each seen again and again
+    stream = StreamingEstimator(Readings.from_dataset(data, SETUP), SETUP, StreamOptions(lag=4.0))
+    left: set = set()  # landmarks that have left the window at some point
+    entered_again: set = set()
+    while not stream.done:
+        stream.step()
+        held = {k for k in stream.solver.inner.estimate() if k.kind == "l"}
+        entered_again |= held & left
+        left |= set(stream.solver._landmarks)
+    assert entered_again and stream.solver.inner.tree.problems() == []
+
+
+@pytest.mark.parametrize(
+    ("changes", "message"),
+    [
+        (dict(method="pb", lag=5.0), "lag .*BTGP only.*PB re-solves"),
+        (dict(method="pbvr", lag=5.0), "BTGP only"),
+        (dict(lag=0.0), "lag must be a finite number of seconds > 0"),
+        (dict(lag=float("inf")), "lag must be"),
+        (dict(lag=True), "lag must be"),
+        (dict(lag=3.0, converge_at_end=True), "lag and converge_at_end"),
+    ],
+)
+def test_bad_lag_options_are_refused(changes, message):
+    with pytest.raises(SteamError, match=message):
+        StreamOptions(**changes)
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["run", "--lag", "5", "--method", "pb"], "BTGP only"),
+        (["run", "--lag", "0"], "--lag"),
+        (["run", "--lag", "-2"], "--lag"),
+        (["run", "--steps", "0"], "--steps"),
+        (["run", "--steps", "50", "--dataset", "plaza"], "--steps generates the synthetic task"),
+        (["run", "--lag", "5", "--save-estimates", "out.npz"], "--save-estimates .* --lag"),
+    ],
+)
+def test_the_cli_refuses_bad_lag_and_steps_in_one_line(argv, message, capsys, monkeypatch, tmp_path):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(cli, "run_online", lambda *a, **k: pytest.fail("the run started"))
+    assert cli.main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Traceback" not in err
+    assert re.search(message, err), err
+
+
+def test_run_with_steps_and_lag_reports_the_window(capsys):
+    assert cli.main(["run", "--steps", "60", "--lag", "8", "--json"]) == 0
+    row = json.loads(capsys.readouterr().out)
+    assert row["n_poses"] == 61 and row["lag_s"] == 8.0
+    assert row["n_marginalized"] >= 61 - 10 and 0 < row["peak_window"] < 30
