@@ -41,6 +41,7 @@ from ..variables import X
 from .args import build_parser
 from .args import check_out_folder as _check_out_folder
 from .args import check_output as _check_output
+from .args import write_output as _write_output
 
 __all__ = ["main", "build_parser"]  # build_parser lives in cli_args
 
@@ -92,22 +93,26 @@ def _run(args: argparse.Namespace) -> int:
     else:
         _print_summary(summary)
     if args.save_estimates:
-        save_estimates(args.save_estimates, result)
+        _write_output(args.save_estimates, "--save-estimates", lambda name: save_estimates(name, result))
     if args.plot:
         reference: np.ndarray | None
         if score is not None:
             reference = np.array([score.batch.values[X(int(i))][:2] for i in score.poses])
         else:
             reference = None if data.ground_truth is None else data.ground_truth[:, 1:3]
-        plot_trajectory(
-            reference,
-            result.trajectory[:, :2],
-            landmarks_true=data.landmarks[:, 1:3] if len(data.landmarks) else None,
-            landmarks_estimated=result.landmarks,
-            dead_reckoning=data.dead_reckoning[:, 1:3],
-            estimate_label=f"{result.method.upper()} estimate",
-            truth_label="ground truth" if score is None else "batch optimum",
-            path=args.plot,
+        _write_output(
+            args.plot,
+            "--plot",
+            lambda name: plot_trajectory(
+                reference,
+                result.trajectory[:, :2],
+                landmarks_true=data.landmarks[:, 1:3] if len(data.landmarks) else None,
+                landmarks_estimated=result.landmarks,
+                dead_reckoning=data.dead_reckoning[:, 1:3],
+                estimate_label=f"{result.method.upper()} estimate",
+                truth_label="ground truth" if score is None else "batch optimum",
+                path=name,
+            ),
         )
     return 0
 
@@ -209,12 +214,16 @@ def _batch(args: argparse.Namespace) -> int:
             f"{summary['total_s']:.2f} s, Cholesky factor {summary['factor_nnz']} nonzeros ({summary['backend']})"
         )
     if args.plot:
-        plot_trajectory(
-            truth,
-            positions,
-            landmarks_true=data.landmarks[:, 1:3] if len(data.landmarks) else None,
-            title=f"batch on {args.dataset}",
-            path=args.plot,
+        _write_output(
+            args.plot,
+            "--plot",
+            lambda name: plot_trajectory(
+                truth,
+                positions,
+                landmarks_true=data.landmarks[:, 1:3] if len(data.landmarks) else None,
+                title=f"batch on {args.dataset}",
+                path=name,
+            ),
         )
     return 0
 
@@ -237,7 +246,7 @@ def _fidelity(args: argparse.Namespace) -> int:
         }
         print(json.dumps(row) if args.json else _fidelity_text(row))
     if args.plot:
-        plot_fidelity(distances, path=args.plot)
+        _write_output(args.plot, "--plot", lambda name: plot_fidelity(distances, path=name))
     return 0
 
 
@@ -264,7 +273,10 @@ def _fidelity_text(row: dict) -> str:
 
 def _reproduce(args: argparse.Namespace) -> int:
     _check_out_folder(args.out, "--out")
-    table = reproduce(args.out, quick=args.quick, data_dir=args.data_dir)
+    try:
+        table = reproduce(args.out, quick=args.quick, data_dir=args.data_dir)
+    except OSError as err:  # a full disk while writing the plots or the table
+        raise SteamError(f"--out: cannot write {err.filename or args.out!r} ({err.strerror or err})") from None
     print(table)
     return 0
 
