@@ -13,6 +13,7 @@ from ._version import __version__ as __version__
 from .errors import (
     ConvergenceWarning,
     DataError,
+    DivergenceWarning,
     IllConditionedWarning,
     NumericalError,
     ShapeError,
@@ -111,6 +112,7 @@ __all__ = [
     "NumericalError",
     "IllConditionedWarning",
     "ConvergenceWarning",
+    "DivergenceWarning",
     "Key",
     "X",
     "L",

@@ -38,3 +38,8 @@ class IllConditionedWarning(UserWarning):
 
 class ConvergenceWarning(UserWarning):
     """An iteration asked to converge stopped before its check passed; the result says why."""
+
+
+class DivergenceWarning(UserWarning):
+    """A streamed estimate met a reading beyond any plausible noise, or stopped fitting what it was given
+    (it diverges); the run's result records it (``RunResult.divergence``)."""

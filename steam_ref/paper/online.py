@@ -31,6 +31,7 @@ from ..graph import FactorGraph
 from ..trajectory import Trajectory
 from ..variables import L, Values, X
 from .converge import converge
+from .divergence import DivergenceCheck
 from .frontend import FrontEnd, Layout, NewStep
 from .presets import PaperSetup
 from .readings import Readings
@@ -160,6 +161,7 @@ class StreamingEstimator:
         self.step_seconds: list[float] = []  # wall time of each processed pose
         self.update_steps: list[int] = []  # pose at which each solver update ran
         self.update_seconds: list[float] = []  # wall time of each solver update
+        self.divergence = DivergenceCheck()  # readings beyond any noise, a diverging estimate (paper.divergence)
 
     def _new_solver(self) -> OnlineSolver:
         o = self.options
@@ -200,7 +202,12 @@ class StreamingEstimator:
         values = self._pending_values
         if not self.schedule.started and self.schedule.start_after > 0:
             values = levenberg_marquardt(FactorGraph(self._pending), values, **INITIAL_SOLVE).values
+        prediction = values  # the gate: new readings at the prediction; the fit: at the new estimate
+        self.divergence.gate(
+            self._pending, lambda k: prediction[k] if k in prediction else self.solver.estimate_of(k), pose
+        )
         self.solver.update(self._pending, values)
+        self.divergence.fit(self._pending, self.solver.estimate_of, pose)
         self.factors.extend(self._pending)
         if pose == self.schedule.last_pose:
             for _ in range(self.final_updates):
@@ -292,6 +299,7 @@ class StreamingEstimator:
             peak_rss_mb(),
             self.convergence_seconds if self.convergence is not None else None,
             self.convergence.converged if self.convergence is not None else None,
+            self.divergence.findings,
         )
 
 

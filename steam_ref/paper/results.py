@@ -79,6 +79,7 @@ class RunResult:
     converged_at_end: bool | None = (
         None  # converge_at_end: whether the optimum passed its check; None: not run (not asked, or cut short)
     )
+    divergence: tuple[str, ...] = ()  # readings beyond any plausible noise, a diverging estimate (paper.divergence)
 
     @classmethod
     def of(
@@ -99,6 +100,7 @@ class RunResult:
         peak_rss,
         convergence_s=None,
         converged_at_end=None,
+        divergence=(),
     ) -> RunResult:
         """Package a run, scoring it against ``ground_truth`` (CMU GT layout, x, y in columns 1-2) if given."""
         rmse = rmse_states = float("nan")
@@ -125,6 +127,7 @@ class RunResult:
             peak_rss,
             convergence_s,
             converged_at_end,
+            tuple(divergence),
         )
 
     @property
@@ -162,6 +165,7 @@ class RunResult:
             "update_s_p95": round(float(np.percentile(u, 95)), 6) if len(u) else None,
             "peak_rss_mb": round(self.peak_rss_mb, 1),
             "completed": self.completed,
+            "divergence": list(self.divergence),
         } | (
             {
                 "convergence_s": None if self.convergence_s is None else round(self.convergence_s, 4),
