@@ -119,7 +119,9 @@ def _dataset(bearing: float, distance: float, sigmas=(0.05, 0.1)) -> LandmarkDat
     poses = np.array([[0.0, 0], [1, 1], [2, 2]])
     odometry = np.array([[1.0, 1, 0, 0], [2, 1, 0, 0]])
     covariance = np.tile([0.01, 0, 0, 0.01, 0, 0.001], (2, 1))
-    sightings = np.array([[0.0, 7, 0.3, 10.0, 0.05, 0.1], [1, 7, bearing, distance, *sigmas], [2, 7, 0.4, 9.0, 0.05, 0.1]])
+    sightings = np.array(
+        [[0.0, 7, 0.3, 10.0, 0.05, 0.1], [1, 7, bearing, distance, *sigmas], [2, 7, 0.4, 9.0, 0.05, 0.1]]
+    )
     return LandmarkDataset("three", poses, odometry, covariance, bearing_ranges=sightings)
 
 
