@@ -37,7 +37,17 @@ def _threshold(loss: str, name: str, value: object) -> float:
         raise SteamError(f"{loss} threshold: {exc}") from None
     if t <= 0:
         raise SteamError(f"{loss} threshold must be positive, got {name}={t}")
+    if not _SMALLEST <= t <= _LARGEST:
+        raise SteamError(
+            f"{loss} threshold {name}={t!r}: its square, which the loss {'of an outlier ' if loss == 'Tukey' else ''}"
+            f"is made of, {'overflows' if t > 1 else 'underflows'} float64; use {_SMALLEST:.3g} <= {name} <= {_LARGEST:.3g}"
+            + (" (or loss=None for plain least squares)" if t > 1 else "")
+        )
     return t
+
+
+_LARGEST = float(np.sqrt(np.finfo(float).max) / 3)  # ρ holds the threshold squared (Tukey: c²/6): it must be finite
+_SMALLEST = float(np.sqrt(np.finfo(float).tiny) * 3)  # and a normal float, not 0
 
 
 @dataclass(frozen=True)
