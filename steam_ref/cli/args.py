@@ -50,6 +50,29 @@ def _number(convert: type, lower: float, *, strict: bool):
     return parse
 
 
+def _scale(lower: float, upper: float, why: str):
+    """An argparse type: a finite number in [lower, upper] (outside it, ``why``)."""
+
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            value = math.nan
+        if not (math.isfinite(value) and lower <= value <= upper):
+            raise argparse.ArgumentTypeError(f"expected a number from {lower:g} to {upper:g}, got {text!r} ({why})")
+        return value
+
+    return parse
+
+
+# The preset's Qc balances the prior against the readings; a scale s moves the prior's information by 1/s,
+# and beyond about sqrt(1/eps) = 6.7e7 either way float64 no longer resolves the readings beside the prior
+# (or the prior beside them): the elimination then breaks down, blaming a variable. Past 1e8 refused here.
+QC_SCALES = (1e-8, 1e8)
+# Singer's 1/alpha: the acceleration's memory. Below 1e-6 s (alpha dt > 1e6 at the data sets' dt of 1 s to
+# 0.1 s) its process noise spans more than float64 resolves; above 1e8 s it is WNOJ to float64's precision.
+SINGER_TIME_CONSTANTS = (1e-6, 1e8)
+
 _positive_int = _number(int, 0, strict=True)
 _non_negative_int = _number(int, 0, strict=False)
 _positive_float = _number(float, 0, strict=True)
@@ -121,15 +144,16 @@ def _add_run_arguments(run: argparse.ArgumentParser) -> None:
     )
     run.add_argument(
         "--qc-scale",
-        type=_positive_float,
+        type=_scale(*QC_SCALES, "the prior's information beside the readings must stay within float64's precision"),
         default=1.0,
-        help="multiply the preset's Qc by this (a jerk prior needs its own: tutorial 06 uses 100 on Plaza)",
+        help="multiply the preset's Qc by this, 1e-8 to 1e8 (a jerk prior needs its own: tutorial 06 uses 100 on Plaza)",
     )
     run.add_argument(
         "--singer-time-constant",
-        type=_positive_float,
-        default=PaperSetup.singer_time_constant,
-        help="Singer prior: the acceleration's time constant 1/α in seconds (default %(default)s)",
+        type=_scale(*SINGER_TIME_CONSTANTS, "the Singer prior's process noise must stay within float64's precision"),
+        default=None,
+        help=f"Singer prior (--prior singer only): the acceleration's time constant 1/α in seconds, 1e-6 to 1e8 "
+        f"(default {PaperSetup.singer_time_constant})",
     )
     run.add_argument(
         "--data-dir",

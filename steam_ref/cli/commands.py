@@ -59,7 +59,10 @@ def _run(args: argparse.Namespace) -> int:
     _check_output(args.plot, ".png", "--plot")
     preset = args.preset or _PRESET_OF.get(args.dataset, "plaza")
     setup = PaperSetup.named(preset).departing(*args.departure)
-    setup = setup.replace(prior=args.prior, qc=args.qc_scale * setup.qc, singer_time_constant=args.singer_time_constant)
+    if args.singer_time_constant is not None and args.prior != "singer":
+        raise SteamError(f"--singer-time-constant applies to --prior singer only, not --prior {args.prior}")
+    tau = setup.singer_time_constant if args.singer_time_constant is None else args.singer_time_constant
+    setup = setup.replace(prior=args.prior, qc=args.qc_scale * setup.qc, singer_time_constant=tau)
     options = StreamOptions(
         method=args.method,
         every=args.every,
