@@ -36,16 +36,21 @@ PLAUSIBLE_SIGMAS = 1e3  # a whitened residual above this is beyond any plausible
 MAX_FINDINGS = 20  # findings kept for the result (the warnings say every one)
 
 
-def worst_fit(factors: Sequence[Factor], value_of: Callable[[Key], NDArray]) -> tuple[float, Factor | None]:
-    """The largest ‖W e‖ among ``factors`` at the values ``value_of`` gives (inf when one is not finite)."""
-    worst, which = 0.0, None
+def fits(factors: Sequence[Factor], value_of: Callable[[Key], NDArray]) -> list[float]:
+    """‖W e‖ of each of ``factors`` at the values ``value_of`` gives (inf when it is not finite)."""
+    out = []
     with np.errstate(all="ignore"):
         for f in factors:
             s = float(np.linalg.norm(f.whitened_error(*(value_of(k) for k in f.keys))))
-            s = s if np.isfinite(s) else np.inf
-            if s > worst or which is None:
-                worst, which = s, f
-    return worst, which
+            out.append(s if np.isfinite(s) else np.inf)
+    return out
+
+
+def worst_fit(factors: Sequence[Factor], value_of: Callable[[Key], NDArray]) -> tuple[float, Factor | None]:
+    """The largest ‖W e‖ among ``factors`` at the values ``value_of`` gives, and its factor (None: no factors)."""
+    s = fits(factors, value_of)
+    i = int(np.argmax(s)) if s else -1
+    return (s[i], factors[i]) if s else (0.0, None)
 
 
 def _is_landmark_reading(factor: Factor) -> bool:
@@ -70,6 +75,7 @@ class DivergenceCheck:
         self.limit = limit  # sigmas beyond any plausible noise
         self.findings: list[str] = []  # what was found, in order (at most MAX_FINDINGS)
         self.count = 0  # how many findings in all
+        self._absurd: set[int] = set()  # ids of the readings the last gate found beyond any noise
         self.diverged_at: int | None = None  # the pose of the first update after which the estimate did not fit
 
     def _found(self, message: str) -> None:
@@ -80,7 +86,10 @@ class DivergenceCheck:
 
     def gate(self, factors: Sequence[Factor], value_of: Callable[[Key], NDArray], pose: int) -> None:
         """Before the update at ``pose``: a new reading beyond any noise at the prediction is named."""
-        s, f = worst_fit([f for f in factors if _is_landmark_reading(f)], value_of)
+        readings = [f for f in factors if _is_landmark_reading(f)]
+        residuals = fits(readings, value_of)
+        self._absurd = {id(f) for f, r in zip(readings, residuals, strict=True) if r > self.limit}
+        s, f = (max(residuals), readings[int(np.argmax(residuals))]) if readings else (0.0, None)
         if f is not None and s > self.limit:
             self._found(
                 f"update at pose {pose}: {describe(f)} is {s:.3g} sigmas from the prediction, beyond any "
@@ -93,8 +102,9 @@ class DivergenceCheck:
             )
 
     def fit(self, factors: Sequence[Factor], value_of: Callable[[Key], NDArray], pose: int) -> None:
-        """After the update at ``pose``: the estimate not fitting a new factor within any noise is diverging."""
-        s, f = worst_fit(factors, value_of)
+        """After the update at ``pose``: the estimate not fitting a new factor within any noise is diverging
+        (the readings the gate found absurd left out: an estimate that does not follow them is right)."""
+        s, f = worst_fit([f for f in factors if id(f) not in self._absurd], value_of)
         if f is not None and s > self.limit:
             self.diverged_at = pose if self.diverged_at is None else self.diverged_at
             self._found(
