@@ -46,7 +46,7 @@ def _threshold(loss: str, name: str, value: object) -> float:
     return t
 
 
-_LARGEST = float(np.sqrt(np.finfo(float).max) / 3)  # ρ holds the threshold squared (Tukey: c²/6): it must be finite
+_LARGEST = float(np.sqrt(np.finfo(float).max) / 10)  # ρ holds the threshold squared (Tukey: c²/6; Huber at 10 k: 10 k²)
 _SMALLEST = float(np.sqrt(np.finfo(float).tiny) * 3)  # and a normal float, not 0
 
 
@@ -61,7 +61,8 @@ class Huber(RobustLoss):
 
     def rho(self, s: NDArray) -> NDArray:
         a = np.abs(s)
-        return np.where(a <= self.k, 0.5 * a**2, self.k * a - 0.5 * self.k**2)
+        core = np.minimum(a, self.k)  # squared only within the core: a**2 of a far outlier would overflow
+        return np.where(a <= self.k, 0.5 * core**2, self.k * a - 0.5 * self.k**2)
 
     def weight(self, s: NDArray) -> NDArray:
         a = np.abs(s)
@@ -78,9 +79,11 @@ class Tukey(RobustLoss):
         object.__setattr__(self, "c", _threshold("Tukey", "c", self.c))
 
     def rho(self, s: NDArray) -> NDArray:
-        u = np.minimum(np.abs(s) / self.c, 1.0)
+        with np.errstate(over="ignore"):  # |s| / c past float64 is past c: u = 1
+            u = np.minimum(np.abs(s) / self.c, 1.0)
         return self.c**2 / 6 * (1 - (1 - u**2) ** 3)
 
     def weight(self, s: NDArray) -> NDArray:
-        u = np.abs(s) / self.c
+        with np.errstate(over="ignore"):  # |s| / c past float64 is past c: weight 0
+            u = np.minimum(np.abs(s) / self.c, 2.0)
         return np.where(u <= 1.0, (1 - u**2) ** 2, 0.0)

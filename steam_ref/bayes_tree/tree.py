@@ -114,8 +114,15 @@ def eliminate_clique(
     if free is not None:
         bad = _free_variable(M, frontals, dims, free)
         diag = (M[:, :-1] ** 2).sum(axis=0)  # the diagonal of the clique's information
-        if not diag[diag > 0].size or not M[:, _columns_of(bad, frontals, dims)].any():
+        own = M[:, _columns_of(bad, frontals, dims)]
+        if not diag[diag > 0].size or not own.any():
             raise UnderdeterminedError(f"variable {bad!r} is not constrained by the factors (no factor reaches it)")
+        span = float(diag.max() / diag[diag > 0].min())
+        rank = int(np.linalg.matrix_rank(own))
+        if span < 1 / np.finfo(float).eps and rank < own.shape[1]:  # well scaled, yet short of directions
+            raise UnderdeterminedError(
+                f"variable {bad!r} is not constrained by the factors (they fix {rank} of its {own.shape[1]} directions)"
+            )
         raise UnderdeterminedError(
             f"elimination breaks down at variable {bad!r} (pivot {free} of its clique vanishes): the factors leave "
             f"it free, or the information matrix is too ill-conditioned for float64 (its diagonal spans "
