@@ -103,7 +103,7 @@ def test_a_reading_float64_cannot_resolve_to_its_sigma_is_refused(value: float, 
         "prior": lambda: sr.PriorFactor.create(sr.L(9), [value, 0.0], sigma),
     }[kind]
     if math.ulp(abs(value)) > sigma:
-        with pytest.raises(SteamError, match="float64 numbers there are .* apart, more than the sigma"):
+        with pytest.raises(SteamError, match=r"float64 numbers there are .* apart, more than the sigma"):
             make()
     else:
         make()
@@ -142,7 +142,7 @@ def test_a_loss_threshold_whose_square_overflows_is_refused(t: float) -> None:
             rho = loss(t).rho(np.array([0.0, t / 2, 10 * t]))
             assert np.all(np.isfinite(rho)), (loss, t, rho)
         else:
-            with pytest.raises(SteamError, match="threshold .*overflows|underflows"):
+            with pytest.raises(SteamError, match=r"threshold .*(overflows|underflows)"):
                 loss(t)
 
 
