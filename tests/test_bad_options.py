@@ -149,6 +149,8 @@ def test_a_loss_threshold_whose_square_overflows_is_refused(t: float) -> None:
 def test_tukey_1e300_is_refused_naming_the_threshold() -> None:
     with pytest.raises(SteamError, match=r"Tukey threshold c=1e\+300: its square.* overflows float64"):
         sr.Tukey(1e300)
+    with pytest.raises(SteamError, match=r"PaperSetup.tukey_c: Tukey threshold c=1e\+300"):
+        sr.PaperSetup.plaza().replace(tukey_c=1e300)
 
 
 # --- iSAM2 speaks of ill-conditioning as GN/LM do ------------------------------------------------

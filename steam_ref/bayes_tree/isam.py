@@ -32,7 +32,7 @@ from ..factors import Factor, check_factors
 from ..linear.ordering import constrained_min_degree
 from ..linear.system import GaussianFactor, linearize
 from ..variables import Key, Values, check_key
-from .journal import Journal, PhaseTimer, UndoDict
+from .journal import Journal, PhaseTimer, UndoDict, until_done
 from .params import ISAM2Params
 from .tree import BayesTree, Clique, eliminate
 
@@ -115,8 +115,7 @@ class IncrementalSolver:
 
     @property
     def factors(self) -> tuple[Factor, ...]:
-        """Every factor so far, in the order added (a factor's id is its position); a tuple, since
-        the solver's caches are indexed by it."""
+        """Every factor so far, in the order added (a tuple: the solver's caches are indexed by position)."""
         return tuple(self._factors)
 
     @property
@@ -179,7 +178,7 @@ class IncrementalSolver:
             report = self._update(F_new, theta_new, relinearize, journal, timer)
             self._delta.record = None
         except BaseException:  # an error, or Ctrl-C (KeyboardInterrupt) at any point: undo, then propagate
-            self._rollback(journal)
+            until_done(lambda: self._rollback(journal))
             raise
         return report
 
@@ -235,30 +234,23 @@ class IncrementalSolver:
     def _rollback(self, journal: Journal) -> None:
         """Put everything back as it was before a failed or interrupted update, wherever it stopped.
 
-        The undo is idempotent: a second Ctrl-C during it starts it again rather than leaving it half done.
+        Idempotent, so that :func:`~.journal.until_done` can start it again after a second Ctrl-C.
         """
-        while True:
-            try:
-                self._delta.record = None
-                self.tree.rollback(journal.tree)
-                for j, gf in journal.old_linear.items():
-                    self._linear[j] = gf
-                for k, (theta, _) in journal.old_points.items():
-                    self._theta_bar.insert(k, theta)
-                self._delta.undo(journal.old_delta)
-                for k in journal.old_delta:
-                    self._stale[k] = None  # its estimate is formed again, from the θ̄ and δ it had
-                for k in journal.new_keys:
-                    for store in (self._theta_bar._data, self._dims, self._threshold, self._estimate, self._stale):
-                        store.pop(k, None)
-                del self._factors[journal.n_factors :], self._linear[journal.n_factors :]
-                self._over = dict(journal.over)
-                self._steps = journal.steps
-                return
-            except Exception:
-                raise
-            except BaseException:
-                continue
+        self._delta.record = None
+        self.tree.rollback(journal.tree)
+        for j, gf in journal.old_linear.items():
+            self._linear[j] = gf
+        for k, (theta, _) in journal.old_points.items():
+            self._theta_bar.insert(k, theta)
+        self._delta.undo(journal.old_delta)
+        for k in journal.old_delta:
+            self._stale[k] = None  # its estimate is formed again, from the θ̄ and δ it had
+        for k in journal.new_keys:
+            for store in (self._theta_bar._data, self._dims, self._threshold, self._estimate, self._stale):
+                store.pop(k, None)
+        del self._factors[journal.n_factors :], self._linear[journal.n_factors :]
+        self._over = dict(journal.over)
+        self._steps = journal.steps
 
     def _checked_update(self, new_factors: list[Factor], new_values: Mapping[Key, NDArray]) -> dict[Key, NDArray]:
         """Validate an update before anything changes; returns the new values as float vectors."""

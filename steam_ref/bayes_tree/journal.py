@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from numpy.typing import NDArray
@@ -10,7 +11,7 @@ from numpy.typing import NDArray
 from ..linear.system import GaussianFactor
 from ..variables import Key
 
-__all__ = ["PhaseTimer", "Journal", "UndoDict"]
+__all__ = ["PhaseTimer", "Journal", "UndoDict", "until_done"]
 
 
 class PhaseTimer:
@@ -37,6 +38,19 @@ class PhaseTimer:
 
 
 _ABSENT = object()  # a key the dict did not have
+
+
+def until_done(undo: Callable[[], None]) -> None:
+    """Run ``undo`` (idempotent) to its end: a second Ctrl-C during it starts it again, rather than
+    leaving it half done; an error in it (a bug) propagates."""
+    while True:
+        try:
+            undo()
+            return
+        except Exception:
+            raise
+        except BaseException:
+            continue
 
 
 class UndoDict(dict):
