@@ -185,3 +185,16 @@ def test_a_diverging_stream_names_the_absurd_reading_first_and_records_it(cut) -
     # the estimate it warns about is indeed wrecked: the last pose is kilometres from the clean run's
     clean = StreamingEstimator(Readings.from_dataset(load_gtsam_2d(cut[1]), VP), VP, StreamOptions()).run()
     assert np.hypot(*(result.trajectory[-1, :2] - clean.trajectory[-1, :2])) > 1e3
+
+
+def test_ranges_and_bearing_ranges_to_one_landmark_are_checked_together() -> None:
+    """A range table (sigma in column 3) and a bearing-range table (range sigma in column 5) together."""
+    poses = np.array([[0.0, 0], [1, 1], [2, 2]])
+    odometry = np.array([[1.0, 1, 0, 0], [2, 1, 0, 0]])
+    covariance = np.tile([0.01, 0, 0, 0.01, 0, 0.001], (2, 1))
+    ranges = np.array([[0.0, 7, 10.0, 0.1], [1, 7, 10.5, 0.1], [2, 7, 60.0, 0.1]])
+    sightings = np.array([[1.0, 7, 0.3, 10.2, 0.05, 0.1]])
+    with pytest.raises(DataError, match=r"ranges\[2, 2\] \(range\) = 60.0 cannot be right: landmark 7"):
+        LandmarkDataset("mixed", poses, odometry, covariance, ranges=ranges, bearing_ranges=sightings, landmark_ids=[7])
+    ranges[2, 2] = 9.0  # 1 m from the last, after 1 m of travel: possible
+    LandmarkDataset("mixed", poses, odometry, covariance, ranges=ranges, bearing_ranges=sightings, landmark_ids=[7])

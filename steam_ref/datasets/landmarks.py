@@ -265,18 +265,18 @@ class LandmarkDataset:
         :data:`RANGE_SLACK_SIGMAS` times the two ranges' sigmas plus the odometry's translation sigmas
         summed along the path. A reading that breaks it with more of the others than not is named (or
         both, when two contradict each other alone): no sensor gives it, or it is another landmark."""
-        rows = [(name, c) for name, c in (("ranges", 2), ("bearing_ranges", 3)) if len(getattr(self, name))]
+        rows = [(n, c, sc) for n, c, sc in (("ranges", 2, 3), ("bearing_ranges", 3, 5)) if len(getattr(self, n))]
         if not rows:
             return
-        c = self.odometry_covariance
+        cov = self.odometry_covariance
         along = np.concatenate([[0.0], np.cumsum(np.hypot(self.odometry[:, 1], self.odometry[:, 2]))])
-        slack = np.concatenate([[0.0], np.cumsum(np.sqrt(c[:, 0] + c[:, 3]))])
-        table = np.concatenate([np.repeat(i, len(getattr(self, n))) for i, (n, _) in enumerate(rows)])
-        row = np.concatenate([np.arange(len(getattr(self, n))) for n, _ in rows])
-        pose = np.concatenate([self.reading_poses(n) for n, _ in rows])
-        lid = np.concatenate([getattr(self, n)[:, 1] for n, _ in rows])
-        r = np.concatenate([getattr(self, n)[:, c] for n, c in rows])
-        sigma = np.concatenate([getattr(self, n)[:, c + 2] for n, c in rows])
+        slack = np.concatenate([[0.0], np.cumsum(np.sqrt(cov[:, 0] + cov[:, 3]))])
+        table = np.concatenate([np.repeat(i, len(getattr(self, n))) for i, (n, _, _) in enumerate(rows)])
+        row = np.concatenate([np.arange(len(getattr(self, n))) for n, _, _ in rows])
+        pose = np.concatenate([self.reading_poses(n) for n, _, _ in rows])
+        lid = np.concatenate([getattr(self, n)[:, 1] for n, _, _ in rows])
+        r = np.concatenate([getattr(self, n)[:, c] for n, c, _ in rows])
+        sigma = np.concatenate([getattr(self, n)[:, sc] for n, _, sc in rows])
         order = np.argsort(lid, kind="stable")
         starts = np.flatnonzero(np.diff(lid[order], prepend=np.nan) != 0)
         for group in np.split(order, starts[1:]):
