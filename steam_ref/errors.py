@@ -57,3 +57,8 @@ class IllConditionedWarning(UserWarning):
 class ConvergenceWarning(UserWarning):
     """An iteration asked to converge stopped before its check passed, and its result, returned flagged
     (``converged=False``), says why."""
+
+
+class DivergenceWarning(UserWarning):
+    """A streamed estimate met a reading beyond any plausible noise, or stopped fitting what it was given
+    (it diverges); the run's result records it (``RunResult.divergence``)."""

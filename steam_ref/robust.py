@@ -37,7 +37,17 @@ def _threshold(loss: str, name: str, value: object) -> float:
         raise SteamError(f"{loss} threshold: {exc}") from None
     if t <= 0:
         raise SteamError(f"{loss} threshold must be positive, got {name}={t}")
+    if not _SMALLEST <= t <= _LARGEST:
+        raise SteamError(
+            f"{loss} threshold {name}={t!r}: its square, which the loss {'of an outlier ' if loss == 'Tukey' else ''}"
+            f"is made of, {'overflows' if t > 1 else 'underflows'} float64; use {_SMALLEST:.3g} <= {name} <= {_LARGEST:.3g}"
+            + (" (or loss=None for plain least squares)" if t > 1 else "")
+        )
     return t
+
+
+_LARGEST = float(np.sqrt(np.finfo(float).max) / 10)  # ρ holds the threshold squared (Tukey: c²/6; Huber at 10 k: 10 k²)
+_SMALLEST = float(np.sqrt(np.finfo(float).tiny) * 3)  # and a normal float, not 0
 
 
 @dataclass(frozen=True)
@@ -51,7 +61,8 @@ class Huber(RobustLoss):
 
     def rho(self, s: NDArray) -> NDArray:
         a = np.abs(s)
-        return np.where(a <= self.k, 0.5 * a**2, self.k * a - 0.5 * self.k**2)
+        core = np.minimum(a, self.k)  # squared only within the core: a**2 of a far outlier would overflow
+        return np.where(a <= self.k, 0.5 * core**2, self.k * a - 0.5 * self.k**2)
 
     def weight(self, s: NDArray) -> NDArray:
         a = np.abs(s)
@@ -68,9 +79,11 @@ class Tukey(RobustLoss):
         object.__setattr__(self, "c", _threshold("Tukey", "c", self.c))
 
     def rho(self, s: NDArray) -> NDArray:
-        u = np.minimum(np.abs(s) / self.c, 1.0)
+        with np.errstate(over="ignore"):  # |s| / c past float64 is past c: u = 1
+            u = np.minimum(np.abs(s) / self.c, 1.0)
         return self.c**2 / 6 * (1 - (1 - u**2) ** 3)
 
     def weight(self, s: NDArray) -> NDArray:
-        u = np.abs(s) / self.c
+        with np.errstate(over="ignore"):  # |s| / c past float64 is past c: weight 0
+            u = np.minimum(np.abs(s) / self.c, 2.0)
         return np.where(u <= 1.0, (1 - u**2) ** 2, 0.0)

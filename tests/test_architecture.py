@@ -53,6 +53,7 @@ LAYERS: dict[str, int] = {
     "steam_ref.paper.solvers": 10,
     "steam_ref.paper.options": 10,
     "steam_ref.paper.results": 10,
+    "steam_ref.paper.divergence": 10,
     "steam_ref.paper.online": 11,
     "steam_ref.paper.fidelity": 11,
     "steam_ref.paper.experiments": 12,

@@ -299,7 +299,7 @@ def test_bad_lag_and_timestamps_are_refused():
         smoother.update([PriorFactor.create(X(0), np.zeros(6), 1.0)], {X(0): np.zeros(6)}, timestamps={X(1): 0.0})
     with pytest.raises(SteamError, match="timestamps"):
         smoother.update([PriorFactor.create(X(0), np.zeros(6), 1.0)], {X(0): np.zeros(6)}, timestamps={X(0): "now"})
-    assert len(smoother) == 0 and smoother.factors == []
+    assert len(smoother) == 0 and smoother.factors == ()
 
 
 def test_a_middle_state_is_re_eliminated_first_and_the_rest_stays_exact():

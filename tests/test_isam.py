@@ -173,7 +173,7 @@ def test_zero_thresholds_give_one_gauss_newton_step(seed, actions):
             point.insert(k, v)
         keys = tuple(point)
         ordering = Ordering(keys, tuple(point.dim(k) for k in keys))
-        J, b = LinearSystem.build(solver.factors + factors, point, ordering).to_dense()
+        J, b = LinearSystem.build(list(solver.factors) + factors, point, ordering).to_dense()
         step = np.linalg.solve(J.T @ J, J.T @ b)
         solver.update(factors, values)
         got = np.concatenate([solver.estimate_of(k) for k in keys])
@@ -377,7 +377,7 @@ def test_threshold_dict_without_a_kind_is_named(rng):
     solver = IncrementalSolver(relinearize_threshold={"x": 0.0}, relinearize_skip=1)
     with pytest.raises(SteamError, match="'l'"):
         solver.update(*stream.step("state"))  # brings x0 and the first landmark
-    assert len(solver) == 0 and len(solver.tree) == 0 and solver.factors == []
+    assert len(solver) == 0 and len(solver.tree) == 0 and solver.factors == ()
 
 
 def test_unknown_key_queries_are_named():

@@ -101,14 +101,16 @@ def test_values_refuse_what_they_would_otherwise_guess():
 
 
 def overflowing_problem():
+    """A range whose error overflows at the estimate (a reading of 1e200 m with sigma 1 is refused when made,
+    since float64 cannot resolve it to its sigma: tests/test_bad_readings.py; an estimate at 1e308 m overflows)."""
     graph = sr.FactorGraph(
         [
             sr.PriorFactor.create(sr.X(0), np.zeros(6), 1.0),
-            sr.RangeFactor.create(sr.X(0), sr.L(0), 1e200, 1.0),
-            sr.PriorFactor.create(sr.L(0), np.ones(2), 1.0),
+            sr.RangeFactor.create(sr.X(0), sr.L(0), 1.0, 1.0),
+            sr.PriorFactor.create(sr.L(0), np.ones(2), 1e300),
         ]
     )
-    return graph, sr.Values({sr.X(0): np.zeros(6), sr.L(0): np.ones(2)})
+    return graph, sr.Values({sr.X(0): np.zeros(6), sr.L(0): np.full(2, 1e308)})
 
 
 @pytest.mark.parametrize("method", [sr.gauss_newton, sr.levenberg_marquardt])

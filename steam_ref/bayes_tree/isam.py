@@ -35,7 +35,7 @@ from ..linear.ordering import constrained_min_degree
 from ..linear.system import GaussianFactor, linearize
 from ..variables import Key, Values, check_key
 from .dot import tree_nnz
-from .journal import Journal, PhaseTimer
+from .journal import Journal, PhaseTimer, UndoDict, until_done
 from .params import ISAM2Params
 from .report import UpdateReport
 from .tree import BayesTree, Clique, eliminate
@@ -57,12 +57,12 @@ class IncrementalSolver:
             raise SteamError(f"params must be an ISAM2Params or None, got params={params!r}")
         self.params = params.replace(**changes) if changes else params  # the settings, validated
         self.tree = BayesTree()  # the current Bayes tree
-        self.factors: list[Factor] = []  # every factor so far; a factor's id is its position
+        self._factors: list[Factor] = []  # every factor so far; a factor's id is its position
         self._linear: list[GaussianFactor | None] = []  # cached linearization of each factor at θ̄
         self._theta_bar = Values()  # linearization point θ̄
         self._dims: dict[Key, int] = {}  # size of each variable
         self._threshold: dict[Key, float] = {}  # relinearization threshold of each variable (by kind)
-        self._delta: dict[Key, NDArray] = {}  # current increment δ, relative to θ̄ (never written in place)
+        self._delta: UndoDict = UndoDict()  # current increment δ, relative to θ̄ (never written in place)
         self._estimate: dict[Key, NDArray] = {}  # θ̄ + δ, read-only arrays, refreshed for ``_stale`` keys
         self._stale: dict[Key, None] = {}  # variables whose δ or θ̄ moved since their estimate was formed
         self._over: dict[Key, None] = {}  # variables whose latest δ has max |δ| ≥ their threshold
@@ -96,6 +96,11 @@ class IncrementalSolver:
         e = self._theta_bar[key] + self._delta[key]
         e.flags.writeable = False
         self._estimate[key] = e
+
+    @property
+    def factors(self) -> tuple[Factor, ...]:
+        """Every factor so far, in the order added (a tuple: the solver's caches are indexed by position)."""
+        return tuple(self._factors)
 
     @property
     def linearization_point(self) -> Values:
@@ -151,13 +156,15 @@ class IncrementalSolver:
                     f"new_values must be a mapping key -> vector (a dict or a Values) or None, got {new_values!r}"
                 )
             theta_new = self._checked_update(F_new, {} if new_values is None else new_values)
-        journal = Journal(len(self.factors), list(theta_new))
+        journal = Journal(len(self._factors), list(theta_new), self._steps, dict(self._over), self.tree.checkpoint())
+        self._delta.record = journal.old_delta
         try:
-            return self._update(F_new, theta_new, relinearize, journal, timer)
-        except Exception:
-            if not journal.closed:
-                self._rollback(journal)
+            report = self._update(F_new, theta_new, relinearize, journal, timer)
+            self._delta.record = None
+        except BaseException:  # an error, or Ctrl-C (KeyboardInterrupt) at any point: undo, then propagate
+            until_done(lambda: self._rollback(journal))
             raise
+        return report
 
     def _update(
         self, F_new: list[Factor], theta_new: dict[Key, NDArray], relinearize: bool, journal: Journal, timer: PhaseTimer
@@ -176,7 +183,7 @@ class IncrementalSolver:
         # 4. Redo the top of the tree for θ_aff = θ_nf ∪ θ_rl.                  [K12 Alg. 4; YIB steps 2-5]
         # 4a. Remove the cliques of θ_aff and their ascendants; the orphans stay. [YIB step 2]
         with timer("remove"):
-            removed, orphans = self._remove_top(theta_nf, theta_rl, journal)
+            removed, orphans = self._remove_top(theta_nf, theta_rl)
         # 4b. Linearize the factors of the removed part that are new or touch θ_rl. [YIB step 3, Eq. 9]
         with timer("linearize"):
             fids = [j for c in removed.values() for j in c.factors] + new_ids
@@ -190,7 +197,7 @@ class IncrementalSolver:
         # 4e. Eliminate into new cliques and attach back the orphans.   [YIB step 5, Eq. 24-25]
         with timer("eliminate"):
             cliques, parents, owner = eliminate(order, linear, self._dims, fids + [None] * len(orphans))
-            new_cids = self._insert(cliques, parents, orphans, owner[len(fids) :], journal)
+            new_cids = self._insert(cliques, parents, orphans, owner[len(fids) :])
         # 5. Partial back-substitution from the root, stopping below α.  [K12 Alg. 7; YIB step 6]
         with timer("backsubstitute"):
             updated, visited = self._backsubstitute(set(new_cids))
@@ -215,23 +222,27 @@ class IncrementalSolver:
         return list(constrained_min_degree(variables, self._dims, factor_keys, last=last).keys)
 
     def _rollback(self, journal: Journal) -> None:
-        """Put everything back as it was before a failed update (the failure came before re-insertion)."""
-        if journal.top_removed:
-            self.tree.restore_top()
+        """Put everything back as it was before a failed or interrupted update, wherever it stopped.
+
+        Idempotent, so that :func:`~.journal.until_done` can start it again after a second Ctrl-C.
+        """
+        self._delta.record = None
+        self.tree.rollback(journal.tree)
         for j, gf in journal.old_linear.items():
             self._linear[j] = gf
-        for k, (theta, delta) in journal.old_points.items():
+        for k, (theta, _) in journal.old_points.items():
             self._theta_bar.insert(k, theta)
-            self._delta[k] = delta
-            self._stale[k] = None
-            self._over[k] = None
+        self._delta.undo(journal.old_delta)
+        for k in journal.old_delta:
+            self._stale[k] = None  # its estimate is formed again, from the θ̄ and δ it had
         for k in journal.new_keys:
             if k in self._theta_bar:
                 self._theta_bar.remove(k)
-            for store in (self._dims, self._threshold, self._delta, self._estimate, self._stale):
+            for store in (self._dims, self._threshold, self._estimate, self._stale):
                 store.pop(k, None)
-        del self.factors[journal.n_factors :], self._linear[journal.n_factors :]
-        self._steps -= 1
+        del self._factors[journal.n_factors :], self._linear[journal.n_factors :]
+        self._over = dict(journal.over)
+        self._steps = journal.steps
 
     def _checked_update(self, new_factors: list[Factor], new_values: Mapping[Key, NDArray]) -> dict[Key, NDArray]:
         """Validate an update before anything changes; returns the new values as float vectors."""
@@ -268,8 +279,8 @@ class IncrementalSolver:
 
     def _add(self, new_factors: list[Factor], new_values: dict[Key, NDArray]) -> list[int]:
         """Store factors (uncached) and variables (θ̄ = initial value, δ = 0); returns the new factor ids."""
-        first = len(self.factors)
-        self.factors.extend(new_factors)
+        first = len(self._factors)
+        self._factors.extend(new_factors)
         self._linear.extend([None] * len(new_factors))
         for k, x in new_values.items():
             self._theta_bar.insert(k, x)
@@ -277,7 +288,7 @@ class IncrementalSolver:
             self._threshold[k] = self.params.threshold_for(k.kind)
             self._delta[k] = np.zeros_like(x)
             self._stale[k] = None
-        return list(range(first, len(self.factors)))
+        return list(range(first, len(self._factors)))
 
     def _fluid_relinearization(self, journal: Journal) -> list[Key]:
         """θ̄ ← θ̄ + δ, δ ← 0 for θ_rl, the variables whose max |δ| ≥ β; returns θ_rl.  [K12 Alg. 5]
@@ -299,9 +310,7 @@ class IncrementalSolver:
             self._delta[k] = np.where(move, 0.0, delta)
         return theta_rl
 
-    def _remove_top(
-        self, theta_nf: list[Key], theta_rl: list[Key], journal: Journal
-    ) -> tuple[dict[int, Clique], list[int]]:
+    def _remove_top(self, theta_nf: list[Key], theta_rl: list[Key]) -> tuple[dict[int, Clique], list[int]]:
         """Remove the cliques of θ_aff = θ_nf ∪ θ_rl and their ascendants: ``(removed, orphans)``.  [K12 Alg. 4]
 
         A variable of θ_nf affects the clique where it is frontal (a new variable is in none yet);
@@ -310,19 +319,17 @@ class IncrementalSolver:
         start = [self.tree.frontal_of[k] for k in theta_nf if k in self.tree.frontal_of]
         for k in theta_rl:
             start.extend(self.tree.cliques_involving(k))
-        removed, orphans = self.tree.remove_top(start)
-        journal.removed_top()
-        return removed, orphans
+        return self.tree.remove_top(start)  # undone by the tree's rollback to the journal's checkpoint
 
     def _relinearize(self, fids: list[int], theta_rl: set[Key], journal: Journal) -> int:
         """Linearize, at θ̄, the factors among ``fids`` that are new or touch θ_rl; returns how many.  [YIB Eq. 9]"""
         need = [
-            j for j in fids if self._linear[j] is None or (theta_rl and not theta_rl.isdisjoint(self.factors[j].keys))
+            j for j in fids if self._linear[j] is None or (theta_rl and not theta_rl.isdisjoint(self._factors[j].keys))
         ]
         for j in need:
             journal.relinearized(j, self._linear[j])
         if need:
-            for group in linearize([self.factors[j] for j in need], self._theta_bar):
+            for group in linearize([self._factors[j] for j in need], self._theta_bar):
                 for i, gf in zip(group.factor_ids, group.gaussian_factors(), strict=True):
                     self._linear[need[i]] = gf
         return len(need)
@@ -335,14 +342,13 @@ class IncrementalSolver:
         return gf
 
     def _insert(
-        self, cliques: list[Clique], parents: list[int | None], orphans: list[int], owners: list[int], journal: Journal
+        self, cliques: list[Clique], parents: list[int | None], orphans: list[int], owners: list[int]
     ) -> list[int]:
         """Put the new cliques in the tree and hang each orphan under ``cliques[owner]``; returns the new ids.
 
         The owner of an orphan is the new clique that eliminated its cached f(S), i.e. the first
         variable of its separator [K12 Alg. 4 step 5].
         """
-        journal.close()  # the old top is replaced from here on
         new_cids = self.tree.insert_eliminated(cliques, parents)
         for o, owner in zip(orphans, owners, strict=True):
             self.tree.attach(o, new_cids[owner])

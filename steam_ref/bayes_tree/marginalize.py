@@ -182,7 +182,7 @@ def marginalize(solver: IncrementalSolver, keys: Iterable[Key]) -> Marginalizati
     tree = solver.tree
     cids = _cliques_of(solver, drop)
     fids = [j for c in cids for j in tree.cliques[c].factors]
-    dropped = [j for j in fids if not drop.isdisjoint(solver.factors[j].keys)]
+    dropped = [j for j in fids if not drop.isdisjoint(solver._factors[j].keys)]
     adjacent = [solver._cached(j) for j in dropped]
     variables = list(dict.fromkeys(k for f in adjacent for k in f.keys))
     last = [k for k in variables if k not in drop]
@@ -212,7 +212,7 @@ def marginalize(solver: IncrementalSolver, keys: Iterable[Key]) -> Marginalizati
         for o, own in zip(orphans, owner, strict=True):
             tree.attach(o, new_cids[own])
     for j in dropped:
-        solver.factors[j] = None  # type: ignore[call-overload]  # ids are positions: keep the slot
+        solver._factors[j] = None  # type: ignore[call-overload]  # ids are positions: keep the slot
         solver._linear[j] = None
     for k in drop:
         for store in (solver._theta_bar._data, solver._dims, solver._threshold, solver._delta, solver._estimate):
@@ -239,7 +239,7 @@ def _reeliminate(
     roots = set(tree.roots)
     removed, orphans = tree.remove_top(cids)
     try:
-        kept = [j for c in removed.values() for j in c.factors if drop.isdisjoint(solver.factors[j].keys)]
+        kept = [j for c in removed.values() for j in c.factors if drop.isdisjoint(solver._factors[j].keys)]
         linear = [solver._cached(j) for j in kept] + schur + [tree.cliques[o].marginal for o in orphans]
         rest = [k for c in removed.values() for k in c.frontals if k not in drop]
         last = [k for c, cl in removed.items() if c in roots for k in cl.frontals if k not in drop]
@@ -274,8 +274,8 @@ def _add_marginal_factors(solver: IncrementalSolver, schur: list[GaussianFactor]
     for gf in schur:
         if not gf.keys:
             raise SteamError("a marginal factor with no variables")  # a root's f(∅) is never made one
-        ids.append(len(solver.factors))
-        solver.factors.append(MarginalFactor.frozen_at(gf, solver._theta_bar))
+        ids.append(len(solver._factors))
+        solver._factors.append(MarginalFactor.frozen_at(gf, solver._theta_bar))
         solver._linear.append(gf)  # its linearization at θ̄ is itself  [Eq. 10.4 at θ̄' = θ̄_S]
     return ids
 

@@ -210,7 +210,7 @@ class CliqueTree(Generic[C]):
                 removed[c] = self.cliques[c]
                 c = self.parent[c]
         orphans = [ch for c in removed for ch in self.children[c] if ch not in removed]
-        self._undo = [(c, clique, self.parent[c], self.children[c]) for c, clique in removed.items()]
+        self._undo = [(c, clique, self.parent[c], self.children[c]) for c, clique in removed.items()]  # before any edit
         for c, clique in removed.items():
             del self.cliques[c], self.parent[c], self.children[c]
             self.roots.pop(c, None)
@@ -260,6 +260,37 @@ class CliqueTree(Generic[C]):
         for ch, up in moved.items():
             self.attach(ch, up)
         return moved
+
+    def checkpoint(self) -> tuple[int, dict[int, None]]:
+        """Start an edit that :meth:`rollback` can undo: its token (the next id, the roots in order).
+
+        Costs time in proportion to the roots (one for a connected problem).
+        """
+        self._undo = []
+        return self._next_id, dict(self.roots)
+
+    def rollback(self, token: tuple[int, dict[int, None]]) -> None:
+        """Put the tree back as it was at :meth:`checkpoint` ``token``: drop the cliques added since, undo
+        the :meth:`remove_top` made since, in any state an interruption left them.
+
+        Idempotent, so a rollback that is itself interrupted can simply be run again.
+        """
+        first_new, roots = token
+        for cid in range(first_new, self._next_id):
+            clique = self.cliques.pop(cid, None)
+            self.parent.pop(cid, None)
+            self.children.pop(cid, None)
+            for v in () if clique is None else clique.frontals:
+                if self.frontal_of.get(v) == cid:
+                    del self.frontal_of[v]
+        for c, clique, parent, children in self._undo:
+            self.cliques[c], self.parent[c], self.children[c] = clique, parent, children
+            for v in clique.frontals:
+                self.frontal_of[v] = c
+            for ch in children:
+                self.parent[ch] = c
+        self.roots = dict(roots)
+        self._next_id = first_new
 
     def snapshot(self) -> CliqueTree[C]:
         """A structural copy (cliques shared, links copied), e.g. the tree "before" an update to draw.

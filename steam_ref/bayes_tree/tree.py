@@ -113,8 +113,20 @@ def eliminate_clique(
         free = int(small[0]) if len(small) else None
     if free is not None:
         bad = _free_variable(M, frontals, dims, free)
+        diag = (M[:, :-1] ** 2).sum(axis=0)  # the diagonal of the clique's information
+        own = M[:, _columns_of(bad, frontals, dims)]
+        if not diag[diag > 0].size or not own.any():
+            raise UnderdeterminedError(f"variable {bad!r} is not constrained by the factors (no factor reaches it)")
+        span = float(diag.max() / diag[diag > 0].min())
+        rank = int(np.linalg.matrix_rank(own))
+        if span < 1 / np.finfo(float).eps and rank < own.shape[1]:  # well scaled, yet short of directions
+            raise UnderdeterminedError(
+                f"variable {bad!r} is not constrained by the factors (they fix {rank} of its {own.shape[1]} directions)"
+            )
         raise UnderdeterminedError(
-            f"variable {bad!r} is not constrained by the factors (pivot {free} of its clique vanishes)"
+            f"elimination breaks down at variable {bad!r} (pivot {free} of its clique vanishes): the factors leave "
+            f"it free, or the information matrix is too ill-conditioned for float64 (its diagonal spans "
+            f"{float(diag.max() / diag[diag > 0].min()):.1e} in this clique)"
         )
     ns = ncol - 1 - nf
     below = R[nf : nf + ns, nf:].copy()  # f(S): the rows left after eliminating F  [YIB Eq. 24]
@@ -134,6 +146,16 @@ def eliminate_clique(
         marginal,
         tuple(factor_ids),
     )
+
+
+def _columns_of(key: Key, frontals: tuple[Key, ...], dims: Mapping[Key, int]) -> slice:
+    """The columns of frontal ``key`` in a gathered clique matrix."""
+    o = 0
+    for k in frontals:
+        if k == key:
+            return slice(o, o + dims[k])
+        o += dims[k]
+    raise KeyError(key)
 
 
 def _free_variable(M: NDArray, frontals: tuple[Key, ...], dims: Mapping[Key, int], col: int) -> Key:

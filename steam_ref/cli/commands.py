@@ -45,8 +45,9 @@ from ..variables import X
 from . import data as data_command
 from . import explain
 from .args import build_parser
-from .args import check_out_folder as _check_out_folder
-from .args import check_output as _check_output
+from .paths import check_out_folder as _check_out_folder
+from .paths import check_output as _check_output
+from .paths import write_output as _write_output
 
 __all__ = ["main", "build_parser"]  # build_parser lives in cli/args.py
 
@@ -67,6 +68,9 @@ def _run(args: argparse.Namespace) -> int:
     if args.tree_dot and args.method != "btgp":
         raise SteamError(f"--tree-dot writes BTGP's Bayes tree: it needs --method btgp, got --method {args.method}")
     setup = PaperSetup.named(_preset(args)).departing(*args.departure)
+    prior = setup.prior if args.prior is None else args.prior
+    if args.singer_time_constant is not None and prior != "singer":
+        raise SteamError(f"--singer-time-constant applies to --prior singer only, not --prior {prior}")
     given = {"prior": args.prior, "singer_time_constant": args.singer_time_constant}  # only what was given
     setup = setup.replace(qc=args.qc_scale * setup.qc, **{k: v for k, v in given.items() if v is not None})
     isam2 = {"relinearize_threshold": args.relinearize_threshold, "relinearize_skip": args.relinearize_skip}
@@ -119,25 +123,30 @@ def _run(args: argparse.Namespace) -> int:
     else:
         print(explain.run_text(summary))
     if args.save_estimates:
-        save_estimates(args.save_estimates, result)
+        _write_output(args.save_estimates, "--save-estimates", lambda name: save_estimates(name, result))
     if args.tree_dot and isinstance(estimator.solver, BayesTreeSolver):  # GTSAM's ISAM2.dot() text (bayes_tree/dot.py)
-        Path(args.tree_dot).write_text(estimator.solver.inner.tree.dot() + "\n", encoding="utf-8")
+        dot = estimator.solver.inner.tree.dot() + "\n"
+        _write_output(args.tree_dot, "--tree-dot", lambda name: Path(name).write_text(dot, encoding="utf-8"))
     if args.plot:
         reference: np.ndarray | None
         if score is not None:
             reference = np.array([score.batch.values[X(int(i))][:2] for i in score.poses])
         else:
             reference = None if data.ground_truth is None else data.ground_truth[:, 1:3]
-        plot_trajectory(
-            reference,
-            result.trajectory[:, :2],
-            landmarks_true=data.landmarks[:, 1:3] if len(data.landmarks) else None,
-            landmarks_estimated=result.landmarks,
-            dead_reckoning=data.dead_reckoning[:, 1:3],
-            estimate_label=f"{result.method.upper()} estimate",
-            truth_label="ground truth" if score is None else "batch optimum",
-            title=explain.plot_title(summary),
-            path=args.plot,
+        _write_output(
+            args.plot,
+            "--plot",
+            lambda name: plot_trajectory(
+                reference,
+                result.trajectory[:, :2],
+                landmarks_true=data.landmarks[:, 1:3] if len(data.landmarks) else None,
+                landmarks_estimated=result.landmarks,
+                dead_reckoning=data.dead_reckoning[:, 1:3],
+                estimate_label=f"{result.method.upper()} estimate",
+                truth_label="ground truth" if score is None else "batch optimum",
+                title=explain.plot_title(summary),
+                path=name,
+            ),
         )
     return 0
 
@@ -226,12 +235,16 @@ def _batch(args: argparse.Namespace) -> int:
             + explain.data_lines(summary)
         )
     if args.plot:
-        plot_trajectory(
-            truth,
-            positions,
-            landmarks_true=data.landmarks[:, 1:3] if len(data.landmarks) else None,
-            title=f"batch on {args.dataset}",
-            path=args.plot,
+        _write_output(
+            args.plot,
+            "--plot",
+            lambda name: plot_trajectory(
+                truth,
+                positions,
+                landmarks_true=data.landmarks[:, 1:3] if len(data.landmarks) else None,
+                title=f"batch on {args.dataset}",
+                path=name,
+            ),
         )
     return 0
 
@@ -258,7 +271,7 @@ def _fidelity(args: argparse.Namespace) -> int:
             json.dumps(row) if args.json else _fidelity_text(row) + "\n" + explain.data_lines(row | {"data_note": None})
         )
     if args.plot:
-        plot_fidelity(distances, path=args.plot)
+        _write_output(args.plot, "--plot", lambda name: plot_fidelity(distances, path=name))
     return 0
 
 
@@ -285,7 +298,10 @@ def _fidelity_text(row: dict) -> str:
 
 def _reproduce(args: argparse.Namespace) -> int:
     _check_out_folder(args.out, "--out")
-    table = reproduce(args.out, quick=args.quick, data_dir=args.data_dir)
+    try:
+        table = reproduce(args.out, quick=args.quick, data_dir=args.data_dir)
+    except OSError as err:  # a full disk while writing the plots or the table
+        raise SteamError(f"--out: cannot write {err.filename or args.out!r} ({err.strerror or err})") from None
     print(table)
     return 0
 

@@ -28,6 +28,14 @@ from .readme import export_readme
 __all__ = ["add_parser", "run"]
 
 
+def _data_dir(text: str) -> str:
+    """An argparse type: a folder that exists (a mistyped --data-dir must not be passed over in silence)."""
+    if not text.strip() or not Path(text).is_dir():
+        what = "an empty string" if not text.strip() else "not a folder" if Path(text).exists() else "does not exist"
+        raise argparse.ArgumentTypeError(f"expected a folder, got {text!r}: {what}")
+    return text
+
+
 def add_parser(sub) -> argparse.ArgumentParser:
     """Add ``conformance`` and its subcommands to ``sub`` (an argparse subparsers object)."""
     conf = sub.add_parser(
@@ -63,13 +71,17 @@ def add_parser(sub) -> argparse.ArgumentParser:
     st.add_argument(
         "--paper", action="store_true", help="also run the paper suite (BTGP/1 on both data sets, about a minute)"
     )
-    st.add_argument("--data-dir", default=None, help="folder with the paper's data files (else $STEAM_REF_DATA_DIR)")
+    st.add_argument(
+        "--data-dir", type=_data_dir, default=None, help="folder with the paper's data files (else $STEAM_REF_DATA_DIR)"
+    )
     bld = commands.add_parser("build", help="regenerate the kit (default: the package's own copy)")
     bld.add_argument("--out", default=None, help="write the kit here instead of into the package")
     bld.add_argument(
         "--paper", action="store_true", help="rebuild the paper suite from the data files (else keep the existing one)"
     )
-    bld.add_argument("--data-dir", default=None, help="folder with the paper's data files (else $STEAM_REF_DATA_DIR)")
+    bld.add_argument(
+        "--data-dir", type=_data_dir, default=None, help="folder with the paper's data files (else $STEAM_REF_DATA_DIR)"
+    )
     return conf
 
 

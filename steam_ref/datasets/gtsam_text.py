@@ -24,6 +24,10 @@ How they are read, following GTSAM's ``load2D`` (a test checks bearing, range an
 - The odometry covariance is kept as given (``odometry_covariance``); a set-up may use its own
   sigmas (Victoria Park's preset uses the script's, which equal the file's diagonal).
 
+Ids are read as integers, never through a float (two ids 2^53 and 2^53 + 1 stay two): digits only
+(``5.0``, ``5e0``, ``-5`` are refused), at most :data:`MAX_ID` = 2^53, since the data set keeps ids in
+float64 columns, which hold every integer up to 2^53 exactly and would merge larger ones.
+
 Errors: :class:`DataError` naming the file and the line (1-based) for a row that cannot be read,
 an unknown row type, a pose id the odometry has not reached, an id used for both a pose and a
 landmark, a sighting at range 0; any error of :class:`LandmarkDataset`'s checks is re-raised
@@ -42,27 +46,39 @@ import numpy as np
 from ..errors import DataError, SteamError
 from .landmarks import LandmarkDataset
 
-__all__ = ["load_gtsam_2d", "GTSAM_ISOTROPY_TOL"]
+__all__ = ["load_gtsam_2d", "GTSAM_ISOTROPY_TOL", "MAX_ID"]
 
 GTSAM_ISOTROPY_TOL = 1e-4  # load2D converts a sighting's covariance only when |v1 - v3| is below this
 _NUMBER = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")  # a plain decimal number
 _FIELDS = {"ODOMETRY": 11, "LANDMARK": 7}  # numbers after the tag
+_ID = re.compile(r"[0-9]+")  # an id: digits only (GTSAM reads a size_t)
+MAX_ID = 2**53  # the largest id the data set's float64 tables hold exactly (with all below it)
 
 
-def _numbers(path: Path, line_no: int, tag: str, fields: list[str]) -> list[float]:
+def _numbers(path: Path, line_no: int, tag: str, fields: list[str]) -> tuple[int, int, list[float]]:
+    """The two ids (exact integers) and the other numbers of a row."""
     if len(fields) != _FIELDS[tag]:
         raise DataError(
             f"{path} line {line_no}: a {tag} row has {_FIELDS[tag]} numbers after the tag, got {len(fields)}"
         )
+    ids = []
+    for c in (0, 1):  # read as integers, never through a float: 2^53 + 1 and 2^53 stay two ids
+        if not _ID.fullmatch(fields[c]):
+            raise DataError(
+                f"{path} line {line_no}, field {c + 2}: id {fields[c]!r} is not a non-negative integer written in digits"
+            )
+        ids.append(int(fields[c]))
+        if ids[-1] > MAX_ID:
+            raise DataError(
+                f"{path} line {line_no}, field {c + 2}: id {fields[c]} is above 2^53, the largest a data set's "
+                f"float64 id columns hold exactly (it would be merged with its neighbours)"
+            )
     out = []
-    for c, f in enumerate(fields):
+    for c, f in enumerate(fields[2:], start=2):
         if not _NUMBER.fullmatch(f) or not math.isfinite(float(f)):
             raise DataError(f"{path} line {line_no}, field {c + 2}: {f!r} is not a finite decimal number")
         out.append(float(f))
-    for c in (0, 1):  # the two ids
-        if out[c] != int(out[c]) or out[c] < 0:
-            raise DataError(f"{path} line {line_no}, field {c + 2}: id {fields[c]!r} is not a non-negative integer")
-    return out
+    return ids[0], ids[1], out
 
 
 def load_gtsam_2d(path: str | os.PathLike, name: str | None = None) -> LandmarkDataset:
@@ -84,6 +100,7 @@ def load_gtsam_2d(path: str | os.PathLike, name: str | None = None) -> LandmarkD
     pose_of: dict[int, int] = {}  # file id -> pose index
     landmark_line: dict[int, int] = {}  # landmark id -> line of its first sighting
     odometry, covariance, sightings = [], [], []
+    lines_of: list[int] = []  # the line of each sighting
     last = None  # the pose id the odometry has reached
     for line_no, line in enumerate(lines[:-1], start=1):
         fields = line.split()
@@ -94,8 +111,7 @@ def load_gtsam_2d(path: str | os.PathLike, name: str | None = None) -> LandmarkD
             raise DataError(
                 f"{path} line {line_no}: unknown row type {tag!r}; this loader reads ODOMETRY and LANDMARK rows (GTSAM's load2D format)"
             )
-        v = _numbers(path, line_no, tag, fields[1:])
-        i, j = int(v[0]), int(v[1])
+        i, j, v = _numbers(path, line_no, tag, fields[1:])
         if tag == "ODOMETRY":
             if last is None:
                 pose_of[i], last = 0, i
@@ -108,8 +124,8 @@ def load_gtsam_2d(path: str | os.PathLike, name: str | None = None) -> LandmarkD
                 kind = "a pose" if j in pose_of else f"landmark (line {landmark_line[j]})"
                 raise DataError(f"{path} line {line_no}: ODOMETRY to pose id {j}, which is already {kind}")
             pose_of[j], last = len(pose_of), j
-            odometry.append([float(pose_of[j]), *v[2:5]])
-            covariance.append(v[5:11])
+            odometry.append([float(pose_of[j]), *v[0:3]])
+            covariance.append(v[3:9])
         else:
             if i not in pose_of:
                 raise DataError(
@@ -118,7 +134,7 @@ def load_gtsam_2d(path: str | os.PathLike, name: str | None = None) -> LandmarkD
                 )
             if j in pose_of:
                 raise DataError(f"{path} line {line_no}: LANDMARK id {j} is also a pose id")
-            x, y, v1, v2, v3 = v[2:7]
+            x, y, v1, v2, v3 = v
             if v2 != 0 or abs(v1 - v3) >= GTSAM_ISOTROPY_TOL or v1 <= 0:
                 raise DataError(
                     f"{path} line {line_no}: LANDMARK covariance [{v1:g} {v2:g}; {v2:g} {v3:g}] is not v·I with v > 0; "
@@ -129,6 +145,7 @@ def load_gtsam_2d(path: str | os.PathLike, name: str | None = None) -> LandmarkD
                 raise DataError(f"{path} line {line_no}: LANDMARK {j} seen at range 0: its bearing is undefined")
             landmark_line.setdefault(j, line_no)
             sightings.append([float(pose_of[i]), float(j), math.atan2(y, x), r, math.sqrt(v1 / 10.0), math.sqrt(v1)])
+            lines_of.append(line_no)
     if not odometry:
         raise DataError(f"{path}: no ODOMETRY rows: a data set needs at least two poses")
     ids = sorted(pose_of, key=lambda i: pose_of[i])
@@ -145,5 +162,6 @@ def load_gtsam_2d(path: str | os.PathLike, name: str | None = None) -> LandmarkD
             landmark_ids=marks,
             source=note,
         )
-    except SteamError as err:
-        raise DataError(f"{path}: {err}") from None
+    except SteamError as err:  # a sighting the data set's checks name by its row: say its line too
+        text = re.sub(r"bearing_ranges\[(\d+), ", lambda m: f"line {lines_of[int(m[1])]}, {m[0]}", str(err))
+        raise DataError(f"{path}: {text}") from None

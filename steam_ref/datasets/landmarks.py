@@ -24,7 +24,12 @@ of a table, the lookup of ids; :mod:`.table`): at least two poses, strictly incr
 integer and unique pose and landmark ids, odometry row k stamped with the time of pose k + 1, a
 positive definite odometry covariance, reading times in order and each at a pose, every reading's
 landmark among ``landmark_ids``, every surveyed landmark among them, positive sigmas, no negative
-range, ground truth (when given) at the pose times. Errors: a table of the wrong shape raises
+range, ground truth (when given) at the pose times. Readings no sensor gives are refused, naming them:
+a value whose float64 spacing exceeds its sigma (a bearing of 1e17 rad: numbers there are 16 rad apart),
+and a range that contradicts the other ranges to its landmark by more than the robot can have moved
+between them (the triangle inequality along the odometry's path, with :data:`RANGE_SLACK_SIGMAS` sigmas
+of slack; a sighting at 1e6 m of a tree seen at 10 m). A landmark read once cannot be checked so: such
+a reading only places its landmark. Errors: a table of the wrong shape raises
 :class:`ShapeError`, bad content :class:`DataError` naming ``table[row, column]`` (rows 0-based).
 """
 
@@ -39,7 +44,7 @@ from ..errors import DataError
 from ..pose2 import integrate_odometry
 from .table import _frozen_table, _ids_text, _num, _rows_of
 
-__all__ = ["LandmarkDataset", "LANDMARK_COLUMNS", "READING_TABLES"]
+__all__ = ["LandmarkDataset", "LANDMARK_COLUMNS", "READING_TABLES", "RANGE_SLACK_SIGMAS"]
 
 _TIME_TOL = 1e-6  # [s] a reading's time and its pose's must agree to this
 LANDMARK_COLUMNS = {  # table -> column names
@@ -54,6 +59,8 @@ LANDMARK_COLUMNS = {  # table -> column names
 }
 READING_TABLES = ("ranges", "bearings", "bearing_ranges")  # the landmark readings, in the order a pose releases them
 _SIGMAS = {"ranges": (3,), "bearings": (3,), "bearing_ranges": (4, 5)}  # columns holding sigmas
+_VALUE_SIGMA = {"ranges": ((2, 3),), "bearings": ((2, 3),), "bearing_ranges": ((2, 4), (3, 5))}  # value, sigma columns
+RANGE_SLACK_SIGMAS = 10.0  # two ranges to a landmark may break the triangle inequality by this many sigmas
 _UPPER = np.array([[0, 1, 2], [1, 3, 4], [2, 4, 5]])  # (3, 3) entry -> column of the upper triangle
 
 
@@ -85,6 +92,7 @@ class LandmarkDataset:
         self._check_landmark_ids()
         for name in READING_TABLES:
             self._check_readings(name)
+        self._check_ranges_agree()
         start = np.concatenate([[self.times[0]], self.start_pose])
         drp = integrate_odometry(start, self.odometry)
         drp.setflags(write=False)
@@ -241,6 +249,60 @@ class LandmarkDataset:
                 raise DataError(
                     f"{name}[{k}, {c}] (range) = {_num(table[k, c])} at t={_num(t[k])} is negative: a range is a distance"
                 )
+        for c, sc in _VALUE_SIGMA[name]:  # a value whose float64 spacing exceeds its sigma holds no reading
+            spacing = np.spacing(np.abs(table[:, c]))
+            bad = np.flatnonzero(spacing > table[:, sc])
+            if bad.size:
+                k = int(bad[0])
+                raise DataError(
+                    f"{name}[{k}, {c}] ({columns[c]}) = {_num(table[k, c])} at t={_num(t[k])}: float64 numbers there "
+                    f"are {spacing[k]:.3g} apart, more than its sigma {_num(table[k, sc])}, so no sensor gives it"
+                )
+
+    def _check_ranges_agree(self) -> None:
+        """Two ranges to one landmark differ by at most the distance the robot moved between them (the
+        triangle inequality), which is at most the odometry's path length between the two poses. Slack:
+        :data:`RANGE_SLACK_SIGMAS` times the two ranges' sigmas plus the odometry's translation sigmas
+        summed along the path. A reading that breaks it with more of the others than not is named (or
+        both, when two contradict each other alone): no sensor gives it, or it is another landmark."""
+        rows = [(n, c, sc) for n, c, sc in (("ranges", 2, 3), ("bearing_ranges", 3, 5)) if len(getattr(self, n))]
+        if not rows:
+            return
+        cov = self.odometry_covariance
+        along = np.concatenate([[0.0], np.cumsum(np.hypot(self.odometry[:, 1], self.odometry[:, 2]))])
+        slack = np.concatenate([[0.0], np.cumsum(np.sqrt(cov[:, 0] + cov[:, 3]))])
+        table = np.concatenate([np.repeat(i, len(getattr(self, n))) for i, (n, _, _) in enumerate(rows)])
+        row = np.concatenate([np.arange(len(getattr(self, n))) for n, _, _ in rows])
+        pose = np.concatenate([self.reading_poses(n) for n, _, _ in rows])
+        lid = np.concatenate([getattr(self, n)[:, 1] for n, _, _ in rows])
+        r = np.concatenate([getattr(self, n)[:, c] for n, c, _ in rows])
+        sigma = np.concatenate([getattr(self, n)[:, sc] for n, _, sc in rows])
+        order = np.argsort(lid, kind="stable")
+        starts = np.flatnonzero(np.diff(lid[order], prepend=np.nan) != 0)
+        for group in np.split(order, starts[1:]):
+            if len(group) < 2:
+                continue
+            p = pose[group]
+            moved = np.abs(along[p][:, None] - along[p][None, :])
+            allowed = moved + RANGE_SLACK_SIGMAS * (
+                sigma[group][:, None] + sigma[group][None, :] + np.abs(slack[p][:, None] - slack[p][None, :])
+            )
+            excess = np.abs(r[group][:, None] - r[group][None, :]) - allowed
+            counts = (excess > 0).sum(axis=1)
+            if not counts.any():
+                continue
+            worst = int(np.argmax(counts))
+            other = int(np.argmax(excess[worst]))
+            alone = counts[worst] == counts[other] and counts[worst] * 2 <= len(group)
+            a, b = group[worst], group[other]
+            what = [f"{rows[table[k]][0]}[{row[k]}, {rows[table[k]][1]}] (range) = {_num(r[k])}" for k in (a, b)]
+            raise DataError(
+                f"{'one of ' + what[0] + ' and ' + what[1] if alone else what[0]} cannot be right: landmark "
+                f"{lid[a]:g} is {_num(r[a])} m away at t={_num(self.times[pose[a]])} and {_num(r[b])} m at "
+                f"t={_num(self.times[pose[b]])}, but the odometry moved {moved[worst, other]:.4g} m in between "
+                f"(allowed with {RANGE_SLACK_SIGMAS:g} sigmas of slack: {allowed[worst, other]:.4g} m)"
+                + ("" if alone else f"; it contradicts {counts[worst]} of the other {len(group) - 1} ranges to it")
+            )
 
 
 def _check_integer_ids(name: str, ids: ArrayLike, column: int | None) -> None:

@@ -7,7 +7,10 @@ is left to report. :func:`read_mat` therefore walks the file's data elements fir
 header, then every tag: a known data-type code, a size that fits inside its parent, miMATRIX
 elements recursively, miCOMPRESSED ones decompressed, which also checks their zlib checksum) and
 raises :class:`DataError` naming the file and the byte offset at the first that is wrong. Only then
-does scipy read the bytes. The walk checks the container, not the numbers in it: a corrupted byte
+does scipy read the bytes. What a file may hold is bounded (a decompression bomb: 791 KB inflating to
+1.6 GB): at most :data:`MAX_BYTES` (256 MiB; ``$STEAM_REF_MAX_MAT_MB`` or ``max_bytes`` sets another)
+on disk plus inflated, and a compressed variable is refused on its declared size before it is inflated,
+and never inflated past it. The walk checks the container, not the numbers in it: a corrupted byte
 inside an uncompressed number still reads as some other number (the data set's own checks and the
 files' compressed form, whose checksum covers the numbers, are what catch those).
 """
@@ -27,9 +30,11 @@ from numpy.typing import NDArray
 
 from ..errors import DataError
 
-__all__ = ["read_mat", "check_mat_structure"]
+__all__ = ["read_mat", "check_mat_structure", "max_mat_bytes", "MAX_BYTES", "MAX_BYTES_ENV"]
 
 _HEADER = 128
+MAX_BYTES = 256 * 2**20  # a .mat file may hold at most this once inflated (the paper's files: under 2 MiB)
+MAX_BYTES_ENV = "STEAM_REF_MAX_MAT_MB"  # environment variable: another limit, in MiB
 _MATRIX, _COMPRESSED = 14, 15
 # The MAT v5 data types: miINT8 .. miDOUBLE (1-7, 9), miINT64, miUINT64, miMATRIX, miCOMPRESSED, miUTF8-32.
 _TYPES = frozenset({1, 2, 3, 4, 5, 6, 7, 9, 12, 13, 14, 15, 16, 17, 18})
@@ -42,7 +47,9 @@ _CLASSES = frozenset(range(1, 18))  # mxCELL_CLASS (1) .. mxOPAQUE_CLASS (17)
 _NUMERIC_CLASSES = frozenset(range(6, 16))  # mxDOUBLE_CLASS .. mxUINT64_CLASS
 
 
-def _walk(buf: bytes, start: int, end: int, order: str, depth: int, where: str) -> list[tuple[int, int, int]]:
+def _walk(
+    buf: bytes, start: int, end: int, order: str, depth: int, where: str, budget: list[int]
+) -> list[tuple[int, int, int]]:
     """Check every data element in ``buf[start:end]``; DataError at the first bad one.
 
     Returns the elements as (data type, offset of the data, size of the data)."""
@@ -66,11 +73,11 @@ def _walk(buf: bytes, start: int, end: int, order: str, depth: int, where: str) 
         if data + size > end:
             raise DataError(f"{where}: element at byte {off} claims {size} bytes, only {end - data} follow")
         if kind == _MATRIX:
-            _check_matrix(buf, data, data + size, order, depth + 1, where)
+            _check_matrix(buf, data, data + size, order, depth + 1, where, budget)
         elif kind == _COMPRESSED:
             if depth:
                 raise DataError(f"{where}: compressed element inside another element at byte {off}")
-            _walk_compressed(buf[data : data + size], order, off, where)
+            _walk_compressed(buf[data : data + size], order, off, where, budget)
         found.append((kind, data, size))
         if next_off > end and depth:
             raise DataError(f"{where}: element at byte {off} and its padding run past the end of its parent")
@@ -78,14 +85,14 @@ def _walk(buf: bytes, start: int, end: int, order: str, depth: int, where: str) 
     return found
 
 
-def _check_matrix(buf: bytes, start: int, end: int, order: str, depth: int, where: str) -> None:
+def _check_matrix(buf: bytes, start: int, end: int, order: str, depth: int, where: str, budget: list[int]) -> None:
     """An miMATRIX body: array flags (miUINT32 x 2) with a known class, dimensions (miINT32), a name
     (miINT8), then the parts its class and complex flag call for, as many numbers (or sub-arrays)
     as its dimensions say. scipy 1.17 reads past the element, and crashes, when a part is missing
     (the complex flag set on a real array, a sparse class on dense data), and allocates what the
     dimensions say before it reads (a cell array of 10⁹ entries from a flipped byte), so both are
     checked here."""
-    parts = _walk(buf, start, end, order, depth, where)
+    parts = _walk(buf, start, end, order, depth, where, budget)
     if not parts:
         return  # an empty miMATRIX: an empty cell entry
     at = f"array at byte {start - 8}"
@@ -157,19 +164,55 @@ def _sparse_indices_fit(buf: bytes, order: str, dims: tuple[int, ...], data: lis
     return n <= len(ir) and all(0 <= r < dims[0] for r in ir[:n]) and all(v >= n for v in values)
 
 
-def _walk_compressed(data: bytes, order: str, at: int, where: str) -> None:
+def _walk_compressed(data: bytes, order: str, at: int, where: str, budget: list[int]) -> None:
+    """Inflate one compressed variable, never more than its declared size nor the bytes left of ``budget``."""
+    limit = budget[0]
     try:
         inflater = zlib.decompressobj()
-        inner = inflater.decompress(data)
+        head = inflater.decompress(data, 8)  # the inner element's tag: its declared size
+        if len(head) == 8:
+            declared = 8 + struct.unpack_from(order + "I", head, 4)[0]
+            if declared > limit:
+                raise DataError(
+                    f"{where}: compressed element at byte {at} declares {declared:,} bytes once inflated, more than "
+                    f"the {limit:,} bytes left of the limit on what a .mat file may inflate to ({_limit_note()})"
+                )
+            limit = declared
+        inner = head + inflater.decompress(inflater.unconsumed_tail, max(1, limit + 1 - len(head)))
     except zlib.error as err:
         raise DataError(f"{where}: compressed element at byte {at} does not decompress ({err})") from None
+    if len(inner) > limit:
+        raise DataError(f"{where}: compressed element at byte {at} inflates to more than its declared {limit:,} bytes")
     if not inflater.eof:
         raise DataError(f"{where}: compressed element at byte {at} is cut short")
-    _walk(inner, 0, len(inner), order, 1, f"{where} (compressed element at byte {at})")
+    budget[0] -= len(inner)
+    _walk(inner, 0, len(inner), order, 1, f"{where} (compressed element at byte {at})", budget)
 
 
-def check_mat_structure(raw: bytes, where: str) -> None:
-    """DataError unless ``raw`` is a MATLAB v5 file whose element tags are all sound (see the module)."""
+def _limit_note() -> str:
+    return f"set ${MAX_BYTES_ENV} (MiB) or read_mat(max_bytes=...) to allow more"
+
+
+def max_mat_bytes() -> int:
+    """The limit on what a .mat file may hold once inflated: ${MAX_BYTES_ENV} MiB, else :data:`MAX_BYTES`."""
+    text = os.environ.get(MAX_BYTES_ENV, "").strip()
+    if not text:
+        return MAX_BYTES
+    try:
+        mib = float(text)
+    except ValueError:
+        mib = math.nan
+    if not (math.isfinite(mib) and mib > 0):
+        raise DataError(f"${MAX_BYTES_ENV} must be a number of MiB > 0, got {text!r}")
+    return int(mib * 2**20)
+
+
+def check_mat_structure(raw: bytes, where: str, max_bytes: int | None = None) -> None:
+    """DataError unless ``raw`` is a MATLAB v5 file whose element tags are all sound (see the module),
+    and which holds at most ``max_bytes`` (default :func:`max_mat_bytes`) once its variables are inflated."""
+    limit = max_mat_bytes() if max_bytes is None else max_bytes
+    if len(raw) > limit:
+        raise DataError(f"{where}: {len(raw):,} bytes, more than the limit of {limit:,} bytes ({_limit_note()})")
     if len(raw) < _HEADER:
         raise DataError(f"{where}: {len(raw)} bytes, shorter than a MATLAB v5 header ({_HEADER} bytes)")
     mark = raw[126:128]
@@ -180,20 +223,25 @@ def check_mat_structure(raw: bytes, where: str) -> None:
     if version != 0x0100:
         hint = " (v7.3, HDF5: save it with -v7, which scipy reads)" if version == 0x0200 else ""
         raise DataError(f"{where}: MAT file version {version:#06x} at byte 124, not 0x0100 (v5){hint}")
-    _walk(raw, _HEADER, len(raw), order, 0, where)
+    _walk(raw, _HEADER, len(raw), order, 0, where, [limit - len(raw)])
 
 
-def read_mat(path: str | os.PathLike) -> dict[str, NDArray]:
+def read_mat(path: str | os.PathLike, max_bytes: int | None = None) -> dict[str, NDArray]:
     """The arrays of a MATLAB v5 file (names starting with ``__`` left out); DataError naming the file
-    when it is missing, not a file, corrupt (:func:`check_mat_structure`) or unreadable by scipy."""
+    when it is missing, not a file, larger than ``max_bytes`` on disk or once inflated (default
+    :func:`max_mat_bytes`), corrupt (:func:`check_mat_structure`) or unreadable by scipy."""
     path = Path(path)
     if not path.is_file():
         raise DataError(f"{path}: {'not a file' if path.exists() else 'no such file'}")
+    limit = max_mat_bytes() if max_bytes is None else max_bytes
     try:
+        size = path.stat().st_size
+        if size > limit:
+            raise DataError(f"{path}: {size:,} bytes, more than the limit of {limit:,} bytes ({_limit_note()})")
         raw = path.read_bytes()
     except OSError as err:
         raise DataError(f"{path}: cannot read it ({type(err).__name__}: {err})") from None
-    check_mat_structure(raw, str(path))
+    check_mat_structure(raw, str(path), limit)
     try:
         content = scipy.io.loadmat(io.BytesIO(raw))
     except Exception as err:  # scipy raises ValueError, OSError, TypeError, zlib errors, MemoryError...

@@ -33,6 +33,25 @@ __all__ = [
 ]
 
 
+def _resolved(factor: str, labels: tuple[str, ...], measured: NDArray, W: NDArray) -> None:
+    """Each measured number is resolved by float64 to within its sigma: a value whose float spacing
+    exceeds its sigma (a bearing of 1e17 rad, numbers there 16 rad apart; a sigma of 1e-150 m on a
+    range of 10 m) is no reading a sensor gives, and its whitened error would be rounding noise."""
+    with np.errstate(all="ignore"):
+        rows = np.linalg.inv(W)  # Σ = W⁻¹W⁻ᵀ: sigma i is the norm of row i, scaled so that 1e-200 does not underflow
+        big = np.maximum(np.abs(rows).max(axis=1), np.finfo(float).tiny)
+        sigma = big * np.sqrt(((rows / big[:, None]) ** 2).sum(axis=1))
+        spacing = np.spacing(np.abs(measured))
+    bad = np.flatnonzero(spacing > sigma)
+    if bad.size:
+        i = int(bad[0])
+        raise SteamError(
+            f"{factor}: {labels[i] if i < len(labels) else f'measured[{i}]'} = {float(measured[i])!r} with sigma "
+            f"{float(sigma[i]):.3g}: float64 numbers there are {float(spacing[i]):.3g} apart, more than the sigma, "
+            f"so the reading carries nothing float64 can resolve"
+        )
+
+
 # --- Priors -------------------------------------------------------------------------------------
 
 
@@ -51,7 +70,9 @@ class PriorFactor(Factor):
         if mean.ndim != 1 or mean.shape[0] == 0:
             raise ShapeError(f"mean (of the prior on {key!r}) must be a non-empty 1-D vector, got shape {mean.shape}")
         mean = _vector(mean, mean.shape[0], "mean")
-        return cls((key,), sqrt_information(noise, mean.shape[0]), mean=mean, loss=loss)
+        W = sqrt_information(noise, mean.shape[0])
+        _resolved(f"PriorFactor on {key!r}", tuple(f"mean[{i}]" for i in range(len(mean))), mean, W)
+        return cls((key,), W, mean=mean, loss=loss)
 
     @property
     def key_dims(self) -> tuple[int]:  # type: ignore[override]
@@ -245,9 +266,9 @@ class RangeFactor(StateMeasurement):
     ) -> RangeFactor:
         """Range reading ``measured`` (m, not negative) from state ``state`` to landmark ``landmark``."""
         reading = _range("measured", measured)
-        return cls(
-            (state, landmark), sqrt_information(sigma, 1, "sigma"), measured=reading, loss=loss, state_dim=state_dim
-        )
+        W = sqrt_information(sigma, 1, "sigma")
+        _resolved(f"RangeFactor on {state!r}, {landmark!r}", ("range",), reading, W)
+        return cls((state, landmark), W, measured=reading, loss=loss, state_dim=state_dim)
 
     def error(self, x: NDArray, l: NDArray) -> NDArray:
         return _range_row(x, l)[0][..., None] - self.measured  # [YIB Eq. 33]
@@ -279,9 +300,9 @@ class BearingFactor(StateMeasurement):
     ) -> BearingFactor:
         """Bearing reading ``measured`` (rad) from ``state`` to ``landmark``."""
         reading = _vector(measured, 1, "measured")
-        return cls(
-            (state, landmark), sqrt_information(sigma, 1, "sigma"), measured=reading, loss=loss, state_dim=state_dim
-        )
+        W = sqrt_information(sigma, 1, "sigma")
+        _resolved(f"BearingFactor on {state!r}, {landmark!r}", ("bearing",), reading, W)
+        return cls((state, landmark), W, measured=reading, loss=loss, state_dim=state_dim)
 
     def error(self, x: NDArray, l: NDArray) -> NDArray:
         return wrap_angle(_bearing_row(x, l)[0] - self.measured[..., 0])[..., None]
@@ -314,7 +335,9 @@ class BearingRangeFactor(StateMeasurement):
     ) -> BearingRangeFactor:
         """Bearing-range reading; noise is sigmas (2,) or a covariance (2, 2) for [bearing, range]."""
         measured = np.concatenate([_vector(bearing, 1, "bearing"), _range("range_", range_)])
-        return cls((state, landmark), sqrt_information(noise, 2), measured=measured, loss=loss, state_dim=state_dim)
+        W = sqrt_information(noise, 2)
+        _resolved(f"BearingRangeFactor on {state!r}, {landmark!r}", ("bearing", "range"), measured, W)
+        return cls((state, landmark), W, measured=measured, loss=loss, state_dim=state_dim)
 
     def error(self, x: NDArray, l: NDArray) -> NDArray:
         b, r = _bearing_row(x, l)[0], _range_row(x, l)[0]

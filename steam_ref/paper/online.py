@@ -25,6 +25,7 @@ from ..graph import FactorGraph
 from ..trajectory import Trajectory
 from ..variables import L, Values, X
 from .converge import converge
+from .divergence import DivergenceCheck
 from .frontend import FrontEnd, NewStep
 from .options import StreamOptions
 from .presets import PaperSetup, Schedule
@@ -91,6 +92,7 @@ class StreamingEstimator:
         self.step_seconds: list[float] = []  # wall time of each processed pose
         self.update_steps: list[int] = []  # pose at which each solver update ran
         self.update_seconds: list[float] = []  # wall time of each solver update
+        self.divergence = DivergenceCheck()  # readings beyond any noise, a diverging estimate (paper.divergence)
 
     def _new_solver(self) -> OnlineSolver:
         o = self.options
@@ -138,7 +140,12 @@ class StreamingEstimator:
             values = levenberg_marquardt(
                 FactorGraph(self._pending), values, ordering="amd", relative_tolerance=tol, absolute_tolerance=tol
             ).values
+        prediction = values  # the gate: new readings at the prediction; the fit: at the new estimate
+        self.divergence.gate(
+            self._pending, lambda k: prediction[k] if k in prediction else self.solver.estimate_of(k), pose
+        )
         self.solver.update(self._pending, values)
+        self.divergence.fit(self._pending, self.solver.estimate_of, pose)
         if isinstance(self.solver, FixedLagTreeSolver):  # keep no factor: the window forgets them
             forgotten = (k.index for k in self.solver.forgotten if k.kind == "l")
             self.front.landmarks.difference_update(forgotten)  # seen again, a landmark enters anew
@@ -235,6 +242,7 @@ class StreamingEstimator:
             peak_rss=peak_rss_mb(),
             convergence_s=self.convergence_seconds if self.convergence is not None else None,
             converged_at_end=self.convergence.converged if self.convergence is not None else None,
+            divergence=tuple(self.divergence.findings),
             **self._lag_figures(),
         )
 

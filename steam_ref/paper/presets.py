@@ -167,6 +167,11 @@ class PaperSetup:
             )
         if self.prior not in PRIORS:
             raise SteamError(f"prior must be one of {PRIORS}, got {self.prior!r}")
+        if self.tukey_c is not None:
+            try:
+                Tukey(self.tukey_c)  # a threshold whose square overflows is refused here, not mid-run
+            except SteamError as err:
+                raise SteamError(f"PaperSetup.tukey_c: {err}") from None
         self.motion_prior()  # checks Qc and the time constant, naming the bad one
 
     @classmethod

@@ -188,6 +188,13 @@ class Readings:
                 f"ranges row {k}: {float(data.ranges[k, 3])!r} m corrected to {a!r} r + {b!r} = "
                 f"{float(value[negative[0]])!r} m, a negative range ({negative.size} in all)"
             )
+        coarse = np.flatnonzero(np.spacing(np.abs(value)) > setup.range_sigma)
+        if coarse.size:  # float64 cannot resolve it to its sigma: no sensor gives it
+            k = int(order[coarse[0]])
+            raise DataError(
+                f"ranges row {k}: {float(data.ranges[k, 3])!r} m: float64 numbers there are "
+                f"{float(np.spacing(abs(value[coarse[0]]))):.3g} apart, more than the range sigma {setup.range_sigma!r} m"
+            )
         marks = {int(i): np.array([x, y]) for i, x, y in data.landmarks}
         return cls(
             np.arange(n, dtype=float),

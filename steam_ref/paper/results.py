@@ -64,6 +64,7 @@ class RunResult:
     )
     n_marginalized: int | None = None  # with a lag: variables marginalized (states and landmarks)
     peak_window: int | None = None  # with a lag: most variables the solver held at once
+    divergence: tuple[str, ...] = ()  # readings beyond any plausible noise, a diverging estimate (paper.divergence)
 
     @classmethod
     def of(
@@ -88,6 +89,7 @@ class RunResult:
         converged_at_end: bool | None = None,
         n_marginalized: int | None = None,
         peak_window: int | None = None,
+        divergence: tuple[str, ...] = (),
     ) -> RunResult:
         """Package a run, scoring it against ``ground_truth`` (CMU GT layout, x, y in columns 1-2) if given."""
         rmse = rmse_states = float("nan")
@@ -116,6 +118,7 @@ class RunResult:
             converged_at_end=converged_at_end,
             n_marginalized=n_marginalized,
             peak_window=peak_window,
+            divergence=tuple(divergence),
         )
 
     @property
@@ -158,6 +161,7 @@ class RunResult:
             "update_s_p95": round(float(np.percentile(u, 95)), 6) if len(u) else None,
             "peak_rss_mb": round(self.peak_rss_mb, 1),
             "completed": self.completed,
+            "divergence": list(self.divergence),
         } | (
             {
                 "convergence_s": None if self.convergence_s is None else round(self.convergence_s, 4),

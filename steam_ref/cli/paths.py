@@ -1,0 +1,149 @@
+"""Output paths of the ``steam-ref`` command: checked before a run, written after it.
+
+Nothing is opened or created at a path before the run (a named pipe would hang it, a dangling link would
+be destroyed); a non-regular file, a folder, a link loop or a folder that is not there is refused with
+one line naming the option. After the run, :func:`write_output` writes beside the target and moves the
+file over it, so a full disk names the option and the path and leaves any old file as it was.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import errno
+import importlib.util
+import os
+import secrets
+import stat
+import tempfile
+from collections.abc import Callable
+from pathlib import Path
+
+from ..errors import SteamError
+
+__all__ = ["check_output", "write_output", "check_out_folder"]
+
+
+_KINDS = {
+    stat.S_IFIFO: "a named pipe",
+    stat.S_IFCHR: "a character device",
+    stat.S_IFBLK: "a block device",
+    stat.S_IFSOCK: "a socket",
+    stat.S_IFDIR: "a folder",
+}
+
+
+def _kind(mode: int) -> str:
+    """What an lstat/stat mode is, in words ("a file" for a regular one)."""
+    return "a file" if stat.S_ISREG(mode) else _KINDS.get(stat.S_IFMT(mode), "not a regular file")
+
+
+def _refuse_path(option: str, path: str, err: OSError) -> SteamError:
+    """Why ``path`` cannot be reached, in words: a part of it is a file, a link loop, ..."""
+    if err.errno == errno.ELOOP:
+        return SteamError(f"{option}: {path!r} is a loop of symbolic links")
+    if err.errno == errno.ENOTDIR:
+        blocker = next((p for p in Path(path).parents if p.is_file()), None)
+        where = f"{str(blocker)!r} is a file, not a folder" if blocker else "a part of it is not a folder"
+        return SteamError(f"{option}: cannot write {path!r}: {where}")
+    return SteamError(f"{option}: cannot write {path!r} ({err.strerror or err})")
+
+
+def _writable_folder(folder: Path, option: str, path: str) -> None:
+    """``folder`` exists, is a folder, and a file can be made in it (an unnamed temporary file is tried)."""
+    try:
+        mode = os.stat(folder).st_mode
+    except FileNotFoundError:
+        raise SteamError(f"{option}: cannot write {path!r}: folder {str(folder)!r} does not exist") from None
+    except OSError as err:
+        raise _refuse_path(option, path, err) from None
+    if not stat.S_ISDIR(mode):
+        raise SteamError(f"{option}: cannot write {path!r}: {str(folder)!r} is {_kind(mode)}, not a folder")
+    try:
+        with tempfile.TemporaryFile(dir=folder):
+            pass
+    except OSError as err:
+        raise SteamError(f"{option}: cannot write in {str(folder)!r} ({err.strerror or err})") from None
+
+
+def check_output(path: str | None, suffix: str, option: str) -> None:
+    """Before the run: ``path`` ends in ``suffix`` and is a regular file that can be written, or nothing
+    yet, in a folder that can be written in (through symbolic links, a dangling one included).
+
+    Nothing is opened or made at ``path``: opening a named pipe blocks, and making a dangling link's
+    target (then removing it) would change the user's files. A named pipe, a device, a socket, a folder
+    or a link loop is refused. :func:`write_output` writes it after the run.
+    """
+    if path is None:
+        return
+    if not path.endswith(suffix):
+        raise SteamError(f"{option} expects a {suffix} file name, got {path!r}")
+    try:
+        mode = os.stat(path).st_mode  # through links
+    except FileNotFoundError:
+        real = Path(os.path.realpath(path))  # where it would be made (a dangling link's target)
+        _writable_folder(real.parent, option, path)
+    except OSError as err:
+        raise _refuse_path(option, path, err) from None
+    else:
+        if stat.S_ISDIR(mode):
+            raise SteamError(f"{option}: {path!r} is a folder, not a file")
+        if not stat.S_ISREG(mode):
+            raise SteamError(
+                f"{option}: {path!r} is {_kind(mode)}, not a regular file: refused, writing it could block"
+            )
+        if not os.access(path, os.W_OK):
+            raise SteamError(f"{option}: cannot write {path!r} (permission denied or a read-only file system)")
+        _writable_folder(Path(os.path.realpath(path)).parent, option, path)  # the new file is made beside it
+    if suffix == ".png" and importlib.util.find_spec("matplotlib") is None:
+        raise SteamError(f"{option} needs matplotlib, which is not installed (pip install matplotlib)")
+
+
+def write_output(path: str, option: str, write: Callable[[str], object]) -> None:
+    """Write an output ``path`` checked by :func:`check_output`: ``write(name)`` writes a new file beside
+    its real target (a link is followed and stays a link), which then replaces it in one step.
+
+    A failure (a full disk, ...) leaves what was at ``path`` as it was and is a SteamError naming the
+    option and the path. A file that was there keeps its permission bits.
+    """
+    real = Path(os.path.realpath(path))
+    temporary = real.parent / f".{real.name}.{os.getpid()}.{secrets.token_hex(4)}{Path(path).suffix}"
+    try:
+        os.close(os.open(temporary, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o666))  # the umask applies
+        write(str(temporary))
+        if real.exists():
+            os.chmod(temporary, stat.S_IMODE(os.stat(real).st_mode))
+        os.replace(temporary, real)
+    except OSError as err:
+        raise SteamError(
+            f"{option}: cannot write {path!r} ({err.strerror or err}); what was there is left as it was"
+        ) from None
+    finally:
+        with contextlib.suppress(OSError):
+            os.unlink(temporary)
+
+
+def check_out_folder(path: str, option: str) -> None:
+    """Before the runs: ``path`` is a folder that exists and can be written, or can be made."""
+    if not path.strip():
+        raise SteamError(f"{option}: expected a folder, got an empty string")
+    try:
+        mode = os.stat(path).st_mode
+    except FileNotFoundError:
+        if os.path.islink(path):
+            raise SteamError(
+                f"{option}: {path!r} is a symbolic link to {os.path.realpath(path)!r}, which does not exist"
+            ) from None
+        mode = None
+    except OSError as err:
+        raise _refuse_path(option, path, err) from None
+    if mode is not None and not stat.S_ISDIR(mode):
+        raise SteamError(f"{option}: {path!r} is {_kind(mode)}, not a folder")
+    target = Path(path).resolve()
+    existing = next(p for p in (target, *target.parents) if p.exists())
+    if not existing.is_dir():
+        raise SteamError(f"{option}: cannot make folder {path!r}: {str(existing)!r} is a file")
+    try:
+        with tempfile.TemporaryFile(dir=existing):
+            pass
+    except OSError as err:
+        raise SteamError(f"{option}: cannot write in {str(existing)!r} ({err.strerror or err})") from None

@@ -1,0 +1,113 @@
+"""A stream that says when a reading is beyond any plausible noise, or its estimate diverges.
+
+After each update of a stream (:mod:`steam_ref.paper.online`) two checks look at the factors that
+update added, in time proportional to them (a cost of every factor after every update would cost
+time in proportion to the whole problem, every update):
+
+- **Before the update, the gate**: each new landmark reading's whitened residual ‖W e‖ at the
+  prediction (the solver's estimate of the variables it holds, the front end's initial guess of the
+  new ones). A reading a Gaussian sensor gives is a few sigmas off; one placed by dead reckoning after
+  a long loop some tens. Beyond :data:`PLAUSIBLE_SIGMAS` (1,000) it is beyond any noise: the warning
+  names it. Velocity readings are not gated: the initial guess of a new state is made from them (and
+  the scripts' heading-rate guess jumps by 2π/dt where the heading wraps, thousands of its sigmas).
+- **After the update, the fit**: the same residuals at the new estimate. Beyond :data:`PLAUSIBLE_SIGMAS`
+  the estimate no longer fits what it was just given: it is diverging (the warning names the worst).
+
+Each finding is a :class:`~steam_ref.errors.DivergenceWarning` (not a ConvergenceWarning: nothing was
+asked to converge) and is kept in :attr:`DivergenceCheck.findings`, which the run's result and its JSON
+report (``divergence``). Robust losses do not hide a reading here: the residual is ‖W e‖, before ρ.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Callable, Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import DivergenceWarning
+from ..factors import BearingFactor, BearingRangeFactor, Factor, InterpolatedFactor, RangeFactor
+from ..variables import Key
+
+__all__ = ["DivergenceCheck", "PLAUSIBLE_SIGMAS", "worst_fit"]
+
+PLAUSIBLE_SIGMAS = 1e3  # a whitened residual above this is beyond any plausible noise
+MAX_FINDINGS = 20  # findings kept for the result (the warnings say every one)
+
+
+def fits(factors: Sequence[Factor], value_of: Callable[[Key], NDArray]) -> list[float]:
+    """‖W e‖ of each of ``factors`` at the values ``value_of`` gives (inf when it is not finite)."""
+    out = []
+    with np.errstate(all="ignore"):
+        for f in factors:
+            s = float(np.linalg.norm(f.whitened_error(*(value_of(k) for k in f.keys))))
+            out.append(s if np.isfinite(s) else np.inf)
+    return out
+
+
+def worst_fit(factors: Sequence[Factor], value_of: Callable[[Key], NDArray]) -> tuple[float, Factor | None]:
+    """The largest ‖W e‖ among ``factors`` at the values ``value_of`` gives, and its factor (None: no factors)."""
+    s = fits(factors, value_of)
+    i = int(np.argmax(s)) if s else -1
+    return (s[i], factors[i]) if s else (0.0, None)
+
+
+def _is_landmark_reading(factor: Factor) -> bool:
+    inner = factor.inner if isinstance(factor, InterpolatedFactor) else factor
+    return isinstance(inner, (RangeFactor, BearingFactor, BearingRangeFactor))
+
+
+def describe(factor: Factor) -> str:
+    """A factor as the reading it holds: its kind, variables and measured value."""
+    inner = factor.inner if isinstance(factor, InterpolatedFactor) else factor
+    measured = getattr(inner, "measured", getattr(inner, "mean", None))
+    what = "" if measured is None else f" reading {np.asarray(measured).tolist()}"
+    where = ", ".join(repr(k) for k in factor.keys)
+    between = " (interpolated between its states)" if isinstance(factor, InterpolatedFactor) else ""
+    return f"{type(inner).__name__} on {where}{between}{what}"
+
+
+class DivergenceCheck:
+    """The two checks around each update of a stream (see the module)."""
+
+    def __init__(self, limit: float = PLAUSIBLE_SIGMAS):
+        self.limit = limit  # sigmas beyond any plausible noise
+        self.findings: list[str] = []  # what was found, in order (at most MAX_FINDINGS)
+        self.count = 0  # how many findings in all
+        self._absurd: set[int] = set()  # ids of the readings the last gate found beyond any noise
+        self.diverged_at: int | None = None  # the pose of the first update after which the estimate did not fit
+
+    def _found(self, message: str) -> None:
+        self.count += 1
+        if len(self.findings) < MAX_FINDINGS:
+            self.findings.append(message)
+        warnings.warn(message, DivergenceWarning, stacklevel=4)
+
+    def gate(self, factors: Sequence[Factor], value_of: Callable[[Key], NDArray], pose: int) -> None:
+        """Before the update at ``pose``: a new reading beyond any noise at the prediction is named."""
+        readings = [f for f in factors if _is_landmark_reading(f)]
+        residuals = fits(readings, value_of)
+        self._absurd = {id(f) for f, r in zip(readings, residuals, strict=True) if r > self.limit}
+        s, f = (max(residuals), readings[int(np.argmax(residuals))]) if readings else (0.0, None)
+        if f is not None and s > self.limit:
+            self._found(
+                f"update at pose {pose}: {describe(f)} is {s:.3g} sigmas from the prediction, beyond any "
+                f"plausible noise (> {self.limit:g}): "
+                + (
+                    "an absurd reading, or another landmark's"
+                    if self.diverged_at is None
+                    else f"the estimate has been diverging since the update at pose {self.diverged_at}, which may be why"
+                )
+            )
+
+    def fit(self, factors: Sequence[Factor], value_of: Callable[[Key], NDArray], pose: int) -> None:
+        """After the update at ``pose``: the estimate not fitting a new factor within any noise is diverging
+        (the readings the gate found absurd left out: an estimate that does not follow them is right)."""
+        s, f = worst_fit([f for f in factors if id(f) not in self._absurd], value_of)
+        if f is not None and s > self.limit:
+            self.diverged_at = pose if self.diverged_at is None else self.diverged_at
+            self._found(
+                f"update at pose {pose}: the estimate is diverging: it misses {describe(f)} by {s:.3g} sigmas "
+                f"(> {self.limit:g}) right after the update that added it"
+            )

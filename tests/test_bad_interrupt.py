@@ -1,0 +1,240 @@
+"""Ctrl-C inside ``IncrementalSolver.update`` (issue 19): any BaseException, wherever it lands, leaves
+the solver exactly as a twin that never saw the update (factors, caches, tree, θ̄, δ, estimate, byte
+for byte), then propagates; the next valid update then gives what an uninterrupted one gives.
+
+Three ways in: a real SIGINT from a timer thread during a large update (where it lands is up to the
+clock); a KeyboardInterrupt raised by a trace function at the n-th executed line of the update, for
+lines spread over the whole update (every phase, deterministic); and a second Ctrl-C during the
+rollback itself.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import sys
+import threading
+import time
+
+import numpy as np
+import pytest
+from test_isam import Stream
+
+from steam_ref.bayes_tree import IncrementalSolver
+from steam_ref.bayes_tree import journal as journal_module
+
+
+def _array(a) -> tuple:
+    a = np.asarray(a)
+    return (a.dtype.str, a.shape, a.tobytes())
+
+
+def state(solver: IncrementalSolver) -> tuple:
+    """Everything the solver holds, as bytes (the twin holds the same factor objects, so ids compare)."""
+    tree = solver.tree
+    cliques = tuple(
+        (
+            cid,
+            c.frontals,
+            c.separator,
+            _array(c.R),
+            _array(c.S),
+            _array(c.d),
+            c.marginal.keys,
+            tuple(_array(b) for b in c.marginal.blocks),
+            _array(c.marginal.rhs),
+            c.factors,
+            tree.parent[cid],
+            tuple(tree.children[cid]),
+        )
+        for cid, c in sorted(tree.cliques.items())
+    )
+    linear = tuple(
+        None if g is None else (g.keys, tuple(_array(b) for b in g.blocks), _array(g.rhs)) for g in solver._linear
+    )
+    theta = solver.linearization_point
+    return (
+        tuple(id(f) for f in solver.factors),
+        linear,
+        cliques,
+        tuple(tree.roots),
+        tuple(sorted(tree.frontal_of.items())),
+        tree._next_id,
+        tuple((k, _array(theta[k])) for k in theta),
+        tuple((k, _array(v)) for k, v in solver._delta.items()),
+        tuple(solver._over),
+        tuple(solver._dims.items()),
+        tuple(solver._threshold.items()),
+        tuple((k, _array(v)) for k, v in solver.estimate().items()),
+        solver._steps,
+    )
+
+
+def parts(n_base: int, n_big: int, seed: int) -> tuple[list, tuple[list, dict], tuple[list, dict]]:
+    """The updates that build the solver, one large update, and one more small one."""
+    stream = Stream(np.random.default_rng(seed), n_base + n_big + 2, n_landmarks=20)
+    base = [stream.step("state") for _ in range(n_base)]
+    big_factors, big_values = [], {}
+    for _ in range(n_big):
+        f, v = stream.step("both")
+        big_factors += f
+        big_values |= v
+    return base, (big_factors, big_values), stream.step("both")
+
+
+def build(base: list) -> IncrementalSolver:
+    solver = IncrementalSolver(relinearize_skip=1)
+    for f, v in base:
+        solver.update(f, v)
+    return solver
+
+
+@pytest.fixture(autouse=True)
+def default_sigint():
+    """Python's own SIGINT handler (KeyboardInterrupt), whatever the test runner installed."""
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, previous)
+
+
+def test_a_real_sigint_during_a_large_update_rolls_it_back() -> None:
+    base, big, after = parts(20, 2000, seed=5)
+    solver, twin, done = build(base), build(base), build(base)
+    assert state(solver) == state(twin)
+    t0 = time.perf_counter()
+    done.update(*big)
+    seconds = time.perf_counter() - t0
+    done.update(*after)
+    landed: list[str] = []
+    for fraction in (0.02, 0.15, 0.3, 0.45, 0.6):
+        timer = threading.Timer(fraction * seconds, os.kill, (os.getpid(), signal.SIGINT))
+        returned = False
+        try:
+            timer.start()
+            solver.update(*big)
+            returned = True
+            time.sleep(2 * seconds + 1)  # the signal lands here if the update was quicker than the clock
+            pytest.fail("the SIGINT never arrived")
+        except KeyboardInterrupt as interrupt:
+            timer.join()
+            if returned:  # the update finished first: start again from the twin's state
+                solver = build(base)
+                continue
+            frames = [f.name for f in __import__("traceback").extract_tb(interrupt.__traceback__)]
+            assert "update" in frames
+            landed.append(frames[-1])
+        assert state(solver) == state(twin), f"not rolled back after a SIGINT in {landed[-1]}"
+    assert len(landed) >= 3, f"only {len(landed)} of 5 interrupts landed inside the update"
+    solver.update(*big)
+    solver.update(*after)
+    assert state(solver) == state(done)
+
+
+def _interrupt_at(n: int):
+    """A trace function that raises KeyboardInterrupt at the n-th line executed (then stops tracing)."""
+    count, top = 0, None
+
+    def trace(frame, event, arg):  # counts the lines below update(): a line of its own is checks or the return
+        nonlocal count, top
+        if top is None and frame.f_code.co_name == "update":
+            top = frame
+        if event == "line" and os.sep + "steam_ref" + os.sep in frame.f_code.co_filename and frame is not top:
+            count += 1
+            if count == n:
+                raise KeyboardInterrupt(f"line {n}: {frame.f_code.co_name}")
+        return trace
+
+    return trace, lambda: count
+
+
+def _lines_of_update(solver: IncrementalSolver, update: tuple[list, dict]) -> list[str]:
+    """The function of each line executed below ``solver.update(*update)``, in order."""
+    names: list[str] = []
+    trace, _ = _interrupt_at(0)
+
+    def record(frame, event, arg):
+        out = trace(frame, event, arg)
+        if event == "line" and os.sep + "steam_ref" + os.sep in frame.f_code.co_filename:
+            names.append(frame.f_code.co_name)
+        return record if out else None
+
+    sys.settrace(record)
+    try:
+        solver.update(*update)
+    finally:
+        sys.settrace(None)
+    return names
+
+
+def test_an_interrupt_at_any_line_of_the_update_rolls_it_back() -> None:
+    base, big, after = parts(25, 12, seed=7)
+    solver, twin, done = build(base), build(base), build(base)
+    trace, lines = _interrupt_at(0)
+    sys.settrace(trace)
+    try:
+        done.update(*big)
+    finally:
+        sys.settrace(None)
+    total = lines()
+    names = _lines_of_update(build(base), big)
+    names = [n for n in names if n != "update"][:total]
+    first = {name: i + 1 for i, name in reversed(list(enumerate(names)))}  # each function's first line
+    last = {name: i + 1 for i, name in enumerate(names)}  # and its last
+    done.update(*after)
+    where = set()
+    for n in sorted({*first.values(), *last.values(), *np.linspace(1, total, 60).astype(int)}):
+        trace, _ = _interrupt_at(int(n))
+        sys.settrace(trace)
+        try:
+            with pytest.raises(KeyboardInterrupt) as interrupt:
+                solver.update(*big)
+        finally:
+            sys.settrace(None)
+        where.add(str(interrupt.value).split(": ")[1])
+        assert state(solver) == state(twin), f"not rolled back after {interrupt.value}"
+    assert {"_add", "_fluid_relinearization", "eliminate_clique", "_backsubstitute"} <= where
+    solver.update(*big)
+    solver.update(*after)
+    assert state(solver) == state(done)
+
+
+def test_a_second_interrupt_during_the_rollback_does_not_leave_it_half_done(monkeypatch) -> None:
+    base, big, after = parts(25, 12, seed=8)
+    solver, twin, done = build(base), build(base), build(base)
+    done.update(*big)
+    done.update(*after)
+    original = journal_module.UndoDict.undo
+    calls = []
+
+    def undo_then_interrupt(self, record):
+        calls.append(1)
+        if len(calls) == 1:  # restore half of it, then a second Ctrl-C
+            original(self, dict(list(record.items())[: len(record) // 2]))
+            raise KeyboardInterrupt("second Ctrl-C")
+        original(self, record)
+
+    def fail_late(*args, **kwargs):
+        raise KeyboardInterrupt("first Ctrl-C")
+
+    monkeypatch.setattr(journal_module.UndoDict, "undo", undo_then_interrupt)
+    monkeypatch.setattr(solver, "_backsubstitute", fail_late)  # after the new cliques are in
+    with pytest.raises(KeyboardInterrupt, match="first Ctrl-C"):
+        solver.update(*big)
+    assert len(calls) == 2
+    monkeypatch.undo()
+    assert state(solver) == state(twin)
+    solver.update(*big)
+    solver.update(*after)
+    assert state(solver) == state(done)
+
+
+def test_factors_are_a_tuple_the_caller_cannot_edit() -> None:
+    base, _, _ = parts(6, 1, seed=9)
+    base, after = base[:-1], base[-1]
+    solver, twin = build(base), build(base)
+    assert isinstance(solver.factors, tuple)
+    with pytest.raises(AttributeError):
+        solver.factors.pop()  # type: ignore[attr-defined]
+    solver.update(*after)
+    twin.update(*after)
+    assert state(solver) == state(twin)

@@ -1,0 +1,218 @@
+"""Output paths of the command (issue 19): ``--save-estimates`` and ``--plot`` name a regular file, or
+nothing yet in a folder that exists; anything else is refused before the run, in one line naming the
+option, without opening it (a named pipe would block) and without changing a thing (a dangling link
+is neither removed nor given a target). A write that fails after the run (a full disk) names the
+option and the path and leaves what was there as it was; a link is written through and stays a link.
+
+The paths are drawn by hypothesis from every kind of thing a path can end in, under every kind of
+parent; what should happen is worked out from the kinds drawn, not from the file system.
+"""
+
+from __future__ import annotations
+
+import errno
+import os
+import signal
+from pathlib import Path
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from steam_ref.cli import commands as cli
+from steam_ref.cli.paths import check_out_folder, check_output, write_output
+from steam_ref.errors import SteamError
+
+# the last part of the path: (kind, accepted when its folder is a folder)
+LEAVES = {
+    "missing": True,
+    "file": True,
+    "folder": False,
+    "fifo": False,
+    "dangling-link": True,  # written through: the link's target is made after the run
+    "link-to-missing-folder": False,
+    "link-to-file": True,
+    "link-to-fifo": False,
+    "link-to-devnull": False,  # a character device
+    "link-loop": False,
+    "link-to-folder": False,
+}
+PARENTS = {"folder": True, "missing-folder": False, "file": False, "link-to-folder": True, "dangling-link": False}
+NAME = st.text(st.characters(blacklist_categories=("Cs",), blacklist_characters="/\0"), min_size=1, max_size=12)
+
+
+class Reached(Exception):
+    """The run started: every check before it passed."""
+
+
+def _reached(*args, **kwargs):
+    raise Reached
+
+
+def snapshot(root: Path) -> dict:
+    """Every entry under ``root``: its kind, a link's target, a file's bytes."""
+    out = {}
+    for dirpath, dirnames, filenames in os.walk(root):
+        for name in dirnames + filenames:
+            p = Path(dirpath) / name
+            if p.is_symlink():
+                out[str(p)] = ("link", os.readlink(p))
+            elif p.is_file():
+                out[str(p)] = ("file", p.read_bytes(), oct(p.stat().st_mode))
+            else:
+                out[str(p)] = ("other", p.stat().st_mode >> 12)
+    return out
+
+
+def make(root: Path, parent_kind: str, leaf_kind: str, name: str, suffix: str) -> str:
+    """Build a parent of ``parent_kind`` in ``root`` and a leaf of ``leaf_kind`` in it; the path."""
+    elsewhere = root / "elsewhere"
+    elsewhere.mkdir()
+    (elsewhere / "target.npz").write_bytes(b"the user's file")
+    os.mkfifo(elsewhere / "pipe")
+    parent = root / "parent"
+    if parent_kind in ("folder", "link-to-folder"):
+        real = elsewhere / "real-folder" if parent_kind == "link-to-folder" else parent
+        real.mkdir()
+        if parent_kind == "link-to-folder":
+            parent.symlink_to(real)
+    elif parent_kind == "file":
+        parent.write_bytes(b"a file, not a folder")
+    elif parent_kind == "dangling-link":
+        parent.symlink_to(root / "nowhere")
+    leaf = parent / (name + suffix)
+    if parent_kind not in ("folder", "link-to-folder"):
+        return str(leaf)
+    links = {
+        "dangling-link": elsewhere / "made-after-the-run.npz",
+        "link-to-missing-folder": root / "no-folder" / "x.npz",
+        "link-to-file": elsewhere / "target.npz",
+        "link-to-fifo": elsewhere / "pipe",
+        "link-to-devnull": Path(os.devnull),
+        "link-loop": leaf,
+        "link-to-folder": elsewhere,
+    }
+    if leaf_kind == "file":
+        leaf.write_bytes(b"the user's own file")
+    elif leaf_kind == "folder":
+        leaf.mkdir()
+    elif leaf_kind == "fifo":
+        os.mkfifo(leaf)
+    elif leaf_kind in links:
+        leaf.symlink_to(links[leaf_kind])
+    return str(leaf)
+
+
+@pytest.fixture(autouse=True)
+def no_hang():
+    """A check that blocks (opening a named pipe) fails the test instead of hanging it."""
+
+    def hang(signum, frame):
+        raise TimeoutError("the output check blocked")
+
+    previous = signal.signal(signal.SIGALRM, hang)
+    yield
+    signal.setitimer(signal.ITIMER_REAL, 0)
+    signal.signal(signal.SIGALRM, previous)
+
+
+@settings(max_examples=150, deadline=None, database=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(
+    parent_kind=st.sampled_from(sorted(PARENTS)),
+    leaf_kind=st.sampled_from(sorted(LEAVES)),
+    name=NAME,
+    option=st.sampled_from(["--save-estimates", "--plot"]),
+    right_suffix=st.booleans(),
+)
+def test_an_output_path_is_accepted_or_refused_before_the_run_and_nothing_changes(
+    tmp_path_factory, monkeypatch, capsys, parent_kind, leaf_kind, name, option, right_suffix
+) -> None:
+    if name in (".", ".."):
+        name = "x" + name
+    monkeypatch.setattr(cli, "StreamingEstimator", _reached)  # the run starts here
+    root = tmp_path_factory.mktemp("out")
+    suffix = {"--save-estimates": ".npz", "--plot": ".png"}[option] if right_suffix else ".txt"
+    path = make(root, parent_kind, leaf_kind, name, suffix)
+    before = snapshot(root)
+    signal.setitimer(signal.ITIMER_REAL, 20)
+    try:
+        code = cli.main(["run", "--max-poses", "3", option, path])
+    except Reached:
+        code = None
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+    out, err = capsys.readouterr()
+    assert snapshot(root) == before
+    accepted = right_suffix and PARENTS[parent_kind] and LEAVES[leaf_kind]
+    if accepted:
+        assert code is None, err
+    else:
+        assert code == 2 and out == "" and len(err.splitlines()) == 1, err
+        assert option in err and "Traceback" not in err
+    if leaf_kind in ("fifo", "link-to-fifo", "link-to-devnull") and PARENTS[parent_kind] and right_suffix:
+        assert "named pipe" in err or "character device" in err
+    if parent_kind == "file" and right_suffix:
+        assert "is a file, not a folder" in err
+    if parent_kind == "missing-folder" and right_suffix:
+        assert "does not exist" in err
+
+
+@pytest.mark.parametrize("leaf_kind", ["missing", "file", "dangling-link", "link-to-file"])
+def test_an_accepted_path_is_written_through_and_a_link_stays_a_link(tmp_path: Path, leaf_kind: str) -> None:
+    path = make(tmp_path, "folder", leaf_kind, "estimates", ".npz")
+    check_output(path, ".npz", "--save-estimates")
+    was_link = os.path.islink(path)
+    write_output(path, "--save-estimates", lambda name: Path(name).write_bytes(b"the new estimates"))
+    assert Path(path).read_bytes() == b"the new estimates"
+    assert os.path.islink(path) == was_link
+    assert not [p for p in tmp_path.rglob(".*") if p.is_file()], "a temporary file was left behind"
+
+
+@pytest.mark.parametrize("leaf_kind", ["missing", "file", "dangling-link", "link-to-file"])
+@pytest.mark.parametrize("error", [errno.ENOSPC, errno.EIO, errno.EDQUOT])
+def test_a_failed_write_names_the_option_and_the_path_and_changes_nothing(tmp_path: Path, leaf_kind, error) -> None:
+    path = make(tmp_path, "folder", leaf_kind, "plot", ".png")
+    before = snapshot(tmp_path)
+
+    def full_disk(name: str) -> None:
+        Path(name).write_bytes(b"half a pl")
+        raise OSError(error, os.strerror(error))
+
+    with pytest.raises(SteamError) as failure:
+        write_output(path, "--plot", full_disk)
+    assert "--plot" in str(failure.value) and repr(path) in str(failure.value)
+    assert os.strerror(error) in str(failure.value)
+    assert snapshot(tmp_path) == before
+
+
+def test_a_full_disk_after_a_real_run_is_one_line_naming_the_option(tmp_path: Path, monkeypatch, capsys) -> None:
+    target = tmp_path / "estimates.npz"
+    target.write_bytes(b"yesterday's estimates")
+
+    def full_disk(path: str, result) -> None:
+        Path(path).write_bytes(b"PK\x03\x04 half")
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(cli, "save_estimates", full_disk)
+    code = cli.main(["run", "--max-poses", "3", "--json", "--save-estimates", str(target)])
+    _, err = capsys.readouterr()
+    assert code == 2 and len(err.splitlines()) == 1
+    assert "--save-estimates" in err and str(target) in err and "No space left on device" in err
+    assert target.read_bytes() == b"yesterday's estimates"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["estimates.npz"]
+
+
+@pytest.mark.parametrize(
+    ("kind", "needle"),
+    [("file", "is a file, not a folder"), ("fifo", "is a named pipe, not a folder"), ("loop", "loop")],
+)
+def test_out_folder_that_is_not_a_folder_says_what_it_is(tmp_path: Path, kind: str, needle: str) -> None:
+    out = tmp_path / "results"
+    if kind == "file":
+        out.write_text("x")
+    elif kind == "fifo":
+        os.mkfifo(out)
+    else:
+        out.symlink_to(out)
+    with pytest.raises(SteamError, match=needle):
+        check_out_folder(str(out), "--out")
