@@ -7,7 +7,8 @@ Usage::
                   [--converge-at-end] [--json] [--save-estimates FILE.npz] [--plot FILE.png]
     steam-ref batch [--dataset NAME_OR_PATH] [--ordering {xl,amd}] [--json] [--plot FILE.png]
     steam-ref fidelity [--dataset {plaza,paper-synthetic,all}] [--json] [--plot FILE.png]
-    steam-ref reproduce [--quick] [--out DIR]
+    steam-ref reproduce [--quick] [--out DIR] [--jobs N]
+    steam-ref consistency [--seeds N] [--jobs N] [--backend loky|dask] [--json] [--plot FILE.png] ...
     steam-ref conformance {export DIR, check RESULTS_DIR [--suite NAME], selftest [--paper], build}
 
 With no options ``steam-ref run`` runs BTGP/1 on the generated synthetic task. A data set without
@@ -29,6 +30,7 @@ import numpy as np
 from ..conformance import command as conformance_command
 from ..datasets import load_dataset, load_range_dataset
 from ..errors import SteamError
+from ..evaluate import trajectory_figures, write_kitti, write_tum
 from ..paper.experiments import reproduce
 from ..paper.fidelity import AUTHORS_RUNS, compare, find_authors_file, load_authors_run
 from ..paper.online import StreamOptions, run_online
@@ -38,6 +40,7 @@ from ..paper.readings import Readings
 from ..paper.results import position_rmse
 from ..plot.figures import plot_fidelity, plot_trajectory
 from ..variables import X
+from . import consistency as consistency_command
 from .args import build_parser
 from .args import check_out_folder as _check_out_folder
 from .args import check_output as _check_output
@@ -53,8 +56,18 @@ _PRESET_OF = {
 }
 
 
+def _save_trajectory(args: argparse.Namespace, times: np.ndarray, poses: np.ndarray) -> None:
+    """--save-trajectory: the poses (n, 3) at the data set's times, as TUM or KITTI."""
+    if args.save_trajectory:
+        if args.trajectory_format == "kitti":
+            write_kitti(args.save_trajectory, poses)
+        else:
+            write_tum(args.save_trajectory, times, poses)
+
+
 def _run(args: argparse.Namespace) -> int:
     _check_output(args.save_estimates, ".npz", "--save-estimates")
+    _check_output(args.save_trajectory, "", "--save-trajectory")
     _check_output(args.plot, ".png", "--plot")
     preset = args.preset or _PRESET_OF.get(args.dataset, "plaza")
     setup = PaperSetup.named(preset).departing(*args.departure)
@@ -87,12 +100,16 @@ def _run(args: argparse.Namespace) -> int:
     )
     if score is not None:
         summary |= score.summary()
+    n = len(result.times)
+    if data.ground_truth is not None and n:  # APE, RPE beside the RMSE (evaluate.trajectory_figures)
+        summary["evaluation"] = trajectory_figures(data.ground_truth[:n, 1:4], result.trajectory[:, :3])
     if args.json:
         print(json.dumps(summary))
     else:
         _print_summary(summary)
     if args.save_estimates:
         save_estimates(args.save_estimates, result)
+    _save_trajectory(args, np.asarray(data.times)[:n], result.trajectory[:, :3])
     if args.plot:
         reference: np.ndarray | None
         if score is not None:
@@ -120,8 +137,21 @@ def _convergence_note(summary: dict) -> str:
     return f" (of which converging at the end {summary['convergence_s']:.2f} s, {verdict})"
 
 
+def _evaluation_note(summary: dict) -> str:
+    """APE (unaligned and SE(2)-aligned) and RPE over one pose, for the human-readable summary."""
+    e = summary.get("evaluation")
+    if not e:
+        return ""
+    rpe = f", RPE/1 {e['rpe']['translation_m']['rmse']:.4g} m" if "rpe" in e else ""
+    aligned = f" ({e['ape_se2']['translation_m']['rmse']:.4g} m SE(2)-aligned)" if "ape_se2" in e else ""
+    return (
+        f"\n  APE RMSE {e['ape']['translation_m']['rmse']:.4g} m{aligned}, "
+        f"heading {e['ape']['heading_rad']['rmse']:.4g} rad{rpe}"
+    )
+
+
 def _print_summary(summary: dict) -> None:
-    state = "" if summary["completed"] else "  (cut short: time budget or --max-poses)"
+    state = ("" if summary["completed"] else "  (cut short: time budget or --max-poses)") + _evaluation_note(summary)
     if "batch_distance_median_m" in summary:
         score = (
             f"  distance to the batch optimum: median {summary['batch_distance_median_m']} m, max {summary['batch_distance_max_m']} m "
@@ -183,13 +213,15 @@ def save_estimates(path: str, result) -> None:
 def _batch(args: argparse.Namespace) -> int:
     """Batch solve of a whole data set (started chunk by chunk, see ``sequential_batch``)."""
     _check_output(args.plot, ".png", "--plot")
+    _check_output(args.save_trajectory, "", "--save-trajectory")
     setup = PaperSetup.named(args.preset or _PRESET_OF.get(args.dataset, "plaza"))
     data = load_dataset(args.dataset, data_dir=args.data_dir, seed=args.seed)
     problem = build_problem(data, setup)
     t0 = time.perf_counter()
     result = sequential_batch(problem, ordering=args.ordering)
     seconds = time.perf_counter() - t0
-    positions = np.array([result.values[X(i)][:2] for i in range(data.n_poses)])
+    poses = np.array([result.values[X(i)][:3] for i in range(data.n_poses)])
+    positions = poses[:, :2]
     truth = None if data.ground_truth is None else data.ground_truth[:, 1:3]
     summary = {
         "dataset": args.dataset,
@@ -201,6 +233,9 @@ def _batch(args: argparse.Namespace) -> int:
         "factor_nnz": result.factor_nnz,
         "backend": result.backend,
     }
+    if data.ground_truth is not None:
+        summary["evaluation"] = trajectory_figures(data.ground_truth[:, 1:4], poses)
+    _save_trajectory(args, np.asarray(data.times), poses)
     if args.json:
         print(json.dumps(summary))
     else:
@@ -264,7 +299,7 @@ def _fidelity_text(row: dict) -> str:
 
 def _reproduce(args: argparse.Namespace) -> int:
     _check_out_folder(args.out, "--out")
-    table = reproduce(args.out, quick=args.quick, data_dir=args.data_dir)
+    table = reproduce(args.out, quick=args.quick, data_dir=args.data_dir, jobs=args.jobs)
     print(table)
     return 0
 
@@ -288,6 +323,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             "fidelity": _fidelity,
             "reproduce": _reproduce,
             "conformance": conformance_command.run,
+            "consistency": consistency_command.run,
         }
         return commands[args.command](args)
     except (SteamError, OSError, MemoryError) as exc:

@@ -7,9 +7,11 @@ any layer may call them and importing steam_ref never loads matplotlib.
 - :mod:`~steam_ref.plot.figures`: the GP prior and its interpolation, a run's trajectory, timing,
   the interpolation trade-off and the distance to the authors' run;
 - :mod:`~steam_ref.plot.tree`: the Bayes tree, an update before and after [K12 Fig. 3-4], its R factor;
+- :mod:`~steam_ref.plot.consistency`: ANEES pose by pose against its χ² band;
 - :mod:`~steam_ref.plot.base`: what they share (axes, saving, array checks).
 """
 
+from .consistency import plot_anees
 from .figures import (
     plot_fidelity,
     plot_interpolation,
@@ -35,4 +37,5 @@ __all__ = [
     "draw_tree",
     "draw_update",
     "draw_spy",
+    "plot_anees",
 ]
