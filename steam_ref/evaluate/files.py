@@ -92,13 +92,13 @@ def read_tum(path: str | os.PathLike) -> tuple[NDArray, NDArray]:
     if bad.any():
         k = int(np.flatnonzero(bad)[0])
         raise DataError(
-            f"{path}, line {_line_of(path, k)}: not a planar pose (z = {xyz[k, 2]!r}, qx = {q[k, 0]!r}, qy = {q[k, 1]!r}, "
-            f"|q| = {norm[k]!r}); steam_ref's trajectories are planar"
+            f"{path}, line {_line_of(path, k)}: not a planar pose (z = {float(xyz[k, 2])!r}, qx = {float(q[k, 0])!r}, qy = {float(q[k, 1])!r}, "
+            f"|q| = {float(norm[k])!r}); steam_ref's trajectories are planar"
         )
     if np.any(np.diff(t) <= 0):
         k = int(np.flatnonzero(np.diff(t) <= 0)[0]) + 1
         raise DataError(
-            f"{path}, line {_line_of(path, k)}: timestamp {t[k]!r} does not increase (previous {t[k - 1]!r})"
+            f"{path}, line {_line_of(path, k)}: timestamp {float(t[k])!r} does not increase (previous {float(t[k - 1])!r})"
         )
     theta = 2 * np.arctan2(q[:, 2], q[:, 3])
     return t, np.column_stack([xyz[:, :2], theta])
