@@ -30,7 +30,9 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.stats import chi2
 
+from ..arguments import integer
 from ..batch import gauss_newton
+from ..errors import SteamError
 from ..datasets import sample_from_model
 from ..evaluate import chi2_band, nees, pose_errors, verdict
 from ..trajectory import Trajectory
@@ -91,6 +93,14 @@ class ConsistencyStudy:
     seed: int = 0  # the root of np.random.SeedSequence(seed).spawn(n_seeds)
     setup: PaperSetup = field(default_factory=consistency_setup)
     estimators: tuple[str, ...] = tuple(ESTIMATORS)
+
+    def __post_init__(self) -> None:
+        for name in ("n_steps", "n_landmarks"):
+            integer(f"ConsistencyStudy.{name}", getattr(self, name), 1)
+        integer("ConsistencyStudy.seed", self.seed, 0)
+        unknown = [e for e in self.estimators if e not in ESTIMATORS]
+        if unknown or not self.estimators:
+            raise SteamError(f"unknown estimator {unknown[0] if unknown else None!r}; use some of {', '.join(ESTIMATORS)}")
 
     def describe(self) -> dict:
         """The study's parameters (a resumed file must have been written by the same study)."""
