@@ -157,7 +157,7 @@ def test_tum_and_kitti_round_trip(tmp_path, rng):
 
 
 @pytest.mark.parametrize(
-    "text, message",
+    ("text", "message"),
     [
         ("# only a comment\n", "no poses"),
         ("1 0 0 0 0 0 0 1\n2 0 0 0.5 0 0 0 1\n", "line 2: not a planar pose"),

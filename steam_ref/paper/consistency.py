@@ -32,8 +32,8 @@ from scipy.stats import chi2
 
 from ..arguments import integer
 from ..batch import gauss_newton
-from ..errors import SteamError
 from ..datasets import sample_from_model
+from ..errors import SteamError
 from ..evaluate import chi2_band, nees, pose_errors, verdict
 from ..trajectory import Trajectory
 from ..variables import L, Values
@@ -100,7 +100,9 @@ class ConsistencyStudy:
         integer("ConsistencyStudy.seed", self.seed, 0)
         unknown = [e for e in self.estimators if e not in ESTIMATORS]
         if unknown or not self.estimators:
-            raise SteamError(f"unknown estimator {unknown[0] if unknown else None!r}; use some of {', '.join(ESTIMATORS)}")
+            raise SteamError(
+                f"unknown estimator {unknown[0] if unknown else None!r}; use some of {', '.join(ESTIMATORS)}"
+            )
 
     def describe(self) -> dict:
         """The study's parameters (a resumed file must have been written by the same study)."""
