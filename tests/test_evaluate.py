@@ -281,3 +281,22 @@ def test_states_at_equals_the_dense_gp_posterior(dense):  # noqa: F811 - the fix
             np.testing.assert_allclose(mean, expected_mean, rtol=1e-7, atol=1e-9 * np.abs(expected_mean).max())
             np.testing.assert_allclose(cov, expected_cov, rtol=1e-7, atol=1e-9 * np.abs(expected_cov).max())
     np.testing.assert_array_equal(states_at(trajectory, times), means)
+
+
+def test_batch_reports_ape_beside_its_rmse_and_saves_its_trajectory(tmp_path, capsys):
+    import scipy.io
+
+    data = generate_synthetic(n_steps=60, n_landmarks=10, seed=2, range_sigma=0.3)
+    scipy.io.savemat(tmp_path / "small.mat", data.to_cmu_arrays())
+    tum = tmp_path / "batch.txt"
+    args = ["batch", "--dataset", str(tmp_path / "small.mat"), "--preset", "synthetic", "--json"]
+    assert main([*args, "--save-trajectory", str(tum)]) == 0
+    row = json.loads(capsys.readouterr().out)
+    times, poses = read_tum(tum)
+    np.testing.assert_array_equal(times, data.times)
+    truth = data.ground_truth[:, 1:4]
+    assert row["evaluation"]["ape"]["translation_m"]["rmse"] == pytest.approx(row["rmse_m"], abs=1e-6)
+    assert row["evaluation"]["ape_se2"]["translation_m"]["rmse"] == pytest.approx(
+        ape(truth, poses, align="se2").translation_stats.rmse, rel=1e-12
+    )
+    assert row["evaluation"]["ape_se2"]["translation_m"]["rmse"] <= row["evaluation"]["ape"]["translation_m"]["rmse"]
