@@ -7,7 +7,8 @@
   per line, no time. A planar pose is [[cos θ, -sin θ, 0, x], [sin θ, cos θ, 0, y], [0, 0, 1, 0]], in the
   frame of the estimate (z up), not KITTI's camera frame (z forward).
 
-Numbers are written with 17 significant digits, so a file read back gives the same floats. The
+Numbers are written with 17 significant digits, so a file read back gives the same times and positions;
+a heading comes back through its quaternion or rotation, equal modulo 2π to within rounding (1e-15). The
 loaders accept planar poses only (z = 0, rotation about z, to 1e-9) and refuse anything else with a
 :class:`~steam_ref.errors.DataError` naming the file and line; timestamps must increase strictly.
 """

@@ -10,7 +10,13 @@
 
 These are the definitions of evo's ``metrics.APE`` and ``metrics.RPE`` (translation_part,
 rotation_angle_rad) restricted to the plane, with pairs chosen the way evo's ``filters`` choose them;
-``tests/test_evaluate.py`` checks the figures against evo's on the same TUM files to 1e-9.
+``tests/test_evaluate.py`` checks the figures against evo's on the same TUM files to 1e-9. How the two
+relate: unaligned, they are the same definitions; evo aligns in SE(3) / Sim(3) (Umeyama in space), which on
+planar poses (z = 0, rotations about z) finds the rotation about z and the planar translation our SE(2) /
+Sim(2) alignment finds, so ``ape(align='se2')`` equals evo's APE after ``align`` and ``ape(align='sim2')``
+after ``align(correct_scale=True)``. RPE pairs are chosen on the truth here by default
+(evo's ``pairs_from_reference=True``); ``pairs_from='estimate'`` is evo's default. Evo's yaw-only planar
+alignment of 3-D trajectories (its issue 746) is what ``se2`` is for planar ones.
 """
 
 from __future__ import annotations
