@@ -23,7 +23,7 @@ import time
 
 from steam_ref.paper.consistency import KINDS, ConsistencyStudy, run_seed, summarize
 from steam_ref.paper.sweep import run_sweep
-from steam_ref.plot.consistency import plot_anees
+from steam_ref.plot.figures import plot_anees
 
 TARGET_RATIO = 0.6
 

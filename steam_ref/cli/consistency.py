@@ -18,7 +18,7 @@ import time
 
 from ..paper.consistency import KINDS, ConsistencyStudy, run_seed, summarize
 from ..paper.sweep import run_sweep
-from ..plot.consistency import plot_anees
+from ..plot.figures import plot_anees
 from .args import check_output
 
 __all__ = ["run"]
