@@ -40,7 +40,8 @@ _LAGGED_READ = r"""
 import json, sys
 import numpy as np
 from steam_ref.datasets import load_dataset
-from steam_ref.paper.online import StreamingEstimator, StreamOptions
+from steam_ref.paper.online import StreamingEstimator
+from steam_ref.paper.options import StreamOptions
 from steam_ref.paper.presets import PaperSetup
 from steam_ref.paper.readings import Readings
 from steam_ref.variables import X

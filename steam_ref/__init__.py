@@ -64,6 +64,13 @@ _HOMES = {
     "PaperSetup": "paper.presets",
     "StreamOptions": "paper.options",
     "run_online": "paper.online",
+    "ape": "evaluate",
+    "rpe": "evaluate",
+    "align_planar": "evaluate",
+    "write_tum": "evaluate",
+    "read_tum": "evaluate",
+    "nees": "evaluate",
+    "chi2_band": "evaluate",
 }
 
 
@@ -86,6 +93,7 @@ if TYPE_CHECKING:  # what a type checker and an IDE see: the same names, importe
     from .bayes_tree import BayesTree, FixedLagSmoother, IncrementalSolver, ISAM2Params
     from .covariance import marginal_covariances
     from .datasets import LandmarkDataset, RangeDataset, generate_synthetic, load_dataset
+    from .evaluate import align_planar, ape, chi2_band, nees, read_tum, rpe, write_tum
     from .factors import (
         BearingFactor,
         BearingRangeFactor,
@@ -153,4 +161,11 @@ __all__ = [
     "PaperSetup",
     "StreamOptions",
     "run_online",
+    "ape",
+    "rpe",
+    "align_planar",
+    "write_tum",
+    "read_tum",
+    "nees",
+    "chi2_band",
 ]

@@ -44,6 +44,7 @@ LAYERS: dict[str, int] = {
     "steam_ref.bayes_tree": 5,
     "steam_ref.trajectory": 5,
     "steam_ref.datasets": 6,
+    "steam_ref.evaluate": 6,  # APE/RPE, trajectory files, NEES: reads trajectory (5), never the paper layer
     # the paper's experiments, in the order data flows
     "steam_ref.paper.presets": 7,
     "steam_ref.paper.readings": 8,
@@ -57,6 +58,8 @@ LAYERS: dict[str, int] = {
     "steam_ref.paper.online": 11,
     "steam_ref.paper.fidelity": 11,
     "steam_ref.paper.experiments": 12,
+    "steam_ref.paper.sweep": 7,  # joblib / Dask runs of any picklable function; imports only errors
+    "steam_ref.paper.consistency": 12,  # NEES over Monte Carlo runs of the solvers
     "steam_ref.paper": 12,  # its __init__ re-exports the layer's main names
     # tools
     "steam_ref.conformance": 13,

@@ -30,7 +30,8 @@ from requirements import optional_import, skip_or_fail
 from steam_ref.cli import commands as cli
 from steam_ref.datasets import LandmarkDataset, gtsam_data_dir, load_gtsam_2d
 from steam_ref.errors import DataError, DivergenceWarning
-from steam_ref.paper.online import StreamingEstimator, StreamOptions
+from steam_ref.paper.online import StreamingEstimator
+from steam_ref.paper.options import StreamOptions
 from steam_ref.paper.presets import PaperSetup
 from steam_ref.paper.readings import Readings
 

@@ -136,3 +136,20 @@ def test_interpolation_sweep_runs_with_its_documented_set_up(small):
     for interpolate, store in ((True, exp.with_interp), (False, exp.without_interp)):
         direct = run_online(small, setup, StreamOptions(skip=3, interpolate=interpolate))
         np.testing.assert_array_equal(store[3].trajectory, direct.trajectory)
+
+
+def test_reproduce_with_jobs_gives_the_serial_accuracy_and_says_how_it_timed(small, reproduced, tmp_path):
+    """--jobs 2: the interpolation sweep in parallel gives the serial runs' figures; timing runs ran alone."""
+    table = reproduce(tmp_path, progress=False, data_sets=[("small", small, SETUP)], jobs=2)
+    assert "every timing run (PB, PBVR, BTGP) ran alone, one after another, each in a fresh process" in table
+    serial = [json.loads(line) for line in (reproduced[0] / "runs.jsonl").read_text().splitlines()]
+    parallel = [json.loads(line) for line in (tmp_path / "runs.jsonl").read_text().splitlines()]
+    assert len(parallel) == len(serial)
+    for a, b in zip(serial, parallel, strict=True):
+        assert (a["method"], a["every"], a["skip"], a["interpolate"]) == (
+            b["method"],
+            b["every"],
+            b["skip"],
+            b["interpolate"],
+        )
+        assert a["rmse_m"] == b["rmse_m"] and a["n_estimated_states"] == b["n_estimated_states"]

@@ -17,7 +17,8 @@ import pytest
 from steam_ref.cli import commands as cli
 from steam_ref.datasets import generate_synthetic
 from steam_ref.errors import SteamError, UnknownVariableError
-from steam_ref.paper.online import StreamingEstimator, StreamOptions, run_online
+from steam_ref.paper.online import StreamingEstimator, run_online
+from steam_ref.paper.options import StreamOptions
 from steam_ref.paper.presets import PaperSetup
 from steam_ref.paper.readings import Readings
 from steam_ref.paper.solvers import FixedLagTreeSolver

@@ -222,6 +222,18 @@ def _add_run_arguments(run: argparse.ArgumentParser) -> None:
         default=None,
         help="write BTGP's final Bayes tree in the Graphviz format of GTSAM's ISAM2.dot() (\"frontals : separator\")",
     )
+    _add_trajectory_arguments(run)
+
+
+def _add_trajectory_arguments(parser: argparse.ArgumentParser) -> None:
+    """--save-trajectory FILE and its format (run and batch)."""
+    parser.add_argument(
+        "--save-trajectory",
+        metavar="FILE",
+        default=None,
+        help="write the estimated pose at every time step: TUM (timestamp tx ty tz qx qy qz qw, read by evo) or KITTI",
+    )
+    parser.add_argument("--trajectory-format", choices=("tum", "kitti"), default="tum", help="of --save-trajectory")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -253,6 +265,7 @@ def build_parser() -> argparse.ArgumentParser:
     bat.add_argument("--seed", type=_non_negative_int, default=0, help="seed of the generated synthetic task")
     bat.add_argument("--json", action="store_true", help="print one JSON line of figures")
     bat.add_argument("--plot", metavar="FILE.png", default=None, help="draw estimate, ground truth, landmarks")
+    _add_trajectory_arguments(bat)
     fid = sub.add_parser("fidelity", help="BTGP/1 against the authors' saved runs, pose by pose, covariances included")
     fid.add_argument("--dataset", choices=("plaza", "paper-synthetic", "all"), default="all")
     fid.add_argument(
@@ -274,6 +287,32 @@ def build_parser() -> argparse.ArgumentParser:
         default=None,
         help="folder searched for data files before $STEAM_REF_DATA_DIR and gtsam's Data/",
     )
+    rep.add_argument(
+        "--jobs",
+        type=_positive_int,
+        default=1,
+        help="accuracy runs in parallel (timing runs stay serial, each in a fresh process)",
+    )
     conformance_command.add_parser(sub)
     data_command.add_parser(sub)
+    _add_consistency_arguments(
+        sub.add_parser("consistency", help="ANEES of each estimator over Monte Carlo runs, with its band")
+    )
     return parser
+
+
+def _add_consistency_arguments(con: argparse.ArgumentParser) -> None:
+    """``steam-ref consistency`` (steam_ref.cli.consistency)."""
+    con.add_argument("--dataset", choices=("synthetic",), default="synthetic", help="tasks drawn from the model")
+    con.add_argument("--seeds", type=_positive_int, default=200, help="Monte Carlo runs (default %(default)s)")
+    con.add_argument("--seed", type=_non_negative_int, default=0, help="root of the seeds (SeedSequence(seed).spawn)")
+    con.add_argument("--steps", type=_positive_int, default=40, help="time steps of a task (default %(default)s)")
+    con.add_argument("--landmarks", type=_positive_int, default=8, help="landmarks of a task (default %(default)s)")
+    con.add_argument("--jobs", type=_positive_int, default=1, help="worker processes (default %(default)s)")
+    con.add_argument("--backend", choices=("loky", "dask"), default="loky", help="joblib's loky processes, or Dask")
+    con.add_argument("--scheduler", default=None, help="Dask scheduler address (default: a LocalCluster on 127.0.0.1)")
+    logs = con.add_mutually_exclusive_group()
+    logs.add_argument("--log", metavar="FILE.jsonl", default=None, help="stream each run's NEES to a new file")
+    logs.add_argument("--resume", metavar="FILE.jsonl", default=None, help="continue this file (or start it)")
+    con.add_argument("--json", action="store_true", help="print one JSON line of figures")
+    con.add_argument("--plot", metavar="FILE.png", default=None, help="ANEES pose by pose against its band")

@@ -8,7 +8,8 @@ Usage::
                   [--lag SECONDS] [--steps N]
     steam-ref batch [--dataset NAME_OR_PATH] [--ordering {xl,amd}] [--json] [--plot FILE.png]
     steam-ref fidelity [--dataset {plaza,paper-synthetic,all}] [--json] [--plot FILE.png]
-    steam-ref reproduce [--quick] [--out DIR]
+    steam-ref reproduce [--quick] [--out DIR] [--jobs N]
+    steam-ref consistency [--seeds N] [--jobs N] [--backend loky|dask] [--json] [--plot FILE.png] ...
     steam-ref conformance {export DIR, check RESULTS_DIR [--only SUITE...], selftest [--paper], build}
 
 With no options ``steam-ref run`` runs BTGP/1 on the generated synthetic task. A data set without
@@ -31,6 +32,7 @@ import numpy as np
 from ..conformance import command as conformance_command
 from ..datasets import generate_synthetic, load_dataset, load_range_dataset
 from ..errors import SteamError
+from ..evaluate import trajectory_figures, write_kitti, write_tum
 from ..paper.experiments import reproduce
 from ..paper.fidelity import AUTHORS_RUNS, compare, find_authors_file, load_authors_run
 from ..paper.online import StreamingEstimator, run_online
@@ -42,6 +44,7 @@ from ..paper.results import position_rmse
 from ..paper.solvers import BayesTreeSolver
 from ..plot.figures import plot_fidelity, plot_trajectory
 from ..variables import X
+from . import consistency as consistency_command
 from . import data as data_command
 from . import explain
 from .args import build_parser
@@ -61,8 +64,18 @@ _PRESET_OF = {
 }
 
 
+def _save_trajectory(args: argparse.Namespace, times: np.ndarray, poses: np.ndarray) -> None:
+    """--save-trajectory: the poses (n, 3) at the data set's times, as TUM or KITTI."""
+    if args.save_trajectory:
+        if args.trajectory_format == "kitti":
+            _write_output(args.save_trajectory, "--save-trajectory", lambda name: write_kitti(name, poses))
+        else:
+            _write_output(args.save_trajectory, "--save-trajectory", lambda name: write_tum(name, times, poses))
+
+
 def _run(args: argparse.Namespace) -> int:
     _check_output(args.save_estimates, ".npz", "--save-estimates")
+    _check_output(args.save_trajectory, "", "--save-trajectory")
     _check_output(args.plot, ".png", "--plot")
     _check_output(args.tree_dot, ".dot", "--tree-dot")
     if args.tree_dot and args.method != "btgp":
@@ -118,15 +131,19 @@ def _run(args: argparse.Namespace) -> int:
             score = score_against_batch(result, Readings.from_dataset(data, setup), setup)
     if score is not None:
         summary |= score.summary()
+    n = len(result.times)
+    if data.ground_truth is not None and n:  # APE, RPE beside the RMSE (evaluate.trajectory_figures)
+        summary["evaluation"] = trajectory_figures(data.ground_truth[:n, 1:4], result.trajectory[:, :3])
     if args.json:
         print(json.dumps(summary))
     else:
-        print(explain.run_text(summary))
+        print(explain.run_text(summary) + _evaluation_note(summary))
     if args.save_estimates:
         _write_output(args.save_estimates, "--save-estimates", lambda name: save_estimates(name, result))
     if args.tree_dot and isinstance(estimator.solver, BayesTreeSolver):  # GTSAM's ISAM2.dot() text (bayes_tree/dot.py)
         dot = estimator.solver.inner.tree.dot() + "\n"
         _write_output(args.tree_dot, "--tree-dot", lambda name: Path(name).write_text(dot, encoding="utf-8"))
+    _save_trajectory(args, np.asarray(data.times)[:n], result.trajectory[:, :3])
     if args.plot:
         reference: np.ndarray | None
         if score is not None:
@@ -174,6 +191,19 @@ def _run_dataset(args: argparse.Namespace):
     return generate_synthetic(n_steps=args.steps, n_landmarks=n_landmarks, seed=args.seed)
 
 
+def _evaluation_note(summary: dict) -> str:
+    """APE (unaligned and SE(2)-aligned) and RPE over one pose, for the human-readable summary."""
+    e = summary.get("evaluation")
+    if not e:
+        return ""
+    rpe = f", RPE/1 {e['rpe']['translation_m']['rmse']:.4g} m" if "rpe" in e else ""
+    aligned = f" ({e['ape_se2']['translation_m']['rmse']:.4g} m SE(2)-aligned)" if "ape_se2" in e else ""
+    return (
+        f"\n  APE RMSE {e['ape']['translation_m']['rmse']:.4g} m{aligned}, "
+        f"heading {e['ape']['heading_rad']['rmse']:.4g} rad{rpe}"
+    )
+
+
 def save_estimates(path: str, result) -> None:
     """Write a run to an .npz file: ``times``, ``x``, ``y``, ``theta`` and ``xdot``, ``ydot``,
     ``thetadot`` at every covered time step (and ``xddot``, ``yddot``, ``thetaddot`` with a WNOJ or Singer
@@ -208,13 +238,15 @@ def save_estimates(path: str, result) -> None:
 def _batch(args: argparse.Namespace) -> int:
     """Batch solve of a whole data set (started chunk by chunk, see ``sequential_batch``)."""
     _check_output(args.plot, ".png", "--plot")
+    _check_output(args.save_trajectory, "", "--save-trajectory")
     setup = PaperSetup.named(_preset(args))
     data = load_dataset(args.dataset, data_dir=args.data_dir, seed=args.seed)
     problem = build_problem(data, setup)
     t0 = time.perf_counter()
     result = sequential_batch(problem, ordering=args.ordering)
     seconds = time.perf_counter() - t0
-    positions = np.array([result.values[X(i)][:2] for i in range(data.n_poses)])
+    poses = np.array([result.values[X(i)][:3] for i in range(data.n_poses)])
+    positions = poses[:, :2]
     truth = None if data.ground_truth is None else data.ground_truth[:, 1:3]
     summary = {
         "dataset": args.dataset,
@@ -226,6 +258,9 @@ def _batch(args: argparse.Namespace) -> int:
         "factor_nnz": result.factor_nnz,
         "backend": result.backend,
     } | explain.data_figures(data, data.n_poses)
+    if data.ground_truth is not None:
+        summary["evaluation"] = trajectory_figures(data.ground_truth[:, 1:4], poses)
+    _save_trajectory(args, np.asarray(data.times), poses)
     if args.json:
         print(json.dumps(summary))
     else:
@@ -299,7 +334,7 @@ def _fidelity_text(row: dict) -> str:
 def _reproduce(args: argparse.Namespace) -> int:
     _check_out_folder(args.out, "--out")
     try:
-        table = reproduce(args.out, quick=args.quick, data_dir=args.data_dir)
+        table = reproduce(args.out, quick=args.quick, data_dir=args.data_dir, jobs=args.jobs)
     except OSError as err:  # a full disk while writing the plots or the table
         raise SteamError(f"--out: cannot write {err.filename or args.out!r} ({err.strerror or err})") from None
     print(table)
@@ -323,6 +358,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             "reproduce": _reproduce,
             "conformance": conformance_command.run,
             "data": data_command.run,
+            "consistency": consistency_command.run,
         }
         return commands[args.command](args)
     except (SteamError, OSError, MemoryError) as exc:

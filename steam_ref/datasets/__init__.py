@@ -10,6 +10,7 @@
 - :mod:`.gtsam_text`: :func:`load_gtsam_2d`, a reader of GTSAM's planar text format (ODOMETRY and
   LANDMARK rows, as ``gtsam.load2D`` reads them).
 - :mod:`.synthetic`: :func:`generate_synthetic`, a task like the paper's Section IV-A.
+- :mod:`.sampled`: :func:`sample_from_model`, a task drawn from the estimator's own model (consistency).
 - :mod:`.search`: :func:`load_dataset` by name or path, searching :func:`default_data_dirs`
   (``data_dir``, ``$STEAM_REF_DATA_DIR``, the fetched files' cache folder, gtsam's ``Data/``).
 - :mod:`.fetch`: the paper's files by name, each with its source and sha256, fetched into the user's
@@ -24,6 +25,7 @@ from .cmu import load_cmu_mat, load_cmu_text
 from .gtsam_text import load_gtsam_2d
 from .landmarks import LandmarkDataset
 from .matfile import read_mat
+from .sampled import ModelSample, sample_from_model
 from .search import DATA_DIR_ENV, default_data_dirs, gtsam_data_dir, load_dataset, load_range_dataset
 from .synthetic import generate_synthetic
 from .table import RangeDataset
@@ -40,5 +42,7 @@ __all__ = [
     "load_dataset",
     "load_range_dataset",
     "generate_synthetic",
+    "sample_from_model",
+    "ModelSample",
     "DATA_DIR_ENV",
 ]

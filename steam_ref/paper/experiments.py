@@ -16,6 +16,7 @@ The figures are drawn by :mod:`steam_ref.plot.figures`, which imports matplotlib
 
 from __future__ import annotations
 
+import functools
 import json
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -30,6 +31,7 @@ from .fidelity import AUTHORS_RUNS, Fidelity, compare, load_authors_run
 from .online import RunResult, run_online
 from .options import StreamOptions
 from .presets import PaperSetup
+from .sweep import run_sweep
 
 __all__ = [
     "SKIPS",
@@ -114,6 +116,37 @@ def published_run_experiment(
         except DataError as err:
             exp.note = str(err)
     return run
+
+
+def _one_run(data, setup: PaperSetup, options: StreamOptions, item) -> RunResult:
+    """One run of the interpolation sweep (``item`` its (skip, interpolate)): a picklable task."""
+    skip, interpolate = item
+    return run_online(data, setup, options.replace(skip=skip, interpolate=interpolate))
+
+
+def _fresh_process(function, *args):
+    """``function(*args)`` in a new process, alone: its time and peak memory are its own."""
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    with ProcessPoolExecutor(max_workers=1, mp_context=multiprocessing.get_context("spawn")) as pool:
+        return pool.submit(function, *args).result()
+
+
+def parallel_experiments(exp: Experiment, jobs: int, *, batch_budget_s: float | None, max_poses: int | None) -> None:
+    """:func:`timing_experiment` and :func:`interpolation_experiment` with ``jobs`` workers: the interpolation
+    sweep in parallel, every timing run serial, each in a fresh process."""
+    for method, every in TIMING_RUNS:
+        budget = batch_budget_s if method != "btgp" else None
+        opts = StreamOptions(method=method, max_poses=max_poses, time_budget_s=budget)
+        setup = exp.setup.with_schedule(every=every)
+        exp.timing[f"{method.upper()}/{every}"] = _fresh_process(run_online, exp.data, setup, opts)
+    setup = exp.setup.departing(*INTERPOLATION_DEPARTURES)
+    items = [[skip, interpolate] for skip in SKIPS for interpolate in (True, False)]
+    runs = run_sweep(functools.partial(_one_run, exp.data, setup, StreamOptions(max_poses=max_poses)), items, jobs=jobs)
+    for skip, interpolate in items:
+        store = exp.with_interp if interpolate else exp.without_interp
+        store[skip] = runs[json.dumps([skip, interpolate])]
 
 
 def speedup_on_prefix(slow: RunResult, fast: RunResult) -> tuple[float, int]:
@@ -257,10 +290,13 @@ def reproduce(
     data_dir: str | None = None,
     progress: bool = True,
     data_sets: list[tuple[str, RangeDataset | LandmarkDataset, PaperSetup]] | None = None,
+    jobs: int = 1,
 ) -> str:
     """Run Fig. 3/4's experiments; write ``fig3.png``/``fig4.png``, ``runs.jsonl`` and ``results.md``
     to ``out``; return the Markdown table. ``quick``: 1,000-pose prefixes and 20 s budgets.
-    ``data_sets`` (name, data, set-up) replaces the paper's two data sets."""
+    ``data_sets`` (name, data, set-up) replaces the paper's two data sets. ``jobs`` > 1: the accuracy
+    runs (the interpolation sweep) run that many at a time (:func:`~steam_ref.paper.sweep.run_sweep`),
+    and every timing run runs alone, one after another, each in a fresh process."""
     import matplotlib as mpl
 
     mpl.use("Agg")
@@ -285,13 +321,22 @@ def reproduce(
     )
     if quick:
         notes.append(f"quick mode: only the first {prefix} poses of each data set")
+    if jobs > 1:
+        notes.append(
+            f"--jobs {jobs}: the interpolation sweep ran {jobs} runs at a time (its RMSE as serial; its times "
+            "under that load); every timing run (PB, PBVR, BTGP) ran alone, one after another, each in a fresh "
+            "process, so its times and peak memory are its own"
+        )
     experiments = []
     with open(out / "runs.jsonl", "w") as log:
         # not strict: data_sets may hold a single set (then no fig4)
         for (name, data, setup), fig in zip(sets, ("fig3", "fig4"), strict=False):
             exp = Experiment(name, data, setup)
-            timing_experiment(exp, batch_budget_s=budget, max_poses=prefix, progress=progress)
-            interpolation_experiment(exp, max_poses=prefix, progress=progress)
+            if jobs > 1:
+                parallel_experiments(exp, jobs, batch_budget_s=budget, max_poses=prefix)
+            else:
+                timing_experiment(exp, batch_budget_s=budget, max_poses=prefix, progress=progress)
+                interpolation_experiment(exp, max_poses=prefix, progress=progress)
             published = published_run_experiment(exp, max_poses=prefix, progress=progress, data_dir=data_dir)
             for r in [*exp.timing.values(), *exp.with_interp.values(), *exp.without_interp.values(), published]:
                 log.write(json.dumps(r.summary(name)) + "\n")

@@ -5,12 +5,13 @@ read), import nothing from steam_ref but its exceptions, and import matplotlib o
 any layer may call them and importing steam_ref never loads matplotlib.
 
 - :mod:`~steam_ref.plot.figures`: the GP prior and its interpolation, a run's trajectory, timing,
-  the interpolation trade-off and the distance to the authors' run;
+  the interpolation trade-off, the distance to the authors' run, ANEES against its χ² band;
 - :mod:`~steam_ref.plot.tree`: the Bayes tree, an update before and after [K12 Fig. 3-4], its R factor;
 - :mod:`~steam_ref.plot.base`: what they share (axes, saving, array checks).
 """
 
 from .figures import (
+    plot_anees,
     plot_fidelity,
     plot_interpolation,
     plot_interpolation_tradeoff,
@@ -35,4 +36,5 @@ __all__ = [
     "draw_tree",
     "draw_update",
     "draw_spy",
+    "plot_anees",
 ]

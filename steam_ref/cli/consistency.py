@@ -1,0 +1,74 @@
+"""``steam-ref consistency``: ANEES of each estimator over Monte Carlo runs, with its 95 % band and verdict.
+
+    steam-ref consistency [--dataset synthetic] [--seeds 200] [--seed 0] [--steps 40] [--landmarks 8]
+                          [--jobs N] [--backend loky|dask] [--scheduler ADDRESS]
+                          [--log FILE.jsonl | --resume FILE.jsonl] [--json] [--plot FILE.png]
+
+The runs are :func:`steam_ref.paper.consistency.run_seed` on tasks drawn from the estimator's own model,
+spread over ``--jobs`` workers (:func:`steam_ref.paper.sweep.run_sweep`); the figures do not depend on the
+backend or the number of workers.
+"""
+
+from __future__ import annotations
+
+import argparse
+import functools
+import json
+import time
+
+from ..paper.consistency import KINDS, ConsistencyStudy, run_seed, summarize
+from ..paper.sweep import run_sweep
+from ..plot.figures import plot_anees
+from .paths import check_output
+
+__all__ = ["run"]
+
+
+def _text(summary: dict) -> str:
+    head = (
+        f"ANEES over {summary['n_seeds']} runs ({summary['seconds']} s, {summary['jobs']} job(s), "
+        f"{summary['backend']}); 95 % band of one pose's ANEES, χ²(N d)/N"
+    )
+    lines = [head]
+    for name, row in summary["estimators"].items():
+        parts = []
+        for kind in KINDS:
+            k = row[kind]
+            lost = f", {k['runs_far_outside']} run(s) far outside" if k["runs_far_outside"] else ""
+            parts.append(f"{kind} {k['anees']:.3f} in [{k['band'][0]:.3f}, {k['band'][1]:.3f}]: {k['verdict']}{lost}")
+        lines.append(
+            f"  {name}: {'consistent' if row['consistent'] else 'not consistent'}\n    " + "\n    ".join(parts)
+        )
+    return "\n".join(lines)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the study, print its figures, draw them."""
+    for path, suffix, option in ((args.plot, ".png", "--plot"), (args.log, ".jsonl", "--log")):
+        check_output(path, suffix, option)
+    check_output(args.resume, ".jsonl", "--resume")
+    study = ConsistencyStudy(n_steps=args.steps, n_landmarks=args.landmarks, seed=args.seed)
+    start = time.perf_counter()
+    results = run_sweep(
+        functools.partial(run_seed, study),
+        range(args.seeds),
+        jobs=args.jobs,
+        backend=args.backend,
+        scheduler=args.scheduler,
+        log=args.resume or args.log,
+        study=study.describe(),
+        resume=args.resume is not None,
+    )
+    summary = summarize({int(k): v for k, v in results.items()}, study.estimators)
+    summary |= {"seconds": round(time.perf_counter() - start, 2), "jobs": args.jobs, "backend": args.backend}
+    if args.plot:
+        per_pose = {
+            name: {k: row[k]["per_state"] for k in ("pose", "velocity")} for name, row in summary["estimators"].items()
+        }
+        bands = {k: tuple(next(iter(summary["estimators"].values()))[k]["band"]) for k in ("pose", "velocity")}
+        plot_anees(per_pose, bands, n_runs=summary["n_seeds"], path=args.plot)
+    for row in summary["estimators"].values():  # the per-pose curves are for the plot
+        for kind in KINDS:
+            row[kind].pop("per_state", None)
+    print(json.dumps(summary) if args.json else _text(summary))
+    return 0

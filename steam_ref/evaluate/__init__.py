@@ -1,0 +1,39 @@
+"""Evaluating an estimate: trajectory error (APE, RPE, aligned or not), trajectory files, consistency (NEES).
+
+- :mod:`.align`: the SE(2) / Sim(2) alignment of an estimate onto the truth, Umeyama's closed form in the plane.
+- :mod:`.metrics`: APE and RPE of planar poses and their statistics (RMSE, mean, median, max), as evo defines them.
+- :mod:`.files`: TUM and KITTI trajectory files, written and read back.
+- :mod:`.report`: the estimate at the truth's own times by GP interpolation [YIB Eq. 18]; a run's figures.
+- :mod:`.nees`: NEES of a state with its covariance, the χ² band of an ANEES over Monte Carlo runs.
+
+The Monte Carlo study itself (sampling tasks from the model, running the estimators, over many seeds) is
+:mod:`steam_ref.paper.consistency`, since it runs the paper's solvers.
+"""
+
+from .align import ALIGNMENTS, Alignment, align_planar
+from .files import read_kitti, read_tum, write_kitti, write_tum
+from .metrics import PoseError, Statistics, ape, planar_poses, rpe, rpe_pairs
+from .nees import chi2_band, nees, pose_errors, verdict
+from .report import states_at, trajectory_figures
+
+__all__ = [
+    "ALIGNMENTS",
+    "Alignment",
+    "align_planar",
+    "Statistics",
+    "PoseError",
+    "ape",
+    "rpe",
+    "rpe_pairs",
+    "planar_poses",
+    "write_tum",
+    "read_tum",
+    "write_kitti",
+    "read_kitti",
+    "states_at",
+    "trajectory_figures",
+    "nees",
+    "chi2_band",
+    "pose_errors",
+    "verdict",
+]

@@ -1,0 +1,85 @@
+"""Aligning an estimated planar trajectory onto the truth: SE(2) and Sim(2), in closed form.  [U91]
+
+The least-squares similarity (or rigid motion) taking points xᵢ onto yᵢ minimises
+Σ ‖yᵢ - (s R xᵢ + t)‖² [U91 Eq. 1]. Umeyama's solution [U91 Lemma, Eq. 38-42] is an SVD of the
+cross-covariance Σxy = (1/n) Σ (yᵢ - μy)(xᵢ - μx)ᵀ; in the plane that SVD has a closed form. Write the
+centred points as complex numbers x̃ᵢ, ỹᵢ: then Σ ỹᵢ conj(x̃ᵢ) = a + i b with a = Σ x̃ᵢ·ỹᵢ (the dot
+products) and b = Σ x̃ᵢ × ỹᵢ (the cross products), and
+
+    φ = atan2(b, a)                     the rotation R(φ) (never a reflection: a rotation by construction)
+    s = √(a² + b²) / Σ ‖x̃ᵢ‖²           the scale [U91 Eq. 42] (1 for SE(2))
+    t = μy - s R(φ) μx                  the translation [U91 Eq. 41]
+
+This is Umeyama's R = U S Vᵀ with S = diag(1, det U det V), written out for 2 × 2 matrices: the
+rotation turning the centred estimate onto the centred truth, and tr(DS) = √(a² + b²). On planar data
+(z = 0, rotations about z) it is the same transform evo's SE(3) / Sim(3) ``align`` finds, which
+``tests/test_evaluate.py`` checks against evo itself.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import SteamError
+from ..pose2 import wrap_angle
+
+__all__ = ["Alignment", "align_planar", "ALIGNMENTS"]
+
+ALIGNMENTS = (None, "se2", "sim2")  # none, rigid (rotation + translation), similarity (+ scale)
+
+
+@dataclass(frozen=True)
+class Alignment:
+    """p ↦ s R(φ) p + t and θ ↦ θ + φ: the transform applied to an estimate."""
+
+    angle: float  # φ [rad]
+    translation: NDArray  # t (2,) [m]
+    scale: float = 1.0  # s
+
+    @classmethod
+    def identity(cls) -> Alignment:
+        return cls(0.0, np.zeros(2), 1.0)
+
+    @property
+    def rotation(self) -> NDArray:
+        c, s = np.cos(self.angle), np.sin(self.angle)
+        return np.array([[c, -s], [s, c]])
+
+    def apply(self, poses: NDArray) -> NDArray:
+        """Poses (n, 3) [x, y, θ] moved by this transform; headings wrapped to [-π, π)."""
+        poses = np.asarray(poses, dtype=float)
+        xy = self.scale * poses[:, :2] @ self.rotation.T + self.translation
+        return np.column_stack([xy, wrap_angle(poses[:, 2] + self.angle)])
+
+    def to_dict(self) -> dict:
+        return {"angle_rad": float(self.angle), "translation_m": self.translation.tolist(), "scale": float(self.scale)}
+
+
+def align_planar(estimate: NDArray, truth: NDArray, *, with_scale: bool = False) -> Alignment:
+    """The SE(2) (or, ``with_scale``, Sim(2)) transform minimising Σ ‖truthᵢ - (s R estimateᵢ + t)‖².  [U91]
+
+    ``estimate`` and ``truth`` are positions (n, 2), n ≥ 2, not all at one point. A rigid alignment
+    (``with_scale=False``) is Umeyama's with s fixed at 1 [U91 Eq. 40-41].
+    """
+    x, y = np.asarray(estimate, dtype=float), np.asarray(truth, dtype=float)
+    if x.ndim != 2 or x.shape[1] != 2 or x.shape != y.shape or len(x) < 2:
+        raise SteamError(
+            f"alignment needs two (n, 2) position arrays of one shape, n >= 2; got {x.shape} and {y.shape}"
+        )
+    mu_x, mu_y = x.mean(axis=0), y.mean(axis=0)  # [U91 Eq. 34-35]
+    xc, yc = x - mu_x, y - mu_y
+    a = float(np.sum(xc * yc))  # Σ x̃ᵢ·ỹᵢ
+    b = float(np.sum(xc[:, 0] * yc[:, 1] - xc[:, 1] * yc[:, 0]))  # Σ x̃ᵢ × ỹᵢ
+    spread = float(np.sum(xc * xc))  # n σx²                      [U91 Eq. 36]
+    if spread == 0.0 or a == b == 0.0:
+        raise SteamError(
+            "alignment is undefined: the estimate's positions all coincide, or are at right angles to the truth's"
+        )
+    angle = float(np.arctan2(b, a))  # R = U S Vᵀ in the plane     [U91 Eq. 39-40]
+    scale = float(np.hypot(a, b) / spread) if with_scale else 1.0  # s = tr(DS) / σx²  [U91 Eq. 42]
+    c, s = np.cos(angle), np.sin(angle)
+    translation = mu_y - scale * np.array([[c, -s], [s, c]]) @ mu_x  # [U91 Eq. 41]
+    return Alignment(angle, translation, scale)

@@ -1,0 +1,199 @@
+"""Trajectory error as the field reports it: APE and RPE of planar poses, with their statistics.
+
+- **APE** (absolute pose error) compares each estimated pose with the true one at the same time, after
+  an optional alignment (:mod:`.align`): the translation error ‖p̂ᵢ - pᵢ‖ and the heading error
+  |wrap(θ̂ᵢ - θᵢ)|, the angle of the relative rotation Rᵢᵀ R̂ᵢ.
+- **RPE** (relative pose error) compares motions: for a pair (i, j), the true motion Qᵢ⁻¹Qⱼ against the
+  estimated one Pᵢ⁻¹Pⱼ, E = (Qᵢ⁻¹Qⱼ)⁻¹ (Pᵢ⁻¹Pⱼ). In SE(2), ‖t(E)‖ = ‖R(θ̂ᵢ)ᵀ(p̂ⱼ - p̂ᵢ) - R(θᵢ)ᵀ(pⱼ - pᵢ)‖
+  and the angle of E is |wrap((θ̂ⱼ - θ̂ᵢ) - (θⱼ - θᵢ))|. Pairs are Δ poses apart, or the first pose at
+  least Δ metres further along the path; consecutive (i₀ = 0, i₁ = i₀ + Δ, ...) or ``all_pairs``.
+
+These are the definitions of evo's ``metrics.APE`` and ``metrics.RPE`` (translation_part,
+rotation_angle_rad) restricted to the plane, with pairs chosen the way evo's ``filters`` choose them;
+``tests/test_evaluate.py`` checks the figures against evo's on the same TUM files to 1e-9. How the two
+relate: unaligned, they are the same definitions; evo aligns in SE(3) / Sim(3) (Umeyama in space), which on
+planar poses (z = 0, rotations about z) finds the rotation about z and the planar translation our SE(2) /
+Sim(2) alignment finds, so ``ape(align='se2')`` equals evo's APE after ``align`` and ``ape(align='sim2')``
+after ``align(correct_scale=True)``. RPE pairs are chosen on the truth here by default
+(evo's ``pairs_from_reference=True``); ``pairs_from='estimate'`` is evo's default. Evo's yaw-only planar
+alignment of 3-D trajectories (its issue 746) is what ``se2`` is for planar ones.
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import ShapeError, SteamError
+from ..pose2 import wrap_angle
+from .align import ALIGNMENTS, Alignment, align_planar
+
+__all__ = ["Statistics", "PoseError", "ape", "rpe", "rpe_pairs", "planar_poses"]
+
+
+def planar_poses(name: str, poses: object) -> NDArray:
+    """``poses`` as a finite float (n, 3) [x, y, θ] array, n ≥ 1; ShapeError / SteamError naming it."""
+    try:
+        out = np.asarray(poses, dtype=float)
+    except (TypeError, ValueError):
+        raise SteamError(f"{name} must be an (n, 3) array of poses [x, y, θ], got {poses!r:.80}") from None
+    if out.ndim != 2 or out.shape[1] != 3 or len(out) == 0:
+        raise ShapeError(f"{name} must be an (n, 3) array of poses [x, y, θ], n >= 1; got shape {out.shape}")
+    if not np.all(np.isfinite(out)):
+        row = int(np.flatnonzero(~np.isfinite(out).all(axis=1))[0])
+        raise SteamError(f"{name}[{row}] is not finite: {out[row].tolist()}")
+    return out
+
+
+@dataclass(frozen=True)
+class Statistics:
+    """RMSE, mean, median and max of a list of errors (and how many)."""
+
+    rmse: float
+    mean: float
+    median: float
+    max: float
+    n: int
+
+    @classmethod
+    def of(cls, errors: NDArray) -> Statistics:
+        e = np.asarray(errors, dtype=float)
+        if e.size == 0:
+            raise SteamError("no errors to summarise: the trajectory has no pose (or no pair) to compare")
+        return cls(float(np.sqrt(np.mean(e * e))), float(np.mean(e)), float(np.median(e)), float(np.max(e)), e.size)
+
+    def to_dict(self) -> dict:
+        return {"rmse": self.rmse, "mean": self.mean, "median": self.median, "max": self.max, "n": self.n}
+
+
+@dataclass(frozen=True)
+class PoseError:
+    """Translation [m] and heading [rad] errors of each pose (APE) or pair (RPE), and their statistics."""
+
+    translation: NDArray  # (n,) [m]
+    heading: NDArray  # (n,) [rad], in [0, π]
+    alignment: Alignment  # what was applied to the estimate first (identity for RPE or no alignment)
+
+    @property
+    def translation_stats(self) -> Statistics:
+        return Statistics.of(self.translation)
+
+    @property
+    def heading_stats(self) -> Statistics:
+        return Statistics.of(self.heading)
+
+    def to_dict(self) -> dict:
+        return {"translation_m": self.translation_stats.to_dict(), "heading_rad": self.heading_stats.to_dict()}
+
+
+def _same_shape(truth: object, estimate: object) -> tuple[NDArray, NDArray]:
+    truth, estimate = planar_poses("truth", truth), planar_poses("estimate", estimate)
+    if truth.shape != estimate.shape:
+        raise ShapeError(
+            f"truth and estimate must hold the same poses, got {len(truth)} and {len(estimate)}: "
+            "sample the estimate at the truth's times first (evaluate.states_at)"
+        )
+    return truth, estimate
+
+
+def ape(truth: object, estimate: object, *, align: str | None = None) -> PoseError:
+    """Absolute pose error of ``estimate`` against ``truth`` (both (n, 3) [x, y, θ] at the same times),
+    the estimate first aligned onto the truth by ``align``: None, 'se2' or 'sim2' (:func:`align_planar`)."""
+    truth, estimate = _same_shape(truth, estimate)
+    if align not in ALIGNMENTS:
+        raise SteamError(f"align must be one of {ALIGNMENTS}, got {align!r}")
+    transform = (
+        Alignment.identity()
+        if align is None
+        else align_planar(estimate[:, :2], truth[:, :2], with_scale=align == "sim2")
+    )
+    moved = transform.apply(estimate)
+    translation = np.hypot(*(moved[:, :2] - truth[:, :2]).T)
+    heading = np.abs(wrap_angle(moved[:, 2] - truth[:, 2]))
+    return PoseError(translation, heading, transform)
+
+
+def rpe_pairs(
+    poses: object, delta: float, *, unit: str = "poses", all_pairs: bool = False, relative_tolerance: float = 0.1
+) -> list[tuple[int, int]]:
+    """The index pairs (i, j) an RPE compares, chosen on ``poses`` (n, 3).
+
+    ``unit='poses'``: j = i + Δ, Δ a positive integer; i = 0, Δ, 2Δ, ... or, ``all_pairs``, every i.
+    ``unit='m'``: consecutive pairs end at the first pose at least Δ metres of path after the pair's
+    start; with ``all_pairs``, every i is paired with the later pose whose path distance from it is
+    nearest to Δ, taken when within ``relative_tolerance`` Δ of it (evo's ``rel_delta_tol``, 0.1).
+    """
+    poses = planar_poses("poses", poses)
+    n = len(poses)
+    if unit == "poses":
+        if isinstance(delta, bool) or not isinstance(delta, (int, np.integer)) or delta < 1:
+            raise SteamError(f"an RPE over poses needs delta, a positive integer, got {delta!r}")
+        starts = range(n) if all_pairs else range(0, n, int(delta))
+        pairs = [(i, i + int(delta)) for i in starts if i + int(delta) < n]
+        return pairs
+    if unit != "m":
+        raise SteamError(f"unit must be 'poses' or 'm', got {unit!r}")
+    if isinstance(delta, bool) or not isinstance(delta, (int, float, np.integer, np.floating)) or not delta > 0:
+        raise SteamError(f"an RPE over metres needs delta, a finite number > 0, got {delta!r}")
+    if not np.isfinite(delta):
+        raise SteamError(f"an RPE over metres needs delta, a finite number > 0, got {delta!r}")
+    step = np.hypot(*np.diff(poses[:, :2], axis=0).T)
+    if all_pairs:
+        path = np.concatenate([[0.0], np.cumsum(step)])
+        out = []
+        for i in range(n - 1):
+            ahead = path[i + 1 :] - path[i]
+            k = int(np.argmin(np.abs(ahead - delta)))
+            if abs(ahead[k] - delta) <= relative_tolerance * delta:
+                out.append((i, i + 1 + k))
+        return out
+    marks, travelled = [0], 0.0
+    for i in range(1, n):
+        travelled += float(step[i - 1])
+        if travelled >= delta:
+            marks.append(i)
+            travelled = 0.0
+    return list(itertools.pairwise(marks))
+
+
+def rpe(
+    truth: object,
+    estimate: object,
+    delta: float = 1,
+    *,
+    unit: str = "poses",
+    all_pairs: bool = False,
+    pairs_from: str = "truth",
+    relative_tolerance: float = 0.1,
+) -> PoseError:
+    """Relative pose error of ``estimate`` against ``truth`` (both (n, 3) at the same times) over pairs
+    ``delta`` apart (:func:`rpe_pairs`, chosen on the truth's path, or the estimate's with
+    ``pairs_from='estimate'``, evo's default)."""
+    truth, estimate = _same_shape(truth, estimate)
+    if pairs_from not in ("truth", "estimate"):
+        raise SteamError(f"pairs_from must be 'truth' or 'estimate', got {pairs_from!r}")
+    pairs = np.array(
+        rpe_pairs(
+            truth if pairs_from == "truth" else estimate,
+            delta,
+            unit=unit,
+            all_pairs=all_pairs,
+            relative_tolerance=relative_tolerance,
+        ),
+        dtype=int,
+    ).reshape(-1, 2)
+    i, j = pairs[:, 0], pairs[:, 1]
+
+    def motion(p: NDArray) -> tuple[NDArray, NDArray]:
+        """Pᵢ⁻¹Pⱼ: the step pⱼ - pᵢ seen from pose i, and the turn."""
+        c, s = np.cos(p[i, 2]), np.sin(p[i, 2])
+        d = p[j, :2] - p[i, :2]
+        return np.column_stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]]), p[j, 2] - p[i, 2]
+
+    (t_true, turn_true), (t_est, turn_est) = motion(truth), motion(estimate)
+    translation = np.hypot(*(t_est - t_true).T)  # ‖t(E)‖: R(-Δθ_true) is an isometry
+    heading = np.abs(wrap_angle(turn_est - turn_true))
+    return PoseError(translation, heading, Alignment.identity())

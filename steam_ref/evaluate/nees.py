@@ -1,0 +1,77 @@
+"""Consistency of an estimator: NEES of its states, ANEES over Monte Carlo runs, and the χ² band.
+
+For a state x of dimension d estimated as x̂ with covariance P, the normalised estimation error squared
+is ε = (x̂ - x)ᵀ P⁻¹ (x̂ - x) [BLK01 Sec. 5.4.2]. When the estimator is consistent (its errors are
+zero-mean Gaussian with the covariance it reports), ε is χ²-distributed with d degrees of freedom, so
+over N independent runs the average ε̄ = (1/N) Σ εₖ (ANEES) has N ε̄ ~ χ²(N d), and the two-sided 95 %
+acceptance band for ε̄ is [χ²⁻¹(0.025; N d) / N, χ²⁻¹(0.975; N d) / N] [BLK01 Sec. 5.4.2].
+Above the band the estimator is overconfident (covariances too small), below it underconfident.
+
+The error of a heading is wrapped to [-π, π): a state's estimate and the truth may differ by whole turns.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.stats import chi2
+
+from ..errors import NumericalError, ShapeError, SteamError
+from ..pose2 import wrap_angle
+
+__all__ = ["nees", "chi2_band", "pose_errors", "verdict"]
+
+
+def pose_errors(estimate: NDArray, truth: NDArray) -> NDArray:
+    """Errors (n, 3) of planar poses [x, y, θ]: the difference, its heading wrapped to [-π, π)."""
+    estimate, truth = np.asarray(estimate, dtype=float), np.asarray(truth, dtype=float)
+    if estimate.shape != truth.shape or estimate.ndim != 2 or estimate.shape[1] != 3:
+        raise ShapeError(f"pose errors need two (n, 3) arrays of one shape, got {estimate.shape} and {truth.shape}")
+    e = estimate - truth
+    e[:, 2] = wrap_angle(e[:, 2])
+    return e
+
+
+def nees(errors: NDArray, covariances: NDArray) -> NDArray:
+    """ε = eᵀ P⁻¹ e of each error (n, d) with its covariance (n, d, d).  [BLK01 Sec. 5.4.2]
+
+    Computed through a Cholesky factor of each P; a P that is not positive definite is a
+    :class:`~steam_ref.errors.NumericalError` naming its row.
+    """
+    e, P = np.asarray(errors, dtype=float), np.asarray(covariances, dtype=float)
+    if e.ndim != 2 or P.shape != (*e.shape, e.shape[1]):
+        raise ShapeError(f"nees needs errors (n, d) and covariances (n, d, d), got {e.shape} and {P.shape}")
+    if not (np.all(np.isfinite(e)) and np.all(np.isfinite(P))):
+        raise NumericalError("nees: an error or a covariance is not finite")
+    out = np.empty(len(e))
+    for k in range(len(e)):
+        try:
+            lower = np.linalg.cholesky(P[k])
+        except np.linalg.LinAlgError:
+            raise NumericalError(f"nees: covariance {k} is not positive definite: {P[k].tolist()}") from None
+        w = np.linalg.solve(lower, e[k])  # L⁻¹ e, so that ε = ‖L⁻¹ e‖²
+        out[k] = float(w @ w)
+    return out
+
+
+def chi2_band(n_runs: int, dim: int, level: float = 0.95) -> tuple[float, float]:
+    """The two-sided ``level`` band of the ANEES of ``n_runs`` runs of a ``dim``-dimensional state:
+    χ²⁻¹((1 ∓ level)/2; N d) / N.  [BLK01 Sec. 5.4.2]"""
+    for name, value in (("n_runs", n_runs), ("dim", dim)):
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+            raise SteamError(f"{name} must be a positive integer, got {value!r}")
+    if isinstance(level, bool) or not isinstance(level, (int, float)) or not 0 < level < 1:
+        raise SteamError(f"level must be a number in (0, 1), got {level!r}")
+    dof = n_runs * dim
+    tail = (1 - level) / 2
+    return float(chi2.ppf(tail, dof) / n_runs), float(chi2.ppf(1 - tail, dof) / n_runs)
+
+
+def verdict(anees: float, band: tuple[float, float]) -> str:
+    """'consistent' inside the band, else 'not consistent (overconfident)' / '(underconfident)'."""
+    lo, hi = band
+    if anees > hi:
+        return "not consistent (overconfident)"
+    if anees < lo:
+        return "not consistent (underconfident)"
+    return "consistent"

@@ -1,0 +1,47 @@
+"""A continuous-time estimate evaluated where the truth is, and the figures a run's JSON line reports.
+
+The estimate is a function of time (:class:`~steam_ref.trajectory.Trajectory`): at a time between two
+states it is the GP interpolation x̄(t) = Λ(t) x̄ᵢ + Ψ(t) x̄ⱼ [YIB Eq. 18] (Λ, Ψ from Φ and Q
+[YIB Eq. 16-17]), so it can be compared with ground truth at the truth's own time stamps, with no
+nearest-time matching (:func:`states_at`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import SteamError
+from ..trajectory import Trajectory
+from .metrics import ape, planar_poses, rpe
+
+__all__ = ["states_at", "trajectory_figures"]
+
+
+def states_at(trajectory: Trajectory, times: object, *, covariance: bool = False) -> NDArray | tuple[NDArray, NDArray]:
+    """The estimated state (n, d) at each of ``times`` (n,) [YIB Eq. 18], with its covariance (n, d, d)
+    when asked (the interpolated covariance between states)."""
+    if not isinstance(trajectory, Trajectory):
+        raise SteamError(f"expected a steam_ref.trajectory.Trajectory, got {type(trajectory).__name__}")
+    t = np.asarray(times, dtype=float).ravel()
+    if not covariance:
+        return np.array([trajectory.at(float(ti)) for ti in t]).reshape(len(t), trajectory.n)
+    pairs = [trajectory.at(float(ti), covariance=True) for ti in t]
+    means = np.array([m for m, _ in pairs]).reshape(len(t), trajectory.n)
+    covs = np.array([c for _, c in pairs]).reshape(len(t), trajectory.n, trajectory.n)
+    return means, covs
+
+
+def trajectory_figures(truth: object, estimate: object, *, rpe_delta: int = 1) -> dict:
+    """APE unaligned, SE(2)- and Sim(2)-aligned, and RPE over ``rpe_delta`` poses, of planar poses (n, 3)
+    at the same times: {'ape': {...}, 'ape_se2': {...}, 'ape_sim2': {...}, 'rpe': {...}}, each with
+    translation [m] and heading [rad] statistics (:class:`~steam_ref.evaluate.metrics.Statistics`)."""
+    truth, estimate = planar_poses("truth", truth), planar_poses("estimate", estimate)
+    out: dict = {"ape": ape(truth, estimate).to_dict()}
+    if len(truth) >= 2:
+        for align in ("se2", "sim2"):
+            err = ape(truth, estimate, align=align)
+            out[f"ape_{align}"] = err.to_dict() | {"alignment": err.alignment.to_dict()}
+    if len(truth) > rpe_delta:
+        out["rpe"] = rpe(truth, estimate, rpe_delta).to_dict() | {"delta_poses": rpe_delta}
+    return out

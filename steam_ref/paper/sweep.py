@@ -1,0 +1,165 @@
+"""Independent runs (seeds, Qc, skip, every) in parallel, on this machine or a Dask cluster, resumable.
+
+:func:`run_sweep` calls ``function(item)`` for every item (a JSON value: an index, a dict of
+parameters) through joblib: loky worker processes by default, or joblib's ``dask`` backend on a
+``dask.distributed`` cluster (``scheduler`` its address; without one, a ``LocalCluster`` on 127.0.0.1 with
+``jobs`` single-threaded workers). The code a run executes is the same either way, so are its results.
+
+- **Threads**: each call runs under ``threadpoolctl.threadpool_limits(1)`` — one BLAS thread per worker,
+  so ``jobs`` workers use ``jobs`` cores and never oversubscribe them.
+- **Seeds**: a study spawns them, ``np.random.SeedSequence(seed).spawn(n)``; item i uses child i
+  (``SeedSequence(seed, spawn_key=(i,))`` is the same child), so a run's draws depend on its index only,
+  never on which worker ran it or in what order.
+- **Streaming and resuming**: each result is appended to a JSONL file as it arrives (one line
+  ``{"item": ..., "result": ...}``, flushed) after a first line ``{"study": ...}`` describing the study.
+  ``resume=True`` reads the file back, checks it was written by the same study, and runs only the items
+  it lacks; a last line cut short by an interruption is ignored (and left in the file, followed by a line
+  break), any other unreadable line is an error naming it.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import Callable, Iterable
+from pathlib import Path
+from typing import Any
+
+from ..errors import DataError, SteamError
+
+__all__ = ["BACKENDS", "run_sweep", "read_results"]
+
+BACKENDS = ("loky", "dask")
+
+
+def _limited(function: Callable[[Any], Any], item: Any) -> tuple[Any, Any]:
+    """``function(item)`` with one BLAS/OpenMP thread; returns (item, result)."""
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(limits=1):
+        return item, function(item)
+
+
+def _key(item: Any) -> str:
+    return json.dumps(item, sort_keys=True)
+
+
+def read_results(path: str | os.PathLike, study: dict) -> dict[str, Any]:
+    """The results a JSONL file holds, by item (its JSON text): DataError when the file was written by
+    another study or has an unreadable line other than a last one cut short."""
+    lines = Path(path).read_text().split("\n")
+    if not lines or not lines[0].strip():
+        raise DataError(f"{path}: empty, no study line; remove it or give another file")
+    try:
+        head = json.loads(lines[0])
+    except json.JSONDecodeError:
+        raise DataError(f"{path}, line 1: not a study line") from None
+    if not isinstance(head, dict) or head.get("study") != json.loads(json.dumps(study)):
+        raise DataError(
+            f"{path} was written by another study ({json.dumps(head.get('study') if isinstance(head, dict) else head)[:200]}); "
+            f"this one is {json.dumps(study)[:200]}: give another file"
+        )
+    done: dict[str, Any] = {}
+    last = len(lines) - 1  # the text after the final line break ('' when the file ends with one)
+    for number, line in enumerate(lines[1:], start=2):
+        if not line.strip():
+            continue
+        try:
+            row = json.loads(line)
+            done[_key(row["item"])] = row["result"]
+        except (json.JSONDecodeError, KeyError, TypeError):
+            if number - 1 == last:  # cut short while being written: that item runs again
+                continue
+            raise DataError(f"{path}, line {number}: not a result line ({line[:80]!r})") from None
+    return done
+
+
+def _open_log(path: Path, study: dict, resume: bool) -> tuple[dict[str, Any], Any]:
+    """(results already there, the file opened for appending)."""
+    if path.exists() and path.stat().st_size > 0:
+        if not resume:
+            raise SteamError(f"{path} exists: pass resume to continue it, or give a new file (nothing is overwritten)")
+        done = read_results(path, study)
+        log = open(path, "a")  # noqa: SIM115 - closed by run_sweep
+        if not path.read_text().endswith("\n"):
+            log.write("\n")  # a line cut short stays alone on its line
+        return done, log
+    log = open(path, "w")  # noqa: SIM115 - closed by run_sweep
+    log.write(json.dumps({"study": study}) + "\n")
+    log.flush()
+    return {}, log
+
+
+def run_sweep(
+    function: Callable[[Any], Any],
+    items: Iterable[Any],
+    *,
+    jobs: int = 1,
+    backend: str = "loky",
+    scheduler: str | None = None,
+    log: str | os.PathLike | None = None,
+    study: dict | None = None,
+    resume: bool = False,
+    on_result: Callable[[Any, Any], None] | None = None,
+) -> dict[str, Any]:
+    """``function(item)`` for every item, in parallel; returns {item's JSON text: result}.
+
+    ``function`` must be picklable (a module-level function, or a ``functools.partial`` of one) and return
+    JSON values. ``log``: the JSONL file results stream to (``study`` its first line); ``resume``: continue
+    it, running only the items it lacks. ``on_result(item, result)`` is called as each result arrives.
+    """
+    import joblib
+
+    if backend not in BACKENDS:
+        raise SteamError(f"backend must be one of {', '.join(BACKENDS)}, got {backend!r}")
+    if isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1:
+        raise SteamError(f"jobs must be a positive integer, got {jobs!r}")
+    if scheduler is not None and backend != "dask":
+        raise SteamError("a scheduler address needs the dask backend (--backend dask)")
+    items = list(items)
+    done: dict[str, Any] = {}
+    stream = None
+    if log is not None:
+        done, stream = _open_log(Path(log), study or {}, resume)
+    todo = [item for item in items if _key(item) not in done]
+    results = {k: v for k, v in done.items() if k in {_key(i) for i in items}}
+    cluster = client = None
+    try:
+        if backend == "dask" and todo:
+            client, cluster = _dask_client(scheduler, jobs)
+        config = joblib.parallel_config(backend="dask") if backend == "dask" else joblib.parallel_config("loky")
+        with config:
+            run = joblib.Parallel(n_jobs=jobs if backend == "loky" else -1, return_as="generator_unordered")
+            for item, result in run(joblib.delayed(_limited)(function, item) for item in todo):
+                results[_key(item)] = result
+                if stream is not None:
+                    stream.write(json.dumps({"item": item, "result": result}) + "\n")
+                    stream.flush()
+                if on_result is not None:
+                    on_result(item, result)
+    finally:
+        if stream is not None:
+            stream.close()
+        if client is not None:
+            client.close()
+        if cluster is not None:
+            cluster.close()
+    return results
+
+
+def _dask_client(scheduler: str | None, jobs: int):
+    """(client, cluster): a client of the scheduler at ``scheduler``, or of a new LocalCluster on
+    127.0.0.1 with ``jobs`` single-threaded worker processes (cluster None when given an address)."""
+    try:
+        from dask.distributed import Client, LocalCluster
+    except ImportError:
+        raise SteamError("--backend dask needs dask.distributed: pip install 'steam_ref[dask]'") from None
+    if scheduler is not None:
+        try:
+            return Client(scheduler, timeout=10), None
+        except (OSError, TimeoutError) as err:
+            raise SteamError(f"cannot reach the Dask scheduler at {scheduler!r} ({err})") from None
+    cluster = LocalCluster(
+        n_workers=jobs, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None
+    )
+    return Client(cluster), cluster

@@ -1,0 +1,161 @@
+"""Consistency: the model's tasks (sample_from_model) against the model itself, NEES against its dense
+definition and χ² tables, the Monte Carlo study (verdicts, seeds by index), and the sweep: loky and a Dask
+LocalCluster give the local figures seed for seed; a JSONL log resumes, skipping finished items."""
+
+import functools
+import json
+
+import numpy as np
+import pytest
+from requirements import optional_import
+
+from steam_ref.cli.commands import main
+from steam_ref.datasets import sample_from_model
+from steam_ref.errors import DataError, NumericalError, SteamError
+from steam_ref.evaluate import chi2_band, nees
+from steam_ref.gp.prior import process_noise, transition
+from steam_ref.paper.consistency import ConsistencyStudy, consistency_setup, run_seed, summarize
+from steam_ref.paper.sweep import run_sweep
+
+TINY = ConsistencyStudy(n_steps=12, n_landmarks=3, estimators=("btgp/1", "btgp/1 Qc x100"))
+
+
+def test_tasks_are_drawn_from_the_estimators_model():
+    """Whitened GP increments, odometry and survey residuals of a long task are N(0, I) (5-sigma bounds)."""
+    s = consistency_setup()
+    kw = dict(
+        qc=s.qc,
+        velocity_sigmas=s.velocity_sigmas,
+        range_sigma=s.range_sigma,
+        landmark_sigma=s.landmark_prior_sigma,
+        first_pose_sigmas=s.first_pose_sigmas,
+        first_velocity=s.first_velocity,
+        first_velocity_sigmas=s.first_velocity_sigmas,
+    )
+    task = sample_from_model(3000, 400, 7, **kw)
+    x = task.states
+    w = np.linalg.solve(np.linalg.cholesky(process_noise(1.0, s.qc)), (x[1:] - x[:-1] @ transition(1.0, 3).T).T).T
+    th, xd, yd, thd = x[1:, 2], x[1:, 3], x[1:, 4], x[1:, 5]
+    h = np.column_stack([np.cos(th) * xd + np.sin(th) * yd, -np.sin(th) * xd + np.cos(th) * yd, thd])
+    v = (task.data.odometry[:, 1:4] - h) / s.velocity_sigmas
+    ids = task.data.landmarks[:, 0].astype(int)
+    survey = (task.data.landmarks[:, 1:3] - np.array([task.landmarks[i] for i in ids])) / s.landmark_prior_sigma
+    pose = task.data.ranges[:, 0].astype(int)
+    marks = np.array([task.landmarks[int(i)] for i in task.data.ranges[:, 1]])
+    r = (task.data.ranges[:, 2] - np.hypot(*(x[pose, :2] - marks).T)) / s.range_sigma
+    for name, z in (("increments", w), ("odometry", v), ("survey", survey), ("ranges", r[:, None])):
+        n = len(z)
+        assert np.all(np.abs(z.mean(axis=0)) < 5 / np.sqrt(n)), name
+        np.testing.assert_allclose(z.var(axis=0), 1.0, atol=5 * np.sqrt(2 / n), err_msg=name)
+    assert task.data.ground_truth is None  # the estimator never sees the truth
+    assert np.all(task.data.start_pose == 0)  # the prior on pose 0 is centred where the front end starts
+
+
+def test_a_task_is_child_i_of_the_spawned_seeds():
+    study = ConsistencyStudy(n_steps=10, n_landmarks=2, seed=5)
+    child = np.random.SeedSequence(5).spawn(4)[3]
+    s = study.setup
+    direct = sample_from_model(
+        10,
+        2,
+        child,
+        qc=s.qc,
+        velocity_sigmas=s.velocity_sigmas,
+        range_sigma=s.range_sigma,
+        landmark_sigma=s.landmark_prior_sigma,
+        first_pose_sigmas=s.first_pose_sigmas,
+        first_velocity=s.first_velocity,
+        first_velocity_sigmas=s.first_velocity_sigmas,
+    )
+    np.testing.assert_array_equal(study.sample(3).states, direct.states)
+    assert not np.array_equal(study.sample(2).states, direct.states)
+
+
+def test_nees_is_the_dense_quadratic_form(rng):
+    a = rng.normal(size=(5, 3, 3))
+    P = a @ np.transpose(a, (0, 2, 1)) + 0.1 * np.eye(3)
+    e = rng.normal(size=(5, 3))
+    expected = [e[k] @ np.linalg.inv(P[k]) @ e[k] for k in range(5)]
+    np.testing.assert_allclose(nees(e, P), expected, rtol=1e-12)
+    with pytest.raises(NumericalError, match="covariance 1 is not positive definite"):
+        nees(e[:2], np.stack([np.eye(3), -np.eye(3)]))
+
+
+def test_chi2_band_equals_the_tables():
+    """χ² quantiles from the tables (Abramowitz and Stegun 26.4): χ²₁ 0.025 / 0.975 and χ²₃₀ 0.025 / 0.975."""
+    lo, hi = chi2_band(1, 1)
+    assert lo == pytest.approx(0.000982069, rel=1e-5) and hi == pytest.approx(5.02389, rel=1e-5)
+    lo, hi = chi2_band(10, 3)  # N d = 30
+    assert lo == pytest.approx(16.7908 / 10, rel=1e-5) and hi == pytest.approx(46.9792 / 10, rel=1e-5)
+    with pytest.raises(SteamError, match="n_runs must be a positive integer, got 0"):
+        chi2_band(0, 3)
+
+
+def test_the_right_prior_is_consistent_and_a_qc_100_times_too_large_is_flagged():
+    results = {i: run_seed(TINY, i) for i in range(16)}
+    summary = summarize(results, TINY.estimators)["estimators"]
+    assert summary["btgp/1"]["consistent"], summary["btgp/1"]
+    wrong = summary["btgp/1 Qc x100"]
+    assert not wrong["consistent"]
+    assert wrong["pose"]["verdict"] == "not consistent (underconfident)"  # covariances far too large
+
+
+def test_a_study_refuses_an_unknown_estimator():
+    with pytest.raises(SteamError, match="unknown estimator 'ekf'"):
+        ConsistencyStudy(estimators=("ekf",))
+
+
+# -- the sweep --
+
+
+def _sweep(jobs, backend="loky", **kw):
+    return run_sweep(functools.partial(run_seed, TINY), range(4), jobs=jobs, backend=backend, **kw)
+
+
+@pytest.fixture(scope="module")
+def serial():
+    return _sweep(1)
+
+
+def test_loky_workers_give_the_serial_figures_seed_for_seed(serial):
+    assert _sweep(2) == serial
+
+
+def test_a_dask_local_cluster_gives_the_serial_figures_seed_for_seed(serial):
+    optional_import("dask.distributed", "dask")
+    assert _sweep(2, backend="dask") == serial
+
+
+def test_a_log_resumes_skipping_finished_items(tmp_path, serial):
+    log, study = tmp_path / "runs.jsonl", TINY.describe()
+    run_sweep(functools.partial(run_seed, TINY), range(2), log=log, study=study)
+    with open(log, "a") as f:
+        f.write('{"item": 3, "resu')  # a line cut short by an interruption
+    ran = []
+    out = _sweep(1, log=log, study=study, resume=True, on_result=lambda item, _: ran.append(item))
+    assert sorted(ran) == [2, 3] and out == serial
+    lines = log.read_text().splitlines()
+    assert json.loads(lines[0]) == {"study": study} and lines[3] == '{"item": 3, "resu'
+    with pytest.raises(SteamError, match="exists: pass resume"):
+        _sweep(1, log=log, study=study)
+    with pytest.raises(DataError, match="written by another study"):
+        _sweep(1, log=log, study=study | {"seed": 1}, resume=True)
+    (tmp_path / "broken.jsonl").write_text(json.dumps({"study": study}) + "\nnot json\n{}\n")
+    with pytest.raises(DataError, match="line 2: not a result line"):
+        _sweep(1, log=tmp_path / "broken.jsonl", study=study, resume=True)
+
+
+def test_the_consistency_command(tmp_path, capsys):
+    args = ["consistency", "--seeds", "2", "--steps", "8", "--landmarks", "2", "--json"]
+    assert main([*args, "--plot", str(tmp_path / "a.png")]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["n_seeds"] == 2 and set(out["estimators"]) >= {"batch", "btgp/1", "btgp/10", "btgp/1 Qc x100"}
+    assert (tmp_path / "a.png").stat().st_size > 0
+    for bad, message in (
+        (["--scheduler", "tcp://127.0.0.1:1"], "needs the dask backend"),
+        (["--seeds", "0"], "--seeds"),
+        (["--log", str(tmp_path / "a.txt")], "expects a .jsonl file"),
+    ):
+        assert main([*args, *bad]) == 2
+        err = capsys.readouterr().err
+        assert message in err and len(err.strip().splitlines()) == 1
