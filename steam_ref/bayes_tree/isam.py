@@ -32,6 +32,7 @@ from ..factors import Factor, check_factors
 from ..linear.ordering import constrained_min_degree
 from ..linear.system import GaussianFactor, linearize
 from ..variables import Key, Values, check_key
+from .backsolve import BatchedBacksubstitution
 from .journal import Journal, PhaseTimer
 from .params import ISAM2Params
 from .tree import BayesTree, Clique, eliminate
@@ -76,11 +77,12 @@ class IncrementalSolver:
         self._linear: list[GaussianFactor | None] = []  # cached linearization of each factor at θ̄
         self._theta_bar = Values()  # linearization point θ̄
         self._dims: dict[Key, int] = {}  # size of each variable
-        self._threshold: dict[Key, float] = {}  # relinearization threshold of each variable (by kind)
+        self._beta: dict[Key, float] = {}  # β: relinearization threshold of each variable (by kind) [K12 Alg. 5]
         self._delta: dict[Key, NDArray] = {}  # current increment δ, relative to θ̄ (never written in place)
         self._estimate: dict[Key, NDArray] = {}  # θ̄ + δ, read-only arrays, refreshed for ``_stale`` keys
         self._stale: dict[Key, None] = {}  # variables whose δ or θ̄ moved since their estimate was formed
-        self._over: dict[Key, None] = {}  # variables whose latest δ has max |δ| ≥ their threshold
+        self._over: dict[Key, None] = {}  # variables whose latest δ has max |δ| ≥ their β
+        self._batched = BatchedBacksubstitution()  # [K12 Alg. 7] in stacked calls (params.backsubstitution)
         self._steps = 0
 
     # --- queries ----------------------------------------------------------------------------
@@ -209,6 +211,7 @@ class IncrementalSolver:
             new_cids = self._insert(cliques, parents, orphans, owner[len(fids) :], journal)
         # 5. Partial back-substitution from the root, stopping below α.  [K12 Alg. 7; YIB step 6]
         with timer("backsubstitute"):
+            self._batched.forget(removed)
             updated, visited = self._backsubstitute(set(new_cids))
         return UpdateReport(
             self._steps,
@@ -236,7 +239,7 @@ class IncrementalSolver:
             self._stale[k] = None
             self._over[k] = None
         for k in journal.new_keys:
-            for store in (self._theta_bar._data, self._dims, self._threshold, self._delta, self._estimate, self._stale):
+            for store in (self._theta_bar._data, self._dims, self._beta, self._delta, self._estimate, self._stale):
                 store.pop(k, None)
         del self.factors[journal.n_factors :], self._linear[journal.n_factors :]
         self._steps -= 1
@@ -282,7 +285,7 @@ class IncrementalSolver:
         for k, x in new_values.items():
             self._theta_bar.insert(k, x)
             self._dims[k] = x.shape[0]
-            self._threshold[k] = self.params.threshold_for(k.kind)
+            self._beta[k] = self.params.threshold_for(k.kind)
             self._delta[k] = np.zeros_like(x)
             self._stale[k] = None
         return list(range(first, len(self.factors)))
@@ -297,7 +300,7 @@ class IncrementalSolver:
         """
         theta_rl = list(self._over)
         moves = {
-            k: self.params.blocks_to_move(k.kind, self._delta[k], self._threshold[k]) for k in theta_rl
+            k: self.params.blocks_to_move(k.kind, self._delta[k], self._beta[k]) for k in theta_rl
         }  # (d,) bool
         self._over.clear()
         for k, move in moves.items():
@@ -357,15 +360,24 @@ class IncrementalSolver:
         return new_cids
 
     def _backsubstitute(self, new_cliques: set[int]) -> tuple[list[Key], int]:
+        """Partial back-substitution [K12 Alg. 7], as ``params.backsubstitution`` says: "batched" (the
+        same descent a tree level at a time, :mod:`.backsolve`) or "loop" (:meth:`_backsubstitute_loop`)."""
+        alpha = self.params.wildfire_threshold
+        if self.params.backsubstitution == "loop":
+            return self._backsubstitute_loop(new_cliques, alpha)
+        return self._batched(self.tree, new_cliques, self._delta, alpha, self._beta, self._stale, self._over)
+
+    def _backsubstitute_loop(self, new_cliques: set[int], alpha: float) -> tuple[list[Key], int]:
         """δ_F = R⁻¹(d - S δ_S) from the roots of the new part down, while it changes.  [K12 Alg. 7]
 
         A re-made clique is always solved; an old one only when a variable of its separator changed
-        by at least the wildfire threshold (with threshold 0, always: full back-substitution).
+        by at least the wildfire threshold α (with α = 0, always: full back-substitution).
         Changes are judged per variable: a root clique holding the newest state and the landmarks
-        must not mark the landmarks changed because the newest state moved.
+        must not mark the landmarks changed because the newest state moved. A variable whose new δ
+        has max |δ| ≥ its relinearization threshold β is a candidate for the next relinearization.
         """
-        tree, delta, threshold = self.tree, self._delta, self.params.wildfire_threshold
-        stale, over, limit = self._stale, self._over, self._threshold
+        tree, delta, beta = self.tree, self._delta, self._beta
+        stale, over = self._stale, self._over
         changed: set[Key] = set()
         updated: list[Key] = []
         stack = [c for c in new_cliques if tree.parent[c] is None]
@@ -378,11 +390,11 @@ class IncrementalSolver:
             x = clique.solve(sep)  # [YIB Eq. 25]
             frontals = clique.frontals
             for k, xk in zip(frontals, (x,) if len(frontals) == 1 else clique.split_frontals(x), strict=True):
-                if threshold == 0 or abs(xk - delta[k]).max() >= threshold:
+                if alpha == 0 or abs(xk - delta[k]).max() >= alpha:
                     changed.add(k)
                 delta[k] = xk
                 stale[k] = None
-                if abs(xk).max() >= limit[k]:  # a candidate for the next relinearization [K12 Alg. 5]
+                if abs(xk).max() >= beta[k]:  # a candidate for the next relinearization [K12 Alg. 5]
                     over[k] = None
                 elif k in over:
                     del over[k]
