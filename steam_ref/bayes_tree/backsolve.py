@@ -26,7 +26,7 @@ from __future__ import annotations
 
 from collections.abc import Collection
 from itertools import compress
-from typing import NamedTuple
+from typing import NamedTuple, cast
 
 import numpy as np
 from numpy.typing import NDArray
@@ -71,7 +71,7 @@ class BatchedBacksubstitution:
 
     def _positions(self, keys: tuple[Key, ...], dims: tuple[int, ...]) -> list[int]:
         """Workspace positions of the entries of ``keys``, giving a variable room on first sight."""
-        out = []
+        out: list[int] = []
         for k, d in zip(keys, dims, strict=True):
             a = self._start.get(k)
             if a is None:
@@ -165,9 +165,9 @@ class BatchedBacksubstitution:
     def _per_variable(flags: NDArray, dims: list[int]) -> list[bool]:
         """Any of each variable's entries set (entries stacked variable after variable)."""
         if len(set(dims)) == 1:
-            return flags.reshape(len(dims), dims[0]).any(axis=1).tolist()
+            return cast(list[bool], flags.reshape(len(dims), dims[0]).any(axis=1).tolist())
         starts = np.cumsum(dims) - np.asarray(dims)
-        return np.logical_or.reduceat(flags, starts).tolist()
+        return cast(list[bool], np.logical_or.reduceat(flags, starts).tolist())
 
     def _relinearization_candidates(
         self, updated: list[Key], delta: dict[Key, NDArray], beta: dict[Key, float], over: dict[Key, None]

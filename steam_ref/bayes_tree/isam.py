@@ -82,8 +82,7 @@ class IncrementalSolver:
         self._estimate: dict[Key, NDArray] = {}  # θ̄ + δ, read-only arrays, refreshed for ``_stale`` keys
         self._stale: dict[Key, None] = {}  # variables whose δ or θ̄ moved since their estimate was formed
         self._over: dict[Key, None] = {}  # variables whose latest δ has max |δ| ≥ their β
-        self._batched = BatchedBacksubstitution()  # [K12 Alg. 7] in stacked calls (params.backsubstitution)
-        self._steps = 0
+        self._batched, self._steps = BatchedBacksubstitution(), 0  # [K12 Alg. 7] in stacked calls; updates so far
 
     # --- queries ----------------------------------------------------------------------------
 
@@ -299,9 +298,7 @@ class IncrementalSolver:
         ([YIB Alg. 1 step 7]: collect them into θ_rl).
         """
         theta_rl = list(self._over)
-        moves = {
-            k: self.params.blocks_to_move(k.kind, self._delta[k], self._beta[k]) for k in theta_rl
-        }  # (d,) bool
+        moves = {k: self.params.blocks_to_move(k.kind, self._delta[k], self._beta[k]) for k in theta_rl}  # (d,) bool
         self._over.clear()
         for k, move in moves.items():
             theta_bar, delta = self._theta_bar[k], self._delta[k]
@@ -360,8 +357,7 @@ class IncrementalSolver:
         return new_cids
 
     def _backsubstitute(self, new_cliques: set[int]) -> tuple[list[Key], int]:
-        """Partial back-substitution [K12 Alg. 7], as ``params.backsubstitution`` says: "batched" (the
-        same descent a tree level at a time, :mod:`.backsolve`) or "loop" (:meth:`_backsubstitute_loop`)."""
+        """[K12 Alg. 7] "batched" (a tree level at a time, :mod:`.backsolve`) or "loop" (below)."""
         alpha = self.params.wildfire_threshold
         if self.params.backsubstitution == "loop":
             return self._backsubstitute_loop(new_cliques, alpha)
@@ -376,8 +372,7 @@ class IncrementalSolver:
         must not mark the landmarks changed because the newest state moved. A variable whose new δ
         has max |δ| ≥ its relinearization threshold β is a candidate for the next relinearization.
         """
-        tree, delta, beta = self.tree, self._delta, self._beta
-        stale, over = self._stale, self._over
+        tree, delta, beta, stale, over = self.tree, self._delta, self._beta, self._stale, self._over
         changed: set[Key] = set()
         updated: list[Key] = []
         stack = [c for c in new_cliques if tree.parent[c] is None]
