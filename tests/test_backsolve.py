@@ -50,9 +50,9 @@ def test_batched_matches_the_loop_after_every_update(
 ):
     stream = Stream(np.random.default_rng(seed), n_states=20, n_landmarks=n_landmarks)
     params = sr.ISAM2Params(relinearize_threshold, relinearize_skip, wildfire_threshold)
-    loop = IncrementalSolver(params, backsubstitution="loop")
-    batched = IncrementalSolver(params)
-    assert batched.params.backsubstitution == "batched"  # the default
+    loop = IncrementalSolver(params)
+    assert loop.params.backsubstitution == "loop"  # the default
+    batched = IncrementalSolver(params, backsubstitution="batched")
     for action in ["state"] + actions:
         factors, values = stream.step(action)
         assert_same(loop, batched, loop.update(factors, values), batched.update(factors, values))

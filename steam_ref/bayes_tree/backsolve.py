@@ -18,8 +18,17 @@ the wildfire test |δ_new - δ_old| ≥ α is one stacked comparison per level, 
 the relinearization test max |δ| ≥ β one per call. Only the choice of children to enter stays a
 set test per child in Python, as in the loop (cheaper than any NumPy call at these sizes).
 
+A level narrower than ``STACK_FROM`` is solved a clique at a time from the same solved form
+(δ_F = [g | -G] [1; δ_S], two calls), where stacking would cost more calls than it saves.
+
 The visited cliques, the variables marked and the candidates for relinearization are those of
-the loop; δ agrees with it to rounding (R⁻¹d - (R⁻¹S)δ_S against R⁻¹(d - Sδ_S)).
+the loop, in the loop's order; δ agrees with it to rounding (R⁻¹d - (R⁻¹S)δ_S against R⁻¹(d - Sδ_S)).
+
+What it is worth: a level can only be solved once the one above it is, and the paper's trees are
+narrow: on Plaza an update descends ~57 levels of ~6 cliques (~390 cliques), on paper-synthetic
+~63 cliques. Each level still costs a dozen NumPy calls plus the Python that gathers it, so on
+those runs this is no faster than the loop (0.75-1.0x, docs/experiments.md) and the loop stays the
+default. It pays where levels are wide (bushy trees, many landmarks at the top).
 """
 
 from __future__ import annotations
@@ -39,6 +48,7 @@ from .tree import BayesTree, Clique
 __all__ = ["BatchedBacksubstitution"]
 
 _INT = np.intp
+STACK_FROM = 4  # a level of this many cliques or more is solved in stacked calls, a narrower one clique by clique
 
 
 class _Solved(NamedTuple):
@@ -49,6 +59,9 @@ class _Solved(NamedTuple):
     columns: NDArray  # (n_f * (1 + n_s),) workspace position each entry multiplies (0: the constant 1)
     row_lengths: NDArray  # (n_f,) 1 + n_s for every row
     rows: NDArray  # (n_f,) workspace positions of the frontal entries
+    matrix: NDArray  # (n_f, 1 + n_s) the same data as a matrix [g | -G], for a clique solved alone
+    inputs: NDArray  # (1 + n_s,) the workspace positions it multiplies
+    single: bool  # one frontal variable
 
 
 class BatchedBacksubstitution:
@@ -63,6 +76,7 @@ class BatchedBacksubstitution:
         self._size = 1  # workspace entries in use; entry 0 is the constant 1
         self._work = np.ones(64)  # the new δ of the variables solved in the current call, by position
         self._solved: dict[int, _Solved] = {}  # clique id → its solved form
+        self._lengths: dict[tuple[int, int], NDArray] = {}  # (n_f, n_s) → row lengths, shared
 
     def forget(self, clique_ids: Collection[int]) -> None:
         """Drop the solved forms of cliques that left the tree."""
@@ -82,20 +96,27 @@ class BatchedBacksubstitution:
             out.extend(range(a, a + d))
         return out
 
-    def _solved_form(self, cid: int, clique: Clique) -> _Solved:
-        """[g | -G] with g = R⁻¹d, G = R⁻¹S, and the clique's workspace positions (once per clique).  [YIB Eq. 25]"""
+    def _solved_form(self, cid: int, clique: Clique, solved: NDArray | None = None) -> _Solved:
+        """[g | -G] with g = R⁻¹d, G = R⁻¹S (``solved`` when already computed), and the clique's workspace
+        positions (once per clique).  [YIB Eq. 25]"""
         nf, ns = clique.R.shape[0], clique.S.shape[1]
-        Gg, info = lapack.dtrtrs(clique.R, np.column_stack([clique.d, -clique.S]))
-        if info != 0:
-            raise SteamError(f"singular conditional in the clique of {clique.frontals}")
-        rows = self._positions(clique.frontals, clique.frontal_dims)
-        columns = [0, *self._positions(clique.separator, clique.separator_dims)]
+        if solved is None:
+            solved, info = lapack.dtrtrs(clique.R, np.column_stack([clique.d, -clique.S]))
+            if info != 0:
+                raise SteamError(f"singular conditional in the clique of {clique.frontals}")
+        inputs = np.asarray([0, *self._positions(clique.separator, clique.separator_dims)], dtype=np.intp)
+        lengths = self._lengths.get((nf, ns))
+        if lengths is None:
+            lengths = self._lengths[nf, ns] = np.full(nf, ns + 1, dtype=np.intp)
         entry = _Solved(
             clique,
-            np.ascontiguousarray(Gg).ravel(),
-            np.tile(np.asarray(columns, dtype=np.intp), nf),
-            np.full(nf, ns + 1, dtype=np.intp),
-            np.asarray(rows, dtype=np.intp),
+            solved.ravel(),
+            np.broadcast_to(inputs, (nf, ns + 1)).ravel(),
+            lengths,
+            np.asarray(self._positions(clique.frontals, clique.frontal_dims), dtype=np.intp),
+            solved,
+            inputs,
+            len(clique.frontals) == 1,
         )
         self._solved[cid] = entry
         return entry
@@ -126,21 +147,11 @@ class BatchedBacksubstitution:
             for c in level:
                 e = solved.get(c)
                 ents.append(e if e is not None and e.clique is cliques[c] else self._solved_form(c, cliques[c]))
-            lengths = np.concatenate([e.row_lengths for e in ents])
-            products = np.concatenate([e.data for e in ents]) * self._work[np.concatenate([e.columns for e in ents])]
-            x = np.add.reduceat(products, np.cumsum(lengths) - lengths)  # [YIB Eq. 25]
-            self._work[np.concatenate([e.rows for e in ents])] = x
-            keys = [k for e in ents for k in e.clique.frontals]
-            dims = [d for e in ents for d in e.clique.frontal_dims]
-            if len(set(dims)) == 1:  # the common case: rows of a (variables, size) array are their δ
-                flags = np.abs(x - np.concatenate([delta[k] for k in keys])) >= alpha
-                moved = flags.reshape(len(keys), dims[0]).any(axis=1).tolist()
-                delta.update(zip(keys, x.reshape(len(keys), dims[0]), strict=True))
+            if len(ents) < STACK_FROM and all(e.single for e in ents):  # narrow: a clique at a time is fewer calls
+                keys = [e.clique.frontals[0] for e in ents]
+                moved = [self._solve_alone(e, k, delta, alpha) for e, k in zip(ents, keys, strict=True)]
             else:
-                flags = np.abs(x - np.concatenate([delta[k] for k in keys])) >= alpha
-                starts = np.cumsum(dims) - np.asarray(dims)
-                moved = np.logical_or.reduceat(flags, starts).tolist()
-                delta.update((k, x[a : a + d]) for k, a, d in zip(keys, starts.tolist(), dims, strict=True))
+                keys, moved = self._solve_stacked(ents, delta, alpha)
             changed.update(keys if alpha == 0 else compress(keys, moved))
             level = [
                 ch
@@ -160,6 +171,32 @@ class BatchedBacksubstitution:
         self._relinearization_candidates(updated, delta, beta, over)
         stale.update(dict.fromkeys(updated))
         return updated, len(entered)
+
+    def _solve_alone(self, e: _Solved, k: Key, delta: dict[Key, NDArray], alpha: float) -> bool:
+        """One clique of a single frontal variable ``k``: δ_k = [g | -G] [1; δ_S]; whether it moved by ≥ α."""
+        x = e.matrix @ self._work[e.inputs]  # [YIB Eq. 25]
+        self._work[e.rows] = x
+        moved = bool((np.abs(x - delta[k]) >= alpha).any())
+        delta[k] = x
+        return moved
+
+    def _solve_stacked(
+        self, ents: list[_Solved], delta: dict[Key, NDArray], alpha: float
+    ) -> tuple[list[Key], list[bool]]:
+        """A level in stacked calls: (its frontal variables, whether each moved by ≥ α)."""
+        lengths = np.concatenate([e.row_lengths for e in ents])
+        products = np.concatenate([e.data for e in ents]) * self._work[np.concatenate([e.columns for e in ents])]
+        x = np.add.reduceat(products, np.cumsum(lengths) - lengths)  # [YIB Eq. 25]
+        self._work[np.concatenate([e.rows for e in ents])] = x
+        keys = [k for e in ents for k in e.clique.frontals]
+        dims = [d for e in ents for d in e.clique.frontal_dims]
+        moved = self._per_variable(np.abs(x - np.concatenate([delta[k] for k in keys])) >= alpha, dims)
+        if len(set(dims)) == 1:  # the common case: rows of a (variables, size) array are their δ
+            delta.update(zip(keys, x.reshape(len(keys), dims[0]), strict=True))
+        else:
+            starts = (np.cumsum(dims) - np.asarray(dims)).tolist()
+            delta.update((k, x[a : a + d]) for k, a, d in zip(keys, starts, dims, strict=True))
+        return keys, moved
 
     @staticmethod
     def _per_variable(flags: NDArray, dims: list[int]) -> list[bool]:

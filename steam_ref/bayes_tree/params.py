@@ -73,9 +73,11 @@ class ISAM2Params:
     # held the blocks as separate variables (the paper's scripts hold a state as pose P and velocity
     # V: {'x': (3, 3)}); None: every variable is one block
     relinearize_blocks: Mapping[str, tuple[int, ...]] | None = None
-    # how [K12 Alg. 7] runs: "batched" (a tree level at a time in stacked NumPy calls, backsolve.py) or
-    # "loop" (a clique at a time, the algorithm as written); the same δ to rounding
-    backsubstitution: str = "batched"
+    # how [K12 Alg. 7] runs: "loop" (a clique at a time, the algorithm as written) or "batched" (a tree
+    # level at a time in stacked NumPy calls, backsolve.py); the same δ to rounding. "loop" is the default:
+    # the paper's trees are narrow (Plaza: ~6 cliques a level, ~57 levels an update), and batching
+    # measured no faster there (docs/experiments.md, issue 22)
+    backsubstitution: str = "loop"
 
     def __post_init__(self) -> None:
         t = self.relinearize_threshold
