@@ -5,7 +5,9 @@
 - :mod:`.tree`: :class:`Clique` (a Gaussian conditional), :class:`BayesTree`, elimination and
   back-substitution;
 - :mod:`.params`: :class:`ISAM2Params`, the solver's thresholds (GTSAM's defaults);
-- :mod:`.isam`: :class:`IncrementalSolver`, the update of Algorithm 1 (steps 2-7).
+- :mod:`.isam`: :class:`IncrementalSolver`, the update of Algorithm 1 (steps 2-7);
+- :mod:`.backsolve`: its partial back-substitution a tree level at a time in stacked NumPy calls
+  (``ISAM2Params(backsubstitution="batched")``).
 """
 
 from .isam import IncrementalSolver, UpdateReport
