@@ -74,41 +74,16 @@ setup = setup.with_schedule(every=every)
 readings = Readings.from_dataset(load_dataset("victoria-park"), setup)
 solver = None
 if solver_name == "gtsam":
-    import gtsam
-    from steam_ref.paper.solvers import OnlineSolver
+    sys.path.insert(0, sys.argv[7])
+    from gtsam_replica import CustomISAM2  # our factors as CustomFactors, GTSAM's defaults
 
-    def gkey(key):
-        return gtsam.symbol("x" if key.kind == "x" else "l", key.index)
-
-    def wrap(factor):  # our error and Jacobians as a GTSAM factor (as tests/test_gtsam_crosscheck.py does)
-        noise = gtsam.noiseModel.Gaussian.SqrtInformation(np.asarray(factor.sqrt_information))
-        def evaluate(this, values, H):
-            xs = [values.atVector(k) for k in this.keys()]
-            if H is not None:
-                for i, J in enumerate(factor.jacobians(*xs)):
-                    H[i] = np.asarray(J)
-            return np.asarray(factor.error(*xs))
-        return gtsam.CustomFactor(noise, [gkey(k) for k in factor.keys], evaluate)
-
-    class GtsamISAM2(OnlineSolver):
-        name = "gtsam"
-        def __init__(self):
-            self.isam = gtsam.ISAM2(gtsam.ISAM2Params())  # GTSAM's defaults: threshold 0.1, skip 10, wildfire 1e-3
-        def update(self, factors, values):
-            graph, initial = gtsam.NonlinearFactorGraph(), gtsam.Values()
-            for f in factors:
-                graph.add(wrap(f))
-            for k in values:
-                initial.insert(gkey(k), np.asarray(values[k]))
-            self.isam.update(graph, initial)
-        def estimate_of(self, key):
-            return self.isam.calculateEstimateVector(gkey(key))
-    solver = GtsamISAM2()
+    solver = CustomISAM2()
 est = StreamingEstimator(readings, setup, StreamOptions(max_poses=max_poses, converge_at_end=at_end), solver=solver)
 while not est.done:
     est.step()
 n = est.front.n_poses
 if solver_name == "gtsam":
+    from gtsam_replica import gkey
     final = est.solver.isam.calculateEstimate()
     states = np.array([final.atVector(gkey(X(i))) for i in est.states])
     marks = {j: final.atVector(gkey(L(j))) for j in sorted(est.front.landmarks)}
@@ -136,7 +111,7 @@ def run_child(
     env = os.environ | {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
     proc = subprocess.run(
         [sys.executable, "-c", _CHILD, solver, json.dumps(blocks), json.dumps(max_poses), str(out), str(every)]
-        + ["converge" if converge else "stream"],
+        + ["converge" if converge else "stream", str(Path(__file__).resolve().parent)],
         capture_output=True,
         text=True,
         env=env,

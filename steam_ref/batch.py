@@ -34,7 +34,7 @@ from .errors import ConvergenceError, IllConditionedWarning, NumericalError, Ste
 from .factors import Factor
 from .graph import FactorGraph
 from .linear.ordering import Ordering, make_ordering, sparse_backend
-from .linear.solve import SparseCholesky
+from .linear.solve import SparseCholesky, Symbolic
 from .linear.system import LinearSystem, linearize
 from .variables import Key, Values, as_values
 
@@ -115,15 +115,21 @@ class BatchResult:
 
 
 def _step(
-    graph: FactorGraph, values: Values, ordering: Ordering, backend: str, damping: float
+    graph: FactorGraph,
+    values: Values,
+    ordering: Ordering,
+    backend: str,
+    damping: float,
+    symbolic: Symbolic | None = None,
 ) -> tuple[dict[Key, NDArray], float, int]:
-    """Linearize, solve (𝓘 + λ diag 𝓘) δ = Aᵀb; return δ (ordered), cost at θ̄, factor nnz."""
+    """Linearize, solve (𝓘 + λ diag 𝓘) δ = Aᵀb; return δ (ordered), cost at θ̄, factor nnz (``symbolic``: reused
+    analysis, the pattern is the same at every iteration)."""
     groups = linearize(graph.factors, values)
     system = LinearSystem.from_groups(groups, ordering)
     info, rhs = system.information()
     if damping > 0:
         info = info + damping * sp.diags(info.diagonal())
-    chol = SparseCholesky.factor(info.tocsc(), ordering, backend, check_symmetry=False)  # AᵀA + λ diag
+    chol = SparseCholesky.factor(info.tocsc(), ordering, backend, check_symmetry=False, symbolic=symbolic)
     delta = chol.solve(rhs)
     if not np.all(np.isfinite(delta)):
         bad = int(np.flatnonzero(~np.isfinite(delta))[0])
@@ -301,9 +307,9 @@ def gauss_newton(
     graph, initial = graph_and_values(graph, initial)
     backend, order, cost0 = prepare(graph, initial, ordering, backend, max_iterations)
     iterations: list[Iteration] = []
-    values, rule, nnz, cost = initial.copy(), "", 0, cost0
+    values, rule, nnz, cost, symbolic = initial.copy(), "", 0, cost0, Symbolic()  # one pattern: analysed once
     for _ in range(max_iterations):
-        delta, _, nnz = _step(graph, values, order, backend, 0.0)
+        delta, _, nnz = _step(graph, values, order, backend, 0.0, symbolic)
         values = values.retract(delta)
         new_cost = graph.error(values)
         step = _norm(delta)
@@ -353,9 +359,9 @@ def levenberg_marquardt(
     graph, initial = graph_and_values(graph, initial)
     backend, order, cost0 = prepare(graph, initial, ordering, backend, max_iterations)
     iterations: list[Iteration] = []
-    values, rule, nnz, lam, cost = initial.copy(), "", 0, initial_damping, cost0
+    values, rule, nnz, lam, cost, symbolic = initial.copy(), "", 0, initial_damping, cost0, Symbolic()
     while len(iterations) < max_iterations and not rule:
-        delta, _, nnz = _step(graph, values, order, backend, lam)
+        delta, _, nnz = _step(graph, values, order, backend, lam, symbolic)
         trial = values.retract(delta)
         new_cost = graph.error(trial)
         step = _norm(delta)

@@ -64,7 +64,7 @@ def state(solver: IncrementalSolver) -> tuple:
         tuple((k, _array(v)) for k, v in solver._delta.items()),
         tuple(solver._over),
         tuple(solver._dims.items()),
-        tuple(solver._threshold.items()),
+        tuple(solver._beta.items()),
         tuple((k, _array(v)) for k, v in solver.estimate().items()),
         solver._steps,
     )

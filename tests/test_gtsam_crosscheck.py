@@ -12,7 +12,9 @@
 from __future__ import annotations
 
 import itertools
+import sys
 from functools import partial
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -33,14 +35,13 @@ from steam_ref.paper.presets import PaperSetup  # noqa: E402
 from steam_ref.paper.problem import build_problem  # noqa: E402
 from steam_ref.paper.readings import Readings  # noqa: E402
 from steam_ref.paper.solvers import BayesTreeSolver  # noqa: E402
-from steam_ref.variables import Key, L, Values, X  # noqa: E402
+from steam_ref.variables import L, Values, X  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+from gtsam_replica import custom_factor, gkey, isam2_params  # noqa: E402  (the one home of GTSAM replicas)
 
 SETUP = PaperSetup.synthetic()
 SKIP = 3
-
-
-def gkey(key: Key) -> int:
-    return gtsam.symbol("x" if key.kind == "x" else "l", key.index)
 
 
 @pytest.fixture(scope="module")
@@ -77,7 +78,7 @@ def interpolated(error, lam, psi, x1, x2, *rest):
     return error(lam @ x1 + psi @ x2, *rest)  # [YIB Eq. 18, 29]
 
 
-def custom_factor(noise, keys, error):
+def error_factor(noise, keys, error):
     """A GTSAM factor from an error function of vector variables; Jacobians by central differences."""
 
     def evaluate(this, values, H):
@@ -110,26 +111,26 @@ def gtsam_problem(data):
     graph = gtsam.NonlinearFactorGraph()
     prior_mean = np.concatenate([r.first_pose, SETUP.first_velocity])
     prior_sigmas = np.concatenate([SETUP.first_pose_sigmas, SETUP.first_velocity_sigmas])
-    graph.add(custom_factor(sigmas(prior_sigmas), [X(0)], partial(prior_error, prior_mean)))
+    graph.add(error_factor(sigmas(prior_sigmas), [X(0)], partial(prior_error, prior_mean)))
     for a, b in itertools.pairwise(states):
         dt = r.times[b] - r.times[a]
         noise = gtsam.noiseModel.Gaussian.Covariance(sde_process_noise(sde, dt))
-        graph.add(custom_factor(noise, [X(a), X(b)], partial(gp_prior_error, sde_transition(sde, dt))))
+        graph.add(error_factor(noise, [X(a), X(b)], partial(gp_prior_error, sde_transition(sde, dt))))
     for lid in sorted(set(r.range_landmark.tolist())):
         graph.add(
-            custom_factor(
+            error_factor(
                 sigmas(np.full(2, SETUP.landmark_prior_sigma)), [L(lid)], partial(prior_error, r.landmarks[lid])
             )
         )
 
     def add(pose, error, noise, others=()):
         if pose in states:
-            graph.add(custom_factor(noise, [X(pose), *others], error))
+            graph.add(error_factor(noise, [X(pose), *others], error))
             return
         j = np.searchsorted(states, pose)
         a, b = states[j - 1], states[j]
         lam, psi = lam_psi(sde, r.times[a], r.times[pose], r.times[b])
-        graph.add(custom_factor(noise, [X(a), X(b), *others], partial(interpolated, error, lam, psi)))
+        graph.add(error_factor(noise, [X(a), X(b), *others], partial(interpolated, error, lam, psi)))
 
     for p in range(1, n):
         vel_sigmas = SETUP.velocity_sigmas if p in states else SETUP.interpolated_velocity_sigmas
@@ -176,44 +177,19 @@ def test_batch_optimum_equals_gtsam(data):
 # --- 2. incremental: our Bayes tree against GTSAM's ISAM2 on one stream ---------------------------
 
 
-def wrap(factor):
-    """One of our factors as a GTSAM factor (its error and Jacobians; the solvers are what is compared)."""
-    base = gtsam.noiseModel.Gaussian.SqrtInformation(np.asarray(factor.sqrt_information))
-    noise = (
-        base
-        if factor.loss is None
-        else gtsam.noiseModel.Robust.Create(gtsam.noiseModel.mEstimator.Tukey.Create(factor.loss.c), base)
-    )
-
-    def evaluate(this, values, H):
-        xs = [values.atVector(k) for k in this.keys()]
-        if H is not None:
-            for i, J in enumerate(factor.jacobians(*xs)):
-                H[i] = np.asarray(J)
-        return np.asarray(factor.error(*xs))
-
-    return gtsam.CustomFactor(noise, [gkey(k) for k in factor.keys], evaluate)
-
-
 class BothSolvers(BayesTreeSolver):
     """Our Bayes tree, with GTSAM's ISAM2 fed the same updates alongside."""
 
     def __init__(self):
         super().__init__(ISAM2Params(relinearize_threshold=0.0, relinearize_skip=1, wildfire_threshold=0.0))
-        params = gtsam.ISAM2Params()
-        params.setRelinearizeThreshold(0.0)
-        params.relinearizeSkip = 1
-        gn = gtsam.ISAM2GaussNewtonParams()
-        gn.setWildfireThreshold(0.0)
-        params.setOptimizationParams(gn)
-        self.isam = gtsam.ISAM2(params)
+        self.isam = gtsam.ISAM2(isam2_params(0.0, 1, 0.0))
         self.largest_gap = 0.0
 
     def update(self, factors, values):
         super().update(factors, values)
         graph = gtsam.NonlinearFactorGraph()
         for f in factors:
-            graph.add(wrap(f))
+            graph.add(custom_factor(f))  # our error and Jacobians: the solvers are what is compared
         self.isam.update(graph, to_gtsam(values))
         theirs = self.isam.calculateEstimate()
         ours = self.estimate()

@@ -8,6 +8,8 @@
 - :mod:`.isam`: :class:`IncrementalSolver`, the update of Algorithm 1 (steps 2-7);
 - :mod:`.marginalize`: :func:`marginalize`, variables out of the tree, leaving their marginal factor;
 - :mod:`.fixed_lag`: :class:`FixedLagSmoother`, iSAM2 over a sliding window of a lag in seconds.
+- :mod:`.backsolve`: its partial back-substitution a tree level at a time in stacked NumPy calls
+  (``ISAM2Params(backsubstitution="batched")``).
 """
 
 from .fixed_lag import FixedLagSmoother

@@ -34,6 +34,7 @@ from ..factors import Factor, check_factors
 from ..linear.ordering import constrained_min_degree
 from ..linear.system import GaussianFactor, linearize
 from ..variables import Key, Values, check_key
+from .backsolve import BatchedBacksubstitution
 from .dot import tree_nnz
 from .journal import Journal, PhaseTimer, UndoDict, until_done
 from .params import ISAM2Params
@@ -61,12 +62,12 @@ class IncrementalSolver:
         self._linear: list[GaussianFactor | None] = []  # cached linearization of each factor at θ̄
         self._theta_bar = Values()  # linearization point θ̄
         self._dims: dict[Key, int] = {}  # size of each variable
-        self._threshold: dict[Key, float] = {}  # relinearization threshold of each variable (by kind)
+        self._beta: dict[Key, float] = {}  # β: relinearization threshold of each variable (by kind) [K12 Alg. 5]
         self._delta: UndoDict = UndoDict()  # current increment δ, relative to θ̄ (never written in place)
         self._estimate: dict[Key, NDArray] = {}  # θ̄ + δ, read-only arrays, refreshed for ``_stale`` keys
         self._stale: dict[Key, None] = {}  # variables whose δ or θ̄ moved since their estimate was formed
-        self._over: dict[Key, None] = {}  # variables whose latest δ has max |δ| ≥ their threshold
-        self._steps = 0
+        self._over: dict[Key, None] = {}  # variables whose latest δ has max |δ| ≥ their β
+        self._batched, self._steps = BatchedBacksubstitution(), 0  # [K12 Alg. 7] in stacked calls; updates so far
         self._tree_nnz = 0  # nonzeros of R (GTSAM's treeNnz), kept by each update
 
     # --- queries ----------------------------------------------------------------------------
@@ -200,6 +201,7 @@ class IncrementalSolver:
             new_cids = self._insert(cliques, parents, orphans, owner[len(fids) :])
         # 5. Partial back-substitution from the root, stopping below α.  [K12 Alg. 7; YIB step 6]
         with timer("backsubstitute"):
+            self._batched.forget(removed)
             updated, visited = self._backsubstitute(set(new_cids))
         self._tree_nnz += tree_nnz(cliques) - tree_nnz(removed.values())
         return UpdateReport(
@@ -238,7 +240,7 @@ class IncrementalSolver:
         for k in journal.new_keys:
             if k in self._theta_bar:
                 self._theta_bar.remove(k)
-            for store in (self._dims, self._threshold, self._estimate, self._stale):
+            for store in (self._dims, self._beta, self._estimate, self._stale):
                 store.pop(k, None)
         del self._factors[journal.n_factors :], self._linear[journal.n_factors :]
         self._over = dict(journal.over)
@@ -285,7 +287,7 @@ class IncrementalSolver:
         for k, x in new_values.items():
             self._theta_bar.insert(k, x)
             self._dims[k] = x.shape[0]
-            self._threshold[k] = self.params.threshold_for(k.kind)
+            self._beta[k] = self.params.threshold_for(k.kind)
             self._delta[k] = np.zeros_like(x)
             self._stale[k] = None
         return list(range(first, len(self._factors)))
@@ -299,9 +301,7 @@ class IncrementalSolver:
         ([YIB Alg. 1 step 7]: collect them into θ_rl).
         """
         theta_rl = list(self._over)
-        moves = {
-            k: self.params.blocks_to_move(k.kind, self._delta[k], self._threshold[k]) for k in theta_rl
-        }  # (d,) bool
+        moves = {k: self.params.blocks_to_move(k.kind, self._delta[k], self._beta[k]) for k in theta_rl}  # (d,) bool
         self._over.clear()
         for k, move in moves.items():
             theta_bar, delta = self._theta_bar[k], self._delta[k]
@@ -355,15 +355,22 @@ class IncrementalSolver:
         return new_cids
 
     def _backsubstitute(self, new_cliques: set[int]) -> tuple[list[Key], int]:
+        """[K12 Alg. 7] "batched" (a tree level at a time, :mod:`.backsolve`) or "loop" (below)."""
+        alpha = self.params.wildfire_threshold
+        if self.params.backsubstitution == "loop":
+            return self._backsubstitute_loop(new_cliques, alpha)
+        return self._batched(self.tree, new_cliques, self._delta, alpha, self._beta, self._stale, self._over)
+
+    def _backsubstitute_loop(self, new_cliques: set[int], alpha: float) -> tuple[list[Key], int]:
         """δ_F = R⁻¹(d - S δ_S) from the roots of the new part down, while it changes.  [K12 Alg. 7]
 
         A re-made clique is always solved; an old one only when a variable of its separator changed
-        by at least the wildfire threshold (with threshold 0, always: full back-substitution).
+        by at least the wildfire threshold α (with α = 0, always: full back-substitution).
         Changes are judged per variable: a root clique holding the newest state and the landmarks
-        must not mark the landmarks changed because the newest state moved.
+        must not mark the landmarks changed because the newest state moved. A variable whose new δ
+        has max |δ| ≥ its relinearization threshold β is a candidate for the next relinearization.
         """
-        tree, delta, threshold = self.tree, self._delta, self.params.wildfire_threshold
-        stale, over, limit = self._stale, self._over, self._threshold
+        tree, delta, beta, stale, over = self.tree, self._delta, self._beta, self._stale, self._over
         changed: set[Key] = set()
         updated: list[Key] = []
         stack = [c for c in new_cliques if tree.parent[c] is None]
@@ -376,11 +383,11 @@ class IncrementalSolver:
             x = clique.solve(sep)  # [YIB Eq. 25]
             frontals = clique.frontals
             for k, xk in zip(frontals, (x,) if len(frontals) == 1 else clique.split_frontals(x), strict=True):
-                if threshold == 0 or abs(xk - delta[k]).max() >= threshold:
+                if alpha == 0 or abs(xk - delta[k]).max() >= alpha:
                     changed.add(k)
                 delta[k] = xk
                 stale[k] = None
-                if abs(xk).max() >= limit[k]:  # a candidate for the next relinearization [K12 Alg. 5]
+                if abs(xk).max() >= beta[k]:  # a candidate for the next relinearization [K12 Alg. 5]
                     over[k] = None
                 elif k in over:
                     del over[k]

@@ -72,6 +72,12 @@ class UndoDict(dict):
             record[key] = dict.get(self, key, _ABSENT)
         dict.__setitem__(self, key, value)
 
+    def update(self, *args: object, **kwargs: object) -> None:
+        """Every write goes through :meth:`__setitem__`, so the record sees it (the batched back-substitution
+        writes δ with ``update``)."""
+        for key, value in dict(*args, **kwargs).items():
+            self[key] = value
+
     def undo(self, record: dict) -> None:
         """Put back the values ``record`` kept (idempotent)."""
         for key, old in record.items():

@@ -215,7 +215,8 @@ def marginalize(solver: IncrementalSolver, keys: Iterable[Key]) -> Marginalizati
         solver._factors[j] = None  # type: ignore[call-overload]  # ids are positions: keep the slot
         solver._linear[j] = None
     for k in drop:
-        for store in (solver._theta_bar._data, solver._dims, solver._threshold, solver._delta, solver._estimate):
+        solver._theta_bar.remove(k)
+        for store in (solver._dims, solver._beta, solver._delta, solver._estimate):
             del store[k]
         solver._stale.pop(k, None)
         solver._over.pop(k, None)

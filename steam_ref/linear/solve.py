@@ -23,7 +23,7 @@ from ..errors import NumericalError, ShapeError, SteamError, UnderdeterminedErro
 from .ordering import Ordering, sparse_backend
 from .system import LinearSystem
 
-__all__ = ["SparseCholesky", "solve"]
+__all__ = ["SparseCholesky", "Symbolic", "solve"]
 
 
 def _unconstrained_variable(info: sp.csc_matrix, ordering: Ordering, column: int | None = None) -> str:
@@ -97,6 +97,34 @@ def _checked_information(info: sp.spmatrix | NDArray, ordering: Ordering, symmet
     return info
 
 
+class Symbolic:
+    """CHOLMOD's symbolic analysis of the last pattern factored, reused while the pattern holds.
+
+    Gauss-Newton and Levenberg-Marquardt factor matrices of one sparsity pattern in one ordering at
+    every iteration: analysing it once and refactoring numerically (``Factor.cholesky``) gives the
+    same factor as a fresh ``cholesky`` (the analysis depends on the pattern only). A new pattern is
+    analysed anew. SuperLU has no such split; it ignores this.
+    """
+
+    def __init__(self) -> None:
+        self._pattern: tuple[NDArray, NDArray] | None = None  # (indptr, indices) analysed
+        self._factor: Any = None  # CHOLMOD's analysed Factor
+        self.analyses = 0  # how many patterns were analysed (for tests and profiles)
+
+    def factor(self, info: sp.csc_matrix) -> Any:
+        """CHOLMOD's numeric factor of ``info``, in natural order, reusing the analysis when the pattern holds."""
+        from sksparse.cholmod import analyze
+
+        pattern = self._pattern
+        if pattern is None or not (
+            np.array_equal(pattern[0], info.indptr) and np.array_equal(pattern[1], info.indices)
+        ):
+            self._factor = analyze(info, ordering_method="natural")
+            self._pattern = (info.indptr.copy(), info.indices.copy())
+            self.analyses += 1
+        return self._factor.cholesky(info)
+
+
 @dataclass
 class SparseCholesky:
     """𝓛𝓛ᵀ = 𝓘 in the given order, with solves.  [YIB Eq. 11]"""
@@ -108,11 +136,18 @@ class SparseCholesky:
 
     @classmethod
     def factor(
-        cls, info: sp.csc_matrix, ordering: Ordering, backend: str | None = None, *, check_symmetry: bool = True
+        cls,
+        info: sp.csc_matrix,
+        ordering: Ordering,
+        backend: str | None = None,
+        *,
+        check_symmetry: bool = True,
+        symbolic: Symbolic | None = None,
     ) -> SparseCholesky:
         """Factor 𝓘 (sparse or dense, symmetric positive definite, of the size of ``ordering``) without reordering it.
 
-        ``check_symmetry=False`` skips the symmetry check, for a caller whose 𝓘 is AᵀA by construction.
+        ``check_symmetry=False`` skips the symmetry check, for a caller whose 𝓘 is AᵀA by construction;
+        ``symbolic`` keeps CHOLMOD's analysis for the next matrix of the same pattern.
         """
         backend = sparse_backend(backend)
         info = _checked_information(info, ordering, check_symmetry)
@@ -122,7 +157,7 @@ class SparseCholesky:
             from sksparse.cholmod import CholmodNotPositiveDefiniteError, cholesky
 
             try:
-                f = cholesky(info, ordering_method="natural")
+                f = cholesky(info, ordering_method="natural") if symbolic is None else symbolic.factor(info)
                 nnz = int(f.L().nnz)  # CHOLMOD may find the failure only here, when it converts the factor
             except CholmodNotPositiveDefiniteError as exc:
                 column = getattr(exc, "column", None)
