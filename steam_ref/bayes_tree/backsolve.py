@@ -14,8 +14,8 @@ G = R⁻¹S, g = R⁻¹d (so δ_F = g - G δ_S) flattened, with the workspace po
 of its separator's entries; g rides along as the coefficient of a workspace entry fixed at 1, so
 a row of the conditional is one dot product. A level is then a handful of stacked calls whatever
 its cliques' shapes: gather the separator values, multiply, sum each row (``np.add.reduceat``);
-the wildfire test |δ_new - δ_old| ≥ α is one stacked comparison per level, reduced per variable;
-the relinearization test max |δ| ≥ β one per call. Only the choice of children to enter stays a
+the wildfire test abs(δ_new - δ_old) ≥ α is one stacked comparison per level, reduced per variable;
+the relinearization test max abs(δ) ≥ β one per call. Only the choice of children to enter stays a
 set test per child in Python, as in the loop (cheaper than any NumPy call at these sizes).
 
 A level narrower than ``STACK_FROM`` is solved a clique at a time from the same solved form
@@ -134,7 +134,7 @@ class BatchedBacksubstitution:
         """δ_F = g - G δ_S from the roots of the new part down, a level at a time.  [K12 Alg. 7]
 
         Same contract as the loop: writes ``delta`` (new arrays) and marks ``stale``; keeps ``over``
-        (max |δ| ≥ β, the candidates of the next relinearization) in the loop's order; returns the
+        (max abs(δ) ≥ β, the candidates of the next relinearization) in the loop's order; returns the
         updated variables in the loop's (depth-first) order and the number of cliques solved.
         """
         roots = [c for c in new_cliques if tree.parent[c] is None]
@@ -209,7 +209,7 @@ class BatchedBacksubstitution:
     def _relinearization_candidates(
         self, updated: list[Key], delta: dict[Key, NDArray], beta: dict[Key, float], over: dict[Key, None]
     ) -> None:
-        """``over`` holds the updated variables whose max |δ| ≥ β, in the loop's order.  [K12 Alg. 5]"""
+        """``over`` holds the updated variables whose max abs(δ) ≥ β, in the loop's order.  [K12 Alg. 5]"""
         if not updated:
             return
         dims = [len(delta[k]) for k in updated]

@@ -2,10 +2,10 @@
 
 - **APE** (absolute pose error) compares each estimated pose with the true one at the same time, after
   an optional alignment (:mod:`.align`): the translation error ‖p̂ᵢ - pᵢ‖ and the heading error
-  |wrap(θ̂ᵢ - θᵢ)|, the angle of the relative rotation Rᵢᵀ R̂ᵢ.
+  abs(wrap(θ̂ᵢ - θᵢ)), the angle of the relative rotation Rᵢᵀ R̂ᵢ.
 - **RPE** (relative pose error) compares motions: for a pair (i, j), the true motion Qᵢ⁻¹Qⱼ against the
   estimated one Pᵢ⁻¹Pⱼ, E = (Qᵢ⁻¹Qⱼ)⁻¹ (Pᵢ⁻¹Pⱼ). In SE(2), ‖t(E)‖ = ‖R(θ̂ᵢ)ᵀ(p̂ⱼ - p̂ᵢ) - R(θᵢ)ᵀ(pⱼ - pᵢ)‖
-  and the angle of E is |wrap((θ̂ⱼ - θ̂ᵢ) - (θⱼ - θᵢ))|. Pairs are Δ poses apart, or the first pose at
+  and the angle of E is abs(wrap((θ̂ⱼ - θ̂ᵢ) - (θⱼ - θᵢ))). Pairs are Δ poses apart, or the first pose at
   least Δ metres further along the path; consecutive (i₀ = 0, i₁ = i₀ + Δ, ...) or ``all_pairs``.
 
 These are the definitions of evo's ``metrics.APE`` and ``metrics.RPE`` (translation_part,
