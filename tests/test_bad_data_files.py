@@ -147,6 +147,6 @@ def test_many_variables_under_the_limit_each_are_bounded_together(tmp_path: Path
 def test_the_cli_names_the_bomb_and_the_setting(tmp_path: Path, monkeypatch, capsys) -> None:
     path = _bomb(tmp_path / "bomb.mat", declared=8 * 2**20, inflated=8 * 2**20)
     monkeypatch.setenv(MAX_BYTES_ENV, "1")
-    code = cli.main(["run", "--dataset", str(path)])
+    code = cli.main(["run", "--dataset", str(path), "--preset", "plaza"])
     _, err = capsys.readouterr()
     assert code == 2 and len(err.splitlines()) == 1 and "bomb.mat" in err and MAX_BYTES_ENV in err
