@@ -247,16 +247,24 @@ def _compare_with_evo(tmp_path, times, truth, estimate):
             _evo_figures(*files, delta=2.0, unit="m", all_pairs=True),
         ),
     ]
-    for ours, theirs in cases:
-        for mine, evo_stats in zip(_ours(ours), theirs, strict=True):
-            for k in mine:
-                assert mine[k] == pytest.approx(evo_stats[k], abs=1e-9, rel=1e-9), (k, mine, evo_stats)
+    return [
+        (k, mine[k], evo_stats[k])
+        for ours, theirs in cases
+        for mine, evo_stats in zip(_ours(ours), theirs, strict=True)
+        for k in mine
+    ]
+
+
+def _differing(figures: list[tuple[str, float, float]]) -> list[tuple[str, float, float]]:
+    return [f for f in figures if f[1] != pytest.approx(f[2], abs=1e-9, rel=1e-9)]
 
 
 def test_ape_and_rpe_equal_evos_on_a_synthetic_run(tmp_path):
     data = generate_synthetic(150, 30, seed=3)
     run = run_online(data, PaperSetup.synthetic())
-    _compare_with_evo(tmp_path, data.times, data.ground_truth[:, 1:4], run.trajectory[:, :3])
+    figures = _compare_with_evo(tmp_path, data.times, data.ground_truth[:, 1:4], run.trajectory[:, :3])
+    assert len(figures) == 8 * 2 * 4 and all(v > 0 for k, v, _ in figures if k == "rmse")  # a real error, compared
+    assert not _differing(figures)
 
 
 @pytest.mark.needs_data
@@ -264,7 +272,9 @@ def test_ape_and_rpe_equal_evos_on_a_plaza_run(tmp_path, shared_data):
     data = load_dataset("plaza", data_dir=shared_data)
     run = run_online(data, PaperSetup.plaza(), StreamOptions(max_poses=600))
     n = len(run.times)
-    _compare_with_evo(tmp_path, data.times[:n], data.ground_truth[:n, 1:4], run.trajectory[:, :3])
+    figures = _compare_with_evo(tmp_path, data.times[:n], data.ground_truth[:n, 1:4], run.trajectory[:, :3])
+    assert len(figures) == 8 * 2 * 4 and all(v > 0 for k, v, _ in figures if k == "rmse")
+    assert not _differing(figures)
 
 
 # -- the estimate at the truth's times --
