@@ -88,6 +88,16 @@ def _folder(text: str) -> str:
     return text
 
 
+def _add_data_dir(parser: argparse.ArgumentParser, also: str = "") -> None:
+    """--data-dir: the one folder the user names, searched first (datasets/search.py gives the whole order)."""
+    parser.add_argument(
+        "--data-dir",
+        type=_folder,
+        default=None,
+        help=f"folder searched for data files{also} before $STEAM_REF_DATA_DIR, the fetched files' cache and gtsam's Data/",
+    )
+
+
 def _add_run_arguments(run: argparse.ArgumentParser) -> None:
     run.add_argument(
         "--dataset",
@@ -162,12 +172,7 @@ def _add_run_arguments(run: argparse.ArgumentParser) -> None:
         help=f"Singer prior (--prior singer only): the acceleration's time constant 1/α in seconds, 1e-6 to 1e8 "
         f"(default: the preset's, {PaperSetup.singer_time_constant})",
     )
-    run.add_argument(
-        "--data-dir",
-        type=_folder,
-        default=None,
-        help="folder searched for data files before $STEAM_REF_DATA_DIR and gtsam's Data/",
-    )
+    _add_data_dir(run)
     run.add_argument("--seed", type=_non_negative_int, default=0, help="seed of the generated synthetic task")
     run.add_argument(
         "--relinearize-threshold",
@@ -256,24 +261,14 @@ def build_parser() -> argparse.ArgumentParser:
     bat.add_argument(
         "--preset", choices=PRESETS, default=None, help="parameter set (default: by data set; required for a PATH)"
     )
-    bat.add_argument(
-        "--data-dir",
-        type=_folder,
-        default=None,
-        help="folder searched for data files before $STEAM_REF_DATA_DIR and gtsam's Data/",
-    )
+    _add_data_dir(bat)
     bat.add_argument("--seed", type=_non_negative_int, default=0, help="seed of the generated synthetic task")
     bat.add_argument("--json", action="store_true", help="print one JSON line of figures")
     bat.add_argument("--plot", metavar="FILE.png", default=None, help="draw estimate, ground truth, landmarks")
     _add_trajectory_arguments(bat)
     fid = sub.add_parser("fidelity", help="BTGP/1 against the authors' saved runs, pose by pose, covariances included")
     fid.add_argument("--dataset", choices=("plaza", "paper-synthetic", "all"), default="all")
-    fid.add_argument(
-        "--data-dir",
-        type=_folder,
-        default=None,
-        help="folder searched for data files (and its authors/ folder) before $STEAM_REF_DATA_DIR and gtsam's Data/",
-    )
+    _add_data_dir(fid, " (and its authors/ folder)")
     fid.add_argument("--json", action="store_true", help="print one JSON line per data set")
     fid.add_argument(
         "--plot", metavar="FILE.png", default=None, help="draw the per-pose distance to the authors' estimate"
@@ -281,12 +276,7 @@ def build_parser() -> argparse.ArgumentParser:
     rep = sub.add_parser("reproduce", help="the experiments of Fig. 3 and Fig. 4, plots and a results table")
     rep.add_argument("--quick", action="store_true", help="small prefixes and budgets: minutes, not hours")
     rep.add_argument("--out", default="results", help="folder for plots and the table (default: results)")
-    rep.add_argument(
-        "--data-dir",
-        type=_folder,
-        default=None,
-        help="folder searched for data files before $STEAM_REF_DATA_DIR and gtsam's Data/",
-    )
+    _add_data_dir(rep)
     rep.add_argument(
         "--jobs",
         type=_positive_int,
