@@ -14,7 +14,7 @@ from steam_ref.datasets import sample_from_model
 from steam_ref.errors import DataError, NumericalError, SteamError
 from steam_ref.evaluate import chi2_band, nees
 from steam_ref.gp.prior import process_noise, transition
-from steam_ref.paper.consistency import ConsistencyStudy, consistency_setup, run_seed, summarize
+from steam_ref.paper.consistency import ConsistencyStudy, consistency_setup, model_of, run_seed, summarize
 from steam_ref.paper.sweep import run_sweep
 
 TINY = ConsistencyStudy(n_steps=12, n_landmarks=3, estimators=("btgp/1", "btgp/1 Qc x100"))
@@ -23,16 +23,7 @@ TINY = ConsistencyStudy(n_steps=12, n_landmarks=3, estimators=("btgp/1", "btgp/1
 def test_tasks_are_drawn_from_the_estimators_model():
     """Whitened GP increments, odometry and survey residuals of a long task are N(0, I) (5-sigma bounds)."""
     s = consistency_setup()
-    kw = dict(
-        qc=s.qc,
-        velocity_sigmas=s.velocity_sigmas,
-        range_sigma=s.range_sigma,
-        landmark_sigma=s.landmark_prior_sigma,
-        first_pose_sigmas=s.first_pose_sigmas,
-        first_velocity=s.first_velocity,
-        first_velocity_sigmas=s.first_velocity_sigmas,
-    )
-    task = sample_from_model(3000, 400, 7, **kw)
+    task = sample_from_model(3000, 400, 7, **model_of(s))
     x = task.states
     w = np.linalg.solve(np.linalg.cholesky(process_noise(1.0, s.qc)), (x[1:] - x[:-1] @ transition(1.0, 3).T).T).T
     th, xd, yd, thd = x[1:, 2], x[1:, 3], x[1:, 4], x[1:, 5]
@@ -54,19 +45,7 @@ def test_tasks_are_drawn_from_the_estimators_model():
 def test_a_task_is_child_i_of_the_spawned_seeds():
     study = ConsistencyStudy(n_steps=10, n_landmarks=2, seed=5)
     child = np.random.SeedSequence(5).spawn(4)[3]
-    s = study.setup
-    direct = sample_from_model(
-        10,
-        2,
-        child,
-        qc=s.qc,
-        velocity_sigmas=s.velocity_sigmas,
-        range_sigma=s.range_sigma,
-        landmark_sigma=s.landmark_prior_sigma,
-        first_pose_sigmas=s.first_pose_sigmas,
-        first_velocity=s.first_velocity,
-        first_velocity_sigmas=s.first_velocity_sigmas,
-    )
+    direct = sample_from_model(10, 2, child, **model_of(study.setup))
     np.testing.assert_array_equal(study.sample(3).states, direct.states)
     assert not np.array_equal(study.sample(2).states, direct.states)
 

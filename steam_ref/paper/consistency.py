@@ -64,7 +64,16 @@ from .problem import build_problem, sequential_batch
 from .readings import Readings
 from .solvers import PeriodicBatchSolver
 
-__all__ = ["Estimator", "ESTIMATORS", "ConsistencyStudy", "consistency_setup", "run_seed", "summarize", "KINDS"]
+__all__ = [
+    "Estimator",
+    "ESTIMATORS",
+    "ConsistencyStudy",
+    "consistency_setup",
+    "model_of",
+    "run_seed",
+    "summarize",
+    "KINDS",
+]
 
 KINDS = {"pose": 3, "velocity": 3, "landmark": 2}  # each kind of state and its dimension d
 
@@ -140,19 +149,21 @@ class ConsistencyStudy:
 
     def sample(self, index: int):
         """Task ``index``: drawn with child ``index`` of SeedSequence(seed).spawn(...)."""
-        s = self.setup
-        return sample_from_model(
-            self.n_steps,
-            self.n_landmarks,
-            np.random.SeedSequence(self.seed, spawn_key=(index,)),  # = SeedSequence(seed).spawn(n)[index]
-            qc=s.qc,
-            velocity_sigmas=s.velocity_sigmas,
-            range_sigma=s.range_sigma,
-            landmark_sigma=s.landmark_prior_sigma,
-            first_pose_sigmas=s.first_pose_sigmas,
-            first_velocity=s.first_velocity,
-            first_velocity_sigmas=s.first_velocity_sigmas,
-        )
+        seed = np.random.SeedSequence(self.seed, spawn_key=(index,))  # = SeedSequence(seed).spawn(n)[index]
+        return sample_from_model(self.n_steps, self.n_landmarks, seed, **model_of(self.setup))
+
+
+def model_of(setup: PaperSetup) -> dict:
+    """The model a set-up's estimator assumes, as :func:`~steam_ref.datasets.sample_from_model`'s keywords."""
+    return dict(
+        qc=setup.qc,
+        velocity_sigmas=setup.velocity_sigmas,
+        range_sigma=setup.range_sigma,
+        landmark_sigma=setup.landmark_prior_sigma,
+        first_pose_sigmas=setup.first_pose_sigmas,
+        first_velocity=setup.first_velocity,
+        first_velocity_sigmas=setup.first_velocity_sigmas,
+    )
 
 
 def _solve(
