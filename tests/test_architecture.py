@@ -380,3 +380,14 @@ def test_the_oracle_check_sees_every_import_form():
     for source in forms:
         targets = {s.target for s in import_sites(ORACLE[0], ast.parse(source))}
         assert targets and not targets <= {"steam_ref.errors", *ORACLE}, source
+
+
+def test_the_type_checking_imports_of_the_root_are_its_lazy_names():
+    """``steam_ref/__init__.py`` states each public name's home twice: ``_HOMES`` (run time) and the
+    ``if TYPE_CHECKING:`` imports (type checkers, IDEs). They must say the same thing."""
+    import steam_ref
+
+    tree = ast.parse(MODULES["steam_ref"].read_text())
+    block = next(n for n in tree.body if isinstance(n, ast.If) and _is_type_checking(n.test))
+    typed = {alias.name: node.module for node in block.body if isinstance(node, ast.ImportFrom) for alias in node.names}
+    assert typed == steam_ref._HOMES
