@@ -72,7 +72,7 @@ def test_plaza_from_gtsams_original_files_says_it_is_uncleaned(capsys, monkeypat
     folder = gtsam_data_dir()
     if folder is None:
         skip_or_fail("gtsam is not installed: its Data/ holds the original Plaza1 files; pip install gtsam", "optional")
-    monkeypatch.delenv("STEAM_REF_DATA_DIR")
+    monkeypatch.delenv("STEAM_REF_DATA_DIR", raising=False)  # a newcomer has none set
     out, _ = _run(capsys, "run", "--dataset", "plaza", "--max-poses", "60", "--data-dir", str(folder))
     assert "NOTE: these are the ORIGINAL, uncleaned Plaza1 files" in out
     assert "`steam-ref data fetch plaza`" in out and "0.338 m" in out
