@@ -63,11 +63,13 @@ _CHILD = r"""
 import json, sys
 import numpy as np
 import steam_ref.cli.commands as cli
+from steam_ref.paper.online import StreamingEstimator
 kept = {}
-def spy(*args, **kwargs):
-    kept["result"] = result = run_online(*args, **kwargs)
+run = StreamingEstimator.run
+def spy(self, *args, **kwargs):
+    kept["result"] = result = run(self, *args, **kwargs)
     return result
-run_online, cli.run_online = cli.run_online, spy
+StreamingEstimator.run = spy
 code = cli.main(json.loads(sys.argv[1]))
 np.save(sys.argv[2], kept["result"].update_seconds)
 sys.exit(code)
