@@ -16,6 +16,11 @@ variable: what was learnt of it before lives on only in the marginal factor on t
 Queries of a marginalized variable raise :class:`UnknownVariableError` naming the update that
 marginalized it; its estimate at that moment is in :attr:`FixedLagSmoother.last_marginalization`
 (the caller keeps it if it wants it: the smoother does not, so that memory stays flat).
+
+``keep_history=True`` keeps instead each marginalized variable's conditional (:mod:`.history`, about
+1 KB a state), and :meth:`FixedLagSmoother.smoothed_history` then gives every forgotten variable its
+estimate given all the data so far, by one backward pass from the window (derivations §10.5): bounded
+work per update online, the whole smoothed trajectory at the end.
 """
 
 from __future__ import annotations
@@ -30,6 +35,7 @@ from ..arguments import number
 from ..errors import SteamError, UnknownVariableError
 from ..factors import Factor, check_factors
 from ..variables import Key
+from .history import History
 from .isam import IncrementalSolver
 from .marginalize import MarginalizationReport, marginalize
 from .params import ISAM2Params
@@ -71,7 +77,9 @@ class FixedLagSmoother(IncrementalSolver):
     ``update(..., timestamps={key: t})`` gives new (or refreshed) timestamps in seconds.
     """
 
-    def __init__(self, lag: float, params: ISAM2Params | None = None, **changes: object) -> None:
+    def __init__(
+        self, lag: float, params: ISAM2Params | None = None, *, keep_history: bool = False, **changes: object
+    ) -> None:
         lag = number("lag", lag)
         if not lag > 0:
             raise SteamError(f"lag must be a number of seconds > 0, got lag={lag!r}")
@@ -82,6 +90,7 @@ class FixedLagSmoother(IncrementalSolver):
         self.newest = -math.inf  # the latest timestamp seen
         self.n_marginalized = 0  # variables marginalized so far
         self.peak_window = 0  # most variables held at once (measured after each update, before marginalizing)
+        self.history: History | None = History() if keep_history else None  # the forgotten conditionals, if kept
         self.last_marginalization: MarginalizationReport | None = None  # what the last update forgot
 
     def update(
@@ -115,7 +124,9 @@ class FixedLagSmoother(IncrementalSolver):
         old = [k for k, t in self._times.items() if t < cutoff]
         self.last_marginalization = None
         if old:
-            done = marginalize(self, old)
+            done = marginalize(self, old, keep_conditionals=self.history is not None)
+            if self.history is not None:
+                self.history.extend(done.conditionals)
             for k in done.keys:
                 self._gone.mark(k, self._steps)
                 del self._times[k]
@@ -169,6 +180,16 @@ class FixedLagSmoother(IncrementalSolver):
                 f"{what} {key!r}, which was marginalized at update {gone} "
                 f"(its timestamp fell more than the lag, {self.lag:g} s, behind the newest)"
             )
+
+    def smoothed_history(self) -> dict[Key, NDArray]:
+        """Every marginalized variable's estimate given all the data so far (:meth:`.History.smooth`).
+
+        Needs ``keep_history=True``. Each is an affine function of the window's current estimate through the
+        conditionals frozen at marginalization [derivations Eq. 10.5]; for a linear problem, the batch optimum.
+        """
+        if self.history is None:
+            raise SteamError("smoothed_history needs the conditionals: make the smoother with keep_history=True")
+        return self.history.smooth(self.estimate_of)
 
     def was_marginalized(self, key: Key) -> bool:
         """True when ``key`` was held once and has been marginalized."""

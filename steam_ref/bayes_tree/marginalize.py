@@ -6,7 +6,8 @@ its marginal p(Θ) = ∫ p(D, Θ) dD. In the linearized problem ‖A δ - b‖²
 
     [A_D A_S | b] = Q [[R_D, S_D, d_D], [0, A_m, b_m]],
 
-leaves the conditional P(D | S), which nothing needs once D is gone, and the rows ‖A_m δ_S - b_m‖²
+leaves the conditional P(D | S), which a smoother keeps only to smooth its past afterwards
+(:mod:`.history`), and the rows ‖A_m δ_S - b_m‖²
 on D's separator S: the Schur complement of D in the information matrix (derivations §10, Eq. 10.1-10.3).
 Every other factor is untouched, so the marginal over Θ is the old factors not touching D plus this
 one. :func:`marginalize` does it in the tree, in the update's style:
@@ -47,6 +48,7 @@ from ..factors import Factor
 from ..linear.ordering import constrained_min_degree
 from ..linear.system import GaussianFactor
 from ..variables import Key, key_list
+from .history import ForgottenConditional
 from .tree import Clique, eliminate, eliminate_clique
 
 if TYPE_CHECKING:
@@ -109,16 +111,21 @@ class MarginalizationReport:
     dropped_factors: tuple[int, ...]  # ids of the factors that touched the keys, now gone
     marginal_factors: tuple[int, ...]  # ids of the MarginalFactors added on the separators
     estimates: dict[Key, NDArray]  # each key's estimate θ̄ + δ at the moment it was marginalized
+    conditionals: tuple[ForgottenConditional, ...] = ()  # P(v | S) of each key, if asked for (``keep_conditionals``)
 
 
 def eliminate_variables(
-    drop: Sequence[Key], factors: Sequence[GaussianFactor], dims: Mapping[Key, int]
+    drop: Sequence[Key],
+    factors: Sequence[GaussianFactor],
+    dims: Mapping[Key, int],
+    conditionals: list[Clique] | None = None,
 ) -> list[GaussianFactor]:
     """Eliminate ``drop`` from linear ``factors``, in that order: the factors left on the other variables.
 
     Each elimination is [YIB Eq. 24] for one variable: the factors adjacent to it are stacked and one QR
-    splits them into the conditional (dropped) and the Schur complement on its separator (kept)
-    [derivations Eq. 10.1-10.3]. Factors not adjacent to ``drop`` come back unchanged, first.
+    splits them into the conditional (dropped, or appended to ``conditionals`` if a list is given) and the
+    Schur complement on its separator (kept) [derivations Eq. 10.1-10.3]. Factors not adjacent to ``drop``
+    come back unchanged, first.
     """
     pool = list(factors)
     for v in drop:
@@ -127,7 +134,10 @@ def eliminate_variables(
             raise UnknownVariableError(f"no factor names {v!r}: nothing to marginalize it from")
         pool = [f for f in pool if v not in f.keys]
         separator = tuple(dict.fromkeys(k for f in adjacent for k in f.keys if k != v))
-        marginal = eliminate_clique((v,), separator, dims, adjacent).marginal
+        clique = eliminate_clique((v,), separator, dims, adjacent)
+        if conditionals is not None:
+            conditionals.append(clique)
+        marginal = clique.marginal
         if separator and marginal.rhs.shape[0]:
             pool.append(marginal)
     return pool
@@ -164,11 +174,15 @@ def _home(solver: IncrementalSolver, keys: tuple[Key, ...], tops: list[int]) -> 
     raise SteamError(f"no clique holds the marginal factor's variables {keys}")
 
 
-def marginalize(solver: IncrementalSolver, keys: Iterable[Key]) -> MarginalizationReport:
+def marginalize(
+    solver: IncrementalSolver, keys: Iterable[Key], *, keep_conditionals: bool = False
+) -> MarginalizationReport:
     """Marginalize ``keys`` out of ``solver``'s Bayes tree and factors (module docstring, steps 1-3).
 
     Afterwards the solver holds the marginal over the other variables: for a linear problem its
     estimate and covariances of every other variable are those of the whole problem, to rounding.
+    ``keep_conditionals``: the report also carries each key's conditional P(v | S) at the linearization
+    point of the moment (:class:`~.history.ForgottenConditional`), for a smoothing pass later.
     Raises :class:`UnknownVariableError` for a key the solver does not hold; on any failure the solver
     is left as it was.
     """
@@ -189,11 +203,12 @@ def marginalize(solver: IncrementalSolver, keys: Iterable[Key]) -> Marginalizati
     order = constrained_min_degree(variables, solver._dims, [f.keys for f in adjacent], last=last).keys
     order_drop = order[: len(drop)]
     estimates = {k: solver.estimate_of(k).copy() for k in order_drop}
+    conditionals: list[Clique] | None = [] if keep_conditionals else None
     leaves = _are_leaves(solver, cids, drop)
     if leaves:  # step 2: cut the cliques of D off; the Schur complement of D's factors goes to their parents
         inside = set(cids)
         tops = [c for c in cids if tree.parent[c] not in inside]
-        schur_factors = eliminate_variables(order_drop, adjacent, solver._dims)  # (Eq. 10.1-10.3)
+        schur_factors = eliminate_variables(order_drop, adjacent, solver._dims, conditionals)  # (Eq. 10.1-10.3)
         homes = [_home(solver, gf.keys, tops) for gf in schur_factors]
         removed = list(cids)
         new_cids: list[int] = []
@@ -202,7 +217,7 @@ def marginalize(solver: IncrementalSolver, keys: Iterable[Key]) -> Marginalizati
             _record_factor(solver, home, j)
         tree.cut(removed)  # a child holding no variable of D hangs under the nearest clique left, its f(S) kept
     else:  # step 3: re-eliminate the affected part with D first
-        schur_factors = eliminate_variables(order_drop, adjacent, solver._dims)
+        schur_factors = eliminate_variables(order_drop, adjacent, solver._dims, conditionals)
         removed_cliques, orphans, cliques, parents, owner, kept = _reeliminate(solver, cids, drop, schur_factors)
         removed = list(removed_cliques)
         factor_ids = _add_marginal_factors(solver, schur_factors)
@@ -211,6 +226,8 @@ def marginalize(solver: IncrementalSolver, keys: Iterable[Key]) -> Marginalizati
         new_cids = tree.insert_eliminated(cliques, parents)
         for o, own in zip(orphans, owner, strict=True):
             tree.attach(o, new_cids[own])
+    theta = solver._theta_bar
+    forgotten = () if conditionals is None else tuple(ForgottenConditional.of(c, theta) for c in conditionals)
     for j in dropped:
         solver._factors[j] = None  # type: ignore[call-overload]  # ids are positions: keep the slot
         solver._linear[j] = None
@@ -223,7 +240,14 @@ def marginalize(solver: IncrementalSolver, keys: Iterable[Key]) -> Marginalizati
     if new_cids:
         solver._backsubstitute(set(new_cids))
     return MarginalizationReport(
-        tuple(order_drop), leaves, tuple(removed), tuple(new_cids), tuple(dropped), tuple(factor_ids), estimates
+        tuple(order_drop),
+        leaves,
+        tuple(removed),
+        tuple(new_cids),
+        tuple(dropped),
+        tuple(factor_ids),
+        estimates,
+        forgotten,
     )
 
 
