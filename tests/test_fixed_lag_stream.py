@@ -59,6 +59,24 @@ def test_a_short_lag_keeps_the_window_small_and_the_estimate_close(data):
     assert summary["lag_s"] == 10.0 and summary["n_marginalized"] == result.n_marginalized
 
 
+def test_a_kept_history_changes_nothing_online_and_smooths_the_past(data):
+    lagged = run_online(data, SETUP, StreamOptions(lag=10.0))
+    stream = StreamingEstimator(Readings.from_dataset(data, SETUP), SETUP, StreamOptions(lag=10.0, lag_history=True))
+    kept = stream.run(data.ground_truth)
+    assert kept.rmse_lagged_m == lagged.rmse_m  # the same online computation: the history is only kept
+    past = stream.solver.inner.smoothed_history()
+    retired = sorted(i for i in kept.state_poses if X(int(i)) in past)
+    assert len(retired) >= len(kept.state_poses) - 12
+    for i in retired:  # the run's trajectory is the smoothed past (derivations Eq. 10.5)
+        np.testing.assert_array_equal(kept.trajectory[i], past[X(int(i))])
+    assert not np.array_equal(kept.trajectory[retired], lagged.trajectory[retired])  # later readings reached them
+    # (how close the smoothed past comes to the full smoother depends on how far the separators moved from where
+    # the conditionals were frozen: tests/test_fixed_lag_history.py checks it where nothing moved; Plaza: 2 mm)
+    summary = kept.lag_summary()
+    assert summary["lag_history"] is True and summary["rmse_lagged_m"] == round(lagged.rmse_m, 6)
+    assert "lag_history" not in lagged.lag_summary()
+
+
 def test_landmarks_leave_the_window_and_enter_again():
     data = generate_synthetic(n_steps=150, n_landmarks=10, seed=2)  # few landmarks: each seen again and again
     stream = StreamingEstimator(Readings.from_dataset(data, SETUP), SETUP, StreamOptions(lag=4.0))
@@ -81,6 +99,8 @@ def test_landmarks_leave_the_window_and_enter_again():
         (dict(lag=float("inf")), "lag must be"),
         (dict(lag=True), "lag must be"),
         (dict(lag=3.0, converge_at_end=True), "lag and converge_at_end"),
+        (dict(lag_history=True), "lag_history keeps what a lag forgets: give a lag"),
+        (dict(lag=3.0, lag_history=1), "lag_history must be True or False"),
     ],
 )
 def test_bad_lag_options_are_refused(changes, message):
@@ -97,11 +117,12 @@ def test_bad_lag_options_are_refused(changes, message):
         (["run", "--steps", "0"], "--steps"),
         (["run", "--steps", "50", "--dataset", "plaza"], "--steps generates the synthetic task"),
         (["run", "--lag", "5", "--save-estimates", "out.npz"], "--save-estimates .* --lag"),
+        (["run", "--lag-history"], "give a lag too"),
     ],
 )
 def test_the_cli_refuses_bad_lag_and_steps_in_one_line(argv, message, capsys, monkeypatch, tmp_path):
     monkeypatch.chdir(tmp_path)
-    monkeypatch.setattr(cli, "run_online", lambda *a, **k: pytest.fail("the run started"))
+    monkeypatch.setattr(StreamingEstimator, "run", lambda *a, **k: pytest.fail("the run started"))
     assert cli.main(argv) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "Traceback" not in err

@@ -93,10 +93,13 @@ class History:
         ``window(key)`` is the final estimate of a variable still held. Conditionals are solved newest first,
         so each one's separator is either in the window or solved already. A variable forgotten twice (a
         landmark seen again after it left the window enters as a new variable) is solved for each
-        incarnation in turn; the returned dict holds its earliest.
+        incarnation in turn, each older conditional seeing the incarnation it was made with; the returned
+        dict holds the latest incarnation forgotten.
         """
-        solved: dict[Key, NDArray] = {}
+        solved: dict[Key, NDArray] = {}  # the incarnation the conditionals solved so far name
+        latest: dict[Key, NDArray] = {}
         for c in reversed(self.conditionals):
             parts = [solved[k] if k in solved else window(k) for k in c.separator]
             solved[c.key] = c.value(np.concatenate(parts) if parts else np.zeros(0))
-        return solved
+            latest.setdefault(c.key, solved[c.key])
+        return latest

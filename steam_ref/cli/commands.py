@@ -101,6 +101,7 @@ def _run(args: argparse.Namespace) -> int:
         progress=explain.progress_wanted(args.progress, args.json),
         converge_at_end=args.converge_at_end,
         lag=args.lag,
+        lag_history=args.lag_history,
     )
     if args.lag is not None and args.save_estimates is not None:
         raise SteamError("--save-estimates writes every marginal covariance, which --lag forgets: drop one of them")

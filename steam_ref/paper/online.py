@@ -97,7 +97,7 @@ class StreamingEstimator:
     def _new_solver(self) -> OnlineSolver:
         o = self.options
         if o.lag is not None:
-            return FixedLagTreeSolver(self.setup.isam2_params(), o.lag, self.readings.times)
+            return FixedLagTreeSolver(self.setup.isam2_params(), o.lag, self.readings.times, keep_history=o.lag_history)
         return make_solver(
             o.method,
             isam2=self.setup.isam2_params(),
@@ -220,8 +220,13 @@ class StreamingEstimator:
     def result(
         self, ground_truth: NDArray | None = None, completed: bool = True, *, covariances: bool = False
     ) -> RunResult:
-        """A :class:`RunResult` of what has been processed so far."""
+        """A :class:`RunResult` of what has been processed so far (with ``lag_history``, the past smoothed
+        from the final window; the estimates it had as it left the window give ``rmse_lagged_m``)."""
         solved = self.solved()
+        lagged = None
+        if isinstance(self.solver, FixedLagTreeSolver) and self.options.lag_history:
+            lagged = solved.at_every_pose()[1]
+            self.solver.smooth_past()
         times, states = solved.at_every_pose()
         marks = self.landmark_estimates()
         return RunResult.of(
@@ -238,6 +243,7 @@ class StreamingEstimator:
             n_steps_processed=self.front.n_processed,
             completed=completed,
             ground_truth=ground_truth,
+            lagged_trajectory=lagged,
             covariances=solved.covariances([L(i) for i in marks]) if covariances else None,
             peak_rss=peak_rss_mb(),
             convergence_s=self.convergence_seconds if self.convergence is not None else None,

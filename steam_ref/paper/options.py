@@ -40,11 +40,12 @@ class StreamOptions:
     time_budget_s: float | None = None  # stop when the run has taken this long (reported)
     progress: bool = False  # tqdm progress bar
     lag: float | None = None  # BTGP only: fixed-lag smoothing, forget states older than this (seconds)
+    lag_history: bool = False  # with a lag: keep the forgotten conditionals, smooth the past at the end (history.py)
 
     def __post_init__(self) -> None:
         if self.method not in METHODS:
             raise SteamError(f"unknown method {self.method!r}; use one of {', '.join(METHODS)}")
-        for name in ("interpolate", "range_states", "progress", "converge_at_end"):
+        for name in ("interpolate", "range_states", "progress", "converge_at_end", "lag_history"):
             if not isinstance(getattr(self, name), bool):
                 raise SteamError(f"{name} must be True or False, got {getattr(self, name)!r}")
         Layout(self.skip, self.range_states, self.interpolate)  # checks skip
@@ -72,6 +73,8 @@ class StreamOptions:
 def _check_lag(o: StreamOptions) -> None:
     """A lag is a number of seconds > 0, for BTGP only, and not with converge_at_end (which needs every factor)."""
     if o.lag is None:
+        if o.lag_history:
+            raise SteamError("lag_history keeps what a lag forgets: give a lag too")
         return
     if not (_is_real(o.lag) and 0 < o.lag < np.inf):
         raise SteamError(f"lag must be a finite number of seconds > 0 (or None), got {o.lag!r}")

@@ -64,6 +64,7 @@ class RunResult:
     )
     n_marginalized: int | None = None  # with a lag: variables marginalized (states and landmarks)
     peak_window: int | None = None  # with a lag: most variables the solver held at once
+    rmse_lagged_m: float | None = None  # with a lag and its history: the RMSE of the estimates as they left the window
     divergence: tuple[str, ...] = ()  # readings beyond any plausible noise, a diverging estimate (paper.divergence)
 
     @classmethod
@@ -85,6 +86,7 @@ class RunResult:
         ground_truth: NDArray | None,
         covariances: Covariances | None,
         peak_rss: float,
+        lagged_trajectory: NDArray | None = None,
         convergence_s: float | None = None,
         converged_at_end: bool | None = None,
         n_marginalized: int | None = None,
@@ -93,10 +95,13 @@ class RunResult:
     ) -> RunResult:
         """Package a run, scoring it against ``ground_truth`` (CMU GT layout, x, y in columns 1-2) if given."""
         rmse = rmse_states = float("nan")
+        rmse_lagged = None if lagged_trajectory is None else float("nan")
         if ground_truth is not None and len(times):
             truth = np.asarray(ground_truth)[: len(times), 1:3]
             rmse = position_rmse(trajectory[:, :2], truth)
             rmse_states = position_rmse(trajectory[state_poses, :2], truth[state_poses])
+            if lagged_trajectory is not None:
+                rmse_lagged = position_rmse(lagged_trajectory[:, :2], truth)
         return cls(
             options=options,
             schedule=schedule,
@@ -118,6 +123,7 @@ class RunResult:
             converged_at_end=converged_at_end,
             n_marginalized=n_marginalized,
             peak_window=peak_window,
+            rmse_lagged_m=rmse_lagged,
             divergence=tuple(divergence),
         )
 
@@ -175,4 +181,8 @@ class RunResult:
         """With a lag, the figures of fixed-lag smoothing the CLI's ``--json`` adds; else nothing."""
         if self.options.lag is None:
             return {}
-        return {"lag_s": self.options.lag, "n_marginalized": self.n_marginalized, "peak_window": self.peak_window}
+        out = {"lag_s": self.options.lag, "n_marginalized": self.n_marginalized, "peak_window": self.peak_window}
+        if self.options.lag_history:  # rmse_m is then the smoothed past's; this, the estimates as they left the window
+            lagged = self.rmse_lagged_m
+            out |= {"lag_history": True, "rmse_lagged_m": None if lagged is None else _json_float(lagged)}
+        return out

@@ -163,20 +163,22 @@ class FixedLagTreeSolver(BayesTreeSolver):
 
     name = "btgp"
 
-    def __init__(self, params: ISAM2Params | None, lag: float, times: NDArray):
-        self.inner: FixedLagSmoother = FixedLagSmoother(lag, params)
+    def __init__(self, params: ISAM2Params | None, lag: float, times: NDArray, *, keep_history: bool = False):
+        self.inner: FixedLagSmoother = FixedLagSmoother(lag, params, keep_history=keep_history)
         self.reports: list = []  # UpdateReport of the latest KEPT_REPORTS updates only: memory stays flat
         self.times = np.asarray(times, dtype=float)  # time of each pose
         self._states = np.zeros((0, 0))  # (n_poses, n) estimate of each marginalized state X(pose), row by pose
         self._retired_states: set[int] = set()  # poses of the marginalized states
         self._landmarks: dict[Key, NDArray] = {}  # marginalized landmark → its estimate then
         self.forgotten: list[Key] = []  # the variables the last update marginalized
+        self._smoothed: dict[Key, NDArray] | None = None  # smooth_past()'s view of the past, until the next update
 
     def update(self, factors: list[Factor], values: Values) -> None:
         stamps = {k: float(self.times[k.index]) for k in values if k.kind == "x"}
         newest = max(stamps.values(), default=self.inner.newest)
         if np.isfinite(newest):
             stamps |= {k: newest for f in factors for k in f.keys if k.kind != "x"}
+        self._smoothed = None
         self.reports.append(self.inner.update(factors, values, timestamps=stamps))
         del self.reports[:-KEPT_REPORTS]
         done = self.inner.last_marginalization
@@ -192,8 +194,16 @@ class FixedLagTreeSolver(BayesTreeSolver):
         for k in values:
             self._landmarks.pop(k, None)  # entered again: the window's estimate is the one
 
+    def smooth_past(self) -> None:
+        """From now until the next update, a marginalized variable's estimate is its smoothed one, given all the
+        data so far (:meth:`FixedLagSmoother.smoothed_history`; needs ``keep_history``), not the lagged one."""
+        self._smoothed = self.inner.smoothed_history()
+
     def retired(self, key: Key) -> NDArray | None:
-        """The estimate ``key`` had when it was marginalized (None while it is in the window, or never held)."""
+        """The estimate ``key`` had when it was marginalized (None while it is in the window, or never held);
+        after :meth:`smooth_past`, its smoothed estimate."""
+        if self._smoothed is not None and key in self._smoothed and key not in self.inner.linearization_point:
+            return self._smoothed[key]
         if key.kind == "x":
             return self._states[key.index] if key.index in self._retired_states else None
         return self._landmarks.get(key)
@@ -204,10 +214,11 @@ class FixedLagTreeSolver(BayesTreeSolver):
 
     def estimate(self) -> Values:
         out = self.inner.estimate()
+        smoothed = self._smoothed or {}
         for i in sorted(self._retired_states):
-            out.insert(X(i), self._states[i])
-        for k, v in self._landmarks.items():
-            out.insert(k, v)
+            out.insert(X(i), smoothed.get(X(i), self._states[i]))
+        for k, v in self._landmarks.items():  # never in the window (popped when one enters again)
+            out.insert(k, smoothed.get(k, v))
         return out
 
 
