@@ -18,7 +18,7 @@ marginalized it; its estimate at that moment is in :attr:`FixedLagSmoother.last_
 (the caller keeps it if it wants it: the smoother does not, so that memory stays flat).
 
 ``keep_history=True`` keeps instead each marginalized variable's conditional (:mod:`.history`, about
-1 KB a state), and :meth:`FixedLagSmoother.smoothed_history` then gives every forgotten variable its
+2 KB a state), and :meth:`FixedLagSmoother.smoothed_history` then gives every forgotten variable its
 estimate given all the data so far, by one backward pass from the window (derivations §10.5): bounded
 work per update online, the whole smoothed trajectory at the end.
 """

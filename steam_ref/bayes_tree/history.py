@@ -22,7 +22,7 @@ this pass has already computed. For a linear problem the result is the batch opt
 ever given, to rounding (tests/test_fixed_lag_history.py).
 
 Each conditional is kept in solved form, x_v = m_v + K_v (x_S - θ̄_S) with m_v = θ̄_v + R_v⁻¹ d_v and
-K_v = -R_v⁻¹ S_v: about 1 KB for a 6-vector state whose separator holds a state and a few landmarks.
+K_v = -R_v⁻¹ S_v: about 2 KB for a 6-vector state whose separator holds a state and a few landmarks.
 Memory then grows with the run, a hundredth of what the whole tree would hold; the window's does not.
 """
 

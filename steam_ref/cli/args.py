@@ -208,7 +208,7 @@ def _add_run_arguments(run: argparse.ArgumentParser) -> None:
     run.add_argument(
         "--lag-history",
         action="store_true",
-        help="with --lag: keep each forgotten state's conditional (~1 KB) and smooth the past from the final window "
+        help="with --lag: keep each forgotten state's conditional (~2 KB) and smooth the past from the final window "
         "at the end (rmse_m; rmse_lagged_m is the estimates as they left the window; derivations §10.5)",
     )
     run.add_argument(
