@@ -8,11 +8,13 @@ import json
 import numpy as np
 import pytest
 from requirements import optional_import
+from scipy.stats import chi2
 
 from steam_ref.cli.commands import main
 from steam_ref.datasets import sample_from_model
 from steam_ref.errors import DataError, NumericalError, SteamError
 from steam_ref.evaluate import chi2_band, nees
+from steam_ref.evaluate.nees import _chi2_quantile
 from steam_ref.gp.prior import process_noise, transition
 from steam_ref.paper.consistency import ConsistencyStudy, consistency_setup, model_of, run_seed, summarize
 from steam_ref.paper.sweep import run_sweep
@@ -138,3 +140,10 @@ def test_the_consistency_command(tmp_path, capsys):
         assert main([*args, *bad]) == 2
         err = capsys.readouterr().err
         assert message in err and len(err.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize("dof", [1, 2, 3, 30, 600, 4000])
+def test_chi2_quantile_equals_scipy_stats(dof):
+    """The band's quantile (scipy.special, light to import) against scipy.stats.chi2.ppf, the oracle."""
+    for p in (0.001, 0.025, 0.5, 0.975, 0.999):
+        assert _chi2_quantile(p, dof) == pytest.approx(chi2.ppf(p, dof), rel=1e-12, abs=0)

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.stats import chi2
+from scipy.special import gammaincinv
 
 from ..errors import NumericalError, ShapeError, SteamError
 from ..pose2 import wrap_angle
@@ -64,7 +64,13 @@ def chi2_band(n_runs: int, dim: int, level: float = 0.95) -> tuple[float, float]
         raise SteamError(f"level must be a number in (0, 1), got {level!r}")
     dof = n_runs * dim
     tail = (1 - level) / 2
-    return float(chi2.ppf(tail, dof) / n_runs), float(chi2.ppf(1 - tail, dof) / n_runs)
+    return _chi2_quantile(tail, dof) / n_runs, _chi2_quantile(1 - tail, dof) / n_runs
+
+
+def _chi2_quantile(p: float, dof: int) -> float:
+    """χ²⁻¹(p; k) = 2 P⁻¹(k/2, p), P the regularized lower incomplete gamma function (SciPy's ``gammaincinv``;
+    ``scipy.stats.chi2.ppf`` computes the same, at 0.3 s of import)."""
+    return float(2 * gammaincinv(dof / 2, p))
 
 
 def verdict(anees: float, band: tuple[float, float]) -> str:
