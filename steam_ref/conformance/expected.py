@@ -93,8 +93,9 @@ def _incremental(name: str, inputs: Mapping) -> dict:
 def _fixed_lag(inputs: Mapping) -> dict:
     isam2, stream = inputs["isam2"], inputs["stream"]
     threshold, skip = float(isam2["relinearize_threshold"]), int(isam2["relinearize_skip"])
+    replay = lag.fixed_lag(stream["variables"], stream["updates"], float(inputs["lag"]), threshold, skip)
     out: dict = {}
-    for k, r in enumerate(lag.fixed_lag(stream["variables"], stream["updates"], float(inputs["lag"]), threshold, skip), 1):
+    for k, r in enumerate(replay, start=1):
         out[f"marginalized_{k}"] = r["marginalized"]
         if r["marginalized"]:
             out[f"separator_{k}"] = r["separator"]

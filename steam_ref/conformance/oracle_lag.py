@@ -93,8 +93,9 @@ def fixed_lag(
     Each update adds its factors and values (and timestamps); at the start of every ``skip``-th update
     each variable whose last δ has max|δ| ≥ ``threshold`` moves θ̄ ← θ̄ + δ; the window is solved at θ̄;
     then every timed variable with t < t_newest − ``lag`` is dropped (:func:`schur_complement` of the
-    factors adjacent to it). ``schur=False`` is the wrong answer of a port that only deletes the dropped
-    variables' factors (for tests of the checker). Returns one dict per update: ``marginalized`` (names in
+    factors adjacent to it). ``schur=False`` is the wrong answer of a port that leaves out the Schur
+    complement's correction, Λ = H_SS and η = g_S (it conditions on D at θ̄ instead of integrating it
+    out: overconfident), for tests of the checker. Returns one dict per update: ``marginalized`` (names in
     the order of ``variables``), and when any, ``separator``, ``point`` (θ̄_S stacked), ``information``
     (Λ), ``vector`` (η); then ``estimate`` and ``covariances`` (name → array) of the window.
     """
@@ -127,12 +128,13 @@ def fixed_lag(
             H, g = information(adjacent, near, theta, local, dims)
             nd = sum(dims[k] for k in drop)
             info, vector = schur_complement(H, g, np.arange(nd), np.arange(nd, len(g)))
+            if not schur:
+                info, vector = H[nd:, nd:], g[nd:]
             point = np.concatenate([theta[k] for k in sep])
             record.update(separator=sep, point=point, information=info, vector=vector)
             specs = [f for f in specs if not _touches(f["keys"], drop)]
             marginals = [m for m in marginals if not _touches(m.keys, drop)]
-            if schur:
-                marginals.append(Marginal(sep, info, vector, point))
+            marginals.append(Marginal(sep, info, vector, point))
             for k in drop:
                 del theta[k], times[k]
             order = [k for k in order if k not in drop]
