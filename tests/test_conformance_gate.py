@@ -131,6 +131,20 @@ def test_v2_results_check_against_the_shipped_v2_which_has_no_fixed_lag_suite(tm
     assert code == 0 and out.strip().splitlines()[-1] == "64 passed, 0 failed", out
 
 
+def test_fixed_lag_results_for_kit_v2_or_v1_are_refused_not_passed_unchecked(tmp_path, capsys):
+    write(tmp_path, "fixed_lag", results_of(SHIPPED, "fixed_lag"), version=2)
+    for args in ((), ("--only", "fixed_lag"), ("--allow-missing",)):
+        code, out, err = cli(capsys, "check", tmp_path, *args)
+        assert code == 2 and out == "" and "kit v2 has no suite 'fixed_lag'" in err and len(err.splitlines()) == 1, err
+    write(tmp_path, "fixed_lag", results_of(SHIPPED, "fixed_lag"), version=None)
+    code, _, err = cli(capsys, "check", tmp_path, "--only", "fixed_lag")
+    assert code == 2 and "kit v1 has no suite 'fixed_lag'" in err, err
+    shutil.rmtree(tmp_path / "fixed_lag")
+    write(tmp_path, "gp", results_of(KITS[2], "gp"), version=2)
+    code, _, err = cli(capsys, "check", tmp_path, "--only", "gp", "fixed_lag")
+    assert code == 2 and "kit v2 has no suite 'fixed_lag'" in err, err
+
+
 def test_v3_results_must_hold_the_fixed_lag_suite(tmp_path, capsys, ours):
     for suite in ("gp", "factors", "linear", "bayes_tree", "incremental"):
         write(tmp_path, suite, ours[suite])
