@@ -153,7 +153,7 @@ def _case(name: str, what: str, stream: dict, lag: float, isam2: dict, notes: di
     return Case(
         name,
         "[YIB Alg. 1, Eq. 9-11, 24; derivations Eq. 10.1-10.4]",
-        f"{what}; lag {lag:g} s. After each update k: marginalized_k (the variables with t < t_newest - lag, in the "
+        f"{what} (lag {lag:g} s). After each update k: marginalized_k (the variables with t < t_newest - lag, in the "
         "order of 'variables'); when any, separator_k (the other variables of the factors adjacent to them, same "
         "order), the marginal factor they leave in information form at the linearization point "
         "marginal_point_k (θ̄ of the separator, stacked): marginal_information_k = Λ, marginal_vector_k = η; "
@@ -194,8 +194,8 @@ def fixed_lag_cases() -> list[Case]:
         _case(
             "mid_clique_relinearize_every_update",
             f"{marks}; a short lag: each state goes one update after the next arrives, while it still shares its "
-            "clique with the landmark and the newer state (x0 after update 2 is a frontal of the root, beside l0 and "
-            "x1: not a leaf)",
+            "clique with the landmark and the newer state (after update 2, x0 is a frontal of iSAM2's root clique "
+            "beside l0 and x1: not a leaf)",
             LANDMARKS,
             0.4,
             EVERY,
