@@ -280,7 +280,7 @@ def test_gtsam_passes_every_case_it_computes(tmp_path, capsys):
     assert run.returncode == 0, run.stderr
     code, out, _ = cli(capsys, "check", tmp_path, "--allow-missing")
     last = out.strip().splitlines()[-1]
-    assert code == 0 and " passed, 0 failed" in last and int(last.split()[0]) >= 48, out
+    assert code == 0 and " passed, 0 failed" in last and int(last.split()[0]) >= 50, out
     computed = {s: set(json.loads((tmp_path / s / "results.json").read_text())["cases"]) for s in GTSAM_SUITES}
     assert {
         "trajectory_xl_cliques",
@@ -296,19 +296,15 @@ def test_gtsam_passes_every_case_it_computes(tmp_path, capsys):
     assert {"bushy_cliques", "bushy_conditionals", "bushy_joint_covariances"} <= computed["bayes_tree"]
     assert {"gp_prior_heading_jump", "range_huber_at_threshold", "range_tukey_at_threshold"} <= computed["factors"]
     assert {"at_optimum_zero_increment", "gp_heading_jump"} <= computed["linear"]
+    # GTSAM's IncrementalFixedLagSmoother, an implementation independent of the oracle, passes the fixed_lag cases
+    # without relinearization (it holds a marginal factor's variables at their linearization point: the others differ)
+    assert computed["fixed_lag"] == {"linear_two_at_once", "mid_clique_no_relinearization"}
     assert {"wnoa_dt0.1", "interp_tau1.1", "interp_tau1.55"} <= computed["gp"] and "interpolated_range" in computed[
         "factors"
     ]
 
 
-GTSAM_SUITES = (
-    "gp",
-    "factors",
-    "linear",
-    "batch",
-    "bayes_tree",
-    "incremental",
-)  # not fixed_lag: see test_fixed_lag_gtsam
+GTSAM_SUITES = ("gp", "factors", "linear", "batch", "bayes_tree", "incremental", "fixed_lag")
 
 
 @pytest.mark.needs_data
