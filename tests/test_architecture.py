@@ -355,7 +355,12 @@ def test_module_is_at_most_400_lines(path):
         assert n <= MAX_LINES, f"{name} has {n} lines (> {MAX_LINES}): split it by job"
 
 
-ORACLE = ("steam_ref.conformance.oracle", "steam_ref.conformance.oracle_graph", "steam_ref.conformance.expected")
+ORACLE = (
+    "steam_ref.conformance.oracle",
+    "steam_ref.conformance.oracle_graph",
+    "steam_ref.conformance.oracle_lag",
+    "steam_ref.conformance.expected",
+)
 
 
 def test_the_conformance_oracle_imports_nothing_of_steam_ref_but_its_errors():

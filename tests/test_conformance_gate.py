@@ -22,9 +22,10 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from steam_ref.cli import main
-from steam_ref.conformance import KITS, SHIPPED, SUITES, kitio, run_case
-from steam_ref.conformance.kitio import dumps, kit_files, read_suite, sha256
+from steam_ref.conformance import KIT_VERSION, KITS, SHIPPED, SUITES, kitio, oracle_lag, run_case
+from steam_ref.conformance.kitio import dumps, kit_files, read_index, read_suite, sha256
 from steam_ref.conformance.oracle_graph import stream
+from steam_ref.conformance.oracle_lag import fixed_lag
 
 
 def cli(capsys, *args) -> tuple[int, str, str]:
@@ -41,7 +42,7 @@ def results_of(kit: Path, suite: str) -> dict:
     return out
 
 
-def write(folder: Path, suite: str, cases: dict, version: int | None = 2) -> Path:
+def write(folder: Path, suite: str, cases: dict, version: int | None = KIT_VERSION) -> Path:
     (folder / suite).mkdir(parents=True, exist_ok=True)
     head = {} if version is None else {"kit_version": version}
     (folder / suite / "results.json").write_text(dumps({**head, "cases": cases}))
@@ -97,17 +98,160 @@ def test_a_structure_mismatch_prints_the_differing_cliques_in_full(tmp_path, cap
 # --- v1 stays checkable ---------------------------------------------------------------------------
 
 
+def computed_suites(kit: Path) -> list[str]:
+    """The suites of ``kit`` computed from their inputs (all but paper)."""
+    return [s for s in read_index(kit)["suites"] if s != "paper"]
+
+
 def test_v1_results_without_a_kit_version_check_against_v1(tmp_path, capsys):
-    for suite in SUITES[:-1]:
+    v1 = computed_suites(KITS[1])
+    assert "fixed_lag" not in v1
+    for suite in v1:
         write(tmp_path, suite, results_of(KITS[1], suite), version=None)
-    code, out, _ = cli(capsys, "check", tmp_path, "--only", *SUITES[:-1])
+    code, out, _ = cli(capsys, "check", tmp_path, "--only", *v1)
     assert code == 0 and out.strip().splitlines()[-1] == "50 passed, 0 failed", out
     assert "checked as kit v1 results against the shipped kit v1" in out
     write(tmp_path, "gp", results_of(KITS[1], "gp"), version=2)  # a mix of versions is refused
-    code, _, err = cli(capsys, "check", tmp_path, "--only", *SUITES[:-1])
+    code, _, err = cli(capsys, "check", tmp_path, "--only", *v1)
     assert code == 2 and "different kit versions" in err
     code, _, err = cli(capsys, "check", tmp_path, "--only", "gp", "--kit", KITS[1])
     assert code == 2 and "kit_version 2" in err and "v1" in err
+
+
+def test_v2_results_check_against_the_shipped_v2_which_has_no_fixed_lag_suite(tmp_path, capsys):
+    v2 = computed_suites(KITS[2])
+    assert v2 == [s for s in SUITES if s not in ("fixed_lag", "paper")]
+    for suite in v2:
+        write(tmp_path, suite, results_of(KITS[2], suite), version=2)
+    code, out, _ = cli(capsys, "check", tmp_path)
+    lines = out.strip().splitlines()
+    assert code == 1 and lines[-1] == "64 passed, 0 failed, 2 missing", out  # the paper suite: not computed here
+    assert "fixed_lag" not in out
+    code, out, _ = cli(capsys, "check", tmp_path, "--only", *v2)
+    assert code == 0 and out.strip().splitlines()[-1] == "64 passed, 0 failed", out
+
+
+def test_fixed_lag_results_for_kit_v2_or_v1_are_refused_not_passed_unchecked(tmp_path, capsys):
+    write(tmp_path, "fixed_lag", results_of(SHIPPED, "fixed_lag"), version=2)
+    for args in ((), ("--only", "fixed_lag"), ("--allow-missing",)):
+        code, out, err = cli(capsys, "check", tmp_path, *args)
+        assert code == 2 and out == "" and "kit v2 has no suite 'fixed_lag'" in err and len(err.splitlines()) == 1, err
+    write(tmp_path, "fixed_lag", results_of(SHIPPED, "fixed_lag"), version=None)
+    code, _, err = cli(capsys, "check", tmp_path, "--only", "fixed_lag")
+    assert code == 2 and "kit v1 has no suite 'fixed_lag'" in err, err
+    shutil.rmtree(tmp_path / "fixed_lag")
+    write(tmp_path, "gp", results_of(KITS[2], "gp"), version=2)
+    code, _, err = cli(capsys, "check", tmp_path, "--only", "gp", "fixed_lag")
+    assert code == 2 and "kit v2 has no suite 'fixed_lag'" in err, err
+
+
+def test_v3_results_must_hold_the_fixed_lag_suite(tmp_path, capsys, ours):
+    for suite in ("gp", "factors", "linear", "bayes_tree", "incremental"):
+        write(tmp_path, suite, ours[suite])
+    write(tmp_path, "batch", results_of(SHIPPED, "batch"))
+    code, out, _ = cli(capsys, "check", tmp_path, "--only", *SUITES[:-1])
+    assert code == 1 and "MISSING: 4 cases of fixed_lag have no result: linear_two_at_once, " in out, out
+    write(tmp_path, "fixed_lag", {})  # {"cases": {}} is no pass either
+    code, out, _ = cli(capsys, "check", tmp_path, "--only", *SUITES[:-1])
+    assert code == 1 and "MISSING: 4 cases of fixed_lag" in out, out
+    write(tmp_path, "fixed_lag", results_of(SHIPPED, "fixed_lag"))
+    code, out, _ = cli(capsys, "check", tmp_path, "--only", *SUITES[:-1])
+    assert code == 0 and out.strip().splitlines()[-1] == "68 passed, 0 failed", out
+
+
+def conditioning_results(case: dict) -> dict:
+    """A port that drops the Schur complement's correction: on the separator it keeps Λ = H_SS, η = g_S of the
+    dropped variables' factors (it conditions on them instead of integrating them out), and solves the window
+    with that factor (the dense replay with ``schur=False``)."""
+    inputs = case["inputs"]
+    isam2, stream = inputs["isam2"], inputs["stream"]
+    replay = fixed_lag(
+        stream["variables"], stream["updates"], inputs["lag"], float(isam2["relinearize_threshold"]), schur=False
+    )
+    out = as_results(replay)
+    return json.loads(dumps({q: out[q] for q in case["tolerance"]}))
+
+
+def as_results(replay: list[dict]) -> dict:
+    """The oracle's per-update records as the quantities of a fixed_lag case."""
+    out: dict = {}
+    for k, r in enumerate(replay, start=1):
+        out[f"marginalized_{k}"] = r["marginalized"]
+        if r["marginalized"]:
+            out[f"separator_{k}"] = r["separator"]
+            out[f"marginal_point_{k}"] = r["point"]
+            out[f"marginal_information_{k}"] = r["information"]
+            out[f"marginal_vector_{k}"] = r["vector"]
+        out[f"estimate_{k}"] = r["estimate"]
+        out[f"covariances_{k}"] = r["covariances"]
+    return out
+
+
+def first_drop(case: dict) -> int:
+    return min(int(q.rsplit("_", 1)[1]) for q in case["tolerance"] if q.startswith("separator_"))
+
+
+def test_a_marginal_factor_without_the_schur_complement_fails_every_fixed_lag_case(tmp_path, capsys):
+    cases = read_suite(SHIPPED, "fixed_lag")["cases"]
+    write(tmp_path, "fixed_lag", {c["name"]: conditioning_results(c) for c in cases})
+    code, out, _ = cli(capsys, "check", tmp_path, "--only", "fixed_lag")
+    lines = out.strip().splitlines()
+    assert code == 1 and lines[-1] == f"0 passed, {len(cases)} failed", out
+    for c in cases:
+        k = first_drop(c)
+        head = next(line for line in lines if line.startswith(f"FAIL fixed_lag/{c['name']}: "))
+        assert f": marginal_information_{k} worst |diff|" in head and "likely cause" in head, head
+        # conditioning is overconfident: the window's covariances are wrong from that update on
+        assert any(line.startswith(f"  covariances_{k}/") and " worst |diff| " in line for line in lines), out
+
+
+def test_a_marginal_factor_not_moved_with_its_linearization_point_fails_the_relinearizing_cases(
+    tmp_path, capsys, monkeypatch
+):
+    """A port that keeps η fixed while θ̄ moves (no Eq. 10.4 shift: the frozen factor taken as a factor of the
+    new δ′) fails where the separator is relinearized after a marginalization, and only there."""
+    plain = oracle_lag.information
+
+    def unshifted(specs, marginals, theta, order, dims):
+        here = [
+            oracle_lag.Marginal(m.keys, m.info, m.vector, np.concatenate([theta[k] for k in m.keys])) for m in marginals
+        ]
+        return plain(specs, here, theta, order, dims)
+
+    monkeypatch.setattr(oracle_lag, "information", unshifted)
+    cases = read_suite(SHIPPED, "fixed_lag")["cases"]
+    results = {}
+    for c in cases:
+        inputs = c["inputs"]
+        isam2, stream = inputs["isam2"], inputs["stream"]
+        replay = oracle_lag.fixed_lag(
+            stream["variables"], stream["updates"], inputs["lag"], float(isam2["relinearize_threshold"])
+        )
+        results[c["name"]] = json.loads(dumps({q: as_results(replay)[q] for q in c["tolerance"]}))
+    write(tmp_path, "fixed_lag", results)
+    code, out, _ = cli(capsys, "check", tmp_path, "--only", "fixed_lag")
+    failed = {line.split()[1].rstrip(":") for line in out.splitlines() if line.startswith("FAIL ")}
+    assert code == 1 and failed == {f"fixed_lag/{c['name']}" for c in cases if "relinearize_every" in c["name"]}, out
+    assert all(
+        c["inputs"]["isam2"]["relinearize_threshold"] == "inf" for c in cases if "relinearize_every" not in c["name"]
+    )
+
+
+def test_deleting_the_old_variables_factors_fails_every_fixed_lag_case(tmp_path, capsys):
+    """Nothing left on the separator (Λ = 0, η = 0), everything else steam_ref's own right answer."""
+    cases = read_suite(SHIPPED, "fixed_lag")["cases"]
+    bad = results_of(SHIPPED, "fixed_lag")
+    for c in cases:
+        for q in c["tolerance"]:
+            if q.startswith(("marginal_information_", "marginal_vector_")):
+                bad[c["name"]][q] = np.zeros_like(np.array(bad[c["name"]][q])).tolist()
+    write(tmp_path, "fixed_lag", bad)
+    code, out, _ = cli(capsys, "check", tmp_path, "--only", "fixed_lag")
+    lines = out.strip().splitlines()
+    assert code == 1 and lines[-1] == f"0 passed, {len(cases)} failed", out
+    for c in cases:
+        head = next(line for line in lines if line.startswith(f"FAIL fixed_lag/{c['name']}: "))
+        assert f": marginal_information_{first_drop(c)} worst |diff|" in head, head
 
 
 # --- conventions ----------------------------------------------------------------------------------

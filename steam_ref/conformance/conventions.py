@@ -70,6 +70,19 @@ CONVENTIONS = {
     "elimination order) is frontal. nnz_k = sum over cliques of n_f (n_f + 1)/2 + n_f n_s (frontal and separator "
     "sizes): GTSAM's ISAM2::treeNnz. With relinearization, the relinearized variables are taken in the order "
     "steam_ref's back-substitution found them over beta: those cases pin steam_ref's behaviour",
+    "fixed_lag": "a stream's updates carry timestamps (seconds) of their new variables; after each update (its "
+    "relinearization and solve, as 'incremental'), every timed variable with t < t_newest - lag (t_newest the latest "
+    "timestamp so far) is marginalized; a variable without a timestamp (a landmark) never is. Marginalizing D: the "
+    "factors adjacent to D (earlier marginal factors too), linearized at the current linearization points theta_bar, "
+    "have information H = A^T A and vector g = A^T b over D and its separator S (the other variables of those "
+    "factors); they are replaced by the marginal factor Lambda = H_SS - H_SD H_DD^-1 H_DS, eta = g_S - H_SD H_DD^-1 "
+    "g_D (the Schur complement; unique, whatever the elimination order or the tree), i.e. 1/2 d^T Lambda d - eta^T d "
+    "with d = theta_S - theta0_S, theta0_S = theta_bar_S at that moment. It is frozen there (first-estimate "
+    "Jacobians): at a later linearization point theta_bar' it contributes Lambda and eta - Lambda (theta_bar'_S - "
+    "theta0_S) to the system. S and marginalized_k list names in the order of the stream's 'variables'; "
+    "marginal_point_k is theta0_S stacked in that order. estimate_k is theta_bar + delta of every variable left "
+    "after update k and its marginalization; covariances_k the diagonal blocks of the inverse of the window's "
+    "information (the same before and after marginalizing)",
     "floats": "JSON numbers are the shortest decimal that reads back to the same IEEE-754 double "
     "(at most 17 significant digits, so reading with strtod is exact); no NaN or inf. "
     "Arrays are nested lists, row-major",
@@ -107,7 +120,7 @@ def depends_on(suite: str, quantity: str) -> list[str]:
 
 
 RESULTS_LAYOUT = (
-    'RESULTS_DIR/<suite>/results.json = {"kit_version": 2, "cases": {"<case name>": {"<quantity>": value, ...}}}: '
+    'RESULTS_DIR/<suite>/results.json = {"kit_version": 3, "cases": {"<case name>": {"<quantity>": value, ...}}}: '
     "the quantities of each case named as in its 'tolerance', values shaped as in its 'expected'; every case of "
     "the kit must have a result unless check is given --only SUITE... or --allow-missing"
 )

@@ -9,6 +9,7 @@ import numpy as np
 from ..errors import SteamError
 from . import oracle as o
 from . import oracle_graph as g
+from . import oracle_lag as lag
 
 __all__ = ["oracle_case", "oracle_alternatives", "ALTERNATIVES"]
 
@@ -89,6 +90,23 @@ def _incremental(name: str, inputs: Mapping) -> dict:
     return out
 
 
+def _fixed_lag(inputs: Mapping) -> dict:
+    isam2, stream = inputs["isam2"], inputs["stream"]
+    threshold, skip = float(isam2["relinearize_threshold"]), int(isam2["relinearize_skip"])
+    replay = lag.fixed_lag(stream["variables"], stream["updates"], float(inputs["lag"]), threshold, skip)
+    out: dict = {}
+    for k, r in enumerate(replay, start=1):
+        out[f"marginalized_{k}"] = r["marginalized"]
+        if r["marginalized"]:
+            out[f"separator_{k}"] = r["separator"]
+            out[f"marginal_point_{k}"] = r["point"]
+            out[f"marginal_information_{k}"] = r["information"]
+            out[f"marginal_vector_{k}"] = r["vector"]
+        out[f"estimate_{k}"] = r["estimate"]
+        out[f"covariances_{k}"] = r["covariances"]
+    return out
+
+
 def oracle_case(suite: str, name: str, inputs: Mapping) -> dict:
     """The expected output quantities of an independent case, computed without steam_ref's solvers."""
     if suite == "gp":
@@ -104,6 +122,8 @@ def oracle_case(suite: str, name: str, inputs: Mapping) -> dict:
         return _bayes_tree(name, inputs)
     if suite == "incremental":
         return _incremental(name, inputs)
+    if suite == "fixed_lag":
+        return _fixed_lag(inputs)
     raise SteamError(f"no oracle for suite {suite!r}")
 
 

@@ -6,8 +6,10 @@ anything missing fails (exit 1) unless ``only`` names the suites to check or ``a
 so; what was skipped is printed either way. A results folder with no results at all, a malformed
 file, or results for another kit version is bad input (exit 2).
 
-A results file names the kit version it was computed against (``"kit_version": 2``); one without
-it was written for kit v1, before the field existed, and is checked against the shipped v1.
+A results file names the kit version it was computed against (``"kit_version": 3``); one without
+it was written for kit v1, before the field existed, and is checked against the shipped v1. Results
+for a suite the kit does not have (``fixed_lag`` results naming kit v2), or ``only`` naming one, are
+bad input: nothing would be compared, and nothing is passed unchecked.
 """
 
 from __future__ import annotations
@@ -87,7 +89,13 @@ def check_directory(
             f"{printable(results_dir)}: the results name {said}, the kit {printable(kit_path)} is v{index['kit_version']}"
         )
     if conventions and not index.get("convention_alternatives"):
-        raise SteamError(f"kit v{index['kit_version']} has no convention alternatives (kit v2 has them)")
+        raise SteamError(f"kit v{index['kit_version']} has no convention alternatives (kits v2 and later have them)")
+    absent = [s for s in chosen if s not in suites and (only is not None or s in files)]
+    if absent:
+        raise SteamError(
+            f"kit v{index['kit_version']} has no suite '{absent[0]}' (its suites: {', '.join(suites)}), "
+            f"so its results cannot be checked against it"
+        )
     report = Report(allow_missing=allow_missing)
     if None in versions.values():
         report.notes.append("the results name no kit_version: checked as kit v1 results against the shipped kit v1")

@@ -42,10 +42,11 @@ __all__ = [
     "kit_files",
 ]
 
-KIT_VERSION = 2  # the version this steam_ref builds; older ones stay shipped and checkable
-KITS = {v: Path(__file__).resolve().parent / f"v{v}" for v in (1, 2)}  # every kit inside the installed package
+KIT_VERSION = 3  # the version this steam_ref builds; older ones stay shipped and checkable
+KITS = {v: Path(__file__).resolve().parent / f"v{v}" for v in (1, 2, 3)}  # every kit inside the installed package
 SHIPPED = KITS[KIT_VERSION]
-SUITES = ("gp", "factors", "linear", "batch", "bayes_tree", "incremental", "paper")
+# every suite of any kit (v1 and v2 have all but fixed_lag); 'paper' last: it is built from the data files
+SUITES = ("gp", "factors", "linear", "batch", "bayes_tree", "incremental", "fixed_lag", "paper")
 MAX_BYTES = 64 * 2**20  # a kit or results file larger than this is refused, not read (the kit's largest is ~1 MB)
 MAX_DEPTH = 64  # JSON nesting deeper than this is refused (the kit's deepest is 8)
 MAX_DIGITS = 18  # an integer literal longer than this is refused (the kit's integers are counts and ids)

@@ -46,6 +46,10 @@ QUANTITIES = {
     "null for a root); conditionals: first frontal -> {R, S, d}; covariances: 'k1,k2' -> joint block",
     "incremental": "estimate_k: key -> vector after update k; relinearized_k: sorted names moved at update k; "
     "update_k: {removed, orphans} (each clique named by its frontals, sorted); nnz_k: the fill of R",
+    "fixed_lag": "for each update k: marginalized_k (names, in the order of 'variables'); when any, separator_k "
+    "(names, same order), marginal_point_k (theta0 of the separator, stacked), marginal_information_k (Lambda) and "
+    "marginal_vector_k (eta) over the separator stacked in that order; estimate_k: key -> vector of the window; "
+    "covariances_k: key -> its marginal covariance (conventions, fixed_lag)",
     "paper": "poses, velocities at the state_poses; landmarks by id; rmse_m",
 }
 
@@ -60,6 +64,8 @@ SUITE_INPUTS = {
     "linearization point, or the start of batch)}, ordering (keys), iterations (batch) or groups (covariances)",
     "incremental": "stream = {variables, updates: [{values (new variables only), factors (new ones)}]} and isam2 = "
     "{relinearize_threshold (a number or 'inf'), relinearize_skip, wildfire_threshold}",
+    "fixed_lag": "stream = {variables, updates: [{values (new variables only), timestamps (new variable -> "
+    "seconds; landmarks have none), factors (new ones)}]}, lag (seconds) and isam2 as for incremental",
     "paper": "dataset, file and sha256 of the paper's data file, the authors' run, method, every, setup (fields "
     "below), setup_fields and procedure (the texts below), state_poses (the poses whose states are compared)",
 }

@@ -14,7 +14,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..batch import gauss_newton
-from ..bayes_tree import BayesTree, IncrementalSolver
+from ..bayes_tree import BayesTree, FixedLagSmoother, IncrementalSolver, MarginalFactor
 from ..covariance import tree_joint_covariance
 from ..errors import SteamError
 from ..gp import (
@@ -233,9 +233,12 @@ def _bayes_tree(name: str, inputs: Mapping) -> dict:
     }
 
 
+def _isam2(inputs: Mapping) -> dict:
+    return {k: (float(v) if k != "relinearize_skip" else int(v)) for k, v in inputs["isam2"].items()}
+
+
 def _incremental(name: str, inputs: Mapping) -> dict:
-    params = {k: (float(v) if k != "relinearize_skip" else int(v)) for k, v in inputs["isam2"].items()}
-    solver = IncrementalSolver(None, **params)
+    solver = IncrementalSolver(None, **_isam2(inputs))
     out: dict[str, object] = {}
     for k, u in enumerate(inputs["stream"]["updates"], start=1):
         before = {cid: [spec.key_name(v) for v in c.frontals] for cid, c in solver.tree.cliques.items()}
@@ -256,6 +259,53 @@ def _incremental(name: str, inputs: Mapping) -> dict:
     return out
 
 
+def _marginal_factor(smoother: FixedLagSmoother, ids, order: list[str]) -> dict:
+    """The marginal factors ``ids`` summed into Λ, η over their keys in ``order``, and their point θ̄⁰."""
+    factors = [f for f in (smoother.factors[j] for j in ids) if isinstance(f, MarginalFactor)]
+    if len(factors) != len(ids):
+        raise SteamError(f"factors {list(ids)} are not all marginal factors")
+    names = {spec.key_name(k) for f in factors for k in f.keys}
+    sep = [k for k in order if k in names]
+    dims = {spec.key_name(k): d for f in factors for k, d in zip(f.keys, f.dims, strict=True)}
+    start = dict(zip(sep, np.cumsum([0] + [dims[k] for k in sep]), strict=False))
+    n = sum(dims[k] for k in sep)
+    info, vector, point = np.zeros((n, n)), np.zeros(n), np.zeros(n)
+    for f in factors:
+        idx = np.concatenate([start[spec.key_name(k)] + np.arange(d) for k, d in zip(f.keys, f.dims, strict=True)])
+        info[np.ix_(idx, idx)] += f.A.T @ f.A
+        vector[idx] += f.A.T @ f.b
+        point[idx] = f.theta0
+    return {"separator": sep, "point": point, "information": info, "vector": vector}
+
+
+def _fixed_lag(inputs: Mapping) -> dict:
+    """A FixedLagSmoother run on the stream: after each update what went, its marginal factor, the window."""
+    stream = inputs["stream"]
+    order = list(stream["variables"])
+    smoother = FixedLagSmoother(float(inputs["lag"]), **_isam2(inputs))
+    out: dict[str, object] = {}
+    for k, u in enumerate(stream["updates"], start=1):
+        smoother.update(
+            [spec.factor(f) for f in u["factors"]],
+            {spec.key(n): np.asarray(v, float) for n, v in u["values"].items()},
+            timestamps={spec.key(n): float(t) for n, t in u["timestamps"].items()},
+        )
+        done = smoother.last_marginalization
+        gone = set() if done is None else {spec.key_name(v) for v in done.keys}
+        out[f"marginalized_{k}"] = [v for v in order if v in gone]
+        if done is not None:
+            m = _marginal_factor(smoother, done.marginal_factors, order)
+            out[f"separator_{k}"] = m["separator"]
+            out[f"marginal_point_{k}"] = m["point"]
+            out[f"marginal_information_{k}"] = m["information"]
+            out[f"marginal_vector_{k}"] = m["vector"]
+        estimate = smoother.estimate()
+        out[f"estimate_{k}"] = {spec.key_name(key): np.asarray(estimate[key]) for key in estimate}
+        covs = smoother.marginal_covariances()
+        out[f"covariances_{k}"] = {spec.key_name(key): np.asarray(c) for key, c in covs.items()}
+    return out
+
+
 def run_case(suite: str, name: str, inputs: Mapping) -> dict:
     """The output quantities of one case, computed by steam_ref from the case's inputs."""
     if suite == "gp":
@@ -270,4 +320,6 @@ def run_case(suite: str, name: str, inputs: Mapping) -> dict:
         return _bayes_tree(name, inputs)
     if suite == "incremental":
         return _incremental(name, inputs)
+    if suite == "fixed_lag":
+        return _fixed_lag(inputs)
     raise SteamError(f"no runner for suite {suite!r}")

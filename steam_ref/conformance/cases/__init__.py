@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from .base import EXACT, Case, tol
 from .factors import factor_cases
+from .fixed_lag import fixed_lag_cases
 from .gp import gp_cases
 from .graphs import batch_cases, bayes_tree_cases, incremental_cases, linear_cases
 from .graphs_v2 import batch_cases_v2, bayes_tree_cases_v2, incremental_cases_v2, linear_cases_v2
@@ -34,6 +35,11 @@ SUITE_DOCS = {
         "a stream of five iSAM2 updates: the estimate after each (relinearizing every update, never, or partially), "
         "the variables relinearized; the cliques removed, the orphans and the fill of R"
     ),
+    "fixed_lag": (
+        "streams of timed updates with a lag (kit v3): after each update the variables marginalized, the marginal "
+        "factor they leave on their separator (Λ, η at the frozen linearization point), the window's estimate and "
+        "marginal covariances"
+    ),
     "paper": "the paper's runs (BTGP/1 on the synthetic set and on Plaza): final estimates and RMSE",
 }
 
@@ -47,4 +53,5 @@ def suite_cases(suite: str) -> list[Case]:
         "batch": lambda: batch_cases() + batch_cases_v2(),
         "bayes_tree": lambda: bayes_tree_cases() + bayes_tree_cases_v2(),
         "incremental": lambda: incremental_cases() + incremental_cases_v2(),
+        "fixed_lag": fixed_lag_cases,
     }[suite]()
