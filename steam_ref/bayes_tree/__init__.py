@@ -7,7 +7,8 @@
 - :mod:`.params`: :class:`ISAM2Params`, the solver's thresholds (GTSAM's defaults);
 - :mod:`.isam`: :class:`IncrementalSolver`, the update of Algorithm 1 (steps 2-7);
 - :mod:`.marginalize`: :func:`marginalize`, variables out of the tree, leaving their marginal factor;
-- :mod:`.fixed_lag`: :class:`FixedLagSmoother`, iSAM2 over a sliding window of a lag in seconds.
+- :mod:`.fixed_lag`: :class:`FixedLagSmoother`, iSAM2 over a sliding window of a lag in seconds;
+- :mod:`.history`: the conditionals a fixed-lag smoother forgot, kept to smooth its past at the end;
 - :mod:`.backsolve`: its partial back-substitution a tree level at a time in stacked NumPy calls
   (``ISAM2Params(backsubstitution="batched")``).
 """
