@@ -74,6 +74,7 @@ def test_a_kept_history_changes_nothing_online_and_smooths_the_past(data):
     # the conditionals were frozen: tests/test_fixed_lag_history.py checks it where nothing moved; Plaza: 2 mm)
     summary = kept.lag_summary()
     assert summary["lag_history"] is True and summary["rmse_lagged_m"] == round(lagged.rmse_m, 6)
+    assert kept.history_smoothing_s is not None and 0 <= kept.history_smoothing_s < kept.total_s
     assert "lag_history" not in lagged.lag_summary()
 
 

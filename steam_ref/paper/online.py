@@ -223,10 +223,12 @@ class StreamingEstimator:
         """A :class:`RunResult` of what has been processed so far (with ``lag_history``, the past smoothed
         from the final window; the estimates it had as it left the window give ``rmse_lagged_m``)."""
         solved = self.solved()
-        lagged = None
+        lagged, smoothing_s = None, None
         if isinstance(self.solver, FixedLagTreeSolver) and self.options.lag_history:
             lagged = solved.at_every_pose()[1]
+            start = time.perf_counter()
             self.solver.smooth_past()
+            smoothing_s = time.perf_counter() - start
         times, states = solved.at_every_pose()
         marks = self.landmark_estimates()
         return RunResult.of(
@@ -244,6 +246,7 @@ class StreamingEstimator:
             completed=completed,
             ground_truth=ground_truth,
             lagged_trajectory=lagged,
+            history_smoothing_s=smoothing_s,
             covariances=solved.covariances([L(i) for i in marks]) if covariances else None,
             peak_rss=peak_rss_mb(),
             convergence_s=self.convergence_seconds if self.convergence is not None else None,

@@ -65,6 +65,9 @@ class RunResult:
     n_marginalized: int | None = None  # with a lag: variables marginalized (states and landmarks)
     peak_window: int | None = None  # with a lag: most variables the solver held at once
     rmse_lagged_m: float | None = None  # with a lag and its history: the RMSE of the estimates as they left the window
+    history_smoothing_s: float | None = (
+        None  # with a lag and its history: wall time of the backward pass (not in total_s)
+    )
     divergence: tuple[str, ...] = ()  # readings beyond any plausible noise, a diverging estimate (paper.divergence)
 
     @classmethod
@@ -87,6 +90,7 @@ class RunResult:
         covariances: Covariances | None,
         peak_rss: float,
         lagged_trajectory: NDArray | None = None,
+        history_smoothing_s: float | None = None,
         convergence_s: float | None = None,
         converged_at_end: bool | None = None,
         n_marginalized: int | None = None,
@@ -124,6 +128,7 @@ class RunResult:
             n_marginalized=n_marginalized,
             peak_window=peak_window,
             rmse_lagged_m=rmse_lagged,
+            history_smoothing_s=history_smoothing_s,
             divergence=tuple(divergence),
         )
 
@@ -185,4 +190,7 @@ class RunResult:
         if self.options.lag_history:  # rmse_m is then the smoothed past's; this, the estimates as they left the window
             lagged = self.rmse_lagged_m
             out |= {"lag_history": True, "rmse_lagged_m": None if lagged is None else _json_float(lagged)}
+            out["history_smoothing_s"] = (
+                None if self.history_smoothing_s is None else round(self.history_smoothing_s, 4)
+            )
         return out

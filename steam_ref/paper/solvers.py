@@ -202,11 +202,12 @@ class FixedLagTreeSolver(BayesTreeSolver):
     def retired(self, key: Key) -> NDArray | None:
         """The estimate ``key`` had when it was marginalized (None while it is in the window, or never held);
         after :meth:`smooth_past`, its smoothed estimate."""
-        if self._smoothed is not None and key in self._smoothed and key not in self.inner.linearization_point:
-            return self._smoothed[key]
-        if key.kind == "x":
-            return self._states[key.index] if key.index in self._retired_states else None
-        return self._landmarks.get(key)
+        lagged = self._landmarks.get(key)  # a landmark that enters again leaves _landmarks
+        if key.kind == "x":  # a state never enters again
+            lagged = self._states[key.index] if key.index in self._retired_states else None
+        if lagged is None or self._smoothed is None:
+            return lagged
+        return self._smoothed.get(key, lagged)
 
     def estimate_of(self, key: Key) -> NDArray:
         retired = self.retired(key)
