@@ -11,7 +11,10 @@ run.
 A variable without a timestamp (a landmark, unless the caller gives one) is never marginalized; a
 timestamp may be refreshed (give a landmark the time it was last seen, and it is forgotten a lag
 after that). A marginalized variable given a value again (a landmark seen again) enters as a new
-variable: what was learnt of it before lives on only in the marginal factor on the window.
+variable: what was learnt of it before lives on only in the marginal factor on the window. The
+smoother decides what to forget from the timestamps alone: do not call :func:`marginalize` on it
+yourself (its timestamps and history would not know, and its next update would fail naming the key);
+give the variable an old timestamp instead.
 
 Queries of a marginalized variable raise :class:`UnknownVariableError` naming the update that
 marginalized it; its estimate at that moment is in :attr:`FixedLagSmoother.last_marginalization`
@@ -185,7 +188,10 @@ class FixedLagSmoother(IncrementalSolver):
         """Every marginalized variable's estimate given all the data so far (:meth:`.History.smooth`).
 
         Needs ``keep_history=True``. Each is an affine function of the window's current estimate through the
-        conditionals frozen at marginalization [derivations Eq. 10.5]; for a linear problem, the batch optimum.
+        conditionals frozen at marginalization [derivations Eq. 10.5]; for a linear problem, the batch optimum;
+        for a nonlinear one, the optimum of those frozen linearizations (:mod:`.history`). A landmark forgotten
+        and back in the window appears here as its *previous* incarnation, under the same key: merging this
+        dict over :meth:`estimate` would overwrite the live estimate with the stale one.
         """
         if self.history is None:
             raise SteamError("smoothed_history needs the conditionals: make the smoother with keep_history=True")

@@ -19,11 +19,16 @@ variable its estimate given all the data, as a Rauch-Tung-Striebel backward pass
 with θ̄ the linearization point at the moment v was marginalized (the conditional, like the marginal
 factor, is frozen there), and x_S the final estimate of each separator variable: the window's, or one
 this pass has already computed. For a linear problem the result is the batch optimum of every factor
-ever given, to rounding (tests/test_fixed_lag_history.py).
+ever given, to rounding (tests/test_fixed_lag_history.py). For a nonlinear one it is the optimum of the
+linearizations frozen at each marginalization: exact where nothing moved after (full iSAM2 to 1e-9 when
+nothing is relinearized), otherwise off by how far the separator moved, and not always closer to the truth
+than the lagged estimates (generated task, 300 steps, 8 s lag: RMSE 5.81 cm smoothed, 5.72 cm lagged; Plaza,
+60 s lag: 0.3362 m smoothed, 0.3668 m lagged, 0.3383 m for the full smoother).
 
 Each conditional is kept in solved form, x_v = m_v + K_v (x_S - θ̄_S) with m_v = θ̄_v + R_v⁻¹ d_v and
 K_v = -R_v⁻¹ S_v: about 2 KB for a 6-vector state whose separator holds a state and a few landmarks.
-Memory then grows with the run, a hundredth of what the whole tree would hold; the window's does not.
+Memory then grows with the run again, by about a sixth of what the whole tree would hold (Plaza: 1.8 KB
+a conditional against ~11.6 KB a state); the window's does not.
 """
 
 from __future__ import annotations
@@ -88,7 +93,8 @@ class History:
         self.conditionals.extend(conditionals)
 
     def smooth(self, window: Callable[[Key], NDArray]) -> dict[Key, NDArray]:
-        """Every forgotten variable's estimate given all the data: the backward pass of the module docstring.
+        """Every forgotten variable's estimate given all the data, through the conditionals frozen when it was
+        forgotten: the backward pass of the module docstring.
 
         ``window(key)`` is the final estimate of a variable still held. Conditionals are solved newest first,
         so each one's separator is either in the window or solved already. A variable forgotten twice (a

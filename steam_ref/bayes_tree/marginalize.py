@@ -182,7 +182,8 @@ def marginalize(
     Afterwards the solver holds the marginal over the other variables: for a linear problem its
     estimate and covariances of every other variable are those of the whole problem, to rounding.
     ``keep_conditionals``: the report also carries each key's conditional P(v | S) at the linearization
-    point of the moment (:class:`~.history.ForgottenConditional`), for a smoothing pass later.
+    point of the moment (:class:`~.history.ForgottenConditional`), for a smoothing pass later. A
+    :class:`~.fixed_lag.FixedLagSmoother` marginalizes by its timestamps: not for calling on one directly.
     Raises :class:`UnknownVariableError` for a key the solver does not hold; on any failure the solver
     is left as it was.
     """
@@ -204,11 +205,13 @@ def marginalize(
     order_drop = order[: len(drop)]
     estimates = {k: solver.estimate_of(k).copy() for k in order_drop}
     conditionals: list[Clique] | None = [] if keep_conditionals else None
+    schur_factors = eliminate_variables(order_drop, adjacent, solver._dims, conditionals)  # (Eq. 10.1-10.3)
+    theta = solver._theta_bar  # nothing is changed yet: a failure up to here leaves the solver as it was
+    forgotten = () if conditionals is None else tuple(ForgottenConditional.of(c, theta) for c in conditionals)
     leaves = _are_leaves(solver, cids, drop)
     if leaves:  # step 2: cut the cliques of D off; the Schur complement of D's factors goes to their parents
         inside = set(cids)
         tops = [c for c in cids if tree.parent[c] not in inside]
-        schur_factors = eliminate_variables(order_drop, adjacent, solver._dims, conditionals)  # (Eq. 10.1-10.3)
         homes = [_home(solver, gf.keys, tops) for gf in schur_factors]
         removed = list(cids)
         new_cids: list[int] = []
@@ -217,7 +220,6 @@ def marginalize(
             _record_factor(solver, home, j)
         tree.cut(removed)  # a child holding no variable of D hangs under the nearest clique left, its f(S) kept
     else:  # step 3: re-eliminate the affected part with D first
-        schur_factors = eliminate_variables(order_drop, adjacent, solver._dims, conditionals)
         removed_cliques, orphans, cliques, parents, owner, kept = _reeliminate(solver, cids, drop, schur_factors)
         removed = list(removed_cliques)
         factor_ids = _add_marginal_factors(solver, schur_factors)
@@ -226,8 +228,6 @@ def marginalize(
         new_cids = tree.insert_eliminated(cliques, parents)
         for o, own in zip(orphans, owner, strict=True):
             tree.attach(o, new_cids[own])
-    theta = solver._theta_bar
-    forgotten = () if conditionals is None else tuple(ForgottenConditional.of(c, theta) for c in conditionals)
     for j in dropped:
         solver._factors[j] = None  # type: ignore[call-overload]  # ids are positions: keep the slot
         solver._linear[j] = None

@@ -144,7 +144,20 @@ def run_text(s: dict) -> str:
         f"\n  time: total {s['total_s']:.2f} s{convergence}, update median {s['update_s_median']} s, "
         f"p95 {s['update_s_p95']} s, peak RSS {s['peak_rss_mb']} MB{state}"
     )
-    return head + score + timing
+    return head + score + _lag_text(s) + timing
+
+
+def _lag_text(s: dict) -> str:
+    """With --lag: what the window forgot, and which RMSE is which with --lag-history."""
+    if "lag_s" not in s:
+        return ""
+    text = f"\n  lag {s['lag_s']:g} s: {s['n_marginalized']} variables marginalized, at most {s['peak_window']} held at once"
+    if s.get("lag_history"):
+        text += (
+            f"; the RMSE above is the past smoothed from the final window at the end ({s['history_smoothing_s']} s, "
+            f"not in the total below); as each state left the window it was {s['rmse_lagged_m']} m"
+        )
+    return text
 
 
 def plot_title(s: dict) -> str:

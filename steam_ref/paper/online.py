@@ -221,10 +221,12 @@ class StreamingEstimator:
         self, ground_truth: NDArray | None = None, completed: bool = True, *, covariances: bool = False
     ) -> RunResult:
         """A :class:`RunResult` of what has been processed so far (with ``lag_history``, the past smoothed
-        from the final window; the estimates it had as it left the window give ``rmse_lagged_m``)."""
+        from the current window; the estimates it had as it left the window give ``rmse_lagged_m``; the
+        estimator's queries then give the smoothed past too, until the next update)."""
         solved = self.solved()
         lagged, smoothing_s = None, None
         if isinstance(self.solver, FixedLagTreeSolver) and self.options.lag_history:
+            self.solver.lagged_past()  # an earlier result() left the past smoothed
             lagged = solved.at_every_pose()[1]
             start = time.perf_counter()
             self.solver.smooth_past()

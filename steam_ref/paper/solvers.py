@@ -199,6 +199,10 @@ class FixedLagTreeSolver(BayesTreeSolver):
         data so far (:meth:`FixedLagSmoother.smoothed_history`; needs ``keep_history``), not the lagged one."""
         self._smoothed = self.inner.smoothed_history()
 
+    def lagged_past(self) -> None:
+        """Undo :meth:`smooth_past`: a marginalized variable's estimate is again the one it left the window with."""
+        self._smoothed = None
+
     def retired(self, key: Key) -> NDArray | None:
         """The estimate ``key`` had when it was marginalized (None while it is in the window, or never held);
         after :meth:`smooth_past`, its smoothed estimate."""
