@@ -17,7 +17,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from test_fixed_lag import EXACT, LinearStream, Offset, dense_posterior, renamed
 
-from steam_ref.bayes_tree import FixedLagSmoother, IncrementalSolver
+from steam_ref.bayes_tree import FixedLagSmoother, IncrementalSolver, marginalize
 from steam_ref.errors import SteamError
 from steam_ref.factors import Factor, PriorFactor
 from steam_ref.variables import L, X
@@ -131,3 +131,22 @@ def test_nonlinear_past_frozen_where_the_full_smoother_never_moved_equals_it(see
     for k in full.estimate():
         got = past[k] if k in past else lagged.estimate_of(k)
         np.testing.assert_allclose(got, full.estimate_of(k), rtol=0, atol=1e-9, err_msg=str(k))
+
+
+def test_marginalize_refuses_a_fixed_lag_smoother_and_leaves_it_as_it_was():
+    stream = LinearStream(4, 1)
+    smoother = stream.smoother = FixedLagSmoother(2.0, keep_history=True, **EXACT)
+    factors, values, stamps = stream.initial()
+    smoother.update(factors, values, timestamps=stamps)
+    for _ in range(6):
+        factors, values, stamps = stream.step()
+        smoother.update(factors, values, timestamps=stamps)
+    held, before, kept = sorted(smoother.timestamps, key=str), smoother.estimate(), len(smoother.history)
+    with pytest.raises(SteamError, match="forgets by its timestamps"):
+        marginalize(smoother, [held[0]])
+    assert sorted(smoother.timestamps, key=str) == held and len(smoother.history) == kept
+    for k in before:
+        np.testing.assert_array_equal(smoother.estimate_of(k), before[k])
+    factors, values, stamps = stream.step()
+    smoother.update(factors, values, timestamps=stamps)  # and it goes on
+    assert smoother.tree.problems() == []

@@ -12,9 +12,8 @@ A variable without a timestamp (a landmark, unless the caller gives one) is neve
 timestamp may be refreshed (give a landmark the time it was last seen, and it is forgotten a lag
 after that). A marginalized variable given a value again (a landmark seen again) enters as a new
 variable: what was learnt of it before lives on only in the marginal factor on the window. The
-smoother decides what to forget from the timestamps alone: do not call :func:`marginalize` on it
-yourself (its timestamps and history would not know, and its next update would fail naming the key);
-give the variable an old timestamp instead.
+smoother decides what to forget from the timestamps alone (:func:`marginalize` refuses it: its
+timestamps and history would not know); give a variable an old timestamp instead.
 
 Queries of a marginalized variable raise :class:`UnknownVariableError` naming the update that
 marginalized it; its estimate at that moment is in :attr:`FixedLagSmoother.last_marginalization`
@@ -40,7 +39,7 @@ from ..factors import Factor, check_factors
 from ..variables import Key
 from .history import History
 from .isam import IncrementalSolver
-from .marginalize import MarginalizationReport, marginalize
+from .marginalize import MarginalizationReport, _marginalize
 from .params import ISAM2Params
 from .report import UpdateReport
 
@@ -79,6 +78,8 @@ class FixedLagSmoother(IncrementalSolver):
 
     ``update(..., timestamps={key: t})`` gives new (or refreshed) timestamps in seconds.
     """
+
+    forgets_by_time = True  # :func:`marginalize` refuses it: what it forgets, it records
 
     def __init__(
         self, lag: float, params: ISAM2Params | None = None, *, keep_history: bool = False, **changes: object
@@ -127,7 +128,7 @@ class FixedLagSmoother(IncrementalSolver):
         old = [k for k, t in self._times.items() if t < cutoff]
         self.last_marginalization = None
         if old:
-            done = marginalize(self, old, keep_conditionals=self.history is not None)
+            done = _marginalize(self, old, keep_conditionals=self.history is not None)
             if self.history is not None:
                 self.history.extend(done.conditionals)
             for k in done.keys:

@@ -182,11 +182,23 @@ def marginalize(
     Afterwards the solver holds the marginal over the other variables: for a linear problem its
     estimate and covariances of every other variable are those of the whole problem, to rounding.
     ``keep_conditionals``: the report also carries each key's conditional P(v | S) at the linearization
-    point of the moment (:class:`~.history.ForgottenConditional`), for a smoothing pass later. A
-    :class:`~.fixed_lag.FixedLagSmoother` marginalizes by its timestamps: not for calling on one directly.
-    Raises :class:`UnknownVariableError` for a key the solver does not hold; on any failure the solver
-    is left as it was.
+    point of the moment (:class:`~.history.ForgottenConditional`), for a smoothing pass later.
+    Raises :class:`UnknownVariableError` for a key the solver does not hold, and :class:`SteamError` for a
+    :class:`~.fixed_lag.FixedLagSmoother`, which marginalizes by its timestamps and keeps its own record of
+    what it forgot; on any failure the solver is left as it was.
     """
+    if getattr(solver, "forgets_by_time", False):
+        raise SteamError(
+            "marginalize: a FixedLagSmoother forgets by its timestamps (and records what it forgot); give the "
+            "variables an old timestamp in its next update instead"
+        )
+    return _marginalize(solver, keys, keep_conditionals=keep_conditionals)
+
+
+def _marginalize(
+    solver: IncrementalSolver, keys: Iterable[Key], *, keep_conditionals: bool = False
+) -> MarginalizationReport:
+    """:func:`marginalize` without its check: what a :class:`~.fixed_lag.FixedLagSmoother` calls on itself."""
     drop_list = list(dict.fromkeys(key_list("keys", keys)))
     for k in drop_list:
         if k not in solver._dims:
