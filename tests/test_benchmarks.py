@@ -7,10 +7,13 @@ on, is a broken README command. Each runs here on a tiny task; the checks are on
 
 from __future__ import annotations
 
+import importlib.util
 import json
 import subprocess
 import sys
 from pathlib import Path
+
+import numpy as np
 
 BENCH = Path(__file__).resolve().parents[1] / "benchmarks"
 
@@ -37,3 +40,18 @@ def test_consistency_benchmark_gives_the_same_figures_in_parallel(tmp_path):
     sitting, last = rows
     assert sitting["seeds"] == 4 and sitting["same_figures"] is True and sitting["ratio"] > 0
     assert set(last["anees"]) >= {"batch", "btgp/1", "btgp/10"} and (tmp_path / "c.png").stat().st_size > 0
+
+
+def test_fixed_lag_benchmark_counts_the_backward_pass_in_a_history_row(capsys, monkeypatch):
+    """The Plaza rows' --lag-history path, on the generated task; and its total is step time plus the backward pass."""
+    spec = importlib.util.spec_from_file_location("fixed_lag_benchmark", BENCH / "fixed_lag.py")
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    out, updates = bench.row("synthetic", ["--steps", "60", "--lag", "5", "--lag-history"], 1)
+    assert out["rmse_lagged_m"] is not None and out["rmse_lagged_m"] != out["rmse_m"] and len(updates) == 60
+    assert json.loads(capsys.readouterr().out.splitlines()[-1])["command"].endswith("--lag-history")
+    line = {"total_s": 2.0, "peak_rss_mb": 100.0, "update_s_median": 0.01, "rmse_m": 0.1, "rmse_lagged_m": 0.2}
+    monkeypatch.setattr(bench, "run", lambda argv: (line | {"history_smoothing_s": 0.25}, np.zeros(10)))
+    assert bench.row("history", [], 1)[0]["total_s"] == 2.25
+    monkeypatch.setattr(bench, "run", lambda argv: (line, np.zeros(10)))
+    assert bench.row("no history", [], 1)[0]["total_s"] == 2.0
