@@ -23,6 +23,7 @@ from hypothesis import strategies as st
 
 from steam_ref.cli import main
 from steam_ref.conformance import KIT_VERSION, KITS, SHIPPED, SUITES, kitio, oracle_lag, run_case
+from steam_ref.conformance.expected import fixed_lag_quantities
 from steam_ref.conformance.kitio import dumps, kit_files, read_index, read_suite, sha256
 from steam_ref.conformance.oracle_graph import stream
 from steam_ref.conformance.oracle_lag import fixed_lag
@@ -168,23 +169,8 @@ def conditioning_results(case: dict) -> dict:
     replay = fixed_lag(
         stream["variables"], stream["updates"], inputs["lag"], float(isam2["relinearize_threshold"]), schur=False
     )
-    out = as_results(replay)
+    out = fixed_lag_quantities(replay)
     return json.loads(dumps({q: out[q] for q in case["tolerance"]}))
-
-
-def as_results(replay: list[dict]) -> dict:
-    """The oracle's per-update records as the quantities of a fixed_lag case."""
-    out: dict = {}
-    for k, r in enumerate(replay, start=1):
-        out[f"marginalized_{k}"] = r["marginalized"]
-        if r["marginalized"]:
-            out[f"separator_{k}"] = r["separator"]
-            out[f"marginal_point_{k}"] = r["point"]
-            out[f"marginal_information_{k}"] = r["information"]
-            out[f"marginal_vector_{k}"] = r["vector"]
-        out[f"estimate_{k}"] = r["estimate"]
-        out[f"covariances_{k}"] = r["covariances"]
-    return out
 
 
 def first_drop(case: dict) -> int:
@@ -227,7 +213,7 @@ def test_a_marginal_factor_not_moved_with_its_linearization_point_fails_the_reli
         replay = oracle_lag.fixed_lag(
             stream["variables"], stream["updates"], inputs["lag"], float(isam2["relinearize_threshold"])
         )
-        results[c["name"]] = json.loads(dumps({q: as_results(replay)[q] for q in c["tolerance"]}))
+        results[c["name"]] = json.loads(dumps({q: fixed_lag_quantities(replay)[q] for q in c["tolerance"]}))
     write(tmp_path, "fixed_lag", results)
     code, out, _ = cli(capsys, "check", tmp_path, "--only", "fixed_lag")
     failed = {line.split()[1].rstrip(":") for line in out.splitlines() if line.startswith("FAIL ")}

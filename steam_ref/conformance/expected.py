@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 
@@ -11,7 +11,7 @@ from . import oracle as o
 from . import oracle_graph as g
 from . import oracle_lag as lag
 
-__all__ = ["oracle_case", "oracle_alternatives", "ALTERNATIVES"]
+__all__ = ["oracle_case", "oracle_alternatives", "fixed_lag_quantities", "ALTERNATIVES"]
 
 
 def _gp(inputs: Mapping) -> dict:
@@ -93,7 +93,13 @@ def _incremental(name: str, inputs: Mapping) -> dict:
 def _fixed_lag(inputs: Mapping) -> dict:
     isam2, stream = inputs["isam2"], inputs["stream"]
     threshold, skip = float(isam2["relinearize_threshold"]), int(isam2["relinearize_skip"])
-    replay = lag.fixed_lag(stream["variables"], stream["updates"], float(inputs["lag"]), threshold, skip)
+    return fixed_lag_quantities(
+        lag.fixed_lag(stream["variables"], stream["updates"], float(inputs["lag"]), threshold, skip)
+    )
+
+
+def fixed_lag_quantities(replay: Sequence[Mapping]) -> dict:
+    """The dense replay's per-update records (:func:`.oracle_lag.fixed_lag`) as a fixed_lag case's quantities."""
     out: dict = {}
     for k, r in enumerate(replay, start=1):
         out[f"marginalized_{k}"] = r["marginalized"]
