@@ -23,6 +23,24 @@ from steam_ref.factors import Factor, PriorFactor
 from steam_ref.variables import L, X
 
 
+def fed(stream: LinearStream, smoother: FixedLagSmoother, n: int, after_each=lambda: None) -> list[Factor]:
+    """Give ``smoother`` the stream's first update and ``n`` more; every factor given, as the dense side names it."""
+    factors, values, stamps = stream.initial()
+    everything = list(factors)
+    smoother.update(factors, values, timestamps=stamps)
+    for _ in range(n):
+        factors, values, stamps = stream.step()
+        everything += renamed(stream, factors)
+        smoother.update(factors, values, timestamps=stamps)
+        after_each()
+    return everything
+
+
+def optimum(everything: list[Factor]) -> dict:
+    """The dense batch optimum of every factor given."""
+    return dense_posterior(everything, list(dict.fromkeys(k for f in everything for k in f.keys)))[0]
+
+
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(
     seed=st.integers(0, 10_000),
@@ -34,15 +52,7 @@ from steam_ref.variables import L, X
 def test_smoothed_history_is_the_batch_optimum(seed, n, lag, landmarks, threshold):
     stream = LinearStream(seed, landmarks)
     smoother = stream.smoother = FixedLagSmoother(lag, relinearize_threshold=threshold, keep_history=True, **EXACT)
-    factors, values, stamps = stream.initial()
-    everything = list(factors)
-    smoother.update(factors, values, timestamps=stamps)
-    for _ in range(n):
-        factors, values, stamps = stream.step()
-        everything += renamed(stream, factors)
-        smoother.update(factors, values, timestamps=stamps)
-    all_keys = list(dict.fromkeys(k for f in everything for k in f.keys))
-    mean, _ = dense_posterior(everything, all_keys)
+    mean = optimum(fed(stream, smoother, n))
     past = smoother.smoothed_history()
     assert len(smoother.history) == smoother.n_marginalized
     states = [X(i) for i in range(n + 1)]
@@ -60,17 +70,13 @@ def test_the_lagged_estimate_is_not_the_smoothed_one():
     """The check can fail: the estimates frozen at marginalization differ from the batch optimum."""
     stream = LinearStream(7, 2)
     smoother = stream.smoother = FixedLagSmoother(1.0, keep_history=True, **EXACT)
-    factors, values, stamps = stream.initial()
-    everything = list(factors)
-    smoother.update(factors, values, timestamps=stamps)
-    frozen = {}
-    for _ in range(15):
-        factors, values, stamps = stream.step()
-        everything += renamed(stream, factors)
-        smoother.update(factors, values, timestamps=stamps)
+    frozen: dict = {}
+
+    def keep_frozen():
         done = smoother.last_marginalization
-        frozen |= {} if done is None else {k: v for k, v in done.estimates.items() if k.kind == "x"}
-    mean, _ = dense_posterior(everything, list(dict.fromkeys(k for f in everything for k in f.keys)))
+        frozen.update({} if done is None else {k: v for k, v in done.estimates.items() if k.kind == "x"})
+
+    mean = optimum(fed(stream, smoother, 15, keep_frozen))
     past = smoother.smoothed_history()
     gap = max(np.abs(frozen[k] - mean[k]).max() for k in frozen)
     assert gap > 1e-3  # later readings moved the past: a lagged estimate is not the optimum
@@ -136,11 +142,7 @@ def test_nonlinear_past_frozen_where_the_full_smoother_never_moved_equals_it(see
 def test_marginalize_refuses_a_fixed_lag_smoother_and_leaves_it_as_it_was():
     stream = LinearStream(4, 1)
     smoother = stream.smoother = FixedLagSmoother(2.0, keep_history=True, **EXACT)
-    factors, values, stamps = stream.initial()
-    smoother.update(factors, values, timestamps=stamps)
-    for _ in range(6):
-        factors, values, stamps = stream.step()
-        smoother.update(factors, values, timestamps=stamps)
+    fed(stream, smoother, 6)
     held, before, kept = sorted(smoother.timestamps, key=str), smoother.estimate(), len(smoother.history)
     with pytest.raises(SteamError, match="forgets by its timestamps"):
         marginalize(smoother, [held[0]])

@@ -90,6 +90,7 @@ class History:
         return len(self.conditionals)
 
     def extend(self, conditionals: tuple[ForgottenConditional, ...]) -> None:
+        """Record the conditionals of one marginalization, in the order it eliminated them."""
         self.conditionals.extend(conditionals)
 
     def smooth(self, window: Callable[[Key], NDArray]) -> dict[Key, NDArray]:

@@ -209,9 +209,11 @@ class FixedLagTreeSolver(BayesTreeSolver):
         lagged = self._landmarks.get(key)  # a landmark that enters again leaves _landmarks
         if key.kind == "x":  # a state never enters again
             lagged = self._states[key.index] if key.index in self._retired_states else None
-        if lagged is None or self._smoothed is None:
-            return lagged
-        return self._smoothed.get(key, lagged)
+        return None if lagged is None else self._past(key, lagged)
+
+    def _past(self, key: Key, lagged: NDArray) -> NDArray:
+        """A marginalized variable's estimate: the one it left the window with, or after smooth_past the smoothed one."""
+        return lagged if self._smoothed is None else self._smoothed.get(key, lagged)
 
     def estimate_of(self, key: Key) -> NDArray:
         retired = self.retired(key)
@@ -219,11 +221,10 @@ class FixedLagTreeSolver(BayesTreeSolver):
 
     def estimate(self) -> Values:
         out = self.inner.estimate()
-        smoothed = self._smoothed or {}
         for i in sorted(self._retired_states):
-            out.insert(X(i), smoothed.get(X(i), self._states[i]))
+            out.insert(X(i), self._past(X(i), self._states[i]))
         for k, v in self._landmarks.items():  # never in the window (popped when one enters again)
-            out.insert(k, smoothed.get(k, v))
+            out.insert(k, self._past(k, v))
         return out
 
 
