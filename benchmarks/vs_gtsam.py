@@ -4,7 +4,7 @@ For each data set (paper-synthetic, plaza) and schedule (/1, /10), the same fron
 readings to three solvers, each run in a fresh Python process with ``OMP_NUM_THREADS`` /
 ``OPENBLAS_NUM_THREADS`` = 1, the three alternating, ``--repeat`` times (medians reported):
 
-- ``steam``: steam_ref's BTGP (the preset's iSAM2 settings, batched back-substitution);
+- ``steam``: steam_ref's BTGP (the preset's iSAM2 settings; back-substitution by the per-clique loop, the default);
 - (a) ``custom``: GTSAM's ISAM2 (its defaults) with our factors as ``gtsam.CustomFactor``s calling our
   errors and Jacobians from Python (the same model; ``gtsam_callback_s`` is the time inside those calls);
 - (b) ``native``: GTSAM's ISAM2 with built-in C++ factors only (``WnoaMotionFactorPose2``,
@@ -16,7 +16,10 @@ the RMSE is taken once at the end over every state. One JSON line per (data set,
 ``steam_*`` and ``gtsam_*`` wall and CPU seconds of the stream (front end included, imports not),
 RMSE, peak memory (ru_maxrss of the child), ``ratio_wall`` / ``ratio_cpu`` = GTSAM's / ours (above 1:
 ours is faster), and ours's median update time over the first and the last 1,000 updates (is the
-per-update cost flat?). The machine may be shared: the ratios, measured in the same sitting, are the
+per-update cost flat?). Ours also gives ``steam_backsub_s``, the seconds its updates spent in partial
+back-substitution (``UpdateReport.timings``), with its clique solves, and ``ratio_wall_if_backsub_free``:
+GTSAM's wall time over ours less that share, the ratio even a free back-substitution could not beat
+(docs/experiments.md, "What the targets would need"). The machine may be shared: the ratios, measured in the same sitting, are the
 figures to read; CPU seconds are less disturbed by other load than wall seconds.
 
     python benchmarks/vs_gtsam.py [--repeat 3] [--datasets paper-synthetic,plaza] [--every 1,10]
@@ -37,6 +40,7 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 QUICK_POSES = 300  # --quick: this prefix of every run
 KEYS = ("wall_s", "cpu_s", "rmse_m", "peak_rss_mb", "callback_s", "update_first_median_s", "update_last_median_s")
+OURS = ("backsub_s", "clique_solves")  # ours only: the back-substitution's share (``phases``)
 
 
 def child(solver: str, dataset: str, every: int, max_poses: int | None) -> dict:
@@ -74,7 +78,7 @@ def child(solver: str, dataset: str, every: int, max_poses: int | None) -> dict:
         positions = np.array([final[X(i)][:2] for i in states])
     truth = np.asarray(data.ground_truth)[states, 1:3]
     updates = est.update_seconds
-    return {
+    return phases(est.solver.reports if solver == "steam" else []) | {
         "wall_s": wall,
         "cpu_s": cpu,
         "rmse_m": position_rmse(positions, truth),
@@ -85,6 +89,19 @@ def child(solver: str, dataset: str, every: int, max_poses: int | None) -> dict:
         "update_first_median_s": statistics.median(updates[:1000]) if updates else None,
         "update_last_median_s": statistics.median(updates[-1000:]) if updates else None,
     }
+
+
+def phases(reports: list) -> dict:
+    """Our run's seconds per phase of the iSAM2 update, summed over its updates (``UpdateReport.timings``), and
+    its clique solves: what a faster back-substitution could save at most (empty for a GTSAM run)."""
+    if not reports:
+        return {"phase_s": None, "backsub_s": None, "clique_solves": None}
+    totals: dict[str, float] = {}
+    for report in reports:
+        for phase, seconds in report.timings.items():
+            totals[phase] = totals.get(phase, 0.0) + seconds
+    solves = sum(r.backsubstituted_cliques for r in reports)
+    return {"phase_s": totals, "backsub_s": totals.get("backsubstitute", 0.0), "clique_solves": solves}
 
 
 def run_child(solver: str, dataset: str, every: int, max_poses: int | None) -> dict:
@@ -123,7 +140,9 @@ def main() -> None:
             for _ in range(repeat):  # alternating, so that a change of load hits every solver alike
                 for solver in runs:
                     runs[solver].append(run_child(solver, dataset, every, max_poses))
-            ours = {k: _median(runs["steam"], k) for k in KEYS}
+            ours = {k: _median(runs["steam"], k) for k in KEYS + OURS}
+            without = statistics.median(r["wall_s"] - r["backsub_s"] for r in runs["steam"])
+            ours_phases = {k: statistics.median(r["phase_s"][k] for r in runs["steam"]) for k in runs["steam"][0]["phase_s"]}
             for setup in setups:
                 theirs = {k: _median(runs[setup], k) for k in KEYS}
                 row = {"dataset": dataset, "every": every, "setup": setup, "repeat": repeat, "max_poses": max_poses}
@@ -132,6 +151,10 @@ def main() -> None:
                 row |= {f"gtsam_{k}": theirs[k] for k in KEYS}
                 row["ratio_wall"] = theirs["wall_s"] / ours["wall_s"]
                 row["ratio_cpu"] = theirs["cpu_s"] / ours["cpu_s"]
+                row |= {"steam_backsub_s": ours["backsub_s"], "steam_clique_solves": ours["clique_solves"]}
+                row["steam_phase_s"] = ours_phases
+                row["steam_wall_without_backsub_s"] = without  # the stream with back-substitution free
+                row["ratio_wall_if_backsub_free"] = theirs["wall_s"] / without  # the most a faster one could reach
                 print(json.dumps(row), flush=True)
 
 

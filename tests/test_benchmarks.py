@@ -55,3 +55,15 @@ def test_fixed_lag_benchmark_counts_the_backward_pass_in_a_history_row(capsys, m
     assert bench.row("history", [], 1)[0]["total_s"] == 2.25
     monkeypatch.setattr(bench, "run", lambda argv: (line, np.zeros(10)))
     assert bench.row("no history", [], 1)[0]["total_s"] == 2.0
+
+
+def test_vs_gtsam_benchmark_reports_the_backsubstitution_share(shared_data):
+    """Ours' row carries the seconds its updates spent in back-substitution, which the phases add up to."""
+    spec = importlib.util.spec_from_file_location("vs_gtsam_benchmark", BENCH / "vs_gtsam.py")
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    out = bench.child("steam", "paper-synthetic", 1, 40)
+    assert out["n_updates"] == 39 and out["clique_solves"] >= out["n_updates"]  # at least the new root each update
+    assert out["backsub_s"] == out["phase_s"]["backsubstitute"] > 0
+    assert 0 < sum(out["phase_s"].values()) <= out["wall_s"]  # the phases are inside the stream's time
+    assert bench.phases([]) == {"phase_s": None, "backsub_s": None, "clique_solves": None}  # a GTSAM run has none
