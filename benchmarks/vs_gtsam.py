@@ -142,7 +142,9 @@ def main() -> None:
                     runs[solver].append(run_child(solver, dataset, every, max_poses))
             ours = {k: _median(runs["steam"], k) for k in KEYS + OURS}
             without = statistics.median(r["wall_s"] - r["backsub_s"] for r in runs["steam"])
-            ours_phases = {k: statistics.median(r["phase_s"][k] for r in runs["steam"]) for k in runs["steam"][0]["phase_s"]}
+            ours_phases = {
+                k: statistics.median(r["phase_s"][k] for r in runs["steam"]) for k in runs["steam"][0]["phase_s"]
+            }
             for setup in setups:
                 theirs = {k: _median(runs[setup], k) for k in KEYS}
                 row = {"dataset": dataset, "every": every, "setup": setup, "repeat": repeat, "max_poses": max_poses}

@@ -152,3 +152,9 @@ def test_marginalize_refuses_a_fixed_lag_smoother_and_leaves_it_as_it_was():
     factors, values, stamps = stream.step()
     smoother.update(factors, values, timestamps=stamps)  # and it goes on
     assert smoother.tree.problems() == []
+
+
+def test_marginalize_names_what_it_was_given_when_it_is_no_solver():
+    for wrong in (None, {"x0": 1}, "solver"):
+        with pytest.raises(SteamError, match=f"solver must be an IncrementalSolver, got {type(wrong).__name__}"):
+            marginalize(wrong, [X(0)])

@@ -1,10 +1,10 @@
-"""Partial back-substitution in batches: [K12 Alg. 7] at the cost of its arithmetic.  [K12 Alg. 7, YIB Eq. 25]
+"""Partial back-substitution, two ways: a clique at a time, and in batches.  [K12 Alg. 7, YIB Eq. 25]
 
-:meth:`~steam_ref.bayes_tree.IncrementalSolver._backsubstitute_loop` states the algorithm a clique at
-a time: solve δ_F = R⁻¹(d - S δ_S), mark the frontals whose δ moved by at least the wildfire
-threshold α, descend into the children whose separator holds a marked variable. On the paper's
-runs it visits hundreds of 6x6 conditionals per update, and each visit costs a dozen NumPy calls
-of interpreter overhead for a few hundred flops.
+:func:`backsubstitute` states the algorithm a clique at a time: solve δ_F = R⁻¹(d - S δ_S), mark the
+frontals whose δ moved by at least the wildfire threshold α, descend into the children whose separator
+holds a marked variable. It is what :class:`~steam_ref.bayes_tree.IncrementalSolver` runs by default
+(``ISAM2Params(backsubstitution="loop")``). On the paper's runs it visits hundreds of 6x6 conditionals
+per update, and each visit costs a dozen NumPy calls of interpreter overhead for a few hundred flops.
 
 :class:`BatchedBacksubstitution` does the same descent a tree level at a time. A visited clique's
 ancestors are all visited (a clique is entered only from its parent), so the separator values a
@@ -45,7 +45,7 @@ from ..errors import SteamError
 from ..variables import Key
 from .tree import BayesTree, Clique
 
-__all__ = ["BatchedBacksubstitution"]
+__all__ = ["backsubstitute", "BatchedBacksubstitution"]
 
 _INT = np.intp
 STACK_FROM = 4  # a level of this many cliques or more is solved in stacked calls, a narrower one clique by clique
@@ -62,6 +62,53 @@ class _Solved(NamedTuple):
     matrix: NDArray  # (n_f, 1 + n_s) the same data as a matrix [g | -G], for a clique solved alone
     inputs: NDArray  # (1 + n_s,) the workspace positions it multiplies
     single: bool  # one frontal variable
+
+
+def backsubstitute(
+    tree: BayesTree,
+    new_cliques: Collection[int],
+    delta: dict[Key, NDArray],
+    alpha: float,
+    beta: dict[Key, float],
+    stale: dict[Key, None],
+    over: dict[Key, None],
+) -> tuple[list[Key], int]:
+    """δ_F = R⁻¹(d - S δ_S) from the roots of the new part down, a clique at a time, while it changes.  [K12 Alg. 7]
+
+    A re-made clique (one of ``new_cliques``) is always solved; an old one only when a variable of its
+    separator changed by at least the wildfire threshold α (with α = 0, always: full back-substitution).
+    Changes are judged per variable: a root clique holding the newest state and the landmarks must not
+    mark the landmarks changed because the newest state moved. Writes each solved variable's new δ into
+    ``delta`` (a new array) and marks it in ``stale``; a variable whose new δ has max |δ| ≥ its
+    relinearization threshold β (``beta``) joins ``over``, the candidates for the next relinearization
+    [K12 Alg. 5], and leaves it otherwise. Returns the updated variables, depth first, and the number of
+    cliques solved.
+    """
+    changed: set[Key] = set()
+    updated: list[Key] = []
+    stack = [c for c in new_cliques if tree.parent[c] is None]
+    visited = 0
+    while stack:
+        c = stack.pop()
+        clique = tree.cliques[c]
+        visited += 1
+        sep = np.concatenate([delta[k] for k in clique.separator]) if clique.separator else np.zeros(0)
+        x = clique.solve(sep)  # [YIB Eq. 25]
+        frontals = clique.frontals
+        for k, xk in zip(frontals, (x,) if len(frontals) == 1 else clique.split_frontals(x), strict=True):
+            if alpha == 0 or abs(xk - delta[k]).max() >= alpha:
+                changed.add(k)
+            delta[k] = xk
+            stale[k] = None
+            if abs(xk).max() >= beta[k]:  # a candidate for the next relinearization [K12 Alg. 5]
+                over[k] = None
+            elif k in over:
+                del over[k]
+        updated.extend(frontals)
+        for ch in tree.children[c]:
+            if ch in new_cliques or not changed.isdisjoint(tree.cliques[ch].separator):
+                stack.append(ch)
+    return updated, visited
 
 
 class BatchedBacksubstitution:

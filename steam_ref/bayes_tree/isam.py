@@ -34,7 +34,7 @@ from ..factors import Factor, check_factors
 from ..linear.ordering import constrained_min_degree
 from ..linear.system import GaussianFactor, linearize
 from ..variables import Key, Values, check_key
-from .backsolve import BatchedBacksubstitution
+from .backsolve import BatchedBacksubstitution, backsubstitute
 from .dot import tree_nnz
 from .journal import Journal, PhaseTimer, UndoDict, until_done
 from .params import ISAM2Params
@@ -51,6 +51,8 @@ class IncrementalSolver:
     wildfire thresholds; keyword ``changes`` override its fields, so
     ``IncrementalSolver(relinearize_skip=1, wildfire_threshold=0)`` works as well.
     """
+
+    forgets_by_time = False  # a FixedLagSmoother forgets by timestamps, so :func:`marginalize` refuses it
 
     def __init__(self, params: ISAM2Params | None = None, **changes: object) -> None:
         params = ISAM2Params() if params is None else params
@@ -355,44 +357,7 @@ class IncrementalSolver:
         return new_cids
 
     def _backsubstitute(self, new_cliques: set[int]) -> tuple[list[Key], int]:
-        """[K12 Alg. 7] "batched" (a tree level at a time, :mod:`.backsolve`) or "loop" (below)."""
+        """[K12 Alg. 7]: the readable loop (:func:`.backsolve.backsubstitute`, the default) or "batched"."""
         alpha = self.params.wildfire_threshold
-        if self.params.backsubstitution == "loop":
-            return self._backsubstitute_loop(new_cliques, alpha)
-        return self._batched(self.tree, new_cliques, self._delta, alpha, self._beta, self._stale, self._over)
-
-    def _backsubstitute_loop(self, new_cliques: set[int], alpha: float) -> tuple[list[Key], int]:
-        """δ_F = R⁻¹(d - S δ_S) from the roots of the new part down, while it changes.  [K12 Alg. 7]
-
-        A re-made clique is always solved; an old one only when a variable of its separator changed
-        by at least the wildfire threshold α (with α = 0, always: full back-substitution).
-        Changes are judged per variable: a root clique holding the newest state and the landmarks
-        must not mark the landmarks changed because the newest state moved. A variable whose new δ
-        has max |δ| ≥ its relinearization threshold β is a candidate for the next relinearization.
-        """
-        tree, delta, beta, stale, over = self.tree, self._delta, self._beta, self._stale, self._over
-        changed: set[Key] = set()
-        updated: list[Key] = []
-        stack = [c for c in new_cliques if tree.parent[c] is None]
-        visited = 0
-        while stack:
-            c = stack.pop()
-            clique = tree.cliques[c]
-            visited += 1
-            sep = np.concatenate([delta[k] for k in clique.separator]) if clique.separator else np.zeros(0)
-            x = clique.solve(sep)  # [YIB Eq. 25]
-            frontals = clique.frontals
-            for k, xk in zip(frontals, (x,) if len(frontals) == 1 else clique.split_frontals(x), strict=True):
-                if alpha == 0 or abs(xk - delta[k]).max() >= alpha:
-                    changed.add(k)
-                delta[k] = xk
-                stale[k] = None
-                if abs(xk).max() >= beta[k]:  # a candidate for the next relinearization [K12 Alg. 5]
-                    over[k] = None
-                elif k in over:
-                    del over[k]
-            updated.extend(frontals)
-            for ch in tree.children[c]:
-                if ch in new_cliques or not changed.isdisjoint(tree.cliques[ch].separator):
-                    stack.append(ch)
-        return updated, visited
+        args = (self.tree, new_cliques, self._delta, alpha, self._beta, self._stale, self._over)
+        return backsubstitute(*args) if self.params.backsubstitution == "loop" else self._batched(*args)

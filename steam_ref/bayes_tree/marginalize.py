@@ -38,7 +38,7 @@ from __future__ import annotations
 import itertools
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, ClassVar
+from typing import ClassVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -49,10 +49,8 @@ from ..linear.ordering import constrained_min_degree
 from ..linear.system import GaussianFactor
 from ..variables import Key, key_list
 from .history import ForgottenConditional
+from .isam import IncrementalSolver
 from .tree import Clique, eliminate, eliminate_clique
-
-if TYPE_CHECKING:
-    from .isam import IncrementalSolver
 
 __all__ = ["MarginalFactor", "MarginalizationReport", "eliminate_variables", "marginalize"]
 
@@ -187,7 +185,9 @@ def marginalize(
     :class:`~.fixed_lag.FixedLagSmoother`, which marginalizes by its timestamps and keeps its own record of
     what it forgot; on any failure the solver is left as it was.
     """
-    if getattr(solver, "forgets_by_time", False):
+    if not isinstance(solver, IncrementalSolver):
+        raise SteamError(f"marginalize: solver must be an IncrementalSolver, got {type(solver).__name__}")
+    if solver.forgets_by_time:
         raise SteamError(
             "marginalize: a FixedLagSmoother forgets by its timestamps (and records what it forgot); give the "
             "variables an old timestamp in its next update instead"

@@ -19,7 +19,7 @@ from scipy.special import gammaincinv
 from ..errors import NumericalError, ShapeError, SteamError
 from ..pose2 import wrap_angle
 
-__all__ = ["nees", "chi2_band", "pose_errors", "verdict"]
+__all__ = ["nees", "chi2_band", "chi2_quantile", "pose_errors", "verdict"]
 
 
 def pose_errors(estimate: NDArray, truth: NDArray) -> NDArray:
@@ -64,12 +64,12 @@ def chi2_band(n_runs: int, dim: int, level: float = 0.95) -> tuple[float, float]
         raise SteamError(f"level must be a number in (0, 1), got {level!r}")
     dof = n_runs * dim
     tail = (1 - level) / 2
-    return _chi2_quantile(tail, dof) / n_runs, _chi2_quantile(1 - tail, dof) / n_runs
+    return chi2_quantile(tail, dof) / n_runs, chi2_quantile(1 - tail, dof) / n_runs
 
 
-def _chi2_quantile(p: float, dof: int) -> float:
+def chi2_quantile(p: float, dof: int) -> float:
     """χ²⁻¹(p; k) = 2 P⁻¹(k/2, p), P the regularized lower incomplete gamma function (SciPy's ``gammaincinv``;
-    ``scipy.stats.chi2.ppf`` computes the same, at 0.3 s of import)."""
+    ``scipy.stats.chi2.ppf`` computes the same, at 0.3 s of import). The one home of the χ² quantile."""
     return float(2 * gammaincinv(dof / 2, p))
 
 

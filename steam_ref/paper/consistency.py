@@ -48,13 +48,12 @@ import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.stats import chi2
 
 from ..arguments import integer
 from ..batch import gauss_newton
 from ..datasets import sample_from_model
 from ..errors import SteamError
-from ..evaluate import chi2_band, nees, pose_errors, verdict
+from ..evaluate import chi2_band, chi2_quantile, nees, pose_errors, verdict
 from ..trajectory import Trajectory
 from ..variables import L, Values
 from .online import StreamingEstimator
@@ -238,7 +237,7 @@ def summarize(results: dict[int, dict], estimators: tuple[str, ...], level: floa
             band = chi2_band(n, d, level)
             # A run whose mean NEES is beyond the 99.9 % point of one state's χ²(d): an estimate lost (a wrong
             # minimum), not a covariance a little off. Counted, never dropped from the ANEES.
-            far = sum(bool(r.mean() > chi2.ppf(0.999, d)) for r in runs if r.size)
+            far = sum(bool(r.mean() > chi2_quantile(0.999, d)) for r in runs if r.size)
             row[kind] = {
                 "anees": anees,
                 "band": list(band),
