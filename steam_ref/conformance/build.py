@@ -93,11 +93,18 @@ def _version() -> str:
         return "unknown"
 
 
-def _commit() -> str:
-    """The git commit of the source tree the package runs from, or 'unknown' (an installed wheel)."""
-    root = Path(__file__).resolve().parents[2]
+# The folder holding the steam_ref package: a source checkout's root, or site-packages when installed.
+SOURCE_ROOT = Path(__file__).resolve().parents[2]
+
+
+def _commit(root: Path = SOURCE_ROOT) -> str:
+    """The git commit of the source checkout at ``root``, or 'unknown' when ``root`` is not the top of
+    a git work tree: an installed wheel, even one whose site-packages lies inside another project's
+    repository (a ``.venv`` there), whose commit is not steam_ref's."""
     try:
-        out = subprocess.run(["git", "-C", str(root), "rev-parse", "HEAD"], capture_output=True, text=True, timeout=10)
+        out = subprocess.run(
+            ["git", "-C", str(root), "rev-parse", "--show-toplevel", "HEAD"], capture_output=True, text=True, timeout=10
+        )
         dirty = subprocess.run(
             ["git", "-C", str(root), "status", "--porcelain", "--", "steam_ref"],
             capture_output=True,
@@ -106,9 +113,10 @@ def _commit() -> str:
         )
     except (OSError, subprocess.SubprocessError):
         return "unknown"
-    if out.returncode != 0:
+    lines = out.stdout.split()
+    if out.returncode != 0 or len(lines) != 2 or Path(lines[0]).resolve() != Path(root).resolve():
         return "unknown"
-    return out.stdout.strip() + ("+modified" if dirty.stdout.strip() else "")
+    return lines[1] + ("+modified" if dirty.stdout.strip() else "")
 
 
 def _write_suite(out: Path, suite: str, records: list[dict]) -> None:
