@@ -156,22 +156,24 @@ class Trajectory:
         return mean, self._between_covariance(a, b, t, self.solver.joint_covariance([X(a), X(b)]))
 
     def at_every_pose(self) -> tuple[NDArray, NDArray]:
-        """Times (n_poses,) and states (n_poses, n) at every pose of the span; reads the whole estimate once."""
+        """Times (m,) and states (m, n) at every pose of the span, from the first state's pose to the last's
+        (m = states[-1] - states[0] + 1; row k is pose states[0] + k); reads the whole estimate once."""
         solved = self.states
         if not solved:
             return np.zeros(0), np.zeros((0, self.n))
-        values, times = self.solver.estimate(), self.times
-        out = np.empty((solved[-1] + 1, self.n))
+        values, times, first = self.solver.estimate(), self.times, solved[0]
+        out = np.empty((solved[-1] + 1 - first, self.n))
         for a, b in itertools.pairwise(solved):
             xa, xb = values[X(a)], values[X(b)]
-            out[a] = xa
+            out[a - first] = xa
             for p in range(a + 1, b):
-                out[p] = self._between(a, b, times[p], xa, xb)  # [YIB Eq. 18]
-        out[solved[-1]] = values[X(solved[-1])]
-        return times[: solved[-1] + 1].copy(), out
+                out[p - first] = self._between(a, b, times[p], xa, xb)  # [YIB Eq. 18]
+        out[-1] = values[X(solved[-1])]
+        return times[first : solved[-1] + 1].copy(), out
 
     def covariances(self, landmarks: Sequence[Key]) -> Covariances:
-        """Marginal covariances at every pose of the span (interpolated between states) and of ``landmarks``."""
+        """Marginal covariances at every pose of the span (interpolated between states; row k is pose
+        states[0] + k, as in :meth:`at_every_pose`) and of ``landmarks``."""
         solved, landmarks = self.states, key_list("landmarks", landmarks)
         marg = self.solver.marginal_covariances([X(i) for i in solved] + landmarks)
         for k in landmarks:
@@ -183,13 +185,13 @@ class Trajectory:
         joints = (
             dict(zip(gaps, self.solver.joint_covariances([(X(a), X(b)) for a, b in gaps]), strict=True)) if gaps else {}
         )
-        n = solved[-1] + 1 if solved else 0
-        full = np.empty((n, self.n, self.n))
+        first = solved[0] if solved else 0
+        full = np.empty((solved[-1] + 1 - first if solved else 0, self.n, self.n))
         for a, b in itertools.pairwise(solved):
-            full[a] = marg[X(a)]
+            full[a - first] = marg[X(a)]
             for p in range(a + 1, b):
-                full[p] = self._between_covariance(a, b, self.times[p], joints[(a, b)])
+                full[p - first] = self._between_covariance(a, b, self.times[p], joints[(a, b)])
         if solved:
-            full[solved[-1]] = marg[X(solved[-1])]
+            full[-1] = marg[X(solved[-1])]
         marks = np.array([marg[k] for k in landmarks]).reshape(-1, 2, 2)
         return Covariances(full[:, :3, :3].copy(), full[:, 3:6, 3:6].copy(), marks, tuple(k.index for k in landmarks))

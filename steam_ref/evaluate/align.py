@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from ..arguments import finite, real_array
 from ..errors import SteamError
 from ..pose2 import wrap_angle
 
@@ -64,11 +65,12 @@ def align_planar(estimate: NDArray, truth: NDArray, *, with_scale: bool = False)
     ``estimate`` and ``truth`` are positions (n, 2), n ≥ 2, not all at one point. A rigid alignment
     (``with_scale=False``) is Umeyama's with s fixed at 1 [U91 Eq. 40-41].
     """
-    x, y = np.asarray(estimate, dtype=float), np.asarray(truth, dtype=float)
+    x, y = real_array("estimate", estimate), real_array("truth", truth)
     if x.ndim != 2 or x.shape[1] != 2 or x.shape != y.shape or len(x) < 2:
         raise SteamError(
             f"alignment needs two (n, 2) position arrays of one shape, n >= 2; got {x.shape} and {y.shape}"
         )
+    finite("estimate", x), finite("truth", y)
     mu_x, mu_y = x.mean(axis=0), y.mean(axis=0)  # [U91 Eq. 34-35]
     xc, yc = x - mu_x, y - mu_y
     a = float(np.sum(xc * yc))  # Σ x̃ᵢ·ỹᵢ

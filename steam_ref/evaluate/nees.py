@@ -16,6 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.special import gammaincinv
 
+from ..arguments import finite, number, real_array
 from ..errors import NumericalError, ShapeError, SteamError
 from ..pose2 import wrap_angle
 
@@ -24,10 +25,10 @@ __all__ = ["nees", "chi2_band", "chi2_quantile", "pose_errors", "verdict"]
 
 def pose_errors(estimate: NDArray, truth: NDArray) -> NDArray:
     """Errors (n, 3) of planar poses [x, y, θ]: the difference, its heading wrapped to [-π, π)."""
-    estimate, truth = np.asarray(estimate, dtype=float), np.asarray(truth, dtype=float)
+    estimate, truth = real_array("estimate", estimate), real_array("truth", truth)
     if estimate.shape != truth.shape or estimate.ndim != 2 or estimate.shape[1] != 3:
         raise ShapeError(f"pose errors need two (n, 3) arrays of one shape, got {estimate.shape} and {truth.shape}")
-    e = estimate - truth
+    e = finite("estimate", estimate) - finite("truth", truth)
     e[:, 2] = wrap_angle(e[:, 2])
     return e
 
@@ -38,7 +39,7 @@ def nees(errors: NDArray, covariances: NDArray) -> NDArray:
     Computed through a Cholesky factor of each P; a P that is not positive definite is a
     :class:`~steam_ref.errors.NumericalError` naming its row.
     """
-    e, P = np.asarray(errors, dtype=float), np.asarray(covariances, dtype=float)
+    e, P = real_array("errors", errors), real_array("covariances", covariances)
     if e.ndim != 2 or P.shape != (*e.shape, e.shape[1]):
         raise ShapeError(f"nees needs errors (n, d) and covariances (n, d, d), got {e.shape} and {P.shape}")
     if not (np.all(np.isfinite(e)) and np.all(np.isfinite(P))):
@@ -75,7 +76,14 @@ def chi2_quantile(p: float, dof: int) -> float:
 
 def verdict(anees: float, band: tuple[float, float]) -> str:
     """'consistent' inside the band, else 'not consistent (overconfident)' / '(underconfident)'."""
-    lo, hi = band
+    anees = number("anees", anees)
+    if anees < 0:
+        raise SteamError(f"anees is an average of squares, never negative, got anees={anees}")
+    if not (isinstance(band, (tuple, list)) and len(band) == 2):
+        raise SteamError(f"band must be a pair (lower, upper), got band={band!r}")
+    lo, hi = number("band[0]", band[0]), number("band[1]", band[1])
+    if not 0 <= lo <= hi:
+        raise SteamError(f"band must be (lower, upper) with 0 <= lower <= upper, got band={band!r}")
     if anees > hi:
         return "not consistent (overconfident)"
     if anees < lo:

@@ -11,7 +11,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import SteamError
+from ..arguments import integer, real_array
+from ..errors import ShapeError, SteamError
 from ..trajectory import Trajectory
 from .metrics import ape, planar_poses, rpe
 
@@ -23,7 +24,9 @@ def states_at(trajectory: Trajectory, times: object, *, covariance: bool = False
     when asked (the interpolated covariance between states)."""
     if not isinstance(trajectory, Trajectory):
         raise SteamError(f"expected a steam_ref.trajectory.Trajectory, got {type(trajectory).__name__}")
-    t = np.asarray(times, dtype=float).ravel()
+    t = real_array("times", times)
+    if t.ndim != 1:
+        raise ShapeError(f"times must be a 1-d array, one time per query, got shape {t.shape}")
     if not covariance:
         return np.array([trajectory.at(float(ti)) for ti in t]).reshape(len(t), trajectory.n)
     pairs = [trajectory.at(float(ti), covariance=True) for ti in t]
@@ -35,8 +38,11 @@ def states_at(trajectory: Trajectory, times: object, *, covariance: bool = False
 def trajectory_figures(truth: object, estimate: object, *, rpe_delta: int = 1) -> dict:
     """APE unaligned, SE(2)- and Sim(2)-aligned, and RPE over ``rpe_delta`` poses, of planar poses (n, 3)
     at the same times: {'ape': {...}, 'ape_se2': {...}, 'ape_sim2': {...}, 'rpe': {...}}, each with
-    translation [m] and heading [rad] statistics (:class:`~steam_ref.evaluate.metrics.Statistics`)."""
+    translation [m] and heading [rad] statistics (:class:`~steam_ref.evaluate.metrics.Statistics`).
+    With one pose there is nothing to align, so 'ape_se2' and 'ape_sim2' are left out; with ``rpe_delta``
+    poses or fewer there is no pair, so 'rpe' is left out."""
     truth, estimate = planar_poses("truth", truth), planar_poses("estimate", estimate)
+    rpe_delta = integer("rpe_delta", rpe_delta, minimum=1)
     out: dict = {"ape": ape(truth, estimate).to_dict()}
     if len(truth) >= 2:
         for align in ("se2", "sim2"):
