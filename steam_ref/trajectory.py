@@ -102,8 +102,12 @@ class Trajectory:
                 )
 
     def _between(self, a: int, b: int, t: float, xa: NDArray, xb: NDArray) -> NDArray:
-        """x̄(t) between the states at poses a and b.  [YIB Eq. 18]"""
+        """x̄(t) between the states at poses a and b, ta <= t <= tb.  [YIB Eq. 18]
+
+        A pose may share its time with a state (times need only not decrease): x(ta) is the state at a."""
         ta, tb = self.times[a], self.times[b]
+        if t == ta or t == tb:
+            return (xa if t == ta else xb).copy()
         if self.qc is None:
             return interpolate_state_sde(self.prior, ta, xa, tb, xb, t)
         lam, psi = interpolation_matrices(ta, tb, t, self.qc)  # [YIB Eq. 16]
@@ -111,6 +115,8 @@ class Trajectory:
 
     def _between_covariance(self, a: int, b: int, t: float, joint: NDArray) -> NDArray:
         ta, tb = self.times[a], self.times[b]
+        if t == ta or t == tb:  # a pose at a state's time: that state's marginal, a block of the joint
+            return joint[: self.n, : self.n].copy() if t == ta else joint[self.n :, self.n :].copy()
         if self.qc is None:
             return interpolate_covariance_sde(self.prior, ta, tb, t, joint)
         return interpolate_covariance(ta, tb, t, self.qc, joint)

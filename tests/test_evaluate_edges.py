@@ -203,3 +203,21 @@ def test_a_tum_file_with_crlf_and_comments_reads_as_evo_reads_it(tmp_path):
 def test_write_tum_refuses_times_that_are_not_numbers(tmp_path):
     with pytest.raises(SteamError, match="times"):
         write_tum(tmp_path / "a.txt", "abcd", TRUTH)
+
+
+def test_a_pose_at_the_time_of_a_state_is_that_state(dense):  # noqa: F811 - the fixture
+    """Times need only not decrease: pose 1 shares state 0's time and pose 4 state 5's. The GP at those times is
+    the dense posterior there, which is the state's own (the query ``at`` already says so)."""
+    qc, solver, posterior = dense
+    solver = WholeSolver(solver.mean, solver.cov, solver.index)
+    times = POSE_TIMES.copy()
+    times[1], times[4] = times[0], times[5]
+    trajectory = Trajectory(solver, STATES, times, qc)
+    got_times, states = trajectory.at_every_pose()
+    covariances = trajectory.covariances([])
+    np.testing.assert_array_equal(got_times, times[:6])
+    for pose in (1, 4):
+        mean, cov = posterior(times[pose])
+        np.testing.assert_allclose(states[pose], mean, rtol=1e-12, atol=1e-12 * np.abs(mean).max())
+        np.testing.assert_allclose(covariances.pose[pose], cov[:3, :3], rtol=1e-12, atol=1e-12 * np.abs(cov).max())
+        np.testing.assert_allclose(covariances.velocity[pose], cov[3:, 3:], rtol=1e-12, atol=1e-12 * np.abs(cov).max())
