@@ -106,7 +106,7 @@ class Trajectory:
 
         A pose may share its time with a state (times need only not decrease): x(ta) is the state at a."""
         ta, tb = self.times[a], self.times[b]
-        if t == ta or t == tb:
+        if t in (ta, tb):
             return (xa if t == ta else xb).copy()
         if self.qc is None:
             return interpolate_state_sde(self.prior, ta, xa, tb, xb, t)
@@ -115,7 +115,7 @@ class Trajectory:
 
     def _between_covariance(self, a: int, b: int, t: float, joint: NDArray) -> NDArray:
         ta, tb = self.times[a], self.times[b]
-        if t == ta or t == tb:  # a pose at a state's time: that state's marginal, a block of the joint
+        if t in (ta, tb):  # a pose at a state's time: that state's marginal, a block of the joint
             return joint[: self.n, : self.n].copy() if t == ta else joint[self.n :, self.n :].copy()
         if self.qc is None:
             return interpolate_covariance_sde(self.prior, ta, tb, t, joint)

@@ -221,3 +221,11 @@ def test_a_pose_at_the_time_of_a_state_is_that_state(dense):  # noqa: F811 - the
         np.testing.assert_allclose(states[pose], mean, rtol=1e-12, atol=1e-12 * np.abs(mean).max())
         np.testing.assert_allclose(covariances.pose[pose], cov[:3, :3], rtol=1e-12, atol=1e-12 * np.abs(cov).max())
         np.testing.assert_allclose(covariances.velocity[pose], cov[3:, 3:], rtol=1e-12, atol=1e-12 * np.abs(cov).max())
+
+
+def test_nees_refuses_a_covariance_that_is_not_symmetric():
+    """A Cholesky factorisation reads one triangle only: [[1, 5], [0, 1]] would pass as the identity (NEES 2)."""
+    with pytest.raises(SteamError, match=r"covariances\[0\] must be symmetric"):
+        nees([[1.0, 1.0]], [[[1.0, 5.0], [0.0, 1.0]]])
+    P = np.array([[2.0, 0.5], [0.5, 1.0]])  # and a symmetric one by hand: eᵀ P⁻¹ e, P⁻¹ = [[1, -.5], [-.5, 2]] / 1.75
+    assert nees([[1.0, 1.0]], [P])[0] == pytest.approx((1.0 - 1.0 + 2.0) / 1.75, rel=1e-14)

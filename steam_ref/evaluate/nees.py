@@ -46,6 +46,8 @@ def nees(errors: NDArray, covariances: NDArray) -> NDArray:
         raise NumericalError("nees: an error or a covariance is not finite")
     out = np.empty(len(e))
     for k in range(len(e)):
+        if np.abs(P[k] - P[k].T).max() > 1e-10 * np.abs(P[k]).max():  # Cholesky would read one triangle only
+            raise SteamError(f"nees: covariances[{k}] must be symmetric, got {P[k].tolist()}")
         try:
             lower = np.linalg.cholesky(P[k])
         except np.linalg.LinAlgError:
