@@ -123,6 +123,7 @@ class Trajectory:
 
     def neighbours(self, t: float) -> tuple[int, int] | int:
         """The state at time t, or the two states around it."""
+        t = number("t", t)
         times, solved = self.times, self.states
         if not solved or not times[solved[0]] <= t <= times[solved[-1]]:
             span = "no solved state yet" if not solved else f"[{times[solved[0]]:g}, {times[solved[-1]]:g}]"

@@ -12,6 +12,8 @@ from test_trajectory import POSE_TIMES, STATES, DenseSolver, dense  # noqa: F401
 
 from steam_ref.errors import DataError, SteamError
 from steam_ref.evaluate import (
+    Alignment,
+    Statistics,
     align_planar,
     nees,
     pose_errors,
@@ -229,3 +231,38 @@ def test_nees_refuses_a_covariance_that_is_not_symmetric():
         nees([[1.0, 1.0]], [[[1.0, 5.0], [0.0, 1.0]]])
     P = np.array([[2.0, 0.5], [0.5, 1.0]])  # and a symmetric one by hand: eᵀ P⁻¹ e, P⁻¹ = [[1, -.5], [-.5, 2]] / 1.75
     assert nees([[1.0, 1.0]], [P])[0] == pytest.approx((1.0 - 1.0 + 2.0) / 1.75, rel=1e-14)
+
+
+def test_statistics_refuse_errors_that_are_not_a_finite_list():
+    with pytest.raises(SteamError, match=r"errors\[0\] = nan"):
+        Statistics.of([np.nan, 1.0])
+    with pytest.raises(SteamError, match="errors"):
+        Statistics.of("ab")
+    with pytest.raises(SteamError, match=r"errors must be a 1-d array.*\(2, 2\)"):
+        Statistics.of([[1.0, 2.0], [3.0, 4.0]])
+    s = Statistics.of([3.0, 4.0, 0.0])  # by hand: √(25/3), 7/3, 3, 4
+    assert (s.rmse, s.mean, s.median, s.max, s.n) == pytest.approx((np.sqrt(25 / 3), 7 / 3, 3.0, 4.0, 3), rel=1e-15)
+
+
+def test_neighbours_refuses_a_time_that_is_not_a_number(dense):  # noqa: F811 - the fixture
+    qc, solver, _ = dense
+    trajectory = Trajectory(solver, STATES, POSE_TIMES, qc)
+    with pytest.raises(SteamError, match="t must be a real number"):
+        trajectory.neighbours("1.0")
+    assert trajectory.neighbours(1.1) == 2 and trajectory.neighbours(2.0) == (3, 5)  # by hand from POSE_TIMES
+
+
+def test_an_alignment_refuses_what_it_cannot_apply():
+    with pytest.raises(SteamError, match="angle must be a finite number"):
+        Alignment(float("nan"), np.zeros(2))
+    with pytest.raises(SteamError, match=r"translation must be a finite \(2,\) vector"):
+        Alignment(0.0, np.zeros(3))
+    with pytest.raises(SteamError, match="scale must be a finite number > 0"):
+        Alignment(0.0, np.zeros(2), -1.0)
+    with pytest.raises(SteamError, match=r"poses must be an \(n, 3\) array"):
+        Alignment(0.5, [1.0, 2.0]).apply([[1.0, 2.0]])
+    with pytest.raises(SteamError, match=r"poses\[0, 0\] = nan"):
+        Alignment(0.5, [1.0, 2.0]).apply([[np.nan, 0.0, 0.0]])
+    # by hand: p = (1, 0), θ = 3 turned by π/2, scaled by 2, moved by (1, 2): (1, 4), heading 3 + π/2 - 2π
+    moved = Alignment(np.pi / 2, [1.0, 2.0], 2.0).apply([[1.0, 0.0, 3.0]])
+    np.testing.assert_allclose(moved, [[1.0, 4.0, 3.0 + np.pi / 2 - 2 * np.pi]], atol=1e-15)

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ..arguments import number
+from ..arguments import finite, number, real_array
 from ..errors import ShapeError, SteamError
 from ..pose2 import wrap_angle
 from .align import ALIGNMENTS, Alignment, align_planar
@@ -61,7 +61,10 @@ class Statistics:
 
     @classmethod
     def of(cls, errors: NDArray) -> Statistics:
-        e = np.asarray(errors, dtype=float)
+        e = real_array("errors", errors)
+        if e.ndim != 1:
+            raise ShapeError(f"errors must be a 1-d array, one error per pose or pair, got shape {e.shape}")
+        finite("errors", e)
         if e.size == 0:
             raise SteamError("no errors to summarise: the trajectory has no pose (or no pair) to compare")
         return cls(float(np.sqrt(np.mean(e * e))), float(np.mean(e)), float(np.median(e)), float(np.max(e)), e.size)
