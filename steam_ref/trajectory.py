@@ -182,6 +182,11 @@ class Trajectory:
         """Marginal covariances at every pose of the span (interpolated between states; row k is pose
         states[0] + k, as in :meth:`at_every_pose`) and of ``landmarks``."""
         solved, landmarks = self.states, key_list("landmarks", landmarks)
+        d = self.prior.qc.shape[0]
+        if d != 3:
+            raise SteamError(
+                f"covariances are those of planar poses [x, y, θ] and their rates; this prior's p has d = {d} numbers"
+            )
         marg = self.solver.marginal_covariances([X(i) for i in solved] + landmarks)
         for k in landmarks:
             if marg[k].shape != (2, 2):

@@ -27,6 +27,7 @@ from steam_ref.evaluate import (
     write_tum,
 )
 from steam_ref.trajectory import Trajectory
+from steam_ref.variables import X
 
 TRUTH = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.1], [2.0, 1.0, 0.5], [3.0, 1.0, 3.1]])
 
@@ -266,3 +267,12 @@ def test_an_alignment_refuses_what_it_cannot_apply():
     # by hand: p = (1, 0), θ = 3 turned by π/2, scaled by 2, moved by (1, 2): (1, 4), heading 3 + π/2 - 2π
     moved = Alignment(np.pi / 2, [1.0, 2.0], 2.0).apply([[1.0, 0.0, 3.0]])
     np.testing.assert_allclose(moved, [[1.0, 4.0, 3.0 + np.pi / 2 - 2 * np.pi]], atol=1e-15)
+
+
+def test_covariances_of_a_prior_not_over_planar_poses_are_refused():
+    """With Qc 2 × 2 the state is [x, y, ẋ, ẏ]: its first 3 × 3 block is not the covariance of [x, y, θ]."""
+    keys = {X(0): np.zeros(4), X(1): np.ones(4)}
+    solver = WholeSolver(keys, np.eye(8), {X(0): np.arange(4), X(1): 4 + np.arange(4)})
+    trajectory = Trajectory(solver, [0, 1], [0.0, 1.0], np.eye(2))
+    with pytest.raises(SteamError, match=r"\[x, y, θ\].*d = 2"):
+        trajectory.covariances([])
