@@ -168,10 +168,13 @@ def test_a_missing_file_is_a_data_error_naming_it(tmp_path):
 
 
 def test_a_number_with_an_underscore_is_not_read_as_another_number(tmp_path):
-    """Python's float() reads '1_0' as 10; a trajectory file's number is plain decimal."""
+    """Python's float() reads '1_0' as 10 and a full-width '１' as 1; a trajectory file's number is plain ASCII."""
     (tmp_path / "a.txt").write_text("1 1_0 0 0 0 0 0 1\n")
     with pytest.raises(DataError, match="line 1: not a number"):
         read_tum(tmp_path / "a.txt")
+    (tmp_path / "b.txt").write_text("1 \uff11 0 0 0 0 0 1\n", encoding="utf-8")  # a full-width digit one
+    with pytest.raises(DataError, match="line 1: not a number"):
+        read_tum(tmp_path / "b.txt")
 
 
 def test_a_tum_heading_comes_back_in_minus_pi_to_pi(tmp_path):

@@ -67,7 +67,7 @@ def _table(path: str | os.PathLike, columns: int, what: str) -> NDArray:
         if len(parts) != columns:
             raise DataError(f"{path}, line {number}: a {what} line has {columns} numbers, this one {len(parts)}")
         try:
-            if any("_" in p for p in parts):  # float() reads "1_0" as 10: not a plain decimal number
+            if any("_" in p or not p.isascii() for p in parts):  # float() reads "1_0" as 10, "１" as 1
                 raise ValueError
             values = [float(p) for p in parts]
         except ValueError:
