@@ -7,6 +7,7 @@ import re
 
 import numpy as np
 import pytest
+import scipy.stats
 from requirements import optional_import
 from test_trajectory import POSE_TIMES, STATES, DenseSolver, dense  # noqa: F401 - the dense GP posterior fixture
 
@@ -15,6 +16,7 @@ from steam_ref.evaluate import (
     Alignment,
     Statistics,
     align_planar,
+    chi2_quantile,
     nees,
     pose_errors,
     read_kitti,
@@ -279,3 +281,15 @@ def test_covariances_of_a_prior_not_over_planar_poses_are_refused():
     trajectory = Trajectory(solver, [0, 1], [0.0, 1.0], np.eye(2))
     with pytest.raises(SteamError, match=r"\[x, y, θ\].*d = 2"):
         trajectory.covariances([])
+
+
+@pytest.mark.parametrize(("p", "dof"), [(1.5, 3), (-0.1, 3), (float("nan"), 3), (0.5, 0), (0.5, -2), ("0.5", 3)])
+def test_chi2_quantile_refuses_a_probability_or_dof_out_of_range(p, dof):
+    """SciPy's gammaincinv answers NaN for these; the quantile must say why instead."""
+    with pytest.raises(SteamError, match=r"^(p|dof) must be"):
+        chi2_quantile(p, dof)
+
+
+def test_chi2_quantile_equals_scipys_chi2_ppf():
+    for p, dof in [(0.025, 1), (0.975, 30), (0.5, 2.5), (0.0, 4), (0.999, 300)]:
+        assert chi2_quantile(p, dof) == pytest.approx(scipy.stats.chi2.ppf(p, dof), rel=1e-12)
