@@ -70,16 +70,16 @@ def chi2_band(n_runs: int, dim: int, level: float = 0.95) -> tuple[float, float]
     return chi2_quantile(tail, dof) / n_runs, chi2_quantile(1 - tail, dof) / n_runs
 
 
-def chi2_quantile(p: float, dof: int) -> float:
+def chi2_quantile(p: float, dof: float) -> float:
     """χ²⁻¹(p; k) = 2 P⁻¹(k/2, p), P the regularized lower incomplete gamma function (SciPy's ``gammaincinv``;
     ``scipy.stats.chi2.ppf`` computes the same, at 0.3 s of import). The one home of the χ² quantile.
     ``p`` in [0, 1], ``dof`` > 0 (SciPy answers NaN outside them)."""
-    p, dof = number("p", p), number("dof", dof)
-    if not 0 <= p <= 1:
-        raise SteamError(f"p must be a probability in [0, 1], got p={p}")
-    if dof <= 0:
-        raise SteamError(f"dof must be a number of degrees of freedom > 0, got dof={dof}")
-    return float(2 * gammaincinv(dof / 2, p))
+    prob, k = number("p", p), number("dof", dof)
+    if not 0 <= prob <= 1:
+        raise SteamError(f"p must be a probability in [0, 1], got p={prob}")
+    if k <= 0:
+        raise SteamError(f"dof must be a number of degrees of freedom > 0, got dof={k}")
+    return float(2 * gammaincinv(k / 2, prob))
 
 
 def verdict(anees: float, band: tuple[float, float]) -> str:
