@@ -293,3 +293,16 @@ def test_chi2_quantile_refuses_a_probability_or_dof_out_of_range(p, dof):
 def test_chi2_quantile_equals_scipys_chi2_ppf():
     for p, dof in [(0.025, 1), (0.975, 30), (0.5, 2.5), (0.0, 4), (0.999, 300)]:
         assert chi2_quantile(p, dof) == pytest.approx(scipy.stats.chi2.ppf(p, dof), rel=1e-12)
+
+
+def test_states_at_refuses_times_after_the_estimate_unless_asked_to_predict(dense):  # noqa: F811 - the fixture
+    """Truth stamped on another clock (all after the last state) was silently compared with the prior's predictions;
+    a time after the last state is refused naming it and the span, and ``extrapolate=True`` gives the dense GP's
+    posterior there (the prior's prediction from the last state)."""
+    qc, solver, posterior = dense
+    trajectory = Trajectory(solver, STATES, POSE_TIMES, qc)
+    with pytest.raises(SteamError, match=r"times\[1\] = 6\.0 is after the last estimated state at t=3"):
+        states_at(trajectory, [1.1, 6.0])
+    mean = states_at(trajectory, [1.1, 6.0], extrapolate=True)[1]
+    expected, _ = posterior(6.0)
+    np.testing.assert_allclose(mean, expected, rtol=1e-7, atol=1e-9 * np.abs(expected).max())

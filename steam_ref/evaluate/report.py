@@ -19,14 +19,30 @@ from .metrics import ape, planar_poses, rpe
 __all__ = ["states_at", "trajectory_figures"]
 
 
-def states_at(trajectory: Trajectory, times: object, *, covariance: bool = False) -> NDArray | tuple[NDArray, NDArray]:
+def states_at(
+    trajectory: Trajectory, times: object, *, covariance: bool = False, extrapolate: bool = False
+) -> NDArray | tuple[NDArray, NDArray]:
     """The estimated state (n, d) at each of ``times`` (n,) [YIB Eq. 18], with its covariance (n, d, d)
-    when asked (the interpolated covariance between states)."""
+    when asked (the interpolated covariance between states).
+
+    A time after the last state is refused unless ``extrapolate``: there the answer is the prior's prediction
+    from the last state (:meth:`Trajectory.at`), not an estimate, and truth stamped on another clock would
+    otherwise be compared with predictions alone. A time before the first state is always refused."""
     if not isinstance(trajectory, Trajectory):
         raise SteamError(f"expected a steam_ref.trajectory.Trajectory, got {type(trajectory).__name__}")
+    if not isinstance(extrapolate, (bool, np.bool_)):
+        raise SteamError(f"extrapolate must be True or False, got extrapolate={extrapolate!r}")
     t = real_array("times", times)
     if t.ndim != 1:
         raise ShapeError(f"times must be a 1-d array, one time per query, got shape {t.shape}")
+    if trajectory.states and not extrapolate:
+        last = trajectory.times[trajectory.states[-1]]
+        if np.any(t > last):
+            k = int(np.flatnonzero(t > last)[0])
+            raise SteamError(
+                f"times[{k}] = {float(t[k])!r} is after the last estimated state at t={last:g}: there the trajectory is "
+                "the prior's prediction, not an estimate (pass extrapolate=True to have it)"
+            )
     if not covariance:
         return np.array([trajectory.at(float(ti)) for ti in t]).reshape(len(t), trajectory.n)
     pairs = [trajectory.at(float(ti), covariance=True) for ti in t]
