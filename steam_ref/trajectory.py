@@ -102,8 +102,12 @@ class Trajectory:
                 )
 
     def _between(self, a: int, b: int, t: float, xa: NDArray, xb: NDArray) -> NDArray:
-        """x̄(t) between the states at poses a and b.  [YIB Eq. 18]"""
+        """x̄(t) between the states at poses a and b, ta <= t <= tb.  [YIB Eq. 18]
+
+        A pose may share its time with a state (times need only not decrease): x(ta) is the state at a."""
         ta, tb = self.times[a], self.times[b]
+        if t in (ta, tb):
+            return (xa if t == ta else xb).copy()
         if self.qc is None:
             return interpolate_state_sde(self.prior, ta, xa, tb, xb, t)
         lam, psi = interpolation_matrices(ta, tb, t, self.qc)  # [YIB Eq. 16]
@@ -111,12 +115,15 @@ class Trajectory:
 
     def _between_covariance(self, a: int, b: int, t: float, joint: NDArray) -> NDArray:
         ta, tb = self.times[a], self.times[b]
+        if t in (ta, tb):  # a pose at a state's time: that state's marginal, a block of the joint
+            return joint[: self.n, : self.n].copy() if t == ta else joint[self.n :, self.n :].copy()
         if self.qc is None:
             return interpolate_covariance_sde(self.prior, ta, tb, t, joint)
         return interpolate_covariance(ta, tb, t, self.qc, joint)
 
     def neighbours(self, t: float) -> tuple[int, int] | int:
         """The state at time t, or the two states around it."""
+        t = number("t", t)
         times, solved = self.times, self.states
         if not solved or not times[solved[0]] <= t <= times[solved[-1]]:
             span = "no solved state yet" if not solved else f"[{times[solved[0]]:g}, {times[solved[-1]]:g}]"
@@ -156,23 +163,30 @@ class Trajectory:
         return mean, self._between_covariance(a, b, t, self.solver.joint_covariance([X(a), X(b)]))
 
     def at_every_pose(self) -> tuple[NDArray, NDArray]:
-        """Times (n_poses,) and states (n_poses, n) at every pose of the span; reads the whole estimate once."""
+        """Times (m,) and states (m, n) at every pose of the span, from the first state's pose to the last's
+        (m = states[-1] - states[0] + 1; row k is pose states[0] + k); reads the whole estimate once."""
         solved = self.states
         if not solved:
             return np.zeros(0), np.zeros((0, self.n))
-        values, times = self.solver.estimate(), self.times
-        out = np.empty((solved[-1] + 1, self.n))
+        values, times, first = self.solver.estimate(), self.times, solved[0]
+        out = np.empty((solved[-1] + 1 - first, self.n))
         for a, b in itertools.pairwise(solved):
             xa, xb = values[X(a)], values[X(b)]
-            out[a] = xa
+            out[a - first] = xa
             for p in range(a + 1, b):
-                out[p] = self._between(a, b, times[p], xa, xb)  # [YIB Eq. 18]
-        out[solved[-1]] = values[X(solved[-1])]
-        return times[: solved[-1] + 1].copy(), out
+                out[p - first] = self._between(a, b, times[p], xa, xb)  # [YIB Eq. 18]
+        out[-1] = values[X(solved[-1])]
+        return times[first : solved[-1] + 1].copy(), out
 
     def covariances(self, landmarks: Sequence[Key]) -> Covariances:
-        """Marginal covariances at every pose of the span (interpolated between states) and of ``landmarks``."""
+        """Marginal covariances at every pose of the span (interpolated between states; row k is pose
+        states[0] + k, as in :meth:`at_every_pose`) and of ``landmarks``."""
         solved, landmarks = self.states, key_list("landmarks", landmarks)
+        d = self.prior.qc.shape[0]
+        if d != 3:
+            raise SteamError(
+                f"covariances are those of planar poses [x, y, θ] and their rates; this prior's p has d = {d} numbers"
+            )
         marg = self.solver.marginal_covariances([X(i) for i in solved] + landmarks)
         for k in landmarks:
             if marg[k].shape != (2, 2):
@@ -183,13 +197,13 @@ class Trajectory:
         joints = (
             dict(zip(gaps, self.solver.joint_covariances([(X(a), X(b)) for a, b in gaps]), strict=True)) if gaps else {}
         )
-        n = solved[-1] + 1 if solved else 0
-        full = np.empty((n, self.n, self.n))
+        first = solved[0] if solved else 0
+        full = np.empty((solved[-1] + 1 - first if solved else 0, self.n, self.n))
         for a, b in itertools.pairwise(solved):
-            full[a] = marg[X(a)]
+            full[a - first] = marg[X(a)]
             for p in range(a + 1, b):
-                full[p] = self._between_covariance(a, b, self.times[p], joints[(a, b)])
+                full[p - first] = self._between_covariance(a, b, self.times[p], joints[(a, b)])
         if solved:
-            full[solved[-1]] = marg[X(solved[-1])]
+            full[-1] = marg[X(solved[-1])]
         marks = np.array([marg[k] for k in landmarks]).reshape(-1, 2, 2)
         return Covariances(full[:, :3, :3].copy(), full[:, 3:6, 3:6].copy(), marks, tuple(k.index for k in landmarks))

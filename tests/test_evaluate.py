@@ -284,12 +284,12 @@ def test_states_at_equals_the_dense_gp_posterior(dense):  # noqa: F811 - the fix
     qc, solver, posterior = dense
     trajectory = Trajectory(solver, STATES, POSE_TIMES, qc)
     times = np.array([0.0, 0.8, 1.1, 3.7, 6.0])  # at a state, between states, after the last
-    means, covs = states_at(trajectory, times, covariance=True)
+    means, covs = states_at(trajectory, times, covariance=True, extrapolate=True)
     for t, mean, cov in zip(times, means, covs, strict=True):
         expected_mean, expected_cov = posterior(t)
         np.testing.assert_allclose(mean, expected_mean, rtol=1e-7, atol=1e-9 * np.abs(expected_mean).max())
         np.testing.assert_allclose(cov, expected_cov, rtol=1e-7, atol=1e-9 * np.abs(expected_cov).max())
-    np.testing.assert_array_equal(states_at(trajectory, times), means)
+    np.testing.assert_array_equal(states_at(trajectory, times, extrapolate=True), means)
 
 
 def test_batch_reports_ape_beside_its_rmse_and_saves_its_trajectory(tmp_path, capsys):

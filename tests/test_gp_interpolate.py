@@ -31,6 +31,13 @@ def dense_problem(rng, kind, M=5):
     if kind == "wnoa":
         qc = random_spd(rng, 2)
         sde = LinearSDE.wnoa(qc, v=rng.normal(size=4))
+    elif kind in ("wnoj", "singer"):  # the closed forms of Φ and Q, with an input v
+        qc = random_spd(rng, 2)
+        sde = (
+            LinearSDE.wnoj(qc, v=rng.normal(size=6))
+            if kind == "wnoj"
+            else LinearSDE.singer(qc, 2.5, v=rng.normal(size=6))
+        )
     else:
         qc, sde = None, LinearSDE(**random_lti(rng, n=4, m=2))
     est_times = 0.2 + np.concatenate([[0.0], np.cumsum(rng.uniform(0.3, 1.0, size=M - 1))])
@@ -102,7 +109,7 @@ def test_wnoa_closed_form_interpolation_equals_sde(rng, d):
 # --- the mean: Eq. 18 equals the dense Eq. 12 -----------------------------------------------------
 
 
-@pytest.mark.parametrize("kind", ["wnoa", "random"])
+@pytest.mark.parametrize("kind", ["wnoa", "wnoj", "singer", "random"])
 def test_interpolate_state_sde_equals_dense_posterior_mean(rng, kind):
     """Nonzero μ (v ≠ 0, μ₀ ≠ 0): x̄(τ) = μ(τ) + K(τ)K⁻¹(x̄ - μ)  [YIB Eq. 12]."""
     sde, _, est, taus, intervals, all_times, K, mu = dense_problem(rng, kind)
@@ -133,7 +140,7 @@ def test_interpolate_state_equals_dense_zero_mean_wnoa(rng):
 # --- the covariance at τ against dense marginalisation ------------------------------------------
 
 
-@pytest.mark.parametrize("kind", ["wnoa", "random"])
+@pytest.mark.parametrize("kind", ["wnoa", "wnoj", "singer", "random"])
 def test_interpolate_covariance_equals_dense_posterior(rng, kind):
     """Random linear measurements of the estimated states only; condition the whole joint densely."""
     sde, qc, est, taus, intervals, all_times, K, mu = dense_problem(rng, kind)

@@ -298,3 +298,12 @@ def test_qc_inverse_is_the_inverse_by_a_cholesky_solve_symmetric_and_read_only(r
     np.testing.assert_allclose(inverse @ qc, np.eye(3), rtol=0, atol=1e-12)  # oracle: the definition
     np.testing.assert_allclose(inverse, np.linalg.inv(qc), rtol=1e-12, atol=1e-14)
     assert np.array_equal(inverse, inverse.T) and not inverse.flags.writeable
+
+
+@pytest.mark.parametrize("scale", [1e-9, 1.0, 1e6])
+def test_qc_not_symmetric_at_any_scale_raises(scale):
+    """An asymmetry of 5 % is refused whatever the units: with an absolute tolerance a Qc of 1e-9 passed, and
+    Q(dt) = Q-pattern ⊗ Qc came out not symmetric (Q[0, 1] = 5 Q[1, 0] by hand)."""
+    qc = scale * np.array([[1.0, 0.05], [0.0, 1.0]])
+    with pytest.raises(SteamError, match="symmetric"):
+        process_noise(1.0, qc)

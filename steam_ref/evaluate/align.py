@@ -23,7 +23,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import SteamError
+from ..arguments import finite, number, real_array
+from ..errors import ShapeError, SteamError
 from ..pose2 import wrap_angle
 
 __all__ = ["Alignment", "align_planar", "ALIGNMENTS"]
@@ -39,6 +40,16 @@ class Alignment:
     translation: NDArray  # t (2,) [m]
     scale: float = 1.0  # s
 
+    def __post_init__(self) -> None:
+        translation = finite("translation", real_array("translation", self.translation))
+        if translation.shape != (2,):
+            raise ShapeError(f"translation must be a finite (2,) vector, got shape {translation.shape}")
+        if number("scale", self.scale) <= 0:
+            raise SteamError(f"scale must be a finite number > 0, got scale={self.scale!r}")
+        object.__setattr__(self, "angle", number("angle", self.angle))
+        object.__setattr__(self, "translation", translation)
+        object.__setattr__(self, "scale", float(self.scale))
+
     @classmethod
     def identity(cls) -> Alignment:
         return cls(0.0, np.zeros(2), 1.0)
@@ -50,7 +61,9 @@ class Alignment:
 
     def apply(self, poses: NDArray) -> NDArray:
         """Poses (n, 3) [x, y, θ] moved by this transform; headings wrapped to [-π, π)."""
-        poses = np.asarray(poses, dtype=float)
+        poses = finite("poses", real_array("poses", poses))
+        if poses.ndim != 2 or poses.shape[1] != 3:
+            raise ShapeError(f"poses must be an (n, 3) array of poses [x, y, θ], got shape {poses.shape}")
         xy = self.scale * poses[:, :2] @ self.rotation.T + self.translation
         return np.column_stack([xy, wrap_angle(poses[:, 2] + self.angle)])
 
@@ -64,11 +77,12 @@ def align_planar(estimate: NDArray, truth: NDArray, *, with_scale: bool = False)
     ``estimate`` and ``truth`` are positions (n, 2), n ≥ 2, not all at one point. A rigid alignment
     (``with_scale=False``) is Umeyama's with s fixed at 1 [U91 Eq. 40-41].
     """
-    x, y = np.asarray(estimate, dtype=float), np.asarray(truth, dtype=float)
+    x, y = real_array("estimate", estimate), real_array("truth", truth)
     if x.ndim != 2 or x.shape[1] != 2 or x.shape != y.shape or len(x) < 2:
         raise SteamError(
             f"alignment needs two (n, 2) position arrays of one shape, n >= 2; got {x.shape} and {y.shape}"
         )
+    finite("estimate", x), finite("truth", y)
     mu_x, mu_y = x.mean(axis=0), y.mean(axis=0)  # [U91 Eq. 34-35]
     xc, yc = x - mu_x, y - mu_y
     a = float(np.sum(xc * yc))  # Σ x̃ᵢ·ỹᵢ

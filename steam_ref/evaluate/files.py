@@ -21,7 +21,9 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from ..arguments import real_array
 from ..errors import DataError, ShapeError
+from ..pose2 import wrap_angle
 from .metrics import planar_poses
 
 __all__ = ["write_tum", "read_tum", "write_kitti", "read_kitti", "PLANAR_TOLERANCE"]
@@ -30,7 +32,7 @@ PLANAR_TOLERANCE = 1e-9  # |z|, |qx|, |qy| and the rotation's off-plane entries 
 
 
 def _times(times: object, n: int) -> NDArray:
-    t = np.asarray(times, dtype=float)
+    t = real_array("times", times)
     if t.shape != (n,):
         raise ShapeError(f"times must be (n,) with one time per pose ({n}), got shape {t.shape}")
     if not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
@@ -55,6 +57,8 @@ def _table(path: str | os.PathLike, columns: int, what: str) -> NDArray:
         text = Path(path).read_text()
     except UnicodeDecodeError:
         raise DataError(f"{path}: not a text file") from None
+    except OSError as err:
+        raise DataError(f"{path}: cannot read it ({type(err).__name__}: {err.strerror or err})") from None
     for number, line in enumerate(text.splitlines(), start=1):
         line = line.strip()
         if not line or line.startswith("#"):
@@ -63,6 +67,8 @@ def _table(path: str | os.PathLike, columns: int, what: str) -> NDArray:
         if len(parts) != columns:
             raise DataError(f"{path}, line {number}: a {what} line has {columns} numbers, this one {len(parts)}")
         try:
+            if any("_" in p or not p.isascii() for p in parts):  # float() reads "1_0" as 10, "１" as 1
+                raise ValueError
             values = [float(p) for p in parts]
         except ValueError:
             raise DataError(f"{path}, line {number}: not a number in {line[:80]!r}") from None
@@ -101,7 +107,7 @@ def read_tum(path: str | os.PathLike) -> tuple[NDArray, NDArray]:
         raise DataError(
             f"{path}, line {_line_of(path, k)}: timestamp {float(t[k])!r} does not increase (previous {float(t[k - 1])!r})"
         )
-    theta = 2 * np.arctan2(q[:, 2], q[:, 3])
+    theta = wrap_angle(2 * np.arctan2(q[:, 2], q[:, 3]))  # q and -q are one rotation: θ in [-π, π)
     return t, np.column_stack([xyz[:, :2], theta])
 
 
@@ -120,6 +126,7 @@ def read_kitti(path: str | os.PathLike) -> NDArray:
     rot, t = rows[:, :, :3], rows[:, :, 3]
     off_plane = np.max(np.abs(np.concatenate([rot[:, 2, :2], rot[:, :2, 2], t[:, 2:]], axis=1)), axis=1)
     not_rotation = np.max(np.abs(rot @ np.transpose(rot, (0, 2, 1)) - np.eye(3)), axis=(1, 2))
+    not_rotation = np.maximum(not_rotation, np.abs(np.linalg.det(rot) - 1))  # det -1: a mirror, orthogonal too
     bad = (off_plane > PLANAR_TOLERANCE) | (np.abs(rot[:, 2, 2] - 1) > PLANAR_TOLERANCE) | (not_rotation > 1e-6)
     if bad.any():
         k = int(np.flatnonzero(bad)[0])

@@ -27,6 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from ..arguments import finite, number, real_array
 from ..errors import ShapeError, SteamError
 from ..pose2 import wrap_angle
 from .align import ALIGNMENTS, Alignment, align_planar
@@ -60,7 +61,10 @@ class Statistics:
 
     @classmethod
     def of(cls, errors: NDArray) -> Statistics:
-        e = np.asarray(errors, dtype=float)
+        e = real_array("errors", errors)
+        if e.ndim != 1:
+            raise ShapeError(f"errors must be a 1-d array, one error per pose or pair, got shape {e.shape}")
+        finite("errors", e)
         if e.size == 0:
             raise SteamError("no errors to summarise: the trajectory has no pose (or no pair) to compare")
         return cls(float(np.sqrt(np.mean(e * e))), float(np.mean(e)), float(np.median(e)), float(np.max(e)), e.size)
@@ -128,6 +132,10 @@ def rpe_pairs(
     """
     poses = planar_poses("poses", poses)
     n = len(poses)
+    if not isinstance(all_pairs, (bool, np.bool_)):
+        raise SteamError(f"all_pairs must be True or False, got all_pairs={all_pairs!r}")
+    if number("relative_tolerance", relative_tolerance) < 0:
+        raise SteamError(f"relative_tolerance must be a number >= 0, got relative_tolerance={relative_tolerance!r}")
     if unit == "poses":
         if isinstance(delta, bool) or not isinstance(delta, (int, np.integer)) or delta < 1:
             raise SteamError(f"an RPE over poses needs delta, a positive integer, got {delta!r}")
@@ -171,7 +179,7 @@ def rpe(
 ) -> PoseError:
     """Relative pose error of ``estimate`` against ``truth`` (both (n, 3) at the same times) over pairs
     ``delta`` apart (:func:`rpe_pairs`, chosen on the truth's path, or the estimate's with
-    ``pairs_from='estimate'``, evo's default)."""
+    ``pairs_from='estimate'``, evo's default). No pair ``delta`` apart is a SteamError naming ``delta``."""
     truth, estimate = _same_shape(truth, estimate)
     if pairs_from not in ("truth", "estimate"):
         raise SteamError(f"pairs_from must be 'truth' or 'estimate', got {pairs_from!r}")
@@ -185,6 +193,11 @@ def rpe(
         ),
         dtype=int,
     ).reshape(-1, 2)
+    if not len(pairs):
+        raise SteamError(
+            f"no pair of poses delta={delta!r} {unit} apart in a trajectory of {len(truth)} poses "
+            f"(pairs chosen on the {pairs_from}'s path): give a smaller delta"
+        )
     i, j = pairs[:, 0], pairs[:, 1]
 
     def motion(p: NDArray) -> tuple[NDArray, NDArray]:

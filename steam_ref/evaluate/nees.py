@@ -16,6 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.special import gammaincinv
 
+from ..arguments import finite, number, real_array
 from ..errors import NumericalError, ShapeError, SteamError
 from ..pose2 import wrap_angle
 
@@ -24,10 +25,10 @@ __all__ = ["nees", "chi2_band", "chi2_quantile", "pose_errors", "verdict"]
 
 def pose_errors(estimate: NDArray, truth: NDArray) -> NDArray:
     """Errors (n, 3) of planar poses [x, y, θ]: the difference, its heading wrapped to [-π, π)."""
-    estimate, truth = np.asarray(estimate, dtype=float), np.asarray(truth, dtype=float)
+    estimate, truth = real_array("estimate", estimate), real_array("truth", truth)
     if estimate.shape != truth.shape or estimate.ndim != 2 or estimate.shape[1] != 3:
         raise ShapeError(f"pose errors need two (n, 3) arrays of one shape, got {estimate.shape} and {truth.shape}")
-    e = estimate - truth
+    e = finite("estimate", estimate) - finite("truth", truth)
     e[:, 2] = wrap_angle(e[:, 2])
     return e
 
@@ -38,13 +39,15 @@ def nees(errors: NDArray, covariances: NDArray) -> NDArray:
     Computed through a Cholesky factor of each P; a P that is not positive definite is a
     :class:`~steam_ref.errors.NumericalError` naming its row.
     """
-    e, P = np.asarray(errors, dtype=float), np.asarray(covariances, dtype=float)
+    e, P = real_array("errors", errors), real_array("covariances", covariances)
     if e.ndim != 2 or P.shape != (*e.shape, e.shape[1]):
         raise ShapeError(f"nees needs errors (n, d) and covariances (n, d, d), got {e.shape} and {P.shape}")
     if not (np.all(np.isfinite(e)) and np.all(np.isfinite(P))):
         raise NumericalError("nees: an error or a covariance is not finite")
     out = np.empty(len(e))
     for k in range(len(e)):
+        if np.abs(P[k] - P[k].T).max() > 1e-10 * np.abs(P[k]).max():  # Cholesky would read one triangle only
+            raise SteamError(f"nees: covariances[{k}] must be symmetric, got {P[k].tolist()}")
         try:
             lower = np.linalg.cholesky(P[k])
         except np.linalg.LinAlgError:
@@ -67,15 +70,28 @@ def chi2_band(n_runs: int, dim: int, level: float = 0.95) -> tuple[float, float]
     return chi2_quantile(tail, dof) / n_runs, chi2_quantile(1 - tail, dof) / n_runs
 
 
-def chi2_quantile(p: float, dof: int) -> float:
+def chi2_quantile(p: float, dof: float) -> float:
     """χ²⁻¹(p; k) = 2 P⁻¹(k/2, p), P the regularized lower incomplete gamma function (SciPy's ``gammaincinv``;
-    ``scipy.stats.chi2.ppf`` computes the same, at 0.3 s of import). The one home of the χ² quantile."""
-    return float(2 * gammaincinv(dof / 2, p))
+    ``scipy.stats.chi2.ppf`` computes the same, at 0.3 s of import). The one home of the χ² quantile.
+    ``p`` in [0, 1], ``dof`` > 0 (SciPy answers NaN outside them)."""
+    prob, k = number("p", p), number("dof", dof)
+    if not 0 <= prob <= 1:
+        raise SteamError(f"p must be a probability in [0, 1], got p={prob}")
+    if k <= 0:
+        raise SteamError(f"dof must be a number of degrees of freedom > 0, got dof={k}")
+    return float(2 * gammaincinv(k / 2, prob))
 
 
 def verdict(anees: float, band: tuple[float, float]) -> str:
     """'consistent' inside the band, else 'not consistent (overconfident)' / '(underconfident)'."""
-    lo, hi = band
+    anees = number("anees", anees)
+    if anees < 0:
+        raise SteamError(f"anees is an average of squares, never negative, got anees={anees}")
+    if not (isinstance(band, (tuple, list)) and len(band) == 2):
+        raise SteamError(f"band must be a pair (lower, upper), got band={band!r}")
+    lo, hi = number("band[0]", band[0]), number("band[1]", band[1])
+    if not 0 <= lo <= hi:
+        raise SteamError(f"band must be (lower, upper) with 0 <= lower <= upper, got band={band!r}")
     if anees > hi:
         return "not consistent (overconfident)"
     if anees < lo:

@@ -11,19 +11,38 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import SteamError
+from ..arguments import integer, real_array
+from ..errors import ShapeError, SteamError
 from ..trajectory import Trajectory
 from .metrics import ape, planar_poses, rpe
 
 __all__ = ["states_at", "trajectory_figures"]
 
 
-def states_at(trajectory: Trajectory, times: object, *, covariance: bool = False) -> NDArray | tuple[NDArray, NDArray]:
+def states_at(
+    trajectory: Trajectory, times: object, *, covariance: bool = False, extrapolate: bool = False
+) -> NDArray | tuple[NDArray, NDArray]:
     """The estimated state (n, d) at each of ``times`` (n,) [YIB Eq. 18], with its covariance (n, d, d)
-    when asked (the interpolated covariance between states)."""
+    when asked (the interpolated covariance between states).
+
+    A time after the last state is refused unless ``extrapolate``: there the answer is the prior's prediction
+    from the last state (:meth:`Trajectory.at`), not an estimate, and truth stamped on another clock would
+    otherwise be compared with predictions alone. A time before the first state is always refused."""
     if not isinstance(trajectory, Trajectory):
         raise SteamError(f"expected a steam_ref.trajectory.Trajectory, got {type(trajectory).__name__}")
-    t = np.asarray(times, dtype=float).ravel()
+    if not isinstance(extrapolate, (bool, np.bool_)):
+        raise SteamError(f"extrapolate must be True or False, got extrapolate={extrapolate!r}")
+    t = real_array("times", times)
+    if t.ndim != 1:
+        raise ShapeError(f"times must be a 1-d array, one time per query, got shape {t.shape}")
+    if trajectory.states and not extrapolate:
+        last = trajectory.times[trajectory.states[-1]]
+        if np.any(t > last):
+            k = int(np.flatnonzero(t > last)[0])
+            raise SteamError(
+                f"times[{k}] = {float(t[k])!r} is after the last estimated state at t={last:g}: there the trajectory is "
+                "the prior's prediction, not an estimate (pass extrapolate=True to have it)"
+            )
     if not covariance:
         return np.array([trajectory.at(float(ti)) for ti in t]).reshape(len(t), trajectory.n)
     pairs = [trajectory.at(float(ti), covariance=True) for ti in t]
@@ -35,8 +54,11 @@ def states_at(trajectory: Trajectory, times: object, *, covariance: bool = False
 def trajectory_figures(truth: object, estimate: object, *, rpe_delta: int = 1) -> dict:
     """APE unaligned, SE(2)- and Sim(2)-aligned, and RPE over ``rpe_delta`` poses, of planar poses (n, 3)
     at the same times: {'ape': {...}, 'ape_se2': {...}, 'ape_sim2': {...}, 'rpe': {...}}, each with
-    translation [m] and heading [rad] statistics (:class:`~steam_ref.evaluate.metrics.Statistics`)."""
+    translation [m] and heading [rad] statistics (:class:`~steam_ref.evaluate.metrics.Statistics`).
+    With one pose there is nothing to align, so 'ape_se2' and 'ape_sim2' are left out; with ``rpe_delta``
+    poses or fewer there is no pair, so 'rpe' is left out."""
     truth, estimate = planar_poses("truth", truth), planar_poses("estimate", estimate)
+    rpe_delta = integer("rpe_delta", rpe_delta, minimum=1)
     out: dict = {"ape": ape(truth, estimate).to_dict()}
     if len(truth) >= 2:
         for align in ("se2", "sim2"):
