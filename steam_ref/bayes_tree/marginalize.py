@@ -270,7 +270,7 @@ def _reeliminate(
 
     Returns ``(removed, orphans, cliques, parents, owner of each orphan, kept factor ids)``; the new
     cliques' ``factors`` index into ``kept + marginal factor ids + orphans``, relabelled by the caller.
-    On failure the tree is put back.
+    On failure or interruption the tree is put back.
     """
     tree = solver.tree
     roots = set(tree.roots)
@@ -283,7 +283,7 @@ def _reeliminate(
         order = solver._elimination_order(rest, [f.keys for f in linear], last)
         n_own = len(kept) + len(schur)
         cliques, parents, owner = eliminate(order, linear, solver._dims, list(range(n_own)) + [None] * len(orphans))
-    except Exception:
+    except BaseException:  # an error, or Ctrl-C (KeyboardInterrupt) while eliminating: the tree as it was
         tree.restore_top()
         raise
     return removed, orphans, cliques, parents, owner[n_own:], kept
