@@ -243,10 +243,8 @@ def test_a_landmark_seen_by_one_range_has_no_covariance(seed, backend):
     infinite, so it is refused, not returned as whatever rounding left of the vanishing pivot (CHOLMOD
     took any positive pivot; on half of these seeds it returned a variance of ~1e15)."""
     p = small_problem(np.random.default_rng(seed), n_states=5, n_landmarks=2, robust=False)
-    lonely = [f for f in p.graph.factors if isinstance(f, sr.RangeFactor) and f.keys[1] == sr.L(1)][0]
-    factors = [
-        f for f in p.graph.factors if sr.L(1) not in f.keys or f is lonely
-    ]  # its prior and its other ranges gone
+    lonely = next(f for f in p.graph.factors if isinstance(f, sr.RangeFactor) and f.keys[1] == sr.L(1))
+    factors = [f for f in p.graph.factors if sr.L(1) not in f.keys or f is lonely]  # its prior, other ranges gone
     with pytest.raises(sr.UnderdeterminedError, match="variable l1"):
         sparse_marginal_covariances(factors, p.initial, [sr.L(1)], backend=backend)
 
