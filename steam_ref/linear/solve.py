@@ -23,7 +23,7 @@ from ..errors import NumericalError, ShapeError, SteamError, UnderdeterminedErro
 from .ordering import Ordering, sparse_backend
 from .system import LinearSystem
 
-__all__ = ["SparseCholesky", "Symbolic", "solve"]
+__all__ = ["SparseCholesky", "Symbolic", "solve", "check_system"]
 
 # A pivot (the LDLᵀ d_i = L_ii²) at most this times its own column's diagonal entry 𝓘_ii is what rounding
 # left of a zero one: the matrix is singular, or its scaled condition exceeds ~10¹³ (d_i / 𝓘_ii ≥ 1/cond of
@@ -191,8 +191,15 @@ class SparseCholesky:
         return self._factor.solve(np.asarray(rhs, dtype=float))
 
 
+def check_system(system: object) -> None:
+    """SteamError unless ``system`` is a :class:`LinearSystem` (what a solve or a covariance of one reads)."""
+    if not isinstance(system, LinearSystem):
+        raise SteamError(f"system must be a LinearSystem (LinearSystem.build), got system={system!r:.80}")
+
+
 def solve(system: LinearSystem, backend: str | None = None) -> tuple[NDArray, SparseCholesky]:
     """The Gauss-Newton step δθ* of Eq. 11 (in the system's column order) and the factor used."""
+    check_system(system)
     info, rhs = system.information()
     chol = SparseCholesky.factor(info, system.ordering, backend, check_symmetry=False)  # AᵀA
     return chol.solve(rhs), chol
