@@ -109,8 +109,8 @@ class FixedLagSmoother(IncrementalSolver):
         """:meth:`IncrementalSolver.update`, then marginalize the variables older than the lag.
 
         Raises :class:`UnknownVariableError` for a factor or timestamp naming a marginalized variable
-        (the solver is then as it was). A failure of the marginalization itself leaves the update done
-        and nothing marginalized.
+        (the solver is then as it was). A failure or interruption of the marginalization itself leaves the
+        update done and nothing marginalized (the next update marginalizes them).
         """
         check_new_values(new_values)  # before anything reads it as a mapping
         times = self._checked_times(timestamps, new_values)
