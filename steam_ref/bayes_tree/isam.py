@@ -108,7 +108,8 @@ class IncrementalSolver:
 
     @property
     def factors(self) -> tuple[Factor, ...]:
-        """Every factor so far, in the order added (a tuple: the solver's caches are indexed by position)."""
+        """Every factor so far, in the order added (a tuple: the solver's caches are indexed by position); the slot
+        of a factor :func:`~.marginalize.marginalize` dropped holds None."""
         return tuple(self._factors)
 
     @property
