@@ -43,7 +43,7 @@ from .errors import SteamError, UnknownVariableError
 from .factors import Factor, check_factors
 from .linear.conditional import Conditional
 from .linear.ordering import Ordering, make_ordering
-from .linear.solve import SparseCholesky
+from .linear.solve import SparseCholesky, check_system
 from .linear.system import LinearSystem
 from .variables import Key, Values, as_values, check_key, key_list
 
@@ -113,6 +113,7 @@ def _blocks_of_inverse(
 
 def marginal_covariances(system: LinearSystem, keys: list[Key], backend: str | None = None) -> dict[Key, NDArray]:
     """Marginal covariance blocks (𝓘⁻¹)ₖₖ (dₖ, dₖ) of chosen variables.  [YIB Eq. 11: cov δθ* = 𝓘⁻¹]"""
+    check_system(system)
     keys = key_list("keys", keys)
     info, _ = system.information()
     chol = SparseCholesky.factor(info, system.ordering, backend, check_symmetry=False)  # AᵀA

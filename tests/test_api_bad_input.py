@@ -37,6 +37,7 @@ from steam_ref.linear import (
     linearize,
     make_ordering,
 )
+from steam_ref.linear import solve as linear_solve
 from steam_ref.paper.results import position_rmse
 from steam_ref.trajectory import Trajectory
 
@@ -663,6 +664,18 @@ CASES = [
         lambda: covariance.marginal_covariances(system(), X(0)),
         SteamError,
         r"keys must be a list of keys, got the single key x0: write \[x0\]",
+    ),
+    (
+        "marginal_covariances of no system",
+        lambda: covariance.marginal_covariances("A", [X(0)]),
+        SteamError,
+        r"system must be a LinearSystem.*got system='A'",
+    ),
+    (
+        "solve of no system",
+        lambda: linear_solve(None),
+        SteamError,
+        r"system must be a LinearSystem.*got system=None",
     ),
     (
         "marginal_covariances None",

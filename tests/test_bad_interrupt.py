@@ -21,7 +21,8 @@ import numpy as np
 import pytest
 from test_isam import Stream
 
-from steam_ref.bayes_tree import IncrementalSolver
+from steam_ref import L, X
+from steam_ref.bayes_tree import IncrementalSolver, marginalize
 from steam_ref.bayes_tree import journal as journal_module
 
 
@@ -245,3 +246,44 @@ def test_factors_are_a_tuple_the_caller_cannot_edit() -> None:
     solver.update(*after)
     twin.update(*after)
     assert state(solver) == state(twin)
+
+
+def _lines_of(call) -> int:
+    """How many steam_ref lines ``call()`` executes (the count an interrupt position runs up to)."""
+    trace, lines = _interrupt_at(0)
+    sys.settrace(trace)
+    try:
+        call()
+    finally:
+        sys.settrace(None)
+    return lines()
+
+
+@pytest.mark.parametrize("keys", [[X(0)], [X(1), X(2)], [X(12)], [X(5), L(3)], [L(4)], [L(2), L(9)]], ids=repr)
+def test_an_interrupt_at_any_line_of_marginalize_leaves_the_solver_as_it_was(keys) -> None:
+    """marginalize (a FixedLagSmoother's after every update) interrupted anywhere, cutting leaves off or
+    re-eliminating: the solver as a twin that never saw it, byte for byte; then it marginalizes as the twin does."""
+    base, _, _ = parts(16, 1, seed=11)
+    solver, twin, done = build(base), build(base), build(base)
+    marginalize(build(base), keys)  # the first MarginalFactor runs one-time class checks: not counted below
+    for s in (solver, twin, done):
+        state(s)  # forms every estimate, as each comparison below does: the runs then execute the same lines
+    total = _lines_of(lambda: marginalize(done, keys))
+    where = set()
+    for n in sorted({*np.linspace(1, total, 40).astype(int), *range(max(total - 40, 1), total + 1)}):  # the end changes
+        trace, _ = _interrupt_at(int(n))
+        sys.settrace(trace)
+        try:
+            with pytest.raises(KeyboardInterrupt) as interrupt:
+                marginalize(solver, keys)
+        finally:
+            sys.settrace(None)
+        where.add(str(interrupt.value).split(": ")[1])
+        assert state(solver) == state(twin), f"not as it was after {interrupt.value}"
+    assert "_commit" in where
+    report = marginalize(solver, keys)
+    assert state(solver)[1:] == state(done)[1:]  # all but the ids of the factors: each made its MarginalFactors
+    assert [None if f is None else f.keys for f in solver.factors] == [
+        None if f is None else f.keys for f in done.factors
+    ]
+    assert report.leaves == marginalize(twin, keys).leaves

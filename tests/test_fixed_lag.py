@@ -10,6 +10,7 @@ tests/test_fixed_lag_gtsam.py.
 
 from __future__ import annotations
 
+import re
 import sys
 from dataclasses import dataclass, replace
 from typing import ClassVar
@@ -209,6 +210,57 @@ def test_marginalizing_any_variables_leaves_the_dense_marginal(seed, n, data):
             check_window(solver, everything)
 
 
+BAD_QUERIES = [
+    ("estimate_of", 7),
+    ("marginal_covariance", "x0"),
+    ("marginal_covariances", X(0)),
+    ("marginal_covariances", "x0"),
+    ("marginal_covariances", 5),
+    ("marginal_covariances", [[X(0)]]),
+    ("joint_covariance", X(0)),
+    ("joint_covariance", None),
+    ("joint_covariance", [X(0), 3]),
+    ("joint_covariances", X(0)),
+    ("joint_covariances", [X(0)]),
+    ("joint_covariances", 5),
+    ("joint_covariances", [[X(0), None]]),
+]
+
+
+@pytest.mark.parametrize(("query", "arg"), BAD_QUERIES, ids=[f"{q}({a!r})" for q, a in BAD_QUERIES])
+def test_bad_queries_of_a_smoother_are_named_as_an_incremental_solver_names_them(query, arg):
+    """The smoother's queries first ask whether a key was marginalized: a value that is no key (or no list of
+    keys) must still get the SteamError an IncrementalSolver gives it, not an AttributeError or TypeError."""
+    stream = LinearStream(3)
+    factors, values, stamps = stream.initial()
+    smoother, solver = FixedLagSmoother(10.0), IncrementalSolver()
+    smoother.update(factors, values, timestamps=stamps)
+    solver.update(factors, values)
+    with pytest.raises(SteamError) as expected:
+        getattr(solver, query)(arg)
+    with pytest.raises(SteamError, match="^" + re.escape(str(expected.value)) + "$"):
+        getattr(smoother, query)(arg)
+
+
+@pytest.mark.parametrize("new_values", [[np.zeros(6)], 5, "x0", [(X(0), np.zeros(6))]], ids=repr)
+def test_new_values_that_are_no_mapping_are_named_as_an_incremental_solver_names_them(new_values):
+    prior = PriorFactor.create(X(0), np.zeros(6), 1.0)
+    with pytest.raises(SteamError) as expected:
+        IncrementalSolver().update([prior], new_values)
+    smoother = FixedLagSmoother(1.0)
+    with pytest.raises(SteamError, match="^" + re.escape(str(expected.value)) + "$"):
+        smoother.update([prior], new_values)
+    assert len(smoother) == 0 and smoother.factors == ()
+
+
+@pytest.mark.parametrize("key", ["x0", None, 3, (X(0),)])
+def test_a_timestamp_of_no_key_is_named(key):
+    smoother = FixedLagSmoother(1.0)
+    with pytest.raises(SteamError, match=r"timestamps has the key .*which is not a variable key"):
+        smoother.update([PriorFactor.create(X(0), np.zeros(6), 1.0)], {X(0): np.zeros(6)}, timestamps={key: 0.0})
+    assert len(smoother) == 0 and smoother.timestamps == {}
+
+
 def test_a_leaf_is_cut_off_without_re_elimination():
     stream = LinearStream(3, 0)
     solver = IncrementalSolver(**EXACT)
@@ -327,7 +379,9 @@ def test_a_failed_marginalization_changes_nothing():
     assert solver.tree.cliques == tree and len(solver.factors) == n and solver._dims == held
 
 
-def test_a_failure_during_re_elimination_puts_the_tree_back(monkeypatch):
+@pytest.mark.parametrize("error", [SteamError, KeyboardInterrupt])
+def test_a_failure_during_re_elimination_puts_the_tree_back(monkeypatch, error):
+    """An error, or Ctrl-C (a KeyboardInterrupt is no Exception), while re-eliminating leaves the tree whole."""
     stream = LinearStream(8, 2, fix_every=2)
     solver = IncrementalSolver(**EXACT)
     everything = []
@@ -342,10 +396,10 @@ def test_a_failure_during_re_elimination_puts_the_tree_back(monkeypatch):
     )
 
     def broken(*args, **kwargs):
-        raise SteamError("interrupted")
+        raise error("interrupted")
 
     monkeypatch.setattr(sys.modules["steam_ref.bayes_tree.marginalize"], "eliminate", broken)
-    with pytest.raises(SteamError, match="interrupted"):
+    with pytest.raises(error, match="interrupted"):
         marginalize(solver, [X(4)])
     assert solver.tree.cliques == tree and solver.tree.parent == parents
     assert len(solver.factors) == n and solver._dims == held and solver.tree.problems() == []

@@ -16,6 +16,7 @@ from problems import small_problem
 
 import steam_ref as sr
 from steam_ref.batch import MAX_CONDITION, check_stationarity
+from steam_ref.covariance import sparse_marginal_covariances
 from steam_ref.linear import LinearSystem, Ordering, SparseCholesky
 from steam_ref.linear.ordering import make_ordering
 
@@ -233,6 +234,35 @@ def test_a_landmark_seen_by_one_range_is_named(rng, backend, ordering):
     values = sr.Values({sr.X(0): rng.normal(size=6), sr.X(1): rng.normal(size=6), sr.L(5): np.array([3.0, 1.0])})
     with pytest.raises(sr.UnderdeterminedError, match="variable l5"):
         sr.gauss_newton(graph, values, backend=backend, ordering=ordering)
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+@pytest.mark.parametrize("seed", range(8))
+def test_a_landmark_seen_by_one_range_has_no_covariance(seed, backend):
+    """Without its prior and with one range, a 2-D landmark is free along one direction: its covariance is
+    infinite, so it is refused, not returned as whatever rounding left of the vanishing pivot (CHOLMOD
+    took any positive pivot; on half of these seeds it returned a variance of ~1e15)."""
+    p = small_problem(np.random.default_rng(seed), n_states=5, n_landmarks=2, robust=False)
+    lonely = next(f for f in p.graph.factors if isinstance(f, sr.RangeFactor) and f.keys[1] == sr.L(1))
+    factors = [f for f in p.graph.factors if sr.L(1) not in f.keys or f is lonely]  # its prior, other ranges gone
+    with pytest.raises(sr.UnderdeterminedError, match="variable l1"):
+        sparse_marginal_covariances(factors, p.initial, [sr.L(1)], backend=backend)
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+@pytest.mark.parametrize("seed", range(20))
+def test_a_singular_information_matrix_is_refused_by_every_backend(seed, backend):
+    """𝓘 = AᵀA with fewer rows than columns is singular by construction: rounding may leave a tiny positive
+    pivot, which must not be taken for information (SuperLU's relative pivot test, now CHOLMOD's too)."""
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(2, 12))
+    A = rng.normal(size=(n - 1, n)) * (rng.random((n - 1, n)) < 0.7)
+    A[:, rng.integers(n)] *= 10.0 ** rng.integers(-4, 5)  # a column of another scale
+    A[np.arange(n - 1), np.arange(n - 1)] += 1.0  # no zero diagonal: the failure is found by elimination
+    assert np.linalg.matrix_rank(A) <= n - 1
+    order = Ordering(tuple(sr.X(i) for i in range(n)), (1,) * n)
+    with pytest.raises(sr.UnderdeterminedError, match=r"variable x\d+"):
+        SparseCholesky.factor(sp.csc_matrix(A.T @ A), order, backend)
 
 
 # --- arguments ------------------------------------------------------------------------------------

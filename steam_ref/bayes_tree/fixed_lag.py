@@ -34,11 +34,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..arguments import number
+from ..covariance import _groups
 from ..errors import SteamError, UnknownVariableError
 from ..factors import Factor, check_factors
-from ..variables import Key
+from ..variables import Key, check_key, key_list
 from .history import History
-from .isam import IncrementalSolver
+from .isam import IncrementalSolver, check_new_values
 from .marginalize import MarginalizationReport, _marginalize
 from .params import ISAM2Params
 from .report import UpdateReport
@@ -108,9 +109,10 @@ class FixedLagSmoother(IncrementalSolver):
         """:meth:`IncrementalSolver.update`, then marginalize the variables older than the lag.
 
         Raises :class:`UnknownVariableError` for a factor or timestamp naming a marginalized variable
-        (the solver is then as it was). A failure of the marginalization itself leaves the update done
-        and nothing marginalized.
+        (the solver is then as it was). A failure or interruption of the marginalization itself leaves the
+        update done and nothing marginalized (the next update marginalizes them).
         """
+        check_new_values(new_values)  # before anything reads it as a mapping
         times = self._checked_times(timestamps, new_values)
         factors = check_factors("new_factors", new_factors)
         fresh = () if new_values is None else new_values
@@ -169,6 +171,10 @@ class FixedLagSmoother(IncrementalSolver):
         out = {}
         new = () if new_values is None else new_values
         for k, t in timestamps.items():
+            if not isinstance(k, Key):
+                raise SteamError(
+                    f"timestamps has the key {k!r:.80}, which is not a variable key (make one with X(i) or L(j))"
+                )
             if k not in new:
                 self._held("timestamps names", k)
             if k not in self._dims and k not in new:
@@ -209,22 +215,26 @@ class FixedLagSmoother(IncrementalSolver):
 
     # --- queries: a marginalized variable is named as such -----------------------------------
 
+    # Each checks its argument as IncrementalSolver does first: ``_held`` reads a key's kind and index.
+
     def estimate_of(self, key: Key) -> NDArray:
+        key = check_key("key", key)
         self._held("the estimate of", key)
         return super().estimate_of(key)
 
     def marginal_covariance(self, key: Key) -> NDArray:
+        key = check_key("key", key)
         self._held("the covariance of", key)
         return super().marginal_covariance(key)
 
     def joint_covariance(self, keys: Iterable[Key]) -> NDArray:
-        keys = list(keys)
+        keys = key_list("keys", keys)
         for k in keys:
             self._held("the covariance of", k)
         return super().joint_covariance(keys)
 
     def joint_covariances(self, groups: Iterable[Iterable[Key]]) -> list[NDArray]:
-        groups = [list(g) for g in groups]
+        groups = _groups(groups)
         for g in groups:
             for k in g:
                 self._held("the covariance of", k)
@@ -232,7 +242,7 @@ class FixedLagSmoother(IncrementalSolver):
 
     def marginal_covariances(self, keys: Iterable[Key] | None = None) -> dict[Key, NDArray]:
         if keys is not None:
-            keys = list(keys)
+            keys = key_list("keys", keys)
             for k in keys:
                 self._held("the covariance of", k)
         return super().marginal_covariances(keys)

@@ -41,7 +41,13 @@ from .params import ISAM2Params
 from .report import UpdateReport
 from .tree import BayesTree, Clique, eliminate
 
-__all__ = ["IncrementalSolver"]
+__all__ = ["IncrementalSolver", "check_new_values"]
+
+
+def check_new_values(new_values: object) -> None:
+    """SteamError unless ``new_values`` is a mapping key → vector or None (what an update accepts)."""
+    if new_values is not None and not isinstance(new_values, Mapping):
+        raise SteamError(f"new_values must be a mapping key -> vector (a dict or a Values) or None, got {new_values!r}")
 
 
 class IncrementalSolver:
@@ -102,7 +108,8 @@ class IncrementalSolver:
 
     @property
     def factors(self) -> tuple[Factor, ...]:
-        """Every factor so far, in the order added (a tuple: the solver's caches are indexed by position)."""
+        """Every factor so far, in the order added (a tuple: the solver's caches are indexed by position); the slot
+        of a factor :func:`~.marginalize.marginalize` dropped holds None."""
         return tuple(self._factors)
 
     @property
@@ -154,10 +161,7 @@ class IncrementalSolver:
             if not isinstance(relinearize, (bool, np.bool_)):
                 raise SteamError(f"relinearize must be True or False, got relinearize={relinearize!r}")
             F_new = check_factors("new_factors", new_factors)
-            if new_values is not None and not isinstance(new_values, Mapping):
-                raise SteamError(
-                    f"new_values must be a mapping key -> vector (a dict or a Values) or None, got {new_values!r}"
-                )
+            check_new_values(new_values)
             theta_new = self._checked_update(F_new, {} if new_values is None else new_values)
         journal = Journal(len(self._factors), list(theta_new), self._steps, dict(self._over), self.tree.checkpoint())
         self._delta.record = journal.old_delta

@@ -47,9 +47,10 @@ from ..errors import SteamError, UnknownVariableError
 from ..factors import Factor
 from ..linear.ordering import constrained_min_degree
 from ..linear.system import GaussianFactor
-from ..variables import Key, key_list
+from ..variables import Key, Values, key_list
 from .history import ForgottenConditional
 from .isam import IncrementalSolver
+from .journal import until_done
 from .tree import Clique, eliminate, eliminate_clique
 
 __all__ = ["MarginalFactor", "MarginalizationReport", "eliminate_variables", "marginalize"]
@@ -183,7 +184,7 @@ def marginalize(
     point of the moment (:class:`~.history.ForgottenConditional`), for a smoothing pass later.
     Raises :class:`UnknownVariableError` for a key the solver does not hold, and :class:`SteamError` for a
     :class:`~.fixed_lag.FixedLagSmoother`, which marginalizes by its timestamps and keeps its own record of
-    what it forgot; on any failure the solver is left as it was.
+    what it forgot; on any failure or interruption (Ctrl-C) the solver is left as it was.
     """
     if not isinstance(solver, IncrementalSolver):
         raise SteamError(f"marginalize: solver must be an IncrementalSolver, got {type(solver).__name__}")
@@ -221,10 +222,81 @@ def _marginalize(
     theta = solver._theta_bar  # nothing is changed yet: a failure up to here leaves the solver as it was
     forgotten = () if conditionals is None else tuple(ForgottenConditional.of(c, theta) for c in conditionals)
     leaves = _are_leaves(solver, cids, drop)
+    inside = set(cids)
+    tops = [c for c in cids if tree.parent[c] not in inside]
+    homes = [_home(solver, gf.keys, tops) for gf in schur_factors] if leaves else []
+    undo = _Undo.of(solver, dropped, [*cids, *(tree.parent[c] for c in cids), *homes] if leaves else [])
+    try:
+        return _commit(solver, drop, cids, dropped, schur_factors, leaves, homes, order_drop, estimates, forgotten)
+    except BaseException:  # an error, or Ctrl-C at any point: the solver as it was, then propagate
+        until_done(lambda: undo.apply(solver))
+        raise
+
+
+@dataclass
+class _Undo:
+    """What :func:`_commit` may change, kept before it starts: any failure or interruption is undone. The per-variable
+    stores are copied whole (their order is part of "as it was"; a fixed-lag window bounds them); the tree keeps its
+    checkpoint (re-elimination) and the links of the cliques a cut or a recorded factor touches."""
+
+    n_factors: int  # number of factors before
+    dropped: dict[int, tuple[Factor, GaussianFactor | None]]  # factor id → (factor, cached linearization)
+    theta_bar: dict[Key, NDArray]  # a copy of θ̄
+    stores: tuple[dict, ...]  # copies of :func:`_stores`
+    tree: tuple[int, dict[int, None]]  # the tree's checkpoint
+    links: dict[int, tuple[Clique, int | None, list[int]]]  # clique id → (clique, parent, children)
+
+    @classmethod
+    def of(cls, solver: IncrementalSolver, dropped: list[int], touched: Iterable[int | None]) -> _Undo:
+        tree = solver.tree
+        links = {c: (tree.cliques[c], tree.parent[c], list(tree.children[c])) for c in touched if c is not None}
+        return cls(
+            len(solver._factors),
+            {j: (solver._factors[j], solver._linear[j]) for j in dropped},
+            dict(solver._theta_bar),
+            tuple(dict(store) for store in _stores(solver)),
+            tree.checkpoint(),
+            links,
+        )
+
+    def apply(self, solver: IncrementalSolver) -> None:
+        """Put it all back (idempotent, for :func:`~.journal.until_done`)."""
+        tree = solver.tree
+        tree.rollback(self.tree)  # re-elimination: its new cliques go, the removed top comes back
+        for c, (clique, parent, children) in self.links.items():  # a cut: the cliques and links it changed
+            tree.cliques[c], tree.parent[c], tree.children[c] = clique, parent, list(children)
+            tree.frontal_of.update(dict.fromkeys(clique.frontals, c))
+            for ch in children:
+                tree.parent[ch] = c
+        del solver._factors[self.n_factors :], solver._linear[self.n_factors :]
+        for j, (factor, gf) in self.dropped.items():
+            solver._factors[j], solver._linear[j] = factor, gf
+        solver._theta_bar = Values.adopt(self.theta_bar)
+        for store, saved in zip(_stores(solver), self.stores, strict=True):
+            dict.clear(store)
+            dict.update(store, saved)  # not the UndoDict's own update: nothing is recorded
+
+
+def _stores(solver: IncrementalSolver) -> tuple[dict, ...]:
+    """The solver's per-variable dicts besides θ̄: sizes, β, δ, the estimates, the stale and relinearization sets."""
+    return (solver._dims, solver._beta, solver._delta, solver._estimate, solver._stale, solver._over)
+
+
+def _commit(
+    solver: IncrementalSolver,
+    drop: set[Key],
+    cids: list[int],
+    dropped: list[int],
+    schur_factors: list[GaussianFactor],
+    leaves: bool,
+    homes: list[int],
+    order_drop: Sequence[Key],
+    estimates: dict[Key, NDArray],
+    forgotten: tuple[ForgottenConditional, ...],
+) -> MarginalizationReport:
+    """Steps 2-3 of :func:`marginalize`: every change to the solver, from what ``_marginalize`` computed."""
+    tree = solver.tree
     if leaves:  # step 2: cut the cliques of D off; the Schur complement of D's factors goes to their parents
-        inside = set(cids)
-        tops = [c for c in cids if tree.parent[c] not in inside]
-        homes = [_home(solver, gf.keys, tops) for gf in schur_factors]
         removed = list(cids)
         new_cids: list[int] = []
         factor_ids = _add_marginal_factors(solver, schur_factors)
@@ -270,7 +342,7 @@ def _reeliminate(
 
     Returns ``(removed, orphans, cliques, parents, owner of each orphan, kept factor ids)``; the new
     cliques' ``factors`` index into ``kept + marginal factor ids + orphans``, relabelled by the caller.
-    On failure the tree is put back.
+    On failure or interruption the tree is put back.
     """
     tree = solver.tree
     roots = set(tree.roots)
@@ -283,7 +355,7 @@ def _reeliminate(
         order = solver._elimination_order(rest, [f.keys for f in linear], last)
         n_own = len(kept) + len(schur)
         cliques, parents, owner = eliminate(order, linear, solver._dims, list(range(n_own)) + [None] * len(orphans))
-    except Exception:
+    except BaseException:  # an error, or Ctrl-C (KeyboardInterrupt) while eliminating: the tree as it was
         tree.restore_top()
         raise
     return removed, orphans, cliques, parents, owner[n_own:], kept

@@ -23,7 +23,12 @@ from ..errors import NumericalError, ShapeError, SteamError, UnderdeterminedErro
 from .ordering import Ordering, sparse_backend
 from .system import LinearSystem
 
-__all__ = ["SparseCholesky", "Symbolic", "solve"]
+__all__ = ["SparseCholesky", "Symbolic", "solve", "check_system"]
+
+# A pivot (the LDLᵀ d_i = L_ii²) at most this times its own column's diagonal entry 𝓘_ii is what rounding
+# left of a zero one: the matrix is singular, or its scaled condition exceeds ~10¹³ (d_i / 𝓘_ii ≥ 1/cond of
+# D^-½ 𝓘 D^-½ for a positive definite 𝓘). Both backends apply it; CHOLMOD by itself takes any pivot > 0.
+PIVOT_TOLERANCE = 1e-13
 
 
 def _unconstrained_variable(info: sp.csc_matrix, ordering: Ordering, column: int | None = None) -> str:
@@ -62,7 +67,7 @@ def _superlu(info: sp.csc_matrix) -> tuple[spla.SuperLU | None, int | None]:
     # scale-invariant, as CHOLMOD's test (pivot > 0) is. Against the largest pivot instead, a positive
     # definite 𝓘 whose diagonal merely spans many decades (tiny time gaps) was refused.
     u = lu.U.diagonal()
-    tiny = np.flatnonzero(~(u > 1e-13 * info.diagonal()))
+    tiny = np.flatnonzero(~(u > PIVOT_TOLERANCE * info.diagonal()))
     if len(tiny) or np.any(lu.perm_r != np.arange(len(u))):
         return None, int(tiny[0]) if len(tiny) else None
     return lu, None
@@ -158,7 +163,7 @@ class SparseCholesky:
 
             try:
                 f = cholesky(info, ordering_method="natural") if symbolic is None else symbolic.factor(info)
-                nnz = int(f.L().nnz)  # CHOLMOD may find the failure only here, when it converts the factor
+                L = f.L()  # CHOLMOD may find the failure only here, when it converts the factor
             except CholmodNotPositiveDefiniteError as exc:
                 column = getattr(exc, "column", None)
                 if column is None:  # simplicial CHOLMOD does not say where: find it by SuperLU
@@ -166,7 +171,10 @@ class SparseCholesky:
                 raise UnderdeterminedError(
                     _unconstrained_variable(info, ordering, column) + f" (CHOLMOD: {exc})"
                 ) from None
-            return cls(backend, nnz, f, info.shape[0])
+            tiny = np.flatnonzero(~(L.diagonal() ** 2 > PIVOT_TOLERANCE * info.diagonal()))  # natural order: no P
+            if len(tiny):
+                raise UnderdeterminedError(_unconstrained_variable(info, ordering, int(tiny[0])))
+            return cls(backend, int(L.nnz), f, info.shape[0])
         lu, column = _superlu(info)
         if lu is None:
             raise UnderdeterminedError(_unconstrained_variable(info, ordering, column))
@@ -183,8 +191,15 @@ class SparseCholesky:
         return self._factor.solve(np.asarray(rhs, dtype=float))
 
 
+def check_system(system: object) -> None:
+    """SteamError unless ``system`` is a :class:`LinearSystem` (what a solve or a covariance of one reads)."""
+    if not isinstance(system, LinearSystem):
+        raise SteamError(f"system must be a LinearSystem (LinearSystem.build), got system={system!r:.80}")
+
+
 def solve(system: LinearSystem, backend: str | None = None) -> tuple[NDArray, SparseCholesky]:
     """The Gauss-Newton step δθ* of Eq. 11 (in the system's column order) and the factor used."""
+    check_system(system)
     info, rhs = system.information()
     chol = SparseCholesky.factor(info, system.ordering, backend, check_symmetry=False)  # AᵀA
     return chol.solve(rhs), chol
