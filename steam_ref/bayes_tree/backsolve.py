@@ -79,7 +79,7 @@ def backsubstitute(
     separator changed by at least the wildfire threshold α (with α = 0, always: full back-substitution).
     Changes are judged per variable: a root clique holding the newest state and the landmarks must not
     mark the landmarks changed because the newest state moved. Writes each solved variable's new δ into
-    ``delta`` (a new array) and marks it in ``stale``; a variable whose new δ has max |δ| ≥ its
+    ``delta`` (a new array) and marks it in ``stale``; a variable whose new δ has max abs(δ) ≥ its
     relinearization threshold β (``beta``) joins ``over``, the candidates for the next relinearization
     [K12 Alg. 5], and leaves it otherwise. Returns the updated variables, depth first, and the number of
     cliques solved.
