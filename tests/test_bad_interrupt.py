@@ -21,6 +21,7 @@ import numpy as np
 import pytest
 from test_isam import Stream
 
+import steam_ref
 from steam_ref import L, X
 from steam_ref.bayes_tree import IncrementalSolver, marginalize
 from steam_ref.bayes_tree import journal as journal_module
@@ -138,6 +139,10 @@ def test_a_real_sigint_during_a_large_update_rolls_it_back() -> None:
     assert state(solver) == state(done)
 
 
+# The package's own files: not the tests', which sit in a folder named steam_ref too when a clone keeps git's name.
+PACKAGE = os.path.dirname(steam_ref.__file__) + os.sep
+
+
 def _interrupt_at(n: int):
     """A trace function that raises KeyboardInterrupt at the n-th line executed (then stops tracing)."""
     count, top = 0, None
@@ -146,7 +151,7 @@ def _interrupt_at(n: int):
         nonlocal count, top
         if top is None and frame.f_code.co_name == "update":
             top = frame
-        if event == "line" and os.sep + "steam_ref" + os.sep in frame.f_code.co_filename and frame is not top:
+        if event == "line" and frame.f_code.co_filename.startswith(PACKAGE) and frame is not top:
             count += 1
             if count == n:
                 raise KeyboardInterrupt(f"line {n}: {frame.f_code.co_name}")
@@ -162,7 +167,7 @@ def _lines_of_update(solver: IncrementalSolver, update: tuple[list, dict]) -> li
 
     def record(frame, event, arg):
         out = trace(frame, event, arg)
-        if event == "line" and os.sep + "steam_ref" + os.sep in frame.f_code.co_filename:
+        if event == "line" and frame.f_code.co_filename.startswith(PACKAGE):
             names.append(frame.f_code.co_name)
         return record if out else None
 
