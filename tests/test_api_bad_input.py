@@ -16,7 +16,7 @@ import math
 import numpy as np
 import pytest
 import scipy.sparse as sp
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 import steam_ref as sr
@@ -1181,6 +1181,7 @@ def test_gp_functions_of_one_time_step_give_finite_arrays_or_a_steam_error(dt):
 
 @settings(max_examples=60, deadline=None)
 @given(t1=TIMES, t2=TIMES, tau=TIMES)
+@example(t1=-3.4028235677973366e38, t2=1.0, tau=np.float32(0.5))  # found by Hypothesis: float32 τ - t₁ overflowed
 def test_interpolation_gives_finite_arrays_or_a_steam_error(t1, t2, tau):
     assert finite_or_steam_error(lambda: gp.interpolation_matrices(t1, t2, tau, QC))
     assert finite_or_steam_error(lambda: gp.interpolation_matrices_sde(WNOJ, t1, t2, tau))

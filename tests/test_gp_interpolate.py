@@ -7,6 +7,7 @@ from hypothesis import strategies as st
 from oracles import condition_gaussian, gp_kernel, gp_mean, random_lti, random_spd
 
 from steam_ref.errors import ShapeError, SteamError
+from steam_ref.factors import InterpolatedFactor, PriorFactor
 from steam_ref.gp import (
     LinearSDE,
     extrapolate_covariance_sde,
@@ -20,6 +21,7 @@ from steam_ref.gp import (
     process_noise,
     transition,
 )
+from steam_ref.variables import X
 
 
 def dense_problem(rng, kind, M=5):
@@ -331,3 +333,19 @@ def test_interpolation_matrices_depend_on_gaps_and_qc_only(rng):
         (lam3, psi3), interpolation_matrices_sde(LinearSDE.wnoa(qc3).general(), 0.0, 2.0, 0.5), strict=True
     ):
         np.testing.assert_allclose(closed, general, rtol=1e-9, atol=1e-12)
+
+
+def test_a_float32_time_is_read_as_float64_by_every_interpolation():
+    """NumPy 2 keeps float32 - float in float32: τ - t₁ with τ = float32(1000) and t₁ = 999.9 lost ~1e-8 of Q(τ - t₁)
+    (and a float32 τ far from t₁ overflowed); every function must give what the float64 time gives."""
+    sde = LinearSDE.wnoj(np.diag([0.1, 0.2, 0.3]), v=np.arange(9.0) / 10)
+    t1, t2, tau = 999.9, 1000.3, np.float32(1000.0)
+    x1, x2, P = np.ones(sde.n), np.arange(sde.n, dtype=float), np.eye(2 * sde.n)
+    inner = PriorFactor.create(X(9), np.zeros(sde.n), np.ones(sde.n))
+    calls = [
+        lambda tau: interpolate_covariance_sde(sde, t1, t2, tau, P),
+        lambda tau: interpolate_state_sde(sde, t1, x1, t2, x2, tau),
+        lambda tau: InterpolatedFactor.create(inner, X(0), X(1), t1, t2, tau, sde).offset,  # [YIB Eq. 23]
+    ]
+    for call in calls:
+        np.testing.assert_array_equal(call(tau), call(float(tau)))

@@ -13,7 +13,7 @@ from typing import ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
-from ..arguments import finite, real_array
+from ..arguments import finite, number, real_array
 from ..errors import NumericalError, ShapeError, SteamError
 from ..gp.interpolate import interpolation_matrices, interpolation_matrices_sde
 from ..gp.prior import process_noise_sqrt_information, transition
@@ -146,6 +146,7 @@ class InterpolatedFactor(Factor):
         if isinstance(inner, InterpolatedFactor):
             raise SteamError("an interpolated factor cannot wrap another interpolated factor")
         prior = check_prior(prior)
+        t1, t2, tau = number("t1", t1), number("t2", t2), number("tau", tau)  # floats, not float32 (NumPy 2)
         if isinstance(prior, LinearSDE):
             lam, psi = interpolation_matrices_sde(prior, t1, t2, tau)  # [YIB Eq. 16]
             offset = prior.input_integral(tau - t1) - psi @ prior.input_integral(t2 - t1)  # [YIB Eq. 23]

@@ -165,6 +165,7 @@ def interpolate_state_sde(sde: LinearSDE, t1: float, x1: ArrayLike, t2: float, x
     μ₂ = Φ(t₂,t₁) μ₁ + v₂ with v_τ, v₂ of [YIB Eq. 23], so by [YIB Eq. 16]
     μ(τ) - Λ μ₁ - Ψ μ₂ = v_τ - Ψ v₂ whatever μ₁ is: the result needs no μ(t₀).
     """
+    t1, t2, tau = _check_tau(t1, t2, tau)  # floats: a float32 time would make tau - t1 float32 (NumPy 2)
     lam, psi = interpolation_matrices_sde(sde, t1, t2, tau)
     x1, x2 = _state("x1", x1, sde.n), _state("x2", x2, sde.n)
     v_tau, v_2 = sde.input_integral(tau - t1), sde.input_integral(t2 - t1)  # [YIB Eq. 23]
@@ -179,6 +180,7 @@ def interpolate_covariance_sde(sde: LinearSDE, t1: float, t2: float, tau: float,
     Cov x(τ) = [Λ Ψ] P [Λ Ψ]ᵀ + Q_τ - Q_τ Φ(t₂,τ)ᵀ Q₂⁻¹ Φ(t₂,τ) Q_τ; derivation in
     ``interpolate_covariance``. The input v shifts means only, not covariances.
     """
+    t1, t2, tau = _check_tau(t1, t2, tau)  # floats: a float32 time would make tau - t1 float32 (NumPy 2)
     lam, psi = interpolation_matrices_sde(sde, t1, t2, tau)
     q_tau = sde.process_noise(tau - t1)  # [YIB Eq. 17]
     cov = _posterior_covariance(lam, psi, q_tau, sde.transition(t2 - tau), joint_cov)
