@@ -16,7 +16,7 @@ import pytest
 
 from steam_ref.datasets import load_cmu_mat
 from steam_ref.errors import DataError
-from steam_ref.paper.fidelity import compare, load_authors_run
+from steam_ref.paper.fidelity import AUTHORS_RUNS, compare, find_authors_file, load_authors_run
 from steam_ref.paper.online import run_online
 from steam_ref.paper.presets import PaperSetup
 
@@ -87,3 +87,12 @@ def test_a_saved_run_is_only_matched_with_its_own_data_set(shared_data):
     original = load_cmu_text(gtsam_data_dir(), "Plaza1", name="plaza")
     with pytest.raises(DataError, match="3363 range readings, 'plaza' has 3529"):
         load_authors_run("plaza", original)
+
+
+@pytest.mark.parametrize(("name", "fetch"), [("plaza", "authors-plaza"), ("paper-synthetic", "authors-synthetic")])
+def test_a_missing_authors_run_names_the_data_set_that_fetches_it(name, fetch, tmp_path, monkeypatch):
+    """A newcomer without the files is told the one command that gets them, as `run` tells it for the data."""
+    monkeypatch.delenv("STEAM_REF_DATA_DIR", raising=False)
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    with pytest.raises(DataError, match=f"authors/{AUTHORS_RUNS[name]} not found.*`steam-ref data fetch {fetch}`"):
+        find_authors_file(name, data_dir=tmp_path)

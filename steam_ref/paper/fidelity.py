@@ -23,6 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..datasets import DATA_DIR_ENV, RangeDataset, default_data_dirs, read_mat
+from ..datasets.fetch import DATASETS
 from ..errors import DataError
 from .results import RunResult, position_rmse
 
@@ -71,9 +72,11 @@ def find_authors_file(name: str, data_dir: str | os.PathLike | None = None) -> P
         if path.is_file():
             return path
     looked = ", ".join(str(f) for f in folders) or "nowhere"
+    fetch = next(s.name for s in DATASETS.values() if any(f.local == f"authors/{file}" for f in s.files))
     raise DataError(
-        f"the authors' run authors/{file} not found; looked in: {looked}. Put the authors/ folder "
-        f"(from XinyanGT/online-gpslam-code matlab/Data) in --data-dir or ${DATA_DIR_ENV}."
+        f"the authors' run authors/{file} not found; looked in: {looked}. Fetch it with `steam-ref data fetch "
+        f"{fetch}`, or put the authors/ folder (from XinyanGT/online-gpslam-code matlab/Data) in --data-dir or "
+        f"${DATA_DIR_ENV}."
     )
 
 
