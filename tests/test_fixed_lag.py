@@ -146,6 +146,20 @@ def dense_posterior(factors: list[Factor], keys: list) -> tuple[dict, np.ndarray
     }
 
 
+def fed(stream: LinearStream, smoother: FixedLagSmoother, n: int, after_each=lambda everything: None) -> list[Factor]:
+    """Give ``smoother`` the stream's first update and ``n`` more, calling ``after_each(every factor so far)``;
+    returns every factor given, as the dense side names it."""
+    factors, values, stamps = stream.initial()
+    everything = list(factors)
+    smoother.update(factors, values, timestamps=stamps)
+    for _ in range(n):
+        factors, values, stamps = stream.step()
+        everything += renamed(stream, factors)
+        smoother.update(factors, values, timestamps=stamps)
+        after_each(everything)
+    return everything
+
+
 def check_window(solver: IncrementalSolver, everything: list[Factor], stream: LinearStream | None = None) -> None:
     """The solver's window equals the dense posterior's marginal over it, mean and joint covariance."""
     name = (lambda k: k) if stream is None else (lambda k: oracle_key(stream, k))
@@ -171,16 +185,13 @@ def check_window(solver: IncrementalSolver, everything: list[Factor], stream: Li
 def test_window_marginal_equals_dense_posterior(seed, n, lag, landmarks, threshold):
     stream = LinearStream(seed, landmarks)
     smoother = stream.smoother = FixedLagSmoother(lag, relinearize_threshold=threshold, **EXACT)
-    factors, values, stamps = stream.initial()
-    everything = list(factors)
-    smoother.update(factors, values, timestamps=stamps)
-    for _ in range(n):
-        factors, values, stamps = stream.step()
-        everything += renamed(stream, factors)
-        smoother.update(factors, values, timestamps=stamps)
+
+    def check(everything):
         check_window(smoother, everything, stream)
         for k, t in smoother.timestamps.items():
             assert t >= smoother.newest - lag, f"{k} at {t} is older than the lag"
+
+    fed(stream, smoother, n, check)
     entered = len(stream.times) + sum(g + 1 for g in stream.generation.values())
     assert smoother.n_marginalized == entered - len(smoother)
 

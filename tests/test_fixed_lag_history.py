@@ -15,25 +15,12 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from test_fixed_lag import EXACT, LinearStream, Offset, dense_posterior, renamed
+from test_fixed_lag import EXACT, LinearStream, Offset, dense_posterior, fed
 
 from steam_ref.bayes_tree import FixedLagSmoother, IncrementalSolver, marginalize
 from steam_ref.errors import SteamError
 from steam_ref.factors import Factor, PriorFactor
 from steam_ref.variables import L, X
-
-
-def fed(stream: LinearStream, smoother: FixedLagSmoother, n: int, after_each=lambda: None) -> list[Factor]:
-    """Give ``smoother`` the stream's first update and ``n`` more; every factor given, as the dense side names it."""
-    factors, values, stamps = stream.initial()
-    everything = list(factors)
-    smoother.update(factors, values, timestamps=stamps)
-    for _ in range(n):
-        factors, values, stamps = stream.step()
-        everything += renamed(stream, factors)
-        smoother.update(factors, values, timestamps=stamps)
-        after_each()
-    return everything
 
 
 def optimum(everything: list[Factor]) -> dict:
@@ -72,7 +59,7 @@ def test_the_lagged_estimate_is_not_the_smoothed_one():
     smoother = stream.smoother = FixedLagSmoother(1.0, keep_history=True, **EXACT)
     frozen: dict = {}
 
-    def keep_frozen():
+    def keep_frozen(_everything):
         done = smoother.last_marginalization
         frozen.update({} if done is None else {k: v for k, v in done.estimates.items() if k.kind == "x"})
 
