@@ -401,6 +401,9 @@ HOSTILE = {
     "1e999": '{"kit_version": 2, "cases": {"wnoa_dt0.1": {"Phi": 1e999}}}',
     "a list": "[1, 2, 3]",
     "a version as a string": '{"kit_version": "2", "cases": {}}',
+    "a version as a list": '{"kit_version": [2], "cases": {}}',
+    "a version as an object": '{"kit_version": {"v": 2}, "cases": {}}',
+    "a version as a fraction": '{"kit_version": 2.5, "cases": {}}',
     "not UTF-8": b'{"cases": {"\xff": {}}}',
 }
 
@@ -469,6 +472,8 @@ KIT_EDITS = {
         "\\x1b[31mred\\nFAIL",
     ),
     "an unknown kit version": (lambda i, g: i.__setitem__("kit_version", 99), "kit version 99"),
+    "a kit version as a list": (lambda i, g: i.__setitem__("kit_version", [3]), "kit version [3]"),
+    "a kit version as an object": (lambda i, g: i.__setitem__("kit_version", {"v": 3}), "kit version {'v': 3}"),
     "alternatives that are a list": (lambda i, g: g["cases"][0].__setitem__("alternatives", [1]), "'alternatives'"),
     "an alternative value as a string": (
         lambda i, g: g["cases"][0].__setitem__("alternatives", {"symmetric-whitener": {"W": "0"}}),

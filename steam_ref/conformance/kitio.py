@@ -30,6 +30,7 @@ __all__ = [
     "SHIPPED",
     "MAX_BYTES",
     "MAX_DEPTH",
+    "is_kit_version",
     "printable",
     "plain",
     "dumps",
@@ -239,6 +240,12 @@ def sha256(path: Path) -> str:
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
+def is_kit_version(value: object) -> bool:
+    """Whether ``value`` names a shipped kit: an int (not a bool, a float, a list or an object, which a
+    lookup in :data:`KITS` would match by equality or refuse with a TypeError) that is one of its keys."""
+    return type(value) is int and value in KITS
+
+
 def kit_files(kit: Path) -> list[str]:
     """Every file of a kit folder but index.json, as sorted relative POSIX paths."""
     kit = Path(kit)
@@ -253,7 +260,7 @@ def read_index(kit: Path) -> dict:
     if not isinstance(index, Mapping):
         raise DataError(f"{where}: expected a JSON object, got a {type(index).__name__}")
     version = index.get("kit_version")
-    if isinstance(version, bool) or version not in KITS:
+    if not is_kit_version(version):
         raise DataError(
             f"{where}: kit version {printable(repr(version))}, this steam_ref reads versions {', '.join(map(str, KITS))}"
         )
