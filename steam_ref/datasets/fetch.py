@@ -54,6 +54,7 @@ __all__ = [
     "UPSTREAM_REPOSITORY",
     "fetch",
     "file_digest",
+    "found",
     "locate",
     "missing_needs",
     "shown_url",

@@ -186,8 +186,3 @@ def check_cached(path: str | os.PathLike, local: str) -> Path:
             f"`steam-ref data fetch {name}` replaces it"
         )
     return Path(path)
-
-
-def published_name(local: str) -> str | None:
-    """The data set whose published file sits at ``local`` in a data folder, or None."""
-    return _PUBLISHED[local][0] if local in _PUBLISHED else None
