@@ -264,7 +264,7 @@ def test_fetch_checks_every_name_the_url_and_the_folder_before_a_download(mirror
         fetching.fetch(["paper-synthetic"], base=_unreachable_url(), cache="/proc/steam_ref_cache")
 
 
-def test_credentials_in_the_url_are_never_shown(mirror, tmp_path, capsys):
+def test_credentials_in_the_url_are_never_shown(mirror, own_cache, tmp_path, capsys):
     url, _ = mirror
     secret = url.replace("http://", "http://someone:s3cr3t@") + "nowhere/"
     with pytest.raises(DataError, match=r"http://\*\*\*@127\.0\.0\.1:\d+/nowhere/Syn_theta_Plaza\.mat: 404") as c:
