@@ -481,7 +481,9 @@ def test_search_order_data_dir_then_env_then_gtsam(tmp_path: Path, monkeypatch: 
     (tmp_path / "empty").mkdir()
     found = load_dataset("paper-synthetic", data_dir=tmp_path / "mine")
     assert found.n_poses == sets["mine"].n_poses
-    assert found.source == str((tmp_path / "mine" / SYN_FILE).resolve())
+    # a file that is not the published one is read as the user's own, its source saying so after "; "
+    assert found.source.split("; ")[0] == str((tmp_path / "mine" / SYN_FILE).resolve())
+    assert found.name == "Syn_theta_Plaza (not the published paper-synthetic)"
     assert n_poses(data_dir=tmp_path / "empty") == sets["env"].n_poses  # data_dir lacks it: env next
     assert n_poses() == sets["env"].n_poses
     monkeypatch.delenv(datasets.DATA_DIR_ENV)

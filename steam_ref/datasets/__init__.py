@@ -13,6 +13,8 @@
 - :mod:`.sampled`: :func:`sample_from_model`, a task drawn from the estimator's own model (consistency).
 - :mod:`.search`: :func:`load_dataset` by name or path, searching :func:`default_data_dirs`
   (``data_dir``, ``$STEAM_REF_DATA_DIR``, the fetched files' cache folder, gtsam's ``Data/``).
+- :mod:`.registry`: the paper's files by name, each with its source, sha256 and size, and the check of a
+  file found under one of those names (at every read, never trusted by name).
 - :mod:`.fetch`: the paper's files by name, each with its source and sha256, fetched into the user's
   cache folder (``steam-ref data fetch``); imported on its own (it loads pooch).
 

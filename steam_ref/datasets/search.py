@@ -3,12 +3,19 @@
 Named files are searched for in exactly four places, in order: the ``data_dir`` argument (the
 CLI's ``--data-dir``), ``$STEAM_REF_DATA_DIR``, the user's cache folder where ``steam-ref data fetch``
 puts the files it downloads (:func:`data_cache_dir`), the ``Data/`` folder of an installed gtsam wheel.
-A folder the user names comes first; fetched files, verified by their sha256, before gtsam's, whose
-``plaza`` is the original uncleaned set.
+A folder the user names comes first; fetched files before gtsam's, whose ``plaza`` is the original
+uncleaned set.
+
+A file found under a published name (:mod:`.registry`) is checked at every read, never trusted by its
+name: in the fetched files' cache a file that is not the published one is refused (DataError saying how
+to fetch it again); in a folder the user names (or gtsam's) it is the user's own file and is read, but
+not as the named set: its name is the file's own, marked "(not the published NAME)", and its ``source``
+says how it differs. A file that is not a regular file (a FIFO, a device) is refused before it is opened.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import importlib.util
 import os
 from pathlib import Path
@@ -19,6 +26,8 @@ from ..errors import DataError
 from .cmu import load_cmu_mat, load_cmu_text
 from .gtsam_text import load_gtsam_2d
 from .landmarks import LandmarkDataset
+from .registry import GTSAM_SETS as _GTSAM_SETS
+from .registry import check_cached, check_regular, published_mismatch
 from .synthetic import generate_synthetic
 from .table import RangeDataset
 
@@ -27,14 +36,13 @@ __all__ = [
     "data_cache_dir",
     "gtsam_data_dir",
     "default_data_dirs",
+    "find_named",
     "load_dataset",
     "load_range_dataset",
 ]
 
 DATA_DIR_ENV = "STEAM_REF_DATA_DIR"
 _FILES = {"paper-synthetic": "Syn_theta_Plaza.mat", "plaza": "Plaza1_thrown_away_some_range.mat"}
-# Named sets read from the files in gtsam's Data/ folder (found in any searched folder): the files, all in one folder.
-_GTSAM_SETS = {"victoria-park": ("victoria_park.txt",), "plaza2": ("Plaza2_DR.txt", "Plaza2_TD.txt", "Plaza2_.mat")}
 
 
 def data_cache_dir() -> Path:
@@ -90,14 +98,38 @@ def default_data_dirs(data_dir: str | os.PathLike | None = None) -> list[Path]:
 
 def _find(file_names: tuple[str, ...], folders: list[Path]) -> Path | None:
     """The first folder holding all of ``file_names`` (joined to the first name), or None.
-    DataError when one of them is there but is not a file (a folder of that name is not passed over)."""
+    DataError when one of them is there but is not a regular file (a folder of that name, a FIFO, a link to
+    a device: none is passed over) or is a cached file that is not the published one (:func:`find_named`)."""
     for folder in folders:
         for f in file_names:
-            if (folder / f).exists() and not (folder / f).is_file():
-                raise DataError(f"{folder / f}: not a file")
+            if (folder / f).exists():
+                check_regular(folder / f)
         if all((folder / f).is_file() for f in file_names):
+            if folder.resolve() == data_cache_dir().resolve():  # written by `data fetch` alone: never trusted
+                for f in file_names:
+                    check_cached(folder / f, f)
             return folder / file_names[0]
     return None
+
+
+def find_named(local: str, data_dir: str | os.PathLike | None = None) -> tuple[Path, str | None] | None:
+    """The file ``local`` (e.g. ``"authors/Syn_full_data_run.mat"``) in the first searched folder that holds
+    it, with how it differs from the published file of that name (None when it is that file), or None when
+    no folder holds it. A cached file that differs, and a file that is not a regular file, raise DataError."""
+    found = _find((local,), default_data_dirs(data_dir))
+    if found is None:
+        return None
+    return found, published_mismatch(found, local)
+
+
+def _load_named_mat(found: Path, key: str) -> RangeDataset:
+    """The named set ``key`` read from ``found``; a file that is not the published one is read as the user's
+    own file: named by its stem with "(not the published KEY)", and ``source`` saying how it differs."""
+    differs = published_mismatch(found, _FILES[key])
+    if differs is None:
+        return load_cmu_mat(found, name=key)
+    data = load_cmu_mat(found, name=f"{found.stem} (not the published {key})")
+    return dataclasses.replace(data, source=f"{data.source}; not the published {key} file: {differs}")
 
 
 def _not_found(what: str, folders: list[Path], hint: str) -> DataError:
@@ -151,7 +183,7 @@ def load_dataset(
     if key in _FILES:
         found = _find((_FILES[key],), folders)
         if found is not None:
-            return load_cmu_mat(found, name=key)
+            return _load_named_mat(found, key)
         if key == "plaza":
             text = _find(("Plaza1_DR.txt", "Plaza1_TD.txt", "Plaza1_.mat"), folders)
             if text is not None:
