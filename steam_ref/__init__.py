@@ -19,6 +19,8 @@ from .errors import (
     NumericalError,
     ShapeError,
     SteamError,
+    SteamWarning,
+    UncleanedDataWarning,
     UnderdeterminedError,
     UnknownVariableError,
 )
@@ -131,6 +133,8 @@ __all__ = [
     "IllConditionedWarning",
     "ConvergenceWarning",
     "DivergenceWarning",
+    "SteamWarning",
+    "UncleanedDataWarning",
     "Key",
     "X",
     "L",
