@@ -209,7 +209,9 @@ def test_plaza_falls_back_to_the_gtsam_text_files(tmp_path: Path, monkeypatch: p
     monkeypatch.delenv(datasets.DATA_DIR_ENV, raising=False)  # hide the cleaned file
     monkeypatch.chdir(tmp_path / "cwd")
     assert datasets.uncleaned_plaza(tmp_path) == gtsam_data_dir()  # said beforehand, as `data list` says it
-    with pytest.warns(UncleanedDataWarning, match=r"ORIGINAL, uncleaned Plaza1 release in .*steam-ref data fetch plaza"):
+    with pytest.warns(
+        UncleanedDataWarning, match=r"ORIGINAL, uncleaned Plaza1 release in .*steam-ref data fetch plaza"
+    ):
         ds = load_dataset("plaza", data_dir=tmp_path)
     assert ds.name == "plaza" and ds.n_ranges == 3529 and "Plaza1_TD.txt" in ds.source
     assert issubclass(UncleanedDataWarning, SteamWarning)

@@ -275,7 +275,8 @@ def _batch(args: argparse.Namespace) -> int:
         print(json.dumps(summary))
     else:
         print(
-            f"batch {_BATCH_NAME[args.ordering]} ({args.ordering.upper()} ordering) on {args.dataset}: RMSE {summary['rmse_m']} m over {data.n_poses} poses, "
+            f"batch {_BATCH_NAME[args.ordering]} ({args.ordering.upper()} ordering) on {args.dataset}: "
+            f"RMSE {summary['rmse_m']} m over {data.n_poses} poses, "
             f"{summary['total_s']:.2f} s, Cholesky factor {summary['factor_nnz']} nonzeros ({summary['backend']})\n"
             + explain.data_lines(summary)
         )
