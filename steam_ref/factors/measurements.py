@@ -1,10 +1,8 @@
 """Priors and measurement factors: odometry, projected velocity, range, bearing.  [YIB Eq. 4, 32-33]
 
-Every motion prior of steam_ref lays a state out as [p; ṗ; ...] with p = [x, y, θ]: the paper's
-WNOA state is [x, y, θ, ẋ, ẏ, θ̇] (6 numbers), the WNOJ and Singer states add [ẍ, ÿ, θ̈] (9). So a
-measurement reads the pose from x[0:3] and the velocity from x[3:6] whatever the prior, and its
-Jacobian is zero on the rest; ``state_dim`` (6 by default) says how long the state is.
-Landmarks are ℓ = [x, y]. A :class:`PriorFactor` works for a variable of any size.
+Every motion prior lays a state out as [p; ṗ; ...], p = [x, y, θ] (docs/api.md, "Conventions"): WNOA's
+[x, y, θ, ẋ, ẏ, θ̇], WNOJ's and Singer's add [ẍ, ÿ, θ̈]. A measurement reads the pose from x[0:3] and the
+velocity from x[3:6], its Jacobian zero on the rest; ``state_dim`` (6 by default) says how long the state is.
 """
 
 from __future__ import annotations
@@ -64,10 +62,9 @@ class PriorFactor(Factor):
     ``key``: ``X(i)`` or ``L(j)``; ``mean``: the variable's prior mean, a (d,) vector (a state
     [x, y, θ, ẋ, ẏ, θ̇], velocity in the world frame; a landmark [x, y]); ``noise``: a sigma, sigmas (d,) or a
     covariance (d, d), in the variable's units (m, rad, m/s, rad/s); ``loss``: ``Huber(k)``, ``Tukey(c)`` or None.
+    Conventions (state layout, frames, units): docs/api.md.
 
     Error:  e = θ - mean   (d,)
-
-    Conventions (state layout, frames, units): docs/api.md, "Conventions".
     """
 
     mean: NDArray  # (d,)
@@ -279,10 +276,9 @@ class RangeFactor(StateMeasurement):
 
     ``state``: ``X(i)``; ``landmark``: ``L(j)``; ``measured``: the range r (m, not negative); ``sigma``: its
     standard deviation (m); ``loss``: ``Huber(k)``, ``Tukey(c)`` (outliers) or None; ``state_dim``: 6, or 9.
+    Conventions (frames, units): docs/api.md.
 
     Error:  e = ‖[x, y] - ℓ‖₂ - r
-
-    Conventions: docs/api.md.
     """
 
     measured: NDArray  # (1,) range [m]
@@ -323,10 +319,9 @@ class BearingFactor(StateMeasurement):
 
     ``state``: ``X(i)``; ``landmark``: ``L(j)``; ``measured``: the bearing b (rad): 0 straight ahead (along the
     heading θ), positive counter-clockwise (to the robot's left); ``sigma``: its standard deviation (rad).
+    Conventions (frames, units): docs/api.md.
 
     Error:  e = wrap(atan2(ℓy - y, ℓx - x) - θ - b),   wrap to [-π, π)
-
-    Conventions: docs/api.md.
     """
 
     measured: NDArray  # (1,) bearing [rad]
@@ -367,11 +362,9 @@ class BearingRangeFactor(StateMeasurement):
 
     ``state``: ``X(i)``; ``landmark``: ``L(j)``; ``bearing``: b (rad) in the robot frame, 0 straight ahead,
     positive counter-clockwise (to the left); ``range_``: r (m, not negative); ``noise``: sigmas (2,) or a
-    covariance (2, 2) of [b, r].
+    covariance (2, 2) of [b, r]. Conventions (frames, units): docs/api.md.
 
     Error:  e = [wrap(atan2(ℓy - y, ℓx - x) - θ - b),  ‖[x, y] - ℓ‖₂ - r],   wrap to [-π, π)
-
-    Conventions: docs/api.md.
     """
 
     measured: NDArray  # (2,) [bearing rad, range m]
