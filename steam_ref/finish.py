@@ -58,9 +58,10 @@ def finish_at_optimum(
         raise SteamError(f"max_updates must be an integer ≥ 1, got max_updates={max_updates!r}")
     factors = solver.factors
     if solver.forgets_by_time or any(f is None for f in factors):
+        what = "marginalizes what leaves its window" if solver.forgets_by_time else "has marginalized variables"
         raise SteamError(
-            f"this {type(solver).__name__} has marginalized variables: it no longer holds the whole problem, "
-            "so it has no batch optimum to finish at"
+            f"this {type(solver).__name__} {what}: it does not hold the whole problem, so it has no batch optimum "
+            "to finish at"
         )
     graph, start = FactorGraph(factors), solver.estimate()
     backend, order, cost0 = prepare(graph, start, "amd", backend, max_updates)

@@ -97,5 +97,10 @@ def test_finish_refuses_what_it_cannot_finish(rng):
     with pytest.raises(sr.SteamError, match="the factor graph is empty"):
         sr.finish_at_optimum(sr.IncrementalSolver())
     lag = sr.FixedLagSmoother(1.0)
-    with pytest.raises(sr.SteamError, match="FixedLagSmoother has marginalized variables"):
+    with pytest.raises(sr.SteamError, match="FixedLagSmoother marginalizes what leaves its window"):
         sr.finish_at_optimum(lag)
+    from steam_ref.bayes_tree import marginalize
+
+    marginalize(solver, [sr.X(0)])
+    with pytest.raises(sr.SteamError, match="IncrementalSolver has marginalized variables"):
+        sr.finish_at_optimum(solver)
