@@ -108,9 +108,9 @@ def gp_prior_factors(keys: list[Key], times: NDArray, prior: NDArray | LinearSDE
 
     ``keys``: any iterable of M state keys (``[X(0), X(1), ...]``), each state [x, y, θ, ẋ, ẏ, θ̇] (velocity in
     the world frame); ``times``: their M times (s); ``prior``: Qc of the paper's WNOA prior, a (3, 3) power
-    spectral density in m²/s³ (x, y) and rad²/s³ (θ), or any :class:`~steam_ref.gp.LinearSDE`. Factor i is
-    ``GPPriorFactor.wnoa(keys[i], keys[i+1], times[i+1] - times[i], qc)``, error xᵢ₊₁ - Φ xᵢ. What Qc means and
-    how to choose it: docs/api.md, "Conventions".
+    spectral density in m²/s³ (x, y) and rad²/s³ (θ), or any :class:`~steam_ref.gp.LinearSDE`. With Qc, factor i
+    is ``GPPriorFactor.wnoa(keys[i], keys[i+1], times[i+1] - times[i], qc)``, error xᵢ₊₁ - Φ xᵢ (``from_sde``
+    with a LinearSDE). What Qc means and how to choose it: docs/api.md, "Conventions".
     """
     keys, times, prior = key_list("keys", keys), real_array("times", times), check_prior(prior)
     if times.ndim != 1 or len(times) != len(keys):
