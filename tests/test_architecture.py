@@ -43,6 +43,7 @@ LAYERS: dict[str, int] = {
     "steam_ref.batch": 5,
     "steam_ref.bayes_tree": 5,
     "steam_ref.trajectory": 5,
+    "steam_ref.finish": 6,  # an incremental solve to the batch optimum: the solver's public API and batch's check
     "steam_ref.datasets": 6,
     "steam_ref.evaluate": 6,  # APE/RPE, trajectory files, NEES: reads trajectory (5), never the paper layer
     # the paper's experiments, in the order data flows

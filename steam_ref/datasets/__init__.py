@@ -28,7 +28,14 @@ from .gtsam_text import load_gtsam_2d
 from .landmarks import LandmarkDataset
 from .matfile import read_mat
 from .sampled import ModelSample, sample_from_model
-from .search import DATA_DIR_ENV, default_data_dirs, gtsam_data_dir, load_dataset, load_range_dataset
+from .search import (
+    DATA_DIR_ENV,
+    default_data_dirs,
+    gtsam_data_dir,
+    load_dataset,
+    load_range_dataset,
+    uncleaned_plaza,
+)
 from .synthetic import generate_synthetic
 from .table import RangeDataset
 
@@ -43,6 +50,7 @@ __all__ = [
     "default_data_dirs",
     "load_dataset",
     "load_range_dataset",
+    "uncleaned_plaza",
     "generate_synthetic",
     "sample_from_model",
     "ModelSample",

@@ -18,11 +18,12 @@ from __future__ import annotations
 import dataclasses
 import importlib.util
 import os
+import warnings
 from pathlib import Path
 
 import platformdirs
 
-from ..errors import DataError
+from ..errors import DataError, UncleanedDataWarning
 from .cmu import load_cmu_mat, load_cmu_text
 from .gtsam_text import load_gtsam_2d
 from .landmarks import LandmarkDataset
@@ -39,10 +40,12 @@ __all__ = [
     "find_named",
     "load_dataset",
     "load_range_dataset",
+    "uncleaned_plaza",
 ]
 
 DATA_DIR_ENV = "STEAM_REF_DATA_DIR"
 _FILES = {"paper-synthetic": "Syn_theta_Plaza.mat", "plaza": "Plaza1_thrown_away_some_range.mat"}
+_PLAZA1_TEXT = ("Plaza1_DR.txt", "Plaza1_TD.txt", "Plaza1_.mat")  # the original release, as gtsam's Data/ has it
 
 
 def data_cache_dir() -> Path:
@@ -132,6 +135,17 @@ def _load_named_mat(found: Path, key: str) -> RangeDataset:
     return dataclasses.replace(data, source=f"{data.source}; not the published {key} file: {differs}")
 
 
+def uncleaned_plaza(data_dir: str | os.PathLike | None = None) -> Path | None:
+    """The folder whose original Plaza1 text files ``load_dataset("plaza", data_dir)`` reads, warning
+    :class:`~steam_ref.errors.UncleanedDataWarning`, because no folder searched holds the cleaned
+    ``Plaza1_thrown_away_some_range.mat``; None when the cleaned file is found, or neither is."""
+    folders = default_data_dirs(data_dir)
+    if _find((_FILES["plaza"],), folders) is not None:
+        return None
+    found = _find(_PLAZA1_TEXT, folders)
+    return None if found is None else found.parent
+
+
 def _not_found(what: str, folders: list[Path], hint: str) -> DataError:
     """One line: what is missing, every folder searched, and where to put the file."""
     looked = (
@@ -159,7 +173,8 @@ def load_dataset(
 
     Names: "synthetic" (generated, see :func:`generate_synthetic`; ``seed`` applies),
     "paper-synthetic" (``Syn_theta_Plaza.mat``), "plaza" (``Plaza1_thrown_away_some_range.mat``,
-    else the original Plaza1 text files with all 3,529 ranges, e.g. from an installed gtsam),
+    else the original Plaza1 text files with all 3,529 ranges, e.g. from an installed gtsam, with an
+    :class:`~steam_ref.errors.UncleanedDataWarning`: :func:`uncleaned_plaza` says beforehand),
     "plaza2" (the CMU text release ``Plaza2_DR.txt``, ``Plaza2_TD.txt``, ``Plaza2_.mat``: all its
     1,816 ranges, none thrown away) and "victoria-park" (``victoria_park.txt``, a
     :class:`LandmarkDataset` read by :func:`load_gtsam_2d`), both as an installed gtsam ships them.
@@ -185,8 +200,15 @@ def load_dataset(
         if found is not None:
             return _load_named_mat(found, key)
         if key == "plaza":
-            text = _find(("Plaza1_DR.txt", "Plaza1_TD.txt", "Plaza1_.mat"), folders)
+            text = _find(_PLAZA1_TEXT, folders)
             if text is not None:
+                warnings.warn(
+                    f"load_dataset('plaza'): the paper's cleaned {_FILES[key]} is in none of the folders searched, so "
+                    f"this is the ORIGINAL, uncleaned Plaza1 release in {text.parent} (all 3,529 ranges, outliers "
+                    "included), not the paper's data; `steam-ref data fetch plaza` gets the cleaned file",
+                    UncleanedDataWarning,
+                    stacklevel=2,
+                )
                 return load_cmu_text(text.parent, "Plaza1", name=key)
             hint += " (or `pip install gtsam`: its Data/ has Plaza1_DR.txt, Plaza1_TD.txt, Plaza1_.mat)"
         raise _not_found(f"data set {key!r} ({_FILES[key]})", folders, hint + ".")
