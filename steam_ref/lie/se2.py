@@ -165,7 +165,7 @@ def compose(a: ArrayLike, b: ArrayLike) -> NDArray:
     return np.stack([x, y, wrap(a[..., 2] + b[..., 2])], axis=-1)
 
 
-def compose_jacobians(a: ArrayLike, b: ArrayLike) -> tuple[NDArray, NDArray]:
+def compose_jacobians(a: ArrayLike, b: ArrayLike) -> tuple[NDArray, NDArray]:  # noqa: ARG001 (a: the signature)
     """∂(T_a T_b)/∂δ_a = Ad(T_b⁻¹), ∂(T_a T_b)/∂δ_b = I (right tangents).  [SOLA Eq. 170-171]"""
     b = np.asarray(b, dtype=float)
     return adjoint(inverse(b)), np.broadcast_to(np.eye(3), b.shape[:-1] + (3, 3)).copy()
