@@ -98,7 +98,9 @@ def _coefficients(phi: NDArray) -> tuple[dict[str, NDArray], dict[str, NDArray]]
 def wrap(theta: ArrayLike) -> NDArray:
     """Angles mapped to (-π, π]; an angle already there is returned unchanged, bit for bit."""
     theta = np.asarray(theta, dtype=float)
-    return theta - 2 * np.pi * np.ceil((theta - np.pi) / (2 * np.pi))
+    w = theta - 2 * np.pi * np.ceil((theta - np.pi) / (2 * np.pi))
+    w = np.where(w <= -np.pi, w + 2 * np.pi, np.where(w > np.pi, w - 2 * np.pi, w))  # a rounding at either end
+    return np.where((theta > -np.pi) & (theta <= np.pi), theta, w)
 
 
 def _rot(theta: NDArray) -> tuple[NDArray, NDArray]:
