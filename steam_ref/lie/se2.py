@@ -19,6 +19,7 @@ loses precision to cancellation near φ = 0 (docs/derivations.md, "SE(2)").
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 import scipy.special
@@ -66,33 +67,67 @@ def _poly(c: NDArray, z: NDArray) -> NDArray:
     return out
 
 
-def _coefficients(phi: NDArray) -> tuple[dict[str, NDArray], dict[str, NDArray]]:
-    """The coefficients of J_r, J_r⁻¹ and Exp/Log at φ, and their derivatives (docs/derivations.md, "SE(2)").
+class _Coefficients:
+    """The coefficients of J_r, J_r⁻¹ and Exp/Log at φ and their derivatives, each computed when first
+    read (docs/derivations.md, "SE(2)"): A = sin φ/φ, B = (1 - cos φ)/φ, C = (φ - sin φ)/φ²,
+    D = (1 - cos φ)/φ², α = (φ/2) cot(φ/2), γ = (1 - α)/φ; a trailing 1 is d/dφ."""
 
-    A = sin φ/φ, B = (1 - cos φ)/φ, C = (φ - sin φ)/φ², D = (1 - cos φ)/φ², α = (φ/2) cot(φ/2),
-    γ = (1 - α)/φ; a trailing 1 is d/dφ.
-    """
-    phi = np.asarray(phi, dtype=float)
-    small = np.abs(phi) < SERIES_BELOW
-    z = phi**2
-    with np.errstate(divide="ignore", invalid="ignore"):  # the closed forms at φ = 0 are replaced by the series
-        s, c, h = np.sin(phi), np.cos(phi), np.sin(phi / 2)
-        A = np.where(small, _poly(_A, z), s / phi)
-        D = np.where(small, _poly(_D, z), 2 * h**2 / z)  # 1 - cos φ = 2 sin²(φ/2): no cancellation
-        C = np.where(small, phi * _poly(_C, z), (phi - s) / z)
-        A1 = np.where(small, phi * _poly(_A1, z), (c - A) / phi)
-        D1 = np.where(small, phi * _poly(_D1, z), (A - 2 * D) / phi)
-        C1 = np.where(small, _poly(_C1, z), D - 2 * C / phi)
-        alpha = np.where(small, 1 - z * _poly(_G, z), (phi / 2) * np.cos(phi / 2) / h)
-        G = np.where(small, phi * _poly(_G, z), (1 - alpha) / phi)
-        alpha1 = -C / (2 * D)  # (sin φ - φ) / (2 (1 - cos φ))
-        G1 = np.where(small, _poly(_G1, z), (-alpha1 - G) / phi)
-    return {"A": A, "B": phi * D, "C": C, "D": D, "A1": A1, "B1": D + phi * D1, "C1": C1, "D1": D1}, {
-        "alpha": alpha,
-        "alpha1": alpha1,
-        "gamma": G,
-        "gamma1": G1,
-    }
+    def __init__(self, phi: ArrayLike):
+        self.phi = np.asarray(phi, dtype=float)
+        self.small = np.abs(self.phi) < SERIES_BELOW
+        self.z = self.phi**2
+        self._known: dict[str, NDArray] = {}
+
+    def _pick(self, series: Callable[[], NDArray], closed: Callable[[], NDArray]) -> NDArray:
+        """The series below SERIES_BELOW, the closed form above (each a thunk, evaluated only if needed)."""
+        if np.all(self.small):
+            return series()
+        with np.errstate(divide="ignore", invalid="ignore"):  # the closed forms at φ = 0 are not used
+            if not np.any(self.small):
+                return closed()
+            return np.where(self.small, series(), closed())
+
+    def __getitem__(self, name: str) -> NDArray:
+        if name not in self._known:
+            self._known[name] = getattr(self, "_" + name)()
+        return self._known[name]
+
+    def _A(self) -> NDArray:
+        return self._pick(lambda: _poly(_A, self.z), lambda: np.sin(self.phi) / self.phi)
+
+    def _D(self) -> NDArray:  # 1 - cos φ = 2 sin²(φ/2): no cancellation
+        return self._pick(lambda: _poly(_D, self.z), lambda: 2 * np.sin(self.phi / 2) ** 2 / self.z)
+
+    def _B(self) -> NDArray:
+        return self.phi * self["D"]
+
+    def _C(self) -> NDArray:
+        return self._pick(lambda: self.phi * _poly(_C, self.z), lambda: (self.phi - np.sin(self.phi)) / self.z)
+
+    def _A1(self) -> NDArray:
+        return self._pick(lambda: self.phi * _poly(_A1, self.z), lambda: (np.cos(self.phi) - self["A"]) / self.phi)
+
+    def _D1(self) -> NDArray:
+        return self._pick(lambda: self.phi * _poly(_D1, self.z), lambda: (self["A"] - 2 * self["D"]) / self.phi)
+
+    def _B1(self) -> NDArray:
+        return self["D"] + self.phi * self["D1"]
+
+    def _C1(self) -> NDArray:
+        return self._pick(lambda: _poly(_C1, self.z), lambda: self["D"] - 2 * self["C"] / self.phi)
+
+    def _alpha(self) -> NDArray:
+        h = self.phi / 2
+        return self._pick(lambda: 1 - self.z * _poly(_G, self.z), lambda: h * np.cos(h) / np.sin(h))
+
+    def _gamma(self) -> NDArray:
+        return self._pick(lambda: self.phi * _poly(_G, self.z), lambda: (1 - self["alpha"]) / self.phi)
+
+    def _alpha1(self) -> NDArray:  # (sin φ - φ) / (2 (1 - cos φ))
+        return -self["C"] / (2 * self["D"])
+
+    def _gamma1(self) -> NDArray:
+        return self._pick(lambda: _poly(_G1, self.z), lambda: (-self["alpha1"] - self["gamma"]) / self.phi)
 
 
 def wrap(theta: ArrayLike) -> NDArray:
@@ -110,7 +145,7 @@ def _rot(theta: NDArray) -> tuple[NDArray, NDArray]:
 def exp(xi: ArrayLike) -> NDArray:
     """Exp(ξ) as a pose [x, y, θ], θ wrapped: t = V(φ) ρ, V = [[A, -B], [B, A]].  [SOLA Eq. 156]"""
     xi = np.asarray(xi, dtype=float)
-    k, _ = _coefficients(xi[..., 2])
+    k = _Coefficients(xi[..., 2])
     A, B = k["A"], k["B"]
     r1, r2 = xi[..., 0], xi[..., 1]
     return np.stack([A * r1 - B * r2, B * r1 + A * r2, wrap(xi[..., 2])], axis=-1)  # [SOLA Eq. 156]
@@ -120,8 +155,7 @@ def log(pose: ArrayLike) -> NDArray:
     """Log(T) = [V(φ)⁻¹ t; φ], φ = θ wrapped to (-π, π]; V⁻¹ = [[α, φ/2], [-φ/2, α]].  [SOLA Eq. 157]"""
     pose = np.asarray(pose, dtype=float)
     phi = wrap(pose[..., 2])
-    _, g = _coefficients(phi)
-    a, b = g["alpha"], phi / 2
+    a, b = _Coefficients(phi)["alpha"], phi / 2
     x, y = pose[..., 0], pose[..., 1]
     return np.stack([a * x + b * y, -b * x + a * y, phi], axis=-1)  # [SOLA Eq. 157]
 
@@ -134,7 +168,7 @@ def _matrix(rows: list[list[NDArray | float]], like: NDArray) -> NDArray:
 def right_jacobian(xi: ArrayLike) -> NDArray:
     """J_r(ξ): Exp(ξ + dξ) ≈ Exp(ξ) Exp(J_r(ξ) dξ) (GTSAM's ``Pose2.ExpmapDerivative``).  [SOLA Eq. 163]"""
     xi = np.asarray(xi, dtype=float)
-    k, _ = _coefficients(xi[..., 2])
+    k = _Coefficients(xi[..., 2])
     A, B, C, D = k["A"], k["B"], k["C"], k["D"]
     r1, r2 = xi[..., 0], xi[..., 1]
     return _matrix(  # [SOLA Eq. 163]: (φρ₁ - ρ₂ + ρ₂ cos φ - ρ₁ sin φ)/φ² = C ρ₁ - D ρ₂, etc.
@@ -145,7 +179,7 @@ def right_jacobian(xi: ArrayLike) -> NDArray:
 def right_jacobian_inverse(xi: ArrayLike) -> NDArray:
     """J_r(ξ)⁻¹ = [[α, -φ/2, γρ₁ + ρ₂/2], [φ/2, α, γρ₂ - ρ₁/2], [0, 0, 1]] (docs/derivations.md, "SE(2)")."""
     xi = np.asarray(xi, dtype=float)
-    _, g = _coefficients(xi[..., 2])
+    g = _Coefficients(xi[..., 2])
     a, G, b = g["alpha"], g["gamma"], xi[..., 2] / 2
     r1, r2 = xi[..., 0], xi[..., 1]
     return _matrix([[a, -b, G * r1 + r2 / 2], [b, a, G * r2 - r1 / 2], [0.0, 0.0, 1.0]], r1)
@@ -203,7 +237,7 @@ def between_jacobians(a: ArrayLike, b: ArrayLike) -> tuple[NDArray, NDArray]:
 def jr_inverse_times_jacobian(xi: ArrayLike, v: ArrayLike) -> NDArray:
     """∂(J_r(ξ)⁻¹ v)/∂ξ, exact (docs/derivations.md, "SE(2)"): (..., 3, 3)."""
     xi, v = np.asarray(xi, dtype=float), np.asarray(v, dtype=float)
-    _, g = _coefficients(xi[..., 2])
+    g = _Coefficients(xi[..., 2])
     G, a1, G1 = g["gamma"], g["alpha1"], g["gamma1"]
     r1, r2 = xi[..., 0], xi[..., 1]
     u1, u2, w = v[..., 0], v[..., 1], v[..., 2]
@@ -221,7 +255,7 @@ def jr_inverse_times_jacobian(xi: ArrayLike, v: ArrayLike) -> NDArray:
 def jr_times_jacobian(xi: ArrayLike, v: ArrayLike) -> NDArray:
     """∂(J_r(ξ) v)/∂ξ, exact (docs/derivations.md, "SE(2)"): (..., 3, 3)."""
     xi, v = np.asarray(xi, dtype=float), np.asarray(v, dtype=float)
-    k, _ = _coefficients(xi[..., 2])
+    k = _Coefficients(xi[..., 2])
     r1, r2 = xi[..., 0], xi[..., 1]
     v1, v2, v3 = v[..., 0], v[..., 1], v[..., 2]
     A1, B1, C, C1, D, D1 = k["A1"], k["B1"], k["C"], k["C1"], k["D"], k["D1"]
