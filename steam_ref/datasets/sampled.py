@@ -206,7 +206,7 @@ def sample_se2_from_model(
 
     - x₀: T₀ = Exp(n), n ~ N(0, diag(first_pose_sigmas²)) (the pose prior in the tangent at the
       identity, right retraction), ϖ₀ ~ N(first_velocity, diag(first_velocity_sigmas²));
-    - each step in the local variables of the state before it [AB15 Eq. 21-26]: γ₂ = Φ(1) [0; ϖₖ] + w,
+    - each step in the local variables of the state before it [DER 11.10-11.11]: γ₂ = Φ(1) [0; ϖₖ] + w,
       w ~ N(0, Q(1)) with Qc on the body twist, then Tₖ₊₁ = Tₖ Exp(γ₂[:3]) and ϖₖ₊₁ = J_r(γ₂[:3]) γ₂[3:]
       ("local-variable") or γ₂[3:] ("simplified"), so the model's residual at the truth is w exactly;
     - odometry at pose k: the body twist ϖₖ plus N(0, diag(σᵥ²)) (dt = 1: a row holds the reading);
@@ -228,7 +228,7 @@ def sample_se2_from_model(
     noise = rng.standard_normal((n_steps, 6)) @ chol.T
     for k in range(1, n):
         twist = states[k - 1, 3:]
-        gamma = np.concatenate([twist, twist]) + noise[k - 1]  # Φ(1) [0; ϖ] + w  [YIB Eq. 22; AB15 Eq. 24]
+        gamma = np.concatenate([twist, twist]) + noise[k - 1]  # Φ(1) [0; ϖ] + w  [YIB Eq. 22; DER 11.11]
         if not -np.pi < gamma[2] < np.pi:
             raise DataError(f"step {k} turned {gamma[2]!r} rad, outside (-π, π): no SE(2) WNOA residual reads it")
         states[k, :3] = se2.compose(states[k - 1, :3], se2.exp(gamma[:3]))  # Tₖ₊₁ = Tₖ Exp(ξ)

@@ -1,11 +1,11 @@
-"""Factors on SE(2) states x = [px, py, θ, vx, vy, ω]: the WNOA prior of both models, and priors.  [AB15]
+"""Factors on SE(2) states x = [px, py, θ, vx, vy, ω]: the WNOA prior of both models, and priors.  [AB15; DER 11]
 
 The state kind is ``steam_ref.lie.SE2_STATE`` (a pose and its body twist, retracted on the right):
 every Jacobian here is with respect to the right tangent δ of each state, x ⊕ δ = (T Exp(δ[:3]),
 ϖ + δ[3:]), which is what a solver on that kind linearizes in.
 
 - :class:`SE2PriorFactor`: the WNOA prior between consecutive states, e = γ₂ - Φ(Δt) γ₁ in the local
-  variables of ``lie.gp`` with the vector-space Q(Δt) [AB15 Eq. 24-26; YIB Eq. 17, 22]. ``model``
+  variables of ``lie.gp`` with the vector-space Q(Δt) [DER 11.10-11.12; YIB Eq. 17, 22]. ``model``
   "local-variable": e = [ξ - Δt ϖ₁; J_r(ξ)⁻¹ ϖ₂ - ϖ₁] (GTSAM 4.3 ``WnoaMotionFactorPose2``, STEAM
   ``const_vel_se2``); "simplified": e = [ξ - Δt ϖ₁; ϖ₂ - ϖ₁] (gpslam, Theseus); ξ = Log(T₁⁻¹ T₂).
 - :class:`SE2StatePrior`: a Gaussian prior in the tangent at a mean, e = x ⊖ mean.
@@ -44,7 +44,7 @@ def check_se2_state(name: str, x: object) -> NDArray:
 
 @dataclass(frozen=True, eq=False)
 class SE2PriorFactor(Factor):
-    """The WNOA prior on SE(2) between consecutive states (module docstring).  [AB15 Eq. 24-26]
+    """The WNOA prior on SE(2) between consecutive states (module docstring).  [DER 11.11-11.13]
 
     e = γ₂ - Φ(Δt) γ₁, γ₁ = [0; ϖ₁], γ₂ = [ξ; J_r(ξ)⁻¹ ϖ₂] ("local-variable") or [ξ; ϖ₂] ("simplified"),
     ξ = Log(T₁⁻¹T₂); Σ = Q(Δt) of the vector-space WNOA prior with Qc read in the body frame.
@@ -78,7 +78,7 @@ class SE2PriorFactor(Factor):
     def error(self, x1: NDArray, x2: NDArray) -> NDArray:
         gamma2 = local_variables(x1, x2, self.model)[0]
         gamma1 = np.concatenate([np.zeros(x1.shape[:-1] + (3,)), x1[..., 3:]], axis=-1)
-        return gamma2 - np.einsum("...ij,...j->...i", self.phi, gamma1)  # [AB15 Eq. 24]
+        return gamma2 - np.einsum("...ij,...j->...i", self.phi, gamma1)  # [DER 11.11-11.12]
 
     def jacobians(self, x1: NDArray, x2: NDArray) -> tuple[NDArray, NDArray]:
         _, d1, d2 = local_variables(x1, x2, self.model)
@@ -126,6 +126,6 @@ class SE2StatePrior(Factor):
     def jacobians(self, x: NDArray) -> tuple[NDArray]:
         e = SE2_STATE.local(self.mean, x)
         J = np.zeros(x.shape + (STATE_SIZE,))
-        J[..., :3, :3] = se2.right_jacobian_inverse(e[..., :3])  # d Log(M⁻¹ T Exp δ) = J_r⁻¹ δ  [SOLA Eq. 179]
+        J[..., :3, :3] = se2.right_jacobian_inverse(e[..., :3])  # d Log(M⁻¹ T Exp δ) = J_r⁻¹ δ  [DER 11.5, 11.14]
         J[..., 3:, 3:] = np.eye(3)
         return (J,)

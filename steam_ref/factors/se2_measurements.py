@@ -1,9 +1,9 @@
-"""Measurements of SE(2) states x = [px, py, θ, vx, vy, ω], at a state or at a time between two.  [AB15 §IV]
+"""Measurements of SE(2) states x = [px, py, θ, vx, vy, ω], at a state or at a time between two.  [DER 11.14-11.16]
 
 Every Jacobian is with respect to the right tangent δ of the state (``steam_ref.lie.SE2_STATE``):
 to first order the position moves by R(θ) δρ and the heading by δφ, so a reading of the pose alone
 (range, bearing, bearing-range) has the vector-space model's error, and its Jacobian is the
-vector-space one times ∂[p; θ]/∂δ = diag(R(θ), 1) [SOLA Eq. 176]. :class:`SE2Measurement` wraps those
+vector-space one times ∂[p; θ]/∂δ = diag(R(θ), 1) [DER 11.14]. :class:`SE2Measurement` wraps those
 models (one home for each), :class:`SE2VelocityFactor` reads the body twist, and
 :class:`SE2InterpolatedFactor` moves any of them to a time τ between two states through the local GP
 of ``lie.gp`` (the SE(2) form of [YIB Eq. 29]).
@@ -89,7 +89,7 @@ class SE2Measurement(Factor):
         Hx, Hl = self.inner.jacobians(x, l)
         c, s = np.cos(x[..., 2])[..., None], np.sin(x[..., 2])[..., None]
         J = np.zeros(Hx.shape)
-        J[..., 0] = Hx[..., 0] * c + Hx[..., 1] * s  # ∂e/∂p · R(θ)  [SOLA Eq. 176]
+        J[..., 0] = Hx[..., 0] * c + Hx[..., 1] * s  # ∂e/∂p · R(θ)  [DER 11.14]
         J[..., 1] = -Hx[..., 0] * s + Hx[..., 1] * c
         J[..., 2] = Hx[..., 2]
         return J, Hl
@@ -122,7 +122,7 @@ class SE2VelocityFactor(Factor):
 
 @dataclass(frozen=True, eq=False)
 class SE2InterpolatedFactor(Factor):
-    """A reading at a time τ with no state, moved onto the SE(2) states at t₁ < τ < t₂.  [YIB Eq. 29; AB15 §IV]
+    """A reading at a time τ with no state, moved onto the SE(2) states at t₁ < τ < t₂.  [YIB Eq. 29; DER 11.16]
 
     e(x₁, x₂, …) = e_inner(x(τ), …) with x(τ) the local GP's mean (``lie.gp.interpolate``), and
     ∂e/∂x₁ = H J₁, ∂e/∂x₂ = H J₂ for H the inner factor's Jacobian in the tangent at x(τ).
@@ -171,7 +171,7 @@ class SE2InterpolatedFactor(Factor):
         return (type(self), self.model, self.inner.batch_signature())
 
     def interpolated_state(self, x1: NDArray, x2: NDArray) -> NDArray:
-        """x(τ) = (T₁ Exp ξ(τ), ϖ(τ)) from γ(τ) = Λ γ₁ + Ψ γ₂.  [YIB Eq. 18; AB15 Eq. 28]"""
+        """x(τ) = (T₁ Exp ξ(τ), ϖ(τ)) from γ(τ) = Λ γ₁ + Ψ γ₂.  [YIB Eq. 18; DER 11.15]"""
         return interpolate(x1, x2, self.lam, self.psi, self.model)[0]
 
     def error(self, x1: NDArray, x2: NDArray, *rest: NDArray) -> NDArray:

@@ -1,17 +1,17 @@
-"""The WNOA GP on SE(2) through local variables, after Anderson & Barfoot 2015.  [AB15 §III]
+"""The WNOA GP on SE(2) through local variables, after Anderson & Barfoot 2015.  [AB15; DER 11.10-11.18]
 
 Between two states x₁ = (T₁, ϖ₁) at t₁ and x₂ = (T₂, ϖ₂) at t₂, the trajectory is written in the
 local variable ξ(t) = Log(T₁⁻¹ T(t)), whose derivative is ξ̇ = J_r(ξ)⁻¹ ϖ (Ṫ = T ϖ^). The local
 state γ(t) = [ξ(t); ξ̇(t)] follows the vector-space WNOA prior of [YIB Eq. 30-31], so
 
-    γ₁ = [0; ϖ₁],   γ₂ = [ξ₂₁; J_r(ξ₂₁)⁻¹ ϖ₂],   ξ₂₁ = Log(T₁⁻¹ T₂)              [AB15 Eq. 21-23]
+    γ₁ = [0; ϖ₁],   γ₂ = [ξ₂₁; J_r(ξ₂₁)⁻¹ ϖ₂],   ξ₂₁ = Log(T₁⁻¹ T₂)              [DER 11.10]
 
 and the prior's residual is e = γ₂ - Φ(Δt) γ₁ = [ξ₂₁ - Δt ϖ₁; J_r(ξ₂₁)⁻¹ ϖ₂ - ϖ₁] with the
 vector-space Q(Δt) ("local-variable": GTSAM 4.3 ``WnoaMotionFactorPose2``, STEAM ``const_vel_se2``).
 The "simplified" model takes ξ̇ ≈ ϖ, γ₂ = [ξ₂₁; ϖ₂] (gpslam ``GaussianProcessPriorPose2``, Theseus).
 The mean at τ is γ(τ) = Λ(τ) γ₁ + Ψ(τ) γ₂ [YIB Eq. 18], mapped back: T(τ) = T₁ Exp(ξ(τ)),
 ϖ(τ) = J_r(ξ(τ)) ξ̇(τ) (simplified: ϖ(τ) = ξ̇(τ)). Every Jacobian here is with respect to the right
-tangents of the states (``steam_ref.lie.state``), exact; derivations in docs/derivations.md, "SE(2)".
+tangents of the states (``steam_ref.lie.state``), exact; derivations in [DER 11.10-11.18].
 """
 
 from __future__ import annotations
@@ -60,18 +60,18 @@ def _blocks(tl: NDArray, tr: NDArray, bl: NDArray, br: NDArray) -> NDArray:
 def local_variables(x1: NDArray, x2: NDArray, model: str) -> tuple[NDArray, NDArray, NDArray]:
     """γ₂ = [ξ₂₁; J_r(ξ₂₁)⁻¹ ϖ₂] in the frame of T₁ (simplified: [ξ₂₁; ϖ₂]), with ∂γ₂/∂x₁, ∂γ₂/∂x₂.
 
-    ∂ξ₂₁/∂δT₁ = -J_r(ξ₂₁)⁻¹ Ad(Exp(-ξ₂₁)), ∂ξ₂₁/∂δT₂ = J_r(ξ₂₁)⁻¹ [SOLA Eq. 179-180, 170-171];
+    ∂ξ₂₁/∂δT₁ = -J_r(ξ₂₁)⁻¹ Ad(Exp(-ξ₂₁)), ∂ξ₂₁/∂δT₂ = J_r(ξ₂₁)⁻¹ [DER 11.13];
     ∂(J_r(ξ)⁻¹ ϖ₂)/∂ξ is exact (``se2.jr_inverse_times_jacobian``). Shapes (..., 6), (..., 6, 6) twice.
     """
     T1, T2, w2 = x1[..., :3], x2[..., :3], x2[..., 3:]
     rel = se2.between(T1, T2)
-    xi = se2.log(rel)  # ξ₂₁ = Log(T₁⁻¹ T₂)  [AB15 Eq. 21]
+    xi = se2.log(rel)  # ξ₂₁ = Log(T₁⁻¹ T₂)  [DER 11.10]
     jinv = se2.right_jacobian_inverse(xi)
     d1 = -_mm(jinv, se2.adjoint(se2.inverse(rel)))  # ∂ξ/∂δT₁
     zero = np.zeros(xi.shape + (3,))
     if model == "local-variable":
-        velocity = _mv(jinv, w2)  # ξ̇(t₂) = J_r(ξ₂₁)⁻¹ ϖ₂  [AB15 Eq. 23]
-        G = se2.jr_inverse_times_jacobian(xi, w2)
+        velocity = _mv(jinv, w2)  # ξ̇(t₂) = J_r(ξ₂₁)⁻¹ ϖ₂  [DER 11.10]
+        G = se2.jr_inverse_times_jacobian(xi, w2)  # [DER 11.6, 11.13]
         dv1, dv2, dw2 = _mm(G, d1), _mm(G, jinv), jinv
     else:
         velocity, dv1, dv2 = w2, zero, zero
@@ -84,10 +84,10 @@ def _from_local(x1: NDArray, gamma: NDArray, model: str) -> tuple[NDArray, NDArr
     """The state at γ = [ξ; ξ̇] in the frame of T₁: (T₁ Exp ξ, J_r(ξ) ξ̇); N = ∂[δT; dϖ]/∂γ and Ad(Exp(-ξ))."""
     xi, xidot = gamma[..., :3], gamma[..., 3:]
     jr = se2.right_jacobian(xi)
-    pose = se2.compose(x1[..., :3], se2.exp(xi))  # T(τ) = T₁ Exp(ξ(τ))  [AB15 Eq. 21]
+    pose = se2.compose(x1[..., :3], se2.exp(xi))  # T(τ) = T₁ Exp(ξ(τ))  [DER 11.10]
     zero = np.zeros(xi.shape + (3,))
     if model == "local-variable":
-        twist = _mv(jr, xidot)  # ϖ(τ) = J_r(ξ(τ)) ξ̇(τ)  [AB15 Eq. 23]
+        twist = _mv(jr, xidot)  # ϖ(τ) = J_r(ξ(τ)) ξ̇(τ)  [DER 11.10]
         N = _blocks(jr, zero, se2.jr_times_jacobian(xi, xidot), jr)
     else:
         twist = xidot
@@ -102,7 +102,7 @@ def interpolate(
     """The mean x(τ) between x₁ and x₂ and its Jacobians ∂x(τ)/∂x₁, ∂x(τ)/∂x₂ (right tangents).
 
     Λ(τ), Ψ(τ) are the vector-space WNOA interpolation matrices of [YIB Eq. 16] (``gp.interpolation_matrices``).
-    γ(τ) = Λ γ₁ + Ψ γ₂ [YIB Eq. 18, AB15 Eq. 28]; dγ(τ) = Λ dγ₁ + Ψ dγ₂; then δ(τ) = Ad(Exp(-ξ(τ))) δT₁ + N dγ(τ).
+    γ(τ) = Λ γ₁ + Ψ γ₂ [YIB Eq. 18; DER 11.15]; dγ(τ) = Λ dγ₁ + Ψ dγ₂; then δ(τ) = Ad(Exp(-ξ(τ))) δT₁ + N dγ(τ).
     """
     x1, x2 = np.asarray(x1, dtype=float), np.asarray(x2, dtype=float)
     gamma2, g21, g22 = local_variables(x1, x2, model)
@@ -111,9 +111,9 @@ def interpolate(
     x, N, ad = _from_local(x1, gamma, model)
     e1 = np.zeros(x1.shape + (6,))
     e1[..., 3:, 3:] = np.eye(3)  # ∂γ₁/∂x₁
-    J1 = _mm(N, _mm(lam, e1) + _mm(psi, g21))
+    J1 = _mm(N, _mm(lam, e1) + _mm(psi, g21))  # [DER 11.16]
     J1[..., :3, :3] += ad
-    return x, J1, _mm(N, _mm(psi, g22))
+    return x, J1, _mm(N, _mm(psi, g22))  # [DER 11.16]
 
 
 def _joint(name: str, joint_cov: ArrayLike) -> NDArray:
@@ -143,7 +143,7 @@ def interpolate_covariance_se2(
     _, N, _ = _from_local(x1, gamma, model)
     J = np.hstack([J1, J2])
     cond = interpolate_covariance(t1, t2, tau, qc, np.zeros((12, 12)))  # Cov(γ(τ) | γ₁, γ₂)
-    cov = J @ _joint("joint_cov", joint_cov) @ J.T + N @ cond @ N.T
+    cov = J @ _joint("joint_cov", joint_cov) @ J.T + N @ cond @ N.T  # [DER 11.17]
     return x, (cov + cov.T) / 2
 
 
@@ -179,5 +179,5 @@ def extrapolate_covariance_se2(
     s = _after(t1, t)
     P = check_covariance("cov1", real_array("cov1", cov1), 6)
     _, N, _ = _from_local(x1, np.concatenate([s * x1[3:], x1[3:]]), "local-variable")
-    cov = J @ P @ J.T + N @ process_noise(s, check_qc(qc)) @ N.T
+    cov = J @ P @ J.T + N @ process_noise(s, check_qc(qc)) @ N.T  # [DER 11.18; YIB Eq. 17]
     return x, (cov + cov.T) / 2

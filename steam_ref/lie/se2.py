@@ -1,4 +1,4 @@
-"""The group SE(2) of planar poses, on poses stored as [x, y, θ] and tangents ξ = [ρx, ρy, φ].  [SOLA §IV-D]
+"""The group SE(2) of planar poses, on poses stored as [x, y, θ] and tangents ξ = [ρx, ρy, φ].  [SOLA App. C]
 
 A pose T = (R(θ), t) acts on a point as p ↦ R p + t. Its tangent (Lie algebra) coordinates put the
 translation first, ξ = [ρ; φ], as GTSAM's ``Pose2`` and [SOLA] do. Every function broadcasts over
@@ -13,7 +13,7 @@ leading axes (a pose (..., 3), a matrix (..., 3, 3)), so a batch of factors eval
 
 Every coefficient (sin φ/φ, (1 - cos φ)/φ², (φ - sin φ)/φ², (φ/2) cot(φ/2) and the rest, with their
 derivatives) is summed from its Taylor series for |φ| < 1 and taken in closed form above, so none
-loses precision to cancellation near φ = 0 (docs/derivations.md, "SE(2)").
+loses precision to cancellation near φ = 0 [DER 11.3-11.7].
 """
 
 from __future__ import annotations
@@ -55,7 +55,7 @@ _D1 = (-1.0) ** (_k + 1) * 2 * (_k + 1) / _fact[2 * _k + 4]  # (d/dφ of D) / φ
 _C = (-1.0) ** _k / _fact[2 * _k + 3]  # (φ - sin φ) / φ³
 _C1 = (-1.0) ** _k * (2 * _k + 1) / _fact[2 * _k + 3]  # d/dφ of C = (φ - sin φ) / φ²
 # (1 - (φ/2) cot(φ/2)) / φ = Σₙ |B₂ₙ| φ²ⁿ⁻¹ / (2n)! = Σₙ 2 ζ(2n) φ²ⁿ⁻¹ / (2π)²ⁿ (Bernoulli numbers B₂ₙ)
-_G = 2 * scipy.special.zeta(2.0 * (_k + 1)) / (2 * np.pi) ** (2.0 * (_k + 1))  # γ / φ
+_G = 2 * scipy.special.zeta(2.0 * (_k + 1)) / (2 * np.pi) ** (2.0 * (_k + 1))  # γ / φ  [DER 11.3]
 _G1 = (2 * _k + 1) * _G  # d/dφ of γ
 
 
@@ -69,7 +69,7 @@ def _poly(c: NDArray, z: NDArray) -> NDArray:
 
 class _Coefficients:
     """The coefficients of J_r, J_r⁻¹ and Exp/Log at φ and their derivatives, each computed when first
-    read (docs/derivations.md, "SE(2)"): A = sin φ/φ, B = (1 - cos φ)/φ, C = (φ - sin φ)/φ²,
+    read [DER 11.3-11.7]: A = sin φ/φ, B = (1 - cos φ)/φ, C = (φ - sin φ)/φ²,
     D = (1 - cos φ)/φ², α = (φ/2) cot(φ/2), γ = (1 - α)/φ; a trailing 1 is d/dφ."""
 
     def __init__(self, phi: ArrayLike):
@@ -143,21 +143,21 @@ def _rot(theta: NDArray) -> tuple[NDArray, NDArray]:
 
 
 def exp(xi: ArrayLike) -> NDArray:
-    """Exp(ξ) as a pose [x, y, θ], θ wrapped: t = V(φ) ρ, V = [[A, -B], [B, A]].  [SOLA Eq. 156]"""
+    """Exp(ξ) as a pose [x, y, θ], θ wrapped: t = V(φ) ρ, V = [[A, -B], [B, A]].  [DER 11.1]"""
     xi = np.asarray(xi, dtype=float)
     k = _Coefficients(xi[..., 2])
     A, B = k["A"], k["B"]
     r1, r2 = xi[..., 0], xi[..., 1]
-    return np.stack([A * r1 - B * r2, B * r1 + A * r2, wrap(xi[..., 2])], axis=-1)  # [SOLA Eq. 156]
+    return np.stack([A * r1 - B * r2, B * r1 + A * r2, wrap(xi[..., 2])], axis=-1)  # [DER 11.1]
 
 
 def log(pose: ArrayLike) -> NDArray:
-    """Log(T) = [V(φ)⁻¹ t; φ], φ = θ wrapped to (-π, π]; V⁻¹ = [[α, φ/2], [-φ/2, α]].  [SOLA Eq. 157]"""
+    """Log(T) = [V(φ)⁻¹ t; φ], φ = θ wrapped to (-π, π]; V⁻¹ = [[α, φ/2], [-φ/2, α]].  [DER 11.1-11.2]"""
     pose = np.asarray(pose, dtype=float)
     phi = wrap(pose[..., 2])
     a, b = _Coefficients(phi)["alpha"], phi / 2
     x, y = pose[..., 0], pose[..., 1]
-    return np.stack([a * x + b * y, -b * x + a * y, phi], axis=-1)  # [SOLA Eq. 157]
+    return np.stack([a * x + b * y, -b * x + a * y, phi], axis=-1)  # [DER 11.1-11.2]
 
 
 def _matrix(rows: list[list[NDArray | float]], like: NDArray) -> NDArray:
@@ -166,30 +166,30 @@ def _matrix(rows: list[list[NDArray | float]], like: NDArray) -> NDArray:
 
 
 def right_jacobian(xi: ArrayLike) -> NDArray:
-    """J_r(ξ): Exp(ξ + dξ) ≈ Exp(ξ) Exp(J_r(ξ) dξ) (GTSAM's ``Pose2.ExpmapDerivative``).  [SOLA Eq. 163]"""
+    """J_r(ξ): Exp(ξ + dξ) ≈ Exp(ξ) Exp(J_r(ξ) dξ) (GTSAM's ``Pose2.ExpmapDerivative``).  [DER 11.4]"""
     xi = np.asarray(xi, dtype=float)
     k = _Coefficients(xi[..., 2])
     A, B, C, D = k["A"], k["B"], k["C"], k["D"]
     r1, r2 = xi[..., 0], xi[..., 1]
-    return _matrix(  # [SOLA Eq. 163]: (φρ₁ - ρ₂ + ρ₂ cos φ - ρ₁ sin φ)/φ² = C ρ₁ - D ρ₂, etc.
+    return _matrix(  # [DER 11.4]
         [[A, B, C * r1 - D * r2], [-B, A, D * r1 + C * r2], [0.0, 0.0, 1.0]], r1
     )
 
 
 def right_jacobian_inverse(xi: ArrayLike) -> NDArray:
-    """J_r(ξ)⁻¹ = [[α, -φ/2, γρ₁ + ρ₂/2], [φ/2, α, γρ₂ - ρ₁/2], [0, 0, 1]] (docs/derivations.md, "SE(2)")."""
+    """J_r(ξ)⁻¹ = [[α, -φ/2, γρ₁ + ρ₂/2], [φ/2, α, γρ₂ - ρ₁/2], [0, 0, 1]] [DER 11.3-11.7]."""
     xi = np.asarray(xi, dtype=float)
     g = _Coefficients(xi[..., 2])
     a, G, b = g["alpha"], g["gamma"], xi[..., 2] / 2
     r1, r2 = xi[..., 0], xi[..., 1]
-    return _matrix([[a, -b, G * r1 + r2 / 2], [b, a, G * r2 - r1 / 2], [0.0, 0.0, 1.0]], r1)
+    return _matrix([[a, -b, G * r1 + r2 / 2], [b, a, G * r2 - r1 / 2], [0.0, 0.0, 1.0]], r1)  # [DER 11.5]
 
 
 def adjoint(pose: ArrayLike) -> NDArray:
-    """Ad(T) = [[R, [y, -x]ᵀ], [0, 1]]: T Exp(ξ) T⁻¹ = Exp(Ad(T) ξ).  [SOLA Eq. 159]"""
+    """Ad(T) = [[R, [y, -x]ᵀ], [0, 1]]: T Exp(ξ) T⁻¹ = Exp(Ad(T) ξ).  [DER 11.8]"""
     pose = np.asarray(pose, dtype=float)
     c, s = _rot(pose[..., 2])
-    return _matrix([[c, -s, pose[..., 1]], [s, c, -pose[..., 0]], [0.0, 0.0, 1.0]], c)  # [SOLA Eq. 159]
+    return _matrix([[c, -s, pose[..., 1]], [s, c, -pose[..., 0]], [0.0, 0.0, 1.0]], c)  # [DER 11.8]
 
 
 def compose(a: ArrayLike, b: ArrayLike) -> NDArray:
@@ -202,7 +202,7 @@ def compose(a: ArrayLike, b: ArrayLike) -> NDArray:
 
 
 def compose_jacobians(a: ArrayLike, b: ArrayLike) -> tuple[NDArray, NDArray]:  # noqa: ARG001 (a: the signature)
-    """∂(T_a T_b)/∂δ_a = Ad(T_b⁻¹), ∂(T_a T_b)/∂δ_b = I (right tangents).  [SOLA Eq. 170-171]"""
+    """∂(T_a T_b)/∂δ_a = Ad(T_b⁻¹), ∂(T_a T_b)/∂δ_b = I (right tangents).  [DER 11.8]"""
     b = np.asarray(b, dtype=float)
     return adjoint(inverse(b)), np.broadcast_to(np.eye(3), b.shape[:-1] + (3, 3)).copy()
 
@@ -216,7 +216,7 @@ def inverse(pose: ArrayLike) -> NDArray:
 
 
 def inverse_jacobian(pose: ArrayLike) -> NDArray:
-    """∂T⁻¹/∂δ = -Ad(T) (right tangents).  [SOLA Eq. 160]"""
+    """∂T⁻¹/∂δ = -Ad(T) (right tangents).  [DER 11.8]"""
     return -adjoint(pose)
 
 
@@ -235,7 +235,7 @@ def between_jacobians(a: ArrayLike, b: ArrayLike) -> tuple[NDArray, NDArray]:
 
 
 def jr_inverse_times_jacobian(xi: ArrayLike, v: ArrayLike) -> NDArray:
-    """∂(J_r(ξ)⁻¹ v)/∂ξ, exact (docs/derivations.md, "SE(2)"): (..., 3, 3)."""
+    """∂(J_r(ξ)⁻¹ v)/∂ξ, exact: (..., 3, 3).  [DER 11.6]"""
     xi, v = np.asarray(xi, dtype=float), np.asarray(v, dtype=float)
     g = _Coefficients(xi[..., 2])
     G, a1, G1 = g["gamma"], g["alpha1"], g["gamma1"]
@@ -253,7 +253,7 @@ def jr_inverse_times_jacobian(xi: ArrayLike, v: ArrayLike) -> NDArray:
 
 
 def jr_times_jacobian(xi: ArrayLike, v: ArrayLike) -> NDArray:
-    """∂(J_r(ξ) v)/∂ξ, exact (docs/derivations.md, "SE(2)"): (..., 3, 3)."""
+    """∂(J_r(ξ) v)/∂ξ, exact: (..., 3, 3).  [DER 11.7]"""
     xi, v = np.asarray(xi, dtype=float), np.asarray(v, dtype=float)
     k = _Coefficients(xi[..., 2])
     r1, r2 = xi[..., 0], xi[..., 1]

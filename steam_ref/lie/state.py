@@ -13,7 +13,7 @@ at the estimate*. δρ is a displacement along the robot's own forward and left 
 displacement is R(θ̄) δρ, to first order), δφ a turn about the robot; the twist block is in the
 body frame already. To read a world-frame (x, y) covariance, rotate: R(θ̄) P_ρρ R(θ̄)ᵀ. A covariance
 taken at one estimate moves to another x̄' by the Jacobian of x̄' ⊖ (x̄ ⊕ δ) (the adjoint of the
-pose difference, to first order), never by copying it. [BARF §7.1.7; SOLA §IV-A]
+pose difference, to first order), never by copying it. [DER 11.9; B17 Ch. 7]
 """
 
 from __future__ import annotations
