@@ -133,9 +133,12 @@ class _Coefficients:
 def wrap(theta: ArrayLike) -> NDArray:
     """Angles mapped to (-π, π]; an angle already there is returned unchanged, bit for bit."""
     theta = np.asarray(theta, dtype=float)
+    inside = (theta > -np.pi) & (theta <= np.pi)
+    if np.all(inside):
+        return theta
     w = theta - 2 * np.pi * np.ceil((theta - np.pi) / (2 * np.pi))
     w = np.where(w <= -np.pi, w + 2 * np.pi, np.where(w > np.pi, w - 2 * np.pi, w))  # a rounding at either end
-    return np.where((theta > -np.pi) & (theta <= np.pi), theta, w)
+    return np.where(inside, theta, w)
 
 
 def _rot(theta: NDArray) -> tuple[NDArray, NDArray]:
