@@ -1,4 +1,6 @@
 """Every tutorial notebook executes top to bottom, and its last code cell asserts (against a dense solve).
+Each has at least two exercises whose checks assert, and the teachers' command of docs/tutorials.md hides
+their solutions.
 
 Executing needs nbformat, nbclient and ipykernel (the ``notebooks``/``test`` extras): without them
 these tests skip, or fail when STEAM_REF_REQUIRE_OPTIONAL=1 (CI). A notebook that loads the
