@@ -43,6 +43,14 @@ def save(axes: Any, path: str | None) -> Any:
     return axes
 
 
+def plain_log_ticks(ax: Any) -> None:
+    """Label the log y axis of ``ax`` with plain numbers (2, 3, 10), not matplotlib's default 2×10⁰."""
+    from matplotlib.ticker import LogFormatter
+
+    ax.yaxis.set_major_formatter(LogFormatter(labelOnlyBase=False))
+    ax.yaxis.set_minor_formatter(LogFormatter(labelOnlyBase=False, minor_thresholds=(2, 0.5)))
+
+
 def array(name: str, a: ArrayLike, ndim: int, columns: int | None = None) -> np.ndarray:
     """``a`` as a non-empty float array of ``ndim`` dimensions (and ``columns`` columns); ShapeError naming it."""
     try:
