@@ -244,7 +244,9 @@ def _add_trajectory_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         help="write the estimated pose at every time step: TUM (timestamp tx ty tz qx qy qz qw, read by evo) or KITTI",
     )
-    parser.add_argument("--trajectory-format", choices=("tum", "kitti"), default="tum", help="of --save-trajectory")
+    parser.add_argument(
+        "--trajectory-format", choices=("tum", "kitti"), default=None, help="of --save-trajectory (default: tum)"
+    )
 
 
 def build_parser() -> argparse.ArgumentParser:

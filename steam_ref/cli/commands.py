@@ -21,7 +21,6 @@ malformed data files give a one-line error and exit code 2.
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import sys
 import time
@@ -52,7 +51,9 @@ from . import explain
 from .args import build_parser
 from .paths import check_out_folder as _check_out_folder
 from .paths import check_output as _check_output
+from .paths import check_outputs_apart as _check_outputs_apart
 from .paths import write_output as _write_output
+from .streams import json_line, one_line, quiet_stdout
 
 __all__ = ["main", "build_parser"]  # build_parser lives in cli/args.py
 
@@ -66,6 +67,15 @@ _PRESET_OF = {
 }
 
 
+def _check_trajectory_output(args: argparse.Namespace) -> None:
+    """--save-trajectory FILE checked before the run; --trajectory-format needs it (alone it would do nothing)."""
+    _check_output(args.save_trajectory, "", "--save-trajectory")
+    if args.trajectory_format is not None and args.save_trajectory is None:
+        raise SteamError(
+            f"--trajectory-format {args.trajectory_format} is the format of --save-trajectory FILE: give it"
+        )
+
+
 def _save_trajectory(args: argparse.Namespace, times: np.ndarray, poses: np.ndarray) -> None:
     """--save-trajectory: the poses (n, 3) at the data set's times, as TUM or KITTI."""
     if args.save_trajectory:
@@ -77,9 +87,17 @@ def _save_trajectory(args: argparse.Namespace, times: np.ndarray, poses: np.ndar
 
 def _run(args: argparse.Namespace) -> int:
     _check_output(args.save_estimates, ".npz", "--save-estimates")
-    _check_output(args.save_trajectory, "", "--save-trajectory")
+    _check_trajectory_output(args)
     _check_output(args.plot, ".png", "--plot")
     _check_output(args.tree_dot, ".dot", "--tree-dot")
+    _check_outputs_apart(
+        {
+            "--save-estimates": args.save_estimates,
+            "--save-trajectory": args.save_trajectory,
+            "--plot": args.plot,
+            "--tree-dot": args.tree_dot,
+        }
+    )
     if args.tree_dot and args.method != "btgp":
         raise SteamError(f"--tree-dot writes BTGP's Bayes tree: it needs --method btgp, got --method {args.method}")
     setup = PaperSetup.named(_preset(args)).departing(*args.departure)
@@ -114,6 +132,14 @@ def _run(args: argparse.Namespace) -> int:
         )
     estimator = StreamingEstimator(Readings.from_dataset(data, setup), setup, options)
     result = estimator.run(data.ground_truth, covariances=args.save_estimates is not None)
+    n = len(result.times)
+    # the run's own files first: nothing computed from them after (scores, figures) can lose them
+    if args.save_estimates:
+        _write_output(args.save_estimates, "--save-estimates", lambda name: save_estimates(name, result))
+    if args.tree_dot and isinstance(estimator.solver, BayesTreeSolver):  # GTSAM's ISAM2.dot() text (bayes_tree/dot.py)
+        dot = estimator.solver.inner.tree.dot() + "\n"
+        _write_output(args.tree_dot, "--tree-dot", lambda name: Path(name).write_text(dot, encoding="utf-8"))
+    _save_trajectory(args, np.asarray(data.times)[:n], result.trajectory[:, :3])
     summary = result.summary(args.dataset) | {
         "preset": setup.name,
         "score_against_optimum": args.score_against_optimum,
@@ -134,26 +160,16 @@ def _run(args: argparse.Namespace) -> int:
             score = score_against_batch(result, Readings.from_dataset(data, setup), setup)
     if score is not None:
         summary |= score.summary()
-    n = len(result.times)
     if data.ground_truth is not None and n:  # APE, RPE beside the RMSE (evaluate.trajectory_figures)
         summary["evaluation"] = trajectory_figures(data.ground_truth[:n, 1:4], result.trajectory[:, :3])
-    if args.json:
-        print(json.dumps(summary))
-    else:
-        print(explain.run_text(summary) + _evaluation_note(summary))
-    if args.save_estimates:
-        _write_output(args.save_estimates, "--save-estimates", lambda name: save_estimates(name, result))
-    if args.tree_dot and isinstance(estimator.solver, BayesTreeSolver):  # GTSAM's ISAM2.dot() text (bayes_tree/dot.py)
-        dot = estimator.solver.inner.tree.dot() + "\n"
-        _write_output(args.tree_dot, "--tree-dot", lambda name: Path(name).write_text(dot, encoding="utf-8"))
-    _save_trajectory(args, np.asarray(data.times)[:n], result.trajectory[:, :3])
+    where = ""
     if args.plot:
         reference: np.ndarray | None
         if score is not None:
             reference = np.array([score.batch.values[X(int(i))][:2] for i in score.poses])
         else:
             reference = None if data.ground_truth is None else data.ground_truth[:, 1:3]
-        _write_plot(
+        where = _write_plot(
             args,
             lambda name: plot_trajectory(
                 reference,
@@ -167,6 +183,8 @@ def _run(args: argparse.Namespace) -> int:
                 path=name,
             ),
         )
+    # printed last: the files are written even when stdout is a pipe its reader closed (`| head`)
+    print(json_line(summary) if args.json else explain.run_text(summary) + _evaluation_note(summary) + where)
     return 0
 
 
@@ -207,7 +225,11 @@ def _evaluation_note(summary: dict) -> str:
     if not e:
         return ""
     rpe = f", RPE/1 {e['rpe']['translation_m']['rmse']:.4g} m" if "rpe" in e else ""
-    aligned = f" ({e['ape_se2']['translation_m']['rmse']:.4g} m SE(2)-aligned)" if "ape_se2" in e else ""
+    aligned = ""
+    if e.get("ape_se2") is not None:
+        aligned = f" ({e['ape_se2']['translation_m']['rmse']:.4g} m SE(2)-aligned)"
+    elif "alignment_undefined" in e:
+        aligned = f" ({e['alignment_undefined']})"
     return (
         f"\n  APE RMSE {e['ape']['translation_m']['rmse']:.4g} m{aligned}, "
         f"heading {e['ape']['heading_rad']['rmse']:.4g} rad{rpe}"
@@ -248,7 +270,8 @@ def save_estimates(path: str, result) -> None:
 def _batch(args: argparse.Namespace) -> int:
     """Batch solve of a whole data set (started chunk by chunk, see ``sequential_batch``)."""
     _check_output(args.plot, ".png", "--plot")
-    _check_output(args.save_trajectory, "", "--save-trajectory")
+    _check_trajectory_output(args)
+    _check_outputs_apart({"--plot": args.plot, "--save-trajectory": args.save_trajectory})
     setup = PaperSetup.named(_preset(args))
     data = _load_with_note(args)
     problem = build_problem(data, setup)
@@ -271,17 +294,9 @@ def _batch(args: argparse.Namespace) -> int:
     if data.ground_truth is not None:
         summary["evaluation"] = trajectory_figures(data.ground_truth[:, 1:4], poses)
     _save_trajectory(args, np.asarray(data.times), poses)
-    if args.json:
-        print(json.dumps(summary))
-    else:
-        print(
-            f"batch {_BATCH_NAME[args.ordering]} ({args.ordering.upper()} ordering) on {args.dataset}: "
-            f"RMSE {summary['rmse_m']} m over {data.n_poses} poses, "
-            f"{summary['total_s']:.2f} s, Cholesky factor {summary['factor_nnz']} nonzeros ({summary['backend']})\n"
-            + explain.data_lines(summary)
-        )
+    where = ""
     if args.plot:
-        _write_plot(
+        where = _write_plot(
             args,
             lambda name: plot_trajectory(
                 truth,
@@ -291,17 +306,28 @@ def _batch(args: argparse.Namespace) -> int:
                 path=name,
             ),
         )
+    if args.json:
+        print(json_line(summary))
+    else:
+        print(
+            f"batch {_BATCH_NAME[args.ordering]} ({args.ordering.upper()} ordering) on {args.dataset}: "
+            f"RMSE {summary['rmse_m']} m over {data.n_poses} poses, "
+            f"{summary['total_s']:.2f} s, Cholesky factor {summary['factor_nnz']} nonzeros ({summary['backend']})\n"
+            + explain.data_lines(summary)
+            + _evaluation_note(summary)
+            + where
+        )
     return 0
 
 
 _BATCH_NAME = {"xl": "PB", "amd": "PBVR"}  # the paper's names of a batch solve by its ordering [YIB Sec. IV]
 
 
-def _write_plot(args: argparse.Namespace, draw: Callable[[str], object]) -> None:
-    """Write ``--plot`` by ``draw(name)`` and say where it went (not with ``--json``: its one line is the figures)."""
+def _write_plot(args: argparse.Namespace, draw: Callable[[str], object]) -> str:
+    """Write ``--plot`` by ``draw(name)``; the line saying where it went, printed after the figures ("" with
+    ``--json``: its one line is the figures)."""
     _write_output(args.plot, "--plot", draw)
-    if not args.json:
-        print(f"plot written to {os.path.abspath(args.plot)}")
+    return "" if args.json else f"\nplot written to {os.path.abspath(args.plot)}"
 
 
 def _fidelity(args: argparse.Namespace) -> int:
@@ -323,10 +349,12 @@ def _fidelity(args: argparse.Namespace) -> int:
             + [explain.file_entry(find_authors_file(name, args.data_dir))],
         }
         print(
-            json.dumps(row) if args.json else _fidelity_text(row) + "\n" + explain.data_lines(row | {"data_note": None})
+            json_line(row) if args.json else _fidelity_text(row) + "\n" + explain.data_lines(row | {"data_note": None})
         )
     if args.plot:
-        _write_plot(args, lambda name: plot_fidelity(distances, path=name))
+        where = _write_plot(args, lambda name: plot_fidelity(distances, path=name))
+        if where:
+            print(where.strip())
     return 0
 
 
@@ -361,11 +389,6 @@ def _reproduce(args: argparse.Namespace) -> int:
     return 0
 
 
-def _one_line(message: str) -> str:
-    """``message`` with its line breaks escaped: an error is one line however odd the input it quotes."""
-    return "".join(c if c.isprintable() or c == "\t" else repr(c)[1:-1] for c in message) or "(no message)"
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``steam-ref`` console script; returns the exit code."""
     argv = list(sys.argv[1:] if argv is None else argv)
@@ -381,8 +404,11 @@ def main(argv: Sequence[str] | None = None) -> int:
             "consistency": consistency_command.run,
         }
         return commands[args.command](args)
+    except BrokenPipeError:  # stdout's reader went away (`| head`): what it read is all it wanted
+        quiet_stdout()
+        return 141  # 128 + SIGPIPE, as a shell reports a command stopped by a closed pipe
     except (SteamError, OSError, MemoryError) as exc:
-        print(f"steam-ref: error: {_one_line(str(exc))}", file=sys.stderr)
+        print(f"steam-ref: error: {one_line(str(exc))}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("steam-ref: interrupted", file=sys.stderr)
