@@ -16,6 +16,7 @@ loaders accept planar poses only (z = 0, rotation about z, to 1e-9) and refuse a
 from __future__ import annotations
 
 import os
+import stat
 from pathlib import Path
 
 import numpy as np
@@ -35,8 +36,14 @@ def _times(times: object, n: int) -> NDArray:
     t = real_array("times", times)
     if t.shape != (n,):
         raise ShapeError(f"times must be (n,) with one time per pose ({n}), got shape {t.shape}")
-    if not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
-        raise DataError("times must be finite and increase strictly")
+    if not np.all(np.isfinite(t)):
+        k = int(np.flatnonzero(~np.isfinite(t))[0])
+        raise DataError(f"times must be finite, but times[{k}] = {float(t[k])!r}")
+    if np.any(np.diff(t) <= 0):
+        k = int(np.flatnonzero(np.diff(t) <= 0)[0]) + 1
+        raise DataError(
+            f"times must increase strictly, but times[{k}] = {float(t[k])!r} follows times[{k - 1}] = {float(t[k - 1])!r}"
+        )
     return t
 
 
@@ -54,6 +61,10 @@ def _table(path: str | os.PathLike, columns: int, what: str) -> NDArray:
     """The numbers of a whitespace-separated text file, ``columns`` per line, ``#`` lines skipped."""
     rows = []
     try:
+        mode = os.stat(path).st_mode
+        if not stat.S_ISREG(mode):  # a named pipe would block the read, /dev/zero fill the memory
+            kind = "a folder" if stat.S_ISDIR(mode) else "a named pipe" if stat.S_ISFIFO(mode) else "a device or socket"
+            raise DataError(f"{path}: cannot read it: it is {kind}, not a regular file")
         text = Path(path).read_text()
     except UnicodeDecodeError:
         raise DataError(f"{path}: not a text file") from None

@@ -37,10 +37,7 @@ __all__ = ["Statistics", "PoseError", "ape", "rpe", "rpe_pairs", "planar_poses"]
 
 def planar_poses(name: str, poses: object) -> NDArray:
     """``poses`` as a finite float (n, 3) [x, y, θ] array, n ≥ 1; ShapeError / SteamError naming it."""
-    try:
-        out = np.asarray(poses, dtype=float)
-    except (TypeError, ValueError):
-        raise SteamError(f"{name} must be an (n, 3) array of poses [x, y, θ], got {poses!r:.80}") from None
+    out = real_array(name, poses)  # never booleans, complex numbers or strings
     if out.ndim != 2 or out.shape[1] != 3 or len(out) == 0:
         raise ShapeError(f"{name} must be an (n, 3) array of poses [x, y, θ], n >= 1; got shape {out.shape}")
     if not np.all(np.isfinite(out)):
