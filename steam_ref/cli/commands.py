@@ -125,6 +125,11 @@ def _run(args: argparse.Namespace) -> int:
     )
     if args.lag is not None and args.save_estimates is not None:
         raise SteamError("--save-estimates writes every marginal covariance, which --lag forgets: drop one of them")
+    if args.lag is not None and args.score_against_optimum:
+        raise SteamError(
+            "--score-against-optimum compares every state and landmark with the batch optimum, and --lag forgets "
+            "the old ones: drop one of them"
+        )
     data = _run_dataset(args)
     if args.score_against_optimum and data.ground_truth is not None:
         raise SteamError(
@@ -407,7 +412,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     except BrokenPipeError:  # stdout's reader went away (`| head`): what it read is all it wanted
         quiet_stdout()
         return 141  # 128 + SIGPIPE, as a shell reports a command stopped by a closed pipe
-    except (SteamError, OSError, MemoryError) as exc:
+    except MemoryError as exc:  # NumPy's names a size, Python's nothing
+        print(f"steam-ref: error: out of memory{f' ({one_line(str(exc))})' if str(exc) else ''}", file=sys.stderr)
+        return 2
+    except (SteamError, OSError) as exc:
         print(f"steam-ref: error: {one_line(str(exc))}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:

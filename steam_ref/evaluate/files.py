@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from ..arguments import real_array
+from ..arguments import parse_decimal, real_array
 from ..errors import DataError, ShapeError
 from ..pose2 import wrap_angle
 from .metrics import planar_poses
@@ -77,13 +77,13 @@ def _table(path: str | os.PathLike, columns: int, what: str) -> NDArray:
         parts = line.split()
         if len(parts) != columns:
             raise DataError(f"{path}, line {number}: a {what} line has {columns} numbers, this one {len(parts)}")
-        try:
-            if any("_" in p or not p.isascii() for p in parts):  # float() reads "1_0" as 10, "１" as 1
-                raise ValueError
-            values = [float(p) for p in parts]
-        except ValueError:
-            raise DataError(f"{path}, line {number}: not a number in {line[:80]!r}") from None
-        if not all(np.isfinite(values)):
+        read = [parse_decimal(p) for p in parts]  # the one rule: float() would read "1_0" as 10, "１" as 1
+        values = [float(v) for v in read if v is not None]
+        if len(values) < len(parts):
+            if any(p.lower().lstrip("+-") in ("inf", "infinity", "nan") for p in parts):
+                raise DataError(f"{path}, line {number}: not finite: {line[:80]!r}")
+            raise DataError(f"{path}, line {number}: not a number in {line[:80]!r}")
+        if not all(np.isfinite(values)):  # 1e999 is written as a number and reads as inf
             raise DataError(f"{path}, line {number}: not finite: {line[:80]!r}")
         rows.append(values)
     if not rows:
