@@ -48,6 +48,20 @@ def _refuse_path(option: str, path: str, err: OSError) -> SteamError:
     return SteamError(f"{option}: cannot write {path!r} ({err.strerror or err})")
 
 
+def _relative_ok(path: str, option: str) -> None:
+    """A relative ``path`` needs the working folder: one deleted under the command is named, not "[Errno 2]"."""
+    if os.path.isabs(path):
+        return
+    try:
+        os.getcwd()
+    except OSError:
+        where = os.environ.get("PWD", "the working folder")
+        raise SteamError(
+            f"{option}: {path!r} is relative to the working folder {where!r}, which no longer exists: "
+            "give an absolute path, or change to a folder that exists"
+        ) from None
+
+
 def _writable_folder(folder: Path, option: str, path: str) -> None:
     """``folder`` exists, is a folder, and a file can be made in it (an unnamed temporary file is tried)."""
     try:
@@ -79,6 +93,7 @@ def check_output(path: str | None, suffix: str, option: str) -> None:
         raise SteamError(f"{option}: expected a file name, got {path!r}")
     if not path.endswith(suffix):
         raise SteamError(f"{option} expects a {suffix} file name, got {path!r}")
+    _relative_ok(path, option)
     try:
         mode = os.stat(path).st_mode  # through links
     except FileNotFoundError:
@@ -165,6 +180,7 @@ def check_out_folder(path: str, option: str) -> None:
     """Before the runs: ``path`` is a folder that exists and can be written, or can be made."""
     if not path.strip():
         raise SteamError(f"{option}: expected a folder, got an empty string")
+    _relative_ok(path, option)
     try:
         mode = os.stat(path).st_mode
     except FileNotFoundError:
