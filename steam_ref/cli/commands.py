@@ -189,7 +189,7 @@ def _run(args: argparse.Namespace) -> int:
             ),
         )
     # printed last: the files are written even when stdout is a pipe its reader closed (`| head`)
-    print(json_line(summary) if args.json else explain.run_text(summary) + _evaluation_note(summary) + where)
+    print(json_line(summary) if args.json else explain.run_text(summary) + explain.evaluation_note(summary) + where)
     return 0
 
 
@@ -222,23 +222,6 @@ def _run_dataset(args: argparse.Namespace):
         raise SteamError(f"--steps generates the synthetic task: it needs --dataset synthetic, got {args.dataset!r}")
     n_landmarks = max(1, round(args.steps * DEFAULT_LANDMARKS / DEFAULT_STEPS))  # the default task's density
     return generate_synthetic(n_steps=args.steps, n_landmarks=n_landmarks, seed=args.seed)
-
-
-def _evaluation_note(summary: dict) -> str:
-    """APE (unaligned and SE(2)-aligned) and RPE over one pose, for the human-readable summary."""
-    e = summary.get("evaluation")
-    if not e:
-        return ""
-    rpe = f", RPE/1 {e['rpe']['translation_m']['rmse']:.4g} m" if "rpe" in e else ""
-    aligned = ""
-    if e.get("ape_se2") is not None:
-        aligned = f" ({e['ape_se2']['translation_m']['rmse']:.4g} m SE(2)-aligned)"
-    elif "alignment_undefined" in e:
-        aligned = f" ({e['alignment_undefined']})"
-    return (
-        f"\n  APE RMSE {e['ape']['translation_m']['rmse']:.4g} m{aligned}, "
-        f"heading {e['ape']['heading_rad']['rmse']:.4g} rad{rpe}"
-    )
 
 
 def save_estimates(path: str, result) -> None:
@@ -319,7 +302,7 @@ def _batch(args: argparse.Namespace) -> int:
             f"RMSE {summary['rmse_m']} m over {data.n_poses} poses, "
             f"{summary['total_s']:.2f} s, Cholesky factor {summary['factor_nnz']} nonzeros ({summary['backend']})\n"
             + explain.data_lines(summary)
-            + _evaluation_note(summary)
+            + explain.evaluation_note(summary)
             + where
         )
     return 0
@@ -354,34 +337,15 @@ def _fidelity(args: argparse.Namespace) -> int:
             + [explain.file_entry(find_authors_file(name, args.data_dir))],
         }
         print(
-            json_line(row) if args.json else _fidelity_text(row) + "\n" + explain.data_lines(row | {"data_note": None})
+            json_line(row)
+            if args.json
+            else explain.fidelity_text(row) + "\n" + explain.data_lines(row | {"data_note": None})
         )
     if args.plot:
         where = _write_plot(args, lambda name: plot_fidelity(distances, path=name))
         if where:
             print(where.strip())
     return 0
-
-
-def _mm(metres: float) -> str:
-    return f"{1000 * metres:.2f} mm"
-
-
-def _fidelity_text(row: dict) -> str:
-    cov = (
-        ""
-        if row["pose_cov_median"] is None
-        else (
-            f"\n  marginal covariances, relative difference: pose median {row['pose_cov_median']:.2%} (max {row['pose_cov_max']:.2%}), "
-            f"velocity median {row['velocity_cov_median']:.2%} (max {row['velocity_cov_max']:.2%}), landmarks max {row['landmark_cov_max']:.2%}"
-        )
-    )
-    return (
-        f"{row['dataset']}: {row['n_states']} states; distance to the authors' estimate RMS {_mm(row['pose_rms_m'])}, "
-        f"max {_mm(row['pose_max_m'])} at pose {row['pose_max_at']}; landmarks max {_mm(row['landmark_max_m'])}\n"
-        f"  position RMSE {row['rmse_m']:.5f} m (authors {row['authors_rmse_m']:.5f} m); {row['total_s']} s "
-        f"(authors' MATLAB + GTSAM 3.2: {row['authors_total_s']} s)" + cov
-    )
 
 
 def _reproduce(args: argparse.Namespace) -> int:
