@@ -21,7 +21,6 @@ malformed data files give a one-line error and exit code 2.
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import sys
 import time
@@ -52,7 +51,9 @@ from . import explain
 from .args import build_parser
 from .paths import check_out_folder as _check_out_folder
 from .paths import check_output as _check_output
+from .paths import check_outputs_apart as _check_outputs_apart
 from .paths import write_output as _write_output
+from .streams import json_line, one_line, quiet_stdout
 
 __all__ = ["main", "build_parser"]  # build_parser lives in cli/args.py
 
@@ -66,6 +67,15 @@ _PRESET_OF = {
 }
 
 
+def _check_trajectory_output(args: argparse.Namespace) -> None:
+    """--save-trajectory FILE checked before the run; --trajectory-format needs it (alone it would do nothing)."""
+    _check_output(args.save_trajectory, "", "--save-trajectory")
+    if args.trajectory_format is not None and args.save_trajectory is None:
+        raise SteamError(
+            f"--trajectory-format {args.trajectory_format} is the format of --save-trajectory FILE: give it"
+        )
+
+
 def _save_trajectory(args: argparse.Namespace, times: np.ndarray, poses: np.ndarray) -> None:
     """--save-trajectory: the poses (n, 3) at the data set's times, as TUM or KITTI."""
     if args.save_trajectory:
@@ -77,9 +87,17 @@ def _save_trajectory(args: argparse.Namespace, times: np.ndarray, poses: np.ndar
 
 def _run(args: argparse.Namespace) -> int:
     _check_output(args.save_estimates, ".npz", "--save-estimates")
-    _check_output(args.save_trajectory, "", "--save-trajectory")
+    _check_trajectory_output(args)
     _check_output(args.plot, ".png", "--plot")
     _check_output(args.tree_dot, ".dot", "--tree-dot")
+    _check_outputs_apart(
+        {
+            "--save-estimates": args.save_estimates,
+            "--save-trajectory": args.save_trajectory,
+            "--plot": args.plot,
+            "--tree-dot": args.tree_dot,
+        }
+    )
     if args.tree_dot and args.method != "btgp":
         raise SteamError(f"--tree-dot writes BTGP's Bayes tree: it needs --method btgp, got --method {args.method}")
     setup = PaperSetup.named(_preset(args)).departing(*args.departure)
@@ -107,6 +125,11 @@ def _run(args: argparse.Namespace) -> int:
     )
     if args.lag is not None and args.save_estimates is not None:
         raise SteamError("--save-estimates writes every marginal covariance, which --lag forgets: drop one of them")
+    if args.lag is not None and args.score_against_optimum:
+        raise SteamError(
+            "--score-against-optimum compares every state and landmark with the batch optimum, and --lag forgets "
+            "the old ones: drop one of them"
+        )
     data = _run_dataset(args)
     if args.score_against_optimum and data.ground_truth is not None:
         raise SteamError(
@@ -114,6 +137,14 @@ def _run(args: argparse.Namespace) -> int:
         )
     estimator = StreamingEstimator(Readings.from_dataset(data, setup), setup, options)
     result = estimator.run(data.ground_truth, covariances=args.save_estimates is not None)
+    n = len(result.times)
+    # the run's own files first: nothing computed from them after (scores, figures) can lose them
+    if args.save_estimates:
+        _write_output(args.save_estimates, "--save-estimates", lambda name: save_estimates(name, result))
+    if args.tree_dot and isinstance(estimator.solver, BayesTreeSolver):  # GTSAM's ISAM2.dot() text (bayes_tree/dot.py)
+        dot = estimator.solver.inner.tree.dot() + "\n"
+        _write_output(args.tree_dot, "--tree-dot", lambda name: Path(name).write_text(dot, encoding="utf-8"))
+    _save_trajectory(args, np.asarray(data.times)[:n], result.trajectory[:, :3])
     summary = result.summary(args.dataset) | {
         "preset": setup.name,
         "score_against_optimum": args.score_against_optimum,
@@ -134,26 +165,16 @@ def _run(args: argparse.Namespace) -> int:
             score = score_against_batch(result, Readings.from_dataset(data, setup), setup)
     if score is not None:
         summary |= score.summary()
-    n = len(result.times)
     if data.ground_truth is not None and n:  # APE, RPE beside the RMSE (evaluate.trajectory_figures)
         summary["evaluation"] = trajectory_figures(data.ground_truth[:n, 1:4], result.trajectory[:, :3])
-    if args.json:
-        print(json.dumps(summary))
-    else:
-        print(explain.run_text(summary) + _evaluation_note(summary))
-    if args.save_estimates:
-        _write_output(args.save_estimates, "--save-estimates", lambda name: save_estimates(name, result))
-    if args.tree_dot and isinstance(estimator.solver, BayesTreeSolver):  # GTSAM's ISAM2.dot() text (bayes_tree/dot.py)
-        dot = estimator.solver.inner.tree.dot() + "\n"
-        _write_output(args.tree_dot, "--tree-dot", lambda name: Path(name).write_text(dot, encoding="utf-8"))
-    _save_trajectory(args, np.asarray(data.times)[:n], result.trajectory[:, :3])
+    where = ""
     if args.plot:
         reference: np.ndarray | None
         if score is not None:
             reference = np.array([score.batch.values[X(int(i))][:2] for i in score.poses])
         else:
             reference = None if data.ground_truth is None else data.ground_truth[:, 1:3]
-        _write_plot(
+        where = _write_plot(
             args,
             lambda name: plot_trajectory(
                 reference,
@@ -167,6 +188,8 @@ def _run(args: argparse.Namespace) -> int:
                 path=name,
             ),
         )
+    # printed last: the files are written even when stdout is a pipe its reader closed (`| head`)
+    print(json_line(summary) if args.json else explain.run_text(summary) + explain.evaluation_note(summary) + where)
     return 0
 
 
@@ -199,19 +222,6 @@ def _run_dataset(args: argparse.Namespace):
         raise SteamError(f"--steps generates the synthetic task: it needs --dataset synthetic, got {args.dataset!r}")
     n_landmarks = max(1, round(args.steps * DEFAULT_LANDMARKS / DEFAULT_STEPS))  # the default task's density
     return generate_synthetic(n_steps=args.steps, n_landmarks=n_landmarks, seed=args.seed)
-
-
-def _evaluation_note(summary: dict) -> str:
-    """APE (unaligned and SE(2)-aligned) and RPE over one pose, for the human-readable summary."""
-    e = summary.get("evaluation")
-    if not e:
-        return ""
-    rpe = f", RPE/1 {e['rpe']['translation_m']['rmse']:.4g} m" if "rpe" in e else ""
-    aligned = f" ({e['ape_se2']['translation_m']['rmse']:.4g} m SE(2)-aligned)" if "ape_se2" in e else ""
-    return (
-        f"\n  APE RMSE {e['ape']['translation_m']['rmse']:.4g} m{aligned}, "
-        f"heading {e['ape']['heading_rad']['rmse']:.4g} rad{rpe}"
-    )
 
 
 def save_estimates(path: str, result) -> None:
@@ -248,7 +258,8 @@ def save_estimates(path: str, result) -> None:
 def _batch(args: argparse.Namespace) -> int:
     """Batch solve of a whole data set (started chunk by chunk, see ``sequential_batch``)."""
     _check_output(args.plot, ".png", "--plot")
-    _check_output(args.save_trajectory, "", "--save-trajectory")
+    _check_trajectory_output(args)
+    _check_outputs_apart({"--plot": args.plot, "--save-trajectory": args.save_trajectory})
     setup = PaperSetup.named(_preset(args))
     data = _load_with_note(args)
     problem = build_problem(data, setup)
@@ -271,17 +282,9 @@ def _batch(args: argparse.Namespace) -> int:
     if data.ground_truth is not None:
         summary["evaluation"] = trajectory_figures(data.ground_truth[:, 1:4], poses)
     _save_trajectory(args, np.asarray(data.times), poses)
-    if args.json:
-        print(json.dumps(summary))
-    else:
-        print(
-            f"batch {_BATCH_NAME[args.ordering]} ({args.ordering.upper()} ordering) on {args.dataset}: "
-            f"RMSE {summary['rmse_m']} m over {data.n_poses} poses, "
-            f"{summary['total_s']:.2f} s, Cholesky factor {summary['factor_nnz']} nonzeros ({summary['backend']})\n"
-            + explain.data_lines(summary)
-        )
+    where = ""
     if args.plot:
-        _write_plot(
+        where = _write_plot(
             args,
             lambda name: plot_trajectory(
                 truth,
@@ -291,17 +294,28 @@ def _batch(args: argparse.Namespace) -> int:
                 path=name,
             ),
         )
+    if args.json:
+        print(json_line(summary))
+    else:
+        print(
+            f"batch {_BATCH_NAME[args.ordering]} ({args.ordering.upper()} ordering) on {args.dataset}: "
+            f"RMSE {summary['rmse_m']} m over {data.n_poses} poses, "
+            f"{summary['total_s']:.2f} s, Cholesky factor {summary['factor_nnz']} nonzeros ({summary['backend']})\n"
+            + explain.data_lines(summary)
+            + explain.evaluation_note(summary)
+            + where
+        )
     return 0
 
 
 _BATCH_NAME = {"xl": "PB", "amd": "PBVR"}  # the paper's names of a batch solve by its ordering [YIB Sec. IV]
 
 
-def _write_plot(args: argparse.Namespace, draw: Callable[[str], object]) -> None:
-    """Write ``--plot`` by ``draw(name)`` and say where it went (not with ``--json``: its one line is the figures)."""
+def _write_plot(args: argparse.Namespace, draw: Callable[[str], object]) -> str:
+    """Write ``--plot`` by ``draw(name)``; the line saying where it went, printed after the figures ("" with
+    ``--json``: its one line is the figures)."""
     _write_output(args.plot, "--plot", draw)
-    if not args.json:
-        print(f"plot written to {os.path.abspath(args.plot)}")
+    return "" if args.json else f"\nplot written to {os.path.abspath(args.plot)}"
 
 
 def _fidelity(args: argparse.Namespace) -> int:
@@ -323,32 +337,15 @@ def _fidelity(args: argparse.Namespace) -> int:
             + [explain.file_entry(find_authors_file(name, args.data_dir))],
         }
         print(
-            json.dumps(row) if args.json else _fidelity_text(row) + "\n" + explain.data_lines(row | {"data_note": None})
+            json_line(row)
+            if args.json
+            else explain.fidelity_text(row) + "\n" + explain.data_lines(row | {"data_note": None})
         )
     if args.plot:
-        _write_plot(args, lambda name: plot_fidelity(distances, path=name))
+        where = _write_plot(args, lambda name: plot_fidelity(distances, path=name))
+        if where:
+            print(where.strip())
     return 0
-
-
-def _mm(metres: float) -> str:
-    return f"{1000 * metres:.2f} mm"
-
-
-def _fidelity_text(row: dict) -> str:
-    cov = (
-        ""
-        if row["pose_cov_median"] is None
-        else (
-            f"\n  marginal covariances, relative difference: pose median {row['pose_cov_median']:.2%} (max {row['pose_cov_max']:.2%}), "
-            f"velocity median {row['velocity_cov_median']:.2%} (max {row['velocity_cov_max']:.2%}), landmarks max {row['landmark_cov_max']:.2%}"
-        )
-    )
-    return (
-        f"{row['dataset']}: {row['n_states']} states; distance to the authors' estimate RMS {_mm(row['pose_rms_m'])}, "
-        f"max {_mm(row['pose_max_m'])} at pose {row['pose_max_at']}; landmarks max {_mm(row['landmark_max_m'])}\n"
-        f"  position RMSE {row['rmse_m']:.5f} m (authors {row['authors_rmse_m']:.5f} m); {row['total_s']} s "
-        f"(authors' MATLAB + GTSAM 3.2: {row['authors_total_s']} s)" + cov
-    )
 
 
 def _reproduce(args: argparse.Namespace) -> int:
@@ -359,11 +356,6 @@ def _reproduce(args: argparse.Namespace) -> int:
         raise SteamError(f"--out: cannot write {err.filename or args.out!r} ({err.strerror or err})") from None
     print(table)
     return 0
-
-
-def _one_line(message: str) -> str:
-    """``message`` with its line breaks escaped: an error is one line however odd the input it quotes."""
-    return "".join(c if c.isprintable() or c == "\t" else repr(c)[1:-1] for c in message) or "(no message)"
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -381,8 +373,14 @@ def main(argv: Sequence[str] | None = None) -> int:
             "consistency": consistency_command.run,
         }
         return commands[args.command](args)
-    except (SteamError, OSError, MemoryError) as exc:
-        print(f"steam-ref: error: {_one_line(str(exc))}", file=sys.stderr)
+    except BrokenPipeError:  # stdout's reader went away (`| head`): what it read is all it wanted
+        quiet_stdout()
+        return 141  # 128 + SIGPIPE, as a shell reports a command stopped by a closed pipe
+    except MemoryError as exc:  # NumPy's names a size, Python's nothing
+        print(f"steam-ref: error: out of memory{f' ({one_line(str(exc))})' if str(exc) else ''}", file=sys.stderr)
+        return 2
+    except (SteamError, OSError) as exc:
+        print(f"steam-ref: error: {one_line(str(exc))}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("steam-ref: interrupted", file=sys.stderr)

@@ -13,13 +13,13 @@ from __future__ import annotations
 
 import argparse
 import functools
-import json
 import time
 
 from ..paper.consistency import KINDS, ConsistencyStudy, check_result, run_seed, summarize
 from ..paper.sweep import run_sweep
 from ..plot.figures import plot_anees
-from .paths import check_output
+from .paths import check_output, check_outputs_apart, write_output
+from .streams import json_line
 
 __all__ = ["run"]
 
@@ -47,6 +47,7 @@ def run(args: argparse.Namespace) -> int:
     for path, suffix, option in ((args.plot, ".png", "--plot"), (args.log, ".jsonl", "--log")):
         check_output(path, suffix, option)
     check_output(args.resume, ".jsonl", "--resume")
+    check_outputs_apart({"--plot": args.plot, "--log": args.log, "--resume": args.resume})
     study = ConsistencyStudy(n_steps=args.steps, n_landmarks=args.landmarks, seed=args.seed)
     start = time.perf_counter()
     results = run_sweep(
@@ -67,9 +68,11 @@ def run(args: argparse.Namespace) -> int:
             name: {k: row[k]["per_state"] for k in ("pose", "velocity")} for name, row in summary["estimators"].items()
         }
         bands = {k: tuple(next(iter(summary["estimators"].values()))[k]["band"]) for k in ("pose", "velocity")}
-        plot_anees(per_pose, bands, n_runs=summary["n_seeds"], path=args.plot)
+        write_output(
+            args.plot, "--plot", lambda name: plot_anees(per_pose, bands, n_runs=summary["n_seeds"], path=name)
+        )
     for row in summary["estimators"].values():  # the per-pose curves are for the plot
         for kind in KINDS:
             row[kind].pop("per_state", None)
-    print(json.dumps(summary) if args.json else _text(summary))
+    print(json_line(summary) if args.json else _text(summary))
     return 0

@@ -4,7 +4,8 @@ measures, and a yardstick to read it by; and a progress line while a run would o
 - :func:`data_figures`: the data file(s) read with a short sha256, a note when ``plaza`` is gtsam's
   original uncleaned set, dead reckoning's RMSE on the same poses, and the authors' BTGP/1 RMSE on the
   same file where they saved one (recognised by its sha256, :data:`steam_ref.datasets.fetch.DATASETS`).
-- :func:`run_text`: the human-readable summary of ``steam-ref run``.
+- :func:`run_text`: the human-readable summary of ``steam-ref run``; :func:`evaluation_note` its APE/RPE
+  line (``run`` and ``batch``), :func:`fidelity_text` the summary of ``steam-ref fidelity``.
 - :func:`working`: a progress line (tqdm, on stderr) with the elapsed time, for a step without a loop
   to count (Victoria Park's scoring against the batch optimum).
 """
@@ -23,7 +24,17 @@ from ..datasets import LandmarkDataset, RangeDataset
 from ..datasets.fetch import DATASETS, file_digest
 from ..paper.results import position_rmse
 
-__all__ = ["data_figures", "file_entry", "method_text", "plot_title", "progress_wanted", "run_text", "working"]
+__all__ = [
+    "data_figures",
+    "evaluation_note",
+    "fidelity_text",
+    "file_entry",
+    "method_text",
+    "plot_title",
+    "progress_wanted",
+    "run_text",
+    "working",
+]
 
 SHORT_SHA = 12
 _METHODS = {
@@ -184,3 +195,41 @@ def working(what: str, enabled: bool) -> Iterator[None]:
         finally:
             done.set()
             thread.join()
+
+
+def evaluation_note(summary: dict) -> str:
+    """APE (unaligned and SE(2)-aligned) and RPE over one pose, for the human-readable summary."""
+    e = summary.get("evaluation")
+    if not e:
+        return ""
+    rpe = f", RPE/1 {e['rpe']['translation_m']['rmse']:.4g} m" if "rpe" in e else ""
+    aligned = ""
+    if e.get("ape_se2") is not None:
+        aligned = f" ({e['ape_se2']['translation_m']['rmse']:.4g} m SE(2)-aligned)"
+    elif "alignment_undefined" in e:
+        aligned = f" ({e['alignment_undefined']})"
+    return (
+        f"\n  APE RMSE {e['ape']['translation_m']['rmse']:.4g} m{aligned}, "
+        f"heading {e['ape']['heading_rad']['rmse']:.4g} rad{rpe}"
+    )
+
+
+def _mm(metres: float) -> str:
+    return f"{1000 * metres:.2f} mm"
+
+
+def fidelity_text(row: dict) -> str:
+    cov = (
+        ""
+        if row["pose_cov_median"] is None
+        else (
+            f"\n  marginal covariances, relative difference: pose median {row['pose_cov_median']:.2%} (max {row['pose_cov_max']:.2%}), "
+            f"velocity median {row['velocity_cov_median']:.2%} (max {row['velocity_cov_max']:.2%}), landmarks max {row['landmark_cov_max']:.2%}"
+        )
+    )
+    return (
+        f"{row['dataset']}: {row['n_states']} states; distance to the authors' estimate RMS {_mm(row['pose_rms_m'])}, "
+        f"max {_mm(row['pose_max_m'])} at pose {row['pose_max_at']}; landmarks max {_mm(row['landmark_max_m'])}\n"
+        f"  position RMSE {row['rmse_m']:.5f} m (authors {row['authors_rmse_m']:.5f} m); {row['total_s']} s "
+        f"(authors' MATLAB + GTSAM 3.2: {row['authors_total_s']} s)" + cov
+    )

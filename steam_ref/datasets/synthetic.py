@@ -108,14 +108,8 @@ def _landmarks_and_ranges(
 
 
 def _is_count(value: object, lowest: int) -> bool:
-    """An integer (or an integer-valued float) >= ``lowest``; never a bool, NaN or inf."""
-    return bool(
-        not isinstance(value, bool)
-        and isinstance(value, (int, float, np.integer, np.floating))
-        and math.isfinite(value)
-        and value == int(value)
-        and value >= lowest
-    )
+    """An integer (int or NumPy integer) >= ``lowest``; never a bool, nor a float (2.0 is not a count)."""
+    return bool(not isinstance(value, (bool, np.bool_)) and isinstance(value, (int, np.integer)) and value >= lowest)
 
 
 def _is_number(value: object, lowest: float, strict: bool) -> bool:

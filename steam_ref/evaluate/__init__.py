@@ -10,7 +10,7 @@ The Monte Carlo study itself (sampling tasks from the model, running the estimat
 :mod:`steam_ref.paper.consistency`, since it runs the paper's solvers.
 """
 
-from .align import ALIGNMENTS, Alignment, align_planar
+from .align import ALIGNMENTS, Alignment, align_planar, alignment_defect
 from .files import read_kitti, read_tum, write_kitti, write_tum
 from .metrics import PoseError, Statistics, ape, planar_poses, rpe, rpe_pairs
 from .nees import chi2_band, chi2_quantile, nees, pose_errors, verdict
@@ -20,6 +20,7 @@ __all__ = [
     "ALIGNMENTS",
     "Alignment",
     "align_planar",
+    "alignment_defect",
     "Statistics",
     "PoseError",
     "ape",

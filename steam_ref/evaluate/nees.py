@@ -40,8 +40,8 @@ def nees(errors: NDArray, covariances: NDArray) -> NDArray:
     :class:`~steam_ref.errors.NumericalError` naming its row.
     """
     e, P = real_array("errors", errors), real_array("covariances", covariances)
-    if e.ndim != 2 or P.shape != (*e.shape, e.shape[1]):
-        raise ShapeError(f"nees needs errors (n, d) and covariances (n, d, d), got {e.shape} and {P.shape}")
+    if e.ndim != 2 or e.shape[1] == 0 or P.shape != (*e.shape, e.shape[1]):
+        raise ShapeError(f"nees needs errors (n, d), d >= 1, and covariances (n, d, d), got {e.shape} and {P.shape}")
     if not (np.all(np.isfinite(e)) and np.all(np.isfinite(P))):
         raise NumericalError("nees: an error or a covariance is not finite")
     out = np.empty(len(e))

@@ -14,6 +14,7 @@ from numpy.typing import NDArray
 from ..arguments import integer, real_array
 from ..errors import ShapeError, SteamError
 from ..trajectory import Trajectory
+from .align import alignment_defect
 from .metrics import ape, planar_poses, rpe
 
 __all__ = ["states_at", "trajectory_figures"]
@@ -56,14 +57,22 @@ def trajectory_figures(truth: object, estimate: object, *, rpe_delta: int = 1) -
     at the same times: {'ape': {...}, 'ape_se2': {...}, 'ape_sim2': {...}, 'rpe': {...}}, each with
     translation [m] and heading [rad] statistics (:class:`~steam_ref.evaluate.metrics.Statistics`).
     With one pose there is nothing to align, so 'ape_se2' and 'ape_sim2' are left out; with ``rpe_delta``
-    poses or fewer there is no pair, so 'rpe' is left out."""
+    poses or fewer there is no pair, so 'rpe' is left out. Where no rotation aligns the two (the truth
+    does not move: :func:`~steam_ref.evaluate.align.alignment_defect`), 'ape_se2' and 'ape_sim2' are None
+    and 'alignment_undefined' says why: the other figures stand."""
     truth, estimate = planar_poses("truth", truth), planar_poses("estimate", estimate)
     rpe_delta = integer("rpe_delta", rpe_delta, minimum=1)
     out: dict = {"ape": ape(truth, estimate).to_dict()}
     if len(truth) >= 2:
+        defect = alignment_defect(estimate[:, :2], truth[:, :2])
         for align in ("se2", "sim2"):
+            if defect is not None:
+                out[f"ape_{align}"] = None
+                continue
             err = ape(truth, estimate, align=align)
             out[f"ape_{align}"] = err.to_dict() | {"alignment": err.alignment.to_dict()}
+        if defect is not None:
+            out["alignment_undefined"] = defect
     if len(truth) > rpe_delta:
         out["rpe"] = rpe(truth, estimate, rpe_delta).to_dict() | {"delta_poses": rpe_delta}
     return out

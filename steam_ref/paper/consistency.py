@@ -198,7 +198,7 @@ def run_seed(study: ConsistencyStudy, index: int) -> dict:
 
     Returns {estimator: {'pose': [...], 'velocity': [...], 'landmark': [...], 'converged': bool}} (JSON).
     """
-    task = study.sample(index)
+    task = study.sample(integer("index", index, minimum=0))  # SeedSequence's spawn keys are >= 0
     out: dict = {}
     stream = None  # BTGP/1's final estimate: the batch optimum's second start
     names = sorted(study.estimators, key=lambda n: ESTIMATORS[n] != ESTIMATORS["btgp/1"])  # BTGP/1 first
@@ -267,6 +267,10 @@ def summarize(results: dict[int, dict], estimators: tuple[str, ...], level: floa
     """ANEES of each estimator and kind over the runs ``results`` (index → :func:`run_seed`'s output),
     with its band and verdict; the per-pose ANEES too (for the plot)."""
     order = sorted(results)
+    for i in order:  # every run has every estimator: an ANEES over fewer runs would not be the one reported
+        missing = [name for name in estimators if not isinstance(results[i], dict) or name not in results[i]]
+        if missing:
+            raise SteamError(f"run {i} has no result for estimator {missing[0]!r}: every run needs every estimator")
     n = len(order)
     out: dict = {"n_seeds": n, "level": level, "estimators": {}}
     for name in estimators:

@@ -205,6 +205,11 @@ class StreamingEstimator:
         y in columns 1-2 (the CMU GT layout) gives the RMSE; ``covariances`` adds the final marginals."""
         from tqdm import tqdm
 
+        if covariances and self.options.lag is not None:  # before the run, not after it
+            raise SteamError(
+                f"covariances=True gives every state's final marginal covariance, which lag={self.options.lag!r} "
+                "forgets: drop one of them"
+            )
         budget, completed = self.options.time_budget_s, True
         with tqdm(
             total=self.n_poses, disable=not self.options.progress, desc=self.options.method, mininterval=0.5

@@ -204,7 +204,12 @@ def reference_batch(problem: SteamProblem, estimate: Values | None = None) -> tu
 def score_against_batch(result, readings: Readings, setup: PaperSetup) -> BatchScore:
     """A streamed run (:class:`~steam_ref.paper.results.RunResult`) against the batch optimum of the same problem
     (:func:`reference_batch`): the same set-up and layout, the poses up to the run's last solved state,
-    compared at its states."""
+    compared at its states. A fixed-lag run (``lag``) forgot states and landmarks the batch has: refused."""
+    if result.options.lag is not None:
+        raise SteamError(
+            f"scoring against the batch optimum needs every state and landmark the run estimated, and lag="
+            f"{result.options.lag!r} forgot the old ones"
+        )
     states = np.asarray(result.state_poses, dtype=int)
     last = int(states[-1]) + 1
     problem = build_problem(

@@ -38,7 +38,8 @@ def attach_ranges(pose_times: NDArray, range_times: NDArray, rule: str = "file-o
     takes every next reading stamped at or before tᵢ (``while t >= TD(k,1)``). A reading whose time
     stamp goes back (Plaza's file does so twice) is taken at the pose the scan has reached, later
     than its own time. 'time' attaches every reading to the first pose at or after its time stamp.
-    A reading later than the last pose raises :class:`DataError`.
+    A reading earlier than the first pose, or later than the last, raises :class:`DataError`: the
+    trajectory has no state there to attach it to.
     """
     pose_times, range_times = np.asarray(pose_times, float), np.asarray(range_times, float)
     if rule == "time":
@@ -52,6 +53,13 @@ def attach_ranges(pose_times: NDArray, range_times: NDArray, rule: str = "file-o
         )
     else:
         raise SteamError(f"unknown range attachment rule {rule!r}; use one of {RANGE_ATTACHMENTS}")
+    early = np.flatnonzero(range_times < pose_times[0]) if len(pose_times) else np.zeros(0, int)
+    if early.size:
+        k = int(early[0])
+        raise DataError(
+            f"range row {k} at t={float(range_times[k])!r} is before the first pose (t={float(pose_times[0])!r}): "
+            "no pose to attach it to"
+        )
     late = np.flatnonzero(pose >= len(pose_times))
     if late.size:
         k = int(late[0])

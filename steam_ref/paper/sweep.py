@@ -173,9 +173,10 @@ def run_sweep(
         with config:
             run = joblib.Parallel(n_jobs=jobs if backend == "loky" else -1, return_as="generator_unordered")
             for item, result in run(joblib.delayed(_limited)(function, item) for item in todo):
+                line = _line(item, result)  # a result that is not JSON is refused, logged or not
                 results[_key(item)] = result
                 if stream is not None:
-                    stream.write(json.dumps({"item": item, "result": result}) + "\n")
+                    stream.write(line + "\n")
                     stream.flush()
                 if on_result is not None:
                     on_result(item, result)
@@ -201,6 +202,16 @@ def _check_address(scheduler: object) -> None:
             f"--scheduler {scheduler!r} is not a Dask scheduler's address: give host:port or tcp://host:port "
             "(e.g. tcp://127.0.0.1:8786)"
         )
+
+
+def _line(item: Any, result: Any) -> str:
+    """The log line of one result; SteamError naming the item when the result is not made of JSON values."""
+    try:
+        return json.dumps({"item": item, "result": result})
+    except (TypeError, ValueError) as err:
+        raise SteamError(
+            f"the result for item {item!r} is not JSON ({err}): the function must return JSON values"
+        ) from None
 
 
 def _dask_client(scheduler: str | None, jobs: int):
