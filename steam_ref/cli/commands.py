@@ -34,6 +34,7 @@ from ..conformance import command as conformance_command
 from ..datasets import LandmarkDataset, RangeDataset, generate_synthetic, load_dataset, load_range_dataset
 from ..errors import SteamError, UncleanedDataWarning
 from ..evaluate import trajectory_figures, write_kitti, write_tum
+from ..linear.threads import limit
 from ..paper.experiments import reproduce
 from ..paper.fidelity import AUTHORS_RUNS, compare, find_authors_file, load_authors_run
 from ..paper.online import StreamingEstimator, run_online
@@ -372,7 +373,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             "data": data_command.run,
             "consistency": consistency_command.run,
         }
-        return commands[args.command](args)
+        with limit():  # the solvers' small dense algebra at one BLAS thread unless $STEAM_REF_BLAS_THREADS says
+            return commands[args.command](args)
     except BrokenPipeError:  # stdout's reader went away (`| head`): what it read is all it wanted
         quiet_stdout()
         return 141  # 128 + SIGPIPE, as a shell reports a command stopped by a closed pipe

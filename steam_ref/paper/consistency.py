@@ -56,6 +56,7 @@ from ..batch import gauss_newton
 from ..datasets import sample_from_model
 from ..errors import SteamError
 from ..evaluate import chi2_band, chi2_quantile, nees, pose_errors, verdict
+from ..linear.threads import limited
 from ..trajectory import Trajectory
 from ..variables import L, Values
 from .online import StreamingEstimator
@@ -193,6 +194,7 @@ def _solve(
     return run.solved(), sorted(run.landmark_estimates())
 
 
+@limited
 def run_seed(study: ConsistencyStudy, index: int) -> dict:
     """One Monte Carlo run: task ``index``, each estimator's NEES of every pose, velocity and landmark.
 

@@ -22,6 +22,7 @@ from numpy.typing import NDArray
 from ..batch import BatchResult, levenberg_marquardt
 from ..errors import ConvergenceWarning, SteamError
 from ..graph import FactorGraph
+from ..linear.threads import limited
 from ..trajectory import Trajectory
 from ..variables import L, Values, X
 from .converge import converge
@@ -200,6 +201,7 @@ class StreamingEstimator:
 
     # -- a whole run --
 
+    @limited
     def run(self, ground_truth: NDArray | None = None, *, covariances: bool = False) -> RunResult:
         """Process the stream to its end (or the time budget); ``ground_truth`` (n_poses, ≥3) with x,
         y in columns 1-2 (the CMU GT layout) gives the RMSE; ``covariances`` adds the final marginals."""
@@ -269,6 +271,7 @@ class StreamingEstimator:
         return {"n_marginalized": self.solver.inner.n_marginalized, "peak_window": self.solver.inner.peak_window}
 
 
+@limited
 def run_online(
     data, setup: PaperSetup, options: StreamOptions | None = None, *, covariances: bool = False, **changes
 ) -> RunResult:
