@@ -136,7 +136,7 @@ def _run(args: argparse.Namespace) -> int:
         raise SteamError(
             f"--score-against-optimum: {args.dataset!r} has ground truth, and is scored by RMSE against it"
         )
-    estimator = StreamingEstimator(Readings.from_dataset(data, setup), setup, options)
+    estimator = StreamingEstimator(Readings.from_dataset(data, setup), setup, options, name=args.dataset)
     result = estimator.run(data.ground_truth, covariances=args.save_estimates is not None)
     n = len(result.times)
     # the run's own files first: nothing computed from them after (scores, figures) can lose them
@@ -265,7 +265,10 @@ def _batch(args: argparse.Namespace) -> int:
     data = _load_with_note(args)
     problem = build_problem(data, setup)
     t0 = time.perf_counter()
-    result = sequential_batch(problem, ordering=args.ordering)
+    with explain.working(
+        f"{args.dataset} batch ({args.ordering.upper()})", explain.progress_wanted(args.progress, args.json)
+    ):
+        result = sequential_batch(problem, ordering=args.ordering)
     seconds = time.perf_counter() - t0
     poses = np.array([result.values[X(i)][:3] for i in range(data.n_poses)])
     positions = poses[:, :2]
@@ -329,7 +332,8 @@ def _fidelity(args: argparse.Namespace) -> int:
         data = load_range_dataset(name, data_dir=args.data_dir)
         authors = load_authors_run(name, data, args.data_dir)
         setup = PaperSetup.named(_PRESET_OF[name])
-        result = run_online(data, setup, covariances=authors.pose_covariance is not None)
+        options = StreamOptions(progress=explain.progress_wanted(args.progress, args.json))
+        result = run_online(data, setup, options, covariances=authors.pose_covariance is not None)
         fid, distances[name] = compare(result, authors, data.ground_truth)
         row = fid.to_dict() | {
             "total_s": round(result.total_s, 2),
@@ -352,7 +356,13 @@ def _fidelity(args: argparse.Namespace) -> int:
 def _reproduce(args: argparse.Namespace) -> int:
     _check_out_folder(args.out, "--out")
     try:
-        table = reproduce(args.out, quick=args.quick, data_dir=args.data_dir, jobs=args.jobs)
+        table = reproduce(
+            args.out,
+            quick=args.quick,
+            data_dir=args.data_dir,
+            jobs=args.jobs,
+            progress=explain.progress_wanted(args.progress, False),
+        )
     except OSError as err:  # a full disk while writing the plots or the table
         raise SteamError(f"--out: cannot write {err.filename or args.out!r} ({err.strerror or err})") from None
     print(table)

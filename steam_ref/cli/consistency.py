@@ -16,6 +16,7 @@ import functools
 import time
 
 from ..evaluate import INCONCLUSIVE
+from ..paper import progress
 from ..paper.consistency import KINDS, ConsistencyStudy, check_result, run_seed, summarize
 from ..paper.sweep import run_sweep
 from ..plot.figures import plot_anees
@@ -60,17 +61,20 @@ def run(args: argparse.Namespace) -> int:
     check_outputs_apart({"--plot": args.plot, "--log": args.log, "--resume": args.resume})
     study = ConsistencyStudy(n_steps=args.steps, n_landmarks=args.landmarks, seed=args.seed)
     start = time.perf_counter()
-    results = run_sweep(
-        functools.partial(run_seed, study),
-        range(args.seeds),
-        jobs=args.jobs,
-        backend=args.backend,
-        scheduler=args.scheduler,
-        log=args.resume or args.log,
-        study=study.describe(),
-        resume=args.resume is not None,
-        check=functools.partial(check_result, study),  # each line read back is validated, naming file and line
-    )
+    label = f"consistency on {args.dataset}: {len(study.estimators)} estimators, seeds"
+    with progress.bar(args.seeds, label, progress.wanted(args.progress, args.json), unit="seed") as shown:
+        results = run_sweep(
+            functools.partial(run_seed, study),
+            range(args.seeds),
+            jobs=args.jobs,
+            backend=args.backend,
+            scheduler=args.scheduler,
+            log=args.resume or args.log,
+            study=study.describe(),
+            resume=args.resume is not None,
+            check=functools.partial(check_result, study),  # each line read back is validated, naming file and line
+            on_result=lambda _item, _result: shown.update(1),
+        )
     summary = summarize({int(k): v for k, v in results.items()}, study.estimators)
     summary |= {"seconds": round(time.perf_counter() - start, 2), "jobs": args.jobs, "backend": args.backend}
     if args.plot:
