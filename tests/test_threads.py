@@ -161,29 +161,29 @@ def test_the_cli_names_a_bad_environment_value_in_one_line():
 
 
 def test_entering_costs_microseconds_and_a_nested_entry_next_to_nothing(start_at_many):
-    """An update takes milliseconds; the limit around it must not be measurable next to that."""
+    """An update takes a few tenths of a millisecond at the least; the limit around it must not be measurable
+    next to that. Each figure is the least over batches (another process's load only adds time)."""
     factors, values = prior_problem()
     sr.IncrementalSolver().update(factors, values)  # the libraries scanned once
     noop = threads.limited(lambda: None)
 
-    def per_call(n: int = 2000) -> float:
+    def per_call(n: int = 100) -> float:
         t0 = time.perf_counter()
         for _ in range(n):
             noop()
         return (time.perf_counter() - t0) / n
 
-    top = min(per_call() for _ in range(3))
+    top = min(per_call() for _ in range(20))
     with sr.blas_threads(1):
-        nested = min(per_call() for _ in range(3))
+        nested = min(per_call() for _ in range(20))
     solver = sr.IncrementalSolver()
     solver.update(factors, values)
-    t0 = time.perf_counter()
-    for i in range(1, 21):  # a chain of states, one update each
-        solver.update(
-            [sr.PriorFactor.create(sr.X(i), np.zeros(6), 0.1)],
-            {sr.X(i): np.zeros(6)},
-        )
-    update = (time.perf_counter() - t0) / 20
-    assert nested < 5e-6, nested
-    assert top < 2e-4, top  # ~20 µs unloaded; generous for a busy machine
+    seconds = []
+    for i in range(1, 21):  # the smallest update there is: one new state with its own prior
+        t0 = time.perf_counter()
+        solver.update([sr.PriorFactor.create(sr.X(i), np.zeros(6), 0.1)], {sr.X(i): np.zeros(6)})
+        seconds.append(time.perf_counter() - t0)
+    update = float(np.median(seconds))
+    assert nested < 2e-6, nested
+    assert top < 5e-5, top  # ~5-15 µs
     assert top < 0.05 * update, (top, update)

@@ -11,8 +11,8 @@ solvers runs its work under a thread limit, through :mod:`threadpoolctl` (the on
   ``IncrementalSolver.update``, ``FixedLagSmoother.update``, the covariance queries, the paper's runs) and
   :func:`limit`, the same as a ``with`` block (every CLI command). The limit is entered once, by the
   outermost call, and restored when that call returns; a nested entry (``update`` inside a stream, a
-  covariance query inside ``update``) costs a counter check (tens of nanoseconds), a top-level one about
-  20 µs (``tests/test_threads.py`` measures both), against an update's milliseconds.
+  covariance query inside ``update``) costs a counter check (under a microsecond), a top-level one about
+  10 µs (``tests/test_threads.py`` measures both), against an update's tenths of milliseconds or more.
 - The number of threads: ``$STEAM_REF_BLAS_THREADS`` when set (a whole number ≥ 1; ``0`` leaves the BLAS
   and OpenMP as they are, threads chosen by their own variables), else 1. Read at each outermost entry.
 - :func:`blas_threads`, the opt-out in code: ``with steam_ref.blas_threads(4): ...`` runs the solvers
@@ -44,7 +44,7 @@ F = TypeVar("F", bound=Callable[..., Any])
 
 _lock = threading.Lock()
 _depth = 0  # entries of limit()/blas_threads() still open, in any thread
-_active: Any = None  # the threadpoolctl limiter set by the outermost entry (None: it left the BLAS alone)
+_active: Any = None  # the _Limit set by the outermost entry (None: it left the BLAS alone)
 _controller: Any = None  # threadpoolctl.ThreadpoolController, kept while no module is imported
 _n_modules = -1  # len(sys.modules) when _controller scanned the loaded libraries
 
@@ -75,14 +75,30 @@ def _checked(n: object) -> int | None:
     return n
 
 
-def _limiter(n: int) -> Any:
-    """threadpoolctl's limiter to ``n`` threads for every BLAS and OpenMP library loaded now."""
-    global _controller, _n_modules
-    if _controller is None or len(sys.modules) != _n_modules:
-        from threadpoolctl import ThreadpoolController
+class _Limit:
+    """``n`` threads for every BLAS and OpenMP library loaded now, each library's own count kept to restore.
 
-        _controller, _n_modules = ThreadpoolController(), len(sys.modules)
-    return _controller.limit(limits=n)
+    Through threadpoolctl's per-library controllers (``get_num_threads`` / ``set_num_threads``), ~5 µs for
+    numpy's and scipy's OpenBLAS and OpenMP; ``ThreadpoolController.limit`` would also read every library's
+    version and architecture, ~20 µs."""
+
+    __slots__ = ("_saved",)
+
+    def __init__(self, n: int) -> None:
+        global _controller, _n_modules
+        if _controller is None or len(sys.modules) != _n_modules:
+            from threadpoolctl import ThreadpoolController
+
+            _controller, _n_modules = ThreadpoolController(), len(sys.modules)
+        self._saved = [(lib, lib.get_num_threads()) for lib in _controller.lib_controllers]
+        for lib, threads in self._saved:
+            if threads is not None and threads != n:  # None: a library that cannot say, left alone
+                lib.set_num_threads(n)
+
+    def restore_original_limits(self) -> None:
+        for lib, threads in self._saved:
+            if threads is not None and lib.get_num_threads() != threads:
+                lib.set_num_threads(threads)
 
 
 class _Entry:
@@ -100,9 +116,9 @@ class _Entry:
         global _depth, _active
         with _lock:
             if _depth == 0:
-                _active = None if self.threads is None else _limiter(self.threads)
+                _active = None if self.threads is None else _Limit(self.threads)
             elif self.force and self.threads is not None:
-                self._own = _limiter(self.threads)
+                self._own = _Limit(self.threads)
             _depth += 1
 
     def __exit__(self, kind: type[BaseException] | None, value: BaseException | None, tb: TracebackType | None) -> None:
