@@ -12,6 +12,9 @@ Usage::
     steam-ref consistency [--seeds N] [--jobs N] [--backend loky|dask] [--json] [--plot FILE.png] ...
     steam-ref conformance {export DIR, check RESULTS_DIR [--only SUITE...], selftest [--paper], build}
 
+Every command that can run longer than a few seconds shows its progress on stderr when that is a terminal
+(``--progress`` / ``--no-progress``: :mod:`steam_ref.paper.progress`), and every command runs the solvers at
+one BLAS thread unless ``$STEAM_REF_BLAS_THREADS`` says otherwise (:mod:`steam_ref.linear.threads`).
 With no options ``steam-ref run`` runs BTGP/1 on the generated synthetic task. A data set without
 ground truth (victoria-park) is not scored unless ``--score-against-optimum`` asks for the converged
 batch solution of the same problem (:func:`~steam_ref.paper.problem.score_against_batch`) instead of an RMSE. Bad arguments and missing or
