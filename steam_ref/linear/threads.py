@@ -8,7 +8,8 @@ longer with OpenBLAS's default threads than with ``OPENBLAS_NUM_THREADS=1``. So 
 solvers runs its work under a thread limit, through :mod:`threadpoolctl` (the one module that sets it):
 
 - :func:`limited`, a decorator on the entry points (``gauss_newton``, ``levenberg_marquardt``,
-  ``IncrementalSolver.update``, ``FixedLagSmoother.update``, the covariance queries, the paper's runs) and
+  ``IncrementalSolver.update``, ``FixedLagSmoother.update``, ``finish_at_optimum``, the covariance queries,
+  the paper's runs) and
   :func:`limit`, the same as a ``with`` block (every CLI command). The limit is entered once, by the
   outermost call, and restored when that call returns; a nested entry (``update`` inside a stream, a
   covariance query inside ``update``) costs a counter check (under a microsecond), a top-level one about
