@@ -268,9 +268,8 @@ def _batch(args: argparse.Namespace) -> int:
     data = _load_with_note(args)
     problem = build_problem(data, setup)
     t0 = time.perf_counter()
-    with explain.working(
-        f"{args.dataset} batch ({args.ordering.upper()})", explain.progress_wanted(args.progress, args.json)
-    ):
+    shown = explain.progress_wanted(args.progress, args.json)
+    with explain.working(f"{args.dataset} batch ({args.ordering.upper()})", shown):
         result = sequential_batch(problem, ordering=args.ordering)
     seconds = time.perf_counter() - t0
     poses = np.array([result.values[X(i)][:3] for i in range(data.n_poses)])
@@ -359,13 +358,8 @@ def _fidelity(args: argparse.Namespace) -> int:
 def _reproduce(args: argparse.Namespace) -> int:
     _check_out_folder(args.out, "--out")
     try:
-        table = reproduce(
-            args.out,
-            quick=args.quick,
-            data_dir=args.data_dir,
-            jobs=args.jobs,
-            progress=explain.progress_wanted(args.progress, False),
-        )
+        shown = explain.progress_wanted(args.progress, False)
+        table = reproduce(args.out, quick=args.quick, data_dir=args.data_dir, jobs=args.jobs, progress=shown)
     except OSError as err:  # a full disk while writing the plots or the table
         raise SteamError(f"--out: cannot write {err.filename or args.out!r} ({err.strerror or err})") from None
     print(table)
