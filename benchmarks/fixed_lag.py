@@ -1,8 +1,10 @@
 """Fixed-lag smoothing: memory and time per update that stay flat, and what the lag costs.  [issue 23]
 
-Every run is ``steam-ref run ... --json`` in a fresh, single-threaded Python process (the command itself,
-called in the child, which also keeps each update's wall time). One JSON line per run, then one line of
-targets:
+Every run is ``steam-ref run ... --json`` in a fresh Python process (the command itself, called in the
+child, which also keeps each update's wall time), with the environment as the user has it: no BLAS or
+OpenMP thread variable is set, so the figures are what a user gets (steam_ref runs its solvers at one BLAS
+thread by itself, ``$STEAM_REF_BLAS_THREADS`` to change it: :mod:`steam_ref.linear.threads`). One JSON line
+per run, then one line of targets:
 
 - ``synthetic``, ``--steps 2000`` and ``--steps 20000`` with ``--lag 30`` (and ``--steps 2000`` without a
   lag, for reference): peak RSS (MB), update time medians of the first and the last 1,000 updates, RMSE,
@@ -29,7 +31,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import statistics
 import subprocess
 import sys
@@ -83,14 +84,12 @@ sys.exit(code)
 
 def run(argv: list[str]) -> tuple[dict, np.ndarray]:
     """``steam-ref run <argv> --json`` in a fresh process: its JSON line and each update's seconds."""
-    env = os.environ | {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
     with tempfile.TemporaryDirectory() as tmp:
         times = Path(tmp) / "updates.npy"
         proc = subprocess.run(
             [sys.executable, "-c", _CHILD, json.dumps(["run", *argv, "--json"]), str(times)],
             capture_output=True,
             text=True,
-            env=env,
         )
         if proc.returncode != 0:
             raise RuntimeError(f"steam-ref run {' '.join(argv)} failed: {proc.stderr.strip()[-400:]}")

@@ -50,6 +50,7 @@ _HOMES = {
     "LinearSystem": "linear",
     "xl_ordering": "linear",
     "amd_ordering": "linear",
+    "blas_threads": "linear",
     "marginal_covariances": "covariance",
     "sparse_marginal_covariances": "covariance",
     "sparse_joint_covariance": "covariance",
@@ -115,7 +116,7 @@ if TYPE_CHECKING:  # what a type checker and an IDE see: the same names, importe
     from .finish import finish_at_optimum
     from .gp import predict_state
     from .graph import FactorGraph
-    from .linear import LinearSystem, amd_ordering, xl_ordering
+    from .linear import LinearSystem, amd_ordering, blas_threads, xl_ordering
     from .paper.online import run_online
     from .paper.options import StreamOptions
     from .paper.presets import PaperSetup
@@ -155,6 +156,7 @@ __all__ = [
     "LinearSystem",
     "xl_ordering",
     "amd_ordering",
+    "blas_threads",
     "marginal_covariances",
     "sparse_marginal_covariances",
     "sparse_joint_covariance",

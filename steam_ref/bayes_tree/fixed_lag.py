@@ -37,6 +37,7 @@ from ..arguments import number
 from ..covariance import _groups
 from ..errors import SteamError, UnknownVariableError
 from ..factors import Factor, check_factors
+from ..linear.threads import limited
 from ..variables import Key, check_key, key_list
 from .history import History
 from .isam import IncrementalSolver, check_new_values
@@ -98,6 +99,7 @@ class FixedLagSmoother(IncrementalSolver):
         self.history: History | None = History() if keep_history else None  # the forgotten conditionals, if kept
         self.last_marginalization: MarginalizationReport | None = None  # what the last update forgot
 
+    @limited
     def update(
         self,
         new_factors: Factor | Iterable[Factor] = (),

@@ -33,6 +33,7 @@ from ..errors import ShapeError, SteamError, UnderdeterminedError, UnknownVariab
 from ..factors import Factor, check_factors
 from ..linear.ordering import constrained_min_degree
 from ..linear.system import GaussianFactor, linearize
+from ..linear.threads import limited
 from ..variables import Key, Values, check_key
 from .backsolve import BatchedBacksubstitution, backsubstitute
 from .dot import tree_nnz
@@ -142,6 +143,7 @@ class IncrementalSolver:
 
     # --- the update -------------------------------------------------------------------------
 
+    @limited
     def update(
         self,
         new_factors: Factor | Iterable[Factor] = (),

@@ -199,12 +199,7 @@ def _add_run_arguments(run: argparse.ArgumentParser) -> None:
     run.add_argument(
         "--time-budget", type=_positive_float, default=None, help="stop after this many seconds (reported)"
     )
-    run.add_argument(
-        "--progress",
-        action=argparse.BooleanOptionalAction,
-        default=None,
-        help="a progress bar on stderr (default: on when stderr is a terminal and without --json)",
-    )
+    _add_progress(run)
     run.add_argument(
         "--lag",
         type=_positive_float,
@@ -281,6 +276,7 @@ def build_parser() -> argparse.ArgumentParser:
     bat.add_argument("--json", action="store_true", help="print one JSON line of figures")
     bat.add_argument("--plot", metavar="FILE.png", default=None, help="draw estimate, ground truth, landmarks")
     _add_trajectory_arguments(bat)
+    _add_progress(bat)
     fid = sub.add_parser("fidelity", help="BTGP/1 against the authors' saved runs, pose by pose, covariances included")
     fid.add_argument("--dataset", choices=("plaza", "paper-synthetic", "all"), default="all")
     _add_data_dir(fid, " (and its authors/ folder)")
@@ -288,6 +284,7 @@ def build_parser() -> argparse.ArgumentParser:
     fid.add_argument(
         "--plot", metavar="FILE.png", default=None, help="draw the per-pose distance to the authors' estimate"
     )
+    _add_progress(fid)
     rep = sub.add_parser("reproduce", help="the experiments of Fig. 3 and Fig. 4, plots and a results table")
     rep.add_argument("--quick", action="store_true", help="small prefixes and budgets: minutes, not hours")
     rep.add_argument("--out", default="results", help="folder for plots and the table (default: results)")
@@ -298,12 +295,23 @@ def build_parser() -> argparse.ArgumentParser:
         default=1,
         help="accuracy runs in parallel (timing runs stay serial, each in a fresh process)",
     )
+    _add_progress(rep)
     conformance_command.add_parser(sub)
     data_command.add_parser(sub)
     _add_consistency_arguments(
         sub.add_parser("consistency", help="ANEES of each estimator over Monte Carlo runs, with its band")
     )
     return parser
+
+
+def _add_progress(parser: argparse.ArgumentParser) -> None:
+    """``--progress`` / ``--no-progress`` (steam_ref.paper.progress.wanted reads it)."""
+    parser.add_argument(
+        "--progress",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="a progress bar on stderr (default: on when stderr is a terminal and without --json)",
+    )
 
 
 def _add_consistency_arguments(con: argparse.ArgumentParser) -> None:
@@ -321,3 +329,4 @@ def _add_consistency_arguments(con: argparse.ArgumentParser) -> None:
     logs.add_argument("--resume", metavar="FILE.jsonl", default=None, help="continue this file (or start it)")
     con.add_argument("--json", action="store_true", help="print one JSON line of figures")
     con.add_argument("--plot", metavar="FILE.png", default=None, help="ANEES pose by pose against its band")
+    _add_progress(con)

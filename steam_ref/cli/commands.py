@@ -12,6 +12,9 @@ Usage::
     steam-ref consistency [--seeds N] [--jobs N] [--backend loky|dask] [--json] [--plot FILE.png] ...
     steam-ref conformance {export DIR, check RESULTS_DIR [--only SUITE...], selftest [--paper], build}
 
+Every command that can run longer than a few seconds shows its progress on stderr when that is a terminal
+(``--progress`` / ``--no-progress``: :mod:`steam_ref.paper.progress`), and every command runs the solvers at
+one BLAS thread unless ``$STEAM_REF_BLAS_THREADS`` says otherwise (:mod:`steam_ref.linear.threads`).
 With no options ``steam-ref run`` runs BTGP/1 on the generated synthetic task. A data set without
 ground truth (victoria-park) is not scored unless ``--score-against-optimum`` asks for the converged
 batch solution of the same problem (:func:`~steam_ref.paper.problem.score_against_batch`) instead of an RMSE. Bad arguments and missing or
@@ -34,6 +37,7 @@ from ..conformance import command as conformance_command
 from ..datasets import LandmarkDataset, RangeDataset, generate_synthetic, load_dataset, load_range_dataset
 from ..errors import SteamError, UncleanedDataWarning
 from ..evaluate import trajectory_figures, write_kitti, write_tum
+from ..linear.threads import limit
 from ..paper.experiments import reproduce
 from ..paper.fidelity import AUTHORS_RUNS, compare, find_authors_file, load_authors_run
 from ..paper.online import StreamingEstimator, run_online
@@ -135,7 +139,7 @@ def _run(args: argparse.Namespace) -> int:
         raise SteamError(
             f"--score-against-optimum: {args.dataset!r} has ground truth, and is scored by RMSE against it"
         )
-    estimator = StreamingEstimator(Readings.from_dataset(data, setup), setup, options)
+    estimator = StreamingEstimator(Readings.from_dataset(data, setup), setup, options, name=args.dataset)
     result = estimator.run(data.ground_truth, covariances=args.save_estimates is not None)
     n = len(result.times)
     # the run's own files first: nothing computed from them after (scores, figures) can lose them
@@ -264,7 +268,9 @@ def _batch(args: argparse.Namespace) -> int:
     data = _load_with_note(args)
     problem = build_problem(data, setup)
     t0 = time.perf_counter()
-    result = sequential_batch(problem, ordering=args.ordering)
+    shown = explain.progress_wanted(args.progress, args.json)
+    with explain.working(f"{args.dataset} batch ({args.ordering.upper()})", shown):
+        result = sequential_batch(problem, ordering=args.ordering)
     seconds = time.perf_counter() - t0
     poses = np.array([result.values[X(i)][:3] for i in range(data.n_poses)])
     positions = poses[:, :2]
@@ -328,7 +334,8 @@ def _fidelity(args: argparse.Namespace) -> int:
         data = load_range_dataset(name, data_dir=args.data_dir)
         authors = load_authors_run(name, data, args.data_dir)
         setup = PaperSetup.named(_PRESET_OF[name])
-        result = run_online(data, setup, covariances=authors.pose_covariance is not None)
+        options = StreamOptions(progress=explain.progress_wanted(args.progress, args.json))
+        result = run_online(data, setup, options, covariances=authors.pose_covariance is not None)
         fid, distances[name] = compare(result, authors, data.ground_truth)
         row = fid.to_dict() | {
             "total_s": round(result.total_s, 2),
@@ -351,7 +358,8 @@ def _fidelity(args: argparse.Namespace) -> int:
 def _reproduce(args: argparse.Namespace) -> int:
     _check_out_folder(args.out, "--out")
     try:
-        table = reproduce(args.out, quick=args.quick, data_dir=args.data_dir, jobs=args.jobs)
+        shown = explain.progress_wanted(args.progress, False)
+        table = reproduce(args.out, quick=args.quick, data_dir=args.data_dir, jobs=args.jobs, progress=shown)
     except OSError as err:  # a full disk while writing the plots or the table
         raise SteamError(f"--out: cannot write {err.filename or args.out!r} ({err.strerror or err})") from None
     print(table)
@@ -372,7 +380,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             "data": data_command.run,
             "consistency": consistency_command.run,
         }
-        return commands[args.command](args)
+        with limit():  # the solvers' small dense algebra at one BLAS thread unless $STEAM_REF_BLAS_THREADS says
+            return commands[args.command](args)
     except BrokenPipeError:  # stdout's reader went away (`| head`): what it read is all it wanted
         quiet_stdout()
         return 141  # 128 + SIGPIPE, as a shell reports a command stopped by a closed pipe

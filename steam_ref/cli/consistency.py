@@ -15,6 +15,8 @@ import argparse
 import functools
 import time
 
+from ..evaluate import INCONCLUSIVE
+from ..paper import progress
 from ..paper.consistency import KINDS, ConsistencyStudy, check_result, run_seed, summarize
 from ..paper.sweep import run_sweep
 from ..plot.figures import plot_anees
@@ -36,10 +38,19 @@ def _text(summary: dict) -> str:
             k = row[kind]
             lost = f", {k['runs_far_outside']} run(s) far outside" if k["runs_far_outside"] else ""
             parts.append(f"{kind} {k['anees']:.3f} in [{k['band'][0]:.3f}, {k['band'][1]:.3f}]: {k['verdict']}{lost}")
-        lines.append(
-            f"  {name}: {'consistent' if row['consistent'] else 'not consistent'}\n    " + "\n    ".join(parts)
-        )
+        lines.append(f"  {name}: {_overall(row, summary['n_seeds'])}\n    " + "\n    ".join(parts))
     return "\n".join(lines)
+
+
+def _overall(row: dict, n_seeds: int) -> str:
+    """An estimator's verdict over every kind of state; inconclusive says how many runs a verdict needs."""
+    if row["consistent"] is None:
+        needed = max(row[k]["runs_needed"] for k in KINDS if row[k]["verdict"] == INCONCLUSIVE)
+        return (
+            f"inconclusive: inside the band, but {n_seeds} runs are too few to have seen a tail of lost runs "
+            f"(--seeds {needed} or more to call it consistent)"
+        )
+    return "consistent" if row["consistent"] else "not consistent"
 
 
 def run(args: argparse.Namespace) -> int:
@@ -50,17 +61,20 @@ def run(args: argparse.Namespace) -> int:
     check_outputs_apart({"--plot": args.plot, "--log": args.log, "--resume": args.resume})
     study = ConsistencyStudy(n_steps=args.steps, n_landmarks=args.landmarks, seed=args.seed)
     start = time.perf_counter()
-    results = run_sweep(
-        functools.partial(run_seed, study),
-        range(args.seeds),
-        jobs=args.jobs,
-        backend=args.backend,
-        scheduler=args.scheduler,
-        log=args.resume or args.log,
-        study=study.describe(),
-        resume=args.resume is not None,
-        check=functools.partial(check_result, study),  # each line read back is validated, naming file and line
-    )
+    label = f"consistency on {args.dataset}: {len(study.estimators)} estimators, seeds"
+    with progress.bar(args.seeds, label, progress.wanted(args.progress, args.json), unit="seed") as shown:
+        results = run_sweep(
+            functools.partial(run_seed, study),
+            range(args.seeds),
+            jobs=args.jobs,
+            backend=args.backend,
+            scheduler=args.scheduler,
+            log=args.resume or args.log,
+            study=study.describe(),
+            resume=args.resume is not None,
+            check=functools.partial(check_result, study),  # each line read back is validated, naming file and line
+            on_result=lambda _item, _result: shown.update(1),
+        )
     summary = summarize({int(k): v for k, v in results.items()}, study.estimators)
     summary |= {"seconds": round(time.perf_counter() - start, 2), "jobs": args.jobs, "backend": args.backend}
     if args.plot:

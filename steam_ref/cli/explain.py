@@ -6,22 +6,17 @@ measures, and a yardstick to read it by; and a progress line while a run would o
   same file where they saved one (recognised by its sha256, :data:`steam_ref.datasets.fetch.DATASETS`).
 - :func:`run_text`: the human-readable summary of ``steam-ref run``; :func:`evaluation_note` its APE/RPE
   line (``run`` and ``batch``), :func:`fidelity_text` the summary of ``steam-ref fidelity``.
-- :func:`working`: a progress line (tqdm, on stderr) with the elapsed time, for a step without a loop
-  to count (Victoria Park's scoring against the batch optimum).
+- ``progress_wanted`` and ``working``: the progress display's, from its home :mod:`steam_ref.paper.progress`.
 """
 
 from __future__ import annotations
 
-import contextlib
-import sys
-import threading
-from collections.abc import Iterator
 from pathlib import Path
-
-from tqdm import tqdm
 
 from ..datasets import LandmarkDataset, RangeDataset
 from ..datasets.fetch import DATASETS, file_digest
+from ..paper.progress import wanted as progress_wanted
+from ..paper.progress import working
 from ..paper.results import position_rmse
 
 __all__ = [
@@ -48,13 +43,6 @@ _UNCLEANED_PLAZA = (
     "paper's cleaned Plaza1_thrown_away_some_range.mat, on which the authors' BTGP/1 scores {rmse} m: "
     "`steam-ref data fetch plaza` gets it (the paper gives no figure for the uncleaned set)"
 )
-
-
-def progress_wanted(asked: bool | None, json_output: bool) -> bool:
-    """``--progress`` / ``--no-progress`` if given, else on when stderr is a terminal and not ``--json``."""
-    if asked is not None:
-        return asked
-    return not json_output and sys.stderr.isatty()
 
 
 def method_text(method: str, every: int) -> str:
@@ -177,24 +165,6 @@ def plot_title(s: dict) -> str:
     if "batch_distance_median_m" in s:
         return f"{run}: median {s['batch_distance_unrotated_median_m']} m from the batch optimum (map turned)"
     return f"{run}: position RMSE {s['rmse_m']} m"
-
-
-@contextlib.contextmanager
-def working(what: str, enabled: bool) -> Iterator[None]:
-    """A progress line on stderr, ``what`` and the elapsed time, refreshed twice a second while the block runs."""
-    if not enabled:
-        yield
-        return
-    done = threading.Event()
-    with tqdm(desc=what, total=None, bar_format="{desc}: {elapsed}", file=sys.stderr, leave=False) as bar:
-        thread = threading.Thread(target=lambda: [bar.refresh() for _ in iter(lambda: done.wait(0.5), True)])
-        thread.daemon = True
-        thread.start()
-        try:
-            yield
-        finally:
-            done.set()
-            thread.join()
 
 
 def evaluation_note(summary: dict) -> str:

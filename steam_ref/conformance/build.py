@@ -222,9 +222,14 @@ def _selftest_suite(kit: Path, suite: str, report: Report) -> None:
 
 
 def selftest(
-    kit: str | os.PathLike | None = None, *, paper: bool = False, data_dir: str | os.PathLike | None = None
+    kit: str | os.PathLike | None = None,
+    *,
+    paper: bool = False,
+    data_dir: str | os.PathLike | None = None,
+    progress: bool = False,
 ) -> Report:
-    """Regenerate every case from the kit's inputs with the installed code and check it against the kit."""
+    """Regenerate every case from the kit's inputs with the installed code and check it against the kit
+    (``progress``: the paper suite's runs show their bars)."""
     kit = Path(SHIPPED if kit is None else kit)
     read_index(kit)  # version and sha256 of every file
     report = Report()
@@ -232,7 +237,9 @@ def selftest(
         _selftest_suite(kit, suite, report)
     cases = read_suite(kit, "paper")["cases"]
     if paper:
-        results = {c["name"]: _roundtrip(run_paper_case(c["name"], c["inputs"], data_dir)) for c in cases}
+        results = {
+            c["name"]: _roundtrip(run_paper_case(c["name"], c["inputs"], data_dir, progress=progress)) for c in cases
+        }
         check_cases("paper", cases, results, report)
     else:
         report.notes.append(

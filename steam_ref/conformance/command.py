@@ -21,6 +21,7 @@ import tempfile
 from pathlib import Path
 
 from ..errors import SteamError
+from ..paper.progress import wanted
 from .build import build_kit, selftest
 from .checker import Report
 from .gate import CONVENTION_NAMES, check_directory
@@ -76,6 +77,12 @@ def add_parser(sub) -> argparse.ArgumentParser:
     st.add_argument(
         "--data-dir", type=_data_dir, default=None, help="folder with the paper's data files (else $STEAM_REF_DATA_DIR)"
     )
+    st.add_argument(
+        "--progress",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="the paper suite's progress bars on stderr (default: on when stderr is a terminal)",
+    )
     bld = commands.add_parser("build", help="regenerate the kit (default: the package's own copy)")
     bld.add_argument("--out", default=None, help="write the kit here instead of into the package")
     bld.add_argument(
@@ -129,7 +136,7 @@ def run(args: argparse.Namespace) -> int:
         )
         return _print(report)
     if command == "selftest":
-        return _print(selftest(paper=args.paper, data_dir=args.data_dir))
+        return _print(selftest(paper=args.paper, data_dir=args.data_dir, progress=wanted(args.progress)))
     index = build_kit(args.out, paper=args.paper, data_dir=args.data_dir)
     counts = ", ".join(f"{s} {v['cases']}" for s, v in index["suites"].items())
     print(f"wrote the conformance kit v{KIT_VERSION} to {args.out or SHIPPED}: {counts} cases")

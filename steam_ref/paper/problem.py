@@ -20,6 +20,7 @@ from ..batch import BatchResult, gauss_newton
 from ..datasets import LandmarkDataset, RangeDataset
 from ..errors import SteamError
 from ..graph import FactorGraph
+from ..linear.threads import limited
 from ..variables import L, Values, X
 from .converge import converge
 from .frontend import FrontEnd, Layout
@@ -75,6 +76,7 @@ def build_problem(
     return SteamProblem(graph, initial, np.array(front.states), readings, setup, layout)
 
 
+@limited
 def sequential_batch(
     problem: SteamProblem, *, chunk: int = 100, ordering: str = "amd", final_iterations: int = 50, **options
 ) -> BatchResult:
@@ -108,6 +110,7 @@ def sequential_batch(
     return result
 
 
+@limited
 def converged_batch(
     problem: SteamProblem,
     *,

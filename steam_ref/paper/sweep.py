@@ -5,8 +5,9 @@ parameters) through joblib: loky worker processes by default, or joblib's ``dask
 ``dask.distributed`` cluster (``scheduler`` its address; without one, a ``LocalCluster`` on 127.0.0.1 with
 ``jobs`` single-threaded workers). The code a run executes is the same either way, so are its results.
 
-- **Threads**: each call runs under ``threadpoolctl.threadpool_limits(1)`` — one BLAS thread per worker,
-  so ``jobs`` workers use ``jobs`` cores and never oversubscribe them.
+- **Threads**: each call runs under ``blas_threads(1)`` (:mod:`steam_ref.linear.threads`) — one BLAS thread
+  per worker whatever ``$STEAM_REF_BLAS_THREADS`` says, so ``jobs`` workers use ``jobs`` cores and never
+  oversubscribe them.
 - **Seeds**: a study spawns them, ``np.random.SeedSequence(seed).spawn(n)``; item i uses child i
   (``SeedSequence(seed, spawn_key=(i,))`` is the same child), so a run's draws depend on its index only,
   never on which worker ran it or in what order.
@@ -32,6 +33,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import DataError, SteamError
+from ..linear.threads import blas_threads
 
 __all__ = ["BACKENDS", "run_sweep", "read_results"]
 
@@ -40,9 +42,7 @@ BACKENDS = ("loky", "dask")
 
 def _limited(function: Callable[[Any], Any], item: Any) -> tuple[Any, Any]:
     """``function(item)`` with one BLAS/OpenMP thread; returns (item, result)."""
-    from threadpoolctl import threadpool_limits
-
-    with threadpool_limits(limits=1):
+    with blas_threads(1):
         return item, function(item)
 
 
