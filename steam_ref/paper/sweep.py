@@ -141,8 +141,9 @@ def run_sweep(
 ) -> dict[str, Any]:
     """``function(item)`` for every item, in parallel; returns {item's JSON text: result}.
 
-    ``function`` must be picklable (a module-level function, or a ``functools.partial`` of one) and return
-    JSON values. ``log``: the JSONL file results stream to (``study`` its first line); ``resume``: continue
+    ``function`` must be picklable (a module-level function, or a ``functools.partial`` of one); with a
+    ``log`` it must return JSON values (a result that is not is refused, naming its item), without one any
+    picklable result comes back as it is. ``log``: the JSONL file results stream to (``study`` its first line); ``resume``: continue
     it, running only the items it lacks, each result read back passed to ``check(item, result)`` (which
     raises SteamError to refuse it). ``on_result(item, result)`` is called as each result arrives.
     """
@@ -173,10 +174,9 @@ def run_sweep(
         with config:
             run = joblib.Parallel(n_jobs=jobs if backend == "loky" else -1, return_as="generator_unordered")
             for item, result in run(joblib.delayed(_limited)(function, item) for item in todo):
-                line = _line(item, result)  # a result that is not JSON is refused, logged or not
                 results[_key(item)] = result
                 if stream is not None:
-                    stream.write(line + "\n")
+                    stream.write(_line(item, result) + "\n")  # a result that is not JSON is refused
                     stream.flush()
                 if on_result is not None:
                     on_result(item, result)
