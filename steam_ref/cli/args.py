@@ -205,7 +205,8 @@ def _add_run_arguments(run: argparse.ArgumentParser) -> None:
         type=_positive_float,
         default=None,
         metavar="SECONDS",
-        help="BTGP: fixed-lag smoothing, marginalize states (and landmarks) not seen for this long (docs/derivations.md §10)",
+        help="BTGP: fixed-lag smoothing, marginalize states (and landmarks) not seen for this many seconds of the data "
+        "set's own time stamps, whatever clock the preset's GP prior runs on (docs/derivations.md §10)",
     )
     run.add_argument(
         "--lag-history",
