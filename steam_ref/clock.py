@@ -70,7 +70,7 @@ class Clock:
         if back.size:
             i = int(back[0])
             need = "not decrease" if basis == "seconds" else "increase strictly (a pose-index clock maps between them)"
-            raise SteamError(f"pose times must {need}, but times[{i}] = {t[i]!r} and times[{i + 1}] = {t[i + 1]!r}")
+            raise SteamError(f"pose times must {need}, but times[{i}] = {float(t[i])!r} and times[{i + 1}] = {float(t[i + 1])!r}")
         model = t.copy() if basis == "seconds" else np.arange(len(t), dtype=float)
         for a in (t, model):
             a.setflags(write=False)

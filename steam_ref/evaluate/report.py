@@ -41,19 +41,19 @@ def states_at(
         raise ShapeError(f"times must be a 1-d array, one time per query, got shape {t.shape}")
     if trajectory.states:
         first, last = (float(trajectory.times[trajectory.states[i]]) for i in (0, -1))
-        span = f"the trajectory's states span t = {first!r} to {last!r} s ({trajectory.clock.describe()})"
+        clock = f"the trajectory's times are in seconds; its prior's clock: {trajectory.clock.describe()}"
         if np.any(t < first):
             k = int(np.flatnonzero(t < first)[0])
             raise ClockError(
-                f"times[{k}] = {float(t[k])!r} is before the first estimated state: {span}; times on another clock "
-                "(a pose index, or another origin) cannot be compared with it"
+                f"times[{k}] = {float(t[k])!r} is before the first estimated state at t={first:g}: times on another "
+                f"clock (a pose index, another origin) cannot be compared with this trajectory ({clock})"
             )
         if not extrapolate and np.any(t > last):
             k = int(np.flatnonzero(t > last)[0])
             raise ClockError(
-                f"times[{k}] = {float(t[k])!r} is after the last estimated state: {span}; there the trajectory is "
-                "the prior's prediction, not an estimate (pass extrapolate=True to have it), and times on another "
-                "clock cannot be compared with it"
+                f"times[{k}] = {float(t[k])!r} is after the last estimated state at t={last:g}: there the trajectory is "
+                f"the prior's prediction, not an estimate (pass extrapolate=True to have it), and times on another "
+                f"clock cannot be compared with it ({clock})"
             )
     if not covariance:
         return np.array([trajectory.at(float(ti)) for ti in t]).reshape(len(t), trajectory.n)
