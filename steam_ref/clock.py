@@ -70,7 +70,9 @@ class Clock:
         if back.size:
             i = int(back[0])
             need = "not decrease" if basis == "seconds" else "increase strictly (a pose-index clock maps between them)"
-            raise SteamError(f"pose times must {need}, but times[{i}] = {float(t[i])!r} and times[{i + 1}] = {float(t[i + 1])!r}")
+            raise SteamError(
+                f"pose times must {need}, but times[{i}] = {float(t[i])!r} and times[{i + 1}] = {float(t[i + 1])!r}"
+            )
         model = t.copy() if basis == "seconds" else np.arange(len(t), dtype=float)
         for a in (t, model):
             a.setflags(write=False)
@@ -104,7 +106,9 @@ class Clock:
 
     def describe(self) -> str:
         """One line: the basis, what one model time unit is in seconds, where the seconds come from."""
-        origin = {"file": "the file's stamps", "generated": "generated stamps", "given": "the given stamps"}[self.origin]
+        origin = {"file": "the file's stamps", "generated": "generated stamps", "given": "the given stamps"}[
+            self.origin
+        ]
         if self.basis == "seconds":
             return f"the model's time is the data's seconds ({origin})"
         step = np.diff(self.seconds)

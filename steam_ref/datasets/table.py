@@ -190,7 +190,9 @@ class RangeDataset:
 def check_time_origin(origin: object) -> str:
     """``origin`` if it is one of TIME_ORIGINS ('file', 'generated', 'given'); else SteamError naming it."""
     if not isinstance(origin, str) or origin not in TIME_ORIGINS:
-        raise SteamError(f"time_origin must be one of {', '.join(TIME_ORIGINS)} (where the pose times come from), got {origin!r}")
+        raise SteamError(
+            f"time_origin must be one of {', '.join(TIME_ORIGINS)} (where the pose times come from), got {origin!r}"
+        )
     return origin
 
 

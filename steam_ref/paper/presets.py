@@ -127,7 +127,9 @@ class PaperSetup:
     isam2: ISAM2Params = field(
         default_factory=ISAM2Params
     )  # BTGP's iSAM2 (GTSAM's defaults); blocks: relinearize_blocks
-    clock: str = "seconds"  # the GP prior's time (steam_ref.clock): the data's 'seconds', or 'pose-index' (dt = 1 per pose)
+    clock: str = (
+        "seconds"  # the GP prior's time (steam_ref.clock): the data's 'seconds', or 'pose-index' (dt = 1 per pose)
+    )
 
     def __post_init__(self) -> None:
         """Check every field where it enters; SteamError naming the field and the value."""
