@@ -176,7 +176,8 @@ def _add_run_arguments(run: argparse.ArgumentParser) -> None:
         "--singer-time-constant",
         type=_scale(*SINGER_TIME_CONSTANTS, "the Singer prior's process noise must stay within float64's precision"),
         default=None,
-        help=f"Singer prior (--prior singer only): the acceleration's time constant 1/α in seconds, 1e-6 to 1e8 "
+        help=f"Singer prior (--prior singer only): the acceleration's time constant 1/α on the preset's GP clock "
+        f"(pose steps for synthetic and plaza, seconds for victoria-park), 1e-6 to 1e8 "
         f"(default: the preset's, {PaperSetup.singer_time_constant})",
     )
     _add_data_dir(run)
