@@ -9,7 +9,7 @@ by the prior, x̄(t) = Φ(t, t_N) x̄_N and Φ P_N Φᵀ + Q(t - t_N)
 prior to speak of (the GP starts there, [YIB Eq. 14]) and a query is an error.
 
 Time: a query and every time returned are on the data's clock (seconds); the GP works on the model's.
-Given a :class:`~steam_ref.clock.Clock` the trajectory maps a query through it; given plain pose times,
+Given a :class:`~steam_ref.gp.clock.Clock` the trajectory maps a query through it; given plain pose times,
 the two clocks are one.
 """
 
@@ -23,8 +23,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .arguments import finite, number, real_array
-from .clock import Clock
 from .errors import ShapeError, SteamError
+from .gp.clock import Clock
 from .gp.interpolate import (
     extrapolate_covariance_sde,
     extrapolate_state_sde,
@@ -87,7 +87,7 @@ class Trajectory:
     ``prior`` is the motion prior the states were estimated with: Qc (3, 3) of the paper's WNOA prior,
     or any :class:`~steam_ref.gp.LinearSDE` (WNOJ, Singer: states of 9 numbers). ``times`` (n_poses,)
     must be finite and non-decreasing, ``states`` strictly increasing pose indices into it at strictly
-    increasing times. ``times`` may be a :class:`~steam_ref.clock.Clock`: then ``times`` are its seconds
+    increasing times. ``times`` may be a :class:`~steam_ref.gp.clock.Clock`: then ``times`` are its seconds
     (what queries and answers use) and the prior runs on its model times.
     """
 

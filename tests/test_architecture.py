@@ -33,7 +33,6 @@ LAYERS: dict[str, int] = {
     "steam_ref.arguments": 0,
     "steam_ref.plot": 1,  # a leaf: draws plain arrays, imports only errors, so any layer may draw
     "steam_ref.manifold": 1,  # how an estimate moves (x ⊕ δ, x ⊖ x0): imports nothing of steam_ref
-    "steam_ref.clock": 1,  # the data's seconds and the GP prior's time, and the one map between them
     "steam_ref.variables": 1,
     "steam_ref.lie": 1,  # SE(2), its state kind, the local GP on it; imports gp (1) and manifold (1)
     "steam_ref.pose2": 1,

@@ -22,10 +22,10 @@ import pytest
 import scipy.io
 
 from steam_ref.cli import commands as cli
-from steam_ref.clock import Clock
 from steam_ref.datasets import RangeDataset, generate_synthetic, load_dataset
 from steam_ref.errors import ClockError, SteamError
 from steam_ref.evaluate import read_tum, states_at
+from steam_ref.gp.clock import Clock
 from steam_ref.paper.online import StreamingEstimator, run_online
 from steam_ref.paper.options import StreamOptions
 from steam_ref.paper.presets import PaperSetup

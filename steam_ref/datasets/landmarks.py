@@ -79,7 +79,7 @@ class LandmarkDataset:
     landmarks: NDArray = field(default_factory=lambda: np.zeros((0, 3)), repr=False)  # (k, 3) surveyed: id, x, y
     ground_truth: NDArray | None = field(default=None, repr=False)  # (n_poses, 4) or None
     source: str = ""  # a path, plus notes on how the file was read
-    time_origin: str = "given"  # where the pose times [s] come from: 'file', 'generated' or 'given' (clock.py)
+    time_origin: str = "given"  # where the pose times [s] come from: 'file', 'generated' or 'given' (gp/clock.py)
     dead_reckoning: NDArray = field(init=False, repr=False)  # (n_poses, 4): the odometry composed from ``start_pose``
 
     def __post_init__(self) -> None:

@@ -21,7 +21,7 @@ Conventions, checked on the reference files (see ``data/README.md`` for the figu
 
 Times are in seconds; ``time_origin`` says where they come from: a file's stamps ('file'), a generator's
 ('generated'), or the caller's arrays ('given'). The clock the GP prior runs on is the set-up's choice
-(:mod:`steam_ref.clock`), not the data set's.
+(:mod:`steam_ref.gp.clock`), not the data set's.
 
 Errors: a table of the wrong shape raises :class:`ShapeError`; bad content (NaN or inf, fewer than
 two poses, pose times not increasing, unknown landmark ids, a negative range) raises
@@ -35,8 +35,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..clock import TIME_ORIGINS
 from ..errors import DataError, ShapeError, SteamError
+from ..gp.clock import TIME_ORIGINS
 
 __all__ = ["RangeDataset", "check_time_origin"]
 
@@ -74,7 +74,7 @@ class RangeDataset:
     landmarks: NDArray = field(repr=False)  # (n_landmarks, 3): id, x, y
     ranges: NDArray = field(repr=False)  # (n_ranges, 4): time, sender id, landmark id, range [m]
     source: str = ""  # a path, or "generated(seed=...)", plus notes on any rework
-    time_origin: str = "given"  # where the pose times [s] come from: 'file', 'generated' or 'given' (clock.py)
+    time_origin: str = "given"  # where the pose times [s] come from: 'file', 'generated' or 'given' (gp/clock.py)
 
     def __post_init__(self) -> None:
         check_time_origin(self.time_origin)

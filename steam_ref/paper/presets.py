@@ -13,7 +13,7 @@ when the stream updates, what starts it, whether a batch solve seeds it, the upd
 pose; every switch explicit) and its iSAM2 settings (``isam2``). What a single run chooses on top (the
 method, the state layout, a prefix, a time budget) is :class:`~steam_ref.paper.options.StreamOptions`.
 
-A set-up also chooses the clock the GP prior runs on (``clock``, :mod:`steam_ref.clock`): the data's
+A set-up also chooses the clock the GP prior runs on (``clock``, :mod:`steam_ref.gp.clock`): the data's
 seconds, or the scripts' 'pose-index' (dt = 1 per pose), which the CMU presets ('synthetic', 'plaza') use
 to reproduce the paper. The prior's parameters (Qc, the Singer time constant) are on that clock; every
 time a user gives or reads (a lag, a query, a file's times) is on the data's, in seconds.
@@ -28,8 +28,8 @@ from numpy.typing import NDArray
 
 from ..arguments import integer, number
 from ..bayes_tree.params import ISAM2Params
-from ..clock import CLOCK_BASES
 from ..errors import ShapeError, SteamError
+from ..gp.clock import CLOCK_BASES
 from ..gp.prior import check_qc
 from ..gp.sde import LinearSDE
 from ..robust import Tukey
@@ -128,7 +128,7 @@ class PaperSetup:
         default_factory=ISAM2Params
     )  # BTGP's iSAM2 (GTSAM's defaults); blocks: relinearize_blocks
     clock: str = (
-        "seconds"  # the GP prior's time (steam_ref.clock): the data's 'seconds', or 'pose-index' (dt = 1 per pose)
+        "seconds"  # the GP prior's time (steam_ref.gp.clock): the data's 'seconds', or 'pose-index' (dt = 1 per pose)
     )
 
     def __post_init__(self) -> None:

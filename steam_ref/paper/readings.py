@@ -11,7 +11,7 @@ odometry [dx, dy, dθ] / dt is the projected velocity of the pose it ends at, an
 bearings, bearing-ranges, each with its own sigma) are taken at their poses.
 
 Time: the readings carry the data set's pose times in seconds and the model's time of each pose, related
-by one :class:`~steam_ref.clock.Clock` built from the set-up's choice (``PaperSetup.clock``): the CMU
+by one :class:`~steam_ref.gp.clock.Clock` built from the set-up's choice (``PaperSetup.clock``): the CMU
 presets' 'pose-index' (dt = 1 per pose, as the scripts) or the data's 'seconds'.
 """
 
@@ -22,9 +22,9 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from numpy.typing import NDArray
 
-from ..clock import Clock
 from ..datasets import LandmarkDataset, RangeDataset
 from ..errors import DataError, SteamError
+from ..gp.clock import Clock
 from .presets import RANGE_ATTACHMENTS, PaperSetup
 
 __all__ = [

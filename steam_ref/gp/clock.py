@@ -30,8 +30,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .arguments import real_array
-from .errors import ShapeError, SteamError
+from ..arguments import real_array
+from ..errors import ShapeError, SteamError
 
 __all__ = ["Clock", "CLOCK_BASES", "TIME_ORIGINS"]
 
