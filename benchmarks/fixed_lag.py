@@ -9,11 +9,12 @@ per run, then one line of targets:
 - ``synthetic``, ``--steps 2000`` and ``--steps 20000`` with ``--lag 30`` (and ``--steps 2000`` without a
   lag, for reference): peak RSS (MB), update time medians of the first and the last 1,000 updates, RMSE,
   states marginalized, peak window;
-- ``plaza`` BTGP/1 without a lag, with ``--lag 60``, and with ``--lag 60 --lag-history`` (the forgotten states'
+- ``plaza`` BTGP/1 without a lag, with ``--lag 60`` (60 s of the file's stamps, about 300 poses 0.2 s apart,
+  whatever clock the preset's GP prior runs on), and with ``--lag 60 --lag-history`` (the forgotten states'
   conditionals kept and the past smoothed from the final window at the end: ``rmse_m`` is then the smoothed
   trajectory's, ``rmse_lagged_m`` the estimates' as they left the window; its ``total_s`` includes the backward
   pass): RMSE and total time; and ``plaza, full smoother read
-  at the lag``: the full smoother's estimate of each state taken when it is 60 s old (what any smoother that
+  at the lag``: the full smoother's estimate of each state taken when it is 60 s old (by the data's stamps) (what any smoother that
   reports a state as it leaves a 60 s window can at best give), which separates the cost of reporting lagged
   estimates from the cost of marginalization (first-estimate Jacobians);
 - ``targets``: peak memory 20,000 / 2,000 steps ≤ 1.2, last / first 1,000 updates' median ≤ 1.2 (both within

@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING, Any
 
 from ._version import __version__ as __version__
 from .errors import (
+    ClockError,
     ConvergenceError,
     ConvergenceWarning,
     DataError,
@@ -130,6 +131,7 @@ __all__ = [
     "UnknownVariableError",
     "UnderdeterminedError",
     "NumericalError",
+    "ClockError",
     "ConvergenceError",
     "IllConditionedWarning",
     "ConvergenceWarning",

@@ -10,7 +10,9 @@ one meaning:
 - :class:`UnderdeterminedError`: the factors leave a variable unconstrained;
 - :class:`NumericalError`: a computation on valid input overflowed to NaN/inf or lost the precision
   its answer needs (never "the iterations stopped short": that is convergence);
-- :class:`ConvergenceError`: an iteration that must return a converged answer did not reach one.
+- :class:`ConvergenceError`: an iteration that must return a converged answer did not reach one;
+- :class:`ClockError`: times compared on two clocks, or a time outside the span it must fall in
+  (truth stamped in seconds queried against a trajectory's pose index, say).
 
 Every warning is a :class:`SteamWarning`, flagging a result that is returned anyway, with the reason in it:
 :class:`IllConditionedWarning` (float64 cannot resolve the answer), :class:`ConvergenceWarning`
@@ -49,6 +51,11 @@ class NumericalError(SteamError):
 class ConvergenceError(SteamError):
     """An iteration that returns only its answer (``batch_solve``) stopped before that answer passed its
     convergence check; the message says which rule stopped it and what the check found."""
+
+
+class ClockError(SteamError):
+    """A time is not on the clock it is compared with, or falls outside the span it must (a query before
+    the first estimated state, or after the last one where only the prior's prediction is known)."""
 
 
 class SteamWarning(UserWarning):

@@ -119,7 +119,7 @@ def test_help_with_alpha_on_an_ascii_stdout(monkeypatch):
         entry(["run", "--help"])
     sys.stdout.flush()
     assert exit_.value.code == 0
-    assert "1/\\u03b1 in seconds" in " ".join(raw.getvalue().decode("ascii").split())
+    assert "1/\\u03b1 on the preset's GP clock" in " ".join(raw.getvalue().decode("ascii").split())
 
 
 def test_consistency_chi_squared_on_an_ascii_stdout(monkeypatch, capsys):

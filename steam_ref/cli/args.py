@@ -176,7 +176,8 @@ def _add_run_arguments(run: argparse.ArgumentParser) -> None:
         "--singer-time-constant",
         type=_scale(*SINGER_TIME_CONSTANTS, "the Singer prior's process noise must stay within float64's precision"),
         default=None,
-        help=f"Singer prior (--prior singer only): the acceleration's time constant 1/α in seconds, 1e-6 to 1e8 "
+        help=f"Singer prior (--prior singer only): the acceleration's time constant 1/α on the preset's GP clock "
+        f"(pose steps for synthetic and plaza, seconds for victoria-park), 1e-6 to 1e8 "
         f"(default: the preset's, {PaperSetup.singer_time_constant})",
     )
     _add_data_dir(run)
@@ -205,7 +206,8 @@ def _add_run_arguments(run: argparse.ArgumentParser) -> None:
         type=_positive_float,
         default=None,
         metavar="SECONDS",
-        help="BTGP: fixed-lag smoothing, marginalize states (and landmarks) not seen for this long (docs/derivations.md §10)",
+        help="BTGP: fixed-lag smoothing, marginalize states (and landmarks) not seen for this many seconds of the data "
+        "set's own time stamps, whatever clock the preset's GP prior runs on (docs/derivations.md §10)",
     )
     run.add_argument(
         "--lag-history",

@@ -148,13 +148,14 @@ def _run(args: argparse.Namespace) -> int:
     if args.tree_dot and isinstance(estimator.solver, BayesTreeSolver):  # GTSAM's ISAM2.dot() text (bayes_tree/dot.py)
         dot = estimator.solver.inner.tree.dot() + "\n"
         _write_output(args.tree_dot, "--tree-dot", lambda name: Path(name).write_text(dot, encoding="utf-8"))
-    _save_trajectory(args, np.asarray(data.times)[:n], result.trajectory[:, :3])
+    _save_trajectory(args, result.times, result.trajectory[:, :3])  # --save-estimates' clock: the data's seconds
     summary = result.summary(args.dataset) | {
         "preset": setup.name,
         "score_against_optimum": args.score_against_optimum,
         "departures": args.departure,
         "prior": setup.prior,
         "qc_scale": args.qc_scale,
+        "clock": estimator.readings.clock.describe(),
     }
     summary |= {"what": explain.method_text(args.method, result.schedule.every)}
     summary |= explain.data_figures(data, len(result.times))
@@ -229,8 +230,9 @@ def _run_dataset(args: argparse.Namespace):
 
 
 def save_estimates(path: str, result) -> None:
-    """Write a run to an .npz file: ``times``, ``x``, ``y``, ``theta`` and ``xdot``, ``ydot``,
-    ``thetadot`` at every covered time step (and ``xddot``, ``yddot``, ``thetaddot`` with a WNOJ or Singer
+    """Write a run to an .npz file: ``times`` (the data set's seconds, as ``--save-trajectory``), ``x``, ``y``,
+    ``theta`` and ``xdot``, ``ydot``, ``thetadot`` (rates per unit of the model's clock: per pose step on a
+    'pose-index' clock, per second on 'seconds') at every covered time step (and ``xddot``, ``yddot``, ``thetaddot`` with a WNOJ or Singer
     prior), ``state_poses`` (pose indices with a state),
     ``landmark_ids`` and ``landmarks`` (m, 2), and, when the run has them, the final marginal
     covariances ``pose_covariance`` (n, 3, 3), ``velocity_covariance`` (n, 3, 3) and

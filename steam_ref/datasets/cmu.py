@@ -79,7 +79,7 @@ def _assemble(name: str, where: str, tables: dict[str, NDArray]) -> RangeDataset
         note = _order_note(td)
         notes += [note] if note else []
         source = "; ".join([where] + notes)
-        return RangeDataset(name, gt, dr, drp, tl, td, source)
+        return RangeDataset(name, gt, dr, drp, tl, td, source, time_origin="file")
     except SteamError as err:
         raise DataError(f"{where}: {err}") from None
 

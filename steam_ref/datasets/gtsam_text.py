@@ -162,6 +162,7 @@ def load_gtsam_2d(path: str | os.PathLike, name: str | None = None) -> LandmarkD
             bearing_ranges=np.array(sightings).reshape(-1, 6),
             landmark_ids=marks,
             source=note,
+            time_origin="generated",
         )
     except SteamError as err:  # a sighting the data set's checks name by its row: say its line too
         text = re.sub(r"bearing_ranges\[(\d+), ", lambda m: f"line {lines_of[int(m[1])]}, {m[0]}", str(err))

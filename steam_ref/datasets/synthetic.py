@@ -222,4 +222,4 @@ def generate_synthetic(
     )
     source = f"generated(seed={seed}, n_steps={n_steps}, n_landmarks={n_landmarks})"
     dead_reckoning = integrate_odometry(gt[0], odometry)
-    return RangeDataset("synthetic", gt, odometry, dead_reckoning, landmarks, ranges, source)
+    return RangeDataset("synthetic", gt, odometry, dead_reckoning, landmarks, ranges, source, time_origin="generated")

@@ -168,7 +168,7 @@ class FrontEnd:
 
     def _predict(self, i: int) -> None:
         """Initial guess of pose i: odometry row i - 1 composed onto the latest pose."""
-        dt = self.readings.times[i] - self.readings.times[i - 1]  # 1 in the CMU and Victoria Park sets
+        dt = self.readings.model_times[i] - self.readings.model_times[i - 1]  # 1 on the pose-index clock
         forward, lateral, turn = self.readings.velocity[i] * dt
         new = compose(self._pose, forward, turn, lateral)
         self._velocity = (new - self._pose) / dt  # backward difference over the step just made
@@ -233,7 +233,7 @@ class FrontEnd:
 
     def _gp_prior(self, a: int, b: int) -> GPPriorFactor:
         """The GP prior factor between states a and b.  [YIB Eq. 22]"""
-        t = self.readings.times
+        t = self.readings.model_times
         prior = self.setup.motion_prior()
         if isinstance(prior, np.ndarray):
             return GPPriorFactor.wnoa(X(a), X(b), t[b] - t[a], prior)
@@ -241,7 +241,7 @@ class FrontEnd:
 
     def _interpolated(self, inner: Factor, a: int, b: int, pose: int) -> InterpolatedFactor:
         """``inner`` (a reading at the pose without a state) on states a and b.  [YIB Eq. 29]"""
-        t = self.readings.times
+        t = self.readings.model_times
         return InterpolatedFactor.create(inner, X(a), X(b), t[a], t[b], t[pose], self.setup.motion_prior())
 
     def _velocity_factor(self, i: int, interpolated: bool) -> VelocityFactor:

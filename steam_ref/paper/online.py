@@ -104,7 +104,7 @@ class StreamingEstimator:
 
     def _new_solver(self) -> OnlineSolver:
         o = self.options
-        if o.lag is not None:
+        if o.lag is not None:  # the lag and the states' stamps in the data's seconds, whatever the prior's clock
             return FixedLagTreeSolver(self.setup.isam2_params(), o.lag, self.readings.times, keep_history=o.lag_history)
         return make_solver(
             o.method,
@@ -195,15 +195,17 @@ class StreamingEstimator:
 
     def solved(self) -> Trajectory:
         """The trajectory the solver holds: its states, queried at any time (Eq. 18)."""
-        return Trajectory(self.solver, self.states[: self.n_solved], self.readings.times, self.setup.motion_prior())
+        return Trajectory(self.solver, self.states[: self.n_solved], self.readings.clock, self.setup.motion_prior())
 
     def estimate_at(self, t: float, *, covariance: bool = False) -> NDArray | tuple[NDArray, NDArray]:
-        """The state x(t) (n,) at any time from the first solved state on, with its covariance (n, n) if asked:
+        """The state x(t) (n,) at any time t in the data's seconds from the first solved state on (the GP prior's
+        clock is the set-up's, ``readings.clock`` maps between them), with its covariance (n, n) if asked:
         [YIB Eq. 18] between states, the prior's prediction after the last one (``Trajectory.at``)."""
         return self.solved().at(t, covariance=covariance)
 
     def trajectory(self) -> tuple[NDArray, NDArray]:
-        """Times (n_poses,) and states (n_poses, n) at every pose of the solved span (Eq. 18 between states)."""
+        """Times (n_poses,) in the data's seconds and states (n_poses, n) at every pose of the solved span (Eq. 18
+        between states)."""
         return self.solved().at_every_pose()
 
     # -- a whole run --

@@ -53,8 +53,13 @@ class SteamProblem:
 
     @property
     def times(self) -> NDArray:
-        """(n_poses,) time of every pose."""
+        """(n_poses,) time of every pose in seconds, on the data's clock."""
         return self.readings.times
+
+    @property
+    def model_times(self) -> NDArray:
+        """(n_poses,) time of every pose on the model's clock: what the GP prior sees."""
+        return self.readings.model_times
 
 
 def build_problem(

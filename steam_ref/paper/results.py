@@ -45,7 +45,7 @@ class RunResult:
 
     options: StreamOptions  # what the run chose
     schedule: Schedule  # when its solver updated (the set-up's)
-    times: NDArray  # (n,) time of every pose covered by the estimate
+    times: NDArray  # (n,) time of every pose covered by the estimate, in the data set's seconds
     trajectory: NDArray  # (n, 6) [x, y, θ, ẋ, ẏ, θ̇] at every covered pose (Eq. 18 between states)
     state_poses: NDArray  # (M,) pose indices that have an estimated state
     landmarks: dict[int, NDArray]  # landmark id → estimate (2,)
