@@ -36,14 +36,8 @@ def backsubstitute(state: SolverState, new_cliques: Collection[int], alpha: floa
     its relinearization candidacy [K12 Alg. 5]. Returns the updated variables, depth first, and the number of
     cliques solved.
     """
-    tree, delta, beta, stale, candidates, log = (
-        state.tree,
-        state.delta,
-        state.beta,
-        state.stale,
-        state.candidates,
-        state.log,
-    )
+    tree, delta, beta, stale, candidates = state.tree, state.delta, state.beta, state.stale, state.candidates
+    olds = state.log.old_values(delta)  # each δ it replaces, for the transaction's undo
     changed: set[Key] = set()
     updated: list[Key] = []
     stack = [c for c in new_cliques if tree.parent[c] is None]
@@ -58,7 +52,8 @@ def backsubstitute(state: SolverState, new_cliques: Collection[int], alpha: floa
         for k, xk in zip(frontals, (x,) if len(frontals) == 1 else clique.split_frontals(x), strict=True):
             if alpha == 0 or abs(xk - delta[k]).max() >= alpha:  # step 3: changed by at least α
                 changed.add(k)
-            log.set(delta, k, xk)
+            olds.append((k, delta[k]))
+            delta[k] = xk
             stale[k] = None  # never undone: an extra mark only forms the same estimate again
             if abs(xk).max() >= beta[k]:  # a candidate for the next relinearization [K12 Alg. 5]
                 candidates[k] = None  # the transaction keeps the candidates whole: no record needed

@@ -16,13 +16,10 @@ smoother decides what to forget from the timestamps alone (:func:`marginalize` r
 timestamps and history would not know); give a variable an old timestamp instead.
 
 Queries of a marginalized variable raise :class:`UnknownVariableError` naming the update that
-marginalized it; its estimate at that moment is in :attr:`FixedLagSmoother.last_marginalization`
-(the caller keeps it if it wants it: the smoother does not, so that memory stays flat).
-
-``keep_history=True`` keeps instead each marginalized variable's conditional (:mod:`.history`, about
-2 KB a state), and :meth:`FixedLagSmoother.smoothed_history` then gives every forgotten variable its
-estimate given all the data so far, by one backward pass from the window (derivations §10.5): bounded
-work per update online, the whole smoothed trajectory at the end.
+marginalized it; its estimate at that moment is in :attr:`FixedLagSmoother.last_marginalization`.
+``keep_history=True`` keeps each marginalized variable's conditional (:mod:`.history`), and
+:meth:`FixedLagSmoother.smoothed_history` gives every forgotten variable its estimate given all the data so
+far, by one backward pass from the window (derivations §10.5).
 """
 
 from __future__ import annotations
@@ -37,10 +34,9 @@ from ..errors import SteamError, UnknownVariableError
 from ..factors import Factor, check_factors
 from ..variables import Key
 from .history import History
-from .isam import IncrementalSolver, check_new_values
+from .isam import IncrementalSolver, UpdateReport, check_new_values
 from .marginalization import MarginalizationReport, marginalize_keys
 from .params import ISAM2Params
-from .report import UpdateReport
 
 __all__ = ["FixedLagSmoother"]
 

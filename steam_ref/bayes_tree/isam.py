@@ -11,13 +11,16 @@ last, eliminate, attach back the orphans; (5) partial back-substitution, descend
 the wildfire threshold α [K12 Alg. 7, YIB step 6]; (6) the estimate θ̄ ⊕ δ, formed lazily when asked for.
 
 Every step costs time in proportion to the removed part and the cliques back-substitution visits: nothing walks the
-whole tree. Every store lives in one :class:`~.state.SolverState`, whose undo log records each change before it is
-made, so a failed or interrupted update leaves the solver as it was; timing and undo stay out of the steps.
+whole tree. Each update returns an :class:`UpdateReport` (the affected top of the tree [K12 Fig. 3-4], the phases'
+times, the fill). Every store lives in one :class:`~.state.SolverState`, whose undo log records each change before
+it is made: a failed or interrupted update leaves the solver as it was.
 """
 
 from __future__ import annotations
 
+import time
 from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
@@ -39,11 +42,51 @@ from ..variables import Key, Values, check_key, key_list
 from .backsolve import backsubstitute
 from .dot import tree_nnz
 from .params import ISAM2Params
-from .report import PhaseTimer, UpdateReport
 from .state import SolverState
 from .tree import BayesTree, Clique, eliminate
 
-__all__ = ["IncrementalSolver", "check_new_values"]
+__all__ = ["IncrementalSolver", "UpdateReport", "check_new_values"]
+
+
+class PhaseTimer:
+    """Wall time of each phase of one update: ``with timer("remove"): ...``."""
+
+    def __init__(self) -> None:
+        self.start = time.perf_counter()  # when the update began
+        self.seconds: dict[str, float] = {}  # phase → seconds
+        self._phase, self._t = "", 0.0
+
+    def __call__(self, phase: str) -> PhaseTimer:
+        self._phase = phase
+        return self
+
+    def __enter__(self) -> None:
+        self._t = time.perf_counter()
+
+    def __exit__(self, *exc: object) -> None:
+        self.seconds[self._phase] = time.perf_counter() - self._t
+
+    def total(self) -> float:
+        """Seconds since the update began."""
+        return time.perf_counter() - self.start
+
+
+@dataclass(frozen=True, kw_only=True)
+class UpdateReport:
+    """What one update did, so a notebook can show the affected top of the tree (built by keyword only)."""
+
+    step: int  # number of this update, from 1
+    removed_cliques: tuple[int, ...]  # ids of the cliques taken off the top (ids of the tree before)
+    new_cliques: tuple[int, ...]  # ids of the cliques made by re-elimination
+    orphans: tuple[int, ...]  # ids of the subtrees kept and reattached
+    relinearized: tuple[Key, ...]  # θ_rl: variables whose linearization point moved
+    reeliminated: tuple[Key, ...]  # variables eliminated anew, in elimination order (frontals of the new cliques)
+    updated: tuple[Key, ...]  # variables whose increment δ (hence estimate) was recomputed
+    linearized_factors: int  # factors linearized in this update (the new ones included)
+    backsubstituted_cliques: int  # cliques whose conditional was solved
+    time_s: float  # wall time of the whole update
+    timings: dict[str, float] = field(default_factory=dict)  # seconds per phase (check, add, ..., backsubstitute)
+    tree_nnz: int = 0  # nonzeros of R after the update, counted as GTSAM's ISAM2::treeNnz (bayes_tree/dot.py)
 
 
 def check_new_values(new_values: object) -> None:

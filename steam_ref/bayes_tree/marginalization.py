@@ -28,13 +28,9 @@ one. :func:`marginalize` does it in the tree, in the update's style:
    part is eliminated as an update would, from its remaining factors, the marginal factors and the
    orphans' cached f(S), with the old root's variables kept last; the orphans are hung back.
 
-The marginal factor is linear, frozen at the linearization point θ̄_S of the moment (first-estimate
-Jacobians): its Jacobian never changes, and when S is relinearized at θ̄' its right-hand side becomes
-b_m - A_m (θ̄' ⊖ θ̄_S) (Eq. 10.4), GTSAM's ``LinearContainerFactor``.
-
-Every change goes through the solver's :class:`~.state.SolverState` and its undo log, in one transaction
-(the caller's, when a fixed-lag smoother's update runs it): a failure or a Ctrl-C anywhere leaves the solver
-as it was.
+The marginal factor (:class:`~steam_ref.factors.MarginalFactor`) is frozen at θ̄_S of the moment: its
+right-hand side at θ̄' is b_m - A_m (θ̄' ⊖ θ̄_S) (Eq. 10.4). Every change goes through the solver's
+:class:`~.state.SolverState`, in one transaction: a failure or a Ctrl-C leaves the solver as it was.
 """
 
 from __future__ import annotations
