@@ -8,13 +8,10 @@
 3. If a frontal variable changed by at least the wildfire threshold α (α = 0: always), descend into the
    children whose separator holds it; a re-made clique is entered in any case. Otherwise stop.
 
-Changes are judged per variable: a root clique holding the newest state and the landmarks must not mark the
-landmarks changed because the newest state moved. Each new δ is also checked against the variable's
-relinearization threshold β: the candidates of the next fluid relinearization [K12 Alg. 5] are collected here,
-the only place δ changes ([YIB Alg. 1 step 7]).
-
-(A variant that solved a tree level at a time in stacked NumPy calls was removed: on the paper's narrow trees
-it measured slower than this loop; docs/experiments.md keeps the measurement.)
+Changes are judged per variable (the newest state moving must not mark the landmarks of its clique changed).
+Each new δ is checked against the variable's relinearization threshold β here, the only place δ changes: the
+candidates of the next fluid relinearization [K12 Alg. 5; YIB Alg. 1 step 7]. (A variant solving a tree level
+at a time in stacked NumPy calls was removed, slower on the paper's trees: docs/experiments.md.)
 """
 
 from __future__ import annotations

@@ -120,11 +120,9 @@ class FixedLagSmoother(IncrementalSolver):
             self.last_marginalization = done
 
     def elimination_order(self, variables: list[Key], factor_keys: list, last: list[Key]) -> list[Key]:
-        """Once the window is full: the timed variables older than newest - OLD_PART * lag (by default all but
-        the new ones) first, oldest first; then minimum degree with ``last`` last [K12 Sec. 5]. The states next to
-        leave the window then sit in leaf cliques, cut off with no re-elimination (marginalize step 2); minimum
-        degree alone puts the oldest state, which the marginal factor joins to many landmarks, above newer ones.
-        GTSAM's fixed-lag smoother constrains its ordering likewise (the keys to marginalize first)."""
+        """Once the window is full: the timed variables older than newest - OLD_PART * lag first, oldest first, then
+        minimum degree with ``last`` last [K12 Sec. 5], so the states next to leave sit in leaf cliques, cut off with
+        no re-elimination (as GTSAM's fixed-lag smoother orders the keys to marginalize first)."""
         if not self.n_marginalized:  # the window is not full yet: iSAM2's own order, as without a lag
             return super().elimination_order(variables, factor_keys, last)
         cutoff, times = self.newest - self.lag * OLD_PART, self._times

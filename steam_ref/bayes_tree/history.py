@@ -100,10 +100,6 @@ class History:
     def __len__(self) -> int:
         return len(self.conditionals)
 
-    def extend(self, conditionals: tuple[ForgottenConditional, ...]) -> None:
-        """Record the conditionals of one marginalization, in the order it eliminated them."""
-        self.conditionals.extend(conditionals)
-
     def smooth(self, window: Callable[[Key], NDArray]) -> dict[Key, NDArray]:
         """Every forgotten variable's estimate given all the data, through the conditionals frozen when it was
         forgotten: the backward pass of the module docstring.

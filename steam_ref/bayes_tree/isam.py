@@ -217,7 +217,7 @@ class IncrementalSolver:
     ) -> UpdateReport:
         """One step of iSAM2, numbered as [K12 Alg. 6], with the steps of [YIB Alg. 1] (module docstring)."""
         state = self.state
-        state.count(steps=1)
+        state.steps += 1
         # 1-2. F ← F ∪ F′, Θ ← Θ ∪ Θ′ (θ̄ = initial value, δ = 0); θ_nf: the variables of F′.   [YIB step 1]
         with timer("add"):
             new_ids = state.append_factors(F_new)
@@ -250,7 +250,7 @@ class IncrementalSolver:
         # 5. Partial back-substitution from the root, stopping below α.  [K12 Alg. 7; YIB step 6]
         with timer("backsubstitute"):
             updated, visited = backsubstitute(state, set(new_cids), self.params.wildfire_threshold)
-        state.count(tree_nnz=tree_nnz(cliques) - tree_nnz(removed.values()))
+        state.tree_nnz += tree_nnz(cliques) - tree_nnz(removed.values())
         return UpdateReport(
             step=state.steps,
             removed_cliques=tuple(removed),
@@ -273,8 +273,7 @@ class IncrementalSolver:
     def _checked_update(
         self, new_factors: list[Factor], new_values: Mapping[Key, NDArray]
     ) -> tuple[dict[Key, NDArray], Mapping[Key, Manifold]]:
-        """Validate an update before anything changes; returns the new values as float vectors and the kinds
-        of those that are not vectors (a :class:`Values` ``new_values`` says them)."""
+        """Validate an update before anything changes: the new values as float vectors, and their kinds."""
         values: dict[Key, NDArray] = {}
         kinds = new_values.kinds() if isinstance(new_values, Values) else {}
         for k, v in new_values.items():
@@ -310,10 +309,8 @@ class IncrementalSolver:
     def _fluid_relinearization(self) -> list[Key]:
         """θ̄ ← θ̄ ⊕ δ, δ ← 0 for θ_rl, the variables whose max abs(δ) ≥ β; returns θ_rl.  [K12 Alg. 5]
 
-        With ``relinearize_blocks``, only the blocks of a variable whose own max abs(δ) ≥ β move (a vector's
-        blocks: a variable of another kind moves whole). The candidates are kept up to date by
-        back-substitution, the only place δ changes ([YIB Alg. 1 step 7]: collect them into θ_rl).
-        """
+        With ``relinearize_blocks``, only a vector's blocks whose own max abs(δ) ≥ β move (another kind moves
+        whole). Back-substitution keeps the candidates ([YIB Alg. 1 step 7]: collect them into θ_rl)."""
         state = self.state
         theta_rl = list(state.candidates)
         moves = {k: self.params.blocks_to_move(k.kind, state.delta[k], state.beta[k]) for k in theta_rl}  # (d,) bool
@@ -328,10 +325,8 @@ class IncrementalSolver:
 
     def _remove_top(self, theta_nf: list[Key], theta_rl: list[Key]) -> tuple[dict[int, Clique], list[int]]:
         """Remove the cliques of θ_aff = θ_nf ∪ θ_rl and their ascendants: ``(removed, orphans)``.  [K12 Alg. 4]
-
-        A variable of θ_nf affects the clique where it is frontal (a new variable is in none yet);
-        a relinearized one every clique holding it, whose conditionals were computed at its old θ̄.
-        """
+        A variable of θ_nf affects the clique where it is frontal (a new one is in none yet); a relinearized one
+        every clique holding it, whose conditionals were computed at its old θ̄."""
         start = [self.tree.frontal_of[k] for k in theta_nf if k in self.tree.frontal_of]
         for k in theta_rl:
             start.extend(self.tree.cliques_involving(k))

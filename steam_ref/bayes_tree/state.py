@@ -132,8 +132,3 @@ class SolverState:
         """Forget factor ``fid`` (its slot stays, None: ids are positions)."""
         self.log.set(self.factors, fid, None)
         self.log.set(self.linear, fid, None)
-
-    def count(self, steps: int = 0, tree_nnz: int = 0) -> None:
-        """Add to the update count and the nonzeros of R (restored by the transaction's undo)."""
-        self.steps += steps
-        self.tree_nnz += tree_nnz

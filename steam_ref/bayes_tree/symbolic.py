@@ -21,12 +21,7 @@ from ..errors import SteamError, UnknownVariableError
 from .dot import tree_dot
 from .undo import UndoLog
 
-__all__ = [
-    "SymbolicClique",
-    "CliqueTree",
-    "symbolic_elimination",
-    "build_cliques",
-]
+__all__ = ["SymbolicClique", "CliqueTree", "symbolic_elimination", "build_cliques"]
 
 V = Hashable
 

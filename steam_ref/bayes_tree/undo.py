@@ -76,9 +76,8 @@ class UndoLog:
         del store[key]
 
     def old_values(self, store: dict) -> list[tuple]:
-        """A list the caller appends ``(key, old value)`` to before each ``store[key] = new`` of a key the store
-        holds: one entry for a hot loop (back-substitution), a list append a write. Outside a transaction, a
-        list nobody reads."""
+        """A list to append ``(key, old value)`` to before each ``store[key] = new`` of a held key: one entry for a
+        hot loop (back-substitution), a list append a write."""
         olds: list[tuple] = []
         if self.depth:
             self.entries.append((_put_all, store, olds))
