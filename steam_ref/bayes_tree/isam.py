@@ -135,10 +135,10 @@ class IncrementalSolver:
             raise UnknownVariableError(f"variable {key!r} is not in the solver") from None
 
     @property
-    def factors(self) -> tuple[Factor | None, ...]:
+    def factors(self) -> tuple[Factor, ...]:
         """Every factor so far, in the order added (a tuple: the solver's caches are indexed by position); the slot
         of a factor :func:`~.marginalization.marginalize` dropped holds None."""
-        return tuple(self.state.factors)
+        return tuple(self.state.factors)  # type: ignore[arg-type]  # a dropped slot is None (docstring)
 
     @property
     def linearization_point(self) -> Values:

@@ -11,6 +11,7 @@ The Monte Carlo study itself (sampling tasks from the model, running the estimat
 """
 
 from .align import ALIGNMENTS, Alignment, align_planar, alignment_defect
+from .consistency import chi2_band, chi2_quantile, nees, pose_errors, verdict
 from .files import read_kitti, read_tum, write_kitti, write_tum
 from .metrics import PoseError, Statistics, ape, planar_poses, rpe, rpe_pairs
 from .report import states_at, trajectory_figures
