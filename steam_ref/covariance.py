@@ -1,6 +1,8 @@
 """Covariance recovery: blocks of 𝓘⁻¹, the covariance of the Gauss-Newton step.  [YIB Eq. 11, K11 Sec. 3]
 
-cov δθ* = 𝓘⁻¹ = (AᵀA)⁻¹ [YIB Eq. 11]. Two sources:
+cov δθ* = 𝓘⁻¹ = (AᵀA)⁻¹ [YIB Eq. 11]: a covariance of the increment, so it lives in each variable's tangent
+space at the estimate (θ = θ̂ ⊕ δ, δ ~ N(0, Σ); :mod:`steam_ref.manifold`), which for a vector is the space
+itself. Two sources:
 
 - the sparse system: :func:`marginal_covariances` and :func:`sparse_joint_covariance` factor 𝓘
   by sparse Cholesky and solve with unit columns;
@@ -43,9 +45,9 @@ from scipy.linalg import lapack
 
 from .errors import SteamError, UnknownVariableError
 from .factors import Factor, check_factors
+from .linear.cholesky import SparseCholesky, check_system
 from .linear.conditional import Conditional
 from .linear.ordering import Ordering, make_ordering
-from .linear.solve import SparseCholesky, check_system
 from .linear.system import LinearSystem
 from .linear.threads import limited
 from .variables import Key, Values, as_values, check_key, key_list
@@ -55,6 +57,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "SparseCovariances",
+    "key_groups",
     "marginal_covariances",
     "sparse_joint_covariance",
     "sparse_marginal_covariances",
@@ -167,7 +170,7 @@ def sparse_joint_covariances(
 ) -> list[NDArray]:
     """Joint covariance of each group of ``keys`` (stacked in the order given), linearized at ``values``:
     one factorization for all groups."""
-    groups = _groups(groups)
+    groups = key_groups(groups)
     order, chol = _factor_at(factors, values, backend)
     return _blocks_of_inverse(chol, order, groups)
 
@@ -202,10 +205,10 @@ class SparseCovariances:
 
     def joint_covariances(self, groups: Iterable[Iterable[Key]]) -> list[NDArray]:
         """Joint covariance of each group of keys (stacked in the order given), from one factorization."""
-        return sparse_joint_covariances(self._kept(), self.values, _groups(groups))
+        return sparse_joint_covariances(self._kept(), self.values, key_groups(groups))
 
 
-def _groups(groups: object) -> list[list[Key]]:
+def key_groups(groups: object) -> list[list[Key]]:
     """Each group of keys as a list; a group that is a single key (not a list of keys) is an error."""
     if isinstance(groups, (str, bytes, Key)) or not isinstance(groups, Iterable):
         raise SteamError(f"groups must be a list of lists of keys, got groups={groups!r}")
@@ -354,7 +357,7 @@ def tree_joint_covariances(tree: BayesTree, groups: Iterable[Iterable[Key]]) -> 
     clique's joint in one walk down the tree (:func:`_walk_down`); any other group goes through
     :func:`tree_joint_covariance`.
     """
-    groups = _groups(groups)
+    groups = key_groups(groups)
     home: dict[int, list[int]] = {}  # clique id → the groups it holds whole
     out: list[NDArray | None] = [None] * len(groups)
     for g, keys in enumerate(groups):

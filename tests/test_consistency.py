@@ -87,7 +87,7 @@ def test_the_right_prior_is_inside_the_band_and_a_qc_100_times_too_large_is_flag
 
 
 def test_runs_needed_is_the_smallest_n_whose_study_would_see_a_tail_that_leaves_the_band():
-    """The rule of evaluate.nees, recomputed with scipy.stats.chi2: at N = runs_needed a tail of lost runs
+    """The rule of evaluate.consistency, recomputed with scipy.stats.chi2: at N = runs_needed a tail of lost runs
     (NEES beyond χ²⁻¹(0.999; d)) frequent enough to lift the expected ANEES above the band is missed with
     probability ≤ 5 %, at N - 1 with more; and every N up to 400 beyond it qualifies too."""
 

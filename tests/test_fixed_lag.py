@@ -10,8 +10,8 @@ tests/test_fixed_lag_gtsam.py.
 
 from __future__ import annotations
 
+import itertools
 import re
-import sys
 from dataclasses import dataclass, replace
 from typing import ClassVar
 
@@ -20,8 +20,15 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from steam_ref.bayes_tree import FixedLagSmoother, IncrementalSolver, MarginalFactor, marginalize
-from steam_ref.bayes_tree.marginalize import eliminate_variables
+from steam_ref.bayes_tree import (
+    BayesTree,
+    FixedLagSmoother,
+    IncrementalSolver,
+    MarginalFactor,
+    marginalization,
+    marginalize,
+)
+from steam_ref.bayes_tree.marginalization import eliminate_variables
 from steam_ref.errors import SteamError, UnknownVariableError
 from steam_ref.factors import Factor, GPPriorFactor, PriorFactor
 from steam_ref.gp import process_noise, transition
@@ -164,7 +171,7 @@ def check_window(solver: IncrementalSolver, everything: list[Factor], stream: Li
     """The solver's window equals the dense posterior's marginal over it, mean and joint covariance."""
     name = (lambda k: k) if stream is None else (lambda k: oracle_key(stream, k))
     all_keys = list(dict.fromkeys(k for f in everything for k in f.keys))
-    held = sorted(solver._dims, key=str)
+    held = sorted(solver.state.dims, key=str)
     mean, where = dense_posterior(everything, all_keys)
     cov = where["cov"]
     idx = np.concatenate([np.arange(where[name(k)][0], where[name(k)][0] + where[name(k)][1]) for k in held])
@@ -208,11 +215,11 @@ def test_marginalizing_any_variables_leaves_the_dense_marginal(seed, n, data):
     leaves_seen = set()
     for _ in range(n):
         factors, values, _ = stream.step()
-        if any(k not in solver._dims and k not in values for f in factors for k in f.keys):
+        if any(k not in solver.state.dims and k not in values for f in factors for k in f.keys):
             continue  # a reading of a variable already marginalized: the stream's next step
         everything += factors
         solver.update(factors, values)
-        held = sorted(solver._dims, key=str)
+        held = sorted(solver.state.dims, key=str)
         if len(held) > 2 and data.draw(st.booleans()):
             drop = data.draw(st.lists(st.sampled_from(held), min_size=1, max_size=len(held) - 1, unique=True))
             report = marginalize(solver, drop)
@@ -374,7 +381,7 @@ def test_a_middle_state_is_re_eliminated_first_and_the_rest_stays_exact():
         solver.update(factors, values)
     report = marginalize(solver, [X(4)])
     assert not report.leaves and report.new_cliques
-    assert X(4) not in solver._dims and all(X(4) not in c.separator for c in solver.tree.cliques.values())
+    assert X(4) not in solver.state.dims and all(X(4) not in c.separator for c in solver.tree.cliques.values())
     check_window(solver, everything)
     np.testing.assert_array_equal(report.estimates[X(4)].shape, (6,))
 
@@ -384,10 +391,10 @@ def test_a_failed_marginalization_changes_nothing():
     solver = IncrementalSolver(**EXACT)
     for factors, values, _ in [stream.initial()] + [stream.step() for _ in range(4)]:
         solver.update(factors, values)
-    tree, n, held = dict(solver.tree.cliques), len(solver.factors), dict(solver._dims)
+    tree, n, held = dict(solver.tree.cliques), len(solver.factors), dict(solver.state.dims)
     with pytest.raises(UnknownVariableError, match="x99"):
         marginalize(solver, [X(0), X(99)])
-    assert solver.tree.cliques == tree and len(solver.factors) == n and solver._dims == held
+    assert solver.tree.cliques == tree and len(solver.factors) == n and solver.state.dims == held
 
 
 @pytest.mark.parametrize("error", [SteamError, KeyboardInterrupt])
@@ -403,16 +410,57 @@ def test_a_failure_during_re_elimination_puts_the_tree_back(monkeypatch, error):
         dict(solver.tree.cliques),
         dict(solver.tree.parent),
         len(solver.factors),
-        dict(solver._dims),
+        dict(solver.state.dims),
     )
 
     def broken(*args, **kwargs):
         raise error("interrupted")
 
-    monkeypatch.setattr(sys.modules["steam_ref.bayes_tree.marginalize"], "eliminate", broken)
+    monkeypatch.setattr(marginalization, "eliminate", broken)
     with pytest.raises(error, match="interrupted"):
         marginalize(solver, [X(4)])
     assert solver.tree.cliques == tree and solver.tree.parent == parents
-    assert len(solver.factors) == n and solver._dims == held and solver.tree.problems() == []
+    assert len(solver.factors) == n and solver.state.dims == held and solver.tree.problems() == []
     monkeypatch.undo()
     check_window(solver, everything)
+
+
+@pytest.mark.parametrize(
+    "ids", [[-3, -2, -1, 0, 1, 2, 3, 4], [2**53 - 4, 2**53 - 3, 2**53 - 2, 2**53 - 1, 2**53, 7, -(2**53), -1]], ids=str
+)
+def test_keys_of_any_id_the_api_accepts_work_in_the_fixed_lag_smoother(ids):
+    """Negative ids and ids near 2^53: marginalized, queried and named as such, the held ones never reported
+    marginalized, and nothing allocated in proportion to an id (an id-indexed array held 4 bytes per id)."""
+    import tracemalloc
+
+    rng = np.random.default_rng(3)
+    keys = [X(i) for i in ids]
+    smoother = FixedLagSmoother(2.5, relinearize_skip=1)
+    tracemalloc.start()
+    smoother.update([PriorFactor.create(keys[0], rng.normal(size=6), 0.1)], {keys[0]: rng.normal(size=6)},
+                    timestamps={keys[0]: 0.0})  # fmt: skip
+    for t, (a, b) in enumerate(itertools.pairwise(keys), start=1):
+        landmark = L(ids[t])  # a landmark with the same (odd) id as the state: another variable
+        factors = [GPPriorFactor.wnoa(a, b, 1.0, QC), Offset((b, landmark), np.eye(3) / 0.1, z=rng.normal(size=3))]
+        smoother.update(factors, {b: rng.normal(size=6), landmark: rng.normal(size=3)}, timestamps={b: float(t)})
+        assert all(not smoother.was_marginalized(k) for k in smoother.state.dims)
+    _, peak = tracemalloc.get_traced_memory()
+    tracemalloc.stop()
+    assert peak < 50e6
+    gone = [k for k in keys if smoother.was_marginalized(k)]
+    assert gone == keys[: len(gone)] and len(gone) >= 4
+    with pytest.raises(UnknownVariableError, match=f"{gone[-1]!r}, which was marginalized at update"):
+        smoother.estimate_of(gone[-1])
+    assert smoother.estimate_of(keys[-1]).shape == (6,)
+
+
+def test_the_dot_text_gives_distinct_keys_distinct_nodes():
+    """X(-1) and L(-1): two cliques, two nodes (GTSAM's integer key has no room for a negative id)."""
+    factors = [
+        GaussianFactor((L(-1), X(0)), (np.eye(3), np.ones((3, 3))), np.ones(3)),
+        GaussianFactor((X(-1), X(0)), (np.eye(3), np.ones((3, 3))), np.ones(3)),
+        GaussianFactor((X(0),), (np.eye(3),), np.zeros(3)),
+    ]
+    tree = BayesTree.from_factors(factors, [L(-1), X(-1), X(0)])  # the root (x-1, x0), its child (l-1)
+    nodes = {line.split("[")[0] for line in tree.dot().splitlines() if "[label=" in line}
+    assert len(tree.cliques) == 2 and len(nodes) == 2

@@ -11,6 +11,8 @@
   in the right tangent): :class:`SE2PriorFactor` (the WNOA prior, "local-variable" or "simplified"),
   :func:`se2_prior_factors`, :class:`SE2StatePrior`, :class:`SE2Measurement` (range, bearing,
   bearing-range), :class:`SE2VelocityFactor` (the body twist), :class:`SE2InterpolatedFactor`.
+- :mod:`.marginal`: :class:`MarginalFactor`, the linear factor a marginalization leaves (Eq. 10.4 of the
+  derivations).
 
 The paper's trajectory state is x = [x, y, θ, ẋ, ẏ, θ̇] (d = 3, so 6 numbers); the WNOJ and Singer
 priors append [ẍ, ÿ, θ̈]. The GP factors take any LTI prior (a Qc for WNOA, or a
@@ -20,6 +22,7 @@ state (``state_dim``). Landmarks are ℓ = [x, y].
 
 from .base import LANDMARK_DIM, STATE_DIM, Factor, check_factors, sqrt_information
 from .gp import GPPriorFactor, InterpolatedFactor, gp_prior_factors
+from .marginal import MarginalFactor
 from .measurements import (
     BearingFactor,
     BearingRangeFactor,
@@ -42,6 +45,7 @@ __all__ = [
     "BearingFactor",
     "BearingRangeFactor",
     "InterpolatedFactor",
+    "MarginalFactor",
     "StateMeasurement",
     "gp_prior_factors",
     "sqrt_information",

@@ -24,7 +24,7 @@ checked against the same band. A run whose mean NEES is beyond χ²⁻¹(0.999; 
 **Too few runs.** An ANEES inside the band is called "consistent" only when the study has enough runs to
 have seen a tail of lost runs large enough to push the expected ANEES above the band
 (:func:`~steam_ref.evaluate.runs_needed`: 60 runs for poses and velocities, 71 for landmarks at 95 %; the
-derivation is in :mod:`steam_ref.evaluate.nees` and docs/derivations.md); with fewer the verdict is
+derivation is in :mod:`steam_ref.evaluate.consistency` and docs/derivations.md); with fewer the verdict is
 "inconclusive (too few runs)" and the estimator's ``consistent`` is None. At 20 runs the interpolated BTGP's
 pose ANEES (3.240 in [2.024, 4.165]) is inside the band, while 200 runs show it at 17.7: a tail that 13 % of
 the runs fall in is missed by 20 runs with probability 0.87²⁰ ≈ 6 %, and one in 9 % of runs (the smallest
@@ -294,7 +294,7 @@ def summarize(results: dict[int, dict], estimators: tuple[str, ...], level: floa
             # A run whose mean NEES is beyond the 99.9 % point of one state's χ²(d): an estimate lost (a wrong
             # minimum), not a covariance a little off. Counted, never dropped from the ANEES.
             far = sum(bool(r.mean() > chi2_quantile(LOST_QUANTILE, d)) for r in runs if r.size)
-            needed = runs_needed(d, level)  # fewer runs could have missed a tail of lost runs (evaluate.nees)
+            needed = runs_needed(d, level)  # fewer runs could have missed a tail of lost runs (evaluate.consistency)
             row[kind] = {
                 "anees": anees,
                 "band": list(band),

@@ -1,0 +1,218 @@
+"""Marginalizing variables out of the Bayes tree, exactly.  [K11 Sec. 3, K12 Sec. 4; derivations §10]
+
+To forget a set of variables D (the states older than a lag) is to replace the posterior p(D, Θ) by
+its marginal p(Θ) = ∫ p(D, Θ) dD. In the linearized problem ‖A δ - b‖² that is one more use of
+[YIB Eq. 24]: eliminating D from the factors adjacent to it,
+
+    [A_D A_S | b] = Q [[R_D, S_D, d_D], [0, A_m, b_m]],
+
+leaves the conditional P(D | S), which a smoother keeps only to smooth its past afterwards
+(:mod:`.history`), and the rows ‖A_m δ_S - b_m‖²
+on D's separator S: the Schur complement of D in the information matrix (derivations §10, Eq. 10.1-10.3).
+Every other factor is untouched, so the marginal over Θ is the old factors not touching D plus this
+one. :func:`marginalize` does it in the tree, in the update's style:
+
+1. *The cliques of D.* Every clique holding a variable of D (frontal or in a separator) is found by
+   walking down from the clique where it is frontal [K12 Alg. 5].
+2. *Leaves: nothing to re-eliminate.* When each of those cliques is frontal only in D, the tree minus
+   them is already the Bayes tree of p(Θ): the cliques above are conditionals of Θ only, computed with
+   the cut cliques' cached factor f(S) [YIB Eq. 24], the marginal (Eq. 10.3). They are cut off; a child
+   holding no variable of D hangs under the nearest clique left, with its own f(S); the Schur complement
+   of D's own factors (Eq. 10.1-10.2) becomes a :class:`MarginalFactor` of the clique that eliminates its
+   first variable, for that clique's next re-elimination. (When the cut cliques are whole subtrees it
+   equals their f(S).)
+3. *Otherwise: re-eliminate the affected part with D first.* (GTSAM's ``marginalizeLeaves`` needs D in
+   leaves; an ordering with D first puts it there.) The cliques of D and their ascendants are removed,
+   as an update removes its top [K12 Alg. 4]. D is eliminated first from the factors adjacent to it
+   (Eq. 10.1-10.2, one variable at a time), its conditionals are dropped, and the rest of the removed
+   part is eliminated as an update would, from its remaining factors, the marginal factors and the
+   orphans' cached f(S), with the old root's variables kept last; the orphans are hung back.
+
+The marginal factor (:class:`~steam_ref.factors.MarginalFactor`) is frozen at θ̄_S of the moment: its
+right-hand side at θ̄' is b_m - A_m (θ̄' ⊖ θ̄_S) (Eq. 10.4). Every change goes through the solver's
+:class:`~.state.SolverState`, in one transaction: a failure or a Ctrl-C leaves the solver as it was.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, replace
+
+from numpy.typing import NDArray
+
+from ..errors import SteamError, UnknownVariableError
+from ..factors.marginal import MarginalFactor
+from ..linear.ordering import constrained_min_degree
+from ..linear.system import GaussianFactor
+from ..variables import Key, key_list
+from .backsolve import backsubstitute
+from .history import ForgottenConditional
+from .isam import IncrementalSolver
+from .state import SolverState
+from .tree import Clique, eliminate, eliminate_clique
+
+__all__ = ["MarginalFactor", "MarginalizationReport", "eliminate_variables", "marginalize", "marginalize_keys"]
+
+
+@dataclass(frozen=True)
+class MarginalizationReport:
+    """What one :func:`marginalize` did."""
+
+    keys: tuple[Key, ...]  # the variables marginalized, in elimination order
+    leaves: bool  # True: they were whole subtrees, cut off with no re-elimination
+    removed_cliques: tuple[int, ...]  # ids of the cliques taken out (tree before)
+    new_cliques: tuple[int, ...]  # ids of the cliques made by re-elimination (none for leaves)
+    dropped_factors: tuple[int, ...]  # ids of the factors that touched the keys, now gone
+    marginal_factors: tuple[int, ...]  # ids of the MarginalFactors added on the separators
+    estimates: dict[Key, NDArray]  # each key's estimate θ̄ + δ at the moment it was marginalized
+    conditionals: tuple[ForgottenConditional, ...] = ()  # P(v | S) of each key, if asked for (``keep_conditionals``)
+
+
+def eliminate_variables(
+    drop: Sequence[Key],
+    factors: Sequence[GaussianFactor],
+    dims: Mapping[Key, int],
+    conditionals: list[Clique] | None = None,
+) -> list[GaussianFactor]:
+    """Eliminate ``drop`` from linear ``factors``, in that order: the factors left on the other variables.
+
+    Each elimination is [YIB Eq. 24] for one variable: the factors adjacent to it are stacked and one QR
+    splits them into the conditional (dropped, or appended to ``conditionals`` if a list is given) and the
+    Schur complement on its separator (kept) [derivations Eq. 10.1-10.3]. Factors not adjacent to ``drop``
+    come back unchanged, first.
+    """
+    pool = list(factors)
+    for v in drop:
+        adjacent = [f for f in pool if v in f.keys]
+        if not adjacent:
+            raise UnknownVariableError(f"no factor names {v!r}: nothing to marginalize it from")
+        pool = [f for f in pool if v not in f.keys]
+        separator = tuple(dict.fromkeys(k for f in adjacent for k in f.keys if k != v))
+        clique = eliminate_clique((v,), separator, dims, adjacent)
+        if conditionals is not None:
+            conditionals.append(clique)
+        marginal = clique.marginal
+        if separator and marginal.rhs.shape[0]:
+            pool.append(marginal)
+    return pool
+
+
+def _home(state: SolverState, keys: tuple[Key, ...], tops: list[int]) -> int:
+    """The clique that eliminates a factor on ``keys``: the deepest holding one of them as frontal (walking up
+    from the parent of a cut top whose variables hold them, the first clique with one of them frontal)."""
+    tree, wanted = state.tree, set(keys)
+    for t in tops:
+        c = tree.parent[t]
+        if c is None or not wanted <= set(tree.cliques[c].frontals) | set(tree.cliques[c].separator):
+            continue
+        while c is not None and wanted.isdisjoint(tree.cliques[c].frontals):
+            c = tree.parent[c]  # a root holds its variables as frontals: the walk ends there at the latest
+        if c is not None:
+            return c
+    raise SteamError(f"no clique holds the marginal factor's variables {keys}")
+
+
+def marginalize(
+    solver: IncrementalSolver, keys: Iterable[Key], *, keep_conditionals: bool = False
+) -> MarginalizationReport:
+    """Marginalize ``keys`` out of ``solver``'s Bayes tree and factors (module docstring, steps 1-3).
+
+    Afterwards the solver holds the marginal over the other variables: for a linear problem its
+    estimate and covariances of every other variable are those of the whole problem, to rounding.
+    ``keep_conditionals``: the report also carries each key's conditional P(v | S) at the linearization
+    point of the moment (:class:`~.history.ForgottenConditional`), for a smoothing pass later.
+    Raises :class:`UnknownVariableError` for a key the solver does not hold, and :class:`SteamError` for a
+    :class:`~.fixed_lag.FixedLagSmoother`, which marginalizes by its timestamps and keeps its own record of
+    what it forgot; on any failure or interruption (Ctrl-C) the solver is left as it was.
+    """
+    if not isinstance(solver, IncrementalSolver):
+        raise SteamError(f"marginalize: solver must be an IncrementalSolver, got {type(solver).__name__}")
+    if solver.forgets_by_time:
+        raise SteamError(
+            "marginalize: a FixedLagSmoother forgets by its timestamps (and records what it forgot); give the "
+            "variables an old timestamp in its next update instead"
+        )
+    return marginalize_keys(solver, keys, keep_conditionals=keep_conditionals)
+
+
+def marginalize_keys(
+    solver: IncrementalSolver, keys: Iterable[Key], *, keep_conditionals: bool = False
+) -> MarginalizationReport:
+    """:func:`marginalize` without its refusal of a smoother that forgets by time: what a
+    :class:`~.fixed_lag.FixedLagSmoother` runs on itself, inside its update's transaction."""
+    state = solver.state
+    drop_list = list(dict.fromkeys(key_list("keys", keys)))
+    for k in drop_list:
+        if k not in state.dims:
+            raise UnknownVariableError(f"cannot marginalize {k!r}: the solver does not hold it")
+    if not drop_list:
+        return MarginalizationReport((), True, (), (), (), (), {})
+    with state.transaction():
+        return _marginalize(solver, state, set(drop_list), keep_conditionals)
+
+
+def _marginalize(
+    solver: IncrementalSolver, state: SolverState, drop: set[Key], keep_conditionals: bool
+) -> MarginalizationReport:
+    """Steps 1-3 of the module docstring, inside a transaction."""
+    tree = state.tree
+    cids = list(dict.fromkeys(c for v in drop for c in tree.cliques_involving(v)))  # step 1
+    fids = [j for c in cids for j in tree.cliques[c].factors]
+    dropped = [j for j in fids if not drop.isdisjoint(state.factors[j].keys)]  # type: ignore[union-attr]
+    adjacent = [solver.cached(j) for j in dropped]
+    variables = list(dict.fromkeys(k for f in adjacent for k in f.keys))
+    last = [k for k in variables if k not in drop]
+    order = constrained_min_degree(variables, state.dims, [f.keys for f in adjacent], last=last).keys
+    order_drop = order[: len(drop)]
+    estimates = {k: state.estimate_of(k).copy() for k in order_drop}
+    conditionals: list[Clique] | None = [] if keep_conditionals else None
+    schur = eliminate_variables(order_drop, adjacent, state.dims, conditionals)  # (Eq. 10.1-10.3)
+    forgotten = tuple(ForgottenConditional.of(c, state.theta_bar, state.kinds) for c in conditionals or ())
+    leaves = all(drop.issuperset(tree.cliques[c].frontals) for c in cids)
+    if leaves:
+        # Step 2, leaves: cut the cliques of D off; the Schur complement of D's factors goes to their parents.
+        inside = set(cids)
+        tops = [c for c in cids if tree.parent[c] not in inside]
+        homes = [_home(state, gf.keys, tops) for gf in schur]
+        removed, new_cids, factor_ids = list(cids), [], _add_marginal_factors(state, schur)
+        for home, j in zip(homes, factor_ids, strict=True):
+            tree.replace(home, _relabel(tree.cliques[home], None, extra=(j,)))  # its next re-elimination gathers j
+        tree.cut(removed)  # a child holding no variable of D hangs under the nearest clique left, its f(S) kept
+    else:  # step 3: re-eliminate the affected part with D first
+        roots = set(tree.roots)
+        removed_top, orphans = tree.remove_top(cids)
+        removed = list(removed_top)
+        kept = [j for c in removed_top.values() for j in c.factors if drop.isdisjoint(state.factors[j].keys)]  # type: ignore[union-attr]
+        linear = [solver.cached(j) for j in kept] + schur + [tree.cliques[o].marginal for o in orphans]
+        rest = [k for c in removed_top.values() for k in c.frontals if k not in drop]
+        last = [k for c, cl in removed_top.items() if c in roots for k in cl.frontals if k not in drop]
+        order_rest = solver.elimination_order(rest, [f.keys for f in linear], last)
+        n_own = len(kept) + len(schur)
+        cliques, parents, owner = eliminate(order_rest, linear, state.dims, list(range(n_own)) + [None] * len(orphans))
+        factor_ids = _add_marginal_factors(state, schur)
+        labels = kept + factor_ids + [None] * len(orphans)
+        new_cids = tree.insert_eliminated([_relabel(c, labels) for c in cliques], parents, orphans, owner[n_own:])
+    for j in dropped:
+        state.drop_factor(j)  # ids are positions: the slot stays
+    for k in drop:
+        state.drop_variable(k)
+    if new_cids:
+        backsubstitute(state, set(new_cids), solver.params.wildfire_threshold)
+    return MarginalizationReport(
+        tuple(order_drop), leaves, tuple(removed), tuple(new_cids),
+        tuple(dropped), tuple(factor_ids), estimates, forgotten,
+    )  # fmt: skip
+
+
+def _relabel(clique: Clique, labels: list[int | None] | None, extra: tuple[int, ...] = ()) -> Clique:
+    """``clique`` with its factor positions replaced by the solver's factor ids (None: kept), ``extra`` added."""
+    ids = clique.factors if labels is None else tuple(labels[i] for i in clique.factors)
+    return replace(clique, factors=tuple(i for i in ids if i is not None) + extra)
+
+
+def _add_marginal_factors(state: SolverState, schur: list[GaussianFactor]) -> list[int]:
+    """Append each Schur factor as a :class:`MarginalFactor` frozen at θ̄, cached as it is; returns ids."""
+    if any(not gf.keys for gf in schur):
+        raise SteamError("a marginal factor with no variables")  # a root's f(∅) is never made one
+    frozen = [MarginalFactor.frozen_at(gf, state.theta_bar, state.kinds) for gf in schur]
+    return state.append_factors(frozen, list(schur))  # its linearization at θ̄ is itself [Eq. 10.4 at θ̄' = θ̄_S]
