@@ -1,9 +1,8 @@
 """Batch Gauss-Newton and Levenberg-Marquardt on the STEAM problem.  [YIB Eq. 6-11]
 
-Each iteration linearizes every factor at θ̄ (Eq. 9), solves 𝓘 δθ* = Aᵀb (Eq. 11) by sparse
-Cholesky under the chosen ordering ('xl': the paper's PB, 'amd': PBVR, 'natural'; see
-:mod:`steam_ref.linear.ordering`), and updates θ̄ ← θ̄ ⊕ δθ* by each variable's kind (:mod:`steam_ref.manifold`).
-The ordering depends only on which variables share factors, so it is computed once.
+Each iteration linearizes every factor at θ̄ (Eq. 9), solves 𝓘 δθ* = Aᵀb (Eq. 11) by sparse Cholesky under
+the chosen ordering ('xl': the paper's PB, 'amd': PBVR, 'natural'; :mod:`steam_ref.linear.ordering`), and updates
+θ̄ ← θ̄ ⊕ δθ* by each variable's kind (:mod:`steam_ref.manifold`). The ordering is computed once.
 
 Iterations stop on GTSAM's rules (the cost, or its relative decrease, below a tolerance) or on a
 small step. A stopping rule is not a proof, so before a result says ``converged`` the returned estimate is

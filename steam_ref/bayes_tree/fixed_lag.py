@@ -32,7 +32,7 @@ from numpy.typing import NDArray
 from ..arguments import number
 from ..errors import SteamError, UnknownVariableError
 from ..factors import Factor, check_factors
-from ..linear.threads import limited
+from ..linear.threads import limit
 from ..variables import Key
 from .history import History
 from .isam import IncrementalSolver, UpdateReport, check_new_values
@@ -68,7 +68,6 @@ class FixedLagSmoother(IncrementalSolver):
         self.history: History | None = History() if keep_history else None  # the forgotten conditionals, if kept
         self.last_marginalization: MarginalizationReport | None = None  # what the last update forgot
 
-    @limited
     def update(
         self,
         new_factors: Factor | Iterable[Factor] = (),
@@ -91,7 +90,7 @@ class FixedLagSmoother(IncrementalSolver):
             for k in f.keys:
                 if k not in fresh:
                     self._held("a new factor names", k)
-        with self.state.transaction():
+        with self.state.transaction(), limit():  # the limit is left inside: an interrupt there undoes all
             report = super().update(factors, new_values, relinearize=relinearize)
             self._forget_old(fresh, times)
         return report

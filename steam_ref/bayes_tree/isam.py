@@ -37,7 +37,7 @@ from ..errors import ShapeError, SteamError, UnderdeterminedError, UnknownVariab
 from ..factors import Factor, check_factors
 from ..linear.ordering import constrained_min_degree
 from ..linear.system import GaussianFactor, linearize
-from ..linear.threads import limited
+from ..linear.threads import limit
 from ..manifold import VECTOR, Manifold
 from ..variables import Key, Values, check_key, key_list
 from .backsolve import backsubstitute
@@ -184,7 +184,6 @@ class IncrementalSolver:
 
     # --- the update -------------------------------------------------------------------------
 
-    @limited
     def update(
         self,
         new_factors: Factor | Iterable[Factor] = (),
@@ -206,7 +205,8 @@ class IncrementalSolver:
             F_new = check_factors("new_factors", new_factors)
             check_new_values(new_values)
             theta_new, kinds = self._checked_update(F_new, {} if new_values is None else new_values)
-        with self.state.transaction():  # an error, or Ctrl-C (KeyboardInterrupt) at any point: all undone
+        # an error, or Ctrl-C (KeyboardInterrupt) at any point: all undone; the BLAS limit is left inside the transaction
+        with self.state.transaction(), limit():
             return self._update(F_new, theta_new, kinds, relinearize, timer)
 
     def _update(
