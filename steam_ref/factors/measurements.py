@@ -7,10 +7,9 @@ velocity from x[3:6], its Jacobian zero on the rest; ``state_dim`` (6 by default
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 from typing import ClassVar
-
-import warnings
 
 import numpy as np
 from numpy.typing import NDArray
@@ -261,7 +260,7 @@ def _range_row(x: NDArray, l: NDArray) -> tuple[NDArray, NDArray, NDArray]:
     safe = np.where(at, 1.0, r)
     ux, uy = np.where(at, 0.0, dx / safe), np.where(at, 0.0, dy / safe)
     Jx = np.zeros(x.shape)
-    Jx[..., 0], Jx[..., 1] = -ux, -uy
+    Jx[..., 0], Jx[..., 1] = np.where(at, 0.0, -ux), np.where(at, 0.0, -uy)
     return r, Jx, np.stack([ux, uy], axis=-1)
 
 
