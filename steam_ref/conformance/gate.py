@@ -10,7 +10,7 @@ conform. A results folder with no results at all, a malformed file, or results f
 version is bad input (exit 2); a quantity a case does not have is a warning line, and the rest is
 checked.
 
-A results file names the kit version it was computed against (``"kit_version": 3``); one without
+A results file names the kit version it was computed against (``"kit_version": 4``); one without
 it was written for kit v1, before the field existed, and is checked against the shipped v1. Results
 for a suite the kit does not have (``fixed_lag`` results naming kit v2), or ``only`` naming one, are
 bad input: nothing would be compared, and nothing is passed unchecked.

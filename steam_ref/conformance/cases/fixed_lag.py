@@ -81,7 +81,7 @@ def _landmark_prior(lm: str, mean: list[float]) -> dict:
 
 # A nonlinear stream: five states 0.5 s apart, two landmarks with priors (no timestamps: they stay),
 # ranges from the states to them, velocity readings.
-LANDMARKS = {
+LANDMARKS: dict = {
     "variables": {**{f"x{i}": STATE for i in range(5)}, "l0": MARK, "l1": MARK},
     "updates": [
         {
