@@ -235,44 +235,25 @@ class VelocityFactor(StateMeasurement):
 # --- Measurements of a state and a landmark -----------------------------------------------------
 
 
-def _offset(x: NDArray, l: NDArray) -> tuple[NDArray, NDArray, NDArray]:
-    """Landmark position relative to the robot: dx, dy, and the distance r."""
-    dx, dy = l[..., 0] - x[..., 0], l[..., 1] - x[..., 1]
-    return dx, dy, np.hypot(dx, dy)
-
-
 def _range_row(x: NDArray, l: NDArray) -> tuple[NDArray, NDArray, NDArray]:
     """r = ‖[x y]ᵀ - ℓ‖ and its rows of ∂r/∂x (..., state size), ∂r/∂ℓ (..., 2).  [YIB Eq. 33]
-
-    At r = 0 (the robot exactly at the landmark) r is 0, but the norm has no derivative there (every unit
-    vector is a one-sided one): the rows are zero by convention, as gpslam and STEAM have it (the smallest
-    subgradient; the reading adds no information at that point, and the next linearization point, moved by
-    the other factors, has a derivative again), with a :class:`DegenerateMeasurementWarning`."""
-    dx, dy, r = _offset(x, l)
-    at = r == 0
-    if np.any(at):
-        warnings.warn(
-            "a range evaluated with the robot exactly at the landmark: the error is 0 - r, the Jacobian "
-            "(undefined there) is taken as zero (docs/conformance.md, 'range at the landmark')",
-            DegenerateMeasurementWarning,
-            stacklevel=4,
-        )
-    safe = np.where(at, 1.0, r)
-    ux, uy = np.where(at, 0.0, dx / safe), np.where(at, 0.0, dy / safe)
+    At r = 0 the norm has no derivative: zero rows (gpslam's and STEAM's convention) and a warning."""
+    dx, dy = l[..., 0] - x[..., 0], l[..., 1] - x[..., 1]
+    r = np.hypot(dx, dy)
+    if np.any(at := r == 0):
+        message = "a range with the robot exactly at the landmark: error 0 - r, its Jacobian (undefined) zero rows"
+        warnings.warn(message, DegenerateMeasurementWarning, stacklevel=4)
+    ux, uy = (np.where(at, 0.0, d / np.where(at, 1.0, r)) for d in (dx, dy))
     Jx = np.zeros(x.shape)
-    Jx[..., 0], Jx[..., 1] = np.where(at, 0.0, -ux), np.where(at, 0.0, -uy)
+    Jx[..., 0], Jx[..., 1] = 0.0 - ux, 0.0 - uy  # 0.0 - u: +0.0, not -0.0, at the landmark
     return r, Jx, np.stack([ux, uy], axis=-1)
 
 
 def _bearing_row(x: NDArray, l: NDArray) -> tuple[NDArray, NDArray, NDArray]:
-    """b = atan2(ℓy - y, ℓx - x) - θ and its rows of ∂b/∂x (..., state size), ∂b/∂ℓ (..., 2).
-
-    At r = 0 the bearing itself is undefined (no direction to the landmark), so it is refused."""
-    dx, dy, r = _offset(x, l)
-    if np.any(r == 0):
-        raise SteamError(
-            "robot position coincides with a landmark: the bearing to it has no value there (a range has: 0)"
-        )
+    """b = atan2(ℓy - y, ℓx - x) - θ and its rows of ∂b/∂x (..., state size), ∂b/∂ℓ (..., 2)."""
+    dx, dy = l[..., 0] - x[..., 0], l[..., 1] - x[..., 1]
+    if np.any((r := np.hypot(dx, dy)) == 0):
+        raise SteamError("robot position coincides with a landmark: a bearing has no value there (a range has: 0)")
     r2 = r**2
     Jx = np.zeros(x.shape)
     Jx[..., 0], Jx[..., 1], Jx[..., 2] = dy / r2, -dx / r2, -1.0
