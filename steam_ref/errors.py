@@ -17,7 +17,9 @@ one meaning:
 Every warning is a :class:`SteamWarning`, flagging a result that is returned anyway, with the reason in it:
 :class:`IllConditionedWarning` (float64 cannot resolve the answer), :class:`ConvergenceWarning`
 (an iteration asked to converge stopped before its check passed), :class:`DivergenceWarning` (a stream
-diverges) and :class:`UncleanedDataWarning` (a named data set was read from other files than the paper's).
+diverges), :class:`UncleanedDataWarning` (a named data set was read from other files than the paper's) and
+:class:`DegenerateMeasurementWarning` (a measurement evaluated where its Jacobian is undefined, given by a
+stated convention).
 """
 
 
@@ -79,3 +81,8 @@ class DivergenceWarning(SteamWarning):
 class UncleanedDataWarning(SteamWarning):
     """``load_dataset("plaza")`` found no cleaned file (``Plaza1_thrown_away_some_range.mat``, the paper's) and read
     the original Plaza1 text files instead (all 3,529 ranges, outliers included): not the paper's data."""
+
+
+class DegenerateMeasurementWarning(SteamWarning):
+    """A measurement was evaluated where its Jacobian is undefined, and the stated convention was used instead
+    (a range with the robot exactly at the landmark: error 0 - r, Jacobian rows zero)."""

@@ -206,8 +206,9 @@ def _add_run_arguments(run: argparse.ArgumentParser) -> None:
         type=_positive_float,
         default=None,
         metavar="SECONDS",
-        help="BTGP: fixed-lag smoothing, marginalize states (and landmarks) not seen for this many seconds of the data "
-        "set's own time stamps, whatever clock the preset's GP prior runs on (docs/derivations.md §10)",
+        help="BTGP: fixed-lag smoothing: after each update, marginalize the states older than this (t < t_newest - "
+        "SECONDS) and the landmarks not seen for this long (a landmark seen again enters anew), in seconds of the "
+        "data set's own time stamps, whatever clock the preset's GP prior runs on (docs/derivations.md §10)",
     )
     run.add_argument(
         "--lag-history",
