@@ -1,4 +1,4 @@
-"""The steam-ref command on bad input (issue 10): every error is one line on stderr and exit code 2,
+"""The steam-ref command on bad input: every error is one line on stderr and exit code 2,
 never a traceback, and it comes before any run: the solver, the batch, the experiments and the
 comparison are replaced here by functions that fail the test if they are reached. Most calls run
 in-process (``steam_ref.cli.commands.main``); two run the module as a user would."""

@@ -1,4 +1,4 @@
-"""Options and numbers blamed on what the user gave (issue 19, the weak classes).
+"""Options and numbers blamed on what the user gave: the weak classes of the bad-input sweep.
 
 - ``--qc-scale`` and ``--singer-time-constant``: outside the range float64 resolves (1e-8..1e8 and
   1e-6..1e8 s) refused naming the option, before any run; inside it, accepted. ``--singer-time-constant``

@@ -1,4 +1,4 @@
-"""Output paths of the command (issue 19): ``--save-estimates`` and ``--plot`` name a regular file, or
+"""Output paths of the command: ``--save-estimates`` and ``--plot`` name a regular file, or
 nothing yet in a folder that exists; anything else is refused before the run, in one line naming the
 option, without opening it (a named pipe would block) and without changing a thing (a dangling link
 is neither removed nor given a target). A write that fails after the run (a full disk) names the
