@@ -22,6 +22,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from numpy.typing import NDArray
 
+from ..arguments import is_integer
 from ..datasets import LandmarkDataset, RangeDataset
 from ..errors import DataError, SteamError
 from ..gp.clock import Clock
@@ -269,7 +270,7 @@ class Readings:
 
     def prefix(self, n_poses: int) -> Readings:
         """The stream of the first ``n_poses`` poses: their odometry and the readings taken at them."""
-        if isinstance(n_poses, bool) or not isinstance(n_poses, (int, np.integer)) or not 2 <= n_poses <= self.n_poses:
+        if not is_integer(n_poses) or not 2 <= n_poses <= self.n_poses:
             raise SteamError(f"a prefix has 2 to {self.n_poses} poses, got {n_poses!r}")
         ranges = self.range_pose < n_poses
         return replace(
