@@ -48,6 +48,8 @@ def _listed(name: str, s: fetching.DataSet, width: int) -> str:
     """The first line of a set in ``data list``: its name (in a column ``width`` wide), the size of its files
     (those found, else the registry's), and where it is, or that the file found there is not the published one;
     for an absent plaza, the original files ``--dataset plaza`` reads instead (UncleanedDataWarning)."""
+    if not s.files:
+        return f"{name:<{width}}  {_size(0):>12}  generated, no file"
     got = fetching.found(name)
     if got is None:
         original = uncleaned_plaza() if name == "plaza" else None
