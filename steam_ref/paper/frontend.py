@@ -257,7 +257,7 @@ class FrontEnd:
                 X(i),
                 L(r.range_landmark[k]),
                 r.range_value[k],
-                s.range_sigma if r.range_sigma is None else r.range_sigma[k],
+                r.range_sigma[k],
                 loss=s.range_loss,
                 state_dim=s.state_dim,
             )
