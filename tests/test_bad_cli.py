@@ -27,8 +27,9 @@ def _never(*args, **kwargs):
 
 @pytest.fixture(autouse=True)
 def no_runs(monkeypatch: pytest.MonkeyPatch) -> None:
-    for name in ("StreamingEstimator", "sequential_batch", "reproduce", "compare", "build_problem"):
-        monkeypatch.setattr(cli, name, _never)
+    for name in ("run.StreamingEstimator", "batch.sequential_batch", "reproduce.reproduce", "fidelity.compare"):
+        monkeypatch.setattr(f"steam_ref.cli.{name}", _never)
+    monkeypatch.setattr("steam_ref.cli.batch.build_problem", _never)
 
 
 @pytest.fixture(scope="module")

@@ -13,7 +13,7 @@ import subprocess
 import pytest
 from requirements import REPO_ROOT
 
-from steam_ref.cli.args import build_parser
+from steam_ref.cli.commands import build_parser
 from steam_ref.datasets import fetch
 
 README = (REPO_ROOT / "README.md").read_text()

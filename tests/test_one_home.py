@@ -59,7 +59,7 @@ def toy(tmp_path, monkeypatch):
 
 def test_a_data_set_added_to_the_registry_alone_is_found_listed_offered_and_run(toy, capsys):
     from steam_ref.cli import main
-    from steam_ref.cli.args import build_parser
+    from steam_ref.cli.commands import build_parser
     from steam_ref.datasets import fetch
 
     got = load_dataset("toy")  # the search path, by the record's loader
@@ -77,7 +77,7 @@ def test_a_data_set_added_to_the_registry_alone_is_found_listed_offered_and_run(
 
 
 def test_every_reader_of_the_data_sets_agrees_with_the_registry():
-    from steam_ref.cli.args import build_parser
+    from steam_ref.cli.commands import build_parser
     from steam_ref.conformance.paper import DATA_FILES
     from steam_ref.datasets import fetch
     from steam_ref.paper.fidelity import AUTHORS_RUNS

@@ -18,7 +18,7 @@ from ..datasets.search import data_cache_dir, uncleaned_plaza
 __all__ = ["add_parser", "run"]
 
 
-def add_parser(sub: argparse._SubParsersAction) -> None:
+def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     """Add ``data`` with its ``list`` and ``fetch`` subcommands to the command's subparsers."""
     data = sub.add_parser("data", help="the paper's data by name: list them, fetch them (sha256-checked)")
     what = data.add_subparsers(dest="data_command", required=True, parser_class=type(data))
@@ -38,6 +38,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         default=None,
         help=f"a mirror to fetch the files from by name (default: ${fetching.DATA_URL_ENV}, else the authors' repository)",
     )
+    return data
 
 
 def _size(n: int) -> str:
