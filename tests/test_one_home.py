@@ -159,7 +159,7 @@ def test_replace_with_an_unknown_field_check_is_written_once():
 # clone cannot open.
 TRACKER = re.compile(r"\bissues? ?#?\d+|(?<![\w&/#])#\d+\b", re.IGNORECASE)
 # Another project's tracker, cited as such, stays: evo's (evaluate/metrics.py), GTSAM's (docs/conformance.md).
-EXTERNAL = re.compile(r"its issue 746|gtsam #\d+(?:, #\d+)*")
+EXTERNAL = re.compile(r"its issue[ ]746|gtsam #\d+(?:, #\d+)*")
 
 
 def test_no_tracker_numbers_in_code_tests_docs_benchmarks_or_tutorials():
