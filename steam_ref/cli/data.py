@@ -70,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
         width = max(map(len, fetching.DATASETS))  # one column for every name, the longest included
         for name, s in fetching.DATASETS.items():
             print(_listed(name, s, width))
-            print(f"{'':<{width}}  {s.what}; from {s.source}; licence: {s.licence}")
+            print(f"{'':<{width}}  {s.what}" + (f"; from {s.source}; licence: {s.licence}" if s.files else ""))
         print(f"fetched files go to {data_cache_dir()}; fetch them with `steam-ref data fetch [NAME ...]`")
         return 0
     progress = sys.stderr.isatty()
