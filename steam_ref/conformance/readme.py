@@ -205,7 +205,8 @@ Keys: 'x<i>' is trajectory state i (6 numbers, [x, y, theta, x_dot, y_dot, theta
 
 Jacobians H_k = de/dx_k are taken in the vector space of the variables (theta a plain coordinate, no
 manifold; the se2 suite alone takes them in the right tangent of SE(2) states, README 'SE(2)'), one
-block per key in the spec's key order; for `interpolated`, the chain rule through Lambda, Psi. W is the upper-triangular square root of Sigma^-1 (conventions, whitening).
+block per key in the spec's key order; for `interpolated`, the chain rule through Lambda, Psi.
+W is the upper-triangular square root of Sigma^-1 (conventions, whitening).
 
 ## Outputs
 
