@@ -195,6 +195,22 @@ def _prior_cases() -> list[Case]:
             0.5,
             "local-variable",
         ),
+        _case(
+            "prior_local_variable_residual_diagonal_qc",
+            "the local-variable residual and cost alone (no Jacobians), with a diagonal Qc, at a turn of 1.4 rad in "
+            "0.7 s: what a peer whose pose Jacobians are a truncated series (GTSAM 4.3's WnoaMotionFactorPose2) "
+            "computes exactly",
+            {
+                "kind": "prior",
+                "model": "local-variable",
+                "x1": [-1.5, 0.8, -2.6, 1.3, -0.2, 1.9],
+                "x2": [-2.3, -0.1, 2.95, 1.1, 0.3, 2.1],
+                "dt": 0.7,
+                "qc": [[0.5, 0.0, 0.0], [0.0, 0.3, 0.0], [0.0, 0.0, 0.4]],
+            },
+            {"error": GROUP, "cost": tol(1e-11)},
+            ORACLE_DIFF,
+        ),
         _prior(
             "prior_simplified_slow", "The slow step of prior_local_variable_slow.", X1_SLOW, X2_SLOW, 0.5, "simplified"
         ),
