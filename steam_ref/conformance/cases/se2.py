@@ -106,7 +106,7 @@ def _group_cases() -> list[Case]:
         ),
         _case(
             "log_near_half_turn",
-            "Log(T) and Exp(Log(T)) for headings at and near +-pi, at 3, near 0: Log's angle lies in (-pi, pi], so "
+            "Log(T) and Exp(Log(T)) for headings at and near +-pi and at 3: Log's angle lies in (-pi, pi], so "
             "theta = -pi (stored as -3.141592653589793) gives phi = +pi, and Exp(Log(T)) returns theta = +pi",
             {
                 "kind": "log",
@@ -116,8 +116,22 @@ def _group_cases() -> list[Case]:
                     [-0.5, 0.3, 3.1415926],
                     [-0.5, 0.3, -3.1415926],
                     [2.0, -1.0, 3.0],
-                    [0.1, 0.2, 1e-10],
+                ],
+            },
+            {"log": GROUP, "exp_of_log": GROUP},
+            ORACLE_GROUP,
+        ),
+        _case(
+            "log_near_zero",
+            "Log(T) and Exp(Log(T)) for headings 0, 1e-10, 1e-6 and on both sides of |theta| = 1",
+            {
+                "kind": "log",
+                "poses": [
                     [0.0, 0.0, 0.0],
+                    [0.1, 0.2, 1e-10],
+                    [0.3, -0.4, 1e-06],
+                    [1.0, 0.5, 0.999999],
+                    [1.0, 0.5, -1.000001],
                 ],
             },
             {"log": GROUP, "exp_of_log": GROUP},
