@@ -2,8 +2,9 @@
 
 Variables are named by small keys: ``X(i)`` is the trajectory state x(tᵢ) = [p; ṗ] (the i-th
 *estimated* state, whatever its time) and ``L(j)`` is landmark ℓⱼ. :class:`Values` maps keys
-to estimates (1-D float arrays). This module sits at the bottom of the package: it imports
-nothing of steam_ref but its errors.
+to estimates (1-D float arrays), each moved by the :class:`~steam_ref.manifold.Manifold` of its kind
+(a vector space unless told otherwise). This module sits at the bottom of the package: it imports
+nothing of steam_ref but its errors and :mod:`.manifold`.
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .errors import NumericalError, ShapeError, SteamError, UnknownVariableError
+from .manifold import VECTOR, Manifold
 
 __all__ = ["Key", "X", "L", "Values", "check_key", "key_list", "as_values"]
 
@@ -54,11 +56,24 @@ def L(j: int) -> Key:
     return Key("l", _index("L", j))
 
 
-class Values(Mapping):
-    """Current estimates: key → 1-D float64 array. Unknown keys raise :class:`UnknownVariableError`."""
+def _check_kind(key: Key, kind: object) -> Manifold:
+    if not isinstance(kind, Manifold):
+        raise SteamError(f"the kind of {key!r} must be a Manifold (steam_ref.manifold), got {kind!r:.80}")
+    return kind
 
-    def __init__(self, items: Mapping[Key, NDArray] | Iterable[tuple[Key, NDArray]] = ()):
+
+class Values(Mapping):
+    """Current estimates: key → 1-D float64 array, each with its kind (:class:`~steam_ref.manifold.Manifold`,
+    :data:`~steam_ref.manifold.VECTOR` unless ``kinds`` says otherwise). Unknown keys raise
+    :class:`UnknownVariableError`."""
+
+    def __init__(
+        self,
+        items: Mapping[Key, NDArray] | Iterable[tuple[Key, NDArray]] = (),
+        kinds: Mapping[Key, Manifold] | None = None,
+    ):
         self._data: dict[Key, NDArray] = {}
+        self._kinds: dict[Key, Manifold] = {}  # the keys whose kind is not VECTOR
         pairs: object = items.items() if isinstance(items, Mapping) else items  # checked, as given at run time
         if isinstance(pairs, (str, bytes)) or not isinstance(pairs, Iterable):
             raise SteamError(f"Values takes a mapping key -> vector or (key, vector) pairs, got {items!r}")
@@ -69,9 +84,33 @@ class Values(Mapping):
             if key in self._data:
                 raise SteamError(f"Values given two estimates of {key!r}")
             self.insert(key, value)
+        if kinds is not None:
+            if not isinstance(kinds, Mapping):
+                raise SteamError(f"Values takes kinds as a mapping key -> Manifold, got {kinds!r:.80}")
+            for key, kind in kinds.items():
+                if key not in self._data:
+                    raise UnknownVariableError(f"kinds names {key!r}, which has no estimate")
+                self._set_kind(key, kind)
 
-    def insert(self, key: Key, value: NDArray) -> None:
-        """Add (or replace) the estimate of one variable; checks the key and that the value is a finite vector."""
+    def _set_kind(self, key: Key, kind: object) -> None:
+        if _check_kind(key, kind) is VECTOR:
+            self._kinds.pop(key, None)
+        else:
+            self._kinds[key] = kind  # type: ignore[assignment]
+
+    def kind(self, key: Key) -> Manifold:
+        """How ``key``'s estimate moves (:data:`~steam_ref.manifold.VECTOR` unless told otherwise)."""
+        if key not in self._data:
+            raise UnknownVariableError(f"no estimate for variable {key!r}")
+        return self._kinds.get(key, VECTOR)
+
+    def kinds(self) -> dict[Key, Manifold]:
+        """The kind of every variable that is not a vector (a copy)."""
+        return dict(self._kinds)
+
+    def insert(self, key: Key, value: NDArray, kind: Manifold | None = None) -> None:
+        """Add (or replace) the estimate of one variable; checks the key and that the value is a finite vector.
+        ``kind`` None keeps the key's kind (VECTOR for a new key)."""
         if not isinstance(key, Key):
             raise SteamError(f"{key!r} is not a variable key (make one with X(i) or L(j))")
         try:
@@ -88,6 +127,8 @@ class Values(Mapping):
         old = self._data.get(key)
         if old is not None and old.shape != v.shape:
             raise ShapeError(f"estimate of {key} changes size from {old.shape[0]} to {v.shape[0]}")
+        if kind is not None:
+            self._set_kind(key, kind)
         self._data[key] = v
 
     def __getitem__(self, key: Key) -> NDArray:
@@ -109,6 +150,7 @@ class Values(Mapping):
         """An independent copy (the arrays are copied too)."""
         out = Values()
         out._data = {k: v.copy() for k, v in self._data.items()}
+        out._kinds = dict(self._kinds)
         return out
 
     def dim(self, key: Key) -> int:
@@ -124,14 +166,18 @@ class Values(Mapping):
         if key not in self._data:
             raise UnknownVariableError(f"no estimate for variable {key!r}")
         del self._data[key]
+        self._kinds.pop(key, None)
 
     @classmethod
-    def adopt(cls, arrays: Mapping[Key, NDArray]) -> Values:
+    def adopt(cls, arrays: Mapping[Key, NDArray], kinds: Mapping[Key, Manifold] | None = None) -> Values:
         """A Values holding ``arrays`` themselves: no copy, no check. Only for a caller whose arrays are
         finite 1-D float vectors by construction and never written in place (a solver's read-only
-        estimates); anyone else builds a ``Values(mapping)``, which checks and copies."""
+        estimates); anyone else builds a ``Values(mapping)``, which checks and copies. ``kinds``: the keys whose
+        kind is not VECTOR."""
         out = cls()
         out._data = dict(arrays)
+        if kinds:
+            out._kinds = {k: m for k, m in kinds.items() if m is not VECTOR}
         return out
 
     def stack(self, keys: Iterable[Key]) -> NDArray:
@@ -144,15 +190,24 @@ class Values(Mapping):
             raise ShapeError(f"Values.stack needs variables of one size, got sizes {sizes}") from None
 
     def retract(self, delta: Mapping[Key, NDArray]) -> Values:
-        """θ̄ + δθ: a new Values with the increments added (the state space is a vector space)."""
+        """θ̄ ⊕ δθ: a new Values with each variable moved by its kind's retraction (+ for a vector).  [YIB Eq. 11]"""
         out = self.copy()
         for key, step in delta.items():
             if np.shape(step) != self[key].shape:
                 raise ShapeError(f"the update of {key!r} has shape {np.shape(step)}, its estimate {self[key].shape}")
-            x = self[key] + step
+            kind = self._kinds.get(key)
+            x = self[key] + step if kind is None else np.asarray(kind.retract(self[key], np.asarray(step)), float)
             if not np.all(np.isfinite(x)):
-                raise NumericalError(f"the update of {key!r} is not finite: {self[key]} + {np.asarray(step)}")
+                raise NumericalError(f"the update of {key!r} is not finite: {self[key]} ⊕ {np.asarray(step)}")
             out._data[key] = x
+        return out
+
+    def local(self, other: Mapping[Key, NDArray]) -> dict[Key, NDArray]:
+        """other ⊖ self for each key of ``other``, by this Values' kinds (other - self for a vector)."""
+        out = {}
+        for key, x in other.items():
+            kind = self._kinds.get(key)
+            out[key] = np.asarray(x) - self[key] if kind is None else kind.local(self[key], np.asarray(x))
         return out
 
     def states(self) -> list[Key]:

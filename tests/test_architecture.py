@@ -32,6 +32,7 @@ LAYERS: dict[str, int] = {
     "steam_ref.errors": 0,
     "steam_ref.arguments": 0,
     "steam_ref.plot": 1,  # a leaf: draws plain arrays, imports only errors, so any layer may draw
+    "steam_ref.manifold": 1,  # how an estimate moves (x ⊕ δ, x ⊖ x0): imports nothing of steam_ref
     "steam_ref.variables": 1,
     "steam_ref.pose2": 1,
     "steam_ref.robust": 1,
