@@ -29,7 +29,7 @@ import steam_ref as sr
 from steam_ref.bayes_tree import IncrementalSolver, ISAM2Params
 from steam_ref.gp import transition
 from steam_ref.linear import LinearSystem, amd_ordering
-from steam_ref.linear.solve import solve
+from steam_ref.linear.cholesky import solve
 
 QC = np.diag([0.01, 0.01, 0.01])  # Qc of the WNOA prior [YIB Eq. 31]
 DT = 0.5  # time between states [s]

@@ -34,7 +34,7 @@ from .errors import ConvergenceError, IllConditionedWarning, NumericalError, Ste
 from .factors import Factor
 from .graph import FactorGraph
 from .linear.ordering import Ordering, make_ordering, sparse_backend
-from .linear.solve import SparseCholesky, Symbolic
+from .linear.cholesky import SparseCholesky, Symbolic
 from .linear.system import LinearSystem, linearize
 from .variables import Key, Values, as_values
 

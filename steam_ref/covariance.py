@@ -43,7 +43,7 @@ from .errors import SteamError, UnknownVariableError
 from .factors import Factor, check_factors
 from .linear.conditional import Conditional
 from .linear.ordering import Ordering, make_ordering
-from .linear.solve import SparseCholesky, check_system
+from .linear.cholesky import SparseCholesky, check_system
 from .linear.system import LinearSystem
 from .variables import Key, Values, as_values, check_key, key_list
 

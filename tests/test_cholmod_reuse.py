@@ -12,7 +12,7 @@ import scipy.sparse as sp
 
 from steam_ref.batch import gauss_newton, levenberg_marquardt
 from steam_ref.datasets import generate_synthetic
-from steam_ref.linear.solve import Symbolic
+from steam_ref.linear.cholesky import Symbolic
 from steam_ref.paper.online import run_online
 from steam_ref.paper.presets import PaperSetup
 from steam_ref.paper.problem import build_problem

@@ -38,7 +38,7 @@ from ..gp import (
 )
 from ..graph import FactorGraph
 from ..linear.ordering import Ordering
-from ..linear.solve import solve
+from ..linear.cholesky import solve
 from ..linear.system import GaussianFactor, LinearSystem, linearize
 from . import spec
 

@@ -4,7 +4,7 @@
 - :mod:`.metrics`: APE and RPE of planar poses and their statistics (RMSE, mean, median, max), as evo defines them.
 - :mod:`.files`: TUM and KITTI trajectory files, written and read back.
 - :mod:`.report`: the estimate at the truth's own times by GP interpolation [YIB Eq. 18]; a run's figures.
-- :mod:`.nees`: NEES of a state with its covariance, the χ² band of an ANEES over Monte Carlo runs.
+- :mod:`.consistency`: NEES of a state with its covariance, the χ² band of an ANEES over Monte Carlo runs.
 
 The Monte Carlo study itself (sampling tasks from the model, running the estimators, over many seeds) is
 :mod:`steam_ref.paper.consistency`, since it runs the paper's solvers.
@@ -13,7 +13,7 @@ The Monte Carlo study itself (sampling tasks from the model, running the estimat
 from .align import ALIGNMENTS, Alignment, align_planar
 from .files import read_kitti, read_tum, write_kitti, write_tum
 from .metrics import PoseError, Statistics, ape, planar_poses, rpe, rpe_pairs
-from .nees import chi2_band, chi2_quantile, nees, pose_errors, verdict
+from .consistency import chi2_band, chi2_quantile, nees, pose_errors, verdict
 from .report import states_at, trajectory_figures
 
 __all__ = [

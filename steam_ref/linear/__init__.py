@@ -10,7 +10,7 @@ from .ordering import (
     sparse_backend,
     xl_ordering,
 )
-from .solve import SparseCholesky, solve
+from .cholesky import SparseCholesky, solve
 from .system import GaussianFactor, LinearizedGroup, LinearSystem, linearize
 
 __all__ = [
