@@ -180,6 +180,17 @@ class Values(Mapping):
             out._kinds = {k: m for k, m in kinds.items() if m is not VECTOR}
         return out
 
+    @classmethod
+    def view(cls, arrays: dict[Key, NDArray], kinds: dict[Key, Manifold] | None = None) -> Values:
+        """A Values reading the dict ``arrays`` itself (and ``kinds``, the keys that are not VECTOR): no copy, no
+        check, later changes to the dicts show through. Only for a solver handing its own store to a reader
+        (linearization at θ̄) that never writes into it."""
+        out = cls()
+        out._data = arrays
+        if kinds is not None:
+            out._kinds = kinds
+        return out
+
     def stack(self, keys: Iterable[Key]) -> NDArray:
         """Estimates of several variables of one size as rows of an (n, dim) array."""
         rows = [self[k] for k in keys]

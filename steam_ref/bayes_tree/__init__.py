@@ -5,17 +5,17 @@
 - :mod:`.tree`: :class:`Clique` (a Gaussian conditional), :class:`BayesTree`, elimination and
   back-substitution;
 - :mod:`.params`: :class:`ISAM2Params`, the solver's thresholds (GTSAM's defaults);
+- :mod:`.undo` and :mod:`.state`: the one undo log, and :class:`~.state.SolverState`, every store of a solver;
 - :mod:`.isam`: :class:`IncrementalSolver`, the update of Algorithm 1 (steps 2-7);
-- :mod:`.marginalize`: :func:`marginalize`, variables out of the tree, leaving their marginal factor;
+- :mod:`.backsolve`: its partial back-substitution [K12 Alg. 7];
+- :mod:`.marginalization`: :func:`marginalize`, variables out of the tree, leaving their marginal factor;
 - :mod:`.fixed_lag`: :class:`FixedLagSmoother`, iSAM2 over a sliding window of a lag in seconds;
-- :mod:`.history`: the conditionals a fixed-lag smoother forgot, kept to smooth its past at the end;
-- :mod:`.backsolve`: its partial back-substitution a tree level at a time in stacked NumPy calls
-  (``ISAM2Params(backsubstitution="batched")``).
+- :mod:`.history`: the conditionals a fixed-lag smoother forgot, kept to smooth its past at the end.
 """
 
 from .fixed_lag import FixedLagSmoother
 from .isam import IncrementalSolver
-from .marginalize import MarginalFactor, MarginalizationReport, marginalize
+from .marginalization import MarginalFactor, MarginalizationReport, marginalize
 from .params import ISAM2Params
 from .report import UpdateReport
 from .symbolic import CliqueTree, SymbolicClique, build_cliques, symbolic_elimination

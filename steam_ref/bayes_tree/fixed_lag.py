@@ -3,7 +3,7 @@
 :class:`FixedLagSmoother` is an :class:`~steam_ref.bayes_tree.IncrementalSolver` whose updates carry
 timestamps. After each update every variable whose timestamp is older than the newest one minus the
 lag (``t < t_newest - lag``, GTSAM's rule) is marginalized out of the Bayes tree by
-:func:`~steam_ref.bayes_tree.marginalize.marginalize`: its factors go, a :class:`MarginalFactor` on
+:func:`~steam_ref.bayes_tree.marginalization.marginalize`: its factors go, a :class:`MarginalFactor` on
 its separator stays, frozen at the linearization point of the moment. The tree, the factors and
 the estimate then hold only the window, so memory and time per update stay flat however long the
 run.
@@ -40,38 +40,13 @@ from ..factors import Factor, check_factors
 from ..variables import Key, check_key, key_list
 from .history import History
 from .isam import IncrementalSolver, check_new_values
-from .marginalize import MarginalizationReport, _marginalize
+from .marginalization import MarginalizationReport, marginalize_keys
 from .params import ISAM2Params
 from .report import UpdateReport
 
 __all__ = ["FixedLagSmoother"]
 
 OLD_PART = 0.0  # once the window is full, the variables older than newest - OLD_PART * lag go first, oldest first
-
-
-class _UpdateRecord:
-    """For each kind of key, the update that marginalized key ``index`` (0: never), 4 bytes a key.
-
-    A dict of keys would grow by ~150 bytes per marginalized variable: 4 MB over a 20,000-step run.
-    """
-
-    def __init__(self) -> None:
-        self._by_kind: dict[str, np.ndarray] = {}
-
-    def get(self, key: Key) -> int:
-        row = self._by_kind.get(key.kind)
-        return int(row[key.index]) if row is not None and key.index < len(row) else 0
-
-    def mark(self, key: Key, update: int) -> None:
-        row = self._by_kind.get(key.kind, np.zeros(0, dtype=np.int32))
-        if key.index >= len(row):
-            row = np.concatenate([row, np.zeros(max(key.index + 1, 2 * len(row)) - len(row), dtype=np.int32)])
-            self._by_kind[key.kind] = row
-        row[key.index] = update
-
-    def forget(self, key: Key) -> None:
-        if self.get(key):
-            self._by_kind[key.kind][key.index] = 0
 
 
 class FixedLagSmoother(IncrementalSolver):
@@ -91,7 +66,7 @@ class FixedLagSmoother(IncrementalSolver):
         super().__init__(params, **changes)
         self.lag = float(lag)  # seconds of history kept
         self._times: dict[Key, float] = {}  # timestamp of each timed variable in the window
-        self._gone = _UpdateRecord()  # marginalized key → the update that marginalized it
+        self._gone: dict[Key, int] = {}  # marginalized key → the update that marginalized it (any id a Key holds)
         self.newest = -math.inf  # the latest timestamp seen
         self.n_marginalized = 0  # variables marginalized so far
         self.peak_window = 0  # most variables held at once (measured after each update, before marginalizing)
@@ -108,9 +83,9 @@ class FixedLagSmoother(IncrementalSolver):
     ) -> UpdateReport:
         """:meth:`IncrementalSolver.update`, then marginalize the variables older than the lag.
 
-        Raises :class:`UnknownVariableError` for a factor or timestamp naming a marginalized variable
-        (the solver is then as it was). A failure or interruption of the marginalization itself leaves the
-        update done and nothing marginalized (the next update marginalizes them).
+        Raises :class:`UnknownVariableError` for a factor or timestamp naming a marginalized variable. The
+        update, the marginalization and the record of what it forgot are one transaction of the solver's undo
+        log: a failure or an interruption (Ctrl-C) anywhere leaves the smoother exactly as before the call.
         """
         check_new_values(new_values)  # before anything reads it as a mapping
         times = self._checked_times(timestamps, new_values)
@@ -120,9 +95,20 @@ class FixedLagSmoother(IncrementalSolver):
             for k in f.keys:
                 if k not in fresh:
                     self._held("a new factor names", k)
-        report = super().update(factors, new_values, relinearize=relinearize)
+        with self.state.transaction():
+            report = super().update(factors, new_values, relinearize=relinearize)
+            self._forget_old(fresh, times)
+        return report
+
+    def _forget_old(self, fresh: Iterable[Key], times: dict[Key, float]) -> None:
+        """After an update: record its timestamps, marginalize what fell behind the lag, and record that."""
+        log = self.state.log
+        for name in ("newest", "n_marginalized", "peak_window", "last_marginalization"):
+            log.record(setattr, self, name, getattr(self, name))
+        log.keep(self._times)  # ordered: the next marginalization's order follows it
         for k in fresh:
-            self._gone.forget(k)  # a marginalized variable given anew is a new variable
+            if k in self._gone:
+                log.delete(self._gone, k)  # a marginalized variable given anew is a new variable
         self._times.update(times)
         self.newest = max(self.newest, *times.values()) if times else self.newest
         self.peak_window = max(self.peak_window, len(self))
@@ -130,35 +116,34 @@ class FixedLagSmoother(IncrementalSolver):
         old = [k for k, t in self._times.items() if t < cutoff]
         self.last_marginalization = None
         if old:
-            done = _marginalize(self, old, keep_conditionals=self.history is not None)
+            done = marginalize_keys(self, old, keep_conditionals=self.history is not None)
             if self.history is not None:
-                self.history.extend(done.conditionals)
+                log.extend(self.history.conditionals, list(done.conditionals))
             for k in done.keys:
-                self._gone.mark(k, self._steps)
+                log.set(self._gone, k, self.state.steps)
                 del self._times[k]
             self.n_marginalized += len(done.keys)
             self.last_marginalization = done
-        return report
 
-    def _elimination_order(self, variables: list[Key], factor_keys: list, last: list[Key]) -> list[Key]:
+    def elimination_order(self, variables: list[Key], factor_keys: list, last: list[Key]) -> list[Key]:
         """Once the window is full: the timed variables older than newest - OLD_PART * lag (by default all but
         the new ones) first, oldest first; then minimum degree with ``last`` last [K12 Sec. 5]. The states next to
         leave the window then sit in leaf cliques, cut off with no re-elimination (marginalize step 2); minimum
         degree alone puts the oldest state, which the marginal factor joins to many landmarks, above newer ones.
         GTSAM's fixed-lag smoother constrains its ordering likewise (the keys to marginalize first)."""
         if not self.n_marginalized:  # the window is not full yet: iSAM2's own order, as without a lag
-            return super()._elimination_order(variables, factor_keys, last)
+            return super().elimination_order(variables, factor_keys, last)
         half, times = self.newest - self.lag * OLD_PART, self._times
         old = sorted((k for k in variables if times.get(k, math.inf) < half and k not in last), key=lambda k: times[k])
         if not old:
-            return super()._elimination_order(variables, factor_keys, last)
+            return super().elimination_order(variables, factor_keys, last)
         groups = [set(keys) for keys in factor_keys]
         for v in old:  # the elimination game on the keys [K12 Alg. 1]: v's factors become one on its neighbours
             touching = [g for g in groups if v in g]
             groups = [g for g in groups if v not in g] + [set().union(*touching) - {v}]
         gone = set(old)
         rest = [k for k in variables if k not in gone]
-        return old + super()._elimination_order(rest, [tuple(g) for g in groups if g], last)
+        return old + super().elimination_order(rest, [tuple(g) for g in groups if g], last)
 
     def _checked_times(
         self, timestamps: Mapping[Key, float] | None, new_values: Mapping[Key, NDArray] | None
@@ -177,7 +162,7 @@ class FixedLagSmoother(IncrementalSolver):
                 )
             if k not in new:
                 self._held("timestamps names", k)
-            if k not in self._dims and k not in new:
+            if not self.holds(k) and k not in new:
                 raise UnknownVariableError(f"timestamps names {k!r}, which is neither held nor in new_values")
             out[k] = number(f"timestamps[{k!r}]", t)
         return out

@@ -14,9 +14,9 @@ and the posterior of the whole run factorizes as
 so once the run is over one pass from the newest conditional to the oldest gives every forgotten
 variable its estimate given all the data, as a Rauch-Tung-Striebel backward pass does:
 
-    x_v = θ̄_v + R_v⁻¹ (d_v - S_v (x_S - θ̄_S)),       (derivations Eq. 10.5)
+    x_v = θ̄_v ⊕ R_v⁻¹ (d_v - S_v (x_S ⊖ θ̄_S)),       (derivations Eq. 10.5)
 
-with θ̄ the linearization point at the moment v was marginalized (the conditional, like the marginal
+(⊕, ⊖ by each variable's kind: + and - for a vector), with θ̄ the linearization point at the moment v was marginalized (the conditional, like the marginal
 factor, is frozen there), and x_S the final estimate of each separator variable: the window's, or one
 this pass has already computed. For a linear problem the result is the batch optimum of every factor
 ever given, to rounding (tests/test_fixed_lag_history.py). For a nonlinear one it is the optimum of the
@@ -26,9 +26,9 @@ than the lagged estimates (generated task, 300 steps, 8 s lag: RMSE 5.81 cm smoo
 60 s lag: 0.3362 m smoothed, 0.3668 m lagged, 0.3383 m for the full smoother).
 
 Each conditional is kept in solved form, x_v = m_v + K_v (x_S - θ̄_S) with m_v = θ̄_v + R_v⁻¹ d_v and
-K_v = -R_v⁻¹ S_v: about 2 KB for a 6-vector state whose separator holds a state and a few landmarks.
-Memory then grows with the run again, by about a sixth of what the whole tree would hold (Plaza: 1.8 KB
-a conditional against ~11.6 KB a state); the window's does not.
+K_v = -R_v⁻¹ S_v for vectors (θ̄_v ⊕ (R_v⁻¹ d_v + K_v (x_S ⊖ θ̄_S)) otherwise): a few KB a state, so memory
+grows with the run again, by a fraction of what the whole tree would hold (docs/experiments.md); the
+window's does not.
 """
 
 from __future__ import annotations
@@ -40,6 +40,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.linalg import solve_triangular
 
+from ..manifold import VECTOR, Manifold
 from ..variables import Key
 from .tree import Clique
 
@@ -56,28 +57,39 @@ class ForgottenConditional:
     mean: NDArray  # (n_v,) θ̄_v + R⁻¹ d: x_v when every separator variable sits at its θ̄
     gain: NDArray  # (n_v, n_S) -R⁻¹ S
     theta_separator: NDArray  # (n_S,) θ̄_S stacked, the linearization point when v was marginalized
+    # Only when v or a separator variable is not a vector: θ̄_v (``mean`` is then R⁻¹d, a tangent step), and
+    # the kind of v and of each separator variable.
+    theta: NDArray | None = None
+    kinds: tuple[Manifold, ...] = ()  # (v's, then each separator variable's)
 
     @classmethod
-    def of(cls, clique: Clique, theta_bar: Mapping[Key, NDArray]) -> ForgottenConditional:
+    def of(
+        cls, clique: Clique, theta_bar: Mapping[Key, NDArray], kinds: Mapping[Key, Manifold] | None = None
+    ) -> ForgottenConditional:
         """The solved form of the one-variable conditional ``clique`` linearized at ``theta_bar``."""
         (key,) = clique.frontals
         ns = clique.S.shape[1]
         RinvS = solve_triangular(clique.R, clique.S) if ns else np.zeros((clique.R.shape[0], 0))
         theta_s = np.concatenate([theta_bar[k] for k in clique.separator]) if clique.separator else np.zeros(0)
-        return cls(
-            key,
-            clique.separator,
-            clique.separator_dims,
-            np.asarray(theta_bar[key], dtype=float) + solve_triangular(clique.R, clique.d),
-            -RinvS,
-            theta_s,
-        )
+        of = tuple((kinds or {}).get(k, VECTOR) for k in (key, *clique.separator))
+        step = solve_triangular(clique.R, clique.d)
+        if all(m is VECTOR for m in of):
+            return cls(key, clique.separator, clique.separator_dims, np.asarray(theta_bar[key], float) + step, -RinvS, theta_s)
+        theta = np.asarray(theta_bar[key], dtype=float)
+        return cls(key, clique.separator, clique.separator_dims, step, -RinvS, theta_s, theta, of)
 
     def value(self, separator_values: NDArray) -> NDArray:
         """x_v given the stacked final estimates of the separator (n_S,).  [derivations Eq. 10.5]"""
-        if not self.separator:
-            return self.mean.copy()
-        return self.mean + self.gain @ (separator_values - self.theta_separator)
+        if self.theta is None:  # every variable a vector
+            if not self.separator:
+                return self.mean.copy()
+            return self.mean + self.gain @ (separator_values - self.theta_separator)
+        local, o = [], 0
+        for kind, d in zip(self.kinds[1:], self.separator_dims, strict=True):
+            local.append(kind.local(self.theta_separator[o : o + d], separator_values[o : o + d]))  # x_S ⊖ θ̄_S
+            o += d
+        step = self.mean + self.gain @ np.concatenate(local) if local else self.mean
+        return np.asarray(self.kinds[0].retract(self.theta, step), dtype=float)
 
 
 class History:

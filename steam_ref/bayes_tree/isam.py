@@ -11,8 +11,8 @@ last, eliminate, attach back the orphans; (5) partial back-substitution, descend
 the wildfire threshold α [K12 Alg. 7, YIB step 6]; (6) the estimate θ̄ ⊕ δ, formed lazily when asked for.
 
 Every step costs time in proportion to the removed part and the cliques back-substitution visits: nothing walks the
-whole tree. Timing and undo (:mod:`.journal`: the steps tell a journal what they change, so a failed update leaves the
-solver as it was) stay out of the steps.
+whole tree. Every store lives in one :class:`~.state.SolverState`, whose undo log records each change before it is
+made, so a failed or interrupted update leaves the solver as it was; timing and undo stay out of the steps.
 """
 
 from __future__ import annotations
@@ -33,12 +33,13 @@ from ..errors import ShapeError, SteamError, UnderdeterminedError, UnknownVariab
 from ..factors import Factor, check_factors
 from ..linear.ordering import constrained_min_degree
 from ..linear.system import GaussianFactor, linearize
+from ..manifold import VECTOR, Manifold
 from ..variables import Key, Values, check_key
-from .backsolve import BatchedBacksubstitution, backsubstitute
+from .backsolve import backsubstitute
 from .dot import tree_nnz
-from .journal import Journal, PhaseTimer, UndoDict, until_done
 from .params import ISAM2Params
-from .report import UpdateReport
+from .report import PhaseTimer, UpdateReport
+from .state import SolverState
 from .tree import BayesTree, Clique, eliminate
 
 __all__ = ["IncrementalSolver", "check_new_values"]
@@ -65,61 +66,48 @@ class IncrementalSolver:
         if not isinstance(params, ISAM2Params):
             raise SteamError(f"params must be an ISAM2Params or None, got params={params!r}")
         self.params = params.replace(**changes) if changes else params  # the settings, validated
-        self.tree = BayesTree()  # the current Bayes tree
-        self._factors: list[Factor] = []  # every factor so far; a factor's id is its position
-        self._linear: list[GaussianFactor | None] = []  # cached linearization of each factor at θ̄
-        self._theta_bar = Values()  # linearization point θ̄
-        self._dims: dict[Key, int] = {}  # size of each variable
-        self._beta: dict[Key, float] = {}  # β: relinearization threshold of each variable (by kind) [K12 Alg. 5]
-        self._delta: UndoDict = UndoDict()  # current increment δ, relative to θ̄ (never written in place)
-        self._estimate: dict[Key, NDArray] = {}  # θ̄ + δ, read-only arrays, refreshed for ``_stale`` keys
-        self._stale: dict[Key, None] = {}  # variables whose δ or θ̄ moved since their estimate was formed
-        self._over: dict[Key, None] = {}  # variables whose latest δ has max |δ| ≥ their β
-        self._batched, self._steps = BatchedBacksubstitution(), 0  # [K12 Alg. 7] in stacked calls; updates so far
-        self._tree_nnz = 0  # nonzeros of R (GTSAM's treeNnz), kept by each update
+        self.state = SolverState()  # every store, the Bayes tree and the undo log (state.py)
+
+    @property
+    def tree(self) -> BayesTree:
+        """The current Bayes tree."""
+        return self.state.tree
 
     # --- queries ----------------------------------------------------------------------------
 
     def estimate(self) -> Values:
-        """The current estimate θ̄ + δ of every variable (a snapshot; the arrays are read-only).
+        """The current estimate θ̄ ⊕ δ of every variable (a snapshot; the arrays are read-only).
 
         Only the variables whose δ changed since the last call are recomputed.
         """
-        for k in self._stale:
-            self._form_estimate(k)
-        self._stale.clear()
-        return Values.adopt(self._estimate)  # no copy: the solver never writes into these arrays
+        return Values.adopt(self.state.all_estimates(), self.state.kinds)  # the arrays are never written in place
 
     def estimate_of(self, key: Key) -> NDArray:
-        """The current estimate θ̄ + δ of one variable (read-only)."""
+        """The current estimate θ̄ ⊕ δ of one variable (read-only)."""
         check_key("key", key)
-        if key in self._stale:
-            del self._stale[key]
-            self._form_estimate(key)
         try:
-            return self._estimate[key]
+            return self.state.estimate_of(key)
         except KeyError:
             raise UnknownVariableError(f"variable {key!r} is not in the solver") from None
-
-    def _form_estimate(self, key: Key) -> None:
-        e = self._theta_bar[key] + self._delta[key]
-        e.flags.writeable = False
-        self._estimate[key] = e
 
     @property
     def factors(self) -> tuple[Factor, ...]:
         """Every factor so far, in the order added (a tuple: the solver's caches are indexed by position); the slot
-        of a factor :func:`~.marginalize.marginalize` dropped holds None."""
-        return tuple(self._factors)
+        of a factor :func:`~.marginalization.marginalize` dropped holds None."""
+        return tuple(self.state.factors)
 
     @property
     def linearization_point(self) -> Values:
         """θ̄: where each factor of the tree was linearized (a copy)."""
-        return self._theta_bar.copy()
+        return self.state.values().copy()
 
     def delta(self) -> dict[Key, NDArray]:
-        """The current increments δ (a copy), relative to :attr:`linearization_point`."""
-        return {k: v.copy() for k, v in self._delta.items()}
+        """The current increments δ (a copy), in the tangent space at :attr:`linearization_point`."""
+        return {k: v.copy() for k, v in self.state.delta.items()}
+
+    def holds(self, key: Key) -> bool:
+        """True when ``key`` is a variable of the solver."""
+        return key in self.state.dims
 
     def marginal_covariance(self, key: Key) -> NDArray:
         """Cov(δθ_key) (d, d) of the current linear system, from the Bayes tree.  [K11 Sec. 3]"""
@@ -138,7 +126,7 @@ class IncrementalSolver:
         return tree_joint_covariances(self.tree, groups)
 
     def __len__(self) -> int:
-        return len(self._dims)
+        return len(self.state.dims)
 
     # --- the update -------------------------------------------------------------------------
 
@@ -162,31 +150,32 @@ class IncrementalSolver:
                 raise SteamError(f"relinearize must be True or False, got relinearize={relinearize!r}")
             F_new = check_factors("new_factors", new_factors)
             check_new_values(new_values)
-            theta_new = self._checked_update(F_new, {} if new_values is None else new_values)
-        journal = Journal(len(self._factors), list(theta_new), self._steps, dict(self._over), self.tree.checkpoint())
-        self._delta.record = journal.old_delta
-        try:
-            report = self._update(F_new, theta_new, relinearize, journal, timer)
-            self._delta.record = None
-        except BaseException:  # an error, or Ctrl-C (KeyboardInterrupt) at any point: undo, then propagate
-            until_done(lambda: self._rollback(journal))
-            raise
-        return report
+            theta_new, kinds = self._checked_update(F_new, {} if new_values is None else new_values)
+        with self.state.transaction():  # an error, or Ctrl-C (KeyboardInterrupt) at any point: all undone
+            return self._update(F_new, theta_new, kinds, relinearize, timer)
 
     def _update(
-        self, F_new: list[Factor], theta_new: dict[Key, NDArray], relinearize: bool, journal: Journal, timer: PhaseTimer
+        self,
+        F_new: list[Factor],
+        theta_new: dict[Key, NDArray],
+        kinds: Mapping[Key, Manifold],
+        relinearize: bool,
+        timer: PhaseTimer,
     ) -> UpdateReport:
         """One step of iSAM2, numbered as [K12 Alg. 6], with the steps of [YIB Alg. 1] (module docstring)."""
-        self._steps += 1
+        state = self.state
+        state.count(steps=1)
         # 1-2. F ← F ∪ F′, Θ ← Θ ∪ Θ′ (θ̄ = initial value, δ = 0); θ_nf: the variables of F′.   [YIB step 1]
         with timer("add"):
-            new_ids = self._add(F_new, theta_new)
+            new_ids = state.append_factors(F_new)
+            for k, x in theta_new.items():
+                state.add_variable(k, x, kinds.get(k, VECTOR), self.params.threshold_for(k.kind))
             theta_nf = list(dict.fromkeys(k for f in F_new for k in f.keys))
-        # 3. Fluid relinearization, θ̄ ← θ̄ + δ for θ_rl, with the δ of the last update: [YIB] step 7
+        # 3. Fluid relinearization, θ̄ ← θ̄ ⊕ δ for θ_rl, with the δ of the last update: [YIB] step 7
         #    of the previous round, which iSAM2 does here, every relinearize_skip-th update. [K12 Alg. 5]
         with timer("relinearize"):
-            due = relinearize and self._steps % self.params.relinearize_skip == 0
-            theta_rl = self._fluid_relinearization(journal) if due else []
+            due = relinearize and state.steps % self.params.relinearize_skip == 0
+            theta_rl = self._fluid_relinearization() if due else []
         # 4. Redo the top of the tree for θ_aff = θ_nf ∪ θ_rl.                  [K12 Alg. 4; YIB steps 2-5]
         # 4a. Remove the cliques of θ_aff and their ascendants; the orphans stay. [YIB step 2]
         with timer("remove"):
@@ -194,24 +183,23 @@ class IncrementalSolver:
         # 4b. Linearize the factors of the removed part that are new or touch θ_rl. [YIB step 3, Eq. 9]
         with timer("linearize"):
             fids = [j for c in removed.values() for j in c.factors] + new_ids
-            n_linearized = self._relinearize(fids, set(theta_rl), journal)
+            n_linearized = self._relinearize(fids, set(theta_rl))
         # 4c. Add the cached marginal factors f(S) of the orphans.                [YIB step 4]
         # 4d. Order the removed part by constrained minimum degree, θ_nf last.    [K12 Sec. 5]
         with timer("order"):
-            linear = [self._cached(j) for j in fids] + [self.tree.cliques[o].marginal for o in orphans]
+            linear = [self.cached(j) for j in fids] + [self.tree.cliques[o].marginal for o in orphans]
             variables = [k for c in removed.values() for k in c.frontals] + list(theta_new)
-            order = self._elimination_order(variables, [f.keys for f in linear], theta_nf)
+            order = self.elimination_order(variables, [f.keys for f in linear], theta_nf)
         # 4e. Eliminate into new cliques and attach back the orphans.   [YIB step 5, Eq. 24-25]
         with timer("eliminate"):
-            cliques, parents, owner = eliminate(order, linear, self._dims, fids + [None] * len(orphans))
+            cliques, parents, owner = eliminate(order, linear, state.dims, fids + [None] * len(orphans))
             new_cids = self._insert(cliques, parents, orphans, owner[len(fids) :])
         # 5. Partial back-substitution from the root, stopping below α.  [K12 Alg. 7; YIB step 6]
         with timer("backsubstitute"):
-            self._batched.forget(removed)
-            updated, visited = self._backsubstitute(set(new_cids))
-        self._tree_nnz += tree_nnz(cliques) - tree_nnz(removed.values())
+            updated, visited = backsubstitute(state, set(new_cids), self.params.wildfire_threshold)
+        state.count(tree_nnz=tree_nnz(cliques) - tree_nnz(removed.values()))
         return UpdateReport(
-            step=self._steps,
+            step=state.steps,
             removed_cliques=tuple(removed),
             new_cliques=tuple(new_cids),
             orphans=tuple(orphans),
@@ -222,45 +210,26 @@ class IncrementalSolver:
             backsubstituted_cliques=visited,
             time_s=timer.total(),
             timings=timer.seconds,
-            tree_nnz=self._tree_nnz,
+            tree_nnz=state.tree_nnz,
         )
 
-    def _elimination_order(self, variables: list[Key], factor_keys: list, last: list[Key]) -> list[Key]:
+    def elimination_order(self, variables: list[Key], factor_keys: list, last: list[Key]) -> list[Key]:
         """Minimum degree with ``last`` eliminated last [K12 Sec. 5]; a subclass may order the ties."""
-        return list(constrained_min_degree(variables, self._dims, factor_keys, last=last).keys)
+        return list(constrained_min_degree(variables, self.state.dims, factor_keys, last=last).keys)
 
-    def _rollback(self, journal: Journal) -> None:
-        """Put everything back as it was before a failed or interrupted update, wherever it stopped.
-
-        Idempotent, so that :func:`~.journal.until_done` can start it again after a second Ctrl-C.
-        """
-        self._delta.record = None
-        self.tree.rollback(journal.tree)
-        for j, gf in journal.old_linear.items():
-            self._linear[j] = gf
-        for k, (theta, _) in journal.old_points.items():
-            self._theta_bar.insert(k, theta)
-        self._delta.undo(journal.old_delta)
-        for k in journal.old_delta:
-            self._stale[k] = None  # its estimate is formed again, from the θ̄ and δ it had
-        for k in journal.new_keys:
-            if k in self._theta_bar:
-                self._theta_bar.remove(k)
-            for store in (self._dims, self._beta, self._estimate, self._stale):
-                store.pop(k, None)
-        del self._factors[journal.n_factors :], self._linear[journal.n_factors :]
-        self._over = dict(journal.over)
-        self._steps = journal.steps
-
-    def _checked_update(self, new_factors: list[Factor], new_values: Mapping[Key, NDArray]) -> dict[Key, NDArray]:
-        """Validate an update before anything changes; returns the new values as float vectors."""
+    def _checked_update(
+        self, new_factors: list[Factor], new_values: Mapping[Key, NDArray]
+    ) -> tuple[dict[Key, NDArray], Mapping[Key, Manifold]]:
+        """Validate an update before anything changes; returns the new values as float vectors and the kinds
+        of those that are not vectors (a :class:`Values` ``new_values`` says them)."""
         values: dict[Key, NDArray] = {}
+        kinds = new_values.kinds() if isinstance(new_values, Values) else {}
         for k, v in new_values.items():
             if not isinstance(k, Key):
                 raise SteamError(
                     f"new_values has the key {k!r}, which is not a variable key (make one with X(i) or L(j))"
                 )
-            if k in self._dims:
+            if k in self.state.dims:
                 raise SteamError(f"variable {k!r} already has a value; an update cannot give it a new one")
             x = real_array(f"new_values[{k!r}]", v)
             if x.ndim != 1 or x.shape[0] == 0:
@@ -272,7 +241,7 @@ class IncrementalSolver:
             values[k] = x
         for f in new_factors:
             for k, dim in zip(f.keys, f.key_dims, strict=True):
-                have = values[k].shape[0] if k in values else self._dims.get(k)
+                have = values[k].shape[0] if k in values else self.state.dims.get(k)
                 if have is None:
                     raise UnknownVariableError(
                         f"{type(f).__name__} names {k!r}, which has no value: give it one in new_values"
@@ -283,37 +252,25 @@ class IncrementalSolver:
         for k in values:
             if k not in named:
                 raise UnderdeterminedError(f"new variable {k!r} is named by no new factor, so nothing constrains it")
-        return values
+        return values, kinds
 
-    def _add(self, new_factors: list[Factor], new_values: dict[Key, NDArray]) -> list[int]:
-        """Store factors (uncached) and variables (θ̄ = initial value, δ = 0); returns the new factor ids."""
-        first = len(self._factors)
-        self._factors.extend(new_factors)
-        self._linear.extend([None] * len(new_factors))
-        for k, x in new_values.items():
-            self._theta_bar.insert(k, x)
-            self._dims[k] = x.shape[0]
-            self._beta[k] = self.params.threshold_for(k.kind)
-            self._delta[k] = np.zeros_like(x)
-            self._stale[k] = None
-        return list(range(first, len(self._factors)))
+    def _fluid_relinearization(self) -> list[Key]:
+        """θ̄ ← θ̄ ⊕ δ, δ ← 0 for θ_rl, the variables whose max abs(δ) ≥ β; returns θ_rl.  [K12 Alg. 5]
 
-    def _fluid_relinearization(self, journal: Journal) -> list[Key]:
-        """θ̄ ← θ̄ + δ, δ ← 0 for θ_rl, the variables whose max |δ| ≥ β; returns θ_rl.  [K12 Alg. 5]
-
-        With ``relinearize_blocks``, only the blocks of a variable whose own max |δ| ≥ β move.
-
-        The candidates are kept up to date by back-substitution, which is the only place δ changes
-        ([YIB Alg. 1 step 7]: collect them into θ_rl).
+        With ``relinearize_blocks``, only the blocks of a variable whose own max abs(δ) ≥ β move (a vector's
+        blocks: a variable of another kind moves whole). The candidates are kept up to date by
+        back-substitution, the only place δ changes ([YIB Alg. 1 step 7]: collect them into θ_rl).
         """
-        theta_rl = list(self._over)
-        moves = {k: self.params.blocks_to_move(k.kind, self._delta[k], self._beta[k]) for k in theta_rl}  # (d,) bool
-        self._over.clear()
+        state = self.state
+        theta_rl = list(state.candidates)
+        moves = {k: self.params.blocks_to_move(k.kind, state.delta[k], state.beta[k]) for k in theta_rl}  # (d,) bool
+        state.candidates.clear()  # the transaction kept them whole
         for k, move in moves.items():
-            theta_bar, delta = self._theta_bar[k], self._delta[k]
-            journal.moved(k, theta_bar, delta)
-            self._theta_bar.insert(k, theta_bar + np.where(move, delta, 0.0))  # the estimate is unchanged
-            self._delta[k] = np.where(move, 0.0, delta)
+            theta_bar, delta, kind = state.theta_bar[k], state.delta[k], state.kinds.get(k)
+            if kind is None:  # a vector: θ̄ + δ, block by block; the estimate is unchanged
+                state.move(k, theta_bar + np.where(move, delta, 0.0), np.where(move, 0.0, delta))
+            else:  # the estimate θ̄ ⊕ δ becomes the linearization point, δ ← 0
+                state.move(k, np.asarray(kind.retract(theta_bar, delta), dtype=float), np.zeros_like(delta))
         return theta_rl
 
     def _remove_top(self, theta_nf: list[Key], theta_rl: list[Key]) -> tuple[dict[int, Clique], list[int]]:
@@ -325,24 +282,22 @@ class IncrementalSolver:
         start = [self.tree.frontal_of[k] for k in theta_nf if k in self.tree.frontal_of]
         for k in theta_rl:
             start.extend(self.tree.cliques_involving(k))
-        return self.tree.remove_top(start)  # undone by the tree's rollback to the journal's checkpoint
+        return self.tree.remove_top(start)  # recorded in the state's undo log
 
-    def _relinearize(self, fids: list[int], theta_rl: set[Key], journal: Journal) -> int:
+    def _relinearize(self, fids: list[int], theta_rl: set[Key]) -> int:
         """Linearize, at θ̄, the factors among ``fids`` that are new or touch θ_rl; returns how many.  [YIB Eq. 9]"""
-        need = [
-            j for j in fids if self._linear[j] is None or (theta_rl and not theta_rl.isdisjoint(self._factors[j].keys))
-        ]
-        for j in need:
-            journal.relinearized(j, self._linear[j])
+        state = self.state
+        linear, factors = state.linear, state.factors
+        need = [j for j in fids if linear[j] is None or (theta_rl and not theta_rl.isdisjoint(factors[j].keys))]  # type: ignore[union-attr]
         if need:
-            for group in linearize([self._factors[j] for j in need], self._theta_bar):
+            for group in linearize([factors[j] for j in need], state.values()):  # type: ignore[misc]
                 for i, gf in zip(group.factor_ids, group.gaussian_factors(), strict=True):
-                    self._linear[need[i]] = gf
+                    state.set_linear(need[i], gf)
         return len(need)
 
-    def _cached(self, j: int) -> GaussianFactor:
-        """The linearization of factor ``j`` that :meth:`_relinearize` made."""
-        gf = self._linear[j]
+    def cached(self, j: int) -> GaussianFactor:
+        """The linearization of factor ``j`` at θ̄ (made when it entered, or when θ̄ of its variables moved)."""
+        gf = self.state.linear[j]
         if gf is None:
             raise SteamError(f"factor {j} has not been linearized")
         return gf
@@ -359,9 +314,3 @@ class IncrementalSolver:
         for o, owner in zip(orphans, owners, strict=True):
             self.tree.attach(o, new_cids[owner])
         return new_cids
-
-    def _backsubstitute(self, new_cliques: set[int]) -> tuple[list[Key], int]:
-        """[K12 Alg. 7]: the readable loop (:func:`.backsolve.backsubstitute`, the default) or "batched"."""
-        alpha = self.params.wildfire_threshold
-        args = (self.tree, new_cliques, self._delta, alpha, self._beta, self._stale, self._over)
-        return backsubstitute(*args) if self.params.backsubstitution == "loop" else self._batched(*args)

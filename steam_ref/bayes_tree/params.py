@@ -18,9 +18,7 @@ from numpy.typing import NDArray
 from ..arguments import integer, number
 from ..errors import ShapeError, SteamError
 
-__all__ = ["ISAM2Params", "BACKSUBSTITUTIONS"]
-
-BACKSUBSTITUTIONS = ("batched", "loop")  # the ways partial back-substitution can run [K12 Alg. 7]
+__all__ = ["ISAM2Params"]
 
 
 def _blocks(kind: str, sizes: object) -> tuple[int, ...]:
@@ -73,11 +71,6 @@ class ISAM2Params:
     # held the blocks as separate variables (the paper's scripts hold a state as pose P and velocity
     # V: {'x': (3, 3)}); None: every variable is one block
     relinearize_blocks: Mapping[str, tuple[int, ...]] | None = None
-    # how [K12 Alg. 7] runs: "loop" (a clique at a time, the algorithm as written) or "batched" (a tree
-    # level at a time in stacked NumPy calls, backsolve.py); the same δ to rounding. "loop" is the default:
-    # the paper's trees are narrow (Plaza: ~6 cliques a level, ~57 levels an update), and batching
-    # measured no faster there (docs/experiments.md, issue 22)
-    backsubstitution: str = "loop"
 
     def __post_init__(self) -> None:
         t = self.relinearize_threshold
@@ -94,8 +87,6 @@ class ISAM2Params:
             raise SteamError(f"relinearize_skip must be a positive integer, got {skip!r}")
         object.__setattr__(self, "relinearize_skip", int(skip))
         object.__setattr__(self, "wildfire_threshold", _threshold(self.wildfire_threshold, "wildfire_threshold"))
-        if self.backsubstitution not in BACKSUBSTITUTIONS:
-            raise SteamError(f"backsubstitution must be one of {BACKSUBSTITUTIONS}, got {self.backsubstitution!r}")
         if self.relinearize_blocks is not None:
             if not isinstance(self.relinearize_blocks, Mapping):
                 raise SteamError(

@@ -1,14 +1,38 @@
 """What one update of the Bayes tree did: :class:`UpdateReport`, returned by every
 :meth:`~steam_ref.bayes_tree.IncrementalSolver.update`, so a notebook can show the affected top of the tree
-[K12 Fig. 3-4] and a benchmark its phases and fill."""
+[K12 Fig. 3-4] and a benchmark its phases and fill; and :class:`PhaseTimer`, which times them."""
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field
 
 from ..variables import Key
 
-__all__ = ["UpdateReport"]
+__all__ = ["UpdateReport", "PhaseTimer"]
+
+
+class PhaseTimer:
+    """Wall time of each phase of one update: ``with timer("remove"): ...``."""
+
+    def __init__(self) -> None:
+        self.start = time.perf_counter()  # when the update began
+        self.seconds: dict[str, float] = {}  # phase → seconds
+        self._phase, self._t = "", 0.0
+
+    def __call__(self, phase: str) -> PhaseTimer:
+        self._phase = phase
+        return self
+
+    def __enter__(self) -> None:
+        self._t = time.perf_counter()
+
+    def __exit__(self, *exc: object) -> None:
+        self.seconds[self._phase] = time.perf_counter() - self._t
+
+    def total(self) -> float:
+        """Seconds since the update began."""
+        return time.perf_counter() - self.start
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -10,7 +10,8 @@ The elimination order comes from :mod:`steam_ref.linear.ordering` (for iSAM2,
   factors adjacent to it into one on its separator sᵢ  [YIB Eq. 24-25].
 - :func:`build_cliques` groups the conditionals P(θᵢ | sᵢ) into cliques [K12 Alg. 2].
 - :class:`CliqueTree` links cliques into a forest and edits it: remove the cliques on the paths
-  from some variables to the root, leaving orphaned subtrees, and reattach them [K12 Alg. 3-4].
+  from some variables to the root, leaving orphaned subtrees, and reattach them [K12 Alg. 3-4]; cut
+  leaves off. Every edit is recorded in an undo log (:mod:`.undo`), the solver's own when it has one.
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ from typing import Generic, Protocol, TypeVar
 
 from ..errors import SteamError, UnknownVariableError
 from .dot import tree_dot
+from .undo import UndoLog
 
 __all__ = [
     "SymbolicClique",
@@ -130,14 +132,14 @@ class CliqueTree(Generic[C]):
     costs time proportional to the cliques it touches, never to the size of the tree.
     """
 
-    def __init__(self) -> None:
+    def __init__(self, log: UndoLog | None = None) -> None:
         self.cliques: dict[int, C] = {}  # id → clique
         self.parent: dict[int, int | None] = {}  # id → parent id (None for a root)
-        self.children: dict[int, list[int]] = {}  # id → child ids
+        self.children: dict[int, list[int]] = {}  # id → child ids (a list is replaced, never edited in place)
         self.frontal_of: dict = {}  # variable → id of the clique that eliminates it
         self.roots: dict[int, None] = {}  # ids of the roots (an ordered set)
         self._next_id = 0
-        self._undo: list = []  # what the last remove_top took away, for restore_top
+        self.log = UndoLog() if log is None else log  # where every edit is recorded (a solver's: :mod:`.undo`)
 
     def __len__(self) -> int:
         return len(self.cliques)
@@ -148,24 +150,31 @@ class CliqueTree(Generic[C]):
 
     def add(self, clique: C, parent: int | None) -> int:
         """Insert a clique under ``parent`` (None: as a root); returns its id."""
-        cid = self._next_id
-        self._next_id += 1
-        self.cliques[cid] = clique
-        self.children[cid] = []
+        cid, log = self._next_id, self.log
         for v in clique.frontals:
             if v in self.frontal_of:
                 raise SteamError(f"variable {v!r} is already frontal in clique {self.frontal_of[v]}")
-            self.frontal_of[v] = cid
+        log.record(setattr, self, "_next_id", cid)
+        self._next_id += 1
+        log.set(self.cliques, cid, clique)
+        log.set(self.children, cid, [])
+        for v in clique.frontals:
+            log.set(self.frontal_of, v, cid)
         self.attach(cid, parent)
         return cid
 
     def attach(self, cid: int, parent: int | None) -> None:
         """Hang clique ``cid`` (a detached subtree) under ``parent`` (None: make it a root)."""
-        self.parent[cid] = parent
+        self.log.set(self.parent, cid, parent)
         if parent is None:
+            self.log.keep(self.roots)
             self.roots[cid] = None
         else:
-            self.children[parent].append(cid)
+            self.log.set(self.children, parent, [*self.children[parent], cid])
+
+    def replace(self, cid: int, clique: C) -> None:
+        """Put ``clique`` in the place of clique ``cid``, with the same variables (e.g. one more factor id)."""
+        self.log.set(self.cliques, cid, clique)
 
     def insert_eliminated(self, cliques: Sequence[C], parents: Sequence[int | None]) -> list[int]:
         """Add the cliques of one elimination (children first; ``parents`` index into the list); returns ids."""
@@ -196,6 +205,22 @@ class CliqueTree(Generic[C]):
             stack.extend(ch for ch in self.children[c] if variable in self.cliques[ch].separator)
         return found
 
+    def _put_back(self, cid: int, clique: C, parent: int | None, children: list[int]) -> None:
+        """Undo the removal of clique ``cid`` (its links to its children are theirs to restore)."""
+        self.cliques[cid], self.parent[cid], self.children[cid] = clique, parent, children
+        for v in clique.frontals:
+            self.frontal_of[v] = cid
+
+    def _remove(self, cid: int) -> int | None:
+        """Take clique ``cid`` out (recorded); returns its parent. Its children keep pointing at it."""
+        clique, parent = self.cliques[cid], self.parent[cid]
+        self.log.record(self._put_back, cid, clique, parent, self.children[cid])
+        del self.cliques[cid], self.parent[cid], self.children[cid]
+        self.roots.pop(cid, None)
+        for v in clique.frontals:
+            del self.frontal_of[v]
+        return parent
+
     def remove_top(self, start: Iterable[int]) -> tuple[dict[int, C], list[int]]:
         """Remove the cliques ``start`` and all their ascendants up to the root.  [K12 Alg. 3-4]
 
@@ -210,33 +235,18 @@ class CliqueTree(Generic[C]):
                 removed[c] = self.cliques[c]
                 c = self.parent[c]
         orphans = [ch for c in removed for ch in self.children[c] if ch not in removed]
-        self._undo = [(c, clique, self.parent[c], self.children[c]) for c, clique in removed.items()]  # before any edit
-        for c, clique in removed.items():
-            del self.cliques[c], self.parent[c], self.children[c]
-            self.roots.pop(c, None)
-            for v in clique.frontals:
-                del self.frontal_of[v]
+        self.log.keep(self.roots)
+        for c in removed:
+            self._remove(c)
         for o in orphans:
-            self.parent[o] = None
+            self.log.set(self.parent, o, None)
         return removed, orphans
-
-    def restore_top(self) -> None:
-        """Undo the last :meth:`remove_top`, before anything was inserted in its place."""
-        for c, clique, parent, children in self._undo:
-            self.cliques[c], self.parent[c], self.children[c] = clique, parent, children
-            if parent is None:
-                self.roots[c] = None
-            for v in clique.frontals:
-                self.frontal_of[v] = c
-            for ch in children:
-                self.parent[ch] = c
-        self._undo = []
 
     def cut(self, cids: Iterable[int]) -> dict[int, int | None]:
         """Delete the cliques ``cids``; each child of one that is not deleted hangs under the nearest ancestor
         that is not (a root when there is none). Returns child → its new parent.
 
-        Marginalizing leaves [bayes_tree.marginalize]: the caller vouches that every such child's separator lies
+        Marginalizing leaves (:mod:`.marginalization`): the caller vouches that every such child's separator lies
         within its new parent's variables (it holds none of the deleted frontals).
         """
         gone = set(cids)
@@ -248,49 +258,14 @@ class CliqueTree(Generic[C]):
                 while up is not None and up in gone:
                     up = self.parent[up]
                 moved.update(dict.fromkeys(keep, up))
+        self.log.keep(self.roots)
         for c in gone:
-            p = self.parent.pop(c)
-            if p is None:
-                self.roots.pop(c, None)
-            elif p not in gone:
-                self.children[p].remove(c)
-            for v in self.cliques.pop(c).frontals:
-                del self.frontal_of[v]
-            del self.children[c]
+            p = self._remove(c)
+            if p is not None and p not in gone:
+                self.log.set(self.children, p, [ch for ch in self.children[p] if ch != c])
         for ch, up in moved.items():
             self.attach(ch, up)
         return moved
-
-    def checkpoint(self) -> tuple[int, dict[int, None]]:
-        """Start an edit that :meth:`rollback` can undo: its token (the next id, the roots in order).
-
-        Costs time in proportion to the roots (one for a connected problem).
-        """
-        self._undo = []
-        return self._next_id, dict(self.roots)
-
-    def rollback(self, token: tuple[int, dict[int, None]]) -> None:
-        """Put the tree back as it was at :meth:`checkpoint` ``token``: drop the cliques added since, undo
-        the :meth:`remove_top` made since, in any state an interruption left them.
-
-        Idempotent, so a rollback that is itself interrupted can simply be run again.
-        """
-        first_new, roots = token
-        for cid in range(first_new, self._next_id):
-            clique = self.cliques.pop(cid, None)
-            self.parent.pop(cid, None)
-            self.children.pop(cid, None)
-            for v in () if clique is None else clique.frontals:
-                if self.frontal_of.get(v) == cid:
-                    del self.frontal_of[v]
-        for c, clique, parent, children in self._undo:
-            self.cliques[c], self.parent[c], self.children[c] = clique, parent, children
-            for v in clique.frontals:
-                self.frontal_of[v] = c
-            for ch in children:
-                self.parent[ch] = c
-        self.roots = dict(roots)
-        self._next_id = first_new
 
     def snapshot(self) -> CliqueTree[C]:
         """A structural copy (cliques shared, links copied), e.g. the tree "before" an update to draw.

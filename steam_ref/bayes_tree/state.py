@@ -1,0 +1,145 @@
+"""Everything an incremental solver holds, in one object with one undo log.  [K12 Alg. 6]
+
+:class:`SolverState` owns every per-factor and per-variable store of an
+:class:`~steam_ref.bayes_tree.IncrementalSolver` (listed once, in :attr:`SolverState.STORES`) and the Bayes
+tree, and offers the few operations every step needs: add a variable, drop one, append factors, drop a factor,
+cache a linearization, move a linearization point. Each writes through :class:`~.undo.UndoLog`, as the tree's
+surgery does into the same log, so one :meth:`SolverState.transaction` undoes an update, a marginalization or
+both, wherever a failure or a Ctrl-C stopped it.
+
+A variable's estimate is θ̄ ⊕ δ by its kind (:mod:`steam_ref.manifold`; + for a vector, the fast path).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from contextlib import contextmanager
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..factors import Factor
+from ..linear.system import GaussianFactor
+from ..manifold import VECTOR, Manifold
+from ..variables import Key, Values
+from .tree import BayesTree
+from .undo import UndoLog
+
+__all__ = ["SolverState"]
+
+
+class SolverState:
+    """The stores of one incremental solver, its Bayes tree, and the undo log they all record into."""
+
+    # Every store, per factor then per variable: what an undo restores and what a test compares.
+    STORES = ("factors", "linear", "theta_bar", "kinds", "dims", "beta", "delta", "estimates", "stale", "candidates")
+    VARIABLE_STORES = STORES[2:]
+
+    def __init__(self) -> None:
+        self.log = UndoLog()  # every change of every store below, and of the tree, while a transaction runs
+        self.tree = BayesTree(self.log)  # the current Bayes tree
+        self.factors: list[Factor | None] = []  # every factor so far; its id is its position (None: dropped)
+        self.linear: list[GaussianFactor | None] = []  # the cached linearization of each factor at θ̄
+        self.theta_bar: dict[Key, NDArray] = {}  # θ̄: the linearization point
+        self.kinds: dict[Key, Manifold] = {}  # how each variable that is not a vector moves
+        self.dims: dict[Key, int] = {}  # size of each variable (its tangent's too)
+        self.beta: dict[Key, float] = {}  # β: each variable's relinearization threshold [K12 Alg. 5]
+        self.delta: dict[Key, NDArray] = {}  # δ, relative to θ̄ (an array is replaced, never written in place)
+        self.estimates: dict[Key, NDArray] = {}  # θ̄ ⊕ δ, read-only arrays, formed again for the stale keys
+        self.stale: dict[Key, None] = {}  # variables whose θ̄ or δ moved since their estimate was formed
+        self.candidates: dict[Key, None] = {}  # relinearization candidates: latest δ has max abs(δ) ≥ β
+        self.steps = 0  # updates so far
+        self.tree_nnz = 0  # nonzeros of R (GTSAM's treeNnz)
+
+    @contextmanager
+    def transaction(self) -> Iterator[None]:
+        """Run a change of the solver: if anything in it raises (Ctrl-C too), every store and the tree are put
+        back as they were; nested transactions belong to the outermost."""
+        with self.log.transaction():
+            self.log.keep(self.candidates)  # an ordered set: the next θ̄ moves, and the next ordering, follow it
+            self.log.record(setattr, self, "steps", self.steps)
+            self.log.record(setattr, self, "tree_nnz", self.tree_nnz)
+            yield
+
+    def values(self) -> Values:
+        """θ̄ as a Values (a view of the store, no copy: for reading only)."""
+        return Values.view(self.theta_bar, self.kinds)
+
+    def kind(self, key: Key) -> Manifold:
+        return self.kinds.get(key, VECTOR)
+
+    # --- variables --------------------------------------------------------------------------
+
+    def add_variable(self, key: Key, value: NDArray, kind: Manifold, beta: float) -> None:
+        """A new variable: θ̄ = ``value``, δ = 0."""
+        log = self.log
+        log.set(self.theta_bar, key, value)
+        if kind is not VECTOR:
+            log.set(self.kinds, key, kind)
+        log.set(self.dims, key, value.shape[0])
+        log.set(self.beta, key, beta)
+        log.set(self.delta, key, np.zeros_like(value))
+        log.set(self.stale, key, None)
+
+    def drop_variable(self, key: Key) -> None:
+        """Forget a variable from every per-variable store (their order comes back on undo)."""
+        for name in self.VARIABLE_STORES:
+            store = getattr(self, name)
+            self.log.keep(store)
+            store.pop(key, None)
+
+    def move(self, key: Key, theta_bar: NDArray, delta: NDArray) -> None:
+        """Set a variable's θ̄ and δ (fluid relinearization: θ̄ ⊕ δ unchanged, or as the caller moves it)."""
+        self.log.set(self.theta_bar, key, theta_bar)
+        self.log.set(self.delta, key, delta)
+        self.log.set(self.stale, key, None)
+
+    def _formed(self, key: Key) -> NDArray:
+        """θ̄ ⊕ δ of ``key`` by its kind, read-only.  [YIB Eq. 11]"""
+        kind = self.kinds.get(key)
+        theta, delta = self.theta_bar[key], self.delta[key]
+        e = theta + delta if kind is None else np.asarray(kind.retract(theta, delta), dtype=float)
+        e.flags.writeable = False
+        return e
+
+    def estimate_of(self, key: Key) -> NDArray:
+        """θ̄ ⊕ δ of one held variable (read-only; formed when stale). KeyError when it is not held."""
+        if key in self.stale:
+            self.log.set(self.estimates, key, self._formed(key))
+            self.log.delete(self.stale, key)
+        return self.estimates[key]
+
+    def all_estimates(self) -> dict[Key, NDArray]:
+        """θ̄ ⊕ δ of every variable (the store itself: the caller copies the dict, never the arrays)."""
+        if self.log.depth:
+            for k in list(self.stale):
+                self.estimate_of(k)
+        else:  # nothing to record: the loop without the log
+            estimates = self.estimates
+            for k in self.stale:
+                estimates[k] = self._formed(k)
+            self.stale.clear()
+        return self.estimates
+
+    # --- factors ----------------------------------------------------------------------------
+
+    def append_factors(self, factors: list[Factor], linear: list[GaussianFactor] | None = None) -> list[int]:
+        """Store factors (with their linearization, else uncached); returns their ids."""
+        first = len(self.factors)
+        self.log.extend(self.factors, factors)
+        self.log.extend(self.linear, [None] * len(factors) if linear is None else linear)
+        return list(range(first, len(self.factors)))
+
+    def set_linear(self, fid: int, gf: GaussianFactor | None) -> None:
+        """Cache factor ``fid``'s linearization at θ̄."""
+        self.log.set(self.linear, fid, gf)
+
+    def drop_factor(self, fid: int) -> None:
+        """Forget factor ``fid`` (its slot stays, None: ids are positions)."""
+        self.log.set(self.factors, fid, None)
+        self.log.set(self.linear, fid, None)
+
+    def count(self, steps: int = 0, tree_nnz: int = 0) -> None:
+        """Add to the update count and the nonzeros of R (restored by the transaction's undo)."""
+        self.steps += steps
+        self.tree_nnz += tree_nnz

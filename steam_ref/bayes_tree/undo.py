@@ -1,0 +1,119 @@
+"""One undo log for everything an incremental solver changes: an update, a marginalization, or both.
+
+Each change to a store is recorded *before* it is made, as an entry (undo function, its arguments) that
+puts back what was there: the old value of one key, the old length of a list, the whole content of an
+ordered store whose order must come back too (copied once per transaction, before its first change).
+Every entry restores an absolute value, so :meth:`UndoLog.rollback` can apply the entries newest first, each
+then dropped, and start again anywhere after a second Ctrl-C (:func:`until_done`): a failure or an
+interruption at any line leaves the stores as they were when the transaction began. Transactions nest: the
+outermost one commits (forgets its entries) or rolls back; a fixed-lag smoother's update, which runs an
+iSAM2 update and a marginalization, is one.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator, MutableMapping
+from contextlib import contextmanager
+from typing import Any
+
+__all__ = ["UndoLog", "until_done"]
+
+_ABSENT = object()  # a key the store did not have
+
+
+def _put(store: Any, key: object, old: object) -> None:
+    """Undo ``store[key] = new``: the old value back, or no key when it had none."""
+    if old is _ABSENT:
+        store.pop(key, None)
+    else:
+        store[key] = old
+
+
+def _restore(store: MutableMapping, saved: dict) -> None:
+    """Undo every change of an ordered store since it was copied: its content and order back."""
+    store.clear()
+    store.update(saved)
+
+
+def _truncate(seq: list, n: int) -> None:
+    """Undo appends to a list of length ``n``."""
+    del seq[n:]
+
+
+def until_done(undo: Callable[[], None]) -> None:
+    """Run ``undo`` (idempotent) to its end: a second Ctrl-C during it starts it again, rather than
+    leaving it half done; an error in it (a bug) propagates."""
+    while True:
+        try:
+            undo()
+            return
+        except Exception:
+            raise
+        except BaseException:
+            continue
+
+
+class UndoLog:
+    """The changes of the running transaction, newest last (module docstring). Outside a transaction nothing
+    is recorded: the writes are made as they are asked for."""
+
+    def __init__(self) -> None:
+        self.entries: list[tuple] = []  # (undo function, *arguments), oldest first
+        self.depth = 0  # transactions open (nested); 0: none
+        self.kept: set[int] = set()  # ids of the stores copied whole in this transaction
+
+    def set(self, store: Any, key: object, value: object) -> None:
+        """``store[key] = value`` (a dict, or a list and an index), recorded."""
+        if self.depth:
+            self.entries.append((_put, store, key, store.get(key, _ABSENT) if isinstance(store, dict) else store[key]))
+        store[key] = value
+
+    def delete(self, store: dict, key: object) -> None:
+        """``del store[key]``, recorded (put back at the end of the store: :meth:`keep` an ordered one first)."""
+        if self.depth:
+            self.entries.append((_put, store, key, store[key]))
+        del store[key]
+
+    def extend(self, seq: list, items: list) -> None:
+        """``seq.extend(items)``, recorded."""
+        if self.depth:
+            self.entries.append((_truncate, seq, len(seq)))
+        seq.extend(items)
+
+    def keep(self, store: dict) -> None:
+        """Copy ``store`` whole, once per transaction, before a change whose undo must restore its order too."""
+        if self.depth and id(store) not in self.kept:
+            self.kept.add(id(store))
+            self.entries.append((_restore, store, dict(store)))
+
+    def record(self, undo: Callable[..., None], *args: object) -> None:
+        """Record any other undo: ``undo(*args)`` must put back an absolute state (idempotent)."""
+        if self.depth:
+            self.entries.append((undo, *args))
+
+    @contextmanager
+    def transaction(self) -> Iterator[None]:
+        """Everything recorded inside is undone if it raises (any BaseException, Ctrl-C too); nested
+        transactions belong to the outermost one. The entries of a committed transaction are dropped when the
+        next one begins, so that committing is one step: an interruption before it undoes, after it keeps."""
+        if not self.depth:
+            self.entries.clear()
+            self.kept.clear()
+        self.depth += 1
+        try:
+            yield
+            self.depth -= 1  # committed (the outermost) or handed to the outer transaction
+        except BaseException:
+            self.depth -= 1
+            if not self.depth:
+                until_done(self.rollback)
+            raise
+
+    def rollback(self) -> None:
+        """Apply the entries newest first, dropping each once applied (idempotent: see :func:`until_done`)."""
+        entries = self.entries
+        while entries:
+            undo, *args = entries[-1]
+            undo(*args)
+            entries.pop()
+        self.kept.clear()
