@@ -33,8 +33,8 @@ from numpy.typing import NDArray
 from .errors import ConvergenceError, IllConditionedWarning, NumericalError, SteamError
 from .factors import Factor
 from .graph import FactorGraph
-from .linear.ordering import Ordering, make_ordering, sparse_backend
 from .linear.cholesky import SparseCholesky, Symbolic
+from .linear.ordering import Ordering, make_ordering, sparse_backend
 from .linear.system import LinearSystem, linearize
 from .variables import Key, Values, as_values
 

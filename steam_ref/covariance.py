@@ -41,9 +41,9 @@ from scipy.linalg import lapack
 
 from .errors import SteamError, UnknownVariableError
 from .factors import Factor, check_factors
+from .linear.cholesky import SparseCholesky, check_system
 from .linear.conditional import Conditional
 from .linear.ordering import Ordering, make_ordering
-from .linear.cholesky import SparseCholesky, check_system
 from .linear.system import LinearSystem
 from .variables import Key, Values, as_values, check_key, key_list
 
@@ -51,6 +51,7 @@ if TYPE_CHECKING:
     from .bayes_tree.tree import BayesTree
 
 __all__ = [
+    "key_groups",
     "marginal_covariances",
     "sparse_joint_covariance",
     "sparse_marginal_covariances",
@@ -159,12 +160,12 @@ def sparse_joint_covariances(
 ) -> list[NDArray]:
     """Joint covariance of each group of ``keys`` (stacked in the order given), linearized at ``values``:
     one factorization for all groups."""
-    groups = _groups(groups)
+    groups = key_groups(groups)
     order, chol = _factor_at(factors, values, backend)
     return _blocks_of_inverse(chol, order, groups)
 
 
-def _groups(groups: object) -> list[list[Key]]:
+def key_groups(groups: object) -> list[list[Key]]:
     """Each group of keys as a list; a group that is a single key (not a list of keys) is an error."""
     if isinstance(groups, (str, bytes, Key)) or not isinstance(groups, Iterable):
         raise SteamError(f"groups must be a list of lists of keys, got groups={groups!r}")
@@ -309,7 +310,7 @@ def tree_joint_covariances(tree: BayesTree, groups: Iterable[Iterable[Key]]) -> 
     clique's joint in one walk down the tree (:func:`_walk_down`); any other group goes through
     :func:`tree_joint_covariance`.
     """
-    groups = _groups(groups)
+    groups = key_groups(groups)
     home: dict[int, list[int]] = {}  # clique id → the groups it holds whole
     out: list[NDArray | None] = [None] * len(groups)
     for g, keys in enumerate(groups):

@@ -397,3 +397,60 @@ def test_the_type_checking_imports_of_the_root_are_its_lazy_names():
     block = next(n for n in tree.body if isinstance(n, ast.If) and _is_type_checking(n.test))
     typed = {alias.name: node.module for node in block.body if isinstance(node, ast.ImportFrom) for alias in node.names}
     assert typed == steam_ref._HOMES
+
+
+# Underscore names that are public API elsewhere (NamedTuple's), not another class's private members.
+# argparse's subparsers type has no public name (annotations only).
+FOREIGN_UNDERSCORE_API = {"_replace", "_asdict", "_fields", "_make", "_field_defaults", "_SubParsersAction"}
+
+
+def _owned_private_names(tree: ast.Module) -> set[str]:
+    """The private names a module defines: members its classes assign through self/cls or define in their body."""
+    owned: set[str] = set()
+    for cls in (n for n in ast.walk(tree) if isinstance(n, ast.ClassDef)):
+        for node in ast.walk(cls):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)) and node in cls.body:
+                owned.add(node.name)
+            elif isinstance(node, ast.Attribute) and isinstance(node.ctx, ast.Store):
+                if isinstance(node.value, ast.Name) and node.value.id in ("self", "cls"):
+                    owned.add(node.attr)
+            elif isinstance(node, (ast.Assign, ast.AnnAssign)) and node in cls.body:
+                targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+                owned.update(t.id for t in targets if isinstance(t, ast.Name))
+    return {name for name in owned if name.startswith("_")}
+
+
+def private_access(path: Path, module: str) -> list[str]:
+    """Each place ``module`` reads a private member of something it does not own: ``obj._x`` where no class of
+    the module defines ``_x`` (``self``/``cls``/``super()`` excepted)."""
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    owned = _owned_private_names(tree)
+    out = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Attribute):
+            name = node.attr
+            if not name.startswith("_") or name.startswith("__") or name in owned or name in FOREIGN_UNDERSCORE_API:
+                continue
+            base = node.value
+            if isinstance(base, ast.Name) and base.id in ("self", "cls"):
+                continue
+            if isinstance(base, ast.Call) and isinstance(base.func, ast.Name) and base.func.id == "super":
+                continue
+            out.append(f"{module}:{node.lineno} reads .{name}")
+    return out
+
+
+def test_the_private_access_check_catches_a_foreign_private_member(tmp_path):
+    source = tmp_path / "m.py"
+    source.write_text(
+        "class A:\n    def __init__(self):\n        self._mine = 1\n    def f(self, other):\n"
+        "        return self._mine + other._mine + other._theirs\n"
+        "def g(solver):\n    return solver._dims\n"
+    )
+    found = private_access(source, "steam_ref.m")
+    assert sorted(found) == ["steam_ref.m:5 reads ._theirs", "steam_ref.m:7 reads ._dims"]
+
+
+def test_no_module_reads_another_class_private_members():
+    found = [line for module, path in MODULES.items() for line in private_access(path, module)]
+    assert not found, "private members read across classes or modules:\n" + "\n".join(found)

@@ -27,7 +27,7 @@ def test_with_alpha_zero_the_loop_gives_the_full_solve_after_every_update(seed, 
     for action in ["state"] + actions:
         solver.update(*stream.step(action))
         full, delta = solver.tree.solve(), solver.delta()
-        assert list(sorted(full, key=str)) == list(sorted(delta, key=str))
+        assert sorted(full, key=str) == sorted(delta, key=str)
         for k in full:
             np.testing.assert_allclose(delta[k], full[k], rtol=0, atol=1e-9, err_msg=str(k))
 

@@ -297,7 +297,9 @@ def test_an_interrupt_at_any_line_of_marginalize_leaves_the_solver_as_it_was(key
             sys.settrace(None)
         where.add(str(interrupt.value).split(": ")[1])
         assert state(solver) == state(twin), f"not as it was after {interrupt.value}"
-    assert "_marginalize" in where and where & {"cut", "insert_eliminated", "add", "drop_factor", "drop_variable"}, where
+    assert "_marginalize" in where and where & {"cut", "insert_eliminated", "add", "drop_factor", "drop_variable"}, (
+        where
+    )
     report = marginalize(solver, keys)
     assert state(solver)[1:] == state(done)[1:]  # all but the ids of the factors: each made its MarginalFactors
     assert [None if f is None else f.keys for f in solver.factors] == [

@@ -11,7 +11,6 @@ tests/test_fixed_lag_gtsam.py.
 from __future__ import annotations
 
 import re
-import sys
 from dataclasses import dataclass, replace
 from typing import ClassVar
 
@@ -20,8 +19,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from steam_ref.bayes_tree import FixedLagSmoother, IncrementalSolver, MarginalFactor, marginalize
-from steam_ref.bayes_tree.marginalize import eliminate_variables
+from steam_ref.bayes_tree import FixedLagSmoother, IncrementalSolver, MarginalFactor, marginalization, marginalize
+from steam_ref.bayes_tree.marginalization import eliminate_variables
 from steam_ref.errors import SteamError, UnknownVariableError
 from steam_ref.factors import Factor, GPPriorFactor, PriorFactor
 from steam_ref.gp import process_noise, transition
@@ -164,7 +163,7 @@ def check_window(solver: IncrementalSolver, everything: list[Factor], stream: Li
     """The solver's window equals the dense posterior's marginal over it, mean and joint covariance."""
     name = (lambda k: k) if stream is None else (lambda k: oracle_key(stream, k))
     all_keys = list(dict.fromkeys(k for f in everything for k in f.keys))
-    held = sorted(solver._dims, key=str)
+    held = sorted(solver.state.dims, key=str)
     mean, where = dense_posterior(everything, all_keys)
     cov = where["cov"]
     idx = np.concatenate([np.arange(where[name(k)][0], where[name(k)][0] + where[name(k)][1]) for k in held])
@@ -208,11 +207,11 @@ def test_marginalizing_any_variables_leaves_the_dense_marginal(seed, n, data):
     leaves_seen = set()
     for _ in range(n):
         factors, values, _ = stream.step()
-        if any(k not in solver._dims and k not in values for f in factors for k in f.keys):
+        if any(k not in solver.state.dims and k not in values for f in factors for k in f.keys):
             continue  # a reading of a variable already marginalized: the stream's next step
         everything += factors
         solver.update(factors, values)
-        held = sorted(solver._dims, key=str)
+        held = sorted(solver.state.dims, key=str)
         if len(held) > 2 and data.draw(st.booleans()):
             drop = data.draw(st.lists(st.sampled_from(held), min_size=1, max_size=len(held) - 1, unique=True))
             report = marginalize(solver, drop)
@@ -374,7 +373,7 @@ def test_a_middle_state_is_re_eliminated_first_and_the_rest_stays_exact():
         solver.update(factors, values)
     report = marginalize(solver, [X(4)])
     assert not report.leaves and report.new_cliques
-    assert X(4) not in solver._dims and all(X(4) not in c.separator for c in solver.tree.cliques.values())
+    assert X(4) not in solver.state.dims and all(X(4) not in c.separator for c in solver.tree.cliques.values())
     check_window(solver, everything)
     np.testing.assert_array_equal(report.estimates[X(4)].shape, (6,))
 
@@ -384,10 +383,10 @@ def test_a_failed_marginalization_changes_nothing():
     solver = IncrementalSolver(**EXACT)
     for factors, values, _ in [stream.initial()] + [stream.step() for _ in range(4)]:
         solver.update(factors, values)
-    tree, n, held = dict(solver.tree.cliques), len(solver.factors), dict(solver._dims)
+    tree, n, held = dict(solver.tree.cliques), len(solver.factors), dict(solver.state.dims)
     with pytest.raises(UnknownVariableError, match="x99"):
         marginalize(solver, [X(0), X(99)])
-    assert solver.tree.cliques == tree and len(solver.factors) == n and solver._dims == held
+    assert solver.tree.cliques == tree and len(solver.factors) == n and solver.state.dims == held
 
 
 @pytest.mark.parametrize("error", [SteamError, KeyboardInterrupt])
@@ -403,16 +402,16 @@ def test_a_failure_during_re_elimination_puts_the_tree_back(monkeypatch, error):
         dict(solver.tree.cliques),
         dict(solver.tree.parent),
         len(solver.factors),
-        dict(solver._dims),
+        dict(solver.state.dims),
     )
 
     def broken(*args, **kwargs):
         raise error("interrupted")
 
-    monkeypatch.setattr(sys.modules["steam_ref.bayes_tree.marginalize"], "eliminate", broken)
+    monkeypatch.setattr(marginalization, "eliminate", broken)
     with pytest.raises(error, match="interrupted"):
         marginalize(solver, [X(4)])
     assert solver.tree.cliques == tree and solver.tree.parent == parents
-    assert len(solver.factors) == n and solver._dims == held and solver.tree.problems() == []
+    assert len(solver.factors) == n and solver.state.dims == held and solver.tree.problems() == []
     monkeypatch.undo()
     check_window(solver, everything)

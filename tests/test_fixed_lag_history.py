@@ -43,12 +43,12 @@ def test_smoothed_history_is_the_batch_optimum(seed, n, lag, landmarks, threshol
     past = smoother.smoothed_history()
     assert len(smoother.history) == smoother.n_marginalized
     states = [X(i) for i in range(n + 1)]
-    assert set(past) | {k for k in states if k in smoother._dims} >= set(states)  # every state, once
+    assert set(past) | {k for k in states if k in smoother.state.dims} >= set(states)  # every state, once
     for k, v in past.items():  # a landmark forgotten and seen again: the latest incarnation forgotten
         held = k in smoother.linearization_point
         name = L(1000 * (stream.generation[k.index] - held) + k.index) if k.kind == "l" else k
         np.testing.assert_allclose(v, mean[name], rtol=0, atol=1e-10, err_msg=f"forgotten {k}")
-    for k in smoother._dims:
+    for k in smoother.state.dims:
         name = L(1000 * stream.generation[k.index] + k.index) if k.kind == "l" else k
         np.testing.assert_allclose(smoother.estimate_of(k), mean[name], rtol=0, atol=1e-10, err_msg=f"window {k}")
 

@@ -36,7 +36,14 @@ def backsubstitute(state: SolverState, new_cliques: Collection[int], alpha: floa
     its relinearization candidacy [K12 Alg. 5]. Returns the updated variables, depth first, and the number of
     cliques solved.
     """
-    tree, delta, beta, stale, candidates, log = state.tree, state.delta, state.beta, state.stale, state.candidates, state.log
+    tree, delta, beta, stale, candidates, log = (
+        state.tree,
+        state.delta,
+        state.beta,
+        state.stale,
+        state.candidates,
+        state.log,
+    )
     changed: set[Key] = set()
     updated: list[Key] = []
     stack = [c for c in new_cliques if tree.parent[c] is None]

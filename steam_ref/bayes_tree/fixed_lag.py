@@ -30,11 +30,10 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Mapping
 
-import numpy as np
 from numpy.typing import NDArray
 
 from ..arguments import number
-from ..covariance import _groups
+from ..covariance import key_groups
 from ..errors import SteamError, UnknownVariableError
 from ..factors import Factor, check_factors
 from ..variables import Key, check_key, key_list
@@ -219,7 +218,7 @@ class FixedLagSmoother(IncrementalSolver):
         return super().joint_covariance(keys)
 
     def joint_covariances(self, groups: Iterable[Iterable[Key]]) -> list[NDArray]:
-        groups = _groups(groups)
+        groups = key_groups(groups)
         for g in groups:
             for k in g:
                 self._held("the covariance of", k)

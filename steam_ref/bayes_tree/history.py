@@ -16,7 +16,8 @@ variable its estimate given all the data, as a Rauch-Tung-Striebel backward pass
 
     x_v = θ̄_v ⊕ R_v⁻¹ (d_v - S_v (x_S ⊖ θ̄_S)),       (derivations Eq. 10.5)
 
-(⊕, ⊖ by each variable's kind: + and - for a vector), with θ̄ the linearization point at the moment v was marginalized (the conditional, like the marginal
+(⊕, ⊖ by each variable's kind: + and - for a vector), with θ̄ the linearization point at the moment v was
+marginalized (the conditional, like the marginal
 factor, is frozen there), and x_S the final estimate of each separator variable: the window's, or one
 this pass has already computed. For a linear problem the result is the batch optimum of every factor
 ever given, to rounding (tests/test_fixed_lag_history.py). For a nonlinear one it is the optimum of the
@@ -74,7 +75,9 @@ class ForgottenConditional:
         of = tuple((kinds or {}).get(k, VECTOR) for k in (key, *clique.separator))
         step = solve_triangular(clique.R, clique.d)
         if all(m is VECTOR for m in of):
-            return cls(key, clique.separator, clique.separator_dims, np.asarray(theta_bar[key], float) + step, -RinvS, theta_s)
+            return cls(
+                key, clique.separator, clique.separator_dims, np.asarray(theta_bar[key], float) + step, -RinvS, theta_s
+            )
         theta = np.asarray(theta_bar[key], dtype=float)
         return cls(key, clique.separator, clique.separator_dims, step, -RinvS, theta_s, theta, of)
 

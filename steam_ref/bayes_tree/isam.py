@@ -91,7 +91,7 @@ class IncrementalSolver:
             raise UnknownVariableError(f"variable {key!r} is not in the solver") from None
 
     @property
-    def factors(self) -> tuple[Factor, ...]:
+    def factors(self) -> tuple[Factor | None, ...]:
         """Every factor so far, in the order added (a tuple: the solver's caches are indexed by position); the slot
         of a factor :func:`~.marginalization.marginalize` dropped holds None."""
         return tuple(self.state.factors)

@@ -265,9 +265,9 @@ def _marginalize(
         linear = [solver.cached(j) for j in kept] + schur + [tree.cliques[o].marginal for o in orphans]
         rest = [k for c in removed_top.values() for k in c.frontals if k not in drop]
         last = [k for c, cl in removed_top.items() if c in roots for k in cl.frontals if k not in drop]
-        order = solver.elimination_order(rest, [f.keys for f in linear], last)
+        order_rest = solver.elimination_order(rest, [f.keys for f in linear], last)
         n_own = len(kept) + len(schur)
-        cliques, parents, owner = eliminate(order, linear, state.dims, list(range(n_own)) + [None] * len(orphans))
+        cliques, parents, owner = eliminate(order_rest, linear, state.dims, list(range(n_own)) + [None] * len(orphans))
         factor_ids = _add_marginal_factors(state, schur)
         labels = kept + factor_ids + [None] * len(orphans)
         new_cids = tree.insert_eliminated([_relabel(c, labels) for c in cliques], parents)

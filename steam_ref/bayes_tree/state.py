@@ -12,7 +12,7 @@ A variable's estimate is θ̄ ⊕ δ by its kind (:mod:`steam_ref.manifold`; + f
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 
 import numpy as np
@@ -123,10 +123,10 @@ class SolverState:
 
     # --- factors ----------------------------------------------------------------------------
 
-    def append_factors(self, factors: list[Factor], linear: list[GaussianFactor] | None = None) -> list[int]:
+    def append_factors(self, factors: Sequence[Factor], linear: list[GaussianFactor] | None = None) -> list[int]:
         """Store factors (with their linearization, else uncached); returns their ids."""
         first = len(self.factors)
-        self.log.extend(self.factors, factors)
+        self.log.extend(self.factors, list(factors))
         self.log.extend(self.linear, [None] * len(factors) if linear is None else linear)
         return list(range(first, len(self.factors)))
 

@@ -37,8 +37,8 @@ from ..gp import (
     wnoj_transition,
 )
 from ..graph import FactorGraph
-from ..linear.ordering import Ordering
 from ..linear.cholesky import solve
+from ..linear.ordering import Ordering
 from ..linear.system import GaussianFactor, LinearSystem, linearize
 from . import spec
 

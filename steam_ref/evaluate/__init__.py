@@ -11,9 +11,9 @@ The Monte Carlo study itself (sampling tasks from the model, running the estimat
 """
 
 from .align import ALIGNMENTS, Alignment, align_planar
+from .consistency import chi2_band, chi2_quantile, nees, pose_errors, verdict
 from .files import read_kitti, read_tum, write_kitti, write_tum
 from .metrics import PoseError, Statistics, ape, planar_poses, rpe, rpe_pairs
-from .consistency import chi2_band, chi2_quantile, nees, pose_errors, verdict
 from .report import states_at, trajectory_figures
 
 __all__ = [

@@ -1,5 +1,6 @@
 """The linear least-squares layer: linearization, orderings, sparse Cholesky, conditionals.  [YIB Eq. 9-11, 15, 21]"""
 
+from .cholesky import SparseCholesky, solve
 from .ordering import (
     Ordering,
     amd_ordering,
@@ -10,7 +11,6 @@ from .ordering import (
     sparse_backend,
     xl_ordering,
 )
-from .cholesky import SparseCholesky, solve
 from .system import GaussianFactor, LinearizedGroup, LinearSystem, linearize
 
 __all__ = [
