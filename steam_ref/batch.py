@@ -2,8 +2,9 @@
 
 Each iteration linearizes every factor at θ̄ (Eq. 9), solves 𝓘 δθ* = Aᵀb (Eq. 11) by sparse
 Cholesky under the chosen ordering ('xl': the paper's PB, 'amd': PBVR, 'natural'; see
-:mod:`steam_ref.linear.ordering`), and updates
-θ̄ ← θ̄ + δθ*. The ordering depends only on which variables share factors, so it is computed once.
+:mod:`steam_ref.linear.ordering`), and updates θ̄ ← θ̄ ⊕ δθ*, each variable moved by its kind
+(:mod:`steam_ref.manifold`: + for a vector). The ordering depends only on which variables share factors,
+so it is computed once.
 
 Iterations stop on GTSAM's rules (the cost, or its relative decrease, below a tolerance) or on a
 small step. A stopping rule is not a proof, so before a result says ``converged`` the returned
@@ -141,7 +142,7 @@ def _step(
 def gauss_newton_step(
     graph: FactorGraph, values: Values, ordering: Ordering, backend: str
 ) -> tuple[Values, dict[Key, NDArray], float]:
-    """Internal API. One Gauss-Newton step from ``values`` (Eq. 11): (θ̄ + δθ*, δθ* by key, the cost at θ̄)."""
+    """Internal API. One Gauss-Newton step from ``values`` (Eq. 11): (θ̄ ⊕ δθ*, δθ* by key, the cost at θ̄)."""
     delta, cost, _ = _step(graph, values, ordering, backend, 0.0)
     return values.retract(delta), delta, cost
 
@@ -290,7 +291,7 @@ def gauss_newton(
     check: bool = True,
     verbose: bool = False,
 ) -> BatchResult:
-    """Gauss-Newton: θ̄ ← θ̄ + δθ* with δθ* from Eq. 11, until a stopping rule holds.
+    """Gauss-Newton: θ̄ ← θ̄ ⊕ δθ* with δθ* from Eq. 11, until a stopping rule holds.
 
     ``graph``: a FactorGraph or any iterable of factors; ``initial``: a Values or any mapping key → vector.
 

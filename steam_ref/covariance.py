@@ -1,6 +1,8 @@
 """Covariance recovery: blocks of 𝓘⁻¹, the covariance of the Gauss-Newton step.  [YIB Eq. 11, K11 Sec. 3]
 
-cov δθ* = 𝓘⁻¹ = (AᵀA)⁻¹ [YIB Eq. 11]. Two sources:
+cov δθ* = 𝓘⁻¹ = (AᵀA)⁻¹ [YIB Eq. 11]: a covariance of the increment, so it lives in each variable's tangent
+space at the estimate (θ = θ̂ ⊕ δ, δ ~ N(0, Σ); :mod:`steam_ref.manifold`), which for a vector is the space
+itself. Two sources:
 
 - the sparse system: :func:`marginal_covariances` and :func:`sparse_joint_covariance` factor 𝓘
   by sparse Cholesky and solve with unit columns;
