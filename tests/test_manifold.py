@@ -72,7 +72,7 @@ class LogRatio(Factor):
 
 
 def problem(seed: int, n: int):
-    """A chain of n scales with a prior, odometry-like ratios, and a few loop closures; per-state batches."""
+    """A chain of n scales with a prior, odometry-like ratios, loop closures and absolute readings; per-state batches."""
     rng = np.random.default_rng(seed)
     truth = np.exp(np.cumsum(rng.normal(0, 0.3, size=(n, D)), axis=0))
     steps = [[LogPrior((X(0),), np.eye(D) / 0.1, z=np.log(truth[0]) + rng.normal(0, 0.1, D))]]
@@ -82,6 +82,8 @@ def problem(seed: int, n: int):
         if i >= 3 and i % 3 == 0:
             j = i - 3
             fs.append(LogRatio((X(j), X(i)), np.eye(D) / 0.1, z=np.log(truth[i] / truth[j]) + rng.normal(0, 0.1, D)))
+        if i % 4 == 0:  # an absolute reading now and then: later data moves the past (smoothing has work to do)
+            fs.append(LogPrior((X(i),), np.eye(D) / 0.05, z=np.log(truth[i]) + rng.normal(0, 0.05, D)))
         steps.append(fs)
         guesses.append(truth[i] * np.exp(rng.normal(0, 0.5, D)))  # far from the truth: relinearization must work
     return steps, guesses
