@@ -23,7 +23,7 @@ from test_isam import Stream
 
 import steam_ref
 from steam_ref import L, X
-from steam_ref.bayes_tree import IncrementalSolver, marginalize
+from steam_ref.bayes_tree import IncrementalSolver, MarginalFactor, marginalize
 from steam_ref.bayes_tree.state import SolverState
 from steam_ref.bayes_tree.undo import UndoLog
 
@@ -45,6 +45,8 @@ def _bytes(value) -> object:
         return (value.keys, _bytes(value.blocks), _array(value.rhs))
     if value is None or isinstance(value, (int, float, str)):
         return value
+    if isinstance(value, MarginalFactor):  # made by each solver: compared by content
+        return (value.keys, _array(value.A), _array(value.b), _array(value.theta0), value.dims)
     return id(value)  # a factor, a kind: the twin holds the same objects
 
 
@@ -306,3 +308,66 @@ def test_an_interrupt_at_any_line_of_marginalize_leaves_the_solver_as_it_was(key
         None if f is None else f.keys for f in done.factors
     ]
     assert report.leaves == marginalize(twin, keys).leaves
+
+
+def _smoother_state(smoother, keys) -> tuple:
+    """state() and everything a FixedLagSmoother keeps besides: timestamps, what it forgot and when, its history,
+    its counters."""
+    last = smoother.last_marginalization
+    history = tuple((c.key, _array(c.mean), _array(c.gain)) for c in smoother.history.conditionals)
+    return (
+        state(smoother),
+        tuple(smoother.timestamps.items()),
+        tuple(smoother.was_marginalized(k) for k in keys),
+        history,
+        (smoother.n_marginalized, smoother.newest, smoother.peak_window, None if last is None else last.keys),
+    )
+
+
+def test_an_interrupt_at_any_line_of_a_fixed_lag_update_leaves_it_as_before_and_usable() -> None:
+    """Ctrl-C anywhere in FixedLagSmoother.update, the bookkeeping after its marginalization included (the
+    history, the record of what was forgotten, the timestamps): the smoother exactly as a twin that never saw the
+    update, and its next updates as the twin's."""
+    from test_fixed_lag import LinearStream
+
+    from steam_ref.bayes_tree import FixedLagSmoother
+
+    stream = LinearStream(21, n_landmarks=2, fix_every=2)
+
+    def make():
+        return FixedLagSmoother(3.0, keep_history=True, relinearize_skip=1)
+
+    reference = stream.smoother = make()
+    updates = [stream.initial()] + [stream.step() for _ in range(14)]
+    for f, v, t in updates:
+        reference.update(f, v, timestamps=t)
+    keys = list(dict.fromkeys(k for f, _, _ in updates for g in f for k in g.keys))
+    base, (big, after) = updates[:12], updates[12:14]
+
+    def build():
+        s = make()
+        for f, v, t in base:
+            s.update(f, v, timestamps=t)
+        return s
+
+    solver, twin, done = build(), build(), build()
+    _smoother_state(solver, keys)
+    total = _lines_of(lambda: done.update(big[0], big[1], timestamps=big[2]))
+    assert done.last_marginalization is not None and done.history  # the update does marginalize
+    done.update(after[0], after[1], timestamps=after[2])
+    where = set()
+    for n in sorted({*np.linspace(1, total, 50).astype(int), *range(max(total - 60, 1), total + 1)}):
+        trace, _ = _interrupt_at(int(n))
+        sys.settrace(trace)
+        try:
+            with pytest.raises(KeyboardInterrupt) as interrupt:
+                solver.update(big[0], big[1], timestamps=big[2])
+        finally:
+            sys.settrace(None)
+        where.add(str(interrupt.value).split(": ")[1])
+        assert _smoother_state(solver, keys) == _smoother_state(twin, keys), f"not as before after {interrupt.value}"
+    assert {"_forget_old", "marginalize_keys"} <= where
+    solver.update(big[0], big[1], timestamps=big[2])
+    solver.update(after[0], after[1], timestamps=after[2])
+    assert _smoother_state(solver, keys)[1:] == _smoother_state(done, keys)[1:]
+    assert state(solver)[1:] == state(done)[1:]  # all but the factors' ids: the stream's factors are shared
