@@ -10,6 +10,7 @@ tests/test_fixed_lag_gtsam.py.
 
 from __future__ import annotations
 
+import itertools
 import re
 from dataclasses import dataclass, replace
 from typing import ClassVar
@@ -19,7 +20,14 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from steam_ref.bayes_tree import FixedLagSmoother, IncrementalSolver, MarginalFactor, marginalization, marginalize
+from steam_ref.bayes_tree import (
+    BayesTree,
+    FixedLagSmoother,
+    IncrementalSolver,
+    MarginalFactor,
+    marginalization,
+    marginalize,
+)
 from steam_ref.bayes_tree.marginalization import eliminate_variables
 from steam_ref.errors import SteamError, UnknownVariableError
 from steam_ref.factors import Factor, GPPriorFactor, PriorFactor
@@ -415,3 +423,44 @@ def test_a_failure_during_re_elimination_puts_the_tree_back(monkeypatch, error):
     assert len(solver.factors) == n and solver.state.dims == held and solver.tree.problems() == []
     monkeypatch.undo()
     check_window(solver, everything)
+
+
+@pytest.mark.parametrize(
+    "ids", [[-3, -2, -1, 0, 1, 2, 3, 4], [2**53 - 4, 2**53 - 3, 2**53 - 2, 2**53 - 1, 2**53, 7, -(2**53), -1]], ids=str
+)
+def test_keys_of_any_id_the_api_accepts_work_in_the_fixed_lag_smoother(ids):
+    """Negative ids and ids near 2^53: marginalized, queried and named as such, the held ones never reported
+    marginalized, and nothing allocated in proportion to an id (an id-indexed array held 4 bytes per id)."""
+    import tracemalloc
+
+    rng = np.random.default_rng(3)
+    keys = [X(i) for i in ids]
+    smoother = FixedLagSmoother(2.5, relinearize_skip=1)
+    tracemalloc.start()
+    smoother.update([PriorFactor.create(keys[0], rng.normal(size=6), 0.1)], {keys[0]: rng.normal(size=6)},
+                    timestamps={keys[0]: 0.0})  # fmt: skip
+    for t, (a, b) in enumerate(itertools.pairwise(keys), start=1):
+        landmark = L(ids[t])  # a landmark with the same (odd) id as the state: another variable
+        factors = [GPPriorFactor.wnoa(a, b, 1.0, QC), Offset((b, landmark), np.eye(3) / 0.1, z=rng.normal(size=3))]
+        smoother.update(factors, {b: rng.normal(size=6), landmark: rng.normal(size=3)}, timestamps={b: float(t)})
+        assert all(not smoother.was_marginalized(k) for k in smoother.state.dims)
+    _, peak = tracemalloc.get_traced_memory()
+    tracemalloc.stop()
+    assert peak < 50e6
+    gone = [k for k in keys if smoother.was_marginalized(k)]
+    assert gone == keys[: len(gone)] and len(gone) >= 4
+    with pytest.raises(UnknownVariableError, match=f"{gone[-1]!r}, which was marginalized at update"):
+        smoother.estimate_of(gone[-1])
+    assert smoother.estimate_of(keys[-1]).shape == (6,)
+
+
+def test_the_dot_text_gives_distinct_keys_distinct_nodes():
+    """X(-1) and L(-1): two cliques, two nodes (GTSAM's integer key has no room for a negative id)."""
+    factors = [
+        GaussianFactor((L(-1), X(0)), (np.eye(3), np.ones((3, 3))), np.ones(3)),
+        GaussianFactor((X(-1), X(0)), (np.eye(3), np.ones((3, 3))), np.ones(3)),
+        GaussianFactor((X(0),), (np.eye(3),), np.zeros(3)),
+    ]
+    tree = BayesTree.from_factors(factors, [L(-1), X(-1), X(0)])  # the root (x-1, x0), its child (l-1)
+    nodes = {line.split("[")[0] for line in tree.dot().splitlines() if "[label=" in line}
+    assert len(tree.cliques) == 2 and len(nodes) == 2
