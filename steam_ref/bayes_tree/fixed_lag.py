@@ -132,8 +132,8 @@ class FixedLagSmoother(IncrementalSolver):
         GTSAM's fixed-lag smoother constrains its ordering likewise (the keys to marginalize first)."""
         if not self.n_marginalized:  # the window is not full yet: iSAM2's own order, as without a lag
             return super().elimination_order(variables, factor_keys, last)
-        half, times = self.newest - self.lag * OLD_PART, self._times
-        old = sorted((k for k in variables if times.get(k, math.inf) < half and k not in last), key=lambda k: times[k])
+        cutoff, times = self.newest - self.lag * OLD_PART, self._times
+        old = sorted((k for k in variables if times.get(k, math.inf) < cutoff and k not in last), key=lambda k: times[k])
         if not old:
             return super().elimination_order(variables, factor_keys, last)
         groups = [set(keys) for keys in factor_keys]

@@ -7,6 +7,8 @@
 - :mod:`.measurements`: :class:`PriorFactor`, :class:`OdometryFactor` (Eq. 32),
   :class:`VelocityFactor`, :class:`RangeFactor` (Eq. 33), :class:`BearingFactor`,
   :class:`BearingRangeFactor`.
+- :mod:`.marginal`: :class:`MarginalFactor`, the linear factor a marginalization leaves (Eq. 10.4 of the
+  derivations).
 
 The paper's trajectory state is x = [x, y, θ, ẋ, ẏ, θ̇] (d = 3, so 6 numbers); the WNOJ and Singer
 priors append [ẍ, ÿ, θ̈]. The GP factors take any LTI prior (a Qc for WNOA, or a
@@ -16,6 +18,7 @@ state (``state_dim``). Landmarks are ℓ = [x, y].
 
 from .base import LANDMARK_DIM, STATE_DIM, Factor, check_factors, sqrt_information
 from .gp import GPPriorFactor, InterpolatedFactor, gp_prior_factors
+from .marginal import MarginalFactor
 from .measurements import (
     BearingFactor,
     BearingRangeFactor,
@@ -36,6 +39,7 @@ __all__ = [
     "BearingFactor",
     "BearingRangeFactor",
     "InterpolatedFactor",
+    "MarginalFactor",
     "StateMeasurement",
     "gp_prior_factors",
     "sqrt_information",
