@@ -33,10 +33,9 @@ from collections.abc import Iterable, Mapping
 from numpy.typing import NDArray
 
 from ..arguments import number
-from ..covariance import key_groups
 from ..errors import SteamError, UnknownVariableError
 from ..factors import Factor, check_factors
-from ..variables import Key, check_key, key_list
+from ..variables import Key
 from .history import History
 from .isam import IncrementalSolver, check_new_values
 from .marginalization import MarginalizationReport, marginalize_keys
@@ -133,7 +132,9 @@ class FixedLagSmoother(IncrementalSolver):
         if not self.n_marginalized:  # the window is not full yet: iSAM2's own order, as without a lag
             return super().elimination_order(variables, factor_keys, last)
         cutoff, times = self.newest - self.lag * OLD_PART, self._times
-        old = sorted((k for k in variables if times.get(k, math.inf) < cutoff and k not in last), key=lambda k: times[k])
+        old = sorted(
+            (k for k in variables if times.get(k, math.inf) < cutoff and k not in last), key=lambda k: times[k]
+        )
         if not old:
             return super().elimination_order(variables, factor_keys, last)
         groups = [set(keys) for keys in factor_keys]
@@ -197,36 +198,8 @@ class FixedLagSmoother(IncrementalSolver):
         """The timestamp of each timed variable in the window (a copy)."""
         return dict(self._times)
 
-    # --- queries: a marginalized variable is named as such -----------------------------------
-
-    # Each checks its argument as IncrementalSolver does first: ``_held`` reads a key's kind and index.
-
-    def estimate_of(self, key: Key) -> NDArray:
-        key = check_key("key", key)
-        self._held("the estimate of", key)
-        return super().estimate_of(key)
-
-    def marginal_covariance(self, key: Key) -> NDArray:
-        key = check_key("key", key)
-        self._held("the covariance of", key)
-        return super().marginal_covariance(key)
-
-    def joint_covariance(self, keys: Iterable[Key]) -> NDArray:
-        keys = key_list("keys", keys)
+    def _known(self, what: str, keys: list[Key]) -> list[Key]:
+        """UnknownVariableError for a key that was marginalized, saying when (the queries' check)."""
         for k in keys:
-            self._held("the covariance of", k)
-        return super().joint_covariance(keys)
-
-    def joint_covariances(self, groups: Iterable[Iterable[Key]]) -> list[NDArray]:
-        groups = key_groups(groups)
-        for g in groups:
-            for k in g:
-                self._held("the covariance of", k)
-        return super().joint_covariances(groups)
-
-    def marginal_covariances(self, keys: Iterable[Key] | None = None) -> dict[Key, NDArray]:
-        if keys is not None:
-            keys = key_list("keys", keys)
-            for k in keys:
-                self._held("the covariance of", k)
-        return super().marginal_covariances(keys)
+            self._held(what, k)
+        return keys

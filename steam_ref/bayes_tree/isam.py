@@ -24,6 +24,7 @@ from numpy.typing import NDArray
 
 from ..arguments import real_array
 from ..covariance import (
+    key_groups,
     tree_joint_covariance,
     tree_joint_covariances,
     tree_marginal_covariance,
@@ -34,7 +35,7 @@ from ..factors import Factor, check_factors
 from ..linear.ordering import constrained_min_degree
 from ..linear.system import GaussianFactor, linearize
 from ..manifold import VECTOR, Manifold
-from ..variables import Key, Values, check_key
+from ..variables import Key, Values, check_key, key_list
 from .backsolve import backsubstitute
 from .dot import tree_nnz
 from .params import ISAM2Params
@@ -84,7 +85,7 @@ class IncrementalSolver:
 
     def estimate_of(self, key: Key) -> NDArray:
         """The current estimate θ̄ ⊕ δ of one variable (read-only)."""
-        check_key("key", key)
+        self._known("the estimate of", [check_key("key", key)])
         try:
             return self.state.estimate_of(key)
         except KeyError:
@@ -111,19 +112,28 @@ class IncrementalSolver:
 
     def marginal_covariance(self, key: Key) -> NDArray:
         """Cov(δθ_key) (d, d) of the current linear system, from the Bayes tree.  [K11 Sec. 3]"""
+        self._known("the covariance of", [check_key("key", key)])
         return tree_marginal_covariance(self.tree, key)
 
     def marginal_covariances(self, keys: Iterable[Key] | None = None) -> dict[Key, NDArray]:
         """Marginal covariance (dₖ, dₖ) of each of ``keys`` (every variable when None), in one pass down the tree."""
+        keys = None if keys is None else self._known("the covariance of", key_list("keys", keys))
         return tree_marginal_covariances(self.tree, keys)
 
     def joint_covariance(self, keys: Iterable[Key]) -> NDArray:
         """Joint covariance (Σdₖ, Σdₖ) of several variables, stacked in the order given, from the tree."""
-        return tree_joint_covariance(self.tree, keys)
+        return tree_joint_covariance(self.tree, self._known("the covariance of", key_list("keys", keys)))
 
     def joint_covariances(self, groups: Iterable[Iterable[Key]]) -> list[NDArray]:
         """Joint covariance of each group of variables (stacked in the order given), from the tree."""
-        return tree_joint_covariances(self.tree, groups)
+        checked = key_groups(groups)
+        self._known("the covariance of", [k for g in checked for k in g])
+        return tree_joint_covariances(self.tree, checked)
+
+    def _known(self, what: str, keys: list[Key]) -> list[Key]:  # noqa: ARG002 - what a subclass names
+        """``keys``, after a subclass has had its say on those it no longer holds (a fixed-lag smoother names
+        when it marginalized them); the queries themselves name a key never held."""
+        return keys
 
     def __len__(self) -> int:
         return len(self.state.dims)
@@ -193,7 +203,7 @@ class IncrementalSolver:
         # 4e. Eliminate into new cliques and attach back the orphans.   [YIB step 5, Eq. 24-25]
         with timer("eliminate"):
             cliques, parents, owner = eliminate(order, linear, state.dims, fids + [None] * len(orphans))
-            new_cids = self._insert(cliques, parents, orphans, owner[len(fids) :])
+            new_cids = self.tree.insert_eliminated(cliques, parents, orphans, owner[len(fids) :])
         # 5. Partial back-substitution from the root, stopping below α.  [K12 Alg. 7; YIB step 6]
         with timer("backsubstitute"):
             updated, visited = backsubstitute(state, set(new_cids), self.params.wildfire_threshold)
@@ -301,16 +311,3 @@ class IncrementalSolver:
         if gf is None:
             raise SteamError(f"factor {j} has not been linearized")
         return gf
-
-    def _insert(
-        self, cliques: list[Clique], parents: list[int | None], orphans: list[int], owners: list[int]
-    ) -> list[int]:
-        """Put the new cliques in the tree and hang each orphan under ``cliques[owner]``; returns the new ids.
-
-        The owner of an orphan is the new clique that eliminated its cached f(S), i.e. the first
-        variable of its separator [K12 Alg. 4 step 5].
-        """
-        new_cids = self.tree.insert_eliminated(cliques, parents)
-        for o, owner in zip(orphans, owners, strict=True):
-            self.tree.attach(o, new_cids[owner])
-        return new_cids

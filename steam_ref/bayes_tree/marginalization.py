@@ -40,7 +40,7 @@ as it was.
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from numpy.typing import NDArray
 
@@ -206,9 +206,7 @@ def _marginalize(
         cliques, parents, owner = eliminate(order_rest, linear, state.dims, list(range(n_own)) + [None] * len(orphans))
         factor_ids = _add_marginal_factors(state, schur)
         labels = kept + factor_ids + [None] * len(orphans)
-        new_cids = tree.insert_eliminated([_relabel(c, labels) for c in cliques], parents)
-        for o, own in zip(orphans, owner[n_own:], strict=True):
-            tree.attach(o, new_cids[own])
+        new_cids = tree.insert_eliminated([_relabel(c, labels) for c in cliques], parents, orphans, owner[n_own:])
     for j in dropped:
         state.drop_factor(j)  # ids are positions: the slot stays
     for k in drop:
@@ -224,17 +222,7 @@ def _marginalize(
 def _relabel(clique: Clique, labels: list[int | None] | None, extra: tuple[int, ...] = ()) -> Clique:
     """``clique`` with its factor positions replaced by the solver's factor ids (None: kept), ``extra`` added."""
     ids = clique.factors if labels is None else tuple(labels[i] for i in clique.factors)
-    return Clique(
-        clique.frontals,
-        clique.separator,
-        clique.frontal_dims,
-        clique.separator_dims,
-        clique.R,
-        clique.S,
-        clique.d,
-        clique.marginal,
-        tuple(i for i in ids if i is not None) + extra,
-    )
+    return replace(clique, factors=tuple(i for i in ids if i is not None) + extra)
 
 
 def _add_marginal_factors(state: SolverState, schur: list[GaussianFactor]) -> list[int]:

@@ -176,12 +176,22 @@ class CliqueTree(Generic[C]):
         """Put ``clique`` in the place of clique ``cid``, with the same variables (e.g. one more factor id)."""
         self.log.set(self.cliques, cid, clique)
 
-    def insert_eliminated(self, cliques: Sequence[C], parents: Sequence[int | None]) -> list[int]:
-        """Add the cliques of one elimination (children first; ``parents`` index into the list); returns ids."""
+    def insert_eliminated(
+        self,
+        cliques: Sequence[C],
+        parents: Sequence[int | None],
+        orphans: Sequence[int] = (),
+        owners: Sequence[int] = (),
+    ) -> list[int]:
+        """Add the cliques of one elimination (children first; ``parents`` index into the list) and hang each
+        orphan under ``cliques[owner]``, the new clique that eliminated its cached f(S) [K12 Alg. 4 step 5];
+        returns the new ids."""
         ids: list[int | None] = [None] * len(cliques)
         for i in reversed(range(len(cliques))):  # parents before children
             p = parents[i]
             ids[i] = self.add(cliques[i], None if p is None else ids[p])
+        for o, owner in zip(orphans, owners, strict=True):
+            self.attach(o, ids[owner])
         return ids  # type: ignore[return-value]
 
     def clique_containing(self, variable: V) -> int:

@@ -25,7 +25,7 @@ from numpy.typing import NDArray
 from scipy.linalg import lapack
 
 from ..errors import SteamError, UnderdeterminedError
-from ..linear.conditional import assemble_sqrt_information
+from ..linear.conditional import assemble_sqrt_information, gather, underdetermined
 from ..linear.ordering import Ordering
 from ..linear.system import GaussianFactor
 from ..variables import Key, key_list
@@ -76,25 +76,6 @@ def factor_dims(factors: Sequence[GaussianFactor]) -> dict[Key, int]:
     return dims
 
 
-def _gather(keys: tuple[Key, ...], dims: Mapping[Key, int], factors: Sequence[GaussianFactor]) -> NDArray:
-    """The dense block [A_F A_S | b] of the factors adjacent to a clique: (rows, n + 1).  [YIB Eq. 24]"""
-    offset, n = {}, 0
-    for k in keys:
-        offset[k] = n
-        n += dims[k]
-    rows = sum(f.rhs.shape[0] for f in factors)
-    M = np.zeros((rows, n + 1), order="F")
-    r = 0
-    for f in factors:
-        end = r + f.rhs.shape[0]
-        for k, block in zip(f.keys, f.blocks, strict=True):  # a factor names each variable once
-            o = offset[k]
-            M[r:end, o : o + block.shape[1]] = block
-        M[r:end, n] = f.rhs
-        r = end
-    return M
-
-
 def eliminate_clique(
     frontals: tuple[Key, ...],
     separator: tuple[Key, ...],
@@ -103,7 +84,7 @@ def eliminate_clique(
     factor_ids: tuple[int, ...] = (),
 ) -> Clique:
     """Eliminate ``frontals`` from the adjacent ``factors`` by one dense QR.  [YIB Eq. 24-25]"""
-    M = _gather(frontals + separator, dims, factors)
+    M = gather(frontals + separator, dims, factors)
     nf, ncol = sum(dims[k] for k in frontals), M.shape[1]
     free = M.shape[0] if M.shape[0] < nf else None  # fewer rows than frontal unknowns
     if free is None:
@@ -111,23 +92,8 @@ def eliminate_clique(
         R = np.triu(qr[: min(M.shape[0], ncol)])
         small = np.flatnonzero(np.abs(np.diagonal(R[:nf, :nf])) <= RANK_TOLERANCE * max(np.abs(M).max(), 1.0))
         free = int(small[0]) if len(small) else None
-    if free is not None:
-        bad = _free_variable(M, frontals, dims, free)
-        diag = (M[:, :-1] ** 2).sum(axis=0)  # the diagonal of the clique's information
-        own = M[:, _columns_of(bad, frontals, dims)]
-        if not diag[diag > 0].size or not own.any():
-            raise UnderdeterminedError(f"variable {bad!r} is not constrained by the factors (no factor reaches it)")
-        span = float(diag.max() / diag[diag > 0].min())
-        rank = int(np.linalg.matrix_rank(own))
-        if span < 1 / np.finfo(float).eps and rank < own.shape[1]:  # well scaled, yet short of directions
-            raise UnderdeterminedError(
-                f"variable {bad!r} is not constrained by the factors (they fix {rank} of its {own.shape[1]} directions)"
-            )
-        raise UnderdeterminedError(
-            f"elimination breaks down at variable {bad!r} (pivot {free} of its clique vanishes): the factors leave "
-            f"it free, or the information matrix is too ill-conditioned for float64 (its diagonal spans "
-            f"{float(diag.max() / diag[diag > 0].min()):.1e} in this clique)"
-        )
+    if free is not None:  # a vanishing pivot: name the variable and why
+        raise underdetermined(M, frontals, dims, free)
     ns = ncol - 1 - nf
     below = R[nf : nf + ns, nf:].copy()  # f(S): the rows left after eliminating F  [YIB Eq. 24]
     blocks, o = [], 0
@@ -146,29 +112,6 @@ def eliminate_clique(
         marginal,
         tuple(factor_ids),
     )
-
-
-def _columns_of(key: Key, frontals: tuple[Key, ...], dims: Mapping[Key, int]) -> slice:
-    """The columns of frontal ``key`` in a gathered clique matrix."""
-    o = 0
-    for k in frontals:
-        if k == key:
-            return slice(o, o + dims[k])
-        o += dims[k]
-    raise KeyError(key)
-
-
-def _free_variable(M: NDArray, frontals: tuple[Key, ...], dims: Mapping[Key, int], col: int) -> Key:
-    """Name a frontal variable left free: one whose own columns have rank below its size, else the pivot's."""
-    o, at_pivot = 0, frontals[-1]
-    for k in frontals:
-        block = M[:, o : o + dims[k]]
-        if np.linalg.matrix_rank(block) < dims[k]:
-            return k
-        if o <= col < o + dims[k]:
-            at_pivot = k
-        o += dims[k]
-    return at_pivot
 
 
 def eliminate(
