@@ -19,6 +19,8 @@ from .errors import (
     NumericalError,
     ShapeError,
     SteamError,
+    SteamWarning,
+    UncleanedDataWarning,
     UnderdeterminedError,
     UnknownVariableError,
 )
@@ -49,6 +51,10 @@ _HOMES = {
     "xl_ordering": "linear",
     "amd_ordering": "linear",
     "marginal_covariances": "covariance",
+    "sparse_marginal_covariances": "covariance",
+    "sparse_joint_covariance": "covariance",
+    "predict_state": "gp",
+    "finish_at_optimum": "finish",
     "gauss_newton": "batch",
     "levenberg_marquardt": "batch",
     "batch_solve": "batch",
@@ -91,7 +97,7 @@ def __dir__() -> list[str]:
 if TYPE_CHECKING:  # what a type checker and an IDE see: the same names, imported eagerly
     from .batch import BatchResult, batch_solve, gauss_newton, levenberg_marquardt
     from .bayes_tree import BayesTree, FixedLagSmoother, IncrementalSolver, ISAM2Params
-    from .covariance import marginal_covariances
+    from .covariance import marginal_covariances, sparse_joint_covariance, sparse_marginal_covariances
     from .datasets import LandmarkDataset, RangeDataset, generate_synthetic, load_dataset
     from .evaluate import align_planar, ape, chi2_band, nees, read_tum, rpe, write_tum
     from .factors import (
@@ -106,6 +112,8 @@ if TYPE_CHECKING:  # what a type checker and an IDE see: the same names, importe
         VelocityFactor,
         gp_prior_factors,
     )
+    from .finish import finish_at_optimum
+    from .gp import predict_state
     from .graph import FactorGraph
     from .linear import LinearSystem, amd_ordering, xl_ordering
     from .paper.online import run_online
@@ -125,6 +133,8 @@ __all__ = [
     "IllConditionedWarning",
     "ConvergenceWarning",
     "DivergenceWarning",
+    "SteamWarning",
+    "UncleanedDataWarning",
     "Key",
     "X",
     "L",
@@ -146,6 +156,10 @@ __all__ = [
     "xl_ordering",
     "amd_ordering",
     "marginal_covariances",
+    "sparse_marginal_covariances",
+    "sparse_joint_covariance",
+    "predict_state",
+    "finish_at_optimum",
     "gauss_newton",
     "levenberg_marquardt",
     "batch_solve",

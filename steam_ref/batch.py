@@ -12,11 +12,9 @@ estimate is checked (:func:`check_stationarity`): one more Gauss-Newton step fro
 to lower the cost by no more than the tolerance, and 𝓘 there must be well enough conditioned for
 float64 to compute that step at all.
 
-Besides the solvers, this module declares the steps a solver built on them reuses (the internal API
-of :mod:`steam_ref.paper.converge`, typed and kept stable with it): :func:`check_options`,
-:func:`graph_and_values` and :func:`prepare` (the checks and set-up both solvers share),
-:func:`gauss_newton_step` (one step of Eq. 11) and :func:`certify` (the stopping rule and the
-stationarity check that decide ``converged``).
+It also declares the steps a solver built on them reuses (the internal API of :mod:`steam_ref.paper.converge`):
+:func:`check_options`, :func:`graph_and_values` and :func:`prepare` (the checks and set-up both solvers share),
+:func:`gauss_newton_step` (one step of Eq. 11) and :func:`certify` (the rule and check that decide ``converged``).
 """
 
 from __future__ import annotations
@@ -31,6 +29,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 
+from .covariance import SparseCovariances
 from .errors import ConvergenceError, IllConditionedWarning, NumericalError, SteamError
 from .factors import Factor
 from .graph import FactorGraph
@@ -96,8 +95,9 @@ class Stationarity:
 
 
 @dataclass(frozen=True)
-class BatchResult:
-    """The outcome of a batch solve."""
+class BatchResult(SparseCovariances):
+    """The outcome of a batch solve; ``marginal_covariance(key)`` and the other queries give blocks of 𝓘⁻¹ at
+    ``values`` (:class:`~steam_ref.covariance.SparseCovariances`)."""
 
     values: Values  # final estimate
     initial_cost: float  # cost at the initial estimate
@@ -108,6 +108,7 @@ class BatchResult:
     factor_nnz: int = 0  # nonzeros of the Cholesky factor under that ordering
     backend: str = ""  # sparse Cholesky backend
     stationarity: Stationarity | None = None  # the check at the returned estimate (None: not checked)
+    factors: tuple[Factor, ...] = field(default=(), repr=False)  # the factors solved: the covariances' 𝓘
 
     @property
     def cost(self) -> float:
@@ -324,7 +325,7 @@ def gauss_newton(
     converged, reason, found = certify(
         graph, values, order, backend, rule, (relative_tolerance, absolute_tolerance), check
     )
-    return BatchResult(values, cost0, iterations, converged, reason, order, nnz, backend, found)
+    return BatchResult(values, cost0, iterations, converged, reason, order, nnz, backend, found, tuple(graph))
 
 
 def levenberg_marquardt(
@@ -380,7 +381,7 @@ def levenberg_marquardt(
     converged, reason, found = certify(
         graph, values, order, backend, rule, (relative_tolerance, absolute_tolerance), check
     )
-    return BatchResult(values, cost0, iterations, converged, reason, order, nnz, backend, found)
+    return BatchResult(values, cost0, iterations, converged, reason, order, nnz, backend, found, tuple(graph))
 
 
 def batch_solve(graph: FactorGraph, initial: Values, *, method: str = "gn", **options) -> Values:

@@ -27,6 +27,8 @@ solver (``IncrementalSolver``, the stream solvers of :mod:`steam_ref.paper.solve
 
 The functions below prefix them with their source: ``sparse_`` (factors linearized at an estimate),
 ``tree_`` (a Bayes tree); :func:`marginal_covariances` reads a built :class:`LinearSystem`.
+:class:`SparseCovariances` gives a batch result (:class:`~steam_ref.batch.BatchResult`) the four
+queries, from its factors linearized at its estimate.
 
 Nothing here imports the Bayes tree package (which builds on this module); a tree is anything with
 the :class:`~steam_ref.bayes_tree.tree.BayesTree` attributes used below.
@@ -53,6 +55,7 @@ if TYPE_CHECKING:
     from .bayes_tree.tree import BayesTree
 
 __all__ = [
+    "SparseCovariances",
     "key_groups",
     "marginal_covariances",
     "sparse_joint_covariance",
@@ -165,6 +168,39 @@ def sparse_joint_covariances(
     groups = key_groups(groups)
     order, chol = _factor_at(factors, values, backend)
     return _blocks_of_inverse(chol, order, groups)
+
+
+class SparseCovariances:
+    """The four covariance queries of an estimate θ̄ and the factors it was solved with: blocks of 𝓘⁻¹,
+    𝓘 = AᵀA with every factor linearized at θ̄ (the final linearization).  [YIB Eq. 11]
+
+    A class that mixes this in has ``values`` (θ̄) and ``factors`` (a tuple; empty: none kept). Each query
+    factors 𝓘 once (sparse Cholesky, AMD order); ask for several variables in one call to share it.
+    """
+
+    values: Values
+    factors: tuple[Factor, ...]
+
+    def _kept(self) -> tuple[Factor, ...]:
+        if not self.factors:
+            raise SteamError(f"this {type(self).__name__} keeps no factors, so it has no covariance to give")
+        return self.factors
+
+    def marginal_covariance(self, key: Key) -> NDArray:
+        """Cov(δθ_key) = (𝓘⁻¹)_key,key (d, d) at the estimate.  [YIB Eq. 11]"""
+        return sparse_joint_covariance(self._kept(), self.values, [check_key("key", key)])
+
+    def marginal_covariances(self, keys: Iterable[Key]) -> dict[Key, NDArray]:
+        """Marginal covariance (dₖ, dₖ) of each of ``keys``, from one factorization."""
+        return sparse_marginal_covariances(self._kept(), self.values, key_list("keys", keys))
+
+    def joint_covariance(self, keys: Iterable[Key]) -> NDArray:
+        """Joint covariance (Σdₖ, Σdₖ) of ``keys``, stacked in the order given."""
+        return sparse_joint_covariance(self._kept(), self.values, key_list("keys", keys))
+
+    def joint_covariances(self, groups: Iterable[Iterable[Key]]) -> list[NDArray]:
+        """Joint covariance of each group of keys (stacked in the order given), from one factorization."""
+        return sparse_joint_covariances(self._kept(), self.values, key_groups(groups))
 
 
 def key_groups(groups: object) -> list[list[Key]]:

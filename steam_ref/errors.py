@@ -12,9 +12,10 @@ one meaning:
   its answer needs (never "the iterations stopped short": that is convergence);
 - :class:`ConvergenceError`: an iteration that must return a converged answer did not reach one.
 
-Two warnings flag a result that is returned anyway, with the reason in it:
-:class:`IllConditionedWarning` (float64 cannot resolve the answer) and :class:`ConvergenceWarning`
-(an iteration asked to converge stopped before its check passed).
+Every warning is a :class:`SteamWarning`, flagging a result that is returned anyway, with the reason in it:
+:class:`IllConditionedWarning` (float64 cannot resolve the answer), :class:`ConvergenceWarning`
+(an iteration asked to converge stopped before its check passed), :class:`DivergenceWarning` (a stream
+diverges) and :class:`UncleanedDataWarning` (a named data set was read from other files than the paper's).
 """
 
 
@@ -50,15 +51,24 @@ class ConvergenceError(SteamError):
     convergence check; the message says which rule stopped it and what the check found."""
 
 
-class IllConditionedWarning(UserWarning):
+class SteamWarning(UserWarning):
+    """Base class of every warning steam_ref gives: ``warnings.simplefilter("error", SteamWarning)`` makes them errors."""
+
+
+class IllConditionedWarning(SteamWarning):
     """The information matrix is so ill-conditioned that float64 cannot resolve the answer to the tolerance asked."""
 
 
-class ConvergenceWarning(UserWarning):
+class ConvergenceWarning(SteamWarning):
     """An iteration asked to converge stopped before its check passed, and its result, returned flagged
     (``converged=False``), says why."""
 
 
-class DivergenceWarning(UserWarning):
+class DivergenceWarning(SteamWarning):
     """A streamed estimate met a reading beyond any plausible noise, or stopped fitting what it was given
     (it diverges); the run's result records it (``RunResult.divergence``)."""
+
+
+class UncleanedDataWarning(SteamWarning):
+    """``load_dataset("plaza")`` found no cleaned file (``Plaza1_thrown_away_some_range.mat``, the paper's) and read
+    the original Plaza1 text files instead (all 3,529 ranges, outliers included): not the paper's data."""

@@ -47,12 +47,17 @@ def _index(name: str, i: int) -> int:
 
 
 def X(i: int) -> Key:
-    """The key of trajectory state number i."""
+    """The key of trajectory state number i (an integer): the variable x(tᵢ) = [x, y, θ, ẋ, ẏ, θ̇].
+
+    [x, y] is the position (m) and θ the heading (rad, counter-clockwise from the world's x axis, never
+    wrapped) in the world frame; [ẋ, ẏ, θ̇] their time derivatives, **the velocity in the world frame**
+    (m/s, rad/s), not the robot's. The WNOJ and Singer priors append [ẍ, ÿ, θ̈]. Conventions: docs/api.md.
+    """
     return Key("x", _index("X", i))
 
 
 def L(j: int) -> Key:
-    """The key of landmark number j."""
+    """The key of landmark number j (an integer): the variable ℓ = [x, y], its position in the world frame (m)."""
     return Key("l", _index("L", j))
 
 

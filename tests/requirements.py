@@ -69,8 +69,9 @@ def data_dir_reason(folder: str | None, missing: list[str]) -> str:
     more = f" and {len(missing) - 1} more" if len(missing) > 1 else ""
     where = f"{folder} lacks {missing[0]}{more}" if folder else f"{DATA_DIR_ENV} is unset"
     return (
-        f"reference data not found ({where}): set {DATA_DIR_ENV} to a folder holding "
-        f"{DATA_FILES[0]}, {DATA_FILES[1]} and authors/*_full_data_run.mat (CI uses ../shared/data)"
+        f"reference data not found ({where}): run `steam-ref data fetch` (the tests then find the files in your "
+        f"cache folder), or set {DATA_DIR_ENV} to a folder holding {DATA_FILES[0]}, {DATA_FILES[1]} and "
+        "authors/*_full_data_run.mat (CI uses ../shared/data)"
     )
 
 

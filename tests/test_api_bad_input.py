@@ -419,13 +419,13 @@ CASES = [
         "BearingRangeFactor range_ list ValueError",
         lambda: sr.BearingRangeFactor.create(X(0), L(0), 0.1, [5, 6], [0.1, 0.3]),
         ShapeError,
-        r"range_ must be 1 finite number.*\[5, 6\]",
+        r"range must be 1 finite number.*\[5, 6\]",
     ),
     (
         "BearingRangeFactor negative range named",
         lambda: sr.BearingRangeFactor.create(X(0), L(0), 0.1, -5.0, [0.1, 0.3]),
         SteamError,
-        r"cannot be negative, got range_=-5.0",
+        r"cannot be negative, got range=-5.0",
     ),
     (
         "InterpolatedFactor inner string",

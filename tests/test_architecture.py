@@ -1,7 +1,7 @@
 """The package's shape, read from its source with ``ast`` (nothing is imported): every module in a
 layer and no import of a higher layer (``LAYERS``, the table docs/architecture.md draws), no import
 cycle between steam_ref modules, no function-local import of a steam_ref module outside an explicit
-allow-list, no module over 400 lines outside an explicit allow-list, at most 12 modules at the top.
+allow-list, no module over 400 lines outside an explicit allow-list, at most 13 modules at the top.
 And, in a fresh interpreter, that ``import steam_ref`` loads neither matplotlib nor the paper layer.
 
 Edges are module-level imports (``if TYPE_CHECKING:`` blocks excluded; class bodies and top-level
@@ -34,6 +34,7 @@ LAYERS: dict[str, int] = {
     "steam_ref.plot": 1,  # a leaf: draws plain arrays, imports only errors, so any layer may draw
     "steam_ref.manifold": 1,  # how an estimate moves (x ⊕ δ, x ⊖ x0): imports nothing of steam_ref
     "steam_ref.variables": 1,
+    "steam_ref.lie": 1,  # SE(2), its state kind, the local GP on it; imports gp (1) and manifold (1)
     "steam_ref.pose2": 1,
     "steam_ref.robust": 1,
     "steam_ref.gp": 1,
@@ -44,6 +45,7 @@ LAYERS: dict[str, int] = {
     "steam_ref.batch": 5,
     "steam_ref.bayes_tree": 5,
     "steam_ref.trajectory": 5,
+    "steam_ref.finish": 6,  # an incremental solve to the batch optimum: the solver's public API and batch's check
     "steam_ref.datasets": 6,
     "steam_ref.evaluate": 6,  # APE/RPE, trajectory files, NEES: reads trajectory (5), never the paper layer
     # the paper's experiments, in the order data flows
@@ -68,7 +70,7 @@ LAYERS: dict[str, int] = {
     "steam_ref.__main__": 14,
     "steam_ref": 15,  # the facade: names load lazily from the layers; nothing imports it
 }
-MAX_TOP_LEVEL_MODULES = 12
+MAX_TOP_LEVEL_MODULES = 13  # 12 until manifold.py, the seam every solver goes through
 # Entries that place only themselves, never the modules inside them: the root (else every new module would be
 # layer 15 and could import anything) and paper/ (each of its modules has its own layer).
 EXACT_ONLY = {"steam_ref", "steam_ref.paper"}
@@ -300,7 +302,7 @@ def test_the_layer_table_names_only_modules_that_exist():
     assert not stale, f"LAYERS names modules that do not exist: {stale}"
 
 
-def test_the_top_of_the_package_holds_at_most_12_modules():
+def test_the_top_of_the_package_holds_at_most_13_modules():
     top = sorted(p.name for p in PACKAGE.glob("*.py") if p.name != "__init__.py")
     assert len(top) <= MAX_TOP_LEVEL_MODULES, f"{len(top)} modules at the top: {top}"
 

@@ -310,6 +310,22 @@ def test_batch_command_matches_a_direct_gauss_newton(capsys, small_mat, tmp_path
     assert plot.stat().st_size > 1000
 
 
+@pytest.mark.parametrize(("ordering", "name"), [("xl", "PB"), ("amd", "PBVR")])
+def test_batch_text_names_the_papers_method_and_where_the_plot_went(capsys, small_mat, tmp_path, ordering, name):
+    """The README's names (PB: XL ordering, PBVR: AMD) in the command's own line, and the plot's full path."""
+    path, _ = small_mat
+    plot = tmp_path / "b.png"
+    argv = ["batch", "--dataset", str(path), "--preset", "synthetic", "--ordering", ordering, "--plot", str(plot)]
+    code, out, err = _run(capsys, *argv)
+    assert code == 0, err
+    assert out.startswith(f"batch {name} ({ordering.upper()} ordering) on {path}:")
+    assert f"plot written to {plot.resolve()}" in out.splitlines()
+    assert plot.stat().st_size > 1000
+    code, out, err = _run(capsys, *argv, "--json")
+    assert code == 0, err
+    assert len(out.strip().splitlines()) == 1 and json.loads(out)["ordering"] == ordering  # --json: one line only
+
+
 def test_fidelity_without_the_authors_files_is_one_line_and_exit_2(capsys, tmp_path, monkeypatch, shared_data):
     import shutil
 

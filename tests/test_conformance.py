@@ -413,3 +413,25 @@ def test_the_mid_clique_cases_marginalize_variables_that_are_not_leaves_of_steam
         if smoother.last_marginalization is not None:
             leaves.append(smoother.last_marginalization.leaves)
     assert leaves == [False, False, False, False]
+
+
+def test_an_export_that_fails_midway_leaves_nothing_and_a_retry_works(tmp_path, capsys, monkeypatch):
+    """A full disk while the README is written (after every kit file): nothing is left at the target or beside
+    it, the error is one line naming the folder and the cause, and the retry writes the kit."""
+    import errno
+
+    from steam_ref.conformance import command
+
+    def full(*args, **kwargs):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(command, "export_readme", full)
+    code, out, err = cli(capsys, "export", tmp_path / "kit")
+    assert code == 2 and out == "" and len(err.strip().splitlines()) == 1, err
+    assert f"cannot export the kit to '{tmp_path / 'kit'}': No space left on device" in err
+    assert list(tmp_path.iterdir()) == []  # no partial kit, no temporary folder
+    monkeypatch.undo()
+    code, _, err = cli(capsys, "export", tmp_path / "kit")
+    assert code == 0 and (tmp_path / "kit" / "README.md").is_file() and (tmp_path / "kit" / "index.json").is_file(), err
+    (tmp_path / "empty").mkdir()
+    assert cli(capsys, "export", tmp_path / "empty")[0] == 0 and (tmp_path / "empty" / "index.json").is_file()

@@ -401,6 +401,9 @@ HOSTILE = {
     "1e999": '{"kit_version": 2, "cases": {"wnoa_dt0.1": {"Phi": 1e999}}}',
     "a list": "[1, 2, 3]",
     "a version as a string": '{"kit_version": "2", "cases": {}}',
+    "a version as a list": '{"kit_version": [2], "cases": {}}',
+    "a version as an object": '{"kit_version": {"v": 2}, "cases": {}}',
+    "a version as a fraction": '{"kit_version": 2.5, "cases": {}}',
     "not UTF-8": b'{"cases": {"\xff": {}}}',
 }
 
@@ -469,6 +472,8 @@ KIT_EDITS = {
         "\\x1b[31mred\\nFAIL",
     ),
     "an unknown kit version": (lambda i, g: i.__setitem__("kit_version", 99), "kit version 99"),
+    "a kit version as a list": (lambda i, g: i.__setitem__("kit_version", [3]), "kit version [3]"),
+    "a kit version as an object": (lambda i, g: i.__setitem__("kit_version", {"v": 3}), "kit version {'v': 3}"),
     "alternatives that are a list": (lambda i, g: g["cases"][0].__setitem__("alternatives", [1]), "'alternatives'"),
     "an alternative value as a string": (
         lambda i, g: g["cases"][0].__setitem__("alternatives", {"symmetric-whitener": {"W": "0"}}),
@@ -525,3 +530,24 @@ def test_any_malformed_results_file_is_a_verdict_or_one_line_with_exit_2_never_a
         assert out == "" and len(err.strip().splitlines()) == 1 and str(path) in err, err
     else:
         assert code == 1 and err == "" and out.strip().splitlines()[-1].endswith(" missing"), out
+
+
+def test_the_checkers_memory_is_bounded_by_its_caps(tmp_path, capsys):
+    """Parsed, a JSON number costs ~30x its text: the byte cap alone let a 63 MiB file take 1.9 GB.
+    A file holding 250,000 values (12x the kit's largest, 1 MB of text) is refused before it is parsed;
+    one just under the value cap is read within 96 MB (tracemalloc: 67 MB measured, ~340 B per value)."""
+    import tracemalloc
+
+    path = tmp_path / "gp" / "results.json"
+    path.parent.mkdir()
+    path.write_text('{"kit_version": 3, "cases": {"wnoa_dt0.1": {"Phi": [' + ",".join(["0.5"] * 250_000) + "]}}}")
+    code, out, err = cli(capsys, "check", tmp_path, "--only", "gp")
+    assert code == 2 and out == "" and "JSON values, more than" in err and str(path) in err, err
+    path.write_text("[" + ",".join(["0.123456789"] * 199_000) + "]")
+    tracemalloc.start()
+    try:
+        kitio.read_json(path)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 96 * 2**20, peak

@@ -146,3 +146,130 @@ def test_chi2_quantile_equals_scipy_stats(dof):
     """The band's quantile (scipy.special, light to import) against scipy.stats.chi2.ppf, the oracle."""
     for p in (0.001, 0.025, 0.5, 0.975, 0.999):
         assert chi2_quantile(p, dof) == pytest.approx(chi2.ppf(p, dof), rel=1e-12, abs=0)
+
+
+# -- a log read back is validated line by line; the Dask edges; a landmark no reading sees --
+
+
+def _damaged(path, serial, edit):
+    """A log of TINY's items 0 and 1 (the serial results) with ``edit(rows)`` applied to its result rows."""
+    rows = [{"item": i, "result": serial[json.dumps(i)]} for i in (0, 1)]
+    lines = [json.dumps({"study": TINY.describe()})] + [json.dumps(r) for r in edit(rows)]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def _resume(path):
+    from steam_ref.paper.consistency import check_result
+
+    return run_sweep(
+        functools.partial(run_seed, TINY),
+        range(2),
+        log=path,
+        study=TINY.describe(),
+        resume=True,
+        check=functools.partial(check_result, TINY),
+    )
+
+
+def _set(row, value):
+    row["result"] = value
+    return row
+
+
+@pytest.mark.parametrize(
+    ("edit", "message"),
+    [
+        (lambda rows: [rows[0], _set(rows[1], {})], r"line 3: item 1: no result of estimator 'btgp/1'"),
+        (lambda rows: [rows[0], _set(rows[1], None)], r"line 3: item 1: the result is null, not an object"),
+        (lambda rows: [_set(rows[0], 5), rows[1]], r"line 2: item 0: the result is 5, not an object"),
+        (
+            lambda rows: [rows[0], _set(rows[1], {"btgp/1": rows[1]["result"]["btgp/1"]})],
+            r"line 3: item 1: no result of estimator 'btgp/1 Qc x100'",
+        ),
+        (
+            lambda rows: [
+                rows[0],
+                _set(rows[1], rows[1]["result"] | {"btgp/1": rows[1]["result"]["btgp/1"] | {"pose": [1.0]}}),
+            ],
+            r"line 3: item 1: estimator 'btgp/1': pose has 1 values where the study has 13",
+        ),
+        (
+            lambda rows: [
+                rows[0],
+                _set(rows[1], rows[1]["result"] | {"btgp/1": rows[1]["result"]["btgp/1"] | {"pose": [-3.0] * 13}}),
+            ],
+            r"line 3: item 1: estimator 'btgp/1': pose\[0\] is -3.0: a NEES is a finite number >= 0",
+        ),
+        (
+            lambda rows: [
+                _set(
+                    rows[0],
+                    rows[0]["result"] | {"btgp/1": rows[0]["result"]["btgp/1"] | {"velocity": [float("nan")] * 13}},
+                ),
+                rows[1],
+            ],
+            r"line 2: item 0: estimator 'btgp/1': velocity\[0\] is NaN: a NEES is a finite number >= 0",
+        ),
+        (
+            lambda rows: [rows[0], rows[1], _set(json.loads(json.dumps(rows[1])), rows[0]["result"])],
+            r"lines 3 and 4: item 1 has two different results",
+        ),
+    ],
+)
+def test_a_resumed_log_is_validated_line_by_line(tmp_path, serial, edit, message):
+    log = _damaged(tmp_path / "runs.jsonl", serial, edit)
+    with pytest.raises(DataError, match=rf"^{tmp_path / 'runs.jsonl'}, {message}"):
+        _resume(log)
+
+
+def test_a_duplicate_line_with_the_same_result_and_a_byte_that_is_not_utf8(tmp_path, serial):
+    log = _damaged(tmp_path / "runs.jsonl", serial, lambda rows: [rows[0], rows[1], rows[1]])
+    assert _resume(log) == {k: v for k, v in serial.items() if k in ("0", "1")}  # the same run, repeated
+    raw = log.read_bytes().split(b"\n")
+    raw[2] = raw[2].replace(b'"item"', b'"it\xe9m"')
+    log.write_bytes(b"\n".join(raw))
+    with pytest.raises(DataError, match=r"runs\.jsonl, line 3: byte 0xe9 is not UTF-8 text"):
+        _resume(log)
+
+
+def test_the_consistency_command_refuses_a_negative_nees_in_a_resumed_log(tmp_path, capsys):
+    args = ["consistency", "--seeds", "1", "--steps", "2", "--landmarks", "1", "--json"]
+    log = tmp_path / "runs.jsonl"
+    assert main([*args, "--log", str(log)]) == 0
+    capsys.readouterr()
+    head, row = log.read_text().splitlines()
+    row = json.loads(row)
+    row["result"]["batch"]["pose"][0] = -1.5
+    log.write_text(f"{head}\n{json.dumps(row)}\n")
+    assert main([*args, "--resume", str(log)]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == "" and len(captured.err.strip().splitlines()) == 1, captured
+    assert f"{log}, line 2: item 0: estimator 'batch': pose[0] is -1.5" in captured.err
+
+
+def test_the_dask_edges_are_one_line_before_any_work(tmp_path, capsys):
+    optional_import("dask.distributed", "dask")
+    args = ["consistency", "--seeds", "1", "--steps", "2", "--landmarks", "1", "--json"]
+    log = tmp_path / "runs.jsonl"
+    assert main([*args, "--log", str(log)]) == 0
+    done = json.loads(capsys.readouterr().out)
+    assert main([*args, "--resume", str(log), "--backend", "dask"]) == 0  # complete: nothing runs, no cluster
+    resumed = json.loads(capsys.readouterr().out)
+    assert {k: v for k, v in resumed.items() if k not in ("seconds", "backend")} == {
+        k: v for k, v in done.items() if k not in ("seconds", "backend")
+    }
+    for address in ("", "not an address", "http://127.0.0.1:8786", "127.0.0.1", "tcp://host:0"):
+        out = tmp_path / f"never{len(address)}.jsonl"
+        code = main([*args, "--backend", "dask", "--scheduler", address, "--log", str(out)])
+        err = capsys.readouterr().err
+        assert code == 2 and len(err.strip().splitlines()) == 1, (address, err)
+        assert f"--scheduler {address!r} is not a Dask scheduler's address" in err
+        assert not out.exists()  # refused before any work
+
+
+def test_a_landmark_no_reading_sees_is_left_out_of_the_batch_optimum():
+    study = ConsistencyStudy(n_steps=2, n_landmarks=30, estimators=("btgp/1", "batch"))
+    out = run_seed(study, 0)
+    seen = len(out["btgp/1"]["landmark"])
+    assert 0 < seen < 30 and len(out["batch"]["landmark"]) == seen

@@ -274,3 +274,41 @@ def test_sqrt_information_is_sparse_and_squares_to_the_information(rng):
     dense = R.toarray()
     np.testing.assert_allclose(dense.T @ dense, A.T @ A, rtol=1e-9, atol=1e-12 * np.abs(A.T @ A).max())
     np.testing.assert_array_equal(tree.to_dense()[0], dense)
+
+
+def test_batch_result_covariances_equal_the_dense_inverse_at_its_estimate(problem):
+    """BatchResult answers the four queries from its factors linearized at its own estimate (not the start)."""
+    result = sr.gauss_newton(problem.graph, problem.initial)
+    keys = problem.graph.keys()
+    natural = natural_ordering(keys, {k: result.values.dim(k) for k in keys})
+    A, _ = LinearSystem.build(problem.graph.factors, result.values, natural).to_dense()
+    dense = np.linalg.inv(A.T @ A)
+    last = block_of(dense, natural, [sr.X(11)])
+    np.testing.assert_allclose(result.marginal_covariance(sr.X(11)), last, rtol=1e-9, atol=1e-12 * abs(last).max())
+    marginals = result.marginal_covariances([sr.L(0), sr.X(0)])
+    assert list(marginals) == [sr.L(0), sr.X(0)]
+    for k, got in marginals.items():
+        np.testing.assert_allclose(got, block_of(dense, natural, [k]), rtol=1e-9, atol=1e-12)
+    group = [sr.X(11), sr.L(3), sr.X(0)]
+    block = block_of(dense, natural, group)
+    np.testing.assert_allclose(result.joint_covariance(group), block, rtol=1e-9, atol=1e-12 * abs(block).max())
+    (again,) = result.joint_covariances([group])
+    np.testing.assert_allclose(again, block, rtol=1e-9, atol=1e-12 * abs(block).max())
+    at_start = sparse_joint_covariance(problem.graph.factors, problem.initial, [sr.X(11)])
+    assert not np.allclose(at_start, last, rtol=1e-6, atol=0)  # the start's linearization is another answer
+    with pytest.raises(UnknownVariableError, match="x99"):
+        result.marginal_covariance(sr.X(99))
+
+
+def test_a_batch_result_without_factors_says_it_has_no_covariance(problem):
+    result = sr.gauss_newton(problem.graph, problem.initial)
+    bare = sr.BatchResult(result.values, result.initial_cost)
+    with pytest.raises(sr.SteamError, match="BatchResult keeps no factors"):
+        bare.marginal_covariance(sr.X(0))
+
+
+def test_the_sparse_covariance_functions_are_exported():
+    from steam_ref.covariance import sparse_marginal_covariances
+
+    assert sr.sparse_marginal_covariances is sparse_marginal_covariances
+    assert sr.sparse_joint_covariance is sparse_joint_covariance

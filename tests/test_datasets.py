@@ -8,6 +8,7 @@ come from the ``shared_data`` fixture (conftest.py: $STEAM_REF_DATA_DIR; skip or
 from __future__ import annotations
 
 import re
+import warnings
 from collections import Counter
 from pathlib import Path
 
@@ -27,7 +28,7 @@ from steam_ref.datasets import (
     load_dataset,
     search,
 )
-from steam_ref.errors import DataError, ShapeError, SteamError
+from steam_ref.errors import DataError, ShapeError, SteamError, SteamWarning, UncleanedDataWarning
 from steam_ref.pose2 import integrate_odometry
 
 SYN_FILE, PLAZA_FILE = "Syn_theta_Plaza.mat", "Plaza1_thrown_away_some_range.mat"
@@ -207,8 +208,37 @@ def test_plaza_falls_back_to_the_gtsam_text_files(tmp_path: Path, monkeypatch: p
     (tmp_path / "cwd").mkdir()
     monkeypatch.delenv(datasets.DATA_DIR_ENV, raising=False)  # hide the cleaned file
     monkeypatch.chdir(tmp_path / "cwd")
-    ds = load_dataset("plaza", data_dir=tmp_path)
+    assert datasets.uncleaned_plaza(tmp_path) == gtsam_data_dir()  # said beforehand, as `data list` says it
+    with pytest.warns(
+        UncleanedDataWarning, match=r"ORIGINAL, uncleaned Plaza1 release in .*steam-ref data fetch plaza"
+    ):
+        ds = load_dataset("plaza", data_dir=tmp_path)
     assert ds.name == "plaza" and ds.n_ranges == 3529 and "Plaza1_TD.txt" in ds.source
+    assert issubclass(UncleanedDataWarning, SteamWarning)
+
+
+def test_the_cleaned_plaza_file_is_read_without_a_warning(shared_data: Path) -> None:
+    assert datasets.uncleaned_plaza(shared_data) is None
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert load_dataset("plaza", data_dir=shared_data).n_ranges < 3529
+
+
+def test_data_list_says_what_plaza_would_read_in_aligned_columns(tmp_path, monkeypatch, capsys) -> None:
+    """With no cleaned file anywhere, `data list` says `--dataset plaza` reads gtsam's original files; every
+    data set's size ends in the same column, the longest name's too."""
+    from steam_ref.cli import main
+
+    optional_import("gtsam", "gtsam")
+    monkeypatch.delenv(datasets.DATA_DIR_ENV, raising=False)
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))  # nothing fetched
+    assert main(["data", "list"]) == 0
+    out = capsys.readouterr().out
+    (plaza,) = [line for line in out.splitlines() if line.startswith("plaza ")]
+    assert plaza.endswith(f"absent; --dataset plaza reads the ORIGINAL, uncleaned Plaza1 files in {gtsam_data_dir()}")
+    rows = [re.match(r"^\S+\s+(?:[\d,]+ B|-)", line) for line in out.splitlines() if line[:1].isalpha()]
+    ends = {m.end() for m in rows if m}
+    assert len([m for m in rows if m]) >= 6 and len(ends) == 1, out
 
 
 # ---------------------------------------------------------------------------------------------
@@ -481,7 +511,9 @@ def test_search_order_data_dir_then_env_then_gtsam(tmp_path: Path, monkeypatch: 
     (tmp_path / "empty").mkdir()
     found = load_dataset("paper-synthetic", data_dir=tmp_path / "mine")
     assert found.n_poses == sets["mine"].n_poses
-    assert found.source == str((tmp_path / "mine" / SYN_FILE).resolve())
+    # a file that is not the published one is read as the user's own, its source saying so after "; "
+    assert found.source.split("; ")[0] == str((tmp_path / "mine" / SYN_FILE).resolve())
+    assert found.name == "Syn_theta_Plaza (not the published paper-synthetic)"
     assert n_poses(data_dir=tmp_path / "empty") == sets["env"].n_poses  # data_dir lacks it: env next
     assert n_poses() == sets["env"].n_poses
     monkeypatch.delenv(datasets.DATA_DIR_ENV)

@@ -281,3 +281,40 @@ def test_stacking_factors_with_different_losses_is_refused():
     b = sr.RangeFactor.create(sr.X(1), sr.L(0), 5.0, 0.1, loss=sr.Huber(1.0))
     with pytest.raises(sr.SteamError, match=r"factor 1 has loss=Huber"):
         sr.RangeFactor.stack([a, b])
+
+
+HELPED = [
+    "PriorFactor",
+    "OdometryFactor",
+    "VelocityFactor",
+    "RangeFactor",
+    "BearingFactor",
+    "BearingRangeFactor",
+    "InterpolatedFactor",
+    "GPPriorFactor",
+]
+
+
+@pytest.mark.parametrize("name", HELPED)
+def test_help_on_a_factor_leads_with_its_purpose_how_to_make_it_and_its_error(name):
+    """help(sr.RangeFactor) opens with the purpose, the call that makes one (with the argument names of the real
+    method) and the error formula, in at most 25 lines before pydoc's listing of members and machinery."""
+    import inspect
+    import pydoc
+    import re
+
+    cls = getattr(sr, name)
+    rendered = pydoc.plain(pydoc.render_doc(cls)).splitlines()
+    top = rendered[: next(i for i, line in enumerate(rendered) if "Method resolution order" in line)]
+    assert len(top) <= 25, f"help({name}) takes {len(top)} lines before its members"
+    text = "\n".join(top)
+    assert cls.__doc__.strip().splitlines()[0] in text
+    assert "Error:  e =" in text
+    for machinery in ("__dataclass_fields__", "_batched", "batch_signature", "stack("):
+        assert machinery not in text, f"{machinery} in the opening of help({name})"
+    makers = re.findall(rf"{name}\.(\w+)\(([^)]*)\)", text)
+    assert makers, f"help({name}) does not show how to make one"
+    for method, shown in makers:
+        real = [p for p in inspect.signature(getattr(cls, method)).parameters if p != "cls"]
+        names = [a.split("=")[0].strip() for a in shown.split(",") if a.strip() not in ("", "*")]
+        assert names == real, f"help({name}) shows {method}({shown}), the method takes {real}"

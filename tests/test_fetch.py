@@ -11,6 +11,7 @@ from __future__ import annotations
 import functools
 import hashlib
 import http.server
+import os
 import re
 import shutil
 import socket
@@ -158,3 +159,146 @@ def test_a_newcomer_third_command_is_data_fetch():
     readme = (REPO_ROOT / "README.md").read_text()
     commands = re.findall(r"^    (.+)$", readme.split("## More commands")[0], flags=re.M)
     assert "steam-ref data fetch" in commands[2], commands[:3]
+
+
+# The cache is checked at every read, never trusted by a file's name; everything is checked before a download.
+
+
+@pytest.fixture
+def own_cache(tmp_path, monkeypatch) -> Path:
+    """A fresh user cache folder, the only folder searched (no $STEAM_REF_DATA_DIR, no gtsam)."""
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
+    monkeypatch.delenv("STEAM_REF_DATA_DIR", raising=False)
+    monkeypatch.setattr(search, "gtsam_data_dir", lambda: None)
+    cache = search.data_cache_dir()
+    (cache / "authors").mkdir(parents=True)
+    return cache
+
+
+def test_a_cached_file_under_another_sets_name_is_refused_at_use(own_cache, shared_data, capsys):
+    shutil.copyfile(shared_data / "Plaza1_thrown_away_some_range.mat", own_cache / "Syn_theta_Plaza.mat")
+    with pytest.raises(DataError, match=r"Syn_theta_Plaza\.mat: the cached file of data set 'paper-synthetic' is not"):
+        load_dataset("paper-synthetic")
+    code, out, err = _cli(capsys, "run", "--dataset", "paper-synthetic", "--json")
+    assert code == 2 and out == "" and err.count("\n") == 1, (code, out, err)
+    assert "681,427 B where the published file has 119,549 B" in err and "steam-ref data fetch paper-synthetic" in err
+    (own_cache / "Syn_theta_Plaza.mat").write_bytes(b"7 bytes")
+    code, out, _ = _cli(capsys, "data", "list")
+    line = next(x for x in out.splitlines() if x.startswith("paper-synthetic "))
+    assert code == 0 and re.match(r"paper-synthetic\s+7 B  NOT the published file: ", line), line  # its own size
+    assert fetching.missing_needs(["data:paper-synthetic"]) == ["data:paper-synthetic"]
+
+
+def test_a_cached_file_changed_after_a_read_is_refused_at_the_next(own_cache, shared_data):
+    """Same size, one byte changed in place: the memoized sha256 is not reused for the changed file."""
+    shutil.copyfile(shared_data / "authors" / "Syn_full_data_run.mat", own_cache / "authors" / "Syn_full_data_run.mat")
+    from steam_ref.paper.fidelity import find_authors_file
+
+    assert find_authors_file("paper-synthetic") == own_cache / "authors" / "Syn_full_data_run.mat"
+    with open(own_cache / "authors" / "Syn_full_data_run.mat", "r+b") as f:
+        f.seek(5000)
+        byte = f.read(1)
+        f.seek(5000)
+        f.write(bytes([byte[0] ^ 0xFF]))
+    with pytest.raises(
+        DataError, match=r"cached file of data set 'authors-synthetic' is not the published one \(sha256"
+    ):
+        find_authors_file("paper-synthetic")
+
+
+def test_a_users_own_file_under_a_published_name_is_read_but_not_as_that_set(tmp_path, shared_data):
+    (tmp_path / "mine").mkdir()
+    shutil.copyfile(shared_data / "Plaza1_thrown_away_some_range.mat", tmp_path / "mine" / "Syn_theta_Plaza.mat")
+    data = load_dataset("paper-synthetic", data_dir=tmp_path / "mine")
+    assert data.name == "Syn_theta_Plaza (not the published paper-synthetic)"
+    assert "not the published paper-synthetic file: 681,427 B where the published file has 119,549 B" in data.source
+    assert load_dataset("plaza", data_dir=shared_data).name == "plaza"  # the published file keeps its name
+
+
+def _finishes(call, seconds: float = 20.0):
+    """``call()``'s exception (or None), failing the test when it has not returned after ``seconds``."""
+    outcome: list = []
+
+    def target():
+        try:
+            call()
+            outcome.append(None)
+        except Exception as exc:  # handed to the test
+            outcome.append(exc)
+
+    thread = threading.Thread(target=target, daemon=True)
+    thread.start()
+    thread.join(seconds)
+    assert outcome, f"still running after {seconds} s"
+    return outcome[0]
+
+
+@pytest.mark.parametrize("kind", ["fifo", "dev-zero"])
+def test_a_non_regular_file_in_the_cache_is_refused_before_it_is_hashed(mirror, own_cache, kind):
+    url, _ = mirror
+    target = own_cache / "Syn_theta_Plaza.mat"
+    if kind == "fifo":
+        os.mkfifo(target)
+    else:
+        target.symlink_to("/dev/zero")
+    caught = _finishes(lambda: fetching.fetch(["paper-synthetic"], base=url))
+    what = "a FIFO" if kind == "fifo" else "a device"
+    assert isinstance(caught, DataError) and f"Syn_theta_Plaza.mat: not a file ({what})" in str(caught), caught
+
+
+def test_fetch_checks_every_name_the_url_and_the_folder_before_a_download(mirror, own_cache, tmp_path, capsys):
+    url, _ = mirror
+    code, _, err = _cli(capsys, "data", "fetch", "paper-synthetic", "plazza", "--base-url", url)
+    assert code == 2 and "no data set named 'plazza'" in err, err
+    assert not (own_cache / "Syn_theta_Plaza.mat").exists()  # the first name was not downloaded
+    for bad in ("http://[::1/", "http://127.0.0.1:99999/", "http://127.0.0.1:port/"):
+        with pytest.raises(DataError, match="cannot be parsed") as caught:
+            fetching.fetch(["paper-synthetic"], base=bad, cache=tmp_path / "c")
+        assert "sha256" not in str(caught.value)
+    with pytest.raises(DataError, match="names no host"):
+        fetching.fetch(["paper-synthetic"], base="http:///Data/", cache=tmp_path / "c")
+    (tmp_path / "a_file").write_text("")
+    with pytest.raises(DataError, match=r"the cache folder .*a_file is not a folder") as caught:
+        fetching.fetch(["paper-synthetic"], base=_unreachable_url(), cache=tmp_path / "a_file")
+    with pytest.raises(DataError, match=r"the cache folder /proc/steam_ref_cache cannot be written"):
+        fetching.fetch(["paper-synthetic"], base=_unreachable_url(), cache="/proc/steam_ref_cache")
+
+
+def test_credentials_in_the_url_are_never_shown(mirror, own_cache, tmp_path, capsys):
+    url, _ = mirror
+    secret = url.replace("http://", "http://someone:s3cr3t@") + "nowhere/"
+    with pytest.raises(DataError, match=r"http://\*\*\*@127\.0\.0\.1:\d+/nowhere/Syn_theta_Plaza\.mat: 404") as c:
+        fetching.fetch(["paper-synthetic"], base=secret, cache=tmp_path)
+    assert "s3cr3t" not in str(c.value) and "someone" not in str(c.value)
+    closed = _unreachable_url().replace("http://", "http://someone:s3cr3t@")
+    code, _, err = _cli(capsys, "data", "fetch", "plaza", "--base-url", closed)
+    assert code == 2 and "cannot fetch" in err and "s3cr3t" not in err and "someone" not in err, err
+    code, _, err = _cli(capsys, "data", "fetch", "plaza", "--base-url", "ftp://someone:s3cr3t@host/")
+    assert code == 2 and "s3cr3t" not in err, err
+
+
+def test_a_download_is_cut_at_the_registrys_size(mirror, tmp_path):
+    url, root = mirror
+    (root / "big").mkdir(exist_ok=True)
+    (root / "big" / "Syn_theta_Plaza.mat").write_bytes(bytes(20 * 1024 * 1024))  # 20 MB for a 120 KB file
+    written: list[int] = []
+    real_open = open
+
+    def spy(file, mode="r", *args, **kwargs):  # the size of every download file when it is closed
+        handle = real_open(file, mode, *args, **kwargs)
+        if "w" in mode and "tmp" in str(file):
+            close = handle.close
+            handle.close = lambda: (written.append(handle.tell()), close())[1]
+        return handle
+
+    import builtins
+
+    builtins_open = builtins.open
+    builtins.open = spy
+    try:
+        with pytest.raises(DataError, match=r"Syn_theta_Plaza\.mat: refused, the download grew past its size"):
+            fetching.fetch(["paper-synthetic"], base=url + "big/", cache=tmp_path / "c")
+    finally:
+        builtins.open = builtins_open
+    assert [p for p in (tmp_path / "c").rglob("*") if p.is_file()] == []
+    assert written and max(written) <= 119_549, written

@@ -2,9 +2,18 @@
 
 import numpy as np
 import pytest
+import scipy.linalg
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from oracles import condition_gaussian, gp_kernel, gp_mean, random_lti, random_spd
+from oracles import (
+    condition_gaussian,
+    gp_kernel,
+    gp_mean,
+    random_lti,
+    random_spd,
+    sde_input_integral,
+    sde_transition,
+)
 
 from steam_ref.errors import ShapeError, SteamError
 from steam_ref.factors import InterpolatedFactor, PriorFactor
@@ -18,6 +27,7 @@ from steam_ref.gp import (
     interpolate_state_sde,
     interpolation_matrices,
     interpolation_matrices_sde,
+    predict_state,
     process_noise,
     transition,
 )
@@ -349,3 +359,38 @@ def test_a_float32_time_is_read_as_float64_by_every_interpolation():
     ]
     for call in calls:
         np.testing.assert_array_equal(call(tau), call(float(tau)))
+
+
+@pytest.mark.parametrize("kind", ["wnoa", "wnoj", "singer", "random"])
+def test_predict_state_is_the_prior_mean_from_expm(rng, kind):
+    """A new state's starting value is Φ(dt) x_prev + v(dt), with Φ = expm(A dt) and v by quadrature.  [YIB Eq. 14, 22]"""
+    sde = extrapolation_sde(rng, kind)
+    x_prev, dt = rng.normal(size=sde.n), 0.7
+    expected = sde_transition(sde, dt) @ x_prev + sde_input_integral(sde, dt)
+    np.testing.assert_allclose(predict_state(x_prev, dt, sde), expected, rtol=1e-10, atol=1e-12)
+
+
+def test_predict_state_of_the_papers_prior_moves_the_pose_by_the_velocity(rng):
+    """For Qc (the zero-mean WNOA prior), Φ = expm([[0, I], [0, 0]] dt): [x, y, θ] += dt [ẋ, ẏ, θ̇], velocity kept."""
+    qc = 0.01 * np.diag([1.0, 1.0, 25.0])
+    x_prev, dt = rng.normal(size=6), 0.3
+    A = np.block([[np.zeros((3, 3)), np.eye(3)], [np.zeros((3, 3)), np.zeros((3, 3))]])
+    got = predict_state(x_prev, dt, qc)
+    np.testing.assert_allclose(got, scipy.linalg.expm(A * dt) @ x_prev, rtol=1e-14, atol=1e-15)
+    np.testing.assert_allclose(got, np.concatenate([x_prev[:3] + dt * x_prev[3:], x_prev[3:]]), rtol=1e-14)
+    assert not np.shares_memory(got, x_prev)  # a new array
+
+
+@pytest.mark.parametrize(
+    ("x_prev", "dt", "error", "match"),
+    [
+        (np.zeros(5), 1.0, ShapeError, r"x_prev must be a finite \(6,\) vector"),
+        (np.zeros(6), 0.0, SteamError, "dt must be > 0"),
+        (np.zeros(6), -1.0, SteamError, "dt must be > 0"),
+        (np.zeros(6), True, SteamError, "dt must be a real number"),
+        ([0, 0, 0, np.nan, 0, 0], 1.0, ShapeError, "x_prev"),
+    ],
+)
+def test_predict_state_refuses_bad_input_naming_it(x_prev, dt, error, match):
+    with pytest.raises(error, match=match):
+        predict_state(x_prev, dt, np.eye(3))

@@ -69,3 +69,55 @@ def test_every_option_of_run_has_help():
     sub = next(a for a in build_parser()._actions if a.dest == "command")
     bare = [a.option_strings[0] for a in sub.choices["run"]._actions if a.option_strings and not a.help]
     assert not bare, f"options of steam-ref run without help: {bare}"
+
+
+def test_a_skip_for_missing_data_points_at_data_fetch():
+    from requirements import data_dir_reason
+
+    for folder in (None, "/somewhere"):
+        reason = data_dir_reason(folder, ["Syn_theta_Plaza.mat"])
+        assert "`steam-ref data fetch`" in reason and "STEAM_REF_DATA_DIR" in reason, reason
+        assert "\n" not in reason
+
+
+def test_the_suite_and_the_docs_build_say_how_long_they_take():
+    """Where a newcomer starts each one, the time it takes (as newcomers measured them on 2 cores)."""
+    contributing = (REPO_ROOT / "CONTRIBUTING.md").read_text()
+    index = (REPO_ROOT / "docs" / "index.md").read_text()
+    after_pytest = README.split("python3 -m pytest -q\n", 1)[1][:300]
+    assert "6-12 minutes" in after_pytest
+    before_sphinx = README.split("python3 -m sphinx -W docs docs/_build/html", 1)[0][-600:]
+    assert "about 6 minutes" in before_sphinx
+    for text in (contributing, index):
+        assert "6-12 minutes" in text and "about 6 minutes" in text
+
+
+NUMBERS = [
+    "one",
+    "two",
+    "three",
+    "four",
+    "five",
+    "six",
+    "seven",
+    "eight",
+    "nine",
+    "ten",
+    "eleven",
+    "twelve",
+    "thirteen",
+    "fourteen",
+    "fifteen",
+]
+
+
+def test_no_page_counts_the_tutorials_and_the_readme_names_each():
+    """A count of notebooks goes stale with the next one; the README's list of them is checked instead."""
+    tutorials = sorted(p.stem for p in (REPO_ROOT / "tutorials").glob("*.ipynb"))
+    for page in ("docs/tutorials.md", "docs/index.md", "README.md"):
+        text = (REPO_ROOT / page).read_text().lower()
+        counted = re.findall(rf"\b({'|'.join(NUMBERS)}|\d+) (?:notebooks|tutorials|topics)\b", text)
+        assert not counted, f"{page} counts the tutorials: {counted}"
+    (row,) = [line for line in README.splitlines() if line.startswith("| `tutorials/` |")]
+    for stem in tutorials:
+        assert re.search(rf"\b{stem[:2]} ", row), f"README's tutorials row does not name {stem}"

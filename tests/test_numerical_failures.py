@@ -79,7 +79,7 @@ def test_noise_covariance_must_be_symmetric():
     ],
 )
 def test_negative_ranges_are_refused(make):
-    with pytest.raises(sr.SteamError, match=r"cannot be negative, got (measured|range_)=-0.5"):
+    with pytest.raises(sr.SteamError, match=r"cannot be negative, got (measured|range)=-0.5"):
         make(-0.5)
     assert make(0.0).measured[-1] == 0.0  # a zero range is a reading (the robot at the landmark)
 

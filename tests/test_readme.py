@@ -26,6 +26,8 @@ def test_readme_example_runs_and_its_two_solvers_agree():
     sr, graph, initial = scope["sr"], scope["graph"], scope["initial"]
     result, estimate = scope["result"], scope["estimate"]
     assert result.converged, result.reason
+    np.testing.assert_allclose(scope["last"], result.marginal_covariances([sr.X(49)])[sr.X(49)], rtol=1e-12)
+    assert scope["last"].shape == (6, 6)
     assert set(estimate.keys()) == set(graph.keys()) == set(initial.keys())
     one_step = sr.gauss_newton(graph, initial, max_iterations=1).values
     for key in graph.keys():

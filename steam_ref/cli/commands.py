@@ -22,16 +22,18 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import time
-from collections.abc import Sequence
+import warnings
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import numpy as np
 
 from ..conformance import command as conformance_command
-from ..datasets import generate_synthetic, load_dataset, load_range_dataset
-from ..errors import SteamError
+from ..datasets import LandmarkDataset, RangeDataset, generate_synthetic, load_dataset, load_range_dataset
+from ..errors import SteamError, UncleanedDataWarning
 from ..evaluate import trajectory_figures, write_kitti, write_tum
 from ..paper.experiments import reproduce
 from ..paper.fidelity import AUTHORS_RUNS, compare, find_authors_file, load_authors_run
@@ -151,9 +153,8 @@ def _run(args: argparse.Namespace) -> int:
             reference = np.array([score.batch.values[X(int(i))][:2] for i in score.poses])
         else:
             reference = None if data.ground_truth is None else data.ground_truth[:, 1:3]
-        _write_output(
-            args.plot,
-            "--plot",
+        _write_plot(
+            args,
             lambda name: plot_trajectory(
                 reference,
                 result.trajectory[:, :2],
@@ -182,10 +183,18 @@ def _preset(args: argparse.Namespace) -> str:
     return _PRESET_OF[args.dataset]
 
 
+def _load_with_note(args: argparse.Namespace) -> RangeDataset | LandmarkDataset:
+    """``--dataset`` loaded for a command whose summary says what it read: its NOTE line says uncleaned Plaza data
+    (explain.data_lines), so load_dataset's UncleanedDataWarning would only repeat it."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UncleanedDataWarning)
+        return load_dataset(args.dataset, data_dir=args.data_dir, seed=args.seed)
+
+
 def _run_dataset(args: argparse.Namespace):
     """The data set of ``run``: by name or path, or the generated task of ``--steps`` steps."""
     if args.steps is None:
-        return load_dataset(args.dataset, data_dir=args.data_dir, seed=args.seed)
+        return _load_with_note(args)
     if args.dataset != "synthetic":
         raise SteamError(f"--steps generates the synthetic task: it needs --dataset synthetic, got {args.dataset!r}")
     n_landmarks = max(1, round(args.steps * DEFAULT_LANDMARKS / DEFAULT_STEPS))  # the default task's density
@@ -241,7 +250,7 @@ def _batch(args: argparse.Namespace) -> int:
     _check_output(args.plot, ".png", "--plot")
     _check_output(args.save_trajectory, "", "--save-trajectory")
     setup = PaperSetup.named(_preset(args))
-    data = load_dataset(args.dataset, data_dir=args.data_dir, seed=args.seed)
+    data = _load_with_note(args)
     problem = build_problem(data, setup)
     t0 = time.perf_counter()
     result = sequential_batch(problem, ordering=args.ordering)
@@ -266,14 +275,14 @@ def _batch(args: argparse.Namespace) -> int:
         print(json.dumps(summary))
     else:
         print(
-            f"batch ({args.ordering.upper()}) on {args.dataset}: RMSE {summary['rmse_m']} m over {data.n_poses} poses, "
+            f"batch {_BATCH_NAME[args.ordering]} ({args.ordering.upper()} ordering) on {args.dataset}: "
+            f"RMSE {summary['rmse_m']} m over {data.n_poses} poses, "
             f"{summary['total_s']:.2f} s, Cholesky factor {summary['factor_nnz']} nonzeros ({summary['backend']})\n"
             + explain.data_lines(summary)
         )
     if args.plot:
-        _write_output(
-            args.plot,
-            "--plot",
+        _write_plot(
+            args,
             lambda name: plot_trajectory(
                 truth,
                 positions,
@@ -283,6 +292,16 @@ def _batch(args: argparse.Namespace) -> int:
             ),
         )
     return 0
+
+
+_BATCH_NAME = {"xl": "PB", "amd": "PBVR"}  # the paper's names of a batch solve by its ordering [YIB Sec. IV]
+
+
+def _write_plot(args: argparse.Namespace, draw: Callable[[str], object]) -> None:
+    """Write ``--plot`` by ``draw(name)`` and say where it went (not with ``--json``: its one line is the figures)."""
+    _write_output(args.plot, "--plot", draw)
+    if not args.json:
+        print(f"plot written to {os.path.abspath(args.plot)}")
 
 
 def _fidelity(args: argparse.Namespace) -> int:
@@ -307,7 +326,7 @@ def _fidelity(args: argparse.Namespace) -> int:
             json.dumps(row) if args.json else _fidelity_text(row) + "\n" + explain.data_lines(row | {"data_note": None})
         )
     if args.plot:
-        _write_output(args.plot, "--plot", lambda name: plot_fidelity(distances, path=name))
+        _write_plot(args, lambda name: plot_fidelity(distances, path=name))
     return 0
 
 

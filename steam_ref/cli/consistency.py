@@ -16,7 +16,7 @@ import functools
 import json
 import time
 
-from ..paper.consistency import KINDS, ConsistencyStudy, run_seed, summarize
+from ..paper.consistency import KINDS, ConsistencyStudy, check_result, run_seed, summarize
 from ..paper.sweep import run_sweep
 from ..plot.figures import plot_anees
 from .paths import check_output
@@ -58,6 +58,7 @@ def run(args: argparse.Namespace) -> int:
         log=args.resume or args.log,
         study=study.describe(),
         resume=args.resume is not None,
+        check=functools.partial(check_result, study),  # each line read back is validated, naming file and line
     )
     summary = summarize({int(k): v for k, v in results.items()}, study.estimators)
     summary |= {"seconds": round(time.perf_counter() - start, 2), "jobs": args.jobs, "backend": args.backend}

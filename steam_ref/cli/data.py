@@ -13,7 +13,7 @@ import sys
 from pathlib import Path
 
 from ..datasets import fetch as fetching
-from ..datasets.search import data_cache_dir
+from ..datasets.search import data_cache_dir, uncleaned_plaza
 
 __all__ = ["add_parser", "run"]
 
@@ -44,20 +44,36 @@ def _size(n: int) -> str:
     return f"{n:,} B" if n else "-"
 
 
+def _listed(name: str, s: fetching.DataSet, width: int) -> str:
+    """The first line of a set in ``data list``: its name (in a column ``width`` wide), the size of its files
+    (those found, else the registry's), and where it is, or that the file found there is not the published one;
+    for an absent plaza, the original files ``--dataset plaza`` reads instead (UncleanedDataWarning)."""
+    got = fetching.found(name)
+    if got is None:
+        original = uncleaned_plaza() if name == "plaza" else None
+        instead = f"; --dataset plaza reads the ORIGINAL, uncleaned Plaza1 files in {original}" if original else ""
+        return f"{name:<{width}}  {_size(sum(f.size for f in s.files)):>12}  absent{instead}"
+    paths, differs = got
+    # the searched folder that holds it (an authors' run sits in its authors/ subfolder)
+    folder = paths[0].parents[len(Path(s.files[0].local).parts) - 1]
+    size = _size(sum(p.stat().st_size for p in paths))
+    if differs:
+        return f"{name:<{width}}  {size:>12}  NOT the published file: {'; '.join(differs)}"
+    return f"{name:<{width}}  {size:>12}  present  {folder}"
+
+
 def run(args: argparse.Namespace) -> int:
     if args.data_command == "list":
+        width = max(map(len, fetching.DATASETS))  # one column for every name, the longest included
         for name, s in fetching.DATASETS.items():
-            found = fetching.locate(name)
-            # the searched folder that holds it (an authors' run sits in its authors/ subfolder)
-            where = f"present  {found[0].parents[len(Path(s.files[0].local).parts) - 1]}" if found else "absent"
-            print(f"{name:<16} {_size(sum(f.size for f in s.files)):>12}  {where}")
-            print(f"{'':<16} {s.what}; from {s.source}; licence: {s.licence}")
+            print(_listed(name, s, width))
+            print(f"{'':<{width}}  {s.what}; from {s.source}; licence: {s.licence}")
         print(f"fetched files go to {data_cache_dir()}; fetch them with `steam-ref data fetch [NAME ...]`")
         return 0
     progress = sys.stderr.isatty()
-    url = fetching.base_url(args.base_url)
-    for name in args.names or [n for n, s in fetching.DATASETS.items() if s.fetchable]:
-        (paths,) = fetching.fetch([name], base=url, progress=progress).values()
+    names = args.names or [n for n, s in fetching.DATASETS.items() if s.fetchable]
+    got = fetching.fetch(names, base=args.base_url, progress=progress)  # every name checked before any download
+    for name, paths in got.items():
         for p in paths:
             print(f"{name}: {p} (sha256 {fetching.file_digest(p)[:12]}, verified)")
     return 0

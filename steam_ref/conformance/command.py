@@ -15,7 +15,9 @@ suites ``--only`` names) is missing, unless ``--allow-missing`` (1 otherwise, 2 
 from __future__ import annotations
 
 import argparse
+import os
 import shutil
+import tempfile
 from pathlib import Path
 
 from ..errors import SteamError
@@ -92,11 +94,25 @@ def _print(report: Report) -> int:
 
 
 def _export(target: Path) -> int:
+    """The kit and its README written to a temporary folder beside ``target``, renamed to it once complete:
+    a failure (a full disk, say) leaves no partial kit to block a retry, and says which folder and why."""
     if target.exists() and (not target.is_dir() or any(target.iterdir())):
         raise SteamError(f"export needs a new or empty folder, and {str(target)!r} is not one")
     read_index(SHIPPED)  # refuse to export a damaged kit
-    shutil.copytree(SHIPPED, target, dirs_exist_ok=True, ignore=shutil.ignore_patterns("__pycache__"))
-    (target / "README.md").write_text(export_readme(), encoding="utf-8")
+    staging = None
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+        staging = Path(tempfile.mkdtemp(prefix=f".{target.name}.", suffix=".partial", dir=target.parent))
+        shutil.copytree(SHIPPED, staging / "kit", ignore=shutil.ignore_patterns("__pycache__"))
+        (staging / "kit" / "README.md").write_text(export_readme(), encoding="utf-8")
+        os.replace(staging / "kit", target)  # an empty folder is replaced; nothing else can be there
+    except OSError as exc:
+        raise SteamError(
+            f"cannot export the kit to {str(target)!r}: {exc.strerror or exc}; nothing was left there"
+        ) from None
+    finally:
+        if staging is not None:
+            shutil.rmtree(staging, ignore_errors=True)
     print(f"wrote the conformance kit v{KIT_VERSION} to {target} (index.json, {len(SUITES)} suites, README.md)")
     return 0
 

@@ -30,6 +30,8 @@ __all__ = [
     "SHIPPED",
     "MAX_BYTES",
     "MAX_DEPTH",
+    "MAX_VALUES",
+    "is_kit_version",
     "printable",
     "plain",
     "dumps",
@@ -49,6 +51,9 @@ SHIPPED = KITS[KIT_VERSION]
 SUITES = ("gp", "factors", "linear", "batch", "bayes_tree", "incremental", "fixed_lag", "paper")
 MAX_BYTES = 64 * 2**20  # a kit or results file larger than this is refused, not read (the kit's largest is ~1 MB)
 MAX_DEPTH = 64  # JSON nesting deeper than this is refused (the kit's deepest is 8)
+MAX_VALUES = (
+    200_000  # JSON values a file may hold (the kit's largest holds ~20,000, 10x fewer): bounds the parse's memory
+)
 MAX_DIGITS = 18  # an integer literal longer than this is refused (the kit's integers are counts and ids)
 
 
@@ -177,7 +182,8 @@ def read_json(path: Path, max_bytes: int | None = None):
     """A kit or results JSON file; DataError naming the file and the problem when it is anything else.
 
     Refused: a missing file, a folder, a dangling link or a link loop, anything but a regular file,
-    a file over ``max_bytes``, malformed JSON, NaN/Infinity, numbers beyond a double, integer
+    a file over ``max_bytes`` or holding over :data:`MAX_VALUES` values (so the memory a file can take is
+    bounded: its bytes, twice, and the values), malformed JSON, NaN/Infinity, numbers beyond a double, integer
     literals over 18 digits, a key given twice in one object, nesting deeper than 64.
     """
     path = Path(path)
@@ -190,6 +196,14 @@ def read_json(path: Path, max_bytes: int | None = None):
             raw = f.read(max_bytes + 1)
         if len(raw) > max_bytes:
             raise DataError(f"{printable(path)}: more than the {max_bytes} bytes a kit or results file may have")
+        # Every JSON value but the first follows a '[', ',' or ':', so this bounds their number from above (a
+        # string holding those characters only raises it): parsed, each costs ~30-100 bytes, 30x its text.
+        values = raw.count(b"[") + raw.count(b",") + raw.count(b":") + 1
+        if values > MAX_VALUES:
+            raise DataError(
+                f"{printable(path)}: about {values:,} JSON values, more than the {MAX_VALUES:,} a kit or results "
+                "file may hold"
+            )
         value = json.loads(
             raw.decode("utf-8"),
             object_pairs_hook=_no_duplicates,
@@ -239,6 +253,12 @@ def sha256(path: Path) -> str:
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
+def is_kit_version(value: object) -> bool:
+    """Whether ``value`` names a shipped kit: an int (not a bool, a float, a list or an object, which a
+    lookup in :data:`KITS` would match by equality or refuse with a TypeError) that is one of its keys."""
+    return type(value) is int and value in KITS
+
+
 def kit_files(kit: Path) -> list[str]:
     """Every file of a kit folder but index.json, as sorted relative POSIX paths."""
     kit = Path(kit)
@@ -253,7 +273,7 @@ def read_index(kit: Path) -> dict:
     if not isinstance(index, Mapping):
         raise DataError(f"{where}: expected a JSON object, got a {type(index).__name__}")
     version = index.get("kit_version")
-    if isinstance(version, bool) or version not in KITS:
+    if not is_kit_version(version):
         raise DataError(
             f"{where}: kit version {printable(repr(version))}, this steam_ref reads versions {', '.join(map(str, KITS))}"
         )

@@ -17,7 +17,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..datasets import default_data_dirs, load_dataset, load_range_dataset
+from ..datasets import load_dataset, load_range_dataset
+from ..datasets.search import find_named
 from ..errors import DataError, SteamError
 from ..paper.fidelity import load_authors_run
 from ..paper.online import run_online
@@ -71,9 +72,9 @@ def setup_inputs(setup: PaperSetup) -> dict:
 
 
 def _data_file(dataset: str, data_dir) -> Path:
-    for folder in default_data_dirs(data_dir):
-        if (folder / DATA_FILES[dataset]).is_file():
-            return folder / DATA_FILES[dataset]
+    got = find_named(DATA_FILES[dataset], data_dir)  # a cached copy that is not the published file is refused
+    if got is not None:
+        return got[0]
     raise DataError(f"{DATA_FILES[dataset]} not found in the data search path (--data-dir, $STEAM_REF_DATA_DIR)")
 
 

@@ -19,7 +19,7 @@ import math
 from collections.abc import Mapping, Sequence
 
 from ..errors import DataError
-from .kitio import KITS, printable
+from .kitio import KITS, is_kit_version, printable
 
 __all__ = ["kit_cases", "results_cases", "results_version", "numeric_leaf_problem"]
 
@@ -103,7 +103,7 @@ def results_version(where: str, data: object) -> int | None:
     version = data.get("kit_version")
     if version is None:
         return None
-    if isinstance(version, bool) or version not in KITS:
+    if not is_kit_version(version):
         raise DataError(
             f"{where}: kit_version {printable(repr(version))[:40]}, the kits are versions {', '.join(map(str, KITS))}"
         )

@@ -10,9 +10,12 @@
 - :mod:`.gtsam_text`: :func:`load_gtsam_2d`, a reader of GTSAM's planar text format (ODOMETRY and
   LANDMARK rows, as ``gtsam.load2D`` reads them).
 - :mod:`.synthetic`: :func:`generate_synthetic`, a task like the paper's Section IV-A.
-- :mod:`.sampled`: :func:`sample_from_model`, a task drawn from the estimator's own model (consistency).
+- :mod:`.sampled`: :func:`sample_from_model`, a task drawn from the estimator's own model (consistency);
+  :func:`sample_se2_from_model`, the same from the SE(2) WNOA model.
 - :mod:`.search`: :func:`load_dataset` by name or path, searching :func:`default_data_dirs`
   (``data_dir``, ``$STEAM_REF_DATA_DIR``, the fetched files' cache folder, gtsam's ``Data/``).
+- :mod:`.registry`: the paper's files by name, each with its source, sha256 and size, and the check of a
+  file found under one of those names (at every read, never trusted by name).
 - :mod:`.fetch`: the paper's files by name, each with its source and sha256, fetched into the user's
   cache folder (``steam-ref data fetch``); imported on its own (it loads pooch).
 
@@ -25,8 +28,15 @@ from .cmu import load_cmu_mat, load_cmu_text
 from .gtsam_text import load_gtsam_2d
 from .landmarks import LandmarkDataset
 from .matfile import read_mat
-from .sampled import ModelSample, sample_from_model
-from .search import DATA_DIR_ENV, default_data_dirs, gtsam_data_dir, load_dataset, load_range_dataset
+from .sampled import ModelSample, sample_from_model, sample_se2_from_model
+from .search import (
+    DATA_DIR_ENV,
+    default_data_dirs,
+    gtsam_data_dir,
+    load_dataset,
+    load_range_dataset,
+    uncleaned_plaza,
+)
 from .synthetic import generate_synthetic
 from .table import RangeDataset
 
@@ -41,8 +51,10 @@ __all__ = [
     "default_data_dirs",
     "load_dataset",
     "load_range_dataset",
+    "uncleaned_plaza",
     "generate_synthetic",
     "sample_from_model",
+    "sample_se2_from_model",
     "ModelSample",
     "DATA_DIR_ENV",
 ]

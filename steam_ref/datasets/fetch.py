@@ -6,7 +6,14 @@ later push upstream cannot change what a name means. Each file is fetched by nam
 :data:`DEFAULT_BASE_URL`, or a mirror named by ``base_url`` (the CLI's ``--base-url``) or
 ``$STEAM_REF_DATA_URL``. ``pooch`` downloads, checks the sha256 and moves the file into
 :func:`~steam_ref.datasets.search.data_cache_dir` only once it matches: a corrupt or truncated download
-leaves nothing behind. The search path (:func:`~steam_ref.datasets.search.default_data_dirs`) then finds it.
+leaves nothing behind, and a download is cut as soon as it exceeds the registry's size. The search path
+(:func:`~steam_ref.datasets.search.default_data_dirs`) then finds it, and checks it again at every read
+(:mod:`.registry`).
+
+Everything is checked before a byte is downloaded: every name asked for, the URL (http or https, a
+host, a port that is a number), the cache folder (a folder that can be written, else an error naming it,
+not the download), and a file already under a data file's name (a FIFO or a device there is refused,
+not hashed). A user name or password in the URL is shown as ``***`` in every message.
 
 Victoria Park and Plaza2, and the original Plaza1 files, are not fetched: they ship in the ``gtsam`` wheel's
 ``Data/`` folder (``pip install gtsam``), which the search path reads as it is.
@@ -14,17 +21,28 @@ Victoria Park and Plaza2, and the original Plaza1 files, are not fetched: they s
 
 from __future__ import annotations
 
-import hashlib
 import logging
 import os
-from dataclasses import dataclass
+import re
+import tempfile
+import urllib.parse
 from pathlib import Path
 
 import pooch
 import requests
 
 from ..errors import DataError
-from .search import _GTSAM_SETS, data_cache_dir, default_data_dirs
+from .registry import (
+    DATASETS,
+    UPSTREAM_COMMIT,
+    UPSTREAM_REPOSITORY,
+    DataFile,
+    DataSet,
+    check_regular,
+    file_digest,
+    published_mismatch,
+)
+from .search import data_cache_dir, default_data_dirs
 
 __all__ = [
     "DATASETS",
@@ -32,105 +50,19 @@ __all__ = [
     "DEFAULT_BASE_URL",
     "DataFile",
     "DataSet",
+    "UPSTREAM_COMMIT",
+    "UPSTREAM_REPOSITORY",
     "fetch",
     "file_digest",
+    "found",
     "locate",
     "missing_needs",
+    "shown_url",
 ]
 
-UPSTREAM_REPOSITORY = "XinyanGT/online-gpslam-code"
-UPSTREAM_COMMIT = "094150971844bd53c9b9cb4562b04f61b8a804a4"
 DEFAULT_BASE_URL = f"https://raw.githubusercontent.com/{UPSTREAM_REPOSITORY}/{UPSTREAM_COMMIT}/matlab/Data/"
 DATA_URL_ENV = "STEAM_REF_DATA_URL"
-_UPSTREAM_LICENCE = "none stated upstream (research use; not redistributed by steam_ref)"
-
-
-@dataclass(frozen=True)
-class DataFile:
-    """One file: its name at the base URL, where it goes in a data folder, its sha256 and size in bytes."""
-
-    remote: str
-    local: str
-    sha256: str
-    size: int
-
-
-@dataclass(frozen=True)
-class DataSet:
-    """A data set by name: what it is, its files, where they come from, and what may be done with them."""
-
-    name: str
-    what: str
-    files: tuple[DataFile, ...]
-    source: str
-    licence: str
-    fetchable: bool = True
-    authors_rmse_m: float | None = None  # the position RMSE of the authors' saved BTGP/1 run on this file
-
-
-def _upstream(
-    name: str, what: str, remote: str, local: str, sha256: str, size: int, rmse: float | None = None
-) -> DataSet:
-    source = f"{UPSTREAM_REPOSITORY} matlab/Data/{remote} @ {UPSTREAM_COMMIT[:7]}"
-    return DataSet(name, what, (DataFile(remote, local, sha256, size),), source, _UPSTREAM_LICENCE, True, rmse)
-
-
-def _gtsam(name: str, what: str) -> DataSet:
-    files = tuple(DataFile(f, f, "", 0) for f in _GTSAM_SETS[name])
-    return DataSet(name, what, files, "the gtsam wheel's Data/ folder (pip install gtsam)", "BSD (GTSAM)", False)
-
-
-# The sha256 of each file was computed from copies of the authors' files (data/README.md): they must match upstream.
-DATASETS: dict[str, DataSet] = {
-    s.name: s
-    for s in (
-        _upstream(
-            "paper-synthetic",
-            "the paper's synthetic task (Sec. IV-A): 1,501 poses, 298 landmarks",
-            "Syn_theta_Plaza.mat",
-            "Syn_theta_Plaza.mat",
-            "2939aadaf29f343339cd20f3b84bc5c0d51b6240f39f521901ecf27fd5675ce8",
-            119_549,
-            0.0697,  # `diff` of authors/Syn_full_data_run.mat
-        ),
-        _upstream(
-            "plaza",
-            "the Plaza lawnmower run, outliers removed (Sec. IV-B): 9,658 poses, 4 beacons",
-            "Plaza1_thrown_away_some_range.mat",
-            "Plaza1_thrown_away_some_range.mat",
-            "5341839031c60d971aab7a9abd1e553650a5f0054897b0a71a29e12ae8f63351",
-            681_427,
-            0.338,  # `diff` of authors/Plaza1_full_data_run.mat: 0.33823 m, the 0.338 m of docs/experiments.md
-        ),
-        _upstream(
-            "authors-synthetic",
-            "the authors' saved BTGP run on paper-synthetic (steam-ref fidelity)",
-            "Syn_full_data_run.mat",
-            "authors/Syn_full_data_run.mat",
-            "f7d82abdbaf02cd0b292a33307f258dee93765b4b582cf19cedb44071c275649",
-            120_388,
-        ),
-        _upstream(
-            "authors-plaza",
-            "the authors' saved BTGP run on plaza (steam-ref fidelity, tutorial 04)",
-            "Plaza1_full_data_run.mat",
-            "authors/Plaza1_full_data_run.mat",
-            "8bb579cf7eccc9b3bf3f3627cd0918c104cdb70c0c9d05cf0d85b45c96108af4",
-            1_752_548,
-        ),
-        _gtsam("victoria-park", "Victoria Park: 6,969 poses, 151 trees seen by bearing-range, no ground truth"),
-        _gtsam("plaza2", "the second Plaza run, all 1,816 ranges"),
-    )
-}
-
-
-def file_digest(path: str | os.PathLike) -> str:
-    """The sha256 of a file, in hex."""
-    digest = hashlib.sha256()
-    with open(path, "rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
+_USERINFO = re.compile(r"^([A-Za-z][A-Za-z0-9+.-]*://)[^/?#]*@")  # scheme://user:password@ (to the last @)
 
 
 def _dataset(name: str) -> DataSet:
@@ -139,18 +71,34 @@ def _dataset(name: str) -> DataSet:
     return DATASETS[name]
 
 
-def locate(name: str, data_dir: str | os.PathLike | None = None) -> list[Path] | None:
-    """The files of data set ``name`` in the first searched folder that holds them all, or None."""
+def found(name: str, data_dir: str | os.PathLike | None = None) -> tuple[list[Path], list[str]] | None:
+    """The files of data set ``name`` in the first searched folder that holds them all, with how each that is
+    not the published file differs (empty: they all are), or None. DataError when one is not a regular file."""
     for folder in default_data_dirs(data_dir):
         paths = [folder / f.local for f in _dataset(name).files]
+        for p in paths:
+            if p.exists():
+                check_regular(p)
         if all(p.is_file() for p in paths):
-            return paths
+            differs = [
+                f"{p}: {why}"
+                for p, f in zip(paths, _dataset(name).files, strict=True)
+                if (why := published_mismatch(p, f.local))
+            ]
+            return paths, differs
     return None
 
 
+def locate(name: str, data_dir: str | os.PathLike | None = None) -> list[Path] | None:
+    """The files of data set ``name`` in the first searched folder that holds them all, when they are the
+    published files (sha256 and size, :mod:`.registry`), else None."""
+    got = found(name, data_dir)
+    return got[0] if got is not None and not got[1] else None
+
+
 def missing_needs(needs: list[str] | tuple[str, ...]) -> list[str]:
-    """Which of ``needs`` are absent: ``"data:NAME"`` (data set NAME's files in the search path) or a
-    package's import name (found, not imported). A tutorial declares its needs in its metadata."""
+    """Which of ``needs`` are absent: ``"data:NAME"`` (data set NAME's published files in the search path)
+    or a package's import name (found, not imported). A tutorial declares its needs in its metadata."""
     missing = []
     for need in needs:
         kind, _, name = need.partition(":")
@@ -170,12 +118,38 @@ def _importable(module: str) -> bool:
     return True
 
 
+def shown_url(url: str) -> str:
+    """``url`` as a message may show it: a user name or password in it replaced by ``***``."""
+    return _USERINFO.sub(r"\1***@", url)
+
+
 def base_url(given: str | None = None) -> str:
-    """``given``, else ``$STEAM_REF_DATA_URL``, else :data:`DEFAULT_BASE_URL`; with one trailing slash."""
+    """``given``, else ``$STEAM_REF_DATA_URL``, else :data:`DEFAULT_BASE_URL`; with one trailing slash.
+    DataError, naming it (credentials masked), when it is not an http:// or https:// address with a host
+    and, if it gives one, a numeric port."""
     url = given or os.environ.get(DATA_URL_ENV) or DEFAULT_BASE_URL
-    if not url.startswith(("http://", "https://")):
-        raise DataError(f"the base URL {url!r} is not an http:// or https:// address")
+    try:
+        parts = urllib.parse.urlsplit(url)
+        parts.port  # noqa: B018 -- a port that is not a number in 0-65535 raises ValueError here
+    except ValueError as exc:
+        raise DataError(f"the base URL {shown_url(url)!r} cannot be parsed: {exc}") from None
+    if parts.scheme not in ("http", "https") or not url.startswith(("http://", "https://")):
+        raise DataError(f"the base URL {shown_url(url)!r} is not an http:// or https:// address")
+    if not parts.hostname or any(c.isspace() for c in url):
+        raise DataError(f"the base URL {shown_url(url)!r} names no host (or holds a blank)")
     return url.rstrip("/") + "/"
+
+
+def _writable_folder(folder: Path) -> None:
+    """DataError naming ``folder`` when it cannot hold downloads: not a folder, or not creatable/writable."""
+    if folder.exists() and not folder.is_dir():
+        raise DataError(f"the cache folder {folder} is not a folder; remove it or set XDG_CACHE_HOME elsewhere")
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=folder):
+            pass
+    except OSError as exc:
+        raise DataError(f"the cache folder {folder} cannot be written: {exc.strerror or type(exc).__name__}") from None
 
 
 def fetch(
@@ -187,10 +161,12 @@ def fetch(
     """Download the files of the data sets ``names`` (default: every fetchable one) into ``cache``
     (default :func:`data_cache_dir`), each checked against its sha256; return each set's files.
 
-    A file already in the cache with the right sha256 is not downloaded again. A download whose sha256
-    differs is refused (DataError naming the file, both hashes) and nothing of it is left in the cache;
-    an unreachable host or an HTTP error is a DataError of one line. The gtsam wheel's sets are not
-    fetched: asking for one is a DataError saying to ``pip install gtsam``.
+    Every name, the URL, the cache folder and the files already there are checked before anything is
+    downloaded (see the module docstring). A file already in the cache with the right sha256 is not
+    downloaded again; one that differs is replaced. A download larger than the registry's size is cut and
+    refused; one whose sha256 differs is refused (DataError naming the file, both hashes) and nothing of it
+    is left in the cache; an unreachable host or an HTTP error is a DataError of one line. The gtsam wheel's
+    sets are not fetched: asking for one is a DataError saying to ``pip install gtsam``.
     """
     wanted = list(names) if names else [n for n, s in DATASETS.items() if s.fetchable]
     sets = [_dataset(n) for n in wanted]
@@ -199,15 +175,48 @@ def fetch(
             raise DataError(f"data set {s.name!r} is not fetched: it ships in {s.source}")
     url = base_url(base)
     folder = Path(cache) if cache is not None else data_cache_dir()
+    for target in {folder / f.local for s in sets for f in s.files}:
+        _writable_folder(target.parent)
+        if os.path.lexists(target):
+            check_regular(target)  # pooch would hash a FIFO or /dev/zero for ever
     pooch.get_logger().setLevel(logging.WARNING)  # the caller says what was fetched
-    found: dict[str, list[Path]] = {}
-    for s in sets:
-        found[s.name] = [_fetch_file(f, url, folder, progress) for f in s.files]
-    return found
+    return {s.name: [_fetch_file(f, url, folder, progress) for f in s.files] for s in sets}
+
+
+class _TooLarge(Exception):
+    """A download went past the registry's size of its file."""
+
+
+class _Capped:
+    """The file a download is written to, refusing to grow past ``limit`` bytes."""
+
+    def __init__(self, handle, limit: int) -> None:
+        self._handle, self._limit, self._written = handle, limit, 0
+
+    def write(self, chunk: bytes) -> int:
+        self._written += len(chunk)
+        if self._written > self._limit:
+            raise _TooLarge(f"more than the registry's {self._limit:,} B")
+        return self._handle.write(chunk)
+
+    def flush(self) -> None:
+        self._handle.flush()
+
+
+def _capped_download(limit: int, progress: bool):
+    """A pooch downloader that writes at most ``limit`` bytes (the registry's size of the file)."""
+    http = pooch.HTTPDownloader(progressbar=progress, timeout=60)
+
+    def download(url: str, output_file: str, pooch_instance: object) -> None:
+        with open(output_file, "w+b") as handle:
+            http(url, _Capped(handle, limit), pooch_instance)
+
+    return download
 
 
 def _fetch_file(f: DataFile, url: str, folder: Path, progress: bool) -> Path:
     target = folder / f.local
+    where = shown_url(url + f.remote)
     try:
         path = pooch.retrieve(
             url + f.remote,
@@ -215,16 +224,19 @@ def _fetch_file(f: DataFile, url: str, folder: Path, progress: bool) -> Path:
             fname=target.name,
             path=target.parent,
             progressbar=progress,
+            downloader=_capped_download(f.size, progress),
         )
-    except ValueError as exc:  # pooch: the downloaded file's hash differs (the download is deleted)
-        raise DataError(
-            f"{url + f.remote}: refused, its sha256 is not the expected {f.sha256[:12]}... ({exc})"
-        ) from None
+    except _TooLarge as exc:
+        raise DataError(f"{where}: refused, the download grew past its size ({exc})") from None
     except requests.exceptions.HTTPError as exc:
         answer = exc.response
         status = "an HTTP error" if answer is None else f"{answer.status_code} {answer.reason}"
-        raise DataError(f"{url + f.remote}: {status}") from None
-    except (requests.exceptions.RequestException, OSError) as exc:
+        raise DataError(f"{where}: {status}") from None
+    except requests.exceptions.RequestException as exc:  # before ValueError: requests' InvalidURL is both
         reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        raise DataError(f"cannot fetch {url + f.remote}: {type(exc).__name__}: {reason}") from None
+        raise DataError(f"cannot fetch {where}: {type(exc).__name__}: {reason.replace(url, shown_url(url))}") from None
+    except ValueError as exc:  # pooch: the downloaded file's hash differs (the download is deleted)
+        raise DataError(f"{where}: refused, its sha256 is not the expected {f.sha256[:12]}... ({exc})") from None
+    except OSError as exc:
+        raise DataError(f"cannot write {target}: {type(exc).__name__}: {exc.strerror or exc}") from None
     return Path(path)

@@ -3,22 +3,32 @@
 Named files are searched for in exactly four places, in order: the ``data_dir`` argument (the
 CLI's ``--data-dir``), ``$STEAM_REF_DATA_DIR``, the user's cache folder where ``steam-ref data fetch``
 puts the files it downloads (:func:`data_cache_dir`), the ``Data/`` folder of an installed gtsam wheel.
-A folder the user names comes first; fetched files, verified by their sha256, before gtsam's, whose
-``plaza`` is the original uncleaned set.
+A folder the user names comes first; fetched files before gtsam's, whose ``plaza`` is the original
+uncleaned set.
+
+A file found under a published name (:mod:`.registry`) is checked at every read, never trusted by its
+name: in the fetched files' cache a file that is not the published one is refused (DataError saying how
+to fetch it again); in a folder the user names (or gtsam's) it is the user's own file and is read, but
+not as the named set: its name is the file's own, marked "(not the published NAME)", and its ``source``
+says how it differs. A file that is not a regular file (a FIFO, a device) is refused before it is opened.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import importlib.util
 import os
+import warnings
 from pathlib import Path
 
 import platformdirs
 
-from ..errors import DataError
+from ..errors import DataError, UncleanedDataWarning
 from .cmu import load_cmu_mat, load_cmu_text
 from .gtsam_text import load_gtsam_2d
 from .landmarks import LandmarkDataset
+from .registry import GTSAM_SETS as _GTSAM_SETS
+from .registry import check_cached, check_regular, published_mismatch
 from .synthetic import generate_synthetic
 from .table import RangeDataset
 
@@ -27,14 +37,15 @@ __all__ = [
     "data_cache_dir",
     "gtsam_data_dir",
     "default_data_dirs",
+    "find_named",
     "load_dataset",
     "load_range_dataset",
+    "uncleaned_plaza",
 ]
 
 DATA_DIR_ENV = "STEAM_REF_DATA_DIR"
 _FILES = {"paper-synthetic": "Syn_theta_Plaza.mat", "plaza": "Plaza1_thrown_away_some_range.mat"}
-# Named sets read from the files in gtsam's Data/ folder (found in any searched folder): the files, all in one folder.
-_GTSAM_SETS = {"victoria-park": ("victoria_park.txt",), "plaza2": ("Plaza2_DR.txt", "Plaza2_TD.txt", "Plaza2_.mat")}
+_PLAZA1_TEXT = ("Plaza1_DR.txt", "Plaza1_TD.txt", "Plaza1_.mat")  # the original release, as gtsam's Data/ has it
 
 
 def data_cache_dir() -> Path:
@@ -90,14 +101,49 @@ def default_data_dirs(data_dir: str | os.PathLike | None = None) -> list[Path]:
 
 def _find(file_names: tuple[str, ...], folders: list[Path]) -> Path | None:
     """The first folder holding all of ``file_names`` (joined to the first name), or None.
-    DataError when one of them is there but is not a file (a folder of that name is not passed over)."""
+    DataError when one of them is there but is not a regular file (a folder of that name, a FIFO, a link to
+    a device: none is passed over) or is a cached file that is not the published one (:func:`find_named`)."""
     for folder in folders:
         for f in file_names:
-            if (folder / f).exists() and not (folder / f).is_file():
-                raise DataError(f"{folder / f}: not a file")
+            if (folder / f).exists():
+                check_regular(folder / f)
         if all((folder / f).is_file() for f in file_names):
+            if folder.resolve() == data_cache_dir().resolve():  # written by `data fetch` alone: never trusted
+                for f in file_names:
+                    check_cached(folder / f, f)
             return folder / file_names[0]
     return None
+
+
+def find_named(local: str, data_dir: str | os.PathLike | None = None) -> tuple[Path, str | None] | None:
+    """The file ``local`` (e.g. ``"authors/Syn_full_data_run.mat"``) in the first searched folder that holds
+    it, with how it differs from the published file of that name (None when it is that file), or None when
+    no folder holds it. A cached file that differs, and a file that is not a regular file, raise DataError."""
+    found = _find((local,), default_data_dirs(data_dir))
+    if found is None:
+        return None
+    return found, published_mismatch(found, local)
+
+
+def _load_named_mat(found: Path, key: str) -> RangeDataset:
+    """The named set ``key`` read from ``found``; a file that is not the published one is read as the user's
+    own file: named by its stem with "(not the published KEY)", and ``source`` saying how it differs."""
+    differs = published_mismatch(found, _FILES[key])
+    if differs is None:
+        return load_cmu_mat(found, name=key)
+    data = load_cmu_mat(found, name=f"{found.stem} (not the published {key})")
+    return dataclasses.replace(data, source=f"{data.source}; not the published {key} file: {differs}")
+
+
+def uncleaned_plaza(data_dir: str | os.PathLike | None = None) -> Path | None:
+    """The folder whose original Plaza1 text files ``load_dataset("plaza", data_dir)`` reads, warning
+    :class:`~steam_ref.errors.UncleanedDataWarning`, because no folder searched holds the cleaned
+    ``Plaza1_thrown_away_some_range.mat``; None when the cleaned file is found, or neither is."""
+    folders = default_data_dirs(data_dir)
+    if _find((_FILES["plaza"],), folders) is not None:
+        return None
+    found = _find(_PLAZA1_TEXT, folders)
+    return None if found is None else found.parent
 
 
 def _not_found(what: str, folders: list[Path], hint: str) -> DataError:
@@ -127,7 +173,8 @@ def load_dataset(
 
     Names: "synthetic" (generated, see :func:`generate_synthetic`; ``seed`` applies),
     "paper-synthetic" (``Syn_theta_Plaza.mat``), "plaza" (``Plaza1_thrown_away_some_range.mat``,
-    else the original Plaza1 text files with all 3,529 ranges, e.g. from an installed gtsam),
+    else the original Plaza1 text files with all 3,529 ranges, e.g. from an installed gtsam, with an
+    :class:`~steam_ref.errors.UncleanedDataWarning`: :func:`uncleaned_plaza` says beforehand),
     "plaza2" (the CMU text release ``Plaza2_DR.txt``, ``Plaza2_TD.txt``, ``Plaza2_.mat``: all its
     1,816 ranges, none thrown away) and "victoria-park" (``victoria_park.txt``, a
     :class:`LandmarkDataset` read by :func:`load_gtsam_2d`), both as an installed gtsam ships them.
@@ -151,10 +198,17 @@ def load_dataset(
     if key in _FILES:
         found = _find((_FILES[key],), folders)
         if found is not None:
-            return load_cmu_mat(found, name=key)
+            return _load_named_mat(found, key)
         if key == "plaza":
-            text = _find(("Plaza1_DR.txt", "Plaza1_TD.txt", "Plaza1_.mat"), folders)
+            text = _find(_PLAZA1_TEXT, folders)
             if text is not None:
+                warnings.warn(
+                    f"load_dataset('plaza'): the paper's cleaned {_FILES[key]} is in none of the folders searched, so "
+                    f"this is the ORIGINAL, uncleaned Plaza1 release in {text.parent} (all 3,529 ranges, outliers "
+                    "included), not the paper's data; `steam-ref data fetch plaza` gets the cleaned file",
+                    UncleanedDataWarning,
+                    stacklevel=2,
+                )
                 return load_cmu_text(text.parent, "Plaza1", name=key)
             hint += " (or `pip install gtsam`: its Data/ has Plaza1_DR.txt, Plaza1_TD.txt, Plaza1_.mat)"
         raise _not_found(f"data set {key!r} ({_FILES[key]})", folders, hint + ".")

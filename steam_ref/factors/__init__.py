@@ -9,6 +9,10 @@
   :class:`BearingRangeFactor`.
 - :mod:`.marginal`: :class:`MarginalFactor`, the linear factor a marginalization leaves (Eq. 10.4 of the
   derivations).
+- :mod:`.se2`, :mod:`.se2_measurements`: factors on SE(2) states (``steam_ref.lie.SE2_STATE``, Jacobians
+  in the right tangent): :class:`SE2PriorFactor` (the WNOA prior, "local-variable" or "simplified"),
+  :func:`se2_prior_factors`, :class:`SE2StatePrior`, :class:`SE2Measurement` (range, bearing,
+  bearing-range), :class:`SE2VelocityFactor` (the body twist), :class:`SE2InterpolatedFactor`.
 
 The paper's trajectory state is x = [x, y, θ, ẋ, ẏ, θ̇] (d = 3, so 6 numbers); the WNOJ and Singer
 priors append [ẍ, ÿ, θ̈]. The GP factors take any LTI prior (a Qc for WNOA, or a
@@ -28,6 +32,8 @@ from .measurements import (
     StateMeasurement,
     VelocityFactor,
 )
+from .se2 import SE2PriorFactor, SE2StatePrior, se2_prior_factors
+from .se2_measurements import SE2InterpolatedFactor, SE2Measurement, SE2VelocityFactor
 
 __all__ = [
     "Factor",
@@ -46,4 +52,10 @@ __all__ = [
     "check_factors",
     "STATE_DIM",
     "LANDMARK_DIM",
+    "SE2PriorFactor",
+    "se2_prior_factors",
+    "SE2StatePrior",
+    "SE2Measurement",
+    "SE2VelocityFactor",
+    "SE2InterpolatedFactor",
 ]

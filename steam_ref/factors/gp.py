@@ -29,11 +29,21 @@ __all__ = ["GPPriorFactor", "gp_prior_factors", "InterpolatedFactor"]
 
 @dataclass(frozen=True, eq=False)
 class GPPriorFactor(Factor):
-    """The GP prior between consecutive estimated states.  [YIB Eq. 22-23]
+    """The GP motion prior between two consecutive states: how smoothly the robot may move.  [YIB Eq. 22-23]
 
-    e = x(tᵢ) - Φ(tᵢ, tᵢ₋₁) x(tᵢ₋₁) - vᵢ,   Σ = Qᵢ.
-    Build it with :meth:`wnoa` (the paper's prior), :meth:`from_sde` (WNOJ, Singer, any LTI SDE) or
-    :meth:`from_matrices`.
+    Made by one of::
+
+        GPPriorFactor.wnoa(key1, key2, dt, qc)          the paper's prior (white noise on acceleration)
+        GPPriorFactor.from_sde(key1, key2, dt, sde)     WNOJ, Singer, any LTI SDE (steam_ref.gp.LinearSDE)
+        GPPriorFactor.from_matrices(key1, key2, phi, q, v=None)
+
+    ``key1``, ``key2``: the states ``X(i-1)``, ``X(i)``, each [x, y, θ, ẋ, ẏ, θ̇] (velocity in the world
+    frame); ``dt`` > 0: the time between them (s); ``qc``: Qc, the (3, 3) power spectral density of the
+    acceleration noise, in m²/s³ for x, y and rad²/s³ for θ (docs/api.md, "Conventions", says how to choose
+    it). For a whole trajectory, :func:`gp_prior_factors` makes them all.
+
+    Error:  e = xᵢ - Φ(Δt) xᵢ₋₁ - vᵢ,   Σ = Qᵢ = Q(Δt)
+    (WNOA: Φ(Δt) = [[I, Δt I], [0, I]], vᵢ = 0, Q(Δt) = [[Δt³/3 Qc, Δt²/2 Qc], [Δt²/2 Qc, Δt Qc]])
     """
 
     phi: NDArray  # Φ(tᵢ, tᵢ₋₁), (2d, 2d)
@@ -43,7 +53,7 @@ class GPPriorFactor(Factor):
 
     @classmethod
     def wnoa(cls, key1: Key, key2: Key, dt: float, qc: NDArray) -> GPPriorFactor:
-        """The white-noise-on-acceleration prior over a gap dt.  [YIB Eq. 22, 30-31]"""
+        """The white-noise-on-acceleration prior over a gap dt (s) > 0; qc: Qc (3, 3).  [YIB Eq. 22, 30-31]"""
         w = process_noise_sqrt_information(dt, qc)  # WᵀW = Qᵢ⁻¹, memoised per (dt, Qc)
         d = w.shape[0] // 2
         return cls((key1, key2), w, phi=transition(dt, d), v=np.zeros(2 * d))
@@ -94,9 +104,13 @@ class GPPriorFactor(Factor):
 
 
 def gp_prior_factors(keys: list[Key], times: NDArray, prior: NDArray | LinearSDE) -> list[GPPriorFactor]:
-    """The M - 1 prior factors linking consecutive states at strictly increasing times.
+    """The M - 1 GP prior factors linking consecutive states at strictly increasing times.  [YIB Eq. 22]
 
-    ``keys``: any iterable of M keys; ``prior`` is Qc (the paper's WNOA prior) or any :class:`~steam_ref.gp.LinearSDE`.
+    ``keys``: any iterable of M state keys (``[X(0), X(1), ...]``), each state [x, y, θ, ẋ, ẏ, θ̇] (velocity in
+    the world frame); ``times``: their M times (s); ``prior``: Qc of the paper's WNOA prior, a (3, 3) power
+    spectral density in m²/s³ (x, y) and rad²/s³ (θ), or any :class:`~steam_ref.gp.LinearSDE`. With Qc, factor i
+    is ``GPPriorFactor.wnoa(keys[i], keys[i+1], times[i+1] - times[i], qc)``, error xᵢ₊₁ - Φ xᵢ (``from_sde``
+    with a LinearSDE). What Qc means and how to choose it: docs/api.md, "Conventions".
     """
     keys, times, prior = key_list("keys", keys), real_array("times", times), check_prior(prior)
     if times.ndim != 1 or len(times) != len(keys):
@@ -116,6 +130,14 @@ def gp_prior_factors(keys: list[Key], times: NDArray, prior: NDArray | LinearSDE
 @dataclass(frozen=True, eq=False)
 class InterpolatedFactor(Factor):
     """A measurement at a time τ with no estimated state, moved onto its two neighbours.  [YIB Eq. 29]
+
+        ``InterpolatedFactor.create(inner, key1, key2, t1, t2, tau, prior)``
+
+    ``inner``: the measurement as if x(τ) were a state (its first key stands for x(τ), e.g. ``X(-1)``);
+    ``key1``, ``key2``: the states at ``t1`` < ``tau`` < ``t2`` (s); ``prior``: Qc or a LinearSDE, as for
+    :class:`GPPriorFactor`.
+
+    Error:  e = e_inner(Λ(τ) xᵢ₋₁ + Ψ(τ) xᵢ + c, …)
 
     The wrapped ``inner`` factor's first key stands for the missing state x(τ) (it is not a variable
     of the graph); its other keys (a landmark, say) are kept. x̄(τ) = Λ(τ) x̄(tᵢ₋₁) + Ψ(τ) x̄(tᵢ) + c

@@ -1,10 +1,8 @@
 """Priors and measurement factors: odometry, projected velocity, range, bearing.  [YIB Eq. 4, 32-33]
 
-Every motion prior of steam_ref lays a state out as [p; ṗ; ...] with p = [x, y, θ]: the paper's
-WNOA state is [x, y, θ, ẋ, ẏ, θ̇] (6 numbers), the WNOJ and Singer states add [ẍ, ÿ, θ̈] (9). So a
-measurement reads the pose from x[0:3] and the velocity from x[3:6] whatever the prior, and its
-Jacobian is zero on the rest; ``state_dim`` (6 by default) says how long the state is.
-Landmarks are ℓ = [x, y]. A :class:`PriorFactor` works for a variable of any size.
+Every motion prior lays a state out as [p; ṗ; ...], p = [x, y, θ] (docs/api.md, "Conventions"): WNOA's
+[x, y, θ, ẋ, ẏ, θ̇], WNOJ's and Singer's add [ẍ, ÿ, θ̈]. A measurement reads the pose from x[0:3] and the
+velocity from x[3:6], its Jacobian zero on the rest; ``state_dim`` (6 by default) says how long the state is.
 """
 
 from __future__ import annotations
@@ -57,7 +55,17 @@ def _resolved(factor: str, labels: tuple[str, ...], measured: NDArray, W: NDArra
 
 @dataclass(frozen=True, eq=False)
 class PriorFactor(Factor):
-    """A Gaussian prior on one variable, e = θ - mean (a state, or a landmark as in Eq. 4)."""
+    """A Gaussian prior on one variable: a state's start, or a landmark's surveyed position.  [YIB Eq. 4-5]
+
+        ``PriorFactor.create(key, mean, noise, *, loss=None)``
+
+    ``key``: ``X(i)`` or ``L(j)``; ``mean``: the variable's prior mean, a (d,) vector (a state
+    [x, y, θ, ẋ, ẏ, θ̇], velocity in the world frame; a landmark [x, y]); ``noise``: a sigma, sigmas (d,) or a
+    covariance (d, d), in the variable's units (m, rad, m/s, rad/s); ``loss``: ``Huber(k)``, ``Tukey(c)`` or None.
+    Conventions (state layout, frames, units): docs/api.md.
+
+    Error:  e = θ - mean   (d,)
+    """
 
     mean: NDArray  # (d,)
 
@@ -120,11 +128,18 @@ class StateMeasurement(Factor):
 
 @dataclass(frozen=True, eq=False)
 class OdometryFactor(StateMeasurement):
-    """Odometry as the paper writes it [YIB Eq. 32]: forward speed and yaw rate of the state.
+    """Odometry as the paper writes it: the state's forward speed and yaw rate.  [YIB Eq. 32]
 
-    h(x) = [cos θ ẋ + sin θ ẏ,  θ̇]. The paper's scripts, and so every run of steam_ref's front end,
-    use the three-component :class:`VelocityFactor` instead (the lateral speed measured as zero);
-    this factor is here for a reader checking Eq. 32 and for users whose odometry has two components.
+        ``OdometryFactor.create(key, measured, noise, *, loss=None, state_dim=6)``
+
+    ``key``: the state ``X(i)``; ``measured``: [v, ω], forward speed (m/s) and yaw rate (rad/s, counter-clockwise
+    positive); ``noise``: a sigma, sigmas (2,) or a covariance (2, 2); ``state_dim``: 6, or 9 for WNOJ/Singer.
+
+    Error:  e = [cos θ ẋ + sin θ ẏ,  θ̇] - [v, ω]   (the state's velocity [ẋ, ẏ] is in the world frame)
+
+    The paper's scripts, and so every run of steam_ref's front end, use the three-component
+    :class:`VelocityFactor` instead (the lateral speed measured as zero); this factor is here for a reader
+    checking Eq. 32 and for users whose odometry has two components. Conventions: docs/api.md.
     """
 
     measured: NDArray  # (2,) [forward speed, yaw rate]
@@ -168,9 +183,18 @@ class OdometryFactor(StateMeasurement):
 
 @dataclass(frozen=True, eq=False)
 class VelocityFactor(StateMeasurement):
-    """Odometry as the paper's scripts use it: the velocity projected into the body frame.
+    """Odometry as the paper's scripts use it: the state's velocity seen in the robot frame.  [YIB Sec. IV]
 
-    h(x) = [cos θ ẋ + sin θ ẏ,  -sin θ ẋ + cos θ ẏ,  θ̇]  ≈  [distance/dt, 0, heading change/dt].
+        ``VelocityFactor.create(key, measured, noise, *, loss=None, state_dim=6)``
+
+    ``key``: the state ``X(i)``; ``measured``: [forward, lateral, yaw rate] (m/s, m/s, rad/s), for a wheeled
+    robot [distance / dt, 0, heading change / dt]; ``noise``: a sigma, sigmas (3,) or a covariance (3, 3);
+    ``state_dim``: 6, or 9 for WNOJ/Singer.
+
+    Error:  e = [cos θ ẋ + sin θ ẏ,  -sin θ ẋ + cos θ ẏ,  θ̇] - measured
+
+    The state's velocity [ẋ, ẏ] is in the world frame; this factor turns it by -θ into the robot's (x forward,
+    y left). Conventions: docs/api.md.
     """
 
     measured: NDArray  # (3,) [forward, lateral, yaw rate]
@@ -246,7 +270,16 @@ def _range(name: str, measured: float) -> NDArray:
 
 @dataclass(frozen=True, eq=False)
 class RangeFactor(StateMeasurement):
-    """Range from the robot's position to a landmark, ‖[x y]ᵀ - ℓ‖₂.  [YIB Eq. 33]"""
+    """A range reading: the distance from the robot's position to a landmark.  [YIB Eq. 33]
+
+        ``RangeFactor.create(state, landmark, measured, sigma, *, loss=None, state_dim=6)``
+
+    ``state``: ``X(i)``; ``landmark``: ``L(j)``; ``measured``: the range r (m, not negative); ``sigma``: its
+    standard deviation (m); ``loss``: ``Huber(k)``, ``Tukey(c)`` (outliers) or None; ``state_dim``: 6, or 9.
+    Conventions (frames, units): docs/api.md.
+
+    Error:  e = ‖[x, y] - ℓ‖₂ - r
+    """
 
     measured: NDArray  # (1,) range [m]
 
@@ -280,7 +313,16 @@ class RangeFactor(StateMeasurement):
 
 @dataclass(frozen=True, eq=False)
 class BearingFactor(StateMeasurement):
-    """Bearing of a landmark in the robot frame, atan2(ℓy - y, ℓx - x) - θ, error wrapped to [-π, π)."""
+    """A bearing reading: the direction of a landmark in the robot frame.
+
+        ``BearingFactor.create(state, landmark, measured, sigma, *, loss=None, state_dim=6)``
+
+    ``state``: ``X(i)``; ``landmark``: ``L(j)``; ``measured``: the bearing b (rad): 0 straight ahead (along the
+    heading θ), positive counter-clockwise (to the robot's left); ``sigma``: its standard deviation (rad).
+    Conventions (frames, units): docs/api.md.
+
+    Error:  e = wrap(atan2(ℓy - y, ℓx - x) - θ - b),   wrap to [-π, π)
+    """
 
     measured: NDArray  # (1,) bearing [rad]
 
@@ -314,7 +356,16 @@ class BearingFactor(StateMeasurement):
 
 @dataclass(frozen=True, eq=False)
 class BearingRangeFactor(StateMeasurement):
-    """Bearing and range of a landmark together: e = [bearing error (wrapped), range error]."""
+    """A bearing and a range of a landmark together (a laser's or a camera's sighting).
+
+        ``BearingRangeFactor.create(state, landmark, bearing, range_, noise, *, loss=None, state_dim=6)``
+
+    ``state``: ``X(i)``; ``landmark``: ``L(j)``; ``bearing``: b (rad) in the robot frame, 0 straight ahead,
+    positive counter-clockwise (to the left); ``range_``: r (m, not negative); ``noise``: sigmas (2,) or a
+    covariance (2, 2) of [b, r]. Conventions (frames, units): docs/api.md.
+
+    Error:  e = [wrap(atan2(ℓy - y, ℓx - x) - θ - b),  ‖[x, y] - ℓ‖₂ - r],   wrap to [-π, π)
+    """
 
     measured: NDArray  # (2,) [bearing rad, range m]
 
@@ -334,7 +385,7 @@ class BearingRangeFactor(StateMeasurement):
         state_dim: int = STATE_DIM,
     ) -> BearingRangeFactor:
         """Bearing-range reading; noise is sigmas (2,) or a covariance (2, 2) for [bearing, range]."""
-        measured = np.concatenate([_vector(bearing, 1, "bearing"), _range("range_", range_)])
+        measured = np.concatenate([_vector(bearing, 1, "bearing"), _range("range", range_)])
         W = sqrt_information(noise, 2)
         _resolved(f"BearingRangeFactor on {state!r}, {landmark!r}", ("bearing", "range"), measured, W)
         return cls((state, landmark), W, measured=measured, loss=loss, state_dim=state_dim)

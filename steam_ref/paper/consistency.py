@@ -44,6 +44,8 @@ can be the second start.
 
 from __future__ import annotations
 
+import json
+import math
 import warnings
 from dataclasses import dataclass, field
 
@@ -69,6 +71,7 @@ __all__ = [
     "ConsistencyStudy",
     "consistency_setup",
     "model_of",
+    "check_result",
     "run_seed",
     "summarize",
     "KINDS",
@@ -182,7 +185,7 @@ def _solve(
             result = other if other.cost < result.cost else result
         solver = PeriodicBatchSolver("amd")  # holds the optimum; its covariances come from 𝓘 there
         solver.graph, solver.values = problem.graph, result.values
-        ids = sorted(readings.landmarks)
+        ids = [i for i in sorted(readings.landmarks) if L(i) in result.values]  # a landmark no reading sees has none
         return Trajectory(solver, problem.states.tolist(), readings.times, setup.motion_prior()), ids
     options = StreamOptions(skip=estimator.skip, interpolate=estimator.interpolate)
     run = StreamingEstimator(readings, setup.with_schedule(every=estimator.every), options)
@@ -221,6 +224,43 @@ def run_seed(study: ConsistencyStudy, index: int) -> dict:
             "warnings": sorted({str(w.message)[:200] for w in caught}),
         }
     return {name: out[name] for name in study.estimators}
+
+
+def _nees_list(value: object, what: str, length: int | None, most: int) -> None:
+    """SteamError unless ``value`` is a list of non-negative finite numbers, ``length`` long (at most ``most``)."""
+    if not isinstance(value, list):
+        raise SteamError(f"{what} is {json.dumps(value)[:40]}, not a list of NEES values")
+    if (length is not None and len(value) != length) or len(value) > most:
+        wanted = f"{length}" if length is not None else f"at most {most}"
+        raise SteamError(f"{what} has {len(value)} values where the study has {wanted}")
+    for k, v in enumerate(value):
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
+            raise SteamError(f"{what}[{k}] is {json.dumps(v)[:40]}: a NEES is a finite number >= 0")
+
+
+def check_result(study: ConsistencyStudy, item: object, result: object) -> None:
+    """SteamError saying what is wrong with ``result``, read back as the result of run ``item`` of ``study``
+    (:func:`run_seed`'s output): every estimator of the study, each with one NEES per pose and velocity
+    (``n_steps + 1``), at most one per landmark (an unseen one has none), each a finite number >= 0, and its
+    warnings as text. A log is read back through this, so a damaged or edited line is never averaged in."""
+    if isinstance(item, bool) or not isinstance(item, int) or item < 0:
+        raise SteamError(f"the item {json.dumps(item)[:40]} is not a run's index (an integer >= 0)")
+    if not isinstance(result, dict):
+        raise SteamError(f"the result is {json.dumps(result)[:40]}, not an object of estimators")
+    missing = [name for name in study.estimators if name not in result]
+    if missing:
+        raise SteamError(f"no result of estimator {missing[0]!r}")
+    n_poses = study.n_steps + 1
+    for name in study.estimators:
+        row = result[name]
+        if not isinstance(row, dict):
+            raise SteamError(f"estimator {name!r}: {json.dumps(row)[:40]} is not an object of NEES lists")
+        for kind in KINDS:
+            length, most = (None, study.n_landmarks) if kind == "landmark" else (n_poses, n_poses)
+            _nees_list(row.get(kind), f"estimator {name!r}: {kind}", length, most)
+        notes = row.get("warnings")
+        if not isinstance(notes, list) or not all(isinstance(w, str) for w in notes):
+            raise SteamError(f"estimator {name!r}: warnings {json.dumps(notes)[:40]} is not a list of text")
 
 
 def summarize(results: dict[int, dict], estimators: tuple[str, ...], level: float = 0.95) -> dict:

@@ -184,4 +184,4 @@ def converge(
     if not np.isfinite(cost):
         raise NumericalError(f"converge: the cost became {cost} (the start is too far from a minimum)")
     converged, reason, found = certify(graph, values, order, backend, rule, (relative_tolerance, 0.0), True)
-    return BatchResult(values, cost0, iterations, converged, reason, order, 0, backend, found)
+    return BatchResult(values, cost0, iterations, converged, reason, order, 0, backend, found, tuple(graph))

@@ -24,6 +24,7 @@ from numpy.typing import NDArray
 
 from ..datasets import DATA_DIR_ENV, RangeDataset, default_data_dirs, read_mat
 from ..datasets.fetch import DATASETS
+from ..datasets.search import find_named
 from ..errors import DataError
 from .results import RunResult, position_rmse
 
@@ -64,13 +65,10 @@ def find_authors_file(name: str, data_dir: str | os.PathLike | None = None) -> P
     if name not in AUTHORS_RUNS:
         raise DataError(f"no saved authors' run for data set {name!r}; there is one for {', '.join(AUTHORS_RUNS)}")
     file = AUTHORS_RUNS[name]
+    got = find_named(f"authors/{file}", data_dir)  # a cached copy that is not the published file is refused
+    if got is not None:
+        return got[0]
     folders = default_data_dirs(data_dir)
-    for folder in folders:
-        path = folder / "authors" / file
-        if path.exists() and not path.is_file():
-            raise DataError(f"{path}: not a file")
-        if path.is_file():
-            return path
     looked = ", ".join(str(f) for f in folders) or "nowhere"
     fetch = next(s.name for s in DATASETS.values() if any(f.local == f"authors/{file}" for f in s.files))
     raise DataError(

@@ -14,13 +14,19 @@ parameters) through joblib: loky worker processes by default, or joblib's ``dask
   ``{"item": ..., "result": ...}``, flushed) after a first line ``{"study": ...}`` describing the study.
   ``resume=True`` reads the file back, checks it was written by the same study, and runs only the items
   it lacks; a last line cut short by an interruption is ignored (and left in the file, followed by a line
-  break), any other unreadable line is an error naming it.
+  break), any other unreadable line is an error naming it: text that is not UTF-8 or not JSON, a line
+  without ``item`` and ``result``, or a result that ``check`` (the caller's test of one result) refuses.
+  An item on two lines is refused, naming both, unless the two lines are the same result (a run repeated
+  after an interruption gives the same figures, seed for seed): a result is never picked by its position.
+- **Dask**: a ``scheduler`` address is checked before any work (``host:port`` or ``tcp://host:port``);
+  a log that already holds every item runs nothing and starts no cluster.
 """
 
 from __future__ import annotations
 
 import json
 import os
+import re
 from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
@@ -44,10 +50,24 @@ def _key(item: Any) -> str:
     return json.dumps(item, sort_keys=True)
 
 
-def read_results(path: str | os.PathLike, study: dict) -> dict[str, Any]:
-    """The results a JSONL file holds, by item (its JSON text): DataError when the file was written by
-    another study or has an unreadable line other than a last one cut short."""
-    lines = Path(path).read_text().split("\n")
+def _text_of(path: str | os.PathLike) -> str:
+    """The file's text; DataError naming the line of a byte that is not UTF-8."""
+    raw = Path(path).read_bytes()
+    try:
+        return raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = raw[: exc.start].count(b"\n") + 1
+        raise DataError(f"{path}, line {line}: byte {raw[exc.start]:#04x} is not UTF-8 text") from None
+
+
+def read_results(
+    path: str | os.PathLike, study: dict, check: Callable[[Any, Any], None] | None = None
+) -> dict[str, Any]:
+    """The results a JSONL file holds, by item (its JSON text): DataError naming the file and line when the
+    file was written by another study, has an unreadable line other than a last one cut short, a result
+    ``check(item, result)`` refuses (it raises SteamError saying why), or an item on two lines with
+    different results."""
+    lines = _text_of(path).split("\n")
     if not lines or not lines[0].strip():
         raise DataError(f"{path}: empty, no study line; remove it or give another file")
     try:
@@ -60,26 +80,42 @@ def read_results(path: str | os.PathLike, study: dict) -> dict[str, Any]:
             f"this one is {json.dumps(study)[:200]}: give another file"
         )
     done: dict[str, Any] = {}
+    seen: dict[str, int] = {}  # item → the line it was read from
     last = len(lines) - 1  # the text after the final line break ('' when the file ends with one)
     for number, line in enumerate(lines[1:], start=2):
         if not line.strip():
             continue
         try:
             row = json.loads(line)
-            done[_key(row["item"])] = row["result"]
-        except (json.JSONDecodeError, KeyError, TypeError):
+            if not isinstance(row, dict) or set(row) != {"item", "result"}:
+                raise KeyError("item")
+            key = _key(row["item"])
+        except (json.JSONDecodeError, KeyError, TypeError, ValueError):
             if number - 1 == last:  # cut short while being written: that item runs again
                 continue
             raise DataError(f"{path}, line {number}: not a result line ({line[:80]!r})") from None
+        if check is not None:
+            try:
+                check(row["item"], row["result"])
+            except SteamError as err:
+                raise DataError(f"{path}, line {number}: item {key[:40]}: {err}") from None
+        if key in done and _key(done[key]) != _key(row["result"]):
+            raise DataError(
+                f"{path}, lines {seen[key]} and {number}: item {key[:40]} has two different results; "
+                "remove the wrong one (a result is never picked by its position)"
+            )
+        done[key], seen[key] = row["result"], seen.get(key, number)
     return done
 
 
-def _open_log(path: Path, study: dict, resume: bool) -> tuple[dict[str, Any], Any]:
+def _open_log(
+    path: Path, study: dict, resume: bool, check: Callable[[Any, Any], None] | None
+) -> tuple[dict[str, Any], Any]:
     """(results already there, the file opened for appending)."""
     if path.exists() and path.stat().st_size > 0:
         if not resume:
             raise SteamError(f"{path} exists: pass resume to continue it, or give a new file (nothing is overwritten)")
-        done = read_results(path, study)
+        done = read_results(path, study, check)
         log = open(path, "a")  # noqa: SIM115 - closed by run_sweep
         if not path.read_text().endswith("\n"):
             log.write("\n")  # a line cut short stays alone on its line
@@ -101,12 +137,14 @@ def run_sweep(
     study: dict | None = None,
     resume: bool = False,
     on_result: Callable[[Any, Any], None] | None = None,
+    check: Callable[[Any, Any], None] | None = None,
 ) -> dict[str, Any]:
     """``function(item)`` for every item, in parallel; returns {item's JSON text: result}.
 
     ``function`` must be picklable (a module-level function, or a ``functools.partial`` of one) and return
     JSON values. ``log``: the JSONL file results stream to (``study`` its first line); ``resume``: continue
-    it, running only the items it lacks. ``on_result(item, result)`` is called as each result arrives.
+    it, running only the items it lacks, each result read back passed to ``check(item, result)`` (which
+    raises SteamError to refuse it). ``on_result(item, result)`` is called as each result arrives.
     """
     import joblib
 
@@ -116,16 +154,20 @@ def run_sweep(
         raise SteamError(f"jobs must be a positive integer, got {jobs!r}")
     if scheduler is not None and backend != "dask":
         raise SteamError("a scheduler address needs the dask backend (--backend dask)")
+    if scheduler is not None:
+        _check_address(scheduler)
     items = list(items)
     done: dict[str, Any] = {}
     stream = None
     if log is not None:
-        done, stream = _open_log(Path(log), study or {}, resume)
+        done, stream = _open_log(Path(log), study or {}, resume, check)
     todo = [item for item in items if _key(item) not in done]
     results = {k: v for k, v in done.items() if k in {_key(i) for i in items}}
     cluster = client = None
     try:
-        if backend == "dask" and todo:
+        if not todo:  # every item is in the log: nothing to run, no cluster (joblib's dask backend needs one)
+            return results
+        if backend == "dask":
             client, cluster = _dask_client(scheduler, jobs)
         config = joblib.parallel_config(backend="dask") if backend == "dask" else joblib.parallel_config("loky")
         with config:
@@ -147,6 +189,20 @@ def run_sweep(
     return results
 
 
+# host:port, optionally tcp:// or tls://; a host is a name, an IPv4 address or a bracketed IPv6 one
+_ADDRESS = re.compile(r"(?:(?:tcp|tls)://)?(?:\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9](?:[A-Za-z0-9.-]*[A-Za-z0-9])?):(\d{1,5})")
+
+
+def _check_address(scheduler: object) -> None:
+    """SteamError naming ``scheduler`` when it is not a Dask scheduler's address (host:port)."""
+    match = _ADDRESS.fullmatch(scheduler) if isinstance(scheduler, str) else None
+    if match is None or not 0 < int(match.group(1)) < 65536:
+        raise SteamError(
+            f"--scheduler {scheduler!r} is not a Dask scheduler's address: give host:port or tcp://host:port "
+            "(e.g. tcp://127.0.0.1:8786)"
+        )
+
+
 def _dask_client(scheduler: str | None, jobs: int):
     """(client, cluster): a client of the scheduler at ``scheduler``, or of a new LocalCluster on
     127.0.0.1 with ``jobs`` single-threaded worker processes (cluster None when given an address)."""
@@ -157,7 +213,7 @@ def _dask_client(scheduler: str | None, jobs: int):
     if scheduler is not None:
         try:
             return Client(scheduler, timeout=10), None
-        except (OSError, TimeoutError) as err:
+        except (OSError, TimeoutError, ValueError) as err:
             raise SteamError(f"cannot reach the Dask scheduler at {scheduler!r} ({err})") from None
     cluster = LocalCluster(
         n_workers=jobs, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None

@@ -1,0 +1,188 @@
+"""The paper's files by name: each file's source, sha256 and size, and the check of a file found under one.
+
+:data:`DATASETS` is the registry: what each name means, byte for byte. A file is never trusted by its name
+alone. :func:`published_mismatch` says how a file found under a registry name differs from the published
+one (its size, else its sha256), and :func:`check_cached` refuses a file in the fetched files' cache that
+differs: that folder is written only by ``steam-ref data fetch``, so a file there that is not the published
+one (truncated, replaced, or another set's file under this name) is never read as the named set.
+
+Cost: a size differs by ``stat`` alone, checked at every use. The sha256 of a file of the right size is
+computed once per process for each (device, inode, size, mtime, ctime) of the file: a write to it changes
+its ctime, which no user call can set back, so a changed file is hashed again; the largest file is 1.7 MB
+(about 5 ms to hash). A non-regular file (a FIFO, a device, a link to one) is refused before it is opened:
+hashing one would block or never end.
+
+Loaded by :mod:`.search` on every named read, and by :mod:`.fetch`; it imports neither pooch nor a loader.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import stat
+from dataclasses import dataclass
+from pathlib import Path
+
+from ..errors import DataError
+
+__all__ = [
+    "DATASETS",
+    "DataFile",
+    "DataSet",
+    "GTSAM_SETS",
+    "UPSTREAM_COMMIT",
+    "UPSTREAM_REPOSITORY",
+    "check_cached",
+    "check_regular",
+    "file_digest",
+    "published_mismatch",
+]
+
+UPSTREAM_REPOSITORY = "XinyanGT/online-gpslam-code"
+UPSTREAM_COMMIT = "094150971844bd53c9b9cb4562b04f61b8a804a4"
+_UPSTREAM_LICENCE = "none stated upstream (research use; not redistributed by steam_ref)"
+# Named sets read from the files in gtsam's Data/ folder (found in any searched folder): the files, all in one folder.
+GTSAM_SETS = {"victoria-park": ("victoria_park.txt",), "plaza2": ("Plaza2_DR.txt", "Plaza2_TD.txt", "Plaza2_.mat")}
+
+
+@dataclass(frozen=True)
+class DataFile:
+    """One file: its name at the base URL, where it goes in a data folder, its sha256 and size in bytes."""
+
+    remote: str
+    local: str
+    sha256: str
+    size: int
+
+
+@dataclass(frozen=True)
+class DataSet:
+    """A data set by name: what it is, its files, where they come from, and what may be done with them."""
+
+    name: str
+    what: str
+    files: tuple[DataFile, ...]
+    source: str
+    licence: str
+    fetchable: bool = True
+    authors_rmse_m: float | None = None  # the position RMSE of the authors' saved BTGP/1 run on this file
+
+
+def _upstream(
+    name: str, what: str, remote: str, local: str, sha256: str, size: int, rmse: float | None = None
+) -> DataSet:
+    source = f"{UPSTREAM_REPOSITORY} matlab/Data/{remote} @ {UPSTREAM_COMMIT[:7]}"
+    return DataSet(name, what, (DataFile(remote, local, sha256, size),), source, _UPSTREAM_LICENCE, True, rmse)
+
+
+def _gtsam(name: str, what: str) -> DataSet:
+    files = tuple(DataFile(f, f, "", 0) for f in GTSAM_SETS[name])
+    return DataSet(name, what, files, "the gtsam wheel's Data/ folder (pip install gtsam)", "BSD (GTSAM)", False)
+
+
+# The sha256 of each file was computed from copies of the authors' files (data/README.md): they must match upstream.
+DATASETS: dict[str, DataSet] = {
+    s.name: s
+    for s in (
+        _upstream(
+            "paper-synthetic",
+            "the paper's synthetic task (Sec. IV-A): 1,501 poses, 298 landmarks",
+            "Syn_theta_Plaza.mat",
+            "Syn_theta_Plaza.mat",
+            "2939aadaf29f343339cd20f3b84bc5c0d51b6240f39f521901ecf27fd5675ce8",
+            119_549,
+            0.0697,  # `diff` of authors/Syn_full_data_run.mat
+        ),
+        _upstream(
+            "plaza",
+            "the Plaza lawnmower run, outliers removed (Sec. IV-B): 9,658 poses, 4 beacons",
+            "Plaza1_thrown_away_some_range.mat",
+            "Plaza1_thrown_away_some_range.mat",
+            "5341839031c60d971aab7a9abd1e553650a5f0054897b0a71a29e12ae8f63351",
+            681_427,
+            0.338,  # `diff` of authors/Plaza1_full_data_run.mat: 0.33823 m, the 0.338 m of docs/experiments.md
+        ),
+        _upstream(
+            "authors-synthetic",
+            "the authors' saved BTGP run on paper-synthetic (steam-ref fidelity)",
+            "Syn_full_data_run.mat",
+            "authors/Syn_full_data_run.mat",
+            "f7d82abdbaf02cd0b292a33307f258dee93765b4b582cf19cedb44071c275649",
+            120_388,
+        ),
+        _upstream(
+            "authors-plaza",
+            "the authors' saved BTGP run on plaza (steam-ref fidelity, tutorial 04)",
+            "Plaza1_full_data_run.mat",
+            "authors/Plaza1_full_data_run.mat",
+            "8bb579cf7eccc9b3bf3f3627cd0918c104cdb70c0c9d05cf0d85b45c96108af4",
+            1_752_548,
+        ),
+        _gtsam("victoria-park", "Victoria Park: 6,969 poses, 151 trees seen by bearing-range, no ground truth"),
+        _gtsam("plaza2", "the second Plaza run, all 1,816 ranges"),
+    )
+}
+
+# A published file by its place in a data folder ("authors/Syn_full_data_run.mat"): its set and its entry.
+_PUBLISHED = {f.local: (s.name, f) for s in DATASETS.values() for f in s.files if f.sha256}
+_DIGESTS: dict[tuple[int, int, int, int, int], str] = {}  # (st_dev, st_ino, size, mtime_ns, ctime_ns) → sha256
+
+
+def check_regular(path: str | os.PathLike) -> os.stat_result:
+    """The ``stat`` of ``path`` (links followed); DataError naming it when it is not a regular file."""
+    try:
+        info = os.stat(path)
+    except OSError as exc:
+        raise DataError(f"{path}: cannot read it ({exc.strerror or type(exc).__name__})") from None
+    if not stat.S_ISREG(info.st_mode):
+        kind = next(
+            (
+                w
+                for test, w in ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a FIFO"), (stat.S_ISSOCK, "a socket"))
+                if test(info.st_mode)
+            ),
+            "a device",
+        )
+        raise DataError(f"{path}: not a file ({kind}); a data file must be a regular file")
+    return info
+
+
+def file_digest(path: str | os.PathLike) -> str:
+    """The sha256 of a regular file, in hex (memoized per device, inode, size, mtime and ctime)."""
+    info = check_regular(path)
+    key = (info.st_dev, info.st_ino, info.st_size, info.st_mtime_ns, info.st_ctime_ns)
+    if key not in _DIGESTS:
+        digest = hashlib.sha256()
+        with open(path, "rb") as f:
+            for block in iter(lambda: f.read(1 << 20), b""):
+                digest.update(block)
+        _DIGESTS[key] = digest.hexdigest()
+    return _DIGESTS[key]
+
+
+def published_mismatch(path: str | os.PathLike, local: str) -> str | None:
+    """How the file ``path``, found as ``local`` in a data folder, differs from the published file of that
+    name (its size, else its sha256), or None when it is that file or ``local`` is no published file's name."""
+    if local not in _PUBLISHED:
+        return None
+    _, expected = _PUBLISHED[local]
+    size = check_regular(path).st_size
+    if size != expected.size:
+        return f"{size:,} B where the published file has {expected.size:,} B"
+    found = file_digest(path)
+    if found != expected.sha256:
+        return f"sha256 {found[:12]}... where the published file's is {expected.sha256[:12]}..."
+    return None
+
+
+def check_cached(path: str | os.PathLike, local: str) -> Path:
+    """``path``, a file of the fetched files' cache found as ``local``; DataError naming it, the data set and
+    how to replace it when it is not the published file (a file there is never trusted by its name)."""
+    why = published_mismatch(path, local)
+    if why is not None:
+        name = _PUBLISHED[local][0]
+        raise DataError(
+            f"{path}: the cached file of data set {name!r} is not the published one ({why}); "
+            f"`steam-ref data fetch {name}` replaces it"
+        )
+    return Path(path)

@@ -1,0 +1,183 @@
+"""Measurements of SE(2) states x = [px, py, θ, vx, vy, ω], at a state or at a time between two.  [DER 11.14-11.16]
+
+Every Jacobian is with respect to the right tangent δ of the state (``steam_ref.lie.SE2_STATE``):
+to first order the position moves by R(θ) δρ and the heading by δφ, so a reading of the pose alone
+(range, bearing, bearing-range) has the vector-space model's error, and its Jacobian is the
+vector-space one times ∂[p; θ]/∂δ = diag(R(θ), 1) [DER 11.14]. :class:`SE2Measurement` wraps those
+models (one home for each), :class:`SE2VelocityFactor` reads the body twist, and
+:class:`SE2InterpolatedFactor` moves any of them to a time τ between two states through the local GP
+of ``lie.gp`` (the SE(2) form of [YIB Eq. 29]).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import ClassVar
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..arguments import number
+from ..errors import SteamError
+from ..gp.interpolate import interpolation_matrices
+from ..gp.prior import check_qc
+from ..lie import STATE_SIZE
+from ..lie.gp import check_model, interpolate
+from ..robust import RobustLoss
+from ..variables import Key
+from .base import Factor, _vector, sqrt_information
+from .measurements import BearingFactor, BearingRangeFactor, RangeFactor
+
+__all__ = ["SE2Measurement", "SE2VelocityFactor", "SE2InterpolatedFactor"]
+
+_POSE_READINGS = (RangeFactor, BearingFactor, BearingRangeFactor)
+
+
+@dataclass(frozen=True, eq=False)
+class SE2Measurement(Factor):
+    """A reading of an SE(2) state's pose and a landmark: range, bearing or bearing-range.
+
+    e = e_inner(x, ℓ) (the vector-space model reads [px, py, θ] alike); ∂e/∂δ = ∂e_inner/∂[p; θ] diag(R(θ), 1).
+    Build it with :meth:`range`, :meth:`bearing`, :meth:`bearing_range`.
+    """
+
+    inner: Factor  # RangeFactor, BearingFactor or BearingRangeFactor with state_dim 6
+
+    _batched_factors: ClassVar[tuple[str, ...]] = ("inner",)
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if not isinstance(self.inner, _POSE_READINGS):
+            raise SteamError(f"SE2Measurement wraps a range, bearing or bearing-range factor, got {self.inner!r}")
+
+    @classmethod
+    def _wrap(cls, inner: Factor) -> SE2Measurement:
+        return cls(inner.keys, inner.sqrt_information, inner=inner, loss=inner.loss)
+
+    @classmethod
+    def range(
+        cls, state: Key, landmark: Key, measured: float, sigma: float, *, loss: RobustLoss | None = None
+    ) -> SE2Measurement:
+        """Range (m) from the state's position to ``landmark``.  [YIB Eq. 33]"""
+        return cls._wrap(RangeFactor.create(state, landmark, measured, sigma, loss=loss))
+
+    @classmethod
+    def bearing(
+        cls, state: Key, landmark: Key, measured: float, sigma: float, *, loss: RobustLoss | None = None
+    ) -> SE2Measurement:
+        """Bearing (rad) of ``landmark`` in the robot frame, error wrapped."""
+        return cls._wrap(BearingFactor.create(state, landmark, measured, sigma, loss=loss))
+
+    @classmethod
+    def bearing_range(
+        cls, state: Key, landmark: Key, bearing: float, range_: float, noise: NDArray, *, loss: RobustLoss | None = None
+    ) -> SE2Measurement:
+        """Bearing and range together; noise: sigmas (2,) or a covariance (2, 2) of [bearing, range]."""
+        return cls._wrap(BearingRangeFactor.create(state, landmark, bearing, range_, noise, loss=loss))
+
+    @property
+    def key_dims(self) -> tuple[int, ...]:  # type: ignore[override]
+        return self.inner.key_dims
+
+    def batch_signature(self) -> tuple:
+        return (type(self), self.inner.batch_signature())
+
+    def error(self, x: NDArray, l: NDArray) -> NDArray:
+        return self.inner.error(x, l)
+
+    def jacobians(self, x: NDArray, l: NDArray) -> tuple[NDArray, NDArray]:
+        Hx, Hl = self.inner.jacobians(x, l)
+        c, s = np.cos(x[..., 2])[..., None], np.sin(x[..., 2])[..., None]
+        J = np.zeros(Hx.shape)
+        J[..., 0] = Hx[..., 0] * c + Hx[..., 1] * s  # ∂e/∂p · R(θ)  [DER 11.14]
+        J[..., 1] = -Hx[..., 0] * s + Hx[..., 1] * c
+        J[..., 2] = Hx[..., 2]
+        return J, Hl
+
+
+@dataclass(frozen=True, eq=False)
+class SE2VelocityFactor(Factor):
+    """A body-velocity reading [forward, lateral, yaw rate] of an SE(2) state: e = ϖ - measured, ∂e/∂δ = [0 I]."""
+
+    measured: NDArray  # (3,)
+
+    _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "measured")
+    key_dims: ClassVar[tuple[int, ...]] = (STATE_SIZE,)
+
+    @classmethod
+    def create(
+        cls, key: Key, measured: NDArray, noise: NDArray | float, *, loss: RobustLoss | None = None
+    ) -> SE2VelocityFactor:
+        """Reading ``measured`` = [vx, vy, ω] in the body frame; noise a sigma, sigmas (3,) or a covariance."""
+        return cls((key,), sqrt_information(noise, 3), measured=_vector(measured, 3, "measured"), loss=loss)
+
+    def error(self, x: NDArray) -> NDArray:
+        return x[..., 3:] - self.measured
+
+    def jacobians(self, x: NDArray) -> tuple[NDArray]:
+        J = np.zeros(x.shape[:-1] + (3, STATE_SIZE))
+        J[..., :, 3:] = np.eye(3)
+        return (J,)
+
+
+@dataclass(frozen=True, eq=False)
+class SE2InterpolatedFactor(Factor):
+    """A reading at a time τ with no state, moved onto the SE(2) states at t₁ < τ < t₂.  [YIB Eq. 29; DER 11.16]
+
+    e(x₁, x₂, …) = e_inner(x(τ), …) with x(τ) the local GP's mean (``lie.gp.interpolate``), and
+    ∂e/∂x₁ = H J₁, ∂e/∂x₂ = H J₂ for H the inner factor's Jacobian in the tangent at x(τ).
+    """
+
+    inner: Factor  # an SE(2) factor whose first key stands for the state at τ
+    lam: NDArray  # Λ(τ), (6, 6)
+    psi: NDArray  # Ψ(τ), (6, 6)
+    model: str = field(default="local-variable", kw_only=True)
+
+    _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "lam", "psi")
+    _batched_factors: ClassVar[tuple[str, ...]] = ("inner",)
+    _shared: ClassVar[tuple[str, ...]] = ("model",)
+
+    @classmethod
+    def create(
+        cls,
+        inner: Factor,
+        key1: Key,
+        key2: Key,
+        t1: float,
+        t2: float,
+        tau: float,
+        qc: NDArray,
+        model: str = "local-variable",
+    ) -> SE2InterpolatedFactor:
+        """Move ``inner`` (on the SE(2) state at τ, t1 < τ < t2) onto ``key1`` at t1 and ``key2`` at t2."""
+        if not isinstance(inner, (SE2Measurement, SE2VelocityFactor)):
+            raise SteamError(
+                f"inner must be an SE2Measurement or SE2VelocityFactor (the reading at tau), got {inner!r}"
+            )
+        t1, t2, tau = number("t1", t1), number("t2", t2), number("tau", tau)
+        lam, psi = interpolation_matrices(t1, t2, tau, check_qc(qc))  # [YIB Eq. 16]
+        if lam.shape != (STATE_SIZE, STATE_SIZE):
+            raise SteamError(f"qc must be (3, 3) on [vx, vy, ω] for an SE(2) state, got {np.shape(qc)}")
+        keys = (key1, key2) + tuple(inner.keys[1:])
+        return cls(
+            keys, inner.sqrt_information, inner=inner, lam=lam, psi=psi, model=check_model(model), loss=inner.loss
+        )
+
+    @property
+    def key_dims(self) -> tuple[int, ...]:  # type: ignore[override]
+        return (STATE_SIZE, STATE_SIZE) + tuple(self.inner.key_dims[1:])
+
+    def batch_signature(self) -> tuple:
+        return (type(self), self.model, self.inner.batch_signature())
+
+    def interpolated_state(self, x1: NDArray, x2: NDArray) -> NDArray:
+        """x(τ) = (T₁ Exp ξ(τ), ϖ(τ)) from γ(τ) = Λ γ₁ + Ψ γ₂.  [YIB Eq. 18; DER 11.15]"""
+        return interpolate(x1, x2, self.lam, self.psi, self.model)[0]
+
+    def error(self, x1: NDArray, x2: NDArray, *rest: NDArray) -> NDArray:
+        return self.inner.error(self.interpolated_state(x1, x2), *rest)  # [YIB Eq. 29]
+
+    def jacobians(self, x1: NDArray, x2: NDArray, *rest: NDArray) -> tuple[NDArray, ...]:
+        x, J1, J2 = interpolate(x1, x2, self.lam, self.psi, self.model)
+        H, *others = self.inner.jacobians(x, *rest)
+        return (H @ J1, H @ J2, *others)  # [YIB Eq. 29]

@@ -1,0 +1,273 @@
+"""The group SE(2) of planar poses, on poses stored as [x, y, θ] and tangents ξ = [ρx, ρy, φ].  [SOLA App. C]
+
+A pose T = (R(θ), t) acts on a point as p ↦ R p + t. Its tangent (Lie algebra) coordinates put the
+translation first, ξ = [ρ; φ], as GTSAM's ``Pose2`` and [SOLA] do. Every function broadcasts over
+leading axes (a pose (..., 3), a matrix (..., 3, 3)), so a batch of factors evaluates them once.
+
+- :func:`exp`, :func:`log` (Log's angle in (-π, π]), :func:`right_jacobian` J_r and
+  :func:`right_jacobian_inverse` J_r⁻¹ (Exp(ξ + dξ) = Exp(ξ) Exp(J_r(ξ) dξ)), :func:`adjoint` Ad(T);
+- :func:`compose`, :func:`inverse`, :func:`between` and their Jacobians in right (body) tangents,
+  δ(T ⊕ dδ) as GTSAM's ``Pose2`` reports them;
+- :func:`jr_inverse_times_jacobian` and :func:`jr_times_jacobian`, the exact derivatives of
+  J_r⁻¹(ξ) v and J_r(ξ) v with respect to ξ (the SE(2) WNOA residual and the interpolation need them).
+
+Every coefficient (sin φ/φ, (1 - cos φ)/φ², (φ - sin φ)/φ², (φ/2) cot(φ/2) and the rest, with their
+derivatives) is summed from its Taylor series for |φ| < 1 and taken in closed form above, so none
+loses precision to cancellation near φ = 0 [DER 11.3-11.7].
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+import scipy.special
+from numpy.typing import ArrayLike, NDArray
+
+__all__ = [
+    "wrap",
+    "exp",
+    "log",
+    "right_jacobian",
+    "right_jacobian_inverse",
+    "adjoint",
+    "compose",
+    "compose_jacobians",
+    "inverse",
+    "inverse_jacobian",
+    "between",
+    "between_jacobians",
+    "jr_inverse_times_jacobian",
+    "jr_times_jacobian",
+    "SERIES_BELOW",
+]
+
+SERIES_BELOW = 1.0  # |φ| below this: the coefficients from their series (each converges fast there)
+_TERMS = 14  # terms of each series: the last is below 1e-22 of the first at |φ| = 1
+_k = np.arange(_TERMS)
+_fact = np.array([float(math.factorial(n)) for n in range(2 * _TERMS + 6)])
+# Coefficients of each series in powers of φ² (c[0] + c[1] φ² + ...), from sin and cos's Taylor series.
+_A = (-1.0) ** _k / _fact[2 * _k + 1]  # sin φ / φ
+_A1 = (-1.0) ** (_k + 1) * 2 * (_k + 1) / _fact[2 * _k + 3]  # (d/dφ of sin φ/φ) / φ
+_D = (-1.0) ** _k / _fact[2 * _k + 2]  # (1 - cos φ) / φ²
+_D1 = (-1.0) ** (_k + 1) * 2 * (_k + 1) / _fact[2 * _k + 4]  # (d/dφ of D) / φ
+_C = (-1.0) ** _k / _fact[2 * _k + 3]  # (φ - sin φ) / φ³
+_C1 = (-1.0) ** _k * (2 * _k + 1) / _fact[2 * _k + 3]  # d/dφ of C = (φ - sin φ) / φ²
+# (1 - (φ/2) cot(φ/2)) / φ = Σₙ |B₂ₙ| φ²ⁿ⁻¹ / (2n)! = Σₙ 2 ζ(2n) φ²ⁿ⁻¹ / (2π)²ⁿ (Bernoulli numbers B₂ₙ)
+_G = 2 * scipy.special.zeta(2.0 * (_k + 1)) / (2 * np.pi) ** (2.0 * (_k + 1))  # γ / φ  [DER 11.3]
+_G1 = (2 * _k + 1) * _G  # d/dφ of γ
+
+
+def _poly(c: NDArray, z: NDArray) -> NDArray:
+    """Σ c[k] zᵏ by Horner's rule."""
+    out = np.full_like(z, c[-1])
+    for ck in c[-2::-1]:
+        out = out * z + ck
+    return out
+
+
+class _Coefficients:
+    """The coefficients of J_r, J_r⁻¹ and Exp/Log at φ and their derivatives, each computed when first
+    read [DER 11.3-11.7]: A = sin φ/φ, B = (1 - cos φ)/φ, C = (φ - sin φ)/φ²,
+    D = (1 - cos φ)/φ², α = (φ/2) cot(φ/2), γ = (1 - α)/φ; a trailing 1 is d/dφ."""
+
+    def __init__(self, phi: ArrayLike):
+        self.phi = np.asarray(phi, dtype=float)
+        self.small = np.abs(self.phi) < SERIES_BELOW
+        self.z = self.phi**2
+        self._known: dict[str, NDArray] = {}
+
+    def _pick(self, series: Callable[[], NDArray], closed: Callable[[], NDArray]) -> NDArray:
+        """The series below SERIES_BELOW, the closed form above (each a thunk, evaluated only if needed)."""
+        if np.all(self.small):
+            return series()
+        with np.errstate(divide="ignore", invalid="ignore"):  # the closed forms at φ = 0 are not used
+            if not np.any(self.small):
+                return closed()
+            return np.where(self.small, series(), closed())
+
+    def __getitem__(self, name: str) -> NDArray:
+        if name not in self._known:
+            self._known[name] = getattr(self, "_" + name)()
+        return self._known[name]
+
+    def _A(self) -> NDArray:
+        return self._pick(lambda: _poly(_A, self.z), lambda: np.sin(self.phi) / self.phi)
+
+    def _D(self) -> NDArray:  # 1 - cos φ = 2 sin²(φ/2): no cancellation
+        return self._pick(lambda: _poly(_D, self.z), lambda: 2 * np.sin(self.phi / 2) ** 2 / self.z)
+
+    def _B(self) -> NDArray:
+        return self.phi * self["D"]
+
+    def _C(self) -> NDArray:
+        return self._pick(lambda: self.phi * _poly(_C, self.z), lambda: (self.phi - np.sin(self.phi)) / self.z)
+
+    def _A1(self) -> NDArray:
+        return self._pick(lambda: self.phi * _poly(_A1, self.z), lambda: (np.cos(self.phi) - self["A"]) / self.phi)
+
+    def _D1(self) -> NDArray:
+        return self._pick(lambda: self.phi * _poly(_D1, self.z), lambda: (self["A"] - 2 * self["D"]) / self.phi)
+
+    def _B1(self) -> NDArray:
+        return self["D"] + self.phi * self["D1"]
+
+    def _C1(self) -> NDArray:
+        return self._pick(lambda: _poly(_C1, self.z), lambda: self["D"] - 2 * self["C"] / self.phi)
+
+    def _alpha(self) -> NDArray:
+        h = self.phi / 2
+        return self._pick(lambda: 1 - self.z * _poly(_G, self.z), lambda: h * np.cos(h) / np.sin(h))
+
+    def _gamma(self) -> NDArray:
+        return self._pick(lambda: self.phi * _poly(_G, self.z), lambda: (1 - self["alpha"]) / self.phi)
+
+    def _alpha1(self) -> NDArray:  # (sin φ - φ) / (2 (1 - cos φ))
+        return -self["C"] / (2 * self["D"])
+
+    def _gamma1(self) -> NDArray:
+        return self._pick(lambda: _poly(_G1, self.z), lambda: (-self["alpha1"] - self["gamma"]) / self.phi)
+
+
+def wrap(theta: ArrayLike) -> NDArray:
+    """Angles mapped to (-π, π]; an angle already there is returned unchanged, bit for bit."""
+    theta = np.asarray(theta, dtype=float)
+    inside = (theta > -np.pi) & (theta <= np.pi)
+    if np.all(inside):
+        return theta
+    w = theta - 2 * np.pi * np.ceil((theta - np.pi) / (2 * np.pi))
+    w = np.where(w <= -np.pi, w + 2 * np.pi, np.where(w > np.pi, w - 2 * np.pi, w))  # a rounding at either end
+    return np.where(inside, theta, w)
+
+
+def _rot(theta: NDArray) -> tuple[NDArray, NDArray]:
+    return np.cos(theta), np.sin(theta)
+
+
+def exp(xi: ArrayLike) -> NDArray:
+    """Exp(ξ) as a pose [x, y, θ], θ wrapped: t = V(φ) ρ, V = [[A, -B], [B, A]].  [DER 11.1]"""
+    xi = np.asarray(xi, dtype=float)
+    k = _Coefficients(xi[..., 2])
+    A, B = k["A"], k["B"]
+    r1, r2 = xi[..., 0], xi[..., 1]
+    return np.stack([A * r1 - B * r2, B * r1 + A * r2, wrap(xi[..., 2])], axis=-1)  # [DER 11.1]
+
+
+def log(pose: ArrayLike) -> NDArray:
+    """Log(T) = [V(φ)⁻¹ t; φ], φ = θ wrapped to (-π, π]; V⁻¹ = [[α, φ/2], [-φ/2, α]].  [DER 11.1-11.2]"""
+    pose = np.asarray(pose, dtype=float)
+    phi = wrap(pose[..., 2])
+    a, b = _Coefficients(phi)["alpha"], phi / 2
+    x, y = pose[..., 0], pose[..., 1]
+    return np.stack([a * x + b * y, -b * x + a * y, phi], axis=-1)  # [DER 11.1-11.2]
+
+
+def _matrix(rows: list[list[NDArray | float]], like: NDArray) -> NDArray:
+    shape = np.shape(like)
+    return np.stack([np.stack([np.broadcast_to(v, shape) for v in row], axis=-1) for row in rows], axis=-2)
+
+
+def right_jacobian(xi: ArrayLike) -> NDArray:
+    """J_r(ξ): Exp(ξ + dξ) ≈ Exp(ξ) Exp(J_r(ξ) dξ) (GTSAM's ``Pose2.ExpmapDerivative``).  [DER 11.4]"""
+    xi = np.asarray(xi, dtype=float)
+    k = _Coefficients(xi[..., 2])
+    A, B, C, D = k["A"], k["B"], k["C"], k["D"]
+    r1, r2 = xi[..., 0], xi[..., 1]
+    return _matrix(  # [DER 11.4]
+        [[A, B, C * r1 - D * r2], [-B, A, D * r1 + C * r2], [0.0, 0.0, 1.0]], r1
+    )
+
+
+def right_jacobian_inverse(xi: ArrayLike) -> NDArray:
+    """J_r(ξ)⁻¹ = [[α, -φ/2, γρ₁ + ρ₂/2], [φ/2, α, γρ₂ - ρ₁/2], [0, 0, 1]] [DER 11.3-11.7]."""
+    xi = np.asarray(xi, dtype=float)
+    g = _Coefficients(xi[..., 2])
+    a, G, b = g["alpha"], g["gamma"], xi[..., 2] / 2
+    r1, r2 = xi[..., 0], xi[..., 1]
+    return _matrix([[a, -b, G * r1 + r2 / 2], [b, a, G * r2 - r1 / 2], [0.0, 0.0, 1.0]], r1)  # [DER 11.5]
+
+
+def adjoint(pose: ArrayLike) -> NDArray:
+    """Ad(T) = [[R, [y, -x]ᵀ], [0, 1]]: T Exp(ξ) T⁻¹ = Exp(Ad(T) ξ).  [DER 11.8]"""
+    pose = np.asarray(pose, dtype=float)
+    c, s = _rot(pose[..., 2])
+    return _matrix([[c, -s, pose[..., 1]], [s, c, -pose[..., 0]], [0.0, 0.0, 1.0]], c)  # [DER 11.8]
+
+
+def compose(a: ArrayLike, b: ArrayLike) -> NDArray:
+    """T_a T_b = [t_a + R_a t_b; θ_a + θ_b wrapped]."""
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    c, s = _rot(a[..., 2])
+    x = a[..., 0] + c * b[..., 0] - s * b[..., 1]
+    y = a[..., 1] + s * b[..., 0] + c * b[..., 1]
+    return np.stack([x, y, wrap(a[..., 2] + b[..., 2])], axis=-1)
+
+
+def compose_jacobians(a: ArrayLike, b: ArrayLike) -> tuple[NDArray, NDArray]:  # noqa: ARG001 (a: the signature)
+    """∂(T_a T_b)/∂δ_a = Ad(T_b⁻¹), ∂(T_a T_b)/∂δ_b = I (right tangents).  [DER 11.8]"""
+    b = np.asarray(b, dtype=float)
+    return adjoint(inverse(b)), np.broadcast_to(np.eye(3), b.shape[:-1] + (3, 3)).copy()
+
+
+def inverse(pose: ArrayLike) -> NDArray:
+    """T⁻¹ = [-Rᵀ t; -θ wrapped]."""
+    pose = np.asarray(pose, dtype=float)
+    c, s = _rot(pose[..., 2])
+    x, y = pose[..., 0], pose[..., 1]
+    return np.stack([-(c * x + s * y), s * x - c * y, wrap(-pose[..., 2])], axis=-1)
+
+
+def inverse_jacobian(pose: ArrayLike) -> NDArray:
+    """∂T⁻¹/∂δ = -Ad(T) (right tangents).  [DER 11.8]"""
+    return -adjoint(pose)
+
+
+def between(a: ArrayLike, b: ArrayLike) -> NDArray:
+    """T_a⁻¹ T_b = [R_aᵀ (t_b - t_a); θ_b - θ_a wrapped] (GTSAM's ``Pose2.between``)."""
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    c, s = _rot(a[..., 2])
+    dx, dy = b[..., 0] - a[..., 0], b[..., 1] - a[..., 1]
+    return np.stack([c * dx + s * dy, -s * dx + c * dy, wrap(b[..., 2] - a[..., 2])], axis=-1)
+
+
+def between_jacobians(a: ArrayLike, b: ArrayLike) -> tuple[NDArray, NDArray]:
+    """∂(T_a⁻¹T_b)/∂δ_a = -Ad((T_a⁻¹T_b)⁻¹), ∂/∂δ_b = I (right tangents)."""
+    rel = between(a, b)
+    return -adjoint(inverse(rel)), np.broadcast_to(np.eye(3), rel.shape[:-1] + (3, 3)).copy()
+
+
+def jr_inverse_times_jacobian(xi: ArrayLike, v: ArrayLike) -> NDArray:
+    """∂(J_r(ξ)⁻¹ v)/∂ξ, exact: (..., 3, 3).  [DER 11.6]"""
+    xi, v = np.asarray(xi, dtype=float), np.asarray(v, dtype=float)
+    g = _Coefficients(xi[..., 2])
+    G, a1, G1 = g["gamma"], g["alpha1"], g["gamma1"]
+    r1, r2 = xi[..., 0], xi[..., 1]
+    u1, u2, w = v[..., 0], v[..., 1], v[..., 2]
+    r1, r2, u1, u2, w, G, a1, G1 = np.broadcast_arrays(r1, r2, u1, u2, w, G, a1, G1)
+    return _matrix(
+        [
+            [G * w, w / 2, a1 * u1 - u2 / 2 + G1 * r1 * w],
+            [-w / 2, G * w, u1 / 2 + a1 * u2 + G1 * r2 * w],
+            [0.0, 0.0, 0.0],
+        ],
+        r1,
+    )
+
+
+def jr_times_jacobian(xi: ArrayLike, v: ArrayLike) -> NDArray:
+    """∂(J_r(ξ) v)/∂ξ, exact: (..., 3, 3).  [DER 11.7]"""
+    xi, v = np.asarray(xi, dtype=float), np.asarray(v, dtype=float)
+    k = _Coefficients(xi[..., 2])
+    r1, r2 = xi[..., 0], xi[..., 1]
+    v1, v2, v3 = v[..., 0], v[..., 1], v[..., 2]
+    A1, B1, C, C1, D, D1 = k["A1"], k["B1"], k["C"], k["C1"], k["D"], k["D1"]
+    r1, r2, v1, v2, v3, A1, B1, C, C1, D, D1 = np.broadcast_arrays(r1, r2, v1, v2, v3, A1, B1, C, C1, D, D1)
+    return _matrix(
+        [
+            [C * v3, -D * v3, A1 * v1 + B1 * v2 + (C1 * r1 - D1 * r2) * v3],
+            [D * v3, C * v3, -B1 * v1 + A1 * v2 + (D1 * r1 + C1 * r2) * v3],
+            [0.0, 0.0, 0.0],
+        ],
+        r1,
+    )

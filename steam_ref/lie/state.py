@@ -1,0 +1,60 @@
+"""The SE(2) state kind: a planar pose and its body-frame twist, retracted on the right.
+
+A state is stored as the flat array x = [px, py, θ, vx, vy, ω] (θ in (-π, π]): the pose
+T = (R(θ), [px, py]) ∈ SE(2) and the body twist ϖ = [vx, vy, ω] ∈ R³ (the velocity in the robot's
+own frame: Ṫ = T ϖ^). Its tangent is 6-D, δ = [δρ; δφ; δϖ], and
+
+    x ⊕ δ = (T Exp(δ[:3]),  ϖ + δ[3:])              (retraction on the right)
+    x ⊖ x₀ = [Log(T₀⁻¹ T);  ϖ - ϖ₀]
+
+**What the right retraction means for a covariance.** A solver's covariance of this state is the
+covariance of δ at the estimate x̄, x = x̄ ⊕ δ with δ ~ N(0, P): its pose block is in the *body frame
+at the estimate*. δρ is a displacement along the robot's own forward and left axes at x̄ (the world
+displacement is R(θ̄) δρ, to first order), δφ a turn about the robot; the twist block is in the
+body frame already. To read a world-frame (x, y) covariance, rotate: R(θ̄) P_ρρ R(θ̄)ᵀ. A covariance
+taken at one estimate moves to another x̄' by the Jacobian of x̄' ⊖ (x̄ ⊕ δ) (the adjoint of the
+pose difference, to first order), never by copying it. [DER 11.9; B17 Ch. 7]
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..arguments import real_array
+from ..errors import ShapeError
+from ..manifold import Manifold
+from . import se2
+
+__all__ = ["SE2State", "SE2_STATE", "STATE_SIZE"]
+
+STATE_SIZE = 6  # [px, py, θ, vx, vy, ω]
+
+
+def _state(name: str, x: NDArray) -> NDArray:
+    x = real_array(name, x)
+    if x.shape[-1:] != (STATE_SIZE,):
+        raise ShapeError(f"{name} must be an SE(2) state [px, py, θ, vx, vy, ω] (6 numbers), got shape {x.shape}")
+    return x
+
+
+class SE2State(Manifold):
+    """A pose T ∈ SE(2) and a body twist ϖ ∈ R³, retracted on the right (module docstring)."""
+
+    name = "se2"
+
+    def retract(self, x: NDArray, delta: NDArray) -> NDArray:
+        """x ⊕ δ = (T Exp(δ[:3]), ϖ + δ[3:]): θ comes back in (-π, π]."""
+        x, delta = _state("x", x), _state("delta", delta)
+        return np.concatenate([se2.compose(x[..., :3], se2.exp(delta[..., :3])), x[..., 3:] + delta[..., 3:]], axis=-1)
+
+    def local(self, x0: NDArray, x: NDArray) -> NDArray:
+        """x ⊖ x₀ = [Log(T₀⁻¹ T); ϖ - ϖ₀], the angle in (-π, π]; retract(x0, local(x0, x)) == x."""
+        x0, x = _state("x0", x0), _state("x", x)
+        return np.concatenate([se2.log(se2.between(x0[..., :3], x[..., :3])), x[..., 3:] - x0[..., 3:]], axis=-1)
+
+    def __repr__(self) -> str:
+        return "SE2_STATE"
+
+
+SE2_STATE = SE2State()

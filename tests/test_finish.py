@@ -1,0 +1,106 @@
+"""Finishing an incremental solve at the batch optimum, against batch Gauss-Newton on the same factors.
+
+The solver is fed a toy run as a user would (each new state started at the prior's prediction from the
+last estimate, GTSAM's default thresholds), so its estimate rests away from the optimum; the finished
+estimate must equal what :func:`steam_ref.gauss_newton` reaches from the same start, to 1e-9.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from problems import sample_trajectory
+
+import steam_ref as sr
+
+QC = 0.01 * np.diag([1.0, 1.0, 25.0])
+
+
+def fed_solver(rng, n_states=30, **params):
+    """An IncrementalSolver fed state by state: the GP prior, a projected velocity and a range to one of three
+    landmarks (priors on them) each step; returns (solver, every factor, the truth)."""
+    times = np.arange(n_states) * 0.5
+    xs = sample_trajectory(rng, times, QC, [0.0, 0.0, 0.2, 1.0, 0.3, 0.2])
+    marks = {sr.L(j): np.array(p) for j, p in enumerate([[5.0, 5.0], [-3.0, 6.0], [8.0, -2.0]])}
+    solver = sr.IncrementalSolver(**params)
+    first = [sr.PriorFactor.create(sr.X(0), xs[0], 0.1)] + [sr.PriorFactor.create(k, p, 0.5) for k, p in marks.items()]
+    everything = list(first)
+    solver.update(first, {sr.X(0): xs[0] + 0.05, **marks})
+    for i in range(1, n_states):
+        key, x = sr.X(i), xs[i]
+        th = x[2]
+        body = [np.cos(th) * x[3] + np.sin(th) * x[4], -np.sin(th) * x[3] + np.cos(th) * x[4], x[5]]
+        mark = sr.L(i % 3)
+        new = sr.gp_prior_factors([sr.X(i - 1), key], times[i - 1 : i + 1], QC) + [
+            sr.VelocityFactor.create(key, np.array(body) + rng.normal(size=3) * 0.05, [0.1, 0.1, 0.1]),
+            sr.RangeFactor.create(key, mark, np.hypot(*(x[:2] - marks[mark])) + rng.normal() * 0.1, 0.1),
+        ]
+        start = sr.predict_state(solver.estimate_of(sr.X(i - 1)), times[i] - times[i - 1], QC)
+        solver.update(new, {key: start})
+        everything += new
+    return solver, everything
+
+
+def test_finish_reaches_the_batch_optimum_the_defaults_do_not(rng):
+    solver, factors = fed_solver(rng)
+    before = solver.estimate()
+    # iterated until the step is rounding (the cost's own rules would stop it ~1e-7 away: it converges linearly)
+    batch = sr.gauss_newton(factors, before, relative_tolerance=0, absolute_tolerance=0, step_tolerance=1e-11)
+    assert batch.stationarity is not None and batch.stationarity.predicted_decrease < 1e-20
+    gap = max(np.abs(before[k] - batch.values[k]).max() for k in batch.values)
+    assert gap > 1e-4, f"the defaults already reached the optimum ({gap:.2g}): the test shows nothing"
+
+    finished = sr.finish_at_optimum(solver)
+
+    assert finished.converged, finished.reason
+    assert finished.stationarity is not None and finished.stationarity.predicted_decrease < 1e-8 * finished.cost
+    for k, x in batch.values.items():
+        np.testing.assert_allclose(finished.values[k], x, rtol=0, atol=1e-9, err_msg=str(k))
+    assert finished.cost == pytest.approx(batch.cost, rel=1e-12)
+    assert finished.cost < finished.initial_cost
+    assert len(finished.iterations) >= 2  # a Gauss-Newton step, then the one that found nothing left to move
+    for k in before:  # the user's solver is not changed
+        np.testing.assert_array_equal(solver.estimate_of(k), before[k])
+    cov = finished.marginal_covariance(sr.X(29))
+    np.testing.assert_allclose(cov, batch.marginal_covariance(sr.X(29)), rtol=1e-7)
+
+
+def test_finish_says_not_converged_when_its_updates_run_out(rng):
+    solver, _ = fed_solver(rng, n_states=12)
+    result = sr.finish_at_optimum(solver, max_updates=1)
+    assert not result.converged
+    assert result.reason.startswith("max_iterations")
+    assert len(result.iterations) == 1
+
+
+def test_finish_continues_as_a_solver_at_the_optimum(rng):
+    """What the docstring says to do next: a solver with the user's settings, linearized at the optimum (its
+    estimate moves by one more Gauss-Newton step, which back-substitution applies where the change reaches α)."""
+    solver, _ = fed_solver(rng, n_states=12)
+    result = sr.finish_at_optimum(solver)
+    again = sr.IncrementalSolver(solver.params)
+    again.update(list(result.factors), result.values)
+    at = again.linearization_point
+    for k, x in result.values.items():
+        np.testing.assert_array_equal(at[k], x)
+        np.testing.assert_allclose(again.estimate_of(k), x, rtol=0, atol=solver.params.wildfire_threshold)
+
+
+def test_finish_refuses_what_it_cannot_finish(rng):
+    with pytest.raises(sr.SteamError, match="solver must be an IncrementalSolver"):
+        sr.finish_at_optimum(sr.FactorGraph())
+    solver, _ = fed_solver(rng, n_states=4)
+    with pytest.raises(sr.SteamError, match="step_tolerance must be a finite number"):
+        sr.finish_at_optimum(solver, step_tolerance=-1.0)
+    with pytest.raises(sr.SteamError, match="max_updates must be an integer"):
+        sr.finish_at_optimum(solver, max_updates=2.5)
+    with pytest.raises(sr.SteamError, match="the factor graph is empty"):
+        sr.finish_at_optimum(sr.IncrementalSolver())
+    lag = sr.FixedLagSmoother(1.0)
+    with pytest.raises(sr.SteamError, match="FixedLagSmoother marginalizes what leaves its window"):
+        sr.finish_at_optimum(lag)
+    from steam_ref.bayes_tree import marginalize
+
+    marginalize(solver, [sr.X(0)])
+    with pytest.raises(sr.SteamError, match="IncrementalSolver has marginalized variables"):
+        sr.finish_at_optimum(solver)
