@@ -7,6 +7,12 @@ x̄(t) = Λ(t) x̄ᵢ + Ψ(t) x̄ⱼ [YIB Eq. 18] and the covariance from the jo
 by the prior, x̄(t) = Φ(t, t_N) x̄_N and Φ P_N Φᵀ + Q(t - t_N)
 (:func:`steam_ref.gp.interpolate.extrapolate_state_sde`); before the first state there is no
 prior to speak of (the GP starts there, [YIB Eq. 14]) and a query is an error.
+
+**SE(2) states** (``se2_model`` given: states ``steam_ref.lie.SE2_STATE``, [x, y, θ, vx, vy, ω]): between
+states the local GP of Anderson & Barfoot (``lie.gp.interpolate``, ``interpolate_covariance_se2``), after the
+last the prediction along its body twist (``extrapolate_covariance_se2``). Every covariance of such a state
+is that of its right tangent at the estimate: the pose block in the *body frame* (``lie.state``;
+``lie.world_position_covariance`` turns its position block to the world frame).
 """
 
 from __future__ import annotations
@@ -29,6 +35,7 @@ from .gp.interpolate import (
     interpolation_matrices,
 )
 from .gp.sde import LinearSDE, check_prior
+from .lie import gp as se2_gp
 from .variables import Key, X, key_list
 
 __all__ = ["Trajectory", "Covariances"]
@@ -82,10 +89,13 @@ class Trajectory:
     ``prior`` is the motion prior the states were estimated with: Qc (3, 3) of the paper's WNOA prior,
     or any :class:`~steam_ref.gp.LinearSDE` (WNOJ, Singer: states of 9 numbers). ``times`` (n_poses,)
     must be finite and non-decreasing, ``states`` strictly increasing pose indices into it at strictly
-    increasing times.
+    increasing times. ``se2_model`` ("local-variable" or "simplified"): the states are SE(2) states and ``prior``
+    is the Qc of their WNOA prior on the body twist (module docstring).
     """
 
-    def __init__(self, solver, states: Sequence[int], times: NDArray, prior: NDArray | LinearSDE):
+    def __init__(
+        self, solver, states: Sequence[int], times: NDArray, prior: NDArray | LinearSDE, se2_model: str | None = None
+    ):
         self.solver = solver  # anything with estimate_of, estimate, marginal_covariances, joint_covariance(s)
         self.states = _pose_indices(states)  # poses with a state, increasing
         self.times = _pose_times(times, self.states)  # (n_poses,) time of every pose
@@ -94,6 +104,9 @@ class Trajectory:
         self.qc = None if isinstance(prior, LinearSDE) else prior
         self.prior = prior if isinstance(prior, LinearSDE) else LinearSDE.wnoa(prior)
         self.n = self.prior.n  # size of a state
+        self.se2_model = None if se2_model is None else se2_gp.check_model(se2_model)
+        if self.se2_model is not None and (self.qc is None or self.qc.shape != (3, 3)):
+            raise SteamError(f"SE(2) states need the Qc (3, 3) of their WNOA prior, got prior={prior!r}")
         if self.states:
             size = np.shape(solver.estimate_of(X(self.states[0])))
             if size != (self.n,):
@@ -111,12 +124,17 @@ class Trajectory:
         if self.qc is None:
             return interpolate_state_sde(self.prior, ta, xa, tb, xb, t)
         lam, psi = interpolation_matrices(ta, tb, t, self.qc)  # [YIB Eq. 16]
+        if self.se2_model is not None:
+            return se2_gp.interpolate(xa, xb, lam, psi, self.se2_model)[0]  # [DER 11.15]
         return lam @ xa + psi @ xb
 
     def _between_covariance(self, a: int, b: int, t: float, joint: NDArray) -> NDArray:
         ta, tb = self.times[a], self.times[b]
         if t in (ta, tb):  # a pose at a state's time: that state's marginal, a block of the joint
             return joint[: self.n, : self.n].copy() if t == ta else joint[self.n :, self.n :].copy()
+        if self.se2_model is not None:
+            xa, xb = self.solver.estimate_of(X(a)), self.solver.estimate_of(X(b))
+            return se2_gp.interpolate_covariance_se2(ta, tb, t, self.qc, xa, xb, joint, self.se2_model)[1]
         if self.qc is None:
             return interpolate_covariance_sde(self.prior, ta, tb, t, joint)
         return interpolate_covariance(ta, tb, t, self.qc, joint)
@@ -148,6 +166,12 @@ class Trajectory:
             )
         if solved and t > times[solved[-1]]:
             last, key = times[solved[-1]], X(solved[-1])
+            if self.se2_model is not None:  # [DER 11.18]
+                x1 = self.solver.estimate_of(key)
+                if not covariance:
+                    return se2_gp.extrapolate(x1, last, t)[0]
+                cov1 = self.solver.joint_covariance([key])
+                return se2_gp.extrapolate_covariance_se2(x1, last, t, self.qc, cov1)
             mean = extrapolate_state_sde(self.prior, last, self.solver.estimate_of(key), t)
             if not covariance:
                 return mean

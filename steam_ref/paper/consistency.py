@@ -186,7 +186,8 @@ def _solve(
         solver = PeriodicBatchSolver("amd")  # holds the optimum; its covariances come from 𝓘 there
         solver.graph, solver.values = problem.graph, result.values
         ids = [i for i in sorted(readings.landmarks) if L(i) in result.values]  # a landmark no reading sees has none
-        return Trajectory(solver, problem.states.tolist(), readings.times, setup.motion_prior()), ids
+        se2_model = setup.se2_residual if setup.is_se2 else None
+        return Trajectory(solver, problem.states.tolist(), readings.times, setup.motion_prior(), se2_model), ids
     options = StreamOptions(skip=estimator.skip, interpolate=estimator.interpolate)
     run = StreamingEstimator(readings, setup.with_schedule(every=estimator.every), options)
     run.run()

@@ -126,7 +126,7 @@ class StreamingEstimator:
         new = self.front.step()
         self._pending.extend(new.factors)
         for k, v in new.values.items():
-            self._pending_values.insert(k, v)
+            self._pending_values.insert(k, v, new.kinds.get(k))
         if self.schedule.due(new):
             self._update(new.pose)
         self.step_seconds.append(time.perf_counter() - start)
@@ -187,7 +187,10 @@ class StreamingEstimator:
 
     def solved(self) -> Trajectory:
         """The trajectory the solver holds: its states, queried at any time (Eq. 18)."""
-        return Trajectory(self.solver, self.states[: self.n_solved], self.readings.times, self.setup.motion_prior())
+        return Trajectory(
+            self.solver, self.states[: self.n_solved], self.readings.times, self.setup.motion_prior(),
+            se2_model=self.setup.se2_residual if self.setup.is_se2 else None,
+        )  # fmt: skip
 
     def estimate_at(self, t: float, *, covariance: bool = False) -> NDArray | tuple[NDArray, NDArray]:
         """The state x(t) (n,) at any time from the first solved state on, with its covariance (n, n) if asked:

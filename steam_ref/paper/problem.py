@@ -71,7 +71,7 @@ def build_problem(
     for step in front:
         graph.add(step.factors)
         for k, v in step.values.items():
-            initial.insert(k, v)
+            initial.insert(k, v, step.kinds.get(k))
     return SteamProblem(graph, initial, np.array(front.states), readings, setup, layout)
 
 
@@ -96,7 +96,7 @@ def sequential_batch(
     for step in front:
         graph.add(step.factors)
         for k, v in step.values.items():
-            values.insert(k, v)
+            values.insert(k, v, step.kinds.get(k))
         if step.is_state and (step.pose >= stop or front.done):
             its = final_iterations if front.done else 10
             result = gauss_newton(graph, values, ordering=ordering, max_iterations=its, check=front.done, **options)
