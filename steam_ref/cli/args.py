@@ -14,7 +14,7 @@ from .._version import __version__
 from ..bayes_tree import ISAM2Params
 from ..conformance import command as conformance_command
 from ..errors import SteamError
-from ..paper.presets import DEPARTURES, PRESETS, PRIORS, PaperSetup
+from ..paper.presets import DEPARTURES, PRESETS, PRIORS, SE2_RESIDUALS, PaperSetup
 from . import data as data_command
 
 __all__ = ["build_parser"]
@@ -156,8 +156,15 @@ def _add_run_arguments(run: argparse.ArgumentParser) -> None:
         "--prior",
         choices=PRIORS,
         default=None,
-        help="motion prior: the paper's white noise on acceleration, or on jerk, or Singer's model (docs/derivations.md); "
-        "default: the preset's (wnoa)",
+        help="motion prior: the paper's white noise on acceleration, or on jerk, or Singer's model, or white noise on "
+        "acceleration on SE(2) (states: pose and body twist; docs/derivations.md); default: the preset's (wnoa)",
+    )
+    run.add_argument(
+        "--se2-residual",
+        choices=SE2_RESIDUALS,
+        default=None,
+        help="--prior se2 only: the SE(2) prior's residual, 'local-variable' (Anderson & Barfoot; GTSAM, STEAM) or "
+        "'simplified' (gpslam, Theseus) (default: local-variable)",
     )
     run.add_argument(
         "--qc-scale",

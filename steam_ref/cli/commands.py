@@ -86,7 +86,9 @@ def _run(args: argparse.Namespace) -> int:
     prior = setup.prior if args.prior is None else args.prior
     if args.singer_time_constant is not None and prior != "singer":
         raise SteamError(f"--singer-time-constant applies to --prior singer only, not --prior {prior}")
-    given = {"prior": args.prior, "singer_time_constant": args.singer_time_constant}  # only what was given
+    if args.se2_residual is not None and prior != "se2":
+        raise SteamError(f"--se2-residual applies to --prior se2 only, not --prior {prior}")
+    given = {"prior": args.prior, "singer_time_constant": args.singer_time_constant, "se2_residual": args.se2_residual}
     setup = setup.replace(qc=args.qc_scale * setup.qc, **{k: v for k, v in given.items() if v is not None})
     isam2 = {"relinearize_threshold": args.relinearize_threshold, "relinearize_skip": args.relinearize_skip}
     if any(v is not None for v in isam2.values()):  # only what was given: the preset owns its iSAM2 settings
@@ -119,6 +121,7 @@ def _run(args: argparse.Namespace) -> int:
         "score_against_optimum": args.score_against_optimum,
         "departures": args.departure,
         "prior": setup.prior,
+        **({"se2_residual": setup.se2_residual} if setup.is_se2 else {}),
         "qc_scale": args.qc_scale,
     }
     summary |= {"what": explain.method_text(args.method, result.schedule.every)}
