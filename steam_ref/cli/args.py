@@ -307,6 +307,22 @@ def build_parser() -> argparse.ArgumentParser:
 def _add_consistency_arguments(con: argparse.ArgumentParser) -> None:
     """``steam-ref consistency`` (steam_ref.cli.consistency)."""
     con.add_argument("--dataset", choices=("synthetic",), default="synthetic", help="tasks drawn from the model")
+    con.add_argument(
+        "--prior",
+        choices=("wnoa", "se2"),
+        default="wnoa",
+        help="the model the tasks are drawn from and the estimators assume: the paper's WNOA, or WNOA on SE(2) "
+        "(then the estimators are batch, btgp/1 and btgp/1 with the vector-space prior)",
+    )
+    con.add_argument(
+        "--se2-residual", choices=SE2_RESIDUALS, default=None, help="--prior se2: the model's residual (local-variable)"
+    )
+    con.add_argument(
+        "--turn",
+        type=float,
+        default=None,
+        help="--prior se2: the task's yaw rate at the start, rad a step (default 0; 1.0 is the fast-turning task)",
+    )
     con.add_argument("--seeds", type=_positive_int, default=200, help="Monte Carlo runs (default %(default)s)")
     con.add_argument("--seed", type=_non_negative_int, default=0, help="root of the seeds (SeedSequence(seed).spawn)")
     con.add_argument("--steps", type=_positive_int, default=40, help="time steps of a task (default %(default)s)")

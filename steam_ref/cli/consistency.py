@@ -3,6 +3,7 @@
     steam-ref consistency [--dataset synthetic] [--seeds 200] [--seed 0] [--steps 40] [--landmarks 8]
                           [--jobs N] [--backend loky|dask] [--scheduler ADDRESS]
                           [--log FILE.jsonl | --resume FILE.jsonl] [--json] [--plot FILE.png]
+                          [--prior wnoa|se2 [--se2-residual local-variable|simplified] [--turn RATE]]
 
 The runs are :func:`steam_ref.paper.consistency.run_seed` on tasks drawn from the estimator's own model,
 spread over ``--jobs`` workers (:func:`steam_ref.paper.sweep.run_sweep`); the figures do not depend on the
@@ -14,9 +15,19 @@ from __future__ import annotations
 import argparse
 import functools
 import json
+import math
 import time
 
-from ..paper.consistency import KINDS, ConsistencyStudy, check_result, run_seed, summarize
+from ..errors import SteamError
+from ..paper.consistency import (
+    KINDS,
+    SE2_ESTIMATORS,
+    ConsistencyStudy,
+    check_result,
+    consistency_se2_setup,
+    run_seed,
+    summarize,
+)
 from ..paper.sweep import run_sweep
 from ..plot.figures import plot_anees
 from .paths import check_output
@@ -42,12 +53,26 @@ def _text(summary: dict) -> str:
     return "\n".join(lines)
 
 
+def _model(args: argparse.Namespace) -> dict:
+    """The study's set-up and estimators for ``--prior`` (and, on SE(2), ``--se2-residual``, ``--turn``)."""
+    if args.prior != "se2":
+        for option, value in (("--se2-residual", args.se2_residual), ("--turn", args.turn)):
+            if value is not None:
+                raise SteamError(f"{option} applies to --prior se2 only")
+        return {}
+    turn = 0.0 if args.turn is None else args.turn
+    if not math.isfinite(turn) or abs(turn) >= math.pi:
+        raise SteamError(f"--turn must be a yaw rate in (-π, π) rad a step, got {args.turn!r}")
+    setup = consistency_se2_setup(turn, args.se2_residual or "local-variable")
+    return {"setup": setup, "estimators": SE2_ESTIMATORS}
+
+
 def run(args: argparse.Namespace) -> int:
     """Run the study, print its figures, draw them."""
     for path, suffix, option in ((args.plot, ".png", "--plot"), (args.log, ".jsonl", "--log")):
         check_output(path, suffix, option)
     check_output(args.resume, ".jsonl", "--resume")
-    study = ConsistencyStudy(n_steps=args.steps, n_landmarks=args.landmarks, seed=args.seed)
+    study = ConsistencyStudy(n_steps=args.steps, n_landmarks=args.landmarks, seed=args.seed, **_model(args))
     start = time.perf_counter()
     results = run_sweep(
         functools.partial(run_seed, study),
