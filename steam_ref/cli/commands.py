@@ -145,7 +145,9 @@ def _run(args: argparse.Namespace) -> int:
     else:
         print(explain.run_text(summary) + _evaluation_note(summary))
     if args.save_estimates:
-        _write_output(args.save_estimates, "--save-estimates", lambda name: save_estimates(name, result))
+        _write_output(
+            args.save_estimates, "--save-estimates", lambda name: save_estimates(name, result, se2=setup.is_se2)
+        )
     if args.tree_dot and isinstance(estimator.solver, BayesTreeSolver):  # GTSAM's ISAM2.dot() text (bayes_tree/dot.py)
         dot = estimator.solver.inner.tree.dot() + "\n"
         _write_output(args.tree_dot, "--tree-dot", lambda name: Path(name).write_text(dot, encoding="utf-8"))
@@ -217,13 +219,15 @@ def _evaluation_note(summary: dict) -> str:
     )
 
 
-def save_estimates(path: str, result) -> None:
+def save_estimates(path: str, result, *, se2: bool = False) -> None:
     """Write a run to an .npz file: ``times``, ``x``, ``y``, ``theta`` and ``xdot``, ``ydot``,
     ``thetadot`` at every covered time step (and ``xddot``, ``yddot``, ``thetaddot`` with a WNOJ or Singer
     prior), ``state_poses`` (pose indices with a state),
     ``landmark_ids`` and ``landmarks`` (m, 2), and, when the run has them, the final marginal
     covariances ``pose_covariance`` (n, 3, 3), ``velocity_covariance`` (n, 3, 3) and
-    ``landmark_covariance`` (m, 2, 2), in the order of ``times`` and ``landmark_ids``."""
+    ``landmark_covariance`` (m, 2, 2), in the order of ``times`` and ``landmark_ids``. With ``se2`` (SE(2)
+    states) the rates are the body twist ``vx``, ``vy``, ``omega`` and the covariances those of the right
+    tangent at the estimate: the pose block in the body frame (``steam_ref.lie.world_position_covariance``)."""
     ids = np.array(sorted(result.landmarks), dtype=int)
     marks = np.array([result.landmarks[i] for i in ids]).reshape(-1, 2)
     tr = result.trajectory
@@ -232,9 +236,11 @@ def save_estimates(path: str, result) -> None:
         x=tr[:, 0],
         y=tr[:, 1],
         theta=tr[:, 2],
-        xdot=tr[:, 3],
-        ydot=tr[:, 4],
-        thetadot=tr[:, 5],
+        **(
+            dict(vx=tr[:, 3], vy=tr[:, 4], omega=tr[:, 5])
+            if se2
+            else dict(xdot=tr[:, 3], ydot=tr[:, 4], thetadot=tr[:, 5])
+        ),
         state_poses=result.state_poses,
         landmark_ids=ids,
         landmarks=marks,
