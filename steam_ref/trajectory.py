@@ -132,7 +132,7 @@ class Trajectory:
         ta, tb = self.times[a], self.times[b]
         if t in (ta, tb):  # a pose at a state's time: that state's marginal, a block of the joint
             return joint[: self.n, : self.n].copy() if t == ta else joint[self.n :, self.n :].copy()
-        if self.se2_model is not None:
+        if self.se2_model is not None and self.qc is not None:
             xa, xb = self.solver.estimate_of(X(a)), self.solver.estimate_of(X(b))
             return se2_gp.interpolate_covariance_se2(ta, tb, t, self.qc, xa, xb, joint, self.se2_model)[1]
         if self.qc is None:
@@ -166,7 +166,7 @@ class Trajectory:
             )
         if solved and t > times[solved[-1]]:
             last, key = times[solved[-1]], X(solved[-1])
-            if self.se2_model is not None:  # [DER 11.18]
+            if self.se2_model is not None and self.qc is not None:  # [DER 11.18]
                 x1 = self.solver.estimate_of(key)
                 if not covariance:
                     return se2_gp.extrapolate(x1, last, t)[0]

@@ -212,7 +212,8 @@ def score_against_batch(result, readings: Readings, setup: PaperSetup) -> BatchS
     )
     estimate = Values(
         {X(int(i)): np.asarray(result.trajectory[i]) for i in states}
-        | {L(j): np.asarray(p) for j, p in result.landmarks.items()}
+        | {L(j): np.asarray(p) for j, p in result.landmarks.items()},
+        kinds=problem.initial.kinds(),  # SE(2) states move as such
     )
     start = time.perf_counter()
     batch, where = reference_batch(problem, estimate)
