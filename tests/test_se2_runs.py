@@ -13,12 +13,14 @@ import scipy.io
 from steam_ref.batch import gauss_newton
 from steam_ref.cli.commands import main
 from steam_ref.datasets import generate_synthetic, sample_se2_from_model
+from steam_ref.errors import DivergenceWarning
 from steam_ref.factors import GPPriorFactor, PriorFactor
 from steam_ref.factors.se2 import SE2PriorFactor, SE2StatePrior
 from steam_ref.factors.se2_measurements import SE2InterpolatedFactor, SE2Measurement, SE2VelocityFactor
 from steam_ref.lie import SE2_STATE, se2
 from steam_ref.paper.consistency import ConsistencyStudy, consistency_se2_setup, model_of, run_seed
 from steam_ref.paper.converge import converge, rotated
+from steam_ref.paper.divergence import DivergenceCheck
 from steam_ref.paper.frontend import FrontEnd, Layout
 from steam_ref.paper.online import StreamingEstimator
 from steam_ref.paper.options import StreamOptions
@@ -26,7 +28,7 @@ from steam_ref.paper.presets import PaperSetup
 from steam_ref.paper.problem import build_problem
 from steam_ref.paper.readings import Readings
 from steam_ref.trajectory import Trajectory
-from steam_ref.variables import Values, X
+from steam_ref.variables import L, Values, X
 
 
 @pytest.fixture(scope="module")
@@ -193,3 +195,15 @@ def test_the_turn_of_the_whole_map_on_se2_states_changes_only_the_anchored_facto
     got = converge(problem.graph, problem.initial, step_tolerance=1e-10).values
     for i in range(16):
         assert np.abs(SE2_STATE.local(want[X(i)], got[X(i)])).max() < 1e-7
+
+
+def test_the_divergence_gate_names_an_absurd_reading_on_se2_states():
+    """A range reading 100 m off at an SE(2) state is named before the update, as on vector states."""
+    check = DivergenceCheck()
+    state = np.array([0.0, 0.0, 0.3, 1.0, 0.0, 0.1])
+    good = SE2Measurement.range(X(0), L(1), 5.0, 0.1)
+    bad = SE2InterpolatedFactor.create(SE2Measurement.range(X(5), L(1), 105.0, 0.1), X(0), X(1), 0.0, 1.0, 0.5,
+                                       np.eye(3))  # fmt: skip
+    values = {X(0): state, X(1): SE2_STATE.retract(state, np.r_[1.0, 0, 0.1, 0, 0, 0]), L(1): np.array([3.0, 4.0])}
+    with pytest.warns(DivergenceWarning, match=r"RangeFactor on x0, x1, l1 \(interpolated between its states\)"):
+        check.gate([good, bad], values.__getitem__, 7)
