@@ -1,17 +1,20 @@
 """Fixed-lag smoothing: memory and time per update that stay flat, and what the lag costs.  [issue 23]
 
-Every run is ``steam-ref run ... --json`` in a fresh, single-threaded Python process (the command itself,
-called in the child, which also keeps each update's wall time). One JSON line per run, then one line of
-targets:
+Every run is ``steam-ref run ... --json`` in a fresh Python process (the command itself, called in the
+child, which also keeps each update's wall time), with the environment as the user has it: no BLAS or
+OpenMP thread variable is set, so the figures are what a user gets (steam_ref runs its solvers at one BLAS
+thread by itself, ``$STEAM_REF_BLAS_THREADS`` to change it: :mod:`steam_ref.linear.threads`). One JSON line
+per run, then one line of targets:
 
 - ``synthetic``, ``--steps 2000`` and ``--steps 20000`` with ``--lag 30`` (and ``--steps 2000`` without a
   lag, for reference): peak RSS (MB), update time medians of the first and the last 1,000 updates, RMSE,
   states marginalized, peak window;
-- ``plaza`` BTGP/1 without a lag, with ``--lag 60``, and with ``--lag 60 --lag-history`` (the forgotten states'
+- ``plaza`` BTGP/1 without a lag, with ``--lag 60`` (60 s of the file's stamps, about 300 poses 0.2 s apart,
+  whatever clock the preset's GP prior runs on), and with ``--lag 60 --lag-history`` (the forgotten states'
   conditionals kept and the past smoothed from the final window at the end: ``rmse_m`` is then the smoothed
   trajectory's, ``rmse_lagged_m`` the estimates' as they left the window; its ``total_s`` includes the backward
   pass): RMSE and total time; and ``plaza, full smoother read
-  at the lag``: the full smoother's estimate of each state taken when it is 60 s old (what any smoother that
+  at the lag``: the full smoother's estimate of each state taken when it is 60 s old (by the data's stamps) (what any smoother that
   reports a state as it leaves a 60 s window can at best give), which separates the cost of reporting lagged
   estimates from the cost of marginalization (first-estimate Jacobians);
 - ``targets``: peak memory 20,000 / 2,000 steps ≤ 1.2, last / first 1,000 updates' median ≤ 1.2 (both within
@@ -29,7 +32,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import statistics
 import subprocess
 import sys
@@ -83,14 +85,12 @@ sys.exit(code)
 
 def run(argv: list[str]) -> tuple[dict, np.ndarray]:
     """``steam-ref run <argv> --json`` in a fresh process: its JSON line and each update's seconds."""
-    env = os.environ | {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
     with tempfile.TemporaryDirectory() as tmp:
         times = Path(tmp) / "updates.npy"
         proc = subprocess.run(
             [sys.executable, "-c", _CHILD, json.dumps(["run", *argv, "--json"]), str(times)],
             capture_output=True,
             text=True,
-            env=env,
         )
         if proc.returncode != 0:
             raise RuntimeError(f"steam-ref run {' '.join(argv)} failed: {proc.stderr.strip()[-400:]}")

@@ -1,8 +1,10 @@
 """steam_ref's BTGP against GTSAM 4.3's ISAM2 (C++) on the same stream.  [issue 22]
 
 For each data set (paper-synthetic, plaza) and schedule (/1, /10), the same front end feeds the same
-readings to three solvers, each run in a fresh Python process with ``OMP_NUM_THREADS`` /
-``OPENBLAS_NUM_THREADS`` = 1, the three alternating, ``--repeat`` times (medians reported):
+readings to three solvers, each run in a fresh Python process with the environment as the user has it (no
+BLAS or OpenMP thread variable set: steam_ref limits its solvers to one BLAS thread by itself,
+:mod:`steam_ref.linear.threads`; GTSAM runs with its own defaults), the three alternating, ``--repeat`` times
+(medians reported):
 
 - ``steam``: steam_ref's BTGP (the preset's iSAM2 settings; back-substitution by the per-clique loop, the default);
 - (a) ``custom``: GTSAM's ISAM2 (its defaults) with our factors as ``gtsam.CustomFactor``s calling our
@@ -30,7 +32,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import statistics
 import subprocess
 import sys
@@ -105,10 +106,9 @@ def phases(reports: list) -> dict:
 
 
 def run_child(solver: str, dataset: str, every: int, max_poses: int | None) -> dict:
-    env = os.environ | {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
     args = [sys.executable, __file__, "--child", solver, "--datasets", dataset, "--every", str(every)]
     args += [] if max_poses is None else ["--max-poses", str(max_poses)]
-    proc = subprocess.run(args, capture_output=True, text=True, env=env)
+    proc = subprocess.run(args, capture_output=True, text=True)
     if proc.returncode != 0:
         raise RuntimeError(f"{solver} on {dataset}/{every} failed: {proc.stderr.strip()[-2000:]}")
     return json.loads(proc.stdout.strip().splitlines()[-1])

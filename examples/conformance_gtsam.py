@@ -108,15 +108,17 @@ def measurement(kind: str, measured, p, v, l):
     dx, dy = l[0] - p[0], l[1] - p[1]
     r2 = dx * dx + dy * dy
     r = np.sqrt(r2)
-    rng = (np.array([r]), np.array([[-dx / r, -dy / r, 0.0]]), np.array([[dx / r, dy / r]]))
+    u = (dx / r, dy / r) if r > 0 else (0.0, 0.0)  # at the landmark: the kit's zero rows (GTSAM's norm2 gives [1, 1])
+    rng = (np.array([r]), np.array([[-u[0], -u[1], 0.0]]), np.array([[u[0], u[1]]]))
+    if kind == "range":
+        _, Jp, Jl = rng
+        return rng[0] - y, Jp, np.zeros((1, 3)), Jl
     brg = (
         np.array([np.arctan2(dy, dx) - p[2]]),
         np.array([[dy / r2, -dx / r2, -1.0]]),
         np.array([[-dy / r2, dx / r2]]),
     )
-    if kind == "range":
-        (h, Jp, Jl), e = rng, rng[0] - y
-    elif kind == "bearing":
+    if kind == "bearing":
         (h, Jp, Jl), e = brg, np.array([_wrap(brg[0][0] - y[0])])
     else:
         h, Jp, Jl = (np.concatenate(a) for a in zip(brg, rng, strict=True))

@@ -11,9 +11,11 @@ from typing import TYPE_CHECKING, Any
 
 from ._version import __version__ as __version__
 from .errors import (
+    ClockError,
     ConvergenceError,
     ConvergenceWarning,
     DataError,
+    DegenerateMeasurementWarning,
     DivergenceWarning,
     IllConditionedWarning,
     NumericalError,
@@ -50,6 +52,7 @@ _HOMES = {
     "LinearSystem": "linear",
     "xl_ordering": "linear",
     "amd_ordering": "linear",
+    "blas_threads": "linear",
     "marginal_covariances": "covariance",
     "sparse_marginal_covariances": "covariance",
     "sparse_joint_covariance": "covariance",
@@ -115,7 +118,7 @@ if TYPE_CHECKING:  # what a type checker and an IDE see: the same names, importe
     from .finish import finish_at_optimum
     from .gp import predict_state
     from .graph import FactorGraph
-    from .linear import LinearSystem, amd_ordering, xl_ordering
+    from .linear import LinearSystem, amd_ordering, blas_threads, xl_ordering
     from .paper.online import run_online
     from .paper.options import StreamOptions
     from .paper.presets import PaperSetup
@@ -129,12 +132,14 @@ __all__ = [
     "UnknownVariableError",
     "UnderdeterminedError",
     "NumericalError",
+    "ClockError",
     "ConvergenceError",
     "IllConditionedWarning",
     "ConvergenceWarning",
     "DivergenceWarning",
     "SteamWarning",
     "UncleanedDataWarning",
+    "DegenerateMeasurementWarning",
     "Key",
     "X",
     "L",
@@ -155,6 +160,7 @@ __all__ = [
     "LinearSystem",
     "xl_ordering",
     "amd_ordering",
+    "blas_threads",
     "marginal_covariances",
     "sparse_marginal_covariances",
     "sparse_joint_covariance",

@@ -9,7 +9,10 @@ and its value otherwise):
 - an **integer**: ``int`` or a NumPy integer, never a ``bool`` nor a float (``2.0`` included);
 - an **array**: anything NumPy reads as integers or floats (lists, tuples, arrays), copied to
   float64; never strings, booleans, complex numbers, ``None`` entries or ragged lists;
-- a **covariance**: a finite symmetric (n, n) array with no negative variance.
+- a **covariance**: a finite symmetric (n, n) array with no negative variance;
+- a number **written as text** (a command-line value, a field of a text file): plain ASCII decimal,
+  :data:`DECIMAL` (``-1.5``, ``.5``, ``2e-3``; an integer, :data:`DIGITS`), never what ``float()`` also
+  reads: ``1_0`` (10), full-width ``５`` (5), ``inf``, ``nan`` or surrounding blanks.
 
 Keys, lists of keys and estimates are checked in :mod:`steam_ref.variables` (``check_key``,
 ``key_list``, ``as_values``). This module imports nothing of steam_ref but its errors.
@@ -19,13 +22,27 @@ from __future__ import annotations
 
 import math
 import numbers
+import re
 
 import numpy as np
 from numpy.typing import NDArray
 
 from .errors import ShapeError, SteamError
 
-__all__ = ["number", "time_step", "integer", "real_array", "finite", "check_covariance"]
+__all__ = [
+    "number",
+    "time_step",
+    "integer",
+    "real_array",
+    "finite",
+    "check_covariance",
+    "DECIMAL",
+    "DIGITS",
+    "parse_decimal",
+]
+
+DECIMAL = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")  # a plain decimal number
+DIGITS = re.compile(r"[+-]?[0-9]+")  # a plain integer
 
 
 def _show(value: object, limit: int = 80) -> str:
@@ -115,3 +132,10 @@ def check_covariance(name: str, P: NDArray, n: int) -> NDArray:
         k = int(np.flatnonzero(diagonal < 0)[0])
         raise SteamError(f"{name} has a negative variance: {name}[{k}, {k}] = {float(diagonal[k])!r}")
     return P
+
+
+def parse_decimal(text: str, convert: type = float) -> float | int | None:
+    """``text`` read as a number by the one rule for numbers written as text (:data:`DECIMAL`, or
+    :data:`DIGITS` for ``convert=int``), or None when it is not one: ``1_0`` and ``５`` are not numbers here."""
+    rule = DIGITS if convert is int else DECIMAL
+    return convert(text) if isinstance(text, str) and rule.fullmatch(text) else None

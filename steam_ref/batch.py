@@ -1,16 +1,13 @@
 """Batch Gauss-Newton and Levenberg-Marquardt on the STEAM problem.  [YIB Eq. 6-11]
 
-Each iteration linearizes every factor at θ̄ (Eq. 9), solves 𝓘 δθ* = Aᵀb (Eq. 11) by sparse
-Cholesky under the chosen ordering ('xl': the paper's PB, 'amd': PBVR, 'natural'; see
-:mod:`steam_ref.linear.ordering`), and updates θ̄ ← θ̄ ⊕ δθ*, each variable moved by its kind
-(:mod:`steam_ref.manifold`: + for a vector). The ordering depends only on which variables share factors,
-so it is computed once.
+Each iteration linearizes every factor at θ̄ (Eq. 9), solves 𝓘 δθ* = Aᵀb (Eq. 11) by sparse Cholesky under
+the chosen ordering ('xl': the paper's PB, 'amd': PBVR, 'natural'; :mod:`steam_ref.linear.ordering`), and updates
+θ̄ ← θ̄ ⊕ δθ* by each variable's kind (:mod:`steam_ref.manifold`). The ordering is computed once.
 
 Iterations stop on GTSAM's rules (the cost, or its relative decrease, below a tolerance) or on a
-small step. A stopping rule is not a proof, so before a result says ``converged`` the returned
-estimate is checked (:func:`check_stationarity`): one more Gauss-Newton step from it must promise
-to lower the cost by no more than the tolerance, and 𝓘 there must be well enough conditioned for
-float64 to compute that step at all.
+small step. A stopping rule is not a proof, so before a result says ``converged`` the returned estimate is
+checked (:func:`check_stationarity`): one more Gauss-Newton step from it must promise to lower the cost by no
+more than the tolerance, and 𝓘 there must be well enough conditioned for float64 to compute that step at all.
 
 It also declares the steps a solver built on them reuses (the internal API of :mod:`steam_ref.paper.converge`):
 :func:`check_options`, :func:`graph_and_values` and :func:`prepare` (the checks and set-up both solvers share),
@@ -36,6 +33,7 @@ from .graph import FactorGraph
 from .linear.cholesky import SparseCholesky, Symbolic
 from .linear.ordering import Ordering, make_ordering, sparse_backend
 from .linear.system import LinearSystem, linearize
+from .linear.threads import limited
 from .variables import Key, Values, as_values
 
 __all__ = [
@@ -55,11 +53,10 @@ __all__ = [
     "certify",
 ]
 
-# Largest condition number of the scaled information matrix for which a result may say "converged".
-# Sparse Cholesky's relative error in the step is about cond · ε (ε = 2.2e-16 in float64) [Higham,
-# Accuracy and Stability of Numerical Algorithms, Thm. 10.6 with van der Sluis's scaling]; at 1e12 that
-# is 2e-4, still enough for the step to tell a stationary point from a slope. Beyond it the check
-# itself cannot be trusted.
+# Largest condition number of the scaled information matrix for which a result may say "converged". Sparse
+# Cholesky's relative error in the step is about cond · ε (ε = 2.2e-16 in float64) [Higham, Accuracy and Stability
+# of Numerical Algorithms, Thm. 10.6 with van der Sluis's scaling]; at 1e12 that is 2e-4, still enough for the
+# step to tell a stationary point from a slope. Beyond it the check itself cannot be trusted.
 MAX_CONDITION = 1e12
 
 
@@ -279,6 +276,7 @@ def _norm(delta: dict[Key, NDArray]) -> float:
     return float(np.sqrt(sum(float(v @ v) for v in delta.values())))
 
 
+@limited
 def gauss_newton(
     graph: FactorGraph,
     initial: Values,
@@ -328,6 +326,7 @@ def gauss_newton(
     return BatchResult(values, cost0, iterations, converged, reason, order, nnz, backend, found, tuple(graph))
 
 
+@limited
 def levenberg_marquardt(
     graph: FactorGraph,
     initial: Values,

@@ -50,6 +50,7 @@ from .linear.cholesky import SparseCholesky, check_system
 from .linear.conditional import Conditional
 from .linear.ordering import Ordering, make_ordering
 from .linear.system import LinearSystem
+from .linear.threads import limited
 from .variables import Key, Values, as_values, check_key, key_list
 
 if TYPE_CHECKING:
@@ -118,6 +119,7 @@ def _blocks_of_inverse(
     return out
 
 
+@limited
 def marginal_covariances(system: LinearSystem, keys: list[Key], backend: str | None = None) -> dict[Key, NDArray]:
     """Marginal covariance blocks (𝓘⁻¹)ₖₖ (dₖ, dₖ) of chosen variables.  [YIB Eq. 11: cov δθ* = 𝓘⁻¹]"""
     check_system(system)
@@ -137,6 +139,7 @@ def _factor_at(factors: Sequence[Factor], values: Values, backend: str | None) -
     return order, SparseCholesky.factor(info, order, backend, check_symmetry=False)  # AᵀA
 
 
+@limited
 def sparse_joint_covariance(
     factors: Sequence[Factor], values: Values, keys: Sequence[Key], backend: str | None = None
 ) -> NDArray:
@@ -152,6 +155,7 @@ def sparse_joint_covariance(
     return 0.5 * (block + block.T)
 
 
+@limited
 def sparse_marginal_covariances(
     factors: Sequence[Factor], values: Values, keys: Sequence[Key], backend: str | None = None
 ) -> dict[Key, NDArray]:
@@ -161,6 +165,7 @@ def sparse_marginal_covariances(
     return dict(zip(keys, _blocks_of_inverse(chol, order, [[k] for k in keys]), strict=True))
 
 
+@limited
 def sparse_joint_covariances(
     factors: Sequence[Factor], values: Values, groups: Sequence[Sequence[Key]], backend: str | None = None
 ) -> list[NDArray]:
@@ -269,6 +274,7 @@ def _symmetric(block: NDArray) -> NDArray:
     return 0.5 * (block + block.T)
 
 
+@limited
 def tree_marginal_covariance(tree: BayesTree, key: Key) -> NDArray:
     """Cov(δθ_key) = (𝓘⁻¹)_key,key (d, d) from the tree, walking down from the root.  [K11 Sec. 3]
 
@@ -277,6 +283,7 @@ def tree_marginal_covariance(tree: BayesTree, key: Key) -> NDArray:
     return tree_joint_covariance(tree, [check_key("key", key)])
 
 
+@limited
 def tree_joint_covariance(tree: BayesTree, keys: Iterable[Key]) -> NDArray:
     """Joint covariance of several variables (Σdₖ, Σdₖ), stacked in the order given, from the tree.
 
@@ -326,6 +333,7 @@ def _walk_down(tree: BayesTree, needed: set[int] | None) -> Iterator[tuple[int, 
                 stack.append((ch, _block(joint, index, tree.cliques[ch].separator)))
 
 
+@limited
 def tree_marginal_covariances(tree: BayesTree, keys: Iterable[Key] | None = None) -> dict[Key, NDArray]:
     """Marginal covariance (dₖ, dₖ) of every variable in ``keys`` (all when None), in one pass.  [K11 Sec. 3]
 
@@ -342,6 +350,7 @@ def tree_marginal_covariances(tree: BayesTree, keys: Iterable[Key] | None = None
     return out if wanted is None else {k: out[k] for k in wanted}
 
 
+@limited
 def tree_joint_covariances(tree: BayesTree, groups: Iterable[Iterable[Key]]) -> list[NDArray]:
     """Joint covariance of each group of variables (stacked in the order given), from the tree.
 

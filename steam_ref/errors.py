@@ -10,12 +10,16 @@ one meaning:
 - :class:`UnderdeterminedError`: the factors leave a variable unconstrained;
 - :class:`NumericalError`: a computation on valid input overflowed to NaN/inf or lost the precision
   its answer needs (never "the iterations stopped short": that is convergence);
-- :class:`ConvergenceError`: an iteration that must return a converged answer did not reach one.
+- :class:`ConvergenceError`: an iteration that must return a converged answer did not reach one;
+- :class:`ClockError`: times compared on two clocks, or a time outside the span it must fall in
+  (truth stamped in seconds queried against a trajectory's pose index, say).
 
 Every warning is a :class:`SteamWarning`, flagging a result that is returned anyway, with the reason in it:
 :class:`IllConditionedWarning` (float64 cannot resolve the answer), :class:`ConvergenceWarning`
 (an iteration asked to converge stopped before its check passed), :class:`DivergenceWarning` (a stream
-diverges) and :class:`UncleanedDataWarning` (a named data set was read from other files than the paper's).
+diverges), :class:`UncleanedDataWarning` (a named data set was read from other files than the paper's) and
+:class:`DegenerateMeasurementWarning` (a measurement evaluated where its Jacobian is undefined, given by a
+stated convention).
 """
 
 
@@ -51,6 +55,11 @@ class ConvergenceError(SteamError):
     convergence check; the message says which rule stopped it and what the check found."""
 
 
+class ClockError(SteamError):
+    """A time is not on the clock it is compared with, or falls outside the span it must (a query before
+    the first estimated state, or after the last one where only the prior's prediction is known)."""
+
+
 class SteamWarning(UserWarning):
     """Base class of every warning steam_ref gives: ``warnings.simplefilter("error", SteamWarning)`` makes them errors."""
 
@@ -72,3 +81,8 @@ class DivergenceWarning(SteamWarning):
 class UncleanedDataWarning(SteamWarning):
     """``load_dataset("plaza")`` found no cleaned file (``Plaza1_thrown_away_some_range.mat``, the paper's) and read
     the original Plaza1 text files instead (all 3,529 ranges, outliers included): not the paper's data."""
+
+
+class DegenerateMeasurementWarning(SteamWarning):
+    """A measurement was evaluated where its Jacobian is undefined, and the stated convention was used instead
+    (a range with the robot exactly at the landmark: error 0 - r, Jacobian rows zero)."""

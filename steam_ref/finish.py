@@ -22,10 +22,12 @@ from .batch import BatchResult, Iteration, certify, check_options, prepare
 from .bayes_tree import IncrementalSolver
 from .errors import SteamError
 from .graph import FactorGraph
+from .linear.threads import limited
 
 __all__ = ["finish_at_optimum"]
 
 
+@limited
 def finish_at_optimum(
     solver: IncrementalSolver,
     *,

@@ -8,6 +8,10 @@ by the prior, x̄(t) = Φ(t, t_N) x̄_N and Φ P_N Φᵀ + Q(t - t_N)
 (:func:`steam_ref.gp.interpolate.extrapolate_state_sde`); before the first state there is no
 prior to speak of (the GP starts there, [YIB Eq. 14]) and a query is an error.
 
+Time: a query and every time returned are on the data's clock (seconds); the GP works on the model's.
+Given a :class:`~steam_ref.gp.clock.Clock` the trajectory maps a query through it; given plain pose times,
+the two clocks are one.
+
 **SE(2) states** (``se2_model`` given: states ``steam_ref.lie.SE2_STATE``, [x, y, θ, vx, vy, ω]): between
 states the local GP of Anderson & Barfoot (``lie.gp.interpolate``, ``interpolate_covariance_se2``), after the
 last the prediction along its body twist (``extrapolate_covariance_se2``). Every covariance of such a state
@@ -26,6 +30,7 @@ from numpy.typing import NDArray
 
 from .arguments import finite, number, real_array
 from .errors import ShapeError, SteamError
+from .gp.clock import Clock
 from .gp.interpolate import (
     extrapolate_covariance_sde,
     extrapolate_state_sde,
@@ -89,16 +94,25 @@ class Trajectory:
     ``prior`` is the motion prior the states were estimated with: Qc (3, 3) of the paper's WNOA prior,
     or any :class:`~steam_ref.gp.LinearSDE` (WNOJ, Singer: states of 9 numbers). ``times`` (n_poses,)
     must be finite and non-decreasing, ``states`` strictly increasing pose indices into it at strictly
-    increasing times. ``se2_model`` ("local-variable" or "simplified"): the states are SE(2) states and ``prior``
-    is the Qc of their WNOA prior on the body twist (module docstring).
+    increasing times. ``times`` may be a :class:`~steam_ref.gp.clock.Clock`: then ``times`` are its seconds
+    (what queries and answers use) and the prior runs on its model times. ``se2_model`` ("local-variable" or
+    "simplified"): the states are SE(2) states and ``prior`` is the Qc of their WNOA prior on the body twist
+    (module docstring).
     """
 
     def __init__(
-        self, solver, states: Sequence[int], times: NDArray, prior: NDArray | LinearSDE, se2_model: str | None = None
+        self,
+        solver,
+        states: Sequence[int],
+        times: NDArray | Clock,
+        prior: NDArray | LinearSDE,
+        se2_model: str | None = None,
     ):
         self.solver = solver  # anything with estimate_of, estimate, marginal_covariances, joint_covariance(s)
         self.states = _pose_indices(states)  # poses with a state, increasing
-        self.times = _pose_times(times, self.states)  # (n_poses,) time of every pose
+        self.clock = times if isinstance(times, Clock) else Clock.of(_pose_times(times, self.states))
+        self.times = _pose_times(self.clock.seconds, self.states)  # (n_poses,) time of every pose [data's clock]
+        self.model_times = _pose_times(self.clock.model, self.states)  # (n_poses,) the same on the prior's clock
         prior = check_prior(prior)
         # Qc of a WNOA prior uses the memoised closed forms; any other prior goes through its LinearSDE.
         self.qc = None if isinstance(prior, LinearSDE) else prior
@@ -117,8 +131,9 @@ class Trajectory:
     def _between(self, a: int, b: int, t: float, xa: NDArray, xb: NDArray) -> NDArray:
         """x̄(t) between the states at poses a and b, ta <= t <= tb.  [YIB Eq. 18]
 
-        A pose may share its time with a state (times need only not decrease): x(ta) is the state at a."""
-        ta, tb = self.times[a], self.times[b]
+        A pose may share its time with a state (times need only not decrease): x(ta) is the state at a.
+        ``t`` is on the model's clock."""
+        ta, tb = self.model_times[a], self.model_times[b]
         if t in (ta, tb):
             return (xa if t == ta else xb).copy()
         if self.qc is None:
@@ -129,7 +144,7 @@ class Trajectory:
         return lam @ xa + psi @ xb
 
     def _between_covariance(self, a: int, b: int, t: float, joint: NDArray) -> NDArray:
-        ta, tb = self.times[a], self.times[b]
+        ta, tb = self.model_times[a], self.model_times[b]
         if t in (ta, tb):  # a pose at a state's time: that state's marginal, a block of the joint
             return joint[: self.n, : self.n].copy() if t == ta else joint[self.n :, self.n :].copy()
         if self.se2_model is not None and self.qc is not None:
@@ -165,26 +180,27 @@ class Trajectory:
                 "the prior extrapolates)"
             )
         if solved and t > times[solved[-1]]:
-            last, key = times[solved[-1]], X(solved[-1])
+            last, key, m = self.model_times[solved[-1]], X(solved[-1]), float(self.clock.to_model(t))
             if self.se2_model is not None and self.qc is not None:  # [DER 11.18]
                 x1 = self.solver.estimate_of(key)
                 if not covariance:
-                    return se2_gp.extrapolate(x1, last, t)[0]
+                    return se2_gp.extrapolate(x1, last, m)[0]
                 cov1 = self.solver.joint_covariance([key])
-                return se2_gp.extrapolate_covariance_se2(x1, last, t, self.qc, cov1)
-            mean = extrapolate_state_sde(self.prior, last, self.solver.estimate_of(key), t)
+                return se2_gp.extrapolate_covariance_se2(x1, last, m, self.qc, cov1)
+            mean = extrapolate_state_sde(self.prior, last, self.solver.estimate_of(key), m)
             if not covariance:
                 return mean
-            return mean, extrapolate_covariance_sde(self.prior, last, t, self.solver.joint_covariance([key]))
+            return mean, extrapolate_covariance_sde(self.prior, last, m, self.solver.joint_covariance([key]))
         near = self.neighbours(t)
         if isinstance(near, int):
             mean = self.solver.estimate_of(X(near)).copy()
             return (mean, self.solver.joint_covariance([X(near)])) if covariance else mean
         a, b = near
-        mean = self._between(a, b, t, self.solver.estimate_of(X(a)), self.solver.estimate_of(X(b)))
+        m = float(self.clock.to_model(t))
+        mean = self._between(a, b, m, self.solver.estimate_of(X(a)), self.solver.estimate_of(X(b)))
         if not covariance:
             return mean
-        return mean, self._between_covariance(a, b, t, self.solver.joint_covariance([X(a), X(b)]))
+        return mean, self._between_covariance(a, b, m, self.solver.joint_covariance([X(a), X(b)]))
 
     def at_every_pose(self) -> tuple[NDArray, NDArray]:
         """Times (m,) and states (m, n) at every pose of the span, from the first state's pose to the last's
@@ -192,7 +208,7 @@ class Trajectory:
         solved = self.states
         if not solved:
             return np.zeros(0), np.zeros((0, self.n))
-        values, times, first = self.solver.estimate(), self.times, solved[0]
+        values, times, first = self.solver.estimate(), self.model_times, solved[0]
         out = np.empty((solved[-1] + 1 - first, self.n))
         for a, b in itertools.pairwise(solved):
             xa, xb = values[X(a)], values[X(b)]
@@ -200,7 +216,7 @@ class Trajectory:
             for p in range(a + 1, b):
                 out[p - first] = self._between(a, b, times[p], xa, xb)  # [YIB Eq. 18]
         out[-1] = values[X(solved[-1])]
-        return times[first : solved[-1] + 1].copy(), out
+        return self.times[first : solved[-1] + 1].copy(), out
 
     def covariances(self, landmarks: Sequence[Key]) -> Covariances:
         """Marginal covariances at every pose of the span (interpolated between states; row k is pose
@@ -226,7 +242,7 @@ class Trajectory:
         for a, b in itertools.pairwise(solved):
             full[a - first] = marg[X(a)]
             for p in range(a + 1, b):
-                full[p - first] = self._between_covariance(a, b, self.times[p], joints[(a, b)])
+                full[p - first] = self._between_covariance(a, b, self.model_times[p], joints[(a, b)])
         if solved:
             full[-1] = marg[X(solved[-1])]
         marks = np.array([marg[k] for k in landmarks]).reshape(-1, 2, 2)

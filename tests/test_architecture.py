@@ -62,7 +62,8 @@ LAYERS: dict[str, int] = {
     "steam_ref.paper.online": 11,
     "steam_ref.paper.fidelity": 11,
     "steam_ref.paper.experiments": 12,
-    "steam_ref.paper.sweep": 7,  # joblib / Dask runs of any picklable function; imports only errors
+    "steam_ref.paper.sweep": 7,  # joblib / Dask runs of any picklable function; imports errors and linear.threads
+    "steam_ref.paper.progress": 7,  # the progress display every long command uses; imports no steam_ref module
     "steam_ref.paper.consistency": 12,  # NEES over Monte Carlo runs of the solvers
     "steam_ref.paper": 12,  # its __init__ re-exports the layer's main names
     # tools

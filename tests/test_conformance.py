@@ -67,10 +67,11 @@ def suite_results(kit: Path, suite: str) -> dict:
 def test_index_lists_every_file_with_its_sha256_the_conventions_and_the_provenance_of_every_case():
     index = read_index(SHIPPED)  # raises if a file's sha256 differs
     assert sorted(index["files"]) == kit_files(SHIPPED)
-    assert index["kit_version"] == 3 and set(index["suites"]) == set(SUITES)
+    assert index["kit_version"] == 4 and set(index["suites"]) == set(SUITES)
     assert read_index(KITS[1])["kit_version"] == 1  # v1 stays shipped, verified
     assert read_index(KITS[2])["kit_version"] == 2 and "fixed_lag" not in read_index(KITS[2])["suites"]  # v2 too
-    assert sum(s["cases"] for s in index["suites"].values()) >= 70 and index["suites"]["fixed_lag"]["cases"] >= 4
+    assert read_index(KITS[3])["kit_version"] == 3 and read_index(KITS[3])["suites"]["fixed_lag"]["cases"] == 4  # v3
+    assert sum(s["cases"] for s in index["suites"].values()) >= 73 and index["suites"]["fixed_lag"]["cases"] >= 6
     assert "t < t_newest - lag" in index["conventions"]["fixed_lag"]
     for word in ("state", "units", "residual", "whitening", "cost", "robust", "angles", "floats", "tolerance"):
         assert index["conventions"][word], word
@@ -131,7 +132,7 @@ def test_selftest_passes_on_the_installed_code(capsys):
 def test_export_writes_the_kit_and_a_readme_and_refuses_a_non_empty_folder(tmp_path, capsys):
     code, _, _ = cli(capsys, "export", tmp_path / "kit")
     readme = (tmp_path / "kit" / "README.md").read_text()
-    assert code == 0 and '"kit_version": 3' in readme and "--allow-missing" in readme
+    assert code == 0 and '"kit_version": 4' in readme and "--allow-missing" in readme and "--paper" in readme
     assert "**fixed_lag**" in readme and "t < t_newest - lag" in readme and "marginal_information_k" in readme
     # self-contained: every factor type with its error, the details an outside port got wrong, the ordering rule
     for factor in ("gp_prior", "prior", "odometry", "velocity", "range", "bearing", "bearing_range", "interpolated"):
@@ -175,7 +176,8 @@ def test_check_is_a_gate_missing_cases_fail_unless_only_or_allow_missing_says_so
     code, out, _ = cli(capsys, "check", tmp_path)
     lines = out.strip().splitlines()
     assert code == 1 and lines[-1].startswith("4 passed, 0 failed, ") and "MISSING: 12 cases of gp" in out, out
-    assert "MISSING: 2 cases of paper have no result: synthetic_btgp1, plaza_btgp1" in out  # absent suites too
+    assert "MISSING: 22 cases of factors have no result: " in out  # absent suites too
+    assert "paper have no result" not in out and "add --paper" in out  # the paper suite only when asked
     code, out, _ = cli(capsys, "check", tmp_path, "--only", "gp")
     assert code == 1 and "MISSING: 12 cases of gp" in out and "not checked (--only): factors" in out
     code, out, _ = cli(capsys, "check", tmp_path, "--allow-missing")
@@ -298,7 +300,9 @@ def test_gtsam_passes_every_case_it_computes(tmp_path, capsys):
     assert {"at_optimum_zero_increment", "gp_heading_jump"} <= computed["linear"]
     # GTSAM's IncrementalFixedLagSmoother, an implementation independent of the oracle, passes the fixed_lag cases
     # without relinearization (it holds a marginal factor's variables at their linearization point: the others differ)
-    assert computed["fixed_lag"] == {"linear_two_at_once", "mid_clique_no_relinearization"}
+    # ... and with it the case of a timestamp exactly at t_newest - lag: GTSAM's rule is strictly less too
+    assert computed["fixed_lag"] == {"linear_two_at_once", "mid_clique_no_relinearization", "timestamp_at_the_boundary"}
+    assert "range_at_landmark" in computed["factors"]
     assert {"wnoa_dt0.1", "interp_tau1.1", "interp_tau1.55"} <= computed["gp"] and "interpolated_range" in computed[
         "factors"
     ]

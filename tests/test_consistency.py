@@ -13,9 +13,9 @@ from scipy.stats import chi2
 from steam_ref.cli.commands import main
 from steam_ref.datasets import sample_from_model
 from steam_ref.errors import DataError, NumericalError, SteamError
-from steam_ref.evaluate import chi2_band, chi2_quantile, nees
+from steam_ref.evaluate import INCONCLUSIVE, chi2_band, chi2_quantile, nees, runs_needed
 from steam_ref.gp.prior import process_noise, transition
-from steam_ref.paper.consistency import ConsistencyStudy, consistency_setup, model_of, run_seed, summarize
+from steam_ref.paper.consistency import KINDS, ConsistencyStudy, consistency_setup, model_of, run_seed, summarize
 from steam_ref.paper.sweep import run_sweep
 
 TINY = ConsistencyStudy(n_steps=12, n_landmarks=3, estimators=("btgp/1", "btgp/1 Qc x100"))
@@ -71,13 +71,79 @@ def test_chi2_band_equals_the_tables():
         chi2_band(0, 3)
 
 
-def test_the_right_prior_is_consistent_and_a_qc_100_times_too_large_is_flagged():
+def test_the_right_prior_is_inside_the_band_and_a_qc_100_times_too_large_is_flagged_even_at_16_runs():
     results = {i: run_seed(TINY, i) for i in range(16)}
     summary = summarize(results, TINY.estimators)["estimators"]
-    assert summary["btgp/1"]["consistent"], summary["btgp/1"]
+    right = summary["btgp/1"]
+    assert all(right[k]["band"][0] <= right[k]["anees"] <= right[k]["band"][1] for k in KINDS), right
+    assert right["consistent"] is None  # inside the band, but 16 runs are too few to call it consistent
+    assert all(right[k]["verdict"] == INCONCLUSIVE for k in KINDS)
     wrong = summary["btgp/1 Qc x100"]
-    assert not wrong["consistent"]
+    assert wrong["consistent"] is False  # outside the band is a verdict at any number of runs
     assert wrong["pose"]["verdict"] == "not consistent (underconfident)"  # covariances far too large
+
+
+# -- how many runs a verdict of "consistent" needs --
+
+
+def test_runs_needed_is_the_smallest_n_whose_study_would_see_a_tail_that_leaves_the_band():
+    """The rule of evaluate.consistency, recomputed with scipy.stats.chi2: at N = runs_needed a tail of lost runs
+    (NEES beyond χ²⁻¹(0.999; d)) frequent enough to lift the expected ANEES above the band is missed with
+    probability ≤ 5 %, at N - 1 with more; and every N up to 400 beyond it qualifies too."""
+
+    def missed(n: int, d: int) -> float:
+        top = chi2.ppf(0.975, n * d) / n
+        p_star = (top - d) / (chi2.ppf(0.999, d) - d)
+        return (1 - p_star) ** n
+
+    for d in (2, 3, 6):
+        n = runs_needed(d)
+        assert missed(n, d) <= 0.05 < missed(n - 1, d), (d, n)
+        assert all(missed(m, d) <= 0.05 for m in range(n, 400)), d
+    assert (runs_needed(3), runs_needed(2)) == (60, 71)
+    assert missed(20, 3) > 0.15  # 20 runs miss such a tail one time in six or more
+    with pytest.raises(SteamError, match="level must be a number in"):
+        runs_needed(3, 1.0)
+
+
+def _chi2_study(rng, n_runs: int, n_poses: int = 40, n_landmarks: int = 8, lost: float = 0.0) -> dict:
+    """Per-run NEES of an estimator whose every ε is χ²(d), as run_seed reports them; a fraction ``lost``
+    of the runs (the first ones) lost: every ε 30 times larger."""
+    out = {}
+    for i in range(n_runs):
+        scale = 30.0 if i < lost * n_runs else 1.0
+        row = {
+            k: (scale * rng.chisquare(d, n_poses if k != "landmark" else n_landmarks)).tolist()
+            for k, d in KINDS.items()
+        }
+        out[i] = {"model": row | {"warnings": []}}
+    return out
+
+
+def test_a_well_specified_estimator_at_200_runs_is_called_consistent_at_20_inconclusive(rng):
+    at_200 = summarize(_chi2_study(rng, 200), ("model",))["estimators"]["model"]
+    assert at_200["consistent"] is True, {k: at_200[k]["anees"] for k in KINDS}
+    at_20 = summarize(_chi2_study(rng, 20), ("model",))["estimators"]["model"]
+    assert at_20["consistent"] is None and at_20["pose"]["verdict"] == INCONCLUSIVE
+    assert at_20["pose"]["runs_needed"] == 60 and at_20["landmark"]["runs_needed"] == 71
+
+
+def test_a_tail_of_lost_runs_is_overconfident_once_the_runs_show_it(rng):
+    tail = summarize(_chi2_study(rng, 200, lost=0.13), ("model",))["estimators"]["model"]
+    assert tail["consistent"] is False and tail["pose"]["verdict"] == "not consistent (overconfident)"
+    assert tail["pose"]["runs_far_outside"] == 26
+
+
+def test_20_runs_of_the_interpolated_estimator_are_not_called_consistent():
+    """At 20 runs its pose ANEES is inside the band (3.240 in [2.024, 4.165]); at 200 it is 17.7, overconfident
+    (docs/experiments.md): 20 runs cannot tell, and the study says so."""
+    name = "btgp/1 skip 5 interpolated"
+    study = ConsistencyStudy(estimators=(name,))
+    row = summarize({i: run_seed(study, i) for i in range(20)}, study.estimators)["estimators"][name]
+    assert row["pose"]["anees"] == pytest.approx(3.240, abs=5e-4)  # inside the band: the old verdict was "consistent"
+    assert row["pose"]["band"][0] < row["pose"]["anees"] < row["pose"]["band"][1]
+    assert row["consistent"] is not True and row["pose"]["verdict"] != "consistent"
+    assert row["pose"]["verdict"] == INCONCLUSIVE
 
 
 def test_a_study_refuses_an_unknown_estimator():
@@ -273,3 +339,11 @@ def test_a_landmark_no_reading_sees_is_left_out_of_the_batch_optimum():
     out = run_seed(study, 0)
     seen = len(out["btgp/1"]["landmark"])
     assert 0 < seen < 30 and len(out["batch"]["landmark"]) == seen
+
+
+def test_the_command_calls_no_estimator_consistent_on_too_few_runs_and_says_how_many_are_needed(capsys):
+    assert main(["consistency", "--seeds", "3", "--steps", "8", "--landmarks", "2"]) == 0
+    out = capsys.readouterr().out
+    heads = [line for line in out.splitlines() if line.startswith("  ") and not line.startswith("    ")]
+    assert len(heads) == 6 and not any(line.endswith(": consistent") for line in heads), out
+    assert "inconclusive: inside the band, but 3 runs are too few" in out and "--seeds 71 or more" in out, out

@@ -3,6 +3,7 @@ trajectory whose first state is not pose 0, NaN and strings, a reflection in a K
 with qw < 0, a missing file, an RPE delta longer than the trajectory. Each answer is checked against the
 dense GP posterior, evo reading the same file, or a hand computation."""
 
+import os
 import re
 
 import numpy as np
@@ -16,6 +17,7 @@ from steam_ref.evaluate import (
     Alignment,
     Statistics,
     align_planar,
+    alignment_defect,
     chi2_quantile,
     nees,
     pose_errors,
@@ -306,3 +308,97 @@ def test_states_at_refuses_times_after_the_estimate_unless_asked_to_predict(dens
     mean = states_at(trajectory, [1.1, 6.0], extrapolate=True)[1]
     expected, _ = posterior(6.0)
     np.testing.assert_allclose(mean, expected, rtol=1e-7, atol=1e-9 * np.abs(expected).max())
+
+
+# -- statistics without overflow, poses that are numbers, nees of nothing, files that are not files --
+
+
+def test_statistics_of_huge_errors_do_not_overflow():
+    """e * e overflows past 1e154: rmse was inf for errors of 1e200 (and the JSON line then carried Infinity).
+    By hand: rmse of (1, 2, 3) · 1e200 is 1e200 √(14/3), mean 2e200, median 2e200."""
+    s = Statistics.of(np.array([1e200, 2e200, 3e200]))
+    assert s.rmse == pytest.approx(1e200 * np.sqrt(14 / 3), rel=1e-15)
+    assert (s.mean, s.median, s.max) == (pytest.approx(2e200, rel=1e-15), pytest.approx(2e200, rel=1e-15), 3e200)
+    s = Statistics.of(np.array([1e308, 1.7e308]))  # their mean and median overflow a plain sum
+    assert np.isfinite([s.rmse, s.mean, s.median]).all() and s.mean == pytest.approx(1.35e308, rel=1e-15)
+
+
+def test_statistics_of_tiny_errors_do_not_underflow():
+    """5e-324 squared is 0: rmse was 0, below the mean 5e-324, which no set of errors has (rmse >= |mean|)."""
+    s = Statistics.of(np.array([5e-324, 5e-324]))
+    assert s.rmse == s.mean == s.median == s.max == 5e-324
+    s = Statistics.of(np.array([3e-200, 4e-200]))
+    assert s.rmse == pytest.approx(np.sqrt(12.5) * 1e-200, rel=1e-15)
+
+
+def test_trajectory_figures_far_from_the_origin_are_finite():
+    truth = TRUTH * 1e200
+    estimate = truth + np.array([1e199, 0.0, 0.0])
+    figures = trajectory_figures(truth, estimate)
+    assert figures["ape"]["translation_m"]["rmse"] == pytest.approx(1e199, rel=1e-12)
+    assert figures["ape_se2"]["translation_m"]["rmse"] == pytest.approx(0.0, abs=1e186)  # a translation aligns it
+
+
+@pytest.mark.parametrize("poses", [[[True, False, True]], np.array([[1 + 2j, 0.0, 0.0]]), [["1", "0", "0"]]])
+def test_poses_that_are_not_real_numbers_are_refused(poses):
+    with pytest.raises(SteamError, match="truth"):
+        trajectory_figures(poses, [[0.0, 0.0, 0.0]])
+
+
+def test_nees_of_a_state_of_no_dimension_is_refused():
+    with pytest.raises(SteamError, match=r"d >= 1.*\(2, 0\)"):
+        nees(np.zeros((2, 0)), np.zeros((2, 0, 0)))
+
+
+def test_read_tum_refuses_a_named_pipe_and_a_device_without_reading(tmp_path):
+    import signal
+
+    fifo = tmp_path / "t.txt"
+    os.mkfifo(fifo)
+    previous = signal.signal(signal.SIGALRM, lambda *_: pytest.fail("read_tum blocked on a named pipe"))
+    signal.alarm(10)
+    try:
+        with pytest.raises(DataError, match="a named pipe, not a regular file"):
+            read_tum(fifo)
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, previous)
+    with pytest.raises(DataError, match="/dev/zero: cannot read it: it is a device or socket"):
+        read_tum("/dev/zero")  # it was read to a MemoryError
+
+
+def test_write_tum_names_the_time_that_does_not_increase(tmp_path):
+    with pytest.raises(DataError, match=r"times\[2\] = 1\.0 follows times\[1\] = 1\.0"):
+        write_tum(tmp_path / "t.txt", [0.0, 1.0, 1.0, 2.0], TRUTH)
+    with pytest.raises(DataError, match=r"times\[3\] = inf"):
+        write_tum(tmp_path / "t.txt", [0.0, 1.0, 2.0, np.inf], TRUTH)
+    assert not (tmp_path / "t.txt").exists()
+
+
+# -- alignment where none is defined --
+
+
+def test_a_truth_that_does_not_move_has_no_alignment_even_to_rounding():
+    """Equal points centre to a few ulps, not to zero (0.1 · 3 / 3 != 0.1); a rotation fitted to those ulps
+    came out as an SE(2) angle of noise and a Sim(2) scale of 1e-33, in silence."""
+    truth = np.full((3, 2), 0.1)
+    assert np.any(truth - truth.mean(axis=0) != 0)  # the rounding this is about
+    estimate = TRUTH[:3, :2]
+    reason = alignment_defect(estimate, truth)
+    assert reason is not None and "truth's positions all coincide" in reason
+    for with_scale in (False, True):
+        with pytest.raises(SteamError, match="truth's positions all coincide"):
+            align_planar(estimate, truth, with_scale=with_scale)
+    assert alignment_defect(truth, estimate) == (
+        "alignment is undefined: the estimate's positions all coincide, no rotation is determined"
+    )
+    assert alignment_defect(estimate, estimate + 1e-9) is None  # a tiny offset of a moving path aligns
+
+
+def test_alignment_of_points_far_from_the_origin_is_the_rotation_by_hand():
+    """Umeyama on points 1e200 away: Σ x̃ᵢ·ỹᵢ overflowed. The truth is the estimate turned by 0.3 rad."""
+    estimate = TRUTH[:, :2] * 1e200
+    c, s = np.cos(0.3), np.sin(0.3)
+    truth = estimate @ np.array([[c, -s], [s, c]]).T
+    found = align_planar(estimate, truth, with_scale=True)
+    assert found.angle == pytest.approx(0.3, abs=1e-14) and found.scale == pytest.approx(1.0, abs=1e-14)

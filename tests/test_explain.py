@@ -88,7 +88,7 @@ def test_progress_goes_to_stderr_only_when_wanted(capsys, monkeypatch):
     assert not explain.progress_wanted(None, json_output=False)
     monkeypatch.undo()
     _, err = _run(capsys, "run", "--max-poses", "40", "--progress")
-    assert "btgp" in err and "40/" in err
+    assert "synthetic BTGP/1" in err and "40/" in err
     _, err = _run(capsys, "run", "--max-poses", "40", "--json")
     assert err == ""
 

@@ -206,9 +206,34 @@ def test_bad_factor_input_raises():
         sr.GPPriorFactor.wnoa(X1, X2, -1.0, QC)
 
 
-def test_landmark_on_the_robot_is_an_error():
+def test_landmark_on_the_robot_is_an_error_for_a_bearing():
     with pytest.raises(sr.SteamError, match="coincides"):
         sr.BearingRangeFactor.create(X1, LM, 0.0, 1.0, [0.1, 0.1]).jacobians(np.ones(6), np.ones(2))
+    with pytest.raises(sr.SteamError, match="a bearing has no value there"):
+        sr.BearingFactor.create(X1, LM, 0.3, 0.1).error(np.ones(6), np.ones(2))
+
+
+@pytest.mark.parametrize("measured", [0.0, 2.5])
+def test_a_range_at_the_landmark_is_zero_minus_the_reading_with_zero_jacobian_rows_and_a_warning(measured):
+    # The convention of gpslam's and STEAM's tests: the distance is 0 (a value, not an error), its derivative does
+    # not exist (|d| has a one-sided slope 1 in every direction), the Jacobian rows are zero.
+    x = np.array([1.5, -0.5, 0.3, 0.8, 0.1, 0.0])
+    factor = sr.RangeFactor.create(X1, LM, measured, 0.2)
+    with pytest.warns(sr.DegenerateMeasurementWarning, match="exactly at the landmark"):
+        e = factor.error(x, x[:2].copy())
+    with pytest.warns(sr.DegenerateMeasurementWarning):
+        Hx, Hl = factor.jacobians(x, x[:2].copy())
+    assert e.tolist() == [-measured] and not Hx.any() and not Hl.any() and Hx.shape == (1, 6) and Hl.shape == (1, 2)
+    # one step away the usual derivative is back, and unchanged by the convention
+    l = x[:2] + [1e-3, 0.0]
+    Hx, Hl = factor.jacobians(x, l)
+    assert np.allclose(Hl, [[1.0, 0.0]]) and np.allclose(Hx[0, :2], [-1.0, 0.0])
+    # a batch with one degenerate row keeps the others' Jacobians
+    xs = np.stack([x, x])
+    ls = np.stack([x[:2], x[:2] + [0.0, 2.0]])
+    with pytest.warns(sr.DegenerateMeasurementWarning):
+        Hx, Hl = factor.jacobians(xs, ls)
+    assert not Hl[0].any() and np.allclose(Hl[1], [[0.0, 1.0]])
 
 
 # --- what a factor class declares for Factor.stack -------------------------------------------------

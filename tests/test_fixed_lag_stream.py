@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from steam_ref.cli import commands as cli
-from steam_ref.datasets import generate_synthetic
+from steam_ref.datasets import generate_synthetic, load_dataset
 from steam_ref.errors import SteamError, UnknownVariableError
 from steam_ref.paper.online import StreamingEstimator, run_online
 from steam_ref.paper.options import StreamOptions
@@ -38,6 +38,20 @@ def test_a_lag_longer_than_the_run_changes_nothing(data):
     np.testing.assert_array_equal(lagged.trajectory, full.trajectory)
     assert lagged.n_marginalized == 0 and lagged.peak_window == len(full.state_poses) + len(full.landmarks)
     assert full.lag_summary() == {} and lagged.lag_summary()["n_marginalized"] == 0
+
+
+def test_plazas_lag_of_60_s_holds_the_poses_of_the_last_60_s_of_its_stamps(shared_data):
+    """Plaza's preset runs the GP prior on the pose index (the scripts' dt = 1), but a lag is in the file's
+    seconds: after 1,200 poses (about 240 s) the window holds every pose stamped within 60 s of the newest state,
+    about 300 poses 0.2 s apart (on the pose-index clock it held 61)."""
+    plaza, setup = load_dataset("plaza"), PaperSetup.plaza()
+    stream = StreamingEstimator(Readings.from_dataset(plaza, setup), setup, StreamOptions(lag=60.0, max_poses=1200))
+    stream.run()
+    smoother, t = stream.solver.inner, plaza.times
+    held = sorted(k.index for k in smoother.estimate() if k.kind == "x")
+    assert t[held[-1]] == smoother.newest
+    assert held == [i for i in range(held[-1] + 1) if t[i] >= smoother.newest - 60.0]  # GTSAM's rule, by the stamps
+    assert 250 < len(held) < 350, len(held)
 
 
 def test_a_short_lag_keeps_the_window_small_and_the_estimate_close(data):

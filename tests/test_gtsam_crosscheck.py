@@ -113,7 +113,7 @@ def gtsam_problem(data):
     prior_sigmas = np.concatenate([SETUP.first_pose_sigmas, SETUP.first_velocity_sigmas])
     graph.add(error_factor(sigmas(prior_sigmas), [X(0)], partial(prior_error, prior_mean)))
     for a, b in itertools.pairwise(states):
-        dt = r.times[b] - r.times[a]
+        dt = r.model_times[b] - r.model_times[a]
         noise = gtsam.noiseModel.Gaussian.Covariance(sde_process_noise(sde, dt))
         graph.add(error_factor(noise, [X(a), X(b)], partial(gp_prior_error, sde_transition(sde, dt))))
     for lid in sorted(set(r.range_landmark.tolist())):
@@ -129,7 +129,7 @@ def gtsam_problem(data):
             return
         j = np.searchsorted(states, pose)
         a, b = states[j - 1], states[j]
-        lam, psi = lam_psi(sde, r.times[a], r.times[pose], r.times[b])
+        lam, psi = lam_psi(sde, r.model_times[a], r.model_times[pose], r.model_times[b])
         graph.add(error_factor(noise, [X(a), X(b), *others], partial(interpolated, error, lam, psi)))
 
     for p in range(1, n):

@@ -1,4 +1,6 @@
 """Every tutorial notebook executes top to bottom, and its last code cell asserts (against a dense solve).
+Each has at least two exercises whose checks assert, and the teachers' command of docs/tutorials.md hides
+their solutions.
 
 Executing needs nbformat, nbclient and ipykernel (the ``notebooks``/``test`` extras): without them
 these tests skip, or fail when STEAM_REF_REQUIRE_OPTIONAL=1 (CI). A notebook that loads the
@@ -12,6 +14,8 @@ from __future__ import annotations
 import ast
 import json
 import re
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -93,3 +97,54 @@ def test_notebook_executes(path):
         nb, timeout=300, kernel_name="python3", resources={"metadata": {"path": str(path.parent)}}
     )
     client.execute()  # raises CellExecutionError on the first failing cell, the final assertions included
+
+
+def _cells(path: Path) -> list[dict]:
+    return json.loads(path.read_text())["cells"]
+
+
+def _tags(cell: dict) -> set[str]:
+    return set(cell.get("metadata", {}).get("tags", []))
+
+
+def _source(cell: dict) -> str:
+    return "".join(cell["source"]) if isinstance(cell["source"], list) else cell["source"]
+
+
+@pytest.mark.parametrize("path", TUTORIALS, ids=[p.stem for p in TUTORIALS])
+def test_at_least_two_checked_exercises(path):
+    """docs/tutorials.md's convention: each exercise is a task (tag exercise), a solution (tags solution and
+    hide-cell, folded on the site) and a check (tag check) that asserts."""
+    cells = _cells(path)
+    tasks = [i for i, c in enumerate(cells) if "exercise" in _tags(c)]
+    assert len(tasks) >= 2, f"{path.name}: {len(tasks)} exercise(s)"
+    for i in tasks:
+        task, solution, check = cells[i : i + 3]
+        assert task["cell_type"] == "markdown" and _source(task).startswith("### Exercise"), _source(task)[:80]
+        assert solution["cell_type"] == "code" and {"solution", "hide-cell"} <= _tags(solution), solution["metadata"]
+        assert check["cell_type"] == "code" and "check" in _tags(check), check["metadata"]
+        assert _asserts(ast.parse(_source(check))), f"{path.name}: the check of {_source(task)[:40]!r} asserts nothing"
+    assert sum("solution" in _tags(c) for c in cells) == len(tasks)  # no solution outside an exercise
+
+
+def _teacher_command() -> str:
+    """The command docs/tutorials.md gives teachers, as written there (one home: the test runs the page's text)."""
+    page = (Path(__file__).resolve().parents[1] / "docs" / "tutorials.md").read_text()
+    (command,) = [line for line in page.splitlines() if line.startswith("jupyter nbconvert") and "solution" in line]
+    return command
+
+
+def test_teacher_command_removes_the_solutions_and_keeps_the_exercises(tmp_path):
+    optional_import("nbconvert", "notebooks")
+    source = next(p for p in TUTORIALS if p.stem.startswith("01_"))
+    (tmp_path / "tutorials").mkdir()
+    (tmp_path / "tutorials" / source.name).write_bytes(source.read_bytes())
+    command = _teacher_command().replace("jupyter ", f"{sys.executable} -m jupyter ", 1)
+    done = subprocess.run(command, shell=True, cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    before, after = _cells(source), _cells(tmp_path / "handout" / source.name)
+    assert any("solution" in _tags(c) for c in before)
+    assert not any("solution" in _tags(c) for c in after)
+    kept = [c["id"] for c in before if "solution" not in _tags(c)]
+    assert [c["id"] for c in after] == kept  # the tasks, the checks and the lesson itself all stay, in order
+    assert [_source(c) for c in after] == [_source(c) for c in before if "solution" not in _tags(c)]

@@ -237,6 +237,16 @@ def test_draw_spy_shows_the_pattern_of_R_and_highlights_rows(rng):
     assert [t.get_text() for t in ax.get_xticklabels()] == list(keys)
 
 
+def test_plot_anees_labels_its_log_axis_with_plain_numbers():
+    """A reader of an ANEES near 3 sees 2, 3, 4 on the axis, not 2×10⁰."""
+    per_pose = {"btgp/1": {"pose": np.linspace(1.5, 9.0, 30), "velocity": np.linspace(2.0, 5.0, 30)}}
+    axes = plot.plot_anees(per_pose, {"pose": (2.2, 3.9), "velocity": (2.2, 3.9)}, n_runs=24)
+    for ax in axes[:, 0]:
+        ax.figure.canvas.draw()
+        labels = [t.get_text() for t in ax.yaxis.get_ticklabels(which="both") if t.get_text()]
+        assert {"2", "3", "10"} <= set(labels) and not any("times" in s or "^" in s for s in labels), labels
+
+
 # --- saving -----------------------------------------------------------------------------------
 
 

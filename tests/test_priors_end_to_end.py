@@ -41,7 +41,7 @@ def test_the_batch_problem_has_nine_number_states_and_the_priors_factors(data, p
     assert all(problem.initial[k][6:].tolist() == [0.0, 0.0, 0.0] for k in problem.initial.states())
     gp = [f for f in problem.graph if type(f).__name__ == "GPPriorFactor"]
     a, b = gp[0].keys
-    dt = problem.times[b.index] - problem.times[a.index]
+    dt = problem.model_times[b.index] - problem.model_times[a.index]
     K = gp_kernel(np.array([0.0, dt]), setup.motion_prior(), 1e-300 * np.eye(9))  # quadrature oracle
     W = gp[0].sqrt_information
     np.testing.assert_allclose(W.T @ W, np.linalg.inv(K[9:, 9:]), rtol=1e-7)
@@ -66,13 +66,14 @@ def test_time_queries_use_the_setups_prior(data, prior):
     est = stream(data, setup, method="pb", skip=3)
     traj = est.solved()
     a, b = est.states[1], est.states[2]
-    t = 0.5 * (est.readings.times[a] + est.readings.times[b])
+    t = 0.5 * (est.readings.model_times[a] + est.readings.model_times[b])
     xa, xb = est.solver.estimate_of(X(a)), est.solver.estimate_of(X(b))
-    ta, tb = est.readings.times[a], est.readings.times[b]
+    ta, tb = est.readings.model_times[a], est.readings.model_times[b]
     K = gp_kernel(np.array([ta, t, tb]), setup.motion_prior(), np.eye(9))  # the dense GP, zero mean
     ends, mid = np.r_[0:9, 18:27], np.arange(9, 18)
     expected = K[np.ix_(mid, ends)] @ np.linalg.solve(K[np.ix_(ends, ends)], np.r_[xa, xb])
-    np.testing.assert_allclose(traj.at(t), expected, rtol=1e-7, atol=1e-9)
+    at = float(est.readings.clock.to_seconds(t))  # a query is in the data's seconds; the GP runs on the model's time
+    np.testing.assert_allclose(traj.at(at), expected, rtol=1e-7, atol=1e-9)
     assert traj.at_every_pose()[1].shape[1] == 9
 
 

@@ -14,10 +14,9 @@
 """
 
 from .fixed_lag import FixedLagSmoother
-from .isam import IncrementalSolver
+from .isam import IncrementalSolver, UpdateReport
 from .marginalization import MarginalFactor, MarginalizationReport, marginalize
 from .params import ISAM2Params
-from .report import UpdateReport
 from .symbolic import CliqueTree, SymbolicClique, build_cliques, symbolic_elimination
 from .tree import BayesTree, Clique, eliminate, eliminate_clique
 

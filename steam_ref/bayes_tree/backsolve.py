@@ -8,13 +8,10 @@
 3. If a frontal variable changed by at least the wildfire threshold α (α = 0: always), descend into the
    children whose separator holds it; a re-made clique is entered in any case. Otherwise stop.
 
-Changes are judged per variable: a root clique holding the newest state and the landmarks must not mark the
-landmarks changed because the newest state moved. Each new δ is also checked against the variable's
-relinearization threshold β: the candidates of the next fluid relinearization [K12 Alg. 5] are collected here,
-the only place δ changes ([YIB Alg. 1 step 7]).
-
-(A variant that solved a tree level at a time in stacked NumPy calls was removed: on the paper's narrow trees
-it measured slower than this loop; docs/experiments.md keeps the measurement.)
+Changes are judged per variable (the newest state moving must not mark the landmarks of its clique changed).
+Each new δ is checked against the variable's relinearization threshold β here, the only place δ changes: the
+candidates of the next fluid relinearization [K12 Alg. 5; YIB Alg. 1 step 7]. (A variant solving a tree level
+at a time in stacked NumPy calls was removed, slower on the paper's trees: docs/experiments.md.)
 """
 
 from __future__ import annotations
@@ -36,14 +33,8 @@ def backsubstitute(state: SolverState, new_cliques: Collection[int], alpha: floa
     its relinearization candidacy [K12 Alg. 5]. Returns the updated variables, depth first, and the number of
     cliques solved.
     """
-    tree, delta, beta, stale, candidates, log = (
-        state.tree,
-        state.delta,
-        state.beta,
-        state.stale,
-        state.candidates,
-        state.log,
-    )
+    tree, delta, beta, stale, candidates = state.tree, state.delta, state.beta, state.stale, state.candidates
+    olds = state.log.old_values(delta)  # each δ it replaces, for the transaction's undo
     changed: set[Key] = set()
     updated: list[Key] = []
     stack = [c for c in new_cliques if tree.parent[c] is None]
@@ -58,7 +49,8 @@ def backsubstitute(state: SolverState, new_cliques: Collection[int], alpha: floa
         for k, xk in zip(frontals, (x,) if len(frontals) == 1 else clique.split_frontals(x), strict=True):
             if alpha == 0 or abs(xk - delta[k]).max() >= alpha:  # step 3: changed by at least α
                 changed.add(k)
-            log.set(delta, k, xk)
+            olds.append((k, delta[k]))
+            delta[k] = xk
             stale[k] = None  # never undone: an extra mark only forms the same estimate again
             if abs(xk).max() >= beta[k]:  # a candidate for the next relinearization [K12 Alg. 5]
                 candidates[k] = None  # the transaction keeps the candidates whole: no record needed

@@ -1,13 +1,11 @@
 """The Bayes tree in GTSAM's words: its ``dot()`` text and its fill, as GTSAM 4.3 reports them.
 
-:func:`tree_dot` writes a tree as GTSAM's ``BayesTree::dot`` (``ISAM2.dot()`` in Python) does: a
-Graphviz digraph whose nodes are named by the integer key of their first frontal variable (GTSAM's
-``Symbol``: the character in the top byte, the index below), labelled ``"frontals : separator"``,
-frontals in elimination order, separator keys sorted by that integer key (GTSAM keeps a
-conditional's parents in a sorted key set), a root without ``" : "``; each edge ``parent->child``
-written just before the child's node, depth first, children in the tree's own order. GTSAM's
-child order comes from its junction tree and can differ where a clique has several children: the
-set of lines is then the same, their order not (tests/test_bayes_tree_dot.py compares both ways)::
+:func:`tree_dot` writes a tree as GTSAM's ``BayesTree::dot`` (``ISAM2.dot()`` in Python) does: a Graphviz
+digraph, a node per clique named by the integer key of its first frontal (GTSAM's ``Symbol``: the character in
+the top byte, the index below) and labelled ``"frontals : separator"`` (frontals in elimination order, the
+separator sorted by integer key, a root without ``" : "``), each edge ``parent->child`` just before the child,
+depth first. GTSAM's child order comes from its junction tree, so where a clique has several children the set of
+lines agrees, their order may not (tests/test_bayes_tree_dot.py compares both ways)::
 
     digraph G{
     8646911284551352322[label="x1, x2"];
@@ -15,10 +13,9 @@ set of lines is then the same, their order not (tests/test_bayes_tree_dot.py com
     8646911284551352320[label="x0 : x1"];
     }
 
-:func:`clique_nnz` and :func:`tree_nnz` count the nonzeros of R as GTSAM's ``ISAM2::treeNnz()``
-(and ``ISAM2Result::getTreeNnz()`` with detailed results) does: per clique the upper triangle of
-its frontal block and its whole separator block, n_f(n_f + 1)/2 + n_f·n_s for frontal and separator
-sizes n_f, n_s (structurally: entries that happen to be 0 count).  [YIB Eq. 21, 25]
+:func:`clique_nnz` and :func:`tree_nnz` count the nonzeros of R as ``ISAM2::treeNnz()`` does: per clique the
+upper triangle of its frontal block and its whole separator block, n_f(n_f + 1)/2 + n_f·n_s (structurally:
+entries that happen to be 0 count).  [YIB Eq. 21, 25]
 """
 
 from __future__ import annotations

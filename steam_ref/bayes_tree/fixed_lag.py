@@ -16,13 +16,10 @@ smoother decides what to forget from the timestamps alone (:func:`marginalize` r
 timestamps and history would not know); give a variable an old timestamp instead.
 
 Queries of a marginalized variable raise :class:`UnknownVariableError` naming the update that
-marginalized it; its estimate at that moment is in :attr:`FixedLagSmoother.last_marginalization`
-(the caller keeps it if it wants it: the smoother does not, so that memory stays flat).
-
-``keep_history=True`` keeps instead each marginalized variable's conditional (:mod:`.history`, about
-2 KB a state), and :meth:`FixedLagSmoother.smoothed_history` then gives every forgotten variable its
-estimate given all the data so far, by one backward pass from the window (derivations §10.5): bounded
-work per update online, the whole smoothed trajectory at the end.
+marginalized it; its estimate at that moment is in :attr:`FixedLagSmoother.last_marginalization`.
+``keep_history=True`` keeps each marginalized variable's conditional (:mod:`.history`), and
+:meth:`FixedLagSmoother.smoothed_history` gives every forgotten variable its estimate given all the data so
+far, by one backward pass from the window (derivations §10.5).
 """
 
 from __future__ import annotations
@@ -35,12 +32,12 @@ from numpy.typing import NDArray
 from ..arguments import number
 from ..errors import SteamError, UnknownVariableError
 from ..factors import Factor, check_factors
+from ..linear.threads import limit
 from ..variables import Key
 from .history import History
-from .isam import IncrementalSolver, check_new_values
+from .isam import IncrementalSolver, UpdateReport, check_new_values
 from .marginalization import MarginalizationReport, marginalize_keys
 from .params import ISAM2Params
-from .report import UpdateReport
 
 __all__ = ["FixedLagSmoother"]
 
@@ -93,7 +90,7 @@ class FixedLagSmoother(IncrementalSolver):
             for k in f.keys:
                 if k not in fresh:
                     self._held("a new factor names", k)
-        with self.state.transaction():
+        with self.state.transaction(), limit():  # the limit is left inside: an interrupt there undoes all
             report = super().update(factors, new_values, relinearize=relinearize)
             self._forget_old(fresh, times)
         return report
@@ -124,11 +121,9 @@ class FixedLagSmoother(IncrementalSolver):
             self.last_marginalization = done
 
     def elimination_order(self, variables: list[Key], factor_keys: list, last: list[Key]) -> list[Key]:
-        """Once the window is full: the timed variables older than newest - OLD_PART * lag (by default all but
-        the new ones) first, oldest first; then minimum degree with ``last`` last [K12 Sec. 5]. The states next to
-        leave the window then sit in leaf cliques, cut off with no re-elimination (marginalize step 2); minimum
-        degree alone puts the oldest state, which the marginal factor joins to many landmarks, above newer ones.
-        GTSAM's fixed-lag smoother constrains its ordering likewise (the keys to marginalize first)."""
+        """Once the window is full: the timed variables older than newest - OLD_PART * lag first, oldest first, then
+        minimum degree with ``last`` last [K12 Sec. 5], so the states next to leave sit in leaf cliques, cut off with
+        no re-elimination (as GTSAM's fixed-lag smoother orders the keys to marginalize first)."""
         if not self.n_marginalized:  # the window is not full yet: iSAM2's own order, as without a lag
             return super().elimination_order(variables, factor_keys, last)
         cutoff, times = self.newest - self.lag * OLD_PART, self._times

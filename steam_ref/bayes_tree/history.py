@@ -1,6 +1,6 @@
 """The past a fixed-lag smoother forgot, kept small, and smoothed once the run is over.  [derivations §10.5]
 
-Marginalizing D out of the tree (:func:`~steam_ref.bayes_tree.marginalize.marginalize`) splits the
+Marginalizing D out of the tree (:func:`~steam_ref.bayes_tree.marginalization.marginalize`) splits the
 linearized problem into the conditional P(D | S), one variable v at a time [YIB Eq. 24-25],
 
     R_v δ_v + S_v δ_S = d_v,
@@ -16,20 +16,16 @@ variable its estimate given all the data, as a Rauch-Tung-Striebel backward pass
 
     x_v = θ̄_v ⊕ R_v⁻¹ (d_v - S_v (x_S ⊖ θ̄_S)),       (derivations Eq. 10.5)
 
-(⊕, ⊖ by each variable's kind: + and - for a vector), with θ̄ the linearization point at the moment v was
-marginalized (the conditional, like the marginal
-factor, is frozen there), and x_S the final estimate of each separator variable: the window's, or one
-this pass has already computed. For a linear problem the result is the batch optimum of every factor
-ever given, to rounding (tests/test_fixed_lag_history.py). For a nonlinear one it is the optimum of the
-linearizations frozen at each marginalization: exact where nothing moved after (full iSAM2 to 1e-9 when
-nothing is relinearized), otherwise off by how far the separator moved, and not always closer to the truth
-than the lagged estimates (generated task, 300 steps, 8 s lag: RMSE 5.81 cm smoothed, 5.72 cm lagged; Plaza,
-60 s lag: 0.3362 m smoothed, 0.3668 m lagged, 0.3383 m for the full smoother).
+(⊕, ⊖ by each variable's kind: + and - for a vector), θ̄ the linearization point when v was marginalized
+(the conditional is frozen there, as the marginal factor), x_S the final estimate of each separator
+variable: the window's, or one this pass has already computed. For a linear problem the result is the
+batch optimum of every factor ever given, to rounding (tests/test_fixed_lag_history.py); for a nonlinear
+one, the optimum of the linearizations frozen at each marginalization, off by how far the separator moved
+since, and not always closer to the truth than the lagged estimates (figures: docs/derivations.md §10.5).
 
 Each conditional is kept in solved form, x_v = m_v + K_v (x_S - θ̄_S) with m_v = θ̄_v + R_v⁻¹ d_v and
-K_v = -R_v⁻¹ S_v for vectors (θ̄_v ⊕ (R_v⁻¹ d_v + K_v (x_S ⊖ θ̄_S)) otherwise): a few KB a state, so memory
-grows with the run again, by a fraction of what the whole tree would hold (docs/experiments.md); the
-window's does not.
+K_v = -R_v⁻¹ S_v (θ̄_v ⊕ (R_v⁻¹ d_v + K_v (x_S ⊖ θ̄_S)) for other kinds): memory grows with the run again, by
+a fraction of what the whole tree would hold; the window's does not.
 """
 
 from __future__ import annotations
@@ -103,10 +99,6 @@ class History:
 
     def __len__(self) -> int:
         return len(self.conditionals)
-
-    def extend(self, conditionals: tuple[ForgottenConditional, ...]) -> None:
-        """Record the conditionals of one marginalization, in the order it eliminated them."""
-        self.conditionals.extend(conditionals)
 
     def smooth(self, window: Callable[[Key], NDArray]) -> dict[Key, NDArray]:
         """Every forgotten variable's estimate given all the data, through the conditionals frozen when it was

@@ -11,13 +11,16 @@ last, eliminate, attach back the orphans; (5) partial back-substitution, descend
 the wildfire threshold α [K12 Alg. 7, YIB step 6]; (6) the estimate θ̄ ⊕ δ, formed lazily when asked for.
 
 Every step costs time in proportion to the removed part and the cliques back-substitution visits: nothing walks the
-whole tree. Every store lives in one :class:`~.state.SolverState`, whose undo log records each change before it is
-made, so a failed or interrupted update leaves the solver as it was; timing and undo stay out of the steps.
+whole tree. Each update returns an :class:`UpdateReport` (the affected top of the tree [K12 Fig. 3-4], the phases'
+times, the fill). Every store lives in one :class:`~.state.SolverState`, whose undo log records each change before
+it is made: a failed or interrupted update leaves the solver as it was.
 """
 
 from __future__ import annotations
 
+import time
 from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
@@ -34,16 +37,57 @@ from ..errors import ShapeError, SteamError, UnderdeterminedError, UnknownVariab
 from ..factors import Factor, check_factors
 from ..linear.ordering import constrained_min_degree
 from ..linear.system import GaussianFactor, linearize
+from ..linear.threads import limit
 from ..manifold import VECTOR, Manifold
 from ..variables import Key, Values, check_key, key_list
 from .backsolve import backsubstitute
 from .dot import tree_nnz
 from .params import ISAM2Params
-from .report import PhaseTimer, UpdateReport
 from .state import SolverState
 from .tree import BayesTree, Clique, eliminate
 
-__all__ = ["IncrementalSolver", "check_new_values"]
+__all__ = ["IncrementalSolver", "UpdateReport", "check_new_values"]
+
+
+class PhaseTimer:
+    """Wall time of each phase of one update: ``with timer("remove"): ...``."""
+
+    def __init__(self) -> None:
+        self.start = time.perf_counter()  # when the update began
+        self.seconds: dict[str, float] = {}  # phase → seconds
+        self._phase, self._t = "", 0.0
+
+    def __call__(self, phase: str) -> PhaseTimer:
+        self._phase = phase
+        return self
+
+    def __enter__(self) -> None:
+        self._t = time.perf_counter()
+
+    def __exit__(self, *exc: object) -> None:
+        self.seconds[self._phase] = time.perf_counter() - self._t
+
+    def total(self) -> float:
+        """Seconds since the update began."""
+        return time.perf_counter() - self.start
+
+
+@dataclass(frozen=True, kw_only=True)
+class UpdateReport:
+    """What one update did, so a notebook can show the affected top of the tree (built by keyword only)."""
+
+    step: int  # number of this update, from 1
+    removed_cliques: tuple[int, ...]  # ids of the cliques taken off the top (ids of the tree before)
+    new_cliques: tuple[int, ...]  # ids of the cliques made by re-elimination
+    orphans: tuple[int, ...]  # ids of the subtrees kept and reattached
+    relinearized: tuple[Key, ...]  # θ_rl: variables whose linearization point moved
+    reeliminated: tuple[Key, ...]  # variables eliminated anew, in elimination order (frontals of the new cliques)
+    updated: tuple[Key, ...]  # variables whose increment δ (hence estimate) was recomputed
+    linearized_factors: int  # factors linearized in this update (the new ones included)
+    backsubstituted_cliques: int  # cliques whose conditional was solved
+    time_s: float  # wall time of the whole update
+    timings: dict[str, float] = field(default_factory=dict)  # seconds per phase (check, add, ..., backsubstitute)
+    tree_nnz: int = 0  # nonzeros of R after the update, counted as GTSAM's ISAM2::treeNnz (bayes_tree/dot.py)
 
 
 def check_new_values(new_values: object) -> None:
@@ -92,10 +136,10 @@ class IncrementalSolver:
             raise UnknownVariableError(f"variable {key!r} is not in the solver") from None
 
     @property
-    def factors(self) -> tuple[Factor | None, ...]:
+    def factors(self) -> tuple[Factor, ...]:
         """Every factor so far, in the order added (a tuple: the solver's caches are indexed by position); the slot
         of a factor :func:`~.marginalization.marginalize` dropped holds None."""
-        return tuple(self.state.factors)
+        return tuple(self.state.factors)  # type: ignore[arg-type]  # a dropped slot is None (docstring)
 
     @property
     def linearization_point(self) -> Values:
@@ -162,7 +206,8 @@ class IncrementalSolver:
             F_new = check_factors("new_factors", new_factors)
             check_new_values(new_values)
             theta_new, kinds = self._checked_update(F_new, {} if new_values is None else new_values)
-        with self.state.transaction():  # an error, or Ctrl-C (KeyboardInterrupt) at any point: all undone
+        # an error, or Ctrl-C (KeyboardInterrupt) at any point: all undone; the BLAS limit is left inside the transaction
+        with self.state.transaction(), limit():
             return self._update(F_new, theta_new, kinds, relinearize, timer)
 
     def _update(
@@ -175,7 +220,7 @@ class IncrementalSolver:
     ) -> UpdateReport:
         """One step of iSAM2, numbered as [K12 Alg. 6], with the steps of [YIB Alg. 1] (module docstring)."""
         state = self.state
-        state.count(steps=1)
+        state.steps += 1
         # 1-2. F ← F ∪ F′, Θ ← Θ ∪ Θ′ (θ̄ = initial value, δ = 0); θ_nf: the variables of F′.   [YIB step 1]
         with timer("add"):
             new_ids = state.append_factors(F_new)
@@ -208,7 +253,7 @@ class IncrementalSolver:
         # 5. Partial back-substitution from the root, stopping below α.  [K12 Alg. 7; YIB step 6]
         with timer("backsubstitute"):
             updated, visited = backsubstitute(state, set(new_cids), self.params.wildfire_threshold)
-        state.count(tree_nnz=tree_nnz(cliques) - tree_nnz(removed.values()))
+        state.tree_nnz += tree_nnz(cliques) - tree_nnz(removed.values())
         return UpdateReport(
             step=state.steps,
             removed_cliques=tuple(removed),
@@ -231,8 +276,7 @@ class IncrementalSolver:
     def _checked_update(
         self, new_factors: list[Factor], new_values: Mapping[Key, NDArray]
     ) -> tuple[dict[Key, NDArray], Mapping[Key, Manifold]]:
-        """Validate an update before anything changes; returns the new values as float vectors and the kinds
-        of those that are not vectors (a :class:`Values` ``new_values`` says them)."""
+        """Validate an update before anything changes: the new values as float vectors, and their kinds."""
         values: dict[Key, NDArray] = {}
         kinds = new_values.kinds() if isinstance(new_values, Values) else {}
         for k, v in new_values.items():
@@ -268,10 +312,8 @@ class IncrementalSolver:
     def _fluid_relinearization(self) -> list[Key]:
         """θ̄ ← θ̄ ⊕ δ, δ ← 0 for θ_rl, the variables whose max abs(δ) ≥ β; returns θ_rl.  [K12 Alg. 5]
 
-        With ``relinearize_blocks``, only the blocks of a variable whose own max abs(δ) ≥ β move (a vector's
-        blocks: a variable of another kind moves whole). The candidates are kept up to date by
-        back-substitution, the only place δ changes ([YIB Alg. 1 step 7]: collect them into θ_rl).
-        """
+        With ``relinearize_blocks``, only a vector's blocks whose own max abs(δ) ≥ β move (another kind moves
+        whole). Back-substitution keeps the candidates ([YIB Alg. 1 step 7]: collect them into θ_rl)."""
         state = self.state
         theta_rl = list(state.candidates)
         moves = {k: self.params.blocks_to_move(k.kind, state.delta[k], state.beta[k]) for k in theta_rl}  # (d,) bool
@@ -286,10 +328,8 @@ class IncrementalSolver:
 
     def _remove_top(self, theta_nf: list[Key], theta_rl: list[Key]) -> tuple[dict[int, Clique], list[int]]:
         """Remove the cliques of θ_aff = θ_nf ∪ θ_rl and their ascendants: ``(removed, orphans)``.  [K12 Alg. 4]
-
-        A variable of θ_nf affects the clique where it is frontal (a new variable is in none yet);
-        a relinearized one every clique holding it, whose conditionals were computed at its old θ̄.
-        """
+        A variable of θ_nf affects the clique where it is frontal (a new one is in none yet); a relinearized one
+        every clique holding it, whose conditionals were computed at its old θ̄."""
         start = [self.tree.frontal_of[k] for k in theta_nf if k in self.tree.frontal_of]
         for k in theta_rl:
             start.extend(self.tree.cliques_involving(k))

@@ -28,13 +28,9 @@ one. :func:`marginalize` does it in the tree, in the update's style:
    part is eliminated as an update would, from its remaining factors, the marginal factors and the
    orphans' cached f(S), with the old root's variables kept last; the orphans are hung back.
 
-The marginal factor is linear, frozen at the linearization point θ̄_S of the moment (first-estimate
-Jacobians): its Jacobian never changes, and when S is relinearized at θ̄' its right-hand side becomes
-b_m - A_m (θ̄' ⊖ θ̄_S) (Eq. 10.4), GTSAM's ``LinearContainerFactor``.
-
-Every change goes through the solver's :class:`~.state.SolverState` and its undo log, in one transaction
-(the caller's, when a fixed-lag smoother's update runs it): a failure or a Ctrl-C anywhere leaves the solver
-as it was.
+The marginal factor (:class:`~steam_ref.factors.MarginalFactor`) is frozen at θ̄_S of the moment: its
+right-hand side at θ̄' is b_m - A_m (θ̄' ⊖ θ̄_S) (Eq. 10.4). Every change goes through the solver's
+:class:`~.state.SolverState`, in one transaction: a failure or a Ctrl-C leaves the solver as it was.
 """
 
 from __future__ import annotations
@@ -101,20 +97,9 @@ def eliminate_variables(
     return pool
 
 
-def _cliques_of(state: SolverState, drop: set[Key]) -> list[int]:
-    """Every clique holding a variable of ``drop``, frontal or in its separator (step 1)."""
-    found: dict[int, None] = {}
-    for v in drop:
-        found.update(dict.fromkeys(state.tree.cliques_involving(v)))
-    return list(found)
-
-
 def _home(state: SolverState, keys: tuple[Key, ...], tops: list[int]) -> int:
-    """The clique that eliminates a factor on ``keys``: the deepest holding one of them as frontal.
-
-    The keys lie within the variables of the parent of one of the cut cliques' tops; walking up from
-    there, the first clique with one of them frontal holds them all.
-    """
+    """The clique that eliminates a factor on ``keys``: the deepest holding one of them as frontal (walking up
+    from the parent of a cut top whose variables hold them, the first clique with one of them frontal)."""
     tree, wanted = state.tree, set(keys)
     for t in tops:
         c = tree.parent[t]
@@ -171,7 +156,7 @@ def _marginalize(
 ) -> MarginalizationReport:
     """Steps 1-3 of the module docstring, inside a transaction."""
     tree = state.tree
-    cids = _cliques_of(state, drop)
+    cids = list(dict.fromkeys(c for v in drop for c in tree.cliques_involving(v)))  # step 1
     fids = [j for c in cids for j in tree.cliques[c].factors]
     dropped = [j for j in fids if not drop.isdisjoint(state.factors[j].keys)]  # type: ignore[union-attr]
     adjacent = [solver.cached(j) for j in dropped]

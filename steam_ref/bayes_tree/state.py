@@ -1,13 +1,10 @@
 """Everything an incremental solver holds, in one object with one undo log.  [K12 Alg. 6]
 
-:class:`SolverState` owns every per-factor and per-variable store of an
-:class:`~steam_ref.bayes_tree.IncrementalSolver` (listed once, in :attr:`SolverState.STORES`) and the Bayes
-tree, and offers the few operations every step needs: add a variable, drop one, append factors, drop a factor,
-cache a linearization, move a linearization point. Each writes through :class:`~.undo.UndoLog`, as the tree's
-surgery does into the same log, so one :meth:`SolverState.transaction` undoes an update, a marginalization or
-both, wherever a failure or a Ctrl-C stopped it.
-
-A variable's estimate is θ̄ ⊕ δ by its kind (:mod:`steam_ref.manifold`; + for a vector, the fast path).
+:class:`SolverState` owns the Bayes tree and every per-factor and per-variable store (listed once, in
+:attr:`SolverState.STORES`), with the operations every step needs: add or drop a variable, append or drop
+factors, cache a linearization, move a linearization point. Each writes through the :class:`~.undo.UndoLog`
+the tree's surgery records into too, so one :meth:`SolverState.transaction` undoes an update, a
+marginalization or both. An estimate is θ̄ ⊕ δ by the variable's kind (:mod:`steam_ref.manifold`).
 """
 
 from __future__ import annotations
@@ -64,9 +61,6 @@ class SolverState:
     def values(self) -> Values:
         """θ̄ as a Values (a view of the store, no copy: for reading only)."""
         return Values.view(self.theta_bar, self.kinds)
-
-    def kind(self, key: Key) -> Manifold:
-        return self.kinds.get(key, VECTOR)
 
     # --- variables --------------------------------------------------------------------------
 
@@ -138,8 +132,3 @@ class SolverState:
         """Forget factor ``fid`` (its slot stays, None: ids are positions)."""
         self.log.set(self.factors, fid, None)
         self.log.set(self.linear, fid, None)
-
-    def count(self, steps: int = 0, tree_nnz: int = 0) -> None:
-        """Add to the update count and the nonzeros of R (restored by the transaction's undo)."""
-        self.steps += steps
-        self.tree_nnz += tree_nnz

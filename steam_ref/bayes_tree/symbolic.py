@@ -1,10 +1,7 @@
 """The structure of a Bayes tree: orderings → cliques, and clique surgery.  [K11, K12 Alg. 1-4]
 
-Nothing here knows a number. Variables are any hashable names (the tests use letters, the solver
-uses :class:`~steam_ref.variables.Key`); a factor is just the tuple of variables it touches.
-
-The elimination order comes from :mod:`steam_ref.linear.ordering` (for iSAM2,
-:func:`~steam_ref.linear.ordering.constrained_min_degree`).
+Nothing here knows a number: variables are any hashable names, a factor the tuple of variables it
+touches; the elimination order comes from :mod:`steam_ref.linear.ordering`.
 
 - :func:`symbolic_elimination` plays the elimination game [K12 Alg. 1]: eliminating θᵢ joins all
   factors adjacent to it into one on its separator sᵢ  [YIB Eq. 24-25].
@@ -24,12 +21,7 @@ from ..errors import SteamError, UnknownVariableError
 from .dot import tree_dot
 from .undo import UndoLog
 
-__all__ = [
-    "SymbolicClique",
-    "CliqueTree",
-    "symbolic_elimination",
-    "build_cliques",
-]
+__all__ = ["SymbolicClique", "CliqueTree", "symbolic_elimination", "build_cliques"]
 
 V = Hashable
 

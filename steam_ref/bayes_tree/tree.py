@@ -69,11 +69,7 @@ class Clique:
 
 def factor_dims(factors: Sequence[GaussianFactor]) -> dict[Key, int]:
     """Size of each variable, read off the factors' blocks."""
-    dims: dict[Key, int] = {}
-    for f in factors:
-        for k, block in zip(f.keys, f.blocks, strict=True):
-            dims[k] = block.shape[1]
-    return dims
+    return {k: block.shape[1] for f in factors for k, block in zip(f.keys, f.blocks, strict=True)}
 
 
 def eliminate_clique(

@@ -1,13 +1,9 @@
 """One undo log for everything an incremental solver changes: an update, a marginalization, or both.
 
-Each change to a store is recorded *before* it is made, as an entry (undo function, its arguments) that
-puts back what was there: the old value of one key, the old length of a list, the whole content of an
-ordered store whose order must come back too (copied once per transaction, before its first change).
-Every entry restores an absolute value, so :meth:`UndoLog.rollback` can apply the entries newest first, each
-then dropped, and start again anywhere after a second Ctrl-C (:func:`until_done`): a failure or an
-interruption at any line leaves the stores as they were when the transaction began. Transactions nest: the
-outermost one commits (forgets its entries) or rolls back; a fixed-lag smoother's update, which runs an
-iSAM2 update and a marginalization, is one.
+Each change is recorded *before* it is made, as (undo function, arguments) putting back what was there: a
+key's old value, a list's old length, or a whole ordered store (copied once per transaction). Every entry
+restores an absolute value, so :meth:`UndoLog.rollback` applies them newest first, dropping each, and can start
+again after a second Ctrl-C (:func:`until_done`). Transactions nest; the outermost commits or rolls back.
 """
 
 from __future__ import annotations
@@ -35,6 +31,12 @@ def _restore(store: MutableMapping, saved: dict) -> None:
     store.update(saved)
 
 
+def _put_all(store: dict, olds: list[tuple]) -> None:
+    """Undo a run of ``store[key] = new`` of keys it held: each old value back, newest first."""
+    for key, old in reversed(olds):
+        store[key] = old
+
+
 def _truncate(seq: list, n: int) -> None:
     """Undo appends to a list of length ``n``."""
     del seq[n:]
@@ -54,8 +56,7 @@ def until_done(undo: Callable[[], None]) -> None:
 
 
 class UndoLog:
-    """The changes of the running transaction, newest last (module docstring). Outside a transaction nothing
-    is recorded: the writes are made as they are asked for."""
+    """The changes of the running transaction, newest last; outside one, writes are simply made."""
 
     def __init__(self) -> None:
         self.entries: list[tuple] = []  # (undo function, *arguments), oldest first
@@ -73,6 +74,14 @@ class UndoLog:
         if self.depth:
             self.entries.append((_put, store, key, store[key]))
         del store[key]
+
+    def old_values(self, store: dict) -> list[tuple]:
+        """A list to append ``(key, old value)`` to before each ``store[key] = new`` of a held key: one entry for a
+        hot loop (back-substitution), a list append a write."""
+        olds: list[tuple] = []
+        if self.depth:
+            self.entries.append((_put_all, store, olds))
+        return olds
 
     def extend(self, seq: list, items: list) -> None:
         """``seq.extend(items)``, recorded."""

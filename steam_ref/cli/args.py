@@ -11,6 +11,7 @@ import math
 from pathlib import Path
 
 from .._version import __version__
+from ..arguments import parse_decimal
 from ..bayes_tree import ISAM2Params
 from ..conformance import command as conformance_command
 from ..errors import SteamError
@@ -27,16 +28,15 @@ class _Parser(argparse.ArgumentParser):
         raise SteamError(f"{message} (see '{self.prog} --help')")
 
 
-def _number(convert: type, lower: float, *, strict: bool):
-    """An argparse type: ``convert(text)``, finite, and above ``lower`` (``strict``) or at least it."""
+def _number(convert: type, lower: float, *, strict: bool, upper: float = math.inf, why: str = ""):
+    """An argparse type: ``text`` by the one rule for numbers (:func:`~steam_ref.arguments.parse_decimal`),
+    above ``lower`` (``strict``) or at least it, and at most ``upper`` (beyond it, ``why``)."""
     what = f"{'an integer' if convert is int else 'a finite number'} {'>' if strict else '>='} {lower:g}"
+    what += f" and <= {upper:g} ({why})" if upper < math.inf else ""
 
     def parse(text: str):
-        try:
-            value = convert(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}") from None
-        if not math.isfinite(value) or value < lower or (strict and value == lower):
+        value = parse_decimal(text, convert)
+        if value is None or not math.isfinite(value) or value < lower or (strict and value == lower) or value > upper:
             raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}")
         return value
 
@@ -47,11 +47,8 @@ def _scale(lower: float, upper: float, why: str):
     """An argparse type: a finite number in [lower, upper] (outside it, ``why``)."""
 
     def parse(text: str) -> float:
-        try:
-            value = float(text)
-        except ValueError:
-            value = math.nan
-        if not (math.isfinite(value) and lower <= value <= upper):
+        value = parse_decimal(text)
+        if value is None or not (math.isfinite(value) and lower <= value <= upper):
             raise argparse.ArgumentTypeError(f"expected a number from {lower:g} to {upper:g}, got {text!r} ({why})")
         return value
 
@@ -65,6 +62,16 @@ QC_SCALES = (1e-8, 1e8)
 # Singer's 1/alpha: the acceleration's memory. Below 1e-6 s (alpha dt > 1e6 at the data sets' dt of 1 s to
 # 0.1 s) its process noise spans more than float64 resolves; above 1e8 s it is WNOJ to float64's precision.
 SINGER_TIME_CONSTANTS = (1e-6, 1e8)
+
+# Sizes of generated work, bounded so that a typo is a one-line refusal, not numpy's "Unable to allocate" (or
+# an empty MemoryError) minutes later. The generator finds each pose's nearest landmarks among all of them:
+# steps × landmarks distances, 0.6 GB at 20,000 steps with the default density (the paper's task has 1,500).
+MAX_STEPS = 20_000
+MAX_LANDMARKS = 10_000
+MAX_SEEDS = 100_000  # Monte Carlo runs (the default is 200): each is a whole task, and a line of the log
+_steps = _number(int, 0, strict=True, upper=MAX_STEPS, why="the generated task is held in memory")
+_landmarks = _number(int, 0, strict=True, upper=MAX_LANDMARKS, why="the generated task is held in memory")
+_seeds = _number(int, 0, strict=True, upper=MAX_SEEDS, why="each run is a whole task")
 
 _positive_int = _number(int, 0, strict=True)
 _non_negative_int = _number(int, 0, strict=False)
@@ -176,7 +183,8 @@ def _add_run_arguments(run: argparse.ArgumentParser) -> None:
         "--singer-time-constant",
         type=_scale(*SINGER_TIME_CONSTANTS, "the Singer prior's process noise must stay within float64's precision"),
         default=None,
-        help=f"Singer prior (--prior singer only): the acceleration's time constant 1/α in seconds, 1e-6 to 1e8 "
+        help=f"Singer prior (--prior singer only): the acceleration's time constant 1/α on the preset's GP clock "
+        f"(pose steps for synthetic and plaza, seconds for victoria-park), 1e-6 to 1e8 "
         f"(default: the preset's, {PaperSetup.singer_time_constant})",
     )
     _add_data_dir(run)
@@ -199,18 +207,15 @@ def _add_run_arguments(run: argparse.ArgumentParser) -> None:
     run.add_argument(
         "--time-budget", type=_positive_float, default=None, help="stop after this many seconds (reported)"
     )
-    run.add_argument(
-        "--progress",
-        action=argparse.BooleanOptionalAction,
-        default=None,
-        help="a progress bar on stderr (default: on when stderr is a terminal and without --json)",
-    )
+    _add_progress(run)
     run.add_argument(
         "--lag",
         type=_positive_float,
         default=None,
         metavar="SECONDS",
-        help="BTGP: fixed-lag smoothing, marginalize states (and landmarks) not seen for this long (docs/derivations.md §10)",
+        help="BTGP: fixed-lag smoothing: after each update, marginalize the states older than this (t < t_newest - "
+        "SECONDS) and the landmarks not seen for this long (a landmark seen again enters anew), in seconds of the "
+        "data set's own time stamps, whatever clock the preset's GP prior runs on (docs/derivations.md §10)",
     )
     run.add_argument(
         "--lag-history",
@@ -220,7 +225,7 @@ def _add_run_arguments(run: argparse.ArgumentParser) -> None:
     )
     run.add_argument(
         "--steps",
-        type=_positive_int,
+        type=_steps,
         default=None,
         help="--dataset synthetic: generate N steps (N + 1 poses), with landmarks as dense as the default task's",
     )
@@ -251,7 +256,9 @@ def _add_trajectory_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         help="write the estimated pose at every time step: TUM (timestamp tx ty tz qx qy qz qw, read by evo) or KITTI",
     )
-    parser.add_argument("--trajectory-format", choices=("tum", "kitti"), default="tum", help="of --save-trajectory")
+    parser.add_argument(
+        "--trajectory-format", choices=("tum", "kitti"), default=None, help="of --save-trajectory (default: tum)"
+    )
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -279,6 +286,7 @@ def build_parser() -> argparse.ArgumentParser:
     bat.add_argument("--json", action="store_true", help="print one JSON line of figures")
     bat.add_argument("--plot", metavar="FILE.png", default=None, help="draw estimate, ground truth, landmarks")
     _add_trajectory_arguments(bat)
+    _add_progress(bat)
     fid = sub.add_parser("fidelity", help="BTGP/1 against the authors' saved runs, pose by pose, covariances included")
     fid.add_argument("--dataset", choices=("plaza", "paper-synthetic", "all"), default="all")
     _add_data_dir(fid, " (and its authors/ folder)")
@@ -286,6 +294,7 @@ def build_parser() -> argparse.ArgumentParser:
     fid.add_argument(
         "--plot", metavar="FILE.png", default=None, help="draw the per-pose distance to the authors' estimate"
     )
+    _add_progress(fid)
     rep = sub.add_parser("reproduce", help="the experiments of Fig. 3 and Fig. 4, plots and a results table")
     rep.add_argument("--quick", action="store_true", help="small prefixes and budgets: minutes, not hours")
     rep.add_argument("--out", default="results", help="folder for plots and the table (default: results)")
@@ -296,12 +305,23 @@ def build_parser() -> argparse.ArgumentParser:
         default=1,
         help="accuracy runs in parallel (timing runs stay serial, each in a fresh process)",
     )
+    _add_progress(rep)
     conformance_command.add_parser(sub)
     data_command.add_parser(sub)
     _add_consistency_arguments(
         sub.add_parser("consistency", help="ANEES of each estimator over Monte Carlo runs, with its band")
     )
     return parser
+
+
+def _add_progress(parser: argparse.ArgumentParser) -> None:
+    """``--progress`` / ``--no-progress`` (steam_ref.paper.progress.wanted reads it)."""
+    parser.add_argument(
+        "--progress",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="a progress bar on stderr (default: on when stderr is a terminal and without --json)",
+    )
 
 
 def _add_consistency_arguments(con: argparse.ArgumentParser) -> None:
@@ -323,10 +343,10 @@ def _add_consistency_arguments(con: argparse.ArgumentParser) -> None:
         default=None,
         help="--prior se2: the task's yaw rate at the start, rad a step (default 0; 1.0 is the fast-turning task)",
     )
-    con.add_argument("--seeds", type=_positive_int, default=200, help="Monte Carlo runs (default %(default)s)")
+    con.add_argument("--seeds", type=_seeds, default=200, help="Monte Carlo runs (default %(default)s)")
     con.add_argument("--seed", type=_non_negative_int, default=0, help="root of the seeds (SeedSequence(seed).spawn)")
-    con.add_argument("--steps", type=_positive_int, default=40, help="time steps of a task (default %(default)s)")
-    con.add_argument("--landmarks", type=_positive_int, default=8, help="landmarks of a task (default %(default)s)")
+    con.add_argument("--steps", type=_steps, default=40, help="time steps of a task (default %(default)s)")
+    con.add_argument("--landmarks", type=_landmarks, default=8, help="landmarks of a task (default %(default)s)")
     con.add_argument("--jobs", type=_positive_int, default=1, help="worker processes (default %(default)s)")
     con.add_argument("--backend", choices=("loky", "dask"), default="loky", help="joblib's loky processes, or Dask")
     con.add_argument("--scheduler", default=None, help="Dask scheduler address (default: a LocalCluster on 127.0.0.1)")
@@ -335,3 +355,4 @@ def _add_consistency_arguments(con: argparse.ArgumentParser) -> None:
     logs.add_argument("--resume", metavar="FILE.jsonl", default=None, help="continue this file (or start it)")
     con.add_argument("--json", action="store_true", help="print one JSON line of figures")
     con.add_argument("--plot", metavar="FILE.png", default=None, help="ANEES pose by pose against its band")
+    _add_progress(con)

@@ -12,6 +12,9 @@ Usage::
     steam-ref consistency [--seeds N] [--jobs N] [--backend loky|dask] [--json] [--plot FILE.png] ...
     steam-ref conformance {export DIR, check RESULTS_DIR [--only SUITE...], selftest [--paper], build}
 
+Every command that can run longer than a few seconds shows its progress on stderr when that is a terminal
+(``--progress`` / ``--no-progress``: :mod:`steam_ref.paper.progress`), and every command runs the solvers at
+one BLAS thread unless ``$STEAM_REF_BLAS_THREADS`` says otherwise (:mod:`steam_ref.linear.threads`).
 With no options ``steam-ref run`` runs BTGP/1 on the generated synthetic task. A data set without
 ground truth (victoria-park) is not scored unless ``--score-against-optimum`` asks for the converged
 batch solution of the same problem (:func:`~steam_ref.paper.problem.score_against_batch`) instead of an RMSE. Bad arguments and missing or
@@ -21,7 +24,6 @@ malformed data files give a one-line error and exit code 2.
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import sys
 import time
@@ -35,6 +37,7 @@ from ..conformance import command as conformance_command
 from ..datasets import LandmarkDataset, RangeDataset, generate_synthetic, load_dataset, load_range_dataset
 from ..errors import SteamError, UncleanedDataWarning
 from ..evaluate import trajectory_figures, write_kitti, write_tum
+from ..linear.threads import limit
 from ..paper.experiments import reproduce
 from ..paper.fidelity import AUTHORS_RUNS, compare, find_authors_file, load_authors_run
 from ..paper.online import StreamingEstimator, run_online
@@ -52,7 +55,9 @@ from . import explain
 from .args import build_parser
 from .paths import check_out_folder as _check_out_folder
 from .paths import check_output as _check_output
+from .paths import check_outputs_apart as _check_outputs_apart
 from .paths import write_output as _write_output
+from .streams import json_line, one_line, quiet_stdout
 
 __all__ = ["main", "build_parser"]  # build_parser lives in cli/args.py
 
@@ -66,6 +71,15 @@ _PRESET_OF = {
 }
 
 
+def _check_trajectory_output(args: argparse.Namespace) -> None:
+    """--save-trajectory FILE checked before the run; --trajectory-format needs it (alone it would do nothing)."""
+    _check_output(args.save_trajectory, "", "--save-trajectory")
+    if args.trajectory_format is not None and args.save_trajectory is None:
+        raise SteamError(
+            f"--trajectory-format {args.trajectory_format} is the format of --save-trajectory FILE: give it"
+        )
+
+
 def _save_trajectory(args: argparse.Namespace, times: np.ndarray, poses: np.ndarray) -> None:
     """--save-trajectory: the poses (n, 3) at the data set's times, as TUM or KITTI."""
     if args.save_trajectory:
@@ -77,18 +91,25 @@ def _save_trajectory(args: argparse.Namespace, times: np.ndarray, poses: np.ndar
 
 def _run(args: argparse.Namespace) -> int:
     _check_output(args.save_estimates, ".npz", "--save-estimates")
-    _check_output(args.save_trajectory, "", "--save-trajectory")
+    _check_trajectory_output(args)
     _check_output(args.plot, ".png", "--plot")
     _check_output(args.tree_dot, ".dot", "--tree-dot")
+    _check_outputs_apart(
+        {
+            "--save-estimates": args.save_estimates,
+            "--save-trajectory": args.save_trajectory,
+            "--plot": args.plot,
+            "--tree-dot": args.tree_dot,
+        }
+    )
     if args.tree_dot and args.method != "btgp":
         raise SteamError(f"--tree-dot writes BTGP's Bayes tree: it needs --method btgp, got --method {args.method}")
     setup = PaperSetup.named(_preset(args)).departing(*args.departure)
     prior = setup.prior if args.prior is None else args.prior
-    if args.singer_time_constant is not None and prior != "singer":
-        raise SteamError(f"--singer-time-constant applies to --prior singer only, not --prior {prior}")
-    if args.se2_residual is not None and prior != "se2":
-        raise SteamError(f"--se2-residual applies to --prior se2 only, not --prior {prior}")
     given = {"prior": args.prior, "singer_time_constant": args.singer_time_constant, "se2_residual": args.se2_residual}
+    for name, owner in (("singer_time_constant", "singer"), ("se2_residual", "se2")):  # only what was given
+        if given[name] is not None and prior != owner:
+            raise SteamError(f"--{name.replace('_', '-')} applies to --prior {owner} only, not --prior {prior}")
     setup = setup.replace(qc=args.qc_scale * setup.qc, **{k: v for k, v in given.items() if v is not None})
     isam2 = {"relinearize_threshold": args.relinearize_threshold, "relinearize_skip": args.relinearize_skip}
     if any(v is not None for v in isam2.values()):  # only what was given: the preset owns its iSAM2 settings
@@ -109,13 +130,28 @@ def _run(args: argparse.Namespace) -> int:
     )
     if args.lag is not None and args.save_estimates is not None:
         raise SteamError("--save-estimates writes every marginal covariance, which --lag forgets: drop one of them")
+    if args.lag is not None and args.score_against_optimum:
+        raise SteamError(
+            "--score-against-optimum compares every state and landmark with the batch optimum, and --lag forgets "
+            "the old ones: drop one of them"
+        )
     data = _run_dataset(args)
     if args.score_against_optimum and data.ground_truth is not None:
         raise SteamError(
             f"--score-against-optimum: {args.dataset!r} has ground truth, and is scored by RMSE against it"
         )
-    estimator = StreamingEstimator(Readings.from_dataset(data, setup), setup, options)
+    estimator = StreamingEstimator(Readings.from_dataset(data, setup), setup, options, name=args.dataset)
     result = estimator.run(data.ground_truth, covariances=args.save_estimates is not None)
+    n = len(result.times)
+    # the run's own files first: nothing computed from them after (scores, figures) can lose them
+    if args.save_estimates:
+        _write_output(
+            args.save_estimates, "--save-estimates", lambda name: save_estimates(name, result, se2=setup.is_se2)
+        )
+    if args.tree_dot and isinstance(estimator.solver, BayesTreeSolver):  # GTSAM's ISAM2.dot() text (bayes_tree/dot.py)
+        dot = estimator.solver.inner.tree.dot() + "\n"
+        _write_output(args.tree_dot, "--tree-dot", lambda name: Path(name).write_text(dot, encoding="utf-8"))
+    _save_trajectory(args, result.times, result.trajectory[:, :3])  # --save-estimates' clock: the data's seconds
     summary = result.summary(args.dataset) | {
         "preset": setup.name,
         "score_against_optimum": args.score_against_optimum,
@@ -123,6 +159,7 @@ def _run(args: argparse.Namespace) -> int:
         "prior": setup.prior,
         **({"se2_residual": setup.se2_residual} if setup.is_se2 else {}),
         "qc_scale": args.qc_scale,
+        "clock": estimator.readings.clock.describe(),
     }
     summary |= {"what": explain.method_text(args.method, result.schedule.every)}
     summary |= explain.data_figures(data, len(result.times))
@@ -137,28 +174,16 @@ def _run(args: argparse.Namespace) -> int:
             score = score_against_batch(result, Readings.from_dataset(data, setup), setup)
     if score is not None:
         summary |= score.summary()
-    n = len(result.times)
     if data.ground_truth is not None and n:  # APE, RPE beside the RMSE (evaluate.trajectory_figures)
         summary["evaluation"] = trajectory_figures(data.ground_truth[:n, 1:4], result.trajectory[:, :3])
-    if args.json:
-        print(json.dumps(summary))
-    else:
-        print(explain.run_text(summary) + _evaluation_note(summary))
-    if args.save_estimates:
-        _write_output(
-            args.save_estimates, "--save-estimates", lambda name: save_estimates(name, result, se2=setup.is_se2)
-        )
-    if args.tree_dot and isinstance(estimator.solver, BayesTreeSolver):  # GTSAM's ISAM2.dot() text (bayes_tree/dot.py)
-        dot = estimator.solver.inner.tree.dot() + "\n"
-        _write_output(args.tree_dot, "--tree-dot", lambda name: Path(name).write_text(dot, encoding="utf-8"))
-    _save_trajectory(args, np.asarray(data.times)[:n], result.trajectory[:, :3])
+    where = ""
     if args.plot:
         reference: np.ndarray | None
         if score is not None:
             reference = np.array([score.batch.values[X(int(i))][:2] for i in score.poses])
         else:
             reference = None if data.ground_truth is None else data.ground_truth[:, 1:3]
-        _write_plot(
+        where = _write_plot(
             args,
             lambda name: plot_trajectory(
                 reference,
@@ -172,6 +197,8 @@ def _run(args: argparse.Namespace) -> int:
                 path=name,
             ),
         )
+    # printed last: the files are written even when stdout is a pipe its reader closed (`| head`)
+    print(json_line(summary) if args.json else explain.run_text(summary) + explain.evaluation_note(summary) + where)
     return 0
 
 
@@ -206,28 +233,14 @@ def _run_dataset(args: argparse.Namespace):
     return generate_synthetic(n_steps=args.steps, n_landmarks=n_landmarks, seed=args.seed)
 
 
-def _evaluation_note(summary: dict) -> str:
-    """APE (unaligned and SE(2)-aligned) and RPE over one pose, for the human-readable summary."""
-    e = summary.get("evaluation")
-    if not e:
-        return ""
-    rpe = f", RPE/1 {e['rpe']['translation_m']['rmse']:.4g} m" if "rpe" in e else ""
-    aligned = f" ({e['ape_se2']['translation_m']['rmse']:.4g} m SE(2)-aligned)" if "ape_se2" in e else ""
-    return (
-        f"\n  APE RMSE {e['ape']['translation_m']['rmse']:.4g} m{aligned}, "
-        f"heading {e['ape']['heading_rad']['rmse']:.4g} rad{rpe}"
-    )
-
-
 def save_estimates(path: str, result, *, se2: bool = False) -> None:
-    """Write a run to an .npz file: ``times``, ``x``, ``y``, ``theta`` and ``xdot``, ``ydot``,
-    ``thetadot`` at every covered time step (and ``xddot``, ``yddot``, ``thetaddot`` with a WNOJ or Singer
-    prior), ``state_poses`` (pose indices with a state),
-    ``landmark_ids`` and ``landmarks`` (m, 2), and, when the run has them, the final marginal
-    covariances ``pose_covariance`` (n, 3, 3), ``velocity_covariance`` (n, 3, 3) and
-    ``landmark_covariance`` (m, 2, 2), in the order of ``times`` and ``landmark_ids``. With ``se2`` (SE(2)
-    states) the rates are the body twist ``vx``, ``vy``, ``omega`` and the covariances those of the right
-    tangent at the estimate: the pose block in the body frame (``steam_ref.lie.world_position_covariance``)."""
+    """Write a run to an .npz file: ``times`` (the data set's seconds, as ``--save-trajectory``), ``x``, ``y``, ``theta``
+    and ``xdot``, ``ydot``, ``thetadot`` (rates per unit of the model's clock: per pose step on a 'pose-index' clock,
+    per second on 'seconds') at every covered time step (and ``xddot``, ``yddot``, ``thetaddot`` with a WNOJ or Singer
+    prior; with ``se2``, SE(2) states: the body twist ``vx``, ``vy``, ``omega``, covariances in the right tangent,
+    the pose block in the body frame), ``state_poses`` (pose indices with a state), ``landmark_ids`` and ``landmarks``
+    (m, 2), and, when the run has them, the final marginal covariances ``pose_covariance`` (n, 3, 3),
+    ``velocity_covariance`` (n, 3, 3) and ``landmark_covariance`` (m, 2, 2), in the order of ``times`` and ids."""
     ids = np.array(sorted(result.landmarks), dtype=int)
     marks = np.array([result.landmarks[i] for i in ids]).reshape(-1, 2)
     tr = result.trajectory
@@ -236,11 +249,7 @@ def save_estimates(path: str, result, *, se2: bool = False) -> None:
         x=tr[:, 0],
         y=tr[:, 1],
         theta=tr[:, 2],
-        **(
-            dict(vx=tr[:, 3], vy=tr[:, 4], omega=tr[:, 5])
-            if se2
-            else dict(xdot=tr[:, 3], ydot=tr[:, 4], thetadot=tr[:, 5])
-        ),
+        **dict(zip(("vx", "vy", "omega") if se2 else ("xdot", "ydot", "thetadot"), tr[:, 3:6].T, strict=True)),
         state_poses=result.state_poses,
         landmark_ids=ids,
         landmarks=marks,
@@ -257,12 +266,15 @@ def save_estimates(path: str, result, *, se2: bool = False) -> None:
 def _batch(args: argparse.Namespace) -> int:
     """Batch solve of a whole data set (started chunk by chunk, see ``sequential_batch``)."""
     _check_output(args.plot, ".png", "--plot")
-    _check_output(args.save_trajectory, "", "--save-trajectory")
+    _check_trajectory_output(args)
+    _check_outputs_apart({"--plot": args.plot, "--save-trajectory": args.save_trajectory})
     setup = PaperSetup.named(_preset(args))
     data = _load_with_note(args)
     problem = build_problem(data, setup)
     t0 = time.perf_counter()
-    result = sequential_batch(problem, ordering=args.ordering)
+    shown = explain.progress_wanted(args.progress, args.json)
+    with explain.working(f"{args.dataset} batch ({args.ordering.upper()})", shown):
+        result = sequential_batch(problem, ordering=args.ordering)
     seconds = time.perf_counter() - t0
     poses = np.array([result.values[X(i)][:3] for i in range(data.n_poses)])
     positions = poses[:, :2]
@@ -280,17 +292,9 @@ def _batch(args: argparse.Namespace) -> int:
     if data.ground_truth is not None:
         summary["evaluation"] = trajectory_figures(data.ground_truth[:, 1:4], poses)
     _save_trajectory(args, np.asarray(data.times), poses)
-    if args.json:
-        print(json.dumps(summary))
-    else:
-        print(
-            f"batch {_BATCH_NAME[args.ordering]} ({args.ordering.upper()} ordering) on {args.dataset}: "
-            f"RMSE {summary['rmse_m']} m over {data.n_poses} poses, "
-            f"{summary['total_s']:.2f} s, Cholesky factor {summary['factor_nnz']} nonzeros ({summary['backend']})\n"
-            + explain.data_lines(summary)
-        )
+    where = ""
     if args.plot:
-        _write_plot(
+        where = _write_plot(
             args,
             lambda name: plot_trajectory(
                 truth,
@@ -300,17 +304,28 @@ def _batch(args: argparse.Namespace) -> int:
                 path=name,
             ),
         )
+    if args.json:
+        print(json_line(summary))
+    else:
+        print(
+            f"batch {_BATCH_NAME[args.ordering]} ({args.ordering.upper()} ordering) on {args.dataset}: "
+            f"RMSE {summary['rmse_m']} m over {data.n_poses} poses, "
+            f"{summary['total_s']:.2f} s, Cholesky factor {summary['factor_nnz']} nonzeros ({summary['backend']})\n"
+            + explain.data_lines(summary)
+            + explain.evaluation_note(summary)
+            + where
+        )
     return 0
 
 
 _BATCH_NAME = {"xl": "PB", "amd": "PBVR"}  # the paper's names of a batch solve by its ordering [YIB Sec. IV]
 
 
-def _write_plot(args: argparse.Namespace, draw: Callable[[str], object]) -> None:
-    """Write ``--plot`` by ``draw(name)`` and say where it went (not with ``--json``: its one line is the figures)."""
+def _write_plot(args: argparse.Namespace, draw: Callable[[str], object]) -> str:
+    """Write ``--plot`` by ``draw(name)``; the line saying where it went, printed after the figures ("" with
+    ``--json``: its one line is the figures)."""
     _write_output(args.plot, "--plot", draw)
-    if not args.json:
-        print(f"plot written to {os.path.abspath(args.plot)}")
+    return "" if args.json else f"\nplot written to {os.path.abspath(args.plot)}"
 
 
 def _fidelity(args: argparse.Namespace) -> int:
@@ -323,7 +338,8 @@ def _fidelity(args: argparse.Namespace) -> int:
         data = load_range_dataset(name, data_dir=args.data_dir)
         authors = load_authors_run(name, data, args.data_dir)
         setup = PaperSetup.named(_PRESET_OF[name])
-        result = run_online(data, setup, covariances=authors.pose_covariance is not None)
+        options = StreamOptions(progress=explain.progress_wanted(args.progress, args.json))
+        result = run_online(data, setup, options, covariances=authors.pose_covariance is not None)
         fid, distances[name] = compare(result, authors, data.ground_truth)
         row = fid.to_dict() | {
             "total_s": round(result.total_s, 2),
@@ -332,47 +348,26 @@ def _fidelity(args: argparse.Namespace) -> int:
             + [explain.file_entry(find_authors_file(name, args.data_dir))],
         }
         print(
-            json.dumps(row) if args.json else _fidelity_text(row) + "\n" + explain.data_lines(row | {"data_note": None})
+            json_line(row)
+            if args.json
+            else explain.fidelity_text(row) + "\n" + explain.data_lines(row | {"data_note": None})
         )
     if args.plot:
-        _write_plot(args, lambda name: plot_fidelity(distances, path=name))
+        where = _write_plot(args, lambda name: plot_fidelity(distances, path=name))
+        if where:
+            print(where.strip())
     return 0
-
-
-def _mm(metres: float) -> str:
-    return f"{1000 * metres:.2f} mm"
-
-
-def _fidelity_text(row: dict) -> str:
-    cov = (
-        ""
-        if row["pose_cov_median"] is None
-        else (
-            f"\n  marginal covariances, relative difference: pose median {row['pose_cov_median']:.2%} (max {row['pose_cov_max']:.2%}), "
-            f"velocity median {row['velocity_cov_median']:.2%} (max {row['velocity_cov_max']:.2%}), landmarks max {row['landmark_cov_max']:.2%}"
-        )
-    )
-    return (
-        f"{row['dataset']}: {row['n_states']} states; distance to the authors' estimate RMS {_mm(row['pose_rms_m'])}, "
-        f"max {_mm(row['pose_max_m'])} at pose {row['pose_max_at']}; landmarks max {_mm(row['landmark_max_m'])}\n"
-        f"  position RMSE {row['rmse_m']:.5f} m (authors {row['authors_rmse_m']:.5f} m); {row['total_s']} s "
-        f"(authors' MATLAB + GTSAM 3.2: {row['authors_total_s']} s)" + cov
-    )
 
 
 def _reproduce(args: argparse.Namespace) -> int:
     _check_out_folder(args.out, "--out")
     try:
-        table = reproduce(args.out, quick=args.quick, data_dir=args.data_dir, jobs=args.jobs)
+        shown = explain.progress_wanted(args.progress, False)
+        table = reproduce(args.out, quick=args.quick, data_dir=args.data_dir, jobs=args.jobs, progress=shown)
     except OSError as err:  # a full disk while writing the plots or the table
         raise SteamError(f"--out: cannot write {err.filename or args.out!r} ({err.strerror or err})") from None
     print(table)
     return 0
-
-
-def _one_line(message: str) -> str:
-    """``message`` with its line breaks escaped: an error is one line however odd the input it quotes."""
-    return "".join(c if c.isprintable() or c == "\t" else repr(c)[1:-1] for c in message) or "(no message)"
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -389,9 +384,16 @@ def main(argv: Sequence[str] | None = None) -> int:
             "data": data_command.run,
             "consistency": consistency_command.run,
         }
-        return commands[args.command](args)
-    except (SteamError, OSError, MemoryError) as exc:
-        print(f"steam-ref: error: {_one_line(str(exc))}", file=sys.stderr)
+        with limit():  # the solvers' small dense algebra at one BLAS thread unless $STEAM_REF_BLAS_THREADS says
+            return commands[args.command](args)
+    except BrokenPipeError:  # stdout's reader went away (`| head`): what it read is all it wanted
+        quiet_stdout()
+        return 141  # 128 + SIGPIPE, as a shell reports a command stopped by a closed pipe
+    except MemoryError as exc:  # NumPy's names a size, Python's nothing
+        print(f"steam-ref: error: out of memory{f' ({one_line(str(exc))})' if str(exc) else ''}", file=sys.stderr)
+        return 2
+    except (SteamError, OSError) as exc:
+        print(f"steam-ref: error: {one_line(str(exc))}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("steam-ref: interrupted", file=sys.stderr)

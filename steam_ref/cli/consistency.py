@@ -14,11 +14,12 @@ from __future__ import annotations
 
 import argparse
 import functools
-import json
 import math
 import time
 
 from ..errors import SteamError
+from ..evaluate import INCONCLUSIVE
+from ..paper import progress
 from ..paper.consistency import (
     KINDS,
     SE2_ESTIMATORS,
@@ -30,7 +31,8 @@ from ..paper.consistency import (
 )
 from ..paper.sweep import run_sweep
 from ..plot.figures import plot_anees
-from .paths import check_output
+from .paths import check_output, check_outputs_apart, write_output
+from .streams import json_line
 
 __all__ = ["run"]
 
@@ -47,10 +49,19 @@ def _text(summary: dict) -> str:
             k = row[kind]
             lost = f", {k['runs_far_outside']} run(s) far outside" if k["runs_far_outside"] else ""
             parts.append(f"{kind} {k['anees']:.3f} in [{k['band'][0]:.3f}, {k['band'][1]:.3f}]: {k['verdict']}{lost}")
-        lines.append(
-            f"  {name}: {'consistent' if row['consistent'] else 'not consistent'}\n    " + "\n    ".join(parts)
-        )
+        lines.append(f"  {name}: {_overall(row, summary['n_seeds'])}\n    " + "\n    ".join(parts))
     return "\n".join(lines)
+
+
+def _overall(row: dict, n_seeds: int) -> str:
+    """An estimator's verdict over every kind of state; inconclusive says how many runs a verdict needs."""
+    if row["consistent"] is None:
+        needed = max(row[k]["runs_needed"] for k in KINDS if row[k]["verdict"] == INCONCLUSIVE)
+        return (
+            f"inconclusive: inside the band, but {n_seeds} runs are too few to have seen a tail of lost runs "
+            f"(--seeds {needed} or more to call it consistent)"
+        )
+    return "consistent" if row["consistent"] else "not consistent"
 
 
 def _model(args: argparse.Namespace) -> dict:
@@ -72,19 +83,23 @@ def run(args: argparse.Namespace) -> int:
     for path, suffix, option in ((args.plot, ".png", "--plot"), (args.log, ".jsonl", "--log")):
         check_output(path, suffix, option)
     check_output(args.resume, ".jsonl", "--resume")
+    check_outputs_apart({"--plot": args.plot, "--log": args.log, "--resume": args.resume})
     study = ConsistencyStudy(n_steps=args.steps, n_landmarks=args.landmarks, seed=args.seed, **_model(args))
     start = time.perf_counter()
-    results = run_sweep(
-        functools.partial(run_seed, study),
-        range(args.seeds),
-        jobs=args.jobs,
-        backend=args.backend,
-        scheduler=args.scheduler,
-        log=args.resume or args.log,
-        study=study.describe(),
-        resume=args.resume is not None,
-        check=functools.partial(check_result, study),  # each line read back is validated, naming file and line
-    )
+    label = f"consistency on {args.dataset}: {len(study.estimators)} estimators, seeds"
+    with progress.bar(args.seeds, label, progress.wanted(args.progress, args.json), unit="seed") as shown:
+        results = run_sweep(
+            functools.partial(run_seed, study),
+            range(args.seeds),
+            jobs=args.jobs,
+            backend=args.backend,
+            scheduler=args.scheduler,
+            log=args.resume or args.log,
+            study=study.describe(),
+            resume=args.resume is not None,
+            check=functools.partial(check_result, study),  # each line read back is validated, naming file and line
+            on_result=lambda _item, _result: shown.update(1),
+        )
     summary = summarize({int(k): v for k, v in results.items()}, study.estimators)
     summary |= {"seconds": round(time.perf_counter() - start, 2), "jobs": args.jobs, "backend": args.backend}
     if args.plot:
@@ -92,9 +107,11 @@ def run(args: argparse.Namespace) -> int:
             name: {k: row[k]["per_state"] for k in ("pose", "velocity")} for name, row in summary["estimators"].items()
         }
         bands = {k: tuple(next(iter(summary["estimators"].values()))[k]["band"]) for k in ("pose", "velocity")}
-        plot_anees(per_pose, bands, n_runs=summary["n_seeds"], path=args.plot)
+        write_output(
+            args.plot, "--plot", lambda name: plot_anees(per_pose, bands, n_runs=summary["n_seeds"], path=name)
+        )
     for row in summary["estimators"].values():  # the per-pose curves are for the plot
         for kind in KINDS:
             row[kind].pop("per_state", None)
-    print(json.dumps(summary) if args.json else _text(summary))
+    print(json_line(summary) if args.json else _text(summary))
     return 0

@@ -4,26 +4,32 @@ measures, and a yardstick to read it by; and a progress line while a run would o
 - :func:`data_figures`: the data file(s) read with a short sha256, a note when ``plaza`` is gtsam's
   original uncleaned set, dead reckoning's RMSE on the same poses, and the authors' BTGP/1 RMSE on the
   same file where they saved one (recognised by its sha256, :data:`steam_ref.datasets.fetch.DATASETS`).
-- :func:`run_text`: the human-readable summary of ``steam-ref run``.
-- :func:`working`: a progress line (tqdm, on stderr) with the elapsed time, for a step without a loop
-  to count (Victoria Park's scoring against the batch optimum).
+- :func:`run_text`: the human-readable summary of ``steam-ref run``; :func:`evaluation_note` its APE/RPE
+  line (``run`` and ``batch``), :func:`fidelity_text` the summary of ``steam-ref fidelity``.
+- ``progress_wanted`` and ``working``: the progress display's, from its home :mod:`steam_ref.paper.progress`.
 """
 
 from __future__ import annotations
 
-import contextlib
-import sys
-import threading
-from collections.abc import Iterator
 from pathlib import Path
-
-from tqdm import tqdm
 
 from ..datasets import LandmarkDataset, RangeDataset
 from ..datasets.fetch import DATASETS, file_digest
+from ..paper.progress import wanted as progress_wanted
+from ..paper.progress import working
 from ..paper.results import position_rmse
 
-__all__ = ["data_figures", "file_entry", "method_text", "plot_title", "progress_wanted", "run_text", "working"]
+__all__ = [
+    "data_figures",
+    "evaluation_note",
+    "fidelity_text",
+    "file_entry",
+    "method_text",
+    "plot_title",
+    "progress_wanted",
+    "run_text",
+    "working",
+]
 
 SHORT_SHA = 12
 _METHODS = {
@@ -37,13 +43,6 @@ _UNCLEANED_PLAZA = (
     "paper's cleaned Plaza1_thrown_away_some_range.mat, on which the authors' BTGP/1 scores {rmse} m: "
     "`steam-ref data fetch plaza` gets it (the paper gives no figure for the uncleaned set)"
 )
-
-
-def progress_wanted(asked: bool | None, json_output: bool) -> bool:
-    """``--progress`` / ``--no-progress`` if given, else on when stderr is a terminal and not ``--json``."""
-    if asked is not None:
-        return asked
-    return not json_output and sys.stderr.isatty()
 
 
 def method_text(method: str, every: int) -> str:
@@ -168,19 +167,39 @@ def plot_title(s: dict) -> str:
     return f"{run}: position RMSE {s['rmse_m']} m"
 
 
-@contextlib.contextmanager
-def working(what: str, enabled: bool) -> Iterator[None]:
-    """A progress line on stderr, ``what`` and the elapsed time, refreshed twice a second while the block runs."""
-    if not enabled:
-        yield
-        return
-    done = threading.Event()
-    with tqdm(desc=what, total=None, bar_format="{desc}: {elapsed}", file=sys.stderr, leave=False) as bar:
-        thread = threading.Thread(target=lambda: [bar.refresh() for _ in iter(lambda: done.wait(0.5), True)])
-        thread.daemon = True
-        thread.start()
-        try:
-            yield
-        finally:
-            done.set()
-            thread.join()
+def evaluation_note(summary: dict) -> str:
+    """APE (unaligned and SE(2)-aligned) and RPE over one pose, for the human-readable summary."""
+    e = summary.get("evaluation")
+    if not e:
+        return ""
+    rpe = f", RPE/1 {e['rpe']['translation_m']['rmse']:.4g} m" if "rpe" in e else ""
+    aligned = ""
+    if e.get("ape_se2") is not None:
+        aligned = f" ({e['ape_se2']['translation_m']['rmse']:.4g} m SE(2)-aligned)"
+    elif "alignment_undefined" in e:
+        aligned = f" ({e['alignment_undefined']})"
+    return (
+        f"\n  APE RMSE {e['ape']['translation_m']['rmse']:.4g} m{aligned}, "
+        f"heading {e['ape']['heading_rad']['rmse']:.4g} rad{rpe}"
+    )
+
+
+def _mm(metres: float) -> str:
+    return f"{1000 * metres:.2f} mm"
+
+
+def fidelity_text(row: dict) -> str:
+    cov = (
+        ""
+        if row["pose_cov_median"] is None
+        else (
+            f"\n  marginal covariances, relative difference: pose median {row['pose_cov_median']:.2%} (max {row['pose_cov_max']:.2%}), "
+            f"velocity median {row['velocity_cov_median']:.2%} (max {row['velocity_cov_max']:.2%}), landmarks max {row['landmark_cov_max']:.2%}"
+        )
+    )
+    return (
+        f"{row['dataset']}: {row['n_states']} states; distance to the authors' estimate RMS {_mm(row['pose_rms_m'])}, "
+        f"max {_mm(row['pose_max_m'])} at pose {row['pose_max_at']}; landmarks max {_mm(row['landmark_max_m'])}\n"
+        f"  position RMSE {row['rmse_m']:.5f} m (authors {row['authors_rmse_m']:.5f} m); {row['total_s']} s "
+        f"(authors' MATLAB + GTSAM 3.2: {row['authors_total_s']} s)" + cov
+    )

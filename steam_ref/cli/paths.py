@@ -20,7 +20,7 @@ from pathlib import Path
 
 from ..errors import SteamError
 
-__all__ = ["check_output", "write_output", "check_out_folder"]
+__all__ = ["check_output", "check_outputs_apart", "write_output", "check_out_folder"]
 
 
 _KINDS = {
@@ -46,6 +46,20 @@ def _refuse_path(option: str, path: str, err: OSError) -> SteamError:
         where = f"{str(blocker)!r} is a file, not a folder" if blocker else "a part of it is not a folder"
         return SteamError(f"{option}: cannot write {path!r}: {where}")
     return SteamError(f"{option}: cannot write {path!r} ({err.strerror or err})")
+
+
+def _relative_ok(path: str, option: str) -> None:
+    """A relative ``path`` needs the working folder: one deleted under the command is named, not "[Errno 2]"."""
+    if os.path.isabs(path):
+        return
+    try:
+        os.getcwd()
+    except OSError:
+        where = os.environ.get("PWD", "the working folder")
+        raise SteamError(
+            f"{option}: {path!r} is relative to the working folder {where!r}, which no longer exists: "
+            "give an absolute path, or change to a folder that exists"
+        ) from None
 
 
 def _writable_folder(folder: Path, option: str, path: str) -> None:
@@ -75,8 +89,11 @@ def check_output(path: str | None, suffix: str, option: str) -> None:
     """
     if path is None:
         return
+    if not path.strip():
+        raise SteamError(f"{option}: expected a file name, got {path!r}")
     if not path.endswith(suffix):
         raise SteamError(f"{option} expects a {suffix} file name, got {path!r}")
+    _relative_ok(path, option)
     try:
         mode = os.stat(path).st_mode  # through links
     except FileNotFoundError:
@@ -98,6 +115,41 @@ def check_output(path: str | None, suffix: str, option: str) -> None:
         raise SteamError(f"{option} needs matplotlib, which is not installed (pip install matplotlib)")
 
 
+def _identity(path: str) -> tuple[str, object]:
+    """What ``path`` writes to: its file (device, inode) when it exists, else its real path."""
+    try:
+        st = os.stat(path)
+    except OSError:
+        return ("path", os.path.realpath(path))
+    return ("file", (st.st_dev, st.st_ino))
+
+
+def _stream_identity(fd: int) -> tuple[str, object] | None:
+    try:
+        st = os.fstat(fd)
+    except OSError:
+        return None
+    return ("file", (st.st_dev, st.st_ino)) if stat.S_ISREG(st.st_mode) else None
+
+
+def check_outputs_apart(outputs: dict[str, str | None]) -> None:
+    """Before the run: the outputs given (option -> path) name different files, none of them the file stdout
+    or stderr is redirected to (replacing it would lose the printed figures); else a SteamError naming both."""
+    seen: dict[tuple[str, object], str] = {}
+    for option, path in outputs.items():
+        if path is None:
+            continue
+        key = _identity(path)
+        if key in seen:
+            raise SteamError(f"{seen[key]} and {option} both name {path!r}: one would overwrite the other")
+        seen[key] = option
+        for fd, stream in ((1, "stdout"), (2, "stderr")):
+            if key == _stream_identity(fd):
+                raise SteamError(
+                    f"{option}: {path!r} is the file {stream} is redirected to: writing it would replace what is printed"
+                )
+
+
 def write_output(path: str, option: str, write: Callable[[str], object]) -> None:
     """Write an output ``path`` checked by :func:`check_output`: ``write(name)`` writes a new file beside
     its real target (a link is followed and stays a link), which then replaces it in one step.
@@ -106,7 +158,9 @@ def write_output(path: str, option: str, write: Callable[[str], object]) -> None
     option and the path. A file that was there keeps its permission bits.
     """
     real = Path(os.path.realpath(path))
-    temporary = real.parent / f".{real.name}.{os.getpid()}.{secrets.token_hex(4)}{Path(path).suffix}"
+    # the temporary's name ends in the whole name, so it keeps the extension a writer goes by (np.savez adds
+    # ".npz" to a name without one, matplotlib picks its format by it) even for a dotfile such as ".npz"
+    temporary = real.parent / f".{os.getpid()}.{secrets.token_hex(4)}.{real.name}"
     try:
         os.close(os.open(temporary, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o666))  # the umask applies
         write(str(temporary))
@@ -126,6 +180,7 @@ def check_out_folder(path: str, option: str) -> None:
     """Before the runs: ``path`` is a folder that exists and can be written, or can be made."""
     if not path.strip():
         raise SteamError(f"{option}: expected a folder, got an empty string")
+    _relative_ok(path, option)
     try:
         mode = os.stat(path).st_mode
     except FileNotFoundError:

@@ -1,6 +1,6 @@
 """The conformance kit: golden inputs and expected outputs that other implementations check against.
 
-The kit (``v3/``, shipped in the package beside the older ``v1/`` and ``v2/``, which stay checkable) has one
+The kit (``v4/``, shipped in the package beside the older ``v1/`` to ``v3/``, which stay checkable) has one
 folder per suite (gp, factors, linear, batch, bayes_tree, incremental, fixed_lag, paper), each a ``cases.json``
 any language reads and an ``expected.npz``,
 and an ``index.json`` with the conventions, provenance and sha256 sums. ``steam-ref conformance``

@@ -30,6 +30,7 @@ from .checker import Outcome, Report, check_cases, compare_quantity
 from .conventions import CONVENTION_ALTERNATIVES, CONVENTIONS, RESULTS_LAYOUT, depends_on
 from .expected import oracle_alternatives, oracle_case
 from .kitio import (
+    DATA_FREE,
     KIT_VERSION,
     SHIPPED,
     SUITES,
@@ -137,7 +138,7 @@ def build_kit(
     """
     out = Path(SHIPPED if out is None else out)
     out.mkdir(parents=True, exist_ok=True)
-    for suite in SUITES[:-1]:
+    for suite in DATA_FREE:
         _write_suite(out, suite, _suite_records(suite))
     if paper:
         _write_suite(out, "paper", [case_record(c, e, "paper") for c, e in paper_cases(data_dir)])
@@ -222,17 +223,24 @@ def _selftest_suite(kit: Path, suite: str, report: Report) -> None:
 
 
 def selftest(
-    kit: str | os.PathLike | None = None, *, paper: bool = False, data_dir: str | os.PathLike | None = None
+    kit: str | os.PathLike | None = None,
+    *,
+    paper: bool = False,
+    data_dir: str | os.PathLike | None = None,
+    progress: bool = False,
 ) -> Report:
-    """Regenerate every case from the kit's inputs with the installed code and check it against the kit."""
+    """Regenerate every case from the kit's inputs with the installed code and check it against the kit
+    (``progress``: the paper suite's runs show their bars)."""
     kit = Path(SHIPPED if kit is None else kit)
     read_index(kit)  # version and sha256 of every file
     report = Report()
-    for suite in SUITES[:-1]:
+    for suite in DATA_FREE:
         _selftest_suite(kit, suite, report)
     cases = read_suite(kit, "paper")["cases"]
     if paper:
-        results = {c["name"]: _roundtrip(run_paper_case(c["name"], c["inputs"], data_dir)) for c in cases}
+        results = {
+            c["name"]: _roundtrip(run_paper_case(c["name"], c["inputs"], data_dir, progress=progress)) for c in cases
+        }
         check_cases("paper", cases, results, report)
     else:
         report.notes.append(

@@ -72,6 +72,7 @@ class Report:
     notes: list[str] = field(default_factory=list)  # anything else to say before the count
     allow_missing: bool = True  # missing results are not a failure (selftest, or --allow-missing)
     excluded: list[str] = field(default_factory=list)  # suites left out with --only
+    warnings: list[str] = field(default_factory=list)  # harmless oddities of a results file (an unknown quantity)
 
     @property
     def passed(self) -> int:
@@ -83,8 +84,9 @@ class Report:
 
     @property
     def ok(self) -> bool:
-        """No case failed, and nothing of the kit is missing unless that was allowed."""
-        return self.failed == 0 and (self.allow_missing or not self.not_run)
+        """Some case passed, none failed, and nothing of the kit is missing unless that was allowed: a check in
+        which nothing passed showed nothing to conform, ``--allow-missing`` or not."""
+        return self.passed > 0 and self.failed == 0 and (self.allow_missing or not self.not_run)
 
     def lines(self) -> list[str]:
         """Failing cases in full, then what was missing, left out or unknown, then 'N passed, N failed'."""
@@ -109,7 +111,12 @@ class Report:
                     f"ignored: results for {len(self.unknown)} cases the kit does not have ({', '.join(self.unknown[:8])})"
                 )
             )
+        out += [printable(f"warning: {w}") for w in self.warnings]
         out += [printable(n) for n in self.notes]
+        if not self.outcomes:
+            out.append("no case was checked, so nothing passed: that is not a pass")
+        elif not self.passed:
+            out.append("no case passed: that is not a pass")
         missing = f", {len(self.not_run)} missing" if self.not_run else ""
         out.append(f"{self.passed} passed, {self.failed} failed{missing}")
         return out

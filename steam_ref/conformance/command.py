@@ -1,14 +1,16 @@
 """``steam-ref conformance``: export the kit, check results against it, check the installed code.
 
     steam-ref conformance export DIR                      the kit and a README on producing results
-    steam-ref conformance check RESULTS_DIR [--only SUITE...] [--allow-missing] [--conventions NAME...] [--kit DIR]
+    steam-ref conformance check RESULTS_DIR [--paper] [--only SUITE...] [--allow-missing] [--conventions NAME...]
+                                            [--kit DIR]
     steam-ref conformance selftest [--paper] [--data-dir DIR]
     steam-ref conformance build [--out DIR] [--paper] [--data-dir DIR]   regenerate the kit
 
 ``check`` prints every failing case (each failing quantity with its worst entries, expected and
 got; the first in computation order flagged as the likely cause), what had no result, and ends
-with ``N passed, N failed``; it exits 0 only when none failed and no case of the kit (or of the
-suites ``--only`` names) is missing, unless ``--allow-missing`` (1 otherwise, 2 on bad input).
+with ``N passed, N failed``; it exits 0 only when some case passed, none failed and no case of the
+gate is missing, unless ``--allow-missing`` (1 otherwise, 2 on bad input). The gate is every data-free
+suite of the kit (all but ``paper``, which ``--paper`` adds), or the suites ``--only`` names.
 ``selftest`` does the same for the installed code.
 """
 
@@ -21,6 +23,7 @@ import tempfile
 from pathlib import Path
 
 from ..errors import SteamError
+from ..paper.progress import wanted
 from .build import build_kit, selftest
 from .checker import Report
 from .gate import CONVENTION_NAMES, check_directory
@@ -54,7 +57,17 @@ def add_parser(sub) -> argparse.ArgumentParser:
     chk.add_argument("results", metavar="RESULTS_DIR", help="a folder with <suite>/results.json")
     chk.add_argument("--only", nargs="+", choices=SUITES, default=None, metavar="SUITE", help="check these suites only")
     chk.add_argument("--suite", choices=SUITES, default=None, help="the same as --only SUITE (one suite)")
-    chk.add_argument("--allow-missing", action="store_true", help="cases without a result are listed, not a failure")
+    chk.add_argument(
+        "--paper",
+        action="store_true",
+        help="also check the paper suite (the paper's runs; needs its data files to compute): by default every "
+        "other suite of the kit is the gate",
+    )
+    chk.add_argument(
+        "--allow-missing",
+        action="store_true",
+        help="cases without a result are listed, not a failure (a check in which no case passed still fails)",
+    )
     chk.add_argument(
         "--conventions",
         nargs="+",
@@ -75,6 +88,12 @@ def add_parser(sub) -> argparse.ArgumentParser:
     )
     st.add_argument(
         "--data-dir", type=_data_dir, default=None, help="folder with the paper's data files (else $STEAM_REF_DATA_DIR)"
+    )
+    st.add_argument(
+        "--progress",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="the paper suite's progress bars on stderr (default: on when stderr is a terminal)",
     )
     bld = commands.add_parser("build", help="regenerate the kit (default: the package's own copy)")
     bld.add_argument("--out", default=None, help="write the kit here instead of into the package")
@@ -125,11 +144,16 @@ def run(args: argparse.Namespace) -> int:
     if command == "check":
         only = list(args.only or []) + ([args.suite] if args.suite else []) or None
         report = check_directory(
-            Path(args.results), args.kit, only=only, allow_missing=args.allow_missing, conventions=args.conventions
+            Path(args.results),
+            args.kit,
+            only=only,
+            allow_missing=args.allow_missing,
+            conventions=args.conventions,
+            paper=args.paper,
         )
         return _print(report)
     if command == "selftest":
-        return _print(selftest(paper=args.paper, data_dir=args.data_dir))
+        return _print(selftest(paper=args.paper, data_dir=args.data_dir, progress=wanted(args.progress)))
     index = build_kit(args.out, paper=args.paper, data_dir=args.data_dir)
     counts = ", ".join(f"{s} {v['cases']}" for s, v in index["suites"].items())
     print(f"wrote the conformance kit v{KIT_VERSION} to {args.out or SHIPPED}: {counts} cases")

@@ -8,6 +8,8 @@ the documented alternatives (:data:`CONVENTION_ALTERNATIVES`), which ``check --c
 
 from __future__ import annotations
 
+from .kitio import KIT_VERSION
+
 __all__ = ["CONVENTIONS", "CONVENTION_ALTERNATIVES", "RESULTS_LAYOUT", "TREE_EDIT_EXAMPLE", "depends_on"]
 
 CONVENTIONS = {
@@ -58,10 +60,14 @@ CONVENTIONS = {
     "tree_edits": "which cliques an update removes and orphans, and the fill of R, depend on the order the removed "
     "part is eliminated in; the kit's is steam_ref's rule (GTSAM orders with CCOLAMD, so its trees can differ). "
     "(1) The list: the frontal variables of the removed cliques, clique by clique in the order they were removed, "
-    "each clique's frontals in elimination order, then the update's new variables in the order its 'values' lists "
+    "each clique's frontals in elimination order (that order is not sorted: 'sorted' in this kit applies to "
+    "lists of cliques and of names, such as relinearized_k and update_k, never to the frontals inside a clique), "
+    "then the update's new variables in the order its 'values' lists "
     "them. A clique is removed when first reached walking up to the root from the clique of each variable the "
     "update's factors name (in order of first appearance, factor by factor, keys in order), then from every "
-    "clique holding a relinearized variable. (2) The graph: two variables are adjacent when one factor of the "
+    "clique holding a relinearized variable, as a frontal or in its separator (the clique where it is frontal and "
+    "every clique below it holding it in its separator: their conditionals all used its old linearization "
+    "point). (2) The graph: two variables are adjacent when one factor of the "
     "removed part (the factors eliminated in removed cliques, and the new ones) or one orphan's separator holds "
     "both. (3) Repeatedly eliminate the variable of least degree (its number of adjacent variables not yet "
     "eliminated; eliminating v makes all its neighbours adjacent: fill counts), taking the variables that no new "
@@ -70,19 +76,30 @@ CONVENTIONS = {
     "elimination order) is frontal. nnz_k = sum over cliques of n_f (n_f + 1)/2 + n_f n_s (frontal and separator "
     "sizes): GTSAM's ISAM2::treeNnz. With relinearization, the relinearized variables are taken in the order "
     "steam_ref's back-substitution found them over beta: those cases pin steam_ref's behaviour",
-    "fixed_lag": "a stream's updates carry timestamps (seconds) of their new variables; after each update (its "
-    "relinearization and solve, as 'incremental'), every timed variable with t < t_newest - lag (t_newest the latest "
-    "timestamp so far) is marginalized; a variable without a timestamp (a landmark) never is. Marginalizing D: the "
-    "factors adjacent to D (earlier marginal factors too), linearized at the current linearization points theta_bar, "
-    "have information H = A^T A and vector g = A^T b over D and its separator S (the other variables of those "
-    "factors); they are replaced by the marginal factor Lambda = H_SS - H_SD H_DD^-1 H_DS, eta = g_S - H_SD H_DD^-1 "
-    "g_D (the Schur complement; unique, whatever the elimination order or the tree), i.e. 1/2 d^T Lambda d - eta^T d "
-    "with d = theta_S - theta0_S, theta0_S = theta_bar_S at that moment. It is frozen there (first-estimate "
-    "Jacobians): at a later linearization point theta_bar' it contributes Lambda and eta - Lambda (theta_bar'_S - "
-    "theta0_S) to the system. S and marginalized_k list names in the order of the stream's 'variables'; "
-    "marginal_point_k is theta0_S stacked in that order. estimate_k is theta_bar + delta of every variable left "
-    "after update k and its marginalization; covariances_k the diagonal blocks of the inverse of the window's "
-    "information (the same before and after marginalizing)",
+    "fixed_lag": "a stream's updates carry timestamps (seconds): an update may stamp any variable, a new one or a "
+    "held one (the new time replaces the old; a landmark stamped with the time it was last seen is forgotten a lag "
+    "after that, as steam_ref's streams do). After each update (its relinearization and solve, as 'incremental'), "
+    "every timed variable with t < t_newest - lag (t_newest the latest timestamp so far) is marginalized: strictly "
+    "less, so one with t = t_newest - lag exactly stays (GTSAM's rule); a variable never stamped never is. A "
+    "marginalized variable given a value again (a landmark seen again) is a new variable: its old factors and "
+    "estimate are gone, and what was learnt of it lives on only in the marginal factor. Marginalizing D: the "
+    "factors adjacent to D (earlier marginal factors too), linearized at the current linearization points "
+    "theta_bar, have information H = A^T A and vector g = A^T b over D and its separator S (the other variables of "
+    "those factors); they are replaced by the marginal factor Lambda = H_SS - H_SD H_DD^-1 H_DS, eta = g_S - H_SD "
+    "H_DD^-1 g_D (the Schur complement; unique, whatever the elimination order or the tree), i.e. 1/2 d^T Lambda d "
+    "- eta^T d with d = theta_S - theta0_S, theta0_S = theta_bar_S at that moment. It is frozen there "
+    "(first-estimate Jacobians): at a later linearization point theta_bar' it contributes Lambda and eta - Lambda "
+    "(theta_bar'_S - theta0_S) to the system. Lambda is positive semi-definite and may be SINGULAR (README, "
+    "'Fixed-lag smoothing'): store it as computed, or as any square root (the rows A_m of the QR of the dropped "
+    "block, an LDL^T, an eigendecomposition), never by an unpivoted Cholesky factorization, and never invert it "
+    "alone; the window's information, which adds the other factors, is positive definite. S and marginalized_k "
+    "list names in the order of the stream's 'variables'; marginal_point_k is theta0_S stacked in that order. "
+    "estimate_k is theta_bar + delta of every variable left after update k and its marginalization; covariances_k "
+    "the diagonal blocks of the inverse of the window's information (the same before and after marginalizing)",
+    "range_at_landmark": "a range evaluated with the robot's position exactly at the landmark (distance 0): the "
+    "error is 0 - r (the distance has a value there), but the distance has no derivative (its slope is 1 in every "
+    "direction), so H_k, and with them A_k, are zero rows by convention (gpslam's and STEAM's; steam_ref warns); "
+    "b = -sqrt(w) W e as always. A bearing there has no value and is refused",
     "floats": "JSON numbers are the shortest decimal that reads back to the same IEEE-754 double "
     "(at most 17 significant digits, so reading with strtod is exact); no NaN or inf. "
     "Arrays are nested lists, row-major",
@@ -120,9 +137,10 @@ def depends_on(suite: str, quantity: str) -> list[str]:
 
 
 RESULTS_LAYOUT = (
-    'RESULTS_DIR/<suite>/results.json = {"kit_version": 3, "cases": {"<case name>": {"<quantity>": value, ...}}}: '
-    "the quantities of each case named as in its 'tolerance', values shaped as in its 'expected'; every case of "
-    "the kit must have a result unless check is given --only SUITE... or --allow-missing"
+    f'RESULTS_DIR/<suite>/results.json = {{"kit_version": {KIT_VERSION}, "cases": {{"<case name>": {{"<quantity>": '
+    "value, ...}}}: the quantities of each case named as in its 'tolerance', values shaped as in its 'expected'; "
+    "every case of every suite but paper (the data-free suites; paper too with check --paper) must have a result "
+    "unless check is given --only SUITE... or --allow-missing; a check in which no case passed fails"
 )
 
 TREE_EDIT_EXAMPLE = """The stream of the incremental suite, relinearization off. After update 2 the tree is one clique

@@ -1,12 +1,16 @@
 """``check`` as a gate: every case of the kit has a result, or the check fails.
 
-:func:`check_directory` reads ``RESULTS_DIR/<suite>/results.json`` for every suite of the kit and
-compares each case. A case or a suite of the kit without a result is *missing*, and a check with
-anything missing fails (exit 1) unless ``only`` names the suites to check or ``allow_missing`` says
-so; what was skipped is printed either way. A results folder with no results at all, a malformed
-file, or results for another kit version is bad input (exit 2).
+:func:`check_directory` reads ``RESULTS_DIR/<suite>/results.json`` for every data-free suite of the
+kit (every suite but ``paper``, which needs the paper's data files: it joins the gate with
+``paper=True``, ``check --paper``, or when ``only`` names it) and compares each case. A case or a
+suite of the gate without a result is *missing*, and a check with anything missing fails (exit 1)
+unless ``only`` names the suites to check or ``allow_missing`` says so; what was skipped is printed
+either way. A check in which no case passed fails, ``allow_missing`` or not: nothing was shown to
+conform. A results folder with no results at all, a malformed file, or results for another kit
+version is bad input (exit 2); a quantity a case does not have is a warning line, and the rest is
+checked.
 
-A results file names the kit version it was computed against (``"kit_version": 3``); one without
+A results file names the kit version it was computed against (``"kit_version": 4``); one without
 it was written for kit v1, before the field existed, and is checked against the shipped v1. Results
 for a suite the kit does not have (``fixed_lag`` results naming kit v2), or ``only`` naming one, are
 bad input: nothing would be compared, and nothing is passed unchecked.
@@ -20,7 +24,7 @@ from pathlib import Path
 
 from ..errors import DataError, SteamError
 from .checker import Report, check_cases, convention_key
-from .kitio import KITS, SUITES, printable, read_index, read_json, read_suite
+from .kitio import DATA_FREE, KITS, SUITES, printable, read_index, read_json, read_suite
 from .validate import kit_cases, results_cases, results_version
 
 __all__ = ["check_directory", "load_kit", "CONVENTION_NAMES"]
@@ -50,6 +54,7 @@ def check_directory(
     only: Sequence[str] | None = None,
     allow_missing: bool = False,
     conventions: Sequence[str] = (),
+    paper: bool = False,
 ) -> Report:
     """Check every suite of the kit (or of ``only``) against ``results_dir``; see the module docstring."""
     results_dir = Path(results_dir)
@@ -64,7 +69,8 @@ def check_directory(
             f"unknown convention '{printable(bad[0])}'; the alternatives are {', '.join(CONVENTION_NAMES)}"
         )
     given = load_kit(Path(kit)) if kit is not None else None  # a kit named is checked first
-    chosen = [s for s in SUITES if only is None or s in only]
+    gate = DATA_FREE if only is None else only
+    chosen = [s for s in SUITES if s in gate or (paper and s == "paper")]
     files = {s: results_dir / s / "results.json" for s in chosen if _present(results_dir / s / "results.json")}
     if not files:
         raise SteamError(
@@ -101,11 +107,14 @@ def check_directory(
         report.notes.append("the results name no kit_version: checked as kit v1 results against the shipped kit v1")
     if conventions:
         report.notes.append(f"conventions: {convention_key(conventions)} for the quantities that depend on them")
-    report.excluded = [s for s in suites if s not in chosen]
+    report.excluded = [s for s in suites if s not in chosen and s != "paper"]
+    if "paper" in suites and "paper" not in chosen:
+        said = " (its results are here)" if _present(results_dir / "paper" / "results.json") else ""
+        report.notes.append(f"not checked: paper{said}, which needs the paper's data files: add --paper")
     for suite in (s for s in chosen if s in suites):
         if suite not in data:
             report.not_run += [f"{suite}/{c['name']}" for c in suites[suite]]
             continue
-        results = results_cases(printable(files[suite]), data[suite], suites[suite])
+        results = results_cases(printable(files[suite]), data[suite], suites[suite], report.warnings)
         check_cases(suite, suites[suite], results, report, conventions)
     return report

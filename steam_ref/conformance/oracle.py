@@ -266,6 +266,20 @@ def loss_weight(loss: Mapping | None, s: float) -> float:
     return (1 - (s / c) ** 2) ** 2 if s <= c else 0.0
 
 
+def _range_at_landmark(spec: Mapping, xs: Sequence[NDArray]) -> bool:
+    """Whether ``spec`` is a range (plain or interpolated) evaluated with the robot exactly at the landmark."""
+    if spec["type"] == "interpolated":
+        if spec["inner"]["type"] != "range":
+            return False
+        lam, psi = interpolated_matrices(spec)
+        x = lam @ xs[0] + psi @ xs[1]
+    elif spec["type"] == "range":
+        x = xs[0]
+    else:
+        return False
+    return bool(xs[-1][0] - x[0] == 0 and xs[-1][1] - x[1] == 0)
+
+
 def linearize_factor(spec: Mapping, xs: Sequence[NDArray], paper_sign: bool = False, symmetric: bool = False) -> dict:
     """Everything the kit records of one factor at ``xs``: e, W e, Hₖ, Aₖ, b, cost (and weight if robust).
 
@@ -282,6 +296,8 @@ def linearize_factor(spec: Mapping, xs: Sequence[NDArray], paper_sign: bool = Fa
             shifted[k][j] += 1j * _STEP
             cols.append(np.imag(factor_error(spec, shifted, paper_sign)) / _STEP)
         H.append(np.stack(cols, axis=1))
+    if _range_at_landmark(spec, xs):  # no derivative exists: the kit's convention (range_at_landmark), zero rows
+        H = [np.zeros_like(h) for h in H]
     noise = _noise_spec(spec)
     if spec["type"] == "gp_prior":  # Σ = Q(Δt) of [YIB Eq. 17]
         qc = np.asarray(spec["qc"], float)

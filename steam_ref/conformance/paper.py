@@ -132,11 +132,14 @@ def paper_cases(data_dir: str | os.PathLike | None = None) -> list[tuple[Case, d
     return out
 
 
-def run_paper_case(name: str, inputs: dict, data_dir: str | os.PathLike | None = None) -> dict:
-    """steam_ref's run of a paper case (BTGP/1 with the paper's set-up): ~10 s for synthetic, ~40 s for Plaza."""
+def run_paper_case(
+    name: str, inputs: dict, data_dir: str | os.PathLike | None = None, *, progress: bool = False
+) -> dict:
+    """steam_ref's run of a paper case (BTGP/1 with the paper's set-up): ~10 s for synthetic, ~40 s for Plaza;
+    ``progress``: its bar on stderr."""
     dataset, preset, _, _ = PAPER_RUNS[name]
     data = load_dataset(dataset, data_dir=data_dir)
-    result = run_online(data, PaperSetup.named(preset))
+    result = run_online(data, PaperSetup.named(preset), progress=progress)
     poses = np.asarray(inputs["state_poses"], dtype=int)
     return {
         "poses": result.trajectory[poses, :3],

@@ -3,7 +3,8 @@
 ``steam-ref conformance export DIR`` writes it beside the kit: the files, how to write results and
 check them, every convention (with the alternatives ``check --conventions`` accepts), the inputs of
 each suite, every factor's error, Jacobian convention, inputs and outputs, the tree-edit ordering
-rule with a worked example, and the paper suite's set-up and procedure.
+rule with a worked example, the fixed-lag marginal factor derived (the cases cite it, so it is here,
+not in steam_ref's docs/derivations.md), and the paper suite's set-up and procedure.
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ from .conventions import CONVENTION_ALTERNATIVES, CONVENTIONS, RESULTS_LAYOUT, T
 from .kitio import KIT_VERSION, SUITES
 from .paper_spec import PROCEDURE, SETUP_FIELDS
 
-__all__ = ["export_readme", "FACTOR_TABLE", "QUANTITIES", "SUITE_INPUTS"]
+__all__ = ["export_readme", "FACTOR_TABLE", "QUANTITIES", "SUITE_INPUTS", "FIXED_LAG"]
 
 FACTOR_TABLE = [  # type, keys, fields, error e (prediction minus measurement)
     ("gp_prior", "x1, x2", "dt, qc", "x2 - Phi(dt) x1, Sigma = Q(dt) [YIB Eq. 22, 30-31]"),
@@ -24,7 +25,12 @@ FACTOR_TABLE = [  # type, keys, fields, error e (prediction minus measurement)
         "measured [v, v_lat, w] (forward, lateral, yaw rate; v_lat is any number), noise",
         "[cos(th) x_dot + sin(th) y_dot - v, -sin(th) x_dot + cos(th) y_dot - v_lat, th_dot - w]",
     ),
-    ("range", "x, l", "measured r, noise", "sqrt((lx - x)^2 + (ly - y)^2) - r [YIB Eq. 33]"),
+    (
+        "range",
+        "x, l",
+        "measured r, noise",
+        "sqrt((lx - x)^2 + (ly - y)^2) - r [YIB Eq. 33]; at distance 0, -r with zero H rows (conventions)",
+    ),
     ("bearing", "x, l", "measured b, noise", "wrap(atan2(ly - y, lx - x) - th - b) to [-pi, pi)"),
     ("bearing_range", "x, l", "measured [b, r], noise", "[bearing error, range error]"),
     (
@@ -45,7 +51,8 @@ QUANTITIES = {
     "bayes_tree": "cliques: [{frontals, separator, parent}] (unordered list; parent named by its first frontal, "
     "null for a root); conditionals: first frontal -> {R, S, d}; covariances: 'k1,k2' -> joint block",
     "incremental": "estimate_k: key -> vector after update k; relinearized_k: sorted names moved at update k; "
-    "update_k: {removed, orphans} (each clique named by its frontals, sorted); nnz_k: the fill of R",
+    "update_k: {removed, orphans}, each a sorted list of cliques (compared unordered), each clique named by the "
+    "list of its frontals in elimination order (not sorted); nnz_k: the fill of R",
     "fixed_lag": "for each update k: marginalized_k (names, in the order of 'variables'); when any, separator_k "
     "(names, same order), marginal_point_k (theta0 of the separator, stacked), marginal_information_k (Lambda) and "
     "marginal_vector_k (eta) over the separator stacked in that order; estimate_k: key -> vector of the window; "
@@ -64,11 +71,66 @@ SUITE_INPUTS = {
     "linearization point, or the start of batch)}, ordering (keys), iterations (batch) or groups (covariances)",
     "incremental": "stream = {variables, updates: [{values (new variables only), factors (new ones)}]} and isam2 = "
     "{relinearize_threshold (a number or 'inf'), relinearize_skip, wildfire_threshold}",
-    "fixed_lag": "stream = {variables, updates: [{values (new variables only), timestamps (new variable -> "
-    "seconds; landmarks have none), factors (new ones)}]}, lag (seconds) and isam2 as for incremental",
+    "fixed_lag": "stream = {variables, updates: [{values (new variables only, or one marginalized earlier and seen "
+    "again: it enters anew), timestamps (variable -> seconds: a new variable's, or a held one's new time, such as a "
+    "landmark's when it is seen again; a variable never stamped is never marginalized), factors (new ones)}]}, lag "
+    "(seconds) and isam2 as for incremental",
     "paper": "dataset, file and sha256 of the paper's data file, the authors' run, method, every, setup (fields "
     "below), setup_fields and procedure (the texts below), state_poses (the poses whose states are compared)",
 }
+
+
+FIXED_LAG = """What the `fixed_lag` cases compute, derived here so that nothing outside the kit is needed.
+
+**The rule.** After each update, every variable with a timestamp t < t_newest - lag is marginalized:
+strictly less; at t = t_newest - lag exactly it stays (the case `timestamp_at_the_boundary`). Any
+variable may be stamped, by any update, a held one too (its new time replaces the old): a landmark
+stamped with the time it was last seen is forgotten a lag after that (`landmark_forgotten_and_seen_again`);
+a variable never stamped is never forgotten. A forgotten variable given a value again is a new variable.
+
+**The marginal factor.** Linearized at theta_bar the problem is ||A delta - b||^2 [YIB Eq. 9-11, 21]. Split the
+variables into D (to forget), S (the other variables of the factors adjacent to D, earlier marginal factors
+included) and the rest T. Only the factors adjacent to D have columns in D:
+
+    ||A delta - b||^2 = ||A_D delta_D + A_S delta_S - b1||^2 + ||A2 [delta_S; delta_T] - b2||^2        (F.1)
+
+A QR of the first block, [A_D A_S | b1] = Q [[R_D, S_D, d_D], [0, A_m, b_m]] (one elimination step,
+[YIB Eq. 24-25]), keeps its norm:
+
+    ||A_D delta_D + A_S delta_S - b1||^2 = ||R_D delta_D + S_D delta_S - d_D||^2 + ||A_m delta_S - b_m||^2 + c   (F.2)
+
+Integrating delta_D out of exp(-1/2 ||A delta - b||^2), the first term of (F.2) integrates to a constant whatever
+delta_S is, so the marginal of (S, T) is the factors not touching D plus one new factor ||A_m delta_S - b_m||^2.
+With H = [A_D A_S]^T [A_D A_S] and g = [A_D A_S]^T b1, its information form is the Schur complement
+
+    Lambda = A_m^T A_m = H_SS - H_SD H_DD^-1 H_DS,      eta = A_m^T b_m = g_S - H_SD H_DD^-1 g_D           (F.3)
+
+(marginal_information_k, marginal_vector_k). It is unique: neither the elimination order nor the tree changes it.
+
+**Frozen.** delta_S = theta_S - theta0_S is about the linearization point of the moment, theta0_S =
+marginal_point_k, and A_m holds the dropped factors' Jacobians there; D is gone, so they can never be evaluated
+again. At a later linearization point theta_bar' the factor is the same function of theta_S, rewritten about it:
+
+    ||A_m (theta_S - theta0_S) - b_m||^2 = ||A_m delta' - (b_m - A_m (theta_bar'_S - theta0_S))||^2         (F.4)
+
+so it adds Lambda to the information and eta - Lambda (theta_bar'_S - theta0_S) to the right-hand side.
+
+**Lambda may be singular.** Lambda is positive semi-definite, and positive definite only when the dropped factors
+alone fix every direction of S. They often do not: in 6 of the 13 marginalizations of kit v3's cases, and 3 of
+the 5 that kit v4 adds, Lambda has a null direction. Dropping the state x_i, the factors adjacent to it are its
+GP priors (or the marginal factor of the states before it), its velocity reading and its ranges; the GP prior to
+x_(i+1) fixes all of x_(i+1), but a landmark in S that those factors see through a single range (from x_i) has
+only its distance from x_i fixed, nothing across the line of sight: the null vector of Lambda is that landmark's
+direction perpendicular to x_i -> landmark (its prior is not adjacent to D, so it is not in Lambda). The window's
+information, Lambda plus the other factors (that prior, the other ranges), is positive definite. So:
+
+- store Lambda as computed (a symmetric matrix), or a square root of it: A_m from the QR (F.2) (rows = its rank),
+  an LDL^T with pivoting, or an eigendecomposition U diag(s) U^T (A_m = diag(sqrt(s)) U^T over s > 0);
+- never an unpivoted Cholesky factorization of Lambda alone (it fails at the zero pivot), and never Lambda^-1;
+- a covariance of S from Lambda alone does not exist; covariances_k come from the whole window's information.
+
+The cases compare Lambda and eta, which every one of these forms gives.
+"""
 
 
 def _bullets(items) -> str:
@@ -103,14 +165,17 @@ For every case read its `inputs`, compute each quantity named in its `tolerance`
 
 Then
 
-    steam-ref conformance check RESULTS_DIR [--only SUITE...] [--allow-missing] [--conventions NAME...]
+    steam-ref conformance check RESULTS_DIR [--paper] [--only SUITE...] [--allow-missing] [--conventions NAME...]
 
+The gate is every suite but `paper` (the data-free suites: any port can compute them); `--paper` adds the paper
+suite, which needs the paper's data files; `--only SUITE...` checks the suites named.
 A numeric quantity passes when max|got - expected| <= atol + rtol * max|expected| over its entries;
 an exact one must be equal (lists of cliques unordered). Every failing quantity is printed with its
 worst entries (index, expected, got); the first failing quantity in computation order is flagged as
-the likely cause; a structure that differs is printed item by item. Exit 0: every case of the kit
-(or of the suites `--only` names) passed; 1: a case failed or has no result (unless
-`--allow-missing`); 2: bad input (a malformed file, names one line).
+the likely cause; a structure that differs is printed item by item. Exit 0: every case of the gate
+passed; 1: a case failed or has no result (unless `--allow-missing`), or no case passed at all (even with
+`--allow-missing`: nothing was shown to conform); 2: bad input (a malformed file, names one line). A quantity
+a case does not have is a warning line, not an error: the rest is checked.
 
 ## Conventions
 
@@ -147,6 +212,9 @@ Lambda, Psi. W is the upper-triangular square root of Sigma^-1 (conventions, whi
 {CONVENTIONS["tree_edits"]}
 
 {TREE_EDIT_EXAMPLE}
+## Fixed-lag smoothing
+
+{FIXED_LAG}
 ## The paper suite: set-up and procedure
 
 Fields of `setup`:

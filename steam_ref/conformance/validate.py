@@ -8,9 +8,13 @@ on something that was not compared. What counts as malformed:
 - a kit case without a string ``name``, a ``tolerance`` object whose values are ``"exact"`` or
   ``{"atol": a, "rtol": r}`` with finite non-negative numbers, or an ``expected`` value for each of
   its quantities; a case name given twice;
-- a results file that is not ``{"kit_version": N, "cases": {case: {quantity: value}}}``; a quantity
-  the case does not have (a typo would otherwise go unnoticed); a value of a numeric quantity whose
-  leaves are not JSON numbers (a string ``"1.0"`` or ``true`` is not read as a number).
+- a results file that is not ``{"kit_version": N, "cases": {case: {quantity: value}}}``; a value of a
+  numeric quantity whose leaves are not JSON numbers (a string ``"1.0"`` or ``true`` is not read as a
+  number).
+
+A quantity the case does not have (an extra output a port writes, or a typo) is not malformed: it is a
+warning line naming it, and the rest of the file is checked (a typo still fails, as the quantity it
+misspells is then missing).
 """
 
 from __future__ import annotations
@@ -110,8 +114,9 @@ def results_version(where: str, data: object) -> int | None:
     return int(version)
 
 
-def results_cases(where: str, data: Mapping, kit: Sequence[Mapping]) -> dict:
-    """The results of the kit's cases, each checked against its case's quantities and their kinds."""
+def results_cases(where: str, data: Mapping, kit: Sequence[Mapping], warnings: list[str] | None = None) -> dict:
+    """The results of the kit's cases, each checked against its case's quantities and their kinds; a quantity
+    a case does not have is left out and named in ``warnings``."""
     by_name = {c["name"]: c for c in kit}
     out = {}
     for name, got in data["cases"].items():
@@ -121,15 +126,19 @@ def results_cases(where: str, data: Mapping, kit: Sequence[Mapping]) -> dict:
             continue
         if not isinstance(got, Mapping):
             raise DataError(f"{where}: cases/{printable(name)} must be an object of quantity -> value")
+        extra = [q for q in got if q not in case["tolerance"]]
+        if extra and warnings is not None:
+            listed = ", ".join(f"'{printable(q)}'" for q in extra[:8]) + (", ..." if len(extra) > 8 else "")
+            warnings.append(
+                f"{where}: cases/{printable(name)} has quantities the case does not have, not checked: {listed} "
+                f"(it has {', '.join(case['tolerance'])})"
+            )
         for q, value in got.items():
-            if q not in case["tolerance"]:
-                known = ", ".join(case["tolerance"])
-                raise DataError(
-                    f"{where}: cases/{printable(name)} has an unknown quantity '{printable(q)}' (it has {known})"
-                )
+            if q in extra:
+                continue
             if case["tolerance"][q] != "exact":
                 problem = numeric_leaf_problem(value)
                 if problem:
                     raise DataError(f"{where}: cases/{printable(name)}/{printable(q)}{problem}")
-        out[name] = dict(got)
+        out[name] = {q: v for q, v in got.items() if q not in extra}
     return out

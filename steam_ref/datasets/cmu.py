@@ -33,6 +33,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from ..arguments import DECIMAL
 from ..errors import DataError, SteamError
 from ..pose2 import integrate_odometry
 from .matfile import read_mat
@@ -78,7 +79,7 @@ def _assemble(name: str, where: str, tables: dict[str, NDArray]) -> RangeDataset
         note = _order_note(td)
         notes += [note] if note else []
         source = "; ".join([where] + notes)
-        return RangeDataset(name, gt, dr, drp, tl, td, source)
+        return RangeDataset(name, gt, dr, drp, tl, td, source, time_origin="file")
     except SteamError as err:
         raise DataError(f"{where}: {err}") from None
 
@@ -108,7 +109,7 @@ def load_cmu_mat(path: str | os.PathLike, name: str | None = None) -> RangeDatas
     return _assemble(name or path.stem, str(path), tables)
 
 
-_NUMBER = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")  # a plain decimal number
+_NUMBER = DECIMAL  # the one rule for numbers written as text (steam_ref.arguments)
 _BLANKS = re.compile(r"[ \t]+")
 
 

@@ -43,13 +43,14 @@ from pathlib import Path
 
 import numpy as np
 
+from ..arguments import DECIMAL
 from ..errors import DataError, SteamError
 from .landmarks import LandmarkDataset
 
 __all__ = ["load_gtsam_2d", "GTSAM_ISOTROPY_TOL", "MAX_ID"]
 
 GTSAM_ISOTROPY_TOL = 1e-4  # load2D converts a sighting's covariance only when |v1 - v3| is below this
-_NUMBER = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")  # a plain decimal number
+_NUMBER = DECIMAL  # the one rule for numbers written as text (steam_ref.arguments)
 _FIELDS = {"ODOMETRY": 11, "LANDMARK": 7}  # numbers after the tag
 _ID = re.compile(r"[0-9]+")  # an id: digits only (GTSAM reads a size_t)
 MAX_ID = 2**53  # the largest id the data set's float64 tables hold exactly (with all below it)
@@ -161,6 +162,7 @@ def load_gtsam_2d(path: str | os.PathLike, name: str | None = None) -> LandmarkD
             bearing_ranges=np.array(sightings).reshape(-1, 6),
             landmark_ids=marks,
             source=note,
+            time_origin="generated",
         )
     except SteamError as err:  # a sighting the data set's checks name by its row: say its line too
         text = re.sub(r"bearing_ranges\[(\d+), ", lambda m: f"line {lines_of[int(m[1])]}, {m[0]}", str(err))

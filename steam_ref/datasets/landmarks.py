@@ -42,7 +42,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..errors import DataError
 from ..pose2 import integrate_odometry
-from .table import _frozen_table, _ids_text, _num, _rows_of
+from .table import _frozen_table, _ids_text, _num, _rows_of, check_time_origin
 
 __all__ = ["LandmarkDataset", "LANDMARK_COLUMNS", "READING_TABLES", "RANGE_SLACK_SIGMAS"]
 
@@ -79,9 +79,11 @@ class LandmarkDataset:
     landmarks: NDArray = field(default_factory=lambda: np.zeros((0, 3)), repr=False)  # (k, 3) surveyed: id, x, y
     ground_truth: NDArray | None = field(default=None, repr=False)  # (n_poses, 4) or None
     source: str = ""  # a path, plus notes on how the file was read
+    time_origin: str = "given"  # where the pose times [s] come from: 'file', 'generated' or 'given' (gp/clock.py)
     dead_reckoning: NDArray = field(init=False, repr=False)  # (n_poses, 4): the odometry composed from ``start_pose``
 
     def __post_init__(self) -> None:
+        check_time_origin(self.time_origin)
         for name in ("poses", "odometry", "odometry_covariance", *READING_TABLES, "landmarks"):
             object.__setattr__(self, name, _frozen_table(name, getattr(self, name), LANDMARK_COLUMNS[name]))
         if self.ground_truth is not None:
@@ -120,7 +122,7 @@ class LandmarkDataset:
 
     @property
     def times(self) -> NDArray:
-        """(n_poses,) pose times, a read-only view of ``poses[:, 0]``."""
+        """(n_poses,) pose times in seconds (from ``time_origin``), a read-only view of ``poses[:, 0]``."""
         return self.poses[:, 0]
 
     @property

@@ -180,6 +180,7 @@ def _task(
         ranges=np.column_stack([times, ids[pick], ranges, np.full(n, float(range_sigma))]),
         landmarks=np.column_stack([ids[order], survey[order]]),
         source=source,
+        time_origin="generated",
     )
     return ModelSample(data, states, {int(ids[j]): truth_xy[j].copy() for j in range(n_landmarks)})
 

@@ -185,6 +185,8 @@ def load_dataset(
     where to put it; so does an empty name, and a ``data_dir`` that is not a folder (even for
     "synthetic", which reads no file: the caller meant something else).
     """
+    if not isinstance(name_or_path, (str, os.PathLike)):  # str(None) is "None", a file name nobody meant
+        raise DataError(f"the data set must be a name or a path, got {name_or_path!r}")
     key = str(name_or_path)
     if not key.strip():
         raise DataError("the data set name is empty: give synthetic, paper-synthetic, plaza, or a file or folder")

@@ -108,14 +108,8 @@ def _landmarks_and_ranges(
 
 
 def _is_count(value: object, lowest: int) -> bool:
-    """An integer (or an integer-valued float) >= ``lowest``; never a bool, NaN or inf."""
-    return bool(
-        not isinstance(value, bool)
-        and isinstance(value, (int, float, np.integer, np.floating))
-        and math.isfinite(value)
-        and value == int(value)
-        and value >= lowest
-    )
+    """An integer (int or NumPy integer) >= ``lowest``; never a bool, nor a float (2.0 is not a count)."""
+    return bool(not isinstance(value, (bool, np.bool_)) and isinstance(value, (int, np.integer)) and value >= lowest)
 
 
 def _is_number(value: object, lowest: float, strict: bool) -> bool:
@@ -228,4 +222,4 @@ def generate_synthetic(
     )
     source = f"generated(seed={seed}, n_steps={n_steps}, n_landmarks={n_landmarks})"
     dead_reckoning = integrate_odometry(gt[0], odometry)
-    return RangeDataset("synthetic", gt, odometry, dead_reckoning, landmarks, ranges, source)
+    return RangeDataset("synthetic", gt, odometry, dead_reckoning, landmarks, ranges, source, time_origin="generated")

@@ -19,6 +19,10 @@ Conventions, checked on the reference files (see ``data/README.md`` for the figu
 - Range rows are kept in the order given, even where their time goes back
   (:meth:`RangeDataset.ranges_going_back` names those rows).
 
+Times are in seconds; ``time_origin`` says where they come from: a file's stamps ('file'), a generator's
+('generated'), or the caller's arrays ('given'). The clock the GP prior runs on is the set-up's choice
+(:mod:`steam_ref.gp.clock`), not the data set's.
+
 Errors: a table of the wrong shape raises :class:`ShapeError`; bad content (NaN or inf, fewer than
 two poses, pose times not increasing, unknown landmark ids, a negative range) raises
 :class:`DataError`. Rows are 0-based in ``array[row, column]`` messages.
@@ -31,9 +35,10 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..errors import DataError, ShapeError
+from ..errors import DataError, ShapeError, SteamError
+from ..gp.clock import TIME_ORIGINS
 
-__all__ = ["RangeDataset"]
+__all__ = ["RangeDataset", "check_time_origin"]
 
 _TIME_TOL = 1e-6  # [s] odometry row k and pose k + 1 must agree to this
 _COLUMNS = {  # field -> (CMU array name, column names)
@@ -69,8 +74,10 @@ class RangeDataset:
     landmarks: NDArray = field(repr=False)  # (n_landmarks, 3): id, x, y
     ranges: NDArray = field(repr=False)  # (n_ranges, 4): time, sender id, landmark id, range [m]
     source: str = ""  # a path, or "generated(seed=...)", plus notes on any rework
+    time_origin: str = "given"  # where the pose times [s] come from: 'file', 'generated' or 'given' (gp/clock.py)
 
     def __post_init__(self) -> None:
+        check_time_origin(self.time_origin)
         for name, (_, columns) in _COLUMNS.items():
             object.__setattr__(self, name, _frozen_table(name, getattr(self, name), columns))
         self._check_times()
@@ -80,7 +87,7 @@ class RangeDataset:
     def __repr__(self) -> str:
         return (
             f"RangeDataset(name={self.name!r}, n_poses={self.n_poses}, n_landmarks={self.n_landmarks}, "
-            f"n_ranges={self.n_ranges}, source={self.source!r})"
+            f"n_ranges={self.n_ranges}, source={self.source!r}, time_origin={self.time_origin!r})"
         )
 
     @property
@@ -102,7 +109,7 @@ class RangeDataset:
 
     @property
     def times(self) -> NDArray:
-        """(n_poses,) pose times, a read-only view of ``ground_truth[:, 0]``."""
+        """(n_poses,) pose times in seconds (from ``time_origin``), a read-only view of ``ground_truth[:, 0]``."""
         return self.ground_truth[:, 0]
 
     def landmark_rows(self, ids: ArrayLike) -> NDArray:
@@ -178,6 +185,15 @@ class RangeDataset:
                 f"ranges[{k}, 3] (range) = {_num(self.ranges[k, 3])} at t={_num(self.ranges[k, 0])} is negative: "
                 f"a range is a distance ({negative.size} negative range(s) in all)"
             )
+
+
+def check_time_origin(origin: object) -> str:
+    """``origin`` if it is one of TIME_ORIGINS ('file', 'generated', 'given'); else SteamError naming it."""
+    if not isinstance(origin, str) or origin not in TIME_ORIGINS:
+        raise SteamError(
+            f"time_origin must be one of {', '.join(TIME_ORIGINS)} (where the pose times come from), got {origin!r}"
+        )
+    return origin
 
 
 def _rows_of(known: NDArray, ids: NDArray) -> tuple[NDArray, int | None]:

@@ -4,14 +4,24 @@
 - :mod:`.metrics`: APE and RPE of planar poses and their statistics (RMSE, mean, median, max), as evo defines them.
 - :mod:`.files`: TUM and KITTI trajectory files, written and read back.
 - :mod:`.report`: the estimate at the truth's own times by GP interpolation [YIB Eq. 18]; a run's figures.
-- :mod:`.consistency`: NEES of a state with its covariance, the χ² band of an ANEES over Monte Carlo runs.
+- :mod:`.consistency`: NEES of a state with its covariance, the χ² band of an ANEES over Monte Carlo runs, its verdict and
+  the runs a verdict of "consistent" needs.
 
 The Monte Carlo study itself (sampling tasks from the model, running the estimators, over many seeds) is
 :mod:`steam_ref.paper.consistency`, since it runs the paper's solvers.
 """
 
-from .align import ALIGNMENTS, Alignment, align_planar
-from .consistency import chi2_band, chi2_quantile, nees, pose_errors, verdict
+from .align import ALIGNMENTS, Alignment, align_planar, alignment_defect
+from .consistency import (
+    INCONCLUSIVE,
+    LOST_QUANTILE,
+    chi2_band,
+    chi2_quantile,
+    nees,
+    pose_errors,
+    runs_needed,
+    verdict,
+)
 from .files import read_kitti, read_tum, write_kitti, write_tum
 from .metrics import PoseError, Statistics, ape, planar_poses, rpe, rpe_pairs
 from .report import states_at, trajectory_figures
@@ -20,6 +30,7 @@ __all__ = [
     "ALIGNMENTS",
     "Alignment",
     "align_planar",
+    "alignment_defect",
     "Statistics",
     "PoseError",
     "ape",
@@ -37,4 +48,7 @@ __all__ = [
     "chi2_quantile",
     "pose_errors",
     "verdict",
+    "runs_needed",
+    "LOST_QUANTILE",
+    "INCONCLUSIVE",
 ]

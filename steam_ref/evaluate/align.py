@@ -27,7 +27,11 @@ from ..arguments import finite, number, real_array
 from ..errors import ShapeError, SteamError
 from ..pose2 import wrap_angle
 
-__all__ = ["Alignment", "align_planar", "ALIGNMENTS"]
+__all__ = ["Alignment", "align_planar", "alignment_defect", "ALIGNMENTS"]
+
+# A spread of points below (ROUNDING · largest coordinate)² per point is rounding, not motion: the centring
+# subtraction of equal points leaves a few ulps, and a rotation fitted to them is noise.
+ROUNDING = 8 * np.finfo(float).eps
 
 ALIGNMENTS = (None, "se2", "sim2")  # none, rigid (rotation + translation), similarity (+ scale)
 
@@ -71,29 +75,76 @@ class Alignment:
         return {"angle_rad": float(self.angle), "translation_m": self.translation.tolist(), "scale": float(self.scale)}
 
 
-def align_planar(estimate: NDArray, truth: NDArray, *, with_scale: bool = False) -> Alignment:
-    """The SE(2) (or, ``with_scale``, Sim(2)) transform minimising Σ ‖truthᵢ - (s R estimateᵢ + t)‖².  [U91]
+def _centred(points: NDArray) -> tuple[NDArray, NDArray, float]:
+    """Mean, the centred points as unit directions' weights x̃ᵢ / ‖x̃‖, and ‖x̃‖ = √(Σ ‖x̃ᵢ‖²) = √(n σ²)
+    [U91 Eq. 34-36]; ‖x̃‖ is 0 when the spread is rounding only (see ROUNDING). Computed on the points
+    divided by their largest coordinate: no overflow, no underflow."""
+    scale = float(np.abs(points).max())
+    if scale == 0.0:
+        return np.zeros(2), np.zeros_like(points), 0.0
+    p = points / scale
+    mu = p.mean(axis=0)
+    centred = p - mu
+    norm = float(np.sqrt(np.sum(centred * centred)))
+    if norm <= np.sqrt(len(points)) * ROUNDING:
+        return mu * scale, np.zeros_like(points), 0.0
+    return mu * scale, centred / norm, norm * scale
 
-    ``estimate`` and ``truth`` are positions (n, 2), n ≥ 2, not all at one point. A rigid alignment
-    (``with_scale=False``) is Umeyama's with s fixed at 1 [U91 Eq. 40-41].
-    """
+
+def _checked(estimate: object, truth: object) -> tuple[NDArray, NDArray]:
     x, y = real_array("estimate", estimate), real_array("truth", truth)
     if x.ndim != 2 or x.shape[1] != 2 or x.shape != y.shape or len(x) < 2:
         raise SteamError(
             f"alignment needs two (n, 2) position arrays of one shape, n >= 2; got {x.shape} and {y.shape}"
         )
     finite("estimate", x), finite("truth", y)
-    mu_x, mu_y = x.mean(axis=0), y.mean(axis=0)  # [U91 Eq. 34-35]
-    xc, yc = x - mu_x, y - mu_y
-    a = float(np.sum(xc * yc))  # Σ x̃ᵢ·ỹᵢ
-    b = float(np.sum(xc[:, 0] * yc[:, 1] - xc[:, 1] * yc[:, 0]))  # Σ x̃ᵢ × ỹᵢ
-    spread = float(np.sum(xc * xc))  # n σx²                      [U91 Eq. 36]
-    if spread == 0.0 or a == b == 0.0:
-        raise SteamError(
-            "alignment is undefined: the estimate's positions all coincide, or are at right angles to the truth's"
+    return x, y
+
+
+def alignment_defect(estimate: object, truth: object) -> str | None:
+    """Why no rotation aligns ``estimate`` onto ``truth`` (positions (n, 2)), or None when one does: the
+    truth's positions coincide (a robot that does not move), the estimate's do, or the two are
+    uncorrelated (Σ ỹᵢ conj(x̃ᵢ) is rounding beside √(Σ‖x̃ᵢ‖² Σ‖ỹᵢ‖²), its Cauchy-Schwarz bound)."""
+    x, y = _checked(estimate, truth)
+    return _defect(x, y)
+
+
+def _defect(x: NDArray, y: NDArray) -> str | None:
+    (_, _, norm_x), (_, _, norm_y) = _centred(x), _centred(y)
+    if norm_y == 0.0:
+        return (
+            "alignment is undefined: the truth's positions all coincide (it does not move), no rotation is determined"
         )
+    if norm_x == 0.0:
+        return "alignment is undefined: the estimate's positions all coincide, no rotation is determined"
+    if np.hypot(*_correlation(x, y)) <= len(x) * ROUNDING:
+        return "alignment is undefined: the estimate's positions are at right angles to the truth's, no rotation is determined"
+    return None
+
+
+def _correlation(x: NDArray, y: NDArray) -> tuple[float, float]:
+    """(a, b) / (‖x̃‖ ‖ỹ‖): Σ x̃ᵢ·ỹᵢ and Σ x̃ᵢ × ỹᵢ of the centred points, each in [-1, 1] (Cauchy-Schwarz)."""
+    (_, u, _), (_, v, _) = _centred(x), _centred(y)
+    a = float(np.sum(u * v))  # Σ x̃ᵢ·ỹᵢ
+    b = float(np.sum(u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]))  # Σ x̃ᵢ × ỹᵢ
+    return a, b
+
+
+def align_planar(estimate: NDArray, truth: NDArray, *, with_scale: bool = False) -> Alignment:
+    """The SE(2) (or, ``with_scale``, Sim(2)) transform minimising Σ ‖truthᵢ - (s R estimateᵢ + t)‖².  [U91]
+
+    ``estimate`` and ``truth`` are positions (n, 2), n ≥ 2, not all at one point (to rounding): where no
+    rotation is determined (:func:`alignment_defect` says why) a SteamError says so. A rigid alignment
+    (``with_scale=False``) is Umeyama's with s fixed at 1 [U91 Eq. 40-41].
+    """
+    x, y = _checked(estimate, truth)
+    defect = _defect(x, y)
+    if defect is not None:
+        raise SteamError(defect)
+    (mu_x, _, norm_x), (mu_y, _, norm_y) = _centred(x), _centred(y)
+    a, b = _correlation(x, y)  # Σ ỹᵢ conj(x̃ᵢ) / (‖x̃‖ ‖ỹ‖)
     angle = float(np.arctan2(b, a))  # R = U S Vᵀ in the plane     [U91 Eq. 39-40]
-    scale = float(np.hypot(a, b) / spread) if with_scale else 1.0  # s = tr(DS) / σx²  [U91 Eq. 42]
+    scale = float(np.hypot(a, b) * (norm_y / norm_x)) if with_scale else 1.0  # s = tr(DS) / σx²  [U91 Eq. 42]
     c, s = np.cos(angle), np.sin(angle)
     translation = mu_y - scale * np.array([[c, -s], [s, c]]) @ mu_x  # [U91 Eq. 41]
     return Alignment(angle, translation, scale)

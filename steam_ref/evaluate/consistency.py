@@ -7,6 +7,19 @@ over N independent runs the average ε̄ = (1/N) Σ εₖ (ANEES) has N ε̄ ~ �
 acceptance band for ε̄ is [χ²⁻¹(0.025; N d) / N, χ²⁻¹(0.975; N d) / N] [BLK01 Sec. 5.4.2].
 Above the band the estimator is overconfident (covariances too small), below it underconfident.
 
+**Too few runs to call it consistent.** The band is exact when every run's ε is χ²(d); an estimator can
+fail differently: most runs fine, a few lost in a wrong minimum with an ε far beyond any χ²(d) value (the
+interpolated BTGP of docs/experiments.md: 26 of 200 runs). Such a tail moves the ANEES only in the runs that
+contain one of its runs, so a study too short to contain one sees nothing. Call a run *lost* when its ε is
+beyond M = χ²⁻¹(0.999; d) (:data:`LOST_QUANTILE`). A fraction p of lost runs raises the expected ANEES by at
+least p (M - d) (each replaces a run of mean d by one above M), which puts it above the band's top h(N) once
+p > p*(N) = (h(N) - d) / (M - d). N runs contain no lost run with probability (1 - p)^N; so the study could
+have missed a tail large enough to make the estimator inconsistent with probability above α = 1 - level
+while (1 - p*(N))^N > α. Below the smallest N where (1 - p*(N))^N ≤ α (:func:`runs_needed`: 60 runs for
+d = 3, 71 for d = 2 at 95 %; since N p*(N) grows like √N, every larger N qualifies too) an ANEES inside the
+band is *inconclusive*, never "consistent" (:func:`verdict` with ``enough_runs=False``). An ANEES outside
+the band is a verdict at any N: it is what the χ² test rejects at its level.
+
 The error of a heading is wrapped to [-π, π): a state's estimate and the truth may differ by whole turns.
 """
 
@@ -20,7 +33,19 @@ from ..arguments import finite, number, real_array
 from ..errors import NumericalError, ShapeError, SteamError
 from ..pose2 import wrap_angle
 
-__all__ = ["nees", "chi2_band", "chi2_quantile", "pose_errors", "verdict"]
+__all__ = [
+    "nees",
+    "chi2_band",
+    "chi2_quantile",
+    "pose_errors",
+    "verdict",
+    "runs_needed",
+    "LOST_QUANTILE",
+    "INCONCLUSIVE",
+]
+
+LOST_QUANTILE = 0.999  # a run whose NEES is beyond χ²⁻¹(0.999; d) is lost (a wrong minimum), not a little off
+INCONCLUSIVE = "inconclusive (too few runs)"
 
 
 def pose_errors(estimate: NDArray, truth: NDArray) -> NDArray:
@@ -40,8 +65,8 @@ def nees(errors: NDArray, covariances: NDArray) -> NDArray:
     :class:`~steam_ref.errors.NumericalError` naming its row.
     """
     e, P = real_array("errors", errors), real_array("covariances", covariances)
-    if e.ndim != 2 or P.shape != (*e.shape, e.shape[1]):
-        raise ShapeError(f"nees needs errors (n, d) and covariances (n, d, d), got {e.shape} and {P.shape}")
+    if e.ndim != 2 or e.shape[1] == 0 or P.shape != (*e.shape, e.shape[1]):
+        raise ShapeError(f"nees needs errors (n, d), d >= 1, and covariances (n, d, d), got {e.shape} and {P.shape}")
     if not (np.all(np.isfinite(e)) and np.all(np.isfinite(P))):
         raise NumericalError("nees: an error or a covariance is not finite")
     out = np.empty(len(e))
@@ -82,8 +107,22 @@ def chi2_quantile(p: float, dof: float) -> float:
     return float(2 * gammaincinv(k / 2, prob))
 
 
-def verdict(anees: float, band: tuple[float, float]) -> str:
-    """'consistent' inside the band, else 'not consistent (overconfident)' / '(underconfident)'."""
+def runs_needed(dim: int, level: float = 0.95) -> int:
+    """The fewest runs whose ANEES inside the band supports "consistent" at ``level``: the smallest N with
+    (1 - p*(N))^N ≤ 1 - level, p*(N) = (h(N) - d) / (χ²⁻¹(0.999; d) - d), h(N) the band's top (module
+    docstring). 60 for d = 3, 71 for d = 2 at 95 %."""
+    chi2_band(1, dim, level)  # the checks of dim and level
+    lost = chi2_quantile(LOST_QUANTILE, dim)
+    n = 1
+    while (1 - (chi2_band(n, dim, level)[1] - dim) / (lost - dim)) ** n > 1 - level:
+        n += 1
+    return n
+
+
+def verdict(anees: float, band: tuple[float, float], enough_runs: bool = True) -> str:
+    """'consistent' inside the band, else 'not consistent (overconfident)' / '(underconfident)'; inside the
+    band with too few runs to have seen a tail of lost runs (``enough_runs=False``, :func:`runs_needed`),
+    :data:`INCONCLUSIVE`."""
     anees = number("anees", anees)
     if anees < 0:
         raise SteamError(f"anees is an average of squares, never negative, got anees={anees}")
@@ -96,4 +135,4 @@ def verdict(anees: float, band: tuple[float, float]) -> str:
         return "not consistent (overconfident)"
     if anees < lo:
         return "not consistent (underconfident)"
-    return "consistent"
+    return "consistent" if enough_runs else INCONCLUSIVE

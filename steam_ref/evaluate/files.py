@@ -16,12 +16,13 @@ loaders accept planar poses only (z = 0, rotation about z, to 1e-9) and refuse a
 from __future__ import annotations
 
 import os
+import stat
 from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
 
-from ..arguments import real_array
+from ..arguments import parse_decimal, real_array
 from ..errors import DataError, ShapeError
 from ..pose2 import wrap_angle
 from .metrics import planar_poses
@@ -35,8 +36,14 @@ def _times(times: object, n: int) -> NDArray:
     t = real_array("times", times)
     if t.shape != (n,):
         raise ShapeError(f"times must be (n,) with one time per pose ({n}), got shape {t.shape}")
-    if not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
-        raise DataError("times must be finite and increase strictly")
+    if not np.all(np.isfinite(t)):
+        k = int(np.flatnonzero(~np.isfinite(t))[0])
+        raise DataError(f"times must be finite, but times[{k}] = {float(t[k])!r}")
+    if np.any(np.diff(t) <= 0):
+        k = int(np.flatnonzero(np.diff(t) <= 0)[0]) + 1
+        raise DataError(
+            f"times must increase strictly, but times[{k}] = {float(t[k])!r} follows times[{k - 1}] = {float(t[k - 1])!r}"
+        )
     return t
 
 
@@ -54,6 +61,10 @@ def _table(path: str | os.PathLike, columns: int, what: str) -> NDArray:
     """The numbers of a whitespace-separated text file, ``columns`` per line, ``#`` lines skipped."""
     rows = []
     try:
+        mode = os.stat(path).st_mode
+        if not stat.S_ISREG(mode):  # a named pipe would block the read, /dev/zero fill the memory
+            kind = "a folder" if stat.S_ISDIR(mode) else "a named pipe" if stat.S_ISFIFO(mode) else "a device or socket"
+            raise DataError(f"{path}: cannot read it: it is {kind}, not a regular file")
         text = Path(path).read_text()
     except UnicodeDecodeError:
         raise DataError(f"{path}: not a text file") from None
@@ -66,13 +77,13 @@ def _table(path: str | os.PathLike, columns: int, what: str) -> NDArray:
         parts = line.split()
         if len(parts) != columns:
             raise DataError(f"{path}, line {number}: a {what} line has {columns} numbers, this one {len(parts)}")
-        try:
-            if any("_" in p or not p.isascii() for p in parts):  # float() reads "1_0" as 10, "１" as 1
-                raise ValueError
-            values = [float(p) for p in parts]
-        except ValueError:
-            raise DataError(f"{path}, line {number}: not a number in {line[:80]!r}") from None
-        if not all(np.isfinite(values)):
+        read = [parse_decimal(p) for p in parts]  # the one rule: float() would read "1_0" as 10, "１" as 1
+        values = [float(v) for v in read if v is not None]
+        if len(values) < len(parts):
+            if any(p.lower().lstrip("+-") in ("inf", "infinity", "nan") for p in parts):
+                raise DataError(f"{path}, line {number}: not finite: {line[:80]!r}")
+            raise DataError(f"{path}, line {number}: not a number in {line[:80]!r}")
+        if not all(np.isfinite(values)):  # 1e999 is written as a number and reads as inf
             raise DataError(f"{path}, line {number}: not finite: {line[:80]!r}")
         rows.append(values)
     if not rows:

@@ -37,10 +37,7 @@ __all__ = ["Statistics", "PoseError", "ape", "rpe", "rpe_pairs", "planar_poses"]
 
 def planar_poses(name: str, poses: object) -> NDArray:
     """``poses`` as a finite float (n, 3) [x, y, θ] array, n ≥ 1; ShapeError / SteamError naming it."""
-    try:
-        out = np.asarray(poses, dtype=float)
-    except (TypeError, ValueError):
-        raise SteamError(f"{name} must be an (n, 3) array of poses [x, y, θ], got {poses!r:.80}") from None
+    out = real_array(name, poses)  # never booleans, complex numbers or strings
     if out.ndim != 2 or out.shape[1] != 3 or len(out) == 0:
         raise ShapeError(f"{name} must be an (n, 3) array of poses [x, y, θ], n >= 1; got shape {out.shape}")
     if not np.all(np.isfinite(out)):
@@ -67,7 +64,13 @@ class Statistics:
         finite("errors", e)
         if e.size == 0:
             raise SteamError("no errors to summarise: the trajectory has no pose (or no pair) to compare")
-        return cls(float(np.sqrt(np.mean(e * e))), float(np.mean(e)), float(np.median(e)), float(np.max(e)), e.size)
+        # scaled by the largest error: e * e overflows past 1e154 and underflows to 0 below 1e-162
+        top = float(np.max(np.abs(e)))
+        if top == 0.0:
+            return cls(0.0, 0.0, 0.0, 0.0, e.size)
+        u = e / top
+        rmse, mean, median = top * float(np.sqrt(np.mean(u * u))), top * float(np.mean(u)), top * float(np.median(u))
+        return cls(rmse, mean, median, float(np.max(e)), e.size)
 
     def to_dict(self) -> dict:
         return {"rmse": self.rmse, "mean": self.mean, "median": self.median, "max": self.max, "n": self.n}

@@ -12,8 +12,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..arguments import integer, real_array
-from ..errors import ShapeError, SteamError
+from ..errors import ClockError, ShapeError, SteamError
 from ..trajectory import Trajectory
+from .align import alignment_defect
 from .metrics import ape, planar_poses, rpe
 
 __all__ = ["states_at", "trajectory_figures"]
@@ -25,9 +26,12 @@ def states_at(
     """The estimated state (n, d) at each of ``times`` (n,) [YIB Eq. 18], with its covariance (n, d, d)
     when asked (the interpolated covariance between states).
 
-    A time after the last state is refused unless ``extrapolate``: there the answer is the prior's prediction
-    from the last state (:meth:`Trajectory.at`), not an estimate, and truth stamped on another clock would
-    otherwise be compared with predictions alone. A time before the first state is always refused."""
+    ``times`` are on the trajectory's data clock, in seconds (``trajectory.times``: a data set's own stamps,
+    so a truth's own time stamps query it directly), whatever clock its GP prior ran on.
+    A time after the last state raises :class:`ClockError` unless ``extrapolate``: there the answer is the
+    prior's prediction from the last state (:meth:`Trajectory.at`), not an estimate, and truth stamped on
+    another clock would otherwise be compared with predictions alone. A time before the first state always
+    raises :class:`ClockError` (pose indices against a trajectory stamped in seconds, say)."""
     if not isinstance(trajectory, Trajectory):
         raise SteamError(f"expected a steam_ref.trajectory.Trajectory, got {type(trajectory).__name__}")
     if not isinstance(extrapolate, (bool, np.bool_)):
@@ -35,13 +39,21 @@ def states_at(
     t = real_array("times", times)
     if t.ndim != 1:
         raise ShapeError(f"times must be a 1-d array, one time per query, got shape {t.shape}")
-    if trajectory.states and not extrapolate:
-        last = trajectory.times[trajectory.states[-1]]
-        if np.any(t > last):
+    if trajectory.states:
+        first, last = (float(trajectory.times[trajectory.states[i]]) for i in (0, -1))
+        clock = f"the trajectory's times are in seconds; its prior's clock: {trajectory.clock.describe()}"
+        if np.any(t < first):
+            k = int(np.flatnonzero(t < first)[0])
+            raise ClockError(
+                f"times[{k}] = {float(t[k])!r} is before the first estimated state at t={first:g}: times on another "
+                f"clock (a pose index, another origin) cannot be compared with this trajectory ({clock})"
+            )
+        if not extrapolate and np.any(t > last):
             k = int(np.flatnonzero(t > last)[0])
-            raise SteamError(
+            raise ClockError(
                 f"times[{k}] = {float(t[k])!r} is after the last estimated state at t={last:g}: there the trajectory is "
-                "the prior's prediction, not an estimate (pass extrapolate=True to have it)"
+                f"the prior's prediction, not an estimate (pass extrapolate=True to have it), and times on another "
+                f"clock cannot be compared with it ({clock})"
             )
     if not covariance:
         return np.array([trajectory.at(float(ti)) for ti in t]).reshape(len(t), trajectory.n)
@@ -56,14 +68,22 @@ def trajectory_figures(truth: object, estimate: object, *, rpe_delta: int = 1) -
     at the same times: {'ape': {...}, 'ape_se2': {...}, 'ape_sim2': {...}, 'rpe': {...}}, each with
     translation [m] and heading [rad] statistics (:class:`~steam_ref.evaluate.metrics.Statistics`).
     With one pose there is nothing to align, so 'ape_se2' and 'ape_sim2' are left out; with ``rpe_delta``
-    poses or fewer there is no pair, so 'rpe' is left out."""
+    poses or fewer there is no pair, so 'rpe' is left out. Where no rotation aligns the two (the truth
+    does not move: :func:`~steam_ref.evaluate.align.alignment_defect`), 'ape_se2' and 'ape_sim2' are None
+    and 'alignment_undefined' says why: the other figures stand."""
     truth, estimate = planar_poses("truth", truth), planar_poses("estimate", estimate)
     rpe_delta = integer("rpe_delta", rpe_delta, minimum=1)
     out: dict = {"ape": ape(truth, estimate).to_dict()}
     if len(truth) >= 2:
+        defect = alignment_defect(estimate[:, :2], truth[:, :2])
         for align in ("se2", "sim2"):
+            if defect is not None:
+                out[f"ape_{align}"] = None
+                continue
             err = ape(truth, estimate, align=align)
             out[f"ape_{align}"] = err.to_dict() | {"alignment": err.alignment.to_dict()}
+        if defect is not None:
+            out["alignment_undefined"] = defect
     if len(truth) > rpe_delta:
         out["rpe"] = rpe(truth, estimate, rpe_delta).to_dict() | {"delta_poses": rpe_delta}
     return out

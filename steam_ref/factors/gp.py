@@ -96,6 +96,11 @@ class GPPriorFactor(Factor):
         return (n, n)
 
     def error(self, x1: NDArray, x2: NDArray) -> NDArray:
+        n = self.phi.shape[-1]
+        if np.shape(x1)[-1:] != (n,) or np.shape(x2)[-1:] != (n,):  # a Qc of another d than the states'
+            raise ShapeError(
+                f"GPPriorFactor over states of size {n} got states of shapes {np.shape(x1)} and {np.shape(x2)}"
+            )
         return x2 - np.einsum("...ij,...j->...i", self.phi, x1) - self.v  # [YIB Eq. 22]
 
     def jacobians(self, x1: NDArray, x2: NDArray) -> tuple[NDArray, NDArray]:  # noqa: ARG002 (linear: constant)

@@ -7,6 +7,7 @@ velocity from x[3:6], its Jacobian zero on the rest; ``state_dim`` (6 by default
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 from typing import ClassVar
 
@@ -14,7 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..arguments import real_array
-from ..errors import ShapeError, SteamError
+from ..errors import DegenerateMeasurementWarning, ShapeError, SteamError
 from ..pose2 import wrap_angle
 from ..robust import RobustLoss
 from ..variables import Key
@@ -234,26 +235,25 @@ class VelocityFactor(StateMeasurement):
 # --- Measurements of a state and a landmark -----------------------------------------------------
 
 
-def _offset(x: NDArray, l: NDArray) -> tuple[NDArray, NDArray, NDArray]:
-    """Landmark position relative to the robot: dx, dy, and the distance r (r = 0 is an error)."""
+def _range_row(x: NDArray, l: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+    """r = ‖[x y]ᵀ - ℓ‖ and its rows of ∂r/∂x (..., state size), ∂r/∂ℓ (..., 2).  [YIB Eq. 33]
+    At r = 0 the norm has no derivative: zero rows (gpslam's and STEAM's convention) and a warning."""
     dx, dy = l[..., 0] - x[..., 0], l[..., 1] - x[..., 1]
     r = np.hypot(dx, dy)
-    if np.any(r == 0):
-        raise SteamError("robot position coincides with a landmark: range and bearing are not differentiable there")
-    return dx, dy, r
-
-
-def _range_row(x: NDArray, l: NDArray) -> tuple[NDArray, NDArray, NDArray]:
-    """r = ‖[x y]ᵀ - ℓ‖ and its rows of ∂r/∂x (..., state size), ∂r/∂ℓ (..., 2).  [YIB Eq. 33]"""
-    dx, dy, r = _offset(x, l)
+    if np.any(at := r == 0):
+        message = "a range with the robot exactly at the landmark: error 0 - r, its Jacobian (undefined) zero rows"
+        warnings.warn(message, DegenerateMeasurementWarning, stacklevel=4)
+    ux, uy = (np.where(at, 0.0, d / np.where(at, 1.0, r)) for d in (dx, dy))
     Jx = np.zeros(x.shape)
-    Jx[..., 0], Jx[..., 1] = -dx / r, -dy / r
-    return r, Jx, np.stack([dx / r, dy / r], axis=-1)
+    Jx[..., 0], Jx[..., 1] = 0.0 - ux, 0.0 - uy  # 0.0 - u: +0.0, not -0.0, at the landmark
+    return r, Jx, np.stack([ux, uy], axis=-1)
 
 
 def _bearing_row(x: NDArray, l: NDArray) -> tuple[NDArray, NDArray, NDArray]:
     """b = atan2(ℓy - y, ℓx - x) - θ and its rows of ∂b/∂x (..., state size), ∂b/∂ℓ (..., 2)."""
-    dx, dy, r = _offset(x, l)
+    dx, dy = l[..., 0] - x[..., 0], l[..., 1] - x[..., 1]
+    if np.any((r := np.hypot(dx, dy)) == 0):
+        raise SteamError("robot position coincides with a landmark: a bearing has no value there (a range has: 0)")
     r2 = r**2
     Jx = np.zeros(x.shape)
     Jx[..., 0], Jx[..., 1], Jx[..., 2] = dy / r2, -dx / r2, -1.0

@@ -71,8 +71,14 @@ def _checked_qc(d: int, data: bytes) -> NDArray:
     if not np.all(np.isfinite(qc)):
         raise ShapeError(f"Qc must be a finite square matrix, got {qc.tolist()}")
     asymmetric = np.abs(qc - qc.T).max() > 1e-10 * np.abs(qc).max()  # relative: Qc's units are the user's
-    if asymmetric or np.any(np.linalg.eigvalsh(qc) <= 0):
+    eigenvalues = np.linalg.eigvalsh(qc)
+    if asymmetric or np.any(eigenvalues <= 0):
         raise SteamError(f"Qc must be symmetric positive definite, got {qc.tolist()}")
+    if eigenvalues.min() < np.finfo(float).tiny:  # a subnormal variance: Qc⁻¹, and every Q⁻¹, overflows
+        raise SteamError(
+            f"Qc's smallest eigenvalue {float(eigenvalues.min())!r} is below float64's normal range "
+            f"({np.finfo(float).tiny:.3g}): its inverse overflows; got Qc={qc.tolist()}"
+        )
     return qc
 
 

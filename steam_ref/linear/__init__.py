@@ -12,6 +12,7 @@ from .ordering import (
     xl_ordering,
 )
 from .system import GaussianFactor, LinearizedGroup, LinearSystem, linearize
+from .threads import blas_threads
 
 __all__ = [
     "Ordering",
@@ -28,4 +29,5 @@ __all__ = [
     "LinearizedGroup",
     "LinearSystem",
     "linearize",
+    "blas_threads",
 ]

@@ -38,6 +38,7 @@ from ..batch import BatchResult, Iteration, certify, check_options, gauss_newton
 from ..errors import NumericalError, SteamError
 from ..graph import FactorGraph
 from ..linear.ordering import Ordering
+from ..linear.threads import limited
 from ..manifold import VECTOR
 from ..variables import Values
 
@@ -149,6 +150,7 @@ def _best_turn(graph: FactorGraph, anchored: FactorGraph, values: Values, cost: 
     return values, cost, 0.0
 
 
+@limited
 def converge(
     graph: FactorGraph,
     initial: Values,

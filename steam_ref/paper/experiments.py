@@ -26,6 +26,7 @@ import numpy as np
 
 from ..datasets import LandmarkDataset, RangeDataset, load_range_dataset
 from ..errors import DataError
+from ..linear.threads import limited
 from ..plot.figures import plot_interpolation_tradeoff, plot_timing, plot_trajectory
 from .fidelity import AUTHORS_RUNS, Fidelity, compare, load_authors_run
 from .online import RunResult, run_online
@@ -283,6 +284,7 @@ def _datasets(data_dir: str | None) -> tuple[list[tuple[str, RangeDataset, Paper
     return out, notes
 
 
+@limited
 def reproduce(
     out: str | Path,
     *,

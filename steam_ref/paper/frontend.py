@@ -176,7 +176,7 @@ class FrontEnd:
 
     def _predict(self, i: int) -> None:
         """Initial guess of pose i: odometry row i - 1 composed onto the latest pose."""
-        dt = self.readings.times[i] - self.readings.times[i - 1]  # 1 in the CMU and Victoria Park sets
+        dt = self.readings.model_times[i] - self.readings.model_times[i - 1]  # 1 on the pose-index clock
         forward, lateral, turn = self.readings.velocity[i] * dt
         new = compose(self._pose, forward, turn, lateral)
         self._velocity = (new - self._pose) / dt  # backward difference over the step just made
@@ -189,7 +189,7 @@ class FrontEnd:
         extra = np.zeros(self.setup.state_dim - 6)  # WNOJ / Singer: acceleration starts at zero
         out = NewStep(i, True, [], {X(i): np.concatenate([self._pose, self._velocity, extra])})
         if self.setup.is_se2:  # an SE(2) state: the pose and its body twist
-            dt = self.readings.times[i] - self.readings.times[i - 1] if i > 0 else 1.0
+            dt = self.readings.model_times[i] - self.readings.model_times[i - 1] if i > 0 else 1.0
             out.values[X(i)], out.kinds[X(i)] = se2_model.initial_state(self._pose, self._velocity, dt), SE2_STATE
         if i == 0:
             out.factors.append(self._first_state_prior())
@@ -245,7 +245,7 @@ class FrontEnd:
 
     def _gp_prior(self, a: int, b: int) -> Factor:
         """The GP prior factor between states a and b.  [YIB Eq. 22]"""
-        t = self.readings.times
+        t = self.readings.model_times
         if self.setup.is_se2:
             return se2_model.gp_prior(X(a), X(b), t[b] - t[a], self.setup)
         prior = self.setup.motion_prior()
@@ -255,7 +255,7 @@ class FrontEnd:
 
     def _interpolated(self, inner: Factor, a: int, b: int, pose: int) -> Factor:
         """``inner`` (a reading at the pose without a state) on states a and b.  [YIB Eq. 29]"""
-        t = self.readings.times
+        t = self.readings.model_times
         if self.setup.is_se2:
             return se2_model.interpolated(inner, X(a), X(b), t[a], t[b], t[pose], self.setup)
         return InterpolatedFactor.create(inner, X(a), X(b), t[a], t[b], t[pose], self.setup.motion_prior())

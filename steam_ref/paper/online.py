@@ -22,8 +22,10 @@ from numpy.typing import NDArray
 from ..batch import BatchResult, levenberg_marquardt
 from ..errors import ConvergenceWarning, SteamError
 from ..graph import FactorGraph
+from ..linear.threads import limited
 from ..trajectory import Trajectory
 from ..variables import L, Values, X
+from . import progress
 from .converge import converge
 from .divergence import DivergenceCheck
 from .frontend import FrontEnd, NewStep
@@ -73,13 +75,19 @@ class StreamingEstimator:
     """
 
     def __init__(
-        self, readings: Readings, setup: PaperSetup, options: StreamOptions, solver: OnlineSolver | None = None
+        self,
+        readings: Readings,
+        setup: PaperSetup,
+        options: StreamOptions,
+        solver: OnlineSolver | None = None,
+        *,
+        name: str | None = None,  # the data set's, for the progress bar
     ):
         if solver is not None and options.converge_at_end:
             raise SteamError(
                 "converge_at_end rebuilds steam_ref's own solver at the optimum: it cannot finish a solver passed in"
             )
-        self.readings, self.setup, self.options = readings, setup, options
+        self.readings, self.setup, self.options, self.name = readings, setup, options, name
         self.front = FrontEnd(readings, setup, options.layout, options.max_poses)
         self.schedule = ScheduleClock(setup.schedule, self.front.n_poses - 1)
         self.solver = solver if solver is not None else self._new_solver()
@@ -96,7 +104,7 @@ class StreamingEstimator:
 
     def _new_solver(self) -> OnlineSolver:
         o = self.options
-        if o.lag is not None:
+        if o.lag is not None:  # the lag and the states' stamps in the data's seconds, whatever the prior's clock
             return FixedLagTreeSolver(self.setup.isam2_params(), o.lag, self.readings.times, keep_history=o.lag_history)
         return make_solver(
             o.method,
@@ -188,35 +196,46 @@ class StreamingEstimator:
     def solved(self) -> Trajectory:
         """The trajectory the solver holds: its states, queried at any time (Eq. 18)."""
         return Trajectory(
-            self.solver, self.states[: self.n_solved], self.readings.times, self.setup.motion_prior(),
+            self.solver, self.states[: self.n_solved], self.readings.clock, self.setup.motion_prior(),
             se2_model=self.setup.se2_residual if self.setup.is_se2 else None,
         )  # fmt: skip
 
     def estimate_at(self, t: float, *, covariance: bool = False) -> NDArray | tuple[NDArray, NDArray]:
-        """The state x(t) (n,) at any time from the first solved state on, with its covariance (n, n) if asked:
+        """The state x(t) (n,) at any time t in the data's seconds from the first solved state on (the GP prior's
+        clock is the set-up's, ``readings.clock`` maps between them), with its covariance (n, n) if asked:
         [YIB Eq. 18] between states, the prior's prediction after the last one (``Trajectory.at``)."""
         return self.solved().at(t, covariance=covariance)
 
     def trajectory(self) -> tuple[NDArray, NDArray]:
-        """Times (n_poses,) and states (n_poses, n) at every pose of the solved span (Eq. 18 between states)."""
+        """Times (n_poses,) in the data's seconds and states (n_poses, n) at every pose of the solved span (Eq. 18
+        between states)."""
         return self.solved().at_every_pose()
 
     # -- a whole run --
 
+    @limited
     def run(self, ground_truth: NDArray | None = None, *, covariances: bool = False) -> RunResult:
         """Process the stream to its end (or the time budget); ``ground_truth`` (n_poses, ≥3) with x,
         y in columns 1-2 (the CMU GT layout) gives the RMSE; ``covariances`` adds the final marginals."""
-        from tqdm import tqdm
-
-        budget, completed = self.options.time_budget_s, True
-        with tqdm(
-            total=self.n_poses, disable=not self.options.progress, desc=self.options.method, mininterval=0.5
-        ) as bar:
+        if covariances and self.options.lag is not None:  # before the run, not after it
+            raise SteamError(
+                f"covariances=True gives every state's final marginal covariance, which lag={self.options.lag!r} "
+                "forgets: drop one of them"
+            )
+        o = self.options
+        budget, completed = o.time_budget_s, True
+        label = progress.stream_label(self.name, o.method, self.setup.schedule.every, o.skip, o.interpolate)
+        with progress.bar(self.n_poses, label, o.progress, unit="pose") as shown:
             while not self.done:
                 self.step()
-                bar.update(1)
+                shown.update(1)
                 if budget is not None and sum(self.step_seconds) > budget and not self.done:
                     completed = False
+                    progress.say(
+                        f"{label}: time budget {budget:g} s used up after {len(self.step_seconds):,} of "
+                        f"{self.n_poses:,} poses; the run stops there (reported as cut short)",
+                        o.progress,
+                    )
                     break
         return self.result(ground_truth, completed and self.n_poses == self.readings.n_poses, covariances=covariances)
 
@@ -267,6 +286,7 @@ class StreamingEstimator:
         return {"n_marginalized": self.solver.inner.n_marginalized, "peak_window": self.solver.inner.peak_window}
 
 
+@limited
 def run_online(
     data, setup: PaperSetup, options: StreamOptions | None = None, *, covariances: bool = False, **changes
 ) -> RunResult:
@@ -282,4 +302,5 @@ def run_online(
         readings, truth = data, None
     else:
         readings, truth = Readings.from_dataset(data, setup), data.ground_truth
-    return StreamingEstimator(readings, setup, options).run(truth, covariances=covariances)
+    name = getattr(data, "name", None)
+    return StreamingEstimator(readings, setup, options, name=name).run(truth, covariances=covariances)

@@ -39,7 +39,7 @@ class StreamOptions:
     max_poses: int | None = None  # process only this prefix of the poses
     time_budget_s: float | None = None  # stop when the run has taken this long (reported)
     progress: bool = False  # tqdm progress bar
-    lag: float | None = None  # BTGP only: fixed-lag smoothing, forget states older than this (seconds)
+    lag: float | None = None  # BTGP only: fixed-lag smoothing, forget states older than this (the data's seconds)
     lag_history: bool = False  # with a lag: keep the forgotten conditionals, smooth the past at the end (history.py)
 
     def __post_init__(self) -> None:

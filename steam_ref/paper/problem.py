@@ -20,6 +20,7 @@ from ..batch import BatchResult, gauss_newton
 from ..datasets import LandmarkDataset, RangeDataset
 from ..errors import SteamError
 from ..graph import FactorGraph
+from ..linear.threads import limited
 from ..variables import L, Values, X
 from .converge import converge
 from .frontend import FrontEnd, Layout
@@ -52,8 +53,13 @@ class SteamProblem:
 
     @property
     def times(self) -> NDArray:
-        """(n_poses,) time of every pose."""
+        """(n_poses,) time of every pose in seconds, on the data's clock."""
         return self.readings.times
+
+    @property
+    def model_times(self) -> NDArray:
+        """(n_poses,) time of every pose on the model's clock: what the GP prior sees."""
+        return self.readings.model_times
 
 
 def build_problem(
@@ -75,6 +81,7 @@ def build_problem(
     return SteamProblem(graph, initial, np.array(front.states), readings, setup, layout)
 
 
+@limited
 def sequential_batch(
     problem: SteamProblem, *, chunk: int = 100, ordering: str = "amd", final_iterations: int = 50, **options
 ) -> BatchResult:
@@ -108,6 +115,7 @@ def sequential_batch(
     return result
 
 
+@limited
 def converged_batch(
     problem: SteamProblem,
     *,
@@ -204,7 +212,12 @@ def reference_batch(problem: SteamProblem, estimate: Values | None = None) -> tu
 def score_against_batch(result, readings: Readings, setup: PaperSetup) -> BatchScore:
     """A streamed run (:class:`~steam_ref.paper.results.RunResult`) against the batch optimum of the same problem
     (:func:`reference_batch`): the same set-up and layout, the poses up to the run's last solved state,
-    compared at its states."""
+    compared at its states. A fixed-lag run (``lag``) forgot states and landmarks the batch has: refused."""
+    if result.options.lag is not None:
+        raise SteamError(
+            f"scoring against the batch optimum needs every state and landmark the run estimated, and lag="
+            f"{result.options.lag!r} forgot the old ones"
+        )
     states = np.asarray(result.state_poses, dtype=int)
     last = int(states[-1]) + 1
     problem = build_problem(

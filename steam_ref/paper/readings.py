@@ -4,11 +4,15 @@ The parameters of a run (:class:`~steam_ref.paper.presets.PaperSetup`) live in
 :mod:`steam_ref.paper.presets`.
 
 :class:`Readings` turns a :class:`~steam_ref.datasets.RangeDataset` into the measurement stream the
-front end consumes: time is the odometry row index (dt = 1), pose i is ground-truth row i, odometry
-row k is a projected-velocity reading of pose k + 1, and each range reading is attached to a pose by
-:func:`attach_ranges`. A :class:`~steam_ref.datasets.LandmarkDataset` (Victoria Park) keeps its own
-times, its odometry [dx, dy, dθ] / dt is the projected velocity of the pose it ends at, and its
-readings (ranges, bearings, bearing-ranges, each with its own sigma) are taken at their poses.
+front end consumes: pose i is ground-truth row i, odometry row k is a projected-velocity reading of pose
+k + 1 (its distance and heading change over the model's time step), and each range reading is attached
+to a pose by :func:`attach_ranges`. A :class:`~steam_ref.datasets.LandmarkDataset` (Victoria Park): its
+odometry [dx, dy, dθ] / dt is the projected velocity of the pose it ends at, and its readings (ranges,
+bearings, bearing-ranges, each with its own sigma) are taken at their poses.
+
+Time: the readings carry the data set's pose times in seconds and the model's time of each pose, related
+by one :class:`~steam_ref.gp.clock.Clock` built from the set-up's choice (``PaperSetup.clock``): the CMU
+presets' 'pose-index' (dt = 1 per pose, as the scripts) or the data's 'seconds'.
 """
 
 from __future__ import annotations
@@ -20,6 +24,7 @@ from numpy.typing import NDArray
 
 from ..datasets import LandmarkDataset, RangeDataset
 from ..errors import DataError, SteamError
+from ..gp.clock import Clock
 from .presets import RANGE_ATTACHMENTS, PaperSetup
 
 __all__ = [
@@ -38,7 +43,8 @@ def attach_ranges(pose_times: NDArray, range_times: NDArray, rule: str = "file-o
     takes every next reading stamped at or before tᵢ (``while t >= TD(k,1)``). A reading whose time
     stamp goes back (Plaza's file does so twice) is taken at the pose the scan has reached, later
     than its own time. 'time' attaches every reading to the first pose at or after its time stamp.
-    A reading later than the last pose raises :class:`DataError`.
+    A reading earlier than the first pose, or later than the last, raises :class:`DataError`: the
+    trajectory has no state there to attach it to.
     """
     pose_times, range_times = np.asarray(pose_times, float), np.asarray(range_times, float)
     if rule == "time":
@@ -52,6 +58,13 @@ def attach_ranges(pose_times: NDArray, range_times: NDArray, rule: str = "file-o
         )
     else:
         raise SteamError(f"unknown range attachment rule {rule!r}; use one of {RANGE_ATTACHMENTS}")
+    early = np.flatnonzero(range_times < pose_times[0]) if len(pose_times) else np.zeros(0, int)
+    if early.size:
+        k = int(early[0])
+        raise DataError(
+            f"range row {k} at t={float(range_times[k])!r} is before the first pose (t={float(pose_times[0])!r}): "
+            "no pose to attach it to"
+        )
     late = np.flatnonzero(pose >= len(pose_times))
     if late.size:
         k = int(late[0])
@@ -143,15 +156,15 @@ class Sightings:
 
 @dataclass(frozen=True)
 class Readings:
-    """The measurement stream of a data set, in solver terms (time = pose index, dt = 1 for the CMU sets).
+    """The measurement stream of a data set, in solver terms; ``clock`` relates its seconds to the model's time.
 
     Ranges are listed in the order the front end meets them: by pose, and at one pose in the
     order of the file (or of time, with the 'time' attachment rule). A pose releases its ranges,
     then its bearings, then its bearing-ranges.
     """
 
-    times: NDArray  # (n_poses,) time of pose i: i
-    velocity: NDArray  # (n_poses, 3) projected velocity reading of pose i; row 0 unused (NaN)
+    clock: Clock  # pose i's time: clock.seconds[i] on the data's clock, clock.model[i] on the GP prior's
+    velocity: NDArray  # (n_poses, 3) projected velocity reading of pose i, per model time unit; row 0 unused (NaN)
     range_pose: NDArray  # (n_ranges,) pose each range belongs to, non-decreasing
     range_landmark: NDArray  # (n_ranges,) landmark id
     range_value: NDArray  # (n_ranges,) range [m], corrected if the set-up says so
@@ -169,11 +182,12 @@ class Readings:
             return cls._from_landmark_dataset(data, setup)
         if not isinstance(data, RangeDataset):
             raise SteamError(f"expected a RangeDataset or LandmarkDataset, got {type(data).__name__}")
-        n = data.n_poses
+        n, clock = data.n_poses, Clock.of(data.times, setup.clock, data.time_origin)
+        dt = np.diff(clock.model)  # 1 on the scripts' pose-index clock
         velocity = np.full((n, 3), np.nan)
-        velocity[1:, 0] = data.odometry[:, 1]  # distance / dt with dt = 1
+        velocity[1:, 0] = data.odometry[:, 1] / dt  # distance / dt
         velocity[1:, 1] = 0.0  # no lateral motion
-        velocity[1:, 2] = data.odometry[:, 2]  # heading change / dt
+        velocity[1:, 2] = data.odometry[:, 2] / dt  # heading change / dt
         t = data.ranges[:, 0]
         pose = attach_ranges(data.times, t, setup.range_attachment)
         order = np.lexsort((t, pose)) if setup.range_attachment == "time" else np.arange(len(pose))
@@ -197,7 +211,7 @@ class Readings:
             )
         marks = {int(i): np.array([x, y]) for i, x, y in data.landmarks}
         return cls(
-            np.arange(n, dtype=float),
+            clock,
             velocity,
             pose[order],
             data.ranges[order, 2].astype(int),
@@ -215,11 +229,12 @@ class Readings:
                 f"the set-up {setup.name!r} fits a range correction on ground truth (range_correction_steps="
                 f"{setup.range_correction_steps}); {data.name!r} is not a CMU range data set: set it to 0"
             )
+        clock = Clock.of(data.times, setup.clock, data.time_origin)
         velocity = np.full((data.n_poses, 3), np.nan)
-        velocity[1:] = data.odometry[:, 1:4] / np.diff(data.times)[:, None]
+        velocity[1:] = data.odometry[:, 1:4] / np.diff(clock.model)[:, None]
         r, b, br = data.ranges, data.bearings, data.bearing_ranges
         return cls(
-            data.times.copy(),
+            clock,
             velocity,
             data.reading_poses("ranges"),
             r[:, 1].astype(int),
@@ -233,9 +248,19 @@ class Readings:
         )
 
     @property
+    def times(self) -> NDArray:
+        """(n_poses,) pose times in seconds, on the data's clock (a lag, a query, a written file use these)."""
+        return self.clock.seconds
+
+    @property
+    def model_times(self) -> NDArray:
+        """(n_poses,) pose times on the model's clock: what the GP prior sees (``clock.model``)."""
+        return self.clock.model
+
+    @property
     def n_poses(self) -> int:
         """Number of poses (time steps + 1)."""
-        return len(self.times)
+        return self.clock.n_poses
 
     @property
     def n_landmark_readings(self) -> int:
@@ -249,7 +274,7 @@ class Readings:
         ranges = self.range_pose < n_poses
         return replace(
             self,
-            times=self.times[:n_poses],
+            clock=self.clock.prefix(n_poses),
             velocity=self.velocity[:n_poses],
             range_pose=self.range_pose[ranges],
             range_landmark=self.range_landmark[ranges],

@@ -10,6 +10,7 @@ from numpy.typing import NDArray
 
 from ..arguments import finite, real_array
 from ..errors import ShapeError
+from ..evaluate.metrics import Statistics
 from ..trajectory import Covariances
 from .options import StreamOptions
 from .presets import Schedule
@@ -26,7 +27,7 @@ def position_rmse(positions: NDArray, truth: NDArray) -> float:
         finite(name, a)
     if positions.shape != truth.shape:
         raise ShapeError(f"positions and truth must have the same shape, got {positions.shape} and {truth.shape}")
-    return float(np.sqrt(np.mean(np.sum((positions - truth) ** 2, axis=1))))
+    return Statistics.of(np.hypot(*(positions - truth).T)).rmse  # no square of a distance: no overflow past 1e154
 
 
 def peak_rss_mb() -> float:
@@ -44,7 +45,7 @@ class RunResult:
 
     options: StreamOptions  # what the run chose
     schedule: Schedule  # when its solver updated (the set-up's)
-    times: NDArray  # (n,) time of every pose covered by the estimate
+    times: NDArray  # (n,) time of every pose covered by the estimate, in the data set's seconds
     trajectory: NDArray  # (n, 6) [x, y, θ, ẋ, ẏ, θ̇] at every covered pose (Eq. 18 between states)
     state_poses: NDArray  # (M,) pose indices that have an estimated state
     landmarks: dict[int, NDArray]  # landmark id → estimate (2,)

@@ -5,8 +5,9 @@ parameters) through joblib: loky worker processes by default, or joblib's ``dask
 ``dask.distributed`` cluster (``scheduler`` its address; without one, a ``LocalCluster`` on 127.0.0.1 with
 ``jobs`` single-threaded workers). The code a run executes is the same either way, so are its results.
 
-- **Threads**: each call runs under ``threadpoolctl.threadpool_limits(1)`` — one BLAS thread per worker,
-  so ``jobs`` workers use ``jobs`` cores and never oversubscribe them.
+- **Threads**: each call runs under ``blas_threads(1)`` (:mod:`steam_ref.linear.threads`) — one BLAS thread
+  per worker whatever ``$STEAM_REF_BLAS_THREADS`` says, so ``jobs`` workers use ``jobs`` cores and never
+  oversubscribe them.
 - **Seeds**: a study spawns them, ``np.random.SeedSequence(seed).spawn(n)``; item i uses child i
   (``SeedSequence(seed, spawn_key=(i,))`` is the same child), so a run's draws depend on its index only,
   never on which worker ran it or in what order.
@@ -32,6 +33,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import DataError, SteamError
+from ..linear.threads import blas_threads
 
 __all__ = ["BACKENDS", "run_sweep", "read_results"]
 
@@ -40,9 +42,7 @@ BACKENDS = ("loky", "dask")
 
 def _limited(function: Callable[[Any], Any], item: Any) -> tuple[Any, Any]:
     """``function(item)`` with one BLAS/OpenMP thread; returns (item, result)."""
-    from threadpoolctl import threadpool_limits
-
-    with threadpool_limits(limits=1):
+    with blas_threads(1):
         return item, function(item)
 
 
@@ -141,8 +141,9 @@ def run_sweep(
 ) -> dict[str, Any]:
     """``function(item)`` for every item, in parallel; returns {item's JSON text: result}.
 
-    ``function`` must be picklable (a module-level function, or a ``functools.partial`` of one) and return
-    JSON values. ``log``: the JSONL file results stream to (``study`` its first line); ``resume``: continue
+    ``function`` must be picklable (a module-level function, or a ``functools.partial`` of one); with a
+    ``log`` it must return JSON values (a result that is not is refused, naming its item), without one any
+    picklable result comes back as it is. ``log``: the JSONL file results stream to (``study`` its first line); ``resume``: continue
     it, running only the items it lacks, each result read back passed to ``check(item, result)`` (which
     raises SteamError to refuse it). ``on_result(item, result)`` is called as each result arrives.
     """
@@ -175,7 +176,7 @@ def run_sweep(
             for item, result in run(joblib.delayed(_limited)(function, item) for item in todo):
                 results[_key(item)] = result
                 if stream is not None:
-                    stream.write(json.dumps({"item": item, "result": result}) + "\n")
+                    stream.write(_line(item, result) + "\n")  # a result that is not JSON is refused
                     stream.flush()
                 if on_result is not None:
                     on_result(item, result)
@@ -201,6 +202,16 @@ def _check_address(scheduler: object) -> None:
             f"--scheduler {scheduler!r} is not a Dask scheduler's address: give host:port or tcp://host:port "
             "(e.g. tcp://127.0.0.1:8786)"
         )
+
+
+def _line(item: Any, result: Any) -> str:
+    """The log line of one result; SteamError naming the item when the result is not made of JSON values."""
+    try:
+        return json.dumps({"item": item, "result": result})
+    except (TypeError, ValueError) as err:
+        raise SteamError(
+            f"the result for item {item!r} is not JSON ({err}): the function must return JSON values"
+        ) from None
 
 
 def _dask_client(scheduler: str | None, jobs: int):

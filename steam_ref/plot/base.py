@@ -6,6 +6,7 @@ matplotlib is imported inside the functions, so importing steam_ref never needs 
 
 from __future__ import annotations
 
+import os
 from typing import Any
 
 import numpy as np
@@ -38,9 +39,19 @@ def save(axes: Any, path: str | None) -> Any:
         import matplotlib.pyplot as plt
 
         fig = np.ravel(axes)[0].figure
-        fig.savefig(path, dpi=120, bbox_inches="tight")
+        name = os.path.basename(os.fspath(path))
+        kind = name.rpartition(".")[2] if "." in name else None  # a dotfile ".png" is a PNG, not ".png.png"
+        fig.savefig(path, dpi=120, bbox_inches="tight", format=kind)
         plt.close(fig)
     return axes
+
+
+def plain_log_ticks(ax: Any) -> None:
+    """Label the log y axis of ``ax`` with plain numbers (2, 3, 10), not matplotlib's default 2×10⁰."""
+    from matplotlib.ticker import LogFormatter
+
+    ax.yaxis.set_major_formatter(LogFormatter(labelOnlyBase=False))
+    ax.yaxis.set_minor_formatter(LogFormatter(labelOnlyBase=False, minor_thresholds=(2, 0.5)))
 
 
 def array(name: str, a: ArrayLike, ndim: int, columns: int | None = None) -> np.ndarray:

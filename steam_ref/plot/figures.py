@@ -28,6 +28,7 @@ from .base import array as _array
 from .base import attributes as _attributes
 from .base import axes as _axes
 from .base import block_grid as _block_grid
+from .base import plain_log_ticks as _plain_log_ticks
 from .base import save as _save
 
 __all__ = [
@@ -290,6 +291,7 @@ def plot_anees(
                 row.plot(np.arange(len(a)), a, lw=0.9, label=name)
         runs = f" over {n_runs} runs" if n_runs else ""
         row.set(yscale="log", ylabel=f"ANEES, {kind}{runs}")
+        _plain_log_ticks(row)
         row.grid(True, alpha=0.3)
     ax[0, 0].legend(fontsize=7, ncol=2)
     ax[-1, 0].set_xlabel("pose")

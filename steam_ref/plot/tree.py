@@ -17,7 +17,7 @@ from .base import axes as _axes
 from .base import save as _save
 
 if TYPE_CHECKING:
-    from ..bayes_tree.report import UpdateReport
+    from ..bayes_tree.isam import UpdateReport
     from ..bayes_tree.symbolic import CliqueTree
     from ..bayes_tree.tree import BayesTree
 

@@ -36,8 +36,9 @@ SUITE_DOCS = {
         "the variables relinearized; the cliques removed, the orphans and the fill of R"
     ),
     "fixed_lag": (
-        "streams of timed updates with a lag (kit v3): after each update the variables marginalized, the marginal "
-        "factor they leave on their separator (Λ, η at the frozen linearization point), the window's estimate and "
+        "streams of timed updates with a lag (kit v3; v4 adds a timestamp exactly at t_newest − lag and a landmark "
+        "forgotten and seen again): after each update the variables marginalized, the marginal factor they leave on "
+        "their separator (Λ, η at the frozen linearization point; Λ may be singular), the window's estimate and "
         "marginal covariances"
     ),
     "paper": "the paper's runs (BTGP/1 on the synthetic set and on Plaza): final estimates and RMSE",

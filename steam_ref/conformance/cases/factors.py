@@ -215,5 +215,14 @@ def factor_cases() -> list[Case]:
             rng(4.5, 0.25, loss={"type": "tukey", "c": 2.0}),
             {"x0": [1.0, 2.0, 0.3, 0.8, -0.2, 0.1], "l0": L0},
         ),
+        _factor_case(  # kit v4
+            "range_at_landmark",
+            "[YIB Eq. 33]",
+            "the robot exactly at the landmark: the distance is 0, so the error is 0 - r = -0.4; the norm has no "
+            "derivative there, and by the kit's convention (conventions, range_at_landmark; gpslam's and STEAM's) "
+            "H_0, H_1, A_0 and A_1 are zero rows, b = -W e",
+            rng(0.4, 0.2),
+            {"x0": [2.0, 3.0, 0.3, 0.8, -0.2, 0.1], "l0": [2.0, 3.0]},
+        ),
     ]
     return c

@@ -1,10 +1,13 @@
-"""Kit v3's ``fixed_lag`` suite (issue 23): streams of timed updates with a lag, and after each update
-which variables were marginalized, the marginal factor they leave on their separator (information
-form, convention-free), and the window's estimate and marginal covariances.
+"""The ``fixed_lag`` suite (kit v3; v4 adds a timestamp exactly at the boundary and a forgotten landmark):
+streams of timed updates with a lag, and after each update which variables were marginalized, the
+marginal factor they leave on their separator (information form, convention-free), and the window's
+estimate and marginal covariances.
 
 Every input is a literal number. The quantities of a case depend on which updates marginalize
 something, which :func:`drop_steps` reads off the timestamps and the lag by the suite's rule
-(a timed variable goes after the update at which ``t < t_newest - lag``).
+(a timed variable goes after the update at which ``t < t_newest - lag``; at ``t = t_newest - lag``
+it stays). An update's ``timestamps`` may stamp any variable, a held one too (kit v4): a landmark
+stamped with the time it was last seen is forgotten a lag after that, as in steam_ref's streams.
 """
 
 from __future__ import annotations
@@ -20,10 +23,13 @@ EVERY = {"relinearize_threshold": 0.0, "relinearize_skip": 1, "wildfire_threshol
 NEVER = {"relinearize_threshold": "inf", "relinearize_skip": 1, "wildfire_threshold": 0.0}
 ORACLE_LAG = (
     "oracle: the stream replayed densely: per-variable linearization points, every factor and every earlier "
-    "marginal factor (frozen: Eq. 10.4) in one dense information matrix per update, solved; the variables past the "
-    "lag dropped by the dense Schur complement of the information of the factors adjacent to them; the window's "
-    "covariances as blocks of the inverse of the window's information"
+    "marginal factor (frozen at its θ̄⁰_S: Λ and η − Λ (θ̄′_S − θ̄⁰_S) at a later θ̄′) in one dense information "
+    "matrix per update, solved; the variables D past the lag dropped by the dense Schur complement of the "
+    "information of the factors adjacent to them, Λ = H_SS − H_SD H_DD⁻¹ H_DS, η = g_S − H_SD H_DD⁻¹ g_D; the "
+    "window's covariances as blocks of the inverse of the window's information"
 )
+# The case's 'equation': the paper's, and where the rest is written out in the kit itself (no outside document).
+EQUATION = "[YIB Alg. 1, Eq. 9-11, 24]; the marginal factor: README 'Fixed-lag smoothing' (conventions, fixed_lag)"
 
 
 def _fix(x: str, mean: list[float], sigmas: list[float] | None = None) -> dict:
@@ -75,7 +81,7 @@ def _landmark_prior(lm: str, mean: list[float]) -> dict:
 
 # A nonlinear stream: five states 0.5 s apart, two landmarks with priors (no timestamps: they stay),
 # ranges from the states to them, velocity readings.
-LANDMARKS = {
+LANDMARKS: dict = {
     "variables": {**{f"x{i}": STATE for i in range(5)}, "l0": MARK, "l1": MARK},
     "updates": [
         {
@@ -117,6 +123,45 @@ LANDMARKS = {
 }
 
 
+def _stamped(u: dict) -> dict:
+    """An update whose timestamps also stamp each landmark its factors name with the update's newest time."""
+    t = max(u["timestamps"].values())
+    marks = sorted({k for f in u["factors"] for k in f["keys"] if k.startswith("l")})
+    return {**u, "timestamps": {**u["timestamps"], **dict.fromkeys(marks, t)}}
+
+
+# A nonlinear stream whose landmarks carry the time they were last seen (kit v4): l0 is seen at 0 and 0.5 s, not
+# again until 2 s, so a lag of 0.8 s forgets it after update 4 (with x1); at update 5 it is seen again and enters
+# anew, with a new value and its survey prior again (the rule of steam_ref's streams).
+FORGET = {
+    "variables": LANDMARKS["variables"],
+    "updates": [
+        _stamped(LANDMARKS["updates"][0]),
+        {
+            "values": {"x1": [0.6, 0.0, 0.1, 0.9, 0.1, 0.1]},
+            "timestamps": {"x1": 0.5, "l0": 0.5},
+            "factors": [_gp_prior("x0", "x1"), _velocity("x1", [1.0, 0.0, 0.06]), _range("x1", "l0", 3.3)],
+        },
+        {
+            "values": {"x2": [1.1, 0.1, 0.2, 0.9, 0.2, 0.0], "l1": [-0.7, 2.8]},
+            "timestamps": {"x2": 1.0, "l1": 1.0},
+            "factors": [_gp_prior("x1", "x2"), _landmark_prior("l1", [-0.9, 2.6]), _range("x2", "l1", 3.05)],
+        },
+        _stamped(LANDMARKS["updates"][3]),
+        {
+            "values": {"x4": [2.0, 0.4, 0.3, 0.85, 0.3, 0.05], "l0": [2.2, 2.85]},
+            "timestamps": {"x4": 2.0, "l0": 2.0, "l1": 2.0},
+            "factors": [
+                _gp_prior("x3", "x4"),
+                _landmark_prior("l0", [2.05, 2.95]),
+                _range("x4", "l0", 2.55),
+                _range("x4", "l1", 3.75),
+            ],
+        },
+    ],
+}
+
+
 def drop_steps(stream: Mapping, lag: float) -> dict[int, list[str]]:
     """Update (from 1) → the variables marginalized after it, in the order of 'variables' (the suite's rule)."""
     times: dict[str, float] = {}
@@ -152,9 +197,9 @@ def _tolerance(stream: Mapping, lag: float) -> dict:
 def _case(name: str, what: str, stream: dict, lag: float, isam2: dict, notes: dict | None = None) -> Case:
     return Case(
         name,
-        "[YIB Alg. 1, Eq. 9-11, 24; derivations Eq. 10.1-10.4]",
+        EQUATION,
         f"{what} (lag {lag:g} s). After each update k: marginalized_k (the variables with t < t_newest - lag, in the "
-        "order of 'variables'); when any, separator_k (the other variables of the factors adjacent to them, same "
+        "order of 'variables'; one with t = t_newest - lag stays); when any, separator_k (the other variables of the factors adjacent to them, same "
         "order), the marginal factor they leave in information form at the linearization point "
         "marginal_point_k (θ̄ of the separator, stacked): marginal_information_k = Λ, marginal_vector_k = η; "
         "then the window's estimate_k (θ̄ + δ) and covariances_k (each variable's marginal covariance)",
@@ -207,5 +252,24 @@ def fixed_lag_cases() -> list[Case]:
             LANDMARKS,
             0.4,
             NEVER,
+        ),
+        _case(  # kit v4
+            "timestamp_at_the_boundary",
+            f"{marks}; lag 1 s, relinearization off: after updates 3, 4 and 5 a state's timestamp is exactly "
+            "t_newest - lag (0 = 1 - 1, 0.5 = 1.5 - 1, 1 = 2 - 1, exact in binary) and it stays; it goes one update "
+            "later. A port that forgets at t <= t_newest - lag drops x0, x1, x2 one update early",
+            LANDMARKS,
+            1.0,
+            NEVER,
+        ),
+        _case(  # kit v4
+            "landmark_forgotten_and_seen_again",
+            "a nonlinear stream: five states 0.5 s apart, GP priors, velocity readings, ranges to two landmarks with "
+            "priors; each update's timestamps stamp the landmarks it sees with its time (a held variable's timestamp "
+            "is replaced). l0, last seen at 0.5 s, goes with x1 after update 4; at update 5 it is seen again and "
+            "enters as a new variable (a new value, its prior again); relinearized at every update",
+            FORGET,
+            0.8,
+            EVERY,
         ),
     ]

@@ -1,0 +1,83 @@
+"""What the long commands show while they work (steam_ref.paper.progress): each bar names the data set, the
+method and its schedule; a line says when a time budget cuts a run short; nothing when stderr is not a
+terminal or with --no-progress, something with --progress."""
+
+from __future__ import annotations
+
+import io
+
+import pytest
+from requirements import reference_data_dir
+
+from steam_ref.cli.commands import main
+from steam_ref.datasets import generate_synthetic
+from steam_ref.paper import progress
+from steam_ref.paper.experiments import Experiment, timing_experiment
+from steam_ref.paper.presets import PaperSetup
+
+
+@pytest.fixture(scope="module")
+def small():
+    return generate_synthetic(n_steps=30, n_landmarks=6, seed=3)
+
+
+def test_a_stream_label_names_the_data_set_the_method_its_schedule_and_the_layout():
+    assert progress.stream_label("plaza", "pb", 1) == "plaza PB/1"
+    assert progress.stream_label("plaza", "btgp", 10) == "plaza BTGP/10"
+    assert progress.stream_label("synthetic", "btgp", 1, 5, False) == "synthetic BTGP/1 skip 5 not interpolated"
+    assert progress.stream_label(None, "pbvr", 10) == "PBVR/10"
+
+
+def test_every_timing_run_is_labelled_and_the_budget_says_when_it_cuts_a_run_short(small, capsys):
+    exp = Experiment("synthetic", small, PaperSetup.synthetic())
+    timing_experiment(exp, batch_budget_s=1e-6, progress=True)  # PB and PBVR stop after their first pose
+    err = capsys.readouterr().err
+    for label in ("PB/1", "PB/10", "PBVR/1", "PBVR/10", "BTGP/1", "BTGP/10"):
+        assert f"synthetic {label}:" in err, label
+    for label in ("PB/1", "PB/10", "PBVR/1", "PBVR/10"):
+        assert f"synthetic {label}: time budget 1e-06 s used up after 1 of 31 poses; the run stops there" in err
+        assert not exp.timing[label].completed
+    assert "BTGP/1: time budget" not in err and exp.timing["BTGP/1"].completed  # BTGP has no budget
+
+
+def test_a_run_within_its_budget_says_nothing_about_it(small, capsys):
+    exp = Experiment("synthetic", small, PaperSetup.synthetic())
+    timing_experiment(exp, batch_budget_s=600.0, progress=True)
+    assert "time budget" not in capsys.readouterr().err
+
+
+def test_progress_is_off_without_a_terminal_and_on_when_asked(monkeypatch, capsys):
+    monkeypatch.setattr("sys.stderr", io.StringIO())  # not a terminal
+    assert not progress.wanted(None) and progress.wanted(True) and not progress.wanted(False, json_output=False)
+    monkeypatch.undo()
+    args = ["consistency", "--seeds", "2", "--steps", "8", "--landmarks", "2"]
+    assert main(args) == 0  # capsys: not a terminal
+    assert capsys.readouterr().err == ""
+    assert main([*args, "--progress"]) == 0
+    assert "consistency on synthetic: 6 estimators, seeds" in capsys.readouterr().err
+    assert main(["batch", "--dataset", "synthetic", "--progress"]) == 0
+    assert "synthetic batch (AMD): 00:0" in capsys.readouterr().err
+    assert main(["batch", "--dataset", "synthetic", "--no-progress"]) == 0
+    assert capsys.readouterr().err == ""
+
+
+class _Terminal(io.StringIO):
+    def isatty(self) -> bool:
+        return True
+
+
+def test_on_a_terminal_the_bar_shows_without_being_asked_and_no_progress_turns_it_off(monkeypatch):
+    terminal = _Terminal()
+    monkeypatch.setattr("sys.stderr", terminal)
+    assert main(["run", "--max-poses", "30"]) == 0
+    assert "synthetic BTGP/1" in terminal.getvalue()
+    terminal.seek(0), terminal.truncate()
+    assert main(["run", "--max-poses", "30", "--no-progress"]) == 0
+    assert main(["consistency", "--seeds", "2", "--steps", "8", "--landmarks", "2", "--no-progress"]) == 0
+    assert terminal.getvalue() == ""
+
+
+def test_fidelity_names_its_data_set_and_method(capsys):
+    folder = reference_data_dir()
+    assert main(["fidelity", "--dataset", "paper-synthetic", "--data-dir", str(folder), "--progress"]) == 0
+    assert "paper-synthetic BTGP/1:" in capsys.readouterr().err
