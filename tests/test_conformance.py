@@ -1,4 +1,4 @@
-"""The conformance kit (issue 11): what it ships, that the checker catches faults, that GTSAM passes it.
+"""The conformance kit: what it ships, that the checker catches faults, that GTSAM passes it.
 
 The oracles here are independent of steam_ref's numerics: deliberate faults written from each
 case's inputs (Q with Δt² for Δt³, Λ and Ψ swapped, a flipped Jacobian, the cost without its ½)
@@ -328,7 +328,8 @@ def test_the_paper_suite_holds_the_authors_saved_runs(shared_data):
 
 def test_the_paper_suites_set_up_is_written_as_the_kit_states_it():
     """The builder writes the set-up flat, field for field as SETUP_FIELDS documents it, and equal to the
-    shipped kit's inputs: the schedule's fields are the set-up's schedule (issue 18 moved them)."""
+    shipped kit's inputs: the schedule's fields are the set-up's schedule (``PaperSetup.schedule``),
+    not fields of their own."""
     from steam_ref.conformance.kitio import plain
     from steam_ref.conformance.paper import setup_inputs
     from steam_ref.conformance.paper_spec import SETUP_FIELDS

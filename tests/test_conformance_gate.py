@@ -1,4 +1,4 @@
-"""Kit v2's checker (issue 21, issue 19 item 3): messages that point at the bug, conventions, v1 still
+"""Kit v2's checker: messages that point at the bug, conventions, v1 still
 checkable, faults in the new blind spots, and hostile JSON answered with one line and exit 2.
 
 The faulty results are written here from each case's inputs and steam_ref's correct results (a
