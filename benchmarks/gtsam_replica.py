@@ -12,7 +12,12 @@ Used by ``benchmarks/vs_gtsam.py``, ``benchmarks/victoria_park.py`` and ``tests/
   SE(2), not the paper's vector-space prior), a velocity reading is a ``PriorFactorVector`` on the
   velocity, a range a ``RangeFactor2D`` with the same Tukey loss, a landmark prior a
   ``PriorFactorPoint2``. It answers ``estimate_of`` with [x, y, θ, world-frame velocity], so our front end
-  can predict from it; it is a yardstick of the machinery, not the same model.
+  can predict from it; it is a yardstick of the machinery, not the same model. Given our SE(2) factors
+  (a run with ``PaperSetup(prior="se2")``, the local-variable residual) it is the *same* model:
+  ``SE2PriorFactor`` → ``WnoaMotionFactorPose2``, ``SE2VelocityFactor`` → ``PriorFactorVector``, an
+  ``SE2Measurement`` range → ``RangeFactor2D``, ``SE2StatePrior`` → ``PriorFactorPose2`` and
+  ``PriorFactorVector``; the states are SE(2) states and ``estimate_of`` answers [x, y, θ, body twist].
+  ``pairs`` keeps each of our factors with the GTSAM factors that stand for it.
 
 GTSAM is imported when this module is; importing it without gtsam installed raises ImportError.
 """
@@ -25,6 +30,8 @@ import gtsam
 import numpy as np
 
 from steam_ref.factors import GPPriorFactor, PriorFactor, RangeFactor, VelocityFactor
+from steam_ref.factors.se2 import SE2PriorFactor, SE2StatePrior
+from steam_ref.factors.se2_measurements import SE2Measurement, SE2VelocityFactor
 from steam_ref.paper.solvers import OnlineSolver
 from steam_ref.variables import Key, Values
 
@@ -114,15 +121,47 @@ class NativeISAM2(OnlineSolver):
 
     name = "gtsam-native"
 
-    def __init__(self, qc, params=None):
+    def __init__(self, qc, params=None, *, se2: bool = False):
         self.qc = np.asarray(qc, dtype=float)
         self.isam = gtsam.ISAM2(isam2_params() if params is None else params)
         self.times: dict[int, float] = {}  # state index → time, from the GP priors' Δt (the first at 0)
+        self.se2 = se2  # our states are SE(2) states [x, y, θ, body twist] (values in and estimates out)
+        self.pairs: list[tuple] = []  # (our factor, [the GTSAM factors standing for it])
 
     def _state(self, key: Key) -> gtsam.StateData:
         return gtsam.StateData(gkey(key, "p"), gkey(key, "v"), self.times[key.index])
 
+    def _se2_factors(self, f) -> list | None:
+        """GTSAM's built-in factors for one of our SE(2) factors (None: not an SE(2) factor)."""
+        if isinstance(f, SE2PriorFactor):
+            if f.model != "local-variable":
+                raise ValueError(f"GTSAM's WnoaMotionFactorPose2 is the local-variable residual, not {f.model!r}")
+            k1, k2 = f.keys
+            self.times.setdefault(k1.index, 0.0)
+            self.times[k2.index] = self.times[k1.index] + float(f.phi[0, 3])  # Φ = [[I, Δt I], [0, I]]
+            return [gtsam.WnoaMotionFactorPose2(self._state(k1), self._state(k2), self.qc)]
+        if isinstance(f, SE2VelocityFactor):
+            return [gtsam.PriorFactorVector(gkey(f.keys[0], "v"), np.asarray(f.measured, dtype=float), _noise(f))]
+        if isinstance(f, SE2Measurement) and isinstance(f.inner, RangeFactor):
+            x, lm = f.keys
+            return [gtsam.RangeFactor2D(gkey(x, "p"), gkey(lm), float(f.inner.measured[0]), _noise(f))]
+        if isinstance(f, SE2StatePrior):
+            k, m, W = f.keys[0], np.asarray(f.mean, dtype=float), np.asarray(f.sqrt_information, dtype=float)
+            if np.any(W[:3, 3:]) or np.any(W[3:, :3]):
+                raise ValueError("the native replica takes a first-state prior with independent pose and velocity")
+            return [
+                gtsam.PriorFactorPose2(gkey(k, "p"), gtsam.Pose2(*m[:3]), gtsam.noiseModel.Gaussian.SqrtInformation(W[:3, :3])),
+                gtsam.PriorFactorVector(gkey(k, "v"), m[3:], gtsam.noiseModel.Gaussian.SqrtInformation(W[3:, 3:])),
+            ]  # fmt: skip
+        return None
+
     def _factors(self, f) -> list:
+        if self.se2:
+            found = self._se2_factors(f)
+            if found is not None or not isinstance(f, PriorFactor):
+                if found is None:
+                    raise ValueError(f"no built-in GTSAM factor stands for {type(f).__name__} here")
+                return found
         if isinstance(f, GPPriorFactor):
             k1, k2 = f.keys
             self.times.setdefault(k1.index, 0.0)
@@ -152,13 +191,16 @@ class NativeISAM2(OnlineSolver):
     def update(self, factors, values) -> None:
         graph, initial = gtsam.NonlinearFactorGraph(), gtsam.Values()
         for f in factors:
-            for g in self._factors(f):
+            built = self._factors(f)
+            if self.se2:
+                self.pairs.append((f, built))
+            for g in built:
                 graph.add(g)
         for k in values:
             v = np.asarray(values[k], dtype=float)
             if k.kind == "x":
                 initial.insert(gkey(k, "p"), gtsam.Pose2(*v[:3]))
-                initial.insert(gkey(k, "v"), np.r_[_rotation(v[2]).T @ v[3:5], v[5]])
+                initial.insert(gkey(k, "v"), v[3:] if self.se2 else np.r_[_rotation(v[2]).T @ v[3:5], v[5]])
             else:
                 initial.insert(gkey(k), gtsam.Point2(*v))
         self.isam.update(graph, initial)
@@ -168,6 +210,8 @@ class NativeISAM2(OnlineSolver):
             return np.asarray(self.isam.calculateEstimatePoint2(gkey(key)))
         pose = self.isam.calculateEstimatePose2(gkey(key, "p"))
         body = self.isam.calculateEstimateVector(gkey(key, "v"))
+        if self.se2:
+            return np.r_[pose.x(), pose.y(), pose.theta(), body]
         return np.r_[pose.x(), pose.y(), pose.theta(), _rotation(pose.theta()) @ body[:2], body[2]]
 
     def positions(self, states) -> np.ndarray:

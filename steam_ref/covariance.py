@@ -2,7 +2,8 @@
 
 cov δθ* = 𝓘⁻¹ = (AᵀA)⁻¹ [YIB Eq. 11]: a covariance of the increment, so it lives in each variable's tangent
 space at the estimate (θ = θ̂ ⊕ δ, δ ~ N(0, Σ); :mod:`steam_ref.manifold`), which for a vector is the space
-itself. Two sources:
+itself. For an SE(2) state (``lie.SE2_STATE``, retracted on the right) the pose block is in the *body frame* at
+the estimate; ``lie.world_position_covariance`` turns its position block to the world frame. Two sources:
 
 - the sparse system: :func:`marginal_covariances` and :func:`sparse_joint_covariance` factor 𝓘
   by sparse Cholesky and solve with unit columns;

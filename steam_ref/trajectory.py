@@ -11,6 +11,12 @@ prior to speak of (the GP starts there, [YIB Eq. 14]) and a query is an error.
 Time: a query and every time returned are on the data's clock (seconds); the GP works on the model's.
 Given a :class:`~steam_ref.gp.clock.Clock` the trajectory maps a query through it; given plain pose times,
 the two clocks are one.
+
+**SE(2) states** (``se2_model`` given: states ``steam_ref.lie.SE2_STATE``, [x, y, θ, vx, vy, ω]): between
+states the local GP of Anderson & Barfoot (``lie.gp.interpolate``, ``interpolate_covariance_se2``), after the
+last the prediction along its body twist (``extrapolate_covariance_se2``). Every covariance of such a state
+is that of its right tangent at the estimate: the pose block in the *body frame* (``lie.state``;
+``lie.world_position_covariance`` turns its position block to the world frame).
 """
 
 from __future__ import annotations
@@ -34,6 +40,7 @@ from .gp.interpolate import (
     interpolation_matrices,
 )
 from .gp.sde import LinearSDE, check_prior
+from .lie import gp as se2_gp
 from .variables import Key, X, key_list
 
 __all__ = ["Trajectory", "Covariances"]
@@ -88,10 +95,19 @@ class Trajectory:
     or any :class:`~steam_ref.gp.LinearSDE` (WNOJ, Singer: states of 9 numbers). ``times`` (n_poses,)
     must be finite and non-decreasing, ``states`` strictly increasing pose indices into it at strictly
     increasing times. ``times`` may be a :class:`~steam_ref.gp.clock.Clock`: then ``times`` are its seconds
-    (what queries and answers use) and the prior runs on its model times.
+    (what queries and answers use) and the prior runs on its model times. ``se2_model`` ("local-variable" or
+    "simplified"): the states are SE(2) states and ``prior`` is the Qc of their WNOA prior on the body twist
+    (module docstring).
     """
 
-    def __init__(self, solver, states: Sequence[int], times: NDArray | Clock, prior: NDArray | LinearSDE):
+    def __init__(
+        self,
+        solver,
+        states: Sequence[int],
+        times: NDArray | Clock,
+        prior: NDArray | LinearSDE,
+        se2_model: str | None = None,
+    ):
         self.solver = solver  # anything with estimate_of, estimate, marginal_covariances, joint_covariance(s)
         self.states = _pose_indices(states)  # poses with a state, increasing
         self.clock = times if isinstance(times, Clock) else Clock.of(_pose_times(times, self.states))
@@ -102,6 +118,9 @@ class Trajectory:
         self.qc = None if isinstance(prior, LinearSDE) else prior
         self.prior = prior if isinstance(prior, LinearSDE) else LinearSDE.wnoa(prior)
         self.n = self.prior.n  # size of a state
+        self.se2_model = None if se2_model is None else se2_gp.check_model(se2_model)
+        if self.se2_model is not None and (self.qc is None or self.qc.shape != (3, 3)):
+            raise SteamError(f"SE(2) states need the Qc (3, 3) of their WNOA prior, got prior={prior!r}")
         if self.states:
             size = np.shape(solver.estimate_of(X(self.states[0])))
             if size != (self.n,):
@@ -120,12 +139,17 @@ class Trajectory:
         if self.qc is None:
             return interpolate_state_sde(self.prior, ta, xa, tb, xb, t)
         lam, psi = interpolation_matrices(ta, tb, t, self.qc)  # [YIB Eq. 16]
+        if self.se2_model is not None:
+            return se2_gp.interpolate(xa, xb, lam, psi, self.se2_model)[0]  # [DER 11.15]
         return lam @ xa + psi @ xb
 
     def _between_covariance(self, a: int, b: int, t: float, joint: NDArray) -> NDArray:
         ta, tb = self.model_times[a], self.model_times[b]
         if t in (ta, tb):  # a pose at a state's time: that state's marginal, a block of the joint
             return joint[: self.n, : self.n].copy() if t == ta else joint[self.n :, self.n :].copy()
+        if self.se2_model is not None and self.qc is not None:
+            xa, xb = self.solver.estimate_of(X(a)), self.solver.estimate_of(X(b))
+            return se2_gp.interpolate_covariance_se2(ta, tb, t, self.qc, xa, xb, joint, self.se2_model)[1]
         if self.qc is None:
             return interpolate_covariance_sde(self.prior, ta, tb, t, joint)
         return interpolate_covariance(ta, tb, t, self.qc, joint)
@@ -157,6 +181,12 @@ class Trajectory:
             )
         if solved and t > times[solved[-1]]:
             last, key, m = self.model_times[solved[-1]], X(solved[-1]), float(self.clock.to_model(t))
+            if self.se2_model is not None and self.qc is not None:  # [DER 11.18]
+                x1 = self.solver.estimate_of(key)
+                if not covariance:
+                    return se2_gp.extrapolate(x1, last, m)[0]
+                cov1 = self.solver.joint_covariance([key])
+                return se2_gp.extrapolate_covariance_se2(x1, last, m, self.qc, cov1)
             mean = extrapolate_state_sde(self.prior, last, self.solver.estimate_of(key), m)
             if not covariance:
                 return mean

@@ -51,6 +51,7 @@ LAYERS: dict[str, int] = {
     # the paper's experiments, in the order data flows
     "steam_ref.paper.presets": 7,
     "steam_ref.paper.readings": 8,
+    "steam_ref.paper.se2_model": 8,  # the SE(2) factors and initial values of a run with prior "se2"
     "steam_ref.paper.converge": 8,
     "steam_ref.paper.frontend": 9,
     "steam_ref.paper.problem": 10,

@@ -155,7 +155,8 @@ class IncrementalSolver:
         return key in self.state.dims
 
     def marginal_covariance(self, key: Key) -> NDArray:
-        """Cov(δθ_key) (d, d) of the current linear system, from the Bayes tree.  [K11 Sec. 3]"""
+        """Cov(δθ_key) (d, d) of the current linear system, from the Bayes tree, in the tangent at the estimate (an
+        SE(2) state's pose block in its body frame: :mod:`steam_ref.covariance`).  [K11 Sec. 3]"""
         self._known("the covariance of", [check_key("key", key)])
         return tree_marginal_covariance(self.tree, key)
 

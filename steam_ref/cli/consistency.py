@@ -3,6 +3,7 @@
     steam-ref consistency [--dataset synthetic] [--seeds 200] [--seed 0] [--steps 40] [--landmarks 8]
                           [--jobs N] [--backend loky|dask] [--scheduler ADDRESS]
                           [--log FILE.jsonl | --resume FILE.jsonl] [--json] [--plot FILE.png]
+                          [--prior wnoa|se2 [--se2-residual local-variable|simplified] [--turn RATE]]
 
 The runs are :func:`steam_ref.paper.consistency.run_seed` on tasks drawn from the estimator's own model,
 spread over ``--jobs`` workers (:func:`steam_ref.paper.sweep.run_sweep`); the figures do not depend on the
@@ -13,11 +14,22 @@ from __future__ import annotations
 
 import argparse
 import functools
+import math
 import time
 
+from ..errors import SteamError
 from ..evaluate import INCONCLUSIVE
 from ..paper import progress
-from ..paper.consistency import KINDS, ConsistencyStudy, check_result, run_seed, summarize
+from ..paper.consistency import (
+    KINDS,
+    SE2_ESTIMATORS,
+    ConsistencyStudy,
+    check_result,
+    consistency_se2_setup,
+    run_seed,
+    summarize,
+)
+from ..paper.presets import SE2_RESIDUALS
 from ..paper.sweep import run_sweep
 from ..plot.figures import plot_anees
 from .args import add_progress, landmarks_count, non_negative_int, positive_int, seeds_count, steps_count
@@ -31,6 +43,22 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     """Add ``consistency`` and its options to the command's subparsers."""
     parser = sub.add_parser("consistency", help="ANEES of each estimator over Monte Carlo runs, with its band")
     parser.add_argument("--dataset", choices=("synthetic",), default="synthetic", help="tasks drawn from the model")
+    parser.add_argument(
+        "--prior",
+        choices=("wnoa", "se2"),
+        default="wnoa",
+        help="the model the tasks are drawn from and the estimators assume: the paper's WNOA, or WNOA on SE(2) "
+        "(then the estimators are batch, btgp/1 and btgp/1 with the vector-space prior)",
+    )
+    parser.add_argument(
+        "--se2-residual", choices=SE2_RESIDUALS, default=None, help="--prior se2: the model's residual (local-variable)"
+    )
+    parser.add_argument(
+        "--turn",
+        type=float,
+        default=None,
+        help="--prior se2: the task's yaw rate at the start, rad a step (default 0; 1.0 is the fast-turning task)",
+    )
     parser.add_argument("--seeds", type=seeds_count, default=200, help="Monte Carlo runs (default %(default)s)")
     parser.add_argument("--seed", type=non_negative_int, default=0, help="root of the seeds (SeedSequence(seed).spawn)")
     parser.add_argument("--steps", type=steps_count, default=40, help="time steps of a task (default %(default)s)")
@@ -78,13 +106,27 @@ def _overall(row: dict, n_seeds: int) -> str:
     return "consistent" if row["consistent"] else "not consistent"
 
 
+def _model(args: argparse.Namespace) -> dict:
+    """The study's set-up and estimators for ``--prior`` (and, on SE(2), ``--se2-residual``, ``--turn``)."""
+    if args.prior != "se2":
+        for option, value in (("--se2-residual", args.se2_residual), ("--turn", args.turn)):
+            if value is not None:
+                raise SteamError(f"{option} applies to --prior se2 only")
+        return {}
+    turn = 0.0 if args.turn is None else args.turn
+    if not math.isfinite(turn) or abs(turn) >= math.pi:
+        raise SteamError(f"--turn must be a yaw rate in (-π, π) rad a step, got {args.turn!r}")
+    setup = consistency_se2_setup(turn, args.se2_residual or "local-variable")
+    return {"setup": setup, "estimators": SE2_ESTIMATORS}
+
+
 def run(args: argparse.Namespace) -> int:
     """Run the study, print its figures, draw them."""
     for path, suffix, option in ((args.plot, ".png", "--plot"), (args.log, ".jsonl", "--log")):
         check_output(path, suffix, option)
     check_output(args.resume, ".jsonl", "--resume")
     check_outputs_apart({"--plot": args.plot, "--log": args.log, "--resume": args.resume})
-    study = ConsistencyStudy(n_steps=args.steps, n_landmarks=args.landmarks, seed=args.seed)
+    study = ConsistencyStudy(n_steps=args.steps, n_landmarks=args.landmarks, seed=args.seed, **_model(args))
     start = time.perf_counter()
     label = f"consistency on {args.dataset}: {len(study.estimators)} estimators, seeds"
     with progress.bar(args.seeds, label, progress.wanted(args.progress, args.json), unit="seed") as shown:

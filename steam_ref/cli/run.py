@@ -18,7 +18,7 @@ from ..errors import SteamError
 from ..evaluate import trajectory_figures
 from ..paper.online import StreamingEstimator
 from ..paper.options import StreamOptions
-from ..paper.presets import DEPARTURES, PRESETS, PRIORS, PaperSetup
+from ..paper.presets import DEPARTURES, PRESETS, PRIORS, SE2_RESIDUALS, PaperSetup
 from ..paper.problem import score_against_batch
 from ..paper.readings import Readings
 from ..paper.solvers import BayesTreeSolver
@@ -111,8 +111,15 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "--prior",
         choices=PRIORS,
         default=None,
-        help="motion prior: the paper's white noise on acceleration, or on jerk, or Singer's model (docs/derivations.md); "
-        "default: the preset's (wnoa)",
+        help="motion prior: the paper's white noise on acceleration, or on jerk, or Singer's model, or white noise on "
+        "acceleration on SE(2) (states: pose and body twist; docs/derivations.md); default: the preset's (wnoa)",
+    )
+    parser.add_argument(
+        "--se2-residual",
+        choices=SE2_RESIDUALS,
+        default=None,
+        help="--prior se2 only: the SE(2) prior's residual, 'local-variable' (Anderson & Barfoot; GTSAM, STEAM) or "
+        "'simplified' (gpslam, Theseus) (default: local-variable)",
     )
     parser.add_argument(
         "--qc-scale",
@@ -208,9 +215,10 @@ def run(args: argparse.Namespace) -> int:
         raise SteamError(f"--tree-dot writes BTGP's Bayes tree: it needs --method btgp, got --method {args.method}")
     setup = PaperSetup.named(preset_of(args)).departing(*args.departure)
     prior = setup.prior if args.prior is None else args.prior
-    if args.singer_time_constant is not None and prior != "singer":
-        raise SteamError(f"--singer-time-constant applies to --prior singer only, not --prior {prior}")
-    given = {"prior": args.prior, "singer_time_constant": args.singer_time_constant}  # only what was given
+    given = {"prior": args.prior, "singer_time_constant": args.singer_time_constant, "se2_residual": args.se2_residual}
+    for name, owner in (("singer_time_constant", "singer"), ("se2_residual", "se2")):  # only what was given
+        if given[name] is not None and prior != owner:
+            raise SteamError(f"--{name.replace('_', '-')} applies to --prior {owner} only, not --prior {prior}")
     setup = setup.replace(qc=args.qc_scale * setup.qc, **{k: v for k, v in given.items() if v is not None})
     isam2 = {"relinearize_threshold": args.relinearize_threshold, "relinearize_skip": args.relinearize_skip}
     if any(v is not None for v in isam2.values()):  # only what was given: the preset owns its iSAM2 settings
@@ -246,7 +254,9 @@ def run(args: argparse.Namespace) -> int:
     n = len(result.times)
     # the run's own files first: nothing computed from them after (scores, figures) can lose them
     if args.save_estimates:
-        write_output(args.save_estimates, "--save-estimates", lambda name: save_estimates(name, result))
+        write_output(
+            args.save_estimates, "--save-estimates", lambda name: save_estimates(name, result, se2=setup.is_se2)
+        )
     if args.tree_dot and isinstance(estimator.solver, BayesTreeSolver):  # GTSAM's ISAM2.dot() text (bayes_tree/dot.py)
         dot = estimator.solver.inner.tree.dot() + "\n"
         write_output(args.tree_dot, "--tree-dot", lambda name: Path(name).write_text(dot, encoding="utf-8"))
@@ -256,6 +266,7 @@ def run(args: argparse.Namespace) -> int:
         "score_against_optimum": args.score_against_optimum,
         "departures": args.departure,
         "prior": setup.prior,
+        **({"se2_residual": setup.se2_residual} if setup.is_se2 else {}),
         "qc_scale": args.qc_scale,
         "clock": estimator.readings.clock.describe(),
     }
@@ -310,14 +321,14 @@ def _run_dataset(args: argparse.Namespace):
     return generate_synthetic(n_steps=args.steps, n_landmarks=n_landmarks, seed=args.seed)
 
 
-def save_estimates(path: str, result) -> None:
-    """Write a run to an .npz file: ``times`` (the data set's seconds, as ``--save-trajectory``), ``x``, ``y``,
-    ``theta`` and ``xdot``, ``ydot``, ``thetadot`` (rates per unit of the model's clock: per pose step on a
-    'pose-index' clock, per second on 'seconds') at every covered time step (and ``xddot``, ``yddot``, ``thetaddot`` with a WNOJ or Singer
-    prior), ``state_poses`` (pose indices with a state),
-    ``landmark_ids`` and ``landmarks`` (m, 2), and, when the run has them, the final marginal
-    covariances ``pose_covariance`` (n, 3, 3), ``velocity_covariance`` (n, 3, 3) and
-    ``landmark_covariance`` (m, 2, 2), in the order of ``times`` and ``landmark_ids``."""
+def save_estimates(path: str, result, *, se2: bool = False) -> None:
+    """Write a run to an .npz file: ``times`` (the data set's seconds, as ``--save-trajectory``), ``x``, ``y``, ``theta``
+    and ``xdot``, ``ydot``, ``thetadot`` (rates per unit of the model's clock: per pose step on a 'pose-index' clock,
+    per second on 'seconds') at every covered time step (and ``xddot``, ``yddot``, ``thetaddot`` with a WNOJ or Singer
+    prior; with ``se2``, SE(2) states: the body twist ``vx``, ``vy``, ``omega``, covariances in the right tangent,
+    the pose block in the body frame), ``state_poses`` (pose indices with a state), ``landmark_ids`` and ``landmarks``
+    (m, 2), and, when the run has them, the final marginal covariances ``pose_covariance`` (n, 3, 3),
+    ``velocity_covariance`` (n, 3, 3) and ``landmark_covariance`` (m, 2, 2), in the order of ``times`` and ids."""
     ids = np.array(sorted(result.landmarks), dtype=int)
     marks = np.array([result.landmarks[i] for i in ids]).reshape(-1, 2)
     tr = result.trajectory
@@ -326,9 +337,7 @@ def save_estimates(path: str, result) -> None:
         x=tr[:, 0],
         y=tr[:, 1],
         theta=tr[:, 2],
-        xdot=tr[:, 3],
-        ydot=tr[:, 4],
-        thetadot=tr[:, 5],
+        **dict(zip(("vx", "vy", "omega") if se2 else ("xdot", "ydot", "thetadot"), tr[:, 3:6].T, strict=True)),
         state_poses=result.state_poses,
         landmark_ids=ids,
         landmarks=marks,

@@ -7,6 +7,8 @@
 - :mod:`.measurements`: :class:`PriorFactor`, :class:`OdometryFactor` (Eq. 32),
   :class:`VelocityFactor`, :class:`RangeFactor` (Eq. 33), :class:`BearingFactor`,
   :class:`BearingRangeFactor`.
+- :mod:`.marginal`: :class:`MarginalFactor`, the linear factor a marginalization leaves (Eq. 10.4 of the
+  derivations).
 - :mod:`.se2`, :mod:`.se2_measurements`: factors on SE(2) states (``steam_ref.lie.SE2_STATE``, Jacobians
   in the right tangent): :class:`SE2PriorFactor` (the WNOA prior, "local-variable" or "simplified"),
   :func:`se2_prior_factors`, :class:`SE2StatePrior`, :class:`SE2Measurement` (range, bearing,

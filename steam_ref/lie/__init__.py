@@ -9,6 +9,6 @@
 """
 
 from . import se2
-from .state import SE2_STATE, STATE_SIZE, SE2State
+from .state import SE2_STATE, STATE_SIZE, SE2State, world_position_covariance
 
-__all__ = ["se2", "SE2_STATE", "SE2State", "STATE_SIZE"]
+__all__ = ["se2", "SE2_STATE", "SE2State", "STATE_SIZE", "world_position_covariance"]

@@ -26,7 +26,7 @@ from ..errors import ShapeError
 from ..manifold import Manifold
 from . import se2
 
-__all__ = ["SE2State", "SE2_STATE", "STATE_SIZE"]
+__all__ = ["SE2State", "SE2_STATE", "STATE_SIZE", "world_position_covariance"]
 
 STATE_SIZE = 6  # [px, py, θ, vx, vy, ω]
 
@@ -58,3 +58,15 @@ class SE2State(Manifold):
 
 
 SE2_STATE = SE2State()
+
+
+def world_position_covariance(x: NDArray, cov: NDArray) -> NDArray:
+    """The (2, 2) covariance of the world-frame position of state ``x``, from the covariance ``cov`` of its right
+    tangent at ``x`` (a pose (3, 3) or state (6, 6) covariance, or any (≥2, ≥2) whose first block is δρ):
+    R(θ) P_ρρ R(θ)ᵀ, the world displacement R(θ) δρ to first order (module docstring). [DER 11.9]"""
+    x, cov = real_array("x", x), real_array("cov", cov)
+    if x.shape[-1:] not in ((3,), (STATE_SIZE,)) or cov.ndim != 2 or cov.shape[0] != cov.shape[1] or cov.shape[0] < 2:
+        raise ShapeError(f"need a pose or state x and a square covariance of its tangent, got {x.shape}, {cov.shape}")
+    c, s = np.cos(x[2]), np.sin(x[2])
+    R = np.array([[c, -s], [s, c]])
+    return R @ cov[:2, :2] @ R.T

@@ -48,6 +48,14 @@ consistent on those runs (mean NEES 1.0-2.3 on four of them), and so is BTGP onc
 at every update (``relinearize_threshold=0, relinearize_skip=1``): iSAM2's lazy relinearization (GTSAM's
 defaults, 0.1 every 10th update) is what leaves interpolated factors linearized at stale states.
 
+**SE(2)** (:func:`consistency_se2_setup`, ``steam-ref consistency --prior se2``): the tasks are drawn from the
+SE(2) WNOA model (:func:`~steam_ref.datasets.sample_se2_from_model`, the set-up's residual), and an SE(2)
+estimator's error is the truth in the right tangent at its estimate, x_true ⊖ x̂ = [Log(T̂⁻¹T); ϖ - ϖ̂], the
+coordinates its covariance is in (the pose block in the body frame). ``turn`` starts the task's yaw rate at
+that many rad a step. The estimator "btgp/1 vector-space prior" solves the same task with the paper's
+vector-space WNOA prior (its error: position and wrapped heading in the world frame, the truth's world
+velocity [R(θ) [vx, vy], ω]).
+
 The batch optimum is the lower of two descents (:func:`_solve`); BTGP/1 runs first so that its estimate
 can be the second start.
 """
@@ -63,9 +71,10 @@ import numpy as np
 
 from ..arguments import integer, is_integer
 from ..batch import gauss_newton
-from ..datasets import sample_from_model
+from ..datasets import sample_from_model, sample_se2_from_model
 from ..errors import SteamError
 from ..evaluate import INCONCLUSIVE, LOST_QUANTILE, chi2_band, chi2_quantile, nees, pose_errors, runs_needed, verdict
+from ..lie import SE2_STATE
 from ..linear.threads import limited
 from ..trajectory import Trajectory
 from ..variables import L, Values
@@ -81,6 +90,8 @@ __all__ = [
     "ESTIMATORS",
     "ConsistencyStudy",
     "consistency_setup",
+    "consistency_se2_setup",
+    "SE2_ESTIMATORS",
     "model_of",
     "check_result",
     "run_seed",
@@ -100,6 +111,7 @@ class Estimator:
     skip: int = 1  # a state every ``skip`` poses
     interpolate: bool = True  # readings between states interpolated (Eq. 29) or dropped
     qc_scale: float = 1.0  # the estimator's Qc is the set-up's times this (the data keep the set-up's)
+    prior: str | None = None  # the estimator's motion prior; None: the set-up's (the one the data come from)
 
 
 ESTIMATORS: dict[str, Estimator] = {
@@ -109,7 +121,10 @@ ESTIMATORS: dict[str, Estimator] = {
     "btgp/1 skip 5 interpolated": Estimator(skip=5),
     "btgp/1 skip 5 not interpolated": Estimator(skip=5, interpolate=False),
     "btgp/1 Qc x100": Estimator(qc_scale=100.0),
+    "btgp/1 vector-space prior": Estimator(prior="wnoa"),
 }
+PAPER_ESTIMATORS = tuple(e for e in ESTIMATORS if ESTIMATORS[e].prior is None)  # the default study
+SE2_ESTIMATORS = ("batch", "btgp/1", "btgp/1 vector-space prior")  # the default study on SE(2) tasks
 
 
 def consistency_setup() -> PaperSetup:
@@ -127,6 +142,12 @@ def consistency_setup() -> PaperSetup:
     )
 
 
+def consistency_se2_setup(turn: float = 0.0, residual: str = "local-variable") -> PaperSetup:
+    """:func:`consistency_setup` on SE(2) states: tasks from the SE(2) WNOA model of ``residual``, the yaw rate
+    starting at ``turn`` rad a step (forward speed 1 m a step)."""
+    return consistency_setup().replace(prior="se2", se2_residual=residual, first_velocity=np.array([1.0, 0.0, turn]))
+
+
 @dataclass(frozen=True)
 class ConsistencyStudy:
     """What a Monte Carlo consistency study runs: the task's size, the set-up, the estimators, the seed."""
@@ -135,7 +156,7 @@ class ConsistencyStudy:
     n_landmarks: int = 8
     seed: int = 0  # the root of np.random.SeedSequence(seed).spawn(n_seeds)
     setup: PaperSetup = field(default_factory=consistency_setup)
-    estimators: tuple[str, ...] = tuple(ESTIMATORS)
+    estimators: tuple[str, ...] = PAPER_ESTIMATORS
 
     def __post_init__(self) -> None:
         for name in ("n_steps", "n_landmarks"):
@@ -158,11 +179,15 @@ class ConsistencyStudy:
             "qc": np.diag(s.qc).tolist(),
             "tukey_c": s.tukey_c,
             "estimators": list(self.estimators),
-        }
+        } | ({"prior": s.prior, "se2_residual": s.se2_residual, "first_velocity": s.first_velocity.tolist()}
+             if s.is_se2 else {})  # fmt: skip
 
     def sample(self, index: int):
         """Task ``index``: drawn with child ``index`` of SeedSequence(seed).spawn(...)."""
         seed = np.random.SeedSequence(self.seed, spawn_key=(index,))  # = SeedSequence(seed).spawn(n)[index]
+        if self.setup.is_se2:
+            model = self.setup.se2_residual
+            return sample_se2_from_model(self.n_steps, self.n_landmarks, seed, **model_of(self.setup), model=model)
         return sample_from_model(self.n_steps, self.n_landmarks, seed, **model_of(self.setup))
 
 
@@ -197,7 +222,8 @@ def _solve(
         solver = PeriodicBatchSolver("amd")  # holds the optimum; its covariances come from 𝓘 there
         solver.graph, solver.values = problem.graph, result.values
         ids = [i for i in sorted(readings.landmarks) if L(i) in result.values]  # a landmark no reading sees has none
-        return Trajectory(solver, problem.states.tolist(), readings.clock, setup.motion_prior()), ids
+        se2_model = setup.se2_residual if setup.is_se2 else None
+        return Trajectory(solver, problem.states.tolist(), readings.clock, setup.motion_prior(), se2_model), ids
     options = StreamOptions(skip=estimator.skip, interpolate=estimator.interpolate)
     run = StreamingEstimator(readings, setup.with_schedule(every=estimator.every), options)
     run.run()
@@ -216,7 +242,7 @@ def run_seed(study: ConsistencyStudy, index: int) -> dict:
     names = sorted(study.estimators, key=lambda n: ESTIMATORS[n] != ESTIMATORS["btgp/1"])  # BTGP/1 first
     for name in names:
         estimator = ESTIMATORS[name]
-        setup = study.setup.replace(qc=estimator.qc_scale * study.setup.qc)
+        setup = study.setup.replace(qc=estimator.qc_scale * study.setup.qc, prior=estimator.prior or study.setup.prior)
         readings = Readings.from_dataset(task.data, setup)
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
@@ -229,13 +255,27 @@ def run_seed(study: ConsistencyStudy, index: int) -> dict:
         truth = task.states[: len(times)]
         marks = np.array([trajectory.solver.estimate_of(L(i)) for i in ids]).reshape(-1, 2)
         true_marks = np.array([task.landmarks[i] for i in ids]).reshape(-1, 2)
+        pose_error, velocity_error = _errors(states, truth, setup.is_se2, study.setup.is_se2)
         out[name] = {
-            "pose": nees(pose_errors(states[:, :3], truth[:, :3]), cov.pose).tolist(),
-            "velocity": nees(states[:, 3:6] - truth[:, 3:6], cov.velocity).tolist(),
+            "pose": nees(pose_error, cov.pose).tolist(),
+            "velocity": nees(velocity_error, cov.velocity).tolist(),
             "landmark": nees(marks - true_marks, cov.landmark).tolist(),
             "warnings": sorted({str(w.message)[:200] for w in caught}),
         }
     return {name: out[name] for name in study.estimators}
+
+
+def _errors(states: np.ndarray, truth: np.ndarray, se2_estimate: bool, se2_truth: bool) -> tuple:
+    """(pose, velocity) errors of the estimated states against the truth, in the coordinates of the estimator's
+    covariance: the right tangent at an SE(2) estimate, world-frame differences for a vector one."""
+    if se2_estimate:
+        local = np.array([SE2_STATE.local(x, t) for x, t in zip(states, truth, strict=True)]).reshape(-1, 6)
+        return local[:, :3], local[:, 3:]  # x_true ⊖ x̂
+    if se2_truth:  # the truth's world velocity [R(θ) [vx, vy], ω]
+        c, s = np.cos(truth[:, 2]), np.sin(truth[:, 2])
+        world = np.column_stack([c * truth[:, 3] - s * truth[:, 4], s * truth[:, 3] + c * truth[:, 4], truth[:, 5]])
+        return pose_errors(states[:, :3], truth[:, :3]), states[:, 3:6] - world
+    return pose_errors(states[:, :3], truth[:, :3]), states[:, 3:6] - truth[:, 3:6]
 
 
 def _nees_list(value: object, what: str, length: int | None, most: int) -> None:

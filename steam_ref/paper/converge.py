@@ -38,6 +38,7 @@ from ..errors import NumericalError, SteamError
 from ..graph import FactorGraph
 from ..linear.ordering import Ordering
 from ..linear.threads import limited
+from ..manifold import VECTOR
 from ..variables import Values
 
 __all__ = ["converge", "rotated", "anchored_factors", "Anderson", "PROBE_TURN"]
@@ -48,11 +49,18 @@ PROBE_TURN = 0.1  # [rad] the turn that tells anchored factors from the rest (an
 def rotated(values: Values, angle: float) -> Values:
     """The whole estimate turned by ``angle`` about the origin: positions, velocities (and accelerations)
     and landmarks rotated, headings shifted. Every factor but a prior on an absolute pose, velocity or
-    landmark is unchanged by it: the near-symmetry :func:`converge` follows."""
+    landmark is unchanged by it: the near-symmetry :func:`converge` follows. An SE(2) state
+    (``lie.SE2_STATE``) turns its position and heading (wrapped); its body twist is unchanged."""
     c, s = np.cos(angle), np.sin(angle)
     out = Values()
     for k in values:
         x = np.array(values[k], dtype=float)
+        kind = values.kind(k)
+        if kind is not VECTOR:  # an SE(2) state: the pose turns, the body twist does not
+            x[0], x[1] = c * x[0] - s * x[1], s * x[0] + c * x[1]
+            x[2] = -((-(x[2] + angle) + np.pi) % (2 * np.pi) - np.pi)  # θ in (-π, π]
+            out.insert(k, x, kind)
+            continue
         blocks = range(0, len(x), 3) if k.kind == "x" else (0,)
         for b in blocks:
             x[b], x[b + 1] = c * x[b] - s * x[b + 1], s * x[b] + c * x[b + 1]
@@ -103,17 +111,25 @@ class Anderson:
 
 
 class _Layout:
-    """Values ↔ one vector, in a fixed key order (for :class:`Anderson`)."""
+    """Values ↔ one vector, in a fixed key order (for :class:`Anderson`): a vector variable as it is, a variable
+    of another kind (an SE(2) state) in the chart x ⊖ x₀ about its value x₀ at the start."""
 
     def __init__(self, values: Values):
         self.keys = list(values)
         self.cuts = np.cumsum([0] + [values.dim(k) for k in self.keys])
+        self.kinds = values.kinds()
+        self.base = {k: values[k] for k in self.kinds}
 
     def vector(self, values: Values) -> NDArray:
-        return np.concatenate([values[k] for k in self.keys])
+        return np.concatenate(
+            [values[k] if k not in self.kinds else self.kinds[k].local(self.base[k], values[k]) for k in self.keys]
+        )
 
     def values(self, x: NDArray) -> Values:
-        return Values({k: x[a:b].copy() for k, a, b in zip(self.keys, self.cuts[:-1], self.cuts[1:], strict=True)})
+        out = Values({k: x[a:b].copy() for k, a, b in zip(self.keys, self.cuts[:-1], self.cuts[1:], strict=True)})
+        for k, kind in self.kinds.items():
+            out.insert(k, kind.retract(self.base[k], out[k]), kind)
+        return out
 
 
 def _best_turn(graph: FactorGraph, anchored: FactorGraph, values: Values, cost: float) -> tuple[Values, float, float]:

@@ -28,7 +28,9 @@ from numpy.typing import NDArray
 
 from ..errors import DivergenceWarning
 from ..factors import BearingFactor, BearingRangeFactor, Factor, InterpolatedFactor, RangeFactor
+from ..factors.se2_measurements import SE2InterpolatedFactor
 from ..variables import Key
+from .se2_model import reading_inside
 
 __all__ = ["DivergenceCheck", "PLAUSIBLE_SIGMAS", "worst_fit"]
 
@@ -54,17 +56,19 @@ def worst_fit(factors: Sequence[Factor], value_of: Callable[[Key], NDArray]) -> 
 
 
 def _is_landmark_reading(factor: Factor) -> bool:
-    inner = factor.inner if isinstance(factor, InterpolatedFactor) else factor
+    inner = reading_inside(factor)
     return isinstance(inner, (RangeFactor, BearingFactor, BearingRangeFactor))
 
 
 def describe(factor: Factor) -> str:
     """A factor as the reading it holds: its kind, variables and measured value."""
-    inner = factor.inner if isinstance(factor, InterpolatedFactor) else factor
+    inner = reading_inside(factor)
     measured = getattr(inner, "measured", getattr(inner, "mean", None))
     what = "" if measured is None else f" reading {np.asarray(measured).tolist()}"
     where = ", ".join(repr(k) for k in factor.keys)
-    between = " (interpolated between its states)" if isinstance(factor, InterpolatedFactor) else ""
+    between = (
+        " (interpolated between its states)" if isinstance(factor, (InterpolatedFactor, SE2InterpolatedFactor)) else ""
+    )
     return f"{type(inner).__name__} on {where}{between}{what}"
 
 

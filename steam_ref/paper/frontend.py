@@ -29,6 +29,10 @@ robot would meet them:
   After a solver update the caller hands the front end the latest state's estimate
   (:meth:`FrontEnd.rebase`), so predictions compose from the estimate, not from dead reckoning.
 
+- **SE(2) states** (``PaperSetup.prior == "se2"``): the same rules, with the SE(2) factors and initial
+  values of :mod:`steam_ref.paper.se2_model`; each new state's kind (``steam_ref.lie.SE2_STATE``) is in
+  ``NewStep.kinds``.
+
 The batch problem is everything the front end yields (:func:`steam_ref.paper.problem.build_problem`); the
 streaming solvers (PB, PBVR, BTGP) consume the same steps, so the two agree by construction.
 """
@@ -53,8 +57,11 @@ from ..factors import (
     RangeFactor,
     VelocityFactor,
 )
+from ..lie import SE2_STATE
+from ..manifold import Manifold
 from ..pose2 import compose, transform_from, wrap_angle
 from ..variables import Key, L, X
+from . import se2_model
 from .presets import PaperSetup
 from .readings import Readings
 
@@ -103,6 +110,7 @@ class NewStep:
     factors: list[Factor]  # the new factors released at this pose
     values: dict[Key, NDArray] = field(default_factory=dict)  # initial values of the new variables
     n_landmark_readings: int = 0  # range, bearing and bearing-range factors among ``factors`` (plain or interpolated)
+    kinds: dict[Key, Manifold] = field(default_factory=dict)  # how each new variable that is not a vector moves
 
 
 def _pose2_heading(theta: float) -> float:
@@ -179,6 +187,9 @@ class FrontEnd:
         """X(i): its value, the GP prior to the previous state, the buffered and its own readings."""
         extra = np.zeros(self.setup.state_dim - 6)  # WNOJ / Singer: acceleration starts at zero
         out = NewStep(i, True, [], {X(i): np.concatenate([self._pose, self._velocity, extra])})
+        if self.setup.is_se2:  # an SE(2) state: the pose and its body twist
+            dt = self.readings.model_times[i] - self.readings.model_times[i - 1] if i > 0 else 1.0
+            out.values[X(i)], out.kinds[X(i)] = se2_model.initial_state(self._pose, self._velocity, dt), SE2_STATE
         if i == 0:
             out.factors.append(self._first_state_prior())
             if self.setup.landmarks_up_front:
@@ -198,8 +209,7 @@ class FrontEnd:
 
     def _release(self, factor: Factor, out: NewStep) -> None:
         """A factor joins the step's new factors; a landmark seen for the first time enters (:meth:`_landmark`)."""
-        inner = factor.inner if isinstance(factor, InterpolatedFactor) else factor
-        if isinstance(inner, (RangeFactor, BearingFactor, BearingRangeFactor)):
+        if isinstance(se2_model.reading_inside(factor), (RangeFactor, BearingFactor, BearingRangeFactor)):
             self._landmark(factor.keys[-1].index, out)
             out.n_landmark_readings += 1
         out.factors.append(factor)
@@ -222,36 +232,46 @@ class FrontEnd:
             )
         self.landmarks.add(lid)
 
-    def _first_state_prior(self) -> PriorFactor:
+    def _first_state_prior(self) -> Factor:
         """Priors on pose 0 (at ground truth) and on velocity 0 (and acceleration 0), as one prior on X(0)."""
         s = self.setup
+        if s.is_se2:
+            return se2_model.first_state_prior(X(0), self.readings.first_pose, s)
         extra = s.state_dim - 6
         mean = np.concatenate([self.readings.first_pose, s.first_velocity, np.zeros(extra)])
         sigmas = np.concatenate([s.first_pose_sigmas, s.first_velocity_sigmas, s.first_acceleration_sigmas[:extra]])
         return PriorFactor.create(X(0), mean, sigmas)
 
-    def _gp_prior(self, a: int, b: int) -> GPPriorFactor:
+    def _gp_prior(self, a: int, b: int) -> Factor:
         """The GP prior factor between states a and b.  [YIB Eq. 22]"""
         t = self.readings.model_times
+        if self.setup.is_se2:
+            return se2_model.gp_prior(X(a), X(b), t[b] - t[a], self.setup)
         prior = self.setup.motion_prior()
         if isinstance(prior, np.ndarray):
             return GPPriorFactor.wnoa(X(a), X(b), t[b] - t[a], prior)
         return GPPriorFactor.from_sde(X(a), X(b), t[b] - t[a], prior)
 
-    def _interpolated(self, inner: Factor, a: int, b: int, pose: int) -> InterpolatedFactor:
+    def _interpolated(self, inner: Factor, a: int, b: int, pose: int) -> Factor:
         """``inner`` (a reading at the pose without a state) on states a and b.  [YIB Eq. 29]"""
         t = self.readings.model_times
+        if self.setup.is_se2:
+            return se2_model.interpolated(inner, X(a), X(b), t[a], t[b], t[pose], self.setup)
         return InterpolatedFactor.create(inner, X(a), X(b), t[a], t[b], t[pose], self.setup.motion_prior())
 
-    def _velocity_factor(self, i: int, interpolated: bool) -> VelocityFactor:
-        """Odometry row i - 1 as the projected velocity of pose i."""
+    def _velocity_factor(self, i: int, interpolated: bool) -> Factor:
+        """Odometry row i - 1 as the projected velocity of pose i (on SE(2): the body twist)."""
         sigmas = self.setup.interpolated_velocity_sigmas if interpolated else self.setup.velocity_sigmas
+        if self.setup.is_se2:
+            return se2_model.velocity_reading(X(i), self.readings.velocity[i], sigmas)
         return VelocityFactor.create(X(i), self.readings.velocity[i], sigmas, state_dim=self.setup.state_dim)
 
     def _landmark_factors(self, i: int) -> list[Factor]:
         """The landmark readings of pose i as factors on X(i) (X(i) may be a pose without a state): its
         ranges, bearings, then bearing-ranges; a bearing-range places a landmark not met before."""
         r, s = self.readings, self.setup
+        if s.is_se2:
+            return self._se2_landmark_factors(i)
         out: list[Factor] = [
             RangeFactor.create(
                 X(i),
@@ -272,6 +292,34 @@ class FrontEnd:
         for k in range(self._bearing_range_bounds[i], self._bearing_range_bounds[i + 1]):
             lid, (bearing, distance) = int(br.landmark[k]), br.value[k]
             out.append(BearingRangeFactor.create(X(i), L(lid), bearing, distance, br.sigma[k], state_dim=s.state_dim))
-            if lid not in r.landmarks and lid not in self.landmarks and lid not in self._placed:
-                self._placed[lid] = transform_from(self._pose, distance * np.array([np.cos(bearing), np.sin(bearing)]))
+            self._place(lid, bearing, distance)
+        return out
+
+    def _place(self, lid: int, bearing: float, distance: float) -> None:
+        """An unsurveyed landmark not met before: where this bearing-range reading puts it from the predicted pose."""
+        r = self.readings
+        if lid not in r.landmarks and lid not in self.landmarks and lid not in self._placed:
+            self._placed[lid] = transform_from(self._pose, distance * np.array([np.cos(bearing), np.sin(bearing)]))
+
+    def _se2_landmark_factors(self, i: int) -> list[Factor]:
+        """:meth:`_landmark_factors` on an SE(2) state: the same readings, as SE(2) pose readings."""
+        r, s, m = self.readings, self.setup, se2_model
+        out: list[Factor] = [
+            m.range_reading(
+                X(i),
+                L(r.range_landmark[k]),
+                r.range_value[k],
+                s.range_sigma if r.range_sigma is None else r.range_sigma[k],
+                s.range_loss,
+            )
+            for k in range(self._bounds[i], self._bounds[i + 1])
+        ]
+        b = r.bearings
+        for k in range(self._bearing_bounds[i], self._bearing_bounds[i + 1]):
+            out.append(m.bearing_reading(X(i), L(b.landmark[k]), b.value[k, 0], b.sigma[k, 0]))
+        br = r.bearing_ranges
+        for k in range(self._bearing_range_bounds[i], self._bearing_range_bounds[i + 1]):
+            lid, (bearing, distance) = int(br.landmark[k]), br.value[k]
+            out.append(m.bearing_range_reading(X(i), L(lid), bearing, distance, br.sigma[k]))
+            self._place(lid, bearing, distance)
         return out

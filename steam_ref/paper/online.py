@@ -135,7 +135,7 @@ class StreamingEstimator:
         new = self.front.step()
         self._pending.extend(new.factors)
         for k, v in new.values.items():
-            self._pending_values.insert(k, v)
+            self._pending_values.insert(k, v, new.kinds.get(k))
         if self.schedule.due(new):
             self._update(new.pose)
         self.step_seconds.append(time.perf_counter() - start)
@@ -196,7 +196,10 @@ class StreamingEstimator:
 
     def solved(self) -> Trajectory:
         """The trajectory the solver holds: its states, queried at any time (Eq. 18)."""
-        return Trajectory(self.solver, self.states[: self.n_solved], self.readings.clock, self.setup.motion_prior())
+        return Trajectory(
+            self.solver, self.states[: self.n_solved], self.readings.clock, self.setup.motion_prior(),
+            se2_model=self.setup.se2_residual if self.setup.is_se2 else None,
+        )  # fmt: skip
 
     def estimate_at(self, t: float, *, covariance: bool = False) -> NDArray | tuple[NDArray, NDArray]:
         """The state x(t) (n,) at any time t in the data's seconds from the first solved state on (the GP prior's

@@ -34,10 +34,11 @@ from ..gp.prior import check_qc
 from ..gp.sde import LinearSDE
 from ..robust import Tukey
 
-__all__ = ["PaperSetup", "Schedule", "RANGE_ATTACHMENTS", "DEPARTURES", "PRIORS", "PRESETS"]
+__all__ = ["PaperSetup", "Schedule", "RANGE_ATTACHMENTS", "DEPARTURES", "PRIORS", "PRESETS", "SE2_RESIDUALS"]
 
 RANGE_ATTACHMENTS = ("file-order", "time")
-PRIORS = ("wnoa", "wnoj", "singer")  # the paper's prior, and two extensions (docs/derivations.md §6)
+PRIORS = ("wnoa", "wnoj", "singer", "se2")  # the paper's prior, two extensions (derivations §6), WNOA on SE(2) (§11)
+SE2_RESIDUALS = ("local-variable", "simplified")  # the two SE(2) WNOA residuals in circulation (derivations §11)
 PRESETS = ("synthetic", "plaza", "victoria-park")  # PaperSetup.named
 
 # The deliberate departures from the scripts, by name: the PaperSetup fields each one changes
@@ -115,7 +116,11 @@ class PaperSetup:
         3,
         3,
     )  # BTGP relinearizes pose and velocity on their own (GTSAM variables P, V); None: the whole state
-    prior: str = "wnoa"  # motion prior: the paper's 'wnoa', or 'wnoj' / 'singer' (then qc is the PSD of jerk)
+    prior: str = "wnoa"  # motion prior: the paper's 'wnoa', or 'wnoj' / 'singer' (then qc is the PSD of jerk), or 'se2'
+    # 'se2': WNOA on SE(2), states [x, y, θ, vx, vy, ω] (a pose and its body twist); qc is then the PSD of the
+    # body-frame acceleration [forward, lateral, yaw] (the same numbers as the vector prior's world-frame Qc:
+    # the presets' x and y entries are equal, so the PSD is the same read in any frame about the vertical)
+    se2_residual: str = "local-variable"  # 'se2' only: which SE(2) WNOA residual (SE2_RESIDUALS)
     singer_time_constant: float = 1.0  # 1/α of the Singer prior, on the model's clock (seconds, or pose steps)
     first_acceleration_sigmas: NDArray = field(
         default_factory=lambda: np.array([1.0, 1.0, np.pi])
@@ -175,6 +180,8 @@ class PaperSetup:
             )
         if self.prior not in PRIORS:
             raise SteamError(f"prior must be one of {PRIORS}, got {self.prior!r}")
+        if self.se2_residual not in SE2_RESIDUALS:
+            raise SteamError(f"PaperSetup.se2_residual must be one of {SE2_RESIDUALS}, got {self.se2_residual!r}")
         if self.tukey_c is not None:
             try:
                 Tukey(self.tukey_c)  # a threshold whose square overflows is refused here, not mid-run
@@ -262,8 +269,9 @@ class PaperSetup:
         return self.replace(isam2=self.isam2.replace(**changes))
 
     def motion_prior(self) -> NDArray | LinearSDE:
-        """The GP prior of the states: Qc for the paper's WNOA (its memoised closed forms), else a LinearSDE."""
-        if self.prior == "wnoa":
+        """The GP prior of the states: Qc for the paper's WNOA (its memoised closed forms) and for WNOA on SE(2)
+        (Qc of the body twist: ``is_se2``), else a LinearSDE."""
+        if self.prior in ("wnoa", "se2"):
             return self.qc
         if self.prior == "wnoj":
             return LinearSDE.wnoj(self.qc)
@@ -271,8 +279,13 @@ class PaperSetup:
 
     @property
     def state_dim(self) -> int:
-        """Size of a state: [p; ṗ] (6) for WNOA, [p; ṗ; p̈] (9) for WNOJ and Singer."""
-        return 6 if self.prior == "wnoa" else 9
+        """Size of a state: [p; ṗ] (6) for WNOA, [p; ṗ; p̈] (9) for WNOJ and Singer, [pose; body twist] (6) on SE(2)."""
+        return 6 if self.prior in ("wnoa", "se2") else 9
+
+    @property
+    def is_se2(self) -> bool:
+        """The states are SE(2) states (``steam_ref.lie.SE2_STATE``), the prior WNOA on SE(2) (``se2_residual``)."""
+        return self.prior == "se2"
 
     def isam2_params(self) -> ISAM2Params:
         """BTGP's iSAM2 settings for this set-up: ``isam2`` with the state's relinearization blocks.

@@ -78,7 +78,7 @@ def build_problem(
     for step in front:
         graph.add(step.factors)
         for k, v in step.values.items():
-            initial.insert(k, v)
+            initial.insert(k, v, step.kinds.get(k))
     return SteamProblem(graph, initial, np.array(front.states), readings, setup, layout)
 
 
@@ -104,7 +104,7 @@ def sequential_batch(
     for step in front:
         graph.add(step.factors)
         for k, v in step.values.items():
-            values.insert(k, v)
+            values.insert(k, v, step.kinds.get(k))
         if step.is_state and (step.pose >= stop or front.done):
             its = final_iterations if front.done else 10
             result = gauss_newton(graph, values, ordering=ordering, max_iterations=its, check=front.done, **options)
@@ -226,7 +226,8 @@ def score_against_batch(result, readings: Readings, setup: PaperSetup) -> BatchS
     )
     estimate = Values(
         {X(int(i)): np.asarray(result.trajectory[i]) for i in states}
-        | {L(j): np.asarray(p) for j, p in result.landmarks.items()}
+        | {L(j): np.asarray(p) for j, p in result.landmarks.items()},
+        kinds=problem.initial.kinds(),  # SE(2) states move as such
     )
     start = time.perf_counter()
     batch, where = reference_batch(problem, estimate)

@@ -91,7 +91,7 @@ class PeriodicBatchSolver(OnlineSolver):
     def update(self, factors: list[Factor], values: Values) -> None:
         self.graph.add(factors)
         for k in values:
-            self.values.insert(k, values[k])
+            self.values.insert(k, values[k], values.kind(k))
         # check=False: the paper's PB stops on GTSAM's rule alone, and timing it is the point.
         result = gauss_newton(
             self.graph,
