@@ -90,6 +90,9 @@ class DataSet:
     authors_run: str | None = None  # the name of the authors' saved BTGP/1 run on it (`steam-ref fidelity`)
     authors_rmse_m: float | None = None  # the position RMSE of that run on this file
     original: tuple[str, ...] = ()  # the original release's files, read when no folder holds the published one
+    # other runs' position RMSE on all of this file, to read a run by: (what ran, metres), measured by the command
+    # or benchmark each names (docs/experiments.md)
+    yardsticks: tuple[tuple[str, float], ...] = ()
 
 
 def _read_mat(path: Path | None, name: str, _seed: int) -> RangeDataset:
@@ -166,6 +169,11 @@ DATASETS: dict[str, DataSet] = {
             authors_run="authors-plaza",
             authors_rmse_m=0.338,  # `diff` of authors/Plaza1_full_data_run.mat: 0.33823 m, the 0.338 m of docs/experiments.md
             original=("Plaza1_DR.txt", "Plaza1_TD.txt", "Plaza1_.mat"),  # the first release, as gtsam's Data/ has it
+            yardsticks=(
+                ("steam_ref BTGP/1 with the vector-space WNOA prior (steam-ref run --dataset plaza)", 0.338282),
+                ("steam_ref BTGP/1 with the SE(2) prior (steam-ref run --dataset plaza --prior se2)", 0.380003),
+                ("GTSAM 4.3's ISAM2 with WnoaMotionFactorPose2 (python benchmarks/se2_vs_gtsam.py)", 0.380795),
+            ),
         ),
         _upstream(
             "authors-synthetic",
