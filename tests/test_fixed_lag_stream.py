@@ -195,7 +195,7 @@ def test_landmarks_leave_the_window_and_enter_again():
         stream.step()
         held = {k for k in stream.solver.inner.estimate() if k.kind == "l"}
         entered_again |= held & left
-        left |= set(stream.solver._landmarks)
+        left |= {k for k in stream.solver.forgotten() if k.kind == "l"}
     assert entered_again and stream.solver.inner.tree.problems() == []
 
 
