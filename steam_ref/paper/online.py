@@ -247,7 +247,7 @@ class StreamingEstimator:
     ) -> RunResult:
         """A :class:`RunResult` of what has been processed so far, scored against ``ground_truth`` (CMU GT layout,
         x, y in columns 1-2) if given. With ``lag_history`` its trajectory is the past smoothed from the current
-        window, and the estimates as they left the window give ``rmse_lagged_m``; the solver's state is unchanged."""
+        window, and the estimates as they left the window give ``rmse_lagged_m``; no later query changes."""
         history = self.options.lag_history
         past = "smoothed" if history else "lagged"
         solved = self.solved(past=past)
