@@ -21,7 +21,7 @@ from steam_ref.paper.online import StreamingEstimator, run_online
 from steam_ref.paper.options import StreamOptions
 from steam_ref.paper.presets import PaperSetup
 from steam_ref.paper.readings import Readings
-from steam_ref.paper.solvers import FixedLagTreeSolver
+from steam_ref.paper.solvers import FixedLagTreeSolver, OnlineSolver, make_solver
 from steam_ref.variables import X
 
 SETUP = PaperSetup.synthetic()
@@ -110,6 +110,82 @@ def test_result_twice_or_mid_run_keeps_the_lagged_and_the_smoothed_apart(data):
     np.testing.assert_array_equal(second.trajectory, whole.trajectory)
 
 
+def test_the_past_is_read_as_asked_and_result_changes_no_later_query(data):
+    """The lagged and the smoothed past are two readings of one solver, chosen by an argument: result() reads the
+    smoothed one for its figures and leaves every later query as it was."""
+    stream = StreamingEstimator(Readings.from_dataset(data, SETUP), SETUP, StreamOptions(lag=10.0, lag_history=True))
+    while not stream.done:
+        stream.step()
+    lagged = stream.trajectory()[1]
+    t0 = float(data.times[0])
+    result = stream.result(data.ground_truth)
+    np.testing.assert_array_equal(stream.trajectory()[1], lagged)  # result() switched nothing
+    np.testing.assert_array_equal(stream.trajectory(past="lagged")[1], lagged)
+    np.testing.assert_array_equal(stream.trajectory(past="smoothed")[1], result.trajectory)
+    np.testing.assert_array_equal(stream.estimate_at(t0, past="smoothed"), result.trajectory[0])
+    np.testing.assert_array_equal(stream.estimate_at(t0), lagged[0])
+    past = stream.solver.inner.smoothed_history()  # the oracle: the smoother's own backward pass
+    np.testing.assert_array_equal(stream.solver.estimate_of(X(0), past="smoothed"), past[X(0)])
+    assert not np.array_equal(past[X(0)], lagged[0])  # the two readings differ, so the checks above mean something
+    truth = data.ground_truth[:, 1:3]
+    assert result.rmse_lagged_m == pytest.approx(np.sqrt(np.mean(np.sum((lagged[:, :2] - truth) ** 2, axis=1))))
+    with pytest.raises(SteamError, match="past must be one of 'lagged', 'smoothed', got past='recent'"):
+        stream.estimate_at(t0, past="recent")
+
+
+def test_the_smoothed_past_of_a_lag_without_its_history_is_refused_even_before_anything_is_forgotten(data):
+    stream = StreamingEstimator(Readings.from_dataset(data, SETUP), SETUP, StreamOptions(lag=10.0, max_poses=3))
+    stream.run()
+    assert stream.solver.n_marginalized == 0
+    with pytest.raises(SteamError, match=r"past='smoothed' needs the forgotten conditionals.*keep_history=True"):
+        stream.trajectory(past="smoothed")
+    stream.trajectory()  # the lagged past is there
+
+
+class Forwarding(OnlineSolver):
+    """A solver the run loop has never heard of, forgetting as the fixed-lag one does (it forwards to one)."""
+
+    def __init__(self, inner: OnlineSolver):
+        self.inner = inner
+
+    def update(self, factors, values):
+        self.inner.update(factors, values)
+
+    def estimate_of(self, key, *, past="lagged"):
+        return self.inner.estimate_of(key, past=past)
+
+    def estimate(self, *, past="lagged"):
+        return self.inner.estimate(past=past)
+
+    def forgotten(self):
+        return self.inner.forgotten()
+
+    n_marginalized = property(lambda self: self.inner.n_marginalized)
+    peak_window = property(lambda self: self.inner.peak_window)
+
+
+def test_the_run_loop_asks_any_solver_the_same_questions():
+    """No switch on the solver's type: a solver passed in that forgets landmarks has them enter again, and its
+    window's figures reach the result, exactly as with the loop's own fixed-lag solver."""
+    data = generate_synthetic(n_steps=150, n_landmarks=10, seed=2)  # few landmarks: each forgotten, then seen again
+    readings = Readings.from_dataset(data, SETUP)
+    own = run_online(readings, SETUP, StreamOptions(lag=4.0))
+    solver = Forwarding(make_solver("btgp", isam2=SETUP.isam2_params(), lag=4.0, times=readings.times))
+    passed = StreamingEstimator(readings, SETUP, StreamOptions(), solver=solver).run()
+    assert own.n_marginalized > len(own.landmarks)  # landmarks were forgotten (and states)
+    np.testing.assert_array_equal(passed.trajectory, own.trajectory)
+    assert (passed.n_marginalized, passed.peak_window) == (own.n_marginalized, own.peak_window)
+
+
+def test_make_solver_refuses_a_lag_it_cannot_keep():
+    with pytest.raises(SteamError, match=r"lag=5\.0.*method='btgp'.*method='pb'"):
+        make_solver("pb", lag=5.0, times=np.arange(3.0))
+    with pytest.raises(SteamError, match="poses' times"):
+        make_solver("btgp", lag=5.0)
+    with pytest.raises(SteamError, match="keep_history keeps what a lag forgets"):
+        make_solver("btgp", keep_history=True)
+
+
 def test_landmarks_leave_the_window_and_enter_again():
     data = generate_synthetic(n_steps=150, n_landmarks=10, seed=2)  # few landmarks: each seen again and again
     stream = StreamingEstimator(Readings.from_dataset(data, SETUP), SETUP, StreamOptions(lag=4.0))
@@ -119,7 +195,7 @@ def test_landmarks_leave_the_window_and_enter_again():
         stream.step()
         held = {k for k in stream.solver.inner.estimate() if k.kind == "l"}
         entered_again |= held & left
-        left |= set(stream.solver._landmarks)
+        left |= {k for k in stream.solver.forgotten() if k.kind == "l"}
     assert entered_again and stream.solver.inner.tree.problems() == []
 
 

@@ -432,3 +432,21 @@ def test_every_solver_answers_the_same_four_covariance_queries(data, method):
     for owner in [solver] + ([solver.inner] if method == "btgp" else []):
         for old in ("marginals", "joint_marginals", "joint_marginal_covariance"):
             assert not hasattr(owner, old), (owner, old)  # renamed, no alias left behind
+
+
+@pytest.mark.parametrize("method", ["pb", "pbvr", "btgp"])
+def test_a_solver_that_forgets_nothing_answers_the_run_loops_questions_so(data, method):
+    """The questions the run loop asks every solver: nothing forgotten, no window, no backward pass, and one
+    past, the estimate, whichever is asked for."""
+    solver = _stream(data, method=method, max_poses=20).solver
+    assert list(solver.forgotten()) == [] and solver.n_marginalized is None and solver.peak_window is None
+    assert solver.smoothing_seconds is None
+    lagged, smoothed = solver.estimate(past="lagged"), solver.estimate(past="smoothed")
+    assert list(smoothed) == list(lagged) and len(lagged) > 0
+    for k in lagged:
+        np.testing.assert_array_equal(smoothed[k], lagged[k])
+        np.testing.assert_array_equal(solver.estimate_of(k, past="smoothed"), lagged[k])
+    with pytest.raises(SteamError, match="past must be one of 'lagged', 'smoothed', got past='recent'"):
+        solver.estimate_of(X(0), past="recent")
+    with pytest.raises(SteamError, match="got past=None"):
+        solver.estimate(past=None)

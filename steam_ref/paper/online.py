@@ -3,7 +3,9 @@
 :class:`StreamingEstimator` is the run loop of Algorithm 1: each pose, the front end
 (:mod:`steam_ref.paper.frontend`, step 1) releases new variables and factors; when the schedule says so
 they go to the solver (:mod:`steam_ref.paper.solvers`: PB, PBVR or BTGP, steps 2-7), and the front end
-then predicts from the solver's latest estimate.
+then predicts from the solver's latest estimate. The loop asks every solver the same questions (what did the
+last update forget?); the queries read a forgotten past as their ``past`` argument says (``"lagged"`` or
+``"smoothed"``, :data:`~steam_ref.paper.solvers.PASTS`).
 
 When the solver updates is the set-up's :class:`~steam_ref.paper.presets.Schedule` (the paper's '/1' and
 '/10', what starts the stream, Plaza's first batch solve); :class:`ScheduleClock` follows it as the
@@ -32,8 +34,8 @@ from .frontend import FrontEnd, NewStep
 from .options import StreamOptions
 from .presets import PaperSetup, Schedule
 from .readings import Readings
-from .results import RunResult, peak_rss_mb
-from .solvers import FixedLagTreeSolver, OnlineSolver, make_solver
+from .results import RunResult, peak_rss_mb, scored
+from .solvers import OnlineSolver, SolverView, make_solver
 
 __all__ = ["ScheduleClock", "StreamingEstimator", "run_online"]
 
@@ -92,7 +94,7 @@ class StreamingEstimator:
         self.front = FrontEnd(readings, setup, options.layout, options.max_poses)
         self.schedule = ScheduleClock(setup.schedule, self.front.n_poses - 1)
         self.solver = solver if solver is not None else self._new_solver()
-        self.factors: list = []  # every factor given to the solver so far
+        self.factors: list = []  # with converge_at_end, every factor given to the solver so far
         self.convergence: BatchResult | None = None  # what converge_at_end found
         self.convergence_seconds = 0.0  # its wall time (within the last update's)
         self.n_solved = 0  # how many of ``states`` the solver holds
@@ -105,13 +107,14 @@ class StreamingEstimator:
 
     def _new_solver(self) -> OnlineSolver:
         o = self.options
-        if o.lag is not None:  # the lag and the states' stamps in the data's seconds, whatever the prior's clock
-            return FixedLagTreeSolver(self.setup.isam2_params(), o.lag, self.readings.times, keep_history=o.lag_history)
         return make_solver(
             o.method,
             isam2=self.setup.isam2_params(),
             pb_relative_tolerance=o.pb_relative_tolerance,
             pb_max_iterations=o.pb_max_iterations,
+            lag=o.lag,
+            times=self.readings.times,  # a lag stamps the states in the data's seconds, whatever the prior's clock
+            keep_history=o.lag_history,
         )
 
     @property
@@ -155,10 +158,9 @@ class StreamingEstimator:
         )
         self.solver.update(self._pending, values)
         self.divergence.fit(self._pending, self.solver.estimate_of, pose)
-        if isinstance(self.solver, FixedLagTreeSolver):  # keep no factor: the window forgets them
-            forgotten = (k.index for k in self.solver.forgotten if k.kind == "l")
-            self.front.landmarks.difference_update(forgotten)  # seen again, a landmark enters anew
-        else:
+        forgotten = (k.index for k in self.solver.forgotten() if k.kind == "l")
+        self.front.landmarks.difference_update(forgotten)  # seen again, a landmark enters anew
+        if self.options.converge_at_end:  # (a lag, which forgets factors, refuses it)
             self.factors.extend(self._pending)
         if pose == self.schedule.last_pose:
             for _ in range(schedule.final_updates):
@@ -185,32 +187,35 @@ class StreamingEstimator:
         self.solver.update(self.factors, self.convergence.values)
         self.convergence_seconds = time.perf_counter() - start
 
-    # -- queries --
+    # -- queries (``past``: how a forgotten variable is read, "lagged" or "smoothed"; solvers.PASTS) --
 
-    def landmark_estimates(self) -> dict[int, NDArray]:
+    def landmark_estimates(self, *, past: str = "lagged") -> dict[int, NDArray]:
         """Current estimate of every landmark the solver holds: id → (2,)."""
         if not self.schedule.started:
             return {}
         held = (lid for lid in sorted(self.front.landmarks) if L(lid) not in self._pending_values)
-        return {lid: self.solver.estimate_of(L(lid)).copy() for lid in held}
+        return {lid: self.solver.estimate_of(L(lid), past=past).copy() for lid in held}
 
-    def solved(self) -> Trajectory:
+    def solved(self, *, past: str = "lagged") -> Trajectory:
         """The trajectory the solver holds: its states, queried at any time (Eq. 18)."""
+        seen = SolverView(self.solver, past)
         return Trajectory(
-            self.solver, self.states[: self.n_solved], self.readings.clock, self.setup.motion_prior(),
+            seen, self.states[: self.n_solved], self.readings.clock, self.setup.motion_prior(),
             se2_model=self.setup.se2_residual if self.setup.is_se2 else None,
         )  # fmt: skip
 
-    def estimate_at(self, t: float, *, covariance: bool = False) -> NDArray | tuple[NDArray, NDArray]:
+    def estimate_at(
+        self, t: float, *, covariance: bool = False, past: str = "lagged"
+    ) -> NDArray | tuple[NDArray, NDArray]:
         """The state x(t) (n,) at any time t in the data's seconds from the first solved state on (the GP prior's
         clock is the set-up's, ``readings.clock`` maps between them), with its covariance (n, n) if asked:
         [YIB Eq. 18] between states, the prior's prediction after the last one (``Trajectory.at``)."""
-        return self.solved().at(t, covariance=covariance)
+        return self.solved(past=past).at(t, covariance=covariance)
 
-    def trajectory(self) -> tuple[NDArray, NDArray]:
+    def trajectory(self, *, past: str = "lagged") -> tuple[NDArray, NDArray]:
         """Times (n_poses,) in the data's seconds and states (n_poses, n) at every pose of the solved span (Eq. 18
         between states)."""
-        return self.solved().at_every_pose()
+        return self.solved(past=past).at_every_pose()
 
     # -- a whole run --
 
@@ -243,25 +248,23 @@ class StreamingEstimator:
     def result(
         self, ground_truth: NDArray | None = None, completed: bool = True, *, covariances: bool = False
     ) -> RunResult:
-        """A :class:`RunResult` of what has been processed so far (with ``lag_history``, the past smoothed
-        from the current window; the estimates it had as it left the window give ``rmse_lagged_m``; the
-        estimator's queries then give the smoothed past too, until the next update)."""
-        solved = self.solved()
-        lagged, smoothing_s = None, None
-        if isinstance(self.solver, FixedLagTreeSolver) and self.options.lag_history:
-            self.solver.lagged_past()  # an earlier result() left the past smoothed
-            lagged = solved.at_every_pose()[1]
-            start = time.perf_counter()
-            self.solver.smooth_past()
-            smoothing_s = time.perf_counter() - start
+        """A :class:`RunResult` of what has been processed so far, scored against ``ground_truth`` (CMU GT layout,
+        x, y in columns 1-2) if given. With ``lag_history`` its trajectory is the past smoothed from the current
+        window, and the estimates as they left the window give ``rmse_lagged_m``; no later query changes."""
+        history = self.options.lag_history
+        past = "smoothed" if history else "lagged"
+        solved = self.solved(past=past)
         times, states = solved.at_every_pose()
-        marks = self.landmark_estimates()
-        return RunResult.of(
+        truth = None if ground_truth is None else np.asarray(ground_truth)[: len(times), 1:3]
+        poses = np.array(solved.states, dtype=int)
+        marks = self.landmark_estimates(past=past)
+        convergence = self.convergence
+        return RunResult(
             options=self.options,
             schedule=self.setup.schedule,
             times=times,
             trajectory=states,
-            state_poses=np.array(solved.states, dtype=int),
+            state_poses=poses,
             landmarks=marks,
             step_seconds=np.array(self.step_seconds),
             update_steps=np.array(self.update_steps, dtype=int),
@@ -269,22 +272,18 @@ class StreamingEstimator:
             n_poses_total=self.readings.n_poses,
             n_steps_processed=self.front.n_processed,
             completed=completed,
-            ground_truth=ground_truth,
-            lagged_trajectory=lagged,
-            history_smoothing_s=smoothing_s,
+            rmse_m=scored(states, truth),
+            rmse_states_m=scored(states, truth, poses),
             covariances=solved.covariances([L(i) for i in marks]) if covariances else None,
-            peak_rss=peak_rss_mb(),
-            convergence_s=self.convergence_seconds if self.convergence is not None else None,
-            converged_at_end=self.convergence.converged if self.convergence is not None else None,
+            peak_rss_mb=peak_rss_mb(),
+            convergence_s=None if convergence is None else self.convergence_seconds,
+            converged_at_end=None if convergence is None else convergence.converged,
+            n_marginalized=self.solver.n_marginalized,
+            peak_window=self.solver.peak_window,
+            rmse_lagged_m=scored(self.trajectory()[1], truth) if history else None,
+            history_smoothing_s=self.solver.smoothing_seconds,
             divergence=tuple(self.divergence.findings),
-            **self._lag_figures(),
         )
-
-    def _lag_figures(self) -> dict[str, int | None]:
-        """With a lag: variables marginalized so far and the peak window; else nothing."""
-        if not isinstance(self.solver, FixedLagTreeSolver):
-            return {}
-        return {"n_marginalized": self.solver.inner.n_marginalized, "peak_window": self.solver.inner.peak_window}
 
 
 @limited

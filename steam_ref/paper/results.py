@@ -15,7 +15,7 @@ from ..trajectory import Covariances
 from .options import StreamOptions
 from .presets import Schedule
 
-__all__ = ["RunResult", "position_rmse", "peak_rss_mb"]
+__all__ = ["RunResult", "position_rmse", "peak_rss_mb", "scored"]
 
 
 def position_rmse(positions: NDArray, truth: NDArray) -> float:
@@ -30,6 +30,16 @@ def position_rmse(positions: NDArray, truth: NDArray) -> float:
     return Statistics.of(np.hypot(*(positions - truth).T)).rmse  # no square of a distance: no overflow past 1e154
 
 
+def scored(trajectory: NDArray, truth: NDArray | None, rows: NDArray | None = None) -> float:
+    """The position RMSE of ``trajectory`` (n, ≥2; x, y first) against ``truth`` (n, 2), over ``rows`` if given
+    (all of them if not); NaN without a truth or without any pose."""
+    if truth is None or not len(truth):
+        return float("nan")
+    if rows is not None:
+        trajectory, truth = trajectory[rows], truth[rows]
+    return position_rmse(trajectory[:, :2], truth)
+
+
 def peak_rss_mb() -> float:
     """Peak resident set size of this process in MB (Linux reports KB)."""
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
@@ -41,7 +51,8 @@ def _json_float(x: float) -> float | None:
 
 @dataclass(frozen=True, kw_only=True)
 class RunResult:
-    """What one streamed run did and produced."""
+    """What one streamed run did and produced: built by :meth:`StreamingEstimator.result
+    <steam_ref.paper.online.StreamingEstimator.result>`, each field filled where it is measured."""
 
     options: StreamOptions  # what the run chose
     schedule: Schedule  # when its solver updated (the set-up's)
@@ -72,68 +83,6 @@ class RunResult:
         None  # with a lag and its history: wall time of the backward pass (not in total_s)
     )
     divergence: tuple[str, ...] = ()  # readings beyond any plausible noise, a diverging estimate (paper.divergence)
-
-    @classmethod
-    def of(
-        cls,
-        *,
-        options: StreamOptions,
-        schedule: Schedule,
-        times: NDArray,
-        trajectory: NDArray,
-        state_poses: NDArray,
-        landmarks: dict[int, NDArray],
-        step_seconds: NDArray,
-        update_steps: NDArray,
-        update_seconds: NDArray,
-        n_poses_total: int,
-        n_steps_processed: int,
-        completed: bool,
-        ground_truth: NDArray | None,
-        covariances: Covariances | None,
-        peak_rss: float,
-        lagged_trajectory: NDArray | None = None,
-        history_smoothing_s: float | None = None,
-        convergence_s: float | None = None,
-        converged_at_end: bool | None = None,
-        n_marginalized: int | None = None,
-        peak_window: int | None = None,
-        divergence: tuple[str, ...] = (),
-    ) -> RunResult:
-        """Package a run, scoring it against ``ground_truth`` (CMU GT layout, x, y in columns 1-2) if given."""
-        rmse = rmse_states = float("nan")
-        rmse_lagged = None if lagged_trajectory is None else float("nan")
-        if ground_truth is not None and len(times):
-            truth = np.asarray(ground_truth)[: len(times), 1:3]
-            rmse = position_rmse(trajectory[:, :2], truth)
-            rmse_states = position_rmse(trajectory[state_poses, :2], truth[state_poses])
-            if lagged_trajectory is not None:
-                rmse_lagged = position_rmse(lagged_trajectory[:, :2], truth)
-        return cls(
-            options=options,
-            schedule=schedule,
-            times=times,
-            trajectory=trajectory,
-            state_poses=state_poses,
-            landmarks=landmarks,
-            step_seconds=step_seconds,
-            update_steps=update_steps,
-            update_seconds=update_seconds,
-            n_poses_total=n_poses_total,
-            n_steps_processed=n_steps_processed,
-            completed=completed,
-            rmse_m=rmse,
-            rmse_states_m=rmse_states,
-            covariances=covariances,
-            peak_rss_mb=peak_rss,
-            convergence_s=convergence_s,
-            converged_at_end=converged_at_end,
-            n_marginalized=n_marginalized,
-            peak_window=peak_window,
-            rmse_lagged_m=rmse_lagged,
-            history_smoothing_s=history_smoothing_s,
-            divergence=tuple(divergence),
-        )
 
     @property
     def method(self) -> str:

@@ -4,11 +4,19 @@
 - ``pbvr``: the same with AMD reordering at every update;
 - ``btgp``: the Bayes tree (:class:`steam_ref.bayes_tree.IncrementalSolver`, Alg. 1 steps 2-7);
   with a lag, :class:`FixedLagTreeSolver` (:class:`steam_ref.bayes_tree.FixedLagSmoother`).
+
+The run loop asks every solver the same questions. A solver that forgets (the fixed-lag one) answers the
+questions about what it forgot; the others keep the defaults of :class:`OnlineSolver`: nothing forgotten, no
+window. The past is read with an explicit argument, ``past`` (:data:`PASTS`): ``"lagged"``, each forgotten
+variable as it left the window (what a fixed-lag smoother reports online), or ``"smoothed"``, given all the data
+so far (derivations Eq. 10.5). A solver that forgets nothing has one past, its estimate, whichever is asked.
 """
 
 from __future__ import annotations
 
+import time
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
@@ -23,12 +31,15 @@ from ..variables import Key, Values, X, check_key
 
 __all__ = [
     "METHODS",
+    "PASTS",
     "PB_RELATIVE_TOLERANCE",
     "PB_MAX_ITERATIONS",
     "OnlineSolver",
     "PeriodicBatchSolver",
     "BayesTreeSolver",
     "FixedLagTreeSolver",
+    "SolverView",
+    "check_past",
     "make_solver",
 ]
 
@@ -36,10 +47,23 @@ METHODS = ("btgp", "pb", "pbvr")
 PB_RELATIVE_TOLERANCE = 1e-5  # PB/PBVR stop when the cost falls by less than this fraction (GTSAM's default)
 KEPT_REPORTS = 100  # a lagged BTGP keeps the UpdateReports of its latest updates only
 PB_MAX_ITERATIONS = 100  # PB/PBVR Gauss-Newton iterations per update at most (GTSAM's default)
+PASTS = ("lagged", "smoothed")  # how a forgotten variable's estimate is read: as it left the window, or given all
+
+
+def check_past(past: str) -> str:
+    """``past`` itself when it is one of :data:`PASTS`; a :class:`SteamError` naming it otherwise."""
+    if past not in PASTS:
+        raise SteamError(f"past must be one of {', '.join(map(repr, PASTS))}, got past={past!r}")
+    return past
 
 
 class OnlineSolver:
-    """What a stream needs from a solver."""
+    """What a stream needs from a solver: the same questions of every one.
+
+    :meth:`update`, :meth:`estimate_of`, :meth:`estimate` and the covariance queries each solver answers; the
+    questions about forgetting (:meth:`forgotten`, :attr:`n_marginalized`, :attr:`peak_window`,
+    :attr:`smoothing_seconds`) have the answers of a solver that forgets nothing here.
+    """
 
     name: str = ""
 
@@ -47,13 +71,33 @@ class OnlineSolver:
         """Add new factors and the initial estimates of new variables, then re-solve."""
         raise NotImplementedError
 
-    def estimate_of(self, key: Key) -> NDArray:
-        """Current estimate of one variable."""
+    def estimate_of(self, key: Key, *, past: str = "lagged") -> NDArray:
+        """Current estimate of one variable; a forgotten one read as ``past`` says (:data:`PASTS`)."""
         raise NotImplementedError
 
-    def estimate(self) -> Values:
-        """Current estimate of every variable."""
+    def estimate(self, *, past: str = "lagged") -> Values:
+        """Current estimate of every variable; the forgotten ones read as ``past`` says (:data:`PASTS`)."""
         raise NotImplementedError
+
+    def forgotten(self) -> Sequence[Key]:
+        """The variables the last update forgot (marginalized): none."""
+        return ()
+
+    @property
+    def n_marginalized(self) -> int | None:
+        """Variables forgotten so far (None: this solver forgets nothing)."""
+        return None
+
+    @property
+    def peak_window(self) -> int | None:
+        """Most variables held at once (None: this solver holds everything, it has no window)."""
+        return None
+
+    @property
+    def smoothing_seconds(self) -> float | None:
+        """Wall time of the backward pass behind the latest ``past="smoothed"`` query since the last update
+        (None: none ran; a solver that forgets nothing needs none)."""
+        return None
 
     def marginal_covariance(self, key: Key) -> NDArray:
         """Marginal covariance (d, d) of one variable (GTSAM's ``marginalCovariance``)."""
@@ -104,10 +148,12 @@ class PeriodicBatchSolver(OnlineSolver):
         self.values = result.values
         self.iterations.append(len(result.iterations))
 
-    def estimate_of(self, key: Key) -> NDArray:
+    def estimate_of(self, key: Key, *, past: str = "lagged") -> NDArray:
+        check_past(past)  # nothing forgotten: one past
         return self.values[key]
 
-    def estimate(self) -> Values:
+    def estimate(self, *, past: str = "lagged") -> Values:
+        check_past(past)
         return self.values
 
     def marginal_covariances(self, keys: Sequence[Key]) -> dict[Key, NDArray]:
@@ -132,10 +178,12 @@ class BayesTreeSolver(OnlineSolver):
     def update(self, factors: list[Factor], values: Values) -> None:
         self.reports.append(self.inner.update(factors, values))
 
-    def estimate_of(self, key: Key) -> NDArray:
+    def estimate_of(self, key: Key, *, past: str = "lagged") -> NDArray:
+        check_past(past)  # nothing forgotten: one past
         return self.inner.estimate_of(key)
 
-    def estimate(self) -> Values:
+    def estimate(self, *, past: str = "lagged") -> Values:
+        check_past(past)
         return self.inner.estimate()
 
     def marginal_covariance(self, key: Key) -> NDArray:
@@ -155,10 +203,11 @@ class FixedLagTreeSolver(BayesTreeSolver):
     """BTGP over a window of ``lag`` seconds: :class:`~steam_ref.bayes_tree.FixedLagSmoother` in a stream.
 
     A state is stamped with its pose's time (``times[pose]``), a landmark with the newest state's time
-    of each update whose factors name it, so it is forgotten a lag after it was last seen. The stream's
-    view of a marginalized variable is its estimate at the moment it was marginalized (the lagged
-    estimate, what a fixed-lag smoother reports); its covariance is no longer known and a query raises
-    the smoother's :class:`~steam_ref.errors.UnknownVariableError`.
+    of each update whose factors name it, so it is forgotten a lag after it was last seen. A marginalized
+    variable is read as ``past`` says: ``"lagged"``, its estimate at the moment it was marginalized (what a
+    fixed-lag smoother reports), or ``"smoothed"``, given all the data so far
+    (:meth:`FixedLagSmoother.smoothed_history`; needs ``keep_history``). Its covariance is no longer known
+    and a query raises the smoother's :class:`~steam_ref.errors.UnknownVariableError`.
     """
 
     name = "btgp"
@@ -170,19 +219,20 @@ class FixedLagTreeSolver(BayesTreeSolver):
         self._states = np.zeros((0, 0))  # (n_poses, n) estimate of each marginalized state X(pose), row by pose
         self._retired_states: set[int] = set()  # poses of the marginalized states
         self._landmarks: dict[Key, NDArray] = {}  # marginalized landmark → its estimate then
-        self.forgotten: list[Key] = []  # the variables the last update marginalized
-        self._smoothed: dict[Key, NDArray] | None = None  # smooth_past()'s view of the past, until the next update
+        self._forgotten: list[Key] = []  # the variables the last update marginalized
+        self._smoothed: dict[Key, NDArray] | None = None  # the smoothed past, computed once per update when asked
+        self._smoothing_s: float | None = None  # the wall time of computing it
 
     def update(self, factors: list[Factor], values: Values) -> None:
         stamps = {k: float(self.times[k.index]) for k in values if k.kind == "x"}
         newest = max(stamps.values(), default=self.inner.newest)
         if np.isfinite(newest):
             stamps |= {k: newest for f in factors for k in f.keys if k.kind != "x"}
-        self._smoothed = None
+        self._smoothed = self._smoothing_s = None
         self.reports.append(self.inner.update(factors, values, timestamps=stamps))
         del self.reports[:-KEPT_REPORTS]
         done = self.inner.last_marginalization
-        self.forgotten = [] if done is None else list(done.keys)
+        self._forgotten = [] if done is None else list(done.keys)
         for k, v in ({} if done is None else done.estimates).items():
             if k.kind == "x":
                 if not self._states.size:
@@ -194,38 +244,91 @@ class FixedLagTreeSolver(BayesTreeSolver):
         for k in values:
             self._landmarks.pop(k, None)  # entered again: the window's estimate is the one
 
-    def smooth_past(self) -> None:
-        """From now until the next update, a marginalized variable's estimate is its smoothed one, given all the
-        data so far (:meth:`FixedLagSmoother.smoothed_history`; needs ``keep_history``), not the lagged one."""
-        self._smoothed = self.inner.smoothed_history()
+    def forgotten(self) -> Sequence[Key]:
+        """The variables the last update marginalized."""
+        return self._forgotten
 
-    def lagged_past(self) -> None:
-        """Undo :meth:`smooth_past`: a marginalized variable's estimate is again the one it left the window with."""
-        self._smoothed = None
+    @property
+    def n_marginalized(self) -> int | None:
+        return self.inner.n_marginalized
 
-    def retired(self, key: Key) -> NDArray | None:
-        """The estimate ``key`` had when it was marginalized (None while it is in the window, or never held);
-        after :meth:`smooth_past`, its smoothed estimate."""
+    @property
+    def peak_window(self) -> int | None:
+        return self.inner.peak_window
+
+    @property
+    def smoothing_seconds(self) -> float | None:
+        return self._smoothing_s
+
+    def _smoothed_past(self) -> dict[Key, NDArray]:
+        """Every marginalized variable's estimate given all the data so far, computed at the first ask after
+        an update (one backward pass, timed) and kept until the next."""
+        if self._smoothed is None:
+            start = time.perf_counter()
+            self._smoothed = self.inner.smoothed_history()
+            self._smoothing_s = time.perf_counter() - start
+        return self._smoothed
+
+    def _checked(self, past: str) -> str:
+        """``past`` itself; a :class:`SteamError` for an unknown one, or for ``"smoothed"`` without the history."""
+        if check_past(past) == "smoothed" and self.inner.history is None:
+            raise SteamError(
+                "past='smoothed' needs the forgotten conditionals: make the solver with keep_history=True "
+                "(StreamOptions(lag_history=True))"
+            )
+        return past
+
+    def retired(self, key: Key, *, past: str = "lagged") -> NDArray | None:
+        """The estimate of ``key`` if it was marginalized, read as ``past`` says (None while it is in the window,
+        or never held)."""
+        self._checked(past)
         lagged = self._landmarks.get(key)  # a landmark that enters again leaves _landmarks
         if key.kind == "x":  # a state never enters again
             lagged = self._states[key.index] if key.index in self._retired_states else None
-        return None if lagged is None else self._past(key, lagged)
+        return None if lagged is None else self._past(key, lagged, past)
 
-    def _past(self, key: Key, lagged: NDArray) -> NDArray:
-        """A marginalized variable's estimate: the one it left the window with, or after smooth_past the smoothed one."""
-        return lagged if self._smoothed is None else self._smoothed.get(key, lagged)
+    def _past(self, key: Key, lagged: NDArray, past: str) -> NDArray:
+        """A marginalized variable's estimate: the one it left the window with, or the smoothed one."""
+        return lagged if past == "lagged" else self._smoothed_past().get(key, lagged)
 
-    def estimate_of(self, key: Key) -> NDArray:
-        retired = self.retired(key)
+    def estimate_of(self, key: Key, *, past: str = "lagged") -> NDArray:
+        retired = self.retired(key, past=past)
         return self.inner.estimate_of(key) if retired is None else retired
 
-    def estimate(self) -> Values:
+    def estimate(self, *, past: str = "lagged") -> Values:
+        self._checked(past)
         out = self.inner.estimate()
         for i in sorted(self._retired_states):
-            out.insert(X(i), self._past(X(i), self._states[i]))
+            out.insert(X(i), self._past(X(i), self._states[i], past))
         for k, v in self._landmarks.items():  # never in the window (popped when one enters again)
-            out.insert(k, self._past(k, v))
+            out.insert(k, self._past(k, v, past))
         return out
+
+
+@dataclass(frozen=True)
+class SolverView:
+    """A solver read with one choice of ``past``: what a :class:`~steam_ref.trajectory.Trajectory` queries."""
+
+    solver: OnlineSolver
+    past: str = "lagged"
+
+    def __post_init__(self) -> None:
+        check_past(self.past)
+
+    def estimate_of(self, key: Key) -> NDArray:
+        return self.solver.estimate_of(key, past=self.past)
+
+    def estimate(self) -> Values:
+        return self.solver.estimate(past=self.past)
+
+    def marginal_covariances(self, keys: Sequence[Key]) -> dict[Key, NDArray]:
+        return self.solver.marginal_covariances(keys)
+
+    def joint_covariance(self, keys: Sequence[Key]) -> NDArray:
+        return self.solver.joint_covariance(keys)
+
+    def joint_covariances(self, groups: Sequence[Sequence[Key]]) -> list[NDArray]:
+        return self.solver.joint_covariances(groups)
 
 
 def make_solver(
@@ -234,10 +337,20 @@ def make_solver(
     isam2: ISAM2Params | None = None,
     pb_relative_tolerance: float = PB_RELATIVE_TOLERANCE,
     pb_max_iterations: int = PB_MAX_ITERATIONS,
+    lag: float | None = None,
+    times: NDArray | None = None,
+    keep_history: bool = False,
 ) -> OnlineSolver:
-    """The solver ``method`` names ('btgp', 'pb' or 'pbvr')."""
+    """The solver ``method`` names ('btgp', 'pb' or 'pbvr'); with a ``lag`` (seconds, BTGP only), the fixed-lag
+    one, stamping each pose with ``times[pose]`` and keeping the forgotten conditionals if ``keep_history``."""
     if method not in METHODS:
         raise SteamError(f"unknown method {method!r}; use one of {', '.join(METHODS)}")
+    if keep_history and lag is None:
+        raise SteamError("keep_history keeps what a lag forgets: give a lag too")
+    if lag is not None:
+        if method != "btgp" or times is None:
+            raise SteamError(f"a lag (lag={lag!r}) needs method='btgp' and the poses' times, got method={method!r}")
+        return FixedLagTreeSolver(isam2, lag, times, keep_history=keep_history)
     if method == "btgp":
         return BayesTreeSolver(isam2)
     return PeriodicBatchSolver("xl" if method == "pb" else "amd", pb_relative_tolerance, pb_max_iterations)
