@@ -7,8 +7,8 @@ and with ``--jobs N`` (loky), alternately, ``--repeat`` times, and prints one JS
     seeds, jobs, serial_s, parallel_s, ratio (parallel / serial), target_ratio, meets_target, same_figures
 
 then a last line with the median ratio and the study's ANEES per estimator and kind (the figures of
-``steam-ref consistency --json``), and draws the ANEES pose by pose (``--plot``). The target (issue 24):
-200 seeds with --jobs 2 in at most 0.6 x the time of --jobs 1.
+``steam-ref consistency --json``), and draws the ANEES pose by pose (``--plot``). The target for the
+parallel sweep: 200 seeds with --jobs 2 in at most 0.6 x the time of --jobs 1.
 
     python benchmarks/consistency.py [--seeds 200] [--jobs 2] [--repeat 1] [--plot consistency.png]
 """

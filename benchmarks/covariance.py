@@ -8,7 +8,7 @@ variables still needed). Prints one JSON line:
     dataset, n_states, n_cliques, run_s, depth_first, cliques_walked, joint_s_median (of --repeat),
     joint_peak_mb (tracemalloc, the query alone), target_s, target_mb, meets_target
 
-The target (issue 10): under 1 s and 200 MB on Plaza.
+The target set when the joint covariance was made to scale: under 1 s and 200 MB on Plaza.
 
     python benchmarks/covariance.py [--dataset plaza] [--max-poses N] [--repeat 5]
 """

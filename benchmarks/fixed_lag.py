@@ -1,4 +1,4 @@
-"""Fixed-lag smoothing: memory and time per update that stay flat, and what the lag costs.  [issue 23]
+"""Fixed-lag smoothing: memory and time per update that stay flat, and what the lag costs.
 
 Every run is ``steam-ref run ... --json`` in a fresh Python process (the command itself, called in the
 child, which also keeps each update's wall time), with the environment as the user has it: no BLAS or

@@ -6,7 +6,7 @@ Used by ``benchmarks/vs_gtsam.py``, ``benchmarks/victoria_park.py`` and ``tests/
   Jacobians from Python (the same model; GTSAM pays pybind11's copy of the ``Values`` into every
   callback). The time spent inside the callbacks is added up in :data:`CALLBACK_SECONDS`.
 - :class:`CustomISAM2`: GTSAM's ISAM2 behind steam_ref's ``OnlineSolver`` interface, every factor a
-  :func:`custom_factor` (setup (a) of issue 22).
+  :func:`custom_factor` (setup (a) of the comparison with GTSAM).
 - :class:`NativeISAM2`: GTSAM's ISAM2 with built-in C++ factors only (setup (b)): the state is a
   ``Pose2`` and a body-frame velocity (GTSAM's ``WnoaMotionFactorPose2``, white noise on acceleration on
   SE(2), not the paper's vector-space prior), a velocity reading is a ``PriorFactorVector`` on the

@@ -1,4 +1,4 @@
-"""Victoria Park: BTGP/10 as the authors ran it, against the converged batch optimum and GTSAM's ISAM2.  [issue 12]
+"""Victoria Park: BTGP/10 as the authors ran it, against the converged batch optimum and GTSAM's ISAM2.
 
 Prints one JSON line. Every streamed run is a fresh Python process with the environment as the user has it
 (no BLAS or OpenMP thread variable set: the Bayes tree's dense blocks are small, and steam_ref runs them at one

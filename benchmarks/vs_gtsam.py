@@ -1,4 +1,4 @@
-"""steam_ref's BTGP against GTSAM 4.3's ISAM2 (C++) on the same stream.  [issue 22]
+"""steam_ref's BTGP against GTSAM 4.3's ISAM2 (C++) on the same stream.
 
 For each data set (paper-synthetic, plaza) and schedule (/1, /10), the same front end feeds the same
 readings to three solvers, each run in a fresh Python process with the environment as the user has it (no

@@ -20,9 +20,11 @@ Keys, lists of keys and estimates are checked in :mod:`steam_ref.variables` (``c
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import numbers
 import re
+from typing import Any, TypeGuard, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -33,6 +35,8 @@ __all__ = [
     "number",
     "time_step",
     "integer",
+    "is_integer",
+    "replace_fields",
     "real_array",
     "finite",
     "check_covariance",
@@ -82,13 +86,33 @@ def time_step(value: object, name: str = "dt", *, positive: bool = True) -> floa
     return x
 
 
+def is_integer(value: object) -> TypeGuard[int | np.integer]:
+    """Whether ``value`` is an integer: a Python ``int`` or a NumPy integer, never a ``bool`` (nor a float, ``2.0``
+    included). The one statement of what an integer is; :func:`integer` and every count the package checks use it."""
+    return isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
+
+
 def integer(name: str, value: object, minimum: int | None = None) -> int:
-    """``value`` as an int (int or NumPy integer, not bool nor float), at least ``minimum``."""
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+    """``value`` as an int (:func:`is_integer`), at least ``minimum``."""
+    if not is_integer(value):
         raise SteamError(f"{name} must be an integer, got {name}={_show(value)}")
     if minimum is not None and value < minimum:
         raise SteamError(f"{name} must be an integer >= {minimum}, got {name}={int(value)}")
     return int(value)
+
+
+_D = TypeVar("_D")
+
+
+def replace_fields(instance: _D, changes: dict[str, Any]) -> _D:
+    """A copy of the dataclass ``instance`` with ``changes`` applied (its ``__post_init__`` checks them again);
+    SteamError naming the first field the class does not have, and the fields it does. The one home of every
+    settings class's ``replace``."""
+    names = [f.name for f in dataclasses.fields(instance)]  # type: ignore[arg-type]
+    unknown = sorted(set(changes) - set(names))
+    if unknown:
+        raise SteamError(f"{type(instance).__name__} has no field {unknown[0]!r}; the fields are {sorted(names)}")
+    return dataclasses.replace(instance, **changes)  # type: ignore[type-var]
 
 
 def real_array(name: str, value: object) -> NDArray:

@@ -26,6 +26,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 
+from .arguments import is_integer
 from .covariance import SparseCovariances
 from .errors import ConvergenceError, IllConditionedWarning, NumericalError, SteamError
 from .factors import Factor
@@ -123,13 +124,13 @@ def _step(
 ) -> tuple[dict[Key, NDArray], float, int]:
     """Linearize, solve (𝓘 + λ diag 𝓘) δ = Aᵀb; return δ (ordered), cost at θ̄, factor nnz (``symbolic``: reused
     analysis, the pattern is the same at every iteration)."""
-    groups = linearize(graph.factors, values)
+    groups = linearize(graph.factors, values)  # h(θ̄ + δθ) ≈ h(θ̄) + H δθ  [YIB Eq. 9]
     system = LinearSystem.from_groups(groups, ordering)
-    info, rhs = system.information()
+    info, rhs = system.information()  # 𝓘 = P⁻¹ + Hᵀ R⁻¹ H and b, whitened: AᵀA and Aᵀb  [YIB Eq. 11]
     if damping > 0:
-        info = info + damping * sp.diags(info.diagonal())
+        info = info + damping * sp.diags(info.diagonal())  # Marquardt's scaling: 𝓘 + λ diag 𝓘
     chol = SparseCholesky.factor(info.tocsc(), ordering, backend, check_symmetry=False, symbolic=symbolic)
-    delta = chol.solve(rhs)
+    delta = chol.solve(rhs)  # 𝓘 δθ* = b by LLᵀ = 𝓘 and two triangular solves  [YIB Eq. 11]
     if not np.all(np.isfinite(delta)):
         bad = int(np.flatnonzero(~np.isfinite(delta))[0])
         key = ordering.keys[int(np.searchsorted(ordering.offsets, bad, side="right") - 1)]
@@ -142,7 +143,7 @@ def gauss_newton_step(
 ) -> tuple[Values, dict[Key, NDArray], float]:
     """Internal API. One Gauss-Newton step from ``values`` (Eq. 11): (θ̄ ⊕ δθ*, δθ* by key, the cost at θ̄)."""
     delta, cost, _ = _step(graph, values, ordering, backend, 0.0)
-    return values.retract(delta), delta, cost
+    return values.retract(delta), delta, cost  # θ̄ ⊕ δθ*  [YIB Eq. 9-11]
 
 
 def _scaled_condition(info: sp.csc_matrix, chol: SparseCholesky) -> float:
@@ -165,11 +166,10 @@ def check_stationarity(
     stationary point). The condition estimate says whether that step means anything.
     """
     backend = sparse_backend(backend)
-    groups = linearize(graph.factors, values)
-    system = LinearSystem.from_groups(groups, ordering)
-    info, rhs = system.information()
-    chol = SparseCholesky.factor(info, ordering, backend, check_symmetry=False)  # AᵀA
-    delta = chol.solve(rhs)
+    groups = linearize(graph.factors, values)  # [YIB Eq. 9]
+    info, rhs = LinearSystem.from_groups(groups, ordering).information()
+    chol = SparseCholesky.factor(info, ordering, backend, check_symmetry=False)  # AᵀA  [YIB Eq. 11]
+    delta = chol.solve(rhs)  # δθ* = 𝓘⁻¹ b  [YIB Eq. 11]
     return Stationarity(
         cost=sum(g.cost for g in groups),
         predicted_decrease=0.5 * float(rhs @ delta),
@@ -236,9 +236,7 @@ def graph_and_values(
 ) -> tuple[FactorGraph, Values]:
     """Internal API. The graph (a FactorGraph, or any iterable of factors) and the initial estimate (a Values or a
     mapping)."""
-    if not isinstance(graph, FactorGraph):
-        graph = FactorGraph(graph)
-    return graph, as_values("initial", initial)
+    return graph if isinstance(graph, FactorGraph) else FactorGraph(graph), as_values("initial", initial)
 
 
 def prepare(
@@ -246,7 +244,7 @@ def prepare(
 ) -> tuple[str, Ordering, float]:
     """Internal API. The checks both solvers share (the graph and estimates, the backend); returns
     (backend, the ordering of the graph's variables, the cost at ``initial``)."""
-    if isinstance(max_iterations, bool) or not isinstance(max_iterations, (int, np.integer)) or max_iterations < 0:
+    if not is_integer(max_iterations) or max_iterations < 0:
         raise SteamError(f"max_iterations must be an integer ≥ 0, got {max_iterations!r}")
     if len(graph) == 0:
         raise SteamError("the factor graph is empty: there is nothing to solve")
@@ -310,7 +308,7 @@ def gauss_newton(
     values, rule, nnz, cost, symbolic = initial.copy(), "", 0, cost0, Symbolic()  # one pattern: analysed once
     for _ in range(max_iterations):
         delta, _, nnz = _step(graph, values, order, backend, 0.0, symbolic)
-        values = values.retract(delta)
+        values = values.retract(delta)  # θ̄ ← θ̄ ⊕ δθ*  [YIB Eq. 9-11]
         new_cost = graph.error(values)
         step = _norm(delta)
         iterations.append(Iteration(new_cost, step))

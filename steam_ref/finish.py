@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .arguments import is_integer
 from .batch import BatchResult, Iteration, certify, check_options, prepare
 from .bayes_tree import IncrementalSolver
 from .errors import SteamError
@@ -56,7 +57,7 @@ def finish_at_optimum(
     check_options(
         step_tolerance=step_tolerance, relative_tolerance=relative_tolerance, absolute_tolerance=absolute_tolerance
     )
-    if isinstance(max_updates, bool) or not isinstance(max_updates, (int, np.integer)) or max_updates < 1:
+    if not is_integer(max_updates) or max_updates < 1:
         raise SteamError(f"max_updates must be an integer ≥ 1, got max_updates={max_updates!r}")
     factors = solver.factors
     if solver.forgets_by_time or any(f is None for f in factors):

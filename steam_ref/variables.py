@@ -1,10 +1,11 @@
 """Variables and their current estimates.  [YIB Sec. III-A]
 
-Variables are named by small keys: ``X(i)`` is the trajectory state x(tᵢ) = [p; ṗ] (the i-th
-*estimated* state, whatever its time) and ``L(j)`` is landmark ℓⱼ. :class:`Values` maps keys
+Variables are named by small keys: ``X(i)`` is the trajectory state x(tᵢ) at pose i (the paper's front end
+keys a state by its pose's index, so with a layout that skips poses only some i have one; in a problem of
+one's own, any integer) and ``L(j)`` is landmark ℓⱼ. :class:`Values` maps keys
 to estimates (1-D float arrays), each moved by the :class:`~steam_ref.manifold.Manifold` of its kind
 (a vector space unless told otherwise). This module sits at the bottom of the package: it imports
-nothing of steam_ref but its errors and :mod:`.manifold`.
+nothing of steam_ref but its errors, :mod:`.arguments` and :mod:`.manifold`.
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
+from .arguments import is_integer
 from .errors import NumericalError, ShapeError, SteamError, UnknownVariableError
 from .manifold import VECTOR, Manifold
 
@@ -41,17 +43,19 @@ class Key(_KeyFields):
 
 def _index(name: str, i: int) -> int:
     """A key's index: an int or a NumPy integer (a bool, a float, even 2.0, or a string is refused)."""
-    if isinstance(i, (bool, np.bool_)) or not isinstance(i, (int, np.integer)):
+    if not is_integer(i):
         raise SteamError(f"{name} takes an integer index, got {i!r}")
     return int(i)
 
 
 def X(i: int) -> Key:
-    """The key of trajectory state number i (an integer): the variable x(tᵢ) = [x, y, θ, ẋ, ẏ, θ̇].
+    """The key of the trajectory state at pose i (an integer): the variable x(tᵢ).
 
-    [x, y] is the position (m) and θ the heading (rad, counter-clockwise from the world's x axis, never
-    wrapped) in the world frame; [ẋ, ẏ, θ̇] their time derivatives, **the velocity in the world frame**
-    (m/s, rad/s), not the robot's. The WNOJ and Singer priors append [ẍ, ÿ, θ̈]. Conventions: docs/api.md.
+    With the vector-space priors, x(tᵢ) = [x, y, θ, ẋ, ẏ, θ̇]: [x, y] is the position (m) and θ the heading
+    (rad, counter-clockwise from the world's x axis, never wrapped) in the world frame; [ẋ, ẏ, θ̇] their time
+    derivatives, **the velocity in the world frame** (m/s, rad/s), not the robot's. The WNOJ and Singer priors
+    append [ẍ, ÿ, θ̈]. On SE(2) (:data:`~steam_ref.lie.SE2_STATE`) it is the pose and its body twist,
+    [px, py, θ, vx, vy, ω]. Conventions: docs/api.md.
     """
     return Key("x", _index("X", i))
 

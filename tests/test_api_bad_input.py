@@ -1,5 +1,5 @@
-"""Bad input to the public Python API, as a new user would give it (issue 10: "API arguments are
-validated where they enter, with messages that name the argument and the value").
+"""Bad input to the public Python API, as a new user would give it (API arguments are validated
+where they enter, with messages that name the argument and the value).
 
 Each case of ``CASES`` is one finding of the sweep: a call that gave a silent wrong answer, a
 non-project exception (TypeError, KeyError, OverflowError, LinAlgError, ...) or a message that named

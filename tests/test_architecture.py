@@ -364,6 +364,7 @@ ORACLE = (
     "steam_ref.conformance.oracle",
     "steam_ref.conformance.oracle_graph",
     "steam_ref.conformance.oracle_lag",
+    "steam_ref.conformance.oracle_se2",
     "steam_ref.conformance.expected",
 )
 

@@ -1,4 +1,4 @@
-"""The steam-ref command on bad input (issue 10): every error is one line on stderr and exit code 2,
+"""The steam-ref command on bad input: every error is one line on stderr and exit code 2,
 never a traceback, and it comes before any run: the solver, the batch, the experiments and the
 comparison are replaced here by functions that fail the test if they are reached. Most calls run
 in-process (``steam_ref.cli.commands.main``); two run the module as a user would."""
@@ -27,8 +27,9 @@ def _never(*args, **kwargs):
 
 @pytest.fixture(autouse=True)
 def no_runs(monkeypatch: pytest.MonkeyPatch) -> None:
-    for name in ("StreamingEstimator", "sequential_batch", "reproduce", "compare", "build_problem"):
-        monkeypatch.setattr(cli, name, _never)
+    for name in ("run.StreamingEstimator", "batch.sequential_batch", "reproduce.reproduce", "fidelity.compare"):
+        monkeypatch.setattr(f"steam_ref.cli.{name}", _never)
+    monkeypatch.setattr("steam_ref.cli.batch.build_problem", _never)
 
 
 @pytest.fixture(scope="module")

@@ -1,4 +1,4 @@
-"""Data files that lie about their size or their ids (issue 19).
+"""Data files that lie about their size or their ids.
 
 - **GTSAM text ids** are read as integers, never through a float: any two ids the file writes
   differently stay two landmarks, ids up to 2^53 are kept exactly, larger ones (which the data set's

@@ -63,7 +63,7 @@ def _call(capsys, argv: list[str]) -> tuple[int, str, str]:
 )
 def test_refused_before_the_run_naming_the_option(capsys, monkeypatch, argv, needle):
     for name in ("StreamingEstimator", "score_against_batch", "generate_synthetic"):
-        monkeypatch.setattr(cli, name, _never)
+        monkeypatch.setattr(f"steam_ref.cli.run.{name}", _never)
     monkeypatch.setattr("steam_ref.cli.consistency.run_sweep", _never)
     code, out, err = _call(capsys, argv)
     assert (code, out) == (2, "") and len(err.splitlines()) == 1
@@ -78,7 +78,7 @@ def test_the_one_rule_for_numbers_still_reads_every_plain_decimal(capsys, monkey
         seen["lag"] = options.lag
         raise SteamError("stop here")
 
-    monkeypatch.setattr(cli, "StreamingEstimator", record)
+    monkeypatch.setattr("steam_ref.cli.run.StreamingEstimator", record)
     for text, value in (("10", 10.0), ("2.5", 2.5), (".5", 0.5), ("5.", 5.0), ("1e1", 10.0), ("+3E-1", 0.3)):
         code, _, err = _call(capsys, ["run", "--lag", text])
         assert code == 2 and "stop here" in err and seen["lag"] == value
@@ -88,7 +88,7 @@ def test_out_of_memory_says_so(capsys, monkeypatch):
     def empty(*args, **kwargs):
         raise MemoryError  # what Python raises with no message: it printed "error: (no message)"
 
-    monkeypatch.setattr(cli, "generate_synthetic", empty)
+    monkeypatch.setattr("steam_ref.cli.run.generate_synthetic", empty)
     code, _, err = _call(capsys, ["run", "--steps", "5"])
     assert code == 2 and err == "steam-ref: error: out of memory\n"
 
@@ -115,7 +115,7 @@ def test_a_deleted_working_folder_is_named(tmp_path, capsys, monkeypatch):
     monkeypatch.chdir(gone)
     monkeypatch.setenv("PWD", str(gone))
     gone.rmdir()
-    monkeypatch.setattr(cli, "StreamingEstimator", _never)
+    monkeypatch.setattr("steam_ref.cli.run.StreamingEstimator", _never)
     code, _, err = _call(capsys, ["run", "--steps", "4", "--save-trajectory", "t.txt"])
     assert code == 2
     assert err.strip() == (

@@ -1,4 +1,4 @@
-"""The bad-input corpus (issue 10, "never silently wrong"): data files, set-ups and options.
+"""The bad-input corpus ("never silently wrong"): data files, set-ups and options.
 
 Every bad input either loads the same data (equal arrays) or raises the project's DataError naming
 the place (the file, and the row or line and column where there is one); never another exception

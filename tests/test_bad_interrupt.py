@@ -1,4 +1,4 @@
-"""Ctrl-C inside ``IncrementalSolver.update`` (issue 19): any BaseException, wherever it lands, leaves
+"""Ctrl-C inside ``IncrementalSolver.update``: any BaseException, wherever it lands, leaves
 the solver exactly as a twin that never saw the update (factors, caches, tree, θ̄, δ, estimate, byte
 for byte), then propagates; the next valid update then gives what an uninterrupted one gives.
 

@@ -1,4 +1,4 @@
-"""Options and numbers blamed on what the user gave (issue 19, the weak classes).
+"""Options and numbers blamed on what the user gave: the weak classes of the bad-input sweep.
 
 - ``--qc-scale`` and ``--singer-time-constant``: outside the range float64 resolves (1e-8..1e8 and
   1e-6..1e8 s) refused naming the option, before any run; inside it, accepted. ``--singer-time-constant``
@@ -60,7 +60,7 @@ NUMBERS = st.one_of(
 @given(value=NUMBERS, option=st.sampled_from(["--qc-scale", "--singer-time-constant"]))
 def test_a_scale_outside_what_float64_resolves_is_blamed_on_its_option(monkeypatch, capsys, value, option) -> None:
     """The data set is missing, so an accepted value ends in that one-line error instead, before any run."""
-    monkeypatch.setattr(cli, "run_online", _never)
+    monkeypatch.setattr("steam_ref.cli.fidelity.run_online", _never)
     low, high = {"--qc-scale": (1e-8, 1e8), "--singer-time-constant": (1e-6, 1e8)}[option]
     prior = ["--prior", "singer"] if option == "--singer-time-constant" else []
     code, err = _run(capsys, ["run", "--dataset", "missing.mat", *prior, f"{option}={value!r}"])
@@ -72,7 +72,7 @@ def test_a_scale_outside_what_float64_resolves_is_blamed_on_its_option(monkeypat
 
 @pytest.mark.parametrize("prior", ["wnoa", "wnoj"])
 def test_a_singer_time_constant_with_another_prior_is_refused(monkeypatch, capsys, prior) -> None:
-    monkeypatch.setattr(cli, "run_online", _never)
+    monkeypatch.setattr("steam_ref.cli.fidelity.run_online", _never)
     code, err = _run(capsys, ["run", "--prior", prior, "--singer-time-constant", "2"])
     assert code == 2 and "--singer-time-constant applies to --prior singer only" in err and prior in err
 

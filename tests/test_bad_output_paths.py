@@ -1,4 +1,4 @@
-"""Output paths of the command (issue 19): ``--save-estimates`` and ``--plot`` name a regular file, or
+"""Output paths of the command: ``--save-estimates`` and ``--plot`` name a regular file, or
 nothing yet in a folder that exists; anything else is refused before the run, in one line naming the
 option, without opening it (a named pipe would block) and without changing a thing (a dangling link
 is neither removed nor given a target). A write that fails after the run (a full disk) names the
@@ -129,7 +129,7 @@ def test_an_output_path_is_accepted_or_refused_before_the_run_and_nothing_change
 ) -> None:
     if name in (".", ".."):
         name = "x" + name
-    monkeypatch.setattr(cli, "StreamingEstimator", _reached)  # the run starts here
+    monkeypatch.setattr("steam_ref.cli.run.StreamingEstimator", _reached)  # the run starts here
     root = tmp_path_factory.mktemp("out")
     suffix = {"--save-estimates": ".npz", "--plot": ".png"}[option] if right_suffix else ".txt"
     path = make(root, parent_kind, leaf_kind, name, suffix)
@@ -193,7 +193,7 @@ def test_a_full_disk_after_a_real_run_is_one_line_naming_the_option(tmp_path: Pa
         Path(path).write_bytes(b"PK\x03\x04 half")
         raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
 
-    monkeypatch.setattr(cli, "save_estimates", full_disk)
+    monkeypatch.setattr("steam_ref.cli.run.save_estimates", full_disk)
     code = cli.main(["run", "--max-poses", "3", "--json", "--save-estimates", str(target)])
     _, err = capsys.readouterr()
     assert code == 2 and len(err.splitlines()) == 1

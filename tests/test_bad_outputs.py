@@ -208,8 +208,8 @@ def test_an_output_onto_the_file_stdout_goes_to_is_refused(tmp_path):
 )
 def test_outputs_that_would_lose_data_are_refused_before_the_run(tmp_path, capsys, monkeypatch, argv, needle):
     (tmp_path / "x").mkdir()
-    monkeypatch.setattr(cli, "StreamingEstimator", lambda *a, **k: pytest.fail("the run started"))
-    monkeypatch.setattr(cli, "sequential_batch", lambda *a, **k: pytest.fail("the run started"))
+    monkeypatch.setattr("steam_ref.cli.run.StreamingEstimator", lambda *a, **k: pytest.fail("the run started"))
+    monkeypatch.setattr("steam_ref.cli.batch.sequential_batch", lambda *a, **k: pytest.fail("the run started"))
     for command in ("run", "batch"):
         args = [a.format(d=tmp_path) for a in argv]
         if command == "batch" and "--tree-dot" in args:

@@ -1,4 +1,4 @@
-"""Absurd readings and diverging streams (issue 19).
+"""Absurd readings and diverging streams.
 
 Two classes. **Readings no sensor gives** are refused when the data set is made, naming the reading:
 a value whose float64 spacing exceeds its sigma (a bearing of 1e17 rad: numbers there are 16 rad

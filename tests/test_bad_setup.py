@@ -1,4 +1,4 @@
-"""Bad set-ups, options and fits (issue 10, "never silently wrong"): each refused where it enters,
+"""Bad set-ups, options and fits ("never silently wrong"): each refused where it enters,
 with an error naming the argument and the value; the range correction's fit is checked; the
 authors' saved covariances must be covariances; data folders that do not exist are named."""
 

@@ -1,4 +1,4 @@
-"""The Bayes tree in GTSAM's words (issue 21): ``dot()`` and ``UpdateReport.tree_nnz`` against GTSAM 4.3.
+"""The Bayes tree in GTSAM's words: ``dot()`` and ``UpdateReport.tree_nnz`` against GTSAM 4.3.
 
 The oracle is GTSAM itself, on problems where both eliminate in the same order: a given ordering
 (``GaussianFactorGraph.eliminateMultifrontal``), and an iSAM2 stream where GTSAM is told steam_ref's

@@ -1,4 +1,4 @@
-"""The conformance kit (issue 11): what it ships, that the checker catches faults, that GTSAM passes it.
+"""The conformance kit: what it ships, that the checker catches faults, that GTSAM passes it.
 
 The oracles here are independent of steam_ref's numerics: deliberate faults written from each
 case's inputs (Q with Δt² for Δt³, Λ and Ψ swapped, a flipped Jacobian, the cost without its ½)
@@ -113,10 +113,10 @@ def test_kit_json_reads_back_every_double_exactly(rng):
 
 
 def test_the_oracle_imports_nothing_of_steam_ref_but_its_errors():
-    for module in ("oracle.py", "oracle_graph.py", "oracle_lag.py", "expected.py"):
+    for module in ("oracle.py", "oracle_graph.py", "oracle_lag.py", "oracle_se2.py", "expected.py"):
         tree = ast.parse((SHIPPED.parent / module).read_text())
         imported = {n.module for n in ast.walk(tree) if isinstance(n, ast.ImportFrom) and n.level}
-        assert imported <= {"errors", None, "oracle", "oracle_graph", "oracle_lag"}, (module, imported)
+        assert imported <= {"errors", None, "oracle", "oracle_graph", "oracle_lag", "oracle_se2"}, (module, imported)
 
 
 # --- selftest, export, check ----------------------------------------------------------------------
@@ -306,9 +306,20 @@ def test_gtsam_passes_every_case_it_computes(tmp_path, capsys):
     assert {"wnoa_dt0.1", "interp_tau1.1", "interp_tau1.55"} <= computed["gp"] and "interpolated_range" in computed[
         "factors"
     ]
+    # kit v4's se2 suite: gtsam.Pose2 passes Exp/Log at the half turn, J_r and J_r^-1 away from 0, between and its
+    # Jacobians, the state prior, and WnoaMotionFactorPose2's residual and cost; its pose Jacobians (a truncated
+    # series) and its closed forms near phi = 0 are left out
+    assert computed["se2"] == {
+        "exp_near_half_turn",
+        "log_near_half_turn",
+        "right_jacobian_large",
+        "between_across_half_turn",
+        "state_prior_across_pi",
+        "prior_local_variable_residual_diagonal_qc",
+    }
 
 
-GTSAM_SUITES = ("gp", "factors", "linear", "batch", "bayes_tree", "incremental", "fixed_lag")
+GTSAM_SUITES = ("gp", "factors", "linear", "batch", "bayes_tree", "incremental", "fixed_lag", "se2")
 
 
 @pytest.mark.needs_data
@@ -328,7 +339,8 @@ def test_the_paper_suite_holds_the_authors_saved_runs(shared_data):
 
 def test_the_paper_suites_set_up_is_written_as_the_kit_states_it():
     """The builder writes the set-up flat, field for field as SETUP_FIELDS documents it, and equal to the
-    shipped kit's inputs: the schedule's fields are the set-up's schedule (issue 18 moved them)."""
+    shipped kit's inputs: the schedule's fields are the set-up's schedule (``PaperSetup.schedule``),
+    not fields of their own."""
     from steam_ref.conformance.kitio import plain
     from steam_ref.conformance.paper import setup_inputs
     from steam_ref.conformance.paper_spec import SETUP_FIELDS

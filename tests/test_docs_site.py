@@ -247,7 +247,7 @@ def test_the_build_leaves_unexecuted_exactly_the_tutorials_whose_data_are_absent
     assert sorted(pages.notebooks_without_their_data(REPO_ROOT / "tutorials")) == expected
     assert "*04_incremental.ipynb" in expected and "*06_motion_priors.ipynb" in expected
     note = pages.needs_note(pages.UNEXECUTED["04_incremental"])
-    assert "steam-ref data fetch plaza authors-plaza" in note and pages.NEEDS_NOTE_CLASS in note
+    assert "    steam-ref data fetch plaza\n" in note and pages.NEEDS_NOTE_CLASS in note  # 04 reads Plaza alone
     monkeypatch.setenv("STEAM_REF_REQUIRE_DATA", "1")
     with pytest.raises(RuntimeError, match=r"STEAM_REF_REQUIRE_DATA=1 but 04_incremental\.ipynb needs data:plaza"):
         pages.notebooks_without_their_data(REPO_ROOT / "tutorials")

@@ -2,7 +2,7 @@
 
 The oracle is the authors' output (MATLAB + GTSAM 3.2, ``XinyanGT/online-gpslam-code``,
 ``matlab/Data/*_full_data_run.mat``), read from ``authors/`` beside the paper's data. The targets
-are those of issue 9: on Plaza every pose within 2 cm and RMS within 5 mm of the authors' estimate,
+are the reproduction's: on Plaza every pose within 2 cm and RMS within 5 mm of the authors' estimate,
 the position RMSE 0.338 ± 0.001 m, every landmark within 2 cm, marginal covariances within 2 %
 (relative Frobenius norm) at the median state; on the synthetic set every pose within 1 cm.
 """

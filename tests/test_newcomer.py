@@ -1,4 +1,4 @@
-"""A newcomer's first hour, as files the repository ships: each check is a friction one met (issue 20).
+"""A newcomer's first hour, as files the repository ships: each check is a friction one met.
 
 The README read on a package index (links absolute, under the project's Source URL), the install that
 fails without SuiteSparse explained, the virtual environment ignored, the extras that the tutorials
@@ -13,7 +13,7 @@ import subprocess
 import pytest
 from requirements import REPO_ROOT
 
-from steam_ref.cli.args import build_parser
+from steam_ref.cli.commands import build_parser
 from steam_ref.datasets import fetch
 
 README = (REPO_ROOT / "README.md").read_text()

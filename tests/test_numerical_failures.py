@@ -1,6 +1,6 @@
 """Never silently wrong: bad factors, overflow, ill-conditioning and false "converged" claims.
 
-Each test builds the failing input of issue 10 and asserts the named error (or the honest result),
+Each test builds one failing input found by the bad-input sweep and asserts the named error (or the honest result),
 checked against dense linear algebra where a number is claimed.
 """
 

@@ -21,7 +21,7 @@ variable its estimate given all the data, as a Rauch-Tung-Striebel backward pass
 variable: the window's, or one this pass has already computed. For a linear problem the result is the
 batch optimum of every factor ever given, to rounding (tests/test_fixed_lag_history.py); for a nonlinear
 one, the optimum of the linearizations frozen at each marginalization, off by how far the separator moved
-since, and not always closer to the truth than the lagged estimates (figures: docs/derivations.md §10.5).
+since, and not always closer to the truth than the lagged estimates (figures: docs/experiments.md).
 
 Each conditional is kept in solved form, x_v = m_v + K_v (x_S - θ̄_S) with m_v = θ̄_v + R_v⁻¹ d_v and
 K_v = -R_v⁻¹ S_v (θ̄_v ⊕ (R_v⁻¹ d_v + K_v (x_S ⊖ θ̄_S)) for other kinds): memory grows with the run again, by

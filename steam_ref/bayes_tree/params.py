@@ -6,7 +6,6 @@ The defaults are GTSAM's ``ISAM2Params`` defaults (relinearization threshold 0.1
 
 from __future__ import annotations
 
-import dataclasses
 import itertools
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -15,7 +14,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..arguments import integer, number
+from ..arguments import integer, is_integer, number, replace_fields
 from ..errors import ShapeError, SteamError
 
 __all__ = ["ISAM2Params"]
@@ -83,7 +82,7 @@ class ISAM2Params:
             t = _threshold(t, "relinearize_threshold")
         object.__setattr__(self, "relinearize_threshold", t)
         skip: object = self.relinearize_skip  # as given: checked here
-        if isinstance(skip, (bool, np.bool_)) or not isinstance(skip, (int, np.integer)) or skip < 1:
+        if not is_integer(skip) or skip < 1:
             raise SteamError(f"relinearize_skip must be a positive integer, got {skip!r}")
         object.__setattr__(self, "relinearize_skip", int(skip))
         object.__setattr__(self, "wildfire_threshold", _threshold(self.wildfire_threshold, "wildfire_threshold"))
@@ -121,9 +120,6 @@ class ISAM2Params:
             raise SteamError(f"relinearize_threshold {t!r} has no entry for variables of kind {kind!r}") from None
 
     def replace(self, **changes: Any) -> ISAM2Params:
-        """A copy with some fields changed (validated again); SteamError names an unknown field."""
-        names = {f.name for f in dataclasses.fields(self)}
-        unknown = sorted(set(changes) - names)
-        if unknown:
-            raise SteamError(f"ISAM2Params has no field {unknown[0]!r}; the fields are {sorted(names)}")
-        return dataclasses.replace(self, **changes)
+        """A copy with some fields changed (validated again); SteamError names an unknown field
+        (:func:`~steam_ref.arguments.replace_fields`)."""
+        return replace_fields(self, changes)

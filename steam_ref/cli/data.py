@@ -18,7 +18,7 @@ from ..datasets.search import data_cache_dir, uncleaned_plaza
 __all__ = ["add_parser", "run"]
 
 
-def add_parser(sub: argparse._SubParsersAction) -> None:
+def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     """Add ``data`` with its ``list`` and ``fetch`` subcommands to the command's subparsers."""
     data = sub.add_parser("data", help="the paper's data by name: list them, fetch them (sha256-checked)")
     what = data.add_subparsers(dest="data_command", required=True, parser_class=type(data))
@@ -38,6 +38,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         default=None,
         help=f"a mirror to fetch the files from by name (default: ${fetching.DATA_URL_ENV}, else the authors' repository)",
     )
+    return data
 
 
 def _size(n: int) -> str:
@@ -48,6 +49,8 @@ def _listed(name: str, s: fetching.DataSet, width: int) -> str:
     """The first line of a set in ``data list``: its name (in a column ``width`` wide), the size of its files
     (those found, else the registry's), and where it is, or that the file found there is not the published one;
     for an absent plaza, the original files ``--dataset plaza`` reads instead (UncleanedDataWarning)."""
+    if not s.files:
+        return f"{name:<{width}}  {_size(0):>12}  generated, no file"
     got = fetching.found(name)
     if got is None:
         original = uncleaned_plaza() if name == "plaza" else None
@@ -67,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
         width = max(map(len, fetching.DATASETS))  # one column for every name, the longest included
         for name, s in fetching.DATASETS.items():
             print(_listed(name, s, width))
-            print(f"{'':<{width}}  {s.what}; from {s.source}; licence: {s.licence}")
+            print(f"{'':<{width}}  {s.what}" + (f"; from {s.source}; licence: {s.licence}" if s.files else ""))
         print(f"fetched files go to {data_cache_dir()}; fetch them with `steam-ref data fetch [NAME ...]`")
         return 0
     progress = sys.stderr.isatty()

@@ -14,7 +14,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..datasets import LandmarkDataset, RangeDataset
-from ..datasets.fetch import DATASETS, file_digest
+from ..datasets.registry import DATASETS, file_digest
 from ..paper.progress import wanted as progress_wanted
 from ..paper.progress import working
 from ..paper.results import position_rmse

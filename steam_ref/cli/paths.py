@@ -8,6 +8,7 @@ file over it, so a full disk names the option and the path and leaves any old fi
 
 from __future__ import annotations
 
+import argparse
 import contextlib
 import errno
 import importlib.util
@@ -18,9 +19,20 @@ import tempfile
 from collections.abc import Callable
 from pathlib import Path
 
-from ..errors import SteamError
+import numpy as np
 
-__all__ = ["check_output", "check_outputs_apart", "write_output", "check_out_folder"]
+from ..errors import SteamError
+from ..evaluate import write_kitti, write_tum
+
+__all__ = [
+    "check_output",
+    "check_outputs_apart",
+    "write_output",
+    "check_out_folder",
+    "check_trajectory_output",
+    "save_trajectory",
+    "write_plot",
+]
 
 
 _KINDS = {
@@ -202,3 +214,28 @@ def check_out_folder(path: str, option: str) -> None:
             pass
     except OSError as err:
         raise SteamError(f"{option}: cannot write in {str(existing)!r} ({err.strerror or err})") from None
+
+
+def check_trajectory_output(args: argparse.Namespace) -> None:
+    """--save-trajectory FILE checked before the run; --trajectory-format needs it (alone it would do nothing)."""
+    check_output(args.save_trajectory, "", "--save-trajectory")
+    if args.trajectory_format is not None and args.save_trajectory is None:
+        raise SteamError(
+            f"--trajectory-format {args.trajectory_format} is the format of --save-trajectory FILE: give it"
+        )
+
+
+def save_trajectory(args: argparse.Namespace, times: np.ndarray, poses: np.ndarray) -> None:
+    """--save-trajectory: the poses (n, 3) at the data set's times, as TUM or KITTI."""
+    if args.save_trajectory:
+        if args.trajectory_format == "kitti":
+            write_output(args.save_trajectory, "--save-trajectory", lambda name: write_kitti(name, poses))
+        else:
+            write_output(args.save_trajectory, "--save-trajectory", lambda name: write_tum(name, times, poses))
+
+
+def write_plot(args: argparse.Namespace, draw: Callable[[str], object]) -> str:
+    """Write ``--plot`` by ``draw(name)``; the line saying where it went, printed after the figures ("" with
+    ``--json``: its one line is the figures)."""
+    write_output(args.plot, "--plot", draw)
+    return "" if args.json else f"\nplot written to {os.path.abspath(args.plot)}"

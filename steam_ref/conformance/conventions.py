@@ -100,6 +100,12 @@ CONVENTIONS = {
     "error is 0 - r (the distance has a value there), but the distance has no derivative (its slope is 1 in every "
     "direction), so H_k, and with them A_k, are zero rows by convention (gpslam's and STEAM's; steam_ref warns); "
     "b = -sqrt(w) W e as always. A bearing there has no value and is refused",
+    "se2": "the se2 suite (kit v4) alone: tangent order [rho; phi] (translation, then angle); a state is "
+    "[x, y, theta, vx, vy, w], a pose and its body twist; right retraction x + d = (T Exp(d[:3]), w + d[3:]), every "
+    "Jacobian and covariance in that d; Log's angle in (-pi, pi], +pi at the half turn (a stored -pi gives +pi); "
+    "headings of poses and states in (-pi, pi]; both WNOA residuals, 'local-variable' [xi - dt w1; J_r(xi)^-1 w2 - "
+    "w1] and 'simplified' [xi - dt w1; w2 - w1], xi = Log(T1^-1 T2) (README 'SE(2)'). The 'state', 'jacobians' and "
+    "'angles' conventions above are the vector-space suites'",
     "floats": "JSON numbers are the shortest decimal that reads back to the same IEEE-754 double "
     "(at most 17 significant digits, so reading with strtod is exact); no NaN or inf. "
     "Arrays are nested lists, row-major",

@@ -10,6 +10,7 @@ from ..errors import SteamError
 from . import oracle as o
 from . import oracle_graph as g
 from . import oracle_lag as lag
+from .oracle_se2 import se2_case
 
 __all__ = ["oracle_case", "oracle_alternatives", "fixed_lag_quantities", "ALTERNATIVES"]
 
@@ -130,6 +131,8 @@ def oracle_case(suite: str, name: str, inputs: Mapping) -> dict:
         return _incremental(name, inputs)
     if suite == "fixed_lag":
         return _fixed_lag(inputs)
+    if suite == "se2":
+        return se2_case(inputs)
     raise SteamError(f"no oracle for suite {suite!r}")
 
 

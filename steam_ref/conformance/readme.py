@@ -12,6 +12,7 @@ from __future__ import annotations
 from .conventions import CONVENTION_ALTERNATIVES, CONVENTIONS, RESULTS_LAYOUT, TREE_EDIT_EXAMPLE
 from .kitio import KIT_VERSION, SUITES
 from .paper_spec import PROCEDURE, SETUP_FIELDS
+from .readme_se2 import SE2, SE2_INPUTS, SE2_QUANTITIES
 
 __all__ = ["export_readme", "FACTOR_TABLE", "QUANTITIES", "SUITE_INPUTS", "FIXED_LAG"]
 
@@ -57,6 +58,7 @@ QUANTITIES = {
     "(names, same order), marginal_point_k (theta0 of the separator, stacked), marginal_information_k (Lambda) and "
     "marginal_vector_k (eta) over the separator stacked in that order; estimate_k: key -> vector of the window; "
     "covariances_k: key -> its marginal covariance (conventions, fixed_lag)",
+    "se2": SE2_QUANTITIES,
     "paper": "poses, velocities at the state_poses; landmarks by id; rmse_m",
 }
 
@@ -75,6 +77,7 @@ SUITE_INPUTS = {
     "again: it enters anew), timestamps (variable -> seconds: a new variable's, or a held one's new time, such as a "
     "landmark's when it is seen again; a variable never stamped is never marginalized), factors (new ones)}]}, lag "
     "(seconds) and isam2 as for incremental",
+    "se2": SE2_INPUTS,
     "paper": "dataset, file and sha256 of the paper's data file, the authors' run, method, every, setup (fields "
     "below), setup_fields and procedure (the texts below), state_poses (the poses whose states are compared)",
 }
@@ -189,7 +192,8 @@ Alternatives that `check --conventions NAME...` accepts for the quantities that 
 
 {_bullets(SUITE_INPUTS.items())}
 
-Keys: 'x<i>' is trajectory state i (6 numbers, [x, y, theta, x_dot, y_dot, theta_dot]), 'l<j>' landmark j
+Keys: 'x<i>' is trajectory state i (6 numbers, [x, y, theta, x_dot, y_dot, theta_dot]; in the se2 suite
+[x, y, theta, vx, vy, w], a pose and its body twist, README 'SE(2)'), 'l<j>' landmark j
 ([x, y]). Noise is `sigma` (scalar), `sigmas` (one per error entry, Sigma = diag(sigmas^2)) or `covariance`
 (a matrix); a measurement may carry `loss`: {{"type": "huber", "k": k}} or {{"type": "tukey", "c": c}}.
 
@@ -200,8 +204,9 @@ Keys: 'x<i>' is trajectory state i (6 numbers, [x, y, theta, x_dot, y_dot, theta
 {factors}
 
 Jacobians H_k = de/dx_k are taken in the vector space of the variables (theta a plain coordinate, no
-manifold), one block per key in the spec's key order; for `interpolated`, the chain rule through
-Lambda, Psi. W is the upper-triangular square root of Sigma^-1 (conventions, whitening).
+manifold; the se2 suite alone takes them in the right tangent of SE(2) states, README 'SE(2)'), one
+block per key in the spec's key order; for `interpolated`, the chain rule through Lambda, Psi.
+W is the upper-triangular square root of Sigma^-1 (conventions, whitening).
 
 ## Outputs
 
@@ -215,6 +220,9 @@ Lambda, Psi. W is the upper-triangular square root of Sigma^-1 (conventions, whi
 ## Fixed-lag smoothing
 
 {FIXED_LAG}
+## SE(2)
+
+{SE2}
 ## The paper suite: set-up and procedure
 
 Fields of `setup`:

@@ -42,6 +42,7 @@ from ..linear.cholesky import solve
 from ..linear.ordering import Ordering
 from ..linear.system import GaussianFactor, LinearSystem, linearize
 from . import spec
+from .runner_se2 import run_se2_case
 
 __all__ = ["run_case", "positive_rows"]
 
@@ -329,4 +330,6 @@ def run_case(suite: str, name: str, inputs: Mapping) -> dict:
         return _incremental(name, inputs)
     if suite == "fixed_lag":
         return _fixed_lag(inputs)
+    if suite == "se2":
+        return run_se2_case(inputs)
     raise SteamError(f"no runner for suite {suite!r}")

@@ -67,13 +67,16 @@ _USERINFO = re.compile(r"^([A-Za-z][A-Za-z0-9+.-]*://)[^/?#]*@")  # scheme://use
 
 def _dataset(name: str) -> DataSet:
     if name not in DATASETS:
-        raise DataError(f"no data set named {name!r}; the names are: {', '.join(DATASETS)}")
+        with_files = (n for n, s in DATASETS.items() if s.files)
+        raise DataError(f"no data set named {name!r}; the names are: {', '.join(with_files)}")
     return DATASETS[name]
 
 
 def found(name: str, data_dir: str | os.PathLike | None = None) -> tuple[list[Path], list[str]] | None:
     """The files of data set ``name`` in the first searched folder that holds them all, with how each that is
     not the published file differs (empty: they all are), or None. DataError when one is not a regular file."""
+    if not _dataset(name).files:  # generated: nothing to find
+        return None
     for folder in default_data_dirs(data_dir):
         paths = [folder / f.local for f in _dataset(name).files]
         for p in paths:
@@ -172,7 +175,8 @@ def fetch(
     sets = [_dataset(n) for n in wanted]
     for s in sets:
         if not s.fetchable:
-            raise DataError(f"data set {s.name!r} is not fetched: it ships in {s.source}")
+            where = f"it ships in {s.source}" if s.files else "it is generated, from no file"
+            raise DataError(f"data set {s.name!r} is not fetched: {where}")
     url = base_url(base)
     folder = Path(cache) if cache is not None else data_cache_dir()
     for target in {folder / f.local for s in sets for f in s.files}:

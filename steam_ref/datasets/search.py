@@ -27,9 +27,7 @@ from ..errors import DataError, UncleanedDataWarning
 from .cmu import load_cmu_mat, load_cmu_text
 from .gtsam_text import load_gtsam_2d
 from .landmarks import LandmarkDataset
-from .registry import GTSAM_SETS as _GTSAM_SETS
-from .registry import check_cached, check_regular, published_mismatch
-from .synthetic import generate_synthetic
+from .registry import DATASETS, DataSet, check_cached, check_regular, loadable, published_mismatch
 from .table import RangeDataset
 
 __all__ = [
@@ -44,8 +42,6 @@ __all__ = [
 ]
 
 DATA_DIR_ENV = "STEAM_REF_DATA_DIR"
-_FILES = {"paper-synthetic": "Syn_theta_Plaza.mat", "plaza": "Plaza1_thrown_away_some_range.mat"}
-_PLAZA1_TEXT = ("Plaza1_DR.txt", "Plaza1_TD.txt", "Plaza1_.mat")  # the original release, as gtsam's Data/ has it
 
 
 def data_cache_dir() -> Path:
@@ -125,14 +121,17 @@ def find_named(local: str, data_dir: str | os.PathLike | None = None) -> tuple[P
     return found, published_mismatch(found, local)
 
 
-def _load_named_mat(found: Path, key: str) -> RangeDataset:
-    """The named set ``key`` read from ``found``; a file that is not the published one is read as the user's
-    own file: named by its stem with "(not the published KEY)", and ``source`` saying how it differs."""
-    differs = published_mismatch(found, _FILES[key])
+def _load_named(s: DataSet, found: Path, seed: int) -> RangeDataset | LandmarkDataset:
+    """The named set ``s`` read by its loader from ``found`` (its first file); a file that is not the published
+    one is read as the user's own file: named by its stem with "(not the published NAME)", and ``source``
+    saying how it differs."""
+    assert s.loader is not None
+    folder = found.parents[len(Path(s.files[0].local).parts) - 1]  # the searched folder that holds them all
+    differs = next((why for f in s.files if (why := published_mismatch(folder / f.local, f.local)) is not None), None)
     if differs is None:
-        return load_cmu_mat(found, name=key)
-    data = load_cmu_mat(found, name=f"{found.stem} (not the published {key})")
-    return dataclasses.replace(data, source=f"{data.source}; not the published {key} file: {differs}")
+        return s.loader(found, s.name, seed)
+    data = s.loader(found, f"{found.stem} (not the published {s.name})", seed)
+    return dataclasses.replace(data, source=f"{data.source}; not the published {s.name} file: {differs}")
 
 
 def uncleaned_plaza(data_dir: str | os.PathLike | None = None) -> Path | None:
@@ -140,9 +139,10 @@ def uncleaned_plaza(data_dir: str | os.PathLike | None = None) -> Path | None:
     :class:`~steam_ref.errors.UncleanedDataWarning`, because no folder searched holds the cleaned
     ``Plaza1_thrown_away_some_range.mat``; None when the cleaned file is found, or neither is."""
     folders = default_data_dirs(data_dir)
-    if _find((_FILES["plaza"],), folders) is not None:
+    plaza = DATASETS["plaza"]
+    if _find(tuple(f.local for f in plaza.files), folders) is not None:
         return None
-    found = _find(_PLAZA1_TEXT, folders)
+    found = _find(plaza.original, folders)
     return None if found is None else found.parent
 
 
@@ -155,15 +155,41 @@ def _not_found(what: str, folders: list[Path], hint: str) -> DataError:
     return DataError(f"{what} not found; looked in: {looked}. {hint}")
 
 
-def _load_gtsam_set(key: str, folders: list[Path], hint: str) -> RangeDataset | LandmarkDataset:
-    """'victoria-park' (GTSAM's text format) or 'plaza2' (the CMU text release), as gtsam's Data/ ships them."""
-    files = _GTSAM_SETS[key]
+def _hint(key: str) -> str:
+    return (
+        f"Fetch it with `steam-ref data fetch {key}`, or put the file in a folder and pass that folder as "
+        f"--data-dir (data_dir= in Python) or set ${DATA_DIR_ENV} to it"
+    )
+
+
+def _load_registered(s: DataSet, folders: list[Path], seed: int) -> RangeDataset | LandmarkDataset:
+    """The registry's set ``s`` from the first folder holding all its files; for a set with an original release
+    (plaza), that release's files with an UncleanedDataWarning when no folder holds the published file."""
+    assert s.loader is not None
+    if not s.files:  # generated
+        return s.loader(None, s.name, seed)
+    files = tuple(f.local for f in s.files)
     found = _find(files, folders)
-    if found is None:
-        raise _not_found(
-            f"data set {key!r} ({', '.join(files)})", folders, hint + " (or `pip install gtsam`: its Data/ has them)."
-        )
-    return load_gtsam_2d(found, name=key) if key == "victoria-park" else load_cmu_text(found.parent, "Plaza2", name=key)
+    if found is not None:
+        return _load_named(s, found, seed)
+    hint = _hint(s.name)
+    if s.original:
+        text = _find(s.original, folders)
+        if text is not None:
+            release = text.name.removesuffix("_DR.txt")
+            data = load_cmu_text(text.parent, release, name=s.name)
+            warnings.warn(
+                f"load_dataset({s.name!r}): the paper's cleaned {', '.join(files)} is in none of the folders searched, "
+                f"so this is the ORIGINAL, uncleaned {release} release in {text.parent} (all {len(data.ranges):,} "
+                f"ranges, outliers included), not the paper's data; `steam-ref data fetch {s.name}` gets the cleaned file",
+                UncleanedDataWarning,
+                stacklevel=3,
+            )
+            return data
+        hint += f" (or `pip install gtsam`: its Data/ has {', '.join(s.original)})"
+    elif not s.fetchable:
+        hint += " (or `pip install gtsam`: its Data/ has them)"
+    raise _not_found(f"data set {s.name!r} ({', '.join(files)})", folders, hint + ".")
 
 
 def load_dataset(
@@ -171,7 +197,8 @@ def load_dataset(
 ) -> RangeDataset | LandmarkDataset:
     """A data set by name or path.
 
-    Names: "synthetic" (generated, see :func:`generate_synthetic`; ``seed`` applies),
+    Names are those of the registry (:data:`~.registry.DATASETS`, each read by its ``loader``):
+    "synthetic" (generated, see :func:`generate_synthetic`; ``seed`` applies),
     "paper-synthetic" (``Syn_theta_Plaza.mat``), "plaza" (``Plaza1_thrown_away_some_range.mat``,
     else the original Plaza1 text files with all 3,529 ranges, e.g. from an installed gtsam, with an
     :class:`~steam_ref.errors.UncleanedDataWarning`: :func:`uncleaned_plaza` says beforehand),
@@ -191,31 +218,9 @@ def load_dataset(
     if not key.strip():
         raise DataError("the data set name is empty: give synthetic, paper-synthetic, plaza, or a file or folder")
     folders = default_data_dirs(data_dir)
-    if key == "synthetic":
-        return generate_synthetic(seed=seed)
-    hint = (
-        f"Fetch it with `steam-ref data fetch {key}`, or put the file in a folder and pass that folder as "
-        f"--data-dir (data_dir= in Python) or set ${DATA_DIR_ENV} to it"
-    )
-    if key in _FILES:
-        found = _find((_FILES[key],), folders)
-        if found is not None:
-            return _load_named_mat(found, key)
-        if key == "plaza":
-            text = _find(_PLAZA1_TEXT, folders)
-            if text is not None:
-                warnings.warn(
-                    f"load_dataset('plaza'): the paper's cleaned {_FILES[key]} is in none of the folders searched, so "
-                    f"this is the ORIGINAL, uncleaned Plaza1 release in {text.parent} (all 3,529 ranges, outliers "
-                    "included), not the paper's data; `steam-ref data fetch plaza` gets the cleaned file",
-                    UncleanedDataWarning,
-                    stacklevel=2,
-                )
-                return load_cmu_text(text.parent, "Plaza1", name=key)
-            hint += " (or `pip install gtsam`: its Data/ has Plaza1_DR.txt, Plaza1_TD.txt, Plaza1_.mat)"
-        raise _not_found(f"data set {key!r} ({_FILES[key]})", folders, hint + ".")
-    if key in _GTSAM_SETS:
-        return _load_gtsam_set(key, folders, hint)
+    s = DATASETS.get(key)
+    if s is not None and s.loader is not None:
+        return _load_registered(s, folders, seed)
     path = Path(name_or_path)
     if not path.exists() and not path.is_absolute() and len(path.parts) == 1:
         path = _find((path.name,), folders) or path
@@ -225,8 +230,8 @@ def load_dataset(
         return load_gtsam_2d(path)
     if path.is_file():
         return load_cmu_mat(path)
-    names = ", ".join(["synthetic", *_FILES, *_GTSAM_SETS])
-    raise _not_found(f"data set {key!r} (not one of {names}, nor a file or folder)", folders, hint + ".")
+    names = ", ".join(loadable())
+    raise _not_found(f"data set {key!r} (not one of {names}, nor a file or folder)", folders, _hint(key) + ".")
 
 
 def load_range_dataset(

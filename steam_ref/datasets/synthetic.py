@@ -8,6 +8,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 
+from ..arguments import is_integer
 from ..errors import ShapeError, SteamError
 from ..gp.prior import check_qc, process_noise, transition
 from ..pose2 import integrate_odometry, wrap_angle
@@ -108,8 +109,8 @@ def _landmarks_and_ranges(
 
 
 def _is_count(value: object, lowest: int) -> bool:
-    """An integer (int or NumPy integer) >= ``lowest``; never a bool, nor a float (2.0 is not a count)."""
-    return bool(not isinstance(value, (bool, np.bool_)) and isinstance(value, (int, np.integer)) and value >= lowest)
+    """An integer (:func:`~steam_ref.arguments.is_integer`) >= ``lowest``."""
+    return is_integer(value) and bool(value >= lowest)
 
 
 def _is_number(value: object, lowest: float, strict: bool) -> bool:
@@ -132,7 +133,7 @@ def _check_generator_args(
     seed: int,
 ) -> NDArray:
     """The odometry sigmas (2,) after checking every argument (SteamError naming the bad one)."""
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+    if not is_integer(seed) or seed < 0:
         raise SteamError(f"seed must be an integer >= 0, got {seed!r}")
     for name, value in (("n_steps", n_steps), ("n_landmarks", n_landmarks), ("n_nearest", n_nearest)):
         if not _is_count(value, 1):

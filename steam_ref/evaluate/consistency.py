@@ -29,7 +29,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.special import gammaincinv
 
-from ..arguments import finite, number, real_array
+from ..arguments import finite, is_integer, number, real_array
 from ..errors import NumericalError, ShapeError, SteamError
 from ..pose2 import wrap_angle
 
@@ -86,7 +86,7 @@ def chi2_band(n_runs: int, dim: int, level: float = 0.95) -> tuple[float, float]
     """The two-sided ``level`` band of the ANEES of ``n_runs`` runs of a ``dim``-dimensional state:
     χ²⁻¹((1 ∓ level)/2; N d) / N.  [BLK01 Sec. 5.4.2]"""
     for name, value in (("n_runs", n_runs), ("dim", dim)):
-        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+        if not is_integer(value) or value < 1:
             raise SteamError(f"{name} must be a positive integer, got {value!r}")
     if isinstance(level, bool) or not isinstance(level, (int, float)) or not 0 < level < 1:
         raise SteamError(f"level must be a number in (0, 1), got {level!r}")

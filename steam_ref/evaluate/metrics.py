@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ..arguments import finite, number, real_array
+from ..arguments import finite, is_integer, number, real_array
 from ..errors import ShapeError, SteamError
 from ..pose2 import wrap_angle
 from .align import ALIGNMENTS, Alignment, align_planar
@@ -140,7 +140,7 @@ def rpe_pairs(
     if number("relative_tolerance", relative_tolerance) < 0:
         raise SteamError(f"relative_tolerance must be a number >= 0, got relative_tolerance={relative_tolerance!r}")
     if unit == "poses":
-        if isinstance(delta, bool) or not isinstance(delta, (int, np.integer)) or delta < 1:
+        if not is_integer(delta) or delta < 1:
             raise SteamError(f"an RPE over poses needs delta, a positive integer, got {delta!r}")
         starts = range(n) if all_pairs else range(0, n, int(delta))
         pairs = [(i, i + int(delta)) for i in starts if i + int(delta) < n]

@@ -14,7 +14,7 @@ from typing import ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
-from ..arguments import real_array
+from ..arguments import is_integer, real_array
 from ..errors import DegenerateMeasurementWarning, ShapeError, SteamError
 from ..pose2 import wrap_angle
 from ..robust import RobustLoss
@@ -99,7 +99,7 @@ class PriorFactor(Factor):
 
 def _check_state_dim(state_dim: object) -> int:
     """A state [p; ṗ; ...] with p = [x, y, θ]: a whole number of 3-blocks, at least pose and velocity."""
-    if isinstance(state_dim, bool) or not isinstance(state_dim, (int, np.integer)) or state_dim < 6 or state_dim % 3:
+    if not is_integer(state_dim) or state_dim < 6 or state_dim % 3:
         raise SteamError(
             f"state_dim must be a multiple of 3, at least 6 ([p; ṗ; ...], p = [x, y, θ]); got {state_dim!r}"
         )

@@ -162,7 +162,9 @@ class SparseCholesky:
             from sksparse.cholmod import CholmodNotPositiveDefiniteError, cholesky
 
             try:
-                f = cholesky(info, ordering_method="natural") if symbolic is None else symbolic.factor(info)
+                f = (
+                    cholesky(info, ordering_method="natural") if symbolic is None else symbolic.factor(info)
+                )  # 𝓛𝓛ᵀ = 𝓘  [YIB Eq. 11]
                 L = f.L()  # CHOLMOD may find the failure only here, when it converts the factor
             except CholmodNotPositiveDefiniteError as exc:
                 column = getattr(exc, "column", None)
@@ -187,8 +189,8 @@ class SparseCholesky:
                 f"rhs must be a vector ({self.n},) or a matrix ({self.n}, k) to match 𝓘, got shape {np.shape(rhs)}"
             )
         if self.backend == "cholmod":
-            return self._factor(rhs)
-        return self._factor.solve(np.asarray(rhs, dtype=float))
+            return self._factor(rhs)  # 𝓛𝓛ᵀ x = rhs by two triangular solves  [YIB Eq. 11]
+        return self._factor.solve(np.asarray(rhs, dtype=float))  # the same by SuperLU's LU of 𝓘  [YIB Eq. 11]
 
 
 def check_system(system: object) -> None:

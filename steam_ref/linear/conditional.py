@@ -57,7 +57,7 @@ def assemble_sqrt_information(ordering: Ordering, conditionals: Sequence[Conditi
         col = [r0 + np.arange(nf)] + [
             ordering.offset_of[k] + np.arange(dim) for k, dim in zip(c.separator, c.separator_dims, strict=True)
         ]
-        block = np.hstack([np.triu(c.R), c.S])  # (n_f, n_f + n_s): its columns are ``col``
+        block = np.hstack([np.triu(c.R), c.S])  # the rows [R S] of P(F | S): RᵀR = 𝓘  [YIB Eq. 25]
         r, j = np.nonzero(block)
         rows.append(r0 + r)
         cols.append(np.concatenate(col)[j])
@@ -82,7 +82,7 @@ def gather(keys: tuple[Key, ...], dims: Mapping[Key, int], factors: Sequence[Gau
         for k, block in zip(f.keys, f.blocks, strict=True):  # a factor names each variable once
             o = offset[k]
             M[r:end, o : o + block.shape[1]] = block
-        M[r:end, n] = f.rhs
+        M[r:end, n] = f.rhs  # ‖a θ + A_s s - b‖², the clique's terms stacked  [YIB Eq. 24]
         r = end
     return M
 

@@ -29,6 +29,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 
+from ..arguments import is_integer
 from ..errors import ShapeError, SteamError, UnknownVariableError
 from ..variables import Key, key_list
 
@@ -73,7 +74,7 @@ def sparse_backend(backend: str | None = None) -> str:
 
 def _positive_size(k: Key, d: object) -> int:
     """The size ``d`` of variable ``k`` as given (any object) as an int; ShapeError unless a positive integer."""
-    if isinstance(d, (bool, np.bool_)) or not isinstance(d, (int, np.integer)) or d < 1:
+    if not is_integer(d) or d < 1:
         raise ShapeError(f"the size of variable {k!r} in an ordering must be a positive integer, got {d!r}")
     return int(d)
 

@@ -112,7 +112,9 @@ def linearize(factors: Sequence[Factor], values: Values, *, jacobians: bool = Tr
         xs = _variables(values, group)
         W = batch.sqrt_information
         with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # checked just below
-            e = np.einsum("nij,nj->ni", W, batch.error(*xs))
+            e = np.einsum(
+                "nij,nj->ni", W, batch.error(*xs)
+            )  # whitened error Σ^-½ e: ‖e‖²_Σ = ‖Σ^-½ e‖²  [YIB Eq. 6, 21]
             s = np.linalg.norm(e, axis=1)
             if batch.loss is None:
                 scale, costs = np.ones_like(s), 0.5 * s**2
@@ -120,11 +122,14 @@ def linearize(factors: Sequence[Factor], values: Values, *, jacobians: bool = Tr
                 scale, costs = np.sqrt(batch.loss.weight(s)), batch.loss.rho(s)
             Js = None
             if jacobians:
-                Js = tuple(scale[:, None, None] * (W @ J) for J in batch.jacobians(*xs))
+                Js = tuple(
+                    scale[:, None, None] * (W @ J) for J in batch.jacobians(*xs)
+                )  # A_i = √w Σ^-½ H_i  [YIB Eq. 9, 21]
         hit = _first_non_finite(e, costs, Js)
         if hit is not None:
             failures.append((ids[hit[0]], hit[1]))
-        out.append(LinearizedGroup(np.asarray(ids), [f.keys for f in group], Js, -scale[:, None] * e, costs))
+        rhs = -scale[:, None] * e  # b_i = -√w Σ^-½ e(θ̄): ‖A_i δθ - b_i‖² is the linearized term  [YIB Eq. 10, 21]
+        out.append(LinearizedGroup(np.asarray(ids), [f.keys for f in group], Js, rhs, costs))
     if failures:
         i, what = min(failures)
         f = factors[i]
@@ -191,7 +196,7 @@ class LinearSystem:
     def information(self) -> tuple[sp.csc_matrix, NDArray]:
         """The information matrix 𝓘 = AᵀA and right-hand side Aᵀb of Eq. 11."""
         At = self.A.T.tocsr()
-        return (At @ self.A).tocsc(), At @ self.b
+        return (At @ self.A).tocsc(), At @ self.b  # 𝓘 = AᵀA, Aᵀb  [YIB Eq. 11, 21]
 
     def to_dense(self) -> tuple[NDArray, NDArray]:
         """Dense A and b, for checking small problems with numpy.linalg."""

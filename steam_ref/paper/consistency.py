@@ -69,7 +69,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..arguments import integer
+from ..arguments import integer, is_integer
 from ..batch import gauss_newton
 from ..datasets import sample_from_model, sample_se2_from_model
 from ..errors import SteamError
@@ -295,7 +295,7 @@ def check_result(study: ConsistencyStudy, item: object, result: object) -> None:
     (:func:`run_seed`'s output): every estimator of the study, each with one NEES per pose and velocity
     (``n_steps + 1``), at most one per landmark (an unseen one has none), each a finite number >= 0, and its
     warnings as text. A log is read back through this, so a damaged or edited line is never averaged in."""
-    if isinstance(item, bool) or not isinstance(item, int) or item < 0:
+    if not is_integer(item) or item < 0:
         raise SteamError(f"the item {json.dumps(item)[:40]} is not a run's index (an integer >= 0)")
     if not isinstance(result, dict):
         raise SteamError(f"the result is {json.dumps(result)[:40]}, not an object of estimators")

@@ -1,5 +1,5 @@
 """The batch optimum when only a weak prior fixes which way the map points: Gauss-Newton with an exact
-line search along the global turn, and Anderson acceleration.  [issue 12]
+line search along the global turn, and Anderson acceleration.
 
 Where nothing is surveyed (Victoria Park), only the prior on pose 0 (heading σ = π) fixes the map's
 orientation: turning the whole estimate about the origin (:func:`rotated`: positions, velocities,
@@ -7,24 +7,23 @@ accelerations and landmarks rotated, headings shifted) changes no other factor's
 nearly flat along that turn (curvature 1/π² per rad²), but each GP prior factor's error vector turns
 with the map, so Gauss-Newton's model, which keeps only the first-order change of each error, has
 curvature Σ‖W e⊥‖² over the GP prior factors along the turn's tangent; the second-order change of the
-odometry and sighting errors, which it drops, cancels that (docs/derivations.md §9). On Victoria Park
-the model's curvature is hundreds to thousands of times the cost's own: each step goes a thousandth of
-the way round, and a stopping rule on the cost stops Gauss-Newton with the map turned tenths of a radian
-from the optimum, tens of metres away at 100-200 m from the origin. A straight line leaves the turn at
-such angles, so :func:`converge`
+odometry and sighting errors, which it drops, cancels that (docs/derivations.md §9). Where the model's
+curvature is many times the cost's own, each step goes a small fraction of the way round, and a stopping
+rule on the cost stops Gauss-Newton with the map still turned from the optimum, far from it at a distance
+from the origin (Victoria Park's figures: docs/experiments.md). A straight line leaves the turn, so
+:func:`converge`
 
 1. takes a Gauss-Newton step (Eq. 11),
 2. turns the result by the angle that minimizes the cost along the turn itself: an exact line search
    (Brent) on the few factors the turn changes, :func:`anchored_factors`, found once by turning the
    start; the turn is kept only if the whole cost falls,
 3. mixes the last few iterates by Anderson acceleration (:class:`Anderson`), kept only if that lowers
-   the cost again: what remains after the turn is a slow bend of the map that Gauss-Newton closes by
-   about 10 % per step on Victoria Park,
+   the cost again: what remains after the turn is a slow bend of the map that Gauss-Newton closes a
+   little at each step,
 
 until no variable moves by more than ``step_tolerance``, and then checks the estimate's stationarity as
-:func:`~steam_ref.batch.gauss_newton` does. From BTGP/10's estimate of Victoria Park (0.39 rad turned,
-1.9 m bent) it reaches the optimum in 26 iterations (about 20 s), where alternating plain Gauss-Newton
-with the line search takes minutes.
+:func:`~steam_ref.batch.gauss_newton` does. How many iterations and seconds that takes on Victoria Park,
+against plain Gauss-Newton alternated with the line search, is measured in docs/experiments.md.
 """
 
 from __future__ import annotations

@@ -23,7 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..datasets import DATA_DIR_ENV, RangeDataset, default_data_dirs, read_mat
-from ..datasets.fetch import DATASETS
+from ..datasets.registry import DATASETS
 from ..datasets.search import find_named
 from ..errors import DataError
 from .results import RunResult, position_rmse
@@ -38,10 +38,9 @@ __all__ = [
     "compare",
 ]
 
-AUTHORS_RUNS = {
-    "plaza": "Plaza1_full_data_run.mat",
-    "paper-synthetic": "Syn_full_data_run.mat",
-}  # data set → file in authors/
+AUTHORS_RUNS = {  # data set → its authors' run, a file in authors/: read from the registry (DataSet.authors_run)
+    name: Path(DATASETS[s.authors_run].files[0].local).name for name, s in DATASETS.items() if s.authors_run
+}
 
 
 @dataclass(frozen=True)
@@ -70,7 +69,7 @@ def find_authors_file(name: str, data_dir: str | os.PathLike | None = None) -> P
         return got[0]
     folders = default_data_dirs(data_dir)
     looked = ", ".join(str(f) for f in folders) or "nowhere"
-    fetch = next(s.name for s in DATASETS.values() if any(f.local == f"authors/{file}" for f in s.files))
+    fetch = DATASETS[name].authors_run
     raise DataError(
         f"the authors' run authors/{file} not found; looked in: {looked}. Fetch it with `steam-ref data fetch "
         f"{fetch}`, or put the authors/ folder (from XinyanGT/online-gpslam-code matlab/Data) in --data-dir or "

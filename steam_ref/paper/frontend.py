@@ -45,6 +45,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from ..arguments import is_integer
 from ..errors import SteamError
 from ..factors import (
     BearingFactor,
@@ -76,7 +77,7 @@ class Layout:
     interpolate: bool = True  # readings between states: interpolated (Eq. 29) or dropped
 
     def __post_init__(self) -> None:
-        if isinstance(self.skip, bool) or not isinstance(self.skip, (int, np.integer)) or self.skip < 1:
+        if not is_integer(self.skip) or self.skip < 1:
             raise SteamError(f"skip must be a positive integer, got {self.skip!r}")
 
     def is_state(self, pose: int, last_state: int, has_range: bool, last_pose: int) -> bool:
@@ -121,9 +122,7 @@ class FrontEnd:
     """Algorithm 1 step 1 over a :class:`Readings` stream: :meth:`step` once per pose, in order."""
 
     def __init__(self, readings: Readings, setup: PaperSetup, layout: Layout = Layout(), n_poses: int | None = None):
-        if n_poses is not None and (
-            isinstance(n_poses, bool) or not isinstance(n_poses, (int, np.integer)) or n_poses < 1
-        ):
+        if n_poses is not None and (not is_integer(n_poses) or n_poses < 1):
             raise SteamError(f"n_poses must be a positive integer (or None for all), got {n_poses!r}")
         self.readings, self.setup, self.layout = readings, setup, layout
         self.n_poses = readings.n_poses if n_poses is None else min(int(n_poses), readings.n_poses)  # poses to process
@@ -278,7 +277,7 @@ class FrontEnd:
                 X(i),
                 L(r.range_landmark[k]),
                 r.range_value[k],
-                s.range_sigma if r.range_sigma is None else r.range_sigma[k],
+                r.range_sigma[k],
                 loss=s.range_loss,
                 state_dim=s.state_dim,
             )

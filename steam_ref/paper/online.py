@@ -49,7 +49,8 @@ class ScheduleClock:
         self.started = False  # the solver has had its first update
 
     def due(self, step: NewStep) -> bool:
-        """Count the step's ranges; True when the solver should update now."""
+        """Count the step's landmark readings (ranges, bearings and bearing-ranges alike, as the '/1' and '/10'
+        count them); True when the solver should update now."""
         self.released += step.n_landmark_readings
         self.since_update += step.n_landmark_readings
         if step.pose == self.last_pose:

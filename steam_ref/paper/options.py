@@ -9,11 +9,11 @@ and iSAM2's settings belong to the set-up (:class:`~steam_ref.paper.presets.Pape
 from __future__ import annotations
 
 import numbers
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass
 
 import numpy as np
 
-from ..arguments import integer
+from ..arguments import integer, replace_fields
 from ..errors import SteamError
 from .frontend import Layout
 from .solvers import METHODS, PB_MAX_ITERATIONS, PB_RELATIVE_TOLERANCE
@@ -63,11 +63,8 @@ class StreamOptions:
         return Layout(self.skip, self.range_states, self.interpolate)
 
     def replace(self, **changes) -> StreamOptions:
-        """A copy with some fields changed; SteamError names an unknown field."""
-        unknown = sorted(set(changes) - {f.name for f in fields(self)})
-        if unknown:
-            raise SteamError(f"StreamOptions has no field {unknown[0]!r}")
-        return replace(self, **changes)
+        """A copy with some fields changed; SteamError names an unknown field (:func:`~steam_ref.arguments.replace_fields`)."""
+        return replace_fields(self, changes)
 
 
 def _check_lag(o: StreamOptions) -> None:

@@ -21,12 +21,12 @@ time a user gives or reads (a lag, a query, a file's times) is on the data's, in
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, fields, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
 
-from ..arguments import integer, number
+from ..arguments import integer, is_integer, number, replace_fields
 from ..bayes_tree.params import ISAM2Params
 from ..errors import ShapeError, SteamError
 from ..gp.clock import CLOCK_BASES
@@ -84,11 +84,8 @@ class Schedule:
             )
 
     def replace(self, **changes) -> Schedule:
-        """A copy with some fields changed; SteamError names an unknown field."""
-        unknown = sorted(set(changes) - {f.name for f in fields(self)})
-        if unknown:
-            raise SteamError(f"Schedule has no field {unknown[0]!r}")
-        return replace(self, **changes)
+        """A copy with some fields changed; SteamError names an unknown field (:func:`~steam_ref.arguments.replace_fields`)."""
+        return replace_fields(self, changes)
 
 
 @dataclass(frozen=True)
@@ -175,7 +172,7 @@ class PaperSetup:
             raise SteamError(f"range_attachment must be one of {RANGE_ATTACHMENTS}, got {self.range_attachment!r}")
         blocks = self.relinearize_blocks
         if blocks is not None and not (
-            isinstance(blocks, tuple) and all(_is_int(b) and b >= 1 for b in blocks) and sum(blocks) == 6
+            isinstance(blocks, tuple) and all(is_integer(b) and b >= 1 for b in blocks) and sum(blocks) == 6
         ):
             raise SteamError(
                 f"PaperSetup.relinearize_blocks must be None or a tuple of positive integers adding up to 6 "
@@ -260,11 +257,8 @@ class PaperSetup:
         return {"synthetic": cls.synthetic, "plaza": cls.plaza, "victoria-park": cls.victoria_park}[name]()
 
     def replace(self, **changes) -> PaperSetup:
-        """A copy with some fields changed; SteamError names an unknown field."""
-        unknown = sorted(set(changes) - {f.name for f in fields(self)})
-        if unknown:
-            raise SteamError(f"PaperSetup has no field {unknown[0]!r}")
-        return replace(self, **changes)
+        """A copy with some fields changed; SteamError names an unknown field (:func:`~steam_ref.arguments.replace_fields`)."""
+        return replace_fields(self, changes)
 
     def with_schedule(self, **changes) -> PaperSetup:
         """A copy whose schedule has some fields changed (``setup.with_schedule(every=10)``)."""
@@ -316,10 +310,6 @@ class PaperSetup:
     def range_loss(self) -> Tukey | None:
         """The robust loss on ranges."""
         return None if self.tukey_c is None else Tukey(self.tukey_c)
-
-
-def _is_int(value: object) -> bool:
-    return not isinstance(value, bool) and isinstance(value, (int, np.integer))
 
 
 def _numeric(value: object) -> bool:

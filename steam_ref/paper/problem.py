@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from ..arguments import is_integer
 from ..batch import BatchResult, gauss_newton
 from ..datasets import LandmarkDataset, RangeDataset
 from ..errors import SteamError
@@ -95,7 +96,7 @@ def sequential_batch(
     one is checked for stationarity).
     """
     for name, value in (("chunk", chunk), ("final_iterations", final_iterations)):
-        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+        if not is_integer(value) or value < 1:
             raise SteamError(f"{name} must be a positive integer, got {value!r}")
     front = FrontEnd(problem.readings, problem.setup, problem.layout)
     graph, values, stop = FactorGraph(), Values(), chunk

@@ -22,6 +22,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from numpy.typing import NDArray
 
+from ..arguments import is_integer
 from ..datasets import LandmarkDataset, RangeDataset
 from ..errors import DataError, SteamError
 from ..gp.clock import Clock
@@ -171,7 +172,7 @@ class Readings:
     range_correction: tuple[float, float]  # (a, b) of r' = a r + b; (1, 0) when not corrected
     first_pose: NDArray  # (3,) pose 0 [x, y, θ]: ground truth, or the origin of a data set without it
     landmarks: dict[int, NDArray]  # id → surveyed position (2,), in the data set's row order
-    range_sigma: NDArray | None = None  # (n_ranges,) each range's own sigma; None: the set-up's range_sigma (CMU)
+    range_sigma: NDArray  # (n_ranges,) each range's sigma: a CMU set's are all the set-up's range_sigma
     bearings: Sightings = field(default_factory=lambda: Sightings.empty(1))  # bearings [rad]
     bearing_ranges: Sightings = field(default_factory=lambda: Sightings.empty(2))  # [bearing rad, range m]
 
@@ -219,6 +220,7 @@ class Readings:
             (a, b),
             data.ground_truth[0, 1:4].copy(),
             marks,
+            np.full(len(value), float(setup.range_sigma)),  # a CMU file gives no sigma: the set-up's, for every range
         )
 
     @classmethod
@@ -269,7 +271,7 @@ class Readings:
 
     def prefix(self, n_poses: int) -> Readings:
         """The stream of the first ``n_poses`` poses: their odometry and the readings taken at them."""
-        if isinstance(n_poses, bool) or not isinstance(n_poses, (int, np.integer)) or not 2 <= n_poses <= self.n_poses:
+        if not is_integer(n_poses) or not 2 <= n_poses <= self.n_poses:
             raise SteamError(f"a prefix has 2 to {self.n_poses} poses, got {n_poses!r}")
         ranges = self.range_pose < n_poses
         return replace(
@@ -279,7 +281,7 @@ class Readings:
             range_pose=self.range_pose[ranges],
             range_landmark=self.range_landmark[ranges],
             range_value=self.range_value[ranges],
-            range_sigma=None if self.range_sigma is None else self.range_sigma[ranges],
+            range_sigma=self.range_sigma[ranges],
             bearings=self.bearings.take(self.bearings.pose < n_poses),
             bearing_ranges=self.bearing_ranges.take(self.bearing_ranges.pose < n_poses),
         )

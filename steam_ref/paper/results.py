@@ -46,7 +46,9 @@ class RunResult:
     options: StreamOptions  # what the run chose
     schedule: Schedule  # when its solver updated (the set-up's)
     times: NDArray  # (n,) time of every pose covered by the estimate, in the data set's seconds
-    trajectory: NDArray  # (n, 6) [x, y, θ, ẋ, ẏ, θ̇] at every covered pose (Eq. 18 between states)
+    # (n, d) the state at every covered pose (Eq. 18 between states): [x, y, θ, ẋ, ẏ, θ̇] (d = 6), and then
+    # [ẍ, ÿ, θ̈] with a WNOJ or Singer prior (d = 9)
+    trajectory: NDArray
     state_poses: NDArray  # (M,) pose indices that have an estimated state
     landmarks: dict[int, NDArray]  # landmark id → estimate (2,)
     step_seconds: NDArray  # (n_steps,) wall time of each processed step (front end + solver)

@@ -32,6 +32,7 @@ from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
 
+from ..arguments import is_integer
 from ..errors import DataError, SteamError
 from ..linear.threads import blas_threads
 
@@ -151,7 +152,7 @@ def run_sweep(
 
     if backend not in BACKENDS:
         raise SteamError(f"backend must be one of {', '.join(BACKENDS)}, got {backend!r}")
-    if isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1:
+    if not is_integer(jobs) or jobs < 1:
         raise SteamError(f"jobs must be a positive integer, got {jobs!r}")
     if scheduler is not None and backend != "dask":
         raise SteamError("a scheduler address needs the dask backend (--backend dask)")

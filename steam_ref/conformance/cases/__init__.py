@@ -16,6 +16,7 @@ from .fixed_lag import fixed_lag_cases
 from .gp import gp_cases
 from .graphs import batch_cases, bayes_tree_cases, incremental_cases, linear_cases
 from .graphs_v2 import batch_cases_v2, bayes_tree_cases_v2, incremental_cases_v2, linear_cases_v2
+from .se2 import se2_cases
 
 __all__ = ["Case", "tol", "EXACT", "suite_cases", "SUITE_DOCS"]
 
@@ -41,6 +42,11 @@ SUITE_DOCS = {
         "their separator (Λ, η at the frozen linearization point; Λ may be singular), the window's estimate and "
         "marginal covariances"
     ),
+    "se2": (
+        "the GP prior on SE(2) (kit v4): Exp, Log (near 0 and the half turn), J_r, J_r⁻¹, between, the adjoint; both "
+        "WNOA residuals ('local-variable', 'simplified') and their Jacobians in the right tangent; the local GP's mean, "
+        "Jacobians and covariance; Gauss-Newton and an iSAM2 stream with relinearization on SE(2) states"
+    ),
     "paper": "the paper's runs (BTGP/1 on the synthetic set and on Plaza): final estimates and RMSE",
 }
 
@@ -55,4 +61,5 @@ def suite_cases(suite: str) -> list[Case]:
         "bayes_tree": lambda: bayes_tree_cases() + bayes_tree_cases_v2(),
         "incremental": lambda: incremental_cases() + incremental_cases_v2(),
         "fixed_lag": fixed_lag_cases,
+        "se2": se2_cases,
     }[suite]()

@@ -1,5 +1,5 @@
 """Kit v2's new problem cases: a zero increment, a GP heading jump, a bushy tree's joint marginals,
-partial relinearization, and the fill of R per update (issue 21)."""
+partial relinearization, and the fill of R per update."""
 
 from __future__ import annotations
 

@@ -1,0 +1,104 @@
+"""``steam-ref batch``: batch Gauss-Newton on all of a data set (PB or PBVR): RMSE and a plot."""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+from ..evaluate import trajectory_figures
+from ..paper.presets import PRESETS, PaperSetup
+from ..paper.problem import build_problem, sequential_batch
+from ..paper.results import position_rmse
+from ..plot.figures import plot_trajectory
+from ..variables import X
+from . import explain
+from .args import (
+    add_data_dir,
+    add_dataset,
+    add_progress,
+    add_trajectory_arguments,
+    load_with_note,
+    non_negative_int,
+    preset_of,
+)
+from .paths import check_output, check_outputs_apart, check_trajectory_output, save_trajectory, write_plot
+from .streams import json_line
+
+__all__ = ["add_parser", "run"]
+
+
+def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    """Add ``batch`` and its options to the command's subparsers."""
+    parser = sub.add_parser("batch", help="batch Gauss-Newton on all of a data set (PB or PBVR): RMSE and a plot")
+    add_dataset(parser, "paper-synthetic")
+    parser.add_argument("--ordering", choices=("xl", "amd"), default="amd", help="xl: the paper's PB; amd: PBVR")
+    parser.add_argument(
+        "--preset", choices=PRESETS, default=None, help="parameter set (default: by data set; required for a PATH)"
+    )
+    add_data_dir(parser)
+    parser.add_argument("--seed", type=non_negative_int, default=0, help="seed of the generated synthetic task")
+    parser.add_argument("--json", action="store_true", help="print one JSON line of figures")
+    parser.add_argument("--plot", metavar="FILE.png", default=None, help="draw estimate, ground truth, landmarks")
+    add_trajectory_arguments(parser)
+    add_progress(parser)
+    return parser
+
+
+def run(args: argparse.Namespace) -> int:
+    """Batch solve of a whole data set (started chunk by chunk, see ``sequential_batch``)."""
+    check_output(args.plot, ".png", "--plot")
+    check_trajectory_output(args)
+    check_outputs_apart({"--plot": args.plot, "--save-trajectory": args.save_trajectory})
+    setup = PaperSetup.named(preset_of(args))
+    data = load_with_note(args)
+    problem = build_problem(data, setup)
+    t0 = time.perf_counter()
+    shown = explain.progress_wanted(args.progress, args.json)
+    with explain.working(f"{args.dataset} batch ({args.ordering.upper()})", shown):
+        result = sequential_batch(problem, ordering=args.ordering)
+    seconds = time.perf_counter() - t0
+    poses = np.array([result.values[X(i)][:3] for i in range(data.n_poses)])
+    positions = poses[:, :2]
+    truth = None if data.ground_truth is None else data.ground_truth[:, 1:3]
+    summary = {
+        "dataset": args.dataset,
+        "ordering": args.ordering,
+        "n_states": len(problem.states),
+        "rmse_m": None if truth is None else round(position_rmse(positions, truth), 6),
+        "total_s": round(seconds, 3),
+        "iterations": len(result.iterations),
+        "factor_nnz": result.factor_nnz,
+        "backend": result.backend,
+    } | explain.data_figures(data, data.n_poses)
+    if data.ground_truth is not None:
+        summary["evaluation"] = trajectory_figures(data.ground_truth[:, 1:4], poses)
+    save_trajectory(args, np.asarray(data.times), poses)
+    where = ""
+    if args.plot:
+        where = write_plot(
+            args,
+            lambda name: plot_trajectory(
+                truth,
+                positions,
+                landmarks_true=data.landmarks[:, 1:3] if len(data.landmarks) else None,
+                title=f"batch on {args.dataset}",
+                path=name,
+            ),
+        )
+    if args.json:
+        print(json_line(summary))
+    else:
+        print(
+            f"batch {_BATCH_NAME[args.ordering]} ({args.ordering.upper()} ordering) on {args.dataset}: "
+            f"RMSE {summary['rmse_m']} m over {data.n_poses} poses, "
+            f"{summary['total_s']:.2f} s, Cholesky factor {summary['factor_nnz']} nonzeros ({summary['backend']})\n"
+            + explain.data_lines(summary)
+            + explain.evaluation_note(summary)
+            + where
+        )
+    return 0
+
+
+_BATCH_NAME = {"xl": "PB", "amd": "PBVR"}  # the paper's names of a batch solve by its ordering [YIB Sec. IV]

@@ -1,0 +1,68 @@
+"""``steam-ref fidelity``: BTGP/1 against the authors' saved runs, pose by pose, covariances included.
+
+The data sets it runs on are those of the registry with an authors' run (``DataSet.authors_run``).
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from ..datasets import load_range_dataset
+from ..datasets.registry import with_authors_run
+from ..paper.fidelity import AUTHORS_RUNS, compare, find_authors_file, load_authors_run
+from ..paper.online import run_online
+from ..paper.options import StreamOptions
+from ..paper.presets import PaperSetup
+from ..plot.figures import plot_fidelity
+from . import explain
+from .args import add_data_dir, add_progress, preset_for
+from .paths import check_output, write_plot
+from .streams import json_line
+
+__all__ = ["add_parser", "run"]
+
+
+def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    """Add ``fidelity`` and its options to the command's subparsers."""
+    parser = sub.add_parser(
+        "fidelity", help="BTGP/1 against the authors' saved runs, pose by pose, covariances included"
+    )
+    parser.add_argument("--dataset", choices=[*with_authors_run(), "all"], default="all")
+    add_data_dir(parser, " (and its authors/ folder)")
+    parser.add_argument("--json", action="store_true", help="print one JSON line per data set")
+    parser.add_argument(
+        "--plot", metavar="FILE.png", default=None, help="draw the per-pose distance to the authors' estimate"
+    )
+    add_progress(parser)
+    return parser
+
+
+def run(args: argparse.Namespace) -> int:
+    """BTGP/1 with the paper's set-up against the authors' saved run of each data set."""
+
+    check_output(args.plot, ".png", "--plot")
+    distances = {}
+    for name in AUTHORS_RUNS if args.dataset == "all" else [args.dataset]:
+        find_authors_file(name, args.data_dir)  # before loading: gtsam's Plaza files are not the authors' data
+        data = load_range_dataset(name, data_dir=args.data_dir)
+        authors = load_authors_run(name, data, args.data_dir)
+        setup = PaperSetup.named(preset_for(name))
+        options = StreamOptions(progress=explain.progress_wanted(args.progress, args.json))
+        result = run_online(data, setup, options, covariances=authors.pose_covariance is not None)
+        fid, distances[name] = compare(result, authors, data.ground_truth)
+        row = fid.to_dict() | {
+            "total_s": round(result.total_s, 2),
+            "authors_total_s": round(float(authors.step_seconds.sum()), 2),
+            "data_files": explain.data_figures(data, 0)["data_files"]
+            + [explain.file_entry(find_authors_file(name, args.data_dir))],
+        }
+        print(
+            json_line(row)
+            if args.json
+            else explain.fidelity_text(row) + "\n" + explain.data_lines(row | {"data_note": None})
+        )
+    if args.plot:
+        where = write_plot(args, lambda name: plot_fidelity(distances, path=name))
+        if where:
+            print(where.strip())
+    return 0

@@ -1,0 +1,41 @@
+"""``steam-ref reproduce``: the experiments of Fig. 3 and Fig. 4, plots and a results table."""
+
+from __future__ import annotations
+
+import argparse
+
+from ..errors import SteamError
+from ..paper.experiments import reproduce
+from . import explain
+from .args import add_data_dir, add_progress, positive_int
+from .paths import check_out_folder
+
+__all__ = ["add_parser", "run"]
+
+
+def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    """Add ``reproduce`` and its options to the command's subparsers."""
+    parser = sub.add_parser("reproduce", help="the experiments of Fig. 3 and Fig. 4, plots and a results table")
+    parser.add_argument("--quick", action="store_true", help="small prefixes and budgets: minutes, not hours")
+    parser.add_argument("--out", default="results", help="folder for plots and the table (default: results)")
+    add_data_dir(parser)
+    parser.add_argument(
+        "--jobs",
+        type=positive_int,
+        default=1,
+        help="accuracy runs in parallel (timing runs stay serial, each in a fresh process)",
+    )
+    add_progress(parser)
+    return parser
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the experiments, write the plots and the table, print the table."""
+    check_out_folder(args.out, "--out")
+    try:
+        shown = explain.progress_wanted(args.progress, False)
+        table = reproduce(args.out, quick=args.quick, data_dir=args.data_dir, jobs=args.jobs, progress=shown)
+    except OSError as err:  # a full disk while writing the plots or the table
+        raise SteamError(f"--out: cannot write {err.filename or args.out!r} ({err.strerror or err})") from None
+    print(table)
+    return 0

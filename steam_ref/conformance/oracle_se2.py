@@ -1,0 +1,384 @@
+"""Independent expected values of the ``se2`` suite: SE(2) from 3×3 matrices and SciPy's ``expm``.
+
+Nothing here shares code with ``steam_ref.lie`` or ``steam_ref.factors``: no series, no closed forms.
+
+- Exp(ξ) = expm(ξ^) of the 3×3 matrix ξ^ = [[0, -φ, ρ₁], [φ, 0, ρ₂], [0, 0, 0]], tangent order [ρ; φ];
+  the pose [x, y, θ] read off it with θ = atan2(R₁₀, R₀₀) in (-π, π] (a -π from atan2 is taken as +π).
+- Log(T): φ = that angle; ρ = V(φ)⁻¹ t, where the columns of V(φ) are the translations of
+  expm([e₁; φ]^) and expm([e₂; φ]^) (t = V(φ) ρ is linear in ρ).
+- J_r(ξ) = ∫₀¹ expm(-s ad_ξ) ds, by Van Loan's block exponential: the top-right block of
+  expm([[-ad_ξ, I], [0, 0]]); ad_ξ's columns are the commutators [ξ^, eᵢ^]∨. J_r⁻¹ by a dense inverse.
+- The state x = [x, y, θ, vx, vy, ω] (pose and body twist) moves by the right retraction
+  x ⊕ δ = (T Exp(δ[:3]), ϖ + δ[3:]); x ⊖ x₀ = [Log(T₀⁻¹T); ϖ - ϖ₀].
+- Every Jacobian is a Richardson-extrapolated central difference through that retraction (step h and
+  h/2, error O(h⁴)), of the output in its own local coordinates about the unperturbed output.
+- The WNOA residuals, the local GP (Λ, Ψ and the conditional covariance from :mod:`.oracle`'s dense
+  kernel), Gauss-Newton and an iSAM2 replay (linearization points per variable, dense solves) on
+  these definitions.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+
+import numpy as np
+import scipy.linalg
+from numpy.typing import NDArray
+from threadpoolctl import threadpool_limits
+
+from ..errors import SteamError
+from . import oracle as o
+
+__all__ = [
+    "hat",
+    "exp",
+    "log",
+    "right_jacobian",
+    "retract",
+    "local",
+    "prior_error",
+    "derivative",
+    "numeric_jacobian",
+    "interpolate",
+    "se2_case",
+]
+
+H = 1e-3  # the central difference's step (Richardson: h and h/2)
+
+
+def hat(xi: NDArray) -> NDArray:
+    """ξ^ for ξ = [ρ₁, ρ₂, φ]."""
+    r1, r2, p = xi
+    return np.array([[0.0, -p, r1], [p, 0.0, r2], [0.0, 0.0, 0.0]])
+
+
+def _vee(M: NDArray) -> NDArray:
+    return np.array([M[0, 2], M[1, 2], M[1, 0]])
+
+
+def matrix(pose: NDArray) -> NDArray:
+    """The 3×3 homogeneous matrix of [x, y, θ]."""
+    c, s = np.cos(pose[2]), np.sin(pose[2])
+    return np.array([[c, -s, pose[0]], [s, c, pose[1]], [0.0, 0.0, 1.0]])
+
+
+def _angle(M: NDArray) -> float:
+    a = float(np.arctan2(M[1, 0], M[0, 0]))
+    return np.pi if a <= -np.pi else a
+
+
+def pose_of(M: NDArray) -> NDArray:
+    return np.array([M[0, 2], M[1, 2], _angle(M)])
+
+
+def exp(xi: NDArray) -> NDArray:
+    """Exp(ξ) as a pose [x, y, θ], θ in (-π, π]."""
+    return pose_of(scipy.linalg.expm(hat(np.asarray(xi, float))))
+
+
+def _V(phi: float) -> NDArray:
+    """V(φ) with t = V(φ) ρ in Exp([ρ; φ]): the top-right block of expm([[φ J, I], [0, 0]]) (Van Loan),
+    which is ∫₀¹ expm(s φ J) ds, the translation part of expm(ξ^) read column by column."""
+    block = np.zeros((4, 4))
+    block[:2, :2], block[:2, 2:] = [[0.0, -phi], [phi, 0.0]], np.eye(2)
+    return scipy.linalg.expm(block)[:2, 2:]
+
+
+def log_matrix(M: NDArray) -> NDArray:
+    """Log of a 3×3 pose matrix: [V(φ)⁻¹ t; φ], φ in (-π, π]."""
+    phi = _angle(M)
+    return np.array([*np.linalg.solve(_V(phi), M[:2, 2]), phi])
+
+
+def log(pose: NDArray) -> NDArray:
+    return log_matrix(matrix(np.asarray(pose, float)))
+
+
+def _ad(xi: NDArray) -> NDArray:
+    X = hat(xi)
+    return np.column_stack([_vee(X @ hat(e) - hat(e) @ X) for e in np.eye(3)])
+
+
+def right_jacobian(xi: NDArray) -> NDArray:
+    """J_r(ξ) = ∫₀¹ expm(-s ad_ξ) ds (Van Loan)."""
+    block = np.zeros((6, 6))
+    block[:3, :3], block[:3, 3:] = -_ad(np.asarray(xi, float)), np.eye(3)
+    return scipy.linalg.expm(block)[:3, 3:]
+
+
+def right_jacobian_inverse(xi: NDArray) -> NDArray:
+    return np.linalg.inv(right_jacobian(xi))
+
+
+def adjoint(pose: NDArray) -> NDArray:
+    """Ad(T): T Exp(ξ) T⁻¹ = Exp(Ad(T) ξ), columns (T eᵢ^ T⁻¹)∨."""
+    T = matrix(np.asarray(pose, float))
+    return np.column_stack([_vee(T @ hat(e) @ np.linalg.inv(T)) for e in np.eye(3)])
+
+
+def between(a: NDArray, b: NDArray) -> NDArray:
+    return pose_of(np.linalg.inv(matrix(np.asarray(a, float))) @ matrix(np.asarray(b, float)))
+
+
+def retract(x: NDArray, delta: NDArray) -> NDArray:
+    """x ⊕ δ: a 3-vector is a pose, a 6-vector an SE(2) state (right retraction); a 2-vector a landmark."""
+    x, delta = np.asarray(x, float), np.asarray(delta, float)
+    if len(x) == 2:
+        return x + delta
+    pose = pose_of(matrix(x[:3]) @ scipy.linalg.expm(hat(delta[:3])))
+    return np.concatenate([pose, x[3:] + delta[3:]])
+
+
+def local(x0: NDArray, x: NDArray) -> NDArray:
+    """x ⊖ x₀ (the inverse of :func:`retract`)."""
+    x0, x = np.asarray(x0, float), np.asarray(x, float)
+    if len(x) == 2:
+        return x - x0
+    xi = log_matrix(np.linalg.inv(matrix(x0[:3])) @ matrix(x[:3]))
+    return np.concatenate([xi, x[3:] - x0[3:]])
+
+
+def derivative(g: Callable[[NDArray], NDArray], n: int) -> NDArray:
+    """∂g/∂δ at δ = 0 (δ of size n): central differences at h and h/2 combined by Richardson's step."""
+
+    def central(h: float) -> NDArray:
+        return np.column_stack([(np.asarray(g(h * e)) - np.asarray(g(-h * e))) / (2 * h) for e in np.eye(n)])
+
+    return (4 * central(H / 2) - central(H)) / 3
+
+
+def numeric_jacobian(
+    f: Callable[..., NDArray], args: Sequence[NDArray], k: int, out_local: Callable | None = None
+) -> NDArray:
+    """∂f/∂δₖ at δ = 0 of f(..., xₖ ⊕ δ, ...) through the right retraction (:func:`derivative`).
+
+    ``out_local(y0, y)``: the output's local coordinates about y0 (default y - y0).
+    """
+    args = [np.asarray(a, float) for a in args]
+    y0 = np.asarray(f(*args), float)
+    diff = out_local or (lambda a, b: np.asarray(b, float) - a)
+
+    def g(d: NDArray) -> NDArray:
+        return diff(y0, f(*args[:k], retract(args[k], d), *args[k + 1 :]))
+
+    return derivative(g, len(args[k]))
+
+
+def prior_error(x1: NDArray, x2: NDArray, dt: float, model: str) -> NDArray:
+    """e = [ξ - Δt ϖ₁; J_r(ξ)⁻¹ ϖ₂ - ϖ₁] (local-variable) or [ξ - Δt ϖ₁; ϖ₂ - ϖ₁] (simplified), ξ = Log(T₁⁻¹T₂)."""
+    x1, x2 = np.asarray(x1, float), np.asarray(x2, float)
+    xi = log_matrix(np.linalg.inv(matrix(x1[:3])) @ matrix(x2[:3]))
+    if model == "local-variable":
+        velocity = right_jacobian_inverse(xi) @ x2[3:]
+    elif model == "simplified":
+        velocity = x2[3:]
+    else:
+        raise SteamError(f"unknown SE(2) prior model {model!r}")
+    return np.concatenate([xi - dt * x1[3:], velocity - x1[3:]])
+
+
+def _wnoa() -> tuple[NDArray, NDArray]:
+    return o.model_matrices("wnoa", 3)
+
+
+def prior_covariance(dt: float, qc: NDArray) -> NDArray:
+    A, F = _wnoa()
+    return o.process_noise(A, F, np.asarray(qc, float), float(dt))
+
+
+def _local_gamma(x1: NDArray, x2: NDArray, model: str) -> NDArray:
+    """γ₂ in the frame of T₁: the prior's error plus Φ γ₁ (Δt = 0 gives [ξ; ξ̇(t₂)])."""
+    return prior_error(x1, x2, 0.0, model) + np.concatenate([np.zeros(3), np.asarray(x1, float)[3:]])
+
+
+def _from_local(x1: NDArray, gamma: NDArray, model: str) -> NDArray:
+    """The state at γ = [ξ; ξ̇]: (T₁ Exp ξ, J_r(ξ) ξ̇) (simplified: ξ̇)."""
+    xi, xidot = gamma[:3], gamma[3:]
+    pose = pose_of(matrix(np.asarray(x1, float)[:3]) @ scipy.linalg.expm(hat(xi)))
+    twist = right_jacobian(xi) @ xidot if model == "local-variable" else xidot
+    return np.concatenate([pose, twist])
+
+
+def interpolate(t1: float, t2: float, tau: float, qc: NDArray, model: str):
+    """x(τ) = from_local(Λ γ₁ + Ψ γ₂), with the local GP's matrices and conditional covariance (dense kernel)."""
+    A, F = _wnoa()
+    lam, psi, cond = o.interpolation(A, F, np.asarray(qc, float), t1, t2, tau)
+
+    def mean(a: NDArray, b: NDArray) -> NDArray:
+        gamma = lam @ np.concatenate([np.zeros(3), np.asarray(a, float)[3:]]) + psi @ _local_gamma(a, b, model)
+        return _from_local(a, gamma, model)
+
+    return mean, lam, psi, cond
+
+
+def _interpolation(inputs: Mapping) -> dict:
+    x1, x2, model = np.asarray(inputs["x1"], float), np.asarray(inputs["x2"], float), inputs["model"]
+    t1, t2, tau, qc = float(inputs["t1"]), float(inputs["t2"]), float(inputs["tau"]), inputs["qc"]
+    mean, lam, psi, cond = interpolate(t1, t2, tau, qc, model)
+    x = mean(x1, x2)
+    J1, J2 = (numeric_jacobian(mean, [x1, x2], k, local) for k in (0, 1))
+    if "joint_cov" not in inputs:
+        return {"x_tau": x, "J_1": J1, "J_2": J2}
+    gamma = lam @ np.concatenate([np.zeros(3), x1[3:]]) + psi @ _local_gamma(x1, x2, model)
+    N = derivative(lambda d: local(x, _from_local(x1, gamma + d, model)), 6)  # ∂[δT; dϖ]/∂γ
+    J = np.hstack([J1, J2])
+    cov = J @ np.asarray(inputs["joint_cov"], float) @ J.T + N @ cond @ N.T
+    return {"x_tau": x, "cov_tau": (cov + cov.T) / 2}
+
+
+# --- problems -------------------------------------------------------------------------------------
+
+
+def factor_error(spec: Mapping, xs: Sequence[NDArray]) -> NDArray:
+    """The error of a factor spec of the se2 suite at its variables' values."""
+    kind = spec["type"]
+    if kind == "se2_prior":
+        return prior_error(xs[0], xs[1], float(spec["dt"]), spec["model"])
+    if kind == "se2_state_prior":
+        return local(np.asarray(spec["mean"], float), xs[0])
+    if kind == "se2_range":
+        return np.array(
+            [np.hypot(*(np.asarray(xs[1], float) - np.asarray(xs[0], float)[:2])) - float(spec["measured"])]
+        )
+    if kind == "prior":
+        return np.asarray(xs[0], float) - np.asarray(spec["mean"], float)
+    raise SteamError(f"unknown se2 factor type {kind!r}")
+
+
+def factor_covariance(spec: Mapping) -> NDArray:
+    if spec["type"] == "se2_prior":
+        return prior_covariance(float(spec["dt"]), spec["qc"])
+    return o.noise_covariance(spec, len(spec.get("sigmas", [0])))
+
+
+def _system(factors: Sequence[Mapping], values: Mapping[str, NDArray], order: Sequence[str], dims: Mapping[str, int]):
+    """Dense A, b and the cost of the factors linearized at ``values`` (tangent columns in ``order``)."""
+    off = dict(zip(order, np.cumsum([0] + [dims[k] for k in order]), strict=False))
+    n = sum(dims[k] for k in order)
+    rows, rhs, cost = [], [], 0.0
+    for spec in factors:
+        xs = [values[k] for k in spec["keys"]]
+        W = o.sqrt_information(factor_covariance(spec))
+        e = factor_error(spec, xs)
+        row = np.zeros((len(e), n))
+
+        def error(*a: NDArray, spec: Mapping = spec) -> NDArray:
+            return factor_error(spec, a)
+
+        for j, k in enumerate(spec["keys"]):
+            row[:, off[k] : off[k] + dims[k]] = W @ numeric_jacobian(error, xs, j)
+        rows.append(row)
+        rhs.append(-W @ e)
+        cost += 0.5 * float(np.sum((W @ e) ** 2))
+    return np.vstack(rows), np.concatenate(rhs), cost
+
+
+def _solve(A: NDArray, b: NDArray, order: Sequence[str], dims: Mapping[str, int]) -> dict[str, NDArray]:
+    delta = np.linalg.solve(A.T @ A, A.T @ b)
+    off = np.cumsum([0] + [dims[k] for k in order])
+    return {k: delta[off[i] : off[i + 1]] for i, k in enumerate(order)}
+
+
+def gauss_newton(problem: Mapping, iterations: int) -> tuple[dict[str, list[NDArray]], list[float]]:
+    """Gauss-Newton from the problem's values: every iterate (x ← x ⊕ δ) and the cost at each."""
+    dims = {k: int(n) for k, n in problem["variables"].items()}
+    order = list(dims)
+    values = {k: np.asarray(v, float) for k, v in problem["values"].items()}
+    iterates = {k: [values[k]] for k in order}
+    costs = []
+    for _ in range(iterations):
+        A, b, cost = _system(problem["factors"], values, order, dims)
+        costs.append(cost)
+        delta = _solve(A, b, order, dims)
+        values = {k: retract(values[k], delta[k]) for k in order}
+        for k in order:
+            iterates[k].append(values[k])
+    costs.append(_system(problem["factors"], values, order, dims)[2])
+    return iterates, costs
+
+
+def stream(variables: Mapping[str, int], updates: Sequence[Mapping], threshold: float, skip: int = 1):
+    """iSAM2 with full back-substitution replayed densely, on the retraction: per-variable θ̄ moved θ̄ ← θ̄ ⊕ δ at
+    the start of every ``skip``-th update when max|δ| ≥ ``threshold``; every factor linearized at θ̄, solved;
+    the estimate θ̄ ⊕ δ. Returns the estimates and the variables moved, per update."""
+    dims = {k: int(n) for k, n in variables.items()}
+    factors: list = []
+    theta: dict[str, NDArray] = {}
+    delta: dict[str, NDArray] = {}
+    out, moved_at = [], []
+    for step, u in enumerate(updates, start=1):
+        factors.extend(u["factors"])
+        moved: list[str] = []
+        if step % skip == 0:
+            moved = [k for k in theta if float(np.max(np.abs(delta[k]))) >= threshold]
+            for k in moved:
+                theta[k] = retract(theta[k], delta[k])
+        for k, v in u["values"].items():
+            theta[k] = np.asarray(v, float)
+        order = [k for k in variables if k in theta]
+        A, b, _ = _system(factors, theta, order, dims)
+        delta = _solve(A, b, order, dims)
+        out.append({k: retract(theta[k], delta[k]) for k in order})
+        moved_at.append(sorted(moved))
+    return out, moved_at
+
+
+# --- the cases ------------------------------------------------------------------------------------
+
+
+def _rows(f: Callable[[NDArray], NDArray], items: Sequence | NDArray) -> NDArray:
+    return np.array([f(np.asarray(v, float)) for v in items])
+
+
+def _prior(inputs: Mapping) -> dict:
+    x1, x2, dt, model = np.asarray(inputs["x1"], float), np.asarray(inputs["x2"], float), inputs["dt"], inputs["model"]
+    e = prior_error(x1, x2, float(dt), model)
+    W = o.sqrt_information(prior_covariance(float(dt), inputs["qc"]))
+    H0, H1 = (numeric_jacobian(lambda a, b: prior_error(a, b, float(dt), model), [x1, x2], k) for k in (0, 1))
+    return {"error": e, "H_0": H0, "H_1": H1, "cost": 0.5 * float(np.sum((W @ e) ** 2))}
+
+
+def se2_case(inputs: Mapping) -> dict:
+    """The expected quantities of an se2 case, by its inputs' ``kind`` (BLAS on one thread: OpenBLAS's threads
+    make each 3×3 ``expm`` a thousand times slower on a busy machine)."""
+    with threadpool_limits(limits=1, user_api="blas"):
+        return _se2_case(inputs)
+
+
+def _se2_case(inputs: Mapping) -> dict:
+    kind = inputs["kind"]
+    if kind == "exp":
+        poses = _rows(exp, inputs["xi"])
+        return {"exp": poses, "log_of_exp": _rows(log, poses)}
+    if kind == "log":
+        tangents = _rows(log, inputs["poses"])
+        return {"log": tangents, "exp_of_log": _rows(exp, tangents)}
+    if kind == "jacobians":
+        return {"Jr": _rows(right_jacobian, inputs["xi"]), "Jr_inv": _rows(right_jacobian_inverse, inputs["xi"])}
+    if kind == "between":
+        a, b = np.asarray(inputs["a"], float), np.asarray(inputs["b"], float)
+        Ha, Hb = (numeric_jacobian(between, [a, b], k, lambda p, q: log(between(p, q))) for k in (0, 1))
+        return {"between": between(a, b), "H_a": Ha, "H_b": Hb, "Ad_a": adjoint(a)}
+    if kind == "prior":
+        return _prior(inputs)
+    if kind == "state_prior":
+        spec = {"type": "se2_state_prior", "mean": inputs["mean"]}
+        x = np.asarray(inputs["x"], float)
+        e = factor_error(spec, [x])
+        return {"error": e, "H_0": numeric_jacobian(lambda a: factor_error(spec, [a]), [x], 0)}
+    if kind == "interpolation":
+        return _interpolation(inputs)
+    if kind == "batch":
+        iterates, costs = gauss_newton(inputs["problem"], int(inputs["iterations"]))
+        return {"iterates": {k: np.array(v) for k, v in iterates.items()}, "costs": np.array(costs)}
+    if kind == "incremental":
+        isam2 = inputs["isam2"]
+        estimates, moved = stream(
+            inputs["stream"]["variables"],
+            inputs["stream"]["updates"],
+            float(isam2["relinearize_threshold"]),
+            int(isam2["relinearize_skip"]),
+        )
+        out: dict = {f"relinearized_{k}": m for k, m in enumerate(moved, start=1)}
+        return {**out, **{f"estimate_{k}": e for k, e in enumerate(estimates, start=1)}}
+    raise SteamError(f"unknown se2 case kind {kind!r}")

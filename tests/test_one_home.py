@@ -1,0 +1,191 @@
+"""One home for each idea: the data sets, what an integer is, a settings class's ``replace``, and no tracker numbers.
+
+- **The registry is the one list of data sets** (``datasets/registry.py``): a record added there, and only
+  there, is found by the search path, offered by the command's ``--dataset`` help, listed by ``data list``,
+  run with its preset, and refused by ``data fetch`` with the reason; the fetcher's names, fidelity's
+  authors' runs and the conformance kit's as-published copy of the file names agree with it.
+- **What an integer is** is stated once, ``arguments.is_integer``; no module of the package spells the
+  check again (the conformance kit's oracle and its file format keep their own code, by design).
+- **A settings class's replace with an unknown-field check** is ``arguments.replace_fields``.
+- **No tracker numbers** in code, tests, docs, benchmarks or tutorials: a clone cannot open them.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from steam_ref import arguments
+from steam_ref.datasets import generate_synthetic, load_dataset, registry
+from steam_ref.errors import DataError, SteamError
+
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGE = ROOT / "steam_ref"
+
+
+def _toy_loader(path, name, seed):
+    """A data set read from a CMU .mat file the test writes (any loader of the registry's signature)."""
+    from steam_ref.datasets import load_cmu_mat
+
+    return load_cmu_mat(path, name=name)
+
+
+@pytest.fixture
+def toy(tmp_path, monkeypatch):
+    """A data set 'toy' added to the registry alone, its one file in a folder given as $STEAM_REF_DATA_DIR."""
+    import scipy.io
+
+    data = generate_synthetic(n_steps=6, n_landmarks=2, seed=1)
+    scipy.io.savemat(tmp_path / "toy.mat", data.to_cmu_arrays())
+    record = registry.DataSet(
+        "toy",
+        "a toy set for the test",
+        (registry.DataFile("toy.mat", "toy.mat", "", 0),),
+        "written by the test",
+        "none",
+        fetchable=False,
+        loader=_toy_loader,
+        preset="synthetic",
+    )
+    monkeypatch.setitem(registry.DATASETS, "toy", record)
+    monkeypatch.setenv("STEAM_REF_DATA_DIR", str(tmp_path))
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    return data
+
+
+def test_a_data_set_added_to_the_registry_alone_is_found_listed_offered_and_run(toy, capsys):
+    from steam_ref.cli import main
+    from steam_ref.cli.commands import build_parser
+    from steam_ref.datasets import fetch
+
+    got = load_dataset("toy")  # the search path, by the record's loader
+    assert got.name == "toy" and np.array_equal(got.ground_truth, toy.ground_truth)
+    sub = next(a for a in build_parser()._actions if a.dest == "command")
+    for command in ("run", "batch"):
+        option = next(a for a in sub.choices[command]._actions if a.dest == "dataset")
+        assert "toy" in option.help, f"steam-ref {command} --dataset help omits a registered set"
+    assert main(["data", "list"]) == 0
+    assert re.search(r"^toy\s.*present", capsys.readouterr().out, flags=re.M)
+    with pytest.raises(DataError, match="'toy' is not fetched: it ships in written by the test"):
+        fetch.fetch(["toy"])
+    assert main(["run", "--dataset", "toy", "--json", "--no-progress"]) == 0  # its preset, from the record
+    assert '"preset": "synthetic"' in capsys.readouterr().out
+
+
+def test_every_reader_of_the_data_sets_agrees_with_the_registry():
+    from steam_ref.cli.commands import build_parser
+    from steam_ref.conformance.paper import DATA_FILES
+    from steam_ref.datasets import fetch
+    from steam_ref.paper.fidelity import AUTHORS_RUNS
+    from steam_ref.paper.presets import PRESETS
+
+    names = registry.loadable()
+    assert {"synthetic", "paper-synthetic", "plaza", "victoria-park", "plaza2"} <= set(names)  # and any set added
+    with pytest.raises(DataError, match=re.escape(f"not one of {', '.join(names)}, nor a file")):
+        load_dataset("no-such-set-here")
+    sub = next(a for a in build_parser()._actions if a.dest == "command")
+    fidelity = next(a for a in sub.choices["fidelity"]._actions if a.dest == "dataset")
+    assert list(fidelity.choices) == [*registry.with_authors_run(), "all"]
+    assert {
+        n: Path(registry.DATASETS[s.authors_run].files[0].local).name
+        for n, s in registry.DATASETS.items()
+        if s.authors_run
+    } == AUTHORS_RUNS
+    for name in names:
+        assert registry.DATASETS[name].preset in PRESETS, name
+    for s in registry.DATASETS.values():
+        if s.fetchable:
+            assert s.files and all(re.fullmatch(r"[0-9a-f]{64}", f.sha256) and f.size > 0 for f in s.files), s.name
+    with pytest.raises(DataError, match="the names are: paper-synthetic, plaza, authors-synthetic"):
+        fetch.fetch(["nope"])
+    # the kit keeps its own as-published copy of the file names: the two must agree
+    for name, file in DATA_FILES.items():
+        assert [f.local for f in registry.DATASETS[name].files] == [file], name
+
+
+def _python_files() -> list[Path]:
+    return sorted(PACKAGE.rglob("*.py"))
+
+
+def test_what_an_integer_is_is_stated_once():
+    """``isinstance(x, bool) or not isinstance(x, (int, np.integer))`` and its variants, outside arguments.py."""
+    spelled = re.compile(r"isinstance\([^()]*,\s*\(?\s*(?:int\s*,\s*np\.integer|np\.integer\s*,\s*int)\b")
+    found = [
+        f"{p.relative_to(ROOT)}:{n}"
+        for p in _python_files()
+        if p.name != "arguments.py" and "conformance" not in p.parts  # the kit's oracle shares no code, by design
+        for n, line in enumerate(p.read_text(encoding="utf-8").splitlines(), 1)
+        if spelled.search(line)
+    ]
+    assert not found, f"what an integer is, written again (use arguments.is_integer): {found}"
+    assert [arguments.is_integer(v) for v in (3, np.int64(3), True, np.bool_(True), 3.0, "3", None)] == [
+        True,
+        True,
+        False,
+        False,
+        False,
+        False,
+        False,
+    ]
+
+
+def test_replace_with_an_unknown_field_check_is_written_once():
+    from steam_ref.bayes_tree import ISAM2Params
+    from steam_ref.paper.options import StreamOptions
+    from steam_ref.paper.presets import PaperSetup, Schedule
+
+    found = [
+        f"{p.relative_to(ROOT)}:{n}"
+        for p in _python_files()
+        if p.name != "arguments.py"
+        for n, line in enumerate(p.read_text(encoding="utf-8").splitlines(), 1)
+        if "has no field" in line
+    ]
+    assert not found, f"an unknown-field check written again (use arguments.replace_fields): {found}"
+    for value in (StreamOptions(), PaperSetup.synthetic(), Schedule(), ISAM2Params()):
+        name = type(value).__name__
+        with pytest.raises(SteamError, match=rf"^{name} has no field 'nope'; the fields are \["):
+            value.replace(nope=1)
+        field = dataclasses.fields(value)[0].name
+        copy = value.replace(**{field: getattr(value, field)})
+        assert type(copy) is type(value) and getattr(copy, field) == getattr(value, field)
+
+
+# The word issue (or issues) and a number, in any brackets, or a hash and a number: a tracker's numbers, which a
+# clone cannot open.
+TRACKER = re.compile(r"\bissues? ?#?\d+|(?<![\w&/#])#\d+\b", re.IGNORECASE)
+# Another project's tracker, cited as such, stays: evo's (evaluate/metrics.py), GTSAM's (docs/conformance.md).
+EXTERNAL = re.compile(r"its issue[ ]746|gtsam #\d+(?:, #\d+)*")
+
+
+def test_no_tracker_numbers_in_code_tests_docs_benchmarks_or_tutorials():
+    files = [
+        p
+        for folder in ("steam_ref", "tests", "docs", "benchmarks", "tutorials", "examples")
+        for pattern in ("*.py", "*.md", "*.ipynb")
+        for p in (ROOT / folder).rglob(pattern)
+        if "_build" not in p.parts and ".ipynb_checkpoints" not in p.parts
+    ] + [ROOT / "README.md", ROOT / "CONTRIBUTING.md"]
+    found = []
+    for p in files:
+        if p == Path(__file__).resolve():
+            continue
+        for n, line in enumerate(p.read_text(encoding="utf-8").splitlines(), 1):
+            found += [f"{p.relative_to(ROOT)}:{n}: {m.group()}" for m in TRACKER.finditer(EXTERNAL.sub("", line))]
+    assert not found, "tracker numbers (say what was meant):\n" + "\n".join(found)
+
+
+def test_a_cmu_sets_range_sigma_is_every_ranges_own():
+    """``Readings.range_sigma`` holds a sigma per range: a CMU file gives none, so each is the set-up's."""
+    from steam_ref.paper.presets import PaperSetup
+    from steam_ref.paper.readings import Readings
+
+    setup = PaperSetup.synthetic().replace(range_sigma=0.25)
+    r = Readings.from_dataset(generate_synthetic(n_steps=20, n_landmarks=4, seed=2), setup)
+    assert r.range_sigma.shape == r.range_value.shape and np.all(r.range_sigma == 0.25)
+    p = r.prefix(10)
+    assert p.range_sigma.shape == p.range_value.shape and np.all(p.range_sigma == 0.25)
