@@ -42,9 +42,8 @@ import gtsam
 import numpy as np
 from numpy.typing import NDArray
 
-from steam_ref.batch import levenberg_marquardt
+from steam_ref.batch import gauss_newton, levenberg_marquardt
 from steam_ref.bayes_tree import IncrementalSolver
-from steam_ref.bayes_tree.params import ISAM2Params
 from steam_ref.datasets import load_dataset
 from steam_ref.factors import PriorFactor
 from steam_ref.factors.se2 import SE2PriorFactor, SE2StatePrior
@@ -90,19 +89,49 @@ def gtsam_jacobians(g: gtsam.WnoaMotionFactorPose2, x1: NDArray, x2: NDArray) ->
 
 
 @dataclass(frozen=True, eq=False)
-class GtsamJacobianPrior(SE2PriorFactor):
-    """Benchmark only: ``SE2PriorFactor`` (local-variable) with GTSAM's Jacobians in place of the exact ones."""
+class GtsamPrior(SE2PriorFactor):
+    """Benchmark only: ``SE2PriorFactor`` (local-variable) with GTSAM's Jacobians in place of the exact ones
+    (``residual`` 'exact'), or GTSAM's residual too ('gtsam'): GTSAM's factor behind our interface."""
 
     qc: NDArray = None  # type: ignore[assignment]  # (3, 3), GTSAM's factor needs it
+    residual: str = "exact"
 
-    _shared: ClassVar[tuple[str, ...]] = ("model", "qc")
+    _shared: ClassVar[tuple[str, ...]] = ("model", "qc", "residual")
 
-    def jacobians(self, x1: NDArray, x2: NDArray) -> tuple[NDArray, NDArray]:
+    def _gtsam(self, x1: NDArray, x2: NDArray) -> list:
         a, b = np.reshape(x1, (-1, 6)), np.reshape(x2, (-1, 6))
         dts = np.broadcast_to(self.phi, a.shape[:1] + (6, 6))[:, 0, 3]  # Φ = [[I, Δt I], [0, I]]
-        J = [gtsam_jacobians(gtsam_wnoa(float(dt), self.qc), u, w)[1:] for dt, u, w in zip(dts, a, b, strict=True)]
-        shape = np.shape(x1)[:-1] + (6, 6)
-        return np.reshape([j[0] for j in J], shape), np.reshape([j[1] for j in J], shape)
+        return [gtsam_jacobians(gtsam_wnoa(float(dt), self.qc), u, w) for dt, u, w in zip(dts, a, b, strict=True)]
+
+    def error(self, x1: NDArray, x2: NDArray) -> NDArray:
+        if self.residual == "exact":
+            return super().error(x1, x2)
+        return np.reshape([g[0] for g in self._gtsam(x1, x2)], np.shape(x1))
+
+    def jacobians(self, x1: NDArray, x2: NDArray) -> tuple[NDArray, NDArray]:
+        out, shape = self._gtsam(x1, x2), np.shape(x1)[:-1] + (6, 6)
+        return np.reshape([g[1] for g in out], shape), np.reshape([g[2] for g in out], shape)
+
+
+# ours; with GTSAM's Jacobians; with its residual too; the simplified residual (a different model)
+VARIANTS = ("exact", "gtsam-jacobians", "gtsam-factor", "simplified")
+SMALL_TURN = 0.05  # rad: below this |Δθ| of a motion prior, GTSAM's J_r⁻¹(ξ)ϖ₂ loses digits (docs/experiments.md)
+
+
+def velocity_rows_reference(x1: NDArray, x2: NDArray) -> NDArray:
+    """J_r(ξ)⁻¹ϖ₂ - ϖ₁ (the residual's velocity rows) in 40-digit arithmetic: J_r = Σ (-ad ξ)ᵏ/(k+1)!, solved
+    by mpmath; ξ = Log(T₁⁻¹T₂) in float64 (both sides take the same).  [DER 11.11]"""
+    import mpmath as mp
+
+    with mp.workdps(40):
+        rx, ry, th = (mp.mpf(float(v)) for v in se2.log(se2.between(x1[:3], x2[:3])))
+        ad = mp.matrix([[0, -th, ry], [th, 0, -rx], [0, 0, 0]])
+        jr, term = mp.zeros(3, 3), mp.eye(3)
+        for k in range(80):
+            jr += term / mp.factorial(k + 1)
+            term = term * (-ad)
+        v = mp.lu_solve(jr, mp.matrix([mp.mpf(float(w)) for w in x2[3:]]))
+        return np.array([float(v[i] - mp.mpf(float(x1[3 + i]))) for i in range(3)])
 
 
 @dataclass
@@ -115,16 +144,19 @@ class Item:
     sigmas: NDArray
     dt: float = 0.0
 
-    def ours(self, setup: PaperSetup, gtsam_jac: bool = False):
+    def ours(self, setup: PaperSetup, variant: str = "exact"):
         k, c = self.keys, setup.tukey_c
         if self.kind == "first":
             return SE2StatePrior.create(X(k[0]), self.value, self.sigmas)
         if self.kind == "landmark":
             return PriorFactor.create(L(k[0]), self.value, self.sigmas)
         if self.kind == "motion":
-            if gtsam_jac:
+            if variant == "simplified":
+                return SE2PriorFactor.create(X(k[0]), X(k[1]), self.dt, setup.qc, "simplified")
+            if variant != "exact":
                 f = SE2PriorFactor.create(X(k[0]), X(k[1]), self.dt, setup.qc)
-                return GtsamJacobianPrior(f.keys, f.sqrt_information, phi=f.phi, qc=setup.qc)
+                residual = "gtsam" if variant == "gtsam-factor" else "exact"
+                return GtsamPrior(f.keys, f.sqrt_information, phi=f.phi, qc=setup.qc, residual=residual)
             return SE2PriorFactor.create(X(k[0]), X(k[1]), self.dt, setup.qc, "local-variable")
         if self.kind == "velocity":
             return SE2VelocityFactor.create(X(k[0]), self.value, self.sigmas)
@@ -200,7 +232,7 @@ def from_gtsam(est: gtsam.Values, states: range, landmarks) -> dict:
     return out
 
 
-def run(max_poses: int | None = None, gtsam_jac: bool = False, setup: PaperSetup | None = None) -> dict:
+def run(max_poses: int | None = None, variant: str = "exact", setup: PaperSetup | None = None) -> dict:
     """Stream Plaza (its first ``max_poses`` poses) through both solvers; the figures (module docstring)."""
     setup = PaperSetup.plaza() if setup is None else setup
     readings = Readings.from_dataset(load_dataset("plaza"), setup)
@@ -217,6 +249,7 @@ def run(max_poses: int | None = None, gtsam_jac: bool = False, setup: PaperSetup
     clock = ScheduleClock(setup.schedule, n - 1)
     wall = {"gtsam": 0.0, "steam": 0.0}
     items: list[Item] = []
+    everything = gtsam.NonlinearFactorGraph()  # every GTSAM factor so far, for the converged comparison
     pending_items: list[Item] = []
     pending: dict = {}  # initial values not yet given to the solvers
     newest: NDArray | None = None  # the newest state's value: GTSAM's estimate, or the pending prediction
@@ -248,11 +281,12 @@ def run(max_poses: int | None = None, gtsam_jac: bool = False, setup: PaperSetup
         for it in pending_items:
             for g in it.theirs(setup):
                 graph.add(g)
+        everything.push_back(graph)
         start = time.perf_counter()
         theirs.update(graph, to_gtsam_values(pending))
         p, v = theirs.calculateEstimatePose2(P(i)), theirs.calculateEstimateVector(V(i))
         wall["gtsam"] += time.perf_counter() - start
-        factors = [it.ours(setup, gtsam_jac) for it in pending_items]
+        factors = [it.ours(setup, variant) for it in pending_items]
         values = Values(pending, kinds={k: SE2_STATE for k in pending if k.kind == "x"})
         start = time.perf_counter()
         ours.update(factors, values)
@@ -263,12 +297,34 @@ def run(max_poses: int | None = None, gtsam_jac: bool = False, setup: PaperSetup
         items += pending_items
         pending_items, pending = [], {}
     start = time.perf_counter()
-    final_g = from_gtsam(theirs.calculateEstimate(), range(n), readings.landmarks)
+    estimate_g = theirs.calculateEstimate()
+    final_g = from_gtsam(estimate_g, range(n), readings.landmarks)
     wall["gtsam"] += time.perf_counter() - start
     start = time.perf_counter()
     final_s = ours.estimate()
     wall["steam"] += time.perf_counter() - start
-    return report(setup, readings, items, final_g, final_s, n, wall, batch_s, gtsam_jac)
+    row = report(setup, items, final_g, final_s, n, wall, batch_s, variant)
+    # Both iSAM2 estimates carried to their Gauss-Newton fixed points: GTSAM's with its Jacobians, ours with ours
+    gn = gtsam.GaussNewtonParams()
+    gn.setRelativeErrorTol(1e-14)
+    gn.setAbsoluteErrorTol(0.0)
+    gn.setMaxIterations(30)
+    optimizer = gtsam.GaussNewtonOptimizer(everything, estimate_g, gn)
+    fixed_g = from_gtsam(optimizer.optimize(), range(n), readings.landmarks)
+    graph = FactorGraph([it.ours(setup, variant) for it in items])
+    result = gauss_newton(
+        graph, final_s, max_iterations=30, relative_tolerance=1e-14, absolute_tolerance=0.0, step_tolerance=1e-13
+    )
+    fixed_s = result.values
+    row |= {"converged_gtsam_iterations": optimizer.iterations(), "converged_steam_reason": result.reason}
+    exact = FactorGraph([it.ours(setup) for it in items])
+    kinds = {k: SE2_STATE for k in fixed_g if k.kind == "x"}
+    row |= {"converged_cost_gtsam_point": float(exact.error(Values(fixed_g, kinds=kinds)))}
+    row |= {"converged_cost_steam_point": float(exact.error(fixed_s))}
+    d, h = distances(fixed_g, fixed_s, n)
+    row |= {"converged_distance_m_median": float(np.median(d)), "converged_distance_m_max": float(d.max())}
+    row |= {"converged_heading_rad_median": float(np.median(h)), "converged_heading_rad_max": float(h.max())}
+    return row
 
 
 def agreement(setup: PaperSetup, items: list[Item], at: dict) -> dict:
@@ -280,20 +336,34 @@ def agreement(setup: PaperSetup, items: list[Item], at: dict) -> dict:
         costs[group.factor_ids] = group.costs
     gv = to_gtsam_values(at)
     worst: dict[str, list[float]] = {}
+    motion_worst = (-1.0, None)  # the motion prior where the two residuals part most, and its states
     for it, f, cost in zip(items, factors, costs, strict=True):
         gs = it.theirs(setup)
         e_ours = f.error(*(np.asarray(values[k]) for k in f.keys))
         e_theirs = np.concatenate([np.asarray(g.unwhitenedError(gv)) for g in gs])
         c_theirs = sum(g.error(gv) for g in gs)
         kind = it.kind
-        if kind == "motion":  # GTSAM's Logmap loses digits below ~0.01 rad: the two sides apart
-            xi = se2.log(se2.between(at[X(it.keys[0])][:3], at[X(it.keys[1])][:3]))
-            kind = "motion |xi| >= 0.01" if np.linalg.norm(xi) >= 0.01 else "motion |xi| < 0.01"
+        if kind == "motion":  # GTSAM's J_r⁻¹(ξ)ϖ₂ loses digits at small turns: the two sides apart
+            x1, x2 = at[X(it.keys[0])], at[X(it.keys[1])]
+            turn = abs(se2.log(se2.between(x1[:3], x2[:3]))[2])
+            kind = f"motion |dtheta| >= {SMALL_TURN}" if turn >= SMALL_TURN else f"motion |dtheta| < {SMALL_TURN}"
+            apart = float(np.abs(e_ours - e_theirs).max())
+            if apart > motion_worst[0]:
+                motion_worst = (apart, (x1, x2, e_ours, e_theirs))
         w = worst.setdefault(kind, [0, 0.0, 0.0])
         w[0] += 1
         w[1] = max(w[1], float(np.abs(e_ours - e_theirs).max()))
         w[2] = max(w[2], abs(cost - c_theirs) / max(1.0, abs(c_theirs)))
-    return {k: {"n": v[0], "residual_max_abs": v[1], "cost_max_rel": v[2]} for k, v in sorted(worst.items())}
+    out: dict = {k: {"n": v[0], "residual_max_abs": v[1], "cost_max_rel": v[2]} for k, v in sorted(worst.items())}
+    if motion_worst[1] is not None:  # who is right where they part most: 40-digit arithmetic says
+        x1, x2, e_ours, e_theirs = motion_worst[1]
+        ref = velocity_rows_reference(x1, x2)
+        out["motion worst vs 40 digits"] = {
+            "dtheta": float(se2.log(se2.between(x1[:3], x2[:3]))[2]),
+            "steam_minus_reference": float(np.abs(e_ours[3:] - ref).max()),
+            "gtsam_minus_reference": float(np.abs(e_theirs[3:] - ref).max()),
+        }
+    return out
 
 
 def distances(a: dict, b: dict, n: int) -> tuple[NDArray, NDArray]:
@@ -304,13 +374,13 @@ def distances(a: dict, b: dict, n: int) -> tuple[NDArray, NDArray]:
     return d, h
 
 
-def report(setup, readings, items, final_g, final_s, n, wall, batch_s, gtsam_jac) -> dict:
+def report(setup, items, final_g, final_s, n, wall, batch_s, variant) -> dict:
     truth = np.asarray(load_dataset("plaza").ground_truth)[:n, 1:3]
     d, h = distances(final_g, final_s, n)
     row = {
         "benchmark": "se2_gtsam_plaza",
         "n_poses": n,
-        "steam_jacobians": "gtsam" if gtsam_jac else "exact",
+        "steam_prior": variant,
         "qc_body": np.diag(setup.qc).tolist(),
         "agreement": agreement(setup, items, final_g),
         "distance_m_median": float(np.median(d)),
@@ -331,10 +401,14 @@ def report(setup, readings, items, final_g, final_s, n, wall, batch_s, gtsam_jac
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--max-poses", type=int, default=None, help="a prefix of Plaza (default: all 9,658 poses)")
-    parser.add_argument("--jacobians", action="store_true", help="also run steam_ref with GTSAM's Jacobians")
+    parser.add_argument(
+        "--variants",
+        default="exact",
+        help=f"comma-separated, of {', '.join(VARIANTS)}: our prior, or GTSAM's parts in it",
+    )
     parser.add_argument("--plot", default=None, help="write the per-pose distances to this PNG")
     args = parser.parse_args()
-    rows = [run(args.max_poses)] + ([run(args.max_poses, gtsam_jac=True)] if args.jacobians else [])
+    rows = [run(args.max_poses, variant) for variant in args.variants.split(",")]
     for row in rows:
         print(json.dumps({k: v for k, v in row.items() if not k.startswith("_")}), flush=True)
     if args.plot:
@@ -343,7 +417,7 @@ def main() -> None:
         fig, ax = plt.subplots(2, 1, sharex=True, figsize=(8, 5))
         for row in rows:
             d, h = row["_distances"]
-            label = f"steam_ref ({row['steam_jacobians']} Jacobians) vs GTSAM"
+            label = f"steam_ref ({row['steam_prior']}) vs GTSAM"
             ax[0].semilogy(np.maximum(d, 1e-16), lw=0.7, label=label)
             ax[1].semilogy(np.maximum(h, 1e-16), lw=0.7, label=label)
         ax[0].set_ylabel("position distance [m]")
