@@ -338,6 +338,7 @@ def agreement(setup: PaperSetup, items: list[Item], at: dict) -> dict:
     gv = to_gtsam_values(at)
     worst: dict[str, list[float]] = {}
     motion_worst = (-1.0, None)  # the motion prior where the two residuals part most, and its states
+    jac = 0.0  # the largest departure of GTSAM's Jacobians from ours (exact: tests/test_se2_factors.py)
     for it, f, cost in zip(items, factors, costs, strict=True):
         gs = it.theirs(setup)
         e_ours = f.error(*(np.asarray(values[k]) for k in f.keys))
@@ -348,6 +349,9 @@ def agreement(setup: PaperSetup, items: list[Item], at: dict) -> dict:
             x1, x2 = at[X(it.keys[0])], at[X(it.keys[1])]
             turn = abs(se2.log(se2.between(x1[:3], x2[:3]))[2])
             kind = f"motion |dtheta| >= {SMALL_TURN}" if turn >= SMALL_TURN else f"motion |dtheta| < {SMALL_TURN}"
+            _, H1, H2 = gtsam_jacobians(gs[0], x1, x2)
+            J1, J2 = f.jacobians(x1, x2)
+            jac = max(jac, float(max(np.abs(H1 - J1).max(), np.abs(H2 - J2).max())))
             apart = float(np.abs(e_ours - e_theirs).max())
             if apart > motion_worst[0]:
                 motion_worst = (apart, (x1, x2, e_ours, e_theirs))
@@ -356,6 +360,7 @@ def agreement(setup: PaperSetup, items: list[Item], at: dict) -> dict:
         w[1] = max(w[1], float(np.abs(e_ours - e_theirs).max()))
         w[2] = max(w[2], abs(cost - c_theirs) / max(1.0, abs(c_theirs)))
     out: dict = {k: {"n": v[0], "residual_max_abs": v[1], "cost_max_rel": v[2]} for k, v in sorted(worst.items())}
+    out["motion jacobians"] = {"gtsam_minus_exact_max_abs": jac}
     if motion_worst[1] is not None:  # who is right where they part most: 40-digit arithmetic says
         x1, x2, e_ours, e_theirs = motion_worst[1]
         ref = velocity_rows_reference(x1, x2)
