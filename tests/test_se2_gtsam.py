@@ -42,8 +42,10 @@ def test_every_factor_agrees_with_gtsams_at_a_common_point(exact):
         assert agreement[kind]["cost_max_rel"] <= 1e-12, kind
     assert sum(v["n"] for k, v in agreement.items() if k.startswith("motion |")) == N_POSES - 1
     for kind, v in agreement.items():
-        if kind.startswith("motion |dtheta| >="):
+        if kind.startswith("motion |dtheta| >="):  # none on this prefix; 52 in the first 1,000 poses
             assert v["residual_max_abs"] <= 1e-12
+        elif kind.startswith("motion |dtheta| <"):  # 1.5e-9 measured here, all of it GTSAM's (next test)
+            assert v["residual_max_abs"] <= 1e-8
 
 
 def test_where_the_motion_residuals_part_40_digit_arithmetic_sides_with_ours(exact):
