@@ -21,7 +21,7 @@ N_POSES = 220  # the first update (50 ranges in) comes at pose ~150
 @pytest.fixture(scope="module")
 def bench(shared_data):
     optional_import("gtsam", "gtsam")
-    optional_import("mpmath", "mpmath")
+    optional_import("mpmath", "test")
     spec = importlib.util.spec_from_file_location("se2_gtsam_plaza", BENCH)
     module = importlib.util.module_from_spec(spec)
     sys.modules[spec.name] = module  # its dataclasses look their module up there
