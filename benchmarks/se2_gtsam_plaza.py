@@ -237,7 +237,9 @@ def run(max_poses: int | None = None, variant: str = "exact", setup: PaperSetup 
     """Stream Plaza (its first ``max_poses`` poses) through both solvers; the figures (module docstring)."""
     setup = PaperSetup.plaza() if setup is None else setup
     readings = Readings.from_dataset(load_dataset("plaza"), setup)
-    n = readings.n_poses if max_poses is None else min(max_poses, readings.n_poses)
+    n = readings.n_poses if max_poses is None else max_poses
+    if not 2 <= n <= readings.n_poses:
+        raise SystemExit(f"--max-poses must be 2 to {readings.n_poses} (Plaza's poses), got {max_poses}")
     rows = readings.range_rows()
     isam2 = setup.isam2.replace(relinearize_blocks={"x": setup.relinearize_blocks})
     gparams = gtsam.ISAM2Params()
