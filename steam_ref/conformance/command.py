@@ -1,4 +1,4 @@
-"""``steam-ref conformance``: export the kit, check results against it, check the installed code.
+"""``steam-ref conformance``: export the kit, check results against it, check the installed code::
 
     steam-ref conformance export DIR                      the kit and a README on producing results
     steam-ref conformance check RESULTS_DIR [--paper] [--only SUITE...] [--allow-missing] [--conventions NAME...]

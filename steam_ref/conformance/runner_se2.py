@@ -1,7 +1,7 @@
 """steam_ref's own results for the ``se2`` suite: ``steam_ref.lie`` and the SE(2) factors on a case's inputs.
 
 A problem's variables named 'x<i>' are SE(2) states (``Values(kinds={k: SE2_STATE})``, retracted on the
-right); 'l<j>' are landmarks (vectors). Factor specs of the suite:
+right); 'l<j>' are landmarks (vectors). Factor specs of the suite::
 
     se2_prior        keys [x1, x2], dt, qc (3×3 on [vx, vy, ω]), model   e = γ₂ - Φ(Δt) γ₁, Σ = Q(Δt)
     se2_state_prior  keys [x], mean, sigmas (6)                          e = x ⊖ mean

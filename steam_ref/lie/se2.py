@@ -12,7 +12,7 @@ leading axes (a pose (..., 3), a matrix (..., 3, 3)), so a batch of factors eval
   J_r⁻¹(ξ) v and J_r(ξ) v with respect to ξ (the SE(2) WNOA residual and the interpolation need them).
 
 Every coefficient (sin φ/φ, (1 - cos φ)/φ², (φ - sin φ)/φ², (φ/2) cot(φ/2) and the rest, with their
-derivatives) is summed from its Taylor series for |φ| < 1 and taken in closed form above, so none
+derivatives) is summed from its Taylor series for abs(φ) < 1 and taken in closed form above, so none
 loses precision to cancellation near φ = 0 [DER 11.3-11.7].
 """
 

@@ -1,6 +1,6 @@
 """The ``se2`` suite (kit v4): the GP prior on SE(2), every case's inputs written out as literal numbers.
 
-Exp and Log near 0, on both sides of the series switch at |φ| = 1 and near the half turn (Log's angle in
+Exp and Log near 0, on both sides of the series switch at abs(φ) = 1 and near the half turn (Log's angle in
 (-π, π], +π at the half turn); J_r and J_r⁻¹; between and the adjoint; both WNOA residuals
 ("local-variable", "simplified") and their Jacobians in the right tangents; the SE(2) state prior; the
 local GP's mean, its Jacobians and its covariance; Gauss-Newton on four SE(2) states with ranges; an
