@@ -34,7 +34,8 @@ def backsubstitute(state: SolverState, new_cliques: Collection[int], alpha: floa
     cliques solved.
     """
     tree, delta, beta, stale, candidates = state.tree, state.delta, state.beta, state.stale, state.candidates
-    olds = state.log.old_values(delta)  # each δ it replaces, for the transaction's undo
+    # record: each δ it replaces, for the transaction's undo; amax: ndarray.max without its Python wrapper
+    record, amax = state.log.old_values(delta).append, np.maximum.reduce
     changed: set[Key] = set()
     updated: list[Key] = []
     stack = [c for c in new_cliques if tree.parent[c] is None]
@@ -47,12 +48,12 @@ def backsubstitute(state: SolverState, new_cliques: Collection[int], alpha: floa
         x = clique.solve(sep)  # [YIB Eq. 25]
         frontals = clique.frontals
         for k, xk in zip(frontals, (x,) if len(frontals) == 1 else clique.split_frontals(x), strict=True):
-            if alpha == 0 or abs(xk - delta[k]).max() >= alpha:  # step 3: changed by at least α
+            if alpha == 0 or amax(abs(xk - delta[k])) >= alpha:  # step 3: changed by at least α
                 changed.add(k)
-            olds.append((k, delta[k]))
+            record((k, delta[k]))
             delta[k] = xk
             stale[k] = None  # never undone: an extra mark only forms the same estimate again
-            if abs(xk).max() >= beta[k]:  # a candidate for the next relinearization [K12 Alg. 5]
+            if amax(abs(xk)) >= beta[k]:  # a candidate for the next relinearization [K12 Alg. 5]
                 candidates[k] = None  # the transaction keeps the candidates whole: no record needed
             elif k in candidates:
                 del candidates[k]
