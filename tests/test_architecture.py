@@ -320,6 +320,13 @@ def test_import_steam_ref_loads_neither_matplotlib_nor_the_paper_layer():
     assert out.stdout.strip() == "", f"import steam_ref loaded {out.stdout.strip()}"
 
 
+def test_the_command_loads_pooch_and_tqdm_only_when_a_download_or_a_bar_needs_them():
+    """pooch (with requests and ssl, ~4 MB) and tqdm were loaded by every run through the data module."""
+    code = "import sys, steam_ref.cli.commands\nprint(','.join(m for m in ('pooch', 'requests', 'tqdm') if m in sys.modules))\n"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "", f"the command loaded {out.stdout.strip()}"
+
+
 def test_the_lazy_names_of_the_package_are_its_public_names_and_resolve():
     import steam_ref
 

@@ -28,9 +28,6 @@ import tempfile
 import urllib.parse
 from pathlib import Path
 
-import pooch
-import requests
-
 from ..errors import DataError
 from .registry import (
     DATASETS,
@@ -183,6 +180,8 @@ def fetch(
         _writable_folder(target.parent)
         if os.path.lexists(target):
             check_regular(target)  # pooch would hash a FIFO or /dev/zero for ever
+    import pooch  # here, not at the top: every command loads this module, only a download needs pooch (~4 MB)
+
     pooch.get_logger().setLevel(logging.WARNING)  # the caller says what was fetched
     return {s.name: [_fetch_file(f, url, folder, progress) for f in s.files] for s in sets}
 
@@ -209,6 +208,8 @@ class _Capped:
 
 def _capped_download(limit: int, progress: bool):
     """A pooch downloader that writes at most ``limit`` bytes (the registry's size of the file)."""
+    import pooch
+
     http = pooch.HTTPDownloader(progressbar=progress, timeout=60)
 
     def download(url: str, output_file: str, pooch_instance: object) -> None:
@@ -219,6 +220,9 @@ def _capped_download(limit: int, progress: bool):
 
 
 def _fetch_file(f: DataFile, url: str, folder: Path, progress: bool) -> Path:
+    import pooch
+    import requests
+
     target = folder / f.local
     where = shown_url(url + f.remote)
     try:
