@@ -189,7 +189,7 @@ def test_a_full_disk_after_a_real_run_is_one_line_naming_the_option(tmp_path: Pa
     target = tmp_path / "estimates.npz"
     target.write_bytes(b"yesterday's estimates")
 
-    def full_disk(path: str, result) -> None:
+    def full_disk(path: str, result, **kwargs) -> None:
         Path(path).write_bytes(b"PK\x03\x04 half")
         raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
 
