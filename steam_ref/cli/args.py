@@ -13,6 +13,7 @@ import argparse
 import math
 import warnings
 from pathlib import Path
+from typing import Any, Protocol
 
 from ..arguments import parse_decimal
 from ..datasets import LandmarkDataset, RangeDataset, load_dataset
@@ -46,6 +47,12 @@ __all__ = [
     "seeds_count",
     "steps_count",
 ]
+
+
+class Subparsers(Protocol):
+    """What a command's ``add_parser(sub)`` is given: argparse's subparsers, by the one method it calls."""
+
+    def add_parser(self, name: str, **kwargs: Any) -> argparse.ArgumentParser: ...
 
 
 class Parser(argparse.ArgumentParser):

@@ -15,6 +15,7 @@ from ..plot.figures import plot_trajectory
 from ..variables import X
 from . import explain
 from .args import (
+    Subparsers,
     add_data_dir,
     add_dataset,
     add_progress,
@@ -29,7 +30,7 @@ from .streams import json_line
 __all__ = ["add_parser", "run"]
 
 
-def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
     """Add ``batch`` and its options to the command's subparsers."""
     parser = sub.add_parser("batch", help="batch Gauss-Newton on all of a data set (PB or PBVR): RMSE and a plot")
     add_dataset(parser, "paper-synthetic")

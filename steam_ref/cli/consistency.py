@@ -32,14 +32,14 @@ from ..paper.consistency import (
 from ..paper.presets import SE2_RESIDUALS
 from ..paper.sweep import run_sweep
 from ..plot.figures import plot_anees
-from .args import add_progress, landmarks_count, non_negative_int, positive_int, seeds_count, steps_count
+from .args import Subparsers, add_progress, landmarks_count, non_negative_int, positive_int, seeds_count, steps_count
 from .paths import check_output, check_outputs_apart, write_output
 from .streams import json_line
 
 __all__ = ["add_parser", "run"]
 
 
-def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
     """Add ``consistency`` and its options to the command's subparsers."""
     parser = sub.add_parser("consistency", help="ANEES of each estimator over Monte Carlo runs, with its band")
     parser.add_argument("--dataset", choices=("synthetic",), default="synthetic", help="tasks drawn from the model")

@@ -14,11 +14,12 @@ from pathlib import Path
 
 from ..datasets import fetch as fetching
 from ..datasets.search import data_cache_dir, uncleaned_plaza
+from .args import Subparsers
 
 __all__ = ["add_parser", "run"]
 
 
-def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
     """Add ``data`` with its ``list`` and ``fetch`` subcommands to the command's subparsers."""
     data = sub.add_parser("data", help="the paper's data by name: list them, fetch them (sha256-checked)")
     what = data.add_subparsers(dest="data_command", required=True, parser_class=type(data))

@@ -15,14 +15,14 @@ from ..paper.options import StreamOptions
 from ..paper.presets import PaperSetup
 from ..plot.figures import plot_fidelity
 from . import explain
-from .args import add_data_dir, add_progress, preset_for
+from .args import Subparsers, add_data_dir, add_progress, preset_for
 from .paths import check_output, write_plot
 from .streams import json_line
 
 __all__ = ["add_parser", "run"]
 
 
-def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
     """Add ``fidelity`` and its options to the command's subparsers."""
     parser = sub.add_parser(
         "fidelity", help="BTGP/1 against the authors' saved runs, pose by pose, covariances included"

@@ -7,13 +7,13 @@ import argparse
 from ..errors import SteamError
 from ..paper.experiments import reproduce
 from . import explain
-from .args import add_data_dir, add_progress, positive_int
+from .args import Subparsers, add_data_dir, add_progress, positive_int
 from .paths import check_out_folder
 
 __all__ = ["add_parser", "run"]
 
 
-def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
     """Add ``reproduce`` and its options to the command's subparsers."""
     parser = sub.add_parser("reproduce", help="the experiments of Fig. 3 and Fig. 4, plots and a results table")
     parser.add_argument("--quick", action="store_true", help="small prefixes and budgets: minutes, not hours")

@@ -28,6 +28,7 @@ from . import explain
 from .args import (
     QC_SCALES,
     SINGER_TIME_CONSTANTS,
+    Subparsers,
     add_data_dir,
     add_dataset,
     add_progress,
@@ -57,7 +58,7 @@ __all__ = ["add_parser", "run", "save_estimates"]
 DEFAULT_STEPS, DEFAULT_LANDMARKS = 1500, 298  # generate_synthetic's defaults: a landmark every ~5 steps
 
 
-def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
     """Add ``run`` and its options to the command's subparsers."""
     parser = sub.add_parser("run", help="stream a data set through one solver")
     add_dataset(parser, "synthetic")
