@@ -367,6 +367,12 @@ def test_module_is_at_most_400_lines(path):
         assert n <= MAX_LINES, f"{name} has {n} lines (> {MAX_LINES}): split it by job"
 
 
+def test_the_bayes_tree_package_is_at_most_2000_lines():
+    # The solver a student reads beside K12 and the paper: every behaviour in at most 2,000 lines, all files counted.
+    n = sum(len(p.read_text().splitlines()) for p in (PACKAGE / "bayes_tree").glob("*.py"))
+    assert n <= 2000, f"steam_ref/bayes_tree/ has {n} lines (> 2,000)"
+
+
 ORACLE = (
     "steam_ref.conformance.oracle",
     "steam_ref.conformance.oracle_graph",

@@ -41,8 +41,6 @@ from .params import ISAM2Params
 
 __all__ = ["FixedLagSmoother"]
 
-OLD_PART = 0.0  # once the window is full, the variables older than newest - OLD_PART * lag go first, oldest first
-
 
 class FixedLagSmoother(IncrementalSolver):
     """iSAM2 over a sliding window of ``lag`` seconds: older variables are marginalized after each update.
@@ -121,12 +119,12 @@ class FixedLagSmoother(IncrementalSolver):
             self.last_marginalization = done
 
     def elimination_order(self, variables: list[Key], factor_keys: list, last: list[Key]) -> list[Key]:
-        """Once the window is full: the timed variables older than newest - OLD_PART * lag first, oldest first, then
+        """Once the window is full: the timed variables older than the newest timestamp first, oldest first, then
         minimum degree with ``last`` last [K12 Sec. 5], so the states next to leave sit in leaf cliques, cut off with
         no re-elimination (as GTSAM's fixed-lag smoother orders the keys to marginalize first)."""
         if not self.n_marginalized:  # the window is not full yet: iSAM2's own order, as without a lag
             return super().elimination_order(variables, factor_keys, last)
-        cutoff, times = self.newest - self.lag * OLD_PART, self._times
+        cutoff, times = self.newest, self._times
         old = sorted(
             (k for k in variables if times.get(k, math.inf) < cutoff and k not in last), key=lambda k: times[k]
         )

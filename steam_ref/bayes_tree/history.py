@@ -5,9 +5,8 @@ linearized problem into the conditional P(D | S), one variable v at a time [YIB 
 
     R_v δ_v + S_v δ_S = d_v,
 
-and the marginal on the rest. A fixed-lag smoother drops the conditional; the window keeps the marginal.
-Kept instead, the conditionals are a Bayes net of the forgotten variables given the ones after them,
-and the posterior of the whole run factorizes as
+and the marginal on the rest. A fixed-lag smoother drops the conditional; the window keeps the marginal. Kept instead,
+the conditionals are a Bayes net of the forgotten variables given the ones after them: the whole run's posterior is
 
     p(everything) = p(window at the end) · Π_v P(v | S_v),
 
@@ -16,16 +15,16 @@ variable its estimate given all the data, as a Rauch-Tung-Striebel backward pass
 
     x_v = θ̄_v ⊕ R_v⁻¹ (d_v - S_v (x_S ⊖ θ̄_S)),       (derivations Eq. 10.5)
 
-(⊕, ⊖ by each variable's kind: + and - for a vector), θ̄ the linearization point when v was marginalized
-(the conditional is frozen there, as the marginal factor), x_S the final estimate of each separator
-variable: the window's, or one this pass has already computed. For a linear problem the result is the
-batch optimum of every factor ever given, to rounding (tests/test_fixed_lag_history.py); for a nonlinear
-one, the optimum of the linearizations frozen at each marginalization, off by how far the separator moved
-since, and not always closer to the truth than the lagged estimates (figures: docs/experiments.md).
+(⊕, ⊖ by each variable's kind: + and - for a vector), θ̄ the linearization point when v was marginalized (the
+conditional is frozen there, as the marginal factor), x_S the final estimate of each separator variable: the window's,
+or one this pass has already computed. For a linear problem the result is the batch optimum of every factor ever given,
+to rounding (tests/test_fixed_lag_history.py); for a nonlinear one, the optimum of the linearizations frozen at each
+marginalization, off by how far the separator moved since, and not always closer to the truth than the lagged
+estimates (figures: docs/experiments.md).
 
-Each conditional is kept in solved form, x_v = m_v + K_v (x_S - θ̄_S) with m_v = θ̄_v + R_v⁻¹ d_v and
-K_v = -R_v⁻¹ S_v (θ̄_v ⊕ (R_v⁻¹ d_v + K_v (x_S ⊖ θ̄_S)) for other kinds): memory grows with the run again, by
-a fraction of what the whole tree would hold; the window's does not.
+Each conditional is kept in solved form, x_v = m_v + K_v (x_S - θ̄_S) with m_v = θ̄_v + R_v⁻¹ d_v and K_v = -R_v⁻¹ S_v
+(θ̄_v ⊕ (R_v⁻¹ d_v + K_v (x_S ⊖ θ̄_S)) for other kinds): memory grows with the run again, by a fraction of what the
+whole tree would hold; the window's does not.
 """
 
 from __future__ import annotations

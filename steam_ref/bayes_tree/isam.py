@@ -19,7 +19,8 @@ it is made: a failed or interrupted update leaves the solver as it was.
 from __future__ import annotations
 
 import time
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Iterator, Mapping
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -35,7 +36,7 @@ from ..covariance import (
 )
 from ..errors import ShapeError, SteamError, UnderdeterminedError, UnknownVariableError
 from ..factors import Factor, check_factors
-from ..linear.ordering import constrained_min_degree
+from ..linear.ordering import min_degree_keys
 from ..linear.system import GaussianFactor, linearize
 from ..linear.threads import limit
 from ..manifold import VECTOR, Manifold
@@ -50,22 +51,17 @@ __all__ = ["IncrementalSolver", "UpdateReport", "check_new_values"]
 
 
 class PhaseTimer:
-    """Wall time of each phase of one update: ``with timer("remove"): ...``."""
+    """Wall time of each phase of one update: ``with timer("remove"): ...`` writes ``seconds["remove"]``."""
 
     def __init__(self) -> None:
         self.start = time.perf_counter()  # when the update began
         self.seconds: dict[str, float] = {}  # phase → seconds
-        self._phase, self._t = "", 0.0
 
-    def __call__(self, phase: str) -> PhaseTimer:
-        self._phase = phase
-        return self
-
-    def __enter__(self) -> None:
-        self._t = time.perf_counter()
-
-    def __exit__(self, *exc: object) -> None:
-        self.seconds[self._phase] = time.perf_counter() - self._t
+    @contextmanager
+    def __call__(self, phase: str) -> Iterator[None]:
+        t = time.perf_counter()
+        yield
+        self.seconds[phase] = time.perf_counter() - t
 
     def total(self) -> float:
         """Seconds since the update began."""
@@ -99,9 +95,9 @@ def check_new_values(new_values: object) -> None:
 class IncrementalSolver:
     """iSAM2 on the Bayes tree: BTGP's incremental solver.  [YIB Alg. 1, K12 Alg. 6]
 
-    ``params`` (default :class:`ISAM2Params`, GTSAM's defaults) sets the relinearization and
-    wildfire thresholds; keyword ``changes`` override its fields, so
-    ``IncrementalSolver(relinearize_skip=1, wildfire_threshold=0)`` works as well.
+    ``params`` (default :class:`ISAM2Params`, GTSAM's defaults) sets the relinearization and wildfire thresholds;
+    keyword ``changes`` override its fields, so ``IncrementalSolver(relinearize_skip=1, wildfire_threshold=0)`` works as
+    well.
     """
 
     forgets_by_time = False  # a FixedLagSmoother forgets by timestamps, so :func:`marginalize` refuses it
@@ -194,10 +190,9 @@ class IncrementalSolver:
     ) -> UpdateReport:
         """Add factors and variables, and update the tree and the estimate.  [YIB Alg. 1, K12 Alg. 6]
 
-        ``relinearize=False`` skips this update's fluid relinearization. Raises
-        :class:`SteamError` subclasses on bad input (a new value for an existing variable, a factor
-        naming a variable with no value, a variable left unconstrained, ...); the solver is then as
-        it was before the call.
+        ``relinearize=False`` skips this update's fluid relinearization. Raises :class:`SteamError` subclasses on bad
+        input (a new value for an existing variable, a factor naming a variable with no value, a variable left
+        unconstrained, ...); the solver is then as it was before the call.
         """
         timer = PhaseTimer()
         with timer("check"):
@@ -271,7 +266,7 @@ class IncrementalSolver:
 
     def elimination_order(self, variables: list[Key], factor_keys: list, last: list[Key]) -> list[Key]:
         """Minimum degree with ``last`` eliminated last [K12 Sec. 5]; a subclass may order the ties."""
-        return list(constrained_min_degree(variables, self.state.dims, factor_keys, last=last).keys)
+        return min_degree_keys(variables, self.state.dims, factor_keys, last)
 
     def _checked_update(
         self, new_factors: list[Factor], new_values: Mapping[Key, NDArray]

@@ -6,10 +6,9 @@ its marginal p(Θ) = ∫ p(D, Θ) dD. In the linearized problem ‖A δ - b‖²
 
     [A_D A_S | b] = Q [[R_D, S_D, d_D], [0, A_m, b_m]],
 
-leaves the conditional P(D | S), which a smoother keeps only to smooth its past afterwards
-(:mod:`.history`), and the rows ‖A_m δ_S - b_m‖²
-on D's separator S: the Schur complement of D in the information matrix (derivations §10, Eq. 10.1-10.3).
-Every other factor is untouched, so the marginal over Θ is the old factors not touching D plus this
+leaves the conditional P(D | S), which a smoother keeps only to smooth its past afterwards (:mod:`.history`), and the
+rows ‖A_m δ_S - b_m‖² on D's separator S: the Schur complement of D in the information matrix (derivations §10,
+Eq. 10.1-10.3). Every other factor is untouched, so the marginal over Θ is the old factors not touching D plus this
 one. :func:`marginalize` does it in the tree, in the update's style:
 
 1. *The cliques of D.* Every clique holding a variable of D (frontal or in a separator) is found by
@@ -42,7 +41,7 @@ from numpy.typing import NDArray
 
 from ..errors import SteamError, UnknownVariableError
 from ..factors.marginal import MarginalFactor
-from ..linear.ordering import constrained_min_degree
+from ..linear.ordering import min_degree_keys
 from ..linear.system import GaussianFactor
 from ..variables import Key, key_list
 from .backsolve import backsubstitute
@@ -162,7 +161,7 @@ def _marginalize(
     adjacent = [solver.cached(j) for j in dropped]
     variables = list(dict.fromkeys(k for f in adjacent for k in f.keys))
     last = [k for k in variables if k not in drop]
-    order = constrained_min_degree(variables, state.dims, [f.keys for f in adjacent], last=last).keys
+    order = min_degree_keys(variables, state.dims, [f.keys for f in adjacent], last)
     order_drop = order[: len(drop)]
     estimates = {k: state.estimate_of(k).copy() for k in order_drop}
     conditionals: list[Clique] | None = [] if keep_conditionals else None

@@ -23,15 +23,13 @@ __all__ = ["ISAM2Params"]
 def _blocks(kind: str, sizes: object) -> tuple[int, ...]:
     """Block sizes as a tuple of positive ints; SteamError naming them otherwise."""
     _kind("relinearize_blocks", kind)
-    if isinstance(sizes, (str, bytes)) or not isinstance(sizes, (tuple, list, np.ndarray)):
-        raise SteamError(f"relinearize_blocks[{kind!r}] must be a sequence of block sizes, got {sizes!r}")
+    bad = SteamError(f"relinearize_blocks[{kind!r}] must be positive integer block sizes, got {sizes!r}")
+    if isinstance(sizes, (str, bytes)) or not isinstance(sizes, (tuple, list, np.ndarray)) or not len(sizes):
+        raise bad
     try:
-        out = tuple(integer("a block size", n, minimum=1) for n in sizes)
+        return tuple(integer("a block size", n, minimum=1) for n in sizes)
     except SteamError:
-        raise SteamError(f"relinearize_blocks[{kind!r}] must be positive integer block sizes, got {sizes!r}") from None
-    if not out:
-        raise SteamError(f"relinearize_blocks[{kind!r}] must be positive integer block sizes, got {sizes!r}")
-    return out
+        raise bad from None
 
 
 def _kind(field: str, kind: object) -> str:

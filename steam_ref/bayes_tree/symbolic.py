@@ -142,18 +142,26 @@ class CliqueTree(Generic[C]):
 
     def add(self, clique: C, parent: int | None) -> int:
         """Insert a clique under ``parent`` (None: as a root); returns its id."""
-        cid, log = self._next_id, self.log
+        cid = self._next_id
         for v in clique.frontals:
             if v in self.frontal_of:
                 raise SteamError(f"variable {v!r} is already frontal in clique {self.frontal_of[v]}")
-        log.record(setattr, self, "_next_id", cid)
-        self._next_id += 1
-        log.set(self.cliques, cid, clique)
-        log.set(self.children, cid, [])
+        self.log.record(self._unadd, cid, clique.frontals)  # one record undoes it all but the parent's new child
+        self._next_id = cid + 1
+        self.cliques[cid], self.children[cid], self.parent[cid] = clique, [], None
         for v in clique.frontals:
-            log.set(self.frontal_of, v, cid)
+            self.frontal_of[v] = cid
         self.attach(cid, parent)
         return cid
+
+    def _unadd(self, cid: int, frontals: tuple) -> None:
+        """Undo :meth:`add` of clique ``cid`` (idempotent; its parent's list of children is recorded apart)."""
+        self._next_id = cid
+        for store in (self.cliques, self.children, self.parent, self.roots):
+            store.pop(cid, None)
+        for v in frontals:
+            if self.frontal_of.get(v) == cid:
+                del self.frontal_of[v]
 
     def attach(self, cid: int, parent: int | None) -> None:
         """Hang clique ``cid`` (a detached subtree) under ``parent`` (None: make it a root)."""

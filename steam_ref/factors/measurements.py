@@ -19,7 +19,7 @@ from ..errors import DegenerateMeasurementWarning, ShapeError, SteamError
 from ..pose2 import wrap_angle
 from ..robust import RobustLoss
 from ..variables import Key
-from .base import LANDMARK_DIM, STATE_DIM, Factor, _jacobian, _vector, sqrt_information
+from .base import LANDMARK_DIM, STATE_DIM, Factor, _jacobian, _resolved, _vector, sqrt_information
 
 __all__ = [
     "StateMeasurement",
@@ -30,25 +30,6 @@ __all__ = [
     "BearingFactor",
     "BearingRangeFactor",
 ]
-
-
-def _resolved(factor: str, labels: tuple[str, ...], measured: NDArray, W: NDArray) -> None:
-    """Each measured number is resolved by float64 to within its sigma: a value whose float spacing
-    exceeds its sigma (a bearing of 1e17 rad, numbers there 16 rad apart; a sigma of 1e-150 m on a
-    range of 10 m) is no reading a sensor gives, and its whitened error would be rounding noise."""
-    with np.errstate(all="ignore"):
-        rows = np.linalg.inv(W)  # Σ = W⁻¹W⁻ᵀ: sigma i is the norm of row i, scaled so that 1e-200 does not underflow
-        big = np.maximum(np.abs(rows).max(axis=1), np.finfo(float).tiny)
-        sigma = big * np.sqrt(((rows / big[:, None]) ** 2).sum(axis=1))
-        spacing = np.spacing(np.abs(measured))
-    bad = np.flatnonzero(spacing > sigma)
-    if bad.size:
-        i = int(bad[0])
-        raise SteamError(
-            f"{factor}: {labels[i] if i < len(labels) else f'measured[{i}]'} = {float(measured[i])!r} with sigma "
-            f"{float(sigma[i]):.3g}: float64 numbers there are {float(spacing[i]):.3g} apart, more than the sigma, "
-            f"so the reading carries nothing float64 can resolve"
-        )
 
 
 # --- Priors -------------------------------------------------------------------------------------
@@ -235,14 +216,22 @@ class VelocityFactor(StateMeasurement):
 # --- Measurements of a state and a landmark -----------------------------------------------------
 
 
-def _range_row(x: NDArray, l: NDArray) -> tuple[NDArray, NDArray, NDArray]:
-    """r = ‖[x y]ᵀ - ℓ‖ and its rows of ∂r/∂x (..., state size), ∂r/∂ℓ (..., 2).  [YIB Eq. 33]
-    At r = 0 the norm has no derivative: zero rows (gpslam's and STEAM's convention) and a warning."""
+def _distance(x: NDArray, l: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+    """r = ‖[x y]ᵀ - ℓ‖ and the difference ℓ - [x y]ᵀ as (dx, dy).  [YIB Eq. 33]
+    At r = 0 the norm has no derivative: a warning (the Jacobian rows there are zero, :func:`_range_row`)."""
     dx, dy = l[..., 0] - x[..., 0], l[..., 1] - x[..., 1]
     r = np.hypot(dx, dy)
-    if np.any(at := r == 0):
+    if (r == 0).any():
         message = "a range with the robot exactly at the landmark: error 0 - r, its Jacobian (undefined) zero rows"
         warnings.warn(message, DegenerateMeasurementWarning, stacklevel=4)
+    return r, dx, dy
+
+
+def _range_row(x: NDArray, l: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+    """r = ‖[x y]ᵀ - ℓ‖ and its rows of ∂r/∂x (..., state size), ∂r/∂ℓ (..., 2).  [YIB Eq. 33]
+    At r = 0 zero rows: gpslam's and STEAM's convention (and :func:`_distance`'s warning)."""
+    r, dx, dy = _distance(x, l)
+    at = r == 0
     ux, uy = (np.where(at, 0.0, d / np.where(at, 1.0, r)) for d in (dx, dy))
     Jx = np.zeros(x.shape)
     Jx[..., 0], Jx[..., 1] = 0.0 - ux, 0.0 - uy  # 0.0 - u: +0.0, not -0.0, at the landmark
@@ -304,7 +293,7 @@ class RangeFactor(StateMeasurement):
         return cls((state, landmark), W, measured=reading, loss=loss, state_dim=state_dim)
 
     def error(self, x: NDArray, l: NDArray) -> NDArray:
-        return _range_row(x, l)[0][..., None] - self.measured  # [YIB Eq. 33]
+        return _distance(x, l)[0][..., None] - self.measured  # [YIB Eq. 33]
 
     def jacobians(self, x: NDArray, l: NDArray) -> tuple[NDArray, NDArray]:
         _, Jx, Jl = _range_row(x, l)
@@ -391,7 +380,7 @@ class BearingRangeFactor(StateMeasurement):
         return cls((state, landmark), W, measured=measured, loss=loss, state_dim=state_dim)
 
     def error(self, x: NDArray, l: NDArray) -> NDArray:
-        b, r = _bearing_row(x, l)[0], _range_row(x, l)[0]
+        b, r = _bearing_row(x, l)[0], _distance(x, l)[0]
         return np.stack([wrap_angle(b - self.measured[..., 0]), r - self.measured[..., 1]], axis=-1)
 
     def jacobians(self, x: NDArray, l: NDArray) -> tuple[NDArray, NDArray]:

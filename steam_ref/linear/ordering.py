@@ -39,6 +39,7 @@ __all__ = [
     "xl_ordering",
     "amd_ordering",
     "constrained_min_degree",
+    "min_degree_keys",
     "make_ordering",
     "variable_adjacency",
     "sparse_backend",
@@ -202,6 +203,19 @@ def constrained_min_degree(
     factor_keys: Iterable[Sequence[Key]],
     last: Iterable[Key] = (),
 ) -> Ordering:
+    """A greedy minimum-degree elimination order with the variables in ``last`` eliminated last, as an
+    :class:`Ordering` (:func:`min_degree_keys` gives the keys alone, as an incremental update needs them).
+    """
+    order = min_degree_keys(variables, dims, factor_keys, last)
+    return Ordering(tuple(order), tuple(dims[k] for k in order))
+
+
+def min_degree_keys(
+    variables: Sequence[Key],
+    dims: Mapping[Key, int],
+    factor_keys: Iterable[Sequence[Key]],
+    last: Iterable[Key] = (),
+) -> list[Key]:
     """A greedy minimum-degree elimination order with the variables in ``last`` eliminated last.
 
     ``dims``: the size of each variable (the :class:`Ordering` carries them); ``factor_keys``: the
@@ -219,7 +233,7 @@ def constrained_min_degree(
     if len(index) != len(variables):
         twice = next(v for i, v in enumerate(variables) if index[v] != i)
         raise SteamError(f"variables lists {twice!r} twice")
-    sizes = _sizes(variables, dims)  # names a variable dims lacks, before any work
+    _sizes(variables, dims)  # names a variable dims lacks, before any work
     adj: dict = {v: set() for v in variables}
     for i, keys in enumerate(factor_keys):
         for k in keys:
@@ -255,7 +269,7 @@ def constrained_min_degree(
             au |= a
             au.discard(u)
             heapq.heappush(heap, (group[u], len(au), index[u]))
-    return Ordering(tuple(order), tuple(sizes[index[v]] for v in order))
+    return order
 
 
 def make_ordering(
