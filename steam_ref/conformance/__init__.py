@@ -18,12 +18,25 @@ exports it, checks results laid out like it, and checks the installed code again
 - :mod:`.command`: the ``steam-ref conformance`` subcommands.
 """
 
-from .build import build_kit, selftest
-from .checker import Report, check_cases
-from .gate import check_directory
-from .kitio import KIT_VERSION, KITS, SHIPPED, SUITES
-from .runner import run_case
+from __future__ import annotations
 
+import importlib
+from typing import TYPE_CHECKING, Any
+
+# Each public name's module, loaded when the name is first used: the kit's machinery (the solvers, the oracles)
+# loads only for a command or a test that needs it, not for every ``steam-ref`` run.
+_HOMES = {
+    "KIT_VERSION": "kitio",
+    "KITS": "kitio",
+    "SHIPPED": "kitio",
+    "SUITES": "kitio",
+    "build_kit": "build",
+    "selftest": "build",
+    "check_directory": "gate",
+    "check_cases": "checker",
+    "Report": "checker",
+    "run_case": "runner",
+}
 __all__ = [
     "KIT_VERSION",
     "KITS",
@@ -36,3 +49,21 @@ __all__ = [
     "Report",
     "run_case",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    """Load a public name's module when the name is first used, and keep the name here."""
+    home = _HOMES.get(name)
+    if home is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f".{home}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+if TYPE_CHECKING:  # what a type checker sees: the same names, imported eagerly
+    from .build import build_kit, selftest
+    from .checker import Report, check_cases
+    from .gate import check_directory
+    from .kitio import KIT_VERSION, KITS, SHIPPED, SUITES
+    from .runner import run_case

@@ -24,7 +24,6 @@ from pathlib import Path
 
 from ..errors import SteamError
 from ..paper.progress import wanted
-from .build import build_kit, selftest
 from .checker import Report
 from .gate import CONVENTION_NAMES, check_directory
 from .kitio import KIT_VERSION, SHIPPED, SUITES, read_index
@@ -152,6 +151,8 @@ def run(args: argparse.Namespace) -> int:
             paper=args.paper,
         )
         return _print(report)
+    from .build import build_kit, selftest  # the solvers and oracles load only for the commands that use them
+
     if command == "selftest":
         return _print(selftest(paper=args.paper, data_dir=args.data_dir, progress=wanted(args.progress)))
     index = build_kit(args.out, paper=args.paper, data_dir=args.data_dir)
