@@ -42,7 +42,7 @@ def run(dataset: str) -> dict:
     start = time.perf_counter()
     estimator.run(data.ground_truth)
     seconds = time.perf_counter() - start
-    nnz = [r.tree_nnz for r in estimator.solver.reports]  # type: ignore[attr-defined]
+    nnz = estimator.solver.tree_nnz  # type: ignore[attr-defined]
     tree = estimator.solver.inner.tree  # type: ignore[attr-defined]
     states = sum(1 for k in tree.frontal_of if k.kind == "x")
     OUT.mkdir(exist_ok=True)

@@ -79,7 +79,7 @@ def child(solver: str, dataset: str, every: int, max_poses: int | None) -> dict:
         positions = np.array([final[X(i)][:2] for i in states])
     truth = np.asarray(data.ground_truth)[states, 1:3]
     updates = est.update_seconds
-    return phases(est.solver.reports if solver == "steam" else []) | {
+    return phases(est.solver if solver == "steam" else None) | {
         "wall_s": wall,
         "cpu_s": cpu,
         "rmse_m": position_rmse(positions, truth),
@@ -92,16 +92,13 @@ def child(solver: str, dataset: str, every: int, max_poses: int | None) -> dict:
     }
 
 
-def phases(reports: list) -> dict:
-    """Our run's seconds per phase of the iSAM2 update, summed over its updates (``UpdateReport.timings``), and
+def phases(solver: object | None) -> dict:
+    """Our run's seconds per phase of the iSAM2 update, summed over its updates (the stream's ``phase_seconds``), and
     its clique solves: what a faster back-substitution could save at most (empty for a GTSAM run)."""
-    if not reports:
+    if solver is None:
         return {"phase_s": None, "backsub_s": None, "clique_solves": None}
-    totals: dict[str, float] = {}
-    for report in reports:
-        for phase, seconds in report.timings.items():
-            totals[phase] = totals.get(phase, 0.0) + seconds
-    solves = sum(r.backsubstituted_cliques for r in reports)
+    totals = dict(solver.phase_seconds)  # type: ignore[attr-defined]
+    solves = solver.clique_solves  # type: ignore[attr-defined]
     return {"phase_s": totals, "backsub_s": totals.get("backsubstitute", 0.0), "clique_solves": solves}
 
 

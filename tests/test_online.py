@@ -10,8 +10,10 @@ import numpy as np
 import pytest
 
 import steam_ref.paper.online as online
+import steam_ref.paper.solvers as online_solvers
 from steam_ref.batch import gauss_newton
 from steam_ref.bayes_tree import ISAM2Params
+from steam_ref.bayes_tree.dot import tree_nnz
 from steam_ref.covariance import sparse_joint_covariance as joint_covariance
 from steam_ref.datasets import generate_synthetic
 from steam_ref.errors import SteamError
@@ -450,3 +452,22 @@ def test_a_solver_that_forgets_nothing_answers_the_run_loops_questions_so(data, 
         solver.estimate_of(X(0), past="recent")
     with pytest.raises(SteamError, match="got past=None"):
         solver.estimate(past=None)
+
+
+def test_a_btgp_stream_keeps_the_latest_reports_and_every_updates_figures(data, monkeypatch):
+    # A long run kept every UpdateReport (11.5 MB on Plaza, each naming every variable it touched); now the latest
+    # KEPT_REPORTS, with the fill after every update and the phase and clique totals kept as numbers.
+    monkeypatch.setattr(online_solvers, "KEPT_REPORTS", 5)
+    stream = StreamingEstimator(Readings.from_dataset(data, SETUP), SETUP, StreamOptions(method="btgp"))
+    seen = []
+    inner_update = stream.solver.inner.update
+    monkeypatch.setattr(stream.solver.inner, "update", lambda *a, **k: seen.append(inner_update(*a, **k)) or seen[-1])
+    while not stream.done:
+        stream.step()
+    solver = stream.solver
+    assert len(seen) >= len(stream.update_steps) > 5 and solver.reports == seen[-5:]  # (and the final updates)
+    assert solver.tree_nnz == [r.tree_nnz for r in seen]
+    assert solver.tree_nnz[-1] == tree_nnz(solver.inner.tree.cliques.values())  # counted again from the tree
+    assert solver.clique_solves == sum(r.backsubstituted_cliques for r in seen)
+    for phase in seen[0].timings:
+        assert solver.phase_seconds[phase] == pytest.approx(sum(r.timings[phase] for r in seen), rel=1e-12)

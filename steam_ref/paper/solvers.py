@@ -22,7 +22,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..batch import gauss_newton
-from ..bayes_tree import FixedLagSmoother, IncrementalSolver, ISAM2Params
+from ..bayes_tree import FixedLagSmoother, IncrementalSolver, ISAM2Params, UpdateReport
 from ..covariance import sparse_joint_covariance, sparse_joint_covariances, sparse_marginal_covariances
 from ..errors import SteamError
 from ..factors import Factor
@@ -45,7 +45,7 @@ __all__ = [
 
 METHODS = ("btgp", "pb", "pbvr")
 PB_RELATIVE_TOLERANCE = 1e-5  # PB/PBVR stop when the cost falls by less than this fraction (GTSAM's default)
-KEPT_REPORTS = 100  # a lagged BTGP keeps the UpdateReports of its latest updates only
+KEPT_REPORTS = 100  # a BTGP stream keeps the UpdateReports of its latest updates only (each names every key it touched)
 PB_MAX_ITERATIONS = 100  # PB/PBVR Gauss-Newton iterations per update at most (GTSAM's default)
 PASTS = ("lagged", "smoothed")  # how a forgotten variable's estimate is read: as it left the window, or given all
 
@@ -171,12 +171,24 @@ class BayesTreeSolver(OnlineSolver):
 
     name = "btgp"
 
-    def __init__(self, params: ISAM2Params | None = None):
-        self.inner = IncrementalSolver(params)
-        self.reports: list = []  # UpdateReport of each update
+    def __init__(self, params: ISAM2Params | None = None, *, inner: IncrementalSolver | None = None):
+        self.inner = IncrementalSolver(params) if inner is None else inner
+        self.reports: list[UpdateReport] = []  # the latest KEPT_REPORTS updates' reports: memory stays flat
+        self.tree_nnz: list[int] = []  # nonzeros of R after each update (GTSAM's treeNnz): the fill, every update
+        self.phase_seconds: dict[str, float] = {}  # seconds in each phase of the update, summed over every update
+        self.clique_solves = 0  # cliques back-substitution solved, over every update
 
     def update(self, factors: list[Factor], values: Values) -> None:
-        self.reports.append(self.inner.update(factors, values))
+        self._keep(self.inner.update(factors, values))
+
+    def _keep(self, report: UpdateReport) -> None:
+        """What the stream keeps of an update: the report itself among the latest KEPT_REPORTS, its figures always."""
+        self.reports.append(report)
+        del self.reports[:-KEPT_REPORTS]
+        self.tree_nnz.append(report.tree_nnz)
+        for phase, seconds in report.timings.items():
+            self.phase_seconds[phase] = self.phase_seconds.get(phase, 0.0) + seconds
+        self.clique_solves += report.backsubstituted_cliques
 
     def estimate_of(self, key: Key, *, past: str = "lagged") -> NDArray:
         check_past(past)  # nothing forgotten: one past
@@ -211,10 +223,10 @@ class FixedLagTreeSolver(BayesTreeSolver):
     """
 
     name = "btgp"
+    inner: FixedLagSmoother
 
     def __init__(self, params: ISAM2Params | None, lag: float, times: NDArray, *, keep_history: bool = False):
-        self.inner: FixedLagSmoother = FixedLagSmoother(lag, params, keep_history=keep_history)
-        self.reports: list = []  # UpdateReport of the latest KEPT_REPORTS updates only: memory stays flat
+        super().__init__(inner=FixedLagSmoother(lag, params, keep_history=keep_history))
         self.times = np.asarray(times, dtype=float)  # time of each pose
         self._states = np.zeros((0, 0))  # (n_poses, n) estimate of each marginalized state X(pose), row by pose
         self._retired_states: set[int] = set()  # poses of the marginalized states
@@ -229,8 +241,7 @@ class FixedLagTreeSolver(BayesTreeSolver):
         if np.isfinite(newest):
             stamps |= {k: newest for f in factors for k in f.keys if k.kind != "x"}
         self._smoothed = self._smoothing_s = None
-        self.reports.append(self.inner.update(factors, values, timestamps=stamps))
-        del self.reports[:-KEPT_REPORTS]
+        self._keep(self.inner.update(factors, values, timestamps=stamps))
         done = self.inner.last_marginalization
         self._forgotten = [] if done is None else list(done.keys)
         for k, v in ({} if done is None else done.estimates).items():
