@@ -66,4 +66,14 @@ def test_vs_gtsam_benchmark_reports_the_backsubstitution_share(shared_data):
     assert out["n_updates"] == 39 and out["clique_solves"] >= out["n_updates"]  # at least the new root each update
     assert out["backsub_s"] == out["phase_s"]["backsubstitute"] > 0
     assert 0 < sum(out["phase_s"].values()) <= out["wall_s"]  # the phases are inside the stream's time
-    assert bench.phases([]) == {"phase_s": None, "backsub_s": None, "clique_solves": None}  # a GTSAM run has none
+    assert bench.phases(None) == {"phase_s": None, "backsub_s": None, "clique_solves": None}  # a GTSAM run has none
+
+
+def test_against_commit_benchmark_runs_both_trees_and_finds_the_same_estimate(shared_data, tmp_path):
+    """The earlier commit is extracted from git and run beside this tree: both give the same RMSE on a prefix."""
+    (row,) = _rows(
+        "against_commit.py", "--pairs", "1", "--dataset", "paper-synthetic", "--max-poses", "60", cwd=tmp_path
+    )
+    assert row["ref"] == "a80dcd0" and len(row["runs"]["ref"]) == len(row["runs"]["now"]) == 1
+    assert len(row["rmse_m"]) == 1  # the bookkeeping since then changed no estimate
+    assert all(row["ratio_now_over_ref"][k] > 0 for k in ("total_s", "update_s_median", "peak_rss_mb"))
