@@ -119,6 +119,13 @@ def check_factors(name: str, factors: object) -> list[Factor]:
     return out
 
 
+def apply(A: NDArray, x: NDArray) -> NDArray:
+    """A x for one matrix (A.dot(x): a third of einsum's call cost) or for a stack of them (einsum), as a factor
+    is evaluated alone (the divergence check) or in a batch (linearization)."""
+    one = A.ndim == 2 and isinstance(x, np.ndarray) and x.ndim == 1
+    return A.dot(x) if one else np.einsum("...ij,...j->...i", A, x)
+
+
 def _jacobian(x: NDArray, m: int) -> NDArray:
     """A zero Jacobian (..., m, dim) for the leading shape of x."""
     return np.zeros(x.shape[:-1] + (m, x.shape[-1]))
@@ -242,5 +249,4 @@ class Factor:
 
     def whitened_error(self, *xs: NDArray) -> NDArray:
         """W e (no robust loss): its squared norm is the Mahalanobis norm of Eq. 6."""
-        W, e = self.sqrt_information, self.error(*xs)
-        return W.dot(e) if W.ndim == 2 and e.ndim == 1 else np.einsum("...ij,...j->...i", W, e)  # .dot: one factor
+        return apply(self.sqrt_information, self.error(*xs))

@@ -19,7 +19,7 @@ from ..gp.interpolate import interpolation_matrices, interpolation_matrices_sde
 from ..gp.prior import process_noise_sqrt_information, transition
 from ..gp.sde import LinearSDE, check_prior
 from ..variables import Key, key_list
-from .base import Factor, _vector, sqrt_information
+from .base import Factor, _vector, apply, sqrt_information
 
 __all__ = ["GPPriorFactor", "gp_prior_factors", "InterpolatedFactor"]
 
@@ -101,7 +101,7 @@ class GPPriorFactor(Factor):
             raise ShapeError(
                 f"GPPriorFactor over states of size {n} got states of shapes {np.shape(x1)} and {np.shape(x2)}"
             )
-        return x2 - np.einsum("...ij,...j->...i", self.phi, x1) - self.v  # [YIB Eq. 22]
+        return x2 - apply(self.phi, x1) - self.v  # [YIB Eq. 22]
 
     def jacobians(self, x1: NDArray, x2: NDArray) -> tuple[NDArray, NDArray]:  # noqa: ARG002 (linear: constant)
         eye = np.broadcast_to(np.eye(self.phi.shape[-1]), self.phi.shape)
@@ -197,7 +197,7 @@ class InterpolatedFactor(Factor):
 
     def interpolated_state(self, x1: NDArray, x2: NDArray) -> NDArray:
         """x̄(τ) = Λ x̄₁ + Ψ x̄₂ + c  [YIB Eq. 18, 23]."""
-        return np.einsum("...ij,...j->...i", self.lam, x1) + np.einsum("...ij,...j->...i", self.psi, x2) + self.offset
+        return apply(self.lam, x1) + apply(self.psi, x2) + self.offset
 
     def error(self, x1: NDArray, x2: NDArray, *rest: NDArray) -> NDArray:
         return self.inner.error(self.interpolated_state(x1, x2), *rest)  # [YIB Eq. 29]
