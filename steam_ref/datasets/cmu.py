@@ -37,7 +37,7 @@ from ..arguments import DECIMAL
 from ..errors import DataError, SteamError
 from ..pose2 import integrate_odometry
 from .matfile import read_mat
-from .table import _COLUMNS, RangeDataset, _frozen_table
+from .table import CMU_COLUMNS, RangeDataset, frozen_table
 
 __all__ = ["load_cmu_mat", "load_cmu_text", "TEXT_TABLE_RULE"]
 
@@ -61,12 +61,12 @@ def _assemble(name: str, where: str, tables: dict[str, NDArray]) -> RangeDataset
     """RangeDataset from CMU tables (DRp may be absent); any error is re-raised naming ``where``."""
     notes = []
     try:
-        gt = _frozen_table("GT", tables["GT"], _COLUMNS["ground_truth"][1])
-        tl = _frozen_table("TL", tables["TL"], _COLUMNS["landmarks"][1])
-        dr = _frozen_table("DR", tables["DR"], _COLUMNS["odometry"][1])
+        gt = frozen_table("GT", tables["GT"], CMU_COLUMNS["ground_truth"][1])
+        tl = frozen_table("TL", tables["TL"], CMU_COLUMNS["landmarks"][1])
+        dr = frozen_table("DR", tables["DR"], CMU_COLUMNS["odometry"][1])
         drp = tables.get("DRp")
         if drp is not None:
-            drp = _frozen_table("DRp", drp, _COLUMNS["dead_reckoning"][1])
+            drp = frozen_table("DRp", drp, CMU_COLUMNS["dead_reckoning"][1])
             if drp.shape[0] != gt.shape[0]:
                 raise DataError(
                     f"DRp has {drp.shape[0]} rows but GT has {gt.shape[0]}: expected one per pose "
@@ -75,7 +75,7 @@ def _assemble(name: str, where: str, tables: dict[str, NDArray]) -> RangeDataset
         else:
             notes.append("DRp recomputed from DR (the file has none)")
             drp = integrate_odometry(gt[0], dr)
-        td = _frozen_table("TD", tables["TD"], _COLUMNS["ranges"][1])
+        td = frozen_table("TD", tables["TD"], CMU_COLUMNS["ranges"][1])
         note = _order_note(td)
         notes += [note] if note else []
         source = "; ".join([where] + notes)
@@ -209,8 +209,8 @@ def load_cmu_text(
     if not mats:
         raise DataError(f"{folder}: no {prefix}_.mat holding GT and TL next to {dr_path.name}")
     content = read_mat(mats[0])
-    dr = _read_text_table(dr_path, _COLUMNS["odometry"][1])
-    td = _read_text_table(td_path, _COLUMNS["ranges"][1])
+    dr = _read_text_table(dr_path, CMU_COLUMNS["odometry"][1])
+    td = _read_text_table(td_path, CMU_COLUMNS["ranges"][1])
     _check_same(dr, content, "DR", dr_path, mats[0])
     _check_same(td, content, "TD", td_path, mats[0])
     tables = {"GT": _mat_table(content, "GT", mats[0]), "TL": _mat_table(content, "TL", mats[0])}

@@ -42,7 +42,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..errors import DataError
 from ..pose2 import integrate_odometry
-from .table import _frozen_table, _ids_text, _num, _rows_of, check_time_origin
+from .table import check_time_origin, frozen_table, ids_text, number_text, rows_of
 
 __all__ = ["LandmarkDataset", "LANDMARK_COLUMNS", "READING_TABLES", "RANGE_SLACK_SIGMAS"]
 
@@ -85,10 +85,10 @@ class LandmarkDataset:
     def __post_init__(self) -> None:
         check_time_origin(self.time_origin)
         for name in ("poses", "odometry", "odometry_covariance", *READING_TABLES, "landmarks"):
-            object.__setattr__(self, name, _frozen_table(name, getattr(self, name), LANDMARK_COLUMNS[name]))
+            object.__setattr__(self, name, frozen_table(name, getattr(self, name), LANDMARK_COLUMNS[name]))
         if self.ground_truth is not None:
             object.__setattr__(
-                self, "ground_truth", _frozen_table("ground_truth", self.ground_truth, LANDMARK_COLUMNS["ground_truth"])
+                self, "ground_truth", frozen_table("ground_truth", self.ground_truth, LANDMARK_COLUMNS["ground_truth"])
             )
         self._check_poses()
         self._check_landmark_ids()
@@ -152,7 +152,7 @@ class LandmarkDataset:
         if bad.size:
             k = int(bad[0]) + 1
             raise DataError(
-                f"pose times must increase strictly: poses row {k} has t={_num(t[k])} after t={_num(t[k - 1])} at row {k - 1}"
+                f"pose times must increase strictly: poses row {k} has t={number_text(t[k])} after t={number_text(t[k - 1])} at row {k - 1}"
             )
         _check_integer_ids("poses", self.poses[:, 1], 1)
         if len(self.odometry) != n - 1:
@@ -165,7 +165,7 @@ class LandmarkDataset:
         if off.size:
             k = int(off[0])
             raise DataError(
-                f"odometry row {k} has t={_num(self.odometry[k, 0])} but pose {k + 1} has t={_num(t[k + 1])}: "
+                f"odometry row {k} has t={number_text(self.odometry[k, 0])} but pose {k + 1} has t={number_text(t[k + 1])}: "
                 f"odometry row k must end at pose k+1"
             )
         covariances = self.odometry_covariance[:, _UPPER]
@@ -174,8 +174,8 @@ class LandmarkDataset:
         if bad.size:
             k = int(bad[0])
             raise DataError(
-                f"odometry_covariance row {k} ({', '.join(_num(v) for v in self.odometry_covariance[k])}) "
-                f"is not positive definite (smallest eigenvalue {_num(eigen[k, 0])})"
+                f"odometry_covariance row {k} ({', '.join(number_text(v) for v in self.odometry_covariance[k])}) "
+                f"is not positive definite (smallest eigenvalue {number_text(eigen[k, 0])})"
             )
         if self.ground_truth is not None:
             gt = self.ground_truth
@@ -184,7 +184,9 @@ class LandmarkDataset:
             off = np.flatnonzero(np.abs(gt[:, 0] - t) > _TIME_TOL)
             if off.size:
                 k = int(off[0])
-                raise DataError(f"ground_truth row {k} has t={_num(gt[k, 0])} but pose {k} has t={_num(t[k])}")
+                raise DataError(
+                    f"ground_truth row {k} has t={number_text(gt[k, 0])} but pose {k} has t={number_text(t[k])}"
+                )
 
     def _check_landmark_ids(self) -> None:
         _check_integer_ids("landmarks", self.landmarks[:, 0], 0)
@@ -200,11 +202,11 @@ class LandmarkDataset:
         ids = ids.astype(int)
         ids.setflags(write=False)
         object.__setattr__(self, "landmark_ids", ids)
-        missing = _rows_of(ids.astype(float), self.landmarks[:, 0])[1]
+        missing = rows_of(ids.astype(float), self.landmarks[:, 0])[1]
         if missing is not None:
             raise DataError(
                 f"landmarks row {missing} surveys landmark id {self.landmarks[missing, 0]:g}, "
-                f"which is not in landmark_ids ({_ids_text(ids.astype(float))})"
+                f"which is not in landmark_ids ({ids_text(ids.astype(float))})"
             )
 
     def _check_readings(self, name: str) -> None:
@@ -216,40 +218,40 @@ class LandmarkDataset:
         if back.size:
             k = int(back[0]) + 1
             raise DataError(
-                f"{name} times must not go back: {name} row {k} has t={_num(t[k])} after t={_num(t[k - 1])} at row {k - 1}"
+                f"{name} times must not go back: {name} row {k} has t={number_text(t[k])} after t={number_text(t[k - 1])} at row {k - 1}"
             )
         pose = self.reading_poses(name)
         off = np.flatnonzero(np.abs(self.times[pose] - t) > _TIME_TOL)
         if off.size:
             k = int(off[0])
             raise DataError(
-                f"{name} row {k} has t={_num(t[k])}, which is no pose's time (the nearest, pose {int(pose[k])}, "
-                f"has t={_num(self.times[pose[k]])}): a reading is taken at a pose"
+                f"{name} row {k} has t={number_text(t[k])}, which is no pose's time (the nearest, pose {int(pose[k])}, "
+                f"has t={number_text(self.times[pose[k]])}): a reading is taken at a pose"
             )
         ids = table[:, 1]
         frac = np.flatnonzero(ids != np.round(ids))
         if frac.size:
             k = int(frac[0])
-            raise DataError(f"{name}[{k}, 1] (landmark id) = {_num(ids[k])} is not an integer")
+            raise DataError(f"{name}[{k}, 1] (landmark id) = {number_text(ids[k])} is not an integer")
         known = np.zeros(0) if self.landmark_ids is None else self.landmark_ids.astype(float)
-        missing = _rows_of(known, ids)[1]
+        missing = rows_of(known, ids)[1]
         if missing is not None:
             raise DataError(
-                f"{name} row {missing} (t={_num(t[missing])}) names landmark id {ids[missing]:g}, "
-                f"which is not in landmark_ids ({_ids_text(known)})"
+                f"{name} row {missing} (t={number_text(t[missing])}) names landmark id {ids[missing]:g}, "
+                f"which is not in landmark_ids ({ids_text(known)})"
             )
         for c in _SIGMAS[name]:
             bad = np.flatnonzero(table[:, c] <= 0)
             if bad.size:
                 k = int(bad[0])
-                raise DataError(f"{name}[{k}, {c}] ({columns[c]}) = {_num(table[k, c])}: a sigma must be > 0")
+                raise DataError(f"{name}[{k}, {c}] ({columns[c]}) = {number_text(table[k, c])}: a sigma must be > 0")
         if "range" in columns:
             c = columns.index("range")
             bad = np.flatnonzero(table[:, c] < 0)
             if bad.size:
                 k = int(bad[0])
                 raise DataError(
-                    f"{name}[{k}, {c}] (range) = {_num(table[k, c])} at t={_num(t[k])} is negative: a range is a distance"
+                    f"{name}[{k}, {c}] (range) = {number_text(table[k, c])} at t={number_text(t[k])} is negative: a range is a distance"
                 )
         for c, sc in _VALUE_SIGMA[name]:  # a value whose float64 spacing exceeds its sigma holds no reading
             spacing = np.spacing(np.abs(table[:, c]))
@@ -257,8 +259,8 @@ class LandmarkDataset:
             if bad.size:
                 k = int(bad[0])
                 raise DataError(
-                    f"{name}[{k}, {c}] ({columns[c]}) = {_num(table[k, c])} at t={_num(t[k])}: float64 numbers there "
-                    f"are {spacing[k]:.3g} apart, more than its sigma {_num(table[k, sc])}, so no sensor gives it"
+                    f"{name}[{k}, {c}] ({columns[c]}) = {number_text(table[k, c])} at t={number_text(t[k])}: float64 numbers there "
+                    f"are {spacing[k]:.3g} apart, more than its sigma {number_text(table[k, sc])}, so no sensor gives it"
                 )
 
     def _check_ranges_agree(self) -> None:
@@ -297,11 +299,11 @@ class LandmarkDataset:
             other = int(np.argmax(excess[worst]))
             alone = counts[worst] == counts[other] and counts[worst] * 2 <= len(group)
             a, b = group[worst], group[other]
-            what = [f"{rows[table[k]][0]}[{row[k]}, {rows[table[k]][1]}] (range) = {_num(r[k])}" for k in (a, b)]
+            what = [f"{rows[table[k]][0]}[{row[k]}, {rows[table[k]][1]}] (range) = {number_text(r[k])}" for k in (a, b)]
             raise DataError(
                 f"{'one of ' + what[0] + ' and ' + what[1] if alone else what[0]} cannot be right: landmark "
-                f"{lid[a]:g} is {_num(r[a])} m away at t={_num(self.times[pose[a]])} and {_num(r[b])} m at "
-                f"t={_num(self.times[pose[b]])}, but the odometry moved {moved[worst, other]:.4g} m in between "
+                f"{lid[a]:g} is {number_text(r[a])} m away at t={number_text(self.times[pose[a]])} and {number_text(r[b])} m at "
+                f"t={number_text(self.times[pose[b]])}, but the odometry moved {moved[worst, other]:.4g} m in between "
                 f"(allowed with {RANGE_SLACK_SIGMAS:g} sigmas of slack: {allowed[worst, other]:.4g} m)"
                 + ("" if alone else f"; it contradicts {counts[worst]} of the other {len(group) - 1} ranges to it")
             )
@@ -314,7 +316,7 @@ def _check_integer_ids(name: str, ids: ArrayLike, column: int | None) -> None:
     frac = np.flatnonzero(ids != np.round(ids))
     if frac.size:
         k = int(frac[0])
-        raise DataError(f"{where(k)} (id) = {_num(ids[k])} is not an integer")
+        raise DataError(f"{where(k)} (id) = {number_text(ids[k])} is not an integer")
     order = np.argsort(ids, kind="stable")
     same = np.flatnonzero(np.diff(ids[order]) == 0)
     if same.size:

@@ -35,7 +35,7 @@ from ..gp.prior import check_qc, process_noise, transition
 from ..lie import se2
 from ..lie.gp import check_model
 from .landmarks import LandmarkDataset
-from .synthetic import _check_generator_args, _ids_by_first_sighting, _observed_landmarks, _scatter_landmarks
+from .synthetic import check_generator_args, ids_by_first_sighting, observed_landmarks, scatter_landmarks
 
 __all__ = ["ModelSample", "sample_from_model", "sample_se2_from_model"]
 
@@ -72,9 +72,9 @@ def _checked(
 ) -> tuple[int, int, NDArray, NDArray, NDArray, NDArray, NDArray]:
     """The samplers' arguments checked: SteamError naming the first bad one."""
     if not isinstance(seed, np.random.SeedSequence):
-        _check_generator_args(n_steps, n_landmarks, (0, 0), 0.0, landmark_distance, n_nearest, seed)
+        check_generator_args(n_steps, n_landmarks, (0, 0), 0.0, landmark_distance, n_nearest, seed)
     else:
-        _check_generator_args(n_steps, n_landmarks, (0, 0), 0.0, landmark_distance, n_nearest, 0)
+        check_generator_args(n_steps, n_landmarks, (0, 0), 0.0, landmark_distance, n_nearest, 0)
     qc = check_qc(np.asarray(qc, dtype=float))
     if qc.shape != (3, 3):
         raise SteamError(f"qc must be (3, 3) for x, y, θ, got shape {qc.shape}")
@@ -160,9 +160,9 @@ def _task(
     # Landmarks and ranges.  [YIB Eq. 4, 33]
     path = states[:, :2]
     anchors = (2 * np.arange(n_landmarks) + 1) * n // (2 * n_landmarks)
-    truth_xy = _scatter_landmarks(rng, path, anchors, landmark_distance)
-    pick = _observed_landmarks(rng, path, truth_xy, anchors, int(n_nearest))
-    ids = _ids_by_first_sighting(pick, n_landmarks)
+    truth_xy = scatter_landmarks(rng, path, anchors, landmark_distance)
+    pick = observed_landmarks(rng, path, truth_xy, anchors, int(n_nearest))
+    ids = ids_by_first_sighting(pick, n_landmarks)
     ranges = np.hypot(*(path - truth_xy[pick]).T) + range_sigma * rng.standard_normal(n)
     if np.any(ranges < 0):
         k = int(np.flatnonzero(ranges < 0)[0])

@@ -37,9 +37,7 @@ def _noisy_odometry(rng: np.random.Generator, gt: NDArray, sigmas: NDArray) -> N
     return np.column_stack([gt[1:, 0], distance + noise[:, 0], wrap_angle(turn + noise[:, 1])])
 
 
-def _scatter_landmarks(
-    rng: np.random.Generator, path: NDArray, anchors: NDArray, reach: tuple[float, float]
-) -> NDArray:
+def scatter_landmarks(rng: np.random.Generator, path: NDArray, anchors: NDArray, reach: tuple[float, float]) -> NDArray:
     """(n, 2) landmark positions, landmark j placed by pose ``anchors[j]`` of ``path`` (n_poses, 2).
 
     Each sits at a uniform bearing and a uniform distance in [lo, hi] = ``reach`` from its anchor
@@ -58,7 +56,7 @@ def _scatter_landmarks(
     return points[np.arange(n), pick]
 
 
-def _observed_landmarks(
+def observed_landmarks(
     rng: np.random.Generator, path: NDArray, xy: NDArray, anchors: NDArray, n_nearest: int
 ) -> NDArray:
     """(n_poses,) index of the landmark ranged at each pose: one drawn among its n_nearest,
@@ -75,7 +73,7 @@ def _observed_landmarks(
     return pick
 
 
-def _ids_by_first_sighting(pick: NDArray, n: int) -> NDArray:
+def ids_by_first_sighting(pick: NDArray, n: int) -> NDArray:
     """(n,) id of each landmark: 1, 2, ... in order of first sighting; unseen ones last."""
     seen = pick[np.sort(np.unique(pick, return_index=True)[1])]
     order = np.concatenate([seen, np.setdiff1d(np.arange(n), seen)])
@@ -95,9 +93,9 @@ def _landmarks_and_ranges(
     """(n, 3) landmarks id, x, y and (n_poses, 4) ranges time, sender 1, id, range.  [YIB Eq. 33]"""
     path = gt[:, 1:3]
     anchors = (2 * np.arange(n) + 1) * len(gt) // (2 * n)  # evenly spaced pose indices
-    xy = _scatter_landmarks(rng, path, anchors, reach)
-    pick = _observed_landmarks(rng, path, xy, anchors, n_nearest)
-    ids = _ids_by_first_sighting(pick, n)
+    xy = scatter_landmarks(rng, path, anchors, reach)
+    pick = observed_landmarks(rng, path, xy, anchors, n_nearest)
+    ids = ids_by_first_sighting(pick, n)
     true = np.hypot(*(path - xy[pick]).T)
     measured = true + sigma * rng.standard_normal(len(gt))  # [YIB Eq. 33]
     negative = np.flatnonzero(measured < 0)
@@ -123,7 +121,7 @@ def _is_number(value: object, lowest: float, strict: bool) -> bool:
     )
 
 
-def _check_generator_args(
+def check_generator_args(
     n_steps: int,
     n_landmarks: int,
     sigmas: object,
@@ -208,7 +206,7 @@ def generate_synthetic(
 
     Draws come from ``np.random.default_rng(seed)``, so a seed gives the same data set everywhere.
     """
-    sigmas = _check_generator_args(
+    sigmas = check_generator_args(
         n_steps, n_landmarks, odometry_sigmas, range_sigma, landmark_distance, n_nearest, seed
     )
     n_steps, n_landmarks, n_nearest = int(n_steps), int(n_landmarks), int(n_nearest)

@@ -41,7 +41,7 @@ from ..gp.clock import TIME_ORIGINS
 __all__ = ["RangeDataset", "check_time_origin"]
 
 _TIME_TOL = 1e-6  # [s] odometry row k and pose k + 1 must agree to this
-_COLUMNS = {  # field -> (CMU array name, column names)
+CMU_COLUMNS = {  # field -> (CMU array name, column names)
     "ground_truth": ("GT", ("time", "x", "y", "heading")),
     "odometry": ("DR", ("time", "distance", "heading change")),
     "dead_reckoning": ("DRp", ("time", "x", "y", "heading")),
@@ -50,7 +50,8 @@ _COLUMNS = {  # field -> (CMU array name, column names)
 }
 
 
-def _num(value: float) -> str:
+def number_text(value: float) -> str:
+    """A number for an error message, every digit kept (repr of the float)."""
     return repr(float(value))
 
 
@@ -78,8 +79,8 @@ class RangeDataset:
 
     def __post_init__(self) -> None:
         check_time_origin(self.time_origin)
-        for name, (_, columns) in _COLUMNS.items():
-            object.__setattr__(self, name, _frozen_table(name, getattr(self, name), columns))
+        for name, (_, columns) in CMU_COLUMNS.items():
+            object.__setattr__(self, name, frozen_table(name, getattr(self, name), columns))
         self._check_times()
         self._check_ids()
         self._check_ranges()
@@ -115,11 +116,11 @@ class RangeDataset:
     def landmark_rows(self, ids: ArrayLike) -> NDArray:
         """(n,) row of ``landmarks`` holding each id; DataError naming the first unknown id."""
         ids = np.asarray(ids, dtype=float).ravel()
-        rows, missing = _rows_of(self.landmarks[:, 0], ids)
+        rows, missing = rows_of(self.landmarks[:, 0], ids)
         if missing is not None:
             raise DataError(
                 f"landmark id {ids[missing]:g} (entry {missing}) is not in landmarks; "
-                f"known ids: {_ids_text(self.landmarks[:, 0])}"
+                f"known ids: {ids_text(self.landmarks[:, 0])}"
             )
         return rows
 
@@ -129,7 +130,7 @@ class RangeDataset:
 
     def to_cmu_arrays(self) -> dict[str, NDArray]:
         """Writable copies under the CMU names GT, DR, DRp, TL, TD (for ``scipy.io.savemat``)."""
-        return {cmu: np.array(getattr(self, name)) for name, (cmu, _) in _COLUMNS.items()}
+        return {cmu: np.array(getattr(self, name)) for name, (cmu, _) in CMU_COLUMNS.items()}
 
     def _check_times(self) -> None:
         t, n = self.times, self.n_poses
@@ -145,15 +146,15 @@ class RangeDataset:
             if bad.size:
                 k = int(bad[0]) + 1
                 raise DataError(
-                    f"pose times must increase strictly: {name} row {k} has t={_num(times[k])} "
-                    f"after t={_num(times[k - 1])} at row {k - 1}"
+                    f"pose times must increase strictly: {name} row {k} has t={number_text(times[k])} "
+                    f"after t={number_text(times[k - 1])} at row {k - 1}"
                 )
         off = np.flatnonzero(np.abs(self.odometry[:, 0] - t[1:]) > _TIME_TOL)
         if off.size:
             k = int(off[0])
             raise DataError(
-                f"odometry row {k} has t={_num(self.odometry[k, 0])} but pose {k + 1} has "
-                f"t={_num(t[k + 1])}: odometry row k must end at pose k+1"
+                f"odometry row {k} has t={number_text(self.odometry[k, 0])} but pose {k + 1} has "
+                f"t={number_text(t[k + 1])}: odometry row k must end at pose k+1"
             )
 
     def _check_ids(self) -> None:
@@ -162,19 +163,19 @@ class RangeDataset:
             bad = np.flatnonzero(values != np.round(values))
             if bad.size:
                 k = int(bad[0])
-                label = _COLUMNS[name][1][column]
-                raise DataError(f"{name}[{k}, {column}] ({label}) = {_num(values[k])} is not an integer")
+                label = CMU_COLUMNS[name][1][column]
+                raise DataError(f"{name}[{k}, {column}] ({label}) = {number_text(values[k])} is not an integer")
         ids = self.landmarks[:, 0]
         order = np.argsort(ids, kind="stable")
         same = np.flatnonzero(np.diff(ids[order]) == 0)
         if same.size:
             r1, r2 = int(order[same[0]]), int(order[same[0] + 1])
             raise DataError(f"landmark id {ids[r1]:g} appears twice, in landmarks rows {r1} and {r2}")
-        missing = _rows_of(ids, self.ranges[:, 2])[1]
+        missing = rows_of(ids, self.ranges[:, 2])[1]
         if missing is not None:
             raise DataError(
-                f"ranges row {missing} (t={_num(self.ranges[missing, 0])}) names landmark id "
-                f"{self.ranges[missing, 2]:g}, which is not in landmarks; known ids: {_ids_text(ids)}"
+                f"ranges row {missing} (t={number_text(self.ranges[missing, 0])}) names landmark id "
+                f"{self.ranges[missing, 2]:g}, which is not in landmarks; known ids: {ids_text(ids)}"
             )
 
     def _check_ranges(self) -> None:
@@ -182,7 +183,7 @@ class RangeDataset:
         if negative.size:
             k = int(negative[0])
             raise DataError(
-                f"ranges[{k}, 3] (range) = {_num(self.ranges[k, 3])} at t={_num(self.ranges[k, 0])} is negative: "
+                f"ranges[{k}, 3] (range) = {number_text(self.ranges[k, 3])} at t={number_text(self.ranges[k, 0])} is negative: "
                 f"a range is a distance ({negative.size} negative range(s) in all)"
             )
 
@@ -196,7 +197,7 @@ def check_time_origin(origin: object) -> str:
     return origin
 
 
-def _rows_of(known: NDArray, ids: NDArray) -> tuple[NDArray, int | None]:
+def rows_of(known: NDArray, ids: NDArray) -> tuple[NDArray, int | None]:
     """Row of ``known`` holding each of ``ids``, and the index of the first id not there (or None)."""
     order = np.argsort(known, kind="stable")
     pos = np.minimum(np.searchsorted(known[order], ids), max(len(known) - 1, 0))
@@ -205,14 +206,15 @@ def _rows_of(known: NDArray, ids: NDArray) -> tuple[NDArray, int | None]:
     return order[pos] if len(known) else pos, (int(missing[0]) if missing.size else None)
 
 
-def _ids_text(ids: NDArray) -> str:
+def ids_text(ids: NDArray) -> str:
+    """Ids for an error message: all of them up to 12, else how many and their range."""
     ids = np.sort(ids)
     if len(ids) <= 12:
         return "[" + ", ".join(f"{i:g}" for i in ids) + "]"
     return f"{len(ids)} ids from {ids[0]:g} to {ids[-1]:g}"
 
 
-def _frozen_table(name: str, value: ArrayLike, columns: tuple[str, ...]) -> NDArray:
+def frozen_table(name: str, value: ArrayLike, columns: tuple[str, ...]) -> NDArray:
     """A read-only float64 copy of one table, checked for shape (ShapeError) and finiteness (DataError)."""
     try:
         table = np.array(value, dtype=float)

@@ -15,7 +15,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 
 from .base import EXACT, Case, tol
-from .graphs import MARK, STATE, _gp_prior, _range, _velocity
+from .graphs import MARK, STATE, gp_prior_between, range_reading, velocity_reading
 
 __all__ = ["fixed_lag_cases", "drop_steps"]
 
@@ -49,24 +49,24 @@ LINEAR = {
         {
             "values": {"x1": [0.6, 0.0, 0.1, 0.9, 0.1, 0.1]},
             "timestamps": {"x1": 0.5},
-            "factors": [_gp_prior("x0", "x1")],
+            "factors": [gp_prior_between("x0", "x1")],
         },
         {
             "values": {"x2": [1.1, 0.1, 0.2, 0.9, 0.2, 0.0]},
             "timestamps": {"x2": 1.0},
-            "factors": [_gp_prior("x1", "x2"), _fix("x2", [1.01, 0.18, 0.16, 0.95, 0.25, 0.04])],
+            "factors": [gp_prior_between("x1", "x2"), _fix("x2", [1.01, 0.18, 0.16, 0.95, 0.25, 0.04])],
         },
         {
             "values": {"x3": [1.6, 0.2, 0.25, 0.85, 0.2, 0.1]},
             "timestamps": {"x3": 1.5},
-            "factors": [_gp_prior("x2", "x3")],
+            "factors": [gp_prior_between("x2", "x3")],
         },
         {
             "values": {"x4": [1.9, 0.45, 0.2, 0.9, 0.3, 0.05], "x5": [2.4, 0.6, 0.25, 0.9, 0.35, 0.1]},
             "timestamps": {"x4": 2.0, "x5": 2.5},
             "factors": [
-                _gp_prior("x3", "x4"),
-                _gp_prior("x4", "x5"),
+                gp_prior_between("x3", "x4"),
+                gp_prior_between("x4", "x5"),
                 _fix("x5", [2.38, 0.66, 0.27, 0.88, 0.33, 0.06]),
             ],
         },
@@ -90,34 +90,42 @@ LANDMARKS: dict = {
             "factors": [
                 _fix("x0", [0.0, 0.0, 0.1, 1.0, 0.1, 0.05], [0.01, 0.01, 0.01, 0.1, 0.1, 0.1]),
                 _landmark_prior("l0", [2.05, 2.95]),
-                _range("x0", "l0", 3.62),
-                _velocity("x0", [1.0, 0.0, 0.05]),
+                range_reading("x0", "l0", 3.62),
+                velocity_reading("x0", [1.0, 0.0, 0.05]),
             ],
         },
         {
             "values": {"x1": [0.6, 0.0, 0.1, 0.9, 0.1, 0.1]},
             "timestamps": {"x1": 0.5},
-            "factors": [_gp_prior("x0", "x1"), _velocity("x1", [1.0, 0.0, 0.06]), _range("x1", "l0", 3.3)],
+            "factors": [
+                gp_prior_between("x0", "x1"),
+                velocity_reading("x1", [1.0, 0.0, 0.06]),
+                range_reading("x1", "l0", 3.3),
+            ],
         },
         {
             "values": {"x2": [1.1, 0.1, 0.2, 0.9, 0.2, 0.0], "l1": [-0.7, 2.8]},
             "timestamps": {"x2": 1.0},
             "factors": [
-                _gp_prior("x1", "x2"),
+                gp_prior_between("x1", "x2"),
                 _landmark_prior("l1", [-0.9, 2.6]),
-                _range("x2", "l1", 3.05),
-                _range("x2", "l0", 2.95),
+                range_reading("x2", "l1", 3.05),
+                range_reading("x2", "l0", 2.95),
             ],
         },
         {
             "values": {"x3": [1.6, 0.2, 0.25, 0.85, 0.2, 0.1]},
             "timestamps": {"x3": 1.5},
-            "factors": [_gp_prior("x2", "x3"), _velocity("x3", [0.95, 0.0, 0.07]), _range("x3", "l1", 3.45)],
+            "factors": [
+                gp_prior_between("x2", "x3"),
+                velocity_reading("x3", [0.95, 0.0, 0.07]),
+                range_reading("x3", "l1", 3.45),
+            ],
         },
         {
             "values": {"x4": [2.0, 0.4, 0.3, 0.85, 0.3, 0.05]},
             "timestamps": {"x4": 2.0},
-            "factors": [_gp_prior("x3", "x4"), _range("x4", "l0", 2.55), _range("x4", "l1", 3.75)],
+            "factors": [gp_prior_between("x3", "x4"), range_reading("x4", "l0", 2.55), range_reading("x4", "l1", 3.75)],
         },
     ],
 }
@@ -140,22 +148,30 @@ FORGET = {
         {
             "values": {"x1": [0.6, 0.0, 0.1, 0.9, 0.1, 0.1]},
             "timestamps": {"x1": 0.5, "l0": 0.5},
-            "factors": [_gp_prior("x0", "x1"), _velocity("x1", [1.0, 0.0, 0.06]), _range("x1", "l0", 3.3)],
+            "factors": [
+                gp_prior_between("x0", "x1"),
+                velocity_reading("x1", [1.0, 0.0, 0.06]),
+                range_reading("x1", "l0", 3.3),
+            ],
         },
         {
             "values": {"x2": [1.1, 0.1, 0.2, 0.9, 0.2, 0.0], "l1": [-0.7, 2.8]},
             "timestamps": {"x2": 1.0, "l1": 1.0},
-            "factors": [_gp_prior("x1", "x2"), _landmark_prior("l1", [-0.9, 2.6]), _range("x2", "l1", 3.05)],
+            "factors": [
+                gp_prior_between("x1", "x2"),
+                _landmark_prior("l1", [-0.9, 2.6]),
+                range_reading("x2", "l1", 3.05),
+            ],
         },
         _stamped(LANDMARKS["updates"][3]),
         {
             "values": {"x4": [2.0, 0.4, 0.3, 0.85, 0.3, 0.05], "l0": [2.2, 2.85]},
             "timestamps": {"x4": 2.0, "l0": 2.0, "l1": 2.0},
             "factors": [
-                _gp_prior("x3", "x4"),
+                gp_prior_between("x3", "x4"),
                 _landmark_prior("l0", [2.05, 2.95]),
-                _range("x4", "l0", 2.55),
-                _range("x4", "l1", 3.75),
+                range_reading("x4", "l0", 2.55),
+                range_reading("x4", "l1", 3.75),
             ],
         },
     ],

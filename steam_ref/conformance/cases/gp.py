@@ -7,7 +7,7 @@ from .base import ORACLE_GP, ORACLE_KERNEL, QC_DIAG, QC_FULL, X1, X2, Case, tol
 __all__ = ["gp_cases"]
 
 
-def _spd(n: int, a: int, b: int) -> list[list[float]]:
+def exact_spd(n: int, a: int, b: int) -> list[list[float]]:
     """(B Bᵀ + n I) / 64 for the integer matrix B_ij = (a i + b j) mod 7 - 3: exact in binary floating point."""
     B = [[(a * i + b * j) % 7 - 3 for j in range(n)] for i in range(n)]
     return [
@@ -104,7 +104,7 @@ def gp_cases() -> list[Case]:
                     "t2": 1.6,
                     "tau": tau,
                     "qc": QC_FULL,
-                    "joint_cov": _spd(12, 3, 5),
+                    "joint_cov": exact_spd(12, 3, 5),
                 },
                 {"cov_tau": tol(1e-9)},
                 True,
@@ -136,7 +136,7 @@ def gp_cases() -> list[Case]:
             "extrapolate_dt0.4",
             "[YIB Eq. 17, 22]",
             "prediction after the last state: Φ x̄₁ and Φ P₁ Φᵀ + Q",
-            {"kind": "extrapolation", "t1": 2.0, "t": 2.4, "qc": QC_FULL, "x1": X1, "cov1": _spd(6, 2, 3)},
+            {"kind": "extrapolation", "t1": 2.0, "t": 2.4, "qc": QC_FULL, "x1": X1, "cov1": exact_spd(6, 2, 3)},
             {"x_t": tol(1e-12), "cov_t": tol(1e-12)},
             True,
             ORACLE_GP,

@@ -26,15 +26,18 @@ TRAJ_START = {
 }
 
 
-def _range(x: str, l: str, measured: float, sigma: float = 0.1, **extra) -> dict:
+def range_reading(x: str, l: str, measured: float, sigma: float = 0.1, **extra) -> dict:
+    """A range factor of a case, as the kit writes it: state ``x``, landmark ``l``, the reading and its sigma."""
     return {"type": "range", "keys": [x, l], "measured": measured, "sigma": sigma, **extra}
 
 
-def _velocity(x: str, measured: list[float]) -> dict:
+def velocity_reading(x: str, measured: list[float]) -> dict:
+    """A velocity factor of a case on state ``x``: [forward, lateral, yaw rate] and the cases' sigmas."""
     return {"type": "velocity", "keys": [x], "measured": measured, "sigmas": [0.05, 0.05, 0.02]}
 
 
-def _gp_prior(a: str, b: str, dt: float = 0.5) -> dict:
+def gp_prior_between(a: str, b: str, dt: float = 0.5) -> dict:
+    """The WNOA prior factor of a case between states ``a`` and ``b``, ``dt`` apart, with the cases' Qc."""
     return {"type": "gp_prior", "keys": [a, b], "dt": dt, "qc": QC_DIAG}
 
 
@@ -45,16 +48,16 @@ TRAJ_FACTORS = [
         "mean": [0.0, 0.0, 0.1, 1.0, 0.1, 0.05],
         "sigmas": [0.01, 0.01, 0.01, 0.1, 0.1, 0.1],
     },
-    _gp_prior("x0", "x1"),
-    _gp_prior("x1", "x2"),
-    _gp_prior("x2", "x3"),
-    _velocity("x1", [1.0, 0.0, 0.06]),
-    _velocity("x3", [0.95, 0.0, 0.07]),
-    _range("x0", "l0", 3.62),
-    _range("x1", "l0", 3.3),
-    _range("x2", "l1", 3.05),
-    _range("x3", "l1", 3.45, loss={"type": "huber", "k": 1.345}),
-    _range("x3", "l0", 2.7),
+    gp_prior_between("x0", "x1"),
+    gp_prior_between("x1", "x2"),
+    gp_prior_between("x2", "x3"),
+    velocity_reading("x1", [1.0, 0.0, 0.06]),
+    velocity_reading("x3", [0.95, 0.0, 0.07]),
+    range_reading("x0", "l0", 3.62),
+    range_reading("x1", "l0", 3.3),
+    range_reading("x2", "l1", 3.05),
+    range_reading("x3", "l1", 3.45, loss={"type": "huber", "k": 1.345}),
+    range_reading("x3", "l0", 2.7),
     {"type": "bearing", "keys": ["x2", "l0"], "measured": 1.08, "sigma": 0.02},
     {
         "type": "interpolated",
@@ -86,17 +89,17 @@ BEACONS = {
             "mean": [0.0, 0.0, 0.0, 0.5, 0.0, 0.0],
             "sigmas": [0.1, 0.1, 0.05, 0.2, 0.2, 0.1],
         },
-        _gp_prior("x0", "x1", 1.0),
-        _velocity("x1", [0.5, 0.0, 0.02]),
+        gp_prior_between("x0", "x1", 1.0),
+        velocity_reading("x1", [0.5, 0.0, 0.02]),
         *[{"type": "prior", "keys": [k], "mean": m, "sigmas": [0.3, 0.3]} for k, m in BEACON_TRUE.items()],
-        _range("x0", "l0", 3.02, 0.05),
-        _range("x0", "l1", 2.97, 0.05),
-        _range("x0", "l2", 3.01, 0.05),
-        _range("x0", "l3", 3.0, 0.05),
-        _range("x1", "l0", 2.52, 0.05),
-        _range("x1", "l1", 2.93, 0.05, loss={"type": "tukey", "c": 4.685}),
-        _range("x1", "l2", 3.49, 0.05),
-        _range("x1", "l3", 3.1, 0.05),
+        range_reading("x0", "l0", 3.02, 0.05),
+        range_reading("x0", "l1", 2.97, 0.05),
+        range_reading("x0", "l2", 3.01, 0.05),
+        range_reading("x0", "l3", 3.0, 0.05),
+        range_reading("x1", "l0", 2.52, 0.05),
+        range_reading("x1", "l1", 2.93, 0.05, loss={"type": "tukey", "c": 4.685}),
+        range_reading("x1", "l2", 3.49, 0.05),
+        range_reading("x1", "l3", 3.1, 0.05),
     ],
     "values": {
         "l0": [3.1, 0.1],
@@ -219,13 +222,19 @@ def bayes_tree_cases() -> list[Case]:
     return out
 
 
-def _stream() -> dict:
+def trajectory_stream() -> dict:
+    """The incremental cases' stream: the trajectory problem's factors given over five updates."""
     return {
         "variables": {"x0": STATE, "x1": STATE, "x2": STATE, "x3": STATE, "l0": MARK, "l1": MARK},
         "updates": [
             {
                 "values": {"x0": TRAJ_START["x0"], "l0": TRAJ_START["l0"]},
-                "factors": [TRAJ_FACTORS[0], TRAJ_FACTORS[13], TRAJ_FACTORS[6], _velocity("x0", [1.0, 0.0, 0.05])],
+                "factors": [
+                    TRAJ_FACTORS[0],
+                    TRAJ_FACTORS[13],
+                    TRAJ_FACTORS[6],
+                    velocity_reading("x0", [1.0, 0.0, 0.05]),
+                ],
             },
             {"values": {"x1": TRAJ_START["x1"]}, "factors": [TRAJ_FACTORS[1], TRAJ_FACTORS[4], TRAJ_FACTORS[7]]},
             {
@@ -236,13 +245,13 @@ def _stream() -> dict:
                 "values": {"x3": TRAJ_START["x3"]},
                 "factors": [TRAJ_FACTORS[3], TRAJ_FACTORS[5], TRAJ_FACTORS[9], TRAJ_FACTORS[10], TRAJ_FACTORS[12]],
             },
-            {"values": {}, "factors": [_range("x1", "l1", 2.95)]},
+            {"values": {}, "factors": [range_reading("x1", "l1", 2.95)]},
         ],
     }
 
 
 def incremental_cases() -> list[Case]:
-    stream = _stream()
+    stream = trajectory_stream()
     n = len(stream["updates"])
     est = {f"estimate_{k}": tol(1e-8, 1e-12) for k in range(1, n + 1)}
     every = {"relinearize_threshold": 0.0, "relinearize_skip": 1, "wildfire_threshold": 0.0}

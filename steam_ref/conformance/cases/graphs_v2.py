@@ -4,7 +4,7 @@ partial relinearization, and the fill of R per update."""
 from __future__ import annotations
 
 from .base import EXACT, ORACLE_DENSE, Case, tol
-from .graphs import LINEAR_TOL, MARK, STATE, _gp_prior, _range, _stream, _velocity
+from .graphs import LINEAR_TOL, MARK, STATE, gp_prior_between, range_reading, trajectory_stream, velocity_reading
 
 __all__ = ["linear_cases_v2", "batch_cases_v2", "bayes_tree_cases_v2", "incremental_cases_v2"]
 
@@ -14,9 +14,9 @@ AT_OPTIMUM = {
     "times": {"x0": 0.0, "x1": 0.5},
     "factors": [
         {"type": "prior", "keys": ["x0"], "mean": [0.0, 0.0, 0.0, 1.0, 0.0, 0.0], "sigmas": [0.1] * 6},
-        _gp_prior("x0", "x1"),
-        _velocity("x1", [1.0, 0.0, 0.0]),
-        _range("x1", "l0", 5.0),
+        gp_prior_between("x0", "x1"),
+        velocity_reading("x1", [1.0, 0.0, 0.0]),
+        range_reading("x1", "l0", 5.0),
         {"type": "prior", "keys": ["l0"], "mean": [3.5, 4.0], "sigmas": [0.5, 0.5]},
     ],
     "values": {"x0": [0.0, 0.0, 0.0, 1.0, 0.0, 0.0], "x1": [0.5, 0.0, 0.0, 1.0, 0.0, 0.0], "l0": [3.5, 4.0]},
@@ -29,8 +29,8 @@ HEADING_JUMP = {
     "times": {"x0": 0.0, "x1": 0.5},
     "factors": [
         {"type": "prior", "keys": ["x0"], "mean": [0.0, 0.0, 3.0, -1.0, 0.1, 0.4], "sigmas": [0.1] * 6},
-        _gp_prior("x0", "x1"),
-        _velocity("x1", [1.0, 0.0, 0.4]),
+        gp_prior_between("x0", "x1"),
+        velocity_reading("x1", [1.0, 0.0, 0.4]),
     ],
     "values": {"x0": [0.0, 0.0, 3.0, -1.0, 0.1, 0.4], "x1": [-0.5, 0.06, -3.1, -1.0, 0.12, 0.38]},
 }
@@ -44,10 +44,13 @@ BUSHY = {
     "times": {"x0": 0.0, "x1": 0.5, "x2": 1.0},
     "factors": [
         {"type": "prior", "keys": ["x0"], "mean": [0.0, 0.0, 0.1, 1.0, 0.1, 0.05], "sigmas": [0.05] * 6},
-        _gp_prior("x0", "x1"),
-        _gp_prior("x1", "x2"),
-        _velocity("x2", [0.97, 0.0, 0.05]),
-        *[_range(x, lm, r) for (lm, x), r in zip(BUSHY_SEEN.items(), (3.58, 2.65, 2.95, 3.65, 2.9), strict=True)],
+        gp_prior_between("x0", "x1"),
+        gp_prior_between("x1", "x2"),
+        velocity_reading("x2", [0.97, 0.0, 0.05]),
+        *[
+            range_reading(x, lm, r)
+            for (lm, x), r in zip(BUSHY_SEEN.items(), (3.58, 2.65, 2.95, 3.65, 2.9), strict=True)
+        ],
         *[{"type": "prior", "keys": [lm], "mean": m, "sigmas": [0.4, 0.4]} for lm, m in BUSHY_AT.items()],
     ],
     "values": {
@@ -149,7 +152,7 @@ ORDER_RULE = (
 
 
 def incremental_cases_v2() -> list[Case]:
-    stream = _stream()
+    stream = trajectory_stream()
     n = len(stream["updates"])
     est = {f"estimate_{k}": tol(1e-8, 1e-12) for k in range(1, n + 1)}
     moved = {f"relinearized_{k}": EXACT for k in range(1, n + 1)}

@@ -11,7 +11,7 @@ iSAM2 stream that relinearizes. Every case is independent: :mod:`steam_ref.confo
 from __future__ import annotations
 
 from .base import EXACT, Case, tol
-from .gp import _spd
+from .gp import exact_spd
 
 __all__ = ["se2_cases"]
 
@@ -251,7 +251,7 @@ def _interp(model: str, tau: float, cov: bool) -> dict:
     out = {"kind": "interpolation", "model": model, "x1": X1_INTERP, "x2": X2_INTERP, "t1": 0.0, "t2": 1.0}
     out.update(tau=tau, qc=QC)
     if cov:
-        out["joint_cov"] = [[v / 16 for v in row] for row in _spd(12, 2, 3)]
+        out["joint_cov"] = [[v / 16 for v in row] for row in exact_spd(12, 2, 3)]
     return out
 
 
