@@ -77,7 +77,7 @@ def sqrt_information(noise: NDArray | float, m: int, name: str = "noise") -> NDA
     )
 
 
-def _resolved(factor: str, labels: tuple[str, ...], measured: NDArray, W: NDArray) -> None:
+def check_resolved(factor: str, labels: tuple[str, ...], measured: NDArray, W: NDArray) -> None:
     """Each measured number is resolved by float64 to within its sigma: a value whose float spacing
     exceeds its sigma (a bearing of 1e17 rad, numbers there 16 rad apart; a sigma of 1e-150 m on a
     range of 10 m) is no reading a sensor gives, and its whitened error would be rounding noise."""
@@ -96,7 +96,7 @@ def _resolved(factor: str, labels: tuple[str, ...], measured: NDArray, W: NDArra
         )
 
 
-def _vector(value: NDArray | float, m: int, what: str) -> NDArray:
+def measured_vector(value: NDArray | float, m: int, what: str) -> NDArray:
     """``value`` as a float vector (m,): a 1-d array of m finite numbers, or a number when m = 1."""
     v = real_array(what, value)
     if v.shape != (m,) and not (m == 1 and v.ndim == 0):
@@ -126,7 +126,7 @@ def apply(A: NDArray, x: NDArray) -> NDArray:
     return A.dot(x) if one else np.einsum("...ij,...j->...i", A, x)
 
 
-def _jacobian(x: NDArray, m: int) -> NDArray:
+def zero_jacobian(x: NDArray, m: int) -> NDArray:
     """A zero Jacobian (..., m, dim) for the leading shape of x."""
     return np.zeros(x.shape[:-1] + (m, x.shape[-1]))
 

@@ -19,7 +19,7 @@ from ..gp.interpolate import interpolation_matrices, interpolation_matrices_sde
 from ..gp.prior import process_noise_sqrt_information, transition
 from ..gp.sde import LinearSDE, check_prior
 from ..variables import Key, key_list
-from .base import Factor, _vector, apply, sqrt_information
+from .base import Factor, apply, measured_vector, sqrt_information
 
 __all__ = ["GPPriorFactor", "gp_prior_factors", "InterpolatedFactor"]
 
@@ -68,7 +68,7 @@ class GPPriorFactor(Factor):
         q = real_array("q", q)
         if q.shape != (n, n):  # a covariance: not a sigma, nor sigmas, as sqrt_information would read them
             raise ShapeError(f"q (Qᵢ) must be a ({n}, {n}) covariance to match phi, got shape {q.shape}")
-        v = np.zeros(n) if v is None else _vector(v, n, "v")
+        v = np.zeros(n) if v is None else measured_vector(v, n, "v")
         return cls((key1, key2), sqrt_information(q, n, "q"), phi=finite("phi", phi), v=v)
 
     @classmethod

@@ -19,7 +19,7 @@ from ..errors import DegenerateMeasurementWarning, ShapeError, SteamError
 from ..pose2 import wrap_angle
 from ..robust import RobustLoss
 from ..variables import Key
-from .base import LANDMARK_DIM, STATE_DIM, Factor, _jacobian, _resolved, _vector, sqrt_information
+from .base import LANDMARK_DIM, STATE_DIM, Factor, check_resolved, measured_vector, sqrt_information, zero_jacobian
 
 __all__ = [
     "StateMeasurement",
@@ -59,9 +59,9 @@ class PriorFactor(Factor):
         mean = real_array("mean", mean)
         if mean.ndim != 1 or mean.shape[0] == 0:
             raise ShapeError(f"mean (of the prior on {key!r}) must be a non-empty 1-D vector, got shape {mean.shape}")
-        mean = _vector(mean, mean.shape[0], "mean")
+        mean = measured_vector(mean, mean.shape[0], "mean")
         W = sqrt_information(noise, mean.shape[0])
-        _resolved(f"PriorFactor on {key!r}", tuple(f"mean[{i}]" for i in range(len(mean))), mean, W)
+        check_resolved(f"PriorFactor on {key!r}", tuple(f"mean[{i}]" for i in range(len(mean))), mean, W)
         return cls((key,), W, mean=mean, loss=loss)
 
     @property
@@ -142,7 +142,7 @@ class OdometryFactor(StateMeasurement):
         return cls(
             (key,),
             sqrt_information(noise, 2),
-            measured=_vector(measured, 2, "measured"),
+            measured=measured_vector(measured, 2, "measured"),
             loss=loss,
             state_dim=state_dim,
         )
@@ -155,7 +155,7 @@ class OdometryFactor(StateMeasurement):
     def jacobians(self, x: NDArray) -> tuple[NDArray]:
         th, xd, yd = x[..., 2], x[..., 3], x[..., 4]
         c, s = np.cos(th), np.sin(th)
-        J = _jacobian(x, 2)
+        J = zero_jacobian(x, 2)
         J[..., 0, 2] = -s * xd + c * yd
         J[..., 0, 3] = c
         J[..., 0, 4] = s
@@ -194,7 +194,7 @@ class VelocityFactor(StateMeasurement):
         state_dim: int = STATE_DIM,
     ) -> VelocityFactor:
         """Projected-velocity reading [forward, lateral, yaw rate] on state ``key``."""
-        measured = _vector(measured, 3, "measured")
+        measured = measured_vector(measured, 3, "measured")
         return cls((key,), sqrt_information(noise, 3), measured=measured, loss=loss, state_dim=state_dim)
 
     def error(self, x: NDArray) -> NDArray:
@@ -206,7 +206,7 @@ class VelocityFactor(StateMeasurement):
     def jacobians(self, x: NDArray) -> tuple[NDArray]:
         th, xd, yd = x[..., 2], x[..., 3], x[..., 4]
         c, s = np.cos(th), np.sin(th)
-        J = _jacobian(x, 3)
+        J = zero_jacobian(x, 3)
         J[..., 0, 2], J[..., 0, 3], J[..., 0, 4] = -s * xd + c * yd, c, s
         J[..., 1, 2], J[..., 1, 3], J[..., 1, 4] = -c * xd - s * yd, -s, c
         J[..., 2, 5] = 1.0
@@ -251,7 +251,7 @@ def _bearing_row(x: NDArray, l: NDArray) -> tuple[NDArray, NDArray, NDArray]:
 
 def _range(name: str, measured: float) -> NDArray:
     """A range reading as a (1,) vector: a finite distance; a negative one is a bad reading, not a far landmark."""
-    r = _vector(measured, 1, name)
+    r = measured_vector(measured, 1, name)
     if r[0] < 0:
         raise SteamError(f"a range cannot be negative, got {name}={float(r[0])!r}")
     return r
@@ -289,7 +289,7 @@ class RangeFactor(StateMeasurement):
         """Range reading ``measured`` (m, not negative) from state ``state`` to landmark ``landmark``."""
         reading = _range("measured", measured)
         W = sqrt_information(sigma, 1, "sigma")
-        _resolved(f"RangeFactor on {state!r}, {landmark!r}", ("range",), reading, W)
+        check_resolved(f"RangeFactor on {state!r}, {landmark!r}", ("range",), reading, W)
         return cls((state, landmark), W, measured=reading, loss=loss, state_dim=state_dim)
 
     def error(self, x: NDArray, l: NDArray) -> NDArray:
@@ -330,9 +330,9 @@ class BearingFactor(StateMeasurement):
         state_dim: int = STATE_DIM,
     ) -> BearingFactor:
         """Bearing reading ``measured`` (rad) from ``state`` to ``landmark``."""
-        reading = _vector(measured, 1, "measured")
+        reading = measured_vector(measured, 1, "measured")
         W = sqrt_information(sigma, 1, "sigma")
-        _resolved(f"BearingFactor on {state!r}, {landmark!r}", ("bearing",), reading, W)
+        check_resolved(f"BearingFactor on {state!r}, {landmark!r}", ("bearing",), reading, W)
         return cls((state, landmark), W, measured=reading, loss=loss, state_dim=state_dim)
 
     def error(self, x: NDArray, l: NDArray) -> NDArray:
@@ -374,9 +374,9 @@ class BearingRangeFactor(StateMeasurement):
         state_dim: int = STATE_DIM,
     ) -> BearingRangeFactor:
         """Bearing-range reading; noise is sigmas (2,) or a covariance (2, 2) for [bearing, range]."""
-        measured = np.concatenate([_vector(bearing, 1, "bearing"), _range("range", range_)])
+        measured = np.concatenate([measured_vector(bearing, 1, "bearing"), _range("range", range_)])
         W = sqrt_information(noise, 2)
-        _resolved(f"BearingRangeFactor on {state!r}, {landmark!r}", ("bearing", "range"), measured, W)
+        check_resolved(f"BearingRangeFactor on {state!r}, {landmark!r}", ("bearing", "range"), measured, W)
         return cls((state, landmark), W, measured=measured, loss=loss, state_dim=state_dim)
 
     def error(self, x: NDArray, l: NDArray) -> NDArray:

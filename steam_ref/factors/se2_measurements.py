@@ -25,7 +25,7 @@ from ..lie import STATE_SIZE
 from ..lie.gp import check_model, interpolate
 from ..robust import RobustLoss
 from ..variables import Key
-from .base import Factor, _vector, sqrt_information
+from .base import Factor, measured_vector, sqrt_information
 from .measurements import BearingFactor, BearingRangeFactor, RangeFactor
 
 __all__ = ["SE2Measurement", "SE2VelocityFactor", "SE2InterpolatedFactor"]
@@ -109,7 +109,7 @@ class SE2VelocityFactor(Factor):
         cls, key: Key, measured: NDArray, noise: NDArray | float, *, loss: RobustLoss | None = None
     ) -> SE2VelocityFactor:
         """Reading ``measured`` = [vx, vy, ω] in the body frame; noise a sigma, sigmas (3,) or a covariance."""
-        return cls((key,), sqrt_information(noise, 3), measured=_vector(measured, 3, "measured"), loss=loss)
+        return cls((key,), sqrt_information(noise, 3), measured=measured_vector(measured, 3, "measured"), loss=loss)
 
     def error(self, x: NDArray) -> NDArray:
         return x[..., 3:] - self.measured
