@@ -14,8 +14,8 @@ Used by ``benchmarks/vs_gtsam.py``, ``benchmarks/victoria_park.py`` and ``tests/
   ``PriorFactorPoint2``. It answers ``estimate_of`` with [x, y, θ, world-frame velocity], so our front end
   can predict from it; it is a yardstick of the machinery, not the same model. Given our SE(2) factors
   (a run with ``PaperSetup(prior="se2")``, the local-variable residual) it is the *same* model:
-  ``SE2PriorFactor`` → ``WnoaMotionFactorPose2``, ``SE2VelocityFactor`` → ``PriorFactorVector``, an
-  ``SE2Measurement`` range → ``RangeFactor2D``, ``SE2StatePrior`` → ``PriorFactorPose2`` and
+  ``LiePriorFactor`` → ``WnoaMotionFactorPose2``, ``BodyVelocityFactor`` → ``PriorFactorVector``, an
+  ``PoseReading`` range → ``RangeFactor2D``, ``LieStatePrior`` → ``PriorFactorPose2`` and
   ``PriorFactorVector``; the states are SE(2) states and ``estimate_of`` answers [x, y, θ, body twist].
   ``pairs`` keeps each of our factors with the GTSAM factors that stand for it.
 
@@ -30,8 +30,8 @@ import gtsam
 import numpy as np
 
 from steam_ref.factors import GPPriorFactor, PriorFactor, RangeFactor, VelocityFactor
-from steam_ref.factors.se2 import SE2PriorFactor, SE2StatePrior
-from steam_ref.factors.se2_measurements import SE2Measurement, SE2VelocityFactor
+from steam_ref.factors.lie_prior import LiePriorFactor, LieStatePrior
+from steam_ref.factors.lie_readings import PoseReading, BodyVelocityFactor
 from steam_ref.paper.solvers import OnlineSolver
 from steam_ref.variables import Key, Values
 
@@ -133,19 +133,19 @@ class NativeISAM2(OnlineSolver):
 
     def _se2_factors(self, f) -> list | None:
         """GTSAM's built-in factors for one of our SE(2) factors (None: not an SE(2) factor)."""
-        if isinstance(f, SE2PriorFactor):
+        if isinstance(f, LiePriorFactor):
             if f.model != "local-variable":
                 raise ValueError(f"GTSAM's WnoaMotionFactorPose2 is the local-variable residual, not {f.model!r}")
             k1, k2 = f.keys
             self.times.setdefault(k1.index, 0.0)
             self.times[k2.index] = self.times[k1.index] + float(f.phi[0, 3])  # Φ = [[I, Δt I], [0, I]]
             return [gtsam.WnoaMotionFactorPose2(self._state(k1), self._state(k2), self.qc)]
-        if isinstance(f, SE2VelocityFactor):
+        if isinstance(f, BodyVelocityFactor):
             return [gtsam.PriorFactorVector(gkey(f.keys[0], "v"), np.asarray(f.measured, dtype=float), _noise(f))]
-        if isinstance(f, SE2Measurement) and isinstance(f.inner, RangeFactor):
+        if isinstance(f, PoseReading) and isinstance(f.inner, RangeFactor):
             x, lm = f.keys
             return [gtsam.RangeFactor2D(gkey(x, "p"), gkey(lm), float(f.inner.measured[0]), _noise(f))]
-        if isinstance(f, SE2StatePrior):
+        if isinstance(f, LieStatePrior):
             k, m, W = f.keys[0], np.asarray(f.mean, dtype=float), np.asarray(f.sqrt_information, dtype=float)
             if np.any(W[:3, 3:]) or np.any(W[3:, :3]):
                 raise ValueError("the native replica takes a first-state prior with independent pose and velocity")

@@ -9,9 +9,9 @@ in lockstep to
   GTSAM's Tukey, ``PriorFactorPoint2`` on a landmark, ``PriorFactorPose2`` + ``PriorFactorVector`` on the
   first state; ``ISAM2Params`` relinearizeThreshold 0.1, relinearizeSkip 10, wildfire 1e-3 (each Pose2,
   velocity and landmark its own variable);
-- **steam**: steam_ref's ``IncrementalSolver`` on SE(2) states with ``SE2PriorFactor(model="local-variable")``,
-  ``SE2VelocityFactor``, ``SE2Measurement.range`` with ``Tukey``, ``PriorFactor`` on a landmark,
-  ``SE2StatePrior`` on the first state; ``ISAM2Params`` with the same thresholds and a state relinearized as
+- **steam**: steam_ref's ``IncrementalSolver`` on SE(2) states with ``LiePriorFactor(model="local-variable")``,
+  ``BodyVelocityFactor``, ``PoseReading.range`` with ``Tukey``, ``PriorFactor`` on a landmark,
+  ``LieStatePrior`` on the first state; ``ISAM2Params`` with the same thresholds and a state relinearized as
   two blocks (pose, velocity), as GTSAM holds it;
 - **steam-gtsam-jacobians** (``--jacobians``): the same as steam, but every motion prior's Jacobians are
   GTSAM's own (:class:`GtsamJacobianPrior`, a benchmark-only factor that calls GTSAM for them): the run
@@ -47,8 +47,8 @@ from steam_ref.batch import gauss_newton, levenberg_marquardt
 from steam_ref.bayes_tree import IncrementalSolver
 from steam_ref.datasets import load_dataset
 from steam_ref.factors import PriorFactor
-from steam_ref.factors.se2 import SE2PriorFactor, SE2StatePrior
-from steam_ref.factors.se2_measurements import SE2Measurement, SE2VelocityFactor
+from steam_ref.factors.lie_prior import LiePriorFactor, LieStatePrior
+from steam_ref.factors.lie_readings import PoseReading, BodyVelocityFactor
 from steam_ref.graph import FactorGraph
 from steam_ref.lie import SE2_STATE, se2
 from steam_ref.linear.system import linearize
@@ -90,8 +90,8 @@ def gtsam_jacobians(g: gtsam.WnoaMotionFactorPose2, x1: NDArray, x2: NDArray) ->
 
 
 @dataclass(frozen=True, eq=False)
-class GtsamPrior(SE2PriorFactor):
-    """Benchmark only: ``SE2PriorFactor`` (local-variable) with GTSAM's Jacobians in place of the exact ones
+class GtsamPrior(LiePriorFactor):
+    """Benchmark only: ``LiePriorFactor`` (local-variable) with GTSAM's Jacobians in place of the exact ones
     (``residual`` 'exact'), or GTSAM's residual too ('gtsam'): GTSAM's factor behind our interface."""
 
     qc: NDArray = None  # type: ignore[assignment]  # (3, 3), GTSAM's factor needs it
@@ -148,21 +148,21 @@ class Item:
     def ours(self, setup: PaperSetup, variant: str = "exact"):
         k, c = self.keys, setup.tukey_c
         if self.kind == "first":
-            return SE2StatePrior.create(X(k[0]), self.value, self.sigmas)
+            return LieStatePrior.create(X(k[0]), self.value, self.sigmas)
         if self.kind == "landmark":
             return PriorFactor.create(L(k[0]), self.value, self.sigmas)
         if self.kind == "motion":
             if variant == "simplified":
-                return SE2PriorFactor.create(X(k[0]), X(k[1]), self.dt, setup.qc, "simplified")
+                return LiePriorFactor.create(X(k[0]), X(k[1]), self.dt, setup.qc, "simplified")
             if variant != "exact":
-                f = SE2PriorFactor.create(X(k[0]), X(k[1]), self.dt, setup.qc)
+                f = LiePriorFactor.create(X(k[0]), X(k[1]), self.dt, setup.qc)
                 residual = "gtsam" if variant == "gtsam-factor" else "exact"
                 return GtsamPrior(f.keys, f.sqrt_information, phi=f.phi, qc=setup.qc, residual=residual)
-            return SE2PriorFactor.create(X(k[0]), X(k[1]), self.dt, setup.qc, "local-variable")
+            return LiePriorFactor.create(X(k[0]), X(k[1]), self.dt, setup.qc, "local-variable")
         if self.kind == "velocity":
-            return SE2VelocityFactor.create(X(k[0]), self.value, self.sigmas)
+            return BodyVelocityFactor.create(X(k[0]), self.value, self.sigmas)
         loss = None if c is None else Tukey(c)
-        return SE2Measurement.range(X(k[0]), L(k[1]), float(self.value[0]), float(self.sigmas[0]), loss=loss)
+        return PoseReading.range(X(k[0]), L(k[1]), float(self.value[0]), float(self.sigmas[0]), loss=loss)
 
     def theirs(self, setup: PaperSetup) -> list:
         k, c = self.keys, setup.tukey_c

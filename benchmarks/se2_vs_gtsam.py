@@ -62,7 +62,7 @@ def main() -> None:
 
     from steam_ref.batch import gauss_newton
     from steam_ref.datasets import load_dataset
-    from steam_ref.factors.se2 import SE2PriorFactor
+    from steam_ref.factors.lie_prior import LiePriorFactor
     from steam_ref.graph import FactorGraph
     from steam_ref.lie import SE2_STATE, se2
     from steam_ref.linear.system import linearize
@@ -100,17 +100,17 @@ def main() -> None:
         theirs_e = np.concatenate([g.unwhitenedError(final) for g in built])
         diff = float(np.abs(mine - theirs_e).max())
         worst = max(worst, diff)
-        if isinstance(f, SE2PriorFactor):
+        if isinstance(f, LiePriorFactor):
             wnoa.append((diff, f, mine, theirs_e))
         else:
             others = max(others, diff)
         for g in built:
             graph.add(g)
     our_cost, their_cost = FactorGraph(factors).error(at), graph.error(final)
-    rest = [f for f, _ in replica.pairs if not isinstance(f, SE2PriorFactor)]
+    rest = [f for f, _ in replica.pairs if not isinstance(f, LiePriorFactor)]
     rest_graph = gtsam.NonlinearFactorGraph()
     for f, built in replica.pairs:
-        if not isinstance(f, SE2PriorFactor):
+        if not isinstance(f, LiePriorFactor):
             for g in built:
                 rest_graph.add(g)
     rest_cost = (FactorGraph(rest).error(at), rest_graph.error(final))

@@ -28,8 +28,8 @@ from steam_ref.datasets import (
     load_dataset,
     search,
 )
+from steam_ref.dead_reckoning import integrate_odometry
 from steam_ref.errors import DataError, ShapeError, SteamError, SteamWarning, UncleanedDataWarning
-from steam_ref.pose2 import integrate_odometry
 
 SYN_FILE, PLAZA_FILE = "Syn_theta_Plaza.mat", "Plaza1_thrown_away_some_range.mat"
 FIELDS = ("ground_truth", "odometry", "dead_reckoning", "landmarks", "ranges")

@@ -8,12 +8,12 @@ import numpy as np
 import pytest
 
 from steam_ref.datasets import RangeDataset, generate_synthetic, load_cmu_mat
+from steam_ref.dead_reckoning import compose
 from steam_ref.errors import DataError, SteamError
 from steam_ref.factors import PriorFactor, RangeFactor
 from steam_ref.paper.frontend import FrontEnd, Layout
 from steam_ref.paper.presets import PaperSetup
 from steam_ref.paper.readings import Readings, attach_ranges, range_correction
-from steam_ref.pose2 import compose
 from steam_ref.variables import L, X
 
 

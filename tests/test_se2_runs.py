@@ -16,8 +16,8 @@ from steam_ref.cli.commands import main
 from steam_ref.datasets import generate_synthetic, sample_se2_from_model
 from steam_ref.errors import DivergenceWarning
 from steam_ref.factors import GPPriorFactor, PriorFactor
-from steam_ref.factors.se2 import SE2PriorFactor, SE2StatePrior
-from steam_ref.factors.se2_measurements import SE2InterpolatedFactor, SE2Measurement, SE2VelocityFactor
+from steam_ref.factors.lie_prior import LiePriorFactor, LieStatePrior
+from steam_ref.factors.lie_readings import BodyVelocityFactor, LieInterpolatedFactor, PoseReading
 from steam_ref.lie import SE2_STATE, se2
 from steam_ref.paper.consistency import ConsistencyStudy, consistency_se2_setup, model_of, run_seed
 from steam_ref.paper.converge import converge, rotated
@@ -55,8 +55,8 @@ def test_the_front_end_makes_se2_factors_and_states(small_mat):
     steps = list(FrontEnd(readings, setup, Layout(skip=3), n_poses=20))
     factors = [f for s in steps for f in s.factors]
     kinds = {type(f) for f in factors}
-    assert {SE2StatePrior, SE2PriorFactor, SE2VelocityFactor, SE2Measurement, SE2InterpolatedFactor} <= kinds
-    assert GPPriorFactor not in kinds and all(f.model == "simplified" for f in factors if isinstance(f, SE2PriorFactor))
+    assert {LieStatePrior, LiePriorFactor, BodyVelocityFactor, PoseReading, LieInterpolatedFactor} <= kinds
+    assert GPPriorFactor not in kinds and all(f.model == "simplified" for f in factors if isinstance(f, LiePriorFactor))
     for s in steps:
         for k, v in s.values.items():
             if k.kind == "x":
@@ -202,7 +202,7 @@ def test_the_turn_of_the_whole_map_on_se2_states_changes_only_the_anchored_facto
     moved = [f for f in problem.graph if not np.allclose(
         f.whitened_error(*[turned[k] for k in f.keys]), f.whitened_error(*[problem.initial[k] for k in f.keys]),
         rtol=1e-9, atol=1e-9)]  # fmt: skip
-    assert moved and all(isinstance(f, (SE2StatePrior, PriorFactor)) for f in moved)
+    assert moved and all(isinstance(f, (LieStatePrior, PriorFactor)) for f in moved)
     want = gauss_newton(problem.graph, problem.initial, relative_tolerance=1e-14, max_iterations=100).values
     got = converge(problem.graph, problem.initial, step_tolerance=1e-10).values
     for i in range(16):
@@ -213,8 +213,8 @@ def test_the_divergence_gate_names_an_absurd_reading_on_se2_states():
     """A range reading 100 m off at an SE(2) state is named before the update, as on vector states."""
     check = DivergenceCheck()
     state = np.array([0.0, 0.0, 0.3, 1.0, 0.0, 0.1])
-    good = SE2Measurement.range(X(0), L(1), 5.0, 0.1)
-    bad = SE2InterpolatedFactor.create(SE2Measurement.range(X(5), L(1), 105.0, 0.1), X(0), X(1), 0.0, 1.0, 0.5,
+    good = PoseReading.range(X(0), L(1), 5.0, 0.1)
+    bad = LieInterpolatedFactor.create(PoseReading.range(X(5), L(1), 105.0, 0.1), X(0), X(1), 0.0, 1.0, 0.5,
                                        np.eye(3))  # fmt: skip
     values = {X(0): state, X(1): SE2_STATE.retract(state, np.r_[1.0, 0, 0.1, 0, 0, 0]), L(1): np.array([3.0, 4.0])}
     with pytest.warns(DivergenceWarning, match=r"RangeFactor on x0, x1, l1 \(interpolated between its states\)"):

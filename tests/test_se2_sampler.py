@@ -8,7 +8,7 @@ import pytest
 
 from steam_ref.datasets import sample_se2_from_model
 from steam_ref.errors import DataError, SteamError
-from steam_ref.factors.se2 import SE2PriorFactor, se2_prior_factors
+from steam_ref.factors.lie_prior import LiePriorFactor, lie_prior_factors
 from steam_ref.variables import X
 
 KW = dict(
@@ -24,8 +24,8 @@ KW = dict(
 
 def _nees(sample, model):
     n = len(sample.states)
-    factors = se2_prior_factors([X(i) for i in range(n)], np.arange(n, dtype=float), KW["qc"], model)
-    batch = SE2PriorFactor.stack(factors)  # every step at once, as a solver evaluates them
+    factors = lie_prior_factors([X(i) for i in range(n)], np.arange(n, dtype=float), KW["qc"], model)
+    batch = LiePriorFactor.stack(factors)  # every step at once, as a solver evaluates them
     return np.sum(batch.whitened_error(sample.states[:-1], sample.states[1:]) ** 2, axis=1)
 
 

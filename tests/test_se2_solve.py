@@ -10,8 +10,8 @@ import pytest
 from requirements import optional_import
 
 from steam_ref.factors import PriorFactor
-from steam_ref.factors.se2 import SE2StatePrior, se2_prior_factors
-from steam_ref.factors.se2_measurements import SE2Measurement, SE2VelocityFactor
+from steam_ref.factors.lie_prior import LieStatePrior, lie_prior_factors
+from steam_ref.factors.lie_readings import BodyVelocityFactor, PoseReading
 from steam_ref.lie import SE2_STATE, se2
 from steam_ref.linear.system import linearize
 from steam_ref.variables import L, Values, X
@@ -31,15 +31,15 @@ def _problem():
         w = truth[-1][3:] + rng.normal(0, 0.05, 3)
         truth.append(np.r_[se2.compose(truth[-1][:3], se2.exp(w)), w])
     keys = [X(i) for i in range(N_STATES)]
-    factors = [SE2StatePrior.create(X(0), truth[0], np.full(6, 0.01))]
-    factors += se2_prior_factors(keys, np.arange(N_STATES, dtype=float), QC)
+    factors = [LieStatePrior.create(X(0), truth[0], np.full(6, 0.01))]
+    factors += lie_prior_factors(keys, np.arange(N_STATES, dtype=float), QC)
     readings = {}
     for i, x in enumerate(truth):
         vel = x[3:] + VEL_SIGMAS * rng.standard_normal(3)
-        factors.append(SE2VelocityFactor.create(X(i), vel, VEL_SIGMAS))
+        factors.append(BodyVelocityFactor.create(X(i), vel, VEL_SIGMAS))
         for j, l in LANDMARKS.items():
             r = float(np.hypot(*(l - x[:2]))) + RANGE_SIGMA * rng.standard_normal()
-            factors.append(SE2Measurement.range(X(i), L(j), r, RANGE_SIGMA))
+            factors.append(PoseReading.range(X(i), L(j), r, RANGE_SIGMA))
             readings[(i, j)] = r
         readings[i] = vel
     for j, l in LANDMARKS.items():

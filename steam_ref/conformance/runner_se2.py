@@ -18,7 +18,7 @@ import numpy as np
 from ..batch import gauss_newton
 from ..bayes_tree import IncrementalSolver
 from ..errors import SteamError
-from ..factors import Factor, PriorFactor, SE2Measurement, SE2PriorFactor, SE2StatePrior
+from ..factors import Factor, LiePriorFactor, LieStatePrior, PoseReading, PriorFactor
 from ..gp import interpolation_matrices
 from ..graph import FactorGraph
 from ..lie import SE2_STATE, se2
@@ -34,11 +34,11 @@ def se2_factor(f: Mapping) -> Factor:
     keys = [spec.key(k) for k in f["keys"]]
     kind = f["type"]
     if kind == "se2_prior":
-        return SE2PriorFactor.create(keys[0], keys[1], float(f["dt"]), np.asarray(f["qc"], float), f["model"])
+        return LiePriorFactor.create(keys[0], keys[1], float(f["dt"]), np.asarray(f["qc"], float), f["model"])
     if kind == "se2_state_prior":
-        return SE2StatePrior.create(keys[0], np.asarray(f["mean"], float), np.asarray(f["sigmas"], float))
+        return LieStatePrior.create(keys[0], np.asarray(f["mean"], float), np.asarray(f["sigmas"], float))
     if kind == "se2_range":
-        return SE2Measurement.range(keys[0], keys[1], float(f["measured"]), float(f["sigma"]))
+        return PoseReading.range(keys[0], keys[1], float(f["measured"]), float(f["sigma"]))
     if kind == "prior":
         return PriorFactor.create(keys[0], np.asarray(f["mean"], float), np.asarray(f["sigmas"], float))
     raise SteamError(f"unknown se2 factor type {kind!r}")
@@ -51,7 +51,7 @@ def se2_values(named: Mapping) -> Values:
 
 
 def _prior(inputs: Mapping) -> dict:
-    f = SE2PriorFactor.create(
+    f = LiePriorFactor.create(
         spec.key("x1"), spec.key("x2"), float(inputs["dt"]), np.asarray(inputs["qc"], float), inputs["model"]
     )
     x1, x2 = np.asarray(inputs["x1"], float), np.asarray(inputs["x2"], float)
@@ -122,7 +122,7 @@ def run_se2_case(inputs: Mapping) -> dict:
     if kind == "prior":
         return _prior(inputs)
     if kind == "state_prior":
-        f = SE2StatePrior.create(spec.key("x0"), np.asarray(inputs["mean"], float), 1.0)
+        f = LieStatePrior.create(spec.key("x0"), np.asarray(inputs["mean"], float), 1.0)
         x = np.asarray(inputs["x"], float)
         return {"error": f.error(x), "H_0": f.jacobians(x)[0]}
     if kind == "interpolation":

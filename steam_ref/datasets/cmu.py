@@ -34,8 +34,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..arguments import DECIMAL
+from ..dead_reckoning import integrate_odometry
 from ..errors import DataError, SteamError
-from ..pose2 import integrate_odometry
 from .matfile import read_mat
 from .table import CMU_COLUMNS, RangeDataset, frozen_table
 

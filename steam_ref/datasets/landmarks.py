@@ -40,8 +40,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..dead_reckoning import integrate_odometry
 from ..errors import DataError
-from ..pose2 import integrate_odometry
 from .table import check_time_origin, frozen_table, ids_text, number_text, rows_of
 
 __all__ = ["LandmarkDataset", "LANDMARK_COLUMNS", "READING_TABLES", "RANGE_SLACK_SIGMAS"]

@@ -9,9 +9,9 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 
 from ..arguments import is_integer
+from ..dead_reckoning import integrate_odometry, wrap_angle
 from ..errors import ShapeError, SteamError
 from ..gp.prior import check_qc, process_noise, transition
-from ..pose2 import integrate_odometry, wrap_angle
 from .table import RangeDataset
 
 __all__ = ["generate_synthetic"]

@@ -24,8 +24,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..arguments import finite, number, real_array
+from ..dead_reckoning import wrap_angle
 from ..errors import ShapeError, SteamError
-from ..pose2 import wrap_angle
 
 __all__ = ["Alignment", "align_planar", "alignment_defect", "ALIGNMENTS"]
 

@@ -30,8 +30,8 @@ from numpy.typing import NDArray
 from scipy.special import gammaincinv
 
 from ..arguments import finite, is_integer, number, real_array
+from ..dead_reckoning import wrap_angle
 from ..errors import NumericalError, ShapeError, SteamError
-from ..pose2 import wrap_angle
 
 __all__ = [
     "nees",

@@ -23,8 +23,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..arguments import parse_decimal, real_array
+from ..dead_reckoning import wrap_angle
 from ..errors import DataError, ShapeError
-from ..pose2 import wrap_angle
 from .metrics import planar_poses
 
 __all__ = ["write_tum", "read_tum", "write_kitti", "read_kitti", "PLANAR_TOLERANCE"]

@@ -28,8 +28,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..arguments import finite, is_integer, number, real_array
+from ..dead_reckoning import wrap_angle
 from ..errors import ShapeError, SteamError
-from ..pose2 import wrap_angle
 from .align import ALIGNMENTS, Alignment, align_planar
 
 __all__ = ["Statistics", "PoseError", "ape", "rpe", "rpe_pairs", "planar_poses"]

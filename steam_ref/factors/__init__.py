@@ -9,10 +9,10 @@
   :class:`BearingRangeFactor`.
 - :mod:`.marginal`: :class:`MarginalFactor`, the linear factor a marginalization leaves (Eq. 10.4 of the
   derivations).
-- :mod:`.se2`, :mod:`.se2_measurements`: factors on SE(2) states (``steam_ref.lie.SE2_STATE``, Jacobians
-  in the right tangent): :class:`SE2PriorFactor` (the WNOA prior, "local-variable" or "simplified"),
-  :func:`se2_prior_factors`, :class:`SE2StatePrior`, :class:`SE2Measurement` (range, bearing,
-  bearing-range), :class:`SE2VelocityFactor` (the body twist), :class:`SE2InterpolatedFactor`.
+- :mod:`.lie_prior`, :mod:`.lie_readings`: factors on SE(2) states (``steam_ref.lie.SE2_STATE``, Jacobians
+  in the right tangent): :class:`LiePriorFactor` (the WNOA prior, "local-variable" or "simplified"),
+  :func:`lie_prior_factors`, :class:`LieStatePrior`, :class:`PoseReading` (range, bearing,
+  bearing-range), :class:`BodyVelocityFactor` (the body twist), :class:`LieInterpolatedFactor`.
 - :mod:`.marginal`: :class:`MarginalFactor`, the linear factor a marginalization leaves (Eq. 10.4 of the
   derivations).
 
@@ -24,6 +24,8 @@ state (``state_dim``). Landmarks are ℓ = [x, y].
 
 from .base import LANDMARK_DIM, STATE_DIM, Factor, check_factors, sqrt_information
 from .gp import GPPriorFactor, InterpolatedFactor, gp_prior_factors
+from .lie_prior import LiePriorFactor, LieStatePrior, lie_prior_factors
+from .lie_readings import BodyVelocityFactor, LieInterpolatedFactor, PoseReading
 from .marginal import MarginalFactor
 from .measurements import (
     BearingFactor,
@@ -34,8 +36,6 @@ from .measurements import (
     StateMeasurement,
     VelocityFactor,
 )
-from .se2 import SE2PriorFactor, SE2StatePrior, se2_prior_factors
-from .se2_measurements import SE2InterpolatedFactor, SE2Measurement, SE2VelocityFactor
 
 __all__ = [
     "Factor",
@@ -54,10 +54,10 @@ __all__ = [
     "check_factors",
     "STATE_DIM",
     "LANDMARK_DIM",
-    "SE2PriorFactor",
-    "se2_prior_factors",
-    "SE2StatePrior",
-    "SE2Measurement",
-    "SE2VelocityFactor",
-    "SE2InterpolatedFactor",
+    "LiePriorFactor",
+    "lie_prior_factors",
+    "LieStatePrior",
+    "PoseReading",
+    "BodyVelocityFactor",
+    "LieInterpolatedFactor",
 ]

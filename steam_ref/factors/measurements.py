@@ -15,8 +15,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..arguments import is_integer, real_array
+from ..dead_reckoning import wrap_angle
 from ..errors import DegenerateMeasurementWarning, ShapeError, SteamError
-from ..pose2 import wrap_angle
 from ..robust import RobustLoss
 from ..variables import Key
 from .base import LANDMARK_DIM, STATE_DIM, Factor, check_resolved, measured_vector, sqrt_information, zero_jacobian

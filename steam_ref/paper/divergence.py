@@ -29,7 +29,7 @@ from numpy.typing import NDArray
 
 from ..errors import DivergenceWarning
 from ..factors import BearingFactor, BearingRangeFactor, Factor, InterpolatedFactor, RangeFactor
-from ..factors.se2_measurements import SE2InterpolatedFactor
+from ..factors.lie_readings import LieInterpolatedFactor
 from ..variables import Key
 from .se2_model import reading_inside
 
@@ -69,7 +69,7 @@ def describe(factor: Factor) -> str:
     what = "" if measured is None else f" reading {np.asarray(measured).tolist()}"
     where = ", ".join(repr(k) for k in factor.keys)
     between = (
-        " (interpolated between its states)" if isinstance(factor, (InterpolatedFactor, SE2InterpolatedFactor)) else ""
+        " (interpolated between its states)" if isinstance(factor, (InterpolatedFactor, LieInterpolatedFactor)) else ""
     )
     return f"{type(inner).__name__} on {where}{between}{what}"
 

@@ -22,7 +22,7 @@ robot would meet them:
   bearing-range reading puts it seen from the pose predicted at that reading (the script's
   ``lastPose.transform_from(...)``); a range or a bearing alone cannot place it (SteamError).
 - **Initial values** (as the paper's scripts make them): a new pose is the previous pose composed
-  with the odometry (:func:`steam_ref.pose2.compose`; [dx, dy, dθ] = velocity × dt); its velocity is the backward difference over
+  with the odometry (:func:`steam_ref.dead_reckoning.compose`; [dx, dy, dθ] = velocity × dt); its velocity is the backward difference over
   the last step, (pᵢ - pᵢ₋₁)/dt, the only velocity a causal front end knows when the state is made
   (the scripts take the heading part as the difference of two GTSAM ``Pose2`` headings, each wrapped
   to (-π, π], so it is off by ±2π where the heading crosses ±π; ``PaperSetup.pose2_heading_rate_guess``).
@@ -46,6 +46,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..arguments import is_integer
+from ..dead_reckoning import compose, transform_from, wrap_angle
 from ..errors import SteamError
 from ..factors import (
     BearingFactor,
@@ -59,7 +60,6 @@ from ..factors import (
 )
 from ..lie import SE2_STATE
 from ..manifold import Manifold
-from ..pose2 import compose, transform_from, wrap_angle
 from ..variables import Key, L, X
 from . import se2_model
 from .presets import PaperSetup

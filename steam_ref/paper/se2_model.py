@@ -5,16 +5,16 @@ With ``prior="se2"`` a state is ``steam_ref.lie.SE2_STATE``, x = [x, y, θ, vx, 
 *body* twist (forward, lateral, yaw rate), retracted on the right. Every reading keeps its vector-space
 meaning and noise; only the factors change:
 
-- the GP prior between states is :class:`~steam_ref.factors.se2.SE2PriorFactor` of the set-up's
+- the GP prior between states is :class:`~steam_ref.factors.lie_prior.LiePriorFactor` of the set-up's
   ``se2_residual`` ("local-variable" or "simplified") with the set-up's Qc read as the PSD of the
   body-frame acceleration (:attr:`PaperSetup.prior`: the presets' Qc is isotropic in x, y, so it is the
   same numbers in either frame);
 - a projected-velocity reading [forward, lateral, yaw rate] is what the body twist is, so it is an
-  :class:`~steam_ref.factors.se2_measurements.SE2VelocityFactor` (e = ϖ - z), not a projection;
-- ranges, bearings and bearing-ranges are :class:`~steam_ref.factors.se2_measurements.SE2Measurement`;
-  readings between states :class:`~steam_ref.factors.se2_measurements.SE2InterpolatedFactor` (the
+  :class:`~steam_ref.factors.lie_readings.BodyVelocityFactor` (e = ϖ - z), not a projection;
+- ranges, bearings and bearing-ranges are :class:`~steam_ref.factors.lie_readings.PoseReading`;
+  readings between states :class:`~steam_ref.factors.lie_readings.LieInterpolatedFactor` (the
   local GP of Anderson & Barfoot, the SE(2) form of [YIB Eq. 29]);
-- the prior on the first state is :class:`~steam_ref.factors.se2.SE2StatePrior`, its sigmas those of
+- the prior on the first state is :class:`~steam_ref.factors.lie_prior.LieStatePrior`, its sigmas those of
   the vector model read in the tangent at its mean (pose in the body frame).
 
 A new state's initial value (:func:`initial_state`) is the dead-reckoned pose, its heading wrapped to
@@ -28,10 +28,10 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from ..dead_reckoning import wrap_angle
 from ..factors import Factor, InterpolatedFactor
-from ..factors.se2 import SE2PriorFactor, SE2StatePrior
-from ..factors.se2_measurements import SE2InterpolatedFactor, SE2Measurement, SE2VelocityFactor
-from ..pose2 import wrap_angle
+from ..factors.lie_prior import LiePriorFactor, LieStatePrior
+from ..factors.lie_readings import BodyVelocityFactor, LieInterpolatedFactor, PoseReading
 from ..robust import RobustLoss
 from ..variables import Key
 from .presets import PaperSetup
@@ -54,44 +54,44 @@ def initial_state(pose: NDArray, world_velocity: NDArray, dt: float) -> NDArray:
     return np.array([pose[0], pose[1], theta, vx, vy, rate])
 
 
-def first_state_prior(key: Key, pose: NDArray, setup: PaperSetup) -> SE2StatePrior:
+def first_state_prior(key: Key, pose: NDArray, setup: PaperSetup) -> LieStatePrior:
     """The prior on the first state: pose at ``pose``, twist at ``setup.first_velocity``, the set-up's sigmas."""
     mean = np.concatenate([[pose[0], pose[1], _heading(pose[2])], setup.first_velocity])
-    return SE2StatePrior.create(key, mean, np.concatenate([setup.first_pose_sigmas, setup.first_velocity_sigmas]))
+    return LieStatePrior.create(key, mean, np.concatenate([setup.first_pose_sigmas, setup.first_velocity_sigmas]))
 
 
-def gp_prior(a: Key, b: Key, dt: float, setup: PaperSetup) -> SE2PriorFactor:
+def gp_prior(a: Key, b: Key, dt: float, setup: PaperSetup) -> LiePriorFactor:
     """The SE(2) WNOA prior between two states ``dt`` apart, of the set-up's residual.  [DER 11.11-11.12]"""
-    return SE2PriorFactor.create(a, b, dt, setup.qc, setup.se2_residual)
+    return LiePriorFactor.create(a, b, dt, setup.qc, setup.se2_residual)
 
 
 def interpolated(
     inner: Factor, a: Key, b: Key, ta: float, tb: float, tau: float, setup: PaperSetup
-) -> SE2InterpolatedFactor:
+) -> LieInterpolatedFactor:
     """``inner`` (on the state at τ) moved onto the states a at ta and b at tb.  [YIB Eq. 29; DER 11.16]"""
-    return SE2InterpolatedFactor.create(inner, a, b, ta, tb, tau, setup.qc, setup.se2_residual)
+    return LieInterpolatedFactor.create(inner, a, b, ta, tb, tau, setup.qc, setup.se2_residual)
 
 
-def velocity_reading(key: Key, reading: NDArray, sigmas: NDArray) -> SE2VelocityFactor:
+def velocity_reading(key: Key, reading: NDArray, sigmas: NDArray) -> BodyVelocityFactor:
     """A [forward, lateral, yaw rate] reading: the body twist itself."""
-    return SE2VelocityFactor.create(key, reading, sigmas)
+    return BodyVelocityFactor.create(key, reading, sigmas)
 
 
-def range_reading(key: Key, landmark: Key, value: float, sigma: float, loss: RobustLoss | None) -> SE2Measurement:
-    return SE2Measurement.range(key, landmark, value, sigma, loss=loss)
+def range_reading(key: Key, landmark: Key, value: float, sigma: float, loss: RobustLoss | None) -> PoseReading:
+    return PoseReading.range(key, landmark, value, sigma, loss=loss)
 
 
-def bearing_reading(key: Key, landmark: Key, value: float, sigma: float) -> SE2Measurement:
-    return SE2Measurement.bearing(key, landmark, value, sigma)
+def bearing_reading(key: Key, landmark: Key, value: float, sigma: float) -> PoseReading:
+    return PoseReading.bearing(key, landmark, value, sigma)
 
 
-def bearing_range_reading(key: Key, landmark: Key, bearing: float, distance: float, noise: NDArray) -> SE2Measurement:
-    return SE2Measurement.bearing_range(key, landmark, bearing, distance, noise)
+def bearing_range_reading(key: Key, landmark: Key, bearing: float, distance: float, noise: NDArray) -> PoseReading:
+    return PoseReading.bearing_range(key, landmark, bearing, distance, noise)
 
 
 def reading_inside(factor: Factor) -> Factor:
     """The reading a factor holds, through every wrapper: an interpolated factor of either state (vector, SE(2))
     and the SE(2) pose reading hold a range, bearing or bearing-range factor as ``inner``."""
-    while isinstance(factor, (InterpolatedFactor, SE2InterpolatedFactor, SE2Measurement)):
+    while isinstance(factor, (InterpolatedFactor, LieInterpolatedFactor, PoseReading)):
         factor = factor.inner
     return factor

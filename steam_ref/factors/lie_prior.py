@@ -4,11 +4,11 @@ The state kind is ``steam_ref.lie.SE2_STATE`` (a pose and its body twist, retrac
 every Jacobian here is with respect to the right tangent δ of each state, x ⊕ δ = (T Exp(δ[:3]),
 ϖ + δ[3:]), which is what a solver on that kind linearizes in.
 
-- :class:`SE2PriorFactor`: the WNOA prior between consecutive states, e = γ₂ - Φ(Δt) γ₁ in the local
+- :class:`LiePriorFactor`: the WNOA prior between consecutive states, e = γ₂ - Φ(Δt) γ₁ in the local
   variables of ``lie.gp`` with the vector-space Q(Δt) [DER 11.10-11.12; YIB Eq. 17, 22]. ``model``
   "local-variable": e = [ξ - Δt ϖ₁; J_r(ξ)⁻¹ ϖ₂ - ϖ₁] (GTSAM 4.3 ``WnoaMotionFactorPose2``, STEAM
   ``const_vel_se2``); "simplified": e = [ξ - Δt ϖ₁; ϖ₂ - ϖ₁] (gpslam, Theseus); ξ = Log(T₁⁻¹ T₂).
-- :class:`SE2StatePrior`: a Gaussian prior in the tangent at a mean, e = x ⊖ mean.
+- :class:`LieStatePrior`: a Gaussian prior in the tangent at a mean, e = x ⊖ mean.
 """
 
 from __future__ import annotations
@@ -28,7 +28,7 @@ from ..robust import RobustLoss
 from ..variables import Key, key_list
 from .base import Factor, sqrt_information
 
-__all__ = ["SE2PriorFactor", "se2_prior_factors", "SE2StatePrior", "check_se2_state"]
+__all__ = ["LiePriorFactor", "lie_prior_factors", "LieStatePrior", "check_se2_state"]
 
 
 def check_se2_state(name: str, x: object) -> NDArray:
@@ -43,7 +43,7 @@ def check_se2_state(name: str, x: object) -> NDArray:
 
 
 @dataclass(frozen=True, eq=False)
-class SE2PriorFactor(Factor):
+class LiePriorFactor(Factor):
     """The WNOA prior on SE(2) between consecutive states (module docstring).  [DER 11.11-11.13]
 
     e = γ₂ - Φ(Δt) γ₁, γ₁ = [0; ϖ₁], γ₂ = [ξ; J_r(ξ)⁻¹ ϖ₂] ("local-variable") or [ξ; ϖ₂] ("simplified"),
@@ -63,7 +63,7 @@ class SE2PriorFactor(Factor):
         check_model(self.model)
 
     @classmethod
-    def create(cls, key1: Key, key2: Key, dt: float, qc: NDArray, model: str = "local-variable") -> SE2PriorFactor:
+    def create(cls, key1: Key, key2: Key, dt: float, qc: NDArray, model: str = "local-variable") -> LiePriorFactor:
         """The prior over a gap dt > 0 with Qc (3, 3) on the body twist [vx, vy, ω].  [YIB Eq. 17, 22]"""
         dt = time_step(dt)
         qc = check_qc(qc)
@@ -87,9 +87,9 @@ class SE2PriorFactor(Factor):
         return d1, d2
 
 
-def se2_prior_factors(
+def lie_prior_factors(
     keys: list[Key], times: NDArray, qc: NDArray, model: str = "local-variable"
-) -> list[SE2PriorFactor]:
+) -> list[LiePriorFactor]:
     """The M - 1 SE(2) prior factors linking consecutive states at strictly increasing times."""
     keys, times = key_list("keys", keys), real_array("times", times)
     if times.ndim != 1 or len(times) != len(keys):
@@ -98,11 +98,11 @@ def se2_prior_factors(
     if np.any(~(gaps > 0)):
         i = int(np.flatnonzero(~(gaps > 0))[0])
         raise SteamError(f"times must increase strictly: t[{i}]={times[i]} then t[{i + 1}]={times[i + 1]}")
-    return [SE2PriorFactor.create(keys[i], keys[i + 1], gaps[i], qc, model) for i in range(len(gaps))]
+    return [LiePriorFactor.create(keys[i], keys[i + 1], gaps[i], qc, model) for i in range(len(gaps))]
 
 
 @dataclass(frozen=True, eq=False)
-class SE2StatePrior(Factor):
+class LieStatePrior(Factor):
     """A prior N(mean, Σ) on an SE(2) state in the tangent at the mean: e = x ⊖ mean = [Log(M⁻¹T); ϖ - ϖₘ].
 
     Σ is the covariance of the right tangent at the mean (``lie.state``); ∂e/∂δ = diag(J_r(e_T)⁻¹, I).
@@ -116,7 +116,7 @@ class SE2StatePrior(Factor):
     @classmethod
     def create(
         cls, key: Key, mean: NDArray, noise: NDArray | float, *, loss: RobustLoss | None = None
-    ) -> SE2StatePrior:
+    ) -> LieStatePrior:
         """Prior on ``key``; noise is a sigma, sigmas (6,) or a covariance (6, 6) of the tangent at ``mean``."""
         return cls((key,), sqrt_information(noise, STATE_SIZE), mean=check_se2_state("mean", mean), loss=loss)
 

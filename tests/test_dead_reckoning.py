@@ -1,11 +1,11 @@
-"""Dead reckoning and angle wrapping: the one home in steam_ref.pose2."""
+"""Dead reckoning and angle wrapping: the one home in steam_ref.dead_reckoning."""
 
 from __future__ import annotations
 
 import numpy as np
 from requirements import optional_import
 
-from steam_ref.pose2 import compose, integrate_odometry, transform_from, wrap_angle
+from steam_ref.dead_reckoning import compose, integrate_odometry, transform_from, wrap_angle
 
 
 def test_integrate_odometry_equals_composing_row_by_row(rng):

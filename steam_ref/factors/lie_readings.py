@@ -3,9 +3,9 @@
 Every Jacobian is with respect to the right tangent δ of the state (``steam_ref.lie.SE2_STATE``):
 to first order the position moves by R(θ) δρ and the heading by δφ, so a reading of the pose alone
 (range, bearing, bearing-range) has the vector-space model's error, and its Jacobian is the
-vector-space one times ∂[p; θ]/∂δ = diag(R(θ), 1) [DER 11.14]. :class:`SE2Measurement` wraps those
-models (one home for each), :class:`SE2VelocityFactor` reads the body twist, and
-:class:`SE2InterpolatedFactor` moves any of them to a time τ between two states through the local GP
+vector-space one times ∂[p; θ]/∂δ = diag(R(θ), 1) [DER 11.14]. :class:`PoseReading` wraps those
+models (one home for each), :class:`BodyVelocityFactor` reads the body twist, and
+:class:`LieInterpolatedFactor` moves any of them to a time τ between two states through the local GP
 of ``lie.gp`` (the SE(2) form of [YIB Eq. 29]).
 """
 
@@ -28,13 +28,13 @@ from ..variables import Key
 from .base import Factor, measured_vector, sqrt_information
 from .measurements import BearingFactor, BearingRangeFactor, RangeFactor
 
-__all__ = ["SE2Measurement", "SE2VelocityFactor", "SE2InterpolatedFactor"]
+__all__ = ["PoseReading", "BodyVelocityFactor", "LieInterpolatedFactor"]
 
 _POSE_READINGS = (RangeFactor, BearingFactor, BearingRangeFactor)
 
 
 @dataclass(frozen=True, eq=False)
-class SE2Measurement(Factor):
+class PoseReading(Factor):
     """A reading of an SE(2) state's pose and a landmark: range, bearing or bearing-range.
 
     e = e_inner(x, ℓ) (the vector-space model reads [px, py, θ] alike); ∂e/∂δ = ∂e_inner/∂[p; θ] diag(R(θ), 1).
@@ -48,30 +48,30 @@ class SE2Measurement(Factor):
     def __post_init__(self) -> None:
         super().__post_init__()
         if not isinstance(self.inner, _POSE_READINGS):
-            raise SteamError(f"SE2Measurement wraps a range, bearing or bearing-range factor, got {self.inner!r}")
+            raise SteamError(f"PoseReading wraps a range, bearing or bearing-range factor, got {self.inner!r}")
 
     @classmethod
-    def _wrap(cls, inner: Factor) -> SE2Measurement:
+    def _wrap(cls, inner: Factor) -> PoseReading:
         return cls(inner.keys, inner.sqrt_information, inner=inner, loss=inner.loss)
 
     @classmethod
     def range(
         cls, state: Key, landmark: Key, measured: float, sigma: float, *, loss: RobustLoss | None = None
-    ) -> SE2Measurement:
+    ) -> PoseReading:
         """Range (m) from the state's position to ``landmark``.  [YIB Eq. 33]"""
         return cls._wrap(RangeFactor.create(state, landmark, measured, sigma, loss=loss))
 
     @classmethod
     def bearing(
         cls, state: Key, landmark: Key, measured: float, sigma: float, *, loss: RobustLoss | None = None
-    ) -> SE2Measurement:
+    ) -> PoseReading:
         """Bearing (rad) of ``landmark`` in the robot frame, error wrapped."""
         return cls._wrap(BearingFactor.create(state, landmark, measured, sigma, loss=loss))
 
     @classmethod
     def bearing_range(
         cls, state: Key, landmark: Key, bearing: float, range_: float, noise: NDArray, *, loss: RobustLoss | None = None
-    ) -> SE2Measurement:
+    ) -> PoseReading:
         """Bearing and range together; noise: sigmas (2,) or a covariance (2, 2) of [bearing, range]."""
         return cls._wrap(BearingRangeFactor.create(state, landmark, bearing, range_, noise, loss=loss))
 
@@ -96,7 +96,7 @@ class SE2Measurement(Factor):
 
 
 @dataclass(frozen=True, eq=False)
-class SE2VelocityFactor(Factor):
+class BodyVelocityFactor(Factor):
     """A body-velocity reading [forward, lateral, yaw rate] of an SE(2) state: e = ϖ - measured, ∂e/∂δ = [0 I]."""
 
     measured: NDArray  # (3,)
@@ -107,7 +107,7 @@ class SE2VelocityFactor(Factor):
     @classmethod
     def create(
         cls, key: Key, measured: NDArray, noise: NDArray | float, *, loss: RobustLoss | None = None
-    ) -> SE2VelocityFactor:
+    ) -> BodyVelocityFactor:
         """Reading ``measured`` = [vx, vy, ω] in the body frame; noise a sigma, sigmas (3,) or a covariance."""
         return cls((key,), sqrt_information(noise, 3), measured=measured_vector(measured, 3, "measured"), loss=loss)
 
@@ -121,7 +121,7 @@ class SE2VelocityFactor(Factor):
 
 
 @dataclass(frozen=True, eq=False)
-class SE2InterpolatedFactor(Factor):
+class LieInterpolatedFactor(Factor):
     """A reading at a time τ with no state, moved onto the SE(2) states at t₁ < τ < t₂.  [YIB Eq. 29; DER 11.16]
 
     e(x₁, x₂, …) = e_inner(x(τ), …) with x(τ) the local GP's mean (``lie.gp.interpolate``), and
@@ -148,12 +148,10 @@ class SE2InterpolatedFactor(Factor):
         tau: float,
         qc: NDArray,
         model: str = "local-variable",
-    ) -> SE2InterpolatedFactor:
+    ) -> LieInterpolatedFactor:
         """Move ``inner`` (on the SE(2) state at τ, t1 < τ < t2) onto ``key1`` at t1 and ``key2`` at t2."""
-        if not isinstance(inner, (SE2Measurement, SE2VelocityFactor)):
-            raise SteamError(
-                f"inner must be an SE2Measurement or SE2VelocityFactor (the reading at tau), got {inner!r}"
-            )
+        if not isinstance(inner, (PoseReading, BodyVelocityFactor)):
+            raise SteamError(f"inner must be an PoseReading or BodyVelocityFactor (the reading at tau), got {inner!r}")
         t1, t2, tau = number("t1", t1), number("t2", t2), number("tau", tau)
         lam, psi = interpolation_matrices(t1, t2, tau, check_qc(qc))  # [YIB Eq. 16]
         if lam.shape != (STATE_SIZE, STATE_SIZE):
