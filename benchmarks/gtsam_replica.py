@@ -31,7 +31,7 @@ import numpy as np
 
 from steam_ref.factors import GPPriorFactor, PriorFactor, RangeFactor, VelocityFactor
 from steam_ref.factors.lie_prior import LiePriorFactor, LieStatePrior
-from steam_ref.factors.lie_readings import PoseReading, BodyVelocityFactor
+from steam_ref.factors.lie_readings import BodyVelocityFactor, PoseReading
 from steam_ref.paper.solvers import OnlineSolver
 from steam_ref.variables import Key, Values
 
@@ -42,7 +42,7 @@ CALLBACK_SECONDS = [0.0]  # seconds spent inside custom_factor callbacks since t
 
 def gkey(key: Key, kind: str | None = None) -> int:
     """GTSAM's key of one of ours ('x' states, 'l' landmarks; ``kind`` 'p' or 'v' for a state's pose or velocity)."""
-    return gtsam.symbol(kind or ("x" if key.kind == "x" else "l"), key.index)
+    return gtsam.symbol(kind or ("x" if key.symbol == "x" else "l"), key.index)
 
 
 def _noise(factor) -> gtsam.noiseModel.Base:
@@ -173,9 +173,9 @@ class NativeISAM2(OnlineSolver):
         if isinstance(f, RangeFactor):
             x, lm = f.keys
             return [gtsam.RangeFactor2D(gkey(x, "p"), gkey(lm), float(f.measured[0]), noise)]
-        if isinstance(f, PriorFactor) and f.keys[0].kind == "l":
+        if isinstance(f, PriorFactor) and f.keys[0].symbol == "l":
             return [gtsam.PriorFactorPoint2(gkey(f.keys[0]), np.asarray(f.mean, dtype=float), noise)]
-        if isinstance(f, PriorFactor) and f.keys[0].kind == "x":  # the first state: pose and velocity apart
+        if isinstance(f, PriorFactor) and f.keys[0].symbol == "x":  # the first state: pose and velocity apart
             k, m, W = f.keys[0], np.asarray(f.mean, dtype=float), np.asarray(f.sqrt_information, dtype=float)
             if np.any(W[:3, 3:]) or np.any(W[3:, :3]):
                 raise ValueError("the native replica takes a first-state prior with independent pose and velocity")
@@ -198,7 +198,7 @@ class NativeISAM2(OnlineSolver):
                 graph.add(g)
         for k in values:
             v = np.asarray(values[k], dtype=float)
-            if k.kind == "x":
+            if k.symbol == "x":
                 initial.insert(gkey(k, "p"), gtsam.Pose2(*v[:3]))
                 initial.insert(gkey(k, "v"), v[3:] if self.se2 else np.r_[_rotation(v[2]).T @ v[3:5], v[5]])
             else:
@@ -206,7 +206,7 @@ class NativeISAM2(OnlineSolver):
         self.isam.update(graph, initial)
 
     def estimate_of(self, key):
-        if key.kind != "x":
+        if key.symbol != "x":
             return np.asarray(self.isam.calculateEstimatePoint2(gkey(key)))
         pose = self.isam.calculateEstimatePose2(gkey(key, "p"))
         body = self.isam.calculateEstimateVector(gkey(key, "v"))

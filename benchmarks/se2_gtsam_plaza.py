@@ -48,7 +48,7 @@ from steam_ref.bayes_tree import IncrementalSolver
 from steam_ref.datasets import load_dataset
 from steam_ref.factors import PriorFactor
 from steam_ref.factors.lie_prior import LiePriorFactor, LieStatePrior
-from steam_ref.factors.lie_readings import PoseReading, BodyVelocityFactor
+from steam_ref.factors.lie_readings import BodyVelocityFactor, PoseReading
 from steam_ref.graph import FactorGraph
 from steam_ref.lie import SE2_STATE, se2
 from steam_ref.linear.system import linearize
@@ -215,7 +215,7 @@ class Step:  # what ScheduleClock.due reads of a pose
 def to_gtsam_values(values: dict) -> gtsam.Values:
     out = gtsam.Values()
     for k, v in values.items():
-        if k.kind == "x":
+        if k.symbol == "x":
             out.insert(P(k.index), gtsam.Pose2(*v[:3]))
             out.insert(V(k.index), np.asarray(v[3:], dtype=float))
         else:
@@ -272,7 +272,7 @@ def run(max_poses: int | None = None, variant: str = "exact", setup: PaperSetup 
         if not clock.started and setup.schedule.initial_batch:
             start = time.perf_counter()
             tol = setup.schedule.initial_batch_tolerance
-            kinds = {k: SE2_STATE for k in pending if k.kind == "x"}
+            kinds = {k: SE2_STATE for k in pending if k.symbol == "x"}
             graph = FactorGraph([it.ours(setup) for it in pending_items])
             pending = dict(
                 levenberg_marquardt(
@@ -290,7 +290,7 @@ def run(max_poses: int | None = None, variant: str = "exact", setup: PaperSetup 
         p, v = theirs.calculateEstimatePose2(P(i)), theirs.calculateEstimateVector(V(i))
         wall["gtsam"] += time.perf_counter() - start
         factors = [it.ours(setup, variant) for it in pending_items]
-        values = Values(pending, kinds={k: SE2_STATE for k in pending if k.kind == "x"})
+        values = Values(pending, kinds={k: SE2_STATE for k in pending if k.symbol == "x"})
         start = time.perf_counter()
         ours.update(factors, values)
         ours.estimate_of(X(i))
@@ -321,7 +321,7 @@ def run(max_poses: int | None = None, variant: str = "exact", setup: PaperSetup 
     fixed_s = result.values
     row |= {"converged_gtsam_iterations": optimizer.iterations(), "converged_steam_reason": result.reason}
     exact = FactorGraph([it.ours(setup) for it in items])
-    kinds = {k: SE2_STATE for k in fixed_g if k.kind == "x"}
+    kinds = {k: SE2_STATE for k in fixed_g if k.symbol == "x"}
     row |= {"converged_cost_gtsam_point": float(exact.error(Values(fixed_g, kinds=kinds)))}
     row |= {"converged_cost_steam_point": float(exact.error(fixed_s))}
     d, h = distances(fixed_g, fixed_s, n)
@@ -333,7 +333,7 @@ def run(max_poses: int | None = None, variant: str = "exact", setup: PaperSetup 
 def agreement(setup: PaperSetup, items: list[Item], at: dict) -> dict:
     """Every factor's residual and cost, ours against GTSAM's, at the values ``at`` (GTSAM's estimate)."""
     factors = [it.ours(setup) for it in items]
-    values = Values(at, kinds={k: SE2_STATE for k in at if k.kind == "x"})
+    values = Values(at, kinds={k: SE2_STATE for k in at if k.symbol == "x"})
     costs = np.zeros(len(factors))
     for group in linearize(factors, values, jacobians=False):
         costs[group.factor_ids] = group.costs

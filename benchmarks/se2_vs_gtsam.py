@@ -92,7 +92,7 @@ def main() -> None:
     # GTSAM's final estimate as our values (SE(2) states), and GTSAM's own graph of the same factors
     final = replica.isam.calculateEstimate()
     keys = {k for f in factors for k in f.keys}
-    at = Values({k: replica.estimate_of(k) for k in keys}, kinds={k: SE2_STATE for k in keys if k.kind == "x"})
+    at = Values({k: replica.estimate_of(k) for k in keys}, kinds={k: SE2_STATE for k in keys if k.symbol == "x"})
     graph = gtsam.NonlinearFactorGraph()
     worst, others, wnoa = 0.0, 0.0, []
     for f, built in replica.pairs:
@@ -151,7 +151,7 @@ def main() -> None:
         return float(np.sqrt(np.mean(np.sum((p - truth) ** 2, axis=1))))
 
     print(json.dumps({
-        "n_poses": ours.n_poses, "n_states": len(states), "n_landmarks": len([k for k in keys if k.kind == "l"]),
+        "n_poses": ours.n_poses, "n_states": len(states), "n_landmarks": len([k for k in keys if k.symbol == "l"]),
         "n_factors": len(factors),
         "residuals": {"max_abs_difference": worst, "max_abs_difference_but_wnoa": others,
                       "wnoa_against_40_digits": {"steam": exact_ours, "gtsam": exact_gtsam}},
@@ -162,7 +162,7 @@ def main() -> None:
         "to_optimum": {"steam": apart(optimum, ours_values), "gtsam": apart(optimum, at)},
         "rmse_m": {"steam": rmse(ours_values), "gtsam": rmse(at), "optimum": rmse(optimum)},
         "seconds": seconds,
-        "landmarks": [L(j).index for j in sorted(k.index for k in keys if k.kind == "l")],
+        "landmarks": [L(j).index for j in sorted(k.index for k in keys if k.symbol == "l")],
     }))  # fmt: skip
 
 

@@ -44,7 +44,7 @@ def run(dataset: str) -> dict:
     seconds = time.perf_counter() - start
     nnz = estimator.solver.tree_nnz  # type: ignore[attr-defined]
     tree = estimator.solver.inner.tree  # type: ignore[attr-defined]
-    states = sum(1 for k in tree.frontal_of if k.kind == "x")
+    states = sum(1 for k in tree.frontal_of if k.symbol == "x")
     OUT.mkdir(exist_ok=True)
     fig, ax = plt.subplots(figsize=(6, 3.5))
     ax.plot(range(1, len(nnz) + 1), nnz, lw=1)
@@ -56,7 +56,7 @@ def run(dataset: str) -> dict:
         "dataset": dataset,
         "updates": len(nnz),
         "states": states,
-        "landmarks": sum(1 for k in tree.frontal_of if k.kind == "l"),
+        "landmarks": sum(1 for k in tree.frontal_of if k.symbol == "l"),
         "nnz_final": nnz[-1],
         "nnz_at": {p: nnz[max(0, round(p / 100 * len(nnz)) - 1)] for p in (25, 50, 75, 100)},
         "nnz_per_state_final": round(nnz[-1] / states, 1),

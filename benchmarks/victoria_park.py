@@ -239,7 +239,7 @@ def _plots(data, n_poses: int, estimate: Values, poses: np.ndarray, batch, score
 
     ours = np.array([estimate[X(int(i))][:2] for i in poses])
     best = np.array([batch.values[X(int(i))][:2] for i in poses])
-    ids = sorted(k.index for k in estimate if k.kind == "l")
+    ids = sorted(k.index for k in estimate if k.symbol == "l")
     marks = np.array([estimate[L(j)] for j in ids])
     c, s = np.cos(score.rotation), np.sin(score.rotation)
     turn = np.array([[c, s], [-s, c]])  # row vectors p -> R p

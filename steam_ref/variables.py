@@ -26,19 +26,20 @@ __all__ = ["Key", "X", "L", "Values", "check_key", "key_list", "as_values"]
 # The field `index` shadows tuple.index on purpose (a key's index is the paper's subscript). mypy reports
 # that shadowing, in the class syntax of NamedTuple, as an incompatible override; in the functional
 # syntax it does not, hence the functional syntax here (and UP014 off for this line).
-_KeyFields = NamedTuple("_KeyFields", [("kind", str), ("index", int)])  # noqa: UP014
+_KeyFields = NamedTuple("_KeyFields", [("symbol", str), ("index", int)])  # noqa: UP014
 
 
 class Key(_KeyFields):
-    """The name of a variable: a kind ('x' for states, 'l' for landmarks) and an integer index."""
+    """The name of a variable: a symbol ('x' for states, 'l' for landmarks, GTSAM's ``Symbol.chr()``) and an
+    integer index. (What space the variable lives in is its *kind*, a :class:`~steam_ref.manifold.Manifold`.)"""
 
     __slots__ = ()
 
     def __repr__(self) -> str:
-        return f"{self.kind}{self.index}"
+        return f"{self.symbol}{self.index}"
 
     def __str__(self) -> str:
-        return f"{self.kind}{self.index}"
+        return f"{self.symbol}{self.index}"
 
 
 def _index(name: str, i: int) -> int:
@@ -232,11 +233,11 @@ class Values(Mapping):
 
     def states(self) -> list[Key]:
         """The trajectory-state keys, in index order."""
-        return sorted((k for k in self._data if k.kind == "x"), key=lambda k: k.index)
+        return sorted((k for k in self._data if k.symbol == "x"), key=lambda k: k.index)
 
     def landmarks(self) -> list[Key]:
         """The landmark keys, in index order."""
-        return sorted((k for k in self._data if k.kind == "l"), key=lambda k: k.index)
+        return sorted((k for k in self._data if k.symbol == "l"), key=lambda k: k.index)
 
     def __repr__(self) -> str:
         return f"Values({len(self)} variables)"

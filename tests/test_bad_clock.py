@@ -86,7 +86,7 @@ def test_the_api_lag_holds_the_poses_of_its_seconds(data):
     plaza_like = restamped(data, stamps)
     stream = StreamingEstimator(Readings.from_dataset(plaza_like, SETUP), SETUP, StreamOptions(lag=6.0))
     stream.run(plaza_like.ground_truth)
-    held = sorted(k.index for k in stream.solver.inner.estimate() if k.kind == "x")
+    held = sorted(k.index for k in stream.solver.inner.estimate() if k.symbol == "x")
     newest = stamps[held[-1]]
     expected = [i for i in range(held[-1] + 1) if stamps[i] >= newest - 6.0]  # the arithmetic of the stamps
     assert held == expected and len(held) > 20, (len(held), len(expected))

@@ -134,7 +134,7 @@ def test_landmarks_seen_all_along_the_path_end_in_the_root_under_any_ordering(rn
     orderings = {"xl": xl_ordering(keys, dims), **_min_degree_orderings(keys, dims, factor_keys)}
     for name, ordering in orderings.items():
         frontals = _root_frontals(BayesTree.from_factors(gaussian, ordering))
-        assert {k for k in frontals if k.kind == "l"} == {sr.L(j) for j in range(4)}, name
+        assert {k for k in frontals if k.symbol == "l"} == {sr.L(j) for j in range(4)}, name
         assert sum(dims[k] for k in frontals) == 4 * 2 + 2 * 6, name  # the landmarks and two states
 
 
@@ -161,13 +161,13 @@ def test_min_degree_spreads_local_landmarks_that_xl_puts_in_the_root(rng):
     state first, which joins all landmarks along the chain, so its root holds all eight (28 columns)."""
     factors, dims = local_landmark_factors(rng)
     keys = list(dims)
-    landmarks = {k for k in keys if k.kind == "l"}
+    landmarks = {k for k in keys if k.symbol == "l"}
     factor_keys = [f.keys for f in factors]
     natural = Ordering(tuple(keys), tuple(dims[k] for k in keys))
     A, b = dense_system(factors, natural)
     reference = np.linalg.solve(A.T @ A, A.T @ b)
     xl = BayesTree.from_factors(factors, xl_ordering(keys, dims))
-    assert {k for k in _root_frontals(xl) if k.kind == "l"} == landmarks and len(landmarks) == 8
+    assert {k for k in _root_frontals(xl) if k.symbol == "l"} == landmarks and len(landmarks) == 8
     xl_root = sum(dims[k] for k in _root_frontals(xl))
     for name, ordering in _min_degree_orderings(keys, dims, factor_keys).items():
         tree = BayesTree.from_factors(factors, ordering)

@@ -43,7 +43,7 @@ def test_dot_writes_gtsams_format_and_nnz_counts_the_upper_triangle_and_the_sepa
     assert text.startswith("digraph G{\n") and text.endswith("\n}") and text.count("[label=") == len(s.tree)
     assert gtsam_key(X(2)) == 8646911284551352322 and gtsam_key(L(0)) == 7782220156096217088  # Symbol('x', 2)...
     # a dense count of R's upper-triangular structure: every clique's rows over its frontal and separator columns
-    dims = {k: (6 if k.kind == "x" else 2) for k in (X(0), X(1), L(1))}
+    dims = {k: (6 if k.symbol == "x" else 2) for k in (X(0), X(1), L(1))}
     expected = 0
     for c in s.tree.cliques.values():
         nf, ns = sum(dims[k] for k in c.frontals), sum(dims[k] for k in c.separator)
@@ -89,7 +89,7 @@ def test_tree_nnz_and_dot_after_every_isam2_update_match_gtsam_given_the_same_or
     rng = np.random.default_rng(7)
 
     def custom(keys, m):  # a linear factor of GTSAM's with the structure of ours (values do not matter here)
-        blocks = [rng.normal(size=(m, 6 if k.kind == "x" else 2)) for k in keys]
+        blocks = [rng.normal(size=(m, 6 if k.symbol == "x" else 2)) for k in keys]
 
         def error(this, values, H):
             if H is not None:
@@ -118,7 +118,7 @@ def test_tree_nnz_and_dot_after_every_isam2_update_match_gtsam_given_the_same_or
         for j in range(2):
             if i % (j + 2) == 0 and (j == 0 or i >= 5):
                 factors.append((RangeFactor.create(X(i), L(j), 1.0, 1.0), 1))
-        report = ours.update([f for f, _ in factors], {k: rng.normal(size=6 if k.kind == "x" else 2) for k in new})
+        report = ours.update([f for f, _ in factors], {k: rng.normal(size=6 if k.symbol == "x" else 2) for k in new})
         groups = gtsam.KeyGroupMap()
         for position, k in enumerate(report.reeliminated):
             groups.insert2(gtsam_key(k), position)
@@ -126,7 +126,7 @@ def test_tree_nnz_and_dot_after_every_isam2_update_match_gtsam_given_the_same_or
         for f, m in factors:
             graph.add(custom(f.keys, m))
         for k in new:
-            theta.insert(gtsam_key(k), np.zeros(6 if k.kind == "x" else 2))
+            theta.insert(gtsam_key(k), np.zeros(6 if k.symbol == "x" else 2))
         result = isam.update(graph, theta, [], groups)
         assert report.tree_nnz == isam.treeNnz() == result.getTreeNnz(), i
         assert sorted(ours.tree.dot().splitlines()) == sorted(isam.dot().splitlines()), i

@@ -120,7 +120,7 @@ class LinearStream:
 
 def oracle_key(stream: LinearStream, key):
     """The dense side's name of a variable: a landmark that entered again is another variable."""
-    return L(1000 * stream.generation[key.index] + key.index) if key.kind == "l" else key
+    return L(1000 * stream.generation[key.index] + key.index) if key.symbol == "l" else key
 
 
 def renamed(stream: LinearStream, factors: list[Factor]) -> list[Factor]:

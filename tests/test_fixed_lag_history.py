@@ -46,10 +46,10 @@ def test_smoothed_history_is_the_batch_optimum(seed, n, lag, landmarks, threshol
     assert set(past) | {k for k in states if k in smoother.state.dims} >= set(states)  # every state, once
     for k, v in past.items():  # a landmark forgotten and seen again: the latest incarnation forgotten
         held = k in smoother.linearization_point
-        name = L(1000 * (stream.generation[k.index] - held) + k.index) if k.kind == "l" else k
+        name = L(1000 * (stream.generation[k.index] - held) + k.index) if k.symbol == "l" else k
         np.testing.assert_allclose(v, mean[name], rtol=0, atol=1e-10, err_msg=f"forgotten {k}")
     for k in smoother.state.dims:
-        name = L(1000 * stream.generation[k.index] + k.index) if k.kind == "l" else k
+        name = L(1000 * stream.generation[k.index] + k.index) if k.symbol == "l" else k
         np.testing.assert_allclose(smoother.estimate_of(k), mean[name], rtol=0, atol=1e-10, err_msg=f"window {k}")
 
 
@@ -61,7 +61,7 @@ def test_the_lagged_estimate_is_not_the_smoothed_one():
 
     def keep_frozen(_everything):
         done = smoother.last_marginalization
-        frozen.update({} if done is None else {k: v for k, v in done.estimates.items() if k.kind == "x"})
+        frozen.update({} if done is None else {k: v for k, v in done.estimates.items() if k.symbol == "x"})
 
     mean = optimum(fed(stream, smoother, 15, keep_frozen))
     past = smoother.smoothed_history()
@@ -115,9 +115,9 @@ def test_nonlinear_past_frozen_where_the_full_smoother_never_moved_equals_it(see
             for f in factors
         ]
         factors += [
-            PriorFactor.create(k, v, 1.0) for k, v in values.items() if k.kind == "l"
+            PriorFactor.create(k, v, 1.0) for k, v in values.items() if k.symbol == "l"
         ]  # one distance fixes 1 of 3
-        lagged.update(factors, values, timestamps={k: t for k, t in stamps.items() if k.kind == "x"})
+        lagged.update(factors, values, timestamps={k: t for k, t in stamps.items() if k.symbol == "x"})
         full.update(factors, values)
     past = lagged.smoothed_history()
     assert len(past) >= 20

@@ -48,7 +48,7 @@ def test_plazas_lag_of_60_s_holds_the_poses_of_the_last_60_s_of_its_stamps(share
     stream = StreamingEstimator(Readings.from_dataset(plaza, setup), setup, StreamOptions(lag=60.0, max_poses=1200))
     stream.run()
     smoother, t = stream.solver.inner, plaza.times
-    held = sorted(k.index for k in smoother.estimate() if k.kind == "x")
+    held = sorted(k.index for k in smoother.estimate() if k.symbol == "x")
     assert t[held[-1]] == smoother.newest
     assert held == [i for i in range(held[-1] + 1) if t[i] >= smoother.newest - 60.0]  # GTSAM's rule, by the stamps
     assert 250 < len(held) < 350, len(held)
@@ -60,7 +60,7 @@ def test_a_short_lag_keeps_the_window_small_and_the_estimate_close(data):
     result = stream.run(data.ground_truth)
     smoother = stream.solver.inner
     assert isinstance(stream.solver, FixedLagTreeSolver)
-    held_states = [k for k in smoother.estimate() if k.kind == "x"]
+    held_states = [k for k in smoother.estimate() if k.symbol == "x"]
     assert len(held_states) <= 12  # Δt = 1 s: t > t_newest - 10 s, and the newest
     assert result.n_marginalized >= len(result.state_poses) - 12
     assert result.peak_window < 40 and smoother.tree.problems() == []
@@ -193,9 +193,9 @@ def test_landmarks_leave_the_window_and_enter_again():
     entered_again: set = set()
     while not stream.done:
         stream.step()
-        held = {k for k in stream.solver.inner.estimate() if k.kind == "l"}
+        held = {k for k in stream.solver.inner.estimate() if k.symbol == "l"}
         entered_again |= held & left
-        left |= {k for k in stream.solver.forgotten() if k.kind == "l"}
+        left |= {k for k in stream.solver.forgotten() if k.symbol == "l"}
     assert entered_again and stream.solver.inner.tree.problems() == []
 
 

@@ -258,11 +258,11 @@ def test_per_kind_threshold_keeps_landmarks_at_their_first_linearization(rng):
     first: dict = {}
     for report in run(stream, solver, ["state"] * 12):
         for k in solver.linearization_point:
-            if k.kind == "l":
+            if k.symbol == "l":
                 first.setdefault(k, solver.linearization_point[k].copy())
                 np.testing.assert_array_equal(solver.linearization_point[k], first[k])
-        assert all(k.kind == "x" for k in report.relinearized)
-    assert any(k.kind == "x" for r in [report] for k in r.relinearized)
+        assert all(k.symbol == "x" for k in report.relinearized)
+    assert any(k.symbol == "x" for r in [report] for k in r.relinearized)
     assert_matches_dense(solver, exact_delta=True)
 
 
@@ -490,12 +490,12 @@ def test_relinearize_blocks_move_only_the_blocks_over_the_threshold(rng):
         theta, delta = solver.linearization_point, solver.delta()
         report = solver.update(*stream.step(action))
         for k in report.relinearized:
-            blocks = [slice(0, 3), slice(3, 6)] if k.kind == "x" else [slice(0, 2)]
+            blocks = [slice(0, 3), slice(3, 6)] if k.symbol == "x" else [slice(0, 2)]
             moved = solver.linearization_point[k] - theta[k]
             for b in blocks:
                 over = np.abs(delta[k][b]).max() >= beta
                 np.testing.assert_allclose(moved[b], delta[k][b] if over else 0.0, rtol=0, atol=1e-12)
-            partial += k.kind == "x" and (np.abs(delta[k][:3]).max() >= beta) != (np.abs(delta[k][3:]).max() >= beta)
+            partial += k.symbol == "x" and (np.abs(delta[k][:3]).max() >= beta) != (np.abs(delta[k][3:]).max() >= beta)
         assert_matches_dense(solver, exact_delta=True)
     assert partial > 0  # some state relinearized one block and not the other
 

@@ -150,7 +150,7 @@ def test_make_ordering_by_name_is_a_permutation_with_the_right_sizes(problem, na
     if name == "natural":
         assert list(order.keys) == keys
     if name == "xl":
-        kinds = [k.kind for k in order.keys]
+        kinds = [k.symbol for k in order.keys]
         assert kinds == sorted(kinds, key=lambda kind: kind != "x")  # every state before every landmark
     # the batch solvers order through the same function: their result records it
     used = sr.gauss_newton(problem.graph, problem.initial, ordering=name, max_iterations=0, check=False).ordering

@@ -122,7 +122,7 @@ def test_plaza_landmarks_enter_up_front_synthetic_at_first_sighting():
     front, steps = _first_steps(PaperSetup.synthetic(), ds, 31)
     for s in steps:
         seen = {f.keys[1] for f in s.factors if isinstance(f, RangeFactor)}
-        new = {f.keys[0] for f in s.factors if isinstance(f, PriorFactor) and f.keys[0].kind == "l"}
+        new = {f.keys[0] for f in s.factors if isinstance(f, PriorFactor) and f.keys[0].symbol == "l"}
         assert new <= seen  # a landmark's prior comes with a range to it
     assert front.landmarks == set(np.unique(ds.ranges[:, 2]).astype(int).tolist())
 

@@ -50,7 +50,7 @@ def _problem():
 
 
 def _retract(values, delta):
-    return {k: SE2_STATE.retract(v, delta[k]) if k.kind == "x" else v + delta[k] for k, v in values.items()}
+    return {k: SE2_STATE.retract(v, delta[k]) if k.symbol == "x" else v + delta[k] for k, v in values.items()}
 
 
 def _cost(factors, values):

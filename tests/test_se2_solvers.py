@@ -29,7 +29,7 @@ RANGE_SIGMA, VEL_SIGMAS = 0.05, np.array([0.05, 0.05, 0.05])
 
 
 def kind(key):
-    return SE2_STATE if key.kind == "x" else VECTOR
+    return SE2_STATE if key.symbol == "x" else VECTOR
 
 
 def problem(seed: int, n: int, model: str = "local-variable"):
@@ -212,15 +212,15 @@ def test_the_fixed_lag_history_on_se2_states_is_near_the_full_optimum():
         for _ in range(3):
             smoother.update()
         done = smoother.last_marginalization
-        lagged |= {} if done is None else {k: v for k, v in done.estimates.items() if k.kind == "x"}
+        lagged |= {} if done is None else {k: v for k, v in done.estimates.items() if k.symbol == "x"}
     assert smoother.n_marginalized >= 10
     want = dense_gauss_newton([f for fs in steps for f in fs], guesses)
     past, window = smoother.smoothed_history(), smoother.estimate()
     assert set(past) | set(window) == set(want)
-    off = max(np.abs(SE2_STATE.local(want[k], past[k])).max() for k in past if k.kind == "x")
+    off = max(np.abs(SE2_STATE.local(want[k], past[k])).max() for k in past if k.symbol == "x")
     assert off < 5e-3, off
-    assert_close(window, want, [k for k in window if k.kind == "x"], tol=5e-3)
-    assert all(-np.pi < past[k][2] <= np.pi for k in past if k.kind == "x")
+    assert_close(window, want, [k for k in window if k.symbol == "x"], tol=5e-3)
+    assert all(-np.pi < past[k][2] <= np.pi for k in past if k.symbol == "x")
 
 
 def test_covariances_of_se2_states_are_those_of_the_right_tangent(chain):

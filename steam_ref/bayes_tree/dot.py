@@ -30,11 +30,11 @@ __all__ = ["gtsam_key", "tree_dot", "clique_nnz", "tree_nnz"]
 def gtsam_key(key: Key) -> int:
     """The integer GTSAM's ``Symbol(c, j)`` stands for: ord(c) << 56 | j (for 0 ≤ j < 2⁵⁶, GTSAM's range; a
     negative index, which GTSAM has no Symbol for, still gives each key its own integer)."""
-    return (ord(key.kind) << 56) + int(key.index)
+    return (ord(key.symbol) << 56) + int(key.index)
 
 
 def _label(keys: Iterable[Key]) -> str:
-    return ", ".join(f"{k.kind}{k.index}" for k in keys)
+    return ", ".join(f"{k.symbol}{k.index}" for k in keys)
 
 
 def tree_dot(tree) -> str:

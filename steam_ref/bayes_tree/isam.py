@@ -220,7 +220,7 @@ class IncrementalSolver:
         with timer("add"):
             new_ids = state.append_factors(F_new)
             for k, x in theta_new.items():
-                state.add_variable(k, x, kinds.get(k, VECTOR), self.params.threshold_for(k.kind))
+                state.add_variable(k, x, kinds.get(k, VECTOR), self.params.threshold_for(k.symbol))
             theta_nf = list(dict.fromkeys(k for f in F_new for k in f.keys))
         # 3. Fluid relinearization, θ̄ ← θ̄ ⊕ δ for θ_rl, with the δ of the last update: [YIB] step 7
         #    of the previous round, which iSAM2 does here, every relinearize_skip-th update. [K12 Alg. 5]
@@ -286,8 +286,8 @@ class IncrementalSolver:
                 raise ShapeError(f"new_values[{k!r}] must be a non-empty 1-D vector, got shape {x.shape}")
             if not np.all(np.isfinite(x)):
                 raise ShapeError(f"new value of {k!r} is not finite: {x}")
-            self.params.threshold_for(k.kind)  # a dict of thresholds must name every kind
-            self.params.blocks_of(k.kind, x.shape[0])  # relinearization blocks must fit the variable
+            self.params.threshold_for(k.symbol)  # a dict of thresholds must name every kind
+            self.params.blocks_of(k.symbol, x.shape[0])  # relinearization blocks must fit the variable
             values[k] = x
         for f in new_factors:
             for k, dim in zip(f.keys, f.key_dims, strict=True):
@@ -311,7 +311,7 @@ class IncrementalSolver:
         whole). Back-substitution keeps the candidates ([YIB Alg. 1 step 7]: collect them into θ_rl)."""
         state = self.state
         theta_rl = list(state.candidates)
-        moves = {k: self.params.blocks_to_move(k.kind, state.delta[k], state.beta[k]) for k in theta_rl}  # (d,) bool
+        moves = {k: self.params.blocks_to_move(k.symbol, state.delta[k], state.beta[k]) for k in theta_rl}  # (d,) bool
         state.candidates.clear()  # the transaction kept them whole
         for k, move in moves.items():
             theta_bar, delta, kind = state.theta_bar[k], state.delta[k], state.kinds.get(k)

@@ -47,7 +47,7 @@ def se2_factor(f: Mapping) -> Factor:
 def se2_values(named: Mapping) -> Values:
     """Values from name → vector, the 'x<i>' ones SE(2) states."""
     values = {spec.key(k): np.asarray(v, float) for k, v in named.items()}
-    return Values(values, kinds={k: SE2_STATE for k in values if k.kind == "x"})
+    return Values(values, kinds={k: SE2_STATE for k in values if k.symbol == "x"})
 
 
 def _prior(inputs: Mapping) -> dict:

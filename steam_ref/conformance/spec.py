@@ -54,7 +54,7 @@ def key(name: str) -> Key:
 
 def key_name(k: Key) -> str:
     """X(3) → 'x3'."""
-    return f"{k.kind}{k.index}"
+    return f"{k.symbol}{k.index}"
 
 
 def _loss(spec: Mapping | None) -> RobustLoss | None:

@@ -147,8 +147,8 @@ def natural_ordering(keys: Iterable[Key], dims: Mapping[Key, int]) -> Ordering:
 def xl_ordering(keys: Iterable[Key], dims: Mapping[Key, int]) -> Ordering:
     """Trajectory states first (by index), then landmarks (by index): the paper's PB.  [YIB Eq. 15]"""
     keys = key_list("keys", keys)
-    states = sorted((k for k in keys if k.kind == "x"), key=lambda k: k.index)
-    others = sorted((k for k in keys if k.kind != "x"), key=lambda k: (k.kind, k.index))
+    states = sorted((k for k in keys if k.symbol == "x"), key=lambda k: k.index)
+    others = sorted((k for k in keys if k.symbol != "x"), key=lambda k: (k.symbol, k.index))
     ordered = states + others
     return Ordering(tuple(ordered), _sizes(ordered, dims))
 

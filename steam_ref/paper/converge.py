@@ -61,10 +61,10 @@ def rotated(values: Values, angle: float) -> Values:
             x[2] = -((-(x[2] + angle) + np.pi) % (2 * np.pi) - np.pi)  # θ in (-π, π]
             out.insert(k, x, kind)
             continue
-        blocks = range(0, len(x), 3) if k.kind == "x" else (0,)
+        blocks = range(0, len(x), 3) if k.symbol == "x" else (0,)
         for b in blocks:
             x[b], x[b + 1] = c * x[b] - s * x[b + 1], s * x[b] + c * x[b + 1]
-        if k.kind == "x":
+        if k.symbol == "x":
             x[2] += angle
         out.insert(k, x)
     return out

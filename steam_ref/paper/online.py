@@ -158,7 +158,7 @@ class StreamingEstimator:
         )
         self.solver.update(self._pending, values)
         self.divergence.fit(self._pending, self.solver.estimate_of, pose)
-        forgotten = (k.index for k in self.solver.forgotten() if k.kind == "l")
+        forgotten = (k.index for k in self.solver.forgotten() if k.symbol == "l")
         self.front.landmarks.difference_update(forgotten)  # seen again, a landmark enters anew
         if self.options.converge_at_end:  # (a lag, which forgets factors, refuses it)
             self.factors.extend(self._pending)

@@ -236,16 +236,16 @@ class FixedLagTreeSolver(BayesTreeSolver):
         self._smoothing_s: float | None = None  # the wall time of computing it
 
     def update(self, factors: list[Factor], values: Values) -> None:
-        stamps = {k: float(self.times[k.index]) for k in values if k.kind == "x"}
+        stamps = {k: float(self.times[k.index]) for k in values if k.symbol == "x"}
         newest = max(stamps.values(), default=self.inner.newest)
         if np.isfinite(newest):
-            stamps |= {k: newest for f in factors for k in f.keys if k.kind != "x"}
+            stamps |= {k: newest for f in factors for k in f.keys if k.symbol != "x"}
         self._smoothed = self._smoothing_s = None
         self._keep(self.inner.update(factors, values, timestamps=stamps))
         done = self.inner.last_marginalization
         self._forgotten = [] if done is None else list(done.keys)
         for k, v in ({} if done is None else done.estimates).items():
-            if k.kind == "x":
+            if k.symbol == "x":
                 if not self._states.size:
                     self._states = np.zeros((len(self.times), len(v)))
                 self._states[k.index] = v
@@ -294,7 +294,7 @@ class FixedLagTreeSolver(BayesTreeSolver):
         or never held)."""
         self._checked(past)
         lagged = self._landmarks.get(key)  # a landmark that enters again leaves _landmarks
-        if key.kind == "x":  # a state never enters again
+        if key.symbol == "x":  # a state never enters again
             lagged = self._states[key.index] if key.index in self._retired_states else None
         return None if lagged is None else self._past(key, lagged, past)
 
