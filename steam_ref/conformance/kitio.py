@@ -33,6 +33,7 @@ __all__ = [
     "MAX_DEPTH",
     "MAX_VALUES",
     "is_kit_version",
+    "case_type",
     "printable",
     "plain",
     "dumps",
@@ -260,6 +261,15 @@ def is_kit_version(value: object) -> bool:
     """Whether ``value`` names a shipped kit: an int (not a bool, a float, a list or an object, which a
     lookup in :data:`KITS` would match by equality or refuse with a TypeError) that is one of its keys."""
     return type(value) is int and value in KITS
+
+
+def case_type(suite: str, inputs: Mapping) -> str:
+    """What a case computes: the key of the runner's and the oracle's tables (``runner.RUNNERS``,
+    ``expected.ORACLES``). It is the case's suite, and the ``kind`` its inputs name where a suite's cases compute
+    different things: ``gp/wnoa``, ``se2/exp``, ``se2/batch`` (Gauss-Newton as the batch suite's, on SE(2)
+    states); ``batch``."""
+    kind = inputs.get("kind")
+    return suite if kind is None else f"{suite}/{kind}"
 
 
 def kit_files(kit: Path) -> list[str]:

@@ -5,20 +5,22 @@ A problem is given in the kit's own format: ``variables`` (key → size, in a na
 
 - A, b stacked in factor order, columns in a given ordering [YIB Eq. 9-11, 21]; 𝓘 = AᵀA, Aᵀb;
 - R: the upper Cholesky factor of 𝓘 (positive diagonal), d = R⁻ᵀAᵀb, δ = R⁻¹d [YIB Eq. 11, 21];
-- Gauss-Newton iterates θ ← θ + δ from a start [YIB Eq. 6-11];
+- Gauss-Newton iterates θ ← θ ⊕ δ from a start [YIB Eq. 6-11], in a :class:`Space`: the vector space
+  (θ + δ, complex-step Jacobians) or another's retraction and linearization (:data:`.oracle_lie.LIE`);
 - the cliques of an elimination order: the elimination game and the clique rule of [K12 Alg. 1-2],
   written here a second time; each clique's conditional read off the dense R [YIB Eq. 25];
 - covariances: blocks of the dense 𝓘⁻¹;
 - a stream of updates: per-variable linearization points moved when max|δ| reaches the threshold,
   every factor linearized at them, a dense solve per update (threshold 0: one Gauss-Newton step on
-  all factors so far per update; inf: the linear solve at the first linearization point).
+  all factors so far per update; inf: the linear solve at the first linearization point), in a :class:`Space`.
 
 Only NumPy/SciPy and :mod:`.oracle` are used: none of steam_ref's linear algebra or solvers.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg
@@ -26,7 +28,31 @@ from numpy.typing import NDArray
 
 from .oracle import linearize_factor
 
-__all__ = ["Problem", "dense_system", "factorize", "gauss_newton", "cliques", "conditionals", "covariances", "stream"]
+__all__ = [
+    "Space",
+    "VECTOR",
+    "Problem",
+    "dense_system",
+    "factorize",
+    "gauss_newton",
+    "cliques",
+    "conditionals",
+    "covariances",
+    "stream",
+]
+
+
+@dataclass(frozen=True)
+class Space:
+    """Where a problem's variables live, for the oracle's solvers: how a variable moves by a step δ (``retract``:
+    x ⊕ δ) and what a factor spec linearized at its variables' values is (``linearize``: a dict with ``A_k`` per
+    key, ``b`` and ``cost``, as :func:`.oracle.linearize_factor` returns it)."""
+
+    retract: Callable[[NDArray, NDArray], NDArray]
+    linearize: Callable[..., Mapping]
+
+
+VECTOR = Space(lambda x, delta: x + delta, linearize_factor)  # θ + δ; Jacobians by complex steps
 
 
 class Problem:
@@ -47,17 +73,22 @@ class Problem:
 
 
 def dense_system(
-    problem: Problem, values: Mapping[str, NDArray], order: Sequence[str], **conventions: bool
+    problem: Problem,
+    values: Mapping[str, NDArray],
+    order: Sequence[str],
+    space: Space = VECTOR,
+    **conventions: bool,
 ) -> tuple[NDArray, NDArray, float]:
-    """Dense A (rows in factor order, columns in ``order``), b and the cost at ``values``.
+    """Dense A (rows in factor order, columns in ``order``), b and the cost at ``values``, each factor linearized
+    by ``space``.
 
-    ``conventions``: ``paper_sign``, ``symmetric`` of :func:`.oracle.linearize_factor`.
+    ``conventions``: ``paper_sign``, ``symmetric`` of :func:`.oracle.linearize_factor` (the vector space's).
     """
     off = problem.offsets(order)
     n = sum(problem.dims[k] for k in order)
     rows, rhs, cost = [], [], 0.0
     for spec in problem.factors:
-        lin = linearize_factor(spec, [values[k] for k in spec["keys"]], **conventions)
+        lin = space.linearize(spec, [values[k] for k in spec["keys"]], **conventions)
         block = np.zeros((len(lin["b"]), n))
         for slot, key in enumerate(spec["keys"]):
             block[:, off[key] : off[key] + problem.dims[key]] = lin[f"A_{slot}"]
@@ -82,18 +113,18 @@ def _split(problem: Problem, order: Sequence[str], x: NDArray) -> dict[str, NDAr
 
 
 def gauss_newton(
-    problem: Problem, order: Sequence[str], iterations: int
+    problem: Problem, order: Sequence[str], iterations: int, space: Space = VECTOR
 ) -> tuple[list[dict[str, NDArray]], list[float]]:
-    """The start and ``iterations`` Gauss-Newton iterates, and the cost at each."""
+    """The start and ``iterations`` Gauss-Newton iterates θ ← θ ⊕ δ in ``space``, and the cost at each."""
     values = dict(problem.values)
     iterates, costs = [values], []
     for _ in range(iterations):
-        A, b, cost = dense_system(problem, values, order)
+        A, b, cost = dense_system(problem, values, order, space)
         costs.append(cost)
         step = _split(problem, order, factorize(A, b)["delta"])
-        values = {k: values[k] + step[k] for k in order}
+        values = {k: space.retract(values[k], step[k]) for k in order}
         iterates.append(values)
-    costs.append(dense_system(problem, values, order)[2])
+    costs.append(dense_system(problem, values, order, space)[2])
     return iterates, costs
 
 
@@ -164,17 +195,18 @@ def covariances(
 
 
 def stream(
-    variables: Mapping[str, int], updates: Sequence[Mapping], threshold: float, skip: int = 1
+    variables: Mapping[str, int], updates: Sequence[Mapping], threshold: float, skip: int = 1, space: Space = VECTOR
 ) -> tuple[list[dict[str, NDArray]], list[list[str]]]:
     """The estimate after each update of a stream, and the variables relinearized at each.
 
     iSAM2 with full back-substitution keeps a linearization point θ̄ⱼ per variable and the exact
     solution δ of the system linearized there. At the start of every ``skip``-th update, each
-    variable whose last δⱼ has max|δⱼ| ≥ ``threshold`` moves: θ̄ⱼ ← θ̄ⱼ + δⱼ (a new variable starts
+    variable whose last δⱼ has max|δⱼ| ≥ ``threshold`` moves: θ̄ⱼ ← θ̄ⱼ ⊕ δⱼ (a new variable starts
     at its given value with δ = 0). A factor relinearized because one of its variables moved is
     linearized at θ̄ of all its variables, and one whose variables did not move kept the linearization
-    at those same θ̄: so every factor is linearized at the current θ̄, and the estimate is θ̄ + δ.
-    ``threshold`` 0 is one Gauss-Newton step per update; inf never relinearizes.
+    at those same θ̄: so every factor is linearized at the current θ̄, and the estimate is θ̄ ⊕ δ.
+    ``threshold`` 0 is one Gauss-Newton step per update; inf never relinearizes. ``space``: how variables
+    move and factors linearize (:class:`Space`).
     """
     factors: list = []
     theta: dict[str, NDArray] = {}
@@ -186,13 +218,13 @@ def stream(
         if step % skip == 0:
             moved = [k for k in theta if float(np.max(np.abs(delta[k]))) >= threshold]
             for k in moved:
-                theta[k] = theta[k] + delta[k]
+                theta[k] = space.retract(theta[k], delta[k])
         for k, v in u["values"].items():
             theta[k] = np.asarray(v, float)
         order = [k for k in variables if k in theta]
         problem = Problem({"variables": {k: variables[k] for k in order}, "factors": factors})
-        A, b, _ = dense_system(problem, theta, order)
+        A, b, _ = dense_system(problem, theta, order, space)
         delta = _split(problem, order, factorize(A, b)["delta"])
-        out.append({k: theta[k] + delta[k] for k in order})
+        out.append({k: space.retract(theta[k], delta[k]) for k in order})
         moved_at.append(sorted(moved))
     return out, moved_at

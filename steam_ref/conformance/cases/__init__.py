@@ -1,11 +1,14 @@
-"""The kit's cases, one module per suite, inputs written out as literal numbers (no random draws:
-the kit stores them).
+"""The kit's cases, one module per idea, inputs written out as literal numbers (no random draws:
+the kit stores them): the GP prior (:mod:`.gp`), the factors (:mod:`.factors`), the problems several suites
+share (:mod:`.problems`), solving them (:mod:`.graphs`: linear, batch, bayes_tree), iSAM2 (:mod:`.incremental`),
+fixed-lag smoothing (:mod:`.fixed_lag`) and the GP prior on a Lie group (:mod:`.lie_groups`: the se2 suite).
+A case added by a later kit version is tagged ``# kit vN``.
 
 Each :class:`Case` says what it computes ([YIB Eq. n]), its inputs, the tolerance of each output
 quantity, and whether its expected values come from the independent oracle
-(:mod:`steam_ref.conformance.oracle`, :mod:`steam_ref.conformance.oracle_graph`) or from steam_ref
-itself. The expected values are computed by :mod:`steam_ref.conformance.build`. The ``paper``
-suite's cases are made from the data files by :mod:`steam_ref.conformance.paper`.
+(:mod:`steam_ref.conformance.expected`) or from steam_ref itself. The expected values are computed by
+:mod:`steam_ref.conformance.build`. The ``paper`` suite's cases are made from the data files by
+:mod:`steam_ref.conformance.paper`.
 """
 
 from __future__ import annotations
@@ -14,9 +17,9 @@ from .base import EXACT, Case, tol
 from .factors import factor_cases
 from .fixed_lag import fixed_lag_cases
 from .gp import gp_cases
-from .graphs import batch_cases, bayes_tree_cases, incremental_cases, linear_cases
-from .graphs_v2 import batch_cases_v2, bayes_tree_cases_v2, incremental_cases_v2, linear_cases_v2
-from .se2 import se2_cases
+from .graphs import batch_cases, bayes_tree_cases, linear_cases
+from .incremental import incremental_cases
+from .lie_groups import lie_group_cases
 
 __all__ = ["Case", "tol", "EXACT", "suite_cases", "SUITE_DOCS"]
 
@@ -56,10 +59,10 @@ def suite_cases(suite: str) -> list[Case]:
     return {
         "gp": gp_cases,
         "factors": factor_cases,
-        "linear": lambda: linear_cases() + linear_cases_v2(),
-        "batch": lambda: batch_cases() + batch_cases_v2(),
-        "bayes_tree": lambda: bayes_tree_cases() + bayes_tree_cases_v2(),
-        "incremental": lambda: incremental_cases() + incremental_cases_v2(),
+        "linear": linear_cases,
+        "batch": batch_cases,
+        "bayes_tree": bayes_tree_cases,
+        "incremental": incremental_cases,
         "fixed_lag": fixed_lag_cases,
-        "se2": se2_cases,
+        "se2": lie_group_cases,
     }[suite]()

@@ -15,7 +15,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 
 from .base import EXACT, Case, tol
-from .graphs import MARK, STATE, gp_prior_between, range_reading, velocity_reading
+from .problems import MARK, STATE, gp_prior_between, range_reading, velocity_reading
 
 __all__ = ["fixed_lag_cases", "drop_steps"]
 

@@ -1,138 +1,25 @@
-"""The ``linear``, ``batch``, ``bayes_tree`` and ``incremental`` suites: two small problems (a
-trajectory with landmarks, a pair of states among beacons) and a stream of updates."""
+"""The ``linear``, ``batch`` and ``bayes_tree`` suites: the problems of :mod:`.problems` linearized, solved by
+Gauss-Newton and eliminated into Bayes trees (kit v1; kit v2 adds a zero increment, a GP heading jump and a bushy
+tree)."""
 
 from __future__ import annotations
 
-from .base import EXACT, ORACLE_DENSE, QC_DIAG, Case, tol
+from .base import EXACT, ORACLE_DENSE, Case, tol
+from .problems import (
+    AT_OPTIMUM,
+    BEACON_START,
+    BUSHY,
+    BUSHY_GROUPS,
+    BUSHY_ORDER,
+    HEADING_JUMP,
+    ORDERINGS,
+    PROBLEM_DOCS,
+    PROBLEMS,
+    TRAJ_START,
+)
 
-__all__ = ["linear_cases", "batch_cases", "bayes_tree_cases", "incremental_cases"]
+__all__ = ["linear_cases", "batch_cases", "bayes_tree_cases"]
 
-STATE, MARK = 6, 2
-TRAJ_VALUES = {
-    "x0": [0.0, 0.0, 0.1, 1.0, 0.1, 0.05],
-    "x1": [0.52, 0.07, 0.13, 0.98, 0.18, 0.06],
-    "x2": [1.01, 0.18, 0.16, 0.95, 0.25, 0.04],
-    "x3": [1.47, 0.33, 0.19, 0.9, 0.31, 0.07],
-    "l0": [2.0, 3.0],
-    "l1": [-1.0, 2.5],
-}
-TRAJ_START = {
-    "x0": [0.05, -0.05, 0.12, 0.9, 0.0, 0.0],
-    "x1": [0.6, 0.0, 0.1, 0.9, 0.1, 0.1],
-    "x2": [1.1, 0.1, 0.2, 0.9, 0.2, 0.0],
-    "x3": [1.6, 0.2, 0.25, 0.85, 0.2, 0.1],
-    "l0": [2.3, 2.7],
-    "l1": [-0.7, 2.8],
-}
-
-
-def range_reading(x: str, l: str, measured: float, sigma: float = 0.1, **extra) -> dict:
-    """A range factor of a case, as the kit writes it: state ``x``, landmark ``l``, the reading and its sigma."""
-    return {"type": "range", "keys": [x, l], "measured": measured, "sigma": sigma, **extra}
-
-
-def velocity_reading(x: str, measured: list[float]) -> dict:
-    """A velocity factor of a case on state ``x``: [forward, lateral, yaw rate] and the cases' sigmas."""
-    return {"type": "velocity", "keys": [x], "measured": measured, "sigmas": [0.05, 0.05, 0.02]}
-
-
-def gp_prior_between(a: str, b: str, dt: float = 0.5) -> dict:
-    """The WNOA prior factor of a case between states ``a`` and ``b``, ``dt`` apart, with the cases' Qc."""
-    return {"type": "gp_prior", "keys": [a, b], "dt": dt, "qc": QC_DIAG}
-
-
-TRAJ_FACTORS = [
-    {
-        "type": "prior",
-        "keys": ["x0"],
-        "mean": [0.0, 0.0, 0.1, 1.0, 0.1, 0.05],
-        "sigmas": [0.01, 0.01, 0.01, 0.1, 0.1, 0.1],
-    },
-    gp_prior_between("x0", "x1"),
-    gp_prior_between("x1", "x2"),
-    gp_prior_between("x2", "x3"),
-    velocity_reading("x1", [1.0, 0.0, 0.06]),
-    velocity_reading("x3", [0.95, 0.0, 0.07]),
-    range_reading("x0", "l0", 3.62),
-    range_reading("x1", "l0", 3.3),
-    range_reading("x2", "l1", 3.05),
-    range_reading("x3", "l1", 3.45, loss={"type": "huber", "k": 1.345}),
-    range_reading("x3", "l0", 2.7),
-    {"type": "bearing", "keys": ["x2", "l0"], "measured": 1.08, "sigma": 0.02},
-    {
-        "type": "interpolated",
-        "keys": ["x2", "x3", "l1"],
-        "t1": 1.0,
-        "t2": 1.5,
-        "tau": 1.2,
-        "qc": QC_DIAG,
-        "inner": {"type": "range", "measured": 3.15, "sigma": 0.1},
-    },
-    {"type": "prior", "keys": ["l0"], "mean": [2.05, 2.95], "sigmas": [0.5, 0.5]},
-    {"type": "prior", "keys": ["l1"], "mean": [-0.9, 2.6], "sigmas": [0.5, 0.5]},
-]
-TRAJECTORY = {
-    "variables": {"x0": STATE, "x1": STATE, "x2": STATE, "x3": STATE, "l0": MARK, "l1": MARK},
-    "times": {"x0": 0.0, "x1": 0.5, "x2": 1.0, "x3": 1.5},
-    "factors": TRAJ_FACTORS,
-    "values": TRAJ_VALUES,
-}
-
-BEACON_TRUE = {"l0": [3.0, 0.0], "l1": [0.0, 3.0], "l2": [-3.0, 0.0], "l3": [0.0, -3.0]}
-BEACONS = {
-    "variables": {"l0": MARK, "l1": MARK, "l2": MARK, "l3": MARK, "x0": STATE, "x1": STATE},
-    "times": {"x0": 0.0, "x1": 1.0},
-    "factors": [
-        {
-            "type": "prior",
-            "keys": ["x0"],
-            "mean": [0.0, 0.0, 0.0, 0.5, 0.0, 0.0],
-            "sigmas": [0.1, 0.1, 0.05, 0.2, 0.2, 0.1],
-        },
-        gp_prior_between("x0", "x1", 1.0),
-        velocity_reading("x1", [0.5, 0.0, 0.02]),
-        *[{"type": "prior", "keys": [k], "mean": m, "sigmas": [0.3, 0.3]} for k, m in BEACON_TRUE.items()],
-        range_reading("x0", "l0", 3.02, 0.05),
-        range_reading("x0", "l1", 2.97, 0.05),
-        range_reading("x0", "l2", 3.01, 0.05),
-        range_reading("x0", "l3", 3.0, 0.05),
-        range_reading("x1", "l0", 2.52, 0.05),
-        range_reading("x1", "l1", 2.93, 0.05, loss={"type": "tukey", "c": 4.685}),
-        range_reading("x1", "l2", 3.49, 0.05),
-        range_reading("x1", "l3", 3.1, 0.05),
-    ],
-    "values": {
-        "l0": [3.1, 0.1],
-        "l1": [0.1, 2.9],
-        "l2": [-2.95, -0.1],
-        "l3": [0.05, -3.05],
-        "x0": [0.0, 0.0, 0.0, 0.5, 0.0, 0.0],
-        "x1": [0.5, 0.05, 0.02, 0.5, 0.05, 0.02],
-    },
-}
-BEACON_START = {
-    "l0": [2.6, 0.4],
-    "l1": [0.4, 2.5],
-    "l2": [-2.5, 0.4],
-    "l3": [0.4, -2.6],
-    "x0": [0.1, 0.1, 0.05, 0.4, 0.1, 0.0],
-    "x1": [0.7, 0.2, 0.0, 0.4, 0.1, 0.0],
-}
-
-ORDERINGS = {
-    "trajectory": {
-        "xl": ["x0", "x1", "x2", "x3", "l0", "l1"],
-        "landmarks_first": ["l0", "l1", "x0", "x1", "x2", "x3"],
-        "interleaved": ["x3", "l1", "x0", "l0", "x2", "x1"],
-    },
-    "beacons": {"natural": ["l0", "l1", "l2", "l3", "x0", "x1"], "states_first": ["x0", "x1", "l0", "l1", "l2", "l3"]},
-}
-PROBLEMS = {"trajectory": TRAJECTORY, "beacons": BEACONS}
-PROBLEM_DOCS = {
-    "trajectory": "four states at t = 0, 0.5, 1, 1.5 with a prior, GP priors, velocities, ranges (one Huber), "
-    "a bearing, an interpolated range and two landmarks with priors",
-    "beacons": "two states and four beacons with priors, ranges from each state to each beacon (one Tukey)",
-}
 LINEAR_TOL = {
     "A": tol(1e-9, 1e-13),
     "b": tol(1e-10, 1e-13),
@@ -158,7 +45,29 @@ def linear_cases() -> list[Case]:
                 ORACLE_DENSE,
             )
         )
-    return out
+    return out + [
+        Case(  # kit v2
+            "at_optimum_zero_increment",
+            "[YIB Eq. 9-11, 21]",
+            "a state pair and a landmark whose values satisfy every factor exactly (sums and products exact in "
+            "binary): b = 0, Aᵀb = 0, d = 0 and the step δ = 0 (compared with atol only: max|expected| is 0)",
+            {"problem": AT_OPTIMUM, "ordering": ["x0", "x1", "l0"]},
+            dict(LINEAR_TOL),
+            True,
+            ORACLE_DENSE,
+        ),
+        Case(  # kit v2
+            "gp_heading_jump",
+            "[YIB Eq. 9-11, 22]",
+            "two states whose headings are stored 3.0 and -3.1 (2π apart, less 0.18): the GP prior's heading "
+            "error is -6.3 (not wrapped: headings are continuous coordinates), so b holds it; a port that wraps "
+            "the GP prior's heading fails b, d and δ",
+            {"problem": HEADING_JUMP, "ordering": ["x0", "x1"]},
+            dict(LINEAR_TOL),
+            True,
+            ORACLE_DENSE,
+        ),
+    ]
 
 
 def batch_cases() -> list[Case]:
@@ -176,7 +85,17 @@ def batch_cases() -> list[Case]:
                 "oracle: dense Gauss-Newton on the oracle's factors",
             )
         )
-    return out
+    return out + [
+        Case(  # kit v2
+            "at_optimum_gauss_newton",
+            "[YIB Eq. 6-11]",
+            "Gauss-Newton started at the exact optimum: every step is zero, the iterates stay, every cost is 0",
+            {"problem": AT_OPTIMUM, "ordering": ["x0", "x1", "l0"], "iterations": 2},
+            {"iterates": tol(1e-8, 1e-12), "costs": tol(1e-9, 1e-20)},
+            True,
+            "oracle: dense Gauss-Newton on the oracle's factors",
+        )
+    ]
 
 
 def bayes_tree_cases() -> list[Case]:
@@ -219,74 +138,42 @@ def bayes_tree_cases() -> list[Case]:
                 "oracle: blocks of the dense inverse of 𝓘",
             )
         )
-    return out
+    return out + _bushy_cases()
 
 
-def trajectory_stream() -> dict:
-    """The incremental cases' stream: the trajectory problem's factors given over five updates."""
-    return {
-        "variables": {"x0": STATE, "x1": STATE, "x2": STATE, "x3": STATE, "l0": MARK, "l1": MARK},
-        "updates": [
-            {
-                "values": {"x0": TRAJ_START["x0"], "l0": TRAJ_START["l0"]},
-                "factors": [
-                    TRAJ_FACTORS[0],
-                    TRAJ_FACTORS[13],
-                    TRAJ_FACTORS[6],
-                    velocity_reading("x0", [1.0, 0.0, 0.05]),
-                ],
-            },
-            {"values": {"x1": TRAJ_START["x1"]}, "factors": [TRAJ_FACTORS[1], TRAJ_FACTORS[4], TRAJ_FACTORS[7]]},
-            {
-                "values": {"x2": TRAJ_START["x2"], "l1": TRAJ_START["l1"]},
-                "factors": [TRAJ_FACTORS[2], TRAJ_FACTORS[14], TRAJ_FACTORS[8], TRAJ_FACTORS[11]],
-            },
-            {
-                "values": {"x3": TRAJ_START["x3"]},
-                "factors": [TRAJ_FACTORS[3], TRAJ_FACTORS[5], TRAJ_FACTORS[9], TRAJ_FACTORS[10], TRAJ_FACTORS[12]],
-            },
-            {"values": {}, "factors": [range_reading("x1", "l1", 2.95)]},
-        ],
-    }
-
-
-def incremental_cases() -> list[Case]:
-    stream = trajectory_stream()
-    n = len(stream["updates"])
-    est = {f"estimate_{k}": tol(1e-8, 1e-12) for k in range(1, n + 1)}
-    every = {"relinearize_threshold": 0.0, "relinearize_skip": 1, "wildfire_threshold": 0.0}
-    never = {"relinearize_threshold": "inf", "relinearize_skip": 1, "wildfire_threshold": 0.0}
+def _bushy_cases() -> list[Case]:  # kit v2
+    inputs = {"problem": BUSHY, "ordering": BUSHY_ORDER}
+    what = (
+        "a bushy tree: three states, five landmarks each seen from one state, eliminated landmarks first "
+        "(the root {x1, x2} has four children, x0's clique two)"
+    )
     return [
         Case(
-            "relinearize_every_update_estimates",
-            "[YIB Alg. 1, Eq. 9-11]",
-            "five updates of iSAM2 with relinearization threshold 0 checked every update and full back-substitution "
-            "(wildfire 0): each update is one Gauss-Newton step on every factor so far; the estimate after each",
-            {"stream": stream, "isam2": every},
-            est,
+            "bushy_cliques",
+            "[YIB Sec. III-A, Eq. 24-25]",
+            f"{what}: the cliques",
+            inputs,
+            {"cliques": EXACT},
             True,
-            "oracle: one dense Gauss-Newton step per update",
+            "oracle: the elimination game and GTSAM's clique rule, written a second time",
         ),
         Case(
-            "no_relinearization_estimates",
-            "[YIB Alg. 1, Eq. 9-11]",
-            "the same stream with relinearization off (threshold inf) and wildfire 0: every factor stays linearized "
-            "at the values first given; the estimate after each update",
-            {"stream": stream, "isam2": never},
-            est,
+            "bushy_conditionals",
+            "[YIB Eq. 24-25]",
+            f"{what}: each clique's conditional R, S, d",
+            inputs,
+            {"conditionals": tol(1e-9, 1e-12)},
             True,
-            "oracle: the dense linear solve at the first linearization point",
+            "oracle: the rows of the dense R of 𝓘 and of d = R⁻ᵀAᵀb",
         ),
         Case(
-            "no_relinearization_tree_edits",
-            "[YIB Alg. 1 steps 2-5]",
-            "the same run: after each update, the cliques removed from the top of the tree and the orphaned subtrees "
-            "reattached, each named by its frontal variables. Depends on the elimination order of the removed part "
-            "(the tree-edit ordering rule of the conventions, 'tree_edits'); nnz_k is the fill of R after update k, "
-            "counted as GTSAM's ISAM2::treeNnz does",
-            {"stream": stream, "isam2": never},
-            {**{f"update_{k}": EXACT for k in range(1, n + 1)}, **{f"nnz_{k}": EXACT for k in range(1, n + 1)}},
-            False,
-            "produced by steam_ref",
+            "bushy_joint_covariances",
+            "[YIB Eq. 11]",
+            f"{what}: joint covariances of groups of two to five variables from different branches, each stacked "
+            "in the order listed (not the elimination order)",
+            {**inputs, "groups": BUSHY_GROUPS},
+            {"covariances": tol(1e-9, 1e-13)},
+            True,
+            "oracle: blocks of the dense inverse of 𝓘",
         ),
     ]

@@ -1,10 +1,10 @@
-"""The ``se2`` suite (kit v4): the GP prior on SE(2), every case's inputs written out as literal numbers.
+"""The Lie-group suite ``se2`` (kit v4): the GP prior on SE(2), every case's inputs written out as literal numbers.
 
 Exp and Log near 0, on both sides of the series switch at abs(φ) = 1 and near the half turn (Log's angle in
 (-π, π], +π at the half turn); J_r and J_r⁻¹; between and the adjoint; both WNOA residuals
 ("local-variable", "simplified") and their Jacobians in the right tangents; the SE(2) state prior; the
 local GP's mean, its Jacobians and its covariance; Gauss-Newton on four SE(2) states with ranges; an
-iSAM2 stream that relinearizes. Every case is independent: :mod:`steam_ref.conformance.oracle_se2`
+iSAM2 stream that relinearizes. Every case is independent: :mod:`steam_ref.conformance.oracle_lie`
 (expm/Van Loan, central differences through the right retraction, dense solves).
 """
 
@@ -13,7 +13,7 @@ from __future__ import annotations
 from .base import EXACT, Case, tol
 from .gp import exact_spd
 
-__all__ = ["se2_cases"]
+__all__ = ["lie_group_cases"]
 
 ORACLE_GROUP = (
     "oracle: Exp = expm of the 3x3 matrix; Log: angle atan2(R10, R00) (-pi read as +pi), rho = V(phi)^-1 t with "
@@ -377,5 +377,5 @@ def _solve_cases() -> list[Case]:
     ]
 
 
-def se2_cases() -> list[Case]:
+def lie_group_cases() -> list[Case]:
     return _group_cases() + _prior_cases() + _gp_cases() + _solve_cases()

@@ -1,6 +1,7 @@
-"""Independent expected values of the ``se2`` suite: SE(2) from 3×3 matrices and SciPy's ``expm``.
+"""The oracle on a Lie group: SE(2) (the kit's one group today) from 3×3 matrices and SciPy's ``expm``.
 
-Nothing here shares code with ``steam_ref.lie`` or ``steam_ref.factors``: no series, no closed forms.
+Independent expected values of the ``se2`` suite. Nothing here shares code with ``steam_ref.lie`` or
+``steam_ref.factors``: no series, no closed forms.
 
 - Exp(ξ) = expm(ξ^) of the 3×3 matrix ξ^ = [[0, -φ, ρ₁], [φ, 0, ρ₂], [0, 0, 0]], tangent order [ρ; φ];
   the pose [x, y, θ] read off it with θ = atan2(R₁₀, R₀₀) in (-π, π] (a -π from atan2 is taken as +π).
@@ -12,9 +13,9 @@ Nothing here shares code with ``steam_ref.lie`` or ``steam_ref.factors``: no ser
   x ⊕ δ = (T Exp(δ[:3]), ϖ + δ[3:]); x ⊖ x₀ = [Log(T₀⁻¹T); ϖ - ϖ₀].
 - Every Jacobian is a Richardson-extrapolated central difference through that retraction (step h and
   h/2, error O(h⁴)), of the output in its own local coordinates about the unperturbed output.
-- The WNOA residuals, the local GP (Λ, Ψ and the conditional covariance from :mod:`.oracle`'s dense
-  kernel), Gauss-Newton and an iSAM2 replay (linearization points per variable, dense solves) on
-  these definitions.
+- The WNOA residuals and the local GP (Λ, Ψ and the conditional covariance from :mod:`.oracle`'s dense
+  kernel) on these definitions; :data:`LIE`, the :class:`.oracle_graph.Space` in which the graph oracle's
+  Gauss-Newton and iSAM2 replay (:mod:`.oracle_graph`) solve problems on these states.
 """
 
 from __future__ import annotations
@@ -24,10 +25,10 @@ from collections.abc import Callable, Mapping, Sequence
 import numpy as np
 import scipy.linalg
 from numpy.typing import NDArray
-from threadpoolctl import threadpool_limits
 
 from ..errors import SteamError
 from . import oracle as o
+from .oracle_graph import Space
 
 __all__ = [
     "hat",
@@ -40,7 +41,11 @@ __all__ = [
     "derivative",
     "numeric_jacobian",
     "interpolate",
-    "se2_case",
+    "interpolation_quantities",
+    "factor_error",
+    "factor_jacobians",
+    "linearize_factor",
+    "LIE",
 ]
 
 H = 1e-3  # the central difference's step (Richardson: h and h/2)
@@ -211,7 +216,9 @@ def interpolate(t1: float, t2: float, tau: float, qc: NDArray, model: str):
     return mean, lam, psi, cond
 
 
-def _interpolation(inputs: Mapping) -> dict:
+def interpolation_quantities(inputs: Mapping) -> dict:
+    """x(τ) and its Jacobians J_1, J_2, or (given ``joint_cov``) x(τ) and its covariance, of an interpolation
+    case's inputs."""
     x1, x2, model = np.asarray(inputs["x1"], float), np.asarray(inputs["x2"], float), inputs["model"]
     t1, t2, tau, qc = float(inputs["t1"]), float(inputs["t2"]), float(inputs["tau"]), inputs["qc"]
     mean, lam, psi, cond = interpolate(t1, t2, tau, qc, model)
@@ -251,134 +258,27 @@ def factor_covariance(spec: Mapping) -> NDArray:
     return o.noise_covariance(spec, len(spec.get("sigmas", [0])))
 
 
-def _system(factors: Sequence[Mapping], values: Mapping[str, NDArray], order: Sequence[str], dims: Mapping[str, int]):
-    """Dense A, b and the cost of the factors linearized at ``values`` (tangent columns in ``order``)."""
-    off = dict(zip(order, np.cumsum([0] + [dims[k] for k in order]), strict=False))
-    n = sum(dims[k] for k in order)
-    rows, rhs, cost = [], [], 0.0
-    for spec in factors:
-        xs = [values[k] for k in spec["keys"]]
-        W = o.sqrt_information(factor_covariance(spec))
-        e = factor_error(spec, xs)
-        row = np.zeros((len(e), n))
+def factor_jacobians(spec: Mapping, xs: Sequence[NDArray]) -> tuple[NDArray, list[NDArray]]:
+    """The error of a factor spec at ``xs`` and its Jacobian H_k = ∂e/∂δₖ in each key's right tangent."""
+    xs = [np.asarray(x, float) for x in xs]
 
-        def error(*a: NDArray, spec: Mapping = spec) -> NDArray:
-            return factor_error(spec, a)
+    def error(*a: NDArray) -> NDArray:
+        return factor_error(spec, a)
 
-        for j, k in enumerate(spec["keys"]):
-            row[:, off[k] : off[k] + dims[k]] = W @ numeric_jacobian(error, xs, j)
-        rows.append(row)
-        rhs.append(-W @ e)
-        cost += 0.5 * float(np.sum((W @ e) ** 2))
-    return np.vstack(rows), np.concatenate(rhs), cost
+    return factor_error(spec, xs), [numeric_jacobian(error, xs, k) for k in range(len(xs))]
 
 
-def _solve(A: NDArray, b: NDArray, order: Sequence[str], dims: Mapping[str, int]) -> dict[str, NDArray]:
-    delta = np.linalg.solve(A.T @ A, A.T @ b)
-    off = np.cumsum([0] + [dims[k] for k in order])
-    return {k: delta[off[i] : off[i + 1]] for i, k in enumerate(order)}
+def linearize_factor(spec: Mapping, xs: Sequence[NDArray]) -> dict:
+    """e, W e, Hₖ, Aₖ = W Hₖ, b = -W e and the cost ½‖W e‖² of a factor spec at ``xs`` (no robust losses here)."""
+    e, H = factor_jacobians(spec, xs)
+    W = o.sqrt_information(factor_covariance(spec))
+    we = W @ e
+    out = {"error": e, "whitened_error": we, **{f"H_{k}": h for k, h in enumerate(H)}}
+    out.update({f"A_{k}": W @ h for k, h in enumerate(H)})
+    out["b"], out["cost"] = -we, 0.5 * float(np.sum(we**2))
+    return out
 
 
-def gauss_newton(problem: Mapping, iterations: int) -> tuple[dict[str, list[NDArray]], list[float]]:
-    """Gauss-Newton from the problem's values: every iterate (x ← x ⊕ δ) and the cost at each."""
-    dims = {k: int(n) for k, n in problem["variables"].items()}
-    order = list(dims)
-    values = {k: np.asarray(v, float) for k, v in problem["values"].items()}
-    iterates = {k: [values[k]] for k in order}
-    costs = []
-    for _ in range(iterations):
-        A, b, cost = _system(problem["factors"], values, order, dims)
-        costs.append(cost)
-        delta = _solve(A, b, order, dims)
-        values = {k: retract(values[k], delta[k]) for k in order}
-        for k in order:
-            iterates[k].append(values[k])
-    costs.append(_system(problem["factors"], values, order, dims)[2])
-    return iterates, costs
-
-
-def stream(variables: Mapping[str, int], updates: Sequence[Mapping], threshold: float, skip: int = 1):
-    """iSAM2 with full back-substitution replayed densely, on the retraction: per-variable θ̄ moved θ̄ ← θ̄ ⊕ δ at
-    the start of every ``skip``-th update when max|δ| ≥ ``threshold``; every factor linearized at θ̄, solved;
-    the estimate θ̄ ⊕ δ. Returns the estimates and the variables moved, per update."""
-    dims = {k: int(n) for k, n in variables.items()}
-    factors: list = []
-    theta: dict[str, NDArray] = {}
-    delta: dict[str, NDArray] = {}
-    out, moved_at = [], []
-    for step, u in enumerate(updates, start=1):
-        factors.extend(u["factors"])
-        moved: list[str] = []
-        if step % skip == 0:
-            moved = [k for k in theta if float(np.max(np.abs(delta[k]))) >= threshold]
-            for k in moved:
-                theta[k] = retract(theta[k], delta[k])
-        for k, v in u["values"].items():
-            theta[k] = np.asarray(v, float)
-        order = [k for k in variables if k in theta]
-        A, b, _ = _system(factors, theta, order, dims)
-        delta = _solve(A, b, order, dims)
-        out.append({k: retract(theta[k], delta[k]) for k in order})
-        moved_at.append(sorted(moved))
-    return out, moved_at
-
-
-# --- the cases ------------------------------------------------------------------------------------
-
-
-def _rows(f: Callable[[NDArray], NDArray], items: Sequence | NDArray) -> NDArray:
-    return np.array([f(np.asarray(v, float)) for v in items])
-
-
-def _prior(inputs: Mapping) -> dict:
-    x1, x2, dt, model = np.asarray(inputs["x1"], float), np.asarray(inputs["x2"], float), inputs["dt"], inputs["model"]
-    e = prior_error(x1, x2, float(dt), model)
-    W = o.sqrt_information(prior_covariance(float(dt), inputs["qc"]))
-    H0, H1 = (numeric_jacobian(lambda a, b: prior_error(a, b, float(dt), model), [x1, x2], k) for k in (0, 1))
-    return {"error": e, "H_0": H0, "H_1": H1, "cost": 0.5 * float(np.sum((W @ e) ** 2))}
-
-
-def se2_case(inputs: Mapping) -> dict:
-    """The expected quantities of an se2 case, by its inputs' ``kind`` (BLAS on one thread: OpenBLAS's threads
-    make each 3×3 ``expm`` a thousand times slower on a busy machine)."""
-    with threadpool_limits(limits=1, user_api="blas"):
-        return _se2_case(inputs)
-
-
-def _se2_case(inputs: Mapping) -> dict:
-    kind = inputs["kind"]
-    if kind == "exp":
-        poses = _rows(exp, inputs["xi"])
-        return {"exp": poses, "log_of_exp": _rows(log, poses)}
-    if kind == "log":
-        tangents = _rows(log, inputs["poses"])
-        return {"log": tangents, "exp_of_log": _rows(exp, tangents)}
-    if kind == "jacobians":
-        return {"Jr": _rows(right_jacobian, inputs["xi"]), "Jr_inv": _rows(right_jacobian_inverse, inputs["xi"])}
-    if kind == "between":
-        a, b = np.asarray(inputs["a"], float), np.asarray(inputs["b"], float)
-        Ha, Hb = (numeric_jacobian(between, [a, b], k, lambda p, q: log(between(p, q))) for k in (0, 1))
-        return {"between": between(a, b), "H_a": Ha, "H_b": Hb, "Ad_a": adjoint(a)}
-    if kind == "prior":
-        return _prior(inputs)
-    if kind == "state_prior":
-        spec = {"type": "se2_state_prior", "mean": inputs["mean"]}
-        x = np.asarray(inputs["x"], float)
-        e = factor_error(spec, [x])
-        return {"error": e, "H_0": numeric_jacobian(lambda a: factor_error(spec, [a]), [x], 0)}
-    if kind == "interpolation":
-        return _interpolation(inputs)
-    if kind == "batch":
-        iterates, costs = gauss_newton(inputs["problem"], int(inputs["iterations"]))
-        return {"iterates": {k: np.array(v) for k, v in iterates.items()}, "costs": np.array(costs)}
-    if kind == "incremental":
-        isam2 = inputs["isam2"]
-        estimates, moved = stream(
-            inputs["stream"]["variables"],
-            inputs["stream"]["updates"],
-            float(isam2["relinearize_threshold"]),
-            int(isam2["relinearize_skip"]),
-        )
-        out: dict = {f"relinearized_{k}": m for k, m in enumerate(moved, start=1)}
-        return {**out, **{f"estimate_{k}": e for k, e in enumerate(estimates, start=1)}}
-    raise SteamError(f"unknown se2 case kind {kind!r}")
+# The states move by the right retraction; every factor is linearized by differences through it. Both are looked
+# up when called, so a test can swap either for a wrong port's.
+LIE = Space(lambda x, delta: retract(x, delta), lambda spec, xs: linearize_factor(spec, xs))
