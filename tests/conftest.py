@@ -56,3 +56,57 @@ def pytest_runtest_setup(item):
         reference_data_dir()
     if item.get_closest_marker("needs_cholmod"):
         optional_import("sksparse.cholmod", "cholmod", kind="cholmod")
+
+
+# --- the conformance kit (tests/test_conformance*.py): steam_ref's results of a kit, written as a port would ---------
+
+
+@pytest.fixture(scope="session")
+def kit_results():
+    """``kit_results(kit, suite)``: steam_ref's results for every case of a kit's suite (case → the quantities it is
+    checked on), as a results file holds them. Computed once per kit and suite; each call returns a fresh copy,
+    which a test may edit into a wrong port's."""
+    import json
+
+    from steam_ref.conformance import run_case
+    from steam_ref.conformance.kitio import dumps, read_suite
+
+    computed: dict[tuple[str, str], str] = {}
+
+    def results(kit, suite: str) -> dict:
+        if (str(kit), suite) not in computed:
+            out = {}
+            for case in read_suite(kit, suite)["cases"]:
+                got = json.loads(dumps(run_case(suite, case["name"], case["inputs"])))
+                out[case["name"]] = {q: got[q] for q in case["tolerance"]}
+            computed[str(kit), suite] = json.dumps(out)
+        return json.loads(computed[str(kit), suite])
+
+    return results
+
+
+@pytest.fixture(scope="session")
+def write_results():
+    """``write_results(folder, suite, cases, version=KIT_VERSION)``: ``folder/<suite>/results.json`` as a port writes
+    it (``version`` None: without a kit_version, as kit v1's results were); returns its path."""
+    from steam_ref.conformance import KIT_VERSION
+    from steam_ref.conformance.kitio import dumps
+
+    def write(folder, suite: str, cases: dict, version: int | None = KIT_VERSION):
+        (folder / suite).mkdir(parents=True, exist_ok=True)
+        head = {} if version is None else {"kit_version": version}
+        (folder / suite / "results.json").write_text(dumps({**head, "cases": cases}))
+        return folder / suite / "results.json"
+
+    return write
+
+
+@pytest.fixture
+def kit_copy(tmp_path):
+    """A copy of the shipped kit (``tmp_path / "kit"``), for a test to edit."""
+    import shutil
+
+    from steam_ref.conformance import SHIPPED
+
+    shutil.copytree(SHIPPED, tmp_path / "kit")
+    return tmp_path / "kit"

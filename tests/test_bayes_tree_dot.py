@@ -17,8 +17,7 @@ from steam_ref.bayes_tree import BayesTree, IncrementalSolver
 from steam_ref.bayes_tree.dot import clique_nnz, gtsam_key, tree_dot, tree_nnz
 from steam_ref.cli import main
 from steam_ref.conformance import spec
-from steam_ref.conformance.cases.graphs import BEACONS, ORDERINGS, TRAJECTORY
-from steam_ref.conformance.cases.graphs_v2 import BUSHY, BUSHY_ORDER
+from steam_ref.conformance.cases.problems import BEACONS, BUSHY, BUSHY_ORDER, ORDERINGS, TRAJECTORY
 from steam_ref.factors import GPPriorFactor, PriorFactor, RangeFactor
 from steam_ref.linear.system import linearize
 from steam_ref.variables import L, X

@@ -22,7 +22,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from steam_ref.cli import main
-from steam_ref.conformance import KIT_VERSION, KITS, SHIPPED, SUITES, kitio, oracle_lag, run_case
+from steam_ref.conformance import KITS, SHIPPED, SUITES, kitio, oracle_lag
 from steam_ref.conformance.expected import fixed_lag_quantities
 from steam_ref.conformance.kitio import dumps, kit_files, read_index, read_suite, sha256
 from steam_ref.conformance.oracle_graph import stream
@@ -35,24 +35,9 @@ def cli(capsys, *args) -> tuple[int, str, str]:
     return code, out.out, out.err
 
 
-def results_of(kit: Path, suite: str) -> dict:
-    out = {}
-    for c in read_suite(kit, suite)["cases"]:
-        got = json.loads(dumps(run_case(suite, c["name"], c["inputs"])))
-        out[c["name"]] = {q: got[q] for q in c["tolerance"]}
-    return out
-
-
-def write(folder: Path, suite: str, cases: dict, version: int | None = KIT_VERSION) -> Path:
-    (folder / suite).mkdir(parents=True, exist_ok=True)
-    head = {} if version is None else {"kit_version": version}
-    (folder / suite / "results.json").write_text(dumps({**head, "cases": cases}))
-    return folder / suite / "results.json"
-
-
 @pytest.fixture(scope="module")
-def ours() -> dict:
-    return {s: results_of(SHIPPED, s) for s in ("gp", "factors", "linear", "bayes_tree", "incremental")}
+def ours(kit_results) -> dict:
+    return {s: kit_results(SHIPPED, s) for s in ("gp", "factors", "linear", "bayes_tree", "incremental")}
 
 
 def inputs_of(suite: str) -> dict:
@@ -63,7 +48,7 @@ def inputs_of(suite: str) -> dict:
 
 
 def test_a_nudged_number_prints_expected_and_got_and_the_first_failing_quantity_is_the_likely_cause(
-    tmp_path, capsys, ours
+    tmp_path, capsys, ours, write_results
 ):
     bad = copy.deepcopy(ours["gp"])
     lam = np.array(bad["interp_tau1.1"]["Lambda"])
@@ -72,7 +57,7 @@ def test_a_nudged_number_prints_expected_and_got_and_the_first_failing_quantity_
     bad["interp_tau1.1"].update(
         Lambda=lam.tolist(), x_tau=(lam @ x1 + np.array(bad["interp_tau1.1"]["Psi"]) @ x2).tolist()
     )
-    write(tmp_path, "gp", bad)
+    write_results(tmp_path, "gp", bad)
     code, out, _ = cli(capsys, "check", tmp_path, "--only", "gp")
     lines = out.splitlines()
     head = next(line for line in lines if line.startswith("FAIL gp/interp_tau1.1"))
@@ -84,12 +69,12 @@ def test_a_nudged_number_prints_expected_and_got_and_the_first_failing_quantity_
     assert any(line.startswith("    x_tau[0]: expected ") for line in lines)
 
 
-def test_a_structure_mismatch_prints_the_differing_cliques_in_full(tmp_path, capsys, ours):
+def test_a_structure_mismatch_prints_the_differing_cliques_in_full(tmp_path, capsys, ours, write_results):
     bad = copy.deepcopy(ours["bayes_tree"])
     cliques = bad["bushy_cliques"]["cliques"]
     victim = next(c for c in cliques if c["frontals"] == ["l3"])
     victim["separator"] = ["x1"]
-    write(tmp_path, "bayes_tree", bad)
+    write_results(tmp_path, "bayes_tree", bad)
     code, out, _ = cli(capsys, "check", tmp_path, "--only", "bayes_tree")
     assert code == 1 and "FAIL bayes_tree/bushy_cliques: cliques differs (compared exactly)" in out
     assert '    expected, not got: {"frontals": ["l3"], "parent": "x1", "separator": ["x2"]}' in out
@@ -104,26 +89,28 @@ def computed_suites(kit: Path) -> list[str]:
     return [s for s in read_index(kit)["suites"] if s != "paper"]
 
 
-def test_v1_results_without_a_kit_version_check_against_v1(tmp_path, capsys):
+def test_v1_results_without_a_kit_version_check_against_v1(tmp_path, capsys, kit_results, write_results):
     v1 = computed_suites(KITS[1])
     assert "fixed_lag" not in v1
     for suite in v1:
-        write(tmp_path, suite, results_of(KITS[1], suite), version=None)
+        write_results(tmp_path, suite, kit_results(KITS[1], suite), version=None)
     code, out, _ = cli(capsys, "check", tmp_path, "--only", *v1)
     assert code == 0 and out.strip().splitlines()[-1] == "50 passed, 0 failed", out
     assert "checked as kit v1 results against the shipped kit v1" in out
-    write(tmp_path, "gp", results_of(KITS[1], "gp"), version=2)  # a mix of versions is refused
+    write_results(tmp_path, "gp", kit_results(KITS[1], "gp"), version=2)  # a mix of versions is refused
     code, _, err = cli(capsys, "check", tmp_path, "--only", *v1)
     assert code == 2 and "different kit versions" in err
     code, _, err = cli(capsys, "check", tmp_path, "--only", "gp", "--kit", KITS[1])
     assert code == 2 and "kit_version 2" in err and "v1" in err
 
 
-def test_v2_results_check_against_the_shipped_v2_which_has_no_fixed_lag_suite(tmp_path, capsys):
+def test_v2_results_check_against_the_shipped_v2_which_has_no_fixed_lag_suite(
+    tmp_path, capsys, kit_results, write_results
+):
     v2 = computed_suites(KITS[2])
     assert v2 == [s for s in SUITES if s not in ("fixed_lag", "se2", "paper")]
     for suite in v2:
-        write(tmp_path, suite, results_of(KITS[2], suite), version=2)
+        write_results(tmp_path, suite, kit_results(KITS[2], suite), version=2)
     code, out, _ = cli(capsys, "check", tmp_path)  # the data-free suites are the gate; paper only with --paper
     lines = out.strip().splitlines()
     assert code == 0 and lines[-1] == "64 passed, 0 failed" and "add --paper" in out, out
@@ -134,42 +121,44 @@ def test_v2_results_check_against_the_shipped_v2_which_has_no_fixed_lag_suite(tm
     assert code == 0 and out.strip().splitlines()[-1] == "64 passed, 0 failed", out
 
 
-def test_fixed_lag_results_for_kit_v2_or_v1_are_refused_not_passed_unchecked(tmp_path, capsys):
-    write(tmp_path, "fixed_lag", results_of(SHIPPED, "fixed_lag"), version=2)
+def test_fixed_lag_results_for_kit_v2_or_v1_are_refused_not_passed_unchecked(
+    tmp_path, capsys, kit_results, write_results
+):
+    write_results(tmp_path, "fixed_lag", kit_results(SHIPPED, "fixed_lag"), version=2)
     for args in ((), ("--only", "fixed_lag"), ("--allow-missing",)):
         code, out, err = cli(capsys, "check", tmp_path, *args)
         assert code == 2 and out == "" and "kit v2 has no suite 'fixed_lag'" in err and len(err.splitlines()) == 1, err
-    write(tmp_path, "fixed_lag", results_of(SHIPPED, "fixed_lag"), version=None)
+    write_results(tmp_path, "fixed_lag", kit_results(SHIPPED, "fixed_lag"), version=None)
     code, _, err = cli(capsys, "check", tmp_path, "--only", "fixed_lag")
     assert code == 2 and "kit v1 has no suite 'fixed_lag'" in err, err
     shutil.rmtree(tmp_path / "fixed_lag")
-    write(tmp_path, "gp", results_of(KITS[2], "gp"), version=2)
+    write_results(tmp_path, "gp", kit_results(KITS[2], "gp"), version=2)
     code, _, err = cli(capsys, "check", tmp_path, "--only", "gp", "fixed_lag")
     assert code == 2 and "kit v2 has no suite 'fixed_lag'" in err, err
 
 
-def test_v4_results_must_hold_the_fixed_lag_suite(tmp_path, capsys, ours):
+def test_v4_results_must_hold_the_fixed_lag_suite(tmp_path, capsys, ours, kit_results, write_results):
     for suite in ("gp", "factors", "linear", "bayes_tree", "incremental"):
-        write(tmp_path, suite, ours[suite])
-    write(tmp_path, "batch", results_of(SHIPPED, "batch"))
+        write_results(tmp_path, suite, ours[suite])
+    write_results(tmp_path, "batch", kit_results(SHIPPED, "batch"))
     code, out, _ = cli(capsys, "check", tmp_path)
     assert code == 1 and "MISSING: 6 cases of fixed_lag have no result: linear_two_at_once, " in out, out
-    write(tmp_path, "fixed_lag", {})  # {"cases": {}} is no pass either
+    write_results(tmp_path, "fixed_lag", {})  # {"cases": {}} is no pass either
     code, out, _ = cli(capsys, "check", tmp_path)
     assert code == 1 and "MISSING: 6 cases of fixed_lag" in out, out
-    write(tmp_path, "fixed_lag", results_of(SHIPPED, "fixed_lag"))
+    write_results(tmp_path, "fixed_lag", kit_results(SHIPPED, "fixed_lag"))
     code, out, _ = cli(capsys, "check", tmp_path)
     assert code == 1 and "MISSING: 20 cases of se2 have no result: exp_near_zero, " in out, out
-    write(tmp_path, "se2", results_of(SHIPPED, "se2"))
+    write_results(tmp_path, "se2", kit_results(SHIPPED, "se2"))
     code, out, _ = cli(capsys, "check", tmp_path)
     assert code == 0 and out.strip().splitlines()[-1] == "91 passed, 0 failed", out
 
 
-def test_v3_results_still_check_against_the_shipped_v3(tmp_path, capsys):
+def test_v3_results_still_check_against_the_shipped_v3(tmp_path, capsys, kit_results, write_results):
     v3 = computed_suites(KITS[3])
     assert v3 == [s for s in SUITES if s not in ("se2", "paper")]
     for suite in v3:
-        write(tmp_path, suite, results_of(KITS[3], suite), version=3)
+        write_results(tmp_path, suite, kit_results(KITS[3], suite), version=3)
     code, out, _ = cli(capsys, "check", tmp_path)
     assert code == 0 and out.strip().splitlines()[-1] == "68 passed, 0 failed", out
 
@@ -191,9 +180,9 @@ def first_drop(case: dict) -> int:
     return min(int(q.rsplit("_", 1)[1]) for q in case["tolerance"] if q.startswith("separator_"))
 
 
-def test_a_marginal_factor_without_the_schur_complement_fails_every_fixed_lag_case(tmp_path, capsys):
+def test_a_marginal_factor_without_the_schur_complement_fails_every_fixed_lag_case(tmp_path, capsys, write_results):
     cases = read_suite(SHIPPED, "fixed_lag")["cases"]
-    write(tmp_path, "fixed_lag", {c["name"]: conditioning_results(c) for c in cases})
+    write_results(tmp_path, "fixed_lag", {c["name"]: conditioning_results(c) for c in cases})
     code, out, _ = cli(capsys, "check", tmp_path, "--only", "fixed_lag")
     lines = out.strip().splitlines()
     assert code == 1 and lines[-1] == f"0 passed, {len(cases)} failed", out
@@ -206,7 +195,7 @@ def test_a_marginal_factor_without_the_schur_complement_fails_every_fixed_lag_ca
 
 
 def test_a_marginal_factor_not_moved_with_its_linearization_point_fails_the_relinearizing_cases(
-    tmp_path, capsys, monkeypatch
+    tmp_path, capsys, monkeypatch, write_results
 ):
     """A port that keeps η fixed while θ̄ moves (no Eq. 10.4 shift: the frozen factor taken as a factor of the
     new δ′) fails where the separator is relinearized after a marginalization, and only there."""
@@ -228,22 +217,22 @@ def test_a_marginal_factor_not_moved_with_its_linearization_point_fails_the_reli
             stream["variables"], stream["updates"], inputs["lag"], float(isam2["relinearize_threshold"])
         )
         results[c["name"]] = json.loads(dumps({q: fixed_lag_quantities(replay)[q] for q in c["tolerance"]}))
-    write(tmp_path, "fixed_lag", results)
+    write_results(tmp_path, "fixed_lag", results)
     code, out, _ = cli(capsys, "check", tmp_path, "--only", "fixed_lag")
     failed = {line.split()[1].rstrip(":") for line in out.splitlines() if line.startswith("FAIL ")}
     relinearizing = {f"fixed_lag/{c['name']}" for c in cases if c["inputs"]["isam2"]["relinearize_threshold"] != "inf"}
     assert code == 1 and failed == relinearizing and len(relinearizing) == 3, out
 
 
-def test_deleting_the_old_variables_factors_fails_every_fixed_lag_case(tmp_path, capsys):
+def test_deleting_the_old_variables_factors_fails_every_fixed_lag_case(tmp_path, capsys, kit_results, write_results):
     """Nothing left on the separator (Λ = 0, η = 0), everything else steam_ref's own right answer."""
     cases = read_suite(SHIPPED, "fixed_lag")["cases"]
-    bad = results_of(SHIPPED, "fixed_lag")
+    bad = kit_results(SHIPPED, "fixed_lag")
     for c in cases:
         for q in c["tolerance"]:
             if q.startswith(("marginal_information_", "marginal_vector_")):
                 bad[c["name"]][q] = np.zeros_like(np.array(bad[c["name"]][q])).tolist()
-    write(tmp_path, "fixed_lag", bad)
+    write_results(tmp_path, "fixed_lag", bad)
     code, out, _ = cli(capsys, "check", tmp_path, "--only", "fixed_lag")
     lines = out.strip().splitlines()
     assert code == 1 and lines[-1] == f"0 passed, {len(cases)} failed", out
@@ -265,7 +254,7 @@ def _gp_rows(problem: dict) -> list[tuple[int, int, dict]]:
     return out
 
 
-def test_paper_sign_results_fail_by_default_and_pass_with_conventions_paper_sign(tmp_path, capsys, ours):
+def test_paper_sign_results_fail_by_default_and_pass_with_conventions_paper_sign(tmp_path, capsys, ours, write_results):
     factors, linear = copy.deepcopy(ours["factors"]), copy.deepcopy(ours["linear"])
     finputs, linputs = inputs_of("factors"), inputs_of("linear")
     flipped = set()
@@ -282,8 +271,8 @@ def test_paper_sign_results_fail_by_default_and_pass_with_conventions_paper_sign
                 A[r : r + m], b[r : r + m] = -A[r : r + m], -b[r : r + m]
         res.update(A=A.tolist(), b=b.tolist())
         flipped.add(f"linear/{name}")
-    write(tmp_path, "factors", factors)
-    write(tmp_path, "linear", linear)
+    write_results(tmp_path, "factors", factors)
+    write_results(tmp_path, "linear", linear)
     code, out, _ = cli(capsys, "check", tmp_path, "--only", "factors", "linear")
     failed = {line.split()[1].rstrip(":") for line in out.splitlines() if line.startswith("FAIL ")}
     assert code == 1 and failed == flipped and len(flipped) == 9, out
@@ -291,7 +280,7 @@ def test_paper_sign_results_fail_by_default_and_pass_with_conventions_paper_sign
     assert code == 0 and out.strip().splitlines()[-1] == "27 passed, 0 failed", out
 
 
-def test_symmetric_whitener_results_pass_with_conventions_symmetric_whitener(tmp_path, capsys, ours):
+def test_symmetric_whitener_results_pass_with_conventions_symmetric_whitener(tmp_path, capsys, ours, write_results):
     factors, finputs = copy.deepcopy(ours["factors"]), inputs_of("factors")
     changed = set()
     for name, res in factors.items():
@@ -308,7 +297,7 @@ def test_symmetric_whitener_results_pass_with_conventions_symmetric_whitener(tmp
             for k in range(len(spec["keys"])):
                 res[f"A_{k}"] = (S @ np.array(res[f"H_{k}"])).tolist()
             changed.add(name)
-    write(tmp_path, "factors", factors)
+    write_results(tmp_path, "factors", factors)
     code, out, _ = cli(capsys, "check", tmp_path, "--only", "factors")
     failed = {line.split()[1].rstrip(":") for line in out.splitlines() if line.startswith("FAIL ")}
     assert code == 1 and failed == {f"factors/{n}" for n in changed} and len(changed) == 6, out
@@ -341,7 +330,7 @@ def _wrap(a: float) -> float:
     return (a + np.pi) % (2 * np.pi) - np.pi
 
 
-def test_a_port_that_wraps_the_gp_priors_heading_error_fails(tmp_path, capsys, ours):
+def test_a_port_that_wraps_the_gp_priors_heading_error_fails(tmp_path, capsys, ours, write_results):
     factors, linear = copy.deepcopy(ours["factors"]), copy.deepcopy(ours["linear"])
     res = factors["gp_prior_heading_jump"]
     W, e = np.array(res["A_1"]), np.array(res["error"])  # A_1 = W (H_1 = I)
@@ -356,8 +345,8 @@ def test_a_port_that_wraps_the_gp_priors_heading_error_fails(tmp_path, capsys, o
     R = np.linalg.cholesky(info).T
     d = scipy.linalg.solve_triangular(R, rhs, trans="T")
     lin.update(b=b.tolist(), rhs=rhs.tolist(), d=d.tolist(), delta=scipy.linalg.solve_triangular(R, d).tolist())
-    write(tmp_path, "factors", factors)
-    write(tmp_path, "linear", linear)
+    write_results(tmp_path, "factors", factors)
+    write_results(tmp_path, "linear", linear)
     code, out, _ = cli(capsys, "check", tmp_path, "--only", "factors", "linear")
     fails = [line for line in out.splitlines() if line.startswith("FAIL ")]
     assert code == 1 and len(fails) == 2, out
@@ -365,17 +354,19 @@ def test_a_port_that_wraps_the_gp_priors_heading_error_fails(tmp_path, capsys, o
     assert any(line.startswith("FAIL linear/gp_heading_jump: b worst") for line in fails)  # the cause, not δ
 
 
-def test_a_joint_covariance_stacked_in_elimination_order_fails_the_bushy_case(tmp_path, capsys, ours):
+def test_a_joint_covariance_stacked_in_elimination_order_fails_the_bushy_case(tmp_path, capsys, ours, write_results):
     bad = copy.deepcopy(ours["bayes_tree"])
     cov = np.array(bad["bushy_joint_covariances"]["covariances"]["l4,l3,l2,l1,l0"])
     rev = np.arange(10).reshape(5, 2)[::-1].ravel()
     bad["bushy_joint_covariances"]["covariances"]["l4,l3,l2,l1,l0"] = cov[np.ix_(rev, rev)].tolist()
-    write(tmp_path, "bayes_tree", bad)
+    write_results(tmp_path, "bayes_tree", bad)
     code, out, _ = cli(capsys, "check", tmp_path, "--only", "bayes_tree")
     assert code == 1 and "FAIL bayes_tree/bushy_joint_covariances: covariances/l4,l3,l2,l1,l0 worst" in out
 
 
-def test_relinearizing_every_variable_instead_of_those_over_beta_fails_the_partial_cases(tmp_path, capsys, ours):
+def test_relinearizing_every_variable_instead_of_those_over_beta_fails_the_partial_cases(
+    tmp_path, capsys, ours, write_results
+):
     bad = copy.deepcopy(ours["incremental"])
     for name in ("partial_relinearization_estimates", "partial_relinearization_skip2_estimates"):
         inputs = inputs_of("incremental")[name]
@@ -383,7 +374,7 @@ def test_relinearizing_every_variable_instead_of_those_over_beta_fails_the_parti
         for k, (est, m) in enumerate(zip(estimates, moved, strict=True), start=1):
             bad[name][f"estimate_{k}"] = {n: v.tolist() for n, v in est.items()}
             bad[name][f"relinearized_{k}"] = m
-    write(tmp_path, "incremental", bad)
+    write_results(tmp_path, "incremental", bad)
     code, out, _ = cli(capsys, "check", tmp_path, "--only", "incremental")
     fails = {line.split()[1].rstrip(":") for line in out.splitlines() if line.startswith("FAIL ")}
     assert code == 1 and fails == {
@@ -456,10 +447,8 @@ def test_a_results_path_that_is_no_regular_file_is_refused_not_skipped(tmp_path,
     assert code == 2 and words[what] in err and str(path) in err and len(err.strip().splitlines()) == 1, err
 
 
-def hostile_kit(tmp_path: Path, edit) -> Path:
-    """A copy of the shipped kit, edited by ``edit(index, gp_cases)``, its sha256 sums made consistent again."""
-    kit = tmp_path / "kit"
-    shutil.copytree(SHIPPED, kit)
+def hostile_kit(kit: Path, edit) -> Path:
+    """The copy ``kit`` of the shipped kit, edited by ``edit(index, gp_cases)``, its sha256 sums made consistent again."""
     index = json.loads((kit / "index.json").read_text())
     gp = json.loads((kit / "gp" / "cases.json").read_text())
     edit(index, gp)
@@ -494,22 +483,22 @@ KIT_EDITS = {
 
 
 @pytest.mark.parametrize("what", list(KIT_EDITS))
-def test_a_hostile_kit_is_refused_with_one_line(tmp_path, capsys, what, ours):
+def test_a_hostile_kit_is_refused_with_one_line(tmp_path, capsys, what, ours, write_results, kit_copy):
     edit, words = KIT_EDITS[what]
     if what == "index.json a list":
-        kit = hostile_kit(tmp_path, lambda i, g: None)
+        kit = hostile_kit(kit_copy, lambda i, g: None)
         (kit / "index.json").write_text("[1, 2]")
     else:
-        kit = hostile_kit(tmp_path, edit)
-    write(tmp_path / "results", "gp", ours["gp"])
+        kit = hostile_kit(kit_copy, edit)
+    write_results(tmp_path / "results", "gp", ours["gp"])
     code, out, err = cli(capsys, "check", tmp_path / "results", "--only", "gp", "--kit", kit)
     assert code == 2 and out == "" and len(err.strip().splitlines()) == 1 and words in err, err
     assert "\x1b" not in err
 
 
-def test_control_characters_in_a_results_case_name_are_escaped_in_the_report(tmp_path, capsys, ours):
+def test_control_characters_in_a_results_case_name_are_escaped_in_the_report(tmp_path, capsys, ours, write_results):
     forged = {**ours["gp"], "x\x1b[2J\nFAIL gp/wnoa_dt0.1: forged": {"Phi": 1.0}}
-    write(tmp_path, "gp", forged)
+    write_results(tmp_path, "gp", forged)
     code, out, _ = cli(capsys, "check", tmp_path, "--only", "gp")
     assert code == 0 and "\x1b" not in out and "\\x1b[2J\\nFAIL gp/wnoa_dt0.1: forged" in out
     assert not any(line.startswith("FAIL") for line in out.splitlines())

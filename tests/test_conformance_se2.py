@@ -1,6 +1,6 @@
 """Kit v4's ``se2`` suite: it ships with its independent oracle, steam_ref passes it, and wrong ports fail it.
 
-The wrong ports are the independent oracle (:mod:`steam_ref.conformance.oracle_se2`) with one piece swapped,
+The wrong ports are the independent oracle (:mod:`steam_ref.conformance.oracle_lie`) with one piece swapped,
 never steam_ref's own code: J_r where J_r⁻¹ belongs, a left retraction, a Log whose angle is wrapped to
 [-π, π) (the half turn -π), ξ taken from the unwrapped heading difference, and the simplified residual
 handed in for the local-variable one.
@@ -16,8 +16,9 @@ import scipy.linalg
 
 from steam_ref.cli import main
 from steam_ref.conformance import SHIPPED, run_case
-from steam_ref.conformance import oracle_se2 as o
+from steam_ref.conformance import oracle_lie as o
 from steam_ref.conformance.checker import check_cases
+from steam_ref.conformance.expected import oracle_case
 from steam_ref.conformance.kitio import dumps, read_suite
 from steam_ref.conformance.readme import export_readme
 
@@ -26,7 +27,7 @@ CASES = {c["name"]: c for c in read_suite(SHIPPED, "se2")["cases"]}
 
 def port(case: dict, inputs: dict | None = None) -> dict:
     """The oracle's answer to a case (with other inputs, for a port that misreads them), as a results file holds it."""
-    out = o.se2_case(case["inputs"] if inputs is None else inputs)
+    out = oracle_case("se2", case["name"], case["inputs"] if inputs is None else inputs)
     return json.loads(dumps({q: out[q] for q in case["tolerance"]}))
 
 

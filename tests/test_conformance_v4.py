@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 from steam_ref.cli import main
-from steam_ref.conformance import KIT_VERSION, KITS, SHIPPED, run_case
+from steam_ref.conformance import KIT_VERSION, KITS, SHIPPED
 from steam_ref.conformance.expected import fixed_lag_quantities
 from steam_ref.conformance.kitio import DATA_FREE, dumps, read_index, read_suite
 from steam_ref.conformance.oracle_lag import fixed_lag
@@ -32,23 +32,10 @@ def cli(capsys, *args) -> tuple[int, str, str]:
     return code, out.out, out.err
 
 
-def results_of(kit: Path, suite: str) -> dict:
-    out = {}
-    for c in read_suite(kit, suite)["cases"]:
-        got = json.loads(dumps(run_case(suite, c["name"], c["inputs"])))
-        out[c["name"]] = {q: got[q] for q in c["tolerance"]}
-    return out
-
-
-def write(folder: Path, suite: str, cases: dict, version: int = KIT_VERSION) -> None:
-    (folder / suite).mkdir(parents=True, exist_ok=True)
-    (folder / suite / "results.json").write_text(dumps({"kit_version": version, "cases": cases}))
-
-
 @pytest.fixture(scope="module")
-def all_data_free() -> dict:
+def all_data_free(kit_results) -> dict:
     """steam_ref's results for every data-free suite of the shipped kit (they pass)."""
-    return {s: results_of(SHIPPED, s) for s in DATA_FREE}
+    return {s: kit_results(SHIPPED, s) for s in DATA_FREE}
 
 
 def case_of(suite: str, name: str) -> dict:
@@ -86,9 +73,11 @@ def test_kit_v4_ships_beside_v1_to_v3_which_are_unchanged():
 # --- the gate ---------------------------------------------------------------------------------------
 
 
-def test_the_data_free_suites_are_the_default_gate_and_the_paper_suite_is_opt_in(tmp_path, capsys, all_data_free):
+def test_the_data_free_suites_are_the_default_gate_and_the_paper_suite_is_opt_in(
+    tmp_path, capsys, all_data_free, write_results
+):
     for suite, results in all_data_free.items():
-        write(tmp_path, suite, results)
+        write_results(tmp_path, suite, results)
     n = sum(map(len, all_data_free.values()))
     code, out, _ = cli(capsys, "check", tmp_path)  # no --only listing every suite but paper
     lines = out.strip().splitlines()
@@ -98,27 +87,29 @@ def test_the_data_free_suites_are_the_default_gate_and_the_paper_suite_is_opt_in
     assert code == 1 and "MISSING: 2 cases of paper have no result: synthetic_btgp1, plaza_btgp1" in out, out
     code, out, _ = cli(capsys, "check", tmp_path, "--only", "gp", "--paper")
     assert code == 1 and "MISSING: 2 cases of paper" in out and "not checked (--only): factors" in out, out
-    write(tmp_path, "paper", {})
+    write_results(tmp_path, "paper", {})
     code, out, _ = cli(capsys, "check", tmp_path)
     assert code == 0 and "not checked: paper (its results are here)" in out, out
 
 
-def test_allow_missing_with_nothing_passed_is_not_a_pass(tmp_path, capsys, all_data_free):
-    write(tmp_path, "gp", {})
+def test_allow_missing_with_nothing_passed_is_not_a_pass(tmp_path, capsys, all_data_free, write_results):
+    write_results(tmp_path, "gp", {})
     code, out, _ = cli(capsys, "check", tmp_path, "--allow-missing")
     lines = out.strip().splitlines()
     assert code == 1 and lines[-1].startswith("0 passed, 0 failed, ") and lines[-1].endswith(" missing"), out
     assert "no case was checked, so nothing passed: that is not a pass" in out
-    write(tmp_path, "gp", {"wnoa_dt0.1": all_data_free["gp"]["wnoa_dt0.1"]})
+    write_results(tmp_path, "gp", {"wnoa_dt0.1": all_data_free["gp"]["wnoa_dt0.1"]})
     code, out, _ = cli(capsys, "check", tmp_path, "--allow-missing")
     assert code == 0 and out.strip().splitlines()[-1].startswith("1 passed, 0 failed, "), out
 
 
-def test_a_quantity_the_case_does_not_have_is_a_warning_and_the_rest_is_checked(tmp_path, capsys, all_data_free):
+def test_a_quantity_the_case_does_not_have_is_a_warning_and_the_rest_is_checked(
+    tmp_path, capsys, all_data_free, write_results
+):
     gp = copy.deepcopy(all_data_free["gp"])
     gp["wnoa_dt0.1"]["Q_condition_number"] = 12.5  # an extra output a port writes
     gp["wnoa_dt0.5"]["Phi"][0][3] += 1e-3  # and a real fault elsewhere in the same file
-    write(tmp_path, "gp", gp)
+    write_results(tmp_path, "gp", gp)
     code, out, err = cli(capsys, "check", tmp_path, "--only", "gp")
     lines = out.strip().splitlines()
     assert code == 1 and err == "" and lines[-1] == f"{len(gp) - 1} passed, 1 failed", out
@@ -128,7 +119,7 @@ def test_a_quantity_the_case_does_not_have_is_a_warning_and_the_rest_is_checked(
     assert any(line.startswith("FAIL gp/wnoa_dt0.5: Phi") for line in lines), out
     gp["wnoa_dt0.5"]["Phi"][0][3] -= 1e-3
     gp["wnoa_dt0.1"]["Phii"] = gp["wnoa_dt0.1"].pop("Phi")  # a typo still fails: the quantity it misspells is missing
-    write(tmp_path, "gp", gp)
+    write_results(tmp_path, "gp", gp)
     code, out, _ = cli(capsys, "check", tmp_path, "--only", "gp")
     assert code == 1 and "FAIL gp/wnoa_dt0.1: Phi is missing from the results" in out and "'Phii'" in out, out
 
@@ -136,7 +127,7 @@ def test_a_quantity_the_case_does_not_have_is_a_warning_and_the_rest_is_checked(
 # --- the fixed_lag suite -------------------------------------------------------------------------------
 
 
-def test_a_port_that_forgets_at_t_equal_to_newest_minus_lag_fails_the_boundary_case(tmp_path, capsys):
+def test_a_port_that_forgets_at_t_equal_to_newest_minus_lag_fails_the_boundary_case(tmp_path, capsys, write_results):
     case = case_of("fixed_lag", "timestamp_at_the_boundary")
     lag = case["inputs"]["lag"]
     times = [t for u in case["inputs"]["stream"]["updates"] for t in u["timestamps"].values()]
@@ -144,21 +135,21 @@ def test_a_port_that_forgets_at_t_equal_to_newest_minus_lag_fails_the_boundary_c
     assert any(t == n - lag for t in times for n in newest)  # a timestamp exactly at the boundary, in binary
     assert case["expected"]["marginalized_3"] == [] and case["expected"]["marginalized_4"] == ["x0"]
     # t <= newest - lag is t < newest - lag' for any lag' a hair below lag (the timestamps are multiples of 0.5)
-    write(tmp_path, "fixed_lag", {case["name"]: replay(case, lag=np.nextafter(lag, 0.0))})
+    write_results(tmp_path, "fixed_lag", {case["name"]: replay(case, lag=np.nextafter(lag, 0.0))})
     code, out, _ = cli(capsys, "check", tmp_path, "--only", "fixed_lag", "--allow-missing")
     assert code == 1 and "FAIL fixed_lag/timestamp_at_the_boundary: marginalized_3 differs" in out, out
-    write(tmp_path, "fixed_lag", {case["name"]: replay(case)})  # the oracle's own rule passes
+    write_results(tmp_path, "fixed_lag", {case["name"]: replay(case)})  # the oracle's own rule passes
     code, out, _ = cli(capsys, "check", tmp_path, "--only", "fixed_lag", "--allow-missing")
     assert code == 0, out
 
 
-def test_a_port_that_never_forgets_landmarks_fails_the_forgotten_landmark_case(tmp_path, capsys):
+def test_a_port_that_never_forgets_landmarks_fails_the_forgotten_landmark_case(tmp_path, capsys, write_results):
     case = case_of("fixed_lag", "landmark_forgotten_and_seen_again")
     assert case["expected"]["marginalized_4"] == ["x1", "l0"] and "l0" in case["expected"]["estimate_5"]
     updates = copy.deepcopy(case["inputs"]["stream"]["updates"])
     for u in updates:  # timestamps of states only: landmarks stay for ever
         u["timestamps"] = {k: t for k, t in u["timestamps"].items() if k.startswith("x")}
-    write(tmp_path, "fixed_lag", {case["name"]: replay(case, updates=updates)})
+    write_results(tmp_path, "fixed_lag", {case["name"]: replay(case, updates=updates)})
     code, out, _ = cli(capsys, "check", tmp_path, "--only", "fixed_lag", "--allow-missing")
     assert code == 1 and "FAIL fixed_lag/landmark_forgotten_and_seen_again: marginalized_4 differs" in out, out
 
@@ -235,7 +226,7 @@ def test_the_tree_edit_rule_says_frontal_or_separator_and_what_sorted_applies_to
 # --- the range at the landmark -------------------------------------------------------------------------
 
 
-def test_a_range_at_the_landmark_is_minus_the_reading_with_zero_jacobian_rows(tmp_path, capsys):
+def test_a_range_at_the_landmark_is_minus_the_reading_with_zero_jacobian_rows(tmp_path, capsys, write_results):
     case = case_of("factors", "range_at_landmark")
     values = case["inputs"]["values"]
     assert values["x0"][:2] == values["l0"]  # exactly at the landmark
@@ -244,12 +235,12 @@ def test_a_range_at_the_landmark_is_minus_the_reading_with_zero_jacobian_rows(tm
     assert exp["error"] == [-r] and exp["b"] == [r / sigma] and exp["cost"] == pytest.approx(0.5 * (r / sigma) ** 2)
     assert not np.any(exp["H_0"]) and not np.any(exp["H_1"]) and not np.any(exp["A_0"]) and not np.any(exp["A_1"])
     good = json.loads(dumps({q: exp[q] for q in case["tolerance"]}))
-    write(tmp_path, "factors", {case["name"]: good})
+    write_results(tmp_path, "factors", {case["name"]: good})
     code, out, _ = cli(capsys, "check", tmp_path, "--only", "factors", "--allow-missing")
     assert code == 0, out
     gtsam_like = copy.deepcopy(good)  # GTSAM's norm2 at 0: H = [1, 1] ("really infinity, why 1?")
     gtsam_like["H_1"] = [[1.0, 1.0]]
-    write(tmp_path, "factors", {case["name"]: gtsam_like})
+    write_results(tmp_path, "factors", {case["name"]: gtsam_like})
     code, out, _ = cli(capsys, "check", tmp_path, "--only", "factors", "--allow-missing")
     assert code == 1 and "FAIL factors/range_at_landmark: H_1" in out, out
     assert "range_at_landmark" in read_index(SHIPPED)["conventions"]
