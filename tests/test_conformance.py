@@ -12,6 +12,7 @@ import ast
 import copy
 import fnmatch
 import json
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -103,6 +104,34 @@ def test_the_oracle_imports_nothing_of_steam_ref_but_its_errors():
         tree = ast.parse((SHIPPED.parent / f"{module}.py").read_text())
         imported = {n.module for n in ast.walk(tree) if isinstance(n, ast.ImportFrom) and n.level}
         assert imported <= {"errors", None, *oracle}, (module, imported)
+
+
+def test_every_case_of_every_shipped_kit_has_one_runner_and_one_oracle_by_its_type():
+    """The kits v1-v4 are data: the one runner and the one oracle read every version's cases through one table
+    each, keyed by case type (suite, and the kind its inputs name), and the two tables name the same types."""
+    from steam_ref.conformance.expected import ORACLES
+    from steam_ref.conformance.kitio import case_type
+    from steam_ref.conformance.runner import RUNNERS
+
+    assert set(RUNNERS) == set(ORACLES)
+    seen = set()
+    for version, kit in KITS.items():
+        for suite in read_index(kit)["suites"]:
+            for c in read_suite(kit, suite)["cases"] if suite != "paper" else ():
+                kind = case_type(suite, c["inputs"])
+                assert kind in RUNNERS and (kind in ORACLES or not c["independent"]), (version, suite, c["name"])
+                seen.add(kind)
+    assert seen == set(RUNNERS)  # no row for a type no kit has
+
+
+def test_no_module_of_the_kit_is_named_after_a_group_or_a_kit_version_and_the_kits_hold_no_code():
+    package = SHIPPED.parent
+    modules = [p.relative_to(package).as_posix() for p in package.rglob("*.py")]
+    for name in modules:
+        stem = Path(name).stem
+        assert not any(group in stem for group in ("se2", "se3", "so2", "so3", "pose2", "pose3")), name
+        assert not re.search(r"(^|_)v\d+$", stem), name  # graphs_v2.py: a case belongs to its idea's module
+    assert not [n for n in modules if n.split("/")[0] in {kit.name for kit in KITS.values()}]  # data, not modules
 
 
 # --- selftest, export, check ----------------------------------------------------------------------
@@ -437,3 +466,20 @@ def test_an_export_that_fails_midway_leaves_nothing_and_a_retry_works(tmp_path, 
     assert code == 0 and (tmp_path / "kit" / "README.md").is_file() and (tmp_path / "kit" / "index.json").is_file(), err
     (tmp_path / "empty").mkdir()
     assert cli(capsys, "export", tmp_path / "empty")[0] == 0 and (tmp_path / "empty" / "index.json").is_file()
+
+
+def test_an_export_onto_a_full_disk_says_so_in_one_line_naming_the_destination(tmp_path, capsys, monkeypatch):
+    """A full disk while the kit's files are copied: one line naming the folder and the cause, not the copy's list of
+    (source, destination, error) tuples with the installed package's paths; nothing is left behind."""
+    import errno
+    import shutil
+
+    def full(*args, **kwargs):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(shutil, "copyfile", full)
+    code, out, err = cli(capsys, "export", tmp_path / "kit")
+    assert code == 2 and out == "" and len(err.strip().splitlines()) == 1, err
+    assert f"cannot export the kit to '{tmp_path / 'kit'}': No space left on device" in err, err
+    assert str(SHIPPED) not in err and "[(" not in err, err
+    assert list(tmp_path.iterdir()) == []

@@ -22,7 +22,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from steam_ref.cli import main
-from steam_ref.conformance import KITS, SHIPPED, SUITES, kitio, oracle_lag
+from steam_ref.conformance import KIT_VERSION, KITS, SHIPPED, SUITES, kitio, oracle_lag
 from steam_ref.conformance.expected import fixed_lag_quantities
 from steam_ref.conformance.kitio import dumps, kit_files, read_index, read_suite, sha256
 from steam_ref.conformance.oracle_graph import stream
@@ -161,6 +161,30 @@ def test_v3_results_still_check_against_the_shipped_v3(tmp_path, capsys, kit_res
         write_results(tmp_path, suite, kit_results(KITS[3], suite), version=3)
     code, out, _ = cli(capsys, "check", tmp_path)
     assert code == 0 and out.strip().splitlines()[-1] == "68 passed, 0 failed", out
+
+
+def test_a_kit_version_written_as_an_integral_float_names_that_kit(tmp_path, capsys, kit_results):
+    """JSON has one number type: ``"kit_version": 3.0`` (a writer that prints every number as a float) is kit v3;
+    ``3.5`` names no kit and is refused, the message naming it as given."""
+    results = {"kit_version": 3.0, "cases": kit_results(KITS[3], "gp")}
+    (tmp_path / "gp").mkdir()
+    (tmp_path / "gp" / "results.json").write_text(json.dumps(results))
+    code, out, err = cli(capsys, "check", tmp_path, "--only", "gp")
+    assert code == 0 and out.strip().splitlines()[-1] == "16 passed, 0 failed", out + err
+    (tmp_path / "gp" / "results.json").write_text(json.dumps({**results, "kit_version": 3.5}))
+    code, _, err = cli(capsys, "check", tmp_path, "--only", "gp")
+    assert code == 2 and "kit_version 3.5, the kits are versions 1, 2, 3, 4" in err, err
+
+
+def test_an_empty_results_path_is_refused_not_read_as_the_working_folder(tmp_path, capsys, monkeypatch, ours):
+    results = {"kit_version": KIT_VERSION, "cases": ours["gp"]}
+    (tmp_path / "gp").mkdir()
+    (tmp_path / "gp" / "results.json").write_text(dumps(results))
+    monkeypatch.chdir(tmp_path)  # the working folder holds results that pass
+    for args in (["check", ""], ["check", " "], ["check", ".", "--only", "gp", "--kit", ""]):
+        code, out, err = cli(capsys, *args)
+        assert code == 2 and out == "" and len(err.strip().splitlines()) == 1 and "empty" in err, (args, out, err)
+    assert cli(capsys, "check", ".", "--only", "gp")[0] == 0  # the working folder named is read
 
 
 def conditioning_results(case: dict) -> dict:

@@ -26,10 +26,17 @@ from ..errors import SteamError
 from ..paper.progress import wanted
 from .checker import Report
 from .gate import CONVENTION_NAMES, check_directory
-from .kitio import KIT_VERSION, SHIPPED, SUITES, read_index
+from .kitio import KIT_VERSION, SHIPPED, SUITES, kit_files, read_index
 from .readme import export_readme
 
 __all__ = ["add_parser", "run"]
+
+
+def _path(text: str) -> str:
+    """An argparse type: a path that is not empty (``Path("")`` is the working folder, which no one means)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError(f"expected a folder, got an empty path {text!r}")
+    return text
 
 
 def _data_dir(text: str) -> str:
@@ -51,9 +58,9 @@ def add_parser(sub) -> argparse.ArgumentParser:
     exp = commands.add_parser(
         "export", help="write the kit (inputs, expected outputs, conventions) and a README to DIR"
     )
-    exp.add_argument("dir", metavar="DIR", help="a new or empty folder")
+    exp.add_argument("dir", metavar="DIR", type=_path, help="a new or empty folder")
     chk = commands.add_parser("check", help="compare results laid out like the kit with its expected values")
-    chk.add_argument("results", metavar="RESULTS_DIR", help="a folder with <suite>/results.json")
+    chk.add_argument("results", metavar="RESULTS_DIR", type=_path, help="a folder with <suite>/results.json")
     chk.add_argument("--only", nargs="+", choices=SUITES, default=None, metavar="SUITE", help="check these suites only")
     chk.add_argument("--suite", choices=SUITES, default=None, help="the same as --only SUITE (one suite)")
     chk.add_argument(
@@ -77,7 +84,10 @@ def add_parser(sub) -> argparse.ArgumentParser:
         + ", ".join(CONVENTION_NAMES),
     )
     chk.add_argument(
-        "--kit", default=None, help="check against this exported kit (default: the shipped kit of the results' version)"
+        "--kit",
+        type=_path,
+        default=None,
+        help="check against this exported kit (default: the shipped kit of the results' version)",
     )
     st = commands.add_parser(
         "selftest", help="regenerate every case with the installed code and check it against the shipped kit"
@@ -95,7 +105,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
         help="the paper suite's progress bars on stderr (default: on when stderr is a terminal)",
     )
     bld = commands.add_parser("build", help="regenerate the kit (default: the package's own copy)")
-    bld.add_argument("--out", default=None, help="write the kit here instead of into the package")
+    bld.add_argument("--out", type=_path, default=None, help="write the kit here instead of into the package")
     bld.add_argument(
         "--paper", action="store_true", help="rebuild the paper suite from the data files (else keep the existing one)"
     )
@@ -121,7 +131,9 @@ def _export(target: Path) -> int:
     try:
         target.parent.mkdir(parents=True, exist_ok=True)
         staging = Path(tempfile.mkdtemp(prefix=f".{target.name}.", suffix=".partial", dir=target.parent))
-        shutil.copytree(SHIPPED, staging / "kit", ignore=shutil.ignore_patterns("__pycache__"))
+        for name in [*kit_files(SHIPPED), "index.json"]:  # file by file: the first failure is the one reported
+            (staging / "kit" / name).parent.mkdir(parents=True, exist_ok=True)
+            shutil.copyfile(SHIPPED / name, staging / "kit" / name)
         (staging / "kit" / "README.md").write_text(export_readme(), encoding="utf-8")
         os.replace(staging / "kit", target)  # an empty folder is replaced; nothing else can be there
     except OSError as exc:

@@ -57,6 +57,9 @@ def check_directory(
     paper: bool = False,
 ) -> Report:
     """Check every suite of the kit (or of ``only``) against ``results_dir``; see the module docstring."""
+    for what, path in (("results folder", results_dir), ("kit", kit)):
+        if isinstance(path, str) and not path.strip():  # Path("") is the working folder, which no one means
+            raise SteamError(f"the {what} is an empty path {path!r}: name a folder")
     results_dir = Path(results_dir)
     if not results_dir.is_dir():
         raise SteamError(f"results folder '{printable(results_dir)}' does not exist (or is not a folder)")

@@ -32,7 +32,7 @@ __all__ = [
     "MAX_BYTES",
     "MAX_DEPTH",
     "MAX_VALUES",
-    "is_kit_version",
+    "kit_version",
     "case_type",
     "printable",
     "plain",
@@ -257,10 +257,13 @@ def sha256(path: Path) -> str:
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
-def is_kit_version(value: object) -> bool:
-    """Whether ``value`` names a shipped kit: an int (not a bool, a float, a list or an object, which a
-    lookup in :data:`KITS` would match by equality or refuse with a TypeError) that is one of its keys."""
-    return type(value) is int and value in KITS
+def kit_version(value: object) -> int | None:
+    """The shipped kit ``value`` names, or None: an int, or a float with an integral value (JSON has one number
+    type, and a writer may print 3 as 3.0), that is a key of :data:`KITS`. A bool, a string, a list or an object
+    names none (a lookup in :data:`KITS` would match ``True`` as 1, or refuse a list with a TypeError)."""
+    if type(value) is float and value.is_integer():
+        value = int(value)
+    return value if type(value) is int and value in KITS else None
 
 
 def case_type(suite: str, inputs: Mapping) -> str:
@@ -285,10 +288,11 @@ def read_index(kit: Path) -> dict:
     index = read_json(kit / "index.json")
     if not isinstance(index, Mapping):
         raise DataError(f"{where}: expected a JSON object, got a {type(index).__name__}")
-    version = index.get("kit_version")
-    if not is_kit_version(version):
+    version = kit_version(index.get("kit_version"))
+    if version is None:
         raise DataError(
-            f"{where}: kit version {printable(repr(version))}, this steam_ref reads versions {', '.join(map(str, KITS))}"
+            f"{where}: kit version {printable(repr(index.get('kit_version')))}, this steam_ref reads versions "
+            f"{', '.join(map(str, KITS))}"
         )
     files = index.get("files")
     if not isinstance(files, Mapping) or not files:
@@ -308,7 +312,7 @@ def read_index(kit: Path) -> dict:
     suites = index.get("suites")
     if not isinstance(suites, Mapping) or not suites or not set(suites) <= set(SUITES):
         raise DataError(f"{where}: 'suites' must be an object naming suites of {', '.join(SUITES)}")
-    return dict(index)
+    return {**index, "kit_version": version}
 
 
 def read_suite(kit: Path, suite: str) -> dict:

@@ -23,7 +23,7 @@ import math
 from collections.abc import Mapping, Sequence
 
 from ..errors import DataError
-from .kitio import KITS, is_kit_version, printable
+from .kitio import KITS, kit_version, printable
 
 __all__ = ["kit_cases", "results_cases", "results_version", "numeric_leaf_problem"]
 
@@ -99,19 +99,21 @@ def numeric_leaf_problem(value) -> str:
 
 
 def results_version(where: str, data: object) -> int | None:
-    """The ``kit_version`` a results file names (None when it names none: results written for kit v1)."""
+    """The ``kit_version`` a results file names (None when it names none: results written for kit v1); an integral
+    float (3.0) names that kit."""
     if not isinstance(data, Mapping) or not isinstance(data.get("cases"), Mapping):
         raise DataError(
             f'{where}: expected an object {{"kit_version": N, "cases": {{case name: {{quantity: value}}}}}}'
         )
-    version = data.get("kit_version")
-    if version is None:
+    given = data.get("kit_version")
+    if given is None:
         return None
-    if not is_kit_version(version):
+    version = kit_version(given)
+    if version is None:
         raise DataError(
-            f"{where}: kit_version {printable(repr(version))[:40]}, the kits are versions {', '.join(map(str, KITS))}"
+            f"{where}: kit_version {printable(repr(given))[:40]}, the kits are versions {', '.join(map(str, KITS))}"
         )
-    return int(version)
+    return version
 
 
 def results_cases(where: str, data: Mapping, kit: Sequence[Mapping], warnings: list[str] | None = None) -> dict:
