@@ -553,7 +553,7 @@ def _log(x) -> np.ndarray:
     return gtsam.Pose2.Logmap(_kit_pose(*x))
 
 
-def se2_case(name: str, inputs: dict) -> dict:
+def lie_group_case(name: str, inputs: dict) -> dict:
     kind = inputs["kind"]
     if name in SE2_NEAR_ZERO:
         raise Unsupported("Pose2's closed forms lose digits near phi = 0 (up to 2.6e-5 against a 1e-12 tolerance)")
@@ -596,22 +596,17 @@ def se2_case(name: str, inputs: dict) -> dict:
     raise Unsupported(SE2_LEFT_OUT[kind])
 
 
-def compute(suite: str, name: str, inputs: dict) -> dict:
-    if suite == "gp":
-        return gp_case(inputs)
-    if suite == "factors":
-        return factor_case(inputs)
-    if suite == "linear":
-        return linear_case(inputs)
-    if suite == "batch":
-        return batch_case(inputs)
-    if suite == "bayes_tree":
-        return bayes_tree_case(name, inputs)
-    if suite == "fixed_lag":
-        return fixed_lag_case(inputs)
-    if suite == "se2":
-        return se2_case(name, inputs)
-    return incremental_case(name, inputs)
+# suite → its cases computed with GTSAM, from a case's name and inputs
+COMPUTE = {
+    "gp": lambda _name, inputs: gp_case(inputs),
+    "factors": lambda _name, inputs: factor_case(inputs),
+    "linear": lambda _name, inputs: linear_case(inputs),
+    "batch": lambda _name, inputs: batch_case(inputs),
+    "bayes_tree": bayes_tree_case,
+    "incremental": incremental_case,
+    "fixed_lag": lambda _name, inputs: fixed_lag_case(inputs),
+    "se2": lie_group_case,
+}
 
 
 def plain(v):
@@ -641,7 +636,7 @@ def main(argv=None) -> int:
         results, skipped = {}, []
         for case in cases:
             try:
-                got = compute(suite, case["name"], case["inputs"])
+                got = COMPUTE[suite](case["name"], case["inputs"])
             except Unsupported as why:
                 skipped.append(f"{case['name']} ({why})")
                 continue
