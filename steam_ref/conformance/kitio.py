@@ -47,7 +47,8 @@ __all__ = [
 ]
 
 KIT_VERSION = 4  # the version this steam_ref builds; older ones stay shipped and checkable (never edited)
-KITS = {v: Path(__file__).resolve().parent / f"v{v}" for v in (1, 2, 3, 4)}  # every kit inside the installed package
+# every kit inside the installed package: data (JSON and .npz), read by the one checker and runner
+KITS = {v: Path(__file__).resolve().parent / f"v{v}" for v in range(1, KIT_VERSION + 1)}
 SHIPPED = KITS[KIT_VERSION]
 # every suite of any kit (v1 and v2 have all but fixed_lag and se2, v3 all but se2); 'paper' last: it is built from the data files.
 # A new suite goes before 'paper'; check's default gate is every suite of a kit but 'paper'.
