@@ -100,14 +100,21 @@ def batch(inputs: Mapping) -> dict:
     """Gauss-Newton's iterates (x ← x ⊕ δ) and the cost at each, in the case's ordering (else steam_ref's)."""
     p, factors, values, ordering = _problem(inputs)
     graph, n = FactorGraph(factors), int(inputs["iterations"])
-    options = dict(relative_tolerance=0.0, absolute_tolerance=0.0, step_tolerance=0.0, check=False)
-    if ordering is not None:
-        options["ordering"] = ordering
+    given = {} if ordering is None else {"ordering": ordering}  # else steam_ref's own
     iterates = {k: [np.asarray(v, float)] for k, v in p["values"].items()}
     if n < 1:
         raise SteamError(f"a batch case runs at least one iteration, got iterations={n}")
     for k in range(1, n + 1):
-        result = gauss_newton(graph, values, max_iterations=k, **options)
+        result = gauss_newton(
+            graph,
+            values,
+            max_iterations=k,
+            relative_tolerance=0.0,
+            absolute_tolerance=0.0,
+            step_tolerance=0.0,
+            check=False,
+            **given,
+        )
         for name in iterates:
             iterates[name].append(result.values[spec.key(name)])
     costs = [result.initial_cost] + [it.cost for it in result.iterations]
