@@ -44,6 +44,17 @@ _C1 = (-1.0) ** _k * (2 * _k + 1) / _fact[2 * _k + 3]  # d/dφ of C = (φ - sin 
 # (1 - (φ/2) cot(φ/2)) / φ = Σₙ |B₂ₙ| φ²ⁿ⁻¹ / (2n)! = Σₙ 2 ζ(2n) φ²ⁿ⁻¹ / (2π)²ⁿ (Bernoulli numbers B₂ₙ)
 _G = 2 * scipy.special.zeta(2.0 * (_k + 1)) / (2 * np.pi) ** (2.0 * (_k + 1))  # γ / φ  [DER 11.3]
 _G1 = (2 * _k + 1) * _G  # d/dφ of γ
+# B' = 2 sin h g(h) / φ² with h = φ/2 and g(h) = 2h cos h - sin h, which vanishes at h* (tan h* = 2h*, φ* = 2h* ≈ 2.331,
+# where B = (1 - cos φ)/φ peaks): within _ROOT_NEAR of h*, g is summed from its Taylor series about h*, so B' keeps
+# its relative precision through its zero [DER 11.7]. h* = _ROOT_HI + _ROOT_LO to 32 digits (mpmath's findroot).
+_ROOT_HI, _ROOT_LO = 1.1655611852072114, -1.0746027478595998e-16
+_ROOT_NEAR = 0.05  # |h - h*| below this: 12 terms, the last below 1e-20 of g
+_rc, _rs = math.cos(_ROOT_HI), math.sin(_ROOT_HI)
+_cos_k, _sin_k = (_rc, -_rs, -_rc, _rs), (_rs, _rc, -_rs, -_rc)  # the k-th derivatives of cos and sin at h*, k mod 4
+# g⁽ᵏ⁾(h*) / k! for k = 1..12, g⁽ᵏ⁾ = 2h cos⁽ᵏ⁾ + 2k cos⁽ᵏ⁻¹⁾ - sin⁽ᵏ⁾; g(h) = Σ _ROOT_G[k-1] (h - h*)ᵏ
+_ROOT_G = np.array(
+    [(2 * _ROOT_HI * _cos_k[k % 4] + 2 * k * _cos_k[(k - 1) % 4] - _sin_k[k % 4]) / _fact[k] for k in range(1, 13)]
+)
 
 
 def _poly(c: NDArray, z: NDArray) -> NDArray:
@@ -97,11 +108,25 @@ class _Coefficients:
     def _D1(self) -> NDArray:
         return self._pick(lambda: self.phi * _poly(_D1, self.z), lambda: (self["A"] - 2 * self["D"]) / self.phi)
 
-    def _B1(self) -> NDArray:
-        return self["D"] + self.phi * self["D1"]
+    def _B1(self) -> NDArray:  # B' = A - D: above the switch 2 sin h g(h)/φ², h = φ/2, g(h) = 2h cos h - sin h
+        return self._pick(lambda: self["D"] + self.phi * self["D1"], self._B1_closed)
 
-    def _C1(self) -> NDArray:
-        return self._pick(lambda: _poly(_C1, self.z), lambda: self["D"] - 2 * self["C"] / self.phi)
+    def _B1_closed(self) -> NDArray:
+        h = np.abs(self.phi) / 2  # B' is even in φ
+        g = 2 * h * np.cos(h) - np.sin(h)
+        d = (h - _ROOT_HI) - _ROOT_LO  # h - h*: the first difference is exact near h*
+        near = np.abs(d) < _ROOT_NEAR
+        if np.any(near):
+            g = np.where(near, d * _poly(_ROOT_G, d), g)  # Taylor series of g about its root h*
+        return 2 * np.sin(h) * g / self.z
+
+    def _C1(
+        self,
+    ) -> NDArray:  # C' = D - 2C/φ = 4 cos h (sin h - h cos h)/φ³, h = φ/2: no cancellation at φ = π, where C' = 0
+        h = self.phi / 2
+        return self._pick(
+            lambda: _poly(_C1, self.z), lambda: 4 * np.cos(h) * (np.sin(h) - h * np.cos(h)) / (self.z * self.phi)
+        )
 
     def _alpha(self) -> NDArray:
         h = self.phi / 2
