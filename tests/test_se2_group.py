@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 from requirements import optional_import
 
-from steam_ref.errors import ShapeError
-from steam_ref.lie import SE2, SE2_STATE
-from steam_ref.lie.se2 import SERIES_BELOW, _Coefficients, wrap
+from steam_ref.errors import ShapeError, SteamError
+from steam_ref.lie import SE2, SE2_STATE, world_position_covariance
+from steam_ref.lie.se2 import _ROOT_HI, _ROOT_LO, _ROOT_NEAR, SERIES_BELOW, _Coefficients, wrap
 from steam_ref.manifold import VECTOR, Manifold
 
 mp = optional_import("mpmath", "test")
@@ -54,6 +54,31 @@ def test_every_coefficient_and_its_derivative_is_exact_on_both_sides_of_the_seri
         # relative in the series' range; the closed forms above it carry an absolute rounding of a few ulp of 1
         tol = 2e-15 * abs(value) + (4e-16 if abs(phi) >= EDGE else 1e-29 if phi == 0 else 0.0)
         assert abs(got - value) <= tol, (name, phi, got, value)
+
+
+ROOT = 2 * _ROOT_HI  # B' = 0 here: tan(φ/2) = φ, where B = (1 - cos φ)/φ peaks
+NEAR_ZEROS = [ROOT, np.nextafter(ROOT, 0), np.nextafter(ROOT, 4), -ROOT, np.pi, np.nextafter(np.pi, 0)]
+NEAR_ZEROS += [
+    ROOT + s * d for s in (1, -1) for d in (1e-12, 1e-9, 1e-6, 1e-3, 2 * _ROOT_NEAR * 0.99, 2 * _ROOT_NEAR * 1.01)
+]
+NEAR_ZEROS += [np.pi - d for d in (1e-12, 1e-8, 1e-4, 1e-2)]
+
+
+def test_the_root_of_b_prime_is_known_to_32_digits():
+    with mp.workdps(60):
+        root = mp.findroot(lambda h: mp.tan(h) - 2 * h, mp.mpf("1.1655611852"))
+        assert abs(mp.mpf(_ROOT_HI) + mp.mpf(_ROOT_LO) - root) < mp.mpf("1e-32")
+
+
+@pytest.mark.parametrize("phi", NEAR_ZEROS)
+def test_b_prime_and_c_prime_keep_their_relative_precision_where_they_vanish(phi):
+    """B' vanishes at φ ≈ ±2.331 and C' at ±π: a difference of two O(1) terms there would be all rounding."""
+    with mp.workdps(60):
+        p = mp.mpf(phi)
+        want = {"B1": (p * mp.sin(p) - 1 + mp.cos(p)) / p**2, "C1": (2 * mp.sin(p) - p - p * mp.cos(p)) / p**3}
+        ours = _Coefficients(phi)
+        for name, value in want.items():
+            assert abs(mp.mpf(float(ours[name])) - value) <= 1e-13 * abs(value), (name, phi)
 
 
 def _mp_exp(xi):
@@ -215,3 +240,22 @@ def test_the_se2_state_kind_retracts_on_the_right_and_local_inverts_it(rng):
     np.testing.assert_array_equal(VECTOR.local(x, 2 * x), x)
     with pytest.raises(ShapeError, match=r"SE2_STATE state"):
         SE2_STATE.retract(np.zeros(3), np.zeros(3))
+
+
+def test_world_position_covariance_refuses_a_nan_or_asymmetric_covariance():
+    """It rotated either without a word (issue 39)."""
+    x, P = np.array([1.0, 2.0, 0.5, 0.3, 0.0, 0.1]), np.diag([0.4, 0.1, 0.2, 1.0, 1.0, 1.0])
+    c, s = np.cos(0.5), np.sin(0.5)
+    R = np.array([[c, -s], [s, c]])
+    np.testing.assert_allclose(world_position_covariance(x, P), R @ P[:2, :2] @ R.T, rtol=1e-15)
+    np.testing.assert_allclose(world_position_covariance(x[:3], P[:3, :3]), R @ P[:2, :2] @ R.T, rtol=1e-15)
+    bad = P.copy()
+    bad[1, 1] = np.nan
+    with pytest.raises(SteamError, match=r"cov .*nan"):
+        world_position_covariance(x, bad)
+    bad = P.copy()
+    bad[0, 1] = 0.05
+    with pytest.raises(SteamError, match=r"cov must be symmetric.*cov\[0, 1\] = 0\.05"):
+        world_position_covariance(x, bad)
+    with pytest.raises(ShapeError, match="square covariance"):
+        world_position_covariance(x, np.eye(1))
