@@ -97,7 +97,7 @@ class GtsamPrior(LiePriorFactor):
     qc: NDArray = None  # type: ignore[assignment]  # (3, 3), GTSAM's factor needs it
     residual: str = "exact"
 
-    _shared: ClassVar[tuple[str, ...]] = ("model", "qc", "residual")
+    _shared: ClassVar[tuple[str, ...]] = LiePriorFactor._shared + ("qc", "residual")
 
     def _gtsam(self, x1: NDArray, x2: NDArray) -> list:
         a, b = np.reshape(x1, (-1, 6)), np.reshape(x2, (-1, 6))
