@@ -243,7 +243,7 @@ def test_the_se2_state_kind_retracts_on_the_right_and_local_inverts_it(rng):
 
 
 def test_world_position_covariance_refuses_a_nan_or_asymmetric_covariance():
-    """It rotated either without a word (issue 39)."""
+    """It used to rotate either without a word."""
     x, P = np.array([1.0, 2.0, 0.5, 0.3, 0.0, 0.1]), np.diag([0.4, 0.1, 0.2, 1.0, 1.0, 1.0])
     c, s = np.cos(0.5), np.sin(0.5)
     R = np.array([[c, -s], [s, c]])
