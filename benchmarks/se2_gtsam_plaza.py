@@ -50,7 +50,7 @@ from steam_ref.factors import PriorFactor
 from steam_ref.factors.lie_prior import LiePriorFactor, LieStatePrior
 from steam_ref.factors.lie_readings import BodyVelocityFactor, PoseReading
 from steam_ref.graph import FactorGraph
-from steam_ref.lie import SE2_STATE, se2
+from steam_ref.lie import SE2, SE2_STATE
 from steam_ref.linear.system import linearize
 from steam_ref.paper.online import ScheduleClock
 from steam_ref.paper.presets import PaperSetup
@@ -97,7 +97,7 @@ class GtsamPrior(LiePriorFactor):
     qc: NDArray = None  # type: ignore[assignment]  # (3, 3), GTSAM's factor needs it
     residual: str = "exact"
 
-    _shared: ClassVar[tuple[str, ...]] = ("model", "qc", "residual")
+    _shared: ClassVar[tuple[str, ...]] = LiePriorFactor._shared + ("qc", "residual")
 
     def _gtsam(self, x1: NDArray, x2: NDArray) -> list:
         a, b = np.reshape(x1, (-1, 6)), np.reshape(x2, (-1, 6))
@@ -125,7 +125,7 @@ def velocity_rows_reference(x1: NDArray, x2: NDArray) -> NDArray:
     import mpmath as mp
 
     with mp.workdps(40):
-        rx, ry, th = (mp.mpf(float(v)) for v in se2.log(se2.between(x1[:3], x2[:3])))
+        rx, ry, th = (mp.mpf(float(v)) for v in SE2.log(SE2.between(x1[:3], x2[:3])))
         ad = mp.matrix([[0, -th, ry], [th, 0, -rx], [0, 0, 0]])
         jr, term = mp.zeros(3, 3), mp.eye(3)
         for k in range(80):
@@ -264,7 +264,7 @@ def run(max_poses: int | None = None, variant: str = "exact", setup: PaperSetup 
             pending |= {L(j): pos.copy() for j, pos in readings.landmarks.items()}
         else:
             dt, w = new[0].dt, readings.velocity[i]
-            newest = np.r_[se2.compose(newest[:3], se2.exp(dt * w)), w]  # T Exp(Δt ϖ)
+            newest = np.r_[SE2.compose(newest[:3], SE2.exp(dt * w)), w]  # T Exp(Δt ϖ)
         pending[X(i)] = newest
         pending_items += new
         if not clock.due(Step(i, sum(it.kind == "range" for it in new))):
@@ -349,7 +349,7 @@ def agreement(setup: PaperSetup, items: list[Item], at: dict) -> dict:
         kind = it.kind
         if kind == "motion":  # GTSAM's J_r⁻¹(ξ)ϖ₂ loses digits at small turns: the two sides apart
             x1, x2 = at[X(it.keys[0])], at[X(it.keys[1])]
-            turn = abs(se2.log(se2.between(x1[:3], x2[:3]))[2])
+            turn = abs(SE2.log(SE2.between(x1[:3], x2[:3]))[2])
             kind = f"motion |dtheta| >= {SMALL_TURN}" if turn >= SMALL_TURN else f"motion |dtheta| < {SMALL_TURN}"
             _, H1, H2 = gtsam_jacobians(gs[0], x1, x2)
             J1, J2 = f.jacobians(x1, x2)
@@ -367,7 +367,7 @@ def agreement(setup: PaperSetup, items: list[Item], at: dict) -> dict:
         x1, x2, e_ours, e_theirs = motion_worst[1]
         ref = velocity_rows_reference(x1, x2)
         out["motion worst vs 40 digits"] = {
-            "dtheta": float(se2.log(se2.between(x1[:3], x2[:3]))[2]),
+            "dtheta": float(SE2.log(SE2.between(x1[:3], x2[:3]))[2]),
             "steam_minus_reference": float(np.abs(e_ours[3:] - ref).max()),
             "gtsam_minus_reference": float(np.abs(e_theirs[3:] - ref).max()),
         }

@@ -64,7 +64,7 @@ def main() -> None:
     from steam_ref.datasets import load_dataset
     from steam_ref.factors.lie_prior import LiePriorFactor
     from steam_ref.graph import FactorGraph
-    from steam_ref.lie import SE2_STATE, se2
+    from steam_ref.lie import SE2, SE2_STATE
     from steam_ref.linear.system import linearize
     from steam_ref.paper.online import StreamingEstimator
     from steam_ref.paper.options import StreamOptions
@@ -118,7 +118,7 @@ def main() -> None:
     exact_ours, exact_gtsam = 0.0, 0.0
     for _, f, mine, theirs_e in sorted(wnoa, key=lambda w: -w[0])[:20]:
         x1, x2 = at[f.keys[0]], at[f.keys[1]]
-        xi = se2.log(se2.between(x1[:3], x2[:3]))
+        xi = SE2.log(SE2.between(x1[:3], x2[:3]))
         e = np.r_[xi - f.phi[0, 3] * x1[3:], _jr_inverse_times(xi, x2[3:]) - x1[3:]]
         exact_ours, exact_gtsam = (
             max(exact_ours, float(np.abs(mine - e).max())),

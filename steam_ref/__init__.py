@@ -47,6 +47,10 @@ _HOMES = {
     "BearingRangeFactor": "factors",
     "InterpolatedFactor": "factors",
     "gp_prior_factors": "factors",
+    "LieGroup": "lie",
+    "SE2": "lie",
+    "GroupState": "lie",
+    "SE2_STATE": "lie",
     "Huber": "robust",
     "Tukey": "robust",
     "LinearSystem": "linear",
@@ -118,6 +122,7 @@ if TYPE_CHECKING:  # what a type checker and an IDE see: the same names, importe
     from .finish import finish_at_optimum
     from .gp import predict_state
     from .graph import FactorGraph
+    from .lie import SE2, SE2_STATE, GroupState, LieGroup
     from .linear import LinearSystem, amd_ordering, blas_threads, xl_ordering
     from .paper.online import run_online
     from .paper.options import StreamOptions
@@ -155,6 +160,10 @@ __all__ = [
     "BearingRangeFactor",
     "InterpolatedFactor",
     "gp_prior_factors",
+    "LieGroup",
+    "SE2",
+    "GroupState",
+    "SE2_STATE",
     "Huber",
     "Tukey",
     "LinearSystem",

@@ -12,7 +12,7 @@ from steam_ref.errors import SteamError
 from steam_ref.factors import Factor
 from steam_ref.factors.lie_prior import LiePriorFactor, LieStatePrior, lie_prior_factors
 from steam_ref.factors.lie_readings import BodyVelocityFactor, LieInterpolatedFactor, PoseReading
-from steam_ref.lie import SE2_STATE, se2
+from steam_ref.lie import SE2, SE2_STATE
 from steam_ref.linear.system import linearize
 from steam_ref.variables import L, Values, X
 
@@ -57,10 +57,10 @@ def test_the_prior_jacobians_are_exact(rng, model, scale):
 
 def test_the_two_models_are_the_formulas_they_name(rng):
     x1, x2 = pair(rng, 0.9)
-    xi = se2.log(se2.between(x1[:3], x2[:3]))
+    xi = SE2.log(SE2.between(x1[:3], x2[:3]))
     lv = LiePriorFactor.create(X(0), X(1), DT, QC).error(x1, x2)
     sm = LiePriorFactor.create(X(0), X(1), DT, QC, "simplified").error(x1, x2)
-    np.testing.assert_allclose(lv, np.r_[xi - DT * x1[3:], np.linalg.solve(se2.right_jacobian(xi), x2[3:]) - x1[3:]])
+    np.testing.assert_allclose(lv, np.r_[xi - DT * x1[3:], np.linalg.solve(SE2.right_jacobian(xi), x2[3:]) - x1[3:]])
     np.testing.assert_allclose(sm, np.r_[xi - DT * x1[3:], x2[3:] - x1[3:]])
     assert np.abs(lv[3:] - sm[3:]).max() > 1e-2  # they differ at a turn of 0.9 rad
 
@@ -204,7 +204,7 @@ def test_bad_input_names_the_offending_value():
         LiePriorFactor.create(X(0), X(1), DT, QC, "lie")
     with pytest.raises(SteamError, match=r"qc must be \(3, 3\)"):
         LiePriorFactor.create(X(0), X(1), DT, np.eye(2))
-    with pytest.raises(SteamError, match="inner must be an PoseReading"):
+    with pytest.raises(SteamError, match="inner must be a PoseReading"):
         LieInterpolatedFactor.create(LieStatePrior.create(X(9), np.zeros(6), 1.0), X(0), X(1), 0, 1, 0.5, QC)
     with pytest.raises(SteamError, match="times must increase strictly"):
         lie_prior_factors([X(0), X(1)], np.array([1.0, 1.0]), QC)

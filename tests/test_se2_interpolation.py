@@ -9,7 +9,7 @@ import pytest
 
 from steam_ref.errors import SteamError
 from steam_ref.gp import interpolate_covariance, interpolation_matrices, process_noise
-from steam_ref.lie import SE2_STATE, se2
+from steam_ref.lie import SE2, SE2_STATE
 from steam_ref.lie.gp import (
     extrapolate,
     extrapolate_covariance_se2,
@@ -51,11 +51,11 @@ def test_on_a_constant_twist_the_mean_lies_on_the_path(model):
     """T(t) = T₁ Exp((t - t₁) ϖ), ϖ constant (2.4 rad of turn over the gap): every τ lands on it."""
     twist = np.array([1.5, 0.3, 1.2])
     x1 = np.r_[X1[:3], twist]
-    x2 = np.r_[se2.compose(x1[:3], se2.exp(2.0 * twist)), twist]
+    x2 = np.r_[SE2.compose(x1[:3], SE2.exp(2.0 * twist)), twist]
     for tau in (0.1, 0.7, 1.0, 1.9):
         lam, psi = interpolation_matrices(0.0, 2.0, tau, QC)
         x = interpolate(x1, x2, lam, psi, model)[0]
-        path = se2.compose(x1[:3], se2.exp(tau * twist))
+        path = SE2.compose(x1[:3], SE2.exp(tau * twist))
         np.testing.assert_allclose(x[:3], path, atol=1e-14)
         np.testing.assert_allclose(x[3:], twist, atol=1e-14)
         pred = extrapolate(x1, 0.0, tau)[0]
@@ -97,8 +97,8 @@ def test_the_interpolated_covariance_against_monte_carlo(model):
     x1, x2 = SE2_STATE.retract(X1, d[:, :6]), SE2_STATE.retract(X2, d[:, 6:])  # every map broadcasts over draws
     gamma1 = np.concatenate([np.zeros((n, 3)), x1[:, 3:]], axis=1)
     gamma = gamma1 @ lam.T + local_variables(x1, x2, model)[0] @ psi.T + w  # γ(τ) + its conditional noise
-    pose = se2.compose(x1[:, :3], se2.exp(gamma[:, :3]))
-    jr = se2.right_jacobian(gamma[:, :3])
+    pose = SE2.compose(x1[:, :3], SE2.exp(gamma[:, :3]))
+    jr = SE2.right_jacobian(gamma[:, :3])
     twist = np.einsum("nij,nj->ni", jr, gamma[:, 3:]) if model == "local-variable" else gamma[:, 3:]
     draws = np.concatenate([pose, twist], axis=1)
     sample = _sample_covariance(draws, mean)
@@ -117,9 +117,9 @@ def test_the_extrapolated_covariance_against_monte_carlo():
     w = rng.multivariate_normal(np.zeros(6), process_noise(s, QC * 1e-3), n)
     x1 = SE2_STATE.retract(X1, d)
     gamma = np.concatenate([s * x1[:, 3:], x1[:, 3:]], axis=1) + w  # Φ(s) γ₁ + w  [YIB Eq. 22]
-    jr = se2.right_jacobian(gamma[:, :3])
+    jr = SE2.right_jacobian(gamma[:, :3])
     draws = np.concatenate(
-        [se2.compose(x1[:, :3], se2.exp(gamma[:, :3])), np.einsum("nij,nj->ni", jr, gamma[:, 3:])], 1
+        [SE2.compose(x1[:, :3], SE2.exp(gamma[:, :3])), np.einsum("nij,nj->ni", jr, gamma[:, 3:])], 1
     )
     sample = _sample_covariance(draws, mean)
     scale = np.sqrt(np.outer(np.diag(cov), np.diag(cov)))

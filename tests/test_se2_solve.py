@@ -12,7 +12,7 @@ from requirements import optional_import
 from steam_ref.factors import PriorFactor
 from steam_ref.factors.lie_prior import LieStatePrior, lie_prior_factors
 from steam_ref.factors.lie_readings import BodyVelocityFactor, PoseReading
-from steam_ref.lie import SE2_STATE, se2
+from steam_ref.lie import SE2, SE2_STATE
 from steam_ref.linear.system import linearize
 from steam_ref.variables import L, Values, X
 
@@ -29,7 +29,7 @@ def _problem():
     truth = [np.r_[0.0, 0.0, 0.0, twist]]
     for _ in range(N_STATES - 1):
         w = truth[-1][3:] + rng.normal(0, 0.05, 3)
-        truth.append(np.r_[se2.compose(truth[-1][:3], se2.exp(w)), w])
+        truth.append(np.r_[SE2.compose(truth[-1][:3], SE2.exp(w)), w])
     keys = [X(i) for i in range(N_STATES)]
     factors = [LieStatePrior.create(X(0), truth[0], np.full(6, 0.01))]
     factors += lie_prior_factors(keys, np.arange(N_STATES, dtype=float), QC)

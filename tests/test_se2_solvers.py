@@ -19,7 +19,7 @@ from steam_ref.bayes_tree import FixedLagSmoother, IncrementalSolver, marginaliz
 from steam_ref.factors import PriorFactor
 from steam_ref.factors.lie_prior import LiePriorFactor, LieStatePrior
 from steam_ref.factors.lie_readings import BodyVelocityFactor, PoseReading
-from steam_ref.lie import SE2_STATE, se2, world_position_covariance
+from steam_ref.lie import SE2, SE2_STATE, world_position_covariance
 from steam_ref.manifold import VECTOR
 from steam_ref.variables import L, Values, X
 
@@ -39,7 +39,7 @@ def problem(seed: int, n: int, model: str = "local-variable"):
     truth = [np.r_[0.0, 0.0, 0.0, 1.0, 0.0, 1.1]]
     for _ in range(n - 1):
         w = truth[-1][3:] + rng.normal(0, 0.05, 3)
-        truth.append(np.r_[se2.compose(truth[-1][:3], se2.exp(w)), w])
+        truth.append(np.r_[SE2.compose(truth[-1][:3], SE2.exp(w)), w])
     steps = []
     for i, x in enumerate(truth):
         fs = [LieStatePrior.create(X(0), x, np.full(6, 0.05))] if i == 0 else []

@@ -37,7 +37,7 @@ from ..gp import (
     wnoj_process_noise_inverse,
     wnoj_transition,
 )
-from ..lie import se2
+from ..lie import SE2
 from ..lie.gp import interpolate, interpolate_covariance_se2
 from ..linear.system import linearize
 from . import solvers, spec
@@ -149,24 +149,24 @@ def _lie_state_prior(inputs: Mapping) -> dict:
 
 
 def _exp(inputs: Mapping) -> dict:
-    poses = se2.exp(np.asarray(inputs["xi"], float))
-    return {"exp": poses, "log_of_exp": se2.log(poses)}
+    poses = SE2.exp(np.asarray(inputs["xi"], float))
+    return {"exp": poses, "log_of_exp": SE2.log(poses)}
 
 
 def _log(inputs: Mapping) -> dict:
-    tangents = se2.log(np.asarray(inputs["poses"], float))
-    return {"log": tangents, "exp_of_log": se2.exp(tangents)}
+    tangents = SE2.log(np.asarray(inputs["poses"], float))
+    return {"log": tangents, "exp_of_log": SE2.exp(tangents)}
 
 
 def _jacobians(inputs: Mapping) -> dict:
     xi = np.asarray(inputs["xi"], float)
-    return {"Jr": se2.right_jacobian(xi), "Jr_inv": se2.right_jacobian_inverse(xi)}
+    return {"Jr": SE2.right_jacobian(xi), "Jr_inv": SE2.right_jacobian_inverse(xi)}
 
 
 def _between(inputs: Mapping) -> dict:
     a, b = np.asarray(inputs["a"], float), np.asarray(inputs["b"], float)
-    Ha, Hb = se2.between_jacobians(a, b)
-    return {"between": se2.between(a, b), "H_a": Ha, "H_b": Hb, "Ad_a": se2.adjoint(a)}
+    between, Ha, Hb = SE2.between(a, b, jacobians=True)
+    return {"between": between, "H_a": Ha, "H_b": Hb, "Ad_a": SE2.adjoint(a)}
 
 
 def _lie_interpolation(inputs: Mapping) -> dict:

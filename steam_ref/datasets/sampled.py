@@ -32,7 +32,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..errors import DataError, SteamError
 from ..gp.prior import check_qc, process_noise, transition
-from ..lie import se2
+from ..lie import SE2
 from ..lie.gp import check_model
 from .landmarks import LandmarkDataset
 from .synthetic import check_generator_args, ids_by_first_sighting, observed_landmarks, scatter_landmarks
@@ -225,15 +225,15 @@ def sample_se2_from_model(
     n = n_steps + 1
     chol = np.linalg.cholesky(process_noise(1.0, qc))
     states = np.empty((n, 6))
-    states[0] = np.concatenate([se2.exp(fps * rng.standard_normal(3)), fv + fvs * rng.standard_normal(3)])
+    states[0] = np.concatenate([SE2.exp(fps * rng.standard_normal(3)), fv + fvs * rng.standard_normal(3)])
     noise = rng.standard_normal((n_steps, 6)) @ chol.T
     for k in range(1, n):
         twist = states[k - 1, 3:]
         gamma = np.concatenate([twist, twist]) + noise[k - 1]  # Φ(1) [0; ϖ] + w  [YIB Eq. 22; DER 11.11]
         if not -np.pi < gamma[2] < np.pi:
             raise DataError(f"step {k} turned {gamma[2]!r} rad, outside (-π, π): no SE(2) WNOA residual reads it")
-        states[k, :3] = se2.compose(states[k - 1, :3], se2.exp(gamma[:3]))  # Tₖ₊₁ = Tₖ Exp(ξ)
-        states[k, 3:] = se2.right_jacobian(gamma[:3]) @ gamma[3:] if model == "local-variable" else gamma[3:]
+        states[k, :3] = SE2.compose(states[k - 1, :3], SE2.exp(gamma[:3]))  # Tₖ₊₁ = Tₖ Exp(ξ)
+        states[k, 3:] = SE2.right_jacobian(gamma[:3]) @ gamma[3:] if model == "local-variable" else gamma[3:]
     velocity = states[1:, 3:] + sv * rng.standard_normal((n_steps, 3))  # the body twist, read
     odometry = np.column_stack([np.arange(1.0, n), velocity])  # dt = 1: the step is the velocity
     covariance = np.tile([sv[0] ** 2, 0, 0, sv[1] ** 2, 0, sv[2] ** 2], (n_steps, 1))

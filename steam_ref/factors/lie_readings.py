@@ -1,12 +1,13 @@
-"""Measurements of SE(2) states x = [px, py, θ, vx, vy, ω], at a state or at a time between two.  [DER 11.14-11.16]
+"""Measurements of Lie-group states (a pose and its body twist), at a state or at a time between two.  [DER 11.14-11.16]
 
-Every Jacobian is with respect to the right tangent δ of the state (``steam_ref.lie.SE2_STATE``):
-to first order the position moves by R(θ) δρ and the heading by δφ, so a reading of the pose alone
-(range, bearing, bearing-range) has the vector-space model's error, and its Jacobian is the
-vector-space one times ∂[p; θ]/∂δ = diag(R(θ), 1) [DER 11.14]. :class:`PoseReading` wraps those
-models (one home for each), :class:`BodyVelocityFactor` reads the body twist, and
-:class:`LieInterpolatedFactor` moves any of them to a time τ between two states through the local GP
-of ``lie.gp`` (the SE(2) form of [YIB Eq. 29]).
+Each factor holds its group (``group=``, ``SE2`` by default, whose states are [px, py, θ, vx, vy, ω]).
+Every Jacobian is with respect to the right tangent δ of the state (``GroupState(group)``, for SE(2)
+``steam_ref.lie.SE2_STATE``). :class:`PoseReading` reads a planar pose: to first order the position
+moves by R(θ) δρ and the heading by δφ, so a reading of the pose alone (range, bearing, bearing-range)
+has the vector-space model's error, and its Jacobian is the vector-space one times ∂[p; θ]/∂δ =
+diag(R(θ), 1) [DER 11.14] (one home for each model). :class:`BodyVelocityFactor` reads the body twist,
+and :class:`LieInterpolatedFactor` moves any of them to a time τ between two states through the local
+GP of ``lie.gp`` (the group form of [YIB Eq. 29]).
 """
 
 from __future__ import annotations
@@ -21,8 +22,9 @@ from ..arguments import number
 from ..errors import SteamError
 from ..gp.interpolate import interpolation_matrices
 from ..gp.prior import check_qc
-from ..lie import STATE_SIZE
+from ..lie import SE2, LieGroup
 from ..lie.gp import check_model, interpolate
+from ..lie.group import check_group
 from ..robust import RobustLoss
 from ..variables import Key
 from .base import Factor, measured_vector, sqrt_information
@@ -35,52 +37,83 @@ _POSE_READINGS = (RangeFactor, BearingFactor, BearingRangeFactor)
 
 @dataclass(frozen=True, eq=False)
 class PoseReading(Factor):
-    """A reading of an SE(2) state's pose and a landmark: range, bearing or bearing-range.
+    """A reading of a planar pose [px, py, θ] of a group state and a landmark: range, bearing or bearing-range.
 
     e = e_inner(x, ℓ) (the vector-space model reads [px, py, θ] alike); ∂e/∂δ = ∂e_inner/∂[p; θ] diag(R(θ), 1).
-    Build it with :meth:`range`, :meth:`bearing`, :meth:`bearing_range`.
+    The group must store its poses as [px, py, θ] (SE(2)). Build it with :meth:`range`, :meth:`bearing`,
+    :meth:`bearing_range`.
     """
 
-    inner: Factor  # RangeFactor, BearingFactor or BearingRangeFactor with state_dim 6
+    inner: Factor  # RangeFactor, BearingFactor or BearingRangeFactor with state_dim the group state's size
+    group: LieGroup = field(default=SE2, kw_only=True)
 
     _batched_factors: ClassVar[tuple[str, ...]] = ("inner",)
+    _shared: ClassVar[tuple[str, ...]] = ("group",)
 
     def __post_init__(self) -> None:
         super().__post_init__()
         if not isinstance(self.inner, _POSE_READINGS):
             raise SteamError(f"PoseReading wraps a range, bearing or bearing-range factor, got {self.inner!r}")
+        group = check_group(self.group)
+        if (group.size, group.dim) != (3, 3) or self.inner.key_dims[0] != 6:
+            raise SteamError(
+                f"PoseReading reads a planar pose [px, py, θ] of a 6-number state; {group!r} stores {group.size} "
+                f"numbers with a {group.dim}-d tangent and the reading's state has {self.inner.key_dims[0]}"
+            )
 
     @classmethod
-    def _wrap(cls, inner: Factor) -> PoseReading:
-        return cls(inner.keys, inner.sqrt_information, inner=inner, loss=inner.loss)
+    def _wrap(cls, inner: Factor, group: LieGroup) -> PoseReading:
+        return cls(inner.keys, inner.sqrt_information, inner=inner, loss=inner.loss, group=group)
 
     @classmethod
     def range(
-        cls, state: Key, landmark: Key, measured: float, sigma: float, *, loss: RobustLoss | None = None
+        cls,
+        state: Key,
+        landmark: Key,
+        measured: float,
+        sigma: float,
+        *,
+        loss: RobustLoss | None = None,
+        group: LieGroup = SE2,
     ) -> PoseReading:
         """Range (m) from the state's position to ``landmark``.  [YIB Eq. 33]"""
-        return cls._wrap(RangeFactor.create(state, landmark, measured, sigma, loss=loss))
+        return cls._wrap(RangeFactor.create(state, landmark, measured, sigma, loss=loss), group)
 
     @classmethod
     def bearing(
-        cls, state: Key, landmark: Key, measured: float, sigma: float, *, loss: RobustLoss | None = None
+        cls,
+        state: Key,
+        landmark: Key,
+        measured: float,
+        sigma: float,
+        *,
+        loss: RobustLoss | None = None,
+        group: LieGroup = SE2,
     ) -> PoseReading:
         """Bearing (rad) of ``landmark`` in the robot frame, error wrapped."""
-        return cls._wrap(BearingFactor.create(state, landmark, measured, sigma, loss=loss))
+        return cls._wrap(BearingFactor.create(state, landmark, measured, sigma, loss=loss), group)
 
     @classmethod
     def bearing_range(
-        cls, state: Key, landmark: Key, bearing: float, range_: float, noise: NDArray, *, loss: RobustLoss | None = None
+        cls,
+        state: Key,
+        landmark: Key,
+        bearing: float,
+        range_: float,
+        noise: NDArray,
+        *,
+        loss: RobustLoss | None = None,
+        group: LieGroup = SE2,
     ) -> PoseReading:
         """Bearing and range together; noise: sigmas (2,) or a covariance (2, 2) of [bearing, range]."""
-        return cls._wrap(BearingRangeFactor.create(state, landmark, bearing, range_, noise, loss=loss))
+        return cls._wrap(BearingRangeFactor.create(state, landmark, bearing, range_, noise, loss=loss), group)
 
     @property
     def key_dims(self) -> tuple[int, ...]:  # type: ignore[override]
         return self.inner.key_dims
 
     def batch_signature(self) -> tuple:
-        return (type(self), self.inner.batch_signature())
+        return (type(self), self.group, self.inner.batch_signature())
 
     def error(self, x: NDArray, l: NDArray) -> NDArray:
         return self.inner.error(x, l)
@@ -97,45 +130,63 @@ class PoseReading(Factor):
 
 @dataclass(frozen=True, eq=False)
 class BodyVelocityFactor(Factor):
-    """A body-velocity reading [forward, lateral, yaw rate] of an SE(2) state: e = ϖ - measured, ∂e/∂δ = [0 I]."""
+    """A reading of a group state's body twist (SE(2): [forward, lateral, yaw rate]): e = ϖ - measured, ∂e/∂δ = [0 I]."""
 
-    measured: NDArray  # (3,)
+    measured: NDArray  # (d,)
+    group: LieGroup = field(default=SE2, kw_only=True)
 
     _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "measured")
-    key_dims: ClassVar[tuple[int, ...]] = (STATE_SIZE,)
+    _shared: ClassVar[tuple[str, ...]] = ("group",)
 
     @classmethod
     def create(
-        cls, key: Key, measured: NDArray, noise: NDArray | float, *, loss: RobustLoss | None = None
+        cls,
+        key: Key,
+        measured: NDArray,
+        noise: NDArray | float,
+        *,
+        loss: RobustLoss | None = None,
+        group: LieGroup = SE2,
     ) -> BodyVelocityFactor:
-        """Reading ``measured`` = [vx, vy, ω] in the body frame; noise a sigma, sigmas (3,) or a covariance."""
-        return cls((key,), sqrt_information(noise, 3), measured=measured_vector(measured, 3, "measured"), loss=loss)
+        """Reading ``measured`` = ϖ (SE(2): [vx, vy, ω]) in the body frame; noise a sigma, sigmas (d,) or a covariance."""
+        d = check_group(group).dim
+        measured = measured_vector(measured, d, "measured")
+        return cls((key,), sqrt_information(noise, d), measured=measured, loss=loss, group=group)
+
+    @property
+    def key_dims(self) -> tuple[int, ...]:  # type: ignore[override]
+        return (2 * self.group.dim,)
+
+    def batch_signature(self) -> tuple:
+        return super().batch_signature() + (self.group,)
 
     def error(self, x: NDArray) -> NDArray:
-        return x[..., 3:] - self.measured
+        return x[..., self.group.size :] - self.measured
 
     def jacobians(self, x: NDArray) -> tuple[NDArray]:
-        J = np.zeros(x.shape[:-1] + (3, STATE_SIZE))
-        J[..., :, 3:] = np.eye(3)
+        d = self.group.dim
+        J = np.zeros(x.shape[:-1] + (d, 2 * d))
+        J[..., :, d:] = np.eye(d)
         return (J,)
 
 
 @dataclass(frozen=True, eq=False)
 class LieInterpolatedFactor(Factor):
-    """A reading at a time τ with no state, moved onto the SE(2) states at t₁ < τ < t₂.  [YIB Eq. 29; DER 11.16]
+    """A reading at a time τ with no state, moved onto the group states at t₁ < τ < t₂.  [YIB Eq. 29; DER 11.16]
 
     e(x₁, x₂, …) = e_inner(x(τ), …) with x(τ) the local GP's mean (``lie.gp.interpolate``), and
     ∂e/∂x₁ = H J₁, ∂e/∂x₂ = H J₂ for H the inner factor's Jacobian in the tangent at x(τ).
     """
 
-    inner: Factor  # an SE(2) factor whose first key stands for the state at τ
-    lam: NDArray  # Λ(τ), (6, 6)
-    psi: NDArray  # Ψ(τ), (6, 6)
+    inner: Factor  # a reading of a state on the group, whose first key stands for the state at τ
+    lam: NDArray  # Λ(τ), (2d, 2d)
+    psi: NDArray  # Ψ(τ), (2d, 2d)
     model: str = field(default="local-variable", kw_only=True)
+    group: LieGroup = field(default=SE2, kw_only=True)
 
     _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "lam", "psi")
     _batched_factors: ClassVar[tuple[str, ...]] = ("inner",)
-    _shared: ClassVar[tuple[str, ...]] = ("model",)
+    _shared: ClassVar[tuple[str, ...]] = ("model", "group")
 
     @classmethod
     def create(
@@ -148,34 +199,40 @@ class LieInterpolatedFactor(Factor):
         tau: float,
         qc: NDArray,
         model: str = "local-variable",
+        *,
+        group: LieGroup = SE2,
     ) -> LieInterpolatedFactor:
-        """Move ``inner`` (on the SE(2) state at τ, t1 < τ < t2) onto ``key1`` at t1 and ``key2`` at t2."""
+        """Move ``inner`` (on the state at τ on ``group``, t1 < τ < t2) onto ``key1`` at t1 and ``key2`` at t2."""
         if not isinstance(inner, (PoseReading, BodyVelocityFactor)):
-            raise SteamError(f"inner must be an PoseReading or BodyVelocityFactor (the reading at tau), got {inner!r}")
+            raise SteamError(f"inner must be a PoseReading or BodyVelocityFactor (the reading at tau), got {inner!r}")
+        if inner.group is not check_group(group):
+            raise SteamError(f"inner reads a state on {inner.group!r}, the interpolation is on group={group!r}")
         t1, t2, tau = number("t1", t1), number("t2", t2), number("tau", tau)
         lam, psi = interpolation_matrices(t1, t2, tau, check_qc(qc))  # [YIB Eq. 16]
-        if lam.shape != (STATE_SIZE, STATE_SIZE):
-            raise SteamError(f"qc must be (3, 3) on [vx, vy, ω] for an SE(2) state, got {np.shape(qc)}")
+        d = group.dim
+        if lam.shape != (2 * d, 2 * d):
+            raise SteamError(f"qc must be ({d}, {d}) on the body twist of a state on {group!r}, got {np.shape(qc)}")
         keys = (key1, key2) + tuple(inner.keys[1:])
+        model = check_model(model)
         return cls(
-            keys, inner.sqrt_information, inner=inner, lam=lam, psi=psi, model=check_model(model), loss=inner.loss
+            keys, inner.sqrt_information, inner=inner, lam=lam, psi=psi, model=model, group=group, loss=inner.loss
         )
 
     @property
     def key_dims(self) -> tuple[int, ...]:  # type: ignore[override]
-        return (STATE_SIZE, STATE_SIZE) + tuple(self.inner.key_dims[1:])
+        return (2 * self.group.dim,) * 2 + tuple(self.inner.key_dims[1:])
 
     def batch_signature(self) -> tuple:
-        return (type(self), self.model, self.inner.batch_signature())
+        return (type(self), self.model, self.group, self.inner.batch_signature())
 
     def interpolated_state(self, x1: NDArray, x2: NDArray) -> NDArray:
         """x(τ) = (T₁ Exp ξ(τ), ϖ(τ)) from γ(τ) = Λ γ₁ + Ψ γ₂.  [YIB Eq. 18; DER 11.15]"""
-        return interpolate(x1, x2, self.lam, self.psi, self.model)[0]
+        return interpolate(x1, x2, self.lam, self.psi, self.model, group=self.group, jacobians=False)
 
     def error(self, x1: NDArray, x2: NDArray, *rest: NDArray) -> NDArray:
         return self.inner.error(self.interpolated_state(x1, x2), *rest)  # [YIB Eq. 29]
 
     def jacobians(self, x1: NDArray, x2: NDArray, *rest: NDArray) -> tuple[NDArray, ...]:
-        x, J1, J2 = interpolate(x1, x2, self.lam, self.psi, self.model)
+        x, J1, J2 = interpolate(x1, x2, self.lam, self.psi, self.model, group=self.group)
         H, *others = self.inner.jacobians(x, *rest)
         return (H @ J1, H @ J2, *others)  # [YIB Eq. 29]

@@ -1,14 +1,21 @@
-"""Lie groups for the states of a motion prior on a manifold: SE(2) and its state kind.
+"""Lie groups for the states of a motion prior on a manifold: the protocol, SE(2), the state kind, the local GP.
 
-- :mod:`.se2`: the group SE(2) (Exp, Log, J_r, J_r⁻¹, Ad, compose, inverse, between and their
-  Jacobians), every function broadcasting over leading axes.
-- :mod:`.state`: :data:`SE2_STATE`, the state kind [px, py, θ, vx, vy, ω] (a pose and its body twist),
-  retracted on the right (a :class:`~steam_ref.manifold.Manifold`).
-- :mod:`.interpolate`: the local GP between two SE(2) states (Anderson & Barfoot 2015): the mean at
-  a time τ, its Jacobians and covariance; prediction after the last state.
+- :mod:`.group`: :class:`LieGroup`, the protocol every group implements (Exp, Log, hat/vee, J_r, J_r⁻¹,
+  Ad, compose / inverse / between each with its Jacobians from the same call, the exact derivatives of
+  J_r(ξ)^{±1} v); conventions: tangent [ρ; φ] translation first, right Jacobians, flat arrays,
+  broadcasting over leading axes.
+- :mod:`.se2`: :data:`SE2`, its first instance (poses [x, y, θ], θ in (-π, π]; series below
+  abs(φ) = 1, closed forms above).
+- :mod:`.state`: :class:`GroupState`, the state kind of a pose on any group and its body twist,
+  retracted on the right (a :class:`~steam_ref.manifold.Manifold`); :data:`SE2_STATE` =
+  ``GroupState(SE2)``, the state [px, py, θ, vx, vy, ω]; :func:`world_position_covariance`.
+- :mod:`.gp`: the local GP between two group states (Anderson & Barfoot 2015): the local variables of
+  both WNOA models, the mean at a time τ with its Jacobians and covariance, the prediction after the last
+  state.
 """
 
-from . import se2
-from .state import SE2_STATE, STATE_SIZE, SE2State, world_position_covariance
+from .group import LieGroup
+from .se2 import SE2
+from .state import SE2_STATE, STATE_SIZE, GroupState, world_position_covariance
 
-__all__ = ["se2", "SE2_STATE", "SE2State", "STATE_SIZE", "world_position_covariance"]
+__all__ = ["LieGroup", "SE2", "GroupState", "SE2_STATE", "STATE_SIZE", "world_position_covariance"]

@@ -1,4 +1,4 @@
-"""The WNOA GP on SE(2) through local variables, after Anderson & Barfoot 2015.  [AB15; DER 11.10-11.18]
+"""The WNOA GP on a Lie group through local variables, after Anderson & Barfoot 2015.  [AB15; DER 11.10-11.18]
 
 Between two states x₁ = (T₁, ϖ₁) at t₁ and x₂ = (T₂, ϖ₂) at t₂, the trajectory is written in the
 local variable ξ(t) = Log(T₁⁻¹ T(t)), whose derivative is ξ̇ = J_r(ξ)⁻¹ ϖ (Ṫ = T ϖ^). The local
@@ -11,10 +11,18 @@ vector-space Q(Δt) ("local-variable": GTSAM 4.3 ``WnoaMotionFactorPose2``, STEA
 The "simplified" model takes ξ̇ ≈ ϖ, γ₂ = [ξ₂₁; ϖ₂] (gpslam ``GaussianProcessPriorPose2``, Theseus).
 The mean at τ is γ(τ) = Λ(τ) γ₁ + Ψ(τ) γ₂ [YIB Eq. 18], mapped back: T(τ) = T₁ Exp(ξ(τ)),
 ϖ(τ) = J_r(ξ(τ)) ξ̇(τ) (simplified: ϖ(τ) = ξ̇(τ)). Every Jacobian here is with respect to the right
-tangents of the states (``steam_ref.lie.state``), exact; derivations in [DER 11.10-11.18].
+tangents of the states (``steam_ref.lie.state``), exact; derivations in [DER 11.10-11.18] (written for
+SE(2); every step uses only the group's protocol, ``lie.group``, so the code holds for any group).
+
+Every function takes the group as ``group=`` (a :class:`~steam_ref.lie.group.LieGroup`; SE(2) for now),
+and a state on it as the flat array [T; ϖ] of ``GroupState(group)``: the pose's ``group.size`` numbers
+then the body twist's ``group.dim``. ``local_variables`` and ``interpolate`` give the value and its
+Jacobians from one call, or with ``jacobians=False`` the value alone (a factor's error needs no more).
 """
 
 from __future__ import annotations
+
+from typing import Literal, overload
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -23,7 +31,8 @@ from ..arguments import check_covariance, number, real_array
 from ..errors import SteamError
 from ..gp.interpolate import interpolate_covariance, interpolation_matrices
 from ..gp.prior import check_qc, process_noise
-from . import se2
+from .group import LieGroup
+from .se2 import SE2
 
 __all__ = [
     "MODELS",
@@ -39,7 +48,7 @@ MODELS = ("local-variable", "simplified")
 
 
 def check_model(model: object) -> str:
-    """The name of an SE(2) WNOA model, or SteamError naming the choices."""
+    """The name of a WNOA model on a group ("local-variable" or "simplified"), or SteamError naming the choices."""
     if model not in MODELS:
         raise SteamError(f"model must be one of {', '.join(repr(m) for m in MODELS)}, got model={model!r}")
     return str(model)
@@ -57,67 +66,126 @@ def _blocks(tl: NDArray, tr: NDArray, bl: NDArray, br: NDArray) -> NDArray:
     return np.concatenate([np.concatenate([tl, tr], axis=-1), np.concatenate([bl, br], axis=-1)], axis=-2)
 
 
-def local_variables(x1: NDArray, x2: NDArray, model: str) -> tuple[NDArray, NDArray, NDArray]:
-    """γ₂ = [ξ₂₁; J_r(ξ₂₁)⁻¹ ϖ₂] in the frame of T₁ (simplified: [ξ₂₁; ϖ₂]), with ∂γ₂/∂x₁, ∂γ₂/∂x₂.
+def _eye(d: int, shape: tuple[int, ...]) -> NDArray:
+    return np.broadcast_to(np.eye(d), shape + (d, d))
 
-    ∂ξ₂₁/∂δT₁ = -J_r(ξ₂₁)⁻¹ Ad(Exp(-ξ₂₁)), ∂ξ₂₁/∂δT₂ = J_r(ξ₂₁)⁻¹ [DER 11.13];
-    ∂(J_r(ξ)⁻¹ ϖ₂)/∂ξ is exact (``se2.jr_inverse_times_jacobian``). Shapes (..., 6), (..., 6, 6) twice.
+
+@overload
+def local_variables(
+    x1: NDArray, x2: NDArray, model: str, *, group: LieGroup = ..., jacobians: Literal[True] = ...
+) -> tuple[NDArray, NDArray, NDArray]: ...
+@overload
+def local_variables(
+    x1: NDArray, x2: NDArray, model: str, *, group: LieGroup = ..., jacobians: Literal[False]
+) -> NDArray: ...
+def local_variables(
+    x1: NDArray, x2: NDArray, model: str, *, group: LieGroup = SE2, jacobians: bool = True
+) -> NDArray | tuple[NDArray, NDArray, NDArray]:
+    """γ₂ = [ξ₂₁; J_r(ξ₂₁)⁻¹ ϖ₂] in the frame of T₁ (simplified: [ξ₂₁; ϖ₂]), with ∂γ₂/∂x₁, ∂γ₂/∂x₂ unless
+    ``jacobians`` is False (γ₂ alone).
+
+    ∂ξ₂₁/∂δT₁ = J_r(ξ₂₁)⁻¹ ∂(T₁⁻¹T₂)/∂δT₁ = -J_r(ξ₂₁)⁻¹ Ad(Exp(-ξ₂₁)), ∂ξ₂₁/∂δT₂ = J_r(ξ₂₁)⁻¹ [DER 11.13];
+    ∂(J_r(ξ)⁻¹ ϖ₂)/∂ξ is exact (``group.jr_inverse_times_jacobian``). Shapes (..., 2d), (..., 2d, 2d) twice.
     """
-    T1, T2, w2 = x1[..., :3], x2[..., :3], x2[..., 3:]
-    rel = se2.between(T1, T2)
-    xi = se2.log(rel)  # ξ₂₁ = Log(T₁⁻¹ T₂)  [DER 11.10]
-    jinv = se2.right_jacobian_inverse(xi)
-    d1 = -_mm(jinv, se2.adjoint(se2.inverse(rel)))  # ∂ξ/∂δT₁
-    zero = np.zeros(xi.shape + (3,))
+    n, d = group.size, group.dim
+    T1, T2, w2 = x1[..., :n], x2[..., :n], x2[..., n:]
+    if not jacobians:
+        xi = group.log(group.between(T1, T2))  # ξ₂₁ = Log(T₁⁻¹ T₂)  [DER 11.10]
+        velocity = _mv(group.right_jacobian_inverse(xi), w2) if model == "local-variable" else w2
+        return np.concatenate([xi, velocity], axis=-1)
+    rel, H1, _ = group.between(T1, T2, jacobians=True)  # ∂(T₁⁻¹T₂)/∂δT₂ = I
+    xi = group.log(rel)  # ξ₂₁ = Log(T₁⁻¹ T₂)  [DER 11.10]
+    jinv = group.right_jacobian_inverse(xi)
+    d1 = _mm(jinv, H1)  # ∂ξ/∂δT₁
+    zero = np.zeros(xi.shape + (d,))
     if model == "local-variable":
         velocity = _mv(jinv, w2)  # ξ̇(t₂) = J_r(ξ₂₁)⁻¹ ϖ₂  [DER 11.10]
-        G = se2.jr_inverse_times_jacobian(xi, w2)  # [DER 11.6, 11.13]
+        G = group.jr_inverse_times_jacobian(xi, w2)  # [DER 11.6, 11.13]
         dv1, dv2, dw2 = _mm(G, d1), _mm(G, jinv), jinv
     else:
         velocity, dv1, dv2 = w2, zero, zero
-        dw2 = np.broadcast_to(np.eye(3), zero.shape)
+        dw2 = _eye(d, xi.shape[:-1])
     gamma = np.concatenate([xi, velocity], axis=-1)
     return gamma, _blocks(d1, zero, dv1, zero), _blocks(jinv, zero, dv2, dw2)
 
 
-def _from_local(x1: NDArray, gamma: NDArray, model: str) -> tuple[NDArray, NDArray, NDArray]:
-    """The state at γ = [ξ; ξ̇] in the frame of T₁: (T₁ Exp ξ, J_r(ξ) ξ̇); N = ∂[δT; dϖ]/∂γ and Ad(Exp(-ξ))."""
-    xi, xidot = gamma[..., :3], gamma[..., 3:]
-    jr = se2.right_jacobian(xi)
-    pose = se2.compose(x1[..., :3], se2.exp(xi))  # T(τ) = T₁ Exp(ξ(τ))  [DER 11.10]
-    zero = np.zeros(xi.shape + (3,))
-    if model == "local-variable":
-        twist = _mv(jr, xidot)  # ϖ(τ) = J_r(ξ(τ)) ξ̇(τ)  [DER 11.10]
-        N = _blocks(jr, zero, se2.jr_times_jacobian(xi, xidot), jr)
-    else:
-        twist = xidot
-        N = _blocks(jr, zero, zero, np.broadcast_to(np.eye(3), zero.shape))
-    ad = se2.adjoint(se2.inverse(se2.exp(xi)))  # T₁ Exp(δ) Exp(ξ) = T₁ Exp(ξ) Exp(Ad(Exp(-ξ)) δ)
+@overload
+def _from_local(
+    x1: NDArray, gamma: NDArray, model: str, group: LieGroup, jacobians: Literal[True] = ...
+) -> tuple[NDArray, NDArray, NDArray]: ...
+@overload
+def _from_local(x1: NDArray, gamma: NDArray, model: str, group: LieGroup, jacobians: Literal[False]) -> NDArray: ...
+def _from_local(
+    x1: NDArray, gamma: NDArray, model: str, group: LieGroup, jacobians: bool = True
+) -> NDArray | tuple[NDArray, NDArray, NDArray]:
+    """The state at γ = [ξ; ξ̇] in the frame of T₁: (T₁ Exp ξ, J_r(ξ) ξ̇); unless ``jacobians`` is False, also
+    N = ∂[δT; dϖ]/∂γ and ∂(T₁ Exp ξ)/∂δT₁ = Ad(Exp(-ξ)) (T₁ Exp(δ) Exp(ξ) = T₁ Exp(ξ) Exp(Ad(Exp(-ξ)) δ))."""
+    n, d = group.size, group.dim
+    xi, xidot = gamma[..., :d], gamma[..., d:]
+    local = model == "local-variable"
+    jr = group.right_jacobian(xi) if local or jacobians else np.empty(0)
+    twist = _mv(jr, xidot) if local else xidot  # ϖ(τ) = J_r(ξ(τ)) ξ̇(τ)  [DER 11.10]
+    if not jacobians:
+        return np.concatenate([group.compose(x1[..., :n], group.exp(xi)), twist], axis=-1)
+    pose, ad, _ = group.compose(x1[..., :n], group.exp(xi), jacobians=True)  # T(τ) = T₁ Exp(ξ(τ))  [DER 11.10]
+    zero = np.zeros(xi.shape + (d,))
+    dtwist = group.jr_times_jacobian(xi, xidot) if local else zero  # ∂ϖ(τ)/∂ξ
+    N = _blocks(jr, zero, dtwist, jr if local else _eye(d, xi.shape[:-1]))
     return np.concatenate([pose, twist], axis=-1), N, ad
 
 
+@overload
 def interpolate(
-    x1: NDArray, x2: NDArray, lam: NDArray, psi: NDArray, model: str = "local-variable"
-) -> tuple[NDArray, NDArray, NDArray]:
-    """The mean x(τ) between x₁ and x₂ and its Jacobians ∂x(τ)/∂x₁, ∂x(τ)/∂x₂ (right tangents).
+    x1: NDArray,
+    x2: NDArray,
+    lam: NDArray,
+    psi: NDArray,
+    model: str = ...,
+    *,
+    group: LieGroup = ...,
+    jacobians: Literal[True] = ...,
+) -> tuple[NDArray, NDArray, NDArray]: ...
+@overload
+def interpolate(
+    x1: NDArray,
+    x2: NDArray,
+    lam: NDArray,
+    psi: NDArray,
+    model: str = ...,
+    *,
+    group: LieGroup = ...,
+    jacobians: Literal[False],
+) -> NDArray: ...
+def interpolate(
+    x1: NDArray,
+    x2: NDArray,
+    lam: NDArray,
+    psi: NDArray,
+    model: str = "local-variable",
+    *,
+    group: LieGroup = SE2,
+    jacobians: bool = True,
+) -> NDArray | tuple[NDArray, NDArray, NDArray]:
+    """The mean x(τ) between x₁ and x₂ and its Jacobians ∂x(τ)/∂x₁, ∂x(τ)/∂x₂ (right tangents); x(τ) alone
+    when ``jacobians`` is False.
 
     Λ(τ), Ψ(τ) are the vector-space WNOA interpolation matrices of [YIB Eq. 16] (``gp.interpolation_matrices``).
     γ(τ) = Λ γ₁ + Ψ γ₂ [YIB Eq. 18; DER 11.15]; dγ(τ) = Λ dγ₁ + Ψ dγ₂; then δ(τ) = Ad(Exp(-ξ(τ))) δT₁ + N dγ(τ).
     """
     x1, x2 = np.asarray(x1, dtype=float), np.asarray(x2, dtype=float)
-    gamma2, g21, g22 = local_variables(x1, x2, model)
-    gamma1 = np.concatenate([np.zeros(x1.shape[:-1] + (3,)), x1[..., 3:]], axis=-1)  # γ₁ = [0; ϖ₁]
+    n, d = group.size, group.dim
+    gamma1 = np.concatenate([np.zeros(x1.shape[:-1] + (d,)), x1[..., n:]], axis=-1)  # γ₁ = [0; ϖ₁]
+    if not jacobians:
+        gamma2 = local_variables(x1, x2, model, group=group, jacobians=False)
+        return _from_local(x1, _mv(lam, gamma1) + _mv(psi, gamma2), model, group, jacobians=False)  # [YIB Eq. 18]
+    gamma2, g21, g22 = local_variables(x1, x2, model, group=group)
     gamma = _mv(lam, gamma1) + _mv(psi, gamma2)  # [YIB Eq. 18]
-    x, N, ad = _from_local(x1, gamma, model)
-    e1 = np.zeros(x1.shape + (6,))
-    e1[..., 3:, 3:] = np.eye(3)  # ∂γ₁/∂x₁
+    x, N, ad = _from_local(x1, gamma, model, group)
+    e1 = np.zeros(x1.shape[:-1] + (2 * d, 2 * d))
+    e1[..., d:, d:] = np.eye(d)  # ∂γ₁/∂x₁
     J1 = _mm(N, _mm(lam, e1) + _mm(psi, g21))  # [DER 11.16]
-    J1[..., :3, :3] += ad
+    J1[..., :d, :d] += ad
     return x, J1, _mm(N, _mm(psi, g22))  # [DER 11.16]
-
-
-def _joint(name: str, joint_cov: ArrayLike) -> NDArray:
-    return check_covariance(name, real_array(name, joint_cov), 12)
 
 
 def interpolate_covariance_se2(
@@ -129,21 +197,26 @@ def interpolate_covariance_se2(
     x2: NDArray,
     joint_cov: ArrayLike,
     model: str = "local-variable",
+    *,
+    group: LieGroup = SE2,
 ) -> tuple[NDArray, NDArray]:
     """The mean x(τ) and its covariance (in the right tangent at x(τ)), t₁ < τ < t₂.
 
-    ``joint_cov`` (12, 12) is the covariance of [δ₁; δ₂], the right tangents at x₁ and x₂. To first
+    ``joint_cov`` (4d, 4d) is the covariance of [δ₁; δ₂], the right tangents at x₁ and x₂. To first
     order δ(τ) = J₁ δ₁ + J₂ δ₂ + N w, w ~ N(0, Q_c(τ)) the local GP's own conditional noise (that of
     ``gp.interpolate_covariance`` with no state uncertainty), so Cov = J P Jᵀ + N Q_c(τ) Nᵀ.
     """
     model = check_model(model)
+    n, d = group.size, group.dim
     lam, psi = interpolation_matrices(t1, t2, tau, qc)
-    x, J1, J2 = interpolate(x1, x2, lam, psi, model)
-    gamma = np.concatenate([np.zeros(3), x1[3:]]) @ lam.T + local_variables(x1, x2, model)[0] @ psi.T
-    _, N, _ = _from_local(x1, gamma, model)
+    x, J1, J2 = interpolate(x1, x2, lam, psi, model, group=group)
+    gamma2 = local_variables(x1, x2, model, group=group, jacobians=False)
+    gamma = np.concatenate([np.zeros(d), x1[n:]]) @ lam.T + gamma2 @ psi.T
+    _, N, _ = _from_local(x1, gamma, model, group)
     J = np.hstack([J1, J2])
-    cond = interpolate_covariance(t1, t2, tau, qc, np.zeros((12, 12)))  # Cov(γ(τ) | γ₁, γ₂)
-    cov = J @ _joint("joint_cov", joint_cov) @ J.T + N @ cond @ N.T  # [DER 11.17]
+    cond = interpolate_covariance(t1, t2, tau, qc, np.zeros((4 * d, 4 * d)))  # Cov(γ(τ) | γ₁, γ₂)
+    P = check_covariance("joint_cov", real_array("joint_cov", joint_cov), 4 * d)
+    cov = J @ P @ J.T + N @ cond @ N.T  # [DER 11.17]
     return x, (cov + cov.T) / 2
 
 
@@ -154,7 +227,13 @@ def _after(t1: float, t: float) -> float:
     return t - t1
 
 
-def extrapolate(x1: NDArray, t1: float, t: float) -> tuple[NDArray, NDArray]:
+def _ahead(x1: NDArray, s: float, group: LieGroup) -> NDArray:
+    """γ(t) = Φ(s) γ₁ = [s ϖ₁; ϖ₁] for γ₁ = [0; ϖ₁].  [YIB Eq. 22]"""
+    w1 = x1[..., group.size :]
+    return np.concatenate([s * w1, w1], axis=-1)
+
+
+def extrapolate(x1: NDArray, t1: float, t: float, *, group: LieGroup = SE2) -> tuple[NDArray, NDArray]:
     """The prediction x(t) = (T₁ Exp((t - t₁) ϖ₁), ϖ₁) after the last state, and ∂x(t)/∂x₁.
 
     Past the last state nothing constrains the noise, so the mean follows γ(t) = Φ(t - t₁) γ₁ =
@@ -162,22 +241,24 @@ def extrapolate(x1: NDArray, t1: float, t: float) -> tuple[NDArray, NDArray]:
     """
     s = _after(t1, t)
     x1 = np.asarray(x1, dtype=float)
-    gamma = np.concatenate([s * x1[..., 3:], x1[..., 3:]], axis=-1)  # Φ(s) [0; ϖ₁]  [YIB Eq. 22]
-    x, N, ad = _from_local(x1, gamma, "local-variable")
-    dgamma = np.zeros(x1.shape + (6,))
-    dgamma[..., :3, 3:], dgamma[..., 3:, 3:] = s * np.eye(3), np.eye(3)
+    d = group.dim
+    x, N, ad = _from_local(x1, _ahead(x1, s, group), "local-variable", group)
+    dgamma = np.zeros(x1.shape[:-1] + (2 * d, 2 * d))
+    dgamma[..., :d, d:], dgamma[..., d:, d:] = s * np.eye(d), np.eye(d)
     J = _mm(N, dgamma)
-    J[..., :3, :3] += ad
+    J[..., :d, :d] += ad
     return x, J
 
 
 def extrapolate_covariance_se2(
-    x1: NDArray, t1: float, t: float, qc: NDArray, cov1: ArrayLike
+    x1: NDArray, t1: float, t: float, qc: NDArray, cov1: ArrayLike, *, group: LieGroup = SE2
 ) -> tuple[NDArray, NDArray]:
     """The prediction x(t) after the last state and its covariance J P₁ Jᵀ + N Q(t - t₁) Nᵀ.  [YIB Eq. 17, 22]"""
-    x, J = extrapolate(x1, t1, t)
+    x, J = extrapolate(x1, t1, t, group=group)
     s = _after(t1, t)
-    P = check_covariance("cov1", real_array("cov1", cov1), 6)
-    _, N, _ = _from_local(x1, np.concatenate([s * x1[3:], x1[3:]]), "local-variable")
+    P = check_covariance("cov1", real_array("cov1", cov1), 2 * group.dim)
+    _, N, _ = _from_local(
+        np.asarray(x1, dtype=float), _ahead(np.asarray(x1, dtype=float), s, group), "local-variable", group
+    )
     cov = J @ P @ J.T + N @ process_noise(s, check_qc(qc)) @ N.T  # [DER 11.18; YIB Eq. 17]
     return x, (cov + cov.T) / 2

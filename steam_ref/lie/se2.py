@@ -1,19 +1,19 @@
-"""The group SE(2) of planar poses, on poses stored as [x, y, θ] and tangents ξ = [ρx, ρy, φ].  [SOLA App. C]
+"""SE(2), the group of planar poses: :data:`SE2`, the first instance of :class:`~steam_ref.lie.group.LieGroup`.  [SOLA App. C]
 
-A pose T = (R(θ), t) acts on a point as p ↦ R p + t. Its tangent (Lie algebra) coordinates put the
-translation first, ξ = [ρ; φ], as GTSAM's ``Pose2`` and [SOLA] do. Every function broadcasts over
-leading axes (a pose (..., 3), a matrix (..., 3, 3)), so a batch of factors evaluates them once.
+A pose T = (R(θ), t) acts on a point as p ↦ R p + t; it is stored as [x, y, θ] with θ in (-π, π],
+its tangent ξ = [ρx, ρy, φ] (translation first, as GTSAM's ``Pose2`` and [SOLA]). The protocol's
+conventions (right Jacobians, broadcasting, value and Jacobians from one call) are in ``lie.group``;
+this module holds what is SE(2)'s own:
 
-- :func:`exp`, :func:`log` (Log's angle in (-π, π]), :func:`right_jacobian` J_r and
-  :func:`right_jacobian_inverse` J_r⁻¹ (Exp(ξ + dξ) = Exp(ξ) Exp(J_r(ξ) dξ)), :func:`adjoint` Ad(T);
-- :func:`compose`, :func:`inverse`, :func:`between` and their Jacobians in right (body) tangents,
-  δ(T ⊕ dδ) as GTSAM's ``Pose2`` reports them;
-- :func:`jr_inverse_times_jacobian` and :func:`jr_times_jacobian`, the exact derivatives of
-  J_r⁻¹(ξ) v and J_r(ξ) v with respect to ξ (the SE(2) WNOA residual and the interpolation need them).
+- Exp, Log (Log's angle in (-π, π]), hat/vee, the 3 × 3 matrix of a pose, J_r and its closed-form
+  inverse J_r⁻¹ [DER 11.5], Ad(T), the values of compose, inverse and between;
+- the exact derivatives of J_r(ξ)⁻¹ v and J_r(ξ) v with respect to ξ (the SE(2) WNOA residual and
+  the interpolation need them) [DER 11.6-11.7];
+- :func:`wrap`, an angle to (-π, π].
 
 Every coefficient (sin φ/φ, (1 - cos φ)/φ², (φ - sin φ)/φ², (φ/2) cot(φ/2) and the rest, with their
-derivatives) is summed from its Taylor series for abs(φ) < 1 and taken in closed form above, so none
-loses precision to cancellation near φ = 0 [DER 11.3-11.7].
+derivatives) is summed from its Taylor series for abs(φ) < 1 (``SERIES_BELOW``) and taken in closed form above, so
+none loses precision to cancellation near φ = 0 [DER 11.3-11.7].
 """
 
 from __future__ import annotations
@@ -25,23 +25,10 @@ import numpy as np
 import scipy.special
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = [
-    "wrap",
-    "exp",
-    "log",
-    "right_jacobian",
-    "right_jacobian_inverse",
-    "adjoint",
-    "compose",
-    "compose_jacobians",
-    "inverse",
-    "inverse_jacobian",
-    "between",
-    "between_jacobians",
-    "jr_inverse_times_jacobian",
-    "jr_times_jacobian",
-    "SERIES_BELOW",
-]
+from ..errors import SteamError
+from .group import LieGroup
+
+__all__ = ["SE2", "SE2Group", "wrap", "SERIES_BELOW"]
 
 SERIES_BELOW = 1.0  # |φ| below this: the coefficients from their series (each converges fast there)
 _TERMS = 14  # terms of each series: the last is below 1e-22 of the first at |φ| = 1
@@ -57,6 +44,17 @@ _C1 = (-1.0) ** _k * (2 * _k + 1) / _fact[2 * _k + 3]  # d/dφ of C = (φ - sin 
 # (1 - (φ/2) cot(φ/2)) / φ = Σₙ |B₂ₙ| φ²ⁿ⁻¹ / (2n)! = Σₙ 2 ζ(2n) φ²ⁿ⁻¹ / (2π)²ⁿ (Bernoulli numbers B₂ₙ)
 _G = 2 * scipy.special.zeta(2.0 * (_k + 1)) / (2 * np.pi) ** (2.0 * (_k + 1))  # γ / φ  [DER 11.3]
 _G1 = (2 * _k + 1) * _G  # d/dφ of γ
+# B' = 2 sin h g(h) / φ² with h = φ/2 and g(h) = 2h cos h - sin h, which vanishes at h* (tan h* = 2h*, φ* = 2h* ≈ 2.331,
+# where B = (1 - cos φ)/φ peaks): within _ROOT_NEAR of h*, g is summed from its Taylor series about h*, so B' keeps
+# its relative precision through its zero [DER 11.7]. h* = _ROOT_HI + _ROOT_LO to 32 digits (mpmath's findroot).
+_ROOT_HI, _ROOT_LO = 1.1655611852072114, -1.0746027478595998e-16
+_ROOT_NEAR = 0.05  # |h - h*| below this: 12 terms, the last below 1e-20 of g
+_rc, _rs = math.cos(_ROOT_HI), math.sin(_ROOT_HI)
+_cos_k, _sin_k = (_rc, -_rs, -_rc, _rs), (_rs, _rc, -_rs, -_rc)  # the k-th derivatives of cos and sin at h*, k mod 4
+# g⁽ᵏ⁾(h*) / k! for k = 1..12, g⁽ᵏ⁾ = 2h cos⁽ᵏ⁾ + 2k cos⁽ᵏ⁻¹⁾ - sin⁽ᵏ⁾; g(h) = Σ _ROOT_G[k-1] (h - h*)ᵏ
+_ROOT_G = np.array(
+    [(2 * _ROOT_HI * _cos_k[k % 4] + 2 * k * _cos_k[(k - 1) % 4] - _sin_k[k % 4]) / _fact[k] for k in range(1, 13)]
+)
 
 
 def _poly(c: NDArray, z: NDArray) -> NDArray:
@@ -110,11 +108,25 @@ class _Coefficients:
     def _D1(self) -> NDArray:
         return self._pick(lambda: self.phi * _poly(_D1, self.z), lambda: (self["A"] - 2 * self["D"]) / self.phi)
 
-    def _B1(self) -> NDArray:
-        return self["D"] + self.phi * self["D1"]
+    def _B1(self) -> NDArray:  # B' = A - D: above the switch 2 sin h g(h)/φ², h = φ/2, g(h) = 2h cos h - sin h
+        return self._pick(lambda: self["D"] + self.phi * self["D1"], self._B1_closed)
 
-    def _C1(self) -> NDArray:
-        return self._pick(lambda: _poly(_C1, self.z), lambda: self["D"] - 2 * self["C"] / self.phi)
+    def _B1_closed(self) -> NDArray:
+        h = np.abs(self.phi) / 2  # B' is even in φ
+        g = 2 * h * np.cos(h) - np.sin(h)
+        d = (h - _ROOT_HI) - _ROOT_LO  # h - h*: the first difference is exact near h*
+        near = np.abs(d) < _ROOT_NEAR
+        if np.any(near):
+            g = np.where(near, d * _poly(_ROOT_G, d), g)  # Taylor series of g about its root h*
+        return 2 * np.sin(h) * g / self.z
+
+    def _C1(
+        self,
+    ) -> NDArray:  # C' = D - 2C/φ = 4 cos h (sin h - h cos h)/φ³, h = φ/2: no cancellation at φ = π, where C' = 0
+        h = self.phi / 2
+        return self._pick(
+            lambda: _poly(_C1, self.z), lambda: 4 * np.cos(h) * (np.sin(h) - h * np.cos(h)) / (self.z * self.phi)
+        )
 
     def _alpha(self) -> NDArray:
         h = self.phi / 2
@@ -145,129 +157,139 @@ def _rot(theta: NDArray) -> tuple[NDArray, NDArray]:
     return np.cos(theta), np.sin(theta)
 
 
-def exp(xi: ArrayLike) -> NDArray:
-    """Exp(ξ) as a pose [x, y, θ], θ wrapped: t = V(φ) ρ, V = [[A, -B], [B, A]].  [DER 11.1]"""
-    xi = np.asarray(xi, dtype=float)
-    k = _Coefficients(xi[..., 2])
-    A, B = k["A"], k["B"]
-    r1, r2 = xi[..., 0], xi[..., 1]
-    return np.stack([A * r1 - B * r2, B * r1 + A * r2, wrap(xi[..., 2])], axis=-1)  # [DER 11.1]
-
-
-def log(pose: ArrayLike) -> NDArray:
-    """Log(T) = [V(φ)⁻¹ t; φ], φ = θ wrapped to (-π, π]; V⁻¹ = [[α, φ/2], [-φ/2, α]].  [DER 11.1-11.2]"""
-    pose = np.asarray(pose, dtype=float)
-    phi = wrap(pose[..., 2])
-    a, b = _Coefficients(phi)["alpha"], phi / 2
-    x, y = pose[..., 0], pose[..., 1]
-    return np.stack([a * x + b * y, -b * x + a * y, phi], axis=-1)  # [DER 11.1-11.2]
-
-
 def _matrix(rows: list[list[NDArray | float]], like: NDArray) -> NDArray:
     shape = np.shape(like)
     return np.stack([np.stack([np.broadcast_to(v, shape) for v in row], axis=-1) for row in rows], axis=-2)
 
 
-def right_jacobian(xi: ArrayLike) -> NDArray:
-    """J_r(ξ): Exp(ξ + dξ) ≈ Exp(ξ) Exp(J_r(ξ) dξ) (GTSAM's ``Pose2.ExpmapDerivative``).  [DER 11.4]"""
-    xi = np.asarray(xi, dtype=float)
-    k = _Coefficients(xi[..., 2])
-    A, B, C, D = k["A"], k["B"], k["C"], k["D"]
-    r1, r2 = xi[..., 0], xi[..., 1]
-    return _matrix(  # [DER 11.4]
-        [[A, B, C * r1 - D * r2], [-B, A, D * r1 + C * r2], [0.0, 0.0, 1.0]], r1
-    )
+class SE2Group(LieGroup):
+    """SE(2) on poses [x, y, θ] and twists [ρx, ρy, φ] (module docstring); its one instance is :data:`SE2`."""
+
+    name = "se2"
+    dim = 3
+    size = 3
+    series_below = SERIES_BELOW
+
+    def exp(self, xi: ArrayLike) -> NDArray:
+        """Exp(ξ) as a pose [x, y, θ], θ wrapped: t = V(φ) ρ, V = [[A, -B], [B, A]].  [DER 11.1]"""
+        xi = np.asarray(xi, dtype=float)
+        k = _Coefficients(xi[..., 2])
+        A, B = k["A"], k["B"]
+        r1, r2 = xi[..., 0], xi[..., 1]
+        return np.stack([A * r1 - B * r2, B * r1 + A * r2, wrap(xi[..., 2])], axis=-1)  # [DER 11.1]
+
+    def log(self, a: ArrayLike) -> NDArray:
+        """Log(T) = [V(φ)⁻¹ t; φ], φ = θ wrapped to (-π, π]; V⁻¹ = [[α, φ/2], [-φ/2, α]].  [DER 11.1-11.2]"""
+        pose = np.asarray(a, dtype=float)
+        phi = wrap(pose[..., 2])
+        al, b = _Coefficients(phi)["alpha"], phi / 2
+        x, y = pose[..., 0], pose[..., 1]
+        return np.stack([al * x + b * y, -b * x + al * y, phi], axis=-1)  # [DER 11.1-11.2]
+
+    def hat(self, xi: ArrayLike) -> NDArray:
+        """ξ^ = [[0, -φ, ρx], [φ, 0, ρy], [0, 0, 0]]."""
+        xi = np.asarray(xi, dtype=float)
+        r1, r2, p = xi[..., 0], xi[..., 1], xi[..., 2]
+        return _matrix([[0.0, -p, r1], [p, 0.0, r2], [0.0, 0.0, 0.0]], p)
+
+    def vee(self, X: ArrayLike) -> NDArray:
+        """[ρx, ρy, φ] = [X₀₂, X₁₂, X₁₀]."""
+        X = np.asarray(X, dtype=float)
+        return np.stack([X[..., 0, 2], X[..., 1, 2], X[..., 1, 0]], axis=-1)
+
+    def matrix(self, a: ArrayLike) -> NDArray:
+        """[[R(θ), t], [0, 1]]."""
+        pose = np.asarray(a, dtype=float)
+        c, s = _rot(pose[..., 2])
+        return _matrix([[c, -s, pose[..., 0]], [s, c, pose[..., 1]], [0.0, 0.0, 1.0]], c)
+
+    def angle(self, xi: ArrayLike) -> NDArray:
+        """abs(φ), the angle every coefficient's series switch tests."""
+        return np.abs(np.asarray(xi, dtype=float)[..., 2])
+
+    def check(self, name: str, a: object) -> NDArray:
+        """A finite pose [x, y, θ] with θ in (-π, π]; SteamError naming ``name`` otherwise."""
+        pose = super().check(name, a)
+        if not -np.pi < pose[2] <= np.pi:
+            raise SteamError(f"{name}: the heading of an SE(2) pose must lie in (-π, π], got θ={float(pose[2])!r}")
+        return pose
+
+    def right_jacobian(self, xi: ArrayLike) -> NDArray:
+        """J_r(ξ): Exp(ξ + dξ) ≈ Exp(ξ) Exp(J_r(ξ) dξ) (GTSAM's ``Pose2.ExpmapDerivative``).  [DER 11.4]"""
+        xi = np.asarray(xi, dtype=float)
+        k = _Coefficients(xi[..., 2])
+        A, B, C, D = k["A"], k["B"], k["C"], k["D"]
+        r1, r2 = xi[..., 0], xi[..., 1]
+        return _matrix(  # [DER 11.4]
+            [[A, B, C * r1 - D * r2], [-B, A, D * r1 + C * r2], [0.0, 0.0, 1.0]], r1
+        )
+
+    def right_jacobian_inverse(self, xi: ArrayLike) -> NDArray:
+        """J_r(ξ)⁻¹ = [[α, -φ/2, γρ₁ + ρ₂/2], [φ/2, α, γρ₂ - ρ₁/2], [0, 0, 1]] in closed form.  [DER 11.5]"""
+        xi = np.asarray(xi, dtype=float)
+        g = _Coefficients(xi[..., 2])
+        al, G, b = g["alpha"], g["gamma"], xi[..., 2] / 2
+        r1, r2 = xi[..., 0], xi[..., 1]
+        return _matrix([[al, -b, G * r1 + r2 / 2], [b, al, G * r2 - r1 / 2], [0.0, 0.0, 1.0]], r1)  # [DER 11.5]
+
+    def adjoint(self, a: ArrayLike) -> NDArray:
+        """Ad(T) = [[R, [y, -x]ᵀ], [0, 1]]: T Exp(ξ) T⁻¹ = Exp(Ad(T) ξ).  [DER 11.8]"""
+        pose = np.asarray(a, dtype=float)
+        c, s = _rot(pose[..., 2])
+        return _matrix([[c, -s, pose[..., 1]], [s, c, -pose[..., 0]], [0.0, 0.0, 1.0]], c)  # [DER 11.8]
+
+    def _compose(self, a: NDArray, b: NDArray) -> NDArray:
+        """T_a T_b = [t_a + R_a t_b; θ_a + θ_b wrapped]."""
+        c, s = _rot(a[..., 2])
+        x = a[..., 0] + c * b[..., 0] - s * b[..., 1]
+        y = a[..., 1] + s * b[..., 0] + c * b[..., 1]
+        return np.stack([x, y, wrap(a[..., 2] + b[..., 2])], axis=-1)
+
+    def _inverse(self, a: NDArray) -> NDArray:
+        """T⁻¹ = [-Rᵀ t; -θ wrapped]."""
+        c, s = _rot(a[..., 2])
+        x, y = a[..., 0], a[..., 1]
+        return np.stack([-(c * x + s * y), s * x - c * y, wrap(-a[..., 2])], axis=-1)
+
+    def _between(self, a: NDArray, b: NDArray) -> NDArray:
+        """T_a⁻¹ T_b = [R_aᵀ (t_b - t_a); θ_b - θ_a wrapped] (GTSAM's ``Pose2.between``)."""
+        c, s = _rot(a[..., 2])
+        dx, dy = b[..., 0] - a[..., 0], b[..., 1] - a[..., 1]
+        return np.stack([c * dx + s * dy, -s * dx + c * dy, wrap(b[..., 2] - a[..., 2])], axis=-1)
+
+    def jr_inverse_times_jacobian(self, xi: ArrayLike, v: ArrayLike) -> NDArray:
+        """∂(J_r(ξ)⁻¹ v)/∂ξ, exact, in closed form: (..., 3, 3).  [DER 11.6]"""
+        xi, v = np.asarray(xi, dtype=float), np.asarray(v, dtype=float)
+        g = _Coefficients(xi[..., 2])
+        G, a1, G1 = g["gamma"], g["alpha1"], g["gamma1"]
+        r1, r2 = xi[..., 0], xi[..., 1]
+        u1, u2, w = v[..., 0], v[..., 1], v[..., 2]
+        r1, r2, u1, u2, w, G, a1, G1 = np.broadcast_arrays(r1, r2, u1, u2, w, G, a1, G1)
+        return _matrix(
+            [
+                [G * w, w / 2, a1 * u1 - u2 / 2 + G1 * r1 * w],
+                [-w / 2, G * w, u1 / 2 + a1 * u2 + G1 * r2 * w],
+                [0.0, 0.0, 0.0],
+            ],
+            r1,
+        )
+
+    def jr_times_jacobian(self, xi: ArrayLike, v: ArrayLike) -> NDArray:
+        """∂(J_r(ξ) v)/∂ξ, exact: (..., 3, 3).  [DER 11.7]"""
+        xi, v = np.asarray(xi, dtype=float), np.asarray(v, dtype=float)
+        k = _Coefficients(xi[..., 2])
+        r1, r2 = xi[..., 0], xi[..., 1]
+        v1, v2, v3 = v[..., 0], v[..., 1], v[..., 2]
+        A1, B1, C, C1, D, D1 = k["A1"], k["B1"], k["C"], k["C1"], k["D"], k["D1"]
+        r1, r2, v1, v2, v3, A1, B1, C, C1, D, D1 = np.broadcast_arrays(r1, r2, v1, v2, v3, A1, B1, C, C1, D, D1)
+        return _matrix(
+            [
+                [C * v3, -D * v3, A1 * v1 + B1 * v2 + (C1 * r1 - D1 * r2) * v3],
+                [D * v3, C * v3, -B1 * v1 + A1 * v2 + (D1 * r1 + C1 * r2) * v3],
+                [0.0, 0.0, 0.0],
+            ],
+            r1,
+        )
 
 
-def right_jacobian_inverse(xi: ArrayLike) -> NDArray:
-    """J_r(ξ)⁻¹ = [[α, -φ/2, γρ₁ + ρ₂/2], [φ/2, α, γρ₂ - ρ₁/2], [0, 0, 1]] [DER 11.3-11.7]."""
-    xi = np.asarray(xi, dtype=float)
-    g = _Coefficients(xi[..., 2])
-    a, G, b = g["alpha"], g["gamma"], xi[..., 2] / 2
-    r1, r2 = xi[..., 0], xi[..., 1]
-    return _matrix([[a, -b, G * r1 + r2 / 2], [b, a, G * r2 - r1 / 2], [0.0, 0.0, 1.0]], r1)  # [DER 11.5]
-
-
-def adjoint(pose: ArrayLike) -> NDArray:
-    """Ad(T) = [[R, [y, -x]ᵀ], [0, 1]]: T Exp(ξ) T⁻¹ = Exp(Ad(T) ξ).  [DER 11.8]"""
-    pose = np.asarray(pose, dtype=float)
-    c, s = _rot(pose[..., 2])
-    return _matrix([[c, -s, pose[..., 1]], [s, c, -pose[..., 0]], [0.0, 0.0, 1.0]], c)  # [DER 11.8]
-
-
-def compose(a: ArrayLike, b: ArrayLike) -> NDArray:
-    """T_a T_b = [t_a + R_a t_b; θ_a + θ_b wrapped]."""
-    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
-    c, s = _rot(a[..., 2])
-    x = a[..., 0] + c * b[..., 0] - s * b[..., 1]
-    y = a[..., 1] + s * b[..., 0] + c * b[..., 1]
-    return np.stack([x, y, wrap(a[..., 2] + b[..., 2])], axis=-1)
-
-
-def compose_jacobians(a: ArrayLike, b: ArrayLike) -> tuple[NDArray, NDArray]:  # noqa: ARG001 (a: the signature)
-    """∂(T_a T_b)/∂δ_a = Ad(T_b⁻¹), ∂(T_a T_b)/∂δ_b = I (right tangents).  [DER 11.8]"""
-    b = np.asarray(b, dtype=float)
-    return adjoint(inverse(b)), np.broadcast_to(np.eye(3), b.shape[:-1] + (3, 3)).copy()
-
-
-def inverse(pose: ArrayLike) -> NDArray:
-    """T⁻¹ = [-Rᵀ t; -θ wrapped]."""
-    pose = np.asarray(pose, dtype=float)
-    c, s = _rot(pose[..., 2])
-    x, y = pose[..., 0], pose[..., 1]
-    return np.stack([-(c * x + s * y), s * x - c * y, wrap(-pose[..., 2])], axis=-1)
-
-
-def inverse_jacobian(pose: ArrayLike) -> NDArray:
-    """∂T⁻¹/∂δ = -Ad(T) (right tangents).  [DER 11.8]"""
-    return -adjoint(pose)
-
-
-def between(a: ArrayLike, b: ArrayLike) -> NDArray:
-    """T_a⁻¹ T_b = [R_aᵀ (t_b - t_a); θ_b - θ_a wrapped] (GTSAM's ``Pose2.between``)."""
-    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
-    c, s = _rot(a[..., 2])
-    dx, dy = b[..., 0] - a[..., 0], b[..., 1] - a[..., 1]
-    return np.stack([c * dx + s * dy, -s * dx + c * dy, wrap(b[..., 2] - a[..., 2])], axis=-1)
-
-
-def between_jacobians(a: ArrayLike, b: ArrayLike) -> tuple[NDArray, NDArray]:
-    """∂(T_a⁻¹T_b)/∂δ_a = -Ad((T_a⁻¹T_b)⁻¹), ∂/∂δ_b = I (right tangents)."""
-    rel = between(a, b)
-    return -adjoint(inverse(rel)), np.broadcast_to(np.eye(3), rel.shape[:-1] + (3, 3)).copy()
-
-
-def jr_inverse_times_jacobian(xi: ArrayLike, v: ArrayLike) -> NDArray:
-    """∂(J_r(ξ)⁻¹ v)/∂ξ, exact: (..., 3, 3).  [DER 11.6]"""
-    xi, v = np.asarray(xi, dtype=float), np.asarray(v, dtype=float)
-    g = _Coefficients(xi[..., 2])
-    G, a1, G1 = g["gamma"], g["alpha1"], g["gamma1"]
-    r1, r2 = xi[..., 0], xi[..., 1]
-    u1, u2, w = v[..., 0], v[..., 1], v[..., 2]
-    r1, r2, u1, u2, w, G, a1, G1 = np.broadcast_arrays(r1, r2, u1, u2, w, G, a1, G1)
-    return _matrix(
-        [
-            [G * w, w / 2, a1 * u1 - u2 / 2 + G1 * r1 * w],
-            [-w / 2, G * w, u1 / 2 + a1 * u2 + G1 * r2 * w],
-            [0.0, 0.0, 0.0],
-        ],
-        r1,
-    )
-
-
-def jr_times_jacobian(xi: ArrayLike, v: ArrayLike) -> NDArray:
-    """∂(J_r(ξ) v)/∂ξ, exact: (..., 3, 3).  [DER 11.7]"""
-    xi, v = np.asarray(xi, dtype=float), np.asarray(v, dtype=float)
-    k = _Coefficients(xi[..., 2])
-    r1, r2 = xi[..., 0], xi[..., 1]
-    v1, v2, v3 = v[..., 0], v[..., 1], v[..., 2]
-    A1, B1, C, C1, D, D1 = k["A1"], k["B1"], k["C"], k["C1"], k["D"], k["D1"]
-    r1, r2, v1, v2, v3, A1, B1, C, C1, D, D1 = np.broadcast_arrays(r1, r2, v1, v2, v3, A1, B1, C, C1, D, D1)
-    return _matrix(
-        [
-            [C * v3, -D * v3, A1 * v1 + B1 * v2 + (C1 * r1 - D1 * r2) * v3],
-            [D * v3, C * v3, -B1 * v1 + A1 * v2 + (D1 * r1 + C1 * r2) * v3],
-            [0.0, 0.0, 0.0],
-        ],
-        r1,
-    )
+SE2 = SE2Group()  # the group SE(2): every function of it is a method of this object

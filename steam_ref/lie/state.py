@@ -1,72 +1,113 @@
-"""The SE(2) state kind: a planar pose and its body-frame twist, retracted on the right.
+"""The state kind of a motion prior on a Lie group: a pose and its body twist, retracted on the right.
 
-A state is stored as the flat array x = [px, py, θ, vx, vy, ω] (θ in (-π, π]): the pose
-T = (R(θ), [px, py]) ∈ SE(2) and the body twist ϖ = [vx, vy, ω] ∈ R³ (the velocity in the robot's
-own frame: Ṫ = T ϖ^). Its tangent is 6-D, δ = [δρ; δφ; δϖ], and
+:class:`GroupState` is written once for any :class:`~steam_ref.lie.group.LieGroup`; :data:`SE2_STATE`
+is ``GroupState(SE2)``. A state is stored as the flat array x = [T; ϖ]: the pose T on the group (its
+``size`` numbers; SE(2): [px, py, θ], θ in (-π, π]) and the body twist ϖ ∈ R^dim (the velocity in the
+robot's own frame: Ṫ = T ϖ^; SE(2): [vx, vy, ω]). Its tangent has 2·dim entries, δ = [δT; δϖ], and
 
-    x ⊕ δ = (T Exp(δ[:3]),  ϖ + δ[3:])              (retraction on the right)
+    x ⊕ δ = (T Exp(δT),  ϖ + δϖ)              (retraction on the right)
     x ⊖ x₀ = [Log(T₀⁻¹ T);  ϖ - ϖ₀]
 
 **What the right retraction means for a covariance.** A solver's covariance of this state is the
 covariance of δ at the estimate x̄, x = x̄ ⊕ δ with δ ~ N(0, P): its pose block is in the *body frame
-at the estimate*. δρ is a displacement along the robot's own forward and left axes at x̄ (the world
-displacement is R(θ̄) δρ, to first order), δφ a turn about the robot; the twist block is in the
-body frame already. To read a world-frame (x, y) covariance, rotate: R(θ̄) P_ρρ R(θ̄)ᵀ. A covariance
-taken at one estimate moves to another x̄' by the Jacobian of x̄' ⊖ (x̄ ⊕ δ) (the adjoint of the
-pose difference, to first order), never by copying it. [DER 11.9; B17 Ch. 7]
+at the estimate*. δρ is a displacement along the robot's own axes at x̄ (the world displacement is
+R(θ̄) δρ, to first order), δφ a turn about the robot; the twist block is in the body frame already.
+To read a world-frame position covariance, rotate: R(θ̄) P_ρρ R(θ̄)ᵀ (:func:`world_position_covariance`).
+A covariance taken at one estimate moves to another x̄' by the Jacobian of x̄' ⊖ (x̄ ⊕ δ) (the
+adjoint of the pose difference, to first order), never by copying it. [DER 11.9; B17 Ch. 7]
 """
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 import numpy as np
 from numpy.typing import NDArray
 
-from ..arguments import real_array
+from ..arguments import check_covariance, finite, real_array
 from ..errors import ShapeError
 from ..manifold import Manifold
-from . import se2
+from .group import LieGroup, check_group
+from .se2 import SE2
 
-__all__ = ["SE2State", "SE2_STATE", "STATE_SIZE", "world_position_covariance"]
-
-STATE_SIZE = 6  # [px, py, θ, vx, vy, ω]
-
-
-def _state(name: str, x: NDArray) -> NDArray:
-    x = real_array(name, x)
-    if x.shape[-1:] != (STATE_SIZE,):
-        raise ShapeError(f"{name} must be an SE(2) state [px, py, θ, vx, vy, ω] (6 numbers), got shape {x.shape}")
-    return x
+__all__ = ["GroupState", "SE2_STATE", "STATE_SIZE", "world_position_covariance"]
 
 
-class SE2State(Manifold):
-    """A pose T ∈ SE(2) and a body twist ϖ ∈ R³, retracted on the right (module docstring)."""
+class GroupState(Manifold):
+    """A pose on ``group`` and its body twist, retracted on the right (module docstring).
 
-    name = "se2"
+    ``size`` is the stored size of a state (group.size + group.dim), ``dim`` its tangent's (2 group.dim),
+    ``name`` the group's. There is one kind per group.
+    """
+
+    _kinds: ClassVar[dict[LieGroup, GroupState]] = {}
+
+    def __new__(cls, group: LieGroup) -> GroupState:
+        """The one kind of each group: ``GroupState(SE2) is SE2_STATE`` (the solvers compare kinds by identity)."""
+        check_group(group)
+        if group not in cls._kinds:
+            cls._kinds[group] = super().__new__(cls)
+        return cls._kinds[group]
+
+    def __init__(self, group: LieGroup):
+        self.group = group
+        self.name = group.name
+        self.size = group.size + group.dim
+        self.dim = 2 * group.dim
+
+    def _state(self, name: str, x: NDArray) -> NDArray:
+        x = real_array(name, x)
+        if x.shape[-1:] != (self.size,):
+            raise ShapeError(
+                f"{name} must be an {self!r} state: a pose on {self.group!r} and its body twist, {self.size} numbers; "
+                f"got shape {x.shape}"
+            )
+        return x
+
+    def check(self, name: str, x: object) -> NDArray:
+        """One finite state (size,) whose pose is an element of the group in its stored form (SE(2): θ in
+        (-π, π]); ShapeError or SteamError naming ``name`` otherwise."""
+        x = real_array(name, x)
+        if x.shape != (self.size,):
+            raise ShapeError(f"{name} must be one {self!r} state ({self.size} numbers), got shape {x.shape}")
+        self.group.check(name, finite(name, x)[: self.group.size])
+        return x
 
     def retract(self, x: NDArray, delta: NDArray) -> NDArray:
-        """x ⊕ δ = (T Exp(δ[:3]), ϖ + δ[3:]): θ comes back in (-π, π]."""
-        x, delta = _state("x", x), _state("delta", delta)
-        return np.concatenate([se2.compose(x[..., :3], se2.exp(delta[..., :3])), x[..., 3:] + delta[..., 3:]], axis=-1)
+        """x ⊕ δ = (T Exp(δT), ϖ + δϖ): the pose comes back in its stored form (SE(2): θ in (-π, π])."""
+        x, delta = self._state("x", x), self._state("delta", delta)
+        g, n = self.group, self.group.size
+        d = g.dim
+        return np.concatenate([g.compose(x[..., :n], g.exp(delta[..., :d])), x[..., n:] + delta[..., d:]], axis=-1)
 
     def local(self, x0: NDArray, x: NDArray) -> NDArray:
-        """x ⊖ x₀ = [Log(T₀⁻¹ T); ϖ - ϖ₀], the angle in (-π, π]; retract(x0, local(x0, x)) == x."""
-        x0, x = _state("x0", x0), _state("x", x)
-        return np.concatenate([se2.log(se2.between(x0[..., :3], x[..., :3])), x[..., 3:] - x0[..., 3:]], axis=-1)
+        """x ⊖ x₀ = [Log(T₀⁻¹ T); ϖ - ϖ₀] (SE(2): the angle in (-π, π]); retract(x0, local(x0, x)) == x."""
+        x0, x = self._state("x0", x0), self._state("x", x)
+        g, n = self.group, self.group.size
+        return np.concatenate([g.log(g.between(x0[..., :n], x[..., :n])), x[..., n:] - x0[..., n:]], axis=-1)
 
     def __repr__(self) -> str:
-        return "SE2_STATE"
+        return f"{self.group!r}_STATE"
+
+    def __reduce__(self) -> tuple:
+        return (GroupState, (self.group,))  # unpickled as the one kind of its group
 
 
-SE2_STATE = SE2State()
+SE2_STATE = GroupState(SE2)  # [px, py, θ, vx, vy, ω]: an SE(2) pose and its body twist
+STATE_SIZE = SE2_STATE.size
 
 
-def world_position_covariance(x: NDArray, cov: NDArray) -> NDArray:
-    """The (2, 2) covariance of the world-frame position of state ``x``, from the covariance ``cov`` of its right
-    tangent at ``x`` (a pose (3, 3) or state (6, 6) covariance, or any (≥2, ≥2) whose first block is δρ):
-    R(θ) P_ρρ R(θ)ᵀ, the world displacement R(θ) δρ to first order (module docstring). [DER 11.9]"""
+def world_position_covariance(x: NDArray, cov: NDArray, *, group: LieGroup = SE2) -> NDArray:
+    """The covariance of the world-frame position of a pose or state ``x`` on ``group``, from the covariance
+    ``cov`` of its right tangent at ``x`` (a pose or state covariance, or any square one whose first block is
+    δρ): R P_ρρ Rᵀ, R the pose's rotation, the world displacement R δρ to first order (module docstring).
+    A NaN, infinite or non-symmetric ``cov`` is refused (SteamError naming it). [DER 11.9]"""
     x, cov = real_array("x", x), real_array("cov", cov)
-    if x.shape[-1:] not in ((3,), (STATE_SIZE,)) or cov.ndim != 2 or cov.shape[0] != cov.shape[1] or cov.shape[0] < 2:
-        raise ShapeError(f"need a pose or state x and a square covariance of its tangent, got {x.shape}, {cov.shape}")
-    c, s = np.cos(x[2]), np.sin(x[2])
-    R = np.array([[c, -s], [s, c]])
-    return R @ cov[:2, :2] @ R.T
+    n = group.matrix(group.identity()).shape[-1] - 1  # the dimension of the space the group moves
+    if x.shape not in ((group.size,), (group.size + group.dim,)) or cov.ndim != 2 or cov.shape[0] < n:
+        raise ShapeError(
+            f"need a pose or state x on {group!r} and a square covariance of its tangent, got {x.shape}, {cov.shape}"
+        )
+    cov = check_covariance("cov", cov, cov.shape[0])
+    R = group.matrix(finite("x", x)[: group.size])[:n, :n]
+    return R @ cov[:n, :n] @ R.T

@@ -1,0 +1,197 @@
+"""The Lie group protocol: what a group of rigid motions gives the states, factors and GP built on it.  [SOLA; DER 11]
+
+A :class:`LieGroup` is one object per group (``steam_ref.lie.SE2`` is the first); everything written
+against it (the state kind ``GroupState``, the local GP of ``lie.gp``, the factors on group states)
+works for the next group unchanged. Its conventions, the same for every group (those of GTSAM's
+``Pose2``/``Pose3``, of manif and of [SOLA]):
+
+- **Storage.** An element is a flat float array of ``size`` numbers (SE(2): [x, y, θ]); a tangent
+  vector (a twist) has ``dim`` numbers, **translation first**: ξ = [ρ; φ].
+- **Right Jacobians.** Every Jacobian is taken in the right (body) tangent of each argument and of
+  the value: for y = f(x), J = ∂ Log(f(x)⁻¹ f(x Exp δ)) / ∂δ at δ = 0. So J_r(ξ) is defined by
+  Exp(ξ + dξ) = Exp(ξ) Exp(J_r(ξ) dξ) to first order, and Ad(T) by T Exp(ξ) T⁻¹ = Exp(Ad(T) ξ).
+- **Broadcasting.** Every method broadcasts over leading axes: ξ (..., dim), an element (..., size),
+  a Jacobian (..., dim, dim), a group matrix (..., n, n); so a batch of factors evaluates it once.
+- **One call for a value and its Jacobians.** ``compose``, ``inverse`` and ``between`` return the
+  value, or with ``jacobians=True`` the value and its Jacobians from the same call (GTSAM's
+  ``Pose2::between(p2, H1, H2)``, manif's ``compose(m, J_mc_ma, J_mc_mb)``).
+
+A group implements what differs between groups: Exp, Log, hat and vee, the matrix of an element, the
+angle its series switch tests, J_r, Ad, the value of compose and inverse, and the exact derivative
+of J_r(ξ) v; each of its closed forms switches to a series below ``series_below``. This base class
+derives the rest once, for every group: the Jacobians of compose, inverse and between from Ad
+[SOLA; DER 11.8], and (for a group without closed forms of its own) between
+= compose(inverse(a), b), J_r⁻¹ = (J_r)⁻¹ and the derivative of J_r(ξ)⁻¹ v from that of J_r(ξ) v.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from typing import ClassVar, Literal, overload
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..arguments import finite, real_array
+from ..errors import ShapeError, SteamError
+
+__all__ = ["LieGroup", "check_group"]
+
+
+def _mm(a: NDArray, b: NDArray) -> NDArray:
+    return np.einsum("...ij,...jk->...ik", a, b)
+
+
+def _mv(a: NDArray, v: NDArray) -> NDArray:
+    return np.einsum("...ij,...j->...i", a, v)
+
+
+class LieGroup(ABC):
+    """A matrix Lie group on flat arrays, right Jacobians, translation first (module docstring).
+
+    A group sets ``name`` (a short lower-case name, "se2"), ``dim`` (the tangent's size), ``size``
+    (an element's stored size), ``series_below`` (the angle below which its coefficients come from
+    their series) and the abstract methods. A group class has one object (``SE2Group() is SE2``), also
+    after a round trip through pickle, so a group is compared by identity.
+    """
+
+    name: str
+    dim: int
+    size: int
+    series_below: float
+
+    # --- what each group implements ---------------------------------------------------------------
+
+    @abstractmethod
+    def exp(self, xi: ArrayLike) -> NDArray:
+        """Exp(ξ): the element (..., size) of the twist ξ (..., dim)."""
+
+    @abstractmethod
+    def log(self, a: ArrayLike) -> NDArray:
+        """Log(a): the twist (..., dim) of the element a, its angle in the principal range; Exp(Log(a)) = a."""
+
+    @abstractmethod
+    def hat(self, xi: ArrayLike) -> NDArray:
+        """ξ^: the Lie algebra matrix (..., n, n) of the twist ξ; Exp(ξ) = expm(ξ^)."""
+
+    @abstractmethod
+    def vee(self, X: ArrayLike) -> NDArray:
+        """The twist (..., dim) of a Lie algebra matrix X (..., n, n): vee(hat(ξ)) = ξ."""
+
+    @abstractmethod
+    def matrix(self, a: ArrayLike) -> NDArray:
+        """The element a as its (..., n, n) matrix: compose is the matrix product, inverse the matrix inverse."""
+
+    @abstractmethod
+    def angle(self, xi: ArrayLike) -> NDArray:
+        """The rotation angle of ξ (..., ) that the series switch tests (SE(2): abs(φ)); positively homogeneous."""
+
+    @abstractmethod
+    def right_jacobian(self, xi: ArrayLike) -> NDArray:
+        """J_r(ξ) (..., dim, dim): Exp(ξ + dξ) = Exp(ξ) Exp(J_r(ξ) dξ) to first order."""
+
+    @abstractmethod
+    def adjoint(self, a: ArrayLike) -> NDArray:
+        """Ad(a) (..., dim, dim): a Exp(ξ) a⁻¹ = Exp(Ad(a) ξ)."""
+
+    @abstractmethod
+    def jr_times_jacobian(self, xi: ArrayLike, v: ArrayLike) -> NDArray:
+        """∂(J_r(ξ) v)/∂ξ (..., dim, dim), exact."""
+
+    @abstractmethod
+    def _compose(self, a: NDArray, b: NDArray) -> NDArray:
+        """The value a b (float arrays)."""
+
+    @abstractmethod
+    def _inverse(self, a: NDArray) -> NDArray:
+        """The value a⁻¹ (a float array)."""
+
+    # --- what follows for any group (a group may replace one by its own closed form) -------------------
+
+    def _between(self, a: NDArray, b: NDArray) -> NDArray:
+        """The value a⁻¹ b (float arrays)."""
+        return self._compose(self._inverse(a), b)
+
+    def identity(self) -> NDArray:
+        """The identity element, Exp(0) (size,)."""
+        return self.exp(np.zeros(self.dim))
+
+    def check(self, name: str, a: object) -> NDArray:
+        """``a`` as one finite element (size,) in its stored form; ShapeError or SteamError naming ``name``."""
+        a = real_array(name, a)
+        if a.shape != (self.size,):
+            raise ShapeError(f"{name} must be an element of {self!r} ({self.size} numbers), got shape {a.shape}")
+        return finite(name, a)
+
+    def right_jacobian_inverse(self, xi: ArrayLike) -> NDArray:
+        """J_r(ξ)⁻¹ (..., dim, dim): Log(Exp(ξ) Exp(δ)) = ξ + J_r(ξ)⁻¹ δ to first order."""
+        return np.linalg.inv(self.right_jacobian(xi))
+
+    def jr_inverse_times_jacobian(self, xi: ArrayLike, v: ArrayLike) -> NDArray:
+        """∂(J_r(ξ)⁻¹ v)/∂ξ (..., dim, dim), exact: d(J⁻¹) = -J⁻¹ dJ J⁻¹, so it is -J⁻¹ ∂(J_r(ξ) u)/∂ξ at u = J⁻¹ v."""
+        jinv = self.right_jacobian_inverse(xi)
+        return -_mm(jinv, self.jr_times_jacobian(xi, _mv(jinv, np.asarray(v, dtype=float))))
+
+    def _eye(self, shape: tuple[int, ...]) -> NDArray:
+        return np.broadcast_to(np.eye(self.dim), shape + (self.dim, self.dim)).copy()
+
+    @overload
+    def compose(self, a: ArrayLike, b: ArrayLike, jacobians: Literal[False] = False) -> NDArray: ...
+    @overload
+    def compose(self, a: ArrayLike, b: ArrayLike, jacobians: Literal[True]) -> tuple[NDArray, NDArray, NDArray]: ...
+    def compose(
+        self, a: ArrayLike, b: ArrayLike, jacobians: bool = False
+    ) -> NDArray | tuple[NDArray, NDArray, NDArray]:
+        """a b; with ``jacobians``, also ∂(a b)/∂δa = Ad(b⁻¹) and ∂(a b)/∂δb = I.  [DER 11.8]"""
+        a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+        value = self._compose(a, b)
+        if not jacobians:
+            return value
+        return value, self.adjoint(self._inverse(b)), self._eye(value.shape[:-1])
+
+    @overload
+    def inverse(self, a: ArrayLike, jacobians: Literal[False] = False) -> NDArray: ...
+    @overload
+    def inverse(self, a: ArrayLike, jacobians: Literal[True]) -> tuple[NDArray, NDArray]: ...
+    def inverse(self, a: ArrayLike, jacobians: bool = False) -> NDArray | tuple[NDArray, NDArray]:
+        """a⁻¹; with ``jacobians``, also ∂a⁻¹/∂δa = -Ad(a).  [DER 11.8]"""
+        a = np.asarray(a, dtype=float)
+        value = self._inverse(a)
+        if not jacobians:
+            return value
+        return value, -self.adjoint(a)
+
+    @overload
+    def between(self, a: ArrayLike, b: ArrayLike, jacobians: Literal[False] = False) -> NDArray: ...
+    @overload
+    def between(self, a: ArrayLike, b: ArrayLike, jacobians: Literal[True]) -> tuple[NDArray, NDArray, NDArray]: ...
+    def between(
+        self, a: ArrayLike, b: ArrayLike, jacobians: bool = False
+    ) -> NDArray | tuple[NDArray, NDArray, NDArray]:
+        """a⁻¹ b; with ``jacobians``, also ∂(a⁻¹b)/∂δa = -Ad((a⁻¹b)⁻¹) and ∂(a⁻¹b)/∂δb = I.  [DER 11.8]"""
+        a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+        value = self._between(a, b)
+        if not jacobians:
+            return value
+        return value, -self.adjoint(self._inverse(value)), self._eye(value.shape[:-1])
+
+    # --- one object per group ----------------------------------------------------------------------
+
+    _instances: ClassVar[dict[type, LieGroup]] = {}
+
+    def __new__(cls) -> LieGroup:
+        """The one object of each group class: constructing or unpickling one gives the same object, so a
+        factor or state kind holding a group is compared by identity, as the solvers compare kinds."""
+        if cls not in LieGroup._instances:
+            LieGroup._instances[cls] = super().__new__(cls)
+        return LieGroup._instances[cls]
+
+    def __repr__(self) -> str:
+        return self.name.upper()
+
+
+def check_group(group: object, name: str = "group") -> LieGroup:
+    """``group`` if it is a :class:`LieGroup`; SteamError naming it otherwise."""
+    if not isinstance(group, LieGroup):
+        raise SteamError(f"{name} must be a LieGroup (steam_ref.lie.SE2, ...), got {name}={group!r}")
+    return group
