@@ -20,7 +20,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..arguments import finite, number, real_array
 from ..errors import ShapeError, SteamError
-from ..gp.sde import LinearSDE
+from ..gp.sde import LinearSDE, check_prior
 from .base import MotionPrior
 from .lie_group import LieGroupWnoa
 from .vector import VectorPrior
@@ -73,9 +73,9 @@ def as_motion_prior(prior: MotionPrior | ArrayLike | LinearSDE, name: str = "pri
     if isinstance(prior, MotionPrior):
         return prior
     try:
-        return VectorPrior(prior)
+        return VectorPrior(check_prior(prior, name))
     except SteamError as exc:
-        raise type(exc)(f"{name} must be a MotionPrior, a LinearSDE or Qc: {exc}") from None
+        raise type(exc)(f"{exc} (or a steam_ref.motion.MotionPrior)") from None
 
 
 def predict_state(x_prev: ArrayLike, dt: float, prior: MotionPrior | ArrayLike | LinearSDE) -> NDArray:
