@@ -37,7 +37,7 @@ from ..robust import Tukey
 __all__ = ["PaperSetup", "Schedule", "RANGE_ATTACHMENTS", "DEPARTURES", "PRIORS", "PRESETS", "SE2_RESIDUALS"]
 
 RANGE_ATTACHMENTS = ("file-order", "time")
-PRIORS = tuple(MOTION_PRIORS)  # the paper's 'wnoa', two extensions (derivations §6), WNOA on SE(2) (§11): steam_ref.motion
+PRIORS = tuple(MOTION_PRIORS)  # the names of steam_ref.motion.MOTION_PRIORS: wnoa, wnoj, singer (§6), se2 (§11)
 SE2_RESIDUALS = RESIDUALS  # the two SE(2) WNOA residuals in circulation (derivations §11)
 PRESETS = ("synthetic", "plaza", "victoria-park")  # PaperSetup.named
 
