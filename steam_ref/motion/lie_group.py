@@ -144,12 +144,12 @@ class LieGroupWnoa(MotionPrior):
             [se2.exp(pose_sigmas * rng.standard_normal(3)), velocity + twist_sigmas * rng.standard_normal(3)]
         )
         noise = rng.standard_normal((n - 1, STATE_SIZE)) @ chol.T
+        local = self.residual == "local-variable"  # ϖ = J_r(ξ) ξ̇, or ξ̇ itself (simplified)
         for k in range(1, n):
             twist = states[k - 1, 3:]
             gamma = np.concatenate([dt * twist, twist]) + noise[k - 1]  # Φ(dt) [0; ϖ] + w  [YIB Eq. 22; DER 11.11]
             if not -np.pi < gamma[2] < np.pi:
                 raise DataError(f"step {k} turned {gamma[2]!r} rad, outside (-π, π): no SE(2) WNOA residual reads it")
             states[k, :3] = se2.compose(states[k - 1, :3], se2.exp(gamma[:3]))  # Tₖ₊₁ = Tₖ Exp(ξ)
-            local = self.residual == "local-variable"
             states[k, 3:] = se2.right_jacobian(gamma[:3]) @ gamma[3:] if local else gamma[3:]
         return states
