@@ -10,7 +10,7 @@ position RMSE against the truth are one JSON line per task:
 
 - ``plaza``: the Plaza run, every pose a state, started from a streamed estimate (``--start FILE.npz``,
   written by ``steam-ref run --dataset plaza --prior se2 --save-estimates FILE.npz``);
-- ``turn``: a task drawn from the SE(2) model (``sample_se2_from_model``, the consistency set-up of
+- ``turn``: a task drawn from the SE(2) model (``sample_from_model`` with the SE(2) prior, the consistency set-up of
   ``paper.consistency.consistency_se2_setup``) whose yaw rate starts at ``--turn`` rad a step (near and past
   1 rad), started at the truth; the vector-space prior's optimum of the same readings is scored too.
 
@@ -26,7 +26,7 @@ import json
 import numpy as np
 
 from steam_ref.batch import gauss_newton
-from steam_ref.datasets import load_dataset, sample_se2_from_model
+from steam_ref.datasets import load_dataset, sample_from_model
 from steam_ref.lie import SE2_STATE
 from steam_ref.paper.consistency import consistency_se2_setup, model_of
 from steam_ref.paper.presets import PaperSetup
@@ -90,7 +90,7 @@ def plaza(path: str) -> dict:
 
 def turn(rate: float, steps: int, seed: int) -> dict:
     setup = consistency_se2_setup(rate)
-    task = sample_se2_from_model(steps, 8, seed, **model_of(setup))
+    task = sample_from_model(steps, 8, seed, **model_of(setup))
     readings = Readings.from_dataset(task.data, setup)
     start = {X(i): x for i, x in enumerate(task.states)} | {L(j): p for j, p in task.landmarks.items()}
     out = {"task": "turn", "turn_rad_per_step": rate, "steps": steps, "seed": seed}

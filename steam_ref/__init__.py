@@ -60,7 +60,9 @@ _HOMES = {
     "marginal_covariances": "covariance",
     "sparse_marginal_covariances": "covariance",
     "sparse_joint_covariance": "covariance",
-    "predict_state": "gp",
+    "predict_state": "motion",
+    "MotionPrior": "motion",
+    "motion_prior": "motion",
     "finish_at_optimum": "finish",
     "gauss_newton": "batch",
     "levenberg_marquardt": "batch",
@@ -120,10 +122,10 @@ if TYPE_CHECKING:  # what a type checker and an IDE see: the same names, importe
         gp_prior_factors,
     )
     from .finish import finish_at_optimum
-    from .gp import predict_state
     from .graph import FactorGraph
     from .lie import SE2, SE2_STATE, GroupState, LieGroup
     from .linear import LinearSystem, amd_ordering, blas_threads, xl_ordering
+    from .motion import MotionPrior, motion_prior, predict_state
     from .paper.online import run_online
     from .paper.options import StreamOptions
     from .paper.presets import PaperSetup
@@ -174,6 +176,8 @@ __all__ = [
     "sparse_marginal_covariances",
     "sparse_joint_covariance",
     "predict_state",
+    "MotionPrior",
+    "motion_prior",
     "finish_at_optimum",
     "gauss_newton",
     "levenberg_marquardt",

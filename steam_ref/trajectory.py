@@ -1,21 +1,19 @@
 """The estimated trajectory as a function of time: states, Eq. 18 between them, covariances.
 
 A :class:`Trajectory` reads a solver's current estimate of the states at the poses ``states``. At a
-state it returns the solver's estimate and marginal covariance; between states tᵢ < t < tⱼ,
-x̄(t) = Λ(t) x̄ᵢ + Ψ(t) x̄ⱼ [YIB Eq. 18] and the covariance from the joint covariance of (xᵢ, xⱼ)
-(:func:`steam_ref.gp.interpolate.interpolate_covariance`). After the last state t_N it predicts
-by the prior, x̄(t) = Φ(t, t_N) x̄_N and Φ P_N Φᵀ + Q(t - t_N)
-(:func:`steam_ref.gp.interpolate.extrapolate_state_sde`); before the first state there is no
-prior to speak of (the GP starts there, [YIB Eq. 14]) and a query is an error.
+state it returns the solver's estimate and marginal covariance; between states tᵢ < t < tⱼ, the motion
+prior's interpolated state (for a vector-space prior x̄(t) = Λ(t) x̄ᵢ + Ψ(t) x̄ⱼ [YIB Eq. 18]) and its
+covariance from the joint covariance of (xᵢ, xⱼ); after the last state t_N, the prior's prediction (for a
+vector-space prior Φ(t, t_N) x̄_N and Φ P_N Φᵀ + Q(t - t_N)). The motion prior
+(:class:`~steam_ref.motion.MotionPrior`) owns each of these; the trajectory asks it. Before the first state
+there is no prior to speak of (the GP starts there, [YIB Eq. 14]) and a query is an error.
 
 Time: a query and every time returned are on the data's clock (seconds); the GP works on the model's.
 Given a :class:`~steam_ref.gp.clock.Clock` the trajectory maps a query through it; given plain pose times,
 the two clocks are one.
 
-**SE(2) states** (``se2_model`` given: states ``steam_ref.lie.SE2_STATE``, [x, y, θ, vx, vy, ω]): between
-states the local GP of Anderson & Barfoot (``lie.gp.interpolate``, ``interpolate_covariance_se2``), after the
-last the prediction along its body twist (``extrapolate_covariance_se2``). Every covariance of such a state
-is that of its right tangent at the estimate: the pose block in the *body frame* (``lie.state``;
+Every covariance is that of the state's tangent under the prior's kind: on SE(2) states (``motion_prior('se2',
+qc)``) the right tangent at the estimate, its pose block in the *body frame* (``lie.state``;
 ``lie.world_position_covariance`` turns its position block to the world frame).
 """
 
@@ -31,16 +29,8 @@ from numpy.typing import NDArray
 from .arguments import finite, number, real_array
 from .errors import ShapeError, SteamError
 from .gp.clock import Clock
-from .gp.interpolate import (
-    extrapolate_covariance_sde,
-    extrapolate_state_sde,
-    interpolate_covariance,
-    interpolate_covariance_sde,
-    interpolate_state_sde,
-    interpolation_matrices,
-)
-from .gp.sde import LinearSDE, check_prior
-from .lie import gp as se2_gp
+from .gp.sde import LinearSDE
+from .motion import MotionPrior, as_motion_prior
 from .variables import Key, X, key_list
 
 __all__ = ["Trajectory", "Covariances"]
@@ -91,13 +81,13 @@ def _pose_times(times: NDArray, states: list[int]) -> NDArray:
 class Trajectory:
     """A solver's states at poses ``states`` (sorted), queried at any time from the first state on.
 
-    ``prior`` is the motion prior the states were estimated with: Qc (3, 3) of the paper's WNOA prior,
-    or any :class:`~steam_ref.gp.LinearSDE` (WNOJ, Singer: states of 9 numbers). ``times`` (n_poses,)
-    must be finite and non-decreasing, ``states`` strictly increasing pose indices into it at strictly
-    increasing times. ``times`` may be a :class:`~steam_ref.gp.clock.Clock`: then ``times`` are its seconds
-    (what queries and answers use) and the prior runs on its model times. ``se2_model`` ("local-variable" or
-    "simplified"): the states are SE(2) states and ``prior`` is the Qc of their WNOA prior on the body twist
-    (module docstring).
+    ``prior`` is the motion prior the states were estimated with: a :class:`~steam_ref.motion.MotionPrior`
+    (``PaperSetup.motion_prior()``, ``steam_ref.motion_prior('se2', qc)``), or Qc (3, 3) of the paper's WNOA
+    prior, or any :class:`~steam_ref.gp.LinearSDE` (WNOJ, Singer: states of 9 numbers), each read by
+    :func:`~steam_ref.motion.as_motion_prior`. ``times`` (n_poses,) must be finite and non-decreasing,
+    ``states`` strictly increasing pose indices into it at strictly increasing times. ``times`` may be a
+    :class:`~steam_ref.gp.clock.Clock`: then ``times`` are its seconds (what queries and answers use) and the
+    prior runs on its model times.
     """
 
     def __init__(
@@ -105,22 +95,15 @@ class Trajectory:
         solver,
         states: Sequence[int],
         times: NDArray | Clock,
-        prior: NDArray | LinearSDE,
-        se2_model: str | None = None,
+        prior: MotionPrior | NDArray | LinearSDE,
     ):
         self.solver = solver  # anything with estimate_of, estimate, marginal_covariances, joint_covariance(s)
         self.states = _pose_indices(states)  # poses with a state, increasing
         self.clock = times if isinstance(times, Clock) else Clock.of(_pose_times(times, self.states))
         self.times = _pose_times(self.clock.seconds, self.states)  # (n_poses,) time of every pose [data's clock]
         self.model_times = _pose_times(self.clock.model, self.states)  # (n_poses,) the same on the prior's clock
-        prior = check_prior(prior)
-        # Qc of a WNOA prior uses the memoised closed forms; any other prior goes through its LinearSDE.
-        self.qc = None if isinstance(prior, LinearSDE) else prior
-        self.prior = prior if isinstance(prior, LinearSDE) else LinearSDE.wnoa(prior)
-        self.n = self.prior.n  # size of a state
-        self.se2_model = None if se2_model is None else se2_gp.check_model(se2_model)
-        if self.se2_model is not None and (self.qc is None or self.qc.shape != (3, 3)):
-            raise SteamError(f"SE(2) states need the Qc (3, 3) of their WNOA prior, got prior={prior!r}")
+        self.prior = as_motion_prior(prior)  # everything that differs between priors
+        self.n = self.prior.state_dim  # size of a state
         if self.states:
             size = np.shape(solver.estimate_of(X(self.states[0])))
             if size != (self.n,):
@@ -136,23 +119,14 @@ class Trajectory:
         ta, tb = self.model_times[a], self.model_times[b]
         if t in (ta, tb):
             return (xa if t == ta else xb).copy()
-        if self.qc is None:
-            return interpolate_state_sde(self.prior, ta, xa, tb, xb, t)
-        lam, psi = interpolation_matrices(ta, tb, t, self.qc)  # [YIB Eq. 16]
-        if self.se2_model is not None:
-            return se2_gp.interpolate(xa, xb, lam, psi, self.se2_model)[0]  # [DER 11.15]
-        return lam @ xa + psi @ xb
+        return self.prior.interpolate(ta, xa, tb, xb, t)  # [YIB Eq. 18]
 
-    def _between_covariance(self, a: int, b: int, t: float, joint: NDArray) -> NDArray:
+    def _between_covariance(self, a: int, b: int, t: float, xa: NDArray, xb: NDArray, joint: NDArray) -> NDArray:
+        """Cov x(t) between the states at poses a and b (estimates xa, xb; joint covariance ``joint``)."""
         ta, tb = self.model_times[a], self.model_times[b]
         if t in (ta, tb):  # a pose at a state's time: that state's marginal, a block of the joint
             return joint[: self.n, : self.n].copy() if t == ta else joint[self.n :, self.n :].copy()
-        if self.se2_model is not None and self.qc is not None:
-            xa, xb = self.solver.estimate_of(X(a)), self.solver.estimate_of(X(b))
-            return se2_gp.interpolate_covariance_se2(ta, tb, t, self.qc, xa, xb, joint, self.se2_model)[1]
-        if self.qc is None:
-            return interpolate_covariance_sde(self.prior, ta, tb, t, joint)
-        return interpolate_covariance(ta, tb, t, self.qc, joint)
+        return self.prior.interpolate_covariance(ta, xa, tb, xb, t, joint)
 
     def neighbours(self, t: float) -> tuple[int, int] | int:
         """The state at time t, or the two states around it."""
@@ -181,26 +155,22 @@ class Trajectory:
             )
         if solved and t > times[solved[-1]]:
             last, key, m = self.model_times[solved[-1]], X(solved[-1]), float(self.clock.to_model(t))
-            if self.se2_model is not None and self.qc is not None:  # [DER 11.18]
-                x1 = self.solver.estimate_of(key)
-                if not covariance:
-                    return se2_gp.extrapolate(x1, last, m)[0]
-                cov1 = self.solver.joint_covariance([key])
-                return se2_gp.extrapolate_covariance_se2(x1, last, m, self.qc, cov1)
-            mean = extrapolate_state_sde(self.prior, last, self.solver.estimate_of(key), m)
+            x1 = self.solver.estimate_of(key)
+            mean = self.prior.extrapolate(last, x1, m)  # [YIB Eq. 22]
             if not covariance:
                 return mean
-            return mean, extrapolate_covariance_sde(self.prior, last, m, self.solver.joint_covariance([key]))
+            return mean, self.prior.extrapolate_covariance(last, x1, m, self.solver.joint_covariance([key]))
         near = self.neighbours(t)
         if isinstance(near, int):
             mean = self.solver.estimate_of(X(near)).copy()
             return (mean, self.solver.joint_covariance([X(near)])) if covariance else mean
         a, b = near
         m = float(self.clock.to_model(t))
-        mean = self._between(a, b, m, self.solver.estimate_of(X(a)), self.solver.estimate_of(X(b)))
+        xa, xb = self.solver.estimate_of(X(a)), self.solver.estimate_of(X(b))
+        mean = self._between(a, b, m, xa, xb)
         if not covariance:
             return mean
-        return mean, self._between_covariance(a, b, m, self.solver.joint_covariance([X(a), X(b)]))
+        return mean, self._between_covariance(a, b, m, xa, xb, self.solver.joint_covariance([X(a), X(b)]))
 
     def at_every_pose(self) -> tuple[NDArray, NDArray]:
         """Times (m,) and states (m, n) at every pose of the span, from the first state's pose to the last's
@@ -222,7 +192,7 @@ class Trajectory:
         """Marginal covariances at every pose of the span (interpolated between states; row k is pose
         states[0] + k, as in :meth:`at_every_pose`) and of ``landmarks``."""
         solved, landmarks = self.states, key_list("landmarks", landmarks)
-        d = self.prior.qc.shape[0]
+        d = self.prior.qc.shape[0]  # p's size: a pose [x, y, θ] and its rates come first in every planar state
         if d != 3:
             raise SteamError(
                 f"covariances are those of planar poses [x, y, θ] and their rates; this prior's p has d = {d} numbers"
@@ -239,11 +209,11 @@ class Trajectory:
         )
         first = solved[0] if solved else 0
         full = np.empty((solved[-1] + 1 - first if solved else 0, self.n, self.n))
-        for a, b in itertools.pairwise(solved):
+        for a in solved:
             full[a - first] = marg[X(a)]
+        for a, b in gaps:
+            xa, xb = self.solver.estimate_of(X(a)), self.solver.estimate_of(X(b))
             for p in range(a + 1, b):
-                full[p - first] = self._between_covariance(a, b, self.model_times[p], joints[(a, b)])
-        if solved:
-            full[-1] = marg[X(solved[-1])]
+                full[p - first] = self._between_covariance(a, b, self.model_times[p], xa, xb, joints[(a, b)])
         marks = np.array([marg[k] for k in landmarks]).reshape(-1, 2, 2)
         return Covariances(full[:, :3, :3].copy(), full[:, 3:6, 3:6].copy(), marks, tuple(k.index for k in landmarks))

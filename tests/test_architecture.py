@@ -40,6 +40,7 @@ LAYERS: dict[str, int] = {
     "steam_ref.gp": 1,
     "steam_ref.factors": 2,
     "steam_ref.linear": 3,
+    "steam_ref.motion": 3,  # the motion priors, one object each: imports factors (2), gp, lie, manifold (1)
     "steam_ref.graph": 4,
     "steam_ref.covariance": 4,
     "steam_ref.batch": 5,
@@ -51,7 +52,6 @@ LAYERS: dict[str, int] = {
     # the paper's experiments, in the order data flows
     "steam_ref.paper.presets": 7,
     "steam_ref.paper.readings": 8,
-    "steam_ref.paper.se2_model": 8,  # the SE(2) factors and initial values of a run with prior "se2"
     "steam_ref.paper.converge": 8,
     "steam_ref.paper.frontend": 9,
     "steam_ref.paper.problem": 10,

@@ -27,10 +27,10 @@ from steam_ref.gp import (
     interpolate_state_sde,
     interpolation_matrices,
     interpolation_matrices_sde,
-    predict_state,
     process_noise,
     transition,
 )
+from steam_ref.motion import predict_state
 from steam_ref.variables import X
 
 

@@ -11,6 +11,7 @@ from steam_ref.bayes_tree import ISAM2Params
 from steam_ref.datasets import generate_synthetic
 from steam_ref.errors import SteamError
 from steam_ref.gp import LinearSDE
+from steam_ref.motion import VectorPrior
 from steam_ref.paper.online import StreamingEstimator
 from steam_ref.paper.options import StreamOptions
 from steam_ref.paper.presets import PaperSetup
@@ -42,7 +43,7 @@ def test_the_batch_problem_has_nine_number_states_and_the_priors_factors(data, p
     gp = [f for f in problem.graph if type(f).__name__ == "GPPriorFactor"]
     a, b = gp[0].keys
     dt = problem.model_times[b.index] - problem.model_times[a.index]
-    K = gp_kernel(np.array([0.0, dt]), setup.motion_prior(), 1e-300 * np.eye(9))  # quadrature oracle
+    K = gp_kernel(np.array([0.0, dt]), setup.motion_prior().sde, 1e-300 * np.eye(9))  # quadrature oracle
     W = gp[0].sqrt_information
     np.testing.assert_allclose(W.T @ W, np.linalg.inv(K[9:, 9:]), rtol=1e-7)
     result = gauss_newton(problem.graph, problem.initial)
@@ -69,7 +70,7 @@ def test_time_queries_use_the_setups_prior(data, prior):
     t = 0.5 * (est.readings.model_times[a] + est.readings.model_times[b])
     xa, xb = est.solver.estimate_of(X(a)), est.solver.estimate_of(X(b))
     ta, tb = est.readings.model_times[a], est.readings.model_times[b]
-    K = gp_kernel(np.array([ta, t, tb]), setup.motion_prior(), np.eye(9))  # the dense GP, zero mean
+    K = gp_kernel(np.array([ta, t, tb]), setup.motion_prior().sde, np.eye(9))  # the dense GP, zero mean
     ends, mid = np.r_[0:9, 18:27], np.arange(9, 18)
     expected = K[np.ix_(mid, ends)] @ np.linalg.solve(K[np.ix_(ends, ends)], np.r_[xa, xb])
     at = float(est.readings.clock.to_seconds(t))  # a query is in the data's seconds; the GP runs on the model's time
@@ -96,6 +97,8 @@ def test_bad_prior_settings_are_named(changes, message):
 
 
 def test_singer_setup_is_the_singer_sde():
-    sde = SETUPS["singer"].motion_prior()
+    prior = SETUPS["singer"].motion_prior()
+    sde = prior.sde
+    assert isinstance(prior, VectorPrior) and prior.name == "singer" and prior.state_dim == 9
     assert isinstance(sde, LinearSDE) and sde.n == 9
     np.testing.assert_allclose(np.asarray(sde.A)[6:, 6:], -0.5 * np.eye(3))  # α = 1 / time constant

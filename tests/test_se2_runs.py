@@ -13,12 +13,13 @@ import scipy.io
 
 from steam_ref.batch import gauss_newton
 from steam_ref.cli.commands import main
-from steam_ref.datasets import generate_synthetic, sample_se2_from_model
+from steam_ref.datasets import generate_synthetic, sample_from_model
 from steam_ref.errors import DivergenceWarning
 from steam_ref.factors import GPPriorFactor, PriorFactor
 from steam_ref.factors.lie_prior import LiePriorFactor, LieStatePrior
 from steam_ref.factors.lie_readings import BodyVelocityFactor, LieInterpolatedFactor, PoseReading
 from steam_ref.lie import SE2, SE2_STATE
+from steam_ref.motion import motion_prior
 from steam_ref.paper.consistency import ConsistencyStudy, consistency_se2_setup, model_of, run_seed
 from steam_ref.paper.converge import converge, rotated
 from steam_ref.paper.divergence import DivergenceCheck
@@ -88,12 +89,12 @@ def test_the_trajectory_between_se2_states_follows_a_constant_twist():
             return {X(i): v for i, v in state.items()}
 
     qc = np.diag([0.1, 0.1, 0.2])
-    ours = Trajectory(Held(), [0, 4, 6], times, qc, se2_model="local-variable").at_every_pose()[1]
+    ours = Trajectory(Held(), [0, 4, 6], times, motion_prior("se2", qc)).at_every_pose()[1]
     for i in (1, 2, 3, 5):
         assert np.abs(SE2_STATE.local(state[i], ours[i])).max() < 1e-12
     vector = Trajectory(Held(), [0, 4, 6], times, qc).at_every_pose()[1]
     assert np.abs(vector[2, :2] - state[2][:2]).max() > 1e-2
-    extrapolated = Trajectory(Held(), [0, 4], times, qc, se2_model="simplified").at(1.5)
+    extrapolated = Trajectory(Held(), [0, 4], times, motion_prior("se2", qc, se2_residual="simplified")).at(1.5)
     assert np.abs(SE2_STATE.local(state[5], extrapolated)).max() < 1e-12
 
 
@@ -101,7 +102,7 @@ def test_a_stream_on_se2_states_reaches_the_batch_optimum():
     """BTGP relinearizing every variable at every update, then ten updates more, on a task drawn from the SE(2)
     model turning about 0.8 rad a step: the batch optimum of the same problem (Gauss-Newton on SE(2))."""
     setup = consistency_se2_setup(0.8).with_isam2(relinearize_threshold=0.0, relinearize_skip=1)
-    task = sample_se2_from_model(20, 6, 5, **model_of(setup))
+    task = sample_from_model(20, 6, 5, **model_of(setup))
     readings = Readings.from_dataset(task.data, setup)
     run = StreamingEstimator(readings, setup, StreamOptions())
     run.run()
@@ -162,7 +163,7 @@ def test_a_fast_turning_task_is_followed_on_se2_and_lost_in_vector_space():
     """A task drawn from the SE(2) model turning about 1.2 rad a step: the SE(2) optimum stays near the truth,
     the vector-space prior's optimum of the same readings does not."""
     setup = consistency_se2_setup(1.2)
-    task = sample_se2_from_model(25, 8, 3, **model_of(setup))
+    task = sample_from_model(25, 8, 3, **model_of(setup))
     readings = Readings.from_dataset(task.data, setup)
 
     def error(prior):
@@ -194,7 +195,7 @@ def test_the_turn_of_the_whole_map_on_se2_states_changes_only_the_anchored_facto
     twist does not, so no GP prior, velocity or range factor changes (their errors are body-frame quantities),
     and converge reaches the Gauss-Newton optimum."""
     setup = consistency_se2_setup(0.9).replace(first_pose_sigmas=np.array([0.05, 0.05, np.pi]))
-    task = sample_se2_from_model(15, 6, 2, **model_of(setup))
+    task = sample_from_model(15, 6, 2, **model_of(setup))
     problem = build_problem(Readings.from_dataset(task.data, setup), setup)
     turned = rotated(problem.initial, 0.7)
     assert turned.kind(X(2)) is SE2_STATE

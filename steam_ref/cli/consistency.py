@@ -20,15 +20,7 @@ import time
 from ..errors import SteamError
 from ..evaluate import INCONCLUSIVE
 from ..paper import progress
-from ..paper.consistency import (
-    KINDS,
-    SE2_ESTIMATORS,
-    ConsistencyStudy,
-    check_result,
-    consistency_se2_setup,
-    run_seed,
-    summarize,
-)
+from ..paper.consistency import KINDS, STUDIES, ConsistencyStudy, check_result, run_seed, summarize
 from ..paper.presets import SE2_RESIDUALS
 from ..paper.sweep import run_sweep
 from ..plot.figures import plot_anees
@@ -45,7 +37,7 @@ def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
     parser.add_argument("--dataset", choices=("synthetic",), default="synthetic", help="tasks drawn from the model")
     parser.add_argument(
         "--prior",
-        choices=("wnoa", "se2"),
+        choices=tuple(STUDIES),
         default="wnoa",
         help="the model the tasks are drawn from and the estimators assume: the paper's WNOA, or WNOA on SE(2) "
         "(then the estimators are batch, btgp/1 and btgp/1 with the vector-space prior)",
@@ -107,17 +99,18 @@ def _overall(row: dict, n_seeds: int) -> str:
 
 
 def _model(args: argparse.Namespace) -> dict:
-    """The study's set-up and estimators for ``--prior`` (and, on SE(2), ``--se2-residual``, ``--turn``)."""
-    if args.prior != "se2":
-        for option, value in (("--se2-residual", args.se2_residual), ("--turn", args.turn)):
-            if value is not None:
-                raise SteamError(f"{option} applies to --prior se2 only")
-        return {}
-    turn = 0.0 if args.turn is None else args.turn
+    """The study's set-up and estimators for ``--prior`` (:data:`~steam_ref.paper.consistency.STUDIES`), with the
+    options given (``--se2-residual``, ``--turn``), each refused by a model that does not take it."""
+    model = STUDIES[args.prior]
+    given = {name: getattr(args, name) for name in ("turn", "se2_residual") if getattr(args, name) is not None}
+    for name in given:
+        if name not in model.options:
+            takers = " or ".join(f"--prior {p}" for p, m in STUDIES.items() if name in m.options)
+            raise SteamError(f"--{name.replace('_', '-')} applies to {takers} only")
+    turn = given.get("turn", 0.0)
     if not math.isfinite(turn) or abs(turn) >= math.pi:
         raise SteamError(f"--turn must be a yaw rate in (-π, π) rad a step, got {args.turn!r}")
-    setup = consistency_se2_setup(turn, args.se2_residual or "local-variable")
-    return {"setup": setup, "estimators": SE2_ESTIMATORS}
+    return {"setup": model.setup(**given), "estimators": model.estimators}
 
 
 def run(args: argparse.Namespace) -> int:

@@ -16,6 +16,7 @@ from ..bayes_tree import ISAM2Params
 from ..datasets import generate_synthetic
 from ..errors import SteamError
 from ..evaluate import trajectory_figures
+from ..motion import MOTION_PRIORS
 from ..paper.online import StreamingEstimator
 from ..paper.options import StreamOptions
 from ..paper.presets import DEPARTURES, PRESETS, PRIORS, SE2_RESIDUALS, PaperSetup
@@ -55,6 +56,7 @@ from .streams import json_line
 
 __all__ = ["add_parser", "run", "save_estimates"]
 
+VECTOR_STATE_NAMES = ("x", "y", "theta", "xdot", "ydot", "thetadot")  # the paper's WNOA state, as files name it
 DEFAULT_STEPS, DEFAULT_LANDMARKS = 1500, 298  # generate_synthetic's defaults: a landmark every ~5 steps
 
 
@@ -112,8 +114,9 @@ def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
         "--prior",
         choices=PRIORS,
         default=None,
-        help="motion prior: the paper's white noise on acceleration, or on jerk, or Singer's model, or white noise on "
-        "acceleration on SE(2) (states: pose and body twist; docs/derivations.md); default: the preset's (wnoa)",
+        help="motion prior: "
+        + "; ".join(f"{name}, {choice.what}" for name, choice in MOTION_PRIORS.items())
+        + " (docs/derivations.md); default: the preset's (wnoa)",
     )
     parser.add_argument(
         "--se2-residual",
@@ -217,9 +220,10 @@ def run(args: argparse.Namespace) -> int:
     setup = PaperSetup.named(preset_of(args)).departing(*args.departure)
     prior = setup.prior if args.prior is None else args.prior
     given = {"prior": args.prior, "singer_time_constant": args.singer_time_constant, "se2_residual": args.se2_residual}
-    for name, owner in (("singer_time_constant", "singer"), ("se2_residual", "se2")):  # only what was given
-        if given[name] is not None and prior != owner:
-            raise SteamError(f"--{name.replace('_', '-')} applies to --prior {owner} only, not --prior {prior}")
+    for name in ("singer_time_constant", "se2_residual"):  # an option only of the priors that take it (MOTION_PRIORS)
+        if given[name] is not None and name not in MOTION_PRIORS[prior].options:
+            takers = " or ".join(f"--prior {p}" for p, choice in MOTION_PRIORS.items() if name in choice.options)
+            raise SteamError(f"--{name.replace('_', '-')} applies to {takers} only, not --prior {prior}")
     setup = setup.replace(qc=args.qc_scale * setup.qc, **{k: v for k, v in given.items() if v is not None})
     isam2 = {"relinearize_threshold": args.relinearize_threshold, "relinearize_skip": args.relinearize_skip}
     if any(v is not None for v in isam2.values()):  # only what was given: the preset owns its iSAM2 settings
@@ -256,7 +260,9 @@ def run(args: argparse.Namespace) -> int:
     # the run's own files first: nothing computed from them after (scores, figures) can lose them
     if args.save_estimates:
         write_output(
-            args.save_estimates, "--save-estimates", lambda name: save_estimates(name, result, se2=setup.is_se2)
+            args.save_estimates,
+            "--save-estimates",
+            lambda name: save_estimates(name, result, state_names=estimator.front.prior.state_names),
         )
     if args.tree_dot and isinstance(estimator.solver, BayesTreeSolver):  # GTSAM's ISAM2.dot() text (bayes_tree/dot.py)
         dot = estimator.solver.inner.tree.dot() + "\n"
@@ -267,7 +273,7 @@ def run(args: argparse.Namespace) -> int:
         "score_against_optimum": args.score_against_optimum,
         "departures": args.departure,
         "prior": setup.prior,
-        **({"se2_residual": setup.se2_residual} if setup.is_se2 else {}),
+        **setup.prior_options(),
         "qc_scale": args.qc_scale,
         "clock": estimator.readings.clock.describe(),
     }
@@ -322,29 +328,27 @@ def _run_dataset(args: argparse.Namespace):
     return generate_synthetic(n_steps=args.steps, n_landmarks=n_landmarks, seed=args.seed)
 
 
-def save_estimates(path: str, result, *, se2: bool = False) -> None:
-    """Write a run to an .npz file: ``times`` (the data set's seconds, as ``--save-trajectory``), ``x``, ``y``, ``theta``
-    and ``xdot``, ``ydot``, ``thetadot`` (rates per unit of the model's clock: per pose step on a 'pose-index' clock,
-    per second on 'seconds') at every covered time step (and ``xddot``, ``yddot``, ``thetaddot`` with a WNOJ or Singer
-    prior; with ``se2``, SE(2) states: the body twist ``vx``, ``vy``, ``omega``, covariances in the right tangent,
-    the pose block in the body frame), ``state_poses`` (pose indices with a state), ``landmark_ids`` and ``landmarks``
-    (m, 2), and, when the run has them, the final marginal covariances ``pose_covariance`` (n, 3, 3),
-    ``velocity_covariance`` (n, 3, 3) and ``landmark_covariance`` (m, 2, 2), in the order of ``times`` and ids."""
+def save_estimates(path: str, result, *, state_names: tuple[str, ...] = VECTOR_STATE_NAMES) -> None:
+    """Write a run to an .npz file: ``times`` (the data set's seconds, as ``--save-trajectory``), one array per number
+    of a state at every covered time step, named by the motion prior (``MotionPrior.state_names``: ``x``, ``y``,
+    ``theta``, then ``xdot``, ``ydot``, ``thetadot`` (rates per unit of the model's clock: per pose step on a
+    'pose-index' clock, per second on 'seconds') and with a WNOJ or Singer prior ``xddot``, ``yddot``, ``thetaddot``;
+    on SE(2) states the body twist ``vx``, ``vy``, ``omega``, covariances in the right tangent, the pose block in the
+    body frame), ``state_poses`` (pose indices with a state), ``landmark_ids`` and ``landmarks`` (m, 2), and, when the
+    run has them, the final marginal covariances ``pose_covariance`` (n, 3, 3), ``velocity_covariance`` (n, 3, 3) and
+    ``landmark_covariance`` (m, 2, 2), in the order of ``times`` and ids."""
     ids = np.array(sorted(result.landmarks), dtype=int)
     marks = np.array([result.landmarks[i] for i in ids]).reshape(-1, 2)
     tr = result.trajectory
+    if len(state_names) != tr.shape[1]:
+        raise SteamError(f"the run's states have {tr.shape[1]} numbers, but {len(state_names)} names were given")
     arrays = dict(
         times=result.times,
-        x=tr[:, 0],
-        y=tr[:, 1],
-        theta=tr[:, 2],
-        **dict(zip(("vx", "vy", "omega") if se2 else ("xdot", "ydot", "thetadot"), tr[:, 3:6].T, strict=True)),
+        **dict(zip(state_names, tr.T, strict=True)),
         state_poses=result.state_poses,
         landmark_ids=ids,
         landmarks=marks,
     )
-    if tr.shape[1] == 9:
-        arrays.update(xddot=tr[:, 6], yddot=tr[:, 7], thetaddot=tr[:, 8])
     if result.covariances is not None:
         c = result.covariances
         landmark_covariance = c.landmark[[c.landmark_ids.index(i) for i in ids]].reshape(-1, 2, 2)

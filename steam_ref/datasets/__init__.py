@@ -10,8 +10,8 @@
 - :mod:`.gtsam_text`: :func:`load_gtsam_2d`, a reader of GTSAM's planar text format (ODOMETRY and
   LANDMARK rows, as ``gtsam.load2D`` reads them).
 - :mod:`.synthetic`: :func:`generate_synthetic`, a task like the paper's Section IV-A.
-- :mod:`.sampled`: :func:`sample_from_model`, a task drawn from the estimator's own model (consistency);
-  :func:`sample_se2_from_model`, the same from the SE(2) WNOA model.
+- :mod:`.sampled`: :func:`sample_from_model`, a task drawn from the estimator's own model, any motion prior
+  (consistency).
 - :mod:`.search`: :func:`load_dataset` by name or path, searching :func:`default_data_dirs`
   (``data_dir``, ``$STEAM_REF_DATA_DIR``, the fetched files' cache folder, gtsam's ``Data/``).
 - :mod:`.registry`: the paper's files by name, each with its source, sha256 and size, and the check of a
@@ -28,7 +28,7 @@ from .cmu import load_cmu_mat, load_cmu_text
 from .gtsam_text import load_gtsam_2d
 from .landmarks import LandmarkDataset
 from .matfile import read_mat
-from .sampled import ModelSample, sample_from_model, sample_se2_from_model
+from .sampled import ModelSample, sample_from_model
 from .search import (
     DATA_DIR_ENV,
     default_data_dirs,
@@ -54,7 +54,6 @@ __all__ = [
     "uncleaned_plaza",
     "generate_synthetic",
     "sample_from_model",
-    "sample_se2_from_model",
     "ModelSample",
     "DATA_DIR_ENV",
 ]

@@ -9,7 +9,6 @@ from .interpolate import (
     interpolate_state_sde,
     interpolation_matrices,
     interpolation_matrices_sde,
-    predict_state,
 )
 from .models import (
     ClosedForm,
@@ -37,7 +36,6 @@ __all__ = [
     "interpolate_covariance_sde",
     "extrapolate_state_sde",
     "extrapolate_covariance_sde",
-    "predict_state",
     "ClosedForm",
     "wnoj_transition",
     "wnoj_process_noise",

@@ -28,7 +28,7 @@ from .prior import (
     qc_key,
     transition,
 )
-from .sde import LinearSDE, check_prior
+from .sde import LinearSDE
 
 __all__ = [
     "interpolation_matrices",
@@ -39,7 +39,6 @@ __all__ = [
     "interpolate_covariance_sde",
     "extrapolate_state_sde",
     "extrapolate_covariance_sde",
-    "predict_state",
 ]
 
 
@@ -220,25 +219,3 @@ def extrapolate_covariance_sde(sde: LinearSDE, t1: float, t: float, cov1: ArrayL
     with np.errstate(over="ignore", invalid="ignore"):
         cov = Phi @ P @ Phi.T + sde.process_noise(dt)  # [YIB Eq. 17, 22]
     return finite_result("the extrapolated covariance", (cov + cov.T) / 2, t_minus_t1=dt)
-
-
-def predict_state(x_prev: ArrayLike, dt: float, prior: ArrayLike | LinearSDE) -> NDArray:
-    """The starting value of a new state dt after ``x_prev``: the prior's mean, Φ(dt) x_prev + v(dt).  [YIB Eq. 14, 22]
-
-    ``prior`` is Qc (the paper's WNOA prior: Φ(dt) moves the pose by dt times the velocity and keeps the
-    velocity, so [x, y, θ] += dt [ẋ, ẏ, θ̇]) or any :class:`LinearSDE` (its exogenous input v included).
-    Give the new state this value in the update that adds it: the GP prior factor to it then has a zero
-    error, and the measurements pull it from there. Returns a new (n,) array; dt must be > 0.
-    """
-    prior, dt = check_prior(prior), number("dt", dt)
-    if not dt > 0:
-        raise SteamError(f"dt must be > 0 (the new state comes after x_prev), got dt={dt!r}")
-    if isinstance(prior, LinearSDE):
-        phi, v = prior.transition(dt), prior.input_integral(dt)
-    else:
-        phi = transition(dt, prior.shape[0])
-        v = np.zeros(phi.shape[0])  # the zero-mean prior: v = 0
-    x_prev = _state("x_prev", x_prev, phi.shape[0])
-    with np.errstate(over="ignore", invalid="ignore"):
-        x = phi @ x_prev + v  # [YIB Eq. 14, 22]
-    return finite_result("the predicted state", x, dt=dt)

@@ -24,6 +24,7 @@ build the SDEs and use these forms; ``steam_ref.gp.prior`` holds WNOA's.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from math import factorial
 
@@ -187,6 +188,49 @@ def singer_process_noise(dt: float, alpha: float, qc: ArrayLike) -> NDArray:
 # --- the models LinearSDE knows in closed form ----------------------------------------------------
 
 
+def _wnoa_matrices(d: int) -> tuple[NDArray, NDArray]:
+    """A (2d, 2d) and F (2d, d) of p̈ = w.  [YIB Eq. 31]"""
+    I, O = np.eye(check_d(d)), np.zeros((d, d))
+    return np.block([[O, I], [O, O]]), np.vstack([O, I])
+
+
+@dataclass(frozen=True)
+class _Forms:
+    """One model's closed forms, each taking Singer's α last (None for a model without one)."""
+
+    matrices: Callable[[int, float | None], tuple[NDArray, NDArray]]
+    transition: Callable[[float, int, float | None], NDArray]
+    process_noise: Callable[[float, ArrayLike, float | None], NDArray]
+    has_alpha: bool = False
+
+
+_FORMS: dict[str, _Forms] = {  # a model LinearSDE knows in closed form is one entry here
+    "wnoa": _Forms(
+        lambda d, _: _wnoa_matrices(d),
+        lambda dt, d, _: wnoa_transition(dt, d),
+        lambda dt, qc, _: wnoa_process_noise(dt, qc),
+    ),
+    "wnoj": _Forms(
+        lambda d, _: wnoj_matrices(d),
+        lambda dt, d, _: wnoj_transition(dt, d),
+        lambda dt, qc, _: wnoj_process_noise(dt, qc),
+    ),
+    "singer": _Forms(
+        lambda d, alpha: singer_matrices(d, _given(alpha)),
+        lambda dt, d, alpha: singer_transition(dt, _given(alpha), d),
+        lambda dt, qc, alpha: singer_process_noise(dt, _given(alpha), qc),
+        has_alpha=True,
+    ),
+}
+
+
+def _given(alpha: float | None) -> float:
+    """α of a model that has one (set and checked by ``ClosedForm.__post_init__``)."""
+    if alpha is None:
+        raise SteamError("this model has no alpha")
+    return alpha
+
+
 @dataclass(frozen=True)
 class ClosedForm:
     """A motion prior with Φ and Q in closed form: 'wnoa' [YIB Eq. 30-31], 'wnoj' or 'singer' (α)."""
@@ -195,34 +239,22 @@ class ClosedForm:
     alpha: float | None = None  # Singer's α; None for the others
 
     def __post_init__(self) -> None:
-        if self.name not in ("wnoa", "wnoj", "singer"):
+        forms = _FORMS.get(self.name) if isinstance(self.name, str) else None
+        if forms is None:
             raise SteamError(f"unknown closed-form model name={self.name!r}; use 'wnoa', 'wnoj' or 'singer'")
-        if self.name == "singer":
+        if forms.has_alpha:
             object.__setattr__(self, "alpha", check_alpha(self.alpha))
         elif self.alpha is not None:
             raise SteamError(f"only the 'singer' model has an alpha, got alpha={self.alpha!r} for {self.name!r}")
 
-    def _singer_alpha(self) -> float:
-        """α of 'singer' (set and checked by ``__post_init__``)."""
-        if self.alpha is None:
-            raise SteamError(f"the {self.name!r} model has no alpha")
-        return self.alpha
-
     def matrices(self, d: int) -> tuple[NDArray, NDArray]:
         """A and F of the model for p of dimension d."""
-        if self.name == "wnoa":
-            I, O = np.eye(d), np.zeros((d, d))
-            return np.block([[O, I], [O, O]]), np.vstack([O, I])  # [YIB Eq. 31]
-        return wnoj_matrices(d) if self.name == "wnoj" else singer_matrices(d, self._singer_alpha())
+        return _FORMS[self.name].matrices(d, self.alpha)
 
     def transition(self, dt: float, d: int) -> NDArray:
         """Φ(t + Δt, t), any finite Δt."""
-        if self.name == "wnoa":
-            return wnoa_transition(dt, d)
-        return wnoj_transition(dt, d) if self.name == "wnoj" else singer_transition(dt, self._singer_alpha(), d)
+        return _FORMS[self.name].transition(dt, d, self.alpha)
 
     def process_noise(self, dt: float, qc: ArrayLike) -> NDArray:
         """Q(Δt), Δt > 0."""
-        if self.name == "wnoa":
-            return wnoa_process_noise(dt, qc)
-        return wnoj_process_noise(dt, qc) if self.name == "wnoj" else singer_process_noise(dt, self._singer_alpha(), qc)
+        return _FORMS[self.name].process_noise(dt, qc, self.alpha)

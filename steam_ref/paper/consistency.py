@@ -48,13 +48,15 @@ consistent on those runs (mean NEES 1.0-2.3 on four of them), and so is BTGP onc
 at every update (``relinearize_threshold=0, relinearize_skip=1``): iSAM2's lazy relinearization (GTSAM's
 defaults, 0.1 every 10th update) is what leaves interpolated factors linearized at stale states.
 
-**SE(2)** (:func:`consistency_se2_setup`, ``steam-ref consistency --prior se2``): the tasks are drawn from the
-SE(2) WNOA model (:func:`~steam_ref.datasets.sample_se2_from_model`, the set-up's residual), and an SE(2)
-estimator's error is the truth in the right tangent at its estimate, x_true ⊖ x̂ = [Log(T̂⁻¹T); ϖ - ϖ̂], the
-coordinates its covariance is in (the pose block in the body frame). ``turn`` starts the task's yaw rate at
-that many rad a step. The estimator "btgp/1 vector-space prior" solves the same task with the paper's
-vector-space WNOA prior (its error: position and wrapped heading in the world frame, the truth's world
-velocity [R(θ) [vx, vy], ω]).
+**Any motion prior.** The task is drawn from the set-up's motion prior (``sample_from_model`` asks it), and
+each estimator's error is the truth against its estimate in the coordinates its covariance is in, as its own
+prior says (``MotionPrior.errors`` of the truth's world-frame pose and velocity, ``MotionPrior.world_states``):
+for the vector-space priors the difference, heading wrapped; on SE(2) the truth in the right tangent at the
+estimate, x_true ⊖ x̂ = [Log(T̂⁻¹T); ϖ - ϖ̂] (the pose block in the body frame). The study of a named model is
+one entry of :data:`STUDIES`: ``steam-ref consistency --prior se2`` (:func:`consistency_se2_setup`) draws from
+the SE(2) WNOA model, ``turn`` starting the task's yaw rate at that many rad a step, and its estimator "btgp/1
+vector-space prior" solves the same task with the paper's vector-space WNOA prior (its error: position and
+wrapped heading in the world frame, the truth's world velocity [R(θ) [vx, vy], ω]).
 
 The batch optimum is the lower of two descents (:func:`_solve`); BTGP/1 runs first so that its estimate
 can be the second start.
@@ -65,16 +67,16 @@ from __future__ import annotations
 import json
 import math
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..arguments import integer, is_integer
 from ..batch import gauss_newton
-from ..datasets import sample_from_model, sample_se2_from_model
+from ..datasets import sample_from_model
 from ..errors import SteamError
-from ..evaluate import INCONCLUSIVE, LOST_QUANTILE, chi2_band, chi2_quantile, nees, pose_errors, runs_needed, verdict
-from ..lie import SE2_STATE
+from ..evaluate import INCONCLUSIVE, LOST_QUANTILE, chi2_band, chi2_quantile, nees, runs_needed, verdict
 from ..linear.threads import limited
 from ..trajectory import Trajectory
 from ..variables import L, Values
@@ -92,6 +94,8 @@ __all__ = [
     "consistency_setup",
     "consistency_se2_setup",
     "SE2_ESTIMATORS",
+    "StudyModel",
+    "STUDIES",
     "model_of",
     "check_result",
     "run_seed",
@@ -142,10 +146,28 @@ def consistency_setup() -> PaperSetup:
     )
 
 
-def consistency_se2_setup(turn: float = 0.0, residual: str = "local-variable") -> PaperSetup:
-    """:func:`consistency_setup` on SE(2) states: tasks from the SE(2) WNOA model of ``residual``, the yaw rate
+def consistency_se2_setup(turn: float = 0.0, se2_residual: str = "local-variable") -> PaperSetup:
+    """:func:`consistency_setup` on SE(2) states: tasks from the SE(2) WNOA model of ``se2_residual``, the yaw rate
     starting at ``turn`` rad a step (forward speed 1 m a step)."""
-    return consistency_setup().replace(prior="se2", se2_residual=residual, first_velocity=np.array([1.0, 0.0, turn]))
+    return consistency_setup().replace(
+        prior="se2", se2_residual=se2_residual, first_velocity=np.array([1.0, 0.0, turn])
+    )
+
+
+@dataclass(frozen=True)
+class StudyModel:
+    """A model a study draws its tasks from, by the name ``steam-ref consistency --prior`` gives it: its set-up
+    (``setup(**options)``), the estimators its study runs, and the options ``setup`` takes (the command's names)."""
+
+    setup: Callable[..., PaperSetup]
+    estimators: tuple[str, ...]
+    options: tuple[str, ...] = ()
+
+
+STUDIES: dict[str, StudyModel] = {
+    "wnoa": StudyModel(consistency_setup, PAPER_ESTIMATORS),
+    "se2": StudyModel(consistency_se2_setup, SE2_ESTIMATORS, ("turn", "se2_residual")),
+}
 
 
 @dataclass(frozen=True)
@@ -179,28 +201,28 @@ class ConsistencyStudy:
             "qc": np.diag(s.qc).tolist(),
             "tukey_c": s.tukey_c,
             "estimators": list(self.estimators),
-        } | ({"prior": s.prior, "se2_residual": s.se2_residual, "first_velocity": s.first_velocity.tolist()}
-             if s.is_se2 else {})  # fmt: skip
+            "prior": s.prior,
+            **s.prior_options(),
+            "first_velocity": s.first_velocity.tolist(),
+        }
 
     def sample(self, index: int):
         """Task ``index``: drawn with child ``index`` of SeedSequence(seed).spawn(...)."""
         seed = np.random.SeedSequence(self.seed, spawn_key=(index,))  # = SeedSequence(seed).spawn(n)[index]
-        if self.setup.is_se2:
-            model = self.setup.se2_residual
-            return sample_se2_from_model(self.n_steps, self.n_landmarks, seed, **model_of(self.setup), model=model)
         return sample_from_model(self.n_steps, self.n_landmarks, seed, **model_of(self.setup))
 
 
 def model_of(setup: PaperSetup) -> dict:
     """The model a set-up's estimator assumes, as :func:`~steam_ref.datasets.sample_from_model`'s keywords."""
     return dict(
-        qc=setup.qc,
+        prior=setup.motion_prior(),
         velocity_sigmas=setup.velocity_sigmas,
         range_sigma=setup.range_sigma,
         landmark_sigma=setup.landmark_prior_sigma,
         first_pose_sigmas=setup.first_pose_sigmas,
         first_velocity=setup.first_velocity,
         first_velocity_sigmas=setup.first_velocity_sigmas,
+        first_acceleration_sigmas=setup.first_acceleration_sigmas,
     )
 
 
@@ -222,8 +244,7 @@ def _solve(
         solver = PeriodicBatchSolver("amd")  # holds the optimum; its covariances come from 𝓘 there
         solver.graph, solver.values = problem.graph, result.values
         ids = [i for i in sorted(readings.landmarks) if L(i) in result.values]  # a landmark no reading sees has none
-        se2_model = setup.se2_residual if setup.is_se2 else None
-        return Trajectory(solver, problem.states.tolist(), readings.clock, setup.motion_prior(), se2_model), ids
+        return Trajectory(solver, problem.states.tolist(), readings.clock, setup.motion_prior()), ids
     options = StreamOptions(skip=estimator.skip, interpolate=estimator.interpolate)
     run = StreamingEstimator(readings, setup.with_schedule(every=estimator.every), options)
     run.run()
@@ -252,10 +273,11 @@ def run_seed(study: ConsistencyStudy, index: int) -> dict:
                 stream = trajectory.solver.estimate()
             times, states = trajectory.at_every_pose()
             cov = trajectory.covariances([L(i) for i in ids])
-        truth = task.states[: len(times)]
+        truth = task.prior.world_states(task.states[: len(times)])  # the truth's pose and velocity, world frame
         marks = np.array([trajectory.solver.estimate_of(L(i)) for i in ids]).reshape(-1, 2)
         true_marks = np.array([task.landmarks[i] for i in ids]).reshape(-1, 2)
-        pose_error, velocity_error = _errors(states, truth, setup.is_se2, study.setup.is_se2)
+        error = trajectory.prior.errors(states, truth)  # in the coordinates of the estimator's covariance
+        pose_error, velocity_error = error[:, :3], error[:, 3:]
         out[name] = {
             "pose": nees(pose_error, cov.pose).tolist(),
             "velocity": nees(velocity_error, cov.velocity).tolist(),
@@ -263,19 +285,6 @@ def run_seed(study: ConsistencyStudy, index: int) -> dict:
             "warnings": sorted({str(w.message)[:200] for w in caught}),
         }
     return {name: out[name] for name in study.estimators}
-
-
-def _errors(states: np.ndarray, truth: np.ndarray, se2_estimate: bool, se2_truth: bool) -> tuple:
-    """(pose, velocity) errors of the estimated states against the truth, in the coordinates of the estimator's
-    covariance: the right tangent at an SE(2) estimate, world-frame differences for a vector one."""
-    if se2_estimate:
-        local = np.array([SE2_STATE.local(x, t) for x, t in zip(states, truth, strict=True)]).reshape(-1, 6)
-        return local[:, :3], local[:, 3:]  # x_true ⊖ x̂
-    if se2_truth:  # the truth's world velocity [R(θ) [vx, vy], ω]
-        c, s = np.cos(truth[:, 2]), np.sin(truth[:, 2])
-        world = np.column_stack([c * truth[:, 3] - s * truth[:, 4], s * truth[:, 3] + c * truth[:, 4], truth[:, 5]])
-        return pose_errors(states[:, :3], truth[:, :3]), states[:, 3:6] - world
-    return pose_errors(states[:, :3], truth[:, :3]), states[:, 3:6] - truth[:, 3:6]
 
 
 def _nees_list(value: object, what: str, length: int | None, most: int) -> None:

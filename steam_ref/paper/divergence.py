@@ -28,10 +28,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import DivergenceWarning
-from ..factors import BearingFactor, BearingRangeFactor, Factor, InterpolatedFactor, RangeFactor
-from ..factors.lie_readings import LieInterpolatedFactor
+from ..factors import BearingFactor, BearingRangeFactor, Factor, RangeFactor
+from ..motion import is_interpolated, reading_inside
 from ..variables import Key
-from .se2_model import reading_inside
 
 __all__ = ["DivergenceCheck", "PLAUSIBLE_SIGMAS", "worst_fit"]
 
@@ -68,9 +67,7 @@ def describe(factor: Factor) -> str:
     measured = getattr(inner, "measured", getattr(inner, "mean", None))
     what = "" if measured is None else f" reading {np.asarray(measured).tolist()}"
     where = ", ".join(repr(k) for k in factor.keys)
-    between = (
-        " (interpolated between its states)" if isinstance(factor, (InterpolatedFactor, LieInterpolatedFactor)) else ""
-    )
+    between = " (interpolated between its states)" if is_interpolated(factor) else ""
     return f"{type(inner).__name__} on {where}{between}{what}"
 
 

@@ -13,9 +13,12 @@ robot would meet them:
 - **Readings between states** are buffered until the next state exists, then enter as interpolated
   factors on the two neighbouring states (Eq. 29), velocity readings with the looser
   ``interpolated_velocity_sigmas``; with ``interpolate=False`` they are dropped.
-- **GP prior**: each new state brings the prior factor to the previous one (Eq. 22), of the set-up's
-  motion prior (``PaperSetup.prior``: the paper's WNOA, or WNOJ / Singer with states of 9 numbers,
-  whose acceleration starts at zero).
+- **The motion prior** (``PaperSetup.motion_prior()``, a :class:`~steam_ref.motion.MotionPrior`) owns what
+  differs between priors, and the front end asks it: each new state brings its prior factor to the previous
+  one (Eq. 22); a velocity reading, a range, bearing or bearing-range, a reading between states (Eq. 29), the
+  first state's prior and a new state's first value (its kind in ``NewStep.kinds``) are what it makes of them
+  (the paper's WNOA; WNOJ / Singer, states of 9 numbers whose acceleration starts at zero; WNOA on SE(2),
+  a pose and its body twist).
 - **Landmarks**: a surveyed landmark enters with its prior at its surveyed position (Eq. 4), at its
   first sighting or, when the set-up says so (Plaza), all of them at pose 0. A landmark nobody
   surveyed (Victoria Park's trees) enters at its first sighting with no prior, placed where its first
@@ -28,10 +31,6 @@ robot would meet them:
   to (-π, π], so it is off by ±2π where the heading crosses ±π; ``PaperSetup.pose2_heading_rate_guess``).
   After a solver update the caller hands the front end the latest state's estimate
   (:meth:`FrontEnd.rebase`), so predictions compose from the estimate, not from dead reckoning.
-
-- **SE(2) states** (``PaperSetup.prior == "se2"``): the same rules, with the SE(2) factors and initial
-  values of :mod:`steam_ref.paper.se2_model`; each new state's kind (``steam_ref.lie.SE2_STATE``) is in
-  ``NewStep.kinds``.
 
 The batch problem is everything the front end yields (:func:`steam_ref.paper.problem.build_problem`); the
 streaming solvers (PB, PBVR, BTGP) consume the same steps, so the two agree by construction.
@@ -48,20 +47,9 @@ from numpy.typing import NDArray
 from ..arguments import is_integer
 from ..dead_reckoning import compose, transform_from, wrap_angle
 from ..errors import SteamError
-from ..factors import (
-    BearingFactor,
-    BearingRangeFactor,
-    Factor,
-    GPPriorFactor,
-    InterpolatedFactor,
-    PriorFactor,
-    RangeFactor,
-    VelocityFactor,
-)
-from ..lie import SE2_STATE
+from ..factors import BearingFactor, BearingRangeFactor, Factor, PriorFactor, RangeFactor
 from ..manifold import Manifold
 from ..variables import Key, L, X
-from . import se2_model
 from .presets import PaperSetup
 from .readings import Readings
 
@@ -110,7 +98,7 @@ class NewStep:
     factors: list[Factor]  # the new factors released at this pose
     values: dict[Key, NDArray] = field(default_factory=dict)  # initial values of the new variables
     n_landmark_readings: int = 0  # range, bearing and bearing-range factors among ``factors`` (plain or interpolated)
-    kinds: dict[Key, Manifold] = field(default_factory=dict)  # how each new variable that is not a vector moves
+    kinds: dict[Key, Manifold] = field(default_factory=dict)  # how each new state moves (the motion prior's kind)
 
 
 def _pose2_heading(theta: float) -> float:
@@ -125,6 +113,7 @@ class FrontEnd:
         if n_poses is not None and (not is_integer(n_poses) or n_poses < 1):
             raise SteamError(f"n_poses must be a positive integer (or None for all), got {n_poses!r}")
         self.readings, self.setup, self.layout = readings, setup, layout
+        self.prior = setup.motion_prior()  # what differs between priors, asked of one object
         self.n_poses = readings.n_poses if n_poses is None else min(int(n_poses), readings.n_poses)  # poses to process
         self.states: list[int] = []  # poses with a state so far, increasing
         self.landmarks: set[int] = set()  # landmark ids with a variable
@@ -133,7 +122,7 @@ class FrontEnd:
         self._bearing_range_bounds = readings.bearing_ranges.rows(readings.n_poses)
         self._placed: dict[int, NDArray] = {}  # an unsurveyed landmark's position from its first bearing-range reading
         self._next = 0  # the pose step() processes next
-        self._buffer: list[tuple[int, Factor]] = []  # readings at poses after the last state
+        self._buffer: list[tuple[int, Factor, bool]] = []  # (pose, reading, of a landmark?) after the last state
         self._pose = readings.first_pose.copy()  # predicted [x, y, θ] of the latest pose
         self._velocity = setup.first_velocity.copy()  # predicted velocity over the latest step
 
@@ -166,8 +155,8 @@ class FrontEnd:
         has_reading = any(b[i + 1] > b[i] for b in (self._bounds, self._bearing_bounds, self._bearing_range_bounds))
         if not self.layout.is_state(i, self.states[-1] if self.states else 0, has_reading, self.n_poses - 1):
             if self.layout.interpolate:
-                self._buffer.append((i, self._velocity_factor(i, interpolated=True)))
-                self._buffer.extend((i, f) for f in self._landmark_factors(i))
+                self._buffer.append((i, self._velocity_factor(i, interpolated=True), False))
+                self._buffer.extend((i, f, True) for f in self._landmark_factors(i))
             return NewStep(i, False, [])
         return self._new_state(i)
 
@@ -185,11 +174,9 @@ class FrontEnd:
 
     def _new_state(self, i: int) -> NewStep:
         """X(i): its value, the GP prior to the previous state, the buffered and its own readings."""
-        extra = np.zeros(self.setup.state_dim - 6)  # WNOJ / Singer: acceleration starts at zero
-        out = NewStep(i, True, [], {X(i): np.concatenate([self._pose, self._velocity, extra])})
-        if self.setup.is_se2:  # an SE(2) state: the pose and its body twist
-            dt = self.readings.model_times[i] - self.readings.model_times[i - 1] if i > 0 else 1.0
-            out.values[X(i)], out.kinds[X(i)] = se2_model.initial_state(self._pose, self._velocity, dt), SE2_STATE
+        dt = self.readings.model_times[i] - self.readings.model_times[i - 1] if i > 0 else 1.0
+        value = self.prior.initial_state(self._pose, self._velocity, dt)  # WNOJ / Singer: acceleration zero
+        out = NewStep(i, True, [], {X(i): value}, kinds={X(i): self.prior.kind})
         if i == 0:
             out.factors.append(self._first_state_prior())
             if self.setup.landmarks_up_front:
@@ -198,18 +185,18 @@ class FrontEnd:
         else:
             prev = self.states[-1]
             out.factors.append(self._gp_prior(prev, i))
-            for pose, inner in self._buffer:
-                self._release(self._interpolated(inner, prev, i, pose), out)
+            for pose, inner, landmark in self._buffer:
+                self._release(self._interpolated(inner, prev, i, pose), out, landmark)
             self._buffer = []
-            self._release(self._velocity_factor(i, interpolated=False), out)
+            self._release(self._velocity_factor(i, interpolated=False), out, False)
         for f in self._landmark_factors(i):
-            self._release(f, out)
+            self._release(f, out, True)
         self.states.append(i)
         return out
 
-    def _release(self, factor: Factor, out: NewStep) -> None:
+    def _release(self, factor: Factor, out: NewStep, landmark: bool) -> None:
         """A factor joins the step's new factors; a landmark seen for the first time enters (:meth:`_landmark`)."""
-        if isinstance(se2_model.reading_inside(factor), (RangeFactor, BearingFactor, BearingRangeFactor)):
+        if landmark:  # a range, bearing or bearing-range: its last key is the landmark
             self._landmark(factor.keys[-1].index, out)
             out.n_landmark_readings += 1
         out.factors.append(factor)
@@ -235,63 +222,44 @@ class FrontEnd:
     def _first_state_prior(self) -> Factor:
         """Priors on pose 0 (at ground truth) and on velocity 0 (and acceleration 0), as one prior on X(0)."""
         s = self.setup
-        if s.is_se2:
-            return se2_model.first_state_prior(X(0), self.readings.first_pose, s)
-        extra = s.state_dim - 6
-        mean = np.concatenate([self.readings.first_pose, s.first_velocity, np.zeros(extra)])
-        sigmas = np.concatenate([s.first_pose_sigmas, s.first_velocity_sigmas, s.first_acceleration_sigmas[:extra]])
-        return PriorFactor.create(X(0), mean, sigmas)
+        sigmas = (s.first_pose_sigmas, s.first_velocity_sigmas, s.first_acceleration_sigmas)
+        return self.prior.first_state_prior(X(0), self.readings.first_pose, s.first_velocity, sigmas)
 
     def _gp_prior(self, a: int, b: int) -> Factor:
         """The GP prior factor between states a and b.  [YIB Eq. 22]"""
         t = self.readings.model_times
-        if self.setup.is_se2:
-            return se2_model.gp_prior(X(a), X(b), t[b] - t[a], self.setup)
-        prior = self.setup.motion_prior()
-        if isinstance(prior, np.ndarray):
-            return GPPriorFactor.wnoa(X(a), X(b), t[b] - t[a], prior)
-        return GPPriorFactor.from_sde(X(a), X(b), t[b] - t[a], prior)
+        return self.prior.prior_factor(X(a), X(b), t[b] - t[a])
 
     def _interpolated(self, inner: Factor, a: int, b: int, pose: int) -> Factor:
         """``inner`` (a reading at the pose without a state) on states a and b.  [YIB Eq. 29]"""
         t = self.readings.model_times
-        if self.setup.is_se2:
-            return se2_model.interpolated(inner, X(a), X(b), t[a], t[b], t[pose], self.setup)
-        return InterpolatedFactor.create(inner, X(a), X(b), t[a], t[b], t[pose], self.setup.motion_prior())
+        return self.prior.interpolated_factor(inner, X(a), X(b), t[a], t[b], t[pose])
 
     def _velocity_factor(self, i: int, interpolated: bool) -> Factor:
-        """Odometry row i - 1 as the projected velocity of pose i (on SE(2): the body twist)."""
+        """Odometry row i - 1 as the velocity reading of pose i (the projected velocity, or on SE(2) the body twist)."""
         sigmas = self.setup.interpolated_velocity_sigmas if interpolated else self.setup.velocity_sigmas
-        if self.setup.is_se2:
-            return se2_model.velocity_reading(X(i), self.readings.velocity[i], sigmas)
-        return VelocityFactor.create(X(i), self.readings.velocity[i], sigmas, state_dim=self.setup.state_dim)
+        return self.prior.velocity_reading(X(i), self.readings.velocity[i], sigmas)
 
     def _landmark_factors(self, i: int) -> list[Factor]:
         """The landmark readings of pose i as factors on X(i) (X(i) may be a pose without a state): its
-        ranges, bearings, then bearing-ranges; a bearing-range places a landmark not met before."""
-        r, s = self.readings, self.setup
-        if s.is_se2:
-            return self._se2_landmark_factors(i)
+        ranges, bearings, then bearing-ranges, each as the motion prior reads a pose reading on its state; a
+        bearing-range places a landmark not met before."""
+        r, s, n, pose = self.readings, self.setup, self.prior.state_dim, self.prior.pose_reading
         out: list[Factor] = [
-            RangeFactor.create(
-                X(i),
-                L(r.range_landmark[k]),
-                r.range_value[k],
-                r.range_sigma[k],
-                loss=s.range_loss,
-                state_dim=s.state_dim,
+            pose(
+                RangeFactor.create(
+                    X(i), L(r.range_landmark[k]), r.range_value[k], r.range_sigma[k], loss=s.range_loss, state_dim=n
+                )
             )
             for k in range(self._bounds[i], self._bounds[i + 1])
         ]
         b = r.bearings
         for k in range(self._bearing_bounds[i], self._bearing_bounds[i + 1]):
-            out.append(
-                BearingFactor.create(X(i), L(b.landmark[k]), b.value[k, 0], b.sigma[k, 0], state_dim=s.state_dim)
-            )
+            out.append(pose(BearingFactor.create(X(i), L(b.landmark[k]), b.value[k, 0], b.sigma[k, 0], state_dim=n)))
         br = r.bearing_ranges
         for k in range(self._bearing_range_bounds[i], self._bearing_range_bounds[i + 1]):
             lid, (bearing, distance) = int(br.landmark[k]), br.value[k]
-            out.append(BearingRangeFactor.create(X(i), L(lid), bearing, distance, br.sigma[k], state_dim=s.state_dim))
+            out.append(pose(BearingRangeFactor.create(X(i), L(lid), bearing, distance, br.sigma[k], state_dim=n)))
             self._place(lid, bearing, distance)
         return out
 
@@ -300,26 +268,3 @@ class FrontEnd:
         r = self.readings
         if lid not in r.landmarks and lid not in self.landmarks and lid not in self._placed:
             self._placed[lid] = transform_from(self._pose, distance * np.array([np.cos(bearing), np.sin(bearing)]))
-
-    def _se2_landmark_factors(self, i: int) -> list[Factor]:
-        """:meth:`_landmark_factors` on an SE(2) state: the same readings, as SE(2) pose readings."""
-        r, s, m = self.readings, self.setup, se2_model
-        out: list[Factor] = [
-            m.range_reading(
-                X(i),
-                L(r.range_landmark[k]),
-                r.range_value[k],
-                s.range_sigma if r.range_sigma is None else r.range_sigma[k],
-                s.range_loss,
-            )
-            for k in range(self._bounds[i], self._bounds[i + 1])
-        ]
-        b = r.bearings
-        for k in range(self._bearing_bounds[i], self._bearing_bounds[i + 1]):
-            out.append(m.bearing_reading(X(i), L(b.landmark[k]), b.value[k, 0], b.sigma[k, 0]))
-        br = r.bearing_ranges
-        for k in range(self._bearing_range_bounds[i], self._bearing_range_bounds[i + 1]):
-            lid, (bearing, distance) = int(br.landmark[k]), br.value[k]
-            out.append(m.bearing_range_reading(X(i), L(lid), bearing, distance, br.sigma[k]))
-            self._place(lid, bearing, distance)
-        return out

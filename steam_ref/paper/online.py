@@ -199,10 +199,7 @@ class StreamingEstimator:
     def solved(self, *, past: str = "lagged") -> Trajectory:
         """The trajectory the solver holds: its states, queried at any time (Eq. 18)."""
         seen = SolverView(self.solver, past)
-        return Trajectory(
-            seen, self.states[: self.n_solved], self.readings.clock, self.setup.motion_prior(),
-            se2_model=self.setup.se2_residual if self.setup.is_se2 else None,
-        )  # fmt: skip
+        return Trajectory(seen, self.states[: self.n_solved], self.readings.clock, self.front.prior)
 
     def estimate_at(
         self, t: float, *, covariance: bool = False, past: str = "lagged"

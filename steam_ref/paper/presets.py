@@ -31,14 +31,14 @@ from ..bayes_tree.params import ISAM2Params
 from ..errors import ShapeError, SteamError
 from ..gp.clock import CLOCK_BASES
 from ..gp.prior import check_qc
-from ..gp.sde import LinearSDE
+from ..motion import MOTION_PRIORS, RESIDUALS, MotionPrior, motion_prior
 from ..robust import Tukey
 
 __all__ = ["PaperSetup", "Schedule", "RANGE_ATTACHMENTS", "DEPARTURES", "PRIORS", "PRESETS", "SE2_RESIDUALS"]
 
 RANGE_ATTACHMENTS = ("file-order", "time")
-PRIORS = ("wnoa", "wnoj", "singer", "se2")  # the paper's prior, two extensions (derivations §6), WNOA on SE(2) (§11)
-SE2_RESIDUALS = ("local-variable", "simplified")  # the two SE(2) WNOA residuals in circulation (derivations §11)
+PRIORS = tuple(MOTION_PRIORS)  # the names of steam_ref.motion.MOTION_PRIORS: wnoa, wnoj, singer (§6), se2 (§11)
+SE2_RESIDUALS = RESIDUALS  # the two SE(2) WNOA residuals in circulation (derivations §11)
 PRESETS = ("synthetic", "plaza", "victoria-park")  # PaperSetup.named
 
 # The deliberate departures from the scripts, by name: the PaperSetup fields each one changes
@@ -116,12 +116,13 @@ class PaperSetup:
         3,
         3,
     )  # BTGP relinearizes pose and velocity on their own (GTSAM variables P, V); None: the whole state
-    prior: str = "wnoa"  # motion prior: the paper's 'wnoa', or 'wnoj' / 'singer' (then qc is the PSD of jerk), or 'se2'
+    prior: str = "wnoa"  # the motion prior by name (steam_ref.motion.MOTION_PRIORS): 'wnoa', 'wnoj', 'singer' or 'se2'
+    # 'wnoj' / 'singer': qc is the PSD of jerk, states [p; ṗ; p̈] (9 numbers).
     # 'se2': WNOA on SE(2), states [x, y, θ, vx, vy, ω] (a pose and its body twist); qc is then the PSD of the
     # body-frame acceleration [forward, lateral, yaw] (the same numbers as the vector prior's world-frame Qc:
     # the presets' x and y entries are equal, so the PSD is the same read in any frame about the vertical)
-    se2_residual: str = "local-variable"  # 'se2' only: which SE(2) WNOA residual (SE2_RESIDUALS)
-    singer_time_constant: float = 1.0  # 1/α of the Singer prior, on the model's clock (seconds, or pose steps)
+    se2_residual: str = "local-variable"  # an option of 'se2' (MOTION_PRIORS): which SE(2) WNOA residual
+    singer_time_constant: float = 1.0  # an option of 'singer': 1/α, on the model's clock (seconds, or pose steps)
     first_acceleration_sigmas: NDArray = field(
         default_factory=lambda: np.array([1.0, 1.0, np.pi])
     )  # (3,) prior on acceleration 0 (mean 0), WNOJ and Singer
@@ -268,33 +269,24 @@ class PaperSetup:
         """A copy whose iSAM2 settings have some fields changed (``setup.with_isam2(relinearize_skip=1)``)."""
         return self.replace(isam2=self.isam2.replace(**changes))
 
-    def motion_prior(self) -> NDArray | LinearSDE:
-        """The GP prior of the states: Qc for the paper's WNOA (its memoised closed forms) and for WNOA on SE(2)
-        (Qc of the body twist: ``is_se2``), else a LinearSDE."""
-        if self.prior in ("wnoa", "se2"):
-            return self.qc
-        if self.prior == "wnoj":
-            return LinearSDE.wnoj(self.qc)
-        return LinearSDE.singer(self.qc, time_constant=self.singer_time_constant)
+    def motion_prior(self) -> MotionPrior:
+        """The motion prior of the states (:mod:`steam_ref.motion`): ``prior`` by its name in
+        :data:`~steam_ref.motion.MOTION_PRIORS`, with ``qc`` and the options that prior takes (``singer_time_constant``,
+        ``se2_residual``). Everything that differs between priors is asked of it."""
+        return motion_prior(self.prior, self.qc, **self.prior_options())
 
-    @property
-    def state_dim(self) -> int:
-        """Size of a state: [p; ṗ] (6) for WNOA, [p; ṗ; p̈] (9) for WNOJ and Singer, [pose; body twist] (6) on SE(2)."""
-        return 6 if self.prior in ("wnoa", "se2") else 9
-
-    @property
-    def is_se2(self) -> bool:
-        """The states are SE(2) states (``steam_ref.lie.SE2_STATE``), the prior WNOA on SE(2) (``se2_residual``)."""
-        return self.prior == "se2"
+    def prior_options(self) -> dict[str, object]:
+        """The fields of this set-up that its prior takes beside Qc, by name (a run's report names them)."""
+        return {name: getattr(self, name) for name in MOTION_PRIORS[self.prior].options}
 
     def isam2_params(self) -> ISAM2Params:
         """BTGP's iSAM2 settings for this set-up: ``isam2`` with the state's relinearization blocks.
 
         ``relinearize_blocks`` (3, 3) is pose and velocity on their own; a 9-number state adds its acceleration.
         """
-        blocks = self.relinearize_blocks
-        if blocks is not None and sum(blocks) < self.state_dim:
-            blocks = tuple(blocks) + (3,) * ((self.state_dim - sum(blocks)) // 3)
+        blocks, size = self.relinearize_blocks, self.motion_prior().state_dim
+        if blocks is not None and sum(blocks) < size:
+            blocks = tuple(blocks) + (3,) * ((size - sum(blocks)) // 3)
         return self.isam2.replace(relinearize_blocks=None if blocks is None else {"x": blocks})
 
     def departing(self, *names: str) -> PaperSetup:

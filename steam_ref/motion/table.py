@@ -1,0 +1,96 @@
+"""The priors by the names a user types, the one conversion of a prior argument, and a new state's start.
+
+- :data:`MOTION_PRIORS`: name → :class:`PriorChoice` (its constructor and the options it takes beside Qc). A new
+  prior is one line here (docs/architecture.md, "Add a motion prior"); the command line's ``--prior`` choices,
+  ``PaperSetup.prior`` and :func:`motion_prior` read it.
+- :func:`as_motion_prior`: what every API that takes a prior accepts (a :class:`~steam_ref.motion.MotionPrior`,
+  or, as before the protocol, Qc of the paper's WNOA prior or a :class:`~steam_ref.gp.LinearSDE`), as a
+  :class:`~steam_ref.motion.MotionPrior`.
+- :func:`predict_state`: a new state's starting value, the prior's prediction [YIB Eq. 14, 22], right for every
+  kind of state (on SE(2) along the arc of the twist, not the straight line).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..arguments import finite, number, real_array
+from ..errors import ShapeError, SteamError
+from ..gp.sde import LinearSDE, check_prior
+from .base import MotionPrior
+from .lie_group import LieGroupWnoa
+from .vector import VectorPrior
+
+__all__ = ["PriorChoice", "MOTION_PRIORS", "motion_prior", "as_motion_prior", "predict_state"]
+
+
+@dataclass(frozen=True)
+class PriorChoice:
+    """A prior a user can name: ``make(qc, **options)`` builds it; ``options`` are the keywords it takes beside
+    Qc (as ``PaperSetup`` and the command line name them); ``what`` says it in one line."""
+
+    make: Callable[..., MotionPrior]
+    options: tuple[str, ...]
+    what: str
+
+
+def _singer(qc: ArrayLike, singer_time_constant: float = 1.0) -> MotionPrior:
+    return VectorPrior.singer(qc, time_constant=singer_time_constant)
+
+
+def _se2(qc: ArrayLike, se2_residual: str = "local-variable") -> MotionPrior:
+    return LieGroupWnoa(qc, residual=se2_residual)
+
+
+MOTION_PRIORS: dict[str, PriorChoice] = {
+    "wnoa": PriorChoice(VectorPrior.wnoa, (), "white noise on acceleration, the paper's prior [YIB Eq. 30-31]"),
+    "wnoj": PriorChoice(VectorPrior.wnoj, (), "white noise on jerk (states with an acceleration)"),
+    "singer": PriorChoice(_singer, ("singer_time_constant",), "Singer's model (states with an acceleration)"),
+    "se2": PriorChoice(_se2, ("se2_residual",), "white noise on acceleration on SE(2) (a pose and its body twist)"),
+}
+
+
+def motion_prior(name: str, qc: ArrayLike, **options: object) -> MotionPrior:
+    """The prior called ``name`` (:data:`MOTION_PRIORS`) with Qc ``qc`` and its ``options``; SteamError names an
+    unknown prior, or an option it does not take."""
+    choice = MOTION_PRIORS.get(name) if isinstance(name, str) else None
+    if choice is None:
+        raise SteamError(f"unknown motion prior {name!r}; use one of {', '.join(MOTION_PRIORS)}")
+    foreign = [option for option in options if option not in choice.options]
+    if foreign:
+        takes = ", ".join(choice.options) or "none"
+        raise SteamError(f"the motion prior {name!r} takes no option {foreign[0]!r} (its options: {takes})")
+    return choice.make(qc, **options)
+
+
+def as_motion_prior(prior: MotionPrior | ArrayLike | LinearSDE, name: str = "prior") -> MotionPrior:
+    """``prior`` as a :class:`MotionPrior`: one as it is; Qc (d, d) as the paper's WNOA prior (its closed forms);
+    a :class:`~steam_ref.gp.LinearSDE` as its vector-space prior."""
+    if isinstance(prior, MotionPrior):
+        return prior
+    try:
+        return VectorPrior(check_prior(prior, name))
+    except SteamError as exc:
+        raise type(exc)(f"{exc} (or a steam_ref.motion.MotionPrior)") from None
+
+
+def predict_state(x_prev: ArrayLike, dt: float, prior: MotionPrior | ArrayLike | LinearSDE) -> NDArray:
+    """The starting value of a new state ``dt`` after ``x_prev``: the prior's mean there.  [YIB Eq. 14, 22]
+
+    ``prior`` is a :class:`MotionPrior` (``motion_prior('se2', qc)``: the pose moves along the arc of its body
+    twist, T Exp(dt ϖ)), or Qc (the paper's WNOA prior: [x, y, θ] += dt [ẋ, ẏ, θ̇], the velocity kept) or any
+    :class:`~steam_ref.gp.LinearSDE` (Φ(dt) x_prev + v(dt)). Give the new state this value in the update that adds
+    it: the prior factor to it then has a zero error, and the measurements pull it from there. Returns a new
+    (n,) array; dt must be > 0.
+    """
+    prior, dt = as_motion_prior(prior), number("dt", dt)
+    if not dt > 0:
+        raise SteamError(f"dt must be > 0 (the new state comes after x_prev), got dt={dt!r}")
+    x = real_array("x_prev", x_prev)
+    if x.shape != (prior.state_dim,):
+        raise ShapeError(f"x_prev must be a finite ({prior.state_dim},) vector, got shape {x.shape}")
+    return np.asarray(prior.predict(finite("x_prev", x), dt))
