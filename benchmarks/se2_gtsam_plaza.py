@@ -148,21 +148,21 @@ class Item:
     def ours(self, setup: PaperSetup, variant: str = "exact"):
         k, c = self.keys, setup.tukey_c
         if self.kind == "first":
-            return LieStatePrior.create(X(k[0]), self.value, self.sigmas)
+            return LieStatePrior.create(X(k[0]), self.value, self.sigmas, group=SE2)
         if self.kind == "landmark":
             return PriorFactor.create(L(k[0]), self.value, self.sigmas)
         if self.kind == "motion":
             if variant == "simplified":
-                return LiePriorFactor.create(X(k[0]), X(k[1]), self.dt, setup.qc, "simplified")
+                return LiePriorFactor.create(X(k[0]), X(k[1]), self.dt, setup.qc, "simplified", group=SE2)
             if variant != "exact":
-                f = LiePriorFactor.create(X(k[0]), X(k[1]), self.dt, setup.qc)
+                f = LiePriorFactor.create(X(k[0]), X(k[1]), self.dt, setup.qc, group=SE2)
                 residual = "gtsam" if variant == "gtsam-factor" else "exact"
                 return GtsamPrior(f.keys, f.sqrt_information, phi=f.phi, qc=setup.qc, residual=residual)
-            return LiePriorFactor.create(X(k[0]), X(k[1]), self.dt, setup.qc, "local-variable")
+            return LiePriorFactor.create(X(k[0]), X(k[1]), self.dt, setup.qc, "local-variable", group=SE2)
         if self.kind == "velocity":
-            return BodyVelocityFactor.create(X(k[0]), self.value, self.sigmas)
+            return BodyVelocityFactor.create(X(k[0]), self.value, self.sigmas, group=SE2)
         loss = None if c is None else Tukey(c)
-        return PoseReading.range(X(k[0]), L(k[1]), float(self.value[0]), float(self.sigmas[0]), loss=loss)
+        return PoseReading.range(X(k[0]), L(k[1]), float(self.value[0]), float(self.sigmas[0]), loss=loss, group=SE2)
 
     def theirs(self, setup: PaperSetup) -> list:
         k, c = self.keys, setup.tukey_c

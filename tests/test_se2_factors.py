@@ -47,7 +47,7 @@ def pair(rng, scale):
 @pytest.mark.parametrize("model", ["local-variable", "simplified"])
 @pytest.mark.parametrize("scale", [0.005, 0.71, 3.5])
 def test_the_prior_jacobians_are_exact(rng, model, scale):
-    f = LiePriorFactor.create(X(0), X(1), DT, QC, model)
+    f = LiePriorFactor.create(X(0), X(1), DT, QC, model, group=SE2)
     x1, x2 = pair(rng, scale)
     J1, J2 = f.jacobians(x1, x2)
     N1, N2 = tangent_jacobians(f.error, x1, x2, kinds=("se2", "se2"))
@@ -58,8 +58,8 @@ def test_the_prior_jacobians_are_exact(rng, model, scale):
 def test_the_two_models_are_the_formulas_they_name(rng):
     x1, x2 = pair(rng, 0.9)
     xi = SE2.log(SE2.between(x1[:3], x2[:3]))
-    lv = LiePriorFactor.create(X(0), X(1), DT, QC).error(x1, x2)
-    sm = LiePriorFactor.create(X(0), X(1), DT, QC, "simplified").error(x1, x2)
+    lv = LiePriorFactor.create(X(0), X(1), DT, QC, group=SE2).error(x1, x2)
+    sm = LiePriorFactor.create(X(0), X(1), DT, QC, "simplified", group=SE2).error(x1, x2)
     np.testing.assert_allclose(lv, np.r_[xi - DT * x1[3:], np.linalg.solve(SE2.right_jacobian(xi), x2[3:]) - x1[3:]])
     np.testing.assert_allclose(sm, np.r_[xi - DT * x1[3:], x2[3:] - x1[3:]])
     assert np.abs(lv[3:] - sm[3:]).max() > 1e-2  # they differ at a turn of 0.9 rad
@@ -89,7 +89,7 @@ def test_residual_cost_and_velocity_jacobians_match_gtsam_wnoa_motion_factor_pos
     gtsam = optional_import("gtsam", "gtsam")
     rng = np.random.default_rng(seed)
     g, k = _gtsam_factor(gtsam)
-    f = LiePriorFactor.create(X(0), X(1), DT, QC)
+    f = LiePriorFactor.create(X(0), X(1), DT, QC, group=SE2)
     # angles where GTSAM's own Logmap is exact (it loses digits below ~0.01 rad: 2.7e-11 at |ξ| = 0.005)
     x1 = np.r_[rng.uniform(-5, 5, 2), rng.uniform(-3, 3), rng.standard_normal(3)]
     x2 = SE2_STATE.retract(
@@ -108,7 +108,7 @@ def test_where_gtsams_series_pose_jacobians_depart_from_the_exact_ones():
     central differences confirm to 1e-8) more and more as |ξ| grows."""
     gtsam = optional_import("gtsam", "gtsam")
     g, k = _gtsam_factor(gtsam)
-    f = LiePriorFactor.create(X(0), X(1), DT, QC)
+    f = LiePriorFactor.create(X(0), X(1), DT, QC, group=SE2)
     rng = np.random.default_rng(3)
     departures = {}
     for scale in (0.005, 0.71, 3.5):
@@ -133,9 +133,9 @@ LANDMARK = np.array([4.0, 3.0])
 @pytest.mark.parametrize(
     "factor",
     [
-        PoseReading.range(X(0), L(1), 4.0, 0.1),
-        PoseReading.bearing(X(0), L(1), 0.3, 0.05),
-        PoseReading.bearing_range(X(0), L(1), 0.3, 4.0, np.array([0.05, 0.1])),
+        PoseReading.range(X(0), L(1), 4.0, 0.1, group=SE2),
+        PoseReading.bearing(X(0), L(1), 0.3, 0.05, group=SE2),
+        PoseReading.bearing_range(X(0), L(1), 0.3, 4.0, np.array([0.05, 0.1]), group=SE2),
     ],
     ids=["range", "bearing", "bearing-range"],
 )
@@ -148,31 +148,31 @@ def test_landmark_readings_jacobians_in_the_right_tangent(factor):
 
 
 def test_velocity_reading_and_state_prior_jacobians(rng):
-    v = BodyVelocityFactor.create(X(0), np.array([0.7, 0.0, 1.0]), 0.1)
+    v = BodyVelocityFactor.create(X(0), np.array([0.7, 0.0, 1.0]), 0.1, group=SE2)
     np.testing.assert_allclose(v.error(STATE), STATE[3:] - [0.7, 0.0, 1.0])
     np.testing.assert_allclose(v.jacobians(STATE)[0], tangent_jacobians(v.error, STATE, kinds=("se2",))[0], atol=1e-9)
     mean = SE2_STATE.retract(STATE, rng.standard_normal(6))
-    p = LieStatePrior.create(X(0), mean, np.full(6, 0.1))
+    p = LieStatePrior.create(X(0), mean, np.full(6, 0.1), group=SE2)
     np.testing.assert_allclose(p.error(mean), 0.0, atol=1e-15)
     np.testing.assert_allclose(SE2_STATE.retract(mean, p.error(STATE)), STATE, atol=1e-14)
     np.testing.assert_allclose(p.jacobians(STATE)[0], tangent_jacobians(p.error, STATE, kinds=("se2",))[0], atol=1e-8)
     with pytest.raises(SteamError, match=r"heading .* \(-π, π\]"):
-        LieStatePrior.create(X(0), np.r_[0, 0, 4.0, 0, 0, 0], 0.1)
+        LieStatePrior.create(X(0), np.r_[0, 0, 4.0, 0, 0, 0], 0.1, group=SE2)
 
 
 @pytest.mark.parametrize("model", ["local-variable", "simplified"])
 @pytest.mark.parametrize(
     "inner",
     [
-        PoseReading.range(X(9), L(1), 4.0, 0.1),
-        PoseReading.bearing_range(X(9), L(1), 0.3, 4.0, np.array([0.05, 0.1])),
-        BodyVelocityFactor.create(X(9), np.array([0.7, 0.0, 1.0]), 0.1),
+        PoseReading.range(X(9), L(1), 4.0, 0.1, group=SE2),
+        PoseReading.bearing_range(X(9), L(1), 0.3, 4.0, np.array([0.05, 0.1]), group=SE2),
+        BodyVelocityFactor.create(X(9), np.array([0.7, 0.0, 1.0]), 0.1, group=SE2),
     ],
     ids=["range", "bearing-range", "velocity"],
 )
 def test_interpolated_readings_jacobians(rng, model, inner):
     x1, x2 = pair(rng, 1.3)
-    f = LieInterpolatedFactor.create(inner, X(0), X(1), 0.0, DT, 0.3, QC, model)
+    f = LieInterpolatedFactor.create(inner, X(0), X(1), 0.0, DT, 0.3, QC, model, group=SE2)
     rest = (LANDMARK,) if len(inner.keys) == 2 else ()
     kinds = ("se2", "se2") + ("vector",) * len(rest)
     J = f.jacobians(x1, x2, *rest)
@@ -186,10 +186,10 @@ def test_a_batch_evaluates_as_its_factors_do(rng):
     """linearize stacks factors of one signature: the stacked error and Jacobians are each factor's own."""
     states = [SE2_STATE.retract(STATE, rng.standard_normal(6)) for _ in range(4)]
     values = Values({X(i): s for i, s in enumerate(states)} | {L(1): LANDMARK})
-    factors: list[Factor] = lie_prior_factors([X(i) for i in range(4)], np.array([0.0, 0.5, 1.1, 2.0]), QC)
-    factors += [PoseReading.range(X(i), L(1), 3.0, 0.2) for i in range(4)]
-    inner = PoseReading.bearing(X(9), L(1), 0.2, 0.1)
-    factors += [LieInterpolatedFactor.create(inner, X(i), X(i + 1), 0.0, 1.0, 0.4, QC) for i in range(3)]
+    factors: list[Factor] = lie_prior_factors([X(i) for i in range(4)], np.array([0.0, 0.5, 1.1, 2.0]), QC, group=SE2)
+    factors += [PoseReading.range(X(i), L(1), 3.0, 0.2, group=SE2) for i in range(4)]
+    inner = PoseReading.bearing(X(9), L(1), 0.2, 0.1, group=SE2)
+    factors += [LieInterpolatedFactor.create(inner, X(i), X(i + 1), 0.0, 1.0, 0.4, QC, group=SE2) for i in range(3)]
     for group in linearize(factors, values):
         for row, i in enumerate(group.factor_ids):
             f = factors[i]
@@ -201,10 +201,12 @@ def test_a_batch_evaluates_as_its_factors_do(rng):
 
 def test_bad_input_names_the_offending_value():
     with pytest.raises(SteamError, match="model must be one of 'local-variable', 'simplified', got model='lie'"):
-        LiePriorFactor.create(X(0), X(1), DT, QC, "lie")
+        LiePriorFactor.create(X(0), X(1), DT, QC, "lie", group=SE2)
     with pytest.raises(SteamError, match=r"qc must be \(3, 3\)"):
-        LiePriorFactor.create(X(0), X(1), DT, np.eye(2))
+        LiePriorFactor.create(X(0), X(1), DT, np.eye(2), group=SE2)
     with pytest.raises(SteamError, match="inner must be a PoseReading"):
-        LieInterpolatedFactor.create(LieStatePrior.create(X(9), np.zeros(6), 1.0), X(0), X(1), 0, 1, 0.5, QC)
+        LieInterpolatedFactor.create(
+            LieStatePrior.create(X(9), np.zeros(6), 1.0, group=SE2), X(0), X(1), 0, 1, 0.5, QC, group=SE2
+        )
     with pytest.raises(SteamError, match="times must increase strictly"):
-        lie_prior_factors([X(0), X(1)], np.array([1.0, 1.0]), QC)
+        lie_prior_factors([X(0), X(1)], np.array([1.0, 1.0]), QC, group=SE2)

@@ -12,11 +12,11 @@ from steam_ref.gp import interpolate_covariance, interpolation_matrices, process
 from steam_ref.lie import SE2, SE2_STATE
 from steam_ref.lie.gp import (
     extrapolate,
-    extrapolate_covariance_se2,
+    extrapolate_covariance,
     interpolate,
-    interpolate_covariance_se2,
     local_variables,
 )
+from steam_ref.lie.gp import interpolate_covariance as lie_interpolate_covariance
 
 QC = np.diag([0.3, 0.2, 0.5])
 X1 = np.array([1.0, 2.0, 2.9, 0.8, 0.1, 0.9])
@@ -38,12 +38,14 @@ def tangent_jacobian(f, x, eps=1e-6):
 @pytest.mark.parametrize("model", MODELS)
 def test_the_mean_reproduces_the_states_at_the_ends(model):
     I, O = np.eye(6), np.zeros((6, 6))  # Λ(t₁) = I, Ψ(t₁) = 0; Λ(t₂) = 0, Ψ(t₂) = I  [YIB Eq. 16]
-    np.testing.assert_allclose(interpolate(X1, X2, I, O, model)[0], X1, atol=1e-15)
-    np.testing.assert_allclose(interpolate(X1, X2, O, I, model)[0], X2, atol=1e-14)
+    np.testing.assert_allclose(interpolate(X1, X2, I, O, model, group=SE2)[0], X1, atol=1e-15)
+    np.testing.assert_allclose(interpolate(X1, X2, O, I, model, group=SE2)[0], X2, atol=1e-14)
     # and the Λ(τ), Ψ(τ) of the prior approach them as τ → t₁, t₂
     for tau, end in ((1e-9, X1), (1 - 1e-9, X2)):
         lam, psi = interpolation_matrices(0.0, 1.0, tau, QC)
-        np.testing.assert_allclose(SE2_STATE.local(end, interpolate(X1, X2, lam, psi, model)[0]), 0.0, atol=1e-7)
+        np.testing.assert_allclose(
+            SE2_STATE.local(end, interpolate(X1, X2, lam, psi, model, group=SE2)[0]), 0.0, atol=1e-7
+        )
 
 
 @pytest.mark.parametrize("model", MODELS)
@@ -54,11 +56,11 @@ def test_on_a_constant_twist_the_mean_lies_on_the_path(model):
     x2 = np.r_[SE2.compose(x1[:3], SE2.exp(2.0 * twist)), twist]
     for tau in (0.1, 0.7, 1.0, 1.9):
         lam, psi = interpolation_matrices(0.0, 2.0, tau, QC)
-        x = interpolate(x1, x2, lam, psi, model)[0]
+        x = interpolate(x1, x2, lam, psi, model, group=SE2)[0]
         path = SE2.compose(x1[:3], SE2.exp(tau * twist))
         np.testing.assert_allclose(x[:3], path, atol=1e-14)
         np.testing.assert_allclose(x[3:], twist, atol=1e-14)
-        pred = extrapolate(x1, 0.0, tau)[0]
+        pred = extrapolate(x1, 0.0, tau, group=SE2)[0]
         np.testing.assert_allclose(pred, np.r_[path, twist], atol=1e-14)
 
 
@@ -66,14 +68,18 @@ def test_on_a_constant_twist_the_mean_lies_on_the_path(model):
 @pytest.mark.parametrize("tau", [0.15, 0.5, 0.93])
 def test_the_interpolation_jacobians_are_exact(model, tau):
     lam, psi = interpolation_matrices(0.0, 1.0, tau, QC)
-    _, J1, J2 = interpolate(X1, X2, lam, psi, model)
-    np.testing.assert_allclose(J1, tangent_jacobian(lambda z: interpolate(z, X2, lam, psi, model)[0], X1), atol=2e-8)
-    np.testing.assert_allclose(J2, tangent_jacobian(lambda z: interpolate(X1, z, lam, psi, model)[0], X2), atol=2e-8)
+    _, J1, J2 = interpolate(X1, X2, lam, psi, model, group=SE2)
+    np.testing.assert_allclose(
+        J1, tangent_jacobian(lambda z: interpolate(z, X2, lam, psi, model, group=SE2)[0], X1), atol=2e-8
+    )
+    np.testing.assert_allclose(
+        J2, tangent_jacobian(lambda z: interpolate(X1, z, lam, psi, model, group=SE2)[0], X2), atol=2e-8
+    )
 
 
 def test_the_extrapolation_jacobian_is_exact():
-    _, J = extrapolate(X1, 0.0, 1.7)
-    np.testing.assert_allclose(J, tangent_jacobian(lambda z: extrapolate(z, 0.0, 1.7)[0], X1), atol=2e-8)
+    _, J = extrapolate(X1, 0.0, 1.7, group=SE2)
+    np.testing.assert_allclose(J, tangent_jacobian(lambda z: extrapolate(z, 0.0, 1.7, group=SE2)[0], X1), atol=2e-8)
 
 
 def _sample_covariance(draws, mean):
@@ -89,14 +95,14 @@ def test_the_interpolated_covariance_against_monte_carlo(model):
     t1, t2, tau, n = 0.0, 1.0, 0.35, 40000
     A = rng.standard_normal((12, 12)) * 1e-3
     P = A @ A.T + 1e-6 * np.eye(12)
-    mean, cov = interpolate_covariance_se2(t1, t2, tau, QC * 1e-3, X1, X2, P, model)
+    mean, cov = lie_interpolate_covariance(t1, t2, tau, QC * 1e-3, X1, X2, P, model, group=SE2)
     lam, psi = interpolation_matrices(t1, t2, tau, QC * 1e-3)
     cond = interpolate_covariance(t1, t2, tau, QC * 1e-3, np.zeros((12, 12)))
     d = rng.multivariate_normal(np.zeros(12), P, n)
     w = rng.multivariate_normal(np.zeros(6), cond, n)
     x1, x2 = SE2_STATE.retract(X1, d[:, :6]), SE2_STATE.retract(X2, d[:, 6:])  # every map broadcasts over draws
     gamma1 = np.concatenate([np.zeros((n, 3)), x1[:, 3:]], axis=1)
-    gamma = gamma1 @ lam.T + local_variables(x1, x2, model)[0] @ psi.T + w  # γ(τ) + its conditional noise
+    gamma = gamma1 @ lam.T + local_variables(x1, x2, model, group=SE2)[0] @ psi.T + w  # γ(τ) + its conditional noise
     pose = SE2.compose(x1[:, :3], SE2.exp(gamma[:, :3]))
     jr = SE2.right_jacobian(gamma[:, :3])
     twist = np.einsum("nij,nj->ni", jr, gamma[:, 3:]) if model == "local-variable" else gamma[:, 3:]
@@ -112,7 +118,7 @@ def test_the_extrapolated_covariance_against_monte_carlo():
     n, s = 40000, 1.3
     A = rng.standard_normal((6, 6)) * 1e-3
     P = A @ A.T + 1e-6 * np.eye(6)
-    mean, cov = extrapolate_covariance_se2(X1, 0.0, s, QC * 1e-3, P)
+    mean, cov = extrapolate_covariance(X1, 0.0, s, QC * 1e-3, P, group=SE2)
     d = rng.multivariate_normal(np.zeros(6), P, n)
     w = rng.multivariate_normal(np.zeros(6), process_noise(s, QC * 1e-3), n)
     x1 = SE2_STATE.retract(X1, d)
@@ -128,8 +134,8 @@ def test_the_extrapolated_covariance_against_monte_carlo():
 
 def test_bad_times_are_refused():
     with pytest.raises(SteamError, match="extrapolation needs a finite t > t1"):
-        extrapolate(X1, 1.0, 1.0)
+        extrapolate(X1, 1.0, 1.0, group=SE2)
     with pytest.raises(SteamError, match="t1 < tau < t2"):
-        interpolate_covariance_se2(0.0, 1.0, 1.0, QC, X1, X2, np.eye(12))
+        lie_interpolate_covariance(0.0, 1.0, 1.0, QC, X1, X2, np.eye(12), group=SE2)
     with pytest.raises(SteamError, match="model must be one of"):
-        interpolate_covariance_se2(0.0, 1.0, 0.5, QC, X1, X2, np.eye(12), "exact")
+        lie_interpolate_covariance(0.0, 1.0, 0.5, QC, X1, X2, np.eye(12), "exact", group=SE2)

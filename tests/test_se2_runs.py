@@ -214,9 +214,9 @@ def test_the_divergence_gate_names_an_absurd_reading_on_se2_states():
     """A range reading 100 m off at an SE(2) state is named before the update, as on vector states."""
     check = DivergenceCheck()
     state = np.array([0.0, 0.0, 0.3, 1.0, 0.0, 0.1])
-    good = PoseReading.range(X(0), L(1), 5.0, 0.1)
-    bad = LieInterpolatedFactor.create(PoseReading.range(X(5), L(1), 105.0, 0.1), X(0), X(1), 0.0, 1.0, 0.5,
-                                       np.eye(3))  # fmt: skip
+    good = PoseReading.range(X(0), L(1), 5.0, 0.1, group=SE2)
+    bad = LieInterpolatedFactor.create(PoseReading.range(X(5), L(1), 105.0, 0.1, group=SE2), X(0), X(1), 0.0, 1.0, 0.5,
+                                       np.eye(3), group=SE2)  # fmt: skip
     values = {X(0): state, X(1): SE2_STATE.retract(state, np.r_[1.0, 0, 0.1, 0, 0, 0]), L(1): np.array([3.0, 4.0])}
     with pytest.warns(DivergenceWarning, match=r"RangeFactor on x0, x1, l1 \(interpolated between its states\)"):
         check.gate([good, bad], values.__getitem__, 7)

@@ -10,6 +10,7 @@ import pytest
 from steam_ref.datasets import sample_from_model
 from steam_ref.errors import DataError, SteamError
 from steam_ref.factors.lie_prior import LiePriorFactor, lie_prior_factors
+from steam_ref.lie import SE2
 from steam_ref.motion import motion_prior
 from steam_ref.variables import X
 
@@ -32,7 +33,7 @@ def _sample(n_steps, n_landmarks, seed, model="local-variable", **changes):
 
 def _nees(sample, model):
     n = len(sample.states)
-    factors = lie_prior_factors([X(i) for i in range(n)], np.arange(n, dtype=float), QC, model)
+    factors = lie_prior_factors([X(i) for i in range(n)], np.arange(n, dtype=float), QC, model, group=SE2)
     batch = LiePriorFactor.stack(factors)  # every step at once, as a solver evaluates them
     return np.sum(batch.whitened_error(sample.states[:-1], sample.states[1:]) ** 2, axis=1)
 

@@ -31,15 +31,15 @@ def _problem():
         w = truth[-1][3:] + rng.normal(0, 0.05, 3)
         truth.append(np.r_[SE2.compose(truth[-1][:3], SE2.exp(w)), w])
     keys = [X(i) for i in range(N_STATES)]
-    factors = [LieStatePrior.create(X(0), truth[0], np.full(6, 0.01))]
-    factors += lie_prior_factors(keys, np.arange(N_STATES, dtype=float), QC)
+    factors = [LieStatePrior.create(X(0), truth[0], np.full(6, 0.01), group=SE2)]
+    factors += lie_prior_factors(keys, np.arange(N_STATES, dtype=float), QC, group=SE2)
     readings = {}
     for i, x in enumerate(truth):
         vel = x[3:] + VEL_SIGMAS * rng.standard_normal(3)
-        factors.append(BodyVelocityFactor.create(X(i), vel, VEL_SIGMAS))
+        factors.append(BodyVelocityFactor.create(X(i), vel, VEL_SIGMAS, group=SE2))
         for j, l in LANDMARKS.items():
             r = float(np.hypot(*(l - x[:2]))) + RANGE_SIGMA * rng.standard_normal()
-            factors.append(PoseReading.range(X(i), L(j), r, RANGE_SIGMA))
+            factors.append(PoseReading.range(X(i), L(j), r, RANGE_SIGMA, group=SE2))
             readings[(i, j)] = r
         readings[i] = vel
     for j, l in LANDMARKS.items():

@@ -42,13 +42,13 @@ def problem(seed: int, n: int, model: str = "local-variable"):
         truth.append(np.r_[SE2.compose(truth[-1][:3], SE2.exp(w)), w])
     steps = []
     for i, x in enumerate(truth):
-        fs = [LieStatePrior.create(X(0), x, np.full(6, 0.05))] if i == 0 else []
+        fs = [LieStatePrior.create(X(0), x, np.full(6, 0.05), group=SE2)] if i == 0 else []
         fs += [PriorFactor.create(L(j), l, 1e-2) for j, l in LANDMARKS.items()] if i == 0 else []
-        fs += [LiePriorFactor.create(X(i - 1), X(i), 1.0, QC, model)] if i > 0 else []
-        fs.append(BodyVelocityFactor.create(X(i), x[3:] + VEL_SIGMAS * rng.standard_normal(3), VEL_SIGMAS))
+        fs += [LiePriorFactor.create(X(i - 1), X(i), 1.0, QC, model, group=SE2)] if i > 0 else []
+        fs.append(BodyVelocityFactor.create(X(i), x[3:] + VEL_SIGMAS * rng.standard_normal(3), VEL_SIGMAS, group=SE2))
         for j, l in LANDMARKS.items():
             r = float(np.hypot(*(l - x[:2]))) + RANGE_SIGMA * rng.standard_normal()
-            fs.append(PoseReading.range(X(i), L(j), r, RANGE_SIGMA))
+            fs.append(PoseReading.range(X(i), L(j), r, RANGE_SIGMA, group=SE2))
         steps.append(fs)
     guesses = {X(i): SE2_STATE.retract(x, rng.normal(0, 0.2, 6)) for i, x in enumerate(truth)}
     guesses |= {L(j): l + rng.normal(0, 0.05, 2) for j, l in LANDMARKS.items()}
@@ -176,8 +176,8 @@ def test_marginalization_freezes_the_schur_complement_in_the_se2_tangent():
     marginalize(solver, drop)
     # later readings pull the separator away from θ₀, so the frozen factor's θ ⊖ θ₀ matters
     rng = np.random.default_rng(1)
-    later = [PoseReading.range(X(2), L(j), float(np.hypot(*(l - truth[2][:2]))) + 0.3, 0.02) for j, l in LANDMARKS.items()]  # fmt: skip
-    later += [BodyVelocityFactor.create(X(2), truth[2][3:] + rng.normal(0, 0.3, 3), 0.01)]
+    later = [PoseReading.range(X(2), L(j), float(np.hypot(*(l - truth[2][:2]))) + 0.3, 0.02, group=SE2) for j, l in LANDMARKS.items()]  # fmt: skip
+    later += [BodyVelocityFactor.create(X(2), truth[2][3:] + rng.normal(0, 0.3, 3), 0.01, group=SE2)]
     solver.update(later)
     for _ in range(20):
         solver.update()

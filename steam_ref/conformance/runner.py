@@ -38,7 +38,7 @@ from ..gp import (
     wnoj_transition,
 )
 from ..lie import SE2
-from ..lie.gp import interpolate, interpolate_covariance_se2
+from ..lie import gp as lie_gp
 from ..linear.system import linearize
 from . import solvers, spec
 from .kitio import case_type
@@ -174,10 +174,10 @@ def _lie_interpolation(inputs: Mapping) -> dict:
     x1, x2, model = np.asarray(inputs["x1"], float), np.asarray(inputs["x2"], float), inputs["model"]
     (t1, t2, tau), qc = _times(inputs), _qc(inputs)
     if "joint_cov" in inputs:
-        x, cov = interpolate_covariance_se2(t1, t2, tau, qc, x1, x2, inputs["joint_cov"], model)
+        x, cov = lie_gp.interpolate_covariance(t1, t2, tau, qc, x1, x2, inputs["joint_cov"], model, group=SE2)
         return {"x_tau": x, "cov_tau": cov}
     lam, psi = interpolation_matrices(t1, t2, tau, qc)
-    x, J1, J2 = interpolate(x1, x2, lam, psi, model)
+    x, J1, J2 = lie_gp.interpolate(x1, x2, lam, psi, model, group=SE2)
     return {"x_tau": x, "J_1": J1, "J_2": J2}
 
 

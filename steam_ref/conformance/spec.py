@@ -42,7 +42,7 @@ from ..factors import (
     RangeFactor,
     VelocityFactor,
 )
-from ..lie import SE2_STATE
+from ..lie import SE2, SE2_STATE
 from ..linear.ordering import Ordering
 from ..manifold import VECTOR, Manifold
 from ..robust import Huber, RobustLoss, Tukey
@@ -109,15 +109,16 @@ def _interpolated(spec: Mapping, keys: Sequence[Key]) -> Factor:
 
 
 def _lie_prior(spec: Mapping, keys: Sequence[Key]) -> Factor:
-    return LiePriorFactor.create(keys[0], keys[1], float(spec["dt"]), np.asarray(spec["qc"], float), spec["model"])
+    dt, qc = float(spec["dt"]), np.asarray(spec["qc"], float)
+    return LiePriorFactor.create(keys[0], keys[1], dt, qc, spec["model"], group=SE2)
 
 
 def _lie_state_prior(spec: Mapping, keys: Sequence[Key]) -> Factor:
-    return LieStatePrior.create(keys[0], np.asarray(spec["mean"], float), np.asarray(spec["sigmas"], float))
+    return LieStatePrior.create(keys[0], np.asarray(spec["mean"], float), np.asarray(spec["sigmas"], float), group=SE2)
 
 
 def _pose_range(spec: Mapping, keys: Sequence[Key]) -> Factor:
-    return PoseReading.range(keys[0], keys[1], float(spec["measured"]), float(spec["sigma"]))
+    return PoseReading.range(keys[0], keys[1], float(spec["measured"]), float(spec["sigma"]), group=SE2)
 
 
 _V = VECTOR

@@ -1,6 +1,6 @@
 """Factors on the states of a Lie group (a pose T and its body twist ϖ): the WNOA prior of both models, and priors.  [AB15; DER 11]
 
-Each factor holds its group (``group=``, a :class:`~steam_ref.lie.LieGroup`; ``SE2`` by default, whose
+Each factor holds its group (``group=``, a :class:`~steam_ref.lie.LieGroup`, always given; ``SE2``'s
 states are x = [px, py, θ, vx, vy, ω]); the state kind is ``GroupState(group)`` (``steam_ref.lie.SE2_STATE``
 for SE(2): a pose and its body twist, retracted on the right). Every Jacobian here is with respect to the
 right tangent δ of each state, x ⊕ δ = (T Exp(δT), ϖ + δϖ), which is what a solver on that kind
@@ -24,7 +24,7 @@ from numpy.typing import NDArray
 from ..arguments import finite, real_array, time_step
 from ..errors import ShapeError, SteamError
 from ..gp.prior import check_qc, process_noise_sqrt_information, transition
-from ..lie import SE2, GroupState, LieGroup
+from ..lie import GroupState, LieGroup
 from ..lie.gp import check_model, local_variables
 from ..lie.group import check_group
 from ..robust import RobustLoss
@@ -45,7 +45,7 @@ class LiePriorFactor(Factor):
 
     phi: NDArray  # Φ(Δt), (2d, 2d)
     model: str = field(default="local-variable", kw_only=True)
-    group: LieGroup = field(default=SE2, kw_only=True)
+    group: LieGroup = field(kw_only=True)
 
     _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "phi")
     _shared: ClassVar[tuple[str, ...]] = ("model", "group")
@@ -57,7 +57,7 @@ class LiePriorFactor(Factor):
 
     @classmethod
     def create(
-        cls, key1: Key, key2: Key, dt: float, qc: NDArray, model: str = "local-variable", *, group: LieGroup = SE2
+        cls, key1: Key, key2: Key, dt: float, qc: NDArray, model: str = "local-variable", *, group: LieGroup
     ) -> LiePriorFactor:
         """The prior over a gap dt > 0 with Qc (d, d) on the body twist (SE(2): [vx, vy, ω]).  [YIB Eq. 17, 22]"""
         dt = time_step(dt)
@@ -89,7 +89,7 @@ class LiePriorFactor(Factor):
 
 
 def lie_prior_factors(
-    keys: list[Key], times: NDArray, qc: NDArray, model: str = "local-variable", *, group: LieGroup = SE2
+    keys: list[Key], times: NDArray, qc: NDArray, model: str = "local-variable", *, group: LieGroup
 ) -> list[LiePriorFactor]:
     """The M - 1 prior factors on ``group`` linking consecutive states at strictly increasing times."""
     keys, times = key_list("keys", keys), real_array("times", times)
@@ -110,14 +110,14 @@ class LieStatePrior(Factor):
     """
 
     mean: NDArray  # (size + d,)
-    group: LieGroup = field(default=SE2, kw_only=True)
+    group: LieGroup = field(kw_only=True)
 
     _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "mean")
     _shared: ClassVar[tuple[str, ...]] = ("group",)
 
     @classmethod
     def create(
-        cls, key: Key, mean: NDArray, noise: NDArray | float, *, loss: RobustLoss | None = None, group: LieGroup = SE2
+        cls, key: Key, mean: NDArray, noise: NDArray | float, *, loss: RobustLoss | None = None, group: LieGroup
     ) -> LieStatePrior:
         """Prior on ``key``; noise is a sigma, sigmas (2d,) or a covariance (2d, 2d) of the tangent at ``mean``."""
         kind = GroupState(check_group(group))

@@ -1,6 +1,6 @@
 """Measurements of Lie-group states (a pose and its body twist), at a state or at a time between two.  [DER 11.14-11.16]
 
-Each factor holds its group (``group=``, ``SE2`` by default, whose states are [px, py, θ, vx, vy, ω]).
+Each factor holds its group (``group=``, always given; ``SE2``'s states are [px, py, θ, vx, vy, ω]).
 Every Jacobian is with respect to the right tangent δ of the state (``GroupState(group)``, for SE(2)
 ``steam_ref.lie.SE2_STATE``). :class:`PoseReading` reads a planar pose: to first order the position
 moves by R(θ) δρ and the heading by δφ, so a reading of the pose alone (range, bearing, bearing-range)
@@ -22,7 +22,7 @@ from ..arguments import number
 from ..errors import SteamError
 from ..gp.interpolate import interpolation_matrices
 from ..gp.prior import check_qc
-from ..lie import SE2, LieGroup
+from ..lie import LieGroup
 from ..lie.gp import check_model, interpolate
 from ..lie.group import check_group
 from ..robust import RobustLoss
@@ -45,7 +45,7 @@ class PoseReading(Factor):
     """
 
     inner: Factor  # RangeFactor, BearingFactor or BearingRangeFactor with state_dim the group state's size
-    group: LieGroup = field(default=SE2, kw_only=True)
+    group: LieGroup = field(kw_only=True)
 
     _batched_factors: ClassVar[tuple[str, ...]] = ("inner",)
     _shared: ClassVar[tuple[str, ...]] = ("group",)
@@ -74,7 +74,7 @@ class PoseReading(Factor):
         sigma: float,
         *,
         loss: RobustLoss | None = None,
-        group: LieGroup = SE2,
+        group: LieGroup,
     ) -> PoseReading:
         """Range (m) from the state's position to ``landmark``.  [YIB Eq. 33]"""
         return cls._wrap(RangeFactor.create(state, landmark, measured, sigma, loss=loss), group)
@@ -88,7 +88,7 @@ class PoseReading(Factor):
         sigma: float,
         *,
         loss: RobustLoss | None = None,
-        group: LieGroup = SE2,
+        group: LieGroup,
     ) -> PoseReading:
         """Bearing (rad) of ``landmark`` in the robot frame, error wrapped."""
         return cls._wrap(BearingFactor.create(state, landmark, measured, sigma, loss=loss), group)
@@ -103,7 +103,7 @@ class PoseReading(Factor):
         noise: NDArray,
         *,
         loss: RobustLoss | None = None,
-        group: LieGroup = SE2,
+        group: LieGroup,
     ) -> PoseReading:
         """Bearing and range together; noise: sigmas (2,) or a covariance (2, 2) of [bearing, range]."""
         return cls._wrap(BearingRangeFactor.create(state, landmark, bearing, range_, noise, loss=loss), group)
@@ -133,7 +133,7 @@ class BodyVelocityFactor(Factor):
     """A reading of a group state's body twist (SE(2): [forward, lateral, yaw rate]): e = ϖ - measured, ∂e/∂δ = [0 I]."""
 
     measured: NDArray  # (d,)
-    group: LieGroup = field(default=SE2, kw_only=True)
+    group: LieGroup = field(kw_only=True)
 
     _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "measured")
     _shared: ClassVar[tuple[str, ...]] = ("group",)
@@ -146,7 +146,7 @@ class BodyVelocityFactor(Factor):
         noise: NDArray | float,
         *,
         loss: RobustLoss | None = None,
-        group: LieGroup = SE2,
+        group: LieGroup,
     ) -> BodyVelocityFactor:
         """Reading ``measured`` = ϖ (SE(2): [vx, vy, ω]) in the body frame; noise a sigma, sigmas (d,) or a covariance."""
         d = check_group(group).dim
@@ -182,7 +182,7 @@ class LieInterpolatedFactor(Factor):
     lam: NDArray  # Λ(τ), (2d, 2d)
     psi: NDArray  # Ψ(τ), (2d, 2d)
     model: str = field(default="local-variable", kw_only=True)
-    group: LieGroup = field(default=SE2, kw_only=True)
+    group: LieGroup = field(kw_only=True)
 
     _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "lam", "psi")
     _batched_factors: ClassVar[tuple[str, ...]] = ("inner",)
@@ -200,7 +200,7 @@ class LieInterpolatedFactor(Factor):
         qc: NDArray,
         model: str = "local-variable",
         *,
-        group: LieGroup = SE2,
+        group: LieGroup,
     ) -> LieInterpolatedFactor:
         """Move ``inner`` (on the state at τ on ``group``, t1 < τ < t2) onto ``key1`` at t1 and ``key2`` at t2."""
         if not isinstance(inner, (PoseReading, BodyVelocityFactor)):

@@ -14,8 +14,8 @@ The mean at τ is γ(τ) = Λ(τ) γ₁ + Ψ(τ) γ₂ [YIB Eq. 18], mapped back
 tangents of the states (``steam_ref.lie.state``), exact; derivations in [DER 11.10-11.18] (written for
 SE(2); every step uses only the group's protocol, ``lie.group``, so the code holds for any group).
 
-Every function takes the group as ``group=`` (a :class:`~steam_ref.lie.group.LieGroup`; SE(2) for now),
-and a state on it as the flat array [T; ϖ] of ``GroupState(group)``: the pose's ``group.size`` numbers
+Every function takes the group as ``group=`` (a :class:`~steam_ref.lie.group.LieGroup`, always given: the
+motion prior on a group passes its own), and a state on it as the flat array [T; ϖ] of ``GroupState(group)``: the pose's ``group.size`` numbers
 then the body twist's ``group.dim``. ``local_variables`` and ``interpolate`` give the value and its
 Jacobians from one call, or with ``jacobians=False`` the value alone (a factor's error needs no more).
 """
@@ -29,19 +29,19 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..arguments import check_covariance, number, real_array
 from ..errors import SteamError
-from ..gp.interpolate import interpolate_covariance, interpolation_matrices
+from ..gp.interpolate import interpolate_covariance as vector_interpolate_covariance
+from ..gp.interpolate import interpolation_matrices
 from ..gp.prior import check_qc, process_noise
 from .group import LieGroup
-from .se2 import SE2
 
 __all__ = [
     "MODELS",
     "check_model",
     "local_variables",
     "interpolate",
-    "interpolate_covariance_se2",
+    "interpolate_covariance",
     "extrapolate",
-    "extrapolate_covariance_se2",
+    "extrapolate_covariance",
 ]
 
 MODELS = ("local-variable", "simplified")
@@ -72,14 +72,12 @@ def _eye(d: int, shape: tuple[int, ...]) -> NDArray:
 
 @overload
 def local_variables(
-    x1: NDArray, x2: NDArray, model: str, *, group: LieGroup = ..., jacobians: Literal[True] = ...
+    x1: NDArray, x2: NDArray, model: str, *, group: LieGroup, jacobians: Literal[True] = ...
 ) -> tuple[NDArray, NDArray, NDArray]: ...
 @overload
+def local_variables(x1: NDArray, x2: NDArray, model: str, *, group: LieGroup, jacobians: Literal[False]) -> NDArray: ...
 def local_variables(
-    x1: NDArray, x2: NDArray, model: str, *, group: LieGroup = ..., jacobians: Literal[False]
-) -> NDArray: ...
-def local_variables(
-    x1: NDArray, x2: NDArray, model: str, *, group: LieGroup = SE2, jacobians: bool = True
+    x1: NDArray, x2: NDArray, model: str, *, group: LieGroup, jacobians: bool = True
 ) -> NDArray | tuple[NDArray, NDArray, NDArray]:
     """γ₂ = [ξ₂₁; J_r(ξ₂₁)⁻¹ ϖ₂] in the frame of T₁ (simplified: [ξ₂₁; ϖ₂]), with ∂γ₂/∂x₁, ∂γ₂/∂x₂ unless
     ``jacobians`` is False (γ₂ alone).
@@ -142,7 +140,7 @@ def interpolate(
     psi: NDArray,
     model: str = ...,
     *,
-    group: LieGroup = ...,
+    group: LieGroup,
     jacobians: Literal[True] = ...,
 ) -> tuple[NDArray, NDArray, NDArray]: ...
 @overload
@@ -153,7 +151,7 @@ def interpolate(
     psi: NDArray,
     model: str = ...,
     *,
-    group: LieGroup = ...,
+    group: LieGroup,
     jacobians: Literal[False],
 ) -> NDArray: ...
 def interpolate(
@@ -163,7 +161,7 @@ def interpolate(
     psi: NDArray,
     model: str = "local-variable",
     *,
-    group: LieGroup = SE2,
+    group: LieGroup,
     jacobians: bool = True,
 ) -> NDArray | tuple[NDArray, NDArray, NDArray]:
     """The mean x(τ) between x₁ and x₂ and its Jacobians ∂x(τ)/∂x₁, ∂x(τ)/∂x₂ (right tangents); x(τ) alone
@@ -188,7 +186,7 @@ def interpolate(
     return x, J1, _mm(N, _mm(psi, g22))  # [DER 11.16]
 
 
-def interpolate_covariance_se2(
+def interpolate_covariance(
     t1: float,
     t2: float,
     tau: float,
@@ -198,9 +196,10 @@ def interpolate_covariance_se2(
     joint_cov: ArrayLike,
     model: str = "local-variable",
     *,
-    group: LieGroup = SE2,
+    group: LieGroup,
 ) -> tuple[NDArray, NDArray]:
-    """The mean x(τ) and its covariance (in the right tangent at x(τ)), t₁ < τ < t₂.
+    """The mean x(τ) and its covariance (in the right tangent at x(τ)), t₁ < τ < t₂: the group form of
+    ``gp.interpolate_covariance``, which gives the covariance alone.
 
     ``joint_cov`` (4d, 4d) is the covariance of [δ₁; δ₂], the right tangents at x₁ and x₂. To first
     order δ(τ) = J₁ δ₁ + J₂ δ₂ + N w, w ~ N(0, Q_c(τ)) the local GP's own conditional noise (that of
@@ -214,7 +213,7 @@ def interpolate_covariance_se2(
     gamma = np.concatenate([np.zeros(d), x1[n:]]) @ lam.T + gamma2 @ psi.T
     _, N, _ = _from_local(x1, gamma, model, group)
     J = np.hstack([J1, J2])
-    cond = interpolate_covariance(t1, t2, tau, qc, np.zeros((4 * d, 4 * d)))  # Cov(γ(τ) | γ₁, γ₂)
+    cond = vector_interpolate_covariance(t1, t2, tau, qc, np.zeros((4 * d, 4 * d)))  # Cov(γ(τ) | γ₁, γ₂)
     P = check_covariance("joint_cov", real_array("joint_cov", joint_cov), 4 * d)
     cov = J @ P @ J.T + N @ cond @ N.T  # [DER 11.17]
     return x, (cov + cov.T) / 2
@@ -233,7 +232,7 @@ def _ahead(x1: NDArray, s: float, group: LieGroup) -> NDArray:
     return np.concatenate([s * w1, w1], axis=-1)
 
 
-def extrapolate(x1: NDArray, t1: float, t: float, *, group: LieGroup = SE2) -> tuple[NDArray, NDArray]:
+def extrapolate(x1: NDArray, t1: float, t: float, *, group: LieGroup) -> tuple[NDArray, NDArray]:
     """The prediction x(t) = (T₁ Exp((t - t₁) ϖ₁), ϖ₁) after the last state, and ∂x(t)/∂x₁.
 
     Past the last state nothing constrains the noise, so the mean follows γ(t) = Φ(t - t₁) γ₁ =
@@ -250,8 +249,8 @@ def extrapolate(x1: NDArray, t1: float, t: float, *, group: LieGroup = SE2) -> t
     return x, J
 
 
-def extrapolate_covariance_se2(
-    x1: NDArray, t1: float, t: float, qc: NDArray, cov1: ArrayLike, *, group: LieGroup = SE2
+def extrapolate_covariance(
+    x1: NDArray, t1: float, t: float, qc: NDArray, cov1: ArrayLike, *, group: LieGroup
 ) -> tuple[NDArray, NDArray]:
     """The prediction x(t) after the last state and its covariance J P₁ Jᵀ + N Q(t - t₁) Nᵀ.  [YIB Eq. 17, 22]"""
     x, J = extrapolate(x1, t1, t, group=group)

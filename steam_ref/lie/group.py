@@ -175,6 +175,39 @@ class LieGroup(ABC):
             return value
         return value, -self.adjoint(self._inverse(value)), self._eye(value.shape[:-1])
 
+    # --- a planar robot's pose and velocity (a group whose elements hold one says how) ----------------
+
+    def state_names(self) -> tuple[str, ...]:
+        """A name for each number of a state on this group (its pose's ``size``, then its twist's ``dim``),
+        as files write them; generic unless the group names them (SE(2): x, y, theta, vx, vy, omega)."""
+        return tuple(f"pose{i}" for i in range(self.size)) + tuple(f"twist{i}" for i in range(self.dim))
+
+    def from_planar(self, pose: ArrayLike) -> NDArray:  # noqa: ARG002 (a planar group's)
+        """The element (..., size) of a planar pose [x, y, θ] (..., 3) in the world frame, in its stored form:
+        how a dead-reckoned pose enters a state. SteamError for a group that holds no planar pose."""
+        raise SteamError(self._not_planar("the element of a planar pose [x, y, θ]"))
+
+    def to_planar(self, a: ArrayLike) -> NDArray:  # noqa: ARG002 (a planar group's)
+        """The planar pose [x, y, θ] (..., 3) of the element ``a`` (..., size). SteamError for a group that
+        holds no planar pose."""
+        raise SteamError(self._not_planar("the planar pose [x, y, θ] of an element"))
+
+    def body_twist(self, a: ArrayLike, velocity: ArrayLike) -> NDArray:  # noqa: ARG002 (a planar group's)
+        """The body twist (..., dim) of a robot at the element ``a`` moving with the world-frame planar velocity
+        [ẋ, ẏ, θ̇] (..., 3). SteamError for a group that holds no planar pose."""
+        raise SteamError(self._not_planar("the body twist of a planar world-frame velocity"))
+
+    def world_velocity(self, a: ArrayLike, twist: ArrayLike) -> NDArray:  # noqa: ARG002 (a planar group's)
+        """The world-frame planar velocity [ẋ, ẏ, θ̇] (..., 3) of the body twist ``twist`` (..., dim) at the
+        element ``a``. SteamError for a group that holds no planar pose."""
+        raise SteamError(self._not_planar("the world-frame planar velocity of a body twist"))
+
+    def _not_planar(self, what: str) -> str:
+        return (
+            f"{self!r} holds no planar pose, so it has no {what}: a planar front end, reading or evaluation "
+            f"needs a group that says how (SE2 does)"
+        )
+
     # --- one object per group ----------------------------------------------------------------------
 
     _instances: ClassVar[dict[type, LieGroup]] = {}

@@ -25,6 +25,7 @@ import numpy as np
 import scipy.special
 from numpy.typing import ArrayLike, NDArray
 
+from ..dead_reckoning import wrap_angle
 from ..errors import SteamError
 from .group import LieGroup
 
@@ -273,6 +274,35 @@ class SE2Group(LieGroup):
             ],
             r1,
         )
+
+    # --- a planar robot: an SE(2) pose is [x, y, θ] itself -------------------------------------------
+
+    def state_names(self) -> tuple[str, ...]:
+        """[px, py, θ, vx, vy, ω] as files write them."""
+        return ("x", "y", "theta", "vx", "vy", "omega")
+
+    def from_planar(self, pose: ArrayLike) -> NDArray:
+        """[x, y, θ] with θ taken to (-π, π] as -wrap_angle(-θ) (``dead_reckoning``: the heading a planar front
+        end has always handed a state, bit for bit; :func:`wrap` may differ from it in the last bit)."""
+        pose = np.array(pose, dtype=float)
+        pose[..., 2] = -wrap_angle(-pose[..., 2])
+        return pose
+
+    def to_planar(self, a: ArrayLike) -> NDArray:
+        """The pose [x, y, θ] as it is."""
+        return np.array(a, dtype=float)
+
+    def body_twist(self, a: ArrayLike, velocity: ArrayLike) -> NDArray:
+        """[R(θ)ᵀ [ẋ, ẏ]; θ̇]: the velocity in the robot's own frame (forward, lateral, yaw rate)."""
+        a, v = np.asarray(a, dtype=float), np.asarray(velocity, dtype=float)
+        c, s = _rot(a[..., 2])
+        return np.stack([c * v[..., 0] + s * v[..., 1], -s * v[..., 0] + c * v[..., 1], v[..., 2]], axis=-1)
+
+    def world_velocity(self, a: ArrayLike, twist: ArrayLike) -> NDArray:
+        """[R(θ) [vx, vy]; ω]: the body twist in the world frame."""
+        a, w = np.asarray(a, dtype=float), np.asarray(twist, dtype=float)
+        c, s = _rot(a[..., 2])
+        return np.stack([c * w[..., 0] - s * w[..., 1], s * w[..., 0] + c * w[..., 1], w[..., 2]], axis=-1)
 
     def jr_times_jacobian(self, xi: ArrayLike, v: ArrayLike) -> NDArray:
         """∂(J_r(ξ) v)/∂ξ, exact: (..., 3, 3).  [DER 11.7]"""

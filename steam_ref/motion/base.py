@@ -139,16 +139,18 @@ class MotionPrior(ABC):
         return f"<motion prior {self.name}: states of {self.state_dim} numbers, kind {self.kind!r}>"
 
 
-def sigma_blocks(name: str, sigmas: Sequence[ArrayLike], blocks: int) -> list[NDArray]:
-    """The first ``blocks`` of ``sigmas`` (pose, velocity, acceleration, ...) as (3,) float arrays."""
+def sigma_blocks(name: str, sigmas: Sequence[ArrayLike], blocks: int, size: int = 3) -> list[NDArray]:
+    """The first ``blocks`` of ``sigmas`` (pose, velocity, acceleration, ...) as (size,) float arrays (3 on a
+    plane; a group's tangent dim on a group)."""
     if isinstance(sigmas, (str, bytes)) or not isinstance(sigmas, Sequence) or len(sigmas) < blocks:
         raise SteamError(
-            f"{name} must be a sequence of at least {blocks} blocks of 3 sigmas (pose, velocity, ...), got {sigmas!r:.80}"
+            f"{name} must be a sequence of at least {blocks} blocks of {size} sigmas (pose, velocity, ...), "
+            f"got {sigmas!r:.80}"
         )
     out = [np.asarray(s, dtype=float) for s in sigmas[:blocks]]
     for k, s in enumerate(out):
-        if s.shape != (3,) or not np.all(np.isfinite(s)) or np.any(s <= 0):
-            raise SteamError(f"{name}[{k}] must be 3 finite numbers > 0, got {s.tolist()!r}")
+        if s.shape != (size,) or not np.all(np.isfinite(s)) or np.any(s <= 0):
+            raise SteamError(f"{name}[{k}] must be {size} finite numbers > 0, got {s.tolist()!r}")
     return out
 
 

@@ -21,6 +21,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..arguments import finite, number, real_array
 from ..errors import ShapeError, SteamError
 from ..gp.sde import LinearSDE, check_prior
+from ..lie import SE2
 from .base import MotionPrior
 from .lie_group import LieGroupWnoa
 from .vector import VectorPrior
@@ -43,7 +44,7 @@ def _singer(qc: ArrayLike, singer_time_constant: float = 1.0) -> MotionPrior:
 
 
 def _se2(qc: ArrayLike, se2_residual: str = "local-variable") -> MotionPrior:
-    return LieGroupWnoa(qc, residual=se2_residual)
+    return LieGroupWnoa(SE2, qc, residual=se2_residual)
 
 
 MOTION_PRIORS: dict[str, PriorChoice] = {
