@@ -1,13 +1,11 @@
 """Every motion prior of the table (steam_ref.motion.MOTION_PRIORS) through the same checks: its factors agree
 with its own prediction, interpolation and sampling; its readings measure what the sampler draws; a stream and a
-trajectory run on it. And no module outside the homes of the priors and the groups tests a prior by name."""
+trajectory run on it. (That no module outside the homes of the priors and the groups tests a prior by name is
+tests/test_seam.py's.)"""
 
 from __future__ import annotations
 
-import ast
 import itertools
-import re
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -172,57 +170,3 @@ def test_a_task_drawn_from_each_prior_is_in_its_layout():
             first_acceleration_sigmas=[0.1] * 3,
         )  # fmt: skip
         assert task.states.shape == (11, task.prior.state_dim) and task.prior.name == name
-
-
-# --- the seam: no caller tests which prior or group it holds ------------------------------------------
-
-PACKAGE = Path(__file__).resolve().parents[1] / "steam_ref"
-HOMES = ("motion", "lie")  # where a prior or a group may be told by name
-NAME_TEST = re.compile(
-    r"is_se2|se2_model|[\"'](se2|se3|wnoa|wnoj|singer)[\"']|isinstance\([^)]*\b(LinearSDE|ClosedForm|MotionPrior|"
-    r"VectorPrior|LieGroupWnoa)\b|\bprior in \(|SE2_STATE"
-)
-# The tests left outside the homes, each with its reason (a path, or a folder ending in "/").
-ALLOWED: dict[str, str] = {
-    "factors/gp.py": "the factors take Qc (memoised WNOA closed forms) or a LinearSDE, and choose the path",
-    "gp/sde.py": "check_prior, the conversion of a Qc / LinearSDE argument, and LinearSDE's own type check",
-    "conformance/": "the kit: its oracle is independent of the package by design, its cases name their prior",
-}
-
-
-def allowed(rel: str) -> bool:
-    return any(rel == home or (home.endswith("/") and rel.startswith(home)) for home in ALLOWED)
-
-
-def name_tests() -> dict[str, list[str]]:
-    """Every ``if`` / conditional expression / comprehension filter outside the homes whose test names a prior or a
-    group, by file."""
-    found: dict[str, list[str]] = {}
-    for path in sorted(PACKAGE.rglob("*.py")):
-        rel = path.relative_to(PACKAGE).as_posix()
-        if rel.split("/")[0] in HOMES:
-            continue
-        source = path.read_text(encoding="utf-8")
-        for node in ast.walk(ast.parse(source)):
-            tests = [node.test] if isinstance(node, (ast.If, ast.IfExp, ast.While)) else []
-            tests += node.ifs if isinstance(node, ast.comprehension) else []
-            for test in tests:
-                text = ast.get_source_segment(source, test) or ""
-                if NAME_TEST.search(text):
-                    found.setdefault(rel, []).append(f"{rel}:{test.lineno}: {text[:80]}")
-    return found
-
-
-def test_no_module_outside_the_homes_of_the_priors_and_groups_tests_a_prior_by_name():
-    found = name_tests()
-    unexpected = [site for rel, sites in found.items() if not allowed(rel) for site in sites]
-    assert not unexpected, "a prior or group told by name outside motion/ and lie/: " + "; ".join(unexpected)
-
-
-def test_the_name_test_scan_finds_a_branch_on_a_prior():
-    source = "def f(setup):\n    if setup.prior == 'se2':\n        return 1\n    return [x for x in y if x.is_se2]\n"
-    tree = ast.parse(source)
-    hits = [
-        n for n in ast.walk(tree) if isinstance(n, ast.If) and NAME_TEST.search(ast.get_source_segment(source, n.test))
-    ]
-    assert len(hits) == 1 and NAME_TEST.search("x.is_se2")

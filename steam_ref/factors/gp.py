@@ -15,9 +15,9 @@ from numpy.typing import NDArray
 
 from ..arguments import finite, number, real_array
 from ..errors import NumericalError, ShapeError, SteamError
-from ..gp.interpolate import interpolation_matrices, interpolation_matrices_sde
+from ..gp.interpolate import interpolation_terms
 from ..gp.prior import process_noise_sqrt_information, transition
-from ..gp.sde import LinearSDE, check_prior
+from ..gp.sde import LinearSDE, as_sde, check_prior, check_sde
 from ..variables import Key, key_list
 from .base import Factor, apply, measured_vector, sqrt_information
 
@@ -73,13 +73,13 @@ class GPPriorFactor(Factor):
 
     @classmethod
     def from_sde(cls, key1: Key, key2: Key, dt: float, sde: LinearSDE) -> GPPriorFactor:
-        """The prior of ``sde`` over a gap dt: Φ, Qᵢ and vᵢ from its (closed-form or general) discretisation."""
-        if not isinstance(sde, LinearSDE):
-            raise SteamError(
-                f"sde must be a LinearSDE (for Qc of the WNOA prior use GPPriorFactor.wnoa), got sde={sde!r}"
-            )
-        if sde.model is not None and sde.model.name == "wnoa" and not np.any(sde.v):
-            return cls.wnoa(key1, key2, dt, sde.qc)  # the memoised closed form
+        """The prior of ``sde`` over a gap dt: Φ, Qᵢ and vᵢ from its (closed-form or general) discretisation; W
+        from the SDE where it knows it in closed form (the paper's WNOA: memoised, ``wnoa``'s factor bit for bit),
+        else from Qᵢ."""
+        sde = check_sde(sde, hint=" (for Qc of the WNOA prior use GPPriorFactor.wnoa)")
+        w = sde.sqrt_information(dt)  # WᵀW = Qᵢ⁻¹ in closed form, or None
+        if w is not None:
+            return cls((key1, key2), w, phi=sde.transition(dt), v=sde.input_integral(dt))
         q = sde.process_noise(dt)
         try:
             np.linalg.cholesky(q)
@@ -117,16 +117,14 @@ def gp_prior_factors(keys: list[Key], times: NDArray, prior: NDArray | LinearSDE
     is ``GPPriorFactor.wnoa(keys[i], keys[i+1], times[i+1] - times[i], qc)``, error xᵢ₊₁ - Φ xᵢ (``from_sde``
     with a LinearSDE). What Qc means and how to choose it: docs/api.md, "Conventions".
     """
-    keys, times, prior = key_list("keys", keys), real_array("times", times), check_prior(prior)
+    keys, times, sde = key_list("keys", keys), real_array("times", times), as_sde(prior)
     if times.ndim != 1 or len(times) != len(keys):
         raise ShapeError(f"need one time per key: {len(keys)} keys, times of shape {times.shape}")
     gaps = np.diff(finite("times", times))
     if np.any(~(gaps > 0)):
         i = int(np.flatnonzero(~(gaps > 0))[0])
         raise SteamError(f"times must increase strictly: t[{i}]={times[i]} then t[{i + 1}]={times[i + 1]}")
-    if isinstance(prior, LinearSDE):
-        return [GPPriorFactor.from_sde(keys[i], keys[i + 1], gaps[i], prior) for i in range(len(gaps))]
-    return [GPPriorFactor.wnoa(keys[i], keys[i + 1], gaps[i], prior) for i in range(len(gaps))]
+    return [GPPriorFactor.from_sde(keys[i], keys[i + 1], gaps[i], sde) for i in range(len(gaps))]  # Qc: wnoa's
 
 
 # --- Measurements at a missing (interpolated) state ---------------------------------------------
@@ -174,12 +172,7 @@ class InterpolatedFactor(Factor):
             raise SteamError("an interpolated factor cannot wrap another interpolated factor")
         prior = check_prior(prior)
         t1, t2, tau = number("t1", t1), number("t2", t2), number("tau", tau)  # floats, not float32 (NumPy 2)
-        if isinstance(prior, LinearSDE):
-            lam, psi = interpolation_matrices_sde(prior, t1, t2, tau)  # [YIB Eq. 16]
-            offset = prior.input_integral(tau - t1) - psi @ prior.input_integral(t2 - t1)  # [YIB Eq. 23]
-        else:
-            lam, psi = interpolation_matrices(t1, t2, tau, prior)  # [YIB Eq. 16]
-            offset = np.zeros(lam.shape[0])
+        lam, psi, offset = interpolation_terms(prior, t1, t2, tau)  # [YIB Eq. 16, 23]
         if lam.shape[0] != inner.key_dims[0]:
             raise ShapeError(
                 f"the prior gives states of size {lam.shape[0]}, {type(inner).__name__} expects {inner.key_dims[0]}"

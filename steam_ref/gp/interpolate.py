@@ -35,6 +35,7 @@ __all__ = [
     "interpolate_state",
     "interpolate_covariance",
     "interpolation_matrices_sde",
+    "interpolation_terms",
     "interpolate_state_sde",
     "interpolate_covariance_sde",
     "extrapolate_state_sde",
@@ -156,6 +157,19 @@ def interpolation_matrices_sde(sde: LinearSDE, t1: float, t2: float, tau: float)
         lam = sde.transition(tau - t1) - psi @ sde.transition(t2 - t1)  # [YIB Eq. 16]
     finite_result("Λ(τ), Ψ(τ)", np.hstack([lam, psi]), t1=t1, t2=t2, tau=tau)
     return lam, psi
+
+
+def interpolation_terms(
+    prior: NDArray | LinearSDE, t1: float, t2: float, tau: float
+) -> tuple[NDArray, NDArray, NDArray]:
+    """Λ(τ), Ψ(τ) and the offset c = v(τ - t₁) - Ψ v(t₂ - t₁) of x̄(τ) = Λ x̄₁ + Ψ x̄₂ + c  [YIB Eq. 16, 18, 23]
+    for a prior given as ``check_prior`` gives it: Qc (the paper's WNOA: the memoised closed forms, c = 0) or
+    any LinearSDE (derivation of c in :func:`interpolate_state_sde`). What an interpolated factor holds."""
+    if isinstance(prior, LinearSDE):
+        lam, psi = interpolation_matrices_sde(prior, t1, t2, tau)  # [YIB Eq. 16]
+        return lam, psi, prior.input_integral(tau - t1) - psi @ prior.input_integral(t2 - t1)  # [YIB Eq. 23]
+    lam, psi = interpolation_matrices(t1, t2, tau, prior)  # [YIB Eq. 16]
+    return lam, psi, np.zeros(lam.shape[0])
 
 
 def interpolate_state_sde(sde: LinearSDE, t1: float, x1: ArrayLike, t2: float, x2: ArrayLike, tau: float) -> NDArray:

@@ -35,6 +35,7 @@ from ..arguments import number, time_step
 from ..errors import SteamError
 from .prior import check_d, check_qc, finite_result, qc_inverse
 from .prior import process_noise as wnoa_process_noise
+from .prior import process_noise_sqrt_information as wnoa_sqrt_information
 from .prior import transition as wnoa_transition
 
 __all__ = [
@@ -196,12 +197,14 @@ def _wnoa_matrices(d: int) -> tuple[NDArray, NDArray]:
 
 @dataclass(frozen=True)
 class _Forms:
-    """One model's closed forms, each taking Singer's α last (None for a model without one)."""
+    """One model's closed forms, each taking Singer's α last (None for a model without one); ``sqrt_information``
+    (W with WᵀW = Q(Δt)⁻¹, memoised by value) only for a model that has it in closed form."""
 
     matrices: Callable[[int, float | None], tuple[NDArray, NDArray]]
     transition: Callable[[float, int, float | None], NDArray]
     process_noise: Callable[[float, ArrayLike, float | None], NDArray]
     has_alpha: bool = False
+    sqrt_information: Callable[[float, ArrayLike, float | None], NDArray] | None = None
 
 
 _FORMS: dict[str, _Forms] = {  # a model LinearSDE knows in closed form is one entry here
@@ -209,6 +212,7 @@ _FORMS: dict[str, _Forms] = {  # a model LinearSDE knows in closed form is one e
         lambda d, _: _wnoa_matrices(d),
         lambda dt, d, _: wnoa_transition(dt, d),
         lambda dt, qc, _: wnoa_process_noise(dt, qc),
+        sqrt_information=lambda dt, qc, _: wnoa_sqrt_information(dt, qc),
     ),
     "wnoj": _Forms(
         lambda d, _: wnoj_matrices(d),
@@ -258,3 +262,9 @@ class ClosedForm:
     def process_noise(self, dt: float, qc: ArrayLike) -> NDArray:
         """Q(Δt), Δt > 0."""
         return _FORMS[self.name].process_noise(dt, qc, self.alpha)
+
+    def sqrt_information(self, dt: float, qc: ArrayLike) -> NDArray | None:
+        """W with WᵀW = Q(Δt)⁻¹ in closed form, memoised by value (WNOA's [YIB Eq. 17]); None for a model
+        without one (its factor factors Q(Δt) itself)."""
+        form = _FORMS[self.name].sqrt_information
+        return None if form is None else form(dt, qc, self.alpha)

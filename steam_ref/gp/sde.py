@@ -28,7 +28,7 @@ from ..errors import ShapeError, SteamError
 from .models import ClosedForm, check_alpha
 from .prior import check_qc, finite_result
 
-__all__ = ["LinearSDE", "check_prior", "dense_kernel"]
+__all__ = ["LinearSDE", "check_prior", "check_sde", "as_sde", "dense_kernel"]
 
 
 def _finite_matrix(name: str, a: ArrayLike, ndim: int) -> NDArray:
@@ -134,6 +134,14 @@ class LinearSDE:
             return self.model.process_noise(dt, self.qc)
         return self.process_noise_van_loan(dt)
 
+    def sqrt_information(self, dt: float) -> NDArray | None:
+        """W with WᵀW = Q(dt)⁻¹ where the model has it in closed form, memoised by value, and there is no input:
+        the paper's WNOA, whose prior factor is then ``GPPriorFactor.wnoa``'s bit for bit. None otherwise (the
+        factor factors Q(dt)).  [YIB Eq. 17, 22]"""
+        if self.model is None or np.any(self.v):
+            return None
+        return self.model.sqrt_information(dt, self.qc)
+
     def transition_expm(self, dt: float) -> NDArray:
         """Φ(t + dt, t) = exp(A dt) by scipy's expm: (n, n). Any finite dt; Φ(t, s)⁻¹ = Φ(s, t).  [YIB Eq. 16]"""
         dt = time_step(dt, positive=False)
@@ -195,13 +203,30 @@ class LinearSDE:
 
 
 def check_prior(prior: ArrayLike | LinearSDE, name: str = "prior") -> NDArray | LinearSDE:
-    """A motion prior argument: a LinearSDE as it is, or Qc of the WNOA prior checked (a read-only (d, d) array)."""
+    """A motion prior argument: a LinearSDE as it is, or Qc of the WNOA prior checked (a read-only (d, d) array).
+
+    The one place that tells the two forms apart (with :func:`check_sde` and :func:`as_sde` below, and
+    ``gp.interpolate.interpolation_terms``): the GP factors ask these, never the argument's type."""
     if isinstance(prior, LinearSDE):
         return prior
     try:
         return check_qc(prior)
     except SteamError as exc:
         raise type(exc)(f"{name} must be a LinearSDE or Qc, a (d, d) matrix: {exc}") from None
+
+
+def check_sde(sde: object, name: str = "sde", hint: str = "") -> LinearSDE:
+    """``sde`` if it is a LinearSDE; SteamError naming it (and ``hint``, what to use instead) otherwise."""
+    if not isinstance(sde, LinearSDE):
+        raise SteamError(f"{name} must be a LinearSDE{hint}, got {name}={sde!r}")
+    return sde
+
+
+def as_sde(prior: ArrayLike | LinearSDE, name: str = "prior") -> LinearSDE:
+    """A motion prior argument as a LinearSDE: one as it is, Qc as ``LinearSDE.wnoa(Qc)`` (whose prior factors are
+    the memoised closed forms of Qc's, bit for bit: :meth:`LinearSDE.sqrt_information`)."""
+    prior = check_prior(prior, name)
+    return prior if isinstance(prior, LinearSDE) else LinearSDE.wnoa(prior)
 
 
 def dense_kernel(sde: LinearSDE, times: ArrayLike, P0: ArrayLike) -> NDArray:

@@ -47,10 +47,11 @@ __all__ = [
 MODELS = ("local-variable", "simplified")
 
 
-def check_model(model: object) -> str:
-    """The name of a WNOA model on a group ("local-variable" or "simplified"), or SteamError naming the choices."""
+def check_model(model: object, name: str = "model") -> str:
+    """The name of a WNOA model on a group ("local-variable" or "simplified"), or SteamError naming ``name`` and
+    the choices."""
     if model not in MODELS:
-        raise SteamError(f"model must be one of {', '.join(repr(m) for m in MODELS)}, got model={model!r}")
+        raise SteamError(f"{name} must be one of {', '.join(repr(m) for m in MODELS)}, got {name}={model!r}")
     return str(model)
 
 

@@ -86,6 +86,18 @@ class GroupState(Manifold):
         g, n = self.group, self.group.size
         return np.concatenate([g.log(g.between(x0[..., :n], x[..., :n])), x[..., n:] - x0[..., n:]], axis=-1)
 
+    def turned(self, x: NDArray, angle: float) -> NDArray:
+        """The state ``x`` with the world turned by ``angle`` about its origin: the pose's planar pose rotated and
+        its heading shifted (through the group's ``to_planar`` / ``from_planar``; SE(2): the heading wrapped), the
+        body twist unchanged (it is in the robot's own frame). A group without a planar pose refuses."""
+        x = self._state("x", x)
+        g, n = self.group, self.group.size
+        pose = g.to_planar(x[:n])
+        c, s = np.cos(angle), np.sin(angle)
+        pose[0], pose[1] = c * pose[0] - s * pose[1], s * pose[0] + c * pose[1]
+        pose[2] = pose[2] + angle
+        return np.concatenate([g.from_planar(pose), x[n:]])
+
     def __repr__(self) -> str:
         return f"{self.group!r}_STATE"
 

@@ -9,12 +9,13 @@
   memoised closed forms), WNOJ, Singer's model, any (A, F, Qc, v).
 - :mod:`.lie_group`: :class:`LieGroupWnoa`, WNOA on a Lie group through local variables (SE(2), both residuals).
 - :mod:`.table`: :data:`MOTION_PRIORS` (the names a user types → constructors), :func:`motion_prior`,
-  :func:`as_motion_prior` (the one conversion of a prior argument), :func:`predict_state`.
+  :func:`as_motion_prior` (the one conversion of a prior argument), :func:`predict_state`, :func:`turned_state`
+  (a state with the world turned about its origin).
 """
 
 from .base import MotionPrior, is_interpolated, reading_inside
 from .lie_group import RESIDUALS, LieGroupWnoa
-from .table import MOTION_PRIORS, PriorChoice, as_motion_prior, motion_prior, predict_state
+from .table import MOTION_PRIORS, PriorChoice, as_motion_prior, motion_prior, predict_state, turned_state
 from .vector import VectorPrior
 
 __all__ = [
@@ -27,6 +28,7 @@ __all__ = [
     "motion_prior",
     "as_motion_prior",
     "predict_state",
+    "turned_state",
     "reading_inside",
     "is_interpolated",
 ]

@@ -21,12 +21,13 @@ from numpy.typing import ArrayLike, NDArray
 from ..arguments import finite, number, real_array
 from ..errors import ShapeError, SteamError
 from ..gp.sde import LinearSDE, check_prior
-from ..lie import SE2
+from ..lie import SE2, GroupState
+from ..manifold import Manifold
 from .base import MotionPrior
 from .lie_group import LieGroupWnoa
 from .vector import VectorPrior
 
-__all__ = ["PriorChoice", "MOTION_PRIORS", "motion_prior", "as_motion_prior", "predict_state"]
+__all__ = ["PriorChoice", "MOTION_PRIORS", "motion_prior", "as_motion_prior", "predict_state", "turned_state"]
 
 
 @dataclass(frozen=True)
@@ -95,3 +96,18 @@ def predict_state(x_prev: ArrayLike, dt: float, prior: MotionPrior | ArrayLike |
     if x.shape != (prior.state_dim,):
         raise ShapeError(f"x_prev must be a finite ({prior.state_dim},) vector, got shape {x.shape}")
     return np.asarray(prior.predict(finite("x_prev", x), dt))
+
+
+def turned_state(x: ArrayLike, kind: Manifold, angle: float) -> NDArray:
+    """The state ``x`` of a motion prior (its kind ``kind``) with the world turned by ``angle`` about its origin:
+    how the whole estimate turns (``paper.converge.rotated``). A state on a group turns its pose and keeps its
+    body twist (``GroupState.turned``); a vector state (pose, world velocity, acceleration: blocks of [x, y, θ]
+    and their derivatives) rotates every block's [x, y] and shifts its heading, unwrapped."""
+    x = np.array(x, dtype=float)
+    if isinstance(kind, GroupState):
+        return kind.turned(x, angle)
+    c, s = np.cos(angle), np.sin(angle)
+    for b in range(0, len(x), 3):
+        x[b], x[b + 1] = c * x[b] - s * x[b + 1], s * x[b] + c * x[b + 1]
+    x[2] += angle
+    return x

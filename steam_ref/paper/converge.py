@@ -38,7 +38,7 @@ from ..errors import NumericalError, SteamError
 from ..graph import FactorGraph
 from ..linear.ordering import Ordering
 from ..linear.threads import limited
-from ..manifold import VECTOR
+from ..motion import turned_state
 from ..variables import Values
 
 __all__ = ["converge", "rotated", "anchored_factors", "Anderson", "PROBE_TURN"]
@@ -47,26 +47,19 @@ PROBE_TURN = 0.1  # [rad] the turn that tells anchored factors from the rest (an
 
 
 def rotated(values: Values, angle: float) -> Values:
-    """The whole estimate turned by ``angle`` about the origin: positions, velocities (and accelerations)
-    and landmarks rotated, headings shifted. Every factor but a prior on an absolute pose, velocity or
-    landmark is unchanged by it: the near-symmetry :func:`converge` follows. An SE(2) state
-    (``lie.SE2_STATE``) turns its position and heading (wrapped); its body twist is unchanged."""
+    """The whole estimate turned by ``angle`` about the origin: each state as its prior turns it
+    (:func:`~steam_ref.motion.turned_state`: positions rotated, headings shifted, a world-frame velocity
+    rotated, a body twist kept) and landmarks rotated. Every factor but a prior on an absolute pose,
+    velocity or landmark is unchanged by it: the near-symmetry :func:`converge` follows."""
     c, s = np.cos(angle), np.sin(angle)
     out = Values()
     for k in values:
-        x = np.array(values[k], dtype=float)
-        kind = values.kind(k)
-        if kind is not VECTOR:  # an SE(2) state: the pose turns, the body twist does not
-            x[0], x[1] = c * x[0] - s * x[1], s * x[0] + c * x[1]
-            x[2] = -((-(x[2] + angle) + np.pi) % (2 * np.pi) - np.pi)  # θ in (-π, π]
-            out.insert(k, x, kind)
+        x, kind = np.array(values[k], dtype=float), values.kind(k)
+        if k.symbol == "x":  # a state of the motion prior
+            out.insert(k, turned_state(x, kind, angle), kind)
             continue
-        blocks = range(0, len(x), 3) if k.symbol == "x" else (0,)
-        for b in blocks:
-            x[b], x[b + 1] = c * x[b] - s * x[b + 1], s * x[b] + c * x[b + 1]
-        if k.symbol == "x":
-            x[2] += angle
-        out.insert(k, x)
+        x[0], x[1] = c * x[0] - s * x[1], s * x[0] + c * x[1]  # a landmark [x, y]
+        out.insert(k, x, kind)
     return out
 
 

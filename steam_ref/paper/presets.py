@@ -31,6 +31,7 @@ from ..bayes_tree.params import ISAM2Params
 from ..errors import ShapeError, SteamError
 from ..gp.clock import CLOCK_BASES
 from ..gp.prior import check_qc
+from ..lie.gp import check_model as check_residual
 from ..motion import MOTION_PRIORS, RESIDUALS, MotionPrior, motion_prior
 from ..robust import Tukey
 
@@ -181,8 +182,7 @@ class PaperSetup:
             )
         if self.prior not in PRIORS:
             raise SteamError(f"prior must be one of {PRIORS}, got {self.prior!r}")
-        if self.se2_residual not in SE2_RESIDUALS:
-            raise SteamError(f"PaperSetup.se2_residual must be one of {SE2_RESIDUALS}, got {self.se2_residual!r}")
+        check_residual(self.se2_residual, "PaperSetup.se2_residual")  # whichever prior: the field is always read
         if self.tukey_c is not None:
             try:
                 Tukey(self.tukey_c)  # a threshold whose square overflows is refused here, not mid-run

@@ -52,8 +52,11 @@ def _case(name: str, description: str, inputs: dict, tolerance: dict, source: st
     return Case(name, EQUATION, description, inputs, tolerance, True, source)
 
 
+RESIDUAL = {"local-variable": "[xi - dt w1; J_r(xi)^-1 w2 - w1]", "simplified": "[xi - dt w1; w2 - w1]"}  # e of each
+
+
 def _prior(name: str, what: str, x1: list, x2: list, dt: float, model: str) -> Case:
-    e = "[xi - dt w1; J_r(xi)^-1 w2 - w1]" if model == "local-variable" else "[xi - dt w1; w2 - w1]"
+    e = RESIDUAL[model]
     return _case(
         name,
         f"the SE(2) WNOA prior, model '{model}': e = {e}, xi = Log(T1^-1 T2); H_k = de/d(delta_k) in the right "
