@@ -2,8 +2,8 @@
 
 - :mod:`.group`: :class:`LieGroup`, the protocol every group implements (Exp, Log, hat/vee, J_r, J_r⁻¹,
   Ad, compose / inverse / between each with its Jacobians from the same call, the exact derivatives of
-  J_r(ξ)^{±1} v); conventions: tangent [ρ; φ] translation first, right Jacobians, flat arrays,
-  broadcasting over leading axes.
+  J_r(ξ)^{±1} v; a planar robot's pose and velocity, which a group without one refuses); conventions:
+  tangent [ρ; φ] translation first, right Jacobians, flat arrays, broadcasting over leading axes.
 - :mod:`.se2`: :data:`SE2`, its first instance (poses [x, y, θ], θ in (-π, π]; series below
   abs(φ) = 1, closed forms above).
 - :mod:`.state`: :class:`GroupState`, the state kind of a pose on any group and its body twist,
@@ -11,7 +11,7 @@
   ``GroupState(SE2)``, the state [px, py, θ, vx, vy, ω]; :func:`world_position_covariance`.
 - :mod:`.gp`: the local GP between two group states (Anderson & Barfoot 2015): the local variables of
   both WNOA models, the mean at a time τ with its Jacobians and covariance, the prediction after the last
-  state.
+  state; every function takes the group (``group=``).
 """
 
 from .group import LieGroup

@@ -22,6 +22,12 @@ of J_r(ξ) v; each of its closed forms switches to a series below ``series_below
 derives the rest once, for every group: the Jacobians of compose, inverse and between from Ad
 [SOLA; DER 11.8], and (for a group without closed forms of its own) between
 = compose(inverse(a), b), J_r⁻¹ = (J_r)⁻¹ and the derivative of J_r(ξ)⁻¹ v from that of J_r(ξ) v.
+
+**A planar robot.** What a planar front end, reading or evaluation needs of a state on the group (the element of a
+dead-reckoned pose [x, y, θ], the planar pose of an element, the body twist of a world-frame velocity [ẋ, ẏ, θ̇]
+and back, a name for each number of a state) are methods here too: ``from_planar``, ``to_planar``,
+``body_twist``, ``world_velocity``, ``state_names``. A group whose elements hold a planar pose writes them (SE(2));
+the base class refuses each with a SteamError naming the group, so a group without one fails clearly, not wrongly.
 """
 
 from __future__ import annotations

@@ -7,7 +7,8 @@
   every wrapper a prior puts it in).
 - :mod:`.vector`: :class:`VectorPrior`, the vector-space prior of any LTI SDE: the paper's WNOA (from Qc, its
   memoised closed forms), WNOJ, Singer's model, any (A, F, Qc, v).
-- :mod:`.lie_group`: :class:`LieGroupWnoa`, WNOA on a Lie group through local variables (SE(2), both residuals).
+- :mod:`.lie_group`: :class:`LieGroupWnoa`, WNOA on any Lie group through local variables (both residuals);
+  the table's 'se2' is ``LieGroupWnoa(SE2, qc, residual)``.
 - :mod:`.table`: :data:`MOTION_PRIORS` (the names a user types → constructors), :func:`motion_prior`,
   :func:`as_motion_prior` (the one conversion of a prior argument), :func:`predict_state`, :func:`turned_state`
   (a state with the world turned about its origin).

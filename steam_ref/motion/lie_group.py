@@ -138,7 +138,9 @@ class LieGroupWnoa(MotionPrior):
         truth = np.asarray(truth, dtype=float)
         poses = self.group.from_planar(truth[:, :3])
         held = np.column_stack([poses, self.group.body_twist(poses, truth[:, 3:6])])
-        return np.array([self.kind.local(x, t) for x, t in zip(states, held, strict=True)]).reshape(-1, self.kind.dim)
+        return np.array([self.kind.local(x, t) for x, t in zip(states, held, strict=True)]).reshape(
+            -1, 2 * self.group.dim
+        )
 
     def body_velocity(self, states: NDArray) -> NDArray:
         return np.array(self._split(states)[1])

@@ -21,8 +21,8 @@ from numpy.typing import ArrayLike, NDArray
 from ..arguments import finite, number, real_array
 from ..errors import ShapeError, SteamError
 from ..gp.sde import LinearSDE, check_prior
-from ..lie import SE2, GroupState
-from ..manifold import Manifold
+from ..lie import SE2
+from ..manifold import VECTOR, Manifold
 from .base import MotionPrior
 from .lie_group import LieGroupWnoa
 from .vector import VectorPrior
@@ -100,12 +100,16 @@ def predict_state(x_prev: ArrayLike, dt: float, prior: MotionPrior | ArrayLike |
 
 def turned_state(x: ArrayLike, kind: Manifold, angle: float) -> NDArray:
     """The state ``x`` of a motion prior (its kind ``kind``) with the world turned by ``angle`` about its origin:
-    how the whole estimate turns (``paper.converge.rotated``). A state on a group turns its pose and keeps its
-    body twist (``GroupState.turned``); a vector state (pose, world velocity, acceleration: blocks of [x, y, θ]
-    and their derivatives) rotates every block's [x, y] and shifts its heading, unwrapped."""
+    how the whole estimate turns (``paper.converge.rotated``). A vector state (pose, world velocity, acceleration:
+    blocks of [x, y, θ] and their derivatives) rotates every block's [x, y] and shifts its heading, unwrapped; a
+    state of any other kind turns as its kind says (``turned(x, angle)``: ``GroupState.turned`` turns the pose and
+    keeps the body twist). SteamError for a kind that does not say."""
     x = np.array(x, dtype=float)
-    if isinstance(kind, GroupState):
-        return kind.turned(x, angle)
+    if kind is not VECTOR:
+        turned = getattr(kind, "turned", None)
+        if turned is None:
+            raise SteamError(f"a state of kind {kind!r} does not say how it turns about the origin (no turned method)")
+        return np.asarray(turned(x, angle))
     c, s = np.cos(angle), np.sin(angle)
     for b in range(0, len(x), 3):
         x[b], x[b + 1] = c * x[b] - s * x[b + 1], s * x[b] + c * x[b + 1]
