@@ -103,3 +103,24 @@ def test_gp_prior_factor_of_any_sde_whitens_by_q(rng, name):
         rtol=1e-9,
         atol=1e-12,
     )
+
+
+def test_the_papers_prior_from_qc_is_one_factor_whichever_way_it_is_asked():
+    """Qc, ``LinearSDE.wnoa(Qc)`` through ``from_sde`` and ``gp_prior_factors`` of either give ``GPPriorFactor.wnoa``'s
+    factor bit for bit: the SDE hands over W only where its model has it in closed form (memoised, the very array),
+    and that W is Q(dt)⁻¹'s square root (Q by Van Loan's expm, independent of the closed forms). WNOJ, and WNOA with an
+    input, have none: their factor factors Q(dt) itself."""
+    dt = 0.37
+    ref = sr.GPPriorFactor.wnoa(X1, X2, dt, QC)
+    asked = [
+        sr.GPPriorFactor.from_sde(X1, X2, dt, LinearSDE.wnoa(QC)),
+        *sr.gp_prior_factors([X1, X2], [0.0, dt], QC),
+        *sr.gp_prior_factors([X1, X2], [0.0, dt], LinearSDE.wnoa(QC)),
+    ]
+    for factor in asked:
+        for name in ("sqrt_information", "phi", "v"):
+            np.testing.assert_array_equal(getattr(factor, name), getattr(ref, name))
+        assert factor.sqrt_information is ref.sqrt_information  # the memoised closed form, not a recomputation
+    W, Q = ref.sqrt_information, LinearSDE.wnoa(QC).general().process_noise(dt)
+    np.testing.assert_allclose(W.T @ W @ Q, np.eye(6), atol=1e-9)
+    assert LinearSDE.wnoj(QC).sqrt_information(dt) is None and PRIORS["wnoa+input"].sqrt_information(dt) is None

@@ -273,6 +273,61 @@ def test_the_state_kind_retracts_on_the_right_and_local_inverts_it(group, rng):
         np.testing.assert_allclose(kind.retract(x, kind.local(x, y)), y, atol=1e-12)
 
 
+# --- a planar robot's pose and velocity -----------------------------------------------------------------
+
+PLANAR = ("from_planar", "to_planar", "body_twist", "world_velocity")
+
+
+def _planar_calls(group):
+    pose, velocity = np.array([1.5, -0.4, 2.2]), np.array([0.7, -0.2, 0.9])
+    return {
+        "from_planar": lambda: group.from_planar(pose),
+        "to_planar": lambda: group.to_planar(group.identity()),
+        "body_twist": lambda: group.body_twist(group.identity(), velocity),
+        "world_velocity": lambda: group.world_velocity(group.identity(), np.ones(group.dim)),
+        "turned": lambda: GroupState(group).turned(np.concatenate([group.identity(), np.zeros(group.dim)]), 0.3),
+    }
+
+
+def test_the_base_class_refuses_a_planar_pose_by_the_groups_name(group):
+    """What a group does not write is refused, naming the group: never a silent SE(2) assumption."""
+    for name in PLANAR:
+        with pytest.raises(SteamError, match=rf"{group!r} holds no planar pose"):
+            getattr(LieGroup, name)(group, *([np.zeros(3)] * (2 if name in ("body_twist", "world_velocity") else 1)))
+    names = group.state_names()
+    assert len(names) == group.size + group.dim and len(set(names)) == len(names)
+
+
+def test_a_planar_pose_and_velocity_through_the_group(group, rng):
+    """A group that holds a planar pose: the pose round-trips (heading wrapped to (-π, π]); the world velocity is
+    the derivative of the planar pose as the element moves by its body twist, T Exp(h ϖ) (8th-order differences),
+    and body_twist inverts it; a state turned about the world's origin is the left action of the turn, its twist
+    kept. A group that holds none refuses every one of these, naming itself."""
+    if type(group).from_planar is LieGroup.from_planar:  # the group writes no planar pose
+        for call in _planar_calls(group).values():
+            with pytest.raises(SteamError, match=rf"{group!r} holds no planar pose"):
+                call()
+        return
+    for _ in range(6):
+        pose = np.array([*rng.normal(0, 3, 2), rng.uniform(-3.0, 3.0)])
+        np.testing.assert_allclose(group.to_planar(group.from_planar(pose)), pose, rtol=0, atol=1e-15)
+        turned = group.to_planar(group.from_planar(pose + [0.0, 0.0, 4 * np.pi]))
+        np.testing.assert_allclose(turned, pose, rtol=0, atol=1e-14)  # the heading wrapped back
+        assert -np.pi < group.to_planar(group.from_planar([0.0, 0.0, 3 * np.pi / 2]))[2] <= np.pi
+        a = elements(group, rng, 1, max_angle=2.5)[0]
+        w = rng.normal(0, 1, group.dim)
+        velocity = group.world_velocity(a, w)
+        np.testing.assert_allclose(group.body_twist(a, velocity), w, rtol=0, atol=1e-14)
+        moved = lambda h, a=a, w=w: group.to_planar(group.compose(a, group.exp(h[0] * w)))
+        assert_derivative(velocity[:, None], moved, np.zeros(1))
+        kind, angle = GroupState(group), rng.uniform(-3, 3)
+        x = np.concatenate([a, w])
+        y = kind.turned(x, angle)
+        left = group.compose(group.from_planar([0.0, 0.0, angle]), a)  # the world turned: Rz(angle) T
+        np.testing.assert_allclose(group.log(group.between(left, y[: group.size])), 0.0, atol=1e-13)
+        np.testing.assert_array_equal(y[group.size :], w)
+
+
 # --- the angle sweep against 50 digits -----------------------------------------------------------------
 
 

@@ -15,7 +15,8 @@ from steam_ref.datasets import generate_synthetic, sample_from_model
 from steam_ref.errors import SteamError
 from steam_ref.factors import RangeFactor
 from steam_ref.gp import LinearSDE
-from steam_ref.lie import SE2
+from steam_ref.lie import SE2, LieGroup
+from steam_ref.lie.se2 import SE2Group
 from steam_ref.motion import (
     MOTION_PRIORS,
     LieGroupWnoa,
@@ -123,6 +124,44 @@ def test_predict_state_on_se2_follows_the_arc_not_the_straight_line():
     np.testing.assert_allclose(arc[:3], SE2.exp(0.5 * x[3:]), atol=1e-15)
     line = sr.predict_state(x, 0.5, np.eye(3))  # the vector-space prior: [x, y, θ] += dt [ẋ, ẏ, θ̇]
     np.testing.assert_array_equal(line, [0.5, 0.0, 0.5, 1.0, 0.0, 1.0])
+
+
+class _NoPlane(SE2Group):
+    """SE(2) that does not say it holds a planar pose: what any group without one is to the prior."""
+
+    name = "noplane"
+    from_planar, to_planar = LieGroup.from_planar, LieGroup.to_planar
+    body_twist, world_velocity = LieGroup.body_twist, LieGroup.world_velocity
+
+
+def test_the_lie_group_prior_is_its_groups_and_a_group_without_a_planar_pose_refuses_the_planar_calls(rng):
+    """LieGroupWnoa takes its group: name, kind, state and factors are the group's. On a group that does not hold
+    a planar pose, the group-only work (factors, interpolation, prediction, drawing) runs as on SE(2), and every
+    planar call (a dead-reckoned pose or world velocity in, a world-frame state out) is refused naming the group."""
+    prior = LieGroupWnoa(SE2, QC, "simplified")
+    assert (prior.name, prior.kind, prior.state_dim, prior.residual) == ("se2", sr.lie.SE2_STATE, 6, "simplified")
+    assert prior.prior_factor(X(0), X(1), 1.0).group is SE2
+    other = LieGroupWnoa(_NoPlane(), QC)
+    assert other.kind is sr.lie.GroupState(_NoPlane()) and other.kind is not prior.kind
+    x = prior.sample_states(rng, 2, 0.5, np.array([1.0, 0.0, 0.3]), SIGMAS)
+    y = other.sample_states(np.random.default_rng(7), 2, 0.5, np.array([1.0, 0.0, 0.3]), SIGMAS)
+    se2 = LieGroupWnoa(SE2, QC)
+    np.testing.assert_array_equal(
+        y, se2.sample_states(np.random.default_rng(7), 2, 0.5, np.array([1.0, 0.0, 0.3]), SIGMAS)
+    )
+    np.testing.assert_array_equal(other.extrapolate(0.0, x[0], 0.7), se2.extrapolate(0.0, x[0], 0.7))
+    for call in (
+        lambda: other.initial_state(np.zeros(3), np.ones(3), 1.0),
+        lambda: other.first_state_prior(X(0), np.zeros(3), np.ones(3), SIGMAS),
+        lambda: other.world_states(x),
+        lambda: other.errors(x, prior.world_states(x)),
+    ):
+        with pytest.raises(SteamError, match=r"NOPLANE holds no planar pose"):
+            call()
+    with pytest.raises(SteamError, match=r"group must be a LieGroup .*got group='se2'"):
+        LieGroupWnoa("se2", QC)  # type: ignore[arg-type]
+    with pytest.raises(SteamError, match=r"qc must be \(3, 3\) on the body twist of a state on SE2"):
+        LieGroupWnoa(SE2, np.eye(2))
 
 
 def test_the_table_names_each_prior_and_refuses_what_it_does_not_know():
