@@ -157,7 +157,7 @@ class Item:
             if variant != "exact":
                 f = LiePriorFactor.create(X(k[0]), X(k[1]), self.dt, setup.qc, group=SE2)
                 residual = "gtsam" if variant == "gtsam-factor" else "exact"
-                return GtsamPrior(f.keys, f.sqrt_information, phi=f.phi, qc=setup.qc, residual=residual)
+                return GtsamPrior(f.keys, f.sqrt_information, phi=f.phi, qc=setup.qc, residual=residual, group=f.group)
             return LiePriorFactor.create(X(k[0]), X(k[1]), self.dt, setup.qc, "local-variable", group=SE2)
         if self.kind == "velocity":
             return BodyVelocityFactor.create(X(k[0]), self.value, self.sigmas, group=SE2)

@@ -1,5 +1,5 @@
 """The seam holds: outside the homes of the motion priors and of the Lie groups, no module tests which prior or
-group it has, and no module is named after one (issue 36).
+group it has, and no module is named after one.
 
 A branch on a prior's or a group's name is how a second prior comes in as a tenant: every caller pays for the
 next one again. This test parses every module of the package (without importing it) and reads the condition of
