@@ -182,7 +182,7 @@ class PaperSetup:
             )
         if self.prior not in PRIORS:
             raise SteamError(f"prior must be one of {PRIORS}, got {self.prior!r}")
-        check_residual(self.se2_residual, "PaperSetup.se2_residual")  # whichever prior: the field is always read
+        check_residual(self.se2_residual, "PaperSetup.se2_residual")  # one prior's option, always checked
         if self.tukey_c is not None:
             try:
                 Tukey(self.tukey_c)  # a threshold whose square overflows is refused here, not mid-run
