@@ -64,7 +64,7 @@ def _over_t(s: Series) -> Series:
 def _add(*terms: tuple[float, Series]) -> Series:
     """Σ weight · series, all of one parity."""
     (odd,) = {s[1] for _, s in terms}
-    return sum(w * s[0] for w, s in terms), odd
+    return np.sum([w * s[0] for w, s in terms], axis=0), odd
 
 
 _S: dict[str, Series] = {

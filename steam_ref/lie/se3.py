@@ -209,8 +209,9 @@ def _derivative(xi: NDArray, v: NDArray, entries: _Entries) -> NDArray:
     return _conjugate(F, M)
 
 
-def _jr_v(k: Coefficients, r1, r2, r3, v1, v2, v3, v4, v5, v6) -> NDArray:  # type: ignore[no-untyped-def]
-    """∂(J_r(ξ) v)/∂ξ at φ = θ e_z: rows of ∂/∂ρ then ∂/∂φ.  [DER 13.5]"""
+def _jr_v(k: Coefficients, *components: NDArray) -> NDArray:
+    """∂(J_r(ξ) v)/∂ξ at φ = θ e_z, from r = Fᵀρ and v = [Fᵀv_ρ; Fᵀv_φ]; columns ∂/∂ρ then ∂/∂φ.  [DER 13.5]"""
+    r1, r2, r3, v1, v2, v3, v4, v5, v6 = components
     A1, B1, C, D, C1, D1 = k["A1"], k["B1"], k["C"], k["D"], k["C1"], k["D1"]
     A2, B2, Ct, A1t, E1 = k["A2"], k["B2"], k["Ct"], k["A1t"], k["E1"]
     so3 = [
@@ -242,8 +243,9 @@ def _jr_v(k: Coefficients, r1, r2, r3, v1, v2, v3, v4, v5, v6) -> NDArray:  # ty
     return matrix_of(rows, r1 * v1 * C)
 
 
-def _jr_inverse_v(k: Coefficients, r1, r2, r3, v1, v2, v3, v4, v5, v6) -> NDArray:  # type: ignore[no-untyped-def]
-    """∂(J_r(ξ)⁻¹ v)/∂ξ at φ = θ e_z.  [DER 13.5]"""
+def _jr_inverse_v(k: Coefficients, *components: NDArray) -> NDArray:
+    """∂(J_r(ξ)⁻¹ v)/∂ξ at φ = θ e_z, from the same components.  [DER 13.5]"""
+    r1, r2, r3, v1, v2, v3, v4, v5, v6 = components
     G, a1, a2, Gt, a1t, G1, G2 = (k[n] for n in ("gamma", "alpha1", "alpha2", "gammat", "alpha1t", "G1", "G2"))
     so3 = [
         [G * v6, v6 / 2, a1 * v4 - v5 / 2],
