@@ -27,7 +27,7 @@ import pytest
 import scipy.linalg
 from requirements import optional_import
 
-from steam_ref.errors import SteamError
+from steam_ref.errors import ShapeError, SteamError
 from steam_ref.lie import SE2, SE3, SO3, GroupState, LieGroup
 
 mp = optional_import("mpmath", "test")
@@ -271,6 +271,77 @@ def test_the_state_kind_retracts_on_the_right_and_local_inverts_it(group, rng):
         np.testing.assert_allclose(y[:n], group.compose(x[:n], group.exp(d[: group.dim])))
         np.testing.assert_allclose(kind.local(x, y), d, atol=1e-12)
         np.testing.assert_allclose(kind.retract(x, kind.local(x, y)), y, atol=1e-12)
+
+
+# --- angles of any size, inputs of the wrong shape -------------------------------------------------------
+
+HUGE = (7.0, -40.0, 1e6, 2.1097e15, 1e16, -3e17, 1e20, 1e300)
+
+
+def _reduced(theta):
+    """θ reduced to (-π, π] exactly (mpmath with the digits |θ| needs), as a float."""
+    with mp.workdps(360):
+        t = mp.mpf(float(theta))
+        r = t - 2 * mp.pi * mp.nint(t / (2 * mp.pi))
+        return float(r if r > -mp.pi else r + 2 * mp.pi)
+
+
+def test_angles_of_any_size_are_reduced_exactly_and_exp_log_and_the_retraction_agree(group, rng):
+    """Exp of a twist turning by any finite angle is the rotation by that angle reduced exactly: its Log turns by
+    the reduced angle, Exp(ξ) = Exp(ξ/2)² (heading and translation agree), and the state retraction turns by it
+    too. (SE(2) subtracted a rounded 2π, losing |θ|·2.4e-17 in the heading but not in the translation.)"""
+    kind = GroupState(group)
+    x = np.concatenate([elements(group, rng, 1)[0], np.zeros(group.dim)])
+    for theta in HUGE:
+        for r in rotation_directions(group):
+            want = abs(_reduced(theta))
+            E = group.exp(theta * r)
+            assert abs(float(group.angle(group.log(E))) - want) <= 4 * EPS * max(want, 1.0), (theta, r)
+            xi = theta * r + sum(translation_directions(group)) + 0 * r
+            half = group.exp(xi / 2)
+            M = group.matrix(group.exp(xi))
+            np.testing.assert_allclose(
+                M, group.matrix(group.compose(half, half)), rtol=0, atol=20 * EPS * np.abs(M).max()
+            )
+            moved = kind.retract(x, np.concatenate([theta * r, np.zeros(group.dim)]))
+            turn = group.log(group.between(x[: group.size], moved[: group.size]))
+            assert abs(float(group.angle(turn)) - want) <= 8 * EPS * max(want, 1.0), (theta, r)
+
+
+def test_an_angle_that_cannot_be_reduced_is_refused(group):
+    turn = rotation_directions(group)[0]
+    for bad in (np.inf, -np.inf, np.nan):
+        with pytest.raises(ShapeError, match="angle"):
+            group.exp(np.where(turn != 0, bad, 0.0))
+
+
+def test_every_kernel_checks_its_inputs_shapes(group):
+    """A twist or an element with one number too many (a 4-vector for an SE(2) pose) is refused, naming it."""
+    xi, a = np.zeros(group.dim), group.identity()
+    long_xi, long_a = np.zeros(group.dim + 1), np.zeros(group.size + 1)
+    n = group.hat(xi).shape[-1]
+    calls = {
+        "xi": [group.exp, group.hat, group.angle, group.right_jacobian, group.right_jacobian_inverse],
+        "a": [group.log, group.matrix, group.adjoint, group.inverse],
+    }
+    for name, fs in calls.items():
+        for f in fs:
+            with pytest.raises(ShapeError, match=rf"^{name} must be"):
+                f(long_xi if name == "xi" else long_a)
+    for f in (group.jr_times_jacobian, group.jr_inverse_times_jacobian):
+        with pytest.raises(ShapeError, match=r"^xi must be"):
+            f(long_xi, xi)
+        with pytest.raises(ShapeError, match=r"^v must be"):
+            f(xi, long_xi)
+    for f in (group.compose, group.between):
+        with pytest.raises(ShapeError, match=r"^a must be"):
+            f(long_a, a)
+        with pytest.raises(ShapeError, match=r"^b must be"):
+            f(a, long_a)
+    with pytest.raises(ShapeError, match=r"^X must be"):
+        group.vee(np.zeros((n + 1, n + 1)))
+    with pytest.raises(ShapeError, match=r"^xi must be an array of numbers"):
+        group.exp("1, 2, 3")
 
 
 # --- the angle sweep against 50 digits -----------------------------------------------------------------

@@ -179,11 +179,13 @@ class Coefficients:
             return np.where(self.small, self._series(name), closed)
 
     def _near_root(self, root: tuple[float, float], taylor: NDArray, value: NDArray) -> NDArray:
+        """``value`` (a numerator ÷ θ), or within _ROOT_NEAR of its root θ* its Taylor series there ÷ θ."""
         d = (self.t - root[0]) - root[1]  # θ - θ*: the first difference is exact near θ*
         near = np.abs(d) < _ROOT_NEAR
-        return np.where(near, d * _poly(taylor, d), value) if np.any(near) else value
+        return np.where(near, d * _poly(taylor, d) / self.t, value) if np.any(near) else value
 
-    # --- closed forms, θ ≥ SERIES_BELOW: 1 - cos θ = 2 sin²h, no difference of large terms ---------------------
+    # --- closed forms, θ ≥ SERIES_BELOW: 1 - cos θ = 2 sin²h, no difference of large terms, and θ's powers divided
+    # one at a time, so none overflows at any finite θ ---------------------------------------------------------
 
     def _trig(self) -> tuple[NDArray, NDArray, NDArray, NDArray]:
         if "_trig" not in self._known:
@@ -199,7 +201,7 @@ class Coefficients:
         return 2 * self._trig()[2] ** 2 / self.t
 
     def _C(self) -> NDArray:
-        return (self.t - self._trig()[0]) / self.t**2
+        return (self.t - self._trig()[0]) / self.t / self.t
 
     def _D(self) -> NDArray:
         return self["B"] / self.t
@@ -216,27 +218,28 @@ class Coefficients:
 
     def _B1(self) -> NDArray:  # 2 sin h (θ cos h - sin h)/θ², or about its root
         _, _, sh, ch = self._trig()
-        return self._near_root(_B1_ROOT, _B1_TAYLOR, 2 * sh * (self.t * ch - sh)) / self.t**2
+        return self._near_root(_B1_ROOT, _B1_TAYLOR, 2 * sh * (ch - sh / self.t)) / self.t
 
     def _C1(self) -> NDArray:  # 4 cos h (sin h - h cos h)/θ³: zero at θ = π with its relative precision
         _, _, sh, ch = self._trig()
-        return 4 * ch * (sh - self.t / 2 * ch) / self.t**3
+        return 4 * ch * (sh / self.t - ch / 2) / self.t / self.t
 
     def _D1(self) -> NDArray:
         return (self["A"] - 2 * self["D"]) / self.t
 
-    def _alpha1(self) -> NDArray:
-        return -self["C"] / (2 * self["D"])
+    def _alpha1(self) -> NDArray:  # (sin θ - θ)/(2 (1 - cos θ)) = -C/(2D)
+        s, _, sh, _ = self._trig()
+        return (s - self.t) / (4 * sh**2)
 
     def _A2(self) -> NDArray:
         s, c, _, _ = self._trig()
         t = self.t
-        return self._near_root(_A2_ROOT, _A2_TAYLOR, 2 * s - 2 * t * c - t**2 * s) / t**3
+        return self._near_root(_A2_ROOT, _A2_TAYLOR, (2 * s / t - 2 * c) - t * s) / t / t
 
     def _B2(self) -> NDArray:
         s, c, sh, _ = self._trig()
         t = self.t
-        return (t**2 * c - 2 * t * s + 4 * sh**2) / t**3
+        return (c - 2 * s / t + 4 * sh**2 / t / t) / t
 
     def _alpha2(self) -> NDArray:  # -1/2 + sin θ (θ - sin θ)/(2 (1 - cos θ)²)
         s, _, sh, _ = self._trig()

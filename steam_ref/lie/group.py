@@ -131,6 +131,16 @@ class LieGroup(ABC):
         """``a`` as a float array of elements (..., size) in their stored form; ShapeError naming ``name`` otherwise."""
         return self._as_last(name, a, self.size, "an element")
 
+    def _algebra(self, name: str, X: object, n: int) -> NDArray:
+        """``X`` as a float array of Lie algebra matrices (..., n, n); ShapeError naming ``name`` otherwise."""
+        try:
+            M = np.asarray(X, dtype=float)
+        except (TypeError, ValueError):
+            raise ShapeError(f"{name} must be an array of numbers, got {name}={X!r:.80}") from None
+        if M.shape[-2:] != (n, n):
+            raise ShapeError(f"{name} must be a Lie algebra matrix of {self!r} ({n} × {n}), got shape {M.shape}")
+        return M
+
     def identity(self) -> NDArray:
         """The identity element, Exp(0) (size,)."""
         return self.exp(np.zeros(self.dim))

@@ -4,7 +4,7 @@ A pose T = (R, t) acts on a point as p ↦ R p + t; it is stored as 12 numbers [
 first, as the tangent), its tangent ξ = [ρ; φ] (translation first, as SE(2) here and [SOLA]; GTSAM's ``Pose3``
 puts the rotation first, [ω; v]). The protocol's conventions are in ``lie.group``; this module holds SE(3)'s own:
 
-- Exp(ξ) = (Exp_SO3(φ), V(φ) ρ) with V = J_l(φ) = A I + D φ^ + Ct φφᵀ, Log by SO(3)'s Log (exact up to θ = π)
+- Exp(ξ) = (Exp_SO3(φ), V(φ) ρ) with V = J_l(φ) = A I + D φ^ + Ct φφᵀ (any finite angle), Log by SO(3)'s Log (exact up to θ = π)
   and V⁻¹ = α I - φ^/2 + γt φφᵀ [B17 Sec. 7.1.5; DER 13.1-13.2];
 - J_r(ξ) = [[J_r(φ), Q_r(ρ, φ)], [0, J_r(φ)]] and its closed-form inverse [[J_r⁻¹, -J_r⁻¹ Q_r J_r⁻¹], [0, J_r⁻¹]]:
   Barfoot's Q block [B17 Eq. 7.86] (for the right Jacobian, Q_r(ρ, φ) = Q_l(-ρ, -φ)), written in the frame of
@@ -24,7 +24,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .coefficients import DEFINITIONS, NAMES, SERIES_BELOW, Coefficients
 from .group import LieGroup
-from .so3 import SO3, axis_frame, check_rotation, hat3, isotropic, matrix_of, mm3, mv3, rotation_angle
+from .so3 import SO3, axis_frame, check_rotation, hat3, isotropic, matrix_of, mm3, mv3, rotation_angle, unit_axis
 
 __all__ = ["SE3", "SE3Group"]
 
@@ -77,15 +77,18 @@ class SE3Group(LieGroup):
         """Exp(ξ) = (Exp(φ), V(φ) ρ), V = A I + D φ^ + Ct φφᵀ.  [DER 13.1]"""
         xi = self._twists("xi", xi)
         rho, phi = xi[..., :3], xi[..., 3:]
-        k = Coefficients(rotation_angle(phi))
-        return _join(mv3(isotropic(k["A"], k["D"], k["Ct"], phi), rho), SO3.rotation(phi))
+        R = SO3.rotation(phi)  # (refuses an infinite or NaN angle)
+        theta, u = unit_axis(phi)
+        k = Coefficients(theta)
+        return _join(mv3(isotropic(k["A"], k["B"], k["C"] * theta, u), rho), R)
 
     def log(self, a: ArrayLike) -> NDArray:
         """Log(T) = [V(φ)⁻¹ t; φ], φ = Log(R) (angle in [0, π]), V⁻¹ = α I - φ^/2 + γt φφᵀ.  [DER 13.2]"""
         t, R = _split(self._elements("a", a))
         phi = SO3.log_matrix(R)
-        k = Coefficients(rotation_angle(phi))
-        return np.concatenate([mv3(isotropic(k["alpha"], -0.5, k["gammat"], phi), t), phi], axis=-1)
+        theta, u = unit_axis(phi)
+        k = Coefficients(theta)
+        return np.concatenate([mv3(isotropic(k["alpha"], -theta / 2, k["gamma"] * theta, u), t), phi], axis=-1)
 
     def hat(self, xi: ArrayLike) -> NDArray:
         """ξ^ = [[φ^, ρ], [0, 0]] (4 × 4)."""
@@ -95,7 +98,7 @@ class SE3Group(LieGroup):
 
     def vee(self, X: ArrayLike) -> NDArray:
         """[X₀₃, X₁₃, X₂₃, X₂₁, X₀₂, X₁₀]."""
-        X = np.asarray(X, dtype=float)
+        X = self._algebra("X", X, 4)
         return np.stack([X[..., 0, 3], X[..., 1, 3], X[..., 2, 3], X[..., 2, 1], X[..., 0, 2], X[..., 1, 0]], -1)
 
     def matrix(self, a: ArrayLike) -> NDArray:
@@ -164,9 +167,8 @@ _Entries = Callable[..., NDArray]
 
 def _q_block(xi: NDArray, entries: _Entries) -> NDArray:
     """F M Fᵀ with M = entries(coefficients, r1, r2, r3), r = Fᵀρ."""
-    phi = xi[..., 3:]
-    theta = rotation_angle(phi)
-    F = axis_frame(phi, theta)
+    theta, u = unit_axis(xi[..., 3:])
+    F = axis_frame(u)
     Ft = np.swapaxes(F, -1, -2)
     r = mv3(Ft, xi[..., :3])
     return mm3(mm3(F, entries(Coefficients(theta), r[..., 0], r[..., 1], r[..., 2])), Ft)
@@ -200,9 +202,8 @@ def _q_r_inverse(k: Coefficients, r1: NDArray, r2: NDArray, r3: NDArray) -> NDAr
 
 def _derivative(xi: NDArray, v: NDArray, entries: _Entries) -> NDArray:
     """diag(F, F) M diag(F, F)ᵀ with M = entries(coefficients, r, v) in the axis frame."""
-    phi = xi[..., 3:]
-    theta = rotation_angle(phi)
-    F = axis_frame(phi, theta)
+    theta, u = unit_axis(xi[..., 3:])
+    F = axis_frame(u)
     Ft = np.swapaxes(F, -1, -2)
     r, u, w = mv3(Ft, xi[..., :3]), mv3(Ft, v[..., :3]), mv3(Ft, v[..., 3:])
     M = entries(Coefficients(theta), *(x[..., i] for x in (r, u, w) for i in range(3)))

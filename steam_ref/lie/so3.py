@@ -6,13 +6,14 @@ about u = φ/θ). Log's angle lies in [0, π]. The protocol's conventions (right
 and its Jacobians from one call) are in ``lie.group``; this module holds what is SO(3)'s own, and what SE(3)
 shares with it:
 
-- Exp by Rodrigues, R = cos θ I + A φ^ + D φφᵀ, and Log exact up to θ = π: the angle from atan2 of the skew
+- Exp by Rodrigues, R = cos θ I + sin θ u^ + (1 - cos θ) uuᵀ at any finite angle, and Log exact up to θ = π: the angle from atan2 of the skew
   and the trace parts, the axis from the skew part below π/2 and from the symmetric part R + Rᵀ above, where
   the skew part vanishes (GTSAM's ``Rot3::Logmap`` took both from the skew part and lost up to 2e-4 near π);
 - J_r = A I - D φ^ + Ct φφᵀ and its inverse α I + φ^/2 + γt φφᵀ in closed form [B17 Sec. 7.1.3; SOLA Eq. 143-146];
 - the exact derivatives of J_r(φ)^{±1} v, written in the frame of the rotation axis (:func:`axis_frame`), where
   each entry is one coefficient of ``lie.coefficients`` times a component of v [DER 13.5];
-- :func:`rotation_angle`, :func:`axis_frame` and the 3 × 3 products SE(3) builds on.
+- :func:`rotation_angle`, :func:`unit_axis`, :func:`axis_frame`, :func:`isotropic` and the 3 × 3 products
+  SE(3) builds on.
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..errors import SteamError
+from ..errors import ShapeError, SteamError
 from .coefficients import DEFINITIONS, NAMES, SERIES_BELOW, Coefficients
 from .group import LieGroup
 
@@ -31,6 +32,8 @@ __all__ = [
     "SO3Group",
     "rotation_angle",
     "axis_frame",
+    "unit_axis",
+    "finite_angles",
     "check_rotation",
     "isotropic",
     "mm3",
@@ -73,17 +76,38 @@ def rotation_angle(phi: NDArray) -> NDArray:
     return np.hypot(np.hypot(phi[..., 0], phi[..., 1]), phi[..., 2])
 
 
-def axis_frame(phi: NDArray, theta: NDArray) -> NDArray:
-    """A rotation F (..., 3, 3) whose third column is u = φ/θ (e_z where θ = 0), so Fᵀφ = θ e_z: Duff et al.'s
-    branch-free basis ("Building an orthonormal basis, revisited", JCGT 2017). On a coordinate axis F is a signed
-    permutation, so moving into the frame and back is exact there."""
+def unit_axis(phi: NDArray) -> tuple[NDArray, NDArray]:
+    """θ = |φ| and the unit axis u = φ/θ (e_z where θ = 0, where every closed form is the same for any axis)."""
+    theta = rotation_angle(phi)
     with np.errstate(divide="ignore", invalid="ignore"):
         u = np.where(theta[..., None] > 0, phi / theta[..., None], np.array([0.0, 0.0, 1.0]))
+    return theta, u
+
+
+def finite_angles(name: str, theta: NDArray) -> NDArray:
+    """``theta`` itself; ShapeError naming ``name`` if an angle is infinite or NaN (it has no rotation)."""
+    if not np.all(np.isfinite(theta)):
+        bad = theta.ravel()[int(np.flatnonzero(~np.isfinite(theta))[0])]
+        raise ShapeError(f"{name} must turn by a finite angle, got an angle of {bad}")
+    return theta
+
+
+def axis_frame(u: NDArray) -> NDArray:
+    """A rotation F (..., 3, 3) whose third column is the unit axis u, so Fᵀφ = θ e_z: Duff et al.'s branch-free
+    basis ("Building an orthonormal basis, revisited", JCGT 2017). On a coordinate axis F is a signed
+    permutation, so moving into the frame and back is exact there."""
     x, y, z = u[..., 0], u[..., 1], u[..., 2]
     s = np.copysign(1.0, z)
     a = -1.0 / (s + z)
     b = x * y * a
     return matrix_of([[1 + s * x * x * a, b, x], [s * b, s + y * y * a, y], [-s * x, -y, z]], x)
+
+
+def isotropic(a: NDArray, b: NDArray | float, c: NDArray, u: NDArray) -> NDArray:
+    """a I + b u^ + c uuᵀ (..., 3, 3) for a unit axis u: a rotation-invariant matrix function of φ = θu, each
+    coefficient already scaled by its power of θ, so nothing overflows at any θ."""
+    out = a[..., None, None] * np.eye(3) + np.asarray(b)[..., None, None] * hat3(u)
+    return out + c[..., None, None] * u[..., :, None] * u[..., None, :]
 
 
 class SO3Group(LieGroup):
@@ -102,18 +126,15 @@ class SO3Group(LieGroup):
         return {name: k[name] for name in NAMES}
 
     def exp(self, xi: ArrayLike) -> NDArray:
-        """Exp(φ) = cos θ I + A φ^ + D φφᵀ (Rodrigues), flat.  [DER 13.1]"""
+        """Exp(φ) = cos θ I + sin θ u^ + (1 - cos θ) uuᵀ (Rodrigues), flat; any finite angle.  [DER 13.1]"""
         phi = self._twists("xi", xi)
         return self.rotation(phi).reshape(phi.shape[:-1] + (9,))
 
     def rotation(self, phi: NDArray) -> NDArray:
-        """Exp(φ) as a (..., 3, 3) matrix (φ a float array)."""
-        theta = rotation_angle(phi)
-        k = Coefficients(theta)
-        eye = np.cos(theta)[..., None, None] * np.eye(3)
-        return (
-            eye + k["A"][..., None, None] * hat3(phi) + k["D"][..., None, None] * phi[..., :, None] * phi[..., None, :]
-        )
+        """Exp(φ) as a (..., 3, 3) matrix (φ a float array); ShapeError for an infinite or NaN angle."""
+        theta, u = unit_axis(phi)
+        finite_angles("xi", theta)
+        return isotropic(np.cos(theta), np.sin(theta), 2 * np.sin(theta / 2) ** 2, u)
 
     def log(self, a: ArrayLike) -> NDArray:
         """Log(R): the rotation vector, its angle in [0, π], exact up to π.  [DER 13.2]"""
@@ -142,7 +163,7 @@ class SO3Group(LieGroup):
 
     def vee(self, X: ArrayLike) -> NDArray:
         """[X₂₁, X₀₂, X₁₀]."""
-        X = np.asarray(X, dtype=float)
+        X = self._algebra("X", X, 3)
         return np.stack([X[..., 2, 1], X[..., 0, 2], X[..., 1, 0]], axis=-1)
 
     def matrix(self, a: ArrayLike) -> NDArray:
@@ -162,16 +183,16 @@ class SO3Group(LieGroup):
         return a
 
     def right_jacobian(self, xi: ArrayLike) -> NDArray:
-        """J_r(φ) = A I - D φ^ + Ct φφᵀ (GTSAM's ``Rot3.ExpmapDerivative``).  [DER 13.3]"""
-        phi = self._twists("xi", xi)
-        k = Coefficients(rotation_angle(phi))
-        return isotropic(k["A"], -k["D"], k["Ct"], phi)
+        """J_r(φ) = A I - D φ^ + Ct φφᵀ = A I - B u^ + Cθ uuᵀ (GTSAM's ``Rot3.ExpmapDerivative``).  [DER 13.3]"""
+        theta, u = unit_axis(self._twists("xi", xi))
+        k = Coefficients(theta)
+        return isotropic(k["A"], -k["B"], k["C"] * theta, u)
 
     def right_jacobian_inverse(self, xi: ArrayLike) -> NDArray:
-        """J_r(φ)⁻¹ = α I + φ^/2 + γt φφᵀ in closed form.  [DER 13.3]"""
-        phi = self._twists("xi", xi)
-        k = Coefficients(rotation_angle(phi))
-        return isotropic(k["alpha"], 0.5, k["gammat"], phi)
+        """J_r(φ)⁻¹ = α I + φ^/2 + γt φφᵀ = α I + (θ/2) u^ + γθ uuᵀ in closed form.  [DER 13.3]"""
+        theta, u = unit_axis(self._twists("xi", xi))
+        k = Coefficients(theta)
+        return isotropic(k["alpha"], theta / 2, k["gamma"] * theta, u)
 
     def adjoint(self, a: ArrayLike) -> NDArray:
         """Ad(R) = R."""
@@ -210,16 +231,10 @@ def check_rotation(name: str, R: NDArray) -> None:
         )
 
 
-def isotropic(a: NDArray, b: NDArray | float, c: NDArray, phi: NDArray) -> NDArray:
-    """a I + b φ^ + c φφᵀ (..., 3, 3)."""
-    out = a[..., None, None] * np.eye(3) + np.asarray(b)[..., None, None] * hat3(phi)
-    return out + c[..., None, None] * phi[..., :, None] * phi[..., None, :]
-
-
 def _in_frame(phi: NDArray, v: NDArray, entries: Callable[..., NDArray]) -> NDArray:
     """F M Fᵀ, M = entries(coefficients, Fᵀv) the matrix in the axis frame."""
-    theta = rotation_angle(phi)
-    F = axis_frame(phi, theta)
+    theta, u = unit_axis(phi)
+    F = axis_frame(u)
     w = mv3(np.swapaxes(F, -1, -2), v)
     M = entries(Coefficients(theta), w[..., 0], w[..., 1], w[..., 2])
     return mm3(mm3(F, M), np.swapaxes(F, -1, -2))
