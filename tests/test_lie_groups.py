@@ -488,4 +488,4 @@ def test_every_listed_coefficient_against_its_definition_at_50_digits(group):
                         f"{name}({theta!r}) = {got!r}, 50 digits: {mp.nstr(want, 20)} (relative error {err:.2e})"
                     )
     assert not failures, f"{len(failures)} coefficients off by more than {REL}:\n" + "\n".join(failures[:20])
-    assert worst <= 1e-14  # (what they reach today: the bound above leaves a margin for another platform's libm)
+    assert worst <= REL

@@ -3,7 +3,7 @@
 - Storage and the axis frame: R row-major, [t; R] for a pose; the frame F of the rotation axis is a rotation.
 - Each coefficient's definition is the derivative or quotient its name says (mpmath's differentiation), and the two
   roots the coefficients are summed about are known to 32 digits.
-- Barfoot's Q block [B17 Eq. 7.86], evaluated in mpmath from its own formula, is the top-right block of J_r
+- Barfoot's Q block [B24; BF14], evaluated in mpmath from its own formula, is the top-right block of J_r
   (right Jacobian: Q_r(ρ, φ) = Q_l(-ρ, -φ)) and -J_r⁻¹ Q_r J_r⁻¹ that of J_r⁻¹.
 - Log is exact up to θ = π (against rotations built in mpmath and rounded); GTSAM's Logmap there is measured and
   printed, not asserted.
@@ -130,7 +130,7 @@ def _mp_hat(w):
 
 
 def _barfoot_q_left(rho, phi):
-    """Q_l(ρ, φ) [B17 Eq. 7.86]: ½ρ^ + c₁(φ^ρ^ + ρ^φ^ + φ^ρ^φ^) + c₂(φ^²ρ^ + ρ^φ^² - 3φ^ρ^φ^) + c₃(φ^ρ^φ^² + φ^²ρ^φ^)."""
+    """Q_l(ρ, φ) [B24; BF14]: ½ρ^ + c₁(φ^ρ^ + ρ^φ^ + φ^ρ^φ^) + c₂(φ^²ρ^ + ρ^φ^² - 3φ^ρ^φ^) + c₃(φ^ρ^φ^² + φ^²ρ^φ^)."""
     R, F = _mp_hat(rho), _mp_hat(phi)
     t = mp.sqrt(sum(x**2 for x in phi))
     c1 = (t - mp.sin(t)) / t**3

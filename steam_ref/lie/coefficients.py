@@ -1,4 +1,4 @@
-"""The coefficients of SO(3)'s and SE(3)'s closed forms: functions of the rotation angle θ ≥ 0.  [DER 13.2-13.4]
+"""The coefficients of SO(3)'s and SE(3)'s closed forms: functions of the rotation angle θ ≥ 0.  [DER 13.7]
 
 Every closed form of ``lie.so3`` and ``lie.se3`` (Exp, Log, J_r, J_r⁻¹, their Q blocks and the derivatives of
 J_r(ξ)^{±1} v) is written in the frame whose third axis is the rotation axis u = φ/θ; there each entry is one

@@ -5,9 +5,9 @@ first, as the tangent), its tangent ξ = [ρ; φ] (translation first, as SE(2) h
 puts the rotation first, [ω; v]). The protocol's conventions are in ``lie.group``; this module holds SE(3)'s own:
 
 - Exp(ξ) = (Exp_SO3(φ), V(φ) ρ) with V = J_l(φ) = A I + D φ^ + Ct φφᵀ (any finite angle), Log by SO(3)'s Log (exact up to θ = π)
-  and V⁻¹ = α I - φ^/2 + γt φφᵀ [B17 Sec. 7.1.5; DER 13.1-13.2];
+  and V⁻¹ = α I - φ^/2 + γt φφᵀ [B24; SOLA App. D; DER 13.1-13.2];
 - J_r(ξ) = [[J_r(φ), Q_r(ρ, φ)], [0, J_r(φ)]] and its closed-form inverse [[J_r⁻¹, -J_r⁻¹ Q_r J_r⁻¹], [0, J_r⁻¹]]:
-  Barfoot's Q block [B17 Eq. 7.86] (for the right Jacobian, Q_r(ρ, φ) = Q_l(-ρ, -φ)), written in the frame of
+  Barfoot's Q block [B24; BF14] (for the right Jacobian, Q_r(ρ, φ) = Q_l(-ρ, -φ)), written in the frame of
   the rotation axis, where each entry of Q_r and of -J_r⁻¹ Q_r J_r⁻¹ is one coefficient times a component of ρ
   [DER 13.4];
 - Ad(T) = [[R, t^ R], [0, R]]; the values of compose, inverse and between;

@@ -9,7 +9,7 @@ shares with it:
 - Exp by Rodrigues, R = cos θ I + sin θ u^ + (1 - cos θ) uuᵀ at any finite angle, and Log exact up to θ = π: the angle from atan2 of the skew
   and the trace parts, the axis from the skew part below π/2 and from the symmetric part R + Rᵀ above, where
   the skew part vanishes (GTSAM's ``Rot3::Logmap`` took both from the skew part and lost up to 2e-4 near π);
-- J_r = A I - D φ^ + Ct φφᵀ and its inverse α I + φ^/2 + γt φφᵀ in closed form [B17 Sec. 7.1.3; SOLA Eq. 143-146];
+- J_r = A I - D φ^ + Ct φφᵀ and its inverse α I + φ^/2 + γt φφᵀ in closed form [FCDS17; SOLA App. B; B24];
 - the exact derivatives of J_r(φ)^{±1} v, written in the frame of the rotation axis (:func:`axis_frame`), where
   each entry is one coefficient of ``lie.coefficients`` times a component of v [DER 13.5];
 - :func:`rotation_angle`, :func:`unit_axis`, :func:`axis_frame`, :func:`isotropic` and the 3 × 3 products
