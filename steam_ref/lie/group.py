@@ -5,8 +5,9 @@ against it (the state kind ``GroupState``, the local GP of ``lie.gp``, the facto
 works for the next group unchanged. Its conventions, the same for every group (those of GTSAM's
 ``Pose2``/``Pose3``, of manif and of [SOLA]):
 
-- **Storage.** An element is a flat float array of ``size`` numbers (SE(2): [x, y, θ]); a tangent
-  vector (a twist) has ``dim`` numbers, **translation first**: ξ = [ρ; φ].
+- **Storage.** An element is a flat float array of ``size`` numbers (SE(2): [x, y, θ]; SO(3): R's 9 entries
+  row-major; SE(3): [t; R row-major]); a tangent vector (a twist) has ``dim`` numbers, **translation first**:
+  ξ = [ρ; φ]. Each kernel checks its inputs' last axis (ShapeError naming the argument).
 - **Right Jacobians.** Every Jacobian is taken in the right (body) tangent of each argument and of
   the value: for y = f(x), J = ∂ Log(f(x)⁻¹ f(x Exp δ)) / ∂δ at δ = 0. So J_r(ξ) is defined by
   Exp(ξ + dξ) = Exp(ξ) Exp(J_r(ξ) dξ) to first order, and Ad(T) by T Exp(ξ) T⁻¹ = Exp(Ad(T) ξ).

@@ -130,9 +130,9 @@ class SO3Group(LieGroup):
         phi = self._twists("xi", xi)
         return self.rotation(phi).reshape(phi.shape[:-1] + (9,))
 
-    def rotation(self, phi: NDArray) -> NDArray:
-        """Exp(φ) as a (..., 3, 3) matrix (φ a float array); ShapeError for an infinite or NaN angle."""
-        theta, u = unit_axis(phi)
+    def rotation(self, phi: ArrayLike) -> NDArray:
+        """Exp(φ) as a (..., 3, 3) matrix; ShapeError for an infinite or NaN angle."""
+        theta, u = unit_axis(self._twists("xi", phi))
         finite_angles("xi", theta)
         return isotropic(np.cos(theta), np.sin(theta), 2 * np.sin(theta / 2) ** 2, u)
 
@@ -141,10 +141,13 @@ class SO3Group(LieGroup):
         a = self._elements("a", a)
         return self.log_matrix(a.reshape(a.shape[:-1] + (3, 3)))
 
-    def log_matrix(self, R: NDArray) -> NDArray:
+    def log_matrix(self, R: ArrayLike) -> NDArray:
         """Log of a (..., 3, 3) rotation matrix. θ = atan2(|w|, (tr R - 1)/2) with w = vee(R - Rᵀ)/2 = sin θ u;
         below π/2 the axis is w/|w|, φ = w/A(θ); above, (R + Rᵀ)/2 - cos θ I = (1 - cos θ) uuᵀ gives u from its
         largest column, signed to agree with w: no quantity there is a small difference.  [DER 13.2]"""
+        R = np.asarray(R, dtype=float)
+        if R.shape[-2:] != (3, 3):
+            raise ShapeError(f"R must be a rotation matrix (3 × 3 in its last two axes), got shape {R.shape}")
         w = 0.5 * np.stack([R[..., 2, 1] - R[..., 1, 2], R[..., 0, 2] - R[..., 2, 0], R[..., 1, 0] - R[..., 0, 1]], -1)
         c = 0.5 * (R[..., 0, 0] + R[..., 1, 1] + R[..., 2, 2] - 1)
         theta = np.arctan2(rotation_angle(w), c)
