@@ -1,4 +1,4 @@
-"""Lie groups for the states of a motion prior on a manifold: the protocol, SE(2), the state kind, the local GP.
+"""Lie groups for the states of a motion prior on a manifold: the protocol, SE(2), SO(3), SE(3), the state kind, the local GP.
 
 - :mod:`.group`: :class:`LieGroup`, the protocol every group implements (Exp, Log, hat/vee, J_r, J_r⁻¹,
   Ad, compose / inverse / between each with its Jacobians from the same call, the exact derivatives of
