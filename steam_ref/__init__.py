@@ -49,6 +49,8 @@ _HOMES = {
     "gp_prior_factors": "factors",
     "LieGroup": "lie",
     "SE2": "lie",
+    "SO3": "lie",
+    "SE3": "lie",
     "GroupState": "lie",
     "SE2_STATE": "lie",
     "Huber": "robust",
@@ -123,7 +125,7 @@ if TYPE_CHECKING:  # what a type checker and an IDE see: the same names, importe
     )
     from .finish import finish_at_optimum
     from .graph import FactorGraph
-    from .lie import SE2, SE2_STATE, GroupState, LieGroup
+    from .lie import SE2, SE2_STATE, SE3, SO3, GroupState, LieGroup
     from .linear import LinearSystem, amd_ordering, blas_threads, xl_ordering
     from .motion import MotionPrior, motion_prior, predict_state
     from .paper.online import run_online
@@ -164,6 +166,8 @@ __all__ = [
     "gp_prior_factors",
     "LieGroup",
     "SE2",
+    "SO3",
+    "SE3",
     "GroupState",
     "SE2_STATE",
     "Huber",

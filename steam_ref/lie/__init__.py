@@ -1,4 +1,4 @@
-"""Lie groups for the states of a motion prior on a manifold: the protocol, SE(2), the state kind, the local GP.
+"""Lie groups for the states of a motion prior on a manifold: the protocol, SE(2), SO(3), SE(3), the state kind, the local GP.
 
 - :mod:`.group`: :class:`LieGroup`, the protocol every group implements (Exp, Log, hat/vee, J_r, J_r⁻¹,
   Ad, compose / inverse / between each with its Jacobians from the same call, the exact derivatives of
@@ -6,6 +6,9 @@
   tangent [ρ; φ] translation first, right Jacobians, flat arrays, broadcasting over leading axes.
 - :mod:`.se2`: :data:`SE2`, its first instance (poses [x, y, θ], θ in (-π, π]; series below
   abs(φ) = 1, closed forms above).
+- :mod:`.so3`, :mod:`.se3`: :data:`SO3` (rotations stored as R's 9 entries row-major, tangent φ) and :data:`SE3`
+  (poses [t; R row-major], tangent [ρ; φ]); Log's angle in [0, π], exact up to π; their closed forms' coefficients
+  (:mod:`.coefficients`), each from its series below θ = 2 and its closed form above.
 - :mod:`.state`: :class:`GroupState`, the state kind of a pose on any group and its body twist,
   retracted on the right (a :class:`~steam_ref.manifold.Manifold`); :data:`SE2_STATE` =
   ``GroupState(SE2)``, the state [px, py, θ, vx, vy, ω]; :func:`world_position_covariance`.
@@ -16,6 +19,8 @@
 
 from .group import LieGroup
 from .se2 import SE2
+from .se3 import SE3
+from .so3 import SO3
 from .state import SE2_STATE, STATE_SIZE, GroupState, world_position_covariance
 
-__all__ = ["LieGroup", "SE2", "GroupState", "SE2_STATE", "STATE_SIZE", "world_position_covariance"]
+__all__ = ["LieGroup", "SE2", "SO3", "SE3", "GroupState", "SE2_STATE", "STATE_SIZE", "world_position_covariance"]

@@ -5,8 +5,9 @@ against it (the state kind ``GroupState``, the local GP of ``lie.gp``, the facto
 works for the next group unchanged. Its conventions, the same for every group (those of GTSAM's
 ``Pose2``/``Pose3``, of manif and of [SOLA]):
 
-- **Storage.** An element is a flat float array of ``size`` numbers (SE(2): [x, y, θ]); a tangent
-  vector (a twist) has ``dim`` numbers, **translation first**: ξ = [ρ; φ].
+- **Storage.** An element is a flat float array of ``size`` numbers (SE(2): [x, y, θ]; SO(3): R's 9 entries
+  row-major; SE(3): [t; R row-major]); a tangent vector (a twist) has ``dim`` numbers, **translation first**:
+  ξ = [ρ; φ]. Each kernel checks its inputs' last axis (ShapeError naming the argument).
 - **Right Jacobians.** Every Jacobian is taken in the right (body) tangent of each argument and of
   the value: for y = f(x), J = ∂ Log(f(x)⁻¹ f(x Exp δ)) / ∂δ at δ = 0. So J_r(ξ) is defined by
   Exp(ξ + dξ) = Exp(ξ) Exp(J_r(ξ) dξ) to first order, and Ad(T) by T Exp(ξ) T⁻¹ = Exp(Ad(T) ξ).
@@ -33,7 +34,8 @@ the base class refuses each with a SteamError naming the group, so a group witho
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from typing import ClassVar, Literal, overload
+from collections.abc import Callable, Mapping
+from typing import Any, ClassVar, Literal, overload
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -118,6 +120,34 @@ class LieGroup(ABC):
         """The value a⁻¹ b (float arrays)."""
         return self._compose(self._inverse(a), b)
 
+    def _as_last(self, name: str, value: object, n: int, what: str) -> NDArray:
+        try:
+            a = np.asarray(value, dtype=float)
+        except (TypeError, ValueError):
+            raise ShapeError(f"{name} must be an array of numbers, got {name}={value!r:.80}") from None
+        if a.shape[-1:] != (n,):
+            raise ShapeError(f"{name} must be {what} of {self!r} ({n} numbers in its last axis), got shape {a.shape}")
+        return a
+
+    def _twists(self, name: str, xi: object) -> NDArray:
+        """``xi`` as a float array of twists (..., dim); ShapeError naming ``name`` otherwise (the public kernels
+        check their inputs' shapes, so a 4-vector is never read as an SE(2) twist or pose)."""
+        return self._as_last(name, xi, self.dim, "a twist")
+
+    def _elements(self, name: str, a: object) -> NDArray:
+        """``a`` as a float array of elements (..., size) in their stored form; ShapeError naming ``name`` otherwise."""
+        return self._as_last(name, a, self.size, "an element")
+
+    def _algebra(self, name: str, X: object, n: int) -> NDArray:
+        """``X`` as a float array of Lie algebra matrices (..., n, n); ShapeError naming ``name`` otherwise."""
+        try:
+            M = np.asarray(X, dtype=float)
+        except (TypeError, ValueError):
+            raise ShapeError(f"{name} must be an array of numbers, got {name}={X!r:.80}") from None
+        if M.shape[-2:] != (n, n):
+            raise ShapeError(f"{name} must be a Lie algebra matrix of {self!r} ({n} × {n}), got shape {M.shape}")
+        return M
+
     def identity(self) -> NDArray:
         """The identity element, Exp(0) (size,)."""
         return self.exp(np.zeros(self.dim))
@@ -128,6 +158,16 @@ class LieGroup(ABC):
         if a.shape != (self.size,):
             raise ShapeError(f"{name} must be an element of {self!r} ({self.size} numbers), got shape {a.shape}")
         return finite(name, a)
+
+    # The scalar coefficients of the group's closed forms, for the battery's sweep against their definitions at
+    # 50 digits (tests/test_lie_groups.py); a group that lists none is checked through its matrices alone.
+    coefficient_definitions: ClassVar[Mapping[str, Callable[[Any, Any], Any]]] = {}
+
+    def coefficients(self, theta: ArrayLike) -> dict[str, NDArray]:
+        """Each coefficient of ``coefficient_definitions`` at the angles θ, as the group computes it (series below
+        ``series_below``, closed forms above); a definition maps (θ, a math module such as mpmath) to its value."""
+        del theta  # a group that lists no coefficients
+        return {}
 
     def right_jacobian_inverse(self, xi: ArrayLike) -> NDArray:
         """J_r(ξ)⁻¹ (..., dim, dim): Log(Exp(ξ) Exp(δ)) = ξ + J_r(ξ)⁻¹ δ to first order."""
@@ -149,7 +189,7 @@ class LieGroup(ABC):
         self, a: ArrayLike, b: ArrayLike, jacobians: bool = False
     ) -> NDArray | tuple[NDArray, NDArray, NDArray]:
         """a b; with ``jacobians``, also ∂(a b)/∂δa = Ad(b⁻¹) and ∂(a b)/∂δb = I.  [DER 11.8]"""
-        a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+        a, b = self._elements("a", a), self._elements("b", b)
         value = self._compose(a, b)
         if not jacobians:
             return value
@@ -161,7 +201,7 @@ class LieGroup(ABC):
     def inverse(self, a: ArrayLike, jacobians: Literal[True]) -> tuple[NDArray, NDArray]: ...
     def inverse(self, a: ArrayLike, jacobians: bool = False) -> NDArray | tuple[NDArray, NDArray]:
         """a⁻¹; with ``jacobians``, also ∂a⁻¹/∂δa = -Ad(a).  [DER 11.8]"""
-        a = np.asarray(a, dtype=float)
+        a = self._elements("a", a)
         value = self._inverse(a)
         if not jacobians:
             return value
@@ -175,7 +215,7 @@ class LieGroup(ABC):
         self, a: ArrayLike, b: ArrayLike, jacobians: bool = False
     ) -> NDArray | tuple[NDArray, NDArray, NDArray]:
         """a⁻¹ b; with ``jacobians``, also ∂(a⁻¹b)/∂δa = -Ad((a⁻¹b)⁻¹) and ∂(a⁻¹b)/∂δb = I.  [DER 11.8]"""
-        a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+        a, b = self._elements("a", a), self._elements("b", b)
         value = self._between(a, b)
         if not jacobians:
             return value

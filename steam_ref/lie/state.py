@@ -64,6 +64,14 @@ class GroupState(Manifold):
             )
         return x
 
+    def _step(self, name: str, delta: NDArray) -> NDArray:
+        delta = real_array(name, delta)
+        if delta.shape[-1:] != (self.dim,):
+            raise ShapeError(
+                f"{name} must be a step in the tangent of an {self!r} state ({self.dim} numbers), got shape {delta.shape}"
+            )
+        return delta
+
     def check(self, name: str, x: object) -> NDArray:
         """One finite state (size,) whose pose is an element of the group in its stored form (SE(2): θ in
         (-π, π]); ShapeError or SteamError naming ``name`` otherwise."""
@@ -75,7 +83,7 @@ class GroupState(Manifold):
 
     def retract(self, x: NDArray, delta: NDArray) -> NDArray:
         """x ⊕ δ = (T Exp(δT), ϖ + δϖ): the pose comes back in its stored form (SE(2): θ in (-π, π])."""
-        x, delta = self._state("x", x), self._state("delta", delta)
+        x, delta = self._state("x", x), self._step("delta", delta)
         g, n = self.group, self.group.size
         d = g.dim
         return np.concatenate([g.compose(x[..., :n], g.exp(delta[..., :d])), x[..., n:] + delta[..., d:]], axis=-1)
