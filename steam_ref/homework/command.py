@@ -1,12 +1,12 @@
 """``steam-ref homework``: the student's handouts from the teacher's notebooks, and the marks of their answers::
 
     steam-ref homework handout NOTEBOOK_OR_FOLDER... [--out DIR]
-    steam-ref homework mark SUBMISSION_OR_FOLDER... [--source DIR] [--timeout SECONDS] [--json]
+    steam-ref homework mark SUBMISSION_OR_FOLDER... [--source DIR] [--timeout SECONDS] [--jobs N] [--json]
 
 ``handout`` writes each teacher's notebook (a folder: every notebook in it) to ``DIR`` (default ``handout``)
 with each solution an empty answer cell and no marking check (:func:`~steam_ref.homework.exercises.handout`).
 ``mark`` marks every notebook given or found under a folder against the teacher's notebooks in ``--source``
-(default ``tutorials``): one line per submission with its score, one per exercise with its point and, if it
+(default ``tutorials``), ``--jobs`` at once: one line per submission with its score, one per exercise with its point and, if it
 lost it, why; ``--json`` prints the same as one JSON document. Exit code 0 once every submission is marked
 (a submission that cannot be read scores 0, saying why), 2 on bad input: a path that does not exist, a file
 given that is not a notebook or a handout of none of the teacher's notebooks, a folder with no notebook.
@@ -17,6 +17,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 from ..errors import SteamError
@@ -42,6 +43,13 @@ def _seconds(text: str) -> int:
     return value
 
 
+def _jobs(text: str) -> int:
+    value = int(text.strip(), 10) if text.strip().isascii() and text.strip().isdigit() else None
+    if value is None or not 1 <= value <= 64:
+        raise argparse.ArgumentTypeError(f"expected a whole number from 1 to 64, got {text!r}")
+    return value
+
+
 def add_parser(sub) -> argparse.ArgumentParser:
     """Add ``homework`` and its two subcommands to ``sub`` (an argparse subparsers object)."""
     hw = sub.add_parser("homework", help="the tutorials as homework: build the student handouts, mark submissions")
@@ -60,6 +68,9 @@ def add_parser(sub) -> argparse.ArgumentParser:
     )
     mark.add_argument(
         "--timeout", type=_seconds, default=300, help="seconds any one cell may run before it is stopped (default 300)"
+    )
+    mark.add_argument(
+        "--jobs", type=_jobs, default=1, help="submissions marked at once, each in its own kernel (default 1)"
     )
     mark.add_argument("--json", action="store_true", help="print the marks as one JSON document")
     return hw
@@ -131,10 +142,11 @@ def _mark(args: argparse.Namespace) -> int:
     files = _notebooks(args.submissions, "mark")
     _check_given(args.submissions, tutorials)
     marks = []
-    for path, shown in files:
-        marks.append(mark_submission(path, shown, tutorials, args.timeout))
-        if not args.json:
-            _print(marks[-1:])
+    with ThreadPoolExecutor(max_workers=args.jobs) as pool:  # each submission runs in its own kernel process
+        for mark in pool.map(lambda f: mark_submission(f[0], f[1], tutorials, args.timeout), files):
+            marks.append(mark)
+            if not args.json:
+                _print([mark])
     if args.json:
         total = {"submissions": [m.as_dict() for m in marks]}
         json.dump(total, sys.stdout, ensure_ascii=False)

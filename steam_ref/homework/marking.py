@@ -11,6 +11,7 @@ cell still holds after a second timeout, ends the run: what had not run scores 0
 
 from __future__ import annotations
 
+import asyncio
 import copy
 import re
 import subprocess
@@ -188,7 +189,8 @@ def _run(cells: list[_Cell], tutorial: Tutorial, timeout: int) -> tuple[dict[int
     )
     stopped = None
     try:
-        client.execute(stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)  # the kernel's own log lines
+        # a loop of its own, closed at the end, in whichever thread marks; the kernel's log lines go nowhere
+        asyncio.run(client.async_execute(stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
     except Stop:
         stopped = "the run stopped: the kernel was still busy after two cells ran over their time limit"
     except DeadKernelError:
