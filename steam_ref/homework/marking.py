@@ -258,7 +258,7 @@ def mark_submission(path: Path, shown: str, tutorials: dict[str, Tutorial], time
         if not present.get(k, True) and status != "passed":
             status, message = "no answer", "the submission has no task cell for this exercise, so no answer"
         marks.append(ExerciseMark(e.number, e.title, int(status == "passed"), 1, status, message))
-    notes = []
+    notes: list[str] = []
     for i, c in enumerate(cells):
         error = outcomes.get(i)
         if c.role == "lesson" and error is not None:  # the teacher's own cell: the marking set-up is at fault
