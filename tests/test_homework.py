@@ -20,7 +20,9 @@ from steam_ref.homework import exercises, handout
 
 
 def _cell(kind: str, cid: str, text: str, tags: tuple[str, ...] = ()) -> dict:
-    cell = {"cell_type": kind, "id": cid, "metadata": {"tags": list(tags)} if tags else {}, "source": text}
+    """A cell as a notebook file stores it: its source a list of lines."""
+    lines = text.splitlines(keepends=True)
+    cell = {"cell_type": kind, "id": cid, "metadata": {"tags": list(tags)} if tags else {}, "source": lines}
     return {**cell, "outputs": [], "execution_count": None} if kind == "code" else cell
 
 

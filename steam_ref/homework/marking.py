@@ -20,7 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import SteamError
-from .exercises import Exercise, answer_cells, exercises, handout_of, read_notebook
+from .exercises import Exercise, answer_cells, exercises, handout_of, read_notebook, source
 
 __all__ = [
     "ExerciseMark",
@@ -142,6 +142,7 @@ def _assemble(tutorial: Tutorial, submission: dict) -> tuple[list[_Cell], dict[i
         cells += [_Cell(copy.deepcopy(c), k, "answer") for c in answer or []]
     for n, c in enumerate(cells):
         c.cell["id"] = f"marking-{n}"  # unique, whatever the student copied
+        c.cell["source"] = source(c.cell)  # nbformat's list of lines as the one string a kernel runs
         if c.cell.get("cell_type") == "code":
             c.cell["outputs"], c.cell["execution_count"] = [], None
     return cells, present
