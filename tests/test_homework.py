@@ -103,6 +103,7 @@ def test_marking_scores_each_exercise_on_its_own_and_never_stops_on_a_bad_submis
     _submit(course, "hangs", {"s1": "while True:\n    pass", "s2": cube})
     _submit(course, "exits", {"s1": "import os\nos._exit(3)", "s2": cube})
     _submit(course, "edits-the-check", {"s1": "square = 10", "s2": cube, "c1": "pass", "h1": "pass"})
+    _submit(course, "blank", {"s2": cube})  # exercise 1's answer cell left as handed out
     (course / "submitted" / "broken").mkdir()
     (course / "submitted" / "broken" / "tiny.ipynb").write_text('{"cells": [')
     argv = ["--source", str(course / "teacher"), "--timeout", "5", "--jobs", "3", "--json"]
@@ -117,12 +118,13 @@ def test_marking_scores_each_exercise_on_its_own_and_never_stops_on_a_bad_submis
         "exits": [(0, "not run"), (0, "not run")],
         "edits-the-check": [(0, "failed"), (1, "passed")],  # the teacher's checks run, not the student's copy
         "broken": [(0, "not run"), (0, "not run")],
+        "blank": [(0, "no answer"), (1, "passed")],
     }
     assert marks["right"]["score"] == marks["right"]["out_of"] == 2
     said = {name: m["exercises"][0]["message"] for name, m in marks.items()}
     assert said["wrong"] == "marking check: square is not base times base"  # what is wrong, not the value
     assert "ZeroDivisionError" in said["raises"] and "longer than 5 s" in said["hangs"]
-    assert "kernel died" in said["exits"] and "not a notebook" in said["broken"]
+    assert "kernel died" in said["exits"] and "not a notebook" in said["broken"] and "no code" in said["blank"]
     assert "9" not in "".join(said.values())
 
 

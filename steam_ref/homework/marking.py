@@ -122,15 +122,25 @@ class _Cell:
     role: str  # lesson, answer, check, hidden
 
 
-def _assemble(tutorial: Tutorial, submission: dict) -> tuple[list[_Cell], dict[int, bool]]:
-    """The cells of the marking run, and for each exercise whether the submission had its task cell."""
+def _written(cells: list[dict] | None) -> str | None:
+    """Why an answer is missing (no task cell, nothing but comments), or None if there is code to run."""
+    if cells is None:
+        return "the submission has no task cell for this exercise, so no answer"
+    code = [
+        line for c in cells for line in source(c).splitlines() if line.strip() and not line.lstrip().startswith("#")
+    ]
+    return None if code else "the answer cell holds no code"
+
+
+def _assemble(tutorial: Tutorial, submission: dict) -> tuple[list[_Cell], dict[int, str | None]]:
+    """The cells of the marking run, and for each exercise why it has no answer (None: it has one)."""
     role_of: dict[int, tuple[int | None, str]] = {}
     for n, e in enumerate(tutorial.exercises):
         role_of[e.solution] = (n, "answer")
         role_of[e.check] = (n, "check")
         role_of.update(dict.fromkeys(e.hidden, (n, "hidden")))
     cells: list[_Cell] = []
-    present: dict[int, bool] = {}
+    missing: dict[int, str | None] = {}
     for i, cell in enumerate(tutorial.notebook["cells"]):
         k, role = role_of.get(i, (None, "lesson"))
         if role != "answer":
@@ -138,14 +148,14 @@ def _assemble(tutorial: Tutorial, submission: dict) -> tuple[list[_Cell], dict[i
             continue
         assert k is not None
         answer = answer_cells(submission, tutorial.exercises[k], k)
-        present[k] = answer is not None
+        missing[k] = _written(answer)
         cells += [_Cell(copy.deepcopy(c), k, "answer") for c in answer or []]
     for n, c in enumerate(cells):
         c.cell["id"] = f"marking-{n}"  # unique, whatever the student copied
         c.cell["source"] = source(c.cell)  # nbformat's list of lines as the one string a kernel runs
         if c.cell.get("cell_type") == "code":
             c.cell["outputs"], c.cell["execution_count"] = [], None
-    return cells, present
+    return cells, missing
 
 
 def _run(cells: list[_Cell], tutorial: Tutorial, timeout: int) -> tuple[dict[int, tuple[str, str] | None], str | None]:
@@ -251,13 +261,13 @@ def mark_submission(path: Path, shown: str, tutorials: dict[str, Tutorial], time
             ExerciseMark(e.number, e.title, 0, 1, "not run", _one_line(problem or "")) for e in tutorial.exercises
         )
         return SubmissionMark(shown, name, zero, error=_one_line(problem or ""))
-    cells, present = _assemble(tutorial, nb)
+    cells, missing = _assemble(tutorial, nb)
     outcomes, stopped = _run(cells, tutorial, timeout)
     marks = []
     for k, e in enumerate(tutorial.exercises):
         status, message = _verdict(k, cells, outcomes, stopped, timeout)
-        if not present.get(k, True) and status != "passed":
-            status, message = "no answer", "the submission has no task cell for this exercise, so no answer"
+        if missing.get(k) and status != "passed":
+            status, message = "no answer", str(missing[k])
         marks.append(ExerciseMark(e.number, e.title, int(status == "passed"), 1, status, message))
     notes: list[str] = []
     for i, c in enumerate(cells):
