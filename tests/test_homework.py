@@ -102,11 +102,13 @@ def test_marking_scores_each_exercise_on_its_own_and_never_stops_on_a_bad_submis
     _submit(course, "raises", {"s1": "square = 1 // 0", "s2": cube})
     _submit(course, "hangs", {"s1": "while True:\n    pass", "s2": cube})
     _submit(course, "exits", {"s1": "import os\nos._exit(3)", "s2": cube})
+    deaf = "import signal\nsignal.signal(signal.SIGINT, signal.SIG_IGN)\nwhile True:\n    pass"
+    _submit(course, "ignores-the-interrupt", {"s1": deaf, "s2": cube})
     _submit(course, "edits-the-check", {"s1": "square = 10", "s2": cube, "c1": "pass", "h1": "pass"})
     _submit(course, "blank", {"s2": cube})  # exercise 1's answer cell left as handed out
     (course / "submitted" / "broken").mkdir()
     (course / "submitted" / "broken" / "tiny.ipynb").write_text('{"cells": [')
-    argv = ["--source", str(course / "teacher"), "--timeout", "5", "--jobs", "3", "--json"]
+    argv = ["--source", str(course / "teacher"), "--timeout", "10", "--jobs", "3", "--json"]
     assert main(["homework", "mark", str(course / "submitted"), *argv]) == 0
     marks = {m["submission"].split("/")[0]: m for m in json.loads(capsys.readouterr().out)["submissions"]}
     got = {name: [(e["score"], e["status"]) for e in m["exercises"]] for name, m in marks.items()}
@@ -116,6 +118,7 @@ def test_marking_scores_each_exercise_on_its_own_and_never_stops_on_a_bad_submis
         "raises": [(0, "error"), (1, "passed")],
         "hangs": [(0, "timeout"), (1, "passed")],
         "exits": [(0, "not run"), (0, "not run")],
+        "ignores-the-interrupt": [(0, "timeout"), (0, "not run")],  # two cells over their limit end the run
         "edits-the-check": [(0, "failed"), (1, "passed")],  # the teacher's checks run, not the student's copy
         "broken": [(0, "not run"), (0, "not run")],
         "blank": [(0, "no answer"), (1, "passed")],
@@ -123,7 +126,8 @@ def test_marking_scores_each_exercise_on_its_own_and_never_stops_on_a_bad_submis
     assert marks["right"]["score"] == marks["right"]["out_of"] == 2
     said = {name: m["exercises"][0]["message"] for name, m in marks.items()}
     assert said["wrong"] == "marking check: square is not base times base"  # what is wrong, not the value
-    assert "ZeroDivisionError" in said["raises"] and "longer than 5 s" in said["hangs"]
+    assert "ZeroDivisionError" in said["raises"] and "longer than 10 s" in said["hangs"]
+    assert "still busy" in marks["ignores-the-interrupt"]["exercises"][1]["message"]
     assert "kernel died" in said["exits"] and "not a notebook" in said["broken"] and "no code" in said["blank"]
     assert "9" not in "".join(said.values())
 

@@ -125,6 +125,8 @@ def test_at_least_two_exercises_each_with_its_solution_check_and_marking_check(p
         for i in (e.check, *e.hidden):
             assert _asserts(ast.parse(source(nb["cells"][i]))), f"{path.name}: a check of {e.label} asserts nothing"
         assert e.names, f"{path.name}: the checks of {e.label} read nothing its solution defines"
+        unnamed = [n for n in e.names if not re.search(rf"\b{n}\b", source(nb["cells"][e.task]))]
+        assert not unnamed, f"{path.name}: the checks of {e.label} read {unnamed}, which its task does not ask for"
 
 
 def _size(node: ast.AST) -> int:

@@ -98,26 +98,35 @@ def read_notebook(path: Path) -> dict[str, Any]:
     return nb
 
 
-def _defined(code: str) -> list[str]:
-    """Names a cell binds at its top level (assignments, functions, imports), in order."""
+def _bound(body: list[ast.stmt]) -> list[str]:
+    """Names a block binds for later cells (assignments, functions, classes, imports), loop variables left out."""
     names: list[str] = []
-    for node in ast.parse(code).body:
+    for node in body:
         if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
             names.append(node.name)
-        for sub in ast.walk(node) if isinstance(node, (ast.Assign, ast.AnnAssign, ast.AugAssign, ast.For)) else ():
-            if isinstance(sub, ast.Name) and isinstance(sub.ctx, ast.Store):
-                names.append(sub.id)
-    return list(dict.fromkeys(names))
+        elif isinstance(node, (ast.Import, ast.ImportFrom)):
+            names += [(a.asname or a.name).split(".")[0] for a in node.names]
+        elif isinstance(node, (ast.Assign, ast.AnnAssign, ast.AugAssign)):
+            targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+            names += [n.id for t in targets for n in ast.walk(t) if isinstance(n, ast.Name)]
+        for field in ("body", "orelse", "finalbody"):  # inside if, for, while, with, try
+            inner = getattr(node, field, None)
+            if isinstance(inner, list) and not isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+                names += _bound(inner)
+    return names
 
 
 def _read(code: str) -> set[str]:
-    return {n.id for n in ast.walk(ast.parse(code)) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Load)}
+    """Names a cell reads that it does not bind itself (nor as a loop or comprehension variable)."""
+    nodes = [n for n in ast.walk(ast.parse(code)) if isinstance(n, ast.Name)]
+    stored = {n.id for n in nodes if isinstance(n.ctx, ast.Store)}
+    return {n.id for n in nodes if isinstance(n.ctx, ast.Load)} - stored
 
 
 def _names(nb: dict, solution: int, checks: list[int]) -> tuple[str, ...]:
     try:
         read = set().union(*(_read(source(nb["cells"][i])) for i in checks))
-        return tuple(n for n in _defined(source(nb["cells"][solution])) if n in read)
+        return tuple(dict.fromkeys(n for n in _bound(ast.parse(source(nb["cells"][solution])).body) if n in read))
     except SyntaxError:
         return ()
 

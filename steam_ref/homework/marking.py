@@ -163,6 +163,7 @@ def _run(cells: list[_Cell], tutorial: Tutorial, timeout: int) -> tuple[dict[int
     and why the run stopped early, if it did."""
     import nbclient
     import nbformat
+    from jupyter_core.utils import ensure_async
     from nbclient.exceptions import DeadKernelError
 
     nb = copy.deepcopy({k: v for k, v in tutorial.notebook.items() if k != "cells"})
@@ -174,7 +175,9 @@ def _run(cells: list[_Cell], tutorial: Tutorial, timeout: int) -> tuple[dict[int
     class Stop(Exception):
         pass
 
-    def start(cell: Any, cell_index: int) -> None:  # noqa: ARG001 (nbclient's hook signature)
+    async def start(cell: Any, cell_index: int) -> None:  # noqa: ARG001 (nbclient's hook signature)
+        if timeouts_in_a_row[0] and client.km is not None and not await ensure_async(client.km.is_alive()):
+            raise DeadKernelError("the kernel died")  # a death taken for a cell's timeout, under load
         if timeouts_in_a_row[0] >= 2:  # the interrupt did not free the kernel: every later cell would wait too
             raise Stop
 
@@ -214,14 +217,16 @@ def _run(cells: list[_Cell], tutorial: Tutorial, timeout: int) -> tuple[dict[int
 def _verdict(
     k: int, cells: list[_Cell], outcomes: dict[int, tuple[str, str] | None], stopped: str | None, timeout: int
 ) -> tuple[str, str]:
-    """(status, message) of exercise ``k`` from what its cells did."""
+    """(status, message) of exercise ``k`` from what its cells did: passed when every check ran without an
+    error; else the first of its cells that failed (the answer's error or timeout, then a check's), else why its
+    checks did not run."""
     mine = [(i, c.role) for i, c in enumerate(cells) if c.exercise == k]
     checks = [i for i, role in mine if role in ("check", "hidden")]
-    if any(i not in outcomes for i in checks):
-        return "not run", stopped or "its check did not run"
-    failed = [(i, role, outcomes[i]) for i, role in mine if outcomes.get(i) is not None]
-    if not any(role in ("check", "hidden") for _, role, _ in failed):
+    if all(i in outcomes and outcomes[i] is None for i in checks):
         return "passed", ""
+    failed = [(i, role, outcomes[i]) for i, role in mine if outcomes.get(i) is not None]
+    if not failed:
+        return "not run", stopped or "its check did not run"
     _, role, error = failed[0]
     assert error is not None
     name, message = error
