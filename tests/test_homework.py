@@ -151,6 +151,8 @@ def test_bad_input_is_one_line_and_exit_code_2(course, capsys):
     stranger = copy.deepcopy(_teacher())
     (course / "other.ipynb").write_text(json.dumps(stranger))
     (course / "bad.ipynb").write_text("{")
+    (course / "linked").mkdir()
+    (course / "linked" / "tiny.ipynb").symlink_to(course / "nowhere" / "tiny.ipynb")  # a dangling link
     cases = {
         ("mark", str(course / "missing"), "--source", teacher): "'.*missing' does not exist",
         ("mark", str(course / "notes.txt"), "--source", teacher): "notes.txt' is not a notebook",
@@ -165,6 +167,7 @@ def test_bad_input_is_one_line_and_exit_code_2(course, capsys):
         ("handout", str(course / "other.ipynb"), "--out", ""): "expected a path, got an empty one",
         ("handout", teacher, "--out", teacher): "would overwrite the teacher's notebook",
         ("handout", str(course / "bad.ipynb")): "is not a notebook",
+        ("handout", teacher, "--out", str(course / "linked")): "tiny.ipynb' is a link",
     }
     for argv, message in cases.items():
         code = main(["homework", *argv])

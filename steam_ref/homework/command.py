@@ -105,6 +105,10 @@ def _handout(args: argparse.Namespace) -> int:
     for path, _ in made:
         if (out / path.name).resolve() == path.resolve():
             raise SteamError(f"--out {args.out!r} would overwrite the teacher's notebook {str(path)!r}")
+        if (out / path.name).is_symlink():  # written through, a link would put the handout wherever it points
+            raise SteamError(
+                f"--out {args.out!r}: {str(out / path.name)!r} is a link; remove it or choose another folder"
+            )
     try:
         out.mkdir(parents=True, exist_ok=True)
         for path, nb in made:

@@ -87,7 +87,7 @@ class SubmissionMark:
     tutorial: str | None
     exercises: tuple[ExerciseMark, ...] = ()
     error: str | None = None  # why the submission could not be marked at all
-    notes: tuple[str, ...] = field(default=())  # a lesson cell of the teacher's that failed, a run that stopped
+    notes: tuple[str, ...] = field(default=())  # a cell of the teacher's lesson that failed: the set-up's fault
 
     @property
     def score(self) -> int:
@@ -170,21 +170,22 @@ def _run(cells: list[_Cell], tutorial: Tutorial, timeout: int) -> tuple[dict[int
     nb["cells"] = [c.cell for c in cells]
     nb["nbformat"], nb["nbformat_minor"] = 4, max(5, int(nb.get("nbformat_minor", 5)))
     outcomes: dict[int, tuple[str, str] | None] = {}
-    timeouts_in_a_row = [0]
+    timeouts_in_a_row = 0
 
     class Stop(Exception):
         pass
 
     async def start(cell: Any, cell_index: int) -> None:  # noqa: ARG001 (nbclient's hook signature)
-        if timeouts_in_a_row[0] and client.km is not None and not await ensure_async(client.km.is_alive()):
+        if timeouts_in_a_row and client.km is not None and not await ensure_async(client.km.is_alive()):
             raise DeadKernelError("the kernel died")  # a death taken for a cell's timeout, under load
-        if timeouts_in_a_row[0] >= 2:  # the interrupt did not free the kernel: every later cell would wait too
+        if timeouts_in_a_row >= 2:  # the interrupt did not free the kernel: every later cell would wait too
             raise Stop
 
     def executed(cell: Any, cell_index: int, execute_reply: dict | None) -> None:  # noqa: ARG001
+        nonlocal timeouts_in_a_row
         content = (execute_reply or {}).get("content", {})
         timed_out = content.get("status") == "error" and content.get("ename") == TIMEOUT
-        timeouts_in_a_row[0] = timeouts_in_a_row[0] + 1 if timed_out else 0
+        timeouts_in_a_row = timeouts_in_a_row + 1 if timed_out else 0
         if content.get("status") == "error":
             outcomes[cell_index] = (str(content.get("ename", "Error")), _one_line(content.get("evalue", "")))
         else:
