@@ -68,6 +68,7 @@ LAYERS: dict[str, int] = {
     "steam_ref.paper": 12,  # its __init__ re-exports the layer's main names
     # tools
     "steam_ref.conformance": 13,
+    "steam_ref.homework": 13,  # the tutorials as markable homework: handouts and the marking run; imports errors (0)
     "steam_ref.cli": 14,
     "steam_ref.__main__": 14,
     "steam_ref": 15,  # the facade: names load lazily from the layers; nothing imports it

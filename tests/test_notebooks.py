@@ -1,6 +1,7 @@
-"""Every tutorial notebook executes top to bottom, and its last code cell asserts (against a dense solve).
-Each has at least two exercises whose checks assert, and the teachers' command of docs/tutorials.md hides
-their solutions.
+"""Every tutorial notebook executes top to bottom (its solutions, checks and marking checks with it), and its
+last code cell asserts. Each has at least two exercises, each a task, a solution, a check that gives nothing of
+the answer away and a marking check; the teachers' commands of docs/tutorials.md build the handouts (no solution,
+no marking check) and mark a right and a wrong submission. A tutorial imports past the public API only saying why.
 
 Executing needs nbformat, nbclient and ipykernel (the ``notebooks``/``test`` extras): without them
 these tests skip, or fail when STEAM_REF_REQUIRE_OPTIONAL=1 (CI). A notebook that loads the
@@ -14,12 +15,17 @@ from __future__ import annotations
 import ast
 import json
 import re
+import shlex
+import shutil
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
 from requirements import optional_import
+
+import steam_ref
+from steam_ref.homework.exercises import ANSWER, HIDDEN, SOLUTION, exercises, source, tags
 
 TUTORIALS = sorted((Path(__file__).resolve().parents[1] / "tutorials").glob("*.ipynb"))
 READS_REFERENCE_DATA = re.compile(r"""load_dataset\(\s*["'](plaza|paper-synthetic)["']|Syn_theta_Plaza|Plaza1_thrown""")
@@ -103,48 +109,186 @@ def _cells(path: Path) -> list[dict]:
     return json.loads(path.read_text())["cells"]
 
 
-def _tags(cell: dict) -> set[str]:
-    return set(cell.get("metadata", {}).get("tags", []))
+@pytest.mark.parametrize("path", TUTORIALS, ids=[p.stem for p in TUTORIALS])
+def test_at_least_two_exercises_each_with_its_solution_check_and_marking_check(path):
+    """docs/tutorials.md's convention, read by the marking machinery itself: each exercise is a task (tag
+    exercise), a solution (tags solution and hide-cell, folded on the site), a check (tag check) and one marking
+    check (tags hidden-check and remove-cell: left off the site and out of the handout), and every check asserts."""
+    nb = json.loads(path.read_text())
+    found = exercises(nb, path.name)  # refuses a solution, check or marking check outside an exercise
+    assert len(found) >= 2, f"{path.name}: {len(found)} exercise(s)"
+    assert [e.number for e in found] == list(range(1, len(found) + 1)), [e.label for e in found]
+    for e in found:
+        assert e.title and len(e.hidden) == 1, f"{path.name}: {e.label} has {len(e.hidden)} marking checks"
+        assert {SOLUTION, "hide-cell"} <= tags(nb["cells"][e.solution]), e.label
+        assert {HIDDEN, "remove-cell"} <= tags(nb["cells"][e.hidden[0]]), e.label
+        for i in (e.check, *e.hidden):
+            assert _asserts(ast.parse(source(nb["cells"][i]))), f"{path.name}: a check of {e.label} asserts nothing"
+        assert e.names, f"{path.name}: the checks of {e.label} read nothing its solution defines"
+        unnamed = [n for n in e.names if not re.search(rf"\b{n}\b", source(nb["cells"][e.task]))]
+        assert not unnamed, f"{path.name}: the checks of {e.label} read {unnamed}, which its task does not ask for"
 
 
-def _source(cell: dict) -> str:
-    return "".join(cell["source"]) if isinstance(cell["source"], list) else cell["source"]
+def _size(node: ast.AST) -> int:
+    return sum(1 for n in ast.walk(node) if not isinstance(n, ast.expr_context))
+
+
+def _answers(solution: ast.AST) -> list[ast.expr]:
+    """The expressions a solution computes its answers with: every assigned or returned value of some size."""
+    values = [
+        n.value for n in ast.walk(solution) if isinstance(n, (ast.Assign, ast.AugAssign, ast.AnnAssign, ast.Return))
+    ]
+    return [v for v in values if v is not None and _size(v) >= 6]
+
+
+def _giveaways(check: str, solution: str) -> list[str]:
+    """What in a check cell would give the answer away (empty when none): an np.testing assertion (its failure
+    prints the desired value), an assert without a message or with one computed from values, a loop or function
+    (a whole algorithm), an expression of the solution."""
+    tree, found = ast.parse(check), []
+    found += [f"{a} (its failure prints the expected value)" for a in _asserts(tree) if a.startswith("np.testing")]
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Assert) and not (
+            isinstance(node.msg, ast.Constant) and isinstance(node.msg.value, str)
+        ):
+            found.append(f"line {node.lineno}: an assert whose message is not a plain sentence")
+        if isinstance(node, (ast.For, ast.While, ast.FunctionDef, ast.Lambda, ast.ClassDef)):
+            found.append(
+                f"line {node.lineno}: a {type(node).__name__} (a check states properties, it computes no algorithm)"
+            )
+    inside = {ast.dump(n) for n in ast.walk(tree) if isinstance(n, ast.expr)}
+    found += [f"the solution's {ast.unparse(v)!r}" for v in _answers(ast.parse(solution)) if ast.dump(v) in inside]
+    return found
+
+
+def test_the_giveaway_finder_sees_each_kind_of_leak():
+    """The oracle of the test below: each leak it must find, and a clean check it must pass."""
+    solution = "Q = np.block([[dt**3 / 3 * qc, dt**2 / 2 * qc], [dt**2 / 2 * qc, dt * qc]])"
+    leaks = {
+        "np.testing.assert_allclose(Q, Q.T)": "np.testing",
+        "assert Q.shape == (6, 6)": "not a plain sentence",
+        "assert Q.shape == (6, 6), f'got {Q.shape}'": "not a plain sentence",
+        "for i in range(3):\n    assert Q[i, i] > 0, 'a variance is not positive'": "For",
+        "assert np.allclose(Q, np.block([[dt**3 / 3 * qc, dt**2 / 2 * qc], [dt**2 / 2 * qc, dt * qc]])), 'no'": "solution",
+    }
+    for check, kind in leaks.items():
+        assert any(kind in g for g in _giveaways(check, solution)), check
+    clean = "assert Q.shape == (6, 6), 'Q must be 6 x 6'\nassert np.allclose(Q, Q.T), 'Q is not symmetric'"
+    assert _giveaways(clean, solution) == []
 
 
 @pytest.mark.parametrize("path", TUTORIALS, ids=[p.stem for p in TUTORIALS])
-def test_at_least_two_checked_exercises(path):
-    """docs/tutorials.md's convention: each exercise is a task (tag exercise), a solution (tags solution and
-    hide-cell, folded on the site) and a check (tag check) that asserts."""
-    cells = _cells(path)
-    tasks = [i for i, c in enumerate(cells) if "exercise" in _tags(c)]
-    assert len(tasks) >= 2, f"{path.name}: {len(tasks)} exercise(s)"
-    for i in tasks:
-        task, solution, check = cells[i : i + 3]
-        assert task["cell_type"] == "markdown" and _source(task).startswith("### Exercise"), _source(task)[:80]
-        assert solution["cell_type"] == "code" and {"solution", "hide-cell"} <= _tags(solution), solution["metadata"]
-        assert check["cell_type"] == "code" and "check" in _tags(check), check["metadata"]
-        assert _asserts(ast.parse(_source(check))), f"{path.name}: the check of {_source(task)[:40]!r} asserts nothing"
-    assert sum("solution" in _tags(c) for c in cells) == len(tasks)  # no solution outside an exercise
+def test_no_check_gives_the_answer_away(path):
+    """A check (and a marking check, whose message the marking report shows) fails with a sentence saying what
+    is wrong, never with the expected value; the handout's check holds no expression of the solution, no
+    loop and no function: properties a right answer has, not a second solution."""
+    nb = json.loads(path.read_text())
+    for e in exercises(nb, path.name):
+        solution = source(nb["cells"][e.solution])
+        leaks = _giveaways(source(nb["cells"][e.check]), solution)
+        assert not leaks, f"{path.name}, the check of {e.label}: {leaks}"
+        for i in e.hidden:
+            said = [g for g in _giveaways(source(nb["cells"][i]), solution) if "np.testing" in g or "message" in g]
+            assert not said, f"{path.name}, the marking check of {e.label}: {said}"
 
 
-def _teacher_command() -> str:
-    """The command docs/tutorials.md gives teachers, as written there (one home: the test runs the page's text)."""
+@pytest.mark.parametrize("path", TUTORIALS, ids=[p.stem for p in TUTORIALS])
+def test_a_tutorial_reaches_past_the_public_api_only_saying_why(path):
+    """Names of the public API (``import steam_ref as sr``) come from steam_ref itself; a tutorial that imports
+    a module beneath it says why in a comment (the machinery it is about) on the first such import of a cell."""
+    public = set(steam_ref.__all__)
+    for cell in _code_cells(path):
+        tree, lines = ast.parse(cell), cell.splitlines()
+        for node in ast.walk(tree):
+            if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("steam_ref."):
+                named = {a.name for a in node.names} & public
+                assert not named, (
+                    f"{path.name}: {sorted(named)} are public: import them from steam_ref (sr.{min(named)})"
+                )
+        inner = [n for n in tree.body if isinstance(n, (ast.Import, ast.ImportFrom)) and _submodule(n)]
+        if inner:  # the reason: a comment on the line above the first such import, or at its end
+            line, above = lines[inner[0].lineno - 1], lines[inner[0].lineno - 2] if inner[0].lineno > 1 else ""
+            assert above.lstrip().startswith("#") or "  # " in line, (
+                f"{path.name}: {line!r} without a comment saying why"
+            )
+
+
+def _submodule(node: ast.Import | ast.ImportFrom) -> bool:
+    """An import of a steam_ref module beneath the public API (``from steam_ref import plot`` is one)."""
+    if isinstance(node, ast.ImportFrom):
+        module = node.module or ""
+        return module.startswith("steam_ref.") or (
+            module == "steam_ref" and not {a.name for a in node.names} <= set(steam_ref.__all__)
+        )
+    return any(a.name.startswith("steam_ref.") for a in node.names)
+
+
+def _homework_command(verb: str) -> str:
+    """The command docs/tutorials.md gives teachers for ``verb`` (one home: the tests run the page's text)."""
     page = (Path(__file__).resolve().parents[1] / "docs" / "tutorials.md").read_text()
-    (command,) = [line for line in page.splitlines() if line.startswith("jupyter nbconvert") and "solution" in line]
+    (command,) = [line for line in page.splitlines() if line.startswith(f"steam-ref homework {verb} ")]
     return command
 
 
-def test_teacher_command_removes_the_solutions_and_keeps_the_exercises(tmp_path):
-    optional_import("nbconvert", "notebooks")
-    source = next(p for p in TUTORIALS if p.stem.startswith("01_"))
-    (tmp_path / "tutorials").mkdir()
-    (tmp_path / "tutorials" / source.name).write_bytes(source.read_bytes())
-    command = _teacher_command().replace("jupyter ", f"{sys.executable} -m jupyter ", 1)
-    done = subprocess.run(command, shell=True, cwd=tmp_path, capture_output=True, text=True, timeout=120)
+def _run_command(command: str, cwd: Path, timeout: int) -> subprocess.CompletedProcess:
+    argv = [sys.executable, "-m", "steam_ref", *shlex.split(command)[1:]]
+    return subprocess.run(argv, cwd=cwd, capture_output=True, text=True, timeout=timeout)
+
+
+@pytest.fixture(scope="module")
+def handouts(tmp_path_factory):
+    """docs/tutorials.md's handout command, run as written on a copy of every tutorial."""
+    work = tmp_path_factory.mktemp("course")
+    shutil.copytree(TUTORIALS[0].parent, work / "tutorials", ignore=shutil.ignore_patterns(".ipynb_checkpoints"))
+    done = _run_command(_homework_command("handout"), work, timeout=120)
     assert done.returncode == 0, done.stderr
-    before, after = _cells(source), _cells(tmp_path / "handout" / source.name)
-    assert any("solution" in _tags(c) for c in before)
-    assert not any("solution" in _tags(c) for c in after)
-    kept = [c["id"] for c in before if "solution" not in _tags(c)]
-    assert [c["id"] for c in after] == kept  # the tasks, the checks and the lesson itself all stay, in order
-    assert [_source(c) for c in after] == [_source(c) for c in before if "solution" not in _tags(c)]
+    return work
+
+
+@pytest.mark.parametrize("path", TUTORIALS, ids=[p.stem for p in TUTORIALS])
+def test_the_handout_keeps_the_lesson_tasks_and_checks_and_nothing_of_the_answers(handouts, path):
+    nb = json.loads(path.read_text())
+    given = json.loads((handouts / "handout" / path.name).read_text())
+    found = exercises(nb, path.name)
+    answer_of = {e.solution: e for e in found}
+    hidden = {i for e in found for i in e.hidden}
+    expected = [(i, c) for i, c in enumerate(nb["cells"]) if i not in hidden]
+    assert [c["id"] for c in given["cells"]] == [c["id"] for _, c in expected]  # in order; the answer takes its id
+    for (i, mine), theirs in zip(expected, given["cells"], strict=True):
+        if i in answer_of:
+            assert tags(theirs) == {ANSWER} and source(theirs).startswith("# Your answer"), theirs
+            assert all(f"`{n}`" in source(theirs) for n in answer_of[i].names), source(theirs)
+        else:
+            assert source(theirs) == source(mine) and tags(theirs) == tags(mine), f"{path.name} cell {i}"
+        assert not theirs.get("outputs")
+    assert not any(tags(c) & {SOLUTION, HIDDEN, "hide-cell", "remove-cell"} for c in given["cells"])
+    assert given["metadata"]["steam_ref"]["handout_of"] == path.stem
+
+
+def test_a_teacher_marks_a_right_and_a_wrong_submission_of_tutorial_00(handouts):
+    """A right answer to every exercise scores full marks; a plausible wrong one (exercise 1's error with its
+    sign flipped, which the handout's check cannot see: the cost is the same) scores 0 there and full marks
+    elsewhere, with a message that says what is wrong without the expected value."""
+    optional_import("nbclient", "notebooks")
+    optional_import("ipykernel", "notebooks")
+    name = "00_solve_your_own_problem.ipynb"
+    teacher = json.loads((handouts / "tutorials" / name).read_text())
+    solutions = {c["id"]: source(c) for c in teacher["cells"] if SOLUTION in tags(c)}
+    flipped = solutions["exercise-1-solution"].replace(
+        "return x_next - transition_matrix(dt) @ x_prev", "return transition_matrix(dt) @ x_prev - x_next"
+    )
+    assert flipped != solutions["exercise-1-solution"]
+    for student, answers in (("right", solutions), ("wrong", {**solutions, "exercise-1-solution": flipped})):
+        nb = json.loads((handouts / "handout" / name).read_text())
+        for cell in nb["cells"]:
+            cell["source"] = answers.get(cell["id"], cell["source"])
+        (handouts / "submitted" / student).mkdir(parents=True)
+        (handouts / "submitted" / student / name).write_text(json.dumps(nb))
+    command = _homework_command("mark").replace("submitted/", "submitted/ --json --jobs 2")
+    done = _run_command(command, handouts, timeout=900)
+    assert done.returncode == 0, done.stderr
+    marks = {m["submission"].split("/")[0]: m for m in json.loads(done.stdout)["submissions"]}
+    assert [(e["number"], e["score"]) for e in marks["right"]["exercises"]] == [(1, 1), (2, 1), (3, 1)], marks["right"]
+    assert [(e["number"], e["score"]) for e in marks["wrong"]["exercises"]] == [(1, 0), (2, 1), (3, 1)], marks["wrong"]
+    message = marks["wrong"]["exercises"][0]["message"]
+    assert message.startswith("marking check: prior_error is not Eq. 22's") and not re.search(r"\d\.\d", message)

@@ -12,6 +12,7 @@ Usage::
     steam-ref conformance {export DIR, check RESULTS_DIR [--only SUITE...], selftest [--paper], build}
     steam-ref data {list, fetch [NAME ...]}
     steam-ref consistency [--seeds N] [--jobs N] [--backend loky|dask] [--json] [--plot FILE.png] ...
+    steam-ref homework {handout NOTEBOOK... [--out DIR], mark SUBMISSION... [--source DIR] [--json]}
 
 Each command is one module with ``add_parser(subparsers)`` (its options; returns its parser) and
 ``run(args)`` (what it does; returns the exit code), registered once in :data:`COMMANDS`.
@@ -31,6 +32,7 @@ from collections.abc import Sequence
 from .._version import __version__
 from ..conformance import command as conformance
 from ..errors import SteamError
+from ..homework import command as homework
 from ..linear.threads import limit
 from . import batch, consistency, data, fidelity, reproduce, run
 from .args import Parser
@@ -39,7 +41,7 @@ from .streams import one_line, quiet_stdout
 __all__ = ["COMMANDS", "build_parser", "main"]
 
 # Every command of `steam-ref`, in the order its help lists them: a module with add_parser(sub) and run(args).
-COMMANDS = (run, batch, fidelity, reproduce, conformance, data, consistency)
+COMMANDS = (run, batch, fidelity, reproduce, conformance, data, consistency, homework)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -1,0 +1,24 @@
+"""The tutorials as homework a teacher can mark (docs/tutorials.md, "For teachers").
+
+- :mod:`.exercises`: a teacher's notebook read by its cell tags (each exercise's task, solution, check and
+  marking checks), and the student's handout made from it;
+- :mod:`.marking`: the marking run, each submission's answers between the teacher's own cells and checks, in a
+  fresh kernel under a time limit per cell, scored per exercise;
+- :mod:`.command`: ``steam-ref homework handout`` and ``steam-ref homework mark``.
+
+Running notebooks needs nbformat, nbclient and ipykernel (the ``notebooks`` extra); they load only when marking.
+"""
+
+from .exercises import Exercise, exercises, handout, read_notebook
+from .marking import ExerciseMark, SubmissionMark, load_tutorials, mark_submission
+
+__all__ = [
+    "Exercise",
+    "exercises",
+    "handout",
+    "read_notebook",
+    "ExerciseMark",
+    "SubmissionMark",
+    "load_tutorials",
+    "mark_submission",
+]

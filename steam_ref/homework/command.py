@@ -1,0 +1,163 @@
+"""``steam-ref homework``: the student's handouts from the teacher's notebooks, and the marks of their answers::
+
+    steam-ref homework handout NOTEBOOK_OR_FOLDER... [--out DIR]
+    steam-ref homework mark SUBMISSION_OR_FOLDER... [--source DIR] [--timeout SECONDS] [--jobs N] [--json]
+
+``handout`` writes each teacher's notebook (a folder: every notebook in it) to ``DIR`` (default ``handout``)
+with each solution an empty answer cell and no marking check (:func:`~steam_ref.homework.exercises.handout`).
+``mark`` marks every notebook given or found under a folder against the teacher's notebooks in ``--source``
+(default ``tutorials``), ``--jobs`` at once: one line per submission with its score, one per exercise with its point and, if it
+lost it, why; ``--json`` prints the same as one JSON document. Exit code 0 once every submission is marked
+(a submission that cannot be read scores 0, saying why), 2 on bad input: a path that does not exist, a file
+given that is not a notebook or a handout of none of the teacher's notebooks, a folder with no notebook.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+from ..errors import SteamError
+from .exercises import handout, read_notebook
+from .marking import SubmissionMark, Tutorial, load_tutorials, mark_submission, requirements, tutorial_of
+
+__all__ = ["add_parser", "run"]
+
+
+def _path(text: str) -> str:
+    if not text.strip():
+        raise argparse.ArgumentTypeError(f"expected a path, got an empty one {text!r}")
+    return text
+
+
+def _seconds(text: str) -> int:
+    try:
+        value = int(text.strip(), 10) if text.strip().isascii() else None
+    except ValueError:
+        value = None
+    if value is None or not 1 <= value <= 86_400:
+        raise argparse.ArgumentTypeError(f"expected a whole number of seconds from 1 to 86400, got {text!r}")
+    return value
+
+
+def _jobs(text: str) -> int:
+    value = int(text.strip(), 10) if text.strip().isascii() and text.strip().isdigit() else None
+    if value is None or not 1 <= value <= 64:
+        raise argparse.ArgumentTypeError(f"expected a whole number from 1 to 64, got {text!r}")
+    return value
+
+
+def add_parser(sub) -> argparse.ArgumentParser:
+    """Add ``homework`` and its two subcommands to ``sub`` (an argparse subparsers object)."""
+    hw = sub.add_parser("homework", help="the tutorials as homework: build the student handouts, mark submissions")
+    commands = hw.add_subparsers(
+        dest="homework_command", parser_class=type(hw), required=True, metavar="{handout,mark}"
+    )
+    out = commands.add_parser("handout", help="the teacher's notebooks without solutions or marking checks")
+    out.add_argument("notebooks", nargs="+", type=_path, metavar="NOTEBOOK_OR_FOLDER", help="teacher's notebooks")
+    out.add_argument("--out", type=_path, default="handout", help="folder to write the handouts to (default handout)")
+    mark = commands.add_parser("mark", help="run submitted notebooks with the teacher's checks; a score per exercise")
+    mark.add_argument(
+        "submissions", nargs="+", type=_path, metavar="SUBMISSION_OR_FOLDER", help="notebooks, or folders of them"
+    )
+    mark.add_argument(
+        "--source", type=_path, default="tutorials", help="folder of the teacher's notebooks (default tutorials)"
+    )
+    mark.add_argument(
+        "--timeout", type=_seconds, default=300, help="seconds any one cell may run before it is stopped (default 300)"
+    )
+    mark.add_argument(
+        "--jobs", type=_jobs, default=1, help="submissions marked at once, each in its own kernel (default 1)"
+    )
+    mark.add_argument("--json", action="store_true", help="print the marks as one JSON document")
+    return hw
+
+
+def _notebooks(paths: list[str], what: str) -> list[tuple[Path, str]]:
+    """Each notebook given or under a folder given, with the name the report shows; SteamError for a path that
+    does not exist, a file that is not a .ipynb, a folder with none."""
+    found = []
+    for text in paths:
+        path = Path(text)
+        if path.is_dir():
+            inside = sorted(p for p in path.rglob("*.ipynb") if ".ipynb_checkpoints" not in p.parts and p.is_file())
+            if not inside:
+                raise SteamError(f"{what}: the folder {text!r} holds no notebook (.ipynb)")
+            found += [(p, str(p.relative_to(path))) for p in inside]
+        elif path.is_file():
+            if path.suffix != ".ipynb":
+                raise SteamError(f"{what}: {text!r} is not a notebook (.ipynb)")
+            found.append((path, path.name))
+        else:
+            raise SteamError(f"{what}: {text!r} does not exist")
+    return found
+
+
+def _handout(args: argparse.Namespace) -> int:
+    sources = _notebooks(args.notebooks, "handout")
+    made = [(path, handout(read_notebook(path), path.name)) for path, _ in sources]  # all checked before any write
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise SteamError(f"--out {args.out!r} is a file, not a folder")
+    for path, _ in made:
+        if (out / path.name).resolve() == path.resolve():
+            raise SteamError(f"--out {args.out!r} would overwrite the teacher's notebook {str(path)!r}")
+        if (out / path.name).is_symlink():  # written through, a link would put the handout wherever it points
+            raise SteamError(
+                f"--out {args.out!r}: {str(out / path.name)!r} is a link; remove it or choose another folder"
+            )
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        for path, nb in made:
+            (out / path.name).write_text(json.dumps(nb, indent=1, ensure_ascii=False) + "\n", encoding="utf-8")
+    except OSError as exc:
+        raise SteamError(f"cannot write the handouts to {args.out!r}: {exc.strerror or exc}") from None
+    print(f"wrote {len(made)} handout{'s' * (len(made) != 1)} to {out} (answers empty, no solution, no marking check)")
+    return 0
+
+
+def _check_given(given: list[str], tutorials: dict[str, Tutorial]) -> None:
+    """A notebook named on the command line must be one, and a handout of one of the teacher's notebooks."""
+    for text in given:
+        path = Path(text)
+        if path.is_file():
+            nb = read_notebook(path)
+            if tutorial_of(path, nb, tutorials) is None:
+                raise SteamError(f"{text!r} is not a handout of any of the teacher's notebooks in --source")
+
+
+def _print(marks: list[SubmissionMark]) -> None:
+    for m in marks:
+        head = f"{m.submission}: {m.tutorial or '?'}, {m.score}/{m.out_of}"
+        print(head + (f" ({m.error})" if m.error else ""), flush=True)
+        for e in m.exercises:
+            lost = f" {e.status}: {e.message}" if e.score < e.out_of else ""
+            print(f"  Exercise {e.number} · {e.title}: {e.score}/{e.out_of}{lost}")
+        for note in m.notes:
+            print(f"  note: {note}")
+
+
+def _mark(args: argparse.Namespace) -> int:
+    requirements()
+    tutorials = load_tutorials(Path(args.source))
+    files = _notebooks(args.submissions, "mark")
+    _check_given(args.submissions, tutorials)
+    marks = []
+    with ThreadPoolExecutor(max_workers=args.jobs) as pool:  # each submission runs in its own kernel process
+        for mark in pool.map(lambda f: mark_submission(f[0], f[1], tutorials, args.timeout), files):
+            marks.append(mark)
+            if not args.json:
+                _print([mark])
+    if args.json:
+        total = {"submissions": [m.as_dict() for m in marks]}
+        json.dump(total, sys.stdout, ensure_ascii=False)
+        print()
+    return 0
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run a parsed ``steam-ref homework ...`` command; returns the exit code."""
+    return _handout(args) if args.homework_command == "handout" else _mark(args)

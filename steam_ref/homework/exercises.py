@@ -1,0 +1,241 @@
+"""A teacher's notebook and its exercises, read by cell tags; the student's handout made from it.
+
+A teacher's notebook (each tutorial in ``tutorials/``) holds every exercise as consecutive cells, found by
+their tags (docs/tutorials.md, "Exercises"):
+
+==================  ==========================  =======================================================
+cell                tags                        in the handout
+==================  ==========================  =======================================================
+the task            ``exercise`` (Markdown,     kept
+                    headed ``### Exercise k``)
+the solution        ``solution``, ``hide-cell`` replaced by an empty answer cell (tag ``answer``, the
+                                                solution's cell id), naming what the checks read
+the check           ``check``                   kept: properties any right answer has, never the answer
+the marking checks  ``hidden-check``,           removed: the teacher's marking run adds them back
+                    ``remove-cell``
+==================  ==========================  =======================================================
+
+``hide-cell`` folds a solution and ``remove-cell`` leaves a marking check off the documentation site; running
+the teacher's notebook runs all of them, so every check is tested against the solution.
+"""
+
+from __future__ import annotations
+
+import ast
+import copy
+import json
+import re
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from ..errors import SteamError
+
+__all__ = [
+    "ANSWER",
+    "CHECK",
+    "HIDDEN",
+    "SOLUTION",
+    "TASK",
+    "Exercise",
+    "answer_cells",
+    "exercises",
+    "handout",
+    "handout_of",
+    "read_notebook",
+    "source",
+    "tags",
+]
+
+TASK, SOLUTION, CHECK, HIDDEN, ANSWER = "exercise", "solution", "check", "hidden-check", "answer"
+HEADING = re.compile(r"###\s*Exercise\s+(\d+)\s*(?:[·:.-]\s*)?(.*)")
+METADATA = "steam_ref"  # the notebook metadata key the tutorials already use; a handout adds "handout_of"
+
+
+@dataclass(frozen=True)
+class Exercise:
+    """One exercise of a teacher's notebook: the positions of its cells and what its checks read."""
+
+    number: int  # k of "### Exercise k"
+    title: str
+    task: int  # index of the task cell
+    solution: int  # index of the solution cell
+    check: int  # index of the check cell
+    hidden: tuple[int, ...]  # indices of the marking checks (none, or the cells right after the check)
+    task_id: str  # the cells' ids, which the handout keeps (the answer cell takes the solution's)
+    solution_id: str
+    check_id: str
+    names: tuple[str, ...]  # what the solution defines and the checks read: what the answer must define
+
+    @property
+    def label(self) -> str:
+        return f"Exercise {self.number}" + (f" · {self.title}" if self.title else "")
+
+
+def source(cell: dict) -> str:
+    """A cell's source as one string (nbformat stores a list of lines or a string)."""
+    text = cell.get("source", "")
+    return "".join(text) if isinstance(text, list) else str(text)
+
+
+def tags(cell: dict) -> set[str]:
+    return set(cell.get("metadata", {}).get("tags", []))
+
+
+def read_notebook(path: Path) -> dict[str, Any]:
+    """The notebook at ``path`` as nbformat 4 JSON; SteamError naming the file if it is not one."""
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise SteamError(f"cannot read {str(path)!r}: {getattr(exc, 'strerror', None) or exc}") from None
+    try:
+        nb = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise SteamError(f"{str(path)!r} is not a notebook: not JSON ({exc.msg} at line {exc.lineno})") from None
+    cells = nb.get("cells") if isinstance(nb, dict) else None
+    if not isinstance(cells, list) or nb.get("nbformat") != 4 or not all(isinstance(c, dict) for c in cells):
+        raise SteamError(f"{str(path)!r} is not a notebook: no nbformat 4 'cells' list")
+    return nb
+
+
+def _bound(body: list[ast.stmt]) -> list[str]:
+    """Names a block binds for later cells (assignments, functions, classes, imports), loop variables left out."""
+    names: list[str] = []
+    for node in body:
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            names.append(node.name)
+        elif isinstance(node, (ast.Import, ast.ImportFrom)):
+            names += [(a.asname or a.name).split(".")[0] for a in node.names]
+        elif isinstance(node, (ast.Assign, ast.AnnAssign, ast.AugAssign)):
+            targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+            names += [n.id for t in targets for n in ast.walk(t) if isinstance(n, ast.Name)]
+        for field in ("body", "orelse", "finalbody"):  # inside if, for, while, with, try
+            inner = getattr(node, field, None)
+            if isinstance(inner, list) and not isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+                names += _bound(inner)
+    return names
+
+
+def _read(code: str) -> set[str]:
+    """Names a cell reads that it does not bind itself (nor as a loop or comprehension variable)."""
+    nodes = [n for n in ast.walk(ast.parse(code)) if isinstance(n, ast.Name)]
+    stored = {n.id for n in nodes if isinstance(n.ctx, ast.Store)}
+    return {n.id for n in nodes if isinstance(n.ctx, ast.Load)} - stored
+
+
+def _names(nb: dict, solution: int, checks: list[int]) -> tuple[str, ...]:
+    try:
+        read = set().union(*(_read(source(nb["cells"][i])) for i in checks))
+        return tuple(dict.fromkeys(n for n in _bound(ast.parse(source(nb["cells"][solution])).body) if n in read))
+    except SyntaxError:
+        return ()
+
+
+def exercises(nb: dict, name: str) -> list[Exercise]:
+    """The exercises of a teacher's notebook, in order; SteamError naming ``name`` and the cell if one is
+    not a task followed by its solution and its check (docs/tutorials.md's convention)."""
+    cells = nb["cells"]
+    found = []
+    for i, cell in enumerate(cells):
+        if TASK not in tags(cell):
+            continue
+        heading = HEADING.match(source(cell).lstrip())
+        if cell.get("cell_type") != "markdown" or heading is None:
+            raise SteamError(f"{name}: cell {i} is tagged {TASK!r} but is not a Markdown cell headed '### Exercise k'")
+        parts = cells[i + 1 : i + 3]
+        wanted = ((SOLUTION, "its solution"), (CHECK, "its check"))
+        for offset, (tag, what) in enumerate(wanted, start=1):
+            if (
+                len(parts) < offset
+                or parts[offset - 1].get("cell_type") != "code"
+                or tag not in tags(parts[offset - 1])
+            ):
+                raise SteamError(
+                    f"{name}: exercise {heading[1]} (cell {i}) is not followed by {what}, a code cell tagged {tag!r}"
+                )
+        hidden = []
+        j = i + 3
+        while j < len(cells) and HIDDEN in tags(cells[j]) and cells[j].get("cell_type") == "code":
+            hidden.append(j)
+            j += 1
+        found.append(
+            Exercise(
+                number=int(heading[1]),
+                title=heading[2].strip(),
+                task=i,
+                solution=i + 1,
+                check=i + 2,
+                hidden=tuple(hidden),
+                task_id=str(cell.get("id", "")),
+                solution_id=str(cells[i + 1].get("id", "")),
+                check_id=str(cells[i + 2].get("id", "")),
+                names=_names(nb, i + 1, [i + 2, *hidden]),
+            )
+        )
+    placed = {k for e in found for k in (e.solution, e.check, *e.hidden)}
+    for i, cell in enumerate(cells):
+        stray = tags(cell) & {SOLUTION, CHECK, HIDDEN}
+        if stray and i not in placed:
+            raise SteamError(f"{name}: cell {i} is tagged {sorted(stray)[0]!r} but belongs to no exercise")
+    return found
+
+
+def _answer_cell(exercise: Exercise) -> dict:
+    wanted = ", ".join(f"`{n}`" for n in exercise.names) or "the names the task asks for"
+    text = f"# Your answer to exercise {exercise.number}: define {wanted} (the check below reads them)\n"
+    cell: dict[str, Any] = {"cell_type": "code", "execution_count": None, "metadata": {"tags": [ANSWER]}, "outputs": []}
+    if exercise.solution_id:
+        cell["id"] = exercise.solution_id
+    return {**cell, "source": text}
+
+
+def handout(nb: dict, name: str) -> dict:
+    """The student's copy of a teacher's notebook: each solution an empty answer cell, no marking check, no
+    output; the notebook's metadata names the tutorial (``steam_ref.handout_of``), which the marking run reads."""
+    found = exercises(nb, name)
+    if not found:
+        raise SteamError(f"{name} has no exercise (no Markdown cell tagged {TASK!r})")
+    by_solution = {e.solution: e for e in found}
+    hidden = {i for e in found for i in e.hidden}
+    cells = []
+    for i, cell in enumerate(nb["cells"]):
+        if i in hidden:
+            continue
+        if i in by_solution:
+            cells.append(_answer_cell(by_solution[i]))
+            continue
+        kept = copy.deepcopy(cell)
+        if kept.get("cell_type") == "code":
+            kept["outputs"], kept["execution_count"] = [], None
+        cells.append(kept)
+    out = copy.deepcopy({k: v for k, v in nb.items() if k != "cells"})
+    meta = out.setdefault("metadata", {})
+    meta[METADATA] = {**meta.get(METADATA, {}), "handout_of": Path(name).stem}
+    return {**out, "cells": cells}
+
+
+def handout_of(nb: dict) -> str | None:
+    """The tutorial a handout (or a student's copy of it) was made from, as its metadata says."""
+    meta = nb.get("metadata", {}).get(METADATA, {})
+    found = meta.get("handout_of") if isinstance(meta, dict) else None
+    return found if isinstance(found, str) else None
+
+
+def answer_cells(submission: dict, exercise: Exercise, position: int) -> list[dict] | None:
+    """The student's answer to ``exercise`` in ``submission``: the code cells between its task cell and the
+    check below it. The task is found by its cell id, else as the ``position``-th task cell (0-based); None if
+    the submission has no such task."""
+    cells = submission["cells"]
+    start = next((i for i, c in enumerate(cells) if exercise.task_id and c.get("id") == exercise.task_id), None)
+    if start is None:
+        tasks = [i for i, c in enumerate(cells) if TASK in tags(c)]
+        start = tasks[position] if position < len(tasks) else None
+    if start is None:
+        return None
+    answer = []
+    for cell in cells[start + 1 :]:
+        if tags(cell) & {CHECK, TASK, HIDDEN} or (exercise.check_id and cell.get("id") == exercise.check_id):
+            break
+        if cell.get("cell_type") == "code":
+            answer.append(cell)
+    return answer

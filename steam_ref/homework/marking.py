@@ -1,0 +1,284 @@
+"""The teacher's marking run: each submission's answers run between the teacher's own cells and checks.
+
+A submission contributes only its answers (the code cells between each task and its check). The notebook that
+runs is the teacher's: its lesson cells, the student's answer where the solution was, then the teacher's check
+and marking checks, so an edited or deleted check changes nothing. It runs in a fresh kernel (nbclient) in the
+teacher's notebook's folder, every cell under a time limit; a cell that raises or runs over its limit is
+recorded and the run goes on, so one exercise's failure costs that exercise only. An exercise scores its point
+when its check and marking checks ran without an error. A kernel that dies (``os._exit``), or that a timed-out
+cell still holds after a second timeout, ends the run: what had not run scores 0, saying why.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import copy
+import re
+import subprocess
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from ..errors import SteamError
+from .exercises import Exercise, answer_cells, exercises, handout_of, read_notebook, source
+
+__all__ = [
+    "ExerciseMark",
+    "SubmissionMark",
+    "Tutorial",
+    "load_tutorials",
+    "mark_submission",
+    "requirements",
+    "tutorial_of",
+]
+
+TIMEOUT = "CellTimeoutError"  # the error name a cell stopped at its time limit is recorded under
+MAX_MESSAGE = 300
+
+
+def requirements() -> None:
+    """SteamError saying what to install unless nbformat, nbclient and ipykernel are importable."""
+    import importlib.util
+
+    missing = [m for m in ("nbformat", "nbclient", "ipykernel") if importlib.util.find_spec(m) is None]
+    if missing:
+        raise SteamError(f"marking runs notebooks and needs {', '.join(missing)}: pip install 'steam_ref[notebooks]'")
+
+
+@dataclass(frozen=True)
+class Tutorial:
+    """A teacher's notebook: its name (file stem), its folder (the kernel's working folder), its exercises."""
+
+    name: str
+    folder: Path
+    notebook: dict[str, Any]
+    exercises: tuple[Exercise, ...]
+
+
+def load_tutorials(folder: Path) -> dict[str, Tutorial]:
+    """Every notebook with exercises in ``folder``, by name; SteamError if there is none."""
+    if not folder.is_dir():
+        what = "does not exist" if not folder.exists() else "is not a folder"
+        raise SteamError(f"the teacher's notebooks: {str(folder)!r} {what} (give their folder with --source)")
+    found = {}
+    for path in sorted(folder.glob("*.ipynb")):
+        nb = read_notebook(path)
+        listed = tuple(exercises(nb, path.name))
+        if listed:
+            found[path.stem] = Tutorial(path.stem, path.parent.resolve(), nb, listed)
+    if not found:
+        raise SteamError(f"no notebook with exercises in {str(folder)!r} (give the teacher's notebooks with --source)")
+    return found
+
+
+@dataclass(frozen=True)
+class ExerciseMark:
+    number: int
+    title: str
+    score: int
+    out_of: int
+    status: str  # passed, failed, error, timeout, not run, no answer
+    message: str  # what went wrong, never the expected value (the checks' messages say what, not how much)
+
+
+@dataclass(frozen=True)
+class SubmissionMark:
+    submission: str
+    tutorial: str | None
+    exercises: tuple[ExerciseMark, ...] = ()
+    error: str | None = None  # why the submission could not be marked at all
+    notes: tuple[str, ...] = field(default=())  # a cell of the teacher's lesson that failed: the set-up's fault
+
+    @property
+    def score(self) -> int:
+        return sum(e.score for e in self.exercises)
+
+    @property
+    def out_of(self) -> int:
+        return sum(e.out_of for e in self.exercises)
+
+    def as_dict(self) -> dict[str, Any]:
+        return {
+            "submission": self.submission,
+            "tutorial": self.tutorial,
+            "score": self.score,
+            "out_of": self.out_of,
+            "error": self.error,
+            "notes": list(self.notes),
+            "exercises": [e.__dict__ for e in self.exercises],
+        }
+
+
+def _one_line(text: str) -> str:
+    line = " ".join(str(text).split())
+    line = re.sub(r"\x1b\[[0-9;]*m", "", line)  # IPython's colours
+    return line if len(line) <= MAX_MESSAGE else line[: MAX_MESSAGE - 3] + "..."
+
+
+@dataclass
+class _Cell:
+    cell: dict[str, Any]
+    exercise: int | None  # the exercise's position among the tutorial's, for its answer and checks
+    role: str  # lesson, answer, check, hidden
+
+
+def _written(cells: list[dict] | None) -> str | None:
+    """Why an answer is missing (no task cell, nothing but comments), or None if there is code to run."""
+    if cells is None:
+        return "the submission has no task cell for this exercise, so no answer"
+    code = [
+        line for c in cells for line in source(c).splitlines() if line.strip() and not line.lstrip().startswith("#")
+    ]
+    return None if code else "the answer cell holds no code"
+
+
+def _assemble(tutorial: Tutorial, submission: dict) -> tuple[list[_Cell], dict[int, str | None]]:
+    """The cells of the marking run, and for each exercise why it has no answer (None: it has one)."""
+    role_of: dict[int, tuple[int | None, str]] = {}
+    for n, e in enumerate(tutorial.exercises):
+        role_of[e.solution] = (n, "answer")
+        role_of[e.check] = (n, "check")
+        role_of.update(dict.fromkeys(e.hidden, (n, "hidden")))
+    cells: list[_Cell] = []
+    missing: dict[int, str | None] = {}
+    for i, cell in enumerate(tutorial.notebook["cells"]):
+        k, role = role_of.get(i, (None, "lesson"))
+        if role != "answer":
+            cells.append(_Cell(copy.deepcopy(cell), k, role))
+            continue
+        assert k is not None
+        answer = answer_cells(submission, tutorial.exercises[k], k)
+        missing[k] = _written(answer)
+        cells += [_Cell(copy.deepcopy(c), k, "answer") for c in answer or []]
+    for n, c in enumerate(cells):
+        c.cell["id"] = f"marking-{n}"  # unique, whatever the student copied
+        c.cell["source"] = source(c.cell)  # nbformat's list of lines as the one string a kernel runs
+        if c.cell.get("cell_type") == "code":
+            c.cell["outputs"], c.cell["execution_count"] = [], None
+    return cells, missing
+
+
+def _run(cells: list[_Cell], tutorial: Tutorial, timeout: int) -> tuple[dict[int, tuple[str, str] | None], str | None]:
+    """Run the cells in a fresh kernel: for each code cell that ran, None (no error) or (error name, message);
+    and why the run stopped early, if it did."""
+    import nbclient
+    import nbformat
+    from jupyter_core.utils import ensure_async
+    from nbclient.exceptions import DeadKernelError
+
+    nb = copy.deepcopy({k: v for k, v in tutorial.notebook.items() if k != "cells"})
+    nb["cells"] = [c.cell for c in cells]
+    nb["nbformat"], nb["nbformat_minor"] = 4, max(5, int(nb.get("nbformat_minor", 5)))
+    outcomes: dict[int, tuple[str, str] | None] = {}
+    timeouts_in_a_row = 0
+
+    class Stop(Exception):
+        pass
+
+    async def start(cell: Any, cell_index: int) -> None:  # noqa: ARG001 (nbclient's hook signature)
+        if timeouts_in_a_row and client.km is not None and not await ensure_async(client.km.is_alive()):
+            raise DeadKernelError("the kernel died")  # a death taken for a cell's timeout, under load
+        if timeouts_in_a_row >= 2:  # the interrupt did not free the kernel: every later cell would wait too
+            raise Stop
+
+    def executed(cell: Any, cell_index: int, execute_reply: dict | None) -> None:  # noqa: ARG001
+        nonlocal timeouts_in_a_row
+        content = (execute_reply or {}).get("content", {})
+        timed_out = content.get("status") == "error" and content.get("ename") == TIMEOUT
+        timeouts_in_a_row = timeouts_in_a_row + 1 if timed_out else 0
+        if content.get("status") == "error":
+            outcomes[cell_index] = (str(content.get("ename", "Error")), _one_line(content.get("evalue", "")))
+        else:
+            outcomes[cell_index] = None
+
+    client = nbclient.NotebookClient(
+        nbformat.from_dict(nb),
+        timeout=timeout,
+        kernel_name="python3",
+        allow_errors=True,
+        interrupt_on_timeout=True,
+        error_on_timeout={"ename": TIMEOUT, "evalue": f"ran longer than {timeout} s and was stopped", "traceback": []},
+        resources={"metadata": {"path": str(tutorial.folder)}},
+        on_cell_start=start,
+        on_cell_executed=executed,
+    )
+    stopped = None
+    try:
+        # a loop of its own, closed at the end, in whichever thread marks; the kernel's log lines go nowhere
+        asyncio.run(client.async_execute(stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
+    except Stop:
+        stopped = "the run stopped: the kernel was still busy after two cells ran over their time limit"
+    except DeadKernelError:
+        stopped = "the run stopped: the kernel died (did the answer exit Python?)"
+    except Exception as exc:  # the marker reports any failure of the run itself, never stops on it
+        stopped = _one_line(f"the run stopped: {type(exc).__name__}: {exc}")
+    return outcomes, stopped
+
+
+def _verdict(
+    k: int, cells: list[_Cell], outcomes: dict[int, tuple[str, str] | None], stopped: str | None, timeout: int
+) -> tuple[str, str]:
+    """(status, message) of exercise ``k`` from what its cells did: passed when every check ran without an
+    error; else the first of its cells that failed (the answer's error or timeout, then a check's), else why its
+    checks did not run."""
+    mine = [(i, c.role) for i, c in enumerate(cells) if c.exercise == k]
+    checks = [i for i, role in mine if role in ("check", "hidden")]
+    if all(i in outcomes and outcomes[i] is None for i in checks):
+        return "passed", ""
+    failed = [(i, role, outcomes[i]) for i, role in mine if outcomes.get(i) is not None]
+    if not failed:
+        return "not run", stopped or "its check did not run"
+    _, role, error = failed[0]
+    assert error is not None
+    name, message = error
+    if name == TIMEOUT:
+        return (
+            "timeout",
+            f"{'the answer' if role == 'answer' else 'a check'} ran longer than {timeout} s and was stopped",
+        )
+    if role == "answer":
+        return "error", _one_line(f"the answer raised {name}: {message}")
+    said = message if name == "AssertionError" and message else f"{name}: {message}".rstrip(": ")
+    return "failed", _one_line(f"{'check' if role == 'check' else 'marking check'}: {said}")
+
+
+def tutorial_of(path: Path, nb: dict | None, tutorials: dict[str, Tutorial]) -> str | None:
+    """The teacher's notebook a submission answers: the one its metadata names, else the one its file name holds."""
+    named = handout_of(nb) if nb is not None else None
+    if named in tutorials:
+        return named
+    return next((name for name in sorted(tutorials, key=len, reverse=True) if name in path.stem), None)
+
+
+def mark_submission(path: Path, shown: str, tutorials: dict[str, Tutorial], timeout: int) -> SubmissionMark:
+    """Mark the notebook at ``path`` (named ``shown`` in the report); never raises for a bad submission."""
+    try:
+        nb: dict | None = read_notebook(path)
+        problem = None
+    except SteamError as exc:
+        nb, problem = None, str(exc)
+    name = tutorial_of(path, nb, tutorials)
+    if name is None:
+        why = problem or "not a handout of any of the teacher's notebooks (no steam_ref.handout_of metadata)"
+        return SubmissionMark(shown, None, error=_one_line(why))
+    tutorial = tutorials[name]
+    if nb is None:
+        zero = tuple(
+            ExerciseMark(e.number, e.title, 0, 1, "not run", _one_line(problem or "")) for e in tutorial.exercises
+        )
+        return SubmissionMark(shown, name, zero, error=_one_line(problem or ""))
+    cells, missing = _assemble(tutorial, nb)
+    outcomes, stopped = _run(cells, tutorial, timeout)
+    marks = []
+    for k, e in enumerate(tutorial.exercises):
+        status, message = _verdict(k, cells, outcomes, stopped, timeout)
+        if missing.get(k) and status != "passed":
+            status, message = "no answer", str(missing[k])
+        marks.append(ExerciseMark(e.number, e.title, int(status == "passed"), 1, status, message))
+    notes: list[str] = []
+    for i, c in enumerate(cells):
+        error = outcomes.get(i)
+        if c.role == "lesson" and error is not None:  # the teacher's own cell: the marking set-up is at fault
+            notes.insert(0, _one_line(f"a cell of the teacher's notebook raised {error[0]}: {error[1]}"))
+            break
+    return SubmissionMark(shown, name, tuple(marks), notes=tuple(notes))
