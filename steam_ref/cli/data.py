@@ -16,7 +16,9 @@ from ..datasets import fetch as fetching
 from ..datasets.search import data_cache_dir, uncleaned_plaza
 from .args import Subparsers
 
-__all__ = ["add_parser", "run"]
+__all__ = ["SOLVES", "add_parser", "run"]
+
+SOLVES = False  # lists and downloads files: runs no solver, so $STEAM_REF_BLAS_THREADS is not read
 
 
 def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
