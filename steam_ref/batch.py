@@ -157,14 +157,35 @@ def _scaled_condition(info: sp.csc_matrix, chol: SparseCholesky) -> float:
 
 
 def check_stationarity(
-    graph: FactorGraph, values: Values, ordering: Ordering, backend: str | None = None
+    graph: FactorGraph | Iterable[Factor],
+    values: Values | Mapping[Key, NDArray],
+    ordering: Ordering,
+    backend: str | None = None,
 ) -> Stationarity:
     """How far ``values`` is from a stationary point of the cost, and whether float64 can tell.
 
     Linearizes at θ̄ and computes the Gauss-Newton step δ = 𝓘⁻¹Aᵀb: its model decrease ½ (Aᵀb)ᵀδ is
     what one more iteration would gain, a scale-free measure of the gradient Aᵀb (zero exactly at a
     stationary point). The condition estimate says whether that step means anything.
+
+    ``graph``: a FactorGraph or any iterable of factors, as :func:`gauss_newton` takes; ``values``: a
+    value for every variable of the graph and no other (a value no factor names would be left out of
+    the check, which would then say nothing about it); ``ordering``: an Ordering of exactly the graph's
+    variables. Anything else is a SteamError naming the argument.
     """
+    graph = graph if isinstance(graph, FactorGraph) else FactorGraph(graph)
+    values = as_values("values", values)
+    graph.check_values(values)
+    named = set(graph.keys())
+    unconstrained = [k for k in values if k not in named]
+    if unconstrained:
+        raise SteamError(
+            f"check_stationarity: variable {unconstrained[0]!r} has a value but no factor names it, so the check "
+            "cannot say anything about it"
+        )
+    unknown = [k for k in ordering.keys if k not in named] if isinstance(ordering, Ordering) else []  # else: below
+    if unknown:
+        raise SteamError(f"check_stationarity: the ordering holds {unknown[0]!r}, which no factor of the graph names")
     backend = sparse_backend(backend)
     groups = linearize(graph.factors, values)  # [YIB Eq. 9]
     info, rhs = LinearSystem.from_groups(groups, ordering).information()

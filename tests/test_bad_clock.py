@@ -168,3 +168,11 @@ def test_the_priors_clock_is_the_setups_choice(data):
     a = run_online(plaza_like, SETUP, StreamOptions(max_poses=30))
     b = run_online(restamped(data, data.times), SETUP, StreamOptions(max_poses=30))
     np.testing.assert_array_equal(a.trajectory, b.trajectory)  # pose-index: the stamps do not reach the prior
+
+
+def test_a_clock_of_no_pose_is_refused():
+    with pytest.raises(SteamError, match="times is empty: a clock needs the time of one pose at least"):
+        Clock.of([])
+    with pytest.raises(SteamError, match="times is empty"):
+        Clock.of(np.array([]), "pose-index")
+    assert Clock.of([5.0]).to_model(6.0) == 6.0  # one pose is a clock: the map is a shift

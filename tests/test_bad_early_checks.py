@@ -16,17 +16,20 @@ import numpy as np
 import pytest
 import scipy.io
 
+import steam_ref as sr
+from steam_ref.batch import check_stationarity
 from steam_ref.cli import commands as cli
 from steam_ref.cli import main as entry
 from steam_ref.cli.streams import json_line
 from steam_ref.datasets import generate_synthetic, load_dataset
 from steam_ref.errors import DataError, ShapeError, SteamError
 from steam_ref.factors import GPPriorFactor
+from steam_ref.linear import make_ordering
 from steam_ref.paper.consistency import ConsistencyStudy, run_seed, summarize
 from steam_ref.paper.online import run_online
 from steam_ref.paper.presets import PaperSetup
 from steam_ref.paper.sweep import run_sweep
-from steam_ref.variables import X
+from steam_ref.variables import L, X
 
 SMALL = generate_synthetic(n_steps=12, n_landmarks=3, seed=3, range_sigma=0.3)
 
@@ -205,3 +208,40 @@ def test_a_range_before_the_first_pose_is_refused(tmp_path: Path, capsys):
     code, _, err = _call(capsys, ["run", "--dataset", str(tmp_path / "early.mat"), "--preset", "synthetic"])
     assert code == 2
     assert err == "steam-ref: error: range row 0 at t=-4.0 is before the first pose (t=1.0): no pose to attach it to\n"
+
+
+# --- check_stationarity: its arguments named, as gauss_newton names them ---------------------------
+
+
+def _two_variables():
+    """Two states' worth of factors (a prior on each, a range between): a well-posed problem, its ordering."""
+    factors = [
+        sr.PriorFactor.create(sr.X(0), np.zeros(6), 0.1),
+        sr.PriorFactor.create(sr.L(0), np.array([3.0, 4.0]), 0.5),
+        sr.RangeFactor.create(sr.X(0), sr.L(0), 5.1, 0.2),
+    ]
+    values = {sr.X(0): np.full(6, 0.01), sr.L(0): np.array([3.1, 3.9])}
+    graph = sr.FactorGraph(factors)
+    return factors, values, make_ordering("amd", graph.keys(), sr.Values(values).dims(), [f.keys for f in graph])
+
+
+def test_check_stationarity_takes_a_list_of_factors_and_a_mapping_as_gauss_newton_does():
+    factors, values, ordering = _two_variables()
+    expected = check_stationarity(sr.FactorGraph(factors), sr.Values(values), ordering)
+    found = check_stationarity(factors, values, ordering)  # was AttributeError: 'list' object has no ... 'factors'
+    exact = ("cost", "predicted_decrease", "gradient_norm")  # the condition is a randomized estimate (onenormest)
+    assert [getattr(found, f) for f in exact] == [getattr(expected, f) for f in exact]
+    with pytest.raises(SteamError, match=r"factors must be a factor or an iterable of factors, got factors=None"):
+        check_stationarity(None, values, ordering)
+    with pytest.raises(SteamError, match=r"values must be a Values or a mapping"):
+        check_stationarity(factors, list(values.values()), ordering)
+
+
+def test_check_stationarity_refuses_a_value_no_factor_names_and_an_ordering_of_other_variables():
+    """A value without a factor was left out of the check, which then certified nothing about it."""
+    factors, values, ordering = _two_variables()
+    with pytest.raises(SteamError, match=r"variable x7 has a value but no factor names it"):
+        check_stationarity(factors, {**values, X(7): np.zeros(6)}, ordering)
+    wider = make_ordering("natural", [X(0), L(0), X(7)], {X(0): 6, L(0): 2, X(7): 6}, [[X(0), L(0), X(7)]])
+    with pytest.raises(SteamError, match=r"the ordering holds x7, which no factor of the graph names"):
+        check_stationarity(factors, values, wider)
