@@ -20,8 +20,8 @@ import json
 import numpy as np
 import pytest
 import scipy.io
+from cli_runs import runner
 
-from steam_ref.cli import commands as cli
 from steam_ref.datasets import RangeDataset, generate_synthetic, load_dataset
 from steam_ref.errors import ClockError, SteamError
 from steam_ref.evaluate import read_tum, states_at
@@ -55,9 +55,14 @@ def scaled_file(tmp_path, data: RangeDataset, factor: float):
     return path
 
 
+_cli = runner("run")
+
+
 def run_json(capsys, *argv) -> dict:
-    assert cli.main(["run", *map(str, argv), "--json", "--no-progress"]) == 0
-    return json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    """The figures of ``steam-ref run ARGV --json``, which must succeed."""
+    code, out, err = _cli(capsys, *argv, "--json", "--no-progress")
+    assert code == 0, err
+    return json.loads(out.strip().splitlines()[-1])
 
 
 # -- (a) a lag is in the data's seconds ------------------------------------------------------------

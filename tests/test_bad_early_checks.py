@@ -15,10 +15,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 import scipy.io
+from cli_runs import runner
 
 import steam_ref as sr
 from steam_ref.batch import check_stationarity
-from steam_ref.cli import commands as cli
 from steam_ref.cli import main as entry
 from steam_ref.cli.streams import json_line
 from steam_ref.datasets import generate_synthetic, load_dataset
@@ -38,10 +38,7 @@ def _never(*args, **kwargs):
     raise AssertionError("the run started although the input was bad")
 
 
-def _call(capsys, argv: list[str]) -> tuple[int, str, str]:
-    code = cli.main(argv)
-    out = capsys.readouterr()
-    return code, out.out, out.err
+_cli = runner()
 
 
 # -- the command line: refused before the run, naming the option --
@@ -68,7 +65,7 @@ def test_refused_before_the_run_naming_the_option(capsys, monkeypatch, argv, nee
     for name in ("StreamingEstimator", "score_against_batch", "generate_synthetic"):
         monkeypatch.setattr(f"steam_ref.cli.run.{name}", _never)
     monkeypatch.setattr("steam_ref.cli.consistency.run_sweep", _never)
-    code, out, err = _call(capsys, argv)
+    code, out, err = _cli(capsys, *argv)
     assert (code, out) == (2, "") and len(err.splitlines()) == 1
     assert needle in err
 
@@ -83,7 +80,7 @@ def test_the_one_rule_for_numbers_still_reads_every_plain_decimal(capsys, monkey
 
     monkeypatch.setattr("steam_ref.cli.run.StreamingEstimator", record)
     for text, value in (("10", 10.0), ("2.5", 2.5), (".5", 0.5), ("5.", 5.0), ("1e1", 10.0), ("+3E-1", 0.3)):
-        code, _, err = _call(capsys, ["run", "--lag", text])
+        code, _, err = _cli(capsys, "run", "--lag", text)
         assert code == 2 and "stop here" in err and seen["lag"] == value
 
 
@@ -92,7 +89,7 @@ def test_out_of_memory_says_so(capsys, monkeypatch):
         raise MemoryError  # what Python raises with no message: it printed "error: (no message)"
 
     monkeypatch.setattr("steam_ref.cli.run.generate_synthetic", empty)
-    code, _, err = _call(capsys, ["run", "--steps", "5"])
+    code, _, err = _cli(capsys, "run", "--steps", "5")
     assert code == 2 and err == "steam-ref: error: out of memory\n"
 
 
@@ -119,7 +116,7 @@ def test_a_deleted_working_folder_is_named(tmp_path, capsys, monkeypatch):
     monkeypatch.setenv("PWD", str(gone))
     gone.rmdir()
     monkeypatch.setattr("steam_ref.cli.run.StreamingEstimator", _never)
-    code, _, err = _call(capsys, ["run", "--steps", "4", "--save-trajectory", "t.txt"])
+    code, _, err = _cli(capsys, "run", "--steps", "4", "--save-trajectory", "t.txt")
     assert code == 2
     assert err.strip() == (
         f"steam-ref: error: --save-trajectory: 't.txt' is relative to the working folder {str(gone)!r}, which no "
@@ -140,7 +137,7 @@ def test_a_truth_or_dead_reckoning_at_1e300_gives_its_figures(tmp_path, capsys, 
     arrays = SMALL.to_cmu_arrays()
     arrays[column][5, 1] = 1e300
     scipy.io.savemat(tmp_path / "far.mat", arrays)
-    code, out, err = _call(capsys, ["run", "--dataset", str(tmp_path / "far.mat"), "--preset", "synthetic", "--json"])
+    code, out, err = _cli(capsys, "run", "--dataset", str(tmp_path / "far.mat"), "--preset", "synthetic", "--json")
     assert code == 0, err
     summary = json.loads(out)
     key = "rmse_m" if column == "GT" else "dead_reckoning_rmse_m"
@@ -205,7 +202,7 @@ def test_a_range_before_the_first_pose_is_refused(tmp_path: Path, capsys):
     arrays = SMALL.to_cmu_arrays()
     arrays["TD"][0, 0] = arrays["GT"][0, 0] - 5  # it was attached to pose 0 in silence
     scipy.io.savemat(tmp_path / "early.mat", arrays)
-    code, _, err = _call(capsys, ["run", "--dataset", str(tmp_path / "early.mat"), "--preset", "synthetic"])
+    code, _, err = _cli(capsys, "run", "--dataset", str(tmp_path / "early.mat"), "--preset", "synthetic")
     assert code == 2
     assert err == "steam-ref: error: range row 0 at t=-4.0 is before the first pose (t=1.0): no pose to attach it to\n"
 

@@ -4,13 +4,11 @@ from __future__ import annotations
 
 import hashlib
 import json
-import subprocess
-import sys
 
 import numpy as np
 import pytest
 import scipy.io
-from cli_runs import run_module
+from cli_runs import run_module, runner
 
 from steam_ref.cli.commands import main
 from steam_ref.datasets import generate_synthetic
@@ -42,10 +40,7 @@ def small_mat(tmp_path_factory):
     return path, data
 
 
-def _run(capsys, *argv):
-    code = main(list(argv))
-    out, err = capsys.readouterr()
-    return code, out, err
+_run = runner()
 
 
 def test_json_line_has_the_keys_and_sane_values(capsys, small_mat):
@@ -251,31 +246,12 @@ def test_malformed_data_file_is_one_line_exit_2(capsys, tmp_path):
 
 def test_module_entry_point_runs(small_mat):
     path, _ = small_mat
-    proc = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "steam_ref",
-            "run",
-            "--dataset",
-            str(path),
-            "--preset",
-            "synthetic",
-            "--method",
-            "pb",
-            "--skip",
-            "5",
-            "--json",
-        ],
-        capture_output=True,
-        text=True,
-        timeout=120,
+    proc = run_module(
+        "run", "--dataset", path, "--preset", "synthetic", "--method", "pb", "--skip", 5, "--json", timeout=120
     )
     assert proc.returncode == 0, proc.stderr
     assert set(json.loads(proc.stdout)) >= JSON_KEYS
-    proc = subprocess.run(
-        [sys.executable, "-m", "steam_ref", "run", "--skip", "-1"], capture_output=True, text=True, timeout=60
-    )
+    proc = run_module("run", "--skip", "-1", timeout=60)
     assert proc.returncode == 2 and len(proc.stderr.strip().splitlines()) == 1
 
 

@@ -17,6 +17,7 @@ import shutil
 import socket
 import threading
 from pathlib import Path
+from typing import ClassVar
 
 import pytest
 from cli_runs import runner
@@ -50,7 +51,7 @@ def mirror(tmp_path_factory: pytest.TempPathFactory, shared_data: Path):
 
 
 class _QuietHandler(http.server.SimpleHTTPRequestHandler):
-    asked: list[str] = []  # every path asked for, its query included (the mirror serves the file without it)
+    asked: ClassVar[list[str]] = []  # every path asked for, its query included (the mirror serves the file without it)
 
     def do_GET(self):
         self.asked.append(self.path)
