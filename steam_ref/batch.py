@@ -157,46 +157,25 @@ def _scaled_condition(info: sp.csc_matrix, chol: SparseCholesky) -> float:
 
 
 def check_stationarity(
-    graph: FactorGraph | Iterable[Factor],
-    values: Values | Mapping[Key, NDArray],
-    ordering: Ordering,
-    backend: str | None = None,
+    graph: FactorGraph | Iterable[Factor], values: Values | Mapping, ordering: Ordering, backend: str | None = None
 ) -> Stationarity:
     """How far ``values`` is from a stationary point of the cost, and whether float64 can tell.
 
     Linearizes at θ̄ and computes the Gauss-Newton step δ = 𝓘⁻¹Aᵀb: its model decrease ½ (Aᵀb)ᵀδ is
     what one more iteration would gain, a scale-free measure of the gradient Aᵀb (zero exactly at a
-    stationary point). The condition estimate says whether that step means anything.
-
-    ``graph``: a FactorGraph or any iterable of factors, as :func:`gauss_newton` takes; ``values``: a
-    value for every variable of the graph and no other (a value no factor names would be left out of
-    the check, which would then say nothing about it); ``ordering``: an Ordering of exactly the graph's
-    variables. Anything else is a SteamError naming the argument.
+    stationary point). The condition estimate says whether that step means anything. ``graph`` and ``values``
+    as :func:`gauss_newton` takes them; a value no factor names is refused (the check would say nothing of it).
     """
-    graph = graph if isinstance(graph, FactorGraph) else FactorGraph(graph)
-    values = as_values("values", values)
-    graph.check_values(values)
-    named = set(graph.keys())
-    unconstrained = [k for k in values if k not in named]
-    if unconstrained:
-        raise SteamError(
-            f"check_stationarity: variable {unconstrained[0]!r} has a value but no factor names it, so the check "
-            "cannot say anything about it"
-        )
-    unknown = [k for k in ordering.keys if k not in named] if isinstance(ordering, Ordering) else []  # else: below
-    if unknown:
-        raise SteamError(f"check_stationarity: the ordering holds {unknown[0]!r}, which no factor of the graph names")
+    graph, values = graph if isinstance(graph, FactorGraph) else FactorGraph(graph), as_values("values", values)
+    if extra := set(values).difference(graph.keys()):
+        raise SteamError(f"check_stationarity: variable {min(extra, key=repr)!r} has a value but no factor names it")
     backend = sparse_backend(backend)
     groups = linearize(graph.factors, values)  # [YIB Eq. 9]
     info, rhs = LinearSystem.from_groups(groups, ordering).information()
     chol = SparseCholesky.factor(info, ordering, backend, check_symmetry=False)  # AᵀA  [YIB Eq. 11]
     delta = chol.solve(rhs)  # δθ* = 𝓘⁻¹ b  [YIB Eq. 11]
-    return Stationarity(
-        cost=sum(g.cost for g in groups),
-        predicted_decrease=0.5 * float(rhs @ delta),
-        gradient_norm=float(np.max(np.abs(rhs))) if len(rhs) else 0.0,
-        condition=_scaled_condition(info, chol),
-    )
+    gradient = float(np.max(np.abs(rhs))) if len(rhs) else 0.0
+    return Stationarity(sum(g.cost for g in groups), 0.5 * float(rhs @ delta), gradient, _scaled_condition(info, chol))
 
 
 def certify(

