@@ -182,8 +182,8 @@ def test_without_threadpoolctl_the_solvers_run_unlimited_and_say_so_once(monkeyp
         warnings.simplefilter("always")
         first.update(factors, values)
         second.update(factors, values)
-    assert [str(w.message)[:40] for w in said] == ["threadpoolctl (a dependency of steam_ref)"]
-    assert issubclass(said[0].category, sr.SteamWarning) and "is not installed" in str(said[0].message)
+    assert len(said) == 1 and issubclass(said[0].category, sr.SteamWarning)  # once, not at every solve
+    assert str(said[0].message).startswith("threadpoolctl (a dependency of steam_ref) is not installed")
     assert threads._depth == 0
     monkeypatch.undo()  # the same estimate with the limit
     limited = sr.IncrementalSolver()
