@@ -216,3 +216,12 @@ def test_outputs_that_would_lose_data_are_refused_before_the_run(tmp_path, capsy
         assert (code, out) == (2, "") and len(err.splitlines()) == 1
         assert needle in err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["x"]
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full")
+def test_an_error_with_stderr_full_still_exits_2_not_with_a_traceback():
+    """The error line cannot be written; the exit code still says what happened (it was 1: the failed print's
+    own traceback, which could not be written either)."""
+    with open("/dev/full", "w") as full:
+        proc = run_module("run", "--skip", "-1", stderr=full, stdout=subprocess.PIPE, timeout=120)
+    assert proc.returncode == 2 and proc.stdout == ""
