@@ -5,17 +5,15 @@ in-process (``steam_ref.cli.commands.main``); two run the module as a user would
 
 from __future__ import annotations
 
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 import scipy.io
+from cli_runs import run_module, runner
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from steam_ref.cli import commands as cli
 from steam_ref.datasets import generate_synthetic
 
 SMALL = generate_synthetic(n_steps=4, n_landmarks=2, seed=3, range_sigma=0.3)
@@ -122,10 +120,7 @@ BAD = {
 }
 
 
-def _call(capsys, argv: list[str]) -> tuple[int, str, str]:
-    code = cli.main(argv)
-    out, err = capsys.readouterr()
-    return code, out, err
+_cli = runner()
 
 
 def _assert_one_line_exit_2(code: int, out: str, err: str, needle: str) -> None:
@@ -140,13 +135,13 @@ def _assert_one_line_exit_2(code: int, out: str, err: str, needle: str) -> None:
 def test_bad_input_is_one_line_and_exit_2_before_any_run(capsys, places, name: str) -> None:
     argv, needle = BAD[name]
     argv = [a.format(**places) for a in argv]
-    _assert_one_line_exit_2(*_call(capsys, argv), needle.format(**places))
+    _assert_one_line_exit_2(*_cli(capsys, *argv), needle.format(**places))
 
 
 def test_an_output_check_leaves_no_file_behind(capsys, places) -> None:
     """The check of --save-estimates/--plot makes nothing at the path (nothing is opened or made there)."""
     target = Path(places["root"]) / "est.npz"
-    code, _, err = _call(capsys, ["run", "--dataset", places["missing"] + ".mat", "--save-estimates", str(target)])
+    code, _, err = _cli(capsys, "run", "--dataset", places["missing"] + ".mat", "--save-estimates", target)
     assert code == 2 and "missing.mat" in err and not target.exists()
 
 
@@ -179,7 +174,7 @@ OPTION = st.sampled_from(
 def test_any_value_of_any_option_gives_one_line_and_exit_2(capsys, places, option: str, value: str) -> None:
     """The data set is missing, so a valid value still ends in its one-line error, before any run."""
     dataset = [] if option == "--dataset" else ["--dataset", places["missing"] + ".mat"]
-    code, out, err = _call(capsys, ["run", *dataset, option, value])
+    code, out, err = _cli(capsys, "run", *dataset, option, value)
     _assert_one_line_exit_2(code, out, err, "")
 
 
@@ -192,6 +187,6 @@ def test_any_value_of_any_option_gives_one_line_and_exit_2(capsys, places, optio
 )
 def test_the_module_as_a_user_runs_it(places, argv, needle) -> None:
     argv = [places["one"] if a == "one.mat" else a for a in argv]
-    proc = subprocess.run([sys.executable, "-m", "steam_ref", *argv], capture_output=True, text=True, timeout=120)
+    proc = run_module(*argv, timeout=120)
     assert proc.returncode == 2 and proc.stdout == ""
     assert len(proc.stderr.splitlines()) == 1 and needle in proc.stderr and "Traceback" not in proc.stderr

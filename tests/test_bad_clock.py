@@ -20,8 +20,8 @@ import json
 import numpy as np
 import pytest
 import scipy.io
+from cli_runs import runner
 
-from steam_ref.cli import commands as cli
 from steam_ref.datasets import RangeDataset, generate_synthetic, load_dataset
 from steam_ref.errors import ClockError, SteamError
 from steam_ref.evaluate import read_tum, states_at
@@ -55,9 +55,14 @@ def scaled_file(tmp_path, data: RangeDataset, factor: float):
     return path
 
 
+_cli = runner("run")
+
+
 def run_json(capsys, *argv) -> dict:
-    assert cli.main(["run", *map(str, argv), "--json", "--no-progress"]) == 0
-    return json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    """The figures of ``steam-ref run ARGV --json``, which must succeed."""
+    code, out, err = _cli(capsys, *argv, "--json", "--no-progress")
+    assert code == 0, err
+    return json.loads(out.strip().splitlines()[-1])
 
 
 # -- (a) a lag is in the data's seconds ------------------------------------------------------------
@@ -168,3 +173,11 @@ def test_the_priors_clock_is_the_setups_choice(data):
     a = run_online(plaza_like, SETUP, StreamOptions(max_poses=30))
     b = run_online(restamped(data, data.times), SETUP, StreamOptions(max_poses=30))
     np.testing.assert_array_equal(a.trajectory, b.trajectory)  # pose-index: the stamps do not reach the prior
+
+
+def test_a_clock_of_no_pose_is_refused():
+    with pytest.raises(SteamError, match="times is empty: a clock needs the time of one pose at least"):
+        Clock.of([])
+    with pytest.raises(SteamError, match="times is empty"):
+        Clock.of(np.array([]), "pose-index")
+    assert Clock.of([5.0]).to_model(6.0) == 6.0  # one pose is a clock: the map is a shift

@@ -15,18 +15,21 @@ from pathlib import Path
 import numpy as np
 import pytest
 import scipy.io
+from cli_runs import runner
 
-from steam_ref.cli import commands as cli
+import steam_ref as sr
+from steam_ref.batch import check_stationarity
 from steam_ref.cli import main as entry
 from steam_ref.cli.streams import json_line
 from steam_ref.datasets import generate_synthetic, load_dataset
 from steam_ref.errors import DataError, ShapeError, SteamError
 from steam_ref.factors import GPPriorFactor
+from steam_ref.linear import make_ordering
 from steam_ref.paper.consistency import ConsistencyStudy, run_seed, summarize
 from steam_ref.paper.online import run_online
 from steam_ref.paper.presets import PaperSetup
 from steam_ref.paper.sweep import run_sweep
-from steam_ref.variables import X
+from steam_ref.variables import L, X
 
 SMALL = generate_synthetic(n_steps=12, n_landmarks=3, seed=3, range_sigma=0.3)
 
@@ -35,10 +38,7 @@ def _never(*args, **kwargs):
     raise AssertionError("the run started although the input was bad")
 
 
-def _call(capsys, argv: list[str]) -> tuple[int, str, str]:
-    code = cli.main(argv)
-    out = capsys.readouterr()
-    return code, out.out, out.err
+_cli = runner()
 
 
 # -- the command line: refused before the run, naming the option --
@@ -65,7 +65,7 @@ def test_refused_before_the_run_naming_the_option(capsys, monkeypatch, argv, nee
     for name in ("StreamingEstimator", "score_against_batch", "generate_synthetic"):
         monkeypatch.setattr(f"steam_ref.cli.run.{name}", _never)
     monkeypatch.setattr("steam_ref.cli.consistency.run_sweep", _never)
-    code, out, err = _call(capsys, argv)
+    code, out, err = _cli(capsys, *argv)
     assert (code, out) == (2, "") and len(err.splitlines()) == 1
     assert needle in err
 
@@ -80,7 +80,7 @@ def test_the_one_rule_for_numbers_still_reads_every_plain_decimal(capsys, monkey
 
     monkeypatch.setattr("steam_ref.cli.run.StreamingEstimator", record)
     for text, value in (("10", 10.0), ("2.5", 2.5), (".5", 0.5), ("5.", 5.0), ("1e1", 10.0), ("+3E-1", 0.3)):
-        code, _, err = _call(capsys, ["run", "--lag", text])
+        code, _, err = _cli(capsys, "run", "--lag", text)
         assert code == 2 and "stop here" in err and seen["lag"] == value
 
 
@@ -89,7 +89,7 @@ def test_out_of_memory_says_so(capsys, monkeypatch):
         raise MemoryError  # what Python raises with no message: it printed "error: (no message)"
 
     monkeypatch.setattr("steam_ref.cli.run.generate_synthetic", empty)
-    code, _, err = _call(capsys, ["run", "--steps", "5"])
+    code, _, err = _cli(capsys, "run", "--steps", "5")
     assert code == 2 and err == "steam-ref: error: out of memory\n"
 
 
@@ -116,7 +116,7 @@ def test_a_deleted_working_folder_is_named(tmp_path, capsys, monkeypatch):
     monkeypatch.setenv("PWD", str(gone))
     gone.rmdir()
     monkeypatch.setattr("steam_ref.cli.run.StreamingEstimator", _never)
-    code, _, err = _call(capsys, ["run", "--steps", "4", "--save-trajectory", "t.txt"])
+    code, _, err = _cli(capsys, "run", "--steps", "4", "--save-trajectory", "t.txt")
     assert code == 2
     assert err.strip() == (
         f"steam-ref: error: --save-trajectory: 't.txt' is relative to the working folder {str(gone)!r}, which no "
@@ -137,7 +137,7 @@ def test_a_truth_or_dead_reckoning_at_1e300_gives_its_figures(tmp_path, capsys, 
     arrays = SMALL.to_cmu_arrays()
     arrays[column][5, 1] = 1e300
     scipy.io.savemat(tmp_path / "far.mat", arrays)
-    code, out, err = _call(capsys, ["run", "--dataset", str(tmp_path / "far.mat"), "--preset", "synthetic", "--json"])
+    code, out, err = _cli(capsys, "run", "--dataset", str(tmp_path / "far.mat"), "--preset", "synthetic", "--json")
     assert code == 0, err
     summary = json.loads(out)
     key = "rmse_m" if column == "GT" else "dead_reckoning_rmse_m"
@@ -202,6 +202,43 @@ def test_a_range_before_the_first_pose_is_refused(tmp_path: Path, capsys):
     arrays = SMALL.to_cmu_arrays()
     arrays["TD"][0, 0] = arrays["GT"][0, 0] - 5  # it was attached to pose 0 in silence
     scipy.io.savemat(tmp_path / "early.mat", arrays)
-    code, _, err = _call(capsys, ["run", "--dataset", str(tmp_path / "early.mat"), "--preset", "synthetic"])
+    code, _, err = _cli(capsys, "run", "--dataset", str(tmp_path / "early.mat"), "--preset", "synthetic")
     assert code == 2
     assert err == "steam-ref: error: range row 0 at t=-4.0 is before the first pose (t=1.0): no pose to attach it to\n"
+
+
+# --- check_stationarity: its arguments named, as gauss_newton names them ---------------------------
+
+
+def _two_variables():
+    """Two states' worth of factors (a prior on each, a range between): a well-posed problem, its ordering."""
+    factors = [
+        sr.PriorFactor.create(sr.X(0), np.zeros(6), 0.1),
+        sr.PriorFactor.create(sr.L(0), np.array([3.0, 4.0]), 0.5),
+        sr.RangeFactor.create(sr.X(0), sr.L(0), 5.1, 0.2),
+    ]
+    values = {sr.X(0): np.full(6, 0.01), sr.L(0): np.array([3.1, 3.9])}
+    graph = sr.FactorGraph(factors)
+    return factors, values, make_ordering("amd", graph.keys(), sr.Values(values).dims(), [f.keys for f in graph])
+
+
+def test_check_stationarity_takes_a_list_of_factors_and_a_mapping_as_gauss_newton_does():
+    factors, values, ordering = _two_variables()
+    expected = check_stationarity(sr.FactorGraph(factors), sr.Values(values), ordering)
+    found = check_stationarity(factors, values, ordering)  # was AttributeError: 'list' object has no ... 'factors'
+    exact = ("cost", "predicted_decrease", "gradient_norm")  # the condition is a randomized estimate (onenormest)
+    assert [getattr(found, f) for f in exact] == [getattr(expected, f) for f in exact]
+    with pytest.raises(SteamError, match=r"factors must be a factor or an iterable of factors, got factors=None"):
+        check_stationarity(None, values, ordering)
+    with pytest.raises(SteamError, match=r"values must be a Values or a mapping"):
+        check_stationarity(factors, list(values.values()), ordering)
+
+
+def test_check_stationarity_refuses_a_value_no_factor_names():
+    """A value without a factor was left out of the check, which then certified nothing about it."""
+    factors, values, ordering = _two_variables()
+    with pytest.raises(SteamError, match=r"check_stationarity: variable x7 has a value but no factor names it"):
+        check_stationarity(factors, {**values, X(7): np.zeros(6)}, ordering)
+    wider = make_ordering("natural", [X(0), L(0), X(7)], {X(0): 6, L(0): 2, X(7): 6}, [[X(0), L(0), X(7)]])
+    with pytest.raises(SteamError, match=r"x7"):  # an ordering of a variable no factor names: named too
+        check_stationarity(factors, values, wider)

@@ -1,8 +1,9 @@
 """Output paths of the command: ``--save-estimates`` and ``--plot`` name a regular file, or
 nothing yet in a folder that exists; anything else is refused before the run, in one line naming the
 option, without opening it (a named pipe would block) and without changing a thing (a dangling link
-is neither removed nor given a target). A write that fails after the run (a full disk) names the
-option and the path and leaves what was there as it was; a link is written through and stays a link.
+is refused, neither removed nor given a target: writing through it would make a file the user never
+named). A write that fails after the run (a full disk) names the option and the path and leaves what was
+there as it was; a link to a file is written through and stays a link.
 
 The paths are drawn by hypothesis from every kind of thing a path can end in, under every kind of
 parent; what should happen is worked out from the kinds drawn, not from the file system.
@@ -29,7 +30,7 @@ LEAVES = {
     "file": True,
     "folder": False,
     "fifo": False,
-    "dangling-link": True,  # written through: the link's target is made after the run
+    "dangling-link": False,  # writing through it would make a file where it points (as root: into /etc)
     "link-to-missing-folder": False,
     "link-to-file": True,
     "link-to-fifo": False,
@@ -157,7 +158,24 @@ def test_an_output_path_is_accepted_or_refused_before_the_run_and_nothing_change
         assert "does not exist" in err
 
 
-@pytest.mark.parametrize("leaf_kind", ["missing", "file", "dangling-link", "link-to-file"])
+@pytest.mark.parametrize("option", ["--save-estimates", "--save-trajectory", "--plot", "--tree-dot"])
+def test_a_dangling_link_is_refused_in_one_line_naming_the_path_and_where_it_points(tmp_path, capsys, option):
+    suffix = {"--save-estimates": ".npz", "--save-trajectory": ".txt", "--plot": ".png", "--tree-dot": ".dot"}[option]
+    path = tmp_path / f"out{suffix}"
+    path.symlink_to(tmp_path / "etc" / f"passwd{suffix}")  # as root: /etc/passwd
+    (tmp_path / "etc").mkdir()
+    code = cli.main(["run", "--max-poses", "3", option, str(path)])
+    out, err = capsys.readouterr()
+    assert code == 2 and out == "" and len(err.splitlines()) == 1, err
+    assert f"{option}: {str(path)!r} is a symbolic link to {str(tmp_path / 'etc' / f'passwd{suffix}')!r}" in err
+    assert "which does not exist" in err
+    assert os.listdir(tmp_path / "etc") == [] and os.path.islink(path)
+    with pytest.raises(SteamError, match="is a symbolic link to"):  # a link made dangling after the check
+        write_output(str(path), option, lambda name: Path(name).write_bytes(b"estimates"))
+    assert os.listdir(tmp_path / "etc") == []
+
+
+@pytest.mark.parametrize("leaf_kind", ["missing", "file", "link-to-file"])
 def test_an_accepted_path_is_written_through_and_a_link_stays_a_link(tmp_path: Path, leaf_kind: str) -> None:
     path = make(tmp_path, "folder", leaf_kind, "estimates", ".npz")
     check_output(path, ".npz", "--save-estimates")
@@ -168,7 +186,7 @@ def test_an_accepted_path_is_written_through_and_a_link_stays_a_link(tmp_path: P
     assert not [p for p in tmp_path.rglob(".*") if p.is_file()], "a temporary file was left behind"
 
 
-@pytest.mark.parametrize("leaf_kind", ["missing", "file", "dangling-link", "link-to-file"])
+@pytest.mark.parametrize("leaf_kind", ["missing", "file", "link-to-file"])
 @pytest.mark.parametrize("error", [errno.ENOSPC, errno.EIO, errno.EDQUOT])
 def test_a_failed_write_names_the_option_and_the_path_and_changes_nothing(tmp_path: Path, leaf_kind, error) -> None:
     path = make(tmp_path, "folder", leaf_kind, "plot", ".png")

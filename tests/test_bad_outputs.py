@@ -16,14 +16,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 import scipy.io
+from cli_runs import run_module
 
-import steam_ref
 from steam_ref.cli import commands as cli
 from steam_ref.cli import main as entry
 from steam_ref.datasets import generate_synthetic
 from steam_ref.evaluate import read_tum
 
-ROOT = Path(steam_ref.__file__).resolve().parents[1]  # the package under test, for its subprocesses
 PNG = b"\x89PNG\r\n\x1a\n"
 
 
@@ -142,10 +141,7 @@ def test_conformance_check_with_a_non_ascii_case_name_on_an_ascii_stdout(tmp_pat
 
 
 def test_the_module_on_an_ascii_stdout_is_not_a_traceback():
-    env = dict(os.environ, PYTHONIOENCODING="ascii", PYTHONPATH=str(ROOT))
-    proc = subprocess.run(
-        [sys.executable, "-m", "steam_ref", "run", "--help"], capture_output=True, env=env, timeout=120
-    )
+    proc = run_module("run", "--help", env=dict(os.environ, PYTHONIOENCODING="ascii"), text=False, timeout=120)
     assert proc.returncode == 0 and proc.stderr == b""
     assert b"\\u03b1" in proc.stdout
 
@@ -153,18 +149,18 @@ def test_the_module_on_an_ascii_stdout_is_not_a_traceback():
 # -- stdout closed, a pipe closed by its reader, outputs onto stdout --
 
 
-def _module(argv: list[str], **kwargs) -> subprocess.CompletedProcess:
-    env = dict(os.environ, PYTHONPATH=str(ROOT), MPLBACKEND="Agg")
-    return subprocess.run([sys.executable, "-m", "steam_ref", *argv], env=env, timeout=300, **kwargs)
-
-
 def test_a_closed_stdout_is_refused_before_the_run(tmp_path):
     """Python sets sys.stdout to None when fd 1 is closed, and print() then drops everything: rc 0, nothing."""
     saved = tmp_path / "t.txt"
-    proc = _module(
-        ["run", "--steps", "4", "--save-trajectory", str(saved)],
+    proc = run_module(
+        "run",
+        "--steps",
+        "4",
+        "--save-trajectory",
+        saved,
         stdout=subprocess.DEVNULL,
         stderr=subprocess.PIPE,
+        text=False,
         preexec_fn=lambda: os.close(1),
     )
     assert proc.returncode == 2
@@ -179,7 +175,9 @@ def test_a_pipe_closed_by_its_reader_is_quiet_and_the_files_are_written(tmp_path
     read, write = os.pipe()
     os.close(read)  # the reader went away before a byte was printed
     try:
-        proc = _module(["run", "--steps", "4", "--save-trajectory", str(saved)], stdout=write, stderr=subprocess.PIPE)
+        proc = run_module(
+            "run", "--steps", 4, "--save-trajectory", saved, stdout=write, stderr=subprocess.PIPE, text=False
+        )
     finally:
         os.close(write)
     assert proc.stderr == b""
@@ -190,11 +188,11 @@ def test_a_pipe_closed_by_its_reader_is_quiet_and_the_files_are_written(tmp_path
 def test_an_output_onto_the_file_stdout_goes_to_is_refused(tmp_path):
     log = tmp_path / "summary.json"
     with open(log, "wb") as stdout:
-        proc = _module(
-            ["run", "--steps", "4", "--json", "--save-trajectory", "/dev/stdout"], stdout=stdout, stderr=subprocess.PIPE
+        proc = run_module(
+            "run", "--steps", 4, "--json", "--save-trajectory", "/dev/stdout", stdout=stdout, stderr=subprocess.PIPE
         )
     assert proc.returncode == 2
-    assert "--save-trajectory: '/dev/stdout' is the file stdout is redirected to" in proc.stderr.decode()
+    assert "--save-trajectory: '/dev/stdout' is the file stdout is redirected to" in proc.stderr
 
 
 @pytest.mark.parametrize(
@@ -218,3 +216,12 @@ def test_outputs_that_would_lose_data_are_refused_before_the_run(tmp_path, capsy
         assert (code, out) == (2, "") and len(err.splitlines()) == 1
         assert needle in err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["x"]
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full")
+def test_an_error_with_stderr_full_still_exits_2_not_with_a_traceback():
+    """The error line cannot be written; the exit code still says what happened (it was 1: the failed print's
+    own traceback, which could not be written either)."""
+    with open("/dev/full", "w") as full:
+        proc = run_module("run", "--skip", "-1", stderr=full, stdout=subprocess.PIPE, timeout=120)
+    assert proc.returncode == 2 and proc.stdout == ""

@@ -4,15 +4,15 @@ from __future__ import annotations
 
 import hashlib
 import json
-import subprocess
-import sys
 
 import numpy as np
 import pytest
 import scipy.io
+from cli_runs import run_module, runner
 
 from steam_ref.cli.commands import main
 from steam_ref.datasets import generate_synthetic
+from steam_ref.errors import DivergenceWarning
 from steam_ref.paper.online import run_online
 from steam_ref.paper.presets import PaperSetup
 
@@ -40,10 +40,7 @@ def small_mat(tmp_path_factory):
     return path, data
 
 
-def _run(capsys, *argv):
-    code = main(list(argv))
-    out, err = capsys.readouterr()
-    return code, out, err
+_run = runner()
 
 
 def test_json_line_has_the_keys_and_sane_values(capsys, small_mat):
@@ -249,31 +246,12 @@ def test_malformed_data_file_is_one_line_exit_2(capsys, tmp_path):
 
 def test_module_entry_point_runs(small_mat):
     path, _ = small_mat
-    proc = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "steam_ref",
-            "run",
-            "--dataset",
-            str(path),
-            "--preset",
-            "synthetic",
-            "--method",
-            "pb",
-            "--skip",
-            "5",
-            "--json",
-        ],
-        capture_output=True,
-        text=True,
-        timeout=120,
+    proc = run_module(
+        "run", "--dataset", path, "--preset", "synthetic", "--method", "pb", "--skip", 5, "--json", timeout=120
     )
     assert proc.returncode == 0, proc.stderr
     assert set(json.loads(proc.stdout)) >= JSON_KEYS
-    proc = subprocess.run(
-        [sys.executable, "-m", "steam_ref", "run", "--skip", "-1"], capture_output=True, text=True, timeout=60
-    )
+    proc = run_module("run", "--skip", "-1", timeout=60)
     assert proc.returncode == 2 and len(proc.stderr.strip().splitlines()) == 1
 
 
@@ -418,3 +396,25 @@ def test_prior_flags_reach_the_setup(capsys, small_mat, tmp_path):
     np.testing.assert_allclose(saved["x"], direct.trajectory[:, 0], rtol=1e-9, atol=1e-9)
     np.testing.assert_allclose(saved["thetaddot"], direct.trajectory[:, 8], rtol=1e-9, atol=1e-9)
     assert row["rmse_m"] == pytest.approx(direct.rmse_m, abs=1e-6)
+
+
+DIVERGING = ["run", "--prior", "se2", "--qc-scale", "1e-8", "--max-poses", "12", "--json"]  # misses its prior
+
+
+def test_a_diverging_run_warns_in_one_clean_line_and_counts_the_rest():
+    """Not Python's `file:line: DivergenceWarning: ...` and its source line per update: the first warning as
+    one line, the other nine counted at the end; the run completes (exit 0) and its JSON lists them."""
+    proc = run_module(*DIVERGING)
+    assert proc.returncode == 0, proc.stderr
+    first, *rest = proc.stderr.splitlines()
+    assert first.startswith("steam-ref: warning: update at pose 2: the estimate is diverging: it misses")
+    assert ".py:" not in first and "DivergenceWarning" not in first
+    assert rest == ["steam-ref: warning: 8 more DivergenceWarnings after the first (above), not shown"]
+    assert len(json.loads(proc.stdout)["divergence"]) == 9
+
+
+def test_the_clean_display_hides_no_warning_from_a_caller(capsys):
+    with pytest.warns(DivergenceWarning) as caught:
+        assert main(DIVERGING) == 0
+    assert len([w for w in caught if w.category is DivergenceWarning]) == 9
+    assert capsys.readouterr().err == ""  # recorded by the caller, so not shown

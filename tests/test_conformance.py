@@ -21,10 +21,10 @@ import numpy as np
 import pytest
 import scipy.io
 import tomllib
+from cli_runs import runner
 from requirements import optional_import
 
 from steam_ref.bayes_tree import FixedLagSmoother, IncrementalSolver
-from steam_ref.cli.commands import main
 from steam_ref.conformance import KITS, SHIPPED, SUITES, spec
 from steam_ref.conformance.checker import compare_quantity
 from steam_ref.conformance.kitio import dumps, kit_files, read_index, read_suite
@@ -35,10 +35,7 @@ from steam_ref.variables import L, X
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def cli(capsys, *args: str) -> tuple[int, str, str]:
-    code = main(["conformance", *map(str, args)])
-    out = capsys.readouterr()
-    return code, out.out, out.err
+cli = runner("conformance")
 
 
 @pytest.fixture(scope="module")

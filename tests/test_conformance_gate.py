@@ -18,21 +18,17 @@ from pathlib import Path
 import numpy as np
 import pytest
 import scipy.linalg
+from cli_runs import runner
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from steam_ref.cli import main
 from steam_ref.conformance import KIT_VERSION, KITS, SHIPPED, SUITES, kitio, oracle_lag
 from steam_ref.conformance.expected import fixed_lag_quantities
 from steam_ref.conformance.kitio import dumps, kit_files, read_index, read_suite, sha256
 from steam_ref.conformance.oracle_graph import stream
 from steam_ref.conformance.oracle_lag import fixed_lag
 
-
-def cli(capsys, *args) -> tuple[int, str, str]:
-    code = main(["conformance", *map(str, args)])
-    out = capsys.readouterr()
-    return code, out.out, out.err
+cli = runner("conformance")
 
 
 @pytest.fixture(scope="module")

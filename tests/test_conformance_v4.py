@@ -17,19 +17,15 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from cli_runs import runner
 
-from steam_ref.cli import main
 from steam_ref.conformance import KIT_VERSION, KITS, SHIPPED
 from steam_ref.conformance.expected import fixed_lag_quantities
 from steam_ref.conformance.kitio import DATA_FREE, dumps, read_index, read_suite
 from steam_ref.conformance.oracle_lag import fixed_lag
 from steam_ref.conformance.readme import export_readme
 
-
-def cli(capsys, *args) -> tuple[int, str, str]:
-    code = main(["conformance", *map(str, args)])
-    out = capsys.readouterr()
-    return code, out.out, out.err
+cli = runner("conformance")
 
 
 @pytest.fixture(scope="module")

@@ -16,17 +16,20 @@ from pathlib import Path
 import numpy as np
 import pytest
 import scipy.io
+from cli_runs import runner
 from requirements import skip_or_fail
 
 from steam_ref.cli import explain
-from steam_ref.cli.commands import main
 from steam_ref.datasets import generate_synthetic, gtsam_data_dir
+
+_cli = runner()
 
 
 def _run(capsys, *argv: str) -> tuple[str, str]:
-    assert main(list(argv)) == 0
-    out = capsys.readouterr()
-    return out.out, out.err
+    """stdout and stderr of a command that must succeed."""
+    code, out, err = _cli(capsys, *argv)
+    assert code == 0, err
+    return out, err
 
 
 def _rms(d: np.ndarray) -> float:

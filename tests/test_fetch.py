@@ -17,11 +17,12 @@ import shutil
 import socket
 import threading
 from pathlib import Path
+from typing import ClassVar
 
 import pytest
+from cli_runs import runner
 from requirements import REPO_ROOT
 
-from steam_ref.cli import main
 from steam_ref.datasets import fetch as fetching
 from steam_ref.datasets import load_dataset, search
 from steam_ref.errors import DataError
@@ -50,6 +51,12 @@ def mirror(tmp_path_factory: pytest.TempPathFactory, shared_data: Path):
 
 
 class _QuietHandler(http.server.SimpleHTTPRequestHandler):
+    asked: ClassVar[list[str]] = []  # every path asked for, its query included (the mirror serves the file without it)
+
+    def do_GET(self):
+        self.asked.append(self.path)
+        super().do_GET()
+
     def log_message(self, *args):
         pass
 
@@ -122,11 +129,7 @@ def test_an_unreachable_host_and_a_missing_file_are_one_line(mirror, tmp_path):
         fetching.fetch(["plaza"], base="ftp://x", cache=tmp_path)
 
 
-def _cli(capsys: pytest.CaptureFixture, *args: str) -> tuple[int, str, str]:
-    """``steam-ref ARGS`` in this process (the command's own entry point): exit code, stdout, stderr."""
-    code = main(list(args))
-    out = capsys.readouterr()
-    return code, out.out, out.err
+_cli = runner()
 
 
 def test_the_command_fetches_lists_and_fails_in_one_line(mirror, tmp_path, monkeypatch, capsys):
@@ -275,6 +278,28 @@ def test_credentials_in_the_url_are_never_shown(mirror, own_cache, tmp_path, cap
     assert code == 2 and "cannot fetch" in err and "s3cr3t" not in err and "someone" not in err, err
     code, _, err = _cli(capsys, "data", "fetch", "plaza", "--base-url", "ftp://someone:s3cr3t@host/")
     assert code == 2 and "s3cr3t" not in err, err
+
+
+def test_a_token_in_the_urls_query_reaches_the_mirror_and_is_never_shown(
+    mirror, own_cache, tmp_path, capsys, monkeypatch
+):
+    """A mirror that wants a token in the query (``?token=...``): each file is asked for by its name with the
+    query after it, and every message shows the token's value as ``***``, as it shows user:password."""
+    url, _ = mirror
+    _QuietHandler.asked.clear()
+    got = fetching.fetch(["paper-synthetic"], base=url + "?token=s3cr3t&expires=99", cache=tmp_path / "c")
+    assert fetching.file_digest(got["paper-synthetic"][0]) == fetching.DATASETS["paper-synthetic"].files[0].sha256
+    assert _QuietHandler.asked == ["/Syn_theta_Plaza.mat?token=s3cr3t&expires=99"]
+    with pytest.raises(DataError, match=r"/nowhere/Syn_theta_Plaza\.mat\?token=\*\*\*&expires=\*\*\*: 404") as c:
+        fetching.fetch(["paper-synthetic"], base=url + "nowhere/?token=s3cr3t&expires=99", cache=tmp_path)
+    assert "s3cr3t" not in str(c.value)
+    for base in (_unreachable_url() + "?token=s3cr3t", "ftp://host/?token=s3cr3t", "http://[::1/?token=s3cr3t"):
+        monkeypatch.setenv("STEAM_REF_DATA_URL", base)
+        code, _, err = _cli(capsys, "data", "fetch", "plaza")
+        assert code == 2 and "token=***" in err and "s3cr3t" not in err, err
+    assert (
+        fetching.shown_url("https://someone:pw@host/a?sig&token=s3cr3t#part") == "https://***@host/a?***&token=***#part"
+    )
 
 
 def test_a_download_is_cut_at_the_registrys_size(mirror, tmp_path):

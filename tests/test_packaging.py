@@ -5,10 +5,9 @@ from __future__ import annotations
 
 import importlib.metadata
 import re
-import subprocess
-import sys
 
 import pytest
+from cli_runs import run_module
 from requirements import REPO_ROOT
 
 import steam_ref
@@ -27,7 +26,7 @@ def test_the_version_is_written_once_and_read_from_the_metadata():
 
 
 def test_steam_ref_version_prints_the_version():
-    out = subprocess.run([sys.executable, "-m", "steam_ref", "--version"], capture_output=True, text=True, timeout=120)
+    out = run_module("--version", timeout=120)
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip() == f"steam-ref {steam_ref.__version__}"
 

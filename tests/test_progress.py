@@ -4,9 +4,14 @@ terminal or with --no-progress, something with --progress."""
 
 from __future__ import annotations
 
+import errno
 import io
+import json
+import os
+import subprocess
 
 import pytest
+from cli_runs import run_module
 from requirements import reference_data_dir
 
 from steam_ref.cli.commands import main
@@ -81,3 +86,41 @@ def test_fidelity_names_its_data_set_and_method(capsys):
     folder = reference_data_dir()
     assert main(["fidelity", "--dataset", "paper-synthetic", "--data-dir", str(folder), "--progress"]) == 0
     assert "paper-synthetic BTGP/1:" in capsys.readouterr().err
+
+
+# -- a progress display never costs a run ---------------------------------------------------------
+
+
+class _Full(io.StringIO):
+    """stderr on a full disk: every write fails as /dev/full's does."""
+
+    def write(self, text: str) -> int:
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    def isatty(self) -> bool:
+        return True
+
+
+@pytest.mark.parametrize("stderr", [_Full, None], ids=["full", "closed"])
+def test_a_stderr_that_cannot_take_the_bar_costs_the_run_nothing(monkeypatch, capsys, tmp_path, stderr):
+    monkeypatch.setattr("sys.stderr", stderr() if stderr else None)  # None: Python's stderr when fd 2 is closed
+    saved = tmp_path / "trajectory.txt"
+    code = main(["run", "--steps", "40", "--progress", "--json", "--save-trajectory", str(saved)])
+    assert code == 0 and saved.is_file()
+    assert json.loads(capsys.readouterr().out)["n_poses"] == 41
+    for command in (["batch", "--progress"], ["consistency", "--seeds", "2", "--steps", "8", "--progress"]):
+        assert main(command) == 0, command
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full")
+@pytest.mark.parametrize("where", ["/dev/full", "closed"])
+def test_the_command_with_its_stderr_full_or_closed_completes_and_writes_its_files(tmp_path, where):
+    saved = tmp_path / "trajectory.txt"
+    args = ["run", "--steps", "40", "--progress", "--json", "--save-trajectory", saved]
+    if where == "closed":
+        proc = run_module(*args, stdout=subprocess.PIPE, preexec_fn=lambda: os.close(2))
+    else:
+        with open(where, "w") as full:
+            proc = run_module(*args, stdout=subprocess.PIPE, stderr=full)
+    assert proc.returncode == 0 and saved.is_file()
+    assert json.loads(proc.stdout)["n_poses"] == 41

@@ -40,3 +40,38 @@ def test_readme_test_command_is_the_one_ci_runs():
     assert len(commands) == 1, commands
     ci = (ROOT / ".ci" / "run").read_text().splitlines()
     assert commands[0] in ci, f"README's {commands[0]!r} is not a line of .ci/run"
+
+
+def _more_commands() -> list[tuple[str, str]]:
+    """The rows of the "More commands" table: (what, command)."""
+    section = README.split("## More commands", 1)[1].split("\n## ", 1)[0]
+    rows = re.findall(r"^\| (.*) \| (`.*`) \|$", section, flags=re.M)
+    assert len(rows) > 20, "the More commands table was not found"
+    return rows
+
+
+def test_the_more_commands_rows_write_and_read_distinct_folders():
+    """A folder one row writes figures or a kit into is never the folder another row checks as kit results
+    (reproduce wrote to results/ and two rows later `conformance check results/` read it)."""
+    written: dict[str, str] = {}  # folder -> the command writing it
+    checked: dict[str, str] = {}
+    for _, command in _more_commands():
+        for folder in re.findall(r"(?:--out|conformance export) (\S+?)/?`", command):
+            written[folder] = command
+        for folder in re.findall(r"conformance check (\S+?)/? ", command + " "):
+            checked[folder] = command
+    assert written and checked
+    for folder, command in checked.items():
+        assert folder not in written or written[folder] == command, (folder, command, written[folder])
+
+
+LONG = ("steam-ref fidelity", "steam-ref reproduce [", "--dataset victoria-park", "--seeds 200")
+
+
+def test_the_long_rows_say_how_long_they_take():
+    """Every row that runs for minutes (fidelity, all of Plaza, Victoria Park, reproduce, 200 seeds) says
+    about how long, and on what machine."""
+    for what, command in _more_commands():
+        all_of_plaza = re.search(r"steam-ref run --dataset plaza (?!.*--(skip|max-poses))", command)
+        if any(k in command for k in LONG) or all_of_plaza:
+            assert re.search(r"(about|under) [^|]*\bon 2 cores", what), what

@@ -10,9 +10,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 import scipy.io
+from cli_runs import runner
 
 from steam_ref.batch import gauss_newton
-from steam_ref.cli.commands import main
 from steam_ref.datasets import generate_synthetic, sample_from_model
 from steam_ref.errors import DivergenceWarning
 from steam_ref.factors import GPPriorFactor, PriorFactor
@@ -43,10 +43,7 @@ def small_mat(tmp_path_factory):
     return path, data
 
 
-def _run(capsys, *argv):
-    code = main(list(argv))
-    out, err = capsys.readouterr()
-    return code, out, err
+_run = runner()
 
 
 def test_the_front_end_makes_se2_factors_and_states(small_mat):

@@ -9,16 +9,18 @@ solver that did not limit it would be seen at 2.
 from __future__ import annotations
 
 import os
-import subprocess
 import sys
 import time
+import warnings
 
 import numpy as np
 import pytest
+from cli_runs import run_module
 from threadpoolctl import threadpool_info, threadpool_limits
 
 import steam_ref as sr
 from steam_ref import covariance
+from steam_ref.cli.commands import main
 from steam_ref.errors import SteamError
 from steam_ref.linear import threads
 
@@ -134,30 +136,60 @@ def test_the_limit_is_restored_after_an_error(start_at_many):
     assert threads._depth == 0
 
 
-@pytest.mark.parametrize("bad", ["-1", "two", "1.5"])
+@pytest.mark.parametrize("bad", ["-1", "two", "1.5", "99999999999999999999", "4097", "\u0663", "\uff13", "1_0"])
 def test_a_bad_environment_value_is_named(monkeypatch, bad):
+    """Beyond a C int was ctypes' OverflowError; '٣' (Arabic-Indic 3) and '３' (full-width) were read as 3,
+    where every option of the command refuses them."""
     monkeypatch.setenv(threads.ENV_VAR, bad)
     with pytest.raises(SteamError, match=f"STEAM_REF_BLAS_THREADS={bad!r}"):
         sr.IncrementalSolver().update(*prior_problem())
     assert threads._depth == 0
 
 
-@pytest.mark.parametrize("bad", [0, -2, 1.0, True, "1"])
+@pytest.mark.parametrize("bad", [0, -2, 1.0, True, "1", np.float64(2.0), np.bool_(True), 4097, 2**64])
 def test_blas_threads_rejects_what_is_not_a_count(bad):
     with pytest.raises(SteamError, match="blas_threads"):
         sr.blas_threads(bad)
 
 
-def test_the_cli_names_a_bad_environment_value_in_one_line():
-    out = subprocess.run(
-        [sys.executable, "-m", "steam_ref", "run", "--steps", "20", "--json"],
-        env=os.environ | {"STEAM_REF_BLAS_THREADS": "many"},
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
-    assert out.returncode == 2
-    assert out.stderr.strip().count("\n") == 0 and "STEAM_REF_BLAS_THREADS='many'" in out.stderr
+def test_blas_threads_takes_a_numpy_integer(start_at_many, seen):
+    with threadpool_limits(limits=1, user_api="blas"), sr.blas_threads(np.int64(2)):
+        run_each_entry_point()
+    assert seen and all(s == {2} for s in seen), seen
+
+
+@pytest.mark.parametrize("bad", ["many", "99999999999999999999", "\u0663"])
+def test_the_cli_names_a_bad_environment_value_in_one_line(bad):
+    out = run_module("run", "--steps", "20", "--json", env=os.environ | {"STEAM_REF_BLAS_THREADS": bad}, timeout=120)
+    assert out.returncode == 2 and "Traceback" not in out.stderr
+    assert out.stderr.strip().count("\n") == 0 and f"STEAM_REF_BLAS_THREADS={bad!r}" in out.stderr
+
+
+def test_a_command_that_never_solves_does_not_read_the_variable(monkeypatch, capsys):
+    monkeypatch.setenv(threads.ENV_VAR, "many")
+    assert main(["data", "list"]) == 0, capsys.readouterr().err
+    assert main(["run", "--steps", "5"]) == 2  # one that solves refuses it before the run
+    assert "STEAM_REF_BLAS_THREADS='many'" in capsys.readouterr().err
+
+
+def test_without_threadpoolctl_the_solvers_run_unlimited_and_say_so_once(monkeypatch):
+    monkeypatch.setitem(sys.modules, "threadpoolctl", None)  # its import fails, as when it is not installed
+    monkeypatch.setattr(threads, "_controller", None)
+    monkeypatch.setattr(threads, "_missing_said", False, raising=False)
+    factors, values = prior_problem()
+    first, second = sr.IncrementalSolver(), sr.IncrementalSolver()
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        first.update(factors, values)
+        second.update(factors, values)
+    assert len(said) == 1 and issubclass(said[0].category, sr.SteamWarning)  # once, not at every solve
+    assert str(said[0].message).startswith("threadpoolctl (a dependency of steam_ref) is not installed")
+    assert threads._depth == 0
+    monkeypatch.undo()  # the same estimate with the limit
+    limited = sr.IncrementalSolver()
+    limited.update(factors, values)
+    for key in values:
+        np.testing.assert_array_equal(first.estimate_of(key), limited.estimate_of(key))
 
 
 def test_entering_costs_microseconds_and_a_nested_entry_next_to_nothing(start_at_many):

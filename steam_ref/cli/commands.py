@@ -20,23 +20,29 @@ Each command is one module with ``add_parser(subparsers)`` (its options; returns
 Every command that can run longer than a few seconds shows its progress on stderr when that is a terminal
 (``--progress`` / ``--no-progress``: :mod:`steam_ref.paper.progress`), and every command runs the solvers at
 one BLAS thread unless ``$STEAM_REF_BLAS_THREADS`` says otherwise (:mod:`steam_ref.linear.threads`).
-Bad arguments and missing or malformed data files give a one-line error and exit code 2.
+Bad arguments and missing or malformed data files give a one-line error and exit code 2. The project's
+warnings (:class:`~steam_ref.errors.SteamWarning`: a diverging stream, a cut-short convergence) are one line
+each on stderr, ``steam-ref: warning: ...``, the first of each kind shown and the rest counted at the end
+(:func:`~steam_ref.cli.streams.warning_lines`); they do not change the exit code: the run finished and wrote
+its outputs, and its figures (``--json``: ``divergence``) say what was found. A command that never solves
+(``data``: its module says ``SOLVES = False``) does not read ``$STEAM_REF_BLAS_THREADS``.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import sys
 from collections.abc import Sequence
 
 from .._version import __version__
 from ..conformance import command as conformance
-from ..errors import SteamError
+from ..errors import SteamError, SteamWarning
 from ..homework import command as homework
 from ..linear.threads import limit
 from . import batch, consistency, data, fidelity, reproduce, run
 from .args import Parser
-from .streams import one_line, quiet_stdout
+from .streams import complain, one_line, quiet_stdout, warning_lines
 
 __all__ = ["COMMANDS", "build_parser", "main"]
 
@@ -53,7 +59,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = parser.add_subparsers(dest="command", parser_class=Parser, required=True)
     for command in COMMANDS:
-        command.add_parser(sub).set_defaults(handler=command.run)
+        command.add_parser(sub).set_defaults(handler=command.run, solves=getattr(command, "SOLVES", True))
     return parser
 
 
@@ -62,17 +68,18 @@ def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     try:
         args = build_parser().parse_args(argv or ["run"])  # no command at all runs the main job
-        with limit():  # the solvers' small dense algebra at one BLAS thread unless $STEAM_REF_BLAS_THREADS says
+        # the solvers' small dense algebra at one BLAS thread unless $STEAM_REF_BLAS_THREADS says
+        with limit() if args.solves else contextlib.nullcontext(), warning_lines(SteamWarning):
             return args.handler(args)
     except BrokenPipeError:  # stdout's reader went away (`| head`): what it read is all it wanted
         quiet_stdout()
         return 141  # 128 + SIGPIPE, as a shell reports a command stopped by a closed pipe
     except MemoryError as exc:  # NumPy's names a size, Python's nothing
-        print(f"steam-ref: error: out of memory{f' ({one_line(str(exc))})' if str(exc) else ''}", file=sys.stderr)
+        complain(f"steam-ref: error: out of memory{f' ({one_line(str(exc))})' if str(exc) else ''}")
         return 2
     except (SteamError, OSError) as exc:
-        print(f"steam-ref: error: {one_line(str(exc))}", file=sys.stderr)
+        complain(f"steam-ref: error: {one_line(str(exc))}")
         return 2
     except KeyboardInterrupt:
-        print("steam-ref: interrupted", file=sys.stderr)
+        complain("steam-ref: interrupted")
         return 130

@@ -9,14 +9,16 @@ each file checked against its sha256 (:mod:`steam_ref.datasets.fetch`); the sear
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
 from ..datasets import fetch as fetching
 from ..datasets.search import data_cache_dir, uncleaned_plaza
+from ..paper.progress import wanted
 from .args import Subparsers
 
-__all__ = ["add_parser", "run"]
+__all__ = ["SOLVES", "add_parser", "run"]
+
+SOLVES = False  # lists and downloads files: runs no solver, so $STEAM_REF_BLAS_THREADS is not read
 
 
 def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
@@ -74,7 +76,7 @@ def run(args: argparse.Namespace) -> int:
             print(f"{'':<{width}}  {s.what}" + (f"; from {s.source}; licence: {s.licence}" if s.files else ""))
         print(f"fetched files go to {data_cache_dir()}; fetch them with `steam-ref data fetch [NAME ...]`")
         return 0
-    progress = sys.stderr.isatty()
+    progress = wanted(None)  # a bar on a terminal's stderr only (not a closed one, nor a pipe)
     names = args.names or [n for n, s in fetching.DATASETS.items() if s.fetchable]
     got = fetching.fetch(names, base=args.base_url, progress=progress)  # every name checked before any download
     for name, paths in got.items():

@@ -1,8 +1,10 @@
 """Output paths of the ``steam-ref`` command: checked before a run, written after it.
 
 Nothing is opened or created at a path before the run (a named pipe would hang it, a dangling link would
-be destroyed); a non-regular file, a folder, a link loop or a folder that is not there is refused with
-one line naming the option. After the run, :func:`write_output` writes beside the target and moves the
+be destroyed); a non-regular file, a folder, a link loop, a dangling link or a folder that is not there is
+refused with one line naming the option. A dangling link is refused because writing through it would make a
+file wherever it points, which the user never named (run as root, a link into ``/etc`` would write there); a
+link to a file that exists is written through and stays a link. After the run, :func:`write_output` writes beside the target and moves the
 file over it, so a full disk names the option and the path and leaves any old file as it was.
 """
 
@@ -25,6 +27,7 @@ from ..errors import SteamError
 from ..evaluate import write_kitti, write_tum
 
 __all__ = [
+    "refuse_dangling",
     "check_output",
     "check_outputs_apart",
     "write_output",
@@ -92,12 +95,13 @@ def _writable_folder(folder: Path, option: str, path: str) -> None:
 
 
 def check_output(path: str | None, suffix: str, option: str) -> None:
-    """Before the run: ``path`` ends in ``suffix`` and is a regular file that can be written, or nothing
-    yet, in a folder that can be written in (through symbolic links, a dangling one included).
+    """Before the run: ``path`` ends in ``suffix`` and is a regular file that can be written (through
+    symbolic links), or nothing yet, in a folder that can be written in.
 
     Nothing is opened or made at ``path``: opening a named pipe blocks, and making a dangling link's
-    target (then removing it) would change the user's files. A named pipe, a device, a socket, a folder
-    or a link loop is refused. :func:`write_output` writes it after the run.
+    target (then removing it) would change the user's files. A named pipe, a device, a socket, a folder,
+    a link loop or a dangling link (:func:`refuse_dangling`) is refused. :func:`write_output` writes it after
+    the run.
     """
     if path is None:
         return
@@ -109,8 +113,8 @@ def check_output(path: str | None, suffix: str, option: str) -> None:
     try:
         mode = os.stat(path).st_mode  # through links
     except FileNotFoundError:
-        real = Path(os.path.realpath(path))  # where it would be made (a dangling link's target)
-        _writable_folder(real.parent, option, path)
+        refuse_dangling(path, option)
+        _writable_folder(Path(os.path.realpath(path)).parent, option, path)
     except OSError as err:
         raise _refuse_path(option, path, err) from None
     else:
@@ -125,6 +129,16 @@ def check_output(path: str | None, suffix: str, option: str) -> None:
         _writable_folder(Path(os.path.realpath(path)).parent, option, path)  # the new file is made beside it
     if suffix == ".png" and importlib.util.find_spec("matplotlib") is None:
         raise SteamError(f"{option} needs matplotlib, which is not installed (pip install matplotlib)")
+
+
+def refuse_dangling(path: str, option: str) -> None:
+    """SteamError naming ``option``, ``path`` and where it points when ``path`` is a symbolic link to nothing:
+    writing through it would make a file the user never named (as root, a link into /etc writes there)."""
+    if os.path.islink(path) and not os.path.exists(path):
+        raise SteamError(
+            f"{option}: {path!r} is a symbolic link to {os.readlink(path)!r}, which does not exist: refused, "
+            "writing through it would make a file there (name the target itself, or remove the link)"
+        )
 
 
 def _identity(path: str) -> tuple[str, object]:
@@ -169,6 +183,7 @@ def write_output(path: str, option: str, write: Callable[[str], object]) -> None
     A failure (a full disk, ...) leaves what was at ``path`` as it was and is a SteamError naming the
     option and the path. A file that was there keeps its permission bits.
     """
+    refuse_dangling(path, option)  # checked before the run; a link made dangling since is refused too
     real = Path(os.path.realpath(path))
     # the temporary's name ends in the whole name, so it keeps the extension a writer goes by (np.savez adds
     # ".npz" to a name without one, matplotlib picks its format by it) even for a dotfile such as ".npz"

@@ -6,7 +6,11 @@
 - :func:`json_line`: a summary as one line of JSON, refusing (and naming) a NaN or an infinity rather
   than writing ``NaN``/``Infinity``, which is not JSON;
 - :func:`quiet_stdout`: after stdout's reader went away (``| head``), the interpreter's last flush is sent
-  to the null device instead of failing again.
+  to the null device instead of failing again;
+- :func:`complain`: a line on stderr that is dropped, not raised, when stderr cannot take it (a full disk,
+  ``2>/dev/full``; closed, ``2>&-``): the exit code still says what happened;
+- :func:`warning_lines`: the project's warnings as one line each, ``steam-ref: warning: ...`` (no source
+  line), the first of each kind shown and the rest counted in one line at the end.
 
 Imports nothing but the standard library and steam_ref's errors: the entry point uses it before NumPy loads.
 """
@@ -18,10 +22,12 @@ import json
 import math
 import os
 import sys
+import warnings
+from collections.abc import Iterator
 
 from ..errors import SteamError
 
-__all__ = ["make_encodable", "one_line", "json_line", "quiet_stdout"]
+__all__ = ["complain", "make_encodable", "one_line", "json_line", "quiet_stdout", "warning_lines"]
 
 
 def make_encodable(stream: object) -> None:
@@ -63,3 +69,38 @@ def quiet_stdout() -> None:
         null = os.open(os.devnull, os.O_WRONLY)
         os.dup2(null, sys.stdout.fileno())
         os.close(null)
+
+
+def complain(line: str) -> None:
+    """``line`` on stderr, dropped when stderr cannot take it (full, closed): never an error of its own."""
+    with contextlib.suppress(OSError, ValueError, AttributeError):  # AttributeError: stderr closed, so None
+        print(line, file=sys.stderr, flush=True)
+
+
+@contextlib.contextmanager
+def warning_lines(family: type[Warning]) -> Iterator[None]:
+    """While the block runs, each warning of ``family`` that the warnings filters let through is shown as one
+    line, ``steam-ref: warning: <message>``, without Python's file, line number and source line; of each
+    warning class only the first is shown, and when the block ends one line counts the rest ("145 more
+    DivergenceWarnings after the first (above), not shown"). Other warnings are shown as Python shows them.
+
+    It changes how a warning is written, not whether it is: the filters (``-W``, ``PYTHONWARNINGS``,
+    ``warnings.simplefilter``) and a caller recording warnings (``catch_warnings(record=True)``,
+    ``pytest.warns``) see every one as before."""
+    original = warnings.formatwarning
+    shown: dict[type[Warning], int] = {}
+
+    def one_line_each(message, category, filename, lineno, line=None):  # warnings.formatwarning's signature
+        if not issubclass(category, family):
+            return original(message, category, filename, lineno, line)
+        shown[category] = shown.get(category, 0) + 1
+        return f"steam-ref: warning: {one_line(str(message))}\n" if shown[category] == 1 else ""
+
+    warnings.formatwarning = one_line_each
+    try:
+        yield
+    finally:
+        warnings.formatwarning = original
+        for category, n in shown.items():
+            if n > 1:
+                complain(f"steam-ref: warning: {n - 1:,} more {category.__name__}s after the first (above), not shown")

@@ -13,7 +13,11 @@ leaves nothing behind, and a download is cut as soon as it exceeds the registry'
 Everything is checked before a byte is downloaded: every name asked for, the URL (http or https, a
 host, a port that is a number), the cache folder (a folder that can be written, else an error naming it,
 not the download), and a file already under a data file's name (a FIFO or a device there is refused,
-not hashed). A user name or password in the URL is shown as ``***`` in every message.
+not hashed). A user name or password in the URL, and every value of its query (where a token or a
+signature travels: ``?token=***``), is shown as ``***`` in every message (:func:`shown_url`, the one home of
+that masking). A mirror is flat, as upstream's ``matlab/Data/`` is: each file is fetched from the base URL's
+folder by its upstream name (``<base>/Plaza1_full_data_run.mat``, though it is kept in the cache's
+``authors/``), the base URL's query, if any, kept after it (``<base>/Syn_theta_Plaza.mat?token=...``).
 
 Victoria Park and Plaza2, and the original Plaza1 files, are not fetched: they ship in the ``gtsam`` wheel's
 ``Data/`` folder (``pip install gtsam``), which the search path reads as it is.
@@ -51,6 +55,7 @@ __all__ = [
     "UPSTREAM_REPOSITORY",
     "fetch",
     "file_digest",
+    "file_url",
     "found",
     "locate",
     "missing_needs",
@@ -59,7 +64,8 @@ __all__ = [
 
 DEFAULT_BASE_URL = f"https://raw.githubusercontent.com/{UPSTREAM_REPOSITORY}/{UPSTREAM_COMMIT}/matlab/Data/"
 DATA_URL_ENV = "STEAM_REF_DATA_URL"
-_USERINFO = re.compile(r"^([A-Za-z][A-Za-z0-9+.-]*://)[^/?#]*@")  # scheme://user:password@ (to the last @)
+_USERINFO = re.compile(r"([A-Za-z][A-Za-z0-9+.-]*://)[^/?#\s]*@")  # scheme://user:password@ (to the last @)
+_QUERY = re.compile(r"\?([^\s#'\"<>()]+)")  # a URL's query, up to its fragment or the end of the quoted URL
 
 
 def _dataset(name: str) -> DataSet:
@@ -118,13 +124,28 @@ def _importable(module: str) -> bool:
     return True
 
 
-def shown_url(url: str) -> str:
-    """``url`` as a message may show it: a user name or password in it replaced by ``***``."""
-    return _USERINFO.sub(r"\1***@", url)
+def shown_url(text: str) -> str:
+    """``text`` (a URL, or a message quoting one, as requests' do) as a message may show it: a user name or
+    password (``scheme://***@host``) and the value of every query field (``?token=***&expires=***``; a field
+    without ``=``, ``***``) replaced by ``***``. The one home of hiding a URL's secrets."""
+
+    def fields(query: re.Match) -> str:
+        return "?" + "&".join(
+            f"{k}=***" if sep else "***" for k, sep, _ in (f.partition("=") for f in query[1].split("&"))
+        )
+
+    return _QUERY.sub(fields, _USERINFO.sub(r"\1***@", text))
+
+
+def file_url(base: str, remote: str) -> str:
+    """The URL of the file ``remote`` under the base URL ``base`` (as :func:`base_url` returns it): the name
+    appended to its path, its query (a token) kept after it."""
+    parts = urllib.parse.urlsplit(base)
+    return urllib.parse.urlunsplit(parts._replace(path=parts.path + urllib.parse.quote(remote), fragment=""))
 
 
 def base_url(given: str | None = None) -> str:
-    """``given``, else ``$STEAM_REF_DATA_URL``, else :data:`DEFAULT_BASE_URL`; with one trailing slash.
+    """``given``, else ``$STEAM_REF_DATA_URL``, else :data:`DEFAULT_BASE_URL`; its path with one trailing slash.
     DataError, naming it (credentials masked), when it is not an http:// or https:// address with a host
     and, if it gives one, a numeric port."""
     url = given or os.environ.get(DATA_URL_ENV) or DEFAULT_BASE_URL
@@ -137,7 +158,7 @@ def base_url(given: str | None = None) -> str:
         raise DataError(f"the base URL {shown_url(url)!r} is not an http:// or https:// address")
     if not parts.hostname or any(c.isspace() for c in url):
         raise DataError(f"the base URL {shown_url(url)!r} names no host (or holds a blank)")
-    return url.rstrip("/") + "/"
+    return urllib.parse.urlunsplit(parts._replace(path=parts.path.rstrip("/") + "/"))
 
 
 def _writable_folder(folder: Path) -> None:
@@ -224,10 +245,10 @@ def _fetch_file(f: DataFile, url: str, folder: Path, progress: bool) -> Path:
     import requests
 
     target = folder / f.local
-    where = shown_url(url + f.remote)
+    where = shown_url(file_url(url, f.remote))
     try:
         path = pooch.retrieve(
-            url + f.remote,
+            file_url(url, f.remote),
             known_hash=f"sha256:{f.sha256}",
             fname=target.name,
             path=target.parent,
@@ -242,9 +263,11 @@ def _fetch_file(f: DataFile, url: str, folder: Path, progress: bool) -> Path:
         raise DataError(f"{where}: {status}") from None
     except requests.exceptions.RequestException as exc:  # before ValueError: requests' InvalidURL is both
         reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        raise DataError(f"cannot fetch {where}: {type(exc).__name__}: {reason.replace(url, shown_url(url))}") from None
+        raise DataError(f"cannot fetch {where}: {type(exc).__name__}: {shown_url(reason)}") from None
     except ValueError as exc:  # pooch: the downloaded file's hash differs (the download is deleted)
-        raise DataError(f"{where}: refused, its sha256 is not the expected {f.sha256[:12]}... ({exc})") from None
+        raise DataError(
+            f"{where}: refused, its sha256 is not the expected {f.sha256[:12]}... ({shown_url(str(exc))})"
+        ) from None
     except OSError as exc:
         raise DataError(f"cannot write {target}: {type(exc).__name__}: {exc.strerror or exc}") from None
     return Path(path)

@@ -16,7 +16,7 @@ set's file under this name) is never read as the named set.
 Cost: a size differs by ``stat`` alone, checked at every use. The sha256 of a file of the right size is
 computed once per process for each (device, inode, size, mtime, ctime) of the file: a write to it changes
 its ctime, which no user call can set back, so a changed file is hashed again; the largest file is 1.7 MB
-(about 5 ms to hash). A non-regular file (a FIFO, a device, a link to one) is refused before it is opened:
+(its hashing time: docs/experiments.md). A non-regular file (a FIFO, a device, a link to one) is refused before it is opened:
 hashing one would block or never end.
 
 Loaded by :mod:`.search` on every named read, and by :mod:`.fetch`; it imports the loaders, never pooch.

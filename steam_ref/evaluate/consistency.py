@@ -97,7 +97,7 @@ def chi2_band(n_runs: int, dim: int, level: float = 0.95) -> tuple[float, float]
 
 def chi2_quantile(p: float, dof: float) -> float:
     """χ²⁻¹(p; k) = 2 P⁻¹(k/2, p), P the regularized lower incomplete gamma function (SciPy's ``gammaincinv``;
-    ``scipy.stats.chi2.ppf`` computes the same, at 0.3 s of import). The one home of the χ² quantile.
+    ``scipy.stats.chi2.ppf`` computes the same, at the cost of importing scipy.stats: docs/experiments.md). The one home of the χ² quantile.
     ``p`` in [0, 1], ``dof`` > 0 (SciPy answers NaN outside them)."""
     prob, k = number("p", p), number("dof", dof)
     if not 0 <= prob <= 1:

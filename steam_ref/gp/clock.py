@@ -54,7 +54,8 @@ class Clock:
 
     @classmethod
     def of(cls, seconds: ArrayLike, basis: str = "seconds", origin: str = "given") -> Clock:
-        """The clock of poses stamped ``seconds``; SteamError names a bad basis, origin or time."""
+        """The clock of poses stamped ``seconds`` (one time at least); SteamError names a bad basis, origin or
+        time, or no time at all (a clock of no pose maps nothing: every query of it would be undefined)."""
         if basis not in CLOCK_BASES:
             raise SteamError(f"unknown clock basis {basis!r}; use one of {', '.join(CLOCK_BASES)}")
         if origin not in TIME_ORIGINS:
@@ -62,6 +63,8 @@ class Clock:
         t = np.array(real_array("times", seconds), dtype=float)
         if t.ndim != 1:
             raise ShapeError(f"times must be a 1-d array, one time per pose, got shape {t.shape}")
+        if not t.size:
+            raise SteamError("times is empty: a clock needs the time of one pose at least")
         bad = np.flatnonzero(~np.isfinite(t))
         if bad.size:
             raise SteamError(f"times[{int(bad[0])}] = {float(t[bad[0]])!r}: every pose time must be finite")

@@ -12,6 +12,10 @@ The one home of progress display; every command that can run longer than a few s
   cuts a run short (``plaza PB/1: time budget 300 s used up after 330 of 1,000 poses; the run stops
   there``), so a bar that stops early says why.
 - :func:`working`: a line with the elapsed time, for a step without a loop to count.
+
+A progress display never costs a run: each of them writes through :func:`display`, stderr as a display
+sees it, where a write that fails (stderr on a full disk, ``2>/dev/full``, or closed, ``2>&-``) is
+dropped and the display goes quiet; the run goes on and writes its outputs.
 """
 
 from __future__ import annotations
@@ -22,14 +26,17 @@ import threading
 from collections.abc import Iterator
 from typing import Any
 
-__all__ = ["bar", "say", "stream_label", "wanted", "working"]
+__all__ = ["bar", "display", "say", "stream_label", "wanted", "working"]
 
 
 def wanted(asked: bool | None, json_output: bool = False) -> bool:
     """``--progress`` / ``--no-progress`` if given, else on when stderr is a terminal and not ``--json``."""
     if asked is not None:
         return asked
-    return not json_output and sys.stderr.isatty()
+    try:
+        return not json_output and sys.stderr is not None and sys.stderr.isatty()
+    except ValueError:  # a closed stderr
+        return False
 
 
 def stream_label(dataset: str | None, method: str, every: int, skip: int = 1, interpolate: bool = True) -> str:
@@ -41,12 +48,51 @@ def stream_label(dataset: str | None, method: str, every: int, skip: int = 1, in
     return f"{dataset} {run}" if dataset else run
 
 
+class _Display:
+    """``stream`` as a progress display writes to it: the first write or flush that fails (OSError: a full
+    disk, a closed descriptor; ValueError: a closed file) is dropped and every later one skipped."""
+
+    def __init__(self, stream: Any) -> None:
+        self.stream = stream
+        self.failed = stream is None  # started with stderr closed: Python then sets sys.stderr to None
+
+    def write(self, text: str) -> int:
+        self._try(lambda: self.stream.write(text))
+        return len(text)
+
+    def flush(self) -> None:
+        self._try(lambda: self.stream.flush())
+
+    def _try(self, step: Any) -> None:
+        if self.failed:
+            return
+        try:
+            step()
+        except (OSError, ValueError):
+            self.failed = True
+
+    def __getattr__(self, name: str) -> Any:  # encoding, isatty, fileno: what tqdm asks of its file
+        return getattr(self.stream, name)
+
+
+_shown: _Display | None = None  # the display of the last stderr seen (one per stream, so bars and lines share it)
+
+
+def display() -> Any:
+    """stderr as a progress display writes to it (the stream ``sys.stderr`` is now): a write that fails is
+    dropped, never raised, and the display goes quiet."""
+    global _shown
+    if _shown is None or _shown.stream is not sys.stderr:
+        _shown = _Display(sys.stderr)
+    return _shown
+
+
 def bar(total: int | None, label: str, enabled: bool, unit: str = "it") -> Any:
     """A tqdm bar on stderr named ``label``, refreshed at most twice a second; a silent one when not
     ``enabled``."""
     from tqdm import tqdm
 
-    return tqdm(total=total, desc=label, disable=not enabled, mininterval=0.5, file=sys.stderr, unit=unit)
+    return tqdm(total=total, desc=label, disable=not enabled, mininterval=0.5, file=display(), unit=unit)
 
 
 def say(line: str, enabled: bool) -> None:
@@ -54,7 +100,7 @@ def say(line: str, enabled: bool) -> None:
     if enabled:
         from tqdm import tqdm
 
-        tqdm.write(line, file=sys.stderr)
+        tqdm.write(line, file=display())
 
 
 @contextlib.contextmanager
@@ -66,7 +112,7 @@ def working(what: str, enabled: bool) -> Iterator[None]:
     from tqdm import tqdm
 
     done = threading.Event()
-    with tqdm(desc=what, total=None, bar_format="{desc}: {elapsed}", file=sys.stderr, leave=False) as line:
+    with tqdm(desc=what, total=None, bar_format="{desc}: {elapsed}", file=display(), leave=False) as line:
         thread = threading.Thread(target=lambda: [line.refresh() for _ in iter(lambda: done.wait(0.5), True)])
         thread.daemon = True
         thread.start()
