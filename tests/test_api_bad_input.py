@@ -817,7 +817,7 @@ CASES = [
         "ISAM2Params blocks keyed by an int (never matched)",
         lambda: sr.ISAM2Params(relinearize_blocks={3: (3, 3)}),
         SteamError,
-        r"keyed by variable kind.*got the key 3",
+        r"keyed by a key's symbol.*got the key 3",
     ),
     (
         "ISAM2Params thresholds keyed by an int (never matched)",

@@ -24,6 +24,7 @@ from ..errors import ShapeError, SteamError
 from ..gp.prior import check_qc, process_noise_sqrt_information, transition
 from ..lie import SE2_STATE, STATE_SIZE, se2
 from ..lie.gp import check_model, local_variables
+from ..manifold import Manifold
 from ..robust import RobustLoss
 from ..variables import Key, key_list
 from .base import Factor, sqrt_information
@@ -57,6 +58,10 @@ class LiePriorFactor(Factor):
     _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "phi")
     _shared: ClassVar[tuple[str, ...]] = ("model",)
     key_dims: ClassVar[tuple[int, ...]] = (STATE_SIZE, STATE_SIZE)
+
+    @property
+    def key_kinds(self) -> tuple[Manifold, ...]:
+        return (SE2_STATE, SE2_STATE)
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -112,6 +117,10 @@ class LieStatePrior(Factor):
 
     _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "mean")
     key_dims: ClassVar[tuple[int, ...]] = (STATE_SIZE,)
+
+    @property
+    def key_kinds(self) -> tuple[Manifold, ...]:
+        return (SE2_STATE,)
 
     @classmethod
     def create(

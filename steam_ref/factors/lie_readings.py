@@ -21,8 +21,9 @@ from ..arguments import number
 from ..errors import SteamError
 from ..gp.interpolate import interpolation_matrices
 from ..gp.prior import check_qc
-from ..lie import STATE_SIZE
+from ..lie import SE2_STATE, STATE_SIZE
 from ..lie.gp import check_model, interpolate
+from ..manifold import Manifold
 from ..robust import RobustLoss
 from ..variables import Key
 from .base import Factor, measured_vector, sqrt_information
@@ -79,6 +80,10 @@ class PoseReading(Factor):
     def key_dims(self) -> tuple[int, ...]:  # type: ignore[override]
         return self.inner.key_dims
 
+    @property
+    def key_kinds(self) -> tuple[Manifold, ...]:
+        return (SE2_STATE, *self.inner.key_kinds[1:])  # an SE(2) state, then the landmark
+
     def batch_signature(self) -> tuple:
         return (type(self), self.inner.batch_signature())
 
@@ -103,6 +108,10 @@ class BodyVelocityFactor(Factor):
 
     _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "measured")
     key_dims: ClassVar[tuple[int, ...]] = (STATE_SIZE,)
+
+    @property
+    def key_kinds(self) -> tuple[Manifold, ...]:
+        return (SE2_STATE,)
 
     @classmethod
     def create(
@@ -164,6 +173,10 @@ class LieInterpolatedFactor(Factor):
     @property
     def key_dims(self) -> tuple[int, ...]:  # type: ignore[override]
         return (STATE_SIZE, STATE_SIZE) + tuple(self.inner.key_dims[1:])
+
+    @property
+    def key_kinds(self) -> tuple[Manifold, ...]:
+        return (SE2_STATE, SE2_STATE, *self.inner.key_kinds[1:])
 
     def batch_signature(self) -> tuple:
         return (type(self), self.model, self.inner.batch_signature())

@@ -22,7 +22,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..arguments import real_array
-from ..errors import ShapeError
+from ..errors import ShapeError, SteamError
 from ..manifold import Manifold
 from . import se2
 
@@ -42,6 +42,16 @@ class SE2State(Manifold):
     """A pose T ∈ SE(2) and a body twist ϖ ∈ R³, retracted on the right (module docstring)."""
 
     name = "se2"
+    size = STATE_SIZE
+
+    def check(self, name: str, x: NDArray) -> None:
+        """Six numbers, the heading θ in (-π, π] (refused outside it, not wrapped: wrap it with ``lie.se2.wrap``)."""
+        super().check(name, x)
+        if not -np.pi < x[2] <= np.pi:
+            raise SteamError(
+                f"{name}: the heading of an SE(2) state must lie in (-π, π], got θ={float(x[2])!r} "
+                "(wrap it: steam_ref.lie.se2.wrap)"
+            )
 
     def retract(self, x: NDArray, delta: NDArray) -> NDArray:
         """x ⊕ δ = (T Exp(δ[:3]), ϖ + δ[3:]): θ comes back in (-π, π]."""

@@ -29,7 +29,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 
-from ..arguments import is_integer
+from ..arguments import is_integer, number
 from ..errors import ShapeError, SteamError, UnknownVariableError
 from ..variables import Key, key_list
 
@@ -215,6 +215,7 @@ def min_degree_keys(
     dims: Mapping[Key, int],
     factor_keys: Iterable[Sequence[Key]],
     last: Iterable[Key] = (),
+    first: Mapping[Key, float] | None = None,
 ) -> list[Key]:
     """A greedy minimum-degree elimination order with the variables in ``last`` eliminated last.
 
@@ -227,7 +228,14 @@ def min_degree_keys(
     ``last`` are ordered among themselves by minimum degree too, after all others: this is the
     constrained ordering iSAM2 obtains from CCOLAMD, which keeps the variables touched by new
     factors near the root so the next update removes little of the tree.  [K12 Sec. 5]
+
+    ``first`` (GTSAM's ``constrainedKeys``): the variables it names (and ``last`` does not) are eliminated before
+    all others, in increasing order of the number it maps each to (ties in the order of ``variables``), and the
+    rest by minimum degree on the graph their elimination leaves: a fixed-lag smoother puts the variables next to
+    leave its window there, so that they sit in leaf cliques and are cut off with no re-elimination.
     """
+    if first:
+        return _first_then_min_degree(list(variables), dims, factor_keys, list(last), first)
     variables = list(variables)
     index = {v: i for i, v in enumerate(variables)}
     if len(index) != len(variables):
@@ -270,6 +278,26 @@ def min_degree_keys(
             au.discard(u)
             heapq.heappush(heap, (group[u], len(au), index[u]))
     return order
+
+
+def _first_then_min_degree(
+    variables: list[Key], dims: Mapping[Key, int], factor_keys: Iterable[Sequence[Key]], last: list[Key], first: Mapping
+) -> list[Key]:
+    """:func:`min_degree_keys` with ``first`` (its docstring)."""
+    rank = {k: first[k] for k in variables if k in first}
+    for k, r in rank.items():
+        if type(r) is not float:  # a float passes as it is (the smoother's timestamps); anything else is checked
+            rank[k] = number(f"the rank of {k!r} among the keys eliminated first", r)
+    early = sorted((k for k in rank if k not in last), key=rank.__getitem__)
+    if not early:
+        return min_degree_keys(variables, dims, factor_keys, last)
+    groups = [set(keys) for keys in factor_keys]
+    for v in early:  # the elimination game on the keys [K12 Alg. 1]: v's factors become one on its neighbours
+        touching = [g for g in groups if v in g]
+        groups = [g for g in groups if v not in g] + [set().union(*touching) - {v}]
+    gone = set(early)
+    rest = [k for k in variables if k not in gone]
+    return early + min_degree_keys(rest, dims, [tuple(g) for g in groups if g], last)
 
 
 def make_ordering(

@@ -117,7 +117,7 @@ class _Layout:
     def __init__(self, values: Values):
         self.keys = list(values)
         self.cuts = np.cumsum([0] + [values.dim(k) for k in self.keys])
-        self.kinds = values.kinds()
+        self.kinds = {k: m for k, m in values.kinds().items() if m is not VECTOR}  # a vector as it is
         self.base = {k: values[k] for k in self.kinds}
 
     def vector(self, values: Values) -> NDArray:
