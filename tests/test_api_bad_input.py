@@ -20,7 +20,7 @@ from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 import steam_ref as sr
-from steam_ref import L, X, covariance, gp, plot, pose2
+from steam_ref import L, X, covariance, dead_reckoning, gp, plot
 from steam_ref.errors import (
     NumericalError,
     ShapeError,
@@ -905,31 +905,31 @@ CASES = [
     ),
     (
         "compose pose of 2",
-        lambda: pose2.compose([1, 2], 1.0, 0.0),
+        lambda: dead_reckoning.compose([1, 2], 1.0, 0.0),
         ShapeError,
         r"pose must be \(3,\).*got shape \(2,\)",
     ),
     (
         "compose distance NaN",
-        lambda: pose2.compose([1, 2, 0], np.nan, 0.0),
+        lambda: dead_reckoning.compose([1, 2, 0], np.nan, 0.0),
         SteamError,
         r"distance must be a finite number, got distance=nan",
     ),
     (
         "integrate_odometry (3, 2) reshaped silently",
-        lambda: pose2.integrate_odometry([0, 0, 0, 0], np.ones((3, 2))),
+        lambda: dead_reckoning.integrate_odometry([0, 0, 0, 0], np.ones((3, 2))),
         ShapeError,
         r"odometry must be \(n, 3\).*got shape \(3, 2\)",
     ),
     (
         "integrate_odometry NaN",
-        lambda: pose2.integrate_odometry([0, 0, 0, 0], np.full((2, 3), np.nan)),
+        lambda: dead_reckoning.integrate_odometry([0, 0, 0, 0], np.full((2, 3), np.nan)),
         ShapeError,
         r"odometry\[0, 0\] = nan",
     ),
     (
         "integrate_odometry start NaN",
-        lambda: pose2.integrate_odometry([0, np.nan, 0, 0], np.ones((2, 3))),
+        lambda: dead_reckoning.integrate_odometry([0, np.nan, 0, 0], np.ones((2, 3))),
         ShapeError,
         r"start\[1\] = nan",
     ),
