@@ -296,7 +296,8 @@ def test_an_interrupt_at_any_line_of_marginalize_leaves_the_solver_as_it_was(key
         state(s)  # forms every estimate, as each comparison below does: the runs then execute the same lines
     total = _lines_of(lambda: marginalize(done, keys))
     where = set()
-    for n in sorted({*np.linspace(1, total, 40).astype(int), *range(max(total - 40, 1), total + 1)}):  # the end changes
+    # 60 spread: 40 left every mutating step of a re-elimination unvisited for some hash seeds (set orders)
+    for n in sorted({*np.linspace(1, total, 60).astype(int), *range(max(total - 40, 1), total + 1)}):  # the end changes
         trace, _ = _interrupt_at(int(n))
         sys.settrace(trace)
         try:
