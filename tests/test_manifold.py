@@ -139,19 +139,21 @@ def test_the_batched_moves_are_the_one_variable_moves():
     xs = [rng.normal(size=6 if i % 3 else 2) for i in range(7)]
     ds = [rng.normal(size=len(x)) for x in xs]
     moves = [rng.random(len(x)) < 0.5 for x in xs]
-    assert [a.tobytes() for a in VECTOR.retract_many(xs, ds)] == [(x + d).tobytes() for x, d in zip(xs, ds)]
-    assert [a.tobytes() for a in VECTOR.local_many(xs, ds)] == [(d - x).tobytes() for x, d in zip(xs, ds)]
+    assert [a.tobytes() for a in VECTOR.retract_many(xs, ds)] == [
+        (x + d).tobytes() for x, d in zip(xs, ds, strict=True)
+    ]
+    assert [a.tobytes() for a in VECTOR.local_many(xs, ds)] == [(d - x).tobytes() for x, d in zip(xs, ds, strict=True)]
     theta, delta = VECTOR.rebase_many(xs, ds, moves)
-    for x, d, m, t, e in zip(xs, ds, moves, theta, delta):
+    for x, d, m, t, e in zip(xs, ds, moves, theta, delta, strict=True):
         np.testing.assert_array_equal(t, np.where(m, x + d, x))
         np.testing.assert_array_equal(e, np.where(m, 0.0, d))
     assert VECTOR.retract_sum(xs[0], ds[0], xs[0]).tobytes() == ((xs[0] + ds[0]) + xs[0]).tobytes()
     pos = [np.exp(rng.normal(size=D)) for _ in range(5)]
     steps = [rng.normal(size=D) for _ in range(5)]
-    for got, x, d in zip(SCALE.retract_many(pos, steps), pos, steps):
+    for got, x, d in zip(SCALE.retract_many(pos, steps), pos, steps, strict=True):
         np.testing.assert_allclose(got, x * np.exp(d), rtol=1e-15)
     theta, delta = SCALE.rebase_many(pos, steps, [np.array([True, False])] * 5)  # a kind that moves whole
-    for t, e, x, d in zip(theta, delta, pos, steps):
+    for t, e, x, d in zip(theta, delta, pos, steps, strict=True):
         np.testing.assert_allclose(t, x * np.exp(d), rtol=1e-15)
         assert not e.any()
     assert SCALE.retract_many([], []) == [] and isinstance(VECTOR, VectorSpace)
@@ -188,7 +190,7 @@ def test_batch_gauss_newton_follows_the_kind():
     assert plain.converged and all(plain.values[k].tobytes() == told[k].tobytes() for k in initial)
     assert plain.values.kind(X(3)) is SCALE
     added = dict.fromkeys(initial, VECTOR)  # x + δ: not the optimum, and refused for saying so
-    with pytest.raises(KindError, match="the kind of x0 is given twice and differs: vector by its value.*scale by"):
+    with pytest.raises(KindError, match=r"the kind of x0 is given twice and differs: vector by its value.*scale by"):
         gauss_newton(factors, Values(initial, kinds=added))
 
 
