@@ -28,6 +28,7 @@ from ..arguments import number
 from ..covariance import key_groups
 from ..errors import SteamError, UnknownVariableError
 from ..factors import Factor, check_factors
+from ..linear.ordering import KeysBelow
 from ..linear.threads import limit
 from ..variables import Key, Values, check_key, check_new_values, key_list
 from .history import History
@@ -87,11 +88,10 @@ class FixedLagSmoother:
             self._forget_old(log, report.step, fresh, times)
         return report
 
-    def _leaving(self) -> dict[Key, float] | None:
+    def _leaving(self) -> KeysBelow | None:
         """Once the window is full, the timed variables older than the newest timestamp, to eliminate first, oldest
         first (as GTSAM's smoother orders the keys to marginalize); before, None: iSAM2's own order."""
-        newest = self.newest
-        return {k: t for k, t in self._times.items() if t < newest} if self.n_marginalized else None
+        return KeysBelow(self._times, self.newest) if self.n_marginalized else None
 
     def _forget_old(self, log: UndoLog, step: int, fresh: Iterable[Key], times: dict[Key, float]) -> None:
         """After update ``step``: record its timestamps, marginalize what fell behind the lag, and record that (each

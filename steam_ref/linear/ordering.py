@@ -34,6 +34,7 @@ from ..errors import ShapeError, SteamError, UnknownVariableError
 from ..variables import Key, key_list
 
 __all__ = [
+    "KeysBelow",
     "Ordering",
     "natural_ordering",
     "xl_ordering",
@@ -234,7 +235,7 @@ def min_degree_keys(
     rest by minimum degree on the graph their elimination leaves: a fixed-lag smoother puts the variables next to
     leave its window there, so that they sit in leaf cliques and are cut off with no re-elimination.
     """
-    if first:
+    if first is not None:
         return _first_then_min_degree(list(variables), dims, factor_keys, list(last), first)
     variables = list(variables)
     index = {v: i for i, v in enumerate(variables)}
@@ -298,6 +299,30 @@ def _first_then_min_degree(
     gone = set(early)
     rest = [k for k in variables if k not in gone]
     return early + min_degree_keys(rest, dims, [tuple(g) for g in groups if g], last)
+
+
+class KeysBelow(Mapping):
+    """The entries of ``numbers`` below ``bound``, read in place, never copied: a fixed-lag smoother's timestamps
+    older than the newest, the keys it has its solver eliminate first (``min_degree_keys(first=...)``), at the cost
+    of the keys looked up rather than of its whole window."""
+
+    def __init__(self, numbers: Mapping[Key, float], bound: float) -> None:
+        self.numbers, self.bound = numbers, bound
+
+    def __contains__(self, key: object) -> bool:
+        t = self.numbers.get(key)  # type: ignore[call-overload]
+        return t is not None and t < self.bound
+
+    def __getitem__(self, key: Key) -> float:
+        if key not in self:
+            raise KeyError(key)
+        return self.numbers[key]
+
+    def __iter__(self) -> Iterator[Key]:
+        return (k for k, t in self.numbers.items() if t < self.bound)
+
+    def __len__(self) -> int:
+        return sum(1 for _ in self)
 
 
 def make_ordering(
