@@ -285,7 +285,7 @@ def _first_then_min_degree(
     variables: list[Key], dims: Mapping[Key, int], factor_keys: Iterable[Sequence[Key]], last: list[Key], first: Mapping
 ) -> list[Key]:
     """:func:`min_degree_keys` with ``first`` (its docstring)."""
-    rank = {k: first[k] for k in variables if k in first}
+    rank = {k: r for k in variables if (r := first.get(k)) is not None}  # one look-up a variable
     for k, r in rank.items():
         if type(r) is not float:  # a float passes as it is (the smoother's timestamps); anything else is checked
             rank[k] = number(f"the rank of {k!r} among the keys eliminated first", r)
@@ -309,14 +309,18 @@ class KeysBelow(Mapping):
     def __init__(self, numbers: Mapping[Key, float], bound: float) -> None:
         self.numbers, self.bound = numbers, bound
 
+    def get(self, key: Key, default: float | None = None) -> float | None:  # type: ignore[override]
+        t = self.numbers.get(key)
+        return t if t is not None and t < self.bound else default
+
     def __contains__(self, key: object) -> bool:
-        t = self.numbers.get(key)  # type: ignore[call-overload]
-        return t is not None and t < self.bound
+        return self.get(key) is not None  # type: ignore[arg-type]
 
     def __getitem__(self, key: Key) -> float:
-        if key not in self:
+        t = self.get(key)
+        if t is None:
             raise KeyError(key)
-        return self.numbers[key]
+        return t
 
     def __iter__(self) -> Iterator[Key]:
         return (k for k, t in self.numbers.items() if t < self.bound)
