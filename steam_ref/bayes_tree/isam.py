@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Iterable, Iterator, Mapping
-from contextlib import contextmanager
+from contextlib import AbstractContextManager, contextmanager
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -188,21 +188,18 @@ class IncrementalSolver:
         with self.state.transaction(), limit():
             return self._update(F_new, theta_new, kinds, relinearize, constrained, timer)
 
-    @contextmanager
-    def transaction(self) -> Iterator[UndoLog]:
+    def transaction(self) -> AbstractContextManager[UndoLog]:
         """Changes as one: all undone if anything inside raises (Ctrl-C too), the caller's recorded in the log yielded."""
-        with self.state.transaction():
-            yield self.state.log
+        return self.state.transaction()
 
     def marginalize_leaves(
         self, keys: Iterable[Key], *, constrained: Mapping[Key, float] | None = None, keep_conditionals: bool = False
     ) -> MarginalizationReport:
         """Marginalize ``keys`` out of the tree and the factors (GTSAM's ``marginalizeLeaves``; keys not in leaf
-        cliques are re-eliminated first, ``constrained`` as in :meth:`update`): :mod:`.marginalization`.
-
-        The solver then holds the marginal of the other variables (for a linear problem, their estimate and
-        covariances are the whole problem's, to rounding). ``keep_conditionals``: the report carries each key's
-        P(v | S) (:class:`~.history.ForgottenConditional`). :class:`UnknownVariableError` for a key not held."""
+        cliques are re-eliminated first, ``constrained`` as in :meth:`update`): :mod:`.marginalization`. The solver
+        then holds the marginal of the other variables (for a linear problem, their estimate and covariances are the
+        whole problem's, to rounding). ``keep_conditionals``: the report carries each key's P(v | S)
+        (:class:`~.history.ForgottenConditional`). :class:`UnknownVariableError` for a key not held."""
         return marginalize_keys(self.state, keys, self.params.wildfire_threshold, constrained, keep_conditionals)
 
     def _update(

@@ -50,14 +50,14 @@ class SolverState:
         self.tree_nnz = 0  # nonzeros of R (GTSAM's treeNnz)
 
     @contextmanager
-    def transaction(self) -> Iterator[None]:
+    def transaction(self) -> Iterator[UndoLog]:
         """Run a change of the solver: if anything in it raises (Ctrl-C too), every store and the tree are put
-        back as they were; nested transactions belong to the outermost."""
+        back as they were, with what the caller recorded in the log it yields; nested ones belong to the outermost."""
         with self.log.transaction():
             self.log.keep(self.candidates)  # an ordered set: the next θ̄ moves, and the next ordering, follow it
             self.log.record(setattr, self, "steps", self.steps)
             self.log.record(setattr, self, "tree_nnz", self.tree_nnz)
-            yield
+            yield self.log
 
     def values(self) -> Values:
         """θ̄ as a Values (a view of the store, no copy: for reading only)."""
@@ -107,9 +107,13 @@ class SolverState:
 
     def all_estimates(self) -> dict[Key, NDArray]:
         """θ̄ ⊕ δ of every variable (the store itself: the caller copies the dict, never the arrays).  [YIB Eq. 11]"""
-        for k, e in self._formed(list(self.stale)).items():  # in the order they went stale, as always
-            self.log.set(self.estimates, k, e)
-        self.log.keep(self.stale)
+        formed = self._formed(list(self.stale))  # in the order they went stale, as always
+        if self.log.depth:  # in a transaction: recorded
+            for k, e in formed.items():
+                self.log.set(self.estimates, k, e)
+            self.log.keep(self.stale)
+        else:
+            self.estimates.update(formed)
         self.stale.clear()
         return self.estimates
 
