@@ -173,13 +173,11 @@ class FixedLagSmoother:
     tree = property(lambda self: self.solver.tree, doc="The window's Bayes tree.")
     factors = property(lambda self: self.solver.factors, doc="Every factor (a marginalized one's slot None).")
     linearization_point = property(lambda self: self.solver.linearization_point, doc="θ̄ of the window (a copy).")
+    __len__ = lambda self: len(self.solver)  # the variables in the window
 
     def holds(self, key: Key) -> bool:
         """True when ``key`` is in the window."""
         return self.solver.holds(key)
-
-    def __len__(self) -> int:
-        return len(self.solver)
 
     def estimate(self) -> Values:
         """The window's estimate θ̄ ⊕ δ (a snapshot)."""
@@ -187,8 +185,7 @@ class FixedLagSmoother:
 
     def estimate_of(self, key: Key) -> NDArray:
         """The estimate of one variable of the window (read-only)."""
-        self._held("the estimate of", check_key("key", key))
-        return self.solver.estimate_of(key)
+        return self.solver.estimate_of(self._known([check_key("key", key)], "the estimate of")[0])
 
     def marginal_covariance(self, key: Key) -> NDArray:
         """:meth:`IncrementalSolver.marginal_covariance` of a variable of the window."""
@@ -208,8 +205,8 @@ class FixedLagSmoother:
         self._known([k for g in checked for k in g])
         return self.solver.joint_covariances(checked)
 
-    def _known(self, keys: list[Key]) -> list[Key]:
+    def _known(self, keys: list[Key], what: str = "the covariance of") -> list[Key]:
         """``keys``, after UnknownVariableError for one that was marginalized, saying when."""
         for k in keys:
-            self._held("the covariance of", k)
+            self._held(what, k)
         return keys

@@ -100,8 +100,10 @@ class SolverState:
 
     def estimate_of(self, key: Key) -> NDArray:
         """θ̄ ⊕ δ of one held variable (read-only; formed when stale). KeyError when it is not held."""
-        if key in self.stale:
-            self.log.set(self.estimates, key, self._formed([key])[key])
+        if key in self.stale:  # one variable: its kind's own map (the batch of :meth:`_formed` costs more for one)
+            e = np.asarray(self.kinds[key].retract(self.theta_bar[key], self.delta[key]), dtype=float)
+            e.flags.writeable = False
+            self.log.set(self.estimates, key, e)
             self.log.delete(self.stale, key)
         return self.estimates[key]
 
