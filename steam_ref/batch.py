@@ -1,8 +1,8 @@
 """Batch Gauss-Newton and Levenberg-Marquardt on the STEAM problem.  [YIB Eq. 6-11]
 
-Each iteration linearizes every factor at θ̄ (Eq. 9), solves 𝓘 δθ* = Aᵀb (Eq. 11) by sparse Cholesky under
-the chosen ordering ('xl': the paper's PB, 'amd': PBVR, 'natural'; :mod:`steam_ref.linear.ordering`), and updates
-θ̄ ← θ̄ ⊕ δθ* by each variable's kind (:mod:`steam_ref.manifold`). The ordering is computed once.
+Each iteration linearizes every factor at θ̄ (Eq. 9), solves 𝓘 δθ* = Aᵀb (Eq. 11) by sparse Cholesky under the chosen
+ordering ('xl': the paper's PB, 'amd': PBVR, 'natural'; :mod:`steam_ref.linear.ordering`; computed once), and updates
+θ̄ ← θ̄ ⊕ δθ* by each variable's kind, as its factors declare it (:mod:`steam_ref.manifold`).
 
 Iterations stop on GTSAM's rules (the cost, or its relative decrease, below a tolerance) or on a
 small step. A stopping rule is not a proof, so before a result says ``converged`` the returned estimate is
@@ -235,8 +235,9 @@ def graph_and_values(
     graph: FactorGraph | Iterable[Factor], initial: Values | Mapping[Key, NDArray]
 ) -> tuple[FactorGraph, Values]:
     """Internal API. The graph (a FactorGraph, or any iterable of factors) and the initial estimate (a Values or a
-    mapping)."""
-    return graph if isinstance(graph, FactorGraph) else FactorGraph(graph), as_values("initial", initial)
+    mapping), each variable of the kind its factors declare (:class:`~steam_ref.errors.KindError` if any disagree)."""
+    graph = graph if isinstance(graph, FactorGraph) else FactorGraph(graph)
+    return graph, graph.with_kinds(as_values("initial", initial))
 
 
 def prepare(

@@ -7,6 +7,8 @@ one meaning:
 - :class:`ShapeError`: an argument has the wrong shape, or holds NaN/inf as given;
 - :class:`DataError`: a data file is missing, malformed or inconsistent;
 - :class:`UnknownVariableError`: a variable is named that has no estimate;
+- :class:`KindError`: a variable's kind (the space it lives in, :mod:`steam_ref.manifold`) is given two ways that
+  disagree: by two factors, by a factor and the solver holding it, or by a factor and ``Values(kinds=)``;
 - :class:`UnderdeterminedError`: the factors leave a variable unconstrained;
 - :class:`NumericalError`: a computation on valid input overflowed to NaN/inf or lost the precision
   its answer needs (never "the iterations stopped short": that is convergence);
@@ -40,6 +42,11 @@ class UnknownVariableError(SteamError, KeyError):
 
     def __str__(self) -> str:  # KeyError would quote the message
         return str(self.args[0]) if self.args else ""
+
+
+class KindError(SteamError):
+    """Two sources disagree on a variable's kind (a vector, an SE(2) state...): two factors, a factor and the
+    solver holding the variable, or a factor and the kind its value was given; the message names the key and both."""
 
 
 class UnderdeterminedError(SteamError):

@@ -20,7 +20,7 @@ import numpy as np
 
 from .arguments import is_integer
 from .batch import BatchResult, Iteration, certify, check_options, prepare
-from .bayes_tree import IncrementalSolver
+from .bayes_tree import FixedLagSmoother, IncrementalSolver
 from .errors import SteamError
 from .graph import FactorGraph
 from .linear.threads import limited
@@ -53,18 +53,22 @@ def finish_at_optimum(
     holds the whole problem and is refused.
     """
     if not isinstance(solver, IncrementalSolver):
-        raise SteamError(f"solver must be an IncrementalSolver, got solver={solver!r}")
+        raise SteamError(
+            "this FixedLagSmoother marginalizes what leaves its window: it does not hold the whole problem, so it has "
+            "no batch optimum to finish at"
+            if isinstance(solver, FixedLagSmoother)
+            else f"solver must be an IncrementalSolver, got solver={solver!r}"
+        )
     check_options(
         step_tolerance=step_tolerance, relative_tolerance=relative_tolerance, absolute_tolerance=absolute_tolerance
     )
     if not is_integer(max_updates) or max_updates < 1:
         raise SteamError(f"max_updates must be an integer ≥ 1, got max_updates={max_updates!r}")
     factors = solver.factors
-    if solver.forgets_by_time or any(f is None for f in factors):
-        what = "marginalizes what leaves its window" if solver.forgets_by_time else "has marginalized variables"
+    if any(f is None for f in factors):
         raise SteamError(
-            f"this {type(solver).__name__} {what}: it does not hold the whole problem, so it has no batch optimum "
-            "to finish at"
+            f"this {type(solver).__name__} has marginalized variables: it does not hold the whole problem, so it has "
+            "no batch optimum to finish at"
         )
     graph, start = FactorGraph(factors), solver.estimate()
     backend, order, cost0 = prepare(graph, start, "amd", backend, max_updates)

@@ -1,7 +1,8 @@
 """The factor graph: the factors f_i(θ_i) whose product is the joint density.  [YIB Eq. 20]
 
 A :class:`FactorGraph` is a list of factors; its variables are the keys the factors name
-(:mod:`steam_ref.variables`), and its cost at an estimate is the sum of the factors' costs,
+(:mod:`steam_ref.variables`), each of the kind its factors declare (:attr:`~steam_ref.factors.Factor.key_kinds`,
+checked as factors are added), and its cost at an estimate is the sum of the factors' costs,
 evaluated by the linearization layer (:func:`steam_ref.linear.system.linearize`).
 """
 
@@ -10,8 +11,9 @@ from __future__ import annotations
 from collections.abc import Iterable, Iterator
 
 from .errors import ShapeError, UnknownVariableError
-from .factors import Factor, check_factors
+from .factors import Factor, check_factors, kinds_of
 from .linear.system import linearize
+from .manifold import Manifold
 from .variables import Key, Values, as_values
 
 __all__ = ["FactorGraph"]
@@ -21,12 +23,25 @@ class FactorGraph:
     """A list of factors; the variables are the keys the factors name.  [YIB Eq. 20]"""
 
     def __init__(self, factors: Iterable[Factor] = ()):
-        self.factors: list[Factor] = []
+        self.factors: list[Factor] = []  # add factors with :meth:`add`, which keeps the kinds
+        self._kinds: dict[Key, Manifold] = {}  # the kind of each variable, as its factors declare it
         self.add(factors)
 
     def add(self, factors: Factor | Iterable[Factor]) -> None:
-        """Append one factor or several (any iterable of factors); nothing is added if one is not a factor."""
-        self.factors.extend(check_factors("factors", factors))
+        """Append one factor or several (any iterable of factors); nothing is added if one is not a factor, or
+        declares a variable's kind other than the graph's factors do (:class:`~steam_ref.errors.KindError`)."""
+        new = check_factors("factors", factors)
+        self._kinds.update(kinds_of(new, self._kinds, "the graph's factors"))
+        self.factors.extend(new)
+
+    def kinds(self) -> dict[Key, Manifold]:
+        """The kind of every variable, as its factors declare it (a copy)."""
+        return dict(self._kinds)
+
+    def with_kinds(self, values: Values) -> Values:
+        """A copy of ``values`` whose variables have the kinds their factors declare, each value checked
+        against its kind; :class:`~steam_ref.errors.KindError` for a kind given to a value otherwise."""
+        return values.with_kinds(self._kinds, "its factors")
 
     def __len__(self) -> int:
         return len(self.factors)

@@ -17,10 +17,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .arguments import is_integer
-from .errors import NumericalError, ShapeError, SteamError, UnknownVariableError
-from .manifold import VECTOR, Manifold
+from .errors import KindError, NumericalError, ShapeError, SteamError, UnknownVariableError
+from .manifold import VECTOR, Manifold, by_kind
 
-__all__ = ["Key", "X", "L", "Values", "check_key", "key_list", "as_values"]
+__all__ = ["Key", "X", "L", "Values", "check_key", "key_list", "as_values", "check_new_values", "kind_clash"]
 
 
 # The field `index` shadows tuple.index on purpose (a key's index is the paper's subscript). mypy reports
@@ -72,10 +72,20 @@ def _check_kind(key: Key, kind: object) -> Manifold:
     return kind
 
 
+def kind_clash(key: Key, first: Manifold, by_first: str, second: Manifold, by_second: str) -> KindError:
+    """The error for a variable given two kinds: names the key, both kinds and who gave each."""
+    return KindError(
+        f"the kind of {key!r} is given twice and differs: {first.name} by {by_first}, {second.name} by {by_second}"
+    )
+
+
 class Values(Mapping):
-    """Current estimates: key → 1-D float64 array, each with its kind (:class:`~steam_ref.manifold.Manifold`,
-    :data:`~steam_ref.manifold.VECTOR` unless ``kinds`` says otherwise). Unknown keys raise
-    :class:`UnknownVariableError`."""
+    """Current estimates: key → 1-D float64 array, each with its kind (:class:`~steam_ref.manifold.Manifold`).
+
+    A kind is given with ``kinds`` (or :meth:`insert`), or by a solver from the factors naming the key
+    (a plain mapping of estimates is enough: its factors say what each variable is); a variable no one gave a
+    kind reads as :data:`~steam_ref.manifold.VECTOR`. A value given a kind is checked against it (an SE(2) state
+    is six numbers, its heading in (-π, π]). Unknown keys raise :class:`UnknownVariableError`."""
 
     def __init__(
         self,
@@ -83,7 +93,7 @@ class Values(Mapping):
         kinds: Mapping[Key, Manifold] | None = None,
     ):
         self._data: dict[Key, NDArray] = {}
-        self._kinds: dict[Key, Manifold] = {}  # the keys whose kind is not VECTOR
+        self._kinds: dict[Key, Manifold] = {}  # the kinds given (VECTOR included): every other key reads as VECTOR
         pairs: object = items.items() if isinstance(items, Mapping) else items  # checked, as given at run time
         if isinstance(pairs, (str, bytes)) or not isinstance(pairs, Iterable):
             raise SteamError(f"Values takes a mapping key -> vector or (key, vector) pairs, got {items!r}")
@@ -100,27 +110,44 @@ class Values(Mapping):
             for key, kind in kinds.items():
                 if key not in self._data:
                     raise UnknownVariableError(f"kinds names {key!r}, which has no estimate")
-                self._set_kind(key, kind)
+                self._set_kind(key, kind, self._data[key])
 
-    def _set_kind(self, key: Key, kind: object) -> None:
-        if _check_kind(key, kind) is VECTOR:
-            self._kinds.pop(key, None)
-        else:
-            self._kinds[key] = kind  # type: ignore[assignment]
+    def _set_kind(self, key: Key, kind: object, value: NDArray) -> None:
+        _check_kind(key, kind).check(f"the estimate of {key!r}", value)
+        self._kinds[key] = kind  # type: ignore[assignment]
 
     def kind(self, key: Key) -> Manifold:
-        """How ``key``'s estimate moves (:data:`~steam_ref.manifold.VECTOR` unless told otherwise)."""
+        """How ``key``'s estimate moves (:data:`~steam_ref.manifold.VECTOR` unless it was given another)."""
         if key not in self._data:
             raise UnknownVariableError(f"no estimate for variable {key!r}")
         return self._kinds.get(key, VECTOR)
 
     def kinds(self) -> dict[Key, Manifold]:
-        """The kind of every variable that is not a vector (a copy)."""
+        """The kind of every variable that was given one, VECTOR included (a copy; a solver's estimate gives
+        every variable its kind)."""
         return dict(self._kinds)
 
+    def check_kinds(self, kinds: Mapping[Key, Manifold], by: str) -> None:
+        """KindError for a variable whose given kind differs from its kind in ``kinds`` (what ``by`` says)."""
+        for key, kind in self._kinds.items():
+            other = kinds.get(key, kind)
+            if other is not kind and other != kind:
+                raise kind_clash(key, kind, "its value (Values(kinds=))", other, by)
+
+    def with_kinds(self, kinds: Mapping[Key, Manifold], by: str) -> Values:
+        """A copy whose variables named in ``kinds`` have those kinds (what ``by`` says, their factors say);
+        :class:`KindError` for one given another kind here, each value checked against its new kind."""
+        self.check_kinds(kinds, by)
+        out = self.copy()
+        for key, kind in kinds.items():
+            value = self._data.get(key)
+            if value is not None and self._kinds.get(key) is not kind:
+                out._set_kind(key, kind, value)
+        return out
+
     def insert(self, key: Key, value: NDArray, kind: Manifold | None = None) -> None:
-        """Add (or replace) the estimate of one variable; checks the key and that the value is a finite vector.
-        ``kind`` None keeps the key's kind (VECTOR for a new key)."""
+        """Add (or replace) the estimate of one variable; checks the key and that the value is a finite vector
+        (of the kind's size and rules). ``kind`` None keeps the key's kind (none given, for a new key)."""
         if not isinstance(key, Key):
             raise SteamError(f"{key!r} is not a variable key (make one with X(i) or L(j))")
         try:
@@ -137,8 +164,9 @@ class Values(Mapping):
         old = self._data.get(key)
         if old is not None and old.shape != v.shape:
             raise ShapeError(f"estimate of {key} changes size from {old.shape[0]} to {v.shape[0]}")
+        kind = self._kinds.get(key) if kind is None else kind
         if kind is not None:
-            self._set_kind(key, kind)
+            self._set_kind(key, kind, v)
         self._data[key] = v
 
     def __getitem__(self, key: Key) -> NDArray:
@@ -182,19 +210,19 @@ class Values(Mapping):
     def adopt(cls, arrays: Mapping[Key, NDArray], kinds: Mapping[Key, Manifold] | None = None) -> Values:
         """A Values holding ``arrays`` themselves: no copy, no check. Only for a caller whose arrays are
         finite 1-D float vectors by construction and never written in place (a solver's read-only
-        estimates); anyone else builds a ``Values(mapping)``, which checks and copies. ``kinds``: the keys whose
-        kind is not VECTOR."""
+        estimates); anyone else builds a ``Values(mapping)``, which checks and copies. ``kinds``: each key's kind
+        (copied)."""
         out = cls()
         out._data = dict(arrays)
         if kinds:
-            out._kinds = {k: m for k, m in kinds.items() if m is not VECTOR}
+            out._kinds = dict(kinds)
         return out
 
     @classmethod
     def view(cls, arrays: dict[Key, NDArray], kinds: dict[Key, Manifold] | None = None) -> Values:
-        """A Values reading the dict ``arrays`` itself (and ``kinds``, the keys that are not VECTOR): no copy, no
-        check, later changes to the dicts show through. Only for a solver handing its own store to a reader
-        (linearization at θ̄) that never writes into it."""
+        """A Values reading the dicts ``arrays`` and ``kinds`` themselves: no copy, no check, later changes to the
+        dicts show through. Only for a solver handing its own store to a reader (linearization at θ̄) that never
+        writes into it."""
         out = cls()
         out._data = arrays
         if kinds is not None:
@@ -211,25 +239,30 @@ class Values(Mapping):
             raise ShapeError(f"Values.stack needs variables of one size, got sizes {sizes}") from None
 
     def retract(self, delta: Mapping[Key, NDArray]) -> Values:
-        """θ̄ ⊕ δθ: a new Values with each variable moved by its kind's retraction (+ for a vector).  [YIB Eq. 11]"""
+        """θ̄ ⊕ δθ: a new Values with each variable moved by its kind's retraction, one call per kind.  [YIB Eq. 11]"""
         out = self.copy()
+        steps = {}
         for key, step in delta.items():
             if np.shape(step) != self[key].shape:
                 raise ShapeError(f"the update of {key!r} has shape {np.shape(step)}, its estimate {self[key].shape}")
-            kind = self._kinds.get(key)
-            x = self[key] + step if kind is None else np.asarray(kind.retract(self[key], np.asarray(step)), float)
-            if not np.all(np.isfinite(x)):
-                raise NumericalError(f"the update of {key!r} is not finite: {self[key]} ⊕ {np.asarray(step)}")
-            out._data[key] = x
+            steps[key] = np.asarray(step)
+        for kind, keys in by_kind(steps, self._kinds):
+            moved = kind.retract_many([self._data[k] for k in keys], [steps[k] for k in keys])
+            for key, x in zip(keys, moved, strict=True):
+                if not np.all(np.isfinite(x)):
+                    raise NumericalError(f"the update of {key!r} is not finite: {self[key]} ⊕ {steps[key]}")
+                out._data[key] = x
         return out
 
     def local(self, other: Mapping[Key, NDArray]) -> dict[Key, NDArray]:
-        """other ⊖ self for each key of ``other``, by this Values' kinds (other - self for a vector)."""
+        """other ⊖ self for each key of ``other``, by this Values' kinds, one call per kind."""
         out = {}
-        for key, x in other.items():
-            kind = self._kinds.get(key)
-            out[key] = np.asarray(x) - self[key] if kind is None else kind.local(self[key], np.asarray(x))
-        return out
+        for kind, keys in by_kind(other, self._kinds):
+            for key, d in zip(
+                keys, kind.local_many([self[k] for k in keys], [np.asarray(other[k]) for k in keys]), strict=True
+            ):
+                out[key] = d
+        return {k: out[k] for k in other}
 
     def states(self) -> list[Key]:
         """The trajectory-state keys, in index order."""
@@ -265,6 +298,12 @@ def key_list(name: str, keys: object) -> list[Key]:
         if not isinstance(k, Key):
             raise SteamError(f"{name}[{i}] = {k!r:.80} is not a variable key (make one with X(i) or L(j))")
     return out
+
+
+def check_new_values(new_values: object) -> None:
+    """SteamError unless ``new_values`` is a mapping key → vector or None (what a solver's update accepts)."""
+    if new_values is not None and not isinstance(new_values, Mapping):
+        raise SteamError(f"new_values must be a mapping key -> vector (a dict or a Values) or None, got {new_values!r}")
 
 
 def as_values(name: str, values: object) -> Values:

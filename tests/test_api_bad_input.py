@@ -22,13 +22,16 @@ from hypothesis import strategies as st
 import steam_ref as sr
 from steam_ref import L, X, covariance, dead_reckoning, gp, plot
 from steam_ref.errors import (
+    KindError,
     NumericalError,
     ShapeError,
     SteamError,
     UnderdeterminedError,
     UnknownVariableError,
 )
+from steam_ref.factors import LieStatePrior
 from steam_ref.gp import LinearSDE
+from steam_ref.lie import SE2, SE2_STATE
 from steam_ref.linear import (
     LinearSystem,
     Ordering,
@@ -38,6 +41,7 @@ from steam_ref.linear import (
     make_ordering,
 )
 from steam_ref.linear import solve as linear_solve
+from steam_ref.manifold import VECTOR
 from steam_ref.paper.results import position_rmse
 from steam_ref.trajectory import Trajectory
 
@@ -817,7 +821,7 @@ CASES = [
         "ISAM2Params blocks keyed by an int (never matched)",
         lambda: sr.ISAM2Params(relinearize_blocks={3: (3, 3)}),
         SteamError,
-        r"keyed by variable kind.*got the key 3",
+        r"keyed by a key's symbol.*got the key 3",
     ),
     (
         "ISAM2Params thresholds keyed by an int (never matched)",
@@ -982,6 +986,58 @@ CASES = [
         lambda: plot.draw_spy(solver().tree, highlight=[X(9)], path=PNG),
         UnknownVariableError,
         r"highlight names x9",
+    ),
+    # --- kinds: a variable's manifold, from its factors (issue 36) ------------------------------------
+    (
+        "Values kind not a Manifold",
+        lambda: sr.Values({X(0): ONES}, kinds={X(0): "se2"}),
+        SteamError,
+        r"the kind of x0 must be a Manifold .*got 'se2'",
+    ),
+    (
+        "Values SE(2) kind on a 3-vector accepted until the first retract",
+        lambda: sr.Values({X(0): np.zeros(3)}, kinds={X(0): SE2_STATE}),
+        ShapeError,
+        r"the estimate of x0 must be one SE2_STATE state \(6 numbers\), got shape \(3,\)",
+    ),
+    (
+        "Values SE(2) heading 4.0 taken as given",
+        lambda: sr.Values({X(0): np.r_[0.0, 0.0, 4.0, 0.0, 0.0, 0.0]}, kinds={X(0): SE2_STATE}),
+        SteamError,
+        r"the estimate of x0: the heading of an SE\(2\) pose must lie in \(-π, π\], got θ=4.0",
+    ),
+    (
+        "gauss_newton a world velocity on an SE(2) state converged 1.25 off",
+        lambda: sr.gauss_newton(
+            [
+                LieStatePrior.create(X(0), np.zeros(6), 0.1, group=SE2),
+                sr.VelocityFactor.create(X(0), [1.0, 0.0, 0.0], 0.1),
+            ],
+            {X(0): np.zeros(6)},
+        ),
+        KindError,
+        r"the kind of x0 is given twice and differs: se2 by LieStatePrior, vector by VelocityFactor",
+    ),
+    (
+        "IncrementalSolver.update a vector kind for an SE(2) factor's state",
+        lambda: sr.IncrementalSolver().update(
+            [LieStatePrior.create(X(0), np.zeros(6), 0.1, group=SE2)],
+            sr.Values({X(0): np.zeros(6)}, kinds={X(0): VECTOR}),
+        ),
+        KindError,
+        r"the kind of x0 is given twice and differs: vector by its value \(Values\(kinds=\)\), se2 by its factors",
+    ),
+    (
+        "IncrementalSolver.update constrained not a mapping",
+        lambda: sr.IncrementalSolver().update(*two_states(), constrained=[X(0)]),
+        SteamError,
+        r"constrained must be a mapping key -> number or None, got \[x0\]",
+    ),
+    (
+        "IncrementalSolver.update constrained rank not a number",
+        lambda: sr.IncrementalSolver().update(*two_states(), constrained={X(0): "first"}),
+        SteamError,
+        r"the rank of x0 among the keys eliminated first must be a real number, got .*'first'",
     ),
 ]
 

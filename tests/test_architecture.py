@@ -32,7 +32,7 @@ LAYERS: dict[str, int] = {
     "steam_ref.errors": 0,
     "steam_ref.arguments": 0,
     "steam_ref.plot": 1,  # a leaf: draws plain arrays, imports only errors, so any layer may draw
-    "steam_ref.manifold": 1,  # how an estimate moves (x ⊕ δ, x ⊖ x0): imports nothing of steam_ref
+    "steam_ref.manifold": 1,  # how an estimate moves (x ⊕ δ, x ⊖ x0), a variable's kind: imports only errors
     "steam_ref.variables": 1,
     "steam_ref.lie": 1,  # the LieGroup protocol (group.py), SE(2), the state kind on any group, the local GP; imports gp, manifold (1)
     "steam_ref.dead_reckoning": 1,

@@ -296,7 +296,8 @@ def test_an_interrupt_at_any_line_of_marginalize_leaves_the_solver_as_it_was(key
         state(s)  # forms every estimate, as each comparison below does: the runs then execute the same lines
     total = _lines_of(lambda: marginalize(done, keys))
     where = set()
-    for n in sorted({*np.linspace(1, total, 40).astype(int), *range(max(total - 40, 1), total + 1)}):  # the end changes
+    # 60 spread: 40 left every mutating step of a re-elimination unvisited for some hash seeds (set orders)
+    for n in sorted({*np.linspace(1, total, 60).astype(int), *range(max(total - 40, 1), total + 1)}):  # the end changes
         trace, _ = _interrupt_at(int(n))
         sys.settrace(trace)
         try:
@@ -321,9 +322,9 @@ def _smoother_state(smoother, keys) -> tuple:
     """state() and everything a FixedLagSmoother keeps besides: timestamps, what it forgot and when, its history,
     its counters."""
     last = smoother.last_marginalization
-    history = tuple((c.key, _array(c.mean), _array(c.gain)) for c in smoother.history.conditionals)
+    history = tuple((c.key, _array(c.theta), _array(c.step), _array(c.gain)) for c in smoother.history.conditionals)
     return (
-        state(smoother),
+        state(smoother.solver),
         tuple(smoother.timestamps.items()),
         tuple(smoother.was_marginalized(k) for k in keys),
         history,
@@ -373,8 +374,8 @@ def test_an_interrupt_at_any_line_of_a_fixed_lag_update_leaves_it_as_before_and_
             sys.settrace(None)
         where.add(str(interrupt.value).split(": ")[1])
         assert _smoother_state(solver, keys) == _smoother_state(twin, keys), f"not as before after {interrupt.value}"
-    assert {"_forget_old", "marginalize_keys"} <= where
+    assert {"_forget_old", "marginalize_keys"} <= where, where
     solver.update(big[0], big[1], timestamps=big[2])
     solver.update(after[0], after[1], timestamps=after[2])
     assert _smoother_state(solver, keys)[1:] == _smoother_state(done, keys)[1:]
-    assert state(solver)[1:] == state(done)[1:]  # all but the factors' ids: the stream's factors are shared
+    assert state(solver.solver)[1:] == state(done.solver)[1:]  # all but the factors' ids: the stream's are shared

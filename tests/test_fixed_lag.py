@@ -33,10 +33,12 @@ from steam_ref.errors import SteamError, UnknownVariableError
 from steam_ref.factors import Factor, GPPriorFactor, PriorFactor
 from steam_ref.gp import process_noise, transition
 from steam_ref.linear.system import GaussianFactor
+from steam_ref.manifold import VECTOR
 from steam_ref.variables import L, X
 
 QC = np.diag([0.3, 0.2, 0.1])
 EXACT = dict(relinearize_skip=1, wildfire_threshold=0.0)  # full back-substitution: δ solves the system
+KINDS = {X(1): VECTOR, X(2): VECTOR}
 
 
 @dataclass(frozen=True, eq=False)
@@ -167,11 +169,13 @@ def fed(stream: LinearStream, smoother: FixedLagSmoother, n: int, after_each=lam
     return everything
 
 
-def check_window(solver: IncrementalSolver, everything: list[Factor], stream: LinearStream | None = None) -> None:
+def check_window(
+    solver: IncrementalSolver | FixedLagSmoother, everything: list[Factor], stream: LinearStream | None = None
+) -> None:
     """The solver's window equals the dense posterior's marginal over it, mean and joint covariance."""
     name = (lambda k: k) if stream is None else (lambda k: oracle_key(stream, k))
     all_keys = list(dict.fromkeys(k for f in everything for k in f.keys))
-    held = sorted(solver.state.dims, key=str)
+    held = sorted(solver.estimate(), key=str)
     mean, where = dense_posterior(everything, all_keys)
     cov = where["cov"]
     idx = np.concatenate([np.arange(where[name(k)][0], where[name(k)][0] + where[name(k)][1]) for k in held])
@@ -333,7 +337,7 @@ def test_the_marginal_factor_moves_its_right_hand_side_with_the_estimate():
     rng = np.random.default_rng(1)
     A1, A2, b = rng.normal(size=(3, 2)), rng.normal(size=(3, 1)), rng.normal(size=3)
     t1, t2 = rng.normal(size=2), rng.normal(size=1)
-    f = MarginalFactor.frozen_at(GaussianFactor((X(1), X(2)), (A1, A2), b), {X(1): t1, X(2): t2})
+    f = MarginalFactor.frozen_at(GaussianFactor((X(1), X(2)), (A1, A2), b), {X(1): t1, X(2): t2}, KINDS)
     x1, x2 = rng.normal(size=2), rng.normal(size=1)
     np.testing.assert_allclose(f.error(x1, x2), A1 @ (x1 - t1) + A2 @ (x2 - t2) - b, atol=1e-14)
     np.testing.assert_allclose(np.hstack(f.jacobians(x1, x2)), np.hstack([A1, A2]), atol=0)
@@ -443,7 +447,7 @@ def test_keys_of_any_id_the_api_accepts_work_in_the_fixed_lag_smoother(ids):
         landmark = L(ids[t])  # a landmark with the same (odd) id as the state: another variable
         factors = [GPPriorFactor.wnoa(a, b, 1.0, QC), Offset((b, landmark), np.eye(3) / 0.1, z=rng.normal(size=3))]
         smoother.update(factors, {b: rng.normal(size=6), landmark: rng.normal(size=3)}, timestamps={b: float(t)})
-        assert all(not smoother.was_marginalized(k) for k in smoother.state.dims)
+        assert all(not smoother.was_marginalized(k) for k in smoother.solver.state.dims)
     _, peak = tracemalloc.get_traced_memory()
     tracemalloc.stop()
     assert peak < 50e6

@@ -52,7 +52,7 @@ class Fix(Factor):
 
 def held(smoother: FixedLagSmoother) -> dict[str, int]:
     """The size of everything the smoother holds that should not grow with the run."""
-    state = smoother.state
+    state = smoother.solver.state
     sizes = {name: len(getattr(state, name)) for name in SolverState.VARIABLE_STORES}
     sizes["live factors"] = sum(f is not None for f in state.factors)
     sizes["cached linearizations"] = sum(g is not None for g in state.linear)

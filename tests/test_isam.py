@@ -511,7 +511,7 @@ def test_relinearize_blocks_are_checked():
     np.testing.assert_array_equal(params.blocks_to_move("l", np.array([0.0, 0.01]), 0.1), [0, 0])
     with pytest.raises(SteamError, match="do not add up"):
         params.blocks_to_move("x", np.zeros(4), 0.1)
-    with pytest.raises(SteamError, match="map a variable kind"):
+    with pytest.raises(SteamError, match="map a key's symbol"):
         sr.ISAM2Params(relinearize_blocks="x")
 
 
@@ -521,6 +521,6 @@ def test_a_variable_its_blocks_do_not_fit_is_rejected_on_insert(rng):
     stream = Stream(rng, n_states=3)
     solver.update(*stream.step("state"))
     before = solver.estimate()
-    with pytest.raises(ShapeError, match=r"\(3, 3\) for kind 'x' do not add up to its size 4"):
+    with pytest.raises(ShapeError, match=r"\(3, 3\) for symbol 'x' do not add up to its size 4"):
         solver.update([sr.PriorFactor.create(sr.X(9), np.zeros(4), 1.0)], {sr.X(9): np.zeros(4)})
     assert set(solver.estimate()) == set(before) and len(solver) == len(before)

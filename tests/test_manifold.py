@@ -2,10 +2,11 @@
 Gauss-Newton, the Bayes tree (incremental updates with relinearization), marginalization and the fixed-lag
 smoother's kept history, each against a dense Gauss-Newton written here for that kind.
 
-The kind is defined in this file only: a positive scale, x ⊕ δ = x·exp(δ), x ⊖ x₀ = log(x/x₀) (elementwise).
-The factors read log-ratios, so the problem is linear in the tangent coordinates u = log x: every solver that
-moves the estimate through the kind reaches the optimum exactly (to rounding), and one that adds δ to x does
-not. The oracle's Jacobians are central differences through the retraction, not the factors' own.
+The kind is defined in this file only: a positive scale, x ⊕ δ = x·exp(δ), x ⊖ x₀ = log(x/x₀) (elementwise),
+and its factors declare it (``key_kinds``), so the estimates may be plain dicts: a solver takes each variable's
+kind from its factors. The factors read log-ratios, so the problem is linear in the tangent coordinates u = log x:
+every solver that moves the estimate through the kind reaches the optimum exactly (to rounding), and one that adds
+δ to x does not. The oracle's Jacobians are central differences through the retraction, not the factors' own.
 """
 
 from __future__ import annotations
@@ -18,8 +19,9 @@ import pytest
 
 from steam_ref.batch import gauss_newton
 from steam_ref.bayes_tree import FixedLagSmoother, IncrementalSolver, marginalize
+from steam_ref.errors import KindError
 from steam_ref.factors import Factor
-from steam_ref.manifold import VECTOR, Manifold
+from steam_ref.manifold import VECTOR, Manifold, VectorSpace, by_kind
 from steam_ref.variables import Values, X
 
 D = 2  # size of each variable
@@ -47,6 +49,7 @@ class LogPrior(Factor):
     z: np.ndarray
     _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "z")
     key_dims: ClassVar[tuple[int, ...]] = (D,)
+    key_kinds: ClassVar[tuple[Manifold, ...]] = (SCALE,)  # type: ignore[misc]
 
     def error(self, x):
         return np.log(x) - self.z
@@ -62,6 +65,7 @@ class LogRatio(Factor):
     z: np.ndarray
     _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "z")
     key_dims: ClassVar[tuple[int, ...]] = (D, D)
+    key_kinds: ClassVar[tuple[Manifold, ...]] = (SCALE, SCALE)  # type: ignore[misc]
 
     def error(self, a, b):
         return np.log(b / a) - self.z
@@ -127,9 +131,46 @@ def test_the_seam_is_bit_for_bit_addition_for_a_vector():
     assert v.retract({X(0): d})[X(0)].tobytes() == (x + d).tobytes() and v.kind(X(0)) is VECTOR
 
 
+def test_the_batched_moves_are_the_one_variable_moves():
+    """retract_many / local_many / rebase_many of many variables (sizes 6 and 2 mixed for a vector) equal the
+    one-variable maps: bit for bit for a vector (x + δ, x - x₀, the marked blocks moved alone), to rounding for a
+    kind that moves by its broadcast map."""
+    rng = np.random.default_rng(1)
+    xs = [rng.normal(size=6 if i % 3 else 2) for i in range(7)]
+    ds = [rng.normal(size=len(x)) for x in xs]
+    moves = [rng.random(len(x)) < 0.5 for x in xs]
+    assert [a.tobytes() for a in VECTOR.retract_many(xs, ds)] == [
+        (x + d).tobytes() for x, d in zip(xs, ds, strict=True)
+    ]
+    assert [a.tobytes() for a in VECTOR.local_many(xs, ds)] == [(d - x).tobytes() for x, d in zip(xs, ds, strict=True)]
+    theta, delta = VECTOR.rebase_many(xs, ds, moves)
+    for x, d, m, t, e in zip(xs, ds, moves, theta, delta, strict=True):
+        np.testing.assert_array_equal(t, np.where(m, x + d, x))
+        np.testing.assert_array_equal(e, np.where(m, 0.0, d))
+    assert VECTOR.retract_sum(xs[0], ds[0], xs[0]).tobytes() == ((xs[0] + ds[0]) + xs[0]).tobytes()
+    pos = [np.exp(rng.normal(size=D)) for _ in range(5)]
+    steps = [rng.normal(size=D) for _ in range(5)]
+    for got, x, d in zip(SCALE.retract_many(pos, steps), pos, steps, strict=True):
+        np.testing.assert_allclose(got, x * np.exp(d), rtol=1e-15)
+    theta, delta = SCALE.rebase_many(pos, steps, [np.array([True, False])] * 5)  # a kind that moves whole
+    for t, e, x, d in zip(theta, delta, pos, steps, strict=True):
+        np.testing.assert_allclose(t, x * np.exp(d), rtol=1e-15)
+        assert not e.any()
+    assert SCALE.retract_many([], []) == [] and isinstance(VECTOR, VectorSpace)
+    groups = by_kind([X(0), X(1), X(2), X(3)], {X(1): SCALE, X(3): SCALE, X(2): VECTOR})
+    assert groups == [(VECTOR, [X(0), X(2)]), (SCALE, [X(1), X(3)])]
+
+
+def test_a_kind_that_only_says_its_name_moves_nothing():
+    """The base Manifold is no vector space: a kind that forgets its maps fails loudly, not with + silently."""
+    with pytest.raises(NotImplementedError):
+        Manifold().retract(np.zeros(2), np.ones(2))
+
+
 def test_values_carry_kinds_through_copy_insert_and_remove():
     v = Values({X(0): [1.0, 2.0], X(1): [3.0, 4.0]}, kinds={X(0): SCALE})
     assert v.kind(X(0)) is SCALE and v.kind(X(1)) is VECTOR and v.copy().kind(X(0)) is SCALE
+    assert v.kinds() == {X(0): SCALE}  # the kinds given; X(1) was given none
     v.insert(X(0), [2.0, 2.0])  # the kind stays
     assert v.kind(X(0)) is SCALE
     np.testing.assert_allclose(v.local({X(0): np.array([2.0, 2.0 * np.e])})[X(0)], [0.0, 1.0])
@@ -143,18 +184,22 @@ def test_batch_gauss_newton_follows_the_kind():
     factors = [f for fs in steps for f in fs]
     initial = {X(i): g for i, g in enumerate(guesses)}
     want = dense_gauss_newton(factors, initial)
-    got = gauss_newton(factors, Values(initial, kinds=dict.fromkeys(initial, SCALE))).values
-    assert_close(got, want, initial)
-    plain = gauss_newton(factors, Values(initial), max_iterations=3, check=False).values  # x + δ: not the optimum
-    assert max(np.abs(plain[k] - want[k]).max() for k in initial) > 1e-3
+    told = gauss_newton(factors, Values(initial, kinds=dict.fromkeys(initial, SCALE))).values
+    assert_close(told, want, initial)
+    plain = gauss_newton(factors, initial)  # a plain dict: the factors say what each variable is
+    assert plain.converged and all(plain.values[k].tobytes() == told[k].tobytes() for k in initial)
+    assert plain.values.kind(X(3)) is SCALE
+    added = dict.fromkeys(initial, VECTOR)  # x + δ: not the optimum, and refused for saying so
+    with pytest.raises(KindError, match=r"the kind of x0 is given twice and differs: vector by its value.*scale by"):
+        gauss_newton(factors, Values(initial, kinds=added))
 
 
 @pytest.mark.parametrize("seed", [2, 3])
 def test_the_bayes_tree_relinearizes_along_the_kind(seed):
     steps, guesses = problem(seed, 15)
     solver = IncrementalSolver(relinearize_threshold=0.01, relinearize_skip=1, wildfire_threshold=0.0)
-    for i, fs in enumerate(steps):
-        solver.update(fs, Values({X(i): guesses[i]}, kinds={X(i): SCALE}))
+    for i, fs in enumerate(steps):  # the kind told, or not: the factors say it
+        solver.update(fs, Values({X(i): guesses[i]}, kinds={X(i): SCALE}) if i % 2 else {X(i): guesses[i]})
     for _ in range(30):  # updates with nothing new: fluid relinearization to the optimum
         solver.update()
     want = dense_gauss_newton([f for fs in steps for f in fs], {X(i): g for i, g in enumerate(guesses)})
@@ -169,7 +214,7 @@ def test_marginalization_and_the_kept_history_follow_the_kind():
     smoother = FixedLagSmoother(lag, keep_history=True, relinearize_threshold=0.0, relinearize_skip=1,
                                 wildfire_threshold=0.0)  # fmt: skip
     for i, fs in enumerate(steps):
-        smoother.update(fs, Values({X(i): guesses[i]}, kinds={X(i): SCALE}), timestamps={X(i): float(i)})
+        smoother.update(fs, {X(i): guesses[i]}, timestamps={X(i): float(i)})
         for _ in range(2):
             smoother.update()  # relinearize the window (and the marginal factors' right-hand sides) as it slides
     assert smoother.n_marginalized > 10
@@ -185,8 +230,10 @@ def test_marginalize_follows_the_kind():
     steps, guesses = problem(5, 14)
     solver = IncrementalSolver(relinearize_threshold=0.0, relinearize_skip=1, wildfire_threshold=0.0)
     for i, fs in enumerate(steps):
-        solver.update(fs, Values({X(i): guesses[i]}, kinds={X(i): SCALE}))
+        solver.update(fs, {X(i): guesses[i]})
     marginalize(solver, [X(0), X(1), X(5)])
+    marginal = [f for f in solver.factors if f is not None and type(f).__name__ == "MarginalFactor"]
+    assert marginal and all(k is SCALE for f in marginal for k in f.key_kinds)  # made with the kinds held
     for _ in range(5):
         solver.update()
     want = dense_gauss_newton([f for fs in steps for f in fs], {X(i): g for i, g in enumerate(guesses)})

@@ -5,8 +5,9 @@ Schur complement frozen at the linearization point, Eq. 10.4 of the derivations)
 kept history, and covariance recovery (the dense inverse of JᵀJ at the optimum, in the right tangent:
 the pose block in the body frame).
 
-The robot turns about 1.1 rad a step, so an estimate moved by ``+`` in place of the right retraction lands
-measurably elsewhere (the batch test checks that it does).
+The robot turns about 1.1 rad a step, so an estimate moved by ``+`` in place of the right retraction would land
+measurably elsewhere; the factors declare their states SE(2) (``key_kinds``), so a plain dict of estimates reaches
+the same optimum and states called vectors are refused (the batch test checks both).
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ import pytest
 
 from steam_ref.batch import gauss_newton
 from steam_ref.bayes_tree import FixedLagSmoother, IncrementalSolver, marginalize
+from steam_ref.errors import KindError
 from steam_ref.factors import PriorFactor
 from steam_ref.factors.lie_prior import LiePriorFactor, LieStatePrior
 from steam_ref.factors.lie_readings import BodyVelocityFactor, PoseReading
@@ -145,8 +147,10 @@ def test_batch_gauss_newton_on_se2_states(chain):
     assert_close(got, want, want)
     assert got.kind(X(3)) is SE2_STATE
     assert max(np.abs(SE2_STATE.local(truth[i], want[X(i)])[:3]).max() for i in range(10)) < 0.2  # near the truth
-    plain = gauss_newton(factors, Values(guesses), max_iterations=8, check=False).values  # x + δ: not the optimum
-    assert max(np.abs(SE2_STATE.local(want[X(i)], plain[X(i)])).max() for i in range(10)) > 1e-3
+    plain = gauss_newton(factors, guesses, relative_tolerance=1e-14, step_tolerance=1e-12).values  # kinds: the factors'
+    assert all(plain[k].tobytes() == got[k].tobytes() for k in want) and plain.kind(X(3)) is SE2_STATE
+    with pytest.raises(KindError, match="the kind of x0 is given twice and differs: vector by its value"):
+        gauss_newton(factors, Values(guesses, kinds=dict.fromkeys(guesses, VECTOR)))  # x + δ: refused
 
 
 @pytest.mark.parametrize("model", ["local-variable", "simplified"])

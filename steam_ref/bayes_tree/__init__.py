@@ -6,16 +6,17 @@
   back-substitution;
 - :mod:`.params`: :class:`ISAM2Params`, the solver's thresholds (GTSAM's defaults);
 - :mod:`.undo` and :mod:`.state`: the one undo log, and :class:`~.state.SolverState`, every store of a solver;
-- :mod:`.isam`: :class:`IncrementalSolver`, the update of Algorithm 1 (steps 2-7);
+- :mod:`.isam`: :class:`IncrementalSolver`, the update of Algorithm 1 (steps 2-7), and its public
+  ``marginalize_leaves`` (:func:`marginalize` as a function);
 - :mod:`.backsolve`: its partial back-substitution [K12 Alg. 7];
-- :mod:`.marginalization`: :func:`marginalize`, variables out of the tree, leaving their marginal factor;
-- :mod:`.fixed_lag`: :class:`FixedLagSmoother`, iSAM2 over a sliding window of a lag in seconds;
+- :mod:`.marginalization`: how variables leave the tree, leaving their marginal factor;
+- :mod:`.fixed_lag`: :class:`FixedLagSmoother`, which holds an IncrementalSolver over a sliding window of a lag;
 - :mod:`.history`: the conditionals a fixed-lag smoother forgot, kept to smooth its past at the end.
 """
 
 from .fixed_lag import FixedLagSmoother
-from .isam import IncrementalSolver, UpdateReport
-from .marginalization import MarginalFactor, MarginalizationReport, marginalize
+from .isam import IncrementalSolver, UpdateReport, marginalize
+from .marginalization import MarginalFactor, MarginalizationReport
 from .params import ISAM2Params
 from .symbolic import CliqueTree, SymbolicClique, build_cliques, symbolic_elimination
 from .tree import BayesTree, Clique, eliminate, eliminate_clique

@@ -1,24 +1,19 @@
 """Fixed-lag smoothing: iSAM2 that forgets the variables older than a lag.  [K12, derivations §10]
 
-:class:`FixedLagSmoother` is an :class:`~steam_ref.bayes_tree.IncrementalSolver` whose updates carry
-timestamps. After each update every variable whose timestamp is older than the newest one minus the
-lag (``t < t_newest - lag``, GTSAM's rule) is marginalized out of the Bayes tree by
-:func:`~steam_ref.bayes_tree.marginalization.marginalize`: its factors go, a :class:`MarginalFactor` on
-its separator stays, frozen at the linearization point of the moment. The tree, the factors and
-the estimate then hold only the window, so memory and time per update stay flat however long the
-run.
+:class:`FixedLagSmoother` holds an :class:`~steam_ref.bayes_tree.IncrementalSolver` and the timestamps of its
+variables, as GTSAM's ``IncrementalFixedLagSmoother`` holds an ISAM2. After each update every variable older than
+the newest timestamp minus the lag (``t < t_newest - lag``, GTSAM's rule) is marginalized by the solver's
+:meth:`~steam_ref.bayes_tree.IncrementalSolver.marginalize_leaves`: its factors go, a :class:`MarginalFactor` on
+its separator stays, frozen at the linearization point of the moment. Each update has the solver eliminate the
+variables next to leave first (``constrained``), so that they are leaves, cut off with no re-elimination. The
+window alone is held: memory and time per update stay flat however long the run.
 
-A variable without a timestamp (a landmark, unless the caller gives one) is never marginalized; a
-timestamp may be refreshed (give a landmark the time it was last seen, and it is forgotten a lag
-after that). A marginalized variable given a value again (a landmark seen again) enters as a new
-variable: what was learnt of it before lives on only in the marginal factor on the window. The
-smoother decides what to forget from the timestamps alone (:func:`marginalize` refuses it: its
-timestamps and history would not know); give a variable an old timestamp instead.
-
-Queries of a marginalized variable raise :class:`UnknownVariableError` naming the update that
-marginalized it; its estimate at that moment is in :attr:`FixedLagSmoother.last_marginalization`.
-``keep_history=True`` keeps each marginalized variable's conditional (:mod:`.history`), and
-:meth:`FixedLagSmoother.smoothed_history` gives every forgotten variable its estimate given all the data so
+A variable without a timestamp (a landmark, unless the caller gives one) is never marginalized; a refreshed
+timestamp (a landmark's, when it is seen) restarts its clock. A marginalized variable given a value again enters
+as a new variable: what was learnt of it before lives on only in the marginal factor. Queries of a marginalized
+variable raise :class:`UnknownVariableError` naming the update that marginalized it; its estimate then is in
+:attr:`FixedLagSmoother.last_marginalization`. ``keep_history=True`` keeps each one's conditional (:mod:`.history`),
+and :meth:`FixedLagSmoother.smoothed_history` gives every forgotten variable its estimate given all the data so
 far, by one backward pass from the window (derivations §10.5).
 """
 
@@ -30,25 +25,25 @@ from collections.abc import Iterable, Mapping
 from numpy.typing import NDArray
 
 from ..arguments import number
+from ..covariance import key_groups
 from ..errors import SteamError, UnknownVariableError
 from ..factors import Factor, check_factors
+from ..linear.ordering import KeysBelow
 from ..linear.threads import limit
-from ..variables import Key
+from ..variables import Key, Values, check_key, check_new_values, key_list
 from .history import History
-from .isam import IncrementalSolver, UpdateReport, check_new_values
-from .marginalization import MarginalizationReport, marginalize_keys
+from .isam import IncrementalSolver, UpdateReport
+from .marginalization import MarginalizationReport
 from .params import ISAM2Params
+from .undo import UndoLog
 
 __all__ = ["FixedLagSmoother"]
 
 
-class FixedLagSmoother(IncrementalSolver):
-    """iSAM2 over a sliding window of ``lag`` seconds: older variables are marginalized after each update.
-
-    ``update(..., timestamps={key: t})`` gives new (or refreshed) timestamps in seconds.
-    """
-
-    forgets_by_time = True  # :func:`marginalize` refuses it: what it forgets, it records
+class FixedLagSmoother:
+    """iSAM2 over a sliding window of ``lag`` seconds: an :class:`IncrementalSolver` (:attr:`solver`) whose variables
+    older than the lag are marginalized after each update (``update(..., timestamps={key: t})``, in seconds).
+    The queries are the solver's; of a marginalized variable, they say when it went."""
 
     def __init__(
         self, lag: float, params: ISAM2Params | None = None, *, keep_history: bool = False, **changes: object
@@ -56,7 +51,7 @@ class FixedLagSmoother(IncrementalSolver):
         lag = number("lag", lag)
         if not lag > 0:
             raise SteamError(f"lag must be a number of seconds > 0, got lag={lag!r}")
-        super().__init__(params, **changes)
+        self.solver = IncrementalSolver(params, **changes)  # the window's iSAM2
         self.lag = float(lag)  # seconds of history kept
         self._times: dict[Key, float] = {}  # timestamp of each timed variable in the window
         self._gone: dict[Key, int] = {}  # marginalized key → the update that marginalized it (any id a Key holds)
@@ -88,14 +83,19 @@ class FixedLagSmoother(IncrementalSolver):
             for k in f.keys:
                 if k not in fresh:
                     self._held("a new factor names", k)
-        with self.state.transaction(), limit():  # the limit is left inside: an interrupt there undoes all
-            report = super().update(factors, new_values, relinearize=relinearize)
-            self._forget_old(fresh, times)
+        with self.solver.transaction() as log, limit():  # the limit is left inside: an interrupt there undoes all
+            report = self.solver.update(factors, new_values, relinearize=relinearize, constrained=self._leaving())
+            self._forget_old(log, report.step, fresh, times)
         return report
 
-    def _forget_old(self, fresh: Iterable[Key], times: dict[Key, float]) -> None:
-        """After an update: record its timestamps, marginalize what fell behind the lag, and record that."""
-        log = self.state.log
+    def _leaving(self) -> KeysBelow | None:
+        """Once the window is full, the timed variables older than the newest timestamp, to eliminate first, oldest
+        first (as GTSAM's smoother orders the keys to marginalize); before, None: iSAM2's own order."""
+        return KeysBelow(self._times, self.newest) if self.n_marginalized else None
+
+    def _forget_old(self, log: UndoLog, step: int, fresh: Iterable[Key], times: dict[Key, float]) -> None:
+        """After update ``step``: record its timestamps, marginalize what fell behind the lag, and record that (each
+        change recorded in the solver's undo ``log`` first)."""
         for name in ("newest", "n_marginalized", "peak_window", "last_marginalization"):
             log.record(setattr, self, name, getattr(self, name))
         log.keep(self._times)  # ordered: the next marginalization's order follows it
@@ -104,39 +104,20 @@ class FixedLagSmoother(IncrementalSolver):
                 log.delete(self._gone, k)  # a marginalized variable given anew is a new variable
         self._times.update(times)
         self.newest = max(self.newest, *times.values()) if times else self.newest
-        self.peak_window = max(self.peak_window, len(self))
+        self.peak_window = max(self.peak_window, len(self.solver))
         cutoff = self.newest - self.lag
         old = [k for k, t in self._times.items() if t < cutoff]
         self.last_marginalization = None
         if old:
-            done = marginalize_keys(self, old, keep_conditionals=self.history is not None)
+            keep = self.history is not None
+            done = self.solver.marginalize_leaves(old, constrained=self._leaving(), keep_conditionals=keep)
             if self.history is not None:
                 log.extend(self.history.conditionals, list(done.conditionals))
             for k in done.keys:
-                log.set(self._gone, k, self.state.steps)
+                log.set(self._gone, k, step)
                 del self._times[k]
             self.n_marginalized += len(done.keys)
             self.last_marginalization = done
-
-    def elimination_order(self, variables: list[Key], factor_keys: list, last: list[Key]) -> list[Key]:
-        """Once the window is full: the timed variables older than the newest timestamp first, oldest first, then
-        minimum degree with ``last`` last [K12 Sec. 5], so the states next to leave sit in leaf cliques, cut off with
-        no re-elimination (as GTSAM's fixed-lag smoother orders the keys to marginalize first)."""
-        if not self.n_marginalized:  # the window is not full yet: iSAM2's own order, as without a lag
-            return super().elimination_order(variables, factor_keys, last)
-        cutoff, times = self.newest, self._times
-        old = sorted(
-            (k for k in variables if times.get(k, math.inf) < cutoff and k not in last), key=lambda k: times[k]
-        )
-        if not old:
-            return super().elimination_order(variables, factor_keys, last)
-        groups = [set(keys) for keys in factor_keys]
-        for v in old:  # the elimination game on the keys [K12 Alg. 1]: v's factors become one on its neighbours
-            touching = [g for g in groups if v in g]
-            groups = [g for g in groups if v not in g] + [set().union(*touching) - {v}]
-        gone = set(old)
-        rest = [k for k in variables if k not in gone]
-        return old + super().elimination_order(rest, [tuple(g) for g in groups if g], last)
 
     def _checked_times(
         self, timestamps: Mapping[Key, float] | None, new_values: Mapping[Key, NDArray] | None
@@ -155,7 +136,7 @@ class FixedLagSmoother(IncrementalSolver):
                 )
             if k not in new:
                 self._held("timestamps names", k)
-            if not self.holds(k) and k not in new:
+            if not self.solver.holds(k) and k not in new:
                 raise UnknownVariableError(f"timestamps names {k!r}, which is neither held nor in new_values")
             out[k] = number(f"timestamps[{k!r}]", t)
         return out
@@ -170,14 +151,10 @@ class FixedLagSmoother(IncrementalSolver):
             )
 
     def smoothed_history(self) -> dict[Key, NDArray]:
-        """Every marginalized variable's estimate given all the data so far (:meth:`.History.smooth`).
-
-        Needs ``keep_history=True``. Each is an affine function of the window's current estimate through the
-        conditionals frozen at marginalization [derivations Eq. 10.5]; for a linear problem, the batch optimum;
-        for a nonlinear one, the optimum of those frozen linearizations (:mod:`.history`). A landmark forgotten
-        and back in the window appears here as its *previous* incarnation, under the same key: merging this
-        dict over :meth:`estimate` would overwrite the live estimate with the stale one.
-        """
+        """Every marginalized variable's estimate given all the data so far (:meth:`.History.smooth`; needs
+        ``keep_history=True``), through the conditionals frozen at marginalization [derivations Eq. 10.5]: for a
+        linear problem, the batch optimum (:mod:`.history`). A landmark forgotten and back in the window appears here
+        as its *previous* incarnation, under the same key: merged over :meth:`estimate`, it would hide the live one."""
         if self.history is None:
             raise SteamError("smoothed_history needs the conditionals: make the smoother with keep_history=True")
         return self.history.smooth(self.estimate_of)
@@ -191,8 +168,45 @@ class FixedLagSmoother(IncrementalSolver):
         """The timestamp of each timed variable in the window (a copy)."""
         return dict(self._times)
 
-    def _known(self, what: str, keys: list[Key]) -> list[Key]:
-        """UnknownVariableError for a key that was marginalized, saying when (the queries' check)."""
+    # --- the solver's queries ---------------------------------------------------------------------------------
+
+    tree = property(lambda self: self.solver.tree, doc="The window's Bayes tree.")
+    factors = property(lambda self: self.solver.factors, doc="Every factor (a marginalized one's slot None).")
+    linearization_point = property(lambda self: self.solver.linearization_point, doc="θ̄ of the window (a copy).")
+    __len__ = lambda self: len(self.solver)  # the variables in the window
+
+    def holds(self, key: Key) -> bool:
+        """True when ``key`` is in the window."""
+        return self.solver.holds(key)
+
+    def estimate(self) -> Values:
+        """The window's estimate θ̄ ⊕ δ (a snapshot)."""
+        return self.solver.estimate()
+
+    def estimate_of(self, key: Key) -> NDArray:
+        """The estimate of one variable of the window (read-only)."""
+        return self.solver.estimate_of(self._known([check_key("key", key)], "the estimate of")[0])
+
+    def marginal_covariance(self, key: Key) -> NDArray:
+        """:meth:`IncrementalSolver.marginal_covariance` of a variable of the window."""
+        return self.solver.marginal_covariance(self._known([check_key("key", key)])[0])
+
+    def marginal_covariances(self, keys: Iterable[Key] | None = None) -> dict[Key, NDArray]:
+        """:meth:`IncrementalSolver.marginal_covariances` of variables of the window (all of them when None)."""
+        return self.solver.marginal_covariances(None if keys is None else self._known(key_list("keys", keys)))
+
+    def joint_covariance(self, keys: Iterable[Key]) -> NDArray:
+        """:meth:`IncrementalSolver.joint_covariance` of variables of the window."""
+        return self.solver.joint_covariance(self._known(key_list("keys", keys)))
+
+    def joint_covariances(self, groups: Iterable[Iterable[Key]]) -> list[NDArray]:
+        """:meth:`IncrementalSolver.joint_covariances` of groups of variables of the window."""
+        checked = key_groups(groups)
+        self._known([k for g in checked for k in g])
+        return self.solver.joint_covariances(checked)
+
+    def _known(self, keys: list[Key], what: str = "the covariance of") -> list[Key]:
+        """``keys``, after UnknownVariableError for one that was marginalized, saying when."""
         for k in keys:
             self._held(what, k)
         return keys

@@ -20,34 +20,30 @@ from __future__ import annotations
 
 import time
 from collections.abc import Iterable, Iterator, Mapping
-from contextlib import contextmanager
+from contextlib import AbstractContextManager, contextmanager
 from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
 
+from .. import covariance
 from ..arguments import real_array
-from ..covariance import (
-    key_groups,
-    tree_joint_covariance,
-    tree_joint_covariances,
-    tree_marginal_covariance,
-    tree_marginal_covariances,
-)
 from ..errors import ShapeError, SteamError, UnderdeterminedError, UnknownVariableError
-from ..factors import Factor, check_factors
+from ..factors import Factor, check_factors, kinds_of
 from ..linear.ordering import min_degree_keys
-from ..linear.system import GaussianFactor, linearize
+from ..linear.system import linearize
 from ..linear.threads import limit
-from ..manifold import VECTOR, Manifold
-from ..variables import Key, Values, check_key, key_list
+from ..manifold import Manifold, by_kind
+from ..variables import Key, Values, check_key, check_new_values, key_list
 from .backsolve import backsubstitute
 from .dot import tree_nnz
+from .marginalization import MarginalizationReport, marginalize_keys
 from .params import ISAM2Params
 from .state import SolverState
 from .tree import BayesTree, Clique, eliminate
+from .undo import UndoLog
 
-__all__ = ["IncrementalSolver", "UpdateReport", "check_new_values"]
+__all__ = ["IncrementalSolver", "UpdateReport", "marginalize"]
 
 
 class PhaseTimer:
@@ -86,12 +82,6 @@ class UpdateReport:
     tree_nnz: int = 0  # nonzeros of R after the update, counted as GTSAM's ISAM2::treeNnz (bayes_tree/dot.py)
 
 
-def check_new_values(new_values: object) -> None:
-    """SteamError unless ``new_values`` is a mapping key → vector or None (what an update accepts)."""
-    if new_values is not None and not isinstance(new_values, Mapping):
-        raise SteamError(f"new_values must be a mapping key -> vector (a dict or a Values) or None, got {new_values!r}")
-
-
 class IncrementalSolver:
     """iSAM2 on the Bayes tree: BTGP's incremental solver.  [YIB Alg. 1, K12 Alg. 6]
 
@@ -99,8 +89,6 @@ class IncrementalSolver:
     keyword ``changes`` override its fields, so ``IncrementalSolver(relinearize_skip=1, wildfire_threshold=0)`` works as
     well.
     """
-
-    forgets_by_time = False  # a FixedLagSmoother forgets by timestamps, so :func:`marginalize` refuses it
 
     def __init__(self, params: ISAM2Params | None = None, **changes: object) -> None:
         params = ISAM2Params() if params is None else params
@@ -125,7 +113,7 @@ class IncrementalSolver:
 
     def estimate_of(self, key: Key) -> NDArray:
         """The current estimate θ̄ ⊕ δ of one variable (read-only)."""
-        self._known("the estimate of", [check_key("key", key)])
+        check_key("key", key)
         try:
             return self.state.estimate_of(key)
         except KeyError:
@@ -134,7 +122,7 @@ class IncrementalSolver:
     @property
     def factors(self) -> tuple[Factor, ...]:
         """Every factor so far, in the order added (a tuple: the solver's caches are indexed by position); the slot
-        of a factor :func:`~.marginalization.marginalize` dropped holds None."""
+        of a factor :meth:`marginalize_leaves` dropped holds None."""
         return tuple(self.state.factors)  # type: ignore[arg-type]  # a dropped slot is None (docstring)
 
     @property
@@ -153,28 +141,19 @@ class IncrementalSolver:
     def marginal_covariance(self, key: Key) -> NDArray:
         """Cov(δθ_key) (d, d) of the current linear system, from the Bayes tree, in the tangent at the estimate (an
         SE(2) state's pose block in its body frame: :mod:`steam_ref.covariance`).  [K11 Sec. 3]"""
-        self._known("the covariance of", [check_key("key", key)])
-        return tree_marginal_covariance(self.tree, key)
+        return covariance.tree_marginal_covariance(self.tree, check_key("key", key))
 
     def marginal_covariances(self, keys: Iterable[Key] | None = None) -> dict[Key, NDArray]:
         """Marginal covariance (dₖ, dₖ) of each of ``keys`` (every variable when None), in one pass down the tree."""
-        keys = None if keys is None else self._known("the covariance of", key_list("keys", keys))
-        return tree_marginal_covariances(self.tree, keys)
+        return covariance.tree_marginal_covariances(self.tree, None if keys is None else key_list("keys", keys))
 
     def joint_covariance(self, keys: Iterable[Key]) -> NDArray:
         """Joint covariance (Σdₖ, Σdₖ) of several variables, stacked in the order given, from the tree."""
-        return tree_joint_covariance(self.tree, self._known("the covariance of", key_list("keys", keys)))
+        return covariance.tree_joint_covariance(self.tree, key_list("keys", keys))
 
     def joint_covariances(self, groups: Iterable[Iterable[Key]]) -> list[NDArray]:
         """Joint covariance of each group of variables (stacked in the order given), from the tree."""
-        checked = key_groups(groups)
-        self._known("the covariance of", [k for g in checked for k in g])
-        return tree_joint_covariances(self.tree, checked)
-
-    def _known(self, what: str, keys: list[Key]) -> list[Key]:  # noqa: ARG002 - what a subclass names
-        """``keys``, after a subclass has had its say on those it no longer holds (a fixed-lag smoother names
-        when it marginalized them); the queries themselves name a key never held."""
-        return keys
+        return covariance.tree_joint_covariances(self.tree, covariance.key_groups(groups))
 
     def __len__(self) -> int:
         return len(self.state.dims)
@@ -187,23 +166,41 @@ class IncrementalSolver:
         new_values: Mapping[Key, NDArray] | None = None,
         *,
         relinearize: bool = True,
+        constrained: Mapping[Key, float] | None = None,
     ) -> UpdateReport:
         """Add factors and variables, and update the tree and the estimate.  [YIB Alg. 1, K12 Alg. 6]
 
-        ``relinearize=False`` skips this update's fluid relinearization. Raises :class:`SteamError` subclasses on bad
-        input (a new value for an existing variable, a factor naming a variable with no value, a variable left
-        unconstrained, ...); the solver is then as it was before the call.
-        """
+        Each new variable is of the kind its factors declare (``new_values`` may be a plain mapping). ``relinearize``
+        False skips this update's fluid relinearization; ``constrained`` (GTSAM's ``constrainedKeys``): keys to
+        eliminate first, by increasing number (:func:`~steam_ref.linear.ordering.min_degree_keys`). Raises
+        :class:`SteamError` subclasses on bad input (a new value for a held variable, a factor naming a variable with
+        no value, a variable left unconstrained, a :class:`~steam_ref.errors.KindError`...), the solver as it was."""
         timer = PhaseTimer()
         with timer("check"):
             if not isinstance(relinearize, (bool, np.bool_)):
                 raise SteamError(f"relinearize must be True or False, got relinearize={relinearize!r}")
+            if constrained is not None and not isinstance(constrained, Mapping):
+                raise SteamError(f"constrained must be a mapping key -> number or None, got {constrained!r:.80}")
             F_new = check_factors("new_factors", new_factors)
             check_new_values(new_values)
             theta_new, kinds = self._checked_update(F_new, {} if new_values is None else new_values)
         # an error, or Ctrl-C (KeyboardInterrupt) at any point: all undone; the BLAS limit is left inside the transaction
         with self.state.transaction(), limit():
-            return self._update(F_new, theta_new, kinds, relinearize, timer)
+            return self._update(F_new, theta_new, kinds, relinearize, constrained, timer)
+
+    def transaction(self) -> AbstractContextManager[UndoLog]:
+        """Changes as one: all undone if anything inside raises (Ctrl-C too), the caller's recorded in the log yielded."""
+        return self.state.transaction()
+
+    def marginalize_leaves(
+        self, keys: Iterable[Key], *, constrained: Mapping[Key, float] | None = None, keep_conditionals: bool = False
+    ) -> MarginalizationReport:
+        """Marginalize ``keys`` out of the tree and the factors (GTSAM's ``marginalizeLeaves``; keys not in leaf
+        cliques are re-eliminated first, ``constrained`` as in :meth:`update`): :mod:`.marginalization`. The solver
+        then holds the marginal of the other variables (for a linear problem, their estimate and covariances are the
+        whole problem's, to rounding). ``keep_conditionals``: the report carries each key's P(v | S)
+        (:class:`~.history.ForgottenConditional`). :class:`UnknownVariableError` for a key not held."""
+        return marginalize_keys(self.state, keys, self.params.wildfire_threshold, constrained, keep_conditionals)
 
     def _update(
         self,
@@ -211,6 +208,7 @@ class IncrementalSolver:
         theta_new: dict[Key, NDArray],
         kinds: Mapping[Key, Manifold],
         relinearize: bool,
+        constrained: Mapping[Key, float] | None,
         timer: PhaseTimer,
     ) -> UpdateReport:
         """One step of iSAM2, numbered as [K12 Alg. 6], with the steps of [YIB Alg. 1] (module docstring)."""
@@ -220,7 +218,7 @@ class IncrementalSolver:
         with timer("add"):
             new_ids = state.append_factors(F_new)
             for k, x in theta_new.items():
-                state.add_variable(k, x, kinds.get(k, VECTOR), self.params.threshold_for(k.symbol))
+                state.add_variable(k, x, kinds[k], self.params.threshold_for(k.symbol))
             theta_nf = list(dict.fromkeys(k for f in F_new for k in f.keys))
         # 3. Fluid relinearization, θ̄ ← θ̄ ⊕ δ for θ_rl, with the δ of the last update: [YIB] step 7
         #    of the previous round, which iSAM2 does here, every relinearize_skip-th update. [K12 Alg. 5]
@@ -238,9 +236,9 @@ class IncrementalSolver:
         # 4c. Add the cached marginal factors f(S) of the orphans.                [YIB step 4]
         # 4d. Order the removed part by constrained minimum degree, θ_nf last.    [K12 Sec. 5]
         with timer("order"):
-            linear = [self.cached(j) for j in fids] + [self.tree.cliques[o].marginal for o in orphans]
+            linear = [state.cached(j) for j in fids] + [self.tree.cliques[o].marginal for o in orphans]
             variables = [k for c in removed.values() for k in c.frontals] + list(theta_new)
-            order = self.elimination_order(variables, [f.keys for f in linear], theta_nf)
+            order = min_degree_keys(variables, state.dims, [f.keys for f in linear], theta_nf, constrained)
         # 4e. Eliminate into new cliques and attach back the orphans.   [YIB step 5, Eq. 24-25]
         with timer("eliminate"):
             cliques, parents, owner = eliminate(order, linear, state.dims, fids + [None] * len(orphans))
@@ -264,16 +262,13 @@ class IncrementalSolver:
             tree_nnz=state.tree_nnz,
         )
 
-    def elimination_order(self, variables: list[Key], factor_keys: list, last: list[Key]) -> list[Key]:
-        """Minimum degree with ``last`` eliminated last [K12 Sec. 5]; a subclass may order the ties."""
-        return min_degree_keys(variables, self.state.dims, factor_keys, last)
-
     def _checked_update(
         self, new_factors: list[Factor], new_values: Mapping[Key, NDArray]
     ) -> tuple[dict[Key, NDArray], Mapping[Key, Manifold]]:
-        """Validate an update before anything changes: the new values as float vectors, and their kinds."""
+        """Validate an update before anything changes: the new values as float vectors, and the kind of each
+        variable the new factors name, from their declarations (refused when one contradicts another, the solver or
+        a kind given in ``Values(kinds=)``), each new value checked against its kind."""
         values: dict[Key, NDArray] = {}
-        kinds = new_values.kinds() if isinstance(new_values, Values) else {}
         for k, v in new_values.items():
             if not isinstance(k, Key):
                 raise SteamError(
@@ -286,7 +281,7 @@ class IncrementalSolver:
                 raise ShapeError(f"new_values[{k!r}] must be a non-empty 1-D vector, got shape {x.shape}")
             if not np.all(np.isfinite(x)):
                 raise ShapeError(f"new value of {k!r} is not finite: {x}")
-            self.params.threshold_for(k.symbol)  # a dict of thresholds must name every kind
+            self.params.threshold_for(k.symbol)  # a dict of thresholds must name every symbol
             self.params.blocks_of(k.symbol, x.shape[0])  # relinearization blocks must fit the variable
             values[k] = x
         for f in new_factors:
@@ -302,23 +297,29 @@ class IncrementalSolver:
         for k in values:
             if k not in named:
                 raise UnderdeterminedError(f"new variable {k!r} is named by no new factor, so nothing constrains it")
+        kinds = kinds_of(new_factors, self.state.kinds)
+        if isinstance(new_values, Values):
+            new_values.check_kinds(kinds, "its factors")
+        for k, x in values.items():
+            kinds[k].check(f"new_values[{k!r}]", x)
         return values, kinds
 
     def _fluid_relinearization(self) -> list[Key]:
         """θ̄ ← θ̄ ⊕ δ, δ ← 0 for θ_rl, the variables whose max abs(δ) ≥ β; returns θ_rl.  [K12 Alg. 5]
 
         With ``relinearize_blocks``, only a vector's blocks whose own max abs(δ) ≥ β move (another kind moves
-        whole). Back-substitution keeps the candidates ([YIB Alg. 1 step 7]: collect them into θ_rl)."""
+        whole: :meth:`~steam_ref.manifold.Manifold.rebase_many`, one call per kind; the estimate is unchanged).
+        Back-substitution keeps the candidates ([YIB Alg. 1 step 7]: collect them into θ_rl)."""
         state = self.state
         theta_rl = list(state.candidates)
         moves = {k: self.params.blocks_to_move(k.symbol, state.delta[k], state.beta[k]) for k in theta_rl}  # (d,) bool
         state.candidates.clear()  # the transaction kept them whole
-        for k, move in moves.items():
-            theta_bar, delta, kind = state.theta_bar[k], state.delta[k], state.kinds.get(k)
-            if kind is None:  # a vector: θ̄ + δ, block by block; the estimate is unchanged
-                state.move(k, theta_bar + np.where(move, delta, 0.0), np.where(move, 0.0, delta))
-            else:  # the estimate θ̄ ⊕ δ becomes the linearization point, δ ← 0
-                state.move(k, np.asarray(kind.retract(theta_bar, delta), dtype=float), np.zeros_like(delta))
+        for kind, keys in by_kind(theta_rl, state.kinds):
+            thetas, deltas = kind.rebase_many(
+                [state.theta_bar[k] for k in keys], [state.delta[k] for k in keys], [moves[k] for k in keys]
+            )
+            for k, theta_bar, delta in zip(keys, thetas, deltas, strict=True):
+                state.move(k, theta_bar, delta)
         return theta_rl
 
     def _remove_top(self, theta_nf: list[Key], theta_rl: list[Key]) -> tuple[dict[int, Clique], list[int]]:
@@ -341,9 +342,11 @@ class IncrementalSolver:
                     state.set_linear(need[i], gf)
         return len(need)
 
-    def cached(self, j: int) -> GaussianFactor:
-        """The linearization of factor ``j`` at θ̄ (made when it entered, or when θ̄ of its variables moved)."""
-        gf = self.state.linear[j]
-        if gf is None:
-            raise SteamError(f"factor {j} has not been linearized")
-        return gf
+
+def marginalize(
+    solver: IncrementalSolver, keys: Iterable[Key], *, keep_conditionals: bool = False
+) -> MarginalizationReport:
+    """:meth:`IncrementalSolver.marginalize_leaves` (a FixedLagSmoother is none: it forgets by its timestamps)."""
+    if not isinstance(solver, IncrementalSolver):
+        raise SteamError(f"marginalize: solver must be an IncrementalSolver, got {type(solver).__name__}")
+    return solver.marginalize_leaves(keys, keep_conditionals=keep_conditionals)

@@ -9,7 +9,8 @@ its marginal p(Θ) = ∫ p(D, Θ) dD. In the linearized problem ‖A δ - b‖²
 leaves the conditional P(D | S), which a smoother keeps only to smooth its past afterwards (:mod:`.history`), and the
 rows ‖A_m δ_S - b_m‖² on D's separator S: the Schur complement of D in the information matrix (derivations §10,
 Eq. 10.1-10.3). Every other factor is untouched, so the marginal over Θ is the old factors not touching D plus this
-one. :func:`marginalize` does it in the tree, in the update's style:
+one. :meth:`IncrementalSolver.marginalize_leaves <.isam.IncrementalSolver.marginalize_leaves>` does it in the
+tree, in the update's style:
 
 1. *The cliques of D.* Every clique holding a variable of D (frontal or in a separator) is found by
    walking down from the clique where it is frontal [K12 Alg. 5].
@@ -25,7 +26,8 @@ one. :func:`marginalize` does it in the tree, in the update's style:
    as an update removes its top [K12 Alg. 4]. D is eliminated first from the factors adjacent to it
    (Eq. 10.1-10.2, one variable at a time), its conditionals are dropped, and the rest of the removed
    part is eliminated as an update would, from its remaining factors, the marginal factors and the
-   orphans' cached f(S), with the old root's variables kept last; the orphans are hung back.
+   orphans' cached f(S), with the old root's variables kept last (and the caller's ``constrained`` first);
+   the orphans are hung back.
 
 The marginal factor (:class:`~steam_ref.factors.MarginalFactor`) is frozen at θ̄_S of the moment: its
 right-hand side at θ̄' is b_m - A_m (θ̄' ⊖ θ̄_S) (Eq. 10.4). Every change goes through the solver's
@@ -46,16 +48,15 @@ from ..linear.system import GaussianFactor
 from ..variables import Key, key_list
 from .backsolve import backsubstitute
 from .history import ForgottenConditional
-from .isam import IncrementalSolver
 from .state import SolverState
 from .tree import Clique, eliminate, eliminate_clique
 
-__all__ = ["MarginalFactor", "MarginalizationReport", "eliminate_variables", "marginalize", "marginalize_keys"]
+__all__ = ["MarginalFactor", "MarginalizationReport", "eliminate_variables", "marginalize_keys"]
 
 
 @dataclass(frozen=True)
 class MarginalizationReport:
-    """What one :func:`marginalize` did."""
+    """What one marginalization did."""
 
     keys: tuple[Key, ...]  # the variables marginalized, in elimination order
     leaves: bool  # True: they were whole subtrees, cut off with no re-elimination
@@ -111,35 +112,18 @@ def _home(state: SolverState, keys: tuple[Key, ...], tops: list[int]) -> int:
     raise SteamError(f"no clique holds the marginal factor's variables {keys}")
 
 
-def marginalize(
-    solver: IncrementalSolver, keys: Iterable[Key], *, keep_conditionals: bool = False
-) -> MarginalizationReport:
-    """Marginalize ``keys`` out of ``solver``'s Bayes tree and factors (module docstring, steps 1-3).
-
-    Afterwards the solver holds the marginal over the other variables: for a linear problem its
-    estimate and covariances of every other variable are those of the whole problem, to rounding.
-    ``keep_conditionals``: the report also carries each key's conditional P(v | S) at the linearization
-    point of the moment (:class:`~.history.ForgottenConditional`), for a smoothing pass later.
-    Raises :class:`UnknownVariableError` for a key the solver does not hold, and :class:`SteamError` for a
-    :class:`~.fixed_lag.FixedLagSmoother`, which marginalizes by its timestamps and keeps its own record of
-    what it forgot; on any failure or interruption (Ctrl-C) the solver is left as it was.
-    """
-    if not isinstance(solver, IncrementalSolver):
-        raise SteamError(f"marginalize: solver must be an IncrementalSolver, got {type(solver).__name__}")
-    if solver.forgets_by_time:
-        raise SteamError(
-            "marginalize: a FixedLagSmoother forgets by its timestamps (and records what it forgot); give the "
-            "variables an old timestamp in its next update instead"
-        )
-    return marginalize_keys(solver, keys, keep_conditionals=keep_conditionals)
-
-
 def marginalize_keys(
-    solver: IncrementalSolver, keys: Iterable[Key], *, keep_conditionals: bool = False
+    state: SolverState,
+    keys: Iterable[Key],
+    alpha: float,
+    constrained: Mapping[Key, float] | None = None,
+    keep_conditionals: bool = False,
 ) -> MarginalizationReport:
-    """:func:`marginalize` without its refusal of a smoother that forgets by time: what a
-    :class:`~.fixed_lag.FixedLagSmoother` runs on itself, inside its update's transaction."""
-    state = solver.state
+    """Marginalize ``keys`` out of ``state``'s Bayes tree and factors (module docstring, steps 1-3): what
+    :meth:`~.isam.IncrementalSolver.marginalize_leaves` runs. ``alpha``: the wildfire threshold of the
+    back-substitution after a re-elimination; ``constrained``: the keys its ordering eliminates first
+    (:func:`~steam_ref.linear.ordering.min_degree_keys`). One transaction: on any failure or interruption
+    (Ctrl-C) the state is left as it was."""
     drop_list = list(dict.fromkeys(key_list("keys", keys)))
     for k in drop_list:
         if k not in state.dims:
@@ -147,18 +131,18 @@ def marginalize_keys(
     if not drop_list:
         return MarginalizationReport((), True, (), (), (), (), {})
     with state.transaction():
-        return _marginalize(solver, state, set(drop_list), keep_conditionals)
+        return _marginalize(state, set(drop_list), alpha, constrained, keep_conditionals)
 
 
 def _marginalize(
-    solver: IncrementalSolver, state: SolverState, drop: set[Key], keep_conditionals: bool
+    state: SolverState, drop: set[Key], alpha: float, constrained: Mapping[Key, float] | None, keep_conditionals: bool
 ) -> MarginalizationReport:
     """Steps 1-3 of the module docstring, inside a transaction."""
     tree = state.tree
     cids = list(dict.fromkeys(c for v in drop for c in tree.cliques_involving(v)))  # step 1
     fids = [j for c in cids for j in tree.cliques[c].factors]
     dropped = [j for j in fids if not drop.isdisjoint(state.factors[j].keys)]  # type: ignore[union-attr]
-    adjacent = [solver.cached(j) for j in dropped]
+    adjacent = [state.cached(j) for j in dropped]
     variables = list(dict.fromkeys(k for f in adjacent for k in f.keys))
     last = [k for k in variables if k not in drop]
     order = min_degree_keys(variables, state.dims, [f.keys for f in adjacent], last)
@@ -182,10 +166,10 @@ def _marginalize(
         removed_top, orphans = tree.remove_top(cids)
         removed = list(removed_top)
         kept = [j for c in removed_top.values() for j in c.factors if drop.isdisjoint(state.factors[j].keys)]  # type: ignore[union-attr]
-        linear = [solver.cached(j) for j in kept] + schur + [tree.cliques[o].marginal for o in orphans]
+        linear = [state.cached(j) for j in kept] + schur + [tree.cliques[o].marginal for o in orphans]
         rest = [k for c in removed_top.values() for k in c.frontals if k not in drop]
         last = [k for c, cl in removed_top.items() if c in roots for k in cl.frontals if k not in drop]
-        order_rest = solver.elimination_order(rest, [f.keys for f in linear], last)
+        order_rest = min_degree_keys(rest, state.dims, [f.keys for f in linear], last, constrained)
         n_own = len(kept) + len(schur)
         cliques, parents, owner = eliminate(order_rest, linear, state.dims, list(range(n_own)) + [None] * len(orphans))
         factor_ids = _add_marginal_factors(state, schur)
@@ -196,7 +180,7 @@ def _marginalize(
     for k in drop:
         state.drop_variable(k)
     if new_cids:
-        backsubstitute(state, set(new_cids), solver.params.wildfire_threshold)
+        backsubstitute(state, set(new_cids), alpha)
     return MarginalizationReport(
         tuple(order_drop), leaves, tuple(removed), tuple(new_cids),
         tuple(dropped), tuple(factor_ids), estimates, forgotten,

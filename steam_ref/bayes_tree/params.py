@@ -20,10 +20,10 @@ from ..errors import ShapeError, SteamError
 __all__ = ["ISAM2Params"]
 
 
-def _blocks(kind: str, sizes: object) -> tuple[int, ...]:
+def _blocks(symbol: str, sizes: object) -> tuple[int, ...]:
     """Block sizes as a tuple of positive ints; SteamError naming them otherwise."""
-    _kind("relinearize_blocks", kind)
-    bad = SteamError(f"relinearize_blocks[{kind!r}] must be positive integer block sizes, got {sizes!r}")
+    _symbol("relinearize_blocks", symbol)
+    bad = SteamError(f"relinearize_blocks[{symbol!r}] must be positive integer block sizes, got {sizes!r}")
     if isinstance(sizes, (str, bytes)) or not isinstance(sizes, (tuple, list, np.ndarray)) or not len(sizes):
         raise bad
     try:
@@ -32,11 +32,11 @@ def _blocks(kind: str, sizes: object) -> tuple[int, ...]:
         raise bad from None
 
 
-def _kind(field: str, kind: object) -> str:
-    """A variable kind, the ``kind`` of a Key ('x', 'l'): a string, else the entry would never match."""
-    if not isinstance(kind, str):
-        raise SteamError(f"{field} is keyed by variable kind, a string such as 'x' or 'l'; got the key {kind!r}")
-    return kind
+def _symbol(field: str, symbol: object) -> str:
+    """A key's symbol ('x', 'l'): a string, else the entry would never match."""
+    if not isinstance(symbol, str):
+        raise SteamError(f"{field} is keyed by a key's symbol, a string such as 'x' or 'l'; got the key {symbol!r}")
+    return symbol
 
 
 def _threshold(value: object, name: str) -> float:
@@ -58,13 +58,13 @@ class ISAM2Params:
     The defaults are GTSAM's ISAM2Params defaults, which the paper's scripts use.
     """
 
-    # β of [K12 Alg. 5]: relinearize a variable when max |δ| ≥ β; one float, or one per kind {'x': 0.1, 'l': 0.5}
+    # β of [K12 Alg. 5]: relinearize a variable when max |δ| ≥ β; one float, or one per symbol {'x': 0.1, 'l': 0.5}
     relinearize_threshold: float | Mapping[str, float] = 0.1
     # check for relinearization every k-th update only (GTSAM's relinearizeSkip)
     relinearize_skip: int = 10
     # α of [K12 Alg. 7]: back-substitution descends only where δ changed by at least α (0: full)
     wildfire_threshold: float = 1e-3
-    # kind → block sizes: relinearize each block of such a variable on its own, as GTSAM would if it
+    # symbol → block sizes: relinearize each block of such a variable on its own, as GTSAM would if it
     # held the blocks as separate variables (the paper's scripts hold a state as pose P and velocity
     # V: {'x': (3, 3)}); None: every variable is one block
     relinearize_blocks: Mapping[str, tuple[int, ...]] | None = None
@@ -73,8 +73,8 @@ class ISAM2Params:
         t = self.relinearize_threshold
         if isinstance(t, Mapping):
             t = {
-                _kind("relinearize_threshold", kind): _threshold(v, f"relinearize_threshold[{kind!r}]")
-                for kind, v in t.items()
+                _symbol("relinearize_threshold", symbol): _threshold(v, f"relinearize_threshold[{symbol!r}]")
+                for symbol, v in t.items()
             }
         else:
             t = _threshold(t, "relinearize_threshold")
@@ -87,35 +87,35 @@ class ISAM2Params:
         if self.relinearize_blocks is not None:
             if not isinstance(self.relinearize_blocks, Mapping):
                 raise SteamError(
-                    "relinearize_blocks must map a variable kind to block sizes, e.g. {'x': (3, 3)}; "
+                    "relinearize_blocks must map a key's symbol to block sizes, e.g. {'x': (3, 3)}; "
                     f"got {self.relinearize_blocks!r}"
                 )
             object.__setattr__(
                 self, "relinearize_blocks", {k: _blocks(k, v) for k, v in self.relinearize_blocks.items()}
             )
 
-    def blocks_of(self, kind: str, size: int) -> tuple[int, ...]:
-        """Block sizes of a variable of ``kind`` and ``size``; ShapeError when its blocks do not fit it."""
-        sizes = (self.relinearize_blocks or {}).get(kind, (size,))
+    def blocks_of(self, symbol: str, size: int) -> tuple[int, ...]:
+        """Block sizes of a variable of ``symbol`` and ``size``; ShapeError when its blocks do not fit it."""
+        sizes = (self.relinearize_blocks or {}).get(symbol, (size,))
         if sum(sizes) != size:
-            raise ShapeError(f"relinearize_blocks {sizes} for kind {kind!r} do not add up to its size {size}")
+            raise ShapeError(f"relinearize_blocks {sizes} for symbol {symbol!r} do not add up to its size {size}")
         return sizes
 
-    def blocks_to_move(self, kind: str, delta: NDArray, threshold: float) -> NDArray:
-        """(d,) bool: the entries of a variable of ``kind`` whose block has max abs(δ) ≥ ``threshold``."""
-        sizes = self.blocks_of(kind, len(delta))
+    def blocks_to_move(self, symbol: str, delta: NDArray, threshold: float) -> NDArray:
+        """(d,) bool: the entries of a variable of ``symbol`` whose block has max abs(δ) ≥ ``threshold``."""
+        sizes = self.blocks_of(symbol, len(delta))
         bounds = np.cumsum((0, *sizes))
         return np.repeat([np.abs(delta[a:b]).max() >= threshold for a, b in itertools.pairwise(bounds)], sizes)
 
-    def threshold_for(self, kind: str) -> float:
-        """β for variables of ``kind`` ('x', 'l', ...); SteamError when a per-kind dict lacks it."""
+    def threshold_for(self, symbol: str) -> float:
+        """β for variables of ``symbol`` ('x', 'l', ...); SteamError when a per-symbol dict lacks it."""
         t = self.relinearize_threshold
         if not isinstance(t, Mapping):  # a dict after __post_init__
             return t
         try:
-            return t[kind]
+            return t[symbol]
         except KeyError:
-            raise SteamError(f"relinearize_threshold {t!r} has no entry for variables of kind {kind!r}") from None
+            raise SteamError(f"relinearize_threshold {t!r} has no entry for variables of symbol {symbol!r}") from None
 
     def replace(self, **changes: Any) -> ISAM2Params:
         """A copy with some fields changed (validated again); SteamError names an unknown field

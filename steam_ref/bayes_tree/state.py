@@ -15,9 +15,10 @@ from contextlib import contextmanager
 import numpy as np
 from numpy.typing import NDArray
 
+from ..errors import SteamError
 from ..factors import Factor
 from ..linear.system import GaussianFactor
-from ..manifold import VECTOR, Manifold
+from ..manifold import Manifold, by_kind
 from ..variables import Key, Values
 from .tree import BayesTree
 from .undo import UndoLog
@@ -38,7 +39,7 @@ class SolverState:
         self.factors: list[Factor | None] = []  # every factor so far; its id is its position (None: dropped)
         self.linear: list[GaussianFactor | None] = []  # the cached linearization of each factor at θ̄
         self.theta_bar: dict[Key, NDArray] = {}  # θ̄: the linearization point
-        self.kinds: dict[Key, Manifold] = {}  # how each variable that is not a vector moves
+        self.kinds: dict[Key, Manifold] = {}  # the kind of each variable (how it moves), from its factors
         self.dims: dict[Key, int] = {}  # size of each variable (its tangent's too)
         self.beta: dict[Key, float] = {}  # β: each variable's relinearization threshold [K12 Alg. 5]
         self.delta: dict[Key, NDArray] = {}  # δ, relative to θ̄ (an array is replaced, never written in place)
@@ -49,14 +50,14 @@ class SolverState:
         self.tree_nnz = 0  # nonzeros of R (GTSAM's treeNnz)
 
     @contextmanager
-    def transaction(self) -> Iterator[None]:
+    def transaction(self) -> Iterator[UndoLog]:
         """Run a change of the solver: if anything in it raises (Ctrl-C too), every store and the tree are put
-        back as they were; nested transactions belong to the outermost."""
+        back as they were, with what the caller recorded in the log it yields; nested ones belong to the outermost."""
         with self.log.transaction():
             self.log.keep(self.candidates)  # an ordered set: the next θ̄ moves, and the next ordering, follow it
             self.log.record(setattr, self, "steps", self.steps)
             self.log.record(setattr, self, "tree_nnz", self.tree_nnz)
-            yield
+            yield self.log
 
     def values(self) -> Values:
         """θ̄ as a Values (a view of the store, no copy: for reading only)."""
@@ -68,8 +69,7 @@ class SolverState:
         """A new variable: θ̄ = ``value``, δ = 0."""
         log = self.log
         log.set(self.theta_bar, key, value)
-        if kind is not VECTOR:
-            log.set(self.kinds, key, kind)
+        log.set(self.kinds, key, kind)
         log.set(self.dims, key, value.shape[0])
         log.set(self.beta, key, beta)
         log.set(self.delta, key, np.zeros_like(value))
@@ -88,31 +88,35 @@ class SolverState:
         self.log.set(self.delta, key, delta)
         self.log.set(self.stale, key, None)
 
-    def _formed(self, key: Key) -> NDArray:
-        """θ̄ ⊕ δ of ``key`` by its kind, read-only.  [YIB Eq. 11]"""
-        kind = self.kinds.get(key)
-        theta, delta = self.theta_bar[key], self.delta[key]
-        e = theta + delta if kind is None else np.asarray(kind.retract(theta, delta), dtype=float)
-        e.flags.writeable = False
-        return e
+    def _formed(self, keys: list[Key]) -> dict[Key, NDArray]:
+        """θ̄ ⊕ δ of ``keys`` by their kinds, one call per kind, as read-only arrays in the order of ``keys``."""
+        formed, groups = {}, by_kind(keys, self.kinds)
+        for kind, group in groups:
+            moved = kind.retract_many([self.theta_bar[k] for k in group], [self.delta[k] for k in group])
+            for k, e in zip(group, moved, strict=True):
+                e.flags.writeable = False
+                formed[k] = e
+        return formed if len(groups) < 2 else {k: formed[k] for k in keys}
 
     def estimate_of(self, key: Key) -> NDArray:
         """θ̄ ⊕ δ of one held variable (read-only; formed when stale). KeyError when it is not held."""
-        if key in self.stale:
-            self.log.set(self.estimates, key, self._formed(key))
+        if key in self.stale:  # one variable: its kind's own map (the batch of :meth:`_formed` costs more for one)
+            e = np.asarray(self.kinds[key].retract(self.theta_bar[key], self.delta[key]), dtype=float)
+            e.flags.writeable = False
+            self.log.set(self.estimates, key, e)
             self.log.delete(self.stale, key)
         return self.estimates[key]
 
     def all_estimates(self) -> dict[Key, NDArray]:
-        """θ̄ ⊕ δ of every variable (the store itself: the caller copies the dict, never the arrays)."""
-        if self.log.depth:
-            for k in list(self.stale):
-                self.estimate_of(k)
-        else:  # nothing to record: the loop without the log
-            estimates = self.estimates
-            for k in self.stale:
-                estimates[k] = self._formed(k)
-            self.stale.clear()
+        """θ̄ ⊕ δ of every variable (the store itself: the caller copies the dict, never the arrays).  [YIB Eq. 11]"""
+        formed = self._formed(list(self.stale))  # in the order they went stale, as always
+        if self.log.depth:  # in a transaction: recorded
+            for k, e in formed.items():
+                self.log.set(self.estimates, k, e)
+            self.log.keep(self.stale)
+        else:
+            self.estimates.update(formed)
+        self.stale.clear()
         return self.estimates
 
     # --- factors ----------------------------------------------------------------------------
@@ -123,6 +127,13 @@ class SolverState:
         self.log.extend(self.factors, list(factors))
         self.log.extend(self.linear, [None] * len(factors) if linear is None else linear)
         return list(range(first, len(self.factors)))
+
+    def cached(self, fid: int) -> GaussianFactor:
+        """The linearization of factor ``fid`` at θ̄ (made when it entered, or when θ̄ of its variables moved)."""
+        gf = self.linear[fid]
+        if gf is None:
+            raise SteamError(f"factor {fid} has not been linearized")
+        return gf
 
     def set_linear(self, fid: int, gf: GaussianFactor | None) -> None:
         """Cache factor ``fid``'s linearization at θ̄."""

@@ -12,7 +12,7 @@ twenty thousand factors fast without a second, "vectorized" copy of any measurem
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field, fields
 from typing import Any, ClassVar
 
@@ -22,10 +22,11 @@ from scipy.linalg import lapack
 
 from ..arguments import finite, real_array
 from ..errors import NumericalError, ShapeError, SteamError
+from ..manifold import VECTOR, Manifold
 from ..robust import RobustLoss
-from ..variables import Key
+from ..variables import Key, kind_clash
 
-__all__ = ["Factor", "sqrt_information", "check_factors", "STATE_DIM", "LANDMARK_DIM"]
+__all__ = ["Factor", "sqrt_information", "check_factors", "kinds_of", "STATE_DIM", "LANDMARK_DIM"]
 
 STATE_DIM = 6  # [x, y, θ, ẋ, ẏ, θ̇]
 LANDMARK_DIM = 2
@@ -119,6 +120,36 @@ def check_factors(name: str, factors: object) -> list[Factor]:
     return out
 
 
+def kinds_of(
+    factors: Sequence[Factor], held: Mapping[Key, Manifold] | None = None, held_by: str = "the solver"
+) -> dict[Key, Manifold]:
+    """The kind of every variable ``factors`` name, as they declare it (:attr:`Factor.key_kinds`).
+
+    :class:`~steam_ref.errors.KindError`, naming the key and both kinds, when two factors disagree on a variable
+    or one disagrees with ``held``, the kinds ``held_by`` holds already (a solver's variables, a graph's).
+    """
+    out: dict[Key, Manifold] = {}
+    held = {} if held is None else held
+    for f in factors:
+        for k, kind in zip(f.keys, f.key_kinds, strict=True):
+            have = out.get(k)
+            if have is None:
+                have = out[k] = held.get(k, kind)
+            if have is not kind and have != kind:
+                raise _clash(k, have, kind, f, factors, held, held_by)
+    return out
+
+
+def _clash(
+    key: Key, have: Manifold, kind: Manifold, f: Factor, factors: Sequence[Factor], held: Mapping, held_by: str
+) -> Exception:
+    """The KindError of :func:`kinds_of`, naming who gave ``key`` its first kind (the error path only)."""
+    if key in held:
+        return kind_clash(key, have, held_by, kind, type(f).__name__)
+    first = next(g for g in factors if key in g.keys)
+    return kind_clash(key, have, type(first).__name__, kind, type(f).__name__)
+
+
 def apply(A: NDArray, x: NDArray) -> NDArray:
     """A x for one matrix (A.dot(x): a third of einsum's call cost) or for a stack of them (einsum), as a factor
     is evaluated alone (the divergence check) or in a batch (linearization)."""
@@ -205,6 +236,13 @@ class Factor:
     def dim(self) -> int:
         """Size m of the error."""
         return self.sqrt_information.shape[-1]
+
+    @property
+    def key_kinds(self) -> tuple[Manifold, ...]:
+        """The kind of each key (:mod:`steam_ref.manifold`), in key order: the space the factor's Jacobians are
+        taken in. :data:`~steam_ref.manifold.VECTOR` for every key unless the subclass says otherwise (a factor on
+        SE(2) states says ``lie.SE2_STATE`` for them); a solver takes each variable's kind from its factors."""
+        return (VECTOR,) * len(self.keys)
 
     # error and jacobians take one array per key, named by each subclass (x, l; x1, x2): the base's
     # (*xs: Any, **kwargs: Any) is how a type checker is told that any such signature overrides it.

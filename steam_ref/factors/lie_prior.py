@@ -27,6 +27,7 @@ from ..gp.prior import check_qc, process_noise_sqrt_information, transition
 from ..lie import GroupState, LieGroup
 from ..lie.gp import check_model, local_variables
 from ..lie.group import check_group
+from ..manifold import Manifold
 from ..robust import RobustLoss
 from ..variables import Key, key_list
 from .base import Factor, sqrt_information
@@ -49,6 +50,10 @@ class LiePriorFactor(Factor):
 
     _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "phi")
     _shared: ClassVar[tuple[str, ...]] = ("model", "group")
+
+    @property
+    def key_kinds(self) -> tuple[Manifold, ...]:
+        return (GroupState(self.group), GroupState(self.group))
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -114,6 +119,10 @@ class LieStatePrior(Factor):
 
     _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "mean")
     _shared: ClassVar[tuple[str, ...]] = ("group",)
+
+    @property
+    def key_kinds(self) -> tuple[Manifold, ...]:
+        return (GroupState(self.group),)
 
     @classmethod
     def create(

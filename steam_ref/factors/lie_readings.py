@@ -22,9 +22,10 @@ from ..arguments import number
 from ..errors import SteamError
 from ..gp.interpolate import interpolation_matrices
 from ..gp.prior import check_qc
-from ..lie import LieGroup
+from ..lie import GroupState, LieGroup
 from ..lie.gp import check_model, interpolate
 from ..lie.group import check_group
+from ..manifold import Manifold
 from ..robust import RobustLoss
 from ..variables import Key
 from .base import Factor, measured_vector, sqrt_information
@@ -112,6 +113,10 @@ class PoseReading(Factor):
     def key_dims(self) -> tuple[int, ...]:  # type: ignore[override]
         return self.inner.key_dims
 
+    @property
+    def key_kinds(self) -> tuple[Manifold, ...]:
+        return (GroupState(self.group), *self.inner.key_kinds[1:])  # a state on the group, then the landmark
+
     def batch_signature(self) -> tuple:
         return (type(self), self.group, self.inner.batch_signature())
 
@@ -137,6 +142,10 @@ class BodyVelocityFactor(Factor):
 
     _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "measured")
     _shared: ClassVar[tuple[str, ...]] = ("group",)
+
+    @property
+    def key_kinds(self) -> tuple[Manifold, ...]:
+        return (GroupState(self.group),)
 
     @classmethod
     def create(
@@ -221,6 +230,10 @@ class LieInterpolatedFactor(Factor):
     @property
     def key_dims(self) -> tuple[int, ...]:  # type: ignore[override]
         return (2 * self.group.dim,) * 2 + tuple(self.inner.key_dims[1:])
+
+    @property
+    def key_kinds(self) -> tuple[Manifold, ...]:
+        return (GroupState(self.group), GroupState(self.group), *self.inner.key_kinds[1:])
 
     def batch_signature(self) -> tuple:
         return (type(self), self.model, self.group, self.inner.batch_signature())

@@ -41,6 +41,7 @@ class GroupState(Manifold):
     """
 
     _kinds: ClassVar[dict[LieGroup, GroupState]] = {}
+    size: int  # always known for a state on a group (a vector space may leave it None)
 
     def __new__(cls, group: LieGroup) -> GroupState:
         """The one kind of each group: ``GroupState(SE2) is SE2_STATE`` (the solvers compare kinds by identity)."""

@@ -29,11 +29,12 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 
-from ..arguments import is_integer
+from ..arguments import is_integer, number
 from ..errors import ShapeError, SteamError, UnknownVariableError
 from ..variables import Key, key_list
 
 __all__ = [
+    "KeysBelow",
     "Ordering",
     "natural_ordering",
     "xl_ordering",
@@ -215,6 +216,7 @@ def min_degree_keys(
     dims: Mapping[Key, int],
     factor_keys: Iterable[Sequence[Key]],
     last: Iterable[Key] = (),
+    first: Mapping[Key, float] | None = None,
 ) -> list[Key]:
     """A greedy minimum-degree elimination order with the variables in ``last`` eliminated last.
 
@@ -227,7 +229,14 @@ def min_degree_keys(
     ``last`` are ordered among themselves by minimum degree too, after all others: this is the
     constrained ordering iSAM2 obtains from CCOLAMD, which keeps the variables touched by new
     factors near the root so the next update removes little of the tree.  [K12 Sec. 5]
+
+    ``first`` (GTSAM's ``constrainedKeys``): the variables it names (and ``last`` does not) are eliminated before
+    all others, in increasing order of the number it maps each to (ties in the order of ``variables``), and the
+    rest by minimum degree on the graph their elimination leaves: a fixed-lag smoother puts the variables next to
+    leave its window there, so that they sit in leaf cliques and are cut off with no re-elimination.
     """
+    if first is not None:
+        return _first_then_min_degree(list(variables), dims, factor_keys, list(last), first)
     variables = list(variables)
     index = {v: i for i, v in enumerate(variables)}
     if len(index) != len(variables):
@@ -270,6 +279,54 @@ def min_degree_keys(
             au.discard(u)
             heapq.heappush(heap, (group[u], len(au), index[u]))
     return order
+
+
+def _first_then_min_degree(
+    variables: list[Key], dims: Mapping[Key, int], factor_keys: Iterable[Sequence[Key]], last: list[Key], first: Mapping
+) -> list[Key]:
+    """:func:`min_degree_keys` with ``first`` (its docstring)."""
+    rank = {k: r for k in variables if (r := first.get(k)) is not None}  # one look-up a variable
+    for k, r in rank.items():
+        if type(r) is not float:  # a float passes as it is (the smoother's timestamps); anything else is checked
+            rank[k] = number(f"the rank of {k!r} among the keys eliminated first", r)
+    early = sorted((k for k in rank if k not in last), key=rank.__getitem__)
+    if not early:
+        return min_degree_keys(variables, dims, factor_keys, last)
+    groups = [set(keys) for keys in factor_keys]
+    for v in early:  # the elimination game on the keys [K12 Alg. 1]: v's factors become one on its neighbours
+        touching = [g for g in groups if v in g]
+        groups = [g for g in groups if v not in g] + [set().union(*touching) - {v}]
+    gone = set(early)
+    rest = [k for k in variables if k not in gone]
+    return early + min_degree_keys(rest, dims, [tuple(g) for g in groups if g], last)
+
+
+class KeysBelow(Mapping):
+    """The entries of ``numbers`` below ``bound``, read in place, never copied: a fixed-lag smoother's timestamps
+    older than the newest, the keys it has its solver eliminate first (``min_degree_keys(first=...)``), at the cost
+    of the keys looked up rather than of its whole window."""
+
+    def __init__(self, numbers: Mapping[Key, float], bound: float) -> None:
+        self.numbers, self.bound = numbers, bound
+
+    def get(self, key: Key, default: float | None = None) -> float | None:  # type: ignore[override]
+        t = self.numbers.get(key)
+        return t if t is not None and t < self.bound else default
+
+    def __contains__(self, key: object) -> bool:
+        return self.get(key) is not None  # type: ignore[arg-type]
+
+    def __getitem__(self, key: Key) -> float:
+        t = self.get(key)
+        if t is None:
+            raise KeyError(key)
+        return t
+
+    def __iter__(self) -> Iterator[Key]:
+        return (k for k, t in self.numbers.items() if t < self.bound)
+
+    def __len__(self) -> int:
+        return sum(1 for _ in self)
 
 
 def make_ordering(

@@ -38,6 +38,7 @@ from ..errors import NumericalError, SteamError
 from ..graph import FactorGraph
 from ..linear.ordering import Ordering
 from ..linear.threads import limited
+from ..manifold import VECTOR
 from ..motion import turned_state
 from ..variables import Values
 
@@ -110,7 +111,7 @@ class _Layout:
     def __init__(self, values: Values):
         self.keys = list(values)
         self.cuts = np.cumsum([0] + [values.dim(k) for k in self.keys])
-        self.kinds = values.kinds()
+        self.kinds = {k: m for k, m in values.kinds().items() if m is not VECTOR}  # a vector as it is
         self.base = {k: values[k] for k in self.kinds}
 
     def vector(self, values: Values) -> NDArray:

@@ -171,8 +171,8 @@ class BayesTreeSolver(OnlineSolver):
 
     name = "btgp"
 
-    def __init__(self, params: ISAM2Params | None = None, *, inner: IncrementalSolver | None = None):
-        self.inner = IncrementalSolver(params) if inner is None else inner
+    def __init__(self, params: ISAM2Params | None = None, *, inner: IncrementalSolver | FixedLagSmoother | None = None):
+        self.inner: IncrementalSolver | FixedLagSmoother = IncrementalSolver(params) if inner is None else inner
         self.reports: list[UpdateReport] = []  # the latest KEPT_REPORTS updates' reports: memory stays flat
         self.tree_nnz: list[int] = []  # nonzeros of R after each update (GTSAM's treeNnz): the fill, every update
         self.phase_seconds: dict[str, float] = {}  # seconds in each phase of the update, summed over every update
