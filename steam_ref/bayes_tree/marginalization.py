@@ -131,15 +131,15 @@ def marginalize_keys(
     if not drop_list:
         return MarginalizationReport((), True, (), (), (), (), {})
     with state.transaction():
-        return _marginalize(state, set(drop_list), alpha, constrained, keep_conditionals)
+        return _marginalize(state, drop_list, alpha, constrained, keep_conditionals)
 
 
 def _marginalize(
-    state: SolverState, drop: set[Key], alpha: float, constrained: Mapping[Key, float] | None, keep_conditionals: bool
+    state: SolverState, keys: list[Key], alpha: float, constrained: Mapping[Key, float] | None, keep_conditionals: bool
 ) -> MarginalizationReport:
-    """Steps 1-3 of the module docstring, inside a transaction."""
-    tree = state.tree
-    cids = list(dict.fromkeys(c for v in drop for c in tree.cliques_involving(v)))  # step 1
+    """Steps 1-3 of the module docstring, inside a transaction; ``keys`` in their order (a set's is PYTHONHASHSEED's)."""
+    tree, drop = state.tree, set(keys)
+    cids = list(dict.fromkeys(c for v in keys for c in tree.cliques_involving(v)))  # step 1
     fids = [j for c in cids for j in tree.cliques[c].factors]
     dropped = [j for j in fids if not drop.isdisjoint(state.factors[j].keys)]  # type: ignore[union-attr]
     adjacent = [state.cached(j) for j in dropped]
@@ -177,7 +177,7 @@ def _marginalize(
         new_cids = tree.insert_eliminated([_relabel(c, labels) for c in cliques], parents, orphans, owner[n_own:])
     for j in dropped:
         state.drop_factor(j)  # ids are positions: the slot stays
-    for k in drop:
+    for k in keys:
         state.drop_variable(k)
     if new_cids:
         backsubstitute(state, set(new_cids), alpha)
