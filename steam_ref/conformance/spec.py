@@ -14,7 +14,7 @@ maps each type to its steam_ref factor and the kind (manifold) of each of its ke
     interpolated   keys [x1, x2, (l)], t1, t2, tau, qc, inner (a measurement spec without keys)  [YIB Eq. 29]
     se2_prior        keys [x1, x2] SE(2) states, dt, qc (3×3 on the body twist), model   e = γ₂ - Φ(Δt) γ₁
     se2_state_prior  keys [x] an SE(2) state, mean, sigmas (6)                         e = x ⊖ mean
-    se2_range        keys [x, l], x an SE(2) state, measured, sigma                    e = |l - p| - r
+    se2_range        keys [x, l], x an SE(2) state, measured, sigma                    e = ‖l - p‖ - r
 
 where noise is ``sigma`` (a scalar), ``sigmas`` (one per error entry) or ``covariance`` (a matrix),
 and a measurement may carry ``loss``: ``{"type": "huber", "k": k}`` or ``{"type": "tukey", "c": c}``.

@@ -3,17 +3,17 @@
 A teacher's notebook (each tutorial in ``tutorials/``) holds every exercise as consecutive cells, found by
 their tags (docs/tutorials.md, "Exercises"):
 
-==================  ==========================  =======================================================
-cell                tags                        in the handout
-==================  ==========================  =======================================================
-the task            ``exercise`` (Markdown,     kept
+==================  ============================  =======================================================
+cell                tags                          in the handout
+==================  ============================  =======================================================
+the task            ``exercise`` (Markdown,       kept
                     headed ``### Exercise k``)
-the solution        ``solution``, ``hide-cell`` replaced by an empty answer cell (tag ``answer``, the
-                                                solution's cell id), naming what the checks read
-the check           ``check``                   kept: properties any right answer has, never the answer
-the marking checks  ``hidden-check``,           removed: the teacher's marking run adds them back
+the solution        ``solution``, ``hide-cell``   replaced by an empty answer cell (tag ``answer``, the
+                                                  solution's cell id), naming what the checks read
+the check           ``check``                     kept: properties any right answer has, never the answer
+the marking checks  ``hidden-check``,             removed: the teacher's marking run adds them back
                     ``remove-cell``
-==================  ==========================  =======================================================
+==================  ============================  =======================================================
 
 ``hide-cell`` folds a solution and ``remove-cell`` leaves a marking check off the documentation site; running
 the teacher's notebook runs all of them, so every check is tested against the solution.

@@ -149,7 +149,7 @@ def wrap(theta: ArrayLike) -> NDArray:
 
     Any other finite angle is reduced exactly (to the rounding of the result), as atan2(sin θ, cos θ): the sin
     and cos that Exp reads, whose argument reduction is exact at every size, so a pose's heading and its
-    translation agree at any |θ| (subtracting a rounded 2π lost |θ|·2.4e-17: 2.1 rad at θ = 1e15, every digit
+    translation agree at any abs(θ) (subtracting a rounded 2π lost abs(θ)·2.4e-17: 2.1 rad at θ = 1e15, every digit
     from 1e16). An infinite or NaN angle has no reduction and is refused (ShapeError naming it).
     """
     theta = np.asarray(theta, dtype=float)

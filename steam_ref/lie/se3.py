@@ -108,7 +108,7 @@ class SE3Group(LieGroup):
         return np.concatenate([top, np.broadcast_to([0.0, 0.0, 0.0, 1.0], top.shape[:-2] + (1, 4))], axis=-2)
 
     def angle(self, xi: ArrayLike) -> NDArray:
-        """θ = |φ|, the angle every coefficient's series switch tests."""
+        """θ = ‖φ‖, the angle every coefficient's series switch tests."""
         return rotation_angle(self._twists("xi", xi)[..., 3:])
 
     def check(self, name: str, a: object) -> NDArray:

@@ -1,7 +1,7 @@
 """SO(3), the group of rotations in space: :data:`SO3`, an instance of :class:`~steam_ref.lie.group.LieGroup`.  [DER 13]
 
 A rotation R is stored as its 9 entries, row-major (R.reshape(3, 3) is the matrix; GTSAM's ``Rot3`` in its
-matrix mode, Eigen's ``Matrix3``); its tangent is φ ∈ R³ (the rotation vector: R = Exp(φ) turns by θ = |φ|
+matrix mode, Eigen's ``Matrix3``); its tangent is φ ∈ R³ (the rotation vector: R = Exp(φ) turns by θ = ‖φ‖
 about u = φ/θ). Log's angle lies in [0, π]. The protocol's conventions (right Jacobians, broadcasting, a value
 and its Jacobians from one call) are in ``lie.group``; this module holds what is SO(3)'s own, and what SE(3)
 shares with it:
@@ -72,12 +72,12 @@ def hat3(w: NDArray) -> NDArray:
 
 
 def rotation_angle(phi: NDArray) -> NDArray:
-    """θ = |φ| by hypot (no overflow or underflow in the squares; exact on an axis)."""
+    """θ = ‖φ‖ by hypot (no overflow or underflow in the squares; exact on an axis)."""
     return np.hypot(np.hypot(phi[..., 0], phi[..., 1]), phi[..., 2])
 
 
 def unit_axis(phi: NDArray) -> tuple[NDArray, NDArray]:
-    """θ = |φ| and the unit axis u = φ/θ (e_z where θ = 0, where every closed form is the same for any axis)."""
+    """θ = ‖φ‖ and the unit axis u = φ/θ (e_z where θ = 0, where every closed form is the same for any axis)."""
     theta = rotation_angle(phi)
     with np.errstate(divide="ignore", invalid="ignore"):
         u = np.where(theta[..., None] > 0, phi / theta[..., None], np.array([0.0, 0.0, 1.0]))
@@ -142,8 +142,8 @@ class SO3Group(LieGroup):
         return self.log_matrix(a.reshape(a.shape[:-1] + (3, 3)))
 
     def log_matrix(self, R: ArrayLike) -> NDArray:
-        """Log of a (..., 3, 3) rotation matrix. θ = atan2(|w|, (tr R - 1)/2) with w = vee(R - Rᵀ)/2 = sin θ u;
-        below π/2 the axis is w/|w|, φ = w/A(θ); above, (R + Rᵀ)/2 - cos θ I = (1 - cos θ) uuᵀ gives u from its
+        """Log of a (..., 3, 3) rotation matrix. θ = atan2(‖w‖, (tr R - 1)/2) with w = vee(R - Rᵀ)/2 = sin θ u;
+        below π/2 the axis is w/‖w‖, φ = w/A(θ); above, (R + Rᵀ)/2 - cos θ I = (1 - cos θ) uuᵀ gives u from its
         largest column, signed to agree with w: no quantity there is a small difference.  [DER 13.2]"""
         R = np.asarray(R, dtype=float)
         if R.shape[-2:] != (3, 3):
@@ -175,11 +175,11 @@ class SO3Group(LieGroup):
         return a.reshape(a.shape[:-1] + (3, 3))
 
     def angle(self, xi: ArrayLike) -> NDArray:
-        """θ = |φ|, the angle every coefficient's series switch tests."""
+        """θ = ‖φ‖, the angle every coefficient's series switch tests."""
         return rotation_angle(self._twists("xi", xi))
 
     def check(self, name: str, a: object) -> NDArray:
-        """A finite rotation (9 numbers, R row-major) with |RᵀR - I| ≤ 1e-9 entrywise and det R > 0; SteamError
+        """A finite rotation (9 numbers, R row-major) with every entry of RᵀR - I within ±1e-9 and det R > 0; SteamError
         naming ``name`` otherwise."""
         a = super().check(name, a)
         check_rotation(name, a.reshape(3, 3))
