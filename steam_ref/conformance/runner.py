@@ -4,7 +4,7 @@
 case's inputs and returns its output quantities in the kit's conventions (a superset of those the case
 is checked on). :data:`RUNNERS` maps each case type (:func:`.kitio.case_type`: the suite, and the ``kind``
 its inputs name) to the function computing it; every suite's factor specs are read by one table
-(:mod:`.spec`), and the problems of every suite are solved by :mod:`.solvers`, whatever their variables'
+(:mod:`.spec`), and the problems of every suite are solved by :mod:`steam_ref.conformance.solvers`, whatever their variables'
 kinds. ``selftest`` checks these results against the shipped kit; the build uses them as the expected
 values of the cases that are not independent, and checks them against the oracle for those that are.
 """
