@@ -987,7 +987,7 @@ CASES = [
         UnknownVariableError,
         r"highlight names x9",
     ),
-    # --- kinds: a variable's manifold, from its factors (issue 36) ------------------------------------
+    # --- kinds: a variable's manifold, from its factors -----------------------------------------------
     (
         "Values kind not a Manifold",
         lambda: sr.Values({X(0): ONES}, kinds={X(0): "se2"}),

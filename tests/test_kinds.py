@@ -1,4 +1,4 @@
-"""A variable's kind cannot be wrong silently (issue 36): every factor declares the kind of each of its keys
+"""A variable's kind cannot be wrong silently: every factor declares the kind of each of its keys
 (``Factor.key_kinds``), every solver takes a variable's kind from its factors, and a contradiction is refused with a
 :class:`~steam_ref.errors.KindError` naming the key and both kinds.
 
