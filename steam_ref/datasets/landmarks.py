@@ -20,7 +20,7 @@ Conventions: odometry row k ends at pose k + 1 and carries its time; a reading i
 from its heading. Each reading carries its own sigma, since files give one per row.
 
 Checked on construction, where :class:`RangeDataset`'s checks are shared (the shape and finiteness
-of a table, the lookup of ids; :mod:`.table`): at least two poses, strictly increasing pose times,
+of a table, the lookup of ids; :mod:`steam_ref.datasets.table`): at least two poses, strictly increasing pose times,
 integer and unique pose and landmark ids, odometry row k stamped with the time of pose k + 1, a
 positive definite odometry covariance, reading times in order and each at a pose, every reading's
 landmark among ``landmark_ids``, every surveyed landmark among them, positive sigmas, no negative

@@ -158,6 +158,9 @@ def _assemble(tutorial: Tutorial, submission: dict) -> tuple[list[_Cell], dict[i
     return cells, missing
 
 
+DIED = "the run stopped: the kernel died (did the answer exit Python?)"
+
+
 def _run(cells: list[_Cell], tutorial: Tutorial, timeout: int) -> tuple[dict[int, tuple[str, str] | None], str | None]:
     """Run the cells in a fresh kernel: for each code cell that ran, None (no error) or (error name, message);
     and why the run stopped early, if it did."""
@@ -209,9 +212,11 @@ def _run(cells: list[_Cell], tutorial: Tutorial, timeout: int) -> tuple[dict[int
     except Stop:
         stopped = "the run stopped: the kernel was still busy after two cells ran over their time limit"
     except DeadKernelError:
-        stopped = "the run stopped: the kernel died (did the answer exit Python?)"
+        stopped = DIED
     except Exception as exc:  # the marker reports any failure of the run itself, never stops on it
-        stopped = _one_line(f"the run stopped: {type(exc).__name__}: {exc}")
+        # a kernel that dies while nbclient (re)connects is a RuntimeError "Kernel died before replying ..."
+        died = "kernel died" in str(exc).lower()
+        stopped = DIED if died else _one_line(f"the run stopped: {type(exc).__name__}: {exc}")
     return outcomes, stopped
 
 
