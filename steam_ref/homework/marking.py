@@ -11,7 +11,6 @@ cell still holds after a second timeout, ends the run: what had not run scores 0
 
 from __future__ import annotations
 
-import asyncio
 import copy
 import re
 import subprocess
@@ -164,6 +163,8 @@ DIED = "the run stopped: the kernel died (did the answer exit Python?)"
 def _run(cells: list[_Cell], tutorial: Tutorial, timeout: int) -> tuple[dict[int, tuple[str, str] | None], str | None]:
     """Run the cells in a fresh kernel: for each code cell that ran, None (no error) or (error name, message);
     and why the run stopped early, if it did."""
+    import asyncio  # here, not at the top: a run of the CLI loads this module and need not load asyncio
+
     import nbclient
     import nbformat
     from jupyter_core.utils import ensure_async
