@@ -17,10 +17,24 @@
   state; every function takes the group (``group=``).
 """
 
+from importlib import import_module
+from typing import TYPE_CHECKING
+
 from .group import LieGroup
 from .se2 import SE2
-from .se3 import SE3
-from .so3 import SO3
 from .state import SE2_STATE, STATE_SIZE, GroupState, world_position_covariance
+
+if TYPE_CHECKING:
+    from .se3 import SE3
+    from .so3 import SO3
+
+_LATER = {"SO3": ".so3", "SE3": ".se3"}  # loaded when first used (PEP 562): a planar run never loads them
+
+
+def __getattr__(name: str) -> object:
+    if name in _LATER:
+        return getattr(import_module(_LATER[name], __name__), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 __all__ = ["LieGroup", "SE2", "SO3", "SE3", "GroupState", "SE2_STATE", "STATE_SIZE", "world_position_covariance"]
