@@ -20,12 +20,12 @@ from numpy.typing import ArrayLike, NDArray
 from ..arguments import check_covariance, finite, number, real_array
 from ..errors import NumericalError, ShapeError, SteamError
 from .prior import (
-    _read_only,
     check_qc,
     finite_result,
     process_noise,
     process_noise_inverse,
     qc_key,
+    read_only,
     transition,
 )
 from .sde import LinearSDE
@@ -79,7 +79,7 @@ def _interpolation_matrices(dtau: float, dt: float, d: int, qc_bytes: bytes) -> 
         psi = q_tau @ transition(dt - dtau, d).T @ q2_inv  # [YIB Eq. 16]
         lam = transition(dtau, d) - psi @ transition(dt, d)  # [YIB Eq. 16]
     finite_result("Λ(τ), Ψ(τ)", np.hstack([lam, psi]), tau_minus_t1=dtau, t2_minus_t1=dt)
-    _read_only(lam, psi)
+    read_only(lam, psi)
     return lam, psi
 
 

@@ -52,7 +52,7 @@ def qc_inverse(qc: ArrayLike) -> NDArray:
 def _qc_inverse(d: int, data: bytes) -> NDArray:
     inverse = scipy.linalg.cho_solve(scipy.linalg.cho_factor(_checked_qc(d, data), lower=True), np.eye(d))
     inverse = 0.5 * (inverse + inverse.T)  # exactly symmetric, as the Q⁻¹ built from it must be
-    _read_only(inverse)
+    read_only(inverse)
     return inverse
 
 
@@ -83,7 +83,8 @@ def _checked_qc(d: int, data: bytes) -> NDArray:
     return qc
 
 
-def _read_only(*arrays: NDArray) -> None:
+def read_only(*arrays: NDArray) -> None:
+    """Mark memoised arrays read-only, so a caller cannot change what the next caller is handed."""
     for a in arrays:
         a.flags.writeable = False
 
@@ -141,5 +142,5 @@ def _sqrt_information(dt: float, d: int, qc_bytes: bytes) -> NDArray:
         w = np.linalg.cholesky(process_noise_inverse(dt, qc)).T
     except np.linalg.LinAlgError:
         raise NumericalError(f"Q(dt)⁻¹ of the WNOA prior is not positive definite in float64 at dt={dt!r}") from None
-    _read_only(w)
+    read_only(w)
     return finite_result("the square-root information of Q(dt)", w, dt=dt)
