@@ -33,7 +33,7 @@ import numpy as np
 import scipy.special
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["Coefficients", "NAMES", "DEFINITIONS", "SERIES_BELOW"]
+__all__ = ["Coefficients", "NAMES", "DEFINITIONS", "SERIES_BELOW", "coefficients_at"]
 
 SERIES_BELOW = 2.0  # θ below this: every coefficient from its series
 _N = 24  # terms in θ² of each series: the last is below 1e-20 of the sum at θ = 2 (cot family: (θ/2π)^48 · 48²)
@@ -265,3 +265,9 @@ class Coefficients:
 
     def _G2(self) -> NDArray:
         return -(self["gamma"] + self["alpha1"]) / self.t
+
+
+def coefficients_at(theta: ArrayLike) -> dict[str, NDArray]:
+    """Every coefficient of :data:`NAMES` at the angles θ (``LieGroup.coefficients`` of SO(3) and SE(3))."""
+    k = Coefficients(np.abs(np.asarray(theta, dtype=float)))
+    return {name: k[name] for name in NAMES}

@@ -22,7 +22,7 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .coefficients import DEFINITIONS, NAMES, SERIES_BELOW, Coefficients
+from .coefficients import DEFINITIONS, SERIES_BELOW, Coefficients, coefficients_at
 from .group import LieGroup
 from .so3 import SO3, axis_frame, check_rotation, hat3, isotropic, matrix_of, mm3, mv3, rotation_angle, unit_axis
 
@@ -70,8 +70,7 @@ class SE3Group(LieGroup):
 
     def coefficients(self, theta: ArrayLike) -> dict[str, NDArray]:
         """The coefficients of ``lie.coefficients`` at the angles θ (those of SO(3) too)."""
-        k = Coefficients(np.abs(np.asarray(theta, dtype=float)))
-        return {name: k[name] for name in NAMES}
+        return coefficients_at(theta)
 
     def exp(self, xi: ArrayLike) -> NDArray:
         """Exp(ξ) = (Exp(φ), V(φ) ρ), V = A I + D φ^ + Ct φφᵀ.  [DER 13.1]"""

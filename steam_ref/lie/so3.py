@@ -24,7 +24,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import ShapeError, SteamError
-from .coefficients import DEFINITIONS, NAMES, SERIES_BELOW, Coefficients
+from .coefficients import DEFINITIONS, SERIES_BELOW, Coefficients, coefficients_at
 from .group import LieGroup
 
 __all__ = [
@@ -122,8 +122,7 @@ class SO3Group(LieGroup):
 
     def coefficients(self, theta: ArrayLike) -> dict[str, NDArray]:
         """The coefficients of ``lie.coefficients`` at the angles θ."""
-        k = Coefficients(np.abs(np.asarray(theta, dtype=float)))
-        return {name: k[name] for name in NAMES}
+        return coefficients_at(theta)
 
     def exp(self, xi: ArrayLike) -> NDArray:
         """Exp(φ) = cos θ I + sin θ u^ + (1 - cos θ) uuᵀ (Rodrigues), flat; any finite angle.  [DER 13.1]"""
