@@ -34,32 +34,43 @@ import argparse
 import contextlib
 import sys
 from collections.abc import Sequence
+from importlib import import_module
 
 from .._version import __version__
-from ..conformance import command as conformance
 from ..errors import SteamError, SteamWarning
-from ..homework import command as homework
 from ..linear.threads import limit
-from . import batch, consistency, data, fidelity, reproduce, run
 from .args import Parser
 from .streams import complain, one_line, quiet_stdout, warning_lines
 
 __all__ = ["COMMANDS", "build_parser", "main"]
 
-# Every command of `steam-ref`, in the order its help lists them: a module with add_parser(sub) and run(args).
-COMMANDS = (run, batch, fidelity, reproduce, conformance, data, consistency, homework)
+# Every command of `steam-ref`, in the order its help lists them: its name and its module, which has
+# add_parser(sub) and run(args). A command's module loads only when it is the one run (or help lists them all),
+# so that a run carries none of the kit's, the homework's or the other commands' machinery.
+COMMANDS = {
+    "run": "steam_ref.cli.run",
+    "batch": "steam_ref.cli.batch",
+    "fidelity": "steam_ref.cli.fidelity",
+    "reproduce": "steam_ref.cli.reproduce",
+    "conformance": "steam_ref.conformance.command",
+    "data": "steam_ref.cli.data",
+    "consistency": "steam_ref.cli.consistency",
+    "homework": "steam_ref.homework.command",
+}
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The argument parser of ``steam-ref``: each command of :data:`COMMANDS` adds its own."""
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The argument parser of ``steam-ref``: each command of :data:`COMMANDS` adds its own; given the name
+    of one, only that one (the parser of ``steam-ref <command> ...``)."""
     parser = Parser(
         prog="steam-ref",
         description="Incremental sparse GP regression for continuous-time STEAM (Yan, Indelman, Boots).",
     )
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = parser.add_subparsers(dest="command", parser_class=Parser, required=True)
-    for command in COMMANDS:
-        command.add_parser(sub).set_defaults(handler=command.run, solves=getattr(command, "SOLVES", True))
+    for name in [command] if command in COMMANDS else COMMANDS:
+        module = import_module(COMMANDS[name])
+        module.add_parser(sub).set_defaults(handler=module.run, solves=getattr(module, "SOLVES", True))
     return parser
 
 
@@ -67,7 +78,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``steam-ref`` console script; returns the exit code."""
     argv = list(sys.argv[1:] if argv is None else argv)
     try:
-        args = build_parser().parse_args(argv or ["run"])  # no command at all runs the main job
+        argv = argv or ["run"]  # no command at all runs the main job
+        args = build_parser(argv[0]).parse_args(argv)
         # the solvers' small dense algebra at one BLAS thread unless $STEAM_REF_BLAS_THREADS says
         with limit() if args.solves else contextlib.nullcontext(), warning_lines(SteamWarning):
             return args.handler(args)
