@@ -25,6 +25,7 @@ from .arguments import is_integer
 from .batch import BatchResult, check_options, gauss_newton
 from .bayes_tree import FixedLagSmoother, IncrementalSolver
 from .errors import SteamError
+from .graph import FactorGraph
 from .linear.threads import limited
 
 __all__ = ["finish_at_optimum"]
@@ -79,7 +80,7 @@ def finish_at_optimum(
     if not factors:
         raise SteamError("the factor graph is empty: there is nothing to solve")
     result = gauss_newton(
-        factors,
+        FactorGraph(factors),
         solver.estimate(),
         ordering="amd",
         max_iterations=max_updates,
