@@ -35,7 +35,7 @@ from .linear.cholesky import SparseCholesky, Symbolic
 from .linear.ordering import Ordering, make_ordering, sparse_backend
 from .linear.system import LinearSystem, linearize
 from .linear.threads import limited
-from .variables import Key, Values, as_values, check_key
+from .variables import Key, Values, as_values
 
 __all__ = [
     "Iteration",
@@ -112,17 +112,6 @@ class BatchResult(SparseCovariances):
     def cost(self) -> float:
         """Final cost."""
         return self.iterations[-1].cost if self.iterations else self.initial_cost
-
-    def estimate(self) -> Values:
-        """The final estimate (a copy), as a solver's ``estimate()``: what a :class:`~steam_ref.trajectory.Trajectory`
-        reads."""
-        return self.values.copy()
-
-    def estimate_of(self, key: Key) -> NDArray:
-        """The final estimate of one variable (read-only), as a solver's ``estimate_of(key)``."""
-        out = self.values[check_key("key", key)].view()
-        out.flags.writeable = False
-        return out
 
 
 def _step(
