@@ -1,16 +1,18 @@
 """Fixed-lag smoothing: iSAM2 that forgets the variables older than a lag, and keeps a map.  [K12, derivations §10]
 
 :class:`FixedLagSmoother` holds an :class:`~steam_ref.bayes_tree.IncrementalSolver` and the timestamps of its
-variables, as GTSAM's ``IncrementalFixedLagSmoother`` holds an ISAM2. **What ages:** a variable whose timestamp is
-older than the newest minus the lag (``t < t_newest - lag``, GTSAM's rule) is marginalized after the update by the
-solver's ``marginalize_leaves``, eliminated first so that it is a leaf: its factors go, a :class:`MarginalFactor` on
-its separator (a kept landmark too) stays, frozen at θ̄ of the moment. **What never ages:** a variable never stamped,
-and one ``keep=`` names (``"l"``, symbols: every landmark; or a predicate on a key), whatever its timestamp: a
-SLAM run's map, refined by every later sighting while the states age out. A timestamp given again restarts a
-variable's clock. **An aged variable is gone:** a new factor, timestamp or query naming it raises
-:class:`UnknownVariableError` naming the update that forgot it (GTSAM refuses it too); given a value again, it enters
-as a new variable. ``keep_history=True`` keeps each one's conditional (:mod:`.history`), and
-:meth:`FixedLagSmoother.smoothed_history` gives every forgotten variable its estimate given all the data so far.
+variables, as GTSAM's ``IncrementalFixedLagSmoother`` holds an ISAM2. **What ages:** a variable stamped older than
+the newest minus the lag (``t < t_newest - lag``, GTSAM's rule) is marginalized after the update, eliminated first
+so that it is a leaf (``marginalize_leaves``): its factors go, a :class:`MarginalFactor` on its separator (a kept
+landmark too) stays, frozen at θ̄ of the moment. **What never ages:** a variable never stamped, and one ``keep=``
+names (``"l"``, symbols: every landmark; or a predicate on a key): a map, refined by every later sighting while
+the states age out. A timestamp given again restarts a variable's clock. **An aged variable is gone:** a factor,
+timestamp or query naming it raises :class:`UnknownVariableError` naming the update that forgot it (as GTSAM);
+given a value again, it enters as a new variable. ``keep_history=True`` keeps each one's conditional
+(:mod:`.history`): :meth:`FixedLagSmoother.smoothed_history` gives the forgotten variables all the data so far.
+**A kept map is not the batch's:** exact at a fixed θ̄, it keeps each marginal factor's θ̄ of the moment, and with
+``relinearize_skip=10`` a state may leave still linearized where it entered: on a figure-eight with 1-rad turns, up
+to 14 of the batch's σ away; ``relinearize_skip=1`` gave at most 0.7 σ, or full iSAM2's own gap (docs/experiments.md).
 """
 
 from __future__ import annotations
@@ -76,9 +78,8 @@ class FixedLagSmoother:
     ) -> UpdateReport:
         """:meth:`IncrementalSolver.update`, then marginalize the variables older than the lag.
 
-        Raises :class:`UnknownVariableError` for a factor or timestamp naming a marginalized variable. The
-        update, the marginalization and the record of what it forgot are one transaction of the solver's undo
-        log: a failure or an interruption (Ctrl-C) anywhere leaves the smoother exactly as before the call.
+        Raises :class:`UnknownVariableError` for a factor or timestamp naming a marginalized variable. Update,
+        marginalization and their record are one transaction: a failure or a Ctrl-C leaves the smoother as it was.
         """
         check_new_values(new_values)  # before anything reads it as a mapping
         times = self._checked_times(timestamps, new_values)
@@ -106,8 +107,7 @@ class FixedLagSmoother:
         self.newest = max(self.newest, *times.values()) if times else self.newest
         self._times.update((k, t) for k, t in times.items() if not self.keeps(k))
         self.peak_window = max(self.peak_window, len(self.solver))
-        cutoff = self.newest - self.lag
-        old = [k for k, t in self._times.items() if t < cutoff]
+        old = [k for k, t in self._times.items() if t < self.newest - self.lag]
         self.last_marginalization = None
         if old:
             keep = self.history is not None
