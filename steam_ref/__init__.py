@@ -67,6 +67,7 @@ _HOMES = {
     "MotionPrior": "motion",
     "motion_prior": "motion",
     "finish_at_optimum": "finish",
+    "Trajectory": "trajectory",
     "gauss_newton": "batch",
     "levenberg_marquardt": "batch",
     "batch_solve": "batch",
@@ -133,6 +134,7 @@ if TYPE_CHECKING:  # what a type checker and an IDE see: the same names, importe
     from .paper.options import StreamOptions
     from .paper.presets import PaperSetup
     from .robust import Huber, Tukey
+    from .trajectory import Trajectory
     from .variables import Key, L, Values, X
 
 __all__ = [
@@ -185,6 +187,7 @@ __all__ = [
     "MotionPrior",
     "motion_prior",
     "finish_at_optimum",
+    "Trajectory",
     "gauss_newton",
     "levenberg_marquardt",
     "batch_solve",

@@ -201,18 +201,17 @@ def certify(
         )
         warnings.warn(message, IllConditionedWarning, stacklevel=3)
         return False, message, found
+    tolerance = max(tolerances[0] * found.cost, tolerances[1])
+    gain = (
+        f"one more Gauss-Newton step would lower the cost by {found.predicted_decrease:.3g}, "
+        f"{'within' if found.predicted_decrease <= tolerance else 'above'} the tolerance {tolerance:.3g} "
+        f"(max of {tolerances[0]:g} × cost {found.cost:.6g} and {tolerances[1]:g}); condition ≈ {found.condition:.1e} ≤ {MAX_CONDITION:.0e}"
+    )
     if not rule:
-        return False, "max_iterations", found
+        return False, f"max_iterations: {gain}", found
     if not found.holds(*tolerances):
-        return (
-            False,
-            (
-                f"{rule}, but one more Gauss-Newton step would lower the cost by {found.predicted_decrease:.3g}: "
-                "not a stationary point"
-            ),
-            found,
-        )
-    return True, f"{rule}; stationary (one more step would gain {found.predicted_decrease:.2g})", found
+        return False, f"{rule}, but {gain}: not a stationary point", found
+    return True, f"{rule}; stationary: {gain}", found
 
 
 def check_options(**options: object) -> None:

@@ -187,6 +187,16 @@ class SparseCovariances:
     values: Values
     factors: tuple[Factor, ...]
 
+    def estimate(self) -> Values:
+        """The estimate θ̄ (a copy), as a solver's ``estimate()``: what a ``Trajectory`` reads."""
+        return self.values.copy()
+
+    def estimate_of(self, key: Key) -> NDArray:
+        """The estimate of one variable (read-only), as a solver's ``estimate_of(key)``."""
+        out = self.values[check_key("key", key)].view()
+        out.flags.writeable = False
+        return out
+
     def _kept(self) -> tuple[Factor, ...]:
         if not self.factors:
             raise SteamError(f"this {type(self).__name__} keeps no factors, so it has no covariance to give")

@@ -6,20 +6,23 @@ iSAM2 moves a variable's linearization point θ̄ only when its increment reache
 from the optimum (on a toy problem with GTSAM's defaults, about a centimetre). Updates with no new factors do
 not close that gap, because a δ below β never moves θ̄.
 
-:func:`finish_at_optimum` closes it with the solver's public API only: it puts every factor of the solver,
-at the solver's estimate, into a new :class:`~steam_ref.bayes_tree.IncrementalSolver` with both thresholds 0
-and skip 1 (where each update with no new factors is one Gauss-Newton step on all factors,
-:class:`~steam_ref.bayes_tree.ISAM2Params`), updates it until the largest entry of the step is below a
-tolerance, and certifies the estimate with the batch check (:func:`~steam_ref.batch.check_stationarity`):
-the result says ``converged`` only if that check passed.
+:func:`finish_at_optimum` closes it with the solver's public API only: it runs the batch's Gauss-Newton
+(:func:`~steam_ref.batch.gauss_newton`) on every factor of the solver from the solver's estimate, with the batch's
+stopping rules and its check (:func:`~steam_ref.batch.check_stationarity`), so it certifies exactly the optimum
+the batch certifies from there. A rule on the step alone (the largest entry below an absolute 1e-9, its
+rule before) would not do: with a vector-space prior Gauss-Newton closes the whole map's turn only linearly,
+each step a fixed fraction of the way (docs/derivations.md §9), so on a figure-eight with sharp turns it ran out
+of iterations (50, the step 0.8 times the one before) long after the batch's check had passed. When the
+iterations run out, the reason says how far the estimate is (what one more step would gain, against the
+tolerance) and how fast the steps were shrinking.
 """
 
 from __future__ import annotations
 
-import numpy as np
+import dataclasses
 
 from .arguments import is_integer
-from .batch import BatchResult, Iteration, certify, check_options, prepare
+from .batch import BatchResult, check_options, gauss_newton
 from .bayes_tree import FixedLagSmoother, IncrementalSolver
 from .errors import SteamError
 from .graph import FactorGraph
@@ -40,14 +43,18 @@ def finish_at_optimum(
 ) -> BatchResult:
     """The batch optimum of every factor of ``solver``, iterated from its estimate; ``solver`` is not changed.
 
-    Gauss-Newton steps, each one update of a fresh solver with both thresholds 0 (module docstring), until
-    the largest entry of a step is at most ``step_tolerance`` or ``max_updates`` updates have run. The
-    result is a :class:`~steam_ref.batch.BatchResult` (``values``, ``converged``, ``reason``,
-    ``stationarity``, one ``Iteration`` per update, and the covariance queries at the optimum, such as
-    ``marginal_covariance(key)``); ``converged`` is True only when the step fell below the tolerance
-    **and** :func:`~steam_ref.batch.check_stationarity` at the returned estimate found one more step would
-    lower the cost by at most ``max(relative_tolerance * cost, absolute_tolerance)``. To go on updating
-    from the optimum: ``IncrementalSolver(solver.params).update(list(result.factors), result.values)``.
+    Exactly :func:`~steam_ref.batch.gauss_newton` on ``solver.factors`` from ``solver.estimate()`` (AMD
+    ordering, at most ``max_updates`` iterations): it stops when the cost falls below ``absolute_tolerance``,
+    decreases by less than ``relative_tolerance`` times itself, or the step's norm falls below
+    ``step_tolerance``, and ``converged`` is True only when one of those held **and**
+    :func:`~steam_ref.batch.check_stationarity` at the returned estimate found that one more Gauss-Newton step
+    would lower the cost by at most ``max(relative_tolerance * cost, absolute_tolerance)``, in a system well
+    enough conditioned to tell. ``reason`` says which rule stopped it and what the check found; when the
+    iterations ran out, also how fast the steps were shrinking. For an optimum tighter than the batch's, lower
+    ``relative_tolerance`` (e.g. 1e-15) and ``step_tolerance``. The result is a
+    :class:`~steam_ref.batch.BatchResult` (``values``, ``iterations``, ``stationarity``, the covariance queries
+    at the optimum, such as ``marginal_covariance(key)``). To go on updating from the optimum:
+    ``IncrementalSolver(solver.params).update(list(result.factors), result.values)``.
 
     A solver that has marginalized variables (a :class:`~steam_ref.bayes_tree.FixedLagSmoother`) no longer
     holds the whole problem and is refused.
@@ -70,27 +77,24 @@ def finish_at_optimum(
             f"this {type(solver).__name__} has marginalized variables: it does not hold the whole problem, so it has "
             "no batch optimum to finish at"
         )
-    graph, start = FactorGraph(factors), solver.estimate()
-    backend, order, cost0 = prepare(graph, start, "amd", backend, max_updates)
-    gauss_newton = IncrementalSolver(
-        solver.params.replace(relinearize_threshold=0.0, relinearize_skip=1, wildfire_threshold=0.0)
+    if not factors:
+        raise SteamError("the factor graph is empty: there is nothing to solve")
+    result = gauss_newton(
+        FactorGraph(factors),
+        solver.estimate(),
+        ordering="amd",
+        max_iterations=max_updates,
+        relative_tolerance=relative_tolerance,
+        absolute_tolerance=absolute_tolerance,
+        step_tolerance=step_tolerance,
+        backend=backend,
     )
-    iterations: list[Iteration] = []
-    rule, values = "", start
-    for i in range(max_updates):
-        # the first update linearizes every factor at the start; each later one at the last estimate [YIB Eq. 9-11]
-        if i == 0:
-            gauss_newton.update(factors, start)
-        else:
-            gauss_newton.update()
-        step = np.concatenate([d.ravel() for d in gauss_newton.delta().values()])
-        values = gauss_newton.estimate().copy()
-        iterations.append(Iteration(graph.error(values), float(np.linalg.norm(step))))
-        largest = float(np.max(np.abs(step))) if step.size else 0.0
-        if largest <= step_tolerance:
-            rule = f"largest step entry {largest:.3g} below {step_tolerance:g}"
-            break
-    converged, reason, found = certify(
-        graph, values, order, backend, rule, (relative_tolerance, absolute_tolerance), True
+    steps = [it.step_norm for it in result.iterations]
+    if result.converged or len(steps) < 2 or not steps[-2] > 0:
+        return result
+    rate = steps[-1] / steps[-2]  # Gauss-Newton along the map's turn: a fixed fraction per step (derivations §9)
+    return dataclasses.replace(
+        result,
+        reason=f"{result.reason}; the last step's norm was {steps[-1]:.2g}, {rate:.2f} times the one before"
+        + (" (linear convergence: docs/derivations.md §9; raise max_updates)" if 0.1 < rate < 1 else ""),
     )
-    return BatchResult(values, cost0, iterations, converged, reason, order, 0, backend, found, tuple(factors))

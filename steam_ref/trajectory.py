@@ -15,6 +15,16 @@ the two clocks are one.
 Every covariance is that of the state's tangent under the prior's kind: on SE(2) states (``motion_prior('se2',
 qc)``) the right tangent at the estimate, its pose block in the *body frame* (``lie.state``;
 ``lie.world_position_covariance`` turns its position block to the world frame).
+
+What it reads (:class:`Estimates`, a protocol): ``estimate_of(key)`` and ``estimate()``, and, only when a
+covariance is asked for, ``marginal_covariances``, ``joint_covariance`` and ``joint_covariances``. Every solver's
+result has them, each through its own public methods: a :class:`~steam_ref.batch.BatchResult` (its covariances
+are blocks of 𝓘⁻¹ with every factor linearized at its estimate, one sparse factorization per query; a result
+that kept no factors says so), an :class:`~steam_ref.bayes_tree.IncrementalSolver` (from its Bayes tree) and a
+:class:`~steam_ref.bayes_tree.FixedLagSmoother` (its window). A query that needs a state a fixed-lag smoother has
+marginalized raises :class:`~steam_ref.errors.UnknownVariableError` naming the time, the state and the update that
+forgot it: the trajectory reads the window, not a past the smoother no longer holds (with ``keep_history=True``,
+``smoothed_history()`` gives the forgotten states, smoothed by all the data, to read instead).
 """
 
 from __future__ import annotations
@@ -22,18 +32,38 @@ from __future__ import annotations
 import itertools
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 from numpy.typing import NDArray
 
 from .arguments import finite, number, real_array
-from .errors import ShapeError, SteamError
+from .errors import ShapeError, SteamError, UnknownVariableError
 from .gp.clock import Clock
 from .gp.sde import LinearSDE
 from .motion import MotionPrior, as_motion_prior
-from .variables import Key, X, key_list
+from .variables import Key, Values, X, key_list
 
-__all__ = ["Trajectory", "Covariances"]
+__all__ = ["Trajectory", "Covariances", "Estimates"]
+
+
+class Estimates(Protocol):
+    """What a :class:`Trajectory` reads of a solver's result (module docstring): a ``BatchResult``, an
+    ``IncrementalSolver``, a ``FixedLagSmoother`` or anything else with these methods. The covariance queries
+    are read only when a covariance is asked for."""
+
+    def estimate_of(self, key: Key) -> NDArray: ...  # one variable's estimate (n,)
+
+    def estimate(self) -> Values: ...  # every variable's
+
+    def marginal_covariances(self, keys: Sequence[Key]) -> dict[Key, NDArray]: ...
+
+    def joint_covariance(self, keys: Sequence[Key]) -> NDArray: ...
+
+    def joint_covariances(self, groups: Sequence[Sequence[Key]]) -> list[NDArray]: ...
+
+
+_READS = ("estimate_of", "estimate")  # what every query needs; the covariance queries are checked when called
 
 
 @dataclass(frozen=True)
@@ -92,24 +122,38 @@ class Trajectory:
 
     def __init__(
         self,
-        solver,
+        solver: Estimates,
         states: Sequence[int],
         times: NDArray | Clock,
         prior: MotionPrior | NDArray | LinearSDE,
     ):
-        self.solver = solver  # anything with estimate_of, estimate, marginal_covariances, joint_covariance(s)
+        if missing := [name for name in _READS if not callable(getattr(solver, name, None))]:
+            raise SteamError(
+                f"solver must give its estimates (estimate_of(key) and estimate(), as a BatchResult, IncrementalSolver "
+                f"or FixedLagSmoother does); {type(solver).__name__} has no {' or '.join(missing)}"
+            )
+        self.solver = solver  # an Estimates: a solver or its result
         self.states = _pose_indices(states)  # poses with a state, increasing
         self.clock = times if isinstance(times, Clock) else Clock.of(_pose_times(times, self.states))
         self.times = _pose_times(self.clock.seconds, self.states)  # (n_poses,) time of every pose [data's clock]
         self.model_times = _pose_times(self.clock.model, self.states)  # (n_poses,) the same on the prior's clock
         self.prior = as_motion_prior(prior)  # everything that differs between priors
         self.n = self.prior.state_dim  # size of a state
-        if self.states:
-            size = np.shape(solver.estimate_of(X(self.states[0])))
+        if self.states:  # the newest state: a fixed-lag smoother still holds it
+            size = np.shape(solver.estimate_of(X(self.states[-1])))
             if size != (self.n,):
                 raise ShapeError(
-                    f"the prior has states of {self.n} numbers, the solver's {X(self.states[0])!r} has shape {size}"
+                    f"the prior has states of {self.n} numbers, the solver's {X(self.states[-1])!r} has shape {size}"
                 )
+
+    def _read(self, t: float | str, read, *args):
+        """``read(*args)`` of the solver; a state it no longer holds is an UnknownVariableError naming the time ``t``
+        (or what needed it)."""
+        try:
+            return read(*args)
+        except UnknownVariableError as e:
+            where = f"at t={t!r} s" if isinstance(t, float) else t
+            raise UnknownVariableError(f"the trajectory {where} needs a state the solver does not hold: {e}") from e
 
     def _between(self, a: int, b: int, t: float, xa: NDArray, xb: NDArray) -> NDArray:
         """x̄(t) between the states at poses a and b, ta <= t <= tb.  [YIB Eq. 18]
@@ -155,22 +199,24 @@ class Trajectory:
             )
         if solved and t > times[solved[-1]]:
             last, key, m = self.model_times[solved[-1]], X(solved[-1]), float(self.clock.to_model(t))
-            x1 = self.solver.estimate_of(key)
+            x1 = self._read(t, self.solver.estimate_of, key)
             mean = self.prior.extrapolate(last, x1, m)  # [YIB Eq. 22]
             if not covariance:
                 return mean
-            return mean, self.prior.extrapolate_covariance(last, x1, m, self.solver.joint_covariance([key]))
+            cov1 = self._read(t, self.solver.joint_covariance, [key])
+            return mean, self.prior.extrapolate_covariance(last, x1, m, cov1)
         near = self.neighbours(t)
         if isinstance(near, int):
-            mean = self.solver.estimate_of(X(near)).copy()
-            return (mean, self.solver.joint_covariance([X(near)])) if covariance else mean
+            mean = np.array(self._read(t, self.solver.estimate_of, X(near)))
+            return (mean, self._read(t, self.solver.joint_covariance, [X(near)])) if covariance else mean
         a, b = near
         m = float(self.clock.to_model(t))
-        xa, xb = self.solver.estimate_of(X(a)), self.solver.estimate_of(X(b))
+        xa, xb = self._read(t, self.solver.estimate_of, X(a)), self._read(t, self.solver.estimate_of, X(b))
         mean = self._between(a, b, m, xa, xb)
         if not covariance:
             return mean
-        return mean, self._between_covariance(a, b, m, xa, xb, self.solver.joint_covariance([X(a), X(b)]))
+        joint = self._read(t, self.solver.joint_covariance, [X(a), X(b)])
+        return mean, self._between_covariance(a, b, m, xa, xb, joint)
 
     def at_every_pose(self) -> tuple[NDArray, NDArray]:
         """Times (m,) and states (m, n) at every pose of the span, from the first state's pose to the last's
@@ -179,6 +225,11 @@ class Trajectory:
         if not solved:
             return np.zeros(0), np.zeros((0, self.n))
         values, times, first = self.solver.estimate(), self.model_times, solved[0]
+        if gone := [i for i in solved if X(i) not in values]:
+            raise UnknownVariableError(
+                f"the trajectory's every pose needs {X(gone[0])!r} (t={self.times[gone[0]]:g} s), which the solver "
+                "does not hold"
+            )
         out = np.empty((solved[-1] + 1 - first, self.n))
         for a, b in itertools.pairwise(solved):
             xa, xb = values[X(a)], values[X(b)]
@@ -197,7 +248,7 @@ class Trajectory:
             raise SteamError(
                 f"covariances are those of planar poses [x, y, θ] and their rates; this prior's p has d = {d} numbers"
             )
-        marg = self.solver.marginal_covariances([X(i) for i in solved] + landmarks)
+        marg = self._read("covariances", self.solver.marginal_covariances, [X(i) for i in solved] + landmarks)
         for k in landmarks:
             if marg[k].shape != (2, 2):
                 raise ShapeError(

@@ -468,3 +468,51 @@ def test_the_dot_text_gives_distinct_keys_distinct_nodes():
     tree = BayesTree.from_factors(factors, [L(-1), X(-1), X(0)])  # the root (x-1, x0), its child (l-1)
     nodes = {line.split("[")[0] for line in tree.dot().splitlines() if "[label=" in line}
     assert len(tree.cliques) == 2 and len(nodes) == 2
+
+
+# --- keep=: a map that never ages -------------------------------------------------------------------------------
+
+
+@settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(seed=st.integers(0, 10_000), lag=st.floats(0.6, 4.0), keep_all=st.booleans())
+def test_a_kept_map_leaves_the_window_the_dense_posterior(seed, lag, keep_all):
+    """States age out, kept landmarks stay, each one's marginal factor lands on them: the window (mean and joint
+    covariance, landmarks included) is the dense posterior's marginal of every factor ever given, to 1e-10. With
+    ``keep`` a predicate keeping landmark 0 only, the other landmarks age out and come back as new variables."""
+    stream = LinearStream(seed, 3)
+    keep = "l" if keep_all else (lambda k: k == L(0))
+    smoother = stream.smoother = FixedLagSmoother(lag, keep=keep, **EXACT)
+    fed(stream, smoother, 16, lambda everything: check_window(smoother, everything, stream))
+    kept = [L(j) for j in stream.seen if keep_all or j == 0]
+    assert all(smoother.holds(k) and not smoother.was_marginalized(k) for k in kept)
+    assert all(k not in smoother.timestamps for k in kept)
+    assert all(t >= smoother.newest - lag for t in smoother.timestamps.values())
+
+
+def test_the_marginal_factor_of_an_aged_state_lands_on_the_kept_landmark():
+    """X(0) and X(1) read L(0) and age out; L(0) stays, and the information they held on it is a MarginalFactor
+    on L(0) (with the oldest state left), without which L(0)'s covariance would be that of its later reading alone."""
+    stream = LinearStream(0, 1)
+    smoother = FixedLagSmoother(1.0, keep="l", **EXACT)
+    factors, values, stamps = stream.initial()
+    smoother.update(factors, values, timestamps=stamps)
+    z = stream.landmarks[0] - stream.x[:3]
+    everything = factors + [Offset((X(0), L(0)), np.eye(3) / 0.1, z=z)]
+    smoother.update(everything[-1:], {L(0): stream.landmarks[0]}, timestamps={L(0): 0.0})
+    while not smoother.was_marginalized(X(0)):
+        factors, values, stamps = stream.step()
+        factors = [f for f in factors if not isinstance(f, Offset)]  # no other reading of L(0)
+        values.pop(L(0), None)
+        stamps.pop(L(0), None)
+        everything += factors
+        smoother.update(factors, values, timestamps=stamps)
+    assert smoother.holds(L(0)) and X(0) not in smoother.estimate()
+    on_landmark = [f for f in smoother.factors if isinstance(f, MarginalFactor) and L(0) in f.keys]
+    assert on_landmark, "no marginal factor names the kept landmark"
+    check_window(smoother, everything)
+
+
+@pytest.mark.parametrize("keep", ["", "l1", "l ", 3, ["l"], {L(0)}, True, b"l"], ids=repr)
+def test_a_bad_keep_is_refused_naming_it(keep):
+    with pytest.raises(SteamError, match=re.escape(f"keep={keep!r}")):
+        FixedLagSmoother(1.0, keep=keep)

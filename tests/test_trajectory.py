@@ -23,6 +23,9 @@ class DenseSolver:
     def estimate_of(self, key):
         return self.mean[key]
 
+    def estimate(self):
+        return dict(self.mean)
+
     def joint_covariance(self, keys):
         rows = np.concatenate([self.index[k] for k in keys])
         return self.cov[np.ix_(rows, rows)]

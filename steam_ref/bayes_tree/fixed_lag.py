@@ -1,26 +1,24 @@
-"""Fixed-lag smoothing: iSAM2 that forgets the variables older than a lag.  [K12, derivations §10]
+"""Fixed-lag smoothing: iSAM2 that forgets the variables older than a lag, and keeps a map.  [K12, derivations §10]
 
 :class:`FixedLagSmoother` holds an :class:`~steam_ref.bayes_tree.IncrementalSolver` and the timestamps of its
-variables, as GTSAM's ``IncrementalFixedLagSmoother`` holds an ISAM2. After each update every variable older than
-the newest timestamp minus the lag (``t < t_newest - lag``, GTSAM's rule) is marginalized by the solver's
-:meth:`~steam_ref.bayes_tree.IncrementalSolver.marginalize_leaves`: its factors go, a :class:`MarginalFactor` on
-its separator stays, frozen at the linearization point of the moment. Each update has the solver eliminate the
-variables next to leave first (``constrained``), so that they are leaves, cut off with no re-elimination. The
-window alone is held: memory and time per update stay flat however long the run.
-
-A variable without a timestamp (a landmark, unless the caller gives one) is never marginalized; a refreshed
-timestamp (a landmark's, when it is seen) restarts its clock. A marginalized variable given a value again enters
-as a new variable: what was learnt of it before lives on only in the marginal factor. Queries of a marginalized
-variable raise :class:`UnknownVariableError` naming the update that marginalized it; its estimate then is in
-:attr:`FixedLagSmoother.last_marginalization`. ``keep_history=True`` keeps each one's conditional (:mod:`.history`),
-and :meth:`FixedLagSmoother.smoothed_history` gives every forgotten variable its estimate given all the data so
-far, by one backward pass from the window (derivations §10.5).
+variables, as GTSAM's ``IncrementalFixedLagSmoother`` holds an ISAM2. **What ages:** a variable stamped older than
+the newest minus the lag (``t < t_newest - lag``, GTSAM's rule) is marginalized after the update, eliminated first
+so that it is a leaf (``marginalize_leaves``): its factors go, a :class:`MarginalFactor` on its separator (a kept
+landmark too) stays, frozen at θ̄ of the moment. **What never ages:** a variable never stamped, and one ``keep=``
+names (``"l"``, symbols: every landmark; or a predicate on a key): a map, refined by every later sighting while
+the states age out. A timestamp given again restarts a variable's clock. **An aged variable is gone:** a factor,
+timestamp or query naming it raises :class:`UnknownVariableError` naming the update that forgot it (as GTSAM);
+given a value again, it enters as a new variable. ``keep_history=True`` keeps each one's conditional
+(:mod:`.history`): :meth:`FixedLagSmoother.smoothed_history` gives the forgotten variables all the data so far.
+**A kept map is not the batch's:** exact at a fixed θ̄, it keeps each marginal factor's θ̄ of the moment, and with
+``relinearize_skip=10`` a state may leave still linearized where it entered: on a figure-eight with 1-rad turns, up
+to 14 of the batch's σ away; ``relinearize_skip=1`` gave at most 0.7 σ, or full iSAM2's own gap (docs/experiments.md).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 
 from numpy.typing import NDArray
 
@@ -41,19 +39,28 @@ __all__ = ["FixedLagSmoother"]
 
 
 class FixedLagSmoother:
-    """iSAM2 over a sliding window of ``lag`` seconds: an :class:`IncrementalSolver` (:attr:`solver`) whose variables
-    older than the lag are marginalized after each update (``update(..., timestamps={key: t})``, in seconds).
-    The queries are the solver's; of a marginalized variable, they say when it went."""
+    """iSAM2 over a window of ``lag`` seconds: an :class:`IncrementalSolver` (:attr:`solver`) whose variables stamped
+    older than the lag (``update(..., timestamps={key: t})``) are marginalized after each update, but for those
+    ``keep`` names (``keep="l"``: every landmark), which never age (module docstring). Its queries are the solver's."""
 
     def __init__(
-        self, lag: float, params: ISAM2Params | None = None, *, keep_history: bool = False, **changes: object
+        self,
+        lag: float,
+        params: ISAM2Params | None = None,
+        *,
+        keep: str | Callable[[Key], bool] | None = None,
+        keep_history: bool = False,
+        **changes: object,
     ) -> None:
         lag = number("lag", lag)
         if not lag > 0:
             raise SteamError(f"lag must be a number of seconds > 0, got lag={lag!r}")
+        if not (keep is None or callable(keep) or (isinstance(keep, str) and keep.isalpha())):
+            raise SteamError(f"keep must be key symbols such as 'l', or a predicate on a key, got keep={keep!r}")
+        self.keeps = (lambda k: k.symbol in keep) if isinstance(keep, str) else keep or (lambda _: False)  # never ages
         self.solver = IncrementalSolver(params, **changes)  # the window's iSAM2
         self.lag = float(lag)  # seconds of history kept
-        self._times: dict[Key, float] = {}  # timestamp of each timed variable in the window
+        self._times: dict[Key, float] = {}  # timestamp of each timed variable in the window, kept ones excepted
         self._gone: dict[Key, int] = {}  # marginalized key → the update that marginalized it (any id a Key holds)
         self.newest = -math.inf  # the latest timestamp seen
         self.n_marginalized = 0  # variables marginalized so far
@@ -71,42 +78,36 @@ class FixedLagSmoother:
     ) -> UpdateReport:
         """:meth:`IncrementalSolver.update`, then marginalize the variables older than the lag.
 
-        Raises :class:`UnknownVariableError` for a factor or timestamp naming a marginalized variable. The
-        update, the marginalization and the record of what it forgot are one transaction of the solver's undo
-        log: a failure or an interruption (Ctrl-C) anywhere leaves the smoother exactly as before the call.
+        Raises :class:`UnknownVariableError` for a factor or timestamp naming a marginalized variable. Update,
+        marginalization and their record are one transaction: a failure or a Ctrl-C leaves the smoother as it was.
         """
         check_new_values(new_values)  # before anything reads it as a mapping
         times = self._checked_times(timestamps, new_values)
         factors = check_factors("new_factors", new_factors)
         fresh = () if new_values is None else new_values
-        for f in factors:
-            for k in f.keys:
-                if k not in fresh:
-                    self._held("a new factor names", k)
+        for k in dict.fromkeys(k for f in factors for k in f.keys if k not in fresh):
+            self._held("a new factor names", k)
         with self.solver.transaction() as log, limit():  # the limit is left inside: an interrupt there undoes all
             report = self.solver.update(factors, new_values, relinearize=relinearize, constrained=self._leaving())
             self._forget_old(log, report.step, fresh, times)
         return report
 
     def _leaving(self) -> KeysBelow | None:
-        """Once the window is full, the timed variables older than the newest timestamp, to eliminate first, oldest
-        first (as GTSAM's smoother orders the keys to marginalize); before, None: iSAM2's own order."""
+        """Once the window is full, the aging variables older than the newest, to eliminate first (GTSAM's order)."""
         return KeysBelow(self._times, self.newest) if self.n_marginalized else None
 
     def _forget_old(self, log: UndoLog, step: int, fresh: Iterable[Key], times: dict[Key, float]) -> None:
-        """After update ``step``: record its timestamps, marginalize what fell behind the lag, and record that (each
-        change recorded in the solver's undo ``log`` first)."""
+        """After update ``step``: record its timestamps, marginalize what fell behind the lag (each change in ``log``)."""
         for name in ("newest", "n_marginalized", "peak_window", "last_marginalization"):
             log.record(setattr, self, name, getattr(self, name))
         log.keep(self._times)  # ordered: the next marginalization's order follows it
         for k in fresh:
             if k in self._gone:
                 log.delete(self._gone, k)  # a marginalized variable given anew is a new variable
-        self._times.update(times)
         self.newest = max(self.newest, *times.values()) if times else self.newest
+        self._times.update((k, t) for k, t in times.items() if not self.keeps(k))
         self.peak_window = max(self.peak_window, len(self.solver))
-        cutoff = self.newest - self.lag
-        old = [k for k, t in self._times.items() if t < cutoff]
+        old = [k for k, t in self._times.items() if t < self.newest - self.lag]
         self.last_marginalization = None
         if old:
             keep = self.history is not None
@@ -136,8 +137,8 @@ class FixedLagSmoother:
                 )
             if k not in new:
                 self._held("timestamps names", k)
-            if not self.solver.holds(k) and k not in new:
-                raise UnknownVariableError(f"timestamps names {k!r}, which is neither held nor in new_values")
+                if not self.solver.holds(k):
+                    raise UnknownVariableError(f"timestamps names {k!r}, which is neither held nor in new_values")
             out[k] = number(f"timestamps[{k!r}]", t)
         return out
 
@@ -147,7 +148,7 @@ class FixedLagSmoother:
         if gone:
             raise UnknownVariableError(
                 f"{what} {key!r}, which was marginalized at update {gone} "
-                f"(its timestamp fell more than the lag, {self.lag:g} s, behind the newest)"
+                f"(its timestamp fell more than the lag, {self.lag:g} s, behind the newest; keep= keeps a map)"
             )
 
     def smoothed_history(self) -> dict[Key, NDArray]:
@@ -165,7 +166,7 @@ class FixedLagSmoother:
 
     @property
     def timestamps(self) -> dict[Key, float]:
-        """The timestamp of each timed variable in the window (a copy)."""
+        """The timestamp of each variable of the window that ages (a copy; no kept one)."""
         return dict(self._times)
 
     # --- the solver's queries ---------------------------------------------------------------------------------
