@@ -119,6 +119,15 @@ class IncrementalSolver:
         except KeyError:
             raise UnknownVariableError(f"variable {key!r} is not in the solver") from None
 
+    def estimates_of(self, keys: Iterable[Key]) -> dict[Key, NDArray]:
+        """The current estimate θ̄ ⊕ δ of each of ``keys`` (read-only), those whose δ moved formed in one call per
+        kind: what a caller reading several variables asks instead of :meth:`estimate_of` of each."""
+        keys = key_list("keys", keys)
+        try:
+            return self.state.estimates_of(keys)
+        except KeyError as exc:
+            raise UnknownVariableError(f"variable {exc.args[0]!r} is not in the solver") from None
+
     @property
     def factors(self) -> tuple[Factor, ...]:
         """Every factor so far, in the order added (a tuple: the solver's caches are indexed by position); the slot

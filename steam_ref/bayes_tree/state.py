@@ -107,6 +107,16 @@ class SolverState:
             self.log.delete(self.stale, key)
         return self.estimates[key]
 
+    def estimates_of(self, keys: Sequence[Key]) -> dict[Key, NDArray]:
+        """θ̄ ⊕ δ of several held variables (read-only), the stale among them formed in one call per kind
+        (:meth:`_formed`), as :meth:`estimate_of` forms one. KeyError when one is not held."""
+        stale = [k for k in dict.fromkeys(keys) if k in self.stale]
+        if stale:
+            for k, e in self._formed(stale).items():
+                self.log.set(self.estimates, k, e)
+                self.log.delete(self.stale, k)
+        return {k: self.estimates[k] for k in keys}
+
     def all_estimates(self) -> dict[Key, NDArray]:
         """θ̄ ⊕ δ of every variable (the store itself: the caller copies the dict, never the arrays).  [YIB Eq. 11]"""
         formed = self._formed(list(self.stale))  # in the order they went stale, as always

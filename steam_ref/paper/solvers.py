@@ -79,6 +79,11 @@ class OnlineSolver:
         """Current estimate of every variable; the forgotten ones read as ``past`` says (:data:`PASTS`)."""
         raise NotImplementedError
 
+    def estimates_of(self, keys: Sequence[Key], *, past: str = "lagged") -> dict[Key, NDArray]:
+        """Current estimate of each of ``keys``, as :meth:`estimate_of` reads each (a solver that forms its
+        estimates on demand forms these in one call per kind)."""
+        return {k: self.estimate_of(k, past=past) for k in keys}
+
     def forgotten(self) -> Sequence[Key]:
         """The variables the last update forgot (marginalized): none."""
         return ()
@@ -198,6 +203,10 @@ class BayesTreeSolver(OnlineSolver):
         check_past(past)
         return self.inner.estimate()
 
+    def estimates_of(self, keys: Sequence[Key], *, past: str = "lagged") -> dict[Key, NDArray]:
+        check_past(past)
+        return self.inner.estimates_of(keys)  # the stale ones formed in one call per kind
+
     def marginal_covariance(self, key: Key) -> NDArray:
         return self.inner.marginal_covariance(key)  # one walk down the root path
 
@@ -305,6 +314,17 @@ class FixedLagTreeSolver(BayesTreeSolver):
     def estimate_of(self, key: Key, *, past: str = "lagged") -> NDArray:
         retired = self.retired(key, past=past)
         return self.inner.estimate_of(key) if retired is None else retired
+
+    def estimates_of(self, keys: Sequence[Key], *, past: str = "lagged") -> dict[Key, NDArray]:
+        out: dict[Key, NDArray] = {}
+        held = []
+        for k in keys:
+            retired = self.retired(k, past=past)
+            if retired is None:
+                held.append(k)
+            else:
+                out[k] = retired
+        return out | self.inner.estimates_of(held)
 
     def estimate(self, *, past: str = "lagged") -> Values:
         self._checked(past)
