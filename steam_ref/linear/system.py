@@ -98,7 +98,9 @@ def _first_non_finite(e: NDArray, costs: NDArray, Js: tuple[NDArray, ...] | None
     return min(hits) if hits else None
 
 
-def _batches(factors: Sequence[Factor], values: Values) -> Iterator[tuple[list[int], list[Factor], Factor, list[NDArray]]]:
+def _batches(
+    factors: Sequence[Factor], values: Values
+) -> Iterator[tuple[list[int], list[Factor], Factor, list[NDArray]]]:
     """``factors`` in groups of one type: each group's positions, factors, the factors stacked into one
     (:meth:`~steam_ref.factors.Factor.stack`) and the estimates each key slot reads, (n, dₖ) each."""
     for ids in _group_by_type(factors).values():
