@@ -187,11 +187,6 @@ class FixedLagSmoother:
         """The estimate of one variable of the window (read-only)."""
         return self.solver.estimate_of(self._known([check_key("key", key)], "the estimate of")[0])
 
-    def estimates_of(self, keys: Iterable[Key]) -> dict[Key, NDArray]:
-        """The estimate of each of ``keys`` of the window (read-only), formed in one call per kind
-        (:meth:`IncrementalSolver.estimates_of`)."""
-        return self.solver.estimates_of(self._known(key_list("keys", keys), "the estimate of"))
-
     def marginal_covariance(self, key: Key) -> NDArray:
         """:meth:`IncrementalSolver.marginal_covariance` of a variable of the window."""
         return self.solver.marginal_covariance(self._known([check_key("key", key)])[0])

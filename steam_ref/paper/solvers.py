@@ -204,8 +204,10 @@ class BayesTreeSolver(OnlineSolver):
         return self.inner.estimate()
 
     def estimates_of(self, keys: Sequence[Key], *, past: str = "lagged") -> dict[Key, NDArray]:
-        check_past(past)
-        return self.inner.estimates_of(keys)  # the stale ones formed in one call per kind
+        if isinstance(self.inner, IncrementalSolver):
+            check_past(past)  # nothing forgotten: one past
+            return self.inner.estimates_of(keys)  # the stale ones formed in one call per kind
+        return super().estimates_of(keys, past=past)  # each as estimate_of reads it (in the window, or forgotten)
 
     def marginal_covariance(self, key: Key) -> NDArray:
         return self.inner.marginal_covariance(key)  # one walk down the root path
@@ -314,17 +316,6 @@ class FixedLagTreeSolver(BayesTreeSolver):
     def estimate_of(self, key: Key, *, past: str = "lagged") -> NDArray:
         retired = self.retired(key, past=past)
         return self.inner.estimate_of(key) if retired is None else retired
-
-    def estimates_of(self, keys: Sequence[Key], *, past: str = "lagged") -> dict[Key, NDArray]:
-        out: dict[Key, NDArray] = {}
-        held = []
-        for k in keys:
-            retired = self.retired(k, past=past)
-            if retired is None:
-                held.append(k)
-            else:
-                out[k] = retired
-        return out | self.inner.estimates_of(held)
 
     def estimate(self, *, past: str = "lagged") -> Values:
         self._checked(past)
