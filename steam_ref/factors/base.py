@@ -166,7 +166,7 @@ def _clash(
 
 def apply(A: NDArray, x: NDArray) -> NDArray:
     """A x for one matrix (A.dot(x): a third of einsum's call cost) or for a stack of them (einsum), as a factor
-    is evaluated alone (the divergence check) or in a batch (linearization)."""
+    is evaluated alone (``whitened_error``) or in a batch (linearization, the divergence check)."""
     one = A.ndim == 2 and isinstance(x, np.ndarray) and x.ndim == 1
     return A.dot(x) if one else np.einsum("...ij,...j->...i", A, x)
 

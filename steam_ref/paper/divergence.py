@@ -2,7 +2,9 @@
 
 After each update of a stream (:mod:`steam_ref.paper.online`) two checks look at the factors that
 update added, in time proportional to them (a cost of every factor after every update would cost
-time in proportion to the whole problem, every update):
+time in proportion to the whole problem, every update), evaluated in batches of one type as a linearization
+evaluates them, without Jacobians (:func:`~steam_ref.linear.system.whitened_norms`), at estimates asked for
+once per check (a solver's ``estimates_of``: each kind's formed in one call):
 
 - **Before the update, the gate**: each new landmark reading's whitened residual ‖W e‖ at the
   prediction (the solver's estimate of the variables it holds, the front end's initial guess of the
