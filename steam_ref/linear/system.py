@@ -9,7 +9,7 @@ right-hand side (with the prior written as factors, η - θ̄ and Hᵀ R⁻¹ (y
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -98,16 +98,6 @@ def _first_non_finite(e: NDArray, costs: NDArray, Js: tuple[NDArray, ...] | None
     return min(hits) if hits else None
 
 
-def _batches(
-    factors: Sequence[Factor], values: Values
-) -> Iterator[tuple[list[int], list[Factor], Factor, list[NDArray]]]:
-    """``factors`` in groups of one type: each group's positions, factors, the factors stacked into one
-    (:meth:`~steam_ref.factors.Factor.stack`) and the estimates each key slot reads, (n, dₖ) each."""
-    for ids in _group_by_type(factors).values():
-        group = [factors[i] for i in ids]
-        yield ids, group, type(group[0]).stack(group), _variables(values, group)
-
-
 def _whitened(batch: Factor, xs: list[NDArray]) -> NDArray:
     """(n, m) whitened errors Σ^-½ e of a stacked batch: ‖e‖²_Σ = ‖Σ^-½ e‖².  [YIB Eq. 6, 21]"""
     return np.einsum("nij,nj->ni", batch.sqrt_information, batch.error(*xs))
@@ -116,12 +106,18 @@ def _whitened(batch: Factor, xs: list[NDArray]) -> NDArray:
 def whitened_norms(factors: Sequence[Factor], values: Values) -> NDArray:
     """(n,) ‖W e‖ of each of ``factors`` at ``values``, in the order given (inf where it is not finite): the
     residual before any robust loss, evaluated in batches of one type as :func:`linearize` evaluates them, without
-    Jacobians (the divergence check of a stream, :mod:`steam_ref.paper.divergence`).  [YIB Eq. 6]"""
+    Jacobians (a type with one factor by its own ``whitened_error``); the divergence check of a stream
+    (:mod:`steam_ref.paper.divergence`).  [YIB Eq. 6]"""
     values = as_values("values", values)
     out = np.empty(len(factors))
     with np.errstate(all="ignore"):  # a residual that overflows is inf: beyond any noise, not an error here
-        for ids, _, batch, xs in _batches(factors, values):
-            out[ids] = np.linalg.norm(_whitened(batch, xs), axis=1)
+        for ids in _group_by_type(factors).values():
+            if len(ids) == 1:  # a type with one factor: its own evaluation, which costs less than a stack of one
+                f = factors[ids[0]]
+                out[ids] = np.linalg.norm(f.whitened_error(*[values[k] for k in f.keys]))
+                continue
+            group = [factors[i] for i in ids]
+            out[ids] = np.linalg.norm(_whitened(type(group[0]).stack(group), _variables(values, group)), axis=1)
     out[~np.isfinite(out)] = np.inf
     return out
 
@@ -134,7 +130,10 @@ def linearize(factors: Sequence[Factor], values: Values, *, jacobians: bool = Tr
     """
     values = as_values("values", values)
     out, failures = [], []
-    for ids, group, batch, xs in _batches(factors, values):
+    for ids in _group_by_type(factors).values():
+        group = [factors[i] for i in ids]
+        batch = type(group[0]).stack(group)
+        xs = _variables(values, group)
         W = batch.sqrt_information
         with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # checked just below
             e = _whitened(batch, xs)
