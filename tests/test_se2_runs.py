@@ -216,4 +216,4 @@ def test_the_divergence_gate_names_an_absurd_reading_on_se2_states():
                                        np.eye(3), group=SE2)  # fmt: skip
     values = {X(0): state, X(1): SE2_STATE.retract(state, np.r_[1.0, 0, 0.1, 0, 0, 0]), L(1): np.array([3.0, 4.0])}
     with pytest.warns(DivergenceWarning, match=r"RangeFactor on x0, x1, l1 \(interpolated between its states\)"):
-        check.gate([good, bad], values.__getitem__, 7)
+        check.gate([good, bad], lambda keys: {k: values[k] for k in keys}, 7)

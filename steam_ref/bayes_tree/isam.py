@@ -113,11 +113,14 @@ class IncrementalSolver:
 
     def estimate_of(self, key: Key) -> NDArray:
         """The current estimate θ̄ ⊕ δ of one variable (read-only)."""
-        check_key("key", key)
+        return self.estimates_of([check_key("key", key)])[key]
+
+    def estimates_of(self, keys: Iterable[Key]) -> dict[Key, NDArray]:
+        """The current estimate of each of ``keys`` (read-only), those whose δ moved formed in one call per kind."""
         try:
-            return self.state.estimate_of(key)
-        except KeyError:
-            raise UnknownVariableError(f"variable {key!r} is not in the solver") from None
+            return self.state.estimates_of(key_list("keys", keys))
+        except KeyError as exc:
+            raise UnknownVariableError(f"variable {exc.args[0]!r} is not in the solver") from None
 
     @property
     def factors(self) -> tuple[Factor, ...]:

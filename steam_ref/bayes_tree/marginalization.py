@@ -147,7 +147,7 @@ def _marginalize(
     last = [k for k in variables if k not in drop]
     order = min_degree_keys(variables, state.dims, [f.keys for f in adjacent], last)
     order_drop = order[: len(drop)]
-    estimates = {k: state.estimate_of(k).copy() for k in order_drop}
+    estimates = {k: e.copy() for k, e in state.estimates_of(order_drop).items()}
     conditionals: list[Clique] | None = [] if keep_conditionals else None
     schur = eliminate_variables(order_drop, adjacent, state.dims, conditionals)  # (Eq. 10.1-10.3)
     forgotten = tuple(ForgottenConditional.of(c, state.theta_bar, state.kinds) for c in conditionals or ())

@@ -98,14 +98,12 @@ class SolverState:
                 formed[k] = e
         return formed if len(groups) < 2 else {k: formed[k] for k in keys}
 
-    def estimate_of(self, key: Key) -> NDArray:
-        """θ̄ ⊕ δ of one held variable (read-only; formed when stale). KeyError when it is not held."""
-        if key in self.stale:  # one variable: its kind's own map (the batch of :meth:`_formed` costs more for one)
-            e = np.asarray(self.kinds[key].retract(self.theta_bar[key], self.delta[key]), dtype=float)
-            e.flags.writeable = False
-            self.log.set(self.estimates, key, e)
-            self.log.delete(self.stale, key)
-        return self.estimates[key]
+    def estimates_of(self, keys: Sequence[Key]) -> dict[Key, NDArray]:
+        """θ̄ ⊕ δ of held variables (read-only), the stale among them formed in one call per kind. KeyError: not held."""
+        for k, e in self._formed([k for k in dict.fromkeys(keys) if k in self.stale]).items():
+            self.log.set(self.estimates, k, e)
+            self.log.delete(self.stale, k)
+        return {k: self.estimates[k] for k in keys}
 
     def all_estimates(self) -> dict[Key, NDArray]:
         """θ̄ ⊕ δ of every variable (the store itself: the caller copies the dict, never the arrays).  [YIB Eq. 11]"""

@@ -39,21 +39,35 @@ def _finite_weight(name: str, W: NDArray, noise: NDArray) -> NDArray:
     return W
 
 
+_SIGMA_WEIGHTS: dict[bytes, NDArray] = {}  # W of each set of sigmas met so far (read-only), by their float64 bytes
+_MAX_SIGMA_WEIGHTS = 256  # a stream's readings share a few sets of sigmas; past this many, W is made anew
+
+
 def sqrt_information(noise: NDArray | float, m: int, name: str = "noise") -> NDArray:
     """Upper-triangular W with WᵀW = Σ⁻¹, from sigmas (m,) / a scalar sigma, or a covariance (m, m).
 
-    ``name`` is the argument the noise came in as, for the error messages.
+    ``name`` is the argument the noise came in as, for the error messages. W of sigmas is memoised by their
+    value and read-only (a stream makes every reading of a sensor with the same sigmas, each step).
     """
     noise = real_array(name, noise)
     if noise.ndim == 0:
         noise = np.full(m, float(noise))
+    if noise.shape == (m,):
+        memo = noise.tobytes()  # m is the length: sigmas of two sizes never share bytes
+        W = _SIGMA_WEIGHTS.get(memo)
+        if W is not None:  # made, and so checked, before
+            return W
     finite(name, noise)
     if noise.shape == (m,):
         if np.any(noise <= 0):
             shown = noise.tolist() if m > 1 else noise[0]
             raise SteamError(f"{name} (standard deviation{'s' if m > 1 else ''}) must be positive, got {name}={shown}")
         with np.errstate(over="ignore", divide="ignore"):  # checked by _finite_weight
-            return _finite_weight(name, np.diag(1.0 / noise), noise)
+            W = _finite_weight(name, np.diag(1.0 / noise), noise)
+        W.flags.writeable = False
+        if len(_SIGMA_WEIGHTS) < _MAX_SIGMA_WEIGHTS:
+            _SIGMA_WEIGHTS[memo] = W
+        return W
     if noise.shape == (m, m):
         if not np.allclose(noise, noise.T, rtol=0.0, atol=1e-12 * np.max(np.abs(noise))):
             i, j = np.unravel_index(np.argmax(np.abs(noise - noise.T)), noise.shape)
@@ -152,7 +166,7 @@ def _clash(
 
 def apply(A: NDArray, x: NDArray) -> NDArray:
     """A x for one matrix (A.dot(x): a third of einsum's call cost) or for a stack of them (einsum), as a factor
-    is evaluated alone (the divergence check) or in a batch (linearization)."""
+    is evaluated alone (``whitened_error``) or in a batch (linearization, the divergence check)."""
     one = A.ndim == 2 and isinstance(x, np.ndarray) and x.ndim == 1
     return A.dot(x) if one else np.einsum("...ij,...j->...i", A, x)
 

@@ -21,7 +21,7 @@ from typing import ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
-from ..arguments import finite, real_array, time_step
+from ..arguments import finite, real_array
 from ..errors import ShapeError, SteamError
 from ..gp.prior import check_qc, process_noise_sqrt_information, transition
 from ..lie import GroupState, LieGroup
@@ -65,13 +65,18 @@ class LiePriorFactor(Factor):
         cls, key1: Key, key2: Key, dt: float, qc: NDArray, model: str = "local-variable", *, group: LieGroup
     ) -> LiePriorFactor:
         """The prior over a gap dt > 0 with Qc (d, d) on the body twist (SE(2): [vx, vy, ω]).  [YIB Eq. 17, 22]"""
-        dt = time_step(dt)
         qc = check_qc(qc)
         d = check_group(group).dim
         if qc.shape != (d, d):
             raise ShapeError(f"qc must be ({d}, {d}) on the body twist for a prior on {group!r}, got shape {qc.shape}")
-        w = process_noise_sqrt_information(dt, qc)  # WᵀW = Q(Δt)⁻¹  [YIB Eq. 17]
-        return cls((key1, key2), w, phi=transition(dt, d), model=check_model(model), group=group)
+        return cls.of_checked(key1, key2, dt, qc, check_model(model), group)
+
+    @classmethod
+    def of_checked(cls, key1: Key, key2: Key, dt: float, qc: NDArray, model: str, group: LieGroup) -> LiePriorFactor:
+        """:meth:`create` with ``qc``, ``model`` and ``group`` checked already (a motion prior's own, checked when it
+        was made: ``motion.LieGroupWnoa``); ``dt`` is checked here.  [YIB Eq. 17, 22]"""
+        w = process_noise_sqrt_information(dt, qc)  # WᵀW = Q(Δt)⁻¹, memoised per (dt, Qc)  [YIB Eq. 17]
+        return cls((key1, key2), w, phi=transition(dt, group.dim), model=model, group=group)
 
     @property
     def key_dims(self) -> tuple[int, ...]:  # type: ignore[override]

@@ -217,12 +217,29 @@ class LieInterpolatedFactor(Factor):
         if inner.group is not check_group(group):
             raise SteamError(f"inner reads a state on {inner.group!r}, the interpolation is on group={group!r}")
         t1, t2, tau = number("t1", t1), number("t2", t2), number("tau", tau)
-        lam, psi = interpolation_matrices(t1, t2, tau, check_qc(qc))  # [YIB Eq. 16]
-        d = group.dim
-        if lam.shape != (2 * d, 2 * d):
+        d, qc = group.dim, check_qc(qc)
+        if qc.shape != (d, d):
             raise SteamError(f"qc must be ({d}, {d}) on the body twist of a state on {group!r}, got {np.shape(qc)}")
+        return cls.of_checked(inner, key1, key2, t1, t2, tau, qc, check_model(model), group)
+
+    @classmethod
+    def of_checked(
+        cls,
+        inner: Factor,
+        key1: Key,
+        key2: Key,
+        t1: float,
+        t2: float,
+        tau: float,
+        qc: NDArray,
+        model: str,
+        group: LieGroup,
+    ) -> LieInterpolatedFactor:
+        """:meth:`create` with ``inner`` (a reading on ``group``'s state), ``qc``, ``model`` and ``group`` checked
+        already (a motion prior's own, checked when it was made: ``motion.LieGroupWnoa``); t1 < tau < t2 is checked
+        here (``interpolation_matrices``).  [YIB Eq. 16, 29]"""
+        lam, psi = interpolation_matrices(t1, t2, tau, qc)  # [YIB Eq. 16]
         keys = (key1, key2) + tuple(inner.keys[1:])
-        model = check_model(model)
         return cls(
             keys, inner.sqrt_information, inner=inner, lam=lam, psi=psi, model=model, group=group, loss=inner.loss
         )

@@ -106,10 +106,17 @@ def finite_result(what: str, a: NDArray, **at: float) -> NDArray:
 
 
 def transition(dt: float, d: int) -> NDArray:
-    """Φ(t + dt, t) of the WNOA prior for p of dimension d, any finite dt: (2d, 2d).  [YIB Eq. 16, 30-31]"""
-    dt, d = time_step(dt, positive=False), check_d(d)
+    """Φ(t + dt, t) of the WNOA prior for p of dimension d, any finite dt: (2d, 2d), read-only. Memoised per
+    (dt, d): a stream's front end asks it for every new state, mostly with the same step.  [YIB Eq. 16, 30-31]"""
+    return _transition(time_step(dt, positive=False), check_d(d))
+
+
+@lru_cache(maxsize=1024)
+def _transition(dt: float, d: int) -> NDArray:
     I, O = np.eye(d), np.zeros((d, d))
-    return np.block([[I, dt * I], [O, I]])
+    phi = np.block([[I, dt * I], [O, I]])
+    read_only(phi)
+    return phi
 
 
 def process_noise(dt: float, qc: ArrayLike) -> NDArray:

@@ -21,7 +21,7 @@ from ..factors import Factor, check_factors
 from ..variables import Key, Values, as_values
 from .ordering import Ordering
 
-__all__ = ["LinearizedGroup", "linearize", "LinearSystem", "GaussianFactor"]
+__all__ = ["LinearizedGroup", "linearize", "whitened_norms", "LinearSystem", "GaussianFactor"]
 
 
 @dataclass(frozen=True)
@@ -98,6 +98,30 @@ def _first_non_finite(e: NDArray, costs: NDArray, Js: tuple[NDArray, ...] | None
     return min(hits) if hits else None
 
 
+def _whitened(batch: Factor, xs: list[NDArray]) -> NDArray:
+    """(n, m) whitened errors Σ^-½ e of a stacked batch: ‖e‖²_Σ = ‖Σ^-½ e‖².  [YIB Eq. 6, 21]"""
+    return np.einsum("nij,nj->ni", batch.sqrt_information, batch.error(*xs))
+
+
+def whitened_norms(factors: Sequence[Factor], values: Values) -> NDArray:
+    """(n,) ‖W e‖ of each of ``factors`` at ``values``, in the order given (inf where it is not finite): the
+    residual before any robust loss, evaluated in batches of one type as :func:`linearize` evaluates them, without
+    Jacobians (a type with one factor by its own ``whitened_error``); the divergence check of a stream
+    (:mod:`steam_ref.paper.divergence`).  [YIB Eq. 6]"""
+    values = as_values("values", values)
+    out = np.empty(len(factors))
+    with np.errstate(all="ignore"):  # a residual that overflows is inf: beyond any noise, not an error here
+        for ids in _group_by_type(factors).values():
+            if len(ids) == 1:  # a type with one factor: its own evaluation, which costs less than a stack of one
+                f = factors[ids[0]]
+                out[ids] = np.linalg.norm(f.whitened_error(*[values[k] for k in f.keys]))
+                continue
+            group = [factors[i] for i in ids]
+            out[ids] = np.linalg.norm(_whitened(type(group[0]).stack(group), _variables(values, group)), axis=1)
+    out[~np.isfinite(out)] = np.inf
+    return out
+
+
 def linearize(factors: Sequence[Factor], values: Values, *, jacobians: bool = True) -> list[LinearizedGroup]:
     """Whitened Jacobians and right-hand sides of ``factors`` at ``values``.  [YIB Eq. 9, 21]
 
@@ -112,9 +136,7 @@ def linearize(factors: Sequence[Factor], values: Values, *, jacobians: bool = Tr
         xs = _variables(values, group)
         W = batch.sqrt_information
         with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # checked just below
-            e = np.einsum(
-                "nij,nj->ni", W, batch.error(*xs)
-            )  # whitened error Σ^-½ e: ‖e‖²_Σ = ‖Σ^-½ e‖²  [YIB Eq. 6, 21]
+            e = _whitened(batch, xs)
             s = np.linalg.norm(e, axis=1)
             if batch.loss is None:
                 scale, costs = np.ones_like(s), 0.5 * s**2

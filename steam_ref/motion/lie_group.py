@@ -29,7 +29,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..dead_reckoning import wrap_angle
-from ..errors import DataError, ShapeError
+from ..errors import DataError, ShapeError, SteamError
 from ..factors import Factor
 from ..factors.lie_prior import LiePriorFactor, LieStatePrior
 from ..factors.lie_readings import BodyVelocityFactor, LieInterpolatedFactor, PoseReading
@@ -66,12 +66,19 @@ class LieGroupWnoa(MotionPrior):
 
     # --- its factors ------------------------------------------------------------------------------
 
+    # Its qc, residual and group were checked when it was made: its factors are made without checking them again
+    # (``of_checked``), the times and readings are checked as they come.
+
     def prior_factor(self, a: Key, b: Key, dt: float) -> Factor:
-        return LiePriorFactor.create(a, b, dt, self.qc, self.residual, group=self.group)  # [DER 11.11-11.12]
+        return LiePriorFactor.of_checked(a, b, dt, self.qc, self.residual, self.group)  # [DER 11.11-11.12]
 
     def interpolated_factor(self, inner: Factor, a: Key, b: Key, ta: float, tb: float, tau: float) -> Factor:
-        return LieInterpolatedFactor.create(
-            inner, a, b, ta, tb, tau, self.qc, self.residual, group=self.group
+        if not isinstance(inner, (PoseReading, BodyVelocityFactor)) or inner.group is not self.group:
+            raise SteamError(
+                f"inner must be a reading of a state on {self.group!r} (the reading at tau), got {inner!r}"
+            )
+        return LieInterpolatedFactor.of_checked(
+            inner, a, b, ta, tb, tau, self.qc, self.residual, self.group
         )  # [YIB Eq. 29; DER 11.16]
 
     def velocity_reading(self, key: Key, measured: NDArray, sigmas: NDArray) -> Factor:

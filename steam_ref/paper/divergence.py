@@ -2,7 +2,9 @@
 
 After each update of a stream (:mod:`steam_ref.paper.online`) two checks look at the factors that
 update added, in time proportional to them (a cost of every factor after every update would cost
-time in proportion to the whole problem, every update):
+time in proportion to the whole problem, every update), evaluated in batches of one type as a linearization
+evaluates them, without Jacobians (:func:`~steam_ref.linear.system.whitened_norms`), at estimates asked for
+once per check (a solver's ``estimates_of``: each kind's formed in one call):
 
 - **Before the update, the gate**: each new landmark reading's whitened residual ‖W e‖ at the
   prediction (the solver's estimate of the variables it holds, the front end's initial guess of the
@@ -20,40 +22,41 @@ report (``divergence``). Robust losses do not hide a reading here: the residual 
 
 from __future__ import annotations
 
-import math
 import warnings
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import DivergenceWarning
 from ..factors import BearingFactor, BearingRangeFactor, Factor, RangeFactor
+from ..linear.system import whitened_norms
 from ..motion import is_interpolated, reading_inside
-from ..variables import Key
+from ..variables import Key, Values
 
-__all__ = ["DivergenceCheck", "PLAUSIBLE_SIGMAS", "worst_fit"]
+__all__ = ["DivergenceCheck", "PLAUSIBLE_SIGMAS", "fits", "worst_fit"]
 
 PLAUSIBLE_SIGMAS = 1e3  # a whitened residual above this is beyond any plausible noise
 MAX_FINDINGS = 20  # findings kept for the result (the warnings say every one)
 
-
-def fits(factors: Sequence[Factor], value_of: Callable[[Key], NDArray]) -> list[float]:
-    """‖W e‖ of each of ``factors`` at the values ``value_of`` gives (inf when it is not finite)."""
-    out = []
-    with np.errstate(all="ignore"):
-        for f in factors:
-            w = f.whitened_error(*[value_of(k) for k in f.keys])
-            s = math.sqrt(w.dot(w))  # ‖w‖ as np.linalg.norm computes it, without its call costs
-            out.append(s if math.isfinite(s) else math.inf)
-    return out
+Estimates = Callable[[list[Key]], Mapping[Key, NDArray]]  # the estimates of the keys asked, in one call
 
 
-def worst_fit(factors: Sequence[Factor], value_of: Callable[[Key], NDArray]) -> tuple[float, Factor | None]:
-    """The largest ‖W e‖ among ``factors`` at the values ``value_of`` gives, and its factor (None: no factors)."""
-    s = fits(factors, value_of)
-    i = int(np.argmax(s)) if s else -1
-    return (s[i], factors[i]) if s else (0.0, None)
+def fits(factors: Sequence[Factor], estimates: Estimates) -> NDArray:
+    """(n,) ‖W e‖ of each of ``factors`` (inf when it is not finite) at the values ``estimates`` gives for their
+    keys, asked once for all of them: the factors evaluated in batches of one type, as a linearization evaluates
+    them without Jacobians (:func:`~steam_ref.linear.system.whitened_norms`)."""
+    if not factors:
+        return np.zeros(0)
+    keys = list(dict.fromkeys(k for f in factors for k in f.keys))
+    return whitened_norms(factors, Values.adopt(estimates(keys)))
+
+
+def worst_fit(factors: Sequence[Factor], estimates: Estimates) -> tuple[float, Factor | None]:
+    """The largest ‖W e‖ among ``factors`` at the values ``estimates`` gives, and its factor (None: no factors)."""
+    s = fits(factors, estimates)
+    i = int(np.argmax(s)) if s.size else -1
+    return (float(s[i]), factors[i]) if s.size else (0.0, None)
 
 
 def _is_landmark_reading(factor: Factor) -> bool:
@@ -87,12 +90,13 @@ class DivergenceCheck:
             self.findings.append(message)
         warnings.warn(message, DivergenceWarning, stacklevel=4)
 
-    def gate(self, factors: Sequence[Factor], value_of: Callable[[Key], NDArray], pose: int) -> None:
-        """Before the update at ``pose``: a new reading beyond any noise at the prediction is named."""
+    def gate(self, factors: Sequence[Factor], estimates: Estimates, pose: int) -> None:
+        """Before the update at ``pose``: a new reading beyond any noise at the prediction (``estimates``: the
+        values of the keys asked, in one call) is named."""
         readings = [f for f in factors if _is_landmark_reading(f)]
-        residuals = fits(readings, value_of)
-        self._absurd = {id(f) for f, r in zip(readings, residuals, strict=True) if r > self.limit}
-        s, f = (max(residuals), readings[int(np.argmax(residuals))]) if readings else (0.0, None)
+        residuals = fits(readings, estimates)
+        self._absurd = {id(readings[i]) for i in np.flatnonzero(residuals > self.limit)}
+        s, f = (float(residuals.max()), readings[int(np.argmax(residuals))]) if readings else (0.0, None)
         if f is not None and s > self.limit:
             self._found(
                 f"update at pose {pose}: {describe(f)} is {s:.3g} sigmas from the prediction, beyond any "
@@ -104,10 +108,10 @@ class DivergenceCheck:
                 )
             )
 
-    def fit(self, factors: Sequence[Factor], value_of: Callable[[Key], NDArray], pose: int) -> None:
+    def fit(self, factors: Sequence[Factor], estimates: Estimates, pose: int) -> None:
         """After the update at ``pose``: the estimate not fitting a new factor within any noise is diverging
         (the readings the gate found absurd left out: an estimate that does not follow them is right)."""
-        s, f = worst_fit([f for f in factors if id(f) not in self._absurd], value_of)
+        s, f = worst_fit([f for f in factors if id(f) not in self._absurd], estimates)
         if f is not None and s > self.limit:
             self.diverged_at = pose if self.diverged_at is None else self.diverged_at
             self._found(

@@ -26,7 +26,7 @@ from ..errors import ConvergenceWarning, SteamError
 from ..graph import FactorGraph
 from ..linear.threads import limited
 from ..trajectory import Trajectory
-from ..variables import L, Values, X
+from ..variables import Key, L, Values, X
 from . import progress
 from .converge import converge
 from .divergence import DivergenceCheck
@@ -153,11 +153,9 @@ class StreamingEstimator:
                 FactorGraph(self._pending), values, ordering="amd", relative_tolerance=tol, absolute_tolerance=tol
             ).values
         prediction = values  # the gate: new readings at the prediction; the fit: at the new estimate
-        self.divergence.gate(
-            self._pending, lambda k: prediction[k] if k in prediction else self.solver.estimate_of(k), pose
-        )
+        self.divergence.gate(self._pending, lambda keys: self._predicted(keys, prediction), pose)
         self.solver.update(self._pending, values)
-        self.divergence.fit(self._pending, self.solver.estimate_of, pose)
+        self.divergence.fit(self._pending, self.solver.estimates_of, pose)
         forgotten = (k.index for k in self.solver.forgotten() if k.symbol == "l")
         self.front.landmarks.difference_update(forgotten)  # seen again, a landmark enters anew
         if self.options.converge_at_end:  # (a lag, which forgets factors, refuses it)
@@ -173,6 +171,13 @@ class StreamingEstimator:
         self.front.rebase(self.solver.estimate_of(X(pose)))  # predict from the estimate
         self.update_steps.append(pose)
         self.update_seconds.append(time.perf_counter() - start)
+
+    def _predicted(self, keys: list[Key], prediction: Values) -> dict[Key, NDArray]:
+        """The prediction of ``keys`` before an update: a new variable's initial value, the solver's estimate
+        of one it holds (asked once for all of them)."""
+        out = self.solver.estimates_of([k for k in keys if k not in prediction])
+        out.update((k, prediction[k]) for k in keys if k in prediction)
+        return out
 
     def _converge(self) -> None:
         """Iterate the whole problem from the solver's estimate to the batch optimum

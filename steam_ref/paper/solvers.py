@@ -79,6 +79,11 @@ class OnlineSolver:
         """Current estimate of every variable; the forgotten ones read as ``past`` says (:data:`PASTS`)."""
         raise NotImplementedError
 
+    def estimates_of(self, keys: Sequence[Key], *, past: str = "lagged") -> dict[Key, NDArray]:
+        """Current estimate of each of ``keys``, as :meth:`estimate_of` reads each (a solver that forms its
+        estimates on demand forms these in one call per kind)."""
+        return {k: self.estimate_of(k, past=past) for k in keys}
+
     def forgotten(self) -> Sequence[Key]:
         """The variables the last update forgot (marginalized): none."""
         return ()
@@ -197,6 +202,12 @@ class BayesTreeSolver(OnlineSolver):
     def estimate(self, *, past: str = "lagged") -> Values:
         check_past(past)
         return self.inner.estimate()
+
+    def estimates_of(self, keys: Sequence[Key], *, past: str = "lagged") -> dict[Key, NDArray]:
+        if isinstance(self.inner, IncrementalSolver):
+            check_past(past)  # nothing forgotten: one past
+            return self.inner.estimates_of(keys)  # the stale ones formed in one call per kind
+        return super().estimates_of(keys, past=past)  # each as estimate_of reads it (in the window, or forgotten)
 
     def marginal_covariance(self, key: Key) -> NDArray:
         return self.inner.marginal_covariance(key)  # one walk down the root path
