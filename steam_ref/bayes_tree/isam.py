@@ -241,7 +241,8 @@ class IncrementalSolver:
             order = min_degree_keys(variables, state.dims, [f.keys for f in linear], theta_nf, constrained)
         # 4e. Eliminate into new cliques and attach back the orphans.   [YIB step 5, Eq. 24-25]
         with timer("eliminate"):
-            cliques, parents, owner = eliminate(order, linear, state.dims, fids + [None] * len(orphans))
+            ids, zeros = fids + [None] * len(orphans), self.params.amalgamation_zeros
+            cliques, parents, owner = eliminate(order, linear, state.dims, ids, zeros)
             new_cids = self.tree.insert_eliminated(cliques, parents, orphans, owner[len(fids) :])
         # 5. Partial back-substitution from the root, stopping below α.  [K12 Alg. 7; YIB step 6]
         with timer("backsubstitute"):

@@ -17,7 +17,7 @@ from numpy.typing import NDArray
 from ..arguments import integer, is_integer, number, replace_fields
 from ..errors import ShapeError, SteamError
 
-__all__ = ["ISAM2Params"]
+__all__ = ["ISAM2Params", "zero_fraction"]
 
 
 def _blocks(symbol: str, sizes: object) -> tuple[int, ...]:
@@ -50,6 +50,17 @@ def _threshold(value: object, name: str) -> float:
     return t
 
 
+def zero_fraction(value: object) -> float:
+    """``amalgamation_zeros`` as a float in [0, 1); SteamError naming it otherwise."""
+    try:
+        z = number("amalgamation_zeros", value)
+    except SteamError:
+        z = -1.0
+    if not 0 <= z < 1:
+        raise SteamError(f"amalgamation_zeros must be a fraction in [0, 1), got {value!r}")
+    return z
+
+
 @dataclass(frozen=True)
 class ISAM2Params:
     """How an :class:`~steam_ref.bayes_tree.IncrementalSolver` relinearizes and back-substitutes.
@@ -68,6 +79,9 @@ class ISAM2Params:
     # held the blocks as separate variables (the paper's scripts hold a state as pose P and velocity
     # V: {'x': (3, 3)}); None: every variable is one block
     relinearize_blocks: Mapping[str, tuple[int, ...]] | None = None
+    # relaxed amalgamation [AG89]: merge a clique into its parent while the merged clique holds at most this
+    # fraction of explicit zeros in its rows of R (CHOLMOD's zrelax); 0: the cliques of [K12 Alg. 2], unmerged
+    amalgamation_zeros: float = 0.0
 
     def __post_init__(self) -> None:
         t = self.relinearize_threshold
@@ -84,6 +98,7 @@ class ISAM2Params:
             raise SteamError(f"relinearize_skip must be a positive integer, got {skip!r}")
         object.__setattr__(self, "relinearize_skip", int(skip))
         object.__setattr__(self, "wildfire_threshold", _threshold(self.wildfire_threshold, "wildfire_threshold"))
+        object.__setattr__(self, "amalgamation_zeros", zero_fraction(self.amalgamation_zeros))
         if self.relinearize_blocks is not None:
             if not isinstance(self.relinearize_blocks, Mapping):
                 raise SteamError(

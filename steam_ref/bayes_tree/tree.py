@@ -29,6 +29,7 @@ from ..linear.conditional import assemble_sqrt_information, gather, underdetermi
 from ..linear.ordering import Ordering
 from ..linear.system import GaussianFactor
 from ..variables import Key, key_list
+from .params import zero_fraction
 from .symbolic import CliqueTree, build_cliques
 
 __all__ = ["Clique", "BayesTree", "eliminate", "eliminate_clique", "factor_dims"]
@@ -115,16 +116,17 @@ def eliminate(
     factors: Sequence[GaussianFactor],
     dims: Mapping[Key, int] | None = None,
     factor_ids: Sequence[int | None] | None = None,
+    amalgamation_zeros: float = 0.0,
 ) -> tuple[list[Clique], list[int | None], list[int]]:
     """Multifrontal elimination of linear factors in ``order``.  [YIB Eq. 24-25, K12 Alg. 1-2]
 
     Returns ``(cliques, parents, owner)``: the cliques children first, each one's parent index
     (None for a root), and for each input factor the index of the clique that eliminated it.
     ``factor_ids`` (None entries for cached marginal factors) label the factors stored in each
-    clique's ``factors``.
+    clique's ``factors``. ``amalgamation_zeros`` > 0 merges cliques (:func:`~.symbolic.build_cliques`).
     """
     dims = factor_dims(factors) if dims is None else dims
-    symbolic = build_cliques(order, [f.keys for f in factors])
+    symbolic = build_cliques(order, [f.keys for f in factors], dims, amalgamation_zeros)
     incoming: list[list[GaussianFactor]] = [[] for _ in symbolic]  # marginal factors from children
     cliques, owner = [], [0] * len(factors)
     for i, sc in enumerate(symbolic):
@@ -143,8 +145,11 @@ class BayesTree(CliqueTree[Clique]):
     """A Bayes tree of Gaussian conditionals.  [YIB Sec. III-A, K11]"""
 
     @classmethod
-    def from_factors(cls, factors: Sequence[GaussianFactor], ordering: Ordering | Sequence[Key]) -> BayesTree:
-        """Eliminate linear factors in the given order (an Ordering or a list of keys) into a new tree."""
+    def from_factors(
+        cls, factors: Sequence[GaussianFactor], ordering: Ordering | Sequence[Key], amalgamation_zeros: float = 0.0
+    ) -> BayesTree:
+        """Eliminate linear factors in the given order (an Ordering or a list of keys) into a new tree, its cliques
+        merged up to ``amalgamation_zeros`` (:class:`~.params.ISAM2Params`)."""
         order = ordering.keys if isinstance(ordering, Ordering) else tuple(key_list("ordering", ordering))
         factors = list(factors)
         for i, f in enumerate(factors):
@@ -158,8 +163,9 @@ class BayesTree(CliqueTree[Clique]):
             raise UnderdeterminedError(
                 f"variable {free!r} of the ordering is named by no factor, so nothing constrains it"
             )
+        zeros = zero_fraction(amalgamation_zeros)
         tree = cls()
-        cliques, parents, _ = eliminate(order, factors)
+        cliques, parents, _ = eliminate(order, factors, amalgamation_zeros=zeros)
         tree.insert_eliminated(cliques, parents)
         return tree
 
