@@ -16,6 +16,7 @@ from the tree are computed in :mod:`steam_ref.covariance`.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
@@ -73,6 +74,14 @@ def factor_dims(factors: Sequence[GaussianFactor]) -> dict[Key, int]:
     return {k: block.shape[1] for f in factors for k, block in zip(f.keys, f.blocks, strict=True)}
 
 
+@functools.cache
+def _below_diagonal(rows: int, cols: int) -> NDArray:
+    """(rows, cols) bool, True below the diagonal (read-only: one per shape, shared)."""
+    mask = np.tri(rows, cols, -1, dtype=bool)
+    mask.flags.writeable = False
+    return mask
+
+
 def eliminate_clique(
     frontals: tuple[Key, ...],
     separator: tuple[Key, ...],
@@ -86,9 +95,10 @@ def eliminate_clique(
     free = M.shape[0] if M.shape[0] < nf else None  # fewer rows than frontal unknowns
     if free is None:
         qr, _, _, _ = lapack.dgeqrf(M)  # Q R = [A_F A_S | b]: Gram-Schmidt on the columns
-        R = np.triu(qr[: min(M.shape[0], ncol)])
-        small = np.flatnonzero(np.abs(np.diagonal(R[:nf, :nf])) <= RANK_TOLERANCE * max(np.abs(M).max(), 1.0))
-        free = int(small[0]) if len(small) else None
+        R = qr[: min(M.shape[0], ncol)]
+        R[_below_diagonal(*R.shape)] = 0.0  # np.triu in place, its mask made once per shape
+        small = np.abs(R.diagonal()[:nf]) <= RANK_TOLERANCE * max(np.abs(M).max(), 1.0)
+        free = int(small.argmax()) if small.any() else None  # the first vanishing pivot
     if free is not None:  # a vanishing pivot: name the variable and why
         raise underdetermined(M, frontals, dims, free)
     ns = ncol - 1 - nf
