@@ -49,8 +49,8 @@ def backsubstitute(state: SolverState, new_cliques: Collection[int], alpha: floa
         sep = delta[on[0]] if len(on) == 1 else np.concatenate([delta[k] for k in on] or [np.zeros(0)])
         x = clique.solve(sep)  # [YIB Eq. 25]
         frontals = clique.frontals
-        one = len(frontals) == 1  # the usual clique: one frontal, its δ is x whole
-        for k, xk in ((frontals[0], x),) if one else zip(frontals, clique.split_frontals(x), strict=True):
+        parts = ((frontals[0], x),) if len(frontals) == 1 else zip(frontals, clique.split_frontals(x), strict=True)
+        for k, xk in parts:  # the usual clique: one frontal, the whole x
             old = delta[k]
             if alpha == 0 or max(map(abs, (xk - old).tolist())) >= alpha:  # step 3: changed by at least α
                 changed.add(k)
@@ -61,10 +61,7 @@ def backsubstitute(state: SolverState, new_cliques: Collection[int], alpha: floa
                 candidates[k] = None  # the transaction keeps the candidates whole: no record needed
             elif k in candidates:
                 del candidates[k]
-        if one:
-            updated.append(frontals[0])
-        else:
-            updated.extend(frontals)
+        updated.extend(frontals)
         for ch in children[c]:
             if ch in new_cliques or not changed.isdisjoint(cliques[ch].separator):
                 stack.append(ch)

@@ -249,19 +249,11 @@ class IncrementalSolver:
             updated, visited = backsubstitute(state, set(new_cids), self.params.wildfire_threshold)
         state.tree_nnz += tree_nnz(cliques) - tree_nnz(removed.values())
         return UpdateReport(
-            step=state.steps,
-            removed_cliques=tuple(removed),
-            new_cliques=tuple(new_cids),
-            orphans=tuple(orphans),
-            relinearized=tuple(theta_rl),
-            reeliminated=tuple(order),
-            updated=tuple(updated),
-            linearized_factors=n_linearized,
-            backsubstituted_cliques=visited,
-            time_s=timer.total(),
-            timings=timer.seconds,
-            tree_nnz=state.tree_nnz,
-        )
+            step=state.steps, removed_cliques=tuple(removed), new_cliques=tuple(new_cids), orphans=tuple(orphans),
+            relinearized=tuple(theta_rl), reeliminated=tuple(order), updated=tuple(updated),
+            linearized_factors=n_linearized, backsubstituted_cliques=visited, time_s=timer.total(),
+            timings=timer.seconds, tree_nnz=state.tree_nnz,
+        )  # fmt: skip
 
     def _checked_update(
         self, new_factors: list[Factor], new_values: Mapping[Key, NDArray]

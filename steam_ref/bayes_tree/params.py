@@ -16,8 +16,9 @@ from numpy.typing import NDArray
 
 from ..arguments import integer, is_integer, number, replace_fields
 from ..errors import ShapeError, SteamError
+from ..linear.amalgamation import zero_fraction
 
-__all__ = ["ISAM2Params", "zero_fraction"]
+__all__ = ["ISAM2Params"]
 
 
 def _blocks(symbol: str, sizes: object) -> tuple[int, ...]:
@@ -50,17 +51,6 @@ def _threshold(value: object, name: str) -> float:
     return t
 
 
-def zero_fraction(value: object) -> float:
-    """``amalgamation_zeros`` as a float in [0, 1); SteamError naming it otherwise."""
-    try:
-        z = number("amalgamation_zeros", value)
-    except SteamError:
-        z = -1.0
-    if not 0 <= z < 1:
-        raise SteamError(f"amalgamation_zeros must be a fraction in [0, 1), got {value!r}")
-    return z
-
-
 @dataclass(frozen=True)
 class ISAM2Params:
     """How an :class:`~steam_ref.bayes_tree.IncrementalSolver` relinearizes and back-substitutes.
@@ -79,8 +69,8 @@ class ISAM2Params:
     # held the blocks as separate variables (the paper's scripts hold a state as pose P and velocity
     # V: {'x': (3, 3)}); None: every variable is one block
     relinearize_blocks: Mapping[str, tuple[int, ...]] | None = None
-    # relaxed amalgamation [AG89]: merge a clique into its parent while the merged clique holds at most this
-    # fraction of explicit zeros in its rows of R (CHOLMOD's zrelax); 0: the cliques of [K12 Alg. 2], unmerged
+    # merge a clique into its parent while the merged clique's rows of R hold at most this fraction of explicit
+    # zeros (relaxed amalgamation [AG89], CHOLMOD's zrelax: linear/amalgamation.py); 0: [K12 Alg. 2]'s cliques
     amalgamation_zeros: float = 0.0
 
     def __post_init__(self) -> None:

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 from typing import Generic, Protocol, TypeVar
 
 from ..errors import SteamError, UnknownVariableError
+from ..linear.amalgamation import amalgamate
 from .dot import tree_dot
 from .undo import UndoLog
 
@@ -78,7 +79,7 @@ def build_cliques(
     Conditionals are visited in reverse elimination order. P(θᵢ | sᵢ) joins the clique C of its
     parent (the clique holding sᵢ's first variable as a frontal) when sᵢ equals all of C's
     variables; otherwise it starts a new child clique of C (or a new root when sᵢ is empty).
-    ``zeros`` > 0 then merges cliques into their parents (:func:`_amalgamate`; ``dims``: each variable's size).
+    ``zeros`` > 0: cliques then merge into their parents (``dims``: :mod:`steam_ref.linear.amalgamation`).
     """
     separators, owner = symbolic_elimination(order, factor_keys)
     clique_of: dict = {}
@@ -99,42 +100,18 @@ def build_cliques(
         variables.append(set(sep) | {v})
         seps.append(sep)
         parents.append(parent)
-    home = _amalgamate(frontals, seps, parents, dims, zeros) if zeros else range(len(frontals))
-    kept = [c for c in range(len(frontals)) if home[c] == c]  # parents first
-    n, index = len(kept), {c: i for i, c in enumerate(kept)}
-    owned: list[list[int]] = [[] for _ in range(n)]
+    home = amalgamate(frontals, seps, parents, dims, zeros) if zeros else range(len(frontals))  # merged [AG89]
+    kept = [c for c, h in enumerate(home) if h == c]  # made parents first; numbered so children come first
+    index = {c: len(kept) - 1 - i for i, c in enumerate(kept)}
+    owned: list[list[int]] = [[] for _ in kept]
     for j, v in enumerate(owner):
         owned[index[home[clique_of[v]]]].append(j)
-    return [  # reversed, so children come first
+    return [
         SymbolicClique(
-            tuple(reversed(frontals[c])), seps[c], None if p is None else n - 1 - index[home[p]], tuple(owned[i])
+            tuple(reversed(frontals[c])), seps[c], None if p is None else index[home[p]], tuple(owned[index[c]])
         )
-        for i, (c, p) in reversed(list(enumerate((c, parents[c]) for c in kept)))
+        for c, p in ((c, parents[c]) for c in reversed(kept))
     ]
-
-
-def _amalgamate(frontals: list[list], seps: list[tuple], parents: list, dims: Mapping | None, zeros: float) -> list:
-    """Relaxed amalgamation [AG89]: merge each clique into its parent while the merged clique's dense rows of R,
-    n_f(n_f + 1)/2 + n_f·n_s entries (n_f, n_s its frontal and separator sizes), hold at most the fraction ``zeros``
-    of entries that are 0 in the unmerged cliques (CHOLMOD's ``zrelax``). Cliques are given parents first; each is
-    tried once, after its children, so a merged clique may merge on up. Moves the merged frontals into the parent's
-    list (child's first in elimination order); returns each clique's home, the kept clique it is now part of."""
-    size = (lambda vs: len(vs)) if dims is None else (lambda vs: sum(dims[v] for v in vs))
-    nf, ns = [size(f) for f in frontals], [size(s) for s in seps]
-    nnz = [f * (f + 1) // 2 + f * s for f, s in zip(nf, ns, strict=True)]  # the unmerged cliques' entries
-    into = list(range(len(frontals)))
-    for c in reversed(range(len(frontals))):  # a child is made after its parent
-        p = parents[c]
-        if p is not None:
-            f = nf[c] + nf[p]
-            entries = f * (f + 1) // 2 + f * ns[p]  # the merged clique: its separator is the parent's
-            if entries - nnz[c] - nnz[p] <= zeros * entries:
-                into[c], nf[p], nnz[p] = p, f, nnz[p] + nnz[c]
-                frontals[p].extend(frontals[c])  # reverse elimination order: the child's frontals go first
-    home = into
-    for c in range(len(into)):  # parents first: a parent's home is known
-        home[c] = c if into[c] == c else home[into[c]]
-    return home
 
 
 class _HasVariables(Protocol):

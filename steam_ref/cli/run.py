@@ -14,10 +14,10 @@ import numpy as np
 
 from ..arguments import parse_decimal
 from ..bayes_tree import ISAM2Params
-from ..bayes_tree.params import zero_fraction
 from ..datasets import generate_synthetic
 from ..errors import SteamError
 from ..evaluate import trajectory_figures
+from ..linear.amalgamation import zero_fraction
 from ..motion import MOTION_PRIORS
 from ..paper.online import StreamingEstimator
 from ..paper.options import StreamOptions
@@ -213,7 +213,7 @@ def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
 
 
 def _zero_fraction(text: str) -> float:
-    """An argparse type: a number in [0, 1) (:func:`~steam_ref.bayes_tree.params.zero_fraction`)."""
+    """An argparse type: a number in [0, 1) (:func:`~steam_ref.linear.amalgamation.zero_fraction`)."""
     try:
         return zero_fraction(parse_decimal(text))
     except SteamError:
