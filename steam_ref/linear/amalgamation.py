@@ -9,8 +9,7 @@ per-clique costs, for some arithmetic on zeros. The merged clique's conditional 
 stacked, so R's product RᵀR = 𝓘 and the solution are the same, to rounding [YIB Eq. 21, 25]. With z = 0 nothing
 merges: a clique the rule of [K12 Alg. 2] leaves apart always adds a zero.
 
-C. Ashcraft and R. Grimes, "The influence of relaxed supernode partitions on the multifrontal method",
-ACM Trans. Math. Softw. 15(4), 1989.
+[AG89]: docs/references.md.
 """
 
 from __future__ import annotations
