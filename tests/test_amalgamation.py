@@ -231,19 +231,25 @@ def run_cli(*args: str) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, "-m", "steam_ref", *args], capture_output=True, text=True, timeout=300)
 
 
-def test_the_run_option_gives_the_librarys_merged_run():
+def test_the_run_option_gives_the_librarys_merged_run(tmp_path):
     from steam_ref.datasets import generate_synthetic
     from steam_ref.paper.online import run_online
     from steam_ref.paper.options import StreamOptions
     from steam_ref.paper.presets import PaperSetup
 
-    out = run_cli("run", "--steps", "60", "--amalgamation-zeros", "0.4", "--json")
-    assert out.returncode == 0, out.stderr
+    rmse, dots = {}, {}
+    for z in ("0.4", "0"):
+        dot = tmp_path / f"z{z}.dot"
+        out = run_cli("run", "--steps", "60", "--amalgamation-zeros", z, "--json", "--tree-dot", str(dot))
+        assert out.returncode == 0, out.stderr
+        rmse[z], dots[z] = json.loads(out.stdout)["rmse_m"], dot.read_text()
     setup, data = PaperSetup.synthetic(), generate_synthetic(n_steps=60, n_landmarks=12, seed=0)  # --steps 60's task
     merged = run_online(data, setup.with_isam2(amalgamation_zeros=0.4), StreamOptions())
-    plain = run_online(data, setup, StreamOptions())
-    assert json.loads(out.stdout)["rmse_m"] == round(merged.rmse_m, 6)
-    assert abs(merged.rmse_m - plain.rmse_m) < 1e-3  # within what the wildfire threshold lets through
+    assert rmse["0.4"] == round(merged.rmse_m, 6)
+    assert abs(rmse["0.4"] - rmse["0"]) < 1e-3  # within what the wildfire threshold lets through
+    # the flag reaches the tree: fewer cliques, some holding several states over a separator
+    assert dots["0.4"].count("[label=") < dots["0"].count("[label=")
+    assert re.search(r'label="x\d+, x\d+[^"]* : ', dots["0.4"])
 
 
 @pytest.mark.parametrize("bad", ["1", "-0.1", "nan", "abc"])

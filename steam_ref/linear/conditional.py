@@ -54,7 +54,7 @@ class Conditional(Protocol):
 
 
 RANK_TOLERANCE = 1e-12  # a pivot |Rᵢᵢ| below this times the largest |entry| means a free direction
-_below_diagonal = functools.cache(functools.partial(np.tri, k=-1, dtype=bool))  # (rows, cols): np.triu's mask, per shape
+_below_diagonal = functools.cache(functools.partial(np.tri, k=-1, dtype=bool))  # (rows, cols): np.triu's mask
 
 
 @dataclass(frozen=True, eq=False)
