@@ -38,17 +38,19 @@ def backsubstitute(state: SolverState, new_cliques: Collection[int], alpha: floa
     record = state.log.old_values(delta).append  # each δ it replaces, for the transaction's undo
     changed: set[Key] = set()
     updated: list[Key] = []
+    cliques, children = tree.cliques, tree.children
     stack = [c for c in new_cliques if tree.parent[c] is None]
     visited = 0
     while stack:
         c = stack.pop()
-        clique = tree.cliques[c]
+        clique = cliques[c]
         visited += 1
         on = clique.separator  # one variable, the usual case, needs no copy; a root has none
         sep = delta[on[0]] if len(on) == 1 else np.concatenate([delta[k] for k in on] or [np.zeros(0)])
         x = clique.solve(sep)  # [YIB Eq. 25]
         frontals = clique.frontals
-        for k, xk in zip(frontals, (x,) if len(frontals) == 1 else clique.split_frontals(x), strict=True):
+        parts = ((frontals[0], x),) if len(frontals) == 1 else zip(frontals, clique.split_frontals(x), strict=True)
+        for k, xk in parts:  # the usual clique: one frontal, the whole x
             old = delta[k]
             if alpha == 0 or max(map(abs, (xk - old).tolist())) >= alpha:  # step 3: changed by at least α
                 changed.add(k)
@@ -60,7 +62,7 @@ def backsubstitute(state: SolverState, new_cliques: Collection[int], alpha: floa
             elif k in candidates:
                 del candidates[k]
         updated.extend(frontals)
-        for ch in tree.children[c]:
-            if ch in new_cliques or not changed.isdisjoint(tree.cliques[ch].separator):
+        for ch in children[c]:
+            if ch in new_cliques or not changed.isdisjoint(cliques[ch].separator):
                 stack.append(ch)
     return updated, visited

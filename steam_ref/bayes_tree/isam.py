@@ -244,26 +244,19 @@ class IncrementalSolver:
             order = min_degree_keys(variables, state.dims, [f.keys for f in linear], theta_nf, constrained)
         # 4e. Eliminate into new cliques and attach back the orphans.   [YIB step 5, Eq. 24-25]
         with timer("eliminate"):
-            cliques, parents, owner = eliminate(order, linear, state.dims, fids + [None] * len(orphans))
+            ids, zeros = fids + [None] * len(orphans), self.params.amalgamation_zeros
+            cliques, parents, owner = eliminate(order, linear, state.dims, ids, zeros)
             new_cids = self.tree.insert_eliminated(cliques, parents, orphans, owner[len(fids) :])
         # 5. Partial back-substitution from the root, stopping below α.  [K12 Alg. 7; YIB step 6]
         with timer("backsubstitute"):
             updated, visited = backsubstitute(state, set(new_cids), self.params.wildfire_threshold)
         state.tree_nnz += tree_nnz(cliques) - tree_nnz(removed.values())
         return UpdateReport(
-            step=state.steps,
-            removed_cliques=tuple(removed),
-            new_cliques=tuple(new_cids),
-            orphans=tuple(orphans),
-            relinearized=tuple(theta_rl),
-            reeliminated=tuple(order),
-            updated=tuple(updated),
-            linearized_factors=n_linearized,
-            backsubstituted_cliques=visited,
-            time_s=timer.total(),
-            timings=timer.seconds,
-            tree_nnz=state.tree_nnz,
-        )
+            step=state.steps, removed_cliques=tuple(removed), new_cliques=tuple(new_cids), orphans=tuple(orphans),
+            relinearized=tuple(theta_rl), reeliminated=tuple(order), updated=tuple(updated),
+            linearized_factors=n_linearized, backsubstituted_cliques=visited, time_s=timer.total(),
+            timings=timer.seconds, tree_nnz=state.tree_nnz,
+        )  # fmt: skip
 
     def _checked_update(
         self, new_factors: list[Factor], new_values: Mapping[Key, NDArray]

@@ -16,6 +16,7 @@ from numpy.typing import NDArray
 
 from ..arguments import integer, is_integer, number, replace_fields
 from ..errors import ShapeError, SteamError
+from ..linear.amalgamation import zero_fraction
 
 __all__ = ["ISAM2Params"]
 
@@ -68,6 +69,9 @@ class ISAM2Params:
     # held the blocks as separate variables (the paper's scripts hold a state as pose P and velocity
     # V: {'x': (3, 3)}); None: every variable is one block
     relinearize_blocks: Mapping[str, tuple[int, ...]] | None = None
+    # merge a clique into its parent while the merged clique's rows of R hold at most this fraction of explicit
+    # zeros (relaxed amalgamation [AG89], CHOLMOD's zrelax: linear/amalgamation.py); 0: [K12 Alg. 2]'s cliques
+    amalgamation_zeros: float = 0.0
 
     def __post_init__(self) -> None:
         t = self.relinearize_threshold
@@ -84,6 +88,7 @@ class ISAM2Params:
             raise SteamError(f"relinearize_skip must be a positive integer, got {skip!r}")
         object.__setattr__(self, "relinearize_skip", int(skip))
         object.__setattr__(self, "wildfire_threshold", _threshold(self.wildfire_threshold, "wildfire_threshold"))
+        object.__setattr__(self, "amalgamation_zeros", zero_fraction(self.amalgamation_zeros))
         if self.relinearize_blocks is not None:
             if not isinstance(self.relinearize_blocks, Mapping):
                 raise SteamError(

@@ -13,11 +13,12 @@ touches; the elimination order comes from :mod:`steam_ref.linear.ordering`.
 
 from __future__ import annotations
 
-from collections.abc import Hashable, Iterable, Sequence
+from collections.abc import Hashable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Generic, Protocol, TypeVar
 
 from ..errors import SteamError, UnknownVariableError
+from ..linear.amalgamation import amalgamate
 from .dot import tree_dot
 from .undo import UndoLog
 
@@ -70,12 +71,15 @@ def symbolic_elimination(order: Sequence[V], factor_keys: Sequence[Sequence[V]])
     return separators, owner
 
 
-def build_cliques(order: Sequence[V], factor_keys: Sequence[Sequence[V]]) -> list[SymbolicClique]:
+def build_cliques(
+    order: Sequence[V], factor_keys: Sequence[Sequence[V]], dims: Mapping | None = None, zeros: float = 0.0
+) -> list[SymbolicClique]:
     """Cliques of the Bayes tree of ``order``, children before parents.  [K12 Alg. 2]
 
     Conditionals are visited in reverse elimination order. P(θᵢ | sᵢ) joins the clique C of its
     parent (the clique holding sᵢ's first variable as a frontal) when sᵢ equals all of C's
     variables; otherwise it starts a new child clique of C (or a new root when sᵢ is empty).
+    ``zeros`` > 0: cliques then merge into their parents (``dims``: :mod:`steam_ref.linear.amalgamation`).
     """
     separators, owner = symbolic_elimination(order, factor_keys)
     clique_of: dict = {}
@@ -96,13 +100,17 @@ def build_cliques(order: Sequence[V], factor_keys: Sequence[Sequence[V]]) -> lis
         variables.append(set(sep) | {v})
         seps.append(sep)
         parents.append(parent)
-    n = len(frontals)  # cliques were made parents first; reverse so children come first
-    owned: list[list[int]] = [[] for _ in range(n)]
+    home = amalgamate(frontals, seps, parents, dims, zeros) if zeros else range(len(frontals))  # merged [AG89]
+    kept = [c for c, h in enumerate(home) if h == c]  # made parents first; numbered so children come first
+    index = {c: len(kept) - 1 - i for i, c in enumerate(kept)}
+    owned: list[list[int]] = [[] for _ in kept]
     for j, v in enumerate(owner):
-        owned[clique_of[v]].append(j)
+        owned[index[home[clique_of[v]]]].append(j)
     return [
-        SymbolicClique(tuple(reversed(frontals[c])), seps[c], None if p is None else n - 1 - p, tuple(owned[c]))
-        for c, p in reversed(list(enumerate(parents)))
+        SymbolicClique(
+            tuple(reversed(frontals[c])), seps[c], None if p is None else index[home[p]], tuple(owned[index[c]])
+        )
+        for c, p in ((c, parents[c]) for c in reversed(kept))
     ]
 
 

@@ -1,31 +1,23 @@
-"""The numeric Bayes tree: cliques of Gaussian conditionals, elimination and back-substitution.
+"""The numeric Bayes tree: multifrontal elimination into cliques, and back-substitution.
 
-Eliminating the frontal variables F of a clique from the factors adjacent to them [YIB Eq. 24],
-
-    f(F, S) ∝ exp(-½ ‖A_F δ_F + A_S δ_S - b‖²),
-
-is one dense QR of the small gathered block [A_F A_S | b] = Q [[R, S, d], [0, A', b']]. The top
-rows give the conditional P(F | S) ∝ exp(-½ ‖R δ_F + S δ_S - d‖²) (Eq. 25 for several variables at
-once: R⁻¹S is the paper's rᵀ, R⁻¹d its d), and the rows below give the new factor on the
-separator, f(S) ∝ exp(-½ ‖A' δ_S - b'‖²), which is passed to the parent clique and cached, so an
-incremental update can reuse it when this clique's subtree is orphaned [K12 Sec. 4]. Stacking the
-conditionals' rows in elimination order gives the upper-triangular R of A = QR, with RᵀR = AᵀA = 𝓘
-[YIB Eq. 11, 21]. The solution is found from the root down: δ_F = R⁻¹(d - S δ_S). Covariances
-from the tree are computed in :mod:`steam_ref.covariance`.
+Each clique is a Gaussian conditional P(F | S) ∝ exp(-½ ‖R δ_F + S δ_S - d‖²), eliminated from the factors adjacent
+to its frontal variables by one dense QR (:func:`~steam_ref.linear.conditional.eliminate_clique`, [YIB Eq. 24-25]),
+which also leaves the factor f(S) on its separator: it is passed to the parent clique and cached, so an incremental
+update can reuse it when this clique's subtree is orphaned [K12 Sec. 4]. Stacking the conditionals' rows in
+elimination order gives the upper-triangular R of A = QR, with RᵀR = AᵀA = 𝓘 [YIB Eq. 11, 21]. The solution is
+found from the root down: δ_F = R⁻¹(d - S δ_S). Covariances from the tree are computed in :mod:`steam_ref.covariance`.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
-from scipy.linalg import lapack
 
 from ..errors import SteamError, UnderdeterminedError
-from ..linear.conditional import assemble_sqrt_information, gather, underdetermined
+from ..linear.conditional import Clique, assemble_sqrt_information, eliminate_clique
 from ..linear.ordering import Ordering
 from ..linear.system import GaussianFactor
 from ..variables import Key, key_list
@@ -33,81 +25,10 @@ from .symbolic import CliqueTree, build_cliques
 
 __all__ = ["Clique", "BayesTree", "eliminate", "eliminate_clique", "factor_dims"]
 
-RANK_TOLERANCE = 1e-12  # a pivot |Rᵢᵢ| below this times the largest |entry| means a free direction
-
-
-@dataclass(frozen=True, eq=False)
-class Clique:
-    """P(F | S) ∝ exp(-½ ‖R δ_F + S δ_S - d‖²), and the factor on S its elimination left.  [YIB Eq. 25]"""
-
-    frontals: tuple[Key, ...]  # F, eliminated here, in elimination order
-    separator: tuple[Key, ...]  # S, shared with the parent clique, in elimination order
-    frontal_dims: tuple[int, ...]  # size of each frontal variable
-    separator_dims: tuple[int, ...]  # size of each separator variable
-    R: NDArray  # (n_f, n_f) upper triangular
-    S: NDArray  # (n_f, n_s)
-    d: NDArray  # (n_f,)
-    marginal: GaussianFactor  # f(S) = ‖A' δ_S - b'‖², A' (k, n_s) with k ≤ n_s  [YIB Eq. 24]
-    factors: tuple[int, ...] = ()  # ids of the original (nonlinear) factors eliminated here
-
-    def solve(self, separator_values: NDArray) -> NDArray:
-        """δ_F = R⁻¹(d - S δ_S) for the stacked separator values (n_s,); returns (n_f,).  [YIB Eq. 25]"""
-        rhs = self.d - self.S.dot(separator_values) if self.S.shape[1] else self.d  # .dot: @'s call costs more
-        x, info = lapack.dtrtrs(self.R, rhs)
-        if info != 0:
-            raise SteamError(f"singular conditional in the clique of {self.frontals}")
-        return x
-
-    def split_frontals(self, x: NDArray) -> list[NDArray]:
-        """A stacked frontal vector (n_f,) as one array per frontal variable."""
-        out, o = [], 0
-        for dim in self.frontal_dims:
-            out.append(x[o : o + dim])
-            o += dim
-        return out
-
 
 def factor_dims(factors: Sequence[GaussianFactor]) -> dict[Key, int]:
     """Size of each variable, read off the factors' blocks."""
     return {k: block.shape[1] for f in factors for k, block in zip(f.keys, f.blocks, strict=True)}
-
-
-def eliminate_clique(
-    frontals: tuple[Key, ...],
-    separator: tuple[Key, ...],
-    dims: Mapping[Key, int],
-    factors: Sequence[GaussianFactor],
-    factor_ids: tuple[int, ...] = (),
-) -> Clique:
-    """Eliminate ``frontals`` from the adjacent ``factors`` by one dense QR.  [YIB Eq. 24-25]"""
-    M = gather(frontals + separator, dims, factors)
-    nf, ncol = sum(dims[k] for k in frontals), M.shape[1]
-    free = M.shape[0] if M.shape[0] < nf else None  # fewer rows than frontal unknowns
-    if free is None:
-        qr, _, _, _ = lapack.dgeqrf(M)  # Q R = [A_F A_S | b]: Gram-Schmidt on the columns
-        R = np.triu(qr[: min(M.shape[0], ncol)])
-        small = np.flatnonzero(np.abs(np.diagonal(R[:nf, :nf])) <= RANK_TOLERANCE * max(np.abs(M).max(), 1.0))
-        free = int(small[0]) if len(small) else None
-    if free is not None:  # a vanishing pivot: name the variable and why
-        raise underdetermined(M, frontals, dims, free)
-    ns = ncol - 1 - nf
-    below = R[nf : nf + ns, nf:].copy()  # f(S): the rows left after eliminating F  [YIB Eq. 24]
-    blocks, o = [], 0
-    for k in separator:
-        blocks.append(below[:, o : o + dims[k]])
-        o += dims[k]
-    marginal = GaussianFactor(separator, tuple(blocks), below[:, ns])
-    return Clique(
-        frontals,
-        separator,
-        tuple(dims[k] for k in frontals),
-        tuple(dims[k] for k in separator),
-        np.asfortranarray(R[:nf, :nf]),
-        np.ascontiguousarray(R[:nf, nf : ncol - 1]),
-        R[:nf, ncol - 1].copy(),
-        marginal,
-        tuple(factor_ids),
-    )
 
 
 def eliminate(
@@ -115,16 +36,17 @@ def eliminate(
     factors: Sequence[GaussianFactor],
     dims: Mapping[Key, int] | None = None,
     factor_ids: Sequence[int | None] | None = None,
+    amalgamation_zeros: float = 0.0,
 ) -> tuple[list[Clique], list[int | None], list[int]]:
     """Multifrontal elimination of linear factors in ``order``.  [YIB Eq. 24-25, K12 Alg. 1-2]
 
     Returns ``(cliques, parents, owner)``: the cliques children first, each one's parent index
     (None for a root), and for each input factor the index of the clique that eliminated it.
     ``factor_ids`` (None entries for cached marginal factors) label the factors stored in each
-    clique's ``factors``.
+    clique's ``factors``. ``amalgamation_zeros`` > 0 merges cliques (:func:`~.symbolic.build_cliques`).
     """
     dims = factor_dims(factors) if dims is None else dims
-    symbolic = build_cliques(order, [f.keys for f in factors])
+    symbolic = build_cliques(order, [f.keys for f in factors], dims, amalgamation_zeros)
     incoming: list[list[GaussianFactor]] = [[] for _ in symbolic]  # marginal factors from children
     cliques, owner = [], [0] * len(factors)
     for i, sc in enumerate(symbolic):

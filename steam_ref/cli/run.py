@@ -12,10 +12,12 @@ from pathlib import Path
 
 import numpy as np
 
+from ..arguments import parse_decimal
 from ..bayes_tree import ISAM2Params
 from ..datasets import generate_synthetic
 from ..errors import SteamError
 from ..evaluate import trajectory_figures
+from ..linear.amalgamation import zero_fraction
 from ..motion import MOTION_PRIORS
 from ..paper.online import StreamingEstimator
 from ..paper.options import StreamOptions
@@ -154,6 +156,15 @@ def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
         help=f"BTGP: check relinearization every N-th update (default: the preset's; GTSAM's is {ISAM2Params.relinearize_skip})",
     )
     parser.add_argument(
+        "--amalgamation-zeros",
+        type=_zero_fraction,
+        default=None,
+        metavar="Z",
+        help="BTGP: merge a clique into its parent while the merged clique's rows of R hold at most this fraction of "
+        "explicit zeros, 0 <= Z < 1 (relaxed amalgamation: fewer, larger cliques; default: the preset's, "
+        f"{ISAM2Params.amalgamation_zeros}; docs/bayes_tree.md)",
+    )
+    parser.add_argument(
         "--max-poses", type=number(int, 2, strict=False), default=None, help="process only the first N poses"
     )
     parser.add_argument(
@@ -201,6 +212,14 @@ def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
     return parser
 
 
+def _zero_fraction(text: str) -> float:
+    """An argparse type: a number in [0, 1) (:func:`~steam_ref.linear.amalgamation.zero_fraction`)."""
+    try:
+        return zero_fraction(parse_decimal(text))
+    except SteamError:
+        raise argparse.ArgumentTypeError(f"expected a fraction >= 0 and < 1, got {text!r}") from None
+
+
 def run(args: argparse.Namespace) -> int:
     """Stream the data set, write the files asked for, print the figures."""
     check_output(args.save_estimates, ".npz", "--save-estimates")
@@ -225,7 +244,11 @@ def run(args: argparse.Namespace) -> int:
             takers = " or ".join(f"--prior {p}" for p, choice in MOTION_PRIORS.items() if name in choice.options)
             raise SteamError(f"--{name.replace('_', '-')} applies to {takers} only, not --prior {prior}")
     setup = setup.replace(qc=args.qc_scale * setup.qc, **{k: v for k, v in given.items() if v is not None})
-    isam2 = {"relinearize_threshold": args.relinearize_threshold, "relinearize_skip": args.relinearize_skip}
+    isam2 = {
+        "relinearize_threshold": args.relinearize_threshold,
+        "relinearize_skip": args.relinearize_skip,
+        "amalgamation_zeros": args.amalgamation_zeros,
+    }
     if any(v is not None for v in isam2.values()):  # only what was given: the preset owns its iSAM2 settings
         setup = setup.with_isam2(**{k: v for k, v in isam2.items() if v is not None})
     if args.every is not None:

@@ -156,7 +156,9 @@ def bayes_tree(inputs: Mapping) -> dict:
 
 
 def _isam2(inputs: Mapping) -> dict:
-    return {k: (float(v) if k != "relinearize_skip" else int(v)) for k, v in inputs["isam2"].items()}
+    """The case's iSAM2 settings; the kit's tree edits and fill are those of unmerged cliques (docs/conformance.md)."""
+    given = {k: (float(v) if k != "relinearize_skip" else int(v)) for k, v in inputs["isam2"].items()}
+    return {"amalgamation_zeros": 0.0} | given
 
 
 def _named(estimate: Mapping) -> dict[str, NDArray]:

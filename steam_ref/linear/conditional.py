@@ -1,28 +1,38 @@
-"""Gaussian conditionals P(F | S) ∝ exp(-½ ‖R δ_F + S δ_S - d‖²) stacked into one square-root
-information matrix R, with RᵀR = AᵀA = 𝓘.  [YIB Eq. 11, 21, 25]
+"""Gaussian conditionals P(F | S) ∝ exp(-½ ‖R δ_F + S δ_S - d‖²): a clique's elimination, and the
+conditionals stacked into one square-root information matrix R, with RᵀR = AᵀA = 𝓘.  [YIB Eq. 11, 21, 24-25]
 
-A Bayes tree's cliques are such conditionals; stacking their rows in elimination order gives the
-upper-triangular R of A = QR, sparse: only the conditionals' blocks are stored. A clique's elimination
-starts from the dense block of its adjacent factors (:func:`gather`) and, when a pivot vanishes, names the
-variable left free (:func:`underdetermined`). Used by the tree's
-``to_sparse`` and ``to_dense`` (covariances come from the cliques themselves, :mod:`steam_ref.covariance`).
+Eliminating the frontal variables F of a clique from the factors adjacent to them [YIB Eq. 24],
+
+    f(F, S) ∝ exp(-½ ‖A_F δ_F + A_S δ_S - b‖²),
+
+is one dense QR of the small gathered block (:func:`gather`) [A_F A_S | b] = Q [[R, S, d], [0, A', b']]
+(:func:`eliminate_clique`). The top rows give the conditional P(F | S) (Eq. 25 for several variables at once: R⁻¹S
+is the paper's rᵀ, R⁻¹d its d), the rows below the new factor on the separator, f(S) ∝ exp(-½ ‖A' δ_S - b'‖²);
+when a pivot vanishes, the variable left free is named (:func:`underdetermined`). A Bayes tree's cliques are such
+conditionals (:mod:`steam_ref.bayes_tree.tree`); stacking their rows in elimination order gives the
+upper-triangular R of A = QR, sparse: only the conditionals' blocks are stored (:func:`assemble_sqrt_information`,
+behind the tree's ``to_sparse`` and ``to_dense``; covariances come from the cliques themselves,
+:mod:`steam_ref.covariance`).
 """
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
+from scipy.linalg import lapack
 
-from ..errors import UnderdeterminedError
+from ..errors import SteamError, UnderdeterminedError
 from ..variables import Key
 from .ordering import Ordering
 from .system import GaussianFactor
 
-__all__ = ["Conditional", "assemble_sqrt_information", "gather", "underdetermined"]
+__all__ = ["Clique", "Conditional", "assemble_sqrt_information", "eliminate_clique", "gather", "underdetermined"]
 
 
 class Conditional(Protocol):
@@ -41,6 +51,41 @@ class Conditional(Protocol):
     def R(self) -> NDArray: ...  # (n_f, n_f) upper triangular
     @property
     def S(self) -> NDArray: ...  # (n_f, n_s)
+
+
+RANK_TOLERANCE = 1e-12  # a pivot |Rᵢᵢ| below this times the largest |entry| means a free direction
+_below_diagonal = functools.cache(functools.partial(np.tri, k=-1, dtype=bool))  # (rows, cols): np.triu's mask
+
+
+@dataclass(frozen=True, eq=False)
+class Clique:
+    """P(F | S) ∝ exp(-½ ‖R δ_F + S δ_S - d‖²), and the factor on S its elimination left.  [YIB Eq. 25]"""
+
+    frontals: tuple[Key, ...]  # F, eliminated here, in elimination order
+    separator: tuple[Key, ...]  # S, shared with the parent clique, in elimination order
+    frontal_dims: tuple[int, ...]  # size of each frontal variable
+    separator_dims: tuple[int, ...]  # size of each separator variable
+    R: NDArray  # (n_f, n_f) upper triangular
+    S: NDArray  # (n_f, n_s)
+    d: NDArray  # (n_f,)
+    marginal: GaussianFactor  # f(S) = ‖A' δ_S - b'‖², A' (k, n_s) with k ≤ n_s  [YIB Eq. 24]
+    factors: tuple[int, ...] = ()  # ids of the original (nonlinear) factors eliminated here
+
+    def solve(self, separator_values: NDArray) -> NDArray:
+        """δ_F = R⁻¹(d - S δ_S) for the stacked separator values (n_s,); returns (n_f,).  [YIB Eq. 25]"""
+        rhs = self.d - self.S.dot(separator_values) if self.S.shape[1] else self.d  # .dot: @'s call costs more
+        x, info = lapack.dtrtrs(self.R, rhs)
+        if info != 0:
+            raise SteamError(f"singular conditional in the clique of {self.frontals}")
+        return x
+
+    def split_frontals(self, x: NDArray) -> list[NDArray]:
+        """A stacked frontal vector (n_f,) as one array per frontal variable."""
+        out, o = [], 0
+        for dim in self.frontal_dims:
+            out.append(x[o : o + dim])
+            o += dim
+        return out
 
 
 def assemble_sqrt_information(ordering: Ordering, conditionals: Sequence[Conditional]) -> sp.csr_matrix:
@@ -105,6 +150,45 @@ def underdetermined(M: NDArray, frontals: tuple[Key, ...], dims: Mapping[Key, in
         f"elimination breaks down at variable {bad!r} (pivot {free} of its clique vanishes): the factors leave "
         f"it free, or the information matrix is too ill-conditioned for float64 (its diagonal spans "
         f"{float(diag.max() / diag[diag > 0].min()):.1e} in this clique)"
+    )
+
+
+def eliminate_clique(
+    frontals: tuple[Key, ...],
+    separator: tuple[Key, ...],
+    dims: Mapping[Key, int],
+    factors: Sequence[GaussianFactor],
+    factor_ids: tuple[int, ...] = (),
+) -> Clique:
+    """Eliminate ``frontals`` from the adjacent ``factors`` by one dense QR.  [YIB Eq. 24-25]"""
+    M = gather(frontals + separator, dims, factors)
+    nf, ncol = sum(dims[k] for k in frontals), M.shape[1]
+    free = M.shape[0] if M.shape[0] < nf else None  # fewer rows than frontal unknowns
+    if free is None:
+        qr, _, _, _ = lapack.dgeqrf(M)  # Q R = [A_F A_S | b]: Gram-Schmidt on the columns
+        R = qr[: min(M.shape[0], ncol)]
+        R[_below_diagonal(*R.shape)] = 0.0  # np.triu in place, its mask made once per shape
+        small = np.abs(R.diagonal()[:nf]) <= RANK_TOLERANCE * max(np.abs(M).max(), 1.0)
+        free = int(small.argmax()) if small.any() else None  # the first vanishing pivot
+    if free is not None:  # a vanishing pivot: name the variable and why
+        raise underdetermined(M, frontals, dims, free)
+    ns = ncol - 1 - nf
+    below = R[nf : nf + ns, nf:].copy()  # f(S): the rows left after eliminating F  [YIB Eq. 24]
+    blocks, o = [], 0
+    for k in separator:
+        blocks.append(below[:, o : o + dims[k]])
+        o += dims[k]
+    marginal = GaussianFactor(separator, tuple(blocks), below[:, ns])
+    return Clique(
+        frontals,
+        separator,
+        tuple(dims[k] for k in frontals),
+        tuple(dims[k] for k in separator),
+        np.asfortranarray(R[:nf, :nf]),
+        np.ascontiguousarray(R[:nf, nf : ncol - 1]),
+        R[:nf, ncol - 1].copy(),
+        marginal,
+        tuple(factor_ids),
     )
 
 
