@@ -46,13 +46,22 @@ class FixedLagSmoother:
     The queries are the solver's; of a marginalized variable, they say when it went."""
 
     def __init__(
-        self, lag: float, params: ISAM2Params | None = None, *, keep_history: bool = False, **changes: object
+        self,
+        lag: float,
+        params: ISAM2Params | None = None,
+        *,
+        keep_history: bool = False,
+        batch: float = 0.0,
+        **changes: object,
     ) -> None:
-        lag = number("lag", lag)
+        lag, batch = number("lag", lag), number("batch", batch)
         if not lag > 0:
             raise SteamError(f"lag must be a number of seconds > 0, got lag={lag!r}")
+        if not 0 <= batch < math.inf:
+            raise SteamError(f"batch must be a number of seconds >= 0, got batch={batch!r}")
         self.solver = IncrementalSolver(params, **changes)  # the window's iSAM2
         self.lag = float(lag)  # seconds of history kept
+        self.batch = float(batch)  # seconds more the window may hold, to marginalize in batches (0: at every update)
         self._times: dict[Key, float] = {}  # timestamp of each timed variable in the window
         self._gone: dict[Key, int] = {}  # marginalized key → the update that marginalized it (any id a Key holds)
         self.newest = -math.inf  # the latest timestamp seen
@@ -108,9 +117,11 @@ class FixedLagSmoother:
         cutoff = self.newest - self.lag
         old = [k for k, t in self._times.items() if t < cutoff]
         self.last_marginalization = None
-        if old:
-            keep = self.history is not None
-            done = self.solver.marginalize_leaves(old, constrained=self._leaving(), keep_conditionals=keep)
+        if old and (not self.batch or min(self._times[k] for k in old) < cutoff - self.batch):
+            keep, batched = self.history is not None, self.batch > 0
+            done = self.solver.marginalize_leaves(
+                old, constrained=self._leaving(), keep_conditionals=keep, reuse_marginals=batched
+            )
             if self.history is not None:
                 log.extend(self.history.conditionals, list(done.conditionals))
             for k in done.keys:

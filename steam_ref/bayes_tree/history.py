@@ -56,17 +56,23 @@ class ForgottenConditional:
 
     @classmethod
     def of(
-        cls, clique: Clique, theta_bar: Mapping[Key, NDArray], kinds: Mapping[Key, Manifold]
+        cls, clique: Clique, theta_bar: Mapping[Key, NDArray], kinds: Mapping[Key, Manifold], i: int = 0
     ) -> ForgottenConditional:
-        """The solved form of the one-variable conditional ``clique`` linearized at ``theta_bar``."""
-        (key,) = clique.frontals
-        ns = clique.S.shape[1]
-        RinvS = solve_triangular(clique.R, clique.S) if ns else np.zeros((clique.R.shape[0], 0))
-        theta_s = np.concatenate([theta_bar[k] for k in clique.separator]) if clique.separator else np.zeros(0)
-        step = solve_triangular(clique.R, clique.d)
-        of = tuple(kinds[k] for k in (key, *clique.separator))
+        """The solved form of P(v | S_v) of the ``i``-th frontal v of ``clique`` linearized at ``theta_bar``: its rows
+        of [R S | d] (R upper triangular), so S_v is the frontals after v and the clique's separator [YIB Eq. 25]."""
+        o, key = sum(clique.frontal_dims[:i]), clique.frontals[i]
+        rows = slice(o, o + clique.frontal_dims[i])
+        R, S = clique.R[rows, rows], np.hstack([clique.R[rows, rows.stop :], clique.S[rows]])
+        separator, dims = (
+            clique.frontals[i + 1 :] + clique.separator,
+            clique.frontal_dims[i + 1 :] + clique.separator_dims,
+        )
+        RinvS = solve_triangular(R, S) if S.shape[1] else np.zeros((R.shape[0], 0))
+        theta_s = np.concatenate([theta_bar[k] for k in separator]) if separator else np.zeros(0)
+        step = solve_triangular(R, clique.d[rows])
+        of = tuple(kinds[k] for k in (key, *separator))
         theta = np.asarray(theta_bar[key], dtype=float)
-        return cls(key, clique.separator, clique.separator_dims, theta, step, -RinvS, theta_s, of)
+        return cls(key, separator, dims, theta, step, -RinvS, theta_s, of)
 
     def value(self, separator_values: NDArray) -> NDArray:
         """x_v given the stacked final estimates of the separator (n_S,).  [derivations Eq. 10.5]"""

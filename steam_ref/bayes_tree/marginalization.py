@@ -49,7 +49,7 @@ from ..variables import Key, key_list
 from .backsolve import backsubstitute
 from .history import ForgottenConditional
 from .state import SolverState
-from .tree import Clique, eliminate, eliminate_clique
+from .tree import BayesTree, Clique, eliminate, eliminate_clique
 
 __all__ = ["MarginalFactor", "MarginalizationReport", "eliminate_variables", "marginalize_keys"]
 
@@ -81,20 +81,27 @@ def eliminate_variables(
     Schur complement on its separator (kept) [derivations Eq. 10.1-10.3]. Factors not adjacent to ``drop``
     come back unchanged, first.
     """
-    pool = list(factors)
+    pool = dict(enumerate(factors))  # position → factor, in the order given then made: the order of the result
+    holding: dict[Key, list[int]] = {}  # variable → positions of the factors naming it (some already used up)
+    for i, f in pool.items():
+        for k in f.keys:
+            holding.setdefault(k, []).append(i)
+    made = len(pool)  # the position of the next factor made
     for v in drop:
-        adjacent = [f for f in pool if v in f.keys]
+        adjacent = [pool.pop(i) for i in holding.pop(v, ()) if i in pool]  # in pool order: positions increase
         if not adjacent:
             raise UnknownVariableError(f"no factor names {v!r}: nothing to marginalize it from")
-        pool = [f for f in pool if v not in f.keys]
         separator = tuple(dict.fromkeys(k for f in adjacent for k in f.keys if k != v))
         clique = eliminate_clique((v,), separator, dims, adjacent)
         if conditionals is not None:
             conditionals.append(clique)
         marginal = clique.marginal
         if separator and marginal.rhs.shape[0]:
-            pool.append(marginal)
-    return pool
+            pool[made] = marginal
+            for k in separator:
+                holding.setdefault(k, []).append(made)
+            made += 1
+    return list(pool.values())
 
 
 def _home(state: SolverState, keys: tuple[Key, ...], tops: list[int]) -> int:
@@ -118,12 +125,14 @@ def marginalize_keys(
     alpha: float,
     constrained: Mapping[Key, float] | None = None,
     keep_conditionals: bool = False,
+    reuse_marginals: bool = False,
 ) -> MarginalizationReport:
     """Marginalize ``keys`` out of ``state``'s Bayes tree and factors (module docstring, steps 1-3): what
     :meth:`~.isam.IncrementalSolver.marginalize_leaves` runs. ``alpha``: the wildfire threshold of the
     back-substitution after a re-elimination; ``constrained``: the keys its ordering eliminates first
-    (:func:`~steam_ref.linear.ordering.min_degree_keys`). One transaction: on any failure or interruption
-    (Ctrl-C) the state is left as it was."""
+    (:func:`~steam_ref.linear.ordering.min_degree_keys`); ``reuse_marginals``: whole subtrees are cut with the f(S)
+    the tree cached (step 2, the same marginal to rounding, with no elimination). One transaction: on any failure
+    or interruption (Ctrl-C) the state is left as it was."""
     drop_list = list(dict.fromkeys(key_list("keys", keys)))
     for k in drop_list:
         if k not in state.dims:
@@ -131,31 +140,37 @@ def marginalize_keys(
     if not drop_list:
         return MarginalizationReport((), True, (), (), (), (), {})
     with state.transaction():
-        return _marginalize(state, drop_list, alpha, constrained, keep_conditionals)
+        return _marginalize(state, drop_list, alpha, constrained, keep_conditionals, reuse_marginals)
 
 
 def _marginalize(
-    state: SolverState, keys: list[Key], alpha: float, constrained: Mapping[Key, float] | None, keep_conditionals: bool
+    state: SolverState, keys: list[Key], alpha: float, constrained: Mapping[Key, float] | None, keep: bool, reuse: bool
 ) -> MarginalizationReport:
     """Steps 1-3 of the module docstring, inside a transaction; ``keys`` in their order (a set's is PYTHONHASHSEED's)."""
     tree, drop = state.tree, set(keys)
-    cids = list(dict.fromkeys(c for v in keys for c in tree.cliques_involving(v)))  # step 1
+    whole = _whole_subtrees(tree, drop, keys) if reuse else None
+    cids = whole or list(dict.fromkeys(c for v in keys for c in tree.cliques_involving(v)))  # step 1
     fids = [j for c in cids for j in tree.cliques[c].factors]
     dropped = [j for j in fids if not drop.isdisjoint(state.factors[j].keys)]  # type: ignore[union-attr]
-    adjacent = [state.cached(j) for j in dropped]
-    variables = list(dict.fromkeys(k for f in adjacent for k in f.keys))
-    last = [k for k in variables if k not in drop]
-    order = min_degree_keys(variables, state.dims, [f.keys for f in adjacent], last)
-    order_drop = order[: len(drop)]
+    inside = set(cids)
+    tops = [c for c in cids if tree.parent[c] not in inside]
+    if whole:  # whole subtrees: the f(S) of their tops is the marginal (Eq. 10.3), their conditionals P(D | S)
+        order_drop = [k for c in reversed(whole) for k in tree.cliques[c].frontals]  # children first
+        schur = [m for t in tops if tree.cliques[t].separator and (m := tree.cliques[t].marginal).rhs.shape[0]]
+        split = [(tree.cliques[c], i) for c in reversed(whole) for i in range(len(tree.cliques[c].frontals))]
+    else:
+        adjacent = [state.cached(j) for j in dropped]
+        variables = list(dict.fromkeys(k for f in adjacent for k in f.keys))
+        last = [k for k in variables if k not in drop]
+        order_drop = min_degree_keys(variables, state.dims, [f.keys for f in adjacent], last)[: len(drop)]
+        conditionals: list[Clique] | None = [] if keep else None
+        schur = eliminate_variables(order_drop, adjacent, state.dims, conditionals)  # (Eq. 10.1-10.3)
+        split = [(c, 0) for c in conditionals or ()]
     estimates = {k: state.estimate_of(k).copy() for k in order_drop}
-    conditionals: list[Clique] | None = [] if keep_conditionals else None
-    schur = eliminate_variables(order_drop, adjacent, state.dims, conditionals)  # (Eq. 10.1-10.3)
-    forgotten = tuple(ForgottenConditional.of(c, state.theta_bar, state.kinds) for c in conditionals or ())
+    forgotten = tuple(ForgottenConditional.of(c, state.theta_bar, state.kinds, i) for c, i in split) if keep else ()
     leaves = all(drop.issuperset(tree.cliques[c].frontals) for c in cids)
     if leaves:
         # Step 2, leaves: cut the cliques of D off; the Schur complement of D's factors goes to their parents.
-        inside = set(cids)
-        tops = [c for c in cids if tree.parent[c] not in inside]
         homes = [_home(state, gf.keys, tops) for gf in schur]
         removed, new_cids, factor_ids = list(cids), [], _add_marginal_factors(state, schur)
         for home, j in zip(homes, factor_ids, strict=True):
@@ -177,14 +192,26 @@ def _marginalize(
         new_cids = tree.insert_eliminated([_relabel(c, labels) for c in cliques], parents, orphans, owner[n_own:])
     for j in dropped:
         state.drop_factor(j)  # ids are positions: the slot stays
-    for k in keys:
-        state.drop_variable(k)
+    state.drop_variables(keys)
     if new_cids:
         backsubstitute(state, set(new_cids), alpha)
     return MarginalizationReport(
         tuple(order_drop), leaves, tuple(removed), tuple(new_cids),
         tuple(dropped), tuple(factor_ids), estimates, forgotten,
     )  # fmt: skip
+
+
+def _whole_subtrees(tree: BayesTree, drop: set[Key], keys: list[Key]) -> list[int] | None:
+    """The cliques where ``keys`` are frontal, parents first, when they are whole subtrees frontal only in ``drop``
+    (then no other clique holds one of them: running intersection); else None."""
+    inside = dict.fromkeys(tree.frontal_of[k] for k in keys)
+    for c in inside:
+        if not drop.issuperset(tree.cliques[c].frontals) or any(ch not in inside for ch in tree.children[c]):
+            return None
+    cids = [c for c in inside if tree.parent[c] not in inside]  # the tops, then breadth first
+    for c in cids:
+        cids.extend(tree.children[c])
+    return cids
 
 
 def _relabel(clique: Clique, labels: list[int | None] | None, extra: tuple[int, ...] = ()) -> Clique:

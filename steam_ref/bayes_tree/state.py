@@ -75,12 +75,13 @@ class SolverState:
         log.set(self.delta, key, np.zeros_like(value))
         log.set(self.stale, key, None)
 
-    def drop_variable(self, key: Key) -> None:
-        """Forget a variable from every per-variable store (their order comes back on undo)."""
+    def drop_variables(self, keys: Sequence[Key]) -> None:
+        """Forget variables from every per-variable store (their order comes back on undo)."""
         for name in self.VARIABLE_STORES:
             store = getattr(self, name)
             self.log.keep(store)
-            store.pop(key, None)
+            for key in keys:
+                store.pop(key, None)
 
     def move(self, key: Key, theta_bar: NDArray, delta: NDArray) -> None:
         """Set a variable's θ̄ and δ (fluid relinearization: θ̄ ⊕ δ unchanged, or as the caller moves it)."""
