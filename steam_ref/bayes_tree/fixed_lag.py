@@ -33,7 +33,7 @@ from ..linear.threads import limit
 from ..variables import Key, Values, check_key, check_new_values, key_list
 from .history import History
 from .isam import IncrementalSolver, UpdateReport
-from .marginalization import MarginalizationReport
+from .marginalization import MarginalizationReport, cuttable
 from .params import ISAM2Params
 from .undo import UndoLog
 
@@ -117,7 +117,12 @@ class FixedLagSmoother:
         cutoff = self.newest - self.lag
         old = [k for k, t in self._times.items() if t < cutoff]
         self.last_marginalization = None
-        if old and (not self.batch or min(self._times[k] for k in old) < cutoff - self.batch):
+        if self.batch and old:  # once one is older than lag + batch: the whole subtrees, or all if one would stay
+            late = cutoff - self.batch
+            cut = self._cuttable(old) if min(self._times[k] for k in old) < late else set()
+            stays = [k for k in old if k not in cut and self._times[k] < late]
+            old = old if stays else [k for k in old if k in cut]
+        if old:
             keep, batched = self.history is not None, self.batch > 0
             done = self.solver.marginalize_leaves(
                 old, constrained=self._leaving(), keep_conditionals=keep, reuse_marginals=batched
@@ -129,6 +134,10 @@ class FixedLagSmoother:
                 del self._times[k]
             self.n_marginalized += len(done.keys)
             self.last_marginalization = done
+
+    def _cuttable(self, keys: list[Key]) -> set[Key]:
+        """The variables among ``keys`` in whole subtrees of the tree (:func:`.marginalization.cuttable`)."""
+        return {k for c in cuttable(self.tree, keys) for k in self.tree.cliques[c].frontals}
 
     def _checked_times(
         self, timestamps: Mapping[Key, float] | None, new_values: Mapping[Key, NDArray] | None

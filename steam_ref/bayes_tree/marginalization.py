@@ -51,7 +51,7 @@ from .history import ForgottenConditional
 from .state import SolverState
 from .tree import BayesTree, Clique, eliminate, eliminate_clique
 
-__all__ = ["MarginalFactor", "MarginalizationReport", "eliminate_variables", "marginalize_keys"]
+__all__ = ["MarginalFactor", "MarginalizationReport", "cuttable", "eliminate_variables", "marginalize_keys"]
 
 
 @dataclass(frozen=True)
@@ -148,10 +148,12 @@ def _marginalize(
 ) -> MarginalizationReport:
     """Steps 1-3 of the module docstring, inside a transaction; ``keys`` in their order (a set's is PYTHONHASHSEED's)."""
     tree, drop = state.tree, set(keys)
-    whole = _whole_subtrees(tree, drop, keys) if reuse else None
+    whole = cuttable(tree, drop) if reuse else None
+    if whole is not None and sum(len(tree.cliques[c].frontals) for c in whole) < len(drop):
+        whole = None  # some of D is not in whole subtrees: the paths below
     cids = whole or list(dict.fromkeys(c for v in keys for c in tree.cliques_involving(v)))  # step 1
     fids = [j for c in cids for j in tree.cliques[c].factors]
-    dropped = [j for j in fids if not drop.isdisjoint(state.factors[j].keys)]  # type: ignore[union-attr]
+    dropped = [j for j in fids if not drop.isdisjoint(state.factors[j].keys)]
     inside = set(cids)
     tops = [c for c in cids if tree.parent[c] not in inside]
     if whole:  # whole subtrees: the f(S) of their tops is the marginal (Eq. 10.3), their conditionals P(D | S)
@@ -180,7 +182,7 @@ def _marginalize(
         roots = set(tree.roots)
         removed_top, orphans = tree.remove_top(cids)
         removed = list(removed_top)
-        kept = [j for c in removed_top.values() for j in c.factors if drop.isdisjoint(state.factors[j].keys)]  # type: ignore[union-attr]
+        kept = [j for c in removed_top.values() for j in c.factors if drop.isdisjoint(state.factors[j].keys)]
         linear = [state.cached(j) for j in kept] + schur + [tree.cliques[o].marginal for o in orphans]
         rest = [k for c in removed_top.values() for k in c.frontals if k not in drop]
         last = [k for c, cl in removed_top.items() if c in roots for k in cl.frontals if k not in drop]
@@ -201,17 +203,19 @@ def _marginalize(
     )  # fmt: skip
 
 
-def _whole_subtrees(tree: BayesTree, drop: set[Key], keys: list[Key]) -> list[int] | None:
-    """The cliques where ``keys`` are frontal, parents first, when they are whole subtrees frontal only in ``drop``
-    (then no other clique holds one of them: running intersection); else None."""
-    inside = dict.fromkeys(tree.frontal_of[k] for k in keys)
-    for c in inside:
-        if not drop.issuperset(tree.cliques[c].frontals) or any(ch not in inside for ch in tree.children[c]):
-            return None
-    cids = [c for c in inside if tree.parent[c] not in inside]  # the tops, then breadth first
-    for c in cids:
-        cids.extend(tree.children[c])
-    return cids
+def cuttable(tree: BayesTree, keys: Iterable[Key]) -> list[int]:
+    """The cliques, parents first, that are frontal only in ``keys`` with every clique below them: the whole subtrees
+    among the cliques of ``keys``, which ``reuse_marginals`` cuts with no elimination."""
+    wanted = set(keys)
+    inside = {tree.frontal_of[k] for k in wanted if k in tree.frontal_of}
+    found = [c for c in inside if tree.parent[c] not in inside]  # the tops, then breadth first
+    for c in found:
+        found.extend(ch for ch in tree.children[c] if ch in inside)
+    whole: dict[int, bool] = {}
+    for c in reversed(found):  # children first
+        kids = tree.children[c]
+        whole[c] = wanted.issuperset(tree.cliques[c].frontals) and all(whole.get(ch, False) for ch in kids)
+    return [c for c in found if whole[c]]
 
 
 def _relabel(clique: Clique, labels: list[int | None] | None, extra: tuple[int, ...] = ()) -> Clique:
