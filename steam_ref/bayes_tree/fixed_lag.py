@@ -31,7 +31,7 @@ from ..factors import Factor, check_factors
 from ..linear.ordering import KeysBelow
 from ..linear.threads import limit
 from ..variables import Key, Values, check_key, check_new_values, key_list
-from .history import History
+from .history import History, Marginalized
 from .isam import IncrementalSolver, UpdateReport
 from .marginalization import MarginalizationReport, cuttable
 from .params import ISAM2Params
@@ -63,7 +63,7 @@ class FixedLagSmoother:
         self.lag = float(lag)  # seconds of history kept
         self.batch = float(batch)  # seconds more the window may hold, to marginalize in batches (0: at every update)
         self._times: dict[Key, float] = {}  # timestamp of each timed variable in the window
-        self._gone: dict[Key, int] = {}  # marginalized key → the update that marginalized it (any id a Key holds)
+        self._gone = Marginalized()  # the update that marginalized each key (any id a Key holds)
         self.newest = -math.inf  # the latest timestamp seen
         self.n_marginalized = 0  # variables marginalized so far
         self.peak_window = 0  # most variables held at once (measured after each update, before marginalizing)
@@ -109,8 +109,8 @@ class FixedLagSmoother:
             log.record(setattr, self, name, getattr(self, name))
         log.keep(self._times)  # ordered: the next marginalization's order follows it
         for k in fresh:
-            if k in self._gone:
-                log.delete(self._gone, k)  # a marginalized variable given anew is a new variable
+            if self._gone.get(k):
+                self._gone.set(log, k, 0)  # a marginalized variable given anew is a new variable
         self._times.update(times)
         self.newest = max(self.newest, *times.values()) if times else self.newest
         self.peak_window = max(self.peak_window, len(self.solver))
@@ -130,7 +130,7 @@ class FixedLagSmoother:
             if self.history is not None:
                 log.extend(self.history.conditionals, list(done.conditionals))
             for k in done.keys:
-                log.set(self._gone, k, step)
+                self._gone.set(log, k, step)
                 del self._times[k]
             self.n_marginalized += len(done.keys)
             self.last_marginalization = done

@@ -229,7 +229,7 @@ class FixedLagTreeSolver(BayesTreeSolver):
         super().__init__(inner=FixedLagSmoother(lag, params, keep_history=keep_history))
         self.times = np.asarray(times, dtype=float)  # time of each pose
         self._states = np.zeros((0, 0))  # (n_poses, n) estimate of each marginalized state X(pose), row by pose
-        self._retired_states: set[int] = set()  # poses of the marginalized states
+        self._retired_states = np.zeros(len(self.times), dtype=bool)  # by pose: its state was marginalized
         self._landmarks: dict[Key, NDArray] = {}  # marginalized landmark → its estimate then
         self._forgotten: list[Key] = []  # the variables the last update marginalized
         self._smoothed: dict[Key, NDArray] | None = None  # the smoothed past, computed once per update when asked
@@ -249,7 +249,7 @@ class FixedLagTreeSolver(BayesTreeSolver):
                 if not self._states.size:
                     self._states = np.zeros((len(self.times), len(v)))
                 self._states[k.index] = v
-                self._retired_states.add(k.index)
+                self._retired_states[k.index] = True
             else:
                 self._landmarks[k] = v
         for k in values:
@@ -295,7 +295,8 @@ class FixedLagTreeSolver(BayesTreeSolver):
         self._checked(past)
         lagged = self._landmarks.get(key)  # a landmark that enters again leaves _landmarks
         if key.symbol == "x":  # a state never enters again
-            lagged = self._states[key.index] if key.index in self._retired_states else None
+            retired = 0 <= key.index < len(self.times) and self._retired_states[key.index]
+            lagged = self._states[key.index] if retired else None
         return None if lagged is None else self._past(key, lagged, past)
 
     def _past(self, key: Key, lagged: NDArray, past: str) -> NDArray:
@@ -309,7 +310,7 @@ class FixedLagTreeSolver(BayesTreeSolver):
     def estimate(self, *, past: str = "lagged") -> Values:
         self._checked(past)
         out = self.inner.estimate()
-        for i in sorted(self._retired_states):
+        for i in np.flatnonzero(self._retired_states).tolist():
             out.insert(X(i), self._past(X(i), self._states[i], past))
         for k, v in self._landmarks.items():  # never in the window (popped when one enters again)
             out.insert(k, self._past(k, v, past))
