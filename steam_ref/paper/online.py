@@ -115,6 +115,7 @@ class StreamingEstimator:
             lag=o.lag,
             times=self.readings.times,  # a lag stamps the states in the data's seconds, whatever the prior's clock
             keep_history=o.lag_history,
+            lag_batch=o.lag_batch,
         )
 
     @property

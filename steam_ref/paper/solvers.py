@@ -225,8 +225,10 @@ class FixedLagTreeSolver(BayesTreeSolver):
     name = "btgp"
     inner: FixedLagSmoother
 
-    def __init__(self, params: ISAM2Params | None, lag: float, times: NDArray, *, keep_history: bool = False):
-        super().__init__(inner=FixedLagSmoother(lag, params, keep_history=keep_history))
+    def __init__(
+        self, params: ISAM2Params | None, lag: float, times: NDArray, *, keep_history: bool = False, batch: float = 0.0
+    ):
+        super().__init__(inner=FixedLagSmoother(lag, params, keep_history=keep_history, batch=batch))
         self.times = np.asarray(times, dtype=float)  # time of each pose
         self._states = np.zeros((0, 0))  # (n_poses, n) estimate of each marginalized state X(pose), row by pose
         self._retired_states = np.zeros(len(self.times), dtype=bool)  # by pose: its state was marginalized
@@ -352,9 +354,11 @@ def make_solver(
     lag: float | None = None,
     times: NDArray | None = None,
     keep_history: bool = False,
+    lag_batch: float = 0.0,
 ) -> OnlineSolver:
     """The solver ``method`` names ('btgp', 'pb' or 'pbvr'); with a ``lag`` (seconds, BTGP only), the fixed-lag
-    one, stamping each pose with ``times[pose]`` and keeping the forgotten conditionals if ``keep_history``."""
+    one, stamping each pose with ``times[pose]``, keeping the forgotten conditionals if ``keep_history``, and
+    marginalizing in batches of ``lag_batch`` seconds (:class:`~steam_ref.bayes_tree.FixedLagSmoother`'s ``batch``)."""
     if method not in METHODS:
         raise SteamError(f"unknown method {method!r}; use one of {', '.join(METHODS)}")
     if keep_history and lag is None:
@@ -362,7 +366,7 @@ def make_solver(
     if lag is not None:
         if method != "btgp" or times is None:
             raise SteamError(f"a lag (lag={lag!r}) needs method='btgp' and the poses' times, got method={method!r}")
-        return FixedLagTreeSolver(isam2, lag, times, keep_history=keep_history)
+        return FixedLagTreeSolver(isam2, lag, times, keep_history=keep_history, batch=lag_batch)
     if method == "btgp":
         return BayesTreeSolver(isam2)
     return PeriodicBatchSolver("xl" if method == "pb" else "amd", pb_relative_tolerance, pb_max_iterations)
