@@ -1,9 +1,10 @@
 """Marginalizing in batches, and whole subtrees cut with the marginal the tree cached, against the dense posterior.
 
 ``FixedLagSmoother(lag, batch=b)`` lets its window grow to ``lag + b`` seconds and then marginalizes what is older
-than ``lag`` at once (the whole subtrees among it, or all of it when one older than ``lag + b`` would stay); ``marginalize_leaves(..., reuse_marginals=True)`` cuts whole subtrees with their tops'
-f(S) instead of eliminating their factors again. Either way, on linear Gaussian streams the window is the marginal of
-the whole problem over it, and the kept conditionals smooth the past to the batch optimum: the dense side is
+than ``lag`` at once (the whole subtrees among it, or all of it when one older than ``lag + b`` would stay);
+``marginalize_keys(..., reuse_marginals=True)``, what it runs, cuts whole subtrees with their tops' f(S) instead of
+eliminating their factors again. Either way, on linear Gaussian streams the window is the marginal of the whole
+problem over it, and the kept conditionals smooth the past to the batch optimum: the dense side is
 tests/test_fixed_lag.py's, built from the factors' error functions alone.
 """
 
@@ -16,6 +17,7 @@ from hypothesis import strategies as st
 from test_fixed_lag import EXACT, LinearStream, check_window, dense_posterior, fed
 
 from steam_ref.bayes_tree import FixedLagSmoother, IncrementalSolver
+from steam_ref.bayes_tree.marginalization import marginalize_keys
 from steam_ref.errors import SteamError
 from steam_ref.variables import L, X
 
@@ -95,7 +97,7 @@ def test_whole_subtrees_cut_with_their_cached_marginal_leave_the_dense_marginal(
             )
             if len(drop) >= len(held):
                 continue
-            report = solver.marginalize_leaves(drop, reuse_marginals=True, keep_conditionals=True)
+            report = marginalize_keys(solver.state, drop, 0.0, keep_conditionals=True, reuse_marginals=True)
             assert set(report.keys) == set(drop) and len(report.conditionals) == len(drop)
             check_window(solver, everything)
 
@@ -110,7 +112,7 @@ def test_a_whole_subtree_is_cut_with_no_elimination_and_each_frontal_keeps_its_c
         solver.update(factors, values, constrained={X(i): i for i in range(9)})  # time order: old states are leaves
     drop = [X(0), X(1), X(2)]
     cliques = {solver.tree.frontal_of[k] for k in drop}
-    report = solver.marginalize_leaves(drop, reuse_marginals=True, keep_conditionals=True)
+    report = marginalize_keys(solver.state, drop, 0.0, keep_conditionals=True, reuse_marginals=True)
     assert report.leaves and report.new_cliques == () and set(report.removed_cliques) == cliques
     assert [c.key for c in report.conditionals] == list(report.keys)  # one each, eliminated first first
     for i, c in enumerate(report.conditionals):  # P(v | S_v): S_v the variables eliminated after v, or the window's

@@ -33,7 +33,7 @@ from ..linear.threads import limit
 from ..variables import Key, Values, check_key, check_new_values, key_list
 from .history import History, Marginalized
 from .isam import IncrementalSolver, UpdateReport
-from .marginalization import MarginalizationReport, cuttable
+from .marginalization import MarginalizationReport, cuttable, marginalize_keys
 from .params import ISAM2Params
 from .undo import UndoLog
 
@@ -119,14 +119,13 @@ class FixedLagSmoother:
         self.last_marginalization = None
         if self.batch and old:  # once one is older than lag + batch: the whole subtrees, or all if one would stay
             late = cutoff - self.batch
-            cut = self._cuttable(old) if min(self._times[k] for k in old) < late else set()
+            due = min(self._times[k] for k in old) < late
+            cut = {k for c in cuttable(self.tree, old) for k in self.tree.cliques[c].frontals} if due else set()
             stays = [k for k in old if k not in cut and self._times[k] < late]
             old = old if stays else [k for k in old if k in cut]
         if old:
-            keep, batched = self.history is not None, self.batch > 0
-            done = self.solver.marginalize_leaves(
-                old, constrained=self._leaving(), keep_conditionals=keep, reuse_marginals=batched
-            )
+            alpha, keep = self.solver.params.wildfire_threshold, self.history is not None  # as marginalize_leaves
+            done = marginalize_keys(self.solver.state, old, alpha, self._leaving(), keep, self.batch > 0)
             if self.history is not None:
                 log.extend(self.history.conditionals, list(done.conditionals))
             for k in done.keys:
@@ -134,10 +133,6 @@ class FixedLagSmoother:
                 del self._times[k]
             self.n_marginalized += len(done.keys)
             self.last_marginalization = done
-
-    def _cuttable(self, keys: list[Key]) -> set[Key]:
-        """The variables among ``keys`` in whole subtrees of the tree (:func:`.marginalization.cuttable`)."""
-        return {k for c in cuttable(self.tree, keys) for k in self.tree.cliques[c].frontals}
 
     def _checked_times(
         self, timestamps: Mapping[Key, float] | None, new_values: Mapping[Key, NDArray] | None

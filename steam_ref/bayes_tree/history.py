@@ -112,31 +112,26 @@ class History:
 
 
 class Marginalized:
-    """Which update marginalized each variable: per symbol, an array indexed by the key's index (0: never, or given
-    anew since), so a long run costs 8 bytes an index rather than a dict entry and a key each; an index past what the
-    array would hold (negative, or far beyond the count so far) goes to a dict."""
+    """The update that marginalized each key (0: none, or given anew since): an int64 array per symbol by index, 8
+    bytes an index rather than a dict entry and a key each; an index the array would not reach goes to a dict."""
 
     def __init__(self) -> None:
-        self.steps: dict[str, np.ndarray] = {}  # symbol → update that marginalized X(i), by i (0: not marginalized)
-        self.other: dict[Key, int] = {}  # the keys of any other index
+        self.steps: dict[str, np.ndarray] = {}  # symbol → the update that marginalized each index
+        self.other: dict[Key, int] = {}  # keys of a negative index, or one far past the others
 
     def get(self, key: Key) -> int:
-        """The update that marginalized ``key``; 0 if none did (or it was given anew since)."""
-        steps = self.steps.get(key.symbol)
-        if steps is not None and 0 <= key.index < len(steps):
-            return int(steps[key.index])
-        return self.other.get(key, 0)
+        if key in self.other:
+            return self.other[key]
+        steps = self.steps.get(key.symbol, ())
+        return int(steps[key.index]) if 0 <= key.index < len(steps) else 0
 
     def set(self, log: UndoLog, key: Key, step: int) -> None:
-        """Record that update ``step`` (≥ 1) marginalized ``key`` (0: given anew), in the undo ``log``."""
+        """Record ``step`` for ``key`` in the undo ``log`` (an array grown by doubling comes back whole on undo)."""
         steps = self.steps.get(key.symbol, np.zeros(0, dtype=np.int64))
-        if not 0 <= key.index < 2 * len(steps) + 1024:
-            if step:
-                log.set(self.other, key, step)
-            elif key in self.other:
-                log.delete(self.other, key)
+        if key in self.other or not 0 <= key.index < 2 * len(steps) + 1024:
+            log.set(self.other, key, step)
             return
-        if key.index >= len(steps):  # grown by doubling; the old array comes back on undo, with its own records
+        if key.index >= len(steps):
             grown = np.zeros(max(2 * len(steps), key.index + 1, 1024), dtype=np.int64)
             grown[: len(steps)] = steps
             log.set(self.steps, key.symbol, grown)

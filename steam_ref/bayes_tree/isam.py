@@ -193,22 +193,14 @@ class IncrementalSolver:
         return self.state.transaction()
 
     def marginalize_leaves(
-        self,
-        keys: Iterable[Key],
-        *,
-        constrained: Mapping[Key, float] | None = None,
-        keep_conditionals: bool = False,
-        reuse_marginals: bool = False,
+        self, keys: Iterable[Key], *, constrained: Mapping[Key, float] | None = None, keep_conditionals: bool = False
     ) -> MarginalizationReport:
         """Marginalize ``keys`` out of the tree and the factors (GTSAM's ``marginalizeLeaves``; keys not in leaf
         cliques are re-eliminated first, ``constrained`` as in :meth:`update`): :mod:`.marginalization`. The solver
         then holds the marginal of the other variables (for a linear problem, their estimate and covariances are the
         whole problem's, to rounding). ``keep_conditionals``: the report carries each key's P(v | S)
-        (:class:`~.history.ForgottenConditional`); ``reuse_marginals``: whole subtrees leave with the f(S) the tree
-        cached, no elimination (:func:`.marginalization.marginalize_keys`). :class:`UnknownVariableError` for a key not
-        held."""
-        alpha = self.params.wildfire_threshold
-        return marginalize_keys(self.state, keys, alpha, constrained, keep_conditionals, reuse_marginals)
+        (:class:`~.history.ForgottenConditional`). :class:`UnknownVariableError` for a key not held."""
+        return marginalize_keys(self.state, keys, self.params.wildfire_threshold, constrained, keep_conditionals)
 
     def _update(
         self,

@@ -20,7 +20,7 @@ tree, in the update's style:
    holding no variable of D hangs under the nearest clique left, with its own f(S); the Schur complement
    of D's own factors (Eq. 10.1-10.2) becomes a :class:`MarginalFactor` of the clique that eliminates its
    first variable, for that clique's next re-elimination. (When the cut cliques are whole subtrees it
-   equals their f(S).)
+   equals their tops' f(S), which ``reuse_marginals`` takes as it is, with no elimination.)
 3. *Otherwise: re-eliminate the affected part with D first.* (GTSAM's ``marginalizeLeaves`` needs D in
    leaves; an ordering with D first puts it there.) The cliques of D and their ascendants are removed,
    as an update removes its top [K12 Alg. 4]. D is eliminated first from the factors adjacent to it
@@ -81,27 +81,20 @@ def eliminate_variables(
     Schur complement on its separator (kept) [derivations Eq. 10.1-10.3]. Factors not adjacent to ``drop``
     come back unchanged, first.
     """
-    pool = dict(enumerate(factors))  # position → factor, in the order given then made: the order of the result
-    holding: dict[Key, list[int]] = {}  # variable → positions of the factors naming it (some already used up)
-    for i, f in pool.items():
-        for k in f.keys:
-            holding.setdefault(k, []).append(i)
-    made = len(pool)  # the position of the next factor made
+    pool = list(factors)
     for v in drop:
-        adjacent = [pool.pop(i) for i in holding.pop(v, ()) if i in pool]  # in pool order: positions increase
+        adjacent = [f for f in pool if v in f.keys]
         if not adjacent:
             raise UnknownVariableError(f"no factor names {v!r}: nothing to marginalize it from")
+        pool = [f for f in pool if v not in f.keys]
         separator = tuple(dict.fromkeys(k for f in adjacent for k in f.keys if k != v))
         clique = eliminate_clique((v,), separator, dims, adjacent)
         if conditionals is not None:
             conditionals.append(clique)
         marginal = clique.marginal
         if separator and marginal.rhs.shape[0]:
-            pool[made] = marginal
-            for k in separator:
-                holding.setdefault(k, []).append(made)
-            made += 1
-    return list(pool.values())
+            pool.append(marginal)
+    return pool
 
 
 def _home(state: SolverState, keys: tuple[Key, ...], tops: list[int]) -> int:
@@ -148,9 +141,8 @@ def _marginalize(
 ) -> MarginalizationReport:
     """Steps 1-3 of the module docstring, inside a transaction; ``keys`` in their order (a set's is PYTHONHASHSEED's)."""
     tree, drop = state.tree, set(keys)
-    whole = cuttable(tree, drop) if reuse else None
-    if whole is not None and sum(len(tree.cliques[c].frontals) for c in whole) < len(drop):
-        whole = None  # some of D is not in whole subtrees: the paths below
+    whole = cuttable(tree, drop) if reuse else []
+    whole = whole if sum(len(tree.cliques[c].frontals) for c in whole) == len(drop) else []  # all of D, or the rest
     cids = whole or list(dict.fromkeys(c for v in keys for c in tree.cliques_involving(v)))  # step 1
     fids = [j for c in cids for j in tree.cliques[c].factors]
     dropped = [j for j in fids if not drop.isdisjoint(state.factors[j].keys)]
@@ -213,8 +205,7 @@ def cuttable(tree: BayesTree, keys: Iterable[Key]) -> list[int]:
         found.extend(ch for ch in tree.children[c] if ch in inside)
     whole: dict[int, bool] = {}
     for c in reversed(found):  # children first
-        kids = tree.children[c]
-        whole[c] = wanted.issuperset(tree.cliques[c].frontals) and all(whole.get(ch, False) for ch in kids)
+        whole[c] = wanted.issuperset(tree.cliques[c].frontals) and all(whole.get(h, 0) for h in tree.children[c])
     return [c for c in found if whole[c]]
 
 

@@ -128,8 +128,9 @@ class SolverState:
         """Store factors (with their linearization, else uncached); returns their ids."""
         ids = list(range(self.n_factors, self.n_factors + len(factors)))
         self.n_factors += len(factors)  # (the transaction recorded it)
-        self.log.add(self.factors, dict(zip(ids, factors, strict=True)))
-        self.log.add(self.linear, dict(zip(ids, [None] * len(factors) if linear is None else linear, strict=True)))
+        for j, f, gf in zip(ids, factors, [None] * len(factors) if linear is None else linear, strict=True):
+            self.log.set(self.factors, j, f)
+            self.log.set(self.linear, j, gf)
         return ids
 
     def factor_slots(self) -> tuple[Factor | None, ...]:

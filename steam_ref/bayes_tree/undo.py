@@ -37,12 +37,6 @@ def _put_all(store: dict, olds: list[tuple]) -> None:
         store[key] = old
 
 
-def _remove(store: dict, keys: list) -> None:
-    """Undo ``store.update`` with keys it did not hold."""
-    for key in keys:
-        store.pop(key, None)
-
-
 def _truncate(seq: list, n: int) -> None:
     """Undo appends to a list of length ``n``."""
     del seq[n:]
@@ -94,12 +88,6 @@ class UndoLog:
         if self.depth:
             self.entries.append((_truncate, seq, len(seq)))
         seq.extend(items)
-
-    def add(self, store: dict, items: dict) -> None:
-        """``store.update(items)`` of keys ``store`` does not hold, recorded."""
-        if self.depth:
-            self.entries.append((_remove, store, list(items)))
-        store.update(items)
 
     def keep(self, store: dict) -> None:
         """Copy ``store`` whole, once per transaction, before a change whose undo must restore its order too."""
