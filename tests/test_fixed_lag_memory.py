@@ -8,10 +8,9 @@ live ones only), and the update that forgot each variable (to name it in an erro
 
 from __future__ import annotations
 
+import tracemalloc
 from dataclasses import dataclass
 from typing import ClassVar
-
-import tracemalloc
 
 import numpy as np
 import pytest
