@@ -185,7 +185,7 @@ def _marginalize(
         labels = kept + factor_ids + [None] * len(orphans)
         new_cids = tree.insert_eliminated([_relabel(c, labels) for c in cliques], parents, orphans, owner[n_own:])
     for j in dropped:
-        state.drop_factor(j)  # ids are positions: the slot stays
+        state.drop_factor(j)  # (its id is never given again)
     state.drop_variables(keys)
     if new_cids:
         backsubstitute(state, set(new_cids), alpha)
