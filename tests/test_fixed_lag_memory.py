@@ -79,7 +79,11 @@ def test_twenty_thousand_updates_hold_what_a_thousand_held():
         if i // 1000 in most:
             for name, n in held(smoother).items():
                 most[i // 1000][name] = max(most[i // 1000].get(name, 0), n)
-    assert most[19] == most[1]
+    # (an update that grows the record of forgotten indices, doubling its array, logs one entry more)
+    assert most[19]["undo entries"] <= most[1]["undo entries"] <= most[19]["undo entries"] + 1
+    assert {k: n for k, n in most[19].items() if k != "undo entries"} == {
+        k: n for k, n in most[1].items() if k != "undo entries"
+    }
     assert smoother.n_marginalized == 20_001 - len(smoother)
     assert most[19]["dims"] <= 8 and most[19]["cliques"] <= 8, most[19]
     # What grows by design, and only by that: a slot per factor ever held (given, or made by a marginalization).
