@@ -17,7 +17,11 @@ per run, then one line of targets:
   at the lag``: the full smoother's estimate of each state taken when it is 60 s old (by the data's stamps) (what any smoother that
   reports a state as it leaves a 60 s window can at best give), which separates the cost of reporting lagged
   estimates from the cost of marginalization (first-estimate Jacobians);
-- ``targets``: peak memory 20,000 / 2,000 steps ≤ 1.2, last / first 1,000 updates' median ≤ 1.2 (both within
+- ``targets``: peak memory 20,000 / 2,000 steps ≤ 1.1 once what the user asked for is taken out of both
+  (``asked_mb``: the bytes of the arrays of the data read and of the run's output, the trajectory at every pose, the
+  forgotten landmarks' estimates, per-step timings; ``memory_ratio`` is the raw one; with ``--lag-history`` the kept
+  conditionals are asked for too, and are not taken out: the Plaza rows report them as they are), last / first
+  1,000 updates' median ≤ 1.2 (both within
   the 20,000-step run), Plaza's RMSE with the lag (its past smoothed at the end) within 2 cm of the full
   smoother's (the estimates as they left the window are reported beside it, ``plaza_lagged_rmse_gap_m``), and
   the lagged runs' time no higher
@@ -25,7 +29,7 @@ per run, then one line of targets:
 
 Plot: benchmarks/out/fixed_lag.png (update time along the run, rolling median; peak memory by run).
 
-    python benchmarks/fixed_lag.py [--repeat 1] [--long 20000] [--short 2000] [--no-plaza]
+    python benchmarks/fixed_lag.py [--repeat 1] [--long 20000] [--short 2000] [--no-plaza] [--batch 0]
 """
 
 from __future__ import annotations
@@ -41,7 +45,7 @@ from pathlib import Path
 import numpy as np
 
 OUT = Path(__file__).resolve().parent / "out"
-TARGET_MEMORY, TARGET_FLAT, TARGET_RMSE_M = 1.2, 1.2, 0.02
+TARGET_MEMORY, TARGET_FLAT, TARGET_RMSE_M = 1.1, 1.2, 0.02
 
 _LAGGED_READ = r"""
 import json, sys
@@ -73,12 +77,27 @@ import steam_ref.cli.commands as cli
 from steam_ref.paper.online import StreamingEstimator
 kept = {}
 run = StreamingEstimator.run
+def arrays(obj, seen):
+    # bytes of the NumPy arrays an object holds, through its fields, dicts, lists and tuples (each object once)
+    if id(obj) in seen:
+        return 0
+    seen[id(obj)] = obj
+    if isinstance(obj, np.ndarray):
+        return obj.nbytes
+    if isinstance(obj, dict):
+        return sum(arrays(v, seen) for v in obj.values())
+    if isinstance(obj, (list, tuple)):
+        return sum(arrays(v, seen) for v in obj)
+    return sum(arrays(v, seen) for v in vars(obj).values()) if hasattr(obj, "__dict__") else 0
 def spy(self, *args, **kwargs):
     kept["result"] = result = run(self, *args, **kwargs)
+    seen = {}  # the data read and the run's output: what the user asked for, growing with the run by design
+    kept["asked_mb"] = (arrays(self.readings, seen) + arrays(vars(result), seen) + 8 * len(self.step_seconds) * 3) / 1e6
     return result
 StreamingEstimator.run = spy
 code = cli.main(json.loads(sys.argv[1]))
 np.save(sys.argv[2], kept["result"].update_seconds)
+print(json.dumps({"asked_mb": kept["asked_mb"]}))
 sys.exit(code)
 """
 
@@ -94,7 +113,8 @@ def run(argv: list[str]) -> tuple[dict, np.ndarray]:
         )
         if proc.returncode != 0:
             raise RuntimeError(f"steam-ref run {' '.join(argv)} failed: {proc.stderr.strip()[-400:]}")
-        return json.loads(proc.stdout.strip().splitlines()[-1]), np.load(times)
+        lines = proc.stdout.strip().splitlines()
+        return json.loads(lines[-2]) | json.loads(lines[-1]), np.load(times)
 
 
 def lagged_read(lag: float) -> dict:
@@ -118,6 +138,7 @@ def row(name: str, argv: list[str], repeat: int) -> tuple[dict, np.ndarray]:
         out[key] = first.get(key)
     for key in ("peak_rss_mb", "update_s_median"):
         out[key] = statistics.median(r[key] for r, _ in runs)
+    out["asked_mb"] = statistics.median(r.get("asked_mb", 0.0) for r, _ in runs)  # the data read and the output
     # with --lag-history the backward pass runs after the stream, outside total_s: it is counted here
     out["total_s"] = statistics.median(r["total_s"] + (r.get("history_smoothing_s") or 0.0) for r, _ in runs)
     if len(updates) >= 2000:
@@ -134,28 +155,34 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--short", type=int, default=2000, help="steps of the short generated run")
     p.add_argument("--lag", type=float, default=30.0, help="lag of the generated runs, seconds")
     p.add_argument("--plaza-lag", type=float, default=60.0, help="lag of the Plaza run, seconds")
+    p.add_argument("--batch", type=float, default=0.0, help="--lag-batch of every lagged run, seconds (0: none)")
     p.add_argument("--no-plaza", action="store_true", help="skip Plaza (needs the paper's data)")
     a = p.parse_args(argv)
-    lag = ["--lag", f"{a.lag:g}"]
+    lag = ["--lag", f"{a.lag:g}", "--lag-batch", f"{a.batch:g}"]
     short, short_u = row("synthetic", ["--steps", str(a.short), *lag], a.repeat)
     long, long_u = row("synthetic", ["--steps", str(a.long), *lag], a.repeat)
     full, full_u = row("synthetic, no lag", ["--steps", str(a.short)], a.repeat)
     targets: dict = {
         "row": "targets",
         "memory_ratio": round(long["peak_rss_mb"] / short["peak_rss_mb"], 3),
+        # what the user asked for (the data read, the output: trajectory, per-step timings...) taken out of both
+        "memory_ratio_less_asked": round(
+            (long["peak_rss_mb"] - long["asked_mb"]) / (short["peak_rss_mb"] - short["asked_mb"]), 3
+        ),
         "update_time_ratio_last_first": None,  # needs 2,000 updates or more
     }
     if "update_s_median_first_1000" in long:
         ratio = long["update_s_median_last_1000"] / long["update_s_median_first_1000"]
         targets["update_time_ratio_last_first"] = round(ratio, 3)
         targets["flat_meets"] = ratio <= TARGET_FLAT
-    targets["memory_meets"] = targets["memory_ratio"] <= TARGET_MEMORY
+    targets["memory_meets"] = targets["memory_ratio_less_asked"] <= TARGET_MEMORY
     plaza_rows = []
     if not a.no_plaza:
         base = ["--dataset", "plaza", "--method", "btgp", "--every", "1"]
         plaza_full, _ = row("plaza", base, a.repeat)
-        plaza_lag, _ = row("plaza", [*base, "--lag", f"{a.plaza_lag:g}"], a.repeat)
-        plaza_hist, _ = row("plaza", [*base, "--lag", f"{a.plaza_lag:g}", "--lag-history"], a.repeat)
+        plaza_lag, _ = row("plaza", [*base, "--lag", f"{a.plaza_lag:g}", "--lag-batch", f"{a.batch:g}"], a.repeat)
+        hist = [*base, "--lag", f"{a.plaza_lag:g}", "--lag-batch", f"{a.batch:g}", "--lag-history"]
+        plaza_hist, _ = row("plaza", hist, a.repeat)
         plaza_rows = [plaza_full, plaza_lag, plaza_hist]
         read = lagged_read(a.plaza_lag)
         targets["plaza_full_read_at_lag_rmse_m"] = read["rmse_m"]

@@ -212,6 +212,9 @@ def test_landmarks_leave_the_window_and_enter_again():
         (dict(lag=3.0, converge_at_end=True), "lag and converge_at_end"),
         (dict(lag_history=True), "lag_history keeps what a lag forgets: give a lag"),
         (dict(lag=3.0, lag_history=1), "lag_history must be True or False"),
+        (dict(lag_batch=2.0), "lag_batch=2.0 batches what a lag forgets: give a lag"),
+        (dict(lag=3.0, lag_batch=-1.0), "lag_batch must be a finite number of seconds >= 0"),
+        (dict(lag=3.0, lag_batch=float("nan")), "lag_batch must be"),
     ],
 )
 def test_bad_lag_options_are_refused(changes, message):
@@ -229,6 +232,8 @@ def test_bad_lag_options_are_refused(changes, message):
         (["run", "--steps", "50", "--dataset", "plaza"], "--steps generates the synthetic task"),
         (["run", "--lag", "5", "--save-estimates", "out.npz"], "--save-estimates .* --lag"),
         (["run", "--lag-history"], "give a lag too"),
+        (["run", "--lag-batch", "3"], "give a lag too"),
+        (["run", "--lag", "5", "--lag-batch", "-1"], "--lag-batch"),
     ],
 )
 def test_the_cli_refuses_bad_lag_and_steps_in_one_line(argv, message, capsys, monkeypatch, tmp_path):
@@ -245,6 +250,15 @@ def test_run_with_steps_and_lag_reports_the_window(capsys):
     row = json.loads(capsys.readouterr().out)
     assert row["n_poses"] == 61 and row["lag_s"] == 8.0
     assert row["n_marginalized"] >= 61 - 10 and 0 < row["peak_window"] < 30
+
+
+def test_a_batched_lag_holds_at_most_lag_plus_batch_and_forgets_as_much(capsys):
+    assert cli.main(["run", "--steps", "60", "--lag", "8", "--json"]) == 0
+    every = json.loads(capsys.readouterr().out)
+    assert cli.main(["run", "--steps", "60", "--lag", "8", "--lag-batch", "4", "--json"]) == 0
+    batched = json.loads(capsys.readouterr().out)
+    assert every["peak_window"] < batched["peak_window"] <= every["peak_window"] + 4 * 2  # a state and ~1 landmark a s
+    assert batched["n_marginalized"] >= 61 - 14 and abs(batched["rmse_m"] - every["rmse_m"]) < 0.02
 
 
 def test_run_text_says_which_rmse_is_which(capsys):

@@ -29,9 +29,9 @@ from ..factors import Factor, check_factors
 from ..linear.ordering import KeysBelow
 from ..linear.threads import limit
 from ..variables import Key, Values, check_key, check_new_values, key_list
-from .history import History
+from .history import History, Marginalized
 from .isam import IncrementalSolver, UpdateReport
-from .marginalization import MarginalizationReport
+from .marginalization import MarginalizationReport, cuttable, marginalize_keys
 from .params import ISAM2Params
 from .undo import UndoLog
 
@@ -50,18 +50,22 @@ class FixedLagSmoother:
         *,
         keep: str | Callable[[Key], bool] | None = None,
         keep_history: bool = False,
+        batch: float = 0.0,
         **changes: object,
     ) -> None:
-        lag = number("lag", lag)
+        lag, batch = number("lag", lag), number("batch", batch)
         if not lag > 0:
             raise SteamError(f"lag must be a number of seconds > 0, got lag={lag!r}")
         if not (keep is None or callable(keep) or (isinstance(keep, str) and keep.isalpha())):
             raise SteamError(f"keep must be key symbols such as 'l', or a predicate on a key, got keep={keep!r}")
+        if not 0 <= batch < math.inf:
+            raise SteamError(f"batch must be a number of seconds >= 0, got batch={batch!r}")
         self.keeps = (lambda k: k.symbol in keep) if isinstance(keep, str) else keep or (lambda _: False)  # never ages
         self.solver = IncrementalSolver(params, **changes)  # the window's iSAM2
         self.lag = float(lag)  # seconds of history kept
+        self.batch = float(batch)  # seconds more the window may hold, to marginalize in batches (0: at every update)
         self._times: dict[Key, float] = {}  # timestamp of each timed variable in the window, kept ones excepted
-        self._gone: dict[Key, int] = {}  # marginalized key → the update that marginalized it (any id a Key holds)
+        self._gone = Marginalized()  # the update that marginalized each key (any id a Key holds)
         self.newest = -math.inf  # the latest timestamp seen
         self.n_marginalized = 0  # variables marginalized so far
         self.peak_window = 0  # most variables held at once (measured after each update, before marginalizing)
@@ -79,8 +83,7 @@ class FixedLagSmoother:
         """:meth:`IncrementalSolver.update`, then marginalize the variables older than the lag.
 
         Raises :class:`UnknownVariableError` for a factor or timestamp naming a marginalized variable. Update,
-        marginalization and their record are one transaction: a failure or a Ctrl-C leaves the smoother as it was.
-        """
+        marginalization and their record are one transaction: a failure or a Ctrl-C leaves the smoother as it was."""
         check_new_values(new_values)  # before anything reads it as a mapping
         times = self._checked_times(timestamps, new_values)
         factors = check_factors("new_factors", new_factors)
@@ -102,20 +105,27 @@ class FixedLagSmoother:
             log.record(setattr, self, name, getattr(self, name))
         log.keep(self._times)  # ordered: the next marginalization's order follows it
         for k in fresh:
-            if k in self._gone:
-                log.delete(self._gone, k)  # a marginalized variable given anew is a new variable
+            if self._gone.get(k):
+                self._gone.set(log, k, 0)  # a marginalized variable given anew is a new variable
         self.newest = max(self.newest, *times.values()) if times else self.newest
         self._times.update((k, t) for k, t in times.items() if not self.keeps(k))
         self.peak_window = max(self.peak_window, len(self.solver))
-        old = [k for k, t in self._times.items() if t < self.newest - self.lag]
+        cutoff = self.newest - self.lag
+        old = [k for k, t in self._times.items() if t < cutoff]
         self.last_marginalization = None
+        if self.batch and old:  # once one is older than lag + batch: the whole subtrees, or all if one would stay
+            late = cutoff - self.batch
+            due = min(self._times[k] for k in old) < late
+            cut = {k for c in cuttable(self.tree, old) for k in self.tree.cliques[c].frontals} if due else set()
+            stays = [k for k in old if k not in cut and self._times[k] < late]
+            old = old if stays else [k for k in old if k in cut]
         if old:
-            keep = self.history is not None
-            done = self.solver.marginalize_leaves(old, constrained=self._leaving(), keep_conditionals=keep)
+            alpha, keep = self.solver.params.wildfire_threshold, self.history is not None  # as marginalize_leaves
+            done = marginalize_keys(self.solver.state, old, alpha, self._leaving(), keep, self.batch > 0)
             if self.history is not None:
                 log.extend(self.history.conditionals, list(done.conditionals))
             for k in done.keys:
-                log.set(self._gone, k, step)
+                self._gone.set(log, k, step)
                 del self._times[k]
             self.n_marginalized += len(done.keys)
             self.last_marginalization = done

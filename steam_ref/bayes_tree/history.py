@@ -37,8 +37,9 @@ from scipy.linalg import solve_triangular
 from ..manifold import Manifold
 from ..variables import Key
 from .tree import Clique
+from .undo import UndoLog
 
-__all__ = ["ForgottenConditional", "History"]
+__all__ = ["ForgottenConditional", "History", "Marginalized"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -56,17 +57,20 @@ class ForgottenConditional:
 
     @classmethod
     def of(
-        cls, clique: Clique, theta_bar: Mapping[Key, NDArray], kinds: Mapping[Key, Manifold]
+        cls, clique: Clique, theta_bar: Mapping[Key, NDArray], kinds: Mapping[Key, Manifold], i: int = 0
     ) -> ForgottenConditional:
-        """The solved form of the one-variable conditional ``clique`` linearized at ``theta_bar``."""
-        (key,) = clique.frontals
-        ns = clique.S.shape[1]
-        RinvS = solve_triangular(clique.R, clique.S) if ns else np.zeros((clique.R.shape[0], 0))
-        theta_s = np.concatenate([theta_bar[k] for k in clique.separator]) if clique.separator else np.zeros(0)
-        step = solve_triangular(clique.R, clique.d)
-        of = tuple(kinds[k] for k in (key, *clique.separator))
-        theta = np.asarray(theta_bar[key], dtype=float)
-        return cls(key, clique.separator, clique.separator_dims, theta, step, -RinvS, theta_s, of)
+        """The solved form of P(v | S_v) of the ``i``-th frontal v of ``clique`` linearized at ``theta_bar``: its rows
+        of [R S | d] (R upper triangular), so S_v is the frontals after v and the clique's separator [YIB Eq. 25]."""
+        o, key = sum(clique.frontal_dims[:i]), clique.frontals[i]
+        rows = slice(o, o + clique.frontal_dims[i])
+        R, S = clique.R[rows, rows], np.hstack([clique.R[rows, rows.stop :], clique.S[rows]])
+        separator = clique.frontals[i + 1 :] + clique.separator
+        dims = clique.frontal_dims[i + 1 :] + clique.separator_dims
+        RinvS = solve_triangular(R, S) if S.shape[1] else np.zeros((R.shape[0], 0))
+        theta_s = np.concatenate([theta_bar[k] for k in separator]) if separator else np.zeros(0)
+        step = solve_triangular(R, clique.d[rows])
+        of = tuple(kinds[k] for k in (key, *separator))
+        return cls(key, separator, dims, np.asarray(theta_bar[key], dtype=float), step, -RinvS, theta_s, of)
 
     def value(self, separator_values: NDArray) -> NDArray:
         """x_v given the stacked final estimates of the separator (n_S,).  [derivations Eq. 10.5]"""
@@ -102,3 +106,27 @@ class History:
             solved[c.key] = c.value(np.concatenate(parts) if parts else np.zeros(0))
             latest.setdefault(c.key, solved[c.key])
         return latest
+
+
+class Marginalized:
+    """The update that marginalized each key (0: none, or given anew since): an int64 array per symbol by index, 8
+    bytes an index rather than a dict entry and a key each; an index the array would not reach goes to a dict."""
+
+    def __init__(self) -> None:
+        self.steps: dict[str, np.ndarray] = {}  # symbol → the update that marginalized each index
+        self.other: dict[Key, int] = {}  # keys of a negative index, or one far past the others
+
+    def get(self, key: Key) -> int:
+        steps = self.steps.get(key.symbol, ())
+        return self.other.get(key, int(steps[key.index]) if 0 <= key.index < len(steps) else 0)
+
+    def set(self, log: UndoLog, key: Key, step: int) -> None:
+        """Record ``step`` for ``key`` in the undo ``log`` (an array grown by doubling comes back whole on undo)."""
+        steps = self.steps.get(key.symbol, np.zeros(0, dtype=np.int64))
+        if key in self.other or not 0 <= key.index < 2 * len(steps) + 1024:
+            log.set(self.other, key, step)
+            return
+        if key.index >= len(steps):  # doubled, or to reach the index, by at least 1,024
+            steps = np.concatenate([steps, np.zeros(max(len(steps), key.index + 1 - len(steps), 1024), dtype=np.int64)])
+            log.set(self.steps, key.symbol, steps)
+        log.set(steps, key.index, step)

@@ -126,7 +126,7 @@ class IncrementalSolver:
     def factors(self) -> tuple[Factor, ...]:
         """Every factor so far, in the order added (a tuple: the solver's caches are indexed by position); the slot
         of a factor :meth:`marginalize_leaves` dropped holds None."""
-        return tuple(self.state.factors)  # type: ignore[arg-type]  # a dropped slot is None (docstring)
+        return self.state.factor_slots()  # type: ignore[return-value]  # a dropped slot is None (docstring)
 
     @property
     def linearization_point(self) -> Values:
@@ -331,9 +331,9 @@ class IncrementalSolver:
         """Linearize, at θ̄, the factors among ``fids`` that are new or touch θ_rl; returns how many.  [YIB Eq. 9]"""
         state = self.state
         linear, factors = state.linear, state.factors
-        need = [j for j in fids if linear[j] is None or (theta_rl and not theta_rl.isdisjoint(factors[j].keys))]  # type: ignore[union-attr]
+        need = [j for j in fids if linear[j] is None or (theta_rl and not theta_rl.isdisjoint(factors[j].keys))]
         if need:
-            for group in linearize([factors[j] for j in need], state.values()):  # type: ignore[misc]
+            for group in linearize([factors[j] for j in need], state.values()):
                 for i, gf in zip(group.factor_ids, group.gaussian_factors(), strict=True):
                     state.set_linear(need[i], gf)
         return len(need)

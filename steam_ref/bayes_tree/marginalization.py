@@ -20,7 +20,7 @@ tree, in the update's style:
    holding no variable of D hangs under the nearest clique left, with its own f(S); the Schur complement
    of D's own factors (Eq. 10.1-10.2) becomes a :class:`MarginalFactor` of the clique that eliminates its
    first variable, for that clique's next re-elimination. (When the cut cliques are whole subtrees it
-   equals their f(S).)
+   equals their tops' f(S), which ``reuse_marginals`` takes as it is, with no elimination.)
 3. *Otherwise: re-eliminate the affected part with D first.* (GTSAM's ``marginalizeLeaves`` needs D in
    leaves; an ordering with D first puts it there.) The cliques of D and their ascendants are removed,
    as an update removes its top [K12 Alg. 4]. D is eliminated first from the factors adjacent to it
@@ -49,9 +49,9 @@ from ..variables import Key, key_list
 from .backsolve import backsubstitute
 from .history import ForgottenConditional
 from .state import SolverState
-from .tree import Clique, eliminate, eliminate_clique
+from .tree import BayesTree, Clique, eliminate, eliminate_clique
 
-__all__ = ["MarginalFactor", "MarginalizationReport", "eliminate_variables", "marginalize_keys"]
+__all__ = ["MarginalFactor", "MarginalizationReport", "cuttable", "eliminate_variables", "marginalize_keys"]
 
 
 @dataclass(frozen=True)
@@ -118,12 +118,14 @@ def marginalize_keys(
     alpha: float,
     constrained: Mapping[Key, float] | None = None,
     keep_conditionals: bool = False,
+    reuse_marginals: bool = False,
 ) -> MarginalizationReport:
     """Marginalize ``keys`` out of ``state``'s Bayes tree and factors (module docstring, steps 1-3): what
     :meth:`~.isam.IncrementalSolver.marginalize_leaves` runs. ``alpha``: the wildfire threshold of the
     back-substitution after a re-elimination; ``constrained``: the keys its ordering eliminates first
-    (:func:`~steam_ref.linear.ordering.min_degree_keys`). One transaction: on any failure or interruption
-    (Ctrl-C) the state is left as it was."""
+    (:func:`~steam_ref.linear.ordering.min_degree_keys`); ``reuse_marginals``: whole subtrees are cut with the f(S)
+    the tree cached (step 2, the same marginal to rounding, with no elimination). One transaction: on any failure
+    or interruption (Ctrl-C) the state is left as it was."""
     drop_list = list(dict.fromkeys(key_list("keys", keys)))
     for k in drop_list:
         if k not in state.dims:
@@ -131,31 +133,38 @@ def marginalize_keys(
     if not drop_list:
         return MarginalizationReport((), True, (), (), (), (), {})
     with state.transaction():
-        return _marginalize(state, drop_list, alpha, constrained, keep_conditionals)
+        return _marginalize(state, drop_list, alpha, constrained, keep_conditionals, reuse_marginals)
 
 
 def _marginalize(
-    state: SolverState, keys: list[Key], alpha: float, constrained: Mapping[Key, float] | None, keep_conditionals: bool
+    state: SolverState, keys: list[Key], alpha: float, constrained: Mapping[Key, float] | None, keep: bool, reuse: bool
 ) -> MarginalizationReport:
     """Steps 1-3 of the module docstring, inside a transaction; ``keys`` in their order (a set's is PYTHONHASHSEED's)."""
     tree, drop = state.tree, set(keys)
-    cids = list(dict.fromkeys(c for v in keys for c in tree.cliques_involving(v)))  # step 1
+    whole = cuttable(tree, drop) if reuse else []
+    whole = whole if sum(len(tree.cliques[c].frontals) for c in whole) == len(drop) else []  # all of D, or the rest
+    cids = whole or list(dict.fromkeys(c for v in keys for c in tree.cliques_involving(v)))  # step 1
     fids = [j for c in cids for j in tree.cliques[c].factors]
-    dropped = [j for j in fids if not drop.isdisjoint(state.factors[j].keys)]  # type: ignore[union-attr]
-    adjacent = [state.cached(j) for j in dropped]
-    variables = list(dict.fromkeys(k for f in adjacent for k in f.keys))
-    last = [k for k in variables if k not in drop]
-    order = min_degree_keys(variables, state.dims, [f.keys for f in adjacent], last)
-    order_drop = order[: len(drop)]
+    dropped = [j for j in fids if not drop.isdisjoint(state.factors[j].keys)]
+    inside = set(cids)
+    tops = [c for c in cids if tree.parent[c] not in inside]
+    if whole:  # whole subtrees: the f(S) of their tops is the marginal (Eq. 10.3), their conditionals P(D | S)
+        order_drop = [k for c in reversed(whole) for k in tree.cliques[c].frontals]  # children first
+        schur = [m for t in tops if tree.cliques[t].separator and (m := tree.cliques[t].marginal).rhs.shape[0]]
+        split = [(tree.cliques[c], i) for c in reversed(whole) for i in range(len(tree.cliques[c].frontals))]
+    else:
+        adjacent = [state.cached(j) for j in dropped]
+        variables = list(dict.fromkeys(k for f in adjacent for k in f.keys))
+        last = [k for k in variables if k not in drop]
+        order_drop = min_degree_keys(variables, state.dims, [f.keys for f in adjacent], last)[: len(drop)]
+        conditionals: list[Clique] | None = [] if keep else None
+        schur = eliminate_variables(order_drop, adjacent, state.dims, conditionals)  # (Eq. 10.1-10.3)
+        split = [(c, 0) for c in conditionals or ()]
     estimates = {k: e.copy() for k, e in state.estimates_of(order_drop).items()}
-    conditionals: list[Clique] | None = [] if keep_conditionals else None
-    schur = eliminate_variables(order_drop, adjacent, state.dims, conditionals)  # (Eq. 10.1-10.3)
-    forgotten = tuple(ForgottenConditional.of(c, state.theta_bar, state.kinds) for c in conditionals or ())
+    forgotten = tuple(ForgottenConditional.of(c, state.theta_bar, state.kinds, i) for c, i in split) if keep else ()
     leaves = all(drop.issuperset(tree.cliques[c].frontals) for c in cids)
     if leaves:
         # Step 2, leaves: cut the cliques of D off; the Schur complement of D's factors goes to their parents.
-        inside = set(cids)
-        tops = [c for c in cids if tree.parent[c] not in inside]
         homes = [_home(state, gf.keys, tops) for gf in schur]
         removed, new_cids, factor_ids = list(cids), [], _add_marginal_factors(state, schur)
         for home, j in zip(homes, factor_ids, strict=True):
@@ -165,7 +174,7 @@ def _marginalize(
         roots = set(tree.roots)
         removed_top, orphans = tree.remove_top(cids)
         removed = list(removed_top)
-        kept = [j for c in removed_top.values() for j in c.factors if drop.isdisjoint(state.factors[j].keys)]  # type: ignore[union-attr]
+        kept = [j for c in removed_top.values() for j in c.factors if drop.isdisjoint(state.factors[j].keys)]
         linear = [state.cached(j) for j in kept] + schur + [tree.cliques[o].marginal for o in orphans]
         rest = [k for c in removed_top.values() for k in c.frontals if k not in drop]
         last = [k for c, cl in removed_top.items() if c in roots for k in cl.frontals if k not in drop]
@@ -176,15 +185,27 @@ def _marginalize(
         labels = kept + factor_ids + [None] * len(orphans)
         new_cids = tree.insert_eliminated([_relabel(c, labels) for c in cliques], parents, orphans, owner[n_own:])
     for j in dropped:
-        state.drop_factor(j)  # ids are positions: the slot stays
-    for k in keys:
-        state.drop_variable(k)
+        state.drop_factor(j)  # (its id is never given again)
+    state.drop_variables(keys)
     if new_cids:
         backsubstitute(state, set(new_cids), alpha)
     return MarginalizationReport(
         tuple(order_drop), leaves, tuple(removed), tuple(new_cids),
         tuple(dropped), tuple(factor_ids), estimates, forgotten,
     )  # fmt: skip
+
+
+def cuttable(tree: BayesTree, keys: Iterable[Key]) -> list[int]:
+    """The whole subtrees among the cliques of ``keys`` (frontal only in them, as all below), parents first."""
+    wanted = set(keys)
+    inside = {tree.frontal_of[k] for k in wanted if k in tree.frontal_of}
+    found = [c for c in inside if tree.parent[c] not in inside]  # the tops, then breadth first
+    for c in found:
+        found.extend(ch for ch in tree.children[c] if ch in inside)
+    whole: dict[int, bool] = {}
+    for c in reversed(found):  # children first
+        whole[c] = wanted.issuperset(tree.cliques[c].frontals) and all(whole.get(h, 0) for h in tree.children[c])
+    return [c for c in found if whole[c]]
 
 
 def _relabel(clique: Clique, labels: list[int | None] | None, extra: tuple[int, ...] = ()) -> Clique:

@@ -36,8 +36,9 @@ class SolverState:
     def __init__(self) -> None:
         self.log = UndoLog()  # every change of every store below, and of the tree, while a transaction runs
         self.tree = BayesTree(self.log)  # the current Bayes tree
-        self.factors: list[Factor | None] = []  # every factor so far; its id is its position (None: dropped)
-        self.linear: list[GaussianFactor | None] = []  # the cached linearization of each factor at θ̄
+        self.factors: dict[int, Factor] = {}  # id → each factor held (ids count every factor given; a dropped one goes)
+        self.linear: dict[int, GaussianFactor | None] = {}  # id → the cached linearization of each at θ̄ (None: not yet)
+        self.n_factors = 0  # factors given so far: the next id
         self.theta_bar: dict[Key, NDArray] = {}  # θ̄: the linearization point
         self.kinds: dict[Key, Manifold] = {}  # the kind of each variable (how it moves), from its factors
         self.dims: dict[Key, int] = {}  # size of each variable (its tangent's too)
@@ -51,12 +52,13 @@ class SolverState:
 
     @contextmanager
     def transaction(self) -> Iterator[UndoLog]:
-        """Run a change of the solver: if anything in it raises (Ctrl-C too), every store and the tree are put
-        back as they were, with what the caller recorded in the log it yields; nested ones belong to the outermost."""
+        """Run a change of the solver: if it raises (Ctrl-C too), the stores, the tree and what the caller logged in
+        the log it yields come back as they were; nested ones belong to the outermost."""
         with self.log.transaction():
             self.log.keep(self.candidates)  # an ordered set: the next θ̄ moves, and the next ordering, follow it
             self.log.record(setattr, self, "steps", self.steps)
             self.log.record(setattr, self, "tree_nnz", self.tree_nnz)
+            self.log.record(setattr, self, "n_factors", self.n_factors)
             yield self.log
 
     def values(self) -> Values:
@@ -75,12 +77,13 @@ class SolverState:
         log.set(self.delta, key, np.zeros_like(value))
         log.set(self.stale, key, None)
 
-    def drop_variable(self, key: Key) -> None:
-        """Forget a variable from every per-variable store (their order comes back on undo)."""
+    def drop_variables(self, keys: Sequence[Key]) -> None:
+        """Forget variables from every per-variable store (their order comes back on undo)."""
         for name in self.VARIABLE_STORES:
             store = getattr(self, name)
             self.log.keep(store)
-            store.pop(key, None)
+            for key in keys:
+                store.pop(key, None)
 
     def move(self, key: Key, theta_bar: NDArray, delta: NDArray) -> None:
         """Set a variable's θ̄ and δ (fluid relinearization: θ̄ ⊕ δ unchanged, or as the caller moves it)."""
@@ -121,10 +124,16 @@ class SolverState:
 
     def append_factors(self, factors: Sequence[Factor], linear: list[GaussianFactor] | None = None) -> list[int]:
         """Store factors (with their linearization, else uncached); returns their ids."""
-        first = len(self.factors)
-        self.log.extend(self.factors, list(factors))
-        self.log.extend(self.linear, [None] * len(factors) if linear is None else linear)
-        return list(range(first, len(self.factors)))
+        ids = list(range(self.n_factors, self.n_factors + len(factors)))
+        self.n_factors += len(factors)  # (the transaction recorded it)
+        for j, f, gf in zip(ids, factors, [None] * len(factors) if linear is None else linear, strict=True):
+            self.log.set(self.factors, j, f)
+            self.log.set(self.linear, j, gf)
+        return ids
+
+    def factor_slots(self) -> tuple[Factor | None, ...]:
+        """Every factor given so far, by id (None: dropped), built when asked: the stores hold the live ones only."""
+        return tuple(self.factors.get(j) for j in range(self.n_factors))
 
     def cached(self, fid: int) -> GaussianFactor:
         """The linearization of factor ``fid`` at θ̄ (made when it entered, or when θ̄ of its variables moved)."""
@@ -138,6 +147,7 @@ class SolverState:
         self.log.set(self.linear, fid, gf)
 
     def drop_factor(self, fid: int) -> None:
-        """Forget factor ``fid`` (its slot stays, None: ids are positions)."""
-        self.log.set(self.factors, fid, None)
-        self.log.set(self.linear, fid, None)
+        """Forget factor ``fid`` (its id is never given again; the stores' order comes back on undo)."""
+        for store in (self.factors, self.linear):
+            self.log.keep(store)
+            del store[fid]

@@ -187,6 +187,15 @@ def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
         "at the end (rmse_m; rmse_lagged_m is the estimates as they left the window; derivations §10.5)",
     )
     parser.add_argument(
+        "--lag-batch",
+        type=non_negative_float,
+        default=0.0,
+        metavar="SECONDS",
+        help="with --lag: let the window grow this many seconds past the lag, then marginalize what is past it at "
+        "once, cutting whole subtrees of the tree with no elimination (default 0: at every update; "
+        "docs/bayes_tree.md)",
+    )
+    parser.add_argument(
         "--steps",
         type=steps_count,
         default=None,
@@ -264,6 +273,7 @@ def run(args: argparse.Namespace) -> int:
         converge_at_end=args.converge_at_end,
         lag=args.lag,
         lag_history=args.lag_history,
+        lag_batch=args.lag_batch,
     )
     if args.lag is not None and args.save_estimates is not None:
         raise SteamError("--save-estimates writes every marginal covariance, which --lag forgets: drop one of them")

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import time
 import warnings
+from array import array
 
 import numpy as np
 from numpy.typing import NDArray
@@ -100,9 +101,9 @@ class StreamingEstimator:
         self.n_solved = 0  # how many of ``states`` the solver holds
         self._pending: list = []  # new factors not yet given to the solver
         self._pending_values = Values()  # initial estimates of new variables not yet given
-        self.step_seconds: list[float] = []  # wall time of each processed pose
-        self.update_steps: list[int] = []  # pose at which each solver update ran
-        self.update_seconds: list[float] = []  # wall time of each solver update
+        self.step_seconds = array("d")  # wall time of each processed pose (8 bytes each: a long run's records)
+        self.update_steps = array("q")  # pose at which each solver update ran
+        self.update_seconds = array("d")  # wall time of each solver update
         self.divergence = DivergenceCheck()  # readings beyond any noise, a diverging estimate (paper.divergence)
 
     def _new_solver(self) -> OnlineSolver:
@@ -115,6 +116,7 @@ class StreamingEstimator:
             lag=o.lag,
             times=self.readings.times,  # a lag stamps the states in the data's seconds, whatever the prior's clock
             keep_history=o.lag_history,
+            lag_batch=o.lag_batch,
         )
 
     @property

@@ -41,6 +41,7 @@ class StreamOptions:
     progress: bool = False  # tqdm progress bar
     lag: float | None = None  # BTGP only: fixed-lag smoothing, forget states older than this (the data's seconds)
     lag_history: bool = False  # with a lag: keep the forgotten conditionals, smooth the past at the end (history.py)
+    lag_batch: float = 0.0  # with a lag: seconds the window may grow past it, to marginalize in batches (fixed_lag.py)
 
     def __post_init__(self) -> None:
         if self.method not in METHODS:
@@ -69,9 +70,13 @@ class StreamOptions:
 
 def _check_lag(o: StreamOptions) -> None:
     """A lag is a number of seconds > 0, for BTGP only, and not with converge_at_end (which needs every factor)."""
+    if not (_is_real(o.lag_batch) and 0 <= o.lag_batch < np.inf):
+        raise SteamError(f"lag_batch must be a finite number of seconds >= 0, got {o.lag_batch!r}")
     if o.lag is None:
         if o.lag_history:
             raise SteamError("lag_history keeps what a lag forgets: give a lag too")
+        if o.lag_batch:
+            raise SteamError(f"lag_batch={o.lag_batch!r} batches what a lag forgets: give a lag too")
         return
     if not (_is_real(o.lag) and 0 < o.lag < np.inf):
         raise SteamError(f"lag must be a finite number of seconds > 0 (or None), got {o.lag!r}")

@@ -236,11 +236,13 @@ class FixedLagTreeSolver(BayesTreeSolver):
     name = "btgp"
     inner: FixedLagSmoother
 
-    def __init__(self, params: ISAM2Params | None, lag: float, times: NDArray, *, keep_history: bool = False):
-        super().__init__(inner=FixedLagSmoother(lag, params, keep_history=keep_history))
+    def __init__(
+        self, params: ISAM2Params | None, lag: float, times: NDArray, *, keep_history: bool = False, batch: float = 0.0
+    ):
+        super().__init__(inner=FixedLagSmoother(lag, params, keep_history=keep_history, batch=batch))
         self.times = np.asarray(times, dtype=float)  # time of each pose
         self._states = np.zeros((0, 0))  # (n_poses, n) estimate of each marginalized state X(pose), row by pose
-        self._retired_states: set[int] = set()  # poses of the marginalized states
+        self._retired_states = np.zeros(len(self.times), dtype=bool)  # by pose: its state was marginalized
         self._landmarks: dict[Key, NDArray] = {}  # marginalized landmark → its estimate then
         self._forgotten: list[Key] = []  # the variables the last update marginalized
         self._smoothed: dict[Key, NDArray] | None = None  # the smoothed past, computed once per update when asked
@@ -260,7 +262,7 @@ class FixedLagTreeSolver(BayesTreeSolver):
                 if not self._states.size:
                     self._states = np.zeros((len(self.times), len(v)))
                 self._states[k.index] = v
-                self._retired_states.add(k.index)
+                self._retired_states[k.index] = True
             else:
                 self._landmarks[k] = v
         for k in values:
@@ -306,7 +308,8 @@ class FixedLagTreeSolver(BayesTreeSolver):
         self._checked(past)
         lagged = self._landmarks.get(key)  # a landmark that enters again leaves _landmarks
         if key.symbol == "x":  # a state never enters again
-            lagged = self._states[key.index] if key.index in self._retired_states else None
+            retired = 0 <= key.index < len(self.times) and self._retired_states[key.index]
+            lagged = self._states[key.index] if retired else None
         return None if lagged is None else self._past(key, lagged, past)
 
     def _past(self, key: Key, lagged: NDArray, past: str) -> NDArray:
@@ -320,7 +323,7 @@ class FixedLagTreeSolver(BayesTreeSolver):
     def estimate(self, *, past: str = "lagged") -> Values:
         self._checked(past)
         out = self.inner.estimate()
-        for i in sorted(self._retired_states):
+        for i in np.flatnonzero(self._retired_states).tolist():
             out.insert(X(i), self._past(X(i), self._states[i], past))
         for k, v in self._landmarks.items():  # never in the window (popped when one enters again)
             out.insert(k, self._past(k, v, past))
@@ -362,9 +365,11 @@ def make_solver(
     lag: float | None = None,
     times: NDArray | None = None,
     keep_history: bool = False,
+    lag_batch: float = 0.0,
 ) -> OnlineSolver:
     """The solver ``method`` names ('btgp', 'pb' or 'pbvr'); with a ``lag`` (seconds, BTGP only), the fixed-lag
-    one, stamping each pose with ``times[pose]`` and keeping the forgotten conditionals if ``keep_history``."""
+    one, stamping each pose with ``times[pose]``, keeping the forgotten conditionals if ``keep_history``, and
+    marginalizing in batches of ``lag_batch`` seconds (:class:`~steam_ref.bayes_tree.FixedLagSmoother`'s ``batch``)."""
     if method not in METHODS:
         raise SteamError(f"unknown method {method!r}; use one of {', '.join(METHODS)}")
     if keep_history and lag is None:
@@ -372,7 +377,7 @@ def make_solver(
     if lag is not None:
         if method != "btgp" or times is None:
             raise SteamError(f"a lag (lag={lag!r}) needs method='btgp' and the poses' times, got method={method!r}")
-        return FixedLagTreeSolver(isam2, lag, times, keep_history=keep_history)
+        return FixedLagTreeSolver(isam2, lag, times, keep_history=keep_history, batch=lag_batch)
     if method == "btgp":
         return BayesTreeSolver(isam2)
     return PeriodicBatchSolver("xl" if method == "pb" else "amd", pb_relative_tolerance, pb_max_iterations)
