@@ -7,7 +7,7 @@ test_WnoaFactor.py of GTSAM 4.3: a pose turned 0.5 rad about x moving with the t
 m/s, states 0.1 s apart; their numbers, rotation-first, carried over to our translation-first order); and for the
 covariance, the dense joint Gaussian: J by differences of the mean, the local GP's conditional covariance from the
 dense kernel of its LTI model (``gp.sde.dense_kernel``), in a joint covariance where one direction (the vertical
-translation) no reading observes (STEAM's PR #64 clipped the negative eigenvalues its interpolation gave there).
+translation) no reading observes (utiasASRL/steam clipped the negative eigenvalues its interpolation gave there).
 """
 
 from __future__ import annotations
@@ -20,9 +20,8 @@ from steam_ref.errors import ShapeError, SteamError
 from steam_ref.gp import LinearSDE
 from steam_ref.gp.interpolate import interpolation_matrices, interpolation_terms
 from steam_ref.gp.sde import dense_kernel
-from steam_ref.lie import SE2, SE3, GroupState
+from steam_ref.lie import SE2, SE3, GroupState, gp_accel
 from steam_ref.lie import gp as lie_gp
-from steam_ref.lie import gp_accel
 from steam_ref.motion import LieGroupAccelPrior, LieGroupWnoa, motion_prior
 from steam_ref.variables import X
 
@@ -53,7 +52,9 @@ def test_the_table_builds_both_residuals_and_refuses_a_planar_qc():
     assert prior.kind is SE3_STATE and prior.state_dim == 18 and len(prior.state_names) == 18
     assert motion_prior("se3-simplified", QC6).residual == "simplified"
     for name in ("se3", "se3-simplified"):
-        with pytest.raises(ShapeError, match=r"qc must be \(6, 6\) on the body twist of a state on SE3, got shape \(3, 3\)"):
+        with pytest.raises(
+            ShapeError, match=r"qc must be \(6, 6\) on the body twist of a state on SE3, got shape \(3, 3\)"
+        ):
             motion_prior(name, np.eye(3))
     with pytest.raises(SteamError, match="'se3' takes no option 'se2_residual'"):
         motion_prior("se3", QC6, se2_residual="simplified")
@@ -86,8 +87,15 @@ def test_interpolation_and_extrapolation_jacobians_are_exact_at_every_angle(resi
     _close(J1, jacobian8(lambda d: at(SE3_STATE.retract(x1, d), x2), 12))
     _close(J2, jacobian8(lambda d: at(x1, SE3_STATE.retract(x2, d)), 12))
     xe, Je = lie_gp.extrapolate(x1, 0.0, 0.9, group=SE3)
-    _close(Je, jacobian8(lambda d: SE3_STATE.local(xe, lie_gp.extrapolate(SE3_STATE.retract(x1, d), 0.0, 0.9, group=SE3)[0]), 12))
-    near = lie_gp.interpolate(x1, x2, *interpolation_matrices(0.0, 0.8, 1e-9, QC6), residual, group=SE3, jacobians=False)
+    _close(
+        Je,
+        jacobian8(
+            lambda d: SE3_STATE.local(xe, lie_gp.extrapolate(SE3_STATE.retract(x1, d), 0.0, 0.9, group=SE3)[0]), 12
+        ),
+    )
+    near = lie_gp.interpolate(
+        x1, x2, *interpolation_matrices(0.0, 0.8, 1e-9, QC6), residual, group=SE3, jacobians=False
+    )
     np.testing.assert_allclose(SE3_STATE.local(x1, near), 0.0, atol=1e-7)  # x(τ) → x₁ as τ → t₁
 
 
@@ -129,7 +137,8 @@ def test_gtsams_doubled_velocity_fixture_leaves_the_velocity_as_residual():
 
 def _unobserved_joint(kind, rng):
     """A joint covariance of two states' tangents from a prior-like coupling and readings of every direction but the
-    tangent's third direction of both poses (SE(3): the vertical translation δρ_z; SE(2): the heading), fixed only by 1e-10 of information: variance ~1e10 there."""
+    tangent's third direction of both poses (SE(3): the vertical translation δρ_z; SE(2): the heading), fixed only
+    by 1e-10 of information: variance ~1e10 there."""
     n = kind.dim
     A = rng.standard_normal((2 * n, 2 * n))
     info = A.T @ A

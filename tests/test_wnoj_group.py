@@ -15,8 +15,7 @@ from finite_differences import jacobian8
 
 from steam_ref.errors import ShapeError
 from steam_ref.gp.interpolate import interpolation_terms
-from steam_ref.lie import SE2, SE3, GroupState
-from steam_ref.lie import gp_accel
+from steam_ref.lie import SE2, SE3, GroupState, gp_accel
 from steam_ref.motion import LieGroupAccelPrior, motion_prior
 from steam_ref.variables import X
 
@@ -93,7 +92,7 @@ def test_a_drawn_step_leaves_its_own_noise_and_the_mean_leaves_none(name):
     np.testing.assert_allclose(f.error(x1, x2), w, atol=1e-13)
     np.testing.assert_allclose(f.error(x1, prior.predict(x1, dt)), 0.0, atol=1e-13)
     steady = np.r_[x1[: g.size + g.dim], np.zeros(g.dim)]  # a constant twist, no acceleration
-    later = lambda s: np.r_[g.compose(steady[: g.size], g.exp(s * steady[g.size : g.size + g.dim])), steady[g.size :]]  # noqa: E731
+    later = lambda s: np.r_[g.compose(steady[: g.size], g.exp(s * steady[g.size : g.size + g.dim])), steady[g.size :]]
     if name.endswith("wnoj"):  # Singer's mean decays the acceleration, WNOJ's keeps a constant twist
         np.testing.assert_allclose(prior.interpolate(0.0, steady, 1.0, later(1.0), 0.4), later(0.4), atol=1e-13)
 

@@ -30,8 +30,7 @@ from ..errors import ShapeError, SteamError
 from ..gp.interpolate import interpolation_terms
 from ..gp.prior import check_qc, process_noise_sqrt_information, transition
 from ..gp.sde import LinearSDE
-from ..lie import GroupState, LieGroup
-from ..lie import gp_accel
+from ..lie import GroupState, LieGroup, gp_accel
 from ..lie.gp import check_model, local_variables
 from ..lie.group import check_group
 from ..manifold import Manifold
@@ -190,7 +189,9 @@ class LieAccelPriorFactor(Factor):
         """The prior over a gap dt > 0 of ``sde`` (3 blocks of the group's dim: ``LinearSDE.wnoj``, ``.singer``)."""
         dt, d = time_step(dt), check_group(group).dim
         if sde.n != 3 * d:
-            raise ShapeError(f"the model's states have {sde.n} numbers; a pose, twist and acceleration on {group!r} {3 * d}")
+            raise ShapeError(
+                f"the model's states have {sde.n} numbers; a pose, twist and acceleration on {group!r} {3 * d}"
+            )
         w = sde.sqrt_information(dt)
         q = sde.process_noise(dt)  # [YIB Eq. 17]
         w = sqrt_information(q, 3 * d, "Q(dt)") if w is None else w
@@ -236,7 +237,9 @@ class LieAccelInterpolatedFactor(Factor):
         t1, t2, tau = number("t1", t1), number("t2", t2), number("tau", tau)
         lam, psi, offset = interpolation_terms(sde, t1, t2, tau)  # [YIB Eq. 16, 23]
         keys = (key1, key2) + tuple(inner.keys[1:])
-        return cls(keys, inner.sqrt_information, inner=inner, lam=lam, psi=psi, offset=offset, group=group, loss=inner.loss)
+        return cls(
+            keys, inner.sqrt_information, inner=inner, lam=lam, psi=psi, offset=offset, group=group, loss=inner.loss
+        )
 
     @property
     def key_dims(self) -> tuple[int, ...]:  # type: ignore[override]

@@ -166,7 +166,9 @@ class BodyVelocityFactor(Factor):
         d = check_group(group).dim
         measured = measured_vector(measured, d, "measured")
         GroupState(group, derivatives)  # refuses a number of derivatives no state holds
-        return cls((key,), sqrt_information(noise, d), measured=measured, loss=loss, group=group, derivatives=derivatives)
+        return cls(
+            (key,), sqrt_information(noise, d), measured=measured, loss=loss, group=group, derivatives=derivatives
+        )
 
     @property
     def key_dims(self) -> tuple[int, ...]:  # type: ignore[override]

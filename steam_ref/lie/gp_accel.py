@@ -99,7 +99,9 @@ def local_variables(
 
 
 @overload
-def from_local(x1: NDArray, gamma: NDArray, group: LieGroup, jacobians: Literal[True] = ...) -> tuple[NDArray, NDArray, NDArray]: ...
+def from_local(
+    x1: NDArray, gamma: NDArray, group: LieGroup, jacobians: Literal[True] = ...
+) -> tuple[NDArray, NDArray, NDArray]: ...
 @overload
 def from_local(x1: NDArray, gamma: NDArray, group: LieGroup, jacobians: Literal[False]) -> NDArray: ...
 def from_local(
@@ -168,7 +170,9 @@ def conditional_noise(q_tau: NDArray, phi_after: NDArray, q_after: NDArray) -> N
         info = info + phi_after.T @ scipy.linalg.cho_solve(scipy.linalg.cho_factor(q_after), phi_after)
         chol = scipy.linalg.cholesky((info + info.T) / 2, lower=True)
     except np.linalg.LinAlgError:
-        raise NumericalError("Q(τ - t₁) or Q(t₂ - τ) is not positive definite in float64: τ is too near a state") from None
+        raise NumericalError(
+            "Q(τ - t₁) or Q(t₂ - τ) is not positive definite in float64: τ is too near a state"
+        ) from None
     root = scipy.linalg.solve_triangular(chol, np.eye(len(chol)), lower=True)  # L⁻¹; the inverse is L⁻ᵀ L⁻¹
     return root.T @ root
 

@@ -226,7 +226,11 @@ class LieGroup(ABC):
         f = _mv(jinv, np.asarray(v, dtype=float))
         G = self.jr_inverse_times_jacobian(xi, v)
         dj_u, _ = self.jr_derivatives(xi, u)
-        inner = self.jr_times_hessian(xi, f, u) + _mm(dj_u, G) + self.jr_times_jacobian(xi, _mv(G, np.asarray(u, dtype=float)))
+        inner = (
+            self.jr_times_hessian(xi, f, u)
+            + _mm(dj_u, G)
+            + self.jr_times_jacobian(xi, _mv(G, np.asarray(u, dtype=float)))
+        )
         return -_mm(jinv, inner)
 
     def _eye(self, shape: tuple[int, ...]) -> NDArray:

@@ -50,7 +50,9 @@ class GroupState(Manifold):
         compare kinds by identity)."""
         check_group(group)
         if derivatives not in (1, 2) or isinstance(derivatives, bool):
-            raise SteamError(f"a state on a group holds its twist (derivatives=1) or also its acceleration (2), got {derivatives!r}")
+            raise SteamError(
+                f"a state on a group holds its twist (derivatives=1) or also its acceleration (2), got {derivatives!r}"
+            )
         if (group, derivatives) not in cls._kinds:
             cls._kinds[group, derivatives] = super().__new__(cls)
         return cls._kinds[group, derivatives]

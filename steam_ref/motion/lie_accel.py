@@ -27,8 +27,7 @@ from ..factors.lie_prior import LieAccelInterpolatedFactor, LieAccelPriorFactor,
 from ..factors.lie_readings import BodyVelocityFactor, PoseReading
 from ..gp.interpolate import interpolation_terms
 from ..gp.sde import LinearSDE, check_sde
-from ..lie import GroupState, LieGroup
-from ..lie import gp_accel
+from ..lie import GroupState, LieGroup, gp_accel
 from ..lie.group import check_group
 from ..variables import Key
 from .base import MotionPrior, sigma_blocks
@@ -171,6 +170,8 @@ class LieGroupAccelPrior(MotionPrior):
         for k in range(1, n):
             gamma = phi @ gp_accel.local_start(states[k - 1], g) + offset + noise[k - 1]  # [YIB Eq. 22]
             if not g.angle(gamma[:d]) < np.pi:
-                raise DataError(f"step {k} turned {float(g.angle(gamma[:d]))!r} rad, outside (-π, π): no residual reads it")
+                raise DataError(
+                    f"step {k} turned {float(g.angle(gamma[:d]))!r} rad, outside (-π, π): no residual reads it"
+                )
             states[k] = gp_accel.from_local(states[k - 1], gamma, g, jacobians=False)
         return states

@@ -18,10 +18,10 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .. import lie
 from ..arguments import finite, number, real_array
 from ..errors import ShapeError, SteamError
 from ..gp.sde import LinearSDE, check_prior
-from .. import lie
 from ..lie import SE2
 from ..manifold import VECTOR, Manifold
 from .base import MotionPrior
