@@ -35,3 +35,17 @@ def jacobian8(f: Callable[[NDArray], NDArray], n: int, h: float = 2.0**-7) -> ND
         e[j] = h
         cols.append(sum(c * np.asarray(f((k - 4) * e)) for k, c in enumerate(_C8) if c) / h)
     return np.stack(cols, axis=-1)
+
+
+def jacobian8_stacked(f: Callable[[NDArray], NDArray], n: int, h: float = 2.0**-7) -> NDArray:
+    """:func:`jacobian8` for an ``f`` that broadcasts over a leading axis: one call of f on the 8n steps (8n, n)
+    stacked, the same stencil, step and sum (the same numbers up to the last bits a batched matrix product may
+    round differently), without 8n calls' overhead."""
+    ks = [k for k, c in enumerate(_C8) if c]
+    steps = np.zeros((n, len(ks), n))
+    for j in range(n):
+        steps[j, :, j] = [(k - 4) * h for k in ks]
+    values = np.asarray(f(steps.reshape(-1, n)))
+    values = values.reshape((n, len(ks)) + values.shape[1:])
+    cols = [sum(_C8[k] * values[j, i] for i, k in enumerate(ks)) / h for j in range(n)]
+    return np.stack(cols, axis=-1)

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from finite_differences import jacobian8
+from finite_differences import jacobian8_stacked
 
 from steam_ref.errors import ShapeError, SteamError
 from steam_ref.gp import LinearSDE
@@ -22,8 +22,18 @@ from steam_ref.gp.interpolate import interpolation_matrices, interpolation_terms
 from steam_ref.gp.sde import dense_kernel
 from steam_ref.lie import SE2, SE3, GroupState, gp_accel
 from steam_ref.lie import gp as lie_gp
+from steam_ref.linear.threads import blas_threads
 from steam_ref.motion import LieGroupAccelPrior, LieGroupWnoa, motion_prior
 from steam_ref.variables import X
+
+
+@pytest.fixture(autouse=True, scope="module")
+def _one_blas_thread():
+    """The kernels at one BLAS thread, as the solvers call them (steam_ref.linear.threads): OpenBLAS's threads
+    woken for each 48×48 matrix function made these tests ten times slower on a loaded machine."""
+    with blas_threads(1):
+        yield
+
 
 ANGLES = (1e-8, 1e-4, 0.3, 1.0, 2.0, 3.0)
 QC6 = np.diag([0.4, 0.3, 0.2, 0.05, 0.08, 0.1])
@@ -69,8 +79,8 @@ def test_the_prior_factors_jacobians_are_exact_at_every_angle(residual, angle, r
     x1, x2 = _states(rng, angle)
     f = prior.prior_factor(X(0), X(1), 0.7)
     A, B = f.jacobians(x1, x2)
-    _close(A, jacobian8(lambda d: f.error(SE3_STATE.retract(x1, d), x2), 12))
-    _close(B, jacobian8(lambda d: f.error(x1, SE3_STATE.retract(x2, d)), 12))
+    _close(A, jacobian8_stacked(lambda d: f.error(SE3_STATE.retract(x1, d), x2), 12))
+    _close(B, jacobian8_stacked(lambda d: f.error(x1, SE3_STATE.retract(x2, d)), 12))
     np.testing.assert_allclose(f.error(x1, prior.predict(x1, 0.7)), 0.0, atol=1e-13)  # the mean: zero error
 
 
@@ -84,12 +94,12 @@ def test_interpolation_and_extrapolation_jacobians_are_exact_at_every_angle(resi
     def at(a, b):
         return SE3_STATE.local(x, lie_gp.interpolate(a, b, lam, psi, residual, group=SE3, jacobians=False))
 
-    _close(J1, jacobian8(lambda d: at(SE3_STATE.retract(x1, d), x2), 12))
-    _close(J2, jacobian8(lambda d: at(x1, SE3_STATE.retract(x2, d)), 12))
+    _close(J1, jacobian8_stacked(lambda d: at(SE3_STATE.retract(x1, d), x2), 12))
+    _close(J2, jacobian8_stacked(lambda d: at(x1, SE3_STATE.retract(x2, d)), 12))
     xe, Je = lie_gp.extrapolate(x1, 0.0, 0.9, group=SE3)
     _close(
         Je,
-        jacobian8(
+        jacobian8_stacked(
             lambda d: SE3_STATE.local(xe, lie_gp.extrapolate(SE3_STATE.retract(x1, d), 0.0, 0.9, group=SE3)[0]), 12
         ),
     )
@@ -175,8 +185,8 @@ def test_the_interpolated_covariance_is_the_dense_one_and_psd_where_a_direction_
     n = kind.dim
     J = np.hstack(
         [
-            jacobian8(lambda d: kind.local(x, prior.interpolate(t1, kind.retract(x1, d), t2, x2, tau)), n),
-            jacobian8(lambda d: kind.local(x, prior.interpolate(t1, x1, t2, kind.retract(x2, d), tau)), n),
+            jacobian8_stacked(lambda d: kind.local(x, prior.interpolate(t1, kind.retract(x1, d), t2, x2, tau)), n),
+            jacobian8_stacked(lambda d: kind.local(x, prior.interpolate(t1, x1, t2, kind.retract(x2, d), tau)), n),
         ]
     )
     K = dense_kernel(_sde(prior), [t1, tau, t2], np.eye(n))  # the local GP: γ(t₁), γ(τ), γ(t₂)
@@ -215,7 +225,7 @@ def _dgamma2(prior, x1, x2):
             return gp_accel.local_variables(x1, y, group=g, jacobians=False)
         return lie_gp.local_variables(x1, y, prior.residual, group=g, jacobians=False)
 
-    return jacobian8(gamma2, kind.dim)
+    return jacobian8_stacked(gamma2, kind.dim)
 
 
 @pytest.mark.parametrize("name", sorted(PRIORS))
@@ -227,10 +237,10 @@ def test_the_extrapolated_covariance_is_the_dense_one_and_psd_where_a_direction_
     P = _unobserved_joint(kind, rng)[:n, :n]
     cov = prior.extrapolate_covariance(0.0, x1, 0.6, P)
     x = prior.extrapolate(0.0, x1, 0.6)
-    J = jacobian8(lambda d: kind.local(x, prior.extrapolate(0.0, kind.retract(x1, d), 0.6)), n)
+    J = jacobian8_stacked(lambda d: kind.local(x, prior.extrapolate(0.0, kind.retract(x1, d), 0.6)), n)
     sde = _sde(prior)
     gamma = sde.transition(0.6) @ np.r_[np.zeros(kind.group.dim), x1[kind.group.size :]] + sde.input_integral(0.6)
-    N = jacobian8(lambda dg: kind.local(x, _from_local(prior, x1, gamma + dg)), n)  # ∂x(t)/∂γ(t)
+    N = jacobian8_stacked(lambda dg: kind.local(x, _from_local(prior, x1, gamma + dg)), n)  # ∂x(t)/∂γ(t)
     dense = J @ P @ J.T + N @ sde.process_noise(0.6) @ N.T
     big = np.max(np.abs(dense))
     np.testing.assert_allclose(cov, dense, rtol=0, atol=1e-9 * big)

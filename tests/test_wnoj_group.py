@@ -11,13 +11,23 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from finite_differences import jacobian8
+from finite_differences import jacobian8_stacked
 
 from steam_ref.errors import ShapeError
 from steam_ref.gp.interpolate import interpolation_terms
 from steam_ref.lie import SE2, SE3, GroupState, gp_accel
+from steam_ref.linear.threads import blas_threads
 from steam_ref.motion import LieGroupAccelPrior, motion_prior
 from steam_ref.variables import X
+
+
+@pytest.fixture(autouse=True, scope="module")
+def _one_blas_thread():
+    """The kernels at one BLAS thread, as the solvers call them (steam_ref.linear.threads): OpenBLAS's threads
+    woken for each 48×48 matrix function made these tests ten times slower on a loaded machine."""
+    with blas_threads(1):
+        yield
+
 
 ANGLES = (1e-8, 0.3, 1.0, 3.0)
 GROUPS = {"se2": SE2, "se3": SE3}
@@ -44,8 +54,11 @@ def test_the_second_derivatives_of_jr_and_its_inverse_are_exact(group, angle, rn
     g = GROUPS[group]
     xi, v, u = rng.standard_normal((3, g.dim))
     xi *= angle / float(g.angle(xi))
-    _close(g.jr_times_hessian(xi, v, u), jacobian8(lambda d: g.jr_times_jacobian(xi + d, v) @ u, g.dim))
-    _close(g.jr_inverse_times_hessian(xi, v, u), jacobian8(lambda d: g.jr_inverse_times_jacobian(xi + d, v) @ u, g.dim))
+    _close(g.jr_times_hessian(xi, v, u), jacobian8_stacked(lambda d: g.jr_times_jacobian(xi + d, v) @ u, g.dim))
+    _close(
+        g.jr_inverse_times_hessian(xi, v, u),
+        jacobian8_stacked(lambda d: g.jr_inverse_times_jacobian(xi + d, v) @ u, g.dim),
+    )
     dj, _ = g.jr_derivatives(xi, u)
     _close(dj @ v, g.jr_times_jacobian(xi, v) @ u, 1e-12)
     batch = np.stack([xi, 0.5 * xi])  # broadcasting over a leading axis
@@ -61,19 +74,22 @@ def test_the_prior_factor_and_the_interpolated_and_extrapolated_jacobians_are_ex
     x1, x2 = _states(rng, g, angle)
     f = prior.prior_factor(X(0), X(1), 0.8)
     A, B = f.jacobians(x1, x2)
-    _close(A, jacobian8(lambda d: f.error(kind.retract(x1, d), x2), n))
-    _close(B, jacobian8(lambda d: f.error(x1, kind.retract(x2, d)), n))
+    _close(A, jacobian8_stacked(lambda d: f.error(kind.retract(x1, d), x2), n))
+    _close(B, jacobian8_stacked(lambda d: f.error(x1, kind.retract(x2, d)), n))
     lam, psi, c = interpolation_terms(prior.sde, 0.0, 0.8, 0.3)
     x, J1, J2 = gp_accel.interpolate(x1, x2, lam, psi, c, group=g)
 
     def at(a, b):
         return kind.local(x, gp_accel.interpolate(a, b, lam, psi, c, group=g, jacobians=False))
 
-    _close(J1, jacobian8(lambda d: at(kind.retract(x1, d), x2), n))
-    _close(J2, jacobian8(lambda d: at(x1, kind.retract(x2, d)), n))
+    _close(J1, jacobian8_stacked(lambda d: at(kind.retract(x1, d), x2), n))
+    _close(J2, jacobian8_stacked(lambda d: at(x1, kind.retract(x2, d)), n))
     phi = prior.sde.transition(0.6)
     xe, Je = gp_accel.extrapolate(x1, phi, 0.0, group=g)
-    _close(Je, jacobian8(lambda d: kind.local(xe, gp_accel.extrapolate(kind.retract(x1, d), phi, 0.0, group=g)[0]), n))
+    _close(
+        Je,
+        jacobian8_stacked(lambda d: kind.local(xe, gp_accel.extrapolate(kind.retract(x1, d), phi, 0.0, group=g)[0]), n),
+    )
 
 
 @pytest.mark.parametrize("name", ["se2-wnoj", "se3-wnoj", "se2-singer", "se3-singer"])
