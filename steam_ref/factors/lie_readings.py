@@ -221,10 +221,9 @@ class LieInterpolatedFactor(Factor):
         group: LieGroup,
     ) -> LieInterpolatedFactor:
         """Move ``inner`` (on the state at τ on ``group``, t1 < τ < t2) onto ``key1`` at t1 and ``key2`` at t2."""
-        if not isinstance(inner, (PoseReading, BodyVelocityFactor)):
-            raise SteamError(f"inner must be a PoseReading or BodyVelocityFactor (the reading at tau), got {inner!r}")
-        if inner.group is not check_group(group):
-            raise SteamError(f"inner reads a state on {inner.group!r}, the interpolation is on group={group!r}")
+        kind = GroupState(check_group(group))
+        if inner.key_kinds[0] is not kind:  # any reading of such a state (lie_readings, point_readings)
+            raise SteamError(f"inner must read a state of kind {kind!r} (the reading at tau), got {inner!r}")
         t1, t2, tau = number("t1", t1), number("t2", t2), number("tau", tau)
         lam, psi = interpolation_matrices(t1, t2, tau, check_qc(qc))  # [YIB Eq. 16]
         d = group.dim
