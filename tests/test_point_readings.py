@@ -116,13 +116,14 @@ def test_every_reading_between_two_states_has_exact_jacobians(name, angle, rng):
     derivatives = PRIORS[name]
     prior = motion_prior(name, np.diag([0.4, 0.3, 0.2, 0.05, 0.08, 0.1]))
     kind = prior.kind
-    x1 = _state(rng, SE3, 0.5, derivatives)
+    g = prior.group  # SE3V: poses [t; φ]
+    x1 = _state(rng, g, 0.5, derivatives)
     xi = rng.standard_normal(6)
-    xi *= angle / float(SE3.angle(xi))
-    x2 = np.r_[SE3.compose(x1[:12], SE3.exp(xi)), rng.standard_normal(6 * derivatives)]
+    xi *= angle / float(g.angle(xi))
+    x2 = np.r_[g.compose(x1[:6], g.exp(xi)), rng.standard_normal(6 * derivatives)]
     l = rng.standard_normal(3) * 3
     x = prior.interpolate(0.0, x1, 0.8, x2, 0.3)
-    for f in _readings(SE3, derivatives).values():
+    for f in _readings(g, derivatives).values():
         _check_between(prior.interpolated_factor(f, X(1), X(2), 0.0, 0.8, 0.3), f, kind, x, x1, x2, l)
 
 

@@ -20,7 +20,7 @@ from steam_ref.errors import ShapeError, SteamError
 from steam_ref.gp import LinearSDE
 from steam_ref.gp.interpolate import interpolation_matrices, interpolation_terms
 from steam_ref.gp.sde import dense_kernel
-from steam_ref.lie import SE2, SE3, GroupState, gp_accel
+from steam_ref.lie import SE2, SE3, SE3V, GroupState, gp_accel
 from steam_ref.lie import gp as lie_gp
 from steam_ref.linear.threads import blas_threads
 from steam_ref.motion import LieGroupAccelPrior, LieGroupWnoa, motion_prior
@@ -57,13 +57,13 @@ def _close(analytic, numeric, tol=1e-9):
 
 
 def test_the_table_builds_both_residuals_and_refuses_a_planar_qc():
-    prior = motion_prior("se3", QC6)
-    assert isinstance(prior, LieGroupWnoa) and prior.group is SE3 and prior.residual == "local-variable"
-    assert prior.kind is SE3_STATE and prior.state_dim == 18 and len(prior.state_names) == 18
+    prior = motion_prior("se3", QC6)  # on SE3V: poses [t; φ], so a state has as many numbers as its tangent
+    assert isinstance(prior, LieGroupWnoa) and prior.group is SE3V and prior.residual == "local-variable"
+    assert prior.kind is GroupState(SE3V) and prior.state_dim == 12 and len(prior.state_names) == 12
     assert motion_prior("se3-simplified", QC6).residual == "simplified"
     for name in ("se3", "se3-simplified"):
         with pytest.raises(
-            ShapeError, match=r"qc must be \(6, 6\) on the body twist of a state on SE3, got shape \(3, 3\)"
+            ShapeError, match=r"qc must be \(6, 6\) on the body twist of a state on SE3V, got shape \(3, 3\)"
         ):
             motion_prior(name, np.eye(3))
     with pytest.raises(SteamError, match="'se3' takes no option 'se2_residual'"):
@@ -116,6 +116,9 @@ P0 = SE3.exp([0.0, 0.0, 0.0, 0.5, 0.0, 0.0])  # Pose3::Expmap([0.5, 0, 0, 0, 0, 
 V0 = np.array([0.1, 0.0, 0.0, 1.0, 0.0, 0.5])  # GTSAM's [1, 0, 0.5, 0.1, 0, 0] (rotation first), ours translation first
 
 
+RESIDUAL = {"se3": "local-variable", "se3-simplified": "simplified"}
+
+
 def _along(k: float) -> np.ndarray:
     return np.r_[SE3.compose(P0, SE3.exp(k * DT * V0)), V0]  # p0.expmap(k · timestep · v0), the same velocity
 
@@ -124,7 +127,7 @@ def _along(k: float) -> np.ndarray:
 def test_gtsams_constant_velocity_fixture_has_zero_prior_error_and_interpolates_onto_its_own_poses(name):
     """GTSAM: the factors' error is 0 to 1e-9 at the fixture, its interpolated p1, p3 match to 1e-6 and v1, v3 to
     1e-12 (``testSe3UpdateInterpValues``); both residuals hold all of it to 1e-14 here."""
-    prior = motion_prior(name, np.eye(6))  # Q_se3 = Vector6::Ones()
+    prior = LieGroupWnoa(SE3, np.eye(6), RESIDUAL[name])  # Q_se3 = Vector6::Ones()
     for a, b in ((0, 2), (2, 4)):
         np.testing.assert_allclose(prior.prior_factor(X(0), X(1), 2 * DT).error(_along(a), _along(b)), 0.0, atol=1e-14)
     for k, (a, b) in ((1, (0, 2)), (3, (2, 4))):
@@ -138,7 +141,7 @@ def test_gtsams_doubled_velocity_fixture_leaves_the_velocity_as_residual():
     p0 = SE3.exp([1.0, 0.0, 0.0, 0.5, 0.0, 0.2])  # Pose3::Expmap([0.5, 0, 0.2, 1, 0, 0])
     v0 = np.array([1.0, 0.0, 2.0, 0.1, 0.0, 0.0])  # [0.1, 0, 0, 1, 0, 2]
     x1, x2 = np.r_[p0, v0], np.r_[SE3.compose(p0, SE3.exp(0.1 * v0)), 2 * v0]
-    e = motion_prior("se3", np.eye(6)).prior_factor(X(0), X(1), 0.1).error(x1, x2)
+    e = LieGroupWnoa(SE3, np.eye(6)).prior_factor(X(0), X(1), 0.1).error(x1, x2)
     np.testing.assert_allclose(e, np.r_[np.zeros(6), v0], rtol=0, atol=1e-15)
 
 

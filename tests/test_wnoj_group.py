@@ -15,7 +15,7 @@ from finite_differences import jacobian8_stacked
 
 from steam_ref.errors import ShapeError
 from steam_ref.gp.interpolate import interpolation_terms
-from steam_ref.lie import SE2, SE3, GroupState, gp_accel
+from steam_ref.lie import SE2, SE3, SE3V, GroupState, gp_accel
 from steam_ref.linear.threads import blas_threads
 from steam_ref.motion import LieGroupAccelPrior, motion_prior
 from steam_ref.variables import X
@@ -96,8 +96,8 @@ def test_the_prior_factor_and_the_interpolated_and_extrapolated_jacobians_are_ex
 def test_a_drawn_step_leaves_its_own_noise_and_the_mean_leaves_none(name):
     """The local variables and their map back are inverses (the kinematics are exact, not truncated): a state
     drawn as γ₂ = Φ γ₁ + v + w leaves e = w; the prediction leaves 0; a constant twist interpolates onto itself."""
-    g = GROUPS[name[:3]]
-    prior = motion_prior(name, _qc(g))
+    prior = motion_prior(name, _qc(GROUPS[name[:3]]))
+    g = prior.group  # SE3V for the table's SE(3) priors: poses [t; φ]
     rng = np.random.default_rng(7)
     x1 = np.r_[g.exp(rng.standard_normal(g.dim)), rng.standard_normal(g.dim), 0.3 * rng.standard_normal(g.dim)]
     w = 0.2 * rng.standard_normal(3 * g.dim)
@@ -119,5 +119,5 @@ def test_the_table_refuses_a_qc_of_the_wrong_shape():
         with pytest.raises(ShapeError, match=rf"qc must be \({d}, {d}\) on the body jerk"):
             motion_prior(name, wrong)
     prior = motion_prior("se3-wnoj", np.eye(6))
-    assert prior.kind is GroupState(SE3, 2) and prior.state_dim == 24 and len(prior.state_names) == 24
+    assert prior.kind is GroupState(SE3V, 2) and prior.state_dim == 18 and len(prior.state_names) == 18
     assert motion_prior("se2-singer", np.eye(3), singer_time_constant=2.0).sde.A[6, 6] == -0.5

@@ -51,11 +51,11 @@ def _se2(qc: ArrayLike, se2_residual: str = "local-variable") -> MotionPrior:
 
 
 def _se3(qc: ArrayLike) -> MotionPrior:
-    return LieGroupWnoa(lie.SE3, qc)  # SE(3) loads when a user names it (lie/__init__.py, PEP 562)
+    return LieGroupWnoa(lie.SE3V, qc)  # SE(3) loads when a user names it (lie/__init__.py, PEP 562)
 
 
 def _se3_simplified(qc: ArrayLike) -> MotionPrior:
-    return LieGroupWnoa(lie.SE3, qc, residual="simplified")
+    return LieGroupWnoa(lie.SE3V, qc, residual="simplified")
 
 
 def _se2_wnoj(qc: ArrayLike) -> MotionPrior:
@@ -63,7 +63,7 @@ def _se2_wnoj(qc: ArrayLike) -> MotionPrior:
 
 
 def _se3_wnoj(qc: ArrayLike) -> MotionPrior:
-    return LieGroupAccelPrior.wnoj(lie.SE3, qc)
+    return LieGroupAccelPrior.wnoj(lie.SE3V, qc)
 
 
 def _se2_singer(qc: ArrayLike, singer_time_constant: float = 1.0) -> MotionPrior:
@@ -71,7 +71,7 @@ def _se2_singer(qc: ArrayLike, singer_time_constant: float = 1.0) -> MotionPrior
 
 
 def _se3_singer(qc: ArrayLike, singer_time_constant: float = 1.0) -> MotionPrior:
-    return LieGroupAccelPrior.singer(lie.SE3, qc, singer_time_constant)
+    return LieGroupAccelPrior.singer(lie.SE3V, qc, singer_time_constant)
 
 
 MOTION_PRIORS: dict[str, PriorChoice] = {
