@@ -14,6 +14,7 @@ import numpy as np
 
 from ..bayes_tree import ISAM2Params
 from ..datasets import generate_synthetic
+from ..datasets.registry import DATASETS
 from ..errors import SteamError
 from ..evaluate import trajectory_figures
 from ..motion import MOTION_PRIORS
@@ -26,6 +27,7 @@ from ..paper.solvers import BayesTreeSolver
 from ..plot.figures import plot_trajectory
 from ..variables import X
 from . import explain
+from .rigid import run_rigid
 from .args import (
     QC_SCALES,
     SINGER_TIME_CONSTANTS,
@@ -203,6 +205,8 @@ def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     """Stream the data set, write the files asked for, print the figures."""
+    if args.dataset in DATASETS and DATASETS[args.dataset].rigid:  # a 3-D set: solved on SE(3) (cli/rigid.py)
+        return run_rigid(args)
     check_output(args.save_estimates, ".npz", "--save-estimates")
     check_trajectory_output(args)
     check_output(args.plot, ".png", "--plot")

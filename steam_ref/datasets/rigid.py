@@ -17,7 +17,7 @@ left and climbing: a helix, bent by the model's noise.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -30,6 +30,8 @@ from ..lie.points import point_dim, position, rotation_part, to_body
 from ..motion import MotionPrior
 
 __all__ = ["RigidReadings", "RigidSample", "sample_rigid_task", "RIGID_NOISE"]
+
+_TABLES = ("positions", "gyro", "ranges", "points")  # the tables of readings, each row [t, ...]
 
 # The sigmas of a drawn task's readings, and of the first state's prior (pose block, twist block).
 RIGID_NOISE = {
@@ -51,7 +53,8 @@ class RigidReadings:
     [t, ω], ``ranges`` [t, landmark id, r], ``points`` [t, landmark id, q (k) in the body frame], ``landmarks``
     [id, surveyed position (k)]; each table's sigma in ``sigmas`` (keys as :data:`RIGID_NOISE`).
     ``held_out`` [t, p (k)]: position fixes kept from every estimator, to score it. ``first_state``: the first
-    state's prior mean (None: the run makes one from the readings).
+    state's prior mean; ``initial_states``: each state's first value (None: the prior's prediction from the one
+    before).
     """
 
     name: str
@@ -65,6 +68,8 @@ class RigidReadings:
     landmarks: NDArray = field(default_factory=lambda: np.zeros((0, 1)))
     held_out: NDArray = field(default_factory=lambda: np.zeros((0, 1)))
     first_state: NDArray | None = None
+    initial_states: NDArray | None = None  # (n, kind.size) each state's first value; None: the prior's predictions
+    qc: NDArray | None = None  # the Qc (dim, dim) the data set runs with unless told otherwise
     source: str = ""
     lacks: str = ""  # what the data set does not have (no ground truth, ...), said in a run's report
 
@@ -88,7 +93,37 @@ class RigidReadings:
 
     @property
     def n_readings(self) -> int:
-        return sum(len(getattr(self, t)) for t in ("positions", "gyro", "ranges", "points"))
+        return sum(len(getattr(self, t)) for t in _TABLES)
+
+    def head(self, n: int) -> RigidReadings:
+        """The first ``n`` (>= 2) states and the readings up to the last one's time (held-out fixes too)."""
+        n = integer("n", n, 2)
+        if n >= len(self.state_times):
+            return self
+        end = self.state_times[n - 1]
+        cut = {table: getattr(self, table)[getattr(self, table)[:, 0] <= end] for table in (*_TABLES, "held_out")}
+        initial = None if self.initial_states is None else self.initial_states[:n]
+        return replace(self, state_times=self.state_times[:n], initial_states=initial, **cut)
+
+    def on(self, kind: GroupState) -> RigidReadings:
+        """The same readings for states of ``kind`` (a group of the same dimensions, any number of derivatives):
+        each first value's pose Exp(Log(T)) on the new group, its twist kept, an acceleration added as zero or
+        dropped."""
+        if kind is self.kind:
+            return self
+        old, new = self.kind.group, kind.group
+        if (old.dim, point_dim(old)) != (new.dim, point_dim(new)):
+            raise DataError(f"{self.name}: its states are on {old!r}; {new!r} moves points of another dimension")
+
+        def moved(x: NDArray | None) -> NDArray | None:
+            if x is None:
+                return None
+            x = np.asarray(x, dtype=float)
+            d, twist = old.dim, x[..., old.size : old.size + old.dim]
+            extra = np.zeros(x.shape[:-1] + (d * (kind.derivatives - 1),))
+            return np.concatenate([new.exp(old.log(x[..., : old.size])), twist, extra], axis=-1)
+
+        return replace(self, kind=kind, first_state=moved(self.first_state), initial_states=moved(self.initial_states))
 
 
 @dataclass(frozen=True)

@@ -77,7 +77,7 @@ def steps(data: RigidReadings, prior: MotionPrior, initial: NDArray | None = Non
     """The updates of a run, state by state (module docstring). ``initial`` (n, state size): each state's first
     value; None: the prior's prediction from the one before (the first at ``data.first_state``)."""
     if prior.kind is not data.kind:
-        raise SteamError(f"{data.name} reads states of kind {data.kind!r}; the prior {prior.name!r} has {prior.kind!r}")
+        raise SteamError(f"{data.name} has states of kind {data.kind!r}; the prior {prior.name!r} has {prior.kind!r}")
     t = data.state_times
     slot = {table: np.searchsorted(t, getattr(data, table)[:, 0] - _AT) for table in TABLES}  # first tᵢ ≥ τ - _AT
     survey = {int(row[0]): row[1:] for row in data.landmarks}
@@ -131,7 +131,9 @@ def solve_rigid(
     when it left the window)."""
     if method not in METHODS:
         raise SteamError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
+    data = data.on(prior.kind)  # the data's first values as the prior's states
     n = len(data.state_times)
+    initial = data.initial_states if initial is None else initial
     if method == "batch":
         graph, values = FactorGraph(), {}
         for step in steps(data, prior, initial):
@@ -165,7 +167,7 @@ def _gap(data: RigidReadings, i: int) -> float:
 def _positions_at(data: RigidReadings, prior: MotionPrior, states: NDArray, times: NDArray) -> NDArray:
     """The GP's mean position at each of ``times`` (inside the states' span) [YIB Eq. 18]: between the states
     around it, or a state's own at its time."""
-    t, g = data.state_times, data.kind.group
+    t, g = data.state_times, prior.kind.group
     out = []
     for tau in times:
         i = int(np.clip(np.searchsorted(t, tau), 1, len(t) - 1))
