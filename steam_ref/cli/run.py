@@ -27,7 +27,6 @@ from ..paper.solvers import BayesTreeSolver
 from ..plot.figures import plot_trajectory
 from ..variables import X
 from . import explain
-from .rigid import run_rigid
 from .args import (
     QC_SCALES,
     SINGER_TIME_CONSTANTS,
@@ -54,6 +53,7 @@ from .paths import (
     write_output,
     write_plot,
 )
+from .rigid import run_rigid
 from .streams import json_line
 
 __all__ = ["add_parser", "run", "save_estimates"]

@@ -29,7 +29,11 @@ if TYPE_CHECKING:
     from .se3 import SE3, SE3V
     from .so3 import SO3
 
-_LATER = {"SO3": ".so3", "SE3": ".se3", "SE3V": ".se3"}  # loaded when first used (PEP 562): a planar run never loads them
+_LATER = {
+    "SO3": ".so3",
+    "SE3": ".se3",
+    "SE3V": ".se3",
+}  # loaded when first used (PEP 562): a planar run never loads them
 
 
 def __getattr__(name: str) -> object:
@@ -38,4 +42,14 @@ def __getattr__(name: str) -> object:
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
-__all__ = ["LieGroup", "SE2", "SO3", "SE3", "SE3V", "GroupState", "SE2_STATE", "STATE_SIZE", "world_position_covariance"]
+__all__ = [
+    "LieGroup",
+    "SE2",
+    "SO3",
+    "SE3",
+    "SE3V",
+    "GroupState",
+    "SE2_STATE",
+    "STATE_SIZE",
+    "world_position_covariance",
+]
