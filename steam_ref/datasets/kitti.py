@@ -25,6 +25,7 @@ increase.
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -39,6 +40,7 @@ from .rigid import RigidReadings
 __all__ = ["load_kitti", "GPS_FILE", "IMU_FILE", "KITTI_QC", "KITTI_SIGMAS", "HOLD_OUT_EVERY"]
 
 GPS_FILE, IMU_FILE = "KittiGps_converted.txt", "KittiEquivBiasedImu.txt"
+_PLAIN = re.compile(r"[0-9eE+\-., \t\n]*")  # what a file of decimal numbers holds (anything else: row by row)
 HOLD_OUT_EVERY = 5  # the 5th, 10th, ... fix is held out
 KITTI_QC = np.diag([1.0, 0.1, 0.1, 0.01, 0.01, 0.1])  # (m/s²)², (rad/s²)² per Hz: a car, forward; chosen a priori
 KITTI_SIGMAS = {
@@ -57,7 +59,16 @@ def _table(path: Path, header: str, separator: str | None, width: int) -> NDArra
         raise DataError(f"{path}: cannot read it ({exc})") from None
     if not lines or lines[0].split(separator) != header.split(separator):
         raise DataError(f"{path}, line 1: expected the header {header!r}, got {lines[0][:80] if lines else ''!r}")
-    rows = []
+    body = [line for line in lines[1:] if line.strip()]
+    if _PLAIN.fullmatch("\n".join(body)):  # only digits, signs, points, exponents, separators: parse in one call
+        try:
+            table = np.array([line.split(separator) for line in body], dtype=float)
+        except ValueError:
+            table = None
+        shaped = table is not None and table.ndim == 2 and table.shape[1] == width and len(table) >= 2
+        if shaped and np.all(np.isfinite(table)) and np.all(np.diff(table[:, 0]) > 0):  # type: ignore[index]
+            return table  # type: ignore[return-value]
+    rows = []  # something is wrong: find the first line that says what, row by row
     for no, line in enumerate(lines[1:], start=2):
         if not line.strip():
             continue
