@@ -25,7 +25,7 @@ from .streams import json_line
 __all__ = ["run_rigid"]
 
 # run's options that a 3-D run does not read, with the value that means "not given"
-_PLANAR = {
+_PLANAR: dict[str, object] = {
     "every": None, "skip": 1, "range_states": False, "converge_at_end": False, "departure": [], "preset": None,
     "score_against_optimum": False, "se2_residual": None, "steps": None, "save_estimates": None, "plot": None,
     "tree_dot": None, "lag_history": False, "time_budget": None, "relinearize_threshold": None,
@@ -46,9 +46,10 @@ def run_rigid(args: argparse.Namespace) -> int:
     given = [f"--{k.replace('_', '-')}" for k, none in _PLANAR.items() if getattr(args, k, none) != none]
     if given or getattr(args, "save_trajectory", None):
         raise SteamError(f"--dataset {args.dataset} is a 3-D set: {(given or ['--save-trajectory'])[0]} does not apply")
-    data = load_dataset(args.dataset, data_dir=args.data_dir, seed=args.seed)
-    if not isinstance(data, RigidReadings):
+    loaded = load_dataset(args.dataset, data_dir=args.data_dir, seed=args.seed)
+    if not isinstance(loaded, RigidReadings):
         raise SteamError(f"--dataset {args.dataset!r} gives no 3-D readings")
+    data = loaded
     if args.max_poses is not None:
         data = data.head(args.max_poses)
     options = {} if args.singer_time_constant is None else {"singer_time_constant": args.singer_time_constant}

@@ -62,13 +62,13 @@ def _table(path: Path, header: str, separator: str | None, width: int) -> NDArra
     body = [line for line in lines[1:] if line.strip()]
     if _PLAIN.fullmatch("\n".join(body)):  # only digits, signs, points, exponents, separators: parse in one call
         try:
-            table = np.array([line.split(separator) for line in body], dtype=float)
+            table: NDArray | None = np.array([line.split(separator) for line in body], dtype=float)
         except ValueError:
             table = None
-        shaped = table is not None and table.ndim == 2 and table.shape[1] == width and len(table) >= 2
-        if shaped and np.all(np.isfinite(table)) and np.all(np.diff(table[:, 0]) > 0):  # type: ignore[index]
-            return table  # type: ignore[return-value]
-    rows = []  # something is wrong: find the first line that says what, row by row
+        if table is not None and table.ndim == 2 and table.shape[1] == width and len(table) >= 2:  # noqa: SIM102
+            if np.all(np.isfinite(table)) and np.all(np.diff(table[:, 0]) > 0):
+                return table
+    rows: list[list[float]] = []  # something is wrong: find the first line that says what, row by row
     for no, line in enumerate(lines[1:], start=2):
         if not line.strip():
             continue

@@ -25,8 +25,9 @@ from numpy.typing import ArrayLike, NDArray
 from ..arguments import integer
 from ..errors import DataError, SteamError
 from ..lie import GroupState
-from ..lie.group import check_group
 from ..lie.points import point_dim, position, rotation_part, to_body
+from ..lie.state import group_state
+from ..manifold import Manifold
 from ..motion import MotionPrior
 
 __all__ = ["RigidReadings", "RigidSample", "sample_rigid_task", "RIGID_NOISE"]
@@ -105,12 +106,13 @@ class RigidReadings:
         initial = None if self.initial_states is None else self.initial_states[:n]
         return replace(self, state_times=self.state_times[:n], initial_states=initial, **cut)
 
-    def on(self, kind: GroupState) -> RigidReadings:
+    def on(self, kind: Manifold) -> RigidReadings:
         """The same readings for states of ``kind`` (a group of the same dimensions, any number of derivatives):
         each first value's pose Exp(Log(T)) on the new group, its twist kept, an acceleration added as zero or
         dropped."""
         if kind is self.kind:
             return self
+        kind = group_state(kind)
         old, new = self.kind.group, kind.group
         if (old.dim, point_dim(old)) != (new.dim, point_dim(new)):
             raise DataError(f"{self.name}: its states are on {old!r}; {new!r} moves points of another dimension")
@@ -156,8 +158,8 @@ def sample_rigid_task(
     a group of rigid motions: 'se3', 'se3-wnoj', ...; module docstring). Each state has a gyro reading, a range and
     a body-frame point of its nearest landmark; every ``gps_every``-th state a position fix. ``noise`` overrides
     :data:`RIGID_NOISE`. A draw the model cannot read (a step turning beyond π) is a DataError naming the step."""
-    kind = prior.kind
-    g = check_group(getattr(kind, "group", None), f"the group of {prior!r}")
+    kind = group_state(prior.kind, f"the state of {prior!r}")
+    g = kind.group
     k, spin = point_dim(g), rotation_part(g)
     n = integer("n_steps", n_steps, 1) + 1
     n_landmarks = integer("n_landmarks", n_landmarks, 1)

@@ -30,7 +30,7 @@ from ..manifold import Manifold
 from .group import LieGroup, check_group
 from .se2 import SE2
 
-__all__ = ["GroupState", "SE2_STATE", "STATE_SIZE", "world_position_covariance"]
+__all__ = ["GroupState", "SE2_STATE", "STATE_SIZE", "group_state", "world_position_covariance"]
 
 
 class GroupState(Manifold):
@@ -140,3 +140,11 @@ def world_position_covariance(x: NDArray, cov: NDArray, *, group: LieGroup = SE2
     cov = check_covariance("cov", cov, cov.shape[0])
     R = group.matrix(finite("x", x)[: group.size])[:n, :n]
     return R @ cov[:n, :n] @ R.T
+
+
+def group_state(kind: object, what: str = "the prior's state") -> GroupState:
+    """``kind`` itself when it is a state on a group (:class:`GroupState`); SteamError naming ``what`` otherwise (a
+    3-D run, a rigid body's reading, needs a pose on a group, not a vector)."""
+    if not isinstance(kind, GroupState):
+        raise SteamError(f"{what} must be a pose on a group of rigid motions (a GroupState), got {kind!r}")
+    return kind

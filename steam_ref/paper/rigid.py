@@ -28,6 +28,7 @@ from ..factors import Factor, LieStatePrior, PriorFactor
 from ..factors.point_readings import AngularVelocityReading, PointReading, PositionReading, RangeReading
 from ..graph import FactorGraph
 from ..lie.points import position
+from ..lie.state import group_state
 from ..linear.threads import limited
 from ..motion import MotionPrior
 from ..variables import Key, L, Values, X
@@ -59,26 +60,25 @@ class Step:
 
 def _reading(data: RigidReadings, table: str, row: NDArray, key: Key) -> Factor:
     """The factor of one row of a table, on the state ``key`` (the state at the reading's time)."""
-    opts = {"group": data.kind.group, "derivatives": data.kind.derivatives}
-    sigma = data.sigmas
+    g, n, sigma = data.kind.group, data.kind.derivatives, data.sigmas
     if table == "positions":
-        return PositionReading.create(key, row[1:], sigma["position"], **opts)
+        return PositionReading.create(key, row[1:], sigma["position"], group=g, derivatives=n)
     if table == "gyro":
-        return AngularVelocityReading.create(key, row[1:], sigma["gyro"], **opts)
+        return AngularVelocityReading.create(key, row[1:], sigma["gyro"], group=g, derivatives=n)
     if table == "ranges":
-        return RangeReading.create(key, L(int(row[1])), row[2], sigma["range"], **opts)
-    return PointReading.create(key, L(int(row[1])), row[2:], sigma["point"], **opts)
+        return RangeReading.create(key, L(int(row[1])), row[2], sigma["range"], group=g, derivatives=n)
+    return PointReading.create(key, L(int(row[1])), row[2:], sigma["point"], group=g, derivatives=n)
 
 
 TABLES = ("positions", "gyro", "ranges", "points")
 
 
-def first_state_prior(data: RigidReadings, prior: MotionPrior) -> Factor:
+def first_state_prior(data: RigidReadings) -> Factor:
     """The first state's prior: at ``data.first_state`` with the sigmas 'first_pose' and 'first_twist'."""
     if data.first_state is None:
         raise SteamError(f"{data.name}: no first state to put the first state's prior at")
     d = data.kind.group.dim
-    sig = np.r_[np.full(d, data.sigmas["first_pose"]), np.full(prior.kind.dim - d, data.sigmas["first_twist"])]
+    sig = np.r_[np.full(d, data.sigmas["first_pose"]), np.full(data.kind.dim - d, data.sigmas["first_twist"])]
     return LieStatePrior.create(X(0), data.first_state, sig, group=data.kind.group, derivatives=data.kind.derivatives)
 
 
@@ -91,13 +91,13 @@ def steps(data: RigidReadings, prior: MotionPrior, initial: NDArray | None = Non
     slot = {table: np.searchsorted(t, getattr(data, table)[:, 0] - _AT) for table in TABLES}  # first tᵢ ≥ τ - _AT
     survey = {int(row[0]): row[1:] for row in data.landmarks}
     seen: set[int] = set()
-    value = data.first_state if initial is None else initial[0]
+    value = np.asarray(data.first_state if initial is None else initial[0], dtype=float)
     for i in range(len(t)):
         if initial is not None:
             value = initial[i]
         elif i:
             value = prior.predict(value, t[i] - t[i - 1])
-        factors = [first_state_prior(data, prior)] if i == 0 else [prior.prior_factor(X(i - 1), X(i), t[i] - t[i - 1])]
+        factors = [first_state_prior(data)] if i == 0 else [prior.prior_factor(X(i - 1), X(i), t[i] - t[i - 1])]
         new: dict[Key, NDArray] = {}
         for table in TABLES:
             rows = getattr(data, table)
@@ -176,7 +176,7 @@ def _gap(data: RigidReadings, i: int) -> float:
 def _positions_at(data: RigidReadings, prior: MotionPrior, states: NDArray, times: NDArray) -> NDArray:
     """The GP's mean position at each of ``times`` (inside the states' span) [YIB Eq. 18]: between the states
     around it, or a state's own at its time."""
-    t, g = data.state_times, prior.kind.group
+    t, g = data.state_times, group_state(prior.kind).group
     out = []
     for tau in times:
         i = int(np.clip(np.searchsorted(t, tau), 1, len(t) - 1))
@@ -216,7 +216,7 @@ def _inside(data: RigidReadings) -> NDArray:
 def rigid_nees(run: RigidRun, truth: NDArray, prior: MotionPrior) -> dict[str, NDArray]:
     """NEES of each state's pose and twist blocks (the truth in the right tangent at the estimate, x_true ⊖ x̂, the
     covariance's coordinates) from the solver's marginal covariances."""
-    d = prior.kind.group.dim
+    d = group_state(prior.kind).group.dim
     keys = [X(i) for i in range(len(truth))]
     covs = run.solver.marginal_covariances(keys)  # type: ignore[attr-defined]
     errors = np.array([prior.kind.local(x, y) for x, y in zip(run.states, truth, strict=True)])
@@ -243,7 +243,7 @@ def rigid_consistency(
             scores = rigid_nees(run, task.states, prior)
             for block, values in scores.items():
                 runs[method][block].append(float(np.mean(values)))
-    d = prior.kind.group.dim
+    d = group_state(prior.kind).group.dim
     band, needed = chi2_band(n_seeds, d), runs_needed(d)
     return {
         method: {
