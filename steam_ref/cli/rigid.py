@@ -18,7 +18,7 @@ import numpy as np
 from ..datasets.rigid import RigidReadings
 from ..datasets.search import load_dataset
 from ..errors import SteamError
-from ..motion import motion_prior
+from ..motion import MOTION_PRIORS, motion_prior
 from ..paper.rigid import held_out_errors, solve_rigid, straight_line_errors
 from .streams import json_line
 
@@ -52,9 +52,11 @@ def run_rigid(args: argparse.Namespace) -> int:
     data = loaded
     if args.max_poses is not None:
         data = data.head(args.max_poses)
-    options = {} if args.singer_time_constant is None else {"singer_time_constant": args.singer_time_constant}
+    name = args.prior or "se3"
+    takes = MOTION_PRIORS[name].options if name in MOTION_PRIORS else ()  # an unknown name: motion_prior says so
+    options = {k: getattr(args, k) for k in takes if getattr(args, k, None) is not None}
     qc = args.qc_scale * (np.eye(6) if data.qc is None else data.qc)
-    prior = motion_prior(args.prior or "se3", qc, **options)
+    prior = motion_prior(name, qc, **options)
     straight = straight_line_errors(data)
     summary: dict = {
         "dataset": args.dataset,
