@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import shutil
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -153,3 +154,15 @@ def test_steam_ref_run_on_kitti_reports_the_held_out_error_beside_a_straight_lin
         rmse = summary[method]["rmse_m"]
         assert np.isfinite(rmse) and rmse < line, (method, rmse, line)
     assert summary["batch"]["converged"]
+
+
+def test_readings_before_the_first_state_or_after_the_last_are_dropped_and_counted():
+    prior = motion_prior("se3", QC)
+    task = sample_rigid_task(prior, 6, 2, 1)
+    early = np.r_[-0.5, task.data.gyro[0, 1:]]
+    late = np.r_[6.5, task.data.gyro[-1, 1:]]
+    data = replace(task.data, gyro=np.vstack([early, task.data.gyro, late]))
+    keys = [f.keys for step in steps(data, prior) for f in step.factors]
+    assert all(k.index >= 0 for ks in keys for k in ks)
+    assert len(keys) == len([f for step in steps(task.data, prior) for f in step.factors])
+    assert solve_rigid(data, prior, "batch").dropped == 2

@@ -88,7 +88,10 @@ def steps(data: RigidReadings, prior: MotionPrior, initial: NDArray | None = Non
     if prior.kind is not data.kind:
         raise SteamError(f"{data.name} has states of kind {data.kind!r}; the prior {prior.name!r} has {prior.kind!r}")
     t = data.state_times
-    slot = {table: np.searchsorted(t, getattr(data, table)[:, 0] - _AT) for table in TABLES}  # first tᵢ ≥ τ - _AT
+    slot = {}  # each reading's state: the first tᵢ ≥ τ - _AT; -1 before the first state, n after the last (dropped)
+    for table in TABLES:
+        tau = getattr(data, table)[:, 0]
+        slot[table] = np.where(tau < t[0] - _AT, -1, np.searchsorted(t, tau - _AT))
     survey = {int(row[0]): row[1:] for row in data.landmarks}
     seen: set[int] = set()
     value = np.asarray(data.first_state if initial is None else initial[0], dtype=float)
