@@ -34,11 +34,11 @@ import scipy.linalg
 from requirements import optional_import
 
 from steam_ref.errors import ShapeError, SteamError
-from steam_ref.lie import SE2, SE3, SO3, GroupState, LieGroup
+from steam_ref.lie import SE2, SE3, SE3V, SO3, GroupState, LieGroup
 
 mp = optional_import("mpmath", "test")
 
-GROUPS = [SE2, SO3, SE3]  # a new group joins the battery here
+GROUPS = [SE2, SO3, SE3, SE3V]  # a new group joins the battery here
 
 H = 2.0**-7  # the stencil's step (exact, so x ± kh is exact for |x| ≥ 1/16)
 STENCIL = np.array([1 / 280, -4 / 105, 1 / 5, -4 / 5, 0, 4 / 5, -1 / 5, 4 / 105, -1 / 280])

@@ -204,9 +204,9 @@ def test_bad_input_names_the_offending_value():
         LiePriorFactor.create(X(0), X(1), DT, QC, "lie", group=SE2)
     with pytest.raises(SteamError, match=r"qc must be \(3, 3\)"):
         LiePriorFactor.create(X(0), X(1), DT, np.eye(2), group=SE2)
-    with pytest.raises(SteamError, match="inner must be a PoseReading"):
+    with pytest.raises(SteamError, match=r"inner must read a state of kind SE2_STATE \(the reading at tau\)"):
         LieInterpolatedFactor.create(
-            LieStatePrior.create(X(9), np.zeros(6), 1.0, group=SE2), X(0), X(1), 0, 1, 0.5, QC, group=SE2
+            LieStatePrior.create(X(9), np.zeros(9), 1.0, group=SE2, derivatives=2), X(0), X(1), 0, 1, 0.5, QC, group=SE2
         )
     with pytest.raises(SteamError, match="times must increase strictly"):
         lie_prior_factors([X(0), X(1)], np.array([1.0, 1.0]), QC, group=SE2)

@@ -18,6 +18,7 @@ from typing import Any, Protocol
 from ..arguments import parse_decimal
 from ..datasets import LandmarkDataset, RangeDataset, load_dataset
 from ..datasets.registry import DATASETS, loadable
+from ..datasets.rigid import RigidReadings
 from ..errors import SteamError, UncleanedDataWarning
 from ..paper.presets import PRESETS
 
@@ -199,6 +200,8 @@ def preset_of(args: argparse.Namespace) -> str:
     --preset (each preset changes what is done to the file: Plaza's fits a range correction to its truth)."""
     if args.preset is not None:
         return args.preset
+    if args.dataset in DATASETS and DATASETS[args.dataset].rigid:
+        raise SteamError(f"--dataset {args.dataset!r} is a 3-D set: `steam-ref run --dataset {args.dataset}` solves it")
     if args.dataset not in DATASETS or DATASETS[args.dataset].preset is None:
         raise SteamError(
             f"--dataset {args.dataset!r} is a path: say which parameters it runs with, --preset {{{','.join(PRESETS)}}} "
@@ -220,4 +223,7 @@ def load_with_note(args: argparse.Namespace) -> RangeDataset | LandmarkDataset:
     (explain.data_lines), so load_dataset's UncleanedDataWarning would only repeat it."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UncleanedDataWarning)
-        return load_dataset(args.dataset, data_dir=args.data_dir, seed=args.seed)
+        data = load_dataset(args.dataset, data_dir=args.data_dir, seed=args.seed)
+    if isinstance(data, RigidReadings):  # a 3-D set: `steam-ref run` solves it (cli/rigid.py)
+        raise SteamError(f"--dataset {args.dataset!r} is a 3-D set: `steam-ref run --dataset {args.dataset}` solves it")
+    return data

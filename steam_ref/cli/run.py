@@ -15,6 +15,7 @@ import numpy as np
 from ..arguments import parse_decimal
 from ..bayes_tree import ISAM2Params
 from ..datasets import generate_synthetic
+from ..datasets.registry import DATASETS
 from ..errors import SteamError
 from ..evaluate import trajectory_figures
 from ..linear.amalgamation import zero_fraction
@@ -54,6 +55,7 @@ from .paths import (
     write_output,
     write_plot,
 )
+from .rigid import run_rigid
 from .streams import json_line
 
 __all__ = ["add_parser", "run", "save_estimates"]
@@ -231,6 +233,8 @@ def _zero_fraction(text: str) -> float:
 
 def run(args: argparse.Namespace) -> int:
     """Stream the data set, write the files asked for, print the figures."""
+    if args.dataset in DATASETS and DATASETS[args.dataset].rigid:  # a 3-D set: solved on SE(3) (cli/rigid.py)
+        return run_rigid(args)
     check_output(args.save_estimates, ".npz", "--save-estimates")
     check_trajectory_output(args)
     check_output(args.plot, ".png", "--plot")

@@ -31,10 +31,13 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
+from .. import lie  # lie.SE3V loads when first read (lie/__init__.py, PEP 562): a planar run never loads SE(3)
 from ..errors import DataError
 from .cmu import load_cmu_mat, load_cmu_text
 from .gtsam_text import load_gtsam_2d
+from .kitti import load_kitti
 from .landmarks import LandmarkDataset
+from .rigid import RigidReadings
 from .synthetic import generate_synthetic
 from .table import RangeDataset
 
@@ -60,7 +63,7 @@ _GTSAM_SOURCE = "the gtsam wheel's Data/ folder (pip install gtsam)"
 
 # How a data set is read: ``loader(path, name, seed)``, where ``path`` is its first file as found in a data folder
 # (None for a set with no file) and ``seed`` applies to a generated set only.
-Loader = Callable[[Path | None, str, int], RangeDataset | LandmarkDataset]
+Loader = Callable[[Path | None, str, int], RangeDataset | LandmarkDataset | RigidReadings]
 
 
 @dataclass(frozen=True)
@@ -93,6 +96,7 @@ class DataSet:
     # other runs' position RMSE on all of this file, to read a run by: (what ran, metres), measured by the command
     # or benchmark each names (docs/experiments.md)
     yardsticks: tuple[tuple[str, float], ...] = ()
+    rigid: bool = False  # its loader gives RigidReadings: a 3-D run on SE(3) states (`steam-ref run`, paper/rigid.py)
 
 
 def _read_mat(path: Path | None, name: str, _seed: int) -> RangeDataset:
@@ -106,6 +110,10 @@ def _read_cmu_text(path: Path | None, name: str, _seed: int) -> RangeDataset:
 
 def _read_gtsam_2d(path: Path | None, name: str, _seed: int) -> LandmarkDataset:
     return load_gtsam_2d(_given(path, name), name=name)
+
+
+def _read_kitti(path: Path | None, name: str, _seed: int) -> RigidReadings:
+    return load_kitti(_given(path, name).parent, group=lie.SE3V, name=name)  # the table's SE(3) priors' group
 
 
 def _generate(_path: Path | None, _name: str, seed: int) -> RangeDataset:
@@ -197,6 +205,13 @@ DATASETS: dict[str, DataSet] = {
             ("victoria_park.txt",),
             loader=_read_gtsam_2d,
             preset="victoria-park",
+        ),
+        _gtsam(
+            "kitti",
+            "KITTI: 470 GPS fixes and 46,968 IMU rows over 470 s (gtsam's IMU example), 3-D, no ground truth",
+            ("KittiGps_converted.txt", "KittiEquivBiasedImu.txt"),
+            loader=_read_kitti,
+            rigid=True,
         ),
         _gtsam(
             "plaza2",

@@ -28,6 +28,7 @@ from .cmu import load_cmu_mat, load_cmu_text
 from .gtsam_text import load_gtsam_2d
 from .landmarks import LandmarkDataset
 from .registry import DATASETS, DataSet, check_cached, check_regular, loadable, published_mismatch
+from .rigid import RigidReadings
 from .table import RangeDataset
 
 __all__ = [
@@ -121,7 +122,7 @@ def find_named(local: str, data_dir: str | os.PathLike | None = None) -> tuple[P
     return found, published_mismatch(found, local)
 
 
-def _load_named(s: DataSet, found: Path, seed: int) -> RangeDataset | LandmarkDataset:
+def _load_named(s: DataSet, found: Path, seed: int) -> RangeDataset | LandmarkDataset | RigidReadings:
     """The named set ``s`` read by its loader from ``found`` (its first file); a file that is not the published
     one is read as the user's own file: named by its stem with "(not the published NAME)", and ``source``
     saying how it differs."""
@@ -162,7 +163,7 @@ def _hint(key: str) -> str:
     )
 
 
-def _load_registered(s: DataSet, folders: list[Path], seed: int) -> RangeDataset | LandmarkDataset:
+def _load_registered(s: DataSet, folders: list[Path], seed: int) -> RangeDataset | LandmarkDataset | RigidReadings:
     """The registry's set ``s`` from the first folder holding all its files; for a set with an original release
     (plaza), that release's files with an UncleanedDataWarning when no folder holds the published file."""
     assert s.loader is not None
@@ -194,7 +195,7 @@ def _load_registered(s: DataSet, folders: list[Path], seed: int) -> RangeDataset
 
 def load_dataset(
     name_or_path: str | os.PathLike, data_dir: str | os.PathLike | None = None, seed: int = 0
-) -> RangeDataset | LandmarkDataset:
+) -> RangeDataset | LandmarkDataset | RigidReadings:
     """A data set by name or path.
 
     Names are those of the registry (:data:`~.registry.DATASETS`, each read by its ``loader``):

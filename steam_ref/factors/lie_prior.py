@@ -11,6 +11,10 @@ linearizes in.
   "local-variable": e = [ξ - Δt ϖ₁; J_r(ξ)⁻¹ ϖ₂ - ϖ₁] (GTSAM 4.3 ``WnoaMotionFactorPose2``, STEAM
   ``const_vel_se2``); "simplified": e = [ξ - Δt ϖ₁; ϖ₂ - ϖ₁] (gpslam, Theseus); ξ = Log(T₁⁻¹ T₂).
 - :class:`LieStatePrior`: a Gaussian prior in the tangent at a mean, e = x ⊖ mean.
+- :class:`LieAccelPriorFactor`, :class:`LieAccelInterpolatedFactor`: on states with an acceleration
+  (``GroupState(group, 2)``: pose, body twist, its rate), the prior of a three-block LTI model (WNOJ, Singer) in the
+  exact local variables of ``lie.gp_accel``, and a reading at a time between two states moved onto them
+  [TYB19; DER 14].
 """
 
 from __future__ import annotations
@@ -21,10 +25,12 @@ from typing import ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
-from ..arguments import finite, real_array
+from ..arguments import finite, number, real_array, time_step
 from ..errors import ShapeError, SteamError
+from ..gp.interpolate import interpolation_terms
 from ..gp.prior import check_qc, process_noise_sqrt_information, transition
-from ..lie import GroupState, LieGroup
+from ..gp.sde import LinearSDE
+from ..lie import GroupState, LieGroup, gp_accel
 from ..lie.gp import check_model, local_variables
 from ..lie.group import check_group
 from ..manifold import Manifold
@@ -32,7 +38,7 @@ from ..robust import RobustLoss
 from ..variables import Key, key_list
 from .base import Factor, sqrt_information
 
-__all__ = ["LiePriorFactor", "lie_prior_factors", "LieStatePrior"]
+__all__ = ["LiePriorFactor", "lie_prior_factors", "LieStatePrior", "LieAccelPriorFactor", "LieAccelInterpolatedFactor"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -119,37 +125,146 @@ class LieStatePrior(Factor):
     Σ is the covariance of the right tangent at the mean (``lie.state``); ∂e/∂δ = diag(J_r(e_T)⁻¹, I).
     """
 
-    mean: NDArray  # (size + d,)
+    mean: NDArray  # (size + d,), or (size + 2d,) with an acceleration
     group: LieGroup = field(kw_only=True)
+    derivatives: int = field(default=1, kw_only=True)  # the state's (``GroupState(group, derivatives)``)
 
     _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "mean")
+    _shared: ClassVar[tuple[str, ...]] = ("group", "derivatives")
+
+    @property
+    def key_kinds(self) -> tuple[Manifold, ...]:
+        return (GroupState(self.group, self.derivatives),)
+
+    @classmethod
+    def create(
+        cls,
+        key: Key,
+        mean: NDArray,
+        noise: NDArray | float,
+        *,
+        loss: RobustLoss | None = None,
+        group: LieGroup,
+        derivatives: int = 1,
+    ) -> LieStatePrior:
+        """Prior on ``key``; noise is a sigma, sigmas or a covariance of the tangent at ``mean`` ((1 + derivatives) d)."""
+        kind = GroupState(check_group(group), derivatives)
+        return cls(
+            (key,), sqrt_information(noise, kind.dim), mean=kind.check("mean", mean), loss=loss, group=group,
+            derivatives=derivatives,
+        )  # fmt: skip
+
+    @property
+    def key_dims(self) -> tuple[int, ...]:  # type: ignore[override]
+        return (GroupState(self.group, self.derivatives).dim,)
+
+    def error(self, x: NDArray) -> NDArray:
+        return GroupState(self.group, self.derivatives).local(self.mean, x)  # x ⊖ mean
+
+    def jacobians(self, x: NDArray) -> tuple[NDArray]:
+        e = GroupState(self.group, self.derivatives).local(self.mean, x)
+        d = self.group.dim
+        J = np.zeros(e.shape + (e.shape[-1],))
+        J[..., :d, :d] = self.group.right_jacobian_inverse(
+            e[..., :d]
+        )  # d Log(M⁻¹ T Exp δ) = J_r⁻¹ δ  [DER 11.5, 11.14]
+        J[..., d:, d:] = np.eye(e.shape[-1] - d)
+        return (J,)
+
+
+@dataclass(frozen=True, eq=False)
+class LieAccelPriorFactor(Factor):
+    """The prior of a three-block LTI model (WNOJ, Singer) between consecutive states with an acceleration on a group:
+    e = γ₂ - Φ(Δt) γ₁ - v(Δt) in the exact local variables of ``lie.gp_accel``; Σ = Q(Δt) of the model with Qc
+    read in the body frame; Jacobians exact (the second derivative of J_r(ξ)⁻¹ ϖ₂ included).  [TYB19; DER 14.1, 14.4]"""
+
+    phi: NDArray  # Φ(Δt), (3d, 3d)
+    offset: NDArray  # v(Δt), (3d,)
+    group: LieGroup = field(kw_only=True)
+
+    _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "phi", "offset")
     _shared: ClassVar[tuple[str, ...]] = ("group",)
 
     @property
     def key_kinds(self) -> tuple[Manifold, ...]:
-        return (GroupState(self.group),)
+        return (GroupState(self.group, 2),) * 2
 
     @classmethod
-    def create(
-        cls, key: Key, mean: NDArray, noise: NDArray | float, *, loss: RobustLoss | None = None, group: LieGroup
-    ) -> LieStatePrior:
-        """Prior on ``key``; noise is a sigma, sigmas (2d,) or a covariance (2d, 2d) of the tangent at ``mean``."""
-        kind = GroupState(check_group(group))
-        return cls((key,), sqrt_information(noise, kind.dim), mean=kind.check("mean", mean), loss=loss, group=group)
+    def create(cls, key1: Key, key2: Key, dt: float, sde: LinearSDE, *, group: LieGroup) -> LieAccelPriorFactor:
+        """The prior over a gap dt > 0 of ``sde`` (3 blocks of the group's dim: ``LinearSDE.wnoj``, ``.singer``)."""
+        dt, d = time_step(dt), check_group(group).dim
+        if sde.n != 3 * d:
+            raise ShapeError(
+                f"the model's states have {sde.n} numbers; a pose, twist and acceleration on {group!r} {3 * d}"
+            )
+        w = sde.sqrt_information(dt)
+        q = sde.process_noise(dt)  # [YIB Eq. 17]
+        w = sqrt_information(q, 3 * d, "Q(dt)") if w is None else w
+        return cls((key1, key2), w, phi=sde.transition(dt), offset=sde.input_integral(dt), group=group)
 
     @property
     def key_dims(self) -> tuple[int, ...]:  # type: ignore[override]
-        return (2 * self.group.dim,)
+        return (3 * self.group.dim,) * 2
 
-    def error(self, x: NDArray) -> NDArray:
-        return GroupState(self.group).local(self.mean, x)  # x ⊖ mean
+    def batch_signature(self) -> tuple:
+        return super().batch_signature() + (self.group,)
 
-    def jacobians(self, x: NDArray) -> tuple[NDArray]:
-        e = GroupState(self.group).local(self.mean, x)
-        d = self.group.dim
-        J = np.zeros(e.shape + (2 * d,))
-        J[..., :d, :d] = self.group.right_jacobian_inverse(
-            e[..., :d]
-        )  # d Log(M⁻¹ T Exp δ) = J_r⁻¹ δ  [DER 11.5, 11.14]
-        J[..., d:, d:] = np.eye(d)
-        return (J,)
+    def error(self, x1: NDArray, x2: NDArray) -> NDArray:
+        return gp_accel.prior_error(x1, x2, self.phi, self.offset, group=self.group)  # [DER 14.1]
+
+    def jacobians(self, x1: NDArray, x2: NDArray) -> tuple[NDArray, NDArray]:
+        return gp_accel.prior_jacobians(x1, x2, self.phi, group=self.group)  # [DER 14.4]
+
+
+@dataclass(frozen=True, eq=False)
+class LieAccelInterpolatedFactor(Factor):
+    """A reading at a time τ between two states with an acceleration, moved onto them through ``lie.gp_accel``:
+    e = e_inner(x(τ), …), ∂e/∂x₁ = H J₁, ∂e/∂x₂ = H J₂.  [YIB Eq. 29; DER 14.5]"""
+
+    inner: Factor  # a reading of a state GroupState(group, 2) (its first key stands for the state at τ)
+    lam: NDArray  # Λ(τ), (3d, 3d)
+    psi: NDArray  # Ψ(τ), (3d, 3d)
+    offset: NDArray  # c, (3d,) [YIB Eq. 23]
+    group: LieGroup = field(kw_only=True)
+
+    _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "lam", "psi", "offset")
+    _batched_factors: ClassVar[tuple[str, ...]] = ("inner",)
+    _shared: ClassVar[tuple[str, ...]] = ("group",)
+
+    @classmethod
+    def create(
+        cls, inner: Factor, key1: Key, key2: Key, t1: float, t2: float, tau: float, sde: LinearSDE, *, group: LieGroup
+    ) -> LieAccelInterpolatedFactor:
+        """Move ``inner`` (on the state at τ, t1 < τ < t2) onto ``key1`` at t1 and ``key2`` at t2."""
+        kind = GroupState(check_group(group), 2)
+        if inner.key_kinds[0] is not kind:
+            raise SteamError(f"inner must read a state of kind {kind!r} (the reading at tau), got {inner!r}")
+        t1, t2, tau = number("t1", t1), number("t2", t2), number("tau", tau)
+        lam, psi, offset = interpolation_terms(sde, t1, t2, tau)  # [YIB Eq. 16, 23]
+        keys = (key1, key2) + tuple(inner.keys[1:])
+        return cls(
+            keys, inner.sqrt_information, inner=inner, lam=lam, psi=psi, offset=offset, group=group, loss=inner.loss
+        )
+
+    @property
+    def key_dims(self) -> tuple[int, ...]:  # type: ignore[override]
+        return (3 * self.group.dim,) * 2 + tuple(self.inner.key_dims[1:])
+
+    @property
+    def key_kinds(self) -> tuple[Manifold, ...]:
+        return (GroupState(self.group, 2),) * 2 + tuple(self.inner.key_kinds[1:])
+
+    def batch_signature(self) -> tuple:
+        return (type(self), self.group, self.inner.batch_signature())
+
+    def interpolated_state(self, x1: NDArray, x2: NDArray) -> NDArray:
+        """x(τ) from γ(τ) = Λ γ₁ + Ψ γ₂ + c.  [YIB Eq. 18; DER 14.5]"""
+        return gp_accel.interpolate(x1, x2, self.lam, self.psi, self.offset, group=self.group, jacobians=False)  # type: ignore[return-value]
+
+    def error(self, x1: NDArray, x2: NDArray, *rest: NDArray) -> NDArray:
+        return self.inner.error(self.interpolated_state(x1, x2), *rest)  # [YIB Eq. 29]
+
+    def jacobians(self, x1: NDArray, x2: NDArray, *rest: NDArray) -> tuple[NDArray, ...]:
+        x, J1, J2 = gp_accel.interpolate(x1, x2, self.lam, self.psi, self.offset, group=self.group)
+        H, *others = self.inner.jacobians(x, *rest)
+        return (H @ J1, H @ J2, *others)  # [YIB Eq. 29]

@@ -47,18 +47,20 @@ class PoseReading(Factor):
 
     inner: Factor  # RangeFactor, BearingFactor or BearingRangeFactor with state_dim the group state's size
     group: LieGroup = field(kw_only=True)
+    derivatives: int = field(default=1, kw_only=True)  # the state's: 1 (pose, twist) or 2 (and its acceleration)
 
     _batched_factors: ClassVar[tuple[str, ...]] = ("inner",)
-    _shared: ClassVar[tuple[str, ...]] = ("group",)
+    _shared: ClassVar[tuple[str, ...]] = ("group", "derivatives")
 
     def __post_init__(self) -> None:
         super().__post_init__()
         if not isinstance(self.inner, _POSE_READINGS):
             raise SteamError(f"PoseReading wraps a range, bearing or bearing-range factor, got {self.inner!r}")
         group = check_group(self.group)
-        if (group.size, group.dim) != (3, 3) or self.inner.key_dims[0] != 6:
+        size = GroupState(group, self.derivatives).size
+        if (group.size, group.dim) != (3, 3) or self.inner.key_dims[0] != size:
             raise SteamError(
-                f"PoseReading reads a planar pose [px, py, θ] of a 6-number state; {group!r} stores {group.size} "
+                f"PoseReading reads a planar pose [px, py, θ] of a {size}-number state; {group!r} stores {group.size} "
                 f"numbers with a {group.dim}-d tangent and the reading's state has {self.inner.key_dims[0]}"
             )
 
@@ -115,10 +117,10 @@ class PoseReading(Factor):
 
     @property
     def key_kinds(self) -> tuple[Manifold, ...]:
-        return (GroupState(self.group), *self.inner.key_kinds[1:])  # a state on the group, then the landmark
+        return (GroupState(self.group, self.derivatives), *self.inner.key_kinds[1:])  # a state, then the landmark
 
     def batch_signature(self) -> tuple:
-        return (type(self), self.group, self.inner.batch_signature())
+        return (type(self), self.group, self.derivatives, self.inner.batch_signature())
 
     def error(self, x: NDArray, l: NDArray) -> NDArray:
         return self.inner.error(x, l)
@@ -139,13 +141,14 @@ class BodyVelocityFactor(Factor):
 
     measured: NDArray  # (d,)
     group: LieGroup = field(kw_only=True)
+    derivatives: int = field(default=1, kw_only=True)  # the state's: 1 (pose, twist) or 2 (and its acceleration)
 
     _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "measured")
-    _shared: ClassVar[tuple[str, ...]] = ("group",)
+    _shared: ClassVar[tuple[str, ...]] = ("group", "derivatives")
 
     @property
     def key_kinds(self) -> tuple[Manifold, ...]:
-        return (GroupState(self.group),)
+        return (GroupState(self.group, self.derivatives),)
 
     @classmethod
     def create(
@@ -156,26 +159,32 @@ class BodyVelocityFactor(Factor):
         *,
         loss: RobustLoss | None = None,
         group: LieGroup,
+        derivatives: int = 1,
     ) -> BodyVelocityFactor:
-        """Reading ``measured`` = ϖ (SE(2): [vx, vy, ω]) in the body frame; noise a sigma, sigmas (d,) or a covariance."""
+        """Reading ``measured`` = ϖ (SE(2): [vx, vy, ω]) in the body frame; noise a sigma, sigmas (d,) or a covariance;
+        ``derivatives`` the state's (``GroupState(group, derivatives)``)."""
         d = check_group(group).dim
         measured = measured_vector(measured, d, "measured")
-        return cls((key,), sqrt_information(noise, d), measured=measured, loss=loss, group=group)
+        GroupState(group, derivatives)  # refuses a number of derivatives no state holds
+        return cls(
+            (key,), sqrt_information(noise, d), measured=measured, loss=loss, group=group, derivatives=derivatives
+        )
 
     @property
     def key_dims(self) -> tuple[int, ...]:  # type: ignore[override]
-        return (2 * self.group.dim,)
+        return ((1 + self.derivatives) * self.group.dim,)
 
     def batch_signature(self) -> tuple:
-        return super().batch_signature() + (self.group,)
+        return super().batch_signature() + (self.group, self.derivatives)
 
     def error(self, x: NDArray) -> NDArray:
-        return x[..., self.group.size :] - self.measured
+        n, d = self.group.size, self.group.dim
+        return x[..., n : n + d] - self.measured
 
     def jacobians(self, x: NDArray) -> tuple[NDArray]:
         d = self.group.dim
-        J = np.zeros(x.shape[:-1] + (d, 2 * d))
-        J[..., :, d:] = np.eye(d)
+        J = np.zeros(x.shape[:-1] + (d, (1 + self.derivatives) * d))
+        J[..., :, d : 2 * d] = np.eye(d)
         return (J,)
 
 
@@ -212,10 +221,9 @@ class LieInterpolatedFactor(Factor):
         group: LieGroup,
     ) -> LieInterpolatedFactor:
         """Move ``inner`` (on the state at τ on ``group``, t1 < τ < t2) onto ``key1`` at t1 and ``key2`` at t2."""
-        if not isinstance(inner, (PoseReading, BodyVelocityFactor)):
-            raise SteamError(f"inner must be a PoseReading or BodyVelocityFactor (the reading at tau), got {inner!r}")
-        if inner.group is not check_group(group):
-            raise SteamError(f"inner reads a state on {inner.group!r}, the interpolation is on group={group!r}")
+        kind = GroupState(check_group(group))
+        if inner.key_kinds[0] is not kind:  # any reading of such a state (lie_readings, point_readings)
+            raise SteamError(f"inner must read a state of kind {kind!r} (the reading at tau), got {inner!r}")
         t1, t2, tau = number("t1", t1), number("t2", t2), number("tau", tau)
         d, qc = group.dim, check_qc(qc)
         if qc.shape != (d, d):

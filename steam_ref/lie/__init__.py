@@ -7,7 +7,8 @@
 - :mod:`.se2`: :data:`SE2`, its first instance (poses [x, y, θ], θ in (-π, π]; series below
   abs(φ) = 1, closed forms above).
 - :mod:`.so3`, :mod:`.se3`: :data:`SO3` (rotations stored as R's 9 entries row-major, tangent φ) and :data:`SE3`
-  (poses [t; R row-major], tangent [ρ; φ]); Log's angle in [0, π], exact up to π; their closed forms' coefficients
+  (poses [t; R row-major], tangent [ρ; φ]) and :data:`SE3V` (the same group on poses [t; φ], 6 numbers as its
+  tangent, so the solvers run on its states); Log's angle in [0, π], exact up to π; their closed forms' coefficients
   (:mod:`.coefficients`), each from its series below θ = 2 and its closed form above.
 - :mod:`.state`: :class:`GroupState`, the state kind of a pose on any group and its body twist,
   retracted on the right (a :class:`~steam_ref.manifold.Manifold`); :data:`SE2_STATE` =
@@ -25,10 +26,14 @@ from .se2 import SE2
 from .state import SE2_STATE, STATE_SIZE, GroupState, world_position_covariance
 
 if TYPE_CHECKING:
-    from .se3 import SE3
+    from .se3 import SE3, SE3V
     from .so3 import SO3
 
-_LATER = {"SO3": ".so3", "SE3": ".se3"}  # loaded when first used (PEP 562): a planar run never loads them
+_LATER = {
+    "SO3": ".so3",
+    "SE3": ".se3",
+    "SE3V": ".se3",
+}  # loaded when first used (PEP 562): a planar run never loads them
 
 
 def __getattr__(name: str) -> object:
@@ -37,4 +42,14 @@ def __getattr__(name: str) -> object:
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
-__all__ = ["LieGroup", "SE2", "SO3", "SE3", "GroupState", "SE2_STATE", "STATE_SIZE", "world_position_covariance"]
+__all__ = [
+    "LieGroup",
+    "SE2",
+    "SO3",
+    "SE3",
+    "SE3V",
+    "GroupState",
+    "SE2_STATE",
+    "STATE_SIZE",
+    "world_position_covariance",
+]

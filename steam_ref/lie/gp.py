@@ -91,7 +91,7 @@ def local_variables(
     if not jacobians:
         xi = group.log(group.between(T1, T2))  # ξ₂₁ = Log(T₁⁻¹ T₂)  [DER 11.10]
         velocity = _mv(group.right_jacobian_inverse(xi), w2) if model == "local-variable" else w2
-        return np.concatenate([xi, velocity], axis=-1)
+        return np.concatenate(np.broadcast_arrays(xi, velocity), axis=-1)
     rel, H1, _ = group.between(T1, T2, jacobians=True)  # ∂(T₁⁻¹T₂)/∂δT₂ = I
     xi = group.log(rel)  # ξ₂₁ = Log(T₁⁻¹ T₂)  [DER 11.10]
     jinv = group.right_jacobian_inverse(xi)
@@ -104,7 +104,7 @@ def local_variables(
     else:
         velocity, dv1, dv2 = w2, zero, zero
         dw2 = _eye(d, xi.shape[:-1])
-    gamma = np.concatenate([xi, velocity], axis=-1)
+    gamma = np.concatenate(np.broadcast_arrays(xi, velocity), axis=-1)
     return gamma, _blocks(d1, zero, dv1, zero), _blocks(jinv, zero, dv2, dw2)
 
 

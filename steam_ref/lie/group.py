@@ -38,6 +38,7 @@ from collections.abc import Callable, Mapping
 from typing import Any, ClassVar, Literal, overload
 
 import numpy as np
+import scipy.linalg
 from numpy.typing import ArrayLike, NDArray
 
 from ..arguments import finite, real_array
@@ -177,6 +178,60 @@ class LieGroup(ABC):
         """∂(J_r(ξ)⁻¹ v)/∂ξ (..., dim, dim), exact: d(J⁻¹) = -J⁻¹ dJ J⁻¹, so it is -J⁻¹ ∂(J_r(ξ) u)/∂ξ at u = J⁻¹ v."""
         jinv = self.right_jacobian_inverse(xi)
         return -_mm(jinv, self.jr_times_jacobian(xi, _mv(jinv, np.asarray(v, dtype=float))))
+
+    # --- second order, for a prior with an acceleration in its state (written once, for every group) ------------
+
+    def ad(self, xi: ArrayLike) -> NDArray:
+        """ad_ξ (..., dim, dim): ad_ξ η = vee(ξ^ η^ - η^ ξ^), the derivative of Ad(Exp(s ξ)) at s = 0."""
+        xi = self._twists("xi", xi)
+        X, E = self.hat(xi)[..., None, :, :], self.hat(np.eye(self.dim))  # (..., 1, n, n), (dim, n, n)
+        return np.swapaxes(self.vee(X @ E - E @ X), -1, -2)  # column j is ad_ξ e_j
+
+    def jr_derivatives(self, xi: ArrayLike, u: ArrayLike) -> tuple[NDArray, NDArray]:
+        """The derivatives of J_r along u: DJ[u] = ∂J_r(ξ + s u)/∂s at 0 (..., dim, dim), and the second ones
+        D²J[u, e_j] (..., dim, dim, dim), j first, exact.  [DER 14.2]
+
+        J_r(ξ) = φ₁(-ad_ξ), φ₁(z) = (eᶻ - 1)/z; for A = -ad_ξ, E = -ad_u, F_j = -ad_(e_j), the function φ₁ of the
+        block upper-triangular M = [[A, E, F, 0], [0, A, 0, F], [0, 0, A, E], [0, 0, 0, A]] holds DJ[u] in its
+        block (0, 1) and D²J[u, e_j] = D²φ₁(A)[E, F_j] in its block (0, 3); φ₁(M) is the top-right block of
+        expm([[M, I], [0, 0]]) (a matrix function by scaling and squaring: no series cut, no branch on the angle).
+        """
+        xi, u = self._twists("xi", xi), self._twists("u", u)
+        d = self.dim
+        A, E, F = -self.ad(xi), -self.ad(u), -self.ad(np.eye(d))  # (..., d, d), (..., d, d), (d, d, d)
+        shape = np.broadcast_shapes(A.shape[:-2], E.shape[:-2])
+        A = np.broadcast_to(A, shape + (d, d))[..., None, :, :]
+        E = np.broadcast_to(E, shape + (d, d))[..., None, :, :]
+        M = np.zeros(shape + (d, 8 * d, 8 * d))
+        for b in range(4):
+            M[..., b * d : (b + 1) * d, b * d : (b + 1) * d] = A
+        M[..., 0:d, d : 2 * d] = M[..., 2 * d : 3 * d, 3 * d : 4 * d] = E
+        M[..., 0:d, 2 * d : 3 * d] = M[..., d : 2 * d, 3 * d : 4 * d] = F
+        M[..., : 4 * d, 4 * d :] = np.eye(4 * d)
+        phi1 = scipy.linalg.expm(M)[..., : 4 * d, 4 * d :]  # φ₁(M)
+        return phi1[..., 0, 0:d, d : 2 * d], phi1[..., 0:d, 3 * d : 4 * d]
+
+    def jr_times_hessian(self, xi: ArrayLike, v: ArrayLike, u: ArrayLike) -> NDArray:
+        """∂/∂ξ [∂(J_r(ξ) v)/∂ξ u] at fixed u and v (..., dim, dim): column j is D²J[u, e_j] v, exact.  [DER 14.2]"""
+        _, second = self.jr_derivatives(xi, u)
+        return np.swapaxes(_mv(second, np.asarray(v, dtype=float)[..., None, :]), -1, -2)
+
+    def jr_inverse_times_hessian(self, xi: ArrayLike, v: ArrayLike, u: ArrayLike) -> NDArray:
+        """∂/∂ξ [∂(J_r(ξ)⁻¹ v)/∂ξ u] at fixed u and v (..., dim, dim), exact.  [DER 14.3]
+
+        With f = J⁻¹ v, J f = v twice differentiated: D²f[u, w] = -J⁻¹ (D²J[u, w] f + DJ[u] Df[w] + DJ[w] Df[u]),
+        and DJ[w] z = ∂(J z)/∂ξ w, Df[w] = ∂(J⁻¹ v)/∂ξ w.
+        """
+        jinv = self.right_jacobian_inverse(xi)
+        f = _mv(jinv, np.asarray(v, dtype=float))
+        G = self.jr_inverse_times_jacobian(xi, v)
+        dj_u, _ = self.jr_derivatives(xi, u)
+        inner = (
+            self.jr_times_hessian(xi, f, u)
+            + _mm(dj_u, G)
+            + self.jr_times_jacobian(xi, _mv(G, np.asarray(u, dtype=float)))
+        )
+        return -_mm(jinv, inner)
 
     def _eye(self, shape: tuple[int, ...]) -> NDArray:
         return np.broadcast_to(np.eye(self.dim), shape + (self.dim, self.dim)).copy()

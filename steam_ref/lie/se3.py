@@ -26,7 +26,7 @@ from .coefficients import DEFINITIONS, SERIES_BELOW, Coefficients, coefficients_
 from .group import LieGroup
 from .so3 import SO3, axis_frame, check_rotation, hat3, isotropic, matrix_of, mm3, mv3, rotation_angle, unit_axis
 
-__all__ = ["SE3", "SE3Group"]
+__all__ = ["SE3", "SE3Group", "SE3V", "SE3VectorGroup"]
 
 
 def _split(a: NDArray) -> tuple[NDArray, NDArray]:
@@ -277,3 +277,52 @@ def _jr_inverse_v(k: Coefficients, *components: NDArray) -> NDArray:
 
 
 SE3 = SE3Group()  # the group SE(3): every function of it is a method of this object
+
+
+class SE3VectorGroup(SE3Group):
+    """SE(3) on poses stored as [t; φ], φ the rotation vector of R (its angle in [0, π]): the same group, tangent and
+    Jacobians as :data:`SE3`, its elements 6 numbers as its tangent has, so a state on it has as many numbers as its
+    tangent (the solvers' rule, ``steam_ref.manifold``) and batch, iSAM2 and the fixed-lag smoother run on it
+    unchanged; its one instance is :data:`SE3V`. Each value goes through :data:`SE3`'s: R = Exp(φ) in, φ = Log(R)
+    out (exact up to π), so a composed pose's rotation is rounded once more than SE3's."""
+
+    name = "se3v"
+    size = 6
+
+    @staticmethod
+    def _full(a: NDArray) -> NDArray:
+        return np.concatenate([a[..., :3], SO3.exp(a[..., 3:])], axis=-1)
+
+    @staticmethod
+    def _vector(a: NDArray) -> NDArray:
+        t, R = _split(a)
+        return np.concatenate([t, SO3.log_matrix(R)], axis=-1)
+
+    def exp(self, xi: ArrayLike) -> NDArray:
+        """Exp(ξ) = (V(φ) ρ, φ) for an angle up to π; beyond, the rotation vector of Exp(φ).  [DER 13.1]"""
+        return self._vector(SE3.exp(xi))
+
+    def log(self, a: ArrayLike) -> NDArray:
+        return SE3.log(self._full(self._elements("a", a)))
+
+    def matrix(self, a: ArrayLike) -> NDArray:
+        return SE3.matrix(self._full(self._elements("a", a)))
+
+    def check(self, name: str, a: object) -> NDArray:
+        """A finite pose [t; φ]; SteamError naming ``name`` otherwise."""
+        return LieGroup.check(self, name, a)
+
+    def adjoint(self, a: ArrayLike) -> NDArray:
+        return SE3.adjoint(self._full(self._elements("a", a)))
+
+    def _compose(self, a: NDArray, b: NDArray) -> NDArray:
+        return self._vector(SE3._compose(self._full(a), self._full(b)))
+
+    def _inverse(self, a: NDArray) -> NDArray:
+        return self._vector(SE3._inverse(self._full(a)))
+
+    def _between(self, a: NDArray, b: NDArray) -> NDArray:
+        return self._vector(SE3._between(self._full(a), self._full(b)))
+
+
+SE3V = SE3VectorGroup()

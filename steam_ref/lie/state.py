@@ -25,36 +25,44 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..arguments import check_covariance, finite, real_array
-from ..errors import ShapeError
+from ..errors import ShapeError, SteamError
 from ..manifold import Manifold
 from .group import LieGroup, check_group
 from .se2 import SE2
 
-__all__ = ["GroupState", "SE2_STATE", "STATE_SIZE", "world_position_covariance"]
+__all__ = ["GroupState", "SE2_STATE", "STATE_SIZE", "group_state", "world_position_covariance"]
 
 
 class GroupState(Manifold):
-    """A pose on ``group`` and its body twist, retracted on the right (module docstring).
+    """A pose on ``group`` and its body twist (and, with ``derivatives`` = 2, its body acceleration ϖ̇), retracted
+    on the right (module docstring): x = [T; ϖ; ϖ̇], x ⊕ δ = (T Exp(δT), ϖ + δϖ, ϖ̇ + δϖ̇).
 
-    ``size`` is the stored size of a state (group.size + group.dim), ``dim`` its tangent's (2 group.dim),
-    ``name`` the group's. There is one kind per group.
+    ``size`` is the stored size of a state (group.size + derivatives · group.dim), ``dim`` its tangent's
+    ((1 + derivatives) group.dim), ``name`` the group's (with '+acc' for the acceleration). There is one kind per
+    group and number of derivatives.
     """
 
-    _kinds: ClassVar[dict[LieGroup, GroupState]] = {}
+    _kinds: ClassVar[dict[tuple[LieGroup, int], GroupState]] = {}
     size: int  # always known for a state on a group (a vector space may leave it None)
 
-    def __new__(cls, group: LieGroup) -> GroupState:
-        """The one kind of each group: ``GroupState(SE2) is SE2_STATE`` (the solvers compare kinds by identity)."""
+    def __new__(cls, group: LieGroup, derivatives: int = 1) -> GroupState:
+        """The one kind of each group and number of derivatives: ``GroupState(SE2) is SE2_STATE`` (the solvers
+        compare kinds by identity)."""
         check_group(group)
-        if group not in cls._kinds:
-            cls._kinds[group] = super().__new__(cls)
-        return cls._kinds[group]
+        if derivatives not in (1, 2) or isinstance(derivatives, bool):
+            raise SteamError(
+                f"a state on a group holds its twist (derivatives=1) or also its acceleration (2), got {derivatives!r}"
+            )
+        if (group, derivatives) not in cls._kinds:
+            cls._kinds[group, derivatives] = super().__new__(cls)
+        return cls._kinds[group, derivatives]
 
-    def __init__(self, group: LieGroup):
+    def __init__(self, group: LieGroup, derivatives: int = 1):
         self.group = group
-        self.name = group.name
-        self.size = group.size + group.dim
-        self.dim = 2 * group.dim
+        self.derivatives = derivatives
+        self.name = group.name if derivatives == 1 else f"{group.name}+acc"
+        self.size = group.size + derivatives * group.dim
+        self.dim = (1 + derivatives) * group.dim
 
     def _state(self, name: str, x: NDArray) -> NDArray:
         x = real_array(name, x)
@@ -108,10 +116,10 @@ class GroupState(Manifold):
         return np.concatenate([g.from_planar(pose), x[n:]])
 
     def __repr__(self) -> str:
-        return f"{self.group!r}_STATE"
+        return f"{self.group!r}_STATE" if self.derivatives == 1 else f"{self.group!r}_ACC_STATE"
 
     def __reduce__(self) -> tuple:
-        return (GroupState, (self.group,))  # unpickled as the one kind of its group
+        return (GroupState, (self.group, self.derivatives))  # unpickled as the one kind of its group
 
 
 SE2_STATE = GroupState(SE2)  # [px, py, θ, vx, vy, ω]: an SE(2) pose and its body twist
@@ -132,3 +140,11 @@ def world_position_covariance(x: NDArray, cov: NDArray, *, group: LieGroup = SE2
     cov = check_covariance("cov", cov, cov.shape[0])
     R = group.matrix(finite("x", x)[: group.size])[:n, :n]
     return R @ cov[:n, :n] @ R.T
+
+
+def group_state(kind: object, what: str = "the prior's state") -> GroupState:
+    """``kind`` itself when it is a state on a group (:class:`GroupState`); SteamError naming ``what`` otherwise (a
+    3-D run, a rigid body's reading, needs a pose on a group, not a vector)."""
+    if not isinstance(kind, GroupState):
+        raise SteamError(f"{what} must be a pose on a group of rigid motions (a GroupState), got {kind!r}")
+    return kind

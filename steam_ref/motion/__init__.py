@@ -9,12 +9,16 @@
   memoised closed forms), WNOJ, Singer's model, any (A, F, Qc, v).
 - :mod:`.lie_group`: :class:`LieGroupWnoa`, WNOA on any Lie group through local variables (both residuals);
   the table's 'se2' is ``LieGroupWnoa(SE2, qc, residual)``.
+- :mod:`.lie_accel`: :class:`LieGroupAccelPrior`, a three-block LTI model (WNOJ, Singer) on any Lie group through
+  exact local variables, states [pose; body twist; its rate]; the table's 'se2-wnoj', 'se3-wnoj', 'se2-singer',
+  'se3-singer'.
 - :mod:`.table`: :data:`MOTION_PRIORS` (the names a user types → constructors), :func:`motion_prior`,
   :func:`as_motion_prior` (the one conversion of a prior argument), :func:`predict_state`, :func:`turned_state`
   (a state with the world turned about its origin).
 """
 
 from .base import MotionPrior, is_interpolated, reading_inside
+from .lie_accel import LieGroupAccelPrior
 from .lie_group import RESIDUALS, LieGroupWnoa
 from .table import MOTION_PRIORS, PriorChoice, as_motion_prior, motion_prior, predict_state, turned_state
 from .vector import VectorPrior
@@ -23,6 +27,7 @@ __all__ = [
     "MotionPrior",
     "VectorPrior",
     "LieGroupWnoa",
+    "LieGroupAccelPrior",
     "RESIDUALS",
     "MOTION_PRIORS",
     "PriorChoice",

@@ -25,14 +25,15 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..errors import SteamError
 from ..factors import Factor, InterpolatedFactor
+from ..factors.lie_prior import LieAccelInterpolatedFactor
 from ..factors.lie_readings import LieInterpolatedFactor, PoseReading
 from ..manifold import Manifold
 from ..variables import Key
 
 __all__ = ["MotionPrior", "reading_inside", "is_interpolated", "sigma_blocks"]
 
-_WRAPPERS = (InterpolatedFactor, LieInterpolatedFactor, PoseReading)  # the factors a prior wraps a reading in
-_INTERPOLATED = (InterpolatedFactor, LieInterpolatedFactor)
+_INTERPOLATED = (InterpolatedFactor, LieInterpolatedFactor, LieAccelInterpolatedFactor)
+_WRAPPERS = (*_INTERPOLATED, PoseReading)  # the factors a prior wraps a reading in
 
 
 class MotionPrior(ABC):

@@ -18,12 +18,14 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .. import lie
 from ..arguments import finite, number, real_array
 from ..errors import ShapeError, SteamError
 from ..gp.sde import LinearSDE, check_prior
 from ..lie import SE2
 from ..manifold import VECTOR, Manifold
 from .base import MotionPrior
+from .lie_accel import LieGroupAccelPrior
 from .lie_group import LieGroupWnoa
 from .vector import VectorPrior
 
@@ -48,11 +50,41 @@ def _se2(qc: ArrayLike, se2_residual: str = "local-variable") -> MotionPrior:
     return LieGroupWnoa(SE2, qc, residual=se2_residual)
 
 
+def _se3(qc: ArrayLike) -> MotionPrior:
+    return LieGroupWnoa(lie.SE3V, qc)  # SE(3) loads when a user names it (lie/__init__.py, PEP 562)
+
+
+def _se3_simplified(qc: ArrayLike) -> MotionPrior:
+    return LieGroupWnoa(lie.SE3V, qc, residual="simplified")
+
+
+def _se2_wnoj(qc: ArrayLike) -> MotionPrior:
+    return LieGroupAccelPrior.wnoj(SE2, qc)
+
+
+def _se3_wnoj(qc: ArrayLike) -> MotionPrior:
+    return LieGroupAccelPrior.wnoj(lie.SE3V, qc)
+
+
+def _se2_singer(qc: ArrayLike, singer_time_constant: float = 1.0) -> MotionPrior:
+    return LieGroupAccelPrior.singer(SE2, qc, singer_time_constant)
+
+
+def _se3_singer(qc: ArrayLike, singer_time_constant: float = 1.0) -> MotionPrior:
+    return LieGroupAccelPrior.singer(lie.SE3V, qc, singer_time_constant)
+
+
 MOTION_PRIORS: dict[str, PriorChoice] = {
     "wnoa": PriorChoice(VectorPrior.wnoa, (), "white noise on acceleration, the paper's prior [YIB Eq. 30-31]"),
     "wnoj": PriorChoice(VectorPrior.wnoj, (), "white noise on jerk (states with an acceleration)"),
     "singer": PriorChoice(_singer, ("singer_time_constant",), "Singer's model (states with an acceleration)"),
     "se2": PriorChoice(_se2, ("se2_residual",), "white noise on acceleration on SE(2) (a pose and its body twist)"),
+    "se2-wnoj": PriorChoice(_se2_wnoj, (), "white noise on jerk on SE(2) (a pose, its body twist and acceleration)"),
+    "se2-singer": PriorChoice(_se2_singer, ("singer_time_constant",), "Singer's model on SE(2) (with acceleration)"),
+    "se3": PriorChoice(_se3, (), "white noise on acceleration on SE(3), local-variable residual (Qc 6 x 6)"),
+    "se3-simplified": PriorChoice(_se3_simplified, (), "white noise on acceleration on SE(3), simplified residual"),
+    "se3-wnoj": PriorChoice(_se3_wnoj, (), "white noise on jerk on SE(3) (a pose, its body twist and acceleration)"),
+    "se3-singer": PriorChoice(_se3_singer, ("singer_time_constant",), "Singer's model on SE(3) (with acceleration)"),
 }
 
 
