@@ -46,13 +46,13 @@ __all__ = [
     "kit_files",
 ]
 
-KIT_VERSION = 4  # the version this steam_ref builds; older ones stay shipped and checkable (never edited)
+KIT_VERSION = 5  # the version this steam_ref builds; older ones stay shipped and checkable (never edited)
 # every kit inside the installed package: data (JSON and .npz), read by the one checker and runner
 KITS = {v: Path(__file__).resolve().parent / f"v{v}" for v in range(1, KIT_VERSION + 1)}
 SHIPPED = KITS[KIT_VERSION]
-# every suite of any kit (v1 and v2 have all but fixed_lag and se2, v3 all but se2); 'paper' last: it is built from the data files.
+# every suite of any kit (v1, v2: all but fixed_lag, se2, se3; v3 all but se2, se3; v4 all but se3); 'paper' last: it is built from the data files.
 # A new suite goes before 'paper'; check's default gate is every suite of a kit but 'paper'.
-SUITES = ("gp", "factors", "linear", "batch", "bayes_tree", "incremental", "fixed_lag", "se2", "paper")
+SUITES = ("gp", "factors", "linear", "batch", "bayes_tree", "incremental", "fixed_lag", "se2", "se3", "paper")
 DATA_FREE = SUITES[:-1]  # the suites any port can run: check's default gate (the paper suite needs the data files)
 MAX_BYTES = 64 * 2**20  # a kit or results file larger than this is refused, not read (the kit's largest is ~1 MB)
 MAX_DEPTH = 64  # JSON nesting deeper than this is refused (the kit's deepest is 8)
