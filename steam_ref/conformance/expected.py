@@ -19,7 +19,7 @@ from . import oracle as o
 from . import oracle_graph as g
 from . import oracle_lag as lag
 from . import oracle_lie as lie
-from . import oracle_se3 as se3
+from . import oracle_rigid as se3
 from .kitio import case_type
 
 __all__ = ["ORACLES", "oracle_case", "oracle_alternatives", "fixed_lag_quantities", "ALTERNATIVES"]

@@ -149,8 +149,37 @@ def _float(text: str) -> float:
     return x
 
 
+class _NonFinite(DataError):
+    """NaN, Infinity or -Infinity where a JSON number belongs (located afterwards: :func:`_locate`)."""
+
+
 def _constant(text: str):
-    raise DataError(f"{text} is not a JSON number (the kit holds finite numbers only)")
+    raise _NonFinite(f"{text} is not a JSON number (the kit holds finite numbers only)")
+
+
+class _Marker:
+    """What a NaN or Infinity parses to while :func:`_locate` looks for it."""
+
+
+def _locate(text: str) -> str:
+    """Where the first NaN/Infinity of a JSON text sits: 'case 'name', quantity 'q' at [i][j]' in a results or
+    suite file, else the path of keys and indices."""
+    value = json.loads(text, parse_constant=lambda _t: _Marker())
+    stack: list = [(value, ())]
+    while stack:
+        v, path = stack.pop(0)
+        if isinstance(v, _Marker):
+            break
+        if isinstance(v, dict):
+            stack.extend((x, (*path, k)) for k, x in v.items())
+        elif isinstance(v, list):
+            stack.extend((x, (*path, i)) for i, x in enumerate(v))
+    else:
+        return "somewhere"
+    if len(path) >= 3 and path[0] == "cases" and isinstance(path[1], str):  # a results file: cases -> name -> q
+        rest = "".join(f"[{i}]" if isinstance(i, int) else f"/{i}" for i in path[3:])
+        return f"case '{printable(path[1])}', quantity '{printable(path[2])}'{printable(rest)}"
+    return "at " + printable("".join(f"[{i}]" if isinstance(i, int) else f"/{i}" for i in path))
 
 
 def _depth(value) -> int:
@@ -216,6 +245,12 @@ def read_json(path: Path, max_bytes: int | None = None):
             parse_float=_float,
             parse_constant=_constant,
         )
+    except _NonFinite as err:
+        try:
+            where = _locate(raw.decode("utf-8"))
+        except (ValueError, RecursionError):
+            where = "somewhere"
+        raise DataError(f"{printable(path)}: {err}, in {where}") from None
     except DataError as err:
         raise DataError(f"{printable(path)}: {err}") from None
     except RecursionError:

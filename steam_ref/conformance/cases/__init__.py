@@ -2,7 +2,7 @@
 the kit stores them): the GP prior (:mod:`.gp`), the factors (:mod:`.factors`), the problems several suites
 share (:mod:`.problems`), solving them (:mod:`.graphs`: linear, batch, bayes_tree), iSAM2 (:mod:`.incremental`),
 fixed-lag smoothing (:mod:`.fixed_lag`), the GP prior on a Lie group (:mod:`.lie_groups`: the se2 suite) and on
-SE(3) (:mod:`.se3`: the se3 suite).
+SE(3) (:mod:`.rigid`: the se3 suite).
 A case added by a later kit version is tagged ``# kit vN``.
 
 Each :class:`Case` says what it computes ([YIB Eq. n]), its inputs, the tolerance of each output
@@ -21,7 +21,7 @@ from .gp import gp_cases
 from .graphs import batch_cases, bayes_tree_cases, linear_cases
 from .incremental import incremental_cases
 from .lie_groups import lie_group_cases
-from .se3 import se3_cases
+from .rigid import se3_cases
 
 __all__ = ["Case", "tol", "EXACT", "suite_cases", "SUITE_DOCS"]
 

@@ -4,7 +4,7 @@ Exp and Log of SO(3) and SE(3) at small angles (down to 1e-12) and within 1e-9 o
 between and the adjoint; the WNOA prior with both residuals labelled ('local-variable', 'simplified') and WNOJ
 (pose, body twist, body acceleration), their Jacobians at the exact tier; the SE(3) state prior; the local GP's
 mean, Jacobians and covariance at a τ with t₁ ≠ 0; extrapolation with its covariance; Gauss-Newton and an iSAM2
-stream on SE(3) states. Every case is independent: :mod:`steam_ref.conformance.oracle_se3` (expm, SciPy's rotation
+stream on SE(3) states. Every case is independent: :mod:`steam_ref.conformance.oracle_rigid` (expm, SciPy's rotation
 vectors, Fréchet derivatives, Romberg-extrapolated differences, dense solves). The poses below are Exp of
 round twists, written out to the last digit (orthonormal to rounding).
 """
@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from .base import Case, tol
 from .gp import exact_spd
-from .se3_poses import (
+from .rigid_poses import (
     POSE_A,
     POSE_B_FAST,
     POSE_B_HALF,

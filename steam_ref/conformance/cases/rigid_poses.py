@@ -1,6 +1,6 @@
 """The poses of the se3 suite (kit v5): Exp of round twists (each named beside it), written out to the last digit.
 
-A pose is [t; R row-major], orthonormal to rounding; computed once by ``oracle_se3.exp`` and stored here as literal
+A pose is [t; R row-major], orthonormal to rounding; computed once by ``oracle_rigid.exp`` and stored here as literal
 numbers, so that the kit's inputs are the same on every machine.
 """
 
