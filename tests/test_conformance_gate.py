@@ -133,7 +133,9 @@ def test_fixed_lag_results_for_kit_v2_or_v1_are_refused_not_passed_unchecked(
     assert code == 2 and "kit v2 has no suite 'fixed_lag'" in err, err
 
 
-def test_results_of_the_shipped_kit_must_hold_the_fixed_lag_se2_and_se3_suites(tmp_path, capsys, ours, kit_results, write_results):
+def test_results_of_the_shipped_kit_must_hold_the_fixed_lag_se2_and_se3_suites(
+    tmp_path, capsys, ours, kit_results, write_results
+):
     for suite in ("gp", "factors", "linear", "bayes_tree", "incremental"):
         write_results(tmp_path, suite, ours[suite])
     write_results(tmp_path, "batch", kit_results(SHIPPED, "batch"))

@@ -14,6 +14,8 @@ from __future__ import annotations
 from .base import Case, tol
 from .gp import exact_spd
 from .rigid_poses import (
+    ACC1,
+    ACC2,
     POSE_A,
     POSE_B_FAST,
     POSE_B_HALF,
@@ -21,14 +23,16 @@ from .rigid_poses import (
     POSE_B_TINY,
     POSE_C,
     POSE_D,
-    POSE_G0,
-    POSE_G1,
-    POSE_G2,
     POSE_M,
     POSE_S,
+    QC,
+    QC_DIAGONAL,
+    W1,
+    W2,
+    W_FAST,
 )
 
-__all__ = ["se3_cases", "solve_cases", "GTSAM_NOTE"]
+__all__ = ["se3_cases", "GTSAM_NOTE"]
 
 ORACLE_GROUP = (
     "oracle: Exp = expm of the 4x4 (3x3) matrix; Log: phi = the rotation vector of R by SciPy's quaternion route, "
@@ -45,10 +49,6 @@ ORACLE_GP = (
     "[g(t1); g(tau); g(t2)] of the local variable g; the mean mapped back; Jacobians and N = dx/dg by Romberg "
     "differences through the right retraction"
 )
-ORACLE_SOLVE = (
-    "oracle: dense Gauss-Newton and a dense iSAM2 replay with the oracle's right retraction on SE(3) states, each "
-    "factor linearized by the differences above"
-)
 EQUATION = "[YIB Eq. 16-18, 22, 30-31] on SE(3) through local variables; README 'SE(3)'"
 GTSAM_NOTE = {
     "gtsam": "GTSAM 4.3 WnoaMotionFactorPose3 computes this case's residual and cost exactly (it passes at the kit's "
@@ -61,23 +61,6 @@ GROUP = tol(1e-12, 1e-14)  # Exp, Log, J_r: what the oracle and steam_ref differ
 EXACT_JACOBIAN = tol(1e-10, 1e-12)  # the exact tier: forward differences (error ~1e-8) fail it
 COVARIANCE = tol(1e-10, 1e-14)
 SOLVE = tol(1e-9, 1e-11)
-
-QC = [
-    [0.5, 0.05, 0.0, 0.01, 0.0, 0.0],
-    [0.05, 0.8, 0.02, 0.0, 0.01, 0.0],
-    [0.0, 0.02, 1.1, 0.0, 0.0, 0.01],
-    [0.01, 0.0, 0.0, 0.05, 0.0, 0.0],
-    [0.0, 0.01, 0.0, 0.0, 0.07, 0.0],
-    [0.0, 0.0, 0.01, 0.0, 0.0, 0.09],
-]
-QC_DIAGONAL = [[0.5 if i == j else 0.0 for j in range(6)] for i in range(3)] + [
-    [0.05 if i == j else 0.0 for j in range(6)] for i in range(3, 6)
-]
-W1 = [0.8, 0.1, -0.05, 0.04, -0.08, 0.15]
-W2 = [0.85, 0.05, -0.02, 0.06, -0.05, 0.2]
-W_FAST = [1.2, 0.4, -0.3, 0.9, -1.2, 1.5]
-ACC1 = [0.1, -0.05, 0.02, 0.03, 0.01, -0.04]
-ACC2 = [0.05, 0.02, -0.03, -0.02, 0.04, 0.03]
 
 
 def _case(name: str, description: str, inputs: dict, tolerance: dict, source: str, notes: dict | None = None) -> Case:
@@ -412,76 +395,6 @@ def _gp_cases() -> list[Case]:
     ]
 
 
-def _lv(a: str, b: str, dt: float = 0.5) -> dict:
-    return {"type": "se3_prior", "keys": [a, b], "dt": dt, "qc": QC, "model": "local-variable"}
-
-
-SIGMAS = [0.02, 0.02, 0.02, 0.01, 0.01, 0.01, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1]
-FIX_X0 = {
-    "type": "se3_state_prior",
-    "keys": ["x0"],
-    "mean": POSE_G0 + [1.1, 0.0, 0.2, 0.1, -0.04, 1.3],
-    "sigmas": SIGMAS,
-}
-FIX_X2 = {
-    "type": "se3_state_prior",
-    "keys": ["x2"],
-    "mean": POSE_G2 + [1.0, -0.1, 0.25, 0.15, 0.05, 1.2],
-    "sigmas": [0.05, 0.05, 0.05, 0.02, 0.02, 0.02, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0],
-}
-GYRO_X1 = {
-    "type": "se3_velocity",
-    "keys": ["x1"],
-    "measured": [1.05, 0.05, 0.2, 0.12, -0.02, 1.25],
-    "sigmas": [0.1] * 6,
-}
-START = {
-    "x0": POSE_G0 + [1.0, 0.05, 0.15, 0.1, 0.0, 1.2],
-    "x1": POSE_G1 + [1.0, 0.0, 0.2, 0.1, -0.05, 1.3],
-    "x2": POSE_G2 + [0.9, -0.05, 0.2, 0.1, 0.05, 1.1],
-}
-
-
-def solve_cases() -> list[Case]:
-    variables = {"x0": 12, "x1": 12, "x2": 12}
-    factors = [FIX_X0, _lv("x0", "x1"), _lv("x1", "x2"), GYRO_X1, FIX_X2]
-    updates = [
-        {"values": {"x0": START["x0"]}, "factors": [FIX_X0]},
-        {"values": {"x1": START["x1"]}, "factors": [_lv("x0", "x1"), GYRO_X1]},
-        {"values": {"x2": START["x2"]}, "factors": [_lv("x1", "x2"), FIX_X2]},
-    ]
-    isam2 = {"relinearize_threshold": 0.02, "relinearize_skip": 1, "wildfire_threshold": 0.0}
-    quantities: dict = {}
-    for k in range(1, len(updates) + 1):
-        quantities[f"relinearized_{k}"] = "exact"
-        quantities[f"estimate_{k}"] = SOLVE
-    return [
-        _case(
-            "batch_three_states",
-            "Gauss-Newton on three SE(3) states 0.5 s apart (local-variable WNOA priors, a state prior on x0 and on x2, "
-            "a body-twist reading at x1, e = w - z); every iterate x <- x + delta (right retraction) and the cost at "
-            "each, from a given start; 'variables' gives each state's tangent size (12), values hold 18 numbers",
-            {
-                "kind": "batch",
-                "problem": {"variables": variables, "factors": factors, "values": START},
-                "iterations": 3,
-            },
-            {"iterates": SOLVE, "costs": SOLVE},
-            ORACLE_SOLVE,
-        ),
-        _case(
-            "incremental_three_updates",
-            "the same problem as a stream of three iSAM2 updates (one state per update with its factors), "
-            "relinearization threshold 0.02 checked every update, full back-substitution; relinearized_k and "
-            "estimate_k = theta + delta after each update",
-            {"kind": "incremental", "stream": {"variables": variables, "updates": updates}, "isam2": isam2},
-            quantities,
-            ORACLE_SOLVE,
-        ),
-    ]
-
-
 def se3_cases() -> list[Case]:
-    """The suite's cases. The batch and incremental cases of :func:`solve_cases` are not in it yet: steam_ref's linear
-    layer takes a variable's stored size for its tangent's, and an SE(3) state stores 18 numbers for 12."""
+    """The suite's cases (the batch and incremental ones of :mod:`.rigid_solves` are not in it yet: its docstring)."""
     return _group_cases() + _prior_cases() + _gp_cases()

@@ -1,4 +1,4 @@
-"""The poses of the se3 suite (kit v5): Exp of round twists (each named beside it), written out to the last digit.
+"""The poses, twists and Qc of the se3 suite (kit v5): Exp of round twists (each named beside it), written out to the last digit.
 
 A pose is [t; R row-major], orthonormal to rounding; computed once by ``oracle_rigid.exp`` and stored here as literal
 numbers, so that the kit's inputs are the same on every machine.
@@ -184,3 +184,20 @@ POSE_G2 = [
     0.09760728680648523,
     0.9941555168301509,
 ]
+
+QC = [
+    [0.5, 0.05, 0.0, 0.01, 0.0, 0.0],
+    [0.05, 0.8, 0.02, 0.0, 0.01, 0.0],
+    [0.0, 0.02, 1.1, 0.0, 0.0, 0.01],
+    [0.01, 0.0, 0.0, 0.05, 0.0, 0.0],
+    [0.0, 0.01, 0.0, 0.0, 0.07, 0.0],
+    [0.0, 0.0, 0.01, 0.0, 0.0, 0.09],
+]
+QC_DIAGONAL = [[0.5 if i == j else 0.0 for j in range(6)] for i in range(3)] + [
+    [0.05 if i == j else 0.0 for j in range(6)] for i in range(3, 6)
+]
+W1 = [0.8, 0.1, -0.05, 0.04, -0.08, 0.15]
+W2 = [0.85, 0.05, -0.02, 0.06, -0.05, 0.2]
+W_FAST = [1.2, 0.4, -0.3, 0.9, -1.2, 1.5]
+ACC1 = [0.1, -0.05, 0.02, 0.03, 0.01, -0.04]
+ACC2 = [0.05, 0.02, -0.03, -0.02, 0.04, 0.03]
