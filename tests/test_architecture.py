@@ -381,6 +381,7 @@ ORACLE = (
     "steam_ref.conformance.oracle_graph",
     "steam_ref.conformance.oracle_lag",
     "steam_ref.conformance.oracle_lie",
+    "steam_ref.conformance.oracle_rigid",
     "steam_ref.conformance.expected",
     "steam_ref.conformance.kitio",  # the file format (a case's type), which the oracle's table reads: errors only
 )

@@ -104,7 +104,7 @@ def test_v2_results_check_against_the_shipped_v2_which_has_no_fixed_lag_suite(
     tmp_path, capsys, kit_results, write_results
 ):
     v2 = computed_suites(KITS[2])
-    assert v2 == [s for s in SUITES if s not in ("fixed_lag", "se2", "paper")]
+    assert v2 == [s for s in SUITES if s not in ("fixed_lag", "se2", "se3", "paper")]
     for suite in v2:
         write_results(tmp_path, suite, kit_results(KITS[2], suite), version=2)
     code, out, _ = cli(capsys, "check", tmp_path)  # the data-free suites are the gate; paper only with --paper
@@ -133,7 +133,9 @@ def test_fixed_lag_results_for_kit_v2_or_v1_are_refused_not_passed_unchecked(
     assert code == 2 and "kit v2 has no suite 'fixed_lag'" in err, err
 
 
-def test_v4_results_must_hold_the_fixed_lag_suite(tmp_path, capsys, ours, kit_results, write_results):
+def test_results_of_the_shipped_kit_must_hold_the_fixed_lag_se2_and_se3_suites(
+    tmp_path, capsys, ours, kit_results, write_results
+):
     for suite in ("gp", "factors", "linear", "bayes_tree", "incremental"):
         write_results(tmp_path, suite, ours[suite])
     write_results(tmp_path, "batch", kit_results(SHIPPED, "batch"))
@@ -144,15 +146,19 @@ def test_v4_results_must_hold_the_fixed_lag_suite(tmp_path, capsys, ours, kit_re
     assert code == 1 and "MISSING: 6 cases of fixed_lag" in out, out
     write_results(tmp_path, "fixed_lag", kit_results(SHIPPED, "fixed_lag"))
     code, out, _ = cli(capsys, "check", tmp_path)
-    assert code == 1 and "MISSING: 20 cases of se2 have no result: exp_near_zero, " in out, out
+    n = {suite: len(read_suite(SHIPPED, suite)["cases"]) for suite in SUITES[:-1]}
+    assert code == 1 and f"MISSING: {n['se2']} cases of se2 have no result: exp_near_zero, " in out, out
     write_results(tmp_path, "se2", kit_results(SHIPPED, "se2"))
     code, out, _ = cli(capsys, "check", tmp_path)
-    assert code == 0 and out.strip().splitlines()[-1] == "91 passed, 0 failed", out
+    assert code == 1 and f"MISSING: {n['se3']} cases of se3 have no result: so3_exp_near_zero, " in out, out
+    write_results(tmp_path, "se3", kit_results(SHIPPED, "se3"))
+    code, out, _ = cli(capsys, "check", tmp_path)
+    assert code == 0 and out.strip().splitlines()[-1] == f"{sum(n.values())} passed, 0 failed", out
 
 
 def test_v3_results_still_check_against_the_shipped_v3(tmp_path, capsys, kit_results, write_results):
     v3 = computed_suites(KITS[3])
-    assert v3 == [s for s in SUITES if s not in ("se2", "paper")]
+    assert v3 == [s for s in SUITES if s not in ("se2", "se3", "paper")]
     for suite in v3:
         write_results(tmp_path, suite, kit_results(KITS[3], suite), version=3)
     code, out, _ = cli(capsys, "check", tmp_path)

@@ -15,7 +15,7 @@ import pytest
 import scipy.linalg
 
 from steam_ref.cli import main
-from steam_ref.conformance import SHIPPED, run_case
+from steam_ref.conformance import KIT_VERSION, SHIPPED, run_case
 from steam_ref.conformance import oracle_lie as o
 from steam_ref.conformance.checker import check_cases
 from steam_ref.conformance.expected import oracle_case
@@ -56,7 +56,7 @@ def test_steam_ref_and_the_oracle_pass_every_case(tmp_path, capsys):
     assert failing(list(CASES), ours) == []
     assert failing(list(CASES), {n: port(c) for n, c in CASES.items()}) == []
     (tmp_path / "se2").mkdir()
-    (tmp_path / "se2" / "results.json").write_text(dumps({"kit_version": 4, "cases": ours}))
+    (tmp_path / "se2" / "results.json").write_text(dumps({"kit_version": KIT_VERSION, "cases": ours}))
     code = main(["conformance", "check", str(tmp_path), "--only", "se2"])
     assert code == 0 and capsys.readouterr().out.strip().splitlines()[-1] == f"{len(CASES)} passed, 0 failed"
 

@@ -57,7 +57,7 @@ def replay(case: dict, lag: float | None = None, updates: list | None = None) ->
 
 
 def test_kit_v4_ships_beside_v1_to_v3_which_are_unchanged():
-    assert KIT_VERSION == 4 and KITS[4] == SHIPPED
+    assert KIT_VERSION >= 4 and (KITS[4] / "index.json").is_file()  # v4 stays shipped beside the newer kits
     assert [read_index(KITS[v])["kit_version"] for v in (1, 2, 3, 4)] == [1, 2, 3, 4]
     v3, v4 = ({c["name"]: c for c in read_suite(KITS[v], "fixed_lag")["cases"]} for v in (3, 4))
     assert set(v4) - set(v3) == {"timestamp_at_the_boundary", "landmark_forgotten_and_seen_again"}

@@ -19,6 +19,7 @@ from . import oracle as o
 from . import oracle_graph as g
 from . import oracle_lag as lag
 from . import oracle_lie as lie
+from . import oracle_rigid as se3
 from .kitio import case_type
 
 __all__ = ["ORACLES", "oracle_case", "oracle_alternatives", "fixed_lag_quantities", "ALTERNATIVES"]
@@ -171,6 +172,36 @@ def _lie_state_prior(inputs: Mapping) -> dict:
     return {"error": e, "H_0": H}
 
 
+def _se3_rows(inputs: Mapping) -> dict:
+    items = [np.asarray(v, float) for v in inputs["xi" if "xi" in inputs else "phi"]]
+    if "phi" in inputs:  # SO(3)
+        exps = [se3.so3_exp(v) for v in items]
+        return {"exp": np.array(exps), "log_of_exp": np.array([se3.so3_log(r) for r in exps])}
+    exps = [se3.exp(v) for v in items]
+    return {"exp": np.array(exps), "log_of_exp": np.array([se3.log(p) for p in exps])}
+
+
+def _se3_jacobians(inputs: Mapping) -> dict:
+    items = [np.asarray(v, float) for v in inputs["xi" if "xi" in inputs else "phi"]]
+    return {"Jr": _rows(se3.right_jacobian, items), "Jr_inv": _rows(se3.right_jacobian_inverse, items)}
+
+
+def _se3_between(inputs: Mapping) -> dict:
+    a, b = np.asarray(inputs["a"], float), np.asarray(inputs["b"], float)
+    Ha, Hb = (se3.numeric_jacobian(se3.between, [a, b], k, lambda p, q: se3.log(se3.between(p, q))) for k in (0, 1))
+    return {"between": se3.between(a, b), "H_a": Ha, "H_b": Hb, "Ad_a": se3.adjoint(a)}
+
+
+def _se3_prior(kind: str, inputs: Mapping) -> dict:
+    spec = {"type": kind, "keys": ["x1", "x2"], **{k: inputs[k] for k in ("dt", "qc", "model") if k in inputs}}
+    return se3.linearize_factor(spec, [inputs["x1"], inputs["x2"]])
+
+
+def _se3_state_prior(inputs: Mapping) -> dict:
+    e, (H,) = se3.factor_jacobians({"type": "se3_state_prior", "mean": inputs["mean"]}, [inputs["x"]])
+    return {"error": e, "H_0": H}
+
+
 def _one_thread(f: Callable[[Mapping], dict]) -> Callable[[Mapping], dict]:
     """``f`` under a one-thread BLAS: OpenBLAS's threads make each 3×3 ``expm`` a thousand times slower on a busy
     machine."""
@@ -208,6 +239,17 @@ ORACLES: dict[str, Callable[[Mapping], dict]] = {
     "se2/interpolation": _one_thread(lie.interpolation_quantities),
     "se2/batch": _one_thread(partial(_batch, lie.LIE)),
     "se2/incremental": _one_thread(partial(_incremental, lie.LIE)),
+    "se3/so3_exp": _one_thread(_se3_rows),
+    "se3/so3_jacobians": _one_thread(_se3_jacobians),
+    "se3/exp": _one_thread(_se3_rows),
+    "se3/jacobians": _one_thread(_se3_jacobians),
+    "se3/between": _one_thread(_se3_between),
+    "se3/prior": _one_thread(partial(_se3_prior, "se3_prior")),
+    "se3/wnoj_prior": _one_thread(partial(_se3_prior, "se3_wnoj_prior")),
+    "se3/state_prior": _one_thread(_se3_state_prior),
+    "se3/interpolation": _one_thread(se3.interpolation_quantities),
+    "se3/wnoj_interpolation": _one_thread(se3.interpolation_quantities),
+    "se3/extrapolation": _one_thread(se3.extrapolation_quantities),
 }
 
 

@@ -46,13 +46,13 @@ __all__ = [
     "kit_files",
 ]
 
-KIT_VERSION = 4  # the version this steam_ref builds; older ones stay shipped and checkable (never edited)
+KIT_VERSION = 5  # the version this steam_ref builds; older ones stay shipped and checkable (never edited)
 # every kit inside the installed package: data (JSON and .npz), read by the one checker and runner
 KITS = {v: Path(__file__).resolve().parent / f"v{v}" for v in range(1, KIT_VERSION + 1)}
 SHIPPED = KITS[KIT_VERSION]
-# every suite of any kit (v1 and v2 have all but fixed_lag and se2, v3 all but se2); 'paper' last: it is built from the data files.
+# every suite of any kit (v1, v2: all but fixed_lag, se2, se3; v3 all but se2, se3; v4 all but se3); 'paper' last: it is built from the data files.
 # A new suite goes before 'paper'; check's default gate is every suite of a kit but 'paper'.
-SUITES = ("gp", "factors", "linear", "batch", "bayes_tree", "incremental", "fixed_lag", "se2", "paper")
+SUITES = ("gp", "factors", "linear", "batch", "bayes_tree", "incremental", "fixed_lag", "se2", "se3", "paper")
 DATA_FREE = SUITES[:-1]  # the suites any port can run: check's default gate (the paper suite needs the data files)
 MAX_BYTES = 64 * 2**20  # a kit or results file larger than this is refused, not read (the kit's largest is ~1 MB)
 MAX_DEPTH = 64  # JSON nesting deeper than this is refused (the kit's deepest is 8)
@@ -149,8 +149,37 @@ def _float(text: str) -> float:
     return x
 
 
+class _NonFinite(DataError):
+    """NaN, Infinity or -Infinity where a JSON number belongs (located afterwards: :func:`_locate`)."""
+
+
 def _constant(text: str):
-    raise DataError(f"{text} is not a JSON number (the kit holds finite numbers only)")
+    raise _NonFinite(f"{text} is not a JSON number (the kit holds finite numbers only)")
+
+
+class _Marker:
+    """What a NaN or Infinity parses to while :func:`_locate` looks for it."""
+
+
+def _locate(text: str) -> str:
+    """Where the first NaN/Infinity of a JSON text sits: 'case 'name', quantity 'q' at [i][j]' in a results or
+    suite file, else the path of keys and indices."""
+    value = json.loads(text, parse_constant=lambda _t: _Marker())
+    stack: list = [(value, ())]
+    while stack:
+        v, path = stack.pop(0)
+        if isinstance(v, _Marker):
+            break
+        if isinstance(v, dict):
+            stack.extend((x, (*path, k)) for k, x in v.items())
+        elif isinstance(v, list):
+            stack.extend((x, (*path, i)) for i, x in enumerate(v))
+    else:
+        return "somewhere"
+    if len(path) >= 3 and path[0] == "cases" and isinstance(path[1], str):  # a results file: cases -> name -> q
+        rest = "".join(f"[{i}]" if isinstance(i, int) else f"/{i}" for i in path[3:])
+        return f"case '{printable(path[1])}', quantity '{printable(path[2])}'{printable(rest)}"
+    return "at " + printable("".join(f"[{i}]" if isinstance(i, int) else f"/{i}" for i in path))
 
 
 def _depth(value) -> int:
@@ -216,6 +245,12 @@ def read_json(path: Path, max_bytes: int | None = None):
             parse_float=_float,
             parse_constant=_constant,
         )
+    except _NonFinite as err:
+        try:
+            where = _locate(raw.decode("utf-8"))
+        except (ValueError, RecursionError):
+            where = "somewhere"
+        raise DataError(f"{printable(path)}: {err}, in {where}") from None
     except DataError as err:
         raise DataError(f"{printable(path)}: {err}") from None
     except RecursionError:

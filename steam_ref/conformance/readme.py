@@ -4,7 +4,8 @@
 check them, every convention (with the alternatives ``check --conventions`` accepts), the inputs of
 each suite, every factor's error, Jacobian convention, inputs and outputs, the tree-edit ordering
 rule with a worked example, the fixed-lag marginal factor derived (the cases cite it, so it is here,
-not in steam_ref's docs/derivations.md), the Lie group of the se2 suite written out (section "SE(2)"), and the
+not in steam_ref's docs/derivations.md), the Lie groups of the se2 and se3 suites written out (sections "SE(2)",
+"SE(3)", :mod:`.readme_rigid`), and the
 paper suite's set-up and procedure.
 """
 
@@ -13,6 +14,7 @@ from __future__ import annotations
 from .conventions import CONVENTION_ALTERNATIVES, CONVENTIONS, RESULTS_LAYOUT, TREE_EDIT_EXAMPLE
 from .kitio import KIT_VERSION, SUITES
 from .paper_spec import PROCEDURE, SETUP_FIELDS
+from .readme_rigid import EXACT_TIER, RIGID
 
 __all__ = ["export_readme", "FACTOR_TABLE", "QUANTITIES", "SUITE_INPUTS", "FIXED_LAG", "LIE_GROUP"]
 
@@ -58,6 +60,9 @@ QUANTITIES = {
     "(names, same order), marginal_point_k (theta0 of the separator, stacked), marginal_information_k (Lambda) and "
     "marginal_vector_k (eta) over the separator stacked in that order; estimate_k: key -> vector of the window; "
     "covariances_k: key -> its marginal covariance (conventions, fixed_lag)",
+    "se3": "exp, log_of_exp (n, 9) SO(3) / (n, 12) SE(3); Jr, Jr_inv (n, 3, 3) / (n, 6, 6); between (12,), H_a, H_b, "
+    "Ad_a (6, 6); error (12,) or WNOJ (18,), H_0, H_1 (12, 12) or (18, 18), cost; x_tau (18,) or (24,), J_1, J_2, "
+    "cov_tau in the right tangent at x_tau; x_t, J_1, cov_t (prediction)",
     "se2": "exp, log_of_exp (n, 3); log, exp_of_log (n, 3); Jr, Jr_inv (n, 3, 3); between (3,), H_a, H_b, Ad_a (3, 3); "
     "error (6,), H_0, H_1 (6, 6) in right tangents, cost; x_tau (6,), J_1, J_2 (6, 6), cov_tau (6, 6) in the right "
     "tangent at x_tau; iterates (key -> (iterations + 1, n)), costs; relinearized_k, estimate_k (as incremental)",
@@ -85,6 +90,11 @@ SUITE_INPUTS = {
     "= {variables, factors, values}, iterations), 'incremental' (stream, isam2 as for the incremental suite). Factor "
     "specs of batch and incremental: se2_prior {keys [x1, x2], dt, qc, model}, se2_state_prior {keys [x], mean, "
     "sigmas (6)}, se2_range {keys [x, l], measured, sigma}, prior {keys [l], mean, sigmas (2)}",
+    "se3": "kind: 'so3_exp' (phi: rows of 3), 'so3_jacobians' (phi), 'exp' (xi: rows [rho; phi] of 6), 'jacobians' "
+    "(xi), 'between' (a, b poses of 12), 'prior' (model, x1, x2 SE(3) states of 18, dt, qc 6x6), 'wnoj_prior' (x1, x2 "
+    "of 24, dt, qc on the jerk), 'state_prior' (mean, x), 'interpolation' (model, x1, x2, t1, t2, tau, qc, and joint_cov "
+    "24x24 for a covariance case), 'wnoj_interpolation' (x1, x2 of 24, t1, t2, tau, qc), 'extrapolation' (x1 of 18 or "
+    "24, t1, t, qc, cov1)",
     "paper": "dataset, file and sha256 of the paper's data file, the authors' run, method, every, setup (fields "
     "below), setup_fields and procedure (the texts below), state_poses (the poses whose states are compared)",
 }
@@ -156,6 +166,11 @@ turn** (a stored -pi gives +pi), so Log(Exp(xi)) = xi only for phi in (-pi, pi] 
 ad_xi = [[0, -phi, rho2], [phi, 0, -rho1], [0, 0, 0]] (ad_xi eta = [xi^, eta^] as a vector). Log(Exp(xi) Exp(d))
 = xi + J_r(xi)^-1 d. Ad(T) = [[R, [y, -x]^T], [0, 0, 1]]: T Exp(xi) T^-1 = Exp(Ad(T) xi).
 
+**between and its Jacobians.** between(T_a, T_b) = B = T_a^-1 T_b. Its Jacobians are taken in right tangents, of
+the value read in its own right tangent: H_a = d Log(B^-1 (T_a Exp(d))^-1 T_b) / dd and H_b = d Log(B^-1 T_a^-1 T_b
+Exp(d)) / dd at d = 0, so H_a = -Ad(B^-1) and H_b = I (case `between_across_half_turn`; the se3 suite's `between`
+alike).
+
 **The state and its retraction.** An SE(2) state is x = [x, y, theta, vx, vy, w]: the pose T and the **body twist**
 w = [vx, vy, w] (velocity in the robot's own frame, dT/dt = T w^). Its tangent is 6-D and the retraction is on
 the **right**: x + d = (T Exp(d[:3]), w + d[3:]); x2 - x1 = [Log(T1^-1 T2); w2 - w1]. Every Jacobian of the suite
@@ -203,7 +218,12 @@ def export_readme(version: int = KIT_VERSION) -> str:
 Golden inputs and expected outputs for checking an implementation of "Incremental Sparse GP
 Regression for Continuous-time Trajectory Estimation & Mapping" (Yan, Indelman, Boots) against
 steam_ref. Any language that reads JSON can use it; `*/expected.npz` repeats the expected arrays for
-NumPy. This README is self-contained: nothing else is needed to implement the cases.
+NumPy. This README writes out every definition the cases compute from: the conventions, the fixed-lag marginal factor
+(section 'Fixed-lag smoothing'), the groups SE(2), SO(3), SE(3) and their GP priors (sections 'SE(2)', 'SE(3)':
+the local-variable GP, both residuals, WNOJ, the interpolated mean and covariance). Why those Jacobians and
+covariances are what they are is derived in steam_ref's docs/derivations.md (§10 fixed lag, §11 the GP on a Lie
+group, §14 WNOJ on a group), which this kit does not hold and a port does not need: every Jacobian of the kit is the
+derivative of a function defined here, in the retraction defined here.
 
 ## Files
 
@@ -227,7 +247,7 @@ Then
 The gate is every suite but `paper` (the data-free suites: any port can compute them); `--paper` adds the paper
 suite, which needs the paper's data files; `--only SUITE...` checks the suites named.
 A numeric quantity passes when max|got - expected| <= atol + rtol * max|expected| over its entries;
-an exact one must be equal (lists of cliques unordered). Every failing quantity is printed with its
+an exact one must be equal (lists of cliques unordered). {EXACT_TIER} Every failing quantity is printed with its
 worst entries (index, expected, got); the first failing quantity in computation order is flagged as
 the likely cause; a structure that differs is printed item by item. Exit 0: every case of the gate
 passed; 1: a case failed or has no result (unless `--allow-missing`), or no case passed at all (even with
@@ -277,6 +297,10 @@ W is the upper-triangular square root of Sigma^-1 (conventions, whitening).
 ## SE(2)
 
 {LIE_GROUP}
+## SE(3)
+
+{RIGID}
+
 ## The paper suite: set-up and procedure
 
 Fields of `setup`:

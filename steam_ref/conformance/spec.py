@@ -15,6 +15,10 @@ maps each type to its steam_ref factor and the kind (manifold) of each of its ke
     se2_prior        keys [x1, x2] SE(2) states, dt, qc (3×3 on the body twist), model   e = γ₂ - Φ(Δt) γ₁
     se2_state_prior  keys [x] an SE(2) state, mean, sigmas (6)                         e = x ⊖ mean
     se2_range        keys [x, l], x an SE(2) state, measured, sigma                    e = ‖l - p‖ - r
+    se3_prior        keys [x1, x2] SE(3) states, dt, qc (6×6), model                  e = γ₂ - Φ(Δt) γ₁   (kit v5)
+    se3_wnoj_prior   keys [x1, x2] SE(3) states with an acceleration, dt, qc (6×6)     e = γ₂ - Φ(Δt) γ₁   (kit v5)
+    se3_state_prior  keys [x] an SE(3) state, mean, sigmas (12)                        e = x ⊖ mean        (kit v5)
+    se3_velocity     keys [x] an SE(3) state, measured (6), sigmas (6)                 e = ϖ - z           (kit v5)
 
 where noise is ``sigma`` (a scalar), ``sigmas`` (one per error entry) or ``covariance`` (a matrix),
 and a measurement may carry ``loss``: ``{"type": "huber", "k": k}`` or ``{"type": "tukey", "c": c}``.
@@ -27,10 +31,12 @@ from collections.abc import Callable, Iterable, Mapping, Sequence
 
 import numpy as np
 
+from .. import lie
 from ..errors import SteamError
 from ..factors import (
     BearingFactor,
     BearingRangeFactor,
+    BodyVelocityFactor,
     Factor,
     GPPriorFactor,
     InterpolatedFactor,
@@ -42,7 +48,9 @@ from ..factors import (
     RangeFactor,
     VelocityFactor,
 )
-from ..lie import SE2, SE2_STATE
+from ..factors.lie_prior import LieAccelPriorFactor
+from ..gp import LinearSDE
+from ..lie import SE2, SE2_STATE, GroupState
 from ..linear.ordering import Ordering
 from ..manifold import VECTOR, Manifold
 from ..robust import Huber, RobustLoss, Tukey
@@ -121,6 +129,28 @@ def _pose_range(spec: Mapping, keys: Sequence[Key]) -> Factor:
     return PoseReading.range(keys[0], keys[1], float(spec["measured"]), float(spec["sigma"]), group=SE2)
 
 
+def _se3_prior(spec: Mapping, keys: Sequence[Key]) -> Factor:
+    dt, qc = float(spec["dt"]), np.asarray(spec["qc"], float)
+    return LiePriorFactor.create(keys[0], keys[1], dt, qc, spec["model"], group=lie.SE3)
+
+
+def _se3_wnoj_prior(spec: Mapping, keys: Sequence[Key]) -> Factor:
+    sde = LinearSDE.wnoj(np.asarray(spec["qc"], float))
+    return LieAccelPriorFactor.create(keys[0], keys[1], float(spec["dt"]), sde, group=lie.SE3)
+
+
+def _se3_state_prior(spec: Mapping, keys: Sequence[Key]) -> Factor:
+    mean, sigmas = np.asarray(spec["mean"], float), np.asarray(spec["sigmas"], float)
+    return LieStatePrior.create(keys[0], mean, sigmas, group=lie.SE3)
+
+
+def _se3_velocity(spec: Mapping, keys: Sequence[Key]) -> Factor:
+    measured, sigmas = np.asarray(spec["measured"], float), np.asarray(spec["sigmas"], float)
+    return BodyVelocityFactor.create(keys[0], measured, sigmas, group=lie.SE3)
+
+
+_SE3, _SE3_ACC = GroupState(lie.SE3), GroupState(lie.SE3, 2)  # the states of the se3 suite (kit v5)
+
 _V = VECTOR
 _vector, _number = (lambda y: [y]), (lambda y: [float(y)])  # a reading as given; a number
 # Factor type → (its steam_ref factor from the spec and its keys, the kind of each key). A new type is a row.
@@ -136,6 +166,10 @@ FACTORS: dict[str, tuple[Callable[[Mapping, Sequence[Key]], Factor], tuple[Manif
     "se2_prior": (_lie_prior, (SE2_STATE, SE2_STATE)),
     "se2_state_prior": (_lie_state_prior, (SE2_STATE,)),
     "se2_range": (_pose_range, (SE2_STATE, _V)),
+    "se3_prior": (_se3_prior, (_SE3, _SE3)),
+    "se3_wnoj_prior": (_se3_wnoj_prior, (_SE3_ACC, _SE3_ACC)),
+    "se3_state_prior": (_se3_state_prior, (_SE3,)),
+    "se3_velocity": (_se3_velocity, (_SE3,)),
 }
 
 

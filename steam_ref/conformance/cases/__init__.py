@@ -1,7 +1,8 @@
 """The kit's cases, one module per idea, inputs written out as literal numbers (no random draws:
 the kit stores them): the GP prior (:mod:`.gp`), the factors (:mod:`.factors`), the problems several suites
 share (:mod:`.problems`), solving them (:mod:`.graphs`: linear, batch, bayes_tree), iSAM2 (:mod:`.incremental`),
-fixed-lag smoothing (:mod:`.fixed_lag`) and the GP prior on a Lie group (:mod:`.lie_groups`: the se2 suite).
+fixed-lag smoothing (:mod:`.fixed_lag`), the GP prior on a Lie group (:mod:`.lie_groups`: the se2 suite) and on
+SE(3) (:mod:`.rigid`: the se3 suite).
 A case added by a later kit version is tagged ``# kit vN``.
 
 Each :class:`Case` says what it computes ([YIB Eq. n]), its inputs, the tolerance of each output
@@ -20,6 +21,7 @@ from .gp import gp_cases
 from .graphs import batch_cases, bayes_tree_cases, linear_cases
 from .incremental import incremental_cases
 from .lie_groups import lie_group_cases
+from .rigid import se3_cases
 
 __all__ = ["Case", "tol", "EXACT", "suite_cases", "SUITE_DOCS"]
 
@@ -50,6 +52,12 @@ SUITE_DOCS = {
         "WNOA residuals ('local-variable', 'simplified') and their Jacobians in the right tangent; the local GP's mean, "
         "Jacobians and covariance; Gauss-Newton and an iSAM2 stream with relinearization on SE(2) states"
     ),
+    "se3": (
+        "SO(3), SE(3) and the GP priors on SE(3) (kit v5): Exp, Log (angles 1e-12 to pi - 1e-9), J_r, J_r⁻¹, between, "
+        "the adjoint; the WNOA prior with both residuals ('local-variable', 'simplified') and WNOJ, their Jacobians at "
+        "the exact tier; the local GP's mean, Jacobians and covariance (t₁ ≠ 0); extrapolation; Gauss-Newton and an "
+        "iSAM2 stream on SE(3) states"
+    ),
     "paper": "the paper's runs (BTGP/1 on the synthetic set and on Plaza): final estimates and RMSE",
 }
 
@@ -65,4 +73,5 @@ def suite_cases(suite: str) -> list[Case]:
         "incremental": incremental_cases,
         "fixed_lag": fixed_lag_cases,
         "se2": lie_group_cases,
+        "se3": se3_cases,
     }[suite]()

@@ -56,7 +56,36 @@ def incremental_cases() -> list[Case]:
             "produced by steam_ref",
         ),
         *_partial_cases(),
+        _tie_case(),
     ]
+
+
+def _tie_case() -> Case:  # kit v5
+    def prior(k: str, first: float) -> dict:
+        return {"type": "prior", "keys": [k], "mean": [first, 0.0, 0.0, 0.0, 0.0, 0.0], "sigmas": [1.0] * 6}
+
+    zero = [0.0] * 6
+    stream = {
+        "variables": {"x0": 6, "x1": 6, "x2": 6},
+        "updates": [
+            {"values": {"x0": zero}, "factors": [prior("x0", 0.25)]},
+            {"values": {"x1": zero}, "factors": [prior("x1", 0.125)]},
+            {"values": {"x2": zero}, "factors": [prior("x2", 0.25)]},
+        ],
+    }
+    isam2 = {"relinearize_threshold": 0.25, "relinearize_skip": 1, "wildfire_threshold": 0.0}
+    return Case(
+        "relinearize_on_the_tie",
+        "[YIB Alg. 1, Eq. 9-11]",
+        "three updates whose variables each have a unit prior, every step exact in binary: after update 1, x0's delta "
+        "is 0.25 exactly, the threshold beta = 0.25. Relinearization moves a variable whose max|delta| >= beta, so x0 "
+        "is relinearized at update 2 (relinearized_2 = [x0]; a port testing max|delta| > beta relinearizes nothing); "
+        "x1's delta 0.125 stays below",
+        {"stream": stream, "isam2": isam2},
+        {**{f"relinearized_{k}": EXACT for k in (1, 2, 3)}, **{f"estimate_{k}": tol(1e-12, 1e-14) for k in (1, 2, 3)}},
+        True,
+        "oracle: per-variable linearization points, a dense linearization and solve per update",
+    )
 
 
 def _partial_cases() -> list[Case]:  # kit v2

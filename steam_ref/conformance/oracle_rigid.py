@@ -1,0 +1,363 @@
+"""The oracle on SO(3) and SE(3): 3×3 and 4×4 matrices, SciPy's ``expm`` and ``expm_frechet`` and its rotations.
+
+Independent expected values of the ``se3`` suite (kit v5). Nothing here shares code with ``steam_ref.lie``,
+``steam_ref.motion`` or ``steam_ref.factors``: no series, no closed forms, no coefficient.
+
+- A pose is stored as 12 numbers [t; R row-major], a rotation as R's 9 entries row-major; a twist ξ = [ρ; φ]
+  (translation first), ξ^ = [[φ^, ρ], [0, 0]].
+- Exp(ξ) = expm(ξ^) (SciPy, Padé). Log(T): φ = the rotation vector of R (SciPy's ``Rotation.as_rotvec``, through a
+  quaternion: accurate at the half turn, where a Log read off R - Rᵀ loses every digit), ρ = V(φ)⁻¹ t with V(φ) the
+  top-right block of expm([[φ^, I], [0, 0]]) (Van Loan: ∫₀¹ expm(s φ^) ds).
+- J_r(ξ) = ∫₀¹ expm(-s ad_ξ) ds, the top-right block of expm([[-ad_ξ, I], [0, 0]]); ad_ξ's columns the commutators
+  [ξ^, eᵢ^]∨; J_r⁻¹ a dense inverse. Its derivative DJ_r(ξ)[u] is the Fréchet derivative of that block exponential
+  in the direction [[-ad_u, 0], [0, 0]] (``scipy.linalg.expm_frechet``), exact to rounding.
+- A state x = [T; ϖ] (18 numbers) or [T; ϖ; ϖ̇] (24) moves by the right retraction
+  x ⊕ δ = (T Exp(δ[:6]), ϖ + δ[6:12], ϖ̇ + δ[12:]).
+- Every Jacobian is a central difference through that retraction at h, h/2, h/4, h/8 (h = 0.04) combined by
+  Romberg's scheme (error O(h⁸), rounding ~1e-13 relative): the exact tier's reference.
+- The WNOA residuals, WNOJ's (γ = [ξ; ξ̇; ξ̈] from the definitions ξ̇ = J_r⁻¹ϖ, ξ̈ = d/dt(J_r⁻¹ϖ)), the local GP's mean
+  and covariance (Λ, Ψ and the conditional covariance from :mod:`.oracle`'s dense kernel) on these definitions;
+  :data:`LIE3`, the :class:`.oracle_graph.Space` of SE(3) states for the graph oracle's solvers.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+
+import numpy as np
+import scipy.linalg
+from numpy.typing import NDArray
+from scipy.spatial.transform import Rotation
+
+from ..errors import SteamError
+from . import oracle as o
+from .oracle_graph import Space
+
+__all__ = [
+    "hat",
+    "exp",
+    "log",
+    "right_jacobian",
+    "right_jacobian_inverse",
+    "retract",
+    "local",
+    "derivative",
+    "numeric_jacobian",
+    "prior_error",
+    "accel_prior_error",
+    "interpolation_quantities",
+    "extrapolation_quantities",
+    "linearize_factor",
+    "LIE3",
+]
+
+H = 0.04  # the first step of the Romberg table
+LEVELS = 4  # h, h/2, h/4, h/8
+
+
+def hat3(w: NDArray) -> NDArray:
+    return np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])
+
+
+def hat(xi: NDArray) -> NDArray:
+    """ξ^ (4×4) for ξ = [ρ; φ]."""
+    out = np.zeros((4, 4))
+    out[:3, :3], out[:3, 3] = hat3(xi[3:]), xi[:3]
+    return out
+
+
+def _vee(M: NDArray) -> NDArray:
+    return np.array([M[0, 3], M[1, 3], M[2, 3], M[2, 1], M[0, 2], M[1, 0]])
+
+
+def matrix(pose: NDArray) -> NDArray:
+    out = np.eye(4)
+    out[:3, :3], out[:3, 3] = np.asarray(pose[3:12], float).reshape(3, 3), pose[:3]
+    return out
+
+
+def pose_of(M: NDArray) -> NDArray:
+    return np.concatenate([M[:3, 3], M[:3, :3].ravel()])
+
+
+def exp(xi: NDArray) -> NDArray:
+    """Exp(ξ) as a pose [t; R row-major]."""
+    return pose_of(scipy.linalg.expm(hat(np.asarray(xi, float))))
+
+
+def so3_exp(phi: NDArray) -> NDArray:
+    """Exp(φ) on SO(3) as R's 9 entries row-major."""
+    return scipy.linalg.expm(hat3(np.asarray(phi, float))).ravel()
+
+
+def so3_log(R: NDArray) -> NDArray:
+    """Log(R): the rotation vector, angle in [0, π] (SciPy's quaternion route)."""
+    return Rotation.from_matrix(np.asarray(R, float).reshape(3, 3)).as_rotvec()
+
+
+def _V(phi: NDArray) -> NDArray:
+    block = np.zeros((6, 6))
+    block[:3, :3], block[:3, 3:] = hat3(phi), np.eye(3)
+    return scipy.linalg.expm(block)[:3, 3:]
+
+
+def log_matrix(M: NDArray) -> NDArray:
+    phi = so3_log(M[:3, :3])
+    return np.concatenate([np.linalg.solve(_V(phi), M[:3, 3]), phi])
+
+
+def log(pose: NDArray) -> NDArray:
+    return log_matrix(matrix(np.asarray(pose, float)))
+
+
+def ad(xi: NDArray) -> NDArray:
+    X = hat(np.asarray(xi, float))
+    return np.column_stack([_vee(X @ hat(e) - hat(e) @ X) for e in np.eye(6)])
+
+
+def _so3_ad(phi: NDArray) -> NDArray:
+    return hat3(np.asarray(phi, float))  # [φ^, e_i^]∨ = φ × e_i
+
+
+def _block(adx: NDArray) -> NDArray:
+    n = len(adx)
+    block = np.zeros((2 * n, 2 * n))
+    block[:n, :n], block[:n, n:] = -adx, np.eye(n)
+    return block
+
+
+def right_jacobian(xi: NDArray) -> NDArray:
+    """J_r(ξ) = ∫₀¹ expm(-s ad_ξ) ds (Van Loan); a 3-vector is on SO(3)."""
+    xi = np.asarray(xi, float)
+    adx = _so3_ad(xi) if len(xi) == 3 else ad(xi)
+    return scipy.linalg.expm(_block(adx))[: len(xi), len(xi) :]
+
+
+def right_jacobian_inverse(xi: NDArray) -> NDArray:
+    return np.linalg.inv(right_jacobian(xi))
+
+
+def jr_derivative(xi: NDArray, u: NDArray) -> NDArray:
+    """DJ_r(ξ)[u], the Fréchet derivative of the Van Loan block exponential (exact to rounding)."""
+    n = len(xi)
+    direction = np.zeros((2 * n, 2 * n))
+    direction[:n, :n] = -ad(np.asarray(u, float))
+    _, frechet = scipy.linalg.expm_frechet(_block(ad(np.asarray(xi, float))), direction)
+    return frechet[:n, n:]
+
+
+def jr_inverse_times_derivative(xi: NDArray, v: NDArray, u: NDArray) -> NDArray:
+    """D(J_r(ξ)⁻¹ v)[u] = -J_r⁻¹ DJ_r[u] J_r⁻¹ v."""
+    Ji = right_jacobian_inverse(xi)
+    return -Ji @ jr_derivative(xi, u) @ Ji @ v
+
+
+def adjoint(pose: NDArray) -> NDArray:
+    """Ad(T): columns (T eᵢ^ T⁻¹)∨."""
+    T = matrix(np.asarray(pose, float))
+    return np.column_stack([_vee(T @ hat(e) @ np.linalg.inv(T)) for e in np.eye(6)])
+
+
+def between(a: NDArray, b: NDArray) -> NDArray:
+    return pose_of(np.linalg.inv(matrix(np.asarray(a, float))) @ matrix(np.asarray(b, float)))
+
+
+def retract(x: NDArray, delta: NDArray) -> NDArray:
+    """x ⊕ δ: a 12-vector is a pose, an 18- or 24-vector a state (right retraction); a 3-vector a landmark."""
+    x, delta = np.asarray(x, float), np.asarray(delta, float)
+    if len(x) == 3:
+        return x + delta
+    pose = pose_of(matrix(x[:12]) @ scipy.linalg.expm(hat(delta[:6])))
+    return np.concatenate([pose, x[12:] + delta[6:]])
+
+
+def local(x0: NDArray, x: NDArray) -> NDArray:
+    """x ⊖ x₀ (the inverse of :func:`retract`)."""
+    x0, x = np.asarray(x0, float), np.asarray(x, float)
+    if len(x) == 3:
+        return x - x0
+    xi = log_matrix(np.linalg.inv(matrix(x0[:12])) @ matrix(x[:12]))
+    return np.concatenate([xi, x[12:] - x0[12:]])
+
+
+def derivative(g: Callable[[NDArray], NDArray], n: int) -> NDArray:
+    """∂g/∂δ at δ = 0 (δ of size n): central differences at h, h/2, h/4, h/8, Romberg's table (error O(h⁸))."""
+
+    def central(h: float) -> NDArray:
+        return np.column_stack([(np.asarray(g(h * e)) - np.asarray(g(-h * e))) / (2 * h) for e in np.eye(n)])
+
+    table = [central(H / 2**k) for k in range(LEVELS)]
+    for level in range(1, LEVELS):
+        factor = 4.0**level
+        table = [(factor * table[k + 1] - table[k]) / (factor - 1) for k in range(len(table) - 1)]
+    return table[0]
+
+
+def numeric_jacobian(
+    f: Callable[..., NDArray], args: Sequence[NDArray], k: int, out_local: Callable | None = None
+) -> NDArray:
+    """∂f/∂δₖ at δ = 0 of f(..., xₖ ⊕ δ, ...) through the right retraction; ``out_local(y0, y)``: the output's
+    local coordinates about y0 (default y - y0)."""
+    args = [np.asarray(a, float) for a in args]
+    y0 = np.asarray(f(*args), float)
+    diff = out_local or (lambda a, b: np.asarray(b, float) - a)
+
+    def g(d: NDArray) -> NDArray:
+        return diff(y0, f(*args[:k], retract(args[k], d), *args[k + 1 :]))
+
+    dims = {3: 3, 12: 6, 18: 12, 24: 18}
+    return derivative(g, dims[len(args[k])])
+
+
+# --- the local GP ---------------------------------------------------------------------------------------
+
+
+def _xi(x1: NDArray, x2: NDArray) -> NDArray:
+    return log_matrix(np.linalg.inv(matrix(x1[:12])) @ matrix(x2[:12]))
+
+
+def local_gamma(x1: NDArray, x2: NDArray, model: str) -> NDArray:
+    """γ₂ = [ξ; ξ̇] ('local-variable': ξ̇ = J_r(ξ)⁻¹ ϖ₂; 'simplified': ϖ₂), or with an acceleration (24 numbers)
+    [ξ; ξ̇; ξ̈], ξ̈ = D(J_r⁻¹ϖ₂)[ξ̇] + J_r⁻¹ ϖ̇₂."""
+    x1, x2 = np.asarray(x1, float), np.asarray(x2, float)
+    xi = _xi(x1, x2)
+    if model == "simplified":
+        return np.concatenate([xi, x2[12:18]])
+    if model != "local-variable":
+        raise SteamError(f"unknown SE(3) prior model {model!r}")
+    rate = right_jacobian_inverse(xi) @ x2[12:18]
+    if len(x2) == 18:
+        return np.concatenate([xi, rate])
+    accel = jr_inverse_times_derivative(xi, x2[12:18], rate) + right_jacobian_inverse(xi) @ x2[18:]
+    return np.concatenate([xi, rate, accel])
+
+
+def start_gamma(x1: NDArray) -> NDArray:
+    """γ₁ = [0; ϖ₁] (or [0; ϖ₁; ϖ̇₁])."""
+    return np.concatenate([np.zeros(6), np.asarray(x1, float)[12:]])
+
+
+def from_local(x1: NDArray, gamma: NDArray, model: str) -> NDArray:
+    """The state at γ: (T₁ Exp ξ, J_r(ξ) ξ̇ [, DJ_r(ξ)[ξ̇] ξ̇ + J_r(ξ) ξ̈]) (simplified: ξ̇ as the twist)."""
+    xi, rate = gamma[:6], gamma[6:12]
+    pose = pose_of(matrix(np.asarray(x1, float)[:12]) @ scipy.linalg.expm(hat(xi)))
+    if model == "simplified":
+        return np.concatenate([pose, rate])
+    twist = right_jacobian(xi) @ rate
+    if len(gamma) == 12:
+        return np.concatenate([pose, twist])
+    accel = jr_derivative(xi, rate) @ rate + right_jacobian(xi) @ gamma[12:]
+    return np.concatenate([pose, twist, accel])
+
+
+def _model(derivatives: int) -> tuple[NDArray, NDArray]:
+    return o.model_matrices("wnoa" if derivatives == 1 else "wnoj", 6)
+
+
+def prior_error(x1: NDArray, x2: NDArray, dt: float, model: str) -> NDArray:
+    """e = γ₂ - Φ(Δt) γ₁ (WNOA with either residual; WNOJ for 24-number states)."""
+    A, _ = _model(1 if len(x1) == 18 else 2)
+    return local_gamma(x1, x2, model) - o.transition(A, float(dt)) @ start_gamma(x1)
+
+
+def accel_prior_error(x1: NDArray, x2: NDArray, dt: float) -> NDArray:
+    return prior_error(x1, x2, dt, "local-variable")
+
+
+def prior_covariance(dt: float, qc: NDArray, derivatives: int = 1) -> NDArray:
+    A, F = _model(derivatives)
+    return o.process_noise(A, F, np.asarray(qc, float), float(dt))
+
+
+def interpolation_quantities(inputs: Mapping) -> dict:
+    """x(τ), J_1, J_2 (and, given ``joint_cov``, cov_tau) of an interpolation case: γ(τ) = Λ γ₁ + Ψ γ₂ mapped back."""
+    x1, x2, model = np.asarray(inputs["x1"], float), np.asarray(inputs["x2"], float), inputs["model"]
+    t1, t2, tau, qc = float(inputs["t1"]), float(inputs["t2"]), float(inputs["tau"]), np.asarray(inputs["qc"], float)
+    A, F = _model(1 if len(x1) == 18 else 2)
+    lam, psi, cond = o.interpolation(A, F, qc, t1, t2, tau)
+
+    def gamma_of(a: NDArray, b: NDArray) -> NDArray:
+        return lam @ start_gamma(a) + psi @ local_gamma(a, b, model)
+
+    def mean(a: NDArray, b: NDArray) -> NDArray:
+        return from_local(a, gamma_of(a, b), model)
+
+    x = mean(x1, x2)
+    J1, J2 = (numeric_jacobian(mean, [x1, x2], k, local) for k in (0, 1))
+    out = {"x_tau": x, "J_1": J1, "J_2": J2}
+    if "joint_cov" in inputs:
+        gamma = gamma_of(x1, x2)
+        N = derivative(lambda d: local(x, from_local(x1, gamma + d, model)), len(gamma))
+        J = np.hstack([J1, J2])
+        cov = J @ np.asarray(inputs["joint_cov"], float) @ J.T + N @ cond @ N.T
+        out["cov_tau"] = (cov + cov.T) / 2
+    return out
+
+
+def extrapolation_quantities(inputs: Mapping) -> dict:
+    """x(t) = from_local(Φ(t - t₁) γ₁), its Jacobian J_1 and covariance J P₁ Jᵀ + N Q(t - t₁) Nᵀ."""
+    x1, qc = np.asarray(inputs["x1"], float), np.asarray(inputs["qc"], float)
+    s = float(inputs["t"]) - float(inputs["t1"])
+    A, F = _model(1 if len(x1) == 18 else 2)
+    Phi = o.transition(A, s)
+
+    def mean(a: NDArray) -> NDArray:
+        return from_local(a, Phi @ start_gamma(a), "local-variable")
+
+    x = mean(x1)
+    J = numeric_jacobian(mean, [x1], 0, local)
+    gamma = Phi @ start_gamma(x1)
+    N = derivative(lambda d: local(x, from_local(x1, gamma + d, "local-variable")), len(gamma))
+    cov = J @ np.asarray(inputs["cov1"], float) @ J.T + N @ o.process_noise(A, F, qc, s) @ N.T
+    return {"x_t": x, "J_1": J, "cov_t": (cov + cov.T) / 2}
+
+
+# --- problems -------------------------------------------------------------------------------------------
+
+
+def factor_error(spec: Mapping, xs: Sequence[NDArray]) -> NDArray:
+    """The error of a factor spec of the se3 suite at its variables' values."""
+    kind = spec["type"]
+    if kind == "se3_prior":
+        return prior_error(xs[0], xs[1], float(spec["dt"]), spec["model"])
+    if kind == "se3_wnoj_prior":
+        return accel_prior_error(xs[0], xs[1], float(spec["dt"]))
+    if kind == "se3_state_prior":
+        return local(np.asarray(spec["mean"], float), xs[0])
+    if kind == "se3_velocity":
+        return np.asarray(xs[0], float)[12:18] - np.asarray(spec["measured"], float)
+    raise SteamError(f"unknown se3 factor type {kind!r}")
+
+
+def factor_covariance(spec: Mapping) -> NDArray:
+    if spec["type"] == "se3_prior":
+        return prior_covariance(float(spec["dt"]), spec["qc"])
+    if spec["type"] == "se3_wnoj_prior":
+        return prior_covariance(float(spec["dt"]), spec["qc"], 2)
+    return np.diag(np.asarray(spec["sigmas"], float) ** 2)
+
+
+def factor_jacobians(spec: Mapping, xs: Sequence[NDArray]) -> tuple[NDArray, list[NDArray]]:
+    """The error of a factor spec at ``xs`` and H_k = ∂e/∂δₖ in each key's right tangent."""
+    xs = [np.asarray(x, float) for x in xs]
+
+    def error(*a: NDArray) -> NDArray:
+        return factor_error(spec, a)
+
+    return factor_error(spec, xs), [numeric_jacobian(error, xs, k) for k in range(len(xs))]
+
+
+def linearize_factor(spec: Mapping, xs: Sequence[NDArray]) -> dict:
+    """e, W e, Hₖ, Aₖ = W Hₖ, b = -W e and the cost ½‖W e‖² of a factor spec at ``xs``."""
+    e, H_ = factor_jacobians(spec, xs)
+    W = o.sqrt_information(factor_covariance(spec))
+    we = W @ e
+    out = {"error": e, "whitened_error": we, **{f"H_{k}": h for k, h in enumerate(H_)}}
+    out.update({f"A_{k}": W @ h for k, h in enumerate(H_)})
+    out["b"], out["cost"] = -we, 0.5 * float(np.sum(we**2))
+    return out
+
+
+# SE(3) states move by the right retraction; every factor is linearized by differences through it (both looked up
+# when called, so a test can swap either for a wrong port's).
+LIE3 = Space(lambda x, delta: retract(x, delta), lambda spec, xs: linearize_factor(spec, xs))
