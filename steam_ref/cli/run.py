@@ -41,6 +41,7 @@ from .args import (
     positive_float,
     positive_int,
     preset_of,
+    qc_diagonal,
     scale,
     steps_count,
 )
@@ -130,6 +131,14 @@ def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
         type=scale(*QC_SCALES, "the prior's information beside the readings must stay within float64's precision"),
         default=1.0,
         help="multiply the preset's Qc by this, 1e-8 to 1e8 (a jerk prior needs its own: tutorial 06 uses 100 on Plaza)",
+    )
+    parser.add_argument(
+        "--qc",
+        type=qc_diagonal,
+        default=None,
+        metavar="QXX,QYY,QTT",
+        help="the prior's Qc, diagonal, in place of the preset's (three numbers > 0 on the preset's GP clock, as "
+        "`steam-ref fit-qc` prints them; --qc-scale then multiplies it)",
     )
     parser.add_argument(
         "--singer-time-constant",
@@ -224,7 +233,8 @@ def run(args: argparse.Namespace) -> int:
         if given[name] is not None and name not in MOTION_PRIORS[prior].options:
             takers = " or ".join(f"--prior {p}" for p, choice in MOTION_PRIORS.items() if name in choice.options)
             raise SteamError(f"--{name.replace('_', '-')} applies to {takers} only, not --prior {prior}")
-    setup = setup.replace(qc=args.qc_scale * setup.qc, **{k: v for k, v in given.items() if v is not None})
+    qc = setup.qc if args.qc is None else np.diag(args.qc)
+    setup = setup.replace(qc=args.qc_scale * qc, **{k: v for k, v in given.items() if v is not None})
     isam2 = {"relinearize_threshold": args.relinearize_threshold, "relinearize_skip": args.relinearize_skip}
     if any(v is not None for v in isam2.values()):  # only what was given: the preset owns its iSAM2 settings
         setup = setup.with_isam2(**{k: v for k, v in isam2.items() if v is not None})
@@ -275,6 +285,7 @@ def run(args: argparse.Namespace) -> int:
         "prior": setup.prior,
         **setup.prior_options(),
         "qc_scale": args.qc_scale,
+        "qc": setup.qc.tolist(),
         "clock": estimator.readings.clock.describe(),
     }
     summary |= {"what": explain.method_text(args.method, result.schedule.every)}

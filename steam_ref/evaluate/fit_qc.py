@@ -207,4 +207,3 @@ def fit_qc(
         smoothed_at=smoothed_at,
         states=states,
     )
-
