@@ -103,8 +103,10 @@ def _text(dataset: str, setup: PaperSetup, n: int, clock: Clock, fit: QcFit, nam
     lines = [
         f"{dataset}: {n} poses of ground truth; prior {setup.prior} ({MOTION_PRIORS[setup.prior].what})",
         f"clock: {clock.describe()}",
-        f"Qc by maximum likelihood (docs/derivations.md §12; velocities smoothed, {fit.rounds} round(s), "
-        f"{fit.dof} degrees of freedom per dimension):",
+        (
+            f"Qc by maximum likelihood (docs/derivations.md §12; velocities smoothed, {fit.rounds} round(s), "
+            f"{fit.dof} degrees of freedom per dimension):"
+        ),
     ]
     for j, name in enumerate(names):
         q, se, preset = fit.qc[j, j], fit.standard_error[j], setup.qc[j, j]

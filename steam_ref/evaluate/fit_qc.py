@@ -34,6 +34,7 @@ from ..arguments import finite, real_array
 from ..batch import gauss_newton
 from ..errors import ConvergenceError, DataError, ShapeError, SteamError
 from ..factors import Factor
+from ..graph import FactorGraph
 from ..motion import MotionPrior, as_motion_prior
 from ..variables import Values, X
 
@@ -139,7 +140,7 @@ def _smooth(prior: MotionPrior, times: NDArray, poses: NDArray, start: NDArray) 
     sigmas = [np.full(d, POSE_HOLD * position)] + [np.full(d, FREE_VELOCITY)] * (k - 1)
     holds = [prior.first_state_prior(X(i), poses[i], np.zeros(d), sigmas) for i in range(n)]
     initial = Values({X(i): start[i] for i in range(n)})
-    result = gauss_newton(factors + holds, initial, max_iterations=100)
+    result = gauss_newton(FactorGraph(factors + holds), initial, max_iterations=100)
     if not result.converged:
         raise ConvergenceError(f"fit_qc: smoothing the velocities under {prior!r} did not converge ({result.reason})")
     return result.values.stack([X(i) for i in range(n)]), factors
