@@ -2,11 +2,11 @@
 
 - Recovery: poses drawn from each prior's own model (``MotionPrior.sample_states``) at a known Qc, the fit started
   far from it: every fitted entry lies within 4 standard errors of the truth. The fitted Qc_jj times dof / Qc_jj is
-  χ² with dof = N - 1 degrees of freedom (derivations §12.3: exact for the vector prior, to first order on SE(2)),
+  χ² with dof = N - 1 degrees of freedom (derivations §14.2: exact for the vector prior, to first order on SE(2)),
   so its relative standard error is sqrt(2 / dof); 4 of them fail a correct fit once in ~16,000 per entry.
 - Exactness: on the vector WNOA prior the fit is the restricted maximum likelihood of the second differences of
   the positions, d = p₊ - 2p + p₋, whose covariance at Qc_jj = 1 and equal steps h is tridiagonal (2h³/3 on the
-  diagonal, h³/6 beside it) [DER 12.4]: Qc_jj = dᵀ K⁻¹ d / (N - 1), computed here by a dense Cholesky solve,
+  diagonal, h³/6 beside it) [DER 14.5]: Qc_jj = dᵀ K⁻¹ d / (N - 1), computed here by a dense Cholesky solve,
   no steam_ref code. The fit holds the poses to 1e-4 of the prior's sigma, so the two agree to ~1e-7.
 - Bad input: no ground truth, mismatched lengths, times that do not increase, a non-diagonal Qc, too few poses:
   the project's error naming the value; the command's bad input: one line, exit code 2.

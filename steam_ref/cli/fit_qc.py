@@ -2,7 +2,7 @@
 
 The poses of the ground truth at the data set's pose times, on the preset's GP clock (pose steps for the CMU
 sets, seconds otherwise), are the data; the velocities are smoothed under the prior and Qc is the maximum of the
-poses' likelihood, closed form per dimension (:func:`steam_ref.evaluate.fit_qc`, docs/derivations.md §12). It
+poses' likelihood, closed form per dimension (:func:`steam_ref.evaluate.fit_qc`, docs/derivations.md §14). It
 prints the fitted diagonal with each entry's standard error beside the preset's Qc, and the ``--qc`` that makes
 ``steam-ref run`` use it. A data set without ground truth is refused in one line.
 """
@@ -104,7 +104,7 @@ def _text(dataset: str, setup: PaperSetup, n: int, clock: Clock, fit: QcFit, nam
         f"{dataset}: {n} poses of ground truth; prior {setup.prior} ({MOTION_PRIORS[setup.prior].what})",
         f"clock: {clock.describe()}",
         (
-            f"Qc by maximum likelihood (docs/derivations.md §12; velocities smoothed, {fit.rounds} round(s), "
+            f"Qc by maximum likelihood (docs/derivations.md §14; velocities smoothed, {fit.rounds} round(s), "
             f"{fit.dof} degrees of freedom per dimension):"
         ),
     ]

@@ -1,11 +1,11 @@
-"""Qc from data: the maximum-likelihood diagonal Qc of a motion prior, given the poses of a run.  [DER 12.1-12.4]
+"""Qc from data: the maximum-likelihood diagonal Qc of a motion prior, given the poses of a run.  [DER 14.1-14.5]
 
 A motion prior's white noise has a power spectral density Qc [YIB Eq. 14]; the paper gives one per data set,
 tuned by hand. :func:`fit_qc` reads one from ground truth instead: the poses [x, y, θ] of a run at its states'
 times (on the prior's clock) are the data, the states' velocities (and any higher derivative) are not observed.
 The velocities are smoothed (a batch solve of the prior's own factors with every pose held at the truth), and
 the fitted Qc is the maximum of the poses' likelihood, which for a prior whose noise over a step is Q(Δt) ⊗ Qc
-has a closed form per dimension (docs/derivations.md §12):
+has a closed form per dimension (docs/derivations.md §14):
 
     Qc_jj = min over the velocities of Σᵢ eᵢⱼᵀ Q(Δtᵢ)⁻¹ eᵢⱼ / (N - k + 1)
 
@@ -132,7 +132,7 @@ def _noise(prior: MotionPrior, factors: list[Factor], d: int, k: int) -> NDArray
 
 def _smooth(prior: MotionPrior, times: NDArray, poses: NDArray, start: NDArray) -> tuple[NDArray, list[Factor]]:
     """The states with every pose held at ``poses`` and the velocities (and higher) free: the minimum over them of
-    the prior's cost [DER 12.2], by Gauss-Newton from ``start``; and the prior factors between them."""
+    the prior's cost [DER 14.3], by Gauss-Newton from ``start``; and the prior factors between them."""
     n = len(times)
     factors = [prior.prior_factor(X(i), X(i + 1), float(times[i + 1] - times[i])) for i in range(n - 1)]
     d, k = _blocks(prior, factors[0])
@@ -156,7 +156,7 @@ def fit_qc(
     tolerance: float = 1e-4,
 ) -> QcFit:
     """The maximum-likelihood diagonal Qc of ``prior`` from the ``poses`` (n, 3) [x, y, θ] at ``times`` (n,).
-    [DER 12.1-12.4]
+    [DER 14.1-14.5]
 
     ``times`` are on the prior's clock (a set-up's ``Clock.model``: on a 'pose-index' clock, the pose index).
     ``prior``: a :class:`~steam_ref.motion.MotionPrior` (or Qc of the paper's WNOA) whose noise over a step is
@@ -192,7 +192,7 @@ def fit_qc(
         by_dimension = errors.reshape(n_steps, k, d).transpose(0, 2, 1)  # (N, d, k)
         step_noise = _noise(prior, factors, d, k)  # Q(Δtᵢ), (N, d, k, k)
         whitened = np.einsum("ndk,ndk->nd", by_dimension, np.linalg.solve(step_noise, by_dimension[..., None])[..., 0])
-        fitted = np.sum(whitened, axis=0) / dof  # [DER 12.3]
+        fitted = np.sum(whitened, axis=0) / dof  # [DER 14.2]
         smoothed_at = np.array(prior.qc)
         moved = np.max(np.abs(fitted / np.diag(smoothed_at) - 1.0))
         if refit is None or moved <= tolerance or done == rounds:
