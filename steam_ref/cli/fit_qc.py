@@ -62,10 +62,12 @@ def run(args: argparse.Namespace) -> int:
     setup = PaperSetup.named(preset_of(args))
     if args.prior is not None:
         setup = setup.replace(prior=args.prior)
-    if args.se2_residual is not None:
-        if "se2_residual" not in MOTION_PRIORS[setup.prior].options:
-            raise SteamError(f"--se2-residual applies to --prior se2 only, not --prior {setup.prior}")
-        setup = setup.replace(se2_residual=args.se2_residual)
+    given = {name: value for name, value in {"se2_residual": args.se2_residual}.items() if value is not None}
+    for name in given:  # an option only of the priors that take it (MOTION_PRIORS)
+        if name not in MOTION_PRIORS[setup.prior].options:
+            takers = " or ".join(f"--prior {p}" for p, choice in MOTION_PRIORS.items() if name in choice.options)
+            raise SteamError(f"--{name.replace('_', '-')} applies to {takers} only, not --prior {setup.prior}")
+    setup = setup.replace(**given)
     data = load_with_note(args)
     if data.ground_truth is None:
         raise DataError(
