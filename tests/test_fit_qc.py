@@ -22,7 +22,7 @@ import scipy.linalg
 from cli_runs import runner
 
 from steam_ref.datasets import load_dataset
-from steam_ref.errors import DataError, ShapeError, SteamError
+from steam_ref.errors import ConvergenceWarning, DataError, ShapeError, SteamError
 from steam_ref.evaluate.fit_qc import fit_qc
 from steam_ref.motion import motion_prior
 
@@ -99,8 +99,17 @@ def test_bad_input_is_refused_naming_the_value() -> None:
         fit_qc(motion_prior("se2", QC + 0.001 * (1 - np.eye(3))), times, poses)
     with pytest.raises(DataError, match="more than 1 steps"):
         fit_qc(prior, times[:2], poses[:2])
-    with pytest.raises(SteamError, match="rounds must be an integer >= 1, got 0"):
+    with pytest.raises(DataError, match=r"more than 1 steps between poses.*got 0"):
+        fit_qc(prior, times[:1], poses[:1])
+    with pytest.raises(SteamError, match=r"rounds must be an integer >= 1, got rounds=0"):
         fit_qc(prior, times, poses, rounds=0)
+
+
+def test_a_fit_that_has_not_settled_says_so() -> None:
+    times, poses = _drawn("se2", 201, 0.2, seed=5)
+    with pytest.warns(ConvergenceWarning, match="after 1 smoothings the fitted Qc still moved"):
+        fit = fit_qc(motion_prior("se2", START * QC), times, poses, refit=lambda qc: motion_prior("se2", qc), rounds=1)
+    assert fit.rounds == 1 and np.array_equal(fit.smoothed_at, START * QC)
 
 
 def test_the_command_fits_the_ground_truth_of_a_data_set(capsys, shared_data) -> None:

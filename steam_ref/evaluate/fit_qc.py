@@ -24,15 +24,16 @@ state's prior (a pose held, the velocity free) and a new state's value; it asks 
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..arguments import finite, real_array
+from ..arguments import finite, integer, real_array
 from ..batch import gauss_newton
-from ..errors import ConvergenceError, DataError, ShapeError, SteamError
+from ..errors import ConvergenceError, ConvergenceWarning, DataError, ShapeError, SteamError
 from ..factors import Factor
 from ..graph import FactorGraph
 from ..motion import MotionPrior, as_motion_prior
@@ -169,9 +170,13 @@ def fit_qc(
     """
     prior = as_motion_prior(prior)
     t, p = _inputs(times, poses)
-    if not isinstance(rounds, int) or rounds < 1:
-        raise SteamError(f"rounds must be an integer >= 1, got {rounds!r}")
+    rounds = integer("rounds", rounds, 1)
     dt = np.diff(t)
+    k = _blocks(prior, prior.prior_factor(X(0), X(1), float(dt[0])))[1] if len(dt) else 2
+    if len(dt) - k + 1 < 1:
+        raise DataError(
+            f"fit_qc needs more than {k - 1} steps between poses (a state has {k - 1} unobserved blocks), got {len(dt)}"
+        )
     velocity = finite_difference_velocity(t, p)
     states = np.array(
         [prior.initial_state(p[i], velocity[i], float(dt[max(i - 1, 0)])) for i in range(len(t))], dtype=float
@@ -183,11 +188,6 @@ def fit_qc(
         d, k = _blocks(prior, factors[0])
         n_steps = len(factors)
         dof = n_steps - k + 1
-        if dof < 1:
-            raise DataError(
-                f"fit_qc needs more than {k - 1} steps between poses (a state has {k - 1} unobserved blocks), "
-                f"got {n_steps}"
-            )
         errors = type(factors[0]).stack(factors).error(states[:-1], states[1:])  # (N, k d), one call
         by_dimension = errors.reshape(n_steps, k, d).transpose(0, 2, 1)  # (N, d, k)
         step_noise = _noise(prior, factors, d, k)  # Q(Δtᵢ), (N, d, k, k)
@@ -195,7 +195,15 @@ def fit_qc(
         fitted = np.sum(whitened, axis=0) / dof  # [DER 14.2]
         smoothed_at = np.array(prior.qc)
         moved = np.max(np.abs(fitted / np.diag(smoothed_at) - 1.0))
-        if refit is None or moved <= tolerance or done == rounds:
+        if refit is None or moved <= tolerance:
+            break
+        if done == rounds:
+            warnings.warn(
+                f"fit_qc: after {rounds} smoothings the fitted Qc still moved by {moved:.3g} relative (tolerance "
+                f"{tolerance:g}); the last is returned",
+                ConvergenceWarning,
+                stacklevel=2,
+            )
             break
         prior = refit(np.diag(fitted))
     return QcFit(
