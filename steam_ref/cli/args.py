@@ -31,6 +31,7 @@ __all__ = [
     "add_data_dir",
     "add_dataset",
     "add_progress",
+    "add_qc",
     "add_trajectory_arguments",
     "dataset_name",
     "folder",
@@ -94,6 +95,18 @@ def scale(lower: float, upper: float, why: str):
 # and beyond about sqrt(1/eps) = 6.7e7 either way float64 no longer resolves the readings beside the prior
 # (or the prior beside them): the elimination then breaks down, blaming a variable. Past 1e8 refused here.
 QC_SCALES = (1e-8, 1e8)
+
+
+def add_qc(parser: argparse.ArgumentParser) -> None:
+    """--qc: a diagonal Qc in place of the preset's, as ``steam-ref fit-qc`` prints it."""
+    parser.add_argument(
+        "--qc",
+        type=qc_diagonal,
+        default=None,
+        metavar="QXX,QYY,QTT",
+        help="the prior's Qc, diagonal, in place of the preset's (three numbers > 0 on the preset's GP clock, as "
+        "`steam-ref fit-qc` prints them; --qc-scale then multiplies it)",
+    )
 
 
 def qc_diagonal(text: str) -> list[float]:

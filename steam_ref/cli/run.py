@@ -33,6 +33,7 @@ from .args import (
     add_data_dir,
     add_dataset,
     add_progress,
+    add_qc,
     add_trajectory_arguments,
     load_with_note,
     non_negative_float,
@@ -41,7 +42,6 @@ from .args import (
     positive_float,
     positive_int,
     preset_of,
-    qc_diagonal,
     scale,
     steps_count,
 )
@@ -132,14 +132,7 @@ def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
         default=1.0,
         help="multiply the preset's Qc by this, 1e-8 to 1e8 (a jerk prior needs its own: tutorial 06 uses 100 on Plaza)",
     )
-    parser.add_argument(
-        "--qc",
-        type=qc_diagonal,
-        default=None,
-        metavar="QXX,QYY,QTT",
-        help="the prior's Qc, diagonal, in place of the preset's (three numbers > 0 on the preset's GP clock, as "
-        "`steam-ref fit-qc` prints them; --qc-scale then multiplies it)",
-    )
+    add_qc(parser)
     parser.add_argument(
         "--singer-time-constant",
         type=scale(*SINGER_TIME_CONSTANTS, "the Singer prior's process noise must stay within float64's precision"),
@@ -233,7 +226,7 @@ def run(args: argparse.Namespace) -> int:
         if given[name] is not None and name not in MOTION_PRIORS[prior].options:
             takers = " or ".join(f"--prior {p}" for p, choice in MOTION_PRIORS.items() if name in choice.options)
             raise SteamError(f"--{name.replace('_', '-')} applies to {takers} only, not --prior {prior}")
-    qc = setup.qc if args.qc is None else np.diag(args.qc)
+    qc = setup.qc if args.qc is None else np.diag(args.qc)  # --qc, then --qc-scale
     setup = setup.replace(qc=args.qc_scale * qc, **{k: v for k, v in given.items() if v is not None})
     isam2 = {"relinearize_threshold": args.relinearize_threshold, "relinearize_skip": args.relinearize_skip}
     if any(v is not None for v in isam2.values()):  # only what was given: the preset owns its iSAM2 settings
