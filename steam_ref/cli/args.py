@@ -32,6 +32,7 @@ __all__ = [
     "add_data_dir",
     "add_dataset",
     "add_progress",
+    "add_qc",
     "add_trajectory_arguments",
     "dataset_name",
     "folder",
@@ -44,6 +45,7 @@ __all__ = [
     "positive_int",
     "preset_for",
     "preset_of",
+    "qc_diagonal",
     "scale",
     "seeds_count",
     "steps_count",
@@ -94,6 +96,29 @@ def scale(lower: float, upper: float, why: str):
 # and beyond about sqrt(1/eps) = 6.7e7 either way float64 no longer resolves the readings beside the prior
 # (or the prior beside them): the elimination then breaks down, blaming a variable. Past 1e8 refused here.
 QC_SCALES = (1e-8, 1e8)
+
+
+def add_qc(parser: argparse.ArgumentParser) -> None:
+    """--qc: a diagonal Qc in place of the preset's, as ``steam-ref fit-qc`` prints it."""
+    parser.add_argument(
+        "--qc",
+        type=qc_diagonal,
+        default=None,
+        metavar="QXX,QYY,QTT",
+        help="the prior's Qc, diagonal, in place of the preset's (three numbers > 0 on the preset's GP clock, as "
+        "`steam-ref fit-qc` prints them; --qc-scale then multiplies it)",
+    )
+
+
+def qc_diagonal(text: str) -> list[float]:
+    """An argparse type: a diagonal Qc as three comma-separated numbers > 0 ('0.0005,0.0005,0.0001')."""
+    parts = text.split(",")
+    values = [parse_decimal(part.strip()) for part in parts]
+    if len(parts) != 3 or any(v is None or not (math.isfinite(v) and v > 0) for v in values):
+        raise argparse.ArgumentTypeError(
+            f"expected three numbers > 0 separated by commas (Qc's diagonal), got {text!r}"
+        )
+    return [float(v) for v in values if v is not None]
 
 
 # Singer's 1/alpha: the acceleration's memory. Below 1e-6 s (alpha dt > 1e6 at the data sets' dt of 1 s to

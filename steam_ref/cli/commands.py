@@ -12,6 +12,7 @@ Usage::
     steam-ref conformance {export DIR, check RESULTS_DIR [--only SUITE...], selftest [--paper], build}
     steam-ref data {list, fetch [NAME ...]}
     steam-ref consistency [--seeds N] [--jobs N] [--backend loky|dask] [--json] [--plot FILE.png] ...
+    steam-ref fit-qc [--dataset NAME_OR_PATH] [--prior {wnoa,wnoj,singer,se2}] [--max-poses N] [--json]
     steam-ref homework {handout NOTEBOOK... [--out DIR], mark SUBMISSION... [--source DIR] [--json]}
 
 Each command is one module with ``add_parser(subparsers)`` (its options; returns its parser) and
@@ -55,6 +56,7 @@ COMMANDS = {
     "conformance": "steam_ref.conformance.command",
     "data": "steam_ref.cli.data",
     "consistency": "steam_ref.cli.consistency",
+    "fit-qc": "steam_ref.cli.fit_qc",
     "homework": "steam_ref.homework.command",
 }
 

@@ -36,6 +36,7 @@ from .args import (
     add_data_dir,
     add_dataset,
     add_progress,
+    add_qc,
     add_trajectory_arguments,
     load_with_note,
     non_negative_float,
@@ -135,6 +136,7 @@ def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
         default=1.0,
         help="multiply the preset's Qc by this, 1e-8 to 1e8 (a jerk prior needs its own: tutorial 06 uses 100 on Plaza)",
     )
+    add_qc(parser)
     parser.add_argument(
         "--singer-time-constant",
         type=scale(*SINGER_TIME_CONSTANTS, "the Singer prior's process noise must stay within float64's precision"),
@@ -256,7 +258,8 @@ def run(args: argparse.Namespace) -> int:
         if given[name] is not None and name not in MOTION_PRIORS[prior].options:
             takers = " or ".join(f"--prior {p}" for p, choice in MOTION_PRIORS.items() if name in choice.options)
             raise SteamError(f"--{name.replace('_', '-')} applies to {takers} only, not --prior {prior}")
-    setup = setup.replace(qc=args.qc_scale * setup.qc, **{k: v for k, v in given.items() if v is not None})
+    qc = setup.qc if args.qc is None else np.diag(args.qc)  # --qc, then --qc-scale
+    setup = setup.replace(qc=args.qc_scale * qc, **{k: v for k, v in given.items() if v is not None})
     isam2 = {
         "relinearize_threshold": args.relinearize_threshold,
         "relinearize_skip": args.relinearize_skip,
@@ -312,6 +315,7 @@ def run(args: argparse.Namespace) -> int:
         "prior": setup.prior,
         **setup.prior_options(),
         "qc_scale": args.qc_scale,
+        "qc": setup.qc.tolist(),
         "clock": estimator.readings.clock.describe(),
     }
     summary |= {"what": explain.method_text(args.method, result.schedule.every)}

@@ -4,6 +4,7 @@
 - :mod:`.metrics`: APE and RPE of planar poses and their statistics (RMSE, mean, median, max), as evo defines them.
 - :mod:`.files`: TUM and KITTI trajectory files, written and read back.
 - :mod:`.report`: the estimate at the truth's own times by GP interpolation [YIB Eq. 18]; a run's figures.
+- :mod:`.fit_qc`: Qc from data, the maximum-likelihood diagonal Qc of a motion prior from a run's ground-truth poses.
 - :mod:`.consistency`: NEES of a state with its covariance, the χ² band of an ANEES over Monte Carlo runs, its verdict and
   the runs a verdict of "consistent" needs.
 
@@ -23,6 +24,7 @@ from .consistency import (
     verdict,
 )
 from .files import read_kitti, read_tum, write_kitti, write_tum
+from .fit_qc import QcFit, fit_qc
 from .metrics import PoseError, Statistics, ape, planar_poses, rpe, rpe_pairs
 from .report import states_at, trajectory_figures
 
@@ -51,4 +53,6 @@ __all__ = [
     "runs_needed",
     "LOST_QUANTILE",
     "INCONCLUSIVE",
+    "QcFit",
+    "fit_qc",
 ]

@@ -1,0 +1,117 @@
+"""``steam-ref fit-qc``: the maximum-likelihood diagonal Qc of a motion prior, from a data set's ground truth.
+
+The poses of the ground truth at the data set's pose times, on the preset's GP clock (pose steps for the CMU
+sets, seconds otherwise), are the data; the velocities are smoothed under the prior and Qc is the maximum of the
+poses' likelihood, closed form per dimension (:func:`steam_ref.evaluate.fit_qc`, docs/derivations.md §16). It
+prints the fitted diagonal with each entry's standard error beside the preset's Qc, and the ``--qc`` that makes
+``steam-ref run`` use it. A data set without ground truth is refused in one line.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+
+from ..errors import DataError, SteamError
+from ..evaluate.fit_qc import QcFit, fit_qc
+from ..gp.clock import Clock
+from ..motion import MOTION_PRIORS, motion_prior
+from ..paper.presets import PRIORS, SE2_RESIDUALS, PaperSetup
+from .args import Subparsers, add_data_dir, add_dataset, load_with_note, non_negative_int, number, preset_of
+from .streams import json_line
+
+__all__ = ["add_parser", "run"]
+
+
+def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
+    """Add ``fit-qc`` and its options to the command's subparsers."""
+    parser = sub.add_parser("fit-qc", help="fit a motion prior's Qc to a data set's ground truth (maximum likelihood)")
+    add_dataset(parser, "plaza")
+    parser.add_argument(
+        "--prior",
+        choices=PRIORS,
+        default=None,
+        help="the motion prior whose Qc is fitted: "
+        + "; ".join(f"{name}, {choice.what}" for name, choice in MOTION_PRIORS.items())
+        + "; default: the preset's (wnoa)",
+    )
+    parser.add_argument(
+        "--se2-residual",
+        choices=SE2_RESIDUALS,
+        default=None,
+        help="--prior se2 only: the SE(2) prior's residual (default: local-variable)",
+    )
+    parser.add_argument(
+        "--preset",
+        choices=("synthetic", "plaza", "victoria-park"),
+        default=None,
+        help="the set-up whose GP clock and starting Qc are used (default: by data set; required for a PATH)",
+    )
+    parser.add_argument(
+        "--max-poses", type=number(int, 3, strict=False), default=None, help="fit to the first N poses only"
+    )
+    add_data_dir(parser)
+    parser.add_argument("--seed", type=non_negative_int, default=0, help="seed of the generated synthetic task")
+    parser.add_argument("--json", action="store_true", help="print one JSON line of figures")
+    return parser
+
+
+def run(args: argparse.Namespace) -> int:
+    """Fit Qc to the data set's ground truth and print it."""
+    setup = PaperSetup.named(preset_of(args))
+    if args.prior is not None:
+        setup = setup.replace(prior=args.prior)
+    given = {name: value for name, value in {"se2_residual": args.se2_residual}.items() if value is not None}
+    for name in given:  # an option only of the priors that take it (MOTION_PRIORS)
+        if name not in MOTION_PRIORS[setup.prior].options:
+            takers = " or ".join(f"--prior {p}" for p, choice in MOTION_PRIORS.items() if name in choice.options)
+            raise SteamError(f"--{name.replace('_', '-')} applies to {takers} only, not --prior {setup.prior}")
+    setup = setup.replace(**given)
+    data = load_with_note(args)
+    if data.ground_truth is None:
+        raise DataError(
+            f"--dataset {args.dataset!r} has no ground truth: fit-qc fits Qc to the true poses of a run, and this "
+            "one has none"
+        )
+    n = data.n_poses if args.max_poses is None else min(args.max_poses, data.n_poses)
+    clock = Clock.of(data.ground_truth[:n, 0], setup.clock, data.time_origin)
+    options = setup.prior_options()
+    fit = fit_qc(
+        setup.motion_prior(),
+        clock.model,
+        data.ground_truth[:n, 1:4],
+        refit=lambda qc: motion_prior(setup.prior, qc, **options),
+    )
+    names = setup.motion_prior().state_names[-setup.qc.shape[0] :]  # Qc drives the last block's rate
+    flag = ",".join(f"{q:.6g}" for q in np.diag(fit.qc))
+    rerun = f"steam-ref run --dataset {args.dataset} --prior {setup.prior} --qc {flag}"
+    if args.json:
+        print(
+            json_line(
+                {"dataset": args.dataset, "preset": setup.name, "prior": setup.prior, **options, "poses": n}
+                | {"clock": clock.describe(), "preset_qc_diagonal": np.diag(setup.qc).tolist(), "driven": list(names)}
+                | fit.summary()
+                | {"run": rerun}
+            )
+        )
+        return 0
+    print(_text(args.dataset, setup, n, clock, fit, names, rerun))
+    return 0
+
+
+def _text(dataset: str, setup: PaperSetup, n: int, clock: Clock, fit: QcFit, names: tuple[str, ...], rerun: str) -> str:
+    """What the command prints without --json."""
+    lines = [
+        f"{dataset}: {n} poses of ground truth; prior {setup.prior} ({MOTION_PRIORS[setup.prior].what})",
+        f"clock: {clock.describe()}",
+        (
+            f"Qc by maximum likelihood (docs/derivations.md §16; velocities smoothed, {fit.rounds} round(s), "
+            f"{fit.dof} degrees of freedom per dimension):"
+        ),
+    ]
+    for j, name in enumerate(names):
+        q, se, preset = fit.qc[j, j], fit.standard_error[j], setup.qc[j, j]
+        lines.append(f"  d/dt {name:<9} {q:.6g} ± {se:.2g}   (preset {preset:.6g}: {q / preset:.3g} of it)")
+    lines.append(f"use it: {rerun}")
+    return "\n".join(lines)
