@@ -90,8 +90,8 @@ _HOMES = {
     "read_tum": "evaluate",
     "nees": "evaluate",
     "chi2_band": "evaluate",
-    "fit_qc": "evaluate",
-    "QcFit": "evaluate",
+    "fit_qc": "evaluate.fit_qc",
+    "QcFit": "evaluate.fit_qc",
 }
 
 
@@ -114,7 +114,8 @@ if TYPE_CHECKING:  # what a type checker and an IDE see: the same names, importe
     from .bayes_tree import BayesTree, FixedLagSmoother, IncrementalSolver, ISAM2Params
     from .covariance import marginal_covariances, sparse_joint_covariance, sparse_marginal_covariances
     from .datasets import LandmarkDataset, RangeDataset, generate_synthetic, load_dataset
-    from .evaluate import QcFit, align_planar, ape, chi2_band, fit_qc, nees, read_tum, rpe, write_tum
+    from .evaluate import align_planar, ape, chi2_band, nees, read_tum, rpe, write_tum
+    from .evaluate.fit_qc import QcFit, fit_qc
     from .factors import (
         BearingFactor,
         BearingRangeFactor,
