@@ -859,7 +859,7 @@ CASES = [
         "Trajectory prior of another state size blamed x1",
         lambda: trajectory(prior=WNOJ),
         ShapeError,
-        r"prior has states of 9 numbers, the solver's x0 has shape \(6,\)",
+        r"prior has states of 9 numbers, the solver's x1 has shape \(6,\)",
     ),
     ("Trajectory prior None", lambda: trajectory(prior=None), ShapeError, r"prior must be a LinearSDE or Qc"),
     ("Trajectory.at('abc')", lambda: trajectory().at("abc"), SteamError, r"t must be a real number, got t='abc'"),
