@@ -162,7 +162,7 @@ def test_the_se2_prior_makes_the_factors_create_makes_without_checking_again():
         prior.prior_factor(X(1), X(2), 0.0)
     with pytest.raises(SteamError, match=r"t1 < tau < t2"):
         prior.interpolated_factor(inner, X(1), X(2), 0.0, 1.0, 1.5)
-    with pytest.raises(SteamError, match=r"inner must be a reading of a state on"):
+    with pytest.raises(SteamError, match=r"inner must read a state of kind SE2_STATE"):
         prior.interpolated_factor(RangeFactor.create(X(-1), L(3), 4.0, 0.1), X(1), X(2), 0.0, 1.0, 0.3)
     assert isinstance(prior.velocity_reading(X(1), np.ones(3), np.ones(3)), BodyVelocityFactor)
     assert isinstance(

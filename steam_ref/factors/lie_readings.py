@@ -221,14 +221,18 @@ class LieInterpolatedFactor(Factor):
         group: LieGroup,
     ) -> LieInterpolatedFactor:
         """Move ``inner`` (on the state at τ on ``group``, t1 < τ < t2) onto ``key1`` at t1 and ``key2`` at t2."""
-        kind = GroupState(check_group(group))
-        if inner.key_kinds[0] is not kind:  # any reading of such a state (lie_readings, point_readings)
-            raise SteamError(f"inner must read a state of kind {kind!r} (the reading at tau), got {inner!r}")
+        cls.check_inner(inner, GroupState(check_group(group)))
         t1, t2, tau = number("t1", t1), number("t2", t2), number("tau", tau)
         d, qc = group.dim, check_qc(qc)
         if qc.shape != (d, d):
             raise SteamError(f"qc must be ({d}, {d}) on the body twist of a state on {group!r}, got {np.shape(qc)}")
         return cls.of_checked(inner, key1, key2, t1, t2, tau, qc, check_model(model), group)
+
+    @classmethod
+    def check_inner(cls, inner: Factor, kind: Manifold) -> None:
+        """SteamError unless ``inner`` reads one state of ``kind`` (any reading: lie_readings, point_readings)."""
+        if inner.key_kinds[0] is not kind:
+            raise SteamError(f"inner must read a state of kind {kind!r} (the reading at tau), got {inner!r}")
 
     @classmethod
     def of_checked(

@@ -29,7 +29,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..dead_reckoning import wrap_angle
-from ..errors import DataError, ShapeError, SteamError
+from ..errors import DataError, ShapeError
 from ..factors import Factor
 from ..factors.lie_prior import LiePriorFactor, LieStatePrior
 from ..factors.lie_readings import BodyVelocityFactor, LieInterpolatedFactor, PoseReading
@@ -73,10 +73,7 @@ class LieGroupWnoa(MotionPrior):
         return LiePriorFactor.of_checked(a, b, dt, self.qc, self.residual, self.group)  # [DER 11.11-11.12]
 
     def interpolated_factor(self, inner: Factor, a: Key, b: Key, ta: float, tb: float, tau: float) -> Factor:
-        if not isinstance(inner, (PoseReading, BodyVelocityFactor)) or inner.group is not self.group:
-            raise SteamError(
-                f"inner must be a reading of a state on {self.group!r} (the reading at tau), got {inner!r}"
-            )
+        LieInterpolatedFactor.check_inner(inner, self.kind)
         return LieInterpolatedFactor.of_checked(
             inner, a, b, ta, tb, tau, self.qc, self.residual, self.group
         )  # [YIB Eq. 29; DER 11.16]
