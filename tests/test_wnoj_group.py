@@ -37,7 +37,7 @@ def _qc(g):
     return np.diag(np.linspace(0.1, 0.5, g.dim))
 
 
-def _close(analytic, numeric, tol=1e-9):
+def assert_close(analytic, numeric, tol=1e-9):
     np.testing.assert_allclose(analytic, numeric, rtol=0, atol=tol * max(1.0, float(np.max(np.abs(numeric)))))
 
 
@@ -54,13 +54,13 @@ def test_the_second_derivatives_of_jr_and_its_inverse_are_exact(group, angle, rn
     g = GROUPS[group]
     xi, v, u = rng.standard_normal((3, g.dim))
     xi *= angle / float(g.angle(xi))
-    _close(g.jr_times_hessian(xi, v, u), jacobian8_stacked(lambda d: g.jr_times_jacobian(xi + d, v) @ u, g.dim))
-    _close(
+    assert_close(g.jr_times_hessian(xi, v, u), jacobian8_stacked(lambda d: g.jr_times_jacobian(xi + d, v) @ u, g.dim))
+    assert_close(
         g.jr_inverse_times_hessian(xi, v, u),
         jacobian8_stacked(lambda d: g.jr_inverse_times_jacobian(xi + d, v) @ u, g.dim),
     )
     dj, _ = g.jr_derivatives(xi, u)
-    _close(dj @ v, g.jr_times_jacobian(xi, v) @ u, 1e-12)
+    assert_close(dj @ v, g.jr_times_jacobian(xi, v) @ u, 1e-12)
     batch = np.stack([xi, 0.5 * xi])  # broadcasting over a leading axis
     np.testing.assert_allclose(g.jr_times_hessian(batch, v, u)[1], g.jr_times_hessian(0.5 * xi, v, u), atol=1e-14)
 
@@ -74,19 +74,19 @@ def test_the_prior_factor_and_the_interpolated_and_extrapolated_jacobians_are_ex
     x1, x2 = _states(rng, g, angle)
     f = prior.prior_factor(X(0), X(1), 0.8)
     A, B = f.jacobians(x1, x2)
-    _close(A, jacobian8_stacked(lambda d: f.error(kind.retract(x1, d), x2), n))
-    _close(B, jacobian8_stacked(lambda d: f.error(x1, kind.retract(x2, d)), n))
+    assert_close(A, jacobian8_stacked(lambda d: f.error(kind.retract(x1, d), x2), n))
+    assert_close(B, jacobian8_stacked(lambda d: f.error(x1, kind.retract(x2, d)), n))
     lam, psi, c = interpolation_terms(prior.sde, 0.0, 0.8, 0.3)
     x, J1, J2 = gp_accel.interpolate(x1, x2, lam, psi, c, group=g)
 
     def at(a, b):
         return kind.local(x, gp_accel.interpolate(a, b, lam, psi, c, group=g, jacobians=False))
 
-    _close(J1, jacobian8_stacked(lambda d: at(kind.retract(x1, d), x2), n))
-    _close(J2, jacobian8_stacked(lambda d: at(x1, kind.retract(x2, d)), n))
+    assert_close(J1, jacobian8_stacked(lambda d: at(kind.retract(x1, d), x2), n))
+    assert_close(J2, jacobian8_stacked(lambda d: at(x1, kind.retract(x2, d)), n))
     phi = prior.sde.transition(0.6)
     xe, Je = gp_accel.extrapolate(x1, phi, 0.0, group=g)
-    _close(
+    assert_close(
         Je,
         jacobian8_stacked(lambda d: kind.local(xe, gp_accel.extrapolate(kind.retract(x1, d), phi, 0.0, group=g)[0]), n),
     )

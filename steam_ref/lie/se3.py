@@ -316,13 +316,13 @@ class SE3VectorGroup(SE3Group):
         return SE3.adjoint(self._full(self._elements("a", a)))
 
     def _compose(self, a: NDArray, b: NDArray) -> NDArray:
-        return self._vector(SE3._compose(self._full(a), self._full(b)))
+        return self._vector(SE3.compose(self._full(a), self._full(b)))  # the public map: SE3 owns its kernels
 
     def _inverse(self, a: NDArray) -> NDArray:
-        return self._vector(SE3._inverse(self._full(a)))
+        return self._vector(SE3.inverse(self._full(a)))
 
     def _between(self, a: NDArray, b: NDArray) -> NDArray:
-        return self._vector(SE3._between(self._full(a), self._full(b)))
+        return self._vector(SE3.between(self._full(a), self._full(b)))
 
 
 SE3V = SE3VectorGroup()
