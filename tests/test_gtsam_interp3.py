@@ -266,8 +266,6 @@ def test_the_covariances_agree_when_nothing_moves():
     np.testing.assert_allclose(twist_cov, cov[6:, 6:], rtol=0, atol=1e-12 * scale)
 
 
-
-
 @pytest.mark.parametrize("angle", [0.1, 1.0])
 def test_the_covariances_part_with_motion_by_what_the_formulas_differ(angle):
     """With motion the formulas part (module docstring): measured, relative to the largest entry, 2.7e-2 at
