@@ -105,7 +105,8 @@ def _states(fixture) -> tuple[np.ndarray, np.ndarray]:
 def test_prior_factor_fixture(name):
     """``GaussianProcessPriorPose3Test.Factor``: e = 0 at rest and at a constant twist (gpslam: 1e-6; ours 1e-15);
     H₁..H₄ against central differences of step 1e-6 (gpslam: 1e-6, H₁ 1e-5 at the random states): ours within 1e-12
-    of 8th-order differences at every fixture (measured ≤ 1.1e-13), and H₂ = [-Δt I; -I], H₄ = [0; J_r(ξ)⁻¹] as gpslam writes them."""
+    of 8th-order differences at every fixture (measured ≤ 1.1e-13), and H₂ = [-Δt I; -I], H₄ = [0; J_r(ξ)⁻¹] as
+    gpslam writes them."""
     dt = 0.1
     x1, x2 = _states(PRIOR_FIXTURES[name])
     factor = PRIOR.prior_factor(X(1), X(2), dt)
