@@ -61,8 +61,12 @@ def mv3(a: NDArray, v: NDArray) -> NDArray:
 
 def matrix_of(rows: list[list[NDArray | float]], like: NDArray) -> NDArray:
     """A stack of matrices (..., n, m) from rows of entries, each an array broadcast to ``like``'s shape or a number."""
-    shape = np.shape(like)
-    return np.stack([np.stack([np.broadcast_to(v, shape) for v in row], axis=-1) for row in rows], axis=-2)
+    entries = [v for row in rows for v in row]
+    out = np.empty(np.shape(like) + (len(rows), len(rows[0])), dtype=np.result_type(like, *entries))
+    for i, row in enumerate(rows):
+        for j, v in enumerate(row):
+            out[..., i, j] = v
+    return out
 
 
 def hat3(w: NDArray) -> NDArray:
