@@ -250,6 +250,8 @@ ORACLES: dict[str, Callable[[Mapping], dict]] = {
     "se3/interpolation": _one_thread(se3.interpolation_quantities),
     "se3/wnoj_interpolation": _one_thread(se3.interpolation_quantities),
     "se3/extrapolation": _one_thread(se3.extrapolation_quantities),
+    "se3/batch": _one_thread(partial(_batch, se3.LIE3)),
+    "se3/incremental": _one_thread(partial(_incremental, se3.LIE3)),
 }
 
 

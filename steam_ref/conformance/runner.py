@@ -287,6 +287,8 @@ RUNNERS: dict[str, Callable[[Mapping], dict]] = {
     "se3/interpolation": _se3_interpolation,
     "se3/wnoj_interpolation": _se3_wnoj_interpolation,
     "se3/extrapolation": _se3_extrapolation,
+    "se3/batch": solvers.batch,  # kit v5: on lie.SE3V's form of the states (spec.SOLVER_FORMS)
+    "se3/incremental": solvers.incremental,
 }
 
 
