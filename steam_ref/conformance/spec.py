@@ -14,7 +14,12 @@ maps each type to its steam_ref factor and the kind (manifold) of each of its ke
     interpolated   keys [x1, x2, (l)], t1, t2, tau, qc, inner (a measurement spec without keys)  [YIB Eq. 29]
     se2_prior        keys [x1, x2] SE(2) states, dt, qc (3×3 on the body twist), model   e = γ₂ - Φ(Δt) γ₁
     se2_state_prior  keys [x] an SE(2) state, mean, sigmas (6)                         e = x ⊖ mean
-    se2_range        keys [x, l], x an SE(2) state, measured, sigma                    e = ‖l - p‖ - r
+    se2_range        keys [x, l], x an SE(2) state, measured, noise                    e = ‖l - p‖ - r
+    se2_bearing      keys [x, l], x an SE(2) state, measured, noise     bearing, error wrapped to [-π, π)  (kit v5)
+    se2_bearing_range keys [x, l], x an SE(2) state, measured [b, r], noise                            (kit v5)
+    se2_velocity     keys [x] an SE(2) state, measured (3), noise                      e = ϖ - z           (kit v5)
+    se2_interpolated keys [x1, x2, (l)] SE(2) states, t1, t2, tau, qc, model, inner (an se2 reading without keys)
+                     e = e_inner(x(τ), ...), x(τ) the local GP's mean                                  (kit v5)
     se3_prior        keys [x1, x2] SE(3) states, dt, qc (6×6), model                  e = γ₂ - Φ(Δt) γ₁   (kit v5)
     se3_wnoj_prior   keys [x1, x2] SE(3) states with an acceleration, dt, qc (6×6)     e = γ₂ - Φ(Δt) γ₁   (kit v5)
     se3_state_prior  keys [x] an SE(3) state, mean, sigmas (12)                        e = x ⊖ mean        (kit v5)
@@ -43,6 +48,7 @@ from ..factors import (
     Factor,
     GPPriorFactor,
     InterpolatedFactor,
+    LieInterpolatedFactor,
     LiePriorFactor,
     LieStatePrior,
     OdometryFactor,
@@ -141,7 +147,28 @@ def _lie_state_prior(spec: Mapping, keys: Sequence[Key]) -> Factor:
 
 
 def _pose_range(spec: Mapping, keys: Sequence[Key]) -> Factor:
-    return PoseReading.range(keys[0], keys[1], float(spec["measured"]), float(spec["sigma"]), group=SE2)
+    return PoseReading.range(keys[0], keys[1], float(spec["measured"]), _noise(spec), group=SE2)
+
+
+def _pose_bearing(spec: Mapping, keys: Sequence[Key]) -> Factor:
+    return PoseReading.bearing(keys[0], keys[1], float(spec["measured"]), _noise(spec), group=SE2)
+
+
+def _pose_bearing_range(spec: Mapping, keys: Sequence[Key]) -> Factor:
+    b, r = (float(v) for v in spec["measured"])
+    return PoseReading.bearing_range(keys[0], keys[1], b, r, _noise(spec), group=SE2)
+
+
+def _twist_reading(spec: Mapping, keys: Sequence[Key]) -> Factor:
+    return BodyVelocityFactor.create(keys[0], np.asarray(spec["measured"], float), _noise(spec), group=SE2)
+
+
+def _lie_interpolated(spec: Mapping, keys: Sequence[Key]) -> Factor:
+    """A reading of an SE(2) state at τ moved onto the states at t1 and t2 (the local GP of the spec's model)."""
+    inner = factor({**spec["inner"], "keys": []}, [X(10**9), *keys[2:]])  # X(10**9) stands for the state at τ
+    t1, t2, tau = (float(spec[k]) for k in ("t1", "t2", "tau"))
+    qc = np.asarray(spec["qc"], float)
+    return LieInterpolatedFactor.create(inner, keys[0], keys[1], t1, t2, tau, qc, spec["model"], group=SE2)
 
 
 def _se3_prior(group: LieGroup, spec: Mapping, keys: Sequence[Key]) -> Factor:
@@ -197,7 +224,7 @@ class SolverForm:
 
 
 # The kit's kind → the solvers' form of it (a kind not listed is held as the kit stores it).
-SOLVER_FORMS = {
+SOLVER_FORMS: dict[Manifold, SolverForm] = {
     _SE3: SolverForm(GroupState(lie.SE3V), _rotation_vector, _rotation_matrix),
     _SE3_ACC: SolverForm(GroupState(lie.SE3V, 2), _rotation_vector, _rotation_matrix),
 }
@@ -217,6 +244,10 @@ FACTORS: dict[str, tuple[Callable[[Mapping, Sequence[Key]], Factor], tuple[Manif
     "se2_prior": (_lie_prior, (SE2_STATE, SE2_STATE)),
     "se2_state_prior": (_lie_state_prior, (SE2_STATE,)),
     "se2_range": (_pose_range, (SE2_STATE, _V)),
+    "se2_bearing": (_pose_bearing, (SE2_STATE, _V)),  # kit v5
+    "se2_bearing_range": (_pose_bearing_range, (SE2_STATE, _V)),  # kit v5
+    "se2_velocity": (_twist_reading, (SE2_STATE,)),  # kit v5
+    "se2_interpolated": (_lie_interpolated, (SE2_STATE, SE2_STATE, _V)),  # kit v5
     "se3_prior": (partial(_se3_prior, lie.SE3), (_SE3, _SE3)),
     "se3_wnoj_prior": (partial(_se3_wnoj_prior, lie.SE3), (_SE3_ACC, _SE3_ACC)),
     "se3_state_prior": (partial(_se3_state_prior, lie.SE3, _same), (_SE3,)),
@@ -270,12 +301,12 @@ def solver_values(spec: Mapping[str, Sequence[float]], specs: Iterable[Mapping])
         k = key(name)
         kind = kinds.get(k, VECTOR)
         form = SOLVER_FORMS.get(kind)
-        given[k] = np.asarray(value, float) if form is None else form.read(value)
+        given[k] = np.asarray(value, float) if form is None else form.read(np.asarray(value, float))
         held[k] = kind if form is None else form.kind
     return Values(given, kinds={k: m for k, m in held.items() if m is not VECTOR})
 
 
-_KIT_FORMS = {form.kind: form for form in SOLVER_FORMS.values()}  # the solvers' kind → its form
+_KIT_FORMS: dict[Manifold, SolverForm] = {form.kind: form for form in SOLVER_FORMS.values()}  # the solvers' kind → its form
 
 
 def kit_value(values: Values, k: Key) -> NDArray:
