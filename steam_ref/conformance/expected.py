@@ -274,7 +274,8 @@ def oracle_case(suite: str, name: str, inputs: Mapping) -> dict:
     return ORACLES[kind](inputs)
 
 
-ALTERNATIVES: dict[str, dict[str, object]] = {  # how the kit names a combination of alternative conventions → oracle switches
+# How the kit names a combination of alternative conventions → oracle switches.
+ALTERNATIVES: dict[str, dict[str, object]] = {
     "paper-sign": {"paper_sign": True},
     "symmetric-whitener": {"symmetric": True},
     "paper-sign+symmetric-whitener": {"paper_sign": True, "symmetric": True},

@@ -306,7 +306,8 @@ def solver_values(spec: Mapping[str, Sequence[float]], specs: Iterable[Mapping])
     return Values(given, kinds={k: m for k, m in held.items() if m is not VECTOR})
 
 
-_KIT_FORMS: dict[Manifold, SolverForm] = {form.kind: form for form in SOLVER_FORMS.values()}  # the solvers' kind → its form
+# The solvers' kind → its form.
+_KIT_FORMS: dict[Manifold, SolverForm] = {form.kind: form for form in SOLVER_FORMS.values()}
 
 
 def kit_value(values: Values, k: Key) -> NDArray:
