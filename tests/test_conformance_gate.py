@@ -227,11 +227,11 @@ def test_a_marginal_factor_not_moved_with_its_linearization_point_fails_the_reli
     new δ′) fails where the separator is relinearized after a marginalization, and only there."""
     plain = oracle_lag.information
 
-    def unshifted(specs, marginals, theta, order, dims):
+    def unshifted(specs, marginals, theta, order, dims, *space):
         here = [
             oracle_lag.Marginal(m.keys, m.info, m.vector, np.concatenate([theta[k] for k in m.keys])) for m in marginals
         ]
-        return plain(specs, here, theta, order, dims)
+        return plain(specs, here, theta, order, dims, *space)
 
     monkeypatch.setattr(oracle_lag, "information", unshifted)
     cases = read_suite(SHIPPED, "fixed_lag")["cases"]

@@ -143,13 +143,15 @@ _DEPENDS = {
 }
 
 
-HALF_TURN_QUANTITIES = ("exp", "log", "log_of_exp", "exp_of_log")  # of the se2 suite's Exp and Log cases
+# Suite → convention → the quantities of the suite that depend on it (kit v5: the se2 suite's Exp and Log cases).
+SUITE_CONVENTIONS = {"se2": {"half_turn": ("exp", "log", "log_of_exp", "exp_of_log")}}
 
 
 def depends_on(suite: str, quantity: str) -> list[str]:
     """The conventions a quantity of a suite depends on ([] when invariant): 'residual', 'whitening', 'half_turn'."""
-    if suite == "se2" and quantity in HALF_TURN_QUANTITIES:
-        return ["half_turn"]
+    named = [name for name, quantities in SUITE_CONVENTIONS.get(suite, {}).items() if quantity in quantities]
+    if named:
+        return named
     if suite not in ("gp", "factors", "linear"):
         return []
     base = quantity.split("_")[0] if quantity[:2] in ("H_", "A_") else quantity
