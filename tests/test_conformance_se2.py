@@ -99,7 +99,7 @@ def test_a_port_with_a_left_retraction_fails(monkeypatch):
 
 
 def test_a_port_whose_log_wraps_the_half_turn_to_minus_pi_fails(monkeypatch):
-    def angle(M):  # atan2's range [-π, π) : the half turn -π
+    def angle(M, half_turn=None):  # atan2's range [-π, π) : the half turn -π
         a = float(np.arctan2(M[1, 0], M[0, 0]))
         return -np.pi if a >= np.pi else a
 

@@ -11,8 +11,9 @@ the case's computation order (its ``quantities`` list, else its ``tolerance`` or
 the likely cause, since a wrong Φ also makes everything computed from it wrong. A structure that
 differs is printed in full: the items expected but not got, and got but not expected.
 
-With conventions (``paper-sign``, ``symmetric-whitener``), a quantity that depends on them is
-compared with the kit's ``alternatives`` for that combination instead (kit v2).
+With conventions (``paper-sign``, ``symmetric-whitener``; kit v5 ``signed-half-turn``), a quantity that depends
+on them is compared with the kit's ``alternatives`` for that combination instead (kit v2), the combination of
+those given that the case's alternatives name (:func:`case_alternative`).
 """
 
 from __future__ import annotations
@@ -27,7 +28,15 @@ import numpy as np
 
 from .kitio import printable
 
-__all__ = ["Outcome", "Report", "compare_quantity", "check_cases", "computation_order", "convention_key"]
+__all__ = [
+    "Outcome",
+    "Report",
+    "compare_quantity",
+    "check_cases",
+    "computation_order",
+    "convention_key",
+    "case_alternative",
+]
 
 WORST = 3  # entries shown per failing numeric quantity
 WIDTH = 2000  # characters of one structure item shown at most
@@ -222,6 +231,16 @@ def convention_key(conventions: Sequence[str]) -> str:
     return "+".join(sorted(set(conventions)))
 
 
+def case_alternative(case: Mapping, conventions: Sequence[str]) -> Mapping:
+    """A case's expected values under ``conventions``: its alternatives for those of them its alternatives name (a
+    case stores only the combinations of the conventions that change it: an SE(2) Exp case has 'signed-half-turn',
+    a factor case 'paper-sign' and 'paper-sign+symmetric-whitener'); {} when none applies."""
+    stored = case.get("alternatives", {})
+    named = {name for combination in stored for name in combination.split("+")}
+    key = convention_key([c for c in conventions if c in named])
+    return stored.get(key, {}) if key else {}
+
+
 def check_cases(
     suite: str,
     kit_cases: Sequence[Mapping],
@@ -232,7 +251,6 @@ def check_cases(
     """Check ``results`` (case name → quantity → value) against a suite's kit cases."""
     report = Report() if report is None else report
     known = {c["name"] for c in kit_cases}
-    key = convention_key(conventions)
     for case in kit_cases:
         got = results.get(case["name"])
         if got is None:
@@ -243,7 +261,7 @@ def check_cases(
                 Outcome(suite, case["name"], ((math.inf, "its result is not an object of quantities", ()),))
             )
             continue
-        alternative = case.get("alternatives", {}).get(key, {}) if key else {}
+        alternative = case_alternative(case, conventions)
         failures: list[Failure] = []
         for q in computation_order(case):
             if q not in got:

@@ -2,7 +2,7 @@
 
 Each quantity of a case is either convention-invariant (cost, 𝓘 = AᵀA, Aᵀb, R, d, δ, marginals,
 estimates) or depends on named conventions (:func:`depends_on`): ``residual`` (the sign of an
-error) and ``whitening`` (which W with WᵀW = Σ⁻¹). For those, the kit also stores the values under
+error), ``whitening`` (which W with WᵀW = Σ⁻¹) and (kit v5) ``half_turn`` (SE(2)'s angle at ±π). For those, the kit also stores the values under
 the documented alternatives (:data:`CONVENTION_ALTERNATIVES`), which ``check --conventions`` accepts.
 """
 
@@ -106,6 +106,12 @@ CONVENTIONS = {
     "headings of poses and states in (-pi, pi]; both WNOA residuals, 'local-variable' [xi - dt w1; J_r(xi)^-1 w2 - "
     "w1] and 'simplified' [xi - dt w1; w2 - w1], xi = Log(T1^-1 T2) (README 'SE(2)'). The 'state', 'jacobians' and "
     "'angles' conventions above are the vector-space suites'",
+    "half_turn": "the se2 suite's Exp and Log (kit v5 names it): Log's angle and the heading of every pose Exp returns "
+    "lie in (-pi, pi], and the double nearest pi, +-3.141592653589793, is the half turn, +pi (Exp([rho; "
+    "-3.141592653589793]) has theta = +pi; Log of a pose stored with theta = -3.141592653589793 has phi = +pi and rho = "
+    "V(pi)^-1 t). That double lies 1.2e-16 inside pi, so an implementation that reads angles as atan2(sin, cos) keeps "
+    "its sign (gtsam.Pose2's Rot2: -3.141592653589793 stays negative); it declares so with the alternative "
+    "'signed-half-turn'",
     "floats": "JSON numbers are the shortest decimal that reads back to the same IEEE-754 double "
     "(at most 17 significant digits, so reading with strtod is exact); no NaN or inf. "
     "Arrays are nested lists, row-major",
@@ -124,6 +130,11 @@ CONVENTION_ALTERNATIVES = {
     "information (W = U W_kit for an orthogonal U): changes whitened_error, A_k, b, the gp W and the rows of A "
     "and b of factors with a non-diagonal Sigma",
     "paper-sign+symmetric-whitener": "both of the above",
+    "signed-half-turn": "half_turn (kit v5): SE(2)'s angle at the half turn as atan2 computes it, +-3.141592653589793 "
+    "keeping its sign (gtsam.Pose2's): Exp([rho; -3.141592653589793]) has theta = -3.141592653589793, a pose stored "
+    "with theta = -3.141592653589793 logs to phi = -3.141592653589793 and rho = V(phi)^-1 t, one stored with "
+    "+3.141592653589793 to +pi; changes exp, log_of_exp, log and exp_of_log of the se2 suite's Exp and Log cases "
+    "(those rows; a case stores the whole quantity). It combines with no other alternative (no case depends on both)",
 }
 
 _DEPENDS = {
@@ -132,8 +143,15 @@ _DEPENDS = {
 }
 
 
+# Suite → convention → the quantities of the suite that depend on it (kit v5: the se2 suite's Exp and Log cases).
+SUITE_CONVENTIONS = {"se2": {"half_turn": ("exp", "log", "log_of_exp", "exp_of_log")}}
+
+
 def depends_on(suite: str, quantity: str) -> list[str]:
-    """The conventions a quantity of a suite depends on ([] when invariant): 'residual', 'whitening'."""
+    """The conventions a quantity of a suite depends on ([] when invariant): 'residual', 'whitening', 'half_turn'."""
+    named = [name for name, quantities in SUITE_CONVENTIONS.get(suite, {}).items() if quantity in quantities]
+    if named:
+        return named
     if suite not in ("gp", "factors", "linear"):
         return []
     base = quantity.split("_")[0] if quantity[:2] in ("H_", "A_") else quantity

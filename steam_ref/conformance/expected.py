@@ -110,11 +110,11 @@ def _incremental(space: g.Space, inputs: Mapping) -> dict:
     return {**out, **{f"estimate_{k}": e for k, e in enumerate(estimates, start=1)}}
 
 
-def _fixed_lag(inputs: Mapping) -> dict:
+def _fixed_lag(space: g.Space, inputs: Mapping) -> dict:
     isam2, stream = inputs["isam2"], inputs["stream"]
     threshold, skip = float(isam2["relinearize_threshold"]), int(isam2["relinearize_skip"])
     return fixed_lag_quantities(
-        lag.fixed_lag(stream["variables"], stream["updates"], float(inputs["lag"]), threshold, skip)
+        lag.fixed_lag(stream["variables"], stream["updates"], float(inputs["lag"]), threshold, skip, space=space)
     )
 
 
@@ -140,14 +140,14 @@ def _rows(f: Callable[[np.ndarray], np.ndarray], items) -> np.ndarray:
     return np.array([f(np.asarray(v, float)) for v in items])
 
 
-def _exp(inputs: Mapping) -> dict:
-    poses = _rows(lie.exp, inputs["xi"])
-    return {"exp": poses, "log_of_exp": _rows(lie.log, poses)}
+def _exp(inputs: Mapping, half_turn: float | None = lie.HALF_TURN) -> dict:
+    poses = _rows(partial(lie.exp, half_turn=half_turn), inputs["xi"])
+    return {"exp": poses, "log_of_exp": _rows(partial(lie.log, half_turn=half_turn), poses)}
 
 
-def _log(inputs: Mapping) -> dict:
-    tangents = _rows(lie.log, inputs["poses"])
-    return {"log": tangents, "exp_of_log": _rows(lie.exp, tangents)}
+def _log(inputs: Mapping, half_turn: float | None = lie.HALF_TURN) -> dict:
+    tangents = _rows(partial(lie.log, half_turn=half_turn), inputs["poses"])
+    return {"log": tangents, "exp_of_log": _rows(partial(lie.exp, half_turn=half_turn), tangents)}
 
 
 def _jacobians(inputs: Mapping) -> dict:
@@ -170,6 +170,12 @@ def _lie_state_prior(inputs: Mapping) -> dict:
     """A prior on one state (its error x ⊖ mean and Jacobian; no noise given)."""
     e, (H,) = lie.factor_jacobians({"type": "se2_state_prior", "mean": inputs["mean"]}, [inputs["x"]])
     return {"error": e, "H_0": H}
+
+
+def _lie_reading(inputs: Mapping) -> dict:
+    """A reading of SE(2) states (kit v5): a factor case whose spec names its states and landmark."""
+    spec = inputs["factor"]
+    return lie.linearize_factor(spec, [inputs["values"][k] for k in spec["keys"]])
 
 
 def _se3_rows(inputs: Mapping) -> dict:
@@ -229,7 +235,7 @@ ORACLES: dict[str, Callable[[Mapping], dict]] = {
     "batch": partial(_batch, g.VECTOR),
     "bayes_tree": _bayes_tree,
     "incremental": partial(_incremental, g.VECTOR),
-    "fixed_lag": _fixed_lag,
+    "fixed_lag": partial(_fixed_lag, g.VECTOR),
     "se2/exp": _one_thread(_exp),
     "se2/log": _one_thread(_log),
     "se2/jacobians": _one_thread(_jacobians),
@@ -239,6 +245,10 @@ ORACLES: dict[str, Callable[[Mapping], dict]] = {
     "se2/interpolation": _one_thread(lie.interpolation_quantities),
     "se2/batch": _one_thread(partial(_batch, lie.LIE)),
     "se2/incremental": _one_thread(partial(_incremental, lie.LIE)),
+    "se2/reading": _one_thread(_lie_reading),
+    "se2/retract": _one_thread(lie.retraction_quantities),
+    "se2/extrapolation": _one_thread(lie.extrapolation_quantities),
+    "se2/fixed_lag": _one_thread(partial(_fixed_lag, lie.LIE)),
     "se3/so3_exp": _one_thread(_se3_rows),
     "se3/so3_jacobians": _one_thread(_se3_jacobians),
     "se3/exp": _one_thread(_se3_rows),
@@ -250,6 +260,8 @@ ORACLES: dict[str, Callable[[Mapping], dict]] = {
     "se3/interpolation": _one_thread(se3.interpolation_quantities),
     "se3/wnoj_interpolation": _one_thread(se3.interpolation_quantities),
     "se3/extrapolation": _one_thread(se3.extrapolation_quantities),
+    "se3/batch": _one_thread(partial(_batch, se3.LIE3)),
+    "se3/incremental": _one_thread(partial(_incremental, se3.LIE3)),
 }
 
 
@@ -262,11 +274,14 @@ def oracle_case(suite: str, name: str, inputs: Mapping) -> dict:
     return ORACLES[kind](inputs)
 
 
-ALTERNATIVES = {  # how the kit names a combination of alternative conventions → oracle switches
+# How the kit names a combination of alternative conventions → oracle switches.
+ALTERNATIVES: dict[str, dict[str, object]] = {
     "paper-sign": {"paper_sign": True},
     "symmetric-whitener": {"symmetric": True},
     "paper-sign+symmetric-whitener": {"paper_sign": True, "symmetric": True},
+    "signed-half-turn": {"half_turn": None},  # kit v5: SE(2)'s ±π kept as computed (gtsam.Pose2's)
 }
+SIGN_AND_WHITENER = ("paper-sign", "symmetric-whitener", "paper-sign+symmetric-whitener")
 
 
 def _whitener_alternative(inputs: Mapping, switches: Mapping) -> dict:
@@ -291,21 +306,29 @@ def _linear_alternative(inputs: Mapping, switches: Mapping) -> dict:
     return {q: v for q, v, v0 in (("A", A, A0), ("b", b, b0)) if not np.array_equal(v, v0)}
 
 
-# Case type → its quantities under alternative conventions (types not listed depend on none).
-ALTERNATIVE_ORACLES: dict[str, Callable[[Mapping, Mapping], dict]] = {
-    "gp/wnoa": _whitener_alternative,
-    "factors": _factor_alternative,
-    "linear": _linear_alternative,
+def _half_turn_alternative(mine: Callable[..., dict], inputs: Mapping, switches: Mapping) -> dict:
+    """Exp and Log of SE(2) with atan2's ±π kept (the half turn signed as computed): the quantities that differ."""
+    theirs, kit = _one_thread(partial(mine, half_turn=switches["half_turn"]))(inputs), _one_thread(mine)(inputs)
+    return {q: v for q, v in theirs.items() if not np.array_equal(v, kit[q])}
+
+
+# Case type → its quantities under alternative conventions, and the combinations (ALTERNATIVES) it has them for
+# (types not listed depend on none).
+ALTERNATIVE_ORACLES: dict[str, tuple[Callable[[Mapping, Mapping], dict], tuple[str, ...]]] = {
+    "gp/wnoa": (_whitener_alternative, SIGN_AND_WHITENER),
+    "factors": (_factor_alternative, SIGN_AND_WHITENER),
+    "linear": (_linear_alternative, SIGN_AND_WHITENER),
+    "se2/exp": (partial(_half_turn_alternative, _exp), ("signed-half-turn",)),
+    "se2/log": (partial(_half_turn_alternative, _log), ("signed-half-turn",)),
 }
 
 
 def oracle_alternatives(suite: str, inputs: Mapping) -> dict:
-    """The convention-dependent quantities of a case under each combination of the alternative conventions.
-
-    Only quantities whose values differ from the kit's own conventions are listed.
-    """
-    alternative = ALTERNATIVE_ORACLES.get(case_type(suite, inputs))
+    """The convention-dependent quantities of a case under each combination of the alternative conventions its type
+    depends on. Only quantities whose values differ from the kit's own conventions are listed, and only combinations
+    that change some (a checker takes, of the conventions given, those a case's alternatives name)."""
+    alternative, names = ALTERNATIVE_ORACLES.get(case_type(suite, inputs), (None, ()))
     if alternative is None:
         return {}
-    out = {name: alternative(inputs, switches) for name, switches in ALTERNATIVES.items()}
+    out = {name: alternative(inputs, ALTERNATIVES[name]) for name in names}
     return {name: alt for name, alt in out.items() if alt}

@@ -29,7 +29,7 @@ from .validate import kit_cases, results_cases, results_version
 
 __all__ = ["check_directory", "load_kit", "CONVENTION_NAMES"]
 
-CONVENTION_NAMES = ("paper-sign", "symmetric-whitener")
+CONVENTION_NAMES = ("paper-sign", "symmetric-whitener", "signed-half-turn")  # the last: kit v5 on
 
 
 def load_kit(kit: Path) -> tuple[dict, dict[str, list[dict]]]:
@@ -99,6 +99,12 @@ def check_directory(
         )
     if conventions and not index.get("convention_alternatives"):
         raise SteamError(f"kit v{index['kit_version']} has no convention alternatives (kits v2 and later have them)")
+    lacking = [c for c in conventions if c not in index.get("convention_alternatives", {})]
+    if lacking:
+        raise SteamError(
+            f"kit v{index['kit_version']} has no convention alternative '{printable(lacking[0])}' (its alternatives: "
+            f"{', '.join(name for name in index['convention_alternatives'] if '+' not in name)})"
+        )
     absent = [s for s in chosen if s not in suites and (only is not None or s in files)]
     if absent:
         raise SteamError(

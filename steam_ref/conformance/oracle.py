@@ -206,6 +206,12 @@ def _measurement(kind: str, spec: Mapping, x, l=None):
     raise SteamError(f"unknown measurement type {kind!r}")
 
 
+def measurement_error(kind: str, spec: Mapping, x, l=None) -> NDArray:
+    """h(x[, ℓ]) - y of a measurement ``kind`` (range, bearing, bearing_range, velocity, odometry) on a state whose
+    first three numbers are [x, y, θ] (a vector state, or an SE(2) state [x, y, θ, vx, vy, ω] for the pose readings)."""
+    return _measurement(kind, spec, x, *(() if l is None else (l,)))
+
+
 def factor_error(spec: Mapping, xs: Sequence, paper_sign: bool = False) -> NDArray:
     """The unwhitened error e of a factor spec at its variables ``xs`` (in its key order).
 

@@ -45,11 +45,13 @@ __all__ = [
 @dataclass(frozen=True)
 class Space:
     """Where a problem's variables live, for the oracle's solvers: how a variable moves by a step δ (``retract``:
-    x ⊕ δ) and what a factor spec linearized at its variables' values is (``linearize``: a dict with ``A_k`` per
-    key, ``b`` and ``cost``, as :func:`.oracle.linearize_factor` returns it)."""
+    x ⊕ δ), what a factor spec linearized at its variables' values is (``linearize``: a dict with ``A_k`` per
+    key, ``b`` and ``cost``, as :func:`.oracle.linearize_factor` returns it), and the step from x₀ to x
+    (``local``: x ⊖ x₀, the inverse of ``retract``; a frozen marginal factor's shift, :mod:`.oracle_lag`)."""
 
     retract: Callable[[NDArray, NDArray], NDArray]
     linearize: Callable[..., Mapping]
+    local: Callable[[NDArray, NDArray], NDArray] = lambda x0, x: x - x0
 
 
 VECTOR = Space(lambda x, delta: x + delta, linearize_factor)  # θ + δ; Jacobians by complex steps

@@ -9,7 +9,8 @@ variables of those factors); what they leave on S is the Schur complement
 
 a linear factor ½ δ_Sᵀ Λ δ_S − ηᵀ δ_S about θ̄⁰_S = θ̄_S of the moment. It is frozen there: D is gone,
 so its Jacobians can never be evaluated again; at a later linearization point θ̄′ it contributes Λ
-and η − Λ (θ̄′_S − θ̄⁰_S) (Eq. 10.4, first-estimate Jacobians).
+and η − Λ (θ̄′_S ⊖ θ̄⁰_S) (Eq. 10.4, first-estimate Jacobians; ⊖ the space's: a difference of vectors, or the
+right tangent step of an SE(2) state).
 
 :func:`fixed_lag` replays a stream: per-variable linearization points moved by the same rule as
 :func:`.oracle_graph.stream` (iSAM2 with full back-substitution), all factors of the window and all
@@ -27,7 +28,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from .oracle_graph import Problem, dense_system
+from .oracle_graph import VECTOR, Problem, Space, dense_system
 
 __all__ = ["Marginal", "information", "schur_complement", "fixed_lag"]
 
@@ -52,17 +53,22 @@ def information(
     theta: Mapping[str, NDArray],
     order: Sequence[str],
     dims: Mapping[str, int],
+    space: Space = VECTOR,
 ) -> tuple[NDArray, NDArray]:
-    """H = Σ AᵢᵀAᵢ + Σ Λ and g = Σ Aᵢᵀbᵢ + Σ (η − Λ (θ̄_S − θ⁰)) over ``order``, linearized at ``theta``."""
+    """H = Σ AᵢᵀAᵢ + Σ Λ and g = Σ Aᵢᵀbᵢ + Σ (η − Λ (θ̄_S ⊖ θ⁰)) over ``order``, linearized at ``theta`` in
+    ``space`` (θ̄_S ⊖ θ⁰ key by key, its ``local``)."""
     n = sum(dims[k] for k in order)
     H, g = np.zeros((n, n)), np.zeros(n)
     if specs:
         problem = Problem({"variables": {k: dims[k] for k in order}, "factors": list(specs)})
-        A, b, _ = dense_system(problem, theta, order)
+        A, b, _ = dense_system(problem, theta, order, space)
         H, g = H + A.T @ A, g + A.T @ b
     for m in marginals:
         idx = _columns(order, dims, m.keys)
-        shift = np.concatenate([theta[k] for k in m.keys]) - m.theta0
+        ends = np.cumsum([0] + [len(theta[k]) for k in m.keys])  # each key's stored numbers in θ⁰
+        shift = np.concatenate(
+            [space.local(m.theta0[a:z], theta[k]) for k, a, z in zip(m.keys, ends[:-1], ends[1:], strict=True)]
+        )
         H[np.ix_(idx, idx)] += m.info
         g[idx] += m.vector - m.info @ shift  # [derivations Eq. 10.4]
     return H, g
@@ -87,6 +93,7 @@ def fixed_lag(
     threshold: float,
     skip: int = 1,
     schur: bool = True,
+    space: Space = VECTOR,
 ) -> list[dict]:
     """After each update: the variables marginalized, their marginal factor, the window's estimate and covariances.
 
@@ -97,7 +104,8 @@ def fixed_lag(
     complement's correction, Λ = H_SS and η = g_S (it conditions on D at θ̄ instead of integrating it
     out: overconfident), for tests of the checker. Returns one dict per update: ``marginalized`` (names in
     the order of ``variables``), and when any, ``separator``, ``point`` (θ̄_S stacked), ``information``
-    (Λ), ``vector`` (η); then ``estimate`` and ``covariances`` (name → array) of the window.
+    (Λ), ``vector`` (η); then ``estimate`` and ``covariances`` (name → array) of the window. ``space``: how the
+    variables move and the factors linearize (:class:`.oracle_graph.Space`; SE(2) states: ``oracle_lie.LIE``).
     """
     dims = {k: int(n) for k, n in variables.items()}
     specs: list[Mapping] = []
@@ -111,7 +119,7 @@ def fixed_lag(
         specs.extend(u["factors"])
         if step % skip == 0:
             for k in [k for k in theta if float(np.max(np.abs(delta[k]))) >= threshold]:
-                theta[k] = theta[k] + delta[k]
+                theta[k] = space.retract(theta[k], delta[k])
         for k, v in u["values"].items():
             theta[k] = np.asarray(v, float)
         times.update({k: float(t) for k, t in u.get("timestamps", {}).items()})
@@ -125,7 +133,7 @@ def fixed_lag(
             named = {k for f in adjacent for k in f["keys"]} | {k for m in near for k in m.keys}
             sep = [k for k in order if k in named and k not in drop]
             local = record["marginalized"] + sep
-            H, g = information(adjacent, near, theta, local, dims)
+            H, g = information(adjacent, near, theta, local, dims, space)
             nd = sum(dims[k] for k in drop)
             info, vector = schur_complement(H, g, np.arange(nd), np.arange(nd, len(g)))
             if not schur:
@@ -138,12 +146,12 @@ def fixed_lag(
             for k in drop:
                 del theta[k], times[k]
             order = [k for k in order if k not in drop]
-        H, g = information(specs, marginals, theta, order, dims)
+        H, g = information(specs, marginals, theta, order, dims, space)
         step_delta = np.linalg.solve(H, g)
         cov = np.linalg.inv(H)
         cov = (cov + cov.T) / 2
         delta = {k: step_delta[_columns(order, dims, [k])] for k in order}
-        record["estimate"] = {k: theta[k] + delta[k] for k in order}
+        record["estimate"] = {k: space.retract(theta[k], delta[k]) for k in order}
         record["covariances"] = {k: cov[np.ix_(_columns(order, dims, [k]), _columns(order, dims, [k]))] for k in order}
         out.append(record)
     return out

@@ -1,10 +1,11 @@
-"""The oracle on a Lie group: SE(2) (the kit's one group today) from 3×3 matrices and SciPy's ``expm``.
+"""The oracle on SE(2): 3×3 matrices and SciPy's ``expm`` (SE(3)'s is :mod:`.oracle_rigid`).
 
 Independent expected values of the ``se2`` suite. Nothing here shares code with ``steam_ref.lie`` or
 ``steam_ref.factors``: no series, no closed forms.
 
 - Exp(ξ) = expm(ξ^) of the 3×3 matrix ξ^ = [[0, -φ, ρ₁], [φ, 0, ρ₂], [0, 0, 0]], tangent order [ρ; φ];
-  the pose [x, y, θ] read off it with θ = atan2(R₁₀, R₀₀) in (-π, π] (a -π from atan2 is taken as +π).
+  the pose [x, y, θ] read off it with θ = atan2(R₁₀, R₀₀) in (-π, π] (a -π from atan2 is taken as +π; under the
+  alternative convention 'signed-half-turn', ``half_turn=None``, atan2's ±π is kept: GTSAM's Pose2).
 - Log(T): φ = that angle; ρ = V(φ)⁻¹ t, where the columns of V(φ) are the translations of
   expm([e₁; φ]^) and expm([e₂; φ]^) (t = V(φ) ρ is linear in ρ).
 - J_r(ξ) = ∫₀¹ expm(-s ad_ξ) ds, by Van Loan's block exponential: the top-right block of
@@ -14,7 +15,9 @@ Independent expected values of the ``se2`` suite. Nothing here shares code with 
 - Every Jacobian is a Romberg-extrapolated central difference through that retraction (steps h to h/8, error
   O(h⁸)), of the output in its own local coordinates about the unperturbed output.
 - The WNOA residuals and the local GP (Λ, Ψ and the conditional covariance from :mod:`.oracle`'s dense
-  kernel) on these definitions; :data:`LIE`, the :class:`.oracle_graph.Space` in which the graph oracle's
+  kernel) on these definitions, the prediction after the last state; readings of a state (range, bearing,
+  bearing-range of the pose as :mod:`.oracle` writes them for a vector state, the body twist), also at τ through the
+  local GP's mean (kit v5); :data:`LIE`, the :class:`.oracle_graph.Space` in which the graph oracle's
   Gauss-Newton and iSAM2 replay (:mod:`.oracle_graph`) solve problems on these states.
 """
 
@@ -43,6 +46,8 @@ __all__ = [
     "numeric_jacobian",
     "interpolate",
     "interpolation_quantities",
+    "extrapolation_quantities",
+    "retraction_quantities",
     "factor_error",
     "factor_jacobians",
     "linearize_factor",
@@ -66,18 +71,23 @@ def matrix(pose: NDArray) -> NDArray:
     return np.array([[c, -s, pose[0]], [s, c, pose[1]], [0.0, 0.0, 1.0]])
 
 
-def _angle(M: NDArray) -> float:
+HALF_TURN = np.pi  # the angle of the half turn: +π, the kit's (angles in (-π, π]); None under 'signed-half-turn'
+
+
+def _angle(M: NDArray, half_turn: float | None = HALF_TURN) -> float:
+    """The angle of M, atan2(R₁₀, R₀₀), with ±π (the double nearest π) read as ``half_turn``; None keeps atan2's
+    sign (the sign of R₁₀: that double lies 1.2e-16 inside the half turn)."""
     a = float(np.arctan2(M[1, 0], M[0, 0]))
-    return np.pi if a <= -np.pi else a
+    return a if half_turn is None or abs(a) < np.pi else half_turn
 
 
-def pose_of(M: NDArray) -> NDArray:
-    return np.array([M[0, 2], M[1, 2], _angle(M)])
+def pose_of(M: NDArray, half_turn: float | None = HALF_TURN) -> NDArray:
+    return np.array([M[0, 2], M[1, 2], _angle(M, half_turn)])
 
 
-def exp(xi: NDArray) -> NDArray:
-    """Exp(ξ) as a pose [x, y, θ], θ in (-π, π]."""
-    return pose_of(scipy.linalg.expm(hat(np.asarray(xi, float))))
+def exp(xi: NDArray, half_turn: float | None = HALF_TURN) -> NDArray:
+    """Exp(ξ) as a pose [x, y, θ], θ in (-π, π] (``half_turn`` None: ±π as atan2 gives it)."""
+    return pose_of(scipy.linalg.expm(hat(np.asarray(xi, float))), half_turn)
 
 
 def _V(phi: float) -> NDArray:
@@ -88,14 +98,14 @@ def _V(phi: float) -> NDArray:
     return scipy.linalg.expm(block)[:2, 2:]
 
 
-def log_matrix(M: NDArray) -> NDArray:
-    """Log of a 3×3 pose matrix: [V(φ)⁻¹ t; φ], φ in (-π, π]."""
-    phi = _angle(M)
+def log_matrix(M: NDArray, half_turn: float | None = HALF_TURN) -> NDArray:
+    """Log of a 3×3 pose matrix: [V(φ)⁻¹ t; φ], φ in (-π, π] (``half_turn`` None: ±π as atan2 gives it)."""
+    phi = _angle(M, half_turn)
     return np.array([*np.linalg.solve(_V(phi), M[:2, 2]), phi])
 
 
-def log(pose: NDArray) -> NDArray:
-    return log_matrix(matrix(np.asarray(pose, float)))
+def log(pose: NDArray, half_turn: float | None = HALF_TURN) -> NDArray:
+    return log_matrix(matrix(np.asarray(pose, float)), half_turn)
 
 
 def _ad(xi: NDArray) -> NDArray:
@@ -212,6 +222,39 @@ def interpolate(t1: float, t2: float, tau: float, qc: NDArray, model: str):
     return mean, lam, psi, cond
 
 
+def extrapolation_quantities(inputs: Mapping) -> dict:
+    """x(t) = from_local(Φ(t - t₁) γ₁) after the last state (either model: the same mean), its Jacobian J_1 and its
+    covariance J P₁ Jᵀ + N Q(t - t₁) Nᵀ with N = ∂x(t)/∂γ(t) of the case's model."""
+    x1, model = np.asarray(inputs["x1"], float), inputs["model"]
+    s = float(inputs["t"]) - float(inputs["t1"])
+    A, F = _wnoa()
+    Phi = o.transition(A, s)
+
+    def gamma_of(a: NDArray) -> NDArray:
+        return Phi @ np.concatenate([np.zeros(3), np.asarray(a, float)[3:]])
+
+    def mean(a: NDArray) -> NDArray:
+        return _from_local(a, gamma_of(a), model)
+
+    x = mean(x1)
+    J = numeric_jacobian(mean, [x1], 0, local)
+    N = derivative(lambda d: local(x, _from_local(x1, gamma_of(x1) + d, model)), 6)
+    cov = (
+        J @ np.asarray(inputs["cov1"], float) @ J.T
+        + N @ o.process_noise(A, F, np.asarray(inputs["qc"], float), s) @ N.T
+    )
+    return {"x_t": x, "J_1": J, "cov_t": (cov + cov.T) / 2}
+
+
+def retraction_quantities(inputs: Mapping) -> dict:
+    """x ⊕ δ of each row, and (x ⊕ δ) ⊖ x (δ again while δ's angle lies in (-π, π))."""
+    moved = [retract(x, d) for x, d in zip(inputs["x"], inputs["delta"], strict=True)]
+    return {
+        "retract": np.array(moved),
+        "local": np.array([local(x, y) for x, y in zip(inputs["x"], moved, strict=True)]),
+    }
+
+
 def interpolation_quantities(inputs: Mapping) -> dict:
     """x(τ) and its Jacobians J_1, J_2, or (given ``joint_cov``) x(τ) and its covariance, of an interpolation
     case's inputs."""
@@ -243,6 +286,13 @@ def factor_error(spec: Mapping, xs: Sequence[NDArray]) -> NDArray:
         return np.array(
             [np.hypot(*(np.asarray(xs[1], float) - np.asarray(xs[0], float)[:2])) - float(spec["measured"])]
         )
+    if kind in ("se2_bearing", "se2_bearing_range"):  # kit v5: the pose [x, y, θ] read as a vector state's
+        return o.measurement_error(kind.removeprefix("se2_"), spec, np.asarray(xs[0], float), np.asarray(xs[1], float))
+    if kind == "se2_velocity":  # kit v5: the body twist
+        return np.asarray(xs[0], float)[3:] - np.asarray(spec["measured"], float)
+    if kind == "se2_interpolated":  # kit v5: the inner reading at x(τ), the local GP's mean
+        mean = interpolate(float(spec["t1"]), float(spec["t2"]), float(spec["tau"]), spec["qc"], spec["model"])[0]
+        return factor_error(spec["inner"], [mean(xs[0], xs[1]), *xs[2:]])
     if kind == "prior":
         return np.asarray(xs[0], float) - np.asarray(spec["mean"], float)
     raise SteamError(f"unknown se2 factor type {kind!r}")
@@ -251,7 +301,10 @@ def factor_error(spec: Mapping, xs: Sequence[NDArray]) -> NDArray:
 def factor_covariance(spec: Mapping) -> NDArray:
     if spec["type"] == "se2_prior":
         return prior_covariance(float(spec["dt"]), spec["qc"])
-    return o.noise_covariance(spec, len(spec.get("sigmas", [0])))
+    if spec["type"] == "se2_interpolated":
+        return factor_covariance(spec["inner"])
+    size = {"se2_velocity": 3, "se2_bearing_range": 2}.get(spec["type"], len(spec.get("sigmas", [0])))
+    return o.noise_covariance(spec, size)
 
 
 def factor_jacobians(spec: Mapping, xs: Sequence[NDArray]) -> tuple[NDArray, list[NDArray]]:
@@ -277,4 +330,4 @@ def linearize_factor(spec: Mapping, xs: Sequence[NDArray]) -> dict:
 
 # The states move by the right retraction; every factor is linearized by differences through it. Both are looked
 # up when called, so a test can swap either for a wrong port's.
-LIE = Space(lambda x, delta: retract(x, delta), lambda spec, xs: linearize_factor(spec, xs))
+LIE = Space(lambda x, delta: retract(x, delta), lambda spec, xs: linearize_factor(spec, xs), lambda x0, x: local(x0, x))

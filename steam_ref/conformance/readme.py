@@ -62,10 +62,13 @@ QUANTITIES = {
     "covariances_k: key -> its marginal covariance (conventions, fixed_lag)",
     "se3": "exp, log_of_exp (n, 9) SO(3) / (n, 12) SE(3); Jr, Jr_inv (n, 3, 3) / (n, 6, 6); between (12,), H_a, H_b, "
     "Ad_a (6, 6); error (12,) or WNOJ (18,), H_0, H_1 (12, 12) or (18, 18), cost; x_tau (18,) or (24,), J_1, J_2, "
-    "cov_tau in the right tangent at x_tau; x_t, J_1, cov_t (prediction)",
+    "cov_tau in the right tangent at x_tau; x_t, J_1, cov_t (prediction); iterates (key -> (iterations + 1, 18)), "
+    "costs; relinearized_k, estimate_k (key -> 18 numbers [t; R; w])",
     "se2": "exp, log_of_exp (n, 3); log, exp_of_log (n, 3); Jr, Jr_inv (n, 3, 3); between (3,), H_a, H_b, Ad_a (3, 3); "
     "error (6,), H_0, H_1 (6, 6) in right tangents, cost; x_tau (6,), J_1, J_2 (6, 6), cov_tau (6, 6) in the right "
-    "tangent at x_tau; iterates (key -> (iterations + 1, n)), costs; relinearized_k, estimate_k (as incremental)",
+    "tangent at x_tau; iterates (key -> (iterations + 1, n)), costs; relinearized_k, estimate_k (as incremental); "
+    "(v5) a reading's error, whitened_error, H_k, A_k, b, cost (as the factors suite's, H_k in right tangents); "
+    "retract, local (n, 6); x_t (6,), J_1 (6, 6), cov_t (6, 6) (prediction); fixed_lag's quantities (as that suite's)",
     "paper": "poses, velocities at the state_poses; landmarks by id; rmse_m",
 }
 
@@ -89,12 +92,19 @@ SUITE_INPUTS = {
     "'interpolation' (model, x1, x2, t1, t2, tau, qc, and joint_cov 12x12 for the covariance case), 'batch' (problem "
     "= {variables, factors, values}, iterations), 'incremental' (stream, isam2 as for the incremental suite). Factor "
     "specs of batch and incremental: se2_prior {keys [x1, x2], dt, qc, model}, se2_state_prior {keys [x], mean, "
-    "sigmas (6)}, se2_range {keys [x, l], measured, sigma}, prior {keys [l], mean, sigmas (2)}",
+    "sigmas (6)}, se2_range {keys [x, l], measured, sigma}, prior {keys [l], mean, sigmas (2)}. Kit v5: 'reading' "
+    "(factor, values: as the factors suite's), 'retract' (x, delta: rows of 6), 'extrapolation' (model, x1, t1, t, qc, "
+    "cov1), 'fixed_lag' (stream, lag, isam2 as for the fixed_lag suite); specs se2_bearing {keys [x, l], measured, "
+    "noise}, se2_bearing_range {keys [x, l], measured [b, r], noise}, se2_velocity {keys [x], measured [vx, vy, w], "
+    "noise}, se2_interpolated {keys [x1, x2(, l)], t1, t2, tau, qc, model, inner (a reading spec without keys)}, "
+    "se2_range with any noise",
     "se3": "kind: 'so3_exp' (phi: rows of 3), 'so3_jacobians' (phi), 'exp' (xi: rows [rho; phi] of 6), 'jacobians' "
     "(xi), 'between' (a, b poses of 12), 'prior' (model, x1, x2 SE(3) states of 18, dt, qc 6x6), 'wnoj_prior' (x1, x2 "
     "of 24, dt, qc on the jerk), 'state_prior' (mean, x), 'interpolation' (model, x1, x2, t1, t2, tau, qc, and joint_cov "
     "24x24 for a covariance case), 'wnoj_interpolation' (x1, x2 of 24, t1, t2, tau, qc), 'extrapolation' (x1 of 18 or "
-    "24, t1, t, qc, cov1)",
+    "24, t1, t, qc, cov1), 'batch' and 'incremental' (as the se2 suite's; specs se3_prior {keys [x1, x2], dt, qc, "
+    "model}, se3_state_prior {keys [x], mean (18), sigmas (12)}, se3_velocity {keys [x], measured (6), sigmas (6)}; "
+    "values of 18 numbers, 'variables' gives each state's tangent size, 12)",
     "paper": "dataset, file and sha256 of the paper's data file, the authors' run, method, every, setup (fields "
     "below), setup_fields and procedure (the texts below), state_poses (the poses whose states are compared)",
 }
@@ -202,6 +212,35 @@ cov_tau = [J_1 J_2] P [J_1 J_2]^T + N Q_tau N^T.
 **Batch and incremental.** As the batch and incremental suites, with x <- x + d the right retraction for the
 states and vector addition for landmarks; relinearization moves theta_bar <- theta_bar + d by the retraction; the
 range error is |l - p| - r with p the state's position.
+
+**Readings of a state (kit v5).** A range, bearing or bearing-range reads the pose [x, y, theta] exactly as the
+factors suite reads a vector state's first three numbers (bearing = atan2(ly - py, lx - px) - theta, its error
+wrapped to [-pi, pi)); a body-twist reading is e = w - z. Their Jacobians are in the right tangent (to first order
+x + d moves the position by R(theta) d[:2] and the heading by d[2], so H = dh/d[p; theta] diag(R(theta), 1) for the
+pose readings and [0 I] for the twist). `se2_interpolated` reads its inner reading at x(tau), the local GP's mean
+of its model between its two states (above), e = e_inner(x(tau), ...), with H_k = H_inner J_k.
+
+**The retraction (kit v5).** `retract_across_pi` checks x + d and x' - x as defined above on rows that cross +-pi,
+translate only, turn by 1e-9 and by 3.5 (beyond pi, so Log gives back 3.5 - 2 pi and another rho).
+
+**The prediction (kit v5).** After the last state (t > t1), g(t) = Phi(t - t1) [0; w1] = [(t - t1) w1; w1] and
+x(t) = (T1 Exp((t - t1) w1), w1) under either model (J_r(s w) w = w); J_1 = dx(t)/d d1, and cov_t = J_1 P1 J_1^T +
+N Q(t - t1) N^T, where N = dx(t)/dg(t) is the model's: 'local-variable' maps xi_dot through J_r(xi), so N's twist
+rows hold d(J_r(xi) xi_dot)/dxi and J_r(xi); 'simplified' takes the twist as xi_dot, N = [[J_r(xi), 0], [0, I]]
+(`extrapolation_local_variable`, `extrapolation_simplified`).
+
+**Fixed-lag smoothing on SE(2) (kit v5).** The fixed_lag suite's rule and quantities (section 'Fixed-lag
+smoothing'), with theta_bar moved by the right retraction, Lambda and eta in the right tangents, and a frozen
+marginal factor contributing eta - Lambda (theta_bar'_S - theta0_S) where theta_bar' - theta0 is the right tangent
+step x' - x above, state by state: `fixed_lag_through_the_half_turn` freezes a state at heading 3.05 whose next
+linearization point lies past pi (stored -3.13), where subtracting stored headings is 2 pi off.
+
+**The half turn, and its alternative.** The kit's Log and Exp return the half turn as +pi (the double
+3.141592653589793 and its negative both read as +pi). That double lies 1.2e-16 inside pi, so an implementation that
+takes atan2(sin, cos) of it keeps its sign (gtsam.Pose2: Exp([rho; -3.141592653589793]) has theta =
+-3.141592653589793, and a pose stored at -3.141592653589793 logs to that angle with rho = V(phi)^-1 t): it passes
+`exp_near_half_turn` and `log_near_half_turn` with `check --conventions signed-half-turn`, whose values the cases
+store under `alternatives`.
 """
 
 

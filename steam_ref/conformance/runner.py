@@ -40,7 +40,7 @@ from ..gp import (
     wnoj_transition,
 )
 from ..gp.interpolate import interpolation_terms
-from ..lie import SE2, gp_accel
+from ..lie import SE2, SE2_STATE, gp_accel
 from ..lie import gp as lie_gp
 from ..lie.group import LieGroup
 from ..linear.system import linearize
@@ -250,6 +250,21 @@ def _lie_interpolation(inputs: Mapping) -> dict:
     return {"x_tau": x, "J_1": J1, "J_2": J2}
 
 
+def _lie_extrapolation(inputs: Mapping) -> dict:
+    """The prediction after the last SE(2) state: x(t), ∂x(t)/∂x₁ and its covariance under the case's model."""
+    x1, t1, t = np.asarray(inputs["x1"], float), float(inputs["t1"]), float(inputs["t"])
+    x, J = lie_gp.extrapolate(x1, t1, t, group=SE2)
+    _, cov = lie_gp.extrapolate_covariance(x1, t1, t, _qc(inputs), inputs["cov1"], inputs["model"], group=SE2)
+    return {"x_t": x, "J_1": J, "cov_t": cov}
+
+
+def _lie_retraction(inputs: Mapping) -> dict:
+    """x ⊕ δ of each row on SE(2) states, and (x ⊕ δ) ⊖ x."""
+    x, delta = np.asarray(inputs["x"], float), np.asarray(inputs["delta"], float)
+    moved = SE2_STATE.retract(x, delta)
+    return {"retract": moved, "local": SE2_STATE.local(x, moved)}
+
+
 # Case type → steam_ref's quantities of a case of that type. A new type is a row here and one in
 # expected.ORACLES (tests/test_conformance.py checks that both cover every case of every shipped kit).
 RUNNERS: dict[str, Callable[[Mapping], dict]] = {
@@ -276,6 +291,10 @@ RUNNERS: dict[str, Callable[[Mapping], dict]] = {
     "se2/interpolation": _lie_interpolation,
     "se2/batch": solvers.batch,
     "se2/incremental": solvers.incremental,
+    "se2/reading": _factor,  # kit v5: readings of SE(2) states, as the factors suite's cases
+    "se2/retract": _lie_retraction,
+    "se2/extrapolation": _lie_extrapolation,
+    "se2/fixed_lag": solvers.fixed_lag,
     "se3/so3_exp": partial(_exp, "SO3"),
     "se3/so3_jacobians": partial(_jacobians, "SO3"),
     "se3/exp": partial(_exp, "SE3"),
@@ -287,6 +306,8 @@ RUNNERS: dict[str, Callable[[Mapping], dict]] = {
     "se3/interpolation": _se3_interpolation,
     "se3/wnoj_interpolation": _se3_wnoj_interpolation,
     "se3/extrapolation": _se3_extrapolation,
+    "se3/batch": solvers.batch,  # kit v5: on lie.SE3V's form of the states (spec.SOLVER_FORMS)
+    "se3/incremental": solvers.incremental,
 }
 
 

@@ -1,6 +1,7 @@
 """steam_ref's answer to the cases that solve a problem: its linearization, Gauss-Newton, the Bayes tree, iSAM2 and
 the fixed-lag smoother on a case's problem or stream, whatever its variables' kinds (the kind of each key comes
-from the factor specs that name it, :func:`.spec.key_kinds`: an SE(2) state or a plain vector).
+from the factor specs that name it, :func:`.spec.key_kinds`: an SE(2) or SE(3) state or a plain vector; an SE(3)
+state is solved in lie.SE3V's form and its estimates written back in the kit's, :data:`.spec.SOLVER_FORMS`).
 
 Each function returns every quantity its computation gives (the Bayes tree's cliques, conditionals and
 covariances; iSAM2's estimates, the variables it relinearized and its tree edits); a case is checked on those its
@@ -22,6 +23,7 @@ from ..graph import FactorGraph
 from ..linear.cholesky import solve
 from ..linear.ordering import Ordering
 from ..linear.system import GaussianFactor, LinearSystem, linearize
+from ..variables import Values
 from . import spec
 
 __all__ = ["linear", "batch", "bayes_tree", "incremental", "fixed_lag", "positive_rows"]
@@ -35,8 +37,8 @@ def positive_rows(R: NDArray, *others: NDArray) -> tuple[NDArray, ...]:
 
 def _problem(inputs: Mapping):
     p = inputs["problem"]
-    factors = [spec.factor(f) for f in p["factors"]]
-    values = spec.values(p["values"], spec.key_kinds(p["factors"]))
+    factors = [spec.solver_factor(f) for f in p["factors"]]
+    values = spec.solver_values(p["values"], p["factors"])
     return p, factors, values, spec.ordering(inputs["ordering"], p["variables"]) if "ordering" in inputs else None
 
 
@@ -116,7 +118,7 @@ def batch(inputs: Mapping) -> dict:
             **given,
         )
         for name in iterates:
-            iterates[name].append(result.values[spec.key(name)])
+            iterates[name].append(spec.kit_value(result.values, spec.key(name)))
     costs = [result.initial_cost] + [it.cost for it in result.iterations]
     costs += [costs[-1]] * (n + 1 - len(costs))  # a run stopped early by an unchanged cost stays there
     return {"iterates": {k: np.array(v) for k, v in iterates.items()}, "costs": np.array(costs)}
@@ -161,8 +163,9 @@ def _isam2(inputs: Mapping) -> dict:
     return {"amalgamation_zeros": 0.0} | given
 
 
-def _named(estimate: Mapping) -> dict[str, NDArray]:
-    return {spec.key_name(key): np.asarray(estimate[key]) for key in estimate}
+def _named(estimate: Values) -> dict[str, NDArray]:
+    """Each variable's estimate by name, in the kit's stored form."""
+    return {spec.key_name(key): spec.kit_value(estimate, key) for key in estimate}
 
 
 def incremental(inputs: Mapping) -> dict:
@@ -174,7 +177,7 @@ def incremental(inputs: Mapping) -> dict:
     for k, u in enumerate(inputs["stream"]["updates"], start=1):
         seen += u["factors"]
         before = {cid: [spec.key_name(v) for v in c.frontals] for cid, c in solver.tree.cliques.items()}
-        report = solver.update([spec.factor(f) for f in u["factors"]], spec.values(u["values"], spec.key_kinds(seen)))
+        report = solver.update([spec.solver_factor(f) for f in u["factors"]], spec.solver_values(u["values"], seen))
         out[f"update_{k}"] = {
             "removed": sorted(before[c] for c in report.removed_cliques),
             "orphans": sorted(before[o] for o in report.orphans),
@@ -214,8 +217,8 @@ def fixed_lag(inputs: Mapping) -> dict:
     for k, u in enumerate(stream["updates"], start=1):
         seen += u["factors"]
         smoother.update(
-            [spec.factor(f) for f in u["factors"]],
-            spec.values(u["values"], spec.key_kinds(seen)),
+            [spec.solver_factor(f) for f in u["factors"]],
+            spec.solver_values(u["values"], seen),
             timestamps={spec.key(n): float(t) for n, t in u["timestamps"].items()},
         )
         done = smoother.last_marginalization

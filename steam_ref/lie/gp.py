@@ -251,14 +251,21 @@ def extrapolate(x1: NDArray, t1: float, t: float, *, group: LieGroup) -> tuple[N
 
 
 def extrapolate_covariance(
-    x1: NDArray, t1: float, t: float, qc: NDArray, cov1: ArrayLike, *, group: LieGroup
+    x1: NDArray,
+    t1: float,
+    t: float,
+    qc: NDArray,
+    cov1: ArrayLike,
+    model: str = "local-variable",
+    *,
+    group: LieGroup,
 ) -> tuple[NDArray, NDArray]:
-    """The prediction x(t) after the last state and its covariance J P₁ Jᵀ + N Q(t - t₁) Nᵀ.  [YIB Eq. 17, 22]"""
+    """The prediction x(t) after the last state and its covariance J P₁ Jᵀ + N Q(t - t₁) Nᵀ, N = ∂x(t)/∂γ(t) of
+    ``model`` (the mean and J are either model's; N's twist rows are not: ϖ = J_r(ξ) ξ̇, or ξ̇).  [YIB Eq. 17, 22]"""
+    model = check_model(model)
     x, J = extrapolate(x1, t1, t, group=group)
     s = _after(t1, t)
     P = check_covariance("cov1", real_array("cov1", cov1), 2 * group.dim)
-    _, N, _ = _from_local(
-        np.asarray(x1, dtype=float), _ahead(np.asarray(x1, dtype=float), s, group), "local-variable", group
-    )
+    _, N, _ = _from_local(np.asarray(x1, dtype=float), _ahead(np.asarray(x1, dtype=float), s, group), model, group)
     cov = J @ P @ J.T + N @ process_noise(s, check_qc(qc)) @ N.T  # [DER 11.18; YIB Eq. 17]
     return x, (cov + cov.T) / 2

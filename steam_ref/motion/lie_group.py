@@ -111,7 +111,9 @@ class LieGroupWnoa(MotionPrior):
         return lie_gp.extrapolate(x1, t1, t, group=self.group)[0]
 
     def extrapolate_covariance(self, t1: float, x1: NDArray, t: float, cov1: NDArray) -> NDArray:
-        return lie_gp.extrapolate_covariance(x1, t1, t, self.qc, cov1, group=self.group)[1]  # [DER 11.18; YIB Eq. 17]
+        return lie_gp.extrapolate_covariance(x1, t1, t, self.qc, cov1, self.residual, group=self.group)[
+            1
+        ]  # [DER 11.18; YIB Eq. 17]
 
     # --- a new state's value ------------------------------------------------------------------------
 

@@ -1,8 +1,9 @@
 """The kit's cases, one module per idea, inputs written out as literal numbers (no random draws:
 the kit stores them): the GP prior (:mod:`.gp`), the factors (:mod:`.factors`), the problems several suites
 share (:mod:`.problems`), solving them (:mod:`.graphs`: linear, batch, bayes_tree), iSAM2 (:mod:`.incremental`),
-fixed-lag smoothing (:mod:`.fixed_lag`), the GP prior on a Lie group (:mod:`.lie_groups`: the se2 suite) and on
-SE(3) (:mod:`.rigid`: the se3 suite).
+fixed-lag smoothing (:mod:`.fixed_lag`), the GP prior on a Lie group (:mod:`.lie_groups`: the se2 suite, with kit
+v5's readings of SE(2) states, :mod:`.lie_readings`, the retraction and the prediction, :mod:`.lie_motion`, and
+fixed-lag smoothing, :mod:`.lie_lag`) and on SE(3) (:mod:`.rigid`, :mod:`.rigid_solves`: the se3 suite).
 A case added by a later kit version is tagged ``# kit vN``.
 
 Each :class:`Case` says what it computes ([YIB Eq. n]), its inputs, the tolerance of each output
@@ -21,6 +22,9 @@ from .gp import gp_cases
 from .graphs import batch_cases, bayes_tree_cases, linear_cases
 from .incremental import incremental_cases
 from .lie_groups import lie_group_cases
+from .lie_lag import lag_cases
+from .lie_motion import motion_cases
+from .lie_readings import reading_cases
 from .rigid import se3_cases
 
 __all__ = ["Case", "tol", "EXACT", "suite_cases", "SUITE_DOCS"]
@@ -50,7 +54,10 @@ SUITE_DOCS = {
     "se2": (
         "the GP prior on SE(2) (kit v4): Exp, Log (near 0 and the half turn), J_r, J_r⁻¹, between, the adjoint; both "
         "WNOA residuals ('local-variable', 'simplified') and their Jacobians in the right tangent; the local GP's mean, "
-        "Jacobians and covariance; Gauss-Newton and an iSAM2 stream with relinearization on SE(2) states"
+        "Jacobians and covariance; Gauss-Newton and an iSAM2 stream with relinearization on SE(2) states; kit v5: "
+        "range, bearing, bearing-range and body-twist readings of SE(2) states, also at τ between two states; the "
+        "retraction; the prediction after the last state with its covariance (both models); fixed-lag smoothing "
+        "through the half turn"
     ),
     "se3": (
         "SO(3), SE(3) and the GP priors on SE(3) (kit v5): Exp, Log (angles 1e-12 to pi - 1e-9), J_r, J_r⁻¹, between, "
@@ -72,6 +79,6 @@ def suite_cases(suite: str) -> list[Case]:
         "bayes_tree": bayes_tree_cases,
         "incremental": incremental_cases,
         "fixed_lag": fixed_lag_cases,
-        "se2": lie_group_cases,
+        "se2": lambda: lie_group_cases() + reading_cases() + motion_cases() + lag_cases(),
         "se3": se3_cases,
     }[suite]()

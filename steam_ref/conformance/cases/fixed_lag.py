@@ -17,7 +17,7 @@ from collections.abc import Mapping
 from .base import EXACT, Case, tol
 from .problems import MARK, STATE, gp_prior_between, range_reading, velocity_reading
 
-__all__ = ["fixed_lag_cases", "drop_steps"]
+__all__ = ["fixed_lag_cases", "drop_steps", "tolerances", "EVERY", "EQUATION"]
 
 EVERY = {"relinearize_threshold": 0.0, "relinearize_skip": 1, "wildfire_threshold": 0.0}
 NEVER = {"relinearize_threshold": "inf", "relinearize_skip": 1, "wildfire_threshold": 0.0}
@@ -194,7 +194,7 @@ def drop_steps(stream: Mapping, lag: float) -> dict[int, list[str]]:
     return out
 
 
-def _tolerance(stream: Mapping, lag: float) -> dict:
+def tolerances(stream: Mapping, lag: float) -> dict:
     """The quantities of each update in computation order: what goes, the marginal factor, then the window."""
     drops = drop_steps(stream, lag)
     out: dict = {}
@@ -220,7 +220,7 @@ def _case(name: str, what: str, stream: dict, lag: float, isam2: dict, notes: di
         "marginal_point_k (θ̄ of the separator, stacked): marginal_information_k = Λ, marginal_vector_k = η; "
         "then the window's estimate_k (θ̄ + δ) and covariances_k (each variable's marginal covariance)",
         {"stream": stream, "lag": lag, "isam2": isam2},
-        _tolerance(stream, lag),
+        tolerances(stream, lag),
         True,
         ORACLE_LAG,
         notes or {},

@@ -31,6 +31,7 @@ from .rigid_poses import (
     W2,
     W_FAST,
 )
+from .rigid_solves import solve_cases
 
 __all__ = ["se3_cases", "GTSAM_NOTE"]
 
@@ -396,5 +397,4 @@ def _gp_cases() -> list[Case]:
 
 
 def se3_cases() -> list[Case]:
-    """The suite's cases (the batch and incremental ones of :mod:`.rigid_solves` are not in it yet: its docstring)."""
-    return _group_cases() + _prior_cases() + _gp_cases()
+    return _group_cases() + _prior_cases() + _gp_cases() + solve_cases()

@@ -1,6 +1,7 @@
-"""The se3 suite's problems on SE(3) states (kit v5), not yet in the suite: Gauss-Newton on three states and the same
-problem as an iSAM2 stream. steam_ref's linear layer takes a variable's stored size for its tangent's, and an SE(3)
-state stores 18 numbers for a 12-entry tangent; the cases and their oracle (``oracle_rigid.LIE3``) are ready.
+"""The se3 suite's problems on SE(3) states (kit v5): Gauss-Newton on three states and the same problem as an iSAM2
+stream. The oracle solves them on the kit's states [t; R; w] (``oracle_rigid.LIE3``); steam_ref's solvers take a
+variable's stored size for its tangent's, so its runner holds each state in lie.SE3V's form [t; phi; w] and writes
+the estimates back (``spec.SOLVER_FORMS``).
 """
 
 from __future__ import annotations
