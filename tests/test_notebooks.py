@@ -6,7 +6,7 @@ no marking check) and mark a right and a wrong submission. A tutorial imports pa
 Executing needs nbformat, nbclient and ipykernel (the ``notebooks``/``test`` extras): without them
 these tests skip, or fail when STEAM_REF_REQUIRE_OPTIONAL=1 (CI). A notebook that loads the
 paper's files (``load_dataset("plaza")`` or ``"paper-synthetic"``) is a ``needs_data`` test; one that
-loads a set from the gtsam wheel's ``Data/`` folder (``"victoria-park"``, ``"plaza2"``) needs gtsam, an
+loads a set from the gtsam wheel's ``Data/`` folder (``"victoria-park"``, ``"plaza2"``, ``"kitti"``) needs gtsam, an
 optional package, by the same rule.
 """
 
@@ -29,7 +29,7 @@ from steam_ref.homework.exercises import ANSWER, HIDDEN, SOLUTION, exercises, so
 
 TUTORIALS = sorted((Path(__file__).resolve().parents[1] / "tutorials").glob("*.ipynb"))
 READS_REFERENCE_DATA = re.compile(r"""load_dataset\(\s*["'](plaza|paper-synthetic)["']|Syn_theta_Plaza|Plaza1_thrown""")
-READS_GTSAM_DATA = re.compile(r"""load_dataset\(\s*["'](victoria-park|plaza2)["']""")
+READS_GTSAM_DATA = re.compile(r"""load_dataset\(\s*["'](victoria-park|plaza2|kitti)["']""")
 
 
 def _code_cells(path: Path) -> list[str]:
