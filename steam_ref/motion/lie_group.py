@@ -97,7 +97,7 @@ class LieGroupWnoa(MotionPrior):
 
     def interpolate(self, ta: float, xa: NDArray, tb: float, xb: NDArray, t: float) -> NDArray:
         lam, psi = interpolation_matrices(ta, tb, t, self.qc)  # [YIB Eq. 16]
-        return lie_gp.interpolate(xa, xb, lam, psi, self.residual, group=self.group)[0]  # [DER 11.15]
+        return lie_gp.interpolate(xa, xb, lam, psi, self.residual, group=self.group, jacobians=False)  # [DER 11.15]
 
     def interpolate_covariance(
         self, ta: float, xa: NDArray, tb: float, xb: NDArray, t: float, joint: NDArray
