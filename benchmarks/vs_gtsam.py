@@ -1,31 +1,42 @@
-"""steam_ref's BTGP against GTSAM 4.3's ISAM2 (C++) on the same stream.
+"""steam_ref's BTGP against GTSAM 4.3's ISAM2 (C++) on the same stream: the rows of the performance targets, in one run.
 
-For each data set (paper-synthetic, plaza) and schedule (/1, /10), the same front end feeds the same
-readings to three solvers, each run in a fresh Python process with the environment as the user has it (no
-BLAS or OpenMP thread variable set: steam_ref limits its solvers to one BLAS thread by itself,
-:mod:`steam_ref.linear.threads`; GTSAM runs with its own defaults), the three alternating, ``--repeat`` times
-(medians reported):
+Each row is a data set, a prior, a schedule (/1, /10), a GTSAM set-up and optionally a lag. The same front end feeds
+the same readings to our solver and to GTSAM's, each run in a fresh Python process with the environment as the user
+has it (no BLAS or OpenMP thread variable set: steam_ref limits its solvers to one BLAS thread by itself,
+:mod:`steam_ref.linear.threads`; GTSAM runs with its own defaults). Every distinct run of every row runs once per
+``--repeat``, all of them alternating (so that a change of load hits every row alike); medians are reported.
 
-- ``steam``: steam_ref's BTGP (the preset's iSAM2 settings; back-substitution by the per-clique loop, the default);
+- ``steam``: steam_ref's BTGP (the preset's iSAM2 settings), or with a lag its fixed-lag smoother (``--lag``);
 - (a) ``custom``: GTSAM's ISAM2 (its defaults) with our factors as ``gtsam.CustomFactor``s calling our
   errors and Jacobians from Python (the same model; ``gtsam_callback_s`` is the time inside those calls);
 - (b) ``native``: GTSAM's ISAM2 with built-in C++ factors only (``WnoaMotionFactorPose2``,
   ``PriorFactorVector`` on the body velocity, ``RangeFactor2D`` with Tukey, ``PriorFactorPoint2``): the
-  SE(2) motion prior, not the paper's, so a yardstick of the machinery rather than the same model.
+  SE(2) motion prior, not the paper's, so a yardstick of the machinery rather than the same model; on a row
+  ``plaza-se2`` ours runs the SE(2) prior (``--prior se2``, local-variable residual) and (b) is then the same model;
+  with a lag, GTSAM 4.3's ``IncrementalFixedLagSmoother`` (``gtsam_replica.NativeFixedLag``), a state stamped with its
+  time and a landmark with the newest time of each update naming it (``--landmarks last-seen``, ours's rule) or
+  never (``unstamped``).
+
+The default rows (``ROWS``): Plaza BTGP/1 and /10 against (b), paper-synthetic /1 against (a), the SE(2) prior on
+the whole Plaza /1 against (b), and Plaza /10 with a 60 s lag against GTSAM's fixed-lag smoother. A run that fails
+(GTSAM's smoother can) makes its row a ``failed`` line naming the exception.
 
 Every solver is asked for the newest state only after each update (the front end predicts from it);
-the RMSE is taken once at the end over every state. One JSON line per (data set, schedule, setup):
-``steam_*`` and ``gtsam_*`` wall and CPU seconds of the stream (front end included, imports not),
-RMSE, peak memory (ru_maxrss of the child), ``ratio_wall`` / ``ratio_cpu`` = GTSAM's / ours (above 1:
-ours is faster), and ours's median update time over the first and the last 1,000 updates (is the
-per-update cost flat?). Ours also gives ``steam_backsub_s``, the seconds its updates spent in partial
-back-substitution (``UpdateReport.timings``), with its clique solves, and ``ratio_wall_if_backsub_free``:
+the RMSE is taken once at the end over every state (a fixed-lag run: the forgotten ones as they left the window).
+One JSON line per row: ``steam_*`` and ``gtsam_*`` wall and CPU seconds of the stream (front end included,
+imports not), RMSE, peak memory (ru_maxrss of the child), ``ratio_wall`` / ``ratio_cpu`` = GTSAM's / ours (above 1:
+ours is faster; ``ratio_cpu_pairs`` each alternating pair's), and ours's median update time over the first and the
+last 1,000 updates (is the per-update cost flat?). Ours also gives ``steam_backsub_s``, the seconds its updates spent
+in partial back-substitution (``UpdateReport.timings``), with its clique solves, and ``ratio_wall_if_backsub_free``:
 GTSAM's wall time over ours less that share, the ratio even a free back-substitution could not beat
-(docs/experiments.md, "What the targets would need"). The machine may be shared: the ratios, measured in the same sitting, are the
-figures to read; CPU seconds are less disturbed by other load than wall seconds.
+(docs/experiments.md, "What the targets would need"). An SE(2) row whose vector-space run (same data set, schedule
+and lag) ran too gives ``ratio_cpu_over_vector``, ours on SE(2) over ours in vector space, with its pairs. The
+machine may be shared: the ratios, measured in the same sitting, are the figures to read; CPU seconds are less
+disturbed by other load than wall seconds.
 
-    python benchmarks/vs_gtsam.py [--repeat 3] [--datasets paper-synthetic,plaza] [--every 1,10]
-                                  [--setups custom,native] [--max-poses N] [--quick]
+    python benchmarks/vs_gtsam.py [--repeat 3] [--rows DATASET[-se2]/EVERY/SETUP[/lag=S],...] [--landmarks last-seen]
+                                  [--max-poses N] [--quick]
+    python benchmarks/vs_gtsam.py --datasets paper-synthetic,plaza --every 1,10 --setups custom,native   # every combination
 """
 
 from __future__ import annotations
