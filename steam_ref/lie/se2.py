@@ -66,7 +66,9 @@ def _poly(c: NDArray, z: NDArray) -> NDArray:
         value = terms[-1]
         for ck in terms[-2::-1]:
             value = value * zf + ck
-        return np.full_like(z, value)
+        out = np.empty_like(z)
+        out[...] = value
+        return out
     out = np.full_like(z, c[-1])
     for ck in c[-2::-1]:
         out = out * z + ck
@@ -83,8 +85,11 @@ class _Coefficients:
         self.small = np.abs(self.phi) < SERIES_BELOW
         self.all_small = bool(self.small.all())
         self.any_small = self.all_small or bool(self.small.any())
-        with np.errstate(over="ignore"):  # |φ| > 1e154: φ² is inf, and the closed forms' O(1/φ²) terms 0
+        if self.all_small:
             self.z = self.phi**2
+        else:
+            with np.errstate(over="ignore"):  # |φ| > 1e154: φ² is inf, and the closed forms' O(1/φ²) terms 0
+                self.z = self.phi**2
         self._known: dict[str, NDArray] = {}
 
     def _pick(self, series: Callable[[], NDArray], closed: Callable[[], NDArray]) -> NDArray:
@@ -188,7 +193,7 @@ def wrap(theta: ArrayLike) -> NDArray:
     """
     theta = np.asarray(theta, dtype=float)
     inside = (theta > -np.pi) & (theta <= np.pi)
-    if np.all(inside):
+    if inside.all():
         return theta
     if not np.all(np.isfinite(theta)):
         bad = theta.ravel()[int(np.flatnonzero(~np.isfinite(theta))[0])]
