@@ -18,6 +18,8 @@ Used by ``benchmarks/vs_gtsam.py``, ``benchmarks/victoria_park.py`` and ``tests/
   ``PoseReading`` range → ``RangeFactor2D``, ``LieStatePrior`` → ``PriorFactorPose2`` and
   ``PriorFactorVector``; the states are SE(2) states and ``estimate_of`` answers [x, y, θ, body twist].
   ``pairs`` keeps each of our factors with the GTSAM factors that stand for it.
+- :class:`NativeFixedLag`: the same factors through GTSAM 4.3's ``IncrementalFixedLagSmoother``, each state's
+  pose and velocity stamped with its time; a landmark stamped as ``landmarks`` says (:data:`LANDMARK_STAMPS`).
 
 GTSAM is imported when this module is; importing it without gtsam installed raises ImportError.
 """
@@ -33,9 +35,18 @@ from steam_ref.factors import GPPriorFactor, PriorFactor, RangeFactor, VelocityF
 from steam_ref.factors.lie_prior import LiePriorFactor, LieStatePrior
 from steam_ref.factors.lie_readings import BodyVelocityFactor, PoseReading
 from steam_ref.paper.solvers import OnlineSolver
-from steam_ref.variables import Key, Values
+from steam_ref.variables import Key, Values, X
 
-__all__ = ["CALLBACK_SECONDS", "CustomISAM2", "NativeISAM2", "custom_factor", "gkey", "isam2_params"]
+__all__ = [
+    "CALLBACK_SECONDS",
+    "CustomISAM2",
+    "NativeISAM2",
+    "NativeFixedLag",
+    "LANDMARK_STAMPS",
+    "custom_factor",
+    "gkey",
+    "isam2_params",
+]
 
 CALLBACK_SECONDS = [0.0]  # seconds spent inside custom_factor callbacks since the process started
 
@@ -96,7 +107,7 @@ class CustomISAM2(OnlineSolver):
             initial.insert(gkey(k), np.asarray(values[k], dtype=float))
         self.isam.update(graph, initial)
 
-    def estimate_of(self, key):
+    def estimate_of(self, key, *, past: str = "lagged"):  # noqa: ARG002 (nothing is forgotten, or as it left)
         return self.isam.calculateEstimateVector(gkey(key))
 
     def estimate(self) -> Values:
@@ -189,6 +200,10 @@ class NativeISAM2(OnlineSolver):
         raise ValueError(f"no built-in GTSAM factor stands for {type(f).__name__} here")
 
     def update(self, factors, values) -> None:
+        self.isam.update(*self._graph(factors, values))
+
+    def _graph(self, factors, values) -> tuple[gtsam.NonlinearFactorGraph, gtsam.Values]:
+        """The GTSAM factors standing for ``factors`` and the initial values of ``values``."""
         graph, initial = gtsam.NonlinearFactorGraph(), gtsam.Values()
         for f in factors:
             built = self._factors(f)
@@ -203,13 +218,17 @@ class NativeISAM2(OnlineSolver):
                 initial.insert(gkey(k, "v"), v[3:] if self.se2 else np.r_[_rotation(v[2]).T @ v[3:5], v[5]])
             else:
                 initial.insert(gkey(k), gtsam.Point2(*v))
-        self.isam.update(graph, initial)
+        return graph, initial
 
-    def estimate_of(self, key):
+    def estimate_of(self, key, *, past: str = "lagged"):  # noqa: ARG002 (nothing is forgotten, or as it left)
         if key.symbol != "x":
             return np.asarray(self.isam.calculateEstimatePoint2(gkey(key)))
-        pose = self.isam.calculateEstimatePose2(gkey(key, "p"))
-        body = self.isam.calculateEstimateVector(gkey(key, "v"))
+        return self._state_of(
+            self.isam.calculateEstimatePose2(gkey(key, "p")), self.isam.calculateEstimateVector(gkey(key, "v"))
+        )
+
+    def _state_of(self, pose, body) -> np.ndarray:
+        """Our state of GTSAM's pose and body velocity."""
         if self.se2:
             return np.r_[pose.x(), pose.y(), pose.theta(), body]
         return np.r_[pose.x(), pose.y(), pose.theta(), _rotation(pose.theta()) @ body[:2], body[2]]
@@ -218,3 +237,81 @@ class NativeISAM2(OnlineSolver):
         """(n, 2) the estimated positions of ``states`` (indices), from one full estimate."""
         final = self.isam.calculateEstimate()
         return np.array([[p.x(), p.y()] for p in (final.atPose2(gtsam.symbol("p", i)) for i in states)])
+
+
+LANDMARK_STAMPS = (
+    "last-seen",
+    "unstamped",
+)  # a landmark stamped with the newest time of each update naming it, or never
+
+
+class NativeFixedLag(NativeISAM2):
+    """:class:`NativeISAM2`'s factors through GTSAM 4.3's ``IncrementalFixedLagSmoother(lag)``, as steam_ref's
+    ``FixedLagTreeSolver`` stamps its variables: a state's pose and velocity with its pose's time (``times``), a
+    landmark (``landmarks="last-seen"``) with the newest state's time of each update whose factors name it, so it
+    leaves the window a lag after it was last seen; ``"unstamped"`` gives a landmark no time (GTSAM never
+    marginalizes it on its own). GTSAM marginalizes, after each update, what is stamped more than ``lag`` before
+    the newest stamp; :meth:`forgotten` names those (our keys), read as they were before that update, the last
+    estimate GTSAM gave of them (a variable marginalized in the update that brings it: its initial value), for ``estimate_of``
+    afterwards."""
+
+    name = "gtsam-fixed-lag"
+
+    def __init__(self, qc, lag: float, times, params=None, *, landmarks: str = "last-seen", se2: bool = False):
+        super().__init__(qc, params, se2=se2)
+        if landmarks not in LANDMARK_STAMPS:
+            raise ValueError(f"landmarks must be one of {LANDMARK_STAMPS}, got {landmarks!r}")
+        self.isam = None
+        self.smoother = gtsam.IncrementalFixedLagSmoother(float(lag), isam2_params() if params is None else params)
+        self.lag, self.pose_times, self.landmarks = float(lag), np.asarray(times, dtype=float), landmarks
+        self.stamp: dict[Key, float] = {}  # our key → its newest stamp
+        self.queue: list[tuple[float, int, Key]] = []  # (stamp, order, key), a heap; stale entries skipped
+        self.lagged: dict[Key, np.ndarray] = {}  # a forgotten key → its estimate as it left
+        self._forgotten: list[Key] = []
+        self.newest = -np.inf
+
+    def update(self, factors, values) -> None:
+        import heapq
+
+        graph, initial = self._graph(factors, values)
+        stamps = {k: float(self.pose_times[k.index]) for k in values if k.symbol == "x"}
+        self.newest = max([self.newest, *stamps.values()])
+        if self.landmarks == "last-seen" and np.isfinite(self.newest):
+            stamps |= {k: self.newest for f in factors for k in f.keys if k.symbol != "x"}
+        given = gtsam.FixedLagSmootherKeyTimestampMap()
+        for k, t in stamps.items():
+            for g in (gkey(k, "p"), gkey(k, "v")) if k.symbol == "x" else (gkey(k),):
+                given.insert((g, t))
+            self.stamp[k] = t
+            heapq.heappush(self.queue, (t, len(self.queue), k))
+        for k in values:
+            self.lagged.pop(k, None)  # entered again
+        self._forgotten = []
+        while self.queue and self.queue[0][0] < self.newest - self.lag:
+            t, _, k = heapq.heappop(self.queue)
+            if self.stamp.get(k) == t:  # its newest stamp: GTSAM marginalizes it in this update
+                self.lagged[k] = np.asarray(values[k], dtype=float) if k in values else self.estimate_of(k)
+                del self.stamp[k]
+                self._forgotten.append(k)
+        self.smoother.update(graph, initial, given)
+
+    def forgotten(self):
+        return self._forgotten
+
+    def estimate_of(self, key, *, past: str = "lagged"):  # noqa: ARG002 (nothing is forgotten, or as it left)
+        if key in self.lagged:
+            return self.lagged[key]
+        if key.symbol != "x":
+            return np.asarray(self.smoother.calculateEstimatePoint2(gkey(key)))
+        return self._state_of(
+            self.smoother.calculateEstimatePose2(gkey(key, "p")), self.smoother.calculateEstimateVector(gkey(key, "v"))
+        )
+
+    def positions(self, states) -> np.ndarray:
+        """(n, 2) the estimated positions of ``states`` (indices): the window's from one estimate, the rest as they left."""
+        final = self.smoother.calculateEstimate()
+        out = []
+        for i in states:
+            key = gtsam.symbol("p", i)
+            out.append([final.atPose2(key).x(), final.atPose2(key).y()] if final.exists(key) else self.lagged[X(i)][:2])
+        return np.array(out)

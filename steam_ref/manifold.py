@@ -63,13 +63,13 @@ class Manifold:
         """x ⊕ δ of many variables of this kind, one call of ``retract`` on the stacked arrays (new arrays)."""
         if not xs:
             return []
-        return [row.copy() for row in np.asarray(self.retract(np.stack(xs), np.stack(deltas)), dtype=float)]
+        return [row.copy() for row in np.asarray(self.retract(np.array(xs), np.array(deltas)), dtype=float)]
 
     def local_many(self, x0s: Sequence[NDArray], xs: Sequence[NDArray]) -> list[NDArray]:
         """x ⊖ x₀ of many variables of this kind, one call of ``local`` on the stacked arrays (new arrays)."""
         if not xs:
             return []
-        return [row.copy() for row in np.asarray(self.local(np.stack(x0s), np.stack(xs)), dtype=float)]
+        return [row.copy() for row in np.asarray(self.local(np.array(x0s), np.array(xs)), dtype=float)]
 
     def rebase_many(
         self,

@@ -199,6 +199,30 @@ def test_a_batch_evaluates_as_its_factors_do(rng):
                 np.testing.assert_allclose(J[row], f.sqrt_information @ Jf, atol=1e-13)
 
 
+@pytest.mark.parametrize("model", ["local-variable", "simplified"])
+@pytest.mark.parametrize("scale", [1e-6, 0.005, 0.71, 3.5])
+def test_error_and_jacobians_from_one_evaluation_are_the_two_calls_bit_for_bit(rng, model, scale):
+    """A linearization asks a Lie factor for both at once (one evaluation of the local variables or of x(τ)): the
+    same numbers, to the last bit, as error() and jacobians() asked apart, for a stack and for one factor."""
+    pairs = [pair(rng, scale) for _ in range(3)]
+    x1, x2 = np.array([p[0] for p in pairs]), np.array([p[1] for p in pairs])
+    priors = [LiePriorFactor.create(X(0), X(1), DT * (k + 1), QC, model, group=SE2) for k in range(3)]
+    inner = PoseReading.bearing_range(X(9), L(1), 0.3, 4.0, np.array([0.05, 0.1]), group=SE2)
+    readings = [
+        LieInterpolatedFactor.create(inner, X(0), X(1), 0.0, DT, 0.1 + 0.2 * k, QC, model, group=SE2) for k in range(3)
+    ]
+    landmarks = np.tile(LANDMARK, (3, 1))
+    for factors, rest in ((priors, ()), (readings, (landmarks,))):
+        for f, xs in (
+            (type(factors[0]).stack(factors), (x1, x2, *rest)),
+            (factors[0], (x1[0], x2[0], *(r[0] for r in rest))),
+        ):
+            e, J = f.error_and_jacobians(*xs)
+            assert np.array_equal(e, f.error(*xs))
+            for a, b in zip(J, f.jacobians(*xs), strict=True):
+                assert np.array_equal(a, b)
+
+
 def test_bad_input_names_the_offending_value():
     with pytest.raises(SteamError, match="model must be one of 'local-variable', 'simplified', got model='lie'"):
         LiePriorFactor.create(X(0), X(1), DT, QC, "lie", group=SE2)

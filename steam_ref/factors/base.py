@@ -268,6 +268,12 @@ class Factor:
         """∂e/∂xₖ for each key: each (..., m, dₖ)."""
         raise NotImplementedError
 
+    def error_and_jacobians(self, *xs: Any) -> tuple[NDArray, tuple[NDArray, ...]]:
+        """:meth:`error` and :meth:`jacobians` at the same point, what a linearization asks for: a factor whose error
+        is a by-product of its Jacobians' computation (a Lie group's local variables, an interpolated state) gives
+        both from one evaluation, equal to the two calls'."""
+        return self.error(*xs), self.jacobians(*xs)
+
     def batch_signature(self) -> tuple:
         """Factors with equal signatures can be stacked and evaluated together."""
         return (type(self), self.loss, self.dim)

@@ -92,16 +92,22 @@ class LiePriorFactor(Factor):
         return super().batch_signature() + (self.model, self.group)
 
     def error(self, x1: NDArray, x2: NDArray) -> NDArray:
-        gamma2 = local_variables(x1, x2, self.model, group=self.group, jacobians=False)
+        return self._error(x1, local_variables(x1, x2, self.model, group=self.group, jacobians=False))
+
+    def _error(self, x1: NDArray, gamma2: NDArray) -> NDArray:
         gamma1 = np.concatenate([np.zeros(x1.shape[:-1] + (self.group.dim,)), x1[..., self.group.size :]], axis=-1)
         return gamma2 - np.einsum("...ij,...j->...i", self.phi, gamma1)  # [DER 11.11-11.12]
 
     def jacobians(self, x1: NDArray, x2: NDArray) -> tuple[NDArray, NDArray]:
-        _, d1, d2 = local_variables(x1, x2, self.model, group=self.group)
+        return self.error_and_jacobians(x1, x2)[1]
+
+    def error_and_jacobians(self, x1: NDArray, x2: NDArray) -> tuple[NDArray, tuple[NDArray, NDArray]]:
+        """The error and its Jacobians from one evaluation of the local variables (γ₂ is the same either way)."""
+        gamma2, d1, d2 = local_variables(x1, x2, self.model, group=self.group)
         d = self.group.dim
         d1 = d1.copy()
         d1[..., :, d:] -= self.phi[..., :, d:]  # ∂(Φ γ₁)/∂ϖ₁ = Φ[:, d:] (γ₁ = [0; ϖ₁])
-        return d1, d2
+        return self._error(x1, gamma2), (d1, d2)
 
 
 def lie_prior_factors(

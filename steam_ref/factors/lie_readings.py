@@ -275,6 +275,10 @@ class LieInterpolatedFactor(Factor):
         return self.inner.error(self.interpolated_state(x1, x2), *rest)  # [YIB Eq. 29]
 
     def jacobians(self, x1: NDArray, x2: NDArray, *rest: NDArray) -> tuple[NDArray, ...]:
+        return self.error_and_jacobians(x1, x2, *rest)[1]
+
+    def error_and_jacobians(self, x1: NDArray, x2: NDArray, *rest: NDArray) -> tuple[NDArray, tuple[NDArray, ...]]:
+        """The error and its Jacobians from one interpolation (x(τ) is the same either way)."""
         x, J1, J2 = interpolate(x1, x2, self.lam, self.psi, self.model, group=self.group)
         H, *others = self.inner.jacobians(x, *rest)
-        return (H @ J1, H @ J2, *others)  # [YIB Eq. 29]
+        return self.inner.error(x, *rest), (H @ J1, H @ J2, *others)  # [YIB Eq. 29]

@@ -67,6 +67,13 @@ def _blocks(tl: NDArray, tr: NDArray, bl: NDArray, br: NDArray) -> NDArray:
     return np.concatenate([np.concatenate([tl, tr], axis=-1), np.concatenate([bl, br], axis=-1)], axis=-2)
 
 
+def _joined(xi: NDArray, velocity: NDArray) -> NDArray:
+    """[ξ; ξ̇] along the last axis, broadcast only if their shapes differ."""
+    if xi.shape == velocity.shape:
+        return np.concatenate([xi, velocity], axis=-1)
+    return np.concatenate(np.broadcast_arrays(xi, velocity), axis=-1)
+
+
 def _eye(d: int, shape: tuple[int, ...]) -> NDArray:
     return np.broadcast_to(np.eye(d), shape + (d, d))
 
@@ -91,7 +98,7 @@ def local_variables(
     if not jacobians:
         xi = group.log(group.between(T1, T2))  # ξ₂₁ = Log(T₁⁻¹ T₂)  [DER 11.10]
         velocity = _mv(group.right_jacobian_inverse(xi), w2) if model == "local-variable" else w2
-        return np.concatenate(np.broadcast_arrays(xi, velocity), axis=-1)
+        return _joined(xi, velocity)
     rel, H1, _ = group.between(T1, T2, jacobians=True)  # ∂(T₁⁻¹T₂)/∂δT₂ = I
     xi = group.log(rel)  # ξ₂₁ = Log(T₁⁻¹ T₂)  [DER 11.10]
     jinv = group.right_jacobian_inverse(xi)
@@ -104,8 +111,7 @@ def local_variables(
     else:
         velocity, dv1, dv2 = w2, zero, zero
         dw2 = _eye(d, xi.shape[:-1])
-    gamma = np.concatenate(np.broadcast_arrays(xi, velocity), axis=-1)
-    return gamma, _blocks(d1, zero, dv1, zero), _blocks(jinv, zero, dv2, dw2)
+    return _joined(xi, velocity), _blocks(d1, zero, dv1, zero), _blocks(jinv, zero, dv2, dw2)
 
 
 @overload

@@ -59,7 +59,16 @@ _ROOT_G = np.array(
 
 
 def _poly(c: NDArray, z: NDArray) -> NDArray:
-    """Σ c[k] zᵏ by Horner's rule."""
+    """Σ c[k] zᵏ by Horner's rule; at one z in Python's floats (the same IEEE double products and sums, rounded
+    alike, so the same number to the last bit) at a fortieth of the cost of a NumPy operation on a 1-element array."""
+    if z.size == 1:
+        zf, terms = float(z.flat[0]), c.tolist()
+        value = terms[-1]
+        for ck in terms[-2::-1]:
+            value = value * zf + ck
+        out = np.empty_like(z)
+        out[...] = value
+        return out
     out = np.full_like(z, c[-1])
     for ck in c[-2::-1]:
         out = out * z + ck
@@ -74,16 +83,21 @@ class _Coefficients:
     def __init__(self, phi: ArrayLike):
         self.phi = np.asarray(phi, dtype=float)
         self.small = np.abs(self.phi) < SERIES_BELOW
-        with np.errstate(over="ignore"):  # |φ| > 1e154: φ² is inf, and the closed forms' O(1/φ²) terms 0
+        self.all_small = bool(self.small.all())
+        self.any_small = self.all_small or bool(self.small.any())
+        if self.all_small:
             self.z = self.phi**2
+        else:
+            with np.errstate(over="ignore"):  # |φ| > 1e154: φ² is inf, and the closed forms' O(1/φ²) terms 0
+                self.z = self.phi**2
         self._known: dict[str, NDArray] = {}
 
     def _pick(self, series: Callable[[], NDArray], closed: Callable[[], NDArray]) -> NDArray:
         """The series below SERIES_BELOW, the closed form above (each a thunk, evaluated only if needed)."""
-        if np.all(self.small):
+        if self.all_small:
             return series()
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # the closed forms at φ = 0 are not used
-            if not np.any(self.small):
+            if not self.any_small:
                 return closed()
             return np.where(self.small, series(), closed())
 
@@ -144,6 +158,31 @@ class _Coefficients:
         return self._pick(lambda: _poly(_G1, self.z), lambda: (-self["alpha1"] - self["gamma"]) / self.phi)
 
 
+_LAST: list = [
+    None,
+    None,
+]  # (φ's shape and bytes, its _Coefficients): the kernels of one factor read the same φ in turn
+
+
+def _coefficients(phi: NDArray) -> _Coefficients:
+    """The coefficients at φ, shared with the last call at the same φ (Log, J_r⁻¹ and ∂(J_r⁻¹ v)/∂ξ of one local
+    variable read one φ in turn: each coefficient is computed once, the same numbers)."""
+    phi = np.asarray(phi, dtype=float)
+    key = (phi.shape, phi.tobytes())
+    if _LAST[0] != key:
+        _LAST[:] = [key, _Coefficients(phi.copy())]
+    return _LAST[1]
+
+
+def _stacked(values: list[NDArray]) -> NDArray:
+    """``np.stack(values, axis=-1)`` for arrays of one shape, written in place (np.stack costs twenty times more on a
+    few numbers)."""
+    out = np.empty(np.shape(values[0]) + (len(values),))
+    for i, v in enumerate(values):
+        out[..., i] = v
+    return out
+
+
 def wrap(theta: ArrayLike) -> NDArray:
     """Angles mapped to (-π, π]; an angle already there is returned unchanged, bit for bit.
 
@@ -154,7 +193,7 @@ def wrap(theta: ArrayLike) -> NDArray:
     """
     theta = np.asarray(theta, dtype=float)
     inside = (theta > -np.pi) & (theta <= np.pi)
-    if np.all(inside):
+    if inside.all():
         return theta
     if not np.all(np.isfinite(theta)):
         bad = theta.ravel()[int(np.flatnonzero(~np.isfinite(theta))[0])]
@@ -193,18 +232,18 @@ class SE2Group(LieGroup):
     def exp(self, xi: ArrayLike) -> NDArray:
         """Exp(ξ) as a pose [x, y, θ], θ wrapped exactly at any size: t = V(φ) ρ, V = [[A, -B], [B, A]].  [DER 11.1]"""
         xi = self._twists("xi", xi)
-        k = _Coefficients(xi[..., 2])
+        k = _coefficients(xi[..., 2])
         A, B = k["A"], k["B"]
         r1, r2 = xi[..., 0], xi[..., 1]
-        return np.stack([A * r1 - B * r2, B * r1 + A * r2, wrap(xi[..., 2])], axis=-1)  # [DER 11.1]
+        return _stacked([A * r1 - B * r2, B * r1 + A * r2, wrap(xi[..., 2])])  # [DER 11.1]
 
     def log(self, a: ArrayLike) -> NDArray:
         """Log(T) = [V(φ)⁻¹ t; φ], φ = θ wrapped to (-π, π]; V⁻¹ = [[α, φ/2], [-φ/2, α]].  [DER 11.1-11.2]"""
         pose = self._elements("a", a)
         phi = wrap(pose[..., 2])
-        al, b = _Coefficients(phi)["alpha"], phi / 2
+        al, b = _coefficients(phi)["alpha"], phi / 2
         x, y = pose[..., 0], pose[..., 1]
-        return np.stack([al * x + b * y, -b * x + al * y, phi], axis=-1)  # [DER 11.1-11.2]
+        return _stacked([al * x + b * y, -b * x + al * y, phi])  # [DER 11.1-11.2]
 
     def hat(self, xi: ArrayLike) -> NDArray:
         """ξ^ = [[0, -φ, ρx], [φ, 0, ρy], [0, 0, 0]]."""
@@ -215,7 +254,7 @@ class SE2Group(LieGroup):
     def vee(self, X: ArrayLike) -> NDArray:
         """[ρx, ρy, φ] = [X₀₂, X₁₂, X₁₀]."""
         X = self._algebra("X", X, 3)
-        return np.stack([X[..., 0, 2], X[..., 1, 2], X[..., 1, 0]], axis=-1)
+        return _stacked([X[..., 0, 2], X[..., 1, 2], X[..., 1, 0]])
 
     def matrix(self, a: ArrayLike) -> NDArray:
         """[[R(θ), t], [0, 1]]."""
@@ -237,7 +276,7 @@ class SE2Group(LieGroup):
     def right_jacobian(self, xi: ArrayLike) -> NDArray:
         """J_r(ξ): Exp(ξ + dξ) ≈ Exp(ξ) Exp(J_r(ξ) dξ) (GTSAM's ``Pose2.ExpmapDerivative``).  [DER 11.4]"""
         xi = self._twists("xi", xi)
-        k = _Coefficients(xi[..., 2])
+        k = _coefficients(xi[..., 2])
         A, B, C, D = k["A"], k["B"], k["C"], k["D"]
         r1, r2 = xi[..., 0], xi[..., 1]
         return _matrix(  # [DER 11.4]
@@ -247,7 +286,7 @@ class SE2Group(LieGroup):
     def right_jacobian_inverse(self, xi: ArrayLike) -> NDArray:
         """J_r(ξ)⁻¹ = [[α, -φ/2, γρ₁ + ρ₂/2], [φ/2, α, γρ₂ - ρ₁/2], [0, 0, 1]] in closed form.  [DER 11.5]"""
         xi = self._twists("xi", xi)
-        g = _Coefficients(xi[..., 2])
+        g = _coefficients(xi[..., 2])
         al, G, b = g["alpha"], g["gamma"], xi[..., 2] / 2
         r1, r2 = xi[..., 0], xi[..., 1]
         return _matrix([[al, -b, G * r1 + r2 / 2], [b, al, G * r2 - r1 / 2], [0.0, 0.0, 1.0]], r1)  # [DER 11.5]
@@ -263,24 +302,24 @@ class SE2Group(LieGroup):
         c, s = _rot(a[..., 2])
         x = a[..., 0] + c * b[..., 0] - s * b[..., 1]
         y = a[..., 1] + s * b[..., 0] + c * b[..., 1]
-        return np.stack([x, y, wrap(a[..., 2] + b[..., 2])], axis=-1)
+        return _stacked([x, y, wrap(a[..., 2] + b[..., 2])])
 
     def _inverse(self, a: NDArray) -> NDArray:
         """T⁻¹ = [-Rᵀ t; -θ wrapped]."""
         c, s = _rot(a[..., 2])
         x, y = a[..., 0], a[..., 1]
-        return np.stack([-(c * x + s * y), s * x - c * y, wrap(-a[..., 2])], axis=-1)
+        return _stacked([-(c * x + s * y), s * x - c * y, wrap(-a[..., 2])])
 
     def _between(self, a: NDArray, b: NDArray) -> NDArray:
         """T_a⁻¹ T_b = [R_aᵀ (t_b - t_a); θ_b - θ_a wrapped] (GTSAM's ``Pose2.between``)."""
         c, s = _rot(a[..., 2])
         dx, dy = b[..., 0] - a[..., 0], b[..., 1] - a[..., 1]
-        return np.stack([c * dx + s * dy, -s * dx + c * dy, wrap(b[..., 2] - a[..., 2])], axis=-1)
+        return _stacked([c * dx + s * dy, -s * dx + c * dy, wrap(b[..., 2] - a[..., 2])])
 
     def jr_inverse_times_jacobian(self, xi: ArrayLike, v: ArrayLike) -> NDArray:
         """∂(J_r(ξ)⁻¹ v)/∂ξ, exact, in closed form: (..., 3, 3).  [DER 11.6]"""
         xi, v = self._twists("xi", xi), self._twists("v", v)
-        g = _Coefficients(xi[..., 2])
+        g = _coefficients(xi[..., 2])
         G, a1, G1 = g["gamma"], g["alpha1"], g["gamma1"]
         r1, r2 = xi[..., 0], xi[..., 1]
         u1, u2, w = v[..., 0], v[..., 1], v[..., 2]
@@ -315,18 +354,18 @@ class SE2Group(LieGroup):
         """[R(θ)ᵀ [ẋ, ẏ]; θ̇]: the velocity in the robot's own frame (forward, lateral, yaw rate)."""
         a, v = np.asarray(a, dtype=float), np.asarray(velocity, dtype=float)
         c, s = _rot(a[..., 2])
-        return np.stack([c * v[..., 0] + s * v[..., 1], -s * v[..., 0] + c * v[..., 1], v[..., 2]], axis=-1)
+        return _stacked([c * v[..., 0] + s * v[..., 1], -s * v[..., 0] + c * v[..., 1], v[..., 2]])
 
     def world_velocity(self, a: ArrayLike, twist: ArrayLike) -> NDArray:
         """[R(θ) [vx, vy]; ω]: the body twist in the world frame."""
         a, w = np.asarray(a, dtype=float), np.asarray(twist, dtype=float)
         c, s = _rot(a[..., 2])
-        return np.stack([c * w[..., 0] - s * w[..., 1], s * w[..., 0] + c * w[..., 1], w[..., 2]], axis=-1)
+        return _stacked([c * w[..., 0] - s * w[..., 1], s * w[..., 0] + c * w[..., 1], w[..., 2]])
 
     def jr_times_jacobian(self, xi: ArrayLike, v: ArrayLike) -> NDArray:
         """∂(J_r(ξ) v)/∂ξ, exact: (..., 3, 3).  [DER 11.7]"""
         xi, v = self._twists("xi", xi), self._twists("v", v)
-        k = _Coefficients(xi[..., 2])
+        k = _coefficients(xi[..., 2])
         r1, r2 = xi[..., 0], xi[..., 1]
         v1, v2, v3 = v[..., 0], v[..., 1], v[..., 2]
         A1, B1, C, C1, D, D1 = k["A1"], k["B1"], k["C"], k["C1"], k["D"], k["D1"]

@@ -98,9 +98,9 @@ def _first_non_finite(e: NDArray, costs: NDArray, Js: tuple[NDArray, ...] | None
     return min(hits) if hits else None
 
 
-def _whitened(batch: Factor, xs: list[NDArray]) -> NDArray:
-    """(n, m) whitened errors Σ^-½ e of a stacked batch: ‖e‖²_Σ = ‖Σ^-½ e‖².  [YIB Eq. 6, 21]"""
-    return np.einsum("nij,nj->ni", batch.sqrt_information, batch.error(*xs))
+def _whitened(batch: Factor, e: NDArray) -> NDArray:
+    """(n, m) whitened errors Σ^-½ e of a stacked batch's errors e: ‖e‖²_Σ = ‖Σ^-½ e‖².  [YIB Eq. 6, 21]"""
+    return np.einsum("nij,nj->ni", batch.sqrt_information, e)
 
 
 def whitened_norms(factors: Sequence[Factor], values: Values) -> NDArray:
@@ -117,7 +117,8 @@ def whitened_norms(factors: Sequence[Factor], values: Values) -> NDArray:
                 out[ids] = np.linalg.norm(f.whitened_error(*[values[k] for k in f.keys]))
                 continue
             group = [factors[i] for i in ids]
-            out[ids] = np.linalg.norm(_whitened(type(group[0]).stack(group), _variables(values, group)), axis=1)
+            batch = type(group[0]).stack(group)
+            out[ids] = np.linalg.norm(_whitened(batch, batch.error(*_variables(values, group))), axis=1)
     out[~np.isfinite(out)] = np.inf
     return out
 
@@ -136,17 +137,16 @@ def linearize(factors: Sequence[Factor], values: Values, *, jacobians: bool = Tr
         xs = _variables(values, group)
         W = batch.sqrt_information
         with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # checked just below
-            e = _whitened(batch, xs)
+            error, H = batch.error_and_jacobians(*xs) if jacobians else (batch.error(*xs), None)
+            e = _whitened(batch, error)
             s = np.linalg.norm(e, axis=1)
             if batch.loss is None:
                 scale, costs = np.ones_like(s), 0.5 * s**2
             else:
                 scale, costs = np.sqrt(batch.loss.weight(s)), batch.loss.rho(s)
             Js = None
-            if jacobians:
-                Js = tuple(
-                    scale[:, None, None] * (W @ J) for J in batch.jacobians(*xs)
-                )  # A_i = √w Σ^-½ H_i  [YIB Eq. 9, 21]
+            if H is not None:
+                Js = tuple(scale[:, None, None] * (W @ J) for J in H)  # A_i = √w Σ^-½ H_i  [YIB Eq. 9, 21]
         hit = _first_non_finite(e, costs, Js)
         if hit is not None:
             failures.append((ids[hit[0]], hit[1]))
