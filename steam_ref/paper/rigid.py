@@ -17,6 +17,7 @@ from __future__ import annotations
 import warnings
 from collections.abc import Iterator
 from dataclasses import dataclass, field
+from itertools import compress
 
 import numpy as np
 from numpy.typing import NDArray
@@ -108,18 +109,23 @@ def steps(data: RigidReadings, prior: MotionPrior, initial: NDArray | None = Non
         factors = [first_state_prior(data)] if i == 0 else [prior.prior_factor(X(i - 1), X(i), t[i] - t[i - 1])]
         new: dict[Key, NDArray] = {}
         for table in TABLES:
-            rows = getattr(data, table)
-            for row in rows[slot[table] == i]:
+            rows = getattr(data, table)[slot[table] == i]
+            inners = [_reading(data, table, row, X(i)) for row in rows]
+            between = np.abs(rows[:, 0] - t[i]) > _AT  # read between states i-1 and i: moved in one call
+            moved = iter(_between(prior, list(compress(inners, between)), i, t, rows[between, 0]))
+            for row, inner, interpolated in zip(rows, inners, between, strict=True):
                 if table in ("ranges", "points") and int(row[1]) not in seen:
                     j = int(row[1])
                     seen.add(j)
                     new[L(j)] = survey[j]
                     factors.append(PriorFactor.create(L(j), survey[j], data.sigmas["landmark"]))  # [YIB Eq. 4]
-                inner = _reading(data, table, row, X(i))
-                if abs(row[0] - t[i]) > _AT:  # between states i-1 and i  [YIB Eq. 29]
-                    inner = prior.interpolated_factor(inner, X(i - 1), X(i), t[i - 1], t[i], row[0])
-                factors.append(inner)
+                factors.append(next(moved) if interpolated else inner)
         yield Step(i, np.asarray(value, dtype=float), factors, new)
+
+
+def _between(prior: MotionPrior, inners: list[Factor], i: int, t: NDArray, taus: NDArray) -> list[Factor]:
+    """The readings ``inners`` at ``taus``, between states i-1 and i, moved onto them.  [YIB Eq. 29]"""
+    return prior.interpolated_factors(inners, X(i - 1), X(i), t[i - 1], t[i], taus) if inners else []
 
 
 @dataclass
