@@ -259,9 +259,11 @@ STUDIES: dict[str, StudyModel] = {
     "wnoa": StudyModel(consistency_setup, PAPER_ESTIMATORS),
     "se2": StudyModel(consistency_se2_setup, SE2_ESTIMATORS, ("turn", "se2_residual")),
     "se3": StudyModel(RigidSetup, RIGID_ESTIMATORS, study=RigidStudy),
-    # WNOJ's Qc is on the jerk, whose integral walks: RIGID_QC would turn a step past π within 20 steps
+    # WNOJ's Qc is on the jerk, and a first acceleration off by σ turns the twist by 40 σ in 40 steps: both smaller
     "se3-wnoj": StudyModel(
-        functools.partial(RigidSetup, "se3-wnoj", RIGID_QC / 1000), RIGID_ESTIMATORS, study=RigidStudy
+        functools.partial(RigidSetup, "se3-wnoj", RIGID_QC / 1000, {"first_twist": 0.005}),
+        RIGID_ESTIMATORS,
+        study=RigidStudy,
     ),
 }
 

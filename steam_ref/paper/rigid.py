@@ -247,10 +247,12 @@ RIGID_QC = np.diag([0.02, 0.005, 0.005, 0.001, 0.001, 0.002])  # a drawn task's 
 @dataclass(frozen=True)
 class RigidSetup:
     """The model a 3-D study draws its tasks from and its estimators assume: a prior of the table on a group of rigid
-    motions (``prior``, a name of ``MOTION_PRIORS``) with ``qc``; the readings' noise is ``RIGID_NOISE``."""
+    motions (``prior``, a name of ``MOTION_PRIORS``) with ``qc``; the readings' and first state's sigmas are
+    ``RIGID_NOISE`` with ``noise`` in place of its entries."""
 
     prior: str = "se3"
     qc: NDArray = field(default_factory=lambda: RIGID_QC.copy())
+    noise: dict[str, float] = field(default_factory=dict)
 
     def motion_prior(self) -> MotionPrior:
         return motion_prior(self.prior, self.qc)
@@ -293,13 +295,15 @@ class RigidStudy:
             "setup": "rigid-model",
             "prior": self.setup.prior,
             "qc": self.setup.qc.tolist(),
-            "noise": RIGID_NOISE,
+            "noise": RIGID_NOISE | self.setup.noise,
             "estimators": list(self.estimators),
         }
 
     def sample(self, index: int) -> RigidSample:
         seed = np.random.SeedSequence(self.seed, spawn_key=(index,))  # = SeedSequence(seed).spawn(n)[index]
-        return sample_rigid_task(self.setup.motion_prior(), self.n_steps, self.n_landmarks, seed)
+        return sample_rigid_task(
+            self.setup.motion_prior(), self.n_steps, self.n_landmarks, seed, noise=self.setup.noise
+        )
 
     def run(self, index: int) -> dict:
         """Run ``index``: {estimator: {'pose': [NEES of each state], 'twist': [...], 'warnings': [...]}} (JSON)."""
