@@ -4,6 +4,7 @@ LocalCluster give the local figures seed for seed; a JSONL log resumes, skipping
 
 import functools
 import json
+import pickle
 
 import numpy as np
 import pytest
@@ -15,7 +16,16 @@ from steam_ref.datasets import sample_from_model
 from steam_ref.errors import DataError, NumericalError, SteamError
 from steam_ref.evaluate import INCONCLUSIVE, chi2_band, chi2_quantile, nees, runs_needed
 from steam_ref.gp.prior import process_noise, transition
-from steam_ref.paper.consistency import KINDS, ConsistencyStudy, consistency_setup, model_of, run_seed, summarize
+from steam_ref.paper.consistency import (
+    KINDS,
+    ConsistencyStudy,
+    check_result,
+    consistency_setup,
+    model_of,
+    run_seed,
+    summarize,
+)
+from steam_ref.paper.rigid import RigidStudy
 from steam_ref.paper.sweep import run_sweep
 
 TINY = ConsistencyStudy(n_steps=12, n_landmarks=3, estimators=("btgp/1", "btgp/1 Qc x100"))
@@ -347,3 +357,103 @@ def test_the_command_calls_no_estimator_consistent_on_too_few_runs_and_says_how_
     heads = [line for line in out.splitlines() if line.startswith("  ") and not line.startswith("    ")]
     assert len(heads) == 6 and not any(line.endswith(": consistent") for line in heads), out
     assert "inconclusive: inside the band, but 3 runs are too few" in out and "--seeds 71 or more" in out, out
+
+
+# -- the study on SE(3) tasks: the same command, sweep and verdict (paper.rigid.RigidStudy) --
+
+
+def _band(n: int, d: int) -> list[float]:
+    """The oracle's two-sided 95 % band of an ANEES over n runs of dimension d: scipy's χ²(n d) quantiles / n."""
+    return [chi2.ppf(0.025, n * d) / n, chi2.ppf(0.975, n * d) / n]
+
+
+@pytest.mark.parametrize(("prior", "jobs"), [("se3", 1), ("se3-wnoj", 1)])
+def test_the_consistency_command_runs_the_se3_study(tmp_path, capsys, prior, jobs):
+    """Two 3-step 3-D tasks: batch and BTGP, each state's pose and twist (d = 6); each ANEES is the mean of the
+    logged runs' mean NEES, against scipy's χ² band of 2 runs, too few for "consistent" (46 needed); a plot of both
+    kinds; WNOJ through the same path. (Its --jobs 2 runs, 46 seeds each, are in docs/experiments.md; a worker is
+    handed the pickled study, checked below.)"""
+    log = tmp_path / "runs.jsonl"
+    args = ["consistency", "--prior", prior, "--seeds", "2", "--steps", "3", "--landmarks", "2", "--json"]
+    assert main([*args, "--jobs", str(jobs), "--plot", str(tmp_path / "a.png"), "--log", str(log)]) == 0
+    out = json.loads(capsys.readouterr().out)
+    runs = [json.loads(line)["result"] for line in log.read_text().splitlines()[1:]]
+    assert out["n_seeds"] == len(runs) == 2 and set(out["estimators"]) == {"batch", "btgp"}
+    for name, row in out["estimators"].items():
+        assert set(row) == {"pose", "twist", "consistent", "runs_with_warnings"}
+        for kind in ("pose", "twist"):
+            k, nees = row[kind], [run[name][kind] for run in runs]
+            assert k["dim"] == 6 and k["runs_needed"] == 46 and all(len(v) == 4 for v in nees)
+            assert k["anees"] == pytest.approx(np.mean([np.mean(v) for v in nees]), rel=1e-12)
+            np.testing.assert_allclose(k["band"], _band(2, 6), rtol=1e-12)
+            lo, hi = k["band"]
+            side = "overconfident" if k["anees"] > hi else "underconfident"
+            assert k["verdict"] == (INCONCLUSIVE if lo <= k["anees"] <= hi else f"not consistent ({side})"), k
+        assert row["consistent"] is (
+            None if all(row[k]["verdict"] == INCONCLUSIVE for k in ("pose", "twist")) else False
+        )
+    assert (tmp_path / "a.png").stat().st_size > 0
+
+
+def test_the_se3_studys_verdict_is_the_planar_one_on_its_kinds():
+    """summarize on a 3-D study's kinds: every NEES 6 (the mean of χ²(6)) is consistent from runs_needed(6) = 46
+    runs, inconclusive at 45; every NEES doubled is overconfident, halved underconfident (scipy's band)."""
+    study = RigidStudy()
+
+    def runs(n: int, value: float) -> dict:
+        row = {"pose": [value] * 41, "twist": [value] * 41, "warnings": []}
+        return {i: {"batch": row, "btgp": row} for i in range(n)}
+
+    for n, value, expected in ((46, 6.0, "consistent"), (45, 6.0, INCONCLUSIVE), (46, 12.0, "not consistent (overconfident)"),
+                               (46, 3.0, "not consistent (underconfident)")):  # fmt: skip
+        result = runs(n, value)
+        for i in result:
+            check_result(study, i, result[i])  # what run_seed returns passes the log's check
+        out = summarize(result, study.estimators, kinds=study.kinds)
+        for kind in ("pose", "twist"):
+            assert out["estimators"]["batch"][kind]["verdict"] == expected, (n, value, kind)
+            np.testing.assert_allclose(out["estimators"]["batch"][kind]["band"], _band(n, 6), rtol=1e-12)
+        consistent = out["estimators"]["btgp"]["consistent"]
+        assert consistent is {"consistent": True, INCONCLUSIVE: None}.get(expected, False)
+
+
+def test_a_3d_result_read_back_is_checked_by_the_studys_kinds():
+    study = RigidStudy(n_steps=4)
+    good = {"pose": [1.0] * 5, "twist": [2.0] * 5, "warnings": []}
+    check_result(study, 0, {"batch": good, "btgp": good})
+    with pytest.raises(SteamError, match="estimator 'btgp': twist has 4 values where the study has 5"):
+        check_result(study, 0, {"batch": good, "btgp": good | {"twist": [1.0] * 4}})
+    with pytest.raises(SteamError, match="estimator 'batch': twist is null, not a list"):
+        check_result(study, 0, {"batch": {"pose": [1.0] * 5, "warnings": []}, "btgp": good})
+
+
+@pytest.mark.parametrize(
+    ("bad", "message"),
+    [
+        (["--turn", "0.5"], "--turn applies to --prior se2 only"),
+        (["--se2-residual", "simplified"], "--se2-residual applies to --prior se2 only"),
+        (["--steps", "0"], "--steps"),
+        (["--plot", "a.txt"], "expects a .png file"),
+    ],
+)
+def test_bad_input_to_the_se3_study_is_one_line_before_any_work(tmp_path, capsys, bad, message):
+    args = ["consistency", "--prior", "se3", "--seeds", "1", "--steps", "2", "--landmarks", "1", "--json"]
+    assert main([*args, "--log", str(tmp_path / "never.jsonl"), *bad]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == "" and message in captured.err and len(captured.err.strip().splitlines()) == 1
+    assert not (tmp_path / "never.jsonl").exists()
+
+
+def test_a_3d_study_refuses_an_estimator_without_marginals_and_a_resume_of_another_study(tmp_path, capsys):
+    with pytest.raises(SteamError, match="unknown estimator 'fixed-lag'; use some of batch, btgp"):
+        RigidStudy(estimators=("fixed-lag",))
+    study = RigidStudy(n_steps=2, n_landmarks=1)
+    handed = pickle.loads(pickle.dumps(functools.partial(run_seed, study))).args[0]  # what a loky worker gets
+    assert handed.describe() == study.describe() and handed.kinds == {"pose": 6, "twist": 6}
+    log = tmp_path / "runs.jsonl"
+    small = ["consistency", "--seeds", "1", "--steps", "2", "--landmarks", "1", "--json"]
+    assert main([*small, "--prior", "se3", "--log", str(log)]) == 0
+    capsys.readouterr()
+    assert main([*small, "--prior", "se3-wnoj", "--resume", str(log)]) == 2  # written by the 'se3' study
+    err = capsys.readouterr().err
+    assert "written by another study" in err and len(err.strip().splitlines()) == 1

@@ -26,6 +26,7 @@ from steam_ref.gp import (
     interpolate_state,
     interpolate_state_sde,
     interpolation_matrices,
+    interpolation_matrices_many,
     interpolation_matrices_sde,
     process_noise,
     transition,
@@ -394,3 +395,31 @@ def test_predict_state_of_the_papers_prior_moves_the_pose_by_the_velocity(rng):
 def test_predict_state_refuses_bad_input_naming_it(x_prev, dt, error, match):
     with pytest.raises(error, match=match):
         predict_state(x_prev, dt, np.eye(3))
+
+
+@pytest.mark.parametrize("d", [1, 6])
+def test_many_interpolation_matrices_at_once_equal_the_sde_and_each_one_alone(rng, d):
+    """Λ(τ), Ψ(τ) of 40 times between two states in one call (the readings a gyro makes between two GPS fixes)
+    against Van Loan's (an SDE of its own) and against the memoised one-at-a-time closed form."""
+    qc = random_spd(rng, d)
+    sde = LinearSDE.wnoa(qc).general()
+    t1, t2 = 3.0, 3.0 + rng.uniform(0.5, 2.0)
+    taus = np.sort(rng.uniform(t1, t2, size=40))
+    lam, psi = interpolation_matrices_many(t1, t2, taus, qc)
+    assert lam.shape == psi.shape == (40, 2 * d, 2 * d) and not lam.flags.writeable and not psi.flags.writeable
+    for i, tau in enumerate(taus):
+        for many, general, alone in zip(
+            (lam[i], psi[i]), interpolation_matrices_sde(sde, t1, t2, tau), interpolation_matrices(t1, t2, tau, qc),
+            strict=True,
+        ):  # fmt: skip
+            np.testing.assert_allclose(many, general, rtol=1e-9, atol=1e-11)
+            np.testing.assert_allclose(many, alone, rtol=1e-13, atol=1e-14)
+
+
+def test_many_interpolation_matrices_refuse_a_time_outside_naming_it():
+    qc = np.eye(2)
+    for taus, shown in (([0.5, 1.0, 0.7], "at 1: t1=0.0, tau=1.0, t2=1.0"), ([0.5, np.nan], "at 1: t1=0.0, tau=nan")):
+        with pytest.raises(SteamError, match=f"interpolation needs t1 < tau < t2 .*{shown}"):
+            interpolation_matrices_many(0.0, 1.0, taus, qc)
+    with pytest.raises(SteamError, match="a vector of times"):
+        interpolation_matrices_many(0.0, 1.0, [[0.5]], qc)

@@ -154,3 +154,26 @@ def test_bad_readings_are_refused_by_name():
         motion_prior("se3", np.eye(6)).interpolated_factor(
             PositionReading.create(X(0), np.zeros(2), 1.0, group=SE2), X(1), X(2), 0, 1, 0.5
         )
+
+
+@pytest.mark.parametrize("name", ["se3", "se3-wnoj"])
+def test_readings_between_two_states_moved_at_once_are_the_factors_moved_one_by_one(rng, name):
+    """MotionPrior.interpolated_factors (SE(3) WNOA: every Λ(τ), Ψ(τ) in one call; WNOJ: the protocol's default, one
+    by one) gives each reading's interpolated factor: the same error and Jacobians at random states."""
+    prior = motion_prior(name, np.diag([0.02, 0.005, 0.005, 0.001, 0.001, 0.002]))
+    g, n = prior.kind.group, prior.kind.derivatives  # SE3V: the table's SE(3) priors hold [t; φ]
+    taus = np.sort(rng.uniform(2.0, 3.0, size=7))
+    inners = [AngularVelocityReading.create(X(1), rng.normal(size=3), 0.01, group=g, derivatives=n) for _ in taus]
+    inners.append(PointReading.create(X(1), L(4), rng.normal(size=3), 0.05, group=g, derivatives=n))
+    taus = np.r_[taus, 2.5]
+    many = prior.interpolated_factors(inners, X(0), X(1), 2.0, 3.0, taus)
+    size = prior.state_dim - g.size
+    x1, x2 = (np.r_[g.exp(0.3 * rng.normal(size=6)), rng.normal(size=size)] for _ in range(2))
+    landmark = rng.normal(size=3)
+    for f, inner, tau in zip(many, inners, taus, strict=True):
+        one = prior.interpolated_factor(inner, X(0), X(1), 2.0, 3.0, tau)
+        args = (x1, x2, landmark)[: len(one.keys)]
+        assert f.keys == one.keys and type(f) is type(one)
+        np.testing.assert_allclose(f.error(*args), one.error(*args), rtol=1e-12, atol=1e-13)
+        for a, b in zip(f.jacobians(*args), one.jacobians(*args), strict=True):
+            np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-13)

@@ -4,7 +4,8 @@ Every value is checked by its argparse type, so a bad one is a one-line error wi
 anything runs. Each command's own options are in its module (``cli/run.py``, ``cli/batch.py``...,
 :data:`~steam_ref.cli.commands.COMMANDS`); what they share is here: :class:`Parser`, the number types, the
 data set and its folder (``--dataset`` offers the registry's names: :mod:`steam_ref.datasets.registry`), the
-preset a data set runs with, ``--progress`` and ``--save-trajectory``.
+preset a data set runs with, the motion prior and its options (``--prior``, ``--se2-residual``), ``--progress``
+and ``--save-trajectory``.
 """
 
 from __future__ import annotations
@@ -20,7 +21,8 @@ from ..datasets import LandmarkDataset, RangeDataset, load_dataset
 from ..datasets.registry import DATASETS, loadable
 from ..datasets.rigid import RigidReadings
 from ..errors import SteamError, UncleanedDataWarning
-from ..paper.presets import PRESETS
+from ..motion import MOTION_PRIORS
+from ..paper.presets import PRESETS, PRIORS, SE2_RESIDUALS
 
 __all__ = [
     "MAX_LANDMARKS",
@@ -31,7 +33,9 @@ __all__ = [
     "Parser",
     "add_data_dir",
     "add_dataset",
+    "add_prior",
     "add_progress",
+    "check_prior_options",
     "add_qc",
     "add_trajectory_arguments",
     "dataset_name",
@@ -176,6 +180,27 @@ def add_dataset(parser: argparse.ArgumentParser, default: str) -> None:
         help=f"{', '.join(names)}, or a PATH (.mat, CMU text folder, GTSAM .txt); `steam-ref data list` shows "
         "which are present",
     )
+
+
+def add_prior(parser: argparse.ArgumentParser, head: str, tail: str, se2_residual: str) -> None:
+    """--prior (a name of ``MOTION_PRIORS``; its help ``head``, each prior with what it is, then ``tail``) and
+    --se2-residual (help ``se2_residual``), each None unless given: the preset's then (:func:`check_prior_options`)."""
+    parser.add_argument(
+        "--prior",
+        choices=PRIORS,
+        default=None,
+        help=head + "; ".join(f"{name}, {choice.what}" for name, choice in MOTION_PRIORS.items()) + tail,
+    )
+    parser.add_argument("--se2-residual", choices=SE2_RESIDUALS, default=None, help=se2_residual)
+
+
+def check_prior_options(prior: str, given: dict[str, object]) -> None:
+    """SteamError unless each option ``given`` (its name → value, None for not given) is one ``prior`` takes
+    (``MOTION_PRIORS``), naming the priors that do."""
+    for name, value in given.items():
+        if value is not None and name not in MOTION_PRIORS[prior].options:
+            takers = " or ".join(f"--prior {p}" for p, choice in MOTION_PRIORS.items() if name in choice.options)
+            raise SteamError(f"--{name.replace('_', '-')} applies to {takers} only, not --prior {prior}")
 
 
 def folder(text: str) -> str:

@@ -3,9 +3,10 @@
     steam-ref consistency [--dataset synthetic] [--seeds 200] [--seed 0] [--steps 40] [--landmarks 8]
                           [--jobs N] [--backend loky|dask] [--scheduler ADDRESS]
                           [--log FILE.jsonl | --resume FILE.jsonl] [--json] [--plot FILE.png]
-                          [--prior wnoa|se2 [--se2-residual local-variable|simplified] [--turn RATE]]
+                          [--prior wnoa|se2|se3|se3-wnoj [--se2-residual local-variable|simplified] [--turn RATE]]
 
-The runs are :func:`steam_ref.paper.consistency.run_seed` on tasks drawn from the estimator's own model,
+The runs are :func:`steam_ref.paper.consistency.run_seed` on tasks drawn from the estimator's own model (with
+``--prior se3`` or ``se3-wnoj``, 3-D tasks: :class:`~steam_ref.paper.rigid.RigidStudy`, batch and BTGP, pose and twist),
 spread over ``--jobs`` workers (:func:`steam_ref.paper.sweep.run_sweep`); the figures do not depend on the
 backend or the number of workers.
 """
@@ -20,7 +21,7 @@ import time
 from ..errors import SteamError
 from ..evaluate import INCONCLUSIVE
 from ..paper import progress
-from ..paper.consistency import KINDS, STUDIES, ConsistencyStudy, check_result, run_seed, summarize
+from ..paper.consistency import STUDIES, Study, check_result, run_seed, summarize
 from ..paper.presets import SE2_RESIDUALS
 from ..paper.sweep import run_sweep
 from ..plot.figures import plot_anees
@@ -39,8 +40,9 @@ def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
         "--prior",
         choices=tuple(STUDIES),
         default="wnoa",
-        help="the model the tasks are drawn from and the estimators assume: the paper's WNOA, or WNOA on SE(2) "
-        "(then the estimators are batch, btgp/1 and btgp/1 with the vector-space prior)",
+        help="the model the tasks are drawn from and the estimators assume: the paper's WNOA, WNOA on SE(2) "
+        "(then the estimators are batch, btgp/1 and btgp/1 with the vector-space prior), or WNOA or WNOJ on SE(3) "
+        "(3-D tasks; batch and btgp; NEES of each state's pose and twist)",
     )
     parser.add_argument(
         "--se2-residual", choices=SE2_RESIDUALS, default=None, help="--prior se2: the model's residual (local-variable)"
@@ -71,7 +73,7 @@ def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
     return parser
 
 
-def _text(summary: dict) -> str:
+def _text(summary: dict, kinds: dict[str, int]) -> str:
     head = (
         f"ANEES over {summary['n_seeds']} runs ({summary['seconds']} s, {summary['jobs']} job(s), "
         f"{summary['backend']}); 95 % band of one pose's ANEES, χ²(N d)/N"
@@ -79,18 +81,18 @@ def _text(summary: dict) -> str:
     lines = [head]
     for name, row in summary["estimators"].items():
         parts = []
-        for kind in KINDS:
+        for kind in kinds:
             k = row[kind]
             lost = f", {k['runs_far_outside']} run(s) far outside" if k["runs_far_outside"] else ""
             parts.append(f"{kind} {k['anees']:.3f} in [{k['band'][0]:.3f}, {k['band'][1]:.3f}]: {k['verdict']}{lost}")
-        lines.append(f"  {name}: {_overall(row, summary['n_seeds'])}\n    " + "\n    ".join(parts))
+        lines.append(f"  {name}: {_overall(row, summary['n_seeds'], kinds)}\n    " + "\n    ".join(parts))
     return "\n".join(lines)
 
 
-def _overall(row: dict, n_seeds: int) -> str:
+def _overall(row: dict, n_seeds: int, kinds: dict[str, int]) -> str:
     """An estimator's verdict over every kind of state; inconclusive says how many runs a verdict needs."""
     if row["consistent"] is None:
-        needed = max(row[k]["runs_needed"] for k in KINDS if row[k]["verdict"] == INCONCLUSIVE)
+        needed = max(row[k]["runs_needed"] for k in kinds if row[k]["verdict"] == INCONCLUSIVE)
         return (
             f"inconclusive: inside the band, but {n_seeds} runs are too few to have seen a tail of lost runs "
             f"(--seeds {needed} or more to call it consistent)"
@@ -98,9 +100,9 @@ def _overall(row: dict, n_seeds: int) -> str:
     return "consistent" if row["consistent"] else "not consistent"
 
 
-def _model(args: argparse.Namespace) -> dict:
-    """The study's set-up and estimators for ``--prior`` (:data:`~steam_ref.paper.consistency.STUDIES`), with the
-    options given (``--se2-residual``, ``--turn``), each refused by a model that does not take it."""
+def _study(args: argparse.Namespace) -> Study:
+    """The study of ``--prior`` (:data:`~steam_ref.paper.consistency.STUDIES`: its set-up, estimators and study),
+    with the options given (``--se2-residual``, ``--turn``), each refused by a model that does not take it."""
     model = STUDIES[args.prior]
     given = {name: getattr(args, name) for name in ("turn", "se2_residual") if getattr(args, name) is not None}
     for name in given:
@@ -110,7 +112,10 @@ def _model(args: argparse.Namespace) -> dict:
     turn = given.get("turn", 0.0)
     if not math.isfinite(turn) or abs(turn) >= math.pi:
         raise SteamError(f"--turn must be a yaw rate in (-π, π) rad a step, got {args.turn!r}")
-    return {"setup": model.setup(**given), "estimators": model.estimators}
+    return model.study(
+        n_steps=args.steps, n_landmarks=args.landmarks, seed=args.seed, setup=model.setup(**given),
+        estimators=model.estimators,
+    )  # fmt: skip
 
 
 def run(args: argparse.Namespace) -> int:
@@ -119,7 +124,7 @@ def run(args: argparse.Namespace) -> int:
         check_output(path, suffix, option)
     check_output(args.resume, ".jsonl", "--resume")
     check_outputs_apart({"--plot": args.plot, "--log": args.log, "--resume": args.resume})
-    study = ConsistencyStudy(n_steps=args.steps, n_landmarks=args.landmarks, seed=args.seed, **_model(args))
+    study = _study(args)
     start = time.perf_counter()
     label = f"consistency on {args.dataset}: {len(study.estimators)} estimators, seeds"
     with progress.bar(args.seeds, label, progress.wanted(args.progress, args.json), unit="seed") as shown:
@@ -135,18 +140,18 @@ def run(args: argparse.Namespace) -> int:
             check=functools.partial(check_result, study),  # each line read back is validated, naming file and line
             on_result=lambda _item, _result: shown.update(1),
         )
-    summary = summarize({int(k): v for k, v in results.items()}, study.estimators)
+    summary = summarize({int(k): v for k, v in results.items()}, study.estimators, kinds=study.kinds)
     summary |= {"seconds": round(time.perf_counter() - start, 2), "jobs": args.jobs, "backend": args.backend}
-    if args.plot:
-        per_pose = {
-            name: {k: row[k]["per_state"] for k in ("pose", "velocity")} for name, row in summary["estimators"].items()
-        }
-        bands = {k: tuple(next(iter(summary["estimators"].values()))[k]["band"]) for k in ("pose", "velocity")}
+    if args.plot:  # the kinds every state has (not a landmark): an ANEES at each state
+        first = next(iter(summary["estimators"].values()))
+        curves = [k for k in study.kinds if "per_state" in first[k]]
+        per_pose = {name: {k: row[k]["per_state"] for k in curves} for name, row in summary["estimators"].items()}
+        bands = {k: tuple(first[k]["band"]) for k in curves}
         write_output(
             args.plot, "--plot", lambda name: plot_anees(per_pose, bands, n_runs=summary["n_seeds"], path=name)
         )
     for row in summary["estimators"].values():  # the per-pose curves are for the plot
-        for kind in KINDS:
+        for kind in study.kinds:
             row[kind].pop("per_state", None)
-    print(json_line(summary) if args.json else _text(summary))
+    print(json_line(summary) if args.json else _text(summary, study.kinds))
     return 0

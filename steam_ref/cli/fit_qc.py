@@ -13,12 +13,22 @@ import argparse
 
 import numpy as np
 
-from ..errors import DataError, SteamError
+from ..errors import DataError
 from ..evaluate.fit_qc import QcFit, fit_qc
 from ..gp.clock import Clock
 from ..motion import MOTION_PRIORS, motion_prior
-from ..paper.presets import PRIORS, SE2_RESIDUALS, PaperSetup
-from .args import Subparsers, add_data_dir, add_dataset, load_with_note, non_negative_int, number, preset_of
+from ..paper.presets import PaperSetup
+from .args import (
+    Subparsers,
+    add_data_dir,
+    add_dataset,
+    add_prior,
+    check_prior_options,
+    load_with_note,
+    non_negative_int,
+    number,
+    preset_of,
+)
 from .streams import json_line
 
 __all__ = ["add_parser", "run"]
@@ -28,19 +38,11 @@ def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
     """Add ``fit-qc`` and its options to the command's subparsers."""
     parser = sub.add_parser("fit-qc", help="fit a motion prior's Qc to a data set's ground truth (maximum likelihood)")
     add_dataset(parser, "plaza")
-    parser.add_argument(
-        "--prior",
-        choices=PRIORS,
-        default=None,
-        help="the motion prior whose Qc is fitted: "
-        + "; ".join(f"{name}, {choice.what}" for name, choice in MOTION_PRIORS.items())
-        + "; default: the preset's (wnoa)",
-    )
-    parser.add_argument(
-        "--se2-residual",
-        choices=SE2_RESIDUALS,
-        default=None,
-        help="--prior se2 only: the SE(2) prior's residual (default: local-variable)",
+    add_prior(
+        parser,
+        "the motion prior whose Qc is fitted: ",
+        "; default: the preset's (wnoa)",
+        "--prior se2 only: the SE(2) prior's residual (default: local-variable)",
     )
     parser.add_argument(
         "--preset",
@@ -63,10 +65,7 @@ def run(args: argparse.Namespace) -> int:
     if args.prior is not None:
         setup = setup.replace(prior=args.prior)
     given = {name: value for name, value in {"se2_residual": args.se2_residual}.items() if value is not None}
-    for name in given:  # an option only of the priors that take it (MOTION_PRIORS)
-        if name not in MOTION_PRIORS[setup.prior].options:
-            takers = " or ".join(f"--prior {p}" for p, choice in MOTION_PRIORS.items() if name in choice.options)
-            raise SteamError(f"--{name.replace('_', '-')} applies to {takers} only, not --prior {setup.prior}")
+    check_prior_options(setup.prior, given)  # an option only of the priors that take it
     setup = setup.replace(**given)
     data = load_with_note(args)
     if data.ground_truth is None:

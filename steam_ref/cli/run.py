@@ -19,10 +19,9 @@ from ..datasets.registry import DATASETS
 from ..errors import SteamError
 from ..evaluate import trajectory_figures
 from ..linear.amalgamation import zero_fraction
-from ..motion import MOTION_PRIORS
 from ..paper.online import StreamingEstimator
 from ..paper.options import StreamOptions
-from ..paper.presets import DEPARTURES, PRESETS, PRIORS, SE2_RESIDUALS, PaperSetup
+from ..paper.presets import DEPARTURES, PRESETS, PaperSetup
 from ..paper.problem import score_against_batch
 from ..paper.readings import Readings
 from ..paper.solvers import BayesTreeSolver
@@ -35,9 +34,11 @@ from .args import (
     Subparsers,
     add_data_dir,
     add_dataset,
+    add_prior,
     add_progress,
     add_qc,
     add_trajectory_arguments,
+    check_prior_options,
     load_with_note,
     non_negative_float,
     non_negative_int,
@@ -115,19 +116,11 @@ def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
         help="a data set without ground truth (victoria-park): score the run against the converged batch optimum of "
         "the same problem (two batch solves after the run: ~100 s on victoria-park)",
     )
-    parser.add_argument(
-        "--prior",
-        choices=PRIORS,
-        default=None,
-        help="motion prior: "
-        + "; ".join(f"{name}, {choice.what}" for name, choice in MOTION_PRIORS.items())
-        + " (docs/derivations.md); default: the preset's (wnoa)",
-    )
-    parser.add_argument(
-        "--se2-residual",
-        choices=SE2_RESIDUALS,
-        default=None,
-        help="--prior se2 only: the SE(2) prior's residual, 'local-variable' (Anderson & Barfoot; GTSAM, STEAM) or "
+    add_prior(
+        parser,
+        "motion prior: ",
+        " (docs/derivations.md); default: the preset's (wnoa)",
+        "--prior se2 only: the SE(2) prior's residual, 'local-variable' (Anderson & Barfoot; GTSAM, STEAM) or "
         "'simplified' (gpslam, Theseus) (default: local-variable)",
     )
     parser.add_argument(
@@ -254,10 +247,7 @@ def run(args: argparse.Namespace) -> int:
     setup = PaperSetup.named(preset_of(args)).departing(*args.departure)
     prior = setup.prior if args.prior is None else args.prior
     given = {"prior": args.prior, "singer_time_constant": args.singer_time_constant, "se2_residual": args.se2_residual}
-    for name in ("singer_time_constant", "se2_residual"):  # an option only of the priors that take it (MOTION_PRIORS)
-        if given[name] is not None and name not in MOTION_PRIORS[prior].options:
-            takers = " or ".join(f"--prior {p}" for p, choice in MOTION_PRIORS.items() if name in choice.options)
-            raise SteamError(f"--{name.replace('_', '-')} applies to {takers} only, not --prior {prior}")
+    check_prior_options(prior, {name: given[name] for name in ("singer_time_constant", "se2_residual")})
     qc = setup.qc if args.qc is None else np.diag(args.qc)  # --qc, then --qc-scale
     setup = setup.replace(qc=args.qc_scale * qc, **{k: v for k, v in given.items() if v is not None})
     isam2 = {

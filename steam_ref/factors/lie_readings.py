@@ -12,15 +12,16 @@ GP of ``lie.gp`` (the group form of [YIB Eq. 29]).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import ClassVar
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from ..arguments import number
 from ..errors import SteamError
-from ..gp.interpolate import interpolation_matrices
+from ..gp.interpolate import interpolation_matrices, interpolation_matrices_many
 from ..gp.prior import check_qc
 from ..lie import GroupState, LieGroup
 from ..lie.gp import check_model, interpolate
@@ -251,6 +252,33 @@ class LieInterpolatedFactor(Factor):
         already (a motion prior's own, checked when it was made: ``motion.LieGroupWnoa``); t1 < tau < t2 is checked
         here (``interpolation_matrices``).  [YIB Eq. 16, 29]"""
         lam, psi = interpolation_matrices(t1, t2, tau, qc)  # [YIB Eq. 16]
+        return cls._of_matrices(inner, key1, key2, lam, psi, model, group)
+
+    @classmethod
+    def many_of_checked(
+        cls,
+        inners: Sequence[Factor],
+        key1: Key,
+        key2: Key,
+        t1: float,
+        t2: float,
+        taus: ArrayLike,
+        qc: NDArray,
+        model: str,
+        group: LieGroup,
+    ) -> list[LieInterpolatedFactor]:
+        """:meth:`of_checked` of each of ``inners`` at its time in ``taus`` (n,), all between ``key1`` at t1 and
+        ``key2`` at t2, with every Λ(τ), Ψ(τ) formed in one call.  [YIB Eq. 16, 29]"""
+        lam, psi = interpolation_matrices_many(t1, t2, taus, qc)  # [YIB Eq. 16]
+        return [
+            cls._of_matrices(inner, key1, key2, a, b, model, group)
+            for inner, a, b in zip(inners, lam, psi, strict=True)
+        ]
+
+    @classmethod
+    def _of_matrices(
+        cls, inner: Factor, key1: Key, key2: Key, lam: NDArray, psi: NDArray, model: str, group: LieGroup
+    ) -> LieInterpolatedFactor:
         keys = (key1, key2) + tuple(inner.keys[1:])
         return cls(
             keys, inner.sqrt_information, inner=inner, lam=lam, psi=psi, model=model, group=group, loss=inner.loss

@@ -8,6 +8,7 @@ from .interpolate import (
     interpolate_state,
     interpolate_state_sde,
     interpolation_matrices,
+    interpolation_matrices_many,
     interpolation_matrices_sde,
 )
 from .models import (
@@ -27,6 +28,7 @@ __all__ = [
     "process_noise_inverse",
     "process_noise_sqrt_information",
     "interpolation_matrices",
+    "interpolation_matrices_many",
     "interpolate_state",
     "interpolate_covariance",
     "LinearSDE",

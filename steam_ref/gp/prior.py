@@ -30,6 +30,9 @@ __all__ = [
     "process_noise",
     "process_noise_inverse",
     "process_noise_sqrt_information",
+    "transition_many",
+    "process_noise_many",
+    "process_noise_inverse_many",
 ]
 
 # A run builds thousands of prior and interpolated factors from one Qc and a few distinct gaps, so
@@ -113,28 +116,82 @@ def transition(dt: float, d: int) -> NDArray:
 
 @lru_cache(maxsize=1024)
 def _transition(dt: float, d: int) -> NDArray:
-    I, O = np.eye(d), np.zeros((d, d))
-    phi = np.block([[I, dt * I], [O, I]])
+    phi = _phi(dt, d)
     read_only(phi)
     return phi
+
+
+def transition_many(dts: ArrayLike, d: int) -> NDArray:
+    """Φ(t + dtᵢ, t) for each finite step of ``dts`` (n,): (n, 2d, 2d).  [YIB Eq. 16, 30-31]"""
+    return _phi(_steps("dts", dts, positive=False), check_d(d))
+
+
+def _phi(dt: float | NDArray, d: int) -> NDArray:
+    """[[I, dt I], [0, I]]: (2d, 2d) for a step, (n, 2d, 2d) for n of them."""
+    phi = np.broadcast_to(np.eye(2 * d), np.shape(dt) + (2 * d, 2 * d)).copy()
+    phi[..., :d, d:] = np.asarray(dt)[..., None, None] * np.eye(d)
+    return phi
+
+
+def _blocks(c11: float | NDArray, c12: float | NDArray, c22: float | NDArray, m: NDArray) -> NDArray:
+    """[[c11 m, c12 m], [c12 m, c22 m]]: (2d, 2d) for scalar coefficients, (n, 2d, 2d) for (n,) of each."""
+    a, b, c = (np.asarray(x)[..., None, None] for x in (c11, c12, c22))
+    return np.concatenate([np.concatenate([a * m, b * m], -1), np.concatenate([b * m, c * m], -1)], -2)
+
+
+def _steps(name: str, dts: ArrayLike, positive: bool = True) -> NDArray:
+    """``dts`` as a float (n,) array of finite steps (each > 0 when ``positive``), or SteamError naming the first
+    that is not."""
+    t = real_array(name, dts)
+    if t.ndim != 1:
+        raise ShapeError(f"{name} must be a vector of time steps, got shape {t.shape}")
+    bad = ~np.isfinite(t) | (t <= 0 if positive else False)
+    if bad.any():
+        i = int(np.argmax(bad))
+        raise SteamError(f"time step must be {'positive and ' if positive else ''}finite, got {name}[{i}]={t[i]}")
+    return t
+
+
+def _finite_many(what: str, a: NDArray, dts: NDArray) -> NDArray:
+    """``a`` (n, ...) itself if finite; else :func:`finite_result`'s NumericalError at the first step of ``dts``
+    whose row is not."""
+    bad = ~np.isfinite(a).reshape(len(a), -1).all(axis=1)
+    return finite_result(what, a, dt=float(dts[np.argmax(bad)])) if bad.any() else a
 
 
 def process_noise(dt: float, qc: ArrayLike) -> NDArray:
     """Q(dt) = ∫₀^dt Φ(dt, s) F Qc Fᵀ Φ(dt, s)ᵀ ds for the WNOA prior: (2d, 2d).  [YIB Eq. 17]"""
     dt, qc = time_step(dt), check_qc(qc)
     t = np.float64(dt)  # NumPy arithmetic: an overflow gives inf (checked), not Python's OverflowError
+    return finite_result("Q(dt) of the WNOA prior", _noise(t, qc), dt=dt)
+
+
+def process_noise_many(dts: ArrayLike, qc: ArrayLike) -> NDArray:
+    """Q(dtᵢ) of :func:`process_noise` for each step of ``dts`` (n,), each > 0: (n, 2d, 2d).  [YIB Eq. 17]"""
+    t, qc = _steps("dts", dts), check_qc(qc)
+    return _finite_many("Q(dt) of the WNOA prior", _noise(t, qc), t)
+
+
+def _noise(t: np.float64 | NDArray, qc: NDArray) -> NDArray:
     with np.errstate(over="ignore", invalid="ignore"):
-        q = np.block([[t**3 / 3 * qc, t**2 / 2 * qc], [t**2 / 2 * qc, t * qc]])
-    return finite_result("Q(dt) of the WNOA prior", q, dt=dt)
+        return _blocks(t**3 / 3, t**2 / 2, t, qc)  # [YIB Eq. 17]
 
 
 def process_noise_inverse(dt: float, qc: ArrayLike) -> NDArray:
     """Q(dt)⁻¹ in closed form: (2d, 2d).  [YIB Eq. 17; derivations §1; BTS]"""
     dt, qi = time_step(dt), qc_inverse(qc)
-    t = np.float64(dt)
+    return finite_result("Q(dt)⁻¹ of the WNOA prior", _noise_inverse(np.float64(dt), qi), dt=dt)
+
+
+def process_noise_inverse_many(dts: ArrayLike, qc: ArrayLike) -> NDArray:
+    """Q(dtᵢ)⁻¹ of :func:`process_noise_inverse` for each step of ``dts`` (n,), each > 0: (n, 2d, 2d)."""
+    t, qi = _steps("dts", dts), qc_inverse(qc)
+    return _finite_many("Q(dt)⁻¹ of the WNOA prior", _noise_inverse(t, qi), t)
+
+
+def _noise_inverse(t: np.float64 | NDArray, qi: NDArray) -> NDArray:
     with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
-        q_inv = np.block([[12 / t**3 * qi, -6 / t**2 * qi], [-6 / t**2 * qi, 4 / t * qi]])
-    return finite_result("Q(dt)⁻¹ of the WNOA prior", q_inv, dt=dt)
+        return _blocks(12 / t**3, -6 / t**2, 4 / t, qi)  # [YIB Eq. 17; derivations §1; BTS]
 
 
 def process_noise_sqrt_information(dt: float, qc: ArrayLike) -> NDArray:

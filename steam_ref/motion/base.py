@@ -63,6 +63,14 @@ class MotionPrior(ABC):
         """``inner`` (a reading of the state at ``tau``, its first key standing for that state) moved onto the
         states ``a`` at ``ta`` and ``b`` at ``tb``, ta < tau < tb.  [YIB Eq. 29]"""
 
+    def interpolated_factors(
+        self, inners: Sequence[Factor], a: Key, b: Key, ta: float, tb: float, taus: ArrayLike
+    ) -> list[Factor]:
+        """:meth:`interpolated_factor` of each of ``inners`` at its time in ``taus`` (n,), all between the same two
+        states: the same factors, which a prior may form in one call (``LieGroupWnoa``: every Λ(τ), Ψ(τ) at once).
+        [YIB Eq. 29]"""
+        return [self.interpolated_factor(f, a, b, ta, tb, t) for f, t in zip(inners, np.asarray(taus), strict=True)]
+
     @abstractmethod
     def velocity_reading(self, key: Key, measured: NDArray, sigmas: NDArray) -> Factor:
         """A reading [forward, lateral, yaw rate] of the robot's velocity in its own frame, on state ``key``."""

@@ -78,6 +78,15 @@ class LieGroupWnoa(MotionPrior):
             inner, a, b, ta, tb, tau, self.qc, self.residual, self.group
         )  # [YIB Eq. 29; DER 11.16]
 
+    def interpolated_factors(
+        self, inners: Sequence[Factor], a: Key, b: Key, ta: float, tb: float, taus: ArrayLike
+    ) -> list[Factor]:
+        for inner in inners:
+            LieInterpolatedFactor.check_inner(inner, self.kind)
+        return list(
+            LieInterpolatedFactor.many_of_checked(inners, a, b, ta, tb, taus, self.qc, self.residual, self.group)
+        )  # [YIB Eq. 16, 29; DER 11.16]
+
     def velocity_reading(self, key: Key, measured: NDArray, sigmas: NDArray) -> Factor:
         return BodyVelocityFactor.create(key, measured, sigmas, group=self.group)  # e = ϖ - z
 

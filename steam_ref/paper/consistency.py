@@ -25,11 +25,8 @@ checked against the same band. A run whose mean NEES is beyond χ²⁻¹(0.999; 
 have seen a tail of lost runs large enough to push the expected ANEES above the band
 (:func:`~steam_ref.evaluate.runs_needed`: 60 runs for poses and velocities, 71 for landmarks at 95 %; the
 derivation is in :mod:`steam_ref.evaluate.consistency` and docs/derivations.md); with fewer the verdict is
-"inconclusive (too few runs)" and the estimator's ``consistent`` is None. At 20 runs the interpolated BTGP's
-pose ANEES (3.240 in [2.024, 4.165]) is inside the band, while 200 runs show it at 17.7: a tail that 13 % of
-the runs fall in is missed by 20 runs with probability 0.87²⁰ ≈ 6 %, and one in 9 % of runs (the smallest
-that would put the expected ANEES above the band at 20 runs) with probability 16 %, above the 5 % the verdict
-allows.
+"inconclusive (too few runs)" and the estimator's ``consistent`` is None (docs/derivations.md §12: the
+interpolated BTGP, 17.7 over 200 runs, was inside the band at 20).
 
 The set-up (:func:`consistency_setup`) is the paper's synthetic one scaled to where its posterior is
 Gaussian, with Gaussian ranges (no Tukey loss: a robust loss is not the model the data are drawn from).
@@ -39,14 +36,10 @@ batch optimum's pose ANEES was 59.6 and BTGP/1's 28.1, against a band of [2.19, 
 measure the linearisation, not the solver. ``qc_scale`` gives an estimator a deliberately wrong prior:
 the data still come from the set-up's Qc.
 
-Measured with ``steam-ref consistency --seeds 200 --jobs 2`` (the default study; band [2.670, 3.349] for
-poses and velocities, [1.732, 2.287] for landmarks): pose ANEES 2.976 for the batch optimum, 3.037 for BTGP/1,
-3.032 for BTGP/10, 3.257 at skip 5 without interpolation, all consistent in every kind; Qc × 100 1.195
-(underconfident in every kind); skip 5 with interpolated readings 17.7, overconfident, because in 26 of the 200
-runs BTGP stays away from the optimum (median run 2.95). The batch optimum of the same interpolated problem is
-consistent on those runs (mean NEES 1.0-2.3 on four of them), and so is BTGP once it relinearizes every variable
-at every update (``relinearize_threshold=0, relinearize_skip=1``): iSAM2's lazy relinearization (GTSAM's
-defaults, 0.1 every 10th update) is what leaves interpolated factors linearized at stale states.
+Measured with ``steam-ref consistency --seeds 200 --jobs 2`` (docs/experiments.md): the batch optimum, BTGP/1,
+BTGP/10 and skip 5 without interpolation consistent in every kind; Qc × 100 underconfident; skip 5 with interpolated
+readings overconfident (pose ANEES 17.7): in 26 of the 200 runs iSAM2's lazy relinearization (GTSAM's defaults)
+leaves interpolated factors linearized at stale states, away from the optimum, which is consistent on those runs.
 
 **Any motion prior.** The task is drawn from the set-up's motion prior (``sample_from_model`` asks it), and
 each estimator's error is the truth against its estimate in the coordinates its covariance is in, as its own
@@ -58,17 +51,20 @@ the SE(2) WNOA model, ``turn`` starting the task's yaw rate at that many rad a s
 vector-space prior" solves the same task with the paper's vector-space WNOA prior (its error: position and
 wrapped heading in the world frame, the truth's world velocity [R(θ) [vx, vy], ω]).
 
-The batch optimum is the lower of two descents (:func:`_solve`); BTGP/1 runs first so that its estimate
-can be the second start.
+**SE(3).** ``--prior se3`` and ``se3-wnoj`` are entries of the same table whose study is a
+:class:`~steam_ref.paper.rigid.RigidStudy` (3-D tasks, batch and BTGP, each state's pose and twist: d = 6). Any
+:class:`Study` runs through :func:`run_seed`, :func:`check_result` and :func:`summarize` (which read its ``kinds``).
 """
 
 from __future__ import annotations
 
+import functools
 import json
 import math
 import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any, ClassVar, Protocol
 
 import numpy as np
 
@@ -85,6 +81,7 @@ from .options import StreamOptions
 from .presets import PaperSetup
 from .problem import build_problem, sequential_batch
 from .readings import Readings
+from .rigid import RIGID_QC, RigidSetup, RigidStudy
 from .solvers import PeriodicBatchSolver
 
 __all__ = [
@@ -94,6 +91,7 @@ __all__ = [
     "consistency_setup",
     "consistency_se2_setup",
     "SE2_ESTIMATORS",
+    "Study",
     "StudyModel",
     "STUDIES",
     "model_of",
@@ -129,6 +127,7 @@ ESTIMATORS: dict[str, Estimator] = {
 }
 PAPER_ESTIMATORS = tuple(e for e in ESTIMATORS if ESTIMATORS[e].prior is None)  # the default study
 SE2_ESTIMATORS = ("batch", "btgp/1", "btgp/1 vector-space prior")  # the default study on SE(2) tasks
+RIGID_ESTIMATORS = ("batch", "btgp")  # a 3-D study's: paper.rigid.solve_rigid's methods
 
 
 def consistency_setup() -> PaperSetup:
@@ -154,20 +153,20 @@ def consistency_se2_setup(turn: float = 0.0, se2_residual: str = "local-variable
     )
 
 
-@dataclass(frozen=True)
-class StudyModel:
-    """A model a study draws its tasks from, by the name ``steam-ref consistency --prior`` gives it: its set-up
-    (``setup(**options)``), the estimators its study runs, and the options ``setup`` takes (the command's names)."""
+class Study(Protocol):
+    """A consistency study to the command, the sweep and :func:`summarize`: its task's size, its estimators, the kinds
+    of state it scores (name → d), its parameters (JSON), run ``index`` (:meth:`ConsistencyStudy.run`)."""
 
-    setup: Callable[..., PaperSetup]
-    estimators: tuple[str, ...]
-    options: tuple[str, ...] = ()
-
-
-STUDIES: dict[str, StudyModel] = {
-    "wnoa": StudyModel(consistency_setup, PAPER_ESTIMATORS),
-    "se2": StudyModel(consistency_se2_setup, SE2_ESTIMATORS, ("turn", "se2_residual")),
-}
+    @property
+    def n_steps(self) -> int: ...
+    @property
+    def n_landmarks(self) -> int: ...
+    @property
+    def estimators(self) -> tuple[str, ...]: ...
+    @property
+    def kinds(self) -> dict[str, int]: ...
+    def describe(self) -> dict: ...
+    def run(self, index: int) -> dict: ...
 
 
 @dataclass(frozen=True)
@@ -179,6 +178,7 @@ class ConsistencyStudy:
     seed: int = 0  # the root of np.random.SeedSequence(seed).spawn(n_seeds)
     setup: PaperSetup = field(default_factory=consistency_setup)
     estimators: tuple[str, ...] = PAPER_ESTIMATORS
+    kinds: ClassVar[dict[str, int]] = KINDS  # the kinds of state it scores
 
     def __post_init__(self) -> None:
         for name in ("n_steps", "n_landmarks"):
@@ -211,6 +211,62 @@ class ConsistencyStudy:
         seed = np.random.SeedSequence(self.seed, spawn_key=(index,))  # = SeedSequence(seed).spawn(n)[index]
         return sample_from_model(self.n_steps, self.n_landmarks, seed, **model_of(self.setup))
 
+    def run(self, index: int) -> dict:
+        """Run ``index``: {estimator: {'pose' | 'velocity' | 'landmark': [NEES of each], 'warnings': [...]}}."""
+        task = self.sample(index)
+        out: dict = {}
+        stream = None  # BTGP/1's final estimate: the batch optimum's second start
+        names = sorted(self.estimators, key=lambda n: ESTIMATORS[n] != ESTIMATORS["btgp/1"])  # BTGP/1 first
+        for name in names:
+            estimator = ESTIMATORS[name]
+            setup = self.setup.replace(qc=estimator.qc_scale * self.setup.qc, prior=estimator.prior or self.setup.prior)
+            readings = Readings.from_dataset(task.data, setup)
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                same = estimator.qc_scale == 1.0 and estimator.skip == 1
+                trajectory, ids = _solve(estimator, readings, setup, stream if same else None)
+                if ESTIMATORS[name] == ESTIMATORS["btgp/1"]:
+                    stream = trajectory.solver.estimate()
+                times, states = trajectory.at_every_pose()
+                cov = trajectory.covariances([L(i) for i in ids])
+            truth = task.prior.world_states(task.states[: len(times)])  # the truth's pose and velocity, world frame
+            marks = np.array([trajectory.solver.estimate_of(L(i)) for i in ids]).reshape(-1, 2)
+            true_marks = np.array([task.landmarks[i] for i in ids]).reshape(-1, 2)
+            error = trajectory.prior.errors(states, truth)  # in the coordinates of the estimator's covariance
+            pose_error, velocity_error = error[:, :3], error[:, 3:]
+            out[name] = {
+                "pose": nees(pose_error, cov.pose).tolist(),
+                "velocity": nees(velocity_error, cov.velocity).tolist(),
+                "landmark": nees(marks - true_marks, cov.landmark).tolist(),
+                "warnings": sorted({str(w.message)[:200] for w in caught}),
+            }
+        return {name: out[name] for name in self.estimators}
+
+
+@dataclass(frozen=True)
+class StudyModel:
+    """A model a study draws its tasks from, by the name ``steam-ref consistency --prior`` gives it: its set-up
+    (``setup(**options)``), the estimators its study runs, the options ``setup`` takes (the command's names), and
+    the study (``study(n_steps=, n_landmarks=, seed=, setup=, estimators=)``, a :class:`Study`)."""
+
+    setup: Callable[..., Any]
+    estimators: tuple[str, ...]
+    options: tuple[str, ...] = ()
+    study: Callable[..., Study] = ConsistencyStudy
+
+
+STUDIES: dict[str, StudyModel] = {
+    "wnoa": StudyModel(consistency_setup, PAPER_ESTIMATORS),
+    "se2": StudyModel(consistency_se2_setup, SE2_ESTIMATORS, ("turn", "se2_residual")),
+    "se3": StudyModel(RigidSetup, RIGID_ESTIMATORS, study=RigidStudy),
+    # WNOJ's Qc is on the jerk, and a first acceleration off by σ turns the twist by 40 σ in 40 steps: both smaller
+    "se3-wnoj": StudyModel(
+        functools.partial(RigidSetup, "se3-wnoj", RIGID_QC / 1000, {"first_twist": 0.005}),
+        RIGID_ESTIMATORS,
+        study=RigidStudy,
+    ),
+}
+
 
 def model_of(setup: PaperSetup) -> dict:
     """The model a set-up's estimator assumes, as :func:`~steam_ref.datasets.sample_from_model`'s keywords."""
@@ -229,7 +285,8 @@ def model_of(setup: PaperSetup) -> dict:
 def _solve(
     estimator: Estimator, readings: Readings, setup: PaperSetup, start: Values | None = None
 ) -> tuple[Trajectory, list[int]]:
-    """The estimator's final trajectory (estimates and covariances at any time) and its landmarks' ids.
+    """The estimator's final trajectory (estimates and covariances at any time) and its landmarks' ids (BTGP/1 runs
+    first, so that its estimate can be the batch optimum's second start).
 
     The batch optimum is the lower of the minima Gauss-Newton reaches from a sequential batch (chunks of
     10 poses) and from ``start`` (BTGP/1's estimate of the same problem, when given): a descent from
@@ -252,39 +309,9 @@ def _solve(
 
 
 @limited
-def run_seed(study: ConsistencyStudy, index: int) -> dict:
-    """One Monte Carlo run: task ``index``, each estimator's NEES of every pose, velocity and landmark.
-
-    Returns {estimator: {'pose': [...], 'velocity': [...], 'landmark': [...], 'converged': bool}} (JSON).
-    """
-    task = study.sample(integer("index", index, minimum=0))  # SeedSequence's spawn keys are >= 0
-    out: dict = {}
-    stream = None  # BTGP/1's final estimate: the batch optimum's second start
-    names = sorted(study.estimators, key=lambda n: ESTIMATORS[n] != ESTIMATORS["btgp/1"])  # BTGP/1 first
-    for name in names:
-        estimator = ESTIMATORS[name]
-        setup = study.setup.replace(qc=estimator.qc_scale * study.setup.qc, prior=estimator.prior or study.setup.prior)
-        readings = Readings.from_dataset(task.data, setup)
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always")
-            same = estimator.qc_scale == 1.0 and estimator.skip == 1
-            trajectory, ids = _solve(estimator, readings, setup, stream if same else None)
-            if ESTIMATORS[name] == ESTIMATORS["btgp/1"]:
-                stream = trajectory.solver.estimate()
-            times, states = trajectory.at_every_pose()
-            cov = trajectory.covariances([L(i) for i in ids])
-        truth = task.prior.world_states(task.states[: len(times)])  # the truth's pose and velocity, world frame
-        marks = np.array([trajectory.solver.estimate_of(L(i)) for i in ids]).reshape(-1, 2)
-        true_marks = np.array([task.landmarks[i] for i in ids]).reshape(-1, 2)
-        error = trajectory.prior.errors(states, truth)  # in the coordinates of the estimator's covariance
-        pose_error, velocity_error = error[:, :3], error[:, 3:]
-        out[name] = {
-            "pose": nees(pose_error, cov.pose).tolist(),
-            "velocity": nees(velocity_error, cov.velocity).tolist(),
-            "landmark": nees(marks - true_marks, cov.landmark).tolist(),
-            "warnings": sorted({str(w.message)[:200] for w in caught}),
-        }
-    return {name: out[name] for name in study.estimators}
+def run_seed(study: Study, index: int) -> dict:
+    """One Monte Carlo run of ``study``: task ``index``, each estimator's NEES of each kind of state (JSON)."""
+    return study.run(integer("index", index, minimum=0))  # SeedSequence's spawn keys are >= 0
 
 
 def _nees_list(value: object, what: str, length: int | None, most: int) -> None:
@@ -299,7 +326,7 @@ def _nees_list(value: object, what: str, length: int | None, most: int) -> None:
             raise SteamError(f"{what}[{k}] is {json.dumps(v)[:40]}: a NEES is a finite number >= 0")
 
 
-def check_result(study: ConsistencyStudy, item: object, result: object) -> None:
+def check_result(study: Study, item: object, result: object) -> None:
     """SteamError saying what is wrong with ``result``, read back as the result of run ``item`` of ``study``
     (:func:`run_seed`'s output): every estimator of the study, each with one NEES per pose and velocity
     (``n_steps + 1``), at most one per landmark (an unseen one has none), each a finite number >= 0, and its
@@ -316,7 +343,7 @@ def check_result(study: ConsistencyStudy, item: object, result: object) -> None:
         row = result[name]
         if not isinstance(row, dict):
             raise SteamError(f"estimator {name!r}: {json.dumps(row)[:40]} is not an object of NEES lists")
-        for kind in KINDS:
+        for kind in study.kinds:
             length, most = (None, study.n_landmarks) if kind == "landmark" else (n_poses, n_poses)
             _nees_list(row.get(kind), f"estimator {name!r}: {kind}", length, most)
         notes = row.get("warnings")
@@ -324,9 +351,11 @@ def check_result(study: ConsistencyStudy, item: object, result: object) -> None:
             raise SteamError(f"estimator {name!r}: warnings {json.dumps(notes)[:40]} is not a list of text")
 
 
-def summarize(results: dict[int, dict], estimators: tuple[str, ...], level: float = 0.95) -> dict:
-    """ANEES of each estimator and kind over the runs ``results`` (index → :func:`run_seed`'s output),
-    with its band and verdict; the per-pose ANEES too (for the plot)."""
+def summarize(
+    results: dict[int, dict], estimators: tuple[str, ...], level: float = 0.95, kinds: dict[str, int] = KINDS
+) -> dict:
+    """ANEES of each estimator and kind (``kinds``: a study's, name → d) over the runs ``results`` (index →
+    :func:`run_seed`'s output), with its band and verdict; the per-pose ANEES too (for the plot)."""
     order = sorted(results)
     for i in order:  # every run has every estimator: an ANEES over fewer runs would not be the one reported
         missing = [name for name in estimators if not isinstance(results[i], dict) or name not in results[i]]
@@ -336,7 +365,7 @@ def summarize(results: dict[int, dict], estimators: tuple[str, ...], level: floa
     out: dict = {"n_seeds": n, "level": level, "estimators": {}}
     for name in estimators:
         row: dict = {}
-        for kind, d in KINDS.items():
+        for kind, d in kinds.items():
             runs = [np.asarray(results[i][name][kind]) for i in order]
             anees = float(np.mean([r.mean() for r in runs]))  # the runs' means, averaged
             band = chi2_band(n, d, level)
@@ -357,7 +386,7 @@ def summarize(results: dict[int, dict], estimators: tuple[str, ...], level: floa
                 per_state = np.mean(runs, axis=0)
                 inside = (per_state >= band[0]) & (per_state <= band[1])
                 row[kind] |= {"per_state": per_state.tolist(), "inside_fraction": float(np.mean(inside))}
-        verdicts = [row[k]["verdict"] for k in KINDS]
+        verdicts = [row[k]["verdict"] for k in kinds]
         # True, False, or None when no kind is inconsistent but some are inconclusive (too few runs)
         row["consistent"] = (
             True

@@ -1,5 +1,6 @@
 """A run on the states of a group of rigid motions (SE(3)): timed readings to factors, solved in batch, by BTGP or by
-a fixed-lag smoother; the trajectory read at held-out times; NEES on a task drawn from the model.
+a fixed-lag smoother; the trajectory read at held-out times; NEES on tasks drawn from the model (:class:`RigidStudy`,
+the 3-D study of ``steam-ref consistency``).
 
 The front end (:func:`steps`) is the planar one's idea on :class:`~steam_ref.datasets.rigid.RigidReadings`: a state
 at each of the data's state times, the prior's factor between consecutive states (``MotionPrior.prior_factor``
@@ -13,24 +14,27 @@ either residual, WNOJ or Singer's model runs the same way (no branch on a prior 
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from itertools import compress
 
 import numpy as np
 from numpy.typing import NDArray
 
+from ..arguments import integer
 from ..batch import gauss_newton
 from ..bayes_tree import FixedLagSmoother, IncrementalSolver
-from ..datasets.rigid import RigidReadings, sample_rigid_task
+from ..datasets.rigid import RIGID_NOISE, RigidReadings, RigidSample, sample_rigid_task
 from ..errors import SteamError
-from ..evaluate import chi2_band, nees, runs_needed, verdict
+from ..evaluate import nees
 from ..factors import Factor, LieStatePrior, PriorFactor
 from ..factors.point_readings import AngularVelocityReading, PointReading, PositionReading, RangeReading
 from ..graph import FactorGraph
 from ..lie.points import position
 from ..lie.state import group_state
 from ..linear.threads import limited
-from ..motion import MotionPrior
+from ..motion import MotionPrior, motion_prior
 from ..variables import Key, L, Values, X
 
 __all__ = [
@@ -41,7 +45,9 @@ __all__ = [
     "held_out_errors",
     "straight_line_errors",
     "rigid_nees",
-    "rigid_consistency",
+    "RIGID_QC",
+    "RigidSetup",
+    "RigidStudy",
 ]
 
 METHODS = ("batch", "btgp", "fixed-lag")
@@ -103,18 +109,23 @@ def steps(data: RigidReadings, prior: MotionPrior, initial: NDArray | None = Non
         factors = [first_state_prior(data)] if i == 0 else [prior.prior_factor(X(i - 1), X(i), t[i] - t[i - 1])]
         new: dict[Key, NDArray] = {}
         for table in TABLES:
-            rows = getattr(data, table)
-            for row in rows[slot[table] == i]:
+            rows = getattr(data, table)[slot[table] == i]
+            inners = [_reading(data, table, row, X(i)) for row in rows]
+            between = np.abs(rows[:, 0] - t[i]) > _AT  # read between states i-1 and i: moved in one call
+            moved = iter(_between(prior, list(compress(inners, between)), i, t, rows[between, 0]))
+            for row, inner, interpolated in zip(rows, inners, between, strict=True):
                 if table in ("ranges", "points") and int(row[1]) not in seen:
                     j = int(row[1])
                     seen.add(j)
                     new[L(j)] = survey[j]
                     factors.append(PriorFactor.create(L(j), survey[j], data.sigmas["landmark"]))  # [YIB Eq. 4]
-                inner = _reading(data, table, row, X(i))
-                if abs(row[0] - t[i]) > _AT:  # between states i-1 and i  [YIB Eq. 29]
-                    inner = prior.interpolated_factor(inner, X(i - 1), X(i), t[i - 1], t[i], row[0])
-                factors.append(inner)
+                factors.append(next(moved) if interpolated else inner)
         yield Step(i, np.asarray(value, dtype=float), factors, new)
+
+
+def _between(prior: MotionPrior, inners: list[Factor], i: int, t: NDArray, taus: NDArray) -> list[Factor]:
+    """The readings ``inners`` at ``taus``, between states i-1 and i, moved onto them.  [YIB Eq. 29]"""
+    return prior.interpolated_factors(inners, X(i - 1), X(i), t[i - 1], t[i], taus) if inners else []
 
 
 @dataclass
@@ -230,29 +241,80 @@ def rigid_nees(run: RigidRun, truth: NDArray, prior: MotionPrior) -> dict[str, N
     }
 
 
-def rigid_consistency(
-    prior: MotionPrior, n_seeds: int, *, n_steps: int = 40, n_landmarks: int = 8, methods: tuple[str, ...] = METHODS[:2]
-) -> dict:
-    """ANEES of each method's poses and twists over ``n_seeds`` tasks drawn from ``prior``
-    (:func:`~steam_ref.datasets.rigid.sample_rigid_task`, seeds 0, 1, ...), each with its χ² band and verdict
-    (:mod:`steam_ref.evaluate`; "consistent" needs ``runs_needed`` seeds): as ``paper.consistency`` does on a plane."""
-    runs: dict[str, dict[str, list[float]]] = {m: {"pose": [], "twist": []} for m in methods}
-    for seed in range(n_seeds):
-        task = sample_rigid_task(prior, n_steps, n_landmarks, seed)
-        start = None  # the batch optimum descends from BTGP's estimate when BTGP ran (the planar study's second start)
-        for method in sorted(methods, key=lambda m: m != "btgp"):
-            run = solve_rigid(task.data, prior, method, initial=start if method == "batch" else None)
-            start = run.states if method == "btgp" else start
-            scores = rigid_nees(run, task.states, prior)
-            for block, values in scores.items():
-                runs[method][block].append(float(np.mean(values)))
-    d = group_state(prior.kind).group.dim
-    band, needed = chi2_band(n_seeds, d), runs_needed(d)
-    return {
-        method: {
-            block: {"anees": float(np.mean(v)), "band": list(band), "runs_needed": needed,
-                    "verdict": verdict(float(np.mean(v)), band, enough_runs=n_seeds >= needed)}
-            for block, v in blocks.items()
+RIGID_QC = np.diag([0.02, 0.005, 0.005, 0.001, 0.001, 0.002])  # a drawn task's Qc on SE(3) (docs/experiments.md)
+
+
+@dataclass(frozen=True)
+class RigidSetup:
+    """The model a 3-D study draws its tasks from and its estimators assume: a prior of the table on a group of rigid
+    motions (``prior``, a name of ``MOTION_PRIORS``) with ``qc``; the readings' and first state's sigmas are
+    ``RIGID_NOISE`` with ``noise`` in place of its entries."""
+
+    prior: str = "se3"
+    qc: NDArray = field(default_factory=lambda: RIGID_QC.copy())
+    noise: dict[str, float] = field(default_factory=dict)
+
+    def motion_prior(self) -> MotionPrior:
+        return motion_prior(self.prior, self.qc)
+
+
+@dataclass(frozen=True)
+class RigidStudy:
+    """A Monte Carlo consistency study on 3-D tasks (``steam-ref consistency --prior se3``): each run draws task
+    ``index`` from the set-up's model (:func:`~steam_ref.datasets.rigid.sample_rigid_task`, child ``index`` of
+    SeedSequence(seed)), solves it with each of ``estimators`` (methods of :func:`solve_rigid`: BTGP first, then the
+    batch optimum descended from BTGP's estimate, the planar study's second start) and scores each state's pose and
+    twist by its NEES (:func:`rigid_nees`). The same interface as the planar ``paper.consistency.ConsistencyStudy``."""
+
+    n_steps: int = 40
+    n_landmarks: int = 8
+    seed: int = 0
+    setup: RigidSetup = field(default_factory=RigidSetup)
+    estimators: tuple[str, ...] = ("batch", "btgp")
+
+    def __post_init__(self) -> None:
+        for name in ("n_steps", "n_landmarks"):
+            integer(f"RigidStudy.{name}", getattr(self, name), 1)
+        integer("RigidStudy.seed", self.seed, 0)
+        unknown = [e for e in self.estimators if e not in METHODS[:2]]  # fixed-lag keeps no marginal of a past state
+        if unknown or not self.estimators:
+            raise SteamError(f"unknown estimator {unknown[0] if unknown else None!r}; use some of batch, btgp")
+
+    @property
+    def kinds(self) -> dict[str, int]:
+        """Each kind of state the study scores, with its dimension d (the group's)."""
+        d = group_state(self.setup.motion_prior().kind).group.dim
+        return {"pose": d, "twist": d}
+
+    def describe(self) -> dict:
+        """The study's parameters (a resumed file must have been written by the same study)."""
+        return {
+            "n_steps": self.n_steps,
+            "n_landmarks": self.n_landmarks,
+            "seed": self.seed,
+            "setup": "rigid-model",
+            "prior": self.setup.prior,
+            "qc": self.setup.qc.tolist(),
+            "noise": RIGID_NOISE | self.setup.noise,
+            "estimators": list(self.estimators),
         }
-        for method, blocks in runs.items()
-    }  # fmt: skip
+
+    def sample(self, index: int) -> RigidSample:
+        seed = np.random.SeedSequence(self.seed, spawn_key=(index,))  # = SeedSequence(seed).spawn(n)[index]
+        return sample_rigid_task(
+            self.setup.motion_prior(), self.n_steps, self.n_landmarks, seed, noise=self.setup.noise
+        )
+
+    def run(self, index: int) -> dict:
+        """Run ``index``: {estimator: {'pose': [NEES of each state], 'twist': [...], 'warnings': [...]}} (JSON)."""
+        task, prior = self.sample(index), self.setup.motion_prior()
+        out, start = {}, None
+        for method in sorted(self.estimators, key=lambda m: m != "btgp"):
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                solved = solve_rigid(task.data, prior, method, initial=start if method == "batch" else None)
+                scores = rigid_nees(solved, task.states, prior)
+            start = solved.states if method == "btgp" else start
+            out[method] = {k: v.tolist() for k, v in scores.items()}
+            out[method]["warnings"] = sorted({str(w.message)[:200] for w in caught})
+        return {name: out[name] for name in self.estimators}
