@@ -2,7 +2,7 @@
 """Check GTSAM 4.3 against the steam_ref conformance kit: an implementation that is not steam_ref.
 
     python examples/conformance_gtsam.py RESULTS_DIR [--kit KIT_DIR]
-    steam-ref conformance check RESULTS_DIR --allow-missing
+    steam-ref conformance check RESULTS_DIR --allow-missing --conventions signed-half-turn
 
 Reads the kit's cases.json files (JSON only), computes every case GTSAM can, and writes
 RESULTS_DIR/<suite>/results.json. Nothing of steam_ref is used but the path of its shipped kit.
@@ -19,10 +19,11 @@ the paper's runs) are left
 out, and ``check --allow-missing`` lists them as skipped.
 
 The ``se2`` suite (kit v4) uses ``gtsam.Pose2`` (Expmap, Logmap, ExpmapDerivative, LogmapDerivative, between
-with its Jacobians, AdjointMap) and ``WnoaMotionFactorPose2`` (its residual and cost), with the kit's half-turn
-convention (+π where GTSAM's Rot2 keeps -π). Left out: the cases near φ = 0 (Pose2's closed forms lose up to
-2.6e-5 there), every case needing the prior's pose Jacobians (a truncated series in GTSAM), the simplified model
-(GTSAM has none), interpolation, Gauss-Newton and ISAM2 on SE(2) (they use those Jacobians). Results name the kit's version.
+with its Jacobians, AdjointMap) and ``WnoaMotionFactorPose2`` (its residual and cost), its angles as GTSAM gives
+them (Rot2 keeps atan2's sign at the half turn): check with ``--conventions signed-half-turn``. Left out: the
+cases near φ = 0 (Pose2's closed forms lose up to 2.6e-5 there), every case needing the prior's pose Jacobians (a
+truncated series in GTSAM), the simplified model (GTSAM has none), interpolation, Gauss-Newton and ISAM2 on SE(2)
+(they use those Jacobians). Results name the kit's version.
 """
 
 from __future__ import annotations
@@ -546,13 +547,12 @@ SE2_LEFT_OUT = {  # what GTSAM 4.3 does not compute exactly, so the cases are no
 
 
 def _kit_pose(x, y, theta) -> gtsam.Pose2:
-    """A Pose2 with the kit's heading convention: a half turn is +π (GTSAM's Rot2 keeps -π as given)."""
-    return gtsam.Pose2(x, y, np.pi if theta <= -np.pi else theta)
+    """A Pose2 at the kit's [x, y, θ]."""
+    return gtsam.Pose2(x, y, theta)
 
 
 def _pose_vec(p: gtsam.Pose2) -> np.ndarray:
-    theta = p.theta()
-    return np.array([p.x(), p.y(), np.pi if theta <= -np.pi else theta])  # the kit's (-π, π]
+    return np.array([p.x(), p.y(), p.theta()])
 
 
 def _log(x) -> np.ndarray:

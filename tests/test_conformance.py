@@ -292,7 +292,7 @@ def test_gtsam_passes_every_case_it_computes(tmp_path, capsys):
         cwd=ROOT,
     )
     assert run.returncode == 0, run.stderr
-    code, out, _ = cli(capsys, "check", tmp_path, "--allow-missing")
+    code, out, _ = cli(capsys, "check", tmp_path, "--allow-missing", "--conventions", "signed-half-turn")
     last = out.strip().splitlines()[-1]
     assert code == 0 and " passed, 0 failed" in last and int(last.split()[0]) >= 50, out
     computed = {s: set(json.loads((tmp_path / s / "results.json").read_text())["cases"]) for s in GTSAM_SUITES}
