@@ -7,8 +7,8 @@ thread by itself, ``$STEAM_REF_BLAS_THREADS`` to change it: :mod:`steam_ref.line
 per run, then one line of targets:
 
 - ``synthetic``, ``--steps 2000`` and ``--steps 20000`` with ``--lag 30`` (and ``--steps 2000`` without a
-  lag, for reference): peak RSS (MB), update time medians of the first and the last 1,000 updates, RMSE,
-  states marginalized, peak window;
+  lag, for reference): peak RSS (MB) of the whole process (its scores and output included), update time medians
+  of the first and the last 1,000 updates, RMSE, states marginalized, peak window;
 - ``plaza`` BTGP/1 without a lag, with ``--lag 60`` (60 s of the file's stamps, about 300 poses 0.2 s apart,
   whatever clock the preset's GP prior runs on), and with ``--lag 60 --lag-history`` (the forgotten states'
   conditionals kept and the past smoothed from the final window at the end: ``rmse_m`` is then the smoothed
@@ -112,7 +112,9 @@ def spy(self, *args, **kwargs):
 StreamingEstimator.run, command._run_dataset = spy, read
 code = cli.main(json.loads(sys.argv[1]))
 np.save(sys.argv[2], kept["result"].update_seconds)
-print(json.dumps({"asked_mb": round(sum(kept["asked"].values()), 3), "asked_parts_mb": kept["asked"]}))
+import resource
+peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024  # the whole process's, scores and output included
+print(json.dumps({"asked_mb": round(sum(kept["asked"].values()), 3), "asked_parts_mb": kept["asked"], "peak_rss_mb": peak}))
 sys.exit(code)
 """
 
