@@ -16,11 +16,12 @@ Every covariance is that of the state's tangent under the prior's kind: on SE(2)
 qc)``) the right tangent at the estimate, its pose block in the *body frame* (``lie.state``;
 ``lie.world_position_covariance`` turns its position block to the world frame).
 
-What it reads (:class:`Estimates`, a protocol): ``estimate_of(key)`` and ``estimate()`` (and, where the solver has it,
-``estimates_of(keys)``: the states at every pose are read a block at a time), and, only when a covariance is asked for, ``marginal_covariances``, ``joint_covariance`` and ``joint_covariances``. Every solver's
-result has them, each through its own public methods: a :class:`~steam_ref.batch.BatchResult` (its covariances
-are blocks of 𝓘⁻¹ with every factor linearized at its estimate, one sparse factorization per query; a result
-that kept no factors says so), an :class:`~steam_ref.bayes_tree.IncrementalSolver` (from its Bayes tree) and a
+What it reads (:class:`Estimates`, a protocol): ``estimate_of(key)`` and ``estimate()`` (and, where the solver has
+it, ``estimates_of(keys)``: the states at every pose are read a block at a time), and, only when a covariance is
+asked for, ``marginal_covariances``, ``joint_covariance`` and ``joint_covariances``. Every solver's result has them,
+each through its own public methods: a :class:`~steam_ref.batch.BatchResult` (its covariances are blocks of 𝓘⁻¹ with
+every factor linearized at its estimate, one sparse factorization per query; a result that kept no factors says so),
+an :class:`~steam_ref.bayes_tree.IncrementalSolver` (from its Bayes tree) and a
 :class:`~steam_ref.bayes_tree.FixedLagSmoother` (its window). A query that needs a state a fixed-lag smoother has
 marginalized raises :class:`~steam_ref.errors.UnknownVariableError` naming the time, the state and the update that
 forgot it: the trajectory reads the window, not a past the smoother no longer holds (with ``keep_history=True``,
