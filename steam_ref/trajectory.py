@@ -16,11 +16,12 @@ Every covariance is that of the state's tangent under the prior's kind: on SE(2)
 qc)``) the right tangent at the estimate, its pose block in the *body frame* (``lie.state``;
 ``lie.world_position_covariance`` turns its position block to the world frame).
 
-What it reads (:class:`Estimates`, a protocol): ``estimate_of(key)`` and ``estimate()``, and, only when a
-covariance is asked for, ``marginal_covariances``, ``joint_covariance`` and ``joint_covariances``. Every solver's
-result has them, each through its own public methods: a :class:`~steam_ref.batch.BatchResult` (its covariances
-are blocks of 𝓘⁻¹ with every factor linearized at its estimate, one sparse factorization per query; a result
-that kept no factors says so), an :class:`~steam_ref.bayes_tree.IncrementalSolver` (from its Bayes tree) and a
+What it reads (:class:`Estimates`, a protocol): ``estimate_of(key)`` and ``estimate()`` (and, where the solver has
+it, ``estimates_of(keys)``: the states at every pose are read a block at a time), and, only when a covariance is
+asked for, ``marginal_covariances``, ``joint_covariance`` and ``joint_covariances``. Every solver's result has them,
+each through its own public methods: a :class:`~steam_ref.batch.BatchResult` (its covariances are blocks of 𝓘⁻¹ with
+every factor linearized at its estimate, one sparse factorization per query; a result that kept no factors says so),
+an :class:`~steam_ref.bayes_tree.IncrementalSolver` (from its Bayes tree) and a
 :class:`~steam_ref.bayes_tree.FixedLagSmoother` (its window). A query that needs a state a fixed-lag smoother has
 marginalized raises :class:`~steam_ref.errors.UnknownVariableError` naming the time, the state and the update that
 forgot it: the trajectory reads the window, not a past the smoother no longer holds (with ``keep_history=True``,
@@ -64,6 +65,7 @@ class Estimates(Protocol):
 
 
 _READS = ("estimate_of", "estimate")  # what every query needs; the covariance queries are checked when called
+BLOCK = 1024  # states read at once by Trajectory.at_every_pose
 
 
 @dataclass(frozen=True)
@@ -220,23 +222,31 @@ class Trajectory:
 
     def at_every_pose(self) -> tuple[NDArray, NDArray]:
         """Times (m,) and states (m, n) at every pose of the span, from the first state's pose to the last's
-        (m = states[-1] - states[0] + 1; row k is pose states[0] + k); reads the whole estimate once."""
+        (m = states[-1] - states[0] + 1; row k is pose states[0] + k). The states are read :data:`BLOCK` at a time
+        (``estimates_of(keys)``, where the solver has it; else ``estimate()`` once): beside the answer, memory for a
+        block, not a copy of the whole estimate (a fixed-lag run's 20,000 forgotten states made one of 7 MB)."""
         solved = self.states
         if not solved:
             return np.zeros(0), np.zeros((0, self.n))
-        values, times, first = self.solver.estimate(), self.model_times, solved[0]
-        if gone := [i for i in solved if X(i) not in values]:
-            raise UnknownVariableError(
-                f"the trajectory's every pose needs {X(gone[0])!r} (t={self.times[gone[0]]:g} s), which the solver "
-                "does not hold"
-            )
+        times, first, read = self.model_times, solved[0], getattr(self.solver, "estimates_of", None)
+        whole = None if callable(read) else self.solver.estimate()
         out = np.empty((solved[-1] + 1 - first, self.n))
-        for a, b in itertools.pairwise(solved):
-            xa, xb = values[X(a)], values[X(b)]
-            out[a - first] = xa
-            for p in range(a + 1, b):
-                out[p - first] = self._between(a, b, times[p], xa, xb)  # [YIB Eq. 18]
-        out[-1] = values[X(solved[-1])]
+        a, xa = solved[0], np.zeros(0)
+        for start in range(0, len(solved), BLOCK):
+            poses = solved[start : start + BLOCK]
+            keys = [X(i) for i in poses]
+            values = self._read("at every pose", read, keys) if whole is None else whole
+            if gone := [k for k in keys if k not in values]:
+                raise UnknownVariableError(
+                    f"the trajectory's every pose needs {gone[0]!r} (t={self.times[gone[0].index]:g} s), which the "
+                    "solver does not hold"
+                )
+            for b, key in zip(poses, keys, strict=True):
+                xb = values[key]
+                out[b - first] = xb
+                for p in range(a + 1, b):
+                    out[p - first] = self._between(a, b, times[p], xa, xb)  # [YIB Eq. 18]
+                a, xa = b, xb
         return self.times[first : solved[-1] + 1].copy(), out
 
     def covariances(self, landmarks: Sequence[Key]) -> Covariances:

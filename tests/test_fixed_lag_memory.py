@@ -8,6 +8,7 @@ live ones only), and the update that forgot each variable (to name it in an erro
 
 from __future__ import annotations
 
+import gc
 import tracemalloc
 from dataclasses import dataclass
 from typing import ClassVar
@@ -17,8 +18,13 @@ import pytest
 
 from steam_ref.bayes_tree import FixedLagSmoother
 from steam_ref.bayes_tree.state import SolverState
+from steam_ref.datasets import generate_synthetic
 from steam_ref.factors import Factor
-from steam_ref.variables import X
+from steam_ref.paper.frontend import FrontEnd
+from steam_ref.paper.presets import PaperSetup
+from steam_ref.paper.readings import Readings
+from steam_ref.trajectory import BLOCK, Trajectory
+from steam_ref.variables import Values, X
 
 
 @dataclass(frozen=True, eq=False)
@@ -114,3 +120,99 @@ def test_the_memory_a_smoother_holds_does_not_grow_by_an_object_a_step():
     (early, early_bytes), (late, late_bytes) = seen[497], seen[4_998]
     assert late == early, {k: (early[k], late[k]) for k in early if early[k] != late[k]}  # (grown: early, late)
     assert (late_bytes - early_bytes) / 4_501 <= 32, f"{(late_bytes - early_bytes) / 4_501:.0f} bytes a step"
+
+
+# --- a lagged stream, besides its smoother: what it reads, records and writes ------------------------------------
+
+
+def _generation_room(n_steps: int) -> int:
+    """Peak bytes traced while generating the task of ``n_steps`` (a landmark every ~5 steps, as ``steam-ref run
+    --steps`` makes it), less the arrays of the data set it returns."""
+    tracemalloc.start()
+    try:
+        data = generate_synthetic(n_steps=n_steps, n_landmarks=round(n_steps * 298 / 1500), seed=0)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    tables = (data.ground_truth, data.odometry, data.dead_reckoning, data.landmarks, data.ranges)
+    return peak - sum(a.nbytes for a in tables)
+
+
+def test_generating_a_long_task_takes_little_more_room_than_a_short_one_beside_the_data_set():
+    """Each landmark's 64 candidate places, their clearance from the path and the distances to the nearest landmarks
+    are formed a block of rows at a time: beside the data set it returns, generating 20,000 steps takes at most 1.5x
+    the room of 2,000 (made whole, the candidates took 16 MB at 20,000 steps: 2.4x)."""
+    short, long = _generation_room(2_000), _generation_room(20_000)
+    assert long <= 1.5 * short, f"{short / 1e6:.1f} MB at 2,000 steps, {long / 1e6:.1f} MB at 20,000"
+
+
+class Record:
+    """The estimates of states X(0), X(2), X(4), ... as rows of one array, formed when asked (as a lagged stream's
+    forgotten states are: a view of its record); it counts the most keys asked at once."""
+
+    def __init__(self, n_poses: int):
+        self.rows = np.random.default_rng(3).normal(size=(n_poses, 6))
+        self.most = 0
+
+    def estimate_of(self, key):
+        return self.rows[key.index]
+
+    def estimates_of(self, keys):
+        self.most = max(self.most, len(keys))
+        return {k: self.rows[k.index] for k in keys}
+
+    def estimate(self):
+        raise AssertionError("the trajectory asked for the whole estimate at once")
+
+
+class Whole:
+    """The same estimates, read as a whole only (a solver without ``estimates_of``)."""
+
+    def __init__(self, record: Record):
+        self.record = record
+
+    def estimate_of(self, key):
+        return self.record.rows[key.index]
+
+    def estimate(self):
+        return Values.adopt({X(i): self.record.rows[i] for i in range(0, len(self.record.rows), 2)})
+
+
+def test_every_pose_of_a_long_trajectory_is_read_a_block_of_states_at_a_time():
+    """Beside the answer, ``at_every_pose`` holds a block of states at once (before, a copy of the whole estimate: 7 MB
+    of keys and arrays for a lagged run's 20,000 forgotten states), and answers bit for bit what a read of the whole
+    estimate answers (one pose in two is interpolated [YIB Eq. 18])."""
+    n_poses, qc = 20_001, np.diag([0.01, 0.01, 0.25])
+    record, times = Record(n_poses), np.arange(n_poses, dtype=float)
+    blocks = Trajectory(record, range(0, n_poses, 2), times, qc)
+    tracemalloc.start()
+    try:
+        start = tracemalloc.get_traced_memory()[0]
+        t, states = blocks.at_every_pose()
+        room = tracemalloc.get_traced_memory()[1] - start - t.nbytes - states.nbytes
+    finally:
+        tracemalloc.stop()
+    assert record.most == BLOCK < 10_001
+    assert room < 1e6, f"{room / 1e6:.1f} MB beside the answer"
+    t_whole, whole = Trajectory(Whole(record), range(0, n_poses, 2), times, qc).at_every_pose()
+    assert np.array_equal(t, t_whole) and np.array_equal(states, whole)
+    assert np.array_equal(states[::2], record.rows[::2])
+
+
+def test_a_stream_records_its_state_poses_in_eight_bytes_a_state():
+    """The front end's record of which poses have a state grows with the run: 8 bytes a state (a list of ints took
+    40), read back as the poses. (Its landmarks are forgotten at every step, as a lagged solver forgets them.)"""
+    setup = PaperSetup.synthetic()
+    front = FrontEnd(Readings.from_dataset(generate_synthetic(n_steps=2_000, n_landmarks=397, seed=0), setup), setup)
+    sizes = {}
+    for i in range(1, 2_002):
+        front.step()
+        front.landmarks.clear()
+        if i == 500:
+            tracemalloc.start()
+        if i in (500, 2_000):
+            gc.collect()
+            sizes[i] = tracemalloc.get_traced_memory()[0]
+    tracemalloc.stop()
+    assert (sizes[2_000] - sizes[500]) / 1_500 <= 12, f"{(sizes[2_000] - sizes[500]) / 1_500:.0f} bytes a step"
+    assert list(front.states) == list(range(2_001))

@@ -48,12 +48,16 @@ def scatter_landmarks(rng: np.random.Generator, path: NDArray, anchors: NDArray,
     n = len(anchors)
     bearing = rng.uniform(0, 2 * np.pi, (n, 64))
     radius = rng.uniform(lo, hi, (n, 64))
-    offsets = radius[..., None] * np.stack([np.cos(bearing), np.sin(bearing)], axis=-1)
-    points = path[anchors, None, :] + offsets
-    clearance = cKDTree(path).query(points.reshape(-1, 2))[0].reshape(n, 64)
-    ok = clearance >= lo
-    pick = np.where(ok.any(axis=1), ok.argmax(axis=1), clearance.argmax(axis=1))
-    return points[np.arange(n), pick]
+    tree, out = cKDTree(path), np.empty((n, 2))
+    for a in range(0, n, 512):  # rows at a time: the candidates' temporaries stay small (16 MB whole at 20,000 poses)
+        rows = slice(a, a + 512)
+        offsets = radius[rows, :, None] * np.stack([np.cos(bearing[rows]), np.sin(bearing[rows])], axis=-1)
+        points = path[anchors[rows], None, :] + offsets
+        clearance = tree.query(points.reshape(-1, 2))[0].reshape(-1, 64)
+        ok = clearance >= lo
+        pick = np.where(ok.any(axis=1), ok.argmax(axis=1), clearance.argmax(axis=1))
+        out[rows] = points[np.arange(len(pick)), pick]
+    return out
 
 
 def observed_landmarks(

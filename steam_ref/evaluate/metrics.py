@@ -133,6 +133,11 @@ def rpe_pairs(
     start; with ``all_pairs``, every i is paired with the later pose whose path distance from it is
     nearest to Δ, taken when within ``relative_tolerance`` Δ of it (evo's ``rel_delta_tol``, 0.1).
     """
+    return [(i, j) for i, j in _pairs(poses, delta, unit, all_pairs, relative_tolerance).tolist()]
+
+
+def _pairs(poses: object, delta: float, unit: str, all_pairs: bool, relative_tolerance: float) -> NDArray:
+    """The pairs of :func:`rpe_pairs` as an (m, 2) int array (a list of tuples took 120 bytes a pose)."""
     poses = planar_poses("poses", poses)
     n = len(poses)
     if not isinstance(all_pairs, (bool, np.bool_)):
@@ -142,9 +147,8 @@ def rpe_pairs(
     if unit == "poses":
         if not is_integer(delta) or delta < 1:
             raise SteamError(f"an RPE over poses needs delta, a positive integer, got {delta!r}")
-        starts = range(n) if all_pairs else range(0, n, int(delta))
-        pairs = [(i, i + int(delta)) for i in starts if i + int(delta) < n]
-        return pairs
+        starts = np.arange(0, n - int(delta), 1 if all_pairs else int(delta))  # each with i + Δ < n
+        return np.column_stack([starts, starts + int(delta)])
     if unit != "m":
         raise SteamError(f"unit must be 'poses' or 'm', got {unit!r}")
     if isinstance(delta, bool) or not isinstance(delta, (int, float, np.integer, np.floating)) or not delta > 0:
@@ -160,14 +164,14 @@ def rpe_pairs(
             k = int(np.argmin(np.abs(ahead - delta)))
             if abs(ahead[k] - delta) <= relative_tolerance * delta:
                 out.append((i, i + 1 + k))
-        return out
+        return np.array(out, dtype=int).reshape(-1, 2)
     marks, travelled = [0], 0.0
     for i in range(1, n):
         travelled += float(step[i - 1])
         if travelled >= delta:
             marks.append(i)
             travelled = 0.0
-    return list(itertools.pairwise(marks))
+    return np.array(list(itertools.pairwise(marks)), dtype=int).reshape(-1, 2)
 
 
 def rpe(
@@ -186,16 +190,7 @@ def rpe(
     truth, estimate = _same_shape(truth, estimate)
     if pairs_from not in ("truth", "estimate"):
         raise SteamError(f"pairs_from must be 'truth' or 'estimate', got {pairs_from!r}")
-    pairs = np.array(
-        rpe_pairs(
-            truth if pairs_from == "truth" else estimate,
-            delta,
-            unit=unit,
-            all_pairs=all_pairs,
-            relative_tolerance=relative_tolerance,
-        ),
-        dtype=int,
-    ).reshape(-1, 2)
+    pairs = _pairs(truth if pairs_from == "truth" else estimate, delta, unit, all_pairs, relative_tolerance)
     if not len(pairs):
         raise SteamError(
             f"no pair of poses delta={delta!r} {unit} apart in a trajectory of {len(truth)} poses "

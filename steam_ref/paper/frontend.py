@@ -38,6 +38,7 @@ streaming solvers (PB, PBVR, BTGP) consume the same steps, so the two agree by c
 
 from __future__ import annotations
 
+from array import array
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 
@@ -115,7 +116,7 @@ class FrontEnd:
         self.readings, self.setup, self.layout = readings, setup, layout
         self.prior = setup.motion_prior()  # what differs between priors, asked of one object
         self.n_poses = readings.n_poses if n_poses is None else min(int(n_poses), readings.n_poses)  # poses to process
-        self.states: list[int] = []  # poses with a state so far, increasing
+        self.states = array("q")  # poses with a state so far, increasing (8 bytes each: a long run's record)
         self.landmarks: set[int] = set()  # landmark ids with a variable
         self._bounds = readings.range_rows()
         self._bearing_bounds = readings.bearings.rows(readings.n_poses)

@@ -125,8 +125,8 @@ class StreamingEstimator:
         return self.front.n_poses
 
     @property
-    def states(self) -> list[int]:
-        """Poses with an estimated state so far, increasing."""
+    def states(self) -> array[int]:
+        """Poses with an estimated state so far, increasing (an ``array('q')``: 8 bytes a state)."""
         return self.front.states
 
     @property

@@ -15,6 +15,7 @@ so far (derivations Eq. 10.5). A solver that forgets nothing has one past, its e
 from __future__ import annotations
 
 import time
+from array import array
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -179,7 +180,7 @@ class BayesTreeSolver(OnlineSolver):
     def __init__(self, params: ISAM2Params | None = None, *, inner: IncrementalSolver | FixedLagSmoother | None = None):
         self.inner: IncrementalSolver | FixedLagSmoother = IncrementalSolver(params) if inner is None else inner
         self.reports: list[UpdateReport] = []  # the latest KEPT_REPORTS updates' reports: memory stays flat
-        self.tree_nnz: list[int] = []  # nonzeros of R after each update (GTSAM's treeNnz): the fill, every update
+        self.tree_nnz = array("q")  # nonzeros of R after each update (GTSAM's treeNnz): the fill, 8 bytes an update
         self.phase_seconds: dict[str, float] = {}  # seconds in each phase of the update, summed over every update
         self.clique_solves = 0  # cliques back-substitution solved, over every update
 
@@ -342,6 +343,9 @@ class SolverView:
 
     def estimate_of(self, key: Key) -> NDArray:
         return self.solver.estimate_of(key, past=self.past)
+
+    def estimates_of(self, keys: Sequence[Key]) -> dict[Key, NDArray]:
+        return self.solver.estimates_of(keys, past=self.past)
 
     def estimate(self) -> Values:
         return self.solver.estimate(past=self.past)
