@@ -424,7 +424,6 @@ def _hat_vee(group):
 def _mp_tools(gens, coeffs):
     """hat and ad(ξ) = [ξ^, ·]ᵛ in mpf, from hat's generators and vee's coefficients."""
     G, V = _mp_array(gens), _mp_array(coeffs)
-    n = gens.shape[-1]
 
     def hat(xi):
         return np.einsum("k,kij->ij", xi, G)
