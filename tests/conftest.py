@@ -9,7 +9,9 @@ the ``needs_data`` marker; both skip with one line saying where to put the files
 STEAM_REF_REQUIRE_DATA=1 (see ``requirements.py``, which also handles the optional packages).
 """
 
+import atexit
 import os
+import shutil
 import tempfile
 
 import numpy as np
@@ -23,8 +25,11 @@ if not os.environ.get(DATA_DIR_ENV) and SHARED_DATA.is_dir():
 elif not os.environ.get(DATA_DIR_ENV) and all((data_cache_dir() / f).is_file() for f in DATA_FILES):
     os.environ[DATA_DIR_ENV] = str(data_cache_dir())  # a newcomer's `steam-ref data fetch`
 # No test reads or writes the user's cache folder: XDG_CACHE_HOME is a fresh one (platformdirs on Linux).
-_CACHE = tempfile.TemporaryDirectory(prefix="steam_ref_test_cache_")
-os.environ["XDG_CACHE_HOME"] = _CACHE.name
+# (removed at exit by atexit, not by a TemporaryDirectory's finalizer, whose ResourceWarning an xdist worker's
+# warnings-as-errors would print as an error at its exit)
+_CACHE = tempfile.mkdtemp(prefix="steam_ref_test_cache_")
+atexit.register(shutil.rmtree, _CACHE, ignore_errors=True)
+os.environ["XDG_CACHE_HOME"] = _CACHE
 
 
 @pytest.fixture

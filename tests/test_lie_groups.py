@@ -408,9 +408,9 @@ def test_every_kernel_checks_its_inputs_shapes(group):
 # --- the angle sweep against 50 digits -----------------------------------------------------------------
 
 
-def _mp_tools(group):
-    """hat's generators and vee's coefficients as object arrays of mpf (both maps are linear, so the group's own on
-    basis vectors and elementary matrices give them exactly), and ad(ξ) = [ξ^, ·]ᵛ from them."""
+def _hat_vee(group):
+    """hat's generators and vee's coefficients (both maps are linear, so the group's own on basis vectors and
+    elementary matrices give them exactly)."""
     gens = np.array([group.hat(e) for e in np.eye(group.dim)])  # (dim, n, n), entries 0 and ±1
     n = gens.shape[-1]
     coeffs = np.zeros((group.dim, n, n))  # vee(M)ₖ = Σᵢⱼ coeffs[k, i, j] Mᵢⱼ
@@ -418,6 +418,11 @@ def _mp_tools(group):
         E = np.zeros((n, n))
         E[i, j] = 1.0
         coeffs[:, i, j] = group.vee(E)
+    return gens, coeffs
+
+
+def _mp_tools(gens, coeffs):
+    """hat and ad(ξ) = [ξ^, ·]ᵛ in mpf, from hat's generators and vee's coefficients."""
     G, V = _mp_array(gens), _mp_array(coeffs)
 
     def hat(xi):
@@ -425,7 +430,7 @@ def _mp_tools(group):
 
     def ad(xi):
         X = hat(xi)
-        return np.stack([np.einsum("kij,ij->k", V, X @ G[j] - G[j] @ X) for j in range(group.dim)], axis=1)
+        return np.stack([np.einsum("kij,ij->k", V, X @ G[j] - G[j] @ X) for j in range(len(gens))], axis=1)
 
     return hat, ad
 
@@ -450,14 +455,28 @@ def _left_multiplier(A):
     return times
 
 
+_MP_REFERENCES: dict[tuple, dict[str, np.ndarray]] = {}
+
+
 def _mp_reference(group, xi, vs):
+    """``_mp_series`` for the group's hat and vee, computed once per hat, vee, ξ, v's and digits (a pure function of
+    them: SE3 and SE3V, the same group with the same hat, vee and sweep, share each reference). Read-only."""
+    gens, coeffs = _hat_vee(group)
+    key = (gens.tobytes(), coeffs.tobytes(), np.asarray(xi, float).tobytes(), np.asarray(vs, float).tobytes())
+    key += (gens.shape, len(vs), mp.mp.dps)
+    if key not in _MP_REFERENCES:
+        _MP_REFERENCES[key] = _mp_series(gens, coeffs, xi, vs)
+    return _MP_REFERENCES[key]
+
+
+def _mp_series(gens, coeffs, xi, vs):
     """Exp(ξ)'s matrix, J_r(ξ), J_r(ξ)⁻¹ and, for each v, ∂(J_r v)/∂ξ and ∂(J_r⁻¹ v)/∂ξ, in mpmath.
 
     J_r = Σₖ (-1)ᵏ adᵏ / (k+1)!, with ∂(adᵏ)/∂ξⱼ = ad ∂(adᵏ⁻¹)/∂ξⱼ + ad(eⱼ) adᵏ⁻¹ summed alongside; then
     ∂(J_r v)/∂ξⱼ = (∂J_r/∂ξⱼ) v and ∂(J_r⁻¹ v)/∂ξⱼ = -J_r⁻¹ (∂J_r/∂ξⱼ) J_r⁻¹ v (d(J⁻¹) = -J⁻¹ dJ J⁻¹).
     """
-    d = group.dim
-    hat, ad = _mp_tools(group)
+    d = len(gens)
+    hat, ad = _mp_tools(gens, coeffs)
     x = _mp_array(xi)
     A = _left_multiplier(ad(x))
     basis = [_left_multiplier(ad(_mp_array(e))) for e in np.eye(d)]
