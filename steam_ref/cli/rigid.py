@@ -50,6 +50,8 @@ _PLANAR: dict[str, object] = {
 
 
 def _figures(errors: np.ndarray) -> dict:
+    if not errors.size:  # no held-out fix inside the states' span (a short run)
+        return {"rmse_m": None, "median_m": None, "max_m": None}
     return {
         "rmse_m": float(np.sqrt(np.mean(errors**2))),
         "median_m": float(np.median(errors)),
@@ -71,11 +73,11 @@ def _yardsticks(data: RigidReadings, prior: MotionPrior) -> dict:
     assert data.truth is not None
     g = group_state(prior.kind).group
     first = np.array([step.value for step in steps(data, prior, data.initial_states)])
-    line = straight_line_at(data, data.state_times) - position(g, data.truth[:, : g.size])[0]
-    return {
-        "dead_reckoning": _against_truth(data, prior, first),
-        "straight_line": {"translation_rmse_m": float(np.sqrt(np.mean(np.sum(line**2, axis=1))))},
-    }
+    out = {"dead_reckoning": _against_truth(data, prior, first)}
+    if len(data.positions) >= 2:
+        line = straight_line_at(data, data.state_times) - position(g, data.truth[:, : g.size])[0]
+        out["straight_line"] = {"translation_rmse_m": float(np.sqrt(np.mean(np.sum(line**2, axis=1))))}
+    return out
 
 
 def _scored(data: RigidReadings, prior: MotionPrior, method: str, run: RigidRun) -> dict:
@@ -151,6 +153,9 @@ def run_rigid(args: argparse.Namespace) -> int:
     lines += [f"held-out GPS fixes: {summary['held_out_fixes']}{lacks}"]
     for what in ("straight_line", *methods):
         f = summary[what]
+        if f["rmse_m"] is None:
+            lines.append(f"  {what:14s} no held-out fix inside the states' span")
+            continue
         lines.append(f"  {what:14s} RMSE {f['rmse_m']:.3f} m, median {f['median_m']:.3f} m, max {f['max_m']:.3f} m")
     if truth is not None:
         lines.append("against the true states: translation RMSE, rotation RMSE, mean pose NEES (6 if consistent)")

@@ -206,19 +206,23 @@ def _positions_at(data: RigidReadings, prior: MotionPrior, states: NDArray, time
 def held_out_errors(data: RigidReadings, prior: MotionPrior, states: NDArray) -> NDArray:
     """The distance (m) between each held-out fix inside the states' span and the GP-interpolated position."""
     rows = _inside(data)
+    if not len(rows):  # none inside the span (a short run)
+        return np.zeros(0)
     return np.linalg.norm(_positions_at(data, prior, states, rows[:, 0]) - rows[:, 1:], axis=1)
 
 
 def straight_line_errors(data: RigidReadings) -> NDArray:
     """The same distances for a straight line between the position fixes before and after each held-out one."""
     rows = _inside(data)
-    return np.linalg.norm(straight_line_at(data, rows[:, 0]) - rows[:, 1:], axis=1)
+    return np.linalg.norm(straight_line_at(data, rows[:, 0]) - rows[:, 1:], axis=1) if len(rows) else np.zeros(0)
 
 
 def straight_line_at(data: RigidReadings, times: NDArray) -> NDArray:
     """(m, k) the position at each of ``times`` on the straight line between the position fixes before and after it
-    (the first two or last two fixes' line, continued, outside them)."""
+    (the first two or last two fixes' line, continued, outside them); SteamError with fewer than two fixes."""
     fixes = data.positions[np.argsort(data.positions[:, 0])]
+    if len(fixes) < 2:
+        raise SteamError(f"{data.name}: a straight line between position fixes needs two, it has {len(fixes)}")
     i = np.clip(np.searchsorted(fixes[:, 0], times), 1, len(fixes) - 1)
     a, b = fixes[i - 1], fixes[i]
     s = (np.asarray(times, dtype=float) - a[:, 0]) / (b[:, 0] - a[:, 0])
