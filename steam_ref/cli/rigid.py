@@ -96,10 +96,12 @@ def run_rigid(args: argparse.Namespace) -> int:
         raise SteamError(f"--dataset {args.dataset} is a 3-D set: {(given or ['--save-trajectory'])[0]} does not apply")
     if args.steps is not None and args.dataset != "synthetic-3d":
         raise SteamError(f"--steps generates the synthetic task: it needs --dataset synthetic-3d, got {args.dataset!r}")
-    if args.steps is not None:
-        loaded = generate_rigid(args.steps, seed=args.seed)
-    else:
-        loaded = load_dataset(args.dataset, data_dir=args.data_dir, seed=args.seed)
+    generated = args.steps is not None
+    loaded = (
+        generate_rigid(args.steps, seed=args.seed)
+        if generated
+        else load_dataset(args.dataset, data_dir=args.data_dir, seed=args.seed)
+    )
     if not isinstance(loaded, RigidReadings):
         raise SteamError(f"--dataset {args.dataset!r} gives no 3-D readings")
     data = loaded

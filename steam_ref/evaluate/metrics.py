@@ -14,10 +14,12 @@ rotation_angle_rad) restricted to the plane, with pairs chosen the way evo's ``f
 relate: unaligned, they are the same definitions; evo aligns in SE(3) / Sim(3) (Umeyama in space), which on
 planar poses (z = 0, rotations about z) finds the rotation about z and the planar translation our SE(2) /
 Sim(2) alignment finds, so ``ape(align='se2')`` equals evo's APE after ``align`` and ``ape(align='sim2')``
-after ``align(correct_scale=True)``. :func:`group_ape` is the unaligned APE of poses on any group of rigid motions
-(SE(3)): the translation error and the angle of the relative rotation, evo's ``APE`` with no alignment. RPE pairs are chosen on the truth here by default
+after ``align(correct_scale=True)``. RPE pairs are chosen on the truth here by default
 (evo's ``pairs_from_reference=True``); ``pairs_from='estimate'`` is evo's default. Evo's yaw-only planar
 alignment of 3-D trajectories (its issue 746) is what ``se2`` is for planar ones.
+
+:func:`group_ape` is the unaligned APE of poses on any group of rigid motions (SE(3)): the translation error and
+the angle of the relative rotation, evo's ``APE`` with no alignment.
 """
 
 from __future__ import annotations
