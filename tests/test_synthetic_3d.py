@@ -113,3 +113,15 @@ def test_each_priors_dimensions_are_those_its_states_move_in(name):
     choice = MOTION_PRIORS[name]
     prior = motion_prior(name, np.eye(3 if choice.dimensions == 2 else 6))
     assert choice.dimensions == (2 if prior.kind is VECTOR else point_dim(prior.kind.group))
+
+
+@pytest.mark.parametrize(
+    ("argv", "says"),
+    [
+        (["--dataset", "synthetic-3d"], "--dataset synthetic-3d: fit-qc fits Qc to the planar poses"),
+        (["--dataset", "plaza", "--prior", "se3"], "--prior se3 moves a body in 3-D and --dataset plaza is 2-D"),
+    ],
+)
+def test_fit_qc_refuses_a_3d_set_or_prior_in_one_line(capsys, argv, says):
+    code, out, err = runner("fit-qc")(capsys, *argv)
+    assert code == 2 and not out and err.count("\n") == 1 and says in err, err

@@ -158,18 +158,6 @@ DATASETS: dict[str, DataSet] = {
             loader=_generate,
             preset="synthetic",
         ),
-        DataSet(
-            "synthetic-3d",
-            "a vehicle turning and climbing in 3-D with GPS, gyro and 3-D landmarks, generated from the SE(3) model "
-            "(generate_rigid; --seed, --steps apply)",
-            (),
-            "steam_ref.datasets.generate_rigid (no file)",
-            "steam_ref's own",
-            fetchable=False,
-            loader=_generate_rigid,
-            rigid=True,
-            dimensions=3,
-        ),
         _upstream(
             "paper-synthetic",
             "the paper's synthetic task (Sec. IV-A): 1,501 poses, 298 landmarks",
@@ -222,6 +210,18 @@ DATASETS: dict[str, DataSet] = {
             ("victoria_park.txt",),
             loader=_read_gtsam_2d,
             preset="victoria-park",
+        ),
+        DataSet(
+            "synthetic-3d",
+            "a vehicle turning and climbing in 3-D with GPS, gyro and 3-D landmarks, generated from the SE(3) model "
+            "(generate_rigid; --seed, --steps apply)",
+            (),
+            "steam_ref.datasets.generate_rigid (no file)",
+            "steam_ref's own",
+            fetchable=False,
+            loader=_generate_rigid,
+            rigid=True,
+            dimensions=3,
         ),
         _gtsam(
             "kitti",
