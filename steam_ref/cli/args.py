@@ -36,6 +36,7 @@ __all__ = [
     "add_prior",
     "add_progress",
     "check_prior_options",
+    "check_prior_fits",
     "add_qc",
     "add_trajectory_arguments",
     "dataset_name",
@@ -201,6 +202,24 @@ def check_prior_options(prior: str, given: dict[str, object]) -> None:
         if value is not None and name not in MOTION_PRIORS[prior].options:
             takers = " or ".join(f"--prior {p}" for p, choice in MOTION_PRIORS.items() if name in choice.options)
             raise SteamError(f"--{name.replace('_', '-')} applies to {takers} only, not --prior {prior}")
+
+
+def check_prior_fits(dataset: str, prior: str | None) -> None:
+    """SteamError, one line, when the prior named by ``--prior`` (None: not given, the data set's own) moves a body in
+    a space of other dimensions than ``--dataset``'s (``PriorChoice.dimensions`` against ``DataSet.dimensions``; a
+    PATH is a planar file), naming the sets the prior runs on and the priors the set runs with."""
+    if prior is None:
+        return
+    record = DATASETS.get(dataset)
+    space, wanted = (2 if record is None else record.dimensions), MOTION_PRIORS[prior].dimensions
+    if wanted == space:
+        return
+    sets = [n for n in loadable() if DATASETS[n].dimensions == wanted]
+    priors = [p for p, choice in MOTION_PRIORS.items() if choice.dimensions == space]
+    raise SteamError(
+        f"--prior {prior} moves a body in {wanted}-D and --dataset {dataset} is {space}-D: --prior {prior} runs on "
+        f"--dataset {' | '.join(sets)}; --dataset {dataset} runs with --prior {' | '.join(priors)}"
+    )
 
 
 def folder(text: str) -> str:

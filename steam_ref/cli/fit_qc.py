@@ -4,7 +4,8 @@ The poses of the ground truth at the data set's pose times, on the preset's GP c
 sets, seconds otherwise), are the data; the velocities are smoothed under the prior and Qc is the maximum of the
 poses' likelihood, closed form per dimension (:func:`steam_ref.evaluate.fit_qc`, docs/derivations.md §16). It
 prints the fitted diagonal with each entry's standard error beside the preset's Qc, and the ``--qc`` that makes
-``steam-ref run`` use it. A data set without ground truth is refused in one line.
+``steam-ref run`` use it. A data set without ground truth is refused in one line, and so is a 3-D set (its
+ground truth is on SE(3): no fit there yet) or a 3-D prior.
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ import argparse
 
 import numpy as np
 
+from ..datasets.registry import DATASETS
 from ..errors import DataError
 from ..evaluate.fit_qc import QcFit, fit_qc
 from ..gp.clock import Clock
@@ -23,6 +25,7 @@ from .args import (
     add_data_dir,
     add_dataset,
     add_prior,
+    check_prior_fits,
     check_prior_options,
     load_with_note,
     non_negative_int,
@@ -61,6 +64,12 @@ def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     """Fit Qc to the data set's ground truth and print it."""
+    if args.dataset in DATASETS and DATASETS[args.dataset].dimensions != 2:
+        raise DataError(
+            f"--dataset {args.dataset}: fit-qc fits Qc to the planar poses of a run's ground truth, and this set is "
+            f"{DATASETS[args.dataset].dimensions}-D (a Qc fit on SE(3) is not built yet)"
+        )
+    check_prior_fits(args.dataset, args.prior)
     setup = PaperSetup.named(preset_of(args))
     if args.prior is not None:
         setup = setup.replace(prior=args.prior)

@@ -6,6 +6,11 @@ in 3-D) at the set's Qc times ``--qc-scale``, in batch and by BTGP (one iSAM2 up
 by the fixed-lag smoother; each scored at the held-out position fixes by the GP's mean there [YIB Eq. 18], beside a
 straight line between the fixes around each (``paper.rigid``). ``--max-poses N`` keeps the first N states. The planar
 options (a schedule, a layout, figures of a planar run) do not apply and are refused by name.
+
+A generated set (``synthetic-3d``: ``--steps``, ``--seed``) has its true states: each method's states are also scored
+against them (:func:`~steam_ref.evaluate.group_ape`: translation and rotation RMSE; batch and BTGP also by the pose
+NEES of their marginal covariances, :func:`~steam_ref.paper.rigid.rigid_nees`), beside the first values (the prior's
+prediction from the first state: dead reckoning) and a straight line between the position fixes at the states.
 """
 
 from __future__ import annotations
@@ -15,11 +20,22 @@ import time
 
 import numpy as np
 
-from ..datasets.rigid import RigidReadings
+from ..datasets.rigid import RigidReadings, generate_rigid
 from ..datasets.search import load_dataset
 from ..errors import SteamError
-from ..motion import MOTION_PRIORS, motion_prior
-from ..paper.rigid import held_out_errors, solve_rigid, straight_line_errors
+from ..evaluate import group_ape
+from ..lie.points import position
+from ..lie.state import group_state
+from ..motion import MOTION_PRIORS, MotionPrior, motion_prior
+from ..paper.rigid import (
+    RigidRun,
+    held_out_errors,
+    rigid_nees,
+    solve_rigid,
+    steps,
+    straight_line_at,
+    straight_line_errors,
+)
 from .streams import json_line
 
 __all__ = ["run_rigid"]
@@ -27,13 +43,15 @@ __all__ = ["run_rigid"]
 # run's options that a 3-D run does not read, with the value that means "not given"
 _PLANAR: dict[str, object] = {
     "every": None, "skip": 1, "range_states": False, "converge_at_end": False, "departure": [], "preset": None,
-    "score_against_optimum": False, "se2_residual": None, "steps": None, "save_estimates": None, "plot": None,
+    "score_against_optimum": False, "se2_residual": None, "save_estimates": None, "plot": None, "qc": None,
     "tree_dot": None, "lag_history": False, "time_budget": None, "relinearize_threshold": None,
     "relinearize_skip": None,
 }  # fmt: skip
 
 
 def _figures(errors: np.ndarray) -> dict:
+    if not errors.size:  # no held-out fix inside the states' span (a short run)
+        return {"rmse_m": None, "median_m": None, "max_m": None}
     return {
         "rmse_m": float(np.sqrt(np.mean(errors**2))),
         "median_m": float(np.median(errors)),
@@ -41,12 +59,49 @@ def _figures(errors: np.ndarray) -> dict:
     }
 
 
+def _against_truth(data: RigidReadings, prior: MotionPrior, states: np.ndarray) -> dict:
+    """The translation and rotation RMSE of ``states``' poses against the set's true states."""
+    g = group_state(prior.kind).group
+    assert data.truth is not None
+    error = group_ape(g, data.truth[:, : g.size], states[:, : g.size])
+    return {"translation_rmse_m": error.translation_stats.rmse, "rotation_rmse_rad": error.heading_stats.rmse}
+
+
+def _yardsticks(data: RigidReadings, prior: MotionPrior) -> dict:
+    """A generated set's yardsticks at its states: the first values (the prior's predictions from the first state,
+    dead reckoning) and the straight line between the position fixes (its translation only)."""
+    assert data.truth is not None
+    g = group_state(prior.kind).group
+    first = np.array([step.value for step in steps(data, prior, data.initial_states)])
+    out = {"dead_reckoning": _against_truth(data, prior, first)}
+    if len(data.positions) >= 2:
+        line = straight_line_at(data, data.state_times) - position(g, data.truth[:, : g.size])[0]
+        out["straight_line"] = {"translation_rmse_m": float(np.sqrt(np.mean(np.sum(line**2, axis=1))))}
+    return out
+
+
+def _scored(data: RigidReadings, prior: MotionPrior, method: str, run: RigidRun) -> dict:
+    """A method's figures against the truth: RMSE, and for batch and BTGP the mean pose NEES over the states."""
+    out = _against_truth(data, prior, run.states)
+    if method != "fixed-lag":  # the fixed-lag smoother keeps no marginal of a past state
+        assert data.truth is not None
+        out["pose_anees"] = float(np.mean(rigid_nees(run, data.truth, prior)["pose"]))
+    return out
+
+
 def run_rigid(args: argparse.Namespace) -> int:
     """Solve the 3-D set ``args.dataset`` and print its held-out position errors (module docstring)."""
     given = [f"--{k.replace('_', '-')}" for k, none in _PLANAR.items() if getattr(args, k, none) != none]
     if given or getattr(args, "save_trajectory", None):
         raise SteamError(f"--dataset {args.dataset} is a 3-D set: {(given or ['--save-trajectory'])[0]} does not apply")
-    loaded = load_dataset(args.dataset, data_dir=args.data_dir, seed=args.seed)
+    if args.steps is not None and args.dataset != "synthetic-3d":
+        raise SteamError(f"--steps generates the synthetic task: it needs --dataset synthetic-3d, got {args.dataset!r}")
+    generated = args.steps is not None
+    loaded = (
+        generate_rigid(args.steps, seed=args.seed)
+        if generated
+        else load_dataset(args.dataset, data_dir=args.data_dir, seed=args.seed)
+    )
     if not isinstance(loaded, RigidReadings):
         raise SteamError(f"--dataset {args.dataset!r} gives no 3-D readings")
     data = loaded
@@ -68,23 +123,47 @@ def run_rigid(args: argparse.Namespace) -> int:
         "lacks": data.lacks,
         "straight_line": _figures(straight),
     }
+    truth = data.on(prior.kind) if data.truth is not None else None  # the true states as the prior's
+    if truth is not None:
+        summary["against_truth"] = _yardsticks(truth, prior)
     methods = ["batch", "btgp"] + ([] if args.lag is None else ["fixed-lag"])
-    for method in methods:
+    # batch descends from the set's first values; a set with none (a generated one: the prior's predictions from the
+    # first state, far off after a few turns) from BTGP's estimate, as the 3-D consistency study does
+    from_btgp = data.initial_states is None
+    runs: dict[str, RigidRun] = {}
+    figures: dict[str, dict] = {}
+    for method in sorted(methods, key=lambda m: m != "btgp") if from_btgp else methods:
         start = time.perf_counter()
-        run = solve_rigid(data, prior, method, lag=args.lag or 10.0)
-        summary[method] = _figures(held_out_errors(data, prior, run.states)) | {
+        initial = runs["btgp"].states if method == "batch" and from_btgp else None
+        run = runs[method] = solve_rigid(data, prior, method, initial=initial, lag=args.lag or 10.0)
+        figures[method] = _figures(held_out_errors(data, prior, run.states)) | {
             "seconds": round(time.perf_counter() - start, 2),
             "dropped_readings": run.dropped,
         }
         if method == "batch":
-            summary[method]["converged"] = bool(getattr(run.solver, "converged", False))
+            figures[method]["converged"] = bool(getattr(run.solver, "converged", False))
+            figures[method]["start"] = "btgp" if from_btgp else "first values"
+    for method in methods:
+        summary[method] = figures[method]
+        if truth is not None:
+            summary["against_truth"][method] = _scored(truth, prior, method, runs[method])
     if args.json:
         print(json_line(summary))
         return 0
     lines = [f"{args.dataset}: {summary['states']} states on {prior.kind!r}, prior {summary['prior']}"]
-    lines += [f"held-out GPS fixes: {summary['held_out_fixes']} (the data set lacks {data.lacks})"]
+    lacks = f" (the data set lacks {data.lacks})" if data.lacks else ""
+    lines += [f"held-out GPS fixes: {summary['held_out_fixes']}{lacks}"]
     for what in ("straight_line", *methods):
         f = summary[what]
+        if f["rmse_m"] is None:
+            lines.append(f"  {what:14s} no held-out fix inside the states' span")
+            continue
         lines.append(f"  {what:14s} RMSE {f['rmse_m']:.3f} m, median {f['median_m']:.3f} m, max {f['max_m']:.3f} m")
+    if truth is not None:
+        lines.append("against the true states: translation RMSE, rotation RMSE, mean pose NEES (6 if consistent)")
+        for what, f in summary["against_truth"].items():
+            rotation = f" {f['rotation_rmse_rad']:.4f} rad" if "rotation_rmse_rad" in f else ""
+            nees = f", NEES {f['pose_anees']:.2f}" if "pose_anees" in f else ""
+            lines.append(f"  {what:14s} {f['translation_rmse_m']:.3f} m{rotation}{nees}")
     print("\n".join(lines))
     return 0

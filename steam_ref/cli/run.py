@@ -38,6 +38,7 @@ from .args import (
     add_progress,
     add_qc,
     add_trajectory_arguments,
+    check_prior_fits,
     check_prior_options,
     load_with_note,
     non_negative_float,
@@ -196,7 +197,8 @@ def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
         "--steps",
         type=steps_count,
         default=None,
-        help="--dataset synthetic: generate N steps (N + 1 poses), with landmarks as dense as the default task's",
+        help="--dataset synthetic or synthetic-3d: generate N steps (N + 1 poses), with landmarks as dense as the "
+        "default task's",
     )
     parser.add_argument("--json", action="store_true", help="print one JSON line of figures")
     parser.add_argument(
@@ -228,6 +230,7 @@ def _zero_fraction(text: str) -> float:
 
 def run(args: argparse.Namespace) -> int:
     """Stream the data set, write the files asked for, print the figures."""
+    check_prior_fits(args.dataset, args.prior)  # a 3-D prior on a planar set, or a planar prior on a 3-D set
     if args.dataset in DATASETS and DATASETS[args.dataset].rigid:  # a 3-D set: solved on SE(3) (cli/rigid.py)
         return run_rigid(args)
     check_output(args.save_estimates, ".npz", "--save-estimates")
@@ -354,7 +357,9 @@ def _run_dataset(args: argparse.Namespace):
     if args.steps is None:
         return load_with_note(args)
     if args.dataset != "synthetic":
-        raise SteamError(f"--steps generates the synthetic task: it needs --dataset synthetic, got {args.dataset!r}")
+        raise SteamError(
+            f"--steps generates the synthetic task: it needs --dataset synthetic (or synthetic-3d), got {args.dataset!r}"
+        )
     n_landmarks = max(1, round(args.steps * DEFAULT_LANDMARKS / DEFAULT_STEPS))  # the default task's density
     return generate_synthetic(n_steps=args.steps, n_landmarks=n_landmarks, seed=args.seed)
 

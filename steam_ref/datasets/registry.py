@@ -37,7 +37,7 @@ from .cmu import load_cmu_mat, load_cmu_text
 from .gtsam_text import load_gtsam_2d
 from .kitti import load_kitti
 from .landmarks import LandmarkDataset
-from .rigid import RigidReadings
+from .rigid import RigidReadings, generate_rigid
 from .synthetic import generate_synthetic
 from .table import RangeDataset
 
@@ -97,6 +97,7 @@ class DataSet:
     # or benchmark each names (docs/experiments.md)
     yardsticks: tuple[tuple[str, float], ...] = ()
     rigid: bool = False  # its loader gives RigidReadings: a 3-D run on SE(3) states (`steam-ref run`, paper/rigid.py)
+    dimensions: int = 2  # of the space its body moves in: a prior runs on it when it says the same (PriorChoice)
 
 
 def _read_mat(path: Path | None, name: str, _seed: int) -> RangeDataset:
@@ -118,6 +119,10 @@ def _read_kitti(path: Path | None, name: str, _seed: int) -> RigidReadings:
 
 def _generate(_path: Path | None, _name: str, seed: int) -> RangeDataset:
     return generate_synthetic(seed=seed)
+
+
+def _generate_rigid(_path: Path | None, _name: str, seed: int) -> RigidReadings:
+    return generate_rigid(seed=seed)
 
 
 def _given(path: Path | None, name: str) -> Path:
@@ -206,12 +211,25 @@ DATASETS: dict[str, DataSet] = {
             loader=_read_gtsam_2d,
             preset="victoria-park",
         ),
+        DataSet(
+            "synthetic-3d",
+            "a vehicle turning and climbing in 3-D with GPS, gyro and 3-D landmarks, generated from the SE(3) model "
+            "(generate_rigid; --seed, --steps apply)",
+            (),
+            "steam_ref.datasets.generate_rigid (no file)",
+            "steam_ref's own",
+            fetchable=False,
+            loader=_generate_rigid,
+            rigid=True,
+            dimensions=3,
+        ),
         _gtsam(
             "kitti",
             "KITTI: 470 GPS fixes and 46,968 IMU rows over 470 s (gtsam's IMU example), 3-D, no ground truth",
             ("KittiGps_converted.txt", "KittiEquivBiasedImu.txt"),
             loader=_read_kitti,
             rigid=True,
+            dimensions=3,
         ),
         _gtsam(
             "plaza2",

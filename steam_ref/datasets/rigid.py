@@ -13,6 +13,9 @@ variables of the state before, so the prior's residual at the truth is its noise
 factor's model with its own Gaussian noise, the landmarks placed around the path in 3-D and surveyed with their
 prior's noise. The default first twist [1, 0, 0.1, 0, 0, 0.15] (m/s, rad/s) is a vehicle driving forward, turning
 left and climbing: a helix, bent by the model's noise.
+
+:func:`generate_rigid` is the generated 3-D data set (``steam-ref run --dataset synthetic-3d``): a task drawn from
+the SE(3) WNOA prior at :data:`RIGID_QC`, every other position fix held out, the true states kept in ``truth``.
 """
 
 from __future__ import annotations
@@ -28,9 +31,9 @@ from ..lie import GroupState
 from ..lie.points import point_dim, position, rotation_part, to_body
 from ..lie.state import group_state
 from ..manifold import Manifold
-from ..motion import MotionPrior
+from ..motion import MotionPrior, motion_prior
 
-__all__ = ["RigidReadings", "RigidSample", "sample_rigid_task", "RIGID_NOISE"]
+__all__ = ["RigidReadings", "RigidSample", "sample_rigid_task", "generate_rigid", "RIGID_NOISE", "RIGID_QC"]
 
 _TABLES = ("positions", "gyro", "ranges", "points")  # the tables of readings, each row [t, ...]
 
@@ -44,6 +47,8 @@ RIGID_NOISE = {
     "first_pose": 0.05,  # the first state's pose, each tangent direction
     "first_twist": 0.05,  # its twist
 }
+RIGID_QC = np.diag([0.02, 0.005, 0.005, 0.001, 0.001, 0.002])  # a drawn task's Qc on SE(3) (docs/experiments.md)
+RIGID_STEPS, RIGID_LANDMARKS = 40, 8  # the generated set's size by default (and its landmarks' density)
 
 
 @dataclass(frozen=True)
@@ -55,7 +60,7 @@ class RigidReadings:
     [id, surveyed position (k)]; each table's sigma in ``sigmas`` (keys as :data:`RIGID_NOISE`).
     ``held_out`` [t, p (k)]: position fixes kept from every estimator, to score it. ``first_state``: the first
     state's prior mean; ``initial_states``: each state's first value (None: the prior's prediction from the one
-    before).
+    before); ``truth``: the true states (n, kind.size) of a generated set, None for a real one.
     """
 
     name: str
@@ -73,6 +78,7 @@ class RigidReadings:
     qc: NDArray | None = None  # the Qc (dim, dim) the data set runs with unless told otherwise
     source: str = ""
     lacks: str = ""  # what the data set does not have (no ground truth, ...), said in a run's report
+    truth: NDArray | None = None  # (n, kind.size) the true states (a generated set's), never read by an estimator
 
     def __post_init__(self) -> None:
         k = point_dim(self.kind.group)
@@ -104,12 +110,13 @@ class RigidReadings:
         end = self.state_times[n - 1]
         cut = {table: getattr(self, table)[getattr(self, table)[:, 0] <= end] for table in (*_TABLES, "held_out")}
         initial = None if self.initial_states is None else self.initial_states[:n]
-        return replace(self, state_times=self.state_times[:n], initial_states=initial, **cut)
+        truth = None if self.truth is None else self.truth[:n]
+        return replace(self, state_times=self.state_times[:n], initial_states=initial, truth=truth, **cut)
 
     def on(self, kind: Manifold) -> RigidReadings:
         """The same readings for states of ``kind`` (a group of the same dimensions, any number of derivatives):
-        each first value's pose Exp(Log(T)) on the new group, its twist kept, an acceleration added as zero or
-        dropped."""
+        each first value's (and true state's) pose Exp(Log(T)) on the new group, its twist kept, an acceleration
+        added as zero or dropped."""
         if kind is self.kind:
             return self
         kind = group_state(kind)
@@ -125,7 +132,13 @@ class RigidReadings:
             extra = np.zeros(x.shape[:-1] + (d * (kind.derivatives - 1),))
             return np.concatenate([new.exp(old.log(x[..., : old.size])), twist, extra], axis=-1)
 
-        return replace(self, kind=kind, first_state=moved(self.first_state), initial_states=moved(self.initial_states))
+        return replace(
+            self,
+            kind=kind,
+            first_state=moved(self.first_state),
+            initial_states=moved(self.initial_states),
+            truth=moved(self.truth),
+        )
 
 
 @dataclass(frozen=True)
@@ -201,3 +214,23 @@ def sample_rigid_task(
         source=f"sample_rigid_task(prior={prior.name!r}, n_steps={n - 1}, n_landmarks={n_landmarks})",
     )
     return RigidSample(data, states, {j: truth[j].copy() for j in range(n_landmarks)}, prior)
+
+
+def generate_rigid(n_steps: int = RIGID_STEPS, seed: int = 0) -> RigidReadings:
+    """The generated 3-D data set 'synthetic-3d': a task of ``n_steps`` 1 s steps drawn from the SE(3) WNOA prior at
+    :data:`RIGID_QC` (:func:`sample_rigid_task`, landmarks as dense as :data:`RIGID_STEPS` steps with
+    :data:`RIGID_LANDMARKS`), a position fix every 5 s of which every other one is held out (10 s between the fixes
+    an estimator reads), its true states in ``truth`` and :data:`RIGID_QC` as the Qc it runs with."""
+    n_steps = integer("n_steps", n_steps, 1)
+    n_landmarks = max(1, round(n_steps * RIGID_LANDMARKS / RIGID_STEPS))
+    task = sample_rigid_task(motion_prior("se3", RIGID_QC), n_steps, n_landmarks, seed)
+    fixes = task.data.positions
+    return replace(
+        task.data,
+        name="synthetic-3d",
+        positions=fixes[0::2],
+        held_out=fixes[1::2],
+        truth=task.states,
+        qc=RIGID_QC.copy(),
+        source=f"generate_rigid(n_steps={n_steps}, seed={seed})",
+    )

@@ -1,7 +1,8 @@
 """Evaluating an estimate: trajectory error (APE, RPE, aligned or not), trajectory files, consistency (NEES).
 
 - :mod:`.align`: the SE(2) / Sim(2) alignment of an estimate onto the truth, Umeyama's closed form in the plane.
-- :mod:`.metrics`: APE and RPE of planar poses and their statistics (RMSE, mean, median, max), as evo defines them.
+- :mod:`.metrics`: APE and RPE of planar poses and their statistics (RMSE, mean, median, max), as evo defines them;
+  the APE of poses on SE(3) (any group of rigid motions).
 - :mod:`.files`: TUM and KITTI trajectory files, written and read back.
 - :mod:`.report`: the estimate at the truth's own times by GP interpolation [YIB Eq. 18]; a run's figures.
 - :mod:`.fit_qc`: Qc from data, the maximum-likelihood diagonal Qc of a motion prior from a run's ground-truth poses.
@@ -25,7 +26,7 @@ from .consistency import (
 )
 from .files import read_kitti, read_tum, write_kitti, write_tum
 from .fit_qc import QcFit, fit_qc
-from .metrics import PoseError, Statistics, ape, planar_poses, rpe, rpe_pairs
+from .metrics import PoseError, Statistics, ape, group_ape, planar_poses, rpe, rpe_pairs
 from .report import states_at, trajectory_figures
 
 __all__ = [
@@ -36,6 +37,7 @@ __all__ = [
     "Statistics",
     "PoseError",
     "ape",
+    "group_ape",
     "rpe",
     "rpe_pairs",
     "planar_poses",

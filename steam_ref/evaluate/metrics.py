@@ -17,6 +17,9 @@ Sim(2) alignment finds, so ``ape(align='se2')`` equals evo's APE after ``align``
 after ``align(correct_scale=True)``. RPE pairs are chosen on the truth here by default
 (evo's ``pairs_from_reference=True``); ``pairs_from='estimate'`` is evo's default. Evo's yaw-only planar
 alignment of 3-D trajectories (its issue 746) is what ``se2`` is for planar ones.
+
+:func:`group_ape` is the unaligned APE of poses on any group of rigid motions (SE(3)): the translation error and
+the angle of the relative rotation, evo's ``APE`` with no alignment.
 """
 
 from __future__ import annotations
@@ -30,9 +33,11 @@ from numpy.typing import NDArray
 from ..arguments import finite, is_integer, number, real_array
 from ..dead_reckoning import wrap_angle
 from ..errors import ShapeError, SteamError
+from ..lie import LieGroup
+from ..lie.points import position
 from .align import ALIGNMENTS, Alignment, align_planar
 
-__all__ = ["Statistics", "PoseError", "ape", "rpe", "rpe_pairs", "planar_poses"]
+__all__ = ["Statistics", "PoseError", "ape", "group_ape", "rpe", "rpe_pairs", "planar_poses"]
 
 
 def planar_poses(name: str, poses: object) -> NDArray:
@@ -121,6 +126,23 @@ def ape(truth: object, estimate: object, *, align: str | None = None) -> PoseErr
     translation = np.hypot(*(moved[:, :2] - truth[:, :2]).T)
     heading = np.abs(wrap_angle(moved[:, 2] - truth[:, 2]))
     return PoseError(translation, heading, transform)
+
+
+def group_ape(group: LieGroup, truth: object, estimate: object) -> PoseError:
+    """Absolute pose error, unaligned, of the poses ``estimate`` against ``truth`` (both (n, group.size) elements of
+    ``group``, a group of rigid motions: SE(2), SE(3)): ‖t̂ᵢ - tᵢ‖ and the angle of the relative rotation, that of
+    Log(Tᵢ⁻¹ T̂ᵢ) (in [0, π]); on SE(2) what :func:`ape` gives."""
+    t, e = real_array("truth", truth), real_array("estimate", estimate)
+    if t.shape != e.shape or t.ndim != 2 or t.shape[1] != group.size or len(t) == 0:
+        raise ShapeError(
+            f"truth and estimate must be two (n, {group.size}) arrays of one shape (poses of {group!r}), "
+            f"got {t.shape} and {e.shape}"
+        )
+    finite("truth", t)
+    finite("estimate", e)
+    translation = np.linalg.norm(position(group, e)[0] - position(group, t)[0], axis=-1)
+    rotation = np.asarray(group.angle(group.log(group.between(t, e))), dtype=float)
+    return PoseError(translation, rotation, Alignment.identity())
 
 
 def rpe_pairs(

@@ -35,11 +35,14 @@ __all__ = ["PriorChoice", "MOTION_PRIORS", "motion_prior", "as_motion_prior", "p
 @dataclass(frozen=True)
 class PriorChoice:
     """A prior a user can name: ``make(qc, **options)`` builds it; ``options`` are the keywords it takes beside
-    Qc (as ``PaperSetup`` and the command line name them); ``what`` says it in one line."""
+    Qc (as ``PaperSetup`` and the command line name them); ``what`` says it in one line; ``dimensions``: of the
+    space its states' body moves in (2: a pose [x, y, θ] or on SE(2); 3: on SE(3)), a data set's own
+    (``DataSet.dimensions``) when the prior runs on it."""
 
     make: Callable[..., MotionPrior]
     options: tuple[str, ...]
     what: str
+    dimensions: int = 2
 
 
 def _singer(qc: ArrayLike, singer_time_constant: float = 1.0) -> MotionPrior:
@@ -81,10 +84,10 @@ MOTION_PRIORS: dict[str, PriorChoice] = {
     "se2": PriorChoice(_se2, ("se2_residual",), "white noise on acceleration on SE(2) (a pose and its body twist)"),
     "se2-wnoj": PriorChoice(_se2_wnoj, (), "white noise on jerk on SE(2) (a pose, its body twist and acceleration)"),
     "se2-singer": PriorChoice(_se2_singer, ("singer_time_constant",), "Singer's model on SE(2) (with acceleration)"),
-    "se3": PriorChoice(_se3, (), "white noise on acceleration on SE(3), local-variable residual (Qc 6 x 6)"),
-    "se3-simplified": PriorChoice(_se3_simplified, (), "white noise on acceleration on SE(3), simplified residual"),
-    "se3-wnoj": PriorChoice(_se3_wnoj, (), "white noise on jerk on SE(3) (a pose, its body twist and acceleration)"),
-    "se3-singer": PriorChoice(_se3_singer, ("singer_time_constant",), "Singer's model on SE(3) (with acceleration)"),
+    "se3": PriorChoice(_se3, (), "white noise on acceleration on SE(3), local-variable residual (Qc 6 x 6)", 3),
+    "se3-simplified": PriorChoice(_se3_simplified, (), "white noise on acceleration on SE(3), simplified residual", 3),
+    "se3-wnoj": PriorChoice(_se3_wnoj, (), "white noise on jerk on SE(3) (a pose, its body twist and acceleration)", 3),
+    "se3-singer": PriorChoice(_se3_singer, ("singer_time_constant",), "Singer's model on SE(3) (with acceleration)", 3),
 }
 
 

@@ -25,7 +25,7 @@ from numpy.typing import NDArray
 from ..arguments import integer
 from ..batch import gauss_newton
 from ..bayes_tree import FixedLagSmoother, IncrementalSolver
-from ..datasets.rigid import RIGID_NOISE, RigidReadings, RigidSample, sample_rigid_task
+from ..datasets.rigid import RIGID_NOISE, RIGID_QC, RigidReadings, RigidSample, sample_rigid_task
 from ..errors import SteamError
 from ..evaluate import nees
 from ..factors import Factor, LieStatePrior, PriorFactor
@@ -44,6 +44,7 @@ __all__ = [
     "RigidRun",
     "held_out_errors",
     "straight_line_errors",
+    "straight_line_at",
     "rigid_nees",
     "RIGID_QC",
     "RigidSetup",
@@ -205,19 +206,27 @@ def _positions_at(data: RigidReadings, prior: MotionPrior, states: NDArray, time
 def held_out_errors(data: RigidReadings, prior: MotionPrior, states: NDArray) -> NDArray:
     """The distance (m) between each held-out fix inside the states' span and the GP-interpolated position."""
     rows = _inside(data)
+    if not len(rows):  # none inside the span (a short run)
+        return np.zeros(0)
     return np.linalg.norm(_positions_at(data, prior, states, rows[:, 0]) - rows[:, 1:], axis=1)
 
 
 def straight_line_errors(data: RigidReadings) -> NDArray:
     """The same distances for a straight line between the position fixes before and after each held-out one."""
-    rows, fixes = _inside(data), data.positions[np.argsort(data.positions[:, 0])]
-    out = []
-    for tau, *p in rows:
-        i = int(np.clip(np.searchsorted(fixes[:, 0], tau), 1, len(fixes) - 1))
-        (ta, *a), (tb, *b) = fixes[i - 1], fixes[i]
-        s = (tau - ta) / (tb - ta)
-        out.append(np.linalg.norm((1 - s) * np.asarray(a) + s * np.asarray(b) - p))
-    return np.array(out)
+    rows = _inside(data)
+    return np.linalg.norm(straight_line_at(data, rows[:, 0]) - rows[:, 1:], axis=1) if len(rows) else np.zeros(0)
+
+
+def straight_line_at(data: RigidReadings, times: NDArray) -> NDArray:
+    """(m, k) the position at each of ``times`` on the straight line between the position fixes before and after it
+    (the first two or last two fixes' line, continued, outside them); SteamError with fewer than two fixes."""
+    fixes = data.positions[np.argsort(data.positions[:, 0])]
+    if len(fixes) < 2:
+        raise SteamError(f"{data.name}: a straight line between position fixes needs two, it has {len(fixes)}")
+    i = np.clip(np.searchsorted(fixes[:, 0], times), 1, len(fixes) - 1)
+    a, b = fixes[i - 1], fixes[i]
+    s = (np.asarray(times, dtype=float) - a[:, 0]) / (b[:, 0] - a[:, 0])
+    return (1 - s)[:, None] * a[:, 1:] + s[:, None] * b[:, 1:]
 
 
 def _inside(data: RigidReadings) -> NDArray:
@@ -239,9 +248,6 @@ def rigid_nees(run: RigidRun, truth: NDArray, prior: MotionPrior) -> dict[str, N
         "pose": nees(errors[:, :d], P[:, :d, :d]),
         "twist": nees(errors[:, d : 2 * d], P[:, d : 2 * d, d : 2 * d]),
     }
-
-
-RIGID_QC = np.diag([0.02, 0.005, 0.005, 0.001, 0.001, 0.002])  # a drawn task's Qc on SE(3) (docs/experiments.md)
 
 
 @dataclass(frozen=True)
