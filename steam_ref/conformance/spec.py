@@ -2,7 +2,7 @@
 
 A key is a string: ``"x3"`` is trajectory state 3, ``"l1"`` landmark 1. A factor is a dict with a
 ``type``, its ``keys`` and the numbers its model needs (docs/conformance.md lists them); :data:`FACTORS`
-maps each type to its steam_ref factor and the kind (manifold) of each of its keys:
+maps each type to its steam_ref factor and the kind (manifold) of each of its keys::
 
     gp_prior       keys [x1, x2], dt, qc                      e = x₂ - Φ x₁      [YIB Eq. 22, 30-31]
     prior          keys [k], mean, noise                      e = θ - mean       [YIB Eq. 4]
