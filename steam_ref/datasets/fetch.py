@@ -141,7 +141,9 @@ def file_url(base: str, remote: str) -> str:
     """The URL of the file ``remote`` under the base URL ``base`` (as :func:`base_url` returns it): the name
     appended to its path, its query (a token) kept after it."""
     parts = urllib.parse.urlsplit(base)
-    return urllib.parse.urlunsplit(parts._replace(path=parts.path + urllib.parse.quote(remote), fragment=""))
+    return urllib.parse.urlunsplit(
+        (parts.scheme, parts.netloc, parts.path + urllib.parse.quote(remote), parts.query, "")
+    )
 
 
 def base_url(given: str | None = None) -> str:
@@ -158,7 +160,9 @@ def base_url(given: str | None = None) -> str:
         raise DataError(f"the base URL {shown_url(url)!r} is not an http:// or https:// address")
     if not parts.hostname or any(c.isspace() for c in url):
         raise DataError(f"the base URL {shown_url(url)!r} names no host (or holds a blank)")
-    return urllib.parse.urlunsplit(parts._replace(path=parts.path.rstrip("/") + "/"))
+    return urllib.parse.urlunsplit(
+        (parts.scheme, parts.netloc, parts.path.rstrip("/") + "/", parts.query, parts.fragment)
+    )
 
 
 def _writable_folder(folder: Path) -> None:
