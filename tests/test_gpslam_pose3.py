@@ -72,7 +72,7 @@ def _matrix_off(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.max(np.abs(SE3V.matrix(a) - SE3V.matrix(b))))
 
 
-def _close(analytic: np.ndarray, numeric: np.ndarray, tol: float) -> None:
+def assert_close(analytic: np.ndarray, numeric: np.ndarray, tol: float) -> None:
     scale = max(1.0, float(np.max(np.abs(numeric))))
     np.testing.assert_allclose(analytic, numeric, rtol=0, atol=tol * scale)
 
@@ -114,8 +114,8 @@ def test_prior_factor_fixture(name):
     if name != "random":  # gpslam asserts no value at its random states
         assert np.max(np.abs(e)) < 1e-15
     A, B = factor.jacobians(x1, x2)
-    _close(A, jacobian8_stacked(lambda d: factor.error(STATE.retract(x1, d), x2), 12), 1e-12)
-    _close(B, jacobian8_stacked(lambda d: factor.error(x1, STATE.retract(x2, d)), 12), 1e-12)
+    assert_close(A, jacobian8_stacked(lambda d: factor.error(STATE.retract(x1, d), x2), 12), 1e-12)
+    assert_close(B, jacobian8_stacked(lambda d: factor.error(x1, STATE.retract(x2, d)), 12), 1e-12)
     eye = np.eye(6)
     np.testing.assert_array_equal(A[:, 6:], np.vstack([-dt * eye, -eye]))  # ∂e/∂ϖ₁
     xi = SE3V.log(SE3V.between(x1[:6], x2[:6]))
@@ -127,7 +127,7 @@ def test_prior_noise_is_q_of_dt():
     for dt in (0.1, 1.0):
         W = PRIOR.prior_factor(X(1), X(2), dt).sqrt_information
         Q = np.block([[dt**3 / 3 * QC, dt**2 / 2 * QC], [dt**2 / 2 * QC, dt * QC]])
-        _close(W.T @ W, np.linalg.inv(Q), 1e-12)
+        assert_close(W.T @ W, np.linalg.inv(Q), 1e-12)
 
 
 def test_prior_optimization_fixture():
@@ -195,8 +195,8 @@ def test_interpolator_fixture(name):
         assert np.max(np.abs(x[6:] - x1[6:])) < 1e-15 and np.array_equal(x1[6:], x2[6:])
     y, J1, J2 = lie_gp.interpolate(x1, x2, LAM, PSI, group=SE3V)
     np.testing.assert_array_equal(y, x)
-    _close(J1, jacobian8_stacked(lambda d: STATE.local(x, _interpolate(STATE.retract(x1, d), x2)), 12), 1e-12)
-    _close(J2, jacobian8_stacked(lambda d: STATE.local(x, _interpolate(x1, STATE.retract(x2, d))), 12), 1e-12)
+    assert_close(J1, jacobian8_stacked(lambda d: STATE.local(x, _interpolate(STATE.retract(x1, d), x2)), 12), 1e-12)
+    assert_close(J2, jacobian8_stacked(lambda d: STATE.local(x, _interpolate(x1, STATE.retract(x2, d))), 12), 1e-12)
 
 
 # --- testPose3Utils.cpp -------------------------------------------------------------------------------------------
@@ -258,14 +258,14 @@ def test_se3_jacobian_fixture(name):
     xi = SE3V.log(_pose(*JACOBIAN_POSES[name]))
     right = jacobian8_stacked(lambda u: SE3V.log(SE3V.between(SE3V.exp(xi), SE3V.exp(xi + u))), 6)
     left = jacobian8_stacked(lambda u: SE3V.log(SE3V.compose(SE3V.exp(xi + u), SE3V.inverse(SE3V.exp(xi)))), 6)
-    _close(SE3V.right_jacobian(xi), right, 1e-12)
-    _close(SE3V.right_jacobian(-xi), left, 1e-12)
+    assert_close(SE3V.right_jacobian(xi), right, 1e-12)
+    assert_close(SE3V.right_jacobian(-xi), left, 1e-12)
     for x in (xi, -xi):
-        _close(SE3V.right_jacobian_inverse(x) @ SE3V.right_jacobian(x), np.eye(6), 1e-13)
+        assert_close(SE3V.right_jacobian_inverse(x) @ SE3V.right_jacobian(x), np.eye(6), 1e-13)
     if name in ("origin", "Ypr(1, 2, 3)"):
         phi = xi[3:]
         right = jacobian8_stacked(lambda u: SO3.log(SO3.between(SO3.exp(phi), SO3.exp(phi + u))), 3)
         left = jacobian8_stacked(lambda u: SO3.log(SO3.compose(SO3.exp(phi + u), SO3.inverse(SO3.exp(phi)))), 3)
-        _close(SO3.right_jacobian(phi), right, 1e-12)
-        _close(SO3.right_jacobian(-phi), left, 1e-12)
-        _close(SO3.right_jacobian_inverse(phi) @ SO3.right_jacobian(phi), np.eye(3), 1e-13)
+        assert_close(SO3.right_jacobian(phi), right, 1e-12)
+        assert_close(SO3.right_jacobian(-phi), left, 1e-12)
+        assert_close(SO3.right_jacobian_inverse(phi) @ SO3.right_jacobian(phi), np.eye(3), 1e-13)
