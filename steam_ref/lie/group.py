@@ -44,7 +44,17 @@ from numpy.typing import ArrayLike, NDArray
 from ..arguments import finite, real_array
 from ..errors import ShapeError, SteamError
 
-__all__ = ["LieGroup", "check_group"]
+__all__ = ["LieGroup", "check_group", "matrix_of"]
+
+
+def matrix_of(rows: list[list[NDArray | float]], like: NDArray) -> NDArray:
+    """A stack of matrices (..., n, m) from rows of entries, each an array broadcast to ``like``'s shape or a number."""
+    entries = [v for row in rows for v in row]
+    out = np.empty(np.shape(like) + (len(rows), len(rows[0])), dtype=np.result_type(like, *entries))
+    for i, row in enumerate(rows):
+        for j, v in enumerate(row):
+            out[..., i, j] = v
+    return out
 
 
 def _mm(a: NDArray, b: NDArray) -> NDArray:

@@ -27,7 +27,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..dead_reckoning import wrap_angle
 from ..errors import ShapeError, SteamError
-from .group import LieGroup
+from .group import LieGroup, matrix_of
 
 __all__ = ["SE2", "SE2Group", "wrap", "SERIES_BELOW"]
 
@@ -158,10 +158,9 @@ class _Coefficients:
         return self._pick(lambda: _poly(_G1, self.z), lambda: (-self["alpha1"] - self["gamma"]) / self.phi)
 
 
-_LAST: list = [
-    None,
-    None,
-]  # (φ's shape and bytes, its _Coefficients): the kernels of one factor read the same φ in turn
+# the last φ's coefficients, as one (key, _Coefficients) pair replaced whole: the kernels of one factor read the same
+# φ in turn; a thread reads the pair once, so it never returns the coefficients another thread's φ put there
+_LAST: list[tuple[tuple, _Coefficients] | None] = [None]
 
 
 def _coefficients(phi: NDArray) -> _Coefficients:
@@ -169,9 +168,12 @@ def _coefficients(phi: NDArray) -> _Coefficients:
     variable read one φ in turn: each coefficient is computed once, the same numbers)."""
     phi = np.asarray(phi, dtype=float)
     key = (phi.shape, phi.tobytes())
-    if _LAST[0] != key:
-        _LAST[:] = [key, _Coefficients(phi.copy())]
-    return _LAST[1]
+    last = _LAST[0]
+    if last is not None and last[0] == key:
+        return last[1]
+    found = _Coefficients(phi.copy())
+    _LAST[0] = (key, found)
+    return found
 
 
 def _stacked(values: list[NDArray]) -> NDArray:
@@ -211,16 +213,6 @@ def _rot(theta: NDArray) -> tuple[NDArray, NDArray]:
     return np.cos(theta), np.sin(theta)
 
 
-def _matrix(rows: list[list[NDArray | float]], like: NDArray) -> NDArray:
-    """The matrices (..., n, m) whose entries are ``rows`` (numbers, or arrays of the shape of ``like``), written in
-    place: a stack of broadcasts costs ten times more for one matrix."""
-    out = np.empty(np.shape(like) + (len(rows), len(rows[0])))
-    for i, row in enumerate(rows):
-        for j, v in enumerate(row):
-            out[..., i, j] = v
-    return out
-
-
 class SE2Group(LieGroup):
     """SE(2) on poses [x, y, θ] and twists [ρx, ρy, φ] (module docstring); its one instance is :data:`SE2`."""
 
@@ -249,7 +241,7 @@ class SE2Group(LieGroup):
         """ξ^ = [[0, -φ, ρx], [φ, 0, ρy], [0, 0, 0]]."""
         xi = self._twists("xi", xi)
         r1, r2, p = xi[..., 0], xi[..., 1], xi[..., 2]
-        return _matrix([[0.0, -p, r1], [p, 0.0, r2], [0.0, 0.0, 0.0]], p)
+        return matrix_of([[0.0, -p, r1], [p, 0.0, r2], [0.0, 0.0, 0.0]], p)
 
     def vee(self, X: ArrayLike) -> NDArray:
         """[ρx, ρy, φ] = [X₀₂, X₁₂, X₁₀]."""
@@ -260,7 +252,7 @@ class SE2Group(LieGroup):
         """[[R(θ), t], [0, 1]]."""
         pose = self._elements("a", a)
         c, s = _rot(pose[..., 2])
-        return _matrix([[c, -s, pose[..., 0]], [s, c, pose[..., 1]], [0.0, 0.0, 1.0]], c)
+        return matrix_of([[c, -s, pose[..., 0]], [s, c, pose[..., 1]], [0.0, 0.0, 1.0]], c)
 
     def angle(self, xi: ArrayLike) -> NDArray:
         """abs(φ), the angle every coefficient's series switch tests."""
@@ -279,7 +271,7 @@ class SE2Group(LieGroup):
         k = _coefficients(xi[..., 2])
         A, B, C, D = k["A"], k["B"], k["C"], k["D"]
         r1, r2 = xi[..., 0], xi[..., 1]
-        return _matrix(  # [DER 11.4]
+        return matrix_of(  # [DER 11.4]
             [[A, B, C * r1 - D * r2], [-B, A, D * r1 + C * r2], [0.0, 0.0, 1.0]], r1
         )
 
@@ -289,13 +281,13 @@ class SE2Group(LieGroup):
         g = _coefficients(xi[..., 2])
         al, G, b = g["alpha"], g["gamma"], xi[..., 2] / 2
         r1, r2 = xi[..., 0], xi[..., 1]
-        return _matrix([[al, -b, G * r1 + r2 / 2], [b, al, G * r2 - r1 / 2], [0.0, 0.0, 1.0]], r1)  # [DER 11.5]
+        return matrix_of([[al, -b, G * r1 + r2 / 2], [b, al, G * r2 - r1 / 2], [0.0, 0.0, 1.0]], r1)  # [DER 11.5]
 
     def adjoint(self, a: ArrayLike) -> NDArray:
         """Ad(T) = [[R, [y, -x]ᵀ], [0, 1]]: T Exp(ξ) T⁻¹ = Exp(Ad(T) ξ).  [DER 11.8]"""
         pose = self._elements("a", a)
         c, s = _rot(pose[..., 2])
-        return _matrix([[c, -s, pose[..., 1]], [s, c, -pose[..., 0]], [0.0, 0.0, 1.0]], c)  # [DER 11.8]
+        return matrix_of([[c, -s, pose[..., 1]], [s, c, -pose[..., 0]], [0.0, 0.0, 1.0]], c)  # [DER 11.8]
 
     def _compose(self, a: NDArray, b: NDArray) -> NDArray:
         """T_a T_b = [t_a + R_a t_b; θ_a + θ_b wrapped]."""
@@ -324,7 +316,7 @@ class SE2Group(LieGroup):
         r1, r2 = xi[..., 0], xi[..., 1]
         u1, u2, w = v[..., 0], v[..., 1], v[..., 2]
         r1, r2, u1, u2, w, G, a1, G1 = np.broadcast_arrays(r1, r2, u1, u2, w, G, a1, G1)
-        return _matrix(
+        return matrix_of(
             [
                 [G * w, w / 2, a1 * u1 - u2 / 2 + G1 * r1 * w],
                 [-w / 2, G * w, u1 / 2 + a1 * u2 + G1 * r2 * w],
@@ -370,7 +362,7 @@ class SE2Group(LieGroup):
         v1, v2, v3 = v[..., 0], v[..., 1], v[..., 2]
         A1, B1, C, C1, D, D1 = k["A1"], k["B1"], k["C"], k["C1"], k["D"], k["D1"]
         r1, r2, v1, v2, v3, A1, B1, C, C1, D, D1 = np.broadcast_arrays(r1, r2, v1, v2, v3, A1, B1, C, C1, D, D1)
-        return _matrix(
+        return matrix_of(
             [
                 [C * v3, -D * v3, A1 * v1 + B1 * v2 + (C1 * r1 - D1 * r2) * v3],
                 [D * v3, C * v3, -B1 * v1 + A1 * v2 + (D1 * r1 + C1 * r2) * v3],

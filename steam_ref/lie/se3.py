@@ -23,8 +23,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .coefficients import DEFINITIONS, SERIES_BELOW, Coefficients, coefficients_at
-from .group import LieGroup
-from .so3 import SO3, axis_frame, check_rotation, hat3, isotropic, matrix_of, mm3, mv3, rotation_angle, unit_axis
+from .group import LieGroup, matrix_of
+from .so3 import SO3, axis_frame, check_rotation, hat3, isotropic, mm3, mv3, rotation_angle, unit_axis
 
 __all__ = ["SE3", "SE3Group", "SE3V", "SE3VectorGroup"]
 

@@ -25,7 +25,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..errors import ShapeError, SteamError
 from .coefficients import DEFINITIONS, SERIES_BELOW, Coefficients, coefficients_at
-from .group import LieGroup
+from .group import LieGroup, matrix_of
 
 __all__ = [
     "SO3",
@@ -39,7 +39,6 @@ __all__ = [
     "mm3",
     "mv3",
     "hat3",
-    "matrix_of",
 ]
 
 ORTHONORMAL_TOL = 1e-9  # check(): the largest |RᵀR - I| entry a stored rotation may carry
@@ -57,16 +56,6 @@ def mm3(a: NDArray, b: NDArray) -> NDArray:
 def mv3(a: NDArray, v: NDArray) -> NDArray:
     """a v for stacks of 3 × 3 matrices and 3-vectors."""
     return a[..., :, 0] * v[..., 0, None] + a[..., :, 1] * v[..., 1, None] + a[..., :, 2] * v[..., 2, None]
-
-
-def matrix_of(rows: list[list[NDArray | float]], like: NDArray) -> NDArray:
-    """A stack of matrices (..., n, m) from rows of entries, each an array broadcast to ``like``'s shape or a number."""
-    entries = [v for row in rows for v in row]
-    out = np.empty(np.shape(like) + (len(rows), len(rows[0])), dtype=np.result_type(like, *entries))
-    for i, row in enumerate(rows):
-        for j, v in enumerate(row):
-            out[..., i, j] = v
-    return out
 
 
 def hat3(w: NDArray) -> NDArray:
