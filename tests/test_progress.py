@@ -108,7 +108,10 @@ def test_a_stderr_that_cannot_take_the_bar_costs_the_run_nothing(monkeypatch, ca
     code = main(["run", "--steps", "40", "--progress", "--json", "--save-trajectory", str(saved)])
     assert code == 0 and saved.is_file()
     assert json.loads(capsys.readouterr().out)["n_poses"] == 41
-    for command in (["batch", "--progress"], ["consistency", "--seeds", "2", "--steps", "8", "--progress"]):
+    for command in (
+        ["batch", "--dataset", "synthetic", "--progress"],
+        ["consistency", "--seeds", "2", "--steps", "8", "--progress"],
+    ):
         assert main(command) == 0, command
 
 
