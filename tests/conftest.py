@@ -44,11 +44,24 @@ def shared_data():
     return reference_data_dir()
 
 
+# A run of a whole tutorial is slow (up to ~45 s each), so each runs apart; every other test runs with its file.
+RUNS_APART = "test_notebooks.py::test_notebook_executes["
+
+
+@pytest.hookimpl(tryfirst=True)  # before xdist's own hook reads the groups (``--dist loadgroup``, pyproject.toml)
 def pytest_collection_modifyitems(items):
-    """A test that uses ``shared_data`` is a ``needs_data`` test, so ``-m "not needs_data"`` works."""
+    """A test that uses ``shared_data`` is a ``needs_data`` test, so ``-m "not needs_data"`` works.
+
+    Each test joins an ``xdist_group``, the unit a worker of ``-n 2 --dist loadgroup`` runs whole: its file, so that a
+    module's fixtures are computed once, except a tutorial's run (``RUNS_APART``), its own unit, so that the slow
+    tutorials spread over both workers rather than queueing on one.
+    """
     for item in items:
         if "shared_data" in getattr(item, "fixturenames", ()) and not item.get_closest_marker("needs_data"):
             item.add_marker(pytest.mark.needs_data)
+        if not item.get_closest_marker("xdist_group"):
+            apart = RUNS_APART in item.nodeid  # its group: the tutorial's name (shown after an @ in the test's id)
+            item.add_marker(pytest.mark.xdist_group(item.callspec.id if apart else item.path.stem))
 
 
 def pytest_runtest_setup(item):
