@@ -14,6 +14,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 from requirements import optional_import
 
 BENCH = Path(__file__).resolve().parents[1] / "benchmarks"
@@ -132,3 +133,25 @@ def test_gtsam_fixed_lag_smoother_runs_the_plaza_stream_with_landmarks_stamped_w
     ours = bench.child("steam", "plaza", 10, 600, lag=20.0)
     assert theirs["n_marginalized"] > 0 and ours["n_marginalized"] > 0
     assert theirs["rmse_m"] < 1.0 and ours["rmse_m"] < 1.0 and theirs["n_poses"] == ours["n_poses"] == 600
+
+
+def test_phases_benchmark_profiles_both_trees_phase_by_phase(tmp_path):
+    """Each phase of the update has its medians at both trees and their ratio; the phases lie inside the updates,
+    the updates inside the stream; a child run against a tree its steam_ref does not come from refuses to run."""
+    (row,) = _rows("phases.py", "--quick", "--max-poses", "40", "--rows", "synthetic/1", "--ref", "HEAD", cwd=tmp_path)
+    assert row["row"] == "synthetic/1" and row["ref"] == "HEAD" and row["repeat"] == 1 and row["n_poses"] == 40
+    phases = {"check", "add", "relinearize", "remove", "linearize", "order", "eliminate", "backsubstitute", "sum"}
+    assert set(row["phase_s"]) == phases
+    for figure in [*row["phase_s"].values(), row["update_rest_s"], row["outside_updates_s"], row["wall_s"]]:
+        assert figure["ref"] >= 0 and figure["here"] >= 0
+    assert 0 < row["phase_s"]["sum"]["here"] < row["wall_s"]["here"] and row["outside_updates_s"]["here"] > 0
+    assert row["ratio_wall"] > 0 and row["ratio_cpu"] > 0 and len(row["ratio_cpu_pairs"]) == 1
+    (updates,) = row["n_updates"]["here"]
+    assert updates == 39 and row["cliques_solved"]["here"][0] >= updates  # at least the new root each update
+    assert row["cliques_eliminated"]["here"][0] >= updates and len(row["rmse_m"]["here"]) == 1
+
+    spec = importlib.util.spec_from_file_location("phases_benchmark", BENCH / "phases.py")
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    with pytest.raises(SystemExit, match="not from the tree"):
+        bench.child("synthetic", 1, 10, tmp_path)
