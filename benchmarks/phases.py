@@ -7,12 +7,13 @@ working tree, each run in a fresh process with ``PYTHONPATH`` set to one tree on
 times (default 3) at each tree, the order alternating, rows interleaved (a change of load hits both trees alike).
 
 A child runs what ``steam-ref run --dataset D --every E`` runs (cli/run.py: the data set's preset, its schedule at
-``E``, :class:`~steam_ref.paper.online.StreamingEstimator` with BTGP) and reports:
+``E``, :class:`~steam_ref.paper.online.StreamingEstimator` with BTGP) and reports, in seconds of ``--clock``:
 
-- ``phase_s``: the seconds in each phase of the update (``check``, ``add``, ``relinearize``, ``remove``,
-  ``linearize``, ``order``, ``eliminate``, ``backsubstitute``: ``UpdateReport.timings``), summed over every update;
-- ``update_rest_s``: the rest of the stream's updates (the divergence check, predicting from the new estimate);
-- ``outside_updates_s``: the stream's wall time outside the updates (the front end, the final queries, the RMSE);
+- ``phase_s``: each phase of the iSAM2 update (``check``, ``add``, ``relinearize``, ``remove``, ``linearize``,
+  ``order``, ``eliminate``, ``backsubstitute``: ``UpdateReport.timings``), summed over every update;
+- ``update_rest_s``: the rest of the solver's updates (the bookkeeping between the phases, the stream's record);
+- ``outside_updates_s``: the stream outside the solver's updates (the front end, the divergence check, predicting
+  from the new estimate, the final queries and the RMSE);
 - ``wall_s`` and ``cpu_s`` (``time.process_time``) of the whole stream, imports and loading not included;
 - ``cliques_eliminated`` (new cliques, summed over updates), ``cliques_solved`` (back-substitution's clique
   solves), ``variables_reeliminated`` and ``factors_linearized``, when the reference's ``UpdateReport`` has them;
@@ -22,8 +23,14 @@ One JSON line per row: for each figure the medians at the reference and here and
 is faster), ``ratio_cpu_pairs`` (each alternating pair's CPU ratio), the counts at both, and the RMSEs. With the
 same code at both (``--ref`` a commit whose package equals this tree's), the ratios measure the noise of the sitting.
 
+``--clock cpu`` (the default) makes the update's own phase timer read ``time.process_time`` instead of
+``time.perf_counter`` (the child replaces ``time`` in ``steam_ref.bayes_tree.isam``; a tree whose module has no
+``time`` to replace fails): on a shared machine the wall seconds of a phase are mostly other processes' (measured
+on 2 cores at load 7-15, identical code at both trees: per-phase wall ratios 0.53-1.66, CPU ratios of the whole
+stream 1.00-1.13). ``--clock wall`` keeps the package's own clock.
+
     python benchmarks/phases.py [--ref aaef952] [--repeat 3] [--rows plaza/1,plaza/10,paper-synthetic/1]
-                                [--max-poses N] [--quick]
+                                [--max-poses N] [--clock cpu|wall] [--quick]
 """
 
 from __future__ import annotations
@@ -36,6 +43,7 @@ import subprocess
 import sys
 import tempfile
 import time
+import types
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # the benchmarks folder is no package
@@ -48,9 +56,9 @@ TIMES = ("update_rest_s", "outside_updates_s", "wall_s", "cpu_s")
 COUNTS = ("cliques_eliminated", "cliques_solved", "variables_reeliminated", "factors_linearized", "n_updates")
 
 
-def child(dataset: str, every: int, max_poses: int | None, tree: Path) -> dict:
+def child(dataset: str, every: int, max_poses: int | None, tree: Path, clock: str = "cpu") -> dict:
     """One stream in this process, as ``steam-ref run --dataset D --every E`` runs it; fails if ``steam_ref`` is not
-    ``tree``'s."""
+    ``tree``'s. ``clock`` 'cpu' times the phases in CPU seconds, 'wall' in the package's own wall seconds."""
     import warnings
 
     import steam_ref
@@ -66,15 +74,26 @@ def child(dataset: str, every: int, max_poses: int | None, tree: Path) -> dict:
     from steam_ref.paper.readings import Readings
     from steam_ref.paper.solvers import BayesTreeSolver
 
+    seconds = time.process_time if clock == "cpu" else time.perf_counter
+    if clock == "cpu":
+        from steam_ref.bayes_tree import isam
+
+        if getattr(isam, "time", None) is not time:
+            raise SystemExit(f"{isam.__file__} reads no `time` module whose clock could be replaced: use --clock wall")
+        isam.time = types.SimpleNamespace(perf_counter=time.process_time)
+
     class Counted(BayesTreeSolver):
         """BTGP as the stream makes it (``make_solver('btgp', isam2=...)``), adding up each update's counts."""
 
         def __init__(self, params) -> None:
             super().__init__(params)
             self.counts = dict.fromkeys(COUNTS[:-1], 0)
+            self.update_s = 0.0  # in the solver's update, on ``seconds``
 
         def update(self, factors, values) -> None:
+            start = seconds()
             super().update(factors, values)
+            self.update_s += seconds() - start
             r = self.reports[-1]
             figures = {
                 "cliques_eliminated": _length(getattr(r, "new_cliques", None)),
@@ -96,12 +115,12 @@ def child(dataset: str, every: int, max_poses: int | None, tree: Path) -> dict:
     result = est.run(data.ground_truth)
     wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
     phase_s = dict(solver.phase_seconds)
-    updates = float(sum(est.update_seconds))
+    updates, total = solver.update_s, (cpu if clock == "cpu" else wall)
     return {
         "steam_ref": str(where.parent),
         "phase_s": phase_s,
         "update_rest_s": updates - sum(phase_s.values()),
-        "outside_updates_s": wall - updates,
+        "outside_updates_s": total - updates,
         "wall_s": wall,
         "cpu_s": cpu,
         **solver.counts,
@@ -115,9 +134,9 @@ def _length(items) -> int | None:
     return None if items is None else len(items)
 
 
-def run_child(tree: Path, dataset: str, every: int, max_poses: int | None, cwd: Path) -> dict:
+def run_child(tree: Path, dataset: str, every: int, max_poses: int | None, cwd: Path, clock: str) -> dict:
     """One stream in a fresh process with only ``tree`` on ``PYTHONPATH``."""
-    argv = [sys.executable, __file__, "--child", f"{dataset}/{every}", "--tree", str(tree)]
+    argv = [sys.executable, __file__, "--child", f"{dataset}/{every}", "--tree", str(tree), "--clock", clock]
     argv += [] if max_poses is None else ["--max-poses", str(max_poses)]
     env = os.environ | {"PYTHONPATH": str(tree)}
     proc = subprocess.run(argv, env=env, cwd=cwd, capture_output=True, text=True)
@@ -177,12 +196,13 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--rows", default=ROWS, help=f"comma-separated DATASET/EVERY (default {ROWS})")
     p.add_argument("--max-poses", type=int, default=None, help="process only the first N poses")
     p.add_argument("--quick", action="store_true", help=f"{QUICK_POSES}-pose prefixes, one repeat")
+    p.add_argument("--clock", choices=("cpu", "wall"), default="cpu", help="the phases' clock (default %(default)s)")
     p.add_argument("--child", default=None, help=argparse.SUPPRESS)
     p.add_argument("--tree", default=None, help=argparse.SUPPRESS)
     a = p.parse_args(argv)
     if a.child is not None:
         ((dataset, every),) = parse_rows(a.child)
-        print(json.dumps(child(dataset, every, a.max_poses, Path(a.tree))))
+        print(json.dumps(child(dataset, every, a.max_poses, Path(a.tree), a.clock)))
         return
     if a.quick:
         a.max_poses, a.repeat = a.max_poses or QUICK_POSES, 1
@@ -195,11 +215,17 @@ def main(argv: list[str] | None = None) -> None:
         for i in range(a.repeat):
             for j, (dataset, every) in enumerate(rows):
                 for name in ("ref", "here") if (i + j) % 2 == 0 else ("here", "ref"):
-                    out = run_child(trees[name], dataset, every, a.max_poses, Path(tmp))
+                    out = run_child(trees[name], dataset, every, a.max_poses, Path(tmp), a.clock)
                     runs[(dataset, every)][name].append(out)
                     print(f"  {name} {dataset}/{every}: {out['cpu_s']:.2f} s CPU", file=sys.stderr, flush=True)
     for (dataset, every), by in runs.items():
-        head = {"row": f"{dataset}/{every}", "ref": a.ref, "repeat": a.repeat, "max_poses": a.max_poses}
+        head = {
+            "row": f"{dataset}/{every}",
+            "ref": a.ref,
+            "repeat": a.repeat,
+            "max_poses": a.max_poses,
+            "clock": a.clock,
+        }
         head["n_poses"] = by["here"][0]["n_poses"]
         print(json.dumps(head | compare(by["ref"], by["here"])), flush=True)
 
