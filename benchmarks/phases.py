@@ -25,9 +25,9 @@ same code at both (``--ref`` a commit whose package equals this tree's), the rat
 
 ``--clock cpu`` (the default) makes the update's own phase timer read ``time.process_time`` instead of
 ``time.perf_counter`` (the child replaces ``time`` in ``steam_ref.bayes_tree.isam``; a tree whose module has no
-``time`` to replace fails): on a shared machine the wall seconds of a phase are mostly other processes' (measured
-on 2 cores at load 7-15, identical code at both trees: per-phase wall ratios 0.53-1.66, CPU ratios of the whole
-stream 1.00-1.13). ``--clock wall`` keeps the package's own clock.
+``time`` to replace fails): on a shared machine the wall seconds of a phase are mostly other processes'
+(docs/experiments.md, "Per phase against an earlier commit", has the noise check). ``--clock wall`` keeps the
+package's own clock.
 
     python benchmarks/phases.py [--ref aaef952] [--repeat 3] [--rows plaza/1,plaza/10,paper-synthetic/1]
                                 [--max-poses N] [--clock cpu|wall] [--quick]
