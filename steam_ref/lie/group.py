@@ -168,7 +168,14 @@ class LieGroup(ABC):
         a = real_array(name, a)
         if a.shape != (self.size,):
             raise ShapeError(f"{name} must be an element of {self!r} ({self.size} numbers), got shape {a.shape}")
-        return finite(name, a)
+        self.check_stored(name, finite(name, a))
+        return a
+
+    def check_stored(self, name: str, a: NDArray) -> None:
+        """Nothing, or SteamError naming ``name`` when the finite float element ``a`` (size,) is not in the group's
+        stored form (SE(2): θ in (-π, π]; SO(3): R a rotation); :meth:`check`'s own rule, which a state's check
+        (``lie.state.GroupState.check``) applies to its pose without checking the numbers again."""
+        del name, a  # a group whose every finite array of its size is an element
 
     # The scalar coefficients of the group's closed forms, for the battery's sweep against their definitions at
     # 50 digits (tests/test_lie_groups.py); a group that lists none is checked through its matrices alone.

@@ -258,12 +258,10 @@ class SE2Group(LieGroup):
         """abs(φ), the angle every coefficient's series switch tests."""
         return np.abs(self._twists("xi", xi)[..., 2])
 
-    def check(self, name: str, a: object) -> NDArray:
-        """A finite pose [x, y, θ] with θ in (-π, π]; SteamError naming ``name`` otherwise."""
-        pose = super().check(name, a)
-        if not -np.pi < pose[2] <= np.pi:
-            raise SteamError(f"{name}: the heading of an SE(2) pose must lie in (-π, π], got θ={float(pose[2])!r}")
-        return pose
+    def check_stored(self, name: str, a: NDArray) -> None:
+        """A pose [x, y, θ] with θ in (-π, π]; SteamError naming ``name`` otherwise."""
+        if not -np.pi < a[2] <= np.pi:
+            raise SteamError(f"{name}: the heading of an SE(2) pose must lie in (-π, π], got θ={float(a[2])!r}")
 
     def right_jacobian(self, xi: ArrayLike) -> NDArray:
         """J_r(ξ): Exp(ξ + dξ) ≈ Exp(ξ) Exp(J_r(ξ) dξ) (GTSAM's ``Pose2.ExpmapDerivative``).  [DER 11.4]"""
@@ -346,6 +344,9 @@ class SE2Group(LieGroup):
         """[R(θ)ᵀ [ẋ, ẏ]; θ̇]: the velocity in the robot's own frame (forward, lateral, yaw rate)."""
         a, v = np.asarray(a, dtype=float), np.asarray(velocity, dtype=float)
         c, s = _rot(a[..., 2])
+        if a.ndim == 1 and v.shape == (3,):  # one state (a front end's new one): the same products in Python's floats
+            (v1, v2, v3), cf, sf = v.tolist(), float(c), float(s)
+            return np.array([cf * v1 + sf * v2, -sf * v1 + cf * v2, v3])
         return _stacked([c * v[..., 0] + s * v[..., 1], -s * v[..., 0] + c * v[..., 1], v[..., 2]])
 
     def world_velocity(self, a: ArrayLike, twist: ArrayLike) -> NDArray:

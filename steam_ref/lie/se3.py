@@ -110,11 +110,9 @@ class SE3Group(LieGroup):
         """θ = ‖φ‖, the angle every coefficient's series switch tests."""
         return rotation_angle(self._twists("xi", xi)[..., 3:])
 
-    def check(self, name: str, a: object) -> NDArray:
-        """A finite pose [t; R row-major] whose R is a rotation to 1e-9 (SO(3)'s check); SteamError naming ``name``."""
-        a = super().check(name, a)
+    def check_stored(self, name: str, a: NDArray) -> None:
+        """A pose [t; R row-major] whose R is a rotation to 1e-9 (SO(3)'s check); SteamError naming ``name``."""
         check_rotation(name, a[3:].reshape(3, 3))
-        return a
 
     def right_jacobian(self, xi: ArrayLike) -> NDArray:
         """J_r(ξ) = [[J_r(φ), Q_r], [0, J_r(φ)]] (GTSAM's ``Pose3.ExpmapDerivative``, reordered).  [DER 13.3-13.4]"""
@@ -308,9 +306,9 @@ class SE3VectorGroup(SE3Group):
     def matrix(self, a: ArrayLike) -> NDArray:
         return SE3.matrix(self._full(self._elements("a", a)))
 
-    def check(self, name: str, a: object) -> NDArray:
-        """A finite pose [t; φ]; SteamError naming ``name`` otherwise."""
-        return LieGroup.check(self, name, a)
+    def check_stored(self, name: str, a: NDArray) -> None:
+        """Nothing: every finite [t; φ] is a pose (``check`` refuses the rest, naming ``name``)."""
+        del name, a
 
     def adjoint(self, a: ArrayLike) -> NDArray:
         return SE3.adjoint(self._full(self._elements("a", a)))

@@ -170,12 +170,10 @@ class SO3Group(LieGroup):
         """θ = ‖φ‖, the angle every coefficient's series switch tests."""
         return rotation_angle(self._twists("xi", xi))
 
-    def check(self, name: str, a: object) -> NDArray:
-        """A finite rotation (9 numbers, R row-major) with every entry of RᵀR - I within ±1e-9 and det R > 0; SteamError
+    def check_stored(self, name: str, a: NDArray) -> None:
+        """A rotation (9 numbers, R row-major) with every entry of RᵀR - I within ±1e-9 and det R > 0; SteamError
         naming ``name`` otherwise."""
-        a = super().check(name, a)
         check_rotation(name, a.reshape(3, 3))
-        return a
 
     def right_jacobian(self, xi: ArrayLike) -> NDArray:
         """J_r(φ) = A I - D φ^ + Ct φφᵀ = A I - B u^ + Cθ uuᵀ (GTSAM's ``Rot3.ExpmapDerivative``).  [DER 13.3]"""

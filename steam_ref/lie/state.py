@@ -48,6 +48,9 @@ class GroupState(Manifold):
     def __new__(cls, group: LieGroup, derivatives: int = 1) -> GroupState:
         """The one kind of each group and number of derivatives: ``GroupState(SE2) is SE2_STATE`` (the solvers
         compare kinds by identity)."""
+        known = cls._kinds.get((group, derivatives)) if type(derivatives) is int else None  # a factor's key_kinds
+        if known is not None:
+            return known
         check_group(group)
         if derivatives not in (1, 2) or isinstance(derivatives, bool):
             raise SteamError(
@@ -58,6 +61,8 @@ class GroupState(Manifold):
         return cls._kinds[group, derivatives]
 
     def __init__(self, group: LieGroup, derivatives: int = 1):
+        if getattr(self, "group", None) is group:  # the one kind, made already (``__new__``)
+            return
         self.group = group
         self.derivatives = derivatives
         self.name = group.name if derivatives == 1 else f"{group.name}+acc"
@@ -87,7 +92,7 @@ class GroupState(Manifold):
         x = real_array(name, x)
         if x.shape != (self.size,):
             raise ShapeError(f"{name} must be one {self!r} state ({self.size} numbers), got shape {x.shape}")
-        self.group.check(name, finite(name, x)[: self.group.size])
+        self.group.check_stored(name, finite(name, x)[: self.group.size])  # the numbers are checked: the form alone
         return x
 
     def retract(self, x: NDArray, delta: NDArray) -> NDArray:
