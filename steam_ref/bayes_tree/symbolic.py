@@ -46,26 +46,24 @@ def symbolic_elimination(order: Sequence[V], factor_keys: Sequence[Sequence[V]])
     Returns ``(separators, owner)``: variable → sᵢ (in elimination order), and for each factor the
     first of its variables in ``order``.
     """
-    order = list(order)
-    separators, owner = _elimination_game(order, factor_keys)
-    name = order.__getitem__
-    return {v: tuple(map(name, s)) for v, s in zip(order, separators, strict=True)}, list(map(name, owner))
+    separators, owner = _elimination_game(order := list(order), factor_keys)
+    named = {v: tuple(map(order.__getitem__, s)) for v, s in zip(order, separators, strict=True)}
+    return named, [order[i] for i in owner]
 
 
 def _elimination_game(order: list, factor_keys: Sequence[Sequence[V]]) -> tuple[list[list[int]], list[int]]:
-    """:func:`symbolic_elimination` on places in ``order`` (integers hash and sort faster than keys): each sᵢ as
-    the sorted places of its variables, and the place of each factor's first variable."""
+    """:func:`symbolic_elimination` on places in ``order`` (ints hash and sort faster than keys): sᵢ sorted, owners."""
     pos = {v: i for i, v in enumerate(order)}
     if len(pos) != len(order):
         raise SteamError("an elimination order lists a variable twice")
-    place, pending, owner = pos.__getitem__, {}, []  # pending: place → the places of the factors waiting for it
-    for keys in factor_keys:
-        try:
-            places = list(map(place, keys))
-        except KeyError as exc:
-            raise UnknownVariableError(f"a factor names {exc.args[0]!r}, which is not in the elimination order") from None
-        owner.append(first := min(places))
-        pending.setdefault(first, set()).update(places)
+    place, owner = pos.__getitem__, []
+    pending: dict[int, set[int]] = {}  # place → the places of the factors waiting for it
+    try:
+        for keys in factor_keys:
+            owner.append(first := min(places := list(map(place, keys))))
+            pending.setdefault(first, set()).update(places)
+    except KeyError as exc:
+        raise UnknownVariableError(f"a factor names {exc.args[0]!r}, which is not in the elimination order") from None
     separators = []
     for i in range(len(order)):
         s = pending.pop(i, set())
@@ -86,25 +84,21 @@ def build_cliques(
     variables; otherwise it starts a new child clique of C (or a new root when sᵢ is empty).
     ``zeros`` > 0: cliques then merge into their parents (``dims``: :mod:`steam_ref.linear.amalgamation`).
     """
-    order = list(order)
-    separators, owner = _elimination_game(order, factor_keys)
+    separators, owner = _elimination_game(order := list(order), factor_keys)
     name, clique_of = order.__getitem__, [0] * len(order)  # clique_of: place → the clique where it is frontal
     frontals: list[list] = []  # per clique, frontals in reverse elimination order
-    size: list[int] = []  # per clique, how many variables it holds (frontals and separator)
     seps: list[tuple] = []
     parents: list[int | None] = []
     for i in reversed(range(len(order))):
         sep = separators[i]
         parent = clique_of[sep[0]] if sep else None
         # sᵢ lies within {sᵢ's first variable} ∪ its separator, so within the parent's variables: equal sizes, equal sets
-        if parent is not None and len(sep) == size[parent]:
+        if parent is not None and len(sep) == len(frontals[parent]) + len(seps[parent]):
             frontals[parent].append(order[i])  # [K12 Alg. 2]: sᵢ = F_p ∪ S_p, θᵢ joins the parent clique
-            size[parent] += 1
             clique_of[i] = parent
             continue
         clique_of[i] = len(frontals)
         frontals.append([order[i]])
-        size.append(len(sep) + 1)
         seps.append(tuple(map(name, sep)))
         parents.append(parent)
     home = amalgamate(frontals, seps, parents, dims, zeros) if zeros else range(len(frontals))  # merged [AG89]

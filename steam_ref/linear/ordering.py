@@ -252,8 +252,8 @@ def min_degree_keys(
             raise UnknownVariableError(
                 f"factor_keys[{i}] = {keys!r} names {exc.args[0]!r}, which is not among the variables to order"
             ) from None
-        for a in places:
-            adj[a].update(places)
+        for j in places:
+            adj[j].update(places)
     if isinstance(last, Key):
         raise SteamError(f"last must be a collection of variables, got the single key {last!r}: write [{last!r}]")
     last_set = set(last)
