@@ -46,26 +46,29 @@ def symbolic_elimination(order: Sequence[V], factor_keys: Sequence[Sequence[V]])
     Returns ``(separators, owner)``: variable → sᵢ (in elimination order), and for each factor the
     first of its variables in ``order``.
     """
+    separators, owner = _elimination_game(order := list(order), factor_keys)
+    named = {v: tuple(map(order.__getitem__, s)) for v, s in zip(order, separators, strict=True)}
+    return named, [order[i] for i in owner]
+
+
+def _elimination_game(order: list, factor_keys: Sequence[Sequence[V]]) -> tuple[list[list[int]], list[int]]:
+    """:func:`symbolic_elimination` on places in ``order`` (ints hash and sort faster than keys): sᵢ sorted, owners."""
     pos = {v: i for i, v in enumerate(order)}
     if len(pos) != len(order):
         raise SteamError("an elimination order lists a variable twice")
-    pending: dict = {}  # variable → the variables of the factors waiting for it
-    owner = []
-    for keys in factor_keys:
-        try:
-            first = min(keys, key=pos.__getitem__)
-        except KeyError as exc:
-            raise UnknownVariableError(
-                f"a factor names {exc.args[0]!r}, which is not in the elimination order"
-            ) from None
-        owner.append(first)
-        pending.setdefault(first, set()).update(keys)
-    separators = {}
-    for v in order:
-        s = pending.pop(v, set())
-        s.discard(v)
-        sep = tuple(sorted(s, key=pos.__getitem__))
-        separators[v] = sep
+    place, owner = pos.__getitem__, []
+    pending: dict[int, set[int]] = {}  # place → the places of the factors waiting for it
+    try:
+        for keys in factor_keys:
+            owner.append(first := min(places := list(map(place, keys))))
+            pending.setdefault(first, set()).update(places)
+    except KeyError as exc:
+        raise UnknownVariableError(f"a factor names {exc.args[0]!r}, which is not in the elimination order") from None
+    separators = []
+    for i in range(len(order)):
+        s = pending.pop(i, set())
+        s.discard(i)
+        separators.append(sep := sorted(s))
         if sep:  # the new factor f(sᵢ) waits for the first variable of sᵢ  [YIB Eq. 24]
             pending.setdefault(sep[0], set()).update(sep)
     return separators, owner
@@ -81,31 +84,29 @@ def build_cliques(
     variables; otherwise it starts a new child clique of C (or a new root when sᵢ is empty).
     ``zeros`` > 0: cliques then merge into their parents (``dims``: :mod:`steam_ref.linear.amalgamation`).
     """
-    separators, owner = symbolic_elimination(order, factor_keys)
-    clique_of: dict = {}
+    separators, owner = _elimination_game(order := list(order), factor_keys)
+    name, clique_of = order.__getitem__, [0] * len(order)  # clique_of: place → the clique where it is frontal
     frontals: list[list] = []  # per clique, frontals in reverse elimination order
-    variables: list[set] = []
     seps: list[tuple] = []
     parents: list[int | None] = []
-    for v in reversed(order):
-        sep = separators[v]
+    for i in reversed(range(len(order))):
+        sep = separators[i]
         parent = clique_of[sep[0]] if sep else None
-        if parent is not None and len(sep) == len(variables[parent]) and variables[parent].issuperset(sep):
-            frontals[parent].append(v)  # [K12 Alg. 2]: sᵢ = F_p ∪ S_p, θᵢ joins the parent clique
-            variables[parent].add(v)
-            clique_of[v] = parent
+        # sᵢ lies within {sᵢ's first variable} ∪ its separator, so within the parent's variables: equal sizes, equal sets
+        if parent is not None and len(sep) == len(frontals[parent]) + len(seps[parent]):
+            frontals[parent].append(order[i])  # [K12 Alg. 2]: sᵢ = F_p ∪ S_p, θᵢ joins the parent clique
+            clique_of[i] = parent
             continue
-        clique_of[v] = len(frontals)
-        frontals.append([v])
-        variables.append(set(sep) | {v})
-        seps.append(sep)
+        clique_of[i] = len(frontals)
+        frontals.append([order[i]])
+        seps.append(tuple(map(name, sep)))
         parents.append(parent)
     home = amalgamate(frontals, seps, parents, dims, zeros) if zeros else range(len(frontals))  # merged [AG89]
     kept = [c for c, h in enumerate(home) if h == c]  # made parents first; numbered so children come first
     index = {c: len(kept) - 1 - i for i, c in enumerate(kept)}
     owned: list[list[int]] = [[] for _ in kept]
-    for j, v in enumerate(owner):
-        owned[index[home[clique_of[v]]]].append(j)
+    for j, i in enumerate(owner):
+        owned[index[home[clique_of[i]]]].append(j)
     return [
         SymbolicClique(
             tuple(reversed(frontals[c])), seps[c], None if p is None else index[home[p]], tuple(owned[index[c]])

@@ -53,8 +53,7 @@ def eliminate(
         for j in sc.factors:
             owner[j] = i
         ids = () if factor_ids is None else tuple(i for i in (factor_ids[j] for j in sc.factors) if i is not None)
-        gathered = [factors[j] for j in sc.factors] + incoming[i]
-        clique = eliminate_clique(sc.frontals, sc.separator, dims, gathered, ids)
+        clique = eliminate_clique(sc.frontals, sc.separator, dims, [factors[j] for j in sc.factors] + incoming[i], ids)
         if sc.parent is not None:
             incoming[sc.parent].append(clique.marginal)
         cliques.append(clique)

@@ -115,19 +115,21 @@ def assemble_sqrt_information(ordering: Ordering, conditionals: Sequence[Conditi
 
 def gather(keys: tuple[Key, ...], dims: Mapping[Key, int], factors: Sequence[GaussianFactor]) -> NDArray:
     """The dense block [A_F A_S | b] of the factors adjacent to a clique: (rows, n + 1).  [YIB Eq. 24]"""
-    offset, n = {}, 0
+    columns, n = {}, 0
     for k in keys:
-        offset[k] = n
-        n += dims[k]
-    rows = sum(f.rhs.shape[0] for f in factors)
-    M = np.zeros((rows, n + 1), order="F")
+        d = dims[k]
+        columns[k] = slice(n, n + d)
+        n += d
+    if not factors:
+        return np.zeros((0, n + 1), order="F")
+    rhs = np.concatenate([f.rhs for f in factors])  # ‖a θ + A_s s - b‖², the clique's terms stacked  [YIB Eq. 24]
+    M = np.zeros((rhs.shape[0], n + 1), order="F")
+    M[:, n] = rhs
     r = 0
     for f in factors:
         end = r + f.rhs.shape[0]
         for k, block in zip(f.keys, f.blocks, strict=True):  # a factor names each variable once
-            o = offset[k]
-            M[r:end, o : o + block.shape[1]] = block
-        M[r:end, n] = f.rhs  # ‖a θ + A_s s - b‖², the clique's terms stacked  [YIB Eq. 24]
+            M[r:end, columns[k]] = block
         r = end
     return M
 
@@ -161,29 +163,31 @@ def eliminate_clique(
     factor_ids: tuple[int, ...] = (),
 ) -> Clique:
     """Eliminate ``frontals`` from the adjacent ``factors`` by one dense QR.  [YIB Eq. 24-25]"""
+    frontal_dims, separator_dims = tuple(map(dims.__getitem__, frontals)), tuple(map(dims.__getitem__, separator))
     M = gather(frontals + separator, dims, factors)
-    nf, ncol = sum(dims[k] for k in frontals), M.shape[1]
-    free = M.shape[0] if M.shape[0] < nf else None  # fewer rows than frontal unknowns
-    if free is None:
-        qr, _, _, _ = lapack.dgeqrf(M)  # Q R = [A_F A_S | b]: Gram-Schmidt on the columns
-        R = qr[: min(M.shape[0], ncol)]
-        R[_below_diagonal(*R.shape)] = 0.0  # np.triu in place, its mask made once per shape
-        small = np.abs(R.diagonal()[:nf]) <= RANK_TOLERANCE * max(np.abs(M).max(), 1.0)
-        free = int(small.argmax()) if small.any() else None  # the first vanishing pivot
-    if free is not None:  # a vanishing pivot: name the variable and why
-        raise underdetermined(M, frontals, dims, free)
+    (rows, ncol), nf = M.shape, sum(frontal_dims)
+    if rows < nf:  # fewer rows than frontal unknowns
+        raise underdetermined(M, frontals, dims, rows)
+    qr, _, _, _ = lapack.dgeqrf(M)  # Q R = [A_F A_S | b]: Gram-Schmidt on the columns
+    R = qr if rows <= ncol else qr[:ncol]
+    R[_below_diagonal(*R.shape)] = 0.0  # np.triu in place, its mask made once per shape
+    tolerance = RANK_TOLERANCE * max(np.abs(M).max(), 1.0)
+    pivots = R.diagonal().tolist()  # a Python loop over them costs less than NumPy's calls on a few numbers
+    for i in range(nf):
+        if abs(pivots[i]) <= tolerance:  # the first vanishing pivot: name the variable and why
+            raise underdetermined(M, frontals, dims, i)
     ns = ncol - 1 - nf
     below = R[nf : nf + ns, nf:].copy()  # f(S): the rows left after eliminating F  [YIB Eq. 24]
     blocks, o = [], 0
-    for k in separator:
-        blocks.append(below[:, o : o + dims[k]])
-        o += dims[k]
+    for d in separator_dims:
+        blocks.append(below[:, o : o + d])
+        o += d
     marginal = GaussianFactor(separator, tuple(blocks), below[:, ns])
     return Clique(
         frontals,
         separator,
-        tuple(dims[k] for k in frontals),
-        tuple(dims[k] for k in separator),
+        frontal_dims,
+        separator_dims,
         np.asfortranarray(R[:nf, :nf]),
         np.ascontiguousarray(R[:nf, nf : ncol - 1]),
         R[:nf, ncol - 1].copy(),

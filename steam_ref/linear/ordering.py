@@ -243,41 +243,50 @@ def min_degree_keys(
         twice = next(v for i, v in enumerate(variables) if index[v] != i)
         raise SteamError(f"variables lists {twice!r} twice")
     _sizes(variables, dims)  # names a variable dims lacks, before any work
-    adj: dict = {v: set() for v in variables}
+    n = len(variables)
+    adj: list[set[int]] = [set() for _ in range(n)]  # by place in ``variables``: integers hash faster than keys
     for i, keys in enumerate(factor_keys):
-        for k in keys:
-            if k not in adj:
-                raise UnknownVariableError(
-                    f"factor_keys[{i}] = {keys!r} names {k!r}, which is not among the variables to order"
-                )
-            adj[k].update(keys)
+        try:
+            places = [index[k] for k in keys]
+        except KeyError as exc:
+            raise UnknownVariableError(
+                f"factor_keys[{i}] = {keys!r} names {exc.args[0]!r}, which is not among the variables to order"
+            ) from None
+        for j in places:
+            adj[j].update(places)
     if isinstance(last, Key):
         raise SteamError(f"last must be a collection of variables, got the single key {last!r}: write [{last!r}]")
     last_set = set(last)
-    unknown = [v for v in last_set if v not in adj]
+    unknown = [v for v in last_set if v not in index]
     if unknown:
         raise UnknownVariableError(f"last names {unknown[0]!r}, which is not among the variables to order")
-    group = {v: (1 if v in last_set else 0) for v in variables}
-    heap = []
-    for v, a in adj.items():
-        a.discard(v)
-        heap.append((group[v], len(a), index[v]))
+    # A heap entry is one integer, (group · n + degree) · n + place: compared as the tuple (group, degree, place),
+    # with group 1 for the variables of ``last``. ``current`` holds each variable's valid entry (-1 once eliminated).
+    group = [n * n if v in last_set else 0 for v in variables] if last_set else [0] * n
+    current = []
+    for i, a in enumerate(adj):
+        a.discard(i)
+        current.append(group[i] + len(a) * n + i)
+    heap = current.copy()
     heapq.heapify(heap)
-    order: list = []
+    pop, push, order = heapq.heappop, heapq.heappush, []
     while heap:
-        _, deg, i = heapq.heappop(heap)
-        v = variables[i]
-        a = adj.get(v)
-        if a is None or len(a) != deg:  # already eliminated, or a stale degree
+        entry = pop(heap)
+        i = entry % n
+        if current[i] != entry:  # already eliminated, or a stale degree
             continue
-        order.append(v)
-        del adj[v]
+        current[i] = -1
+        order.append(variables[i])
+        a = adj[i]
         for u in a:  # eliminating v joins its neighbours into a clique (fill)
             au = adj[u]
-            au.discard(v)
+            au.discard(i)
             au |= a
             au.discard(u)
-            heapq.heappush(heap, (group[u], len(au), index[u]))
+            entry = group[u] + len(au) * n + u
+            if entry != current[u]:  # an unchanged degree's entry is in the heap already
+                current[u] = entry
+                push(heap, entry)
     return order
 
 
