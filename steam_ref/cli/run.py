@@ -21,7 +21,7 @@ from ..evaluate import trajectory_figures
 from ..linear.amalgamation import zero_fraction
 from ..paper.online import StreamingEstimator
 from ..paper.options import StreamOptions
-from ..paper.presets import DEPARTURES, PRESETS, PaperSetup
+from ..paper.presets import DEPARTURES, PAPER_AMALGAMATION_ZEROS, PRESETS, PaperSetup
 from ..paper.problem import score_against_batch
 from ..paper.readings import Readings
 from ..paper.solvers import BayesTreeSolver
@@ -160,7 +160,7 @@ def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
         metavar="Z",
         help="BTGP: merge a clique into its parent while the merged clique's rows of R hold at most this fraction of "
         "explicit zeros, 0 <= Z < 1 (relaxed amalgamation: fewer, larger cliques; default: the preset's, "
-        f"{ISAM2Params.amalgamation_zeros}; docs/bayes_tree.md)",
+        f"{PAPER_AMALGAMATION_ZEROS}; 0 builds GTSAM's cliques; docs/bayes_tree.md)",
     )
     parser.add_argument(
         "--max-poses", type=number(int, 2, strict=False), default=None, help="process only the first N poses"
