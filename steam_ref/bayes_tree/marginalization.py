@@ -81,20 +81,27 @@ def eliminate_variables(
     Schur complement on its separator (kept) [derivations Eq. 10.1-10.3]. Factors not adjacent to ``drop``
     come back unchanged, first.
     """
-    pool = list(factors)
+    pool = dict(enumerate(factors))  # position → factor, in order: a new marginal goes last, as a list's append
+    on: dict[Key, list[int]] = {}  # variable → the positions naming it, increasing (a used one stays, skipped)
+    for i, f in pool.items():
+        for k in f.keys:
+            on.setdefault(k, []).append(i)
+    end = len(pool)
     for v in drop:
-        adjacent = [f for f in pool if v in f.keys]
+        adjacent = [pool.pop(i) for i in on.pop(v, ()) if i in pool]  # in the pool's order, no scan of it
         if not adjacent:
             raise UnknownVariableError(f"no factor names {v!r}: nothing to marginalize it from")
-        pool = [f for f in pool if v not in f.keys]
         separator = tuple(dict.fromkeys(k for f in adjacent for k in f.keys if k != v))
         clique = eliminate_clique((v,), separator, dims, adjacent)
         if conditionals is not None:
             conditionals.append(clique)
         marginal = clique.marginal
         if separator and marginal.rhs.shape[0]:
-            pool.append(marginal)
-    return pool
+            pool[end] = marginal
+            for k in separator:
+                on.setdefault(k, []).append(end)
+            end += 1
+    return list(pool.values())
 
 
 def _home(state: SolverState, keys: tuple[Key, ...], tops: list[int]) -> int:
@@ -184,8 +191,7 @@ def _marginalize(
         factor_ids = _add_marginal_factors(state, schur)
         labels = kept + factor_ids + [None] * len(orphans)
         new_cids = tree.insert_eliminated([_relabel(c, labels) for c in cliques], parents, orphans, owner[n_own:])
-    for j in dropped:
-        state.drop_factor(j)  # (its id is never given again)
+    state.drop_factors(dropped)  # (their ids are never given again)
     state.drop_variables(keys)
     if new_cids:
         backsubstitute(state, set(new_cids), alpha)
