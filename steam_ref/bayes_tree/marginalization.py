@@ -37,7 +37,7 @@ right-hand side at θ̄' is b_m - A_m (θ̄' ⊖ θ̄_S) (Eq. 10.4). Every chang
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 from numpy.typing import NDArray
 
@@ -217,7 +217,8 @@ def cuttable(tree: BayesTree, keys: Iterable[Key]) -> list[int]:
 def _relabel(clique: Clique, labels: list[int | None] | None, extra: tuple[int, ...] = ()) -> Clique:
     """``clique`` with its factor positions replaced by the solver's factor ids (None: kept), ``extra`` added."""
     ids = clique.factors if labels is None else tuple(labels[i] for i in clique.factors)
-    return replace(clique, factors=tuple(i for i in ids if i is not None) + extra)
+    kept, c = tuple(i for i in ids if i is not None), clique  # made whole: replace() reads the fields each call
+    return Clique(c.frontals, c.separator, c.frontal_dims, c.separator_dims, c.R, c.S, c.d, c.marginal, kept + extra)
 
 
 def _add_marginal_factors(state: SolverState, schur: list[GaussianFactor]) -> list[int]:
