@@ -114,6 +114,14 @@ def _pose_times(times: NDArray, states: array[int]) -> NDArray:
     return times
 
 
+def _kept(times: NDArray, states: array[int]) -> NDArray:
+    """:func:`_pose_times` checked; the clock's own array when it is read-only float64 (a clock made by ``Clock.of``
+    is), not a copy beside it (8 bytes a pose, twice)."""
+    checked = _pose_times(times, states)
+    shared = isinstance(times, np.ndarray) and times.dtype == np.float64 and times.ndim == 1
+    return times if shared and not times.flags.writeable else checked
+
+
 class Trajectory:
     """A solver's states at poses ``states`` (sorted), queried at any time from the first state on.
 
@@ -141,8 +149,8 @@ class Trajectory:
         self.solver = solver  # an Estimates: a solver or its result
         self.states = _pose_indices(states)  # poses with a state, increasing (an array('q'))
         self.clock = times if isinstance(times, Clock) else Clock.of(_pose_times(times, self.states))
-        self.times = _pose_times(self.clock.seconds, self.states)  # (n_poses,) time of every pose [data's clock]
-        self.model_times = _pose_times(self.clock.model, self.states)  # (n_poses,) the same on the prior's clock
+        self.times = _kept(self.clock.seconds, self.states)  # (n_poses,) time of every pose [data's clock]
+        self.model_times = _kept(self.clock.model, self.states)  # (n_poses,) the same on the prior's clock
         self.prior = as_motion_prior(prior)  # everything that differs between priors
         self.n = self.prior.state_dim  # size of a state
         if self.states:  # the newest state: a fixed-lag smoother still holds it

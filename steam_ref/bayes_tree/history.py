@@ -41,6 +41,8 @@ from .undo import UndoLog
 
 __all__ = ["ForgottenConditional", "History", "Marginalized"]
 
+_INT32_MAX = np.iinfo(np.int32).max  # the latest update Marginalized keeps in its arrays
+
 
 @dataclass(frozen=True, eq=False)
 class ForgottenConditional:
@@ -109,8 +111,9 @@ class History:
 
 
 class Marginalized:
-    """The update that marginalized each key (0: none, or given anew since): an int64 array per symbol by index, 8
-    bytes an index rather than a dict entry and a key each; an index the array would not reach goes to a dict."""
+    """The update that marginalized each key (0: none, or given anew since): an int32 array per symbol by index, 4
+    bytes an index rather than a dict entry and a key each; an index the array would not reach, or an update past
+    int32's range, goes to a dict."""
 
     def __init__(self) -> None:
         self.steps: dict[str, np.ndarray] = {}  # symbol → the update that marginalized each index
@@ -122,11 +125,11 @@ class Marginalized:
 
     def set(self, log: UndoLog, key: Key, step: int) -> None:
         """Record ``step`` for ``key`` in the undo ``log`` (an array grown by doubling comes back whole on undo)."""
-        steps = self.steps.get(key.symbol, np.zeros(0, dtype=np.int64))
-        if key in self.other or not 0 <= key.index < 2 * len(steps) + 1024:
+        steps = self.steps.get(key.symbol, np.zeros(0, dtype=np.int32))
+        if key in self.other or not 0 <= key.index < 2 * len(steps) + 1024 or not 0 <= step <= _INT32_MAX:
             log.set(self.other, key, step)
             return
         if key.index >= len(steps):  # doubled, or to reach the index, by at least 1,024
-            steps = np.concatenate([steps, np.zeros(max(len(steps), key.index + 1 - len(steps), 1024), dtype=np.int64)])
+            steps = np.concatenate([steps, np.zeros(max(len(steps), key.index + 1 - len(steps), 1024), dtype=np.int32)])
             log.set(self.steps, key.symbol, steps)
         log.set(steps, key.index, step)
