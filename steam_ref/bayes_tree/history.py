@@ -41,8 +41,6 @@ from .undo import UndoLog
 
 __all__ = ["ForgottenConditional", "History", "Marginalized"]
 
-_INT32_MAX = np.iinfo(np.int32).max  # the latest update Marginalized keeps in its arrays
-
 
 @dataclass(frozen=True, eq=False)
 class ForgottenConditional:
@@ -70,8 +68,7 @@ class ForgottenConditional:
         dims = clique.frontal_dims[i + 1 :] + clique.separator_dims
         RinvS = solve_triangular(R, S) if S.shape[1] else np.zeros((R.shape[0], 0))
         theta_s = np.concatenate([theta_bar[k] for k in separator]) if separator else np.zeros(0)
-        step = solve_triangular(R, clique.d[rows])
-        of = tuple(kinds[k] for k in (key, *separator))
+        step, of = solve_triangular(R, clique.d[rows]), tuple(kinds[k] for k in (key, *separator))
         return cls(key, separator, dims, np.asarray(theta_bar[key], dtype=float), step, -RinvS, theta_s, of)
 
     def value(self, separator_values: NDArray) -> NDArray:
@@ -111,9 +108,8 @@ class History:
 
 
 class Marginalized:
-    """The update that marginalized each key (0: none, or given anew since): an int32 array per symbol by index, 4
-    bytes an index rather than a dict entry and a key each; an index the array would not reach, or an update past
-    int32's range, goes to a dict."""
+    """The update that marginalized each key (0: none, or given anew since): an int32 array per symbol by index, 4 bytes
+    an index rather than a dict entry and a key each; an index the array would not reach, or a later update, in a dict."""
 
     def __init__(self) -> None:
         self.steps: dict[str, np.ndarray] = {}  # symbol → the update that marginalized each index
@@ -126,7 +122,7 @@ class Marginalized:
     def set(self, log: UndoLog, key: Key, step: int) -> None:
         """Record ``step`` for ``key`` in the undo ``log`` (an array grown by doubling comes back whole on undo)."""
         steps = self.steps.get(key.symbol, np.zeros(0, dtype=np.int32))
-        if key in self.other or not 0 <= key.index < 2 * len(steps) + 1024 or not 0 <= step <= _INT32_MAX:
+        if key in self.other or not 0 <= key.index < 2 * len(steps) + 1024 or not 0 <= step < 2**31:
             log.set(self.other, key, step)
             return
         if key.index >= len(steps):  # doubled, or to reach the index, by at least 1,024

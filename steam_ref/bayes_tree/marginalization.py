@@ -37,7 +37,7 @@ right-hand side at θ̄' is b_m - A_m (θ̄' ⊖ θ̄_S) (Eq. 10.4). Every chang
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from numpy.typing import NDArray
 
@@ -81,12 +81,11 @@ def eliminate_variables(
     Schur complement on its separator (kept) [derivations Eq. 10.1-10.3]. Factors not adjacent to ``drop``
     come back unchanged, first.
     """
-    pool = dict(enumerate(factors))  # position → factor, in order: a new marginal goes last, as a list's append
+    pool, end = dict(enumerate(factors)), len(factors)  # position → factor, in order: a new marginal goes last
     on: dict[Key, list[int]] = {}  # variable → the positions naming it, increasing (a used one stays, skipped)
     for i, f in pool.items():
         for k in f.keys:
             on.setdefault(k, []).append(i)
-    end = len(pool)
     for v in drop:
         adjacent = [pool.pop(i) for i in on.pop(v, ()) if i in pool]  # in the pool's order, no scan of it
         if not adjacent:
@@ -97,10 +96,9 @@ def eliminate_variables(
             conditionals.append(clique)
         marginal = clique.marginal
         if separator and marginal.rhs.shape[0]:
-            pool[end] = marginal
             for k in separator:
                 on.setdefault(k, []).append(end)
-            end += 1
+            pool[end], end = marginal, end + 1
     return list(pool.values())
 
 
@@ -151,8 +149,7 @@ def _marginalize(
     whole = cuttable(tree, drop) if reuse else []
     whole = whole if sum(len(tree.cliques[c].frontals) for c in whole) == len(drop) else []  # all of D, or the rest
     cids = whole or list(dict.fromkeys(c for v in keys for c in tree.cliques_involving(v)))  # step 1
-    fids = [j for c in cids for j in tree.cliques[c].factors]
-    dropped = [j for j in fids if not drop.isdisjoint(state.factors[j].keys)]
+    dropped = [j for c in cids for j in tree.cliques[c].factors if not drop.isdisjoint(state.factors[j].keys)]
     inside = set(cids)
     tops = [c for c in cids if tree.parent[c] not in inside]
     if whole:  # whole subtrees: the f(S) of their tops is the marginal (Eq. 10.3), their conditionals P(D | S)
@@ -163,9 +160,8 @@ def _marginalize(
         adjacent = [state.cached(j) for j in dropped]
         variables = list(dict.fromkeys(k for f in adjacent for k in f.keys))
         last = [k for k in variables if k not in drop]
-        # the first |D| of an order with the rest last are D: one variable needs no ordering (a /1 stream's state)
         order = keys if len(keys) == 1 else min_degree_keys(variables, state.dims, [f.keys for f in adjacent], last)
-        order_drop = order[: len(drop)]
+        order_drop = order[: len(drop)]  # D, the rest being last: one variable needs no ordering (a /1 stream's)
         conditionals: list[Clique] | None = [] if keep else None
         schur = eliminate_variables(order_drop, adjacent, state.dims, conditionals)  # (Eq. 10.1-10.3)
         split = [(c, 0) for c in conditionals or ()]
@@ -197,10 +193,8 @@ def _marginalize(
     state.drop_variables(keys)
     if new_cids:
         backsubstitute(state, set(new_cids), alpha)
-    return MarginalizationReport(
-        tuple(order_drop), leaves, tuple(removed), tuple(new_cids),
-        tuple(dropped), tuple(factor_ids), estimates, forgotten,
-    )  # fmt: skip
+    did = (tuple(order_drop), leaves, tuple(removed), tuple(new_cids), tuple(dropped), tuple(factor_ids))
+    return MarginalizationReport(*did, estimates, forgotten)
 
 
 def cuttable(tree: BayesTree, keys: Iterable[Key]) -> list[int]:
@@ -219,8 +213,7 @@ def cuttable(tree: BayesTree, keys: Iterable[Key]) -> list[int]:
 def _relabel(clique: Clique, labels: list[int | None] | None, extra: tuple[int, ...] = ()) -> Clique:
     """``clique`` with its factor positions replaced by the solver's factor ids (None: kept), ``extra`` added."""
     ids = clique.factors if labels is None else tuple(labels[i] for i in clique.factors)
-    kept, c = tuple(i for i in ids if i is not None), clique  # made whole: replace() reads the fields each call
-    return Clique(c.frontals, c.separator, c.frontal_dims, c.separator_dims, c.R, c.S, c.d, c.marginal, kept + extra)
+    return replace(clique, factors=tuple(i for i in ids if i is not None) + extra)
 
 
 def _add_marginal_factors(state: SolverState, schur: list[GaussianFactor]) -> list[int]:
