@@ -160,8 +160,7 @@ def _marginalize(
         adjacent = [state.cached(j) for j in dropped]
         variables = list(dict.fromkeys(k for f in adjacent for k in f.keys))
         last = [k for k in variables if k not in drop]
-        order = keys if len(keys) == 1 else min_degree_keys(variables, state.dims, [f.keys for f in adjacent], last)
-        order_drop = order[: len(drop)]  # D, the rest being last: one variable needs no ordering (a /1 stream's)
+        order_drop = min_degree_keys(variables, state.dims, [f.keys for f in adjacent], last)[: len(drop)]
         conditionals: list[Clique] | None = [] if keep else None
         schur = eliminate_variables(order_drop, adjacent, state.dims, conditionals)  # (Eq. 10.1-10.3)
         split = [(c, 0) for c in conditionals or ()]
