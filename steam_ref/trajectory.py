@@ -31,6 +31,7 @@ forgot it: the trajectory reads the window, not a past the smoother no longer ho
 from __future__ import annotations
 
 import itertools
+from array import array
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import Protocol
@@ -78,11 +79,12 @@ class Covariances:
     landmark_ids: tuple[int, ...]  # (m,) the landmarks' ids
 
 
-def _pose_indices(states: Sequence[int]) -> list[int]:
-    """Pose indices as a list of ints, strictly increasing."""
+def _pose_indices(states: Sequence[int]) -> array[int]:
+    """Pose indices, strictly increasing, as an ``array('q')``: 8 bytes a state, where a list holds an int object and
+    a slot each (40 bytes; a long run's 20,000 states made 0.8 MB, and as much again while converted)."""
     if isinstance(states, (str, bytes)) or not isinstance(states, Iterable):
         raise SteamError(f"states must be a list of pose indices, got states={states!r}")
-    out = np.asarray(list(states))
+    out = np.asarray(states if isinstance(states, (Sequence, np.ndarray, array)) else list(states))
     if out.size and (out.ndim != 1 or out.dtype.kind not in "iu" or out.min() < 0):
         raise SteamError(f"states must be pose indices (integers >= 0), got states={out.tolist()!r:.120}")
     if np.any(np.diff(out) <= 0):
@@ -90,10 +92,12 @@ def _pose_indices(states: Sequence[int]) -> list[int]:
         raise SteamError(
             f"states must increase strictly, but states[{i}] = {out[i]} and states[{i + 1}] = {out[i + 1]}"
         )
-    return out.tolist()
+    kept = array("q")
+    kept.frombytes(out.astype(np.int64).tobytes())  # (an empty input's float dtype too)
+    return kept
 
 
-def _pose_times(times: NDArray, states: list[int]) -> NDArray:
+def _pose_times(times: NDArray, states: array[int]) -> NDArray:
     """The time of every pose: finite, non-decreasing, covering every state, strictly increasing at the states."""
     times = real_array("times", times)
     if times.ndim != 1:
@@ -108,6 +112,14 @@ def _pose_times(times: NDArray, states: list[int]) -> NDArray:
         i = int(np.flatnonzero(np.diff(at) <= 0)[0])
         raise SteamError(f"two states share the time {at[i]}: poses {states[i]} and {states[i + 1]}")
     return times
+
+
+def _kept(times: NDArray, states: array[int]) -> NDArray:
+    """:func:`_pose_times` checked; the clock's own array when it is read-only float64 (a clock made by ``Clock.of``
+    is), not a copy beside it (8 bytes a pose, twice)."""
+    checked = _pose_times(times, states)
+    shared = isinstance(times, np.ndarray) and times.dtype == np.float64 and times.ndim == 1
+    return times if shared and not times.flags.writeable else checked
 
 
 class Trajectory:
@@ -135,10 +147,10 @@ class Trajectory:
                 f"or FixedLagSmoother does); {type(solver).__name__} has no {' or '.join(missing)}"
             )
         self.solver = solver  # an Estimates: a solver or its result
-        self.states = _pose_indices(states)  # poses with a state, increasing
+        self.states = _pose_indices(states)  # poses with a state, increasing (an array('q'))
         self.clock = times if isinstance(times, Clock) else Clock.of(_pose_times(times, self.states))
-        self.times = _pose_times(self.clock.seconds, self.states)  # (n_poses,) time of every pose [data's clock]
-        self.model_times = _pose_times(self.clock.model, self.states)  # (n_poses,) the same on the prior's clock
+        self.times = _kept(self.clock.seconds, self.states)  # (n_poses,) time of every pose [data's clock]
+        self.model_times = _kept(self.clock.model, self.states)  # (n_poses,) the same on the prior's clock
         self.prior = as_motion_prior(prior)  # everything that differs between priors
         self.n = self.prior.state_dim  # size of a state
         if self.states:  # the newest state: a fixed-lag smoother still holds it

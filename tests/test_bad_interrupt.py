@@ -307,7 +307,7 @@ def test_an_interrupt_at_any_line_of_marginalize_leaves_the_solver_as_it_was(key
             sys.settrace(None)
         where.add(str(interrupt.value).split(": ")[1])
         assert state(solver) == state(twin), f"not as it was after {interrupt.value}"
-    assert "_marginalize" in where and where & {"cut", "insert_eliminated", "add", "drop_factor", "drop_variables"}, (
+    assert "_marginalize" in where and where & {"cut", "insert_eliminated", "add", "drop_factors", "drop_variables"}, (
         where
     )
     report = marginalize(solver, keys)

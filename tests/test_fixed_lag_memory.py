@@ -3,7 +3,7 @@ object, its tree and its window hold what they held after the first thousand (ob
 memory it holds after 5,000 updates is what it held after 500, but for 8 bytes a forgotten index.
 
 What does grow, by design, is counted too: the ids (a factor's id counts every factor ever given; the stores hold the
-live ones only), and the update that forgot each variable (to name it in an error): 8 bytes an index, in an array.
+live ones only), and the update that forgot each variable (to name it in an error): 4 bytes an index, in an array.
 """
 
 from __future__ import annotations
@@ -98,7 +98,7 @@ def test_twenty_thousand_updates_hold_what_a_thousand_held():
 
 def test_the_memory_a_smoother_holds_does_not_grow_by_an_object_a_step():
     """500 and then 5,000 updates: each store holds as many entries, and the bytes held (tracemalloc) grow by at most
-    32 a step: the record of the forgotten indices, 8 bytes each in an array doubled as it grows (up to 16), and
+    32 a step: the record of the forgotten indices, 4 bytes each in an array doubled as it grows (up to 8), and
     slack. Before the factor stores held the live factors only and that record was an array, the stores grew by an
     entry a factor and the record by a dict entry and a key a variable (~250 bytes a step)."""
     rng = np.random.default_rng(1)
@@ -216,3 +216,49 @@ def test_a_stream_records_its_state_poses_in_eight_bytes_a_state():
     tracemalloc.stop()
     assert (sizes[2_000] - sizes[500]) / 1_500 <= 12, f"{(sizes[2_000] - sizes[500]) / 1_500:.0f} bytes a step"
     assert list(front.states) == list(range(2_001))
+
+
+def test_the_record_of_forgotten_indices_keeps_any_update_in_four_bytes_an_index_or_beside_them():
+    """Marginalized keeps an update that fits int32 in its array (4 bytes an index) and one past it, or an index far
+    past the others, in its dict: each reads back as written, and an undone write is as it was."""
+    from steam_ref.bayes_tree.history import Marginalized
+    from steam_ref.bayes_tree.undo import UndoLog
+
+    record, log = Marginalized(), UndoLog()
+    writes = {X(3): 7, X(5): 2**31 - 1, X(6): 2**31, X(10**9): 9, X(-2): 4}
+    for key, step in writes.items():
+        record.set(log, key, step)
+    assert {k: record.get(k) for k in writes} == writes
+    assert record.steps["x"].dtype == np.int32 and record.steps["x"].nbytes == 4 * len(record.steps["x"])
+    assert set(record.other) == {X(6), X(10**9), X(-2)}
+    assert record.get(X(4)) == 0
+
+    def undone() -> None:
+        with log.transaction():
+            record.set(log, X(3), 2**40)
+            assert record.get(X(3)) == 2**40
+            raise RuntimeError
+
+    with pytest.raises(RuntimeError):
+        undone()
+    assert record.get(X(3)) == 7
+
+
+def test_a_trajectory_holds_its_states_in_eight_bytes_a_state_and_shares_its_clock():
+    """A trajectory keeps its state poses as an ``array('q')`` (a list took 40 bytes a state) and its times as the
+    clock's own read-only arrays, not copies; it reads what a list of states reads."""
+    from array import array
+
+    from steam_ref.gp.clock import Clock
+
+    n_poses, qc = 2_001, np.diag([0.01, 0.01, 0.25])
+    record, clock = Record(n_poses), Clock.of(np.arange(n_poses, dtype=float) * 0.5)
+    kept = Trajectory(record, array("q", range(0, n_poses, 2)), clock, qc)
+    listed = Trajectory(record, list(range(0, n_poses, 2)), clock, qc)
+    assert isinstance(kept.states, array) and kept.states.itemsize == 8 and kept.states == listed.states
+    assert kept.times is clock.seconds and kept.model_times is clock.model
+    for a, b in zip(kept.at_every_pose(), listed.at_every_pose(), strict=True):
+        assert np.array_equal(a, b)
+    assert np.array_equal(kept.at(3.3), listed.at(3.3))
+    mutable = np.arange(n_poses, dtype=float)
+    assert Trajectory(record, [0, 2], mutable, qc).times is not mutable  # a caller's writable array is copied

@@ -114,8 +114,7 @@ class FixedLagSmoother:
         old = [k for k, t in self._times.items() if t < cutoff]
         self.last_marginalization = None
         if self.batch and old:  # once one is older than lag + batch: the whole subtrees, or all if one would stay
-            late = cutoff - self.batch
-            due = min(self._times[k] for k in old) < late
+            due = min(self._times[k] for k in old) < (late := cutoff - self.batch)
             cut = {k for c in cuttable(self.tree, old) for k in self.tree.cliques[c].frontals} if due else set()
             stays = [k for k in old if k not in cut and self._times[k] < late]
             old = old if stays else [k for k in old if k in cut]
@@ -138,8 +137,7 @@ class FixedLagSmoother:
             return {}
         if not isinstance(timestamps, Mapping):
             raise SteamError(f"timestamps must be a mapping key -> seconds (or None), got {timestamps!r}")
-        out = {}
-        new = () if new_values is None else new_values
+        out, new = {}, () if new_values is None else new_values
         for k, t in timestamps.items():
             if not isinstance(k, Key):
                 raise SteamError(

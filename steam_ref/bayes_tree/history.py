@@ -68,8 +68,7 @@ class ForgottenConditional:
         dims = clique.frontal_dims[i + 1 :] + clique.separator_dims
         RinvS = solve_triangular(R, S) if S.shape[1] else np.zeros((R.shape[0], 0))
         theta_s = np.concatenate([theta_bar[k] for k in separator]) if separator else np.zeros(0)
-        step = solve_triangular(R, clique.d[rows])
-        of = tuple(kinds[k] for k in (key, *separator))
+        step, of = solve_triangular(R, clique.d[rows]), tuple(kinds[k] for k in (key, *separator))
         return cls(key, separator, dims, np.asarray(theta_bar[key], dtype=float), step, -RinvS, theta_s, of)
 
     def value(self, separator_values: NDArray) -> NDArray:
@@ -109,8 +108,8 @@ class History:
 
 
 class Marginalized:
-    """The update that marginalized each key (0: none, or given anew since): an int64 array per symbol by index, 8
-    bytes an index rather than a dict entry and a key each; an index the array would not reach goes to a dict."""
+    """The update that marginalized each key (0: none, or given anew since): an int32 array per symbol by index, 4 bytes
+    an index rather than a dict entry and a key each; an index the array would not reach, or a later update, in a dict."""
 
     def __init__(self) -> None:
         self.steps: dict[str, np.ndarray] = {}  # symbol → the update that marginalized each index
@@ -122,11 +121,11 @@ class Marginalized:
 
     def set(self, log: UndoLog, key: Key, step: int) -> None:
         """Record ``step`` for ``key`` in the undo ``log`` (an array grown by doubling comes back whole on undo)."""
-        steps = self.steps.get(key.symbol, np.zeros(0, dtype=np.int64))
-        if key in self.other or not 0 <= key.index < 2 * len(steps) + 1024:
+        steps = self.steps.get(key.symbol, np.zeros(0, dtype=np.int32))
+        if key in self.other or not 0 <= key.index < 2 * len(steps) + 1024 or not 0 <= step < 2**31:
             log.set(self.other, key, step)
             return
         if key.index >= len(steps):  # doubled, or to reach the index, by at least 1,024
-            steps = np.concatenate([steps, np.zeros(max(len(steps), key.index + 1 - len(steps), 1024), dtype=np.int64)])
+            steps = np.concatenate([steps, np.zeros(max(len(steps), key.index + 1 - len(steps), 1024), dtype=np.int32)])
             log.set(self.steps, key.symbol, steps)
         log.set(steps, key.index, step)

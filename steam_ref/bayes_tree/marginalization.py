@@ -81,20 +81,25 @@ def eliminate_variables(
     Schur complement on its separator (kept) [derivations Eq. 10.1-10.3]. Factors not adjacent to ``drop``
     come back unchanged, first.
     """
-    pool = list(factors)
+    pool, end = dict(enumerate(factors)), len(factors)  # position → factor, in order: a new marginal goes last
+    on: dict[Key, list[int]] = {}  # variable → the positions naming it, increasing (a used one stays, skipped)
+    for i, f in pool.items():
+        for k in f.keys:
+            on.setdefault(k, []).append(i)
     for v in drop:
-        adjacent = [f for f in pool if v in f.keys]
+        adjacent = [pool.pop(i) for i in on.pop(v, ()) if i in pool]  # in the pool's order, no scan of it
         if not adjacent:
             raise UnknownVariableError(f"no factor names {v!r}: nothing to marginalize it from")
-        pool = [f for f in pool if v not in f.keys]
         separator = tuple(dict.fromkeys(k for f in adjacent for k in f.keys if k != v))
         clique = eliminate_clique((v,), separator, dims, adjacent)
         if conditionals is not None:
             conditionals.append(clique)
         marginal = clique.marginal
         if separator and marginal.rhs.shape[0]:
-            pool.append(marginal)
-    return pool
+            for k in separator:
+                on.setdefault(k, []).append(end)
+            pool[end], end = marginal, end + 1
+    return list(pool.values())
 
 
 def _home(state: SolverState, keys: tuple[Key, ...], tops: list[int]) -> int:
@@ -144,8 +149,7 @@ def _marginalize(
     whole = cuttable(tree, drop) if reuse else []
     whole = whole if sum(len(tree.cliques[c].frontals) for c in whole) == len(drop) else []  # all of D, or the rest
     cids = whole or list(dict.fromkeys(c for v in keys for c in tree.cliques_involving(v)))  # step 1
-    fids = [j for c in cids for j in tree.cliques[c].factors]
-    dropped = [j for j in fids if not drop.isdisjoint(state.factors[j].keys)]
+    dropped = [j for c in cids for j in tree.cliques[c].factors if not drop.isdisjoint(state.factors[j].keys)]
     inside = set(cids)
     tops = [c for c in cids if tree.parent[c] not in inside]
     if whole:  # whole subtrees: the f(S) of their tops is the marginal (Eq. 10.3), their conditionals P(D | S)
@@ -184,15 +188,12 @@ def _marginalize(
         factor_ids = _add_marginal_factors(state, schur)
         labels = kept + factor_ids + [None] * len(orphans)
         new_cids = tree.insert_eliminated([_relabel(c, labels) for c in cliques], parents, orphans, owner[n_own:])
-    for j in dropped:
-        state.drop_factor(j)  # (its id is never given again)
+    state.drop_factors(dropped)  # (their ids are never given again)
     state.drop_variables(keys)
     if new_cids:
         backsubstitute(state, set(new_cids), alpha)
-    return MarginalizationReport(
-        tuple(order_drop), leaves, tuple(removed), tuple(new_cids),
-        tuple(dropped), tuple(factor_ids), estimates, forgotten,
-    )  # fmt: skip
+    did = (tuple(order_drop), leaves, tuple(removed), tuple(new_cids), tuple(dropped), tuple(factor_ids))
+    return MarginalizationReport(*did, estimates, forgotten)
 
 
 def cuttable(tree: BayesTree, keys: Iterable[Key]) -> list[int]:

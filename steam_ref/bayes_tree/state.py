@@ -146,8 +146,9 @@ class SolverState:
         """Cache factor ``fid``'s linearization at θ̄."""
         self.log.set(self.linear, fid, gf)
 
-    def drop_factor(self, fid: int) -> None:
-        """Forget factor ``fid`` (its id is never given again; the stores' order comes back on undo)."""
+    def drop_factors(self, fids: Sequence[int]) -> None:
+        """Forget factors ``fids`` (their ids are never given again; the stores' order comes back on undo)."""
         for store in (self.factors, self.linear):
             self.log.keep(store)
-            del store[fid]
+            for fid in fids:
+                del store[fid]
