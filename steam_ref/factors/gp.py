@@ -198,7 +198,7 @@ class InterpolatedFactor(Factor):
         H, *others = self.inner.jacobians(self.interpolated_state(x1, x2), *rest)
         return (H @ self.lam, H @ self.psi, *others)  # [YIB Eq. 19, 29]
 
-    def error_and_jacobians(self, x1: NDArray, x2: NDArray, *rest: NDArray) -> tuple[NDArray, tuple[NDArray, ...]]:  # type: ignore[override]
+    def error_and_jacobians(self, x1: NDArray, x2: NDArray, *rest: NDArray) -> tuple[NDArray, tuple[NDArray, ...]]:
         """The error and its Jacobians at one interpolated state, the inner factor's from its one evaluation."""
         e, (H, *others) = self.inner.error_and_jacobians(self.interpolated_state(x1, x2), *rest)
         return e, (H @ self.lam, H @ self.psi, *others)  # [YIB Eq. 19, 29]

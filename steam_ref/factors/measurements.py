@@ -19,16 +19,7 @@ from ..dead_reckoning import wrap_angle
 from ..errors import DegenerateMeasurementWarning, ShapeError, SteamError
 from ..robust import RobustLoss
 from ..variables import Key
-from .base import (
-    LANDMARK_DIM,
-    STATE_DIM,
-    Factor,
-    check_resolved,
-    identity,
-    measured_vector,
-    sqrt_information,
-    zero_jacobian,
-)
+from .base import LANDMARK_DIM, STATE_DIM, Factor, check_resolved, measured_vector, sqrt_information, zero_jacobian
 
 __all__ = [
     "StateMeasurement",
@@ -81,7 +72,7 @@ class PriorFactor(Factor):
         return x - self.mean
 
     def jacobians(self, x: NDArray) -> tuple[NDArray]:
-        return (np.broadcast_to(identity(x.shape[-1]), x.shape[:-1] + (x.shape[-1], x.shape[-1])),)
+        return (np.broadcast_to(np.eye(x.shape[-1]), x.shape[:-1] + (x.shape[-1], x.shape[-1])),)
 
 
 # --- Measurements of one state ------------------------------------------------------------------
@@ -213,24 +204,16 @@ class VelocityFactor(StateMeasurement):
         return h - self.measured
 
     def jacobians(self, x: NDArray) -> tuple[NDArray]:
-        return (self._jacobian(x)[2],)
+        return self.error_and_jacobians(x)[1]
 
-    def _jacobian(self, x: NDArray) -> tuple[NDArray, NDArray, NDArray]:
-        """cos θ, sin θ and the Jacobian."""
-        th, xd, yd = x[..., 2], x[..., 3], x[..., 4]
-        c, s = np.cos(th), np.sin(th)
+    def error_and_jacobians(self, x: NDArray) -> tuple[NDArray, tuple[NDArray]]:
+        th, xd, yd, thd = x[..., 2], x[..., 3], x[..., 4], x[..., 5]
+        c, s = np.cos(th), np.sin(th)  # once for the error and its Jacobian
         J = zero_jacobian(x, 3)
         J[..., 0, 2], J[..., 0, 3], J[..., 0, 4] = -s * xd + c * yd, c, s
         J[..., 1, 2], J[..., 1, 3], J[..., 1, 4] = -c * xd - s * yd, -s, c
         J[..., 2, 5] = 1.0
-        return c, s, J
-
-    def error_and_jacobians(self, x: NDArray) -> tuple[NDArray, tuple[NDArray]]:  # type: ignore[override]
-        """The error and its Jacobian from one cos θ and sin θ (a linearization's one call)."""
-        c, s, J = self._jacobian(x)
-        xd, yd = x[..., 3], x[..., 4]
-        h = np.stack([c * xd + s * yd, -s * xd + c * yd, x[..., 5]], axis=-1)
-        return h - self.measured, (J,)
+        return np.stack([c * xd + s * yd, -s * xd + c * yd, thd], axis=-1) - self.measured, (J,)
 
 
 # --- Measurements of a state and a landmark -----------------------------------------------------
@@ -316,12 +299,10 @@ class RangeFactor(StateMeasurement):
         return _distance(x, l)[0][..., None] - self.measured  # [YIB Eq. 33]
 
     def jacobians(self, x: NDArray, l: NDArray) -> tuple[NDArray, NDArray]:
-        _, Jx, Jl = _range_row(x, l)
-        return Jx[..., None, :], Jl[..., None, :]
+        return self.error_and_jacobians(x, l)[1]
 
-    def error_and_jacobians(self, x: NDArray, l: NDArray) -> tuple[NDArray, tuple[NDArray, NDArray]]:  # type: ignore[override]
-        """The error and its Jacobians from one distance (a linearization's one call)."""
-        r, Jx, Jl = _range_row(x, l)
+    def error_and_jacobians(self, x: NDArray, l: NDArray) -> tuple[NDArray, tuple[NDArray, NDArray]]:
+        r, Jx, Jl = _range_row(x, l)  # one distance for the error and its Jacobians
         return r[..., None] - self.measured, (Jx[..., None, :], Jl[..., None, :])
 
 
@@ -411,8 +392,7 @@ class BearingRangeFactor(StateMeasurement):
     def jacobians(self, x: NDArray, l: NDArray) -> tuple[NDArray, NDArray]:
         return self.error_and_jacobians(x, l)[1]
 
-    def error_and_jacobians(self, x: NDArray, l: NDArray) -> tuple[NDArray, tuple[NDArray, NDArray]]:  # type: ignore[override]
-        """The error and its Jacobians from one bearing and one distance (a linearization's one call)."""
-        (b, bx, bl), (r, rx, rl) = _bearing_row(x, l), _range_row(x, l)
+    def error_and_jacobians(self, x: NDArray, l: NDArray) -> tuple[NDArray, tuple[NDArray, NDArray]]:
+        (b, bx, bl), (r, rx, rl) = _bearing_row(x, l), _range_row(x, l)  # one of each for the error and Jacobians
         e = np.stack([wrap_angle(b - self.measured[..., 0]), r - self.measured[..., 1]], axis=-1)
         return e, (np.stack([bx, rx], axis=-2), np.stack([bl, rl], axis=-2))

@@ -116,12 +116,14 @@ def whitened_norms(factors: Sequence[Factor], values: Values) -> NDArray:
         for ids in _group_by_type(factors).values():
             if len(ids) == 1:  # a type with one factor: its own evaluation, which costs less than a stack of one
                 f = factors[ids[0]]
-                out[ids] = np.linalg.norm(f.whitened_error(*[values[k] for k in f.keys]))
+                w = f.whitened_error(*[values[k] for k in f.keys]).ravel()
+                out[ids[0]] = np.sqrt(w.dot(w))  # np.linalg.norm(w), without its checks and dispatch
                 continue
             group = [factors[i] for i in ids]
             batch = type(group[0]).stack(group)
-            out[ids] = np.linalg.norm(_whitened(batch, batch.error(*_variables(values, group))), axis=1)
-    out[~np.isfinite(out)] = np.inf
+            e = _whitened(batch, batch.error(*_variables(values, group)))
+            out[ids] = np.sqrt(np.add.reduce(e * e, axis=1))  # np.linalg.norm(e, axis=1)
+    out[np.isnan(out)] = np.inf  # a norm is ≥ 0, inf or NaN
     return out
 
 
