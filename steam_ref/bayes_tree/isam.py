@@ -19,8 +19,8 @@ it is made: a failed or interrupted update leaves the solver as it was.
 from __future__ import annotations
 
 import time
-from collections.abc import Iterable, Mapping
-from contextlib import AbstractContextManager
+from collections.abc import Iterable, Iterator, Mapping
+from contextlib import AbstractContextManager, contextmanager
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -47,24 +47,17 @@ __all__ = ["IncrementalSolver", "UpdateReport", "marginalize"]
 
 
 class PhaseTimer:
-    """Wall time of each phase of one update: ``with timer("remove"): ...`` writes ``seconds["remove"]`` (a phase
-    that raises writes nothing). Its own context manager, not a generator's: seven phases an update."""
+    """Wall time of each phase of one update: ``with timer("remove"): ...`` writes ``seconds["remove"]``."""
 
     def __init__(self) -> None:
         self.start = time.perf_counter()  # when the update began
         self.seconds: dict[str, float] = {}  # phase → seconds
-        self._phase, self._began = "", 0.0  # the phase running and when it began
 
-    def __call__(self, phase: str) -> PhaseTimer:
-        self._phase = phase
-        return self
-
-    def __enter__(self) -> None:
-        self._began = time.perf_counter()
-
-    def __exit__(self, kind: type[BaseException] | None, *_: object) -> None:
-        if kind is None:
-            self.seconds[self._phase] = time.perf_counter() - self._began
+    @contextmanager
+    def __call__(self, phase: str) -> Iterator[None]:
+        t = time.perf_counter()
+        yield
+        self.seconds[phase] = time.perf_counter() - t
 
     def total(self) -> float:
         """Seconds since the update began."""
