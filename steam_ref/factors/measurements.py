@@ -204,16 +204,13 @@ class VelocityFactor(StateMeasurement):
         return h - self.measured
 
     def jacobians(self, x: NDArray) -> tuple[NDArray]:
-        return self.error_and_jacobians(x)[1]
-
-    def error_and_jacobians(self, x: NDArray) -> tuple[NDArray, tuple[NDArray]]:
-        th, xd, yd, thd = x[..., 2], x[..., 3], x[..., 4], x[..., 5]
-        c, s = np.cos(th), np.sin(th)  # once for the error and its Jacobian
+        th, xd, yd = x[..., 2], x[..., 3], x[..., 4]
+        c, s = np.cos(th), np.sin(th)
         J = zero_jacobian(x, 3)
         J[..., 0, 2], J[..., 0, 3], J[..., 0, 4] = -s * xd + c * yd, c, s
         J[..., 1, 2], J[..., 1, 3], J[..., 1, 4] = -c * xd - s * yd, -s, c
         J[..., 2, 5] = 1.0
-        return np.stack([c * xd + s * yd, -s * xd + c * yd, thd], axis=-1) - self.measured, (J,)
+        return (J,)
 
 
 # --- Measurements of a state and a landmark -----------------------------------------------------
@@ -299,7 +296,8 @@ class RangeFactor(StateMeasurement):
         return _distance(x, l)[0][..., None] - self.measured  # [YIB Eq. 33]
 
     def jacobians(self, x: NDArray, l: NDArray) -> tuple[NDArray, NDArray]:
-        return self.error_and_jacobians(x, l)[1]
+        _, Jx, Jl = _range_row(x, l)
+        return Jx[..., None, :], Jl[..., None, :]
 
     def error_and_jacobians(self, x: NDArray, l: NDArray) -> tuple[NDArray, tuple[NDArray, NDArray]]:
         r, Jx, Jl = _range_row(x, l)  # one distance for the error and its Jacobians
@@ -390,7 +388,8 @@ class BearingRangeFactor(StateMeasurement):
         return np.stack([wrap_angle(b - self.measured[..., 0]), r - self.measured[..., 1]], axis=-1)
 
     def jacobians(self, x: NDArray, l: NDArray) -> tuple[NDArray, NDArray]:
-        return self.error_and_jacobians(x, l)[1]
+        (_, bx, bl), (_, rx, rl) = _bearing_row(x, l), _range_row(x, l)
+        return np.stack([bx, rx], axis=-2), np.stack([bl, rl], axis=-2)
 
     def error_and_jacobians(self, x: NDArray, l: NDArray) -> tuple[NDArray, tuple[NDArray, NDArray]]:
         (b, bx, bl), (r, rx, rl) = _bearing_row(x, l), _range_row(x, l)  # one of each for the error and Jacobians

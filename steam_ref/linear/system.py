@@ -9,6 +9,7 @@ right-hand side (with the prior written as factors, η - θ̄ and Hᵀ R⁻¹ (y
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -117,7 +118,7 @@ def whitened_norms(factors: Sequence[Factor], values: Values) -> NDArray:
             if len(ids) == 1:  # a type with one factor: its own evaluation, which costs less than a stack of one
                 f = factors[ids[0]]
                 w = f.whitened_error(*[values[k] for k in f.keys]).ravel()
-                out[ids[0]] = np.sqrt(w.dot(w))  # np.linalg.norm(w), without its checks and dispatch
+                out[ids[0]] = math.sqrt(w.dot(w))  # np.linalg.norm(w), without its checks and dispatch
                 continue
             group = [factors[i] for i in ids]
             batch = type(group[0]).stack(group)
@@ -152,8 +153,9 @@ def linearize(factors: Sequence[Factor], values: Values, *, jacobians: bool = Tr
                 scale, costs = np.sqrt(batch.loss.weight(s)), batch.loss.rho(s)
                 Js = None if H is None else tuple(scale[:, None, None] * (W @ J) for J in H)  # A_i = √w Σ^-½ H_i
                 rhs = -scale[:, None] * e  # b_i = -√w Σ^-½ e(θ̄): ‖A_i δθ - b_i‖² is the term  [YIB Eq. 9-10, 21]
-            # one sum is finite only if every number in it is (or it overflowed: then the search finds nothing)
-            total = e.sum() + costs.sum() + sum(J.sum() for J in Js or ())
+            # one sum is finite only if every number in it is (or it overflowed: then the search finds nothing);
+            # without a loss, ½‖e‖² is finite only if e is
+            total = (0.0 if batch.loss is None else e.sum()) + costs.sum() + sum(J.sum() for J in Js or ())
         if not np.isfinite(total):
             hit = _first_non_finite(e, costs, Js)
             if hit is not None:
