@@ -314,6 +314,17 @@ class Factor:
         """
         cls._check_declared()
         batch = object.__new__(cls)
+        if len(factors) == 1:  # a batch of one (a linearization's usual group in a stream): nothing to compare
+            (one,) = factors
+            for name in cls._batched:
+                object.__setattr__(batch, name, np.array([getattr(one, name)]))
+            for name in cls._batched_factors:
+                inner = getattr(one, name)
+                object.__setattr__(batch, name, type(inner).stack([inner]))
+            for name in ("loss", *cls._shared):
+                object.__setattr__(batch, name, getattr(one, name))
+            object.__setattr__(batch, "keys", None)
+            return batch
         for name in cls._batched:  # np.array of equal-shaped arrays is np.stack's result at a fifth of its call cost
             object.__setattr__(batch, name, np.array([getattr(f, name) for f in factors]))
         for name in cls._batched_factors:

@@ -231,8 +231,11 @@ def _range_row(x: NDArray, l: NDArray) -> tuple[NDArray, NDArray, NDArray]:
     """r = ‖[x y]ᵀ - ℓ‖ and its rows of ∂r/∂x (..., state size), ∂r/∂ℓ (..., 2).  [YIB Eq. 33]
     At r = 0 zero rows: gpslam's and STEAM's convention (and :func:`_distance`'s warning)."""
     r, dx, dy = _distance(x, l)
-    at = r == 0
-    ux, uy = (np.where(at, 0.0, d / np.where(at, 1.0, r)) for d in (dx, dy))
+    if np.all(r):  # nowhere at the landmark (the usual case): the quotients the masks below would leave
+        ux, uy = dx / r, dy / r
+    else:
+        at = r == 0
+        ux, uy = (np.where(at, 0.0, d / np.where(at, 1.0, r)) for d in (dx, dy))
     Jx = np.zeros(x.shape)
     Jx[..., 0], Jx[..., 1] = 0.0 - ux, 0.0 - uy  # 0.0 - u: +0.0, not -0.0, at the landmark
     return r, Jx, np.stack([ux, uy], axis=-1)

@@ -156,7 +156,7 @@ def linearize(factors: Sequence[Factor], values: Values, *, jacobians: bool = Tr
             # one sum is finite only if every number in it is (or it overflowed: then the search finds nothing);
             # without a loss, ½‖e‖² is finite only if e is
             total = (0.0 if batch.loss is None else e.sum()) + costs.sum() + sum(J.sum() for J in Js or ())
-        if not np.isfinite(total):
+        if not math.isfinite(total):
             hit = _first_non_finite(e, costs, Js)
             if hit is not None:
                 failures.append((ids[hit[0]], hit[1]))
