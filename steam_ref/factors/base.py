@@ -92,15 +92,30 @@ def sqrt_information(noise: NDArray | float, m: int, name: str = "noise") -> NDA
     )
 
 
+_SIGMAS: dict[bytes, NDArray] = {}  # the sigmas of each W met so far, by its float64 bytes (its size among them)
+
+
+def _sigmas(W: NDArray) -> NDArray:
+    """The standard deviations (m,) of the noise whose square-root information is W (m, m), memoised by value:
+    a stream's readings of one sensor share their W, each step."""
+    memo = W.tobytes()
+    sigma = _SIGMAS.get(memo)
+    if sigma is None:
+        with np.errstate(all="ignore"):
+            rows = np.linalg.inv(W)  # Σ = W⁻¹W⁻ᵀ: sigma i is the norm of row i, scaled so 1e-200 does not underflow
+            big = np.maximum(np.abs(rows).max(axis=1), np.finfo(float).tiny)
+            sigma = big * np.sqrt(((rows / big[:, None]) ** 2).sum(axis=1))
+        if len(_SIGMAS) < _MAX_SIGMA_WEIGHTS:
+            _SIGMAS[memo] = sigma
+    return sigma
+
+
 def check_resolved(factor: str, labels: tuple[str, ...], measured: NDArray, W: NDArray) -> None:
     """Each measured number is resolved by float64 to within its sigma: a value whose float spacing
     exceeds its sigma (a bearing of 1e17 rad, numbers there 16 rad apart; a sigma of 1e-150 m on a
     range of 10 m) is no reading a sensor gives, and its whitened error would be rounding noise."""
-    with np.errstate(all="ignore"):
-        rows = np.linalg.inv(W)  # Σ = W⁻¹W⁻ᵀ: sigma i is the norm of row i, scaled so that 1e-200 does not underflow
-        big = np.maximum(np.abs(rows).max(axis=1), np.finfo(float).tiny)
-        sigma = big * np.sqrt(((rows / big[:, None]) ** 2).sum(axis=1))
-        spacing = np.spacing(np.abs(measured))
+    sigma = _sigmas(W)
+    spacing = np.spacing(np.abs(measured))  # finite by the callers' checks: no warning to silence
     bad = np.flatnonzero(spacing > sigma)
     if bad.size:
         i = int(bad[0])
@@ -169,6 +184,18 @@ def apply(A: NDArray, x: NDArray) -> NDArray:
     is evaluated alone (``whitened_error``) or in a batch (linearization, the divergence check)."""
     one = A.ndim == 2 and isinstance(x, np.ndarray) and x.ndim == 1
     return A.dot(x) if one else np.einsum("...ij,...j->...i", A, x)
+
+
+_IDENTITIES: dict[int, NDArray] = {}  # I (n, n) of each size asked, read-only
+
+
+def identity(n: int) -> NDArray:
+    """The identity (n, n), read-only, made once per size: the Jacobian of a prior, of a GP prior's later state."""
+    eye = _IDENTITIES.get(n)
+    if eye is None:
+        eye = _IDENTITIES[n] = np.eye(n)
+        eye.flags.writeable = False
+    return eye
 
 
 def zero_jacobian(x: NDArray, m: int) -> NDArray:
@@ -287,8 +314,19 @@ class Factor:
         """
         cls._check_declared()
         batch = object.__new__(cls)
-        for name in cls._batched:
-            object.__setattr__(batch, name, np.stack([getattr(f, name) for f in factors]))
+        if len(factors) == 1:  # a batch of one (a linearization's usual group in a stream): nothing to compare
+            (one,) = factors
+            for name in cls._batched:
+                object.__setattr__(batch, name, np.array([getattr(one, name)]))
+            for name in cls._batched_factors:
+                inner = getattr(one, name)
+                object.__setattr__(batch, name, type(inner).stack([inner]))
+            for name in ("loss", *cls._shared):
+                object.__setattr__(batch, name, getattr(one, name))
+            object.__setattr__(batch, "keys", None)
+            return batch
+        for name in cls._batched:  # np.array of equal-shaped arrays is np.stack's result at a fifth of its call cost
+            object.__setattr__(batch, name, np.array([getattr(f, name) for f in factors]))
         for name in cls._batched_factors:
             inner = [getattr(f, name) for f in factors]
             object.__setattr__(batch, name, type(inner[0]).stack(inner))

@@ -19,7 +19,7 @@ from ..gp.interpolate import interpolation_terms
 from ..gp.prior import process_noise_sqrt_information, transition
 from ..gp.sde import LinearSDE, as_sde, check_prior, check_sde
 from ..variables import Key, key_list
-from .base import Factor, apply, measured_vector, sqrt_information
+from .base import Factor, apply, identity, measured_vector, sqrt_information
 
 __all__ = ["GPPriorFactor", "gp_prior_factors", "InterpolatedFactor"]
 
@@ -104,8 +104,7 @@ class GPPriorFactor(Factor):
         return x2 - apply(self.phi, x1) - self.v  # [YIB Eq. 22]
 
     def jacobians(self, x1: NDArray, x2: NDArray) -> tuple[NDArray, NDArray]:  # noqa: ARG002 (linear: constant)
-        eye = np.broadcast_to(np.eye(self.phi.shape[-1]), self.phi.shape)
-        return -self.phi, eye
+        return -self.phi, np.broadcast_to(identity(self.phi.shape[-1]), self.phi.shape)
 
 
 def gp_prior_factors(keys: list[Key], times: NDArray, prior: NDArray | LinearSDE) -> list[GPPriorFactor]:
@@ -198,3 +197,8 @@ class InterpolatedFactor(Factor):
     def jacobians(self, x1: NDArray, x2: NDArray, *rest: NDArray) -> tuple[NDArray, ...]:
         H, *others = self.inner.jacobians(self.interpolated_state(x1, x2), *rest)
         return (H @ self.lam, H @ self.psi, *others)  # [YIB Eq. 19, 29]
+
+    def error_and_jacobians(self, x1: NDArray, x2: NDArray, *rest: NDArray) -> tuple[NDArray, tuple[NDArray, ...]]:
+        """The error and its Jacobians at one interpolated state, the inner factor's from its one evaluation."""
+        e, (H, *others) = self.inner.error_and_jacobians(self.interpolated_state(x1, x2), *rest)
+        return e, (H @ self.lam, H @ self.psi, *others)  # [YIB Eq. 19, 29]

@@ -231,8 +231,11 @@ def _range_row(x: NDArray, l: NDArray) -> tuple[NDArray, NDArray, NDArray]:
     """r = ‖[x y]ᵀ - ℓ‖ and its rows of ∂r/∂x (..., state size), ∂r/∂ℓ (..., 2).  [YIB Eq. 33]
     At r = 0 zero rows: gpslam's and STEAM's convention (and :func:`_distance`'s warning)."""
     r, dx, dy = _distance(x, l)
-    at = r == 0
-    ux, uy = (np.where(at, 0.0, d / np.where(at, 1.0, r)) for d in (dx, dy))
+    if np.all(r):  # nowhere at the landmark (the usual case): the quotients the masks below would leave
+        ux, uy = dx / r, dy / r
+    else:
+        at = r == 0
+        ux, uy = (np.where(at, 0.0, d / np.where(at, 1.0, r)) for d in (dx, dy))
     Jx = np.zeros(x.shape)
     Jx[..., 0], Jx[..., 1] = 0.0 - ux, 0.0 - uy  # 0.0 - u: +0.0, not -0.0, at the landmark
     return r, Jx, np.stack([ux, uy], axis=-1)
@@ -298,6 +301,10 @@ class RangeFactor(StateMeasurement):
     def jacobians(self, x: NDArray, l: NDArray) -> tuple[NDArray, NDArray]:
         _, Jx, Jl = _range_row(x, l)
         return Jx[..., None, :], Jl[..., None, :]
+
+    def error_and_jacobians(self, x: NDArray, l: NDArray) -> tuple[NDArray, tuple[NDArray, NDArray]]:
+        r, Jx, Jl = _range_row(x, l)  # one distance for the error and its Jacobians
+        return r[..., None] - self.measured, (Jx[..., None, :], Jl[..., None, :])
 
 
 @dataclass(frozen=True, eq=False)
@@ -386,3 +393,8 @@ class BearingRangeFactor(StateMeasurement):
     def jacobians(self, x: NDArray, l: NDArray) -> tuple[NDArray, NDArray]:
         (_, bx, bl), (_, rx, rl) = _bearing_row(x, l), _range_row(x, l)
         return np.stack([bx, rx], axis=-2), np.stack([bl, rl], axis=-2)
+
+    def error_and_jacobians(self, x: NDArray, l: NDArray) -> tuple[NDArray, tuple[NDArray, NDArray]]:
+        (b, bx, bl), (r, rx, rl) = _bearing_row(x, l), _range_row(x, l)  # one of each for the error and Jacobians
+        e = np.stack([wrap_angle(b - self.measured[..., 0]), r - self.measured[..., 1]], axis=-1)
+        return e, (np.stack([bx, rx], axis=-2), np.stack([bl, rl], axis=-2))

@@ -29,7 +29,6 @@ against plain Gauss-Newton alternated with the line search, is measured in docs/
 from __future__ import annotations
 
 import numpy as np
-import scipy.optimize
 from numpy.typing import NDArray
 
 from ..arguments import integer
@@ -131,6 +130,8 @@ def _best_turn(graph: FactorGraph, anchored: FactorGraph, values: Values, cost: 
     that lowers the whole cost; else ``values`` unchanged (angle 0)."""
     if len(anchored) == 0:  # nothing fixes the orientation: every turn costs the same
         return values, cost, 0.0
+    import scipy.optimize  # loaded here, a quarter second that only this search needs (every stream loads the module)
+
     anchor_keys = anchored.keys()
     at = Values({k: values[k] for k in anchor_keys})
     found = scipy.optimize.minimize_scalar(lambda a: anchored.error(rotated(at, a)), bracket=(-1e-3, 1e-3), tol=1e-12)

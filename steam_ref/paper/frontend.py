@@ -126,6 +126,7 @@ class FrontEnd:
         self._buffer: list[tuple[int, Factor, bool]] = []  # (pose, reading, of a landmark?) after the last state
         self._pose = readings.first_pose.copy()  # predicted [x, y, θ] of the latest pose
         self._velocity = setup.first_velocity.copy()  # predicted velocity over the latest step
+        self._range_loss = setup.range_loss  # one loss for every range (a batch of them then shares the object)
 
     @property
     def n_processed(self) -> int:
@@ -245,11 +246,11 @@ class FrontEnd:
         """The landmark readings of pose i as factors on X(i) (X(i) may be a pose without a state): its
         ranges, bearings, then bearing-ranges, each as the motion prior reads a pose reading on its state; a
         bearing-range places a landmark not met before."""
-        r, s, n, pose = self.readings, self.setup, self.prior.state_dim, self.prior.pose_reading
+        r, loss, n, pose = self.readings, self._range_loss, self.prior.state_dim, self.prior.pose_reading
         out: list[Factor] = [
             pose(
                 RangeFactor.create(
-                    X(i), L(r.range_landmark[k]), r.range_value[k], r.range_sigma[k], loss=s.range_loss, state_dim=n
+                    X(i), L(r.range_landmark[k]), r.range_value[k], r.range_sigma[k], loss=loss, state_dim=n
                 )
             )
             for k in range(self._bounds[i], self._bounds[i + 1])
