@@ -11,13 +11,15 @@
 Changes are judged per variable (the newest state moving must not mark the landmarks of its clique changed).
 Each new δ is checked against the variable's relinearization threshold β here, the only place δ changes: the
 candidates of the next fluid relinearization [K12 Alg. 5; YIB Alg. 1 step 7]. Both tests take max abs(·) of a
-variable's 2 to 6 numbers in Python floats, at half the cost of NumPy's calls (the same value when all are finite).
+variable's 2 to 6 numbers in Python floats (the difference too: the same IEEE subtraction as NumPy's), at half the
+cost of NumPy's calls (the same value when all are finite).
 (A variant solving a tree level at a time in stacked NumPy calls was removed, slower: docs/experiments.md.)
 """
 
 from __future__ import annotations
 
 from collections.abc import Collection
+from operator import sub
 
 import numpy as np
 
@@ -25,6 +27,9 @@ from ..variables import Key
 from .state import SolverState
 
 __all__ = ["backsubstitute"]
+
+concatenate = np.concatenate
+_NONE = np.zeros(0)  # a root's separator values
 
 
 def backsubstitute(state: SolverState, new_cliques: Collection[int], alpha: float) -> tuple[list[Key], int]:
@@ -37,32 +42,34 @@ def backsubstitute(state: SolverState, new_cliques: Collection[int], alpha: floa
     tree, delta, beta, stale, candidates = state.tree, state.delta, state.beta, state.stale, state.candidates
     record = state.log.old_values(delta).append  # each δ it replaces, for the transaction's undo
     changed: set[Key] = set()
+    mark, unmarked = changed.add, changed.isdisjoint
     updated: list[Key] = []
     cliques, children = tree.cliques, tree.children
     stack = [c for c in new_cliques if tree.parent[c] is None]
+    pop, push = stack.pop, stack.append
     visited = 0
     while stack:
-        c = stack.pop()
+        c = pop()
         clique = cliques[c]
         visited += 1
-        on = clique.separator  # one variable, the usual case, needs no copy; a root has none
-        sep = delta[on[0]] if len(on) == 1 else np.concatenate([delta[k] for k in on] or [np.zeros(0)])
+        on, frontals = clique.separator, clique.frontals
+        # one separator variable, the usual case, needs no copy; a root has none
+        sep = delta[on[0]] if len(on) == 1 else concatenate([delta[k] for k in on] or [_NONE])
         x = clique.solve(sep)  # [YIB Eq. 25]
-        frontals = clique.frontals
         parts = ((frontals[0], x),) if len(frontals) == 1 else zip(frontals, clique.split_frontals(x), strict=True)
         for k, xk in parts:  # the usual clique: one frontal, the whole x
-            old = delta[k]
-            if alpha == 0 or max(map(abs, (xk - old).tolist())) >= alpha:  # step 3: changed by at least α
-                changed.add(k)
+            old, new = delta[k], xk.tolist()
+            if alpha == 0 or max(map(abs, map(sub, new, old.tolist()))) >= alpha:  # step 3: changed by at least α
+                mark(k)
             record((k, old))
             delta[k] = xk
             stale[k] = None  # never undone: an extra mark only forms the same estimate again
-            if max(map(abs, xk.tolist())) >= beta[k]:  # a candidate for the next relinearization [K12 Alg. 5]
+            if max(map(abs, new)) >= beta[k]:  # a candidate for the next relinearization [K12 Alg. 5]
                 candidates[k] = None  # the transaction keeps the candidates whole: no record needed
             elif k in candidates:
                 del candidates[k]
         updated.extend(frontals)
         for ch in children[c]:
-            if ch in new_cliques or not changed.isdisjoint(cliques[ch].separator):
-                stack.append(ch)
+            if ch in new_cliques or not unmarked(cliques[ch].separator):
+                push(ch)
     return updated, visited
