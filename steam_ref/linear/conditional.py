@@ -71,13 +71,22 @@ class Clique:
     marginal: GaussianFactor  # f(S) = ‖A' δ_S - b'‖², A' (k, n_s) with k ≤ n_s  [YIB Eq. 24]
     factors: tuple[int, ...] = ()  # ids of the original (nonlinear) factors eliminated here
 
-    def solve(self, separator_values: NDArray) -> NDArray:
-        """δ_F = R⁻¹(d - S δ_S) for the stacked separator values (n_s,); returns (n_f,).  [YIB Eq. 25]"""
-        rhs = self.d - self.S.dot(separator_values) if self.S.shape[1] else self.d  # .dot: @'s call costs more
-        x, info = lapack.dtrtrs(self.R, rhs)
+    @functools.cached_property
+    def solved(self) -> tuple[NDArray, NDArray]:
+        """(g, G) = (R⁻¹d, R⁻¹S), the conditional solved for its frontals: δ_F = g - G δ_S.  [YIB Eq. 25]
+
+        G is the paper's rᵀ, g its d. One triangular solve with n_s + 1 right-hand sides, made at the first
+        solve and kept, so that a back-substitution visit is one product, no LAPACK call.
+        """
+        X, info = lapack.dtrtrs(self.R, np.column_stack((self.d, self.S)))
         if info != 0:
             raise SteamError(f"singular conditional in the clique of {self.frontals}")
-        return x
+        return X[:, 0].copy(), np.ascontiguousarray(X[:, 1:])
+
+    def solve(self, separator_values: NDArray) -> NDArray:
+        """δ_F = R⁻¹(d - S δ_S) = g - G δ_S for the stacked separator values (n_s,); returns (n_f,).  [YIB Eq. 25]"""
+        g, G = self.solved
+        return g - G.dot(separator_values)  # .dot: @'s call costs more
 
     def split_frontals(self, x: NDArray) -> list[NDArray]:
         """A stacked frontal vector (n_f,) as one array per frontal variable."""
