@@ -7,12 +7,12 @@ Eliminating the frontal variables F of a clique from the factors adjacent to the
 
 is one dense QR of the small gathered block (:func:`gather`) [A_F A_S | b] = Q [[R, S, d], [0, A', b']]
 (:func:`eliminate_clique`). The top rows give the conditional P(F | S) (Eq. 25 for several variables at once: R⁻¹S
-is the paper's rᵀ, R⁻¹d its d), the rows below the new factor on the separator, f(S) ∝ exp(-½ ‖A' δ_S - b'‖²);
-when a pivot vanishes, the variable left free is named (:func:`underdetermined`). A Bayes tree's cliques are such
-conditionals (:mod:`steam_ref.bayes_tree.tree`); stacking their rows in elimination order gives the
-upper-triangular R of A = QR, sparse: only the conditionals' blocks are stored (:func:`assemble_sqrt_information`,
-behind the tree's ``to_sparse`` and ``to_dense``; covariances come from the cliques themselves,
-:mod:`steam_ref.covariance`).
+is the paper's rᵀ, R⁻¹d its d: ``Clique.solved`` keeps both, so that solving is one product), the rows below the
+new factor on the separator, f(S) ∝ exp(-½ ‖A' δ_S - b'‖²); when a pivot vanishes, the variable left free is
+named (:func:`underdetermined`). A Bayes tree's cliques are such conditionals (:mod:`steam_ref.bayes_tree.tree`);
+stacking their rows in elimination order gives the upper-triangular R of A = QR, sparse: only the conditionals'
+blocks are stored (:func:`assemble_sqrt_information`, behind the tree's ``to_sparse`` and ``to_dense``; covariances
+come from the cliques themselves, :mod:`steam_ref.covariance`).
 """
 
 from __future__ import annotations
