@@ -5,7 +5,8 @@
 1. Start at the roots of the re-eliminated top of the tree; its cliques are always solved.
 2. For the current clique, compute the frontal variables from the separator's current solution,
    δ_F = R⁻¹(d - S δ_S) [YIB Eq. 25], in the clique's solved form δ_F = g - G δ_S (``Clique.solved``: g = R⁻¹d,
-   G = R⁻¹S, the paper's rᵀ, made at the clique's first solve): one product a visit, no triangular solve.
+   G = R⁻¹S, the paper's rᵀ, made at the clique's first solve): one product a visit, no triangular solve
+   (against R⁻¹(·) at each visit, the estimates move at rounding level: ≤ 1e-11 on Plaza, docs/experiments.md).
 3. If a frontal variable changed by at least the wildfire threshold α (α = 0: always), descend into the
    children whose separator holds it; a re-made clique is entered in any case. Otherwise stop.
 
