@@ -4,17 +4,14 @@
 
 1. Start at the roots of the re-eliminated top of the tree; its cliques are always solved.
 2. For the current clique, compute the frontal variables from the separator's current solution,
-   δ_F = R⁻¹(d - S δ_S) [YIB Eq. 25], in the clique's solved form δ_F = g - G δ_S (``Clique.solved``: g = R⁻¹d,
-   G = R⁻¹S, the paper's rᵀ, made at the clique's first solve): one product a visit, no triangular solve
-   (against R⁻¹(·) at each visit, the estimates move at rounding level: ≤ 1e-11 on Plaza, docs/experiments.md).
+   δ_F = R⁻¹(d - S δ_S) [YIB Eq. 25], as g - G δ_S: ``Clique.solved`` keeps g = R⁻¹d and G = R⁻¹S (the paper's rᵀ).
 3. If a frontal variable changed by at least the wildfire threshold α (α = 0: always), descend into the
    children whose separator holds it; a re-made clique is entered in any case. Otherwise stop.
 
 Changes are judged per variable (the newest state moving must not mark the landmarks of its clique changed).
 Each new δ is checked against the variable's relinearization threshold β here, the only place δ changes: the
 candidates of the next fluid relinearization [K12 Alg. 5; YIB Alg. 1 step 7]. Both tests take max abs(·) of a
-variable's 2 to 6 numbers in Python floats (the difference too: the same IEEE subtraction as NumPy's), at half the
-cost of NumPy's calls (the same value when all are finite).
+variable's 2 to 6 numbers (and its change) in Python floats, at half the cost of NumPy's calls (the same when finite).
 (A variant solving a tree level at a time in stacked NumPy calls was removed, slower: docs/experiments.md.)
 """
 
@@ -30,9 +27,6 @@ from .state import SolverState
 
 __all__ = ["backsubstitute"]
 
-concatenate = np.concatenate
-_NONE = np.zeros(0)  # a root's separator values
-
 
 def backsubstitute(state: SolverState, new_cliques: Collection[int], alpha: float) -> tuple[list[Key], int]:
     """δ_F = R⁻¹(d - S δ_S) from the roots of the new part down, a clique at a time, while it changes.  [K12 Alg. 7]
@@ -44,25 +38,22 @@ def backsubstitute(state: SolverState, new_cliques: Collection[int], alpha: floa
     tree, delta, beta, stale, candidates = state.tree, state.delta, state.beta, state.stale, state.candidates
     record = state.log.old_values(delta).append  # each δ it replaces, for the transaction's undo
     changed: set[Key] = set()
-    mark, unmarked = changed.add, changed.isdisjoint
     updated: list[Key] = []
     cliques, children = tree.cliques, tree.children
     stack = [c for c in new_cliques if tree.parent[c] is None]
-    pop, push = stack.pop, stack.append
     visited = 0
     while stack:
-        c = pop()
+        c = stack.pop()
         clique = cliques[c]
         visited += 1
-        on, frontals = clique.separator, clique.frontals
-        # one separator variable, the usual case, needs no copy; a root has none
-        sep = delta[on[0]] if len(on) == 1 else concatenate([delta[k] for k in on] or [_NONE])
+        on, frontals = clique.separator, clique.frontals  # one separator variable, the usual case, needs no copy
+        sep = delta[on[0]] if len(on) == 1 else np.concatenate([delta[k] for k in on] or [np.zeros(0)])  # a root: none
         x = clique.solve(sep)  # [YIB Eq. 25]
         parts = ((frontals[0], x),) if len(frontals) == 1 else zip(frontals, clique.split_frontals(x), strict=True)
         for k, xk in parts:  # the usual clique: one frontal, the whole x
             old, new = delta[k], xk.tolist()
             if alpha == 0 or max(map(abs, map(sub, new, old.tolist()))) >= alpha:  # step 3: changed by at least α
-                mark(k)
+                changed.add(k)
             record((k, old))
             delta[k] = xk
             stale[k] = None  # never undone: an extra mark only forms the same estimate again
@@ -72,6 +63,6 @@ def backsubstitute(state: SolverState, new_cliques: Collection[int], alpha: floa
                 del candidates[k]
         updated.extend(frontals)
         for ch in children[c]:
-            if ch in new_cliques or not unmarked(cliques[ch].separator):
-                push(ch)
+            if ch in new_cliques or not changed.isdisjoint(cliques[ch].separator):
+                stack.append(ch)
     return updated, visited
