@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Protocol
 
 import numpy as np
@@ -71,18 +71,20 @@ class Clique:
     marginal: GaussianFactor  # f(S) = ‖A' δ_S - b'‖², A' (k, n_s) with k ≤ n_s  [YIB Eq. 24]
     factors: tuple[int, ...] = ()  # ids of the original (nonlinear) factors eliminated here
 
-    @functools.cached_property
-    def solved(self) -> tuple[NDArray, NDArray]:
+    solved: tuple[NDArray, NDArray] = field(init=False, repr=False)  # (g, G) = (R⁻¹d, R⁻¹S), made with the clique
+
+    def __post_init__(self) -> None:
         """(g, G) = (R⁻¹d, R⁻¹S), the conditional solved for its frontals: δ_F = g - G δ_S.  [YIB Eq. 25]
 
-        G is the paper's rᵀ, g its d. One triangular solve with n_s + 1 right-hand sides, made at the first
-        solve and kept, so that a back-substitution visit is one product, no LAPACK call. Against a solve per visit the
-        estimates move at rounding level (whole Plaza runs: ≤ 1e-11, docs/experiments.md).
+        G is the paper's rᵀ, g its d. One triangular solve with n_s + 1 right-hand sides, made once with the clique
+        (not lazily: an interrupted update must leave no trace), so that a back-substitution visit is one product,
+        no LAPACK call. Against a solve per visit the estimates move at rounding level (whole Plaza runs: ≤ 1e-11,
+        docs/experiments.md).
         """
         X, info = lapack.dtrtrs(self.R, np.column_stack((self.d, self.S)))
         if info != 0:
             raise SteamError(f"singular conditional in the clique of {self.frontals}")
-        return X[:, 0].copy(), np.ascontiguousarray(X[:, 1:])
+        object.__setattr__(self, "solved", (X[:, 0].copy(), np.ascontiguousarray(X[:, 1:])))
 
     def solve(self, separator_values: NDArray) -> NDArray:
         """δ_F = R⁻¹(d - S δ_S) = g - G δ_S for the stacked separator values (n_s,); returns (n_f,).  [YIB Eq. 25]"""
