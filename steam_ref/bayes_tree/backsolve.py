@@ -4,20 +4,21 @@
 
 1. Start at the roots of the re-eliminated top of the tree; its cliques are always solved.
 2. For the current clique, compute the frontal variables from the separator's current solution,
-   δ_F = R⁻¹(d - S δ_S) [YIB Eq. 25].
+   δ_F = R⁻¹(d - S δ_S) [YIB Eq. 25], as g - G δ_S: ``Clique.solved`` keeps g = R⁻¹d and G = R⁻¹S (the paper's rᵀ).
 3. If a frontal variable changed by at least the wildfire threshold α (α = 0: always), descend into the
    children whose separator holds it; a re-made clique is entered in any case. Otherwise stop.
 
 Changes are judged per variable (the newest state moving must not mark the landmarks of its clique changed).
 Each new δ is checked against the variable's relinearization threshold β here, the only place δ changes: the
 candidates of the next fluid relinearization [K12 Alg. 5; YIB Alg. 1 step 7]. Both tests take max abs(·) of a
-variable's 2 to 6 numbers in Python floats, at half the cost of NumPy's calls (the same value when all are finite).
+variable's 2 to 6 numbers (and its change) in Python floats, at half the cost of NumPy's calls (the same when finite).
 (A variant solving a tree level at a time in stacked NumPy calls was removed, slower: docs/experiments.md.)
 """
 
 from __future__ import annotations
 
 from collections.abc import Collection
+from operator import sub
 
 import numpy as np
 
@@ -45,19 +46,18 @@ def backsubstitute(state: SolverState, new_cliques: Collection[int], alpha: floa
         c = stack.pop()
         clique = cliques[c]
         visited += 1
-        on = clique.separator  # one variable, the usual case, needs no copy; a root has none
-        sep = delta[on[0]] if len(on) == 1 else np.concatenate([delta[k] for k in on] or [np.zeros(0)])
+        on, frontals = clique.separator, clique.frontals  # one separator variable, the usual case, needs no copy
+        sep = delta[on[0]] if len(on) == 1 else np.concatenate([delta[k] for k in on] or [np.zeros(0)])  # a root: none
         x = clique.solve(sep)  # [YIB Eq. 25]
-        frontals = clique.frontals
         parts = ((frontals[0], x),) if len(frontals) == 1 else zip(frontals, clique.split_frontals(x), strict=True)
         for k, xk in parts:  # the usual clique: one frontal, the whole x
-            old = delta[k]
-            if alpha == 0 or max(map(abs, (xk - old).tolist())) >= alpha:  # step 3: changed by at least α
+            old, new = delta[k], xk.tolist()
+            if alpha == 0 or max(map(abs, map(sub, new, old.tolist()))) >= alpha:  # step 3: changed by at least α
                 changed.add(k)
             record((k, old))
             delta[k] = xk
             stale[k] = None  # never undone: an extra mark only forms the same estimate again
-            if max(map(abs, xk.tolist())) >= beta[k]:  # a candidate for the next relinearization [K12 Alg. 5]
+            if max(map(abs, new)) >= beta[k]:  # a candidate for the next relinearization [K12 Alg. 5]
                 candidates[k] = None  # the transaction keeps the candidates whole: no record needed
             elif k in candidates:
                 del candidates[k]

@@ -7,19 +7,19 @@ Eliminating the frontal variables F of a clique from the factors adjacent to the
 
 is one dense QR of the small gathered block (:func:`gather`) [A_F A_S | b] = Q [[R, S, d], [0, A', b']]
 (:func:`eliminate_clique`). The top rows give the conditional P(F | S) (Eq. 25 for several variables at once: R⁻¹S
-is the paper's rᵀ, R⁻¹d its d), the rows below the new factor on the separator, f(S) ∝ exp(-½ ‖A' δ_S - b'‖²);
-when a pivot vanishes, the variable left free is named (:func:`underdetermined`). A Bayes tree's cliques are such
-conditionals (:mod:`steam_ref.bayes_tree.tree`); stacking their rows in elimination order gives the
-upper-triangular R of A = QR, sparse: only the conditionals' blocks are stored (:func:`assemble_sqrt_information`,
-behind the tree's ``to_sparse`` and ``to_dense``; covariances come from the cliques themselves,
-:mod:`steam_ref.covariance`).
+is the paper's rᵀ, R⁻¹d its d: ``Clique.solved`` keeps both, so that solving is one product), the rows below the
+new factor on the separator, f(S) ∝ exp(-½ ‖A' δ_S - b'‖²); when a pivot vanishes, the variable left free is
+named (:func:`underdetermined`). A Bayes tree's cliques are such conditionals (:mod:`steam_ref.bayes_tree.tree`);
+stacking their rows in elimination order gives the upper-triangular R of A = QR, sparse: only the conditionals'
+blocks are stored (:func:`assemble_sqrt_information`, behind the tree's ``to_sparse`` and ``to_dense``; covariances
+come from the cliques themselves, :mod:`steam_ref.covariance`).
 """
 
 from __future__ import annotations
 
 import functools
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Protocol
 
 import numpy as np
@@ -71,13 +71,25 @@ class Clique:
     marginal: GaussianFactor  # f(S) = ‖A' δ_S - b'‖², A' (k, n_s) with k ≤ n_s  [YIB Eq. 24]
     factors: tuple[int, ...] = ()  # ids of the original (nonlinear) factors eliminated here
 
-    def solve(self, separator_values: NDArray) -> NDArray:
-        """δ_F = R⁻¹(d - S δ_S) for the stacked separator values (n_s,); returns (n_f,).  [YIB Eq. 25]"""
-        rhs = self.d - self.S.dot(separator_values) if self.S.shape[1] else self.d  # .dot: @'s call costs more
-        x, info = lapack.dtrtrs(self.R, rhs)
+    solved: tuple[NDArray, NDArray] = field(init=False, repr=False)  # (g, G) = (R⁻¹d, R⁻¹S), made with the clique
+
+    def __post_init__(self) -> None:
+        """(g, G) = (R⁻¹d, R⁻¹S), the conditional solved for its frontals: δ_F = g - G δ_S.  [YIB Eq. 25]
+
+        G is the paper's rᵀ, g its d. One triangular solve with n_s + 1 right-hand sides, made once with the clique
+        (not lazily: an interrupted update must leave no trace), so that a back-substitution visit is one product,
+        no LAPACK call. Against a solve per visit the estimates move at rounding level (whole Plaza runs: ≤ 1e-11,
+        docs/experiments.md).
+        """
+        X, info = lapack.dtrtrs(self.R, np.column_stack((self.d, self.S)))
         if info != 0:
             raise SteamError(f"singular conditional in the clique of {self.frontals}")
-        return x
+        object.__setattr__(self, "solved", (X[:, 0].copy(), np.ascontiguousarray(X[:, 1:])))
+
+    def solve(self, separator_values: NDArray) -> NDArray:
+        """δ_F = R⁻¹(d - S δ_S) = g - G δ_S for the stacked separator values (n_s,); returns (n_f,).  [YIB Eq. 25]"""
+        g, G = self.solved
+        return g - G.dot(separator_values)  # .dot: @'s call costs more
 
     def split_frontals(self, x: NDArray) -> list[NDArray]:
         """A stacked frontal vector (n_f,) as one array per frontal variable."""
