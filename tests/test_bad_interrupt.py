@@ -81,6 +81,7 @@ def state(solver: IncrementalSolver) -> tuple:
         tree._next_id,
         solver.state.steps,
         solver.state.tree_nnz,
+        solver.state.n_factors,
     )
 
 
@@ -316,6 +317,52 @@ def test_an_interrupt_at_any_line_of_marginalize_leaves_the_solver_as_it_was(key
         None if f is None else f.keys for f in done.factors
     ]
     assert report.leaves == marginalize(twin, keys).leaves
+
+
+def _interrupt_in(name: str, n: int):
+    """A trace function that raises KeyboardInterrupt at the n-th line executed in a function of ours named ``name``."""
+    count = 0
+
+    def trace(frame, event, arg):
+        nonlocal count
+        if event == "line" and frame.f_code.co_name == name and _ours(frame.f_code.co_filename):
+            count += 1
+            if count == n:
+                raise KeyboardInterrupt(f"line {n} of {name}: {frame.f_code.co_filename}:{frame.f_lineno}")
+        return trace
+
+    return trace
+
+
+@pytest.mark.parametrize("call", ["update", "marginalize"])
+def test_an_interrupt_as_a_transaction_begins_or_commits_leaves_the_next_one_undoable(call) -> None:
+    """Ctrl-C on each line of the transactions' own bookkeeping (the undo log's and the state's, opening and
+    committing), then again in the same call after it stored a factor: each time the solver as it was. (An
+    interrupt between the log's depth being raised and its try once left the depth raised for good: every later
+    transaction was then a nested one, never rolled back, and the next interrupt kept its half-done change.)"""
+    base, big, _ = parts(16, 3, seed=11)
+    solver, twin = build(base), build(base)
+    run = (lambda s: s.update(*big)) if call == "update" else (lambda s: marginalize(s, [L(4)]))
+    reference = state(twin)
+    for n in range(1, 100):
+        sys.settrace(_interrupt_in("transaction", n))
+        try:
+            run(solver)
+            break  # past the last line of the transactions: the call went through
+        except KeyboardInterrupt as interrupt:
+            first = interrupt
+        finally:
+            sys.settrace(None)
+        assert state(solver) == reference, f"not as it was after {first}"
+        sys.settrace(_interrupt_in("append_factors", 3))  # the factor count raised, the factors not all stored
+        try:
+            with pytest.raises(KeyboardInterrupt):
+                run(solver)
+        finally:
+            sys.settrace(None)
+        assert state(solver) == reference, f"an interrupt in append_factors not undone after {first}"
+    assert n > 10  # every line of both transactions was tried
+    assert state(solver) == state(run(twin) and twin)
 
 
 def _smoother_state(smoother, keys) -> tuple:

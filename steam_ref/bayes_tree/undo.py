@@ -105,16 +105,16 @@ class UndoLog:
         """Everything recorded inside is undone if it raises (any BaseException, Ctrl-C too); nested
         transactions belong to the outermost one. The entries of a committed transaction are dropped when the
         next one begins, so that committing is one step: an interruption before it undoes, after it keeps."""
-        if not self.depth:
+        if not (depth := self.depth):
             self.entries.clear()
             self.kept.clear()
-        self.depth += 1
-        try:
+        try:  # the depth raised inside: an interruption before the try is entered would leave it raised for good
+            self.depth = depth + 1
             yield
-            self.depth -= 1  # committed (the outermost) or handed to the outer transaction
+            self.depth = depth  # committed (the outermost) or handed to the outer transaction
         except BaseException:
-            self.depth -= 1
-            if not self.depth:
+            self.depth = depth
+            if not depth:
                 until_done(self.rollback)
             raise
 
