@@ -87,13 +87,16 @@ def _pose_indices(states: Sequence[int]) -> array[int]:
     out = np.asarray(states if isinstance(states, (Sequence, np.ndarray, array)) else list(states))
     if out.size and (out.ndim != 1 or out.dtype.kind not in "iu" or out.min() < 0):
         raise SteamError(f"states must be pose indices (integers >= 0), got states={out.tolist()!r:.120}")
+    if out.size and out.max() > np.iinfo(np.int64).max:  # (unsigned: an int64 would wrap it, np.diff too)
+        raise SteamError(f"states names pose {int(out.max())}, past any file's poses")
+    out = out.astype(np.int64)
     if np.any(np.diff(out) <= 0):
         i = int(np.flatnonzero(np.diff(out) <= 0)[0])
         raise SteamError(
             f"states must increase strictly, but states[{i}] = {out[i]} and states[{i + 1}] = {out[i + 1]}"
         )
     kept = array("q")
-    kept.frombytes(out.astype(np.int64).tobytes())  # (an empty input's float dtype too)
+    kept.frombytes(out.tobytes())  # (an empty input's float dtype too, as int64)
     return kept
 
 

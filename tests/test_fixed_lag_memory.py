@@ -19,6 +19,7 @@ import pytest
 from steam_ref.bayes_tree import FixedLagSmoother
 from steam_ref.bayes_tree.state import SolverState
 from steam_ref.datasets import generate_synthetic
+from steam_ref.errors import SteamError
 from steam_ref.factors import Factor
 from steam_ref.paper.frontend import FrontEnd
 from steam_ref.paper.presets import PaperSetup
@@ -262,3 +263,17 @@ def test_a_trajectory_holds_its_states_in_eight_bytes_a_state_and_shares_its_clo
     assert np.array_equal(kept.at(3.3), listed.at(3.3))
     mutable = np.arange(n_poses, dtype=float)
     assert Trajectory(record, [0, 2], mutable, qc).times is not mutable  # a caller's writable array is copied
+
+
+@pytest.mark.parametrize(
+    ("states", "needle"),
+    [
+        (np.array([0, 2**64 - 1], dtype=np.uint64), "names pose 18446744073709551615"),  # int64 would make it -1
+        (np.array([0, 2**63], dtype=np.uint64), "names pose 9223372036854775808"),
+        (np.array([5, 3], dtype=np.uint64), r"increase strictly, but states\[0\] = 5 and states\[1\] = 3"),
+    ],
+)
+def test_unsigned_state_indices_are_checked_as_the_numbers_they_are(states, needle):
+    """Unsigned indices are neither wrapped into int64 nor differenced in unsigned arithmetic (where 3 - 5 > 0)."""
+    with pytest.raises(SteamError, match=needle):
+        Trajectory(Record(10), states, np.arange(10.0), np.eye(3))

@@ -48,7 +48,9 @@ class GroupState(Manifold):
     def __new__(cls, group: LieGroup, derivatives: int = 1) -> GroupState:
         """The one kind of each group and number of derivatives: ``GroupState(SE2) is SE2_STATE`` (the solvers
         compare kinds by identity)."""
-        known = cls._kinds.get((group, derivatives)) if type(derivatives) is int else None  # a factor's key_kinds
+        known = (  # a factor's key_kinds: the kind made already (an unhashable group goes on to check_group's error)
+            cls._kinds.get((group, derivatives)) if isinstance(group, LieGroup) and type(derivatives) is int else None
+        )
         if known is not None:
             return known
         check_group(group)
@@ -63,11 +65,11 @@ class GroupState(Manifold):
     def __init__(self, group: LieGroup, derivatives: int = 1):
         if getattr(self, "group", None) is group:  # the one kind, made already (``__new__``)
             return
-        self.group = group
         self.derivatives = derivatives
         self.name = group.name if derivatives == 1 else f"{group.name}+acc"
         self.size = group.size + derivatives * group.dim
         self.dim = (1 + derivatives) * group.dim
+        self.group = group  # last: the test above must not see a kind half made
 
     def _state(self, name: str, x: NDArray) -> NDArray:
         x = real_array(name, x)

@@ -76,15 +76,16 @@ class Clique:
     def __post_init__(self) -> None:
         """(g, G) = (R⁻¹d, R⁻¹S), the conditional solved for its frontals: δ_F = g - G δ_S.  [YIB Eq. 25]
 
-        G is the paper's rᵀ, g its d. One triangular solve with n_s + 1 right-hand sides, made once with the clique
-        (not lazily: an interrupted update must leave no trace), so that a back-substitution visit is one product,
-        no LAPACK call. Against a solve per visit the estimates move at rounding level (whole Plaza runs: ≤ 1e-11,
-        docs/experiments.md).
+        G is the paper's rᵀ, g its d, made once with the clique (not lazily: an interrupted update must leave no
+        trace), so that a back-substitution visit is one product, no LAPACK call. R⁻¹ by ``dtrtri`` and two products,
+        not ``dtrtrs`` with n_s + 1 right-hand sides, which OpenBLAS threads (~100× slower outside the solvers' thread
+        limit; the same choice as ``covariance._extend``). Against a solve per visit the estimates move at rounding
+        level (whole Plaza runs: ≤ 1e-11, docs/experiments.md).
         """
-        X, info = lapack.dtrtrs(self.R, np.column_stack((self.d, self.S)))
+        Rinv, info = lapack.dtrtri(self.R)
         if info != 0:
             raise SteamError(f"singular conditional in the clique of {self.frontals}")
-        object.__setattr__(self, "solved", (X[:, 0].copy(), np.ascontiguousarray(X[:, 1:])))
+        object.__setattr__(self, "solved", (Rinv.dot(self.d), Rinv.dot(self.S)))
 
     def solve(self, separator_values: NDArray) -> NDArray:
         """δ_F = R⁻¹(d - S δ_S) = g - G δ_S for the stacked separator values (n_s,); returns (n_f,).  [YIB Eq. 25]"""
