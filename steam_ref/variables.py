@@ -233,10 +233,13 @@ class Values(Mapping):
         """Estimates of several variables of one size as rows of an (n, dim) array."""
         rows = [self[k] for k in keys]
         try:
-            return np.stack(rows)
-        except ValueError:  # sizes differ (or no keys): name them only then, at no cost to a good call
+            out = np.array(rows)  # np.stack's result at a fifth of its call cost (a linearization's hot path)
+        except ValueError:  # a ragged list
+            out = None
+        if out is None or out.ndim != 2:  # sizes differ (or no keys): name them only then, at no cost to a good call
             sizes = sorted({r.shape[0] for r in rows})
             raise ShapeError(f"Values.stack needs variables of one size, got sizes {sizes}") from None
+        return out
 
     def retract(self, delta: Mapping[Key, NDArray]) -> Values:
         """θ̄ ⊕ δθ: a new Values with each variable moved by its kind's retraction, one call per kind.  [YIB Eq. 11]"""

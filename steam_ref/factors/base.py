@@ -314,31 +314,23 @@ class Factor:
         """
         cls._check_declared()
         batch = object.__new__(cls)
-        if len(factors) == 1:  # a batch of one (a linearization's usual group in a stream): nothing to compare
-            (one,) = factors
-            for name in cls._batched:
-                object.__setattr__(batch, name, np.array([getattr(one, name)]))
-            for name in cls._batched_factors:
-                inner = getattr(one, name)
-                object.__setattr__(batch, name, type(inner).stack([inner]))
-            for name in ("loss", *cls._shared):
-                object.__setattr__(batch, name, getattr(one, name))
-            object.__setattr__(batch, "keys", None)
-            return batch
         for name in cls._batched:  # np.array of equal-shaped arrays is np.stack's result at a fifth of its call cost
             object.__setattr__(batch, name, np.array([getattr(f, name) for f in factors]))
         for name in cls._batched_factors:
             inner = [getattr(f, name) for f in factors]
             object.__setattr__(batch, name, type(inner[0]).stack(inner))
         for name in ("loss", *cls._shared):
-            first, given = getattr(factors[0], name), [getattr(f, name) for f in factors]
-            same_object = all(v is first for v in given)  # the usual case (None, a small int), at no cost
-            differs = None if same_object else next((i for i, v in enumerate(given) if not _same(v, first)), None)
-            if differs is not None:
-                raise SteamError(
-                    f"{cls.__name__}.stack: factor {differs} has {name}={getattr(factors[differs], name)!r}, factor 0 "
-                    f"{name}={first!r}; a shared field must be equal across a batch (a varying one is _batched)"
-                )
+            first = getattr(factors[0], name)
+            if len(factors) > 1:  # a batch of one (a linearization's usual group in a stream): nothing to compare
+                given = [getattr(f, name) for f in factors]
+                same_object = all(v is first for v in given)  # the usual case (None, a small int), at no cost
+                differs = None if same_object else next((i for i, v in enumerate(given) if not _same(v, first)), None)
+                if differs is not None:
+                    raise SteamError(
+                        f"{cls.__name__}.stack: factor {differs} has {name}={getattr(factors[differs], name)!r}, "
+                        f"factor 0 {name}={first!r}; a shared field must be equal across a batch (a varying one is "
+                        "_batched)"
+                    )
             object.__setattr__(batch, name, first)
         object.__setattr__(batch, "keys", None)
         return batch

@@ -158,18 +158,24 @@ def variable_adjacency(keys: Sequence[Key], factor_keys: Iterable[tuple[Key, ...
     """The symmetric variable-level pattern of 𝓘 (1 where two variables share a factor), (n, n)."""
     index = {k: i for i, k in enumerate(keys)}
     rows, cols = [np.arange(len(keys))], [np.arange(len(keys))]
-    for i, fk in enumerate(factor_keys):
-        try:
-            ids = [index[k] for k in fk]
-        except KeyError as exc:
-            raise UnknownVariableError(
-                f"factor_keys[{i}] = {fk!r} names {exc.args[0]!r}, which is not among the keys to order"
-            ) from None
+    for ids in _places(index, factor_keys, "keys"):
         for a in ids:
             rows.append(np.full(len(ids), a))
             cols.append(np.array(ids))
     r, c = np.concatenate(rows), np.concatenate(cols)
     return sp.csc_matrix((np.ones(len(r)), (r, c)), shape=(len(keys), len(keys)))
+
+
+def _places(index: Mapping[Key, int], factor_keys: Iterable[Sequence[Key]], among: str) -> Iterator[list[int]]:
+    """Each factor's variables as their places in ``index``; UnknownVariableError names one ``index`` lacks."""
+    for i, keys in enumerate(factor_keys):
+        try:
+            places = [index[k] for k in keys]
+        except KeyError as exc:
+            raise UnknownVariableError(
+                f"factor_keys[{i}] = {keys!r} names {exc.args[0]!r}, which is not among the {among} to order"
+            ) from None
+        yield places
 
 
 def _amd_permutation(pattern: sp.csc_matrix, backend: str) -> NDArray:
@@ -245,13 +251,7 @@ def min_degree_keys(
     _sizes(variables, dims)  # names a variable dims lacks, before any work
     n = len(variables)
     adj: list[set[int]] = [set() for _ in range(n)]  # by place in ``variables``: integers hash faster than keys
-    for i, keys in enumerate(factor_keys):
-        try:
-            places = [index[k] for k in keys]
-        except KeyError as exc:
-            raise UnknownVariableError(
-                f"factor_keys[{i}] = {keys!r} names {exc.args[0]!r}, which is not among the variables to order"
-            ) from None
+    for places in _places(index, factor_keys, "variables"):
         for j in places:
             adj[j].update(places)
     if isinstance(last, Key):

@@ -78,10 +78,8 @@ def _variables(values: Values, group: list[Factor]) -> list[NDArray]:
     for slot, dim in enumerate(group[0].key_dims):
         keys = [f.keys[slot] for f in group]
         try:
-            x = np.array([values[k] for k in keys])  # Values.stack's rows, at a fifth of np.stack's call cost
+            x = values.stack(keys)
         except ValueError:  # estimates of different sizes
-            x = None
-        if x is not None and x.ndim != 2:  # a ragged list NumPy made an array of objects of, or no rows
             x = None
         if x is None or x.shape[1] != dim:
             bad = next(k for k in keys if values.dim(k) != dim)
