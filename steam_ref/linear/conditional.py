@@ -137,14 +137,14 @@ def gather(keys: tuple[Key, ...], dims: Mapping[Key, int], factors: Sequence[Gau
     if not factors:
         return np.zeros((0, n + 1), order="F")
     rhs = np.concatenate([f.rhs for f in factors])  # ‖a θ + A_s s - b‖², the clique's terms stacked  [YIB Eq. 24]
-    M = np.zeros((rhs.shape[0], n + 1), order="F")
+    M = np.zeros((len(rhs), n + 1), order="F")
     M[:, n] = rhs
     r = 0
     for f in factors:
-        end = r + f.rhs.shape[0]
-        for k, block in zip(f.keys, f.blocks, strict=True):  # a factor names each variable once
-            M[r:end, columns[k]] = block
-        r = end
+        rows = slice(r, r + len(f.rhs))  # the factor's rows, one slice for all its blocks
+        for k, block in zip(f.keys, f.blocks, strict=True):  # a factor names each variable once, one block each
+            M[rows, columns[k]] = block
+        r = rows.stop
     return M
 
 
