@@ -57,20 +57,19 @@ def _elimination_game(order: list, factor_keys: Sequence[Sequence[V]]) -> tuple[
     if len(pos) != len(order):
         raise SteamError("an elimination order lists a variable twice")
     place, owner = pos.__getitem__, []
-    pending: dict[int, set[int]] = {}  # place → the places of the factors waiting for it
+    pending: list[set[int]] = [set() for _ in order]  # by place: the places of the factors waiting for it
     try:
         for keys in factor_keys:
             owner.append(first := min(places := list(map(place, keys))))
-            pending.setdefault(first, set()).update(places)
+            pending[first].update(places)
     except KeyError as exc:
         raise UnknownVariableError(f"a factor names {exc.args[0]!r}, which is not in the elimination order") from None
     separators = []
-    for i in range(len(order)):
-        s = pending.pop(i, set())
+    for i, s in enumerate(pending):
         s.discard(i)
         separators.append(sep := sorted(s))
         if sep:  # the new factor f(sᵢ) waits for the first variable of sᵢ  [YIB Eq. 24]
-            pending.setdefault(sep[0], set()).update(sep)
+            pending[sep[0]].update(sep)
     return separators, owner
 
 
@@ -85,33 +84,33 @@ def build_cliques(
     ``zeros`` > 0: cliques then merge into their parents (``dims``: :mod:`steam_ref.linear.amalgamation`).
     """
     separators, owner = _elimination_game(order := list(order), factor_keys)
-    name, clique_of = order.__getitem__, [0] * len(order)  # clique_of: place → the clique where it is frontal
-    frontals: list[list] = []  # per clique, frontals in reverse elimination order
-    seps: list[tuple] = []
+    clique_of = [0] * len(order)  # place → the clique where it is frontal
+    frontals: list[list[int]] = []  # per clique, the places of its frontals in reverse elimination order
+    seps: list[list[int]] = []  # per clique, the places of its separator
     parents: list[int | None] = []
     for i in reversed(range(len(order))):
         sep = separators[i]
         parent = clique_of[sep[0]] if sep else None
         # sᵢ lies within {sᵢ's first variable} ∪ its separator, so within the parent's variables: equal sizes, equal sets
         if parent is not None and len(sep) == len(frontals[parent]) + len(seps[parent]):
-            frontals[parent].append(order[i])  # [K12 Alg. 2]: sᵢ = F_p ∪ S_p, θᵢ joins the parent clique
+            frontals[parent].append(i)  # [K12 Alg. 2]: sᵢ = F_p ∪ S_p, θᵢ joins the parent clique
             clique_of[i] = parent
             continue
         clique_of[i] = len(frontals)
-        frontals.append([order[i]])
-        seps.append(tuple(map(name, sep)))
+        frontals.append([i])
+        seps.append(sep)
         parents.append(parent)
-    home = amalgamate(frontals, seps, parents, dims, zeros) if zeros else range(len(frontals))  # merged [AG89]
+    sizes = [1] * len(order) if dims is None or not zeros else [dims[v] for v in order]  # read once, by place
+    home = amalgamate(frontals, seps, parents, sizes, zeros) if zeros else range(len(frontals))  # merged [AG89]
     kept = [c for c, h in enumerate(home) if h == c]  # made parents first; numbered so children come first
     index = {c: len(kept) - 1 - i for i, c in enumerate(kept)}
-    owned: list[list[int]] = [[] for _ in kept]
+    owned: list[list[int]] = [[] for _ in home]  # by clique: the factors it eliminates
     for j, i in enumerate(owner):
-        owned[index[home[clique_of[i]]]].append(j)
+        owned[home[clique_of[i]]].append(j)
+    name, up = order.__getitem__, [None if p is None else index[home[p]] for p in parents]  # a kept clique's parent
     return [
-        SymbolicClique(
-            tuple(reversed(frontals[c])), seps[c], None if p is None else index[home[p]], tuple(owned[index[c]])
-        )
-        for c, p in ((c, parents[c]) for c in reversed(kept))
+        SymbolicClique(tuple(map(name, reversed(frontals[c]))), tuple(map(name, seps[c])), up[c], tuple(owned[c]))
+        for c in reversed(kept)
     ]
 
 

@@ -52,7 +52,7 @@ def eliminate(
     for i, sc in enumerate(symbolic):
         for j in sc.factors:
             owner[j] = i
-        ids = () if factor_ids is None else tuple(i for i in (factor_ids[j] for j in sc.factors) if i is not None)
+        ids = () if factor_ids is None else tuple([f for f in map(factor_ids.__getitem__, sc.factors) if f is not None])
         clique = eliminate_clique(sc.frontals, sc.separator, dims, [factors[j] for j in sc.factors] + incoming[i], ids)
         if sc.parent is not None:
             incoming[sc.parent].append(clique.marginal)

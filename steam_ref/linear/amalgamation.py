@@ -14,7 +14,7 @@ merges: a clique the rule of [K12 Alg. 2] leaves apart always adds a zero.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 
 from ..arguments import number
 from ..errors import SteamError
@@ -34,21 +34,21 @@ def zero_fraction(value: object) -> float:
 
 
 def amalgamate(
-    frontals: list[list],
-    separators: Sequence[Sequence],
+    frontals: list[list[int]],
+    separators: Sequence[Sequence[int]],
     parents: Sequence[int | None],
-    dims: Mapping | None,
+    sizes: Sequence[int],
     zeros: float,
 ) -> list[int]:
     """Merge cliques into their parents while a merged clique holds at most the fraction ``zeros`` of explicit zeros.
 
     The cliques are numbered parents first (``parents[c] < c``), each given by its list of frontal variables, in
-    reverse elimination order, and its separator; ``dims`` is each variable's size (1 when None). Each clique is tried
-    once, after all its children, so a merged clique may merge on up. A merged clique's frontals are appended to its
-    parent's list (so they come first in elimination order). Returns the clique each clique is now part of (itself
-    when kept)."""
-    size = (lambda vs: len(vs)) if dims is None else (lambda vs: sum(dims[v] for v in vs))
-    nf, ns = [size(f) for f in frontals], [size(s) for s in separators]
+    reverse elimination order, and its separator, every variable as its place in the elimination order; ``sizes`` is
+    the size of each place. Each clique is tried once, after all its children, so a merged clique may merge on up. A
+    merged clique's frontals are appended to its parent's list (so they come first in elimination order). Returns the
+    clique each clique is now part of (itself when kept)."""
+    size = sizes.__getitem__
+    nf, ns = [sum(map(size, f)) for f in frontals], [sum(map(size, s)) for s in separators]
     nnz = [f * (f + 1) // 2 + f * s for f, s in zip(nf, ns, strict=True)]  # entries the unmerged cliques hold
     home = list(range(len(nf)))
     for c in reversed(range(len(nf))):

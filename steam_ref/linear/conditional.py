@@ -55,6 +55,7 @@ class Conditional(Protocol):
 
 RANK_TOLERANCE = 1e-12  # a pivot |Rᵢᵢ| below this times the largest |entry| means a free direction
 _below_diagonal = functools.cache(functools.partial(np.tri, k=-1, dtype=bool))  # (rows, cols): np.triu's mask
+_largest = np.maximum.reduce  # the ufunc itself: ndarray.max's Python wrapper costs more than the reduction
 
 
 @dataclass(frozen=True, eq=False)
@@ -136,14 +137,14 @@ def gather(keys: tuple[Key, ...], dims: Mapping[Key, int], factors: Sequence[Gau
     if not factors:
         return np.zeros((0, n + 1), order="F")
     rhs = np.concatenate([f.rhs for f in factors])  # ‖a θ + A_s s - b‖², the clique's terms stacked  [YIB Eq. 24]
-    M = np.zeros((rhs.shape[0], n + 1), order="F")
+    M = np.zeros((len(rhs), n + 1), order="F")
     M[:, n] = rhs
     r = 0
     for f in factors:
-        end = r + f.rhs.shape[0]
-        for k, block in zip(f.keys, f.blocks, strict=True):  # a factor names each variable once
-            M[r:end, columns[k]] = block
-        r = end
+        rows = slice(r, r + len(f.rhs))  # the factor's rows, one slice for all its blocks
+        for k, block in zip(f.keys, f.blocks, strict=True):  # a factor names each variable once, one block each
+            M[rows, columns[k]] = block
+        r = rows.stop
     return M
 
 
@@ -181,14 +182,14 @@ def eliminate_clique(
     (rows, ncol), nf = M.shape, sum(frontal_dims)
     if rows < nf:  # fewer rows than frontal unknowns
         raise underdetermined(M, frontals, dims, rows)
-    qr, _, _, _ = lapack.dgeqrf(M)  # Q R = [A_F A_S | b]: Gram-Schmidt on the columns
+    tolerance = RANK_TOLERANCE * max(_largest(np.abs(M), axis=None), 1.0)  # read before the QR overwrites M
+    qr, _, _, _ = lapack.dgeqrf(M, overwrite_a=True)  # Q R = [A_F A_S | b]: Gram-Schmidt on the columns, in place
     R = qr if rows <= ncol else qr[:ncol]
     R[_below_diagonal(*R.shape)] = 0.0  # np.triu in place, its mask made once per shape
-    tolerance = RANK_TOLERANCE * max(np.abs(M).max(), 1.0)
-    pivots = R.diagonal().tolist()  # a Python loop over them costs less than NumPy's calls on a few numbers
-    for i in range(nf):
-        if abs(pivots[i]) <= tolerance:  # the first vanishing pivot: name the variable and why
-            raise underdetermined(M, frontals, dims, i)
+    pivots = R.diagonal()[:nf].tolist()  # Python's min over a few numbers costs less than NumPy's calls
+    if min(map(abs, pivots), default=np.inf) <= tolerance:  # a vanishing pivot: name the first one's variable and why
+        free = next(i for i, p in enumerate(pivots) if abs(p) <= tolerance)
+        raise underdetermined(gather(frontals + separator, dims, factors), frontals, dims, free)
     ns = ncol - 1 - nf
     below = R[nf : nf + ns, nf:].copy()  # f(S): the rows left after eliminating F  [YIB Eq. 24]
     blocks, o = [], 0

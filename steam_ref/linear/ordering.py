@@ -166,16 +166,17 @@ def variable_adjacency(keys: Sequence[Key], factor_keys: Iterable[tuple[Key, ...
     return sp.csc_matrix((np.ones(len(r)), (r, c)), shape=(len(keys), len(keys)))
 
 
-def _places(index: Mapping[Key, int], factor_keys: Iterable[Sequence[Key]], among: str) -> Iterator[list[int]]:
+def _places(index: Mapping[Key, int], factor_keys: Iterable[Sequence[Key]], among: str) -> list[list[int]]:
     """Each factor's variables as their places in ``index``; UnknownVariableError names one ``index`` lacks."""
-    for i, keys in enumerate(factor_keys):
-        try:
-            places = [index[k] for k in keys]
-        except KeyError as exc:
-            raise UnknownVariableError(
-                f"factor_keys[{i}] = {keys!r} names {exc.args[0]!r}, which is not among the {among} to order"
-            ) from None
-        yield places
+    factor_keys, place = list(factor_keys), index.__getitem__
+    try:
+        return [list(map(place, keys)) for keys in factor_keys]  # one pass in C: a list per factor, no generator
+    except KeyError as exc:
+        missing = exc.args[0]
+    i, keys = next((i, keys) for i, keys in enumerate(factor_keys) if missing in keys)
+    raise UnknownVariableError(
+        f"factor_keys[{i}] = {keys!r} names {missing!r}, which is not among the {among} to order"
+    )
 
 
 def _amd_permutation(pattern: sp.csc_matrix, backend: str) -> NDArray:
