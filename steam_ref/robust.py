@@ -27,6 +27,10 @@ class RobustLoss:
     def weight(self, s: NDArray) -> NDArray:
         raise NotImplementedError
 
+    def weight_and_rho(self, s: NDArray) -> tuple[NDArray, NDArray]:
+        """w(s) and ρ(s) together, what a linearization asks for (a loss may share their work, equal to the two calls')."""
+        return self.weight(s), self.rho(s)
+
 
 def _threshold(loss: str, name: str, value: object) -> float:
     """A loss's threshold as a float: a positive finite number. An infinite one would be plain least
@@ -87,3 +91,10 @@ class Tukey(RobustLoss):
         with np.errstate(over="ignore"):  # |s| / c past float64 is past c: weight 0
             u = np.minimum(np.abs(s) / self.c, 2.0)
         return np.where(u <= 1.0, (1 - u**2) ** 2, 0.0)
+
+    def weight_and_rho(self, s: NDArray) -> tuple[NDArray, NDArray]:
+        """Both from one u = min(abs(s)/c, 1) (where abs(s) ≤ c the weight's u is the same u; beyond, the weight is 0)."""
+        with np.errstate(over="ignore"):
+            a = np.abs(s) / self.c
+        t = 1 - np.minimum(a, 1.0) ** 2  # 1 - u²
+        return np.where(a <= 1.0, t**2, 0.0), self.c**2 / 6 * (1 - t**3)

@@ -198,6 +198,20 @@ def identity(n: int) -> NDArray:
     return eye
 
 
+_IDENTITY_STACKS: dict[tuple[int, ...], NDArray] = {}  # I broadcast to each shape (..., n, n) asked, read-only
+
+
+def identity_stack(shape: tuple[int, ...]) -> NDArray:
+    """The identity broadcast to ``shape`` (..., n, n), a read-only view made once per shape: the Jacobian of a
+    batch of GP priors' later states."""
+    eye = _IDENTITY_STACKS.get(shape)
+    if eye is None:
+        eye = np.broadcast_to(identity(shape[-1]), shape)
+        if len(_IDENTITY_STACKS) < _MAX_SIGMA_WEIGHTS:  # a few batch sizes recur; past this many, made anew
+            _IDENTITY_STACKS[shape] = eye
+    return eye
+
+
 def zero_jacobian(x: NDArray, m: int) -> NDArray:
     """A zero Jacobian (..., m, dim) for the leading shape of x."""
     return np.zeros(x.shape[:-1] + (m, x.shape[-1]))
@@ -315,7 +329,8 @@ class Factor:
         cls._check_declared()
         batch = object.__new__(cls)
         for name in cls._batched:  # np.array of equal-shaped arrays is np.stack's result at a fifth of its call cost
-            object.__setattr__(batch, name, np.array([getattr(f, name) for f in factors]))
+            value = np.asarray(getattr(factors[0], name))[None] if len(factors) == 1 else None  # one: a view, no copy
+            object.__setattr__(batch, name, np.array([getattr(f, name) for f in factors]) if value is None else value)
         for name in cls._batched_factors:
             inner = [getattr(f, name) for f in factors]
             object.__setattr__(batch, name, type(inner[0]).stack(inner))

@@ -19,7 +19,7 @@ from ..gp.interpolate import interpolation_terms
 from ..gp.prior import process_noise_sqrt_information, transition
 from ..gp.sde import LinearSDE, as_sde, check_prior, check_sde
 from ..variables import Key, key_list
-from .base import Factor, apply, identity, measured_vector, sqrt_information
+from .base import Factor, apply, identity_stack, measured_vector, sqrt_information
 
 __all__ = ["GPPriorFactor", "gp_prior_factors", "InterpolatedFactor"]
 
@@ -104,7 +104,7 @@ class GPPriorFactor(Factor):
         return x2 - apply(self.phi, x1) - self.v  # [YIB Eq. 22]
 
     def jacobians(self, x1: NDArray, x2: NDArray) -> tuple[NDArray, NDArray]:  # noqa: ARG002 (linear: constant)
-        return -self.phi, np.broadcast_to(identity(self.phi.shape[-1]), self.phi.shape)
+        return -self.phi, identity_stack(self.phi.shape)
 
 
 def gp_prior_factors(keys: list[Key], times: NDArray, prior: NDArray | LinearSDE) -> list[GPPriorFactor]:

@@ -73,12 +73,12 @@ def _group_by_type(factors: Sequence[Factor]) -> dict[tuple, list[int]]:
 
 
 def _variables(values: Values, group: list[Factor]) -> list[NDArray]:
-    """The estimates each key slot of a group of factors reads, as (n, dₖ) arrays."""
+    """The estimates each key slot of a group of factors reads, as (n, dₖ) arrays (a group of one: views)."""
     xs = []
     for slot, dim in enumerate(group[0].key_dims):
         keys = [f.keys[slot] for f in group]
         try:
-            x = values.stack(keys)
+            x = values[keys[0]][None] if len(keys) == 1 else values.stack(keys)  # a view costs a tenth of a copy
         except ValueError:  # estimates of different sizes
             x = None
         if x is None or x.shape[1] != dim:
@@ -134,12 +134,12 @@ def linearize(factors: Sequence[Factor], values: Values, *, jacobians: bool = Tr
     """
     values = as_values("values", values)
     out, failures = [], []
-    for ids in _group_by_type(factors).values():
-        group = [factors[i] for i in ids]
-        batch = type(group[0]).stack(group)
-        xs = _variables(values, group)
-        W = batch.sqrt_information
-        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # checked just below
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # checked group by group, just below
+        for ids in _group_by_type(factors).values():
+            group = [factors[i] for i in ids]
+            batch = type(group[0]).stack(group)
+            xs = _variables(values, group)
+            W = batch.sqrt_information
             error, H = batch.error_and_jacobians(*xs) if jacobians else (batch.error(*xs), None)
             e = _whitened(batch, error)
             s = np.sqrt(np.add.reduce(e * e, axis=1))  # ‖e‖ row by row, as np.linalg.norm(e, axis=1) sums it
@@ -148,17 +148,18 @@ def linearize(factors: Sequence[Factor], values: Values, *, jacobians: bool = Tr
                 Js = None if H is None else tuple(W @ J for J in H)
                 rhs = -e
             else:
-                scale, costs = np.sqrt(batch.loss.weight(s)), batch.loss.rho(s)
+                weight, costs = batch.loss.weight_and_rho(s)
+                scale = np.sqrt(weight)
                 Js = None if H is None else tuple(scale[:, None, None] * (W @ J) for J in H)  # A_i = √w Σ^-½ H_i
                 rhs = -scale[:, None] * e  # b_i = -√w Σ^-½ e(θ̄): ‖A_i δθ - b_i‖² is the term  [YIB Eq. 9-10, 21]
             # one sum is finite only if every number in it is (or it overflowed: then the search finds nothing);
             # without a loss, ½‖e‖² is finite only if e is
             total = (0.0 if batch.loss is None else e.sum()) + costs.sum() + sum(J.sum() for J in Js or ())
-        if not math.isfinite(total):
-            hit = _first_non_finite(e, costs, Js)
-            if hit is not None:
-                failures.append((ids[hit[0]], hit[1]))
-        out.append(LinearizedGroup(np.asarray(ids), [f.keys for f in group], Js, rhs, costs))
+            if not math.isfinite(total):
+                hit = _first_non_finite(e, costs, Js)
+                if hit is not None:
+                    failures.append((ids[hit[0]], hit[1]))
+            out.append(LinearizedGroup(np.asarray(ids), [f.keys for f in group], Js, rhs, costs))
     if failures:
         i, what = min(failures)
         f = factors[i]
