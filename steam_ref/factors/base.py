@@ -110,19 +110,20 @@ def _sigmas(W: NDArray) -> NDArray:
     return sigma
 
 
-def check_resolved(factor: str, labels: tuple[str, ...], measured: NDArray, W: NDArray) -> None:
+def check_resolved(factor: str, keys: tuple, labels: tuple[str, ...], measured: NDArray, W: NDArray) -> None:
     """Each measured number is resolved by float64 to within its sigma: a value whose float spacing
     exceeds its sigma (a bearing of 1e17 rad, numbers there 16 rad apart; a sigma of 1e-150 m on a
-    range of 10 m) is no reading a sensor gives, and its whitened error would be rounding noise."""
+    range of 10 m) is no reading a sensor gives, and its whitened error would be rounding noise.
+    ``factor`` on ``keys`` names the reading (written out only for the error)."""
     sigma = _sigmas(W)
     spacing = np.spacing(np.abs(measured))  # finite by the callers' checks: no warning to silence
     bad = np.flatnonzero(spacing > sigma)
     if bad.size:
         i = int(bad[0])
         raise SteamError(
-            f"{factor}: {labels[i] if i < len(labels) else f'measured[{i}]'} = {float(measured[i])!r} with sigma "
-            f"{float(sigma[i]):.3g}: float64 numbers there are {float(spacing[i]):.3g} apart, more than the sigma, "
-            f"so the reading carries nothing float64 can resolve"
+            f"{factor} on {', '.join(map(repr, keys))}: {labels[i] if i < len(labels) else f'measured[{i}]'} = "
+            f"{float(measured[i])!r} with sigma {float(sigma[i]):.3g}: float64 numbers there are "
+            f"{float(spacing[i]):.3g} apart, more than the sigma, so the reading carries nothing float64 can resolve"
         )
 
 
@@ -283,8 +284,8 @@ class Factor:
         for k in self.keys:
             if not isinstance(k, Key):
                 raise SteamError(f"{type(self).__name__}: {k!r} is not a variable key (make one with X(i) or L(j))")
-        repeated = [k for i, k in enumerate(self.keys) if k in self.keys[:i]]
-        if repeated:
+        if len(set(self.keys)) < len(self.keys):  # a variable named twice (found below only then)
+            repeated = [k for i, k in enumerate(self.keys) if k in self.keys[:i]]
             raise SteamError(f"{type(self).__name__} names variable {repeated[0]!r} twice (keys {self.keys})")
 
     @property
