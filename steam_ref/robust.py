@@ -93,8 +93,8 @@ class Tukey(RobustLoss):
         return np.where(u <= 1.0, (1 - u**2) ** 2, 0.0)
 
     def weight_and_rho(self, s: NDArray) -> tuple[NDArray, NDArray]:
-        """Both from one u = min(abs(s)/c, 1) (where abs(s) ≤ c the weight's u is the same u; beyond, the weight is 0)."""
-        with np.errstate(over="ignore"):
-            a = np.abs(s) / self.c
-        t = 1 - np.minimum(a, 1.0) ** 2  # 1 - u²
-        return np.where(a <= 1.0, t**2, 0.0), self.c**2 / 6 * (1 - t**3)
+        """Both from one u = min(abs(s), c) / c, which is min(abs(s) / c, 1) and cannot overflow (where abs(s) ≤ c
+        it is the weight's u too; beyond, u = 1 and the weight (1 - u²)² = 0, as the weight's own)."""
+        u = np.minimum(np.abs(s), self.c) / self.c
+        t = 1 - u**2
+        return np.where(u <= 1.0, t**2, 0.0), self.c**2 / 6 * (1 - t**3)

@@ -74,11 +74,15 @@ def _group_by_type(factors: Sequence[Factor]) -> dict[tuple, list[int]]:
 
 def _variables(values: Values, group: list[Factor]) -> list[NDArray]:
     """The estimates each key slot of a group of factors reads, as (n, dₖ) arrays (a group of one: views)."""
+    if len(group) == 1:  # a view costs a tenth of a copy; a size that differs is named below
+        xs = [values[k][None] for k in group[0].keys]
+        if all(x.shape[1] == d for x, d in zip(xs, group[0].key_dims, strict=True)):
+            return xs
     xs = []
     for slot, dim in enumerate(group[0].key_dims):
         keys = [f.keys[slot] for f in group]
         try:
-            x = values[keys[0]][None] if len(keys) == 1 else values.stack(keys)  # a view costs a tenth of a copy
+            x = values.stack(keys)
         except ValueError:  # estimates of different sizes
             x = None
         if x is None or x.shape[1] != dim:
