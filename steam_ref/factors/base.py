@@ -117,9 +117,9 @@ def check_resolved(factor: str, keys: tuple, labels: tuple[str, ...], measured: 
     ``factor`` on ``keys`` names the reading (written out only for the error)."""
     sigma = _sigmas(W)
     spacing = np.spacing(np.abs(measured))  # finite by the callers' checks: no warning to silence
-    bad = np.flatnonzero(spacing > sigma)
-    if bad.size:
-        i = int(bad[0])
+    coarse = spacing > sigma
+    if coarse.any():
+        i = int(np.flatnonzero(coarse)[0])
         raise SteamError(
             f"{factor} on {', '.join(map(repr, keys))}: {labels[i] if i < len(labels) else f'measured[{i}]'} = "
             f"{float(measured[i])!r} with sigma {float(sigma[i]):.3g}: float64 numbers there are "
