@@ -200,10 +200,10 @@ class VelocityFactor(StateMeasurement):
     def error(self, x: NDArray) -> NDArray:
         return self.error_and_jacobians(x, jacobians=False)[0]
 
-    def jacobians(self, x: NDArray) -> tuple[NDArray]:
+    def jacobians(self, x: NDArray) -> tuple[NDArray, ...]:
         return self.error_and_jacobians(x)[1]
 
-    def error_and_jacobians(self, x: NDArray, jacobians: bool = True) -> tuple[NDArray, tuple[NDArray]]:
+    def error_and_jacobians(self, x: NDArray, jacobians: bool = True) -> tuple[NDArray, tuple[NDArray, ...]]:
         th, xd, yd, thd = x[..., 2], x[..., 3], x[..., 4], x[..., 5]
         c, s = np.cos(th), np.sin(th)
         h = np.empty(x.shape[:-1] + (3,))  # filled row by row: np.stack's result at a fraction of its call cost
