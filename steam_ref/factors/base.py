@@ -354,3 +354,8 @@ class Factor:
     def whitened_error(self, *xs: NDArray) -> NDArray:
         """W e (no robust loss): its squared norm is the Mahalanobis norm of Eq. 6."""
         return apply(self.sqrt_information, self.error(*xs))
+
+    def whitened_jacobians(self) -> tuple[NDArray, ...] | None:
+        """W Hₖ for each key, (m, dₖ), when they do not depend on the estimates (a linear factor's: made once, finite,
+        read-only, equal to what a linearization of this factor alone computes); None, the default, when they do."""
+        return None

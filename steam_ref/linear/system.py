@@ -145,22 +145,27 @@ def linearize(factors: Sequence[Factor], values: Values, *, jacobians: bool = Tr
             group = [factors[i] for i in ids]
             batch = type(group[0]).stack(group)
             xs = _variables(values, group)
-            W = batch.sqrt_information
-            error, H = batch.error_and_jacobians(*xs) if jacobians else (batch.error(*xs), None)
+            fixed = group[0].whitened_jacobians() if jacobians and len(ids) == 1 else None  # a linear factor's
+            if fixed is None:
+                error, H = batch.error_and_jacobians(*xs) if jacobians else (batch.error(*xs), None)
+                WH = None if H is None else tuple(batch.sqrt_information @ J for J in H)  # Σ^-½ H_i
+            else:  # made once, finite
+                error, WH = batch.error(*xs), tuple(A[None] for A in fixed)
             e = _whitened(batch, error)
             s = np.sqrt(np.add.reduce(e * e, axis=1))  # ‖e‖ row by row, as np.linalg.norm(e, axis=1) sums it
             if batch.loss is None:  # √w = 1: A_i = Σ^-½ H_i, b_i = -Σ^-½ e, the products by 1 left out
                 costs = 0.5 * s**2
-                Js = None if H is None else tuple(W @ J for J in H)
+                Js = WH
                 rhs = -e
             else:
                 weight, costs = batch.loss.weight_and_rho(s)
                 scale = np.sqrt(weight)
-                Js = None if H is None else tuple(scale[:, None, None] * (W @ J) for J in H)  # A_i = √w Σ^-½ H_i
+                Js = None if WH is None else tuple(scale[:, None, None] * A for A in WH)  # A_i = √w Σ^-½ H_i
                 rhs = -scale[:, None] * e  # b_i = -√w Σ^-½ e(θ̄): ‖A_i δθ - b_i‖² is the term  [YIB Eq. 9-10, 21]
             # one sum is finite only if every number in it is (or it overflowed: then the search finds nothing);
-            # without a loss, ½‖e‖² is finite only if e is
-            total = (0.0 if batch.loss is None else e.sum()) + costs.sum() + sum(J.sum() for J in Js or ())
+            # without a loss, ½‖e‖² is finite only if e is, and blocks made once are finite
+            checked = () if Js is None or (fixed is not None and batch.loss is None) else Js
+            total = (0.0 if batch.loss is None else e.sum()) + costs.sum() + sum(J.sum() for J in checked)
             if not math.isfinite(total):
                 hit = _first_non_finite(e, costs, Js)
                 if hit is not None:
