@@ -135,6 +135,8 @@ def whitened_norms(factors: Sequence[Factor], values: Values) -> NDArray:
 def linearize(factors: Sequence[Factor], values: Values, *, jacobians: bool = True) -> list[LinearizedGroup]:
     """Whitened Jacobians and right-hand sides of ``factors`` at ``values``.  [YIB Eq. 9, 21]
 
+    A type with one factor is a batch of one read through views; a linear factor alone gives its whitened
+    Jacobians made once (:meth:`~steam_ref.factors.Factor.whitened_jacobians`, the GP prior's W(-Φ) and W).
     Raises :class:`~steam_ref.errors.NumericalError` naming the first factor (in the order given)
     whose error or Jacobian is NaN or inf at ``values``: an overflowing reading, say.
     """
