@@ -27,6 +27,10 @@ class RobustLoss:
     def weight(self, s: NDArray) -> NDArray:
         raise NotImplementedError
 
+    def weight_and_rho(self, s: NDArray) -> tuple[NDArray, NDArray]:
+        """w(s) and ρ(s) together, what a linearization asks for (a loss may share their work, equal to the two calls')."""
+        return self.weight(s), self.rho(s)
+
 
 def _threshold(loss: str, name: str, value: object) -> float:
     """A loss's threshold as a float: a positive finite number. An infinite one would be plain least
@@ -87,3 +91,10 @@ class Tukey(RobustLoss):
         with np.errstate(over="ignore"):  # |s| / c past float64 is past c: weight 0
             u = np.minimum(np.abs(s) / self.c, 2.0)
         return np.where(u <= 1.0, (1 - u**2) ** 2, 0.0)
+
+    def weight_and_rho(self, s: NDArray) -> tuple[NDArray, NDArray]:
+        """Both from one u = min(abs(s), c) / c, which is min(abs(s) / c, 1) and cannot overflow (where abs(s) ≤ c
+        it is the weight's u too; beyond, u = 1 and the weight (1 - u²)² = 0, as the weight's own)."""
+        u = np.minimum(np.abs(s), self.c) / self.c
+        t = 1 - u**2
+        return np.where(u <= 1.0, t**2, 0.0), self.c**2 / 6 * (1 - t**3)

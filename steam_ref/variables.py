@@ -159,7 +159,7 @@ class Values(Mapping):
         v = np.array(a, dtype=float)
         if v.ndim != 1 or v.shape[0] == 0:
             raise ShapeError(f"estimate of {key} must be a non-empty 1-D vector, got shape {v.shape}")
-        if not np.all(np.isfinite(v)):
+        if not np.isfinite(v).all():
             raise ShapeError(f"estimate of {key} is not finite: {v}")
         old = self._data.get(key)
         if old is not None and old.shape != v.shape:

@@ -11,6 +11,7 @@ import steam_ref.batch
 from steam_ref.linear import LinearSystem, SparseCholesky, solve
 from steam_ref.linear import ordering as orderings
 from steam_ref.linear.ordering import make_ordering
+from steam_ref.linear.system import linearize
 
 BACKENDS = ["superlu", pytest.param("cholmod", marks=pytest.mark.needs_cholmod)]
 
@@ -61,6 +62,22 @@ def test_dense_A_rows_are_whitened_factors(rng):
         rhs.append(-f.sqrt_information @ f.error(*xs))
     np.testing.assert_allclose(np.sort(A, axis=0), np.sort(np.vstack(rows), axis=0), rtol=1e-12, atol=1e-14)
     np.testing.assert_allclose(A.T @ b, np.vstack(rows).T @ np.concatenate(rhs), rtol=1e-12, atol=1e-12)
+
+
+def test_gp_prior_blocks_made_once_are_what_each_linearization_makes(rng):
+    """A GP prior alone, linearized with the blocks it makes once (W (-Φ), W I), against the same prior in a group of
+    two, which makes them anew: equal bit for bit, to the dense product within rounding, and read-only."""
+    qc = np.diag([0.5, 0.4, 0.1])
+    f = sr.GPPriorFactor.wnoa(sr.X(0), sr.X(1), 0.7, qc)
+    g = sr.GPPriorFactor.wnoa(sr.X(1), sr.X(2), 0.7, qc)  # the same gap: the same W and Φ
+    values = {sr.X(i): rng.standard_normal(6) for i in range(3)}
+    (alone,) = linearize([f], values)
+    (pair,) = linearize([f, g], values)
+    assert f.whitened_jacobians() is f.whitened_jacobians() is g.whitened_jacobians()
+    for A_alone, A_pair, H in zip(alone.jacobians, pair.jacobians, (-f.phi, np.eye(6)), strict=True):
+        assert np.array_equal(A_alone[0], A_pair[0]) and not A_alone.flags.writeable
+        np.testing.assert_allclose(A_alone[0], f.sqrt_information @ H, rtol=1e-14, atol=1e-14)
+    assert np.array_equal(alone.rhs[0], pair.rhs[0]) and np.array_equal(alone.costs[0], pair.costs[0])
 
 
 def test_xl_information_has_eq15_structure(rng):

@@ -110,19 +110,20 @@ def _sigmas(W: NDArray) -> NDArray:
     return sigma
 
 
-def check_resolved(factor: str, labels: tuple[str, ...], measured: NDArray, W: NDArray) -> None:
+def check_resolved(factor: str, keys: tuple, labels: tuple[str, ...], measured: NDArray, W: NDArray) -> None:
     """Each measured number is resolved by float64 to within its sigma: a value whose float spacing
     exceeds its sigma (a bearing of 1e17 rad, numbers there 16 rad apart; a sigma of 1e-150 m on a
-    range of 10 m) is no reading a sensor gives, and its whitened error would be rounding noise."""
+    range of 10 m) is no reading a sensor gives, and its whitened error would be rounding noise.
+    ``factor`` on ``keys`` names the reading (written out only for the error)."""
     sigma = _sigmas(W)
     spacing = np.spacing(np.abs(measured))  # finite by the callers' checks: no warning to silence
-    bad = np.flatnonzero(spacing > sigma)
-    if bad.size:
-        i = int(bad[0])
+    coarse = spacing > sigma
+    if coarse.any():
+        i = int(np.flatnonzero(coarse)[0])
         raise SteamError(
-            f"{factor}: {labels[i] if i < len(labels) else f'measured[{i}]'} = {float(measured[i])!r} with sigma "
-            f"{float(sigma[i]):.3g}: float64 numbers there are {float(spacing[i]):.3g} apart, more than the sigma, "
-            f"so the reading carries nothing float64 can resolve"
+            f"{factor} on {', '.join(map(repr, keys))}: {labels[i] if i < len(labels) else f'measured[{i}]'} = "
+            f"{float(measured[i])!r} with sigma {float(sigma[i]):.3g}: float64 numbers there are "
+            f"{float(spacing[i]):.3g} apart, more than the sigma, so the reading carries nothing float64 can resolve"
         )
 
 
@@ -198,6 +199,20 @@ def identity(n: int) -> NDArray:
     return eye
 
 
+_IDENTITY_STACKS: dict[tuple[int, ...], NDArray] = {}  # I broadcast to each shape (..., n, n) asked, read-only
+
+
+def identity_stack(shape: tuple[int, ...]) -> NDArray:
+    """The identity broadcast to ``shape`` (..., n, n), a read-only view made once per shape: the Jacobian of a
+    batch of GP priors' later states."""
+    eye = _IDENTITY_STACKS.get(shape)
+    if eye is None:
+        eye = np.broadcast_to(identity(shape[-1]), shape)
+        if len(_IDENTITY_STACKS) < _MAX_SIGMA_WEIGHTS:  # a few batch sizes recur; past this many, made anew
+            _IDENTITY_STACKS[shape] = eye
+    return eye
+
+
 def zero_jacobian(x: NDArray, m: int) -> NDArray:
     """A zero Jacobian (..., m, dim) for the leading shape of x."""
     return np.zeros(x.shape[:-1] + (m, x.shape[-1]))
@@ -269,8 +284,8 @@ class Factor:
         for k in self.keys:
             if not isinstance(k, Key):
                 raise SteamError(f"{type(self).__name__}: {k!r} is not a variable key (make one with X(i) or L(j))")
-        repeated = [k for i, k in enumerate(self.keys) if k in self.keys[:i]]
-        if repeated:
+        if len(set(self.keys)) < len(self.keys):  # a variable named twice (found below only then)
+            repeated = [k for i, k in enumerate(self.keys) if k in self.keys[:i]]
             raise SteamError(f"{type(self).__name__} names variable {repeated[0]!r} twice (keys {self.keys})")
 
     @property
@@ -315,7 +330,8 @@ class Factor:
         cls._check_declared()
         batch = object.__new__(cls)
         for name in cls._batched:  # np.array of equal-shaped arrays is np.stack's result at a fifth of its call cost
-            object.__setattr__(batch, name, np.array([getattr(f, name) for f in factors]))
+            value = np.asarray(getattr(factors[0], name))[None] if len(factors) == 1 else None  # one: a view, no copy
+            object.__setattr__(batch, name, np.array([getattr(f, name) for f in factors]) if value is None else value)
         for name in cls._batched_factors:
             inner = [getattr(f, name) for f in factors]
             object.__setattr__(batch, name, type(inner[0]).stack(inner))
@@ -338,3 +354,8 @@ class Factor:
     def whitened_error(self, *xs: NDArray) -> NDArray:
         """W e (no robust loss): its squared norm is the Mahalanobis norm of Eq. 6."""
         return apply(self.sqrt_information, self.error(*xs))
+
+    def whitened_jacobians(self) -> tuple[NDArray, ...] | None:
+        """W Hₖ for each key, (m, dₖ), when they do not depend on the estimates (a linear factor's: made once, finite,
+        read-only, equal to what a linearization of this factor alone computes); None, the default, when they do."""
+        return None

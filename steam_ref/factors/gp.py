@@ -19,7 +19,7 @@ from ..gp.interpolate import interpolation_terms
 from ..gp.prior import process_noise_sqrt_information, transition
 from ..gp.sde import LinearSDE, as_sde, check_prior, check_sde
 from ..variables import Key, key_list
-from .base import Factor, apply, identity, measured_vector, sqrt_information
+from .base import Factor, apply, identity_stack, measured_vector, sqrt_information
 
 __all__ = ["GPPriorFactor", "gp_prior_factors", "InterpolatedFactor"]
 
@@ -104,7 +104,29 @@ class GPPriorFactor(Factor):
         return x2 - apply(self.phi, x1) - self.v  # [YIB Eq. 22]
 
     def jacobians(self, x1: NDArray, x2: NDArray) -> tuple[NDArray, NDArray]:  # noqa: ARG002 (linear: constant)
-        return -self.phi, np.broadcast_to(identity(self.phi.shape[-1]), self.phi.shape)
+        return -self.phi, identity_stack(self.phi.shape)
+
+    def whitened_jacobians(self) -> tuple[NDArray, ...] | None:
+        """W (-Φ) and W I, made once for each W and Φ (a stream's priors share them, memoised per gap), as a
+        linearization of this factor alone makes them; None if one is not finite (the linearization says so)."""
+        W, phi = self.sqrt_information, self.phi
+        made = _WHITENED.get((id(W), id(phi)))
+        if made is None or made[0] is not W or made[1] is not phi:  # (the arrays are held: their ids stay theirs)
+            batch = type(self).stack([self])
+            with np.errstate(all="ignore"):
+                blocks = tuple((batch.sqrt_information @ J)[0] for J in batch.jacobians(phi, phi))
+            if not all(np.isfinite(A).all() for A in blocks):
+                return None
+            for A in blocks:
+                A.flags.writeable = False
+            made = (W, phi, blocks)
+            if len(_WHITENED) < _MAX_WHITENED:
+                _WHITENED[(id(W), id(phi))] = made
+        return made[2]
+
+
+_WHITENED: dict[tuple[int, int], tuple[NDArray, NDArray, tuple[NDArray, ...]]] = {}  # (W, Φ, blocks) by ids of W, Φ
+_MAX_WHITENED = 256  # a stream's priors share a few gaps; past this many, the blocks are made anew
 
 
 def gp_prior_factors(keys: list[Key], times: NDArray, prior: NDArray | LinearSDE) -> list[GPPriorFactor]:

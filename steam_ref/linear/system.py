@@ -73,7 +73,11 @@ def _group_by_type(factors: Sequence[Factor]) -> dict[tuple, list[int]]:
 
 
 def _variables(values: Values, group: list[Factor]) -> list[NDArray]:
-    """The estimates each key slot of a group of factors reads, as (n, dₖ) arrays."""
+    """The estimates each key slot of a group of factors reads, as (n, dₖ) arrays (a group of one: views)."""
+    if len(group) == 1:  # a view costs a tenth of a copy; a size that differs is named below
+        xs = [values[k][None] for k in group[0].keys]
+        if all(x.shape[1] == d for x, d in zip(xs, group[0].key_dims, strict=True)):
+            return xs
     xs = []
     for slot, dim in enumerate(group[0].key_dims):
         keys = [f.keys[slot] for f in group]
@@ -116,49 +120,59 @@ def whitened_norms(factors: Sequence[Factor], values: Values) -> NDArray:
             if len(ids) == 1:  # a type with one factor: its own evaluation, which costs less than a stack of one
                 f = factors[ids[0]]
                 w = f.whitened_error(*[values[k] for k in f.keys]).ravel()
-                out[ids[0]] = math.sqrt(w.dot(w))  # np.linalg.norm(w), without its checks and dispatch
+                norm = math.sqrt(w.dot(w))  # np.linalg.norm(w), without its checks and dispatch
+                out[ids[0]] = norm if norm == norm else math.inf  # a norm is ≥ 0, inf or NaN
                 continue
             group = [factors[i] for i in ids]
             batch = type(group[0]).stack(group)
             e = _whitened(batch, batch.error(*_variables(values, group)))
-            out[ids] = np.sqrt(np.add.reduce(e * e, axis=1))  # np.linalg.norm(e, axis=1)
-    out[np.isnan(out)] = np.inf  # a norm is ≥ 0, inf or NaN
+            norms = np.sqrt(np.add.reduce(e * e, axis=1))  # np.linalg.norm(e, axis=1)
+            norms[np.isnan(norms)] = np.inf
+            out[ids] = norms
     return out
 
 
 def linearize(factors: Sequence[Factor], values: Values, *, jacobians: bool = True) -> list[LinearizedGroup]:
     """Whitened Jacobians and right-hand sides of ``factors`` at ``values``.  [YIB Eq. 9, 21]
 
+    A type with one factor is a batch of one read through views; a linear factor alone gives its whitened
+    Jacobians made once (:meth:`~steam_ref.factors.Factor.whitened_jacobians`, the GP prior's W(-Φ) and W).
     Raises :class:`~steam_ref.errors.NumericalError` naming the first factor (in the order given)
     whose error or Jacobian is NaN or inf at ``values``: an overflowing reading, say.
     """
     values = as_values("values", values)
     out, failures = [], []
-    for ids in _group_by_type(factors).values():
-        group = [factors[i] for i in ids]
-        batch = type(group[0]).stack(group)
-        xs = _variables(values, group)
-        W = batch.sqrt_information
-        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # checked just below
-            error, H = batch.error_and_jacobians(*xs) if jacobians else (batch.error(*xs), None)
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # checked group by group, just below
+        for ids in _group_by_type(factors).values():
+            group = [factors[i] for i in ids]
+            batch = type(group[0]).stack(group)
+            xs = _variables(values, group)
+            fixed = group[0].whitened_jacobians() if jacobians and len(ids) == 1 else None  # a linear factor's
+            if fixed is None:
+                error, H = batch.error_and_jacobians(*xs) if jacobians else (batch.error(*xs), None)
+                WH = None if H is None else tuple(batch.sqrt_information @ J for J in H)  # Σ^-½ H_i
+            else:  # made once, finite
+                error, WH = batch.error(*xs), tuple(A[None] for A in fixed)
             e = _whitened(batch, error)
             s = np.sqrt(np.add.reduce(e * e, axis=1))  # ‖e‖ row by row, as np.linalg.norm(e, axis=1) sums it
             if batch.loss is None:  # √w = 1: A_i = Σ^-½ H_i, b_i = -Σ^-½ e, the products by 1 left out
                 costs = 0.5 * s**2
-                Js = None if H is None else tuple(W @ J for J in H)
+                Js = WH
                 rhs = -e
             else:
-                scale, costs = np.sqrt(batch.loss.weight(s)), batch.loss.rho(s)
-                Js = None if H is None else tuple(scale[:, None, None] * (W @ J) for J in H)  # A_i = √w Σ^-½ H_i
+                weight, costs = batch.loss.weight_and_rho(s)
+                scale = np.sqrt(weight)
+                Js = None if WH is None else tuple(scale[:, None, None] * A for A in WH)  # A_i = √w Σ^-½ H_i
                 rhs = -scale[:, None] * e  # b_i = -√w Σ^-½ e(θ̄): ‖A_i δθ - b_i‖² is the term  [YIB Eq. 9-10, 21]
             # one sum is finite only if every number in it is (or it overflowed: then the search finds nothing);
-            # without a loss, ½‖e‖² is finite only if e is
-            total = (0.0 if batch.loss is None else e.sum()) + costs.sum() + sum(J.sum() for J in Js or ())
-        if not math.isfinite(total):
-            hit = _first_non_finite(e, costs, Js)
-            if hit is not None:
-                failures.append((ids[hit[0]], hit[1]))
-        out.append(LinearizedGroup(np.asarray(ids), [f.keys for f in group], Js, rhs, costs))
+            # without a loss, ½‖e‖² is finite only if e is, and blocks made once are finite
+            checked = () if Js is None or (fixed is not None and batch.loss is None) else Js
+            total = (0.0 if batch.loss is None else e.sum()) + costs.sum() + sum(J.sum() for J in checked)
+            if not math.isfinite(total):
+                hit = _first_non_finite(e, costs, Js)
+                if hit is not None:
+                    failures.append((ids[hit[0]], hit[1]))
+            out.append(LinearizedGroup(np.asarray(ids), [f.keys for f in group], Js, rhs, costs))
     if failures:
         i, what = min(failures)
         f = factors[i]

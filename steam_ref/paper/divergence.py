@@ -54,9 +54,15 @@ def fits(factors: Sequence[Factor], estimates: Estimates) -> NDArray:
 
 def worst_fit(factors: Sequence[Factor], estimates: Estimates) -> tuple[float, Factor | None]:
     """The largest ‖W e‖ among ``factors`` at the values ``estimates`` gives, and its factor (None: no factors)."""
-    s = fits(factors, estimates)
-    i = int(np.argmax(s)) if s.size else -1
-    return (float(s[i]), factors[i]) if s.size else (0.0, None)
+    return _worst(fits(factors, estimates), factors)
+
+
+def _worst(residuals: NDArray, factors: Sequence[Factor]) -> tuple[float, Factor | None]:
+    """The largest of ``residuals`` and its factor (0 and None: no factors)."""
+    if not factors:
+        return 0.0, None
+    i = int(residuals.argmax())
+    return float(residuals[i]), factors[i]
 
 
 def _is_landmark_reading(factor: Factor) -> bool:
@@ -95,8 +101,8 @@ class DivergenceCheck:
         values of the keys asked, in one call) is named."""
         readings = [f for f in factors if _is_landmark_reading(f)]
         residuals = fits(readings, estimates)
-        self._absurd = {id(readings[i]) for i in np.flatnonzero(residuals > self.limit)}
-        s, f = (float(residuals.max()), readings[int(np.argmax(residuals))]) if readings else (0.0, None)
+        s, f = _worst(residuals, readings)
+        self._absurd = {id(readings[i]) for i in np.flatnonzero(residuals > self.limit)} if s > self.limit else set()
         if f is not None and s > self.limit:
             self._found(
                 f"update at pose {pose}: {describe(f)} is {s:.3g} sigmas from the prediction, beyond any "

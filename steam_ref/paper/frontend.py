@@ -178,7 +178,8 @@ class FrontEnd:
         """X(i): its value, the GP prior to the previous state, the buffered and its own readings."""
         dt = self.readings.model_times[i] - self.readings.model_times[i - 1] if i > 0 else 1.0
         value = self.prior.initial_state(self._pose, self._velocity, dt)  # WNOJ / Singer: acceleration zero
-        out = NewStep(i, True, [], {X(i): value}, kinds={X(i): self.prior.kind})
+        key = X(i)
+        out = NewStep(i, True, [], {key: value}, kinds={key: self.prior.kind})
         if i == 0:
             out.factors.append(self._first_state_prior())
             if self.setup.landmarks_up_front:

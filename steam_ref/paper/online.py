@@ -157,7 +157,13 @@ class StreamingEstimator:
         prediction = values  # the gate: new readings at the prediction; the fit: at the new estimate
         self.divergence.gate(self._pending, lambda keys: self._predicted(keys, prediction), pose)
         self.solver.update(self._pending, values)
-        self.divergence.fit(self._pending, self.solver.estimates_of, pose)
+        after: dict[Key, NDArray] = {}  # the estimates the fit asks for and the latest state's, in one query
+
+        def estimates_after(keys: list[Key]) -> dict[Key, NDArray]:
+            after.update(self.solver.estimates_of([*keys, X(pose)]))
+            return after
+
+        self.divergence.fit(self._pending, estimates_after, pose)
         forgotten = (k.index for k in self.solver.forgotten() if k.symbol == "l")
         self.front.landmarks.difference_update(forgotten)  # seen again, a landmark enters anew
         if self.options.converge_at_end:  # (a lag, which forgets factors, refuses it)
@@ -170,7 +176,8 @@ class StreamingEstimator:
         self.schedule.updated()
         self._pending, self._pending_values = [], Values()
         self.n_solved = len(self.states)
-        self.front.rebase(self.solver.estimate_of(X(pose)))  # predict from the estimate
+        latest = after.get(X(pose)) if pose != self.schedule.last_pose else None  # the last: updated again since
+        self.front.rebase(self.solver.estimate_of(X(pose)) if latest is None else latest)  # predict from the estimate
         self.update_steps.append(pose)
         self.update_seconds.append(time.perf_counter() - start)
 
