@@ -37,7 +37,8 @@ right-hand side at θ̄' is b_m - A_m (θ̄' ⊖ θ̄_S) (Eq. 10.4). Every chang
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass, replace
+from copy import copy
+from dataclasses import dataclass
 
 from numpy.typing import NDArray
 
@@ -102,6 +103,13 @@ def eliminate_variables(
     return list(pool.values())
 
 
+def _first(drop: set[Key], adjacent: list[GaussianFactor], dims: Mapping[Key, int]) -> list[Key]:
+    """An elimination order of ``drop`` by minimum degree among the variables of ``adjacent``, the others last."""
+    variables = list(dict.fromkeys(k for f in adjacent for k in f.keys))
+    last = [k for k in variables if k not in drop]
+    return min_degree_keys(variables, dims, [f.keys for f in adjacent], last)[: len(drop)]
+
+
 def _home(state: SolverState, keys: tuple[Key, ...], tops: list[int]) -> int:
     """The clique that eliminates a factor on ``keys``: the deepest holding one of them as frontal (walking up
     from the parent of a cut top whose variables hold them, the first clique with one of them frontal)."""
@@ -158,9 +166,7 @@ def _marginalize(
         split = [(tree.cliques[c], i) for c in reversed(whole) for i in range(len(tree.cliques[c].frontals))]
     else:
         adjacent = [state.cached(j) for j in dropped]
-        variables = list(dict.fromkeys(k for f in adjacent for k in f.keys))
-        last = [k for k in variables if k not in drop]
-        order_drop = min_degree_keys(variables, state.dims, [f.keys for f in adjacent], last)[: len(drop)]
+        order_drop = keys if len(keys) == 1 else _first(drop, adjacent, state.dims)  # one needs no ordering (/1)
         conditionals: list[Clique] | None = [] if keep else None
         schur = eliminate_variables(order_drop, adjacent, state.dims, conditionals)  # (Eq. 10.1-10.3)
         split = [(c, 0) for c in conditionals or ()]
@@ -172,7 +178,7 @@ def _marginalize(
         homes = [_home(state, gf.keys, tops) for gf in schur]
         removed, new_cids, factor_ids = list(cids), [], _add_marginal_factors(state, schur)
         for home, j in zip(homes, factor_ids, strict=True):
-            tree.replace(home, _relabel(tree.cliques[home], None, extra=(j,)))  # its next re-elimination gathers j
+            tree.replace(home, _with_factor(tree.cliques[home], j))  # its next re-elimination gathers j
         tree.cut(removed)  # a child holding no variable of D hangs under the nearest clique left, its f(S) kept
     else:  # step 3: re-eliminate the affected part with D first
         roots = set(tree.roots)
@@ -183,11 +189,10 @@ def _marginalize(
         rest = [k for c in removed_top.values() for k in c.frontals if k not in drop]
         last = [k for c, cl in removed_top.items() if c in roots for k in cl.frontals if k not in drop]
         order_rest = min_degree_keys(rest, state.dims, [f.keys for f in linear], last, constrained)
-        n_own = len(kept) + len(schur)
-        cliques, parents, owner = eliminate(order_rest, linear, state.dims, list(range(n_own)) + [None] * len(orphans))
-        factor_ids = _add_marginal_factors(state, schur)
-        labels = kept + factor_ids + [None] * len(orphans)
-        new_cids = tree.insert_eliminated([_relabel(c, labels) for c in cliques], parents, orphans, owner[n_own:])
+        factor_ids = _add_marginal_factors(state, schur)  # the solver's ids, so each clique is labelled as it is made
+        labels, n_own = kept + factor_ids + [None] * len(orphans), len(kept) + len(schur)
+        cliques, parents, owner = eliminate(order_rest, linear, state.dims, labels)
+        new_cids = tree.insert_eliminated(cliques, parents, orphans, owner[n_own:])
     state.drop_factors(dropped)  # (their ids are never given again)
     state.drop_variables(keys)
     if new_cids:
@@ -209,10 +214,11 @@ def cuttable(tree: BayesTree, keys: Iterable[Key]) -> list[int]:
     return [c for c in found if whole[c]]
 
 
-def _relabel(clique: Clique, labels: list[int | None] | None, extra: tuple[int, ...] = ()) -> Clique:
-    """``clique`` with its factor positions replaced by the solver's factor ids (None: kept), ``extra`` added."""
-    ids = clique.factors if labels is None else tuple(labels[i] for i in clique.factors)
-    return replace(clique, factors=tuple(i for i in ids if i is not None) + extra)
+def _with_factor(clique: Clique, fid: int) -> Clique:
+    """A copy of ``clique`` that also eliminates factor ``fid``: its arrays shared, its solved form not made again."""
+    out = copy(clique)
+    object.__setattr__(out, "factors", clique.factors + (fid,))  # a new clique, frozen once made
+    return out
 
 
 def _add_marginal_factors(state: SolverState, schur: list[GaussianFactor]) -> list[int]:
