@@ -103,13 +103,6 @@ def eliminate_variables(
     return list(pool.values())
 
 
-def _first(drop: set[Key], adjacent: list[GaussianFactor], dims: Mapping[Key, int]) -> list[Key]:
-    """An elimination order of ``drop`` by minimum degree among the variables of ``adjacent``, the others last."""
-    variables = list(dict.fromkeys(k for f in adjacent for k in f.keys))
-    last = [k for k in variables if k not in drop]
-    return min_degree_keys(variables, dims, [f.keys for f in adjacent], last)[: len(drop)]
-
-
 def _home(state: SolverState, keys: tuple[Key, ...], tops: list[int]) -> int:
     """The clique that eliminates a factor on ``keys``: the deepest holding one of them as frontal (walking up
     from the parent of a cut top whose variables hold them, the first clique with one of them frontal)."""
@@ -166,7 +159,10 @@ def _marginalize(
         split = [(tree.cliques[c], i) for c in reversed(whole) for i in range(len(tree.cliques[c].frontals))]
     else:
         adjacent = [state.cached(j) for j in dropped]
-        order_drop = keys if len(keys) == 1 else _first(drop, adjacent, state.dims)  # one needs no ordering (/1)
+        variables = list(dict.fromkeys(k for f in adjacent for k in f.keys))
+        last = [k for k in variables if k not in drop]  # D first, the rest last: one variable needs no ordering (/1)
+        order = keys if len(keys) == 1 else min_degree_keys(variables, state.dims, [f.keys for f in adjacent], last)
+        order_drop = order[: len(drop)]
         conditionals: list[Clique] | None = [] if keep else None
         schur = eliminate_variables(order_drop, adjacent, state.dims, conditionals)  # (Eq. 10.1-10.3)
         split = [(c, 0) for c in conditionals or ()]
@@ -177,12 +173,13 @@ def _marginalize(
         # Step 2, leaves: cut the cliques of D off; the Schur complement of D's factors goes to their parents.
         homes = [_home(state, gf.keys, tops) for gf in schur]
         removed, new_cids, factor_ids = list(cids), [], _add_marginal_factors(state, schur)
-        for home, j in zip(homes, factor_ids, strict=True):
-            tree.replace(home, _with_factor(tree.cliques[home], j))  # its next re-elimination gathers j
+        for home, j in zip(homes, factor_ids, strict=True):  # its next re-elimination gathers j
+            clique = copy(tree.cliques[home])  # arrays shared: the solved form is not made again
+            object.__setattr__(clique, "factors", clique.factors + (j,))  # a new clique, frozen once in the tree
+            tree.replace(home, clique)
         tree.cut(removed)  # a child holding no variable of D hangs under the nearest clique left, its f(S) kept
     else:  # step 3: re-eliminate the affected part with D first
-        roots = set(tree.roots)
-        removed_top, orphans = tree.remove_top(cids)
+        roots, (removed_top, orphans) = set(tree.roots), tree.remove_top(cids)  # the roots before
         removed = list(removed_top)
         kept = [j for c in removed_top.values() for j in c.factors if drop.isdisjoint(state.factors[j].keys)]
         linear = [state.cached(j) for j in kept] + schur + [tree.cliques[o].marginal for o in orphans]
@@ -197,8 +194,10 @@ def _marginalize(
     state.drop_variables(keys)
     if new_cids:
         backsubstitute(state, set(new_cids), alpha)
-    did = (tuple(order_drop), leaves, tuple(removed), tuple(new_cids), tuple(dropped), tuple(factor_ids))
-    return MarginalizationReport(*did, estimates, forgotten)
+    return MarginalizationReport(
+        tuple(order_drop), leaves, tuple(removed), tuple(new_cids),
+        tuple(dropped), tuple(factor_ids), estimates, forgotten,
+    )  # fmt: skip
 
 
 def cuttable(tree: BayesTree, keys: Iterable[Key]) -> list[int]:
@@ -212,13 +211,6 @@ def cuttable(tree: BayesTree, keys: Iterable[Key]) -> list[int]:
     for c in reversed(found):  # children first
         whole[c] = wanted.issuperset(tree.cliques[c].frontals) and all(whole.get(h, 0) for h in tree.children[c])
     return [c for c in found if whole[c]]
-
-
-def _with_factor(clique: Clique, fid: int) -> Clique:
-    """A copy of ``clique`` that also eliminates factor ``fid``: its arrays shared, its solved form not made again."""
-    out = copy(clique)
-    object.__setattr__(out, "factors", clique.factors + (fid,))  # a new clique, frozen once made
-    return out
 
 
 def _add_marginal_factors(state: SolverState, schur: list[GaussianFactor]) -> list[int]:
