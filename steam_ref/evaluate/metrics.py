@@ -72,13 +72,17 @@ class Statistics:
         finite("errors", e)
         if e.size == 0:
             raise SteamError("no errors to summarise: the trajectory has no pose (or no pair) to compare")
-        # scaled by the largest error: e * e overflows past 1e154 and underflows to 0 below 1e-162
-        top = float(np.max(np.abs(e)))
+        top, u = _scaled(e)
         if top == 0.0:
             return cls(0.0, 0.0, 0.0, 0.0, e.size)
-        u = e / top
         rmse, mean, median = top * float(np.sqrt(np.mean(u * u))), top * float(np.mean(u)), top * float(np.median(u))
         return cls(rmse, mean, median, float(np.max(e)), e.size)
+
+    @staticmethod
+    def rmse_of(errors: NDArray) -> float:
+        """The RMSE of :meth:`of` alone, of finite errors (n,), n >= 1: no median, so no sorted copy of them."""
+        top, u = _scaled(errors)
+        return 0.0 if top == 0.0 else top * float(np.sqrt(np.mean(u * u)))
 
     def to_dict(self) -> dict:
         return {"rmse": self.rmse, "mean": self.mean, "median": self.median, "max": self.max, "n": self.n}
@@ -235,3 +239,9 @@ def _motion(p: NDArray, i: NDArray, j: NDArray) -> tuple[NDArray, NDArray, NDArr
     c, s = np.cos(p[i, 2]), np.sin(p[i, 2])
     dx, dy = p[j, 0] - p[i, 0], p[j, 1] - p[i, 1]
     return c * dx + s * dy, c * dy - s * dx, p[j, 2] - p[i, 2]
+
+
+def _scaled(e: NDArray) -> tuple[float, NDArray]:
+    """The largest error and the errors divided by it (unless 0): e * e overflows past 1e154, underflows below 1e-162."""
+    top = float(np.max(np.abs(e)))
+    return top, e if top == 0.0 else e / top
