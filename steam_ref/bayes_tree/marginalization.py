@@ -37,7 +37,8 @@ right-hand side at θ̄' is b_m - A_m (θ̄' ⊖ θ̄_S) (Eq. 10.4). Every chang
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass, replace
+from copy import copy
+from dataclasses import dataclass
 
 from numpy.typing import NDArray
 
@@ -159,8 +160,9 @@ def _marginalize(
     else:
         adjacent = [state.cached(j) for j in dropped]
         variables = list(dict.fromkeys(k for f in adjacent for k in f.keys))
-        last = [k for k in variables if k not in drop]
-        order_drop = min_degree_keys(variables, state.dims, [f.keys for f in adjacent], last)[: len(drop)]
+        last = [k for k in variables if k not in drop]  # D first, the rest last: one variable needs no ordering (/1)
+        order = keys if len(keys) == 1 else min_degree_keys(variables, state.dims, [f.keys for f in adjacent], last)
+        order_drop = order[: len(drop)]
         conditionals: list[Clique] | None = [] if keep else None
         schur = eliminate_variables(order_drop, adjacent, state.dims, conditionals)  # (Eq. 10.1-10.3)
         split = [(c, 0) for c in conditionals or ()]
@@ -171,29 +173,31 @@ def _marginalize(
         # Step 2, leaves: cut the cliques of D off; the Schur complement of D's factors goes to their parents.
         homes = [_home(state, gf.keys, tops) for gf in schur]
         removed, new_cids, factor_ids = list(cids), [], _add_marginal_factors(state, schur)
-        for home, j in zip(homes, factor_ids, strict=True):
-            tree.replace(home, _relabel(tree.cliques[home], None, extra=(j,)))  # its next re-elimination gathers j
+        for home, j in zip(homes, factor_ids, strict=True):  # its next re-elimination gathers j
+            clique = copy(tree.cliques[home])  # arrays shared: the solved form is not made again
+            object.__setattr__(clique, "factors", clique.factors + (j,))  # a new clique, frozen once in the tree
+            tree.replace(home, clique)
         tree.cut(removed)  # a child holding no variable of D hangs under the nearest clique left, its f(S) kept
     else:  # step 3: re-eliminate the affected part with D first
-        roots = set(tree.roots)
-        removed_top, orphans = tree.remove_top(cids)
+        roots, (removed_top, orphans) = set(tree.roots), tree.remove_top(cids)  # the roots before
         removed = list(removed_top)
         kept = [j for c in removed_top.values() for j in c.factors if drop.isdisjoint(state.factors[j].keys)]
         linear = [state.cached(j) for j in kept] + schur + [tree.cliques[o].marginal for o in orphans]
         rest = [k for c in removed_top.values() for k in c.frontals if k not in drop]
         last = [k for c, cl in removed_top.items() if c in roots for k in cl.frontals if k not in drop]
         order_rest = min_degree_keys(rest, state.dims, [f.keys for f in linear], last, constrained)
-        n_own = len(kept) + len(schur)
-        cliques, parents, owner = eliminate(order_rest, linear, state.dims, list(range(n_own)) + [None] * len(orphans))
-        factor_ids = _add_marginal_factors(state, schur)
-        labels = kept + factor_ids + [None] * len(orphans)
-        new_cids = tree.insert_eliminated([_relabel(c, labels) for c in cliques], parents, orphans, owner[n_own:])
+        factor_ids = _add_marginal_factors(state, schur)  # the solver's ids, so each clique is labelled as it is made
+        labels, n_own = kept + factor_ids + [None] * len(orphans), len(kept) + len(schur)
+        cliques, parents, owner = eliminate(order_rest, linear, state.dims, labels)
+        new_cids = tree.insert_eliminated(cliques, parents, orphans, owner[n_own:])
     state.drop_factors(dropped)  # (their ids are never given again)
     state.drop_variables(keys)
     if new_cids:
         backsubstitute(state, set(new_cids), alpha)
-    did = (tuple(order_drop), leaves, tuple(removed), tuple(new_cids), tuple(dropped), tuple(factor_ids))
-    return MarginalizationReport(*did, estimates, forgotten)
+    return MarginalizationReport(
+        tuple(order_drop), leaves, tuple(removed), tuple(new_cids),
+        tuple(dropped), tuple(factor_ids), estimates, forgotten,
+    )  # fmt: skip
 
 
 def cuttable(tree: BayesTree, keys: Iterable[Key]) -> list[int]:
@@ -207,12 +211,6 @@ def cuttable(tree: BayesTree, keys: Iterable[Key]) -> list[int]:
     for c in reversed(found):  # children first
         whole[c] = wanted.issuperset(tree.cliques[c].frontals) and all(whole.get(h, 0) for h in tree.children[c])
     return [c for c in found if whole[c]]
-
-
-def _relabel(clique: Clique, labels: list[int | None] | None, extra: tuple[int, ...] = ()) -> Clique:
-    """``clique`` with its factor positions replaced by the solver's factor ids (None: kept), ``extra`` added."""
-    ids = clique.factors if labels is None else tuple(labels[i] for i in clique.factors)
-    return replace(clique, factors=tuple(i for i in ids if i is not None) + extra)
 
 
 def _add_marginal_factors(state: SolverState, schur: list[GaussianFactor]) -> list[int]:

@@ -65,7 +65,7 @@ class Alignment:
 
     def apply(self, poses: NDArray) -> NDArray:
         """Poses (n, 3) [x, y, θ] moved by this transform; headings wrapped to [-π, π)."""
-        poses = finite("poses", real_array("poses", poses))
+        poses = finite("poses", floats("poses", poses))
         if poses.ndim != 2 or poses.shape[1] != 3:
             raise ShapeError(f"poses must be an (n, 3) array of poses [x, y, θ], got shape {poses.shape}")
         xy = self.scale * poses[:, :2] @ self.rotation.T + self.translation
@@ -75,24 +75,31 @@ class Alignment:
         return {"angle_rad": float(self.angle), "translation_m": self.translation.tolist(), "scale": float(self.scale)}
 
 
+def floats(name: str, value: object) -> NDArray:
+    """``value`` itself when it is a float64 array (read, never written: a long trajectory is not copied at each
+    figure), else :func:`~steam_ref.arguments.real_array`'s checked float64 copy."""
+    return value if type(value) is np.ndarray and value.dtype == np.float64 else real_array(name, value)
+
+
 def _centred(points: NDArray) -> tuple[NDArray, NDArray, float]:
     """Mean, the centred points as unit directions' weights x̃ᵢ / ‖x̃‖, and ‖x̃‖ = √(Σ ‖x̃ᵢ‖²) = √(n σ²)
     [U91 Eq. 34-36]; ‖x̃‖ is 0 when the spread is rounding only (see ROUNDING). Computed on the points
-    divided by their largest coordinate: no overflow, no underflow."""
-    scale = float(np.abs(points).max())
+    divided by their largest coordinate: no overflow, no underflow; in one array, changed in place."""
+    scale = max(float(points.max()), -float(points.min()))  # max |xᵢ|, with no array of the absolute values
     if scale == 0.0:
         return np.zeros(2), np.zeros_like(points), 0.0
     p = points / scale
     mu = p.mean(axis=0)
-    centred = p - mu
-    norm = float(np.sqrt(np.sum(centred * centred)))
+    p -= mu
+    norm = float(np.sqrt(np.sum(p * p)))
     if norm <= np.sqrt(len(points)) * ROUNDING:
         return mu * scale, np.zeros_like(points), 0.0
-    return mu * scale, centred / norm, norm * scale
+    p /= norm
+    return mu * scale, p, norm * scale
 
 
 def _checked(estimate: object, truth: object) -> tuple[NDArray, NDArray]:
-    x, y = real_array("estimate", estimate), real_array("truth", truth)
+    x, y = floats("estimate", estimate), floats("truth", truth)
     if x.ndim != 2 or x.shape[1] != 2 or x.shape != y.shape or len(x) < 2:
         raise SteamError(
             f"alignment needs two (n, 2) position arrays of one shape, n >= 2; got {x.shape} and {y.shape}"
@@ -105,29 +112,25 @@ def alignment_defect(estimate: object, truth: object) -> str | None:
     """Why no rotation aligns ``estimate`` onto ``truth`` (positions (n, 2)), or None when one does: the
     truth's positions coincide (a robot that does not move), the estimate's do, or the two are
     uncorrelated (Σ ỹᵢ conj(x̃ᵢ) is rounding beside √(Σ‖x̃ᵢ‖² Σ‖ỹᵢ‖²), its Cauchy-Schwarz bound)."""
-    x, y = _checked(estimate, truth)
-    return _defect(x, y)
+    return _fit(*_checked(estimate, truth))[0]
 
 
-def _defect(x: NDArray, y: NDArray) -> str | None:
-    (_, _, norm_x), (_, _, norm_y) = _centred(x), _centred(y)
-    if norm_y == 0.0:
-        return (
-            "alignment is undefined: the truth's positions all coincide (it does not move), no rotation is determined"
-        )
-    if norm_x == 0.0:
-        return "alignment is undefined: the estimate's positions all coincide, no rotation is determined"
-    if np.hypot(*_correlation(x, y)) <= len(x) * ROUNDING:
-        return "alignment is undefined: the estimate's positions are at right angles to the truth's, no rotation is determined"
-    return None
-
-
-def _correlation(x: NDArray, y: NDArray) -> tuple[float, float]:
-    """(a, b) / (‖x̃‖ ‖ỹ‖): Σ x̃ᵢ·ỹᵢ and Σ x̃ᵢ × ỹᵢ of the centred points, each in [-1, 1] (Cauchy-Schwarz)."""
-    (_, u, _), (_, v, _) = _centred(x), _centred(y)
+def _fit(x: NDArray, y: NDArray) -> tuple[str | None, tuple[NDArray, NDArray, float, float, float, float]]:
+    """(why no rotation aligns ``x`` onto ``y``, or None; μx, μy, ‖x̃‖, ‖ỹ‖ and (a, b) / (‖x̃‖ ‖ỹ‖): Σ x̃ᵢ·ỹᵢ and
+    Σ x̃ᵢ × ỹᵢ of the centred points, each in [-1, 1] by Cauchy-Schwarz), each point centred once."""
+    (mu_x, u, norm_x), (mu_y, v, norm_y) = _centred(x), _centred(y)
     a = float(np.sum(u * v))  # Σ x̃ᵢ·ỹᵢ
     b = float(np.sum(u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]))  # Σ x̃ᵢ × ỹᵢ
-    return a, b
+    defect = None
+    if norm_y == 0.0:
+        defect = (
+            "alignment is undefined: the truth's positions all coincide (it does not move), no rotation is determined"
+        )
+    elif norm_x == 0.0:
+        defect = "alignment is undefined: the estimate's positions all coincide, no rotation is determined"
+    elif np.hypot(a, b) <= len(x) * ROUNDING:
+        defect = "alignment is undefined: the estimate's positions are at right angles to the truth's, no rotation is determined"
+    return defect, (mu_x, mu_y, norm_x, norm_y, a, b)
 
 
 def align_planar(estimate: NDArray, truth: NDArray, *, with_scale: bool = False) -> Alignment:
@@ -137,12 +140,9 @@ def align_planar(estimate: NDArray, truth: NDArray, *, with_scale: bool = False)
     rotation is determined (:func:`alignment_defect` says why) a SteamError says so. A rigid alignment
     (``with_scale=False``) is Umeyama's with s fixed at 1 [U91 Eq. 40-41].
     """
-    x, y = _checked(estimate, truth)
-    defect = _defect(x, y)
+    defect, (mu_x, mu_y, norm_x, norm_y, a, b) = _fit(*_checked(estimate, truth))  # a + i b: Σ ỹᵢ conj(x̃ᵢ) / (‖x̃‖ ‖ỹ‖)
     if defect is not None:
         raise SteamError(defect)
-    (mu_x, _, norm_x), (mu_y, _, norm_y) = _centred(x), _centred(y)
-    a, b = _correlation(x, y)  # Σ ỹᵢ conj(x̃ᵢ) / (‖x̃‖ ‖ỹ‖)
     angle = float(np.arctan2(b, a))  # R = U S Vᵀ in the plane     [U91 Eq. 39-40]
     scale = float(np.hypot(a, b) * (norm_y / norm_x)) if with_scale else 1.0  # s = tr(DS) / σx²  [U91 Eq. 42]
     c, s = np.cos(angle), np.sin(angle)

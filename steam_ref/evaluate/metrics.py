@@ -35,14 +35,17 @@ from ..dead_reckoning import wrap_angle
 from ..errors import ShapeError, SteamError
 from ..lie import LieGroup
 from ..lie.points import position
-from .align import ALIGNMENTS, Alignment, align_planar
+from .align import ALIGNMENTS, Alignment, align_planar, floats
+
+_BLOCK = 4096  # pairs a relative pose error computes at once
 
 __all__ = ["Statistics", "PoseError", "ape", "group_ape", "rpe", "rpe_pairs", "planar_poses"]
 
 
 def planar_poses(name: str, poses: object) -> NDArray:
-    """``poses`` as a finite float (n, 3) [x, y, θ] array, n ≥ 1; ShapeError / SteamError naming it."""
-    out = real_array(name, poses)  # never booleans, complex numbers or strings
+    """``poses`` as a finite float (n, 3) [x, y, θ] array, n ≥ 1 (itself if it is one: read, never written);
+    ShapeError / SteamError naming it."""
+    out = floats(name, poses)  # never booleans, complex numbers or strings
     if out.ndim != 2 or out.shape[1] != 3 or len(out) == 0:
         raise ShapeError(f"{name} must be an (n, 3) array of poses [x, y, θ], n >= 1; got shape {out.shape}")
     if not np.all(np.isfinite(out)):
@@ -63,19 +66,23 @@ class Statistics:
 
     @classmethod
     def of(cls, errors: NDArray) -> Statistics:
-        e = real_array("errors", errors)
+        e = floats("errors", errors)
         if e.ndim != 1:
             raise ShapeError(f"errors must be a 1-d array, one error per pose or pair, got shape {e.shape}")
         finite("errors", e)
         if e.size == 0:
             raise SteamError("no errors to summarise: the trajectory has no pose (or no pair) to compare")
-        # scaled by the largest error: e * e overflows past 1e154 and underflows to 0 below 1e-162
-        top = float(np.max(np.abs(e)))
+        top, u = _scaled(e)
         if top == 0.0:
             return cls(0.0, 0.0, 0.0, 0.0, e.size)
-        u = e / top
         rmse, mean, median = top * float(np.sqrt(np.mean(u * u))), top * float(np.mean(u)), top * float(np.median(u))
         return cls(rmse, mean, median, float(np.max(e)), e.size)
+
+    @staticmethod
+    def rmse_of(errors: NDArray) -> float:
+        """The RMSE of :meth:`of` alone, of finite errors (n,), n >= 1: no median, so no sorted copy of them."""
+        top, u = _scaled(errors)
+        return 0.0 if top == 0.0 else top * float(np.sqrt(np.mean(u * u)))
 
     def to_dict(self) -> dict:
         return {"rmse": self.rmse, "mean": self.mean, "median": self.median, "max": self.max, "n": self.n}
@@ -123,7 +130,7 @@ def ape(truth: object, estimate: object, *, align: str | None = None) -> PoseErr
         else align_planar(estimate[:, :2], truth[:, :2], with_scale=align == "sim2")
     )
     moved = transform.apply(estimate)
-    translation = np.hypot(*(moved[:, :2] - truth[:, :2]).T)
+    translation = np.hypot(moved[:, 0] - truth[:, 0], moved[:, 1] - truth[:, 1])
     heading = np.abs(wrap_angle(moved[:, 2] - truth[:, 2]))
     return PoseError(translation, heading, transform)
 
@@ -218,15 +225,23 @@ def rpe(
             f"no pair of poses delta={delta!r} {unit} apart in a trajectory of {len(truth)} poses "
             f"(pairs chosen on the {pairs_from}'s path): give a smaller delta"
         )
-    i, j = pairs[:, 0], pairs[:, 1]
-
-    def motion(p: NDArray) -> tuple[NDArray, NDArray]:
-        """Pᵢ⁻¹Pⱼ: the step pⱼ - pᵢ seen from pose i, and the turn."""
-        c, s = np.cos(p[i, 2]), np.sin(p[i, 2])
-        d = p[j, :2] - p[i, :2]
-        return np.column_stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]]), p[j, 2] - p[i, 2]
-
-    (t_true, turn_true), (t_est, turn_est) = motion(truth), motion(estimate)
-    translation = np.hypot(*(t_est - t_true).T)  # ‖t(E)‖: R(-Δθ_true) is an isometry
-    heading = np.abs(wrap_angle(turn_est - turn_true))
+    translation, heading = np.empty(len(pairs)), np.empty(len(pairs))
+    for lo in range(0, len(pairs), _BLOCK):  # by blocks: a long run's temporaries stay a block's
+        i, j, at = pairs[lo : lo + _BLOCK, 0], pairs[lo : lo + _BLOCK, 1], slice(lo, lo + _BLOCK)
+        (x_true, y_true, turn_true), (x_est, y_est, turn_est) = _motion(truth, i, j), _motion(estimate, i, j)
+        translation[at] = np.hypot(x_est - x_true, y_est - y_true)  # ‖t(E)‖: R(-Δθ_true) is an isometry
+        heading[at] = np.abs(wrap_angle(turn_est - turn_true))
     return PoseError(translation, heading, Alignment.identity())
+
+
+def _motion(p: NDArray, i: NDArray, j: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+    """Pᵢ⁻¹Pⱼ of each pair: the step pⱼ - pᵢ seen from pose i (x, y), and the turn."""
+    c, s = np.cos(p[i, 2]), np.sin(p[i, 2])
+    dx, dy = p[j, 0] - p[i, 0], p[j, 1] - p[i, 1]
+    return c * dx + s * dy, c * dy - s * dx, p[j, 2] - p[i, 2]
+
+
+def _scaled(e: NDArray) -> tuple[float, NDArray]:
+    """The largest error and the errors divided by it (unless 0): e * e overflows past 1e154, underflows below 1e-162."""
+    top = float(np.max(np.abs(e)))
+    return top, e if top == 0.0 else e / top

@@ -82,6 +82,7 @@ def trajectory_figures(truth: object, estimate: object, *, rpe_delta: int = 1) -
                 continue
             err = ape(truth, estimate, align=align)
             out[f"ape_{align}"] = err.to_dict() | {"alignment": err.alignment.to_dict()}
+            del err  # its errors by pose: not held through the next figure
         if defect is not None:
             out["alignment_undefined"] = defect
     if len(truth) > rpe_delta:

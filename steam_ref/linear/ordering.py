@@ -302,10 +302,19 @@ def _first_then_min_degree(
     early = sorted((k for k in rank if k not in last), key=rank.__getitem__)
     if not early:
         return min_degree_keys(variables, dims, factor_keys, last)
-    groups = [set(keys) for keys in factor_keys]
+    groups: list[set[Key] | None] = [set(keys) for keys in factor_keys]
+    holding: dict[Key, list[int]] = {}  # variable → the groups naming it (a merged one's place stays, skipped)
+    for i, g in enumerate(groups):
+        for k in g or ():
+            holding.setdefault(k, []).append(i)
     for v in early:  # the elimination game on the keys [K12 Alg. 1]: v's factors become one on its neighbours
-        touching = [g for g in groups if v in g]
-        groups = [g for g in groups if v not in g] + [set().union(*touching) - {v}]
+        touching = [i for i in holding.pop(v, ()) if groups[i] is not None]
+        merged = set().union(*(groups[i] or () for i in touching)) - {v}
+        for i in touching:
+            groups[i] = None
+        for k in merged:
+            holding[k].append(len(groups))
+        groups.append(merged)
     gone = set(early)
     rest = [k for k in variables if k not in gone]
     return early + min_degree_keys(rest, dims, [tuple(g) for g in groups if g], last)
