@@ -302,17 +302,18 @@ def _first_then_min_degree(
     early = sorted((k for k in rank if k not in last), key=rank.__getitem__)
     if not early:
         return min_degree_keys(variables, dims, factor_keys, last)
-    groups: list[set[Key] | None] = [set(keys) for keys in factor_keys]
-    holding: dict[Key, list[int]] = {}  # variable → the groups naming it (a merged one's place stays, skipped)
+    groups = [set(keys) for keys in factor_keys]  # a group merged away is left empty in its place
+    holding: dict[Key, list[int]] = {v: [] for v in early}  # an early key → the groups naming it, found in one pass
     for i, g in enumerate(groups):
-        for k in g or ():
-            holding.setdefault(k, []).append(i)
+        if not holding.keys().isdisjoint(g):  # most groups name no early key: one test each, no per-key loop
+            for k in holding.keys() & g:
+                holding[k].append(i)
     for v in early:  # the elimination game on the keys [K12 Alg. 1]: v's factors become one on its neighbours
-        touching = [i for i in holding.pop(v, ()) if groups[i] is not None]
-        merged = set().union(*(groups[i] or () for i in touching)) - {v}
+        touching = [i for i in holding.pop(v) if groups[i]]
+        merged = set().union(*(groups[i] for i in touching)) - {v}
         for i in touching:
-            groups[i] = None
-        for k in merged:
+            groups[i] = set()
+        for k in holding.keys() & merged:
             holding[k].append(len(groups))
         groups.append(merged)
     gone = set(early)
