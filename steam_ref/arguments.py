@@ -128,6 +128,12 @@ def real_array(name: str, value: object) -> NDArray:
     return np.array(a, dtype=float)
 
 
+def floats(name: str, value: object) -> NDArray:
+    """``value`` itself when it is a float64 array (read, never written: a long trajectory is not copied at each
+    figure), else :func:`real_array`'s checked float64 copy."""
+    return value if type(value) is np.ndarray and value.dtype == np.float64 else real_array(name, value)
+
+
 def finite(name: str, a: NDArray) -> NDArray:
     """``a`` itself; ShapeError naming the first NaN or inf entry otherwise."""
     if not np.isfinite(a).all():

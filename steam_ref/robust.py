@@ -83,18 +83,14 @@ class Tukey(RobustLoss):
         object.__setattr__(self, "c", _threshold("Tukey", "c", self.c))
 
     def rho(self, s: NDArray) -> NDArray:
-        with np.errstate(over="ignore"):  # |s| / c past float64 is past c: u = 1
-            u = np.minimum(np.abs(s) / self.c, 1.0)
-        return self.c**2 / 6 * (1 - (1 - u**2) ** 3)
+        return self.weight_and_rho(s)[1]
 
     def weight(self, s: NDArray) -> NDArray:
-        with np.errstate(over="ignore"):  # |s| / c past float64 is past c: weight 0
-            u = np.minimum(np.abs(s) / self.c, 2.0)
-        return np.where(u <= 1.0, (1 - u**2) ** 2, 0.0)
+        return self.weight_and_rho(s)[0]
 
     def weight_and_rho(self, s: NDArray) -> tuple[NDArray, NDArray]:
-        """Both from one u = min(abs(s), c) / c, which is min(abs(s) / c, 1) and cannot overflow (where abs(s) ≤ c
-        it is the weight's u too; beyond, u = 1 and the weight (1 - u²)² = 0, as the weight's own)."""
+        """w(s) = (1 - u²)² and ρ(s) = c²/6 (1 - (1 - u²)³) from one u = min(abs(s), c) / c, which is at most 1 and
+        cannot overflow (beyond c, u = 1: weight 0, ρ = c²/6). The ``where`` only maps a NaN's weight to 0."""
         u = np.minimum(np.abs(s), self.c) / self.c
         t = 1 - u**2
         return np.where(u <= 1.0, t**2, 0.0), self.c**2 / 6 * (1 - t**3)

@@ -402,3 +402,17 @@ def test_alignment_of_points_far_from_the_origin_is_the_rotation_by_hand():
     truth = estimate @ np.array([[c, -s], [s, c]]).T
     found = align_planar(estimate, truth, with_scale=True)
     assert found.angle == pytest.approx(0.3, abs=1e-14) and found.scale == pytest.approx(1.0, abs=1e-14)
+
+
+@pytest.mark.parametrize("errors", [[], [1.0, np.nan], np.zeros((2, 2))])
+def test_the_rmse_alone_checks_its_errors_as_the_statistics_do(errors):
+    with pytest.raises(SteamError) as alone:
+        Statistics.rmse_of(errors)
+    with pytest.raises(SteamError) as whole:
+        Statistics.of(errors)
+    assert str(alone.value) == str(whole.value)
+
+
+def test_the_rmse_alone_is_the_statistics_rmse():
+    e = np.array([3.0, 4.0, 1e-300])
+    assert Statistics.rmse_of(e) == Statistics.of(e).rmse == Statistics.rmse_of(e.tolist())

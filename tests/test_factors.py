@@ -236,6 +236,13 @@ def test_a_range_at_the_landmark_is_zero_minus_the_reading_with_zero_jacobian_ro
     assert not Hl[0].any() and np.allclose(Hl[1], [[0.0, 1.0]])
 
 
+def test_the_degenerate_range_warning_names_the_line_that_asked_for_the_jacobians():
+    x = np.array([1.5, -0.5, 0.3, 0.8, 0.1, 0.0])
+    with pytest.warns(sr.DegenerateMeasurementWarning) as record:
+        sr.RangeFactor.create(X1, LM, 1.0, 0.2).jacobians(x, x[:2].copy())
+    assert record[0].filename == __file__
+
+
 # --- what a factor class declares for Factor.stack -------------------------------------------------
 
 

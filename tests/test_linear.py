@@ -82,6 +82,23 @@ def test_gp_prior_blocks_made_once_are_what_each_linearization_makes(rng, monkey
     assert np.array_equal(alone.rhs[0], pair.rhs[0]) and np.array_equal(alone.costs[0], pair.costs[0])
 
 
+def test_a_gp_prior_whose_matrices_may_change_in_place_is_linearized_from_them_as_they_are_now(rng):
+    """Φ given by the caller stays writeable: a change in place must reach the next linearization (no memo of the
+    blocks made from the old Φ), alone as in a group."""
+    f = sr.GPPriorFactor.from_matrices(sr.X(0), sr.X(1), np.eye(6), np.eye(6))
+    values = {sr.X(i): rng.standard_normal(6) for i in range(2)}
+    (before,) = linearize([f], values)
+    f.phi[0, 0] = 5.0
+    (alone,) = linearize([f], values)
+    (pair,) = linearize([f, f], values)
+    assert before.jacobians[0][0, 0, 0] == -1.0 and alone.jacobians[0][0, 0, 0] == pair.jacobians[0][0, 0, 0] == -5.0
+
+
+def test_an_unknown_key_in_a_factor_given_as_an_iterator_is_named():
+    with pytest.raises(sr.UnknownVariableError, match="not among"):
+        orderings.min_degree_keys([sr.X(0)], {sr.X(0): 6}, [iter((sr.X(0), sr.X(9)))], [])
+
+
 def test_xl_information_has_eq15_structure(rng):
     """Eq. 15: 𝓘ₓₓ block-tridiagonal, 𝓘ₗₗ block-diagonal, under XL ordering."""
     p = small_problem(rng, n_states=10, n_landmarks=3)

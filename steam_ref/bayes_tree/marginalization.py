@@ -37,7 +37,6 @@ right-hand side at θ̄' is b_m - A_m (θ̄' ⊖ θ̄_S) (Eq. 10.4). Every chang
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping, Sequence
-from copy import copy
 from dataclasses import dataclass
 
 from numpy.typing import NDArray
@@ -174,9 +173,7 @@ def _marginalize(
         homes = [_home(state, gf.keys, tops) for gf in schur]
         removed, new_cids, factor_ids = list(cids), [], _add_marginal_factors(state, schur)
         for home, j in zip(homes, factor_ids, strict=True):  # its next re-elimination gathers j
-            clique = copy(tree.cliques[home])  # arrays shared: the solved form is not made again
-            object.__setattr__(clique, "factors", clique.factors + (j,))  # a new clique, frozen once in the tree
-            tree.replace(home, clique)
+            tree.replace(home, tree.cliques[home].with_factors((j,)))  # the solved form not made again
         tree.cut(removed)  # a child holding no variable of D hangs under the nearest clique left, its f(S) kept
     else:  # step 3: re-eliminate the affected part with D first
         roots, (removed_top, orphans) = set(tree.roots), tree.remove_top(cids)  # the roots before

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ..arguments import finite, number, real_array
+from ..arguments import finite, floats, number, real_array
 from ..dead_reckoning import wrap_angle
 from ..errors import ShapeError, SteamError
 
@@ -73,12 +73,6 @@ class Alignment:
 
     def to_dict(self) -> dict:
         return {"angle_rad": float(self.angle), "translation_m": self.translation.tolist(), "scale": float(self.scale)}
-
-
-def floats(name: str, value: object) -> NDArray:
-    """``value`` itself when it is a float64 array (read, never written: a long trajectory is not copied at each
-    figure), else :func:`~steam_ref.arguments.real_array`'s checked float64 copy."""
-    return value if type(value) is np.ndarray and value.dtype == np.float64 else real_array(name, value)
 
 
 def _centred(points: NDArray) -> tuple[NDArray, NDArray, float]:

@@ -30,12 +30,12 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ..arguments import finite, is_integer, number, real_array
+from ..arguments import finite, floats, is_integer, number, real_array
 from ..dead_reckoning import wrap_angle
 from ..errors import ShapeError, SteamError
 from ..lie import LieGroup
 from ..lie.points import position
-from .align import ALIGNMENTS, Alignment, align_planar, floats
+from .align import ALIGNMENTS, Alignment, align_planar
 
 _BLOCK = 4096  # pairs a relative pose error computes at once
 
@@ -66,23 +66,16 @@ class Statistics:
 
     @classmethod
     def of(cls, errors: NDArray) -> Statistics:
-        e = floats("errors", errors)
-        if e.ndim != 1:
-            raise ShapeError(f"errors must be a 1-d array, one error per pose or pair, got shape {e.shape}")
-        finite("errors", e)
-        if e.size == 0:
-            raise SteamError("no errors to summarise: the trajectory has no pose (or no pair) to compare")
+        e = _errors(errors)
         top, u = _scaled(e)
         if top == 0.0:
             return cls(0.0, 0.0, 0.0, 0.0, e.size)
-        rmse, mean, median = top * float(np.sqrt(np.mean(u * u))), top * float(np.mean(u)), top * float(np.median(u))
-        return cls(rmse, mean, median, float(np.max(e)), e.size)
+        return cls(_rmse(top, u), top * float(np.mean(u)), top * float(np.median(u)), float(np.max(e)), e.size)
 
     @staticmethod
     def rmse_of(errors: NDArray) -> float:
-        """The RMSE of :meth:`of` alone, of finite errors (n,), n >= 1: no median, so no sorted copy of them."""
-        top, u = _scaled(errors)
-        return 0.0 if top == 0.0 else top * float(np.sqrt(np.mean(u * u)))
+        """The RMSE of :meth:`of` alone, with its checks: no median, so no sorted copy of the errors."""
+        return _rmse(*_scaled(_errors(errors)))
 
     def to_dict(self) -> dict:
         return {"rmse": self.rmse, "mean": self.mean, "median": self.median, "max": self.max, "n": self.n}
@@ -239,6 +232,22 @@ def _motion(p: NDArray, i: NDArray, j: NDArray) -> tuple[NDArray, NDArray, NDArr
     c, s = np.cos(p[i, 2]), np.sin(p[i, 2])
     dx, dy = p[j, 0] - p[i, 0], p[j, 1] - p[i, 1]
     return c * dx + s * dy, c * dy - s * dx, p[j, 2] - p[i, 2]
+
+
+def _errors(errors: object) -> NDArray:
+    """Errors to summarise: a finite 1-d float64 array of at least one (read, not copied, when it is one)."""
+    e = floats("errors", errors)
+    if e.ndim != 1:
+        raise ShapeError(f"errors must be a 1-d array, one error per pose or pair, got shape {e.shape}")
+    finite("errors", e)
+    if e.size == 0:
+        raise SteamError("no errors to summarise: the trajectory has no pose (or no pair) to compare")
+    return e
+
+
+def _rmse(top: float, u: NDArray) -> float:
+    """√(mean e²) of the errors e = top · u (:func:`_scaled`): no overflow or underflow."""
+    return 0.0 if top == 0.0 else top * float(np.sqrt(np.mean(u * u)))
 
 
 def _scaled(e: NDArray) -> tuple[float, NDArray]:

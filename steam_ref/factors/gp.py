@@ -108,10 +108,15 @@ class GPPriorFactor(Factor):
 
     def whitened_jacobians(self) -> tuple[NDArray, ...] | None:
         """W (-Φ) and W I, made once for each W and Φ (a stream's priors share them, memoised per gap), as a
-        linearization of this factor alone makes them; None if one is not finite (the linearization says so)."""
+        linearization of this factor alone makes them. None (made anew by the linearization) if one is not finite,
+        if W or Φ is writeable (a caller may change it in place: ``wnoa``'s are read-only), or if the memo is full."""
         W, phi = self.sqrt_information, self.phi
-        made = _WHITENED.get((id(W), id(phi)))
-        if made is None or made[0] is not W or made[1] is not phi:  # (the arrays are held: their ids stay theirs)
+        if W.flags.writeable or phi.flags.writeable:
+            return None
+        made = _WHITENED.get((id(W), id(phi)))  # the memo holds W and Φ: an id in it is still theirs
+        if made is None:
+            if len(_WHITENED) >= _MAX_WHITENED:
+                return None
             batch = type(self).stack([self])
             with np.errstate(all="ignore"):
                 blocks = tuple((batch.sqrt_information @ J)[0] for J in batch.jacobians(phi, phi))
@@ -119,14 +124,12 @@ class GPPriorFactor(Factor):
                 return None
             for A in blocks:
                 A.flags.writeable = False
-            made = (W, phi, blocks)
-            if len(_WHITENED) < _MAX_WHITENED:
-                _WHITENED[(id(W), id(phi))] = made
+            made = _WHITENED[(id(W), id(phi))] = (W, phi, blocks)
         return made[2]
 
 
 _WHITENED: dict[tuple[int, int], tuple[NDArray, NDArray, tuple[NDArray, ...]]] = {}  # (W, Φ, blocks) by ids of W, Φ
-_MAX_WHITENED = 256  # a stream's priors share a few gaps; past this many, the blocks are made anew
+_MAX_WHITENED = 256  # a stream's priors share a few gaps; past this many, new ones go the linearization's usual way
 
 
 def gp_prior_factors(keys: list[Key], times: NDArray, prior: NDArray | LinearSDE) -> list[GPPriorFactor]:

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Mapping, Sequence
+from copy import copy
 from dataclasses import dataclass, field
 from typing import Protocol
 
@@ -92,6 +93,13 @@ class Clique:
         """δ_F = R⁻¹(d - S δ_S) = g - G δ_S for the stacked separator values (n_s,); returns (n_f,).  [YIB Eq. 25]"""
         g, G = self.solved
         return g - G.dot(separator_values)  # .dot: @'s call costs more
+
+    def with_factors(self, extra: tuple[int, ...]) -> Clique:
+        """This clique naming ``extra`` original factors too (a marginal factor its next re-elimination gathers), its
+        arrays and solved form shared, not made again: a new clique, for the tree to put in this one's place."""
+        out = copy(self)
+        object.__setattr__(out, "factors", self.factors + extra)  # frozen from here on
+        return out
 
     def split_frontals(self, x: NDArray) -> list[NDArray]:
         """A stacked frontal vector (n_f,) as one array per frontal variable."""

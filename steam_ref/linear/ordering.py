@@ -173,7 +173,9 @@ def _places(index: Mapping[Key, int], factor_keys: Iterable[Sequence[Key]], amon
         return [list(map(place, keys)) for keys in factor_keys]  # one pass in C: a list per factor, no generator
     except KeyError as exc:
         missing = exc.args[0]
-    i, keys = next((i, keys) for i, keys in enumerate(factor_keys) if missing in keys)
+    i, keys = next(
+        ((i, keys) for i, keys in enumerate(factor_keys) if missing in keys), ("?", "a key")
+    )  # an iterator is spent
     raise UnknownVariableError(
         f"factor_keys[{i}] = {keys!r} names {missing!r}, which is not among the {among} to order"
     )

@@ -40,7 +40,7 @@ class LinearizedGroup:
 
     factor_ids: NDArray  # (n,) positions in the list given to ``linearize``
     keys: list[tuple[Key, ...]]  # keys of each factor
-    jacobians: tuple[NDArray, ...] | None  # per key slot: (n, m, dₖ), whitened and robust-weighted
+    jacobians: tuple[NDArray, ...] | None  # per key slot: (n, m, dₖ), whitened and robust-weighted; may be read-only
     rhs: NDArray  # (n, m): b = -√w W e
     costs: NDArray  # (n,): ½‖We‖², or ρ(‖We‖) for a robust factor
 

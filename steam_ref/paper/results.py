@@ -8,9 +8,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ..arguments import finite
+from ..arguments import finite, floats
 from ..errors import ShapeError
-from ..evaluate.align import floats
 from ..evaluate.metrics import Statistics
 from ..trajectory import Covariances
 from .options import StreamOptions
