@@ -120,15 +120,13 @@ def whitened_norms(factors: Sequence[Factor], values: Values) -> NDArray:
             if len(ids) == 1:  # a type with one factor: its own evaluation, which costs less than a stack of one
                 f = factors[ids[0]]
                 w = f.whitened_error(*[values[k] for k in f.keys]).ravel()
-                norm = math.sqrt(w.dot(w))  # np.linalg.norm(w), without its checks and dispatch
-                out[ids[0]] = norm if norm == norm else math.inf  # a norm is ≥ 0, inf or NaN
+                out[ids[0]] = math.sqrt(w.dot(w))  # np.linalg.norm(w), without its checks and dispatch
                 continue
             group = [factors[i] for i in ids]
             batch = type(group[0]).stack(group)
             e = _whitened(batch, batch.error(*_variables(values, group)))
-            norms = np.sqrt(np.add.reduce(e * e, axis=1))  # np.linalg.norm(e, axis=1)
-            norms[np.isnan(norms)] = np.inf
-            out[ids] = norms
+            out[ids] = np.sqrt(np.add.reduce(e * e, axis=1))  # np.linalg.norm(e, axis=1)
+    out[np.isnan(out)] = np.inf  # a norm is ≥ 0, inf or NaN
     return out
 
 
