@@ -68,7 +68,8 @@ def test_dense_A_rows_are_whitened_factors(rng):
 def test_gp_prior_blocks_made_once_are_what_each_linearization_makes(rng, monkeypatch):
     """A GP prior alone, linearized with the blocks it makes once (W (-Φ), W I), against the same prior in a group of
     two, which makes them anew: equal bit for bit, to the dense product within rounding, and read-only."""
-    monkeypatch.setattr(gp_factors, "_WHITENED", {})  # an empty memo: earlier tests in this process may have filled it
+    # an empty memo: earlier tests in this process may have filled it
+    monkeypatch.setattr(gp_factors, "_WHITENED", gp_factors.Memo())
     qc = np.diag([0.5, 0.4, 0.1])
     f = sr.GPPriorFactor.wnoa(sr.X(0), sr.X(1), 0.7, qc)
     g = sr.GPPriorFactor.wnoa(sr.X(1), sr.X(2), 0.7, qc)  # the same gap: the same W and Φ
@@ -80,6 +81,27 @@ def test_gp_prior_blocks_made_once_are_what_each_linearization_makes(rng, monkey
         assert np.array_equal(A_alone[0], A_pair[0]) and not A_alone.flags.writeable
         np.testing.assert_allclose(A_alone[0], f.sqrt_information @ H, rtol=1e-14, atol=1e-14)
     assert np.array_equal(alone.rhs[0], pair.rhs[0]) and np.array_equal(alone.costs[0], pair.costs[0])
+
+
+def test_past_its_memo_a_gp_prior_is_linearized_the_usual_way_and_nothing_more_is_kept(rng, monkeypatch):
+    """A full memo makes no blocks and keeps none: the prior's blocks are made by the linearization, equal to the
+    dense product, and the memo holds what it held."""
+    memo = gp_factors.Memo(size=1)
+    monkeypatch.setattr(gp_factors, "_WHITENED", memo)
+    qc = np.diag([0.5, 0.4, 0.1])
+    first, second = (sr.GPPriorFactor.wnoa(sr.X(0), sr.X(1), dt, qc) for dt in (0.7, 0.9))
+    assert first.whitened_jacobians() is not None and memo.full
+    assert second.whitened_jacobians() is None and len(memo) == 1
+    values = {sr.X(i): rng.standard_normal(6) for i in range(2)}
+    (alone,) = linearize([second], values)
+    for A, H in zip(alone.jacobians, (-second.phi, np.eye(6)), strict=True):
+        np.testing.assert_allclose(A[0], second.sqrt_information @ H, rtol=1e-14, atol=1e-14)
+
+
+def test_a_memo_keeps_the_first_values_it_is_given_up_to_its_size():
+    memo = gp_factors.Memo(size=2)
+    assert [memo.keep(k, k * 10) for k in (1, 2, 3)] == [10, 20, 30]  # each value is returned, kept or not
+    assert memo == {1: 10, 2: 20} and memo.full
 
 
 def test_a_gp_prior_whose_matrices_may_change_in_place_is_linearized_from_them_as_they_are_now(rng):

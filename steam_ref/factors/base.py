@@ -39,8 +39,28 @@ def _finite_weight(name: str, W: NDArray, noise: NDArray) -> NDArray:
     return W
 
 
-_SIGMA_WEIGHTS: dict[bytes, NDArray] = {}  # W of each set of sigmas met so far (read-only), by their float64 bytes
-_MAX_SIGMA_WEIGHTS = 256  # a stream's readings share a few sets of sigmas; past this many, W is made anew
+class Memo(dict):
+    """A memo of values made from a stream's recurring inputs (a sensor's sigmas, a batch's shape, a gap's Φ), bounded:
+    it keeps the first ``size`` it is given and no more (never evicting), so an input met once per step, say a
+    reading's own sigmas, costs no memory past them, only the making of its value each time."""
+
+    def __init__(self, size: int = 256):
+        super().__init__()
+        self.size = size
+
+    @property
+    def full(self) -> bool:
+        """Whether it keeps nothing more."""
+        return len(self) >= self.size
+
+    def keep(self, key: Any, value: Any) -> Any:
+        """``value``, kept under ``key`` unless the memo is full."""
+        if not self.full:
+            self[key] = value
+        return value
+
+
+_SIGMA_WEIGHTS = Memo()  # W of each set of sigmas met so far (read-only), by their float64 bytes
 
 
 def sqrt_information(noise: NDArray | float, m: int, name: str = "noise") -> NDArray:
@@ -65,9 +85,7 @@ def sqrt_information(noise: NDArray | float, m: int, name: str = "noise") -> NDA
         with np.errstate(over="ignore", divide="ignore"):  # checked by _finite_weight
             W = _finite_weight(name, np.diag(1.0 / noise), noise)
         W.flags.writeable = False
-        if len(_SIGMA_WEIGHTS) < _MAX_SIGMA_WEIGHTS:
-            _SIGMA_WEIGHTS[memo] = W
-        return W
+        return _SIGMA_WEIGHTS.keep(memo, W)
     if noise.shape == (m, m):
         if not np.allclose(noise, noise.T, rtol=0.0, atol=1e-12 * np.max(np.abs(noise))):
             i, j = np.unravel_index(np.argmax(np.abs(noise - noise.T)), noise.shape)
@@ -92,7 +110,7 @@ def sqrt_information(noise: NDArray | float, m: int, name: str = "noise") -> NDA
     )
 
 
-_SIGMAS: dict[bytes, NDArray] = {}  # the sigmas of each W met so far, by its float64 bytes (its size among them)
+_SIGMAS = Memo()  # the sigmas of each W met so far, by its float64 bytes (its size among them)
 
 
 def _sigmas(W: NDArray) -> NDArray:
@@ -104,9 +122,7 @@ def _sigmas(W: NDArray) -> NDArray:
         with np.errstate(all="ignore"):
             rows = np.linalg.inv(W)  # Σ = W⁻¹W⁻ᵀ: sigma i is the norm of row i, scaled so 1e-200 does not underflow
             big = np.maximum(np.abs(rows).max(axis=1), np.finfo(float).tiny)
-            sigma = big * np.sqrt(((rows / big[:, None]) ** 2).sum(axis=1))
-        if len(_SIGMAS) < _MAX_SIGMA_WEIGHTS:
-            _SIGMAS[memo] = sigma
+            sigma = _SIGMAS.keep(memo, big * np.sqrt(((rows / big[:, None]) ** 2).sum(axis=1)))
     return sigma
 
 
@@ -199,7 +215,7 @@ def identity(n: int) -> NDArray:
     return eye
 
 
-_IDENTITY_STACKS: dict[tuple[int, ...], NDArray] = {}  # I broadcast to each shape (..., n, n) asked, read-only
+_IDENTITY_STACKS = Memo()  # I broadcast to each shape (..., n, n) asked, read-only (a few batch sizes recur)
 
 
 def identity_stack(shape: tuple[int, ...]) -> NDArray:
@@ -207,9 +223,7 @@ def identity_stack(shape: tuple[int, ...]) -> NDArray:
     batch of GP priors' later states."""
     eye = _IDENTITY_STACKS.get(shape)
     if eye is None:
-        eye = np.broadcast_to(identity(shape[-1]), shape)
-        if len(_IDENTITY_STACKS) < _MAX_SIGMA_WEIGHTS:  # a few batch sizes recur; past this many, made anew
-            _IDENTITY_STACKS[shape] = eye
+        eye = _IDENTITY_STACKS.keep(shape, np.broadcast_to(identity(shape[-1]), shape))
     return eye
 
 

@@ -19,7 +19,7 @@ from ..gp.interpolate import interpolation_terms
 from ..gp.prior import process_noise_sqrt_information, transition
 from ..gp.sde import LinearSDE, as_sde, check_prior, check_sde
 from ..variables import Key, key_list
-from .base import Factor, apply, identity_stack, measured_vector, sqrt_information
+from .base import Factor, Memo, apply, identity_stack, measured_vector, sqrt_information
 
 __all__ = ["GPPriorFactor", "gp_prior_factors", "InterpolatedFactor"]
 
@@ -115,7 +115,7 @@ class GPPriorFactor(Factor):
             return None
         made = _WHITENED.get((id(W), id(phi)))  # the memo holds W and Φ: an id in it is still theirs
         if made is None:
-            if len(_WHITENED) >= _MAX_WHITENED:
+            if _WHITENED.full:
                 return None
             batch = type(self).stack([self])
             with np.errstate(all="ignore"):
@@ -124,12 +124,12 @@ class GPPriorFactor(Factor):
                 return None
             for A in blocks:
                 A.flags.writeable = False
-            made = _WHITENED[(id(W), id(phi))] = (W, phi, blocks)
+            made = _WHITENED.keep((id(W), id(phi)), (W, phi, blocks))
         return made[2]
 
 
-_WHITENED: dict[tuple[int, int], tuple[NDArray, NDArray, tuple[NDArray, ...]]] = {}  # (W, Φ, blocks) by ids of W, Φ
-_MAX_WHITENED = 256  # a stream's priors share a few gaps; past this many, new ones go the linearization's usual way
+_WHITENED = Memo()  # (W, Φ, blocks) by the ids of W and Φ: a stream's priors share a few gaps; past the memo's size,
+# new ones go the linearization's usual way
 
 
 def gp_prior_factors(keys: list[Key], times: NDArray, prior: NDArray | LinearSDE) -> list[GPPriorFactor]:
