@@ -32,6 +32,7 @@ from numpy.typing import NDArray
 from ..errors import SteamError
 from . import oracle as o
 from .oracle_graph import Space
+from .oracle_rigid import MatrixGroup, jacobian_through
 from .oracle_rigid import derivative as romberg
 
 __all__ = [
@@ -124,32 +125,8 @@ def right_jacobian_inverse(xi: NDArray) -> NDArray:
     return np.linalg.inv(right_jacobian(xi))
 
 
-def adjoint(pose: NDArray) -> NDArray:
-    """Ad(T): T Exp(ξ) T⁻¹ = Exp(Ad(T) ξ), columns (T eᵢ^ T⁻¹)∨."""
-    T = matrix(np.asarray(pose, float))
-    return np.column_stack([_vee(T @ hat(e) @ np.linalg.inv(T)) for e in np.eye(3)])
-
-
-def between(a: NDArray, b: NDArray) -> NDArray:
-    return pose_of(np.linalg.inv(matrix(np.asarray(a, float))) @ matrix(np.asarray(b, float)))
-
-
-def retract(x: NDArray, delta: NDArray) -> NDArray:
-    """x ⊕ δ: a 3-vector is a pose, a 6-vector an SE(2) state (right retraction); a 2-vector a landmark."""
-    x, delta = np.asarray(x, float), np.asarray(delta, float)
-    if len(x) == 2:
-        return x + delta
-    pose = pose_of(matrix(x[:3]) @ scipy.linalg.expm(hat(delta[:3])))
-    return np.concatenate([pose, x[3:] + delta[3:]])
-
-
-def local(x0: NDArray, x: NDArray) -> NDArray:
-    """x ⊖ x₀ (the inverse of :func:`retract`)."""
-    x0, x = np.asarray(x0, float), np.asarray(x, float)
-    if len(x) == 2:
-        return x - x0
-    xi = log_matrix(np.linalg.inv(matrix(x0[:3])) @ matrix(x[:3]))
-    return np.concatenate([xi, x[3:] - x0[3:]])
+SE2 = MatrixGroup(hat, _vee, matrix, pose_of, log_matrix, pose_size=3, dof=3, landmark_size=2)  # a 6-vector: a state
+adjoint, between, retract, local = SE2.adjoint, SE2.between, SE2.retract, SE2.local
 
 
 def derivative(g: Callable[[NDArray], NDArray], n: int) -> NDArray:
@@ -161,18 +138,9 @@ def derivative(g: Callable[[NDArray], NDArray], n: int) -> NDArray:
 def numeric_jacobian(
     f: Callable[..., NDArray], args: Sequence[NDArray], k: int, out_local: Callable | None = None
 ) -> NDArray:
-    """∂f/∂δₖ at δ = 0 of f(..., xₖ ⊕ δ, ...) through the right retraction (:func:`derivative`).
-
-    ``out_local(y0, y)``: the output's local coordinates about y0 (default y - y0).
-    """
-    args = [np.asarray(a, float) for a in args]
-    y0 = np.asarray(f(*args), float)
-    diff = out_local or (lambda a, b: np.asarray(b, float) - a)
-
-    def g(d: NDArray) -> NDArray:
-        return diff(y0, f(*args[:k], retract(args[k], d), *args[k + 1 :]))
-
-    return derivative(g, len(args[k]))
+    """∂f/∂δₖ at δ = 0 of f(..., xₖ ⊕ δ, ...) through this module's right retraction (:func:`.oracle_rigid.jacobian_through`,
+    :func:`derivative`'s table); ``out_local(y0, y)``: the output's local coordinates about y0 (default y - y0)."""
+    return jacobian_through(retract, SE2.tangent_size(np.asarray(args[k])), f, args, k, out_local)
 
 
 def prior_error(x1: NDArray, x2: NDArray, dt: float, model: str) -> NDArray:

@@ -23,6 +23,7 @@ Independent expected values of the ``se3`` suite (kit v5). Nothing here shares c
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg
@@ -152,34 +153,6 @@ def jr_inverse_times_derivative(xi: NDArray, v: NDArray, u: NDArray) -> NDArray:
     return -Ji @ jr_derivative(xi, u) @ Ji @ v
 
 
-def adjoint(pose: NDArray) -> NDArray:
-    """Ad(T): columns (T eᵢ^ T⁻¹)∨."""
-    T = matrix(np.asarray(pose, float))
-    return np.column_stack([_vee(T @ hat(e) @ np.linalg.inv(T)) for e in np.eye(6)])
-
-
-def between(a: NDArray, b: NDArray) -> NDArray:
-    return pose_of(np.linalg.inv(matrix(np.asarray(a, float))) @ matrix(np.asarray(b, float)))
-
-
-def retract(x: NDArray, delta: NDArray) -> NDArray:
-    """x ⊕ δ: a 12-vector is a pose, an 18- or 24-vector a state (right retraction); a 3-vector a landmark."""
-    x, delta = np.asarray(x, float), np.asarray(delta, float)
-    if len(x) == 3:
-        return x + delta
-    pose = pose_of(matrix(x[:12]) @ scipy.linalg.expm(hat(delta[:6])))
-    return np.concatenate([pose, x[12:] + delta[6:]])
-
-
-def local(x0: NDArray, x: NDArray) -> NDArray:
-    """x ⊖ x₀ (the inverse of :func:`retract`)."""
-    x0, x = np.asarray(x0, float), np.asarray(x, float)
-    if len(x) == 3:
-        return x - x0
-    xi = log_matrix(np.linalg.inv(matrix(x0[:12])) @ matrix(x[:12]))
-    return np.concatenate([xi, x[12:] - x0[12:]])
-
-
 def derivative(g: Callable[[NDArray], NDArray], n: int) -> NDArray:
     """∂g/∂δ at δ = 0 (δ of size n): central differences at h, h/2, h/4, h/8, Romberg's table (error O(h⁸))."""
 
@@ -193,11 +166,65 @@ def derivative(g: Callable[[NDArray], NDArray], n: int) -> NDArray:
     return table[0]
 
 
-def numeric_jacobian(
-    f: Callable[..., NDArray], args: Sequence[NDArray], k: int, out_local: Callable | None = None
+@dataclass(frozen=True)
+class MatrixGroup:
+    """A group of rigid motions as the oracles write it, matrices and ``expm``: what they build on ξ^, its inverse,
+    a pose's matrix and back and the matrix Log, once for SE(2) (:mod:`.oracle_lie`) and SE(3) (here). A state is a
+    pose of ``pose_size`` numbers followed by vector parts (its twist, its acceleration); a vector of
+    ``landmark_size`` is a landmark."""
+
+    hat: Callable[[NDArray], NDArray]  # ξ (dof,) -> ξ^
+    vee: Callable[[NDArray], NDArray]  # ξ^ -> ξ
+    matrix: Callable[[NDArray], NDArray]  # a pose's numbers -> its matrix
+    pose_of: Callable[[NDArray], NDArray]  # a matrix -> the pose's numbers
+    log_matrix: Callable[[NDArray], NDArray]  # Log of a matrix, a tangent (dof,)
+    pose_size: int
+    dof: int
+    landmark_size: int
+
+    def adjoint(self, pose: NDArray) -> NDArray:
+        """Ad(T): T Exp(ξ) T⁻¹ = Exp(Ad(T) ξ), columns (T eᵢ^ T⁻¹)∨."""
+        T = self.matrix(np.asarray(pose, float))
+        return np.column_stack([self.vee(T @ self.hat(e) @ np.linalg.inv(T)) for e in np.eye(self.dof)])
+
+    def between(self, a: NDArray, b: NDArray) -> NDArray:
+        return self.pose_of(np.linalg.inv(self.matrix(np.asarray(a, float))) @ self.matrix(np.asarray(b, float)))
+
+    def retract(self, x: NDArray, delta: NDArray) -> NDArray:
+        """x ⊕ δ: a pose or a state (right retraction: T Exp(δ_T), the vector parts plus theirs), or a landmark."""
+        x, delta, n = np.asarray(x, float), np.asarray(delta, float), self.pose_size
+        if len(x) == self.landmark_size:
+            return x + delta
+        pose = self.pose_of(self.matrix(x[:n]) @ scipy.linalg.expm(self.hat(delta[: self.dof])))
+        return np.concatenate([pose, x[n:] + delta[self.dof :]])
+
+    def local(self, x0: NDArray, x: NDArray) -> NDArray:
+        """x ⊖ x₀ (the inverse of :meth:`retract`)."""
+        x0, x, n = np.asarray(x0, float), np.asarray(x, float), self.pose_size
+        if len(x) == self.landmark_size:
+            return x - x0
+        xi = self.log_matrix(np.linalg.inv(self.matrix(x0[:n])) @ self.matrix(x[:n]))
+        return np.concatenate([xi, x[n:] - x0[n:]])
+
+    def tangent_size(self, x: NDArray) -> int:
+        """The size of a step δ of ``x`` (a pose's dof and its vector parts; a landmark's size)."""
+        return len(x) if len(x) == self.landmark_size else self.dof + len(x) - self.pose_size
+
+
+SE3 = MatrixGroup(hat, _vee, matrix, pose_of, log_matrix, pose_size=12, dof=6, landmark_size=3)
+adjoint, between, retract, local = SE3.adjoint, SE3.between, SE3.retract, SE3.local
+
+
+def jacobian_through(
+    retract: Callable[[NDArray, NDArray], NDArray],
+    step_size: int,
+    f: Callable[..., NDArray],
+    args: Sequence[NDArray],
+    k: int,
+    out_local: Callable | None = None,
 ) -> NDArray:
-    """∂f/∂δₖ at δ = 0 of f(..., xₖ ⊕ δ, ...) through the right retraction; ``out_local(y0, y)``: the output's
-    local coordinates about y0 (default y - y0)."""
+    """∂f/∂δₖ at δ = 0 (δₖ of ``step_size``) of f(..., xₖ ⊕ δ, ...) through ``retract`` (:func:`derivative`);
+    ``out_local(y0, y)``: the output's local coordinates about y0 (default y - y0)."""
     args = [np.asarray(a, float) for a in args]
     y0 = np.asarray(f(*args), float)
     diff = out_local or (lambda a, b: np.asarray(b, float) - a)
@@ -205,8 +232,14 @@ def numeric_jacobian(
     def g(d: NDArray) -> NDArray:
         return diff(y0, f(*args[:k], retract(args[k], d), *args[k + 1 :]))
 
-    dims = {3: 3, 12: 6, 18: 12, 24: 18}
-    return derivative(g, dims[len(args[k])])
+    return derivative(g, step_size)
+
+
+def numeric_jacobian(
+    f: Callable[..., NDArray], args: Sequence[NDArray], k: int, out_local: Callable | None = None
+) -> NDArray:
+    """∂f/∂δₖ at δ = 0 of f(..., xₖ ⊕ δ, ...) through this module's right retraction (:func:`jacobian_through`)."""
+    return jacobian_through(retract, SE3.tangent_size(np.asarray(args[k])), f, args, k, out_local)
 
 
 # --- the local GP ---------------------------------------------------------------------------------------
