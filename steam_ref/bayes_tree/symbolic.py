@@ -19,6 +19,7 @@ from typing import Generic, Protocol, TypeVar
 
 from ..errors import SteamError, UnknownVariableError
 from ..linear.amalgamation import amalgamate
+from ..linear.ordering import Game
 from .dot import tree_dot
 from .undo import UndoLog
 
@@ -74,7 +75,11 @@ def _elimination_game(order: list, factor_keys: Sequence[Sequence[V]]) -> tuple[
 
 
 def build_cliques(
-    order: Sequence[V], factor_keys: Sequence[Sequence[V]], dims: Mapping | None = None, zeros: float = 0.0
+    order: Sequence[V],
+    factor_keys: Sequence[Sequence[V]],
+    dims: Mapping | None = None,
+    zeros: float = 0.0,
+    game: Game | None = None,
 ) -> list[SymbolicClique]:
     """Cliques of the Bayes tree of ``order``, children before parents.  [K12 Alg. 2]
 
@@ -82,8 +87,11 @@ def build_cliques(
     parent (the clique holding sᵢ's first variable as a frontal) when sᵢ equals all of C's
     variables; otherwise it starts a new child clique of C (or a new root when sᵢ is empty).
     ``zeros`` > 0: cliques then merge into their parents (``dims``: :mod:`steam_ref.linear.amalgamation`).
+    ``game``: the elimination game of this order and these factors, as the ordering played it
+    (:func:`~steam_ref.linear.ordering.min_degree_elimination`); None plays it here.
     """
-    separators, owner = _elimination_game(order := list(order), factor_keys)
+    order = list(order)
+    separators, owner = game or _elimination_game(order, factor_keys)
     clique_of = [0] * len(order)  # place → the clique where it is frontal
     frontals: list[list[int]] = []  # per clique, the places of its frontals in reverse elimination order
     seps: list[list[int]] = []  # per clique, the places of its separator

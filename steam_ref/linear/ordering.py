@@ -23,6 +23,7 @@ import heapq
 import os
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 import scipy.sparse as sp
@@ -41,6 +42,8 @@ __all__ = [
     "amd_ordering",
     "constrained_min_degree",
     "min_degree_keys",
+    "min_degree_elimination",
+    "Game",
     "make_ordering",
     "variable_adjacency",
     "sparse_backend",
@@ -227,7 +230,28 @@ def min_degree_keys(
     last: Iterable[Key] = (),
     first: Mapping[Key, float] | None = None,
 ) -> list[Key]:
-    """A greedy minimum-degree elimination order with the variables in ``last`` eliminated last.
+    """A greedy minimum-degree elimination order with the variables in ``last`` eliminated last: the keys of
+    :func:`min_degree_elimination` (its docstring)."""
+    return min_degree_elimination(variables, dims, factor_keys, last, first)[0]
+
+
+class Game(NamedTuple):
+    """What the elimination game found while an ordering played it, by place in the order: for a build of the
+    cliques that need not play it again.  [K12 Alg. 1]"""
+
+    separators: list[list[int]]  # sᵢ of each place, the neighbours it had when eliminated, as places, increasing
+    owner: list[int]  # for each factor, the place of its variable eliminated first
+
+
+def min_degree_elimination(
+    variables: Sequence[Key],
+    dims: Mapping[Key, int],
+    factor_keys: Iterable[Sequence[Key]],
+    last: Iterable[Key] = (),
+    first: Mapping[Key, float] | None = None,
+) -> tuple[list[Key], Game | None]:
+    """A greedy minimum-degree elimination order with the variables in ``last`` eliminated last, and the
+    :class:`Game` it played (None with ``first``).
 
     ``dims``: the size of each variable (the :class:`Ordering` carries them); ``factor_keys``: the
     variables of each factor.
@@ -243,9 +267,13 @@ def min_degree_keys(
     all others, in increasing order of the number it maps each to (ties in the order of ``variables``), and the
     rest by minimum degree on the graph their elimination leaves: a fixed-lag smoother puts the variables next to
     leave its window there, so that they sit in leaf cliques and are cut off with no re-elimination.
+
+    Eliminating a variable joins its neighbours into a clique: its neighbours then are its separator sᵢ, the
+    variables of the factor its elimination leaves [YIB Eq. 24], so the order comes with the elimination game
+    played (:func:`steam_ref.bayes_tree.symbolic.build_cliques` takes it).
     """
     if first is not None:
-        return _first_then_min_degree(list(variables), dims, factor_keys, list(last), first)
+        return _first_then_min_degree(list(variables), dims, factor_keys, list(last), first), None
     variables = list(variables)
     index = {v: i for i, v in enumerate(variables)}
     if len(index) != len(variables):
@@ -254,7 +282,7 @@ def min_degree_keys(
     _sizes(variables, dims)  # names a variable dims lacks, before any work
     n = len(variables)
     adj: list[set[int]] = [set() for _ in range(n)]  # by place in ``variables``: integers hash faster than keys
-    for places in _places(index, factor_keys, "variables"):
+    for places in (placed := _places(index, factor_keys, "variables")):
         for j in places:
             adj[j].update(places)
     if isinstance(last, Key):
@@ -272,15 +300,15 @@ def min_degree_keys(
         current.append(group[i] + len(a) * n + i)
     heap = current.copy()
     heapq.heapify(heap)
-    pop, push, order = heapq.heappop, heapq.heappush, []
+    pop, push, eliminated = heapq.heappop, heapq.heappush, []
     while heap:
         entry = pop(heap)
         i = entry % n
         if current[i] != entry:  # already eliminated, or a stale degree
             continue
         current[i] = -1
-        order.append(variables[i])
-        a = adj[i]
+        eliminated.append(i)
+        a = adj[i]  # sᵢ: left as it is from here on (no other set holds i any more)
         for u in a:  # eliminating v joins its neighbours into a clique (fill)
             au = adj[u]
             au.discard(i)
@@ -290,7 +318,14 @@ def min_degree_keys(
             if entry != current[u]:  # an unchanged degree's entry is in the heap already
                 current[u] = entry
                 push(heap, entry)
-    return order
+    at = [0] * n  # each variable's place in the order
+    for p, i in enumerate(eliminated):
+        at[i] = p
+    place, order = at.__getitem__, list(map(variables.__getitem__, eliminated))
+    if not all(placed):  # a factor of no variable, which no variable owns
+        return order, None
+    owner = [min(map(place, p)) for p in placed]  # each factor's variable eliminated first
+    return order, Game([sorted(map(place, adj[i])) for i in eliminated], owner)
 
 
 def _first_then_min_degree(
