@@ -30,7 +30,7 @@ from .. import covariance
 from ..arguments import real_array
 from ..errors import ShapeError, SteamError, UnderdeterminedError, UnknownVariableError
 from ..factors import Factor, check_factors, kinds_of
-from ..linear.ordering import min_degree_elimination
+from ..linear.min_degree import min_degree_elimination
 from ..linear.system import linearize
 from ..linear.threads import limit
 from ..manifold import Manifold, by_kind
@@ -175,7 +175,7 @@ class IncrementalSolver:
 
         Each new variable is of the kind its factors declare (``new_values`` may be a plain mapping). ``relinearize``
         False skips this update's fluid relinearization; ``constrained`` (GTSAM's ``constrainedKeys``): keys to
-        eliminate first, by increasing number (:func:`~steam_ref.linear.ordering.min_degree_elimination`). Raises
+        eliminate first, by increasing number (:func:`~steam_ref.linear.min_degree.min_degree_keys`). Raises
         :class:`SteamError` subclasses on bad input (a new value for a held variable, a factor naming a variable with
         no value, a variable left unconstrained, a :class:`~steam_ref.errors.KindError`...), the solver as it was."""
         timer = PhaseTimer()

@@ -18,7 +18,8 @@ from numpy.typing import NDArray
 
 from ..errors import SteamError, UnderdeterminedError
 from ..linear.conditional import Clique, assemble_sqrt_information, eliminate_clique
-from ..linear.ordering import Game, Ordering
+from ..linear.min_degree import Game
+from ..linear.ordering import Ordering
 from ..linear.system import GaussianFactor
 from ..variables import Key, key_list
 from .symbolic import CliqueTree, build_cliques
