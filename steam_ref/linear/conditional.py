@@ -21,7 +21,6 @@ import functools
 from collections.abc import Mapping, Sequence
 from copy import copy
 from dataclasses import dataclass, field
-from itertools import accumulate
 from typing import Protocol
 
 import numpy as np
@@ -57,7 +56,7 @@ class Conditional(Protocol):
 
 RANK_TOLERANCE = 1e-12  # a pivot |Rᵢᵢ| below this times the largest |entry| means a free direction
 _below_diagonal = functools.cache(functools.partial(np.tri, k=-1, dtype=bool))  # (rows, cols): np.triu's mask
-_largest, _smallest = np.maximum.reduce, np.minimum.reduce  # the ufuncs: ndarray.max's wrapper costs more
+_largest = np.maximum.reduce  # the ufunc itself: ndarray.max's Python wrapper costs more than the reduction
 
 
 @dataclass(frozen=True, eq=False)
@@ -138,9 +137,11 @@ def assemble_sqrt_information(ordering: Ordering, conditionals: Sequence[Conditi
 
 def gather(keys: tuple[Key, ...], dims: Mapping[Key, int], factors: Sequence[GaussianFactor]) -> NDArray:
     """The dense block [A_F A_S | b] of the factors adjacent to a clique: (rows, n + 1).  [YIB Eq. 24]"""
-    ends = list(accumulate(map(dims.__getitem__, keys)))
-    n = ends[-1] if ends else 0
-    columns = dict(zip(keys, map(slice, [0, *ends], ends), strict=True))  # each variable's columns
+    columns, n = {}, 0
+    for k in keys:
+        d = dims[k]
+        columns[k] = slice(n, n + d)
+        n += d
     if not factors:
         return np.zeros((0, n + 1), order="F")
     rhs = np.concatenate([f.rhs for f in factors])  # ‖a θ + A_s s - b‖², the clique's terms stacked  [YIB Eq. 24]
@@ -148,10 +149,10 @@ def gather(keys: tuple[Key, ...], dims: Mapping[Key, int], factors: Sequence[Gau
     M[:, n] = rhs
     r = 0
     for f in factors:
-        end = r + len(f.rhs)  # the factor's rows
+        rows = slice(r, r + len(f.rhs))  # the factor's rows, one slice for all its blocks
         for k, block in zip(f.keys, f.blocks, strict=True):  # a factor names each variable once, one block each
-            M[r:end, columns[k]] = block
-        r = end
+            M[rows, columns[k]] = block
+        r = rows.stop
     return M
 
 
@@ -189,7 +190,7 @@ def eliminate_clique(
     (rows, ncol), nf = M.shape, sum(frontal_dims)
     if rows < nf:  # fewer rows than frontal unknowns
         raise underdetermined(M, frontals, dims, rows)
-    tolerance = RANK_TOLERANCE * max(_largest(M, axis=None), -_smallest(M, axis=None), 1.0)  # max |M|, before the QR
+    tolerance = RANK_TOLERANCE * max(_largest(np.abs(M), axis=None), 1.0)  # read before the QR overwrites M
     qr, _, _, _ = lapack.dgeqrf(M, overwrite_a=True)  # Q R = [A_F A_S | b]: Gram-Schmidt on the columns, in place
     R = qr if rows <= ncol else qr[:ncol]
     R[_below_diagonal(*R.shape)] = 0.0  # np.triu in place, its mask made once per shape
