@@ -87,7 +87,7 @@ def min_degree_keys(
 ) -> list[Key]:
     """A greedy minimum-degree elimination order with the variables in ``last`` eliminated last: the keys of
     :func:`min_degree_elimination` (its docstring)."""
-    return min_degree_elimination(variables, dims, factor_keys, last, first)[0]
+    return min_degree_elimination(variables, dims, factor_keys, last, first, game=False)[0]
 
 
 def min_degree_elimination(
@@ -96,9 +96,12 @@ def min_degree_elimination(
     factor_keys: Iterable[Sequence[Key]],
     last: Iterable[Key] = (),
     first: Mapping[Key, float] | None = None,
+    *,
+    game: bool = True,
 ) -> tuple[list[Key], Game | None]:
     """A greedy minimum-degree elimination order with the variables in ``last`` eliminated last, and the
-    :class:`Game` it played (None with ``first``, or a factor of no variable: :func:`elimination_game` plays it).
+    :class:`Game` it played (None with ``first``, or a factor of no variable: :func:`elimination_game` plays it;
+    or when ``game`` is False).
 
     ``dims``: the size of each variable (an :class:`~.ordering.Ordering` carries them); ``factor_keys``: the
     variables of each factor.
@@ -165,12 +168,13 @@ def min_degree_elimination(
             if entry != current[u]:  # an unchanged degree's entry is in the heap already
                 current[u] = entry
                 push(heap, entry)
+    order = list(map(variables.__getitem__, eliminated))
+    if not game or not all(placed):  # not asked for, or a factor of no variable, which no variable owns
+        return order, None
     at = [0] * n  # each variable's place in the order
     for p, i in enumerate(eliminated):
         at[i] = p
-    place, order = at.__getitem__, list(map(variables.__getitem__, eliminated))
-    if not all(placed):  # a factor of no variable, which no variable owns
-        return order, None
+    place = at.__getitem__
     owner = [min(map(place, p)) for p in placed]  # each factor's variable eliminated first
     return order, Game([sorted(map(place, adj[i])) for i in eliminated], owner)
 
