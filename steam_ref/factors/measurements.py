@@ -205,12 +205,14 @@ class VelocityFactor(StateMeasurement):
         th, xd, yd, thd = x[..., 2], x[..., 3], x[..., 4], x[..., 5]
         c, s = np.cos(th), np.sin(th)
         h = np.empty(x.shape[:-1] + (3,))  # filled row by row: np.stack's result at a fraction of its call cost
-        h[..., 0], h[..., 1], h[..., 2] = c * xd + s * yd, -s * xd + c * yd, thd
+        ns = -s
+        forward, lateral = c * xd + s * yd, ns * xd + c * yd
+        h[..., 0], h[..., 1], h[..., 2] = forward, lateral, thd
         if not jacobians:  # the error alone
             return h - self.measured, ()
-        J = zero_jacobian(x, 3)  # from the same cos θ and sin θ
-        J[..., 0, 2], J[..., 0, 3], J[..., 0, 4] = -s * xd + c * yd, c, s
-        J[..., 1, 2], J[..., 1, 3], J[..., 1, 4] = -c * xd - s * yd, -s, c
+        J = zero_jacobian(x, 3)  # from the same cos θ and sin θ: ∂forward/∂θ = lateral, ∂lateral/∂θ = -forward
+        J[..., 0, 2], J[..., 0, 3], J[..., 0, 4] = lateral, c, s
+        J[..., 1, 2], J[..., 1, 3], J[..., 1, 4] = -forward, ns, c  # -c ẋ - s ẏ, bit for bit (rounding is odd)
         J[..., 2, 5] = 1.0
         return h - self.measured, (J,)
 
@@ -218,22 +220,23 @@ class VelocityFactor(StateMeasurement):
 # --- Measurements of a state and a landmark -----------------------------------------------------
 
 
-def _distance(x: NDArray, l: NDArray) -> tuple[NDArray, NDArray]:
-    """r = ‖[x y]ᵀ - ℓ‖ and the difference ℓ - [x y]ᵀ (..., 2).  [YIB Eq. 33]
+def _distance(x: NDArray, l: NDArray) -> tuple[NDArray, NDArray, bool]:
+    """r = ‖[x y]ᵀ - ℓ‖, the difference ℓ - [x y]ᵀ (..., 2) and whether r = 0 somewhere.  [YIB Eq. 33]
     At r = 0 the norm has no derivative: a warning (the Jacobian rows there are zero, :func:`_range_row`)."""
     d = l[..., :2] - x[..., :2]
     r = np.hypot(d[..., 0], d[..., 1])
-    if np.count_nonzero(r) < r.size:  # somewhere at the landmark (``r.all()``, at a tenth of its cost on a scalar)
+    somewhere = np.count_nonzero(r) < r.size  # at the landmark (``not r.all()``, at a tenth of its cost on a scalar)
+    if somewhere:
         message = "a range with the robot exactly at the landmark: error 0 - r, its Jacobian (undefined) zero rows"
         warnings.warn(message, DegenerateMeasurementWarning, stacklevel=4)
-    return r, d
+    return r, d, somewhere
 
 
 def _range_row(x: NDArray, l: NDArray) -> tuple[NDArray, NDArray, NDArray]:
     """r = ‖[x y]ᵀ - ℓ‖ and its rows of ∂r/∂x (..., state size), ∂r/∂ℓ (..., 2).  [YIB Eq. 33]
     At r = 0 zero rows: gpslam's and STEAM's convention (and :func:`_distance`'s warning)."""
-    r, d = _distance(x, l)
-    at = None if np.count_nonzero(r) == r.size else (r == 0)[..., None]  # nowhere at the landmark (the usual case)
+    r, d, somewhere = _distance(x, l)
+    at = (r == 0)[..., None] if somewhere else None  # None: nowhere at the landmark (the usual case)
     u = d / r[..., None] if at is None else np.where(at, 0.0, d / np.where(at, 1.0, r[..., None]))
     Jx = np.zeros(x.shape)
     Jx[..., :2] = 0.0 - u  # 0.0 - u: +0.0, not -0.0, at the landmark

@@ -61,22 +61,40 @@ class LinearizedGroup:
         return [GaussianFactor(keys, tuple(J[i] for J in blocks), self.rhs[i]) for i, keys in enumerate(self.keys)]
 
 
-def _group_by_type(factors: Sequence[Factor]) -> dict[tuple, list[int]]:
-    groups: dict[tuple, list[int]] = {}
-    try:
-        for i, f in enumerate(factors):
-            groups.setdefault(f.batch_signature(), []).append(i)
-    except AttributeError:  # checked only on failure, so a batch linearization pays nothing for it
-        check_factors("factors", factors)
-        raise
+def _group_by_type(factors: Sequence[Factor]) -> list[list[int]]:
+    """Positions of ``factors`` by batch signature, groups in the order of their first factor; a factor alone of its
+    class is a group without asking its signature (a stream's usual update: a few factors, each of its own class)."""
+    by_class: dict[type, list[int]] = {}
+    for i, f in enumerate(factors):
+        by_class.setdefault(type(f), []).append(i)
+    groups = []
+    for cls, ids in by_class.items():
+        if not issubclass(cls, Factor):
+            check_factors("factors", factors)  # raises, naming the first that is not a factor
+        if len(ids) == 1:
+            groups.append(ids)
+            continue
+        split: dict[tuple, list[int]] = {}
+        for i in ids:
+            split.setdefault(factors[i].batch_signature(), []).append(i)
+        groups.extend(split.values())
+    if len(groups) > 1:
+        groups.sort(key=_first)
     return groups
+
+
+def _first(ids: list[int]) -> int:
+    return ids[0]
 
 
 def _variables(values: Values, group: list[Factor]) -> list[NDArray]:
     """The estimates each key slot of a group of factors reads, as (n, dₖ) arrays (a group of one: views)."""
     if len(group) == 1:  # a view costs a tenth of a copy; a size that differs is named below
         xs = [values[k][None] for k in group[0].keys]
-        if all(x.shape[1] == d for x, d in zip(xs, group[0].key_dims, strict=True)):
+        for x, d in zip(xs, group[0].key_dims, strict=True):
+            if x.shape[1] != d:
+                break
+        else:
             return xs
     xs = []
     for slot, dim in enumerate(group[0].key_dims):
@@ -116,7 +134,7 @@ def whitened_norms(factors: Sequence[Factor], values: Values) -> NDArray:
     values = as_values("values", values)
     out = np.empty(len(factors))
     with np.errstate(all="ignore"):  # a residual that overflows is inf: beyond any noise, not an error here
-        for ids in _group_by_type(factors).values():
+        for ids in _group_by_type(factors):
             if len(ids) == 1:  # a type with one factor: its own evaluation, which costs less than a stack of one
                 f = factors[ids[0]]
                 w = f.whitened_error(*[values[k] for k in f.keys]).ravel()
@@ -141,7 +159,7 @@ def linearize(factors: Sequence[Factor], values: Values, *, jacobians: bool = Tr
     values = as_values("values", values)
     out, failures = [], []
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # checked group by group, just below
-        for ids in _group_by_type(factors).values():
+        for ids in _group_by_type(factors):
             group = [factors[i] for i in ids]
             batch = type(group[0]).stack(group)
             xs = _variables(values, group)
@@ -165,7 +183,9 @@ def linearize(factors: Sequence[Factor], values: Values, *, jacobians: bool = Tr
             # one sum is finite only if every number in it is (or it overflowed: then the search finds nothing);
             # without a loss, ½‖e‖² is finite only if e is, and blocks made once are finite
             checked = () if Js is None or (fixed is not None and batch.loss is None) else Js
-            total = (0.0 if batch.loss is None else e.sum()) + costs.sum() + sum(J.sum() for J in checked)
+            total = costs.sum() if batch.loss is None else costs.sum() + e.sum()
+            for J in checked:
+                total += J.sum()
             if not math.isfinite(total):
                 hit = _first_non_finite(e, costs, Js)
                 if hit is not None:
