@@ -132,7 +132,7 @@ def whitened_norms(factors: Sequence[Factor], values: Values) -> NDArray:
     Jacobians (a type with one factor by its own ``whitened_error``); the divergence check of a stream
     (:mod:`steam_ref.paper.divergence`).  [YIB Eq. 6]"""
     values = as_values("values", values)
-    out = np.empty(len(factors))
+    out = [0.0] * len(factors)  # floats, made one array at the end
     with np.errstate(all="ignore"):  # a residual that overflows is inf: beyond any noise, not an error here
         for ids in _group_by_type(factors):
             if len(ids) == 1:  # a type with one factor: its own evaluation, which costs less than a stack of one
@@ -143,9 +143,9 @@ def whitened_norms(factors: Sequence[Factor], values: Values) -> NDArray:
             group = [factors[i] for i in ids]
             batch = type(group[0]).stack(group)
             e = _whitened(batch, batch.error(*_variables(values, group)))
-            out[ids] = np.sqrt(np.add.reduce(e * e, axis=1))  # np.linalg.norm(e, axis=1)
-    out[np.isnan(out)] = np.inf  # a norm is ≥ 0, inf or NaN
-    return out
+            for i, norm in zip(ids, np.sqrt(np.add.reduce(e * e, axis=1)).tolist(), strict=True):
+                out[i] = norm  # np.linalg.norm(e, axis=1)
+    return np.array([norm if norm == norm else math.inf for norm in out])  # a norm is ≥ 0, inf or NaN (read as inf)
 
 
 def linearize(factors: Sequence[Factor], values: Values, *, jacobians: bool = True) -> list[LinearizedGroup]:
@@ -183,9 +183,9 @@ def linearize(factors: Sequence[Factor], values: Values, *, jacobians: bool = Tr
             # one sum is finite only if every number in it is (or it overflowed: then the search finds nothing);
             # without a loss, ½‖e‖² is finite only if e is, and blocks made once are finite
             checked = () if Js is None or (fixed is not None and batch.loss is None) else Js
-            total = costs.sum() if batch.loss is None else costs.sum() + e.sum()
+            total = sum(costs.tolist()) if batch.loss is None else sum(costs.tolist()) + sum(e.ravel().tolist())
             for J in checked:
-                total += J.sum()
+                total += sum(J.ravel().tolist())  # a list's sum: a tenth of a NumPy reduction's call on a few numbers
             if not math.isfinite(total):
                 hit = _first_non_finite(e, costs, Js)
                 if hit is not None:
