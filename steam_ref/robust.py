@@ -91,6 +91,10 @@ class Tukey(RobustLoss):
     def weight_and_rho(self, s: NDArray) -> tuple[NDArray, NDArray]:
         """w(s) = (1 - u²)² and ρ(s) = c²/6 (1 - (1 - u²)³) from one u = min(abs(s), c) / c, which is at most 1 and
         cannot overflow (beyond c, u = 1: weight 0, ρ = c²/6). The ``where`` only maps a NaN's weight to 0."""
-        u = np.minimum(np.abs(s), self.c) / self.c
-        t = 1 - u**2
-        return np.where(u <= 1.0, t**2, 0.0), self.c**2 / 6 * (1 - t**3)
+        one = s.shape == (1,)  # a stream's usual batch: one number, in Python floats (the same IEEE operations)
+        x = s.item() if one else s
+        u = (min(abs(x), self.c) if one else np.minimum(np.abs(x), self.c)) / self.c  # min keeps a NaN first
+        t = 1 - u * u  # u * u is NumPy's u**2, a float's too
+        w = (t * t if u <= 1.0 else 0.0) if one else np.where(u <= 1.0, t * t, 0.0)
+        rho = self.c**2 / 6 * (1 - t**3)
+        return (np.array((w,)), np.array((rho,))) if one else (w, rho)
