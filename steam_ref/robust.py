@@ -97,4 +97,4 @@ class Tukey(RobustLoss):
         t = 1 - u * u  # u * u is NumPy's u**2, a float's too
         w = (t * t if u <= 1.0 else 0.0) if one else np.where(u <= 1.0, t * t, 0.0)
         rho = self.c**2 / 6 * (1 - t**3)
-        return (np.array((w,)), np.array((rho,))) if one else (w, rho)
+        return (np.array((w,)), np.array((rho,))) if one else (np.asarray(w), np.asarray(rho))

@@ -129,9 +129,9 @@ def check_resolved(factor: str, keys: tuple, labels: tuple[str, ...], measured: 
     ``factor`` on ``keys`` names the reading (written out only for the error)."""
     sigma = _sigmas(W)
     values = measured.tolist()
-    if max(map(abs, values)) < 1e300:  # math.ulp is np.spacing of the magnitude there (not at the largest float)
-        if not any(math.ulp(v) > s for v, s in zip(values, sigma.tolist(), strict=True)):
-            return
+    # math.ulp is np.spacing of the magnitude below 1e300 (not at the largest float): there, a number and a sigma each
+    if max(map(abs, values)) < 1e300 and not any(math.ulp(v) > s for v, s in zip(values, sigma.tolist(), strict=True)):
+        return
     spacing = np.spacing(np.abs(measured))  # finite by the callers' checks: no warning to silence
     coarse = spacing > sigma
     if coarse.any():

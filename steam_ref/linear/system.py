@@ -100,8 +100,8 @@ def _variables(values: Values, group: list[Factor]) -> list[NDArray]:
     """The estimates each key slot of a group of factors reads, as (n, dₖ) arrays (a group of one: views)."""
     if len(group) == 1:  # a view costs a tenth of a copy; a size that differs is named below
         xs = [values[k][None] for k in group[0].keys]
-        for x, d in zip(xs, group[0].key_dims, strict=True):
-            if x.shape[1] != d:
+        for one, d in zip(xs, group[0].key_dims, strict=True):
+            if one.shape[1] != d:
                 break
         else:
             return xs
