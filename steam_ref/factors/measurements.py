@@ -205,8 +205,7 @@ class VelocityFactor(StateMeasurement):
         th, xd, yd, thd = x[..., 2], x[..., 3], x[..., 4], x[..., 5]
         c, s = np.cos(th), np.sin(th)
         h = np.empty(x.shape[:-1] + (3,))  # filled row by row: np.stack's result at a fraction of its call cost
-        ns = -s
-        forward, lateral = c * xd + s * yd, ns * xd + c * yd
+        forward, lateral = c * xd + s * yd, (ns := -s) * xd + c * yd
         h[..., 0], h[..., 1], h[..., 2] = forward, lateral, thd
         if not jacobians:  # the error alone
             return h - self.measured, ()
@@ -225,8 +224,7 @@ def _distance(x: NDArray, l: NDArray) -> tuple[NDArray, NDArray, bool]:
     At r = 0 the norm has no derivative: a warning (the Jacobian rows there are zero, :func:`_range_row`)."""
     d = l[..., :2] - x[..., :2]
     r = np.hypot(d[..., 0], d[..., 1])
-    somewhere = np.count_nonzero(r) < r.size  # at the landmark (``not r.all()``, at a tenth of its cost on a scalar)
-    if somewhere:
+    if somewhere := np.count_nonzero(r) < r.size:  # at the landmark (``not r.all()``, a tenth of its cost on a scalar)
         message = "a range with the robot exactly at the landmark: error 0 - r, its Jacobian (undefined) zero rows"
         warnings.warn(message, DegenerateMeasurementWarning, stacklevel=4)
     return r, d, somewhere
