@@ -147,7 +147,7 @@ def measured_vector(value: NDArray | float, m: int, what: str) -> NDArray:
     """``value`` as a float vector (m,): a 1-d array of m finite numbers, or a number when m = 1."""
     if type(value) is np.ndarray and value.dtype is _F64 and value.shape == (m,):  # (m,) float64: one copy, one sum
         v = value.copy()
-        if math.isfinite(v.dot(v)):  # finite, as each number is (if it overflowed, the check below decides)
+        if math.isfinite(sum(v.tolist())):  # finite, as each number is (if it overflowed, the checks below decide)
             return v
     elif m == 1 and type(value) in _FLOATS and math.isfinite(value):  # one finite number
         return np.array((value,))
