@@ -54,15 +54,20 @@ class GPPriorFactor(Factor):
     @classmethod
     def wnoa(cls, key1: Key, key2: Key, dt: float, qc: NDArray) -> GPPriorFactor:
         """The white-noise-on-acceleration prior over a gap dt (s) > 0; qc: Qc (3, 3).  [YIB Eq. 22, 30-31]"""
-        made = _WNOA.get((dt, id(qc))) if type(dt) in _FLOATS else None  # a dt met before with this Qc: checked then
+        made = _BY_GAP.get((dt, id(qc))) if type(dt) in _FLOATS else None  # a dt met before with this Qc: checked then
         if made is None:
             w = process_noise_sqrt_information(dt, qc)  # WᵀW = Qᵢ⁻¹, memoised per (dt, Qc)
             d = w.shape[0] // 2
             v = np.zeros(2 * d)
             v.flags.writeable = False  # shared by every factor of this gap, as W and Φ are
             made = (qc, w, transition(dt, d), v)
-            if type(dt) in _FLOATS and type(qc) is np.ndarray and not qc.flags.writeable and len(_WNOA) < _MAX_WHITENED:
-                _WNOA[(dt, id(qc))] = made  # the memo holds Qc: an id in it is still its
+            if (
+                type(dt) in _FLOATS
+                and type(qc) is np.ndarray
+                and not qc.flags.writeable
+                and len(_BY_GAP) < _MAX_WHITENED
+            ):
+                _BY_GAP[(dt, id(qc))] = made  # the memo holds Qc: an id in it is still its
         return cls((key1, key2), made[1], phi=made[2], v=made[3])
 
     @classmethod
@@ -136,7 +141,7 @@ class GPPriorFactor(Factor):
 
 
 _FLOATS = (float, np.float64)  # a time step memoised by value (an int or a bool goes the checked way each time)
-_WNOA: dict[tuple[float, int], tuple[NDArray, ...]] = {}  # (Qc, W, Φ, v) of ``wnoa`` by (dt, id of a read-only Qc)
+_BY_GAP: dict[tuple[float, int], tuple[NDArray, ...]] = {}  # (Qc, W, Φ, v) of ``wnoa`` by (dt, id of a read-only Qc)
 _WHITENED: dict[tuple[int, int], tuple[NDArray, NDArray, tuple[NDArray, ...]]] = {}  # (W, Φ, blocks) by ids of W, Φ
 _MAX_WHITENED = 256  # a stream's priors share a few gaps; past this many, new ones go the linearization's usual way
 

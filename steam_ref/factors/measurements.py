@@ -202,8 +202,8 @@ class VelocityFactor(StateMeasurement):
         return self.error_and_jacobians(x)[1]
 
     def error_and_jacobians(self, x: NDArray, jacobians: bool = True) -> tuple[NDArray, tuple[NDArray, ...]]:
-        th, xd, yd, thd = x[..., 2], x[..., 3], x[..., 4], x[..., 5]
-        c, s = np.cos(th), np.sin(th)
+        th, xd, yd, thd = x[2:6].tolist() if x.ndim == 1 else (x[..., 2], x[..., 3], x[..., 4], x[..., 5])
+        c, s = np.cos(th), np.sin(th)  # one state: NumPy's cos and sin of floats, the rest float arithmetic
         h = np.empty(x.shape[:-1] + (3,))  # filled row by row: np.stack's result at a fraction of its call cost
         forward, lateral = c * xd + s * yd, (ns := -s) * xd + c * yd
         h[..., 0], h[..., 1], h[..., 2] = forward, lateral, thd
