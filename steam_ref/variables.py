@@ -227,21 +227,20 @@ class Values(Mapping):
         finite 1-D float vectors by construction and never written in place (a solver's read-only
         estimates); anyone else builds a ``Values(mapping)``, which checks and copies. ``kinds``: each key's kind
         (copied)."""
-        out = cls()
-        out._data = dict(arrays)
-        if kinds:
-            out._kinds = dict(kinds)
-        return out
+        return cls._holding(dict(arrays), dict(kinds) if kinds else {})
 
     @classmethod
     def view(cls, arrays: dict[Key, NDArray], kinds: dict[Key, Manifold] | None = None) -> Values:
         """A Values reading the dicts ``arrays`` and ``kinds`` themselves: no copy, no check, later changes to the
         dicts show through. Only for a solver handing its own store to a reader (linearization at θ̄) that never
         writes into it."""
-        out = cls()
-        out._data = arrays
-        if kinds is not None:
-            out._kinds = kinds
+        return cls._holding(arrays, {} if kinds is None else kinds)
+
+    @classmethod
+    def _holding(cls, data: dict[Key, NDArray], kinds: dict[Key, Manifold]) -> Values:
+        """A Values whose stores are ``data`` and ``kinds`` themselves, made without ``__init__``'s checks of items."""
+        out = cls.__new__(cls)
+        out._data, out._kinds = data, kinds
         return out
 
     def stack(self, keys: Iterable[Key]) -> NDArray:

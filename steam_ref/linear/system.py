@@ -67,7 +67,7 @@ class LinearizedGroup:
     def gaussian_factors(self) -> list[GaussianFactor]:
         """The group as one GaussianFactor per factor."""
         blocks = self.jacobian_blocks()
-        return [GaussianFactor(keys, tuple(J[i] for J in blocks), self.rhs[i]) for i, keys in enumerate(self.keys)]
+        return [GaussianFactor(keys, tuple([J[i] for J in blocks]), self.rhs[i]) for i, keys in enumerate(self.keys)]
 
 
 def _group_by_type(factors: Sequence[Factor]) -> list[list[int]]:
@@ -143,7 +143,7 @@ def whitened_norms(factors: Sequence[Factor], values: Values) -> NDArray:
     values = as_values("values", values)
     out = [0.0] * len(factors)  # floats, made one array at the end
     with np.errstate(all="ignore"):  # a residual that overflows is inf: beyond any noise, not an error here
-        for ids in _group_by_type(factors):
+        for ids in [[0]] if len(factors) == 1 and isinstance(factors[0], Factor) else _group_by_type(factors):
             if len(ids) == 1:  # a type with one factor: its own evaluation, which costs less than a stack of one
                 f = factors[ids[0]]
                 w = f.whitened_error(*[values[k] for k in f.keys]).ravel()
