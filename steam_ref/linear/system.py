@@ -87,7 +87,7 @@ def _group_by_type(factors: Sequence[Factor]) -> list[list[int]]:
         for i in ids:
             split.setdefault(factors[i].batch_signature(), []).append(i)
         groups.extend(split.values())
-    if len(groups) > 1:
+    if len(groups) > len(by_class):  # a class split by signature: its groups back in the order of their first factor
         groups.sort(key=_first)
     return groups
 
