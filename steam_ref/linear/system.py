@@ -175,9 +175,9 @@ def linearize(factors: Sequence[Factor], values: Values, *, jacobians: bool = Tr
             fixed = group[0].whitened_jacobians() if jacobians and len(ids) == 1 else None  # a linear factor's
             if fixed is None:
                 error, H = batch.error_and_jacobians(*xs) if jacobians else (batch.error(*xs), None)
-                WH = None if H is None else tuple(batch.sqrt_information @ J for J in H)  # Σ^-½ H_i
+                WH = None if H is None else tuple([batch.sqrt_information @ J for J in H])  # Σ^-½ H_i
             else:  # made once, finite
-                error, WH = batch.error(*xs), tuple(A[None] for A in fixed)
+                error, WH = batch.error(*xs), tuple([A[None] for A in fixed])
             e = _whitened(batch, error)
             if batch.loss is None:  # √w = 1: A_i = Σ^-½ H_i, b_i = -Σ^-½ e, the products by 1 left out
                 costs = None  # ½‖e‖², from b when asked
@@ -187,7 +187,7 @@ def linearize(factors: Sequence[Factor], values: Values, *, jacobians: bool = Tr
                 s = np.sqrt(np.add.reduce(e * e, axis=1))  # ‖e‖ row by row, as np.linalg.norm(e, axis=1) sums it
                 weight, costs = batch.loss.weight_and_rho(s)
                 scale = np.sqrt(weight)
-                Js = None if WH is None else tuple(scale[:, None, None] * A for A in WH)  # A_i = √w Σ^-½ H_i
+                Js = None if WH is None else tuple([scale[:, None, None] * A for A in WH])  # A_i = √w Σ^-½ H_i
                 rhs = -scale[:, None] * e  # b_i = -√w Σ^-½ e(θ̄): ‖A_i δθ - b_i‖² is the term  [YIB Eq. 9-10, 21]
             # one sum is finite only if every number in it is (or it overflowed: then the search finds nothing);
             # without a loss, Σ e² is finite only if e and ½‖e‖² are, and blocks made once are finite. Sums of
