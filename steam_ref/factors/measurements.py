@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass, field
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -19,7 +19,7 @@ from ..dead_reckoning import wrap_angle
 from ..errors import DegenerateMeasurementWarning, ShapeError, SteamError
 from ..robust import RobustLoss
 from ..variables import Key
-from .base import LANDMARK_DIM, STATE_DIM, Factor, check_resolved, measured_vector, sqrt_information, zero_jacobian
+from .base import LANDMARK_DIM, STATE_DIM, Factor, check_resolved, filled, measured_vector, sqrt_information
 
 __all__ = [
     "StateMeasurement",
@@ -153,12 +153,7 @@ class OdometryFactor(StateMeasurement):
     def jacobians(self, x: NDArray) -> tuple[NDArray]:
         th, xd, yd = x[..., 2], x[..., 3], x[..., 4]
         c, s = np.cos(th), np.sin(th)
-        J = zero_jacobian(x, 2)
-        J[..., 0, 2] = -s * xd + c * yd
-        J[..., 0, 3] = c
-        J[..., 0, 4] = s
-        J[..., 1, 5] = 1.0
-        return (J,)
+        return (filled(x, (2, x.shape[-1]), {(0, 2): -s * xd + c * yd, (0, 3): c, (0, 4): s, (1, 5): 1.0}),)
 
 
 @dataclass(frozen=True, eq=False)
@@ -202,26 +197,28 @@ class VelocityFactor(StateMeasurement):
         return self.error_and_jacobians(x)[1]
 
     def error_and_jacobians(self, x: NDArray, jacobians: bool = True) -> tuple[NDArray, tuple[NDArray, ...]]:
-        th, xd, yd, thd = x[2:6].tolist() if x.ndim == 1 else (x[..., 2], x[..., 3], x[..., 4], x[..., 5])
-        c, s = np.cos(th), np.sin(th)  # one state: NumPy's cos and sin of floats, the rest float arithmetic
-        h = np.empty(x.shape[:-1] + (3,))  # filled row by row: np.stack's result at a fraction of its call cost
+        one = x.size == x.shape[-1]  # one state (alone or a batch of one): its numbers as floats
+        th, xd, yd, thd = x.ravel()[2:6].tolist() if one else (x[..., 2], x[..., 3], x[..., 4], x[..., 5])
+        c, s = np.cos(th), np.sin(th)  # NumPy's cos and sin (of floats for one state), then the same IEEE arithmetic
         forward, lateral = c * xd + s * yd, (ns := -s) * xd + c * yd
-        h[..., 0], h[..., 1], h[..., 2] = forward, lateral, thd
+        h = filled(x, (3,), {(0,): forward, (1,): lateral, (2,): thd})  # np.stack's result at a fraction of its calls
         if not jacobians:  # the error alone
             return h - self.measured, ()
-        J = zero_jacobian(x, 3)  # from the same cos θ and sin θ: ∂forward/∂θ = lateral, ∂lateral/∂θ = -forward
-        J[..., 0, 2], J[..., 0, 3], J[..., 0, 4] = lateral, c, s
-        J[..., 1, 2], J[..., 1, 3], J[..., 1, 4] = -forward, ns, c  # -c ẋ - s ẏ, bit for bit (rounding is odd)
-        J[..., 2, 5] = 1.0
-        return h - self.measured, (J,)
+        # from the same cos θ and sin θ: ∂forward/∂θ = lateral, ∂lateral/∂θ = -forward (-c ẋ - s ẏ bit for bit: rounding is odd)
+        nonzero = {(0, 2): lateral, (0, 3): c, (0, 4): s, (1, 2): -forward, (1, 3): ns, (1, 4): c, (2, 5): 1.0}
+        return h - self.measured, (filled(x, (3, x.shape[-1]), nonzero),)
 
 
 # --- Measurements of a state and a landmark -----------------------------------------------------
 
 
-def _distance(x: NDArray, l: NDArray) -> tuple[NDArray, NDArray, bool]:
+def _distance(x: NDArray, l: NDArray) -> tuple[NDArray, Any, bool]:
     """r = ‖[x y]ᵀ - ℓ‖, the difference ℓ - [x y]ᵀ (..., 2) and whether r = 0 somewhere.  [YIB Eq. 33]
     At r = 0 the norm has no derivative: a warning (the Jacobian rows there are zero, :func:`_range_row`)."""
+    if x.size == x.shape[-1] and l.size == l.shape[-1] == 2 and x.ndim == l.ndim:  # one state, one landmark: floats
+        (x0, y0), (lx, ly) = x.ravel()[:2].tolist(), l.ravel()[:2].tolist()
+        if (r := np.hypot(lx - x0, ly - y0)) != 0:  # at the landmark: the arrays' way below, which warns
+            return r, (lx - x0, ly - y0), False
     d = l[..., :2] - x[..., :2]
     r = np.hypot(d[..., 0], d[..., 1])
     if somewhere := np.count_nonzero(r) < r.size:  # at the landmark (``not r.all()``, a tenth of its cost on a scalar)
@@ -234,6 +231,9 @@ def _range_row(x: NDArray, l: NDArray) -> tuple[NDArray, NDArray, NDArray]:
     """r = ‖[x y]ᵀ - ℓ‖ and its rows of ∂r/∂x (..., state size), ∂r/∂ℓ (..., 2).  [YIB Eq. 33]
     At r = 0 zero rows: gpslam's and STEAM's convention (and :func:`_distance`'s warning)."""
     r, d, somewhere = _distance(x, l)
+    if isinstance(d, tuple):  # one state off the landmark, in floats
+        ux, uy = d[0] / r, d[1] / r
+        return r, filled(x, x.shape[-1:], {(0,): 0.0 - ux, (1,): 0.0 - uy}), np.array((ux, uy)).reshape(l.shape)
     at = (r == 0)[..., None] if somewhere else None  # None: nowhere at the landmark (the usual case)
     u = d / r[..., None] if at is None else np.where(at, 0.0, d / np.where(at, 1.0, r[..., None]))
     Jx = np.zeros(x.shape)
