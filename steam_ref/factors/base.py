@@ -312,8 +312,7 @@ class Factor:
     def __post_init__(self) -> None:
         """Every factor names each variable once: two Jacobian blocks of one variable would be added by
         a batch solve but overwrite each other in a clique, so the two would solve different problems."""
-        if type(self) not in _DECLARED:
-            type(self)._check_declared()
+        type(self)._check_declared()
         if self.loss is not None and not isinstance(self.loss, RobustLoss):
             raise SteamError(
                 f"{type(self).__name__}: loss must be a RobustLoss (Huber(k), Tukey(c)) or None, got loss={self.loss!r}"
@@ -364,17 +363,14 @@ class Factor:
         Every field is declared (class docstring); a ``_shared`` field, and the loss, must be equal
         across ``factors``: SteamError naming the field and the first factor that differs otherwise.
         """
-        if cls not in _DECLARED:
-            cls._check_declared()
+        cls._check_declared()
         batch = object.__new__(cls)
         one = len(factors) == 1
         for name in cls._batched:  # np.array of equal-shaped arrays is np.stack's result at a fifth of its call cost
-            if one:  # a view, no copy
-                value = getattr(factors[0], name)
-                value = (value if type(value) is np.ndarray else np.asarray(value))[None]
-            else:
-                value = np.array([getattr(f, name) for f in factors])
-            object.__setattr__(batch, name, value)
+            value = (
+                np.asarray(getattr(factors[0], name))[None] if one else np.array([getattr(f, name) for f in factors])
+            )
+            object.__setattr__(batch, name, value)  # one: a view, no copy
         for name in cls._batched_factors:
             inner = [getattr(f, name) for f in factors]
             object.__setattr__(batch, name, type(inner[0]).stack(inner))
