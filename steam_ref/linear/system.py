@@ -71,29 +71,15 @@ class LinearizedGroup:
 
 
 def _group_by_type(factors: Sequence[Factor]) -> list[list[int]]:
-    """Positions of ``factors`` by batch signature, groups in the order of their first factor; a factor alone of its
-    class is a group without asking its signature (a stream's usual update: a few factors, each of its own class)."""
-    by_class: dict[type, list[int]] = {}
-    for i, f in enumerate(factors):
-        by_class.setdefault(type(f), []).append(i)
-    groups = []
-    for cls, ids in by_class.items():
-        if not issubclass(cls, Factor):
-            check_factors("factors", factors)  # raises, naming the first that is not a factor
-        if len(ids) == 1:
-            groups.append(ids)
-            continue
-        split: dict[tuple, list[int]] = {}
-        for i in ids:
-            split.setdefault(factors[i].batch_signature(), []).append(i)
-        groups.extend(split.values())
-    if len(groups) > len(by_class):  # a class split by signature: its groups back in the order of their first factor
-        groups.sort(key=_first)
-    return groups
-
-
-def _first(ids: list[int]) -> int:
-    return ids[0]
+    """Positions of ``factors`` by batch signature, groups in the order of their first factor."""
+    groups: dict[tuple, list[int]] = {}
+    try:
+        for i, f in enumerate(factors):
+            groups.setdefault(f.batch_signature(), []).append(i)
+    except AttributeError:  # checked only on failure, so a batch linearization pays nothing for it
+        check_factors("factors", factors)
+        raise
+    return list(groups.values())
 
 
 def _variables(values: Values, group: list[Factor]) -> list[NDArray]:
@@ -121,6 +107,12 @@ def _variables(values: Values, group: list[Factor]) -> list[NDArray]:
     return xs
 
 
+def _total(a: NDArray) -> float:
+    """Σ a, finite only if every number is: a list's sum for a few numbers (a tenth of a NumPy reduction's call), NumPy's
+    for many."""
+    return sum(a.ravel().tolist()) if a.size <= 64 else float(np.add.reduce(a, axis=None))
+
+
 def _first_non_finite(e: NDArray, costs: NDArray, Js: tuple[NDArray, ...] | None) -> tuple[int, str] | None:
     """(row in the group, what) of the first factor whose error, cost or a Jacobian is NaN or inf."""
     bad = {"error": ~np.isfinite(e).all(axis=1) | ~np.isfinite(costs)}
@@ -143,7 +135,7 @@ def whitened_norms(factors: Sequence[Factor], values: Values) -> NDArray:
     values = as_values("values", values)
     out = [0.0] * len(factors)  # floats, made one array at the end
     with np.errstate(all="ignore"):  # a residual that overflows is inf: beyond any noise, not an error here
-        for ids in [[0]] if len(factors) == 1 and isinstance(factors[0], Factor) else _group_by_type(factors):
+        for ids in _group_by_type(factors):
             if len(ids) == 1:  # a type with one factor: its own evaluation, which costs less than a stack of one
                 f = factors[ids[0]]
                 w = f.whitened_error(*[values[k] for k in f.keys]).ravel()
@@ -190,13 +182,11 @@ def linearize(factors: Sequence[Factor], values: Values, *, jacobians: bool = Tr
                 Js = None if WH is None else tuple([scale[:, None, None] * A for A in WH])  # A_i = √w Σ^-½ H_i
                 rhs = -scale[:, None] * e  # b_i = -√w Σ^-½ e(θ̄): ‖A_i δθ - b_i‖² is the term  [YIB Eq. 9-10, 21]
             # one sum is finite only if every number in it is (or it overflowed: then the search finds nothing);
-            # without a loss, Σ e² is finite only if e and ½‖e‖² are, and blocks made once are finite. Sums of
-            # lists: a tenth of a NumPy reduction's call on a few numbers
+            # without a loss, Σ e² is finite only if e and ½‖e‖² are, and blocks made once are finite
             checked = () if Js is None or (fixed is not None and batch.loss is None) else Js
-            flat = e.ravel().tolist()
-            total = sum([x * x for x in flat]) if costs is None else sum(costs.tolist()) + sum(flat)
+            total = _total(e * e) if costs is None else _total(costs) + _total(e)
             for J in checked:
-                total += sum(J.ravel().tolist())
+                total += _total(J)
             group_out = LinearizedGroup(np.asarray(ids), [f.keys for f in group], Js, rhs, costs)
             if not math.isfinite(total):
                 hit = _first_non_finite(e, group_out.costs, Js)
