@@ -10,6 +10,7 @@ nothing of steam_ref but its errors, :mod:`.arguments` and :mod:`.manifold`.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable, Iterator, Mapping
 from typing import NamedTuple
 
@@ -64,6 +65,25 @@ def X(i: int) -> Key:
 def L(j: int) -> Key:
     """The key of landmark number j (an integer): the variable ℓ = [x, y], its position in the world frame (m)."""
     return Key("l", _index("L", j))
+
+
+def _checked_vector(key: Key, value: object) -> NDArray:
+    """``value`` as a float copy, or ShapeError unless it is a non-empty finite 1-D vector of numbers."""
+    try:
+        a = np.asarray(value)
+    except (TypeError, ValueError):  # a ragged list
+        a = np.asarray(None)
+    if a.dtype.kind not in "iuf":  # not strings, bools, None or objects
+        raise ShapeError(f"estimate of {key} must be a vector of numbers, got {value!r}")
+    v = np.array(a, dtype=float)
+    if v.ndim != 1 or v.shape[0] == 0:
+        raise ShapeError(f"estimate of {key} must be a non-empty 1-D vector, got shape {v.shape}")
+    if not np.isfinite(v).all():
+        raise ShapeError(f"estimate of {key} is not finite: {v}")
+    return v
+
+
+_F64 = np.dtype(np.float64)
 
 
 def _check_kind(key: Key, kind: object) -> Manifold:
@@ -150,17 +170,12 @@ class Values(Mapping):
         (of the kind's size and rules). ``kind`` None keeps the key's kind (none given, for a new key)."""
         if not isinstance(key, Key):
             raise SteamError(f"{key!r} is not a variable key (make one with X(i) or L(j))")
-        try:
-            a = np.asarray(value)
-        except (TypeError, ValueError):  # a ragged list
-            a = np.asarray(None)
-        if a.dtype.kind not in "iuf":  # not strings, bools, None or objects
-            raise ShapeError(f"estimate of {key} must be a vector of numbers, got {value!r}")
-        v = np.array(a, dtype=float)
-        if v.ndim != 1 or v.shape[0] == 0:
-            raise ShapeError(f"estimate of {key} must be a non-empty 1-D vector, got shape {v.shape}")
-        if not np.isfinite(v).all():
-            raise ShapeError(f"estimate of {key} is not finite: {v}")
+        if type(value) is np.ndarray and value.dtype is _F64 and value.ndim == 1 and value.size:
+            v = value.copy()  # a float vector (what a front end gives): one copy, one sum of floats to check it finite
+            if not math.isfinite(sum(v.tolist())):  # NaN, inf, or a sum that overflowed: each check
+                v = _checked_vector(key, value)
+        else:
+            v = _checked_vector(key, value)
         old = self._data.get(key)
         if old is not None and old.shape != v.shape:
             raise ShapeError(f"estimate of {key} changes size from {old.shape[0]} to {v.shape[0]}")
@@ -212,21 +227,20 @@ class Values(Mapping):
         finite 1-D float vectors by construction and never written in place (a solver's read-only
         estimates); anyone else builds a ``Values(mapping)``, which checks and copies. ``kinds``: each key's kind
         (copied)."""
-        out = cls()
-        out._data = dict(arrays)
-        if kinds:
-            out._kinds = dict(kinds)
-        return out
+        return cls._holding(dict(arrays), dict(kinds) if kinds else {})
 
     @classmethod
     def view(cls, arrays: dict[Key, NDArray], kinds: dict[Key, Manifold] | None = None) -> Values:
         """A Values reading the dicts ``arrays`` and ``kinds`` themselves: no copy, no check, later changes to the
         dicts show through. Only for a solver handing its own store to a reader (linearization at θ̄) that never
         writes into it."""
-        out = cls()
-        out._data = arrays
-        if kinds is not None:
-            out._kinds = kinds
+        return cls._holding(arrays, {} if kinds is None else kinds)
+
+    @classmethod
+    def _holding(cls, data: dict[Key, NDArray], kinds: dict[Key, Manifold]) -> Values:
+        """A Values whose stores are ``data`` and ``kinds`` themselves, made without ``__init__``'s checks of items."""
+        out = cls.__new__(cls)
+        out._data, out._kinds = data, kinds
         return out
 
     def stack(self, keys: Iterable[Key]) -> NDArray:

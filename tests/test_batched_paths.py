@@ -168,3 +168,33 @@ def test_the_se2_prior_makes_the_factors_create_makes_without_checking_again():
     assert isinstance(
         LieInterpolatedFactor.create(inner, X(1), X(2), 0.0, 1.0, 0.3, qc, group=SE2), LieInterpolatedFactor
     )
+
+
+def test_one_factor_is_its_batch_bit_for_bit(rng):
+    """One number or one factor (Tukey's weight and ρ; a robust range's and a velocity reading's linearization, alone:
+    a batch of one, read through views) against the same in a batch: equal bit for bit, NaN, inf, zero and the
+    threshold among the residuals."""
+    from steam_ref.factors import VelocityFactor
+    from steam_ref.linear.system import linearize
+    from steam_ref.robust import Tukey
+
+    tukey = Tukey(2.5)
+    s = np.array([0.0, -0.0, 2.5, -2.5, 1e-300, 3.0, np.inf, -np.inf, np.nan, *rng.standard_normal(40) * 3])
+    w, rho = tukey.weight_and_rho(s)
+    for i in range(len(s)):
+        w1, rho1 = tukey.weight_and_rho(s[i : i + 1])
+        assert np.array_equal(w1, w[i : i + 1], equal_nan=True) and np.array_equal(rho1, rho[i : i + 1], equal_nan=True)
+    ranges = [RangeFactor.create(X(i), L(1), 1.0 + i, 0.2, loss=tukey) for i in range(5)]
+    velocities = [VelocityFactor.create(X(i), rng.standard_normal(3), [0.1, 0.2, 0.05]) for i in range(5)]
+    values = {X(i): rng.standard_normal(6) * 4 for i in range(5)} | {L(1): rng.standard_normal(2)}
+    for factors in (ranges, velocities):
+        (batch,) = linearize(factors, values)
+        for i, f in enumerate(factors):
+            (alone,) = linearize([f], values)
+            assert np.array_equal(alone.rhs[0], batch.rhs[i]) and np.array_equal(alone.costs[0], batch.costs[i])
+            for A_alone, A_batch in zip(alone.jacobians, batch.jacobians, strict=True):
+                assert np.array_equal(A_alone[0], A_batch[i])
+    stacked = VelocityFactor.stack(velocities)
+    errors = stacked.error(np.array([values[f.keys[0]] for f in velocities]))
+    for i, f in enumerate(velocities):  # one state as a vector (the divergence check's path): its row of the batch
+        assert np.array_equal(f.error(values[f.keys[0]]), errors[i])

@@ -97,7 +97,7 @@ class SolverState:
         for kind, group in groups:
             moved = kind.retract_many([self.theta_bar[k] for k in group], [self.delta[k] for k in group])
             for k, e in zip(group, moved, strict=True):
-                e.flags.writeable = False
+                e.setflags(write=False)
                 formed[k] = e
         return formed if len(groups) < 2 else {k: formed[k] for k in keys}
 

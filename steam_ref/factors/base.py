@@ -12,6 +12,8 @@ twenty thousand factors fast without a second, "vectorized" copy of any measurem
 
 from __future__ import annotations
 
+import math
+import struct
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field, fields
 from typing import Any, ClassVar
@@ -37,6 +39,10 @@ def _finite_weight(name: str, W: NDArray, noise: NDArray) -> NDArray:
     if not np.all(np.isfinite(W)):
         raise NumericalError(f"{name} is too small to invert in float64 (its weight overflows): {noise.tolist()}")
     return W
+
+
+_FLOATS = (float, np.float64)  # a number read as itself (an int or a bool goes the checked way)
+_F64 = np.dtype(np.float64)
 
 
 class Memo(dict):
@@ -69,6 +75,14 @@ def sqrt_information(noise: NDArray | float, m: int, name: str = "noise") -> NDA
     ``name`` is the argument the noise came in as, for the error messages. W of sigmas is memoised by their
     value and read-only (a stream makes every reading of a sensor with the same sigmas, each step).
     """
+    if type(noise) in _FLOATS:  # one sigma met before: W by the bytes of np.full(m, sigma), without making them
+        W = _SIGMA_WEIGHTS.get(struct.pack("d", noise) * m)
+        if W is not None:
+            return W
+    elif type(noise) is np.ndarray and noise.dtype is _F64 and noise.shape == (m,):  # sigmas met before
+        W = _SIGMA_WEIGHTS.get(noise.tobytes())
+        if W is not None:
+            return W
     noise = real_array(name, noise)
     if noise.ndim == 0:
         noise = np.full(m, float(noise))
@@ -145,6 +159,12 @@ def check_resolved(factor: str, keys: tuple, labels: tuple[str, ...], measured: 
 
 def measured_vector(value: NDArray | float, m: int, what: str) -> NDArray:
     """``value`` as a float vector (m,): a 1-d array of m finite numbers, or a number when m = 1."""
+    if type(value) is np.ndarray and value.dtype is _F64 and value.shape == (m,):  # (m,) float64: one copy, one sum
+        v = value.copy()
+        if math.isfinite(sum(v.tolist())):  # finite, as each number is (if it overflowed, the checks below decide)
+            return v
+    elif m == 1 and type(value) in _FLOATS and math.isfinite(value):  # one finite number
+        return np.array((value,))
     v = real_array(what, value)
     if v.shape != (m,) and not (m == 1 and v.ndim == 0):
         raise ShapeError(
@@ -343,15 +363,18 @@ class Factor:
         """
         cls._check_declared()
         batch = object.__new__(cls)
+        one = len(factors) == 1
         for name in cls._batched:  # np.array of equal-shaped arrays is np.stack's result at a fifth of its call cost
-            value = np.asarray(getattr(factors[0], name))[None] if len(factors) == 1 else None  # one: a view, no copy
-            object.__setattr__(batch, name, np.array([getattr(f, name) for f in factors]) if value is None else value)
+            value = (
+                np.asarray(getattr(factors[0], name))[None] if one else np.array([getattr(f, name) for f in factors])
+            )
+            object.__setattr__(batch, name, value)  # one: a view, no copy
         for name in cls._batched_factors:
             inner = [getattr(f, name) for f in factors]
             object.__setattr__(batch, name, type(inner[0]).stack(inner))
         for name in ("loss", *cls._shared):
             first = getattr(factors[0], name)
-            if len(factors) > 1:  # a batch of one (a linearization's usual group in a stream): nothing to compare
+            if not one:  # a batch of one (a linearization's usual group in a stream): nothing to compare
                 given = [getattr(f, name) for f in factors]
                 same_object = all(v is first for v in given)  # the usual case (None, a small int), at no cost
                 differs = None if same_object else next((i for i, v in enumerate(given) if not _same(v, first)), None)

@@ -42,7 +42,16 @@ class LinearizedGroup:
     keys: list[tuple[Key, ...]]  # keys of each factor
     jacobians: tuple[NDArray, ...] | None  # per key slot: (n, m, dₖ), whitened and robust-weighted; may be read-only
     rhs: NDArray  # (n, m): b = -√w W e
-    costs: NDArray  # (n,): ½‖We‖², or ρ(‖We‖) for a robust factor
+    robust_costs: NDArray | None  # (n,): ρ(‖We‖) of a robust factor; None: ½‖We‖², made from b when asked
+
+    @property
+    def costs(self) -> NDArray:
+        """(n,): ½‖We‖², or ρ(‖We‖) for a robust factor (an incremental update never asks: not made until asked)."""
+        if self.robust_costs is not None:
+            return self.robust_costs
+        with np.errstate(over="ignore"):  # b = -We: b·b is e·e bit for bit; a cost that overflows is inf
+            s = np.sqrt(np.add.reduce(self.rhs * self.rhs, axis=1))  # ‖e‖ row by row, as np.linalg.norm sums it
+            return 0.5 * s**2
 
     @property
     def cost(self) -> float:
@@ -58,10 +67,11 @@ class LinearizedGroup:
     def gaussian_factors(self) -> list[GaussianFactor]:
         """The group as one GaussianFactor per factor."""
         blocks = self.jacobian_blocks()
-        return [GaussianFactor(keys, tuple(J[i] for J in blocks), self.rhs[i]) for i, keys in enumerate(self.keys)]
+        return [GaussianFactor(keys, tuple([J[i] for J in blocks]), self.rhs[i]) for i, keys in enumerate(self.keys)]
 
 
-def _group_by_type(factors: Sequence[Factor]) -> dict[tuple, list[int]]:
+def _group_by_type(factors: Sequence[Factor]) -> list[list[int]]:
+    """Positions of ``factors`` by batch signature, groups in the order of their first factor."""
     groups: dict[tuple, list[int]] = {}
     try:
         for i, f in enumerate(factors):
@@ -69,14 +79,17 @@ def _group_by_type(factors: Sequence[Factor]) -> dict[tuple, list[int]]:
     except AttributeError:  # checked only on failure, so a batch linearization pays nothing for it
         check_factors("factors", factors)
         raise
-    return groups
+    return list(groups.values())
 
 
 def _variables(values: Values, group: list[Factor]) -> list[NDArray]:
     """The estimates each key slot of a group of factors reads, as (n, dₖ) arrays (a group of one: views)."""
     if len(group) == 1:  # a view costs a tenth of a copy; a size that differs is named below
         xs = [values[k][None] for k in group[0].keys]
-        if all(x.shape[1] == d for x, d in zip(xs, group[0].key_dims, strict=True)):
+        for one, d in zip(xs, group[0].key_dims, strict=True):
+            if one.shape[1] != d:
+                break
+        else:
             return xs
     xs = []
     for slot, dim in enumerate(group[0].key_dims):
@@ -92,6 +105,12 @@ def _variables(values: Values, group: list[Factor]) -> list[NDArray]:
             )
         xs.append(x)
     return xs
+
+
+def _total(a: NDArray) -> float:
+    """Σ a, finite only if every number is: a list's sum for a few numbers (a tenth of a NumPy reduction's call), NumPy's
+    for many."""
+    return sum(a.ravel().tolist()) if a.size <= 64 else float(np.add.reduce(a, axis=None))
 
 
 def _first_non_finite(e: NDArray, costs: NDArray, Js: tuple[NDArray, ...] | None) -> tuple[int, str] | None:
@@ -114,9 +133,9 @@ def whitened_norms(factors: Sequence[Factor], values: Values) -> NDArray:
     Jacobians (a type with one factor by its own ``whitened_error``); the divergence check of a stream
     (:mod:`steam_ref.paper.divergence`).  [YIB Eq. 6]"""
     values = as_values("values", values)
-    out = np.empty(len(factors))
+    out = [0.0] * len(factors)  # floats, made one array at the end
     with np.errstate(all="ignore"):  # a residual that overflows is inf: beyond any noise, not an error here
-        for ids in _group_by_type(factors).values():
+        for ids in _group_by_type(factors):
             if len(ids) == 1:  # a type with one factor: its own evaluation, which costs less than a stack of one
                 f = factors[ids[0]]
                 w = f.whitened_error(*[values[k] for k in f.keys]).ravel()
@@ -125,9 +144,9 @@ def whitened_norms(factors: Sequence[Factor], values: Values) -> NDArray:
             group = [factors[i] for i in ids]
             batch = type(group[0]).stack(group)
             e = _whitened(batch, batch.error(*_variables(values, group)))
-            out[ids] = np.sqrt(np.add.reduce(e * e, axis=1))  # np.linalg.norm(e, axis=1)
-    out[np.isnan(out)] = np.inf  # a norm is ≥ 0, inf or NaN
-    return out
+            for i, norm in zip(ids, np.sqrt(np.add.reduce(e * e, axis=1)).tolist(), strict=True):
+                out[i] = norm  # np.linalg.norm(e, axis=1)
+    return np.array([norm if norm == norm else math.inf for norm in out])  # a norm is ≥ 0, inf or NaN (read as inf)
 
 
 def linearize(factors: Sequence[Factor], values: Values, *, jacobians: bool = True) -> list[LinearizedGroup]:
@@ -141,36 +160,39 @@ def linearize(factors: Sequence[Factor], values: Values, *, jacobians: bool = Tr
     values = as_values("values", values)
     out, failures = [], []
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # checked group by group, just below
-        for ids in _group_by_type(factors).values():
+        for ids in _group_by_type(factors):
             group = [factors[i] for i in ids]
             batch = type(group[0]).stack(group)
             xs = _variables(values, group)
             fixed = group[0].whitened_jacobians() if jacobians and len(ids) == 1 else None  # a linear factor's
             if fixed is None:
                 error, H = batch.error_and_jacobians(*xs) if jacobians else (batch.error(*xs), None)
-                WH = None if H is None else tuple(batch.sqrt_information @ J for J in H)  # Σ^-½ H_i
+                WH = None if H is None else tuple([batch.sqrt_information @ J for J in H])  # Σ^-½ H_i
             else:  # made once, finite
-                error, WH = batch.error(*xs), tuple(A[None] for A in fixed)
+                error, WH = batch.error(*xs), tuple([A[None] for A in fixed])
             e = _whitened(batch, error)
-            s = np.sqrt(np.add.reduce(e * e, axis=1))  # ‖e‖ row by row, as np.linalg.norm(e, axis=1) sums it
             if batch.loss is None:  # √w = 1: A_i = Σ^-½ H_i, b_i = -Σ^-½ e, the products by 1 left out
-                costs = 0.5 * s**2
+                costs = None  # ½‖e‖², from b when asked
                 Js = WH
                 rhs = -e
             else:
+                s = np.sqrt(np.add.reduce(e * e, axis=1))  # ‖e‖ row by row, as np.linalg.norm(e, axis=1) sums it
                 weight, costs = batch.loss.weight_and_rho(s)
                 scale = np.sqrt(weight)
-                Js = None if WH is None else tuple(scale[:, None, None] * A for A in WH)  # A_i = √w Σ^-½ H_i
+                Js = None if WH is None else tuple([scale[:, None, None] * A for A in WH])  # A_i = √w Σ^-½ H_i
                 rhs = -scale[:, None] * e  # b_i = -√w Σ^-½ e(θ̄): ‖A_i δθ - b_i‖² is the term  [YIB Eq. 9-10, 21]
             # one sum is finite only if every number in it is (or it overflowed: then the search finds nothing);
-            # without a loss, ½‖e‖² is finite only if e is, and blocks made once are finite
+            # without a loss, Σ e² is finite only if e and ½‖e‖² are, and blocks made once are finite
             checked = () if Js is None or (fixed is not None and batch.loss is None) else Js
-            total = (0.0 if batch.loss is None else e.sum()) + costs.sum() + sum(J.sum() for J in checked)
+            total = _total(e * e) if costs is None else _total(costs) + _total(e)
+            for J in checked:
+                total += _total(J)
+            group_out = LinearizedGroup(np.asarray(ids), [f.keys for f in group], Js, rhs, costs)
             if not math.isfinite(total):
-                hit = _first_non_finite(e, costs, Js)
+                hit = _first_non_finite(e, group_out.costs, Js)
                 if hit is not None:
                     failures.append((ids[hit[0]], hit[1]))
-            out.append(LinearizedGroup(np.asarray(ids), [f.keys for f in group], Js, rhs, costs))
+            out.append(group_out)
     if failures:
         i, what = min(failures)
         f = factors[i]

@@ -184,7 +184,8 @@ class StreamingEstimator:
     def _predicted(self, keys: list[Key], prediction: Values) -> dict[Key, NDArray]:
         """The prediction of ``keys`` before an update: a new variable's initial value, the solver's estimate
         of one it holds (asked once for all of them)."""
-        out = self.solver.estimates_of([k for k in keys if k not in prediction])
+        held = [k for k in keys if k not in prediction]
+        out = self.solver.estimates_of(held) if held else {}
         out.update((k, prediction[k]) for k in keys if k in prediction)
         return out
 
