@@ -25,7 +25,6 @@ from steam_ref.bayes_tree.symbolic import (
     symbolic_elimination,
 )
 from steam_ref.errors import SteamError, UnknownVariableError
-from steam_ref.linear.min_degree import elimination_game, min_degree_elimination, min_degree_keys
 from steam_ref.linear.ordering import constrained_min_degree
 
 TOY = [("a", "c"), ("b", "c"), ("c", "d"), ("d", "e"), ("d", "f"), ("e", "f")]
@@ -110,25 +109,6 @@ def test_unknown_variable_in_factor_is_named():
         symbolic_elimination(list("ab"), [("a", "z")])
     with pytest.raises(SteamError, match="twice"):
         symbolic_elimination(list("aba"), [("a", "b")])
-
-
-def test_the_game_min_degree_hands_on_is_the_elimination_game_of_its_order(rng):
-    """Each variable's neighbours when min degree eliminates it are its separator in the game that merges factors
-    [K12 Alg. 1], and the cliques built from either are the same, merged or not, first batch or a constrained one."""
-    for case in range(200):
-        n = int(rng.integers(1, 30))
-        variables = [f"v{i}" for i in rng.permutation(n)]
-        factors = [tuple(rng.choice(variables, size=rng.integers(1, min(n, 4) + 1), replace=False)) for _ in range(n)]
-        factors += [(v,) for v in variables if not any(v in f for f in factors)]
-        last = list(rng.choice(variables, size=rng.integers(0, n + 1), replace=False)) if case % 2 else []
-        dims = {v: int(rng.integers(1, 7)) for v in variables}
-        order, game = min_degree_elimination(variables, dims, factors, last)
-        assert order == min_degree_keys(variables, dims, factors, last) and game is not None
-        assert game == elimination_game(order, factors)
-        for zeros in (0.0, 0.3, 0.9):
-            assert build_cliques(order, factors, dims, zeros, game) == build_cliques(order, factors, dims, zeros)
-    assert min_degree_elimination(list("ab"), UNIT, [("a", "b")], first={"a": 0.0})[1] is None  # plays its own game
-    assert min_degree_elimination(list("ab"), UNIT, [("a", "b"), ()])[1] is None  # a factor no variable owns
 
 
 # --- cliques --------------------------------------------------------------------------------

@@ -30,7 +30,7 @@ from .. import covariance
 from ..arguments import real_array
 from ..errors import ShapeError, SteamError, UnderdeterminedError, UnknownVariableError
 from ..factors import Factor, check_factors, kinds_of
-from ..linear.min_degree import min_degree_elimination
+from ..linear.ordering import min_degree_keys
 from ..linear.system import linearize
 from ..linear.threads import limit
 from ..manifold import Manifold, by_kind
@@ -175,7 +175,7 @@ class IncrementalSolver:
 
         Each new variable is of the kind its factors declare (``new_values`` may be a plain mapping). ``relinearize``
         False skips this update's fluid relinearization; ``constrained`` (GTSAM's ``constrainedKeys``): keys to
-        eliminate first, by increasing number (:func:`~steam_ref.linear.min_degree.min_degree_keys`). Raises
+        eliminate first, by increasing number (:func:`~steam_ref.linear.ordering.min_degree_keys`). Raises
         :class:`SteamError` subclasses on bad input (a new value for a held variable, a factor naming a variable with
         no value, a variable left unconstrained, a :class:`~steam_ref.errors.KindError`...), the solver as it was."""
         timer = PhaseTimer()
@@ -241,11 +241,11 @@ class IncrementalSolver:
         with timer("order"):
             linear = [state.cached(j) for j in fids] + [self.tree.cliques[o].marginal for o in orphans]
             variables = [k for c in removed.values() for k in c.frontals] + list(theta_new)
-            order, game = min_degree_elimination(variables, state.dims, [f.keys for f in linear], theta_nf, constrained)
+            order = min_degree_keys(variables, state.dims, [f.keys for f in linear], theta_nf, constrained)
         # 4e. Eliminate into new cliques and attach back the orphans.   [YIB step 5, Eq. 24-25]
         with timer("eliminate"):
             ids, zeros = fids + [None] * len(orphans), self.params.amalgamation_zeros
-            cliques, parents, owner = eliminate(order, linear, state.dims, ids, zeros, game)
+            cliques, parents, owner = eliminate(order, linear, state.dims, ids, zeros)
             new_cids = self.tree.insert_eliminated(cliques, parents, orphans, owner[len(fids) :])
         # 5. Partial back-substitution from the root, stopping below α.  [K12 Alg. 7; YIB step 6]
         with timer("backsubstitute"):

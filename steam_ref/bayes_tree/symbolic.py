@@ -19,7 +19,6 @@ from typing import Generic, Protocol, TypeVar
 
 from ..errors import SteamError, UnknownVariableError
 from ..linear.amalgamation import amalgamate
-from ..linear.min_degree import Game, elimination_game
 from .dot import tree_dot
 from .undo import UndoLog
 
@@ -47,17 +46,35 @@ def symbolic_elimination(order: Sequence[V], factor_keys: Sequence[Sequence[V]])
     Returns ``(separators, owner)``: variable → sᵢ (in elimination order), and for each factor the
     first of its variables in ``order``.
     """
-    separators, owner = elimination_game(order := list(order), factor_keys)
+    separators, owner = _elimination_game(order := list(order), factor_keys)
     named = {v: tuple(map(order.__getitem__, s)) for v, s in zip(order, separators, strict=True)}
     return named, [order[i] for i in owner]
 
 
+def _elimination_game(order: list, factor_keys: Sequence[Sequence[V]]) -> tuple[list[list[int]], list[int]]:
+    """:func:`symbolic_elimination` on places in ``order`` (ints hash and sort faster than keys): sᵢ sorted, owners."""
+    pos = {v: i for i, v in enumerate(order)}
+    if len(pos) != len(order):
+        raise SteamError("an elimination order lists a variable twice")
+    place, owner = pos.__getitem__, []
+    pending: list[set[int]] = [set() for _ in order]  # by place: the places of the factors waiting for it
+    try:
+        for keys in factor_keys:
+            owner.append(first := min(places := list(map(place, keys))))
+            pending[first].update(places)
+    except KeyError as exc:
+        raise UnknownVariableError(f"a factor names {exc.args[0]!r}, which is not in the elimination order") from None
+    separators = []
+    for i, s in enumerate(pending):
+        s.discard(i)
+        separators.append(sep := sorted(s))
+        if sep:  # the new factor f(sᵢ) waits for the first variable of sᵢ  [YIB Eq. 24]
+            pending[sep[0]].update(sep)
+    return separators, owner
+
+
 def build_cliques(
-    order: Sequence[V],
-    factor_keys: Sequence[Sequence[V]],
-    dims: Mapping | None = None,
-    zeros: float = 0.0,
-    game: Game | None = None,
+    order: Sequence[V], factor_keys: Sequence[Sequence[V]], dims: Mapping | None = None, zeros: float = 0.0
 ) -> list[SymbolicClique]:
     """Cliques of the Bayes tree of ``order``, children before parents.  [K12 Alg. 2]
 
@@ -65,10 +82,8 @@ def build_cliques(
     parent (the clique holding sᵢ's first variable as a frontal) when sᵢ equals all of C's
     variables; otherwise it starts a new child clique of C (or a new root when sᵢ is empty).
     ``zeros`` > 0: cliques then merge into their parents (``dims``: :mod:`steam_ref.linear.amalgamation`).
-    ``game``: the game of this order on these factors, when its ordering played it
-    (:class:`~steam_ref.linear.min_degree.Game`); None plays it here.
     """
-    separators, owner = game or elimination_game(list(order), factor_keys)
+    separators, owner = _elimination_game(order := list(order), factor_keys)
     clique_of = [0] * len(order)  # place → the clique where it is frontal
     frontals: list[list[int]] = []  # per clique, the places of its frontals in reverse elimination order
     seps: list[list[int]] = []  # per clique, the places of its separator

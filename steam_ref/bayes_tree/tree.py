@@ -18,7 +18,6 @@ from numpy.typing import NDArray
 
 from ..errors import SteamError, UnderdeterminedError
 from ..linear.conditional import Clique, assemble_sqrt_information, eliminate_clique
-from ..linear.min_degree import Game
 from ..linear.ordering import Ordering
 from ..linear.system import GaussianFactor
 from ..variables import Key, key_list
@@ -38,18 +37,16 @@ def eliminate(
     dims: Mapping[Key, int] | None = None,
     factor_ids: Sequence[int | None] | None = None,
     amalgamation_zeros: float = 0.0,
-    game: Game | None = None,
 ) -> tuple[list[Clique], list[int | None], list[int]]:
     """Multifrontal elimination of linear factors in ``order``.  [YIB Eq. 24-25, K12 Alg. 1-2]
 
     Returns ``(cliques, parents, owner)``: the cliques children first, each one's parent index
     (None for a root), and for each input factor the index of the clique that eliminated it.
     ``factor_ids`` (None entries for cached marginal factors) label the factors stored in each
-    clique's ``factors``. ``amalgamation_zeros`` > 0 merges cliques, ``game`` is the order's elimination game if
-    its ordering played it (:func:`~.symbolic.build_cliques`).
+    clique's ``factors``. ``amalgamation_zeros`` > 0 merges cliques (:func:`~.symbolic.build_cliques`).
     """
     dims = factor_dims(factors) if dims is None else dims
-    symbolic = build_cliques(order, [f.keys for f in factors], dims, amalgamation_zeros, game)
+    symbolic = build_cliques(order, [f.keys for f in factors], dims, amalgamation_zeros)
     incoming: list[list[GaussianFactor]] = [[] for _ in symbolic]  # marginal factors from children
     cliques, owner = [], [0] * len(factors)
     for i, sc in enumerate(symbolic):

@@ -5,7 +5,7 @@ An ordering is the order in which variables are eliminated, i.e. the order of th
 of A and of the rows/columns of 𝓘. Natural keeps the order given; XL puts every trajectory state
 before every landmark (footnote 1 of [YIB]); AMD (approximate minimum degree) permutes the
 variables to keep the Cholesky factor sparse; :func:`constrained_min_degree` is exact greedy
-minimum degree with a chosen group forced last (the Bayes tree's re-elimination: :mod:`.min_degree`). Orderings act on
+minimum degree with a chosen group forced last (the Bayes tree's re-elimination). Orderings act on
 *variables* (blocks), as in GTSAM, not on scalars. Every ordering function takes the variables and
 their sizes (and, where the pattern matters, the variables of each factor) and returns an
 :class:`Ordering`; :func:`make_ordering` is the one place that picks one by name, for the batch
@@ -19,6 +19,7 @@ fallback.
 
 from __future__ import annotations
 
+import heapq
 import os
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -28,10 +29,9 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 
-from ..arguments import is_integer
+from ..arguments import is_integer, number
 from ..errors import ShapeError, SteamError, UnknownVariableError
 from ..variables import Key, key_list
-from .min_degree import KeysBelow, _places, _sizes, min_degree_keys
 
 __all__ = [
     "KeysBelow",
@@ -131,6 +131,14 @@ class Ordering:
         return self.keys[i]
 
 
+def _sizes(keys: Sequence[Key], dims: Mapping[Key, int]) -> tuple[int, ...]:
+    """The size of each key, read from ``dims``; UnknownVariableError naming a key it lacks."""
+    try:
+        return tuple(dims[k] for k in keys)
+    except KeyError as exc:
+        raise UnknownVariableError(f"dims gives no size for variable {exc.args[0]!r}") from None
+
+
 def natural_ordering(keys: Iterable[Key], dims: Mapping[Key, int]) -> Ordering:
     """The variables in the order given (for a graph: first-seen order)."""
     keys = tuple(key_list("keys", keys))
@@ -156,6 +164,21 @@ def variable_adjacency(keys: Sequence[Key], factor_keys: Iterable[tuple[Key, ...
             cols.append(np.array(ids))
     r, c = np.concatenate(rows), np.concatenate(cols)
     return sp.csc_matrix((np.ones(len(r)), (r, c)), shape=(len(keys), len(keys)))
+
+
+def _places(index: Mapping[Key, int], factor_keys: Iterable[Sequence[Key]], among: str) -> list[list[int]]:
+    """Each factor's variables as their places in ``index``; UnknownVariableError names one ``index`` lacks."""
+    factor_keys, place = list(factor_keys), index.__getitem__
+    try:
+        return [list(map(place, keys)) for keys in factor_keys]  # one pass in C: a list per factor, no generator
+    except KeyError as exc:
+        missing = exc.args[0]
+    i, keys = next(
+        ((i, keys) for i, keys in enumerate(factor_keys) if missing in keys), ("?", "a key")
+    )  # an iterator is spent
+    raise UnknownVariableError(
+        f"factor_keys[{i}] = {keys!r} names {missing!r}, which is not among the {among} to order"
+    )
 
 
 def _amd_permutation(pattern: sp.csc_matrix, backend: str) -> NDArray:
@@ -191,10 +214,141 @@ def constrained_min_degree(
     last: Iterable[Key] = (),
 ) -> Ordering:
     """A greedy minimum-degree elimination order with the variables in ``last`` eliminated last, as an
-    :class:`Ordering` (:func:`~.min_degree.min_degree_keys` gives the keys alone, as an incremental update needs them).
+    :class:`Ordering` (:func:`min_degree_keys` gives the keys alone, as an incremental update needs them).
     """
     order = min_degree_keys(variables, dims, factor_keys, last)
     return Ordering(tuple(order), tuple(dims[k] for k in order))
+
+
+def min_degree_keys(
+    variables: Sequence[Key],
+    dims: Mapping[Key, int],
+    factor_keys: Iterable[Sequence[Key]],
+    last: Iterable[Key] = (),
+    first: Mapping[Key, float] | None = None,
+) -> list[Key]:
+    """A greedy minimum-degree elimination order with the variables in ``last`` eliminated last.
+
+    ``dims``: the size of each variable (the :class:`Ordering` carries them); ``factor_keys``: the
+    variables of each factor.
+
+    The degree of a variable is its number of neighbours in the current elimination graph (the
+    variable graph after the eliminations so far, fill included), so this is exact minimum degree,
+    not AMD's approximation. Ties go to the variable listed first in ``variables``. Variables in
+    ``last`` are ordered among themselves by minimum degree too, after all others: this is the
+    constrained ordering iSAM2 obtains from CCOLAMD, which keeps the variables touched by new
+    factors near the root so the next update removes little of the tree.  [K12 Sec. 5]
+
+    ``first`` (GTSAM's ``constrainedKeys``): the variables it names (and ``last`` does not) are eliminated before
+    all others, in increasing order of the number it maps each to (ties in the order of ``variables``), and the
+    rest by minimum degree on the graph their elimination leaves: a fixed-lag smoother puts the variables next to
+    leave its window there, so that they sit in leaf cliques and are cut off with no re-elimination.
+    """
+    if first is not None:
+        return _first_then_min_degree(list(variables), dims, factor_keys, list(last), first)
+    variables = list(variables)
+    index = {v: i for i, v in enumerate(variables)}
+    if len(index) != len(variables):
+        twice = next(v for i, v in enumerate(variables) if index[v] != i)
+        raise SteamError(f"variables lists {twice!r} twice")
+    _sizes(variables, dims)  # names a variable dims lacks, before any work
+    n = len(variables)
+    adj: list[set[int]] = [set() for _ in range(n)]  # by place in ``variables``: integers hash faster than keys
+    for places in _places(index, factor_keys, "variables"):
+        for j in places:
+            adj[j].update(places)
+    if isinstance(last, Key):
+        raise SteamError(f"last must be a collection of variables, got the single key {last!r}: write [{last!r}]")
+    last_set = set(last)
+    unknown = [v for v in last_set if v not in index]
+    if unknown:
+        raise UnknownVariableError(f"last names {unknown[0]!r}, which is not among the variables to order")
+    # A heap entry is one integer, (group · n + degree) · n + place: compared as the tuple (group, degree, place),
+    # with group 1 for the variables of ``last``. ``current`` holds each variable's valid entry (-1 once eliminated).
+    group = [n * n if v in last_set else 0 for v in variables] if last_set else [0] * n
+    current = []
+    for i, a in enumerate(adj):
+        a.discard(i)
+        current.append(group[i] + len(a) * n + i)
+    heap = current.copy()
+    heapq.heapify(heap)
+    pop, push, order = heapq.heappop, heapq.heappush, []
+    while heap:
+        entry = pop(heap)
+        i = entry % n
+        if current[i] != entry:  # already eliminated, or a stale degree
+            continue
+        current[i] = -1
+        order.append(variables[i])
+        a = adj[i]
+        for u in a:  # eliminating v joins its neighbours into a clique (fill)
+            au = adj[u]
+            au.discard(i)
+            au |= a
+            au.discard(u)
+            entry = group[u] + len(au) * n + u
+            if entry != current[u]:  # an unchanged degree's entry is in the heap already
+                current[u] = entry
+                push(heap, entry)
+    return order
+
+
+def _first_then_min_degree(
+    variables: list[Key], dims: Mapping[Key, int], factor_keys: Iterable[Sequence[Key]], last: list[Key], first: Mapping
+) -> list[Key]:
+    """:func:`min_degree_keys` with ``first`` (its docstring)."""
+    rank = {k: r for k in variables if (r := first.get(k)) is not None}  # one look-up a variable
+    for k, r in rank.items():
+        if type(r) is not float:  # a float passes as it is (the smoother's timestamps); anything else is checked
+            rank[k] = number(f"the rank of {k!r} among the keys eliminated first", r)
+    early = sorted((k for k in rank if k not in last), key=rank.__getitem__)
+    if not early:
+        return min_degree_keys(variables, dims, factor_keys, last)
+    groups = [set(keys) for keys in factor_keys]  # a group merged away is left empty in its place
+    holding: dict[Key, list[int]] = {v: [] for v in early}  # an early key → the groups naming it, found in one pass
+    for i, g in enumerate(groups):
+        if not holding.keys().isdisjoint(g):  # most groups name no early key: one test each, no per-key loop
+            for k in holding.keys() & g:
+                holding[k].append(i)
+    for v in early:  # the elimination game on the keys [K12 Alg. 1]: v's factors become one on its neighbours
+        touching = [i for i in holding.pop(v) if groups[i]]
+        merged = set().union(*(groups[i] for i in touching)) - {v}
+        for i in touching:
+            groups[i] = set()
+        for k in holding.keys() & merged:
+            holding[k].append(len(groups))
+        groups.append(merged)
+    gone = set(early)
+    rest = [k for k in variables if k not in gone]
+    return early + min_degree_keys(rest, dims, [tuple(g) for g in groups if g], last)
+
+
+class KeysBelow(Mapping):
+    """The entries of ``numbers`` below ``bound``, read in place, never copied: a fixed-lag smoother's timestamps
+    older than the newest, the keys it has its solver eliminate first (``min_degree_keys(first=...)``), at the cost
+    of the keys looked up rather than of its whole window."""
+
+    def __init__(self, numbers: Mapping[Key, float], bound: float) -> None:
+        self.numbers, self.bound = numbers, bound
+
+    def get(self, key: Key, default: float | None = None) -> float | None:  # type: ignore[override]
+        t = self.numbers.get(key)
+        return t if t is not None and t < self.bound else default
+
+    def __contains__(self, key: object) -> bool:
+        return self.get(key) is not None  # type: ignore[arg-type]
+
+    def __getitem__(self, key: Key) -> float:
+        t = self.get(key)
+        if t is None:
+            raise KeyError(key)
+        return t
+
+    def __iter__(self) -> Iterator[Key]:
+        return (k for k, t in self.numbers.items() if t < self.bound)
+
+    def __len__(self) -> int:
+        return sum(1 for _ in self)
 
 
 def make_ordering(
