@@ -102,7 +102,7 @@ class GroupState(Manifold):
         x, delta = self._state("x", x), self._step("delta", delta)
         g, n = self.group, self.group.size
         d = g.dim
-        return np.concatenate([g.compose(x[..., :n], g.exp(delta[..., :d])), x[..., n:] + delta[..., d:]], axis=-1)
+        return np.concatenate([g.compose_exp(x[..., :n], delta[..., :d]), x[..., n:] + delta[..., d:]], axis=-1)
 
     def local(self, x0: NDArray, x: NDArray) -> NDArray:
         """x ⊖ x₀ = [Log(T₀⁻¹ T); ϖ - ϖ₀] (SE(2): the angle in (-π, π]); retract(x0, local(x0, x)) == x."""
