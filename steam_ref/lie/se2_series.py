@@ -61,6 +61,22 @@ def _poly(c: NDArray, z: NDArray) -> NDArray:
     return out
 
 
+_SERIES = {"A": _A, "A1": _A1, "D": _D, "D1": _D1, "C": _C, "C1": _C1, "G": _G, "G1": _G1}
+_ROW = {name: i for i, name in enumerate(_SERIES)}
+_TABLE = np.stack(list(_SERIES.values()), axis=1)  # (_TERMS, 8): term k of every series in row k
+
+
+_POWERS = np.arange(_TERMS, dtype=float)
+_TERMS_BY_SERIES = np.ascontiguousarray(_TABLE.T)  # (8, _TERMS)
+
+
+def _series_sums(z: NDArray) -> NDArray:
+    """Every series of _TABLE at z, (..., 8): Σₖ cₖ zᵏ, each term from zᵏ and the sum over k in one reduction (the
+    same operations for each z whatever the shape, so one φ alone gets the same numbers as in a batch). Each series'
+    terms fall as 1/(2k)! or faster for abs(z) < 1, so the sum is good to a few ulps."""
+    return ((z[..., None] ** _POWERS)[..., None, :] * _TERMS_BY_SERIES).sum(axis=-1)
+
+
 class _Coefficients:
     """The coefficients of J_r, J_r⁻¹ and Exp/Log at φ and their derivatives, each computed when first
     read [DER 11.3-11.7]: A = sin φ/φ, B = (1 - cos φ)/φ, C = (φ - sin φ)/φ²,
@@ -77,6 +93,13 @@ class _Coefficients:
             with np.errstate(over="ignore"):  # |φ| > 1e154: φ² is inf, and the closed forms' O(1/φ²) terms 0
                 self.z = self.phi**2
         self._known: dict[str, NDArray] = {}
+        self._sums: NDArray | None = None  # every series at z, summed when the first is read
+
+    def _sum(self, name: str) -> NDArray:
+        """The series ``name`` at z = φ², from every series summed at the first one read (``_series_sums``)."""
+        if self._sums is None:
+            self._sums = _series_sums(self.z)
+        return self._sums[..., _ROW[name]]
 
     def _pick(self, series: Callable[[], NDArray], closed: Callable[[], NDArray]) -> NDArray:
         """The series below SERIES_BELOW, the closed form above (each a thunk, evaluated only if needed)."""
@@ -93,22 +116,22 @@ class _Coefficients:
         return self._known[name]
 
     def _A(self) -> NDArray:
-        return self._pick(lambda: _poly(_A, self.z), lambda: np.sin(self.phi) / self.phi)
+        return self._pick(lambda: self._sum("A"), lambda: np.sin(self.phi) / self.phi)
 
     def _D(self) -> NDArray:  # 1 - cos φ = 2 sin²(φ/2): no cancellation
-        return self._pick(lambda: _poly(_D, self.z), lambda: 2 * np.sin(self.phi / 2) ** 2 / self.z)
+        return self._pick(lambda: self._sum("D"), lambda: 2 * np.sin(self.phi / 2) ** 2 / self.z)
 
     def _B(self) -> NDArray:
         return self.phi * self["D"]
 
     def _C(self) -> NDArray:
-        return self._pick(lambda: self.phi * _poly(_C, self.z), lambda: (self.phi - np.sin(self.phi)) / self.z)
+        return self._pick(lambda: self.phi * self._sum("C"), lambda: (self.phi - np.sin(self.phi)) / self.z)
 
     def _A1(self) -> NDArray:
-        return self._pick(lambda: self.phi * _poly(_A1, self.z), lambda: (np.cos(self.phi) - self["A"]) / self.phi)
+        return self._pick(lambda: self.phi * self._sum("A1"), lambda: (np.cos(self.phi) - self["A"]) / self.phi)
 
     def _D1(self) -> NDArray:
-        return self._pick(lambda: self.phi * _poly(_D1, self.z), lambda: (self["A"] - 2 * self["D"]) / self.phi)
+        return self._pick(lambda: self.phi * self._sum("D1"), lambda: (self["A"] - 2 * self["D"]) / self.phi)
 
     def _B1(self) -> NDArray:  # B' = A - D: above the switch 2 sin h g(h)/φ², h = φ/2, g(h) = 2h cos h - sin h
         return self._pick(lambda: self["D"] + self.phi * self["D1"], self._B1_closed)
@@ -127,21 +150,21 @@ class _Coefficients:
     ) -> NDArray:  # C' = D - 2C/φ = 4 cos h (sin h - h cos h)/φ³, h = φ/2: no cancellation at φ = π, where C' = 0
         h = self.phi / 2
         return self._pick(
-            lambda: _poly(_C1, self.z), lambda: 4 * np.cos(h) * (np.sin(h) - h * np.cos(h)) / (self.z * self.phi)
+            lambda: self._sum("C1"), lambda: 4 * np.cos(h) * (np.sin(h) - h * np.cos(h)) / (self.z * self.phi)
         )
 
     def _alpha(self) -> NDArray:
         h = self.phi / 2
-        return self._pick(lambda: 1 - self.z * _poly(_G, self.z), lambda: h * np.cos(h) / np.sin(h))
+        return self._pick(lambda: 1 - self.z * self._sum("G"), lambda: h * np.cos(h) / np.sin(h))
 
     def _gamma(self) -> NDArray:
-        return self._pick(lambda: self.phi * _poly(_G, self.z), lambda: (1 - self["alpha"]) / self.phi)
+        return self._pick(lambda: self.phi * self._sum("G"), lambda: (1 - self["alpha"]) / self.phi)
 
     def _alpha1(self) -> NDArray:  # (sin φ - φ) / (2 (1 - cos φ))
         return -self["C"] / (2 * self["D"])
 
     def _gamma1(self) -> NDArray:
-        return self._pick(lambda: _poly(_G1, self.z), lambda: (-self["alpha1"] - self["gamma"]) / self.phi)
+        return self._pick(lambda: self._sum("G1"), lambda: (-self["alpha1"] - self["gamma"]) / self.phi)
 
 
 # the last φ's coefficients, as one (key, _Coefficients) pair replaced whole: the kernels of one factor read the same
