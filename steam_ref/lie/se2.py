@@ -50,7 +50,7 @@ def wrap(theta: ArrayLike) -> NDArray:
     """
     theta = np.asarray(theta, dtype=float)
     inside = (theta > -np.pi) & (theta <= np.pi)
-    if inside.all():
+    if np.count_nonzero(inside) == inside.size:
         return theta
     if not np.all(np.isfinite(theta)):
         bad = theta.ravel()[int(np.flatnonzero(~np.isfinite(theta))[0])]

@@ -85,8 +85,8 @@ class _Coefficients:
     def __init__(self, phi: ArrayLike):
         self.phi = np.asarray(phi, dtype=float)
         self.small = np.abs(self.phi) < SERIES_BELOW
-        self.all_small = bool(self.small.all())
-        self.any_small = self.all_small or bool(self.small.any())
+        n_small = np.count_nonzero(self.small)  # (a third of the cost of .all() and .any() on a few numbers)
+        self.all_small, self.any_small = n_small == self.small.size, n_small > 0
         if self.all_small:
             self.z = self.phi**2
         else:
