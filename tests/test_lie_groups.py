@@ -307,6 +307,10 @@ def test_the_state_kind_retracts_on_the_right_and_local_inverts_it(group, rng):
         np.testing.assert_allclose(y[:n], group.compose(x[:n], group.exp(d[: group.dim])))
         np.testing.assert_allclose(kind.local(x, y), d, atol=1e-12)
         np.testing.assert_allclose(kind.retract(x, kind.local(x, y)), y, atol=1e-12)
+    xs = [np.concatenate([e, rng.standard_normal(group.dim)]) for e in elements(group, rng, 5)]
+    ds = [np.concatenate([tangent(group, rng, rng.uniform(-3, 3)), rng.standard_normal(group.dim)]) for _ in xs]
+    for got, x, d in zip(kind.retract_many(xs, ds), xs, ds, strict=True):  # the solver's batched retraction
+        np.testing.assert_array_equal(got, kind.retract(x, d))
 
 
 # --- a planar robot's pose and velocity -----------------------------------------------------------------
