@@ -220,6 +220,34 @@ def test_the_generic_forms_of_the_base_class_agree_with_the_groups_own(group, rn
         )
 
 
+def test_a_local_variable_and_its_jacobians_from_one_call(group, rng):
+    """log_between(a, b, v): ξ = Log(a⁻¹b), J_r(ξ)⁻¹ v and their Jacobians against the group's methods one at a time,
+    the base class's generic form and differences; compose_exp(a, ξ) against compose(a, exp(ξ))."""
+    zero = np.zeros(group.dim)
+    for angle in ANGLES + _switch(group):
+        a, v = elements(group, rng, 1)[0], rng.standard_normal(group.dim)
+        b = group.compose(a, group.exp(tangent(group, rng, angle)))
+        xi, u, da, db, du = group.log_between(a, b, v, jacobians=True)
+        np.testing.assert_array_equal(np.concatenate([xi, u]), np.concatenate(group.log_between(a, b, v)))
+        scale = 1 + np.abs(xi).max() ** 2 + np.abs(v).max() * (1 + np.abs(xi).max()) ** 2
+        for ours, generic in zip(
+            (xi, u, da, db, du), LieGroup.log_between(group, a, b, v, jacobians=True), strict=True
+        ):
+            np.testing.assert_allclose(ours, generic, rtol=0, atol=100 * EPS * scale)
+        np.testing.assert_allclose(xi, group.log(group.between(a, b)), rtol=0, atol=20 * EPS * scale)
+        if group.angle(xi) < np.pi - 0.1:  # (the stencil must not carry Log across ±π)
+            assert_derivative(da, lambda d, b=b, a=a: group.log(group.between(group.compose(a, group.exp(d)), b)), zero)
+            assert_derivative(db, lambda d, b=b, a=a: group.log(group.between(a, group.compose(b, group.exp(d)))), zero)
+            assert_derivative(du, lambda z, v=v: group.right_jacobian_inverse(z) @ v, xi)
+        step = tangent(group, rng, angle)
+        np.testing.assert_allclose(
+            group.compose_exp(a, step),
+            group.compose(a, group.exp(step)),
+            rtol=0,
+            atol=20 * EPS * (1 + np.abs(step).max()),
+        )
+
+
 def test_every_method_broadcasts_over_leading_axes(group, rng):
     xis = np.stack([tangent(group, rng, a) for a in (0.0, 0.3, 1.5, 3.0, 1e-8, 2.5)]).reshape(2, 3, group.dim)
     vs = rng.standard_normal((2, 3, group.dim))
@@ -238,6 +266,8 @@ def test_every_method_broadcasts_over_leading_axes(group, rng):
         "compose": (lambda x, y: group.compose(x, y, jacobians=True), (a, b)),
         "inverse": (lambda x: group.inverse(x, jacobians=True), (a,)),
         "between": (lambda x, y: group.between(x, y, jacobians=True), (a, b)),
+        "log_between": (lambda x, y, z: group.log_between(x, y, z, jacobians=True), (a, b, vs)),
+        "compose_exp": (group.compose_exp, (a, xis)),
     }
     for name, (f, args) in one_at_a_time.items():
         batch = f(*args)
@@ -277,6 +307,10 @@ def test_the_state_kind_retracts_on_the_right_and_local_inverts_it(group, rng):
         np.testing.assert_allclose(y[:n], group.compose(x[:n], group.exp(d[: group.dim])))
         np.testing.assert_allclose(kind.local(x, y), d, atol=1e-12)
         np.testing.assert_allclose(kind.retract(x, kind.local(x, y)), y, atol=1e-12)
+    xs = [np.concatenate([e, rng.standard_normal(group.dim)]) for e in elements(group, rng, 5)]
+    ds = [np.concatenate([tangent(group, rng, rng.uniform(-3, 3)), rng.standard_normal(group.dim)]) for _ in xs]
+    for got, x, d in zip(kind.retract_many(xs, ds), xs, ds, strict=True):  # the solver's batched retraction
+        np.testing.assert_array_equal(got, kind.retract(x, d))
 
 
 # --- a planar robot's pose and velocity -----------------------------------------------------------------

@@ -9,7 +9,8 @@ from requirements import optional_import
 
 from steam_ref.errors import ShapeError, SteamError
 from steam_ref.lie import SE2, SE2_STATE, world_position_covariance
-from steam_ref.lie.se2 import _ROOT_HI, _ROOT_LO, _ROOT_NEAR, SERIES_BELOW, _Coefficients, wrap
+from steam_ref.lie.se2 import wrap
+from steam_ref.lie.se2_series import _ROOT_HI, _ROOT_LO, _ROOT_NEAR, SERIES_BELOW, _Coefficients
 from steam_ref.manifold import VECTOR, Manifold
 
 mp = optional_import("mpmath", "test")

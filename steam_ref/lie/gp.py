@@ -95,23 +95,18 @@ def local_variables(
     """
     n, d = group.size, group.dim
     T1, T2, w2 = x1[..., :n], x2[..., :n], x2[..., n:]
+    local = model == "local-variable"
     if not jacobians:
-        xi = group.log(group.between(T1, T2))  # ξ₂₁ = Log(T₁⁻¹ T₂)  [DER 11.10]
-        velocity = _mv(group.right_jacobian_inverse(xi), w2) if model == "local-variable" else w2
-        return _joined(xi, velocity)
-    rel, H1, _ = group.between(T1, T2, jacobians=True)  # ∂(T₁⁻¹T₂)/∂δT₂ = I
-    xi = group.log(rel)  # ξ₂₁ = Log(T₁⁻¹ T₂)  [DER 11.10]
-    jinv = group.right_jacobian_inverse(xi)
-    d1 = _mm(jinv, H1)  # ∂ξ/∂δT₁
-    zero = np.zeros(xi.shape + (d,))
-    if model == "local-variable":
-        velocity = _mv(jinv, w2)  # ξ̇(t₂) = J_r(ξ₂₁)⁻¹ ϖ₂  [DER 11.10]
-        G = group.jr_inverse_times_jacobian(xi, w2)  # [DER 11.6, 11.13]
-        dv1, dv2, dw2 = _mm(G, d1), _mm(G, jinv), jinv
+        xi, u = group.log_between(T1, T2, w2)  # ξ₂₁ = Log(T₁⁻¹ T₂), u = J_r(ξ₂₁)⁻¹ ϖ₂  [DER 11.10]
+        return _joined(xi, u if local else w2)
+    xi, u, d1, jinv, G = group.log_between(T1, T2, w2, jacobians=True)  # ∂ξ/∂δT₁, ∂ξ/∂δT₂, ∂u/∂ξ  [DER 11.6, 11.13]
+    J1, J2 = np.zeros((2,) + d1.shape[:-2] + (2 * d, 2 * d))
+    J1[..., :d, :d], J2[..., :d, :d] = d1, jinv
+    if local:  # ξ̇(t₂) = J_r(ξ₂₁)⁻¹ ϖ₂
+        J1[..., d:, :d], J2[..., d:, :d], J2[..., d:, d:] = G @ d1, G @ jinv, jinv
     else:
-        velocity, dv1, dv2 = w2, zero, zero
-        dw2 = _eye(d, xi.shape[:-1])
-    return _joined(xi, velocity), _blocks(d1, zero, dv1, zero), _blocks(jinv, zero, dv2, dw2)
+        J2[..., d:, d:] = np.eye(d)
+    return _joined(xi, u if local else w2), J1, J2
 
 
 @overload

@@ -196,6 +196,36 @@ class LieGroup(ABC):
         jinv = self.right_jacobian_inverse(xi)
         return -_mm(jinv, self.jr_times_jacobian(xi, _mv(jinv, np.asarray(v, dtype=float))))
 
+    @overload
+    def log_between(
+        self, a: ArrayLike, b: ArrayLike, v: ArrayLike, jacobians: Literal[False] = False
+    ) -> tuple[NDArray, NDArray]: ...
+    @overload
+    def log_between(
+        self, a: ArrayLike, b: ArrayLike, v: ArrayLike, jacobians: Literal[True]
+    ) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray]: ...
+    def log_between(
+        self, a: ArrayLike, b: ArrayLike, v: ArrayLike, jacobians: bool = False
+    ) -> tuple[NDArray, NDArray] | tuple[NDArray, NDArray, NDArray, NDArray, NDArray]:
+        """ξ = Log(a⁻¹ b) and u = J_r(ξ)⁻¹ v (a twist v seen in the rates of ξ); with ``jacobians``, also ∂ξ/∂δa =
+        -J_r(ξ)⁻¹ Ad(Exp(-ξ)), ∂ξ/∂δb = J_r(ξ)⁻¹ and ∂u/∂ξ: a local variable of the GP on the group and its
+        Jacobians in one call [DER 11.10, 11.13]. Here from the group's methods in turn; a group may fuse them (SE(2)
+        reads the coefficients of its angle once)."""
+        a, b = self._elements("a", a), self._elements("b", b)
+        v = self._twists("v", v)
+        if not jacobians:
+            xi = self.log(self._between(a, b))
+            return xi, _mv(self.right_jacobian_inverse(xi), v)
+        rel, Ha, _ = self.between(a, b, jacobians=True)
+        xi = self.log(rel)
+        jinv = self.right_jacobian_inverse(xi)
+        return xi, _mv(jinv, v), _mm(jinv, Ha), jinv, self.jr_inverse_times_jacobian(xi, v)
+
+    def compose_exp(self, a: ArrayLike, xi: ArrayLike) -> NDArray:
+        """a Exp(ξ): the element ``a`` moved by ξ in its right tangent (a state's retraction, ``lie.state``). Here
+        compose after exp; a group may fuse them."""
+        return self._compose(self._elements("a", a), self.exp(xi))
+
     # --- second order, for a prior with an acceleration in its state (written once, for every group) ------------
 
     def ad(self, xi: ArrayLike) -> NDArray:

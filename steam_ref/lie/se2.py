@@ -18,162 +18,17 @@ none loses precision to cancellation near φ = 0 [DER 11.3-11.7].
 
 from __future__ import annotations
 
-import math
-from collections.abc import Callable
+from typing import Literal, overload
 
 import numpy as np
-import scipy.special
 from numpy.typing import ArrayLike, NDArray
 
 from ..dead_reckoning import wrap_angle
 from ..errors import ShapeError, SteamError
 from .group import LieGroup, matrix_of
+from .se2_series import SERIES_BELOW, _coefficients
 
 __all__ = ["SE2", "SE2Group", "wrap", "SERIES_BELOW"]
-
-SERIES_BELOW = 1.0  # |φ| below this: the coefficients from their series (each converges fast there)
-_TERMS = 14  # terms of each series: the last is below 1e-22 of the first at |φ| = 1
-_k = np.arange(_TERMS)
-_fact = np.array([float(math.factorial(n)) for n in range(2 * _TERMS + 6)])
-# Coefficients of each series in powers of φ² (c[0] + c[1] φ² + ...), from sin and cos's Taylor series.
-_A = (-1.0) ** _k / _fact[2 * _k + 1]  # sin φ / φ
-_A1 = (-1.0) ** (_k + 1) * 2 * (_k + 1) / _fact[2 * _k + 3]  # (d/dφ of sin φ/φ) / φ
-_D = (-1.0) ** _k / _fact[2 * _k + 2]  # (1 - cos φ) / φ²
-_D1 = (-1.0) ** (_k + 1) * 2 * (_k + 1) / _fact[2 * _k + 4]  # (d/dφ of D) / φ
-_C = (-1.0) ** _k / _fact[2 * _k + 3]  # (φ - sin φ) / φ³
-_C1 = (-1.0) ** _k * (2 * _k + 1) / _fact[2 * _k + 3]  # d/dφ of C = (φ - sin φ) / φ²
-# (1 - (φ/2) cot(φ/2)) / φ = Σₙ |B₂ₙ| φ²ⁿ⁻¹ / (2n)! = Σₙ 2 ζ(2n) φ²ⁿ⁻¹ / (2π)²ⁿ (Bernoulli numbers B₂ₙ)
-_G = 2 * scipy.special.zeta(2.0 * (_k + 1)) / (2 * np.pi) ** (2.0 * (_k + 1))  # γ / φ  [DER 11.3]
-_G1 = (2 * _k + 1) * _G  # d/dφ of γ
-# B' = 2 sin h g(h) / φ² with h = φ/2 and g(h) = 2h cos h - sin h, which vanishes at h* (tan h* = 2h*, φ* = 2h* ≈ 2.331,
-# where B = (1 - cos φ)/φ peaks): within _ROOT_NEAR of h*, g is summed from its Taylor series about h*, so B' keeps
-# its relative precision through its zero [DER 11.7]. h* = _ROOT_HI + _ROOT_LO to 32 digits (mpmath's findroot).
-_ROOT_HI, _ROOT_LO = 1.1655611852072114, -1.0746027478595998e-16
-_ROOT_NEAR = 0.05  # |h - h*| below this: 12 terms, the last below 1e-20 of g
-_rc, _rs = math.cos(_ROOT_HI), math.sin(_ROOT_HI)
-_cos_k, _sin_k = (_rc, -_rs, -_rc, _rs), (_rs, _rc, -_rs, -_rc)  # the k-th derivatives of cos and sin at h*, k mod 4
-# g⁽ᵏ⁾(h*) / k! for k = 1..12, g⁽ᵏ⁾ = 2h cos⁽ᵏ⁾ + 2k cos⁽ᵏ⁻¹⁾ - sin⁽ᵏ⁾; g(h) = Σ _ROOT_G[k-1] (h - h*)ᵏ
-_ROOT_G = np.array(
-    [(2 * _ROOT_HI * _cos_k[k % 4] + 2 * k * _cos_k[(k - 1) % 4] - _sin_k[k % 4]) / _fact[k] for k in range(1, 13)]
-)
-
-
-def _poly(c: NDArray, z: NDArray) -> NDArray:
-    """Σ c[k] zᵏ by Horner's rule; at one z in Python's floats (the same IEEE double products and sums, rounded
-    alike, so the same number to the last bit) at a fortieth of the cost of a NumPy operation on a 1-element array."""
-    if z.size == 1:
-        zf, terms = float(z.flat[0]), c.tolist()
-        value = terms[-1]
-        for ck in terms[-2::-1]:
-            value = value * zf + ck
-        out = np.empty_like(z)
-        out[...] = value
-        return out
-    out = np.full_like(z, c[-1])
-    for ck in c[-2::-1]:
-        out = out * z + ck
-    return out
-
-
-class _Coefficients:
-    """The coefficients of J_r, J_r⁻¹ and Exp/Log at φ and their derivatives, each computed when first
-    read [DER 11.3-11.7]: A = sin φ/φ, B = (1 - cos φ)/φ, C = (φ - sin φ)/φ²,
-    D = (1 - cos φ)/φ², α = (φ/2) cot(φ/2), γ = (1 - α)/φ; a trailing 1 is d/dφ."""
-
-    def __init__(self, phi: ArrayLike):
-        self.phi = np.asarray(phi, dtype=float)
-        self.small = np.abs(self.phi) < SERIES_BELOW
-        self.all_small = bool(self.small.all())
-        self.any_small = self.all_small or bool(self.small.any())
-        if self.all_small:
-            self.z = self.phi**2
-        else:
-            with np.errstate(over="ignore"):  # |φ| > 1e154: φ² is inf, and the closed forms' O(1/φ²) terms 0
-                self.z = self.phi**2
-        self._known: dict[str, NDArray] = {}
-
-    def _pick(self, series: Callable[[], NDArray], closed: Callable[[], NDArray]) -> NDArray:
-        """The series below SERIES_BELOW, the closed form above (each a thunk, evaluated only if needed)."""
-        if self.all_small:
-            return series()
-        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # the closed forms at φ = 0 are not used
-            if not self.any_small:
-                return closed()
-            return np.where(self.small, series(), closed())
-
-    def __getitem__(self, name: str) -> NDArray:
-        if name not in self._known:
-            self._known[name] = getattr(self, "_" + name)()
-        return self._known[name]
-
-    def _A(self) -> NDArray:
-        return self._pick(lambda: _poly(_A, self.z), lambda: np.sin(self.phi) / self.phi)
-
-    def _D(self) -> NDArray:  # 1 - cos φ = 2 sin²(φ/2): no cancellation
-        return self._pick(lambda: _poly(_D, self.z), lambda: 2 * np.sin(self.phi / 2) ** 2 / self.z)
-
-    def _B(self) -> NDArray:
-        return self.phi * self["D"]
-
-    def _C(self) -> NDArray:
-        return self._pick(lambda: self.phi * _poly(_C, self.z), lambda: (self.phi - np.sin(self.phi)) / self.z)
-
-    def _A1(self) -> NDArray:
-        return self._pick(lambda: self.phi * _poly(_A1, self.z), lambda: (np.cos(self.phi) - self["A"]) / self.phi)
-
-    def _D1(self) -> NDArray:
-        return self._pick(lambda: self.phi * _poly(_D1, self.z), lambda: (self["A"] - 2 * self["D"]) / self.phi)
-
-    def _B1(self) -> NDArray:  # B' = A - D: above the switch 2 sin h g(h)/φ², h = φ/2, g(h) = 2h cos h - sin h
-        return self._pick(lambda: self["D"] + self.phi * self["D1"], self._B1_closed)
-
-    def _B1_closed(self) -> NDArray:
-        h = np.abs(self.phi) / 2  # B' is even in φ
-        g = 2 * h * np.cos(h) - np.sin(h)
-        d = (h - _ROOT_HI) - _ROOT_LO  # h - h*: the first difference is exact near h*
-        near = np.abs(d) < _ROOT_NEAR
-        if np.any(near):
-            g = np.where(near, d * _poly(_ROOT_G, d), g)  # Taylor series of g about its root h*
-        return 2 * np.sin(h) * g / self.z
-
-    def _C1(
-        self,
-    ) -> NDArray:  # C' = D - 2C/φ = 4 cos h (sin h - h cos h)/φ³, h = φ/2: no cancellation at φ = π, where C' = 0
-        h = self.phi / 2
-        return self._pick(
-            lambda: _poly(_C1, self.z), lambda: 4 * np.cos(h) * (np.sin(h) - h * np.cos(h)) / (self.z * self.phi)
-        )
-
-    def _alpha(self) -> NDArray:
-        h = self.phi / 2
-        return self._pick(lambda: 1 - self.z * _poly(_G, self.z), lambda: h * np.cos(h) / np.sin(h))
-
-    def _gamma(self) -> NDArray:
-        return self._pick(lambda: self.phi * _poly(_G, self.z), lambda: (1 - self["alpha"]) / self.phi)
-
-    def _alpha1(self) -> NDArray:  # (sin φ - φ) / (2 (1 - cos φ))
-        return -self["C"] / (2 * self["D"])
-
-    def _gamma1(self) -> NDArray:
-        return self._pick(lambda: _poly(_G1, self.z), lambda: (-self["alpha1"] - self["gamma"]) / self.phi)
-
-
-# the last φ's coefficients, as one (key, _Coefficients) pair replaced whole: the kernels of one factor read the same
-# φ in turn; a thread reads the pair once, so it never returns the coefficients another thread's φ put there
-_LAST: list[tuple[tuple, _Coefficients] | None] = [None]
-
-
-def _coefficients(phi: NDArray) -> _Coefficients:
-    """The coefficients at φ, shared with the last call at the same φ (Log, J_r⁻¹ and ∂(J_r⁻¹ v)/∂ξ of one local
-    variable read one φ in turn: each coefficient is computed once, the same numbers)."""
-    phi = np.asarray(phi, dtype=float)
-    key = (phi.shape, phi.tobytes())
-    last = _LAST[0]
-    if last is not None and last[0] == key:
-        return last[1]
-    found = _Coefficients(phi.copy())
-    _LAST[0] = (key, found)
-    return found
 
 
 def _stacked(values: list[NDArray]) -> NDArray:
@@ -195,7 +50,7 @@ def wrap(theta: ArrayLike) -> NDArray:
     """
     theta = np.asarray(theta, dtype=float)
     inside = (theta > -np.pi) & (theta <= np.pi)
-    if inside.all():
+    if np.count_nonzero(inside) == inside.size:
         return theta
     if not np.all(np.isfinite(theta)):
         bad = theta.ravel()[int(np.flatnonzero(~np.isfinite(theta))[0])]
@@ -322,6 +177,58 @@ class SE2Group(LieGroup):
             ],
             r1,
         )
+
+    @overload
+    def log_between(
+        self, a: ArrayLike, b: ArrayLike, v: ArrayLike, jacobians: Literal[False] = False
+    ) -> tuple[NDArray, NDArray]: ...
+    @overload
+    def log_between(
+        self, a: ArrayLike, b: ArrayLike, v: ArrayLike, jacobians: Literal[True]
+    ) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray]: ...
+    def log_between(
+        self, a: ArrayLike, b: ArrayLike, v: ArrayLike, jacobians: bool = False
+    ) -> tuple[NDArray, NDArray] | tuple[NDArray, NDArray, NDArray, NDArray, NDArray]:
+        """ξ = Log(a⁻¹ b), u = J_r(ξ)⁻¹ v and (``jacobians``) ∂ξ/∂δa, ∂ξ/∂δb = J_r(ξ)⁻¹, ∂u/∂ξ in one pass over the
+        coefficients of φ [DER 11.1-11.6]; ∂ξ/∂δa = -J_r(ξ)⁻¹ Ad(Exp(-ξ)) = -J_r(-ξ)⁻¹ (J_r(ξ)⁻¹ Ad(Exp(-ξ)) is
+        J_l(ξ)⁻¹ = J_r(-ξ)⁻¹ [SOLA]): (11.5) at -ξ, α even and γ odd in φ, so no rotation of ξ is needed."""
+        a, b, v = self._elements("a", a), self._elements("b", b), self._twists("v", v)
+        c, s = _rot(a[..., 2])
+        dx, dy = b[..., 0] - a[..., 0], b[..., 1] - a[..., 1]
+        x, y = c * dx + s * dy, -s * dx + c * dy  # t of a⁻¹ b (``_between``)
+        phi = wrap(b[..., 2] - a[..., 2])
+        k = _coefficients(phi)
+        al, g, h = k["alpha"], k["gamma"], phi / 2
+        r1, r2 = al * x + h * y, -h * x + al * y  # Log  [DER 11.1-11.2]
+        v1, v2, w = v[..., 0], v[..., 1], v[..., 2]
+        j13, j23 = g * r1 + r2 / 2, g * r2 - r1 / 2  # J_r(ξ)⁻¹'s last column  [DER 11.5]
+        xi, u = _stacked([r1, r2, phi]), _stacked([al * v1 - h * v2 + j13 * w, h * v1 + al * v2 + j23 * w, w])
+        if not jacobians:
+            return xi, u
+        a1, g1 = k["alpha1"], k["gamma1"]
+        out = np.zeros(np.broadcast_shapes(r1.shape, w.shape) + (3, 3, 3))
+        da, db, du = out[..., 0, :, :], out[..., 1, :, :], out[..., 2, :, :]
+        da[..., 0, 0] = da[..., 1, 1] = -al  # -J_r(-ξ)⁻¹
+        db[..., 0, 0] = db[..., 1, 1] = al  # J_r(ξ)⁻¹  [DER 11.5]
+        da[..., 0, 1] = db[..., 0, 1] = -h
+        da[..., 1, 0] = db[..., 1, 0] = h
+        da[..., 0, 2], da[..., 1, 2], da[..., 2, 2] = r2 / 2 - g * r1, -(g * r2 + r1 / 2), -1.0
+        db[..., 0, 2], db[..., 1, 2], db[..., 2, 2] = j13, j23, 1.0
+        du[..., 0, 0] = du[..., 1, 1] = g * w  # ∂(J_r(ξ)⁻¹ v)/∂ξ  [DER 11.6]
+        du[..., 0, 1], du[..., 1, 0] = w / 2, -w / 2
+        du[..., 0, 2] = a1 * v1 - v2 / 2 + g1 * r1 * w
+        du[..., 1, 2] = v1 / 2 + a1 * v2 + g1 * r2 * w
+        return xi, u, da, db, du
+
+    def compose_exp(self, a: ArrayLike, xi: ArrayLike) -> NDArray:
+        """T Exp(ξ) = [t + R(θ) V(φ) ρ; θ + φ wrapped] in one pass: the same products as ``exp`` then ``compose``."""
+        a, xi = self._elements("a", a), self._twists("xi", xi)
+        k = _coefficients(xi[..., 2])
+        A, B = k["A"], k["B"]
+        r1, r2 = xi[..., 0], xi[..., 1]
+        ex, ey = A * r1 - B * r2, B * r1 + A * r2  # Exp's translation  [DER 11.1]
+        c, s = _rot(a[..., 2])
+        return _stacked([a[..., 0] + c * ex - s * ey, a[..., 1] + s * ex + c * ey, wrap(a[..., 2] + wrap(xi[..., 2]))])
 
     # --- a planar robot: an SE(2) pose is [x, y, θ] itself -------------------------------------------
 
