@@ -42,16 +42,7 @@ class LinearizedGroup:
     keys: list[tuple[Key, ...]]  # keys of each factor
     jacobians: tuple[NDArray, ...] | None  # per key slot: (n, m, dₖ), whitened and robust-weighted; may be read-only
     rhs: NDArray  # (n, m): b = -√w W e
-    robust_costs: NDArray | None  # (n,): ρ(‖We‖) of a robust factor; None: ½‖We‖², made from b when asked
-
-    @property
-    def costs(self) -> NDArray:
-        """(n,): ½‖We‖², or ρ(‖We‖) for a robust factor (an incremental update never asks: not made until asked)."""
-        if self.robust_costs is not None:
-            return self.robust_costs
-        with np.errstate(over="ignore"):  # b = -We: b·b is e·e bit for bit; a cost that overflows is inf
-            s = np.sqrt(np.add.reduce(self.rhs * self.rhs, axis=1))  # ‖e‖ row by row, as np.linalg.norm sums it
-            return 0.5 * s**2
+    costs: NDArray  # (n,): ½‖We‖², or ρ(‖We‖) for a robust factor
 
     @property
     def cost(self) -> float:
@@ -171,28 +162,27 @@ def linearize(factors: Sequence[Factor], values: Values, *, jacobians: bool = Tr
             else:  # made once, finite
                 error, WH = batch.error(*xs), tuple([A[None] for A in fixed])
             e = _whitened(batch, error)
+            s = np.sqrt(np.add.reduce(e * e, axis=1))  # ‖e‖ row by row, as np.linalg.norm(e, axis=1) sums it
             if batch.loss is None:  # √w = 1: A_i = Σ^-½ H_i, b_i = -Σ^-½ e, the products by 1 left out
-                costs = None  # ½‖e‖², from b when asked
+                costs = 0.5 * s**2
                 Js = WH
                 rhs = -e
             else:
-                s = np.sqrt(np.add.reduce(e * e, axis=1))  # ‖e‖ row by row, as np.linalg.norm(e, axis=1) sums it
                 weight, costs = batch.loss.weight_and_rho(s)
                 scale = np.sqrt(weight)
                 Js = None if WH is None else tuple([scale[:, None, None] * A for A in WH])  # A_i = √w Σ^-½ H_i
                 rhs = -scale[:, None] * e  # b_i = -√w Σ^-½ e(θ̄): ‖A_i δθ - b_i‖² is the term  [YIB Eq. 9-10, 21]
             # one sum is finite only if every number in it is (or it overflowed: then the search finds nothing);
-            # without a loss, Σ e² is finite only if e and ½‖e‖² are, and blocks made once are finite
+            # without a loss, ½‖e‖² is finite only if e is, and blocks made once are finite
             checked = () if Js is None or (fixed is not None and batch.loss is None) else Js
-            total = _total(e * e) if costs is None else _total(costs) + _total(e)
+            total = (0.0 if batch.loss is None else _total(e)) + _total(costs)
             for J in checked:
                 total += _total(J)
-            group_out = LinearizedGroup(np.asarray(ids), [f.keys for f in group], Js, rhs, costs)
             if not math.isfinite(total):
-                hit = _first_non_finite(e, group_out.costs, Js)
+                hit = _first_non_finite(e, costs, Js)
                 if hit is not None:
                     failures.append((ids[hit[0]], hit[1]))
-            out.append(group_out)
+            out.append(LinearizedGroup(np.asarray(ids), [f.keys for f in group], Js, rhs, costs))
     if failures:
         i, what = min(failures)
         f = factors[i]
