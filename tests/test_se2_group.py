@@ -10,7 +10,7 @@ from requirements import optional_import
 from steam_ref.errors import ShapeError, SteamError
 from steam_ref.lie import SE2, SE2_STATE, world_position_covariance
 from steam_ref.lie.se2 import wrap
-from steam_ref.lie.se2_series import _ROOT_HI, _ROOT_LO, _ROOT_NEAR, SERIES_BELOW, _Coefficients
+from steam_ref.lie.se2_series import _ROOT_HI, _ROOT_LO, _ROOT_NEAR, SERIES_BELOW, Coefficients
 from steam_ref.manifold import VECTOR, Manifold
 
 mp = optional_import("mpmath", "test")
@@ -48,7 +48,7 @@ def _mp_forms(f):
 
 @pytest.mark.parametrize("phi", ANGLES)
 def test_every_coefficient_and_its_derivative_is_exact_on_both_sides_of_the_series_switch(phi):
-    ours = _Coefficients(phi)
+    ours = Coefficients(phi)
     want = _mp_coefficients(phi)
     for name, value in want.items():
         got = float(ours[name])
@@ -77,7 +77,7 @@ def test_b_prime_and_c_prime_keep_their_relative_precision_where_they_vanish(phi
     with mp.workdps(60):
         p = mp.mpf(phi)
         want = {"B1": (p * mp.sin(p) - 1 + mp.cos(p)) / p**2, "C1": (2 * mp.sin(p) - p - p * mp.cos(p)) / p**3}
-        ours = _Coefficients(phi)
+        ours = Coefficients(phi)
         for name, value in want.items():
             assert abs(mp.mpf(float(ours[name])) - value) <= 1e-13 * abs(value), (name, phi)
 

@@ -41,7 +41,7 @@ def _finite_weight(name: str, W: NDArray, noise: NDArray) -> NDArray:
     return W
 
 
-_FLOATS = (float, np.float64)  # a number read as itself (an int or a bool goes the checked way)
+FLOAT_TYPES = (float, np.float64)  # a number memoised by value (an int or a bool goes the checked way each time)
 _F64 = np.dtype(np.float64)
 
 
@@ -75,7 +75,7 @@ def sqrt_information(noise: NDArray | float, m: int, name: str = "noise") -> NDA
     ``name`` is the argument the noise came in as, for the error messages. W of sigmas is memoised by their
     value and read-only (a stream makes every reading of a sensor with the same sigmas, each step).
     """
-    if type(noise) in _FLOATS:  # one sigma met before: W by the bytes of np.full(m, sigma), without making them
+    if type(noise) in FLOAT_TYPES:  # one sigma met before: W by the bytes of np.full(m, sigma), without making them
         W = _SIGMA_WEIGHTS.get(struct.pack("d", noise) * m)
         if W is not None:
             return W
@@ -163,7 +163,7 @@ def measured_vector(value: NDArray | float, m: int, what: str) -> NDArray:
         v = value.copy()
         if math.isfinite(sum(v.tolist())):  # finite, as each number is (if it overflowed, the checks below decide)
             return v
-    elif m == 1 and type(value) in _FLOATS and math.isfinite(value):  # one finite number
+    elif m == 1 and type(value) in FLOAT_TYPES and math.isfinite(value):  # one finite number
         return np.array((value,))
     v = real_array(what, value)
     if v.shape != (m,) and not (m == 1 and v.ndim == 0):

@@ -19,7 +19,7 @@ from ..gp.interpolate import interpolation_terms
 from ..gp.prior import process_noise_sqrt_information, transition
 from ..gp.sde import LinearSDE, as_sde, check_prior, check_sde
 from ..variables import Key, key_list
-from .base import Factor, Memo, apply, identity_stack, measured_vector, sqrt_information
+from .base import FLOAT_TYPES, Factor, Memo, apply, identity_stack, measured_vector, sqrt_information
 
 __all__ = ["GPPriorFactor", "gp_prior_factors", "InterpolatedFactor"]
 
@@ -54,14 +54,16 @@ class GPPriorFactor(Factor):
     @classmethod
     def wnoa(cls, key1: Key, key2: Key, dt: float, qc: NDArray) -> GPPriorFactor:
         """The white-noise-on-acceleration prior over a gap dt (s) > 0; qc: Qc (3, 3).  [YIB Eq. 22, 30-31]"""
-        made = _BY_GAP.get((dt, id(qc))) if type(dt) in _FLOATS else None  # a dt met before with this Qc: checked then
+        made = (
+            _BY_GAP.get((dt, id(qc))) if type(dt) in FLOAT_TYPES else None
+        )  # a dt met before with this Qc: checked then
         if made is None:
             w = process_noise_sqrt_information(dt, qc)  # WᵀW = Qᵢ⁻¹, memoised per (dt, Qc)
             d = w.shape[0] // 2
             v = np.zeros(2 * d)
             v.flags.writeable = False  # shared by every factor of this gap, as W and Φ are
             made = (qc, w, transition(dt, d), v)
-            if type(dt) in _FLOATS and type(qc) is np.ndarray and not qc.flags.writeable:
+            if type(dt) in FLOAT_TYPES and type(qc) is np.ndarray and not qc.flags.writeable:
                 _BY_GAP.keep((dt, id(qc)), made)  # the memo holds Qc: an id in it is still its
         return cls((key1, key2), made[1], phi=made[2], v=made[3])
 
@@ -135,7 +137,6 @@ class GPPriorFactor(Factor):
         return made[2]
 
 
-_FLOATS = (float, np.float64)  # a time step memoised by value (an int or a bool goes the checked way each time)
 _BY_GAP = Memo()  # (Qc, W, Φ, v) of ``wnoa`` by (dt, id of a read-only Qc)
 _WHITENED = Memo()  # (W, Φ, blocks) by the ids of W and Φ: a stream's priors share a few gaps; past the memo's size,
 # new ones go the linearization's usual way

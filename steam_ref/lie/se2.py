@@ -26,7 +26,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..dead_reckoning import wrap_angle
 from ..errors import ShapeError, SteamError
 from .group import LieGroup, matrix_of
-from .se2_series import SERIES_BELOW, _coefficients
+from .se2_series import SERIES_BELOW, coefficients
 
 __all__ = ["SE2", "SE2Group", "wrap", "SERIES_BELOW"]
 
@@ -79,7 +79,7 @@ class SE2Group(LieGroup):
     def exp(self, xi: ArrayLike) -> NDArray:
         """Exp(ξ) as a pose [x, y, θ], θ wrapped exactly at any size: t = V(φ) ρ, V = [[A, -B], [B, A]].  [DER 11.1]"""
         xi = self._twists("xi", xi)
-        k = _coefficients(xi[..., 2])
+        k = coefficients(xi[..., 2])
         A, B = k["A"], k["B"]
         r1, r2 = xi[..., 0], xi[..., 1]
         return _stacked([A * r1 - B * r2, B * r1 + A * r2, wrap(xi[..., 2])])  # [DER 11.1]
@@ -88,7 +88,7 @@ class SE2Group(LieGroup):
         """Log(T) = [V(φ)⁻¹ t; φ], φ = θ wrapped to (-π, π]; V⁻¹ = [[α, φ/2], [-φ/2, α]].  [DER 11.1-11.2]"""
         pose = self._elements("a", a)
         phi = wrap(pose[..., 2])
-        al, b = _coefficients(phi)["alpha"], phi / 2
+        al, b = coefficients(phi)["alpha"], phi / 2
         x, y = pose[..., 0], pose[..., 1]
         return _stacked([al * x + b * y, -b * x + al * y, phi])  # [DER 11.1-11.2]
 
@@ -121,7 +121,7 @@ class SE2Group(LieGroup):
     def right_jacobian(self, xi: ArrayLike) -> NDArray:
         """J_r(ξ): Exp(ξ + dξ) ≈ Exp(ξ) Exp(J_r(ξ) dξ) (GTSAM's ``Pose2.ExpmapDerivative``).  [DER 11.4]"""
         xi = self._twists("xi", xi)
-        k = _coefficients(xi[..., 2])
+        k = coefficients(xi[..., 2])
         A, B, C, D = k["A"], k["B"], k["C"], k["D"]
         r1, r2 = xi[..., 0], xi[..., 1]
         return matrix_of(  # [DER 11.4]
@@ -131,7 +131,7 @@ class SE2Group(LieGroup):
     def right_jacobian_inverse(self, xi: ArrayLike) -> NDArray:
         """J_r(ξ)⁻¹ = [[α, -φ/2, γρ₁ + ρ₂/2], [φ/2, α, γρ₂ - ρ₁/2], [0, 0, 1]] in closed form.  [DER 11.5]"""
         xi = self._twists("xi", xi)
-        g = _coefficients(xi[..., 2])
+        g = coefficients(xi[..., 2])
         al, G, b = g["alpha"], g["gamma"], xi[..., 2] / 2
         r1, r2 = xi[..., 0], xi[..., 1]
         return matrix_of([[al, -b, G * r1 + r2 / 2], [b, al, G * r2 - r1 / 2], [0.0, 0.0, 1.0]], r1)  # [DER 11.5]
@@ -164,7 +164,7 @@ class SE2Group(LieGroup):
     def jr_inverse_times_jacobian(self, xi: ArrayLike, v: ArrayLike) -> NDArray:
         """∂(J_r(ξ)⁻¹ v)/∂ξ, exact, in closed form: (..., 3, 3).  [DER 11.6]"""
         xi, v = self._twists("xi", xi), self._twists("v", v)
-        g = _coefficients(xi[..., 2])
+        g = coefficients(xi[..., 2])
         G, a1, G1 = g["gamma"], g["alpha1"], g["gamma1"]
         r1, r2 = xi[..., 0], xi[..., 1]
         u1, u2, w = v[..., 0], v[..., 1], v[..., 2]
@@ -197,7 +197,7 @@ class SE2Group(LieGroup):
         dx, dy = b[..., 0] - a[..., 0], b[..., 1] - a[..., 1]
         x, y = c * dx + s * dy, -s * dx + c * dy  # t of a⁻¹ b (``_between``)
         phi = wrap(b[..., 2] - a[..., 2])
-        k = _coefficients(phi)
+        k = coefficients(phi)
         al, g, h = k["alpha"], k["gamma"], phi / 2
         r1, r2 = al * x + h * y, -h * x + al * y  # Log  [DER 11.1-11.2]
         v1, v2, w = v[..., 0], v[..., 1], v[..., 2]
@@ -223,7 +223,7 @@ class SE2Group(LieGroup):
     def compose_exp(self, a: ArrayLike, xi: ArrayLike) -> NDArray:
         """T Exp(ξ) = [t + R(θ) V(φ) ρ; θ + φ wrapped] in one pass: the same products as ``exp`` then ``compose``."""
         a, xi = self._elements("a", a), self._twists("xi", xi)
-        k = _coefficients(xi[..., 2])
+        k = coefficients(xi[..., 2])
         A, B = k["A"], k["B"]
         r1, r2 = xi[..., 0], xi[..., 1]
         ex, ey = A * r1 - B * r2, B * r1 + A * r2  # Exp's translation  [DER 11.1]
@@ -265,7 +265,7 @@ class SE2Group(LieGroup):
     def jr_times_jacobian(self, xi: ArrayLike, v: ArrayLike) -> NDArray:
         """∂(J_r(ξ) v)/∂ξ, exact: (..., 3, 3).  [DER 11.7]"""
         xi, v = self._twists("xi", xi), self._twists("v", v)
-        k = _coefficients(xi[..., 2])
+        k = coefficients(xi[..., 2])
         r1, r2 = xi[..., 0], xi[..., 1]
         v1, v2, v3 = v[..., 0], v[..., 1], v[..., 2]
         A1, B1, C, C1, D, D1 = k["A1"], k["B1"], k["C"], k["C1"], k["D"], k["D1"]

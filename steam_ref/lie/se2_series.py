@@ -3,7 +3,7 @@
 A = sin φ/φ, B = (1 - cos φ)/φ, C = (φ - sin φ)/φ², D = (1 - cos φ)/φ², α = (φ/2) cot(φ/2), γ = (1 - α)/φ and their
 derivatives (a trailing 1 is d/dφ): each summed from its Taylor series for abs(φ) < 1 (``SERIES_BELOW``) and taken in
 closed form above, so none loses precision to cancellation near φ = 0; the SE(2) group (``lie.se2``) reads them
-through :func:`_coefficients`, which shares one angle's coefficients among the kernels that read it in turn.
+through :func:`coefficients`, which shares one angle's coefficients among the kernels that read it in turn.
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ import numpy as np
 import scipy.special
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["SERIES_BELOW"]
+__all__ = ["Coefficients", "SERIES_BELOW", "coefficients"]
 
 SERIES_BELOW = 1.0  # |φ| below this: the coefficients from their series (each converges fast there)
 _TERMS = 14  # terms of each series: the last is below 1e-22 of the first at |φ| = 1
@@ -77,7 +77,7 @@ def _series_sums(z: NDArray) -> NDArray:
     return ((z[..., None] ** _POWERS)[..., None, :] * _TERMS_BY_SERIES).sum(axis=-1)
 
 
-class _Coefficients:
+class Coefficients:
     """The coefficients of J_r, J_r⁻¹ and Exp/Log at φ and their derivatives, each computed when first
     read [DER 11.3-11.7]: A = sin φ/φ, B = (1 - cos φ)/φ, C = (φ - sin φ)/φ²,
     D = (1 - cos φ)/φ², α = (φ/2) cot(φ/2), γ = (1 - α)/φ; a trailing 1 is d/dφ."""
@@ -167,12 +167,12 @@ class _Coefficients:
         return self._pick(lambda: self._sum("G1"), lambda: (-self["alpha1"] - self["gamma"]) / self.phi)
 
 
-# the last φ's coefficients, as one (key, _Coefficients) pair replaced whole: the kernels of one factor read the same
+# the last φ's coefficients, as one (key, Coefficients) pair replaced whole: the kernels of one factor read the same
 # φ in turn; a thread reads the pair once, so it never returns the coefficients another thread's φ put there
-_LAST: list[tuple[tuple, _Coefficients] | None] = [None]
+_LAST: list[tuple[tuple, Coefficients] | None] = [None]
 
 
-def _coefficients(phi: NDArray) -> _Coefficients:
+def coefficients(phi: NDArray) -> Coefficients:
     """The coefficients at φ, shared with the last call at the same φ (Log, J_r⁻¹ and ∂(J_r⁻¹ v)/∂ξ of one local
     variable read one φ in turn: each coefficient is computed once, the same numbers)."""
     phi = np.asarray(phi, dtype=float)
@@ -180,6 +180,6 @@ def _coefficients(phi: NDArray) -> _Coefficients:
     last = _LAST[0]
     if last is not None and last[0] == key:
         return last[1]
-    found = _Coefficients(phi.copy())
+    found = Coefficients(phi.copy())
     _LAST[0] = (key, found)
     return found
