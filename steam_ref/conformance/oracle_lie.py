@@ -276,24 +276,15 @@ def factor_covariance(spec: Mapping) -> NDArray:
 
 
 def factor_jacobians(spec: Mapping, xs: Sequence[NDArray]) -> tuple[NDArray, list[NDArray]]:
-    """The error of a factor spec at ``xs`` and its Jacobian H_k = ∂e/∂δₖ in each key's right tangent."""
-    xs = [np.asarray(x, float) for x in xs]
-
-    def error(*a: NDArray) -> NDArray:
-        return factor_error(spec, a)
-
-    return factor_error(spec, xs), [numeric_jacobian(error, xs, k) for k in range(len(xs))]
+    """The error of a factor spec at ``xs`` and its Jacobian H_k = ∂e/∂δₖ in each key's right tangent
+    (:func:`.oracle.error_and_jacobians` with this module's :func:`factor_error` and :func:`numeric_jacobian`)."""
+    return o.error_and_jacobians(lambda *a: factor_error(spec, a), numeric_jacobian, xs)
 
 
 def linearize_factor(spec: Mapping, xs: Sequence[NDArray]) -> dict:
-    """e, W e, Hₖ, Aₖ = W Hₖ, b = -W e and the cost ½‖W e‖² of a factor spec at ``xs`` (no robust losses here)."""
-    e, H = factor_jacobians(spec, xs)
-    W = o.sqrt_information(factor_covariance(spec))
-    we = W @ e
-    out = {"error": e, "whitened_error": we, **{f"H_{k}": h for k, h in enumerate(H)}}
-    out.update({f"A_{k}": W @ h for k, h in enumerate(H)})
-    out["b"], out["cost"] = -we, 0.5 * float(np.sum(we**2))
-    return out
+    """e, W e, Hₖ, Aₖ = W Hₖ, b = -W e and the cost ½‖W e‖² of a factor spec at ``xs`` (no robust losses here:
+    :func:`.oracle.whitened`)."""
+    return o.whitened(*factor_jacobians(spec, xs), factor_covariance(spec))
 
 
 # The states move by the right retraction; every factor is linearized by differences through it. Both are looked
