@@ -5,7 +5,19 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-__all__ = ["Case", "tol", "EXACT"]
+__all__ = [
+    "Case",
+    "tol",
+    "EXACT",
+    "GROUP",
+    "JR_INVERSE",
+    "EXACT_JACOBIAN",
+    "AT_TAU",
+    "COVARIANCE",
+    "MEAN_AND_JACOBIANS",
+    "PRIOR",
+    "RESIDUAL",
+]
 
 EXACT = "exact"
 
@@ -49,3 +61,13 @@ QC_DIAG = [[0.5, 0.0, 0.0], [0.0, 0.2, 0.0], [0.0, 0.0, 0.1]]
 QC_FULL = [[0.5, 0.2, 0.05], [0.2, 0.4, 0.05], [0.05, 0.05, 0.1]]
 X1 = [1.0, 2.0, 0.3, 0.8, -0.2, 0.1]
 X2 = [1.45, 1.9, 0.38, 0.7, -0.1, 0.12]
+
+# The Lie-group suites (se2, se3): the exact tier (README 'The exact tier') and the WNOA prior's two residuals.
+GROUP = tol(1e-12, 1e-14)  # closed forms (Exp, Log, J_r, errors): steam_ref and the oracle differ by ~1e-15
+JR_INVERSE = tol(1e-11, 1e-13)  # J_r^-1 (the oracle's a dense inverse)
+EXACT_JACOBIAN = tol(1e-10, 1e-12)  # Jacobians: forward differences (~1e-8) fail it; kit v4's se2 had 1e-8
+AT_TAU = tol(1e-11, 1e-13)  # values through the local GP's mean (an expm and a dense solve more)
+COVARIANCE = tol(1e-10, 1e-14)  # covariances through the local GP (kit v5)
+MEAN_AND_JACOBIANS = {"x_tau": AT_TAU, "J_1": EXACT_JACOBIAN, "J_2": EXACT_JACOBIAN}  # an interpolation case's
+PRIOR = {"error": GROUP, "H_0": EXACT_JACOBIAN, "H_1": EXACT_JACOBIAN, "cost": tol(1e-11)}  # a WNOA prior case's
+RESIDUAL = {"local-variable": "[xi - dt w1; J_r(xi)^-1 w2 - w1]", "simplified": "[xi - dt w1; w2 - w1]"}  # e of each

@@ -11,8 +11,8 @@ round twists, written out to the last digit (orthonormal to rounding).
 
 from __future__ import annotations
 
-from .base import Case, tol
-from .gp import exact_spd
+from .base import AT_TAU, COVARIANCE, EXACT_JACOBIAN, GROUP, JR_INVERSE, MEAN_AND_JACOBIANS, PRIOR, RESIDUAL, Case, tol
+from .gp import small_spd
 from .rigid_poses import (
     ACC1,
     ACC2,
@@ -58,9 +58,6 @@ GTSAM_NOTE = {
     "tier (rtol 1e-10): 0.11 off at |xi| = 1",
 }
 
-GROUP = tol(1e-12, 1e-14)  # Exp, Log, J_r: what the oracle and steam_ref differ by is ~1e-15
-EXACT_JACOBIAN = tol(1e-10, 1e-12)  # the exact tier: forward differences (error ~1e-8) fail it
-COVARIANCE = tol(1e-10, 1e-14)
 SOLVE = tol(1e-9, 1e-11)
 
 
@@ -118,7 +115,7 @@ def _group_cases() -> list[Case]:
                     [-1.0, 2.0, 2.0],
                 ],
             },
-            {"Jr": GROUP, "Jr_inv": tol(1e-11, 1e-13)},
+            {"Jr": GROUP, "Jr_inv": JR_INVERSE},
             ORACLE_GROUP,
         ),
         _case(
@@ -165,7 +162,7 @@ def _group_cases() -> list[Case]:
                     [-1.0, 0.4, 0.2, 0.006, 0.0, 0.008],
                 ],
             },
-            {"Jr": GROUP, "Jr_inv": tol(1e-11, 1e-13)},
+            {"Jr": GROUP, "Jr_inv": JR_INVERSE},
             ORACLE_GROUP,
         ),
         _case(
@@ -180,7 +177,7 @@ def _group_cases() -> list[Case]:
                     [1.5, 1.0, -2.0, -1.86, 2.48, 0.0],
                 ],
             },
-            {"Jr": GROUP, "Jr_inv": tol(1e-11, 1e-13)},
+            {"Jr": GROUP, "Jr_inv": JR_INVERSE},
             ORACLE_GROUP,
         ),
         _case(
@@ -192,10 +189,6 @@ def _group_cases() -> list[Case]:
             ORACLE_GROUP + "; H_a, H_b by Romberg differences through the right retraction",
         ),
     ]
-
-
-RESIDUAL = {"local-variable": "[xi - dt w1; J_r(xi)^-1 w2 - w1]", "simplified": "[xi - dt w1; w2 - w1]"}
-PRIOR = {"error": GROUP, "H_0": EXACT_JACOBIAN, "H_1": EXACT_JACOBIAN, "cost": tol(1e-11)}
 
 
 def _prior(name: str, what: str, x1: list, x2: list, dt: float, model: str, notes: dict | None = None) -> Case:
@@ -305,7 +298,7 @@ def _interp(model: str, tau: float, cov: bool, kind: str = "interpolation") -> d
     x2 = POSE_B_FAST + W_FAST + (ACC2 if acc else [])
     out = {"kind": kind, "model": model, "x1": x1, "x2": x2, "t1": 2.5, "t2": 3.5, "tau": tau, "qc": QC}
     if cov:
-        out["joint_cov"] = [[v / 16 for v in row] for row in exact_spd(24, 5, 7)]
+        out["joint_cov"] = small_spd(24, 5, 7)
     return out
 
 
@@ -319,29 +312,25 @@ def _gp_cases() -> list[Case]:
             f"{mean} (residual 'local-variable': g2 = [xi21; J_r(xi21)^-1 w2]) at tau = 2.85, {times}, and J_k = "
             "dx(tau)/d(delta_k) in right tangents",
             _interp("local-variable", 2.85, False),
-            {"x_tau": tol(1e-11, 1e-13), "J_1": EXACT_JACOBIAN, "J_2": EXACT_JACOBIAN},
+            MEAN_AND_JACOBIANS,
             ORACLE_GP,
         ),
         _case(
             "interpolation_simplified",
             f"{mean}, residual 'simplified' (g2 = [xi21; w2], w(tau) = xi_dot(tau)), {times}, and its Jacobians",
             _interp("simplified", 2.85, False),
-            {"x_tau": tol(1e-11, 1e-13), "J_1": EXACT_JACOBIAN, "J_2": EXACT_JACOBIAN},
+            MEAN_AND_JACOBIANS,
             ORACLE_GP,
         ),
-        _case(
-            "interpolation_covariance_local_variable",
-            f"{mean} at tau = 3.1 and {cov}, residual 'local-variable'",
-            _interp("local-variable", 3.1, True),
-            {"x_tau": tol(1e-11, 1e-13), "cov_tau": COVARIANCE},
-            ORACLE_GP,
-        ),
-        _case(
-            "interpolation_covariance_simplified",
-            f"{mean} at tau = 3.1 and {cov}, residual 'simplified'",
-            _interp("simplified", 3.1, True),
-            {"x_tau": tol(1e-11, 1e-13), "cov_tau": COVARIANCE},
-            ORACLE_GP,
+        *(
+            _case(
+                f"interpolation_covariance_{model.replace('-', '_')}",
+                f"{mean} at tau = 3.1 and {cov}, residual '{model}'",
+                _interp(model, 3.1, True),
+                {"x_tau": AT_TAU, "cov_tau": COVARIANCE},
+                ORACLE_GP,
+            )
+            for model in RESIDUAL  # 'local-variable', then 'simplified'
         ),
         _case(
             "wnoj_interpolation",
@@ -361,9 +350,9 @@ def _gp_cases() -> list[Case]:
                 "t1": 4.0,
                 "t": 4.6,
                 "qc": QC,
-                "cov1": [[v / 16 for v in row] for row in exact_spd(12, 3, 5)],
+                "cov1": small_spd(12, 3, 5),
             },
-            {"x_t": tol(1e-11, 1e-13), "J_1": EXACT_JACOBIAN, "cov_t": COVARIANCE},
+            {"x_t": AT_TAU, "J_1": EXACT_JACOBIAN, "cov_t": COVARIANCE},
             ORACLE_GP,
         ),
         _case(
@@ -376,9 +365,9 @@ def _gp_cases() -> list[Case]:
                 "t1": 4.0,
                 "t": 4.6,
                 "qc": QC,
-                "cov1": [[v / 16 for v in row] for row in exact_spd(18, 3, 5)],
+                "cov1": small_spd(18, 3, 5),
             },
-            {"x_t": tol(1e-11, 1e-13), "J_1": EXACT_JACOBIAN, "cov_t": COVARIANCE},
+            {"x_t": AT_TAU, "J_1": EXACT_JACOBIAN, "cov_t": COVARIANCE},
             ORACLE_GP,
         ),
         _case(
@@ -388,9 +377,9 @@ def _gp_cases() -> list[Case]:
             "(a port that raises eigenvalues to a floor, or clips a covariance it computed as a difference, fails)",
             {
                 **_interp("local-variable", 2.51, False),
-                "joint_cov": [[v / 16e6 for v in row] for row in exact_spd(24, 5, 7)],
+                "joint_cov": small_spd(24, 5, 7, 16e6),
             },
-            {"x_tau": tol(1e-11, 1e-13), "cov_tau": COVARIANCE},
+            {"x_tau": AT_TAU, "cov_tau": COVARIANCE},
             ORACLE_GP,
         ),
     ]
