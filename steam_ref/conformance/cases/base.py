@@ -17,6 +17,9 @@ __all__ = [
     "MEAN_AND_JACOBIANS",
     "PRIOR",
     "RESIDUAL",
+    "GROUP_KINDS",
+    "group_case",
+    "stream_checks",
 ]
 
 EXACT = "exact"
@@ -71,3 +74,23 @@ COVARIANCE = tol(1e-10, 1e-14)  # covariances through the local GP (kit v5)
 MEAN_AND_JACOBIANS = {"x_tau": AT_TAU, "J_1": EXACT_JACOBIAN, "J_2": EXACT_JACOBIAN}  # an interpolation case's
 PRIOR = {"error": GROUP, "H_0": EXACT_JACOBIAN, "H_1": EXACT_JACOBIAN, "cost": tol(1e-11)}  # a WNOA prior case's
 RESIDUAL = {"local-variable": "[xi - dt w1; J_r(xi)^-1 w2 - w1]", "simplified": "[xi - dt w1; w2 - w1]"}  # e of each
+GROUP_KINDS = {  # a case of a group's own operations: the input its rows are, the quantities it checks
+    "exp": ("xi", {"exp": GROUP, "log_of_exp": GROUP}),
+    "log": ("poses", {"log": GROUP, "exp_of_log": GROUP}),
+    "jacobians": ("xi", {"Jr": GROUP, "Jr_inv": JR_INVERSE}),
+    "so3_exp": ("phi", {"exp": GROUP, "log_of_exp": GROUP}),
+    "so3_jacobians": ("phi", {"Jr": GROUP, "Jr_inv": JR_INVERSE}),
+}
+
+
+def group_case(equation: str, source: str, name: str, description: str, kind: str, rows: list) -> Case:
+    """A case of Exp, Log or J_r on a Lie group (either Lie suite): ``rows`` under the input :data:`GROUP_KINDS`
+    names for ``kind``, the quantities it lists at their tolerances."""
+    field_name, checks = GROUP_KINDS[kind]
+    return Case(name, equation, description, {"kind": kind, field_name: rows}, dict(checks), True, source)
+
+
+def stream_checks(updates: int, estimate: dict) -> dict:
+    """The quantities of an iSAM2 stream on Lie-group states: after each update k, relinearized_k (exact), then
+    estimate_k at ``estimate``."""
+    return {q: t for k in range(1, updates + 1) for q, t in ((f"relinearized_{k}", EXACT), (f"estimate_{k}", estimate))}

@@ -11,7 +11,20 @@ round twists, written out to the last digit (orthonormal to rounding).
 
 from __future__ import annotations
 
-from .base import AT_TAU, COVARIANCE, EXACT_JACOBIAN, GROUP, JR_INVERSE, MEAN_AND_JACOBIANS, PRIOR, RESIDUAL, Case, tol
+from functools import partial
+
+from .base import (
+    AT_TAU,
+    COVARIANCE,
+    EXACT_JACOBIAN,
+    GROUP,
+    MEAN_AND_JACOBIANS,
+    PRIOR,
+    RESIDUAL,
+    Case,
+    group_case,
+    tol,
+)
 from .gp import small_spd
 from .rigid_poses import (
     ACC1,
@@ -65,120 +78,95 @@ def _case(name: str, description: str, inputs: dict, tolerance: dict, source: st
     return Case(name, EQUATION, description, inputs, tolerance, True, source, notes or {})
 
 
+_group = partial(group_case, EQUATION, ORACLE_GROUP)
+
+
 def _group_cases() -> list[Case]:
     so3 = "Exp(phi) as R's 9 entries row-major and Log(Exp(phi)) (angle in [0, pi])"
     se3 = "Exp(xi) as [t; R row-major] and Log(Exp(xi)), xi = [rho; phi]"
     return [
-        _case(
+        _group(
             "so3_exp_near_zero",
             f"SO(3): {so3}, at angles 0, 1e-12, 1e-8, 1e-4 and 0.3",
-            {
-                "kind": "so3_exp",
-                "phi": [
-                    [0.0, 0.0, 0.0],
-                    [6e-13, -8e-13, 0.0],
-                    [3e-9, 4e-9, -1.2e-9],
-                    [-6e-5, 2e-5, 7.745966692414834e-5],
-                    [0.1, -0.2, 0.2],
-                ],
-            },
-            {"exp": GROUP, "log_of_exp": GROUP},
-            ORACLE_GROUP,
+            "so3_exp",
+            [
+                [0.0, 0.0, 0.0],
+                [6e-13, -8e-13, 0.0],
+                [3e-9, 4e-9, -1.2e-9],
+                [-6e-5, 2e-5, 7.745966692414834e-5],
+                [0.1, -0.2, 0.2],
+            ],
         ),
-        _case(
+        _group(
             "so3_exp_near_half_turn",
             f"SO(3): {so3}, at angles 3.0 and pi - 1e-3, pi - 1e-6, pi - 1e-9 (where a Log read off R - R^T loses "
             "every digit: GTSAM's SO(3) Logmap lost up to 2e-4 here)",
-            {
-                "kind": "so3_exp",
-                "phi": [
-                    [1.8, -2.4, 0.0],
-                    [0.0, 0.0, 3.1405926535897932],
-                    [1.8849549921538757, 0.0, -2.5132733228718345],
-                    [-0.9424777957769379, 0.9424777957769379, 2.8448331416343318],
-                ],
-            },
-            {"exp": GROUP, "log_of_exp": GROUP},
-            ORACLE_GROUP,
+            "so3_exp",
+            [
+                [1.8, -2.4, 0.0],
+                [0.0, 0.0, 3.1405926535897932],
+                [1.8849549921538757, 0.0, -2.5132733228718345],
+                [-0.9424777957769379, 0.9424777957769379, 2.8448331416343318],
+            ],
         ),
-        _case(
+        _group(
             "so3_right_jacobian",
             "SO(3): J_r(phi) (Exp(phi + d) = Exp(phi) Exp(J_r d)) and J_r(phi)^-1 at angles 0, 1e-9, 1e-4, 0.5, 2, 3",
-            {
-                "kind": "so3_jacobians",
-                "phi": [
-                    [0.0, 0.0, 0.0],
-                    [0.0, 6e-10, 8e-10],
-                    [1e-4, 0.0, 0.0],
-                    [0.3, -0.4, 0.0],
-                    [1.2, 0.0, -1.6],
-                    [-1.0, 2.0, 2.0],
-                ],
-            },
-            {"Jr": GROUP, "Jr_inv": JR_INVERSE},
-            ORACLE_GROUP,
+            "so3_jacobians",
+            [
+                [0.0, 0.0, 0.0],
+                [0.0, 6e-10, 8e-10],
+                [1e-4, 0.0, 0.0],
+                [0.3, -0.4, 0.0],
+                [1.2, 0.0, -1.6],
+                [-1.0, 2.0, 2.0],
+            ],
         ),
-        _case(
+        _group(
             "exp_near_zero",
             f"SE(3): {se3}, at angles 0 (a pure translation), 1e-12, 1e-7, 1e-3 and 1",
-            {
-                "kind": "exp",
-                "xi": [
-                    [0.5, -1.0, 2.0, 0.0, 0.0, 0.0],
-                    [1.0, 0.3, -0.2, 6e-13, 0.0, -8e-13],
-                    [-0.4, 2.0, 0.7, 6e-8, -8e-8, 0.0],
-                    [3.0, -1.0, 0.5, 0.0, 0.0, 0.001],
-                    [0.2, 0.4, -0.6, 0.6, 0.0, 0.8],
-                ],
-            },
-            {"exp": GROUP, "log_of_exp": GROUP},
-            ORACLE_GROUP,
+            "exp",
+            [
+                [0.5, -1.0, 2.0, 0.0, 0.0, 0.0],
+                [1.0, 0.3, -0.2, 6e-13, 0.0, -8e-13],
+                [-0.4, 2.0, 0.7, 6e-8, -8e-8, 0.0],
+                [3.0, -1.0, 0.5, 0.0, 0.0, 0.001],
+                [0.2, 0.4, -0.6, 0.6, 0.0, 0.8],
+            ],
         ),
-        _case(
+        _group(
             "exp_near_half_turn",
             f"SE(3): {se3}, at angles 2.5, 3.0 and pi - 1e-6, pi - 1e-9",
-            {
-                "kind": "exp",
-                "xi": [
-                    [1.0, 0.5, -0.5, 1.5, 0.0, 2.0],
-                    [-0.3, 1.2, 0.8, 0.0, -3.0, 0.0],
-                    [0.7, -0.2, 1.5, 1.8849549921538757, 0.0, -2.5132733228718345],
-                    [2.0, 1.0, -1.0, -0.9424777957769379, 0.9424777957769379, 2.8448331416343318],
-                ],
-            },
-            {"exp": GROUP, "log_of_exp": GROUP},
-            ORACLE_GROUP,
+            "exp",
+            [
+                [1.0, 0.5, -0.5, 1.5, 0.0, 2.0],
+                [-0.3, 1.2, 0.8, 0.0, -3.0, 0.0],
+                [0.7, -0.2, 1.5, 1.8849549921538757, 0.0, -2.5132733228718345],
+                [2.0, 1.0, -1.0, -0.9424777957769379, 0.9424777957769379, 2.8448331416343318],
+            ],
         ),
-        _case(
+        _group(
             "right_jacobian_small",
             "SE(3): J_r(xi) = [[J_r(phi), Q_r], [0, J_r(phi)]] and its inverse at angles 0, 1e-9, 1e-5, 1e-2 (where "
             "closed forms of the Q block cancel)",
-            {
-                "kind": "jacobians",
-                "xi": [
-                    [1.0, -2.0, 0.5, 0.0, 0.0, 0.0],
-                    [0.5, 0.3, -0.2, 6e-10, 8e-10, 0.0],
-                    [2.0, 1.0, 1.0, 0.0, -1e-5, 0.0],
-                    [-1.0, 0.4, 0.2, 0.006, 0.0, 0.008],
-                ],
-            },
-            {"Jr": GROUP, "Jr_inv": JR_INVERSE},
-            ORACLE_GROUP,
+            "jacobians",
+            [
+                [1.0, -2.0, 0.5, 0.0, 0.0, 0.0],
+                [0.5, 0.3, -0.2, 6e-10, 8e-10, 0.0],
+                [2.0, 1.0, 1.0, 0.0, -1e-5, 0.0],
+                [-1.0, 0.4, 0.2, 0.006, 0.0, 0.008],
+            ],
         ),
-        _case(
+        _group(
             "right_jacobian_large",
             "SE(3): J_r(xi) and J_r(xi)^-1 at angles 0.8, 1.9, 2.7 and 3.1",
-            {
-                "kind": "jacobians",
-                "xi": [
-                    [1.0, 0.5, -0.5, 0.0, 0.48, 0.64],
-                    [-0.5, 2.0, 0.3, 1.14, -1.52, 0.0],
-                    [0.2, -0.7, 1.1, 1.62, 0.0, 2.16],
-                    [1.5, 1.0, -2.0, -1.86, 2.48, 0.0],
-                ],
-            },
-            {"Jr": GROUP, "Jr_inv": JR_INVERSE},
-            ORACLE_GROUP,
+            "jacobians",
+            [
+                [1.0, 0.5, -0.5, 0.0, 0.48, 0.64],
+                [-0.5, 2.0, 0.3, 1.14, -1.52, 0.0],
+                [0.2, -0.7, 1.1, 1.62, 0.0, 2.16],
+                [1.5, 1.0, -2.0, -1.86, 2.48, 0.0],
+            ],
         ),
         _case(
             "between",
