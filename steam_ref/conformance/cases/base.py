@@ -14,8 +14,7 @@ __all__ = [
     "EXACT_JACOBIAN",
     "AT_TAU",
     "COVARIANCE",
-    "MEAN_AND_JACOBIANS",
-    "PRIOR",
+    "LIE_CHECKS",
     "RESIDUAL",
     "GROUP_KINDS",
     "group_case",
@@ -71,8 +70,15 @@ JR_INVERSE = tol(1e-11, 1e-13)  # J_r^-1 (the oracle's a dense inverse)
 EXACT_JACOBIAN = tol(1e-10, 1e-12)  # Jacobians: forward differences (~1e-8) fail it; kit v4's se2 had 1e-8
 AT_TAU = tol(1e-11, 1e-13)  # values through the local GP's mean (an expm and a dense solve more)
 COVARIANCE = tol(1e-10, 1e-14)  # covariances through the local GP (kit v5)
-MEAN_AND_JACOBIANS = {"x_tau": AT_TAU, "J_1": EXACT_JACOBIAN, "J_2": EXACT_JACOBIAN}  # an interpolation case's
-PRIOR = {"error": GROUP, "H_0": EXACT_JACOBIAN, "H_1": EXACT_JACOBIAN, "cost": tol(1e-11)}  # a WNOA prior case's
+LIE_CHECKS = {  # what a case of each kind checks in both Lie suites, at the exact tier
+    "prior": {"error": GROUP, "H_0": EXACT_JACOBIAN, "H_1": EXACT_JACOBIAN, "cost": tol(1e-11)},
+    "residual": {"error": GROUP, "cost": tol(1e-11)},  # a prior's error and cost alone
+    "state_prior": {"error": GROUP, "H_0": EXACT_JACOBIAN},
+    "between": {"between": GROUP, "H_a": EXACT_JACOBIAN, "H_b": EXACT_JACOBIAN, "Ad_a": GROUP},
+    "interpolation": {"x_tau": AT_TAU, "J_1": EXACT_JACOBIAN, "J_2": EXACT_JACOBIAN},
+    "interpolation_covariance": {"x_tau": AT_TAU, "cov_tau": COVARIANCE},
+    "extrapolation": {"x_t": AT_TAU, "J_1": EXACT_JACOBIAN, "cov_t": COVARIANCE},
+}
 RESIDUAL = {"local-variable": "[xi - dt w1; J_r(xi)^-1 w2 - w1]", "simplified": "[xi - dt w1; w2 - w1]"}  # e of each
 GROUP_KINDS = {  # a case of a group's own operations: the input its rows are, the quantities it checks
     "exp": ("xi", {"exp": GROUP, "log_of_exp": GROUP}),

@@ -12,19 +12,7 @@ from __future__ import annotations
 
 from functools import partial
 
-from .base import (
-    AT_TAU,
-    COVARIANCE,
-    EXACT_JACOBIAN,
-    GROUP,
-    MEAN_AND_JACOBIANS,
-    PRIOR,
-    RESIDUAL,
-    Case,
-    group_case,
-    stream_checks,
-    tol,
-)
+from .base import AT_TAU, LIE_CHECKS, RESIDUAL, Case, group_case, stream_checks, tol
 from .gp import small_spd
 
 __all__ = ["lie_group_cases", "QC"]
@@ -74,7 +62,7 @@ def _prior(name: str, what: str, x1: list, x2: list, dt: float, model: str) -> C
         f"the SE(2) WNOA prior, model '{model}': e = {e}, xi = Log(T1^-1 T2); H_k = de/d(delta_k) in the right "
         f"tangent of state k; cost = 1/2 e^T Q(dt)^-1 e with Qc on the body twist. {what}",
         {"kind": "prior", "model": model, "x1": x1, "x2": x2, "dt": dt, "qc": QC},
-        PRIOR,
+        LIE_CHECKS["prior"],
         ORACLE_DIFF,
     )
 
@@ -167,7 +155,7 @@ def _group_cases() -> list[Case]:
             "T_a^-1 T_b (theta_a = 2.8, theta_b = -2.9: the relative heading is 0.583, not -5.7), its Jacobians "
             "H_a, H_b in right tangents (d Log((T_a^-1 T_b)^-1 (T_a Exp(d))^-1 T_b)/dd) and Ad(T_a)",
             {"kind": "between", "a": [1.0, -2.0, 2.8], "b": [3.0, 0.5, -2.9]},
-            {"between": GROUP, "H_a": EXACT_JACOBIAN, "H_b": EXACT_JACOBIAN, "Ad_a": GROUP},
+            LIE_CHECKS["between"],
             ORACLE_GROUP + "; H_a, H_b by central differences through the right retraction",
         ),
     ]
@@ -213,7 +201,7 @@ def _prior_cases() -> list[Case]:
                 "dt": 0.7,
                 "qc": [[0.5, 0.0, 0.0], [0.0, 0.3, 0.0], [0.0, 0.0, 0.4]],
             },
-            {"error": GROUP, "cost": tol(1e-11)},
+            LIE_CHECKS["residual"],
             ORACLE_DIFF,
         ),
         _prior(
@@ -232,7 +220,7 @@ def _prior_cases() -> list[Case]:
             "a prior on an SE(2) state in the tangent at its mean: e = x - mean = [Log(M^-1 T); w - w_m] (mean "
             "heading 3.0, state heading -3.0: e's angle 0.283); H_0 = de/d(delta) in the right tangent",
             {"kind": "state_prior", "mean": [1.0, 2.0, 3.0, 0.5, 0.0, 0.1], "x": [1.2, 1.9, -3.0, 0.6, 0.1, 0.0]},
-            {"error": GROUP, "H_0": EXACT_JACOBIAN},
+            LIE_CHECKS["state_prior"],
             ORACLE_DIFF,
         ),
     ]
@@ -254,14 +242,14 @@ def _gp_cases() -> list[Case]:
             f"{mean} (model 'local-variable': g2 = [xi21; J_r(xi21)^-1 w2]), and J_k = dx(tau)/d(delta_k) in right "
             "tangents (x(tau)'s about x(tau))",
             _interp("local-variable", 0.35, False),
-            MEAN_AND_JACOBIANS,
+            LIE_CHECKS["interpolation"],
             ORACLE_GP,
         ),
         _case(
             "interpolation_simplified",
             f"{mean}, model 'simplified' (g2 = [xi21; w2], w(tau) = xi_dot(tau)), and its Jacobians",
             _interp("simplified", 0.35, False),
-            MEAN_AND_JACOBIANS,
+            LIE_CHECKS["interpolation"],
             ORACLE_GP,
         ),
         _case(
@@ -277,7 +265,7 @@ def _gp_cases() -> list[Case]:
             f"{mean} (model 'local-variable') with t1 = 7.25, t2 = 8.25, tau = 7.6: Lambda and Psi are of tau - t1 and "
             "t2 - tau (a port that uses absolute times fails here, not where t1 = 0); J_k as above",
             _interp("local-variable", 7.6, False, 7.25),
-            MEAN_AND_JACOBIANS,
+            LIE_CHECKS["interpolation"],
             ORACLE_GP,
         ),
         _case(  # kit v5
@@ -285,7 +273,7 @@ def _gp_cases() -> list[Case]:
             f"{mean} (model 'simplified') at tau = 7.85 between t1 = 7.25 and t2 = 8.25, and its covariance in the right "
             "tangent at x(tau): J P J^T + N Q_tau N^T as in interpolation_covariance_local_variable",
             _interp("simplified", 7.85, True, 7.25),
-            {"x_tau": AT_TAU, "cov_tau": COVARIANCE},
+            LIE_CHECKS["interpolation_covariance"],
             ORACLE_GP,
         ),
     ]

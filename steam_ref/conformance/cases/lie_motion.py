@@ -6,7 +6,7 @@ the state is not). Every case is independent: :mod:`steam_ref.conformance.oracle
 
 from __future__ import annotations
 
-from .base import AT_TAU, COVARIANCE, EXACT_JACOBIAN, GROUP, Case
+from .base import GROUP, LIE_CHECKS, Case
 from .gp import small_spd
 from .lie_groups import QC
 
@@ -74,7 +74,7 @@ def motion_cases() -> list[Case]:
                 f"tangent at x(t), J_1 P1 J_1^T + N Q(t - t1) N^T, P1 = cov1, N = dx(t)/dg(t) for the local variable "
                 f"g = [xi; xi_dot] with {twist[model]}",
                 _ahead(model),
-                {"x_t": AT_TAU, "J_1": EXACT_JACOBIAN, "cov_t": COVARIANCE},
+                LIE_CHECKS["extrapolation"],
                 True,
                 ORACLE_AHEAD,
             )

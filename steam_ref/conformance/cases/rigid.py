@@ -13,18 +13,7 @@ from __future__ import annotations
 
 from functools import partial
 
-from .base import (
-    AT_TAU,
-    COVARIANCE,
-    EXACT_JACOBIAN,
-    GROUP,
-    MEAN_AND_JACOBIANS,
-    PRIOR,
-    RESIDUAL,
-    Case,
-    group_case,
-    tol,
-)
+from .base import LIE_CHECKS, RESIDUAL, Case, group_case, tol
 from .gp import small_spd
 from .rigid_poses import (
     ACC1,
@@ -70,8 +59,6 @@ GTSAM_NOTE = {
     "Jacobians to 1e-3 to 1e-2, and its Jacobians (a truncated series for d(J_r^-1 w2)/dxi) fail the kit's exact "
     "tier (rtol 1e-10): 0.11 off at |xi| = 1",
 }
-
-SOLVE = tol(1e-9, 1e-11)
 
 
 def _case(name: str, description: str, inputs: dict, tolerance: dict, source: str, notes: dict | None = None) -> Case:
@@ -173,7 +160,7 @@ def _group_cases() -> list[Case]:
             "SE(3): T_a^-1 T_b, its Jacobians H_a = d Log((T_a^-1 T_b)^-1 (T_a Exp(d))^-1 T_b)/dd and H_b (the same "
             "with T_b Exp(d)), and Ad(T_a) = [[R, t^ R], [0, R]]",
             {"kind": "between", "a": POSE_C, "b": POSE_D},
-            {"between": GROUP, "H_a": EXACT_JACOBIAN, "H_b": EXACT_JACOBIAN, "Ad_a": GROUP},
+            LIE_CHECKS["between"],
             ORACLE_GROUP + "; H_a, H_b by Romberg differences through the right retraction",
         ),
     ]
@@ -186,7 +173,7 @@ def _prior(name: str, what: str, x1: list, x2: list, dt: float, model: str, note
         f"in the right tangent of state k (12 columns: pose, then twist); cost = 1/2 e^T Q(dt)^-1 e, Qc (6x6) on the "
         f"body twist. {what}",
         {"kind": "prior", "model": model, "x1": x1, "x2": x2, "dt": dt, "qc": QC},
-        PRIOR,
+        LIE_CHECKS["prior"],
         ORACLE_DIFF,
         notes,
     )
@@ -200,7 +187,7 @@ def _wnoj(name: str, what: str, x1: list, x2: list, dt: float) -> Case:
         "variable; STEAM keeps only its first-order term), Phi, Q of WNOJ with Qc on the body jerk; H_k in the right "
         f"tangent (18 columns). {what}",
         {"kind": "wnoj_prior", "x1": x1, "x2": x2, "dt": dt, "qc": QC},
-        PRIOR,
+        LIE_CHECKS["prior"],
         ORACLE_DIFF,
     )
 
@@ -247,7 +234,7 @@ def _prior_cases() -> list[Case]:
                 "dt": 0.7,
                 "qc": QC_DIAGONAL,
             },
-            {"error": GROUP, "cost": tol(1e-11)},
+            LIE_CHECKS["residual"],
             ORACLE_DIFF,
             GTSAM_NOTE,
         ),
@@ -272,7 +259,7 @@ def _prior_cases() -> list[Case]:
             "a prior on an SE(3) state in the tangent at its mean: e = x - mean = [Log(M^-1 T); w - w_m]; H_0 = "
             "de/d(delta) in the right tangent",
             {"kind": "state_prior", "mean": POSE_M + W1, "x": POSE_S + W2},
-            {"error": GROUP, "H_0": EXACT_JACOBIAN},
+            LIE_CHECKS["state_prior"],
             ORACLE_DIFF,
         ),
         _wnoj("wnoj_prior_slow", "A slow step (xi's angle 0.1).", x1 + ACC1, POSE_B_SLOW + W2 + ACC2, 0.5),
@@ -300,14 +287,14 @@ def _gp_cases() -> list[Case]:
             f"{mean} (residual 'local-variable': g2 = [xi21; J_r(xi21)^-1 w2]) at tau = 2.85, {times}, and J_k = "
             "dx(tau)/d(delta_k) in right tangents",
             _interp("local-variable", 2.85, False),
-            MEAN_AND_JACOBIANS,
+            LIE_CHECKS["interpolation"],
             ORACLE_GP,
         ),
         _case(
             "interpolation_simplified",
             f"{mean}, residual 'simplified' (g2 = [xi21; w2], w(tau) = xi_dot(tau)), {times}, and its Jacobians",
             _interp("simplified", 2.85, False),
-            MEAN_AND_JACOBIANS,
+            LIE_CHECKS["interpolation"],
             ORACLE_GP,
         ),
         *(
@@ -315,7 +302,7 @@ def _gp_cases() -> list[Case]:
                 f"interpolation_covariance_{model.replace('-', '_')}",
                 f"{mean} at tau = 3.1 and {cov}, residual '{model}'",
                 _interp(model, 3.1, True),
-                {"x_tau": AT_TAU, "cov_tau": COVARIANCE},
+                LIE_CHECKS["interpolation_covariance"],
                 ORACLE_GP,
             )
             for model in RESIDUAL  # 'local-variable', then 'simplified'
@@ -340,7 +327,7 @@ def _gp_cases() -> list[Case]:
                 "qc": QC,
                 "cov1": small_spd(12, 3, 5),
             },
-            {"x_t": AT_TAU, "J_1": EXACT_JACOBIAN, "cov_t": COVARIANCE},
+            LIE_CHECKS["extrapolation"],
             ORACLE_GP,
         ),
         _case(
@@ -355,7 +342,7 @@ def _gp_cases() -> list[Case]:
                 "qc": QC,
                 "cov1": small_spd(18, 3, 5),
             },
-            {"x_t": AT_TAU, "J_1": EXACT_JACOBIAN, "cov_t": COVARIANCE},
+            LIE_CHECKS["extrapolation"],
             ORACLE_GP,
         ),
         _case(
@@ -367,7 +354,7 @@ def _gp_cases() -> list[Case]:
                 **_interp("local-variable", 2.51, False),
                 "joint_cov": small_spd(24, 5, 7, 16e6),
             },
-            {"x_tau": AT_TAU, "cov_tau": COVARIANCE},
+            LIE_CHECKS["interpolation_covariance"],
             ORACLE_GP,
         ),
     ]
