@@ -16,7 +16,8 @@ steam_ref rather than restate it.
 - Factor errors written out from [YIB Eq. 22, 29, 32, 33] and the bearing model, and their
   Jacobians by complex-step differentiation (exact to rounding: no cancellation).
 - What both Lie oracles (:mod:`.oracle_lie`, :mod:`.oracle_rigid`) make of a factor once they have its error and
-  a Jacobian through their retraction: :func:`error_and_jacobians`, :func:`whitened` (no robust losses there).
+  a Jacobian through their retraction: :func:`error_and_jacobians`, :func:`whitened` (no robust losses there); and
+  of a covariance through the local GP: :func:`mapped_covariance`.
 
 A factor is given as the kit writes it (a dict, see docs/conformance.md), so this module reads the
 kit's own format.
@@ -47,6 +48,7 @@ __all__ = [
     "linearize_factor",
     "error_and_jacobians",
     "whitened",
+    "mapped_covariance",
     "loss_rho",
     "loss_weight",
 ]
@@ -352,3 +354,10 @@ def whitened(e: NDArray, H: Sequence[NDArray], sigma: NDArray) -> dict:
     out.update({f"A_{k}": W @ h for k, h in enumerate(H)})
     out["b"], out["cost"] = -we, 0.5 * float(np.sum(we**2))
     return out
+
+
+def mapped_covariance(J: NDArray, P: NDArray, N: NDArray, Q: NDArray) -> NDArray:
+    """J P Jᵀ + N Q Nᵀ, symmetrized: the covariance of a Lie oracle's x(τ) or x(t) in its right tangent, from the
+    states' covariance P through J and the local GP's Q through N = ∂x/∂γ."""
+    cov = J @ np.asarray(P, float) @ J.T + N @ Q @ N.T
+    return (cov + cov.T) / 2

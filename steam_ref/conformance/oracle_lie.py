@@ -207,11 +207,8 @@ def extrapolation_quantities(inputs: Mapping) -> dict:
     x = mean(x1)
     J = numeric_jacobian(mean, [x1], 0, local)
     N = derivative(lambda d: local(x, _from_local(x1, gamma_of(x1) + d, model)), 6)
-    cov = (
-        J @ np.asarray(inputs["cov1"], float) @ J.T
-        + N @ o.process_noise(A, F, np.asarray(inputs["qc"], float), s) @ N.T
-    )
-    return {"x_t": x, "J_1": J, "cov_t": (cov + cov.T) / 2}
+    Q = o.process_noise(A, F, np.asarray(inputs["qc"], float), s)
+    return {"x_t": x, "J_1": J, "cov_t": o.mapped_covariance(J, inputs["cov1"], N, Q)}
 
 
 def retraction_quantities(inputs: Mapping) -> dict:
@@ -235,9 +232,7 @@ def interpolation_quantities(inputs: Mapping) -> dict:
         return {"x_tau": x, "J_1": J1, "J_2": J2}
     gamma = lam @ np.concatenate([np.zeros(3), x1[3:]]) + psi @ _local_gamma(x1, x2, model)
     N = derivative(lambda d: local(x, _from_local(x1, gamma + d, model)), 6)  # ∂[δT; dϖ]/∂γ
-    J = np.hstack([J1, J2])
-    cov = J @ np.asarray(inputs["joint_cov"], float) @ J.T + N @ cond @ N.T
-    return {"x_tau": x, "cov_tau": (cov + cov.T) / 2}
+    return {"x_tau": x, "cov_tau": o.mapped_covariance(np.hstack([J1, J2]), inputs["joint_cov"], N, cond)}
 
 
 # --- problems -------------------------------------------------------------------------------------

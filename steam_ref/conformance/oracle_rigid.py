@@ -321,9 +321,7 @@ def interpolation_quantities(inputs: Mapping) -> dict:
     if "joint_cov" in inputs:
         gamma = gamma_of(x1, x2)
         N = derivative(lambda d: local(x, from_local(x1, gamma + d, model)), len(gamma))
-        J = np.hstack([J1, J2])
-        cov = J @ np.asarray(inputs["joint_cov"], float) @ J.T + N @ cond @ N.T
-        out["cov_tau"] = (cov + cov.T) / 2
+        out["cov_tau"] = o.mapped_covariance(np.hstack([J1, J2]), inputs["joint_cov"], N, cond)
     return out
 
 
@@ -341,8 +339,7 @@ def extrapolation_quantities(inputs: Mapping) -> dict:
     J = numeric_jacobian(mean, [x1], 0, local)
     gamma = Phi @ start_gamma(x1)
     N = derivative(lambda d: local(x, from_local(x1, gamma + d, "local-variable")), len(gamma))
-    cov = J @ np.asarray(inputs["cov1"], float) @ J.T + N @ o.process_noise(A, F, qc, s) @ N.T
-    return {"x_t": x, "J_1": J, "cov_t": (cov + cov.T) / 2}
+    return {"x_t": x, "J_1": J, "cov_t": o.mapped_covariance(J, inputs["cov1"], N, o.process_noise(A, F, qc, s))}
 
 
 # --- problems -------------------------------------------------------------------------------------------

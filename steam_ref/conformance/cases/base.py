@@ -1,5 +1,7 @@
 """What every case is made of: :class:`Case`, the tolerance helpers, and the numbers and oracle
-descriptions that several suites share."""
+descriptions that several suites share; for the Lie suites (se2, se3) their exact tier, what a case of each kind
+checks (:data:`LIE_CHECKS`), a group operation's case (:func:`group_case`) and an iSAM2 stream's quantities
+(:func:`stream_checks`)."""
 
 from __future__ import annotations
 
