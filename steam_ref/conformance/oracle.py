@@ -15,6 +15,9 @@ steam_ref rather than restate it.
   (``paper_sign``), and the symmetric whitener (``symmetric``).
 - Factor errors written out from [YIB Eq. 22, 29, 32, 33] and the bearing model, and their
   Jacobians by complex-step differentiation (exact to rounding: no cancellation).
+- What both Lie oracles (:mod:`.oracle_lie`, :mod:`.oracle_rigid`) make of a factor once they have its error and
+  a Jacobian through their retraction: :func:`error_and_jacobians`, :func:`whitened` (no robust losses there); and
+  of a covariance through the local GP: :func:`mapped_covariance`.
 
 A factor is given as the kit writes it (a dict, see docs/conformance.md), so this module reads the
 kit's own format.
@@ -23,7 +26,7 @@ kit's own format.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from functools import lru_cache
 
 import numpy as np
@@ -43,6 +46,9 @@ __all__ = [
     "extrapolation",
     "factor_error",
     "linearize_factor",
+    "error_and_jacobians",
+    "whitened",
+    "mapped_covariance",
     "loss_rho",
     "loss_weight",
 ]
@@ -323,3 +329,35 @@ def linearize_factor(spec: Mapping, xs: Sequence[NDArray], paper_sign: bool = Fa
     if loss is not None:
         out["weight"] = w
     return out
+
+
+# --- factors on a Lie group: what both Lie oracles make of a factor ----------------------------------
+
+
+def error_and_jacobians(
+    error: Callable[..., NDArray], jacobian: Callable[..., NDArray], xs: Sequence[NDArray]
+) -> tuple[NDArray, list[NDArray]]:
+    """``error(*xs)`` and Hₖ = ``jacobian(error, xs, k)`` for each key k: a Lie oracle passes its factor's error and
+    its ``numeric_jacobian`` (differences through its retraction), both looked up when it calls, so a test that
+    swaps either for a wrong port's reaches every factor."""
+    xs = [np.asarray(x, float) for x in xs]
+    return error(*xs), [jacobian(error, xs, k) for k in range(len(xs))]
+
+
+def whitened(e: NDArray, H: Sequence[NDArray], sigma: NDArray) -> dict:
+    """e, W e, Hₖ, Aₖ = W Hₖ, b = -W e and the cost ½‖W e‖² of a factor without a robust loss whose error is e,
+    its Jacobians H and its noise Σ (W of :func:`sqrt_information`); :func:`linearize_factor` is the vector
+    states' record, with robust losses and ρ(‖W e‖) for the cost."""
+    W = sqrt_information(sigma)
+    we = W @ e
+    out = {"error": e, "whitened_error": we, **{f"H_{k}": h for k, h in enumerate(H)}}
+    out.update({f"A_{k}": W @ h for k, h in enumerate(H)})
+    out["b"], out["cost"] = -we, 0.5 * float(np.sum(we**2))
+    return out
+
+
+def mapped_covariance(J: NDArray, P: NDArray, N: NDArray, Q: NDArray) -> NDArray:
+    """J P Jᵀ + N Q Nᵀ, symmetrized: the covariance of a Lie oracle's x(τ) or x(t) in its right tangent, from the
+    states' covariance P through J and the local GP's Q through N = ∂x/∂γ."""
+    cov = J @ np.asarray(P, float) @ J.T + N @ Q @ N.T
+    return (cov + cov.T) / 2

@@ -207,11 +207,8 @@ def extrapolation_quantities(inputs: Mapping) -> dict:
     x = mean(x1)
     J = numeric_jacobian(mean, [x1], 0, local)
     N = derivative(lambda d: local(x, _from_local(x1, gamma_of(x1) + d, model)), 6)
-    cov = (
-        J @ np.asarray(inputs["cov1"], float) @ J.T
-        + N @ o.process_noise(A, F, np.asarray(inputs["qc"], float), s) @ N.T
-    )
-    return {"x_t": x, "J_1": J, "cov_t": (cov + cov.T) / 2}
+    Q = o.process_noise(A, F, np.asarray(inputs["qc"], float), s)
+    return {"x_t": x, "J_1": J, "cov_t": o.mapped_covariance(J, inputs["cov1"], N, Q)}
 
 
 def retraction_quantities(inputs: Mapping) -> dict:
@@ -235,9 +232,7 @@ def interpolation_quantities(inputs: Mapping) -> dict:
         return {"x_tau": x, "J_1": J1, "J_2": J2}
     gamma = lam @ np.concatenate([np.zeros(3), x1[3:]]) + psi @ _local_gamma(x1, x2, model)
     N = derivative(lambda d: local(x, _from_local(x1, gamma + d, model)), 6)  # ∂[δT; dϖ]/∂γ
-    J = np.hstack([J1, J2])
-    cov = J @ np.asarray(inputs["joint_cov"], float) @ J.T + N @ cond @ N.T
-    return {"x_tau": x, "cov_tau": (cov + cov.T) / 2}
+    return {"x_tau": x, "cov_tau": o.mapped_covariance(np.hstack([J1, J2]), inputs["joint_cov"], N, cond)}
 
 
 # --- problems -------------------------------------------------------------------------------------
@@ -276,24 +271,15 @@ def factor_covariance(spec: Mapping) -> NDArray:
 
 
 def factor_jacobians(spec: Mapping, xs: Sequence[NDArray]) -> tuple[NDArray, list[NDArray]]:
-    """The error of a factor spec at ``xs`` and its Jacobian H_k = ∂e/∂δₖ in each key's right tangent."""
-    xs = [np.asarray(x, float) for x in xs]
-
-    def error(*a: NDArray) -> NDArray:
-        return factor_error(spec, a)
-
-    return factor_error(spec, xs), [numeric_jacobian(error, xs, k) for k in range(len(xs))]
+    """The error of a factor spec at ``xs`` and its Jacobian H_k = ∂e/∂δₖ in each key's right tangent
+    (:func:`.oracle.error_and_jacobians` with this module's :func:`factor_error` and :func:`numeric_jacobian`)."""
+    return o.error_and_jacobians(lambda *a: factor_error(spec, a), numeric_jacobian, xs)
 
 
 def linearize_factor(spec: Mapping, xs: Sequence[NDArray]) -> dict:
-    """e, W e, Hₖ, Aₖ = W Hₖ, b = -W e and the cost ½‖W e‖² of a factor spec at ``xs`` (no robust losses here)."""
-    e, H = factor_jacobians(spec, xs)
-    W = o.sqrt_information(factor_covariance(spec))
-    we = W @ e
-    out = {"error": e, "whitened_error": we, **{f"H_{k}": h for k, h in enumerate(H)}}
-    out.update({f"A_{k}": W @ h for k, h in enumerate(H)})
-    out["b"], out["cost"] = -we, 0.5 * float(np.sum(we**2))
-    return out
+    """e, W e, Hₖ, Aₖ = W Hₖ, b = -W e and the cost ½‖W e‖² of a factor spec at ``xs`` (no robust losses here:
+    :func:`.oracle.whitened`)."""
+    return o.whitened(*factor_jacobians(spec, xs), factor_covariance(spec))
 
 
 # The states move by the right retraction; every factor is linearized by differences through it. Both are looked

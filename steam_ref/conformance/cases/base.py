@@ -1,11 +1,27 @@
 """What every case is made of: :class:`Case`, the tolerance helpers, and the numbers and oracle
-descriptions that several suites share."""
+descriptions that several suites share; for the Lie suites (se2, se3) their exact tier, what a case of each kind
+checks (:data:`LIE_CHECKS`), a group operation's case (:func:`group_case`) and an iSAM2 stream's quantities
+(:func:`stream_checks`)."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-__all__ = ["Case", "tol", "EXACT"]
+__all__ = [
+    "Case",
+    "tol",
+    "EXACT",
+    "GROUP",
+    "JR_INVERSE",
+    "EXACT_JACOBIAN",
+    "AT_TAU",
+    "COVARIANCE",
+    "LIE_CHECKS",
+    "RESIDUAL",
+    "GROUP_KINDS",
+    "group_case",
+    "stream_checks",
+]
 
 EXACT = "exact"
 
@@ -49,3 +65,40 @@ QC_DIAG = [[0.5, 0.0, 0.0], [0.0, 0.2, 0.0], [0.0, 0.0, 0.1]]
 QC_FULL = [[0.5, 0.2, 0.05], [0.2, 0.4, 0.05], [0.05, 0.05, 0.1]]
 X1 = [1.0, 2.0, 0.3, 0.8, -0.2, 0.1]
 X2 = [1.45, 1.9, 0.38, 0.7, -0.1, 0.12]
+
+# The Lie-group suites (se2, se3): the exact tier (README 'The exact tier') and the WNOA prior's two residuals.
+GROUP = tol(1e-12, 1e-14)  # closed forms (Exp, Log, J_r, errors): steam_ref and the oracle differ by ~1e-15
+JR_INVERSE = tol(1e-11, 1e-13)  # J_r^-1 (the oracle's a dense inverse)
+EXACT_JACOBIAN = tol(1e-10, 1e-12)  # Jacobians: forward differences (~1e-8) fail it; kit v4's se2 had 1e-8
+AT_TAU = tol(1e-11, 1e-13)  # values through the local GP's mean (an expm and a dense solve more)
+COVARIANCE = tol(1e-10, 1e-14)  # covariances through the local GP (kit v5)
+LIE_CHECKS = {  # what a case of each kind checks in both Lie suites, at the exact tier
+    "prior": {"error": GROUP, "H_0": EXACT_JACOBIAN, "H_1": EXACT_JACOBIAN, "cost": tol(1e-11)},
+    "residual": {"error": GROUP, "cost": tol(1e-11)},  # a prior's error and cost alone
+    "state_prior": {"error": GROUP, "H_0": EXACT_JACOBIAN},
+    "between": {"between": GROUP, "H_a": EXACT_JACOBIAN, "H_b": EXACT_JACOBIAN, "Ad_a": GROUP},
+    "interpolation": {"x_tau": AT_TAU, "J_1": EXACT_JACOBIAN, "J_2": EXACT_JACOBIAN},
+    "interpolation_covariance": {"x_tau": AT_TAU, "cov_tau": COVARIANCE},
+    "extrapolation": {"x_t": AT_TAU, "J_1": EXACT_JACOBIAN, "cov_t": COVARIANCE},
+}
+RESIDUAL = {"local-variable": "[xi - dt w1; J_r(xi)^-1 w2 - w1]", "simplified": "[xi - dt w1; w2 - w1]"}  # e of each
+GROUP_KINDS = {  # a case of a group's own operations: the input its rows are, the quantities it checks
+    "exp": ("xi", {"exp": GROUP, "log_of_exp": GROUP}),
+    "log": ("poses", {"log": GROUP, "exp_of_log": GROUP}),
+    "jacobians": ("xi", {"Jr": GROUP, "Jr_inv": JR_INVERSE}),
+    "so3_exp": ("phi", {"exp": GROUP, "log_of_exp": GROUP}),
+    "so3_jacobians": ("phi", {"Jr": GROUP, "Jr_inv": JR_INVERSE}),
+}
+
+
+def group_case(equation: str, source: str, name: str, description: str, kind: str, rows: list) -> Case:
+    """A case of Exp, Log or J_r on a Lie group (either Lie suite): ``rows`` under the input :data:`GROUP_KINDS`
+    names for ``kind``, the quantities it lists at their tolerances."""
+    field_name, checks = GROUP_KINDS[kind]
+    return Case(name, equation, description, {"kind": kind, field_name: rows}, dict(checks), True, source)
+
+
+def stream_checks(updates: int, estimate: dict) -> dict:
+    """The quantities of an iSAM2 stream on Lie-group states: after each update k, relinearized_k (exact), then
+    estimate_k at ``estimate``."""
+    return {q: t for k in range(1, updates + 1) for q, t in ((f"relinearized_{k}", EXACT), (f"estimate_{k}", estimate))}

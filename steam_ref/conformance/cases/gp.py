@@ -15,6 +15,11 @@ def exact_spd(n: int, a: int, b: int) -> list[list[float]]:
     ]
 
 
+def small_spd(n: int, a: int, b: int, divisor: float = 16) -> list[list[float]]:
+    """:func:`exact_spd` divided entry by entry by ``divisor`` (16: still exact), the covariances of the Lie suites."""
+    return [[v / divisor for v in row] for row in exact_spd(n, a, b)]
+
+
 # --- gp -------------------------------------------------------------------------------------------
 
 

@@ -12,6 +12,7 @@ PARTIAL = {"relinearize_threshold": 0.05, "relinearize_skip": 1, "wildfire_thres
 PARTIAL_SKIP2 = {"relinearize_threshold": 0.05, "relinearize_skip": 2, "wildfire_threshold": 0.0}
 EVERY = {"relinearize_threshold": 0.0, "relinearize_skip": 1, "wildfire_threshold": 0.0}
 NEVER = {"relinearize_threshold": "inf", "relinearize_skip": 1, "wildfire_threshold": 0.0}
+ORACLE_REPLAY = "oracle: per variable linearization points, dense linearization and solve per update"
 ORDER_RULE = (
     "Depends on the elimination order of the removed part (the tree-edit ordering rule of the conventions, "
     "'tree_edits'); nnz_k counts R as GTSAM's ISAM2::treeNnz does"
@@ -108,7 +109,7 @@ def _partial_cases() -> list[Case]:  # kit v2
             {"stream": stream, "isam2": PARTIAL},
             {**moved, **est},
             True,
-            "oracle: per variable linearization points, dense linearization and solve per update",
+            ORACLE_REPLAY,
         ),
         Case(
             "partial_relinearization_skip2_estimates",
@@ -117,7 +118,7 @@ def _partial_cases() -> list[Case]:  # kit v2
             {"stream": stream, "isam2": PARTIAL_SKIP2},
             {**moved, **est},
             True,
-            "oracle: per variable linearization points, dense linearization and solve per update",
+            ORACLE_REPLAY,
         ),
         Case(
             "partial_relinearization_tree_edits",

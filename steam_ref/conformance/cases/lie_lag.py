@@ -11,7 +11,7 @@ from __future__ import annotations
 from .base import Case
 from .fixed_lag import EQUATION as LAG_EQUATION
 from .fixed_lag import EVERY, tolerances
-from .lie_readings import QC
+from .lie_groups import QC
 
 __all__ = ["lag_cases"]
 

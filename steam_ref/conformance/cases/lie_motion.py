@@ -6,9 +6,9 @@ the state is not). Every case is independent: :mod:`steam_ref.conformance.oracle
 
 from __future__ import annotations
 
-from .base import Case, tol
-from .gp import exact_spd
-from .lie_readings import DIFF, QC
+from .base import GROUP, LIE_CHECKS, Case
+from .gp import small_spd
+from .lie_groups import QC
 
 __all__ = ["motion_cases"]
 
@@ -22,13 +22,12 @@ ORACLE_AHEAD = (
     "differences; Q(t - t1) by quadrature"
 )
 EQUATION = "[YIB Eq. 17, 22] on SE(2) states through local variables; README 'SE(2)'"
-GROUP = tol(1e-12, 1e-14)
 
 X1 = [1.0, 2.0, 0.3, 1.2, 0.1, 0.9]
 
 
 def _ahead(model: str) -> dict:
-    cov1 = [[v / 16 for v in row] for row in exact_spd(6, 3, 2)]
+    cov1 = small_spd(6, 3, 2)
     return {"kind": "extrapolation", "model": model, "x1": X1, "t1": 3.5, "t": 4.1, "qc": QC, "cov1": cov1}
 
 
@@ -75,7 +74,7 @@ def motion_cases() -> list[Case]:
                 f"tangent at x(t), J_1 P1 J_1^T + N Q(t - t1) N^T, P1 = cov1, N = dx(t)/dg(t) for the local variable "
                 f"g = [xi; xi_dot] with {twist[model]}",
                 _ahead(model),
-                {"x_t": tol(1e-11, 1e-13), "J_1": DIFF, "cov_t": tol(1e-10, 1e-14)},
+                LIE_CHECKS["extrapolation"],
                 True,
                 ORACLE_AHEAD,
             )

@@ -8,9 +8,10 @@ differences through the right retraction, the local GP from the dense WNOA kerne
 
 from __future__ import annotations
 
-from .base import Case, tol
+from .base import AT_TAU, EXACT_JACOBIAN, GROUP, Case, tol
+from .lie_groups import QC
 
-__all__ = ["reading_cases", "READING_VALUE", "DIFF"]
+__all__ = ["reading_cases"]
 
 ORACLE_READING = (
     "oracle: the error written out from the pose [x, y, theta] (as the factors suite's vector state) or the body "
@@ -22,11 +23,6 @@ ORACLE_AT_TAU = (
     "variable [xi; xi_dot]"
 )
 EQUATION = "[YIB Eq. 29, 33] on SE(2) states; README 'SE(2)'"
-QC = [[0.5, 0.1, 0.02], [0.1, 0.3, 0.01], [0.02, 0.01, 0.4]]
-
-READING_VALUE = tol(1e-12, 1e-14)  # error, whitened error, b
-DIFF = tol(1e-10, 1e-12)  # Jacobians: the exact tier
-AT_TAU = tol(1e-11, 1e-13)  # values through the local GP's mean (an expm and a dense solve more)
 
 STATE = [1.0, 2.0, 0.3, 0.8, -0.1, 0.4]  # x0: heading 0.3, moving forward and turning
 MARK = [-1.5, 2.6]  # l0: behind the robot (its bearing 2.6 rad from the heading)
@@ -36,14 +32,14 @@ X2 = [-0.15, 2.2, -3.0, 1.1, -0.1, 1.0]
 
 def _quantities(keys: int, value: dict) -> dict:
     out = {"error": value, "whitened_error": value}
-    out.update({f"H_{k}": DIFF for k in range(keys)})
-    out.update({f"A_{k}": DIFF for k in range(keys)})
+    out.update({f"H_{k}": EXACT_JACOBIAN for k in range(keys)})
+    out.update({f"A_{k}": EXACT_JACOBIAN for k in range(keys)})
     return {**out, "b": value, "cost": tol(1e-11)}
 
 
 def _reading(name: str, description: str, spec: dict, values: dict, tau: bool = False) -> Case:
     inputs = {"kind": "reading", "factor": spec, "values": values}
-    value = AT_TAU if tau else READING_VALUE
+    value = AT_TAU if tau else GROUP  # error, whitened error, b
     source = ORACLE_AT_TAU if tau else ORACLE_READING
     return Case(name, EQUATION, description, inputs, _quantities(len(spec["keys"]), value), True, source)
 

@@ -11,8 +11,10 @@ round twists, written out to the last digit (orthonormal to rounding).
 
 from __future__ import annotations
 
-from .base import Case, tol
-from .gp import exact_spd
+from functools import partial
+
+from .base import LIE_CHECKS, RESIDUAL, Case, group_case, tol
+from .gp import small_spd
 from .rigid_poses import (
     ACC1,
     ACC2,
@@ -58,144 +60,110 @@ GTSAM_NOTE = {
     "tier (rtol 1e-10): 0.11 off at |xi| = 1",
 }
 
-GROUP = tol(1e-12, 1e-14)  # Exp, Log, J_r: what the oracle and steam_ref differ by is ~1e-15
-EXACT_JACOBIAN = tol(1e-10, 1e-12)  # the exact tier: forward differences (error ~1e-8) fail it
-COVARIANCE = tol(1e-10, 1e-14)
-SOLVE = tol(1e-9, 1e-11)
-
 
 def _case(name: str, description: str, inputs: dict, tolerance: dict, source: str, notes: dict | None = None) -> Case:
     return Case(name, EQUATION, description, inputs, tolerance, True, source, notes or {})
+
+
+_group = partial(group_case, EQUATION, ORACLE_GROUP)
 
 
 def _group_cases() -> list[Case]:
     so3 = "Exp(phi) as R's 9 entries row-major and Log(Exp(phi)) (angle in [0, pi])"
     se3 = "Exp(xi) as [t; R row-major] and Log(Exp(xi)), xi = [rho; phi]"
     return [
-        _case(
+        _group(
             "so3_exp_near_zero",
             f"SO(3): {so3}, at angles 0, 1e-12, 1e-8, 1e-4 and 0.3",
-            {
-                "kind": "so3_exp",
-                "phi": [
-                    [0.0, 0.0, 0.0],
-                    [6e-13, -8e-13, 0.0],
-                    [3e-9, 4e-9, -1.2e-9],
-                    [-6e-5, 2e-5, 7.745966692414834e-5],
-                    [0.1, -0.2, 0.2],
-                ],
-            },
-            {"exp": GROUP, "log_of_exp": GROUP},
-            ORACLE_GROUP,
+            "so3_exp",
+            [
+                [0.0, 0.0, 0.0],
+                [6e-13, -8e-13, 0.0],
+                [3e-9, 4e-9, -1.2e-9],
+                [-6e-5, 2e-5, 7.745966692414834e-5],
+                [0.1, -0.2, 0.2],
+            ],
         ),
-        _case(
+        _group(
             "so3_exp_near_half_turn",
             f"SO(3): {so3}, at angles 3.0 and pi - 1e-3, pi - 1e-6, pi - 1e-9 (where a Log read off R - R^T loses "
             "every digit: GTSAM's SO(3) Logmap lost up to 2e-4 here)",
-            {
-                "kind": "so3_exp",
-                "phi": [
-                    [1.8, -2.4, 0.0],
-                    [0.0, 0.0, 3.1405926535897932],
-                    [1.8849549921538757, 0.0, -2.5132733228718345],
-                    [-0.9424777957769379, 0.9424777957769379, 2.8448331416343318],
-                ],
-            },
-            {"exp": GROUP, "log_of_exp": GROUP},
-            ORACLE_GROUP,
+            "so3_exp",
+            [
+                [1.8, -2.4, 0.0],
+                [0.0, 0.0, 3.1405926535897932],
+                [1.8849549921538757, 0.0, -2.5132733228718345],
+                [-0.9424777957769379, 0.9424777957769379, 2.8448331416343318],
+            ],
         ),
-        _case(
+        _group(
             "so3_right_jacobian",
             "SO(3): J_r(phi) (Exp(phi + d) = Exp(phi) Exp(J_r d)) and J_r(phi)^-1 at angles 0, 1e-9, 1e-4, 0.5, 2, 3",
-            {
-                "kind": "so3_jacobians",
-                "phi": [
-                    [0.0, 0.0, 0.0],
-                    [0.0, 6e-10, 8e-10],
-                    [1e-4, 0.0, 0.0],
-                    [0.3, -0.4, 0.0],
-                    [1.2, 0.0, -1.6],
-                    [-1.0, 2.0, 2.0],
-                ],
-            },
-            {"Jr": GROUP, "Jr_inv": tol(1e-11, 1e-13)},
-            ORACLE_GROUP,
+            "so3_jacobians",
+            [
+                [0.0, 0.0, 0.0],
+                [0.0, 6e-10, 8e-10],
+                [1e-4, 0.0, 0.0],
+                [0.3, -0.4, 0.0],
+                [1.2, 0.0, -1.6],
+                [-1.0, 2.0, 2.0],
+            ],
         ),
-        _case(
+        _group(
             "exp_near_zero",
             f"SE(3): {se3}, at angles 0 (a pure translation), 1e-12, 1e-7, 1e-3 and 1",
-            {
-                "kind": "exp",
-                "xi": [
-                    [0.5, -1.0, 2.0, 0.0, 0.0, 0.0],
-                    [1.0, 0.3, -0.2, 6e-13, 0.0, -8e-13],
-                    [-0.4, 2.0, 0.7, 6e-8, -8e-8, 0.0],
-                    [3.0, -1.0, 0.5, 0.0, 0.0, 0.001],
-                    [0.2, 0.4, -0.6, 0.6, 0.0, 0.8],
-                ],
-            },
-            {"exp": GROUP, "log_of_exp": GROUP},
-            ORACLE_GROUP,
+            "exp",
+            [
+                [0.5, -1.0, 2.0, 0.0, 0.0, 0.0],
+                [1.0, 0.3, -0.2, 6e-13, 0.0, -8e-13],
+                [-0.4, 2.0, 0.7, 6e-8, -8e-8, 0.0],
+                [3.0, -1.0, 0.5, 0.0, 0.0, 0.001],
+                [0.2, 0.4, -0.6, 0.6, 0.0, 0.8],
+            ],
         ),
-        _case(
+        _group(
             "exp_near_half_turn",
             f"SE(3): {se3}, at angles 2.5, 3.0 and pi - 1e-6, pi - 1e-9",
-            {
-                "kind": "exp",
-                "xi": [
-                    [1.0, 0.5, -0.5, 1.5, 0.0, 2.0],
-                    [-0.3, 1.2, 0.8, 0.0, -3.0, 0.0],
-                    [0.7, -0.2, 1.5, 1.8849549921538757, 0.0, -2.5132733228718345],
-                    [2.0, 1.0, -1.0, -0.9424777957769379, 0.9424777957769379, 2.8448331416343318],
-                ],
-            },
-            {"exp": GROUP, "log_of_exp": GROUP},
-            ORACLE_GROUP,
+            "exp",
+            [
+                [1.0, 0.5, -0.5, 1.5, 0.0, 2.0],
+                [-0.3, 1.2, 0.8, 0.0, -3.0, 0.0],
+                [0.7, -0.2, 1.5, 1.8849549921538757, 0.0, -2.5132733228718345],
+                [2.0, 1.0, -1.0, -0.9424777957769379, 0.9424777957769379, 2.8448331416343318],
+            ],
         ),
-        _case(
+        _group(
             "right_jacobian_small",
             "SE(3): J_r(xi) = [[J_r(phi), Q_r], [0, J_r(phi)]] and its inverse at angles 0, 1e-9, 1e-5, 1e-2 (where "
             "closed forms of the Q block cancel)",
-            {
-                "kind": "jacobians",
-                "xi": [
-                    [1.0, -2.0, 0.5, 0.0, 0.0, 0.0],
-                    [0.5, 0.3, -0.2, 6e-10, 8e-10, 0.0],
-                    [2.0, 1.0, 1.0, 0.0, -1e-5, 0.0],
-                    [-1.0, 0.4, 0.2, 0.006, 0.0, 0.008],
-                ],
-            },
-            {"Jr": GROUP, "Jr_inv": tol(1e-11, 1e-13)},
-            ORACLE_GROUP,
+            "jacobians",
+            [
+                [1.0, -2.0, 0.5, 0.0, 0.0, 0.0],
+                [0.5, 0.3, -0.2, 6e-10, 8e-10, 0.0],
+                [2.0, 1.0, 1.0, 0.0, -1e-5, 0.0],
+                [-1.0, 0.4, 0.2, 0.006, 0.0, 0.008],
+            ],
         ),
-        _case(
+        _group(
             "right_jacobian_large",
             "SE(3): J_r(xi) and J_r(xi)^-1 at angles 0.8, 1.9, 2.7 and 3.1",
-            {
-                "kind": "jacobians",
-                "xi": [
-                    [1.0, 0.5, -0.5, 0.0, 0.48, 0.64],
-                    [-0.5, 2.0, 0.3, 1.14, -1.52, 0.0],
-                    [0.2, -0.7, 1.1, 1.62, 0.0, 2.16],
-                    [1.5, 1.0, -2.0, -1.86, 2.48, 0.0],
-                ],
-            },
-            {"Jr": GROUP, "Jr_inv": tol(1e-11, 1e-13)},
-            ORACLE_GROUP,
+            "jacobians",
+            [
+                [1.0, 0.5, -0.5, 0.0, 0.48, 0.64],
+                [-0.5, 2.0, 0.3, 1.14, -1.52, 0.0],
+                [0.2, -0.7, 1.1, 1.62, 0.0, 2.16],
+                [1.5, 1.0, -2.0, -1.86, 2.48, 0.0],
+            ],
         ),
         _case(
             "between",
             "SE(3): T_a^-1 T_b, its Jacobians H_a = d Log((T_a^-1 T_b)^-1 (T_a Exp(d))^-1 T_b)/dd and H_b (the same "
             "with T_b Exp(d)), and Ad(T_a) = [[R, t^ R], [0, R]]",
             {"kind": "between", "a": POSE_C, "b": POSE_D},
-            {"between": GROUP, "H_a": EXACT_JACOBIAN, "H_b": EXACT_JACOBIAN, "Ad_a": GROUP},
+            LIE_CHECKS["between"],
             ORACLE_GROUP + "; H_a, H_b by Romberg differences through the right retraction",
         ),
     ]
-
-
-RESIDUAL = {"local-variable": "[xi - dt w1; J_r(xi)^-1 w2 - w1]", "simplified": "[xi - dt w1; w2 - w1]"}
-PRIOR = {"error": GROUP, "H_0": EXACT_JACOBIAN, "H_1": EXACT_JACOBIAN, "cost": tol(1e-11)}
 
 
 def _prior(name: str, what: str, x1: list, x2: list, dt: float, model: str, notes: dict | None = None) -> Case:
@@ -205,7 +173,7 @@ def _prior(name: str, what: str, x1: list, x2: list, dt: float, model: str, note
         f"in the right tangent of state k (12 columns: pose, then twist); cost = 1/2 e^T Q(dt)^-1 e, Qc (6x6) on the "
         f"body twist. {what}",
         {"kind": "prior", "model": model, "x1": x1, "x2": x2, "dt": dt, "qc": QC},
-        PRIOR,
+        LIE_CHECKS["prior"],
         ORACLE_DIFF,
         notes,
     )
@@ -219,7 +187,7 @@ def _wnoj(name: str, what: str, x1: list, x2: list, dt: float) -> Case:
         "variable; STEAM keeps only its first-order term), Phi, Q of WNOJ with Qc on the body jerk; H_k in the right "
         f"tangent (18 columns). {what}",
         {"kind": "wnoj_prior", "x1": x1, "x2": x2, "dt": dt, "qc": QC},
-        PRIOR,
+        LIE_CHECKS["prior"],
         ORACLE_DIFF,
     )
 
@@ -266,7 +234,7 @@ def _prior_cases() -> list[Case]:
                 "dt": 0.7,
                 "qc": QC_DIAGONAL,
             },
-            {"error": GROUP, "cost": tol(1e-11)},
+            LIE_CHECKS["residual"],
             ORACLE_DIFF,
             GTSAM_NOTE,
         ),
@@ -291,7 +259,7 @@ def _prior_cases() -> list[Case]:
             "a prior on an SE(3) state in the tangent at its mean: e = x - mean = [Log(M^-1 T); w - w_m]; H_0 = "
             "de/d(delta) in the right tangent",
             {"kind": "state_prior", "mean": POSE_M + W1, "x": POSE_S + W2},
-            {"error": GROUP, "H_0": EXACT_JACOBIAN},
+            LIE_CHECKS["state_prior"],
             ORACLE_DIFF,
         ),
         _wnoj("wnoj_prior_slow", "A slow step (xi's angle 0.1).", x1 + ACC1, POSE_B_SLOW + W2 + ACC2, 0.5),
@@ -305,7 +273,7 @@ def _interp(model: str, tau: float, cov: bool, kind: str = "interpolation") -> d
     x2 = POSE_B_FAST + W_FAST + (ACC2 if acc else [])
     out = {"kind": kind, "model": model, "x1": x1, "x2": x2, "t1": 2.5, "t2": 3.5, "tau": tau, "qc": QC}
     if cov:
-        out["joint_cov"] = [[v / 16 for v in row] for row in exact_spd(24, 5, 7)]
+        out["joint_cov"] = small_spd(24, 5, 7)
     return out
 
 
@@ -319,29 +287,25 @@ def _gp_cases() -> list[Case]:
             f"{mean} (residual 'local-variable': g2 = [xi21; J_r(xi21)^-1 w2]) at tau = 2.85, {times}, and J_k = "
             "dx(tau)/d(delta_k) in right tangents",
             _interp("local-variable", 2.85, False),
-            {"x_tau": tol(1e-11, 1e-13), "J_1": EXACT_JACOBIAN, "J_2": EXACT_JACOBIAN},
+            LIE_CHECKS["interpolation"],
             ORACLE_GP,
         ),
         _case(
             "interpolation_simplified",
             f"{mean}, residual 'simplified' (g2 = [xi21; w2], w(tau) = xi_dot(tau)), {times}, and its Jacobians",
             _interp("simplified", 2.85, False),
-            {"x_tau": tol(1e-11, 1e-13), "J_1": EXACT_JACOBIAN, "J_2": EXACT_JACOBIAN},
+            LIE_CHECKS["interpolation"],
             ORACLE_GP,
         ),
-        _case(
-            "interpolation_covariance_local_variable",
-            f"{mean} at tau = 3.1 and {cov}, residual 'local-variable'",
-            _interp("local-variable", 3.1, True),
-            {"x_tau": tol(1e-11, 1e-13), "cov_tau": COVARIANCE},
-            ORACLE_GP,
-        ),
-        _case(
-            "interpolation_covariance_simplified",
-            f"{mean} at tau = 3.1 and {cov}, residual 'simplified'",
-            _interp("simplified", 3.1, True),
-            {"x_tau": tol(1e-11, 1e-13), "cov_tau": COVARIANCE},
-            ORACLE_GP,
+        *(
+            _case(
+                f"interpolation_covariance_{model.replace('-', '_')}",
+                f"{mean} at tau = 3.1 and {cov}, residual '{model}'",
+                _interp(model, 3.1, True),
+                LIE_CHECKS["interpolation_covariance"],
+                ORACLE_GP,
+            )
+            for model in RESIDUAL  # 'local-variable', then 'simplified'
         ),
         _case(
             "wnoj_interpolation",
@@ -361,9 +325,9 @@ def _gp_cases() -> list[Case]:
                 "t1": 4.0,
                 "t": 4.6,
                 "qc": QC,
-                "cov1": [[v / 16 for v in row] for row in exact_spd(12, 3, 5)],
+                "cov1": small_spd(12, 3, 5),
             },
-            {"x_t": tol(1e-11, 1e-13), "J_1": EXACT_JACOBIAN, "cov_t": COVARIANCE},
+            LIE_CHECKS["extrapolation"],
             ORACLE_GP,
         ),
         _case(
@@ -376,9 +340,9 @@ def _gp_cases() -> list[Case]:
                 "t1": 4.0,
                 "t": 4.6,
                 "qc": QC,
-                "cov1": [[v / 16 for v in row] for row in exact_spd(18, 3, 5)],
+                "cov1": small_spd(18, 3, 5),
             },
-            {"x_t": tol(1e-11, 1e-13), "J_1": EXACT_JACOBIAN, "cov_t": COVARIANCE},
+            LIE_CHECKS["extrapolation"],
             ORACLE_GP,
         ),
         _case(
@@ -388,9 +352,9 @@ def _gp_cases() -> list[Case]:
             "(a port that raises eigenvalues to a floor, or clips a covariance it computed as a difference, fails)",
             {
                 **_interp("local-variable", 2.51, False),
-                "joint_cov": [[v / 16e6 for v in row] for row in exact_spd(24, 5, 7)],
+                "joint_cov": small_spd(24, 5, 7, 16e6),
             },
-            {"x_tau": tol(1e-11, 1e-13), "cov_tau": COVARIANCE},
+            LIE_CHECKS["interpolation_covariance"],
             ORACLE_GP,
         ),
     ]

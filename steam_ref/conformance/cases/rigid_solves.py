@@ -6,7 +6,7 @@ the estimates back (``spec.SOLVER_FORMS``).
 
 from __future__ import annotations
 
-from .base import Case, tol
+from .base import Case, stream_checks, tol
 from .rigid_poses import POSE_G0, POSE_G1, POSE_G2
 
 __all__ = ["solve_cases"]
@@ -65,10 +65,7 @@ def solve_cases() -> list[Case]:
         {"values": {"x2": START["x2"]}, "factors": [_lv("x1", "x2"), FIX_X2]},
     ]
     isam2 = {"relinearize_threshold": 0.02, "relinearize_skip": 1, "wildfire_threshold": 0.0}
-    quantities: dict = {}
-    for k in range(1, len(updates) + 1):
-        quantities[f"relinearized_{k}"] = "exact"
-        quantities[f"estimate_{k}"] = SOLVE
+    quantities = stream_checks(len(updates), SOLVE)
     return [
         _case(
             "batch_three_states",
