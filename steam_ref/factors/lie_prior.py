@@ -25,7 +25,7 @@ from typing import ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
-from ..arguments import finite, number, real_array, time_step
+from ..arguments import number, time_step
 from ..errors import ShapeError, SteamError
 from ..gp.interpolate import interpolation_terms
 from ..gp.prior import check_qc, process_noise_sqrt_information, transition
@@ -35,8 +35,9 @@ from ..lie.gp import check_model, local_variables
 from ..lie.group import check_group
 from ..manifold import Manifold
 from ..robust import RobustLoss
-from ..variables import Key, key_list
+from ..variables import Key
 from .base import Factor, sqrt_information
+from .gp import consecutive_gaps
 
 __all__ = ["LiePriorFactor", "lie_prior_factors", "LieStatePrior", "LieAccelPriorFactor", "LieAccelInterpolatedFactor"]
 
@@ -114,13 +115,7 @@ def lie_prior_factors(
     keys: list[Key], times: NDArray, qc: NDArray, model: str = "local-variable", *, group: LieGroup
 ) -> list[LiePriorFactor]:
     """The M - 1 prior factors on ``group`` linking consecutive states at strictly increasing times."""
-    keys, times = key_list("keys", keys), real_array("times", times)
-    if times.ndim != 1 or len(times) != len(keys):
-        raise ShapeError(f"need one time per key: {len(keys)} keys, times of shape {times.shape}")
-    gaps = np.diff(finite("times", times))
-    if np.any(~(gaps > 0)):
-        i = int(np.flatnonzero(~(gaps > 0))[0])
-        raise SteamError(f"times must increase strictly: t[{i}]={times[i]} then t[{i + 1}]={times[i + 1]}")
+    keys, gaps = consecutive_gaps(keys, times)
     return [LiePriorFactor.create(keys[i], keys[i + 1], gaps[i], qc, model, group=group) for i in range(len(gaps))]
 
 

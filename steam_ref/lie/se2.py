@@ -18,8 +18,6 @@ none loses precision to cancellation near φ = 0 [DER 11.3-11.7].
 
 from __future__ import annotations
 
-from typing import Literal, overload
-
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -184,21 +182,12 @@ class SE2Group(LieGroup):
         gw, h, d13, d23 = np.broadcast_arrays(*_jr_inverse_derivative(k, r1, r2, v[..., 0], v[..., 1], v[..., 2]))
         return matrix_of([[gw, h, d13], [-h, gw, d23], [0.0, 0.0, 0.0]], gw)  # [DER 11.6]
 
-    @overload
-    def log_between(
-        self, a: ArrayLike, b: ArrayLike, v: ArrayLike, jacobians: Literal[False] = False
-    ) -> tuple[NDArray, NDArray]: ...
-    @overload
-    def log_between(
-        self, a: ArrayLike, b: ArrayLike, v: ArrayLike, jacobians: Literal[True]
-    ) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray]: ...
-    def log_between(
-        self, a: ArrayLike, b: ArrayLike, v: ArrayLike, jacobians: bool = False
+    def _log_between(
+        self, a: NDArray, b: NDArray, v: NDArray, jacobians: bool
     ) -> tuple[NDArray, NDArray] | tuple[NDArray, NDArray, NDArray, NDArray, NDArray]:
         """ξ = Log(a⁻¹ b), u = J_r(ξ)⁻¹ v and (``jacobians``) ∂ξ/∂δa, ∂ξ/∂δb = J_r(ξ)⁻¹, ∂u/∂ξ in one pass over the
         coefficients of φ [DER 11.1-11.6]; ∂ξ/∂δa = -J_r(ξ)⁻¹ Ad(Exp(-ξ)) = -J_r(-ξ)⁻¹ (J_r(ξ)⁻¹ Ad(Exp(-ξ)) is
         J_l(ξ)⁻¹ = J_r(-ξ)⁻¹ [SOLA]): (11.5) at -ξ, α even and γ odd in φ, so no rotation of ξ is needed."""
-        a, b, v = self._elements("a", a), self._elements("b", b), self._twists("v", v)
         c, s = _rot(a[..., 2])
         dx, dy = b[..., 0] - a[..., 0], b[..., 1] - a[..., 1]
         x, y = c * dx + s * dy, -s * dx + c * dy  # t of a⁻¹ b (``_between``)
