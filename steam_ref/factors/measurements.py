@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass, field
-from typing import ClassVar
+from typing import ClassVar, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -259,8 +259,60 @@ def _range(name: str, measured: float) -> NDArray:
     return r
 
 
+def _bearing(name: str, measured: float) -> NDArray:
+    """A bearing reading as a (1,) vector: a finite angle."""
+    return measured_vector(measured, 1, name)
+
+
+_Reading = TypeVar("_Reading", bound="_LandmarkReading")
+
+
 @dataclass(frozen=True, eq=False)
-class RangeFactor(StateMeasurement):
+class _LandmarkReading(StateMeasurement):
+    """Base of a reading of one number about a landmark with its sigma (:class:`RangeFactor`, :class:`BearingFactor`):
+    ``create`` and the Jacobians from the reading's rows of ∂/∂x and ∂/∂ℓ."""
+
+    measured: NDArray  # (1,) the reading
+
+    _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "measured")
+    other_dims: ClassVar[tuple[int, ...]] = (LANDMARK_DIM,)
+    _reads: ClassVar[str]  # the reading's name in an error ("range", "bearing")
+
+    @staticmethod
+    def _reading(name: str, measured: float) -> NDArray:
+        """The reading checked (``_range``, ``_bearing``)."""
+        raise NotImplementedError
+
+    @staticmethod
+    def _rows(x: NDArray, l: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+        """The reading's value and its rows of ∂/∂x, ∂/∂ℓ (``_range_row``, ``_bearing_row``)."""
+        raise NotImplementedError
+
+    @classmethod
+    def create(
+        cls: type[_Reading],
+        state: Key,
+        landmark: Key,
+        measured: float,
+        sigma: float,
+        *,
+        loss: RobustLoss | None = None,
+        state_dim: int = STATE_DIM,
+    ) -> _Reading:
+        """The reading ``measured`` (a range in m, not negative; a bearing in rad) of ``landmark`` from ``state``, with
+        standard deviation ``sigma``."""
+        reading = cls._reading("measured", measured)
+        W = sqrt_information(sigma, 1, "sigma")
+        check_resolved(cls.__name__, (state, landmark), (cls._reads,), reading, W)
+        return cls((state, landmark), W, measured=reading, loss=loss, state_dim=state_dim)
+
+    def jacobians(self, x: NDArray, l: NDArray) -> tuple[NDArray, NDArray]:
+        _, Jx, Jl = self._rows(x, l)  # called here, not through error_and_jacobians: a range's warning's stacklevel
+        return Jx[..., None, :], Jl[..., None, :]
+
+
+@dataclass(frozen=True, eq=False)
+class RangeFactor(_LandmarkReading):
     """A range reading: the distance from the robot's position to a landmark.  [YIB Eq. 33]
 
         ``RangeFactor.create(state, landmark, measured, sigma, *, loss=None, state_dim=6)``
@@ -272,34 +324,12 @@ class RangeFactor(StateMeasurement):
     Error:  e = ‖[x, y] - ℓ‖₂ - r
     """
 
-    measured: NDArray  # (1,) range [m]
-
-    _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "measured")
-    other_dims: ClassVar[tuple[int, ...]] = (LANDMARK_DIM,)
-
-    @classmethod
-    def create(
-        cls,
-        state: Key,
-        landmark: Key,
-        measured: float,
-        sigma: float,
-        *,
-        loss: RobustLoss | None = None,
-        state_dim: int = STATE_DIM,
-    ) -> RangeFactor:
-        """Range reading ``measured`` (m, not negative) from state ``state`` to landmark ``landmark``."""
-        reading = _range("measured", measured)
-        W = sqrt_information(sigma, 1, "sigma")
-        check_resolved("RangeFactor", (state, landmark), ("range",), reading, W)
-        return cls((state, landmark), W, measured=reading, loss=loss, state_dim=state_dim)
+    _reads = "range"
+    _reading = staticmethod(_range)
+    _rows = staticmethod(_range_row)
 
     def error(self, x: NDArray, l: NDArray) -> NDArray:
         return _distance(x, l)[0][..., None] - self.measured  # [YIB Eq. 33]
-
-    def jacobians(self, x: NDArray, l: NDArray) -> tuple[NDArray, NDArray]:
-        _, Jx, Jl = _range_row(x, l)  # called here, not through error_and_jacobians: the warning's stacklevel
-        return Jx[..., None, :], Jl[..., None, :]
 
     def error_and_jacobians(self, x: NDArray, l: NDArray) -> tuple[NDArray, tuple[NDArray, NDArray]]:
         r, Jx, Jl = _range_row(x, l)  # one distance for the error and its Jacobians
@@ -307,7 +337,7 @@ class RangeFactor(StateMeasurement):
 
 
 @dataclass(frozen=True, eq=False)
-class BearingFactor(StateMeasurement):
+class BearingFactor(_LandmarkReading):
     """A bearing reading: the direction of a landmark in the robot frame.
 
         ``BearingFactor.create(state, landmark, measured, sigma, *, loss=None, state_dim=6)``
@@ -319,34 +349,12 @@ class BearingFactor(StateMeasurement):
     Error:  e = wrap(atan2(ℓy - y, ℓx - x) - θ - b),   wrap to [-π, π)
     """
 
-    measured: NDArray  # (1,) bearing [rad]
-
-    _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "measured")
-    other_dims: ClassVar[tuple[int, ...]] = (LANDMARK_DIM,)
-
-    @classmethod
-    def create(
-        cls,
-        state: Key,
-        landmark: Key,
-        measured: float,
-        sigma: float,
-        *,
-        loss: RobustLoss | None = None,
-        state_dim: int = STATE_DIM,
-    ) -> BearingFactor:
-        """Bearing reading ``measured`` (rad) from ``state`` to ``landmark``."""
-        reading = measured_vector(measured, 1, "measured")
-        W = sqrt_information(sigma, 1, "sigma")
-        check_resolved("BearingFactor", (state, landmark), ("bearing",), reading, W)
-        return cls((state, landmark), W, measured=reading, loss=loss, state_dim=state_dim)
+    _reads = "bearing"
+    _reading = staticmethod(_bearing)
+    _rows = staticmethod(_bearing_row)
 
     def error(self, x: NDArray, l: NDArray) -> NDArray:
         return wrap_angle(_bearing_row(x, l)[0] - self.measured[..., 0])[..., None]
-
-    def jacobians(self, x: NDArray, l: NDArray) -> tuple[NDArray, NDArray]:
-        _, Jx, Jl = _bearing_row(x, l)
-        return Jx[..., None, :], Jl[..., None, :]
 
 
 @dataclass(frozen=True, eq=False)
@@ -380,7 +388,7 @@ class BearingRangeFactor(StateMeasurement):
         state_dim: int = STATE_DIM,
     ) -> BearingRangeFactor:
         """Bearing-range reading; noise is sigmas (2,) or a covariance (2, 2) for [bearing, range]."""
-        measured = np.concatenate([measured_vector(bearing, 1, "bearing"), _range("range", range_)])
+        measured = np.concatenate([_bearing("bearing", bearing), _range("range", range_)])
         W = sqrt_information(noise, 2)
         check_resolved("BearingRangeFactor", (state, landmark), ("bearing", "range"), measured, W)
         return cls((state, landmark), W, measured=measured, loss=loss, state_dim=state_dim)
