@@ -33,7 +33,8 @@ from ..gp.sde import LinearSDE
 from ..lie import GroupState, LieGroup, gp_accel
 from ..lie.gp import check_model, local_variables
 from ..lie.group import check_group
-from ..manifold import Manifold
+from ..lie.points import point_dim
+from ..manifold import VECTOR, Manifold
 from ..robust import RobustLoss
 from ..variables import Key
 from .base import Factor, sqrt_information
@@ -120,22 +121,40 @@ def lie_prior_factors(
 
 
 @dataclass(frozen=True, eq=False)
-class LieStatePrior(Factor):
+class OneGroupState(Factor):
+    """Base of a factor on one state of a group, ``GroupState(group, derivatives)``, its first key, and on
+    ``n_landmarks`` points of the group's k-space after it (:class:`LieStatePrior`, ``lie_readings.BodyVelocityFactor``,
+    the readings of ``point_readings``): its keys' kinds and sizes, and the group and derivatives a batch shares."""
+
+    group: LieGroup = field(kw_only=True)
+    derivatives: int = field(default=1, kw_only=True)  # the state's: 1 (pose, twist) or 2 (and its acceleration)
+
+    _shared: ClassVar[tuple[str, ...]] = ("group", "derivatives")
+    n_landmarks: ClassVar[int] = 0  # the landmarks it reads, after the state
+
+    @property
+    def key_kinds(self) -> tuple[Manifold, ...]:
+        return (GroupState(self.group, self.derivatives),) + (VECTOR,) * self.n_landmarks
+
+    @property
+    def key_dims(self) -> tuple[int, ...]:  # type: ignore[override]
+        state = ((1 + self.derivatives) * self.group.dim,)  # GroupState(group, derivatives).dim
+        return state + (point_dim(self.group),) * self.n_landmarks if self.n_landmarks else state
+
+    def batch_signature(self) -> tuple:
+        return super().batch_signature() + (self.group, self.derivatives)
+
+
+@dataclass(frozen=True, eq=False)
+class LieStatePrior(OneGroupState):
     """A prior N(mean, Σ) on a group state in the tangent at the mean: e = x ⊖ mean = [Log(M⁻¹T); ϖ - ϖₘ].
 
     Σ is the covariance of the right tangent at the mean (``lie.state``); ∂e/∂δ = diag(J_r(e_T)⁻¹, I).
     """
 
     mean: NDArray  # (size + d,), or (size + 2d,) with an acceleration
-    group: LieGroup = field(kw_only=True)
-    derivatives: int = field(default=1, kw_only=True)  # the state's (``GroupState(group, derivatives)``)
 
     _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "mean")
-    _shared: ClassVar[tuple[str, ...]] = ("group", "derivatives")
-
-    @property
-    def key_kinds(self) -> tuple[Manifold, ...]:
-        return (GroupState(self.group, self.derivatives),)
 
     @classmethod
     def create(
@@ -154,10 +173,6 @@ class LieStatePrior(Factor):
             (key,), sqrt_information(noise, kind.dim), mean=kind.check("mean", mean), loss=loss, group=group,
             derivatives=derivatives,
         )  # fmt: skip
-
-    @property
-    def key_dims(self) -> tuple[int, ...]:  # type: ignore[override]
-        return (GroupState(self.group, self.derivatives).dim,)
 
     def error(self, x: NDArray) -> NDArray:
         return GroupState(self.group, self.derivatives).local(self.mean, x)  # x ⊖ mean

@@ -30,6 +30,7 @@ from ..manifold import Manifold
 from ..robust import RobustLoss
 from ..variables import Key
 from .base import Factor, measured_vector, sqrt_information
+from .lie_prior import OneGroupState
 from .measurements import BearingFactor, BearingRangeFactor, RangeFactor
 
 __all__ = ["PoseReading", "BodyVelocityFactor", "LieInterpolatedFactor"]
@@ -137,19 +138,12 @@ class PoseReading(Factor):
 
 
 @dataclass(frozen=True, eq=False)
-class BodyVelocityFactor(Factor):
+class BodyVelocityFactor(OneGroupState):
     """A reading of a group state's body twist (SE(2): [forward, lateral, yaw rate]): e = ϖ - measured, ∂e/∂δ = [0 I]."""
 
     measured: NDArray  # (d,)
-    group: LieGroup = field(kw_only=True)
-    derivatives: int = field(default=1, kw_only=True)  # the state's: 1 (pose, twist) or 2 (and its acceleration)
 
     _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "measured")
-    _shared: ClassVar[tuple[str, ...]] = ("group", "derivatives")
-
-    @property
-    def key_kinds(self) -> tuple[Manifold, ...]:
-        return (GroupState(self.group, self.derivatives),)
 
     @classmethod
     def create(
@@ -170,13 +164,6 @@ class BodyVelocityFactor(Factor):
         return cls(
             (key,), sqrt_information(noise, d), measured=measured, loss=loss, group=group, derivatives=derivatives
         )
-
-    @property
-    def key_dims(self) -> tuple[int, ...]:  # type: ignore[override]
-        return ((1 + self.derivatives) * self.group.dim,)
-
-    def batch_signature(self) -> tuple:
-        return super().batch_signature() + (self.group, self.derivatives)
 
     def error(self, x: NDArray) -> NDArray:
         n, d = self.group.size, self.group.dim

@@ -106,8 +106,37 @@ class StateMeasurement(Factor):
         return super().batch_signature() + (self.state_dim,)
 
 
+_OfState = TypeVar("_OfState", bound="_VelocityReading")
+
+
 @dataclass(frozen=True, eq=False)
-class OdometryFactor(StateMeasurement):
+class _VelocityReading(StateMeasurement):
+    """Base of a reading of one state's velocity (:class:`OdometryFactor`, :class:`VelocityFactor`): ``_size``
+    numbers with their noise."""
+
+    measured: NDArray  # (_size,) the reading
+
+    _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "measured")
+    _size: ClassVar[int]  # how many numbers the reading has
+
+    @classmethod
+    def create(
+        cls: type[_OfState],
+        key: Key,
+        measured: NDArray,
+        noise: NDArray | float,
+        *,
+        loss: RobustLoss | None = None,
+        state_dim: int = STATE_DIM,
+    ) -> _OfState:
+        """The reading ``measured`` (the class's numbers: [v, θ̇] of odometry, [forward, lateral, yaw rate] of a
+        velocity) on state ``key``; noise a sigma, sigmas or a covariance."""
+        measured = measured_vector(measured, cls._size, "measured")
+        return cls((key,), sqrt_information(noise, cls._size), measured=measured, loss=loss, state_dim=state_dim)
+
+
+@dataclass(frozen=True, eq=False)
+class OdometryFactor(_VelocityReading):
     """Odometry as the paper writes it: the state's forward speed and yaw rate.  [YIB Eq. 32]
 
         ``OdometryFactor.create(key, measured, noise, *, loss=None, state_dim=6)``
@@ -122,28 +151,7 @@ class OdometryFactor(StateMeasurement):
     checking Eq. 32 and for users whose odometry has two components. Conventions: docs/api.md.
     """
 
-    measured: NDArray  # (2,) [forward speed, yaw rate]
-
-    _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "measured")
-
-    @classmethod
-    def create(
-        cls,
-        key: Key,
-        measured: NDArray,
-        noise: NDArray | float,
-        *,
-        loss: RobustLoss | None = None,
-        state_dim: int = STATE_DIM,
-    ) -> OdometryFactor:
-        """Odometry reading ``measured`` = [v, θ̇] on state ``key``."""
-        return cls(
-            (key,),
-            sqrt_information(noise, 2),
-            measured=measured_vector(measured, 2, "measured"),
-            loss=loss,
-            state_dim=state_dim,
-        )
+    _size = 2  # [forward speed, yaw rate]
 
     def error(self, x: NDArray) -> NDArray:
         th, xd, yd, thd = x[..., 2], x[..., 3], x[..., 4], x[..., 5]
@@ -162,7 +170,7 @@ class OdometryFactor(StateMeasurement):
 
 
 @dataclass(frozen=True, eq=False)
-class VelocityFactor(StateMeasurement):
+class VelocityFactor(_VelocityReading):
     """Odometry as the paper's scripts use it: the state's velocity seen in the robot frame.  [YIB Sec. IV]
 
         ``VelocityFactor.create(key, measured, noise, *, loss=None, state_dim=6)``
@@ -177,23 +185,7 @@ class VelocityFactor(StateMeasurement):
     y left). Conventions: docs/api.md.
     """
 
-    measured: NDArray  # (3,) [forward, lateral, yaw rate]
-
-    _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "measured")
-
-    @classmethod
-    def create(
-        cls,
-        key: Key,
-        measured: NDArray,
-        noise: NDArray | float,
-        *,
-        loss: RobustLoss | None = None,
-        state_dim: int = STATE_DIM,
-    ) -> VelocityFactor:
-        """Projected-velocity reading [forward, lateral, yaw rate] on state ``key``."""
-        measured = measured_vector(measured, 3, "measured")
-        return cls((key,), sqrt_information(noise, 3), measured=measured, loss=loss, state_dim=state_dim)
+    _size = 3  # [forward, lateral, yaw rate]
 
     def error(self, x: NDArray) -> NDArray:
         return self.error_and_jacobians(x, jacobians=False)[0]
