@@ -233,28 +233,59 @@ class LieAccelPriorFactor(Factor):
 
 
 @dataclass(frozen=True, eq=False)
-class LieAccelInterpolatedFactor(Factor):
+class BetweenGroupStates(Factor):
+    """Base of a reading at a time τ between two states on a group, moved onto them by the prior's interpolation
+    (``lie_readings.LieInterpolatedFactor``, :class:`LieAccelInterpolatedFactor`): e = e_inner(x(τ), …) for x(τ) its
+    :meth:`interpolated_state`; the keys, their kinds and sizes: the two states, then the inner reading's others.
+    [YIB Eq. 29]"""
+
+    inner: Factor  # a reading of a state GroupState(group, derivatives) (its first key stands for the state at τ)
+    group: LieGroup = field(kw_only=True)
+
+    _batched_factors: ClassVar[tuple[str, ...]] = ("inner",)
+    _shared: ClassVar[tuple[str, ...]] = ("group",)
+    derivatives: ClassVar[int]  # the states': 1 (pose, twist) or 2 (and its acceleration)
+
+    @classmethod
+    def check_inner(cls, inner: Factor, kind: Manifold) -> None:
+        """SteamError unless ``inner`` reads one state of ``kind`` (any reading: lie_readings, point_readings)."""
+        if inner.key_kinds[0] is not kind:
+            raise SteamError(f"inner must read a state of kind {kind!r} (the reading at tau), got {inner!r}")
+
+    @property
+    def key_dims(self) -> tuple[int, ...]:  # type: ignore[override]
+        return ((1 + self.derivatives) * self.group.dim,) * 2 + tuple(self.inner.key_dims[1:])
+
+    @property
+    def key_kinds(self) -> tuple[Manifold, ...]:
+        return (GroupState(self.group, self.derivatives),) * 2 + tuple(self.inner.key_kinds[1:])
+
+    def interpolated_state(self, x1: NDArray, x2: NDArray) -> NDArray:
+        """x(τ) between the states x₁ and x₂.  [YIB Eq. 18]"""
+        raise NotImplementedError
+
+    def error(self, x1: NDArray, x2: NDArray, *rest: NDArray) -> NDArray:
+        return self.inner.error(self.interpolated_state(x1, x2), *rest)  # [YIB Eq. 29]
+
+
+@dataclass(frozen=True, eq=False)
+class LieAccelInterpolatedFactor(BetweenGroupStates):
     """A reading at a time τ between two states with an acceleration, moved onto them through ``lie.gp_accel``:
     e = e_inner(x(τ), …), ∂e/∂x₁ = H J₁, ∂e/∂x₂ = H J₂.  [YIB Eq. 29; DER 14.5]"""
 
-    inner: Factor  # a reading of a state GroupState(group, 2) (its first key stands for the state at τ)
     lam: NDArray  # Λ(τ), (3d, 3d)
     psi: NDArray  # Ψ(τ), (3d, 3d)
     offset: NDArray  # c, (3d,) [YIB Eq. 23]
-    group: LieGroup = field(kw_only=True)
 
     _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "lam", "psi", "offset")
-    _batched_factors: ClassVar[tuple[str, ...]] = ("inner",)
-    _shared: ClassVar[tuple[str, ...]] = ("group",)
+    derivatives = 2
 
     @classmethod
     def create(
         cls, inner: Factor, key1: Key, key2: Key, t1: float, t2: float, tau: float, sde: LinearSDE, *, group: LieGroup
     ) -> LieAccelInterpolatedFactor:
         """Move ``inner`` (on the state at τ, t1 < τ < t2) onto ``key1`` at t1 and ``key2`` at t2."""
-        kind = GroupState(check_group(group), 2)
-        if inner.key_kinds[0] is not kind:
-            raise SteamError(f"inner must read a state of kind {kind!r} (the reading at tau), got {inner!r}")
+        cls.check_inner(inner, GroupState(check_group(group), 2))
         t1, t2, tau = number("t1", t1), number("t2", t2), number("tau", tau)
         lam, psi, offset = interpolation_terms(sde, t1, t2, tau)  # [YIB Eq. 16, 23]
         keys = (key1, key2) + tuple(inner.keys[1:])
@@ -262,23 +293,12 @@ class LieAccelInterpolatedFactor(Factor):
             keys, inner.sqrt_information, inner=inner, lam=lam, psi=psi, offset=offset, group=group, loss=inner.loss
         )
 
-    @property
-    def key_dims(self) -> tuple[int, ...]:  # type: ignore[override]
-        return (3 * self.group.dim,) * 2 + tuple(self.inner.key_dims[1:])
-
-    @property
-    def key_kinds(self) -> tuple[Manifold, ...]:
-        return (GroupState(self.group, 2),) * 2 + tuple(self.inner.key_kinds[1:])
-
     def batch_signature(self) -> tuple:
         return (type(self), self.group, self.inner.batch_signature())
 
     def interpolated_state(self, x1: NDArray, x2: NDArray) -> NDArray:
         """x(τ) from γ(τ) = Λ γ₁ + Ψ γ₂ + c.  [YIB Eq. 18; DER 14.5]"""
         return gp_accel.interpolate(x1, x2, self.lam, self.psi, self.offset, group=self.group, jacobians=False)  # type: ignore[return-value]
-
-    def error(self, x1: NDArray, x2: NDArray, *rest: NDArray) -> NDArray:
-        return self.inner.error(self.interpolated_state(x1, x2), *rest)  # [YIB Eq. 29]
 
     def jacobians(self, x1: NDArray, x2: NDArray, *rest: NDArray) -> tuple[NDArray, ...]:
         x, J1, J2 = gp_accel.interpolate(x1, x2, self.lam, self.psi, self.offset, group=self.group)
