@@ -206,8 +206,9 @@ class SE2Group(LieGroup):
         db[..., 0, 0] = db[..., 1, 1] = al  # J_r(ξ)⁻¹  [DER 11.5]
         da[..., 0, 1] = db[..., 0, 1] = -h
         da[..., 1, 0] = db[..., 1, 0] = h
-        m13, m23 = _jr_inverse_column(-g, -r1, -r2)  # (11.5) at -ξ, γ odd in φ
-        da[..., 0, 2], da[..., 1, 2], da[..., 2, 2] = -m13, -m23, -1.0
+        # -J_r(-ξ)⁻¹'s column: (11.5)'s at -ξ negated, which is (11.5)'s with γ → -γ (γ odd in φ, the column linear in ρ)
+        da[..., 0, 2], da[..., 1, 2] = _jr_inverse_column(-g, r1, r2)
+        da[..., 2, 2] = -1.0
         db[..., 0, 2], db[..., 1, 2], db[..., 2, 2] = j13, j23, 1.0
         gw, hw, du[..., 0, 2], du[..., 1, 2] = _jr_inverse_derivative(k, r1, r2, v1, v2, w)  # [DER 11.6]
         du[..., 0, 0] = du[..., 1, 1] = gw
