@@ -13,8 +13,6 @@
   in the right tangent): :class:`LiePriorFactor` (the WNOA prior, "local-variable" or "simplified"),
   :func:`lie_prior_factors`, :class:`LieStatePrior`, :class:`PoseReading` (range, bearing,
   bearing-range), :class:`BodyVelocityFactor` (the body twist), :class:`LieInterpolatedFactor`.
-- :mod:`.marginal`: :class:`MarginalFactor`, the linear factor a marginalization leaves (Eq. 10.4 of the
-  derivations).
 
 The paper's trajectory state is x = [x, y, θ, ẋ, ẏ, θ̇] (d = 3, so 6 numbers); the WNOJ and Singer
 priors append [ẍ, ÿ, θ̈]. The GP factors take any LTI prior (a Qc for WNOA, or a

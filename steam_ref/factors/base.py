@@ -26,7 +26,7 @@ from ..arguments import finite, real_array
 from ..errors import NumericalError, ShapeError, SteamError
 from ..manifold import VECTOR, Manifold
 from ..robust import RobustLoss
-from ..variables import Key, kind_clash
+from ..variables import FLOAT64, Key, kind_clash
 
 __all__ = ["Factor", "sqrt_information", "check_factors", "kinds_of", "STATE_DIM", "LANDMARK_DIM"]
 
@@ -42,7 +42,6 @@ def _finite_weight(name: str, W: NDArray, noise: NDArray) -> NDArray:
 
 
 FLOAT_TYPES = (float, np.float64)  # a number memoised by value (an int or a bool goes the checked way each time)
-_F64 = np.dtype(np.float64)
 
 
 class Memo(dict):
@@ -79,7 +78,7 @@ def sqrt_information(noise: NDArray | float, m: int, name: str = "noise") -> NDA
         W = _SIGMA_WEIGHTS.get(struct.pack("d", noise) * m)
         if W is not None:
             return W
-    elif type(noise) is np.ndarray and noise.dtype is _F64 and noise.shape == (m,):  # sigmas met before
+    elif type(noise) is np.ndarray and noise.dtype is FLOAT64 and noise.shape == (m,):  # sigmas met before
         W = _SIGMA_WEIGHTS.get(noise.tobytes())
         if W is not None:
             return W
@@ -159,7 +158,7 @@ def check_resolved(factor: str, keys: tuple, labels: tuple[str, ...], measured: 
 
 def measured_vector(value: NDArray | float, m: int, what: str) -> NDArray:
     """``value`` as a float vector (m,): a 1-d array of m finite numbers, or a number when m = 1."""
-    if type(value) is np.ndarray and value.dtype is _F64 and value.shape == (m,):  # (m,) float64: one copy, one sum
+    if type(value) is np.ndarray and value.dtype is FLOAT64 and value.shape == (m,):  # (m,) float64: one copy, one sum
         v = value.copy()
         if math.isfinite(sum(v.tolist())):  # finite, as each number is (if it overflowed, the checks below decide)
             return v

@@ -151,14 +151,23 @@ def gp_prior_factors(keys: list[Key], times: NDArray, prior: NDArray | LinearSDE
     is ``GPPriorFactor.wnoa(keys[i], keys[i+1], times[i+1] - times[i], qc)``, error xᵢ₊₁ - Φ xᵢ (``from_sde``
     with a LinearSDE). What Qc means and how to choose it: docs/api.md, "Conventions".
     """
-    keys, times, sde = key_list("keys", keys), real_array("times", times), as_sde(prior)
+    keys, gaps = consecutive_gaps(keys, times)
+    sde = as_sde(prior)
+    return [GPPriorFactor.from_sde(keys[i], keys[i + 1], gaps[i], sde) for i in range(len(gaps))]  # Qc: wnoa's
+
+
+def consecutive_gaps(keys: list[Key], times: NDArray) -> tuple[list[Key], NDArray]:
+    """The M state keys and the M - 1 gaps between their times, each > 0, for the prior factors linking consecutive
+    states (any prior's: :func:`gp_prior_factors`, ``lie_prior.lie_prior_factors``); SteamError or ShapeError naming
+    the first time that does not increase strictly, or a count of times that is not one per key."""
+    keys, times = key_list("keys", keys), real_array("times", times)
     if times.ndim != 1 or len(times) != len(keys):
         raise ShapeError(f"need one time per key: {len(keys)} keys, times of shape {times.shape}")
     gaps = np.diff(finite("times", times))
     if np.any(~(gaps > 0)):
         i = int(np.flatnonzero(~(gaps > 0))[0])
         raise SteamError(f"times must increase strictly: t[{i}]={times[i]} then t[{i + 1}]={times[i + 1]}")
-    return [GPPriorFactor.from_sde(keys[i], keys[i + 1], gaps[i], sde) for i in range(len(gaps))]  # Qc: wnoa's
+    return keys, gaps
 
 
 # --- Measurements at a missing (interpolated) state ---------------------------------------------

@@ -25,7 +25,7 @@ from typing import ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
-from ..arguments import finite, number, real_array, time_step
+from ..arguments import number, time_step
 from ..errors import ShapeError, SteamError
 from ..gp.interpolate import interpolation_terms
 from ..gp.prior import check_qc, process_noise_sqrt_information, transition
@@ -33,10 +33,12 @@ from ..gp.sde import LinearSDE
 from ..lie import GroupState, LieGroup, gp_accel
 from ..lie.gp import check_model, local_variables
 from ..lie.group import check_group
-from ..manifold import Manifold
+from ..lie.points import point_dim
+from ..manifold import VECTOR, Manifold
 from ..robust import RobustLoss
-from ..variables import Key, key_list
+from ..variables import Key
 from .base import Factor, sqrt_information
+from .gp import consecutive_gaps
 
 __all__ = ["LiePriorFactor", "lie_prior_factors", "LieStatePrior", "LieAccelPriorFactor", "LieAccelInterpolatedFactor"]
 
@@ -114,33 +116,45 @@ def lie_prior_factors(
     keys: list[Key], times: NDArray, qc: NDArray, model: str = "local-variable", *, group: LieGroup
 ) -> list[LiePriorFactor]:
     """The M - 1 prior factors on ``group`` linking consecutive states at strictly increasing times."""
-    keys, times = key_list("keys", keys), real_array("times", times)
-    if times.ndim != 1 or len(times) != len(keys):
-        raise ShapeError(f"need one time per key: {len(keys)} keys, times of shape {times.shape}")
-    gaps = np.diff(finite("times", times))
-    if np.any(~(gaps > 0)):
-        i = int(np.flatnonzero(~(gaps > 0))[0])
-        raise SteamError(f"times must increase strictly: t[{i}]={times[i]} then t[{i + 1}]={times[i + 1]}")
+    keys, gaps = consecutive_gaps(keys, times)
     return [LiePriorFactor.create(keys[i], keys[i + 1], gaps[i], qc, model, group=group) for i in range(len(gaps))]
 
 
 @dataclass(frozen=True, eq=False)
-class LieStatePrior(Factor):
+class OneGroupState(Factor):
+    """Base of a factor on one state of a group, ``GroupState(group, derivatives)``, its first key, and on
+    ``n_landmarks`` points of the group's k-space after it (:class:`LieStatePrior`, ``lie_readings.BodyVelocityFactor``,
+    the readings of ``point_readings``): its keys' kinds and sizes, and the group and derivatives a batch shares."""
+
+    group: LieGroup = field(kw_only=True)
+    derivatives: int = field(default=1, kw_only=True)  # the state's: 1 (pose, twist) or 2 (and its acceleration)
+
+    _shared: ClassVar[tuple[str, ...]] = ("group", "derivatives")
+    n_landmarks: ClassVar[int] = 0  # the landmarks it reads, after the state
+
+    @property
+    def key_kinds(self) -> tuple[Manifold, ...]:
+        return (GroupState(self.group, self.derivatives),) + (VECTOR,) * self.n_landmarks
+
+    @property
+    def key_dims(self) -> tuple[int, ...]:  # type: ignore[override]
+        state = ((1 + self.derivatives) * self.group.dim,)  # GroupState(group, derivatives).dim
+        return state + (point_dim(self.group),) * self.n_landmarks if self.n_landmarks else state
+
+    def batch_signature(self) -> tuple:
+        return super().batch_signature() + (self.group, self.derivatives)
+
+
+@dataclass(frozen=True, eq=False)
+class LieStatePrior(OneGroupState):
     """A prior N(mean, Σ) on a group state in the tangent at the mean: e = x ⊖ mean = [Log(M⁻¹T); ϖ - ϖₘ].
 
     Σ is the covariance of the right tangent at the mean (``lie.state``); ∂e/∂δ = diag(J_r(e_T)⁻¹, I).
     """
 
     mean: NDArray  # (size + d,), or (size + 2d,) with an acceleration
-    group: LieGroup = field(kw_only=True)
-    derivatives: int = field(default=1, kw_only=True)  # the state's (``GroupState(group, derivatives)``)
 
     _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "mean")
-    _shared: ClassVar[tuple[str, ...]] = ("group", "derivatives")
-
-    @property
-    def key_kinds(self) -> tuple[Manifold, ...]:
-        return (GroupState(self.group, self.derivatives),)
 
     @classmethod
     def create(
@@ -159,10 +173,6 @@ class LieStatePrior(Factor):
             (key,), sqrt_information(noise, kind.dim), mean=kind.check("mean", mean), loss=loss, group=group,
             derivatives=derivatives,
         )  # fmt: skip
-
-    @property
-    def key_dims(self) -> tuple[int, ...]:  # type: ignore[override]
-        return (GroupState(self.group, self.derivatives).dim,)
 
     def error(self, x: NDArray) -> NDArray:
         return GroupState(self.group, self.derivatives).local(self.mean, x)  # x ⊖ mean
@@ -223,28 +233,59 @@ class LieAccelPriorFactor(Factor):
 
 
 @dataclass(frozen=True, eq=False)
-class LieAccelInterpolatedFactor(Factor):
+class BetweenGroupStates(Factor):
+    """Base of a reading at a time τ between two states on a group, moved onto them by the prior's interpolation
+    (``lie_readings.LieInterpolatedFactor``, :class:`LieAccelInterpolatedFactor`): e = e_inner(x(τ), …) for x(τ) its
+    :meth:`interpolated_state`; the keys, their kinds and sizes: the two states, then the inner reading's others.
+    [YIB Eq. 29]"""
+
+    inner: Factor  # a reading of a state GroupState(group, derivatives) (its first key stands for the state at τ)
+    group: LieGroup = field(kw_only=True)
+
+    _batched_factors: ClassVar[tuple[str, ...]] = ("inner",)
+    _shared: ClassVar[tuple[str, ...]] = ("group",)
+    derivatives: ClassVar[int]  # the states': 1 (pose, twist) or 2 (and its acceleration)
+
+    @classmethod
+    def check_inner(cls, inner: Factor, kind: Manifold) -> None:
+        """SteamError unless ``inner`` reads one state of ``kind`` (any reading: lie_readings, point_readings)."""
+        if inner.key_kinds[0] is not kind:
+            raise SteamError(f"inner must read a state of kind {kind!r} (the reading at tau), got {inner!r}")
+
+    @property
+    def key_dims(self) -> tuple[int, ...]:  # type: ignore[override]
+        return ((1 + self.derivatives) * self.group.dim,) * 2 + tuple(self.inner.key_dims[1:])
+
+    @property
+    def key_kinds(self) -> tuple[Manifold, ...]:
+        return (GroupState(self.group, self.derivatives),) * 2 + tuple(self.inner.key_kinds[1:])
+
+    def interpolated_state(self, x1: NDArray, x2: NDArray) -> NDArray:
+        """x(τ) between the states x₁ and x₂.  [YIB Eq. 18]"""
+        raise NotImplementedError
+
+    def error(self, x1: NDArray, x2: NDArray, *rest: NDArray) -> NDArray:
+        return self.inner.error(self.interpolated_state(x1, x2), *rest)  # [YIB Eq. 29]
+
+
+@dataclass(frozen=True, eq=False)
+class LieAccelInterpolatedFactor(BetweenGroupStates):
     """A reading at a time τ between two states with an acceleration, moved onto them through ``lie.gp_accel``:
     e = e_inner(x(τ), …), ∂e/∂x₁ = H J₁, ∂e/∂x₂ = H J₂.  [YIB Eq. 29; DER 14.5]"""
 
-    inner: Factor  # a reading of a state GroupState(group, 2) (its first key stands for the state at τ)
     lam: NDArray  # Λ(τ), (3d, 3d)
     psi: NDArray  # Ψ(τ), (3d, 3d)
     offset: NDArray  # c, (3d,) [YIB Eq. 23]
-    group: LieGroup = field(kw_only=True)
 
     _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "lam", "psi", "offset")
-    _batched_factors: ClassVar[tuple[str, ...]] = ("inner",)
-    _shared: ClassVar[tuple[str, ...]] = ("group",)
+    derivatives = 2
 
     @classmethod
     def create(
         cls, inner: Factor, key1: Key, key2: Key, t1: float, t2: float, tau: float, sde: LinearSDE, *, group: LieGroup
     ) -> LieAccelInterpolatedFactor:
         """Move ``inner`` (on the state at τ, t1 < τ < t2) onto ``key1`` at t1 and ``key2`` at t2."""
-        kind = GroupState(check_group(group), 2)
-        if inner.key_kinds[0] is not kind:
-            raise SteamError(f"inner must read a state of kind {kind!r} (the reading at tau), got {inner!r}")
+        cls.check_inner(inner, GroupState(check_group(group), 2))
         t1, t2, tau = number("t1", t1), number("t2", t2), number("tau", tau)
         lam, psi, offset = interpolation_terms(sde, t1, t2, tau)  # [YIB Eq. 16, 23]
         keys = (key1, key2) + tuple(inner.keys[1:])
@@ -252,23 +293,12 @@ class LieAccelInterpolatedFactor(Factor):
             keys, inner.sqrt_information, inner=inner, lam=lam, psi=psi, offset=offset, group=group, loss=inner.loss
         )
 
-    @property
-    def key_dims(self) -> tuple[int, ...]:  # type: ignore[override]
-        return (3 * self.group.dim,) * 2 + tuple(self.inner.key_dims[1:])
-
-    @property
-    def key_kinds(self) -> tuple[Manifold, ...]:
-        return (GroupState(self.group, 2),) * 2 + tuple(self.inner.key_kinds[1:])
-
     def batch_signature(self) -> tuple:
         return (type(self), self.group, self.inner.batch_signature())
 
     def interpolated_state(self, x1: NDArray, x2: NDArray) -> NDArray:
         """x(τ) from γ(τ) = Λ γ₁ + Ψ γ₂ + c.  [YIB Eq. 18; DER 14.5]"""
         return gp_accel.interpolate(x1, x2, self.lam, self.psi, self.offset, group=self.group, jacobians=False)  # type: ignore[return-value]
-
-    def error(self, x1: NDArray, x2: NDArray, *rest: NDArray) -> NDArray:
-        return self.inner.error(self.interpolated_state(x1, x2), *rest)  # [YIB Eq. 29]
 
     def jacobians(self, x1: NDArray, x2: NDArray, *rest: NDArray) -> tuple[NDArray, ...]:
         x, J1, J2 = gp_accel.interpolate(x1, x2, self.lam, self.psi, self.offset, group=self.group)

@@ -30,6 +30,7 @@ from ..manifold import Manifold
 from ..robust import RobustLoss
 from ..variables import Key
 from .base import Factor, measured_vector, sqrt_information
+from .lie_prior import BetweenGroupStates, OneGroupState
 from .measurements import BearingFactor, BearingRangeFactor, RangeFactor
 
 __all__ = ["PoseReading", "BodyVelocityFactor", "LieInterpolatedFactor"]
@@ -137,19 +138,12 @@ class PoseReading(Factor):
 
 
 @dataclass(frozen=True, eq=False)
-class BodyVelocityFactor(Factor):
+class BodyVelocityFactor(OneGroupState):
     """A reading of a group state's body twist (SE(2): [forward, lateral, yaw rate]): e = ϖ - measured, ∂e/∂δ = [0 I]."""
 
     measured: NDArray  # (d,)
-    group: LieGroup = field(kw_only=True)
-    derivatives: int = field(default=1, kw_only=True)  # the state's: 1 (pose, twist) or 2 (and its acceleration)
 
     _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "measured")
-    _shared: ClassVar[tuple[str, ...]] = ("group", "derivatives")
-
-    @property
-    def key_kinds(self) -> tuple[Manifold, ...]:
-        return (GroupState(self.group, self.derivatives),)
 
     @classmethod
     def create(
@@ -171,13 +165,6 @@ class BodyVelocityFactor(Factor):
             (key,), sqrt_information(noise, d), measured=measured, loss=loss, group=group, derivatives=derivatives
         )
 
-    @property
-    def key_dims(self) -> tuple[int, ...]:  # type: ignore[override]
-        return ((1 + self.derivatives) * self.group.dim,)
-
-    def batch_signature(self) -> tuple:
-        return super().batch_signature() + (self.group, self.derivatives)
-
     def error(self, x: NDArray) -> NDArray:
         n, d = self.group.size, self.group.dim
         return x[..., n : n + d] - self.measured
@@ -190,22 +177,20 @@ class BodyVelocityFactor(Factor):
 
 
 @dataclass(frozen=True, eq=False)
-class LieInterpolatedFactor(Factor):
+class LieInterpolatedFactor(BetweenGroupStates):
     """A reading at a time τ with no state, moved onto the group states at t₁ < τ < t₂.  [YIB Eq. 29; DER 11.16]
 
     e(x₁, x₂, …) = e_inner(x(τ), …) with x(τ) the local GP's mean (``lie.gp.interpolate``), and
     ∂e/∂x₁ = H J₁, ∂e/∂x₂ = H J₂ for H the inner factor's Jacobian in the tangent at x(τ).
     """
 
-    inner: Factor  # a reading of a state on the group, whose first key stands for the state at τ
     lam: NDArray  # Λ(τ), (2d, 2d)
     psi: NDArray  # Ψ(τ), (2d, 2d)
     model: str = field(default="local-variable", kw_only=True)
-    group: LieGroup = field(kw_only=True)
 
     _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "lam", "psi")
-    _batched_factors: ClassVar[tuple[str, ...]] = ("inner",)
     _shared: ClassVar[tuple[str, ...]] = ("model", "group")
+    derivatives = 1
 
     @classmethod
     def create(
@@ -228,12 +213,6 @@ class LieInterpolatedFactor(Factor):
         if qc.shape != (d, d):
             raise SteamError(f"qc must be ({d}, {d}) on the body twist of a state on {group!r}, got {np.shape(qc)}")
         return cls.of_checked(inner, key1, key2, t1, t2, tau, qc, check_model(model), group)
-
-    @classmethod
-    def check_inner(cls, inner: Factor, kind: Manifold) -> None:
-        """SteamError unless ``inner`` reads one state of ``kind`` (any reading: lie_readings, point_readings)."""
-        if inner.key_kinds[0] is not kind:
-            raise SteamError(f"inner must read a state of kind {kind!r} (the reading at tau), got {inner!r}")
 
     @classmethod
     def of_checked(
@@ -284,23 +263,12 @@ class LieInterpolatedFactor(Factor):
             keys, inner.sqrt_information, inner=inner, lam=lam, psi=psi, model=model, group=group, loss=inner.loss
         )
 
-    @property
-    def key_dims(self) -> tuple[int, ...]:  # type: ignore[override]
-        return (2 * self.group.dim,) * 2 + tuple(self.inner.key_dims[1:])
-
-    @property
-    def key_kinds(self) -> tuple[Manifold, ...]:
-        return (GroupState(self.group), GroupState(self.group), *self.inner.key_kinds[1:])
-
     def batch_signature(self) -> tuple:
         return (type(self), self.model, self.group, self.inner.batch_signature())
 
     def interpolated_state(self, x1: NDArray, x2: NDArray) -> NDArray:
         """x(τ) = (T₁ Exp ξ(τ), ϖ(τ)) from γ(τ) = Λ γ₁ + Ψ γ₂.  [YIB Eq. 18; DER 11.15]"""
         return interpolate(x1, x2, self.lam, self.psi, self.model, group=self.group, jacobians=False)
-
-    def error(self, x1: NDArray, x2: NDArray, *rest: NDArray) -> NDArray:
-        return self.inner.error(self.interpolated_state(x1, x2), *rest)  # [YIB Eq. 29]
 
     def jacobians(self, x1: NDArray, x2: NDArray, *rest: NDArray) -> tuple[NDArray, ...]:
         return self.error_and_jacobians(x1, x2, *rest)[1]

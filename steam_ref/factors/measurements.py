@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass, field
-from typing import ClassVar
+from typing import ClassVar, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -106,8 +106,37 @@ class StateMeasurement(Factor):
         return super().batch_signature() + (self.state_dim,)
 
 
+_OfState = TypeVar("_OfState", bound="_VelocityReading")
+
+
 @dataclass(frozen=True, eq=False)
-class OdometryFactor(StateMeasurement):
+class _VelocityReading(StateMeasurement):
+    """Base of a reading of one state's velocity (:class:`OdometryFactor`, :class:`VelocityFactor`): ``_size``
+    numbers with their noise."""
+
+    measured: NDArray  # (_size,) the reading
+
+    _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "measured")
+    _size: ClassVar[int]  # how many numbers the reading has
+
+    @classmethod
+    def create(
+        cls: type[_OfState],
+        key: Key,
+        measured: NDArray,
+        noise: NDArray | float,
+        *,
+        loss: RobustLoss | None = None,
+        state_dim: int = STATE_DIM,
+    ) -> _OfState:
+        """The reading ``measured`` (the class's numbers: [v, θ̇] of odometry, [forward, lateral, yaw rate] of a
+        velocity) on state ``key``; noise a sigma, sigmas or a covariance."""
+        measured = measured_vector(measured, cls._size, "measured")
+        return cls((key,), sqrt_information(noise, cls._size), measured=measured, loss=loss, state_dim=state_dim)
+
+
+@dataclass(frozen=True, eq=False)
+class OdometryFactor(_VelocityReading):
     """Odometry as the paper writes it: the state's forward speed and yaw rate.  [YIB Eq. 32]
 
         ``OdometryFactor.create(key, measured, noise, *, loss=None, state_dim=6)``
@@ -122,28 +151,7 @@ class OdometryFactor(StateMeasurement):
     checking Eq. 32 and for users whose odometry has two components. Conventions: docs/api.md.
     """
 
-    measured: NDArray  # (2,) [forward speed, yaw rate]
-
-    _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "measured")
-
-    @classmethod
-    def create(
-        cls,
-        key: Key,
-        measured: NDArray,
-        noise: NDArray | float,
-        *,
-        loss: RobustLoss | None = None,
-        state_dim: int = STATE_DIM,
-    ) -> OdometryFactor:
-        """Odometry reading ``measured`` = [v, θ̇] on state ``key``."""
-        return cls(
-            (key,),
-            sqrt_information(noise, 2),
-            measured=measured_vector(measured, 2, "measured"),
-            loss=loss,
-            state_dim=state_dim,
-        )
+    _size = 2  # [forward speed, yaw rate]
 
     def error(self, x: NDArray) -> NDArray:
         th, xd, yd, thd = x[..., 2], x[..., 3], x[..., 4], x[..., 5]
@@ -162,7 +170,7 @@ class OdometryFactor(StateMeasurement):
 
 
 @dataclass(frozen=True, eq=False)
-class VelocityFactor(StateMeasurement):
+class VelocityFactor(_VelocityReading):
     """Odometry as the paper's scripts use it: the state's velocity seen in the robot frame.  [YIB Sec. IV]
 
         ``VelocityFactor.create(key, measured, noise, *, loss=None, state_dim=6)``
@@ -177,23 +185,7 @@ class VelocityFactor(StateMeasurement):
     y left). Conventions: docs/api.md.
     """
 
-    measured: NDArray  # (3,) [forward, lateral, yaw rate]
-
-    _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "measured")
-
-    @classmethod
-    def create(
-        cls,
-        key: Key,
-        measured: NDArray,
-        noise: NDArray | float,
-        *,
-        loss: RobustLoss | None = None,
-        state_dim: int = STATE_DIM,
-    ) -> VelocityFactor:
-        """Projected-velocity reading [forward, lateral, yaw rate] on state ``key``."""
-        measured = measured_vector(measured, 3, "measured")
-        return cls((key,), sqrt_information(noise, 3), measured=measured, loss=loss, state_dim=state_dim)
+    _size = 3  # [forward, lateral, yaw rate]
 
     def error(self, x: NDArray) -> NDArray:
         return self.error_and_jacobians(x, jacobians=False)[0]
@@ -259,8 +251,60 @@ def _range(name: str, measured: float) -> NDArray:
     return r
 
 
+def _bearing(name: str, measured: float) -> NDArray:
+    """A bearing reading as a (1,) vector: a finite angle."""
+    return measured_vector(measured, 1, name)
+
+
+_Reading = TypeVar("_Reading", bound="_LandmarkReading")
+
+
 @dataclass(frozen=True, eq=False)
-class RangeFactor(StateMeasurement):
+class _LandmarkReading(StateMeasurement):
+    """Base of a reading of one number about a landmark with its sigma (:class:`RangeFactor`, :class:`BearingFactor`):
+    ``create`` and the Jacobians from the reading's rows of ∂/∂x and ∂/∂ℓ."""
+
+    measured: NDArray  # (1,) the reading
+
+    _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "measured")
+    other_dims: ClassVar[tuple[int, ...]] = (LANDMARK_DIM,)
+    _reads: ClassVar[str]  # the reading's name in an error ("range", "bearing")
+
+    @staticmethod
+    def _reading(name: str, measured: float) -> NDArray:
+        """The reading checked (``_range``, ``_bearing``)."""
+        raise NotImplementedError
+
+    @staticmethod
+    def _rows(x: NDArray, l: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+        """The reading's value and its rows of ∂/∂x, ∂/∂ℓ (``_range_row``, ``_bearing_row``)."""
+        raise NotImplementedError
+
+    @classmethod
+    def create(
+        cls: type[_Reading],
+        state: Key,
+        landmark: Key,
+        measured: float,
+        sigma: float,
+        *,
+        loss: RobustLoss | None = None,
+        state_dim: int = STATE_DIM,
+    ) -> _Reading:
+        """The reading ``measured`` (a range in m, not negative; a bearing in rad) of ``landmark`` from ``state``, with
+        standard deviation ``sigma``."""
+        reading = cls._reading("measured", measured)
+        W = sqrt_information(sigma, 1, "sigma")
+        check_resolved(cls.__name__, (state, landmark), (cls._reads,), reading, W)
+        return cls((state, landmark), W, measured=reading, loss=loss, state_dim=state_dim)
+
+    def jacobians(self, x: NDArray, l: NDArray) -> tuple[NDArray, NDArray]:
+        _, Jx, Jl = self._rows(x, l)  # called here, not through error_and_jacobians: a range's warning's stacklevel
+        return Jx[..., None, :], Jl[..., None, :]
+
+
+@dataclass(frozen=True, eq=False)
+class RangeFactor(_LandmarkReading):
     """A range reading: the distance from the robot's position to a landmark.  [YIB Eq. 33]
 
         ``RangeFactor.create(state, landmark, measured, sigma, *, loss=None, state_dim=6)``
@@ -272,34 +316,12 @@ class RangeFactor(StateMeasurement):
     Error:  e = ‖[x, y] - ℓ‖₂ - r
     """
 
-    measured: NDArray  # (1,) range [m]
-
-    _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "measured")
-    other_dims: ClassVar[tuple[int, ...]] = (LANDMARK_DIM,)
-
-    @classmethod
-    def create(
-        cls,
-        state: Key,
-        landmark: Key,
-        measured: float,
-        sigma: float,
-        *,
-        loss: RobustLoss | None = None,
-        state_dim: int = STATE_DIM,
-    ) -> RangeFactor:
-        """Range reading ``measured`` (m, not negative) from state ``state`` to landmark ``landmark``."""
-        reading = _range("measured", measured)
-        W = sqrt_information(sigma, 1, "sigma")
-        check_resolved("RangeFactor", (state, landmark), ("range",), reading, W)
-        return cls((state, landmark), W, measured=reading, loss=loss, state_dim=state_dim)
+    _reads = "range"
+    _reading = staticmethod(_range)
+    _rows = staticmethod(_range_row)
 
     def error(self, x: NDArray, l: NDArray) -> NDArray:
         return _distance(x, l)[0][..., None] - self.measured  # [YIB Eq. 33]
-
-    def jacobians(self, x: NDArray, l: NDArray) -> tuple[NDArray, NDArray]:
-        _, Jx, Jl = _range_row(x, l)  # called here, not through error_and_jacobians: the warning's stacklevel
-        return Jx[..., None, :], Jl[..., None, :]
 
     def error_and_jacobians(self, x: NDArray, l: NDArray) -> tuple[NDArray, tuple[NDArray, NDArray]]:
         r, Jx, Jl = _range_row(x, l)  # one distance for the error and its Jacobians
@@ -307,7 +329,7 @@ class RangeFactor(StateMeasurement):
 
 
 @dataclass(frozen=True, eq=False)
-class BearingFactor(StateMeasurement):
+class BearingFactor(_LandmarkReading):
     """A bearing reading: the direction of a landmark in the robot frame.
 
         ``BearingFactor.create(state, landmark, measured, sigma, *, loss=None, state_dim=6)``
@@ -319,34 +341,12 @@ class BearingFactor(StateMeasurement):
     Error:  e = wrap(atan2(ℓy - y, ℓx - x) - θ - b),   wrap to [-π, π)
     """
 
-    measured: NDArray  # (1,) bearing [rad]
-
-    _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "measured")
-    other_dims: ClassVar[tuple[int, ...]] = (LANDMARK_DIM,)
-
-    @classmethod
-    def create(
-        cls,
-        state: Key,
-        landmark: Key,
-        measured: float,
-        sigma: float,
-        *,
-        loss: RobustLoss | None = None,
-        state_dim: int = STATE_DIM,
-    ) -> BearingFactor:
-        """Bearing reading ``measured`` (rad) from ``state`` to ``landmark``."""
-        reading = measured_vector(measured, 1, "measured")
-        W = sqrt_information(sigma, 1, "sigma")
-        check_resolved("BearingFactor", (state, landmark), ("bearing",), reading, W)
-        return cls((state, landmark), W, measured=reading, loss=loss, state_dim=state_dim)
+    _reads = "bearing"
+    _reading = staticmethod(_bearing)
+    _rows = staticmethod(_bearing_row)
 
     def error(self, x: NDArray, l: NDArray) -> NDArray:
         return wrap_angle(_bearing_row(x, l)[0] - self.measured[..., 0])[..., None]
-
-    def jacobians(self, x: NDArray, l: NDArray) -> tuple[NDArray, NDArray]:
-        _, Jx, Jl = _bearing_row(x, l)
-        return Jx[..., None, :], Jl[..., None, :]
 
 
 @dataclass(frozen=True, eq=False)
@@ -380,7 +380,7 @@ class BearingRangeFactor(StateMeasurement):
         state_dim: int = STATE_DIM,
     ) -> BearingRangeFactor:
         """Bearing-range reading; noise is sigmas (2,) or a covariance (2, 2) for [bearing, range]."""
-        measured = np.concatenate([measured_vector(bearing, 1, "bearing"), _range("range", range_)])
+        measured = np.concatenate([_bearing("bearing", bearing), _range("range", range_)])
         W = sqrt_information(noise, 2)
         check_resolved("BearingRangeFactor", (state, landmark), ("bearing", "range"), measured, W)
         return cls((state, landmark), W, measured=measured, loss=loss, state_dim=state_dim)

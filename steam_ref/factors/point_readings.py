@@ -19,7 +19,7 @@ reading is read at a time between two states by the one interpolation of its pri
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
@@ -29,34 +29,18 @@ from ..errors import SteamError
 from ..lie import GroupState, LieGroup
 from ..lie.group import check_group
 from ..lie.points import point_dim, position, rotation_part, to_body
-from ..manifold import VECTOR, Manifold
 from ..robust import RobustLoss
 from ..variables import Key
-from .base import Factor, measured_vector, sqrt_information
+from .base import measured_vector, sqrt_information
+from .lie_prior import OneGroupState
 
 __all__ = ["PositionReading", "RangeReading", "PointReading", "AngularVelocityReading", "PosePrior"]
 
 
 @dataclass(frozen=True, eq=False)
-class _StateReading(Factor):
-    """A reading of one group state (its first key) and of landmarks of the group's k-space (any further keys)."""
-
-    group: LieGroup = field(kw_only=True)
-    derivatives: int = field(default=1, kw_only=True)  # the state's: 1 (pose, twist) or 2 (and its acceleration)
-
-    _shared: ClassVar[tuple[str, ...]] = ("group", "derivatives")
-    n_landmarks: ClassVar[int] = 0  # the landmarks it reads, after the state
-
-    @property
-    def key_kinds(self) -> tuple[Manifold, ...]:
-        return (GroupState(self.group, self.derivatives),) + (VECTOR,) * self.n_landmarks
-
-    @property
-    def key_dims(self) -> tuple[int, ...]:  # type: ignore[override]
-        return (GroupState(self.group, self.derivatives).dim,) + (point_dim(self.group),) * self.n_landmarks
-
-    def batch_signature(self) -> tuple:
-        return super().batch_signature() + (self.group, self.derivatives)
+class _StateReading(OneGroupState):
+    """A reading of one group state (its first key) and of landmarks of the group's k-space (any further keys,
+    ``n_landmarks``)."""
 
     def _padded(self, H: NDArray, at: slice) -> NDArray:
         """H (..., m, w) placed in the columns ``at`` of a state Jacobian (..., m, state dim), zero elsewhere."""

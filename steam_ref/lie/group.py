@@ -210,9 +210,13 @@ class LieGroup(ABC):
         """ξ = Log(a⁻¹ b) and u = J_r(ξ)⁻¹ v (a twist v seen in the rates of ξ); with ``jacobians``, also ∂ξ/∂δa =
         -J_r(ξ)⁻¹ Ad(Exp(-ξ)), ∂ξ/∂δb = J_r(ξ)⁻¹ and ∂u/∂ξ: a local variable of the GP on the group and its
         Jacobians in one call [DER 11.10, 11.13]. Here from the group's methods in turn; a group may fuse them (SE(2)
-        reads the coefficients of its angle once)."""
-        a, b = self._elements("a", a), self._elements("b", b)
-        v = self._twists("v", v)
+        reads the coefficients of its angle once, ``_log_between``)."""
+        return self._log_between(self._elements("a", a), self._elements("b", b), self._twists("v", v), jacobians)
+
+    def _log_between(
+        self, a: NDArray, b: NDArray, v: NDArray, jacobians: bool
+    ) -> tuple[NDArray, NDArray] | tuple[NDArray, NDArray, NDArray, NDArray, NDArray]:
+        """:meth:`log_between` of checked elements and twist: here from the group's methods in turn."""
         if not jacobians:
             xi = self.log(self._between(a, b))
             return xi, _mv(self.right_jacobian_inverse(xi), v)

@@ -18,15 +18,13 @@ none loses precision to cancellation near φ = 0 [DER 11.3-11.7].
 
 from __future__ import annotations
 
-from typing import Literal, overload
-
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..dead_reckoning import wrap_angle
 from ..errors import ShapeError, SteamError
 from .group import LieGroup, matrix_of
-from .se2_series import SERIES_BELOW, coefficients
+from .se2_series import SERIES_BELOW, Coefficients, coefficients
 
 __all__ = ["SE2", "SE2Group", "wrap", "SERIES_BELOW"]
 
@@ -66,6 +64,22 @@ def wrap(theta: ArrayLike) -> NDArray:
 
 def _rot(theta: NDArray) -> tuple[NDArray, NDArray]:
     return np.cos(theta), np.sin(theta)
+
+
+def _jr_inverse_column(gamma: NDArray, r1: NDArray, r2: NDArray) -> tuple[NDArray, NDArray]:
+    """J_r(ξ)⁻¹'s last column above its 1, (γρ₁ + ρ₂/2, γρ₂ - ρ₁/2), from γ at φ and ξ's translation ρ; J_r(ξ)⁻¹ is
+    [[α, -φ/2, ·], [φ/2, α, ·], [0, 0, 1]] (``SE2Group.right_jacobian_inverse``, ``log_between``).  [DER 11.5]"""
+    return gamma * r1 + r2 / 2, gamma * r2 - r1 / 2
+
+
+def _jr_inverse_derivative(
+    k: Coefficients, r1: NDArray, r2: NDArray, v1: NDArray, v2: NDArray, w: NDArray
+) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+    """The entries (γw, w/2, α'v₁ - v₂/2 + γ'ρ₁w, v₁/2 + α'v₂ + γ'ρ₂w) of ∂(J_r(ξ)⁻¹ v)/∂ξ =
+    [[γw, w/2, ·], [-w/2, γw, ·], [0, 0, 0]] from the coefficients ``k`` at φ, ξ's ρ and v = [v₁, v₂, w]
+    (``SE2Group.jr_inverse_times_jacobian``, ``log_between``).  [DER 11.6]"""
+    a1, g1 = k["alpha1"], k["gamma1"]
+    return k["gamma"] * w, w / 2, a1 * v1 - v2 / 2 + g1 * r1 * w, v1 / 2 + a1 * v2 + g1 * r2 * w
 
 
 class SE2Group(LieGroup):
@@ -131,10 +145,10 @@ class SE2Group(LieGroup):
     def right_jacobian_inverse(self, xi: ArrayLike) -> NDArray:
         """J_r(ξ)⁻¹ = [[α, -φ/2, γρ₁ + ρ₂/2], [φ/2, α, γρ₂ - ρ₁/2], [0, 0, 1]] in closed form.  [DER 11.5]"""
         xi = self._twists("xi", xi)
-        g = coefficients(xi[..., 2])
-        al, G, b = g["alpha"], g["gamma"], xi[..., 2] / 2
-        r1, r2 = xi[..., 0], xi[..., 1]
-        return matrix_of([[al, -b, G * r1 + r2 / 2], [b, al, G * r2 - r1 / 2], [0.0, 0.0, 1.0]], r1)  # [DER 11.5]
+        k = coefficients(xi[..., 2])
+        al, h, r1 = k["alpha"], xi[..., 2] / 2, xi[..., 0]
+        j13, j23 = _jr_inverse_column(k["gamma"], r1, xi[..., 1])
+        return matrix_of([[al, -h, j13], [h, al, j23], [0.0, 0.0, 1.0]], r1)  # [DER 11.5]
 
     def adjoint(self, a: ArrayLike) -> NDArray:
         """Ad(T) = [[R, [y, -x]ᵀ], [0, 1]]: T Exp(ξ) T⁻¹ = Exp(Ad(T) ξ).  [DER 11.8]"""
@@ -164,35 +178,16 @@ class SE2Group(LieGroup):
     def jr_inverse_times_jacobian(self, xi: ArrayLike, v: ArrayLike) -> NDArray:
         """∂(J_r(ξ)⁻¹ v)/∂ξ, exact, in closed form: (..., 3, 3).  [DER 11.6]"""
         xi, v = self._twists("xi", xi), self._twists("v", v)
-        g = coefficients(xi[..., 2])
-        G, a1, G1 = g["gamma"], g["alpha1"], g["gamma1"]
-        r1, r2 = xi[..., 0], xi[..., 1]
-        u1, u2, w = v[..., 0], v[..., 1], v[..., 2]
-        r1, r2, u1, u2, w, G, a1, G1 = np.broadcast_arrays(r1, r2, u1, u2, w, G, a1, G1)
-        return matrix_of(
-            [
-                [G * w, w / 2, a1 * u1 - u2 / 2 + G1 * r1 * w],
-                [-w / 2, G * w, u1 / 2 + a1 * u2 + G1 * r2 * w],
-                [0.0, 0.0, 0.0],
-            ],
-            r1,
-        )
+        k, r1, r2 = coefficients(xi[..., 2]), xi[..., 0], xi[..., 1]
+        gw, h, d13, d23 = np.broadcast_arrays(*_jr_inverse_derivative(k, r1, r2, v[..., 0], v[..., 1], v[..., 2]))
+        return matrix_of([[gw, h, d13], [-h, gw, d23], [0.0, 0.0, 0.0]], gw)  # [DER 11.6]
 
-    @overload
-    def log_between(
-        self, a: ArrayLike, b: ArrayLike, v: ArrayLike, jacobians: Literal[False] = False
-    ) -> tuple[NDArray, NDArray]: ...
-    @overload
-    def log_between(
-        self, a: ArrayLike, b: ArrayLike, v: ArrayLike, jacobians: Literal[True]
-    ) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray]: ...
-    def log_between(
-        self, a: ArrayLike, b: ArrayLike, v: ArrayLike, jacobians: bool = False
+    def _log_between(
+        self, a: NDArray, b: NDArray, v: NDArray, jacobians: bool
     ) -> tuple[NDArray, NDArray] | tuple[NDArray, NDArray, NDArray, NDArray, NDArray]:
         """ξ = Log(a⁻¹ b), u = J_r(ξ)⁻¹ v and (``jacobians``) ∂ξ/∂δa, ∂ξ/∂δb = J_r(ξ)⁻¹, ∂u/∂ξ in one pass over the
         coefficients of φ [DER 11.1-11.6]; ∂ξ/∂δa = -J_r(ξ)⁻¹ Ad(Exp(-ξ)) = -J_r(-ξ)⁻¹ (J_r(ξ)⁻¹ Ad(Exp(-ξ)) is
         J_l(ξ)⁻¹ = J_r(-ξ)⁻¹ [SOLA]): (11.5) at -ξ, α even and γ odd in φ, so no rotation of ξ is needed."""
-        a, b, v = self._elements("a", a), self._elements("b", b), self._twists("v", v)
         c, s = _rot(a[..., 2])
         dx, dy = b[..., 0] - a[..., 0], b[..., 1] - a[..., 1]
         x, y = c * dx + s * dy, -s * dx + c * dy  # t of a⁻¹ b (``_between``)
@@ -201,23 +196,23 @@ class SE2Group(LieGroup):
         al, g, h = k["alpha"], k["gamma"], phi / 2
         r1, r2 = al * x + h * y, -h * x + al * y  # Log  [DER 11.1-11.2]
         v1, v2, w = v[..., 0], v[..., 1], v[..., 2]
-        j13, j23 = g * r1 + r2 / 2, g * r2 - r1 / 2  # J_r(ξ)⁻¹'s last column  [DER 11.5]
+        j13, j23 = _jr_inverse_column(g, r1, r2)  # [DER 11.5]
         xi, u = _stacked([r1, r2, phi]), _stacked([al * v1 - h * v2 + j13 * w, h * v1 + al * v2 + j23 * w, w])
         if not jacobians:
             return xi, u
-        a1, g1 = k["alpha1"], k["gamma1"]
         out = np.zeros(np.broadcast_shapes(r1.shape, w.shape) + (3, 3, 3))
         da, db, du = out[..., 0, :, :], out[..., 1, :, :], out[..., 2, :, :]
         da[..., 0, 0] = da[..., 1, 1] = -al  # -J_r(-ξ)⁻¹
         db[..., 0, 0] = db[..., 1, 1] = al  # J_r(ξ)⁻¹  [DER 11.5]
         da[..., 0, 1] = db[..., 0, 1] = -h
         da[..., 1, 0] = db[..., 1, 0] = h
-        da[..., 0, 2], da[..., 1, 2], da[..., 2, 2] = r2 / 2 - g * r1, -(g * r2 + r1 / 2), -1.0
+        # -J_r(-ξ)⁻¹'s column: (11.5)'s at -ξ negated, which is (11.5)'s with γ → -γ (γ odd in φ, the column linear in ρ)
+        da[..., 0, 2], da[..., 1, 2] = _jr_inverse_column(-g, r1, r2)
+        da[..., 2, 2] = -1.0
         db[..., 0, 2], db[..., 1, 2], db[..., 2, 2] = j13, j23, 1.0
-        du[..., 0, 0] = du[..., 1, 1] = g * w  # ∂(J_r(ξ)⁻¹ v)/∂ξ  [DER 11.6]
-        du[..., 0, 1], du[..., 1, 0] = w / 2, -w / 2
-        du[..., 0, 2] = a1 * v1 - v2 / 2 + g1 * r1 * w
-        du[..., 1, 2] = v1 / 2 + a1 * v2 + g1 * r2 * w
+        gw, hw, du[..., 0, 2], du[..., 1, 2] = _jr_inverse_derivative(k, r1, r2, v1, v2, w)  # [DER 11.6]
+        du[..., 0, 0] = du[..., 1, 1] = gw
+        du[..., 0, 1], du[..., 1, 0] = hw, -hw
         return xi, u, da, db, du
 
     def compose_exp(self, a: ArrayLike, xi: ArrayLike) -> NDArray:
