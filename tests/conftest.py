@@ -44,6 +44,20 @@ def shared_data():
     return reference_data_dir()
 
 
+@pytest.fixture(scope="session")
+def small_mat(tmp_path_factory):
+    """A small generated task (60 steps, 10 landmarks) written as a CMU .mat file: ``(path, data)``, for a
+    command's ``--dataset PATH --preset synthetic``. Read-only."""
+    import scipy.io
+
+    from steam_ref.datasets import generate_synthetic
+
+    data = generate_synthetic(n_steps=60, n_landmarks=10, seed=2, range_sigma=0.3)
+    path = tmp_path_factory.mktemp("data") / "small.mat"
+    scipy.io.savemat(path, data.to_cmu_arrays())
+    return path, data
+
+
 # A run of a whole tutorial is slow (up to ~45 s each), so each runs apart; every other test runs with its file.
 RUNS_APART = "test_notebooks.py::test_notebook_executes["
 
