@@ -16,9 +16,17 @@ import tempfile
 
 import numpy as np
 import pytest
+import scipy.linalg  # noqa: F401  (its BLAS loaded before the limit below)
 from requirements import DATA_DIR_ENV, DATA_FILES, SHARED_DATA, optional_import, reference_data_dir
+from threadpoolctl import threadpool_limits
 
 from steam_ref.datasets.search import data_cache_dir
+
+# One BLAS thread for the tests' own dense algebra (the oracles' expm, quadrature and solves), as the solvers set for
+# theirs (steam_ref.linear.threads, which sets its own limit inside and restores this one): the suite's two workers
+# (`-n 2`, CI's two cores) with OpenBLAS's default of a thread a core each put four busy threads on two cores.
+# A test that needs another count sets it (tests/test_threads.py starts at 2); subprocesses keep their default.
+_ONE_BLAS_THREAD = threadpool_limits(limits=1)
 
 if not os.environ.get(DATA_DIR_ENV) and SHARED_DATA.is_dir():
     os.environ[DATA_DIR_ENV] = str(SHARED_DATA.resolve())
