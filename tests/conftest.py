@@ -16,9 +16,17 @@ import tempfile
 
 import numpy as np
 import pytest
+import scipy.linalg  # noqa: F401  (its BLAS loaded before the limit below)
 from requirements import DATA_DIR_ENV, DATA_FILES, SHARED_DATA, optional_import, reference_data_dir
+from threadpoolctl import threadpool_limits
 
 from steam_ref.datasets.search import data_cache_dir
+
+# One BLAS thread for the tests' own dense algebra (the oracles' expm, quadrature and solves), as the solvers set for
+# theirs (steam_ref.linear.threads, which sets its own limit inside and restores this one): the suite's two workers
+# (`-n 2`, CI's two cores) with OpenBLAS's default of a thread a core each put four busy threads on two cores.
+# A test that needs another count sets it (tests/test_threads.py starts at 2); subprocesses keep their default.
+_ONE_BLAS_THREAD = threadpool_limits(limits=1)
 
 if not os.environ.get(DATA_DIR_ENV) and SHARED_DATA.is_dir():
     os.environ[DATA_DIR_ENV] = str(SHARED_DATA.resolve())
@@ -42,6 +50,20 @@ def rng() -> np.random.Generator:
 def shared_data():
     """The folder holding the paper's files (Syn_theta_Plaza.mat, Plaza1_..., authors/*.mat)."""
     return reference_data_dir()
+
+
+@pytest.fixture(scope="session")
+def small_mat(tmp_path_factory):
+    """A small generated task (60 steps, 10 landmarks) written as a CMU .mat file: ``(path, data)``, for a
+    command's ``--dataset PATH --preset synthetic``. Read-only."""
+    import scipy.io
+
+    from steam_ref.datasets import generate_synthetic
+
+    data = generate_synthetic(n_steps=60, n_landmarks=10, seed=2, range_sigma=0.3)
+    path = tmp_path_factory.mktemp("data") / "small.mat"
+    scipy.io.savemat(path, data.to_cmu_arrays())
+    return path, data
 
 
 # A run of a whole tutorial is slow (up to ~45 s each), so each runs apart; every other test runs with its file.

@@ -36,6 +36,18 @@ def sde_transition(sde, dt: float) -> NDArray:
     return scipy.linalg.expm(np.asarray(sde.A) * dt)
 
 
+_QUADRATURES: dict[tuple, NDArray] = {}
+
+
+def _quadrature(name: str, integrand, dt: float, *arrays: NDArray) -> NDArray:
+    """∫₀^dt integrand(s) ds by adaptive quadrature, computed once per integral's name, dt and the exact arrays it
+    reads (a pure function of them: a dense kernel asks the same few steps again and again); a fresh copy each call."""
+    key = (name, float(dt), *((a.shape, a.tobytes()) for a in arrays))
+    if key not in _QUADRATURES:
+        _QUADRATURES[key], _ = scipy.integrate.quad_vec(integrand, 0.0, dt, epsabs=1e-13, epsrel=1e-12)
+    return _QUADRATURES[key].copy()
+
+
 def sde_process_noise(sde, dt: float) -> NDArray:
     """Q(dt) = ∫₀^dt Φ(dt, s) F Qc Fᵀ Φ(dt, s)ᵀ ds by adaptive quadrature.  [YIB Eq. 17]"""
     A, F, qc = (np.asarray(a, float) for a in (sde.A, sde.F, sde.qc))
@@ -44,15 +56,13 @@ def sde_process_noise(sde, dt: float) -> NDArray:
         Phi = scipy.linalg.expm(A * (dt - s))
         return Phi @ F @ qc @ F.T @ Phi.T
 
-    Q, _ = scipy.integrate.quad_vec(integrand, 0.0, dt, epsabs=1e-13, epsrel=1e-12)
-    return Q
+    return _quadrature("Q", integrand, dt, A, F, qc)
 
 
 def sde_input_integral(sde, dt: float) -> NDArray:
     """v_i = ∫₀^dt Φ(dt, s) v ds by adaptive quadrature.  [YIB Eq. 23]"""
     A, v = np.asarray(sde.A, float), np.asarray(sde.v, float)
-    vi, _ = scipy.integrate.quad_vec(lambda s: scipy.linalg.expm(A * (dt - s)) @ v, 0.0, dt, epsabs=1e-13, epsrel=1e-12)
-    return vi
+    return _quadrature("v_i", lambda s: scipy.linalg.expm(A * (dt - s)) @ v, dt, A, v)
 
 
 def gp_kernel(times: NDArray, sde, P0: NDArray) -> NDArray:

@@ -7,11 +7,9 @@ import json
 
 import numpy as np
 import pytest
-import scipy.io
 from cli_runs import run_module, runner
 
 from steam_ref.cli.commands import main
-from steam_ref.datasets import generate_synthetic
 from steam_ref.errors import DivergenceWarning
 from steam_ref.paper.online import run_online
 from steam_ref.paper.presets import PaperSetup
@@ -31,23 +29,17 @@ JSON_KEYS = {
 }
 
 
-@pytest.fixture(scope="module")
-def small_mat(tmp_path_factory):
-    """A small generated task written as a CMU .mat file."""
-    data = generate_synthetic(n_steps=60, n_landmarks=10, seed=2, range_sigma=0.3)
-    path = tmp_path_factory.mktemp("data") / "small.mat"
-    scipy.io.savemat(path, data.to_cmu_arrays())
-    return path, data
-
-
 _run = runner()
+
+
+def _run_small(capsys, path, *args: object) -> tuple[int, str, str]:
+    """``steam-ref run`` on the small task (conftest's ``small_mat``) with the synthetic preset, then ``args``."""
+    return _run(capsys, "run", "--dataset", path, "--preset", "synthetic", *args)
 
 
 def test_json_line_has_the_keys_and_sane_values(capsys, small_mat):
     path, data = small_mat
-    code, out, err = _run(
-        capsys, "run", "--dataset", str(path), "--preset", "synthetic", "--method", "pb", "--skip", "3", "--json"
-    )
+    code, out, err = _run_small(capsys, path, "--method", "pb", "--skip", "3", "--json")
     assert code == 0, err
     lines = out.strip().splitlines()
     assert len(lines) == 1
@@ -62,21 +54,8 @@ def test_json_line_has_the_keys_and_sane_values(capsys, small_mat):
 
 def test_no_interpolate_flag_reaches_the_run(capsys, small_mat):
     path, _ = small_mat
-    code, out, _ = _run(
-        capsys,
-        "run",
-        "--dataset",
-        str(path),
-        "--preset",
-        "synthetic",
-        "--method",
-        "pbvr",
-        "--skip",
-        "4",
-        "--no-interpolate",
-        "--every",
-        "10",
-        "--json",
+    code, out, _ = _run_small(
+        capsys, path, "--method", "pbvr", "--skip", "4", "--no-interpolate", "--every", "10", "--json"
     )
     row = json.loads(out)
     assert code == 0 and row["interpolate"] is False and row["every"] == 10 and row["method"] == "pbvr"
@@ -90,19 +69,7 @@ def test_relinearization_flags_reach_the_run(capsys, small_mat):
 
     path, data = small_mat
     setup = PaperSetup.synthetic()
-    code, out, err = _run(
-        capsys,
-        "run",
-        "--dataset",
-        str(path),
-        "--preset",
-        "synthetic",
-        "--relinearize-threshold",
-        "0",
-        "--relinearize-skip",
-        "1",
-        "--json",
-    )
+    code, out, err = _run_small(capsys, path, "--relinearize-threshold", "0", "--relinearize-skip", "1", "--json")
     assert code == 0, err
     direct = run_online(data, setup.with_isam2(relinearize_threshold=0.0, relinearize_skip=1), StreamOptions())
     default = run_online(data, setup, StreamOptions())
@@ -113,20 +80,7 @@ def test_relinearization_flags_reach_the_run(capsys, small_mat):
 def test_save_estimates_writes_every_time_step(capsys, small_mat, tmp_path):
     path, data = small_mat
     target = tmp_path / "est.npz"
-    code, _, err = _run(
-        capsys,
-        "run",
-        "--dataset",
-        str(path),
-        "--preset",
-        "synthetic",
-        "--method",
-        "pb",
-        "--skip",
-        "2",
-        "--save-estimates",
-        str(target),
-    )
+    code, _, err = _run_small(capsys, path, "--method", "pb", "--skip", "2", "--save-estimates", target)
     assert code == 0, err
     saved = np.load(target)
     n = data.n_poses
@@ -155,20 +109,7 @@ def test_save_estimates_writes_the_final_marginals(capsys, small_mat, tmp_path, 
 
     path, data = small_mat
     target = tmp_path / "est.npz"
-    code, _, err = _run(
-        capsys,
-        "run",
-        "--dataset",
-        str(path),
-        "--preset",
-        "synthetic",
-        "--method",
-        method,
-        "--skip",
-        "3",
-        "--save-estimates",
-        str(target),
-    )
+    code, _, err = _run_small(capsys, path, "--method", method, "--skip", "3", "--save-estimates", target)
     assert code == 0, err
     saved = np.load(target)
     setup = PaperSetup.synthetic()
@@ -201,9 +142,11 @@ def test_save_estimates_writes_the_final_marginals(capsys, small_mat, tmp_path, 
         np.testing.assert_allclose(saved["landmark_covariance"][i], block(L(int(lid))), rtol=1e-6, atol=1e-10)
 
 
-def test_fidelity_command_prints_the_distance_to_the_authors_run(capsys, shared_data):
-    code, out, err = _run(capsys, "fidelity", "--dataset", "paper-synthetic", "--data-dir", str(shared_data), "--json")
+def test_fidelity_command_prints_the_distance_to_the_authors_run_and_names_its_run_in_the_progress(capsys, shared_data):
+    argv = ["fidelity", "--dataset", "paper-synthetic", "--data-dir", shared_data, "--json", "--progress"]
+    code, out, err = _run(capsys, *argv)
     assert code == 0, err
+    assert "paper-synthetic BTGP/1:" in err  # the bar names its data set and method (--progress beside --json)
     row = json.loads(out)
     assert row["dataset"] == "paper-synthetic" and row["n_states"] == 1501
     assert row["pose_max_m"] < 0.01 and row["pose_rms_m"] <= row["pose_max_m"]
@@ -321,13 +264,9 @@ def test_departure_flags_reach_the_set_up(capsys, small_mat):
     from steam_ref.paper.presets import PaperSetup
 
     path, data = small_mat
-    code, out, err = _run(
+    code, out, err = _run_small(
         capsys,
-        "run",
-        "--dataset",
-        str(path),
-        "--preset",
-        "synthetic",
+        path,
         "--skip",
         "3",
         "--departure",
@@ -342,19 +281,7 @@ def test_departure_flags_reach_the_set_up(capsys, small_mat):
     setup = PaperSetup.synthetic().replace(pose2_heading_rate_guess=False, relinearize_blocks=None)
     assert row["rmse_m"] == round(run_online(data, setup, StreamOptions(skip=3)).rmse_m, 6)
     for departure in ("plain-heading-rate", "whole-state-relinearization"):  # each one on its own reaches the run
-        _, out, _ = _run(
-            capsys,
-            "run",
-            "--dataset",
-            str(path),
-            "--preset",
-            "synthetic",
-            "--skip",
-            "3",
-            "--departure",
-            departure,
-            "--json",
-        )
+        _, out, _ = _run_small(capsys, path, "--skip", "3", "--departure", departure, "--json")
         setup = PaperSetup.synthetic().departing(departure)
         assert json.loads(out)["rmse_m"] == round(run_online(data, setup, StreamOptions(skip=3)).rmse_m, 6)
     code, _, err = _run(capsys, "run", "--departure", "sorted-ranges")
@@ -362,20 +289,19 @@ def test_departure_flags_reach_the_set_up(capsys, small_mat):
 
 
 def test_prior_flags_reach_the_setup(capsys, small_mat, tmp_path):
-    """--prior singer with --qc-scale is the same run as the API with that set-up, and saves accelerations."""
+    """--prior singer with --qc-scale is the same run as the API with that set-up, and saves accelerations (on the
+    first 24 poses: PB re-solves every pose so far at each update, and the flags reach the run at the first)."""
     path, data = small_mat
     out_file = tmp_path / "singer.npz"
-    code, out, err = _run(
+    code, out, err = _run_small(
         capsys,
-        "run",
-        "--dataset",
-        str(path),
-        "--preset",
-        "synthetic",
+        path,
         "--method",
         "pb",
         "--skip",
         "2",
+        "--max-poses",
+        "24",
         "--prior",
         "singer",
         "--qc-scale",
@@ -384,15 +310,16 @@ def test_prior_flags_reach_the_setup(capsys, small_mat, tmp_path):
         "3",
         "--json",
         "--save-estimates",
-        str(out_file),
+        out_file,
     )
     assert code == 0, err
     row = json.loads(out)
     assert row["prior"] == "singer" and row["qc_scale"] == 10.0
     base = PaperSetup.synthetic()
     setup = base.replace(prior="singer", qc=10 * base.qc, singer_time_constant=3.0)
-    direct = run_online(data, setup, method="pb", skip=2)
+    direct = run_online(data, setup, method="pb", skip=2, max_poses=24)
     saved = np.load(out_file)
+    assert len(saved["x"]) == len(direct.trajectory) == 24
     np.testing.assert_allclose(saved["x"], direct.trajectory[:, 0], rtol=1e-9, atol=1e-9)
     np.testing.assert_allclose(saved["thetaddot"], direct.trajectory[:, 8], rtol=1e-9, atol=1e-9)
     assert row["rmse_m"] == pytest.approx(direct.rmse_m, abs=1e-6)

@@ -61,12 +61,9 @@ def test_synthetic_btgp_lands_on_the_authors_run(shared_data):
     assert fid.n_states == 1501
     assert fid.pose_max_m < 0.01
     assert fid.pose_cov_median is None  # the synthetic run saved no marginals
+    every_other = dataclasses.replace(result, state_poses=result.state_poses[::2])  # a skip-2 run's layout
     with pytest.raises(DataError, match="same state layout"):
-        compare(
-            run_online(data, PaperSetup.synthetic(), skip=2),
-            load_authors_run("paper-synthetic", data),
-            data.ground_truth,
-        )
+        compare(every_other, load_authors_run("paper-synthetic", data), data.ground_truth)
     lid = sorted(result.landmarks)[3]
     fewer = dataclasses.replace(result, landmarks={i: v for i, v in result.landmarks.items() if i != lid})
     with pytest.raises(DataError, match=f"no estimate of landmark {lid}"):

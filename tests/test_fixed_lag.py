@@ -169,6 +169,37 @@ def fed(stream: LinearStream, smoother: FixedLagSmoother, n: int, after_each=lam
     return everything
 
 
+def held_after_each_step(stream: LinearStream, solver: IncrementalSolver, n: int):
+    """Give ``solver`` (no lag: the test marginalizes) the stream's first update and ``n`` more steps, but each that
+    reads a variable already marginalized (the stream's next step then); after each update, yield every factor given
+    so far and the variables held, sorted."""
+    factors, values, _ = stream.initial()
+    everything = list(factors)
+    solver.update(factors, values)
+    for _ in range(n):
+        factors, values, _ = stream.step()
+        if any(k not in solver.state.dims and k not in values for f in factors for k in f.keys):
+            continue
+        everything += factors
+        solver.update(factors, values)
+        yield everything, sorted(solver.state.dims, key=str)
+
+
+def over_lagged_streams(most_steps: int):
+    """Hypothesis over lagged linear streams, ``test(seed, n, lag, landmarks, threshold)``: 25 of them, of 4 to
+    ``most_steps`` steps, lags of 0.6 to 6 s, up to 3 landmarks, relinearization thresholds 0, 0.1 and never."""
+    strategies = given(
+        seed=st.integers(0, 10_000),
+        n=st.integers(4, most_steps),
+        lag=st.floats(0.6, 6.0),
+        landmarks=st.integers(0, 3),
+        threshold=st.sampled_from([0.0, 0.1, np.inf]),
+    )
+    return lambda test: settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])(
+        strategies(test)
+    )
+
+
 def check_window(
     solver: IncrementalSolver | FixedLagSmoother, everything: list[Factor], stream: LinearStream | None = None
 ) -> None:
@@ -185,14 +216,7 @@ def check_window(
     assert solver.tree.problems() == []
 
 
-@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(
-    seed=st.integers(0, 10_000),
-    n=st.integers(4, 20),
-    lag=st.floats(0.6, 6.0),
-    landmarks=st.integers(0, 3),
-    threshold=st.sampled_from([0.0, 0.1, np.inf]),
-)
+@over_lagged_streams(most_steps=20)
 def test_window_marginal_equals_dense_posterior(seed, n, lag, landmarks, threshold):
     stream = LinearStream(seed, landmarks)
     smoother = stream.smoother = FixedLagSmoother(lag, relinearize_threshold=threshold, **EXACT)
@@ -211,19 +235,9 @@ def test_window_marginal_equals_dense_posterior(seed, n, lag, landmarks, thresho
 @given(seed=st.integers(0, 10_000), n=st.integers(5, 14), data=st.data())
 def test_marginalizing_any_variables_leaves_the_dense_marginal(seed, n, data):
     """Any subset, middle states and landmarks included: the non-leaf path (re-elimination, D first)."""
-    stream = LinearStream(seed, 3, fix_every=2)
     solver = IncrementalSolver(**EXACT)
-    factors, values, _ = stream.initial()
-    everything = list(factors)
-    solver.update(factors, values)
     leaves_seen = set()
-    for _ in range(n):
-        factors, values, _ = stream.step()
-        if any(k not in solver.state.dims and k not in values for f in factors for k in f.keys):
-            continue  # a reading of a variable already marginalized: the stream's next step
-        everything += factors
-        solver.update(factors, values)
-        held = sorted(solver.state.dims, key=str)
+    for everything, held in held_after_each_step(LinearStream(seed, 3, fix_every=2), solver, n):
         if len(held) > 2 and data.draw(st.booleans()):
             drop = data.draw(st.lists(st.sampled_from(held), min_size=1, max_size=len(held) - 1, unique=True))
             report = marginalize(solver, drop)

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from test_fixed_lag import EXACT, LinearStream, check_window, dense_posterior, fed
+from test_fixed_lag import EXACT, LinearStream, check_window, dense_posterior, fed, held_after_each_step
 
 from steam_ref.bayes_tree import FixedLagSmoother, IncrementalSolver
 from steam_ref.bayes_tree.marginalization import marginalize_keys
@@ -76,18 +76,8 @@ def test_batches_marginalize_less_often_and_the_same_variables():
 @given(seed=st.integers(0, 10_000), n=st.integers(5, 14), data=st.data())
 def test_whole_subtrees_cut_with_their_cached_marginal_leave_the_dense_marginal(seed, n, data):
     """Any subset: whole subtrees take the cached f(S), others the usual paths (leaves or re-elimination)."""
-    stream = LinearStream(seed, 3, fix_every=2)
     solver = IncrementalSolver(**EXACT)
-    factors, values, _ = stream.initial()
-    everything = list(factors)
-    solver.update(factors, values)
-    for _ in range(n):
-        factors, values, _ = stream.step()
-        if any(k not in solver.state.dims and k not in values for f in factors for k in f.keys):
-            continue
-        everything += factors
-        solver.update(factors, values)
-        held = sorted(solver.state.dims, key=str)
+    for everything, held in held_after_each_step(LinearStream(seed, 3, fix_every=2), solver, n):
         if len(held) > 2 and data.draw(st.booleans()):
             oldest = data.draw(st.booleans())  # the oldest states: whole subtrees, mostly
             drop = (

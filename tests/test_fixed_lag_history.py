@@ -13,9 +13,7 @@ from typing import ClassVar
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
-from hypothesis import strategies as st
-from test_fixed_lag import EXACT, LinearStream, Offset, dense_posterior, fed
+from test_fixed_lag import EXACT, LinearStream, Offset, dense_posterior, fed, over_lagged_streams
 
 from steam_ref.bayes_tree import FixedLagSmoother, IncrementalSolver, marginalize
 from steam_ref.errors import SteamError
@@ -28,14 +26,7 @@ def optimum(everything: list[Factor]) -> dict:
     return dense_posterior(everything, list(dict.fromkeys(k for f in everything for k in f.keys)))[0]
 
 
-@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(
-    seed=st.integers(0, 10_000),
-    n=st.integers(4, 24),
-    lag=st.floats(0.6, 6.0),
-    landmarks=st.integers(0, 3),
-    threshold=st.sampled_from([0.0, 0.1, np.inf]),
-)
+@over_lagged_streams(most_steps=24)
 def test_smoothed_history_is_the_batch_optimum(seed, n, lag, landmarks, threshold):
     stream = LinearStream(seed, landmarks)
     smoother = stream.smoother = FixedLagSmoother(lag, relinearize_threshold=threshold, keep_history=True, **EXACT)

@@ -12,7 +12,6 @@ import subprocess
 
 import pytest
 from cli_runs import run_module
-from requirements import reference_data_dir
 
 from steam_ref.cli.commands import main
 from steam_ref.datasets import generate_synthetic
@@ -51,7 +50,7 @@ def test_a_run_within_its_budget_says_nothing_about_it(small, capsys):
     assert "time budget" not in capsys.readouterr().err
 
 
-def test_progress_is_off_without_a_terminal_and_on_when_asked(monkeypatch, capsys):
+def test_progress_is_off_without_a_terminal_and_on_when_asked(monkeypatch, capsys, small_mat):
     monkeypatch.setattr("sys.stderr", io.StringIO())  # not a terminal
     assert not progress.wanted(None) and progress.wanted(True) and not progress.wanted(False, json_output=False)
     monkeypatch.undo()
@@ -60,9 +59,10 @@ def test_progress_is_off_without_a_terminal_and_on_when_asked(monkeypatch, capsy
     assert capsys.readouterr().err == ""
     assert main([*args, "--progress"]) == 0
     assert "consistency on synthetic: 6 estimators, seeds" in capsys.readouterr().err
-    assert main(["batch", "--dataset", "synthetic", "--progress"]) == 0
-    assert "synthetic batch (AMD): 00:0" in capsys.readouterr().err
-    assert main(["batch", "--dataset", "synthetic", "--no-progress"]) == 0
+    batch = ["batch", "--dataset", str(small_mat[0]), "--preset", "synthetic"]  # a step without a loop
+    assert main([*batch, "--progress"]) == 0
+    assert f"{small_mat[0]} batch (AMD): 00:0" in capsys.readouterr().err
+    assert main([*batch, "--no-progress"]) == 0
     assert capsys.readouterr().err == ""
 
 
@@ -82,12 +82,6 @@ def test_on_a_terminal_the_bar_shows_without_being_asked_and_no_progress_turns_i
     assert terminal.getvalue() == ""
 
 
-def test_fidelity_names_its_data_set_and_method(capsys):
-    folder = reference_data_dir()
-    assert main(["fidelity", "--dataset", "paper-synthetic", "--data-dir", str(folder), "--progress"]) == 0
-    assert "paper-synthetic BTGP/1:" in capsys.readouterr().err
-
-
 # -- a progress display never costs a run ---------------------------------------------------------
 
 
@@ -102,14 +96,14 @@ class _Full(io.StringIO):
 
 
 @pytest.mark.parametrize("stderr", [_Full, None], ids=["full", "closed"])
-def test_a_stderr_that_cannot_take_the_bar_costs_the_run_nothing(monkeypatch, capsys, tmp_path, stderr):
+def test_a_stderr_that_cannot_take_the_bar_costs_the_run_nothing(monkeypatch, capsys, tmp_path, stderr, small_mat):
     monkeypatch.setattr("sys.stderr", stderr() if stderr else None)  # None: Python's stderr when fd 2 is closed
     saved = tmp_path / "trajectory.txt"
     code = main(["run", "--steps", "40", "--progress", "--json", "--save-trajectory", str(saved)])
     assert code == 0 and saved.is_file()
     assert json.loads(capsys.readouterr().out)["n_poses"] == 41
     for command in (
-        ["batch", "--dataset", "synthetic", "--progress"],
+        ["batch", "--dataset", str(small_mat[0]), "--preset", "synthetic", "--progress"],
         ["consistency", "--seeds", "2", "--steps", "8", "--progress"],
     ):
         assert main(command) == 0, command

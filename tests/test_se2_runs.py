@@ -9,11 +9,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import scipy.io
 from cli_runs import runner
 
 from steam_ref.batch import gauss_newton
-from steam_ref.datasets import generate_synthetic, sample_from_model
+from steam_ref.datasets import sample_from_model
 from steam_ref.errors import DivergenceWarning
 from steam_ref.factors import GPPriorFactor, PriorFactor
 from steam_ref.factors.lie_prior import LiePriorFactor, LieStatePrior
@@ -33,14 +32,6 @@ from steam_ref.trajectory import Trajectory
 from steam_ref.variables import L, Values, X
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
-
-
-@pytest.fixture(scope="module")
-def small_mat(tmp_path_factory):
-    data = generate_synthetic(n_steps=60, n_landmarks=10, seed=2, range_sigma=0.3)
-    path = tmp_path_factory.mktemp("data") / "small.mat"
-    scipy.io.savemat(path, data.to_cmu_arrays())
-    return path, data
 
 
 _run = runner()
