@@ -118,14 +118,6 @@ class FigureEight:
         return solver
 
 
-@pytest.fixture(scope="module", autouse=True)
-def one_blas_thread():
-    """The oracles' small dense algebra on one BLAS thread, as the solvers run theirs (steam_ref.linear.threads):
-    with OpenBLAS's threads on a busy machine, the kernel's quadrature took 40 times longer."""
-    with sr.blas_threads(1):
-        yield
-
-
 @pytest.fixture(scope="module", params=["wnoa", "se2"])
 def solved(request):
     """The problem, its incremental solver, and the batch optimum from the incremental estimate."""

@@ -24,17 +24,10 @@ from steam_ref.factors.point_readings import (
 )
 from steam_ref.lie import SE2, SE3, SO3, GroupState
 from steam_ref.lie.points import point_dim
-from steam_ref.linear.threads import blas_threads
 from steam_ref.motion import motion_prior
 from steam_ref.variables import L, X
 
 ANGLES = (1e-8, 0.3, 1.999, 2.001, 3.0)
-
-
-@pytest.fixture(autouse=True, scope="module")
-def _one_blas_thread():
-    with blas_threads(1):
-        yield
 
 
 def _close(analytic, numeric, tol=1e-9):

@@ -23,18 +23,11 @@ from steam_ref.datasets.search import gtsam_data_dir
 from steam_ref.errors import DataError
 from steam_ref.evaluate import chi2_band
 from steam_ref.lie import SE3V, GroupState
-from steam_ref.linear.threads import blas_threads
 from steam_ref.motion import motion_prior
 from steam_ref.paper.rigid import rigid_nees, solve_rigid, steps
 from steam_ref.variables import L, X
 
 QC = np.diag([0.02, 0.005, 0.005, 0.001, 0.001, 0.002])
-
-
-@pytest.fixture(autouse=True, scope="module")
-def _one_blas_thread():
-    with blas_threads(1):
-        yield
 
 
 @pytest.mark.parametrize("name", ["se3", "se3-simplified"])

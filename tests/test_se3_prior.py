@@ -22,18 +22,8 @@ from steam_ref.gp.interpolate import interpolation_matrices, interpolation_terms
 from steam_ref.gp.sde import dense_kernel
 from steam_ref.lie import SE2, SE3, SE3V, GroupState, gp_accel
 from steam_ref.lie import gp as lie_gp
-from steam_ref.linear.threads import blas_threads
 from steam_ref.motion import LieGroupAccelPrior, LieGroupWnoa, motion_prior
 from steam_ref.variables import X
-
-
-@pytest.fixture(autouse=True, scope="module")
-def _one_blas_thread():
-    """The kernels at one BLAS thread, as the solvers call them (steam_ref.linear.threads): OpenBLAS's threads
-    woken for each 48×48 matrix function made these tests ten times slower on a loaded machine."""
-    with blas_threads(1):
-        yield
-
 
 ANGLES = (1e-8, 1e-4, 0.3, 1.0, 2.0, 3.0)
 QC6 = np.diag([0.4, 0.3, 0.2, 0.05, 0.08, 0.1])

@@ -23,17 +23,10 @@ from steam_ref.evaluate import chi2_quantile, group_ape
 from steam_ref.lie import SE3V
 from steam_ref.lie.points import point_dim
 from steam_ref.lie.state import GroupState
-from steam_ref.linear.threads import blas_threads
 from steam_ref.manifold import VECTOR
 from steam_ref.motion import MOTION_PRIORS, motion_prior
 
 run = runner("run")
-
-
-@pytest.fixture(autouse=True, scope="module")
-def _one_blas_thread():
-    with blas_threads(1):
-        yield
 
 
 def test_group_ape_is_the_distance_and_the_angle_of_the_relative_rotation():

@@ -16,18 +16,8 @@ from finite_differences import jacobian8_stacked
 from steam_ref.errors import ShapeError
 from steam_ref.gp.interpolate import interpolation_terms
 from steam_ref.lie import SE2, SE3, SE3V, GroupState, gp_accel
-from steam_ref.linear.threads import blas_threads
 from steam_ref.motion import LieGroupAccelPrior, motion_prior
 from steam_ref.variables import X
-
-
-@pytest.fixture(autouse=True, scope="module")
-def _one_blas_thread():
-    """The kernels at one BLAS thread, as the solvers call them (steam_ref.linear.threads): OpenBLAS's threads
-    woken for each 48×48 matrix function made these tests ten times slower on a loaded machine."""
-    with blas_threads(1):
-        yield
-
 
 ANGLES = (1e-8, 0.3, 1.0, 3.0)
 GROUPS = {"se2": SE2, "se3": SE3}

@@ -138,7 +138,7 @@ class OneGroupState(Factor):
 
     @property
     def key_dims(self) -> tuple[int, ...]:  # type: ignore[override]
-        state = ((1 + self.derivatives) * self.group.dim,)  # GroupState(group, derivatives).dim
+        state = (self.key_kinds[0].dim,)  # GroupState's size, and its check of the derivatives
         return state + (point_dim(self.group),) * self.n_landmarks if self.n_landmarks else state
 
     def batch_signature(self) -> tuple:
@@ -254,7 +254,7 @@ class BetweenGroupStates(Factor):
 
     @property
     def key_dims(self) -> tuple[int, ...]:  # type: ignore[override]
-        return ((1 + self.derivatives) * self.group.dim,) * 2 + tuple(self.inner.key_dims[1:])
+        return (GroupState(self.group, self.derivatives).dim,) * 2 + tuple(self.inner.key_dims[1:])
 
     @property
     def key_kinds(self) -> tuple[Manifold, ...]:
