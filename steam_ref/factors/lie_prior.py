@@ -138,7 +138,7 @@ class OneGroupState(Factor):
 
     @property
     def key_dims(self) -> tuple[int, ...]:  # type: ignore[override]
-        state = (self.key_kinds[0].dim,)  # GroupState's size, and its check of the derivatives
+        state = (GroupState(self.group, self.derivatives).dim,)  # its check of the derivatives, too
         return state + (point_dim(self.group),) * self.n_landmarks if self.n_landmarks else state
 
     def batch_signature(self) -> tuple:
