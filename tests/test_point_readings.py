@@ -15,6 +15,7 @@ from finite_differences import jacobian8_stacked
 from scipy.spatial.transform import Rotation
 
 from steam_ref.errors import ShapeError, SteamError
+from steam_ref.factors.lie_prior import LieStatePrior
 from steam_ref.factors.point_readings import (
     AngularVelocityReading,
     PointReading,
@@ -143,6 +144,9 @@ def test_bad_readings_are_refused_by_name():
         PointReading.create(X(0), L(0), np.zeros(3), 1.0, group=SE3, derivatives=3)
     with pytest.raises(SteamError, match="names variable"):
         RangeReading.create(X(0), X(0), 1.0, 1.0, group=SE3)
+    for bad in (0, 3):  # a reading made directly, not by create: its state's size names the derivatives too
+        with pytest.raises(SteamError, match=rf"derivatives=1\) or also its acceleration \(2\), got {bad}"):
+            _ = LieStatePrior((X(0),), np.eye(6), mean=np.zeros(6), group=SE2, derivatives=bad).key_dims
     with pytest.raises(SteamError, match="inner must read a state of kind"):
         motion_prior("se3", np.eye(6)).interpolated_factor(
             PositionReading.create(X(0), np.zeros(2), 1.0, group=SE2), X(1), X(2), 0, 1, 0.5
