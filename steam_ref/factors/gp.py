@@ -54,9 +54,8 @@ class GPPriorFactor(Factor):
     @classmethod
     def wnoa(cls, key1: Key, key2: Key, dt: float, qc: NDArray) -> GPPriorFactor:
         """The white-noise-on-acceleration prior over a gap dt (s) > 0; qc: Qc (3, 3).  [YIB Eq. 22, 30-31]"""
-        made = (
-            _BY_GAP.get((dt, id(qc))) if type(dt) in FLOAT_TYPES else None
-        )  # a dt met before with this Qc: checked then
+        # a dt met before with this Qc: checked then
+        made = _BY_GAP.get((dt, id(qc))) if type(dt) in FLOAT_TYPES else None
         if made is None:
             w = process_noise_sqrt_information(dt, qc)  # WᵀW = Qᵢ⁻¹, memoised per (dt, Qc)
             d = w.shape[0] // 2

@@ -33,7 +33,7 @@ import numpy as np
 import scipy.special
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["Coefficients", "NAMES", "DEFINITIONS", "SERIES_BELOW", "coefficients_at"]
+__all__ = ["Coefficients", "NAMES", "DEFINITIONS", "SERIES_BELOW", "coefficients_at", "horner"]
 
 SERIES_BELOW = 2.0  # θ below this: every coefficient from its series
 _N = 24  # terms in θ² of each series: the last is below 1e-20 of the sum at θ = 2 (cot family: (θ/2π)^48 · 48²)
@@ -142,8 +142,9 @@ _B1_TAYLOR = _taylor_at_root([(1.0, 1, "sin"), (1.0, 0, "cos"), (-1.0, 0, "one")
 _A2_TAYLOR = _taylor_at_root([(2.0, 0, "sin"), (-2.0, 1, "cos"), (-1.0, 2, "sin")], _A2_ROOT[0])
 
 
-def _poly(c: NDArray, z: NDArray) -> NDArray:
-    """Σ c[k] zᵏ by Horner's rule."""
+def horner(c: NDArray, z: NDArray) -> NDArray:
+    """Σ c[k] zᵏ by Horner's rule, elementwise over z (any shape): the series of SO(3)'s, SE(3)'s and SE(2)'s
+    coefficients (``se2_series``)."""
     out = np.full_like(z, c[-1])
     for ck in c[-2::-1]:
         out = out * z + ck
@@ -165,7 +166,7 @@ class Coefficients:
 
     def _series(self, name: str) -> NDArray:
         c, odd = _S[name]
-        value = _poly(c, self.t**2)
+        value = horner(c, self.t**2)
         return self.t * value if odd else value
 
     def _pick(self, name: str) -> NDArray:
@@ -182,7 +183,7 @@ class Coefficients:
         """``value`` (a numerator ÷ θ), or within _ROOT_NEAR of its root θ* its Taylor series there ÷ θ."""
         d = (self.t - root[0]) - root[1]  # θ - θ*: the first difference is exact near θ*
         near = np.abs(d) < _ROOT_NEAR
-        return np.where(near, d * _poly(taylor, d) / self.t, value) if np.any(near) else value
+        return np.where(near, d * horner(taylor, d) / self.t, value) if np.any(near) else value
 
     # --- closed forms, θ ≥ SERIES_BELOW: 1 - cos θ = 2 sin²h, no difference of large terms, and θ's powers divided
     # one at a time, so none overflows at any finite θ ---------------------------------------------------------

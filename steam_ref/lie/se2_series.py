@@ -15,6 +15,8 @@ import numpy as np
 import scipy.special
 from numpy.typing import ArrayLike, NDArray
 
+from .coefficients import horner
+
 __all__ = ["Coefficients", "SERIES_BELOW", "coefficients"]
 
 SERIES_BELOW = 1.0  # |φ| below this: the coefficients from their series (each converges fast there)
@@ -42,23 +44,6 @@ _cos_k, _sin_k = (_rc, -_rs, -_rc, _rs), (_rs, _rc, -_rs, -_rc)  # the k-th deri
 _ROOT_G = np.array(
     [(2 * _ROOT_HI * _cos_k[k % 4] + 2 * k * _cos_k[(k - 1) % 4] - _sin_k[k % 4]) / _fact[k] for k in range(1, 13)]
 )
-
-
-def _poly(c: NDArray, z: NDArray) -> NDArray:
-    """Σ c[k] zᵏ by Horner's rule; at one z in Python's floats (the same IEEE double products and sums, rounded
-    alike, so the same number to the last bit) at a fortieth of the cost of a NumPy operation on a 1-element array."""
-    if z.size == 1:
-        zf, terms = float(z.flat[0]), c.tolist()
-        value = terms[-1]
-        for ck in terms[-2::-1]:
-            value = value * zf + ck
-        out = np.empty_like(z)
-        out[...] = value
-        return out
-    out = np.full_like(z, c[-1])
-    for ck in c[-2::-1]:
-        out = out * z + ck
-    return out
 
 
 _SERIES = {"A": _A, "A1": _A1, "D": _D, "D1": _D1, "C": _C, "C1": _C1, "G": _G, "G1": _G1}
@@ -142,7 +127,7 @@ class Coefficients:
         d = (h - _ROOT_HI) - _ROOT_LO  # h - h*: the first difference is exact near h*
         near = np.abs(d) < _ROOT_NEAR
         if np.any(near):
-            g = np.where(near, d * _poly(_ROOT_G, d), g)  # Taylor series of g about its root h*
+            g = np.where(near, d * horner(_ROOT_G, d), g)  # Taylor series of g about its root h*
         return 2 * np.sin(h) * g / self.z
 
     def _C1(
