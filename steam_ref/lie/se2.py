@@ -66,6 +66,19 @@ def _rot(theta: NDArray) -> tuple[NDArray, NDArray]:
     return np.cos(theta), np.sin(theta)
 
 
+def _exp_translation(xi: NDArray) -> tuple[NDArray, NDArray]:
+    """Exp(ξ)'s translation t = V(φ) ρ, V = [[A, -B], [B, A]] (``SE2Group.exp``, ``compose_exp``).  [DER 11.1]"""
+    k = coefficients(xi[..., 2])
+    A, B, r1, r2 = k["A"], k["B"], xi[..., 0], xi[..., 1]
+    return A * r1 - B * r2, B * r1 + A * r2
+
+
+def _composed(a: NDArray, x: NDArray, y: NDArray, theta: NDArray) -> NDArray:
+    """T_a T_b = [t_a + R_a t_b; θ_a + θ_b wrapped] from b's parts t_b = (x, y), θ_b (``_compose``, ``compose_exp``)."""
+    c, s = _rot(a[..., 2])
+    return _stacked([a[..., 0] + c * x - s * y, a[..., 1] + s * x + c * y, wrap(a[..., 2] + theta)])
+
+
 def _jr_inverse_column(gamma: NDArray, r1: NDArray, r2: NDArray) -> tuple[NDArray, NDArray]:
     """J_r(ξ)⁻¹'s last column above its 1, (γρ₁ + ρ₂/2, γρ₂ - ρ₁/2), from γ at φ and ξ's translation ρ; J_r(ξ)⁻¹ is
     [[α, -φ/2, ·], [φ/2, α, ·], [0, 0, 1]] (``SE2Group.right_jacobian_inverse``, ``log_between``).  [DER 11.5]"""
@@ -93,10 +106,7 @@ class SE2Group(LieGroup):
     def exp(self, xi: ArrayLike) -> NDArray:
         """Exp(ξ) as a pose [x, y, θ], θ wrapped exactly at any size: t = V(φ) ρ, V = [[A, -B], [B, A]].  [DER 11.1]"""
         xi = self._twists("xi", xi)
-        k = coefficients(xi[..., 2])
-        A, B = k["A"], k["B"]
-        r1, r2 = xi[..., 0], xi[..., 1]
-        return _stacked([A * r1 - B * r2, B * r1 + A * r2, wrap(xi[..., 2])])  # [DER 11.1]
+        return _stacked([*_exp_translation(xi), wrap(xi[..., 2])])  # [DER 11.1]
 
     def log(self, a: ArrayLike) -> NDArray:
         """Log(T) = [V(φ)⁻¹ t; φ], φ = θ wrapped to (-π, π]; V⁻¹ = [[α, φ/2], [-φ/2, α]].  [DER 11.1-11.2]"""
@@ -158,10 +168,7 @@ class SE2Group(LieGroup):
 
     def _compose(self, a: NDArray, b: NDArray) -> NDArray:
         """T_a T_b = [t_a + R_a t_b; θ_a + θ_b wrapped]."""
-        c, s = _rot(a[..., 2])
-        x = a[..., 0] + c * b[..., 0] - s * b[..., 1]
-        y = a[..., 1] + s * b[..., 0] + c * b[..., 1]
-        return _stacked([x, y, wrap(a[..., 2] + b[..., 2])])
+        return _composed(a, b[..., 0], b[..., 1], b[..., 2])
 
     def _inverse(self, a: NDArray) -> NDArray:
         """T⁻¹ = [-Rᵀ t; -θ wrapped]."""
@@ -218,12 +225,7 @@ class SE2Group(LieGroup):
     def compose_exp(self, a: ArrayLike, xi: ArrayLike) -> NDArray:
         """T Exp(ξ) = [t + R(θ) V(φ) ρ; θ + φ wrapped] in one pass: the same products as ``exp`` then ``compose``."""
         a, xi = self._elements("a", a), self._twists("xi", xi)
-        k = coefficients(xi[..., 2])
-        A, B = k["A"], k["B"]
-        r1, r2 = xi[..., 0], xi[..., 1]
-        ex, ey = A * r1 - B * r2, B * r1 + A * r2  # Exp's translation  [DER 11.1]
-        c, s = _rot(a[..., 2])
-        return _stacked([a[..., 0] + c * ex - s * ey, a[..., 1] + s * ex + c * ey, wrap(a[..., 2] + wrap(xi[..., 2]))])
+        return _composed(a, *_exp_translation(xi), wrap(xi[..., 2]))  # [DER 11.1]
 
     # --- a planar robot: an SE(2) pose is [x, y, θ] itself -------------------------------------------
 
