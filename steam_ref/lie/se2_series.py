@@ -130,10 +130,8 @@ class Coefficients:
             g = np.where(near, d * horner(_ROOT_G, d), g)  # Taylor series of g about its root h*
         return 2 * np.sin(h) * g / self.z
 
-    def _C1(
-        self,
-    ) -> NDArray:  # C' = D - 2C/φ = 4 cos h (sin h - h cos h)/φ³, h = φ/2: no cancellation at φ = π, where C' = 0
-        h = self.phi / 2
+    def _C1(self) -> NDArray:
+        h = self.phi / 2  # C' = D - 2C/φ = 4 cos h (sin h - h cos h)/φ³: no cancellation at φ = π, where C' = 0
         return self._pick(
             lambda: self._sum("C1"), lambda: 4 * np.cos(h) * (np.sin(h) - h * np.cos(h)) / (self.z * self.phi)
         )
