@@ -1,19 +1,7 @@
 """The ``steam-ref`` command: every command registered, the parser built from them, and the entry point.
 
-Usage::
-
-    steam-ref run [--dataset NAME_OR_PATH] [--method {btgp,pb,pbvr}] [--every N] [--skip K]
-                  [--interpolate/--no-interpolate] [--preset {synthetic,plaza,victoria-park}] [--data-dir DIR]
-                  [--converge-at-end] [--json] [--save-estimates FILE.npz] [--plot FILE.png]
-                  [--lag SECONDS] [--steps N]
-    steam-ref batch [--dataset NAME_OR_PATH] [--ordering {xl,amd}] [--json] [--plot FILE.png]
-    steam-ref fidelity [--dataset {paper-synthetic,plaza,all}] [--json] [--plot FILE.png]
-    steam-ref reproduce [--quick] [--out DIR] [--jobs N]
-    steam-ref conformance {export DIR, check RESULTS_DIR [--only SUITE...], selftest [--paper], build}
-    steam-ref data {list, fetch [NAME ...]}
-    steam-ref consistency [--seeds N] [--jobs N] [--backend loky|dask] [--json] [--plot FILE.png] ...
-    steam-ref fit-qc [--dataset NAME_OR_PATH] [--prior {wnoa,wnoj,singer,se2}] [--max-poses N] [--json]
-    steam-ref homework {handout NOTEBOOK... [--out DIR], mark SUBMISSION... [--source DIR] [--json]}
+``steam-ref --help`` lists the commands (:data:`COMMANDS`), and ``steam-ref COMMAND --help`` a command's options,
+written once, in its parser (the site's page per command shows the same).
 
 Each command is one module with ``add_parser(subparsers)`` (its options; returns its parser) and
 ``run(args)`` (what it does; returns the exit code), registered once in :data:`COMMANDS`.

@@ -19,6 +19,7 @@ from ..datasets.registry import DATASETS
 from ..errors import SteamError
 from ..evaluate import trajectory_figures
 from ..linear.amalgamation import zero_fraction
+from ..motion import MOTION_PRIORS
 from ..paper.online import StreamingEstimator
 from ..paper.options import StreamOptions
 from ..paper.presets import DEPARTURES, PAPER_AMALGAMATION_ZEROS, PRESETS, PaperSetup
@@ -135,7 +136,8 @@ def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
         "--singer-time-constant",
         type=scale(*SINGER_TIME_CONSTANTS, "the Singer prior's process noise must stay within float64's precision"),
         default=None,
-        help=f"Singer prior (--prior singer only): the acceleration's time constant 1/α on the preset's GP clock "
+        help=f"Singer prior (--prior {' or '.join(p for p, c in MOTION_PRIORS.items() if 'singer_time_constant' in c.options)}"
+        f" only): the acceleration's time constant 1/α on the preset's GP clock "
         f"(pose steps for synthetic and plaza, seconds for victoria-park), 1e-6 to 1e8 "
         f"(default: the preset's, {PaperSetup.singer_time_constant})",
     )
