@@ -6,8 +6,8 @@ written once, in its parser (the site's page per command shows the same).
 Each command is one module with ``add_parser(subparsers)`` (its options; returns its parser) and
 ``run(args)`` (what it does; returns the exit code), registered once in :data:`COMMANDS`.
 
-Every command that can run longer than a few seconds shows its progress on stderr when that is a terminal
-(``--progress`` / ``--no-progress``: :mod:`steam_ref.paper.progress`), and every command runs the solvers at
+Every command with ``--progress`` / ``--no-progress`` shows its progress on stderr when that is a terminal
+(:mod:`steam_ref.paper.progress`; ``fit-qc`` and ``homework`` have none), and every command runs the solvers at
 one BLAS thread unless ``$STEAM_REF_BLAS_THREADS`` says otherwise (:mod:`steam_ref.linear.threads`).
 Bad arguments and missing or malformed data files give a one-line error and exit code 2. The project's
 warnings (:class:`~steam_ref.errors.SteamWarning`: a diverging stream, a cut-short convergence) are one line
