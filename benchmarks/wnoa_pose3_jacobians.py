@@ -7,8 +7,8 @@ tests/test_gtsam_wnoa3.py); GTSAM differentiates J_r(ξ)⁻¹ ϖ₂ by a truncat
 with rotation and translation parts of norm s, ϖ₁ = ξ / Δt plus a tenth of it in noise, ϖ₂ = ϖ₁ plus as much
 (Δt = 0.7, Qc = diag(0.5, 0.8, 1.1, 0.05, 0.07, 0.09)); the error is the largest entry of W (J - J₈) over both
 states' 12 × 12 blocks, W the factor's square-root information and J₈ the 8th-order central differences of our
-residual through the right retraction (step 2⁻⁷), the worst of ``--seeds`` draws. Ours sits on the differences'
-own floor. Prints one JSON line (sizes, both errors) and draws the curves:
+residual through the right retraction (step 2⁻⁷, :mod:`steam_ref.conformance.differences`), the worst of ``--seeds``
+draws. Ours sits on the differences' own floor. Prints one JSON line (sizes, both errors) and draws the curves:
 
     python benchmarks/wnoa_pose3_jacobians.py [--points 37] [--seeds 3] [--plot docs/figures/wnoa_pose3_jacobians.png]
 """
@@ -17,17 +17,13 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
-from pathlib import Path
 
 import numpy as np
 
+from steam_ref.conformance.differences import jacobian8
 from steam_ref.lie import SE3, GroupState
 from steam_ref.motion import LieGroupWnoa
 from steam_ref.variables import X
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-from finite_differences import jacobian8
 
 PERM = np.r_[3:6, 0:3]  # ours [ρ; φ] -> GTSAM's [ω; v], both ways
 ROWS = np.r_[PERM, 6 + PERM]

@@ -1,4 +1,5 @@
-"""Central finite differences: the oracle for every analytic Jacobian."""
+"""Central finite differences: the oracle for every analytic Jacobian (the 8th-order stencil is the package's,
+:mod:`steam_ref.conformance.differences`, which the benchmarks use too)."""
 
 from __future__ import annotations
 
@@ -6,6 +7,10 @@ from collections.abc import Callable
 
 import numpy as np
 from numpy.typing import NDArray
+
+from steam_ref.conformance.differences import jacobian8, jacobian8_stacked
+
+__all__ = ["numerical_jacobians", "jacobian8", "jacobian8_stacked"]
 
 
 def numerical_jacobians(f: Callable[..., NDArray], *xs: NDArray, eps: float = 1e-6) -> list[NDArray]:
@@ -21,31 +26,3 @@ def numerical_jacobians(f: Callable[..., NDArray], *xs: NDArray, eps: float = 1e
             cols.append((np.asarray(f(*plus)) - np.asarray(f(*minus))) / (2 * eps))
         out.append(np.stack(cols, axis=-1))
     return out
-
-
-_C8 = (1 / 280, -4 / 105, 1 / 5, -4 / 5, 0.0, 4 / 5, -1 / 5, 4 / 105, -1 / 280)  # 8th-order central stencil
-
-
-def jacobian8(f: Callable[[NDArray], NDArray], n: int, h: float = 2.0**-7) -> NDArray:
-    """∂f/∂δ at δ = 0 (m, n) by the 8th-order central stencil with step h (truncation h⁸ |f⁽⁹⁾| / 630, rounding
-    about 6e-14 max|f| at h = 2⁻⁷; tests/test_lie_groups.py): f takes a step δ (n,) in a tangent."""
-    cols = []
-    for j in range(n):
-        e = np.zeros(n)
-        e[j] = h
-        cols.append(sum(c * np.asarray(f((k - 4) * e)) for k, c in enumerate(_C8) if c) / h)
-    return np.stack(cols, axis=-1)
-
-
-def jacobian8_stacked(f: Callable[[NDArray], NDArray], n: int, h: float = 2.0**-7) -> NDArray:
-    """:func:`jacobian8` for an ``f`` that broadcasts over a leading axis: one call of f on the 8n steps (8n, n)
-    stacked, the same stencil, step and sum (the same numbers up to the last bits a batched matrix product may
-    round differently), without 8n calls' overhead."""
-    ks = [k for k, c in enumerate(_C8) if c]
-    steps = np.zeros((n, len(ks), n))
-    for j in range(n):
-        steps[j, :, j] = [(k - 4) * h for k in ks]
-    values = np.asarray(f(steps.reshape(-1, n)))
-    values = values.reshape((n, len(ks)) + values.shape[1:])
-    cols = [sum(_C8[k] * values[j, i] for i, k in enumerate(ks)) / h for j in range(n)]
-    return np.stack(cols, axis=-1)

@@ -26,6 +26,8 @@ from requirements import optional_import
 
 from steam_ref.bayes_tree import FixedLagSmoother, IncrementalSolver
 from steam_ref.conformance import KIT_VERSION, KITS, SHIPPED, SUITES, spec
+from steam_ref.conformance.cases import suite_cases
+from steam_ref.conformance.cases.base import EXACT, LIE_CHECKS, Case, tol
 from steam_ref.conformance.checker import compare_quantity
 from steam_ref.conformance.kitio import dumps, kit_files, read_index, read_suite
 from steam_ref.conformance.oracle_graph import Problem, dense_system
@@ -96,7 +98,7 @@ def test_kit_json_reads_back_every_double_exactly(rng):
 
 
 def test_the_oracle_imports_nothing_of_steam_ref_but_its_errors():
-    oracle = {"oracle", "oracle_graph", "oracle_lag", "oracle_lie", "oracle_rigid", "expected", "kitio"}
+    oracle = {"oracle", "oracle_graph", "oracle_lag", "oracle_lie", "oracle_rigid", "expected", "kitio", "differences"}
     for module in oracle:
         tree = ast.parse((SHIPPED.parent / f"{module}.py").read_text())
         imported = {n.module for n in ast.walk(tree) if isinstance(n, ast.ImportFrom) and n.level}
@@ -129,6 +131,27 @@ def test_no_module_of_the_kit_is_named_after_a_group_or_a_kit_version_and_the_ki
         assert not any(group in stem for group in ("se2", "se3", "so2", "so3", "pose2", "pose3")), name
         assert not re.search(r"(^|_)v\d+$", stem), name  # graphs_v2.py: a case belongs to its idea's module
     assert not [n for n in modules if n.split("/")[0] in {kit.name for kit in KITS.values()}]  # data, not modules
+
+
+def test_no_case_can_change_the_tolerances_of_another():
+    """Cases are built from shared tables (LIE_CHECKS, FACTOR_TOL, one tol() for many quantities): each case's
+    tolerances are its own copy, read-only at both levels (quantity → tolerance, tolerance → atol and rtol)."""
+    cases = [c for s in SUITES if s != "paper" for c in suite_cases(s)]
+    for case in cases:
+        with pytest.raises(TypeError):
+            case.tolerance["added"] = EXACT
+        for t in case.tolerance.values():
+            if t != EXACT:
+                with pytest.raises(TypeError):
+                    t["rtol"] = 1.0
+    priors = [c for c in suite_cases("se3") if c.inputs.get("kind") == "prior"]  # both from LIE_CHECKS["prior"]
+    assert len(priors) >= 2 and priors[0].tolerance == priors[1].tolerance == LIE_CHECKS["prior"]
+    with pytest.raises(TypeError):
+        LIE_CHECKS["prior"]["H_0"]["rtol"] = 1.0
+    table = {"x": tol(1e-9)}
+    case = Case("c", "[YIB Eq. 1]", "d", {}, table, True)
+    table["x"] = EXACT
+    assert case.tolerance == {"x": {"atol": 0.0, "rtol": 1e-9}}
 
 
 # --- selftest, export, check ----------------------------------------------------------------------

@@ -231,19 +231,45 @@ def test_window_marginal_equals_dense_posterior(seed, n, lag, landmarks, thresho
     assert smoother.n_marginalized == entered - len(smoother)
 
 
+def marginalized_along(seed: int, n: int, choose) -> set[bool]:
+    """Marginalize ``choose(held)`` (a list of keys; empty: none) after each step of a stream with 3 landmarks, each
+    time checking the window against the dense posterior; returns the paths taken (``report.leaves``: True for the
+    leaf path, False for re-elimination with D first)."""
+    solver = IncrementalSolver(**EXACT)
+    paths = set()
+    for everything, held in held_after_each_step(LinearStream(seed, 3, fix_every=2), solver, n):
+        if len(held) > 2 and (drop := choose(held)):
+            report = marginalize(solver, drop)
+            paths.add(report.leaves)
+            assert set(report.keys) == set(drop)
+            check_window(solver, everything)
+    return paths
+
+
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(seed=st.integers(0, 10_000), n=st.integers(5, 14), data=st.data())
 def test_marginalizing_any_variables_leaves_the_dense_marginal(seed, n, data):
-    """Any subset, middle states and landmarks included: the non-leaf path (re-elimination, D first)."""
-    solver = IncrementalSolver(**EXACT)
-    leaves_seen = set()
-    for everything, held in held_after_each_step(LinearStream(seed, 3, fix_every=2), solver, n):
-        if len(held) > 2 and data.draw(st.booleans()):
-            drop = data.draw(st.lists(st.sampled_from(held), min_size=1, max_size=len(held) - 1, unique=True))
-            report = marginalize(solver, drop)
-            leaves_seen.add(report.leaves)
-            assert set(report.keys) == set(drop)
-            check_window(solver, everything)
+    """Any subset, middle states and landmarks included: the non-leaf path (re-elimination, D first), and the
+    leaf path when the draw is whole subtrees (both taken: the test below)."""
+
+    def drawn(held):
+        if not data.draw(st.booleans()):
+            return []
+        return data.draw(st.lists(st.sampled_from(held), min_size=1, max_size=len(held) - 1, unique=True))
+
+    marginalized_along(seed, n, drawn)
+
+
+def test_marginalizing_the_oldest_state_then_a_middle_one_takes_both_paths():
+    """The property above on fixed choices, so that both paths are taken: the oldest state, a leaf, is cut off;
+    then a state from the middle of the window, no leaf, is re-eliminated with D first; and so on in turn."""
+    turn = itertools.count()
+
+    def alternately(held):
+        states = [k for k in held if k.symbol == "x"]
+        return [min(states, key=lambda k: k.index) if next(turn) % 2 == 0 else states[len(states) // 2]]
+
+    assert marginalized_along(3, 10, alternately) == {True, False}
 
 
 BAD_QUERIES = [

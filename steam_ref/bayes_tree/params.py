@@ -56,7 +56,6 @@ class ISAM2Params:
     """How an :class:`~steam_ref.bayes_tree.IncrementalSolver` relinearizes and back-substitutes.
 
     With both thresholds 0 and skip 1, each update is one Gauss-Newton step on all factors so far.
-    The defaults are GTSAM's ISAM2Params defaults, which the paper's scripts use.
     """
 
     # β of [K12 Alg. 5]: relinearize a variable when max |δ| ≥ β; one float, or one per symbol {'x': 0.1, 'l': 0.5}

@@ -56,9 +56,8 @@ class SolverState:
         the log it yields come back as they were; nested ones belong to the outermost."""
         with self.log.transaction():
             self.log.keep(self.candidates)  # an ordered set: the next θ̄ moves, and the next ordering, follow it
-            self.log.record(setattr, self, "steps", self.steps)
-            self.log.record(setattr, self, "tree_nnz", self.tree_nnz)
-            self.log.record(setattr, self, "n_factors", self.n_factors)
+            for name in ("steps", "tree_nnz", "n_factors"):
+                self.log.record(setattr, self, name, getattr(self, name))
             yield self.log
 
     def values(self) -> Values:

@@ -23,12 +23,7 @@ from ..linear.system import GaussianFactor
 from ..variables import Key, key_list
 from .symbolic import CliqueTree, build_cliques
 
-__all__ = ["Clique", "BayesTree", "eliminate", "eliminate_clique", "factor_dims"]
-
-
-def factor_dims(factors: Sequence[GaussianFactor]) -> dict[Key, int]:
-    """Size of each variable, read off the factors' blocks."""
-    return {k: block.shape[1] for f in factors for k, block in zip(f.keys, f.blocks, strict=True)}
+__all__ = ["Clique", "BayesTree", "eliminate", "eliminate_clique"]
 
 
 def eliminate(
@@ -45,7 +40,8 @@ def eliminate(
     ``factor_ids`` (None entries for cached marginal factors) label the factors stored in each
     clique's ``factors``. ``amalgamation_zeros`` > 0 merges cliques (:func:`~.symbolic.build_cliques`).
     """
-    dims = factor_dims(factors) if dims is None else dims
+    if dims is None:  # each variable's size, read off the factors' blocks
+        dims = {k: block.shape[1] for f in factors for k, block in zip(f.keys, f.blocks, strict=True)}
     symbolic = build_cliques(order, [f.keys for f in factors], dims, amalgamation_zeros)
     incoming: list[list[GaussianFactor]] = [[] for _ in symbolic]  # marginal factors from children
     cliques, owner = [], [0] * len(factors)

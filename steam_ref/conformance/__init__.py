@@ -12,6 +12,7 @@ exports it, checks results laid out like it, and checks the installed code again
 - :mod:`.oracle` (the GP prior, the factors), :mod:`.oracle_graph` (problems, in a space: Gauss-Newton and iSAM2
   replayed with a retraction), :mod:`.oracle_lag` (fixed lag), :mod:`.oracle_lie` (a Lie group) and
   :mod:`.expected` (the table of case type → oracle): independent expected values;
+- :mod:`.differences`: the 8th-order central-difference stencil the tests and benchmarks check Jacobians with;
 - :mod:`.spec` (every suite's specs), :mod:`.runner` (the table of case type → steam_ref's answer),
   :mod:`.solvers` (steam_ref's solvers on a case's problem): steam_ref's own results for a case;
 - :mod:`.checker`: comparison within tolerance; :mod:`.gate`: a results folder against a whole kit

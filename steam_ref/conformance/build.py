@@ -64,7 +64,7 @@ def case_record(case: Case, expected: dict, suite: str = "", alternatives: dict 
         "independent": case.independent,
         "source": case.source,
         "quantities": [{"name": q, "depends_on": depends_on(suite, q)} for q in case.tolerance],
-        "tolerance": case.tolerance,
+        "tolerance": _roundtrip(case.tolerance),
         "inputs": _roundtrip(case.inputs),
         "expected": _roundtrip(expected),
         **({"alternatives": _roundtrip(alternatives)} if alternatives else {}),

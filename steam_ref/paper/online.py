@@ -18,6 +18,7 @@ from __future__ import annotations
 import time
 import warnings
 from array import array
+from functools import partial
 
 import numpy as np
 from numpy.typing import NDArray
@@ -69,6 +70,19 @@ class ScheduleClock:
     def updated(self) -> None:
         """The solver has just been updated."""
         self.started, self.since_update = True, 0
+
+
+class EstimatesAfter:
+    """The solver's estimates after an update, as the divergence fit asks for them (one call: the keys it names) and
+    with the newest state's in the same query, kept in :attr:`answered` for the front end's next prediction."""
+
+    def __init__(self, solver: OnlineSolver, newest: Key) -> None:
+        self.solver, self.newest = solver, newest
+        self.answered: dict[Key, NDArray] = {}  # empty when the fit asked nothing (no new factors)
+
+    def __call__(self, keys: list[Key]) -> dict[Key, NDArray]:
+        self.answered.update(self.solver.estimates_of([*keys, self.newest]))
+        return self.answered
 
 
 class StreamingEstimator:
@@ -154,16 +168,11 @@ class StreamingEstimator:
             values = levenberg_marquardt(
                 FactorGraph(self._pending), values, ordering="amd", relative_tolerance=tol, absolute_tolerance=tol
             ).values
-        prediction = values  # the gate: new readings at the prediction; the fit: at the new estimate
-        self.divergence.gate(self._pending, lambda keys: self._predicted(keys, prediction), pose)
+        # the gate: new readings at the prediction; the fit: at the new estimate
+        self.divergence.gate(self._pending, partial(self._predicted, prediction=values), pose)
         self.solver.update(self._pending, values)
-        after: dict[Key, NDArray] = {}  # the estimates the fit asks for and the latest state's, in one query
-
-        def estimates_after(keys: list[Key]) -> dict[Key, NDArray]:
-            after.update(self.solver.estimates_of([*keys, X(pose)]))
-            return after
-
-        self.divergence.fit(self._pending, estimates_after, pose)
+        after = EstimatesAfter(self.solver, X(pose))
+        self.divergence.fit(self._pending, after, pose)
         forgotten = (k.index for k in self.solver.forgotten() if k.symbol == "l")
         self.front.landmarks.difference_update(forgotten)  # seen again, a landmark enters anew
         if self.options.converge_at_end:  # (a lag, which forgets factors, refuses it)
@@ -176,8 +185,10 @@ class StreamingEstimator:
         self.schedule.updated()
         self._pending, self._pending_values = [], Values()
         self.n_solved = len(self.states)
-        latest = after.get(X(pose)) if pose != self.schedule.last_pose else None  # the last: updated again since
-        self.front.rebase(self.solver.estimate_of(X(pose)) if latest is None else latest)  # predict from the estimate
+        # the front end predicts from the newest state's estimate: the fit's query gave it, unless the fit asked
+        # nothing or the solver has moved since (the last pose: the final updates, converge_at_end's new solver)
+        latest = after.answered.get(X(pose)) if pose != self.schedule.last_pose else None
+        self.front.rebase(self.solver.estimate_of(X(pose)) if latest is None else latest)
         self.update_steps.append(pose)
         self.update_seconds.append(time.perf_counter() - start)
 

@@ -5,7 +5,9 @@ checks (:data:`LIE_CHECKS`), a group operation's case (:func:`group_case`) and a
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
+from types import MappingProxyType
 
 __all__ = [
     "Case",
@@ -26,9 +28,9 @@ __all__ = [
 EXACT = "exact"
 
 
-def tol(rtol: float, atol: float = 0.0) -> dict:
-    """Pass when max|got - expected| ≤ atol + rtol · max|expected| (normwise)."""
-    return {"atol": atol, "rtol": rtol}
+def tol(rtol: float, atol: float = 0.0) -> Mapping[str, float]:
+    """Pass when max|got - expected| ≤ atol + rtol · max|expected| (normwise); read-only, as cases share it."""
+    return MappingProxyType({"atol": atol, "rtol": rtol})
 
 
 @dataclass(frozen=True)
@@ -39,10 +41,16 @@ class Case:
     equation: str  # the paper's equations computed, '[YIB Eq. n]'
     description: str
     inputs: dict
-    tolerance: dict  # quantity → tol(...) or EXACT
+    tolerance: Mapping  # quantity → tol(...) or EXACT; the case's own read-only copy (see __post_init__)
     independent: bool  # expected values from the oracle (True) or produced by steam_ref (False)
     source: str = ""  # how the expected values are obtained
     notes: dict = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        # Cases are built from shared tables (LIE_CHECKS, FACTOR_TOL...): each keeps a read-only copy of its own,
+        # so that no case (or table) can change another's tolerances.
+        own = {q: t if isinstance(t, str) else MappingProxyType(dict(t)) for q, t in self.tolerance.items()}
+        object.__setattr__(self, "tolerance", MappingProxyType(own))
 
 
 ORACLE_GP = (
@@ -72,7 +80,7 @@ JR_INVERSE = tol(1e-11, 1e-13)  # J_r^-1 (the oracle's a dense inverse)
 EXACT_JACOBIAN = tol(1e-10, 1e-12)  # Jacobians: forward differences (~1e-8) fail it; kit v4's se2 had 1e-8
 AT_TAU = tol(1e-11, 1e-13)  # values through the local GP's mean (an expm and a dense solve more)
 COVARIANCE = tol(1e-10, 1e-14)  # covariances through the local GP (kit v5)
-LIE_CHECKS = {  # what a case of each kind checks in both Lie suites, at the exact tier
+_LIE_CHECKS = {
     "prior": {"error": GROUP, "H_0": EXACT_JACOBIAN, "H_1": EXACT_JACOBIAN, "cost": tol(1e-11)},
     "residual": {"error": GROUP, "cost": tol(1e-11)},  # a prior's error and cost alone
     "state_prior": {"error": GROUP, "H_0": EXACT_JACOBIAN},
@@ -81,6 +89,10 @@ LIE_CHECKS = {  # what a case of each kind checks in both Lie suites, at the exa
     "interpolation_covariance": {"x_tau": AT_TAU, "cov_tau": COVARIANCE},
     "extrapolation": {"x_t": AT_TAU, "J_1": EXACT_JACOBIAN, "cov_t": COVARIANCE},
 }
+# What a case of each kind checks in both Lie suites, at the exact tier; read-only, as many cases share each entry.
+LIE_CHECKS: Mapping[str, Mapping[str, Mapping[str, float]]] = MappingProxyType(
+    {kind: MappingProxyType(checks) for kind, checks in _LIE_CHECKS.items()}
+)
 RESIDUAL = {"local-variable": "[xi - dt w1; J_r(xi)^-1 w2 - w1]", "simplified": "[xi - dt w1; w2 - w1]"}  # e of each
 GROUP_KINDS = {  # a case of a group's own operations: the input its rows are, the quantities it checks
     "exp": ("xi", {"exp": GROUP, "log_of_exp": GROUP}),
@@ -98,7 +110,7 @@ def group_case(equation: str, source: str, name: str, description: str, kind: st
     return Case(name, equation, description, {"kind": kind, field_name: rows}, dict(checks), True, source)
 
 
-def stream_checks(updates: int, estimate: dict) -> dict:
+def stream_checks(updates: int, estimate: Mapping) -> dict:
     """The quantities of an iSAM2 stream on Lie-group states: after each update k, relinearized_k (exact), then
     estimate_k at ``estimate``."""
     return {q: t for k in range(1, updates + 1) for q, t in ((f"relinearized_{k}", EXACT), (f"estimate_{k}", estimate))}

@@ -10,6 +10,7 @@ iSAM2 stream that relinearizes. Every case is independent: :mod:`steam_ref.confo
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from functools import partial
 
 from .base import AT_TAU, LIE_CHECKS, RESIDUAL, Case, group_case, stream_checks, tol
@@ -48,7 +49,7 @@ X1_INTERP = [1.0, 2.0, 0.3, 1.2, 0.1, 0.9]
 X2_INTERP = [1.9, 3.0, 1.25, 1.1, -0.1, 1.0]
 
 
-def _case(name: str, description: str, inputs: dict, tolerance: dict, source: str) -> Case:
+def _case(name: str, description: str, inputs: dict, tolerance: Mapping, source: str) -> Case:
     return Case(name, EQUATION, description, inputs, tolerance, True, source)
 
 

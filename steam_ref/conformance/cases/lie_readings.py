@@ -8,6 +8,8 @@ differences through the right retraction, the local GP from the dense WNOA kerne
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 from .base import AT_TAU, EXACT_JACOBIAN, GROUP, Case, tol
 from .lie_groups import QC
 
@@ -30,7 +32,7 @@ X1 = [1.0, 2.0, 2.9, 1.2, 0.1, 0.9]  # the states around tau: the second heading
 X2 = [-0.15, 2.2, -3.0, 1.1, -0.1, 1.0]
 
 
-def _quantities(keys: int, value: dict) -> dict:
+def _quantities(keys: int, value: Mapping) -> dict:
     out = {"error": value, "whitened_error": value}
     out.update({f"H_{k}": EXACT_JACOBIAN for k in range(keys)})
     out.update({f"A_{k}": EXACT_JACOBIAN for k in range(keys)})

@@ -11,6 +11,7 @@ round twists, written out to the last digit (orthonormal to rounding).
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from functools import partial
 
 from .base import LIE_CHECKS, RESIDUAL, Case, group_case, tol
@@ -61,7 +62,9 @@ GTSAM_NOTE = {
 }
 
 
-def _case(name: str, description: str, inputs: dict, tolerance: dict, source: str, notes: dict | None = None) -> Case:
+def _case(
+    name: str, description: str, inputs: dict, tolerance: Mapping, source: str, notes: dict | None = None
+) -> Case:
     return Case(name, EQUATION, description, inputs, tolerance, True, source, notes or {})
 
 

@@ -6,6 +6,8 @@ the estimates back (``spec.SOLVER_FORMS``).
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 from .base import Case, stream_checks, tol
 from .rigid_poses import POSE_G0, POSE_G1, POSE_G2
 
@@ -22,7 +24,7 @@ QC = [[0.5 if i == j else 0.0 for j in range(6)] for i in range(3)] + [
 ]
 
 
-def _case(name: str, description: str, inputs: dict, tolerance: dict, source: str) -> Case:
+def _case(name: str, description: str, inputs: dict, tolerance: Mapping, source: str) -> Case:
     return Case(name, EQUATION, description, inputs, tolerance, True, source)
 
 
