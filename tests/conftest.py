@@ -25,8 +25,13 @@ from steam_ref.datasets.search import data_cache_dir
 # One BLAS thread for the tests' own dense algebra (the oracles' expm, quadrature and solves), as the solvers set for
 # theirs (steam_ref.linear.threads, which sets its own limit inside and restores this one): the suite's two workers
 # (`-n 2`, CI's two cores) with OpenBLAS's default of a thread a core each put four busy threads on two cores.
-# A test that needs another count sets it (tests/test_threads.py starts at 2); subprocesses keep their default.
+# A test that needs another count sets it (tests/test_threads.py starts at 2).
 _ONE_BLAS_THREAD = threadpool_limits(limits=1)
+# The processes the tests start (the command as `python -m steam_ref`, a tutorial's kernel, a benchmark script, a
+# sweep's workers) too, as benchmarks/against_commit.py runs its trees: with OpenBLAS's default of a thread a core, a
+# process beside the other worker waits on a thread that has no core. Measured: tutorial 02's dense solve took 13 s
+# instead of 1 beside one busy process (the notebook 25 s, 8.7 s with one thread; alone, 7.7 s either way).
+os.environ |= {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1"}
 
 if not os.environ.get(DATA_DIR_ENV) and SHARED_DATA.is_dir():
     os.environ[DATA_DIR_ENV] = str(SHARED_DATA.resolve())
