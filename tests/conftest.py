@@ -10,6 +10,7 @@ STEAM_REF_REQUIRE_DATA=1 (see ``requirements.py``, which also handles the option
 """
 
 import atexit
+import collections
 import os
 import shutil
 import tempfile
@@ -25,8 +26,13 @@ from steam_ref.datasets.search import data_cache_dir
 # One BLAS thread for the tests' own dense algebra (the oracles' expm, quadrature and solves), as the solvers set for
 # theirs (steam_ref.linear.threads, which sets its own limit inside and restores this one): the suite's two workers
 # (`-n 2`, CI's two cores) with OpenBLAS's default of a thread a core each put four busy threads on two cores.
-# A test that needs another count sets it (tests/test_threads.py starts at 2); subprocesses keep their default.
+# A test that needs another count sets it (tests/test_threads.py starts at 2).
 _ONE_BLAS_THREAD = threadpool_limits(limits=1)
+# The processes the tests start (the command as `python -m steam_ref`, a tutorial's kernel, a benchmark script, a
+# sweep's workers) too, as benchmarks/against_commit.py runs its trees: with OpenBLAS's default of a thread a core, a
+# process beside the other worker waits on a thread that has no core. Measured: tutorial 02's dense solve took 13 s
+# instead of 1 beside one busy process (the notebook 25 s, 8.7 s with one thread; alone, 7.7 s either way).
+os.environ |= {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1"}
 
 if not os.environ.get(DATA_DIR_ENV) and SHARED_DATA.is_dir():
     os.environ[DATA_DIR_ENV] = str(SHARED_DATA.resolve())
@@ -68,15 +74,31 @@ def small_mat(tmp_path_factory):
 
 # A run of a whole tutorial is slow (up to ~45 s each), so each runs apart; every other test runs with its file.
 RUNS_APART = "test_notebooks.py::test_notebook_executes["
+# The groups that take longest, longest first (measured with `-n 2` on CI's 2 cores, quiet: 20-70 s each), which the
+# workers start before all others. xdist's own order (most tests first) left the tutorials, one test each, for last:
+# the run ended on one worker 30-47 s after the other. A group not named here, or renamed, follows in xdist's order.
+LONGEST_FIRST = (
+    "test_fixed_lag_memory", "test_fidelity", "test_docs_site", "test_wheel", "test_lie_groups", "06_motion_priors",
+    "test_bad_interrupt", "07_victoria_park_turn", "test_online", "test_benchmarks", "test_victoria_park",
+    "test_conformance_gate", "test_experiments", "04_incremental", "test_homework", "test_conformance", "test_fit_qc",
+    "test_cli", "test_notebooks", "test_fixed_lag_stream", "10_vector_space_or_lie_group", "test_consistency",
+    "test_isam", "test_conformance_v5_lie", "08_fixed_lag",
+)  # fmt: skip
+
+
+def _group(item) -> str:
+    return item.get_closest_marker("xdist_group").args[0]
 
 
 @pytest.hookimpl(tryfirst=True)  # before xdist's own hook reads the groups (``--dist loadgroup``, pyproject.toml)
-def pytest_collection_modifyitems(items):
+def pytest_collection_modifyitems(config, items):
     """A test that uses ``shared_data`` is a ``needs_data`` test, so ``-m "not needs_data"`` works.
 
     Each test joins an ``xdist_group``, the unit a worker of ``-n 2 --dist loadgroup`` runs whole: its file, so that a
     module's fixtures are computed once, except a tutorial's run (``RUNS_APART``), its own unit, so that the slow
-    tutorials spread over both workers rather than queueing on one.
+    tutorials spread over both workers rather than queueing on one. In a worker, the groups are in the order they are
+    handed out (``--no-loadscope-reorder``): ``LONGEST_FIRST``, then the others with the most tests first, as xdist
+    orders them; each group's tests keep their order.
     """
     for item in items:
         if "shared_data" in getattr(item, "fixturenames", ()) and not item.get_closest_marker("needs_data"):
@@ -84,6 +106,10 @@ def pytest_collection_modifyitems(items):
         if not item.get_closest_marker("xdist_group"):
             apart = RUNS_APART in item.nodeid  # its group: the tutorial's name (shown after an @ in the test's id)
             item.add_marker(pytest.mark.xdist_group(item.callspec.id if apart else item.path.stem))
+    if hasattr(config, "workerinput"):  # an xdist worker: its order is the one the groups are handed out in
+        size = collections.Counter(_group(item) for item in items)
+        rank = {name: n for n, name in enumerate(LONGEST_FIRST)}
+        items.sort(key=lambda item: (rank.get(_group(item), len(rank)), -size[_group(item)]))  # stable
 
 
 def pytest_runtest_setup(item):

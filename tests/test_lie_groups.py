@@ -490,6 +490,17 @@ def _left_multiplier(A):
 
 
 _MP_REFERENCES: dict[tuple, dict[str, np.ndarray]] = {}
+_MP_BASES: dict[tuple, tuple] = {}
+
+
+def _mp_basis(gens, coeffs):
+    """``_mp_tools``' hat and ad, and X ↦ ad(eⱼ) X for each basis vector eⱼ: the same for every ξ of the sweep, so
+    made once per hat, vee and digits (their entries are small integers, exact in any precision). Read-only."""
+    key = (gens.tobytes(), coeffs.tobytes(), gens.shape, mp.mp.dps)
+    if key not in _MP_BASES:
+        hat, ad = _mp_tools(gens, coeffs)
+        _MP_BASES[key] = hat, ad, [_left_multiplier(ad(_mp_array(e))) for e in np.eye(len(gens))]
+    return _MP_BASES[key]
 
 
 def _mp_reference(group, xi, vs):
@@ -510,10 +521,9 @@ def _mp_series(gens, coeffs, xi, vs):
     ∂(J_r v)/∂ξⱼ = (∂J_r/∂ξⱼ) v and ∂(J_r⁻¹ v)/∂ξⱼ = -J_r⁻¹ (∂J_r/∂ξⱼ) J_r⁻¹ v (d(J⁻¹) = -J⁻¹ dJ J⁻¹).
     """
     d = len(gens)
-    hat, ad = _mp_tools(gens, coeffs)
+    hat, ad, basis = _mp_basis(gens, coeffs)
     x = _mp_array(xi)
     A = _left_multiplier(ad(x))
-    basis = [_left_multiplier(ad(_mp_array(e))) for e in np.eye(d)]
     eye = _mp_array(np.eye(d))
     power, dpower = eye, [_mp_array(np.zeros((d, d))) for _ in range(d)]
     J, dJ = eye.copy(), [m.copy() for m in dpower]
