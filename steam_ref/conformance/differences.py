@@ -18,8 +18,8 @@ _C8 = (1 / 280, -4 / 105, 1 / 5, -4 / 5, 0.0, 4 / 5, -1 / 5, 4 / 105, -1 / 280) 
 
 
 def jacobian8(f: Callable[[NDArray], NDArray], n: int, h: float = 2.0**-7) -> NDArray:
-    """∂f/∂δ at δ = 0 (m, n) by the 8th-order central stencil with step h (truncation h⁸ |f⁽⁹⁾| / 630, rounding
-    about 6e-14 max|f| at h = 2⁻⁷; tests/test_lie_groups.py): f takes a step δ (n,) in a tangent."""
+    """∂f/∂δ at δ = 0 (m, n) by the 8th-order central stencil with step h (truncation h⁸ max abs(f⁽⁹⁾) / 630,
+    rounding about 6e-14 max abs(f) at h = 2⁻⁷; tests/test_lie_groups.py): f takes a step δ (n,) in a tangent."""
     cols = []
     for j in range(n):
         e = np.zeros(n)
