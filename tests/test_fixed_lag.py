@@ -231,16 +231,16 @@ def test_window_marginal_equals_dense_posterior(seed, n, lag, landmarks, thresho
     assert smoother.n_marginalized == entered - len(smoother)
 
 
-def marginalized_along(seed: int, n: int, choose) -> set[bool]:
+def marginalized_along(seed: int, n: int, choose) -> list[bool]:
     """Marginalize ``choose(held)`` (a list of keys; empty: none) after each step of a stream with 3 landmarks, each
-    time checking the window against the dense posterior; returns the paths taken (``report.leaves``: True for the
-    leaf path, False for re-elimination with D first)."""
+    time checking the window against the dense posterior; returns the path each marginalization took
+    (``report.leaves``: True for the leaf path, False for re-elimination with D first)."""
     solver = IncrementalSolver(**EXACT)
-    paths = set()
+    paths = []
     for everything, held in held_after_each_step(LinearStream(seed, 3, fix_every=2), solver, n):
         if len(held) > 2 and (drop := choose(held)):
             report = marginalize(solver, drop)
-            paths.add(report.leaves)
+            paths.append(report.leaves)
             assert set(report.keys) == set(drop)
             check_window(solver, everything)
     return paths
@@ -252,12 +252,16 @@ def test_marginalizing_any_variables_leaves_the_dense_marginal(seed, n, data):
     """Any subset, middle states and landmarks included: the non-leaf path (re-elimination, D first), and the
     leaf path when the draw is whole subtrees (both taken: the test below)."""
 
+    subsets = []  # every non-empty subset drawn: each must be marginalized, its window checked on the way
+
     def drawn(held):
         if not data.draw(st.booleans()):
             return []
-        return data.draw(st.lists(st.sampled_from(held), min_size=1, max_size=len(held) - 1, unique=True))
+        subsets.append(data.draw(st.lists(st.sampled_from(held), min_size=1, max_size=len(held) - 1, unique=True)))
+        return subsets[-1]
 
-    marginalized_along(seed, n, drawn)
+    paths = marginalized_along(seed, n, drawn)
+    assert len(paths) == len(subsets), f"{len(subsets)} subsets drawn, {len(paths)} marginalized and checked"
 
 
 def test_marginalizing_the_oldest_state_then_a_middle_one_takes_both_paths():
@@ -269,7 +273,7 @@ def test_marginalizing_the_oldest_state_then_a_middle_one_takes_both_paths():
         states = [k for k in held if k.symbol == "x"]
         return [min(states, key=lambda k: k.index) if next(turn) % 2 == 0 else states[len(states) // 2]]
 
-    assert marginalized_along(3, 10, alternately) == {True, False}
+    assert set(marginalized_along(3, 10, alternately)) == {True, False}
 
 
 BAD_QUERIES = [
