@@ -34,6 +34,7 @@ from steam_ref.conformance.cases.base import EXACT, LIE_CHECKS, Case, tol
 from steam_ref.conformance.checker import compare_quantity
 from steam_ref.conformance.kitio import dumps, kit_files, plain, read_index, read_suite
 from steam_ref.conformance.oracle_graph import Problem, dense_system
+from steam_ref.conformance.readme import SUITE_INPUTS, export_readme
 from steam_ref.errors import DataError, SteamError
 from steam_ref.variables import L, X
 
@@ -194,6 +195,53 @@ def test_no_case_can_change_the_inputs_of_another():
     assert a.inputs["x"] is not b.inputs["x"]
     with pytest.raises(DataError, match="set"):
         Case("c", "[YIB Eq. 1]", "d", {"kinds": {"prior"}}, {}, True)  # nothing the kit cannot store
+
+
+def _factor_specs(value) -> set[str]:
+    """The ``type`` of every factor spec in a case's inputs (a mapping with a type and keys, or an inner reading)."""
+    if isinstance(value, dict):
+        own = {value["type"]} if "type" in value and ("keys" in value or "inner" in value) else set()
+        return own.union(*(_factor_specs(v) for v in value.values()))
+    return set().union(*(_factor_specs(v) for v in value)) if isinstance(value, list) else set()
+
+
+def test_the_readme_names_every_kind_input_and_factor_spec_of_every_shipped_case():
+    """Each suite's inputs and the factor specs are written once, in the exported README's sections Inputs and
+    Factors (readme.py: SUITE_INPUTS, FACTOR_TABLE), which docs/conformance.md points to: every ``kind``, every
+    input and every factor spec of every case the current kit ships is named there, the se2 and se3 suites' too."""
+    readme = export_readme()
+    inputs = readme[readme.index("\n## Inputs\n") : readme.index("\n## Factors\n")]
+    factors = readme[readme.index("\n## Factors\n") : readme.index("\n## Outputs\n")]
+    by_suite = {suite: text for key, text in SUITE_INPUTS.items() for suite in key.split(", ")}
+    assert list(by_suite) == list(SUITES) and all(f"**: {text}\n" in inputs for text in SUITE_INPUTS.values())
+    absent = []
+    for suite in SUITES:
+        named = by_suite[suite]
+        for case in read_suite(SHIPPED, suite)["cases"]:
+            given, kind = case["inputs"], case["inputs"].get("kind")
+            if kind is not None and f"'{kind}'" not in named:
+                absent.append(f"{suite} kind {kind}")
+            absent += [f"{suite} input {k}" for k in given if not re.search(rf"(?<![\w']){k}(?![\w'])", named)]
+            absent += [
+                f"{suite} spec {t}" for t in _factor_specs(given) if f"| `{t}` |" not in factors and t not in named
+            ]
+    assert not absent, sorted(set(absent))
+
+
+def test_the_docs_show_the_kits_readme_and_point_to_its_inputs_factors_and_groups(tmp_path, monkeypatch):
+    """The docs build renders the exported README as the page kit/readme (docs/_ext/pages.py), the text
+    ``export`` writes, and docs/conformance.md points to its sections rather than repeating them."""
+    optional_import("sphinx", "docs", kind="docs")
+    monkeypatch.syspath_prepend(str(ROOT / "docs" / "_ext"))
+    import pages
+
+    pages.write_kit_readme(tmp_path)
+    assert (tmp_path / "readme.md").read_text() == export_readme()
+    docs = (ROOT / "docs" / "conformance.md").read_text()
+    for section in ("inputs", "factors", "outputs", "se-2", "se-3"):
+        assert f"(kit/readme.md#{section})" in docs, section
+    assert "kit/readme\n```" in docs  # in the page's toctree
+    assert "| `gp_prior` |" not in docs  # the factor table lives in the README alone
 
 
 # --- selftest, export, check ----------------------------------------------------------------------
