@@ -8,6 +8,7 @@ it computes; the paper suite's expected values must be the authors' saved runs a
 
 from __future__ import annotations
 
+import argparse
 import ast
 import copy
 import fnmatch
@@ -15,6 +16,7 @@ import json
 import re
 import subprocess
 import sys
+from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
@@ -25,13 +27,15 @@ from cli_runs import runner
 from requirements import optional_import
 
 from steam_ref.bayes_tree import FixedLagSmoother, IncrementalSolver
+from steam_ref.cli.commands import build_parser
 from steam_ref.conformance import KIT_VERSION, KITS, SHIPPED, SUITES, spec
 from steam_ref.conformance.cases import suite_cases
 from steam_ref.conformance.cases.base import EXACT, LIE_CHECKS, Case, tol
 from steam_ref.conformance.checker import compare_quantity
-from steam_ref.conformance.kitio import dumps, kit_files, read_index, read_suite
+from steam_ref.conformance.kitio import dumps, kit_files, plain, read_index, read_suite
 from steam_ref.conformance.oracle_graph import Problem, dense_system
-from steam_ref.errors import SteamError
+from steam_ref.conformance.readme import SUITE_INPUTS, export_readme
+from steam_ref.errors import DataError, SteamError
 from steam_ref.variables import L, X
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -154,7 +158,118 @@ def test_no_case_can_change_the_tolerances_of_another():
     assert case.tolerance == {"x": {"atol": 0.0, "rtol": 1e-9}}
 
 
+def _read_only_everywhere(value, path: str) -> None:
+    """Every container in ``value`` (a case's inputs or notes) refuses a write; every leaf is immutable."""
+    if isinstance(value, np.ndarray):
+        assert not value.flags.writeable, path
+        with pytest.raises(ValueError, match="read-only"):
+            value[...] = 0
+    elif isinstance(value, Mapping):
+        with pytest.raises(TypeError):
+            value["added"] = 0  # type: ignore[index]
+        for k, v in value.items():
+            _read_only_everywhere(v, f"{path}.{k}")
+    elif isinstance(value, (list, tuple)):
+        assert isinstance(value, tuple), f"{path} is a {type(value).__name__}"
+        for i, v in enumerate(value):
+            _read_only_everywhere(v, f"{path}[{i}]")
+    else:
+        assert value is None or isinstance(value, (str, int, float, np.generic)), path
+
+
+def test_no_case_can_change_the_inputs_of_another():
+    """Cases are built from shared numbers (QC_DIAG, X1, a problem's landmarks...): each case's inputs and notes
+    are its own read-only deep copy (mappings read-only, lists tuples, arrays read-only copies), so neither a case
+    nor the table it was built from can change another case's inputs; the kit stores them as the lists it did."""
+    for suite in SUITES:
+        for case in suite_cases(suite) if suite != "paper" else []:
+            _read_only_everywhere(case.inputs, f"{suite}/{case.name}.inputs")
+            _read_only_everywhere(case.notes, f"{suite}/{case.name}.notes")
+    qc, x, why = [[0.5, 0.0], [0.0, 0.2]], np.array([1.0, 2.0]), ["a note"]
+    a = Case("a", "[YIB Eq. 1]", "d", {"qc": qc, "x": x}, {}, True, notes={"why": why})
+    b = Case("b", "[YIB Eq. 1]", "d", {"qc": qc, "x": x}, {}, True, notes={"why": why})
+    qc[0][0], x[0], why[0] = 9.0, 9.0, "changed"
+    for case in (a, b):
+        assert plain(case.inputs) == {"qc": [[0.5, 0.0], [0.0, 0.2]], "x": [1.0, 2.0]}
+        assert plain(case.notes) == {"why": ["a note"]}
+    assert a.inputs["x"] is not b.inputs["x"]
+    with pytest.raises(DataError, match="set"):
+        Case("c", "[YIB Eq. 1]", "d", {"kinds": {"prior"}}, {}, True)  # nothing the kit cannot store
+
+
+def _factor_specs(value) -> set[str]:
+    """The ``type`` of every factor spec in a case's inputs (a mapping with a type and keys, or an inner reading)."""
+    if isinstance(value, dict):
+        own = {value["type"]} if "type" in value and ("keys" in value or "inner" in value) else set()
+        return own.union(*(_factor_specs(v) for v in value.values()))
+    return set().union(*(_factor_specs(v) for v in value)) if isinstance(value, list) else set()
+
+
+def test_the_readme_names_every_kind_input_and_factor_spec_of_every_shipped_case():
+    """Each suite's inputs and the factor specs are written once, in the exported README's sections Inputs and
+    Factors (readme.py: SUITE_INPUTS, FACTOR_TABLE), which docs/conformance.md points to: every ``kind``, every
+    input and every factor spec of every case the current kit ships is named there, the se2 and se3 suites' too."""
+    readme = export_readme()
+    inputs = readme[readme.index("\n## Inputs\n") : readme.index("\n## Factors\n")]
+    factors = readme[readme.index("\n## Factors\n") : readme.index("\n## Outputs\n")]
+    by_suite = {suite: text for key, text in SUITE_INPUTS.items() for suite in key.split(", ")}
+    assert list(by_suite) == list(SUITES) and all(f"**: {text}\n" in inputs for text in SUITE_INPUTS.values())
+    absent = []
+    for suite in SUITES:
+        named = by_suite[suite]
+        for case in read_suite(SHIPPED, suite)["cases"]:
+            given, kind = case["inputs"], case["inputs"].get("kind")
+            if kind is not None and f"'{kind}'" not in named:
+                absent.append(f"{suite} kind {kind}")
+            absent += [f"{suite} input {k}" for k in given if not re.search(rf"(?<![\w']){k}(?![\w'])", named)]
+            absent += [
+                f"{suite} spec {t}" for t in _factor_specs(given) if f"| `{t}` |" not in factors and t not in named
+            ]
+    assert not absent, sorted(set(absent))
+
+
+def test_the_docs_show_the_kits_readme_and_point_to_its_inputs_factors_and_groups(tmp_path, monkeypatch):
+    """The docs build renders the exported README as the page kit/readme (docs/_ext/pages.py), the text
+    ``export`` writes, and docs/conformance.md points to its sections rather than repeating them."""
+    optional_import("sphinx", "docs", kind="docs")
+    monkeypatch.syspath_prepend(str(ROOT / "docs" / "_ext"))
+    import pages
+
+    pages.write_kit_readme(tmp_path)
+    assert (tmp_path / "readme.md").read_text() == export_readme()
+    docs = (ROOT / "docs" / "conformance.md").read_text()
+    for section in ("inputs", "factors", "outputs", "se-2", "se-3"):
+        assert f"(kit/readme.md#{section})" in docs, section
+    assert "kit/readme\n```" in docs  # in the page's toctree
+    assert "| `gp_prior` |" not in docs  # the factor table lives in the README alone
+
+
 # --- selftest, export, check ----------------------------------------------------------------------
+
+
+def _data_dir_helps(parser: argparse.ArgumentParser, command: str = "") -> dict[str, str]:
+    """The help of --data-dir in every command (and subcommand) of ``parser`` that has one, by command."""
+    helps = {}
+    for action in parser._actions:
+        if "--data-dir" in action.option_strings:
+            helps[command] = str(action.help)
+        if isinstance(action, argparse._SubParsersAction):
+            for name, sub in action.choices.items():
+                helps |= _data_dir_helps(sub, f"{command} {name}".strip())
+    return helps
+
+
+def test_the_conformance_commands_data_dir_help_names_the_whole_search_path_as_every_command_does():
+    """selftest and build read the paper suite's files from the data search path (find_named): their --data-dir
+    help names all of it in its order, in the words every other command's help uses."""
+    helps = _data_dir_helps(build_parser())
+    assert {"conformance selftest", "conformance build", "run", "fidelity"} <= set(helps)
+    tails = set()
+    for command, text in helps.items():
+        places = [text.find(p) for p in ("before", "$STEAM_REF_DATA_DIR", "fetched files' cache", "gtsam's Data/")]
+        assert -1 not in places and places == sorted(places), (command, text)
+        tails.add(text[places[0] :])
+    assert len(tails) == 1, tails
 
 
 def test_selftest_passes_on_the_installed_code(capsys):

@@ -5,6 +5,9 @@
   ``-W``, an error): the table is the map a reader follows, and it stays complete.
 - ``cli/``: one page per ``steam-ref`` command holding its ``--help``, from ``steam_ref.cli.commands``'s own
   parser.
+- ``kit/readme.md``: the README ``steam-ref conformance export`` writes beside the kit (every suite's inputs,
+  factor specs and outputs, the definitions they compute from), from its one source,
+  ``steam_ref.conformance.readme``; conformance.md points to it.
 - Pages listed in ``OPTIONAL_PAGES`` leave the landing page's table of contents while absent.
 - Each tutorial declares what it needs in its metadata (``"steam_ref": {"needs": ["data:plaza"]}``).
   One whose needs are missing is not executed: its page shows the code without outputs and a note
@@ -12,7 +15,7 @@
   STEAM_REF_REQUIRE_OPTIONAL=1, for gtsam) stops the build instead (CI).
 
 Generated files are written only when their text changes, so Sphinx rebuilds only what changed;
-``modules/`` and ``cli/`` are not tracked by git.
+``modules/``, ``cli/`` and ``kit/`` are not tracked by git.
 """
 
 from __future__ import annotations
@@ -31,6 +34,7 @@ from sphinx.application import Sphinx
 from sphinx.util import logging
 
 from steam_ref.cli.commands import build_parser
+from steam_ref.conformance.readme import export_readme
 from steam_ref.datasets.fetch import DATASETS, missing_needs
 
 LOG = logging.getLogger(__name__)
@@ -281,6 +285,11 @@ def write_cli(out: Path) -> None:
     _write(out / "index.md", "\n".join([*index, "```", ""]))
 
 
+def write_kit_readme(out: Path) -> None:
+    """The exported kit's README as the page ``out/readme.md``, exactly as ``export`` writes it."""
+    _write(out / "readme.md", export_readme())
+
+
 # --- Sphinx hooks ----------------------------------------------------------------------------------
 
 
@@ -289,6 +298,7 @@ def _generate(_app: Sphinx) -> None:
     for module in unplaced:
         LOG.warning("%s is in no layer of docs/architecture.md's table: add it there", module)
     write_cli(DOCS / "cli")
+    write_kit_readme(DOCS / "kit")
 
 
 def _drop_absent_optional_pages(_app: Sphinx, docname: str, source: list[str]) -> None:

@@ -20,6 +20,7 @@ from ..arguments import parse_decimal
 from ..datasets import LandmarkDataset, RangeDataset, load_dataset
 from ..datasets.registry import DATASETS, loadable
 from ..datasets.rigid import RigidReadings
+from ..datasets.search import data_dir_help
 from ..errors import SteamError, UncleanedDataWarning
 from ..motion import MOTION_PRIORS
 from ..paper.presets import PRESETS, PRIORS, SE2_RESIDUALS
@@ -232,12 +233,12 @@ def folder(text: str) -> str:
 
 
 def add_data_dir(parser: argparse.ArgumentParser, also: str = "") -> None:
-    """--data-dir: the one folder the user names, searched first (datasets/search.py gives the whole order)."""
+    """--data-dir: the one folder the user names, searched first (its help, the whole order: datasets/search.py)."""
     parser.add_argument(
         "--data-dir",
         type=folder,
         default=None,
-        help=f"folder searched for data files{also} before $STEAM_REF_DATA_DIR, the fetched files' cache and gtsam's Data/",
+        help=data_dir_help(also),
     )
 
 

@@ -68,7 +68,7 @@ def case_record(case: Case, expected: dict, suite: str = "", alternatives: dict 
         "inputs": _roundtrip(case.inputs),
         "expected": _roundtrip(expected),
         **({"alternatives": _roundtrip(alternatives)} if alternatives else {}),
-        **({"notes": case.notes} if case.notes else {}),
+        **({"notes": _roundtrip(case.notes)} if case.notes else {}),
     }
 
 

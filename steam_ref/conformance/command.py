@@ -22,6 +22,7 @@ import shutil
 import tempfile
 from pathlib import Path
 
+from ..datasets.search import data_dir_help
 from ..errors import SteamError
 from ..paper.progress import wanted
 from .checker import Report
@@ -30,6 +31,8 @@ from .kitio import KIT_VERSION, SHIPPED, SUITES, kit_files, read_index
 from .readme import export_readme
 
 __all__ = ["add_parser", "run"]
+
+PAPER_FILES = " (the paper suite's, and their authors/ folder)"  # what --data-dir is searched for
 
 
 def _path(text: str) -> str:
@@ -95,9 +98,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
     st.add_argument(
         "--paper", action="store_true", help="also run the paper suite (BTGP/1 on both data sets, about a minute)"
     )
-    st.add_argument(
-        "--data-dir", type=_data_dir, default=None, help="folder with the paper's data files (else $STEAM_REF_DATA_DIR)"
-    )
+    st.add_argument("--data-dir", type=_data_dir, default=None, help=data_dir_help(PAPER_FILES))
     st.add_argument(
         "--progress",
         action=argparse.BooleanOptionalAction,
@@ -109,9 +110,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
     bld.add_argument(
         "--paper", action="store_true", help="rebuild the paper suite from the data files (else keep the existing one)"
     )
-    bld.add_argument(
-        "--data-dir", type=_data_dir, default=None, help="folder with the paper's data files (else $STEAM_REF_DATA_DIR)"
-    )
+    bld.add_argument("--data-dir", type=_data_dir, default=None, help=data_dir_help(PAPER_FILES))
     return conf
 
 

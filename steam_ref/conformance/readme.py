@@ -102,11 +102,12 @@ SUITE_INPUTS = {
     "(xi), 'between' (a, b poses of 12), 'prior' (model, x1, x2 SE(3) states of 18, dt, qc 6x6), 'wnoj_prior' (x1, x2 "
     "of 24, dt, qc on the jerk), 'state_prior' (mean, x), 'interpolation' (model, x1, x2, t1, t2, tau, qc, and joint_cov "
     "24x24 for a covariance case), 'wnoj_interpolation' (x1, x2 of 24, t1, t2, tau, qc), 'extrapolation' (x1 of 18 or "
-    "24, t1, t, qc, cov1), 'batch' and 'incremental' (as the se2 suite's; specs se3_prior {keys [x1, x2], dt, qc, "
-    "model}, se3_state_prior {keys [x], mean (18), sigmas (12)}, se3_velocity {keys [x], measured (6), sigmas (6)}; "
-    "values of 18 numbers, 'variables' gives each state's tangent size, 12)",
-    "paper": "dataset, file and sha256 of the paper's data file, the authors' run, method, every, setup (fields "
-    "below), setup_fields and procedure (the texts below), state_poses (the poses whose states are compared)",
+    "24, t1, t, qc, cov1), 'batch' (problem, iterations) and 'incremental' (stream, isam2) (as the se2 suite's; specs "
+    "se3_prior {keys [x1, x2], dt, qc, model}, se3_state_prior {keys [x], mean (18), sigmas (12)}, se3_velocity {keys "
+    "[x], measured (6), sigmas (6)}; values of 18 numbers, 'variables' gives each state's tangent size, 12)",
+    "paper": "dataset, file and sha256 of the paper's data file, authors_file and authors_sha256 of the authors' run, "
+    "method, every, setup (fields below), setup_fields and procedure (the texts below), state_poses (the poses whose "
+    "states are compared) and state_poses_total (the run's number of states)",
 }
 
 

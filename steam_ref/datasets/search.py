@@ -34,6 +34,7 @@ from .table import RangeDataset
 __all__ = [
     "DATA_DIR_ENV",
     "data_cache_dir",
+    "data_dir_help",
     "gtsam_data_dir",
     "default_data_dirs",
     "find_named",
@@ -43,6 +44,12 @@ __all__ = [
 ]
 
 DATA_DIR_ENV = "STEAM_REF_DATA_DIR"
+
+
+def data_dir_help(also: str = "") -> str:
+    """The help of ``--data-dir`` in every command that has one: the whole search path of
+    :func:`default_data_dirs`, written beside it. ``also``: what else the command looks for there."""
+    return f"folder searched for data files{also} before ${DATA_DIR_ENV}, the fetched files' cache and gtsam's Data/"
 
 
 def data_cache_dir() -> Path:

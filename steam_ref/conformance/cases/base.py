@@ -9,8 +9,13 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
 
+import numpy as np
+
+from ..kitio import plain
+
 __all__ = [
     "Case",
+    "frozen",
     "tol",
     "EXACT",
     "GROUP",
@@ -33,6 +38,22 @@ def tol(rtol: float, atol: float = 0.0) -> Mapping[str, float]:
     return MappingProxyType({"atol": atol, "rtol": rtol})
 
 
+def frozen(value):
+    """A read-only deep copy of ``value``: mappings → MappingProxyType, lists and tuples → tuples, arrays → a
+    read-only copy. The kit writes it as it wrote ``value`` (:func:`~steam_ref.conformance.kitio.plain` reads
+    each the same way); what the kit cannot store is refused as it would be at writing."""
+    if isinstance(value, Mapping):
+        return MappingProxyType({k: frozen(v) for k, v in value.items()})
+    if isinstance(value, (list, tuple)):
+        return tuple(frozen(v) for v in value)
+    if isinstance(value, np.ndarray):
+        copy = value.copy()
+        copy.setflags(write=False)
+        return copy
+    plain(value)  # a number, a bool, a string or None (all immutable); anything else raises DataError
+    return value
+
+
 @dataclass(frozen=True)
 class Case:
     """One case of a suite: inputs, what is expected of which quantity, and where the expectation comes from."""
@@ -40,17 +61,17 @@ class Case:
     name: str
     equation: str  # the paper's equations computed, '[YIB Eq. n]'
     description: str
-    inputs: dict
+    inputs: Mapping  # the case's own read-only copy (see __post_init__)
     tolerance: Mapping  # quantity → tol(...) or EXACT; the case's own read-only copy (see __post_init__)
     independent: bool  # expected values from the oracle (True) or produced by steam_ref (False)
     source: str = ""  # how the expected values are obtained
-    notes: dict = field(default_factory=dict)
+    notes: Mapping = field(default_factory=dict)  # the case's own read-only copy (see __post_init__)
 
     def __post_init__(self) -> None:
-        # Cases are built from shared tables (LIE_CHECKS, FACTOR_TOL...): each keeps a read-only copy of its own,
-        # so that no case (or table) can change another's tolerances.
-        own = {q: t if isinstance(t, str) else MappingProxyType(dict(t)) for q, t in self.tolerance.items()}
-        object.__setattr__(self, "tolerance", MappingProxyType(own))
+        # Cases are built from shared tables and numbers (LIE_CHECKS, FACTOR_TOL, QC_DIAG, X1...): each keeps a
+        # read-only deep copy of its own, so that no case (or table) can change another's inputs or tolerances.
+        for name in ("inputs", "tolerance", "notes"):
+            object.__setattr__(self, name, frozen(getattr(self, name)))
 
 
 ORACLE_GP = (
