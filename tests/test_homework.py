@@ -9,6 +9,7 @@ from __future__ import annotations
 import copy
 import json
 import re
+import time
 from pathlib import Path
 
 import pytest
@@ -17,8 +18,10 @@ from requirements import optional_import
 from steam_ref.cli.commands import main
 from steam_ref.errors import SteamError
 from steam_ref.homework import exercises, handout
+from steam_ref.homework.marking import GRACE
 
 LIMIT = 3  # seconds a marked cell may run (--timeout) in the marking test
+DEAF = "import signal\nsignal.signal(signal.SIGINT, signal.SIG_IGN)\nwhile True:\n    pass"  # ignores the interrupt
 
 
 def _cell(kind: str, cid: str, text: str, tags: tuple[str, ...] = ()) -> dict:
@@ -60,11 +63,15 @@ def course(tmp_path):
     return tmp_path
 
 
-def _submit(course: Path, name: str, answers: dict[str, str]) -> Path:
-    """A student's copy of the handout with the answer cells (by their ids) filled in."""
+def _submit(course: Path, name: str, answers: dict[str, str], added: dict[str, str] | None = None) -> Path:
+    """A student's copy of the handout with the answer cells (by their ids) filled in, and a code cell ``added``
+    below the cell of each id given."""
     nb = json.loads((course / "handout" / "tiny.ipynb").read_text())
     for cell in nb["cells"]:
         cell["source"] = answers.get(cell["id"], cell["source"])
+    for cid, text in (added or {}).items():
+        at = next(i for i, c in enumerate(nb["cells"]) if c["id"] == cid)
+        nb["cells"].insert(at + 1, _cell("code", f"{cid}-more", text))
     path = course / "submitted" / name / "tiny.ipynb"
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(json.dumps(nb))
@@ -104,14 +111,18 @@ def test_marking_scores_each_exercise_on_its_own_and_never_stops_on_a_bad_submis
     _submit(course, "raises", {"s1": "square = 1 // 0", "s2": cube})
     _submit(course, "hangs", {"s1": "while True:\n    pass", "s2": cube})
     _submit(course, "exits", {"s1": "import os\nos._exit(3)", "s2": cube})
-    deaf = "import signal\nsignal.signal(signal.SIGINT, signal.SIG_IGN)\nwhile True:\n    pass"
-    _submit(course, "ignores-the-interrupt", {"s1": deaf, "s2": cube})
+    _submit(course, "ignores-the-interrupt", {"s1": DEAF, "s2": cube})
+    catches = (
+        "while True:\n    try:\n        while True:\n            pass\n    except KeyboardInterrupt:\n        pass"
+    )
+    _submit(course, "catches-the-interrupt", {"s1": catches, "s2": cube})
+    _submit(course, "hangs-twice", {"s1": "while True:\n    pass", "s2": cube}, added={"s1": "while True:\n    pass"})
     _submit(course, "edits-the-check", {"s1": "square = 10", "s2": cube, "c1": "pass", "h1": "pass"})
     _submit(course, "blank", {"s2": cube})  # exercise 1's answer cell left as handed out
     (course / "submitted" / "broken").mkdir()
     (course / "submitted" / "broken" / "tiny.ipynb").write_text('{"cells": [')
     # A cell's limit of 3 s: the test is about what a timeout says and scores, not its length (each passing cell is
-    # one line of arithmetic, milliseconds even on a loaded machine); "ignores-the-interrupt" waits out two limits.
+    # one line of arithmetic, milliseconds even on a loaded machine); a cell that ignores the interrupt costs 3 s more.
     argv = ["--source", str(course / "teacher"), "--timeout", str(LIMIT), "--jobs", "3", "--json"]
     assert main(["homework", "mark", str(course / "submitted"), *argv]) == 0
     marks = {m["submission"].split("/")[0]: m for m in json.loads(capsys.readouterr().out)["submissions"]}
@@ -122,7 +133,9 @@ def test_marking_scores_each_exercise_on_its_own_and_never_stops_on_a_bad_submis
         "raises": [(0, "error"), (1, "passed")],
         "hangs": [(0, "timeout"), (1, "passed")],
         "exits": [(0, "not run"), (0, "not run")],
-        "ignores-the-interrupt": [(0, "timeout"), (0, "not run")],  # two cells over their limit end the run
+        "ignores-the-interrupt": [(0, "timeout"), (0, "not run")],  # its kernel is killed: the run ends
+        "catches-the-interrupt": [(0, "timeout"), (0, "not run")],
+        "hangs-twice": [(0, "timeout"), (1, "passed")],  # two timeouts in a row, each interrupt obeyed: the run goes on
         "edits-the-check": [(0, "failed"), (1, "passed")],  # the teacher's checks run, not the student's copy
         "broken": [(0, "not run"), (0, "not run")],
         "blank": [(0, "no answer"), (1, "passed")],
@@ -131,9 +144,44 @@ def test_marking_scores_each_exercise_on_its_own_and_never_stops_on_a_bad_submis
     said = {name: m["exercises"][0]["message"] for name, m in marks.items()}
     assert said["wrong"] == "marking check: square is not base times base"  # what is wrong, not the value
     assert "ZeroDivisionError" in said["raises"] and f"longer than {LIMIT} s" in said["hangs"]
-    assert "still busy" in marks["ignores-the-interrupt"]["exercises"][1]["message"]
+    for deaf in ("ignores-the-interrupt", "catches-the-interrupt"):
+        assert "ignored the interrupt" in said[deaf] and "kernel was killed" in said[deaf], said[deaf]
+        after = marks[deaf]["exercises"][1]["message"]
+        assert after.startswith("the run stopped: exercise 1's answer ignored the interrupt"), after
+    assert said["hangs-twice"] == f"the answer ran longer than {LIMIT} s and was stopped"
     assert "kernel died" in said["exits"] and "not a notebook" in said["broken"] and "no code" in said["blank"]
     assert "9" not in said["wrong"] + said["edits-the-check"]  # the value the marking check knows is never shown
+
+
+def test_a_cell_that_ignores_the_interrupt_costs_its_limit_and_the_grace_then_its_kernel_is_killed(course, capsys):
+    """A submission whose answer ignores SIGINT is marked in a right submission's time (measured just before, in
+    the same sitting: the kernel's start under whatever load) plus its cell's limit and GRACE seconds; the report
+    names the cell and says why the rest did not run. Before, it waited out a second cell's limit, nbclient's 4 s
+    wait for output after each, and a graceful shutdown of the busy kernel: 13.4-13.6 s more than the right one for
+    a 2 s limit, against 3.9 s now (two runs each on a loaded 2-core machine)."""
+    optional_import("nbclient", "notebooks")
+    optional_import("ipykernel", "notebooks")
+    limit = 2
+    right = _submit(course, "right", {"s1": "square = base * base", "s2": "cube = lambda x: x**3"})
+    deaf = _submit(course, "deaf", {"s1": DEAF, "s2": "cube = lambda x: x**3"})
+    argv = ["--source", str(course / "teacher"), "--timeout", str(limit), "--json"]
+    took, marks = [], []
+    for path in (right, deaf):
+        began = time.perf_counter()
+        assert main(["homework", "mark", str(path), *argv]) == 0
+        took.append(time.perf_counter() - began)
+        (mark,) = json.loads(capsys.readouterr().out)["submissions"]
+        marks.append([(e["score"], e["status"], e["message"]) for e in mark["exercises"]])
+    assert marks[0] == [(1, "passed", ""), (1, "passed", "")]
+    why = f"the answer ran longer than {limit} s, ignored the interrupt (still running {GRACE} s later)"
+    stopped = f"the run stopped: exercise 1's answer ignored the interrupt at its {limit} s limit"
+    assert marks[1] == [
+        (0, "timeout", f"{why}, and its kernel was killed"),
+        (0, "not run", f"{stopped}, so the kernel was killed"),
+    ]
+    assert took[1] - took[0] < 2 * (limit + GRACE), took  # the limit and the grace, twice over for the load
+    page = (Path(__file__).resolve().parents[1] / "docs" / "tutorials.md").read_text()
+    assert f"costs its limit plus {GRACE} s" in " ".join(page.split())  # the teachers' page states this bound
 
 
 def test_the_text_report_has_a_line_per_submission_and_per_exercise(course, capsys):

@@ -5,8 +5,10 @@ runs is the teacher's: its lesson cells, the student's answer where the solution
 and marking checks, so an edited or deleted check changes nothing. It runs in a fresh kernel (nbclient) in the
 teacher's notebook's folder, every cell under a time limit; a cell that raises or runs over its limit is
 recorded and the run goes on, so one exercise's failure costs that exercise only. An exercise scores its point
-when its check and marking checks ran without an error. A kernel that dies (``os._exit``), or that a timed-out
-cell still holds after a second timeout, ends the run: what had not run scores 0, saying why.
+when its check and marking checks ran without an error. A kernel that dies (``os._exit``) ends the run, and so does
+a cell that ignores the interrupt at its time limit (it catches KeyboardInterrupt, ignores SIGINT or blocks where a
+signal cannot reach it): a kernel not idle ``GRACE`` seconds after the interrupt is killed, so such a cell costs its
+limit plus ``GRACE`` seconds, and what had not run scores 0, saying why.
 """
 
 from __future__ import annotations
@@ -32,6 +34,8 @@ __all__ = [
 ]
 
 TIMEOUT = "CellTimeoutError"  # the error name a cell stopped at its time limit is recorded under
+IGNORED = "InterruptIgnored"  # ... and a cell that ran on after that interrupt, its kernel then killed
+GRACE = 3  # seconds a cell interrupted at its time limit has to stop before its kernel is killed
 MAX_MESSAGE = 300
 
 
@@ -160,6 +164,15 @@ def _assemble(tutorial: Tutorial, submission: dict) -> tuple[list[_Cell], dict[i
 DIED = "the run stopped: the kernel died (did the answer exit Python?)"
 
 
+def _named(cells: list[_Cell], tutorial: Tutorial, i: int) -> str:
+    """Cell ``i`` of the marking run as the report names it: whose it is and, for an exercise's, which."""
+    c = cells[i]
+    if c.exercise is None:
+        return "a cell of the teacher's lesson"
+    role = {"answer": "answer", "check": "check"}.get(c.role, "marking check")
+    return f"exercise {tutorial.exercises[c.exercise].number}'s {role}"
+
+
 def _run(cells: list[_Cell], tutorial: Tutorial, timeout: int) -> tuple[dict[int, tuple[str, str] | None], str | None]:
     """Run the cells in a fresh kernel: for each code cell that ran, None (no error) or (error name, message);
     and why the run stopped early, if it did."""
@@ -174,26 +187,36 @@ def _run(cells: list[_Cell], tutorial: Tutorial, timeout: int) -> tuple[dict[int
     nb["cells"] = [c.cell for c in cells]
     nb["nbformat"], nb["nbformat_minor"] = 4, max(5, int(nb.get("nbformat_minor", 5)))
     outcomes: dict[int, tuple[str, str] | None] = {}
-    timeouts_in_a_row = 0
+    after_timeout = False
 
     class Stop(Exception):
         pass
 
-    async def start(cell: Any, cell_index: int) -> None:  # noqa: ARG001 (nbclient's hook signature)
-        if timeouts_in_a_row and client.km is not None and not await ensure_async(client.km.is_alive()):
-            raise DeadKernelError("the kernel died")  # a death taken for a cell's timeout, under load
-        if timeouts_in_a_row >= 2:  # the interrupt did not free the kernel: every later cell would wait too
-            raise Stop
+    async def alive() -> bool:
+        return client.km is not None and bool(await ensure_async(client.km.is_alive()))
 
-    def executed(cell: Any, cell_index: int, execute_reply: dict | None) -> None:  # noqa: ARG001
-        nonlocal timeouts_in_a_row
+    async def start(cell: Any, cell_index: int) -> None:  # noqa: ARG001 (nbclient's hook signature)
+        if after_timeout and not await alive():
+            raise DeadKernelError("the kernel died")  # a death taken for a cell's timeout, under load
+
+    async def executed(cell: Any, cell_index: int, execute_reply: dict | None) -> None:
+        nonlocal after_timeout
         content = (execute_reply or {}).get("content", {})
-        timed_out = content.get("status") == "error" and content.get("ename") == TIMEOUT
-        timeouts_in_a_row = timeouts_in_a_row + 1 if timed_out else 0
+        after_timeout = content.get("status") == "error" and content.get("ename") == TIMEOUT
         if content.get("status") == "error":
             outcomes[cell_index] = (str(content.get("ename", "Error")), _one_line(content.get("evalue", "")))
         else:
             outcomes[cell_index] = None
+        # At the limit nbclient interrupts the kernel and waits up to its iopub_timeout (GRACE) for the cell's "idle"
+        # status, recorded in the cell's execution metadata (record_timing); none: the cell runs on, deaf to the
+        # interrupt, and every later cell would wait behind it.
+        if after_timeout and "iopub.status.idle" not in cell.get("metadata", {}).get("execution", {}):
+            if not await alive():
+                raise DeadKernelError("the kernel died")
+            outcomes[cell_index] = (IGNORED, f"still running {GRACE} s after the interrupt; the kernel was killed")
+            assert client.km is not None  # alive
+            await ensure_async(client.km.shutdown_kernel(now=True))
+            raise Stop(cell_index)
 
     client = nbclient.NotebookClient(
         nbformat.from_dict(nb),
@@ -202,6 +225,8 @@ def _run(cells: list[_Cell], tutorial: Tutorial, timeout: int) -> tuple[dict[int
         allow_errors=True,
         interrupt_on_timeout=True,
         error_on_timeout={"ename": TIMEOUT, "evalue": f"ran longer than {timeout} s and was stopped", "traceback": []},
+        iopub_timeout=GRACE,
+        record_timing=True,
         resources={"metadata": {"path": str(tutorial.folder)}},
         on_cell_start=start,
         on_cell_executed=executed,
@@ -210,8 +235,9 @@ def _run(cells: list[_Cell], tutorial: Tutorial, timeout: int) -> tuple[dict[int
     try:
         # a loop of its own, closed at the end, in whichever thread marks; the kernel's log lines go nowhere
         asyncio.run(client.async_execute(stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
-    except Stop:
-        stopped = "the run stopped: the kernel was still busy after two cells ran over their time limit"
+    except Stop as stop:
+        deaf = _named(cells, tutorial, stop.args[0])
+        stopped = f"the run stopped: {deaf} ignored the interrupt at its {timeout} s limit, so the kernel was killed"
     except DeadKernelError:
         stopped = DIED
     except Exception as exc:  # the marker reports any failure of the run itself, never stops on it
@@ -237,11 +263,11 @@ def _verdict(
     _, role, error = failed[0]
     assert error is not None
     name, message = error
-    if name == TIMEOUT:
-        return (
-            "timeout",
-            f"{'the answer' if role == 'answer' else 'a check'} ran longer than {timeout} s and was stopped",
-        )
+    if name in (TIMEOUT, IGNORED):
+        what = f"{'the answer' if role == 'answer' else 'a check'} ran longer than {timeout} s"
+        if name == TIMEOUT:
+            return "timeout", f"{what} and was stopped"
+        return "timeout", f"{what}, ignored the interrupt (still running {GRACE} s later), and its kernel was killed"
     if role == "answer":
         return "error", _one_line(f"the answer raised {name}: {message}")
     said = message if name == "AssertionError" and message else f"{name}: {message}".rstrip(": ")
