@@ -110,7 +110,14 @@ class LinearSDE:
             raise SteamError(
                 f"give exactly one of alpha and time_constant, got alpha={alpha!r}, time_constant={time_constant!r}"
             )
-        a = check_alpha(alpha) if alpha is not None else 1.0 / check_alpha(time_constant, "time_constant")
+        if alpha is not None:
+            a = check_alpha(alpha)
+        else:
+            a = 1.0 / check_alpha(time_constant, "time_constant")
+            if not np.isfinite(a):
+                raise SteamError(
+                    f"time_constant={time_constant!r} is too small: alpha = 1/time_constant overflows float64"
+                )
         return cls._known(ClosedForm("singer", a), qc, v)
 
     def general(self) -> LinearSDE:
