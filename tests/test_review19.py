@@ -71,7 +71,7 @@ SDES = {"wnoa": LinearSDE.wnoa(QC), "wnoj": LinearSDE.wnoj(QC), "singer": Linear
 def test_the_interpolated_covariance_keeps_its_relative_precision_next_to_either_state(name, fraction):
     """With the states known exactly (joint covariance 0) the covariance at τ is the conditional one; every entry to
     1e-12 of its 50-digit value at every τ, positive definite next to t₂ as next to t₁ (the closed forms; Van Loan's
-    Q of ``sde.general()`` has its own limits, tests/test_gp_models.py)."""
+    Q of ``sde.general()`` has its own limits, ``LinearSDE.process_noise_van_loan``)."""
     sde, t2 = SDES[name], 0.8
     tau = fraction * t2
     want = _mp_conditional(sde, t2, tau)
