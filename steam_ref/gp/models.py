@@ -32,7 +32,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..arguments import number, time_step
-from ..errors import SteamError
+from ..errors import NumericalError, SteamError
 from .prior import check_d, check_qc, finite_result, qc_inverse
 from .prior import process_noise as wnoa_process_noise
 from .prior import process_noise_sqrt_information as wnoa_sqrt_information
@@ -52,6 +52,7 @@ __all__ = [
 
 _SERIES_TERMS = 24  # |x| ≤ 1: the n-th term is below 2ⁿ / (n + 4)!, under 1e-18 of S at n = 24
 _SERIES_RADIUS = 1.0  # beyond it the closed forms lose at most ~30 ulp to cancellation
+_FAR = 1e15  # x beyond it: e⁻ˣ = 0 in float64, and S in powers of 1/x (x⁵ in the closed forms overflows from 1.2e61)
 
 # φ_k(z) = Σₙ zⁿ / (n + k)!, k = 0, 1, 2
 _PHI_SERIES = np.array([[1.0 / factorial(n + k) for n in range(_SERIES_TERMS)] for k in range(3)])
@@ -161,6 +162,11 @@ def _singer_s(x: float) -> NDArray:
     """S(x), x = αΔt > 0: Q_rc = Δt^(k_r + k_c + 1) S_rc(x) ⊗ Qc. See docs/derivations.md, section 6."""
     if x <= _SERIES_RADIUS:
         return np.polynomial.polynomial.polyval(-x, _S_SERIES.transpose(2, 0, 1))
+    if x > _FAR:  # the closed forms below with E = 0, em1 = em2 = -1, in y = 1/x: no power of x to overflow
+        y = 1 / x
+        pp = y * y * (1 / 3 + y * (-1 + y * (1 + y / 2)))
+        pv, pa, vv, va = y * y * (1 - y) ** 2 / 2, y * y * y / 2, y * y * (1 - 1.5 * y), y * y / 2
+        return np.array([[pp, pv, pa], [pv, vv, va], [pa, va, y / 2]])
     E, em1, em2 = np.exp(-x), np.expm1(-x), np.expm1(-2 * x)  # e⁻ˣ, e⁻ˣ - 1, e⁻²ˣ - 1
     pp = (x**3 / 3 - x**2 + x - 2 * x * E - em2 / 2) / x**5
     pv = (x + em1) ** 2 / (2 * x**4)
@@ -180,10 +186,17 @@ def singer_process_noise(dt: float, alpha: float, qc: ArrayLike) -> NDArray:
     """
     dt, alpha, qc = time_step(dt), check_alpha(alpha), check_qc(qc)
     t = np.float64(dt)
-    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore", under="ignore"):
         D = np.array([t**2, t, 1.0])
-        q = np.kron(t * _singer_s(alpha * t) * np.outer(D, D), qc)
-    return finite_result("Q(dt) of Singer's model", q, dt=dt, alpha=alpha)
+        q = t * _singer_s(alpha * t) * np.outer(D, D)
+    finite_result("Q(dt) of Singer's model", q, dt=dt, alpha=alpha)
+    if not np.all(np.diag(q) > 0):  # a variance that underflowed: no Q float64 holds
+        raise NumericalError(
+            f"Q(dt) of Singer's model has a variance below float64's range at dt={dt!r}, alpha={alpha!r} "
+            f"(diagonal {np.diag(q).tolist()}): the time step or alpha is too large or too small for float64 to "
+            "represent this prior"
+        )
+    return finite_result("Q(dt) of Singer's model", np.kron(q, qc), dt=dt, alpha=alpha)
 
 
 # --- the models LinearSDE knows in closed form ----------------------------------------------------

@@ -29,9 +29,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..arguments import check_covariance, number, real_array
 from ..errors import SteamError
-from ..gp.interpolate import interpolate_covariance as vector_interpolate_covariance
-from ..gp.interpolate import interpolation_matrices
-from ..gp.prior import check_qc, process_noise
+from ..gp.interpolate import conditional_covariance, interpolation_matrices
+from ..gp.prior import check_qc, process_noise, transition
 from .group import LieGroup
 
 __all__ = [
@@ -215,7 +214,9 @@ def interpolate_covariance(
     gamma = np.concatenate([np.zeros(d), x1[n:]]) @ lam.T + gamma2 @ psi.T
     _, N, _ = _from_local(x1, gamma, model, group)
     J = np.hstack([J1, J2])
-    cond = vector_interpolate_covariance(t1, t2, tau, qc, np.zeros((4 * d, 4 * d)))  # Cov(γ(τ) | γ₁, γ₂)
+    t1, t2, tau = float(t1), float(t2), float(tau)  # (checked by interpolation_matrices: t₁ < τ < t₂)
+    qc = check_qc(qc)
+    cond = conditional_covariance(process_noise(tau - t1, qc), transition(t2 - tau, d), process_noise(t2 - tau, qc))
     P = check_covariance("joint_cov", real_array("joint_cov", joint_cov), 4 * d)
     cov = J @ P @ J.T + N @ cond @ N.T  # [DER 11.17]
     return x, (cov + cov.T) / 2

@@ -22,11 +22,9 @@ from __future__ import annotations
 from typing import Literal, overload
 
 import numpy as np
-import scipy.linalg
 from numpy.typing import ArrayLike, NDArray
 
 from ..arguments import check_covariance, real_array
-from ..errors import NumericalError
 from .group import LieGroup
 
 __all__ = [
@@ -39,7 +37,6 @@ __all__ = [
     "interpolate_covariance",
     "extrapolate",
     "extrapolate_covariance",
-    "conditional_noise",
 ]
 
 
@@ -161,22 +158,6 @@ def interpolate(
     return x, J1, _mm(N, _mm(psi, g22))
 
 
-def conditional_noise(q_tau: NDArray, phi_after: NDArray, q_after: NDArray) -> NDArray:
-    """Cov(γ(τ) | γ₁, γ₂) of the local GP, positive definite by construction: (Q_τ⁻¹ + Φᵀ Q_b⁻¹ Φ)⁻¹ with
-    Q_τ = Q(τ - t₁), Φ = Φ(t₂, τ), Q_b = Q(t₂ - τ): the posterior of γ(τ) ~ N(0, Q_τ) given γ(t₂) = Φ γ(τ) + w_b,
-    w_b ~ N(0, Q_b) (no difference of two covariances, so no negative eigenvalue from cancellation).  [DER 14.6]"""
-    try:
-        info = scipy.linalg.cho_solve(scipy.linalg.cho_factor(q_tau), np.eye(len(q_tau)))
-        info = info + phi_after.T @ scipy.linalg.cho_solve(scipy.linalg.cho_factor(q_after), phi_after)
-        chol = scipy.linalg.cholesky((info + info.T) / 2, lower=True)
-    except np.linalg.LinAlgError:
-        raise NumericalError(
-            "Q(τ - t₁) or Q(t₂ - τ) is not positive definite in float64: τ is too near a state"
-        ) from None
-    root = scipy.linalg.solve_triangular(chol, np.eye(len(chol)), lower=True)  # L⁻¹; the inverse is L⁻ᵀ L⁻¹
-    return root.T @ root
-
-
 def _gram(J: NDArray, P: NDArray, N: NDArray, Q: NDArray) -> NDArray:
     """J P Jᵀ + N Q Nᵀ, symmetric to the last bit: a congruence of each PSD matrix (no clipping)."""
     cov = J @ P @ J.T + N @ Q @ N.T
@@ -195,7 +176,7 @@ def interpolate_covariance(
     group: LieGroup,
 ) -> tuple[NDArray, NDArray]:
     """The mean x(τ) and its covariance J P Jᵀ + N Q_cond Nᵀ (right tangent at x(τ)); ``joint_cov`` (6d, 6d) of
-    [δ₁; δ₂], ``q_cond`` from :func:`conditional_noise`.  [DER 14.6]"""
+    [δ₁; δ₂], ``q_cond`` the local GP's Cov(γ(τ) | γ₁, γ₂) (``gp.interpolate.conditional_covariance``).  [DER 14.6]"""
     d = group.dim
     x, J1, J2 = interpolate(x1, x2, lam, psi, offset, group=group)
     gamma = _mv(lam, local_start(x1, group)) + _mv(psi, local_variables(x1, x2, group=group, jacobians=False)) + offset

@@ -25,7 +25,7 @@ from ..errors import DataError, ShapeError, SteamError
 from ..factors import Factor
 from ..factors.lie_prior import LieAccelInterpolatedFactor, LieAccelPriorFactor, LieStatePrior
 from ..factors.lie_readings import BodyVelocityFactor, PoseReading
-from ..gp.interpolate import interpolation_terms
+from ..gp.interpolate import conditional_covariance, interpolation_terms
 from ..gp.sde import LinearSDE, check_sde
 from ..lie import GroupState, LieGroup, gp_accel
 from ..lie.group import check_group
@@ -100,7 +100,7 @@ class LieGroupAccelPrior(MotionPrior):
     ) -> NDArray:
         lam, psi, offset = interpolation_terms(self.sde, ta, tb, t)  # checks ta < t < tb
         ta, tb, t = float(ta), float(tb), float(t)
-        q_cond = gp_accel.conditional_noise(
+        q_cond = conditional_covariance(
             self.sde.process_noise(t - ta), self.sde.transition(tb - t), self.sde.process_noise(tb - t)
         )  # [DER 14.6]
         xa, xb = np.asarray(xa, dtype=float), np.asarray(xb, dtype=float)
