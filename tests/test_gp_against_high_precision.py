@@ -1,4 +1,4 @@
-"""A review of the GP priors and Lie groups against oracles the other files do not use.
+"""The GP priors' covariances and the local variables of the Lie groups against oracles the other files do not use.
 
 Oracles, none of them steam_ref's code:
 
