@@ -575,6 +575,26 @@ def test_not_found_message_lists_where_it_looked(isolated: Path) -> None:
         load_dataset("plazza", data_dir=given)
 
 
+def test_every_search_that_finds_no_file_says_where_it_looked_and_how_to_fetch(isolated: Path) -> None:
+    """The data sets', the authors' runs' and the conformance kit's paper files: one message, naming every folder
+    searched and the fetch command (the kit's once named only two of the four places, and no command)."""
+    from steam_ref.conformance.paper import _data_file
+    from steam_ref.paper.fidelity import find_authors_file
+
+    given = isolated / "my_data"
+    given.mkdir()
+    for look, fetch in (
+        (lambda: load_dataset("plaza", data_dir=given), "plaza"),
+        (lambda: find_authors_file("plaza", given), "authors-plaza"),
+        (lambda: _data_file("plaza", given), "plaza"),
+    ):
+        with pytest.raises(DataError) as caught:
+            look()
+        message = str(caught.value)
+        assert "\n" not in message and f"looked in: {given.resolve()}" in message
+        assert f"`steam-ref data fetch {fetch}`" in message and "$STEAM_REF_DATA_DIR" in message
+
+
 def test_load_dataset_paths(small: RangeDataset, tmp_path: Path, isolated: Path) -> None:
     path = _save_mat(tmp_path / "toy.mat", **small.to_cmu_arrays())
     _assert_same_data(load_dataset(path), small)

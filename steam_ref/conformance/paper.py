@@ -18,8 +18,8 @@ from pathlib import Path
 import numpy as np
 
 from ..datasets import load_dataset, load_range_dataset
-from ..datasets.search import find_named
-from ..errors import DataError, SteamError
+from ..datasets.search import find_named, not_found
+from ..errors import SteamError
 from ..paper.fidelity import load_authors_run
 from ..paper.online import run_online
 from ..paper.presets import PaperSetup
@@ -75,7 +75,7 @@ def _data_file(dataset: str, data_dir) -> Path:
     got = find_named(DATA_FILES[dataset], data_dir)  # a cached copy that is not the published file is refused
     if got is not None:
         return got[0]
-    raise DataError(f"{DATA_FILES[dataset]} not found in the data search path (--data-dir, $STEAM_REF_DATA_DIR)")
+    raise not_found(DATA_FILES[dataset], dataset, data_dir)
 
 
 def _kept(m: int, stride: int) -> list[int]:

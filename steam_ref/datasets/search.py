@@ -38,6 +38,7 @@ __all__ = [
     "gtsam_data_dir",
     "default_data_dirs",
     "find_named",
+    "not_found",
     "load_dataset",
     "load_range_dataset",
     "uncleaned_plaza",
@@ -163,11 +164,17 @@ def _not_found(what: str, folders: list[Path], hint: str) -> DataError:
     return DataError(f"{what} not found; looked in: {looked}. {hint}")
 
 
-def _hint(key: str) -> str:
+def _hint(key: str, put: str = "the file") -> str:
     return (
-        f"Fetch it with `steam-ref data fetch {key}`, or put the file in a folder and pass that folder as "
+        f"Fetch it with `steam-ref data fetch {key}`, or put {put} in a folder and pass that folder as "
         f"--data-dir (data_dir= in Python) or set ${DATA_DIR_ENV} to it"
     )
+
+
+def not_found(what: str, fetch: str, data_dir: str | os.PathLike | None = None, put: str = "the file") -> DataError:
+    """The DataError of a search of the data path that found no ``what``: every folder searched (``data_dir`` first)
+    and how to get it: ``steam-ref data fetch <fetch>``, or ``put`` in a folder of the search path."""
+    return _not_found(what, default_data_dirs(data_dir), _hint(fetch, put) + ".")
 
 
 def _load_registered(s: DataSet, folders: list[Path], seed: int) -> RangeDataset | LandmarkDataset | RigidReadings:

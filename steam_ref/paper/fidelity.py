@@ -22,9 +22,9 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from ..datasets import DATA_DIR_ENV, RangeDataset, default_data_dirs, read_mat
+from ..datasets import RangeDataset, read_mat
 from ..datasets.registry import DATASETS
-from ..datasets.search import find_named
+from ..datasets.search import find_named, not_found
 from ..errors import DataError
 from .results import RunResult, position_rmse
 
@@ -67,14 +67,8 @@ def find_authors_file(name: str, data_dir: str | os.PathLike | None = None) -> P
     got = find_named(f"authors/{file}", data_dir)  # a cached copy that is not the published file is refused
     if got is not None:
         return got[0]
-    folders = default_data_dirs(data_dir)
-    looked = ", ".join(str(f) for f in folders) or "nowhere"
-    fetch = DATASETS[name].authors_run
-    raise DataError(
-        f"the authors' run authors/{file} not found; looked in: {looked}. Fetch it with `steam-ref data fetch "
-        f"{fetch}`, or put the authors/ folder (from XinyanGT/online-gpslam-code matlab/Data) in --data-dir or "
-        f"${DATA_DIR_ENV}."
-    )
+    put = "the authors/ folder (from XinyanGT/online-gpslam-code matlab/Data)"
+    raise not_found(f"the authors' run authors/{file}", DATASETS[name].authors_run, data_dir, put)
 
 
 def _read(path: Path) -> dict:
