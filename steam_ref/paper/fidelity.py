@@ -67,8 +67,9 @@ def find_authors_file(name: str, data_dir: str | os.PathLike | None = None) -> P
     got = find_named(f"authors/{file}", data_dir)  # a cached copy that is not the published file is refused
     if got is not None:
         return got[0]
-    put = "the authors/ folder (from XinyanGT/online-gpslam-code matlab/Data)"
-    raise not_found(f"the authors' run authors/{file}", DATASETS[name].authors_run, data_dir, put)
+    fetch, put = DATASETS[name].authors_run, "the authors/ folder (from XinyanGT/online-gpslam-code matlab/Data)"
+    assert fetch is not None  # AUTHORS_RUNS holds only the sets that name their authors' run
+    raise not_found(f"the authors' run authors/{file}", fetch, data_dir, put)
 
 
 def _read(path: Path) -> dict:
