@@ -53,7 +53,7 @@ def _dense_covariance(factors, values: Values, order: list) -> tuple[np.ndarray,
     for f in factors:
         row = np.zeros((f.dim, int(offsets[-1])))
         for k in f.keys:
-            whitened = lambda d, k=k: f.sqrt_information @ f.error(*[values.retract({k: d})[j] for j in f.keys])
+            whitened = lambda d, k=k, f=f: f.sqrt_information @ f.error(*[values.retract({k: d})[j] for j in f.keys])
             row[:, at[k]] = jacobian8(whitened, values.dim(k))
         rows.append(row)
     A = np.vstack(rows)
