@@ -3,7 +3,8 @@
 GTSAM's mEstimator Huber and Tukey give the weight w(e) and loss ρ(e) of a whitened error norm e, including at the
 threshold itself; a ``RangeFactor2D``, ``BearingFactor2D`` or ``BearingRangeFactor2D`` on a ``Pose2`` with a
 ``Robust`` noise model linearizes to A = √w W H, b = -√w W e (block reweighting, the Jacobian in the pose's body
-tangent [x, y, θ], the SE(2) state's pose block) and its error is ρ of the whitened error norm.
+tangent [x, y, θ], the SE(2) state's pose block; W of a full covariance the upper-triangular R with RᵀR = Σ⁻¹)
+and its error is ρ of the whitened error norm.
 """
 
 from __future__ import annotations
@@ -85,7 +86,7 @@ def _theirs(factor, pose, landmark):
 
 @pytest.mark.parametrize("loss", LOSSES, ids=["huber", "tukey"])
 @pytest.mark.parametrize("case", range(len(CASES)))
-@pytest.mark.parametrize("reading", ["range", "bearing", "bearing_range"])
+@pytest.mark.parametrize("reading", ["range", "bearing", "bearing_range", "bearing_range_correlated"])
 def test_robust_se2_pose_readings_linearize_as_gtsam_robust_factors(reading, case, loss):
     pose, landmark, bearing, rng = CASES[case]
     sigma_b, sigma_r = 0.05, 0.2
@@ -97,6 +98,11 @@ def test_robust_se2_pose_readings_linearize_as_gtsam_robust_factors(reading, cas
         ours = PoseReading.bearing(X(0), L(0), bearing, sigma_b, loss=loss, group=SE2)
         noise = _gtsam_robust(loss, gtsam.noiseModel.Isotropic.Sigma(1, sigma_b))
         theirs = gtsam.BearingFactor2D(0, 1, gtsam.Rot2(bearing), noise)
+    elif reading == "bearing_range_correlated":  # a full covariance: W = R with RᵀR = Σ⁻¹, R upper, as GTSAM's
+        cov = np.array([[sigma_b**2, 0.6 * sigma_b * sigma_r], [0.6 * sigma_b * sigma_r, sigma_r**2]])
+        ours = PoseReading.bearing_range(X(0), L(0), bearing, rng, cov, loss=loss, group=SE2)
+        noise = _gtsam_robust(loss, gtsam.noiseModel.Gaussian.Covariance(cov))
+        theirs = gtsam.BearingRangeFactor2D(0, 1, gtsam.Rot2(bearing), rng, noise)
     else:
         sigmas = np.array([sigma_b, sigma_r])
         ours = PoseReading.bearing_range(X(0), L(0), bearing, rng, sigmas, loss=loss, group=SE2)
