@@ -12,11 +12,14 @@ from __future__ import annotations
 
 import argparse
 import math
+import re
 import warnings
 from pathlib import Path
 from typing import Any, Protocol
 
-from ..arguments import parse_decimal
+import numpy as np
+
+from ..arguments import DECIMAL, parse_decimal
 from ..datasets import LandmarkDataset, RangeDataset, load_dataset
 from ..datasets.registry import DATASETS, loadable
 from ..datasets.rigid import RigidReadings
@@ -26,6 +29,7 @@ from ..motion import MOTION_PRIORS
 from ..paper.presets import PRESETS, PRIORS, SE2_RESIDUALS
 
 __all__ = [
+    "MAX_JOBS",
     "MAX_LANDMARKS",
     "MAX_SEEDS",
     "MAX_STEPS",
@@ -39,9 +43,11 @@ __all__ = [
     "check_prior_options",
     "check_prior_fits",
     "add_qc",
+    "add_seed",
     "add_trajectory_arguments",
     "dataset_name",
     "folder",
+    "jobs_count",
     "landmarks_count",
     "load_with_note",
     "non_negative_float",
@@ -53,6 +59,8 @@ __all__ = [
     "preset_of",
     "qc_diagonal",
     "scale",
+    "scaled_qc",
+    "seed_of",
     "seeds_count",
     "steps_count",
 ]
@@ -65,7 +73,12 @@ class Subparsers(Protocol):
 
 
 class Parser(argparse.ArgumentParser):
-    """argparse that reports a usage error as one line and exit code 2."""
+    """argparse that reports a usage error as one line and exit code 2, and reads a negative number in any form of
+    :data:`~steam_ref.arguments.DECIMAL` (``-1e-3``, not only ``-1`` and ``-0.5``) as a value, not an option."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = re.compile(f"^-(?:{DECIMAL.pattern.removeprefix('[+-]?')})$")
 
     def error(self, message: str) -> None:  # type: ignore[override]
         raise SteamError(f"{message} (see '{self.prog} --help')")
@@ -127,6 +140,20 @@ def qc_diagonal(text: str) -> list[float]:
     return [float(v) for v in values if v is not None]
 
 
+def scaled_qc(preset: np.ndarray, given: list[float] | None, factor: float) -> np.ndarray:
+    """Qc of a run: ``--qc`` (``given``, its diagonal; None: the ``preset``'s) times ``--qc-scale`` (``factor``);
+    SteamError naming both when the product is past float64 (the preset's times a scale <= 1e8 never is)."""
+    qc = preset if given is None else np.diag(given)
+    with np.errstate(over="ignore"):  # refused just below, in one line
+        qc = factor * qc
+    if not np.isfinite(qc).all():
+        raise SteamError(
+            f"--qc {','.join(f'{v:g}' for v in given or [])} times --qc-scale {factor:g} is past float64's largest "
+            f"number ({np.finfo(float).max:.3g}): give a smaller --qc or --qc-scale"
+        )
+    return qc
+
+
 # Singer's 1/alpha: the acceleration's memory. Below 1e-6 s (alpha dt > 1e6 at the data sets' dt of 1 s to
 # 0.1 s) its process noise spans more than float64 resolves; above 1e8 s it is WNOJ to float64's precision.
 SINGER_TIME_CONSTANTS = (1e-6, 1e8)
@@ -141,6 +168,11 @@ MAX_STEPS = 20_000
 MAX_LANDMARKS = 10_000
 
 
+# Worker processes (--jobs): each is a Python with NumPy and SciPy loaded (~100 MB) on a core of its own; past this a
+# typo (--jobs 100000) would spend minutes spawning workers, and a count past C's int is loky's OverflowError.
+MAX_JOBS = 64
+
+
 MAX_SEEDS = 100_000  # Monte Carlo runs (the default is 200): each is a whole task, and a line of the log
 
 
@@ -151,6 +183,9 @@ landmarks_count = number(int, 0, strict=True, upper=MAX_LANDMARKS, why="the gene
 
 
 seeds_count = number(int, 0, strict=True, upper=MAX_SEEDS, why="each run is a whole task")
+
+
+jobs_count = number(int, 0, strict=True, upper=MAX_JOBS, why="each is a worker process of its own")
 
 
 positive_int = number(int, 0, strict=True)
@@ -288,12 +323,33 @@ def preset_for(name: str) -> str:
     return preset
 
 
+def add_seed(parser: argparse.ArgumentParser) -> None:
+    """--seed: the seed of a generated data set (None unless given: :func:`seed_of`)."""
+    parser.add_argument(
+        "--seed", type=non_negative_int, default=None, help="seed of the generated synthetic task (default 0)"
+    )
+
+
+def seed_of(args: argparse.Namespace) -> int:
+    """``--seed``, 0 when not given; SteamError when it is given with a data set read from a file, which it would
+    leave as it is (it draws a generated set only)."""
+    if args.seed is None:
+        return 0
+    if args.dataset not in DATASETS or DATASETS[args.dataset].files:
+        generated = " | ".join(n for n in loadable() if not DATASETS[n].files)
+        raise SteamError(
+            f"--seed {args.seed} draws a generated data set (--dataset {generated}); --dataset {args.dataset!r} is "
+            "read from a file, which no seed changes: drop --seed"
+        )
+    return args.seed
+
+
 def load_with_note(args: argparse.Namespace) -> RangeDataset | LandmarkDataset:
     """``--dataset`` loaded for a command whose summary says what it read: its NOTE line says uncleaned Plaza data
     (explain.data_lines), so load_dataset's UncleanedDataWarning would only repeat it."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UncleanedDataWarning)
-        data = load_dataset(args.dataset, data_dir=args.data_dir, seed=args.seed)
+        data = load_dataset(args.dataset, data_dir=args.data_dir, seed=seed_of(args))
     if isinstance(data, RigidReadings):  # a 3-D set: `steam-ref run` solves it (cli/rigid.py)
         raise SteamError(f"--dataset {args.dataset!r} is a 3-D set: `steam-ref run --dataset {args.dataset}` solves it")
     return data

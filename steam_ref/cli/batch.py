@@ -19,12 +19,19 @@ from .args import (
     add_data_dir,
     add_dataset,
     add_progress,
+    add_seed,
     add_trajectory_arguments,
     load_with_note,
-    non_negative_int,
     preset_of,
 )
-from .paths import check_output, check_outputs_apart, check_trajectory_output, save_trajectory, write_plot
+from .paths import (
+    check_output,
+    check_outputs_apart,
+    check_outputs_not_inputs,
+    check_trajectory_output,
+    save_trajectory,
+    write_plot,
+)
 from .streams import json_line
 
 __all__ = ["add_parser", "run"]
@@ -39,7 +46,7 @@ def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
         "--preset", choices=PRESETS, default=None, help="parameter set (default: by data set; required for a PATH)"
     )
     add_data_dir(parser)
-    parser.add_argument("--seed", type=non_negative_int, default=0, help="seed of the generated synthetic task")
+    add_seed(parser)
     parser.add_argument("--json", action="store_true", help="print one JSON line of figures")
     parser.add_argument("--plot", metavar="FILE.png", default=None, help="draw estimate, ground truth, landmarks")
     add_trajectory_arguments(parser)
@@ -51,9 +58,11 @@ def run(args: argparse.Namespace) -> int:
     """Batch solve of a whole data set (started chunk by chunk, see ``sequential_batch``)."""
     check_output(args.plot, ".png", "--plot")
     check_trajectory_output(args)
-    check_outputs_apart({"--plot": args.plot, "--save-trajectory": args.save_trajectory})
+    outputs = {"--plot": args.plot, "--save-trajectory": args.save_trajectory}
+    check_outputs_apart(outputs)
     setup = PaperSetup.named(preset_of(args))
     data = load_with_note(args)
+    check_outputs_not_inputs(outputs, explain.files_of(data.source))
     problem = build_problem(data, setup)
     t0 = time.perf_counter()
     shown = explain.progress_wanted(args.progress, args.json)

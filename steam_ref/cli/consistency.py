@@ -25,7 +25,16 @@ from ..paper.consistency import STUDIES, Study, check_result, run_seed, summariz
 from ..paper.presets import SE2_RESIDUALS
 from ..paper.sweep import run_sweep
 from ..plot.figures import plot_anees
-from .args import Subparsers, add_progress, landmarks_count, non_negative_int, positive_int, seeds_count, steps_count
+from .args import (
+    MAX_JOBS,
+    Subparsers,
+    add_progress,
+    jobs_count,
+    landmarks_count,
+    non_negative_int,
+    seeds_count,
+    steps_count,
+)
 from .paths import check_output, check_outputs_apart, write_output
 from .streams import json_line
 
@@ -59,7 +68,9 @@ def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
     parser.add_argument(
         "--landmarks", type=landmarks_count, default=8, help="landmarks of a task (default %(default)s)"
     )
-    parser.add_argument("--jobs", type=positive_int, default=1, help="worker processes (default %(default)s)")
+    parser.add_argument(
+        "--jobs", type=jobs_count, default=1, help=f"worker processes, 1 to {MAX_JOBS} (default %(default)s)"
+    )
     parser.add_argument("--backend", choices=("loky", "dask"), default="loky", help="joblib's loky processes, or Dask")
     parser.add_argument(
         "--scheduler", default=None, help="Dask scheduler address (default: a LocalCluster on 127.0.0.1)"

@@ -51,7 +51,7 @@ def method_text(method: str, every: int) -> str:
     return f"{_METHODS.get(method, method.upper())}, update after {cadence}"
 
 
-def _files_of(source: str) -> list[Path]:
+def files_of(source: str) -> list[Path]:
     """The files named at the head of a data set's ``source`` ("path" or "path, path, path; notes")."""
     head = source.split("; ")[0]
     return [Path(p) for p in head.split(", ") if Path(p).is_file()]
@@ -64,7 +64,7 @@ def file_entry(path: Path) -> dict:
 
 def data_figures(data: RangeDataset | LandmarkDataset, n_poses: int) -> dict:
     """JSON figures about the data a run read (see the module docstring)."""
-    files = _files_of(data.source)
+    files = files_of(data.source)
     digests = {p: file_digest(p) for p in files}
     out: dict = {
         "data_files": [{"path": str(p), "sha256": d[:SHORT_SHA]} for p, d in digests.items()],

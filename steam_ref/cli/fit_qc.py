@@ -25,10 +25,10 @@ from .args import (
     add_data_dir,
     add_dataset,
     add_prior,
+    add_seed,
     check_prior_fits,
     check_prior_options,
     load_with_note,
-    non_negative_int,
     number,
     preset_of,
 )
@@ -57,7 +57,7 @@ def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
         "--max-poses", type=number(int, 3, strict=False), default=None, help="fit to the first N poses only"
     )
     add_data_dir(parser)
-    parser.add_argument("--seed", type=non_negative_int, default=0, help="seed of the generated synthetic task")
+    add_seed(parser)
     parser.add_argument("--json", action="store_true", help="print one JSON line of figures")
     return parser
 

@@ -30,6 +30,7 @@ __all__ = [
     "refuse_dangling",
     "check_output",
     "check_outputs_apart",
+    "check_outputs_not_inputs",
     "write_output",
     "check_out_folder",
     "check_trajectory_output",
@@ -174,6 +175,18 @@ def check_outputs_apart(outputs: dict[str, str | None]) -> None:
                 raise SteamError(
                     f"{option}: {path!r} is the file {stream} is redirected to: writing it would replace what is printed"
                 )
+
+
+def check_outputs_not_inputs(outputs: dict[str, str | None], inputs: list[Path]) -> None:
+    """After the data are read, before the run: no output given (option -> path) is one of the files ``inputs`` the
+    run read, by name or through a link (replacing it would destroy the data); else a SteamError naming both."""
+    read = {_identity(str(p)): p for p in inputs}
+    for option, path in outputs.items():
+        if path is not None and _identity(path) in read:
+            raise SteamError(
+                f"{option}: {path!r} is the data file {str(read[_identity(path)])!r} this run reads: writing it "
+                "would destroy the data (give another file)"
+            )
 
 
 def write_output(path: str, option: str, write: Callable[[str], object]) -> None:

@@ -7,7 +7,7 @@ import argparse
 from ..errors import SteamError
 from ..paper.experiments import reproduce
 from . import explain
-from .args import Subparsers, add_data_dir, add_progress, positive_int
+from .args import MAX_JOBS, Subparsers, add_data_dir, add_progress, jobs_count
 from .paths import check_out_folder
 
 __all__ = ["add_parser", "run"]
@@ -21,9 +21,9 @@ def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
     add_data_dir(parser)
     parser.add_argument(
         "--jobs",
-        type=positive_int,
+        type=jobs_count,
         default=1,
-        help="accuracy runs in parallel (timing runs stay serial, each in a fresh process)",
+        help=f"accuracy runs in parallel, 1 to {MAX_JOBS} (timing runs stay serial, each in a fresh process)",
     )
     add_progress(parser)
     return parser

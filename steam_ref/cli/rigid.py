@@ -36,16 +36,19 @@ from ..paper.rigid import (
     straight_line_at,
     straight_line_errors,
 )
+from .args import seed_of
 from .streams import json_line
 
 __all__ = ["run_rigid"]
 
-# run's options that a 3-D run does not read, with the value that means "not given"
+# run's options that a 3-D run does not read, with the value that means "not given" (it runs batch and BTGP, and
+# fixed-lag with --lag, whatever --method says; its readings between states are always interpolated)
 _PLANAR: dict[str, object] = {
     "every": None, "skip": 1, "range_states": False, "converge_at_end": False, "departure": [], "preset": None,
     "score_against_optimum": False, "se2_residual": None, "save_estimates": None, "plot": None, "qc": None,
     "tree_dot": None, "lag_history": False, "time_budget": None, "relinearize_threshold": None,
-    "relinearize_skip": None,
+    "relinearize_skip": None, "method": "btgp", "interpolate": True, "amalgamation_zeros": None, "lag_batch": 0.0,
+    "trajectory_format": None,
 }  # fmt: skip
 
 
@@ -91,16 +94,20 @@ def _scored(data: RigidReadings, prior: MotionPrior, method: str, run: RigidRun)
 
 def run_rigid(args: argparse.Namespace) -> int:
     """Solve the 3-D set ``args.dataset`` and print its held-out position errors (module docstring)."""
-    given = [f"--{k.replace('_', '-')}" for k, none in _PLANAR.items() if getattr(args, k, none) != none]
+    given = [  # an option on by default (--interpolate) was given as --no-...
+        f"--{'no-' * (none is True)}{k.replace('_', '-')}"
+        for k, none in _PLANAR.items()
+        if getattr(args, k, none) != none
+    ]
     if given or getattr(args, "save_trajectory", None):
         raise SteamError(f"--dataset {args.dataset} is a 3-D set: {(given or ['--save-trajectory'])[0]} does not apply")
     if args.steps is not None and args.dataset != "synthetic-3d":
         raise SteamError(f"--steps generates the synthetic task: it needs --dataset synthetic-3d, got {args.dataset!r}")
     generated = args.steps is not None
     loaded = (
-        generate_rigid(args.steps, seed=args.seed)
+        generate_rigid(args.steps, seed=seed_of(args))
         if generated
-        else load_dataset(args.dataset, data_dir=args.data_dir, seed=args.seed)
+        else load_dataset(args.dataset, data_dir=args.data_dir, seed=seed_of(args))
     )
     if not isinstance(loaded, RigidReadings):
         raise SteamError(f"--dataset {args.dataset!r} gives no 3-D readings")

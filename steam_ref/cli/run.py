@@ -38,22 +38,25 @@ from .args import (
     add_prior,
     add_progress,
     add_qc,
+    add_seed,
     add_trajectory_arguments,
     check_prior_fits,
     check_prior_options,
     load_with_note,
     non_negative_float,
-    non_negative_int,
     number,
     positive_float,
     positive_int,
     preset_of,
     scale,
+    scaled_qc,
+    seed_of,
     steps_count,
 )
 from .paths import (
     check_output,
     check_outputs_apart,
+    check_outputs_not_inputs,
     check_trajectory_output,
     save_trajectory,
     write_output,
@@ -142,7 +145,7 @@ def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
         f"(default: the preset's, {PaperSetup.singer_time_constant})",
     )
     add_data_dir(parser)
-    parser.add_argument("--seed", type=non_negative_int, default=0, help="seed of the generated synthetic task")
+    add_seed(parser)
     parser.add_argument(
         "--relinearize-threshold",
         type=non_negative_float,
@@ -239,22 +242,21 @@ def run(args: argparse.Namespace) -> int:
     check_trajectory_output(args)
     check_output(args.plot, ".png", "--plot")
     check_output(args.tree_dot, ".dot", "--tree-dot")
-    check_outputs_apart(
-        {
-            "--save-estimates": args.save_estimates,
-            "--save-trajectory": args.save_trajectory,
-            "--plot": args.plot,
-            "--tree-dot": args.tree_dot,
-        }
-    )
+    outputs = {
+        "--save-estimates": args.save_estimates,
+        "--save-trajectory": args.save_trajectory,
+        "--plot": args.plot,
+        "--tree-dot": args.tree_dot,
+    }
+    check_outputs_apart(outputs)
     if args.tree_dot and args.method != "btgp":
         raise SteamError(f"--tree-dot writes BTGP's Bayes tree: it needs --method btgp, got --method {args.method}")
     setup = PaperSetup.named(preset_of(args)).departing(*args.departure)
     prior = setup.prior if args.prior is None else args.prior
     given = {"prior": args.prior, "singer_time_constant": args.singer_time_constant, "se2_residual": args.se2_residual}
     check_prior_options(prior, {name: given[name] for name in ("singer_time_constant", "se2_residual")})
-    qc = setup.qc if args.qc is None else np.diag(args.qc)  # --qc, then --qc-scale
-    setup = setup.replace(qc=args.qc_scale * qc, **{k: v for k, v in given.items() if v is not None})
+    qc = scaled_qc(setup.qc, args.qc, args.qc_scale)  # --qc, then --qc-scale
+    setup = setup.replace(qc=qc, **{k: v for k, v in given.items() if v is not None})
     isam2 = {
         "relinearize_threshold": args.relinearize_threshold,
         "relinearize_skip": args.relinearize_skip,
@@ -285,6 +287,7 @@ def run(args: argparse.Namespace) -> int:
             "the old ones: drop one of them"
         )
     data = _run_dataset(args)
+    check_outputs_not_inputs(outputs, explain.files_of(data.source))
     if args.score_against_optimum and data.ground_truth is not None:
         raise SteamError(
             f"--score-against-optimum: {args.dataset!r} has ground truth, and is scored by RMSE against it"
@@ -363,7 +366,7 @@ def _run_dataset(args: argparse.Namespace):
             f"--steps generates the synthetic task: it needs --dataset synthetic (or synthetic-3d), got {args.dataset!r}"
         )
     n_landmarks = max(1, round(args.steps * DEFAULT_LANDMARKS / DEFAULT_STEPS))  # the default task's density
-    return generate_synthetic(n_steps=args.steps, n_landmarks=n_landmarks, seed=args.seed)
+    return generate_synthetic(n_steps=args.steps, n_landmarks=n_landmarks, seed=seed_of(args))
 
 
 def save_estimates(path: str, result, *, state_names: tuple[str, ...] = VECTOR_STATE_NAMES) -> None:

@@ -52,8 +52,10 @@ class StreamOptions:
         Layout(self.skip, self.range_states, self.interpolate)  # checks skip
         _check_count("max_poses", self.max_poses, 2)
         _check_count("pb_max_iterations", self.pb_max_iterations, 1)
-        if self.time_budget_s is not None and not (_is_real(self.time_budget_s) and self.time_budget_s > 0):
-            raise SteamError(f"time_budget_s must be a number > 0 (or None), got {self.time_budget_s!r}")
+        if self.time_budget_s is not None and not (_is_real(self.time_budget_s) and 0 < self.time_budget_s < np.inf):
+            raise SteamError(
+                f"time_budget_s must be a finite number of seconds > 0 (or None), got {self.time_budget_s!r}"
+            )
         if not (_is_real(self.pb_relative_tolerance) and 0 <= self.pb_relative_tolerance < np.inf):
             raise SteamError(f"pb_relative_tolerance must be a finite number >= 0, got {self.pb_relative_tolerance!r}")
         _check_lag(self)
