@@ -427,3 +427,22 @@ def test_an_interrupt_at_any_line_of_a_fixed_lag_update_leaves_it_as_before_and_
     solver.update(after[0], after[1], timestamps=after[2])
     assert _smoother_state(solver, keys)[1:] == _smoother_state(done, keys)[1:]
     assert state(solver.solver)[1:] == state(done.solver)[1:]  # all but the factors' ids: the stream's are shared
+
+
+def test_sigterm_stops_a_command_as_ctrl_c_does_in_one_line(tmp_path) -> None:
+    """``kill`` or ``timeout`` (SIGTERM) during a run: one line and 143, the output never written (it was Python's
+    default, an exit with no line and no cleanup, a sweep's worker processes left running without their parent)."""
+    import subprocess
+
+    out = tmp_path / "estimates.npz"
+    env = os.environ | {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1"}
+    command = [sys.executable, "-m", "steam_ref", "run", "--dataset", "synthetic", "--steps", "20000"]
+    proc = subprocess.Popen(
+        [*command, "--save-estimates", str(out), "--no-progress"], stderr=subprocess.PIPE, text=True, env=env
+    )
+    time.sleep(4)  # past the imports: the stream is running
+    assert proc.poll() is None, "the run ended before it could be stopped"
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=60)
+    assert (proc.returncode, err) == (143, "steam-ref: terminated\n")
+    assert not out.exists()

@@ -177,6 +177,22 @@ def test_loky_workers_give_the_serial_figures_seed_for_seed(serial):
     assert _sweep(2) == serial
 
 
+def test_no_worker_is_started_beyond_the_items_to_run(monkeypatch):
+    """--jobs 64 with 2 seeds started 64 loky workers (a minute of start-up on two cores) for 2 items."""
+    import joblib
+
+    asked = []
+
+    class Counting(joblib.Parallel):
+        def __init__(self, n_jobs=None, **kw):
+            asked.append(n_jobs)
+            super().__init__(n_jobs=1, **kw)  # run here: only the count asked for is under test
+
+    monkeypatch.setattr(joblib, "Parallel", Counting)
+    assert len(run_sweep(functools.partial(run_seed, TINY), range(2), jobs=64)) == 2
+    assert asked == [2]
+
+
 def test_a_dask_local_cluster_gives_the_serial_figures_seed_for_seed(serial):
     optional_import("dask.distributed", "dask")
     assert _sweep(2, backend="dask") == serial

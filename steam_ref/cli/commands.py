@@ -15,13 +15,19 @@ each on stderr, ``steam-ref: warning: ...``, the first of each kind shown and th
 (:func:`~steam_ref.cli.streams.warning_lines`); they do not change the exit code: the run finished and wrote
 its outputs, and its figures (``--json``: ``divergence``) say what was found. A command that never solves
 (``data``: its module says ``SOLVES = False``) does not read ``$STEAM_REF_BLAS_THREADS``.
+
+Ctrl-C stops a command with one line, ``steam-ref: interrupted``, and exit code 130; SIGTERM (``kill``, ``timeout``,
+a batch scheduler) is taken the same way, ``steam-ref: terminated`` and 143, so that what an interrupt undoes is
+undone (no half-written output; a sweep's worker processes stopped with it, not left running without a parent).
 """
 
 from __future__ import annotations
 
 import argparse
 import contextlib
+import signal
 import sys
+import threading
 from collections.abc import Sequence
 from importlib import import_module
 
@@ -31,7 +37,30 @@ from ..linear.threads import limit
 from .args import Parser
 from .streams import complain, one_line, quiet_stdout, warning_lines
 
-__all__ = ["COMMANDS", "build_parser", "main"]
+__all__ = ["COMMANDS", "Terminated", "build_parser", "main"]
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised where the command is, as Ctrl-C's KeyboardInterrupt is (and caught where it is)."""
+
+
+def _terminate(signum: int, frame: object) -> None:  # noqa: ARG001 (a signal handler's signature)
+    raise Terminated
+
+
+@contextlib.contextmanager
+def _sigterm_as_interrupt():
+    """SIGTERM raises :class:`Terminated` while the command runs (the main thread only: a handler can be set there
+    alone), the handler before restored after."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    before = signal.signal(signal.SIGTERM, _terminate)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, before)
+
 
 # Every command of `steam-ref`, in the order its help lists them: its name and its module, which has
 # add_parser(sub) and run(args). A command's module loads only when it is the one run (or help lists them all),
@@ -71,7 +100,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         argv = argv or ["run"]  # no command at all runs the main job
         args = build_parser(argv[0]).parse_args(argv)
         # the solvers' small dense algebra at one BLAS thread unless $STEAM_REF_BLAS_THREADS says
-        with limit() if args.solves else contextlib.nullcontext(), warning_lines(SteamWarning):
+        with _sigterm_as_interrupt(), limit() if args.solves else contextlib.nullcontext(), warning_lines(SteamWarning):
             return args.handler(args)
     except BrokenPipeError:  # stdout's reader went away (`| head`): what it read is all it wanted
         quiet_stdout()
@@ -82,6 +111,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (SteamError, OSError) as exc:
         complain(f"steam-ref: error: {one_line(str(exc))}")
         return 2
+    except Terminated:
+        complain("steam-ref: terminated")
+        return 143  # 128 + SIGTERM, as a shell reports a command it stopped
     except KeyboardInterrupt:
         complain("steam-ref: interrupted")
         return 130

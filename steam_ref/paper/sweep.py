@@ -173,7 +173,8 @@ def run_sweep(
             client, cluster = _dask_client(scheduler, jobs)
         config = joblib.parallel_config(backend="dask") if backend == "dask" else joblib.parallel_config("loky")
         with config:
-            run = joblib.Parallel(n_jobs=jobs if backend == "loky" else -1, return_as="generator_unordered")
+            workers = min(jobs, len(todo)) if backend == "loky" else -1  # no idle worker started for nothing
+            run = joblib.Parallel(n_jobs=workers, return_as="generator_unordered")
             for item, result in run(joblib.delayed(_limited)(function, item) for item in todo):
                 results[_key(item)] = result
                 if stream is not None:
