@@ -69,7 +69,8 @@ def find_authors_file(name: str, data_dir: str | os.PathLike | None = None) -> P
     if got is not None:
         return got[0]
     put = "the authors/ folder (from XinyanGT/online-gpslam-code matlab/Data)"
-    raise not_found(f"the authors' run authors/{file}", DATASETS[name].authors_run, data_dir, put)
+    fetch = DATASETS[name].authors_run or name  # never None: AUTHORS_RUNS holds the data sets that have one
+    raise not_found(f"the authors' run authors/{file}", fetch, data_dir, put)
 
 
 def _read(path: Path) -> dict:
