@@ -9,8 +9,9 @@
 
 Numbers are written with 17 significant digits, so a file read back gives the same times and positions;
 a heading comes back through its quaternion or rotation, equal modulo 2π to within rounding (1e-15). The
-loaders accept planar poses only (z = 0, rotation about z, to 1e-9) and refuse anything else with a
-:class:`~steam_ref.errors.DataError` naming the file and line; timestamps must increase strictly.
+loaders accept planar poses only (z = 0, rotation about z, to 1e-9; a TUM quaternion of unit norm, to 1e-3) and
+refuse anything else with a :class:`~steam_ref.errors.DataError` naming the file and line; timestamps must increase
+strictly.
 """
 
 from __future__ import annotations
@@ -27,9 +28,11 @@ from ..dead_reckoning import wrap_angle
 from ..errors import DataError, ShapeError
 from .metrics import planar_poses
 
-__all__ = ["write_tum", "read_tum", "write_kitti", "read_kitti", "PLANAR_TOLERANCE"]
+__all__ = ["write_tum", "read_tum", "write_kitti", "read_kitti", "PLANAR_TOLERANCE", "UNIT_TOLERANCE"]
 
 PLANAR_TOLERANCE = 1e-9  # |z|, |qx|, |qy| and the rotation's off-plane entries a planar file may have
+# |‖q‖ - 1| a TUM quaternion may have: files of 4 decimals (the TUM RGB-D benchmark's own) are within 2e-4 of 1
+UNIT_TOLERANCE = 1e-3
 
 
 def _times(times: object, n: int) -> NDArray:
@@ -104,14 +107,18 @@ def read_tum(path: str | os.PathLike) -> tuple[NDArray, NDArray]:
     rows = _table(path, 8, "TUM")
     t, xyz, q = rows[:, 0], rows[:, 1:4], rows[:, 4:8]
     norm = np.linalg.norm(q, axis=1)
-    bad = (
-        (np.abs(xyz[:, 2]) > PLANAR_TOLERANCE) | (np.abs(q[:, :2]).max(axis=1) > PLANAR_TOLERANCE * norm) | (norm == 0)
-    )
+    bad = (np.abs(xyz[:, 2]) > PLANAR_TOLERANCE) | (np.abs(q[:, :2]).max(axis=1) > PLANAR_TOLERANCE * norm)
     if bad.any():
         k = int(np.flatnonzero(bad)[0])
         raise DataError(
             f"{path}, line {_line_of(path, k)}: not a planar pose (z = {float(xyz[k, 2])!r}, qx = {float(q[k, 0])!r}, qy = {float(q[k, 1])!r}, "
             f"|q| = {float(norm[k])!r}); steam_ref's trajectories are planar"
+        )
+    if np.any(np.abs(norm - 1) > UNIT_TOLERANCE):  # (0, 0, 0, 2) is no rotation: not read as θ = 0
+        k = int(np.flatnonzero(np.abs(norm - 1) > UNIT_TOLERANCE)[0])
+        raise DataError(
+            f"{path}, line {_line_of(path, k)}: the quaternion {q[k].tolist()} has |q| = {float(norm[k])!r}, not a "
+            f"rotation (a unit quaternion, |q| within {UNIT_TOLERANCE:g} of 1)"
         )
     if np.any(np.diff(t) <= 0):
         k = int(np.flatnonzero(np.diff(t) <= 0)[0]) + 1

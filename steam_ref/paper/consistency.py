@@ -17,8 +17,8 @@ pose's ANEES, χ²⁻¹(0.025 / 0.975; N d) / N (:func:`~steam_ref.evaluate.chi2
 conservative for the average: the poses' ANEES are correlated χ² variables of mean d, and the variance
 of their average is at most the largest of theirs.
 
-For a landmark (which a run that drops readings may not see) the figure is the runs' mean NEES averaged,
-checked against the same band. A run whose mean NEES is beyond χ²⁻¹(0.999; d) is counted as "far outside"
+For a landmark (which a run that drops readings may not see) the figure is the runs' mean NEES averaged over
+the runs that saw one, checked against the same band with N those runs. A run whose mean NEES is beyond χ²⁻¹(0.999; d) is counted as "far outside"
 (an estimate lost in a wrong minimum rather than a covariance a little off); it stays in the ANEES.
 
 **Too few runs.** An ANEES inside the band is called "consistent" only when the study has enough runs to
@@ -361,22 +361,22 @@ def summarize(
         missing = [name for name in estimators if not isinstance(results[i], dict) or name not in results[i]]
         if missing:
             raise SteamError(f"run {i} has no result for estimator {missing[0]!r}: every run needs every estimator")
-    n = len(order)
-    out: dict = {"n_seeds": n, "level": level, "estimators": {}}
+    out: dict = {"n_seeds": len(order), "level": level, "estimators": {}}
     for name in estimators:
         row: dict = {}
         for kind, d in kinds.items():
-            runs = [np.asarray(results[i][name][kind]) for i in order]
+            runs = [r for r in (np.asarray(results[i][name][kind], dtype=float) for i in order) if r.size]  # seen
+            if not runs:  # a run that saw no landmark has none: the ANEES and band are over the runs that did
+                raise SteamError(f"estimator {name!r}: no run has a {kind} NEES, so there is no {kind} ANEES")
             anees = float(np.mean([r.mean() for r in runs]))  # the runs' means, averaged
-            band = chi2_band(n, d, level)
-            # A run whose mean NEES is beyond the 99.9 % point of one state's χ²(d): an estimate lost (a wrong
-            # minimum), not a covariance a little off. Counted, never dropped from the ANEES.
-            far = sum(bool(r.mean() > chi2_quantile(LOST_QUANTILE, d)) for r in runs if r.size)
+            band = chi2_band(len(runs), d, level)
+            # A run whose mean NEES is beyond the 99.9 % point of one state's χ²(d): lost (a wrong minimum). Counted.
+            far = sum(bool(r.mean() > chi2_quantile(LOST_QUANTILE, d)) for r in runs)
             needed = runs_needed(d, level)  # fewer runs could have missed a tail of lost runs (evaluate.consistency)
             row[kind] = {
                 "anees": anees,
                 "band": list(band),
-                "verdict": verdict(anees, band, enough_runs=n >= needed),
+                "verdict": verdict(anees, band, enough_runs=len(runs) >= needed),
                 "runs_needed": needed,
                 "dim": d,
                 "median_run": float(np.median([r.mean() for r in runs])),

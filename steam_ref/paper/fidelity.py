@@ -25,6 +25,7 @@ from numpy.typing import NDArray
 from ..datasets import RangeDataset, read_mat
 from ..datasets.registry import DATASETS
 from ..datasets.search import find_named, not_found
+from ..dead_reckoning import wrap_angle
 from ..errors import DataError
 from .results import RunResult, position_rmse
 
@@ -204,7 +205,7 @@ class Fidelity:
     pose_rms_m: float  # RMS over the states of ‖p_ours - p_authors‖ (x, y)
     pose_max_m: float  # its maximum
     pose_max_at: int  # the pose index where the maximum is
-    heading_max_rad: float  # max |θ_ours - θ_authors|
+    heading_max_rad: float  # max |wrap(θ_ours - θ_authors)|, the wrap to [-π, π)
     landmark_max_m: float  # max over landmarks of ‖ℓ_ours - ℓ_authors‖
     rmse_m: float  # our position RMSE against ground truth at the states
     authors_rmse_m: float  # the authors' (the same score of their estimate)
@@ -268,7 +269,7 @@ def compare(result: RunResult, authors: AuthorsRun, ground_truth: NDArray) -> tu
         float(np.sqrt(np.mean(dist**2))),
         float(dist.max()),
         int(result.state_poses[dist.argmax()]),
-        float(np.abs(ours[:, 2] - authors.poses[:, 2]).max()),
+        float(np.abs(wrap_angle(ours[:, 2] - authors.poses[:, 2])).max()),  # θ and θ + 2π are one heading
         float(max(marks)),
         position_rmse(ours[:, :2], truth),
         position_rmse(authors.poses[:, :2], truth),
