@@ -1,4 +1,4 @@
-"""Evaluation against oracles the other tests do not use, and what a review of it found.
+"""Evaluation against oracles the other tests do not use, and the inputs it once answered wrongly.
 
 - Alignment against a brute-force minimisation of Σ ‖yᵢ - (s R(φ) xᵢ + t)‖² (SciPy BFGS from 24 starting angles) on
   the cases a closed form gets wrong: a truth that is the mirror image of the estimate (Umeyama's det = -1 case:
