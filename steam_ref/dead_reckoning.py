@@ -21,7 +21,8 @@ __all__ = ["wrap_angle", "compose", "integrate_odometry", "transform_from"]
 
 
 def wrap_angle(a: ArrayLike) -> NDArray:
-    """Angles mapped to [-π, π)."""
+    """Angles mapped to [-π, π), up to rounding: an angle within an ulp below an odd multiple of -π maps to +π
+    (a + π rounds onto a multiple of 2π), the same heading."""
     return (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi
 
 
