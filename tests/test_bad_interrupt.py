@@ -440,7 +440,7 @@ def test_sigterm_stops_a_command_as_ctrl_c_does_in_one_line(tmp_path) -> None:
     proc = subprocess.Popen(
         [*command, "--save-estimates", str(out), "--no-progress"], stderr=subprocess.PIPE, text=True, env=env
     )
-    time.sleep(4)  # past the imports: the stream is running
+    time.sleep(8)  # well past the imports (~1 s, a few under load): the stream, minutes long, is running
     assert proc.poll() is None, "the run ended before it could be stopped"
     proc.send_signal(signal.SIGTERM)
     _, err = proc.communicate(timeout=60)
