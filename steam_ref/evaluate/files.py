@@ -114,8 +114,9 @@ def read_tum(path: str | os.PathLike) -> tuple[NDArray, NDArray]:
             f"{path}, line {_line_of(path, k)}: not a planar pose (z = {float(xyz[k, 2])!r}, qx = {float(q[k, 0])!r}, qy = {float(q[k, 1])!r}, "
             f"|q| = {float(norm[k])!r}); steam_ref's trajectories are planar"
         )
-    if np.any(np.abs(norm - 1) > UNIT_TOLERANCE):  # (0, 0, 0, 2) is no rotation: not read as θ = 0
-        k = int(np.flatnonzero(np.abs(norm - 1) > UNIT_TOLERANCE)[0])
+    not_unit = np.abs(norm - 1) > UNIT_TOLERANCE  # (0, 0, 0, 2) is no rotation: not read as θ = 0
+    if not_unit.any():
+        k = int(np.flatnonzero(not_unit)[0])
         raise DataError(
             f"{path}, line {_line_of(path, k)}: the quaternion {q[k].tolist()} has |q| = {float(norm[k])!r}, not a "
             f"rotation (a unit quaternion, |q| within {UNIT_TOLERANCE:g} of 1)"

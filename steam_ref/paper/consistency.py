@@ -17,9 +17,9 @@ pose's ANEES, χ²⁻¹(0.025 / 0.975; N d) / N (:func:`~steam_ref.evaluate.chi2
 conservative for the average: the poses' ANEES are correlated χ² variables of mean d, and the variance
 of their average is at most the largest of theirs.
 
-For a landmark (which a run that drops readings may not see) the figure is the runs' mean NEES averaged over
-the runs that saw one, checked against the same band with N those runs. A run whose mean NEES is beyond χ²⁻¹(0.999; d) is counted as "far outside"
-(an estimate lost in a wrong minimum rather than a covariance a little off); it stays in the ANEES.
+For a landmark (which a run that drops readings may not see) the figure is the mean NEES of the runs that saw
+one, averaged, against the same band with N those runs. A run whose mean NEES is beyond χ²⁻¹(0.999; d) is "far
+outside" (an estimate lost in a wrong minimum rather than a covariance a little off); it stays in the ANEES.
 
 **Too few runs.** An ANEES inside the band is called "consistent" only when the study has enough runs to
 have seen a tail of lost runs large enough to push the expected ANEES above the band
