@@ -166,7 +166,7 @@ class Coefficients:
 
     def _series(self, name: str) -> NDArray:
         c, odd = _S[name]
-        value = horner(c, self.t**2)
+        value = horner(c, self.t * self.t)
         return self.t * value if odd else value
 
     def _pick(self, name: str) -> NDArray:
@@ -199,7 +199,8 @@ class Coefficients:
         return self._trig()[0] / self.t
 
     def _B(self) -> NDArray:
-        return 2 * self._trig()[2] ** 2 / self.t
+        sh = self._trig()[2]
+        return 2 * (sh * sh) / self.t
 
     def _C(self) -> NDArray:
         return (self.t - self._trig()[0]) / self.t / self.t
@@ -230,7 +231,7 @@ class Coefficients:
 
     def _alpha1(self) -> NDArray:  # (sin θ - θ)/(2 (1 - cos θ)) = -C/(2D)
         s, _, sh, _ = self._trig()
-        return (s - self.t) / (4 * sh**2)
+        return (s - self.t) / (4 * (sh * sh))
 
     def _A2(self) -> NDArray:
         s, c, _, _ = self._trig()
@@ -240,11 +241,12 @@ class Coefficients:
     def _B2(self) -> NDArray:
         s, c, sh, _ = self._trig()
         t = self.t
-        return (c - 2 * s / t + 4 * sh**2 / t / t) / t
+        return (c - 2 * s / t + 4 * (sh * sh) / t / t) / t
 
     def _alpha2(self) -> NDArray:  # -1/2 + sin θ (θ - sin θ)/(2 (1 - cos θ)²)
         s, _, sh, _ = self._trig()
-        return -0.5 + s * (self.t - s) / (8 * sh**4)
+        sh2 = sh * sh
+        return -0.5 + s * (self.t - s) / (8 * (sh2 * sh2))
 
     def _Ct(self) -> NDArray:
         return self["C"] / self.t

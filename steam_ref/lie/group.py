@@ -12,7 +12,9 @@ works for the next group unchanged. Its conventions, the same for every group (t
   the value: for y = f(x), J = ∂ Log(f(x)⁻¹ f(x Exp δ)) / ∂δ at δ = 0. So J_r(ξ) is defined by
   Exp(ξ + dξ) = Exp(ξ) Exp(J_r(ξ) dξ) to first order, and Ad(T) by T Exp(ξ) T⁻¹ = Exp(Ad(T) ξ).
 - **Broadcasting.** Every method broadcasts over leading axes: ξ (..., dim), an element (..., size),
-  a Jacobian (..., dim, dim), a group matrix (..., n, n); so a batch of factors evaluates it once.
+  a Jacobian (..., dim, dim), a group matrix (..., n, n); so a batch of factors evaluates it once, and each
+  element of a batch gets the bits it gets alone. So a square is ``x * x`` or ``np.square``, never ``x ** 2``:
+  NumPy 2.4 raises an array to an integer power by products but a scalar by C's ``pow``, which differ in the last bit.
 - **One call for a value and its Jacobians.** ``compose``, ``inverse`` and ``between`` return the
   value, or with ``jacobians=True`` the value and its Jacobians from the same call (GTSAM's
   ``Pose2::between(p2, H1, H2)``, manif's ``compose(m, J_mc_ma, J_mc_mb)``).

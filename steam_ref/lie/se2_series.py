@@ -73,10 +73,10 @@ class Coefficients:
         n_small = np.count_nonzero(self.small)  # (a third of the cost of .all() and .any() on a few numbers)
         self.all_small, self.any_small = n_small == self.small.size, n_small > 0
         if self.all_small:
-            self.z = self.phi**2
+            self.z = self.phi * self.phi
         else:
             with np.errstate(over="ignore"):  # |φ| > 1e154: φ² is inf, and the closed forms' O(1/φ²) terms 0
-                self.z = self.phi**2
+                self.z = self.phi * self.phi
         self._known: dict[str, NDArray] = {}
         self._sums: NDArray | None = None  # every series at z, summed when the first is read
 
@@ -104,7 +104,7 @@ class Coefficients:
         return self._pick(lambda: self._sum("A"), lambda: np.sin(self.phi) / self.phi)
 
     def _D(self) -> NDArray:  # 1 - cos φ = 2 sin²(φ/2): no cancellation
-        return self._pick(lambda: self._sum("D"), lambda: 2 * np.sin(self.phi / 2) ** 2 / self.z)
+        return self._pick(lambda: self._sum("D"), lambda: 2 * np.square(np.sin(self.phi / 2)) / self.z)
 
     def _B(self) -> NDArray:
         return self.phi * self["D"]

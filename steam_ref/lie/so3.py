@@ -126,7 +126,7 @@ class SO3Group(LieGroup):
         """Exp(φ) as a (..., 3, 3) matrix; ShapeError for an infinite or NaN angle."""
         theta, u = unit_axis(self._twists("xi", phi))
         finite_angles("xi", theta)
-        return isotropic(np.cos(theta), np.sin(theta), 2 * np.sin(theta / 2) ** 2, u)
+        return isotropic(np.cos(theta), np.sin(theta), 2 * np.square(np.sin(theta / 2)), u)
 
     def log(self, a: ArrayLike) -> NDArray:
         """Log(R): the rotation vector, its angle in [0, π], exact up to π.  [DER 13.2]"""
