@@ -5,9 +5,8 @@ ordering ('xl': the paper's PB, 'amd': PBVR, 'natural'; :mod:`steam_ref.linear.o
 θ̄ ← θ̄ ⊕ δθ* by each variable's kind, as its factors declare it (:mod:`steam_ref.manifold`).
 
 Iterations stop on GTSAM's rules (the cost, or its relative decrease, below a tolerance) or on a
-small Gauss-Newton step (for Levenberg-Marquardt, a short damped step counts only when the undamped one is short
-too: :func:`levenberg_marquardt`). A stopping rule is not a proof, so before a result says ``converged`` the
-returned estimate is checked (:func:`check_stationarity`): one more Gauss-Newton step from it must promise to lower the cost by no
+small step. A stopping rule is not a proof, so before a result says ``converged`` the returned estimate is
+checked (:func:`check_stationarity`): one more Gauss-Newton step from it must promise to lower the cost by no
 more than the tolerance, and 𝓘 there must be well enough conditioned for float64 to compute that step at all.
 
 It also declares the steps a solver built on them reuses (the internal API of :mod:`steam_ref.paper.converge`):
@@ -19,7 +18,7 @@ from __future__ import annotations
 
 import math
 import warnings
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -197,8 +196,7 @@ def certify(
     if not found.well_conditioned:
         message = (
             f"{rule or 'max_iterations'}; the information matrix is too ill-conditioned to trust the answer: "
-            "condition ≈ "
-            f"{found.condition:.1e} > {MAX_CONDITION:.0e} (see docs/derivations.md, 'The smallest time gap')"
+            f"condition ≈ {found.condition:.1e} > {MAX_CONDITION:.0e} (see docs/derivations.md, 'The smallest time gap')"
         )
         warnings.warn(message, IllConditionedWarning, stacklevel=3)
         return False, message, found
@@ -261,28 +259,13 @@ def prepare(
     return backend, order, graph.error(initial)
 
 
-def _converged(
-    old: float,
-    new: float,
-    step: float,
-    rtol: float,
-    atol: float,
-    steptol: float,
-    undamped: Callable[[], float] | None = None,
-) -> str:
-    """The stopping rule that holds after a step from cost ``old`` to ``new`` of norm ``step`` ('' for none).
-    ``undamped``: for a damped step, the norm of the Gauss-Newton step from the estimate just accepted, computed only
-    if the damped step is short; what a short step says, and why a damped one needs it, :func:`levenberg_marquardt`."""
+def _converged(old: float, new: float, step: float, rtol: float, atol: float, steptol: float) -> str:
     if new <= atol:
         return f"cost {new:.3g} below absolute tolerance {atol:g}"
     if abs(old - new) <= rtol * max(old, 1e-300):
         return f"relative cost decrease {abs(old - new) / max(old, 1e-300):.3g} below {rtol:g}"
     if step <= steptol:
-        if undamped is None:
-            return f"step norm {step:.3g} below {steptol:g}"
-        gauss_newton = undamped()  # one more factorization, only when the damped step is short
-        if gauss_newton <= steptol:
-            return f"damped step norm {step:.3g} and the Gauss-Newton step's {gauss_newton:.3g} below {steptol:g}"
+        return f"step norm {step:.3g} below {steptol:g}"
     return ""
 
 
@@ -334,9 +317,8 @@ def gauss_newton(
         cost = new_cost
         if rule:
             break
-    converged, reason, found = certify(
-        graph, values, order, backend, rule, (relative_tolerance, absolute_tolerance), check
-    )
+    tolerances = (relative_tolerance, absolute_tolerance)
+    converged, reason, found = certify(graph, values, order, backend, rule, tolerances, check)
     return BatchResult(values, cost0, iterations, converged, reason, order, nnz, backend, found, tuple(graph))
 
 
@@ -359,20 +341,11 @@ def levenberg_marquardt(
 ) -> BatchResult:
     """Levenberg-Marquardt with Marquardt's scaling: (𝓘 + λ diag 𝓘) δ = Aᵀb.
 
-    A step that lowers the cost is taken and λ divided by ``damping_factor``; otherwise λ is
-    multiplied by it and the step retried. Stops on the Gauss-Newton rules, judged on the steps taken,
-    or when λ exceeds ``max_damping`` (no step lowers the cost). ``converged`` as in :func:`gauss_newton`.
-
-    The step rule is judged on the undamped step. A Gauss-Newton step is the distance to the minimum of
-    the linearized cost; a damped step is not: for λ > 0 its length (in the norm the scaling defines) is the
-    radius of the trust region λ stands for [Nocedal & Wright, Numerical Optimization, 2nd ed., §10.3], and
-    for large λ, after rejected steps or from a large ``initial_damping``, it is a short steepest-descent step
-    however far the minimum [Madsen, Nielsen & Tingleff, Methods for Non-Linear Least Squares Problems, 2004,
-    §3.2, whose Algorithm 3.16 tests the damped step, with a gradient test beside it; GTSAM's
-    LevenbergMarquardtOptimizer has no step test]. So a taken step shorter than ``step_tolerance`` stops the
-    iterations only if the Gauss-Newton step from the estimate it reached is no longer than ``step_tolerance``
-    too (one more factorization, only then, not counted as an iteration); otherwise they go on, λ already
-    divided. The cost rules are judged on the damped step, as GTSAM judges them.
+    A step that lowers the cost is taken and λ divided by ``damping_factor``; otherwise λ is multiplied by it and
+    the step retried. Stops on the Gauss-Newton rules, judged on the steps taken, a short one only if the Gauss-Newton
+    step (λ = 0) from where it led is short too: a damped step's length is the trust region's radius, not the distance
+    to a minimum [Nocedal & Wright 2006, §10.3; Madsen, Nielsen & Tingleff 2004, §3.2]; or when λ exceeds
+    ``max_damping`` (no step lowers the cost). ``converged`` as in :func:`gauss_newton`.
     """
     check_options(
         relative_tolerance=relative_tolerance,
@@ -396,16 +369,17 @@ def levenberg_marquardt(
         if verbose:
             print(f"LM {len(iterations):3d}: cost {new_cost:.9g} λ {lam:.1e} {'ok' if accepted else 'rejected'}")
         if accepted:
-            undamped = lambda at=trial: _norm(_step(graph, at, order, backend, 0.0, symbolic)[0])  # [YIB Eq. 11]
-            rule = _converged(cost, new_cost, step, relative_tolerance, absolute_tolerance, step_tolerance, undamped)
+            rule = _converged(cost, new_cost, step, relative_tolerance, absolute_tolerance, step_tolerance)
+            if rule.startswith("step norm"):  # the step rule (checked last): damped, it must hold at λ = 0 too
+                gn = _norm(_step(graph, trial, order, backend, 0.0, symbolic)[0])  # one more factorization
+                rule = "" if gn > step_tolerance else f"{rule}, the Gauss-Newton step's {gn:.3g} too"
             values, cost, lam = trial, new_cost, max(lam / damping_factor, 1e-12)
         else:
             lam *= damping_factor
             if lam > max_damping:
                 rule = f"damping {lam:.1e} above {max_damping:.1e}: no step lowers the cost"
-    converged, reason, found = certify(
-        graph, values, order, backend, rule, (relative_tolerance, absolute_tolerance), check
-    )
+    tolerances = (relative_tolerance, absolute_tolerance)
+    converged, reason, found = certify(graph, values, order, backend, rule, tolerances, check)
     return BatchResult(values, cost0, iterations, converged, reason, order, nnz, backend, found, tuple(graph))
 
 

@@ -109,7 +109,7 @@ def test_a_step_short_after_rejected_steps_stops_lm_only_within_the_tolerance_of
     # the rule's promise: where it stops, the Gauss-Newton step, and so the distance to the minimum, is within it
     assert np.linalg.norm(gauss_newton_step("brown", result.values[P])) <= tolerance
     assert np.linalg.norm(result.values[P] - minimum) <= tolerance
-    assert "Gauss-Newton step" in result.reason
+    assert result.reason.startswith("step norm")  # the step rule stopped it, where it holds
     # converged says only what the check at the returned estimate says
     found = check_stationarity(factors("brown"), Values({P: result.values[P]}), result.ordering)
     assert result.converged == found.holds(1e-8, 1e-12)
