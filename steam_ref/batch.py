@@ -196,8 +196,7 @@ def certify(
     if not found.well_conditioned:
         message = (
             f"{rule or 'max_iterations'}; the information matrix is too ill-conditioned to trust the answer: "
-            "condition ≈ "
-            f"{found.condition:.1e} > {MAX_CONDITION:.0e} (see docs/derivations.md, 'The smallest time gap')"
+            f"condition ≈ {found.condition:.1e} > {MAX_CONDITION:.0e} (see docs/derivations.md, 'The smallest time gap')"
         )
         warnings.warn(message, IllConditionedWarning, stacklevel=3)
         return False, message, found
@@ -318,9 +317,8 @@ def gauss_newton(
         cost = new_cost
         if rule:
             break
-    converged, reason, found = certify(
-        graph, values, order, backend, rule, (relative_tolerance, absolute_tolerance), check
-    )
+    tolerances = (relative_tolerance, absolute_tolerance)
+    converged, reason, found = certify(graph, values, order, backend, rule, tolerances, check)
     return BatchResult(values, cost0, iterations, converged, reason, order, nnz, backend, found, tuple(graph))
 
 
@@ -343,8 +341,10 @@ def levenberg_marquardt(
 ) -> BatchResult:
     """Levenberg-Marquardt with Marquardt's scaling: (𝓘 + λ diag 𝓘) δ = Aᵀb.
 
-    A step that lowers the cost is taken and λ divided by ``damping_factor``; otherwise λ is
-    multiplied by it and the step retried. Stops on the Gauss-Newton rules, or when λ exceeds
+    A step that lowers the cost is taken and λ divided by ``damping_factor``; otherwise λ is multiplied by it and
+    the step retried. Stops on the Gauss-Newton rules, judged on the steps taken, a short one only if the Gauss-Newton
+    step (λ = 0) from where it led is short too: a damped step's length is the trust region's radius, not the distance
+    to a minimum [Nocedal & Wright 2006, §10.3; Madsen, Nielsen & Tingleff 2004, §3.2]; or when λ exceeds
     ``max_damping`` (no step lowers the cost). ``converged`` as in :func:`gauss_newton`.
     """
     check_options(
@@ -370,14 +370,16 @@ def levenberg_marquardt(
             print(f"LM {len(iterations):3d}: cost {new_cost:.9g} λ {lam:.1e} {'ok' if accepted else 'rejected'}")
         if accepted:
             rule = _converged(cost, new_cost, step, relative_tolerance, absolute_tolerance, step_tolerance)
+            if rule.startswith("step norm"):  # the step rule (checked last): damped, it must hold at λ = 0 too
+                gn = _norm(_step(graph, trial, order, backend, 0.0, symbolic)[0])  # one more factorization
+                rule = "" if gn > step_tolerance else f"{rule}, the Gauss-Newton step's {gn:.3g} too"
             values, cost, lam = trial, new_cost, max(lam / damping_factor, 1e-12)
         else:
             lam *= damping_factor
             if lam > max_damping:
                 rule = f"damping {lam:.1e} above {max_damping:.1e}: no step lowers the cost"
-    converged, reason, found = certify(
-        graph, values, order, backend, rule, (relative_tolerance, absolute_tolerance), check
-    )
+    tolerances = (relative_tolerance, absolute_tolerance)
+    converged, reason, found = certify(graph, values, order, backend, rule, tolerances, check)
     return BatchResult(values, cost0, iterations, converged, reason, order, nnz, backend, found, tuple(graph))
 
 
