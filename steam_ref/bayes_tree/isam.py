@@ -30,7 +30,7 @@ from .. import covariance
 from ..arguments import real_array
 from ..errors import ShapeError, SteamError, UnderdeterminedError, UnknownVariableError
 from ..factors import Factor, check_factors, kinds_of
-from ..linear.ordering import min_degree_keys
+from ..linear.ordering import check_constrained, min_degree_keys
 from ..linear.system import linearize
 from ..linear.threads import limit
 from ..manifold import Manifold, by_kind
@@ -182,8 +182,7 @@ class IncrementalSolver:
         with timer("check"):
             if not isinstance(relinearize, (bool, np.bool_)):
                 raise SteamError(f"relinearize must be True or False, got relinearize={relinearize!r}")
-            if constrained is not None and not isinstance(constrained, Mapping):
-                raise SteamError(f"constrained must be a mapping key -> number or None, got {constrained!r:.80}")
+            check_constrained(constrained)
             F_new = check_factors("new_factors", new_factors)
             check_new_values(new_values)
             theta_new, kinds = self._checked_update(F_new, {} if new_values is None else new_values)

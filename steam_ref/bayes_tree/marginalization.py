@@ -39,11 +39,12 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
+import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import SteamError, UnknownVariableError
 from ..factors.marginal import MarginalFactor
-from ..linear.ordering import min_degree_keys
+from ..linear.ordering import check_constrained, min_degree_keys
 from ..linear.system import GaussianFactor
 from ..variables import Key, key_list
 from .backsolve import backsubstitute
@@ -131,7 +132,10 @@ def marginalize_keys(
     (:func:`~steam_ref.linear.ordering.min_degree_keys`); ``reuse_marginals``: whole subtrees are cut with the f(S)
     the tree cached (step 2, the same marginal to rounding, with no elimination). One transaction: on any failure
     or interruption (Ctrl-C) the state is left as it was."""
-    drop_list = list(dict.fromkeys(key_list("keys", keys)))
+    drop_list = list(dict.fromkeys(key_list("keys", keys)))  # a key named twice is marginalized once (as GTSAM)
+    check_constrained(constrained)
+    if not isinstance(keep_conditionals, (bool, np.bool_)):
+        raise SteamError(f"keep_conditionals must be True or False, got keep_conditionals={keep_conditionals!r:.80}")
     for k in drop_list:
         if k not in state.dims:
             raise UnknownVariableError(f"cannot marginalize {k!r}: the solver does not hold it")
