@@ -13,7 +13,8 @@ A the whitened Jacobians of every factor ever given at θ̄, b = -W e(θ̄), H =
 
 and at the end the forgotten conditionals (``keep_conditionals=True``), smoothed by :class:`History` from the final
 window [derivations Eq. 10.5], give every forgotten variable θ̄ + H⁻¹g, the batch solution of the whole linearized
-problem. The linear streams of tests/test_fixed_lag.py and tests/test_fixed_lag_history.py have δ = the estimate's
+problem. On SE(2) states the same holds in the right tangent: θ̄ ⊕ H⁻¹g (the second test). The linear streams of
+tests/test_fixed_lag.py and tests/test_fixed_lag_history.py have δ = the estimate's
 own offset from a linearization point that moves; here θ̄ stays where the marginal factors froze it.
 """
 
@@ -142,3 +143,35 @@ def test_marginalizing_a_linearized_problem_leaves_the_dense_schur_complement_an
         want = theta[key] + full[span(offset, theta, [key])]
         np.testing.assert_allclose(value, want, rtol=0, atol=1e-9, err_msg=f"smoothed {key}")
     assert np.abs(full).max() > 0.1  # δ far from zero: θ̄ is not the answer
+
+
+def test_the_history_of_se2_states_smooths_to_the_batch_step_in_their_tangent():
+    """The same on SE(2) states turning ~1.1 rad a step (tests/test_se2_solvers.py's problem, its Jacobians by central
+    differences through the retraction): θ̄ never moves, so every forgotten state's smoothed value and every held
+    one's estimate is θ̄ ⊕ δ, δ = H⁻¹g of the whole problem in the right tangent at θ̄ [derivations Eq. 10.5], to the
+    differences' error; θ̄ + δ (a history that adds) lands measurably elsewhere."""
+    from test_se2_solvers import dense_jacobian, kind, new_values, problem
+
+    steps, guesses, _ = problem(3, 9)
+    solver, history = IncrementalSolver(**FROZEN), History()
+    drops = {3: [X(0)], 5: [X(2)], 6: [X(1), X(4)], 8: [X(3), X(6)]}  # leaves and middle states
+    paths = set()
+    for i, factors in enumerate(steps):
+        solver.update(factors, new_values(i, guesses))
+        if i in drops:
+            report = solver.marginalize_leaves(drops[i], keep_conditionals=True)
+            history.conditionals.extend(report.conditionals)
+            paths.add(report.leaves)
+    assert paths == {True, False}
+    keys = list(guesses)
+    r, J = dense_jacobian([f for fs in steps for f in fs], guesses, keys)
+    delta = np.linalg.solve(J.T @ J, -J.T @ r)
+    offset = dict(zip(keys, np.cumsum([0] + [len(guesses[k]) for k in keys])[:-1], strict=True))
+    step = {k: delta[offset[k] : offset[k] + len(guesses[k])] for k in keys}
+    want = {k: kind(k).retract(guesses[k], step[k]) for k in keys}
+    got = history.smooth(solver.estimate_of) | dict(solver.estimate())
+    assert set(got) == set(keys)
+    for k in keys:
+        assert np.abs(kind(k).local(want[k], got[k])).max() < 1e-6, (k, got[k], want[k])
+    forgotten = [k for group in drops.values() for k in group]
+    assert max(np.abs(guesses[k] + step[k] - want[k]).max() for k in forgotten) > 1e-2
