@@ -1053,6 +1053,12 @@ CASES = [
         r"keep_conditionals must be True or False, got keep_conditionals='yes'",
     ),
     (
+        "FixedLagSmoother keep_history not a bool",
+        lambda: sr.FixedLagSmoother(1.0, keep_history="no"),
+        SteamError,
+        r"keep_history must be True or False, got keep_history='no'",
+    ),
+    (
         "marginalize keep_conditionals not a bool",
         lambda: marginalize(solver(), [X(0)], keep_conditionals=None),
         SteamError,

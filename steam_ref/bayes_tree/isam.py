@@ -27,7 +27,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .. import covariance
-from ..arguments import real_array
+from ..arguments import flag, real_array
 from ..errors import ShapeError, SteamError, UnderdeterminedError, UnknownVariableError
 from ..factors import Factor, check_factors, kinds_of
 from ..linear.ordering import check_constrained, min_degree_keys
@@ -180,8 +180,7 @@ class IncrementalSolver:
         no value, a variable left unconstrained, a :class:`~steam_ref.errors.KindError`...), the solver as it was."""
         timer = PhaseTimer()
         with timer("check"):
-            if not isinstance(relinearize, (bool, np.bool_)):
-                raise SteamError(f"relinearize must be True or False, got relinearize={relinearize!r}")
+            flag("relinearize", relinearize)
             check_constrained(constrained)
             F_new = check_factors("new_factors", new_factors)
             check_new_values(new_values)

@@ -39,9 +39,9 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
-import numpy as np
 from numpy.typing import NDArray
 
+from ..arguments import flag
 from ..errors import SteamError, UnknownVariableError
 from ..factors.marginal import MarginalFactor
 from ..linear.ordering import check_constrained, min_degree_keys
@@ -134,8 +134,7 @@ def marginalize_keys(
     or interruption (Ctrl-C) the state is left as it was."""
     drop_list = list(dict.fromkeys(key_list("keys", keys)))  # a key named twice is marginalized once (as GTSAM)
     check_constrained(constrained)
-    if not isinstance(keep_conditionals, (bool, np.bool_)):
-        raise SteamError(f"keep_conditionals must be True or False, got keep_conditionals={keep_conditionals!r:.80}")
+    flag("keep_conditionals", keep_conditionals)
     for k in drop_list:
         if k not in state.dims:
             raise UnknownVariableError(f"cannot marginalize {k!r}: the solver does not hold it")
