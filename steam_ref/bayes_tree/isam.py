@@ -200,7 +200,8 @@ class IncrementalSolver:
         cliques are re-eliminated first, ``constrained`` as in :meth:`update`): :mod:`.marginalization`. The solver
         then holds the marginal of the other variables (for a linear problem, their estimate and covariances are the
         whole problem's, to rounding). ``keep_conditionals``: the report carries each key's P(v | S)
-        (:class:`~.history.ForgottenConditional`). :class:`UnknownVariableError` for a key not held."""
+        (:class:`~.history.ForgottenConditional`). :class:`UnknownVariableError` for a key not held, :class:`SteamError` for
+        a ``constrained`` that is no mapping or a ``keep_conditionals`` that is no bool, the solver as it was."""
         return marginalize_keys(self.state, keys, self.params.wildfire_threshold, constrained, keep_conditionals)
 
     def _update(
