@@ -36,6 +36,7 @@ __all__ = [
     "time_step",
     "integer",
     "is_integer",
+    "flag",
     "replace_fields",
     "real_array",
     "finite",
@@ -90,6 +91,13 @@ def is_integer(value: object) -> TypeGuard[int | np.integer]:
     """Whether ``value`` is an integer: a Python ``int`` or a NumPy integer, never a ``bool`` (nor a float, ``2.0``
     included). The one statement of what an integer is; :func:`integer` and every count the package checks use it."""
     return isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
+
+
+def flag(name: str, value: object) -> bool:
+    """``value`` as a bool: True or False (a NumPy bool too), never a stand-in read as one (1, "no", None, [])."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise SteamError(f"{name} must be True or False, got {name}={_show(value)}")
+    return bool(value)
 
 
 def integer(name: str, value: object, minimum: int | None = None) -> int:

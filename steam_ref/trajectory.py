@@ -39,7 +39,7 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import NDArray
 
-from .arguments import finite, number, real_array
+from .arguments import finite, flag, number, real_array
 from .errors import ShapeError, SteamError, UnknownVariableError
 from .gp.clock import Clock
 from .gp.sde import LinearSDE
@@ -205,8 +205,7 @@ class Trajectory:
         Between states: [YIB Eq. 18]; after the last state t_N: the prior's prediction from x̄_N, P_N.
         """
         t = number("t", t)
-        if not isinstance(covariance, (bool, np.bool_)):
-            raise SteamError(f"covariance must be True or False, got covariance={covariance!r}")
+        flag("covariance", covariance)
         solved, times = self.states, self.times
         if solved and t < times[solved[0]]:
             raise SteamError(

@@ -21,6 +21,7 @@ from hypothesis import strategies as st
 
 import steam_ref as sr
 from steam_ref import L, X, covariance, dead_reckoning, gp, plot
+from steam_ref.bayes_tree import marginalize
 from steam_ref.errors import (
     KindError,
     NumericalError,
@@ -1038,6 +1039,30 @@ CASES = [
         lambda: sr.IncrementalSolver().update(*two_states(), constrained={X(0): "first"}),
         SteamError,
         r"the rank of x0 among the keys eliminated first must be a real number, got .*'first'",
+    ),
+    (
+        "IncrementalSolver.marginalize_leaves constrained not a mapping",
+        lambda: solver().marginalize_leaves([X(0)], constrained=[X(1)]),
+        SteamError,
+        r"constrained must be a mapping key -> number or None, got \[x1\]",
+    ),
+    (
+        "IncrementalSolver.marginalize_leaves keep_conditionals not a bool",
+        lambda: solver().marginalize_leaves([X(0)], keep_conditionals="yes"),
+        SteamError,
+        r"keep_conditionals must be True or False, got keep_conditionals='yes'",
+    ),
+    (
+        "FixedLagSmoother keep_history not a bool",
+        lambda: sr.FixedLagSmoother(1.0, keep_history="no"),
+        SteamError,
+        r"keep_history must be True or False, got keep_history='no'",
+    ),
+    (
+        "marginalize keep_conditionals not a bool",
+        lambda: marginalize(solver(), [X(0)], keep_conditionals=None),
+        SteamError,
+        r"keep_conditionals must be True or False, got keep_conditionals=None",
     ),
 ]
 

@@ -133,6 +133,24 @@ def test_what_an_integer_is_is_stated_once():
     ]
 
 
+def test_what_a_flag_is_is_stated_once():
+    """``isinstance(x, (bool, np.bool_))``, outside arguments.py: an argument that must be True or False is checked
+    by ``arguments.flag`` (a dataclass field stays a plain bool, for JSON: its own check)."""
+    spelled = re.compile(r"isinstance\([^()]*,\s*\(\s*bool\s*,\s*np\.bool_\s*\)\)")
+    found = [
+        f"{p.relative_to(ROOT)}:{n}"
+        for p in _python_files()
+        if p.name != "arguments.py" and "conformance" not in p.parts  # the kit's oracle shares no code, by design
+        for n, line in enumerate(p.read_text(encoding="utf-8").splitlines(), 1)
+        if spelled.search(line)
+    ]
+    assert not found, f"what a flag is, written again (use arguments.flag): {found}"
+    assert [arguments.flag("f", v) for v in (True, np.bool_(False))] == [True, False]
+    for v in (1, "no", None, [], 0.0):
+        with pytest.raises(SteamError, match=f"^f must be True or False, got f={re.escape(repr(v))}$"):
+            arguments.flag("f", v)
+
+
 def test_replace_with_an_unknown_field_check_is_written_once():
     from steam_ref.bayes_tree import ISAM2Params
     from steam_ref.paper.options import StreamOptions

@@ -22,7 +22,7 @@ from collections.abc import Callable, Iterable, Mapping
 
 from numpy.typing import NDArray
 
-from ..arguments import number
+from ..arguments import flag, number
 from ..covariance import key_groups
 from ..errors import SteamError, UnknownVariableError
 from ..factors import Factor, check_factors
@@ -53,7 +53,7 @@ class FixedLagSmoother:
         batch: float = 0.0,
         **changes: object,
     ) -> None:
-        lag, batch = number("lag", lag), number("batch", batch)
+        lag, batch, keep_history = number("lag", lag), number("batch", batch), flag("keep_history", keep_history)
         if not lag > 0:
             raise SteamError(f"lag must be a number of seconds > 0, got lag={lag!r}")
         if not (keep is None or callable(keep) or (isinstance(keep, str) and keep.isalpha())):

@@ -27,10 +27,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .. import covariance
-from ..arguments import real_array
+from ..arguments import flag, real_array
 from ..errors import ShapeError, SteamError, UnderdeterminedError, UnknownVariableError
 from ..factors import Factor, check_factors, kinds_of
-from ..linear.ordering import min_degree_keys
+from ..linear.ordering import check_constrained, min_degree_keys
 from ..linear.system import linearize
 from ..linear.threads import limit
 from ..manifold import Manifold, by_kind
@@ -180,10 +180,8 @@ class IncrementalSolver:
         no value, a variable left unconstrained, a :class:`~steam_ref.errors.KindError`...), the solver as it was."""
         timer = PhaseTimer()
         with timer("check"):
-            if not isinstance(relinearize, (bool, np.bool_)):
-                raise SteamError(f"relinearize must be True or False, got relinearize={relinearize!r}")
-            if constrained is not None and not isinstance(constrained, Mapping):
-                raise SteamError(f"constrained must be a mapping key -> number or None, got {constrained!r:.80}")
+            flag("relinearize", relinearize)
+            check_constrained(constrained)
             F_new = check_factors("new_factors", new_factors)
             check_new_values(new_values)
             theta_new, kinds = self._checked_update(F_new, {} if new_values is None else new_values)
@@ -202,7 +200,8 @@ class IncrementalSolver:
         cliques are re-eliminated first, ``constrained`` as in :meth:`update`): :mod:`.marginalization`. The solver
         then holds the marginal of the other variables (for a linear problem, their estimate and covariances are the
         whole problem's, to rounding). ``keep_conditionals``: the report carries each key's P(v | S)
-        (:class:`~.history.ForgottenConditional`). :class:`UnknownVariableError` for a key not held."""
+        (:class:`~.history.ForgottenConditional`). :class:`UnknownVariableError` for a key not held, :class:`SteamError` for
+        a ``constrained`` that is no mapping or a ``keep_conditionals`` that is no bool, the solver as it was."""
         return marginalize_keys(self.state, keys, self.params.wildfire_threshold, constrained, keep_conditionals)
 
     def _update(

@@ -41,9 +41,10 @@ from dataclasses import dataclass
 
 from numpy.typing import NDArray
 
+from ..arguments import flag
 from ..errors import SteamError, UnknownVariableError
 from ..factors.marginal import MarginalFactor
-from ..linear.ordering import min_degree_keys
+from ..linear.ordering import check_constrained, min_degree_keys
 from ..linear.system import GaussianFactor
 from ..variables import Key, key_list
 from .backsolve import backsubstitute
@@ -131,7 +132,9 @@ def marginalize_keys(
     (:func:`~steam_ref.linear.ordering.min_degree_keys`); ``reuse_marginals``: whole subtrees are cut with the f(S)
     the tree cached (step 2, the same marginal to rounding, with no elimination). One transaction: on any failure
     or interruption (Ctrl-C) the state is left as it was."""
-    drop_list = list(dict.fromkeys(key_list("keys", keys)))
+    drop_list = list(dict.fromkeys(key_list("keys", keys)))  # a key named twice is marginalized once (as GTSAM)
+    check_constrained(constrained)
+    flag("keep_conditionals", keep_conditionals)
     for k in drop_list:
         if k not in state.dims:
             raise UnknownVariableError(f"cannot marginalize {k!r}: the solver does not hold it")

@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ..arguments import finite, floats, is_integer, number, real_array
+from ..arguments import finite, flag, floats, is_integer, number, real_array
 from ..dead_reckoning import wrap_angle
 from ..errors import ShapeError, SteamError
 from ..lie import LieGroup
@@ -162,8 +162,7 @@ def _pairs(poses: object, delta: float, unit: str, all_pairs: bool, relative_tol
     """The pairs of :func:`rpe_pairs` as an (m, 2) int array (a list of tuples took 120 bytes a pose)."""
     poses = planar_poses("poses", poses)
     n = len(poses)
-    if not isinstance(all_pairs, (bool, np.bool_)):
-        raise SteamError(f"all_pairs must be True or False, got all_pairs={all_pairs!r}")
+    flag("all_pairs", all_pairs)
     if number("relative_tolerance", relative_tolerance) < 0:
         raise SteamError(f"relative_tolerance must be a number >= 0, got relative_tolerance={relative_tolerance!r}")
     if unit == "poses":

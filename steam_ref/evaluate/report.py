@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from ..arguments import integer, real_array
+from ..arguments import flag, integer, real_array
 from ..errors import ClockError, ShapeError, SteamError
 from ..trajectory import Trajectory
 from .align import alignment_defect
@@ -34,8 +34,7 @@ def states_at(
     raises :class:`ClockError` (pose indices against a trajectory stamped in seconds, say)."""
     if not isinstance(trajectory, Trajectory):
         raise SteamError(f"expected a steam_ref.trajectory.Trajectory, got {type(trajectory).__name__}")
-    if not isinstance(extrapolate, (bool, np.bool_)):
-        raise SteamError(f"extrapolate must be True or False, got extrapolate={extrapolate!r}")
+    flag("extrapolate", extrapolate)
     t = real_array("times", times)
     if t.ndim != 1:
         raise ShapeError(f"times must be a 1-d array, one time per query, got shape {t.shape}")

@@ -36,6 +36,7 @@ from ..variables import Key, key_list
 __all__ = [
     "KeysBelow",
     "Ordering",
+    "check_constrained",
     "natural_ordering",
     "xl_ordering",
     "amd_ordering",
@@ -291,6 +292,14 @@ def min_degree_keys(
                 current[u] = entry
                 push(heap, entry)
     return order
+
+
+def check_constrained(constrained: object) -> Mapping[Key, float] | None:
+    """``constrained`` (GTSAM's ``constrainedKeys``: :func:`min_degree_keys`'s ``first``) of an update or a
+    marginalization, SteamError unless a mapping key -> number or None (each rank is checked when its key is ordered)."""
+    if constrained is not None and not isinstance(constrained, Mapping):
+        raise SteamError(f"constrained must be a mapping key -> number or None, got {constrained!r:.80}")
+    return constrained
 
 
 def _first_then_min_degree(
