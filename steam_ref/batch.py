@@ -20,6 +20,7 @@ import math
 import warnings
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
+from functools import partial
 
 import numpy as np
 import scipy.sparse as sp
@@ -259,13 +260,14 @@ def prepare(
     return backend, order, graph.error(initial)
 
 
-def _converged(old: float, new: float, step: float, rtol: float, atol: float, steptol: float) -> str:
+def _converged(old: float, new: float, step: float, rtol: float, atol: float, steptol: float, undamped=None) -> str:
+    """The rule that stops the iterations, or "" (a damped step: when ``undamped()``, the step at λ = 0, is short too)."""
     if new <= atol:
         return f"cost {new:.3g} below absolute tolerance {atol:g}"
     if abs(old - new) <= rtol * max(old, 1e-300):
         return f"relative cost decrease {abs(old - new) / max(old, 1e-300):.3g} below {rtol:g}"
-    if step <= steptol:
-        return f"step norm {step:.3g} below {steptol:g}"
+    if step <= steptol and (undamped is None or (gn := _norm(undamped()[0])) <= steptol):
+        return f"step norm {step:.3g} below {steptol:g}" + (f", Gauss-Newton's {gn:.3g} too" if undamped else "")
     return ""
 
 
@@ -369,10 +371,8 @@ def levenberg_marquardt(
         if verbose:
             print(f"LM {len(iterations):3d}: cost {new_cost:.9g} λ {lam:.1e} {'ok' if accepted else 'rejected'}")
         if accepted:
-            rule = _converged(cost, new_cost, step, relative_tolerance, absolute_tolerance, step_tolerance)
-            if rule.startswith("step norm"):  # the step rule (checked last): damped, it must hold at λ = 0 too
-                gn = _norm(_step(graph, trial, order, backend, 0.0, symbolic)[0])  # one more factorization
-                rule = "" if gn > step_tolerance else f"{rule}, the Gauss-Newton step's {gn:.3g} too"
+            undamped = partial(_step, graph, trial, order, backend, 0.0, symbolic)  # one more factorization
+            rule = _converged(cost, new_cost, step, relative_tolerance, absolute_tolerance, step_tolerance, undamped)
             values, cost, lam = trial, new_cost, max(lam / damping_factor, 1e-12)
         else:
             lam *= damping_factor
