@@ -22,7 +22,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.linalg import lapack
 
-from ..arguments import finite, real_array
+from ..arguments import finite, number, real_array
 from ..errors import NumericalError, ShapeError, SteamError
 from ..manifold import VECTOR, Manifold
 from ..robust import RobustLoss
@@ -35,9 +35,16 @@ LANDMARK_DIM = 2
 
 
 def _finite_weight(name: str, W: NDArray, noise: NDArray) -> NDArray:
-    """W itself, unless inverting the noise overflowed float64 (a sigma or covariance near 1e-160 or below)."""
-    if not np.all(np.isfinite(W)):
-        raise NumericalError(f"{name} is too small to invert in float64 (its weight overflows): {noise.tolist()}")
+    """W itself, unless inverting the noise overflowed float64: W, or the information WᵀW (its diagonal, the sum
+    of each column's squares: 1/sigma² for sigmas), is not finite (a sigma below about 1e-154, a covariance below
+    about 1e-308). The one check that a noise model's information is a number."""
+    with np.errstate(over="ignore", invalid="ignore"):  # refused just below
+        information = np.einsum("ij,ij->j", W, W)
+    if not (np.all(np.isfinite(W)) and np.all(np.isfinite(information))):
+        raise NumericalError(
+            f"{name} is too small to invert in float64 (its information, the inverse covariance, overflows): "
+            f"{name}={noise.tolist()}"
+        )
     return W
 
 
@@ -114,7 +121,6 @@ def sqrt_information(noise: NDArray | float, m: int, name: str = "noise") -> NDA
                 # W = U⁻¹ by LAPACK's triangular inverse: not solve_triangular(U, I), whose ?trtrs OpenBLAS
                 # threads, ~40 ms a call on a busy machine (the same choice as covariance._extend)
                 W = lapack.dtrtri(U, lower=0)[0]
-                _finite_weight(name, np.einsum("ij,ij->j", W, W), noise)  # diag Σ⁻¹ = WᵀW must be finite too
             return _finite_weight(name, W, noise)
         except np.linalg.LinAlgError:
             raise SteamError(f"{name} (a covariance) is not positive definite: {noise.tolist()}") from None
@@ -170,6 +176,14 @@ def measured_vector(value: NDArray | float, m: int, what: str) -> NDArray:
             f"{what} must be {m} finite number{'s' if m > 1 else ''} (shape ({m},)), got {np.asarray(value).tolist()}"
         )
     return finite(what, v.reshape(m))
+
+
+def measured_scalar(value: float, what: str) -> NDArray:
+    """A reading documented as one number (a range, a bearing) as a (1,) vector: a finite number by the one rule for
+    numbers (:func:`~steam_ref.arguments.number`: a 0-d array is one, a sequence, ``[5.0]`` included, is not)."""
+    if type(value) in FLOAT_TYPES and math.isfinite(value):  # one finite number (the usual case)
+        return np.array((value,))
+    return np.array((number(what, value),))
 
 
 def check_factors(name: str, factors: object) -> list[Factor]:

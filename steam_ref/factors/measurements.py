@@ -18,8 +18,17 @@ from ..arguments import is_integer, real_array
 from ..dead_reckoning import wrap_angle
 from ..errors import DegenerateMeasurementWarning, ShapeError, SteamError
 from ..robust import RobustLoss
-from ..variables import Key
-from .base import LANDMARK_DIM, STATE_DIM, Factor, check_resolved, measured_vector, sqrt_information, zero_jacobian
+from ..variables import Key, check_roles
+from .base import (
+    LANDMARK_DIM,
+    STATE_DIM,
+    Factor,
+    check_resolved,
+    measured_scalar,
+    measured_vector,
+    sqrt_information,
+    zero_jacobian,
+)
 
 __all__ = [
     "StateMeasurement",
@@ -97,6 +106,7 @@ class StateMeasurement(Factor):
     def __post_init__(self) -> None:
         super().__post_init__()
         _check_state_dim(self.state_dim)
+        check_roles(type(self).__name__, self.keys, 1)  # a state, then the landmarks it reads (other_dims)
 
     @property
     def key_dims(self) -> tuple[int, ...]:  # type: ignore[override]
@@ -243,17 +253,18 @@ def _bearing_row(x: NDArray, l: NDArray) -> tuple[NDArray, NDArray, NDArray]:
     return np.arctan2(dy, dx) - x[..., 2], Jx, np.stack([-dy / r2, dx / r2], axis=-1)
 
 
-def _range(name: str, measured: float) -> NDArray:
-    """A range reading as a (1,) vector: a finite distance; a negative one is a bad reading, not a far landmark."""
-    r = measured_vector(measured, 1, name)
+def range_reading(name: str, measured: float) -> NDArray:
+    """A range reading as a (1,) vector: a finite distance (one number); a negative one is a bad reading, not a far
+    landmark. The one check of a range, on every state (``point_readings.RangeReading`` too)."""
+    r = measured_scalar(measured, name)
     if r[0] < 0:
         raise SteamError(f"a range cannot be negative, got {name}={float(r[0])!r}")
     return r
 
 
 def _bearing(name: str, measured: float) -> NDArray:
-    """A bearing reading as a (1,) vector: a finite angle."""
-    return measured_vector(measured, 1, name)
+    """A bearing reading as a (1,) vector: a finite angle (one number)."""
+    return measured_scalar(measured, name)
 
 
 _Reading = TypeVar("_Reading", bound="_LandmarkReading")
@@ -272,7 +283,7 @@ class _LandmarkReading(StateMeasurement):
 
     @staticmethod
     def _reading(name: str, measured: float) -> NDArray:
-        """The reading checked (``_range``, ``_bearing``)."""
+        """The reading checked (``range_reading``, ``_bearing``)."""
         raise NotImplementedError
 
     @staticmethod
@@ -317,7 +328,7 @@ class RangeFactor(_LandmarkReading):
     """
 
     _reads = "range"
-    _reading = staticmethod(_range)
+    _reading = staticmethod(range_reading)
     _rows = staticmethod(_range_row)
 
     def error(self, x: NDArray, l: NDArray) -> NDArray:
@@ -380,7 +391,7 @@ class BearingRangeFactor(StateMeasurement):
         state_dim: int = STATE_DIM,
     ) -> BearingRangeFactor:
         """Bearing-range reading; noise is sigmas (2,) or a covariance (2, 2) for [bearing, range]."""
-        measured = np.concatenate([_bearing("bearing", bearing), _range("range", range_)])
+        measured = np.concatenate([_bearing("bearing", bearing), range_reading("range", range_)])
         W = sqrt_information(noise, 2)
         check_resolved("BearingRangeFactor", (state, landmark), ("bearing", "range"), measured, W)
         return cls((state, landmark), W, measured=measured, loss=loss, state_dim=state_dim)
