@@ -19,7 +19,8 @@ from ..gp.interpolate import interpolation_terms
 from ..gp.prior import process_noise_sqrt_information, transition
 from ..gp.sde import LinearSDE, as_sde, check_prior, check_sde
 from ..variables import Key, check_roles, key_list
-from .base import FLOAT_TYPES, Factor, Memo, apply, identity_stack, measured_vector, sqrt_information
+from .base import FLOAT_TYPES, Factor, Memo, apply, identity_stack, sqrt_information
+from .measured import measured_vector
 
 __all__ = ["GPPriorFactor", "gp_prior_factors", "InterpolatedFactor"]
 

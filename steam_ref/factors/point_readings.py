@@ -31,9 +31,9 @@ from ..lie.group import check_group
 from ..lie.points import point_dim, position, rotation_part, to_body
 from ..robust import RobustLoss
 from ..variables import Key
-from .base import measured_vector, sqrt_information
+from .base import sqrt_information
 from .lie_prior import OneGroupState
-from .measurements import range_reading
+from .measured import measured_vector, range_reading
 
 __all__ = ["PositionReading", "RangeReading", "PointReading", "AngularVelocityReading", "PosePrior"]
 
