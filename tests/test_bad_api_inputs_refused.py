@@ -5,7 +5,8 @@ another error, before.
 - a key index of magnitude 2⁵⁶ or more (``X(2**70)``): GTSAM's Symbol has 56 bits for it (oracle: ``gtsam.Symbol``);
   negative indices are kept (``X(-1)`` is the placeholder key of an interpolated reading's inner measurement);
 - a reading of a landmark with the state and landmark keys swapped (range, bearing, bearing-range, on a vector
-  state, on SE(2), on any group), and a GP prior (vector or Lie) on a key that is not a state;
+  state, on SE(2), on any group), and a GP prior (vector or Lie) or a reading interpolated between two states on a
+  key that is not a state;
 - a one-element list given as a range or a bearing (one number, documented so): ``[5.0]`` is not ``5.0``;
 - ``estimates_of`` given a key twice (its answer, a mapping by key, held it once);
 - a sigma whose information 1/sigma² overflows float64 (``PriorFactor`` sigma 1e-300);
@@ -33,7 +34,7 @@ from steam_ref.datasets import generate_synthetic, load_dataset
 from steam_ref.datasets.synthetic import MAX_SYNTHETIC_BYTES, synthetic_bytes
 from steam_ref.errors import DataError, NumericalError, ShapeError, SteamError
 from steam_ref.factors.lie_prior import LieAccelPriorFactor, LiePriorFactor
-from steam_ref.factors.lie_readings import PoseReading
+from steam_ref.factors.lie_readings import LieInterpolatedFactor, PoseReading
 from steam_ref.factors.point_readings import PointReading, RangeReading
 from steam_ref.gp import LinearSDE
 from steam_ref.lie import SE2, SE3
@@ -112,6 +113,12 @@ PRIORS = {
     "gp_prior_factors": lambda a, b: sr.gp_prior_factors([a, b], [0.0, 1.0], QC)[0],
     "LiePriorFactor": lambda a, b: LiePriorFactor.create(a, b, 1.0, QC, group=SE2),
     "LieAccelPriorFactor": lambda a, b: LieAccelPriorFactor.create(a, b, 1.0, LinearSDE.wnoj(QC), group=SE2),
+    "InterpolatedFactor": lambda a, b: sr.InterpolatedFactor.create(
+        sr.RangeFactor.create(X(-1), L(7), 3.0, 0.5), a, b, 0.0, 1.0, 0.5, QC
+    ),
+    "LieInterpolatedFactor": lambda a, b: LieInterpolatedFactor.create(
+        PoseReading.range(X(-1), L(7), 3.0, 0.5, group=SE2), a, b, 0.0, 1.0, 0.5, QC, group=SE2
+    ),
 }
 
 

@@ -205,6 +205,10 @@ class InterpolatedFactor(Factor):
     _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "lam", "psi", "offset")
     _batched_factors: ClassVar[tuple[str, ...]] = ("inner",)
 
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        check_roles(type(self).__name__, self.keys[:2], 2)  # its two states (the inner reading checks its own keys)
+
     @classmethod
     def create(
         cls, inner: Factor, key1: Key, key2: Key, t1: float, t2: float, tau: float, prior: NDArray | LinearSDE

@@ -255,6 +255,10 @@ class BetweenGroupStates(Factor):
     _shared: ClassVar[tuple[str, ...]] = ("group",)
     derivatives: ClassVar[int]  # the states': 1 (pose, twist) or 2 (and its acceleration)
 
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        check_roles(type(self).__name__, self.keys[:2], 2)  # its two states (the inner reading checks its own keys)
+
     @classmethod
     def check_inner(cls, inner: Factor, kind: Manifold) -> None:
         """SteamError unless ``inner`` reads one state of ``kind`` (any reading: lie_readings, point_readings)."""
