@@ -78,7 +78,7 @@ def _index(name: str, i: int) -> int:
 
 
 def X(i: int) -> Key:
-    """The key of the trajectory state at pose i (an integer): the variable x(tᵢ).
+    """The key of the trajectory state at pose i (an integer, of magnitude below 2⁵⁶): the variable x(tᵢ).
 
     With the vector-space priors, x(tᵢ) = [x, y, θ, ẋ, ẏ, θ̇]: [x, y] is the position (m) and θ the heading
     (rad, counter-clockwise from the world's x axis, never wrapped) in the world frame; [ẋ, ẏ, θ̇] their time
@@ -90,7 +90,8 @@ def X(i: int) -> Key:
 
 
 def L(j: int) -> Key:
-    """The key of landmark number j (an integer): the variable ℓ = [x, y], its position in the world frame (m)."""
+    """The key of landmark number j (an integer, of magnitude below 2⁵⁶): the variable ℓ = [x, y], its position in the
+    world frame (m)."""
     return Key("l", _index("L", j))
 
 
