@@ -245,6 +245,8 @@ def load_dataset(
         return load_gtsam_2d(path)
     if path.is_file():
         return load_cmu_mat(path)
+    if os.path.lexists(path):  # there, but not a file nor a folder (a device, a FIFO, a broken link): not "not found"
+        check_regular(path)
     names = ", ".join(loadable())
     raise _not_found(f"data set {key!r} (not one of {names}, nor a file or folder)", folders, _hint(key) + ".")
 
