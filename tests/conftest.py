@@ -83,6 +83,12 @@ LONGEST_FIRST = (
     "test_conformance_gate", "test_experiments", "04_incremental", "test_homework", "test_conformance", "test_fit_qc",
     "test_cli", "test_notebooks", "test_fixed_lag_stream", "10_vector_space_or_lie_group", "test_consistency",
     "test_isam", "test_conformance_v5_lie", "08_fixed_lag",
+    # then shorter groups with few tests each, which xdist's order (most tests first) left to the end (6-15 s each in
+    # a loaded `-n 2` run, 10-35 s alone beside other loads): the run ended with tutorials 09 and 11 queued on one
+    # worker after the other had finished; it now ends on files of a second or two
+    "test_conformance_se2", "test_bad_outputs", "test_rigid_runs", "test_converge", "test_synthetic_3d",
+    "test_amalgamation", "test_threads", "11_vehicle_in_3d", "09_consistency", "02_batch_and_amd", "01_gp_prior",
+    "00_solve_your_own_problem", "05_check_your_implementation", "03_bayes_tree", "test_lie_coefficients",
 )  # fmt: skip
 
 

@@ -11,11 +11,10 @@ from __future__ import annotations
 import json
 import math
 import re
-import subprocess
-import sys
 
 import numpy as np
 import pytest
+from cli_runs import run_module, runner
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from test_bayes_tree import dense_system, random_sparse_factors
@@ -227,11 +226,11 @@ def test_the_dot_text_labels_each_merged_clique_with_all_its_frontals(rng):
 # --- the command line ---------------------------------------------------------------------------
 
 
-def run_cli(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "steam_ref", *args], capture_output=True, text=True, timeout=300)
+run = runner("run")
 
 
-def test_the_run_option_gives_the_librarys_merged_run(tmp_path):
+def test_the_run_option_gives_the_librarys_merged_run(tmp_path, capsys):
+    """(in this process, through the command's entry point: the claim is the run's, not the process's)"""
     from steam_ref.datasets import generate_synthetic
     from steam_ref.paper.online import run_online
     from steam_ref.paper.options import StreamOptions
@@ -240,9 +239,9 @@ def test_the_run_option_gives_the_librarys_merged_run(tmp_path):
     rmse, dots = {}, {}
     for z in ("0.4", "0"):
         dot = tmp_path / f"z{z}.dot"
-        out = run_cli("run", "--steps", "60", "--amalgamation-zeros", z, "--json", "--tree-dot", str(dot))
-        assert out.returncode == 0, out.stderr
-        rmse[z], dots[z] = json.loads(out.stdout)["rmse_m"], dot.read_text()
+        code, out, err = run(capsys, "--steps", "60", "--amalgamation-zeros", z, "--json", "--tree-dot", dot)
+        assert code == 0, err
+        rmse[z], dots[z] = json.loads(out)["rmse_m"], dot.read_text()
     setup, data = PaperSetup.synthetic(), generate_synthetic(n_steps=60, n_landmarks=12, seed=0)  # --steps 60's task
     merged = run_online(data, setup.with_isam2(amalgamation_zeros=0.4), StreamOptions())
     assert rmse["0.4"] == round(merged.rmse_m, 6)
@@ -254,6 +253,6 @@ def test_the_run_option_gives_the_librarys_merged_run(tmp_path):
 
 @pytest.mark.parametrize("bad", ["1", "-0.1", "nan", "abc"])
 def test_the_run_option_refuses_a_bad_fraction_in_one_line(bad):
-    out = run_cli("run", "--amalgamation-zeros", bad)
+    out = run_module("run", "--amalgamation-zeros", bad)  # a real process: its exit code
     assert out.returncode == 2
     assert f"--amalgamation-zeros: expected a fraction >= 0 and < 1, got {bad!r}" in out.stderr

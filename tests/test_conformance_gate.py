@@ -12,6 +12,7 @@ from __future__ import annotations
 import copy
 import json
 import os
+import pickle
 import shutil
 from pathlib import Path
 
@@ -541,6 +542,26 @@ json_values = st.recursive(
 )
 
 
+@pytest.fixture
+def kits_read_once(monkeypatch):
+    """The check reads each kit once for the whole test, not once an example (its whole kit, every suite checked:
+    ~0.1 s a call, most of a fuzz example's time); at the end each kit read is still what a fresh read gives."""
+    from steam_ref.conformance import gate
+
+    read, first = gate.load_kit, {}
+
+    def load_kit(kit):
+        if kit not in first:
+            first[kit] = (read(kit), pickle.dumps(read(kit)))
+        return first[kit][0]
+
+    monkeypatch.setattr(gate, "load_kit", load_kit)
+    yield
+    assert first  # the check read a kit through it
+    for kit, (kept, fresh) in first.items():
+        assert pickle.dumps(kept) == fresh, f"the check changed what it read of {kit}"
+
+
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(
     body=st.one_of(
@@ -551,7 +572,9 @@ json_values = st.recursive(
         st.binary(max_size=60).map(lambda b: b.decode("latin-1")),
     )
 )
-def test_any_malformed_results_file_is_a_verdict_or_one_line_with_exit_2_never_a_traceback(tmp_path, capsys, body):
+def test_any_malformed_results_file_is_a_verdict_or_one_line_with_exit_2_never_a_traceback(
+    tmp_path, capsys, kits_read_once, body
+):
     path = tmp_path / "gp" / "results.json"
     path.parent.mkdir(exist_ok=True)
     path.write_text(body, encoding="utf-8", errors="surrogateescape")

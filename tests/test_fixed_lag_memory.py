@@ -73,28 +73,49 @@ def held(smoother: FixedLagSmoother) -> dict[str, int]:
 
 
 UPDATES = 10_000  # the long run's updates (a store that leaks an entry every UPDATES - 2,000 updates or more fails)
+TRACED = (497, 4_998)  # the updates after which the bytes held are read (the same phase of the every-7th prior)
+
+
+@pytest.fixture(scope="module")
+def long_run() -> dict:
+    """One stream of ``UPDATES`` cheap updates, read by both tests below (it was run twice, once for each: the slowest
+    file of the suite): the most each store held over updates 1,000-1,999 and over the last thousand, the stores and
+    the bytes held (tracemalloc, on from the first update to the last of ``TRACED``) after each update of ``TRACED``,
+    and the smoother at the end. Read-only."""
+    rng = np.random.default_rng(1)
+    smoother = FixedLagSmoother(4.0)
+    smoother.update([Fix((X(0),), np.eye(1), z=np.zeros(1))], {X(0): np.zeros(1)}, timestamps={X(0): 0.0})
+    last = UPDATES // 1000 - 1
+    most: dict[int, dict[str, int]] = {1: {}, last: {}}  # the most of each, over updates 1,000-1,999 and the last 1,000
+    seen: dict[int, tuple[dict[str, int], int]] = {}
+    tracemalloc.start()
+    try:
+        for i in range(1, UPDATES + 1):
+            factors = [Step((X(i - 1), X(i)), np.eye(1), z=rng.normal(size=1))]
+            if i % 7 == 0:
+                factors.append(Fix((X(i),), np.eye(1), z=rng.normal(size=1)))
+            smoother.update(factors, {X(i): np.zeros(1)}, timestamps={X(i): float(i)})
+            if i in TRACED:
+                sizes = held(smoother) | {"factor stores": len(smoother.solver.state.factors)}
+                seen[i] = (sizes, tracemalloc.get_traced_memory()[0])
+                if i == TRACED[-1]:
+                    tracemalloc.stop()  # (the rest of the run untraced: tracing makes an update ~6x slower)
+            if i // 1000 in most:
+                for name, n in held(smoother).items():
+                    most[i // 1000][name] = max(most[i // 1000].get(name, 0), n)
+    finally:
+        tracemalloc.stop()
+    return {"most": most, "last": last, "seen": seen, "smoother": smoother}
 
 
 @pytest.mark.slow
-def test_ten_thousand_updates_hold_what_a_thousand_held():
+def test_ten_thousand_updates_hold_what_a_thousand_held(long_run):
     """Objects are counted, not bytes: there is no noise to tell a leak from, one entry more fails. A store that grew
     with the stream (an entry a factor, a variable or a marginalization: one every 7 updates or more often) would hold
     over 1,100 entries more after the last thousand updates than after the second; 10,000 updates, not 20,000 as
     before, fail on any leak of an entry in 8,000 updates. The last thousand are chosen so that neither thousand but
     the second crosses a power of two of the forgotten indices (1,024), where the record of them doubles its array."""
-    rng = np.random.default_rng(0)
-    smoother = FixedLagSmoother(4.0)
-    smoother.update([Fix((X(0),), np.eye(1), z=np.zeros(1))], {X(0): np.zeros(1)}, timestamps={X(0): 0.0})
-    last = UPDATES // 1000 - 1
-    most: dict[int, dict[str, int]] = {1: {}, last: {}}  # the most of each, over updates 1,000-1,999 and the last 1,000
-    for i in range(1, UPDATES + 1):
-        factors = [Step((X(i - 1), X(i)), np.eye(1), z=rng.normal(size=1))]
-        if i % 7 == 0:
-            factors.append(Fix((X(i),), np.eye(1), z=rng.normal(size=1)))
-        smoother.update(factors, {X(i): np.zeros(1)}, timestamps={X(i): float(i)})
-        if i // 1000 in most:
-            for name, n in held(smoother).items():
-                most[i // 1000][name] = max(most[i // 1000].get(name, 0), n)
+    most, last, smoother = long_run["most"], long_run["last"], long_run["smoother"]
     # (an update that grows the record of forgotten indices, doubling its array, logs one entry more)
     assert most[last]["undo entries"] <= most[1]["undo entries"] <= most[last]["undo entries"] + 1
     assert {k: n for k, n in most[last].items() if k != "undo entries"} == {
@@ -106,30 +127,16 @@ def test_ten_thousand_updates_hold_what_a_thousand_held():
     assert len(smoother.factors) <= 3 * (UPDATES + 1)
 
 
-def test_the_memory_a_smoother_holds_does_not_grow_by_an_object_a_step():
-    """500 and then 5,000 updates: each store holds as many entries, and the bytes held (tracemalloc) grow by at most
-    32 a step: the record of the forgotten indices, 4 bytes each in an array doubled as it grows (up to 8), and
-    slack. Before the factor stores held the live factors only and that record was an array, the stores grew by an
-    entry a factor and the record by a dict entry and a key a variable (~250 bytes a step)."""
-    rng = np.random.default_rng(1)
-    smoother = FixedLagSmoother(4.0)
-    smoother.update([Fix((X(0),), np.eye(1), z=np.zeros(1))], {X(0): np.zeros(1)}, timestamps={X(0): 0.0})
-    seen: dict[int, tuple[dict[str, int], int]] = {}
-    tracemalloc.start()
-    try:
-        for i in range(1, 5_001):
-            factors = [Step((X(i - 1), X(i)), np.eye(1), z=rng.normal(size=1))]
-            if i % 7 == 0:
-                factors.append(Fix((X(i),), np.eye(1), z=rng.normal(size=1)))
-            smoother.update(factors, {X(i): np.zeros(1)}, timestamps={X(i): float(i)})
-            if i in (497, 4_998):  # the same phase of the every-7th prior
-                sizes = held(smoother) | {"factor stores": len(smoother.solver.state.factors)}
-                seen[i] = (sizes, tracemalloc.get_traced_memory()[0])
-    finally:
-        tracemalloc.stop()
-    (early, early_bytes), (late, late_bytes) = seen[497], seen[4_998]
+def test_the_memory_a_smoother_holds_does_not_grow_by_an_object_a_step(long_run):
+    """497 and then 4,998 updates: each store holds as many entries, and the bytes held (tracemalloc, traced from the
+    first update) grow by at most 32 a step: the record of the forgotten indices, 4 bytes each in an array doubled
+    as it grows (up to 8), and slack. Before the factor stores held the live factors only and that record was an
+    array, the stores grew by an entry a factor and the record by a dict entry and a key a variable (~250 bytes a
+    step)."""
+    (early, early_bytes), (late, late_bytes) = (long_run["seen"][i] for i in TRACED)
+    steps = TRACED[1] - TRACED[0]
     assert late == early, {k: (early[k], late[k]) for k in early if early[k] != late[k]}  # (grown: early, late)
-    assert (late_bytes - early_bytes) / 4_501 <= 32, f"{(late_bytes - early_bytes) / 4_501:.0f} bytes a step"
+    assert (late_bytes - early_bytes) / steps <= 32, f"{(late_bytes - early_bytes) / steps:.0f} bytes a step"
 
 
 # --- a lagged stream, besides its smoother: what it reads, records and writes ------------------------------------
