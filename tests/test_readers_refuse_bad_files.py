@@ -28,7 +28,9 @@ from steam_ref.lie import SE3V
 
 # 12 GPS fixes on a parabola, 30 IMU rows: small files written with every digit.
 GPS = np.column_stack([np.arange(12.0), np.arange(12.0), 0.1 * np.arange(12.0) ** 2, np.zeros(12)])
-IMU = np.column_stack([0.37 * np.arange(30.0), np.full(30, 0.01), np.ones((30, 3)), 1e-3 * np.arange(90.0).reshape(30, 3)])
+IMU = np.column_stack(
+    [0.37 * np.arange(30.0), np.full(30, 0.01), np.ones((30, 3)), 1e-3 * np.arange(90.0).reshape(30, 3)]
+)
 GPS_TEXT = "Time,X,Y,Z\n" + "".join(",".join(f"{v:.17g}" for v in row) + "\n" for row in GPS)
 IMU_TEXT = "Time dt accelX accelY accelZ omegaX omegaY omegaZ\n" + "".join(
     " ".join(f"{v:.17g}" for v in row) + "\n" for row in IMU
@@ -85,7 +87,9 @@ def test_a_kitti_file_cut_inside_its_last_number_is_refused_naming_the_line(tmp_
     text = GPS_TEXT if which == GPS_FILE else IMU_TEXT
     cut = text.encode()[:-4]  # the newline and the last three characters of the last number
     folder = _kitti(tmp_path, **{"gps" if which == GPS_FILE else "imu": cut})
-    with pytest.raises(DataError, match=rf"{re.escape(which)},? line {_lines(text)}: the last line does not end with a newline"):
+    with pytest.raises(
+        DataError, match=rf"{re.escape(which)},? line {_lines(text)}: the last line does not end with a newline"
+    ):
         load_kitti(folder, group=SE3V)
 
 
@@ -121,7 +125,9 @@ def test_a_non_ascii_byte_in_a_kitti_file_is_named_by_its_line(tmp_path: Path, w
     [(b"\xef\xbb\xbf" + VICTORIA.encode(), 1, "0xef"), (VICTORIA.encode().replace(b"3 4", b"3\xe9 4"), 3, "0xe9")],
     ids=["a BOM", "Latin-1"],
 )
-def test_a_non_ascii_byte_in_a_gtsam_file_is_named_by_its_line(tmp_path: Path, raw: bytes, line: int, byte: str) -> None:
+def test_a_non_ascii_byte_in_a_gtsam_file_is_named_by_its_line(
+    tmp_path: Path, raw: bytes, line: int, byte: str
+) -> None:
     path = tmp_path / "v.txt"
     path.write_bytes(raw)
     with pytest.raises(DataError, match=rf"v\.txt line {line}: byte {byte} is not ASCII"):

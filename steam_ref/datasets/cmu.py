@@ -12,7 +12,8 @@ Conventions, checked on the reference files (see ``data/README.md`` for the figu
   cleaned file); their ranges match ground truth at their own time stamps, not at their row
   position. The loaders keep the rows in file order, as
   the paper's scripts read them, and name the rows that go back in ``source``.
-- A text table (``*_DR.txt``, ``*_TD.txt``) follows :data:`TEXT_TABLE_RULE`. Its last line must end
+- A text table (``*_DR.txt``, ``*_TD.txt``) follows :data:`TEXT_TABLE_RULE` (its lines read by
+  :func:`~steam_ref.datasets.textfile.text_lines`, the rule every text reader shares). Its last line must end
   with a newline: a file cut inside its last number keeps its field count and still parses
   (``5.29560000000000031e+01`` cut after ``5.2956`` reads as 5.2956), so the missing newline is the
   only sign of the cut. A file cut exactly at a line end loses whole rows and cannot be told from a
@@ -38,6 +39,7 @@ from ..dead_reckoning import integrate_odometry
 from ..errors import DataError, SteamError
 from .matfile import read_mat
 from .table import CMU_COLUMNS, RangeDataset, frozen_table
+from .textfile import text_lines
 
 __all__ = ["load_cmu_mat", "load_cmu_text", "TEXT_TABLE_RULE"]
 
@@ -121,26 +123,9 @@ def _read_text_table(path: Path, columns: tuple[str, ...]) -> NDArray:
     decimal number (no nan, inf, hex, ``_`` or non-ASCII digits) that is finite; every non-blank
     line has exactly ``len(columns)`` fields; blank lines are skipped.
     """
-    try:
-        raw = path.read_bytes()
-    except OSError as err:
-        raise DataError(f"{path}: cannot read it ({type(err).__name__}: {err})") from None
-    try:
-        text = raw.decode("ascii")
-    except UnicodeDecodeError as err:
-        where = raw.count(b"\n", 0, err.start) + 1
-        raise DataError(
-            f"{path} line {where}: byte {raw[err.start]:#04x} is not ASCII; a text table holds plain numbers"
-        ) from None
-    lines = text.split("\n")
-    if lines[-1].strip(" \t\r"):
-        raise DataError(
-            f"{path} line {len(lines)}: the last line does not end with a newline, so the file may be cut short "
-            f"(a number cut short still reads as a number); if that line is whole, end the file with a newline"
-        )
+    lines = text_lines(path)
     rows = []
-    for line_no, line in enumerate(lines[:-1], start=1):
-        body = line[:-1] if line.endswith("\r") else line
+    for line_no, body in enumerate(lines, start=1):
         fields = [f for f in _BLANKS.split(body) if f]
         if not fields:
             continue

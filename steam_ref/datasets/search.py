@@ -239,6 +239,8 @@ def load_dataset(
     path = Path(name_or_path)
     if not path.exists() and not path.is_absolute() and len(path.parts) == 1:
         path = _find((path.name,), folders) or path
+    if os.path.lexists(path) and not path.is_dir():
+        check_regular(path)  # there, but a FIFO, a device or a broken link: named as such, not "not found"
     if path.is_dir() or path.name.endswith("_DR.txt"):
         return load_cmu_text(path)
     if path.is_file() and path.suffix == ".txt":
