@@ -24,6 +24,7 @@ from cli_runs import runner
 from steam_ref.datasets import load_cmu_text, load_dataset, load_gtsam_2d
 from steam_ref.datasets.kitti import GPS_FILE, HOLD_OUT_EVERY, IMU_FILE, load_kitti
 from steam_ref.errors import DataError
+from steam_ref.evaluate.files import read_kitti, read_tum, write_kitti, write_tum
 from steam_ref.lie import SE3V
 
 # 12 GPS fixes on a parabola, 30 IMU rows: small files written with every digit.
@@ -183,3 +184,35 @@ def test_the_command_names_a_dataset_path_that_is_not_a_file_in_one_line(capsys:
     code, out, err = runner("run")(capsys, "--dataset", "/dev/null", "--preset", "synthetic")
     assert code == 2 and out == ""
     assert len(err.strip().splitlines()) == 1 and "/dev/null: not a file (a device)" in err, err
+
+
+# --- trajectory files (TUM, KITTI poses) --------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("fmt", ["tum", "kitti"])
+def test_a_trajectory_file_cut_inside_its_last_number_is_refused_naming_the_line(tmp_path: Path, fmt: str) -> None:
+    """TUM's last field is qw: cut from 0.9210609940028851 to 0.92106099400288 the quaternion is still within 1e-3 of
+    unit norm, so the file used to read, its last heading moved. (A KITTI pose file ends in t_z = 0, so this cut
+    drops a field and was refused already; it is held to the same rule.) Only the missing newline shows the cut."""
+    path = tmp_path / f"path.{fmt}"
+    poses = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.3], [2.0, 0.5, 0.8]])
+    if fmt == "tum":
+        write_tum(path, [0.0, 1.0, 2.0], poses)
+    else:
+        write_kitti(path, poses)
+    raw = path.read_bytes()
+    path.write_bytes(raw[:-3])
+    read = read_tum if fmt == "tum" else read_kitti
+    line = raw.count(b"\n")
+    with pytest.raises(DataError, match=rf"path\.{fmt},? line {line}: the last line does not end with a newline"):
+        read(path)
+
+
+def test_a_tum_file_with_windows_line_ends_and_comments_reads_the_poses_written(tmp_path: Path) -> None:
+    """Oracle: the numbers written (x, y, and θ from its quaternion (0, 0, sin θ/2, cos θ/2))."""
+    rows = [[0.5, 1.0, 2.0, 0.0, 0.0, 0.0, np.sin(0.15), np.cos(0.15)], [1.5, 3.0, 4.0, 0.0, 0.0, 0.0, 0.0, 1.0]]
+    text = "# timestamp tx ty tz qx qy qz qw\r\n" + "".join(" ".join(f"{v:.17g}" for v in r) + " \r\n" for r in rows)
+    (tmp_path / "t.txt").write_bytes(text.encode())
+    t, poses = read_tum(tmp_path / "t.txt")
+    np.testing.assert_array_equal(t, [0.5, 1.5])
+    np.testing.assert_allclose(poses, [[1.0, 2.0, 0.3], [3.0, 4.0, 0.0]], rtol=0, atol=1e-15)
