@@ -216,3 +216,14 @@ def test_a_tum_file_with_windows_line_ends_and_comments_reads_the_poses_written(
     t, poses = read_tum(tmp_path / "t.txt")
     np.testing.assert_array_equal(t, [0.5, 1.5])
     np.testing.assert_allclose(poses, [[1.0, 2.0, 0.3], [3.0, 4.0, 0.0]], rtol=0, atol=1e-15)
+
+
+def test_a_folder_of_two_cmu_text_sets_is_refused_naming_a_file_the_command_can_be_given(
+    tmp_path: Path, capsys: pytest.CaptureFixture
+) -> None:
+    """ "pass prefix=" is Python's answer; the command has no --prefix, but reads a ``*_DR.txt`` path given."""
+    for prefix in ("A", "B"):
+        (tmp_path / f"{prefix}_DR.txt").write_text("1 1 0\n")
+    code, out, err = runner("run")(capsys, "--dataset", tmp_path, "--preset", "plaza")
+    assert code == 2 and out == "" and len(err.strip().splitlines()) == 1, err
+    assert f"found several (A, B): give the one to read, e.g. {tmp_path / 'A_DR.txt'}" in err, err

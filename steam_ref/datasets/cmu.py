@@ -148,7 +148,12 @@ def _read_text_table(path: Path, columns: tuple[str, ...]) -> NDArray:
 def _text_prefix(folder: Path) -> str:
     prefixes = sorted(p.name[: -len("_DR.txt")] for p in folder.glob("*_DR.txt"))
     if len(prefixes) != 1:
-        found = f"several ({', '.join(prefixes)}): pass prefix=" if prefixes else "none"
+        found = (
+            f"several ({', '.join(prefixes)}): give the one to read, e.g. {folder / (prefixes[0] + '_DR.txt')} "
+            f"(prefix= in Python)"
+            if prefixes
+            else "none"
+        )
         raise DataError(f"{folder}: expected one *_DR.txt file to pick the data set, found {found}")
     return prefixes[0]
 
