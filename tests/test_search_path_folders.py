@@ -1,0 +1,64 @@
+"""The data search path, named in ways the older tests do not name it: relative folders, and the cache by another name.
+
+- A relative ``$STEAM_REF_DATA_DIR`` or ``data_dir`` is a folder of the working directory (as a shell reads it), not
+  of the package's location: the set read is the one written there (oracle: its pose count, unlike every other's).
+- The fetched files' cache stays the cache when a user names it as ``$STEAM_REF_DATA_DIR`` (with a trailing slash,
+  through ``..``) or through a link as ``data_dir``: a changed file there is refused (never read as the user's own
+  file), since only ``steam-ref data fetch`` writes that folder.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+import scipy.io
+
+from steam_ref.datasets import DATA_DIR_ENV, generate_synthetic, load_dataset, search
+from steam_ref.errors import DataError
+
+FILE = "Syn_theta_Plaza.mat"
+
+
+@pytest.fixture
+def alone(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    """A working directory, a fresh cache, no $STEAM_REF_DATA_DIR, no gtsam."""
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
+    monkeypatch.delenv(DATA_DIR_ENV, raising=False)
+    monkeypatch.setattr(search, "gtsam_data_dir", lambda: None)
+    (tmp_path / "cwd").mkdir()
+    monkeypatch.chdir(tmp_path / "cwd")
+    return tmp_path
+
+
+@pytest.mark.parametrize("how", ["env", "data_dir"])
+def test_a_relative_folder_is_read_from_the_working_directory(alone: Path, monkeypatch, how: str) -> None:
+    mine = generate_synthetic(n_steps=7, n_landmarks=3, seed=11)
+    Path("rel").mkdir()
+    scipy.io.savemat(Path("rel") / FILE, mine.to_cmu_arrays())
+    if how == "env":
+        monkeypatch.setenv(DATA_DIR_ENV, "rel")
+        data = load_dataset("paper-synthetic")
+    else:
+        data = load_dataset("paper-synthetic", data_dir="rel")
+    assert data.n_poses == mine.n_poses == 8
+    assert data.source.startswith(str(alone / "cwd" / "rel" / FILE))
+
+
+@pytest.mark.parametrize("name", ["env", "env with a slash", "env through ..", "data_dir through a link"])
+def test_the_cache_named_another_way_is_still_the_cache(alone: Path, shared_data: Path, monkeypatch, name: str) -> None:
+    cache = search.data_cache_dir()
+    cache.mkdir(parents=True)
+    spoiled = bytearray((shared_data / FILE).read_bytes())
+    spoiled[5000] ^= 0x01  # same size, another sha256
+    (cache / FILE).write_bytes(bytes(spoiled))
+    data_dir = None
+    if name == "data_dir through a link":
+        data_dir = alone / "link"
+        data_dir.symlink_to(cache)
+    else:
+        monkeypatch.setenv(
+            DATA_DIR_ENV, {"env": str(cache), "env with a slash": f"{cache}/"}.get(name, f"{cache}/../data")
+        )
+    with pytest.raises(DataError, match=r"the cached file of data set 'paper-synthetic' is not the published one"):
+        load_dataset("paper-synthetic", data_dir=data_dir)
