@@ -9,12 +9,14 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import pytest
 import scipy.io
 
 from steam_ref.datasets import DATA_DIR_ENV, generate_synthetic, load_dataset, search
+from steam_ref.datasets.registry import DATASETS
 from steam_ref.errors import DataError
 
 FILE = "Syn_theta_Plaza.mat"
@@ -62,3 +64,21 @@ def test_the_cache_named_another_way_is_still_the_cache(alone: Path, shared_data
         )
     with pytest.raises(DataError, match=r"the cached file of data set 'paper-synthetic' is not the published one"):
         load_dataset("paper-synthetic", data_dir=data_dir)
+
+
+@pytest.mark.parametrize("name", ["plazza", "mydata.mat", "authors-plaza", "victoria-park", "kitti", "plaza2", "plaza"])
+def test_a_search_that_finds_nothing_suggests_only_a_fetch_that_works(alone: Path, name: str) -> None:
+    """The oracle of "says what to do": every ``steam-ref data fetch X`` a message suggests names a set that
+    ``steam-ref data fetch`` accepts (the registry's fetchable ones); the folder options are always there."""
+    with pytest.raises(DataError) as caught:
+        load_dataset(name)
+    message = str(caught.value)
+    suggested = re.findall(r"`steam-ref data fetch ([^`]*)`", message)
+    assert all(DATASETS[x].fetchable for x in suggested if x in DATASETS) and set(suggested) <= set(DATASETS), message
+    runnable = name in DATASETS and DATASETS[name].fetchable and DATASETS[name].loader is not None
+    assert (name in suggested) == runnable, message  # fetching the authors' run would not make it a data set
+    assert "--data-dir" in message and DATA_DIR_ENV in message, message
+    if name == "authors-plaza":
+        assert "the authors' saved run" in message and "steam-ref fidelity" in message, message
+    if name == "plazza":
+        assert "did you mean 'plaza'" in message, message
