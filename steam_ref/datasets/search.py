@@ -16,6 +16,7 @@ says how it differs. A file that is not a regular file (a FIFO, a device) is ref
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import importlib.util
 import os
 import warnings
@@ -165,10 +166,15 @@ def _not_found(what: str, folders: list[Path], hint: str) -> DataError:
 
 
 def _hint(key: str, put: str = "the file") -> str:
-    return (
-        f"Fetch it with `steam-ref data fetch {key}`, or put {put} in a folder and pass that folder as "
-        f"--data-dir (data_dir= in Python) or set ${DATA_DIR_ENV} to it"
+    """Where to put ``put``, and the fetch command when ``key`` names a set ``steam-ref data fetch`` gets (never a
+    command that would fail: an unknown name, gtsam's sets)."""
+    folder = (
+        f"put {put} in a folder and pass that folder as --data-dir (data_dir= in Python) or set ${DATA_DIR_ENV} to it"
     )
+    s = DATASETS.get(key)
+    if s is not None and s.fetchable:
+        return f"Fetch it with `steam-ref data fetch {key}`, or {folder}"
+    return folder[0].upper() + folder[1:]
 
 
 def not_found(what: str, fetch: str, data_dir: str | os.PathLike | None = None, put: str = "the file") -> DataError:
@@ -224,8 +230,11 @@ def load_dataset(
     ``$STEAM_REF_DATA_DIR``, the installed gtsam's ``Data/``. Anything else is a path: a CMU .mat
     file, a folder of CMU text files, or a GTSAM planar text file (``.txt``); a bare file name that is not in the working directory is
     also searched for there. A missing file raises DataError naming the folders searched and
-    where to put it; so does an empty name, and a ``data_dir`` that is not a folder (even for
-    "synthetic", which reads no file: the caller meant something else).
+    where to put it (the fetch command only for a set ``steam-ref data fetch`` gets; the closest
+    registered name for a mistyped one); so does an empty name, and a ``data_dir`` that is not a
+    folder (even for "synthetic", which reads no file: the caller meant something else). An
+    authors' saved run (a registered file with no loader) is named as no data set to run on; a path
+    that is there but is no file (a FIFO, a device) is named as such (:func:`.textfile.check_regular`).
     """
     if not isinstance(name_or_path, (str, os.PathLike)):  # str(None) is "None", a file name nobody meant
         raise DataError(f"the data set must be a name or a path, got {name_or_path!r}")
@@ -248,7 +257,11 @@ def load_dataset(
     if path.is_file():
         return load_cmu_mat(path)
     names = ", ".join(loadable())
-    raise _not_found(f"data set {key!r} (not one of {names}, nor a file or folder)", folders, _hint(key) + ".")
+    if s is not None:  # a registered file that is no data set to run on (an authors' saved run)
+        raise DataError(f"{key!r} is not a data set to run on: it is {s.what}; the data sets are: {names}")
+    close = difflib.get_close_matches(key, loadable(), n=1)
+    guess = f"; did you mean {close[0]!r}?" if close else ""
+    raise _not_found(f"data set {key!r} (not one of {names}, nor a file or folder{guess})", folders, _hint(key) + ".")
 
 
 def load_range_dataset(
