@@ -14,6 +14,7 @@ from pathlib import Path
 
 import pytest
 import scipy.io
+from cli_runs import runner
 
 from steam_ref.datasets import DATA_DIR_ENV, generate_synthetic, load_dataset, search
 from steam_ref.datasets.registry import DATASETS
@@ -84,3 +85,17 @@ def test_a_search_that_finds_nothing_suggests_only_a_fetch_that_works(alone: Pat
         assert "not a data set to run on" in message and "steam-ref fidelity" in message, message
     if name == "plazza":
         assert "did you mean 'plaza'" in message, message
+
+
+@pytest.mark.parametrize("command", ["run", "batch", "fit-qc"])
+@pytest.mark.parametrize("name", ["plazza", "authors-plaza"])
+def test_the_command_answers_a_name_that_is_no_set_and_no_file_with_the_search(
+    alone: Path, capsys: pytest.CaptureFixture, command: str, name: str
+) -> None:
+    """Not "'plazza' is a path: say which parameters it runs with, --preset ...": with --preset it would only then
+    be not found. The one line is the search's: not found, the closest name; or no data set to run on."""
+    code, out, err = runner(command)(capsys, "--dataset", name)
+    assert code == 2 and out == "" and len(err.strip().splitlines()) == 1, err
+    assert "--preset" not in err, err
+    says = "did you mean 'plaza'" if name == "plazza" else "is not a data set to run on"
+    assert says in err, err
