@@ -38,6 +38,7 @@ __all__ = [
     "data_dir_help",
     "gtsam_data_dir",
     "default_data_dirs",
+    "dataset_path",
     "find_named",
     "not_found",
     "load_dataset",
@@ -245,18 +246,30 @@ def load_dataset(
     s = DATASETS.get(key)
     if s is not None and s.loader is not None:
         return _load_registered(s, folders, seed)
+    path = dataset_path(name_or_path, data_dir)
+    if path.is_dir() or path.name.endswith("_DR.txt"):
+        return load_cmu_text(path)
+    if path.suffix == ".txt":
+        return load_gtsam_2d(path)
+    return load_cmu_mat(path)
+
+
+def dataset_path(name_or_path: str | os.PathLike, data_dir: str | os.PathLike | None = None) -> Path:
+    """The file or folder :func:`load_dataset` reads for ``name_or_path``, which names no data set of the registry:
+    the path as given, else a bare file name found in :func:`default_data_dirs`. DataError when it is neither (the
+    folders searched, the closest registered name), when it is there but is no file (a FIFO, a device:
+    :func:`.textfile.check_regular`), or when it names a registered file that is no data set (an authors' run)."""
+    key = str(name_or_path)
+    folders = default_data_dirs(data_dir)
     path = Path(name_or_path)
     if not path.exists() and not path.is_absolute() and len(path.parts) == 1:
         path = _find((path.name,), folders) or path
     if os.path.lexists(path) and not path.is_dir():
         check_regular(path)  # there, but a FIFO, a device or a broken link: named as such, not "not found"
-    if path.is_dir() or path.name.endswith("_DR.txt"):
-        return load_cmu_text(path)
-    if path.is_file() and path.suffix == ".txt":
-        return load_gtsam_2d(path)
-    if path.is_file():
-        return load_cmu_mat(path)
+    if path.is_dir() or path.is_file():
+        return path
     names = ", ".join(loadable())
+    s = DATASETS.get(key)
     if s is not None:  # a registered file that is no data set to run on (an authors' saved run)
         raise DataError(f"{key!r} is not a data set to run on: it is {s.what}; the data sets are: {names}")
     close = difflib.get_close_matches(key, loadable(), n=1)
