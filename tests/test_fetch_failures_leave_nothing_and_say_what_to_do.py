@@ -128,3 +128,21 @@ def test_a_cache_folder_that_cannot_be_written_says_where_to_fetch_instead(serve
     with pytest.raises(DataError, match=r"the cache folder /proc/steam_ref_cache cannot be written") as caught:
         fetching.fetch([NAME], base=url, cache="/proc/steam_ref_cache")
     assert "XDG_CACHE_HOME" in str(caught.value), caught.value
+
+
+def test_a_fetch_into_a_users_folder_never_replaces_a_file_of_theirs(server, cache, tmp_path):
+    """``fetch(cache=FOLDER)``: a file under a published name there that is not the published one is the user's own
+    (only the default cache is written by ``fetch`` alone): refused, byte for byte unchanged, the message naming it."""
+    url, root = server
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / FILE).write_bytes(b"my own work, not the authors' file")
+    with pytest.raises(DataError) as caught:
+        fetching.fetch([NAME], base=url, cache=mine)
+    assert (mine / FILE).read_bytes() == b"my own work, not the authors' file"
+    message = str(caught.value)
+    assert "\n" not in message and str(mine / FILE) in message and "not the published file" in message, message
+    shutil.copyfile(root / FILE, mine / FILE)  # the published file there is kept, and not downloaded again
+    before = (mine / FILE).stat().st_mtime_ns
+    assert fetching.fetch([NAME], base=url, cache=mine) == {NAME: [mine / FILE]}
+    assert (mine / FILE).stat().st_mtime_ns == before
