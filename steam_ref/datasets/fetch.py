@@ -202,7 +202,8 @@ def fetch(
 
     Every name, the URL, the cache folder and the files already there are checked before anything is
     downloaded (see the module docstring). A file already in the cache with the right sha256 is not
-    downloaded again; one that differs is replaced. A download larger than the registry's size is cut and
+    downloaded again; one that differs is replaced in the default cache folder (only ``fetch`` writes it), and refused,
+    never overwritten, in a folder given as ``cache`` (the user's file). A download larger than the registry's size is cut and
     refused; one whose sha256 differs is refused (DataError naming the file, both hashes) and nothing of it
     is left in the cache; an unreachable host, a download cut short or an HTTP error is a DataError of one line.
     Each says what to do: nothing was kept, ``steam-ref data fetch NAME`` tries again, ``--base-url`` or
@@ -217,10 +218,20 @@ def fetch(
             raise DataError(f"data set {s.name!r} is not fetched: {where}")
     url = base_url(base)
     folder = Path(cache) if cache is not None else data_cache_dir()
-    for target in {folder / f.local for s in sets for f in s.files}:
+    own = (
+        folder.resolve() == data_cache_dir().resolve()
+    )  # written by fetch alone: a file there that differs is replaced
+    for f in {f for s in sets for f in s.files}:
+        target = folder / f.local
         _writable_folder(target.parent)
         if os.path.lexists(target):
             check_regular(target)  # pooch would hash a FIFO or /dev/zero for ever
+            why = None if own else published_mismatch(target, f.local)
+            if why is not None:  # pooch would download over it: in a folder of the user's, it is the user's file
+                raise DataError(
+                    f"{target} is there and is not the published file ({why}); fetch replaces a file only in its own "
+                    f"cache folder ({data_cache_dir()}): move it away, or fetch into another folder"
+                )
     import pooch  # here, not at the top: every command loads this module, only a download needs pooch (~4 MB)
 
     pooch.get_logger().setLevel(logging.WARNING)  # the caller says what was fetched
