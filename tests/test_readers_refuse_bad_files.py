@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import scipy.io
 from cli_runs import runner
 
 from steam_ref.datasets import load_cmu_text, load_dataset, load_gtsam_2d
@@ -227,3 +228,25 @@ def test_a_folder_of_two_cmu_text_sets_is_refused_naming_a_file_the_command_can_
     code, out, err = runner("run")(capsys, "--dataset", tmp_path, "--preset", "plaza")
     assert code == 2 and out == "" and len(err.strip().splitlines()) == 1, err
     assert f"found several (A, B): give the one to read, e.g. {tmp_path / 'A_DR.txt'}" in err, err
+
+
+# --- .mat integers --------------------------------------------------------------------------------------------------
+
+
+def test_an_integer_in_a_mat_that_float64_cannot_hold_is_refused_not_rounded(tmp_path: Path) -> None:
+    """A landmark id stored as int64 2^53 + 1 read as float64 is 2^53: another id, in silence. Oracle: the int64
+    written; 2^53 itself (every integer up to it is exact) still reads as written."""
+    from steam_ref.datasets import generate_synthetic, load_cmu_mat
+
+    small = generate_synthetic(n_steps=4, n_landmarks=2, seed=3)
+    arrays = small.to_cmu_arrays()
+    arrays["TD"] = arrays["TD"][:0]  # no range names the landmark whose id changes
+    for value, refused in ((2**53 + 1, True), (2**53, False)):
+        tl = arrays["TL"].astype(np.int64)
+        tl[0, 0] = value
+        scipy.io.savemat(tmp_path / "ids.mat", {**arrays, "TL": tl})
+        if refused:
+            with pytest.raises(DataError, match=rf"ids\.mat: TL\[0, 0\] = {value} is an integer float64 cannot hold"):
+                load_cmu_mat(tmp_path / "ids.mat")
+        else:
+            assert int(load_cmu_mat(tmp_path / "ids.mat").landmarks[0, 0]) == value
