@@ -38,7 +38,7 @@ from ..arguments import DECIMAL
 from ..dead_reckoning import integrate_odometry
 from ..errors import DataError, SteamError
 from .matfile import read_mat
-from .table import CMU_COLUMNS, RangeDataset, frozen_table
+from .table import CMU_COLUMNS, MAX_EXACT, RangeDataset, frozen_table
 from .textfile import text_lines
 
 __all__ = ["load_cmu_mat", "load_cmu_text", "TEXT_TABLE_RULE"]
@@ -93,6 +93,15 @@ def _mat_table(content: dict[str, NDArray], key: str, path: Path) -> NDArray:
     if not isinstance(value, np.ndarray) or value.dtype.kind not in "biuf":
         got = f"an array of {value.dtype}" if isinstance(value, np.ndarray) else f"a {type(value).__name__}"
         raise DataError(f"{path}: {key} is not a numeric matrix (got {got})")
+    if value.dtype.kind in "iu":  # an integer beyond 2^53 would become another integer as float64, in silence
+        beyond = np.argwhere(np.abs(value.astype(object)) > MAX_EXACT) if value.size else np.zeros((0, 2), int)
+        if len(beyond):
+            at = tuple(int(i) for i in beyond[0])
+            where = ", ".join(map(str, at))
+            raise DataError(
+                f"{path}: {key}[{where}] = {value[at]} is an integer float64 cannot hold (above 2^53); "
+                f"it would be read as another number"
+            )
     return value.astype(float)
 
 

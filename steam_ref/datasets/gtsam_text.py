@@ -47,6 +47,7 @@ import numpy as np
 from ..arguments import DECIMAL
 from ..errors import DataError, SteamError
 from .landmarks import LandmarkDataset
+from .table import MAX_EXACT
 from .textfile import text_lines
 
 __all__ = ["load_gtsam_2d", "GTSAM_ISOTROPY_TOL", "MAX_ID"]
@@ -55,7 +56,7 @@ GTSAM_ISOTROPY_TOL = 1e-4  # load2D converts a sighting's covariance only when |
 _NUMBER = DECIMAL  # the one rule for numbers written as text (steam_ref.arguments)
 _FIELDS = {"ODOMETRY": 11, "LANDMARK": 7}  # numbers after the tag
 _ID = re.compile(r"[0-9]+")  # an id: digits only (GTSAM reads a size_t)
-MAX_ID = 2**53  # the largest id the data set's float64 tables hold exactly (with all below it)
+MAX_ID = MAX_EXACT  # the largest id the data set's float64 tables hold exactly (with all below it)
 
 
 def _numbers(path: Path, line_no: int, tag: str, fields: list[str]) -> tuple[int, int, list[float]]:
