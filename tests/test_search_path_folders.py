@@ -99,3 +99,25 @@ def test_the_command_answers_a_name_that_is_no_set_and_no_file_with_the_search(
     assert "--preset" not in err, err
     says = "did you mean 'plaza'" if name == "plazza" else "is not a data set to run on"
     assert says in err, err
+
+
+@pytest.mark.parametrize(("name", "present"), [("kitti", "KittiGps_converted.txt"), ("plaza2", "Plaza2_TD.txt")])
+def test_a_folder_holding_part_of_a_sets_files_is_named_not_passed_over(
+    alone: Path, monkeypatch, name: str, present: str
+) -> None:
+    """The user's own KittiGps_converted.txt in --data-dir, without the IMU file: reading gtsam's pair instead would
+    pass over the file the user gave, in silence. The search and ``data list`` (fetch.found) both name what is
+    missing there."""
+    from steam_ref.datasets import fetch
+
+    gtsam = alone / "gtsam"
+    gtsam.mkdir()
+    for f in DATASETS[name].files:
+        (gtsam / f.local).write_text("whole set\n")
+    monkeypatch.setattr(search, "gtsam_data_dir", lambda: gtsam)
+    (alone / "mine").mkdir()
+    (alone / "mine" / present).write_text("the user's file\n")
+    missing = [f.local for f in DATASETS[name].files if f.local != present]
+    for look in (lambda: load_dataset(name, data_dir=alone / "mine"), lambda: fetch.found(name, alone / "mine")):
+        with pytest.raises(DataError, match=rf"{re.escape(str(alone / 'mine'))} holds {present} but not {missing[0]}"):
+            look()
