@@ -43,7 +43,7 @@ from .registry import (
     file_digest,
     published_mismatch,
 )
-from .search import data_cache_dir, default_data_dirs
+from .search import data_cache_dir, default_data_dirs, holds_set
 
 __all__ = [
     "DATASETS",
@@ -77,15 +77,13 @@ def _dataset(name: str) -> DataSet:
 
 def found(name: str, data_dir: str | os.PathLike | None = None) -> tuple[list[Path], list[str]] | None:
     """The files of data set ``name`` in the first searched folder that holds them all, with how each that is
-    not the published file differs (empty: they all are), or None. DataError when one is not a regular file."""
+    not the published file differs (empty: they all are), or None. DataError when one is not a regular file, or a
+    folder holds some of them only (:func:`~.search.holds_set`)."""
     if not _dataset(name).files:  # generated: nothing to find
         return None
     for folder in default_data_dirs(data_dir):
         paths = [folder / f.local for f in _dataset(name).files]
-        for p in paths:
-            if p.exists():
-                check_regular(p)
-        if all(p.is_file() for p in paths):
+        if holds_set(folder, tuple(f.local for f in _dataset(name).files)):
             differs = [
                 f"{p}: {why}"
                 for p, f in zip(paths, _dataset(name).files, strict=True)

@@ -10,7 +10,9 @@ A file found under a published name (:mod:`.registry`) is checked at every read,
 name: in the fetched files' cache a file that is not the published one is refused (DataError saying how
 to fetch it again); in a folder the user names (or gtsam's) it is the user's own file and is read, but
 not as the named set: its name is the file's own, marked "(not the published NAME)", and its ``source``
-says how it differs. A file that is not a regular file (a FIFO, a device) is refused before it is opened.
+says how it differs. A file that is not a regular file (a FIFO, a device) is refused before it is opened. A folder
+that holds some of a set's files but not all (the user's own GPS file without the IMU's) is named, never passed
+over for the next folder's set (:func:`holds_set`).
 """
 
 from __future__ import annotations
@@ -40,6 +42,7 @@ __all__ = [
     "default_data_dirs",
     "dataset_path",
     "find_named",
+    "holds_set",
     "not_found",
     "load_dataset",
     "load_range_dataset",
@@ -106,15 +109,28 @@ def default_data_dirs(data_dir: str | os.PathLike | None = None) -> list[Path]:
     return folders
 
 
+def holds_set(folder: Path, file_names: tuple[str, ...]) -> bool:
+    """Whether ``folder`` holds every one of a set's ``file_names``, each a regular file (:func:`check_regular`);
+    False when it holds none. DataError naming the folder, what it holds and what it lacks when it holds some: the
+    next folder's set would pass over the user's file in silence."""
+    there = [f for f in file_names if os.path.lexists(folder / f)]
+    for f in there:
+        check_regular(folder / f)
+    if len(there) < len(file_names) and there:
+        lacking = ", ".join(f for f in file_names if f not in there)
+        raise DataError(
+            f"{folder} holds {', '.join(there)} but not {lacking}: a data set's files are read from one folder; put "
+            f"{lacking} beside it, or move {', '.join(there)} away to read the set from the next folder searched"
+        )
+    return bool(there)
+
+
 def _find(file_names: tuple[str, ...], folders: list[Path]) -> Path | None:
     """The first folder holding all of ``file_names`` (joined to the first name), or None.
     DataError when one of them is there but is not a regular file (a folder of that name, a FIFO, a link to
     a device: none is passed over) or is a cached file that is not the published one (:func:`find_named`)."""
     for folder in folders:
-        for f in file_names:
-            if (folder / f).exists():
-                check_regular(folder / f)
-        if all((folder / f).is_file() for f in file_names):
+        if holds_set(folder, file_names):
             if folder.resolve() == data_cache_dir().resolve():  # written by `data fetch` alone: never trusted
                 for f in file_names:
                     check_cached(folder / f, f)
