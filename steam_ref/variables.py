@@ -21,7 +21,19 @@ from .arguments import is_integer
 from .errors import KindError, NumericalError, ShapeError, SteamError, UnknownVariableError
 from .manifold import VECTOR, Manifold, by_kind
 
-__all__ = ["Key", "X", "L", "Values", "check_key", "key_list", "as_values", "check_new_values", "kind_clash"]
+__all__ = [
+    "Key",
+    "X",
+    "L",
+    "INDEX_BITS",
+    "Values",
+    "check_key",
+    "check_roles",
+    "key_list",
+    "as_values",
+    "check_new_values",
+    "kind_clash",
+]
 
 
 # The field `index` shadows tuple.index on purpose (a key's index is the paper's subscript). mypy reports
@@ -43,15 +55,30 @@ class Key(_KeyFields):
         return f"{self.symbol}{self.index}"
 
 
+# GTSAM's Symbol packs a key into 64 bits: its character in the top 8, its index in the low 56
+# (``bayes_tree.dot.gtsam_key``). An index of magnitude 2⁵⁶ or more has no such key (it would run into the
+# character's bits), so it is refused. Negative indices are kept (down to -(2⁵⁶ - 1)): ``X(-1)`` is by design the
+# placeholder key of an interpolated reading's inner measurement, and any negative index still gives each key its
+# own integer there (GTSAM has no Symbol for one, whatever its size).
+INDEX_BITS = 56
+
+
 def _index(name: str, i: int) -> int:
-    """A key's index: an int or a NumPy integer (a bool, a float, even 2.0, or a string is refused)."""
+    """A key's index: an int or a NumPy integer (a bool, a float, even 2.0, or a string is refused) of magnitude below
+    2⁵⁶ (:data:`INDEX_BITS`)."""
     if not is_integer(i):
         raise SteamError(f"{name} takes an integer index, got {i!r}")
-    return int(i)
+    index = int(i)
+    if abs(index) >> INDEX_BITS:
+        raise SteamError(
+            f"{name} takes an index of magnitude below 2**{INDEX_BITS} (GTSAM's Symbol keeps {INDEX_BITS} bits for "
+            f"it beside an 8-bit character), got {name}({index})"
+        )
+    return index
 
 
 def X(i: int) -> Key:
-    """The key of the trajectory state at pose i (an integer): the variable x(tᵢ).
+    """The key of the trajectory state at pose i (an integer, of magnitude below 2⁵⁶): the variable x(tᵢ).
 
     With the vector-space priors, x(tᵢ) = [x, y, θ, ẋ, ẏ, θ̇]: [x, y] is the position (m) and θ the heading
     (rad, counter-clockwise from the world's x axis, never wrapped) in the world frame; [ẋ, ẏ, θ̇] their time
@@ -63,7 +90,8 @@ def X(i: int) -> Key:
 
 
 def L(j: int) -> Key:
-    """The key of landmark number j (an integer): the variable ℓ = [x, y], its position in the world frame (m)."""
+    """The key of landmark number j (an integer, of magnitude below 2⁵⁶): the variable ℓ = [x, y], its position in the
+    world frame (m)."""
     return Key("l", _index("L", j))
 
 
@@ -303,9 +331,22 @@ def check_key(name: str, value: object) -> Key:
     return value
 
 
-def key_list(name: str, keys: object) -> list[Key]:
+def check_roles(owner: str, keys: tuple[Key, ...], n_states: int) -> None:
+    """SteamError naming every key unless the first ``n_states`` of ``keys`` are state keys ``X(i)`` and the rest
+    landmark keys ``L(j)``: what a factor reading states and landmarks (``owner``) takes. Keys in the wrong roles
+    (a range from ``L(0)`` to ``X(0)``) would make a problem of another shape without a word."""
+    wrong = [(i, k) for i, k in enumerate(keys) if k.symbol != ("x" if i < n_states else "l")]
+    if wrong:
+        roles = ", ".join("state X(i)" if i < n_states else "landmark L(j)" for i in range(len(keys)))
+        given = ", ".join(map(repr, keys))
+        which = ", ".join(f"{k!r} is not a {'state' if i < n_states else 'landmark'} key" for i, k in wrong)
+        raise SteamError(f"{owner} takes keys ({roles}), got ({given}): {which}")
+
+
+def key_list(name: str, keys: object, *, distinct: bool = False) -> list[Key]:
     """The keys of any iterable (a list, a tuple, a generator, a mapping's keys), as a list. A single key
-    is refused with a hint, since iterating it would read its kind and index as two keys."""
+    is refused with a hint, since iterating it would read its kind and index as two keys. ``distinct``: a key
+    given twice is refused too, naming it (where the answer is a mapping by key, which cannot hold it twice)."""
     if isinstance(keys, Key):
         raise SteamError(f"{name} must be a list of keys, got the single key {keys!r}: write [{keys!r}]")
     if isinstance(keys, (str, bytes)) or not isinstance(keys, Iterable):
@@ -314,6 +355,9 @@ def key_list(name: str, keys: object) -> list[Key]:
     for i, k in enumerate(out):
         if not isinstance(k, Key):
             raise SteamError(f"{name}[{i}] = {k!r:.80} is not a variable key (make one with X(i) or L(j))")
+    if distinct and len(set(out)) < len(out):  # found below only then
+        i = next(i for i, k in enumerate(out) if k in out[:i])
+        raise SteamError(f"{name} names {out[i]!r} twice ({name}[{out.index(out[i])}] and {name}[{i}])")
     return out
 
 

@@ -1093,7 +1093,7 @@ def test_what_is_accepted_still_works():
     result = sr.gauss_newton(iter(factors), {k: values[k] for k in values})  # an iterable, a dict
     assert result.converged
     assert sr.RangeFactor.create(X(0), L(0), 0, 1).measured[0] == 0.0  # a zero range is a reading
-    assert sr.BearingRangeFactor.create(X(0), L(0), 0.1, [5.0], [0.1, 0.3]).measured.tolist() == [0.1, 5.0]
+    assert sr.BearingRangeFactor.create(X(0), L(0), 0.1, np.array(5.0), [0.1, 0.3]).measured.tolist() == [0.1, 5.0]
     s = solver()
     assert s.joint_covariance([]).shape == (0, 0)  # the joint of no variable
     np.testing.assert_array_equal(covariance.sparse_joint_covariance(factors, values, []), np.zeros((0, 0)))

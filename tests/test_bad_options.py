@@ -5,7 +5,8 @@
   with another prior is refused, not ignored. ``conformance selftest/build --data-dir`` must exist.
 - A reading float64 cannot resolve to its sigma is refused when its factor is made, naming it: a bearing
   of 1e17 rad, a range of 1e200 m, a prior (a landmark covariance of 1e-300) tighter than its mean's
-  float spacing. The oracle is ``math.ulp`` against the sigma.
+  float spacing. The oracle is ``math.ulp`` against the sigma. A sigma whose information 1/sigma² overflows
+  float64 (below about 1e-154; mpmath the oracle) is refused before, as a NumericalError.
 - Huber and Tukey refuse a threshold whose square (which ρ holds) overflows or underflows.
 - iSAM2's elimination breaking down on an ill-conditioned problem says so as GN/LM do.
 - ``--converge-at-end`` with one 1e300 m range: refused when the readings are made, one line, no
@@ -17,6 +18,7 @@ from __future__ import annotations
 import math
 import warnings
 
+import mpmath
 import numpy as np
 import pytest
 import scipy.io
@@ -26,7 +28,7 @@ from hypothesis import strategies as st
 import steam_ref as sr
 from steam_ref.cli import commands as cli
 from steam_ref.datasets import generate_synthetic, load_gtsam_2d
-from steam_ref.errors import SteamError
+from steam_ref.errors import NumericalError, SteamError
 
 
 def _never(*args, **kwargs):
@@ -103,7 +105,10 @@ def test_a_reading_float64_cannot_resolve_to_its_sigma_is_refused(value: float, 
         "bearing-range": lambda: sr.BearingRangeFactor.create(sr.X(0), sr.L(1), 0.1, value, [0.05, sigma]),
         "prior": lambda: sr.PriorFactor.create(sr.L(9), [value, 0.0], sigma),
     }[kind]
-    if math.ulp(abs(value)) > sigma:
+    if mpmath.mpf(sigma) ** -2 > np.finfo(float).max:  # its information 1/sigma² overflows: refused before the value
+        with pytest.raises(NumericalError, match=r"information, the inverse covariance, overflows"):
+            make()
+    elif math.ulp(abs(value)) > sigma:
         with pytest.raises(SteamError, match=r"float64 numbers there are .* apart, more than the sigma"):
             make()
     else:

@@ -55,9 +55,11 @@ def dense_scaled_condition(graph, values) -> float:
 def test_a_factor_naming_one_variable_twice_is_refused():
     with pytest.raises(sr.SteamError, match="names variable x2 twice"):
         sr.GPPriorFactor.wnoa(sr.X(2), sr.X(2), 1.0, QC)
-    inner = sr.RangeFactor.create(sr.X(99), sr.X(1), 3.0, 0.5)  # its "landmark" is a neighbour state
+    with pytest.raises(sr.SteamError, match="x1 is not a landmark key"):  # a neighbour state as its "landmark"
+        sr.RangeFactor.create(sr.X(99), sr.X(1), 3.0, 0.5)
+    inner = sr.RangeFactor.create(sr.X(-1), sr.L(1), 3.0, 0.5)
     with pytest.raises(sr.SteamError, match="names variable x1 twice"):
-        sr.InterpolatedFactor.create(inner, sr.X(1), sr.X(2), 0.0, 1.0, 0.5, QC)
+        sr.InterpolatedFactor.create(inner, sr.X(1), sr.X(1), 0.0, 1.0, 0.5, QC)
     with pytest.raises(sr.SteamError, match="not a variable key"):
         sr.PriorFactor.create(("x", 1), np.zeros(6), 1.0)
 

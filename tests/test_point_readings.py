@@ -136,7 +136,7 @@ def test_bad_readings_are_refused_by_name():
         PositionReading.create(X(0), np.zeros(3), 1.0, group=SO3)
     with pytest.raises(ShapeError, match=r"measured must be 3 finite numbers"):
         PositionReading.create(X(0), np.zeros(2), 1.0, group=SE3)
-    with pytest.raises(SteamError, match=r"a range is not negative, got measured=-1\.0"):
+    with pytest.raises(SteamError, match=r"a range cannot be negative, got measured=-1\.0"):
         RangeReading.create(X(0), L(0), -1.0, 1.0, group=SE3)
     with pytest.raises(ShapeError, match=r"measured must be 1 finite number"):
         AngularVelocityReading.create(X(0), np.zeros(3), 1.0, group=SE2)

@@ -116,9 +116,10 @@ class IncrementalSolver:
         return self.estimates_of([check_key("key", key)])[key]
 
     def estimates_of(self, keys: Iterable[Key]) -> dict[Key, NDArray]:
-        """The current estimate of each of ``keys`` (read-only), those whose δ moved formed in one call per kind."""
+        """The current estimate of each of ``keys`` (read-only), those whose δ moved formed in one call per kind; a key
+        named twice is refused (the answer, a mapping by key, would hold it once)."""
         try:
-            return self.state.estimates_of(key_list("keys", keys))
+            return self.state.estimates_of(key_list("keys", keys, distinct=True))
         except KeyError as exc:
             raise UnknownVariableError(f"variable {exc.args[0]!r} is not in the solver") from None
 

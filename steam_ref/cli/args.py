@@ -113,7 +113,9 @@ def scale(lower: float, upper: float, why: str):
 
 # The preset's Qc balances the prior against the readings; a scale s moves the prior's information by 1/s,
 # and beyond about sqrt(1/eps) = 6.7e7 either way float64 no longer resolves the readings beside the prior
-# (or the prior beside them): the elimination then breaks down, blaming a variable. Past 1e8 refused here.
+# (or the prior beside them): the elimination then breaks down, blaming a variable. Past 1e8 refused here, for
+# --qc-scale and for the Qc a run ends with (--qc times --qc-scale, each diagonal entry beside the preset's:
+# --qc 1e308,1e308,1e308 made the prior's information vanish beside the readings, "x1 is not constrained").
 QC_SCALES = (1e-8, 1e8)
 
 
@@ -142,14 +144,22 @@ def qc_diagonal(text: str) -> list[float]:
 
 def scaled_qc(preset: np.ndarray, given: list[float] | None, factor: float) -> np.ndarray:
     """Qc of a run: ``--qc`` (``given``, its diagonal; None: the ``preset``'s) times ``--qc-scale`` (``factor``);
-    SteamError naming both when the product is past float64 (the preset's times a scale <= 1e8 never is)."""
+    SteamError naming both when an entry of its diagonal is past float64, or more than :data:`QC_SCALES` away from
+    the preset's either way (float64 would not resolve the prior beside the readings; the preset's times a scale
+    in QC_SCALES never is)."""
     qc = preset if given is None else np.diag(given)
     with np.errstate(over="ignore"):  # refused just below, in one line
         qc = factor * qc
-    if not np.isfinite(qc).all():
+        ratio = np.diag(qc) / np.diag(preset)
+    low, high = QC_SCALES
+    if not (np.isfinite(qc).all() and np.all((low <= ratio) & (ratio <= high))):
+        past = f"past float64's largest number ({np.finfo(float).max:.3g})" if not np.isfinite(qc).all() else None
+        shown = ",".join(f"{v:g}" for v in np.diag(qc))
         raise SteamError(
-            f"--qc {','.join(f'{v:g}' for v in given or [])} times --qc-scale {factor:g} is past float64's largest "
-            f"number ({np.finfo(float).max:.3g}): give a smaller --qc or --qc-scale"
+            f"--qc {','.join(f'{v:g}' for v in given or [])} times --qc-scale {factor:g} gives Qc's diagonal "
+            f"{past or shown}, beyond {low:g} to {high:g} times the preset's ({','.join(f'{v:g}' for v in np.diag(preset))}"
+            "): float64 would not resolve the prior's information beside the readings; give a --qc (or --qc-scale) "
+            "nearer the preset's"
         )
     return qc
 

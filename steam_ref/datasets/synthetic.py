@@ -14,7 +14,24 @@ from ..errors import ShapeError, SteamError
 from ..gp.prior import check_qc, process_noise, transition
 from .table import RangeDataset
 
-__all__ = ["generate_synthetic"]
+__all__ = ["generate_synthetic", "synthetic_bytes", "MAX_SYNTHETIC_BYTES"]
+
+# What generate_synthetic holds at its peak, measured with tracemalloc (tests/test_bad_api_inputs_refused.py checks
+# it bounds the peak): about 260 bytes a pose (its sampled state and noise, ground truth, odometry, dead reckoning and
+# range, a few float64 rows each) and 1,050 a landmark (its 64 candidate places, drawn at once), beside a few MB of
+# chunked temporaries. Rounded up here.
+_BYTES_PER_POSE, _BYTES_PER_LANDMARK, _BYTES_FIXED = 300, 1_200, 8_000_000
+
+# The largest task generated: 4 GiB, about 14 million steps, ten thousand times the paper's 1,500 (and a minute of
+# its step-by-step sampling). A fixed ceiling, not the machine's free memory, so that a call is refused, or not, the
+# same on every machine, as a seed gives the same data set everywhere; past it NumPy's bare MemoryError, or the
+# machine swapping, would be the answer instead.
+MAX_SYNTHETIC_BYTES = 4 * 2**30
+
+
+def synthetic_bytes(n_steps: int, n_landmarks: int) -> int:
+    """About the most memory (bytes) :func:`generate_synthetic` holds at once for a task of this size (a bound)."""
+    return _BYTES_PER_POSE * (n_steps + 1) + _BYTES_PER_LANDMARK * n_landmarks + _BYTES_FIXED
 
 
 def _sample_wnoa(rng: np.random.Generator, n: int, qc: NDArray) -> NDArray:
@@ -208,12 +225,20 @@ def generate_synthetic(
       noise would make it negative has its noise drawn again (landmarks are at least 2 m away, so
       this needs range_sigma of about 0.5 m or more to happen at all).
 
-    Draws come from ``np.random.default_rng(seed)``, so a seed gives the same data set everywhere.
+    Draws come from ``np.random.default_rng(seed)``, so a seed gives the same data set everywhere. A task that would
+    need more than :data:`MAX_SYNTHETIC_BYTES` of memory (:func:`synthetic_bytes`: about 14 million steps) is refused
+    before anything is drawn.
     """
     sigmas = check_generator_args(
         n_steps, n_landmarks, odometry_sigmas, range_sigma, landmark_distance, n_nearest, seed
     )
     n_steps, n_landmarks, n_nearest = int(n_steps), int(n_landmarks), int(n_nearest)
+    if (need := synthetic_bytes(n_steps, n_landmarks)) > MAX_SYNTHETIC_BYTES:
+        raise SteamError(
+            f"n_steps={n_steps}, n_landmarks={n_landmarks}: the generated task would need about {need / 1e9:.3g} GB "
+            f"of memory, past generate_synthetic's ceiling of {MAX_SYNTHETIC_BYTES / 1e9:.3g} GB "
+            f"(MAX_SYNTHETIC_BYTES, about {(MAX_SYNTHETIC_BYTES - _BYTES_FIXED) // _BYTES_PER_POSE:,} steps)"
+        )
     qc = _generator_qc(qc)
     rng = np.random.default_rng(seed)
     states = _sample_wnoa(rng, n_steps + 1, qc)

@@ -12,7 +12,6 @@ twenty thousand factors fast without a second, "vectorized" copy of any measurem
 
 from __future__ import annotations
 
-import math
 import struct
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field, fields
@@ -35,9 +34,16 @@ LANDMARK_DIM = 2
 
 
 def _finite_weight(name: str, W: NDArray, noise: NDArray) -> NDArray:
-    """W itself, unless inverting the noise overflowed float64 (a sigma or covariance near 1e-160 or below)."""
-    if not np.all(np.isfinite(W)):
-        raise NumericalError(f"{name} is too small to invert in float64 (its weight overflows): {noise.tolist()}")
+    """W itself, unless inverting the noise overflowed float64: W, or the information WᵀW (its diagonal, the sum
+    of each column's squares: 1/sigma² for sigmas), is not finite (a sigma below about 1e-154, a covariance below
+    about 1e-308). The one check that a noise model's information is a number."""
+    with np.errstate(over="ignore", invalid="ignore"):  # refused just below
+        information = np.einsum("ij,ij->j", W, W)
+    if not (np.all(np.isfinite(W)) and np.all(np.isfinite(information))):
+        raise NumericalError(
+            f"{name} is too small to invert in float64 (its information, the inverse covariance, overflows): "
+            f"{name}={noise.tolist()}"
+        )
     return W
 
 
@@ -114,62 +120,12 @@ def sqrt_information(noise: NDArray | float, m: int, name: str = "noise") -> NDA
                 # W = U⁻¹ by LAPACK's triangular inverse: not solve_triangular(U, I), whose ?trtrs OpenBLAS
                 # threads, ~40 ms a call on a busy machine (the same choice as covariance._extend)
                 W = lapack.dtrtri(U, lower=0)[0]
-                _finite_weight(name, np.einsum("ij,ij->j", W, W), noise)  # diag Σ⁻¹ = WᵀW must be finite too
             return _finite_weight(name, W, noise)
         except np.linalg.LinAlgError:
             raise SteamError(f"{name} (a covariance) is not positive definite: {noise.tolist()}") from None
     raise ShapeError(
         f"{name} must be a scalar, sigmas of shape ({m},) or a covariance ({m}, {m}); got shape {noise.shape}"
     )
-
-
-_SIGMAS = Memo()  # the sigmas of each W met so far, by its float64 bytes (its size among them)
-
-
-def _sigmas(W: NDArray) -> NDArray:
-    """The standard deviations (m,) of the noise whose square-root information is W (m, m), memoised by value:
-    a stream's readings of one sensor share their W, each step."""
-    memo = W.tobytes()
-    sigma = _SIGMAS.get(memo)
-    if sigma is None:
-        with np.errstate(all="ignore"):
-            rows = np.linalg.inv(W)  # Σ = W⁻¹W⁻ᵀ: sigma i is the norm of row i, scaled so 1e-200 does not underflow
-            big = np.maximum(np.abs(rows).max(axis=1), np.finfo(float).tiny)
-            sigma = _SIGMAS.keep(memo, big * np.sqrt(((rows / big[:, None]) ** 2).sum(axis=1)))
-    return sigma
-
-
-def check_resolved(factor: str, keys: tuple, labels: tuple[str, ...], measured: NDArray, W: NDArray) -> None:
-    """Each measured number is resolved by float64 to within its sigma: a value whose float spacing
-    exceeds its sigma (a bearing of 1e17 rad, numbers there 16 rad apart; a sigma of 1e-150 m on a
-    range of 10 m) is no reading a sensor gives, and its whitened error would be rounding noise.
-    ``factor`` on ``keys`` names the reading (written out only for the error)."""
-    sigma = _sigmas(W)
-    spacing = np.spacing(np.abs(measured))  # finite by the callers' checks: no warning to silence
-    coarse = spacing > sigma
-    if coarse.any():
-        i = int(np.flatnonzero(coarse)[0])
-        raise SteamError(
-            f"{factor} on {', '.join(map(repr, keys))}: {labels[i] if i < len(labels) else f'measured[{i}]'} = "
-            f"{float(measured[i])!r} with sigma {float(sigma[i]):.3g}: float64 numbers there are "
-            f"{float(spacing[i]):.3g} apart, more than the sigma, so the reading carries nothing float64 can resolve"
-        )
-
-
-def measured_vector(value: NDArray | float, m: int, what: str) -> NDArray:
-    """``value`` as a float vector (m,): a 1-d array of m finite numbers, or a number when m = 1."""
-    if type(value) is np.ndarray and value.dtype is FLOAT64 and value.shape == (m,):  # (m,) float64: one copy, one sum
-        v = value.copy()
-        if math.isfinite(sum(v.tolist())):  # finite, as each number is (if it overflowed, the checks below decide)
-            return v
-    elif m == 1 and type(value) in FLOAT_TYPES and math.isfinite(value):  # one finite number
-        return np.array((value,))
-    v = real_array(what, value)
-    if v.shape != (m,) and not (m == 1 and v.ndim == 0):
-        raise ShapeError(
-            f"{what} must be {m} finite number{'s' if m > 1 else ''} (shape ({m},)), got {np.asarray(value).tolist()}"
-        )
-    return finite(what, v.reshape(m))
 
 
 def check_factors(name: str, factors: object) -> list[Factor]:

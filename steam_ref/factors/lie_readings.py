@@ -29,8 +29,9 @@ from ..lie.group import check_group
 from ..manifold import Manifold
 from ..robust import RobustLoss
 from ..variables import Key
-from .base import Factor, measured_vector, sqrt_information
+from .base import Factor, sqrt_information
 from .lie_prior import BetweenGroupStates, OneGroupState
+from .measured import measured_vector
 from .measurements import BearingFactor, BearingRangeFactor, RangeFactor
 
 __all__ = ["PoseReading", "BodyVelocityFactor", "LieInterpolatedFactor"]

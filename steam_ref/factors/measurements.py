@@ -18,8 +18,9 @@ from ..arguments import is_integer, real_array
 from ..dead_reckoning import wrap_angle
 from ..errors import DegenerateMeasurementWarning, ShapeError, SteamError
 from ..robust import RobustLoss
-from ..variables import Key
-from .base import LANDMARK_DIM, STATE_DIM, Factor, check_resolved, measured_vector, sqrt_information, zero_jacobian
+from ..variables import Key, check_roles
+from .base import LANDMARK_DIM, STATE_DIM, Factor, sqrt_information, zero_jacobian
+from .measured import bearing_reading, check_resolved, measured_vector, range_reading
 
 __all__ = [
     "StateMeasurement",
@@ -97,6 +98,7 @@ class StateMeasurement(Factor):
     def __post_init__(self) -> None:
         super().__post_init__()
         _check_state_dim(self.state_dim)
+        check_roles(type(self).__name__, self.keys, 1)  # a state, then the landmarks it reads (other_dims)
 
     @property
     def key_dims(self) -> tuple[int, ...]:  # type: ignore[override]
@@ -243,19 +245,6 @@ def _bearing_row(x: NDArray, l: NDArray) -> tuple[NDArray, NDArray, NDArray]:
     return np.arctan2(dy, dx) - x[..., 2], Jx, np.stack([-dy / r2, dx / r2], axis=-1)
 
 
-def _range(name: str, measured: float) -> NDArray:
-    """A range reading as a (1,) vector: a finite distance; a negative one is a bad reading, not a far landmark."""
-    r = measured_vector(measured, 1, name)
-    if r[0] < 0:
-        raise SteamError(f"a range cannot be negative, got {name}={float(r[0])!r}")
-    return r
-
-
-def _bearing(name: str, measured: float) -> NDArray:
-    """A bearing reading as a (1,) vector: a finite angle."""
-    return measured_vector(measured, 1, name)
-
-
 _Reading = TypeVar("_Reading", bound="_LandmarkReading")
 
 
@@ -272,7 +261,7 @@ class _LandmarkReading(StateMeasurement):
 
     @staticmethod
     def _reading(name: str, measured: float) -> NDArray:
-        """The reading checked (``_range``, ``_bearing``)."""
+        """The reading checked (``measured.range_reading``, ``bearing_reading``)."""
         raise NotImplementedError
 
     @staticmethod
@@ -317,7 +306,7 @@ class RangeFactor(_LandmarkReading):
     """
 
     _reads = "range"
-    _reading = staticmethod(_range)
+    _reading = staticmethod(range_reading)
     _rows = staticmethod(_range_row)
 
     def error(self, x: NDArray, l: NDArray) -> NDArray:
@@ -342,7 +331,7 @@ class BearingFactor(_LandmarkReading):
     """
 
     _reads = "bearing"
-    _reading = staticmethod(_bearing)
+    _reading = staticmethod(bearing_reading)
     _rows = staticmethod(_bearing_row)
 
     def error(self, x: NDArray, l: NDArray) -> NDArray:
@@ -380,7 +369,7 @@ class BearingRangeFactor(StateMeasurement):
         state_dim: int = STATE_DIM,
     ) -> BearingRangeFactor:
         """Bearing-range reading; noise is sigmas (2,) or a covariance (2, 2) for [bearing, range]."""
-        measured = np.concatenate([_bearing("bearing", bearing), _range("range", range_)])
+        measured = np.concatenate([bearing_reading("bearing", bearing), range_reading("range", range_)])
         W = sqrt_information(noise, 2)
         check_resolved("BearingRangeFactor", (state, landmark), ("bearing", "range"), measured, W)
         return cls((state, landmark), W, measured=measured, loss=loss, state_dim=state_dim)

@@ -31,8 +31,9 @@ from ..lie.group import check_group
 from ..lie.points import point_dim, position, rotation_part, to_body
 from ..robust import RobustLoss
 from ..variables import Key
-from .base import measured_vector, sqrt_information
+from .base import sqrt_information
 from .lie_prior import OneGroupState
+from .measured import measured_vector, range_reading
 
 __all__ = ["PositionReading", "RangeReading", "PointReading", "AngularVelocityReading", "PosePrior"]
 
@@ -100,9 +101,7 @@ class RangeReading(_StateReading):
     ) -> RangeReading:  # fmt: skip
         """Range ``measured`` (m, not negative) from state ``state`` to landmark ``landmark``; ``sigma`` its sigma."""
         group, _ = cls._kind(group, derivatives)
-        r = measured_vector(measured, 1, "measured")
-        if not r[0] >= 0:
-            raise SteamError(f"a range is not negative, got measured={float(r[0])!r}")
+        r = range_reading("measured", measured)
         W = sqrt_information(sigma, 1, "sigma")
         return cls((state, landmark), W, measured=r, loss=loss, group=group, derivatives=derivatives)
 

@@ -81,7 +81,7 @@ class EstimatesAfter:
         self.answered: dict[Key, NDArray] = {}  # empty when the fit asked nothing (no new factors)
 
     def __call__(self, keys: list[Key]) -> dict[Key, NDArray]:
-        self.answered.update(self.solver.estimates_of([*keys, self.newest]))
+        self.answered.update(self.solver.estimates_of(list(dict.fromkeys([*keys, self.newest]))))  # newest once
         return self.answered
 
 

@@ -28,7 +28,7 @@ from ..covariance import sparse_joint_covariance, sparse_joint_covariances, spar
 from ..errors import SteamError
 from ..factors import Factor
 from ..graph import FactorGraph
-from ..variables import Key, Values, X, check_key
+from ..variables import Key, Values, X, check_key, key_list
 
 __all__ = [
     "METHODS",
@@ -82,8 +82,9 @@ class OnlineSolver:
 
     def estimates_of(self, keys: Sequence[Key], *, past: str = "lagged") -> dict[Key, NDArray]:
         """Current estimate of each of ``keys``, as :meth:`estimate_of` reads each (a solver that forms its
-        estimates on demand forms these in one call per kind)."""
-        return {k: self.estimate_of(k, past=past) for k in keys}
+        estimates on demand forms these in one call per kind); a key named twice is refused (the answer, a mapping
+        by key, would hold it once)."""
+        return {k: self.estimate_of(k, past=past) for k in key_list("keys", keys, distinct=True)}
 
     def forgotten(self) -> Sequence[Key]:
         """The variables the last update forgot (marginalized): none."""
