@@ -23,7 +23,7 @@ from ..arguments import DECIMAL, parse_decimal
 from ..datasets import LandmarkDataset, RangeDataset, load_dataset
 from ..datasets.registry import DATASETS, loadable
 from ..datasets.rigid import RigidReadings
-from ..datasets.search import data_dir_help
+from ..datasets.search import data_dir_help, dataset_path
 from ..errors import SteamError, UncleanedDataWarning
 from ..motion import MOTION_PRIORS
 from ..paper.presets import PRESETS, PRIORS, SE2_RESIDUALS
@@ -317,6 +317,8 @@ def preset_of(args: argparse.Namespace) -> str:
         return args.preset
     if args.dataset in DATASETS and DATASETS[args.dataset].rigid:
         raise SteamError(f"--dataset {args.dataset!r} is a 3-D set: `steam-ref run --dataset {args.dataset}` solves it")
+    if args.dataset not in DATASETS or DATASETS[args.dataset].loader is None:
+        dataset_path(args.dataset, getattr(args, "data_dir", None))  # no set, no file: the search says so first
     if args.dataset not in DATASETS or DATASETS[args.dataset].preset is None:
         raise SteamError(
             f"--dataset {args.dataset!r} is a path: say which parameters it runs with, --preset {{{','.join(PRESETS)}}} "

@@ -9,6 +9,8 @@
 - :mod:`.cmu`: :func:`load_cmu_mat` and :func:`load_cmu_text`, readers of the CMU files.
 - :mod:`.gtsam_text`: :func:`load_gtsam_2d`, a reader of GTSAM's planar text format (ODOMETRY and
   LANDMARK rows, as ``gtsam.load2D`` reads them).
+- :mod:`.textfile`: :func:`~.textfile.text_lines` and :func:`~.textfile.check_regular`, what every reader checks
+  of a file before it parses a number (a regular file, not a FIFO; ASCII; its last line ended, not cut short).
 - :mod:`.synthetic`: :func:`generate_synthetic`, a task like the paper's Section IV-A.
 - :mod:`.sampled`: :func:`sample_from_model`, a task drawn from the estimator's own model, any motion prior
   (consistency).

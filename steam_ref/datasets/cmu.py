@@ -12,7 +12,8 @@ Conventions, checked on the reference files (see ``data/README.md`` for the figu
   cleaned file); their ranges match ground truth at their own time stamps, not at their row
   position. The loaders keep the rows in file order, as
   the paper's scripts read them, and name the rows that go back in ``source``.
-- A text table (``*_DR.txt``, ``*_TD.txt``) follows :data:`TEXT_TABLE_RULE`. Its last line must end
+- A text table (``*_DR.txt``, ``*_TD.txt``) follows :data:`TEXT_TABLE_RULE` (its lines read by
+  :func:`~steam_ref.datasets.textfile.text_lines`, the rule every text reader shares). Its last line must end
   with a newline: a file cut inside its last number keeps its field count and still parses
   (``5.29560000000000031e+01`` cut after ``5.2956`` reads as 5.2956), so the missing newline is the
   only sign of the cut. A file cut exactly at a line end loses whole rows and cannot be told from a
@@ -37,7 +38,8 @@ from ..arguments import DECIMAL
 from ..dead_reckoning import integrate_odometry
 from ..errors import DataError, SteamError
 from .matfile import read_mat
-from .table import CMU_COLUMNS, RangeDataset, frozen_table
+from .table import CMU_COLUMNS, MAX_EXACT, RangeDataset, frozen_table
+from .textfile import text_lines
 
 __all__ = ["load_cmu_mat", "load_cmu_text", "TEXT_TABLE_RULE"]
 
@@ -91,6 +93,15 @@ def _mat_table(content: dict[str, NDArray], key: str, path: Path) -> NDArray:
     if not isinstance(value, np.ndarray) or value.dtype.kind not in "biuf":
         got = f"an array of {value.dtype}" if isinstance(value, np.ndarray) else f"a {type(value).__name__}"
         raise DataError(f"{path}: {key} is not a numeric matrix (got {got})")
+    if value.dtype.kind in "iu":  # an integer beyond 2^53 would become another integer as float64, in silence
+        beyond = np.argwhere(np.abs(value.astype(object)) > MAX_EXACT) if value.size else np.zeros((0, 2), int)
+        if len(beyond):
+            at = tuple(int(i) for i in beyond[0])
+            where = ", ".join(map(str, at))
+            raise DataError(
+                f"{path}: {key}[{where}] = {value[at]} is an integer float64 cannot hold (above 2^53); "
+                f"it would be read as another number"
+            )
     return value.astype(float)
 
 
@@ -121,26 +132,9 @@ def _read_text_table(path: Path, columns: tuple[str, ...]) -> NDArray:
     decimal number (no nan, inf, hex, ``_`` or non-ASCII digits) that is finite; every non-blank
     line has exactly ``len(columns)`` fields; blank lines are skipped.
     """
-    try:
-        raw = path.read_bytes()
-    except OSError as err:
-        raise DataError(f"{path}: cannot read it ({type(err).__name__}: {err})") from None
-    try:
-        text = raw.decode("ascii")
-    except UnicodeDecodeError as err:
-        where = raw.count(b"\n", 0, err.start) + 1
-        raise DataError(
-            f"{path} line {where}: byte {raw[err.start]:#04x} is not ASCII; a text table holds plain numbers"
-        ) from None
-    lines = text.split("\n")
-    if lines[-1].strip(" \t\r"):
-        raise DataError(
-            f"{path} line {len(lines)}: the last line does not end with a newline, so the file may be cut short "
-            f"(a number cut short still reads as a number); if that line is whole, end the file with a newline"
-        )
+    lines = text_lines(path)
     rows = []
-    for line_no, line in enumerate(lines[:-1], start=1):
-        body = line[:-1] if line.endswith("\r") else line
+    for line_no, body in enumerate(lines, start=1):
         fields = [f for f in _BLANKS.split(body) if f]
         if not fields:
             continue
@@ -163,7 +157,12 @@ def _read_text_table(path: Path, columns: tuple[str, ...]) -> NDArray:
 def _text_prefix(folder: Path) -> str:
     prefixes = sorted(p.name[: -len("_DR.txt")] for p in folder.glob("*_DR.txt"))
     if len(prefixes) != 1:
-        found = f"several ({', '.join(prefixes)}): pass prefix=" if prefixes else "none"
+        found = (
+            f"several ({', '.join(prefixes)}): give the one to read, e.g. {folder / (prefixes[0] + '_DR.txt')} "
+            f"(prefix= in Python)"
+            if prefixes
+            else "none"
+        )
         raise DataError(f"{folder}: expected one *_DR.txt file to pick the data set, found {found}")
     return prefixes[0]
 

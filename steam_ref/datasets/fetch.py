@@ -43,7 +43,7 @@ from .registry import (
     file_digest,
     published_mismatch,
 )
-from .search import data_cache_dir, default_data_dirs
+from .search import data_cache_dir, default_data_dirs, holds_set
 
 __all__ = [
     "DATASETS",
@@ -77,15 +77,13 @@ def _dataset(name: str) -> DataSet:
 
 def found(name: str, data_dir: str | os.PathLike | None = None) -> tuple[list[Path], list[str]] | None:
     """The files of data set ``name`` in the first searched folder that holds them all, with how each that is
-    not the published file differs (empty: they all are), or None. DataError when one is not a regular file."""
+    not the published file differs (empty: they all are), or None. DataError when one is not a regular file, or a
+    folder holds some of them only (:func:`~.search.holds_set`)."""
     if not _dataset(name).files:  # generated: nothing to find
         return None
     for folder in default_data_dirs(data_dir):
         paths = [folder / f.local for f in _dataset(name).files]
-        for p in paths:
-            if p.exists():
-                check_regular(p)
-        if all(p.is_file() for p in paths):
+        if holds_set(folder, tuple(f.local for f in _dataset(name).files)):
             differs = [
                 f"{p}: {why}"
                 for p, f in zip(paths, _dataset(name).files, strict=True)
@@ -165,16 +163,30 @@ def base_url(given: str | None = None) -> str:
     )
 
 
+_OTHER_CACHE = "set XDG_CACHE_HOME to a folder you can write (its steam_ref/data/ then holds the files)"
+_HASH = re.compile(r"but got ([0-9a-f]{64})")  # the downloaded file's sha256 in pooch's message
+
+
+def _try_again(name: str) -> str:
+    """What a failed download tells its user to do: nothing of it was kept, so fetch again, or from another server."""
+    return (
+        f"nothing of it was kept; `steam-ref data fetch {name}` tries again "
+        f"(--base-url or ${DATA_URL_ENV} names another server)"
+    )
+
+
 def _writable_folder(folder: Path) -> None:
     """DataError naming ``folder`` when it cannot hold downloads: not a folder, or not creatable/writable."""
     if folder.exists() and not folder.is_dir():
-        raise DataError(f"the cache folder {folder} is not a folder; remove it or set XDG_CACHE_HOME elsewhere")
+        raise DataError(f"the cache folder {folder} is not a folder; remove it, or {_OTHER_CACHE}")
     try:
         folder.mkdir(parents=True, exist_ok=True)
         with tempfile.TemporaryFile(dir=folder):
             pass
     except OSError as exc:
-        raise DataError(f"the cache folder {folder} cannot be written: {exc.strerror or type(exc).__name__}") from None
+        raise DataError(
+            f"the cache folder {folder} cannot be written: {exc.strerror or type(exc).__name__}; {_OTHER_CACHE}"
+        ) from None
 
 
 def fetch(
@@ -188,9 +200,12 @@ def fetch(
 
     Every name, the URL, the cache folder and the files already there are checked before anything is
     downloaded (see the module docstring). A file already in the cache with the right sha256 is not
-    downloaded again; one that differs is replaced. A download larger than the registry's size is cut and
+    downloaded again; one that differs is replaced in the default cache folder (only ``fetch`` writes it), and refused,
+    never overwritten, in a folder given as ``cache`` (the user's file). A download larger than the registry's size is cut and
     refused; one whose sha256 differs is refused (DataError naming the file, both hashes) and nothing of it
-    is left in the cache; an unreachable host or an HTTP error is a DataError of one line. The gtsam wheel's
+    is left in the cache; an unreachable host, a download cut short or an HTTP error is a DataError of one line.
+    Each says what to do: nothing was kept, ``steam-ref data fetch NAME`` tries again, ``--base-url`` or
+    ``$STEAM_REF_DATA_URL`` names another server (a cache folder that cannot be written: XDG_CACHE_HOME). The gtsam wheel's
     sets are not fetched: asking for one is a DataError saying to ``pip install gtsam``.
     """
     wanted = list(names) if names else [n for n, s in DATASETS.items() if s.fetchable]
@@ -201,14 +216,24 @@ def fetch(
             raise DataError(f"data set {s.name!r} is not fetched: {where}")
     url = base_url(base)
     folder = Path(cache) if cache is not None else data_cache_dir()
-    for target in {folder / f.local for s in sets for f in s.files}:
+    own = (
+        folder.resolve() == data_cache_dir().resolve()
+    )  # written by fetch alone: a file there that differs is replaced
+    for f in {f for s in sets for f in s.files}:
+        target = folder / f.local
         _writable_folder(target.parent)
         if os.path.lexists(target):
             check_regular(target)  # pooch would hash a FIFO or /dev/zero for ever
+            why = None if own else published_mismatch(target, f.local)
+            if why is not None:  # pooch would download over it: in a folder of the user's, it is the user's file
+                raise DataError(
+                    f"{target} is there and is not the published file ({why}); fetch replaces a file only in its own "
+                    f"cache folder ({data_cache_dir()}): move it away, or fetch into another folder"
+                )
     import pooch  # here, not at the top: every command loads this module, only a download needs pooch (~4 MB)
 
     pooch.get_logger().setLevel(logging.WARNING)  # the caller says what was fetched
-    return {s.name: [_fetch_file(f, url, folder, progress) for f in s.files] for s in sets}
+    return {s.name: [_fetch_file(s.name, f, url, folder, progress) for f in s.files] for s in sets}
 
 
 class _TooLarge(Exception):
@@ -244,12 +269,14 @@ def _capped_download(limit: int, progress: bool):
     return download
 
 
-def _fetch_file(f: DataFile, url: str, folder: Path, progress: bool) -> Path:
+def _fetch_file(name: str, f: DataFile, url: str, folder: Path, progress: bool) -> Path:
+    """One file of data set ``name`` into ``folder``, verified; DataError of one line saying what to do."""
     import pooch
     import requests
 
     target = folder / f.local
     where = shown_url(file_url(url, f.remote))
+    again = _try_again(name)
     try:
         path = pooch.retrieve(
             file_url(url, f.remote),
@@ -260,18 +287,20 @@ def _fetch_file(f: DataFile, url: str, folder: Path, progress: bool) -> Path:
             downloader=_capped_download(f.size, progress),
         )
     except _TooLarge as exc:
-        raise DataError(f"{where}: refused, the download grew past its size ({exc})") from None
+        raise DataError(f"{where}: refused, the download grew past its size ({exc}); {again}") from None
     except requests.exceptions.HTTPError as exc:
         answer = exc.response
         status = "an HTTP error" if answer is None else f"{answer.status_code} {answer.reason}"
-        raise DataError(f"{where}: {status}") from None
+        raise DataError(f"{where}: {status}; {again}") from None
     except requests.exceptions.RequestException as exc:  # before ValueError: requests' InvalidURL is both
         reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        raise DataError(f"cannot fetch {where}: {type(exc).__name__}: {shown_url(reason)}") from None
-    except ValueError as exc:  # pooch: the downloaded file's hash differs (the download is deleted)
+        raise DataError(f"cannot fetch {where}: {type(exc).__name__}: {shown_url(reason)}; {again}") from None
+    except ValueError as exc:  # pooch: the downloaded file's hash differs (pooch has deleted the download)
+        got = _HASH.search(str(exc))
+        shown = f"got {got[1][:12]}..." if got else shown_url(str(exc))
         raise DataError(
-            f"{where}: refused, its sha256 is not the expected {f.sha256[:12]}... ({shown_url(str(exc))})"
+            f"{where}: refused, its sha256 is not the expected {f.sha256[:12]}... ({shown}); {again}"
         ) from None
     except OSError as exc:
-        raise DataError(f"cannot write {target}: {type(exc).__name__}: {exc.strerror or exc}") from None
+        raise DataError(f"cannot write {target}: {type(exc).__name__}: {exc.strerror or exc}; {_OTHER_CACHE}") from None
     return Path(path)

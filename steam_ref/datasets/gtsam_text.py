@@ -28,7 +28,8 @@ Ids are read as integers, never through a float (two ids 2^53 and 2^53 + 1 stay 
 (``5.0``, ``5e0``, ``-5`` are refused), at most :data:`MAX_ID` = 2^53, since the data set keeps ids in
 float64 columns, which hold every integer up to 2^53 exactly and would merge larger ones.
 
-Errors: :class:`DataError` naming the file and the line (1-based) for a row that cannot be read,
+The file's lines are read by :func:`~steam_ref.datasets.textfile.text_lines` (a regular file, ASCII, its last
+line ended by a newline). Errors: :class:`DataError` naming the file and the line (1-based) for a row that cannot be read,
 an unknown row type, a pose id the odometry has not reached, an id used for both a pose and a
 landmark, a sighting at range 0; any error of :class:`LandmarkDataset`'s checks is re-raised
 prefixed with the file name.
@@ -46,6 +47,8 @@ import numpy as np
 from ..arguments import DECIMAL
 from ..errors import DataError, SteamError
 from .landmarks import LandmarkDataset
+from .table import MAX_EXACT
+from .textfile import text_lines
 
 __all__ = ["load_gtsam_2d", "GTSAM_ISOTROPY_TOL", "MAX_ID"]
 
@@ -53,7 +56,7 @@ GTSAM_ISOTROPY_TOL = 1e-4  # load2D converts a sighting's covariance only when |
 _NUMBER = DECIMAL  # the one rule for numbers written as text (steam_ref.arguments)
 _FIELDS = {"ODOMETRY": 11, "LANDMARK": 7}  # numbers after the tag
 _ID = re.compile(r"[0-9]+")  # an id: digits only (GTSAM reads a size_t)
-MAX_ID = 2**53  # the largest id the data set's float64 tables hold exactly (with all below it)
+MAX_ID = MAX_EXACT  # the largest id the data set's float64 tables hold exactly (with all below it)
 
 
 def _numbers(path: Path, line_no: int, tag: str, fields: list[str]) -> tuple[int, int, list[float]]:
@@ -85,25 +88,13 @@ def _numbers(path: Path, line_no: int, tag: str, fields: list[str]) -> tuple[int
 def load_gtsam_2d(path: str | os.PathLike, name: str | None = None) -> LandmarkDataset:
     """A :class:`LandmarkDataset` from a GTSAM planar text file of ODOMETRY and LANDMARK rows (see the module)."""
     path = Path(path)
-    try:
-        text = path.read_bytes().decode("ascii")
-    except OSError as err:
-        raise DataError(f"{path}: cannot read it ({type(err).__name__}: {err.strerror or err})") from None
-    except UnicodeDecodeError as err:
-        raise DataError(
-            f"{path}: byte {err.object[err.start]:#04x} at offset {err.start} is not ASCII; the file holds plain text rows"
-        ) from None
-    lines = text.split("\n")
-    if lines[-1].strip():
-        raise DataError(
-            f"{path} line {len(lines)}: the last line does not end with a newline, so the file may be cut short"
-        )
+    lines = text_lines(path)
     pose_of: dict[int, int] = {}  # file id -> pose index
     landmark_line: dict[int, int] = {}  # landmark id -> line of its first sighting
     odometry, covariance, sightings = [], [], []
     lines_of: list[int] = []  # the line of each sighting
     last = None  # the pose id the odometry has reached
-    for line_no, line in enumerate(lines[:-1], start=1):
+    for line_no, line in enumerate(lines, start=1):
         fields = line.split()
         if not fields:
             continue

@@ -17,9 +17,10 @@ positions, so a run is scored at the held-out fixes, themselves noisy), and the 
 chosen before any run: position 0.3 m (GPS in a local frame), gyro 0.005 rad/s (the white noise at 100 Hz plus
 room for an unmodelled bias of a few mrad/s; the rows' mean rates are below 1e-3 rad/s about x and y).
 
-Each row is checked: :class:`~steam_ref.errors.DataError` naming the file and the line (1-based) for a row of the
-wrong number of fields, a field that is not a decimal number, a non-finite number, or a time that does not
-increase.
+Each file is read by :func:`~steam_ref.datasets.textfile.text_lines` (a regular file, ASCII, its last line ended by
+a newline: a file cut inside its last number is refused, not read short), and each row is checked:
+:class:`~steam_ref.errors.DataError` naming the file and the line (1-based) for a row of the wrong number of fields,
+a field that is not a decimal number, a non-finite number, or a time that does not increase.
 """
 
 from __future__ import annotations
@@ -36,6 +37,7 @@ from ..errors import DataError
 from ..lie import GroupState, LieGroup
 from ..lie.points import point_dim
 from .rigid import RigidReadings
+from .textfile import text_lines
 
 __all__ = ["load_kitti", "GPS_FILE", "IMU_FILE", "KITTI_QC", "KITTI_SIGMAS", "HOLD_OUT_EVERY"]
 
@@ -53,10 +55,7 @@ KITTI_SIGMAS = {
 
 def _table(path: Path, header: str, separator: str | None, width: int) -> NDArray:
     """The rows of a text file after its header, each ``width`` decimal numbers, times increasing strictly."""
-    try:
-        lines = path.read_text(encoding="utf-8").splitlines()
-    except (OSError, UnicodeDecodeError) as exc:
-        raise DataError(f"{path}: cannot read it ({exc})") from None
+    lines = text_lines(path, ",")  # a regular file, ASCII, its last line ended (not cut short)
     if not lines or lines[0].split(separator) != header.split(separator):
         raise DataError(f"{path}, line 1: expected the header {header!r}, got {lines[0][:80] if lines else ''!r}")
     body = [line for line in lines[1:] if line.strip()]

@@ -26,7 +26,6 @@ from __future__ import annotations
 
 import hashlib
 import os
-import stat
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -40,6 +39,7 @@ from .landmarks import LandmarkDataset
 from .rigid import RigidReadings, generate_rigid
 from .synthetic import generate_synthetic
 from .table import RangeDataset
+from .textfile import check_regular  # its home: every reader checks a file before opening it
 
 __all__ = [
     "DATASETS",
@@ -255,25 +255,6 @@ def with_authors_run() -> list[str]:
 # A published file by its place in a data folder ("authors/Syn_full_data_run.mat"): its set and its entry.
 _PUBLISHED = {f.local: (s.name, f) for s in DATASETS.values() for f in s.files if f.sha256}
 _DIGESTS: dict[tuple[int, int, int, int, int], str] = {}  # (st_dev, st_ino, size, mtime_ns, ctime_ns) → sha256
-
-
-def check_regular(path: str | os.PathLike) -> os.stat_result:
-    """The ``stat`` of ``path`` (links followed); DataError naming it when it is not a regular file."""
-    try:
-        info = os.stat(path)
-    except OSError as exc:
-        raise DataError(f"{path}: cannot read it ({exc.strerror or type(exc).__name__})") from None
-    if not stat.S_ISREG(info.st_mode):
-        kind = next(
-            (
-                w
-                for test, w in ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a FIFO"), (stat.S_ISSOCK, "a socket"))
-                if test(info.st_mode)
-            ),
-            "a device",
-        )
-        raise DataError(f"{path}: not a file ({kind}); a data file must be a regular file")
-    return info
 
 
 def file_digest(path: str | os.PathLike) -> str:

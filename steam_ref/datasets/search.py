@@ -10,12 +10,15 @@ A file found under a published name (:mod:`.registry`) is checked at every read,
 name: in the fetched files' cache a file that is not the published one is refused (DataError saying how
 to fetch it again); in a folder the user names (or gtsam's) it is the user's own file and is read, but
 not as the named set: its name is the file's own, marked "(not the published NAME)", and its ``source``
-says how it differs. A file that is not a regular file (a FIFO, a device) is refused before it is opened.
+says how it differs. A file that is not a regular file (a FIFO, a device) is refused before it is opened. A folder
+that holds some of a set's files but not all (the user's own GPS file without the IMU's) is named, never passed
+over for the next folder's set (:func:`holds_set`).
 """
 
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import importlib.util
 import os
 import warnings
@@ -37,7 +40,9 @@ __all__ = [
     "data_dir_help",
     "gtsam_data_dir",
     "default_data_dirs",
+    "dataset_path",
     "find_named",
+    "holds_set",
     "not_found",
     "load_dataset",
     "load_range_dataset",
@@ -104,15 +109,28 @@ def default_data_dirs(data_dir: str | os.PathLike | None = None) -> list[Path]:
     return folders
 
 
+def holds_set(folder: Path, file_names: tuple[str, ...]) -> bool:
+    """Whether ``folder`` holds every one of a set's ``file_names``, each a regular file (:func:`check_regular`);
+    False when it holds none. DataError naming the folder, what it holds and what it lacks when it holds some: the
+    next folder's set would pass over the user's file in silence."""
+    there = [f for f in file_names if os.path.lexists(folder / f)]
+    for f in there:
+        check_regular(folder / f)
+    if len(there) < len(file_names) and there:
+        lacking = ", ".join(f for f in file_names if f not in there)
+        raise DataError(
+            f"{folder} holds {', '.join(there)} but not {lacking}: a data set's files are read from one folder; put "
+            f"{lacking} beside it, or move {', '.join(there)} away to read the set from the next folder searched"
+        )
+    return bool(there)
+
+
 def _find(file_names: tuple[str, ...], folders: list[Path]) -> Path | None:
     """The first folder holding all of ``file_names`` (joined to the first name), or None.
     DataError when one of them is there but is not a regular file (a folder of that name, a FIFO, a link to
     a device: none is passed over) or is a cached file that is not the published one (:func:`find_named`)."""
     for folder in folders:
-        for f in file_names:
-            if (folder / f).exists():
-                check_regular(folder / f)
-        if all((folder / f).is_file() for f in file_names):
+        if holds_set(folder, file_names):
             if folder.resolve() == data_cache_dir().resolve():  # written by `data fetch` alone: never trusted
                 for f in file_names:
                     check_cached(folder / f, f)
@@ -165,10 +183,15 @@ def _not_found(what: str, folders: list[Path], hint: str) -> DataError:
 
 
 def _hint(key: str, put: str = "the file") -> str:
-    return (
-        f"Fetch it with `steam-ref data fetch {key}`, or put {put} in a folder and pass that folder as "
-        f"--data-dir (data_dir= in Python) or set ${DATA_DIR_ENV} to it"
+    """Where to put ``put``, and the fetch command when ``key`` names a set ``steam-ref data fetch`` gets (never a
+    command that would fail: an unknown name, gtsam's sets)."""
+    folder = (
+        f"put {put} in a folder and pass that folder as --data-dir (data_dir= in Python) or set ${DATA_DIR_ENV} to it"
     )
+    s = DATASETS.get(key)
+    if s is not None and s.fetchable:
+        return f"Fetch it with `steam-ref data fetch {key}`, or {folder}"
+    return folder[0].upper() + folder[1:]
 
 
 def not_found(what: str, fetch: str, data_dir: str | os.PathLike | None = None, put: str = "the file") -> DataError:
@@ -224,8 +247,11 @@ def load_dataset(
     ``$STEAM_REF_DATA_DIR``, the installed gtsam's ``Data/``. Anything else is a path: a CMU .mat
     file, a folder of CMU text files, or a GTSAM planar text file (``.txt``); a bare file name that is not in the working directory is
     also searched for there. A missing file raises DataError naming the folders searched and
-    where to put it; so does an empty name, and a ``data_dir`` that is not a folder (even for
-    "synthetic", which reads no file: the caller meant something else).
+    where to put it (the fetch command only for a set ``steam-ref data fetch`` gets; the closest
+    registered name for a mistyped one); so does an empty name, and a ``data_dir`` that is not a
+    folder (even for "synthetic", which reads no file: the caller meant something else). An
+    authors' saved run (a registered file with no loader) is named as no data set to run on; a path
+    that is there but is no file (a FIFO, a device) is named as such (:func:`.textfile.check_regular`).
     """
     if not isinstance(name_or_path, (str, os.PathLike)):  # str(None) is "None", a file name nobody meant
         raise DataError(f"the data set must be a name or a path, got {name_or_path!r}")
@@ -236,19 +262,35 @@ def load_dataset(
     s = DATASETS.get(key)
     if s is not None and s.loader is not None:
         return _load_registered(s, folders, seed)
+    path = dataset_path(name_or_path, data_dir)
+    if path.is_dir() or path.name.endswith("_DR.txt"):
+        return load_cmu_text(path)
+    if path.suffix == ".txt":
+        return load_gtsam_2d(path)
+    return load_cmu_mat(path)
+
+
+def dataset_path(name_or_path: str | os.PathLike, data_dir: str | os.PathLike | None = None) -> Path:
+    """The file or folder :func:`load_dataset` reads for ``name_or_path``, which names no data set of the registry:
+    the path as given, else a bare file name found in :func:`default_data_dirs`. DataError when it is neither (the
+    folders searched, the closest registered name), when it is there but is no file (a FIFO, a device:
+    :func:`.textfile.check_regular`), or when it names a registered file that is no data set (an authors' run)."""
+    key = str(name_or_path)
+    folders = default_data_dirs(data_dir)
     path = Path(name_or_path)
     if not path.exists() and not path.is_absolute() and len(path.parts) == 1:
         path = _find((path.name,), folders) or path
-    if path.is_dir() or path.name.endswith("_DR.txt"):
-        return load_cmu_text(path)
-    if path.is_file() and path.suffix == ".txt":
-        return load_gtsam_2d(path)
-    if path.is_file():
-        return load_cmu_mat(path)
-    if os.path.lexists(path):  # there, but not a file nor a folder (a device, a FIFO, a broken link): not "not found"
-        check_regular(path)
+    if os.path.lexists(path) and not path.is_dir():
+        check_regular(path)  # there, but a FIFO, a device or a broken link: named as such, not "not found"
+    if path.is_dir() or path.is_file():
+        return path
     names = ", ".join(loadable())
-    raise _not_found(f"data set {key!r} (not one of {names}, nor a file or folder)", folders, _hint(key) + ".")
+    s = DATASETS.get(key)
+    if s is not None:  # a registered file that is no data set to run on (an authors' saved run)
+        raise DataError(f"{key!r} is not a data set to run on: it is {s.what}; the data sets are: {names}")
+    close = difflib.get_close_matches(key, loadable(), n=1)
+    guess = f"; did you mean {close[0]!r}?" if close else ""
+    raise _not_found(f"data set {key!r} (not one of {names}, nor a file or folder{guess})", folders, _hint(key) + ".")
 
 
 def load_range_dataset(

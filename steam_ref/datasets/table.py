@@ -38,9 +38,12 @@ from numpy.typing import ArrayLike, NDArray
 from ..errors import DataError, ShapeError, SteamError
 from ..gp.clock import TIME_ORIGINS
 
-__all__ = ["RangeDataset", "check_time_origin"]
+__all__ = ["RangeDataset", "check_time_origin", "MAX_EXACT"]
 
 _TIME_TOL = 1e-6  # [s] odometry row k and pose k + 1 must agree to this
+MAX_EXACT = (
+    2**53
+)  # the largest integer a float64 table holds exactly, with every integer below it (ids read as numbers)
 CMU_COLUMNS = {  # field -> (CMU array name, column names)
     "ground_truth": ("GT", ("time", "x", "y", "heading")),
     "odometry": ("DR", ("time", "distance", "heading change")),

@@ -11,19 +11,21 @@ Numbers are written with 17 significant digits, so a file read back gives the sa
 a heading comes back through its quaternion or rotation, equal modulo 2π to within rounding (1e-15). The
 loaders accept planar poses only (z = 0, rotation about z, to 1e-9; a TUM quaternion of unit norm, to 1e-3) and
 refuse anything else with a :class:`~steam_ref.errors.DataError` naming the file and line; timestamps must increase
-strictly.
+strictly. A file's lines are read by :func:`~steam_ref.datasets.textfile.text_lines`, the rule every data file of text
+follows: a regular file (a FIFO is refused, not waited on), ASCII, its last line ended by a newline (a file cut inside
+its last number, TUM's qw, would still read, its heading moved).
 """
 
 from __future__ import annotations
 
 import os
-import stat
 from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ..arguments import parse_decimal, real_array
+from ..datasets.textfile import text_lines
 from ..dead_reckoning import wrap_angle
 from ..errors import DataError, ShapeError
 from .metrics import planar_poses
@@ -63,17 +65,7 @@ def write_tum(path: str | os.PathLike, times: object, poses: object) -> None:
 def _table(path: str | os.PathLike, columns: int, what: str) -> NDArray:
     """The numbers of a whitespace-separated text file, ``columns`` per line, ``#`` lines skipped."""
     rows = []
-    try:
-        mode = os.stat(path).st_mode
-        if not stat.S_ISREG(mode):  # a named pipe would block the read, /dev/zero fill the memory
-            kind = "a folder" if stat.S_ISDIR(mode) else "a named pipe" if stat.S_ISFIFO(mode) else "a device or socket"
-            raise DataError(f"{path}: cannot read it: it is {kind}, not a regular file")
-        text = Path(path).read_text()
-    except UnicodeDecodeError:
-        raise DataError(f"{path}: not a text file") from None
-    except OSError as err:
-        raise DataError(f"{path}: cannot read it ({type(err).__name__}: {err.strerror or err})") from None
-    for number, line in enumerate(text.splitlines(), start=1):
+    for number, line in enumerate(text_lines(Path(path), ","), start=1):
         line = line.strip()
         if not line or line.startswith("#"):
             continue
@@ -96,9 +88,7 @@ def _table(path: str | os.PathLike, columns: int, what: str) -> NDArray:
 
 def _line_of(path: str | os.PathLike, row: int) -> int:
     """The 1-based line number of data row ``row`` (comments and blank lines skipped)."""
-    data = [
-        i for i, line in enumerate(Path(path).read_text().splitlines(), start=1) if line.strip()[:1] not in ("", "#")
-    ]
+    data = [i for i, line in enumerate(text_lines(Path(path), ","), start=1) if line.strip()[:1] not in ("", "#")]
     return data[row]
 
 
