@@ -1,6 +1,7 @@
 """What a factor is given as measured: a vector of numbers, one number (a range, a bearing), each finite, and
 resolved by float64 to within its sigma (``check_resolved``). The one home of each rule, for every factor
-(:mod:`.measurements`, :mod:`.point_readings`, :mod:`.lie_readings`, :mod:`.gp`).
+(:mod:`steam_ref.factors.measurements`, :mod:`steam_ref.factors.point_readings`,
+:mod:`steam_ref.factors.lie_readings`, :mod:`steam_ref.factors.gp`).
 """
 
 from __future__ import annotations
