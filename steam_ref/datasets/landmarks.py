@@ -284,9 +284,9 @@ class LandmarkDataset:
         order = np.argsort(lid, kind="stable")
         starts = np.flatnonzero(np.diff(lid[order], prepend=np.nan) != 0)
         for group in np.split(order, starts[1:]):
-            if len(group) < 2:
-                continue
             p = pose[group]
+            if len(group) < 2 or _ranges_agree(along[p] + RANGE_SLACK_SIGMAS * slack[p], r[group], sigma[group]):
+                continue  # each pair checked in O(m): the pairs below only where one may break the rule
             moved = np.abs(along[p][:, None] - along[p][None, :])
             allowed = moved + RANGE_SLACK_SIGMAS * (
                 sigma[group][:, None] + sigma[group][None, :] + np.abs(slack[p][:, None] - slack[p][None, :])
@@ -307,6 +307,21 @@ class LandmarkDataset:
                 f"(allowed with {RANGE_SLACK_SIGMAS:g} sigmas of slack: {allowed[worst, other]:.4g} m)"
                 + ("" if alone else f"; it contradicts {counts[worst]} of the other {len(group) - 1} ranges to it")
             )
+
+
+def _ranges_agree(a: NDArray, r: NDArray, sigma: NDArray) -> bool:
+    """True when no two ranges r to one landmark break :meth:`LandmarkDataset._check_ranges_agree`'s rule, in O(m):
+    with a = along + K slack at each reading's pose (K = RANGE_SLACK_SIGMAS; both sums never decrease along the
+    path), the rule for readings i before j is abs(r_j - r_i) ≤ (a_j - a_i) + K σ_i + K σ_j, that is
+    r_j - a_j - K σ_j ≤ r_i - a_i + K σ_i and r_i + a_i - K σ_i ≤ r_j + a_j + K σ_j: each reading against the
+    running minimum (maximum) of the readings before it. A margin of 1e-9 of the numbers' scale leaves a pair the
+    rounding could decide to the exact pairwise check."""
+    i = np.argsort(a, kind="stable")
+    a, r, k_sigma = a[i], r[i], RANGE_SLACK_SIGMAS * sigma[i]
+    margin = 1e-9 * (1.0 + np.abs(r).max() + np.abs(a).max() + k_sigma.max())
+    below = np.minimum.accumulate(r - a + k_sigma)[:-1]  # min over i < j of r_i - a_i + K σ_i
+    above = np.maximum.accumulate(r + a - k_sigma)[:-1]  # max over i < j of r_i + a_i - K σ_i
+    return bool(np.all((r - a - k_sigma)[1:] <= below - margin) and np.all((r + a + k_sigma)[1:] >= above + margin))
 
 
 def _check_integer_ids(name: str, ids: ArrayLike, column: int | None) -> None:
