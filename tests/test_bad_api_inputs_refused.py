@@ -195,6 +195,24 @@ def test_the_smallest_sigmas_whose_information_is_finite_are_kept():
         sr.PriorFactor.create(X(0), np.zeros(2), 1e-310 * np.eye(2))
 
 
+@pytest.mark.parametrize("sigma", [1e200, 7e153, [1.0, 1.0, 1.0, 1.0, 1.0, 1e160]])
+def test_a_sigma_whose_information_underflows_is_refused_naming_it(sigma):
+    largest = mpmath.mpf(float(np.max(sigma)))  # the information 1/sigma², exactly: below float64's smallest normal
+    assert 1 / largest**2 < np.finfo(float).tiny
+    with pytest.raises(NumericalError, match=r"information.*underflows.*noise=.*e\+[0-9]{3}"):
+        sr.PriorFactor.create(X(0), np.zeros(6), sigma)
+
+
+def test_the_largest_sigmas_whose_information_is_normal_are_kept():
+    """1/sigma² just above float64's smallest normal number: kept, its weight exact; a covariance of 1e300 too."""
+    sigma = 6.5e153
+    assert 1 / mpmath.mpf(sigma) ** 2 > np.finfo(float).tiny
+    W = sr.PriorFactor.create(X(0), np.zeros(6), sigma).sqrt_information
+    np.testing.assert_array_equal(W, np.eye(6) / sigma)
+    cov = sr.PriorFactor.create(X(0), np.zeros(2), 1e300 * np.eye(2)).sqrt_information  # information 1e-300
+    np.testing.assert_allclose(cov.T @ cov, 1e-300 * np.eye(2), rtol=1e-14)
+
+
 # --- 7. a generated task past the memory ceiling ----------------------------------------------------------------------
 
 

@@ -34,15 +34,22 @@ LANDMARK_DIM = 2
 
 
 def _finite_weight(name: str, W: NDArray, noise: NDArray) -> NDArray:
-    """W itself, unless inverting the noise overflowed float64: W, or the information WᵀW (its diagonal, the sum
-    of each column's squares: 1/sigma² for sigmas), is not finite (a sigma below about 1e-154, a covariance below
-    about 1e-308). The one check that a noise model's information is a number."""
-    with np.errstate(over="ignore", invalid="ignore"):  # refused just below
+    """W itself, unless inverting the noise left float64's normal range: W, or the information WᵀW (its diagonal,
+    the sum of each column's squares: 1/sigma² for sigmas), is not finite (a sigma below about 1e-154, a covariance
+    below about 1e-308), or the information underflows below the smallest normal number (a sigma above about
+    6.7e153: such a reading weighs nothing a solver can compute with). The one check that a noise model's
+    information is a number."""
+    with np.errstate(over="ignore", invalid="ignore", under="ignore"):  # refused just below
         information = np.einsum("ij,ij->j", W, W)
     if not (np.all(np.isfinite(W)) and np.all(np.isfinite(information))):
         raise NumericalError(
             f"{name} is too small to invert in float64 (its information, the inverse covariance, overflows): "
             f"{name}={noise.tolist()}"
+        )
+    if np.any(information < np.finfo(float).tiny):
+        raise NumericalError(
+            f"{name} is too large for float64 (its information, the inverse covariance, underflows to "
+            f"{information.min():.3g}, below the smallest normal number): {name}={noise.tolist()}"
         )
     return W
 
