@@ -9,16 +9,16 @@
   δ not yet relinearized is large enough to tell them apart); keys in any order, far apart, repeated in a joint.
 - On SE(2) states the pose block is in the body frame, as GTSAM's ``Marginals`` gives for a Pose2 (right
   retraction, tangent [x, y, θ]), for the batch result and the tree alike, at headings where the world frame
-  would differ.
+  would differ; on SE(3) states it is GTSAM's Pose3 block with its tangent [ω; v] permuted to ours [ρ; φ].
 - A query, even one interrupted by Ctrl-C in the middle of its walk, changes nothing the solver holds (every
   store, byte for byte).
 """
 
 from __future__ import annotations
 
-import gtsam
 import numpy as np
 import pytest
+from requirements import optional_import
 from test_bad_interrupt import state
 from test_se2_covariance_and_lm_against_differences import _dense_covariance, _problem
 
@@ -27,10 +27,13 @@ from steam_ref import covariance
 from steam_ref.bayes_tree import FixedLagSmoother, IncrementalSolver
 from steam_ref.factors.lie_prior import LieStatePrior
 from steam_ref.factors.lie_readings import PoseReading
-from steam_ref.lie import SE2
+from steam_ref.factors.point_readings import RangeReading
+from steam_ref.lie import SE2, SE3V
 from steam_ref.linear import LinearSystem, natural_ordering
 from steam_ref.paper.solvers import BayesTreeSolver, PeriodicBatchSolver
 from steam_ref.variables import L, Values, X
+
+gtsam = optional_import("gtsam", "gtsam")
 
 
 def _incremental(seed: int, **params) -> tuple[IncrementalSolver, list, dict]:
@@ -217,6 +220,54 @@ def test_se2_pose_blocks_are_in_the_body_frame_as_gtsams_pose2_marginals():
     np.testing.assert_allclose(
         sr.lie.world_position_covariance(values[X(2)], solver.marginal_covariance(X(2))), world, rtol=1e-12
     )
+
+
+def test_se3_pose_blocks_are_gtsams_pose3_marginals_permuted():
+    """States on SE(3) (``SE3V``: a state of as many numbers as its tangent, as the solvers take) with a correlated
+    prior on each pose (at the linearization point, where both errors are 0 and their Jacobians the identity,
+    whatever GTSAM's Pose3 chart) and ranges to shared landmarks: GTSAM's Pose3 block in [ω; v] is ours in [ρ; φ]
+    after the permutation, for the batch result and the tree."""
+    rng = np.random.default_rng(11)
+    perm = np.r_[3:6, 0:3]  # GTSAM's [ω; v] from ours [ρ; φ]
+    graph, initial, factors, values = gtsam.NonlinearFactorGraph(), gtsam.Values(), [], {}
+    poses = [SE3V.exp(np.r_[rng.normal(size=3) * 2, rng.normal(size=3)]) for _ in range(3)]
+    for i, T in enumerate(poses):
+        B = rng.normal(size=(6, 6)) * 0.2
+        cov = B @ B.T + 0.01 * np.eye(6)
+        x = np.r_[T, rng.normal(size=6)]
+        values[X(i)] = x
+        factors.append(
+            LieStatePrior.create(
+                X(i), x, np.block([[cov, np.zeros((6, 6))], [np.zeros((6, 6)), np.eye(6)]]), group=SE3V
+            )
+        )
+        pose3 = gtsam.Pose3(SE3V.matrix(T))
+        graph.add(gtsam.PriorFactorPose3(i, pose3, gtsam.noiseModel.Gaussian.Covariance(cov[np.ix_(perm, perm)])))
+        initial.insert(i, pose3)
+    for j in range(4):
+        lm = rng.normal(size=3) * 3
+        values[L(j)] = lm
+        factors.append(sr.PriorFactor.create(L(j), lm, 5.0))
+        graph.add(gtsam.PriorFactorPoint3(100 + j, lm, gtsam.noiseModel.Isotropic.Sigma(3, 5.0)))
+        initial.insert(100 + j, lm)
+        for i, T in enumerate(poses):
+            r = np.linalg.norm(lm - SE3V.matrix(T)[:3, 3]) + 0.03
+            factors.append(RangeReading.create(X(i), L(j), r, 0.05, group=SE3V))
+            graph.add(gtsam.RangeFactor3D(i, 100 + j, r, gtsam.noiseModel.Isotropic.Sigma(1, 0.05)))
+    marginals = gtsam.Marginals(graph, initial)
+    expected = marginals.jointMarginalCovariance([2, 0]).fullMatrix()
+    batch = sr.BatchResult(Values(values), 0.0, factors=tuple(factors))
+    solver = IncrementalSolver(relinearize_threshold=1e9)
+    solver.update(factors, values)
+    rows = np.r_[perm, 12 + perm]  # each pose's rows in GTSAM's order, the twists left out
+    for source in (batch, solver):
+        joint = source.joint_covariance([X(2), X(0)])
+        np.testing.assert_allclose(joint[np.ix_(rows, rows)], expected, rtol=1e-7, atol=1e-12)
+        assert np.abs(joint[:6, 12:18]).max() > 1e-6  # the ranges to shared landmarks correlate the poses
+        assert np.abs(joint[:6, :6] - expected[:6, :6]).max() > 1e-3  # unpermuted, it would not match
+        for i in range(3):
+            block = source.marginal_covariance(X(i))[np.ix_(perm, perm)]
+            np.testing.assert_allclose(block, marginals.marginalCovariance(i), rtol=1e-7, atol=1e-12)
 
 
 # --- a query changes nothing ---------------------------------------------------------------------------
