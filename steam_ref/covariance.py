@@ -1,9 +1,12 @@
 """Covariance recovery: blocks of 𝓘⁻¹, the covariance of the Gauss-Newton step.  [YIB Eq. 11, K11 Sec. 3]
 
 cov δθ* = 𝓘⁻¹ = (AᵀA)⁻¹ [YIB Eq. 11]: a covariance of the increment, so it lives in each variable's tangent
-space at the estimate (θ = θ̂ ⊕ δ, δ ~ N(0, Σ); :mod:`steam_ref.manifold`), which for a vector is the space
-itself. For an SE(2) state (``lie.SE2_STATE``, retracted on the right) the pose block is in the *body frame* at
-the estimate; ``lie.world_position_covariance`` turns its position block to the world frame. Two sources:
+space at the point θ̄ where A was linearized (θ = θ̄ ⊕ δ, δ ~ N(0, Σ); :mod:`steam_ref.manifold`), which for a
+vector is the space itself. For a batch result θ̄ is its estimate; for the Bayes tree it is the solver's
+``linearization_point``, which differs from its estimate θ̄ ⊕ δ by the δ not yet relinearized (below the threshold
+β): the tree answers for its current linear system, as GTSAM's ``ISAM2.marginalCovariance`` does, and never
+relinearizes to answer. For an SE(2) state (``lie.SE2_STATE``, retracted on the right) the pose block is in the
+*body frame* at θ̄; ``lie.world_position_covariance`` turns its position block to the world frame. Two sources:
 
 - the sparse system: :func:`marginal_covariances` and :func:`sparse_joint_covariance` factor 𝓘
   by sparse Cholesky and solve with unit columns;
@@ -22,8 +25,10 @@ One vocabulary, GTSAM's (``marginalCovariance``, ``jointMarginalCovariance``), h
 solver (``IncrementalSolver``, the stream solvers of :mod:`steam_ref.paper.solvers`):
 
 - ``marginal_covariance(key)``: the (d, d) block of one variable;
-- ``marginal_covariances(keys)``: that block for each of several variables, as a dict;
-- ``joint_covariance(keys)``: the joint (Σdₖ, Σdₖ) block of several variables, stacked in the order given;
+- ``marginal_covariances(keys)``: that block for each of several variables, as a dict (a key named twice is
+  refused, naming it: a dict cannot hold it twice);
+- ``joint_covariance(keys)``: the joint (Σdₖ, Σdₖ) block of several variables, stacked in the order given (a
+  key named twice repeats its rows and columns, as any selection of rows would);
 - ``joint_covariances(groups)``: the joint block of each group of variables, as a list.
 
 The functions below prefix them with their source: ``sparse_`` (factors linearized at an estimate),
@@ -123,7 +128,7 @@ def _blocks_of_inverse(
 def marginal_covariances(system: LinearSystem, keys: list[Key], backend: str | None = None) -> dict[Key, NDArray]:
     """Marginal covariance blocks (𝓘⁻¹)ₖₖ (dₖ, dₖ) of chosen variables.  [YIB Eq. 11: cov δθ* = 𝓘⁻¹]"""
     check_system(system)
-    keys = key_list("keys", keys)
+    keys = key_list("keys", keys, distinct=True)
     info, _ = system.information()
     chol = SparseCholesky.factor(info, system.ordering, backend, check_symmetry=False)  # AᵀA
     return dict(zip(keys, _blocks_of_inverse(chol, system.ordering, [[k] for k in keys]), strict=True))
@@ -160,7 +165,7 @@ def sparse_marginal_covariances(
     factors: Sequence[Factor], values: Values, keys: Sequence[Key], backend: str | None = None
 ) -> dict[Key, NDArray]:
     """Marginal covariance (dₖ, dₖ) of each of ``keys``, linearized at ``values``: one factorization."""
-    keys = key_list("keys", keys)
+    keys = key_list("keys", keys, distinct=True)
     order, chol = _factor_at(factors, values, backend)
     return dict(zip(keys, _blocks_of_inverse(chol, order, [[k] for k in keys]), strict=True))
 
@@ -351,7 +356,7 @@ def tree_marginal_covariances(tree: BayesTree, keys: Iterable[Key] | None = None
     the cliques on the root paths of ``keys`` are visited: O(cliques), not O(variables × depth) as one
     :func:`tree_marginal_covariance` per variable would cost.
     """
-    wanted = None if keys is None else list(dict.fromkeys(key_list("keys", keys)))
+    wanted = None if keys is None else key_list("keys", keys, distinct=True)
     needed = None if wanted is None else _cliques_on_root_paths(tree, wanted)
     out: dict[Key, NDArray] = {}
     for c, joint, index in _walk_down(tree, needed):

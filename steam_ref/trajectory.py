@@ -13,7 +13,8 @@ Given a :class:`~steam_ref.gp.clock.Clock` the trajectory maps a query through i
 the two clocks are one.
 
 Every covariance is that of the state's tangent under the prior's kind: on SE(2) states (``motion_prior('se2',
-qc)``) the right tangent at the estimate, its pose block in the *body frame* (``lie.state``;
+qc)``) the right tangent at the point the solver linearized at (a batch result's estimate, an incremental solver's
+``linearization_point``: :mod:`steam_ref.covariance`), its pose block in the *body frame* (``lie.state``;
 ``lie.world_position_covariance`` turns its position block to the world frame).
 
 What it reads (:class:`Estimates`, a protocol): ``estimate_of(key)`` and ``estimate()`` (and, where the solver has
@@ -266,13 +267,14 @@ class Trajectory:
     def covariances(self, landmarks: Sequence[Key]) -> Covariances:
         """Marginal covariances at every pose of the span (interpolated between states; row k is pose
         states[0] + k, as in :meth:`at_every_pose`) and of ``landmarks``."""
-        solved, landmarks = self.states, key_list("landmarks", landmarks)
+        solved, landmarks = self.states, key_list("landmarks", landmarks, distinct=True)
         d = self.prior.qc.shape[0]  # p's size: a pose [x, y, θ] and its rates come first in every planar state
         if d != 3:
             raise SteamError(
                 f"covariances are those of planar poses [x, y, θ] and their rates; this prior's p has d = {d} numbers"
             )
-        marg = self._read("covariances", self.solver.marginal_covariances, [X(i) for i in solved] + landmarks)
+        wanted = list(dict.fromkeys([X(i) for i in solved] + landmarks))  # a state given as a landmark: refused below
+        marg = self._read("covariances", self.solver.marginal_covariances, wanted)
         for k in landmarks:
             if marg[k].shape != (2, 2):
                 raise ShapeError(

@@ -143,12 +143,14 @@ class IncrementalSolver:
         return key in self.state.dims
 
     def marginal_covariance(self, key: Key) -> NDArray:
-        """Cov(δθ_key) (d, d) of the current linear system, from the Bayes tree, in the tangent at the estimate (an
-        SE(2) state's pose block in its body frame: :mod:`steam_ref.covariance`).  [K11 Sec. 3]"""
+        """Cov(δθ_key) (d, d) of the current linear system, from the Bayes tree, in the tangent at
+        :attr:`linearization_point` θ̄, not at the estimate θ̄ ⊕ δ (an SE(2) state's pose block in its body frame at θ̄:
+        :mod:`steam_ref.covariance`). A query changes nothing the solver holds.  [K11 Sec. 3]"""
         return covariance.tree_marginal_covariance(self.tree, check_key("key", key))
 
     def marginal_covariances(self, keys: Iterable[Key] | None = None) -> dict[Key, NDArray]:
-        """Marginal covariance (dₖ, dₖ) of each of ``keys`` (every variable when None), in one pass down the tree."""
+        """Marginal covariance (dₖ, dₖ) of each of ``keys`` (every variable when None), in one pass down the tree; a
+        key named twice is refused (the answer, a mapping by key, would hold it once)."""
         return covariance.tree_marginal_covariances(self.tree, None if keys is None else key_list("keys", keys))
 
     def joint_covariance(self, keys: Iterable[Key]) -> NDArray:

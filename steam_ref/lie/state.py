@@ -9,12 +9,13 @@ robot's own frame: Ṫ = T ϖ^; SE(2): [vx, vy, ω]). Its tangent has 2·dim ent
     x ⊖ x₀ = [Log(T₀⁻¹ T);  ϖ - ϖ₀]
 
 **What the right retraction means for a covariance.** A solver's covariance of this state is the
-covariance of δ at the estimate x̄, x = x̄ ⊕ δ with δ ~ N(0, P): its pose block is in the *body frame
-at the estimate*. δρ is a displacement along the robot's own axes at x̄ (the world displacement is
-R(θ̄) δρ, to first order), δφ a turn about the robot; the twist block is in the body frame already.
-To read a world-frame position covariance, rotate: R(θ̄) P_ρρ R(θ̄)ᵀ (:func:`world_position_covariance`).
-A covariance taken at one estimate moves to another x̄' by the Jacobian of x̄' ⊖ (x̄ ⊕ δ) (the
-adjoint of the pose difference, to first order), never by copying it. [DER 11.9; B17 Ch. 7]
+covariance of δ at the estimate x̄ (for an incremental solver, its linearization point:
+:mod:`steam_ref.covariance`), x = x̄ ⊕ δ with δ ~ N(0, P): its pose block is in the *body frame at x̄*.
+δρ is a displacement along the robot's own axes at x̄ (the world displacement is R(θ̄) δρ, to first
+order), δφ a turn about the robot; the twist block is in the body frame already. To read a world-frame
+position covariance, rotate: R(θ̄) P_ρρ R(θ̄)ᵀ (:func:`world_position_covariance`). A covariance taken
+at one estimate moves to another x̄' by the Jacobian of x̄' ⊖ (x̄ ⊕ δ) (the adjoint of the pose
+difference, to first order), never by copying it. [DER 11.9; B17 Ch. 7]
 """
 
 from __future__ import annotations
