@@ -132,6 +132,10 @@ class Report:
 
 
 def _canonical(v):
+    """``v`` as compared exactly: lists of lists or objects sorted, and an integral double read as the integer it
+    is (JSON has one number type: a port's ``189.0`` is the kit's ``189``, as ``kit_version`` 4.0 names kit v4)."""
+    if isinstance(v, float) and v.is_integer():
+        return int(v)
     if isinstance(v, Mapping):
         return {k: _canonical(x) for k, x in v.items()}
     if isinstance(v, list):
