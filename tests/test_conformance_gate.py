@@ -595,7 +595,7 @@ def test_the_checkers_memory_is_bounded_by_its_caps(tmp_path, capsys):
     path.parent.mkdir()
     path.write_text('{"kit_version": 3, "cases": {"wnoa_dt0.1": {"Phi": [' + ",".join(["0.5"] * 250_000) + "]}}}")
     code, out, err = cli(capsys, "check", tmp_path, "--only", "gp")
-    assert code == 2 and out == "" and "JSON values, more than" in err and str(path) in err, err
+    assert code == 2 and out == "" and "JSON values, more than" in err and err.count(str(path)) == 1, err
     path.write_text("[" + ",".join(["0.123456789"] * 199_000) + "]")
     tracemalloc.start()
     try:

@@ -228,16 +228,19 @@ def read_json(path: Path, max_bytes: int | None = None):
     try:
         with open(path, "rb") as f:
             raw = f.read(max_bytes + 1)
-        if len(raw) > max_bytes:
-            raise DataError(f"{printable(path)}: more than the {max_bytes} bytes a kit or results file may have")
-        # Every JSON value but the first follows a '[', ',' or ':', so this bounds their number from above (a
-        # string holding those characters only raises it): parsed, each costs ~30-100 bytes, 30x its text.
-        values = raw.count(b"[") + raw.count(b",") + raw.count(b":") + 1
-        if values > MAX_VALUES:
-            raise DataError(
-                f"{printable(path)}: about {values:,} JSON values, more than the {MAX_VALUES:,} a kit or results "
-                "file may hold"
-            )
+    except OSError as err:
+        raise DataError(f"{printable(path)}: not readable ({printable(err.strerror or err)})") from None
+    if len(raw) > max_bytes:
+        raise DataError(f"{printable(path)}: more than the {max_bytes} bytes a kit or results file may have")
+    # Every JSON value but the first follows a '[', ',' or ':', so this bounds their number from above (a
+    # string holding those characters only raises it): parsed, each costs ~30-100 bytes, 30x its text.
+    values = raw.count(b"[") + raw.count(b",") + raw.count(b":") + 1
+    if values > MAX_VALUES:
+        raise DataError(
+            f"{printable(path)}: about {values:,} JSON values, more than the {MAX_VALUES:,} a kit or results "
+            "file may hold"
+        )
+    try:  # the hooks' DataErrors name no file: the path is put before them here, once
         value = json.loads(
             raw.decode("utf-8"),
             object_pairs_hook=_no_duplicates,
