@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .kitio import printable
+from .kitio import printable, shown
 
 __all__ = [
     "Outcome",
@@ -117,7 +117,8 @@ class Report:
         if self.unknown:
             out.append(
                 printable(
-                    f"ignored: results for {len(self.unknown)} cases the kit does not have ({', '.join(self.unknown[:8])})"
+                    f"ignored: results for {len(self.unknown)} cases the kit does not have "
+                    f"({', '.join(map(shown, self.unknown[:8]))})"
                 )
             )
         out += [printable(f"warning: {w}") for w in self.warnings]
