@@ -20,6 +20,7 @@ from cli_runs import runner
 
 from steam_ref.conformance import KIT_VERSION, SHIPPED
 from steam_ref.conformance.kitio import read_suite
+from steam_ref.conformance.readme import export_readme
 
 cli = runner("conformance")
 
@@ -139,3 +140,6 @@ def test_an_integral_count_written_as_a_double_is_the_same_json_number_and_passe
     code, lines = check(tmp_path / "off", capsys, "incremental", doubled)
     assert code == 1 and fail_line(lines, "incremental", name).endswith(f": {q} differs (compared exactly)"), lines
     assert f"    got      {results[name][q] + 0.5}" in lines, lines
+    assert "JSON has one number type, so a count written 189.0 is 189" in " ".join(
+        export_readme().split()
+    )  # what a port reads

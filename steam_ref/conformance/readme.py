@@ -285,12 +285,14 @@ For every case read its `inputs`, compute each quantity named in its `tolerance`
 
 Then
 
-    steam-ref conformance check RESULTS_DIR [--paper] [--only SUITE...] [--allow-missing] [--conventions NAME...]
+    steam-ref conformance check RESULTS_DIR [--paper] [--only SUITE...] [--allow-missing] [--conventions NAME...] [--kit DIR]
 
 The gate is every suite but `paper` (the data-free suites: any port can compute them); `--paper` adds the paper
-suite, which needs the paper's data files; `--only SUITE...` checks the suites named.
+suite, which needs the paper's data files; `--only SUITE...` checks the suites named; `--kit DIR` checks against
+this exported folder instead of the installed steam_ref's own copy of the kit the results name.
 A numeric quantity passes when max|got - expected| <= atol + rtol * max|expected| over its entries;
-an exact one must be equal (lists of cliques unordered). {EXACT_TIER} Every failing quantity is printed with its
+an exact one must be equal (lists of cliques unordered; JSON has one number type, so a count written 189.0 is
+189). {EXACT_TIER} Every failing quantity is printed with its
 worst entries (index, expected, got); the first failing quantity in computation order is flagged as
 the likely cause; a structure that differs is printed item by item. Exit 0: every case of the gate
 passed; 1: a case failed or has no result (unless `--allow-missing`), or no case passed at all (even with
