@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 from cli_runs import runner
 
-from steam_ref.conformance import KIT_VERSION, SHIPPED
+from steam_ref.conformance import KIT_VERSION, KITS, SHIPPED
 from steam_ref.conformance.kitio import read_suite
 from steam_ref.conformance.readme import export_readme
 
@@ -143,3 +143,18 @@ def test_an_integral_count_written_as_a_double_is_the_same_json_number_and_passe
     assert "JSON has one number type, so a count written 189.0 is 189" in " ".join(
         export_readme().split()
     )  # what a port reads
+
+
+def test_a_misspelt_kit_version_key_is_named_not_silently_read_as_kit_v1(tmp_path, capsys, kit_results):
+    """'kit_verison': 5 is a key the layout does not have; the file then names no kit_version and is checked as kit
+    v1's (its rule for files written before the field existed). The check says so, and names the key it did not
+    read, instead of passing the gp results against v1 with only the v1 note."""
+    (tmp_path / "gp").mkdir()
+    results = {"kit_verison": KIT_VERSION, "cases": kit_results(KITS[1], "gp")}
+    (tmp_path / "gp" / "results.json").write_text(json.dumps(results))
+    code, out, err = cli(capsys, "check", tmp_path, "--only", "gp")
+    assert code == 0 and err == "" and "checked as kit v1 results" in out, out
+    assert (
+        f"warning: {tmp_path / 'gp' / 'results.json'}: 'kit_verison' is not a key of a results file, not read "
+        "(its keys: kit_version, cases)" in out.splitlines()
+    ), out

@@ -25,6 +25,8 @@ from collections.abc import Mapping, Sequence
 from ..errors import DataError
 from .kitio import KITS, kit_version, printable, shown
 
+RESULTS_KEYS = ("kit_version", "cases")  # the keys of a results file: {"kit_version": N, "cases": {...}}
+
 __all__ = ["kit_cases", "results_cases", "results_version", "numeric_leaf_problem"]
 
 
@@ -120,6 +122,12 @@ def results_cases(where: str, data: Mapping, kit: Sequence[Mapping], warnings: l
     """The results of the kit's cases, each checked against its case's quantities and their kinds; a quantity
     a case does not have is left out and named in ``warnings``."""
     by_name = {c["name"]: c for c in kit}
+    if warnings is not None:  # a misspelt 'kit_version' would otherwise make the file kit v1's without a word
+        warnings += [
+            f"{where}: '{shown(key)}' is not a key of a results file, not read (its keys: {', '.join(RESULTS_KEYS)})"
+            for key in data
+            if key not in RESULTS_KEYS
+        ]
     out = {}
     for name, got in data["cases"].items():
         case = by_name.get(name)
