@@ -95,7 +95,7 @@ def test_an_se2_heading_two_pi_off_fails_as_the_readme_promises_headings_in_minu
     tmp_path, capsys, kit_results, suite, name, quantity
 ):
     """The README: 'headings of poses and states in (-pi, pi]'; a heading 2π off is the same rotation, and a port
-    that leaves it there is told so at the entry, 6.28 off."""
+    that leaves it there is told so at the entry, 6.28 off, and that it is 2π off (the hint came with this test)."""
     results = kit_results(SHIPPED, suite)
     rows = np.array(results[name][quantity])
     rows[0, 2] += 2 * math.pi
@@ -103,6 +103,7 @@ def test_an_se2_heading_two_pi_off_fails_as_the_readme_promises_headings_in_minu
     code, lines = check(tmp_path, capsys, suite, results)
     head = fail_line(lines, suite, name)
     assert code == 1 and head.startswith(f"FAIL {suite}/{name}: {quantity} worst |diff| 6.28 at [0, 2] > "), head
+    assert head.endswith("1 x 2 pi off: an angle brought into another range (README conventions 'angles', 'se2')"), head
 
 
 def test_a_transposed_jacobian_fails_square_by_its_entries_and_rectangular_by_its_shape(tmp_path, capsys, kit_results):

@@ -215,9 +215,15 @@ def compare_quantity(expected, got, tolerance, name: str) -> list[Failure]:
         )
     at = _where(tuple(int(j) for j in np.unravel_index(int(flat[0]), diff.shape))) if diff.ndim else ""
     bad = int(np.count_nonzero(diff > allowed))
+    turns = round(worst / (2 * math.pi))
+    hint = (
+        f"; {turns} x 2 pi off: an angle brought into another range (README conventions 'angles', 'se2')"
+        if turns and abs(worst - turns * 2 * math.pi) <= allowed
+        else ""
+    )
     head = (
         f"{name} worst |diff| {worst:.3g}{' at ' + at if at else ''} > tolerance {allowed:.3g} "
-        f"(atol {atol:g} + rtol {rtol:g} x max|expected| {scale:.3g}); {bad} of {diff.size} entries past it"
+        f"(atol {atol:g} + rtol {rtol:g} x max|expected| {scale:.3g}); {bad} of {diff.size} entries past it{hint}"
     )
     return [(worst / allowed if allowed > 0 else math.inf, head, tuple(details))]
 

@@ -293,11 +293,12 @@ this exported folder instead of the installed steam_ref's own copy of the kit th
 A numeric quantity passes when max|got - expected| <= atol + rtol * max|expected| over its entries;
 an exact one must be equal (lists of cliques unordered; JSON has one number type, so a count written 189.0 is
 189). {EXACT_TIER} Every failing quantity is printed with its
-worst entries (index, expected, got); the first failing quantity in computation order is flagged as
+worst entries (index, expected, got), and said to be 2 pi k off when it is; the first failing quantity in computation order is flagged as
 the likely cause; a structure that differs is printed item by item. Exit 0: every case of the gate
 passed; 1: a case failed or has no result (unless `--allow-missing`), or no case passed at all (even with
 `--allow-missing`: nothing was shown to conform); 2: bad input (a malformed file, names one line). A quantity
-a case does not have is a warning line, not an error: the rest is checked.
+a case does not have, or a key of a results file other than kit_version and cases, is a warning line, not an
+error: the rest is checked.
 
 ## Conventions
 
