@@ -118,9 +118,9 @@ def test_a_transposed_jacobian_fails_square_by_its_entries_and_rectangular_by_it
     factors = kit_results(SHIPPED, "factors")
     factors["range"]["H_0"] = np.array(factors["range"]["H_0"]).T.tolist()
     code, lines = check(tmp_path / "rectangular", capsys, "factors", factors)
-    assert (
-        code == 1
-        and fail_line(lines, "factors", "range") == "FAIL factors/range: H_0 has shape (6, 1), expected (1, 6)"
+    assert code == 1 and fail_line(lines, "factors", "range") == (
+        "FAIL factors/range: H_0 has shape (6, 1), expected (1, 6): transposed? (arrays are nested lists, row-major: "
+        "a Jacobian has a row per error entry)"
     )
 
 

@@ -193,7 +193,13 @@ def compare_quantity(expected, got, tolerance, name: str) -> list[Failure]:
     except (TypeError, ValueError, OverflowError):
         return [(math.inf, f"{name} is not numeric: {_text(got)[:60]}", ())]
     if g.shape != exp.shape:
-        return [(math.inf, f"{name} has shape {g.shape}, expected {exp.shape}", ())]
+        flipped = g.ndim == 2 and g.shape == exp.shape[::-1]
+        hint = (
+            ": transposed? (arrays are nested lists, row-major: a Jacobian has a row per error entry)"
+            if flipped
+            else ""
+        )
+        return [(math.inf, f"{name} has shape {g.shape}, expected {exp.shape}{hint}", ())]
     if not np.all(np.isfinite(g)):
         return [(math.inf, f"{name} holds NaN or inf", ())]
     if exp.size == 0:
