@@ -228,6 +228,31 @@ def test_the_readme_names_every_kind_input_and_factor_spec_of_every_shipped_case
     assert not absent, sorted(set(absent))
 
 
+def test_the_readme_says_where_each_numbered_quantity_counts_from_as_the_kit_numbers_them():
+    """A port names its quantities as the kit does, and the kit counts two ways: H_k, A_k from 0 over a factor's
+    keys (H_0 the first key), estimate_k and every per-update quantity from 1 over the updates (J_1, J_2 are of
+    x1, x2). The README's Outputs said 'for each key k in order' and 'after update k', the base of neither, so a
+    port writing H_1, H_2 read its first block as missing. The numbering is read here off the shipped cases."""
+    readme = export_readme()
+    outputs = readme[readme.index("\n## Outputs\n") : readme.index("\n## The ordering rule")]
+    keyed, updated = set(), set()
+    for suite in SUITES:
+        for case in read_suite(SHIPPED, suite)["cases"]:
+            factor = case["inputs"].get("factor")
+            if factor is not None:
+                keyed.add(
+                    sorted(int(q[2:]) for q in case["tolerance"] if q.startswith("H_")) == [*range(len(factor["keys"]))]
+                )
+            updates = case["inputs"].get("stream", {}).get("updates")
+            if updates is not None:
+                counted = {int(m[1]) for q in case["tolerance"] if (m := re.fullmatch(r"[a-z_]+_(\d+)", q))}
+                updated.add(counted == set(range(1, len(updates) + 1)))
+    assert keyed == {True} and updated == {True}, (keyed, updated)
+    assert "H_0 the first key" in outputs and "A_k the same k" in outputs, outputs
+    assert "k counts the updates from 1 (estimate_1 after the first)" in outputs, outputs
+    assert "Ad_a = Ad(T_a)" in outputs, outputs
+
+
 def test_the_docs_show_the_kits_readme_and_point_to_its_inputs_factors_and_groups(tmp_path, monkeypatch):
     """The docs build renders the exported README as the page kit/readme (docs/_ext/pages.py), the text
     ``export`` writes, and docs/conformance.md points to its sections rather than repeating them."""

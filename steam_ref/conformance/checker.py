@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .kitio import printable
+from .kitio import printable, shown
 
 __all__ = [
     "Outcome",
@@ -117,7 +117,8 @@ class Report:
         if self.unknown:
             out.append(
                 printable(
-                    f"ignored: results for {len(self.unknown)} cases the kit does not have ({', '.join(self.unknown[:8])})"
+                    f"ignored: results for {len(self.unknown)} cases the kit does not have "
+                    f"({', '.join(map(shown, self.unknown[:8]))})"
                 )
             )
         out += [printable(f"warning: {w}") for w in self.warnings]
@@ -132,6 +133,10 @@ class Report:
 
 
 def _canonical(v):
+    """``v`` as compared exactly: lists of lists or objects sorted, and an integral double read as the integer it
+    is (JSON has one number type: a port's ``189.0`` is the kit's ``189``, as ``kit_version`` 4.0 names kit v4)."""
+    if isinstance(v, float) and v.is_integer():
+        return int(v)
     if isinstance(v, Mapping):
         return {k: _canonical(x) for k, x in v.items()}
     if isinstance(v, list):
@@ -188,7 +193,13 @@ def compare_quantity(expected, got, tolerance, name: str) -> list[Failure]:
     except (TypeError, ValueError, OverflowError):
         return [(math.inf, f"{name} is not numeric: {_text(got)[:60]}", ())]
     if g.shape != exp.shape:
-        return [(math.inf, f"{name} has shape {g.shape}, expected {exp.shape}", ())]
+        flipped = g.ndim == 2 and g.shape == exp.shape[::-1]
+        hint = (
+            ": transposed? (arrays are nested lists, row-major: a Jacobian has a row per error entry)"
+            if flipped
+            else ""
+        )
+        return [(math.inf, f"{name} has shape {g.shape}, expected {exp.shape}{hint}", ())]
     if not np.all(np.isfinite(g)):
         return [(math.inf, f"{name} holds NaN or inf", ())]
     if exp.size == 0:
@@ -210,9 +221,15 @@ def compare_quantity(expected, got, tolerance, name: str) -> list[Failure]:
         )
     at = _where(tuple(int(j) for j in np.unravel_index(int(flat[0]), diff.shape))) if diff.ndim else ""
     bad = int(np.count_nonzero(diff > allowed))
+    turns = round(worst / (2 * math.pi))
+    hint = (
+        f"; {turns} x 2 pi off: an angle brought into another range (README conventions 'angles', 'se2')"
+        if turns and abs(worst - turns * 2 * math.pi) <= allowed
+        else ""
+    )
     head = (
         f"{name} worst |diff| {worst:.3g}{' at ' + at if at else ''} > tolerance {allowed:.3g} "
-        f"(atol {atol:g} + rtol {rtol:g} x max|expected| {scale:.3g}); {bad} of {diff.size} entries past it"
+        f"(atol {atol:g} + rtol {rtol:g} x max|expected| {scale:.3g}); {bad} of {diff.size} entries past it{hint}"
     )
     return [(worst / allowed if allowed > 0 else math.inf, head, tuple(details))]
 

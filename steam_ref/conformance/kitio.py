@@ -24,6 +24,7 @@ import numpy as np
 from ..errors import DataError, NumericalError
 
 __all__ = [
+    "shown",
     "KIT_VERSION",
     "KITS",
     "SUITES",
@@ -59,12 +60,20 @@ MAX_DEPTH = 64  # JSON nesting deeper than this is refused (the kit's deepest is
 MAX_VALUES = (
     200_000  # JSON values a file may hold (the kit's largest holds ~20,000, 10x fewer): bounds the parse's memory
 )
+NAME_WIDTH = 200  # characters of a name from a file shown at most (the kit's longest case name has 41)
 MAX_DIGITS = 18  # an integer literal longer than this is refused (the kit's integers are counts and ids)
 
 
 def printable(text: object) -> str:
     """``text`` with control characters and escapes written as ``\\xNN``: a name from a file cannot forge output."""
     return "".join(c if c.isprintable() else c.encode("unicode_escape").decode("ascii") for c in str(text))
+
+
+def shown(name: object) -> str:
+    """A name read from a file (a case, a quantity, a key) as a report or an error shows it: :func:`printable`, and
+    cut to :data:`NAME_WIDTH` characters, so a file under the caps cannot fill a report line with megabytes."""
+    text = printable(name)
+    return text if len(text) <= NAME_WIDTH else text[: NAME_WIDTH - 3] + "..."
 
 
 def plain(value):
@@ -131,7 +140,7 @@ def _no_duplicates(pairs: list) -> dict:
     out: dict = {}
     for k, v in pairs:
         if k in out:
-            raise DataError(f"the key '{printable(k)}' appears twice in one object")
+            raise DataError(f"the key '{shown(k)}' appears twice in one object")
         out[k] = v
     return out
 
@@ -178,8 +187,8 @@ def _locate(text: str) -> str:
         return "somewhere"
     if len(path) >= 3 and path[0] == "cases" and isinstance(path[1], str):  # a results file: cases -> name -> q
         rest = "".join(f"[{i}]" if isinstance(i, int) else f"/{i}" for i in path[3:])
-        return f"case '{printable(path[1])}', quantity '{printable(path[2])}'{printable(rest)}"
-    return "at " + printable("".join(f"[{i}]" if isinstance(i, int) else f"/{i}" for i in path))
+        return f"case '{shown(path[1])}', quantity '{shown(path[2])}'{shown(rest)}"
+    return "at " + shown("".join(f"[{i}]" if isinstance(i, int) else f"/{i}" for i in path))
 
 
 def _depth(value) -> int:
@@ -228,16 +237,19 @@ def read_json(path: Path, max_bytes: int | None = None):
     try:
         with open(path, "rb") as f:
             raw = f.read(max_bytes + 1)
-        if len(raw) > max_bytes:
-            raise DataError(f"{printable(path)}: more than the {max_bytes} bytes a kit or results file may have")
-        # Every JSON value but the first follows a '[', ',' or ':', so this bounds their number from above (a
-        # string holding those characters only raises it): parsed, each costs ~30-100 bytes, 30x its text.
-        values = raw.count(b"[") + raw.count(b",") + raw.count(b":") + 1
-        if values > MAX_VALUES:
-            raise DataError(
-                f"{printable(path)}: about {values:,} JSON values, more than the {MAX_VALUES:,} a kit or results "
-                "file may hold"
-            )
+    except OSError as err:
+        raise DataError(f"{printable(path)}: not readable ({printable(err.strerror or err)})") from None
+    if len(raw) > max_bytes:
+        raise DataError(f"{printable(path)}: more than the {max_bytes} bytes a kit or results file may have")
+    # Every JSON value but the first follows a '[', ',' or ':', so this bounds their number from above (a
+    # string holding those characters only raises it): parsed, each costs ~30-100 bytes, 30x its text.
+    values = raw.count(b"[") + raw.count(b",") + raw.count(b":") + 1
+    if values > MAX_VALUES:
+        raise DataError(
+            f"{printable(path)}: about {values:,} JSON values, more than the {MAX_VALUES:,} a kit or results "
+            "file may hold"
+        )
+    try:  # the hooks' DataErrors name no file: the path is put before them here, once
         value = json.loads(
             raw.decode("utf-8"),
             object_pairs_hook=_no_duplicates,

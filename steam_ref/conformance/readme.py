@@ -46,14 +46,16 @@ FACTOR_TABLE = [  # type, keys, fields, error e (prediction minus measurement)
 
 QUANTITIES = {
     "factors": "error e (m,); whitened_error W e (m,), without the robust weight even for a robust factor; "
-    "H_k = de/dx_k (m, n_k) for each key k in order, in the vector space of the variables; A_k = sqrt(w) W H_k; "
+    "H_k = de/dx_k (m, n_k) for each key k in order, counted from 0 (H_0 the first key), in the vector space of the "
+    "variables; A_k = sqrt(w) W H_k (A_k the same k); "
     "b = -sqrt(w) W e; cost = 1/2 ||W e||^2 or rho(||W e||); weight w = rho'(s)/s (robust factors only)",
     "gp": "Phi, Q, Qinv, W (W^T W = Q^-1, upper), v_i; Lambda, Psi, x_tau; cov_tau; x_t, cov_t (prediction)",
     "linear": "A (rows in factor order, columns in the ordering), b, information = A^T A, rhs = A^T b, R, d, delta",
     "batch": "iterates: key -> (iterations + 1, n) every iterate from the start; costs (iterations + 1,)",
     "bayes_tree": "cliques: [{frontals, separator, parent}] (unordered list; parent named by its first frontal, "
     "null for a root); conditionals: first frontal -> {R, S, d}; covariances: 'k1,k2' -> joint block",
-    "incremental": "estimate_k: key -> vector after update k; relinearized_k: sorted names moved at update k; "
+    "incremental": "k counts the updates from 1 (estimate_1 after the first), in every quantity named _k of a stream "
+    "(incremental, fixed_lag, the se2 and se3 streams); estimate_k: key -> vector after update k; relinearized_k: sorted names moved at update k; "
     "update_k: {removed, orphans}, each a sorted list of cliques (compared unordered), each clique named by the "
     "list of its frontals in elimination order (not sorted); nnz_k: the fill of R",
     "fixed_lag": "for each update k: marginalized_k (names, in the order of 'variables'); when any, separator_k "
@@ -64,7 +66,8 @@ QUANTITIES = {
     "Ad_a (6, 6); error (12,) or WNOJ (18,), H_0, H_1 (12, 12) or (18, 18), cost; x_tau (18,) or (24,), J_1, J_2, "
     "cov_tau in the right tangent at x_tau; x_t, J_1, cov_t (prediction); iterates (key -> (iterations + 1, 18)), "
     "costs; relinearized_k, estimate_k (key -> 18 numbers [t; R; w])",
-    "se2": "exp, log_of_exp (n, 3); log, exp_of_log (n, 3); Jr, Jr_inv (n, 3, 3); between (3,), H_a, H_b, Ad_a (3, 3); "
+    "se2": "exp, log_of_exp (n, 3); log, exp_of_log (n, 3); Jr, Jr_inv (n, 3, 3); between (3,), H_a, H_b, Ad_a (3, 3) "
+    "(Ad_a = Ad(T_a), section 'SE(2)'); "
     "error (6,), H_0, H_1 (6, 6) in right tangents, cost; x_tau (6,), J_1, J_2 (6, 6), cov_tau (6, 6) in the right "
     "tangent at x_tau; iterates (key -> (iterations + 1, n)), costs; relinearized_k, estimate_k (as incremental); "
     "(v5) a reading's error, whitened_error, H_k, A_k, b, cost (as the factors suite's, H_k in right tangents); "
@@ -282,17 +285,20 @@ For every case read its `inputs`, compute each quantity named in its `tolerance`
 
 Then
 
-    steam-ref conformance check RESULTS_DIR [--paper] [--only SUITE...] [--allow-missing] [--conventions NAME...]
+    steam-ref conformance check RESULTS_DIR [--paper] [--only SUITE...] [--allow-missing] [--conventions NAME...] [--kit DIR]
 
 The gate is every suite but `paper` (the data-free suites: any port can compute them); `--paper` adds the paper
-suite, which needs the paper's data files; `--only SUITE...` checks the suites named.
+suite, which needs the paper's data files; `--only SUITE...` checks the suites named; `--kit DIR` checks against
+this exported folder instead of the installed steam_ref's own copy of the kit the results name.
 A numeric quantity passes when max|got - expected| <= atol + rtol * max|expected| over its entries;
-an exact one must be equal (lists of cliques unordered). {EXACT_TIER} Every failing quantity is printed with its
-worst entries (index, expected, got); the first failing quantity in computation order is flagged as
+an exact one must be equal (lists of cliques unordered; JSON has one number type, so a count written 189.0 is
+189). {EXACT_TIER} Every failing quantity is printed with its
+worst entries (index, expected, got), and said to be 2 pi k off when it is; the first failing quantity in computation order is flagged as
 the likely cause; a structure that differs is printed item by item. Exit 0: every case of the gate
 passed; 1: a case failed or has no result (unless `--allow-missing`), or no case passed at all (even with
 `--allow-missing`: nothing was shown to conform); 2: bad input (a malformed file, names one line). A quantity
-a case does not have is a warning line, not an error: the rest is checked.
+a case does not have, or a key of a results file other than kit_version and cases, is a warning line, not an
+error: the rest is checked.
 
 ## Conventions
 

@@ -23,7 +23,9 @@ import math
 from collections.abc import Mapping, Sequence
 
 from ..errors import DataError
-from .kitio import KITS, kit_version, printable
+from .kitio import KITS, kit_version, printable, shown
+
+RESULTS_KEYS = ("kit_version", "cases")  # the keys of a results file: {"kit_version": N, "cases": {...}}
 
 __all__ = ["kit_cases", "results_cases", "results_version", "numeric_leaf_problem"]
 
@@ -40,7 +42,7 @@ def kit_cases(where: str, cases: object) -> list[dict]:
     for i, case in enumerate(cases):
         if not isinstance(case, Mapping) or not isinstance(case.get("name"), str):
             raise DataError(f"{where}: cases[{i}] is not an object with a string 'name'")
-        name = printable(case["name"])
+        name = shown(case["name"])
         if case["name"] in seen:
             raise DataError(f"{where}: the case '{name}' is listed twice")
         seen.add(case["name"])
@@ -53,15 +55,15 @@ def kit_cases(where: str, cases: object) -> list[dict]:
             )
             if t != "exact" and not numeric:
                 raise DataError(
-                    f"{where}: case '{name}', tolerance of '{printable(q)}' is {printable(repr(t))[:80]}: "
+                    f"{where}: case '{name}', tolerance of '{shown(q)}' is {printable(repr(t))[:80]}: "
                     'expected "exact" or {"atol": a, "rtol": r} with finite a, r >= 0'
                 )
             if q not in expected:
-                raise DataError(f"{where}: case '{name}' has a tolerance for '{printable(q)}' but no expected value")
+                raise DataError(f"{where}: case '{name}' has a tolerance for '{shown(q)}' but no expected value")
             if t != "exact":
                 problem = numeric_leaf_problem(expected[q])
                 if problem:
-                    raise DataError(f"{where}: case '{name}', expected {printable(q)}{problem}")
+                    raise DataError(f"{where}: case '{name}', expected {shown(q)}{problem}")
         _alternatives(where, name, case)
     return [dict(c) for c in cases]
 
@@ -73,14 +75,14 @@ def _alternatives(where: str, name: str, case: Mapping) -> None:
         raise DataError(f"{where}: case '{name}', 'alternatives' must be an object")
     for key, values in alternatives.items():
         if not isinstance(values, Mapping):
-            raise DataError(f"{where}: case '{name}', alternatives/{printable(key)} must be an object")
+            raise DataError(f"{where}: case '{name}', alternatives/{shown(key)} must be an object")
         for q, v in values.items():
             t = case["tolerance"].get(q)
             if t is None:
-                raise DataError(f"{where}: case '{name}', alternatives/{printable(key)} names an unknown quantity")
+                raise DataError(f"{where}: case '{name}', alternatives/{shown(key)} names an unknown quantity")
             problem = "" if t == "exact" else numeric_leaf_problem(v)
             if problem:
-                raise DataError(f"{where}: case '{name}', alternatives/{printable(key)}/{printable(q)}{problem}")
+                raise DataError(f"{where}: case '{name}', alternatives/{shown(key)}/{shown(q)}{problem}")
 
 
 def numeric_leaf_problem(value) -> str:
@@ -89,7 +91,7 @@ def numeric_leaf_problem(value) -> str:
     while stack:
         v, path = stack.pop()
         if isinstance(v, Mapping):
-            stack.extend((x, f"{path}/{printable(k)}") for k, x in reversed(list(v.items())))
+            stack.extend((x, f"{path}/{shown(k)}") for k, x in reversed(list(v.items())))
         elif isinstance(v, list):
             stack.extend((x, f"{path}[{i}]") for i, x in reversed(list(enumerate(v))))
         elif isinstance(v, bool) or not isinstance(v, (int, float)):
@@ -120,6 +122,12 @@ def results_cases(where: str, data: Mapping, kit: Sequence[Mapping], warnings: l
     """The results of the kit's cases, each checked against its case's quantities and their kinds; a quantity
     a case does not have is left out and named in ``warnings``."""
     by_name = {c["name"]: c for c in kit}
+    if warnings is not None:  # a misspelt 'kit_version' would otherwise make the file kit v1's without a word
+        warnings += [
+            f"{where}: '{shown(key)}' is not a key of a results file, not read (its keys: {', '.join(RESULTS_KEYS)})"
+            for key in data
+            if key not in RESULTS_KEYS
+        ]
     out = {}
     for name, got in data["cases"].items():
         case = by_name.get(name)
@@ -127,12 +135,12 @@ def results_cases(where: str, data: Mapping, kit: Sequence[Mapping], warnings: l
             out[name] = got  # a case the kit does not have: reported, not judged
             continue
         if not isinstance(got, Mapping):
-            raise DataError(f"{where}: cases/{printable(name)} must be an object of quantity -> value")
+            raise DataError(f"{where}: cases/{shown(name)} must be an object of quantity -> value")
         extra = [q for q in got if q not in case["tolerance"]]
         if extra and warnings is not None:
-            listed = ", ".join(f"'{printable(q)}'" for q in extra[:8]) + (", ..." if len(extra) > 8 else "")
+            listed = ", ".join(f"'{shown(q)}'" for q in extra[:8]) + (", ..." if len(extra) > 8 else "")
             warnings.append(
-                f"{where}: cases/{printable(name)} has quantities the case does not have, not checked: {listed} "
+                f"{where}: cases/{shown(name)} has quantities the case does not have, not checked: {listed} "
                 f"(it has {', '.join(case['tolerance'])})"
             )
         for q, value in got.items():
@@ -141,6 +149,6 @@ def results_cases(where: str, data: Mapping, kit: Sequence[Mapping], warnings: l
             if case["tolerance"][q] != "exact":
                 problem = numeric_leaf_problem(value)
                 if problem:
-                    raise DataError(f"{where}: cases/{printable(name)}/{printable(q)}{problem}")
+                    raise DataError(f"{where}: cases/{shown(name)}/{shown(q)}{problem}")
         out[name] = {q: v for q, v in got.items() if q not in extra}
     return out

@@ -1,0 +1,161 @@
+"""The gate against the ways a port goes wrong, each failure naming what an engineer needs to find the bug.
+
+Each test edits steam_ref's correct results into a wrong port's (a Jacobian block of the wrong sign, a value off by
+ten times its tolerance, a heading 2π off, a transposed Jacobian) and checks that ``check`` fails the case and names
+the case, the quantity, the entry, the expected and the got value and the tolerance; and the other way, that what
+is right within the documented rules passes: a value off by half its tolerance, an integral count written as a
+double (``189.0``: JSON has one number type). The tolerance is recomputed here from the kit's ``{atol, rtol}`` and
+the documented rule, atol + rtol max abs(expected), not read from the checker.
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+import math
+
+import numpy as np
+import pytest
+from cli_runs import runner
+
+from steam_ref.conformance import KIT_VERSION, KITS, SHIPPED
+from steam_ref.conformance.kitio import read_suite
+from steam_ref.conformance.readme import export_readme
+
+cli = runner("conformance")
+
+
+def kit_case(suite: str, name: str) -> dict:
+    return next(c for c in read_suite(SHIPPED, suite)["cases"] if c["name"] == name)
+
+
+def allowed(suite: str, name: str, quantity: str) -> float:
+    """The documented tolerance of a numeric quantity: atol + rtol max abs(expected)."""
+    case = kit_case(suite, name)
+    tol = case["tolerance"][quantity]
+    return tol["atol"] + tol["rtol"] * float(np.abs(np.asarray(case["expected"][quantity], float)).max())
+
+
+def check(tmp_path, capsys, suite: str, cases: dict) -> tuple[int, list[str]]:
+    """Write ``cases`` as a port's JSON (Python's json, floats as doubles) and check that suite alone."""
+    (tmp_path / suite).mkdir(parents=True, exist_ok=True)
+    (tmp_path / suite / "results.json").write_text(json.dumps({"kit_version": KIT_VERSION, "cases": cases}))
+    code, out, err = cli(capsys, "check", tmp_path, "--only", suite)
+    assert err == "", err
+    return code, out.splitlines()
+
+
+def fail_line(lines: list[str], suite: str, name: str) -> str:
+    heads = [line for line in lines if line.startswith(f"FAIL {suite}/{name}: ")]
+    assert len(heads) == 1, lines
+    return heads[0]
+
+
+def test_one_jacobian_block_of_the_wrong_sign_fails_naming_the_block_and_its_entries(tmp_path, capsys, kit_results):
+    results = kit_results(SHIPPED, "factors")
+    good = np.array(results["range"]["H_1"])
+    results["range"]["H_1"] = (-good).tolist()  # the landmark's block flipped, the robot's right
+    code, lines = check(tmp_path, capsys, "factors", results)
+    head = fail_line(lines, "factors", "range")
+    assert code == 1 and lines[-1] == f"{len(results) - 1} passed, 1 failed", lines
+    assert head.startswith("FAIL factors/range: H_1 worst |diff| ") and "H_0" not in head, head
+    assert f"> tolerance {allowed('factors', 'range', 'H_1'):.3g}" in head, head
+    expected = kit_case("factors", "range")["expected"]["H_1"]
+    k = np.unravel_index(np.argmax(np.abs(good)), good.shape)
+    assert (
+        f"    H_1[{k[0]}, {k[1]}]: expected {expected[k[0]][k[1]]!r}, got {float(-good[k])!r} (|diff| {2 * abs(float(good[k])):.3g})"
+        in lines
+    ), lines
+
+
+@pytest.mark.parametrize(("times", "fails"), [(10.0, True), (0.5, False)])
+def test_a_value_off_by_ten_times_its_tolerance_fails_and_by_half_of_it_passes(
+    tmp_path, capsys, kit_results, times, fails
+):
+    results = kit_results(SHIPPED, "factors")
+    tol = allowed("factors", "bearing", "error")
+    got = results["bearing"]["error"][0] + times * tol
+    results["bearing"]["error"][0] = got
+    code, lines = check(tmp_path, capsys, "factors", results)
+    if not fails:
+        assert code == 0 and lines[-1] == f"{len(results)} passed, 0 failed", lines
+        return
+    head = fail_line(lines, "factors", "bearing")
+    assert code == 1 and head.startswith("FAIL factors/bearing: error worst |diff| "), head
+    assert f"> tolerance {tol:.3g} (atol " in head and "1 of 1 entries past it" in head, head
+    expected = kit_case("factors", "bearing")["expected"]["error"][0]
+    assert any(line.startswith(f"    error[0]: expected {expected!r}, got {got!r}") for line in lines), lines
+
+
+@pytest.mark.parametrize(
+    ("suite", "name", "quantity"),
+    [("se2", "exp_near_half_turn", "exp"), ("se2", "retract_across_pi", "retract")],
+)
+def test_an_se2_heading_two_pi_off_fails_as_the_readme_promises_headings_in_minus_pi_to_pi(
+    tmp_path, capsys, kit_results, suite, name, quantity
+):
+    """The README: 'headings of poses and states in (-pi, pi]'; a heading 2π off is the same rotation, and a port
+    that leaves it there is told so at the entry, 6.28 off, and that it is 2π off (the hint came with this test)."""
+    results = kit_results(SHIPPED, suite)
+    rows = np.array(results[name][quantity])
+    rows[0, 2] += 2 * math.pi
+    results[name][quantity] = rows.tolist()
+    code, lines = check(tmp_path, capsys, suite, results)
+    head = fail_line(lines, suite, name)
+    assert code == 1 and head.startswith(f"FAIL {suite}/{name}: {quantity} worst |diff| 6.28 at [0, 2] > "), head
+    assert head.endswith("1 x 2 pi off: an angle brought into another range (README conventions 'angles', 'se2')"), head
+
+
+def test_a_transposed_jacobian_fails_square_by_its_entries_and_rectangular_by_its_shape(tmp_path, capsys, kit_results):
+    se2 = kit_results(SHIPPED, "se2")
+    h0 = np.array(se2["prior_local_variable_fast"]["H_0"])
+    assert not np.allclose(h0, h0.T)  # else a transpose would be right
+    se2["prior_local_variable_fast"]["H_0"] = h0.T.tolist()
+    code, lines = check(tmp_path / "square", capsys, "se2", se2)
+    assert code == 1 and fail_line(lines, "se2", "prior_local_variable_fast").startswith(
+        "FAIL se2/prior_local_variable_fast: H_0 worst |diff| "
+    ), lines
+    factors = kit_results(SHIPPED, "factors")
+    factors["range"]["H_0"] = np.array(factors["range"]["H_0"]).T.tolist()
+    code, lines = check(tmp_path / "rectangular", capsys, "factors", factors)
+    assert code == 1 and fail_line(lines, "factors", "range") == (
+        "FAIL factors/range: H_0 has shape (6, 1), expected (1, 6): transposed? (arrays are nested lists, row-major: "
+        "a Jacobian has a row per error entry)"
+    )
+
+
+def test_an_integral_count_written_as_a_double_is_the_same_json_number_and_passes(tmp_path, capsys, kit_results):
+    """nnz_k and the like are compared exactly; JSON has one number type, and a port whose JSON library writes a
+    double (nlohmann's 189.0, a JAX float) gives the same number: it passed 'kit_version': 4.0 but failed
+    nnz_3: 189.0 ('expected 189, got 189.0')."""
+    results = kit_results(SHIPPED, "incremental")
+    counted = [(name, q) for name, case in results.items() for q in case if q.startswith("nnz_")]
+    assert counted
+    doubled = copy.deepcopy(results)
+    for name, q in counted:
+        doubled[name][q] = float(results[name][q])
+    code, lines = check(tmp_path / "doubles", capsys, "incremental", doubled)
+    assert code == 0 and lines[-1] == f"{len(results)} passed, 0 failed", lines
+    name, q = counted[0]
+    doubled[name][q] = results[name][q] + 0.5  # not the same number: still a failure, naming both
+    code, lines = check(tmp_path / "off", capsys, "incremental", doubled)
+    assert code == 1 and fail_line(lines, "incremental", name).endswith(f": {q} differs (compared exactly)"), lines
+    assert f"    got      {results[name][q] + 0.5}" in lines, lines
+    assert "JSON has one number type, so a count written 189.0 is 189" in " ".join(
+        export_readme().split()
+    )  # what a port reads
+
+
+def test_a_misspelt_kit_version_key_is_named_not_silently_read_as_kit_v1(tmp_path, capsys, kit_results):
+    """'kit_verison': 5 is a key the layout does not have; the file then names no kit_version and is checked as kit
+    v1's (its rule for files written before the field existed). The check says so, and names the key it did not
+    read, instead of passing the gp results against v1 with only the v1 note."""
+    (tmp_path / "gp").mkdir()
+    results = {"kit_verison": KIT_VERSION, "cases": kit_results(KITS[1], "gp")}
+    (tmp_path / "gp" / "results.json").write_text(json.dumps(results))
+    code, out, err = cli(capsys, "check", tmp_path, "--only", "gp")
+    assert code == 0 and err == "" and "checked as kit v1 results" in out, out
+    assert (
+        f"warning: {tmp_path / 'gp' / 'results.json'}: 'kit_verison' is not a key of a results file, not read "
+        "(its keys: kit_version, cases)" in out.splitlines()
+    ), out
