@@ -50,7 +50,7 @@ def small_problem(rng, n_states=8, n_landmarks=3, noise=0.05, robust=True, inter
         graph.add(sr.VelocityFactor.create(key, np.array(body) + rng.normal(size=3) * 0.05, [0.5, 0.5, 1.0]))
         lk = sr.L(i % n_landmarks)
         r = np.hypot(*(x[:2] - lms[lk]))
-        graph.add(sr.RangeFactor.create(key, lk, r + rng.normal() * 0.05, 0.3, loss=loss))
+        graph.add(sr.RangeFactor.create(key, lk, abs(r + rng.normal() * 0.05), 0.3, loss=loss))  # never negative
     for _ in range(interpolated):
         i = int(rng.integers(0, n_states - 1))
         tau = rng.uniform(times[i], times[i + 1])

@@ -50,7 +50,9 @@ class Stream:
             values[lm] = guess
             out.append(sr.PriorFactor.create(lm, guess, [1.0, 1.0]))
             self.known.add(lm)
-        r = np.hypot(*(self.xs[i][:2] - self.landmarks[j])) + self.rng.normal() * 0.05
+        # a range sensor reads no negative distance: a state ~0.1 m from a landmark folds its noise (a negative one is
+        # refused as a bad reading, and hypothesis draws such streams)
+        r = abs(np.hypot(*(self.xs[i][:2] - self.landmarks[j])) + self.rng.normal() * 0.05)
         return out + [sr.RangeFactor.create(sr.X(i), lm, r, 0.3)]
 
     def new_state(self, factors: list, values: dict) -> None:

@@ -32,7 +32,7 @@ def chain(rng, dt: float, n: int = 8):
     for key, position in landmarks.items():
         factors.append(sr.PriorFactor.create(key, position, 0.5))
         factors += [
-            sr.RangeFactor.create(k, key, np.linalg.norm(position) + 0.05 * rng.normal(), 0.05) for k in keys[::2]
+            sr.RangeFactor.create(k, key, abs(np.linalg.norm(position) + 0.05 * rng.normal()), 0.05) for k in keys[::2]
         ]
     initial = sr.Values({k: 0.3 * rng.normal(size=6) for k in keys} | {k: p + 0.1 for k, p in landmarks.items()})
     return sr.FactorGraph(factors), initial
