@@ -1,4 +1,4 @@
-"""Linearization and the sparse least-squares system of Eq. 10-11.  [YIB Eq. 9-11, 21]
+"""Linearization and the sparse least-squares system of Eq. 10-11.  [YIB Eq. 7-11, 21]
 
 ``linearize`` evaluates factors in batches of one type and returns whitened Jacobian blocks and
 right-hand sides: each factor i contributes ‖Aᵢ δθᵢ - bᵢ‖² with Aᵢ = √wᵢ Wᵢ Hᵢ and bᵢ = -√wᵢ Wᵢ eᵢ
