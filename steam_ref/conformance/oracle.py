@@ -231,7 +231,7 @@ def factor_error(spec: Mapping, xs: Sequence, paper_sign: bool = False) -> NDArr
         A, _ = model_matrices("wnoa", qc.shape[0])
         e = xs[1] - transition(A, float(spec["dt"])) @ xs[0]
         return -e if paper_sign else e
-    if kind == "interpolated":  # e_inner(Λ x₁ + Ψ x₂, ...)  [YIB Eq. 18, 29]
+    if kind == "interpolated":  # e_inner(Λ x₁ + Ψ x₂, ...), [Λ Ψ] = K(τ) K⁻¹ densely  [YIB Eq. 13, 28; 18, 29]
         lam, psi = interpolated_matrices(spec)
         x_tau = lam @ xs[0] + psi @ xs[1]
         return _measurement(spec["inner"]["type"], spec["inner"], x_tau, *xs[2:])

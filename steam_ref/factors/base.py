@@ -1,4 +1,4 @@
-"""Factor, the base of every factor, and the square-root information of a noise model.  [YIB Eq. 2, 6]
+"""Factor, the base of every factor, and the square-root information of a noise model.  [YIB Eq. 2, 6, 26-27]
 
 A factor f(θ) ∝ exp(-½ ‖e(θ)‖²_Σ) has an error e = h(θ) - y (for a prior, θ - mean) and a noise
 covariance Σ. It gives its *unwhitened* error and Jacobians; whitening by W (WᵀW = Σ⁻¹) and the

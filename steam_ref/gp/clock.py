@@ -5,7 +5,7 @@ The **data's clock** is the time stamps of a data set's poses, in seconds: its f
 trajectory, the ``times`` of every file a run writes.
 
 The **model's clock** is the time the GP prior sees: tᵢ in the transition Φ(tⱼ, tᵢ) and the process
-noise Qᵢ of a prior factor [YIB Eq. 13-14, 22], and the interpolation between states [YIB Eq. 16-18].
+noise Qᵢ of a prior factor [YIB Eq. 14, 17, 22], and the interpolation between states [YIB Eq. 16-18].
 A set-up chooses it (:data:`CLOCK_BASES`):
 
 - ``'seconds'``: the model's time is the data's. A prior's Δt is the time between its states in seconds,

@@ -1,10 +1,12 @@
-"""Linearization and the sparse least-squares system of Eq. 10-11.  [YIB Eq. 9-11, 21]
+"""Linearization and the sparse least-squares system of Eq. 10-11.  [YIB Eq. 7-11, 21]
 
 ``linearize`` evaluates factors in batches of one type and returns whitened Jacobian blocks and
 right-hand sides: each factor i contributes ‖Aᵢ δθᵢ - bᵢ‖² with Aᵢ = √wᵢ Wᵢ Hᵢ and bᵢ = -√wᵢ Wᵢ eᵢ
 (W the whitening, w the robust weight). ``LinearSystem`` stacks them into the sparse A and b of
-Eq. 21 under a variable ordering; I = AᵀA is the information matrix of Eq. 11 and Aᵀb its
-right-hand side (with the prior written as factors, η - θ̄ and Hᵀ R⁻¹ (y - h̄) both live in Aᵀb).
+Eq. 21 under a variable ordering: the errors stacked as h(θ) is in Eq. 7, each whitened by its own
+noise as R = diag(R₁, …, R_N) of Eq. 8 allows. I = AᵀA is the information matrix of Eq. 11 and Aᵀb its
+right-hand side (with the prior written as factors, P⁻¹ (η - θ̄) and Hᵀ R⁻¹ (y - h̄) both live in Aᵀb;
+Eq. 11 as printed drops the P⁻¹, which setting the gradient of Eq. 10 to zero gives).
 """
 
 from __future__ import annotations
@@ -194,7 +196,7 @@ def linearize(factors: Sequence[Factor], values: Values, *, jacobians: bool = Tr
 
 @dataclass(frozen=True)
 class LinearSystem:
-    """The stacked, whitened system ‖A δθ - b‖² under a variable ordering.  [YIB Eq. 10, 21]"""
+    """The stacked, whitened system ‖A δθ - b‖² under a variable ordering.  [YIB Eq. 7-8, 10, 21]"""
 
     A: sp.csr_matrix  # (rows, n) sparse whitened Jacobian; column blocks follow ``ordering``
     b: NDArray  # (rows,)

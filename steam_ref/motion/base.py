@@ -1,6 +1,6 @@
 """The protocol every motion prior implements: :class:`MotionPrior`.  [YIB Sec. II-A, II-B]
 
-A motion prior is the GP x(t) ~ GP(μ(t), K(t, t')) that links a trajectory's states [YIB Eq. 3, 14]. What
+A motion prior is the GP x(t) ~ GP(μ(t), K(t, t')) that links a trajectory's states [YIB Eq. 1, 3, 14]. What
 differs between priors (which numbers a state holds and how it moves, the factor between two states, the state
 at a time between them and after the last one, what a velocity or pose reading becomes on such a state, the
 first state's prior, a new state's first value, how a task is drawn from the model) is owned by one object. The
