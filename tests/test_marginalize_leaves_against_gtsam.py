@@ -18,20 +18,11 @@ from requirements import optional_import
 gtsam = optional_import("gtsam", "gtsam")  # skips here, fails in CI (STEAM_REF_REQUIRE_OPTIONAL=1)
 
 from test_fixed_lag import EXACT, Offset  # noqa: E402
+from test_fixed_lag_gtsam import QC, P, V  # noqa: E402  (GTSAM's keys of a state's position and velocity)
 
 from steam_ref.bayes_tree import IncrementalSolver  # noqa: E402
 from steam_ref.factors import GPPriorFactor, PriorFactor  # noqa: E402
 from steam_ref.variables import L, X  # noqa: E402
-
-QC = np.array([0.3, 0.2, 0.1])
-
-
-def P(i: int) -> int:
-    return gtsam.symbol("p", i)
-
-
-def V(i: int) -> int:
-    return gtsam.symbol("v", i)
 
 
 def G(j: int) -> int:

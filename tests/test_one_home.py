@@ -111,16 +111,22 @@ def _python_files() -> list[Path]:
     return sorted(PACKAGE.rglob("*.py"))
 
 
-def test_what_an_integer_is_is_stated_once():
-    """``isinstance(x, bool) or not isinstance(x, (int, np.integer))`` and its variants, outside arguments.py."""
-    spelled = re.compile(r"isinstance\([^()]*,\s*\(?\s*(?:int\s*,\s*np\.integer|np\.integer\s*,\s*int)\b")
-    found = [
+def _spelled_outside_arguments(pattern: str) -> list[str]:
+    """file:line of each line of the package outside arguments.py matching ``pattern`` (the conformance kit's oracle
+    shares no code, by design)."""
+    spelled = re.compile(pattern)
+    return [
         f"{p.relative_to(ROOT)}:{n}"
         for p in _python_files()
-        if p.name != "arguments.py" and "conformance" not in p.parts  # the kit's oracle shares no code, by design
+        if p.name != "arguments.py" and "conformance" not in p.parts
         for n, line in enumerate(p.read_text(encoding="utf-8").splitlines(), 1)
         if spelled.search(line)
     ]
+
+
+def test_what_an_integer_is_is_stated_once():
+    """``isinstance(x, bool) or not isinstance(x, (int, np.integer))`` and its variants, outside arguments.py."""
+    found = _spelled_outside_arguments(r"isinstance\([^()]*,\s*\(?\s*(?:int\s*,\s*np\.integer|np\.integer\s*,\s*int)\b")
     assert not found, f"what an integer is, written again (use arguments.is_integer): {found}"
     assert [arguments.is_integer(v) for v in (3, np.int64(3), True, np.bool_(True), 3.0, "3", None)] == [
         True,
@@ -136,14 +142,7 @@ def test_what_an_integer_is_is_stated_once():
 def test_what_a_flag_is_is_stated_once():
     """``isinstance(x, (bool, np.bool_))``, outside arguments.py: an argument that must be True or False is checked
     by ``arguments.flag`` (a dataclass field stays a plain bool, for JSON: its own check)."""
-    spelled = re.compile(r"isinstance\([^()]*,\s*\(\s*bool\s*,\s*np\.bool_\s*\)\)")
-    found = [
-        f"{p.relative_to(ROOT)}:{n}"
-        for p in _python_files()
-        if p.name != "arguments.py" and "conformance" not in p.parts  # the kit's oracle shares no code, by design
-        for n, line in enumerate(p.read_text(encoding="utf-8").splitlines(), 1)
-        if spelled.search(line)
-    ]
+    found = _spelled_outside_arguments(r"isinstance\([^()]*,\s*\(\s*bool\s*,\s*np\.bool_\s*\)\)")
     assert not found, f"what a flag is, written again (use arguments.flag): {found}"
     assert [arguments.flag("f", v) for v in (True, np.bool_(False))] == [True, False]
     for v in (1, "no", None, [], 0.0):

@@ -216,9 +216,8 @@ def fetch(
             raise DataError(f"data set {s.name!r} is not fetched: {where}")
     url = base_url(base)
     folder = Path(cache) if cache is not None else data_cache_dir()
-    own = (
-        folder.resolve() == data_cache_dir().resolve()
-    )  # written by fetch alone: a file there that differs is replaced
+    # the default cache is written by fetch alone: a file there that differs is replaced, never one of the user's
+    own = folder.resolve() == data_cache_dir().resolve()
     for f in {f for s in sets for f in s.files}:
         target = folder / f.local
         _writable_folder(target.parent)
