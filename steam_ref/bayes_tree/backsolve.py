@@ -6,7 +6,8 @@
 2. For the current clique, compute the frontal variables from the separator's current solution,
    δ_F = R⁻¹(d - S δ_S) [YIB Eq. 25], as g - G δ_S: ``Clique.solved`` keeps g = R⁻¹d and G = R⁻¹S (the paper's rᵀ).
 3. If a frontal variable changed by at least the wildfire threshold α (α = 0: always), descend into the
-   children whose separator holds it; a re-made clique is entered in any case. Otherwise stop.
+   children whose separator holds it; a re-made clique is entered in any case. Otherwise stop. (A leaf has no
+   children to decide on: its variables' changes are not measured.)
 
 Changes are judged per variable (the newest state moving must not mark the landmarks of its clique changed).
 Each new δ is checked against the variable's relinearization threshold β here, the only place δ changes: the
@@ -46,13 +47,14 @@ def backsubstitute(state: SolverState, new_cliques: Collection[int], alpha: floa
         c = stack.pop()
         clique = cliques[c]
         visited += 1
-        on, frontals = clique.separator, clique.frontals  # one separator variable, the usual case, needs no copy
+        on, frontals, kids = clique.separator, clique.frontals, children[c]
         sep = delta[on[0]] if len(on) == 1 else np.concatenate([delta[k] for k in on] or [np.zeros(0)])  # a root: none
         x = clique.solve(sep)  # [YIB Eq. 25]
+        watch = alpha != 0 and kids  # step 3's test decides only which children to enter: a leaf needs none
         parts = ((frontals[0], x),) if len(frontals) == 1 else zip(frontals, clique.split_frontals(x), strict=True)
         for k, xk in parts:  # the usual clique: one frontal, the whole x
             old, new = delta[k], xk.tolist()
-            if alpha == 0 or max(map(abs, map(sub, new, old.tolist()))) >= alpha:  # step 3: changed by at least α
+            if watch and max(map(abs, map(sub, new, old.tolist()))) >= alpha:  # step 3: changed by at least α
                 changed.add(k)
             record((k, old))
             delta[k] = xk
@@ -62,7 +64,7 @@ def backsubstitute(state: SolverState, new_cliques: Collection[int], alpha: floa
             elif k in candidates:
                 del candidates[k]
         updated.extend(frontals)
-        for ch in children[c]:
-            if ch in new_cliques or not changed.isdisjoint(cliques[ch].separator):
+        for ch in kids:
+            if ch in new_cliques or alpha == 0 or not changed.isdisjoint(cliques[ch].separator):
                 stack.append(ch)
     return updated, visited
