@@ -1,7 +1,8 @@
 """A fetch that fails leaves nothing the search path would read, and its one-line message says what to do.
 
 Served by a local HTTP server on 127.0.0.1 (no test touches the internet) that can cut a download part-way (its
-Content-Length promised, the connection closed after half the bytes) or serve a file with one byte changed. The
+Content-Length promised, the connection closed after half the bytes), stall after half of it (for a fetch killed
+mid-download in a child process) or serve a file with one byte changed. The
 user's cache is a temporary one (XDG_CACHE_HOME). Oracles: hashlib's sha256 of the bytes served, the files found
 in the cache folder after the failure, and a load of the named set afterwards (not found: nothing partial read).
 """
@@ -11,13 +12,18 @@ from __future__ import annotations
 import functools
 import hashlib
 import http.server
+import os
 import re
 import shutil
 import socket
+import subprocess
+import sys
 import threading
+import time
 from pathlib import Path
 
 import pytest
+from cli_runs import ROOT
 
 from steam_ref.datasets import fetch as fetching
 from steam_ref.datasets import load_dataset, search
@@ -25,6 +31,8 @@ from steam_ref.errors import DataError
 
 NAME, FILE = "paper-synthetic", "Syn_theta_Plaza.mat"
 SHA256 = fetching.DATASETS[NAME].files[0].sha256
+_RELEASE = threading.Event()  # ends a stalled answer (its client is killed first)
+_STALLED_AT = 32 * 1024  # B: a whole number of pooch's 1 KiB chunks, each of which reaches the file
 
 
 class _Server(http.server.ThreadingHTTPServer):
@@ -33,10 +41,21 @@ class _Server(http.server.ThreadingHTTPServer):
 
 
 class _Handler(http.server.SimpleHTTPRequestHandler):
-    """``/cut/NAME``: half of the file after a Content-Length of all of it; ``/bad/NAME``: one byte changed."""
+    """``/cut/NAME``: half of the file after a Content-Length of all of it; ``/stall/NAME``: its first
+    :data:`_STALLED_AT` bytes, the connection then held open until :data:`_RELEASE` (or a minute); ``/bad/NAME``: one
+    byte changed."""
 
     def do_GET(self):
         kind, _, name = self.path.lstrip("/").partition("/")
+        if kind == "stall":
+            body = Path(self.directory, name).read_bytes()
+            self.send_response(200)
+            self.send_header("Content-Length", str(len(body)))
+            self.end_headers()
+            self.wfile.write(body[:_STALLED_AT])
+            self.wfile.flush()
+            _RELEASE.wait(60)
+            return
         if kind in ("cut", "bad"):
             body = bytearray(Path(self.directory, name).read_bytes())
             body[100] ^= 0x01
@@ -146,3 +165,48 @@ def test_a_fetch_into_a_users_folder_never_replaces_a_file_of_theirs(server, cac
     before = (mine / FILE).stat().st_mtime_ns
     assert fetching.fetch([NAME], base=url, cache=mine) == {NAME: [mine / FILE]}
     assert (mine / FILE).stat().st_mtime_ns == before
+
+
+def test_a_fetch_killed_mid_download_leaves_a_temporary_the_next_fetch_removes_once_stale(server, cache, tmp_path):
+    """SIGKILL in the middle of a download (a child process): pooch's temporary stays, no clean-up having run. The
+    next fetch into the default cache removes it once it has not been written to for ``STALE_AFTER`` seconds, but
+    not a younger one (a fetch running beside it may be writing it), nor a file of a like name, a link or a folder,
+    nor such a temporary in a folder given as ``cache`` (it may be the user's)."""
+    url, _ = server
+    child = "from steam_ref.datasets.fetch import fetch; import sys; fetch(['paper-synthetic'], base=sys.argv[1])"
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}  # XDG_CACHE_HOME: the fixture's cache
+    _RELEASE.clear()
+    process = subprocess.Popen([sys.executable, "-c", child, url + "stall/"], env=env, stderr=subprocess.DEVNULL)
+    try:
+        deadline = time.monotonic() + 60
+        while not (got := _files(cache)) or got[0].stat().st_size < _STALLED_AT:
+            assert process.poll() is None and time.monotonic() < deadline, (process.returncode, got)
+            time.sleep(0.05)
+    finally:
+        process.kill()  # SIGKILL
+        process.wait()
+        _RELEASE.set()
+    [leftover] = _files(cache)  # every byte received is in it: a live download's temporary is written to as it goes
+    assert leftover.stat().st_size == _STALLED_AT and leftover.parent == cache and leftover.name != FILE, leftover
+    hour_ago = time.time() - fetching.STALE_AFTER - 60
+    decoys = ["tmpABCDEFGH", "tmpabcd1234.mat", "tmpabcd123", "my_tmpabcd1234", "tmpabcd12345"]
+    for decoy in decoys:
+        (cache / decoy).write_bytes(b"a file of the user's")
+    (cache / "tmpfolder01").mkdir()  # pooch's name, a folder
+    (cache / "tmplink_001").symlink_to(cache / "tmpabcd123")  # pooch's name, a link
+    old = [leftover, *(cache / d for d in decoys), cache / "tmpfolder01", cache / "tmplink_001"]
+    for path in old:
+        os.utime(path, (hour_ago, hour_ago), follow_symlinks=False)
+    young = cache / "tmpyoung_01"  # pooch's name, written to just now: a download running beside this one
+    young.write_bytes(b"half a file")
+    assert all(len(p.name) == len(leftover.name) for p in (young, *old[-2:])), "named as pooch names its temporaries"
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / leftover.name).write_bytes(b"a file of the user's")
+    os.utime(mine / leftover.name, (hour_ago, hour_ago))
+    assert fetching.fetch([NAME], base=url) == {NAME: [cache / FILE]}
+    assert not leftover.exists()
+    assert sorted(p.name for p in cache.iterdir()) == sorted([FILE, young.name, *(p.name for p in old[1:])])
+    assert all((cache / d).read_bytes() == b"a file of the user's" for d in decoys)
+    assert fetching.fetch([NAME], base=url, cache=mine) == {NAME: [mine / FILE]}
+    assert (mine / leftover.name).read_bytes() == b"a file of the user's"

@@ -19,6 +19,18 @@ that masking). A mirror is flat, as upstream's ``matlab/Data/`` is: each file is
 folder by its upstream name (``<base>/Plaza1_full_data_run.mat``, though it is kept in the cache's
 ``authors/``), the base URL's query, if any, kept after it (``<base>/Syn_theta_Plaza.mat?token=...``).
 
+A fetch killed mid-download (SIGKILL, a power cut: no clean-up runs) leaves pooch's temporary file in the
+folder of the file it was downloading. Pooch names it as :func:`tempfile.NamedTemporaryFile` does
+(``pooch.utils.temporary_file``): ``tmp`` and 8 characters of ``a-z0-9_``, no suffix, e.g. ``tmpk3_x9q0a``. It is never
+read (the search path asks for the data files' names), but it would stay. The next fetch into the default cache
+folder removes, in each folder it downloads into, a regular file named exactly so that has not been written to for
+:data:`STALE_AFTER` seconds (an hour). The rule is conservative on both sides: only in the default cache, which fetch
+alone writes (in a folder given as ``cache`` such a name could be one of the user's files: it is left there); and
+never a temporary a fetch running beside it is still writing, since a live download writes each chunk through to the
+file as it arrives (:class:`_Capped`) and its reads time out after 60 s, so the file's time of last change is never
+more than a minute or so old (then its sha256 is checked and it is renamed). A fetch stopped (not killed) for more
+than an hour finds its temporary gone when it resumes: a DataError, and fetching again works.
+
 Victoria Park and Plaza2, and the original Plaza1 files, are not fetched: they ship in the ``gtsam`` wheel's
 ``Data/`` folder (``pip install gtsam``), which the search path reads as it is.
 """
@@ -28,7 +40,9 @@ from __future__ import annotations
 import logging
 import os
 import re
+import stat
 import tempfile
+import time
 import urllib.parse
 from pathlib import Path
 
@@ -51,6 +65,7 @@ __all__ = [
     "DEFAULT_BASE_URL",
     "DataFile",
     "DataSet",
+    "STALE_AFTER",
     "UPSTREAM_COMMIT",
     "UPSTREAM_REPOSITORY",
     "fetch",
@@ -66,6 +81,9 @@ DEFAULT_BASE_URL = f"https://raw.githubusercontent.com/{UPSTREAM_REPOSITORY}/{UP
 DATA_URL_ENV = "STEAM_REF_DATA_URL"
 _USERINFO = re.compile(r"([A-Za-z][A-Za-z0-9+.-]*://)[^/?#\s]*@")  # scheme://user:password@ (to the last @)
 _QUERY = re.compile(r"\?([^\s#'\"<>()]+)")  # a URL's query, up to its fragment or the end of the quoted URL
+STALE_AFTER = 3600.0  # s: a pooch temporary not written to for this long is a killed fetch's (module docstring)
+# pooch.utils.temporary_file's name: tempfile.NamedTemporaryFile(dir=folder), its prefix and 8 random characters
+_POOCH_TEMPORARY = re.compile(re.escape(tempfile.gettempprefix()) + r"[a-z0-9_]{8}")
 
 
 def _dataset(name: str) -> DataSet:
@@ -206,7 +224,8 @@ def fetch(
     is left in the cache; an unreachable host, a download cut short or an HTTP error is a DataError of one line.
     Each says what to do: nothing was kept, ``steam-ref data fetch NAME`` tries again, ``--base-url`` or
     ``$STEAM_REF_DATA_URL`` names another server (a cache folder that cannot be written: XDG_CACHE_HOME). The gtsam wheel's
-    sets are not fetched: asking for one is a DataError saying to ``pip install gtsam``.
+    sets are not fetched: asking for one is a DataError saying to ``pip install gtsam``. In the default cache folder,
+    the temporary files of downloads killed more than :data:`STALE_AFTER` seconds ago are removed (module docstring).
     """
     wanted = list(names) if names else [n for n, s in DATASETS.items() if s.fetchable]
     sets = [_dataset(n) for n in wanted]
@@ -229,10 +248,27 @@ def fetch(
                     f"{target} is there and is not the published file ({why}); fetch replaces a file only in its own "
                     f"cache folder ({data_cache_dir()}): move it away, or fetch into another folder"
                 )
+    if own:  # only fetch writes there: a file under pooch's temporary name is a killed fetch's
+        for parent in {(folder / f.local).parent for s in sets for f in s.files}:
+            _remove_stale_temporaries(parent)
     import pooch  # here, not at the top: every command loads this module, only a download needs pooch (~4 MB)
 
     pooch.get_logger().setLevel(logging.WARNING)  # the caller says what was fetched
     return {s.name: [_fetch_file(s.name, f, url, folder, progress) for f in s.files] for s in sets}
+
+
+def _remove_stale_temporaries(folder: Path) -> None:
+    """Remove from ``folder`` (fetch's own cache) the temporaries of pooch's downloads killed before their end: regular
+    files named as pooch names them, not written to for :data:`STALE_AFTER` seconds (the module docstring)."""
+    for entry in os.scandir(folder):
+        if not _POOCH_TEMPORARY.fullmatch(entry.name):
+            continue
+        try:
+            info = entry.stat(follow_symlinks=False)
+            if stat.S_ISREG(info.st_mode) and time.time() - info.st_mtime > STALE_AFTER:
+                os.unlink(entry.path)
+        except OSError:  # removed first by another fetch, or not ours to remove (a shared folder): left as it is
+            pass
 
 
 class _TooLarge(Exception):
@@ -240,7 +276,7 @@ class _TooLarge(Exception):
 
 
 class _Capped:
-    """The file a download is written to, refusing to grow past ``limit`` bytes."""
+    """The file a download is written to, refusing to grow past ``limit`` bytes, each chunk written through."""
 
     def __init__(self, handle, limit: int) -> None:
         self._handle, self._limit, self._written = handle, limit, 0
@@ -249,7 +285,9 @@ class _Capped:
         self._written += len(chunk)
         if self._written > self._limit:
             raise _TooLarge(f"more than the registry's {self._limit:,} B")
-        return self._handle.write(chunk)
+        written = self._handle.write(chunk)
+        self._handle.flush()  # through to the file: its time of last change shows the download is alive
+        return written
 
     def flush(self) -> None:
         self._handle.flush()
