@@ -308,6 +308,40 @@ def test_every_factor_class_of_steam_ref_declares_every_field():
         cls._check_declared()  # raises on a field declared nowhere
 
 
+def test_a_new_factor_family_declaring_its_states_has_its_keys_roles_checked_without_calling_the_check():
+    """``n_states`` alone, no ``__post_init__`` of its own: the base refuses keys in the wrong roles, with the message
+    of the shipped factors (tests/test_bad_api_inputs_refused.py); ``roles_of_states_only`` checks the states alone
+    (the wrapped reading's keys after them are its own to check); a factor declaring none takes any keys."""
+
+    @dataclass(frozen=True, eq=False)
+    class Sighting(sr.Factor):
+        n_states: ClassVar[int | None] = 1
+
+    @dataclass(frozen=True, eq=False)
+    class Between(sr.Factor):
+        n_states: ClassVar[int | None] = 2
+        roles_of_states_only: ClassVar[bool] = True
+
+    @dataclass(frozen=True, eq=False)
+    class Anything(sr.Factor):
+        pass
+
+    w = np.eye(1)
+    Sighting((sr.X(0), sr.L(0), sr.L(1)), w)
+    with pytest.raises(
+        sr.SteamError,
+        match=r"^Sighting takes keys \(state X\(i\), landmark L\(j\)\), got \(l0, x0\): "
+        r"l0 is not a state key, x0 is not a landmark key$",
+    ):
+        Sighting((sr.L(0), sr.X(0)), w)
+    Between((sr.X(0), sr.X(1), sr.X(2), sr.L(0)), w)  # after the two states: any keys
+    with pytest.raises(
+        sr.SteamError, match=r"^Between takes keys \(state X\(i\), state X\(i\)\), got \(x0, l0\): l0 is"
+    ):
+        Between((sr.X(0), sr.L(0), sr.L(1)), w)
+    Anything((sr.L(0), sr.X(0)), w)
+
+
 def test_stacking_factors_with_different_losses_is_refused():
     a = sr.RangeFactor.create(sr.X(0), sr.L(0), 5.0, 0.1)
     b = sr.RangeFactor.create(sr.X(1), sr.L(0), 5.0, 0.1, loss=sr.Huber(1.0))

@@ -172,6 +172,18 @@ def test_replace_with_an_unknown_field_check_is_written_once():
         assert type(copy) is type(value) and getattr(copy, field) == getattr(value, field)
 
 
+def test_the_roles_of_a_factors_keys_are_checked_by_the_factor_base_alone():
+    """A factor family declares ``n_states`` (and ``roles_of_states_only``); ``variables.check_roles`` is called in
+    factors/base.py's ``Factor.__post_init__`` only, so no family checks its keys' roles its own way, or forgets to."""
+    called = [
+        f"{p.relative_to(ROOT)}:{n}"
+        for p in _python_files()
+        for n, line in enumerate(p.read_text(encoding="utf-8").splitlines(), 1)
+        if re.search(r"\bcheck_roles\(", line) and not line.lstrip().startswith("def check_roles(")
+    ]
+    assert [f.partition(":")[0] for f in called] == ["steam_ref/factors/base.py"], called
+
+
 # The word issue (or issues) and a number, in any brackets, or a hash and a number: a tracker's numbers, which a
 # clone cannot open.
 TRACKER = re.compile(r"\bissues? ?#?\d+|(?<![\w&/#])#\d+\b", re.IGNORECASE)

@@ -25,7 +25,7 @@ from ..arguments import finite, real_array
 from ..errors import NumericalError, ShapeError, SteamError
 from ..manifold import VECTOR, Manifold
 from ..robust import RobustLoss
-from ..variables import FLOAT64, Key, kind_clash
+from ..variables import FLOAT64, Key, check_roles, kind_clash
 
 __all__ = ["Factor", "sqrt_information", "check_factors", "kinds_of", "STATE_DIM", "LANDMARK_DIM"]
 
@@ -233,6 +233,11 @@ class Factor:
     leading axis; ``_batched_factors``, the wrapped factors it stacks by their own class; ``_shared``,
     the fields equal across a batch (a state size, say), checked equal when stacked. ``keys`` and
     ``loss`` are the base's. A field declared nowhere raises at the first construction of the class.
+
+    A factor that reads states and landmarks declares how many state keys its keys begin with, ``n_states``; the
+    base checks at every construction (:func:`~steam_ref.variables.check_roles`) that those are states ``X(i)`` and
+    the rest landmarks ``L(j)``, or, with ``roles_of_states_only``, the states alone (an interpolated reading: the
+    keys after its two states are the wrapped reading's, which checked them when it was made).
     """
 
     keys: tuple[Key, ...]
@@ -243,6 +248,8 @@ class Factor:
     _batched_factors: ClassVar[tuple[str, ...]] = ()  # wrapped factors, stacked by their own class
     _shared: ClassVar[tuple[str, ...]] = ()  # fields equal across a batch: checked equal, kept once
     key_dims: ClassVar[tuple[int, ...]] = ()
+    n_states: ClassVar[int | None] = None  # the state keys X(i) its keys begin with (class docstring); None: any keys
+    roles_of_states_only: ClassVar[bool] = False  # True: the keys after the states are a wrapped reading's
 
     @classmethod
     def _check_declared(cls) -> None:
@@ -283,6 +290,9 @@ class Factor:
         if len(set(self.keys)) < len(self.keys):  # a variable named twice (found below only then)
             repeated = [k for i, k in enumerate(self.keys) if k in self.keys[:i]]
             raise SteamError(f"{type(self).__name__} names variable {repeated[0]!r} twice (keys {self.keys})")
+        if self.n_states is not None:  # states, then landmarks (class docstring)
+            keys = self.keys[: self.n_states] if self.roles_of_states_only else self.keys
+            check_roles(type(self).__name__, keys, self.n_states)
 
     @property
     def dim(self) -> int:

@@ -18,7 +18,7 @@ from ..errors import NumericalError, ShapeError, SteamError
 from ..gp.interpolate import interpolation_terms
 from ..gp.prior import process_noise_sqrt_information, transition
 from ..gp.sde import LinearSDE, as_sde, check_prior, check_sde
-from ..variables import Key, check_roles, key_list
+from ..variables import Key, key_list
 from .base import FLOAT_TYPES, Factor, Memo, apply, identity_stack, sqrt_information
 from .measured import measured_vector
 
@@ -51,10 +51,7 @@ class GPPriorFactor(Factor):
     v: NDArray  # vᵢ of Eq. 23, (2d,)
 
     _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "phi", "v")
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        check_roles(type(self).__name__, self.keys, 2)  # two states, whatever the constructor
+    n_states: ClassVar[int | None] = 2  # two states, whatever the constructor
 
     @classmethod
     def wnoa(cls, key1: Key, key2: Key, dt: float, qc: NDArray) -> GPPriorFactor:
@@ -204,10 +201,8 @@ class InterpolatedFactor(Factor):
 
     _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "lam", "psi", "offset")
     _batched_factors: ClassVar[tuple[str, ...]] = ("inner",)
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        check_roles(type(self).__name__, self.keys[:2], 2)  # its two states (the inner reading checks its own keys)
+    n_states: ClassVar[int | None] = 2  # its two states (the inner reading checks its own keys)
+    roles_of_states_only: ClassVar[bool] = True
 
     @classmethod
     def create(

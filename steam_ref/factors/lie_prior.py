@@ -36,7 +36,7 @@ from ..lie.group import check_group
 from ..lie.points import point_dim
 from ..manifold import VECTOR, Manifold
 from ..robust import RobustLoss
-from ..variables import Key, check_roles
+from ..variables import Key
 from .base import Factor, sqrt_information
 from .gp import consecutive_gaps
 
@@ -58,6 +58,7 @@ class LiePriorFactor(Factor):
 
     _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "phi")
     _shared: ClassVar[tuple[str, ...]] = ("model", "group")
+    n_states: ClassVar[int | None] = 2
 
     @property
     def key_kinds(self) -> tuple[Manifold, ...]:
@@ -65,7 +66,6 @@ class LiePriorFactor(Factor):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        check_roles(type(self).__name__, self.keys, 2)  # two states
         check_model(self.model)
         check_group(self.group)
 
@@ -132,10 +132,7 @@ class OneGroupState(Factor):
 
     _shared: ClassVar[tuple[str, ...]] = ("group", "derivatives")
     n_landmarks: ClassVar[int] = 0  # the landmarks it reads, after the state
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        check_roles(type(self).__name__, self.keys, 1)  # a state, then its n_landmarks landmarks
+    n_states: ClassVar[int | None] = 1  # a state, then its n_landmarks landmarks
 
     @property
     def key_kinds(self) -> tuple[Manifold, ...]:
@@ -205,10 +202,7 @@ class LieAccelPriorFactor(Factor):
 
     _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "phi", "offset")
     _shared: ClassVar[tuple[str, ...]] = ("group",)
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        check_roles(type(self).__name__, self.keys, 2)  # two states
+    n_states: ClassVar[int | None] = 2
 
     @property
     def key_kinds(self) -> tuple[Manifold, ...]:
@@ -254,10 +248,8 @@ class BetweenGroupStates(Factor):
     _batched_factors: ClassVar[tuple[str, ...]] = ("inner",)
     _shared: ClassVar[tuple[str, ...]] = ("group",)
     derivatives: ClassVar[int]  # the states': 1 (pose, twist) or 2 (and its acceleration)
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        check_roles(type(self).__name__, self.keys[:2], 2)  # its two states (the inner reading checks its own keys)
+    n_states: ClassVar[int | None] = 2  # its two states (the inner reading checks its own keys)
+    roles_of_states_only: ClassVar[bool] = True
 
     @classmethod
     def check_inner(cls, inner: Factor, kind: Manifold) -> None:

@@ -18,7 +18,7 @@ from ..arguments import is_integer, real_array
 from ..dead_reckoning import wrap_angle
 from ..errors import DegenerateMeasurementWarning, ShapeError, SteamError
 from ..robust import RobustLoss
-from ..variables import Key, check_roles
+from ..variables import Key
 from .base import LANDMARK_DIM, STATE_DIM, Factor, sqrt_information, zero_jacobian
 from .measured import bearing_reading, check_resolved, measured_vector, range_reading
 
@@ -94,11 +94,11 @@ class StateMeasurement(Factor):
 
     other_dims: ClassVar[tuple[int, ...]] = ()  # sizes of the keys after the state
     _shared: ClassVar[tuple[str, ...]] = ("state_dim",)  # one state size per batch (it is in the signature)
+    n_states: ClassVar[int | None] = 1  # a state, then the landmarks it reads (other_dims)
 
     def __post_init__(self) -> None:
         super().__post_init__()
         _check_state_dim(self.state_dim)
-        check_roles(type(self).__name__, self.keys, 1)  # a state, then the landmarks it reads (other_dims)
 
     @property
     def key_dims(self) -> tuple[int, ...]:  # type: ignore[override]
