@@ -6,13 +6,14 @@ tests/test_seam.py's.)"""
 from __future__ import annotations
 
 import itertools
+import re
 
 import numpy as np
 import pytest
 
 import steam_ref as sr
 from steam_ref.datasets import generate_synthetic, sample_from_model
-from steam_ref.errors import SteamError
+from steam_ref.errors import ShapeError, SteamError
 from steam_ref.factors import RangeFactor
 from steam_ref.gp import LinearSDE
 from steam_ref.lie import SE2, LieGroup
@@ -212,3 +213,40 @@ def test_a_task_drawn_from_each_prior_is_in_its_layout():
             first_acceleration_sigmas=[0.1] * 3,
         )  # fmt: skip
         assert task.states.shape == (11, task.prior.state_dim) and task.prior.name == name
+
+
+@pytest.mark.parametrize("name", PRIORS + ["se3", "se3-wnoj"])
+def test_every_prior_refuses_a_state_of_the_wrong_size_or_not_finite_naming_it(name, rng):
+    """Interpolation and prediction take one state each: a state of another size (one number short or over, or a
+    batch (1, n)) is a ShapeError naming it and its shape, NaN a ShapeError too, never a NumPy broadcasting error,
+    a result of another shape or NaN returned (the paper's WNOA interpolated a NaN state to NaN)."""
+    prior = prior_of(name) if not name.startswith("se3") else motion_prior(name, np.diag([0.4, 0.3, 0.2, 0.1, 0.1, 0.1]))
+    n = prior.state_dim
+    tangent = getattr(prior.kind, "dim", n)  # a group state's tangent; a vector state's own size
+    good = prior.predict(_start(prior), 0.3)
+    short, over, batch = good[:-1], np.r_[good, 0.0], good[None, :]
+    nan = good.copy()
+    nan[-1] = np.nan
+    for bad, shape in ((short, (n - 1,)), (over, (n + 1,)), (batch, (1, n)), (nan, None)):
+        shown = re.escape(str(shape)) if shape else "finite"  # the prior's check (xa, xb, x1) names it first
+        with pytest.raises(ShapeError, match=f"xa.*{shown}"):
+            prior.interpolate(0.0, bad, 1.0, good, 0.5)
+        with pytest.raises(ShapeError, match=f"xb.*{shown}"):
+            prior.interpolate(0.0, good, 1.0, bad, 0.5)
+        with pytest.raises(ShapeError, match=f"x1.*{shown}"):
+            prior.extrapolate(0.0, bad, 1.0)
+        with pytest.raises(ShapeError, match=f"xa.*{shown}"):
+            prior.interpolate_covariance(0.0, bad, 1.0, good, 0.5, np.eye(2 * tangent))
+        with pytest.raises(ShapeError, match=f"x1.*{shown}"):
+            prior.extrapolate_covariance(0.0, bad, 1.0, np.eye(tangent))
+
+
+def _start(prior: MotionPrior) -> np.ndarray:
+    """A state of ``prior`` at rest at the origin (its group's identity, or zeros), moving at 1 along x."""
+    x = np.zeros(prior.state_dim)
+    group = getattr(prior, "group", None)
+    front = 3 if group is None else group.size
+    if group is not None:
+        x[:front] = group.identity()
+    x[front] = 1.0
+    return x

@@ -23,7 +23,8 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..errors import SteamError
+from ..arguments import finite, real_array
+from ..errors import ShapeError, SteamError
 from ..factors import Factor, InterpolatedFactor
 from ..factors.lie_prior import LieAccelInterpolatedFactor
 from ..factors.lie_readings import LieInterpolatedFactor, PoseReading
@@ -139,6 +140,17 @@ class MotionPrior(ABC):
         reads them), each next one by the prior's exact transition and noise [YIB Eq. 22]."""
 
     # --- shared -------------------------------------------------------------------------------------------
+
+    def check_state(self, name: str, x: ArrayLike) -> NDArray:
+        """One finite state of this prior, (state_dim,), as a float array (its kind's own rules too: an SE(2) heading
+        in (-π, π]); ShapeError naming ``name`` and the shape otherwise. What every method taking a state checks
+        it with, before any matrix meets it."""
+        x = real_array(name, x)
+        if x.shape != (self.state_dim,):
+            raise ShapeError(
+                f"{name} must be one state of the {self.name} prior ({self.state_dim} numbers), got shape {x.shape}"
+            )
+        return self.kind.check(name, finite(name, x))
 
     def predict(self, x: NDArray, dt: float) -> NDArray:
         """The prior's mean ``dt`` > 0 after the state ``x``: a new state's starting value.  [YIB Eq. 14, 22]"""

@@ -92,6 +92,7 @@ class LieGroupAccelPrior(MotionPrior):
     # --- the state at any time ----------------------------------------------------------------------
 
     def interpolate(self, ta: float, xa: NDArray, tb: float, xb: NDArray, t: float) -> NDArray:
+        xa, xb = self.check_state("xa", xa), self.check_state("xb", xb)
         lam, psi, offset = interpolation_terms(self.sde, ta, tb, t)  # [YIB Eq. 16, 23]
         return np.asarray(gp_accel.interpolate(xa, xb, lam, psi, offset, group=self.group, jacobians=False))
 
@@ -103,7 +104,7 @@ class LieGroupAccelPrior(MotionPrior):
         q_cond = conditional_covariance(
             self.sde.process_noise(t - ta), self.sde.transition(tb - t), self.sde.process_noise(tb - t)
         )  # [DER 14.6]
-        xa, xb = np.asarray(xa, dtype=float), np.asarray(xb, dtype=float)
+        xa, xb = self.check_state("xa", xa), self.check_state("xb", xb)
         return gp_accel.interpolate_covariance(xa, xb, lam, psi, offset, q_cond, joint, group=self.group)[1]
 
     def _ahead(self, t1: float, t: float) -> float:
@@ -115,12 +116,12 @@ class LieGroupAccelPrior(MotionPrior):
     def extrapolate(self, t1: float, x1: NDArray, t: float) -> NDArray:
         """From γ(t) = Φ(t - t₁) [0; ϖ₁; ϖ̇₁] + v: along the arc the twist and acceleration draw.  [YIB Eq. 22]"""
         s = self._ahead(t1, t)
-        x1 = np.asarray(x1, dtype=float)
+        x1 = self.check_state("x1", x1)
         return gp_accel.extrapolate(x1, self.sde.transition(s), self.sde.input_integral(s), group=self.group)[0]
 
     def extrapolate_covariance(self, t1: float, x1: NDArray, t: float, cov1: NDArray) -> NDArray:
         s = self._ahead(t1, t)
-        x1 = np.asarray(x1, dtype=float)
+        x1 = self.check_state("x1", x1)
         return gp_accel.extrapolate_covariance(
             x1, self.sde.transition(s), self.sde.input_integral(s), self.sde.process_noise(s), cov1, group=self.group
         )[1]  # [YIB Eq. 17, 22; DER 14.6]

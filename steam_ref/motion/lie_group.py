@@ -105,21 +105,24 @@ class LieGroupWnoa(MotionPrior):
     # --- the state at any time ----------------------------------------------------------------------
 
     def interpolate(self, ta: float, xa: NDArray, tb: float, xb: NDArray, t: float) -> NDArray:
+        xa, xb = self.check_state("xa", xa), self.check_state("xb", xb)
         lam, psi = interpolation_matrices(ta, tb, t, self.qc)  # [YIB Eq. 16]
         return lie_gp.interpolate(xa, xb, lam, psi, self.residual, group=self.group, jacobians=False)  # [DER 11.15]
 
     def interpolate_covariance(
         self, ta: float, xa: NDArray, tb: float, xb: NDArray, t: float, joint: NDArray
     ) -> NDArray:
+        xa, xb = self.check_state("xa", xa), self.check_state("xb", xb)
         return lie_gp.interpolate_covariance(ta, tb, t, self.qc, xa, xb, joint, self.residual, group=self.group)[
             1
         ]  # [DER 11.17]
 
     def extrapolate(self, t1: float, x1: NDArray, t: float) -> NDArray:
         """(T₁ Exp((t - t₁) ϖ₁), ϖ₁): along the arc of the last twist, either residual.  [DER 11.18]"""
-        return lie_gp.extrapolate(x1, t1, t, group=self.group)[0]
+        return lie_gp.extrapolate(self.check_state("x1", x1), t1, t, group=self.group)[0]
 
     def extrapolate_covariance(self, t1: float, x1: NDArray, t: float, cov1: NDArray) -> NDArray:
+        x1 = self.check_state("x1", x1)
         return lie_gp.extrapolate_covariance(x1, t1, t, self.qc, cov1, self.residual, group=self.group)[
             1
         ]  # [DER 11.18; YIB Eq. 17]

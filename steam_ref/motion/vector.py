@@ -26,8 +26,8 @@ from ..gp.interpolate import (
     extrapolate_state_sde,
     interpolate_covariance,
     interpolate_covariance_sde,
+    interpolate_state,
     interpolate_state_sde,
-    interpolation_matrices,
 )
 from ..gp.sde import LinearSDE, check_prior
 from ..manifold import VECTOR
@@ -102,28 +102,30 @@ class VectorPrior(MotionPrior):
     # --- the state at any time ----------------------------------------------------------------------
 
     def interpolate(self, ta: float, xa: NDArray, tb: float, xb: NDArray, t: float) -> NDArray:
+        xa, xb = self.check_state("xa", xa), self.check_state("xb", xb)
         if self._qc_only is None:
             return interpolate_state_sde(self.sde, ta, xa, tb, xb, t)
-        lam, psi = interpolation_matrices(ta, tb, t, self._qc_only)  # [YIB Eq. 16]
-        return lam @ xa + psi @ xb  # [YIB Eq. 18]
+        return interpolate_state(ta, xa, tb, xb, t, self._qc_only)  # [YIB Eq. 16, 18]
 
     def interpolate_covariance(
         self,
         ta: float,
-        xa: NDArray,  # noqa: ARG002 (a linear prior's covariance does not depend on the estimates)
+        xa: NDArray,
         tb: float,
-        xb: NDArray,  # noqa: ARG002
+        xb: NDArray,
         t: float,
         joint: NDArray,
     ) -> NDArray:
+        self.check_state("xa", xa), self.check_state("xb", xb)  # a linear prior's covariance reads neither
         if self._qc_only is None:
             return interpolate_covariance_sde(self.sde, ta, tb, t, joint)
         return interpolate_covariance(ta, tb, t, self._qc_only, joint)
 
     def extrapolate(self, t1: float, x1: NDArray, t: float) -> NDArray:
-        return extrapolate_state_sde(self.sde, t1, x1, t)  # [YIB Eq. 22-23]
+        return extrapolate_state_sde(self.sde, t1, self.check_state("x1", x1), t)  # [YIB Eq. 22-23]
 
-    def extrapolate_covariance(self, t1: float, x1: NDArray, t: float, cov1: NDArray) -> NDArray:  # noqa: ARG002 (linear)
+    def extrapolate_covariance(self, t1: float, x1: NDArray, t: float, cov1: NDArray) -> NDArray:
+        self.check_state("x1", x1)  # a linear prior's covariance does not read it
         return extrapolate_covariance_sde(self.sde, t1, t, cov1)  # [YIB Eq. 17, 22]
 
     # --- a new state's value ------------------------------------------------------------------------
