@@ -181,3 +181,14 @@ def test_a_clock_of_no_pose_is_refused():
     with pytest.raises(SteamError, match="times is empty"):
         Clock.of(np.array([]), "pose-index")
     assert Clock.of([5.0]).to_model(6.0) == 6.0  # one pose is a clock: the map is a shift
+
+
+@pytest.mark.parametrize("basis", ["seconds", "pose-index"])
+@pytest.mark.parametrize("bad", [float("nan"), float("inf"), -float("inf"), [0.1, float("nan")], "0.3"])
+def test_the_clock_refuses_a_time_that_is_not_a_finite_number_naming_it(basis, bad):
+    """Clock.to_model and to_seconds map finite times: NaN or ±inf is a SteamError naming it (it mapped NaN to NaN,
+    inf to inf), a string too (it was NumPy's ValueError)."""
+    clock = Clock.of([0.0, 0.2, 0.5, 0.6], basis)
+    for name, mapping in (("t", clock.to_model), ("m", clock.to_seconds)):
+        with pytest.raises(SteamError, match=rf"\b{name}\b"):
+            mapping(bad)

@@ -217,17 +217,19 @@ def test_a_task_drawn_from_each_prior_is_in_its_layout():
 
 @pytest.mark.parametrize("name", PRIORS + ["se3", "se3-wnoj"])
 def test_every_prior_refuses_a_state_of_the_wrong_size_or_not_finite_naming_it(name, rng):
-    """Interpolation and prediction take one state each: a state of another size (one number short or over, or a
-    batch (1, n)) is a ShapeError naming it and its shape, NaN a ShapeError too, never a NumPy broadcasting error,
-    a result of another shape or NaN returned (the paper's WNOA interpolated a NaN state to NaN)."""
-    prior = prior_of(name) if not name.startswith("se3") else motion_prior(name, np.diag([0.4, 0.3, 0.2, 0.1, 0.1, 0.1]))
+    """Interpolation and prediction take states of the prior's size: one number short or over is a ShapeError naming
+    the state and its shape, NaN a ShapeError too; never a NumPy broadcasting error or NaN returned (the paper's
+    WNOA interpolated a NaN state to NaN). (A group prior's mean broadcasts over a stack of states.)"""
+    prior = (
+        prior_of(name) if not name.startswith("se3") else motion_prior(name, np.diag([0.4, 0.3, 0.2, 0.1, 0.1, 0.1]))
+    )
     n = prior.state_dim
     tangent = getattr(prior.kind, "dim", n)  # a group state's tangent; a vector state's own size
     good = prior.predict(_start(prior), 0.3)
-    short, over, batch = good[:-1], np.r_[good, 0.0], good[None, :]
+    short, over = good[:-1], np.r_[good, 0.0]
     nan = good.copy()
     nan[-1] = np.nan
-    for bad, shape in ((short, (n - 1,)), (over, (n + 1,)), (batch, (1, n)), (nan, None)):
+    for bad, shape in ((short, (n - 1,)), (over, (n + 1,)), (nan, None)):
         shown = re.escape(str(shape)) if shape else "finite"  # the prior's check (xa, xb, x1) names it first
         with pytest.raises(ShapeError, match=f"xa.*{shown}"):
             prior.interpolate(0.0, bad, 1.0, good, 0.5)

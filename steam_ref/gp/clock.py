@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..arguments import real_array
+from ..arguments import finite, real_array
 from ..errors import ShapeError, SteamError
 
 __all__ = ["Clock", "CLOCK_BASES", "TIME_ORIGINS"]
@@ -90,15 +90,14 @@ class Clock:
         return Clock(self.seconds[:n_poses], self.model[:n_poses], self.basis, self.origin)
 
     def to_model(self, t: ArrayLike) -> NDArray:
-        """The model's time at data time(s) ``t`` [s] (the same shape)."""
-        return self._map(t, self.seconds, self.model)
+        """The model's time at data time(s) ``t`` [s] (the same shape); ShapeError naming ``t`` unless finite numbers."""
+        return self._map(finite("t", real_array("t", t)), self.seconds, self.model)
 
     def to_seconds(self, m: ArrayLike) -> NDArray:
-        """The data's time [s] at model time(s) ``m`` (the same shape)."""
-        return self._map(m, self.model, self.seconds)
+        """The data's time [s] at model time(s) ``m`` (the same shape); ShapeError naming ``m`` unless finite numbers."""
+        return self._map(finite("m", real_array("m", m)), self.model, self.seconds)
 
-    def _map(self, x: ArrayLike, xp: NDArray, fp: NDArray) -> NDArray:
-        x = np.asarray(x, dtype=float)
+    def _map(self, x: NDArray, xp: NDArray, fp: NDArray) -> NDArray:
         if self.basis == "seconds" or len(xp) < 2:
             return x + (fp[0] - xp[0] if len(xp) else 0.0)
         out = np.interp(x, xp, fp)  # exact at a pose: a query at a pose's stamp lands on its state

@@ -142,15 +142,15 @@ class MotionPrior(ABC):
     # --- shared -------------------------------------------------------------------------------------------
 
     def check_state(self, name: str, x: ArrayLike) -> NDArray:
-        """One finite state of this prior, (state_dim,), as a float array (its kind's own rules too: an SE(2) heading
-        in (-π, π]); ShapeError naming ``name`` and the shape otherwise. What every method taking a state checks
-        it with, before any matrix meets it."""
+        """``x`` as a float array of finite states of this prior: one, (state_dim,), or a stack (..., state_dim) where
+        the method broadcasts (a group prior's mean); ShapeError naming ``name`` and the shape otherwise. What every
+        method taking a state checks it with, before any matrix meets it."""
         x = real_array(name, x)
-        if x.shape != (self.state_dim,):
+        if x.ndim == 0 or x.shape[-1] != self.state_dim:
             raise ShapeError(
-                f"{name} must be one state of the {self.name} prior ({self.state_dim} numbers), got shape {x.shape}"
+                f"{name} must be a state of the {self.name} prior ({self.state_dim} numbers), got shape {x.shape}"
             )
-        return self.kind.check(name, finite(name, x))
+        return finite(name, x)
 
     def predict(self, x: NDArray, dt: float) -> NDArray:
         """The prior's mean ``dt`` > 0 after the state ``x``: a new state's starting value.  [YIB Eq. 14, 22]"""
