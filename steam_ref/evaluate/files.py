@@ -11,14 +11,17 @@ Numbers are written with 17 significant digits, so a file read back gives the sa
 a heading comes back through its quaternion or rotation, equal modulo 2π to within rounding (1e-15). The
 loaders accept planar poses only (z = 0, rotation about z, to 1e-9; a TUM quaternion of unit norm, to 1e-3) and
 refuse anything else with a :class:`~steam_ref.errors.DataError` naming the file and line; timestamps must increase
-strictly. A file's lines are read by :func:`~steam_ref.datasets.textfile.text_lines`, the rule every data file of text
-follows: a regular file (a FIFO is refused, not waited on), ASCII, its last line ended by a newline (a file cut inside
-its last number, TUM's qw, would still read, its heading moved).
+strictly as float64 reads them (16 significant digits: two stamps that differ only past them, nanoseconds since the
+epoch say, are refused, the message showing both as written). A file's lines are read by
+:func:`~steam_ref.datasets.textfile.text_lines`, the rule every data file of text follows: a regular file (a FIFO is
+refused, not waited on), ASCII, its last line ended by a newline (a file cut inside its last number, TUM's qw, would
+still read, its heading moved).
 """
 
 from __future__ import annotations
 
 import os
+from decimal import Decimal
 from pathlib import Path
 
 import numpy as np
@@ -92,6 +95,22 @@ def _line_of(path: str | os.PathLike, row: int) -> int:
     return data[row]
 
 
+def _not_increasing(path: str | os.PathLike, k: int, t: NDArray) -> str:
+    """Why data row ``k``'s timestamp is refused: it does not increase on row k - 1's as written, or it does and
+    float64 reads the two as one number (stamps in nanoseconds since the epoch, or seconds with 9 decimals: more
+    digits than its 16), which the message says rather than showing two equal numbers."""
+    line, previous = _line_of(path, k), _line_of(path, k - 1)
+    lines = text_lines(Path(path), ",")
+    written, written_before = lines[line - 1].split()[0], lines[previous - 1].split()[0]
+    if Decimal(written) > Decimal(written_before):
+        return (
+            f"{path}, line {line}: timestamp {written} follows {written_before} (line {previous}), but the two are one "
+            f"number in float64 ({float(t[k])!r}): they differ past its 16 significant digits; write the times with "
+            "fewer digits (in seconds, from a nearer origin)"
+        )
+    return f"{path}, line {line}: timestamp {float(t[k])!r} does not increase (previous {float(t[k - 1])!r})"
+
+
 def read_tum(path: str | os.PathLike) -> tuple[NDArray, NDArray]:
     """Times (n,) and planar poses (n, 3) [x, y, θ] of a TUM file; DataError for a pose out of the plane."""
     rows = _table(path, 8, "TUM")
@@ -113,9 +132,7 @@ def read_tum(path: str | os.PathLike) -> tuple[NDArray, NDArray]:
         )
     if np.any(np.diff(t) <= 0):
         k = int(np.flatnonzero(np.diff(t) <= 0)[0]) + 1
-        raise DataError(
-            f"{path}, line {_line_of(path, k)}: timestamp {float(t[k])!r} does not increase (previous {float(t[k - 1])!r})"
-        )
+        raise DataError(_not_increasing(path, k, t))
     theta = wrap_angle(2 * np.arctan2(q[:, 2], q[:, 3]))  # q and -q are one rotation: θ in [-π, π)
     return t, np.column_stack([xyz[:, :2], theta])
 
