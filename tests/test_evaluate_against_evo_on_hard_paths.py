@@ -13,7 +13,7 @@ import pytest
 from requirements import optional_import
 
 from steam_ref.errors import DataError, SteamError
-from steam_ref.evaluate import align_planar, ape, group_ape, read_tum, rpe
+from steam_ref.evaluate import align_planar, ape, group_ape, read_kitti, read_tum, rpe
 from steam_ref.lie.se3 import SE3
 
 EPS = np.finfo(float).eps
@@ -291,3 +291,15 @@ def test_tum_stamps_one_number_in_float64_are_refused_showing_both_as_written(tm
         read_tum(path)
     message = str(refused.value)
     assert first in message and second in message and "float64" in message
+
+
+@pytest.mark.parametrize(("entry", "read"), [("1.0000001", True), ("1.000002", False)])
+def test_a_kitti_rotation_is_read_to_its_stated_tolerance_and_refused_past_it(tmp_path, entry, read):
+    """R orthonormal to ROTATION_TOLERANCE (1e-6, the module docstring's): within it the heading is atan2(R10, R00)."""
+    path = tmp_path / "poses.txt"
+    path.write_text(f"1 0 0 5 0 1 0 6 0 0 1 0\n{entry} 0 0 5 0 1 0 6 0 0 1 0\n")
+    if read:
+        np.testing.assert_array_equal(read_kitti(path), [[5.0, 6.0, 0.0], [5.0, 6.0, 0.0]])
+    else:
+        with pytest.raises(DataError, match="line 2: not a planar pose"):
+            read_kitti(path)

@@ -9,7 +9,8 @@
 
 Numbers are written with 17 significant digits, so a file read back gives the same times and positions;
 a heading comes back through its quaternion or rotation, equal modulo 2π to within rounding (1e-15). The
-loaders accept planar poses only (z = 0, rotation about z, to 1e-9; a TUM quaternion of unit norm, to 1e-3) and
+loaders accept planar poses only (z = 0, rotation about z, to 1e-9; a TUM quaternion of unit norm, to 1e-3; a KITTI
+R orthonormal with det 1, to 1e-6) and
 refuse anything else with a :class:`~steam_ref.errors.DataError` naming the file and line; timestamps must increase
 strictly as float64 reads them (16 significant digits: two stamps that differ only past them, nanoseconds since the
 epoch say, are refused, the message showing both as written). A file's lines are read by
@@ -33,11 +34,20 @@ from ..dead_reckoning import wrap_angle
 from ..errors import DataError, ShapeError
 from .metrics import planar_poses
 
-__all__ = ["write_tum", "read_tum", "write_kitti", "read_kitti", "PLANAR_TOLERANCE", "UNIT_TOLERANCE"]
+__all__ = [
+    "write_tum",
+    "read_tum",
+    "write_kitti",
+    "read_kitti",
+    "PLANAR_TOLERANCE",
+    "UNIT_TOLERANCE",
+    "ROTATION_TOLERANCE",
+]
 
 PLANAR_TOLERANCE = 1e-9  # |z|, |qx|, |qy| and the rotation's off-plane entries a planar file may have
 # |‖q‖ - 1| a TUM quaternion may have: files of 4 decimals (the TUM RGB-D benchmark's own) are within 2e-4 of 1
 UNIT_TOLERANCE = 1e-3
+ROTATION_TOLERANCE = 1e-6  # abs of each entry of R Rᵀ - I, and of det R - 1, a KITTI rotation may have
 
 
 def _times(times: object, n: int) -> NDArray:
@@ -153,7 +163,11 @@ def read_kitti(path: str | os.PathLike) -> NDArray:
     off_plane = np.max(np.abs(np.concatenate([rot[:, 2, :2], rot[:, :2, 2], t[:, 2:]], axis=1)), axis=1)
     not_rotation = np.max(np.abs(rot @ np.transpose(rot, (0, 2, 1)) - np.eye(3)), axis=(1, 2))
     not_rotation = np.maximum(not_rotation, np.abs(np.linalg.det(rot) - 1))  # det -1: a mirror, orthogonal too
-    bad = (off_plane > PLANAR_TOLERANCE) | (np.abs(rot[:, 2, 2] - 1) > PLANAR_TOLERANCE) | (not_rotation > 1e-6)
+    bad = (
+        (off_plane > PLANAR_TOLERANCE)
+        | (np.abs(rot[:, 2, 2] - 1) > PLANAR_TOLERANCE)
+        | (not_rotation > ROTATION_TOLERANCE)
+    )
     if bad.any():
         k = int(np.flatnonzero(bad)[0])
         raise DataError(f"{path}, line {_line_of(path, k)}: not a planar pose [R | t] (R a rotation about z, t_z = 0)")
