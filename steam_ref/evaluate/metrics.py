@@ -15,9 +15,9 @@ relate: unaligned, they are the same definitions; evo aligns in SE(3) / Sim(3) (
 planar poses (z = 0, rotations about z) finds the rotation about z and the planar translation our SE(2) /
 Sim(2) alignment finds, so ``ape(align='se2')`` equals evo's APE after ``align`` and ``ape(align='sim2')``
 after ``align(correct_scale=True)``, unless the estimate is nearer a mirror image of the truth than a turned
-copy: then evo turns it upside down, a half turn about an axis in the plane (:mod:`.align`). RPE pairs are chosen on the truth here by default
-(evo's ``pairs_from_reference=True``); ``pairs_from='estimate'`` is evo's default. Evo's yaw-only planar
-alignment of 3-D trajectories (its issue 746) is what ``se2`` is for planar ones.
+copy: then evo turns it upside down, a half turn about an axis in the plane (:mod:`.align`). RPE pairs are
+chosen on the truth here by default (evo's ``pairs_from_reference=True``); ``pairs_from='estimate'`` is evo's
+default. Evo's yaw-only planar alignment of 3-D trajectories (its issue 746) is what ``se2`` is for planar ones.
 
 :func:`group_ape` is the unaligned APE of poses on any group of rigid motions (SE(3)): the translation error and
 the angle of the relative rotation, evo's ``APE`` with no alignment.
