@@ -176,7 +176,7 @@ def evaluation_note(summary: dict) -> str:
     e = summary.get("evaluation")
     if not e:
         return ""
-    rpe = f", RPE/1 {e['rpe']['translation_m']['rmse']:.4g} m" if "rpe" in e else ""
+    rpe = f", RPE over one pose {e['rpe']['translation_m']['rmse']:.4g} m" if "rpe" in e else ""
     aligned = ""
     if e.get("ape_se2") is not None:
         aligned = f" ({e['ape_se2']['translation_m']['rmse']:.4g} m SE(2)-aligned)"
