@@ -40,8 +40,9 @@ from finite_differences import jacobian8
 from requirements import optional_import
 
 from steam_ref import X
-from steam_ref.gp import LinearSDE
+from steam_ref.gp import LinearSDE, wnoj_process_noise_inverse
 from steam_ref.gp.interpolate import interpolation_matrices, interpolation_terms
+from steam_ref.gp.prior import process_noise_inverse
 from steam_ref.lie import SE3, GroupState, gp_accel
 from steam_ref.lie import gp as lie_gp
 from steam_ref.motion.lie_accel import LieGroupAccelPrior
@@ -100,13 +101,15 @@ def right_jacobians(f, x1, x2, kind):
 @pytest.mark.parametrize("dt", [0.1, 0.7, 3.0])
 def test_wnoa_transition_and_noise_are_steams_const_vel(dt):
     """STEAM include/steam/trajectory/const_vel/helper.hpp, getTran, getQ, getQinv: Φ = [[I, Δt I], [0, I]],
-    Q = [[Δt³/3, Δt²/2], [Δt²/2, Δt]] ⊗ Qc, Q⁻¹ = [[12/Δt³, -6/Δt²], [-6/Δt², 4/Δt]] ⊗ Qc⁻¹ (ours: WᵀW = Q⁻¹ of the
-    factor's square-root information), to 1e-14 relative (STEAM evaluates the same monomials)."""
+    Q = [[Δt³/3, Δt²/2], [Δt²/2, Δt]] ⊗ Qc, Q⁻¹ = [[12/Δt³, -6/Δt²], [-6/Δt², 4/Δt]] ⊗ Qc⁻¹, to 1e-14 relative (STEAM
+    evaluates the same monomials); ours: ``gp.prior.process_noise_inverse`` to 1e-14, and WᵀW of the prior factor's
+    square-root information to 1e-12."""
     sde, Qc, Qci = LinearSDE.wnoa(np.diag(QC_DIAG)), np.diag(QC_DIAG), np.diag(1 / QC_DIAG)
     np.testing.assert_allclose(sde.transition(dt), np.kron([[1, dt], [0, 1]], np.eye(D)), rtol=1e-15, atol=0)
     Q = np.kron([[dt**3 / 3, dt**2 / 2], [dt**2 / 2, dt]], Qc)
     np.testing.assert_allclose(sde.process_noise(dt), Q, rtol=1e-14, atol=0)
     Qinv = np.kron([[12 / dt**3, -6 / dt**2], [-6 / dt**2, 4 / dt]], Qci)
+    np.testing.assert_allclose(process_noise_inverse(dt, Qc), Qinv, rtol=1e-14, atol=0)
     W = LieGroupWnoa(SE3, Qc).prior_factor(X(0), X(1), dt).sqrt_information
     np.testing.assert_allclose(W.T @ W, Qinv, rtol=1e-12, atol=1e-12 * np.max(np.abs(Qinv)))
 
@@ -115,7 +118,8 @@ def test_wnoa_transition_and_noise_are_steams_const_vel(dt):
 def test_wnoj_transition_and_noise_are_steams_const_acc(dt):
     """STEAM include/steam/trajectory/const_acc/helper.hpp, getTran, getQ, getQinv: Φ = [[I, Δt, Δt²/2], [0, I, Δt],
     [0, 0, I]], Q = [[Δt⁵/20, Δt⁴/8, Δt³/6], [Δt⁴/8, Δt³/3, Δt²/2], [Δt³/6, Δt²/2, Δt]] ⊗ Qc, Q⁻¹ = [[720/Δt⁵, -360/Δt⁴,
-    60/Δt³], [-360/Δt⁴, 192/Δt³, -36/Δt²], [60/Δt³, -36/Δt², 9/Δt]] ⊗ Qc⁻¹ (ours: WᵀW of the prior factor)."""
+    60/Δt³], [-360/Δt⁴, 192/Δt³, -36/Δt²], [60/Δt³, -36/Δt², 9/Δt]] ⊗ Qc⁻¹ (ours: ``gp.wnoj_process_noise_inverse`` to
+    1e-14, and WᵀW of the prior factor to 1e-10)."""
     sde, Qc, Qci = LinearSDE.wnoj(np.diag(QC_DIAG)), np.diag(QC_DIAG), np.diag(1 / QC_DIAG)
     phi = np.kron([[1, dt, dt**2 / 2], [0, 1, dt], [0, 0, 1]], np.eye(D))
     np.testing.assert_allclose(sde.transition(dt), phi, rtol=1e-15, atol=0)
@@ -128,6 +132,7 @@ def test_wnoj_transition_and_noise_are_steams_const_acc(dt):
     ]
     W = LieGroupAccelPrior.wnoj(SE3, Qc).prior_factor(X(0), X(1), dt).sqrt_information
     Qinv = np.kron(qi, Qci)
+    np.testing.assert_allclose(wnoj_process_noise_inverse(dt, Qc), Qinv, rtol=1e-14, atol=0)
     np.testing.assert_allclose(W.T @ W, Qinv, rtol=1e-10, atol=1e-11 * np.max(np.abs(Qinv)))
 
 
