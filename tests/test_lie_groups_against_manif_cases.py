@@ -32,7 +32,11 @@ from steam_ref.lie.points import to_body
 
 EPS = np.finfo(float).eps
 PI, PI_2 = np.pi, np.pi / 2
-DOUBLE_EQ = dict(rtol=4 * EPS, atol=0)  # gtest's EXPECT_DOUBLE_EQ: within 4 units in the last place
+
+
+def assert_double_eq(actual, expected):
+    """gtest's EXPECT_DOUBLE_EQ: within 4 units in the last place (``rtol=4ε``)."""
+    np.testing.assert_allclose(actual, expected, rtol=4 * EPS, atol=0)
 
 
 def act(group, a, p):
@@ -58,7 +62,7 @@ def test_se2_inverse_of_identity_of_a_half_turn_and_of_a_generic_pose():
     assert abs(same_angle(half[2], -PI)) <= 4 * EPS  # manif's -π, the same rotation
     assert -PI < half[2] <= PI  # ours in the stored range
     inv = SE2.inverse([0.7, 2.3, PI / 3])
-    np.testing.assert_allclose(inv[:2], [-2.341858428704209, -0.543782217350893], **DOUBLE_EQ)
+    assert_double_eq(inv[:2], [-2.341858428704209, -0.543782217350893])
     assert abs(inv[2] - -1.04719755119660) <= 3e-15
 
 
@@ -70,10 +74,10 @@ def test_se2_rplus_and_lplus(tau):
     X = np.array([1.0, 1.0, PI_2])
     right, left = SE2.compose_exp(X, tau), SE2.compose(SE2.exp(tau), X)
     if not np.any(tau):
-        np.testing.assert_allclose(right, X, **DOUBLE_EQ)
-        np.testing.assert_allclose(left, X, **DOUBLE_EQ)
+        assert_double_eq(right, X)
+        assert_double_eq(left, X)
     else:
-        np.testing.assert_allclose([right[2], left[2]], [PI, PI], **DOUBLE_EQ)
+        assert_double_eq([right[2], left[2]], [PI, PI])
 
 
 def test_se2_rminus_lminus_lift():
@@ -84,18 +88,18 @@ def test_se2_rminus_lminus_lift():
     np.testing.assert_allclose(zero, 0.0, rtol=0, atol=1e-15)
     X, Y = np.array([1.0, 1.0, PI]), np.array([2.0, 2.0, PI_2])
     assert SE2.log(SE2.between(X, X))[2] == 0.0
-    np.testing.assert_allclose(SE2.log(SE2.between(Y, X))[2], PI_2, **DOUBLE_EQ)  # rminus
-    np.testing.assert_allclose(SE2.log(SE2.compose(X, SE2.inverse(Y)))[2], PI_2, **DOUBLE_EQ)  # lminus
-    np.testing.assert_allclose(SE2.log(X)[2], PI, **DOUBLE_EQ)
+    assert_double_eq(SE2.log(SE2.between(Y, X))[2], PI_2)  # rminus
+    assert_double_eq(SE2.log(SE2.compose(X, SE2.inverse(Y)))[2], PI_2)  # lminus
+    assert_double_eq(SE2.log(X)[2], PI)
 
 
 def test_se2_compose_and_between():
     """manif test/se2/gtest_se2.cpp, TEST_SE2_COMPOSE (and OP_COMPOSE, OP_COMPOSE_EQ), TEST_SE2_BETWEEN_I,
     TEST_SE2_BETWEEN: (1, 1, π/2)(2, 2, π/2) = (-1, 3, π); (1, 1, π)⁻¹(1, 1, π) = (0, 0, 0);
     (1, 1, π)⁻¹(2, 2, π/2) = (-1, -1, -π/2); each to 4 ulps."""
-    np.testing.assert_allclose(SE2.compose([1.0, 1.0, PI_2], [2.0, 2.0, PI_2]), [-1.0, 3.0, PI], **DOUBLE_EQ)
+    assert_double_eq(SE2.compose([1.0, 1.0, PI_2], [2.0, 2.0, PI_2]), [-1.0, 3.0, PI])
     np.testing.assert_array_equal(SE2.between([1.0, 1.0, PI], [1.0, 1.0, PI]), np.zeros(3))
-    np.testing.assert_allclose(SE2.between([1.0, 1.0, PI], [2.0, 2.0, PI_2]), [-1.0, -1.0, -PI_2], **DOUBLE_EQ)
+    assert_double_eq(SE2.between([1.0, 1.0, PI], [2.0, 2.0, PI_2]), [-1.0, -1.0, -PI_2])
 
 
 @pytest.mark.parametrize(
@@ -117,7 +121,7 @@ def test_se2_exp_of_a_half_turn_tangent():
     xi = np.array([4.0, 2.0, PI])
     T = SE2.exp(xi)
     assert T[2] == PI
-    np.testing.assert_allclose([np.cos(T[2]), np.sin(T[2])], [np.cos(PI), np.sin(PI)], **DOUBLE_EQ)
+    assert_double_eq([np.cos(T[2]), np.sin(T[2])], [np.cos(PI), np.sin(PI)])
     J = SE2.right_jacobian(xi)
     assert J.shape == (3, 3)
     h = 1e-6
@@ -155,7 +159,7 @@ def test_so2_values():
         SE2.between(rot(PI), rot(PI_2))[2],
     ]
     expected = [PI, PI, PI_2, PI_2, 3 * PI / 8, PI, PI, -PI_2]
-    np.testing.assert_allclose(values, expected, **DOUBLE_EQ)
+    assert_double_eq(values, expected)
 
 
 def test_so2_jacobians_are_the_angle_entries_of_se2s():
@@ -179,7 +183,7 @@ def test_so2_jacobians_are_the_angle_entries_of_se2s():
     ours = [J_inv0, J_invpi, J_lift, Ja, Jb, J_rplus_m, J_rplus_t, J_lplus_t, J_rminus_a, J_rminus_b, J_between_a]
     ours.append(J_between_b)
     manif = [-1.0, -1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, -1.0, -1.0, 1.0]
-    np.testing.assert_allclose([J[2, 2] for J in ours], manif, **DOUBLE_EQ)
+    assert_double_eq([J[2, 2] for J in ours], manif)
 
 
 @pytest.mark.parametrize(
@@ -254,8 +258,8 @@ def test_so3_exp_log_rplus_rminus_properties(rng):
     np.testing.assert_allclose(SO3.exp(-tau), SO3.inverse(SO3.exp(tau)), rtol=0, atol=4 * EPS)
     X = SO3.exp(rng.uniform(-1, 1, 3))
     np.testing.assert_allclose(SO3.log(SO3.inverse(X)), -SO3.log(X), rtol=4 * EPS, atol=4 * EPS)
-    np.testing.assert_allclose(SO3.compose_exp(X, np.zeros(3)), X, **DOUBLE_EQ)
-    np.testing.assert_allclose(SO3.compose(SO3.exp(np.zeros(3)), X), X, **DOUBLE_EQ)
+    assert_double_eq(SO3.compose_exp(X, np.zeros(3)), X)
+    assert_double_eq(SO3.compose(SO3.exp(np.zeros(3)), X), X)
     np.testing.assert_allclose(SO3.log(SO3.between(X, X)), 0.0, rtol=0, atol=1e-15)
 
 
