@@ -3,7 +3,8 @@
 The source is STEAM (Anderson, Barfoot, Tang, Yoon et al., BSD licence), repository ``utiasASRL/steam`` at commit
 d6e83d93: its one test file of the priors, ``tests/jacobian_test.cpp`` (the interpolators' values at a constant
 acceleration and their Jacobians against differences), and the closed forms its priors use, in
-``include/steam/trajectory/{const_vel,const_acc,singer}/helper.hpp`` and ``src/trajectory/*/prior_factor.cpp``.
+``include/steam/trajectory/{const_vel,const_acc,singer}/helper.hpp``, ``src/trajectory/{const_vel,const_acc}/prior_factor.cpp``
+and ``include/steam/trajectory/singer/prior_factor.hpp``.
 (Its Python port ``utiasASRL/pysteam`` has no test of the priors: ``tests/`` holds autograd and a transform error.)
 Each test names its file and its test or function. Only inputs, expected outputs and properties carry over.
 
@@ -252,7 +253,7 @@ def test_constant_velocity_interpolation_value_and_jacobians():
     np.testing.assert_allclose(J2, n2, rtol=0, atol=1e-9)
 
 
-# --- the prior factors' errors and Jacobians: STEAM src/trajectory/*/prior_factor.cpp, helper.hpp -------------------------
+# --- the prior factors' errors and Jacobians: STEAM prior_factor.cpp / .hpp, helper.hpp -----------------------------------
 
 
 def test_wnoa_prior_error_and_jacobians():
@@ -281,7 +282,8 @@ def test_wnoa_prior_error_and_jacobians():
 
 
 def test_wnoj_and_singer_prior_errors_and_jacobians():
-    """STEAM src/trajectory/const_acc/prior_factor.cpp and src/trajectory/singer/prior_factor.cpp (value:
+    """STEAM src/trajectory/const_acc/prior_factor.cpp and include/steam/trajectory/singer/prior_factor.hpp (Singer's
+    inherits const_acc's error with its own Φ) (value:
     e = γ₂ - Φ γ₁, γ₁ = [0; ϖ₁; ϖ̇₁], γ₂ = [ξ₂₁; J⁻¹ϖ₂; -½(J⁻¹ϖ₂)⋏ϖ₂ + J⁻¹ϖ̇₂]) and their helper.hpp getJacKnot1/2.
     Oracle: the states of T(t) = T₁ Exp(At + Bt²/2 + Ct³/6) at 0 and Δt = 0.7 from ``true_state`` (matrix exponentials
     only), whose local variables are exactly γ₂ = [ξ(Δt); ξ̇(Δt); ξ̈(Δt)], γ₁ = [0; A; B]: e = γ₂ - Φγ₁, to 1e-11,
