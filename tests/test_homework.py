@@ -227,3 +227,121 @@ def test_bad_input_is_one_line_and_exit_code_2(course, capsys):
         assert code == 2, (argv, out, err)
         assert len(err.strip().splitlines()) == 1 and "Traceback" not in err, (argv, err)
         assert re.search(message, err), (argv, err)
+
+
+MALFORMED = {
+    "a cell's metadata null": lambda nb: nb["cells"][3].__setitem__("metadata", None),
+    "a cell's tags null": lambda nb: nb["cells"][3]["metadata"].__setitem__("tags", None),
+    "a cell's tags one string": lambda nb: nb["cells"][3]["metadata"].__setitem__("tags", "answer"),
+    "a cell's source lines not text": lambda nb: nb["cells"][3].__setitem__("source", [1, 2]),
+    "the notebook's metadata a list": lambda nb: nb.__setitem__("metadata", []),
+}
+
+
+@pytest.mark.parametrize("kind", MALFORMED)
+def test_a_submission_off_nbformat_scores_0_saying_why_and_never_stops_the_marking(course, capsys, kind):
+    """A notebook whose JSON parses but whose cells are not nbformat 4's (a student's editor or a hand edit:
+    metadata null, tags not a list of strings, source lines that are not text) is "not a notebook": given on
+    the command line, one line and exit code 2; in a folder, it scores 0 saying why, and the marking goes on.
+    Before, the marker read it and died with a traceback (AttributeError, TypeError), marking no one."""
+    nb = json.loads((course / "handout" / "tiny.ipynb").read_text())
+    assert nb["cells"][3]["id"] == "s1"  # the answer cell the cases break
+    MALFORMED[kind](nb)
+    path = course / "submitted" / "odd" / "tiny.ipynb"
+    path.parent.mkdir(parents=True)
+    path.write_text(json.dumps(nb))
+    assert main(["homework", "mark", str(path), "--source", str(course / "teacher")]) == 2, kind
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and "Traceback" not in err, (kind, err)
+    assert "tiny.ipynb' is not a notebook" in err, (kind, err)
+    from steam_ref.homework.marking import load_tutorials, mark_submission
+
+    mark = mark_submission(path, "odd/tiny.ipynb", load_tutorials(course / "teacher"), timeout=LIMIT)
+    assert mark.tutorial == "tiny" and mark.score == 0 and "is not a notebook" in (mark.error or ""), (kind, mark)
+    assert [e.status for e in mark.exercises] == ["not run", "not run"], (kind, mark)
+
+
+def test_a_teachers_notebook_off_the_form_is_one_line_and_exit_code_2(tmp_path, capsys):
+    """A task tagged with one string, not a list, went unseen (its solution then "belongs to no exercise", or with
+    every tag a string, the handout kept the solution); a ``steam_ref`` metadata entry that is not an object
+    stopped the handout with a TypeError."""
+    tags_string, metadata_string = _teacher(), _teacher()
+    tags_string["cells"][2]["metadata"]["tags"] = "exercise"
+    metadata_string["metadata"]["steam_ref"] = "tiny"
+    cases = {
+        "tags": (tags_string, "tiny.ipynb' is not a notebook: cell 2's tags are not a list of strings"),
+        "metadata": (metadata_string, "tiny.ipynb: its metadata 'steam_ref' is not an object"),
+    }
+    for kind, (nb, message) in cases.items():
+        (tmp_path / kind).mkdir()
+        (tmp_path / kind / "tiny.ipynb").write_text(json.dumps(nb))
+        code = main(["homework", "handout", str(tmp_path / kind), "--out", str(tmp_path / kind / "out")])
+        err = capsys.readouterr().err
+        assert code == 2 and len(err.strip().splitlines()) == 1 and message in err, (kind, err)
+
+
+def _teacher_reading_the_lesson() -> dict:
+    """Marking checks that read the lesson, as the tutorials' do (a helper like chi2_band, a value like qc, an
+    array, a builtin): exercise 1 asks for ``power(base, 2)``, exercise 2 for a cube at the lesson's points."""
+    nb = _teacher()
+    nb["cells"][1] = _cell(
+        "code",
+        "setup",
+        "import numpy as np\nbase = 3\npoints = np.array([-2.0, 0.5])\n\n\ndef power(x, k):\n    return x**k",
+    )
+    nb["cells"][5] = _cell(
+        "code", "h1", "assert abs(square - power(base, 2)) < 1e-12, 'square is not base squared'", ("hidden-check",)
+    )
+    nb["cells"][9] = _cell(
+        "code", "h2", "assert np.allclose(cube(points), power(points, 3)), 'cube is wrong'", ("hidden-check",)
+    )
+    return nb
+
+
+def test_an_answer_that_rebinds_a_name_the_marking_reads_scores_0_and_the_next_exercise_is_marked_fairly(
+    tmp_path, capsys
+):
+    """The marking checks compare an answer with the lesson's own names (tutorial 09's chi2_band, 00's qc): an
+    answer that rebinds one would make the check compare the answer with itself. A wrong square with its own
+    wrong ``power`` (tutorial 09: a student's own chi2_band giving a 90 % band) scored full marks, and the right
+    cube of exercise 2 then lost its point to the student's ``power``; rebinding ``base``, changing ``points``
+    in place or shadowing the builtin ``abs`` passed a wrong answer too. Now each scores 0 naming the name, the
+    lesson's value is put back, and exercise 2 is marked against it; an equal value bound again (``base = 3``, a
+    second ``import numpy as np``) changes nothing."""
+    optional_import("nbclient", "notebooks")
+    optional_import("ipykernel", "notebooks")
+    (tmp_path / "teacher").mkdir()
+    (tmp_path / "teacher" / "tiny.ipynb").write_text(json.dumps(_teacher_reading_the_lesson()))
+    assert main(["homework", "handout", str(tmp_path / "teacher"), "--out", str(tmp_path / "handout")]) == 0
+    capsys.readouterr()
+    cube = "import numpy as np\n\n\ndef cube(x):\n    return x**3"
+    submissions = {
+        "right": {"s1": "base = 3\nsquare = base * base", "s2": cube},
+        "own-helper": {"s1": "def power(x, k):\n    return x * k\n\n\nsquare = power(base, 2)", "s2": cube},
+        "rebinds": {"s1": "base = 4\nsquare = base * base", "s2": cube},
+        "mutates": {"s1": "square = 9", "s2": "points[:] = 0.0\ncube = lambda x: x * x"},
+        "shadows-a-builtin": {"s1": "abs = lambda x: 0\nsquare = 10", "s2": cube},
+    }
+    for name, answers in submissions.items():
+        _submit(tmp_path, name, answers)
+    argv = ["--source", str(tmp_path / "teacher"), "--timeout", "60", "--jobs", "2", "--json"]
+    assert main(["homework", "mark", str(tmp_path / "submitted"), *argv]) == 0
+    marks = {m["submission"].split("/")[0]: m for m in json.loads(capsys.readouterr().out)["submissions"]}
+    got = {name: [(e["score"], e["status"]) for e in m["exercises"]] for name, m in marks.items()}
+    assert got == {
+        "right": [(1, "passed"), (1, "passed")],
+        "own-helper": [(0, "failed"), (1, "passed")],
+        "rebinds": [(0, "failed"), (1, "passed")],
+        "mutates": [(1, "passed"), (0, "failed")],
+        "shadows-a-builtin": [(0, "failed"), (1, "passed")],
+    }, got
+    said = {name: [e["message"] for e in m["exercises"] if e["score"] == 0] for name, m in marks.items()}
+    for name, rebound in (
+        ("own-helper", "power"),
+        ("rebinds", "base"),
+        ("mutates", "points"),
+        ("shadows-a-builtin", "abs"),
+    ):
+        (message,) = said[name]
+        assert f"the answer rebinds `{rebound}`" in message and "another name" in message, (name, message)
+        assert not re.search(r"\d", message), message  # what is wrong, never a value

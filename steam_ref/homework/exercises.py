@@ -66,6 +66,7 @@ class Exercise:
     solution_id: str
     check_id: str
     names: tuple[str, ...]  # what the solution defines and the checks read: what the answer must define
+    reads: tuple[str, ...] = ()  # every name the checks read, sorted: the answer's and the lesson's
 
     @property
     def label(self) -> str:
@@ -95,7 +96,28 @@ def read_notebook(path: Path) -> dict[str, Any]:
     cells = nb.get("cells") if isinstance(nb, dict) else None
     if not isinstance(cells, list) or nb.get("nbformat") != 4 or not all(isinstance(c, dict) for c in cells):
         raise SteamError(f"{str(path)!r} is not a notebook: no nbformat 4 'cells' list")
+    wrong = _off_the_form(nb)
+    if wrong:
+        raise SteamError(f"{str(path)!r} is not a notebook: {wrong}")
     return nb
+
+
+def _off_the_form(nb: dict[str, Any]) -> str | None:
+    """What in the parts of a notebook the homework reads breaks nbformat 4's form, or None: the metadata an
+    object, each cell's metadata an object, its tags a list of strings, its source a string or a list of them."""
+    if not isinstance(nb.get("metadata", {}), dict):
+        return "its 'metadata' is not an object"
+    for i, cell in enumerate(nb["cells"]):
+        meta = cell.get("metadata", {})
+        if not isinstance(meta, dict):
+            return f"cell {i}'s 'metadata' is not an object"
+        found = meta.get("tags", [])
+        if not isinstance(found, list) or not all(isinstance(t, str) for t in found):
+            return f"cell {i}'s tags are not a list of strings"
+        text = cell.get("source", "")
+        if not isinstance(text, str) and not (isinstance(text, list) and all(isinstance(s, str) for s in text)):
+            return f"cell {i}'s source is not text (a string or a list of strings)"
+    return None
 
 
 def _bound(body: list[ast.stmt]) -> list[str]:
@@ -117,15 +139,31 @@ def _bound(body: list[ast.stmt]) -> list[str]:
 
 
 def _read(code: str) -> set[str]:
-    """Names a cell reads that it does not bind itself (nor as a loop or comprehension variable)."""
-    nodes = [n for n in ast.walk(ast.parse(code)) if isinstance(n, ast.Name)]
-    stored = {n.id for n in nodes if isinstance(n.ctx, ast.Store)}
-    return {n.id for n in nodes if isinstance(n.ctx, ast.Load)} - stored
+    """Names a cell reads that it does not bind itself (nor as a loop or comprehension variable, a function's
+    parameter, a function or class it defines, a name it imports)."""
+    tree = ast.parse(code)
+    nodes = [n for n in ast.walk(tree) if isinstance(n, ast.Name)]
+    bound = {n.id for n in nodes if isinstance(n.ctx, ast.Store)} | {
+        a.arg for a in ast.walk(tree) if isinstance(a, ast.arg)
+    }
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            bound.add(node.name)
+        elif isinstance(node, (ast.Import, ast.ImportFrom)):
+            bound |= {(a.asname or a.name).split(".")[0] for a in node.names}
+    return {n.id for n in nodes if isinstance(n.ctx, ast.Load)} - bound
 
 
-def _names(nb: dict, solution: int, checks: list[int]) -> tuple[str, ...]:
+def _reads(nb: dict, checks: list[int]) -> set[str]:
+    """The names the check cells ``checks`` read (none if one is not Python)."""
     try:
-        read = set().union(*(_read(source(nb["cells"][i])) for i in checks))
+        return set().union(*(_read(source(nb["cells"][i])) for i in checks))
+    except SyntaxError:
+        return set()
+
+
+def _names(nb: dict, solution: int, read: set[str]) -> tuple[str, ...]:
+    try:
         return tuple(dict.fromkeys(n for n in _bound(ast.parse(source(nb["cells"][solution])).body) if n in read))
     except SyntaxError:
         return ()
@@ -158,6 +196,7 @@ def exercises(nb: dict, name: str) -> list[Exercise]:
         while j < len(cells) and HIDDEN in tags(cells[j]) and cells[j].get("cell_type") == "code":
             hidden.append(j)
             j += 1
+        read = _reads(nb, [i + 2, *hidden])
         found.append(
             Exercise(
                 number=int(heading[1]),
@@ -169,7 +208,8 @@ def exercises(nb: dict, name: str) -> list[Exercise]:
                 task_id=str(cell.get("id", "")),
                 solution_id=str(cells[i + 1].get("id", "")),
                 check_id=str(cells[i + 2].get("id", "")),
-                names=_names(nb, i + 1, [i + 2, *hidden]),
+                names=_names(nb, i + 1, read),
+                reads=tuple(sorted(read)),
             )
         )
     placed = {k for e in found for k in (e.solution, e.check, *e.hidden)}
@@ -210,6 +250,8 @@ def handout(nb: dict, name: str) -> dict:
         cells.append(kept)
     out = copy.deepcopy({k: v for k, v in nb.items() if k != "cells"})
     meta = out.setdefault("metadata", {})
+    if not isinstance(meta.get(METADATA, {}), dict):
+        raise SteamError(f"{name}: its metadata {METADATA!r} is not an object")
     meta[METADATA] = {**meta.get(METADATA, {}), "handout_of": Path(name).stem}
     return {**out, "cells": cells}
 

@@ -122,7 +122,12 @@ def _one_line(text: str) -> str:
 class _Cell:
     cell: dict[str, Any]
     exercise: int | None  # the exercise's position among the tutorial's, for its answer and checks
-    role: str  # lesson, answer, check, hidden
+    role: str  # lesson, answer, check, hidden, guard (the lesson's names kept around an answer: KEEP, PUT_BACK)
+
+
+def _code(text: str) -> dict[str, Any]:
+    """A code cell of the marking run's own."""
+    return {"cell_type": "code", "metadata": {}, "source": text, "outputs": [], "execution_count": None}
 
 
 def _written(cells: list[dict] | None) -> str | None:
@@ -144,6 +149,7 @@ def _assemble(tutorial: Tutorial, submission: dict) -> tuple[list[_Cell], dict[i
         role_of.update(dict.fromkeys(e.hidden, (n, "hidden")))
     cells: list[_Cell] = []
     missing: dict[int, str | None] = {}
+    guarded = _guarded(tutorial)
     for i, cell in enumerate(tutorial.notebook["cells"]):
         k, role = role_of.get(i, (None, "lesson"))
         if role != "answer":
@@ -152,13 +158,87 @@ def _assemble(tutorial: Tutorial, submission: dict) -> tuple[list[_Cell], dict[i
         assert k is not None
         answer = answer_cells(submission, tutorial.exercises[k], k)
         missing[k] = _written(answer)
+        cells.append(_Cell(_code(KEEP.format(kept=KEPT, names=guarded)), k, "guard"))
         cells += [_Cell(copy.deepcopy(c), k, "answer") for c in answer or []]
+        cells.append(_Cell(_code(PUT_BACK.format(kept=KEPT)), k, "guard"))
     for n, c in enumerate(cells):
         c.cell["id"] = f"marking-{n}"  # unique, whatever the student copied
         c.cell["source"] = source(c.cell)  # nbformat's list of lines as the one string a kernel runs
         if c.cell.get("cell_type") == "code":
             c.cell["outputs"], c.cell["execution_count"] = [], None
     return cells, missing
+
+
+# The lesson's names the checks read, kept around each answer (``_assemble``): a marking check compares an answer with
+# the lesson's own names (a helper like chi2_band, a value like qc), so an answer that rebound one would be compared
+# with itself. Run in the kernel: KEEP before the answer, PUT_BACK after it, which puts back what the answer rebound,
+# changed in place (an array) or shadowed (a builtin the checks call), then fails naming it. An equal value bound
+# again (``n = 24`` where the lesson has 24, ``import numpy as np``) is no change.
+KEPT = "__steam_ref_kept__"
+KEEP = """\
+def __steam_ref_keep__(names, scope):
+    import builtins
+    kept = {{}}
+    for name in names:
+        if name in scope:
+            value = scope[name]
+            saved = value.copy() if type(value).__name__ == "ndarray" and hasattr(value, "copy") else None
+            kept[name] = (value, saved)
+        elif hasattr(builtins, name):
+            kept[name] = None
+    return kept
+
+
+{kept} = __steam_ref_keep__({names!r}, globals())
+del __steam_ref_keep__
+"""
+PUT_BACK = """\
+def __steam_ref_put_back__(kept, scope):
+    try:
+        import numpy
+    except ImportError:
+        numpy = None
+    plain = (bool, int, float, complex, str, bytes, type(None)) + ((numpy.generic,) if numpy else ())
+    changed = []
+    for name, was in kept.items():
+        if was is None:  # a builtin: the answer must not shadow it
+            if name in scope:
+                changed.append(name)
+                del scope[name]
+            continue
+        value, saved = was
+        now = scope.get(name, kept)  # kept: a stand-in for "no longer bound"
+        if saved is not None:
+            same = type(now) is type(saved) and now.shape == saved.shape and now.dtype == saved.dtype
+            try:
+                same = same and bool(numpy.array_equal(now, saved, equal_nan=True))
+            except TypeError:  # not numbers: NaN means nothing
+                same = same and bool(numpy.array_equal(now, saved))
+            if not same and value.flags.writeable:
+                value[...] = saved
+        else:
+            same = now is value or (type(now) is type(value) and isinstance(value, plain) and bool(now == value))
+        if not same:
+            changed.append(name)
+            scope[name] = value
+    named = ", ".join(f"`{{name}}`" for name in changed)
+    assert not changed, (
+        f"the answer rebinds {{named}}, which the marking checks read from the lesson (put back for them): "
+        "give yours another name and leave the lesson's as they are"
+    )
+
+
+try:
+    __steam_ref_put_back__({kept}, globals())
+finally:
+    del __steam_ref_put_back__, {kept}
+"""
+
+
+def _guarded(tutorial: Tutorial) -> tuple[str, ...]:
+    """The lesson's names an answer must leave as they are: those any exercise's checks read, none an answer's."""
+    answers = {n for e in tutorial.exercises for n in e.names}
+    return tuple(sorted({n for e in tutorial.exercises for n in e.reads} - answers))
 
 
 DIED = "the run stopped: the kernel died (did the answer exit Python?)"
@@ -254,7 +334,7 @@ def _verdict(
     error; else the first of its cells that failed (the answer's error or timeout, then a check's), else why its
     checks did not run."""
     mine = [(i, c.role) for i, c in enumerate(cells) if c.exercise == k]
-    checks = [i for i, role in mine if role in ("check", "hidden")]
+    checks = [i for i, role in mine if role in ("check", "hidden", "guard")]
     if all(i in outcomes and outcomes[i] is None for i in checks):
         return "passed", ""
     failed = [(i, role, outcomes[i]) for i, role in mine if outcomes.get(i) is not None]
@@ -271,6 +351,8 @@ def _verdict(
     if role == "answer":
         return "error", _one_line(f"the answer raised {name}: {message}")
     said = message if name == "AssertionError" and message else f"{name}: {message}".rstrip(": ")
+    if role == "guard":  # the answer rebound a name of the lesson the checks read
+        return "failed", _one_line(said)
     return "failed", _one_line(f"{'check' if role == 'check' else 'marking check'}: {said}")
 
 
