@@ -222,7 +222,10 @@ def exercises(nb: dict, name: str) -> list[Exercise]:
 
 def _answer_cell(exercise: Exercise) -> dict:
     wanted = ", ".join(f"`{n}`" for n in exercise.names) or "the names the task asks for"
-    text = f"# Your answer to exercise {exercise.number}: define {wanted} (the check below reads them)\n"
+    text = (
+        f"# Your answer to exercise {exercise.number}: define {wanted} (the check below reads them);"
+        " leave the lesson's names as they are\n"
+    )
     cell: dict[str, Any] = {"cell_type": "code", "execution_count": None, "metadata": {"tags": [ANSWER]}, "outputs": []}
     if exercise.solution_id:
         cell["id"] = exercise.solution_id
