@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import copy
 import json
+import os
 import re
 import time
 from pathlib import Path
@@ -205,10 +206,12 @@ def test_bad_input_is_one_line_and_exit_code_2(course, capsys):
     (course / "bad.ipynb").write_text("{")
     (course / "linked").mkdir()
     (course / "linked" / "tiny.ipynb").symlink_to(course / "nowhere" / "tiny.ipynb")  # a dangling link
+    os.mkfifo(course / "pipe.ipynb")  # exists, but not a file: said so, not "does not exist", and never read
     cases = {
         ("mark", str(course / "missing"), "--source", teacher): "'.*missing' does not exist",
         ("mark", str(course / "notes.txt"), "--source", teacher): "notes.txt' is not a notebook",
         ("mark", str(course / "empty"), "--source", teacher): "holds no notebook",
+        ("mark", str(course / "pipe.ipynb"), "--source", teacher): "pipe.ipynb' is neither a file nor a folder",
         ("mark", str(course / "bad.ipynb"), "--source", teacher): "bad.ipynb' is not a notebook: not JSON",
         ("mark", str(course / "other.ipynb"), "--source", teacher): "not a handout of any of the teacher's notebooks",
         ("mark", str(course / "handout"), "--source", str(course / "nowhere")): "nowhere' does not exist",

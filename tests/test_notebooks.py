@@ -292,3 +292,32 @@ def test_a_teacher_marks_a_right_and_a_wrong_submission_of_tutorial_00(handouts)
     assert [(e["number"], e["score"]) for e in marks["wrong"]["exercises"]] == [(1, 0), (2, 1), (3, 1)], marks["wrong"]
     message = marks["wrong"]["exercises"][0]["message"]
     assert message.startswith("marking check: prior_error is not Eq. 22's") and not re.search(r"\d\.\d", message)
+
+
+def test_a_students_own_chi2_band_in_tutorial_09_is_not_what_the_marking_checks_compare_with(handouts):
+    """Tutorial 09's marking checks compare band_200 with the lesson's chi2_band. A student who writes their own
+    helper under that name, wrongly (a 90 % band), scored full marks for exercise 1 (the check compared the
+    answer with itself), and their right exercise 2 then lost its point to the wrong helper. Now exercise 1 scores
+    0 saying which name it rebinds, and exercise 2 is marked against the lesson's chi2_band."""
+    optional_import("nbclient", "notebooks")
+    optional_import("ipykernel", "notebooks")
+    name = "09_consistency.ipynb"
+    teacher = json.loads((handouts / "tutorials" / name).read_text())
+    solutions = {c["id"]: source(c) for c in teacher["cells"] if SOLUTION in tags(c)}
+    (first, _) = [e.solution_id for e in exercises(teacher, name)]
+    own = (
+        "def chi2_band(n_runs, dof=3):  # 90 %, not 95 %\n"
+        "    return chi2.ppf(0.05, dof * n_runs) / n_runs, chi2.ppf(0.95, dof * n_runs) / n_runs\n\n\n"
+        "band_200 = chi2_band(200)\n"
+        "n_runs_10pct = next(n for n in range(1, 10_000) if chi2_band(n)[0] >= 2.7 and chi2_band(n)[1] <= 3.3)\n"
+    )
+    nb = json.loads((handouts / "handout" / name).read_text())
+    for cell in nb["cells"]:
+        cell["source"] = {**solutions, first: own}.get(cell["id"], cell["source"])
+    (handouts / "own-band").mkdir()
+    (handouts / "own-band" / name).write_text(json.dumps(nb))
+    done = _run_command("steam-ref homework mark own-band/ --source tutorials/ --json", handouts, timeout=600)
+    assert done.returncode == 0, done.stderr
+    (mark,) = json.loads(done.stdout)["submissions"]
+    assert [(e["number"], e["score"]) for e in mark["exercises"]] == [(1, 0), (2, 1)], mark
+    assert mark["exercises"][0]["message"].startswith("the answer rebinds `chi2_band`"), mark

@@ -91,6 +91,8 @@ def _notebooks(paths: list[str], what: str) -> list[tuple[Path, str]]:
             if path.suffix != ".ipynb":
                 raise SteamError(f"{what}: {text!r} is not a notebook (.ipynb)")
             found.append((path, path.name))
+        elif path.exists():  # a pipe, a socket, a device: reading it could block or never end
+            raise SteamError(f"{what}: {text!r} is neither a file nor a folder")
         else:
             raise SteamError(f"{what}: {text!r} does not exist")
     return found
