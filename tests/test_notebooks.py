@@ -26,6 +26,7 @@ from requirements import optional_import
 
 import steam_ref
 from steam_ref.homework.exercises import ANSWER, HIDDEN, SOLUTION, exercises, source, tags
+from steam_ref.homework.marking import guarded, load_tutorials
 
 TUTORIALS = sorted((Path(__file__).resolve().parents[1] / "tutorials").glob("*.ipynb"))
 READS_REFERENCE_DATA = re.compile(r"""load_dataset\(\s*["'](plaza|paper-synthetic)["']|Syn_theta_Plaza|Plaza1_thrown""")
@@ -321,3 +322,38 @@ def test_a_students_own_chi2_band_in_tutorial_09_is_not_what_the_marking_checks_
     (mark,) = json.loads(done.stdout)["submissions"]
     assert [(e["number"], e["score"]) for e in mark["exercises"]] == [(1, 0), (2, 1)], mark
     assert mark["exercises"][0]["message"].startswith("the answer rebinds `chi2_band`"), mark
+
+
+def _rebound(code: str) -> set[str]:
+    """The global names a cell binds: what it assigns, defines or imports outside functions, classes and
+    comprehensions (whose names are their own)."""
+    found: set[str] = set()
+    todo: list[ast.AST] = [ast.parse(code)]
+    while todo:
+        node = todo.pop()
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            found.add(node.name)
+            continue
+        if isinstance(node, (ast.Lambda, ast.ListComp, ast.SetComp, ast.DictComp, ast.GeneratorExp)):
+            continue
+        if isinstance(node, (ast.Import, ast.ImportFrom)):
+            found |= {(a.asname or a.name).split(".")[0] for a in node.names}
+        if isinstance(node, ast.Name) and isinstance(node.ctx, (ast.Store, ast.Del)):
+            found.add(node.id)
+        todo += list(ast.iter_child_nodes(node))
+    return found
+
+
+def test_the_rebinding_finder_sees_assignments_loops_defs_and_imports_but_not_locals():
+    code = "a = 1\nfor b in x:\n    pass\ndef c(d):\n    e = d\nimport f.g\nh = [i for i in x]\nwith x as j:\n    del k"
+    assert _rebound(code) == {"a", "b", "c", "f", "h", "j", "k"}
+
+
+def test_no_solution_rebinds_a_name_the_marking_keeps():
+    """The marking fails an answer that rebinds a name of the lesson the checks read (``marking.guarded``): no
+    tutorial's own solution does, or its right answer would score 0."""
+    for name, tutorial in load_tutorials(TUTORIALS[0].parent).items():
+        kept = set(guarded(tutorial))
+        for e in tutorial.exercises:
+            clash = _rebound(source(tutorial.notebook["cells"][e.solution])) & kept
+            assert not clash, f"{name}: the solution of {e.label} rebinds {sorted(clash)}, which the marking keeps"

@@ -28,6 +28,7 @@ __all__ = [
     "SubmissionMark",
     "Tutorial",
     "load_tutorials",
+    "guarded",
     "mark_submission",
     "requirements",
     "tutorial_of",
@@ -149,7 +150,7 @@ def _assemble(tutorial: Tutorial, submission: dict) -> tuple[list[_Cell], dict[i
         role_of.update(dict.fromkeys(e.hidden, (n, "hidden")))
     cells: list[_Cell] = []
     missing: dict[int, str | None] = {}
-    guarded = _guarded(tutorial)
+    kept = guarded(tutorial)
     for i, cell in enumerate(tutorial.notebook["cells"]):
         k, role = role_of.get(i, (None, "lesson"))
         if role != "answer":
@@ -158,7 +159,7 @@ def _assemble(tutorial: Tutorial, submission: dict) -> tuple[list[_Cell], dict[i
         assert k is not None
         answer = answer_cells(submission, tutorial.exercises[k], k)
         missing[k] = _written(answer)
-        cells.append(_Cell(_code(KEEP.format(kept=KEPT, names=guarded)), k, "guard"))
+        cells.append(_Cell(_code(KEEP.format(kept=KEPT, names=kept)), k, "guard"))
         cells += [_Cell(copy.deepcopy(c), k, "answer") for c in answer or []]
         cells.append(_Cell(_code(PUT_BACK.format(kept=KEPT)), k, "guard"))
     for n, c in enumerate(cells):
@@ -235,7 +236,7 @@ finally:
 """
 
 
-def _guarded(tutorial: Tutorial) -> tuple[str, ...]:
+def guarded(tutorial: Tutorial) -> tuple[str, ...]:
     """The lesson's names an answer must leave as they are: those any exercise's checks read, none an answer's."""
     answers = {n for e in tutorial.exercises for n in e.names}
     return tuple(sorted({n for e in tutorial.exercises for n in e.reads} - answers))
