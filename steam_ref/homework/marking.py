@@ -1,14 +1,14 @@
 """The teacher's marking run: each submission's answers run between the teacher's own cells and checks.
 
-A submission contributes only its answers (the code cells between each task and its check). The notebook that
-runs is the teacher's: its lesson cells, the student's answer where the solution was, then the teacher's check
-and marking checks, so an edited or deleted check changes nothing; the lesson's names the checks read
-(:func:`guarded`) are kept around each answer, and one it rebinds, changes in place or shadows (a builtin) is put
-back and costs that exercise, named, so no check compares an answer with the answer's own helper. It runs in a
-fresh kernel (nbclient) in the teacher's notebook's folder, every cell under a time limit; a cell that raises or
-runs over its limit is recorded and the run goes on, so one exercise's failure costs that exercise only. An exercise scores its point
-when its check and marking checks ran without an error. A kernel that dies (``os._exit``) ends the run, and so does
-a cell that ignores the interrupt at its time limit (it catches KeyboardInterrupt, ignores SIGINT or blocks where a
+A submission contributes only its answers (the code cells between each task and its check). The notebook that runs
+is the teacher's: its lesson cells, the student's answer where the solution was, then the teacher's check and
+marking checks, so an edited or deleted check changes nothing; the lesson's names the checks read (:func:`guarded`)
+are kept around each answer, and one it rebinds, changes in place or shadows (a builtin) is put back and costs that
+exercise, named, so no check compares an answer with the answer's own helper. It runs in a fresh kernel (nbclient)
+in the teacher's notebook's folder, every cell under a time limit; a cell that raises or runs over its limit is
+recorded and the run goes on, so one exercise's failure costs that exercise only. An exercise scores its point when
+its check and marking checks ran without an error. A kernel that dies (``os._exit``) ends the run, and so does a
+cell that ignores the interrupt at its time limit (it catches KeyboardInterrupt, ignores SIGINT or blocks where a
 signal cannot reach it): a kernel not idle ``GRACE`` seconds after the interrupt is killed, so such a cell costs its
 limit plus ``GRACE`` seconds, and what had not run scores 0, saying why.
 """
