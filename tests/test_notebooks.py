@@ -26,7 +26,8 @@ from requirements import optional_import
 
 import steam_ref
 from steam_ref.homework.exercises import ANSWER, HIDDEN, SOLUTION, exercises, source, tags
-from steam_ref.homework.marking import guarded, load_tutorials
+from steam_ref.homework.guard import guarded
+from steam_ref.homework.marking import load_tutorials
 
 TUTORIALS = sorted((Path(__file__).resolve().parents[1] / "tutorials").glob("*.ipynb"))
 READS_REFERENCE_DATA = re.compile(r"""load_dataset\(\s*["'](plaza|paper-synthetic)["']|Syn_theta_Plaza|Plaza1_thrown""")

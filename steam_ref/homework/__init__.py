@@ -4,6 +4,7 @@
   marking checks), and the student's handout made from it;
 - :mod:`.marking`: the marking run, each submission's answers between the teacher's own cells and checks, in a
   fresh kernel under a time limit per cell, scored per exercise;
+- :mod:`.guard`: the lesson's names the checks read, kept around each answer: one an answer rebinds costs it;
 - :mod:`.command`: ``steam-ref homework handout`` and ``steam-ref homework mark``.
 
 Running notebooks needs nbformat, nbclient and ipykernel (the ``notebooks`` extra); they load only when marking.

@@ -2,7 +2,7 @@
 
 A submission contributes only its answers (the code cells between each task and its check). The notebook that runs
 is the teacher's: its lesson cells, the student's answer where the solution was, then the teacher's check and
-marking checks, so an edited or deleted check changes nothing; the lesson's names the checks read (:func:`guarded`)
+marking checks, so an edited or deleted check changes nothing; the lesson's names the checks read (:mod:`.guard`)
 are kept around each answer, and one it rebinds, changes in place or shadows (a builtin) is put back and costs that
 exercise, named, so no check compares an answer with the answer's own helper. It runs in a fresh kernel (nbclient)
 in the teacher's notebook's folder, every cell under a time limit; a cell that raises or runs over its limit is
@@ -24,12 +24,12 @@ from typing import Any
 
 from ..errors import SteamError
 from .exercises import Exercise, answer_cells, exercises, handout_of, read_notebook, source
+from .guard import KEEP, KEPT, PUT_BACK, guarded
 
 __all__ = [
     "ExerciseMark",
     "SubmissionMark",
     "Tutorial",
-    "guarded",
     "load_tutorials",
     "mark_submission",
     "requirements",
@@ -170,78 +170,6 @@ def _assemble(tutorial: Tutorial, submission: dict) -> tuple[list[_Cell], dict[i
         if c.cell.get("cell_type") == "code":
             c.cell["outputs"], c.cell["execution_count"] = [], None
     return cells, missing
-
-
-# The lesson's names the checks read, kept around each answer (``_assemble``): a marking check compares an answer with
-# the lesson's own names (a helper like chi2_band, a value like qc), so an answer that rebound one would be compared
-# with itself. Run in the kernel: KEEP before the answer, PUT_BACK after it, which puts back what the answer rebound,
-# changed in place (an array) or shadowed (a builtin the checks call), then fails naming it. An equal value bound
-# again (``n = 24`` where the lesson has 24, ``import numpy as np``) is no change.
-KEPT = "__steam_ref_kept__"
-KEEP = """\
-def __steam_ref_keep__(names, scope):
-    import builtins
-    kept = {{}}
-    for name in names:
-        if name in scope:
-            value = scope[name]
-            saved = value.copy() if type(value).__name__ == "ndarray" and hasattr(value, "copy") else None
-            kept[name] = (value, saved)
-        elif hasattr(builtins, name):
-            kept[name] = None
-    return kept
-
-
-{kept} = __steam_ref_keep__({names!r}, globals())
-del __steam_ref_keep__
-"""
-PUT_BACK = """\
-def __steam_ref_put_back__(kept, scope):
-    try:
-        import numpy
-    except ImportError:
-        numpy = None
-    plain = (bool, int, float, complex, str, bytes, type(None)) + ((numpy.generic,) if numpy else ())
-    changed = []
-    for name, was in kept.items():
-        if was is None:  # a builtin: the answer must not shadow it
-            if name in scope:
-                changed.append(name)
-                del scope[name]
-            continue
-        value, saved = was
-        now = scope.get(name, kept)  # kept: a stand-in for "no longer bound"
-        if saved is not None:
-            same = type(now) is type(saved) and now.shape == saved.shape and now.dtype == saved.dtype
-            try:
-                same = same and bool(numpy.array_equal(now, saved, equal_nan=True))
-            except TypeError:  # not numbers: NaN means nothing
-                same = same and bool(numpy.array_equal(now, saved))
-            if not same and value.flags.writeable:
-                value[...] = saved
-        else:
-            same = now is value or (type(now) is type(value) and isinstance(value, plain) and bool(now == value))
-        if not same:
-            changed.append(name)
-            scope[name] = value
-    named = ", ".join(f"`{{name}}`" for name in changed)
-    assert not changed, (
-        f"the answer rebinds {{named}}, which the marking checks read from the lesson (put back for them): "
-        "give yours another name and leave the lesson's as they are"
-    )
-
-
-try:
-    __steam_ref_put_back__({kept}, globals())
-finally:
-    del __steam_ref_put_back__, {kept}
-"""
-
-
-def guarded(tutorial: Tutorial) -> tuple[str, ...]:
-    """The lesson's names an answer must leave as they are: those any exercise's checks read, none an answer's."""
-    answers = {n for e in tutorial.exercises for n in e.names}
-    return tuple(sorted({n for e in tutorial.exercises for n in e.reads} - answers))
 
 
 DIED = "the run stopped: the kernel died (did the answer exit Python?)"

@@ -1,0 +1,84 @@
+"""The lesson's names an answer must leave as they are, kept around each answer of the marking run.
+
+A marking check compares an answer with the lesson's own names (tutorial 09's ``chi2_band``, 00's ``qc``): an answer
+that rebound one would be compared with itself, and a wrong answer with its own wrong helper would pass. The marking
+run (:mod:`.marking`) puts a cell of KEEP before each answer and one of PUT_BACK after it: PUT_BACK puts back what the
+answer rebound, changed in place (an array) or shadowed (a builtin the checks call) and fails naming it, so that
+exercise scores 0 and its checks and the exercises after it see the lesson's values. An equal value bound again
+(``n = 24`` where the lesson has 24, ``import numpy as np``) is no change.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from .marking import Tutorial
+
+__all__ = ["KEEP", "KEPT", "PUT_BACK", "guarded"]
+
+KEPT = "__steam_ref_kept__"
+KEEP = """\
+def __steam_ref_keep__(names, scope):
+    import builtins
+    kept = {{}}
+    for name in names:
+        if name in scope:
+            value = scope[name]
+            saved = value.copy() if type(value).__name__ == "ndarray" and hasattr(value, "copy") else None
+            kept[name] = (value, saved)
+        elif hasattr(builtins, name):
+            kept[name] = None
+    return kept
+
+
+{kept} = __steam_ref_keep__({names!r}, globals())
+del __steam_ref_keep__
+"""
+PUT_BACK = """\
+def __steam_ref_put_back__(kept, scope):
+    try:
+        import numpy
+    except ImportError:
+        numpy = None
+    plain = (bool, int, float, complex, str, bytes, type(None)) + ((numpy.generic,) if numpy else ())
+    changed = []
+    for name, was in kept.items():
+        if was is None:  # a builtin: the answer must not shadow it
+            if name in scope:
+                changed.append(name)
+                del scope[name]
+            continue
+        value, saved = was
+        now = scope.get(name, kept)  # kept: a stand-in for "no longer bound"
+        if saved is not None:
+            same = type(now) is type(saved) and now.shape == saved.shape and now.dtype == saved.dtype
+            try:
+                same = same and bool(numpy.array_equal(now, saved, equal_nan=True))
+            except TypeError:  # not numbers: NaN means nothing
+                same = same and bool(numpy.array_equal(now, saved))
+            if not same and value.flags.writeable:
+                value[...] = saved
+        else:
+            same = now is value or (type(now) is type(value) and isinstance(value, plain) and bool(now == value))
+        if not same:
+            changed.append(name)
+            scope[name] = value
+    named = ", ".join(f"`{{name}}`" for name in changed)
+    assert not changed, (
+        f"the answer rebinds {{named}}, which the marking checks read from the lesson (put back for them): "
+        "give yours another name and leave the lesson's as they are"
+    )
+
+
+try:
+    __steam_ref_put_back__({kept}, globals())
+finally:
+    del __steam_ref_put_back__, {kept}
+"""
+
+
+def guarded(tutorial: Tutorial) -> tuple[str, ...]:
+    """The lesson's names an answer must leave as they are: those any exercise's checks read, none an answer's."""
+    answers = {n for e in tutorial.exercises for n in e.names}
+    return tuple(sorted({n for e in tutorial.exercises for n in e.reads} - answers))
