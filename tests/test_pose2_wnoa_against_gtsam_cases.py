@@ -44,6 +44,7 @@ from steam_ref.lie import SE2, GroupState
 from steam_ref.lie.points import to_body
 from steam_ref.lie.se2 import wrap
 from steam_ref.motion.lie_group import LieGroupWnoa
+from steam_ref.variables import Values
 
 gtsam = optional_import("gtsam", "test")
 
@@ -254,7 +255,7 @@ def test_wnoa_se2_optimization_fixture():
     graph = FactorGraph(
         [LieStatePrior.create(X(1), x1, np.full(6, 1e-9), group=SE2), prior.prior_factor(X(1), X(2), TIMESTEP)]
     )
-    initial = {X(1): x1, X(2): x2}
+    initial = Values({X(1): x1, X(2): x2})
     assert graph.error(initial) < 1e-20
     result = gauss_newton(graph, initial)
     assert result.converged and graph.error(result.values) < 1e-20

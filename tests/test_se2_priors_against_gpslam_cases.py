@@ -49,6 +49,7 @@ from steam_ref.lie import SE2, GroupState
 from steam_ref.lie import gp as lie_gp
 from steam_ref.lie.se2 import wrap
 from steam_ref.motion.lie_group import LieGroupWnoa
+from steam_ref.variables import Values
 
 QC = 0.01 * np.eye(3)  # every fixture's Qc
 D = 3
@@ -180,7 +181,7 @@ def test_pose2_prior_optimization_fixture():
             PRIOR.prior_factor(X(1), X(2), 1.0),
         ]
     )
-    initial = {X(1): np.r_[pose1, forward], X(2): np.r_[pose2_, 2.0, -0.5, 0.6]}
+    initial = Values({X(1): np.r_[pose1, forward], X(2): np.r_[pose2_, 2.0, -0.5, 0.6]})
     result = gauss_newton(graph, initial)
     assert result.converged
     assert graph.error(result.values) < 1e-24
