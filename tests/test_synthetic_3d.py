@@ -118,3 +118,33 @@ def test_each_priors_dimensions_are_those_its_states_move_in(name):
 def test_fit_qc_refuses_a_3d_set_or_prior_in_one_line(capsys, argv, says):
     code, out, err = runner("fit-qc")(capsys, *argv)
     assert code == 2 and not out and err.count("\n") == 1 and says in err, err
+
+
+@pytest.mark.parametrize("prior", ["se3", "se3-simplified", "se3-wnoj"])
+def test_a_singer_time_constant_for_a_3d_prior_without_one_is_refused_not_ignored(capsys, prior):
+    """--singer-time-constant on a 3-D run with a prior that has no time constant was dropped without a word (the run
+    printed the prior's figures as if it had been read); the planar run refuses it, and so must the 3-D one."""
+    code, out, err = run(
+        capsys, "--dataset", "synthetic-3d", "--steps", 3, "--prior", prior, "--singer-time-constant", 3
+    )
+    assert code == 2 and not out and err.count("\n") == 1, err
+    assert "--singer-time-constant applies to" in err and "--prior se3-singer" in err and f"not --prior {prior}" in err
+
+
+def test_a_singer_time_constant_reaches_the_3d_singer_prior(capsys):
+    """The time constant given is the one the run's prior has: its JSON figures are those of ``solve_rigid`` with
+    ``motion_prior('se3-singer', RIGID_QC, singer_time_constant=5)`` on the same generated set, and differ from the
+    default's."""
+    from steam_ref.paper.rigid import solve_rigid
+
+    code, out, _ = run(capsys, "--dataset", "synthetic-3d", "--steps", 4, "--prior", "se3-singer",
+                       "--singer-time-constant", 5, "--json")  # fmt: skip
+    assert code == 0
+    figures = json.loads(out)["against_truth"]["btgp"]
+    data = generate_rigid(4, seed=0)
+    for tau, equal in ((5.0, True), (1.0, False)):
+        prior = motion_prior("se3-singer", RIGID_QC, singer_time_constant=tau)
+        states = solve_rigid(data, prior, "btgp").states
+        truth = data.on(prior.kind).truth
+        rmse = float(np.sqrt(np.mean(group_ape(SE3V, truth[:, :6], states[:, :6]).translation ** 2)))
+        assert (rmse == pytest.approx(figures["translation_rmse_m"], rel=1e-12)) is equal

@@ -36,7 +36,7 @@ from ..paper.rigid import (
     straight_line_at,
     straight_line_errors,
 )
-from .args import seed_of
+from .args import check_prior_options, seed_of
 from .streams import json_line
 
 __all__ = ["run_rigid"]
@@ -101,6 +101,11 @@ def run_rigid(args: argparse.Namespace) -> int:
     ]
     if given or getattr(args, "save_trajectory", None):
         raise SteamError(f"--dataset {args.dataset} is a 3-D set: {(given or ['--save-trajectory'])[0]} does not apply")
+    name = args.prior or "se3"
+    taken = {"singer_time_constant": getattr(args, "singer_time_constant", None)}  # --se2-residual: planar, above
+    if name in MOTION_PRIORS:  # an unknown name: motion_prior says so
+        check_prior_options(name, taken)  # an option the prior does not take is refused, never ignored
+    options = {k: v for k, v in taken.items() if v is not None}
     if args.steps is not None and args.dataset != "synthetic-3d":
         raise SteamError(f"--steps generates the synthetic task: it needs --dataset synthetic-3d, got {args.dataset!r}")
     generated = args.steps is not None
@@ -114,9 +119,6 @@ def run_rigid(args: argparse.Namespace) -> int:
     data = loaded
     if args.max_poses is not None:
         data = data.head(args.max_poses)
-    name = args.prior or "se3"
-    takes = MOTION_PRIORS[name].options if name in MOTION_PRIORS else ()  # an unknown name: motion_prior says so
-    options = {k: getattr(args, k) for k in takes if getattr(args, k, None) is not None}
     qc = args.qc_scale * (np.eye(6) if data.qc is None else data.qc)
     prior = motion_prior(name, qc, **options)
     straight = straight_line_errors(data)
