@@ -26,12 +26,14 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..arguments import integer
-from ..errors import DataError, SteamError
+from ..errors import DataError, ShapeError, SteamError
 from ..lie import GroupState
 from ..lie.points import point_dim, position, rotation_part, to_body
 from ..lie.state import group_state
 from ..manifold import Manifold
 from ..motion import MotionPrior, motion_prior
+from .landmarks import _check_integer_ids
+from .table import ids_text, number_text, rows_of
 
 __all__ = ["RigidReadings", "RigidSample", "sample_rigid_task", "generate_rigid", "RIGID_NOISE", "RIGID_QC"]
 
@@ -47,6 +49,7 @@ RIGID_NOISE = {
     "first_pose": 0.05,  # the first state's pose, each tangent direction
     "first_twist": 0.05,  # its twist
 }
+SIGMA_OF = {"positions": "position", "gyro": "gyro", "ranges": "range", "points": "point", "landmarks": "landmark"}
 RIGID_QC = np.diag([0.02, 0.005, 0.005, 0.001, 0.001, 0.002])  # a drawn task's Qc on SE(3) (docs/experiments.md)
 RIGID_STEPS, RIGID_LANDMARKS = 40, 8  # the generated set's size by default (and its landmarks' density)
 
@@ -97,6 +100,39 @@ class RigidReadings:
         held = np.asarray(self.held_out, dtype=float)
         object.__setattr__(self, "held_out", held.reshape(-1, 1 + k) if held.size else np.zeros((0, 1 + k)))
         object.__setattr__(self, "state_times", t)
+        self._check_landmarks()
+        self._check_states()
+        needed = [SIGMA_OF[table] for table in SIGMA_OF if len(getattr(self, table))]
+        needed += ["first_pose", "first_twist"] if self.first_state is not None else []
+        missing = [key for key in needed if key not in self.sigmas]
+        if missing:
+            raise DataError(f"{self.name}: sigmas has no {missing[0]!r} (its readings need {', '.join(needed)})")
+
+    def _check_landmarks(self) -> None:
+        """Integer ids, each surveyed once; every range's and body-frame point's landmark among them (a reading of an
+        id not surveyed, 0.5 or 99, was read as landmark 0 or failed with a KeyError)."""
+        _check_integer_ids("landmarks", self.landmarks[:, 0], 0)
+        known = self.landmarks[:, 0]
+        for table in ("ranges", "points"):
+            ids = getattr(self, table)[:, 1]
+            missing = rows_of(known, ids)[1]
+            if missing is not None:
+                raise DataError(
+                    f"{self.name}: {table} row {missing} (t={number_text(getattr(self, table)[missing, 0])}) names "
+                    f"landmark id {number_text(ids[missing])}, which is not in landmarks; known ids: {ids_text(known)}"
+                )
+
+    def _check_states(self) -> None:
+        """The first state (size,), the first values and the truth (n, size) as ``kind`` stores a state; ShapeError
+        naming the one that is not."""
+        n, size = len(self.state_times), self.kind.size
+        for name, shape in (("first_state", (size,)), ("initial_states", (n, size)), ("truth", (n, size))):
+            value = getattr(self, name)
+            if value is not None and np.shape(value) != shape:
+                raise ShapeError(
+                    f"{self.name}: {name} must be {shape} ({self.kind!r} states at the {n} state times), got shape "
+                    f"{np.shape(value)}"
+                )
 
     @property
     def n_readings(self) -> int:

@@ -22,11 +22,11 @@ from itertools import compress
 import numpy as np
 from numpy.typing import NDArray
 
-from ..arguments import integer
+from ..arguments import integer, real_array
 from ..batch import gauss_newton
 from ..bayes_tree import FixedLagSmoother, IncrementalSolver
-from ..datasets.rigid import RIGID_NOISE, RIGID_QC, RigidReadings, RigidSample, sample_rigid_task
-from ..errors import SteamError
+from ..datasets.rigid import RIGID_NOISE, RIGID_QC, SIGMA_OF, RigidReadings, RigidSample, sample_rigid_task
+from ..errors import ShapeError, SteamError
 from ..evaluate import nees
 from ..factors import Factor, LieStatePrior, PriorFactor
 from ..factors.point_readings import AngularVelocityReading, PointReading, PositionReading, RangeReading
@@ -67,14 +67,14 @@ class Step:
 
 def _reading(data: RigidReadings, table: str, row: NDArray, key: Key) -> Factor:
     """The factor of one row of a table, on the state ``key`` (the state at the reading's time)."""
-    g, n, sigma = data.kind.group, data.kind.derivatives, data.sigmas
+    g, n, sigma = data.kind.group, data.kind.derivatives, data.sigmas[SIGMA_OF[table]]
     if table == "positions":
-        return PositionReading.create(key, row[1:], sigma["position"], group=g, derivatives=n)
+        return PositionReading.create(key, row[1:], sigma, group=g, derivatives=n)
     if table == "gyro":
-        return AngularVelocityReading.create(key, row[1:], sigma["gyro"], group=g, derivatives=n)
+        return AngularVelocityReading.create(key, row[1:], sigma, group=g, derivatives=n)
     if table == "ranges":
-        return RangeReading.create(key, L(int(row[1])), row[2], sigma["range"], group=g, derivatives=n)
-    return PointReading.create(key, L(int(row[1])), row[2:], sigma["point"], group=g, derivatives=n)
+        return RangeReading.create(key, L(int(row[1])), row[2], sigma, group=g, derivatives=n)
+    return PointReading.create(key, L(int(row[1])), row[2:], sigma, group=g, derivatives=n)
 
 
 TABLES = ("positions", "gyro", "ranges", "points")
@@ -95,6 +95,13 @@ def steps(data: RigidReadings, prior: MotionPrior, initial: NDArray | None = Non
     if prior.kind is not data.kind:
         raise SteamError(f"{data.name} has states of kind {data.kind!r}; the prior {prior.name!r} has {prior.kind!r}")
     t = data.state_times
+    if initial is not None:
+        initial = real_array("initial", initial)
+        if initial.shape != (len(t), prior.state_dim):
+            raise ShapeError(
+                f"initial must be ({len(t)}, {prior.state_dim}): a first value for each of {data.name}'s {len(t)} "
+                f"states, as {prior.name!r} stores a state; got shape {initial.shape}"
+            )
     slot = {}  # each reading's state: the first tᵢ ≥ τ - _AT; -1 before the first state, n after the last (dropped)
     for table in TABLES:
         tau = getattr(data, table)[:, 0]
@@ -119,7 +126,9 @@ def steps(data: RigidReadings, prior: MotionPrior, initial: NDArray | None = Non
                     j = int(row[1])
                     seen.add(j)
                     new[L(j)] = survey[j]
-                    factors.append(PriorFactor.create(L(j), survey[j], data.sigmas["landmark"]))  # [YIB Eq. 4]
+                    factors.append(
+                        PriorFactor.create(L(j), survey[j], data.sigmas[SIGMA_OF["landmarks"]])
+                    )  # [YIB Eq. 4]
                 factors.append(next(moved) if interpolated else inner)
         yield Step(i, np.asarray(value, dtype=float), factors, new)
 
