@@ -18,13 +18,13 @@ from cli_runs import runner
 from requirements import optional_import
 
 from steam_ref.datasets.kitti import GPS_FILE, IMU_FILE, load_kitti
-from steam_ref.datasets.rigid import sample_rigid_task
+from steam_ref.datasets.rigid import generate_rigid, sample_rigid_task
 from steam_ref.datasets.search import gtsam_data_dir
 from steam_ref.errors import DataError
 from steam_ref.evaluate import chi2_band
 from steam_ref.lie import SE3V, GroupState
 from steam_ref.motion import motion_prior
-from steam_ref.paper.rigid import rigid_nees, solve_rigid, steps
+from steam_ref.paper.rigid import held_out_errors, rigid_nees, solve_rigid, steps, straight_line_errors
 from steam_ref.variables import L, X
 
 QC = np.diag([0.02, 0.005, 0.005, 0.001, 0.001, 0.002])
@@ -159,3 +159,16 @@ def test_readings_before_the_first_state_or_after_the_last_are_dropped_and_count
     assert all(k.index >= 0 for ks in keys for k in ks)
     assert len(keys) == len([f for step in steps(task.data, prior) for f in step.factors])
     assert solve_rigid(data, prior, "batch").dropped == 2
+
+
+@pytest.mark.parametrize("kept", [0, 1])
+def test_held_out_scores_without_two_kept_fixes_are_empty_not_a_numpy_error(kept):
+    """The held-out fixes are scored where the straight line between the kept fixes is drawn: with one kept fix there
+    is none, and with none (a set of gyro, ranges and points only) ``min()`` of no times was a NumPy ValueError."""
+    data = generate_rigid(12, seed=0)
+    few = replace(data, positions=data.positions[:kept])
+    assert len(few.held_out) > 0
+    prior = motion_prior("se3", QC)
+    states = solve_rigid(few, prior, "batch").states
+    assert held_out_errors(few, prior, states).shape == (0,)
+    assert straight_line_errors(few).shape == (0,)

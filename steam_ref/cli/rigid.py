@@ -53,7 +53,7 @@ _PLANAR: dict[str, object] = {
 
 
 def _figures(errors: np.ndarray) -> dict:
-    if not errors.size:  # no held-out fix inside the states' span (a short run)
+    if not errors.size:  # no held-out fix inside the states' and the kept fixes' span (a short run)
         return {"rmse_m": None, "median_m": None, "max_m": None}
     return {
         "rmse_m": float(np.sqrt(np.mean(errors**2))),
@@ -165,7 +165,7 @@ def run_rigid(args: argparse.Namespace) -> int:
     for what in ("straight_line", *methods):
         f = summary[what]
         if f["rmse_m"] is None:
-            lines.append(f"  {what:14s} no held-out fix inside the states' span")
+            lines.append(f"  {what:14s} no held-out fix inside the states' and the kept fixes' span")
             continue
         lines.append(f"  {what:14s} RMSE {f['rmse_m']:.3f} m, median {f['median_m']:.3f} m, max {f['max_m']:.3f} m")
     if truth is not None:

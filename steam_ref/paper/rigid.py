@@ -213,7 +213,8 @@ def _positions_at(data: RigidReadings, prior: MotionPrior, states: NDArray, time
 
 
 def held_out_errors(data: RigidReadings, prior: MotionPrior, states: NDArray) -> NDArray:
-    """The distance (m) between each held-out fix inside the states' span and the GP-interpolated position."""
+    """The distance (m) between each held-out fix inside the states' span and the kept fixes' span (the fixes
+    :func:`straight_line_errors` scores) and the GP-interpolated position."""
     rows = _inside(data)
     if not len(rows):  # none inside the span (a short run)
         return np.zeros(0)
@@ -239,8 +240,12 @@ def straight_line_at(data: RigidReadings, times: NDArray) -> NDArray:
 
 
 def _inside(data: RigidReadings) -> NDArray:
+    """The held-out fixes strictly inside the states' span and the kept fixes' (where the straight line is drawn):
+    none without a kept fix."""
     t, rows = data.state_times, data.held_out
     fixes = data.positions[:, 0]
+    if not len(fixes):  # no kept fix: no span (min() of nothing was a NumPy ValueError)
+        return rows[:0]
     keep = (rows[:, 0] > max(t[0], fixes.min())) & (rows[:, 0] < min(t[-1], fixes.max()))
     return rows[keep]
 
