@@ -56,7 +56,7 @@ _AT = 1e-9  # s: a reading this near a state's time is read on that state
 # The batch optimum's stopping rules (benchmarks/se2_vs_gtsam.py's 'exact optimum'): at Gauss-Newton's defaults
 # (relative cost decrease 1e-8) a KITTI prefix, whose gyro bias leaves large residuals and linear convergence, stopped
 # 1.5e-4 from the minimum that the settled BTGP stream reaches at a lower cost.
-OPTIMUM = {"relative_tolerance": 1e-14, "step_tolerance": 1e-12}
+OPTIMUM_RELATIVE, OPTIMUM_STEP = 1e-14, 1e-12  # the relative decrease of the cost, the norm of a step
 
 
 @dataclass(frozen=True)
@@ -164,7 +164,7 @@ def solve_rigid(
     data: RigidReadings, prior: MotionPrior, method: str = "batch", *, initial: NDArray | None = None, lag: float = 10.0
 ) -> RigidRun:
     """Solve ``data`` with ``prior`` by ``method``: 'batch' (Gauss-Newton from the first values to the optimum: until
-    the cost falls by less than 1e-14 of itself, :data:`OPTIMUM`, and checked stationary), 'btgp' (iSAM2, one
+    the cost falls by less than 1e-14 of itself, :data:`OPTIMUM_RELATIVE`, and checked stationary), 'btgp' (iSAM2, one
     update per state) or 'fixed-lag' (``lag`` seconds of states kept; the states' estimates are those each had
     when it left the window)."""
     if method not in METHODS:
@@ -178,7 +178,13 @@ def solve_rigid(
             graph.add(step.factors)
             values[X(step.index)] = step.value
             values.update(step.landmarks)
-        result = gauss_newton(graph, graph.with_kinds(Values(values)), max_iterations=30, **OPTIMUM)
+        result = gauss_newton(
+            graph,
+            graph.with_kinds(Values(values)),
+            max_iterations=30,
+            relative_tolerance=OPTIMUM_RELATIVE,
+            step_tolerance=OPTIMUM_STEP,
+        )
         return RigidRun(np.array([result.values[X(i)] for i in range(n)]), result, dropped_readings(data))
     solver: IncrementalSolver | FixedLagSmoother = IncrementalSolver() if method == "btgp" else FixedLagSmoother(lag)
     out = np.empty((n, prior.state_dim))
