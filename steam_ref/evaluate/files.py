@@ -7,11 +7,18 @@
   per line, no time. A planar pose is [[cos θ, -sin θ, 0, x], [sin θ, cos θ, 0, y], [0, 0, 1, 0]], in the
   frame of the estimate (z up), not KITTI's camera frame (z forward).
 
+**Poses in 3-D** (``group=``, a group of rigid motions in 3-D: :data:`~steam_ref.lie.SE3V`, :data:`~steam_ref.lie.SE3`):
+the poses are the group's elements (n, group.size), as its states hold them; TUM's line is the translation and the
+unit quaternion of R in the order the format names, ``qx qy qz qw`` (scalar last, written with qw >= 0), KITTI's
+the 3 × 4 [R | t] row by row, R the body-to-world rotation and t the body's position (the estimate's own frames:
+no camera frame is assumed). A quaternion is normalized as read (within 1e-3 of unit norm, as above); a KITTI R within
+1e-6 of a rotation is taken as the nearest rotation (its polar factor), so the element is a pose of the group.
+
 Numbers are written with 17 significant digits, so a file read back gives the same times and positions;
-a heading comes back through its quaternion or rotation, equal modulo 2π to within rounding (1e-15). The
-loaders accept planar poses only (z = 0, rotation about z, to 1e-9; a TUM quaternion of unit norm, to 1e-3; a KITTI
-R orthonormal with det 1, to 1e-6) and
-refuse anything else with a :class:`~steam_ref.errors.DataError` naming the file and line; timestamps must increase
+a heading comes back through its quaternion or rotation, equal modulo 2π to within rounding (1e-15), and so does a
+rotation in 3-D (each entry of R). Without ``group`` the loaders accept planar poses only (z = 0, rotation about z,
+to 1e-9; a TUM quaternion of unit norm, to 1e-3; a KITTI R orthonormal with det 1, to 1e-6); with it, any pose in
+3-D within the last two. They refuse anything else with a :class:`~steam_ref.errors.DataError` naming the file and line; timestamps must increase
 strictly as float64 reads them (16 significant digits: two stamps that differ only past them, nanoseconds since the
 epoch say, are refused, the message showing both as written). A file's lines are read by
 :func:`~steam_ref.datasets.textfile.text_lines`, the rule every data file of text follows: a regular file (a FIFO is
@@ -31,7 +38,10 @@ from numpy.typing import NDArray
 from ..arguments import parse_decimal, real_array
 from ..datasets.textfile import text_lines
 from ..dead_reckoning import wrap_angle
-from ..errors import DataError, ShapeError
+from ..errors import DataError, ShapeError, SteamError
+from ..lie import LieGroup
+from ..lie.group import check_group
+from ..lie.points import point_dim
 from .metrics import planar_poses
 
 __all__ = [
@@ -65,8 +75,67 @@ def _times(times: object, n: int) -> NDArray:
     return t
 
 
-def write_tum(path: str | os.PathLike, times: object, poses: object) -> None:
-    """Write planar ``poses`` (n, 3) [x, y, θ] at ``times`` (n,) as a TUM trajectory file."""
+def _in_3d(group: object) -> LieGroup:
+    """``group`` if it is a group of rigid motions in 3-D; SteamError naming it otherwise."""
+    group = check_group(group)
+    if point_dim(group) != 3:
+        raise SteamError(f"group must move points in 3-D (SE3V, SE3) for a 3-D trajectory file, got {group!r}")
+    return group
+
+
+def _matrices(group: LieGroup, poses: object) -> NDArray:
+    """The 4 × 4 matrices (n, 4, 4) of ``poses`` (n, group.size), each checked as an element of ``group``."""
+    a = real_array("poses", poses)
+    if a.ndim != 2 or a.shape[1] != group.size or len(a) == 0:
+        raise ShapeError(f"poses must be (n, {group.size}) elements of {group!r}, n >= 1; got shape {a.shape}")
+    for k, row in enumerate(a):
+        group.check(f"poses[{k}]", row)
+    return group.matrix(a)
+
+
+def _rotation_of(q: NDArray) -> NDArray:
+    """R (n, 3, 3) of the quaternions q (n, 4) [qx, qy, qz, qw], each divided by its norm."""
+    x, y, z, w = (q / np.linalg.norm(q, axis=1, keepdims=True)).T
+    return np.stack(
+        [
+            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)], -1),
+            np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)], -1),
+            np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], -1),
+        ],
+        -2,
+    )
+
+
+def _quaternion_of(R: NDArray) -> NDArray:
+    """[qx, qy, qz, qw] (n, 4) of the rotations R (n, 3, 3), qw >= 0 (q and -q are one rotation): each from the
+    largest of 1 + tr R, 1 + 2 R₀₀ - tr R, ... (Shepperd's choice, no small difference divided)."""
+    tr = np.trace(R, axis1=1, axis2=2)
+    big = np.stack([1 + 2 * R[:, 0, 0] - tr, 1 + 2 * R[:, 1, 1] - tr, 1 + 2 * R[:, 2, 2] - tr, 1 + tr], -1)
+    pick = np.argmax(big, axis=1)
+    out = np.empty((len(R), 4))
+    for k, (i, r) in enumerate(zip(pick, R, strict=True)):
+        s = 2 * np.sqrt(big[k, i])  # 4 |q_i|
+        skew = [r[2, 1] - r[1, 2], r[0, 2] - r[2, 0], r[1, 0] - r[0, 1]]  # 4 w q_x, 4 w q_y, 4 w q_z
+        if i == 3:
+            out[k] = [skew[0] / s, skew[1] / s, skew[2] / s, s / 4]
+        else:
+            j, m = (i + 1) % 3, (i + 2) % 3
+            q = np.empty(4)
+            q[i], q[j], q[m] = s / 4, (r[j, i] + r[i, j]) / s, (r[m, i] + r[i, m]) / s
+            q[3] = skew[i] / s
+            out[k] = q
+    return np.where(out[:, 3:] < 0, -out, out)
+
+
+def write_tum(path: str | os.PathLike, times: object, poses: object, *, group: LieGroup | None = None) -> None:
+    """Write planar ``poses`` (n, 3) [x, y, θ] at ``times`` (n,) as a TUM trajectory file; with ``group`` (SE3V,
+    SE3) poses in 3-D (n, group.size), each its translation and the quaternion qx qy qz qw of its rotation."""
+    if group is not None:
+        M = _matrices(_in_3d(group), poses)
+        t = _times(times, len(M))
+        rows = np.column_stack([t, M[:, :3, 3], _quaternion_of(M[:, :3, :3])])
+        np.savetxt(path, rows, fmt="%.17g", header="timestamp tx ty tz qx qy qz qw")
+        return
     poses = planar_poses("poses", poses)
     t = _times(times, len(poses))
     half = poses[:, 2] / 2
@@ -121,12 +190,15 @@ def _not_increasing(path: str | os.PathLike, k: int, t: NDArray) -> str:
     return f"{path}, line {line}: timestamp {float(t[k])!r} does not increase (previous {float(t[k - 1])!r})"
 
 
-def read_tum(path: str | os.PathLike) -> tuple[NDArray, NDArray]:
-    """Times (n,) and planar poses (n, 3) [x, y, θ] of a TUM file; DataError for a pose out of the plane."""
+def read_tum(path: str | os.PathLike, *, group: LieGroup | None = None) -> tuple[NDArray, NDArray]:
+    """Times (n,) and planar poses (n, 3) [x, y, θ] of a TUM file; DataError for a pose out of the plane. With
+    ``group`` (SE3V, SE3): the poses in 3-D as the group's elements (n, group.size), any rotation."""
+    group = None if group is None else _in_3d(group)
     rows = _table(path, 8, "TUM")
     t, xyz, q = rows[:, 0], rows[:, 1:4], rows[:, 4:8]
     norm = np.linalg.norm(q, axis=1)
     bad = (np.abs(xyz[:, 2]) > PLANAR_TOLERANCE) | (np.abs(q[:, :2]).max(axis=1) > PLANAR_TOLERANCE * norm)
+    bad &= group is None  # a pose in 3-D may leave the plane
     if bad.any():
         k = int(np.flatnonzero(bad)[0])
         raise DataError(
@@ -143,12 +215,26 @@ def read_tum(path: str | os.PathLike) -> tuple[NDArray, NDArray]:
     if np.any(np.diff(t) <= 0):
         k = int(np.flatnonzero(np.diff(t) <= 0)[0]) + 1
         raise DataError(_not_increasing(path, k, t))
+    if group is not None:
+        return t, group.from_matrix(_homogeneous(_rotation_of(q), xyz))
     theta = wrap_angle(2 * np.arctan2(q[:, 2], q[:, 3]))  # q and -q are one rotation: θ in [-π, π)
     return t, np.column_stack([xyz[:, :2], theta])
 
 
-def write_kitti(path: str | os.PathLike, poses: object) -> None:
-    """Write planar ``poses`` (n, 3) as a KITTI file: the 3 × 4 pose [R | t] row by row, no times."""
+def _homogeneous(R: NDArray, t: NDArray) -> NDArray:
+    """[[R, t], [0, 1]] (n, 4, 4)."""
+    M = np.zeros((len(R), 4, 4))
+    M[:, :3, :3], M[:, :3, 3], M[:, 3, 3] = R, t, 1.0
+    return M
+
+
+def write_kitti(path: str | os.PathLike, poses: object, *, group: LieGroup | None = None) -> None:
+    """Write planar ``poses`` (n, 3) as a KITTI file: the 3 × 4 pose [R | t] row by row, no times; with ``group``
+    (SE3V, SE3) poses in 3-D (n, group.size)."""
+    if group is not None:
+        M = _matrices(_in_3d(group), poses)
+        np.savetxt(path, M[:, :3, :].reshape(-1, 12), fmt="%.17g")
+        return
     poses = planar_poses("poses", poses)
     c, s = np.cos(poses[:, 2]), np.sin(poses[:, 2])
     zero, one = np.zeros(len(poses)), np.ones(len(poses))
@@ -156,8 +242,12 @@ def write_kitti(path: str | os.PathLike, poses: object) -> None:
     np.savetxt(path, rows, fmt="%.17g")
 
 
-def read_kitti(path: str | os.PathLike) -> NDArray:
-    """Planar poses (n, 3) of a KITTI file; DataError for a pose out of the plane or a matrix not a rotation."""
+def read_kitti(path: str | os.PathLike, *, group: LieGroup | None = None) -> NDArray:
+    """Planar poses (n, 3) of a KITTI file; DataError for a pose out of the plane or a matrix not a rotation. With
+    ``group`` (SE3V, SE3): the poses in 3-D as the group's elements (n, group.size), R taken as its nearest
+    rotation."""
+    if group is not None:
+        return _read_kitti_3d(path, _in_3d(group))
     rows = _table(path, 12, "KITTI").reshape(-1, 3, 4)
     rot, t = rows[:, :, :3], rows[:, :, 3]
     off_plane = np.max(np.abs(np.concatenate([rot[:, 2, :2], rot[:, :2, 2], t[:, 2:]], axis=1)), axis=1)
@@ -172,3 +262,19 @@ def read_kitti(path: str | os.PathLike) -> NDArray:
         k = int(np.flatnonzero(bad)[0])
         raise DataError(f"{path}, line {_line_of(path, k)}: not a planar pose [R | t] (R a rotation about z, t_z = 0)")
     return np.column_stack([t[:, :2], np.arctan2(rot[:, 1, 0], rot[:, 0, 0])])
+
+
+def _read_kitti_3d(path: str | os.PathLike, group: LieGroup) -> NDArray:
+    """The poses in 3-D of a KITTI file: R within ROTATION_TOLERANCE of a rotation, replaced by its polar factor."""
+    rows = _table(path, 12, "KITTI").reshape(-1, 3, 4)
+    rot, t = rows[:, :, :3], rows[:, :, 3]
+    not_rotation = np.max(np.abs(rot @ np.transpose(rot, (0, 2, 1)) - np.eye(3)), axis=(1, 2))
+    not_rotation = np.maximum(not_rotation, np.abs(np.linalg.det(rot) - 1))
+    if np.any(not_rotation > ROTATION_TOLERANCE):
+        k = int(np.flatnonzero(not_rotation > ROTATION_TOLERANCE)[0])
+        raise DataError(
+            f"{path}, line {_line_of(path, k)}: R is not a rotation (abs of R Rᵀ - I or det R - 1 up to "
+            f"{float(not_rotation[k]):.3g} > {ROTATION_TOLERANCE:g})"
+        )
+    u, _, vt = np.linalg.svd(rot)
+    return group.from_matrix(_homogeneous(u @ vt, t))

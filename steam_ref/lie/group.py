@@ -104,6 +104,11 @@ class LieGroup(ABC):
         """The element a as its (..., n, n) matrix: compose is the matrix product, inverse the matrix inverse."""
 
     @abstractmethod
+    def from_matrix(self, M: ArrayLike) -> NDArray:
+        """The element (..., size) whose :meth:`matrix` is M (..., n, n), in its stored form: the inverse of
+        ``matrix`` (M's rotation taken as it is: a caller reading a file makes it one first)."""
+
+    @abstractmethod
     def angle(self, xi: ArrayLike) -> NDArray:
         """The rotation angle of ξ (..., ) that the series switch tests (SE(2): abs(φ)); positively homogeneous."""
 

@@ -133,6 +133,11 @@ class SE2Group(LieGroup):
         c, s = _rot(pose[..., 2])
         return matrix_of([[c, -s, pose[..., 0]], [s, c, pose[..., 1]], [0.0, 0.0, 1.0]], c)
 
+    def from_matrix(self, M: ArrayLike) -> NDArray:
+        """[x, y, θ] of [[R(θ), t], [0, 1]], θ = atan2(R₁₀, R₀₀) in (-π, π]."""
+        M = self._algebra("M", M, 3)
+        return _stacked([M[..., 0, 2], M[..., 1, 2], wrap(np.arctan2(M[..., 1, 0], M[..., 0, 0]))])
+
     def angle(self, xi: ArrayLike) -> NDArray:
         """abs(φ), the angle every coefficient's series switch tests."""
         return np.abs(self._twists("xi", xi)[..., 2])

@@ -106,6 +106,11 @@ class SE3Group(LieGroup):
         top = np.concatenate([R, t[..., None]], axis=-1)
         return np.concatenate([top, np.broadcast_to([0.0, 0.0, 0.0, 1.0], top.shape[:-2] + (1, 4))], axis=-2)
 
+    def from_matrix(self, M: ArrayLike) -> NDArray:
+        """[t; R row-major] of [[R, t], [0, 1]]."""
+        M = self._algebra("M", M, 4)
+        return _join(M[..., :3, 3], M[..., :3, :3])
+
     def angle(self, xi: ArrayLike) -> NDArray:
         """θ = ‖φ‖, the angle every coefficient's series switch tests."""
         return rotation_angle(self._twists("xi", xi)[..., 3:])
@@ -305,6 +310,10 @@ class SE3VectorGroup(SE3Group):
 
     def matrix(self, a: ArrayLike) -> NDArray:
         return SE3.matrix(self._full(self._elements("a", a)))
+
+    def from_matrix(self, M: ArrayLike) -> NDArray:
+        """[t; Log(R)] of [[R, t], [0, 1]] (the angle in [0, π])."""
+        return self._vector(SE3.from_matrix(M))
 
     def check_stored(self, name: str, a: NDArray) -> None:
         """Nothing: every finite [t; φ] is a pose (``check`` refuses the rest, naming ``name``)."""

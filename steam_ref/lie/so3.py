@@ -166,6 +166,11 @@ class SO3Group(LieGroup):
         a = self._elements("a", a)
         return a.reshape(a.shape[:-1] + (3, 3))
 
+    def from_matrix(self, M: ArrayLike) -> NDArray:
+        """R's 9 entries, row-major."""
+        M = self._algebra("M", M, 3)
+        return M.reshape(M.shape[:-2] + (9,))
+
     def angle(self, xi: ArrayLike) -> NDArray:
         """θ = ‖φ‖, the angle every coefficient's series switch tests."""
         return rotation_angle(self._twists("xi", xi))
