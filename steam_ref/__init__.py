@@ -26,6 +26,7 @@ from .errors import (
     UncleanedDataWarning,
     UnderdeterminedError,
     UnknownVariableError,
+    WrappedTurnWarning,
 )
 
 # Every other name a user types, and the module it lives in. They load when first touched (PEP 562), so
@@ -156,6 +157,7 @@ __all__ = [
     "SteamWarning",
     "UncleanedDataWarning",
     "DegenerateMeasurementWarning",
+    "WrappedTurnWarning",
     "Key",
     "X",
     "L",

@@ -19,9 +19,10 @@ one meaning:
 Every warning is a :class:`SteamWarning`, flagging a result that is returned anyway, with the reason in it:
 :class:`IllConditionedWarning` (float64 cannot resolve the answer), :class:`ConvergenceWarning`
 (an iteration asked to converge stopped before its check passed), :class:`DivergenceWarning` (a stream
-diverges), :class:`UncleanedDataWarning` (a named data set was read from other files than the paper's) and
+diverges), :class:`UncleanedDataWarning` (a named data set was read from other files than the paper's),
 :class:`DegenerateMeasurementWarning` (a measurement evaluated where its Jacobian is undefined, given by a
-stated convention).
+stated convention) and :class:`WrappedTurnWarning` (an estimate turns half a turn or more between two states, which
+the prior's local variable reads modulo a full turn).
 """
 
 
@@ -93,3 +94,10 @@ class UncleanedDataWarning(SteamWarning):
 class DegenerateMeasurementWarning(SteamWarning):
     """A measurement was evaluated where its Jacobian is undefined, and the stated convention was used instead
     (a range with the robot exactly at the landmark: error 0 - r, Jacobian rows zero)."""
+
+
+class WrappedTurnWarning(SteamWarning):
+    """An estimate on a group of rigid motions turns by π or more between two consecutive states (the body twist at
+    either end over their gap): a motion prior on the group reads the turn through Log(T₁⁻¹ T₂), which holds less
+    than half a turn, so the estimate is one of several minima, its turn read modulo a full one (another start or
+    solver may end at another). States closer in time remove it."""

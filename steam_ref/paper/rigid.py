@@ -26,7 +26,7 @@ from ..arguments import integer, real_array
 from ..batch import gauss_newton
 from ..bayes_tree import FixedLagSmoother, IncrementalSolver
 from ..datasets.rigid import RIGID_NOISE, RIGID_QC, SIGMA_OF, RigidReadings, RigidSample, sample_rigid_task
-from ..errors import ShapeError, SteamError
+from ..errors import ShapeError, SteamError, WrappedTurnWarning
 from ..evaluate import nees
 from ..factors import Factor, LieStatePrior, PriorFactor
 from ..factors.point_readings import AngularVelocityReading, PointReading, PositionReading, RangeReading
@@ -45,6 +45,7 @@ __all__ = [
     "held_out_errors",
     "straight_line_errors",
     "straight_line_at",
+    "check_turns",
     "rigid_nees",
     "RIGID_QC",
     "RigidSetup",
@@ -185,7 +186,9 @@ def solve_rigid(
             relative_tolerance=OPTIMUM_RELATIVE,
             step_tolerance=OPTIMUM_STEP,
         )
-        return RigidRun(np.array([result.values[X(i)] for i in range(n)]), result, dropped_readings(data))
+        states = np.array([result.values[X(i)] for i in range(n)])
+        check_turns(data, prior, states)
+        return RigidRun(states, result, dropped_readings(data))
     solver: IncrementalSolver | FixedLagSmoother = IncrementalSolver() if method == "btgp" else FixedLagSmoother(lag)
     out = np.empty((n, prior.state_dim))
     kept: list[int] = []
@@ -201,7 +204,29 @@ def solve_rigid(
         kept = [i for i in range(step.index + 1) if X(i) in estimate]
         for i in kept:
             out[i] = estimate[X(i)]
+    check_turns(data, prior, out)
     return RigidRun(out, solver, dropped_readings(data))
+
+
+def check_turns(data: RigidReadings, prior: MotionPrior, states: NDArray) -> None:
+    """:class:`~steam_ref.errors.WrappedTurnWarning` naming the first pair of consecutive states whose body twist, at
+    either end, turns by π or more over their gap (the group's angle of Δt ϖ): the prior's local variable
+    Log(Tᵢ₋₁⁻¹ Tᵢ) [DER 11.11] holds less than half a turn, so such an estimate is one of several minima. A run
+    with a gap of 100 s in a turn at 0.15 rad/s ended 1.2 m apart by batch and by BTGP, each converged, no word said."""
+    g = group_state(prior.kind).group
+    twist = np.asarray(states, dtype=float)[:, g.size : g.size + g.dim]
+    gap = np.diff(data.state_times)[:, None]
+    turn = np.maximum(g.angle(gap * twist[:-1]), g.angle(gap * twist[1:]))
+    past = np.flatnonzero(~(turn < np.pi))
+    if past.size:
+        i = int(past[0]) + 1
+        warnings.warn(
+            f"{data.name}: between states {i - 1} and {i} ({float(gap[i - 1, 0]):g} s apart) the estimate's twist "
+            f"turns by {float(turn[i - 1]):.3g} rad, π or more ({past.size} such gap(s)): the prior reads the turn "
+            "modulo a full one, so this is one of several minima; add states in the gap",
+            WrappedTurnWarning,
+            stacklevel=3,
+        )
 
 
 def _gap(data: RigidReadings, i: int) -> float:
