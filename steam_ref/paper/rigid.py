@@ -212,7 +212,7 @@ def check_turns(data: RigidReadings, prior: MotionPrior, states: NDArray) -> Non
     """:class:`~steam_ref.errors.WrappedTurnWarning` naming the first pair of consecutive states whose body twist, at
     either end, turns by π or more over their gap (the group's angle of Δt ϖ): the prior's local variable
     Log(Tᵢ₋₁⁻¹ Tᵢ) [DER 11.11] holds less than half a turn, so such an estimate is one of several minima. A run
-    with a gap of 100 s in a turn at 0.15 rad/s ended 1.2 m apart by batch and by BTGP, each converged, no word said."""
+    with a gap of 100 s in a turn at 0.15 rad/s ended 4.2 m apart by batch and by BTGP, each converged, no word said."""
     g = group_state(prior.kind).group
     twist = np.asarray(states, dtype=float)[:, g.size : g.size + g.dim]
     gap = np.diff(data.state_times)[:, None]
