@@ -220,3 +220,36 @@ def test_a_gap_the_estimate_turns_half_a_turn_across_is_flagged_not_passed_silen
 
     assert abs(cost(runs["btgp"].states) - cost(runs["batch"].states)) > 1.0
     assert np.max(np.linalg.norm(runs["btgp"].states[:, :3] - runs["batch"].states[:, :3], axis=1)) > 0.5
+
+
+def test_a_streamed_run_reads_its_estimate_once_a_state_not_the_whole_run_at_every_state(monkeypatch):
+    """BTGP's run read the whole estimate (every state and landmark) at every update and looked each state up in it:
+    work growing as n² with the run (n = 20,000 states by ``--steps``: 2e8 look-ups beside the solver's own). It reads
+    the newest state at each update and every state once at the end: the values it returns are the solver's final
+    estimate, as before (the oracle: the same stream run by hand, as ``benchmarks/se3_vs_gtsam.py`` does)."""
+    from steam_ref.bayes_tree import IncrementalSolver
+
+    data = generate_rigid(40, seed=3)
+    prior = motion_prior("se3", QC)
+    read = []
+    for name in ("estimate", "estimates_of"):
+        method = getattr(IncrementalSolver, name)
+
+        def counted(self, *args, _method=method, **kwargs):
+            out = _method(self, *args, **kwargs)
+            read.append(len(out))
+            return out
+
+        monkeypatch.setattr(IncrementalSolver, name, counted)
+    run = solve_rigid(data, prior, "btgp")
+    monkeypatch.undo()
+    n = len(data.state_times)
+    assert sum(read) <= 3 * n, f"{sum(read)} values read over a run of {n} states"
+    solver, last = IncrementalSolver(), None
+    for step in steps(data.on(prior.kind), prior):
+        gap = data.state_times[step.index] - data.state_times[step.index - 1] if step.index else 0.0
+        value = step.value if step.index == 0 else prior.predict(last, gap)
+        solver.update(step.factors, {X(step.index): value, **step.landmarks})
+        last = solver.estimate()[X(step.index)]
+    final = solver.estimate()
+    np.testing.assert_array_equal(run.states, np.array([final[X(i)] for i in range(n)]))

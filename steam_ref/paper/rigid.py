@@ -191,7 +191,6 @@ def solve_rigid(
         return RigidRun(states, result, dropped_readings(data))
     solver: IncrementalSolver | FixedLagSmoother = IncrementalSolver() if method == "btgp" else FixedLagSmoother(lag)
     out = np.empty((n, prior.state_dim))
-    kept: list[int] = []
     for step in steps(data, prior, initial):
         value = step.value if step.index == 0 else prior.predict(out[step.index - 1], _gap(data, step.index))
         new = {X(step.index): value if initial is None else step.value, **step.landmarks}
@@ -200,10 +199,15 @@ def solve_rigid(
             solver.update(step.factors, new, timestamps=stamp)
         else:
             solver.update(step.factors, new)
-        estimate = solver.estimate()
-        kept = [i for i in range(step.index + 1) if X(i) in estimate]
-        for i in kept:
-            out[i] = estimate[X(i)]
+        if isinstance(solver, FixedLagSmoother):  # the window's states: each keeps the value it leaves the window with
+            for key, x in solver.estimate().items():
+                if key.symbol == X(0).symbol:
+                    out[key.index] = x
+        else:  # the newest state (the next one's prediction starts there); all of them once, at the end
+            out[step.index] = solver.estimate_of(X(step.index))
+    if isinstance(solver, IncrementalSolver):
+        final = solver.estimates_of([X(i) for i in range(n)])
+        out = np.array([final[X(i)] for i in range(n)])
     check_turns(data, prior, out)
     return RigidRun(out, solver, dropped_readings(data))
 
