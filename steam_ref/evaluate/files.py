@@ -34,6 +34,7 @@ from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.spatial.transform import Rotation
 
 from ..arguments import parse_decimal, real_array
 from ..datasets.textfile import text_lines
@@ -94,37 +95,15 @@ def _matrices(group: LieGroup, poses: object) -> NDArray:
 
 
 def _rotation_of(q: NDArray) -> NDArray:
-    """R (n, 3, 3) of the quaternions q (n, 4) [qx, qy, qz, qw], each divided by its norm."""
-    x, y, z, w = (q / np.linalg.norm(q, axis=1, keepdims=True)).T
-    return np.stack(
-        [
-            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)], -1),
-            np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)], -1),
-            np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], -1),
-        ],
-        -2,
-    )
+    """R (n, 3, 3) of the quaternions q (n, 4) [qx, qy, qz, qw], each divided by its norm (SciPy's ``Rotation``)."""
+    return Rotation.from_quat(q).as_matrix()
 
 
 def _quaternion_of(R: NDArray) -> NDArray:
-    """[qx, qy, qz, qw] (n, 4) of the rotations R (n, 3, 3), qw >= 0 (q and -q are one rotation): each from the
-    largest of 1 + tr R, 1 + 2 R₀₀ - tr R, ... (Shepperd's choice, no small difference divided)."""
-    tr = np.trace(R, axis1=1, axis2=2)
-    big = np.stack([1 + 2 * R[:, 0, 0] - tr, 1 + 2 * R[:, 1, 1] - tr, 1 + 2 * R[:, 2, 2] - tr, 1 + tr], -1)
-    pick = np.argmax(big, axis=1)
-    out = np.empty((len(R), 4))
-    for k, (i, r) in enumerate(zip(pick, R, strict=True)):
-        s = 2 * np.sqrt(big[k, i])  # 4 |q_i|
-        skew = [r[2, 1] - r[1, 2], r[0, 2] - r[2, 0], r[1, 0] - r[0, 1]]  # 4 w q_x, 4 w q_y, 4 w q_z
-        if i == 3:
-            out[k] = [skew[0] / s, skew[1] / s, skew[2] / s, s / 4]
-        else:
-            j, m = (i + 1) % 3, (i + 2) % 3
-            q = np.empty(4)
-            q[i], q[j], q[m] = s / 4, (r[j, i] + r[i, j]) / s, (r[m, i] + r[i, m]) / s
-            q[3] = skew[i] / s
-            out[k] = q
-    return np.where(out[:, 3:] < 0, -out, out)
+    """[qx, qy, qz, qw] (n, 4) of the rotations R (n, 3, 3) (SciPy's ``Rotation``), qw >= 0 (q and -q are one
+    rotation)."""
+    q = Rotation.from_matrix(R).as_quat()
+    return np.where(q[:, 3:] < 0, -q, q)
 
 
 def write_tum(path: str | os.PathLike, times: object, poses: object, *, group: LieGroup | None = None) -> None:
