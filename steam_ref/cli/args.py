@@ -287,13 +287,14 @@ def add_data_dir(parser: argparse.ArgumentParser, also: str = "") -> None:
     )
 
 
-def add_trajectory_arguments(parser: argparse.ArgumentParser) -> None:
-    """--save-trajectory FILE and its format (run and batch)."""
+def add_trajectory_arguments(parser: argparse.ArgumentParser, which: str = "") -> None:
+    """--save-trajectory FILE and its format (run and batch); ``which`` says whose estimate, if need be."""
     parser.add_argument(
         "--save-trajectory",
         metavar="FILE",
         default=None,
-        help="write the estimated pose at every time step: TUM (timestamp tx ty tz qx qy qz qw, read by evo) or KITTI",
+        help="write the estimated pose at every time step: TUM (timestamp tx ty tz qx qy qz qw, read by evo) or "
+        f"KITTI{which}",
     )
     parser.add_argument(
         "--trajectory-format", choices=("tum", "kitti"), default=None, help="of --save-trajectory (default: tum)"

@@ -25,6 +25,7 @@ import numpy as np
 
 from ..errors import SteamError
 from ..evaluate import write_kitti, write_tum
+from ..lie import LieGroup
 
 __all__ = [
     "refuse_dangling",
@@ -253,13 +254,18 @@ def check_trajectory_output(args: argparse.Namespace) -> None:
         )
 
 
-def save_trajectory(args: argparse.Namespace, times: np.ndarray, poses: np.ndarray) -> None:
-    """--save-trajectory: the poses (n, 3) at the data set's times, as TUM or KITTI."""
+def save_trajectory(
+    args: argparse.Namespace, times: np.ndarray, poses: np.ndarray, *, group: LieGroup | None = None
+) -> None:
+    """--save-trajectory: the poses (n, 3) at the data set's times, as TUM or KITTI; with ``group`` (a 3-D run's:
+    SE3V) the poses in 3-D (n, group.size) (:func:`~steam_ref.evaluate.write_tum`'s ``group``)."""
     if args.save_trajectory:
         if args.trajectory_format == "kitti":
-            write_output(args.save_trajectory, "--save-trajectory", lambda name: write_kitti(name, poses))
+            write_output(args.save_trajectory, "--save-trajectory", lambda name: write_kitti(name, poses, group=group))
         else:
-            write_output(args.save_trajectory, "--save-trajectory", lambda name: write_tum(name, times, poses))
+            write_output(
+                args.save_trajectory, "--save-trajectory", lambda name: write_tum(name, times, poses, group=group)
+            )
 
 
 def write_plot(args: argparse.Namespace, draw: Callable[[str], object]) -> str:

@@ -7,6 +7,11 @@ by the fixed-lag smoother; each scored at the held-out position fixes by the GP'
 straight line between the fixes around each (``paper.rigid``). ``--max-poses N`` keeps the first N states. The planar
 options (a schedule, a layout, figures of a planar run) do not apply and are refused by name.
 
+``--save-trajectory FILE`` (``--trajectory-format``) writes, as the planar run does, the estimate of the run's method:
+BTGP's (``--method``'s one value on a 3-D set), or with ``--lag`` the fixed-lag smoother's (each state as it left the
+window), at the states' times in the set's seconds, through the planar run's checks and writer
+(:func:`~steam_ref.cli.paths.save_trajectory`: TUM or KITTI of poses in 3-D, ``group=SE3V``); batch's is not written.
+
 A generated set (``synthetic-3d``: ``--steps``, ``--seed``) has its true states: each method's states are also scored
 against them (:func:`~steam_ref.evaluate.group_ape`: translation and rotation RMSE; batch and BTGP also by the pose
 NEES of their marginal covariances, :func:`~steam_ref.paper.rigid.rigid_nees`), beside the first values (the prior's
@@ -37,6 +42,8 @@ from ..paper.rigid import (
     straight_line_errors,
 )
 from .args import check_prior_options, seed_of
+from .explain import files_of
+from .paths import check_outputs_apart, check_outputs_not_inputs, check_trajectory_output, save_trajectory
 from .streams import json_line
 
 __all__ = ["run_rigid"]
@@ -48,7 +55,6 @@ _PLANAR: dict[str, object] = {
     "score_against_optimum": False, "se2_residual": None, "save_estimates": None, "plot": None, "qc": None,
     "tree_dot": None, "lag_history": False, "time_budget": None, "relinearize_threshold": None,
     "relinearize_skip": None, "method": "btgp", "interpolate": True, "amalgamation_zeros": None, "lag_batch": 0.0,
-    "trajectory_format": None,
 }  # fmt: skip
 
 
@@ -99,8 +105,11 @@ def run_rigid(args: argparse.Namespace) -> int:
         for k, none in _PLANAR.items()
         if getattr(args, k, none) != none
     ]
-    if given or getattr(args, "save_trajectory", None):
-        raise SteamError(f"--dataset {args.dataset} is a 3-D set: {(given or ['--save-trajectory'])[0]} does not apply")
+    if given:
+        raise SteamError(f"--dataset {args.dataset} is a 3-D set: {given[0]} does not apply")
+    check_trajectory_output(args)  # the planar run's checks, before anything is solved
+    outputs = {"--save-trajectory": args.save_trajectory}
+    check_outputs_apart(outputs)  # not the file stdout or stderr goes to
     name = args.prior or "se3"
     taken = {"singer_time_constant": getattr(args, "singer_time_constant", None)}  # --se2-residual: planar, above
     if name in MOTION_PRIORS:  # an unknown name: motion_prior says so
@@ -117,6 +126,7 @@ def run_rigid(args: argparse.Namespace) -> int:
     if not isinstance(loaded, RigidReadings):
         raise SteamError(f"--dataset {args.dataset!r} gives no 3-D readings")
     data = loaded
+    check_outputs_not_inputs(outputs, files_of(data.source))  # kitti's GPS and IMU files
     if args.max_poses is not None:
         data = data.head(args.max_poses)
     qc = args.qc_scale * (np.eye(6) if data.qc is None else data.qc)
@@ -152,6 +162,11 @@ def run_rigid(args: argparse.Namespace) -> int:
         if method == "batch":
             figures[method]["converged"] = bool(getattr(run.solver, "converged", False))
             figures[method]["start"] = "btgp" if from_btgp else "first values"
+    # the run's own file first, as the planar run writes it: the estimate of its method, BTGP (--method's one value
+    # on a 3-D set), or with --lag the fixed-lag smoother's
+    g = group_state(prior.kind).group
+    written = "btgp" if args.lag is None else "fixed-lag"
+    save_trajectory(args, data.state_times, runs[written].states[:, : g.size], group=g)
     for method in methods:
         summary[method] = figures[method]
         if truth is not None:

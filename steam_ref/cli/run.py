@@ -221,7 +221,11 @@ def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
         default=None,
         help="write BTGP's final Bayes tree in the Graphviz format of GTSAM's ISAM2.dot() (\"frontals : separator\")",
     )
-    add_trajectory_arguments(parser)
+    add_trajectory_arguments(
+        parser,
+        "; the estimate of --method (with --lag, the fixed-lag one); a 3-D set (synthetic-3d, kitti): BTGP's, or "
+        "with --lag the fixed-lag smoother's, its poses in 3-D (batch's is not written)",
+    )
     return parser
 
 
