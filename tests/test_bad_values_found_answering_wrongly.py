@@ -117,7 +117,6 @@ def test_an_output_beside_the_input_is_written(capsys, tmp_path):
         ["--no-interpolate"],
         ["--amalgamation-zeros", "0.5"],
         ["--lag", "5", "--lag-batch", "2"],
-        ["--trajectory-format", "kitti"],
     ],
 )
 def test_a_planar_option_on_a_3d_run_is_refused(capsys, option):

@@ -22,7 +22,7 @@ from steam_ref.datasets.kitti import GPS_FILE, IMU_FILE, load_kitti
 from steam_ref.datasets.rigid import generate_rigid, sample_rigid_task
 from steam_ref.datasets.search import gtsam_data_dir
 from steam_ref.errors import DataError
-from steam_ref.evaluate import chi2_band
+from steam_ref.evaluate import chi2_band, read_tum
 from steam_ref.lie import SE3V, GroupState
 from steam_ref.motion import motion_prior
 from steam_ref.paper.rigid import held_out_errors, rigid_nees, solve_rigid, steps, straight_line_errors
@@ -253,3 +253,27 @@ def test_a_streamed_run_reads_its_estimate_once_a_state_not_the_whole_run_at_eve
         last = solver.estimate()[X(step.index)]
     final = solver.estimate()
     np.testing.assert_array_equal(run.states, np.array([final[X(i)] for i in range(n)]))
+
+
+def test_a_kitti_run_writes_btgps_poses_and_refuses_to_write_over_its_own_data(capsys, tmp_path):
+    """--save-trajectory on KITTI: BTGP's states (the run's method) at the kept fixes' times, the API's solve_rigid of
+    the same 16 states to 1e-12; naming gtsam's GPS file (a copy here) is refused in one line before the run and
+    leaves the file as it was (the planar run's rule, cli/paths.py)."""
+    folder = _kitti_folder()
+    saved = tmp_path / "estimate.txt"
+    run = runner("run")
+    code, _, err = run(capsys, "--dataset", "kitti", "--max-poses", 16, "--json", "--save-trajectory", saved)
+    assert code == 0, err
+    data = load_kitti(folder, group=SE3V).head(16)
+    btgp = solve_rigid(data, motion_prior("se3", data.qc), "btgp")
+    times, poses = read_tum(saved, group=SE3V)
+    np.testing.assert_array_equal(times, data.state_times)
+    np.testing.assert_allclose(SE3V.matrix(poses), SE3V.matrix(btgp.states[:, :6]), rtol=0, atol=1e-12)
+    for name in (GPS_FILE, IMU_FILE):
+        shutil.copy(folder / name, tmp_path / name)
+    before = (tmp_path / GPS_FILE).read_bytes()
+    argv = ["--dataset", "kitti", "--data-dir", tmp_path, "--max-poses", 16, "--save-trajectory", tmp_path / GPS_FILE]
+    code, out, err = run(capsys, *argv)
+    assert code == 2 and out == "" and err.count("\n") == 1, err
+    assert f"--save-trajectory: '{tmp_path / GPS_FILE}' is the data file" in err
+    assert (tmp_path / GPS_FILE).read_bytes() == before

@@ -14,17 +14,19 @@ import json
 import numpy as np
 import pytest
 from cli_runs import runner
+from requirements import optional_import
 from scipy.spatial.transform import Rotation
 
 from steam_ref.datasets.registry import DATASETS, loadable
 from steam_ref.datasets.rigid import RIGID_QC, generate_rigid
 from steam_ref.datasets.search import load_dataset
-from steam_ref.evaluate import chi2_quantile, group_ape
+from steam_ref.evaluate import chi2_quantile, group_ape, read_kitti, read_tum
 from steam_ref.lie import SE3V
 from steam_ref.lie.points import point_dim
 from steam_ref.lie.state import GroupState
 from steam_ref.manifold import VECTOR
 from steam_ref.motion import MOTION_PRIORS, motion_prior
+from steam_ref.paper.rigid import solve_rigid
 
 run = runner("run")
 
@@ -148,3 +150,69 @@ def test_a_singer_time_constant_reaches_the_3d_singer_prior(capsys):
         truth = data.on(prior.kind).truth
         rmse = float(np.sqrt(np.mean(group_ape(SE3V, truth[:, :6], states[:, :6]).translation ** 2)))
         assert (rmse == pytest.approx(figures["translation_rmse_m"], rel=1e-12)) is equal
+
+
+# -- --save-trajectory on a 3-D run: the estimate of the run's method (BTGP; with --lag the fixed-lag smoother's) --
+
+
+def _solved(method: str, steps: int = 12, seed: int = 1, lag: float = 10.0) -> tuple[np.ndarray, np.ndarray]:
+    """The API's estimate of the CLI's run: the states' times and the poses (n, 6) of ``solve_rigid`` by ``method``."""
+    data = generate_rigid(steps, seed=seed)
+    solved = solve_rigid(data, motion_prior("se3", data.qc), method, lag=lag)
+    return data.state_times, solved.states[:, :6]
+
+
+@pytest.mark.parametrize(("method", "lag"), [("btgp", []), ("fixed-lag", ["--lag", 4])])
+def test_a_3d_run_writes_its_methods_poses_as_tum_and_kitti_and_evo_reads_them(capsys, tmp_path, method, lag):
+    """Refused until now ("--save-trajectory does not apply"). The file holds the estimate of the run's method: BTGP's
+    (the planar run's default --method, the only one a 3-D run takes), with --lag the fixed-lag smoother's, at the
+    states' times: the API's solve_rigid of the same task to 1e-12, the times exact; evo reads the same poses."""
+    file_interface = optional_import("evo.tools.file_interface", "evo")
+    tum, kitti = tmp_path / "estimate.txt", tmp_path / "estimate.kitti"
+    argv = ["--dataset", "synthetic-3d", "--steps", 12, "--seed", 1, *lag, "--json"]
+    code, out, err = run(capsys, *argv, "--save-trajectory", tum)
+    assert code == 0, err
+    assert method in json.loads(out)
+    code, _, err = run(capsys, *argv, "--save-trajectory", kitti, "--trajectory-format", "kitti")
+    assert code == 0, err
+    times, poses = _solved(method, lag=float(lag[1]) if lag else 10.0)
+    read_times, tum_poses = read_tum(tum, group=SE3V)
+    np.testing.assert_array_equal(read_times, times)
+    want = SE3V.matrix(poses)
+    for back in (tum_poses, read_kitti(kitti, group=SE3V)):
+        np.testing.assert_allclose(SE3V.matrix(back), want, rtol=0, atol=1e-12)
+    theirs = file_interface.read_tum_trajectory_file(str(tum))
+    np.testing.assert_array_equal(theirs.timestamps, times)
+    np.testing.assert_allclose(np.array(theirs.poses_se3), want, rtol=0, atol=1e-12)
+    if method == "btgp":  # not batch's estimate, which the run also solves (from BTGP's): the two differ
+        data = generate_rigid(12, seed=1)
+        start = solve_rigid(data, motion_prior("se3", RIGID_QC), "btgp").states  # the run's batch starts there
+        batch = solve_rigid(data, motion_prior("se3", RIGID_QC), "batch", initial=start)
+        assert np.max(np.abs(SE3V.matrix(batch.states[:, :6]) - want)) > 1e-6
+
+
+def test_a_3d_run_replaces_an_existing_trajectory_file_as_the_planar_run_does(capsys, tmp_path):
+    """The planar rule (cli/paths.py: a regular file that can be written is replaced after the run, in one step)."""
+    saved = tmp_path / "estimate.txt"
+    for dataset in ("synthetic", "synthetic-3d"):
+        saved.write_text("old\n")
+        code, _, err = run(capsys, "--dataset", dataset, "--steps", 6, "--save-trajectory", saved)
+        assert code == 0, err
+        assert "old" not in saved.read_text() and len(read_tum(saved, group=SE3V)[0]) == 7
+
+
+@pytest.mark.parametrize(
+    ("argv", "says"),
+    [
+        (["--save-trajectory", "{d}/no/t.txt"], "--save-trajectory: cannot write '{d}/no/t.txt': folder '{d}/no' does"),
+        (["--save-trajectory", "{d}"], "--save-trajectory: '{d}' is a folder, not a file"),
+        (["--save-trajectory", ""], "--save-trajectory: expected a file name, got ''"),
+        (["--trajectory-format", "kitti"], "--trajectory-format kitti is the format of --save-trajectory FILE"),
+    ],
+)
+def test_a_3d_runs_bad_trajectory_output_is_refused_in_one_line_before_the_run(capsys, tmp_path, argv, says):
+    argv = [a.format(d=tmp_path) for a in argv]
+    code, out, err = run(capsys, "--dataset", "synthetic-3d", "--steps", 6, *argv)
+    assert code == 2 and out == "" and err.count("\n") == 1, err
+    assert says.format(d=tmp_path) in err, err
+    assert list(tmp_path.iterdir()) == []

@@ -62,7 +62,7 @@ from .paths import (
     write_output,
     write_plot,
 )
-from .rigid import run_rigid
+from .rigid import SAVED_ESTIMATE, run_rigid
 from .streams import json_line
 
 __all__ = ["add_parser", "run", "save_estimates"]
@@ -221,11 +221,7 @@ def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
         default=None,
         help="write BTGP's final Bayes tree in the Graphviz format of GTSAM's ISAM2.dot() (\"frontals : separator\")",
     )
-    add_trajectory_arguments(
-        parser,
-        "; the estimate of --method (with --lag, the fixed-lag one); a 3-D set (synthetic-3d, kitti): BTGP's, or "
-        "with --lag the fixed-lag smoother's, its poses in 3-D (batch's is not written)",
-    )
+    add_trajectory_arguments(parser, SAVED_ESTIMATE)
     return parser
 
 
