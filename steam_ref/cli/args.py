@@ -72,12 +72,28 @@ class Subparsers(Protocol):
     def add_parser(self, name: str, **kwargs: Any) -> argparse.ArgumentParser: ...
 
 
+class _Commands(argparse._SubParsersAction):
+    """argparse's subcommands, each also saying in its own ``--help`` what it does (the ``help`` line that
+    ``steam-ref --help`` lists) and ending with ``example=``, one command line that runs as written."""
+
+    def add_parser(self, name: str, **kwargs: Any) -> argparse.ArgumentParser:
+        kwargs.setdefault("description", kwargs.get("help"))
+        example = kwargs.pop("example", None)
+        if example is not None:
+            kwargs.setdefault("epilog", f"example: {example}")
+        return super().add_parser(name, **kwargs)
+
+
 class Parser(argparse.ArgumentParser):
     """argparse that reports a usage error as one line and exit code 2, and reads a negative number in any form of
-    :data:`~steam_ref.arguments.DECIMAL` (``-1e-3``, not only ``-1`` and ``-0.5``) as a value, not an option."""
+    :data:`~steam_ref.arguments.DECIMAL` (``-1e-3``, not only ``-1`` and ``-0.5``) as a value, not an option.
+    Its subcommands (:class:`_Commands`) repeat their ``help`` atop their own ``--help`` and end it with an
+    ``example=``."""
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
+        kwargs.setdefault("formatter_class", argparse.RawDescriptionHelpFormatter)  # an example stays one line
         super().__init__(*args, **kwargs)
+        self.register("action", "parsers", _Commands)
         self._negative_number_matcher = re.compile(f"^-(?:{DECIMAL.pattern.removeprefix('[+-]?')})$")
 
     def error(self, message: str) -> None:  # type: ignore[override]

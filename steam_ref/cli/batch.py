@@ -39,9 +39,15 @@ __all__ = ["add_parser", "run"]
 
 def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
     """Add ``batch`` and its options to the command's subparsers."""
-    parser = sub.add_parser("batch", help="batch Gauss-Newton on all of a data set (PB or PBVR): RMSE and a plot")
+    parser = sub.add_parser(
+        "batch",
+        help="batch Gauss-Newton on all of a data set (PB or PBVR): RMSE and a plot",
+        example="steam-ref batch --dataset paper-synthetic --plot batch.png",
+    )
     add_dataset(parser, "paper-synthetic")
-    parser.add_argument("--ordering", choices=("xl", "amd"), default="amd", help="xl: the paper's PB; amd: PBVR")
+    parser.add_argument(
+        "--ordering", choices=("xl", "amd"), default="amd", help="xl: the paper's PB; amd: PBVR (default amd)"
+    )
     parser.add_argument(
         "--preset", choices=PRESETS, default=None, help="parameter set (default: by data set; required for a PATH)"
     )
@@ -84,10 +90,10 @@ def run(args: argparse.Namespace) -> int:
     } | explain.data_figures(data, data.n_poses)
     if data.ground_truth is not None:
         summary["evaluation"] = trajectory_figures(data.ground_truth[:, 1:4], poses)
-    save_trajectory(args, np.asarray(data.times), poses)
-    where = ""
+    written = save_trajectory(args, np.asarray(data.times), poses)
+    where = "" if args.json else written
     if args.plot:
-        where = write_plot(
+        where += write_plot(
             args,
             lambda name: plot_trajectory(
                 truth,
@@ -102,9 +108,10 @@ def run(args: argparse.Namespace) -> int:
     else:
         print(
             f"batch {_BATCH_NAME[args.ordering]} ({args.ordering.upper()} ordering) on {args.dataset}: "
-            f"RMSE {summary['rmse_m']} m over {data.n_poses} poses, "
-            f"{summary['total_s']:.2f} s, Cholesky factor {summary['factor_nnz']} nonzeros ({summary['backend']})\n"
+            f"{summary['n_states']} states, solved in {summary['total_s']:.2f} s ({summary['iterations']} "
+            f"iterations), Cholesky factor {summary['factor_nnz']} nonzeros ({summary['backend']})\n"
             + explain.data_lines(summary)
+            + explain.rmse_text(summary["rmse_m"], data.n_poses)
             + explain.evaluation_note(summary)
             + where
         )

@@ -84,6 +84,8 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     parser = Parser(
         prog="steam-ref",
         description="Incremental sparse GP regression for continuous-time STEAM (Yan, Indelman, Boots).",
+        epilog="With no command, steam-ref runs `steam-ref run`. 'steam-ref COMMAND --help' for a command's options.\n"
+        "example: steam-ref run --dataset plaza --max-poses 200",
     )
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = parser.add_subparsers(dest="command", parser_class=Parser, required=True)

@@ -43,7 +43,11 @@ __all__ = ["add_parser", "run"]
 
 def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
     """Add ``consistency`` and its options to the command's subparsers."""
-    parser = sub.add_parser("consistency", help="ANEES of each estimator over Monte Carlo runs, with its band")
+    parser = sub.add_parser(
+        "consistency",
+        help="ANEES of each estimator over Monte Carlo runs, with its band",
+        example="steam-ref consistency --seeds 20 --jobs 2",
+    )
     parser.add_argument("--dataset", choices=("synthetic",), default="synthetic", help="tasks drawn from the model")
     parser.add_argument(
         "--prior",
@@ -153,16 +157,17 @@ def run(args: argparse.Namespace) -> int:
         )
     summary = summarize({int(k): v for k, v in results.items()}, study.estimators, kinds=study.kinds)
     summary |= {"seconds": round(time.perf_counter() - start, 2), "jobs": args.jobs, "backend": args.backend}
+    where = ""
     if args.plot:  # the kinds every state has (not a landmark): an ANEES at each state
         first = next(iter(summary["estimators"].values()))
         curves = [k for k in study.kinds if "per_state" in first[k]]
         per_pose = {name: {k: row[k]["per_state"] for k in curves} for name, row in summary["estimators"].items()}
         bands = {k: tuple(first[k]["band"]) for k in curves}
-        write_output(
+        where = write_output(
             args.plot, "--plot", lambda name: plot_anees(per_pose, bands, n_runs=summary["n_seeds"], path=name)
         )
     for row in summary["estimators"].values():  # the per-pose curves are for the plot
         for kind in study.kinds:
             row[kind].pop("per_state", None)
-    print(json_line(summary) if args.json else _text(summary, study.kinds))
+    print(json_line(summary) if args.json else _text(summary, study.kinds) + where)
     return 0

@@ -23,12 +23,21 @@ SOLVES = False  # lists and downloads files: runs no solver, so $STEAM_REF_BLAS_
 
 def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
     """Add ``data`` with its ``list`` and ``fetch`` subcommands to the command's subparsers."""
-    data = sub.add_parser("data", help="the paper's data by name: list them, fetch them (sha256-checked)")
+    data = sub.add_parser(
+        "data",
+        help="the paper's data by name: list them, fetch them (sha256-checked)",
+        example="steam-ref data list",
+    )
     what = data.add_subparsers(dest="data_command", required=True, parser_class=type(data))
-    what.add_parser("list", help="each data set: source, licence note, size, present or not and where")
+    what.add_parser(
+        "list",
+        help="each data set: source, licence note, size, present or not and where",
+        example="steam-ref data list",
+    )
     get = what.add_parser(
         "fetch",
         help="download data sets from the authors' repository (pinned commit) into the user's cache folder",
+        example="steam-ref data fetch plaza",
     )
     get.add_argument(
         "names",

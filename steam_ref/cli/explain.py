@@ -23,6 +23,7 @@ __all__ = [
     "data_figures",
     "evaluation_note",
     "fidelity_text",
+    "rmse_text",
     "file_entry",
     "method_text",
     "plot_title",
@@ -108,6 +109,17 @@ def _yardstick(s: dict) -> str:
     return f"\n  yardstick: {'; '.join(parts)}" if parts else ""
 
 
+def rmse_text(rmse_m: float | None, n_poses: int, detail: str = "") -> str:
+    """The line saying what a run's or a batch solve's RMSE is, or that a data set without ground truth is
+    not scored."""
+    if rmse_m is None:
+        return "\n  not scored (none: the data set has no ground truth)"
+    return (
+        f"\n  RMSE {rmse_m} m over {n_poses} time steps{detail}: the root-mean-square distance "
+        "between the estimated and the true (ground-truth) positions"
+    )
+
+
 def run_text(s: dict) -> str:
     """The human-readable summary of ``steam-ref run`` from its JSON figures ``s``."""
     state = "" if s["completed"] else "  (cut short: time budget or --max-poses)"
@@ -135,10 +147,7 @@ def run_text(s: dict) -> str:
         at_states = (
             "" if s["n_estimated_states"] == s["n_poses"] else f" ({s['rmse_estimated_m']} m at the estimated states)"
         )
-        score = (
-            f"\n  RMSE {s['rmse_m']} m over {s['n_poses']} time steps{at_states}: the root-mean-square distance "
-            "between the estimated and the true (ground-truth) positions" + _yardstick(s)
-        )
+        score = rmse_text(s["rmse_m"], s["n_poses"], at_states) + _yardstick(s)
     convergence = ""
     if "convergence_s" in s:
         verdict = "converged" if s["converged_at_end"] else "NOT converged: see the warning"

@@ -25,9 +25,16 @@ __all__ = ["add_parser", "run"]
 def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
     """Add ``fidelity`` and its options to the command's subparsers."""
     parser = sub.add_parser(
-        "fidelity", help="BTGP/1 against the authors' saved runs, pose by pose, covariances included"
+        "fidelity",
+        help="BTGP/1 against the authors' saved runs, pose by pose, covariances included",
+        example="steam-ref fidelity --dataset paper-synthetic",
     )
-    parser.add_argument("--dataset", choices=[*with_authors_run(), "all"], default="all")
+    parser.add_argument(
+        "--dataset",
+        choices=[*with_authors_run(), "all"],
+        default="all",
+        help="the data set whose saved run is compared (default all)",
+    )
     add_data_dir(parser, " (and its authors/ folder)")
     parser.add_argument("--json", action="store_true", help="print one JSON line per data set")
     parser.add_argument(

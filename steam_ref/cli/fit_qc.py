@@ -39,7 +39,11 @@ __all__ = ["add_parser", "run"]
 
 def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
     """Add ``fit-qc`` and its options to the command's subparsers."""
-    parser = sub.add_parser("fit-qc", help="fit a motion prior's Qc to a data set's ground truth (maximum likelihood)")
+    parser = sub.add_parser(
+        "fit-qc",
+        help="fit a motion prior's Qc to a data set's ground truth (maximum likelihood)",
+        example="steam-ref fit-qc --dataset plaza --max-poses 2000",
+    )
     add_dataset(parser, "plaza")
     add_prior(
         parser,

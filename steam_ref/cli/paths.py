@@ -190,9 +190,10 @@ def check_outputs_not_inputs(outputs: dict[str, str | None], inputs: list[Path])
             )
 
 
-def write_output(path: str, option: str, write: Callable[[str], object]) -> None:
+def write_output(path: str, option: str, write: Callable[[str], object]) -> str:
     """Write an output ``path`` checked by :func:`check_output`: ``write(name)`` writes a new file beside
-    its real target (a link is followed and stays a link), which then replaces it in one step.
+    its real target (a link is followed and stays a link), which then replaces it in one step. Returns the
+    line saying where it went (``--save-estimates``: "estimates written to /abs/path"), for the text output.
 
     A failure (a full disk, ...) leaves what was at ``path`` as it was and is a SteamError naming the
     option and the path. A file that was there keeps its permission bits.
@@ -215,6 +216,7 @@ def write_output(path: str, option: str, write: Callable[[str], object]) -> None
     finally:
         with contextlib.suppress(OSError):
             os.unlink(temporary)
+    return f"\n{option.removeprefix('--').removeprefix('save-').replace('-', ' ')} written to {os.path.abspath(path)}"
 
 
 def check_out_folder(path: str, option: str) -> None:
@@ -256,20 +258,23 @@ def check_trajectory_output(args: argparse.Namespace) -> None:
 
 def save_trajectory(
     args: argparse.Namespace, times: np.ndarray, poses: np.ndarray, *, group: LieGroup | None = None
-) -> None:
+) -> str:
     """--save-trajectory: the poses (n, 3) at the data set's times, as TUM or KITTI; with ``group`` (a 3-D run's:
-    SE3V) the poses in 3-D (n, group.size) (:func:`~steam_ref.evaluate.write_tum`'s ``group``)."""
-    if args.save_trajectory:
-        if args.trajectory_format == "kitti":
-            write_output(args.save_trajectory, "--save-trajectory", lambda name: write_kitti(name, poses, group=group))
-        else:
-            write_output(
-                args.save_trajectory, "--save-trajectory", lambda name: write_tum(name, times, poses, group=group)
-            )
+    SE3V) the poses in 3-D (n, group.size) (:func:`~steam_ref.evaluate.write_tum`'s ``group``). Returns the line
+    saying where (:func:`write_output`), "" without it."""
+    if not args.save_trajectory:
+        return ""
+    if args.trajectory_format == "kitti":
+        return write_output(
+            args.save_trajectory, "--save-trajectory", lambda name: write_kitti(name, poses, group=group)
+        )
+    return write_output(
+        args.save_trajectory, "--save-trajectory", lambda name: write_tum(name, times, poses, group=group)
+    )
 
 
 def write_plot(args: argparse.Namespace, draw: Callable[[str], object]) -> str:
     """Write ``--plot`` by ``draw(name)``; the line saying where it went, printed after the figures ("" with
     ``--json``: its one line is the figures)."""
-    write_output(args.plot, "--plot", draw)
-    return "" if args.json else f"\nplot written to {os.path.abspath(args.plot)}"
+    where = write_output(args.plot, "--plot", draw)
+    return "" if args.json else where

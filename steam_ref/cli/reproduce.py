@@ -15,7 +15,11 @@ __all__ = ["add_parser", "run"]
 
 def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
     """Add ``reproduce`` and its options to the command's subparsers."""
-    parser = sub.add_parser("reproduce", help="the experiments of Fig. 3 and Fig. 4, plots and a results table")
+    parser = sub.add_parser(
+        "reproduce",
+        help="the experiments of Fig. 3 and Fig. 4, plots and a results table",
+        example="steam-ref reproduce --quick --out reproduced/",
+    )
     parser.add_argument("--quick", action="store_true", help="small prefixes and budgets: minutes, not hours")
     parser.add_argument("--out", default="reproduced", help="folder for plots and the table (default: reproduced)")
     add_data_dir(parser)

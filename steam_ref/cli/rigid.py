@@ -172,7 +172,7 @@ def run_rigid(args: argparse.Namespace) -> int:
     # on a 3-D set), or with --lag the fixed-lag smoother's
     g = group_state(prior.kind).group
     written = "btgp" if args.lag is None else "fixed-lag"
-    save_trajectory(args, data.state_times, runs[written].states[:, : g.size], group=g)
+    where = save_trajectory(args, data.state_times, runs[written].states[:, : g.size], group=g)  # its line, or ""
     for method in methods:
         summary[method] = figures[method]
         if truth is not None:
@@ -195,5 +195,5 @@ def run_rigid(args: argparse.Namespace) -> int:
             rotation = f" {f['rotation_rmse_rad']:.4f} rad" if "rotation_rmse_rad" in f else ""
             nees = f", NEES {f['pose_anees']:.2f}" if "pose_anees" in f else ""
             lines.append(f"  {what:14s} {f['translation_rmse_m']:.3f} m{rotation}{nees}")
-    print("\n".join(lines))
+    print("\n".join(lines) + where)
     return 0

@@ -73,7 +73,11 @@ DEFAULT_STEPS, DEFAULT_LANDMARKS = 1500, 298  # generate_synthetic's defaults: a
 
 def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
     """Add ``run`` and its options to the command's subparsers."""
-    parser = sub.add_parser("run", help="stream a data set through one solver")
+    parser = sub.add_parser(
+        "run",
+        help="stream a data set through one solver: RMSE against ground truth, timing",
+        example="steam-ref run --dataset plaza --max-poses 200",
+    )
     add_dataset(parser, "synthetic")
     parser.add_argument(
         "--method",
@@ -296,16 +300,19 @@ def run(args: argparse.Namespace) -> int:
     result = estimator.run(data.ground_truth, covariances=args.save_estimates is not None)
     n = len(result.times)
     # the run's own files first: nothing computed from them after (scores, figures) can lose them
+    written = ""  # the lines saying where each file went
     if args.save_estimates:
-        write_output(
+        written += write_output(
             args.save_estimates,
             "--save-estimates",
             lambda name: save_estimates(name, result, state_names=estimator.front.prior.state_names),
         )
     if args.tree_dot and isinstance(estimator.solver, BayesTreeSolver):  # GTSAM's ISAM2.dot() text (bayes_tree/dot.py)
         dot = estimator.solver.inner.tree.dot() + "\n"
-        write_output(args.tree_dot, "--tree-dot", lambda name: Path(name).write_text(dot, encoding="utf-8"))
-    save_trajectory(args, result.times, result.trajectory[:, :3])  # --save-estimates' clock: the data's seconds
+        written += write_output(args.tree_dot, "--tree-dot", lambda name: Path(name).write_text(dot, encoding="utf-8"))
+    written += save_trajectory(
+        args, result.times, result.trajectory[:, :3]
+    )  # --save-estimates' clock: the data's seconds
     summary = result.summary(args.dataset) | {
         "preset": setup.name,
         "score_against_optimum": args.score_against_optimum,
@@ -331,14 +338,14 @@ def run(args: argparse.Namespace) -> int:
         summary |= score.summary()
     if data.ground_truth is not None and n:  # APE, RPE beside the RMSE (evaluate.trajectory_figures)
         summary["evaluation"] = trajectory_figures(data.ground_truth[:n, 1:4], result.trajectory[:, :3])
-    where = ""
+    where = "" if args.json else written
     if args.plot:
         reference: np.ndarray | None
         if score is not None:
             reference = np.array([score.batch.values[X(int(i))][:2] for i in score.poses])
         else:
             reference = None if data.ground_truth is None else data.ground_truth[:, 1:3]
-        where = write_plot(
+        where += write_plot(
             args,
             lambda name: plot_trajectory(
                 reference,

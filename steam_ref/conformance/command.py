@@ -53,16 +53,24 @@ def _data_dir(text: str) -> str:
 def add_parser(sub) -> argparse.ArgumentParser:
     """Add ``conformance`` and its subcommands to ``sub`` (an argparse subparsers object)."""
     conf = sub.add_parser(
-        "conformance", help="the conformance kit: export it, check results against it, check this install"
+        "conformance",
+        help="the conformance kit: export it, check results against it, check this install",
+        example="steam-ref conformance selftest",
     )
     commands = conf.add_subparsers(
         dest="conformance_command", parser_class=type(conf), required=True, metavar="{export,check,selftest,build}"
     )
     exp = commands.add_parser(
-        "export", help="write the kit (inputs, expected outputs, conventions) and a README to DIR"
+        "export",
+        help="write the kit (inputs, expected outputs, conventions) and a README to DIR",
+        example="steam-ref conformance export kit/",
     )
     exp.add_argument("dir", metavar="DIR", type=_path, help="a new or empty folder")
-    chk = commands.add_parser("check", help="compare results laid out like the kit with its expected values")
+    chk = commands.add_parser(
+        "check",
+        help="compare results laid out like the kit with its expected values",
+        example="steam-ref conformance check results/ --allow-missing",
+    )
     chk.add_argument("results", metavar="RESULTS_DIR", type=_path, help="a folder with <suite>/results.json")
     chk.add_argument("--only", nargs="+", choices=SUITES, default=None, metavar="SUITE", help="check these suites only")
     chk.add_argument("--suite", choices=SUITES, default=None, help="the same as --only SUITE (one suite)")
@@ -93,7 +101,9 @@ def add_parser(sub) -> argparse.ArgumentParser:
         help="check against this exported kit (default: the shipped kit of the results' version)",
     )
     st = commands.add_parser(
-        "selftest", help="regenerate every case with the installed code and check it against the shipped kit"
+        "selftest",
+        help="regenerate every case with the installed code and check it against the shipped kit",
+        example="steam-ref conformance selftest",
     )
     st.add_argument(
         "--paper", action="store_true", help="also run the paper suite (BTGP/1 on both data sets, about a minute)"
@@ -105,7 +115,11 @@ def add_parser(sub) -> argparse.ArgumentParser:
         default=None,
         help="the paper suite's progress bars on stderr (default: on when stderr is a terminal)",
     )
-    bld = commands.add_parser("build", help="regenerate the kit (default: the package's own copy)")
+    bld = commands.add_parser(
+        "build",
+        help="regenerate the kit (default: the package's own copy)",
+        example="steam-ref conformance build --out rebuilt-kit/",
+    )
     bld.add_argument("--out", type=_path, default=None, help="write the kit here instead of into the package")
     bld.add_argument(
         "--paper", action="store_true", help="rebuild the paper suite from the data files (else keep the existing one)"

@@ -52,14 +52,26 @@ def _jobs(text: str) -> int:
 
 def add_parser(sub) -> argparse.ArgumentParser:
     """Add ``homework`` and its two subcommands to ``sub`` (an argparse subparsers object)."""
-    hw = sub.add_parser("homework", help="the tutorials as homework: build the student handouts, mark submissions")
+    hw = sub.add_parser(
+        "homework",
+        help="the tutorials as homework: build the student handouts, mark submissions",
+        example="steam-ref homework handout tutorials/ --out handout/",
+    )
     commands = hw.add_subparsers(
         dest="homework_command", parser_class=type(hw), required=True, metavar="{handout,mark}"
     )
-    out = commands.add_parser("handout", help="the teacher's notebooks without solutions or marking checks")
+    out = commands.add_parser(
+        "handout",
+        help="the teacher's notebooks without solutions or marking checks",
+        example="steam-ref homework handout tutorials/ --out handout/",
+    )
     out.add_argument("notebooks", nargs="+", type=_path, metavar="NOTEBOOK_OR_FOLDER", help="teacher's notebooks")
     out.add_argument("--out", type=_path, default="handout", help="folder to write the handouts to (default handout)")
-    mark = commands.add_parser("mark", help="run submitted notebooks with the teacher's checks; a score per exercise")
+    mark = commands.add_parser(
+        "mark",
+        help="run submitted notebooks with the teacher's checks; a score per exercise",
+        example="steam-ref homework mark submitted/ --source tutorials/",
+    )
     mark.add_argument(
         "submissions", nargs="+", type=_path, metavar="SUBMISSION_OR_FOLDER", help="notebooks, or folders of them"
     )
