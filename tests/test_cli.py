@@ -8,8 +8,10 @@ import json
 import numpy as np
 import pytest
 from cli_runs import run_module, runner
+from requirements import optional_import, skip_or_fail
 
 from steam_ref.cli.commands import main
+from steam_ref.datasets import gtsam_data_dir
 from steam_ref.errors import DivergenceWarning
 from steam_ref.paper.online import run_online
 from steam_ref.paper.presets import PaperSetup
@@ -345,3 +347,70 @@ def test_the_clean_display_hides_no_warning_from_a_caller(capsys):
         assert main(DIVERGING) == 0
     assert len([w for w in caught if w.category is DivergenceWarning]) == 9
     assert capsys.readouterr().err == ""  # recorded by the caller, so not shown
+
+
+def _commands(parser, prefix=()):
+    """Every (sub)command of ``parser`` as (its words, its parser), depth first."""
+    import argparse
+
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for name, child in action.choices.items():
+                yield (*prefix, name), child
+                yield from _commands(child, (*prefix, name))
+
+
+def test_every_commands_help_says_what_it_does_and_gives_an_example_that_parses():
+    """``steam-ref COMMAND --help`` opens with the line ``steam-ref --help`` lists for it and ends with
+    ``example: steam-ref COMMAND ...``, which the command's own parser accepts as written."""
+    import shlex
+
+    from steam_ref.cli.commands import build_parser
+
+    found = list(_commands(build_parser()))
+    assert {words[0] for words, _ in found} >= {"run", "batch", "fidelity", "data", "conformance", "homework"}
+    for words, parser in found:
+        text = parser.format_help()
+        assert parser.description and parser.description in text, words
+        [example] = [line for line in text.splitlines() if line.startswith("example: ")]
+        argv = shlex.split(example.removeprefix("example: "))
+        assert argv[: 1 + len(words)] == ["steam-ref", *words], example
+        build_parser(argv[1]).parse_args(argv[1:])  # raises SteamError if an option is misspelt
+
+
+def test_batch_without_ground_truth_says_not_scored(capsys, tmp_path):
+    """A data set without ground truth (Victoria Park's first 100 poses): batch printed 'RMSE None m'; it is not scored."""
+    optional_import("gtsam", "gtsam")
+    folder = gtsam_data_dir()
+    if folder is None or not (folder / "victoria_park.txt").is_file():
+        skip_or_fail("gtsam's Data/ folder has no victoria_park.txt; pip install gtsam", "optional")
+    lines = (folder / "victoria_park.txt").read_text().splitlines()
+    lines = lines[: [i for i, line in enumerate(lines) if line.startswith("ODOMETRY")][100]]  # 100 poses
+    path = tmp_path / "vp100.txt"
+    path.write_text("\n".join(lines) + "\n")
+    code, out, err = _run(capsys, "batch", "--dataset", path, "--preset", "victoria-park")
+    assert code == 0, err
+    assert "None" not in out and "not scored" in out
+    code, out, err = _run(capsys, "batch", "--dataset", path, "--preset", "victoria-park", "--json")
+    assert code == 0, err
+    assert json.loads(out)["rmse_m"] is None
+
+
+def test_run_says_where_each_file_went(capsys, small_mat, tmp_path):
+    """--save-estimates, --save-trajectory and --tree-dot wrote their files without a word; each now has a line
+    with its full path, as --plot has (and --json keeps its one line)."""
+    path, _ = small_mat
+    files = {
+        "--save-estimates": tmp_path / "e.npz",
+        "--save-trajectory": tmp_path / "t.txt",
+        "--tree-dot": tmp_path / "t.dot",
+    }
+    argv = [a for option, file in files.items() for a in (option, file)]
+    code, out, err = _run_small(capsys, path, *argv)
+    assert code == 0, err
+    lines = out.splitlines()
+    for what, file in zip(("estimates", "trajectory", "tree dot"), files.values(), strict=True):
+        assert f"{what} written to {file.resolve()}" in lines
+    code, out, err = _run_small(capsys, path, *argv, "--json")
+    assert code == 0, err
+    assert len(out.strip().splitlines()) == 1
