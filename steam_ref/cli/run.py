@@ -73,11 +73,8 @@ DEFAULT_STEPS, DEFAULT_LANDMARKS = 1500, 298  # generate_synthetic's defaults: a
 
 def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
     """Add ``run`` and its options to the command's subparsers."""
-    parser = sub.add_parser(
-        "run",
-        help="stream a data set through one solver: RMSE against ground truth, timing",
-        example="steam-ref run --dataset plaza --max-poses 200",
-    )
+    what = "stream a data set through one solver: RMSE against ground truth, timing"
+    parser = sub.add_parser("run", help=what, example="steam-ref run --dataset plaza --max-poses 200")
     add_dataset(parser, "synthetic")
     parser.add_argument(
         "--method",
@@ -299,8 +296,8 @@ def run(args: argparse.Namespace) -> int:
     estimator = StreamingEstimator(Readings.from_dataset(data, setup), setup, options, name=args.dataset)
     result = estimator.run(data.ground_truth, covariances=args.save_estimates is not None)
     n = len(result.times)
-    # the run's own files first: nothing computed from them after (scores, figures) can lose them
-    written = ""  # the lines saying where each file went
+    # the run's own files first: nothing computed from them after (scores, figures) can lose them; `written` says where
+    written = save_trajectory(args, result.times, result.trajectory[:, :3])  # the data's seconds, as --save-estimates
     if args.save_estimates:
         written += write_output(
             args.save_estimates,
@@ -310,9 +307,6 @@ def run(args: argparse.Namespace) -> int:
     if args.tree_dot and isinstance(estimator.solver, BayesTreeSolver):  # GTSAM's ISAM2.dot() text (bayes_tree/dot.py)
         dot = estimator.solver.inner.tree.dot() + "\n"
         written += write_output(args.tree_dot, "--tree-dot", lambda name: Path(name).write_text(dot, encoding="utf-8"))
-    written += save_trajectory(
-        args, result.times, result.trajectory[:, :3]
-    )  # --save-estimates' clock: the data's seconds
     summary = result.summary(args.dataset) | {
         "preset": setup.name,
         "score_against_optimum": args.score_against_optimum,
