@@ -72,29 +72,34 @@ class Subparsers(Protocol):
     def add_parser(self, name: str, **kwargs: Any) -> argparse.ArgumentParser: ...
 
 
-class _Commands(argparse._SubParsersAction):
-    """argparse's subcommands, each also saying in its own ``--help`` what it does (the ``help`` line that
-    ``steam-ref --help`` lists) and ending with ``example=``, one command line that runs as written."""
-
-    def add_parser(self, name: str, **kwargs: Any) -> argparse.ArgumentParser:
-        kwargs.setdefault("description", kwargs.get("help"))
-        example = kwargs.pop("example", None)
-        if example is not None:
-            kwargs.setdefault("epilog", f"example: {example}")
-        return super().add_parser(name, **kwargs)
+def _command_help(kwargs: dict[str, Any]) -> dict[str, Any]:
+    """A subcommand's ``add_parser`` keywords with its ``help`` line atop its own ``--help`` too, and ``example=``, one
+    command line that runs as written, as the help's last line."""
+    kwargs.setdefault("description", kwargs.get("help"))
+    example = kwargs.pop("example", None)
+    if example is not None:
+        kwargs.setdefault("epilog", f"example: {example}")
+    return kwargs
 
 
 class Parser(argparse.ArgumentParser):
     """argparse that reports a usage error as one line and exit code 2, and reads a negative number in any form of
     :data:`~steam_ref.arguments.DECIMAL` (``-1e-3``, not only ``-1`` and ``-0.5``) as a value, not an option.
-    Its subcommands (:class:`_Commands`) repeat their ``help`` atop their own ``--help`` and end it with an
-    ``example=``."""
+    Its subcommands repeat their ``help`` atop their own ``--help`` and end it with an ``example=``
+    (:func:`_command_help`)."""
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         kwargs.setdefault("formatter_class", argparse.RawDescriptionHelpFormatter)  # an example stays one line
         super().__init__(*args, **kwargs)
-        self.register("action", "parsers", _Commands)
         self._negative_number_matcher = re.compile(f"^-(?:{DECIMAL.pattern.removeprefix('[+-]?')})$")
+
+    def add_subparsers(self, **kwargs: Any) -> Any:
+        """argparse's subcommands, each ``add_parser`` given :func:`_command_help`'s keywords."""
+        commands = super().add_subparsers(**kwargs)
+        plain = commands.add_parser
+        # this action's own add_parser (argparse's action class is private: not subclassed)
+        commands.add_parser = lambda name, **options: plain(name, **_command_help(options))  # type: ignore[method-assign]
+        return commands
 
     def error(self, message: str) -> None:  # type: ignore[override]
         raise SteamError(f"{message} (see '{self.prog} --help')")
