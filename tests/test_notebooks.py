@@ -354,7 +354,7 @@ def test_no_solution_rebinds_a_name_the_marking_keeps():
     """The marking fails an answer that rebinds a name of the lesson the checks read (``marking.guarded``): no
     tutorial's own solution does, or its right answer would score 0."""
     for name, tutorial in load_tutorials(TUTORIALS[0].parent).items():
-        kept = set(guarded(tutorial))
+        kept = set(guarded(tutorial.exercises))
         for e in tutorial.exercises:
             clash = _rebound(source(tutorial.notebook["cells"][e.solution])) & kept
             assert not clash, f"{name}: the solution of {e.label} rebinds {sorted(clash)}, which the marking keeps"

@@ -10,10 +10,9 @@ exercise scores 0 and its checks and the exercises after it see the lesson's val
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from collections.abc import Sequence
 
-if TYPE_CHECKING:
-    from .marking import Tutorial
+from .exercises import Exercise
 
 __all__ = ["KEEP", "KEPT", "PUT_BACK", "guarded"]
 
@@ -78,7 +77,8 @@ finally:
 """
 
 
-def guarded(tutorial: Tutorial) -> tuple[str, ...]:
-    """The lesson's names an answer must leave as they are: those any exercise's checks read, none an answer's."""
-    answers = {n for e in tutorial.exercises for n in e.names}
-    return tuple(sorted({n for e in tutorial.exercises for n in e.reads} - answers))
+def guarded(exercises: Sequence[Exercise]) -> tuple[str, ...]:
+    """The lesson's names an answer must leave as they are: those any of a tutorial's ``exercises``' checks read, none
+    an answer's."""
+    answers = {n for e in exercises for n in e.names}
+    return tuple(sorted({n for e in exercises for n in e.reads} - answers))

@@ -152,7 +152,7 @@ def _assemble(tutorial: Tutorial, submission: dict) -> tuple[list[_Cell], dict[i
         role_of.update(dict.fromkeys(e.hidden, (n, "hidden")))
     cells: list[_Cell] = []
     missing: dict[int, str | None] = {}
-    kept = guarded(tutorial)
+    kept = guarded(tutorial.exercises)
     for i, cell in enumerate(tutorial.notebook["cells"]):
         k, role = role_of.get(i, (None, "lesson"))
         if role != "answer":
