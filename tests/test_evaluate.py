@@ -2,6 +2,7 @@
 known transform and against Umeyama's SVD written out densely, TUM/KITTI round trips (the CLI's
 --save-trajectory too), the estimate at the truth's times against the dense GP posterior, bad files."""
 
+import copy
 import json
 
 import numpy as np
@@ -200,12 +201,12 @@ def test_save_trajectory_round_trips_through_the_cli(tmp_path, capsys):
 # -- evo, the field's tool, on the same files --
 
 
-def _evo_figures(ref_path, est_path, *, align=None, delta=None, unit="frames", all_pairs=False, from_reference=False):
-    """evo's APE (or RPE with ``delta``) translation and heading statistics of two TUM files."""
-    file_interface = optional_import("evo.tools.file_interface", "evo")
+def evo_metrics(ref, est, *, align=None, delta=None, unit="frames", all_pairs=False, from_reference=False) -> list:
+    """evo's APE (or RPE with ``delta``) of the translation and of the rotation angle, each metric processed, for two
+    of evo's trajectories (``est`` aligned on a copy when ``align`` is given: evo's SE(3), or Sim(3) for 'sim2')."""
     metrics = optional_import("evo.core.metrics", "evo")
-    ref, est = file_interface.read_tum_trajectory_file(ref_path), file_interface.read_tum_trajectory_file(est_path)
     if align is not None:
+        est = copy.deepcopy(est)
         est.align(ref, correct_scale=align == "sim2")
     out = []
     for relation in (metrics.PoseRelation.translation_part, metrics.PoseRelation.rotation_angle_rad):
@@ -216,9 +217,16 @@ def _evo_figures(ref_path, est_path, *, align=None, delta=None, unit="frames", a
                 relation, delta, metrics.Unit(unit), all_pairs=all_pairs, pairs_from_reference=from_reference
             )
         metric.process_data((ref, est))
-        s = metric.get_all_statistics()
-        out.append({k: s[k] for k in ("rmse", "mean", "median", "max")})
+        out.append(metric)
     return out
+
+
+def _evo_figures(ref_path, est_path, **options):
+    """evo's APE (or RPE with ``delta``) translation and heading statistics of two TUM files (:func:`evo_metrics`)."""
+    file_interface = optional_import("evo.tools.file_interface", "evo")
+    ref, est = file_interface.read_tum_trajectory_file(ref_path), file_interface.read_tum_trajectory_file(est_path)
+    stats = [m.get_all_statistics() for m in evo_metrics(ref, est, **options)]
+    return [{k: s[k] for k in ("rmse", "mean", "median", "max")} for s in stats]
 
 
 def _ours(err):

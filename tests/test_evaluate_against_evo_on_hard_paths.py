@@ -4,13 +4,13 @@ the RPE far from the origin against mpmath, the alignment against Umeyama's SVD 
 SE(3) one is degenerate (two poses, collinear poses) or leaves the plane (a mirror image), SE(3) APE near a half
 turn against evo, and TUM stamps float64 cannot tell apart."""
 
-import copy
 import logging
 
 import mpmath
 import numpy as np
 import pytest
 from requirements import optional_import
+from test_evaluate import evo_metrics
 
 from steam_ref.errors import DataError, SteamError
 from steam_ref.evaluate import align_planar, ape, group_ape, read_kitti, read_tum, rpe
@@ -38,22 +38,17 @@ def _evo_path(poses):
 
 def _evo_errors(truth, estimate, *, align=None, delta=None, unit="frames", all_pairs=False, from_truth=False):
     """evo's translation and rotation-angle errors, pose by pose (APE) or pair by pair (RPE with ``delta``)."""
-    metrics, _ = _evo()
-    ref, est = _evo_path(truth), _evo_path(estimate)
-    if align is not None:
-        est = copy.deepcopy(est)
-        est.align(ref, correct_scale=align == "sim2")
-    out = []
-    for relation in (metrics.PoseRelation.translation_part, metrics.PoseRelation.rotation_angle_rad):
-        if delta is None:
-            metric = metrics.APE(relation)
-        else:
-            metric = metrics.RPE(
-                relation, delta, metrics.Unit(unit), all_pairs=all_pairs, pairs_from_reference=from_truth
-            )
-        metric.process_data((ref, est))
-        out.append(np.asarray(metric.error))
-    return out
+    _evo()  # evo's logging quieted
+    found = evo_metrics(
+        _evo_path(truth),
+        _evo_path(estimate),
+        align=align,
+        delta=delta,
+        unit=unit,
+        all_pairs=all_pairs,
+        from_reference=from_truth,
+    )
+    return [np.asarray(m.error) for m in found]
 
 
 def _walk(rng, n=50):
