@@ -38,6 +38,7 @@ __all__ = [
     "Parser",
     "add_data_dir",
     "add_dataset",
+    "add_max_poses",
     "add_prior",
     "add_progress",
     "check_prior_options",
@@ -319,6 +320,14 @@ def add_trajectory_arguments(parser: argparse.ArgumentParser, which: str = "") -
     )
     parser.add_argument(
         "--trajectory-format", choices=("tum", "kitti"), default=None, help="of --save-trajectory (default: tum)"
+    )
+
+
+def add_max_poses(parser: argparse.ArgumentParser) -> None:
+    """--max-poses N: process only the first N (>= 2) poses of the data set, as a run streams them (run and batch;
+    a 3-D set keeps its first N states, ``RigidReadings.head``)."""
+    parser.add_argument(
+        "--max-poses", type=number(int, 2, strict=False), default=None, help="process only the first N poses"
     )
 
 

@@ -1,4 +1,9 @@
-"""``steam-ref batch``: batch Gauss-Newton on all of a data set (PB or PBVR): RMSE and a plot."""
+"""``steam-ref batch``: batch Gauss-Newton on all of a data set (PB or PBVR): RMSE and a plot.
+
+``--max-poses N`` solves the first N poses, as ``steam-ref run`` streams them (:meth:`Readings.prefix
+<steam_ref.paper.readings.Readings.prefix>`). A 3-D set (``synthetic-3d``, ``kitti``) is solved on SE(3) by the 3-D
+run's code, batch alone (:func:`~steam_ref.cli.rigid.run_rigid`), and ``--save-trajectory`` writes its estimate.
+"""
 
 from __future__ import annotations
 
@@ -7,9 +12,11 @@ import time
 
 import numpy as np
 
+from ..datasets.registry import DATASETS
 from ..evaluate import trajectory_figures
 from ..paper.presets import PRESETS, PaperSetup
 from ..paper.problem import build_problem, sequential_batch
+from ..paper.readings import Readings
 from ..paper.results import position_rmse
 from ..plot.figures import plot_trajectory
 from ..variables import X
@@ -18,6 +25,7 @@ from .args import (
     Subparsers,
     add_data_dir,
     add_dataset,
+    add_max_poses,
     add_progress,
     add_seed,
     add_trajectory_arguments,
@@ -32,6 +40,7 @@ from .paths import (
     save_trajectory,
     write_plot,
 )
+from .rigid import run_rigid
 from .streams import json_line
 
 __all__ = ["add_parser", "run"]
@@ -53,15 +62,19 @@ def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
     )
     add_data_dir(parser)
     add_seed(parser)
+    add_max_poses(parser)
     parser.add_argument("--json", action="store_true", help="print one JSON line of figures")
     parser.add_argument("--plot", metavar="FILE.png", default=None, help="draw estimate, ground truth, landmarks")
-    add_trajectory_arguments(parser)
+    add_trajectory_arguments(parser, "; a 3-D set (synthetic-3d, kitti): its poses in 3-D")
     add_progress(parser)
     return parser
 
 
 def run(args: argparse.Namespace) -> int:
-    """Batch solve of a whole data set (started chunk by chunk, see ``sequential_batch``)."""
+    """Batch solve of a whole data set, or its first ``--max-poses`` (started chunk by chunk, see
+    ``sequential_batch``); a 3-D set by :func:`~steam_ref.cli.rigid.run_rigid`."""
+    if args.dataset in DATASETS and DATASETS[args.dataset].rigid:  # a 3-D set: solved on SE(3) (cli/rigid.py)
+        return run_rigid(args, batch_only=True)
     check_output(args.plot, ".png", "--plot")
     check_trajectory_output(args)
     outputs = {"--plot": args.plot, "--save-trajectory": args.save_trajectory}
@@ -69,15 +82,17 @@ def run(args: argparse.Namespace) -> int:
     setup = PaperSetup.named(preset_of(args))
     data = load_with_note(args)
     check_outputs_not_inputs(outputs, explain.files_of(data.source))
-    problem = build_problem(data, setup)
+    readings = Readings.from_dataset(data, setup)
+    n = readings.n_poses if args.max_poses is None else min(args.max_poses, readings.n_poses)
+    problem = build_problem(readings if n == readings.n_poses else readings.prefix(n), setup)
     t0 = time.perf_counter()
     shown = explain.progress_wanted(args.progress, args.json)
     with explain.working(f"{args.dataset} batch ({args.ordering.upper()})", shown):
         result = sequential_batch(problem, ordering=args.ordering)
     seconds = time.perf_counter() - t0
-    poses = np.array([result.values[X(i)][:3] for i in range(data.n_poses)])
+    poses = np.array([result.values[X(i)][:3] for i in range(n)])
     positions = poses[:, :2]
-    truth = None if data.ground_truth is None else data.ground_truth[:, 1:3]
+    truth = None if data.ground_truth is None else data.ground_truth[:n, 1:3]
     summary = {
         "dataset": args.dataset,
         "ordering": args.ordering,
@@ -87,10 +102,10 @@ def run(args: argparse.Namespace) -> int:
         "iterations": len(result.iterations),
         "factor_nnz": result.factor_nnz,
         "backend": result.backend,
-    } | explain.data_figures(data, data.n_poses)
+    } | explain.data_figures(data, n)
     if data.ground_truth is not None:
-        summary["evaluation"] = trajectory_figures(data.ground_truth[:, 1:4], poses)
-    written = save_trajectory(args, np.asarray(data.times), poses)
+        summary["evaluation"] = trajectory_figures(data.ground_truth[:n, 1:4], poses)
+    written = save_trajectory(args, np.asarray(data.times)[:n], poses)
     where = "" if args.json else written
     if args.plot:
         where += write_plot(
@@ -111,7 +126,7 @@ def run(args: argparse.Namespace) -> int:
             f"{summary['n_states']} states, solved in {summary['total_s']:.2f} s ({summary['iterations']} "
             f"iterations), Cholesky factor {summary['factor_nnz']} nonzeros ({summary['backend']})\n"
             + explain.data_lines(summary)
-            + explain.rmse_text(summary["rmse_m"], data.n_poses)
+            + explain.rmse_text(summary["rmse_m"], n)
             + explain.evaluation_note(summary)
             + where
         )

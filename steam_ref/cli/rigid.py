@@ -10,7 +10,9 @@ options (a schedule, a layout, figures of a planar run) do not apply and are ref
 ``--save-trajectory FILE`` (``--trajectory-format``) writes, as the planar run does, the estimate of the run's method:
 BTGP's (``--method``'s one value on a 3-D set), or with ``--lag`` the fixed-lag smoother's (each state as it left the
 window), at the states' times in the set's seconds, through the planar run's checks and writer
-(:func:`~steam_ref.cli.paths.save_trajectory`: TUM or KITTI of poses in 3-D, ``group=SE3V``); batch's is not written.
+(:func:`~steam_ref.cli.paths.save_trajectory`: TUM or KITTI of poses in 3-D, ``group=SE3V``). ``steam-ref batch`` on a
+3-D set solves it here too, by batch alone (from BTGP's estimate on a set without first values), and its
+``--save-trajectory`` writes the batch's estimate the same way.
 
 A generated set (``synthetic-3d``: ``--steps``, ``--seed``) has its true states: each method's states are also scored
 against them (:func:`~steam_ref.evaluate.group_ape`: translation and rotation RMSE; batch and BTGP also by the pose
@@ -51,16 +53,17 @@ __all__ = ["run_rigid", "SAVED_ESTIMATE"]
 # whose estimate --save-trajectory writes (run's help; the rule is run_rigid's `written`)
 SAVED_ESTIMATE = (
     "; the estimate of --method (with --lag, the fixed-lag one); a 3-D set (synthetic-3d, kitti): BTGP's, or with "
-    "--lag the fixed-lag smoother's, its poses in 3-D (batch's is not written)"
+    "--lag the fixed-lag smoother's, its poses in 3-D (`steam-ref batch --save-trajectory` writes batch's)"
 )
 
-# run's options that a 3-D run does not read, with the value that means "not given" (it runs batch and BTGP, and
+# run's and batch's options that a 3-D run does not read, with the value that means "not given" (it runs batch and BTGP, and
 # fixed-lag with --lag, whatever --method says; its readings between states are always interpolated)
 _PLANAR: dict[str, object] = {
     "every": None, "skip": 1, "range_states": False, "converge_at_end": False, "departure": [], "preset": None,
     "score_against_optimum": False, "se2_residual": None, "save_estimates": None, "plot": None, "qc": None,
     "tree_dot": None, "lag_history": False, "time_budget": None, "relinearize_threshold": None,
     "relinearize_skip": None, "method": "btgp", "interpolate": True, "amalgamation_zeros": None, "lag_batch": 0.0,
+    "ordering": "amd",  # batch's: a 3-D batch runs Gauss-Newton on AMD's ordering, whatever --ordering says
 }  # fmt: skip
 
 
@@ -104,8 +107,10 @@ def _scored(data: RigidReadings, prior: MotionPrior, method: str, run: RigidRun)
     return out
 
 
-def run_rigid(args: argparse.Namespace) -> int:
-    """Solve the 3-D set ``args.dataset`` and print its held-out position errors (module docstring)."""
+def run_rigid(args: argparse.Namespace, *, batch_only: bool = False) -> int:
+    """Solve the 3-D set ``args.dataset`` and print its held-out position errors (module docstring): ``steam-ref run``'s
+    methods, or with ``batch_only`` (``steam-ref batch``) the batch alone, whose estimate ``--save-trajectory`` then
+    writes. An option of ``run`` the command lacks (batch has no ``--steps``, ``--lag``, ``--prior``...) is not given."""
     given = [  # an option on by default (--interpolate) was given as --no-...
         f"--{'no-' * (none is True)}{k.replace('_', '-')}"
         for k, none in _PLANAR.items()
@@ -116,16 +121,17 @@ def run_rigid(args: argparse.Namespace) -> int:
     check_trajectory_output(args)  # the planar run's checks, before anything is solved
     outputs = {"--save-trajectory": args.save_trajectory}
     check_outputs_apart(outputs)  # not the file stdout or stderr goes to
-    name = args.prior or "se3"
+    name = getattr(args, "prior", None) or "se3"
     taken = {"singer_time_constant": getattr(args, "singer_time_constant", None)}  # --se2-residual: planar, above
     if name in MOTION_PRIORS:  # an unknown name: motion_prior says so
         check_prior_options(name, taken)  # an option the prior does not take is refused, never ignored
     options = {k: v for k, v in taken.items() if v is not None}
-    if args.steps is not None and args.dataset != "synthetic-3d":
+    n_steps, lag = getattr(args, "steps", None), getattr(args, "lag", None)
+    if n_steps is not None and args.dataset != "synthetic-3d":
         raise SteamError(f"--steps generates the synthetic task: it needs --dataset synthetic-3d, got {args.dataset!r}")
-    generated = args.steps is not None
+    generated = n_steps is not None
     loaded = (
-        generate_rigid(args.steps, seed=seed_of(args))
+        generate_rigid(n_steps, seed=seed_of(args))
         if generated
         else load_dataset(args.dataset, data_dir=args.data_dir, seed=seed_of(args))
     )
@@ -135,12 +141,12 @@ def run_rigid(args: argparse.Namespace) -> int:
     check_outputs_not_inputs(outputs, files_of(data.source))  # kitti's GPS and IMU files
     if args.max_poses is not None:
         data = data.head(args.max_poses)
-    qc = args.qc_scale * (np.eye(6) if data.qc is None else data.qc)
+    qc = getattr(args, "qc_scale", 1.0) * (np.eye(6) if data.qc is None else data.qc)
     prior = motion_prior(name, qc, **options)
     straight = straight_line_errors(data)
     summary: dict = {
         "dataset": args.dataset,
-        "prior": args.prior or "se3",
+        "prior": name,
         "qc": np.diag(qc).tolist(),
         "states": len(data.state_times),
         "readings": {"position_fixes": len(data.positions), "gyro": len(data.gyro)},
@@ -151,16 +157,17 @@ def run_rigid(args: argparse.Namespace) -> int:
     truth = data.on(prior.kind) if data.truth is not None else None  # the true states as the prior's
     if truth is not None:
         summary["against_truth"] = _yardsticks(truth, prior)
-    methods = ["batch", "btgp"] + ([] if args.lag is None else ["fixed-lag"])
+    methods = ["batch"] if batch_only else ["batch", "btgp"] + ([] if lag is None else ["fixed-lag"])
     # batch descends from the set's first values; a set with none (a generated one: the prior's predictions from the
     # first state, far off after a few turns) from BTGP's estimate, as the 3-D consistency study does
     from_btgp = data.initial_states is None
+    solved = ["btgp", *(m for m in methods if m != "btgp")] if from_btgp else methods
     runs: dict[str, RigidRun] = {}
     figures: dict[str, dict] = {}
-    for method in sorted(methods, key=lambda m: m != "btgp") if from_btgp else methods:
+    for method in solved:
         start = time.perf_counter()
         initial = runs["btgp"].states if method == "batch" and from_btgp else None
-        run = runs[method] = solve_rigid(data, prior, method, initial=initial, lag=args.lag or 10.0)
+        run = runs[method] = solve_rigid(data, prior, method, initial=initial, lag=lag or 10.0)
         figures[method] = _figures(held_out_errors(data, prior, run.states)) | {
             "seconds": round(time.perf_counter() - start, 2),
             "dropped_readings": run.dropped,
@@ -169,9 +176,9 @@ def run_rigid(args: argparse.Namespace) -> int:
             figures[method]["converged"] = bool(getattr(run.solver, "converged", False))
             figures[method]["start"] = "btgp" if from_btgp else "first values"
     # the run's own file first, as the planar run writes it: the estimate of its method, BTGP (--method's one value
-    # on a 3-D set), or with --lag the fixed-lag smoother's
+    # on a 3-D set), or with --lag the fixed-lag smoother's; the batch command's, the batch's
     g = group_state(prior.kind).group
-    written = "btgp" if args.lag is None else "fixed-lag"
+    written = "batch" if batch_only else "btgp" if lag is None else "fixed-lag"
     where = save_trajectory(args, data.state_times, runs[written].states[:, : g.size], group=g)  # its line, or ""
     for method in methods:
         summary[method] = figures[method]

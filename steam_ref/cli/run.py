@@ -35,6 +35,7 @@ from .args import (
     Subparsers,
     add_data_dir,
     add_dataset,
+    add_max_poses,
     add_prior,
     add_progress,
     add_qc,
@@ -44,7 +45,6 @@ from .args import (
     check_prior_options,
     load_with_note,
     non_negative_float,
-    number,
     positive_float,
     positive_int,
     preset_of,
@@ -168,9 +168,7 @@ def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
         "explicit zeros, 0 <= Z < 1 (relaxed amalgamation: fewer, larger cliques; default: the preset's, "
         f"{PAPER_AMALGAMATION_ZEROS}; 0 builds GTSAM's cliques; docs/bayes_tree.md)",
     )
-    parser.add_argument(
-        "--max-poses", type=number(int, 2, strict=False), default=None, help="process only the first N poses"
-    )
+    add_max_poses(parser)
     parser.add_argument(
         "--time-budget", type=positive_float, default=None, help="stop after this many seconds (reported)"
     )
