@@ -8,6 +8,9 @@
   the positions, d = p₊ - 2p + p₋, whose covariance at Qc_jj = 1 and equal steps h is tridiagonal (2h³/3 on the
   diagonal, h³/6 beside it) [DER 16.5]: Qc_jj = dᵀ K⁻¹ d / (N - 1), computed here by a dense Cholesky solve,
   no steam_ref code. The fit holds the poses to 1e-4 of the prior's sigma, so the two agree to ~1e-7.
+- Units: Qc's unit is what rescaling the data says it is (dimensional analysis): poses in lengths a times larger
+  and times b times longer fit a Qc a² / b^(2k - 1) times as large for x and y and 1 / b^(2k - 1) for θ, with the
+  powers read from ``qc_units`` (m²/s³ and rad²/s³ under WNOA, [YIB Eq. 14, 30-31]; the jerk's under WNOJ).
 - Bad input: no ground truth, mismatched lengths, times that do not increase, a non-diagonal Qc, too few poses:
   the project's error naming the value; the command's bad input: one line, exit code 2.
 """
@@ -23,7 +26,8 @@ from cli_runs import runner
 
 from steam_ref.datasets import load_dataset
 from steam_ref.errors import ConvergenceWarning, DataError, ShapeError, SteamError
-from steam_ref.evaluate.fit_qc import fit_qc
+from steam_ref.evaluate.fit_qc import fit_qc, qc_units
+from steam_ref.gp.clock import Clock
 from steam_ref.motion import motion_prior
 
 QC = np.diag([0.02, 0.05, 0.01])  # the truth the tasks are drawn at
@@ -70,6 +74,37 @@ def test_on_the_vector_prior_it_is_the_reml_of_the_second_differences() -> None:
         fit = fit_qc(motion_prior("wnoa", start), times, poses)
         assert fit.rounds == 1
         np.testing.assert_allclose(np.diag(fit.qc), oracle, rtol=1e-6)
+
+
+def _scale_of(unit: str, length: float, time: float) -> float:
+    """What a quantity in ``unit`` ('m^2/s^3') is multiplied by when lengths are ``length`` times and times ``time``
+    times what they were (an angle is not a length: unchanged)."""
+    top, bottom = unit.split("/")
+    base, power = top.split("^")
+    clock, time_power = bottom.split("^")
+    assert base in ("m", "rad") and clock in ("s", "step"), unit
+    return (length if base == "m" else 1.0) ** int(power) / time ** int(time_power)
+
+
+@pytest.mark.parametrize(("name", "units"), [("wnoa", "m^2/s^3"), ("wnoj", "m^2/s^5")])
+def test_the_units_of_qc_are_how_it_scales_with_the_data(name: str, units: str) -> None:
+    rng = np.random.default_rng(4)
+    prior = motion_prior(name, QC)
+    h, n = 0.3, 401
+    sigmas = [np.full(3, 1e-3)] * prior.state_dim
+    states = prior.sample_states(rng, n, h, np.array([1.0, 0.0, 0.0]), sigmas)
+    times, poses = np.arange(n) * h, prior.world_states(states)[:, :3]
+    length, time = 3.0, 2.0  # lengths and times in other units (both powers tell: 2 and 3 or 5)
+    fit = fit_qc(prior, times, poses)
+    scaled = fit_qc(prior, times * time, poses * np.array([length, length, 1.0]))
+    got = qc_units(fit.blocks, Clock.of(times))
+    assert got == (units, units, units.replace("m", "rad", 1))
+    want = [_scale_of(u, length, time) for u in got]
+    np.testing.assert_allclose(np.diag(scaled.qc) / np.diag(fit.qc), want, rtol=1e-6)
+    np.testing.assert_allclose(scaled.standard_error / fit.standard_error, want, rtol=1e-6)
+    pretty = qc_units(fit.blocks, Clock.of(times), superscripts=True)
+    assert pretty[0] == ("m²/s³" if name == "wnoa" else "m²/s⁵") and pretty[2].startswith("rad²/s")
+    assert qc_units(2, Clock.of(times, "pose-index")) == ("m^2/step^3", "m^2/step^3", "rad^2/step^3")
 
 
 def test_headings_are_read_unwrapped() -> None:
@@ -122,10 +157,16 @@ def test_the_command_fits_the_ground_truth_of_a_data_set(capsys, shared_data) ->
     truth[:, 2] = np.unwrap(truth[:, 2])
     np.testing.assert_allclose(figures["qc_diagonal"], _reml_second_differences(truth, 1.0), rtol=1e-6)
     assert figures["dof"] == 298 and figures["prior"] == "wnoa" and figures["driven"] == ["xdot", "ydot", "thetadot"]
+    assert figures["qc_units"] == ["m^2/step^3", "m^2/step^3", "rad^2/step^3"]  # its preset's pose-index clock
     qc = ",".join(f"{q:.6g}" for q in figures["qc_diagonal"])
     assert figures["run"] == f"steam-ref run --dataset paper-synthetic --prior wnoa --qc {qc}"
     code, out, _ = fit_cli(capsys, "--dataset", "paper-synthetic", "--max-poses", 300)
     assert code == 0 and f"--qc {qc}" in out and "± " in out
+    assert [line.split()[5] for line in out.splitlines() if line.startswith("  d/dt ")] == [
+        "m²/step³",
+        "m²/step³",
+        "rad²/step³",
+    ]
     code, out, err = run_cli(capsys, "--dataset", "paper-synthetic", "--max-poses", 30, "--qc", qc, "--json")
     assert code == 0, err
     np.testing.assert_allclose(np.diag(json.loads(out)["qc"]), [float(q) for q in qc.split(",")])

@@ -3,9 +3,11 @@
 The poses of the ground truth at the data set's pose times, on the preset's GP clock (pose steps for the CMU
 sets, seconds otherwise), are the data; the velocities are smoothed under the prior and Qc is the maximum of the
 poses' likelihood, closed form per dimension (:func:`steam_ref.evaluate.fit_qc`, docs/derivations.md §16). It
-prints the fitted diagonal with each entry's standard error beside the preset's Qc, and the ``--qc`` that makes
-``steam-ref run`` use it. A data set without ground truth is refused in one line, and so is a 3-D set (its
-ground truth is on SE(3): no fit there yet) or a 3-D prior.
+prints the fitted diagonal with each entry's standard error and unit (:func:`~steam_ref.evaluate.fit_qc.qc_units`:
+m²/s³ for x and y and rad²/s³ for θ under WNOA, per pose step on a 'pose-index' clock; ``--json``: ``qc_units``, one
+per entry of ``qc_diagonal``, ``standard_error`` and ``preset_qc_diagonal``, as ``'m^2/s^3'``) beside the preset's Qc,
+and the ``--qc`` that makes ``steam-ref run`` use it. A data set without ground truth is refused in one line, and so
+is a 3-D set (its ground truth is on SE(3): no fit there yet) or a 3-D prior.
 """
 
 from __future__ import annotations
@@ -16,7 +18,7 @@ import numpy as np
 
 from ..datasets.registry import DATASETS
 from ..errors import DataError
-from ..evaluate.fit_qc import QcFit, fit_qc
+from ..evaluate.fit_qc import QcFit, fit_qc, qc_units
 from ..gp.clock import Clock
 from ..motion import MOTION_PRIORS, motion_prior
 from ..paper.presets import PaperSetup
@@ -104,6 +106,7 @@ def run(args: argparse.Namespace) -> int:
                 {"dataset": args.dataset, "preset": setup.name, "prior": setup.prior, **options, "poses": n}
                 | {"clock": clock.describe(), "preset_qc_diagonal": np.diag(setup.qc).tolist(), "driven": list(names)}
                 | fit.summary()
+                | {"qc_units": list(qc_units(fit.blocks, clock))}
                 | {"run": rerun}
             )
         )
@@ -122,8 +125,11 @@ def _text(dataset: str, setup: PaperSetup, n: int, clock: Clock, fit: QcFit, nam
             f"{fit.dof} degrees of freedom per dimension):"
         ),
     ]
+    units = qc_units(fit.blocks, clock, superscripts=True)
     for j, name in enumerate(names):
         q, se, preset = fit.qc[j, j], fit.standard_error[j], setup.qc[j, j]
-        lines.append(f"  d/dt {name:<9} {q:.6g} ± {se:.2g}   (preset {preset:.6g}: {q / preset:.3g} of it)")
+        lines.append(
+            f"  d/dt {name:<9} {q:.6g} ± {se:.2g} {units[j]}   (preset {preset:.6g}: {q / preset:.3g} of it)"
+        )
     lines.append(f"use it: {rerun}")
     return "\n".join(lines)

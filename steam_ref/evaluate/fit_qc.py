@@ -35,15 +35,30 @@ from ..arguments import finite, integer, real_array
 from ..batch import gauss_newton
 from ..errors import ConvergenceError, ConvergenceWarning, DataError, ShapeError, SteamError
 from ..factors import Factor
+from ..gp.clock import Clock
 from ..graph import FactorGraph
 from ..motion import MotionPrior, as_motion_prior
 from ..variables import Values, X
 
-__all__ = ["QcFit", "fit_qc", "finite_difference_velocity"]
+__all__ = ["QcFit", "fit_qc", "finite_difference_velocity", "qc_units"]
 
 POSE_HOLD = 1e-4  # a pose's sigma, over the smallest position sigma the prior allows over a step: the truth held
 FREE_VELOCITY = 1e6  # the sigma of the first state's velocity (and higher) prior: no information, in effect
 _COUPLING = 1e-9  # relative size of Σᵢ's entries between two dimensions above which the noise is not Q(Δt) ⊗ Qc
+POSE_UNITS = ("m", "m", "rad")  # a planar pose [x, y, θ] (docs/api.md), and an SE(2) twist's [vx, vy, ω] per time
+_SUPERSCRIPTS = str.maketrans({"^": None, **dict(zip("0123456789", "⁰¹²³⁴⁵⁶⁷⁸⁹", strict=True))})
+
+
+def qc_units(blocks: int, clock: Clock, *, superscripts: bool = False) -> tuple[str, ...]:
+    """The unit of each diagonal entry of a planar prior's Qc (and of its standard error), as ``'m^2/s^3'``, or
+    ``'m²/s³'`` with ``superscripts``: Qc is the power spectral density of the white noise w(t) that drives the
+    k-th derivative of the pose [YIB Eq. 14, 30-31], k = ``blocks`` (2 for WNOA: p̈ = w(t), the acceleration; 3 for
+    WNOJ and Singer, the jerk), so w is in units of the pose per time^k and Qc, w² times time, per time^(2k - 1):
+    m²/s³ for x and y and rad²/s³ for θ under WNOA. Time is the model's (``clock.unit``): seconds, or on a
+    'pose-index' clock the pose step ('m^2/step^3')."""
+    blocks = integer("blocks", blocks, 1)
+    units = tuple(f"{u}^2/{clock.unit}^{2 * blocks - 1}" for u in POSE_UNITS)
+    return tuple(u.translate(_SUPERSCRIPTS) for u in units) if superscripts else units
 
 
 @dataclass(frozen=True)

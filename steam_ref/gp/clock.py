@@ -106,6 +106,11 @@ class Clock:
         out = np.where(x < xp[0], fp[0] + (x - xp[0]) * first, out)
         return np.where(x > xp[-1], fp[-1] + (x - xp[-1]) * last, out)
 
+    @property
+    def unit(self) -> str:
+        """One unit of the model's time: ``'s'`` on a 'seconds' clock, ``'step'`` (a pose step) on a 'pose-index' one."""
+        return "s" if self.basis == "seconds" else "step"
+
     def describe(self) -> str:
         """One line: the basis, what one model time unit is in seconds, where the seconds come from."""
         origin = {"file": "the file's stamps", "generated": "generated stamps", "given": "the given stamps"}[
