@@ -128,8 +128,6 @@ def _text(dataset: str, setup: PaperSetup, n: int, clock: Clock, fit: QcFit, nam
     units = qc_units(fit.blocks, clock, superscripts=True)
     for j, name in enumerate(names):
         q, se, preset = fit.qc[j, j], fit.standard_error[j], setup.qc[j, j]
-        lines.append(
-            f"  d/dt {name:<9} {q:.6g} ± {se:.2g} {units[j]}   (preset {preset:.6g}: {q / preset:.3g} of it)"
-        )
+        lines.append(f"  d/dt {name:<9} {q:.6g} ± {se:.2g} {units[j]}   (preset {preset:.6g}: {q / preset:.3g} of it)")
     lines.append(f"use it: {rerun}")
     return "\n".join(lines)

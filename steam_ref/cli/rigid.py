@@ -129,11 +129,10 @@ def run_rigid(args: argparse.Namespace, *, batch_only: bool = False) -> int:
     n_steps, lag = getattr(args, "steps", None), getattr(args, "lag", None)
     if n_steps is not None and args.dataset != "synthetic-3d":
         raise SteamError(f"--steps generates the synthetic task: it needs --dataset synthetic-3d, got {args.dataset!r}")
-    generated = n_steps is not None
     loaded = (
-        generate_rigid(n_steps, seed=seed_of(args))
-        if generated
-        else load_dataset(args.dataset, data_dir=args.data_dir, seed=seed_of(args))
+        load_dataset(args.dataset, data_dir=args.data_dir, seed=seed_of(args))
+        if n_steps is None
+        else generate_rigid(n_steps, seed=seed_of(args))
     )
     if not isinstance(loaded, RigidReadings):
         raise SteamError(f"--dataset {args.dataset!r} gives no 3-D readings")
