@@ -18,7 +18,9 @@ from requirements import optional_import
 
 import steam_ref.cli.rigid as cli_rigid
 from steam_ref.datasets import RangeDataset, load_dataset
+from steam_ref.datasets.kitti import GPS_FILE, load_kitti
 from steam_ref.datasets.rigid import RigidReadings, generate_rigid
+from steam_ref.datasets.search import gtsam_data_dir
 from steam_ref.evaluate import read_kitti, read_tum
 from steam_ref.lie import SE3V
 from steam_ref.motion import motion_prior
@@ -143,3 +145,28 @@ def test_a_3d_batch_refuses_what_does_not_apply_in_one_line(capsys, tmp_path):
     ]:
         code, out, err = batch_cli(capsys, "--dataset", "synthetic-3d", *argv)
         assert code == 2 and out == "" and err.count("\n") == 1 and needle in err, err
+
+
+def test_a_kitti_batch_writes_the_batch_of_the_set_cut_by_hand(capsys, tmp_path, solved):
+    """KITTI's first 16 states (gtsam's files): the set has first values, so the batch alone descends from them; the
+    KITTI file holds the batch of the set cut to 16 states by hand, read back by our reader and evo's."""
+    optional_import("gtsam", "gtsam")
+    file_interface = optional_import("evo.tools.file_interface", "evo")
+    folder = gtsam_data_dir()
+    if folder is None or not (folder / GPS_FILE).is_file():
+        pytest.skip("gtsam's Data/ has no KITTI files")
+    n, saved = 16, tmp_path / "batch.txt"
+    argv = ["--dataset", "kitti", "--max-poses", n, "--save-trajectory", saved, "--trajectory-format", "kitti"]
+    code, out, err = batch_cli(capsys, *argv)
+    assert code == 0, err
+    assert f"trajectory written to {saved}" in out and [m for m, _ in solved] == ["batch"]
+    cut = _cut_rigid(load_kitti(folder, group=SE3V), n)
+    oracle = solve_rigid(cut, motion_prior("se3", cut.qc), "batch").states[:, : SE3V.size]
+    M = SE3V.matrix(oracle)
+    np.testing.assert_allclose(SE3V.matrix(solved[0][1].states[:, : SE3V.size]), M, rtol=0, atol=1e-9)
+    for back in (
+        SE3V.matrix(read_kitti(saved, group=SE3V)),
+        np.array(file_interface.read_kitti_poses_file(str(saved)).poses_se3),
+    ):
+        assert back.shape == (n, 4, 4)
+        np.testing.assert_allclose(back, M, rtol=0, atol=1e-9)
