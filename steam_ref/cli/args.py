@@ -4,8 +4,8 @@ Every value is checked by its argparse type, so a bad one is a one-line error wi
 anything runs. Each command's own options are in its module (``cli/run.py``, ``cli/batch.py``...,
 :data:`~steam_ref.cli.commands.COMMANDS`); what they share is here: :class:`Parser`, the number types, the
 data set and its folder (``--dataset`` offers the registry's names: :mod:`steam_ref.datasets.registry`), the
-preset a data set runs with, the motion prior and its options (``--prior``, ``--se2-residual``), ``--progress``
-and ``--save-trajectory``.
+preset a data set runs with, the motion prior and its options (``--prior``, ``--se2-residual``), ``--max-poses``,
+``--progress`` and ``--save-trajectory``.
 """
 
 from __future__ import annotations
@@ -327,7 +327,11 @@ def add_max_poses(parser: argparse.ArgumentParser) -> None:
     """--max-poses N: process only the first N (>= 2) poses of the data set, as a run streams them (run and batch;
     a 3-D set keeps its first N states, ``RigidReadings.head``)."""
     parser.add_argument(
-        "--max-poses", type=number(int, 2, strict=False), default=None, help="process only the first N poses"
+        "--max-poses",
+        type=number(int, 2, strict=False),
+        default=None,
+        metavar="N",
+        help="process only the first N poses",
     )
 
 
