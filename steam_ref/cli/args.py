@@ -324,15 +324,9 @@ def add_trajectory_arguments(parser: argparse.ArgumentParser, which: str = "") -
 
 
 def add_max_poses(parser: argparse.ArgumentParser) -> None:
-    """--max-poses N: process only the first N (>= 2) poses of the data set, as a run streams them (run and batch;
-    a 3-D set keeps its first N states, ``RigidReadings.head``)."""
-    parser.add_argument(
-        "--max-poses",
-        type=number(int, 2, strict=False),
-        default=None,
-        metavar="N",
-        help="process only the first N poses",
-    )
+    """--max-poses N (>= 2): the first N poses of the data set, as a run streams them (run, batch; 3-D: N states)."""
+    first = number(int, 2, strict=False)
+    parser.add_argument("--max-poses", type=first, default=None, metavar="N", help="process only the first N poses")
 
 
 def add_progress(parser: argparse.ArgumentParser) -> None:
