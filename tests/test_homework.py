@@ -25,10 +25,12 @@ LIMIT = 3  # seconds a marked cell may run (--timeout) in the marking test
 DEAF = "import signal\nsignal.signal(signal.SIGINT, signal.SIG_IGN)\nwhile True:\n    pass"  # ignores the interrupt
 
 
-def _cell(kind: str, cid: str, text: str, tags: tuple[str, ...] = ()) -> dict:
-    """A cell as a notebook file stores it: its source a list of lines."""
+def _cell(kind: str, cid: str, text: str, tags: tuple[str, ...] = (), answers: dict | None = None) -> dict:
+    """A cell as a notebook file stores it: its source a list of lines; a solution's ``answers`` their kinds."""
     lines = text.splitlines(keepends=True)
     cell = {"cell_type": kind, "id": cid, "metadata": {"tags": list(tags)} if tags else {}, "source": lines}
+    if answers is not None:
+        cell["metadata"]["steam_ref"] = {"answers": answers}
     return {**cell, "outputs": [], "execution_count": None} if kind == "code" else cell
 
 
@@ -38,11 +40,11 @@ def _teacher() -> dict:
         _cell("markdown", "intro", "# A tiny lesson"),
         _cell("code", "setup", "base = 3"),
         _cell("markdown", "t1", "### Exercise 1 · Square\n\nStore `base` squared in `square`.", ("exercise",)),
-        _cell("code", "s1", "square = base**2", ("solution", "hide-cell")),
+        _cell("code", "s1", "square = base**2", ("solution", "hide-cell"), {"square": "number"}),
         _cell("code", "c1", "assert isinstance(square, int), 'square must be a whole number'", ("check",)),
         _cell("code", "h1", "assert square == 9, 'square is not base times base'", ("hidden-check", "remove-cell")),
         _cell("markdown", "t2", "### Exercise 2 · Cube\n\nWrite `cube(x)`.", ("exercise",)),
-        _cell("code", "s2", "def cube(x):\n    return x**3", ("solution", "hide-cell")),
+        _cell("code", "s2", "def cube(x):\n    return x**3", ("solution", "hide-cell"), {"cube": "function"}),
         _cell("code", "c2", "assert cube(0) == 0, 'cube(0) must be 0'", ("check",)),
         _cell(
             "code",

@@ -5,6 +5,8 @@
 - :mod:`.marking`: the marking run, each submission's answers between the teacher's own cells and checks, in a
   fresh kernel under a time limit per cell, scored per exercise;
 - :mod:`.guard`: the lesson's names the checks read, kept around each answer: one an answer rebinds costs it;
+- :mod:`.kinds`: the kind each answer must be (a number, an array of reals, a function...), as its solution
+  declares, and the one rule that refuses an answer of another type;
 - :mod:`.command`: ``steam-ref homework handout`` and ``steam-ref homework mark``.
 
 Running notebooks needs nbformat, nbclient and ipykernel (the ``notebooks`` extra); they load only when marking.

@@ -9,7 +9,9 @@ cell                tags                          in the handout
 the task            ``exercise`` (Markdown,       kept
                     headed ``### Exercise k``)
 the solution        ``solution``, ``hide-cell``   replaced by an empty answer cell (tag ``answer``, the
-                                                  solution's cell id), naming what the checks read
+                    (its metadata ``steam_ref.    solution's cell id), naming what the checks read and
+                    answers``: each answer's      the kind of each
+                    kind, :mod:`.kinds`)
 the check           ``check``                     kept: properties any right answer has, never the answer
 the marking checks  ``hidden-check``,             removed: the teacher's marking run adds them back
                     ``remove-cell``
@@ -25,16 +27,20 @@ import ast
 import copy
 import json
 import re
+import stat
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from ..errors import SteamError
+from .kinds import KINDS
 
 __all__ = [
     "ANSWER",
     "CHECK",
     "HIDDEN",
+    "MAX_BYTES",
+    "MAX_DEPTH",
     "SOLUTION",
     "TASK",
     "Exercise",
@@ -50,6 +56,13 @@ __all__ = [
 TASK, SOLUTION, CHECK, HIDDEN, ANSWER = "exercise", "solution", "check", "hidden-check", "answer"
 HEADING = re.compile(r"###\s*Exercise\s+(\d+)\s*(?:[·:.-]\s*)?(.*)")
 METADATA = "steam_ref"  # the notebook metadata key the tutorials already use; a handout adds "handout_of"
+# A notebook larger than MAX_BYTES is refused unread. The largest teacher's notebook (tutorial 11) is 42 KB with its
+# outputs stripped, and the largest run with its figures (tutorial 01) 384 KB: 20 MiB is 50 times that, room for a
+# student's extra figures, while a 2 GB file (or one huge output) never reaches memory. Nothing in nbformat nests
+# deeper than about ten levels (a cell's output's data); MAX_DEPTH levels are refused before anything walks them.
+MAX_BYTES = 20 * 2**20
+MAX_DEPTH = 100
+ANSWERS = "answers"  # ... and a solution cell's, under METADATA, the kind of each answer (.kinds)
 
 
 @dataclass(frozen=True)
@@ -67,6 +80,7 @@ class Exercise:
     check_id: str
     names: tuple[str, ...]  # what the solution defines and the checks read: what the answer must define
     reads: tuple[str, ...] = ()  # every name the checks read, sorted: the answer's and the lesson's
+    kinds: tuple[tuple[str, str], ...] = ()  # each of names with its kind (.kinds.KINDS), as the solution declares
 
     @property
     def label(self) -> str:
@@ -84,15 +98,32 @@ def tags(cell: dict) -> set[str]:
 
 
 def read_notebook(path: Path) -> dict[str, Any]:
-    """The notebook at ``path`` as nbformat 4 JSON; SteamError naming the file if it is not one."""
+    """The notebook at ``path`` as nbformat 4 JSON; SteamError naming the file if it is not one, or is larger than
+    MAX_BYTES (its size checked before it is read, and never more than MAX_BYTES + 1 bytes read) or nested deeper
+    than MAX_DEPTH."""
     try:
-        text = path.read_text(encoding="utf-8")
+        found = path.stat()
+        size = found.st_size
+        if not stat.S_ISREG(found.st_mode):  # a pipe or a device: reading it could block or never end
+            raise SteamError(f"cannot read {str(path)!r}: not a file")
+        if size > MAX_BYTES:
+            raise SteamError(_too_large(path, f"{size:,} bytes"))
+        with path.open("rb") as file:
+            data = file.read(MAX_BYTES + 1)
+        if len(data) > MAX_BYTES:  # it grew since, or its size is not what stat says
+            raise SteamError(_too_large(path, f"more than {MAX_BYTES:,} bytes"))
+        text = data.decode("utf-8")
     except (OSError, UnicodeDecodeError) as exc:
         raise SteamError(f"cannot read {str(path)!r}: {getattr(exc, 'strerror', None) or exc}") from None
+    deep = f"{str(path)!r} is not a notebook: its JSON is nested deeper than {MAX_DEPTH} levels"
     try:
         nb = json.loads(text)
     except json.JSONDecodeError as exc:
         raise SteamError(f"{str(path)!r} is not a notebook: not JSON ({exc.msg} at line {exc.lineno})") from None
+    except RecursionError:  # deeper than the parser goes, so deeper than MAX_DEPTH
+        raise SteamError(deep) from None
+    if _deeper_than(nb, MAX_DEPTH):
+        raise SteamError(deep)
     cells = nb.get("cells") if isinstance(nb, dict) else None
     if not isinstance(cells, list) or nb.get("nbformat") != 4 or not all(isinstance(c, dict) for c in cells):
         raise SteamError(f"{str(path)!r} is not a notebook: no nbformat 4 'cells' list")
@@ -100,6 +131,25 @@ def read_notebook(path: Path) -> dict[str, Any]:
     if wrong:
         raise SteamError(f"{str(path)!r} is not a notebook: {wrong}")
     return nb
+
+
+def _too_large(path: Path, size: str) -> str:
+    return (
+        f"{str(path)!r} is {size}, over the {MAX_BYTES:,}-byte limit for a notebook "
+        "(clear its outputs, Kernel > Restart and Clear Outputs, and submit it again)"
+    )
+
+
+def _deeper_than(value: Any, depth: int) -> bool:
+    """Whether JSON ``value`` nests lists and objects more than ``depth`` levels deep (without recursion)."""
+    todo = [(value, 1)]
+    while todo:
+        item, level = todo.pop()
+        if isinstance(item, (dict, list)):
+            if level > depth:
+                return True
+            todo += [(v, level + 1) for v in (item.values() if isinstance(item, dict) else item)]
+    return False
 
 
 def _off_the_form(nb: dict[str, Any]) -> str | None:
@@ -169,6 +219,30 @@ def _names(nb: dict, solution: int, read: set[str]) -> tuple[str, ...]:
         return ()
 
 
+def _kinds(nb: dict, solution: int, names: tuple[str, ...], name: str, number: str) -> tuple[tuple[str, str], ...]:
+    """The kind of each of ``names`` that the solution cell declares (its metadata ``steam_ref.answers``, a name to
+    a key of KINDS); SteamError naming the cell if a name has none, a kind is unknown or a name is not an answer."""
+    where = f"{name}: exercise {number}'s solution (cell {solution})"
+    meta = nb["cells"][solution].get("metadata", {}).get(METADATA, {})
+    declared = meta.get(ANSWERS) if isinstance(meta, dict) else None
+    if not isinstance(declared, dict):
+        raise SteamError(
+            f"{where} declares no kind for its answers: give its metadata {METADATA!r} an {ANSWERS!r} object, "
+            f"each of {', '.join(names) or 'its answers'} to one of {', '.join(KINDS)}"
+        )
+    for answer, kind in declared.items():
+        if answer not in names:
+            raise SteamError(
+                f"{where} declares a kind for {answer!r}, no answer (a name the solution binds and the checks read)"
+            )
+        if kind not in KINDS:
+            raise SteamError(f"{where} declares {answer!r} of kind {kind!r}: not one of {', '.join(KINDS)}")
+    missing = [n for n in names if n not in declared]
+    if missing:
+        raise SteamError(f"{where} declares no kind for {', '.join(missing)} (one of {', '.join(KINDS)})")
+    return tuple((n, str(declared[n])) for n in names)
+
+
 def exercises(nb: dict, name: str) -> list[Exercise]:
     """The exercises of a teacher's notebook, in order; SteamError naming ``name`` and the cell if one is
     not a task followed by its solution and its check (docs/tutorials.md's convention)."""
@@ -197,6 +271,7 @@ def exercises(nb: dict, name: str) -> list[Exercise]:
             hidden.append(j)
             j += 1
         read = _reads(nb, [i + 2, *hidden])
+        names = _names(nb, i + 1, read)
         found.append(
             Exercise(
                 number=int(heading[1]),
@@ -208,8 +283,9 @@ def exercises(nb: dict, name: str) -> list[Exercise]:
                 task_id=str(cell.get("id", "")),
                 solution_id=str(cells[i + 1].get("id", "")),
                 check_id=str(cells[i + 2].get("id", "")),
-                names=_names(nb, i + 1, read),
+                names=names,
                 reads=tuple(sorted(read)),
+                kinds=_kinds(nb, i + 1, names, name, heading[1]),
             )
         )
     placed = {k for e in found for k in (e.solution, e.check, *e.hidden)}
@@ -221,7 +297,7 @@ def exercises(nb: dict, name: str) -> list[Exercise]:
 
 
 def _answer_cell(exercise: Exercise) -> dict:
-    wanted = ", ".join(f"`{n}`" for n in exercise.names) or "the names the task asks for"
+    wanted = ", ".join(f"`{n}` ({kind})" for n, kind in exercise.kinds) or "the names the task asks for"
     text = (
         f"# Your answer to exercise {exercise.number}: define {wanted} (the check below reads them);"
         " leave the lesson's names as they are\n"

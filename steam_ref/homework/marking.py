@@ -4,7 +4,9 @@ A submission contributes only its answers (the code cells between each task and 
 is the teacher's: its lesson cells, the student's answer where the solution was, then the teacher's check and
 marking checks, so an edited or deleted check changes nothing; the lesson's names the checks read (:mod:`.guard`)
 are kept around each answer, and one it rebinds, changes in place or shadows (a builtin) is put back and costs that
-exercise, named, so no check compares an answer with the answer's own helper. It runs in a fresh kernel (nbclient)
+exercise, named, so no check compares an answer with the answer's own helper; an answer of another type than the
+kind its solution declares (:mod:`.kinds`: a complex array for an array of reals, a string for a number) costs that
+exercise too, naming both. It runs in a fresh kernel (nbclient)
 in the teacher's notebook's folder, every cell under a time limit; a cell that raises or runs over its limit is
 recorded and the run goes on, so one exercise's failure costs that exercise only. An exercise scores its point when
 its check and marking checks ran without an error. A kernel that dies (``os._exit``) ends the run, and so does a
@@ -25,6 +27,7 @@ from typing import Any
 from ..errors import SteamError
 from .exercises import Exercise, answer_cells, exercises, handout_of, read_notebook, source
 from .guard import KEEP, KEPT, PUT_BACK, guarded
+from .kinds import check_cell
 
 __all__ = [
     "ExerciseMark",
@@ -125,7 +128,8 @@ def _one_line(text: str) -> str:
 class _Cell:
     cell: dict[str, Any]
     exercise: int | None  # the exercise's position among the tutorial's, for its answer and checks
-    role: str  # lesson, answer, check, hidden, guard (the lesson's names kept around an answer: KEEP, PUT_BACK)
+    role: str  # lesson, answer, check, hidden, guard (the lesson's names kept around an answer: KEEP, PUT_BACK;
+    # the answer's kinds checked after it: .kinds.check_cell)
 
 
 def _code(text: str) -> dict[str, Any]:
@@ -164,6 +168,7 @@ def _assemble(tutorial: Tutorial, submission: dict) -> tuple[list[_Cell], dict[i
         cells.append(_Cell(_code(KEEP.format(kept=KEPT, names=kept)), k, "guard"))
         cells += [_Cell(copy.deepcopy(c), k, "answer") for c in answer or []]
         cells.append(_Cell(_code(PUT_BACK.format(kept=KEPT)), k, "guard"))
+        cells.append(_Cell(_code(check_cell(dict(tutorial.exercises[k].kinds))), k, "guard"))
     for n, c in enumerate(cells):
         c.cell["id"] = f"marking-{n}"  # unique, whatever the student copied
         c.cell["source"] = source(c.cell)  # nbformat's list of lines as the one string a kernel runs
