@@ -350,3 +350,198 @@ def test_an_answer_that_rebinds_a_name_the_marking_reads_scores_0_and_the_next_e
         (message,) = said[name]
         assert f"the answer rebinds `{rebound}`" in message and "another name" in message, (name, message)
         assert not re.search(r"\d", message), message  # what is wrong, never a value
+
+
+# Each case: the kind an exercise asks for, the right value, an answer holding it in some type, and what the marking
+# says of that type (None: accepted). The marking check reads any of them as the right numbers (``close`` below), so
+# before the kinds were checked every one scored its point.
+ODD_TYPES = {
+    "an int": ("number", "9", "9", None),
+    "a float": ("number", "9", "9.0", None),
+    "a NumPy float": ("number", "9", "np.float64(9)", None),
+    "a NumPy int": ("number", "9", "np.int64(9)", None),
+    "a NumPy float32": ("number", "9", "np.float32(9)", None),
+    "a 0-d array": ("number", "9", "np.array(9.0)", None),
+    "a complex number": ("number", "9", "9 + 0j", "a complex"),
+    "a NumPy complex": ("number", "9", "np.complex128(9)", "a numpy.complex128"),
+    "a bool": ("number", "1", "True", "a bool"),
+    "a NumPy bool": ("number", "1", "np.bool_(True)", "a numpy.bool"),
+    "a string of a number": ("number", "9", "'9'", "a str"),
+    "a Fraction": ("number", "9", "Fraction(9)", "a fractions.Fraction"),
+    "a Decimal": ("number", "9", "Decimal(9)", "a decimal.Decimal"),
+    "a one-element array": ("number", "9", "np.array([9.0])", "a numpy.ndarray of dtype float64"),
+    "a masked number": ("number", "9", "np.ma.masked_array(9.0)", "a numpy.ma.MaskedArray of dtype float64"),
+    "a list of floats": ("array", "[1.0, 0.0, 2.0]", "[1.0, 0.0, 2.0]", None),
+    "a list of ints": ("array", "[1.0, 0.0, 2.0]", "[1, 0, 2]", None),
+    "a tuple of NumPy floats": ("array", "[1.0, 0.0, 2.0]", "tuple(np.array([1.0, 0.0, 2.0]))", None),
+    "a float array": ("array", "[1.0, 0.0, 2.0]", "np.array([1.0, 0.0, 2.0])", None),
+    "an int array": ("array", "[1.0, 0.0, 2.0]", "np.array([1, 0, 2])", None),
+    "a float32 array": ("array", "[1.0, 0.0, 2.0]", "np.array([1, 0, 2], dtype=np.float32)", None),
+    "a list of arrays": ("array", "[[1.0, 0.0], [2.0, 3.0]]", "[np.array([1.0, 0.0]), np.array([2.0, 3.0])]", None),
+    "a complex array": (
+        "array",
+        "[1.0, 0.0, 2.0]",
+        "np.array([1, 0, 2], dtype=complex)",
+        "a numpy.ndarray of dtype complex128",
+    ),
+    "an object array": (
+        "array",
+        "[1.0, 0.0, 2.0]",
+        "np.array([1.0, 0.0, 2.0], dtype=object)",
+        "a numpy.ndarray of dtype object",
+    ),
+    "a bool array": ("array", "[1.0, 0.0, 1.0]", "np.array([True, False, True])", "a numpy.ndarray of dtype bool"),
+    "a string array": ("array", "[1.0, 0.0, 2.0]", "np.array(['1', '0', '2'])", "a numpy.ndarray of dtype <U1"),
+    "a masked array": ("array", "[1.0, 0.0, 2.0]", "np.ma.masked_array([1.0, 0.0, 2.0])", "a numpy.ma.MaskedArray"),
+    "a matrix": ("array", "[1.0, 0.0, 2.0]", "np.matrix([1.0, 0.0, 2.0])", "a numpy.matrix of dtype float64"),
+    "a list of strings": ("array", "[1.0, 0.0, 2.0]", "['1', '0', '2']", "a list holding a str"),
+    "a list holding a complex": ("array", "[1.0, 0.0, 2.0]", "[1.0, 0j, 2.0]", "a list holding a complex"),
+    "a list holding a bool": ("array", "[1.0, 0.0, 1.0]", "[1.0, 0.0, True]", "a list holding a bool"),
+    "a number for an array": ("array", "[2.0, 2.0]", "2.0", "a float"),
+    "a function": ("function", "8", "lambda x: x**3", None),
+    "a partial": ("function", "8", "partial(pow, exp=3)", None),
+    "a class": ("function", "8", "type('Cube', (float,), {'__new__': lambda c, x: float.__new__(c, x**3)})", "a type"),
+}
+
+
+def _teacher_of_every_kind() -> dict:
+    """An exercise per case of ODD_TYPES: store the right value (call it at 2, for a function) in ``a<k>``."""
+    lesson = (
+        "import numpy as np\nfrom decimal import Decimal\nfrom fractions import Fraction\nfrom functools import partial"
+        "\n\n\ndef close(x, want):\n    try:\n        return bool(np.allclose(np.array(x, dtype=float), want))\n"
+        "    except (TypeError, ValueError):\n        return bool(np.allclose(x, want))"
+    )
+    cells = [_cell("code", "setup", lesson)]
+    for k, (kind, right, _, _) in enumerate(ODD_TYPES.values()):
+        read = f"a{k}(2.0)" if kind == "function" else f"a{k}"
+        cells += [
+            _cell("markdown", f"t{k}", f"### Exercise {k + 1} · {kind}", ("exercise",)),
+            _cell("code", f"s{k}", f"a{k} = {right}", ("solution", "hide-cell"), {f"a{k}": kind}),
+            _cell("code", f"c{k}", f"assert {read} is not None, 'a{k} is none'", ("check",)),
+            _cell("code", f"h{k}", f"assert close({read}, {right}), 'a{k} is wrong'", ("hidden-check",)),
+        ]
+    return {**_teacher(), "cells": cells}
+
+
+def test_an_answer_of_another_type_than_its_kind_scores_0_naming_both_types(tmp_path, capsys):
+    """A complex array whose imaginary part is 0, an object, bool or string array, a masked array, a matrix, a
+    string that reads as the number, a bool for 1: each compares equal to the right answer, so each scored its
+    point. Now an answer is checked against the kind its solution declares (homework.kinds): a list or tuple of
+    numbers for an array, any int or float (Python's or NumPy's) for a number and any callable for a function are
+    taken; every other type scores 0, the message naming the type received and the kind asked for."""
+    optional_import("nbclient", "notebooks")
+    optional_import("ipykernel", "notebooks")
+    (tmp_path / "teacher").mkdir()
+    (tmp_path / "teacher" / "kinds.ipynb").write_text(json.dumps(_teacher_of_every_kind()))
+    assert main(["homework", "handout", str(tmp_path / "teacher"), "--out", str(tmp_path / "handout")]) == 0
+    nb = json.loads((tmp_path / "handout" / "kinds.ipynb").read_text())
+    answers = {f"s{k}": f"a{k} = {given}" for k, (_, _, given, _) in enumerate(ODD_TYPES.values())}
+    for cell in nb["cells"]:
+        cell["source"] = answers.get(cell["id"], cell["source"])
+    (tmp_path / "kinds.ipynb").write_text(json.dumps(nb))
+    capsys.readouterr()
+    argv = ["--source", str(tmp_path / "teacher"), "--timeout", "60", "--json"]
+    assert main(["homework", "mark", str(tmp_path / "kinds.ipynb"), *argv]) == 0
+    (mark,) = json.loads(capsys.readouterr().out)["submissions"]
+    assert len(mark["exercises"]) == len(ODD_TYPES)
+    expected = {"number": "a real number (an int or a float)", "function": "a function"}
+    expected["array"] = "an array of real numbers (a NumPy array of ints or floats, or a list or tuple of numbers)"
+    for k, (case, (kind, _, _, received), e) in enumerate(
+        zip(ODD_TYPES, ODD_TYPES.values(), mark["exercises"], strict=True)
+    ):
+        if received is None:
+            assert (e["score"], e["status"]) == (1, "passed"), (case, e)
+        else:
+            assert (e["score"], e["status"]) == (0, "failed"), (case, e)
+            said = f"the answer's type is not the one asked for: `a{k}` is {received}"
+            assert e["message"].startswith(said) and e["message"].endswith(f", not {expected[kind]}"), (case, e)
+
+
+def test_a_solution_that_declares_no_kind_for_an_answer_is_one_line_and_exit_code_2(tmp_path, capsys):
+    """The kind each answer must be is the teacher's to say (homework.kinds): a solution that declares none, an
+    unknown kind or a kind for a name that is no answer stops the handout and the marking, naming the cell."""
+    cases = {
+        "none": (lambda meta: meta.pop("steam_ref"), "exercise 1's solution (cell 3) declares no kind for its answers"),
+        "unknown": (
+            lambda meta: meta["steam_ref"]["answers"].__setitem__("square", "integer"),
+            "declares 'square' of kind 'integer': not one of number, array",
+        ),
+        "stray": (
+            lambda meta: meta["steam_ref"]["answers"].__setitem__("base", "number"),
+            "declares a kind for 'base', no answer",
+        ),
+        "missing": (lambda meta: meta["steam_ref"].__setitem__("answers", {}), "declares no kind for square"),
+    }
+    for kind, (change, message) in cases.items():
+        nb = _teacher()
+        change(nb["cells"][3]["metadata"])
+        (tmp_path / kind).mkdir()
+        (tmp_path / kind / "tiny.ipynb").write_text(json.dumps(nb))
+        for argv in (["handout", str(tmp_path / kind), "--out", str(tmp_path / kind / "out")],
+                     ["mark", str(tmp_path / kind), "--source", str(tmp_path / kind)]):  # fmt: skip
+            code = main(["homework", *argv])
+            err = capsys.readouterr().err
+            assert code == 2 and len(err.strip().splitlines()) == 1 and message in err, (kind, argv, err)
+
+
+def test_a_notebook_over_the_size_limit_is_refused_unread_naming_its_size_and_the_limit(course, capsys):
+    """A 2 GB file was read whole into memory before anything looked at it, and a notebook with one huge output was
+    marked as it was. Now a notebook over MAX_BYTES (20 MiB) is refused from its size alone: given on the command
+    line, one line and exit code 2 naming the file, its size and the limit; in a folder, it scores 0 saying so."""
+    from steam_ref.homework.exercises import MAX_BYTES, read_notebook
+    from steam_ref.homework.marking import load_tutorials, mark_submission
+
+    huge = course / "huge" / "tiny.ipynb"
+    huge.parent.mkdir()
+    with huge.open("wb") as file:
+        file.truncate(2 * 2**30)  # 2 GiB, sparse: nothing is written, and nothing must be read
+    over = json.loads((course / "handout" / "tiny.ipynb").read_text())
+    output = {"output_type": "stream", "name": "stdout", "text": "x" * MAX_BYTES}
+    over["cells"][3]["outputs"] = [output]  # a right answer, but an output cell of 20 MiB
+    over["cells"][3]["source"] = "square = base**2\nprint('x' * 20 * 2**20)"
+    printed = course / "printed" / "tiny.ipynb"
+    printed.parent.mkdir()
+    printed.write_text(json.dumps(over))
+    for path in (huge, printed):
+        size = path.stat().st_size
+        said = f"{str(path)!r} is {size:,} bytes, over the {MAX_BYTES:,}-byte limit for a notebook"
+        assert main(["homework", "mark", str(path), "--source", str(course / "teacher")]) == 2, path
+        err = capsys.readouterr().err
+        assert len(err.strip().splitlines()) == 1 and said in err, err
+        with pytest.raises(SteamError) as raised:
+            read_notebook(path)
+        assert said in str(raised.value)
+        mark = mark_submission(path, "tiny.ipynb", load_tutorials(course / "teacher"), timeout=LIMIT)
+        assert mark.score == 0 and said in (mark.error or ""), mark
+    at_limit = json.loads(printed.read_text())
+    at_limit["cells"][3]["outputs"][0]["text"] = "x" * (MAX_BYTES - 2 * 2**10)  # just under: read as before
+    printed.write_text(json.dumps(at_limit))
+    assert MAX_BYTES - 2**12 < printed.stat().st_size <= MAX_BYTES
+    assert read_notebook(printed)["cells"][3]["outputs"][0]["text"] == at_limit["cells"][3]["outputs"][0]["text"]
+
+
+@pytest.mark.parametrize("depth", [101, 200_000])
+def test_a_notebook_nested_too_deeply_is_refused_in_one_line(course, capsys, depth):
+    """JSON nested 200,000 deep (a few hundred KB) stopped the marker with a RecursionError traceback; nested 101
+    deep it was marked, copied and sent to a kernel. Now either is "not a notebook" (MAX_DEPTH levels at most), one
+    line and exit code 2 given on the command line, and a 0 saying why in a folder."""
+    from steam_ref.homework.exercises import MAX_DEPTH
+    from steam_ref.homework.marking import load_tutorials, mark_submission
+
+    assert MAX_DEPTH == 100
+    text = (course / "handout" / "tiny.ipynb").read_text()
+    nb = json.loads(text)
+    nb["cells"][3]["metadata"]["deep"] = "@"
+    # the cell's metadata is 4 levels down (notebook, cells, cell, metadata): the rest nests to ``depth`` in all
+    nested = "[" * (depth - 4) + "]" * (depth - 4)
+    path = course / "deep" / "tiny.ipynb"
+    path.parent.mkdir()
+    path.write_text(json.dumps(nb).replace('"@"', nested))
+    assert main(["homework", "mark", str(path), "--source", str(course / "teacher")]) == 2
+    err = capsys.readouterr().err
+    said = f"tiny.ipynb' is not a notebook: its JSON is nested deeper than {MAX_DEPTH} levels"
+    assert len(err.strip().splitlines()) == 1 and said in err and "Traceback" not in err, err
+    mark = mark_submission(path, "tiny.ipynb", load_tutorials(course / "teacher"), timeout=LIMIT)
+    assert mark.score == 0 and said in (mark.error or ""), mark
+    path.write_text(json.dumps(nb).replace('"@"', "[" * (MAX_DEPTH - 4) + "]" * (MAX_DEPTH - 4)))
+    assert main(["homework", "mark", str(path), "--source", str(course / "teacher"), "--timeout", "60"]) == 0
