@@ -138,7 +138,7 @@ def test_marking_scores_each_exercise_on_its_own_and_never_stops_on_a_bad_submis
         "exits": [(0, "not run"), (0, "not run")],
         "ignores-the-interrupt": [(0, "timeout"), (0, "not run")],  # its kernel is killed: the run ends
         "catches-the-interrupt": [(0, "timeout"), (0, "not run")],
-        "hangs-twice": [(0, "timeout"), (1, "passed")],  # two timeouts in a row, each interrupt obeyed: the run goes on
+        "hangs-twice": [(0, "timeout"), (1, "passed")],  # the second cell of the answer gets what is left: nothing
         "edits-the-check": [(0, "failed"), (1, "passed")],  # the teacher's checks run, not the student's copy
         "broken": [(0, "not run"), (0, "not run")],
         "blank": [(0, "no answer"), (1, "passed")],
@@ -545,3 +545,37 @@ def test_a_notebook_nested_too_deeply_is_refused_in_one_line(course, capsys, dep
     assert mark.score == 0 and said in (mark.error or ""), mark
     path.write_text(json.dumps(nb).replace('"@"', "[" * (MAX_DEPTH - 4) + "]" * (MAX_DEPTH - 4)))
     assert main(["homework", "mark", str(path), "--source", str(course / "teacher"), "--timeout", "60"]) == 0
+
+
+def test_an_answer_of_many_cells_shares_one_time_limit(course, capsys):
+    """``--timeout`` limited each cell, so an answer of many cells could run the limit once per cell: 8 cells that
+    loop for ever took 8 limits (24 s at 3 s; 100 such cells, at the default 300 s, 8 hours), and 8 cells of a second
+    each then the right value ran to the end and passed, over a 3 s limit. Now an exercise's answer cells share its limit: each gets what the ones
+    before it left, and once it is spent the rest do not run; the run goes on to the next exercise. Timed against a
+    right submission marked just before, in the same sitting (the kernel's start under whatever load)."""
+    optional_import("nbclient", "notebooks")
+    optional_import("ipykernel", "notebooks")
+    cube = "cube = lambda x: x**3"
+    right = _submit(course, "right", {"s1": "square = base * base", "s2": cube})
+    many = _submit(course, "many", {"s1": "while True:\n    pass", "s2": cube})
+    nb = json.loads(many.read_text())
+    at = next(i for i, c in enumerate(nb["cells"]) if c["id"] == "s1")
+    nb["cells"][at + 1 : at + 1] = [_cell("code", f"more-{k}", "while True:\n    pass") for k in range(7)]
+    many.write_text(json.dumps(nb))
+    slow = _submit(course, "slow", {"s1": "import time\n\ntime.sleep(1)", "s2": cube})  # right, but at its end
+    nb = json.loads(slow.read_text())
+    at = next(i for i, c in enumerate(nb["cells"]) if c["id"] == "s1")
+    naps = [_cell("code", f"nap-{k}", "time.sleep(1)") for k in range(7)]
+    nb["cells"][at + 1 : at + 1] = [*naps, _cell("code", "last", "square = base * base")]
+    slow.write_text(json.dumps(nb))
+    argv = ["--source", str(course / "teacher"), "--timeout", str(LIMIT), "--json"]
+    took, marks = [], []
+    for path in (right, many, slow):
+        began = time.perf_counter()
+        assert main(["homework", "mark", str(path), *argv]) == 0
+        took.append(time.perf_counter() - began)
+        (mark,) = json.loads(capsys.readouterr().out)["submissions"]
+        marks.append([(e["score"], e["status"], e["message"]) for e in mark["exercises"]])
+    stopped = (0, "timeout", f"the answer ran longer than {LIMIT} s and was stopped")
+    assert marks == [[(1, "passed", ""), (1, "passed", "")], [stopped, (1, "passed", "")], [stopped, (1, "passed", "")]]
+    assert took[1] - took[0] < 2 * (LIMIT + GRACE) and took[2] - took[0] < 2 * (LIMIT + GRACE), took

@@ -1,5 +1,5 @@
-"""Every tutorial notebook executes top to bottom (its solutions, checks and marking checks with it), and its
-last code cell asserts. Each has at least two exercises, each a task, a solution, a check that gives nothing of
+"""Every tutorial notebook executes top to bottom (its solutions, checks and marking checks with it, each solution's
+answers of the kinds it declares), and its last code cell asserts. Each has at least two exercises, each a task, a solution, a check that gives nothing of
 the answer away and a marking check; the teachers' commands of docs/tutorials.md build the handouts (no solution,
 no marking check) and mark a right and a wrong submission. A tutorial imports past the public API only saying why.
 
@@ -27,6 +27,7 @@ from requirements import optional_import
 import steam_ref
 from steam_ref.homework.exercises import ANSWER, HIDDEN, SOLUTION, exercises, source, tags
 from steam_ref.homework.guard import guarded
+from steam_ref.homework.kinds import check_cell
 from steam_ref.homework.marking import load_tutorials
 
 TUTORIALS = sorted((Path(__file__).resolve().parents[1] / "tutorials").glob("*.ipynb"))
@@ -101,6 +102,9 @@ def test_notebook_executes(path):
     assert all(not cell.get("outputs") for cell in nb.cells if cell.cell_type == "code"), (
         "commit notebooks with outputs stripped"
     )
+    # each solution's answers checked against the kinds it declares, as the marking run checks a student's
+    for e in reversed(exercises(json.loads(path.read_text()), path.name)):
+        nb.cells.insert(e.solution + 1, nbformat.v4.new_code_cell(check_cell(dict(e.kinds))))
     client = nbclient.NotebookClient(
         nb, timeout=300, kernel_name="python3", resources={"metadata": {"path": str(path.parent)}}
     )

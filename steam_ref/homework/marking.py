@@ -20,6 +20,7 @@ from __future__ import annotations
 import copy
 import re
 import subprocess
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -204,6 +205,16 @@ def _run(cells: list[_Cell], tutorial: Tutorial, timeout: int) -> tuple[dict[int
     nb["nbformat"], nb["nbformat_minor"] = 4, max(5, int(nb.get("nbformat_minor", 5)))
     outcomes: dict[int, tuple[str, str] | None] = {}
     after_timeout = False
+    # An exercise's answer cells share one limit: however many cells a student adds, an answer runs ``timeout``
+    # seconds at most, and a run at most its limit per answer and per cell of the teacher's.
+    spent: dict[int, float] = {}  # seconds each exercise's answer cells have run
+    began: dict[int, float] = {}
+    index = {c.cell["id"]: i for i, c in enumerate(cells)}
+
+    def left(i: int) -> float:
+        """Seconds cell ``i`` may run: the limit, less what its exercise's answer has run if it is an answer's."""
+        c = cells[i]
+        return timeout - spent.get(c.exercise, 0.0) if c.role == "answer" and c.exercise is not None else timeout
 
     class Stop(Exception):
         pass
@@ -211,12 +222,19 @@ def _run(cells: list[_Cell], tutorial: Tutorial, timeout: int) -> tuple[dict[int
     async def alive() -> bool:
         return client.km is not None and bool(await ensure_async(client.km.is_alive()))
 
-    async def start(cell: Any, cell_index: int) -> None:  # noqa: ARG001 (nbclient's hook signature)
+    async def start(cell: Any, cell_index: int) -> None:
         if after_timeout and not await alive():
             raise DeadKernelError("the kernel died")  # a death taken for a cell's timeout, under load
+        if left(cell_index) < 1:  # the answer has run its limit: its later cells do not run
+            cell.source = ""
+            outcomes[cell_index] = (TIMEOUT, f"the answer's cells ran {timeout} s in all")
+        began[cell_index] = time.monotonic()
 
     async def executed(cell: Any, cell_index: int, execute_reply: dict | None) -> None:
         nonlocal after_timeout
+        c = cells[cell_index]
+        if c.role == "answer" and c.exercise is not None:
+            spent[c.exercise] = spent.get(c.exercise, 0.0) + time.monotonic() - began[cell_index]
         content = (execute_reply or {}).get("content", {})
         after_timeout = content.get("status") == "error" and content.get("ename") == TIMEOUT
         if content.get("status") == "error":
@@ -237,6 +255,7 @@ def _run(cells: list[_Cell], tutorial: Tutorial, timeout: int) -> tuple[dict[int
     client = nbclient.NotebookClient(
         nbformat.from_dict(nb),
         timeout=timeout,
+        timeout_func=lambda cell: int(left(index[cell["id"]])),  # at least 1: a cell with less left does not run
         kernel_name="python3",
         allow_errors=True,
         interrupt_on_timeout=True,
