@@ -9,7 +9,8 @@ with each solution an empty answer cell and no marking check (:func:`~steam_ref.
 (default ``tutorials``), ``--jobs`` at once: one line per submission with its score, one per exercise with its point and, if it
 lost it, why; ``--json`` prints the same as one JSON document. Exit code 0 once every submission is marked
 (a submission that cannot be read scores 0, saying why), 2 on bad input: a path that does not exist, a file
-given that is not a notebook or a handout of none of the teacher's notebooks, a folder with no notebook.
+given that is not a notebook (one over ``exercises.MAX_BYTES`` too, refused unread) or a handout of none of the
+teacher's notebooks, a folder with no notebook.
 """
 
 from __future__ import annotations
@@ -79,7 +80,10 @@ def add_parser(sub) -> argparse.ArgumentParser:
         "--source", type=_path, default="tutorials", help="folder of the teacher's notebooks (default tutorials)"
     )
     mark.add_argument(
-        "--timeout", type=_seconds, default=300, help="seconds any one cell may run before it is stopped (default 300)"
+        "--timeout",
+        type=_seconds,
+        default=300,
+        help="seconds a cell of the teacher's, or an answer (its cells together), may run before it is stopped (default 300)",
     )
     mark.add_argument(
         "--jobs", type=_jobs, default=1, help="submissions marked at once, each in its own kernel (default 1)"

@@ -56,12 +56,8 @@ __all__ = [
 TASK, SOLUTION, CHECK, HIDDEN, ANSWER = "exercise", "solution", "check", "hidden-check", "answer"
 HEADING = re.compile(r"###\s*Exercise\s+(\d+)\s*(?:[·:.-]\s*)?(.*)")
 METADATA = "steam_ref"  # the notebook metadata key the tutorials already use; a handout adds "handout_of"
-# A notebook larger than MAX_BYTES is refused unread. The largest teacher's notebook (tutorial 11) is 42 KB with its
-# outputs stripped, and the largest run with its figures (tutorial 01) 384 KB: 20 MiB is 50 times that, room for a
-# student's extra figures, while a 2 GB file (or one huge output) never reaches memory. Nothing in nbformat nests
-# deeper than about ten levels (a cell's output's data); MAX_DEPTH levels are refused before anything walks them.
-MAX_BYTES = 20 * 2**20
-MAX_DEPTH = 100
+MAX_BYTES = 20 * 2**20  # the largest notebook read (read_notebook says why)
+MAX_DEPTH = 100  # the deepest nesting of lists and objects read
 ANSWERS = "answers"  # ... and a solution cell's, under METADATA, the kind of each answer (.kinds)
 
 
@@ -100,7 +96,12 @@ def tags(cell: dict) -> set[str]:
 def read_notebook(path: Path) -> dict[str, Any]:
     """The notebook at ``path`` as nbformat 4 JSON; SteamError naming the file if it is not one, or is larger than
     MAX_BYTES (its size checked before it is read, and never more than MAX_BYTES + 1 bytes read) or nested deeper
-    than MAX_DEPTH."""
+    than MAX_DEPTH.
+
+    Why 20 MiB: the largest teacher's notebook (tutorial 11) is 42 KB with its outputs stripped, and the largest run
+    with its figures (tutorial 01) 384 KB; 20 MiB is fifty times that, room for a student's extra figures, while a
+    2 GB file (or one huge output) never reaches memory. Why 100 levels: nbformat nests about ten (a cell's output's
+    data), and JSON nested some thousands deep stops the parser with a RecursionError."""
     try:
         found = path.stat()
         size = found.st_size

@@ -6,9 +6,9 @@ marking checks, so an edited or deleted check changes nothing; the lesson's name
 are kept around each answer, and one it rebinds, changes in place or shadows (a builtin) is put back and costs that
 exercise, named, so no check compares an answer with the answer's own helper; an answer of another type than the
 kind its solution declares (:mod:`.kinds`: a complex array for an array of reals, a string for a number) costs that
-exercise too, naming both. It runs in a fresh kernel (nbclient)
-in the teacher's notebook's folder, every cell under a time limit; a cell that raises or runs over its limit is
-recorded and the run goes on, so one exercise's failure costs that exercise only. An exercise scores its point when
+exercise too, naming both. It runs in a fresh kernel (nbclient) in the teacher's notebook's folder, every cell of
+the teacher's under a time limit and each answer too, its cells sharing it (however many a student adds, an answer
+runs the limit at most); a cell that raises or runs over it is recorded and the run goes on, so one exercise's failure costs that exercise only. An exercise scores its point when
 its check and marking checks ran without an error. A kernel that dies (``os._exit``) ends the run, and so does a
 cell that ignores the interrupt at its time limit (it catches KeyboardInterrupt, ignores SIGINT or blocks where a
 signal cannot reach it): a kernel not idle ``GRACE`` seconds after the interrupt is killed, so such a cell costs its
