@@ -1,7 +1,8 @@
 """Every tutorial notebook executes top to bottom (its solutions, checks and marking checks with it, each solution's
-answers of the kinds it declares), and its last code cell asserts. Each has at least two exercises, each a task, a solution, a check that gives nothing of
-the answer away and a marking check; the teachers' commands of docs/tutorials.md build the handouts (no solution,
-no marking check) and mark a right and a wrong submission. A tutorial imports past the public API only saying why.
+answers of the kinds it declares), and its last code cell asserts. Each has at least two exercises, each a task, a
+solution, a check that gives nothing of the answer away and a marking check; the teachers' commands of
+docs/tutorials.md build the handouts (no solution, no marking check) and mark a right and a wrong submission. A
+tutorial imports past the public API only saying why.
 
 Executing needs nbformat, nbclient and ipykernel (the ``notebooks``/``test`` extras): without them
 these tests skip, or fail when STEAM_REF_REQUIRE_OPTIONAL=1 (CI). A notebook that loads the

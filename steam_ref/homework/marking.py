@@ -8,8 +8,9 @@ exercise, named, so no check compares an answer with the answer's own helper; an
 kind its solution declares (:mod:`.kinds`: a complex array for an array of reals, a string for a number) costs that
 exercise too, naming both. It runs in a fresh kernel (nbclient) in the teacher's notebook's folder, every cell of
 the teacher's under a time limit and each answer too, its cells sharing it (however many a student adds, an answer
-runs the limit at most); a cell that raises or runs over it is recorded and the run goes on, so one exercise's failure costs that exercise only. An exercise scores its point when
-its check and marking checks ran without an error. A kernel that dies (``os._exit``) ends the run, and so does a
+runs the limit at most); a cell that raises or runs over it is recorded and the run goes on, so one exercise's
+failure costs that exercise only. An exercise scores its point when its check and marking checks ran without an
+error. A kernel that dies (``os._exit``) ends the run, and so does a
 cell that ignores the interrupt at its time limit (it catches KeyboardInterrupt, ignores SIGINT or blocks where a
 signal cannot reach it): a kernel not idle ``GRACE`` seconds after the interrupt is killed, so such a cell costs its
 limit plus ``GRACE`` seconds, and what had not run scores 0, saying why.
