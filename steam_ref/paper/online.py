@@ -37,7 +37,7 @@ from .options import StreamOptions
 from .presets import PaperSetup, Schedule
 from .readings import Readings
 from .results import RunResult, peak_rss_mb, scored
-from .solvers import OnlineSolver, SolverView, make_solver
+from .solvers import OnlineSolver, SolverView, forget_landmarks, make_solver
 
 __all__ = ["ScheduleClock", "StreamingEstimator", "run_online"]
 
@@ -173,8 +173,7 @@ class StreamingEstimator:
         self.solver.update(self._pending, values)
         after = EstimatesAfter(self.solver, X(pose))
         self.divergence.fit(self._pending, after, pose)
-        forgotten = (k.index for k in self.solver.forgotten() if k.symbol == "l")
-        self.front.landmarks.difference_update(forgotten)  # seen again, a landmark enters anew
+        forget_landmarks(self.front.landmarks, self.solver)  # seen again, a landmark enters anew
         if self.options.converge_at_end:  # (a lag, which forgets factors, refuses it)
             self.factors.extend(self._pending)
         if pose == self.schedule.last_pose:

@@ -6,10 +6,16 @@ The front end (:func:`steps`) is the planar one's idea on :class:`~steam_ref.dat
 at each of the data's state times, the prior's factor between consecutive states (``MotionPrior.prior_factor``
 [YIB Eq. 22]), every reading at a state's time on that state, every other one between the two states around it
 through the prior's one interpolation (``MotionPrior.interpolated_factor`` [YIB Eq. 29]); a landmark enters with its
-survey as a prior [YIB Eq. 4] when first read. Readings before the first state or after the last are dropped
-(counted). The steps are what each update of an incremental solver adds (step i: state i, its prior factor, the
-readings in (tᵢ₋₁, tᵢ]); the batch problem is all of them at once. Everything asks the prior, so SE(3) with WNOA of
-either residual, WNOJ or Singer's model runs the same way (no branch on a prior or group).
+survey as a prior [YIB Eq. 4] when first read, and again when read after a fixed-lag smoother forgot it. Readings
+before the first state or after the last are dropped (counted). The steps are what each update of an incremental
+solver adds (step i: state i, its prior factor, the readings in (tᵢ₋₁, tᵢ]); the batch problem is all of them at once.
+Everything asks the prior, so SE(3) with WNOA of either residual, WNOJ or Singer's model runs the same way (no branch
+on a prior or group).
+
+The fixed-lag run is the planar stream's (:class:`~steam_ref.paper.solvers.FixedLagTreeSolver`, one home for both): a
+state is stamped with its time, a landmark with the newest state's time of each update that reads it, so it leaves the
+window a lag after it was last read (the window holds the last lag's states and landmarks, whatever the map's size);
+read again, it enters anew (:func:`~steam_ref.paper.solvers.forget_landmarks`), at its survey with its survey's prior.
 """
 
 from __future__ import annotations
@@ -24,7 +30,6 @@ from numpy.typing import NDArray
 
 from ..arguments import integer, real_array
 from ..batch import gauss_newton
-from ..bayes_tree import FixedLagSmoother, IncrementalSolver
 from ..datasets.rigid import RIGID_NOISE, RIGID_QC, SIGMA_OF, RigidReadings, RigidSample, sample_rigid_task
 from ..errors import ShapeError, SteamError, WrappedTurnWarning
 from ..evaluate import nees
@@ -36,6 +41,7 @@ from ..lie.state import group_state
 from ..linear.threads import limited
 from ..motion import MotionPrior, motion_prior
 from ..variables import Key, L, Values, X
+from .solvers import BayesTreeSolver, FixedLagTreeSolver, forget_landmarks
 
 __all__ = [
     "Step",
@@ -95,9 +101,14 @@ def first_state_prior(data: RigidReadings) -> Factor:
     return LieStatePrior.create(X(0), data.first_state, sig, group=data.kind.group, derivatives=data.kind.derivatives)
 
 
-def steps(data: RigidReadings, prior: MotionPrior, initial: NDArray | None = None) -> Iterator[Step]:
+def steps(
+    data: RigidReadings, prior: MotionPrior, initial: NDArray | None = None, *, entered: set[int] | None = None
+) -> Iterator[Step]:
     """The updates of a run, state by state (module docstring). ``initial`` (n, state size): each state's first
-    value; None: the prior's prediction from the one before (the first at ``data.first_state``)."""
+    value; None: the prior's prediction from the one before (the first at ``data.first_state``). ``entered``: the
+    ids of the landmarks given a variable so far, read and filled at each step; a fixed-lag caller takes out the
+    ones its solver forgot (:func:`~steam_ref.paper.solvers.forget_landmarks`), and the next reading of one brings it
+    in anew, as at its first reading."""
     if prior.kind is not data.kind:
         raise SteamError(f"{data.name} has states of kind {data.kind!r}; the prior {prior.name!r} has {prior.kind!r}")
     t = data.state_times
@@ -113,7 +124,7 @@ def steps(data: RigidReadings, prior: MotionPrior, initial: NDArray | None = Non
         tau = getattr(data, table)[:, 0]
         slot[table] = np.where(tau < t[0] - _AT, -1, np.searchsorted(t, tau - _AT))
     survey = {int(row[0]): row[1:] for row in data.landmarks}
-    seen: set[int] = set()
+    seen: set[int] = set() if entered is None else entered
     value = np.asarray(data.first_state if initial is None else initial[0], dtype=float)
     for i in range(len(t)):
         if initial is not None:
@@ -167,8 +178,8 @@ def solve_rigid(
 ) -> RigidRun:
     """Solve ``data`` with ``prior`` by ``method``: 'batch' (Gauss-Newton from the first values to the optimum: until
     the cost falls by less than 1e-14 of itself, :data:`OPTIMUM_RELATIVE`, and checked stationary), 'btgp' (iSAM2, one
-    update per state) or 'fixed-lag' (``lag`` seconds of states kept; the states' estimates are those each had
-    when it left the window)."""
+    update per state) or 'fixed-lag' (the states and landmarks of the last ``lag`` seconds kept, module docstring; a
+    state's estimate is the one it had at the end of the update that forgot it)."""
     if method not in METHODS:
         raise SteamError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
     data = data.on(prior.kind)  # the data's first values as the prior's states
@@ -190,25 +201,15 @@ def solve_rigid(
         states = np.array([result.values[X(i)] for i in range(n)])
         check_turns(data, prior, states)
         return RigidRun(states, result, dropped_readings(data))
-    solver: IncrementalSolver | FixedLagSmoother = IncrementalSolver() if method == "btgp" else FixedLagSmoother(lag)
-    out = np.empty((n, prior.state_dim))
-    for step in steps(data, prior, initial):
+    solver = BayesTreeSolver() if method == "btgp" else FixedLagTreeSolver(None, lag, data.state_times)
+    out, entered = np.empty((n, prior.state_dim)), set[int]()
+    for step in steps(data, prior, initial, entered=entered):
         value = step.value if step.index == 0 else prior.predict(out[step.index - 1], _gap(data, step.index))
-        new = {X(step.index): value if initial is None else step.value, **step.landmarks}
-        if isinstance(solver, FixedLagSmoother):
-            stamp = {X(step.index): float(data.state_times[step.index])}  # landmarks untimed: they stay
-            solver.update(step.factors, new, timestamps=stamp)
-        else:
-            solver.update(step.factors, new)
-        if isinstance(solver, FixedLagSmoother):  # the window's states: each keeps the value it leaves the window with
-            for key, x in solver.estimate().items():
-                if key.symbol == X(0).symbol:
-                    out[key.index] = x
-        else:  # the newest state (the next one's prediction starts there); all of them once, at the end
-            out[step.index] = solver.estimate_of(X(step.index))
-    if isinstance(solver, IncrementalSolver):
-        final = solver.estimates_of([X(i) for i in range(n)])
-        out = np.array([final[X(i)] for i in range(n)])
+        solver.update(step.factors, Values({X(step.index): value if initial is None else step.value, **step.landmarks}))
+        forget_landmarks(entered, solver)  # last read a lag ago: out of the window; read again, it enters anew
+        out[step.index] = solver.estimate_of(X(step.index))  # the newest state: the next one's prediction starts there
+    final = solver.estimates_of([X(i) for i in range(n)])  # all at once, at the end (a forgotten state as it left)
+    out = np.array([final[X(i)] for i in range(n)])
     check_turns(data, prior, out)
     return RigidRun(out, solver, dropped_readings(data))
 

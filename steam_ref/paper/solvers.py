@@ -41,6 +41,7 @@ __all__ = [
     "FixedLagTreeSolver",
     "SolverView",
     "check_past",
+    "forget_landmarks",
     "make_solver",
 ]
 
@@ -56,6 +57,13 @@ def check_past(past: str) -> str:
     if past not in PASTS:
         raise SteamError(f"past must be one of {', '.join(map(repr, PASTS))}, got past={past!r}")
     return past
+
+
+def forget_landmarks(landmarks: set[int], solver: OnlineSolver) -> None:
+    """The re-entry rule of every stream: the landmarks ``solver``'s last update forgot leave ``landmarks`` (the ids
+    its front end has given a variable), so the next reading of one brings it in anew, as at its first sighting (its
+    first value and prior). Never held, a reading of a forgotten landmark would be refused (UnknownVariableError)."""
+    landmarks.difference_update(k.index for k in solver.forgotten() if k.symbol == "l")
 
 
 class OnlineSolver:
