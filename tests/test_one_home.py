@@ -7,6 +7,7 @@
 - **What an integer is** is stated once, ``arguments.is_integer``; no module of the package spells the
   check again (the conformance kit's oracle and its file format keep their own code, by design).
 - **A settings class's replace with an unknown-field check** is ``arguments.replace_fields``.
+- **A stream's fixed-lag rule** (what is stamped when, a forgotten landmark's re-entry) is ``paper.solvers``'.
 - **No tracker numbers** in code, tests, docs, benchmarks or tutorials: a clone cannot open them.
 """
 
@@ -170,6 +171,22 @@ def test_replace_with_an_unknown_field_check_is_written_once():
         field = dataclasses.fields(value)[0].name
         copy = value.replace(**{field: getattr(value, field)})
         assert type(copy) is type(value) and getattr(copy, field) == getattr(value, field)
+
+
+def test_a_streams_fixed_lag_rule_is_written_once_for_both_streams():
+    """A stream's timestamps (a state's time, a landmark's last reading) and the re-entry of a forgotten landmark are
+    ``paper.solvers``' alone (``FixedLagTreeSolver.update``, ``forget_landmarks``): the 3-D run had its own, which
+    stamped states only, so its landmarks never left the window (tests/test_rigid_fixed_lag_landmarks.py)."""
+    home = PACKAGE / "paper" / "solvers.py"
+    rule = re.compile(r"timestamps\s*=|\.forgotten\(\)|FixedLagSmoother\(")
+    found = [
+        f"{p.relative_to(ROOT)}:{n}"
+        for p in sorted((PACKAGE / "paper").rglob("*.py"))
+        if p != home
+        for n, line in enumerate(p.read_text(encoding="utf-8").splitlines(), 1)
+        if rule.search(line)
+    ]
+    assert not found, f"a stream's fixed-lag rule written again (use paper.solvers): {found}"
 
 
 def test_the_roles_of_a_factors_keys_are_checked_by_the_factor_base_alone():

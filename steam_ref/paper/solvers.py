@@ -233,10 +233,12 @@ class BayesTreeSolver(OnlineSolver):
 
 
 class FixedLagTreeSolver(BayesTreeSolver):
-    """BTGP over a window of ``lag`` seconds: :class:`~steam_ref.bayes_tree.FixedLagSmoother` in a stream.
+    """BTGP over a window of ``lag`` seconds: :class:`~steam_ref.bayes_tree.FixedLagSmoother` in a stream, the
+    planar one's and the 3-D one's (``paper.rigid.solve_rigid``): the one home of their rule.
 
-    A state is stamped with its pose's time (``times[pose]``), a landmark with the newest state's time
-    of each update whose factors name it, so it is forgotten a lag after it was last seen. A marginalized
+    A state X(i) is stamped with its time (``times[i]``: a pose's, a 3-D run's state's), a landmark with the newest
+    state's time of each update whose factors name it, so it is forgotten a lag after it was last seen (read again,
+    it enters anew: :func:`forget_landmarks`). A marginalized
     variable is read as ``past`` says: ``"lagged"``, its estimate at the moment it was marginalized (what a
     fixed-lag smoother reports), or ``"smoothed"``, given all the data so far
     (:meth:`FixedLagSmoother.smoothed_history`; needs ``keep_history``). Its covariance is no longer known
