@@ -14,11 +14,13 @@ of the smoother taken just before the update that forgot it, given the same upda
 from __future__ import annotations
 
 import copy
+import json
 import math
 from collections import Counter
 
 import numpy as np
 import pytest
+from cli_runs import runner
 
 from steam_ref.bayes_tree import FixedLagSmoother
 from steam_ref.datasets.rigid import generate_rigid
@@ -134,6 +136,19 @@ def test_the_window_stays_bounded_over_a_long_run():
     assert set(run.solver.inner.estimate()) == windows[-1][1]
     read = len(_reading_steps(data))
     assert read >= 30 and run.solver.peak_window <= 2 * (LAG + 2) < read
+
+
+def test_steam_ref_run_on_a_3d_set_reports_the_fixed_lag_window(capsys):
+    """``steam-ref run --dataset synthetic-3d --lag`` gives the window as a planar run does: the variables marginalized
+    and the most held at once, the brute force's."""
+    code, out, err = runner("run")(
+        capsys, "--dataset", "synthetic-3d", "--steps", 60, "--seed", 1, "--lag", LAG, "--json"
+    )
+    assert code == 0, err
+    lagged = json.loads(out)["fixed-lag"]
+    windows = _windows(generate_rigid(60, seed=1), LAG)
+    assert lagged["lag_s"] == LAG and lagged["peak_window"] == max(len(before) for before, _ in windows)
+    assert lagged["n_marginalized"] == sum(len(before - after) for before, after in windows)
 
 
 def test_a_landmark_read_again_enters_anew_at_its_survey_and_none_of_its_readings_is_dropped(recorded):

@@ -3,9 +3,10 @@
 Run by ``steam-ref run`` when ``--dataset`` names a set whose loader gives :class:`~steam_ref.datasets.rigid.RigidReadings`
 (``kitti``): the readings solved with ``--prior`` (default 'se3'; any prior of the table on a group of rigid motions
 in 3-D) at the set's Qc times ``--qc-scale``, in batch and by BTGP (one iSAM2 update per state), and with ``--lag`` also
-by the fixed-lag smoother; each scored at the held-out position fixes by the GP's mean there [YIB Eq. 18], beside a
-straight line between the fixes around each (``paper.rigid``). ``--max-poses N`` keeps the first N states. The planar
-options (a schedule, a layout, figures of a planar run) do not apply and are refused by name.
+by the fixed-lag smoother (the planar stream's window: the variables it marginalized and the most it held at once are
+reported); each scored at the held-out position fixes by the GP's mean there [YIB Eq. 18], beside a straight line
+between the fixes around each (``paper.rigid``). ``--max-poses N`` keeps the first N states. The planar options (a
+schedule, a layout, figures of a planar run) do not apply and are refused by name.
 
 ``--save-trajectory FILE`` (``--trajectory-format``) writes, as the planar run does, the estimate of the run's method:
 BTGP's (``--method``'s one value on a 3-D set), or with ``--lag`` the fixed-lag smoother's (each state as it left the
@@ -171,6 +172,9 @@ def run_rigid(args: argparse.Namespace, *, batch_only: bool = False) -> int:
             "seconds": round(time.perf_counter() - start, 2),
             "dropped_readings": run.dropped,
         }
+        if method == "fixed-lag":  # the window, as a planar run reports it
+            window = {k: getattr(run.solver, k) for k in ("n_marginalized", "peak_window")}
+            figures[method] |= {"lag_s": float(args.lag), **window}
         if method == "batch":
             figures[method]["converged"] = bool(getattr(run.solver, "converged", False))
             figures[method]["start"] = "btgp" if from_btgp else "first values"
@@ -195,6 +199,11 @@ def run_rigid(args: argparse.Namespace, *, batch_only: bool = False) -> int:
             lines.append(f"  {what:14s} no held-out fix inside the states' and the kept fixes' span")
             continue
         lines.append(f"  {what:14s} RMSE {f['rmse_m']:.3f} m, median {f['median_m']:.3f} m, max {f['max_m']:.3f} m")
+    if "fixed-lag" in summary:
+        f = summary["fixed-lag"]
+        lines.append(
+            f"  lag {f['lag_s']:g} s: {f['n_marginalized']} variables marginalized, at most {f['peak_window']} held"
+        )
     if truth is not None:
         lines.append("against the true states: translation RMSE, rotation RMSE, mean pose NEES (6 if consistent)")
         for what, f in summary["against_truth"].items():
