@@ -26,6 +26,7 @@ from steam_ref.bayes_tree import FixedLagSmoother
 from steam_ref.datasets.rigid import generate_rigid
 from steam_ref.errors import UnknownVariableError
 from steam_ref.factors import PriorFactor
+from steam_ref.factors.point_readings import PointReading, RangeReading
 from steam_ref.manifold import Manifold
 from steam_ref.motion import motion_prior
 from steam_ref.paper import solvers
@@ -33,6 +34,7 @@ from steam_ref.paper.rigid import solve_rigid, steps
 from steam_ref.variables import L, Values, X
 
 LAG = 5.0
+READINGS = (RangeReading, PointReading)  # a landmark's readings (synthetic-3d's are at its states' times)
 
 
 def _reading_steps(data) -> dict[int, set[int]]:
@@ -170,12 +172,9 @@ def test_a_landmark_read_again_enters_anew_at_its_survey_and_none_of_its_reading
     lagged = run.solver.estimate_of(L(2))  # its second stay's, not its first
     np.testing.assert_allclose(lagged, recorded[left[-1]]["left"][L(2)], rtol=0, atol=1e-10)
     assert np.max(np.abs(lagged - recorded[left[0]]["left"][L(2)])) > 1e-6
-    given = Counter(f.keys[-1].index for u in recorded for f in u["factors"] if type(f).__name__ in READINGS)
+    given = Counter(f.keys[-1].index for u in recorded for f in u["factors"] if isinstance(f, READINGS))
     expected = Counter(int(j) for table in (data.ranges, data.points) for j in table[:, 1])
     assert given == expected
-
-
-READINGS = ("RangeReading", "PointReading")
 
 
 def test_a_forgotten_landmark_read_without_entering_anew_is_refused_not_dropped():
