@@ -210,3 +210,29 @@ def test_a_fetch_killed_mid_download_leaves_a_temporary_the_next_fetch_removes_o
     assert all((cache / d).read_bytes() == b"a file of the user's" for d in decoys)
     assert fetching.fetch([NAME], base=url, cache=mine) == {NAME: [mine / FILE]}
     assert (mine / leftover.name).read_bytes() == b"a file of the user's"
+
+
+def test_an_unreachable_server_says_where_to_put_the_file_fetched_elsewhere(cache, shared_data, tmp_path):
+    """No connection at all (here a port nothing listens on): the message names the URL and the exact path to copy the
+    file to; doing what it says (the published file copied there) makes the set load. A --data-dir holding the file
+    under its name, as the message also says, does too."""
+    with socket.socket() as probe:  # a port free now, so nothing answers on it
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    with pytest.raises(DataError) as caught:
+        fetching.fetch([NAME], base=f"http://127.0.0.1:{port}/")
+    message = str(caught.value)
+    assert "\n" not in message and f"http://127.0.0.1:{port}/{FILE}: ConnectionError" in message, message
+    assert f"`steam-ref data fetch {NAME}` tries again" in message, message
+    said = re.search(r"copy the file to (\S+) \(or to (\S+) in a folder given as --data-dir", message)
+    assert said is not None, message
+    assert Path(said[1]) == cache / FILE and said[2] == FILE, message
+    with pytest.raises(DataError, match="not found"):
+        load_dataset(NAME)
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    shutil.copyfile(shared_data / FILE, elsewhere / said[2])
+    assert len(load_dataset(NAME, data_dir=elsewhere).ground_truth) > 0
+    Path(said[1]).parent.mkdir(parents=True, exist_ok=True)
+    shutil.copyfile(shared_data / FILE, said[1])
+    assert len(load_dataset(NAME).ground_truth) > 0

@@ -193,6 +193,15 @@ def _try_again(name: str) -> str:
     )
 
 
+def _by_hand(f: DataFile, target: Path) -> str:
+    """What to do where this machine cannot reach the server at all: the file fetched elsewhere, put where the search
+    path (:func:`~steam_ref.datasets.search.default_data_dirs`) reads it, checked there at every read."""
+    return (
+        f"where this machine has no connection to it, download that URL on one that has and copy the file to {target} "
+        f"(or to {f.local} in a folder given as --data-dir, data_dir= in Python, or $STEAM_REF_DATA_DIR)"
+    )
+
+
 def _writable_folder(folder: Path) -> None:
     """DataError naming ``folder`` when it cannot hold downloads: not a folder, or not creatable/writable."""
     if folder.exists() and not folder.is_dir():
@@ -223,7 +232,8 @@ def fetch(
     refused; one whose sha256 differs is refused (DataError naming the file, both hashes) and nothing of it
     is left in the cache; an unreachable host, a download cut short or an HTTP error is a DataError of one line.
     Each says what to do: nothing was kept, ``steam-ref data fetch NAME`` tries again, ``--base-url`` or
-    ``$STEAM_REF_DATA_URL`` names another server (a cache folder that cannot be written: XDG_CACHE_HOME). The gtsam wheel's
+    ``$STEAM_REF_DATA_URL`` names another server, and a host that cannot be reached at all, where to copy the file
+    downloaded on another machine (a cache folder that cannot be written: XDG_CACHE_HOME). The gtsam wheel's
     sets are not fetched: asking for one is a DataError saying to ``pip install gtsam``. In the default cache folder,
     the temporary files of downloads killed more than :data:`STALE_AFTER` seconds ago are removed (module docstring).
     """
@@ -331,7 +341,9 @@ def _fetch_file(name: str, f: DataFile, url: str, folder: Path, progress: bool) 
         raise DataError(f"{where}: {status}; {again}") from None
     except requests.exceptions.RequestException as exc:  # before ValueError: requests' InvalidURL is both
         reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        raise DataError(f"cannot fetch {where}: {type(exc).__name__}: {shown_url(reason)}; {again}") from None
+        unreachable = isinstance(exc, requests.exceptions.ConnectionError | requests.exceptions.Timeout)
+        by_hand = f"; {_by_hand(f, target)}" if unreachable else ""
+        raise DataError(f"cannot fetch {where}: {type(exc).__name__}: {shown_url(reason)}; {again}{by_hand}") from None
     except ValueError as exc:  # pooch: the downloaded file's hash differs (pooch has deleted the download)
         got = _HASH.search(str(exc))
         shown = f"got {got[1][:12]}..." if got else shown_url(str(exc))
