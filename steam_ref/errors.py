@@ -51,7 +51,20 @@ class KindError(SteamError):
 
 
 class UnderdeterminedError(SteamError):
-    """The information matrix is singular: some variable is not constrained by the factors."""
+    """The information matrix is singular: some variable is not constrained by the factors.
+
+    Its message names the variable and ends with what to do (:data:`remedy`, written here once for every place that
+    raises it): most often a problem built without a prior on any state, which the GP prior and odometry alone leave
+    free to slide and turn."""
+
+    remedy = (
+        "to fix it, add factors that pin it down: a PriorFactor on one state (the GP prior and odometry fix only how the "
+        "trajectory moves, not where it is) and, for a landmark, a PriorFactor or readings from enough poses to fix "
+        "its position"
+    )
+
+    def __str__(self) -> str:
+        return f"{self.args[0]}; {self.remedy}" if self.args else self.remedy
 
 
 class NumericalError(SteamError):
