@@ -52,3 +52,34 @@ def test_the_remedy_is_said_once_however_the_error_is_raised() -> None:
     assert str(pickle.loads(pickle.dumps(with_message))) == str(with_message)
     assert str(sr.UnderdeterminedError()) == sr.UnderdeterminedError.remedy
     assert str(with_message).count("PriorFactor on one state") == 1
+
+
+def _bearing_makers():
+    from steam_ref.factors import PoseReading
+
+    return {
+        "BearingFactor": lambda b: sr.BearingFactor.create(KEYS[0], sr.L(0), b, 0.05),
+        "BearingRangeFactor": lambda b: sr.BearingRangeFactor.create(KEYS[0], sr.L(0), b, 4.0, [0.05, 0.1]),
+        "PoseReading.bearing (SE(2))": lambda b: PoseReading.bearing(KEYS[0], sr.L(0), b, 0.05, group=sr.SE2),
+    }
+
+
+@pytest.mark.parametrize("maker", sorted(_bearing_makers()))
+@pytest.mark.parametrize("degrees", [90.0, -45.0, 360.0, 7.0])
+def test_a_bearing_in_degrees_is_refused_with_its_value_in_radians(maker: str, degrees: float) -> None:
+    """A reading beyond a full turn either way (abs(b) > 2π) is no sensor's radians: refused, naming the value and
+    its conversion (math.radians, the oracle), never wrapped into a wrong direction."""
+    with pytest.raises(sr.SteamError) as caught:
+        _bearing_makers()[maker](degrees)
+    message = str(caught.value)
+    assert f"={degrees!r}" in message and "radians" in message, message
+    assert f"np.radians({degrees!r}) = {np.radians(degrees):.6g}" in message, message
+
+
+@pytest.mark.parametrize("maker", sorted(_bearing_makers()))
+def test_a_bearing_within_a_full_turn_is_read_either_way_round(maker: str) -> None:
+    """[0, 2π) and [-π, π) both work: a reading b and b - 2π give the same error, at 2π itself too."""
+    x, landmark = np.array([1.0, 2.0, 0.3, 0.5, 0.1, 0.0]), np.array([4.0, -1.0])
+    for b in (5.0, 2 * np.pi, 3.5):
+        one, other = _bearing_makers()[maker](b), _bearing_makers()[maker](b - 2 * np.pi)
+        np.testing.assert_allclose(one.error(x, landmark), other.error(x, landmark), rtol=0, atol=1e-12)

@@ -88,6 +88,18 @@ def range_reading(name: str, measured: float) -> NDArray:
     return r
 
 
+MAX_BEARING = 2 * math.pi  # rad: a bearing reading beyond a full turn either way is no sensor's, most often degrees
+
+
 def bearing_reading(name: str, measured: float) -> NDArray:
-    """A bearing reading as a (1,) vector: a finite angle (one number)."""
-    return measured_scalar(measured, name)
+    """A bearing reading as a (1,) vector: a finite angle (one number) in radians, within a full turn either way
+    (abs(b) <= 2π covers both a sensor's [-π, π) and its [0, 2π)). A larger one is refused, not wrapped: it is almost
+    always degrees (a reading of 90 is a quarter turn in degrees, 14 turns in radians), and the message says so."""
+    b = measured_scalar(measured, name)
+    if abs(b[0]) > MAX_BEARING:
+        value = float(b[0])
+        raise SteamError(
+            f"a bearing is in radians, within a full turn (abs({name}) <= 2π), got {name}={value!r}: if it is in "
+            f"degrees, give np.radians({value!r}) = {math.radians(value):.6g}"
+        )
+    return b
