@@ -10,8 +10,8 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Iterator
 
-from .errors import ShapeError, UnknownVariableError
-from .factors import Factor, check_factors, kinds_of
+from .errors import UnknownVariableError
+from .factors import Factor, check_factors, kinds_of, wrong_size
 from .linear.system import linearize
 from .manifold import Manifold
 from .variables import Key, Values, as_values
@@ -71,7 +71,7 @@ class FactorGraph:
                 if k not in values:
                     raise UnknownVariableError(f"factor {i} ({type(f).__name__}) names {k!r}, which has no estimate")
                 if values.dim(k) != d:
-                    raise ShapeError(f"{type(f).__name__} expects {k} of size {d}, estimate has {values.dim(k)}")
+                    raise wrong_size(f, k, d, values.dim(k), "estimate")
 
     def error(self, values: Values) -> float:
         """The cost Σ ρᵢ(‖Wᵢeᵢ‖) of Eq. 6 at the given estimates: ρ(s) = s²/2 for a plain factor,

@@ -83,3 +83,23 @@ def test_a_bearing_within_a_full_turn_is_read_either_way_round(maker: str) -> No
     for b in (5.0, 2 * np.pi, 3.5):
         one, other = _bearing_makers()[maker](b), _bearing_makers()[maker](b - 2 * np.pi)
         np.testing.assert_allclose(one.error(x, landmark), other.error(x, landmark), rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("solver", ["graph check", "batch", "incremental"])
+def test_a_prior_on_the_pose_alone_says_the_factor_was_made_for_three_numbers(solver: str) -> None:
+    """``PriorFactor.create(X(0), [x, y, θ], ...)`` on a state of six numbers: the error says what the factor was made
+    for and both ways out; making it for six numbers, as it says, solves."""
+    factors = list(sr.gp_prior_factors(KEYS, np.arange(5.0), QC))
+    values = {k: np.zeros(6) for k in KEYS}
+    run = {
+        "graph check": lambda f: sr.FactorGraph(f).check_values(values),
+        "batch": lambda f: sr.gauss_newton(f, values),
+        "incremental": lambda f: sr.IncrementalSolver().update(f, values),
+    }[solver]
+    with pytest.raises(sr.ShapeError) as caught:
+        run([*factors, sr.PriorFactor.create(KEYS[0], np.zeros(3), 0.1)])
+    message = str(caught.value)
+    assert "PriorFactor expects x0 of size 3" in message and "has size 6" in message, message
+    assert "the factor was made for a variable of 3 numbers (a PriorFactor's mean and noise" in message, message
+    assert "so make it for 6 or give x0 a value of 3" in message, message
+    run([*factors, sr.PriorFactor.create(KEYS[0], np.zeros(6), 0.1)])

@@ -29,7 +29,7 @@ from numpy.typing import NDArray
 from .. import covariance
 from ..arguments import flag, real_array
 from ..errors import ShapeError, SteamError, UnderdeterminedError, UnknownVariableError
-from ..factors import Factor, check_factors, kinds_of
+from ..factors import Factor, check_factors, kinds_of, wrong_size
 from ..linear.ordering import check_constrained, min_degree_keys
 from ..linear.system import linearize
 from ..linear.threads import limit
@@ -290,7 +290,7 @@ class IncrementalSolver:
                         f"{type(f).__name__} names {k!r}, which has no value: give it one in new_values"
                     )
                 if have != dim:
-                    raise ShapeError(f"{type(f).__name__} expects {k!r} of size {dim}, its value has size {have}")
+                    raise wrong_size(f, k, dim, have)
         named = {k for f in new_factors for k in f.keys}
         for k in values:
             if k not in named:

@@ -20,7 +20,7 @@ priors append [ẍ, ÿ, θ̈]. The GP factors take any LTI prior (a Qc for WNOA,
 state (``state_dim``). Landmarks are ℓ = [x, y].
 """
 
-from .base import LANDMARK_DIM, STATE_DIM, Factor, check_factors, kinds_of, sqrt_information
+from .base import LANDMARK_DIM, STATE_DIM, Factor, check_factors, kinds_of, sqrt_information, wrong_size
 from .gp import GPPriorFactor, InterpolatedFactor, gp_prior_factors
 from .lie_prior import LiePriorFactor, LieStatePrior, lie_prior_factors
 from .lie_readings import BodyVelocityFactor, LieInterpolatedFactor, PoseReading
@@ -51,6 +51,7 @@ __all__ = [
     "sqrt_information",
     "check_factors",
     "kinds_of",
+    "wrong_size",
     "STATE_DIM",
     "LANDMARK_DIM",
     "LiePriorFactor",

@@ -27,7 +27,7 @@ from ..manifold import VECTOR, Manifold
 from ..robust import RobustLoss
 from ..variables import FLOAT64, Key, check_roles, kind_clash
 
-__all__ = ["Factor", "sqrt_information", "check_factors", "kinds_of", "STATE_DIM", "LANDMARK_DIM"]
+__all__ = ["Factor", "sqrt_information", "check_factors", "kinds_of", "wrong_size", "STATE_DIM", "LANDMARK_DIM"]
 
 STATE_DIM = 6  # [x, y, θ, ẋ, ẏ, θ̇]
 LANDMARK_DIM = 2
@@ -132,6 +132,17 @@ def sqrt_information(noise: NDArray | float, m: int, name: str = "noise") -> NDA
             raise SteamError(f"{name} (a covariance) is not positive definite: {noise.tolist()}") from None
     raise ShapeError(
         f"{name} must be a scalar, sigmas of shape ({m},) or a covariance ({m}, {m}); got shape {noise.shape}"
+    )
+
+
+def wrong_size(factor: object, key: Key, dim: int, have: int, held: str = "value") -> ShapeError:
+    """The error of ``factor``, made for a variable ``key`` of ``dim`` numbers, met with one of ``have`` (its
+    ``held``: its value in a solver, its estimate in a batch): what the factor expects, and the two ways out. The one
+    home of that message, for the graph's check, the batch's linearization and iSAM2's update."""
+    return ShapeError(
+        f"{type(factor).__name__} expects {key!r} of size {dim}, its {held} has size {have}: the factor was made for a "
+        f"variable of {dim} numbers (a PriorFactor's mean and noise, a reading's state_dim=), so make it for {have} "
+        f"or give {key!r} a value of {dim}"
     )
 
 

@@ -20,7 +20,7 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from ..errors import NumericalError, ShapeError, SteamError, UnknownVariableError
-from ..factors import Factor, check_factors
+from ..factors import Factor, check_factors, wrong_size
 from ..variables import Key, Values, as_values
 from .ordering import Ordering
 
@@ -93,9 +93,7 @@ def _variables(values: Values, group: list[Factor]) -> list[NDArray]:
             x = None
         if x is None or x.shape[1] != dim:
             bad = next(k for k in keys if values.dim(k) != dim)
-            raise ShapeError(
-                f"{type(group[0]).__name__} expects {bad} of size {dim}, its estimate has size {values.dim(bad)}"
-            )
+            raise wrong_size(group[0], bad, dim, values.dim(bad), "estimate")
         xs.append(x)
     return xs
 
