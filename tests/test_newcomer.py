@@ -121,3 +121,19 @@ def test_no_page_counts_the_tutorials_and_the_readme_names_each():
     (row,) = [line for line in README.splitlines() if line.startswith("| `tutorials/` |")]
     for stem in tutorials:
         assert re.search(rf"\b{stem[:2]} ", row), f"README's tutorials row does not name {stem}"
+
+
+def test_the_readme_says_which_commands_need_a_clone():
+    """A user of the wheel (no checkout) copying ``python benchmarks/batch.py`` or ``steam-ref homework handout
+    tutorials/`` met a missing file: each top folder the README's commands read outside the package is not shipped
+    (pyproject's packages are ``steam_ref*`` alone) and is named where the README says what needs a clone."""
+    (include,) = re.findall(r"^include = \[(.*?)\]", PYPROJECT, flags=re.M)
+    assert include.strip() == '"steam_ref*"', include
+    read = set(re.findall(r"`[^`]*?\b(benchmarks|examples|tutorials)/[^`]*`", README))
+    assert read == {"benchmarks", "examples", "tutorials"}, read
+    (said,) = re.findall(
+        r"The `steam-ref` rows work in any install.*?the wheel holds the package alone\.", README, re.S
+    )
+    for folder in read:
+        assert f"`{folder}/`" in said, folder
+    assert "`steam-ref homework`" in said and "`conformance build`" in said, said
