@@ -29,6 +29,7 @@ from requirements import REPO_ROOT, optional_import, skip_or_fail
 
 from steam_ref.conformance.build import _commit
 from steam_ref.conformance.kitio import KITS, SHIPPED, kit_files, read_index
+from steam_ref.errors import SteamError
 
 PYPROJECT = tomllib.loads((REPO_ROOT / "pyproject.toml").read_text())
 PROJECT = PYPROJECT["project"]
@@ -168,6 +169,15 @@ def test_the_installed_wheel_works_away_from_the_repository(wheel, tmp_path):
         run(script, "conformance", "build", "--out", "built")
         index = json.loads((project / "built" / "index.json").read_text())
         assert index["generated_by"]["commit"] == "unknown", "the project's commit is not steam_ref's"
+        # the README's `steam-ref conformance build` copied into this install: refused, the installed kit untouched
+        installed = site / "steam_ref" / "conformance" / f"v{max(KITS)}"
+        before = {n: (installed / n).read_bytes() for n in kit_files(installed)}
+        into_package = subprocess.run(
+            [script, "conformance", "build"], cwd=project, env=env, capture_output=True, text=True, timeout=300
+        )
+        assert into_package.returncode == 2 and len(into_package.stderr.strip().splitlines()) == 1, into_package
+        assert str(installed) in into_package.stderr and "--out DIR" in into_package.stderr, into_package.stderr
+        assert {n: (installed / n).read_bytes() for n in kit_files(installed)} == before
         assert finish(selftest).splitlines()[-1].endswith(" passed, 0 failed")
     finally:
         if selftest.poll() is None:
@@ -184,3 +194,19 @@ def test_the_kit_names_a_commit_only_from_the_top_of_a_git_work_tree(tmp_path):
     (tmp_path / "lib" / "site-packages").mkdir(parents=True)
     assert _commit(tmp_path) == head
     assert _commit(tmp_path / "lib" / "site-packages") == "unknown"
+
+
+def test_the_packages_own_kit_is_rebuilt_only_in_a_source_checkout(monkeypatch, tmp_path):
+    """Where the package is not a checkout's (``_commit`` says 'unknown': an installed wheel), ``build_kit()`` into
+    the package's folder is refused before a file is written, naming the folder and ``out``; ``out`` still works."""
+    from steam_ref.conformance import build
+
+    monkeypatch.setattr(build, "_commit", lambda root=build.SOURCE_ROOT: "unknown")
+    before = {n: (SHIPPED / n).read_bytes() for n in kit_files(SHIPPED)}
+    with pytest.raises(
+        SteamError, match=r"is an installed copy, not a source checkout's.*--out DIR \(out= in Python\)"
+    ):
+        build.build_kit()
+    assert {n: (SHIPPED / n).read_bytes() for n in kit_files(SHIPPED)} == before
+    index = build.build_kit(tmp_path / "elsewhere")
+    assert index["generated_by"]["commit"] == "unknown" and (tmp_path / "elsewhere" / "index.json").is_file()

@@ -174,11 +174,20 @@ def _write_suite(out: Path, suite: str, records: list[dict]) -> None:
 def build_kit(
     out: str | os.PathLike | None = None, *, paper: bool = False, data_dir: str | os.PathLike | None = None
 ) -> dict:
-    """Write the kit to ``out`` (default: the package's own folder); returns its index.
+    """Write the kit to ``out`` (default: the package's own folder, in a source checkout only); returns its index.
 
     ``paper``: rebuild the paper suite from the data files; otherwise keep the one in ``out``, or
-    copy the shipped one.
+    copy the shipped one. The package's own folder is written only when it is a source checkout's (:func:`_commit`
+    knows its commit): in an installed package it is the kit the install shipped, which ``selftest`` checks this
+    install against, so a rebuild there (or a half-finished one) would check the install against itself; SteamError
+    saying to give ``out``.
     """
+    if out is None and _commit() == "unknown":
+        raise SteamError(
+            f"the package's own kit ({SHIPPED}) is an installed copy, not a source checkout's: rebuilding it there "
+            "would make `steam-ref conformance selftest` check this install against itself; write the kit elsewhere "
+            "with --out DIR (out= in Python), or build in a clone of the repository"
+        )
     out = Path(SHIPPED if out is None else out)
     out.mkdir(parents=True, exist_ok=True)
     for suite in DATA_FREE:
