@@ -414,3 +414,22 @@ def test_run_says_where_each_file_went(capsys, small_mat, tmp_path):
     code, out, err = _run_small(capsys, path, *argv, "--json")
     assert code == 0, err
     assert len(out.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize("command", ["data", "conformance", "homework"])
+def test_a_command_given_without_its_subcommand_names_every_subcommand(capsys, command):
+    """``steam-ref data`` alone said "required: data_command", the parser's internal name; each command with
+    subcommands names them all (the parser's own choices, the oracle) in its one line."""
+    import argparse
+
+    from steam_ref.cli.commands import build_parser
+
+    def subcommands(parser: argparse.ArgumentParser) -> argparse._SubParsersAction:
+        (action,) = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+        return action
+
+    names = sorted(subcommands(subcommands(build_parser(command)).choices[command]).choices)
+    code = main([command])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1, err
+    assert all(name in err for name in names), (err, names)

@@ -28,7 +28,7 @@ def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
         help="the paper's data by name: list them, fetch them (sha256-checked)",
         example="steam-ref data list",
     )
-    what = data.add_subparsers(dest="data_command", required=True, parser_class=type(data))
+    what = data.add_subparsers(dest="data_command", required=True, parser_class=type(data), metavar="{list,fetch}")
     what.add_parser(
         "list",
         help="each data set: source, licence note, size, present or not and where",
