@@ -85,7 +85,14 @@ def _pose_indices(states: Sequence[int]) -> array[int]:
     a slot each (40 bytes; a long run's 20,000 states made 0.8 MB, and as much again while converted)."""
     if isinstance(states, (str, bytes)) or not isinstance(states, Iterable):
         raise SteamError(f"states must be a list of pose indices, got states={states!r}")
-    out = np.asarray(states if isinstance(states, (Sequence, np.ndarray, array)) else list(states))
+    given: Sequence[object] | NDArray = states if isinstance(states, (Sequence, np.ndarray, array)) else list(states)
+    if not isinstance(given, np.ndarray) and any(isinstance(s, Key) for s in given):  # NumPy reads X(i) as ('x', i)
+        shown = ", ".join(map(repr, given[:4])) + (", ..." if len(given) > 4 else "")
+        raise SteamError(
+            f"states must be pose indices (integers >= 0), not keys: got states=[{shown}]; "
+            "for states X(0), X(1), ... give [0, 1, ...], [k.index for k in keys]"
+        )
+    out = np.asarray(given)
     if out.size and (out.ndim != 1 or out.dtype.kind not in "iu" or out.min() < 0):
         raise SteamError(f"states must be pose indices (integers >= 0), got states={out.tolist()!r:.120}")
     if out.size and out.max() > np.iinfo(np.int64).max:  # (unsigned: an int64 would wrap it, np.diff too)

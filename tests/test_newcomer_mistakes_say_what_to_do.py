@@ -103,3 +103,19 @@ def test_a_prior_on_the_pose_alone_says_the_factor_was_made_for_three_numbers(so
     assert "the factor was made for a variable of 3 numbers (a PriorFactor's mean and noise" in message, message
     assert "so make it for 6 or give x0 a value of 3" in message, message
     run([*factors, sr.PriorFactor.create(KEYS[0], np.zeros(6), 0.1)])
+
+
+@pytest.mark.parametrize("given", ["list", "generator"])
+def test_keys_given_as_a_trajectorys_states_are_named_as_keys_with_the_indices_to_give(given: str) -> None:
+    """``Trajectory(result, keys, times, qc)``: the states are pose indices. The keys were shown as NumPy read them,
+    ``[['x', '0'], ['x', '1'], ...]``; they are named as keys, with what to give instead, which then works."""
+    factors = [*sr.gp_prior_factors(KEYS, np.arange(5.0), QC), sr.PriorFactor.create(KEYS[0], np.zeros(6), 0.1)]
+    result = sr.gauss_newton(sr.FactorGraph(factors), {k: np.zeros(6) for k in KEYS})
+    states = list(KEYS) if given == "list" else (k for k in KEYS)
+    with pytest.raises(sr.SteamError) as caught:
+        sr.Trajectory(result, states, np.arange(5.0), QC)
+    message = str(caught.value)
+    assert "not keys: got states=[x0, x1, x2, x3, ...]" in message and "[k.index for k in keys]" in message, message
+    assert "['x'" not in message, message
+    xt = sr.Trajectory(result, [k.index for k in KEYS], np.arange(5.0), QC).at(2.5)
+    np.testing.assert_allclose(xt, np.zeros(6), atol=1e-12)  # everything at rest at the origin: so is x(2.5)
