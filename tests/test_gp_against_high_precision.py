@@ -6,6 +6,9 @@ Oracles, none of them steam_ref's code:
   Van Loan's block, then Q_τ - Q_τ Φ(t₂, τ)ᵀ Q₂⁻¹ Φ(t₂, τ) Q_τ with no cancellation left at 50 digits; float64 must
   keep each entry's relative precision at every τ, also within 1e-6 of either state, where the difference of two
   covariances loses it (and gave negative variances next to t₂);
+- **the interpolation matrices Λ(τ), Ψ(τ) at 50 digits** [YIB Eq. 16] from the same Φ and Q: each entry's relative
+  precision at every τ, from 1e-12 (t₂ - t₁) after t₁ to 1e-12 (t₂ - t₁) before t₂, where Φ(τ, t₁) - Ψ Φ(t₂, t₁)
+  and Q_τ Φ(t₂, τ)ᵀ Q₂⁻¹ cancel;
 - **Singer's Q at 30 digits from its definition** ∫ g gᵀ, g the last column of Φ(s), up to αΔt = 1e100;
 - **the kinematics of the local variables** from their definition: a trajectory T(t) = Exp(ξ(t)) with ξ(t) a cubic,
   its body twist ϖ = (T⁻¹ Ṫ)^∨ and ϖ̇ by differences of mpmath's matrix exponential at 60 digits; the local
@@ -24,8 +27,11 @@ from steam_ref.gp import (
     interpolate_covariance,
     interpolate_covariance_sde,
     interpolation_matrices,
+    interpolation_matrices_many,
+    interpolation_matrices_sde,
     singer_process_noise,
 )
+from steam_ref.gp.interpolate import interpolation_terms
 from steam_ref.lie import SE2, SE3, gp_accel
 from steam_ref.lie import gp as lie_gp
 
@@ -82,6 +88,64 @@ def test_the_interpolated_covariance_keeps_its_relative_precision_next_to_either
     for cov in got:
         _assert_entrywise(cov, want, 1e-12)
         np.linalg.cholesky(cov)  # positive definite (Cholesky, not eigvalsh: the entries span s⁵ to s, s = τ - t₁)
+
+
+def _mp_lambda_psi(sde, t2, tau):
+    """Λ(τ), Ψ(τ) with t₁ = 0 at 50 digits, rounded to doubles: Ψ = Q_τ Φ(t₂, τ)ᵀ Q₂⁻¹, Λ = Φ(τ, 0) - Ψ Φ(t₂, 0)
+    [YIB Eq. 16], whose cancellation next to t₂ (down to 1e-12 of Λ's scale) leaves ~35 digits at 50."""
+    with mp.workdps(50):
+        phi_tau, q_tau = _mp_phi_q(sde, tau)
+        phi_rest, _ = _mp_phi_q(sde, mp.mpf(t2) - mp.mpf(tau))
+        phi_2, q_2 = _mp_phi_q(sde, t2)
+        psi = q_tau * phi_rest.T * mp.inverse(q_2)
+        lam = phi_tau - psi * phi_2
+        return np.array(lam.tolist(), dtype=float), np.array(psi.tolist(), dtype=float)
+
+
+# τ / (t₂ - t₁) log-spaced toward both states, and the middle.
+TAU_FRACTIONS = sorted({*np.logspace(-12, -1, 12), 0.5, *(1 - np.logspace(-12, -1, 12))})
+
+# Every route to Λ, Ψ: the paper's memoised closed forms, the batched ones, any LinearSDE's (WNOJ, Singer, the
+# acceleration priors on a group through ``interpolation_terms``). The priors on a group (lie.gp, lie.gp_accel,
+# motion.lie_group, motion.lie_accel) interpolate their local variables with exactly these matrices.
+LAMBDA_PSI_ROUTES = {
+    "wnoa-memoised": ("wnoa", lambda sde, t2, tau: interpolation_matrices(0.0, t2, tau, QC)),
+    "wnoa-batched": ("wnoa", lambda sde, t2, tau: tuple(m[0] for m in interpolation_matrices_many(0.0, t2, [tau], QC))),
+    "wnoa-sde": ("wnoa", lambda sde, t2, tau: interpolation_matrices_sde(sde, 0.0, t2, tau)),
+    "wnoj-sde": ("wnoj", lambda sde, t2, tau: interpolation_matrices_sde(sde, 0.0, t2, tau)),
+    "singer-terms": ("singer", lambda sde, t2, tau: interpolation_terms(sde, 0.0, t2, tau)[:2]),
+}
+
+# A few ulps times a condition factor: each entry of Λ, Ψ is a sum of products whose terms exceed it by up to the
+# integer coefficients of Q₂⁻¹ (Q_pp⁻¹ = 12/Δt³ for WNOA; 720/Δt⁵ for WNOJ, and Singer at small αΔt): measured worst
+# 2.4e-15 for WNOA, 6e-14 for the others, at mid-interval (at 1e-12 of either state, 1.5e-15 and 2.5e-14).
+LAMBDA_PSI_RTOL = {"wnoa": 1e-14, "wnoj": 1e-13, "singer": 1e-13}
+
+
+def _entrywise_error(ours, want):
+    """max over entries of abs(ours - want) / abs(want); an entry zero at 50 digits against the matrix's largest."""
+    scale = np.abs(want).max()
+    zero = np.abs(want) <= 1e-30 * scale
+    return float(np.where(zero, np.abs(ours) / scale, np.abs(ours - want) / np.where(zero, 1.0, np.abs(want))).max())
+
+
+@pytest.mark.parametrize("route", sorted(LAMBDA_PSI_ROUTES))
+def test_every_entry_of_lambda_and_psi_keeps_its_relative_precision_next_to_either_state(route):
+    """Λ(τ) → 0 and Ψ(τ) → I next to t₂ (Ψ → 0, Λ → Φ(τ, t₁) next to t₁): every entry of each, small ones included,
+    to ``LAMBDA_PSI_RTOL`` of its 50-digit value at every τ. Φ(τ, t₁) - Ψ Φ(t₂, t₁) lost Λ's digits next to t₂ (5.8e-4
+    of each entry of the paper's WNOA at 1e-12 (t₂ - t₁), all of them for WNOJ and Singer), and Q_τ Φ(t₂, τ)ᵀ Q₂⁻¹ Ψ's
+    small entries there (2.3e-4)."""
+    name, matrices = LAMBDA_PSI_ROUTES[route]
+    sde, t2, rtol = SDES[name], 0.8, LAMBDA_PSI_RTOL[name]
+    bad = []
+    for fraction in TAU_FRACTIONS:
+        tau = fraction * t2
+        lam, psi = matrices(sde, t2, tau)
+        want_lam, want_psi = _mp_lambda_psi(sde, t2, tau)
+        errors = _entrywise_error(lam, want_lam), _entrywise_error(psi, want_psi)
+        if max(errors) > rtol:
+            bad.append(f"τ/(t₂ - t₁) = {fraction:.12g}: Λ {errors[0]:.1e}, Ψ {errors[1]:.1e}")
+    assert not bad, f"relative error above {rtol:g} at " + "; ".join(bad)
 
 
 @pytest.mark.parametrize("group", [SE2, SE3], ids=lambda g: g.name)
