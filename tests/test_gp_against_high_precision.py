@@ -6,7 +6,7 @@ Oracles, none of them steam_ref's code:
   Van Loan's block, then Q_τ - Q_τ Φ(t₂, τ)ᵀ Q₂⁻¹ Φ(t₂, τ) Q_τ with no cancellation left at 50 digits; float64 must
   keep each entry's relative precision at every τ, also within 1e-6 of either state, where the difference of two
   covariances loses it (and gave negative variances next to t₂);
-- **the interpolation matrices Λ(τ), Ψ(τ) at 50 digits** [YIB Eq. 16] from the same Φ and Q: each entry's relative
+- **the interpolation matrices Λ(τ), Ψ(τ) at 100 digits** [YIB Eq. 16] from the same Φ and Q: each entry's relative
   precision at every τ, from 1e-12 (t₂ - t₁) after t₁ to 1e-12 (t₂ - t₁) before t₂, where Φ(τ, t₁) - Ψ Φ(t₂, t₁)
   and Q_τ Φ(t₂, τ)ᵀ Q₂⁻¹ cancel;
 - **Singer's Q at 30 digits from its definition** ∫ g gᵀ, g the last column of Φ(s), up to αΔt = 1e100;
@@ -91,9 +91,10 @@ def test_the_interpolated_covariance_keeps_its_relative_precision_next_to_either
 
 
 def _mp_lambda_psi(sde, t2, tau):
-    """Λ(τ), Ψ(τ) with t₁ = 0 at 50 digits, rounded to doubles: Ψ = Q_τ Φ(t₂, τ)ᵀ Q₂⁻¹, Λ = Φ(τ, 0) - Ψ Φ(t₂, 0)
-    [YIB Eq. 16], whose cancellation next to t₂ (down to 1e-12 of Λ's scale) leaves ~35 digits at 50."""
-    with mp.workdps(50):
+    """Λ(τ), Ψ(τ) with t₁ = 0 at 100 digits, rounded to doubles: Ψ = Q_τ Φ(t₂, τ)ᵀ Q₂⁻¹, Λ = Φ(τ, 0) - Ψ Φ(t₂, 0)
+    [YIB Eq. 16]. Next to t₂ Λ's entries fall to ~(t₂ - τ)³ of Φ's (1e-36 at 1e-12 (t₂ - t₁)) and Van Loan's block
+    loses e^{αΔt} more: 50 digits left Singer's at αΔt = 16 off by 4e-11."""
+    with mp.workdps(100):
         phi_tau, q_tau = _mp_phi_q(sde, tau)
         phi_rest, _ = _mp_phi_q(sde, mp.mpf(t2) - mp.mpf(tau))
         phi_2, q_2 = _mp_phi_q(sde, t2)
@@ -106,20 +107,26 @@ def _mp_lambda_psi(sde, t2, tau):
 TAU_FRACTIONS = sorted({*np.logspace(-12, -1, 12), 0.5, *(1 - np.logspace(-12, -1, 12))})
 
 # Every route to Λ, Ψ: the paper's memoised closed forms, the batched ones, any LinearSDE's (WNOJ, Singer, the
-# acceleration priors on a group through ``interpolation_terms``). The priors on a group (lie.gp, lie.gp_accel,
+# acceleration priors on a group through ``interpolation_terms``), each with its relative tolerance: a few ulps times
+# a condition factor, for each entry of Λ, Ψ is a sum of products whose terms exceed it by up to the integer
+# coefficients of Q₂⁻¹ (Q_pp⁻¹ = 12/Δt³ for WNOA; 720/Δt⁵ for WNOJ, and Singer at small αΔt). Measured worst:
+# 2.4e-15 for WNOA, 6e-14 for WNOJ and Singer at α = 1.7 (at mid-interval; 1.5e-15 and 2.5e-14 at 1e-12 of either
+# state), 1.7e-13 for Singer at αΔt = 16 (at τ = 0.9 Δt, where α (t₂ - τ) = 1.6 and Φ(τ, t₂) would amplify by e^1.6, so
+# Ψ is a product as before the fix, which gave the same there). The priors on a group (lie.gp, lie.gp_accel,
 # motion.lie_group, motion.lie_accel) interpolate their local variables with exactly these matrices.
+FAST_SINGER = LinearSDE.singer(QC, 20.0)
 LAMBDA_PSI_ROUTES = {
-    "wnoa-memoised": ("wnoa", lambda sde, t2, tau: interpolation_matrices(0.0, t2, tau, QC)),
-    "wnoa-batched": ("wnoa", lambda sde, t2, tau: tuple(m[0] for m in interpolation_matrices_many(0.0, t2, [tau], QC))),
-    "wnoa-sde": ("wnoa", lambda sde, t2, tau: interpolation_matrices_sde(sde, 0.0, t2, tau)),
-    "wnoj-sde": ("wnoj", lambda sde, t2, tau: interpolation_matrices_sde(sde, 0.0, t2, tau)),
-    "singer-terms": ("singer", lambda sde, t2, tau: interpolation_terms(sde, 0.0, t2, tau)[:2]),
+    "wnoa-memoised": (SDES["wnoa"], lambda sde, t2, tau: interpolation_matrices(0.0, t2, tau, QC), 1e-14),
+    "wnoa-batched": (
+        SDES["wnoa"],
+        lambda sde, t2, tau: tuple(m[0] for m in interpolation_matrices_many(0.0, t2, [tau], QC)),
+        1e-14,
+    ),
+    "wnoa-sde": (SDES["wnoa"], lambda sde, t2, tau: interpolation_matrices_sde(sde, 0.0, t2, tau), 1e-14),
+    "wnoj-sde": (SDES["wnoj"], lambda sde, t2, tau: interpolation_matrices_sde(sde, 0.0, t2, tau), 1e-13),
+    "singer-terms": (SDES["singer"], lambda sde, t2, tau: interpolation_terms(sde, 0.0, t2, tau)[:2], 1e-13),
+    "singer-fast-sde": (FAST_SINGER, lambda sde, t2, tau: interpolation_matrices_sde(sde, 0.0, t2, tau), 3e-13),
 }
-
-# A few ulps times a condition factor: each entry of Λ, Ψ is a sum of products whose terms exceed it by up to the
-# integer coefficients of Q₂⁻¹ (Q_pp⁻¹ = 12/Δt³ for WNOA; 720/Δt⁵ for WNOJ, and Singer at small αΔt): measured worst
-# 2.4e-15 for WNOA, 6e-14 for the others, at mid-interval (at 1e-12 of either state, 1.5e-15 and 2.5e-14).
-LAMBDA_PSI_RTOL = {"wnoa": 1e-14, "wnoj": 1e-13, "singer": 1e-13}
 
 
 def _entrywise_error(ours, want):
@@ -132,11 +139,11 @@ def _entrywise_error(ours, want):
 @pytest.mark.parametrize("route", sorted(LAMBDA_PSI_ROUTES))
 def test_every_entry_of_lambda_and_psi_keeps_its_relative_precision_next_to_either_state(route):
     """Λ(τ) → 0 and Ψ(τ) → I next to t₂ (Ψ → 0, Λ → Φ(τ, t₁) next to t₁): every entry of each, small ones included,
-    to ``LAMBDA_PSI_RTOL`` of its 50-digit value at every τ. Φ(τ, t₁) - Ψ Φ(t₂, t₁) lost Λ's digits next to t₂ (5.8e-4
+    to its route's tolerance of its 100-digit value at every τ. Φ(τ, t₁) - Ψ Φ(t₂, t₁) lost Λ's digits next to t₂ (5.8e-4
     of each entry of the paper's WNOA at 1e-12 (t₂ - t₁), all of them for WNOJ and Singer), and Q_τ Φ(t₂, τ)ᵀ Q₂⁻¹ Ψ's
     small entries there (2.3e-4)."""
-    name, matrices = LAMBDA_PSI_ROUTES[route]
-    sde, t2, rtol = SDES[name], 0.8, LAMBDA_PSI_RTOL[name]
+    sde, matrices, rtol = LAMBDA_PSI_ROUTES[route]
+    t2 = 0.8
     bad = []
     for fraction in TAU_FRACTIONS:
         tau = fraction * t2

@@ -116,7 +116,8 @@ def interpolation_matrices_many(t1: ArrayLike, t2: ArrayLike, tau: ArrayLike, qc
     qc = check_qc(qc)
     d, dtau, rest, dt = qc.shape[0], tau - t1, t2 - tau, t2 - t1
     lam, psi = np.empty((2, len(tau), 2 * d, 2 * d))
-    for rows in (dtau <= rest, dtau > rest):  # the same formula, each half as one stack
+    first = _nearer_t1(dtau, rest, 0.0)
+    for rows in (first, ~first):  # the same formula, each side as one stack
         if rows.any():
             lam[rows], psi[rows] = _lambda_psi(
                 dtau[rows], rest[rows], dt[rows], lambda t: process_noise_many(t, qc),
@@ -135,6 +136,12 @@ def _times(right: NDArray) -> Callable[[NDArray], NDArray]:
     return lambda m: m @ right
 
 
+def _nearer_t1(dtau: Steps, rest: Steps, decay_rate: float) -> Steps:
+    """Where :func:`_lambda_psi` forms Ψ as a product: τ - t₁ ≤ t₂ - τ, or Φ(τ, t₂) would amplify by more than
+    e^{1/2} (``decay_rate`` the fastest decay of the SDE, max(0, -Re λ) over A's eigenvalues λ: Singer's α)."""
+    return (dtau <= rest) | (decay_rate * rest > 0.5)
+
+
 def _lambda_psi(
     dtau: Steps,
     rest: Steps,
@@ -142,6 +149,7 @@ def _lambda_psi(
     noise: Callable[[Steps], NDArray],
     phi: Callable[[Steps], NDArray],
     times_q2_inv: Callable[[NDArray], NDArray],
+    decay_rate: float = 0.0,
 ) -> tuple[NDArray, NDArray]:
     """Λ(τ) and Ψ(τ) of [YIB Eq. 16] from τ - t₁, t₂ - τ and t₂ - t₁ (floats, or (n,) arrays all on the same side of
     the middle), with ``noise`` giving Q, ``phi`` Φ of a step (negative ones too) and ``times_q2_inv`` M ↦ M Q₂⁻¹:
@@ -153,9 +161,10 @@ def _lambda_psi(
 
     the one that is small at τ is formed as a product: Ψ where τ - t₁ ≤ t₂ - τ (then Λ = Φ(τ, t₁) - Ψ Φ(t₂, t₁)),
     G elsewhere (then Ψ = Φ(τ, t₂) - G). Each difference is then of a matrix and a small correction, never of two
-    nearly equal ones; and Φ(τ, t₂), which grows as e^{α(t₂ - τ)} for Singer's model, is formed only next to t₂."""
+    nearly equal ones. Φ(τ, t₂) grows as e^{α(t₂ - τ)} for Singer's model, and G with it: Ψ is the product also where
+    α (t₂ - τ) > 1/2 (:func:`_nearer_t1`), so Φ(τ, t₂) is formed only where it stays near Φ(t₂, τ)⁻¹'s size 1."""
     with np.errstate(over="ignore", invalid="ignore"):
-        if np.all(dtau <= rest):
+        if np.all(_nearer_t1(dtau, rest, decay_rate)):
             phi_rest_t = np.ascontiguousarray(np.swapaxes(phi(rest), -1, -2))  # a strided stack multiplies 5× slower
             psi = times_q2_inv(noise(dtau) @ phi_rest_t)  # [YIB Eq. 16]
             return phi(dtau) - psi @ phi(dt), psi  # [YIB Eq. 16]
@@ -258,9 +267,11 @@ def interpolation_matrices_sde(sde: LinearSDE, t1: float, t2: float, tau: float)
             f"Q(t2 - t1) is not positive definite in float64 at t2 - t1 = {t2 - t1!r}: "
             "the gap is too small for this prior"
         ) from None
+    decay_rate = max(0.0, -float(np.linalg.eigvals(sde.A).real.min()))  # Singer's α; 0 for WNOA, WNOJ
     lam, psi = _lambda_psi(
-        tau - t1, t2 - tau, t2 - t1, sde.process_noise, sde.transition, lambda m: scipy.linalg.cho_solve(q2, m.T).T
-    )  # [YIB Eq. 16-17]
+        tau - t1, t2 - tau, t2 - t1, sde.process_noise, sde.transition, lambda m: scipy.linalg.cho_solve(q2, m.T).T,
+        decay_rate,
+    )  # fmt: skip
     finite_result("Λ(τ), Ψ(τ)", np.hstack([lam, psi]), t1=t1, t2=t2, tau=tau)
     return lam, psi
 
