@@ -138,7 +138,7 @@ def _times(right: NDArray) -> Callable[[NDArray], NDArray]:
 
 def _nearer_t1(dtau: Steps, rest: Steps, decay_rate: float) -> Steps:
     """Where :func:`_lambda_psi` forms Ψ as a product: τ - t₁ ≤ t₂ - τ, or Φ(τ, t₂) would amplify by more than
-    e^{1/2} (``decay_rate`` the fastest decay of the SDE, max(0, -Re λ) over A's eigenvalues λ: Singer's α)."""
+    e^{1/2} (``decay_rate``: ``LinearSDE.decay_rate``, Singer's α; 0 for WNOA)."""
     return (dtau <= rest) | (decay_rate * rest > 0.5)
 
 
@@ -267,10 +267,9 @@ def interpolation_matrices_sde(sde: LinearSDE, t1: float, t2: float, tau: float)
             f"Q(t2 - t1) is not positive definite in float64 at t2 - t1 = {t2 - t1!r}: "
             "the gap is too small for this prior"
         ) from None
-    decay_rate = max(0.0, -float(np.linalg.eigvals(sde.A).real.min()))  # Singer's α; 0 for WNOA, WNOJ
     lam, psi = _lambda_psi(
         tau - t1, t2 - tau, t2 - t1, sde.process_noise, sde.transition, lambda m: scipy.linalg.cho_solve(q2, m.T).T,
-        decay_rate,
+        sde.decay_rate,
     )  # fmt: skip
     finite_result("Λ(τ), Ψ(τ)", np.hstack([lam, psi]), t1=t1, t2=t2, tau=tau)
     return lam, psi

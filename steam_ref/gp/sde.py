@@ -18,6 +18,7 @@ exponential route, and the tests check the two against each other and against qu
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from functools import cached_property
 
 import numpy as np
 import scipy.linalg
@@ -123,6 +124,12 @@ class LinearSDE:
     def general(self) -> LinearSDE:
         """The same SDE without its closed forms: Φ by expm, Q by Van Loan's method."""
         return replace(self, model=None)
+
+    @cached_property
+    def decay_rate(self) -> float:
+        """The fastest decay of the SDE, max(0, -Re λ) over A's eigenvalues λ (Singer's α; 0 for WNOA and WNOJ):
+        Φ(t - dt, t) = Φ(t, t - dt)⁻¹ grows as e^{decay_rate dt}."""
+        return max(0.0, -float(np.linalg.eigvals(self.A).real.min()))
 
     @property
     def n(self) -> int:
