@@ -5,6 +5,10 @@
   ``-W``, an error): the table is the map a reader follows, and it stays complete.
 - ``cli/``: one page per ``steam-ref`` command holding its ``--help``, from ``steam_ref.cli.commands``'s own
   parser.
+- ``equations.md``: "Equations → code", each equation of the paper and step of its Algorithm 1 with what it
+  is and every documented module, class and function citing it (``equation_index.py``, which reads the
+  citations through ``citations.py``); a citation of an equation the paper lacks, an equation nothing cites,
+  or a link the API pages cannot resolve is a build warning.
 - ``kit/readme.md``: the README ``steam-ref conformance export`` writes beside the kit (every suite's inputs,
   factor specs and outputs, the definitions they compute from), from its one source,
   ``steam_ref.conformance.readme``; conformance.md points to it.
@@ -15,7 +19,7 @@
   STEAM_REF_REQUIRE_OPTIONAL=1, for gtsam) stops the build instead (CI).
 
 Generated files are written only when their text changes, so Sphinx rebuilds only what changed;
-``modules/``, ``cli/`` and ``kit/`` are not tracked by git.
+``modules/``, ``cli/``, ``kit/`` and ``equations.md`` are not tracked by git.
 """
 
 from __future__ import annotations
@@ -30,7 +34,10 @@ import re
 from pathlib import Path
 from typing import Any
 
+import equation_index
+from sphinx.addnodes import pending_xref
 from sphinx.application import Sphinx
+from sphinx.environment import BuildEnvironment
 from sphinx.util import logging
 
 from steam_ref.cli.commands import build_parser
@@ -297,6 +304,9 @@ def _generate(_app: Sphinx) -> None:
     unplaced = write_reference(DOCS / "modules")
     for module in unplaced:
         LOG.warning("%s is in no layer of docs/architecture.md's table: add it there", module)
+    documented = [m for m in all_modules() if m not in unplaced]
+    for problem in equation_index.write(DOCS / "equations.md", PACKAGE, DOCS / "derivations.md", documented):
+        LOG.warning("equations page: %s", problem)
     write_cli(DOCS / "cli")
     write_kit_readme(DOCS / "kit")
 
@@ -319,9 +329,16 @@ def _reread_when_needs_changed(_app: Sphinx, env: Any, _added: set, _changed: se
     return sorted(d for d in set(before) | set(now) if before.get(d) != now.get(d))
 
 
+def _unresolved_on_the_equations_page(_app: Sphinx, _env: BuildEnvironment, node: pending_xref, _contnode: Any) -> None:
+    """Sphinx drops an unresolved Python reference silently: on the equations page, each must resolve."""
+    if node.get("refdoc") == "equations" and node.get("refdomain") == "py":
+        LOG.warning("equations page: %s is not documented in the API pages", node.get("reftarget"), location=node)
+
+
 def setup(app: Sphinx) -> dict[str, object]:
     app.connect("builder-inited", _generate)
     app.connect("source-read", _drop_absent_optional_pages)
     app.connect("source-read", _mark_unexecuted)
     app.connect("env-get-outdated", _reread_when_needs_changed)
+    app.connect("missing-reference", _unresolved_on_the_equations_page)
     return {"parallel_read_safe": True, "parallel_write_safe": True}
