@@ -251,3 +251,24 @@ def test_the_build_leaves_unexecuted_exactly_the_tutorials_whose_data_are_absent
     monkeypatch.setenv("STEAM_REF_REQUIRE_DATA", "1")
     with pytest.raises(RuntimeError, match=r"STEAM_REF_REQUIRE_DATA=1 but 04_incremental\.ipynb needs data:plaza"):
         pages.notebooks_without_their_data(REPO_ROOT / "tutorials")
+
+
+def test_the_equations_page_links_each_equation_and_step_to_the_api_entries_citing_it():
+    """The page "Equations → code" (docs/_ext/equation_index.py): a section per equation of the paper and per step
+    of its Algorithm 1 (``equations.html#eq-17``, ``#step-6``), each linking into the API pages, and every such
+    link lands on an anchor that page has (an object autodoc documented)."""
+    from test_paper_equations_are_cited import PAPER_EQUATIONS, PAPER_STEPS
+
+    page = _site() / "equations.html"
+    assert page.is_file(), "the site has no equations.html (docs/_ext/pages.py writes docs/equations.md)"
+    sections = {}
+    for chunk in page.read_text().split('<section id="')[1:]:
+        anchor, _, body = chunk.partition('"')
+        sections[anchor] = body
+    expected = [f"eq-{n}" for n in PAPER_EQUATIONS] + ["algorithm-1"] + [f"step-{s}" for _, s in PAPER_STEPS]
+    assert [a for a in expected if a not in sections] == []
+    for anchor in expected:
+        links = re.findall(r'href="(modules/[\w-]+\.html)#([^"]+)"', sections[anchor])
+        assert links, f"{anchor}: no link into the API pages"
+        for target, name in set(links):
+            assert f'id="{name}"' in (_site() / target).read_text(), f"{anchor} links {target}#{name}, not there"
