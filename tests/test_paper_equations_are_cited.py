@@ -15,7 +15,7 @@ import sys
 from pathlib import Path
 
 import pytest
-from requirements import REPO_ROOT, optional_import
+from requirements import REPO_ROOT, optional_import, skip_or_fail
 
 from steam_ref.errors import SteamError
 
@@ -70,7 +70,9 @@ def unknown(sites) -> list[str]:
 def test_the_stored_numbering_is_the_papers():
     paper = _paper()
     if paper is None:
-        pytest.skip(f"the paper's text ({PAPER_NAME}) is not in ../shared/paper: the stored numbering is used alone")
+        skip_or_fail(
+            f"the paper's text ({PAPER_NAME}) is not in ../shared/paper: the stored numbering is used alone", "data"
+        )
     text = paper.read_text()
     numbers = [int(n) for n in re.findall(r"\((\d+)\)\s*\$\$\s*$", text, flags=re.M)]
     assert numbers == sorted(set(numbers)), "the paper's equation numbers repeat or run out of order"
