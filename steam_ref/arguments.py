@@ -15,7 +15,8 @@ and its value otherwise):
   reads: ``1_0`` (10), full-width ``５`` (5), ``inf``, ``nan`` or surrounding blanks.
 
 Keys, lists of keys and estimates are checked in :mod:`steam_ref.variables` (``check_key``,
-``key_list``, ``as_values``). This module imports nothing of steam_ref but its errors.
+``key_list``, ``as_values``). This module imports nothing of steam_ref but its errors and :mod:`steam_ref.choices`, the home of
+:data:`DECIMAL`, :data:`DIGITS` and :func:`parse_decimal` (read there without NumPy by the command's parser).
 """
 
 from __future__ import annotations
@@ -23,12 +24,12 @@ from __future__ import annotations
 import dataclasses
 import math
 import numbers
-import re
 from typing import Any, TypeGuard, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
 
+from .choices import DECIMAL, DIGITS, parse_decimal  # the rule for numbers as text: NumPy-free, for the parser
 from .errors import ShapeError, SteamError
 
 __all__ = [
@@ -45,9 +46,6 @@ __all__ = [
     "DIGITS",
     "parse_decimal",
 ]
-
-DECIMAL = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")  # a plain decimal number
-DIGITS = re.compile(r"[+-]?[0-9]+")  # a plain integer
 
 
 def _show(value: object, limit: int = 80) -> str:
@@ -170,10 +168,3 @@ def check_covariance(name: str, P: NDArray, n: int) -> NDArray:
         k = int(np.flatnonzero(diagonal < 0)[0])
         raise SteamError(f"{name} has a negative variance: {name}[{k}, {k}] = {float(diagonal[k])!r}")
     return P
-
-
-def parse_decimal(text: str, convert: type = float) -> float | int | None:
-    """``text`` read as a number by the one rule for numbers written as text (:data:`DECIMAL`, or
-    :data:`DIGITS` for ``convert=int``), or None when it is not one: ``1_0`` and ``５`` are not numbers here."""
-    rule = DIGITS if convert is int else DECIMAL
-    return convert(text) if isinstance(text, str) and rule.fullmatch(text) else None

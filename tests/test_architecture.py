@@ -1,7 +1,7 @@
 """The package's shape, read from its source with ``ast`` (nothing is imported): every module in a
 layer and no import of a higher layer (``LAYERS``, the table docs/architecture.md draws), no import
 cycle between steam_ref modules, no function-local import of a steam_ref module outside an explicit
-allow-list, no module over 400 lines outside an explicit allow-list, at most 13 modules at the top.
+allow-list, no module over 400 lines outside an explicit allow-list, at most 14 modules at the top.
 And, in a fresh interpreter, that ``import steam_ref`` loads neither matplotlib nor the paper layer.
 
 Edges are module-level imports (``if TYPE_CHECKING:`` blocks excluded; class bodies and top-level
@@ -31,6 +31,7 @@ LAYERS: dict[str, int] = {
     "steam_ref._version": 0,
     "steam_ref.errors": 0,
     "steam_ref.arguments": 0,
+    "steam_ref.choices": 0,  # the names a user picks from and the defaults help quotes; imports nothing: the CLI's parser reads it
     "steam_ref.plot": 1,  # a leaf: draws plain arrays, imports only errors, so any layer may draw
     "steam_ref.manifold": 1,  # how an estimate moves (x ⊕ δ, x ⊖ x0), a variable's kind: imports only errors
     "steam_ref.variables": 1,
@@ -74,7 +75,9 @@ LAYERS: dict[str, int] = {
     "steam_ref.__main__": 14,
     "steam_ref": 15,  # the facade: names load lazily from the layers; nothing imports it
 }
-MAX_TOP_LEVEL_MODULES = 13  # 12 until manifold.py, the seam every solver goes through
+MAX_TOP_LEVEL_MODULES = (
+    14  # 12 until manifold.py, the seam every solver goes through; 13 until choices.py, the CLI's names
+)
 # Entries that place only themselves, never the modules inside them: the root (else every new module would be
 # layer 15 and could import anything) and paper/ (each of its modules has its own layer).
 EXACT_ONLY = {"steam_ref", "steam_ref.paper"}
@@ -83,6 +86,10 @@ EXACT_ONLY = {"steam_ref", "steam_ref.paper"}
 LOCAL_IMPORTS_ALLOWED: dict[str, str] = {
     "steam_ref.cli": "the console script's entry point answers --version before the commands (and SciPy) load",
     "steam_ref.conformance.command": "the kit's builder (the solvers, the oracles) loads only for selftest and build",
+    "steam_ref.cli.commands": "the BLAS limit loads with the command's module, once its arguments are parsed",
+    "steam_ref.cli.parsers.run": "--amalgamation-zeros' check loads its home (with NumPy) only when the option is given",
+    "steam_ref.datasets.registry": "each set's reader loads its loader when the set is read: the CLI's parser reads the "
+    "registry without NumPy",
 }
 # Modules allowed over MAX_LINES, each with its reason (none today).
 LONG_MODULES_ALLOWED: dict[str, str] = {}
@@ -307,7 +314,7 @@ def test_the_layer_table_names_only_modules_that_exist():
     assert not stale, f"LAYERS names modules that do not exist: {stale}"
 
 
-def test_the_top_of_the_package_holds_at_most_13_modules():
+def test_the_top_of_the_package_holds_at_most_14_modules():
     top = sorted(p.name for p in PACKAGE.glob("*.py") if p.name != "__init__.py")
     assert len(top) <= MAX_TOP_LEVEL_MODULES, f"{len(top)} modules at the top: {top}"
 

@@ -29,7 +29,8 @@ import pytest
 import steam_ref as sr
 from steam_ref import L, X
 from steam_ref.bayes_tree.dot import gtsam_key
-from steam_ref.cli.args import QC_SCALES, scaled_qc
+from steam_ref.cli.args import QC_SCALES
+from steam_ref.cli.inputs import scaled_qc
 from steam_ref.datasets import generate_synthetic, load_dataset
 from steam_ref.datasets.synthetic import MAX_SYNTHETIC_BYTES, synthetic_bytes
 from steam_ref.errors import DataError, NumericalError, ShapeError, SteamError

@@ -15,6 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..arguments import integer, is_integer, number, replace_fields
+from ..choices import GTSAM_RELINEARIZE_SKIP, GTSAM_RELINEARIZE_THRESHOLD
 from ..errors import ShapeError, SteamError
 from ..linear.amalgamation import zero_fraction
 
@@ -59,9 +60,9 @@ class ISAM2Params:
     """
 
     # β of [K12 Alg. 5]: relinearize a variable when max |δ| ≥ β; one float, or one per symbol {'x': 0.1, 'l': 0.5}
-    relinearize_threshold: float | Mapping[str, float] = 0.1
+    relinearize_threshold: float | Mapping[str, float] = GTSAM_RELINEARIZE_THRESHOLD
     # check for relinearization every k-th update only (GTSAM's relinearizeSkip)
-    relinearize_skip: int = 10
+    relinearize_skip: int = GTSAM_RELINEARIZE_SKIP
     # α of [K12 Alg. 7]: back-substitution descends only where δ changed by at least α (0: full)
     wildfire_threshold: float = 1e-3
     # symbol → block sizes: relinearize each block of such a variable on its own, as GTSAM would if it

@@ -1,11 +1,15 @@
 """What the ``steam-ref`` command's arguments accept, and the arguments its commands share.
 
 Every value is checked by its argparse type, so a bad one is a one-line error with exit code 2 before
-anything runs. Each command's own options are in its module (``cli/run.py``, ``cli/batch.py``...,
+anything runs. Each command's own options are in its module (``cli/parsers/run.py``, ``cli/parsers/batch.py``...,
 :data:`~steam_ref.cli.commands.COMMANDS`); what they share is here: :class:`Parser`, the number types, the
 data set and its folder (``--dataset`` offers the registry's names: :mod:`steam_ref.datasets.registry`), the
-preset a data set runs with, the motion prior and its options (``--prior``, ``--se2-residual``), ``--max-poses``,
-``--progress`` and ``--save-trajectory``.
+preset a data set runs with, the motion prior and its options (``--prior``, ``--se2-residual``, checked against
+:data:`~steam_ref.choices.MOTION_PRIOR_NAMES`), ``--max-poses``, ``--progress`` and ``--save-trajectory``.
+
+Like the parsers, it imports only :mod:`steam_ref.choices`, the registry and the data folders: no NumPy, no
+solver. What a command makes of its arguments once it runs (the data set loaded, the preset found, Qc scaled) is
+:mod:`steam_ref.cli.inputs`.
 """
 
 from __future__ import annotations
@@ -13,20 +17,13 @@ from __future__ import annotations
 import argparse
 import math
 import re
-import warnings
 from pathlib import Path
 from typing import Any, Protocol
 
-import numpy as np
-
-from ..arguments import DECIMAL, parse_decimal
-from ..datasets import LandmarkDataset, RangeDataset, load_dataset
+from ..choices import DECIMAL, MOTION_PRIOR_NAMES, RESIDUALS, parse_decimal
+from ..datasets.folders import data_dir_help
 from ..datasets.registry import DATASETS, loadable
-from ..datasets.rigid import RigidReadings
-from ..datasets.search import data_dir_help, dataset_path
-from ..errors import SteamError, UncleanedDataWarning
-from ..motion import MOTION_PRIORS
-from ..paper.presets import PRESETS, PRIORS, SE2_RESIDUALS
+from ..errors import SteamError
 
 __all__ = [
     "MAX_JOBS",
@@ -50,17 +47,14 @@ __all__ = [
     "folder",
     "jobs_count",
     "landmarks_count",
-    "load_with_note",
     "non_negative_float",
     "non_negative_int",
     "number",
     "positive_float",
     "positive_int",
     "preset_for",
-    "preset_of",
     "qc_diagonal",
     "scale",
-    "scaled_qc",
     "seed_of",
     "seeds_count",
     "steps_count",
@@ -164,28 +158,6 @@ def qc_diagonal(text: str) -> list[float]:
     return [float(v) for v in values if v is not None]
 
 
-def scaled_qc(preset: np.ndarray, given: list[float] | None, factor: float) -> np.ndarray:
-    """Qc of a run: ``--qc`` (``given``, its diagonal; None: the ``preset``'s) times ``--qc-scale`` (``factor``);
-    SteamError naming both when an entry of its diagonal is past float64, or more than :data:`QC_SCALES` away from
-    the preset's either way (float64 would not resolve the prior beside the readings; the preset's times a scale
-    in QC_SCALES never is)."""
-    qc = preset if given is None else np.diag(given)
-    with np.errstate(over="ignore"):  # refused just below, in one line
-        qc = factor * qc
-        ratio = np.diag(qc) / np.diag(preset)
-    low, high = QC_SCALES
-    if not (np.isfinite(qc).all() and np.all((low <= ratio) & (ratio <= high))):
-        past = f"past float64's largest number ({np.finfo(float).max:.3g})" if not np.isfinite(qc).all() else None
-        shown = ",".join(f"{v:g}" for v in np.diag(qc))
-        raise SteamError(
-            f"--qc {','.join(f'{v:g}' for v in given or [])} times --qc-scale {factor:g} gives Qc's diagonal "
-            f"{past or shown}, beyond {low:g} to {high:g} times the preset's ({','.join(f'{v:g}' for v in np.diag(preset))}"
-            "): float64 would not resolve the prior's information beside the readings; give a --qc (or --qc-scale) "
-            "nearer the preset's"
-        )
-    return qc
-
-
 # Singer's 1/alpha: the acceleration's memory. Below 1e-6 s (alpha dt > 1e6 at the data sets' dt of 1 s to
 # 0.1 s) its process noise spans more than float64 resolves; above 1e8 s it is WNOJ to float64's precision.
 SINGER_TIME_CONSTANTS = (1e-6, 1e8)
@@ -252,23 +224,23 @@ def add_dataset(parser: argparse.ArgumentParser, default: str) -> None:
 
 
 def add_prior(parser: argparse.ArgumentParser, head: str, tail: str, se2_residual: str) -> None:
-    """--prior (a name of ``MOTION_PRIORS``; its help ``head``, each prior with what it is, then ``tail``) and
+    """--prior (a name of ``MOTION_PRIOR_NAMES``; its help ``head``, each prior with what it is, then ``tail``) and
     --se2-residual (help ``se2_residual``), each None unless given: the preset's then (:func:`check_prior_options`)."""
     parser.add_argument(
         "--prior",
-        choices=PRIORS,
+        choices=tuple(MOTION_PRIOR_NAMES),
         default=None,
-        help=head + "; ".join(f"{name}, {choice.what}" for name, choice in MOTION_PRIORS.items()) + tail,
+        help=head + "; ".join(f"{name}, {choice.what}" for name, choice in MOTION_PRIOR_NAMES.items()) + tail,
     )
-    parser.add_argument("--se2-residual", choices=SE2_RESIDUALS, default=None, help=se2_residual)
+    parser.add_argument("--se2-residual", choices=RESIDUALS, default=None, help=se2_residual)
 
 
 def check_prior_options(prior: str, given: dict[str, object]) -> None:
     """SteamError unless each option ``given`` (its name → value, None for not given) is one ``prior`` takes
-    (``MOTION_PRIORS``), naming the priors that do."""
+    (``MOTION_PRIOR_NAMES``), naming the priors that do."""
     for name, value in given.items():
-        if value is not None and name not in MOTION_PRIORS[prior].options:
-            takers = " or ".join(f"--prior {p}" for p, choice in MOTION_PRIORS.items() if name in choice.options)
+        if value is not None and name not in MOTION_PRIOR_NAMES[prior].options:
+            takers = " or ".join(f"--prior {p}" for p, choice in MOTION_PRIOR_NAMES.items() if name in choice.options)
             raise SteamError(f"--{name.replace('_', '-')} applies to {takers} only, not --prior {prior}")
 
 
@@ -279,11 +251,11 @@ def check_prior_fits(dataset: str, prior: str | None) -> None:
     if prior is None:
         return
     record = DATASETS.get(dataset)
-    space, wanted = (2 if record is None else record.dimensions), MOTION_PRIORS[prior].dimensions
+    space, wanted = (2 if record is None else record.dimensions), MOTION_PRIOR_NAMES[prior].dimensions
     if wanted == space:
         return
     sets = [n for n in loadable() if DATASETS[n].dimensions == wanted]
-    priors = [p for p, choice in MOTION_PRIORS.items() if choice.dimensions == space]
+    priors = [p for p, choice in MOTION_PRIOR_NAMES.items() if choice.dimensions == space]
     raise SteamError(
         f"--prior {prior} moves a body in {wanted}-D and --dataset {dataset} is {space}-D: --prior {prior} runs on "
         f"--dataset {' | '.join(sets)}; --dataset {dataset} runs with --prior {' | '.join(priors)}"
@@ -339,23 +311,6 @@ def add_progress(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def preset_of(args: argparse.Namespace) -> str:
-    """The preset a command runs with: --preset, else the named data set's; a data file given by PATH needs
-    --preset (each preset changes what is done to the file: Plaza's fits a range correction to its truth)."""
-    if args.preset is not None:
-        return args.preset
-    if args.dataset in DATASETS and DATASETS[args.dataset].rigid:
-        raise SteamError(f"--dataset {args.dataset!r} is a 3-D set: `steam-ref run --dataset {args.dataset}` solves it")
-    if args.dataset not in DATASETS or DATASETS[args.dataset].loader is None:
-        dataset_path(args.dataset, getattr(args, "data_dir", None))  # no set, no file: the search says so first
-    if args.dataset not in DATASETS or DATASETS[args.dataset].preset is None:
-        raise SteamError(
-            f"--dataset {args.dataset!r} is a path: say which parameters it runs with, --preset {{{','.join(PRESETS)}}} "
-            "(plaza also fits a range correction to the file's own ground truth)"
-        )
-    return preset_for(args.dataset)
-
-
 def preset_for(name: str) -> str:
     """The preset the registry's data set ``name`` runs with (``DataSet.preset``)."""
     preset = DATASETS[name].preset
@@ -383,14 +338,3 @@ def seed_of(args: argparse.Namespace) -> int:
             "read from a file, which no seed changes: drop --seed"
         )
     return args.seed
-
-
-def load_with_note(args: argparse.Namespace) -> RangeDataset | LandmarkDataset:
-    """``--dataset`` loaded for a command whose summary says what it read: its NOTE line says uncleaned Plaza data
-    (explain.data_lines), so load_dataset's UncleanedDataWarning would only repeat it."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", UncleanedDataWarning)
-        data = load_dataset(args.dataset, data_dir=args.data_dir, seed=seed_of(args))
-    if isinstance(data, RigidReadings):  # a 3-D set: `steam-ref run` solves it (cli/rigid.py)
-        raise SteamError(f"--dataset {args.dataset!r} is a 3-D set: `steam-ref run --dataset {args.dataset}` solves it")
-    return data

@@ -12,26 +12,17 @@ import time
 
 import numpy as np
 
+from ..choices import BATCH_ORDERINGS
 from ..datasets.registry import DATASETS
 from ..evaluate import trajectory_figures
-from ..paper.presets import PRESETS, PaperSetup
+from ..paper.presets import PaperSetup
 from ..paper.problem import build_problem, sequential_batch
 from ..paper.readings import Readings
 from ..paper.results import position_rmse
 from ..plot.figures import plot_trajectory
 from ..variables import X
 from . import explain
-from .args import (
-    Subparsers,
-    add_data_dir,
-    add_dataset,
-    add_max_poses,
-    add_progress,
-    add_seed,
-    add_trajectory_arguments,
-    load_with_note,
-    preset_of,
-)
+from .inputs import load_with_note, preset_of
 from .paths import (
     check_output,
     check_outputs_apart,
@@ -43,31 +34,7 @@ from .paths import (
 from .rigid import run_rigid
 from .streams import json_line
 
-__all__ = ["add_parser", "run"]
-
-
-def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
-    """Add ``batch`` and its options to the command's subparsers."""
-    parser = sub.add_parser(
-        "batch",
-        help="batch Gauss-Newton on all of a data set (PB or PBVR): RMSE and a plot",
-        example="steam-ref batch --dataset paper-synthetic --plot batch.png",
-    )
-    add_dataset(parser, "paper-synthetic")
-    parser.add_argument(
-        "--ordering", choices=("xl", "amd"), default="amd", help="xl: the paper's PB; amd: PBVR (default amd)"
-    )
-    parser.add_argument(
-        "--preset", choices=PRESETS, default=None, help="parameter set (default: by data set; required for a PATH)"
-    )
-    add_data_dir(parser)
-    add_seed(parser)
-    add_max_poses(parser)
-    parser.add_argument("--json", action="store_true", help="print one JSON line of figures")
-    parser.add_argument("--plot", metavar="FILE.png", default=None, help="draw estimate, ground truth, landmarks")
-    add_trajectory_arguments(parser, "; a 3-D set (synthetic-3d, kitti): its poses in 3-D")
-    add_progress(parser)
-    return parser
+__all__ = ["run"]
 
 
 def run(args: argparse.Namespace) -> int:
@@ -122,7 +89,7 @@ def run(args: argparse.Namespace) -> int:
         print(json_line(summary))
     else:
         print(
-            f"batch {_BATCH_NAME[args.ordering]} ({args.ordering.upper()} ordering) on {args.dataset}: "
+            f"batch {BATCH_ORDERINGS[args.ordering]} ({args.ordering.upper()} ordering) on {args.dataset}: "
             f"{summary['n_states']} states, solved in {summary['total_s']:.2f} s ({summary['iterations']} "
             f"iterations), Cholesky factor {summary['factor_nnz']} nonzeros ({summary['backend']})\n"
             + explain.data_lines(summary)
@@ -131,6 +98,3 @@ def run(args: argparse.Namespace) -> int:
             + where
         )
     return 0
-
-
-_BATCH_NAME = {"xl": "PB", "amd": "PBVR"}  # the paper's names of a batch solve by its ordering [YIB Sec. IV]

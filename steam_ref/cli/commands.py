@@ -3,18 +3,23 @@
 ``steam-ref --help`` lists the commands (:data:`COMMANDS`), and ``steam-ref COMMAND --help`` a command's options,
 written once, in its parser (the site's page per command shows the same).
 
-Each command is one module with ``add_parser(subparsers)`` (its options; returns its parser) and
-``run(args)`` (what it does; returns the exit code), registered once in :data:`COMMANDS`.
+Each command is two modules, registered once in :data:`COMMANDS`: its options, ``add_parser(subparsers)`` (returns
+its parser; :mod:`steam_ref.cli.parsers`), and what it does, ``run(args)`` (returns the exit code). The parser reads
+only :mod:`steam_ref.choices`, the data sets' registry and :mod:`~steam_ref.cli.args`; the module that runs (and the
+solvers, NumPy and SciPy with it) loads once the arguments are parsed, so ``steam-ref --help``, a command's help and
+a bad argument's one-line answer cost about what ``--version`` does (``tests/test_cli_startup.py`` checks that they
+load neither SciPy's sparse matrices nor the solvers).
 
 Every command with ``--progress`` / ``--no-progress`` shows its progress on stderr when that is a terminal
 (:mod:`steam_ref.paper.progress`; ``fit-qc`` and ``homework`` have none), and every command runs the solvers at
-one BLAS thread unless ``$STEAM_REF_BLAS_THREADS`` says otherwise (:mod:`steam_ref.linear.threads`).
+one BLAS thread unless ``$STEAM_REF_BLAS_THREADS`` says otherwise (:mod:`steam_ref.linear.threads`, entered once
+the command's module has loaded: the limit applies to the libraries loaded when it is entered).
 Bad arguments and missing or malformed data files give a one-line error and exit code 2. The project's
 warnings (:class:`~steam_ref.errors.SteamWarning`: a diverging stream, a cut-short convergence) are one line
 each on stderr, ``steam-ref: warning: ...``, the first of each kind shown and the rest counted at the end
 (:func:`~steam_ref.cli.streams.warning_lines`); they do not change the exit code: the run finished and wrote
 its outputs, and its figures (``--json``: ``divergence``) say what was found. A command that never solves
-(``data``: its module says ``SOLVES = False``) does not read ``$STEAM_REF_BLAS_THREADS``.
+(``data``: its parser's module says ``SOLVES = False``) does not read ``$STEAM_REF_BLAS_THREADS``.
 
 Ctrl-C stops a command with one line, ``steam-ref: interrupted``, and exit code 130; SIGTERM (``kill``, ``timeout``,
 a batch scheduler) is taken the same way, ``steam-ref: terminated`` and 143, so that what an interrupt undoes is
@@ -33,7 +38,6 @@ from importlib import import_module
 
 from .._version import __version__
 from ..errors import SteamError, SteamWarning
-from ..linear.threads import limit
 from .args import Parser
 from .streams import complain, one_line, quiet_stdout, warning_lines
 
@@ -62,19 +66,21 @@ def _sigterm_as_interrupt():
         signal.signal(signal.SIGTERM, before)
 
 
-# Every command of `steam-ref`, in the order its help lists them: its name and its module, which has
-# add_parser(sub) and run(args). A command's module loads only when it is the one run (or help lists them all),
-# so that a run carries none of the kit's, the homework's or the other commands' machinery.
+# Every command of `steam-ref`, in the order its help lists them: its name, the module of its options (which has
+# add_parser(sub); light, read by every --help) and the module that runs it (which has run(args)). A command's
+# parser loads only when it is the one parsed (or help lists them all), and its running module only once its
+# arguments are parsed, so that a run carries none of the kit's, the homework's or the other commands' machinery,
+# and --help or a bad argument none of the solvers.
 COMMANDS = {
-    "run": "steam_ref.cli.run",
-    "batch": "steam_ref.cli.batch",
-    "fidelity": "steam_ref.cli.fidelity",
-    "reproduce": "steam_ref.cli.reproduce",
-    "conformance": "steam_ref.conformance.command",
-    "data": "steam_ref.cli.data",
-    "consistency": "steam_ref.cli.consistency",
-    "fit-qc": "steam_ref.cli.fit_qc",
-    "homework": "steam_ref.homework.command",
+    "run": ("steam_ref.cli.parsers.run", "steam_ref.cli.run"),
+    "batch": ("steam_ref.cli.parsers.batch", "steam_ref.cli.batch"),
+    "fidelity": ("steam_ref.cli.parsers.fidelity", "steam_ref.cli.fidelity"),
+    "reproduce": ("steam_ref.cli.parsers.reproduce", "steam_ref.cli.reproduce"),
+    "conformance": ("steam_ref.cli.parsers.conformance", "steam_ref.conformance.command"),
+    "data": ("steam_ref.cli.parsers.data", "steam_ref.cli.data"),
+    "consistency": ("steam_ref.cli.parsers.consistency", "steam_ref.cli.consistency"),
+    "fit-qc": ("steam_ref.cli.parsers.fit_qc", "steam_ref.cli.fit_qc"),
+    "homework": ("steam_ref.cli.parsers.homework", "steam_ref.homework.command"),
 }
 
 
@@ -90,8 +96,9 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = parser.add_subparsers(dest="command", parser_class=Parser, required=True)
     for name in [command] if command in COMMANDS else COMMANDS:
-        module = import_module(COMMANDS[name])
-        module.add_parser(sub).set_defaults(handler=module.run, solves=getattr(module, "SOLVES", True))
+        options, runs = COMMANDS[name]
+        module = import_module(options)
+        module.add_parser(sub).set_defaults(runs=runs, solves=getattr(module, "SOLVES", True))
     return parser
 
 
@@ -101,9 +108,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         argv = argv or ["run"]  # no command at all runs the main job
         args = build_parser(argv[0]).parse_args(argv)
+        command = import_module(args.runs)  # the command's machinery loads only now, its arguments parsed
+        from ..linear.threads import limit  # a limit applies to the libraries loaded when it is entered: after that
+
         # the solvers' small dense algebra at one BLAS thread unless $STEAM_REF_BLAS_THREADS says
         with _sigterm_as_interrupt(), limit() if args.solves else contextlib.nullcontext(), warning_lines(SteamWarning):
-            return args.handler(args)
+            return command.run(args)
     except BrokenPipeError:  # stdout's reader went away (`| head`): what it read is all it wanted
         quiet_stdout()
         return 141  # 128 + SIGPIPE, as a shell reports a command stopped by a closed pipe

@@ -8,40 +8,17 @@ from __future__ import annotations
 import argparse
 
 from ..datasets import load_range_dataset
-from ..datasets.registry import with_authors_run
 from ..paper.fidelity import AUTHORS_RUNS, compare, find_authors_file, load_authors_run
 from ..paper.online import run_online
 from ..paper.options import StreamOptions
 from ..paper.presets import PaperSetup
 from ..plot.figures import plot_fidelity
 from . import explain
-from .args import Subparsers, add_data_dir, add_progress, preset_for
+from .args import preset_for
 from .paths import check_output, write_plot
 from .streams import json_line
 
-__all__ = ["add_parser", "run"]
-
-
-def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
-    """Add ``fidelity`` and its options to the command's subparsers."""
-    parser = sub.add_parser(
-        "fidelity",
-        help="BTGP/1 against the authors' saved runs, pose by pose, covariances included",
-        example="steam-ref fidelity --dataset paper-synthetic",
-    )
-    parser.add_argument(
-        "--dataset",
-        choices=[*with_authors_run(), "all"],
-        default="all",
-        help="the data set whose saved run is compared (default all)",
-    )
-    add_data_dir(parser, " (and its authors/ folder)")
-    parser.add_argument("--json", action="store_true", help="print one JSON line per data set")
-    parser.add_argument(
-        "--plot", metavar="FILE.png", default=None, help="draw the per-pose distance to the authors' estimate"
-    )
-    add_progress(parser)
-    return parser
+__all__ = ["run"]
 
 
 def run(args: argparse.Namespace) -> int:

@@ -49,13 +49,7 @@ from .explain import files_of
 from .paths import check_outputs_apart, check_outputs_not_inputs, check_trajectory_output, save_trajectory
 from .streams import json_line
 
-__all__ = ["run_rigid", "SAVED_ESTIMATE"]
-
-# whose estimate --save-trajectory writes (run's help; the rule is run_rigid's `written`)
-SAVED_ESTIMATE = (
-    "; the estimate of --method (with --lag, the fixed-lag one); a 3-D set (synthetic-3d, kitti): BTGP's, or with "
-    "--lag the fixed-lag smoother's, its poses in 3-D (`steam-ref batch --save-trajectory` writes batch's)"
-)
+__all__ = ["run_rigid"]
 
 # run's and batch's options that a 3-D run does not read, with the value that means "not given" (it runs batch and BTGP, and
 # fixed-lag with --lag, whatever --method says; its readings between states are always interpolated)

@@ -11,7 +11,8 @@ got; the first in computation order flagged as the likely cause), what had no re
 with ``N passed, N failed``; it exits 0 only when some case passed, none failed and no case of the
 gate is missing, unless ``--allow-missing`` (1 otherwise, 2 on bad input). The gate is every data-free
 suite of the kit (all but ``paper``, which ``--paper`` adds), or the suites ``--only`` names.
-``selftest`` does the same for the installed code.
+``selftest`` does the same for the installed code. The subcommands' options are
+:mod:`steam_ref.cli.parsers.conformance`'s.
 """
 
 from __future__ import annotations
@@ -22,110 +23,14 @@ import shutil
 import tempfile
 from pathlib import Path
 
-from ..datasets.search import data_dir_help
 from ..errors import SteamError
 from ..paper.progress import wanted
 from .checker import Report
-from .gate import CONVENTION_NAMES, check_directory
+from .gate import check_directory
 from .kitio import KIT_VERSION, SHIPPED, SUITES, kit_files, read_index
 from .readme import export_readme
 
-__all__ = ["add_parser", "run"]
-
-PAPER_FILES = " (the paper suite's, and their authors/ folder)"  # what --data-dir is searched for
-
-
-def _path(text: str) -> str:
-    """An argparse type: a path that is not empty (``Path("")`` is the working folder, which no one means)."""
-    if not text.strip():
-        raise argparse.ArgumentTypeError(f"expected a folder, got an empty path {text!r}")
-    return text
-
-
-def _data_dir(text: str) -> str:
-    """An argparse type: a folder that exists (a mistyped --data-dir must not be passed over in silence)."""
-    if not text.strip() or not Path(text).is_dir():
-        what = "an empty string" if not text.strip() else "not a folder" if Path(text).exists() else "does not exist"
-        raise argparse.ArgumentTypeError(f"expected a folder, got {text!r}: {what}")
-    return text
-
-
-def add_parser(sub) -> argparse.ArgumentParser:
-    """Add ``conformance`` and its subcommands to ``sub`` (an argparse subparsers object)."""
-    conf = sub.add_parser(
-        "conformance",
-        help="the conformance kit: export it, check results against it, check this install",
-        example="steam-ref conformance selftest",
-    )
-    commands = conf.add_subparsers(
-        dest="conformance_command", parser_class=type(conf), required=True, metavar="{export,check,selftest,build}"
-    )
-    exp = commands.add_parser(
-        "export",
-        help="write the kit (inputs, expected outputs, conventions) and a README to DIR",
-        example="steam-ref conformance export kit/",
-    )
-    exp.add_argument("dir", metavar="DIR", type=_path, help="a new or empty folder")
-    chk = commands.add_parser(
-        "check",
-        help="compare results laid out like the kit with its expected values",
-        example="steam-ref conformance check results/ --allow-missing",
-    )
-    chk.add_argument("results", metavar="RESULTS_DIR", type=_path, help="a folder with <suite>/results.json")
-    chk.add_argument("--only", nargs="+", choices=SUITES, default=None, metavar="SUITE", help="check these suites only")
-    chk.add_argument("--suite", choices=SUITES, default=None, help="the same as --only SUITE (one suite)")
-    chk.add_argument(
-        "--paper",
-        action="store_true",
-        help="also check the paper suite (the paper's runs; needs its data files to compute): by default every "
-        "other suite of the kit is the gate",
-    )
-    chk.add_argument(
-        "--allow-missing",
-        action="store_true",
-        help="cases without a result are listed, not a failure (a check in which no case passed still fails)",
-    )
-    chk.add_argument(
-        "--conventions",
-        nargs="+",
-        choices=CONVENTION_NAMES,
-        default=(),
-        metavar="NAME",
-        help="compare convention-dependent quantities under these documented alternatives: "
-        + ", ".join(CONVENTION_NAMES),
-    )
-    chk.add_argument(
-        "--kit",
-        type=_path,
-        default=None,
-        help="check against this exported kit (default: the shipped kit of the results' version)",
-    )
-    st = commands.add_parser(
-        "selftest",
-        help="regenerate every case with the installed code and check it against the shipped kit",
-        example="steam-ref conformance selftest",
-    )
-    st.add_argument(
-        "--paper", action="store_true", help="also run the paper suite (BTGP/1 on both data sets, about a minute)"
-    )
-    st.add_argument("--data-dir", type=_data_dir, default=None, help=data_dir_help(PAPER_FILES))
-    st.add_argument(
-        "--progress",
-        action=argparse.BooleanOptionalAction,
-        default=None,
-        help="the paper suite's progress bars on stderr (default: on when stderr is a terminal)",
-    )
-    bld = commands.add_parser(
-        "build",
-        help="regenerate the kit (default: the package's own copy)",
-        example="steam-ref conformance build --out rebuilt-kit/",
-    )
-    bld.add_argument("--out", type=_path, default=None, help="write the kit here instead of into the package")
-    bld.add_argument(
-        "--paper", action="store_true", help="rebuild the paper suite from the data files (else keep the existing one)"
-    )
-    bld.add_argument("--data-dir", type=_data_dir, default=None, help=data_dir_help(PAPER_FILES))
-    return conf
+__all__ = ["run"]
 
 
 def _print(report: Report) -> int:

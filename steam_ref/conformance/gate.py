@@ -22,6 +22,7 @@ import os
 from collections.abc import Sequence
 from pathlib import Path
 
+from ..choices import CONFORMANCE_CONVENTIONS
 from ..errors import DataError, SteamError
 from .checker import Report, check_cases, convention_key
 from .kitio import DATA_FREE, KITS, SUITES, printable, read_index, read_json, read_suite
@@ -29,7 +30,7 @@ from .validate import kit_cases, results_cases, results_version
 
 __all__ = ["check_directory", "load_kit", "CONVENTION_NAMES"]
 
-CONVENTION_NAMES = ("paper-sign", "symmetric-whitener", "signed-half-turn")  # the last: kit v5 on
+CONVENTION_NAMES = CONFORMANCE_CONVENTIONS  # its home: steam_ref.choices, read by the parser
 
 
 def load_kit(kit: Path) -> tuple[dict, dict[str, list[dict]]]:

@@ -15,7 +15,7 @@
 - :mod:`.sampled`: :func:`sample_from_model`, a task drawn from the estimator's own model, any motion prior
   (consistency).
 - :mod:`.search`: :func:`load_dataset` by name or path, searching :func:`default_data_dirs`
-  (``data_dir``, ``$STEAM_REF_DATA_DIR``, the fetched files' cache folder, gtsam's ``Data/``).
+  (:mod:`.folders`: ``data_dir``, ``$STEAM_REF_DATA_DIR``, the fetched files' cache folder, gtsam's ``Data/``).
 - :mod:`.registry`: the paper's files by name, each with its source, sha256 and size, and the check of a
   file found under one of those names (at every read, never trusted by name).
 - :mod:`.fetch`: the paper's files by name, each with its source and sha256, fetched into the user's
@@ -24,23 +24,58 @@
 Errors: a table of the wrong shape given to :class:`RangeDataset` raises :class:`ShapeError`;
 bad content (NaN, pose times not increasing, unknown landmark ids) raises :class:`DataError`; the
 loaders re-raise either as :class:`DataError` prefixed with the file name.
+
+The names below load from their modules when first used (PEP 562), so that importing one light module of the
+package (:mod:`.registry`, :mod:`.folders`: what the command's parser reads) loads no loader, NumPy or SciPy.
 """
 
-from .cmu import load_cmu_mat, load_cmu_text
-from .gtsam_text import load_gtsam_2d
-from .landmarks import LandmarkDataset
-from .matfile import read_mat
-from .sampled import ModelSample, sample_from_model
-from .search import (
-    DATA_DIR_ENV,
-    default_data_dirs,
-    gtsam_data_dir,
-    load_dataset,
-    load_range_dataset,
-    uncleaned_plaza,
-)
-from .synthetic import generate_synthetic
-from .table import RangeDataset
+import importlib
+from typing import TYPE_CHECKING, Any
+
+# Each public name and the module it lives in (loaded when the name is first used).
+_HOMES = {
+    "RangeDataset": "table",
+    "LandmarkDataset": "landmarks",
+    "load_gtsam_2d": "gtsam_text",
+    "load_cmu_mat": "cmu",
+    "load_cmu_text": "cmu",
+    "read_mat": "matfile",
+    "gtsam_data_dir": "folders",
+    "default_data_dirs": "folders",
+    "load_dataset": "search",
+    "load_range_dataset": "search",
+    "uncleaned_plaza": "search",
+    "generate_synthetic": "synthetic",
+    "sample_from_model": "sampled",
+    "ModelSample": "sampled",
+    "DATA_DIR_ENV": "folders",
+}
+
+
+def __getattr__(name: str) -> Any:
+    """Load a public name's module when the name is first used, and keep the name here."""
+    home = _HOMES.get(name)
+    if home is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f".{home}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_HOMES))
+
+
+if TYPE_CHECKING:  # what a type checker and an IDE see: the same names, imported eagerly
+    from .cmu import load_cmu_mat, load_cmu_text
+    from .folders import DATA_DIR_ENV, default_data_dirs, gtsam_data_dir
+    from .gtsam_text import load_gtsam_2d
+    from .landmarks import LandmarkDataset
+    from .matfile import read_mat
+    from .sampled import ModelSample, sample_from_model
+    from .search import load_dataset, load_range_dataset, uncleaned_plaza
+    from .synthetic import generate_synthetic
+    from .table import RangeDataset
 
 __all__ = [
     "RangeDataset",

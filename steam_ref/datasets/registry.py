@@ -19,7 +19,8 @@ its ctime, which no user call can set back, so a changed file is hashed again; t
 (its hashing time: docs/experiments.md). A non-regular file (a FIFO, a device, a link to one) is refused before it is opened:
 hashing one would block or never end.
 
-Loaded by :mod:`.search` on every named read, and by :mod:`.fetch`; it imports the loaders, never pooch.
+Loaded by :mod:`.search` on every named read, by :mod:`.fetch`, and by the command's parser (``--dataset``'s help and
+choices): it imports no loader (each reader loads its own when a set is read), no NumPy, never pooch.
 """
 
 from __future__ import annotations
@@ -29,17 +30,15 @@ import os
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-from .. import lie  # lie.SE3V loads when first read (lie/__init__.py, PEP 562): a planar run never loads SE(3)
 from ..errors import DataError
-from .cmu import load_cmu_mat, load_cmu_text
-from .gtsam_text import load_gtsam_2d
-from .kitti import load_kitti
-from .landmarks import LandmarkDataset
-from .rigid import RigidReadings, generate_rigid
-from .synthetic import generate_synthetic
-from .table import RangeDataset
 from .textfile import check_regular  # its home: every reader checks a file before opening it
+
+if TYPE_CHECKING:
+    from .landmarks import LandmarkDataset
+    from .rigid import RigidReadings
+    from .table import RangeDataset
 
 __all__ = [
     "DATASETS",
@@ -63,7 +62,7 @@ _GTSAM_SOURCE = "the gtsam wheel's Data/ folder (pip install gtsam)"
 
 # How a data set is read: ``loader(path, name, seed)``, where ``path`` is its first file as found in a data folder
 # (None for a set with no file) and ``seed`` applies to a generated set only.
-Loader = Callable[[Path | None, str, int], RangeDataset | LandmarkDataset | RigidReadings]
+Loader = Callable[[Path | None, str, int], "RangeDataset | LandmarkDataset | RigidReadings"]
 
 
 @dataclass(frozen=True)
@@ -100,28 +99,45 @@ class DataSet:
     dimensions: int = 2  # of the space its body moves in: a prior runs on it when it says the same (PriorChoice)
 
 
+# Each reader loads its loader's module when a set is read, not when the registry is: the command line's parser reads
+# the registry (--dataset's help) without NumPy or SciPy.
+
+
 def _read_mat(path: Path | None, name: str, _seed: int) -> RangeDataset:
+    from .cmu import load_cmu_mat
+
     return load_cmu_mat(_given(path, name), name=name)
 
 
 def _read_cmu_text(path: Path | None, name: str, _seed: int) -> RangeDataset:
+    from .cmu import load_cmu_text
+
     path = _given(path, name)  # the first file, PREFIX_DR.txt; its folder holds the others
     return load_cmu_text(path.parent, path.name.removesuffix("_DR.txt"), name=name)
 
 
 def _read_gtsam_2d(path: Path | None, name: str, _seed: int) -> LandmarkDataset:
+    from .gtsam_text import load_gtsam_2d
+
     return load_gtsam_2d(_given(path, name), name=name)
 
 
 def _read_kitti(path: Path | None, name: str, _seed: int) -> RigidReadings:
-    return load_kitti(_given(path, name).parent, group=lie.SE3V, name=name)  # the table's SE(3) priors' group
+    from ..lie import SE3V  # SE(3) loads when a 3-D set is read (lie/__init__.py, PEP 562)
+    from .kitti import load_kitti
+
+    return load_kitti(_given(path, name).parent, group=SE3V, name=name)  # the table's SE(3) priors' group
 
 
 def _generate(_path: Path | None, _name: str, seed: int) -> RangeDataset:
+    from .synthetic import generate_synthetic
+
     return generate_synthetic(seed=seed)
 
 
 def _generate_rigid(_path: Path | None, _name: str, seed: int) -> RigidReadings:
+    from .rigid import generate_rigid
+
     return generate_rigid(seed=seed)
 
 

@@ -28,6 +28,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..arguments import check_covariance, number, real_array
+from ..choices import RESIDUALS
 from ..errors import SteamError
 from ..gp.interpolate import conditional_covariance, interpolation_matrices
 from ..gp.prior import check_qc, process_noise, transition
@@ -43,7 +44,7 @@ __all__ = [
     "extrapolate_covariance",
 ]
 
-MODELS = ("local-variable", "simplified")
+MODELS = RESIDUALS  # the two WNOA models on a group (their home: steam_ref.choices, read by the parser)
 
 
 def check_model(model: object, name: str = "model") -> str:

@@ -1,8 +1,10 @@
 """The priors by the names a user types, the one conversion of a prior argument, and a new state's start.
 
 - :data:`MOTION_PRIORS`: name → :class:`PriorChoice` (its constructor and the options it takes beside Qc). A new
-  prior is one line here (docs/architecture.md, "Add a motion prior"); the command line's ``--prior`` choices,
-  ``PaperSetup.prior`` and :func:`motion_prior` read it.
+  prior is its name in :data:`steam_ref.choices.MOTION_PRIOR_NAMES` (its options, one line saying what it is, its
+  dimensions: what the command line's ``--prior`` choices and help read, without loading this module) and its
+  constructor here (docs/architecture.md, "Add a motion prior"); ``PaperSetup.prior`` and :func:`motion_prior`
+  read it.
 - :func:`as_motion_prior`: what every API that takes a prior accepts (a :class:`~steam_ref.motion.MotionPrior`,
   or, as before the protocol, Qc of the paper's WNOA prior or a :class:`~steam_ref.gp.LinearSDE`), as a
   :class:`~steam_ref.motion.MotionPrior`.
@@ -20,6 +22,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .. import lie
 from ..arguments import finite, number, real_array
+from ..choices import MOTION_PRIOR_NAMES, SINGER_TIME_CONSTANT
 from ..errors import ShapeError, SteamError
 from ..gp.sde import LinearSDE, check_prior
 from ..lie import SE2
@@ -37,7 +40,8 @@ class PriorChoice:
     """A prior a user can name: ``make(qc, **options)`` builds it; ``options`` are the keywords it takes beside
     Qc (as ``PaperSetup`` and the command line name them); ``what`` says it in one line; ``dimensions``: of the
     space its states' body moves in (2: a pose [x, y, θ] or on SE(2); 3: on SE(3)), a data set's own
-    (``DataSet.dimensions``) when the prior runs on it."""
+    (``DataSet.dimensions``) when the prior runs on it. All but ``make`` are its name's
+    :class:`~steam_ref.choices.PriorName`, where the command line's parser reads them."""
 
     make: Callable[..., MotionPrior]
     options: tuple[str, ...]
@@ -45,7 +49,7 @@ class PriorChoice:
     dimensions: int = 2
 
 
-def _singer(qc: ArrayLike, singer_time_constant: float = 1.0) -> MotionPrior:
+def _singer(qc: ArrayLike, singer_time_constant: float = SINGER_TIME_CONSTANT) -> MotionPrior:
     return VectorPrior.singer(qc, time_constant=singer_time_constant)
 
 
@@ -69,25 +73,32 @@ def _se3_wnoj(qc: ArrayLike) -> MotionPrior:
     return LieGroupAccelPrior.wnoj(lie.SE3V, qc)
 
 
-def _se2_singer(qc: ArrayLike, singer_time_constant: float = 1.0) -> MotionPrior:
+def _se2_singer(qc: ArrayLike, singer_time_constant: float = SINGER_TIME_CONSTANT) -> MotionPrior:
     return LieGroupAccelPrior.singer(SE2, qc, singer_time_constant)
 
 
-def _se3_singer(qc: ArrayLike, singer_time_constant: float = 1.0) -> MotionPrior:
+def _se3_singer(qc: ArrayLike, singer_time_constant: float = SINGER_TIME_CONSTANT) -> MotionPrior:
     return LieGroupAccelPrior.singer(lie.SE3V, qc, singer_time_constant)
 
 
+# Each name's constructor; its options, line and dimensions are steam_ref.choices.MOTION_PRIOR_NAMES' (a name
+# without a constructor here fails on import; tests/test_choices.py checks that no constructor goes unnamed).
+_MAKERS: dict[str, Callable[..., MotionPrior]] = {
+    "wnoa": VectorPrior.wnoa,
+    "wnoj": VectorPrior.wnoj,
+    "singer": _singer,
+    "se2": _se2,
+    "se2-wnoj": _se2_wnoj,
+    "se2-singer": _se2_singer,
+    "se3": _se3,
+    "se3-simplified": _se3_simplified,
+    "se3-wnoj": _se3_wnoj,
+    "se3-singer": _se3_singer,
+}
+
 MOTION_PRIORS: dict[str, PriorChoice] = {
-    "wnoa": PriorChoice(VectorPrior.wnoa, (), "white noise on acceleration, the paper's prior [YIB Eq. 30-31]"),
-    "wnoj": PriorChoice(VectorPrior.wnoj, (), "white noise on jerk (states with an acceleration)"),
-    "singer": PriorChoice(_singer, ("singer_time_constant",), "Singer's model (states with an acceleration)"),
-    "se2": PriorChoice(_se2, ("se2_residual",), "white noise on acceleration on SE(2) (a pose and its body twist)"),
-    "se2-wnoj": PriorChoice(_se2_wnoj, (), "white noise on jerk on SE(2) (a pose, its body twist and acceleration)"),
-    "se2-singer": PriorChoice(_se2_singer, ("singer_time_constant",), "Singer's model on SE(2) (with acceleration)"),
-    "se3": PriorChoice(_se3, (), "white noise on acceleration on SE(3), local-variable residual (Qc 6 x 6)", 3),
-    "se3-simplified": PriorChoice(_se3_simplified, (), "white noise on acceleration on SE(3), simplified residual", 3),
-    "se3-wnoj": PriorChoice(_se3_wnoj, (), "white noise on jerk on SE(3) (a pose, its body twist and acceleration)", 3),
-    "se3-singer": PriorChoice(_se3_singer, ("singer_time_constant",), "Singer's model on SE(3) (with acceleration)", 3),
+    name: PriorChoice(_MAKERS[name], named.options, named.what, named.dimensions)
+    for name, named in MOTION_PRIOR_NAMES.items()
 }
 
 

@@ -29,6 +29,7 @@ from numpy.typing import NDArray
 
 from ..arguments import integer, is_integer, number, replace_fields
 from ..bayes_tree.params import ISAM2Params
+from ..choices import DEPARTURES, PAPER_AMALGAMATION_ZEROS, PRESETS, SINGER_TIME_CONSTANT
 from ..errors import ShapeError, SteamError
 from ..gp.clock import CLOCK_BASES
 from ..gp.prior import check_qc
@@ -50,21 +51,9 @@ __all__ = [
 RANGE_ATTACHMENTS = ("file-order", "time")
 PRIORS = tuple(MOTION_PRIORS)  # the names of steam_ref.motion.MOTION_PRIORS: wnoa, wnoj, singer (§6), se2 (§11)
 SE2_RESIDUALS = RESIDUALS  # the two SE(2) WNOA residuals in circulation (derivations §11)
-PRESETS = ("synthetic", "plaza", "victoria-park")  # PaperSetup.named
-# The presets' relaxed amalgamation (ISAM2Params.amalgamation_zeros, [AG89]): fewer, larger cliques than GTSAM's
-# ISAM2 builds, for ~0.8x the CPU of a long BTGP run. Estimates move only within the wildfire threshold's tolerance
-# (Plaza BTGP/1: at most 3 mm, RMSE 0.338282 → 0.338271 m; still 1.18 / 6.22 mm from the authors' saved run);
-# ISAM2Params itself keeps GTSAM's 0, and so does the conformance kit (docs/experiments.md, "Relaxed amalgamation").
-PAPER_AMALGAMATION_ZEROS = 0.3
-
-# The deliberate departures from the scripts, by name: the PaperSetup fields each one changes
-# (docs/experiments.md gives each one's measured effect on the Plaza run).
-DEPARTURES: dict[str, dict[str, object]] = {
-    "time-attachment": dict(range_attachment="time"),  # a range goes to the first pose at or after its time stamp
-    "plain-heading-rate": dict(pose2_heading_rate_guess=False),  # a new state's θ̇ starts from the plain heading change
-    "whole-state-relinearization": dict(relinearize_blocks=None),  # iSAM2 relinearizes the 6-vector state at once
-    "landmarks-at-sighting": dict(landmarks_up_front=False),  # a landmark enters with its first range reading
-}
+# PRESETS (PaperSetup.named), PAPER_AMALGAMATION_ZEROS (the presets' relaxed amalgamation, [AG89]) and DEPARTURES (the
+# deliberate departures from the scripts, by name: the PaperSetup fields each one changes) are steam_ref.choices',
+# where the command line's parser reads them without loading this module.
 
 
 @dataclass(frozen=True)
@@ -138,7 +127,9 @@ class PaperSetup:
     # body-frame acceleration [forward, lateral, yaw] (the same numbers as the vector prior's world-frame Qc:
     # the presets' x and y entries are equal, so the PSD is the same read in any frame about the vertical)
     se2_residual: str = "local-variable"  # an option of 'se2' (MOTION_PRIORS): which SE(2) WNOA residual
-    singer_time_constant: float = 1.0  # an option of 'singer': 1/α, on the model's clock (seconds, or pose steps)
+    singer_time_constant: float = (
+        SINGER_TIME_CONSTANT  # an option of 'singer': 1/α, on the model's clock (seconds, or pose steps)
+    )
     first_acceleration_sigmas: NDArray = field(
         default_factory=lambda: np.array([1.0, 1.0, np.pi])
     )  # (3,) prior on acceleration 0 (mean 0), WNOJ and Singer

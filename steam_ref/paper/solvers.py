@@ -24,6 +24,7 @@ from numpy.typing import NDArray
 
 from ..batch import gauss_newton
 from ..bayes_tree import FixedLagSmoother, IncrementalSolver, ISAM2Params, UpdateReport
+from ..choices import METHODS
 from ..covariance import sparse_joint_covariance, sparse_joint_covariances, sparse_marginal_covariances
 from ..errors import SteamError
 from ..factors import Factor
@@ -45,7 +46,6 @@ __all__ = [
     "make_solver",
 ]
 
-METHODS = ("btgp", "pb", "pbvr")
 PB_RELATIVE_TOLERANCE = 1e-5  # PB/PBVR stop when the cost falls by less than this fraction (GTSAM's default)
 KEPT_REPORTS = 100  # a BTGP stream keeps the UpdateReports of its latest updates only (each names every key it touched)
 PB_MAX_ITERATIONS = 100  # PB/PBVR Gauss-Newton iterations per update at most (GTSAM's default)

@@ -1,0 +1,72 @@
+"""``steam-ref homework``'s subcommands and options (the command: :mod:`steam_ref.homework.command`,
+which loads the marking)."""
+
+from __future__ import annotations
+
+import argparse
+
+__all__ = ["add_parser"]
+
+
+def _path(text: str) -> str:
+    if not text.strip():
+        raise argparse.ArgumentTypeError(f"expected a path, got an empty one {text!r}")
+    return text
+
+
+def _seconds(text: str) -> int:
+    try:
+        value = int(text.strip(), 10) if text.strip().isascii() else None
+    except ValueError:
+        value = None
+    if value is None or not 1 <= value <= 86_400:
+        raise argparse.ArgumentTypeError(f"expected a whole number of seconds from 1 to 86400, got {text!r}")
+    return value
+
+
+def _jobs(text: str) -> int:
+    value = int(text.strip(), 10) if text.strip().isascii() and text.strip().isdigit() else None
+    if value is None or not 1 <= value <= 64:
+        raise argparse.ArgumentTypeError(f"expected a whole number from 1 to 64, got {text!r}")
+    return value
+
+
+def add_parser(sub) -> argparse.ArgumentParser:
+    """Add ``homework`` and its two subcommands to ``sub`` (an argparse subparsers object)."""
+    hw = sub.add_parser(
+        "homework",
+        help="the tutorials as homework: build the student handouts, mark submissions",
+        example="steam-ref homework handout tutorials/ --out handout/",
+    )
+    commands = hw.add_subparsers(
+        dest="homework_command", parser_class=type(hw), required=True, metavar="{handout,mark}"
+    )
+    out = commands.add_parser(
+        "handout",
+        help="the teacher's notebooks without solutions or marking checks",
+        example="steam-ref homework handout tutorials/ --out handout/",
+    )
+    out.add_argument("notebooks", nargs="+", type=_path, metavar="NOTEBOOK_OR_FOLDER", help="teacher's notebooks")
+    out.add_argument("--out", type=_path, default="handout", help="folder to write the handouts to (default handout)")
+    mark = commands.add_parser(
+        "mark",
+        help="run submitted notebooks with the teacher's checks; a score per exercise",
+        example="steam-ref homework mark submitted/ --source tutorials/",
+    )
+    mark.add_argument(
+        "submissions", nargs="+", type=_path, metavar="SUBMISSION_OR_FOLDER", help="notebooks, or folders of them"
+    )
+    mark.add_argument(
+        "--source", type=_path, default="tutorials", help="folder of the teacher's notebooks (default tutorials)"
+    )
+    mark.add_argument(
+        "--timeout",
+        type=_seconds,
+        default=300,
+        help="seconds a cell of the teacher's, or an answer (its cells together), may run before it is stopped (default 300)",
+    )
+    mark.add_argument(
+        "--jobs", type=_jobs, default=1, help="submissions marked at once, each in its own kernel (default 1)"
+    )
+    mark.add_argument("--json", action="store_true", help="print the marks as one JSON document")
+    return hw
