@@ -21,8 +21,8 @@ from pathlib import Path
 from typing import Any, Protocol
 
 from ..choices import DECIMAL, MOTION_PRIOR_NAMES, RESIDUALS, parse_decimal
-from ..datasets.folders import data_dir_help
 from ..datasets.registry import DATASETS, loadable
+from ..datasets.search import data_dir_help
 from ..errors import SteamError
 
 __all__ = [

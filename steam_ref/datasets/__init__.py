@@ -15,7 +15,7 @@
 - :mod:`.sampled`: :func:`sample_from_model`, a task drawn from the estimator's own model, any motion prior
   (consistency).
 - :mod:`.search`: :func:`load_dataset` by name or path, searching :func:`default_data_dirs`
-  (:mod:`.folders`: ``data_dir``, ``$STEAM_REF_DATA_DIR``, the fetched files' cache folder, gtsam's ``Data/``).
+  (``data_dir``, ``$STEAM_REF_DATA_DIR``, the fetched files' cache folder, gtsam's ``Data/``).
 - :mod:`.registry`: the paper's files by name, each with its source, sha256 and size, and the check of a
   file found under one of those names (at every read, never trusted by name).
 - :mod:`.fetch`: the paper's files by name, each with its source and sha256, fetched into the user's
@@ -26,7 +26,7 @@ bad content (NaN, pose times not increasing, unknown landmark ids) raises :class
 loaders re-raise either as :class:`DataError` prefixed with the file name.
 
 The names below load from their modules when first used (PEP 562), so that importing one light module of the
-package (:mod:`.registry`, :mod:`.folders`: what the command's parser reads) loads no loader, NumPy or SciPy.
+package (:mod:`.registry`, :mod:`.search`: what the command's parser reads) loads no loader, NumPy or SciPy.
 """
 
 import importlib
@@ -40,15 +40,15 @@ _HOMES = {
     "load_cmu_mat": "cmu",
     "load_cmu_text": "cmu",
     "read_mat": "matfile",
-    "gtsam_data_dir": "folders",
-    "default_data_dirs": "folders",
+    "gtsam_data_dir": "search",
+    "default_data_dirs": "search",
     "load_dataset": "search",
     "load_range_dataset": "search",
     "uncleaned_plaza": "search",
     "generate_synthetic": "synthetic",
     "sample_from_model": "sampled",
     "ModelSample": "sampled",
-    "DATA_DIR_ENV": "folders",
+    "DATA_DIR_ENV": "search",
 }
 
 
@@ -68,12 +68,18 @@ def __dir__() -> list[str]:
 
 if TYPE_CHECKING:  # what a type checker and an IDE see: the same names, imported eagerly
     from .cmu import load_cmu_mat, load_cmu_text
-    from .folders import DATA_DIR_ENV, default_data_dirs, gtsam_data_dir
     from .gtsam_text import load_gtsam_2d
     from .landmarks import LandmarkDataset
     from .matfile import read_mat
     from .sampled import ModelSample, sample_from_model
-    from .search import load_dataset, load_range_dataset, uncleaned_plaza
+    from .search import (
+        DATA_DIR_ENV,
+        default_data_dirs,
+        gtsam_data_dir,
+        load_dataset,
+        load_range_dataset,
+        uncleaned_plaza,
+    )
     from .synthetic import generate_synthetic
     from .table import RangeDataset
 

@@ -47,7 +47,6 @@ import urllib.parse
 from pathlib import Path
 
 from ..errors import DataError
-from .folders import DATA_URL_ENV
 from .registry import (
     DATASETS,
     UPSTREAM_COMMIT,
@@ -79,6 +78,7 @@ __all__ = [
 ]
 
 DEFAULT_BASE_URL = f"https://raw.githubusercontent.com/{UPSTREAM_REPOSITORY}/{UPSTREAM_COMMIT}/matlab/Data/"
+DATA_URL_ENV = "STEAM_REF_DATA_URL"
 _USERINFO = re.compile(r"([A-Za-z][A-Za-z0-9+.-]*://)[^/?#\s]*@")  # scheme://user:password@ (to the last @)
 _QUERY = re.compile(r"\?([^\s#'\"<>()]+)")  # a URL's query, up to its fragment or the end of the quoted URL
 STALE_AFTER = 3600.0  # s: a pooch temporary not written to for this long is a killed fetch's (module docstring)

@@ -13,24 +13,28 @@ not as the named set: its name is the file's own, marked "(not the published NAM
 says how it differs. A file that is not a regular file (a FIFO, a device) is refused before it is opened. A folder
 that holds some of a set's files but not all (the user's own GPS file without the IMU's) is named, never passed
 over for the next folder's set (:func:`holds_set`).
+
+The readers (and NumPy, SciPy with them) load when a file is read, not with this module: the command's parser reads
+``--data-dir``'s help here (:func:`data_dir_help`), and its early answers load no solver.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import difflib
+import importlib.util
 import os
 import warnings
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from ..errors import DataError, UncleanedDataWarning
-from .cmu import load_cmu_mat, load_cmu_text
-from .folders import DATA_DIR_ENV, data_cache_dir, data_dir_help, default_data_dirs, gtsam_data_dir
-from .gtsam_text import load_gtsam_2d
-from .landmarks import LandmarkDataset
 from .registry import DATASETS, DataSet, check_cached, check_regular, loadable, published_mismatch
-from .rigid import RigidReadings
-from .table import RangeDataset
+
+if TYPE_CHECKING:
+    from .landmarks import LandmarkDataset
+    from .rigid import RigidReadings
+    from .table import RangeDataset
 
 __all__ = [
     "DATA_DIR_ENV",
@@ -46,6 +50,67 @@ __all__ = [
     "load_range_dataset",
     "uncleaned_plaza",
 ]
+
+DATA_DIR_ENV = "STEAM_REF_DATA_DIR"
+
+
+def data_dir_help(also: str = "") -> str:
+    """The help of ``--data-dir`` in every command that has one: the whole search path of
+    :func:`default_data_dirs`, written beside it. ``also``: what else the command looks for there."""
+    return f"folder searched for data files{also} before ${DATA_DIR_ENV}, the fetched files' cache and gtsam's Data/"
+
+
+def data_cache_dir() -> Path:
+    """The folder ``steam-ref data fetch`` downloads into: ``data/`` in the user's cache folder
+    (platformdirs: ``~/.cache/steam_ref/data`` on Linux, ``$XDG_CACHE_HOME`` honoured). It may not exist."""
+    import platformdirs  # loaded when a search or a fetch asks, not by the command's parser (--data-dir's help)
+
+    return Path(platformdirs.user_cache_dir("steam_ref")) / "data"
+
+
+def gtsam_data_dir() -> Path | None:
+    """The ``Data/`` folder of an installed gtsam wheel, or None (gtsam is found, not imported)."""
+    try:
+        spec = importlib.util.find_spec("gtsam")
+    except (ImportError, ValueError):
+        return None
+    for location in (spec.submodule_search_locations or []) if spec else []:
+        folder = Path(location) / "Data"
+        if folder.is_dir():
+            return folder
+    return None
+
+
+def _named_folder(value: str | os.PathLike | None, what: str) -> Path | None:
+    """``value`` as a folder, or None when not given; DataError when it is empty or not a folder."""
+    if value is None:
+        return None
+    if not str(value):
+        raise DataError(f"{what} is empty: give a folder")
+    if not Path(value).is_dir():
+        state = "is not a folder" if Path(value).exists() else "does not exist"
+        raise DataError(f"{what} {str(value)!r} {state}")
+    return Path(value)
+
+
+def default_data_dirs(data_dir: str | os.PathLike | None = None) -> list[Path]:
+    """Folders searched for data files, in order, without duplicates.
+
+    Exactly four places: ``data_dir`` (the CLI's ``--data-dir``), then ``$STEAM_REF_DATA_DIR``, then
+    the fetched files' folder (:func:`data_cache_dir`, when it exists), then the ``Data/`` folder of an
+    installed gtsam wheel. Nothing relative to the working
+    directory or to this package's location is searched. A ``data_dir`` given, or a
+    ``$STEAM_REF_DATA_DIR`` set (an empty one counts as unset), must be an existing folder, else
+    DataError: a mistyped folder would otherwise be passed over for the next place in silence.
+    """
+    given = _named_folder(data_dir, "data_dir (--data-dir)")
+    env = _named_folder(os.environ.get(DATA_DIR_ENV) or None, f"${DATA_DIR_ENV}")
+    folders: list[Path] = []
+    cache = data_cache_dir() if data_cache_dir().is_dir() else None
+    for candidate in (given, env, cache, gtsam_data_dir()):
+        if candidate is not None and Path(candidate).resolve() not in folders:
+            folders.append(Path(candidate).resolve())
+    return folders
 
 
 def holds_set(folder: Path, file_names: tuple[str, ...]) -> bool:
@@ -153,6 +218,8 @@ def _load_registered(s: DataSet, folders: list[Path], seed: int) -> RangeDataset
     if s.original:
         text = _find(s.original, folders)
         if text is not None:
+            from .cmu import load_cmu_text  # each reader loads when a file is read (the module docstring)
+
             release = text.name.removesuffix("_DR.txt")
             data = load_cmu_text(text.parent, release, name=s.name)
             warnings.warn(
@@ -202,6 +269,9 @@ def load_dataset(
     if s is not None and s.loader is not None:
         return _load_registered(s, folders, seed)
     path = dataset_path(name_or_path, data_dir)
+    from .cmu import load_cmu_mat, load_cmu_text  # each reader loads when a file is read (the module docstring)
+    from .gtsam_text import load_gtsam_2d
+
     if path.is_dir() or path.name.endswith("_DR.txt"):
         return load_cmu_text(path)
     if path.suffix == ".txt":
@@ -237,6 +307,8 @@ def load_range_dataset(
 ) -> RangeDataset:
     """:func:`load_dataset` for a range-only data set in the CMU layout (the paper's, with ground truth);
     DataError naming it when it is another kind (Victoria Park's bearing-ranges, say)."""
+    from .table import RangeDataset
+
     data = load_dataset(name_or_path, data_dir, seed)
     if not isinstance(data, RangeDataset):
         raise DataError(f"data set {str(name_or_path)!r} is a {type(data).__name__}, not a range-only CMU data set")

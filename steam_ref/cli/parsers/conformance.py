@@ -10,7 +10,7 @@ import argparse
 from pathlib import Path
 
 from ...choices import CONFORMANCE_CONVENTIONS, CONFORMANCE_SUITES
-from ...datasets.folders import data_dir_help
+from ...datasets.search import data_dir_help
 
 __all__ = ["add_parser"]
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from ...datasets.folders import DATA_URL_ENV
+from ...datasets.fetch import DATA_URL_ENV
 from ...datasets.registry import DATASETS
 from ..args import Subparsers
 
