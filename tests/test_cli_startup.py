@@ -82,6 +82,9 @@ BAD = [
     (("conformance", "check", "results", "--only", "nope"), "argument --only: invalid choice: 'nope'"),
     (("homework", "mark", "x", "--jobs", "0"), "argument --jobs: expected a whole number from 1 to 64, got '0'"),
     (("nonsense",), "invalid choice: 'nonsense'"),
+    # found by run's checks before its machinery loads (cli.parsers.run.check): neither a set nor a file
+    (("run", "--dataset", "nonsense"), "data set 'nonsense' (not one of synthetic, paper-synthetic, plaza"),
+    (("run", "--plot", "out.txt"), "--plot"),
 ]
 
 
@@ -101,6 +104,6 @@ def test_a_bad_argument_is_one_line_and_exit_2_without_scipy_sparse_or_the_solve
 
 def test_the_probe_sees_what_a_command_that_runs_loads():
     """The check above could pass by looking at nothing: a command that runs loads the solvers, and the probe says so."""
-    got = _parse_only("run", "--dataset", "no-such-set-here")  # found missing by the run: the run's module loaded
-    assert got["code"] == 2 and "no-such-set-here" in got["err"]
+    got = _parse_only("batch", "--dataset", "no-such-set-here")  # found missing by batch's run: its module loaded
+    assert got["code"] == 2 and "data set 'no-such-set-here' (not one of" in got["err"]
     assert "scipy.sparse" in got["loaded"] and "steam_ref.linear" in got["loaded"]

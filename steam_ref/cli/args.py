@@ -4,11 +4,12 @@ Every value is checked by its argparse type, so a bad one is a one-line error wi
 anything runs. Each command's own options are in its module (``cli/parsers/run.py``, ``cli/parsers/batch.py``...,
 :data:`~steam_ref.cli.commands.COMMANDS`); what they share is here: :class:`Parser`, the number types, the
 data set and its folder (``--dataset`` offers the registry's names: :mod:`steam_ref.datasets.registry`), the
-preset a data set runs with, the motion prior and its options (``--prior``, ``--se2-residual``, checked against
-:data:`~steam_ref.choices.MOTION_PRIOR_NAMES`), ``--max-poses``, ``--progress`` and ``--save-trajectory``.
+preset a data set runs with (for a PATH, found by the data search first: :func:`preset_of`), the motion prior and its
+options (``--prior``, ``--se2-residual``, checked against :data:`~steam_ref.choices.MOTION_PRIOR_NAMES`),
+``--max-poses``, ``--progress`` and ``--save-trajectory``.
 
-Like the parsers, it imports only :mod:`steam_ref.choices`, the registry and the data folders: no NumPy, no
-solver. What a command makes of its arguments once it runs (the data set loaded, the preset found, Qc scaled) is
+Like the parsers, it imports only :mod:`steam_ref.choices`, the registry and the data search (whose readers load
+when a file is read): no NumPy, no solver. What a command makes of its arguments once it runs (the data set loaded, Qc scaled) is
 :mod:`steam_ref.cli.inputs`.
 """
 
@@ -20,9 +21,9 @@ import re
 from pathlib import Path
 from typing import Any, Protocol
 
-from ..choices import DECIMAL, MOTION_PRIOR_NAMES, RESIDUALS, parse_decimal
+from ..choices import DECIMAL, MOTION_PRIOR_NAMES, PRESETS, RESIDUALS, parse_decimal
 from ..datasets.registry import DATASETS, loadable
-from ..datasets.search import data_dir_help
+from ..datasets.search import data_dir_help, dataset_path
 from ..errors import SteamError
 
 __all__ = [
@@ -53,6 +54,7 @@ __all__ = [
     "positive_float",
     "positive_int",
     "preset_for",
+    "preset_of",
     "qc_diagonal",
     "scale",
     "seed_of",
@@ -309,6 +311,23 @@ def add_progress(parser: argparse.ArgumentParser) -> None:
         default=None,
         help="a progress bar on stderr (default: on when stderr is a terminal and without --json)",
     )
+
+
+def preset_of(args: argparse.Namespace) -> str:
+    """The preset a command runs with: --preset, else the named data set's; a data file given by PATH needs
+    --preset (each preset changes what is done to the file: Plaza's fits a range correction to its truth)."""
+    if args.preset is not None:
+        return args.preset
+    if args.dataset in DATASETS and DATASETS[args.dataset].rigid:
+        raise SteamError(f"--dataset {args.dataset!r} is a 3-D set: `steam-ref run --dataset {args.dataset}` solves it")
+    if args.dataset not in DATASETS or DATASETS[args.dataset].loader is None:
+        dataset_path(args.dataset, getattr(args, "data_dir", None))  # no set, no file: the search says so first
+    if args.dataset not in DATASETS or DATASETS[args.dataset].preset is None:
+        raise SteamError(
+            f"--dataset {args.dataset!r} is a path: say which parameters it runs with, --preset {{{','.join(PRESETS)}}} "
+            "(plaza also fits a range correction to the file's own ground truth)"
+        )
+    return preset_for(args.dataset)
 
 
 def preset_for(name: str) -> str:

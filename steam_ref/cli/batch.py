@@ -22,7 +22,8 @@ from ..paper.results import position_rmse
 from ..plot.figures import plot_trajectory
 from ..variables import X
 from . import explain
-from .inputs import load_with_note, preset_of
+from .args import preset_of
+from .inputs import load_with_note
 from .paths import (
     check_output,
     check_outputs_apart,

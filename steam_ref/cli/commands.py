@@ -98,7 +98,9 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     for name in [command] if command in COMMANDS else COMMANDS:
         options, runs = COMMANDS[name]
         module = import_module(options)
-        module.add_parser(sub).set_defaults(runs=runs, solves=getattr(module, "SOLVES", True))
+        module.add_parser(sub).set_defaults(
+            runs=runs, solves=getattr(module, "SOLVES", True), check=module.__dict__.get("check")
+        )
     return parser
 
 
@@ -108,6 +110,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         argv = argv or ["run"]  # no command at all runs the main job
         args = build_parser(argv[0]).parse_args(argv)
+        if args.check is not None:  # what the command checks before anything is read, with no solver loaded
+            args.check(args)
         command = import_module(args.runs)  # the command's machinery loads only now, its arguments parsed
         from ..linear.threads import limit  # a limit applies to the libraries loaded when it is entered: after that
 

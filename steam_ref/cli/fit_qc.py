@@ -22,8 +22,8 @@ from ..evaluate.fit_qc import QcFit, fit_qc, qc_units
 from ..gp.clock import Clock
 from ..motion import MOTION_PRIORS, motion_prior
 from ..paper.presets import PaperSetup
-from .args import check_prior_fits, check_prior_options
-from .inputs import load_with_note, preset_of
+from .args import check_prior_fits, check_prior_options, preset_of
+from .inputs import load_with_note
 from .streams import json_line
 
 __all__ = ["run"]

@@ -1,4 +1,4 @@
-"""What a command makes of its parsed arguments when it runs: the preset it runs with, the data set loaded, its Qc.
+"""What a command makes of its parsed arguments when it runs: the data set loaded, the Qc it runs with.
 
 The checks that need the data search, NumPy or a loader, so they are here and not in :mod:`~steam_ref.cli.args`,
 which the parser reads without them.
@@ -11,15 +11,12 @@ import warnings
 
 import numpy as np
 
-from ..choices import PRESETS
 from ..datasets import LandmarkDataset, RangeDataset, load_dataset
-from ..datasets.registry import DATASETS
 from ..datasets.rigid import RigidReadings
-from ..datasets.search import dataset_path
 from ..errors import SteamError, UncleanedDataWarning
-from .args import QC_SCALES, preset_for, seed_of
+from .args import QC_SCALES, seed_of
 
-__all__ = ["load_with_note", "preset_of", "scaled_qc"]
+__all__ = ["load_with_note", "scaled_qc"]
 
 
 def scaled_qc(preset: np.ndarray, given: list[float] | None, factor: float) -> np.ndarray:
@@ -42,23 +39,6 @@ def scaled_qc(preset: np.ndarray, given: list[float] | None, factor: float) -> n
             "nearer the preset's"
         )
     return qc
-
-
-def preset_of(args: argparse.Namespace) -> str:
-    """The preset a command runs with: --preset, else the named data set's; a data file given by PATH needs
-    --preset (each preset changes what is done to the file: Plaza's fits a range correction to its truth)."""
-    if args.preset is not None:
-        return args.preset
-    if args.dataset in DATASETS and DATASETS[args.dataset].rigid:
-        raise SteamError(f"--dataset {args.dataset!r} is a 3-D set: `steam-ref run --dataset {args.dataset}` solves it")
-    if args.dataset not in DATASETS or DATASETS[args.dataset].loader is None:
-        dataset_path(args.dataset, getattr(args, "data_dir", None))  # no set, no file: the search says so first
-    if args.dataset not in DATASETS or DATASETS[args.dataset].preset is None:
-        raise SteamError(
-            f"--dataset {args.dataset!r} is a path: say which parameters it runs with, --preset {{{','.join(PRESETS)}}} "
-            "(plaza also fits a range correction to the file's own ground truth)"
-        )
-    return preset_for(args.dataset)
 
 
 def load_with_note(args: argparse.Namespace) -> RangeDataset | LandmarkDataset:

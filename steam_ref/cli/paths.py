@@ -6,6 +6,9 @@ refused with one line naming the option. A dangling link is refused because writ
 file wherever it points, which the user never named (run as root, a link into ``/etc`` would write there); a
 link to a file that exists is written through and stays a link. After the run, :func:`write_output` writes beside the target and moves the
 file over it, so a full disk names the option and the path and leaves any old file as it was.
+
+The checks load no solver and no NumPy: a command checks its outputs before its machinery loads
+(:func:`steam_ref.cli.parsers.run.check`).
 """
 
 from __future__ import annotations
@@ -20,12 +23,14 @@ import stat
 import tempfile
 from collections.abc import Callable
 from pathlib import Path
-
-import numpy as np
+from typing import TYPE_CHECKING
 
 from ..errors import SteamError
-from ..evaluate import write_kitti, write_tum
-from ..lie import LieGroup
+
+if TYPE_CHECKING:
+    import numpy as np
+
+    from ..lie import LieGroup
 
 __all__ = [
     "refuse_dangling",
@@ -264,6 +269,8 @@ def save_trajectory(
     saying where (:func:`write_output`), "" without it."""
     if not args.save_trajectory:
         return ""
+    from ..evaluate import write_kitti, write_tum  # the writers load with the run, not with the checks before it
+
     if args.trajectory_format == "kitti":
         return write_output(
             args.save_trajectory, "--save-trajectory", lambda name: write_kitti(name, poses, group=group)

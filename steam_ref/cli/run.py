@@ -13,7 +13,6 @@ from pathlib import Path
 import numpy as np
 
 from ..datasets import generate_synthetic
-from ..datasets.registry import DATASETS
 from ..errors import SteamError
 from ..evaluate import trajectory_figures
 from ..paper.online import StreamingEstimator
@@ -25,13 +24,11 @@ from ..paper.solvers import BayesTreeSolver
 from ..plot.figures import plot_trajectory
 from ..variables import X
 from . import explain
-from .args import check_prior_fits, check_prior_options, seed_of
-from .inputs import load_with_note, preset_of, scaled_qc
+from .args import check_prior_options, preset_of, seed_of
+from .inputs import load_with_note, scaled_qc
+from .parsers.run import check, is_rigid, outputs
 from .paths import (
-    check_output,
-    check_outputs_apart,
     check_outputs_not_inputs,
-    check_trajectory_output,
     save_trajectory,
     write_output,
     write_plot,
@@ -47,22 +44,9 @@ DEFAULT_STEPS, DEFAULT_LANDMARKS = 1500, 298  # generate_synthetic's defaults: a
 
 def run(args: argparse.Namespace) -> int:
     """Stream the data set, write the files asked for, print the figures."""
-    check_prior_fits(args.dataset, args.prior)  # a 3-D prior on a planar set, or a planar prior on a 3-D set
-    if args.dataset in DATASETS and DATASETS[args.dataset].rigid:  # a 3-D set: solved on SE(3) (cli/rigid.py)
+    check(args)  # what is checked before anything is read (commands.main made these checks before this module loaded)
+    if is_rigid(args.dataset):  # a 3-D set: solved on SE(3) (cli/rigid.py)
         return run_rigid(args)
-    check_output(args.save_estimates, ".npz", "--save-estimates")
-    check_trajectory_output(args)
-    check_output(args.plot, ".png", "--plot")
-    check_output(args.tree_dot, ".dot", "--tree-dot")
-    outputs = {
-        "--save-estimates": args.save_estimates,
-        "--save-trajectory": args.save_trajectory,
-        "--plot": args.plot,
-        "--tree-dot": args.tree_dot,
-    }
-    check_outputs_apart(outputs)
-    if args.tree_dot and args.method != "btgp":
-        raise SteamError(f"--tree-dot writes BTGP's Bayes tree: it needs --method btgp, got --method {args.method}")
     setup = PaperSetup.named(preset_of(args)).departing(*args.departure)
     prior = setup.prior if args.prior is None else args.prior
     given = {"prior": args.prior, "singer_time_constant": args.singer_time_constant, "se2_residual": args.se2_residual}
@@ -99,7 +83,7 @@ def run(args: argparse.Namespace) -> int:
             "the old ones: drop one of them"
         )
     data = _run_dataset(args)
-    check_outputs_not_inputs(outputs, explain.files_of(data.source))
+    check_outputs_not_inputs(outputs(args), explain.files_of(data.source))
     if args.score_against_optimum and data.ground_truth is not None:
         raise SteamError(
             f"--score-against-optimum: {args.dataset!r} has ground truth, and is scored by RMSE against it"

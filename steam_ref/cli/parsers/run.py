@@ -15,6 +15,7 @@ from ...choices import (
     SINGER_TIME_CONSTANT,
     parse_decimal,
 )
+from ...datasets.registry import DATASETS
 from ...errors import SteamError
 from ..args import (
     QC_SCALES,
@@ -28,14 +29,17 @@ from ..args import (
     add_qc,
     add_seed,
     add_trajectory_arguments,
+    check_prior_fits,
     non_negative_float,
     positive_float,
     positive_int,
+    preset_of,
     scale,
     steps_count,
 )
+from ..paths import check_output, check_outputs_apart, check_trajectory_output
 
-__all__ = ["add_parser"]
+__all__ = ["add_parser", "check", "is_rigid", "outputs"]
 
 # whose estimate --save-trajectory writes (run's help; the rule is cli.rigid.run_rigid's `written`)
 SAVED_ESTIMATE = (
@@ -205,3 +209,38 @@ def _zero_fraction(text: str) -> float:
         return zero_fraction(parse_decimal(text))
     except SteamError:
         raise argparse.ArgumentTypeError(f"expected a fraction >= 0 and < 1, got {text!r}") from None
+
+
+def is_rigid(dataset: str) -> bool:
+    """Whether ``--dataset`` names a 3-D set of the registry (``DataSet.rigid``): ``run`` solves it on SE(3)
+    (:func:`steam_ref.cli.rigid.run_rigid`, which checks its own options)."""
+    return dataset in DATASETS and DATASETS[dataset].rigid
+
+
+def outputs(args: argparse.Namespace) -> dict[str, str | None]:
+    """The files a planar ``run`` writes, by option (None: not asked for)."""
+    return {
+        "--save-estimates": args.save_estimates,
+        "--save-trajectory": args.save_trajectory,
+        "--plot": args.plot,
+        "--tree-dot": args.tree_dot,
+    }
+
+
+def check(args: argparse.Namespace) -> None:
+    """What ``run`` checks before it reads or solves anything, in its order, with no solver loaded: the prior against
+    the data set's space; then, for a planar set, each output path and their being apart, ``--tree-dot``'s method,
+    and the data set's preset (for a PATH, the data search finds it: a name that is neither a set nor a file is
+    refused here). :func:`steam_ref.cli.commands.main` calls it before it loads the command's module, and
+    :func:`steam_ref.cli.run.run` first: each check reads the arguments and the file system only."""
+    check_prior_fits(args.dataset, args.prior)  # a 3-D prior on a planar set, or a planar prior on a 3-D set
+    if is_rigid(args.dataset):
+        return
+    check_output(args.save_estimates, ".npz", "--save-estimates")
+    check_trajectory_output(args)
+    check_output(args.plot, ".png", "--plot")
+    check_output(args.tree_dot, ".dot", "--tree-dot")
+    check_outputs_apart(outputs(args))
+    if args.tree_dot and args.method != "btgp":
+        raise SteamError(f"--tree-dot writes BTGP's Bayes tree: it needs --method btgp, got --method {args.method}")
+    preset_of(args)
