@@ -1,7 +1,7 @@
-"""The ``steam-ref`` command: one module per command, each with ``add_parser`` and ``run`` (``run.py``,
-``batch.py``, ...; ``steam-ref conformance`` is :mod:`steam_ref.conformance.command`), registered in
-:data:`steam_ref.cli.commands.COMMANDS`; what their arguments accept in :mod:`~steam_ref.cli.args`. The top of
-the package: nothing imports it.
+"""The ``steam-ref`` command: each command's options in :mod:`steam_ref.cli.parsers` (``add_parser``, loading no
+solver) and what it does in its own module (``run``: ``run.py``, ``batch.py``, ...; ``steam-ref conformance`` is
+:mod:`steam_ref.conformance.command`), both registered in :data:`steam_ref.cli.commands.COMMANDS`; what their
+arguments accept in :mod:`~steam_ref.cli.args`. The top of the package: nothing imports it.
 
 :func:`main` is the console script's entry point. ``steam-ref --version`` is answered here, before the
 commands (and NumPy and SciPy with them) load; everything else goes to :func:`steam_ref.cli.commands.main`.

@@ -99,7 +99,7 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
         options, runs = COMMANDS[name]
         module = import_module(options)
         module.add_parser(sub).set_defaults(
-            runs=runs, solves=getattr(module, "SOLVES", True), check=module.__dict__.get("check")
+            runs=runs, solves=getattr(module, "SOLVES", True), check=getattr(module, "check", None)
         )
     return parser
 
