@@ -85,6 +85,13 @@ BAD = [
     # found by run's checks before its machinery loads (cli.parsers.run.check): neither a set nor a file
     (("run", "--dataset", "nonsense"), "data set 'nonsense' (not one of synthetic, paper-synthetic, plaza"),
     (("run", "--plot", "out.txt"), "--plot"),
+    # batch's and fit-qc's checks before their machinery loads (cli.parsers.batch.check, cli.parsers.fit_qc.check)
+    (("batch", "--dataset", "nonsense"), "data set 'nonsense' (not one of synthetic, paper-synthetic, plaza"),
+    (("batch", "--plot", "out.txt"), "--plot"),
+    (("batch", "--plot", "same.png", "--save-trajectory", "same.png"), "same.png"),
+    (("fit-qc", "--dataset", "nonsense"), "data set 'nonsense' (not one of synthetic, paper-synthetic, plaza"),
+    (("fit-qc", "--dataset", "kitti"), "this set is 3-D (a Qc fit on SE(3) is not built yet)"),
+    (("fit-qc", "--prior", "se3"), "--prior se3"),
 ]
 
 
@@ -104,6 +111,7 @@ def test_a_bad_argument_is_one_line_and_exit_2_without_scipy_sparse_or_the_solve
 
 def test_the_probe_sees_what_a_command_that_runs_loads():
     """The check above could pass by looking at nothing: a command that runs loads the solvers, and the probe says so."""
-    got = _parse_only("batch", "--dataset", "no-such-set-here")  # found missing by batch's run: its module loaded
-    assert got["code"] == 2 and "data set 'no-such-set-here' (not one of" in got["err"]
+    # refused by run's module, once loaded: --lag forgets the covariances --save-estimates writes
+    got = _parse_only("run", "--dataset", "synthetic", "--lag", "5", "--save-estimates", "never-written.npz")
+    assert got["code"] == 2 and "--save-estimates writes every marginal covariance" in got["err"], got
     assert "scipy.sparse" in got["loaded"] and "steam_ref.linear" in got["loaded"]

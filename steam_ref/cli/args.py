@@ -54,6 +54,7 @@ __all__ = [
     "positive_float",
     "positive_int",
     "preset_for",
+    "is_rigid",
     "preset_of",
     "qc_diagonal",
     "scale",
@@ -313,12 +314,18 @@ def add_progress(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def is_rigid(dataset: str) -> bool:
+    """Whether ``--dataset`` names a 3-D set of the registry (``DataSet.rigid``): ``run`` and ``batch`` solve it on
+    SE(3) (:func:`steam_ref.cli.rigid.run_rigid`, which checks its own options)."""
+    return dataset in DATASETS and DATASETS[dataset].rigid
+
+
 def preset_of(args: argparse.Namespace) -> str:
     """The preset a command runs with: --preset, else the named data set's; a data file given by PATH needs
     --preset (each preset changes what is done to the file: Plaza's fits a range correction to its truth)."""
     if args.preset is not None:
         return args.preset
-    if args.dataset in DATASETS and DATASETS[args.dataset].rigid:
+    if is_rigid(args.dataset):
         raise SteamError(f"--dataset {args.dataset!r} is a 3-D set: `steam-ref run --dataset {args.dataset}` solves it")
     if args.dataset not in DATASETS or DATASETS[args.dataset].loader is None:
         dataset_path(args.dataset, getattr(args, "data_dir", None))  # no set, no file: the search says so first

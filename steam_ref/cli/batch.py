@@ -13,7 +13,6 @@ import time
 import numpy as np
 
 from ..choices import BATCH_ORDERINGS
-from ..datasets.registry import DATASETS
 from ..evaluate import trajectory_figures
 from ..paper.presets import PaperSetup
 from ..paper.problem import build_problem, sequential_batch
@@ -22,16 +21,10 @@ from ..paper.results import position_rmse
 from ..plot.figures import plot_trajectory
 from ..variables import X
 from . import explain
-from .args import preset_of
+from .args import is_rigid, preset_of
 from .inputs import load_with_note
-from .paths import (
-    check_output,
-    check_outputs_apart,
-    check_outputs_not_inputs,
-    check_trajectory_output,
-    save_trajectory,
-    write_plot,
-)
+from .parsers.batch import check, outputs
+from .paths import check_outputs_not_inputs, save_trajectory, write_plot
 from .rigid import run_rigid
 from .streams import json_line
 
@@ -41,15 +34,12 @@ __all__ = ["run"]
 def run(args: argparse.Namespace) -> int:
     """Batch solve of a whole data set, or its first ``--max-poses`` (started chunk by chunk, see
     ``sequential_batch``); a 3-D set by :func:`~steam_ref.cli.rigid.run_rigid`."""
-    if args.dataset in DATASETS and DATASETS[args.dataset].rigid:  # a 3-D set: solved on SE(3) (cli/rigid.py)
+    check(args)  # what is checked before anything is read (commands.main made these checks before this module loaded)
+    if is_rigid(args.dataset):  # a 3-D set: solved on SE(3) (cli/rigid.py)
         return run_rigid(args, batch_only=True)
-    check_output(args.plot, ".png", "--plot")
-    check_trajectory_output(args)
-    outputs = {"--plot": args.plot, "--save-trajectory": args.save_trajectory}
-    check_outputs_apart(outputs)
     setup = PaperSetup.named(preset_of(args))
     data = load_with_note(args)
-    check_outputs_not_inputs(outputs, explain.files_of(data.source))
+    check_outputs_not_inputs(outputs(args), explain.files_of(data.source))
     readings = Readings.from_dataset(data, setup)
     n = readings.n_poses if args.max_poses is None else min(args.max_poses, readings.n_poses)
     problem = build_problem(readings if n == readings.n_poses else readings.prefix(n), setup)

@@ -16,14 +16,14 @@ import argparse
 
 import numpy as np
 
-from ..datasets.registry import DATASETS
 from ..errors import DataError
 from ..evaluate.fit_qc import QcFit, fit_qc, qc_units
 from ..gp.clock import Clock
 from ..motion import MOTION_PRIORS, motion_prior
 from ..paper.presets import PaperSetup
-from .args import check_prior_fits, check_prior_options, preset_of
+from .args import check_prior_options, preset_of
 from .inputs import load_with_note
+from .parsers.fit_qc import check
 from .streams import json_line
 
 __all__ = ["run"]
@@ -31,12 +31,7 @@ __all__ = ["run"]
 
 def run(args: argparse.Namespace) -> int:
     """Fit Qc to the data set's ground truth and print it."""
-    if args.dataset in DATASETS and DATASETS[args.dataset].dimensions != 2:
-        raise DataError(
-            f"--dataset {args.dataset}: fit-qc fits Qc to the planar poses of a run's ground truth, and this set is "
-            f"{DATASETS[args.dataset].dimensions}-D (a Qc fit on SE(3) is not built yet)"
-        )
-    check_prior_fits(args.dataset, args.prior)
+    check(args)  # what is checked before anything is read (commands.main made these checks before this module loaded)
     setup = PaperSetup.named(preset_of(args))
     if args.prior is not None:
         setup = setup.replace(prior=args.prior)

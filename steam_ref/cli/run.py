@@ -24,9 +24,9 @@ from ..paper.solvers import BayesTreeSolver
 from ..plot.figures import plot_trajectory
 from ..variables import X
 from . import explain
-from .args import check_prior_options, preset_of, seed_of
+from .args import check_prior_options, is_rigid, preset_of, seed_of
 from .inputs import load_with_note, scaled_qc
-from .parsers.run import check, is_rigid, outputs
+from .parsers.run import check, outputs
 from .paths import (
     check_outputs_not_inputs,
     save_trajectory,

@@ -1,13 +1,16 @@
-"""``steam-ref fit-qc``'s options (the command: :mod:`steam_ref.cli.fit_qc`)."""
+"""``steam-ref fit-qc``'s options (the command: :mod:`steam_ref.cli.fit_qc`), and what it checks before its machinery
+loads (:func:`check`)."""
 
 from __future__ import annotations
 
 import argparse
 
 from ...choices import PRESETS
-from ..args import Subparsers, add_data_dir, add_dataset, add_prior, add_seed, number
+from ...datasets.registry import DATASETS
+from ...errors import DataError
+from ..args import Subparsers, add_data_dir, add_dataset, add_prior, add_seed, check_prior_fits, number, preset_of
 
-__all__ = ["add_parser"]
+__all__ = ["add_parser", "check"]
 
 
 def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
@@ -37,3 +40,17 @@ def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
     add_seed(parser)
     parser.add_argument("--json", action="store_true", help="print one JSON line of figures")
     return parser
+
+
+def check(args: argparse.Namespace) -> None:
+    """What ``fit-qc`` checks before it reads anything, with no solver loaded: a 3-D set is refused (no fit on SE(3)
+    yet), then the prior against the data set's space, then the data set's preset (for a PATH, the data search finds
+    it: a name that is neither a set nor a file is refused here). :func:`steam_ref.cli.commands.main` calls it before
+    it loads the command's module, and :func:`steam_ref.cli.fit_qc.run` first."""
+    if args.dataset in DATASETS and DATASETS[args.dataset].dimensions != 2:
+        raise DataError(
+            f"--dataset {args.dataset}: fit-qc fits Qc to the planar poses of a run's ground truth, and this set is "
+            f"{DATASETS[args.dataset].dimensions}-D (a Qc fit on SE(3) is not built yet)"
+        )
+    check_prior_fits(args.dataset, args.prior)
+    preset_of(args)

@@ -15,7 +15,6 @@ from ...choices import (
     SINGER_TIME_CONSTANT,
     parse_decimal,
 )
-from ...datasets.registry import DATASETS
 from ...errors import SteamError
 from ..args import (
     QC_SCALES,
@@ -30,6 +29,7 @@ from ..args import (
     add_seed,
     add_trajectory_arguments,
     check_prior_fits,
+    is_rigid,
     non_negative_float,
     positive_float,
     positive_int,
@@ -39,7 +39,7 @@ from ..args import (
 )
 from ..paths import check_output, check_outputs_apart, check_trajectory_output
 
-__all__ = ["add_parser", "check", "is_rigid", "outputs"]
+__all__ = ["add_parser", "check", "outputs"]
 
 # whose estimate --save-trajectory writes (run's help; the rule is cli.rigid.run_rigid's `written`)
 SAVED_ESTIMATE = (
@@ -209,12 +209,6 @@ def _zero_fraction(text: str) -> float:
         return zero_fraction(parse_decimal(text))
     except SteamError:
         raise argparse.ArgumentTypeError(f"expected a fraction >= 0 and < 1, got {text!r}") from None
-
-
-def is_rigid(dataset: str) -> bool:
-    """Whether ``--dataset`` names a 3-D set of the registry (``DataSet.rigid``): ``run`` solves it on SE(3)
-    (:func:`steam_ref.cli.rigid.run_rigid`, which checks its own options)."""
-    return dataset in DATASETS and DATASETS[dataset].rigid
 
 
 def outputs(args: argparse.Namespace) -> dict[str, str | None]:
