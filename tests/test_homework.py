@@ -466,6 +466,10 @@ def test_a_solution_that_declares_no_kind_for_an_answer_is_one_line_and_exit_cod
             lambda meta: meta["steam_ref"]["answers"].__setitem__("square", "integer"),
             "declares 'square' of kind 'integer': not one of number, array",
         ),
+        "not a name": (  # a list is unhashable: `kind in KINDS` raised TypeError, a traceback
+            lambda meta: meta["steam_ref"]["answers"].__setitem__("square", ["number"]),
+            "declares 'square' of kind ['number']: not one of number, array",
+        ),
         "stray": (
             lambda meta: meta["steam_ref"]["answers"].__setitem__("base", "number"),
             "declares a kind for 'base', no answer",

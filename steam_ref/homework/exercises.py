@@ -236,7 +236,7 @@ def _kinds(nb: dict, solution: int, names: tuple[str, ...], name: str, number: s
             raise SteamError(
                 f"{where} declares a kind for {answer!r}, no answer (a name the solution binds and the checks read)"
             )
-        if kind not in KINDS:
+        if not isinstance(kind, str) or kind not in KINDS:  # a list or an object is no kind (and unhashable)
             raise SteamError(f"{where} declares {answer!r} of kind {kind!r}: not one of {', '.join(KINDS)}")
     missing = [n for n in names if n not in declared]
     if missing:
