@@ -130,3 +130,16 @@ def test_a_lazy_package_offers_every_name_it_lists():
 def test_a_prior_record_is_frozen():
     with pytest.raises(dataclasses.FrozenInstanceError):
         choices.MOTION_PRIOR_NAMES["wnoa"].what = "x"  # type: ignore[misc]
+
+
+@pytest.mark.parametrize("ordering", ["natural", "AMD", None])
+def test_a_periodic_batch_solver_orders_by_xl_or_amd_only_and_is_named_by_it(ordering):
+    """PB is the XL ordering and PBVR AMD (choices.BATCH_ORDERINGS). Any other ordering was taken and the solver
+    named 'pbvr' in its figures, whatever it ordered by; now it is refused, naming it."""
+    from steam_ref.paper.solvers import PeriodicBatchSolver
+
+    assert [PeriodicBatchSolver(o).name for o in ("xl", "amd")] == ["pb", "pbvr"]
+    assert [make_solver(m).name for m in ("pb", "pbvr")] == ["pb", "pbvr"]
+    assert [make_solver(m).ordering for m in ("pb", "pbvr")] == ["xl", "amd"]
+    with pytest.raises(SteamError, match=f"got ordering={ordering!r}"):
+        PeriodicBatchSolver(ordering)

@@ -24,7 +24,7 @@ from numpy.typing import NDArray
 
 from ..batch import gauss_newton
 from ..bayes_tree import FixedLagSmoother, IncrementalSolver, ISAM2Params, UpdateReport
-from ..choices import METHODS
+from ..choices import BATCH_ORDERINGS, METHODS
 from ..covariance import sparse_joint_covariance, sparse_joint_covariances, sparse_marginal_covariances
 from ..errors import SteamError
 from ..factors import Factor
@@ -140,7 +140,9 @@ class PeriodicBatchSolver(OnlineSolver):
         relative_tolerance: float = PB_RELATIVE_TOLERANCE,
         max_iterations: int = PB_MAX_ITERATIONS,
     ):
-        self.name = "pb" if ordering == "xl" else "pbvr"
+        if ordering not in tuple(BATCH_ORDERINGS):  # (a tuple: an unhashable ordering is refused, not a TypeError)
+            raise SteamError(f"PB and PBVR order by {' or '.join(map(repr, BATCH_ORDERINGS))}, got {ordering=}")
+        self.name = BATCH_ORDERINGS[ordering].lower()  # the one pairing of PB with XL and PBVR with AMD
         self.ordering = ordering
         self.relative_tolerance, self.max_iterations = relative_tolerance, max_iterations
         self.graph = FactorGraph()
