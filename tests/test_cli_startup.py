@@ -80,7 +80,7 @@ BAD = [
     (("batch", "--ordering", "natural"), "argument --ordering: invalid choice: 'natural'"),
     (("consistency", "--prior", "singer"), "argument --prior: invalid choice: 'singer'"),
     (("conformance", "check", "results", "--only", "nope"), "argument --only: invalid choice: 'nope'"),
-    (("homework", "mark", "x", "--jobs", "0"), "argument --jobs: expected a whole number from 1 to 64, got '0'"),
+    (("homework", "mark", "x", "--jobs", "0"), "argument --jobs: expected an integer > 0 and <= 64"),
     (("nonsense",), "invalid choice: 'nonsense'"),
     # found by run's checks before its machinery loads (cli.parsers.run.check): neither a set nor a file
     (("run", "--dataset", "nonsense"), "data set 'nonsense' (not one of synthetic, paper-synthetic, plaza"),

@@ -218,8 +218,10 @@ def test_bad_input_is_one_line_and_exit_code_2(course, capsys):
         ("mark", str(course / "other.ipynb"), "--source", teacher): "not a handout of any of the teacher's notebooks",
         ("mark", str(course / "handout"), "--source", str(course / "nowhere")): "nowhere' does not exist",
         ("mark", str(course / "handout"), "--source", str(course / "empty")): "no notebook with exercises",
-        ("mark", str(course / "handout"), "--source", teacher, "--timeout", "0"): "--timeout: expected a whole number",
-        ("mark", str(course / "handout"), "--source", teacher, "--jobs", "two"): "--jobs: expected a whole number",
+        ("mark", str(course / "handout"), "--source", teacher, "--timeout", "0"): "--timeout: expected an integer >= 1",
+        # the one rule for numbers as text (choices.parse_decimal): int() read 1_0 as 10
+        ("mark", str(course / "handout"), "--source", teacher, "--timeout", "1_0"): "--timeout: expected an integer",
+        ("mark", str(course / "handout"), "--source", teacher, "--jobs", "two"): "--jobs: expected an integer > 0",
         ("handout", str(course / "missing")): "'.*missing' does not exist",
         ("handout", str(course / "other.ipynb"), "--out", ""): "expected a path, got an empty one",
         ("handout", teacher, "--out", teacher): "would overwrite the teacher's notebook",

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import argparse
 
+from ..args import jobs_count, number
+
 __all__ = ["add_parser"]
 
 
@@ -14,21 +16,11 @@ def _path(text: str) -> str:
     return text
 
 
-def _seconds(text: str) -> int:
-    try:
-        value = int(text.strip(), 10) if text.strip().isascii() else None
-    except ValueError:
-        value = None
-    if value is None or not 1 <= value <= 86_400:
-        raise argparse.ArgumentTypeError(f"expected a whole number of seconds from 1 to 86400, got {text!r}")
-    return value
+MAX_SECONDS = 86_400  # --timeout's largest: a day
 
 
-def _jobs(text: str) -> int:
-    value = int(text.strip(), 10) if text.strip().isascii() and text.strip().isdigit() else None
-    if value is None or not 1 <= value <= 64:
-        raise argparse.ArgumentTypeError(f"expected a whole number from 1 to 64, got {text!r}")
-    return value
+# The one rule for numbers written as text (args.number: 1_0, ５ and blanks are not numbers), as every command reads them
+_seconds = number(int, 1, strict=False, upper=MAX_SECONDS, why="a day")
 
 
 def add_parser(sub) -> argparse.ArgumentParser:
@@ -66,7 +58,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
         help="seconds a cell of the teacher's, or an answer (its cells together), may run before it is stopped (default 300)",
     )
     mark.add_argument(
-        "--jobs", type=_jobs, default=1, help="submissions marked at once, each in its own kernel (default 1)"
+        "--jobs", type=jobs_count, default=1, help="submissions marked at once, each in its own kernel (default 1)"
     )
     mark.add_argument("--json", action="store_true", help="print the marks as one JSON document")
     return hw
