@@ -117,6 +117,7 @@ def test_an_output_beside_the_input_is_written(capsys, tmp_path):
         ["--no-interpolate"],
         ["--amalgamation-zeros", "0.5"],
         ["--lag", "5", "--lag-batch", "2"],
+        ["--progress"],  # a 3-D run draws no progress bar: --progress was ignored
     ],
 )
 def test_a_planar_option_on_a_3d_run_is_refused(capsys, option):

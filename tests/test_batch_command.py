@@ -141,6 +141,7 @@ def test_a_3d_batch_refuses_what_does_not_apply_in_one_line(capsys, tmp_path):
     for argv, needle in [
         (["--ordering", "xl"], "--ordering does not apply"),
         (["--plot", tmp_path / "a.png"], "--plot does not apply"),
+        (["--progress"], "--progress does not apply"),  # a 3-D run draws no bar: it was ignored
         (["--max-poses", "1"], "argument --max-poses: expected an integer >= 2, got '1'"),
     ]:
         code, out, err = batch_cli(capsys, "--dataset", "synthetic-3d", *argv)

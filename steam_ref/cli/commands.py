@@ -11,7 +11,8 @@ a bad argument's one-line answer cost about what ``--version`` does (``tests/tes
 load neither SciPy's sparse matrices nor the solvers).
 
 Every command with ``--progress`` / ``--no-progress`` shows its progress on stderr when that is a terminal
-(:mod:`steam_ref.paper.progress`; ``fit-qc`` and ``homework`` have none), and every command runs the solvers at
+(:mod:`steam_ref.paper.progress`; ``fit-qc`` and ``homework`` have none, and ``run`` and ``batch`` on a 3-D set
+draw none and refuse ``--progress``), and every command runs the solvers at
 one BLAS thread unless ``$STEAM_REF_BLAS_THREADS`` says otherwise (:mod:`steam_ref.linear.threads`, entered once
 the command's module has loaded: the limit applies to the libraries loaded when it is entered).
 Bad arguments and missing or malformed data files give a one-line error and exit code 2. The project's

@@ -6,7 +6,7 @@ in 3-D) at the set's Qc times ``--qc-scale``, in batch and by BTGP (one iSAM2 up
 by the fixed-lag smoother (the planar stream's window: the variables it marginalized and the most it held at once are
 reported); each scored at the held-out position fixes by the GP's mean there [YIB Eq. 18], beside a straight line
 between the fixes around each (``paper.rigid``). ``--max-poses N`` keeps the first N states. The planar options (a
-schedule, a layout, figures of a planar run) do not apply and are refused by name.
+schedule, a layout, figures of a planar run, ``--progress``: it draws no bar) do not apply and are refused by name.
 
 ``--save-trajectory FILE`` (``--trajectory-format``) writes, as the planar run does, the estimate of the run's method:
 BTGP's (``--method``'s one value on a 3-D set), or with ``--lag`` the fixed-lag smoother's (each state as it left the
@@ -111,6 +111,8 @@ def run_rigid(args: argparse.Namespace, *, batch_only: bool = False) -> int:
         for k, none in _PLANAR.items()
         if getattr(args, k, none) != none
     ]
+    if getattr(args, "progress", None):  # asked for a bar this run draws none of (--no-progress: what it does anyway)
+        given.append("--progress")
     if given:
         raise SteamError(f"--dataset {args.dataset} is a 3-D set: {given[0]} does not apply")
     check_trajectory_output(args)  # the planar run's checks, before anything is solved
