@@ -235,3 +235,23 @@ def test_a_cmu_sets_range_sigma_is_every_ranges_own():
     assert r.range_sigma.shape == r.range_value.shape and np.all(r.range_sigma == 0.25)
     p = r.prefix(10)
     assert p.range_sigma.shape == p.range_value.shape and np.all(p.range_sigma == 0.25)
+
+
+def test_every_data_dir_option_is_the_one_folder_type():
+    """Every command's --data-dir is :func:`steam_ref.cli.args.add_data_dir`'s (an existing folder, args.folder):
+    the conformance subcommands had a copy of the rule of their own, with its own messages."""
+    import argparse
+
+    from steam_ref.cli.args import folder
+    from steam_ref.cli.commands import build_parser
+
+    found, todo = [], [build_parser()]
+    while todo:
+        parser = todo.pop()
+        for action in parser._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                todo += list(action.choices.values())
+            elif "--data-dir" in action.option_strings:
+                found.append((parser.prog, action.type))
+    assert len(found) >= 7, found  # run, batch, fidelity, reproduce, fit-qc, conformance selftest and build
+    assert [prog for prog, kind in found if kind is not folder] == []

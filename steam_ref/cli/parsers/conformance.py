@@ -7,10 +7,9 @@ so that the command's help and a bad argument load none of the kit's machinery, 
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
 from ...choices import CONFORMANCE_CONVENTIONS, CONFORMANCE_SUITES
-from ...datasets.search import data_dir_help
+from ..args import add_data_dir
 
 __all__ = ["add_parser"]
 
@@ -21,14 +20,6 @@ def _path(text: str) -> str:
     """An argparse type: a path that is not empty (``Path("")`` is the working folder, which no one means)."""
     if not text.strip():
         raise argparse.ArgumentTypeError(f"expected a folder, got an empty path {text!r}")
-    return text
-
-
-def _data_dir(text: str) -> str:
-    """An argparse type: a folder that exists (a mistyped --data-dir must not be passed over in silence)."""
-    if not text.strip() or not Path(text).is_dir():
-        what = "an empty string" if not text.strip() else "not a folder" if Path(text).exists() else "does not exist"
-        raise argparse.ArgumentTypeError(f"expected a folder, got {text!r}: {what}")
     return text
 
 
@@ -92,7 +83,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
     st.add_argument(
         "--paper", action="store_true", help="also run the paper suite (BTGP/1 on both data sets, about a minute)"
     )
-    st.add_argument("--data-dir", type=_data_dir, default=None, help=data_dir_help(PAPER_FILES))
+    add_data_dir(st, PAPER_FILES)  # the one --data-dir of every command (args.folder: an existing folder)
     st.add_argument(
         "--progress",
         action=argparse.BooleanOptionalAction,
@@ -108,5 +99,5 @@ def add_parser(sub) -> argparse.ArgumentParser:
     bld.add_argument(
         "--paper", action="store_true", help="rebuild the paper suite from the data files (else keep the existing one)"
     )
-    bld.add_argument("--data-dir", type=_data_dir, default=None, help=data_dir_help(PAPER_FILES))
+    add_data_dir(bld, PAPER_FILES)
     return conf
