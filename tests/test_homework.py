@@ -400,6 +400,19 @@ ODD_TYPES = {
     "a list holding a complex": ("array", "[1.0, 0.0, 2.0]", "[1.0, 0j, 2.0]", "a list holding a complex"),
     "a list holding a bool": ("array", "[1.0, 0.0, 1.0]", "[1.0, 0.0, True]", "a list holding a bool"),
     "a number for an array": ("array", "[2.0, 2.0]", "2.0", "a float"),
+    "a ragged list": (
+        "array",
+        "[[1.0, 0.0], [2.0, 3.0]]",
+        "[[1.0, 0.0], [2.0]]",
+        "a list of rows of different lengths",
+    ),
+    # numbers each, but NumPy's array of them is of objects: it was said to be "of rows of different lengths"
+    "a list holding an int past 64 bits": (
+        "array",
+        "[2.0**70, 0.0, 2.0]",
+        "[2**70, 0, 2]",
+        "a list that NumPy reads as an array of dtype object",
+    ),
     "a function": ("function", "8", "lambda x: x**3", None),
     "a partial": ("function", "8", "partial(pow, exp=3)", None),
     "a class": ("function", "8", "type('Cube', (float,), {'__new__': lambda c, x: float.__new__(c, x**3)})", "a type"),

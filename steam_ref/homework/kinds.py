@@ -10,8 +10,9 @@ expected, however right its values (a complex array whose imaginary part is 0 co
 - ``number``: one real number: an int or a float, Python's or NumPy's (``np.float64``, ``np.int64``...), or a 0-d
   NumPy array of one; never a bool, a complex (whatever its imaginary part), a string, a Fraction or a Decimal;
 - ``array``: real numbers in an array: a NumPy ``ndarray`` (the class itself) of integers or floats, or a list or
-  tuple (nested as deep as the array) of numbers as ``number`` accepts them; never a bool, complex, object or
-  string array, a masked array, a ``np.matrix`` (whose ``*`` and indexing differ from an array's), a sparse matrix;
+  tuple (nested as deep as the array) of numbers as ``number`` accepts them, which NumPy reads as one array of ints
+  or floats (not ragged; an int past 64 bits makes it an object array); never a bool, complex, object or string
+  array, a masked array, a ``np.matrix`` (whose ``*`` and indexing differ from an array's), a sparse matrix;
 - ``function``: anything callable but a class;
 - ``set``, ``list``, ``dict``: that container (a subclass too: ``collections.Counter`` is a dict); its items are
   the checks' business;
@@ -87,11 +88,12 @@ def refused(value: Any, kind: str) -> str | None:
         if odd is not None:
             return f"{named(value)} holding {named(odd)}"
         try:
-            ok = numpy is None or numpy.asarray(value).dtype.kind in "iuf"
+            dtype = None if numpy is None else numpy.asarray(value).dtype
         except ValueError:  # ragged
-            ok = False
-        if not ok:
             return f"{named(value)} of rows of different lengths"
+        if dtype is not None and dtype.kind not in "iuf":  # an int past 64 bits: NumPy holds it as an object
+            return f"{named(value)} that NumPy reads as an array of dtype {dtype}"
+        ok = True
     elif kind == "array":
         ok = real_array(value) and value.ndim > 0
     elif kind == "function":
