@@ -223,7 +223,7 @@ def test_bad_input_is_one_line_and_exit_code_2(course, capsys):
         ("mark", str(course / "handout"), "--source", teacher, "--timeout", "1_0"): "--timeout: expected an integer",
         ("mark", str(course / "handout"), "--source", teacher, "--jobs", "two"): "--jobs: expected an integer > 0",
         ("handout", str(course / "missing")): "'.*missing' does not exist",
-        ("handout", str(course / "other.ipynb"), "--out", ""): "expected a path, got an empty one",
+        ("handout", str(course / "other.ipynb"), "--out", ""): "expected a path, got an empty path",
         ("handout", teacher, "--out", teacher): "would overwrite the teacher's notebook",
         ("handout", str(course / "bad.ipynb")): "is not a notebook",
         ("handout", teacher, "--out", str(course / "linked")): "tiny.ipynb' is a link",

@@ -46,6 +46,8 @@ __all__ = [
     "add_trajectory_arguments",
     "dataset_name",
     "folder",
+    "not_planar",
+    "path",
     "jobs_count",
     "landmarks_count",
     "non_negative_float",
@@ -265,6 +267,18 @@ def check_prior_fits(dataset: str, prior: str | None) -> None:
     )
 
 
+def path(what: str):
+    """An argparse type: a path that is not empty (``Path("")`` is the working folder, which no one means); ``what``
+    names it in the message ("a path", "a folder")."""
+
+    def parse(text: str) -> str:
+        if not text.strip():
+            raise argparse.ArgumentTypeError(f"expected {what}, got an empty path {text!r}")
+        return text
+
+    return parse
+
+
 def folder(text: str) -> str:
     """An argparse type: an existing folder (a mistyped --data-dir must not be passed over in silence)."""
     if not text.strip():
@@ -320,13 +334,21 @@ def is_rigid(dataset: str) -> bool:
     return dataset in DATASETS and DATASETS[dataset].rigid
 
 
+def not_planar(dataset: str) -> SteamError:
+    """The refusal of a 3-D set by a command that solves planar ones only (``run`` and ``batch`` solve it)."""
+    return SteamError(
+        f"--dataset {dataset!r} is a 3-D set: `steam-ref run --dataset {dataset}` or `steam-ref batch --dataset "
+        f"{dataset}` solves it"
+    )
+
+
 def preset_of(args: argparse.Namespace) -> str:
     """The preset a command runs with: --preset, else the named data set's; a data file given by PATH needs
     --preset (each preset changes what is done to the file: Plaza's fits a range correction to its truth)."""
     if args.preset is not None:
         return args.preset
     if is_rigid(args.dataset):
-        raise SteamError(f"--dataset {args.dataset!r} is a 3-D set: `steam-ref run --dataset {args.dataset}` solves it")
+        raise not_planar(args.dataset)
     if args.dataset not in DATASETS or DATASETS[args.dataset].loader is None:
         dataset_path(args.dataset, getattr(args, "data_dir", None))  # no set, no file: the search says so first
     if args.dataset not in DATASETS or DATASETS[args.dataset].preset is None:

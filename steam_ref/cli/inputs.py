@@ -14,7 +14,7 @@ import numpy as np
 from ..datasets import LandmarkDataset, RangeDataset, load_dataset
 from ..datasets.rigid import RigidReadings
 from ..errors import SteamError, UncleanedDataWarning
-from .args import QC_SCALES, seed_of
+from .args import QC_SCALES, not_planar, seed_of
 
 __all__ = ["load_with_note", "scaled_qc"]
 
@@ -48,5 +48,5 @@ def load_with_note(args: argparse.Namespace) -> RangeDataset | LandmarkDataset:
         warnings.simplefilter("ignore", UncleanedDataWarning)
         data = load_dataset(args.dataset, data_dir=args.data_dir, seed=seed_of(args))
     if isinstance(data, RigidReadings):  # a 3-D set: `steam-ref run` solves it (cli/rigid.py)
-        raise SteamError(f"--dataset {args.dataset!r} is a 3-D set: `steam-ref run --dataset {args.dataset}` solves it")
+        raise not_planar(args.dataset)
     return data

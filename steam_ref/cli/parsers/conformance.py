@@ -9,18 +9,13 @@ from __future__ import annotations
 import argparse
 
 from ...choices import CONFORMANCE_CONVENTIONS, CONFORMANCE_SUITES
-from ..args import add_data_dir
+from ..args import add_data_dir, path
 
 __all__ = ["add_parser"]
 
+_path = path("a folder")  # an empty path is refused (args.path)
+
 PAPER_FILES = " (the paper suite's, and their authors/ folder)"  # what --data-dir is searched for
-
-
-def _path(text: str) -> str:
-    """An argparse type: a path that is not empty (``Path("")`` is the working folder, which no one means)."""
-    if not text.strip():
-        raise argparse.ArgumentTypeError(f"expected a folder, got an empty path {text!r}")
-    return text
 
 
 def add_parser(sub) -> argparse.ArgumentParser:

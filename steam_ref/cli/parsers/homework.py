@@ -5,15 +5,11 @@ from __future__ import annotations
 
 import argparse
 
-from ..args import jobs_count, number
+from ..args import jobs_count, number, path
 
 __all__ = ["add_parser"]
 
-
-def _path(text: str) -> str:
-    if not text.strip():
-        raise argparse.ArgumentTypeError(f"expected a path, got an empty one {text!r}")
-    return text
+_path = path("a path")  # an empty path is refused (args.path)
 
 
 MAX_SECONDS = 86_400  # --timeout's largest: a day
