@@ -9,6 +9,7 @@ from __future__ import annotations
 import io
 import json
 import os
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -21,6 +22,8 @@ from cli_runs import run_module
 from steam_ref.cli import commands as cli
 from steam_ref.cli import main as entry
 from steam_ref.datasets import generate_synthetic
+from steam_ref.datasets.kitti import GPS_FILE, IMU_FILE
+from steam_ref.datasets.search import gtsam_data_dir
 from steam_ref.evaluate import read_tum
 
 PNG = b"\x89PNG\r\n\x1a\n"
@@ -216,6 +219,24 @@ def test_outputs_that_would_lose_data_are_refused_before_the_run(tmp_path, capsy
         assert (code, out) == (2, "") and len(err.splitlines()) == 1
         assert needle in err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["x"]
+
+
+@pytest.mark.parametrize("name", [GPS_FILE, IMU_FILE])
+@pytest.mark.parametrize("command", ["run", "batch"])
+def test_a_kitti_output_onto_either_of_its_data_files_is_refused_and_leaves_it(tmp_path, capsys, command, name):
+    """KITTI reads two files: --save-trajectory naming the IMU file (a copy of gtsam's) was written over it, the data
+    set's source then naming it with a note the data-file check did not read as a path; both are refused now."""
+    folder = gtsam_data_dir()
+    if folder is None or not (folder / GPS_FILE).is_file():
+        pytest.skip("gtsam's Data/ has no KITTI files")
+    for each in (GPS_FILE, IMU_FILE):
+        shutil.copy(folder / each, tmp_path / each)
+    before = (tmp_path / name).read_bytes()
+    argv = [command, "--dataset", "kitti", "--data-dir", str(tmp_path), "--max-poses", "5"]
+    code, out, err = _call(capsys, [*argv, "--save-trajectory", str(tmp_path / name)])
+    assert (code, out) == (2, "") and len(err.splitlines()) == 1, err
+    assert f"--save-trajectory: '{tmp_path / name}' is the data file" in err
+    assert (tmp_path / name).read_bytes() == before
 
 
 @pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full")

@@ -130,7 +130,7 @@ def load_kitti(folder: str | Path, *, group: LieGroup, derivatives: int = 1, nam
         held_out=gps[held],
         first_state=_first_values(kept, group, derivatives)[0],
         initial_states=_first_values(kept, group, derivatives),
-        source=f"{folder / GPS_FILE}, {folder / IMU_FILE} (gtsam's Data/)",
+        source=f"{folder / GPS_FILE}, {folder / IMU_FILE}; the KITTI files of gtsam's Data/",  # "path, path; note"
         qc=KITTI_QC,
         lacks="ground truth (scored at held-out GPS fixes, themselves noisy) and the gyro's bias (not estimated)",
     )
