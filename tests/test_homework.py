@@ -236,6 +236,28 @@ def test_bad_input_is_one_line_and_exit_code_2(course, capsys):
         assert re.search(message, err), (argv, err)
 
 
+@pytest.mark.parametrize("odd", ["pipe", "dangling link"])
+@pytest.mark.parametrize("command", ["mark", "handout"])
+def test_a_folder_holding_a_notebook_name_that_is_no_file_is_refused_not_dropped(course, capsys, odd, command):
+    """A folder's ``*.ipynb`` that is a pipe or a link to nothing was left out in silence (a student's submission
+    missing from the marks, a teacher's notebook from the handout); given alone it was refused: now in a folder too,
+    one line naming it, and nothing is read or written."""
+    folder = course / "teacher" if command == "handout" else course / "submitted"
+    if command == "mark":
+        _submit(course, "ann", {})
+    bad = folder / "late.ipynb"
+    if odd == "pipe":
+        os.mkfifo(bad)
+    else:
+        bad.symlink_to(course / "nowhere.ipynb")
+    extra = ["--source", str(course / "teacher")] if command == "mark" else ["--out", str(course / "out")]
+    code = main(["homework", command, str(folder), *extra])
+    out, err = capsys.readouterr()
+    assert (code, out) == (2, "") and len(err.strip().splitlines()) == 1, err
+    assert f"'{bad}' in the folder '{folder}' is" in err
+    assert not (course / "out").exists()
+
+
 MALFORMED = {
     "a cell's metadata null": lambda nb: nb["cells"][3].__setitem__("metadata", None),
     "a cell's tags null": lambda nb: nb["cells"][3]["metadata"].__setitem__("tags", None),
