@@ -588,6 +588,26 @@ def test_a_notebook_nested_too_deeply_is_refused_in_one_line(course, capsys, dep
     assert main(["homework", "mark", str(path), "--source", str(course / "teacher"), "--timeout", "60"]) == 0
 
 
+def test_a_notebook_holding_a_number_of_5000_digits_is_refused_in_one_line(course, capsys):
+    """Python converts an integer of at most 4300 digits: json.loads raised a plain ValueError (not a JSONDecodeError)
+    on one of 5000, a traceback from mark and handout, and in a folder it stopped the marking of every submission.
+    Now it is "not a notebook", one line and exit code 2 on the command line, a 0 saying why in a folder."""
+    from steam_ref.homework.marking import load_tutorials, mark_submission
+
+    nb = json.loads((course / "handout" / "tiny.ipynb").read_text())
+    nb["cells"][3]["metadata"]["n"] = "@"
+    path = course / "long" / "tiny.ipynb"
+    path.parent.mkdir()
+    path.write_text(json.dumps(nb).replace('"@"', "9" * 5000))
+    said = f"{str(path)!r} is not a notebook: Exceeds the limit (4300 digits) for integer string conversion"
+    for argv in (["mark", str(path), "--source", str(course / "teacher")], ["handout", str(path)]):
+        assert main(["homework", *argv]) == 2, argv
+        err = capsys.readouterr().err
+        assert len(err.strip().splitlines()) == 1 and said in err and "Traceback" not in err, err
+    mark = mark_submission(path, "tiny.ipynb", load_tutorials(course / "teacher"), timeout=LIMIT)
+    assert mark.score == 0 and said in (mark.error or ""), mark
+
+
 def test_an_answer_of_many_cells_shares_one_time_limit(course, capsys):
     """``--timeout`` limited each cell, so an answer of many cells could run the limit once per cell: 8 cells that
     loop for ever took 8 limits (24 s at 3 s; 100 such cells, at the default 300 s, 8 hours), and 8 cells of a second

@@ -123,6 +123,8 @@ def read_notebook(path: Path) -> dict[str, Any]:
         raise SteamError(f"{str(path)!r} is not a notebook: not JSON ({exc.msg} at line {exc.lineno})") from None
     except RecursionError:  # deeper than the parser goes, so deeper than MAX_DEPTH
         raise SteamError(deep) from None
+    except ValueError as exc:  # an integer of more digits than Python converts (4300): "Exceeds the limit ..."
+        raise SteamError(f"{str(path)!r} is not a notebook: {str(exc).split(';')[0]}") from None
     if _deeper_than(nb, MAX_DEPTH):
         raise SteamError(deep)
     cells = nb.get("cells") if isinstance(nb, dict) else None
