@@ -210,6 +210,18 @@ CASES = [
         NumericalError,
         r"dt=1e\+200",
     ),
+    (  # its one entry inside (t1, t2): it was refused as "t1 < tau < t2 ... got at 0: t1=0, tau=0.5, t2=1"
+        "interpolation_many tau a scalar",
+        lambda: gp.interpolation_matrices_many(0, 1, 0.5, QC),
+        ShapeError,
+        r"^tau must be a vector of times \(n,\), got shape \(\)$",
+    ),
+    (
+        "interpolation_many tau a table",
+        lambda: gp.interpolation_matrices_many(0, 1, [[0.25, 0.5]], QC),
+        ShapeError,
+        r"^tau must be a vector of times \(n,\), got shape \(1, 2\)$",
+    ),
     (
         "interpolate_state x1 string",
         lambda: gp.interpolate_state(0, "abc", 1, ONES, 0.5, QC),

@@ -104,15 +104,18 @@ def interpolation_matrices_many(t1: ArrayLike, t2: ArrayLike, tau: ArrayLike, qc
     The readings between two states (a gyro at 100 Hz between GPS fixes) each have their own τ, so no memo helps:
     one call forms them all."""
     tau = real_array("tau", tau)
+    if tau.ndim != 1:  # a scalar or a table: its entries may all lie inside, so say the shape, not an entry
+        raise ShapeError(f"tau must be a vector of times (n,), got shape {tau.shape}")
     try:
         t1, t2 = (np.broadcast_to(real_array(n, t), tau.shape) for n, t in (("t1", t1), ("t2", t2)))
     except ValueError:
         raise ShapeError(f"t1 and t2 must be numbers or arrays of tau's shape {tau.shape}") from None
     bad = ~((t1 < tau) & (tau < t2))  # true for NaN too
-    if tau.ndim != 1 or bad.any():
-        i = int(np.argmax(bad.ravel()))
-        raise SteamError(f"interpolation needs t1 < tau < t2 (a vector of times), got at {i}: t1={t1.ravel()[i]}, "
-                         f"tau={tau.ravel()[i]}, t2={t2.ravel()[i]}")  # fmt: skip
+    if bad.any():
+        i = int(np.argmax(bad))
+        raise SteamError(
+            f"interpolation needs t1 < tau < t2 at every time, got at {i}: t1={t1[i]}, tau={tau[i]}, t2={t2[i]}"
+        )
     qc = check_qc(qc)
     d, dtau, rest, dt = qc.shape[0], tau - t1, t2 - tau, t2 - t1
     lam, psi = np.empty((2, len(tau), 2 * d, 2 * d))
