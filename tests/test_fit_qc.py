@@ -136,6 +136,10 @@ def test_bad_input_is_refused_naming_the_value() -> None:
         fit_qc(prior, times[:2], poses[:2])
     with pytest.raises(DataError, match=r"more than 1 steps between poses.*got 0"):
         fit_qc(prior, times[:1], poses[:1])
+    with pytest.raises(DataError, match=r"more than 2 steps between poses.*got 0"):  # it said 1: WNOA's, guessed
+        fit_qc(motion_prior("wnoj", QC), times[:1], poses[:1])
+    with pytest.raises(DataError, match=r"more than 2 steps between poses.*got 2"):
+        fit_qc(motion_prior("wnoj", QC), times[:3], poses[:3])
     with pytest.raises(SteamError, match=r"rounds must be an integer >= 1, got rounds=0"):
         fit_qc(prior, times, poses, rounds=0)
 
@@ -185,6 +189,18 @@ def test_a_data_set_without_ground_truth_is_one_line_and_exit_2(capsys, tmp_path
     [
         (fit_cli, ("--prior", "wnoa", "--se2-residual", "simplified"), "--se2-residual applies to --prior se2 only"),
         (fit_cli, ("--max-poses", "2"), "argument --max-poses"),
+        # a jerk prior's state has 3 blocks: --max-poses 3 passed --max-poses' check (WNOA's 3) and failed in the fit
+        # ("fit_qc needs more than 2 steps between poses ..., got 2"), naming no option
+        (
+            fit_cli,
+            ("--dataset", "synthetic", "--prior", "singer", "--max-poses", "3"),
+            "--max-poses 3: --prior singer needs 4 poses or more",
+        ),
+        (
+            fit_cli,
+            ("--dataset", "synthetic", "--prior", "se2-wnoj", "--max-poses", "3"),
+            "--prior se2-wnoj needs 4 poses",
+        ),
         (fit_cli, ("--prior", "nope"), "argument --prior"),
         (run_cli, ("--qc", "1,2"), "expected three numbers > 0 separated by commas"),
         (run_cli, ("--qc", "1,-2,3"), "got '1,-2,3'"),

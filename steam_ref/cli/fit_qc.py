@@ -16,8 +16,8 @@ import argparse
 
 import numpy as np
 
-from ..errors import DataError
-from ..evaluate.fit_qc import QcFit, fit_qc, qc_units
+from ..errors import DataError, SteamError
+from ..evaluate.fit_qc import QcFit, fit_qc, poses_needed, qc_units
 from ..gp.clock import Clock
 from ..motion import MOTION_PRIORS, motion_prior
 from ..paper.presets import PaperSetup
@@ -45,6 +45,11 @@ def run(args: argparse.Namespace) -> int:
             "one has none"
         )
     n = data.n_poses if args.max_poses is None else min(args.max_poses, data.n_poses)
+    needed = poses_needed(setup.motion_prior())  # --max-poses' own check (>= 3) is WNOA's: a jerk prior needs more
+    if args.max_poses is not None and args.max_poses < needed:
+        raise SteamError(
+            f"--max-poses {args.max_poses}: --prior {setup.prior} needs {needed} poses or more to be fitted"
+        )
     clock = Clock.of(data.ground_truth[:n, 0], setup.clock, data.time_origin)
     options = setup.prior_options()
     fit = fit_qc(

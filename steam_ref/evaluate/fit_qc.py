@@ -40,7 +40,7 @@ from ..graph import FactorGraph
 from ..motion import MotionPrior, as_motion_prior
 from ..variables import Values, X
 
-__all__ = ["QcFit", "fit_qc", "finite_difference_velocity", "qc_units"]
+__all__ = ["QcFit", "fit_qc", "finite_difference_velocity", "poses_needed", "qc_units"]
 
 POSE_HOLD = 1e-4  # a pose's sigma, over the smallest position sigma the prior allows over a step: the truth held
 FREE_VELOCITY = 1e6  # the sigma of the first state's velocity (and higher) prior: no information, in effect
@@ -125,6 +125,13 @@ def _blocks(prior: MotionPrior, factor: Factor) -> tuple[int, int]:
     return d, factor.dim // d
 
 
+def poses_needed(prior: MotionPrior | ArrayLike) -> int:
+    """The fewest poses :func:`fit_qc` fits ``prior`` to: a state of k blocks of Qc's d numbers (a pose and its
+    velocity: 2; and its acceleration: 3) leaves k - 1 of them unobserved, so the fit needs more than k - 1 steps."""
+    prior = as_motion_prior(prior)
+    return _blocks(prior, prior.prior_factor(X(0), X(1), 1.0))[1] + 1
+
+
 def _noise(prior: MotionPrior, factors: list[Factor], d: int, k: int) -> NDArray:
     """(N, d, k, k): each step's noise Σᵢ = (WᵀW)⁻¹, by dimension, over the prior's own Qc_jj (Q(Δtᵢ) for each j);
     SteamError when Σᵢ couples two dimensions (not Q(Δt) ⊗ a diagonal Qc)."""
@@ -187,8 +194,8 @@ def fit_qc(
     t, p = _inputs(times, poses)
     rounds = integer("rounds", rounds, 1)
     dt = np.diff(t)
-    k = _blocks(prior, prior.prior_factor(X(0), X(1), float(dt[0])))[1] if len(dt) else 2
-    if len(dt) - k + 1 < 1:
+    if len(t) < poses_needed(prior):
+        k = poses_needed(prior) - 1
         raise DataError(
             f"fit_qc needs more than {k - 1} steps between poses (a state has {k - 1} unobserved blocks), got {len(dt)}"
         )
