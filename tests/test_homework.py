@@ -258,6 +258,22 @@ def test_a_folder_holding_a_notebook_name_that_is_no_file_is_refused_not_dropped
     assert not (course / "out").exists()
 
 
+def test_two_notebooks_of_one_name_are_refused_not_one_handout_written_over_the_other(course, capsys):
+    """Handouts are named as their notebooks: two teacher's notebooks named tiny.ipynb (in two folders, or given
+    twice) made one handout, the last, while the command said "wrote 2 handouts". Now refused, nothing written."""
+    other = _teacher()
+    other["cells"][0]["source"] = ["# Another lesson"]
+    (course / "teacher" / "b").mkdir()
+    (course / "teacher" / "b" / "tiny.ipynb").write_text(json.dumps(other))
+    a, b = course / "teacher" / "tiny.ipynb", course / "teacher" / "b" / "tiny.ipynb"
+    both = f"'{b}' and '{a}' would both be written to '{course / 'out' / 'tiny.ipynb'}'"  # rglob's order: b/ first
+    for given, said in (([course / "teacher"], both), ([a, a], f"'{a}' is given twice")):
+        code = main(["homework", "handout", *map(str, given), "--out", str(course / "out")])
+        out, err = capsys.readouterr()
+        assert (code, out) == (2, "") and len(err.strip().splitlines()) == 1 and said in err, err
+        assert not (course / "out").exists()
+
+
 MALFORMED = {
     "a cell's metadata null": lambda nb: nb["cells"][3].__setitem__("metadata", None),
     "a cell's tags null": lambda nb: nb["cells"][3]["metadata"].__setitem__("tags", None),

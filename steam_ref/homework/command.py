@@ -59,6 +59,16 @@ def _handout(args: argparse.Namespace) -> int:
     sources = _notebooks(args.notebooks, "handout")
     made = [(path, handout(read_notebook(path), path.name)) for path, _ in sources]  # all checked before any write
     out = Path(args.out)
+    first: dict[str, Path] = {}
+    for path, _ in made:  # each handout is named as its notebook: two of one name would leave one, in silence
+        seen = first.setdefault(path.name, path)
+        if seen is not path:
+            twice = (
+                f"{str(path)!r} is given twice"
+                if seen.resolve() == path.resolve()
+                else f"{str(seen)!r} and {str(path)!r} would both be written to {str(out / path.name)!r}"
+            )
+            raise SteamError(f"handout: {twice}; give each notebook once, under its own name")
     if out.exists() and not out.is_dir():
         raise SteamError(f"--out {args.out!r} is a file, not a folder")
     for path, _ in made:
