@@ -85,6 +85,12 @@ BAD = [
     # found by run's checks before its machinery loads (cli.parsers.run.check): neither a set nor a file
     (("run", "--dataset", "nonsense"), "data set 'nonsense' (not one of synthetic, paper-synthetic, plaza"),
     (("run", "--plot", "out.txt"), "--plot"),
+    # --steps with a set read from a file: the 3-D one was refused once the solvers had loaded, in other words
+    (
+        ("run", "--dataset", "kitti", "--steps", "30"),
+        "--steps generates the synthetic task: it needs --dataset synthetic | synthetic-3d, got 'kitti'",
+    ),
+    (("run", "--dataset", "plaza", "--steps", "30"), "it needs --dataset synthetic | synthetic-3d, got 'plaza'"),
     # batch's and fit-qc's checks before their machinery loads (cli.parsers.batch.check, cli.parsers.fit_qc.check)
     (("batch", "--dataset", "nonsense"), "data set 'nonsense' (not one of synthetic, paper-synthetic, plaza"),
     (("batch", "--plot", "out.txt"), "--plot"),

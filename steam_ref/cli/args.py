@@ -37,6 +37,7 @@ __all__ = [
     "add_data_dir",
     "add_dataset",
     "add_max_poses",
+    "check_steps",
     "add_prior",
     "add_progress",
     "check_prior_options",
@@ -374,15 +375,27 @@ def add_seed(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def _generated() -> str:
+    """The data sets steam_ref generates (no file), as ``--dataset`` takes them: ``synthetic | synthetic-3d``."""
+    return " | ".join(n for n in loadable() if not DATASETS[n].files)
+
+
 def seed_of(args: argparse.Namespace) -> int:
     """``--seed``, 0 when not given; SteamError when it is given with a data set read from a file, which it would
     leave as it is (it draws a generated set only)."""
     if args.seed is None:
         return 0
     if args.dataset not in DATASETS or DATASETS[args.dataset].files:
-        generated = " | ".join(n for n in loadable() if not DATASETS[n].files)
         raise SteamError(
-            f"--seed {args.seed} draws a generated data set (--dataset {generated}); --dataset {args.dataset!r} is "
+            f"--seed {args.seed} draws a generated data set (--dataset {_generated()}); --dataset {args.dataset!r} is "
             "read from a file, which no seed changes: drop --seed"
         )
     return args.seed
+
+
+def check_steps(args: argparse.Namespace) -> None:
+    """``run --steps N`` generates the data set (planar or 3-D): SteamError when ``--dataset`` is read from a file."""
+    if args.steps is not None and (args.dataset not in DATASETS or DATASETS[args.dataset].files):
+        raise SteamError(
+            f"--steps generates the synthetic task: it needs --dataset {_generated()}, got {args.dataset!r}"
+        )

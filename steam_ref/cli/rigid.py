@@ -124,8 +124,6 @@ def run_rigid(args: argparse.Namespace, *, batch_only: bool = False) -> int:
         check_prior_options(name, taken)  # an option the prior does not take is refused, never ignored
     options = {k: v for k, v in taken.items() if v is not None}
     n_steps, lag = getattr(args, "steps", None), getattr(args, "lag", None)
-    if n_steps is not None and args.dataset != "synthetic-3d":
-        raise SteamError(f"--steps generates the synthetic task: it needs --dataset synthetic-3d, got {args.dataset!r}")
     loaded = (
         load_dataset(args.dataset, data_dir=args.data_dir, seed=seed_of(args))
         if n_steps is None

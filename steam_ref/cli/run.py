@@ -157,10 +157,6 @@ def _run_dataset(args: argparse.Namespace):
     """The data set of ``run``: by name or path, or the generated task of ``--steps`` steps."""
     if args.steps is None:
         return load_with_note(args)
-    if args.dataset != "synthetic":
-        raise SteamError(
-            f"--steps generates the synthetic task: it needs --dataset synthetic (or synthetic-3d), got {args.dataset!r}"
-        )
     n_landmarks = max(1, round(args.steps * DEFAULT_LANDMARKS / DEFAULT_STEPS))  # the default task's density
     return generate_synthetic(n_steps=args.steps, n_landmarks=n_landmarks, seed=seed_of(args))
 

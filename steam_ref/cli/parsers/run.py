@@ -29,6 +29,7 @@ from ..args import (
     add_seed,
     add_trajectory_arguments,
     check_prior_fits,
+    check_steps,
     is_rigid,
     non_negative_float,
     positive_float,
@@ -228,6 +229,7 @@ def check(args: argparse.Namespace) -> None:
     refused here). :func:`steam_ref.cli.commands.main` calls it before it loads the command's module, and
     :func:`steam_ref.cli.run.run` first: each check reads the arguments and the file system only."""
     check_prior_fits(args.dataset, args.prior)  # a 3-D prior on a planar set, or a planar prior on a 3-D set
+    check_steps(args)  # --steps generates a set: not one read from a file
     if is_rigid(args.dataset):
         return
     check_output(args.save_estimates, ".npz", "--save-estimates")
