@@ -18,13 +18,15 @@
 from __future__ import annotations
 
 import json
+import shlex
 
 import numpy as np
 import pytest
+import scipy.io
 import scipy.linalg
 from cli_runs import runner
 
-from steam_ref.datasets import load_dataset
+from steam_ref.datasets import generate_synthetic, load_dataset
 from steam_ref.errors import ConvergenceWarning, DataError, ShapeError, SteamError
 from steam_ref.evaluate.fit_qc import fit_qc, qc_units
 from steam_ref.gp.clock import Clock
@@ -174,6 +176,23 @@ def test_the_command_fits_the_ground_truth_of_a_data_set(capsys, shared_data) ->
     code, out, err = run_cli(capsys, "--dataset", "paper-synthetic", "--max-poses", 30, "--qc", qc, "--json")
     assert code == 0, err
     np.testing.assert_allclose(np.diag(json.loads(out)["qc"]), [float(q) for q in qc.split(",")])
+
+
+def test_the_run_it_prints_runs_on_the_data_it_was_fitted_to(capsys, tmp_path) -> None:
+    """The printed ``steam-ref run`` dropped --preset (a PATH needs it: that run was refused, and the Qc is on that
+    preset's clock), --seed (another synthetic task) and did not quote a path with a space. Read as a shell reads
+    it, it now runs on the same data with the fitted Qc."""
+    path = tmp_path / "my task.mat"
+    scipy.io.savemat(path, generate_synthetic(n_steps=40, n_landmarks=6, seed=2).to_cmu_arrays())
+    for given in (["--dataset", str(path), "--preset", "synthetic"], ["--dataset", "synthetic", "--seed", "4"]):
+        code, out, err = fit_cli(capsys, *given, "--max-poses", 30, "--json")
+        assert code == 0, err
+        figures = json.loads(out)
+        words = shlex.split(figures["run"])
+        assert words[:2] == ["steam-ref", "run"] and words[2:6] == given, words
+        code, out, err = run_cli(capsys, *words[2:], "--max-poses", 30, "--json")
+        assert code == 0, err
+        np.testing.assert_allclose(np.diag(json.loads(out)["qc"]), [float(q) for q in words[-1].split(",")])
 
 
 def test_a_data_set_without_ground_truth_is_one_line_and_exit_2(capsys, tmp_path) -> None:

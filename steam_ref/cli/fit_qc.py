@@ -13,6 +13,7 @@ is a 3-D set (its ground truth is on SE(3): no fit there yet) or a 3-D prior.
 from __future__ import annotations
 
 import argparse
+import shlex
 
 import numpy as np
 
@@ -60,7 +61,7 @@ def run(args: argparse.Namespace) -> int:
     )
     names = setup.motion_prior().state_names[-setup.qc.shape[0] :]  # Qc drives the last block's rate
     flag = ",".join(f"{q:.6g}" for q in np.diag(fit.qc))
-    rerun = f"steam-ref run --dataset {args.dataset} --prior {setup.prior} --qc {flag}"
+    rerun = _rerun(args, setup.prior, flag)
     if args.json:
         print(
             json_line(
@@ -74,6 +75,16 @@ def run(args: argparse.Namespace) -> int:
         return 0
     print(_text(args.dataset, setup, n, clock, fit, names, rerun))
     return 0
+
+
+def _rerun(args: argparse.Namespace, prior: str, qc: str) -> str:
+    """The ``steam-ref run`` that uses the fit, on the data it was fitted to: the same set (a PATH with its --preset,
+    whose GP clock the Qc is on), --data-dir and --seed when given, and --se2-residual; quoted for a shell."""
+    given = {"--preset": args.preset, "--data-dir": args.data_dir, "--seed": args.seed}
+    words = ["steam-ref", "run", "--dataset", args.dataset]
+    words += [w for option, value in given.items() if value is not None for w in (option, str(value))]
+    words += ["--prior", prior] + (["--se2-residual", args.se2_residual] if args.se2_residual else [])
+    return shlex.join([*words, "--qc", qc])
 
 
 def _text(dataset: str, setup: PaperSetup, n: int, clock: Clock, fit: QcFit, names: tuple[str, ...], rerun: str) -> str:
