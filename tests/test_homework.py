@@ -238,24 +238,31 @@ def test_bad_input_is_one_line_and_exit_code_2(course, capsys):
 
 @pytest.mark.parametrize("odd", ["pipe", "dangling link"])
 @pytest.mark.parametrize("command", ["mark", "handout"])
-def test_a_folder_holding_a_notebook_name_that_is_no_file_is_refused_not_dropped(course, capsys, odd, command):
+def test_a_folder_holding_a_notebook_name_that_is_no_file_is_not_dropped(course, capsys, odd, command):
     """A folder's ``*.ipynb`` that is a pipe or a link to nothing was left out in silence (a student's submission
-    missing from the marks, a teacher's notebook from the handout); given alone it was refused: now in a folder too,
-    one line naming it, and nothing is read or written."""
+    missing from the marks, a teacher's notebook from the handout). Now, unread, a submission scores 0 saying why
+    beside the others, marked; a teacher's notebook stops the handout in one line naming it, nothing written."""
     folder = course / "teacher" if command == "handout" else course / "submitted"
     if command == "mark":
-        _submit(course, "ann", {})
+        _submit(course, "ann", {"s1": "square = base**2"})
     bad = folder / "late.ipynb"
     if odd == "pipe":
         os.mkfifo(bad)
     else:
         bad.symlink_to(course / "nowhere.ipynb")
-    extra = ["--source", str(course / "teacher")] if command == "mark" else ["--out", str(course / "out")]
-    code = main(["homework", command, str(folder), *extra])
-    out, err = capsys.readouterr()
-    assert (code, out) == (2, "") and len(err.strip().splitlines()) == 1, err
-    assert f"'{bad}' in the folder '{folder}' is" in err
-    assert not (course / "out").exists()
+    why = "not a file" if odd == "pipe" else "No such file or directory"
+    if command == "mark":
+        code = main(["homework", "mark", str(folder), "--source", str(course / "teacher"), "--timeout", "60"])
+        out, err = capsys.readouterr()
+        assert code == 0, err
+        assert f"late.ipynb: ?, 0/0 (cannot read '{bad}': {why})" in out.splitlines()
+        assert "ann/tiny.ipynb: tiny, 1/2" in out.splitlines(), out
+    else:
+        code = main(["homework", "handout", str(folder), "--out", str(course / "out")])
+        out, err = capsys.readouterr()
+        assert (code, out) == (2, "") and len(err.strip().splitlines()) == 1, err
+        assert f"cannot read '{bad}': {why}" in err
+        assert not (course / "out").exists()
 
 
 def test_two_notebooks_of_one_name_are_refused_not_one_handout_written_over_the_other(course, capsys):
