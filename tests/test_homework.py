@@ -663,3 +663,25 @@ def test_an_answer_of_many_cells_shares_one_time_limit(course, capsys):
     stopped = (0, "timeout", f"the answer ran longer than {LIMIT} s and was stopped")
     assert marks == [[(1, "passed", ""), (1, "passed", "")], [stopped, (1, "passed", "")], [stopped, (1, "passed", "")]]
     assert took[1] - took[0] < 2 * (LIMIT + GRACE) and took[2] - took[0] < 2 * (LIMIT + GRACE), took
+
+
+def test_the_kind_check_cell_is_made_without_parsing_so_marking_threads_cannot_race_in_the_ast(monkeypatch):
+    """Submissions are marked in threads, and CPython 3.11's ``ast.parse`` is not safe there (a run of this suite
+    stopped two markings with ``SystemError: AST constructor recursion depth mismatch``): the check cell is the
+    rule's source as written, its types in comments, which a kernel that lacks ``Any`` (or where a student rebound
+    ``str``) runs as it is."""
+    import ast
+
+    from steam_ref.homework import kinds
+
+    def no_parsing(*args, **kwargs):
+        raise AssertionError("check_cell parsed source")
+
+    monkeypatch.setattr(ast, "parse", no_parsing)
+    cell = kinds.check_cell({"answer": "number", "values": "array"})
+    scope: dict = {"answer": 3.0, "values": [1.0, 2.0], "str": None}  # a kernel without Any, str rebound
+    exec(compile(cell, "<check>", "exec"), scope)
+    assert not any(name.startswith("__steam_ref") for name in scope)
+    scope = {"answer": 1 + 0j}
+    with pytest.raises(AssertionError, match=r"`answer` is a complex, not a real number"):
+        exec(compile(cell, "<check>", "exec"), scope)
