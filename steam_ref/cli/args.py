@@ -269,8 +269,7 @@ def check_prior_fits(dataset: str, prior: str | None) -> None:
 
 
 def path(what: str):
-    """An argparse type: a path that is not empty (``Path("")`` is the working folder, which no one means); ``what``
-    names it in the message ("a path", "a folder")."""
+    """An argparse type: a non-empty path (``Path("")``, the working folder, no one means); ``what`` names it."""
 
     def parse(text: str) -> str:
         if not text.strip():

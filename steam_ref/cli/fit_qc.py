@@ -80,10 +80,10 @@ def run(args: argparse.Namespace) -> int:
 def _rerun(args: argparse.Namespace, prior: str, qc: str) -> str:
     """The ``steam-ref run`` that uses the fit, on the data it was fitted to: the same set (a PATH with its --preset,
     whose GP clock the Qc is on), --data-dir and --seed when given, and --se2-residual; quoted for a shell."""
-    given = {"--preset": args.preset, "--data-dir": args.data_dir, "--seed": args.seed}
+    given = {"--preset": args.preset, "--data-dir": args.data_dir, "--seed": args.seed, "--prior": prior}
+    given["--se2-residual"] = args.se2_residual  # given or None, whatever the prior: the run checks it as fit-qc did
     words = ["steam-ref", "run", "--dataset", args.dataset]
     words += [w for option, value in given.items() if value is not None for w in (option, str(value))]
-    words += ["--prior", prior] + (["--se2-residual", args.se2_residual] if args.se2_residual else [])
     return shlex.join([*words, "--qc", qc])
 
 
