@@ -100,39 +100,13 @@ class RigidReadings:
         held = np.asarray(self.held_out, dtype=float)
         object.__setattr__(self, "held_out", held.reshape(-1, 1 + k) if held.size else np.zeros((0, 1 + k)))
         object.__setattr__(self, "state_times", t)
-        self._check_landmarks()
-        self._check_states()
+        _check_landmarks(self)
+        _check_states(self)
         needed = [SIGMA_OF[table] for table in SIGMA_OF if len(getattr(self, table))]
         needed += ["first_pose", "first_twist"] if self.first_state is not None else []
         missing = [key for key in needed if key not in self.sigmas]
         if missing:
             raise DataError(f"{self.name}: sigmas has no {missing[0]!r} (its readings need {', '.join(needed)})")
-
-    def _check_landmarks(self) -> None:
-        """Integer ids, each surveyed once; every range's and body-frame point's landmark among them (a reading of an
-        id not surveyed, 0.5 or 99, was read as landmark 0 or failed with a KeyError)."""
-        _check_integer_ids("landmarks", self.landmarks[:, 0], 0)
-        known = self.landmarks[:, 0]
-        for table in ("ranges", "points"):
-            ids = getattr(self, table)[:, 1]
-            missing = rows_of(known, ids)[1]
-            if missing is not None:
-                raise DataError(
-                    f"{self.name}: {table} row {missing} (t={number_text(getattr(self, table)[missing, 0])}) names "
-                    f"landmark id {number_text(ids[missing])}, which is not in landmarks; known ids: {ids_text(known)}"
-                )
-
-    def _check_states(self) -> None:
-        """The first state (size,), the first values and the truth (n, size) as ``kind`` stores a state; ShapeError
-        naming the one that is not."""
-        n, size = len(self.state_times), self.kind.size
-        for name, shape in (("first_state", (size,)), ("initial_states", (n, size)), ("truth", (n, size))):
-            value = getattr(self, name)
-            if value is not None and np.shape(value) != shape:
-                raise ShapeError(
-                    f"{self.name}: {name} must be {shape} ({self.kind!r} states at the {n} state times), got shape "
-                    f"{np.shape(value)}"
-                )
 
     @property
     def n_readings(self) -> int:
@@ -270,3 +244,31 @@ def generate_rigid(n_steps: int = RIGID_STEPS, seed: int = 0) -> RigidReadings:
         qc=RIGID_QC.copy(),
         source=f"generate_rigid(n_steps={n_steps}, seed={seed})",
     )
+
+
+def _check_landmarks(data: RigidReadings) -> None:
+    """``data``'s landmarks: integer ids, each surveyed once; every range's and body-frame point's landmark among
+    them (a reading of an id not surveyed, 0.5 or 99, was read as landmark 0 or failed with a KeyError)."""
+    _check_integer_ids("landmarks", data.landmarks[:, 0], 0)
+    known = data.landmarks[:, 0]
+    for table in ("ranges", "points"):
+        ids = getattr(data, table)[:, 1]
+        missing = rows_of(known, ids)[1]
+        if missing is not None:
+            raise DataError(
+                f"{data.name}: {table} row {missing} (t={number_text(getattr(data, table)[missing, 0])}) names "
+                f"landmark id {number_text(ids[missing])}, which is not in landmarks; known ids: {ids_text(known)}"
+            )
+
+
+def _check_states(data: RigidReadings) -> None:
+    """``data``'s first state (size,), the first values and the truth (n, size) as ``kind`` stores a state; ShapeError
+    naming the one that is not."""
+    n, size = len(data.state_times), data.kind.size
+    for name, shape in (("first_state", (size,)), ("initial_states", (n, size)), ("truth", (n, size))):
+        value = getattr(data, name)
+        if value is not None and np.shape(value) != shape:
+            raise ShapeError(
+                f"{data.name}: {name} must be {shape} ({data.kind!r} states at the {n} state times), got shape "
+                f"{np.shape(value)}"
+            )
