@@ -84,6 +84,8 @@ def load_tutorials(folder: Path) -> dict[str, Tutorial]:
 
 @dataclass(frozen=True)
 class ExerciseMark:
+    """One exercise of a submission as marked: its score out of its points, and why it lost any."""
+
     number: int
     title: str
     score: int
@@ -94,6 +96,8 @@ class ExerciseMark:
 
 @dataclass(frozen=True)
 class SubmissionMark:
+    """A submitted notebook as marked: the tutorial it answers, each exercise's mark, or why it could not be marked."""
+
     submission: str
     tutorial: str | None
     exercises: tuple[ExerciseMark, ...] = ()
@@ -102,13 +106,16 @@ class SubmissionMark:
 
     @property
     def score(self) -> int:
+        """Points scored over every exercise."""
         return sum(e.score for e in self.exercises)
 
     @property
     def out_of(self) -> int:
+        """Points available over every exercise."""
         return sum(e.out_of for e in self.exercises)
 
     def as_dict(self) -> dict[str, Any]:
+        """The mark as JSON-ready data (``steam-ref homework mark --json``)."""
         return {
             "submission": self.submission,
             "tutorial": self.tutorial,
