@@ -6,10 +6,10 @@ interpolation, batch Gauss-Newton (PB, PBVR), and the Bayes tree (BTGP). Equatio
 the code as [YIB Eq. n]; see docs/references.md.
 """
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
-from ._version import __version__ as __version__
+from ._package import __version__ as __version__
+from ._package import lazy_names
 from .errors import (
     ClockError,
     ConvergenceError,
@@ -96,18 +96,7 @@ _HOMES = {
 }
 
 
-def __getattr__(name: str) -> Any:
-    """Load a public name's module when the name is first used, and keep the name here."""
-    home = _HOMES.get(name)
-    if home is None:
-        raise AttributeError(f"module 'steam_ref' has no attribute {name!r}")
-    value = getattr(importlib.import_module(f".{home}", __name__), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_HOMES))
+__getattr__, __dir__ = lazy_names(globals(), _HOMES)
 
 
 if TYPE_CHECKING:  # what a type checker and an IDE see: the same names, imported eagerly

@@ -7,13 +7,17 @@
 - **What an integer is** is stated once, ``arguments.is_integer``; no module of the package spells the
   check again (the conformance kit's oracle and its file format keep their own code, by design).
 - **A settings class's replace with an unknown-field check** is ``arguments.replace_fields``.
+- **A package's lazy names** (PEP 562: a name loaded from its module on first use) are ``_package.lazy_names``'; no
+  package writes its own ``__getattr__`` or ``__dir__`` (tests/test_lazy_names.py checks the rule itself).
 - **A stream's fixed-lag rule** (what is stamped when, a forgotten landmark's re-entry) is ``paper.solvers``'.
 - **No tracker numbers** in code, tests, docs, benchmarks or tutorials: a clone cannot open them.
 """
 
 from __future__ import annotations
 
+import ast
 import dataclasses
+import importlib
 import re
 from pathlib import Path
 
@@ -171,6 +175,68 @@ def test_replace_with_an_unknown_field_check_is_written_once():
         field = dataclasses.fields(value)[0].name
         copy = value.replace(**{field: getattr(value, field)})
         assert type(copy) is type(value) and getattr(copy, field) == getattr(value, field)
+
+
+def _module_level(tree: ast.Module) -> list[ast.stmt]:
+    """The statements a module runs on import: its body and what its top-level ``if``/``try`` blocks hold."""
+    out, todo = [], list(tree.body)
+    while todo:
+        node = todo.pop(0)
+        out.append(node)
+        if isinstance(node, (ast.If, ast.Try)):
+            todo += [*node.body, *node.orelse, *getattr(node, "finalbody", []), *getattr(node, "handlers", [])]
+        elif isinstance(node, ast.ExceptHandler):
+            todo += node.body
+    return out
+
+
+def _lazy_loaders_written_again(source: str) -> list[int]:
+    """Lines of a module-level ``__getattr__`` or ``__dir__`` not bound from ``lazy_names``."""
+    found = []
+    for node in _module_level(ast.parse(source)):
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)) and node.name in ("__getattr__", "__dir__"):
+            found.append(node.lineno)
+        elif isinstance(node, (ast.Assign, ast.AnnAssign, ast.AugAssign)):
+            targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+            names = {n.id for t in targets for n in ast.walk(t) if isinstance(n, ast.Name)}
+            call = node.value
+            from_rule = isinstance(call, ast.Call) and isinstance(call.func, ast.Name) and call.func.id == "lazy_names"
+            if names & {"__getattr__", "__dir__"} and not from_rule:
+                found.append(node.lineno)
+    return found
+
+
+def test_the_lazy_name_check_catches_a_loader_written_again():
+    own = "import importlib\ndef __getattr__(name):\n    return importlib.import_module('.x', __name__)\n"
+    hidden = "try:\n    pass\nexcept ImportError:\n    def __dir__():\n        return []\n"
+    bound = "__getattr__ = lambda name: None\n"
+    method = "class P:\n    def __getattr__(self, name):\n        return 1\n"
+    rule = "__getattr__, __dir__ = lazy_names(globals(), _HOMES)\n"
+    assert [_lazy_loaders_written_again(s) for s in (own, hidden, bound, method, rule)] == [[2], [4], [1], [], []]
+
+
+def test_a_packages_lazy_names_are_loaded_by_the_one_rule():
+    """``__getattr__``/``__dir__`` at a module's top level are ``lazy_names``' alone: the root, datasets/, linear/
+    and conformance/ each wrote the loader out, and lie/ a fourth variant (no ``__dir__``, nothing kept)."""
+    found = [
+        f"{p.relative_to(ROOT)}:{n}"
+        for p in _python_files()
+        for n in _lazy_loaders_written_again(p.read_text(encoding="utf-8"))
+    ]
+    assert not found, f"a lazy-name loader written again (use _package.lazy_names): {found}"
+    lazy = [
+        module_name
+        for p in _python_files()
+        if p.name == "__init__.py" and "lazy_names(" in p.read_text(encoding="utf-8")
+        for module_name in [".".join(p.relative_to(ROOT).parent.parts)]
+    ]
+    assert {"steam_ref", "steam_ref.datasets", "steam_ref.linear", "steam_ref.lie", "steam_ref.conformance"} <= set(
+        lazy
+    )
+    for name in lazy:
+        package = importlib.import_module(name)
+        assert package.__getattr__.__qualname__ == "lazy_names.<locals>.__getattr__", name
+        assert package.__dir__.__qualname__ == "lazy_names.<locals>.__dir__", name
 
 
 def test_a_streams_fixed_lag_rule_is_written_once_for_both_streams():

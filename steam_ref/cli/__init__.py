@@ -15,7 +15,7 @@ from __future__ import annotations
 import sys
 from collections.abc import Sequence
 
-from .._version import __version__
+from .._package import __version__
 from .streams import make_encodable
 
 __all__ = ["main"]

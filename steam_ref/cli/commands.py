@@ -37,7 +37,7 @@ import threading
 from collections.abc import Sequence
 from importlib import import_module
 
-from .._version import __version__
+from .._package import __version__
 from ..errors import SteamError, SteamWarning
 from .args import Parser
 from .streams import complain, one_line, quiet_stdout, warning_lines

@@ -23,8 +23,9 @@ exports it, checks results laid out like it, and checks the installed code again
 
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from .._package import lazy_names
 
 # Each public name's module, loaded when the name is first used: the kit's machinery (the solvers, the oracles)
 # loads only for a command or a test that needs it, not for every ``steam-ref`` run.
@@ -54,14 +55,7 @@ __all__ = [
 ]
 
 
-def __getattr__(name: str) -> Any:
-    """Load a public name's module when the name is first used, and keep the name here."""
-    home = _HOMES.get(name)
-    if home is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(f".{home}", __name__), name)
-    globals()[name] = value
-    return value
+__getattr__, __dir__ = lazy_names(globals(), _HOMES)
 
 
 if TYPE_CHECKING:  # what a type checker sees: the same names, imported eagerly

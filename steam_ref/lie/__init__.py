@@ -18,9 +18,9 @@
   state; every function takes the group (``group=``).
 """
 
-from importlib import import_module
 from typing import TYPE_CHECKING
 
+from .._package import lazy_names
 from .group import LieGroup
 from .se2 import SE2
 from .state import SE2_STATE, STATE_SIZE, GroupState, world_position_covariance
@@ -29,18 +29,13 @@ if TYPE_CHECKING:
     from .se3 import SE3, SE3V
     from .so3 import SO3
 
-_LATER = {
-    "SO3": ".so3",
-    "SE3": ".se3",
-    "SE3V": ".se3",
-}  # loaded when first used (PEP 562): a planar run never loads them
-
-
-def __getattr__(name: str) -> object:
-    if name in _LATER:
-        return getattr(import_module(_LATER[name], __name__), name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
+# Loaded when first used (PEP 562): a planar run never loads them.
+_HOMES = {
+    "SO3": "so3",
+    "SE3": "se3",
+    "SE3V": "se3",
+}
+__getattr__, __dir__ = lazy_names(globals(), _HOMES)
 
 __all__ = [
     "LieGroup",

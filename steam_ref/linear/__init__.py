@@ -6,8 +6,9 @@ The names below load from their modules when first used (PEP 562), so that one l
 
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from .._package import lazy_names
 
 # Each public name and the module it lives in (loaded when the name is first used).
 _HOMES = {
@@ -48,18 +49,7 @@ __all__ = [
 ]
 
 
-def __getattr__(name: str) -> Any:
-    """Load a public name's module when the name is first used, and keep the name here."""
-    home = _HOMES.get(name)
-    if home is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(f".{home}", __name__), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_HOMES))
+__getattr__, __dir__ = lazy_names(globals(), _HOMES)
 
 
 if TYPE_CHECKING:  # what a type checker and an IDE see: the same names, imported eagerly
