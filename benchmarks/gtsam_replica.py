@@ -34,7 +34,7 @@ import numpy as np
 from steam_ref.factors import GPPriorFactor, PriorFactor, RangeFactor, VelocityFactor
 from steam_ref.factors.lie_prior import LiePriorFactor, LieStatePrior
 from steam_ref.factors.lie_readings import BodyVelocityFactor, PoseReading
-from steam_ref.paper.solvers import OnlineSolver
+from steam_ref.paper.online_solver import OnlineSolver
 from steam_ref.variables import Key, Values, X
 
 __all__ = [

@@ -57,6 +57,7 @@ LAYERS: dict[str, int] = {
     "steam_ref.paper.frontend": 9,
     "steam_ref.paper.problem": 10,
     "steam_ref.paper.rigid": 10,  # a 3-D run: timed readings to factors, batch / iSAM2 / fixed-lag, held-out scores
+    "steam_ref.paper.online_solver": 10,  # what a stream asks of every solver, how a forgotten past is read
     "steam_ref.paper.solvers": 10,
     "steam_ref.paper.options": 10,
     "steam_ref.paper.results": 10,

@@ -20,10 +20,11 @@ from steam_ref.cli import commands as cli
 from steam_ref.datasets import generate_synthetic, load_dataset
 from steam_ref.errors import SteamError, UnknownVariableError
 from steam_ref.paper.online import StreamingEstimator, run_online
+from steam_ref.paper.online_solver import OnlineSolver
 from steam_ref.paper.options import StreamOptions
 from steam_ref.paper.presets import PaperSetup
 from steam_ref.paper.readings import Readings
-from steam_ref.paper.solvers import FixedLagTreeSolver, OnlineSolver, make_solver
+from steam_ref.paper.solvers import FixedLagTreeSolver, make_solver
 from steam_ref.variables import X
 
 SETUP = PaperSetup.synthetic()

@@ -8,7 +8,8 @@ Above the algorithm (which knows nothing of data sets or schedules), in the orde
 - :mod:`~steam_ref.paper.frontend`: Algorithm 1 step 1, readings to factors (one front end for batch
   and stream);
 - :mod:`~steam_ref.paper.problem`, :mod:`~steam_ref.paper.converge`: the batch problem and its optimum;
-- :mod:`~steam_ref.paper.solvers`: PB, PBVR and BTGP behind one interface;
+- :mod:`~steam_ref.paper.online_solver`: :class:`OnlineSolver`, what the run loop asks of every solver, and how a
+  forgotten past is read; :mod:`~steam_ref.paper.solvers`: PB, PBVR, BTGP and the fixed-lag BTGP;
 - :mod:`~steam_ref.paper.options`: :class:`StreamOptions`, what one run chooses on top of its set-up;
 - :mod:`~steam_ref.paper.results`, :mod:`~steam_ref.paper.online`: a run's results, and the run loop;
 - :mod:`~steam_ref.paper.fidelity`, :mod:`~steam_ref.paper.experiments`: against the authors' saved

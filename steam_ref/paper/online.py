@@ -5,7 +5,7 @@
 they go to the solver (:mod:`steam_ref.paper.solvers`: PB, PBVR or BTGP, steps 2-7), and the front end
 then predicts from the solver's latest estimate. The loop asks every solver the same questions (what did the
 last update forget?); the queries read a forgotten past as their ``past`` argument says (``"lagged"`` or
-``"smoothed"``, :data:`~steam_ref.paper.solvers.PASTS`).
+``"smoothed"``, :data:`~steam_ref.paper.online_solver.PASTS`).
 
 When the solver updates is the set-up's :class:`~steam_ref.paper.presets.Schedule` (the paper's '/1' and
 '/10', what starts the stream, Plaza's first batch solve); :class:`ScheduleClock` follows it as the
@@ -33,11 +33,12 @@ from . import progress
 from .converge import converge
 from .divergence import DivergenceCheck
 from .frontend import FrontEnd, NewStep
+from .online_solver import OnlineSolver, SolverView
 from .options import StreamOptions
 from .presets import PaperSetup, Schedule
 from .readings import Readings
 from .results import RunResult, peak_rss_mb, scored
-from .solvers import OnlineSolver, SolverView, forget_landmarks, make_solver
+from .solvers import forget_landmarks, make_solver
 
 __all__ = ["ScheduleClock", "StreamingEstimator", "run_online"]
 
@@ -212,7 +213,7 @@ class StreamingEstimator:
         self.solver.update(self.factors, self.convergence.values)
         self.convergence_seconds = time.perf_counter() - start
 
-    # -- queries (``past``: how a forgotten variable is read, "lagged" or "smoothed"; solvers.PASTS) --
+    # -- queries (``past``: how a forgotten variable is read, "lagged" or "smoothed"; online_solver.PASTS) --
 
     def landmark_estimates(self, *, past: str = "lagged") -> dict[int, NDArray]:
         """Current estimate of every landmark the solver holds: id → (2,)."""

@@ -1,15 +1,12 @@
-"""The three solvers a stream can feed: PB, PBVR and BTGP, behind one small interface.  [YIB Sec. IV]
+"""The solvers a stream can feed: PB, PBVR, BTGP and the fixed-lag BTGP, each an :class:`OnlineSolver`.  [YIB Sec. IV]
 
 - ``pb``: periodic batch Gauss-Newton over everything so far, XL ordering, warm-started;
 - ``pbvr``: the same with AMD reordering at every update;
 - ``btgp``: the Bayes tree (:class:`steam_ref.bayes_tree.IncrementalSolver`, Alg. 1 steps 2-7);
-  with a lag, :class:`FixedLagTreeSolver` (:class:`steam_ref.bayes_tree.FixedLagSmoother`).
+  with a lag, :class:`FixedLagTreeSolver` (:class:`steam_ref.bayes_tree.FixedLagSmoother`), the one home of a
+  stream's fixed-lag rule, with the re-entry of a forgotten landmark (:func:`forget_landmarks`).
 
-The run loop asks every solver the same questions. A solver that forgets (the fixed-lag one) answers the
-questions about what it forgot; the others keep the defaults of :class:`OnlineSolver`: nothing forgotten, no
-window. The past is read with an explicit argument, ``past`` (:data:`PASTS`): ``"lagged"``, each forgotten
-variable as it left the window (what a fixed-lag smoother reports online), or ``"smoothed"``, given all the data
-so far (derivations Eq. 10.5). A solver that forgets nothing has one past, its estimate, whichever is asked.
+What the run loop asks of each, and how a forgotten past is read (``past``), is :mod:`steam_ref.paper.online_solver`'s.
 """
 
 from __future__ import annotations
@@ -17,7 +14,6 @@ from __future__ import annotations
 import time
 from array import array
 from collections.abc import Sequence
-from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
@@ -29,19 +25,16 @@ from ..covariance import sparse_joint_covariance, sparse_joint_covariances, spar
 from ..errors import SteamError
 from ..factors import Factor
 from ..graph import FactorGraph
-from ..variables import Key, Values, X, check_key, key_list
+from ..variables import Key, Values, X
+from .online_solver import OnlineSolver, check_past
 
 __all__ = [
     "METHODS",
-    "PASTS",
     "PB_RELATIVE_TOLERANCE",
     "PB_MAX_ITERATIONS",
-    "OnlineSolver",
     "PeriodicBatchSolver",
     "BayesTreeSolver",
     "FixedLagTreeSolver",
-    "SolverView",
-    "check_past",
     "forget_landmarks",
     "make_solver",
 ]
@@ -49,14 +42,6 @@ __all__ = [
 PB_RELATIVE_TOLERANCE = 1e-5  # PB/PBVR stop when the cost falls by less than this fraction (GTSAM's default)
 KEPT_REPORTS = 100  # a BTGP stream keeps the UpdateReports of its latest updates only (each names every key it touched)
 PB_MAX_ITERATIONS = 100  # PB/PBVR Gauss-Newton iterations per update at most (GTSAM's default)
-PASTS = ("lagged", "smoothed")  # how a forgotten variable's estimate is read: as it left the window, or given all
-
-
-def check_past(past: str) -> str:
-    """``past`` itself when it is one of :data:`PASTS`; a :class:`SteamError` naming it otherwise."""
-    if past not in PASTS:
-        raise SteamError(f"past must be one of {', '.join(map(repr, PASTS))}, got past={past!r}")
-    return past
 
 
 def forget_landmarks(landmarks: set[int], solver: OnlineSolver) -> None:
@@ -64,71 +49,6 @@ def forget_landmarks(landmarks: set[int], solver: OnlineSolver) -> None:
     its front end has given a variable), so the next reading of one brings it in anew, as at its first sighting (its
     first value and prior). Never held, a reading of a forgotten landmark would be refused (UnknownVariableError)."""
     landmarks.difference_update(k.index for k in solver.forgotten() if k.symbol == "l")
-
-
-class OnlineSolver:
-    """What a stream needs from a solver: the same questions of every one.
-
-    :meth:`update`, :meth:`estimate_of`, :meth:`estimate` and the covariance queries each solver answers; the
-    questions about forgetting (:meth:`forgotten`, :attr:`n_marginalized`, :attr:`peak_window`,
-    :attr:`smoothing_seconds`) have the answers of a solver that forgets nothing here.
-    """
-
-    name: str = ""
-
-    def update(self, factors: list[Factor], values: Values) -> None:
-        """Add new factors and the initial estimates of new variables, then re-solve."""
-        raise NotImplementedError
-
-    def estimate_of(self, key: Key, *, past: str = "lagged") -> NDArray:
-        """Current estimate of one variable; a forgotten one read as ``past`` says (:data:`PASTS`)."""
-        raise NotImplementedError
-
-    def estimate(self, *, past: str = "lagged") -> Values:
-        """Current estimate of every variable; the forgotten ones read as ``past`` says (:data:`PASTS`)."""
-        raise NotImplementedError
-
-    def estimates_of(self, keys: Sequence[Key], *, past: str = "lagged") -> dict[Key, NDArray]:
-        """Current estimate of each of ``keys``, as :meth:`estimate_of` reads each (a solver that forms its
-        estimates on demand forms these in one call per kind); a key named twice is refused (the answer, a mapping
-        by key, would hold it once)."""
-        return {k: self.estimate_of(k, past=past) for k in key_list("keys", keys, distinct=True)}
-
-    def forgotten(self) -> Sequence[Key]:
-        """The variables the last update forgot (marginalized): none."""
-        return ()
-
-    @property
-    def n_marginalized(self) -> int | None:
-        """Variables forgotten so far (None: this solver forgets nothing)."""
-        return None
-
-    @property
-    def peak_window(self) -> int | None:
-        """Most variables held at once (None: this solver holds everything, it has no window)."""
-        return None
-
-    @property
-    def smoothing_seconds(self) -> float | None:
-        """Wall time of the backward pass behind the latest ``past="smoothed"`` query since the last update
-        (None: none ran; a solver that forgets nothing needs none)."""
-        return None
-
-    def marginal_covariance(self, key: Key) -> NDArray:
-        """Marginal covariance (d, d) of one variable (GTSAM's ``marginalCovariance``)."""
-        return self.marginal_covariances([check_key("key", key)])[key]
-
-    def marginal_covariances(self, keys: Sequence[Key]) -> dict[Key, NDArray]:
-        """Marginal covariance of each of ``keys``."""
-        raise NotImplementedError
-
-    def joint_covariance(self, keys: Sequence[Key]) -> NDArray:
-        """Joint marginal covariance of ``keys``, (Σdₖ, Σdₖ), in the order given (GTSAM's ``jointMarginalCovariance``)."""
-        raise NotImplementedError
-
-    def joint_covariances(self, groups: Sequence[Sequence[Key]]) -> list[NDArray]:
-        """Joint marginal covariance of each group of keys, stacked in the order given."""
-        raise NotImplementedError
 
 
 class PeriodicBatchSolver(OnlineSolver):
@@ -288,14 +208,17 @@ class FixedLagTreeSolver(BayesTreeSolver):
 
     @property
     def n_marginalized(self) -> int | None:
+        """Variables (states and landmarks) marginalized so far, a count."""
         return self.inner.n_marginalized
 
     @property
     def peak_window(self) -> int | None:
+        """Most variables the window has held at once (after an update, before it marginalizes), a count."""
         return self.inner.peak_window
 
     @property
     def smoothing_seconds(self) -> float | None:
+        """Wall time of the latest ``past="smoothed"`` backward pass since the last update, seconds (None: none ran)."""
         return self._smoothing_s
 
     def _smoothed_past(self) -> dict[Key, NDArray]:
@@ -342,35 +265,6 @@ class FixedLagTreeSolver(BayesTreeSolver):
         for k, v in self._landmarks.items():  # never in the window (popped when one enters again)
             out.insert(k, self._past(k, v, past))
         return out
-
-
-@dataclass(frozen=True)
-class SolverView:
-    """A solver read with one choice of ``past``: what a :class:`~steam_ref.trajectory.Trajectory` queries."""
-
-    solver: OnlineSolver
-    past: str = "lagged"
-
-    def __post_init__(self) -> None:
-        check_past(self.past)
-
-    def estimate_of(self, key: Key) -> NDArray:
-        return self.solver.estimate_of(key, past=self.past)
-
-    def estimates_of(self, keys: Sequence[Key]) -> dict[Key, NDArray]:
-        return self.solver.estimates_of(keys, past=self.past)
-
-    def estimate(self) -> Values:
-        return self.solver.estimate(past=self.past)
-
-    def marginal_covariances(self, keys: Sequence[Key]) -> dict[Key, NDArray]:
-        return self.solver.marginal_covariances(keys)
-
-    def joint_covariance(self, keys: Sequence[Key]) -> NDArray:
-        return self.solver.joint_covariance(keys)
-
-    def joint_covariances(self, groups: Sequence[Sequence[Key]]) -> list[NDArray]:
-        return self.solver.joint_covariances(groups)
 
 
 def make_solver(
