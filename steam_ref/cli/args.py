@@ -164,8 +164,8 @@ def qc_diagonal(text: str) -> list[float]:
     return [float(v) for v in values if v is not None]
 
 
-# Singer's 1/alpha: the acceleration's memory. Below 1e-6 s (alpha dt > 1e6 at the data sets' dt of 1 s to
-# 0.1 s) its process noise spans more than float64 resolves; above 1e8 s it is WNOJ to float64's precision.
+# Singer's 1/alpha, the acceleration's memory: the prior refuses an alpha*dt too stiff for float64 (1.4e4, naming the
+# gap: gp.models.check_singer_step), below 1e-6 s it is no motion's; above 1e8 s it is WNOJ to float64's precision.
 SINGER_TIME_CONSTANTS = (1e-6, 1e8)
 
 

@@ -47,6 +47,8 @@ __all__ = [
     "singer_matrices",
     "singer_transition",
     "singer_process_noise",
+    "check_singer_step",
+    "SINGER_LARGEST_ALPHA_DT",
     "ClosedForm",
 ]
 
@@ -199,6 +201,30 @@ def singer_process_noise(dt: float, alpha: float, qc: ArrayLike) -> NDArray:
     return finite_result("Q(dt) of Singer's model", np.kron(q, qc), dt=dt, alpha=alpha)
 
 
+# Singer's prior over Δt with x = αΔt ≫ 1 (S(x) above in y = 1/x): Q_vv → Δt Qc/α² = Δt³ Qc/x², Q_pp → Δt³ Qc/(3α²),
+# Q_aa → Qc/(2α): the prior holds the pose and twist about x²/3 times as stiffly as WNOJ with the same Qc over the same
+# Δt (Q_vv of WNOJ is Δt³ Qc/3), the acceleration only x/2 times. Beyond sqrt(1/eps) = 6.7e7 that stiffness leaves
+# float64 unable to resolve the readings beside the prior (the rule of the CLI's --qc-scale): the elimination breaks
+# down, or its answer is ill-conditioned. So x²/3 <= sqrt(1/eps), x <= 1.4e4 (a 3-D task of 10 states, 1 s apart:
+# clean at x = 1.4e4, ill-conditioned at 3.3e4, broken down at 1e6, blaming a state as if a prior were missing).
+SINGER_LARGEST_ALPHA_DT = float(np.sqrt(3 / np.sqrt(np.finfo(float).eps)))
+
+
+def check_singer_step(dt: float, alpha: float) -> None:
+    """Refuse a prior factor of Singer's model over ``dt`` whose αΔt exceeds :data:`SINGER_LARGEST_ALPHA_DT`: a
+    :class:`~steam_ref.errors.NumericalError` naming the time constant 1/α, α, the interval and what to give."""
+    dt, alpha = time_step(dt), check_alpha(alpha)
+    x = alpha * dt
+    if x > SINGER_LARGEST_ALPHA_DT:
+        raise NumericalError(
+            f"Singer's prior with time_constant={1 / alpha:.3g} (alpha={alpha:.3g}) over an interval dt={dt!r}: "
+            f"alpha*dt = {x:.3g} makes its Q(dt) hold the pose and twist {x * x / 3:.2g} times as stiffly as WNOJ's "
+            f"with the same Qc, beyond float64's resolution beside the readings (alpha*dt <= "
+            f"{SINGER_LARGEST_ALPHA_DT:.3g}); give a time constant of at least {dt / SINGER_LARGEST_ALPHA_DT:.3g} "
+            f"on the prior's clock, or the WNOA prior the model tends to"
+        )
+
+
 # --- the models LinearSDE knows in closed form ----------------------------------------------------
 
 
@@ -218,6 +244,7 @@ class _Forms:
     process_noise: Callable[[float, ArrayLike, float | None], NDArray]
     has_alpha: bool = False
     sqrt_information: Callable[[float, ArrayLike, float | None], NDArray] | None = None
+    check_step: Callable[[float, float | None], None] | None = None  # refuses a prior factor's dt float64 cannot hold
 
 
 _FORMS: dict[str, _Forms] = {  # a model LinearSDE knows in closed form is one entry here
@@ -237,6 +264,7 @@ _FORMS: dict[str, _Forms] = {  # a model LinearSDE knows in closed form is one e
         lambda dt, d, alpha: singer_transition(dt, _given(alpha), d),
         lambda dt, qc, alpha: singer_process_noise(dt, _given(alpha), qc),
         has_alpha=True,
+        check_step=lambda dt, alpha: check_singer_step(dt, _given(alpha)),
     ),
 }
 
@@ -281,3 +309,10 @@ class ClosedForm:
         without one (its factor factors Q(Δt) itself)."""
         form = _FORMS[self.name].sqrt_information
         return None if form is None else form(dt, qc, self.alpha)
+
+    def check_step(self, dt: float) -> None:
+        """Refuse ``dt`` as a prior factor's interval where the model's Q(Δt) is too stiff for float64 beside the
+        readings (Singer's: :func:`check_singer_step`); every Δt > 0 for the others."""
+        check = _FORMS[self.name].check_step
+        if check is not None:
+            check(dt, self.alpha)

@@ -151,7 +151,13 @@ class LinearSDE:
     def sqrt_information(self, dt: float) -> NDArray | None:
         """W with WᵀW = Q(dt)⁻¹ where the model has it in closed form, memoised by value, and there is no input:
         the paper's WNOA, whose prior factor is then ``GPPriorFactor.wnoa``'s bit for bit. None otherwise (the
-        factor factors Q(dt)).  [YIB Eq. 17, 22]"""
+        factor factors Q(dt)).  [YIB Eq. 17, 22]
+
+        Every prior factor asks it first, so it is where a known model refuses an interval over which its prior is
+        too stiff for float64 beside the readings (``ClosedForm.check_step``: Singer's αΔt), naming the model's
+        parameters and the interval, before the elimination breaks down blaming a state."""
+        if self.model is not None:
+            self.model.check_step(dt)
         if self.model is None or np.any(self.v):
             return None
         return self.model.sqrt_information(dt, self.qc)
