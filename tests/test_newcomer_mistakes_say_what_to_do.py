@@ -3,6 +3,8 @@ is the project's own (:class:`sr.SteamError`), names the offending value, and sa
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -83,6 +85,34 @@ def test_a_bearing_within_a_full_turn_is_read_either_way_round(maker: str) -> No
     for b in (5.0, 2 * np.pi, 3.5):
         one, other = _bearing_makers()[maker](b), _bearing_makers()[maker](b - 2 * np.pi)
         np.testing.assert_allclose(one.error(x, landmark), other.error(x, landmark), rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("maker", sorted(_bearing_makers()))
+@pytest.mark.parametrize("sign", [1.0, -1.0])
+def test_a_float32_full_turn_is_a_full_turn_read_as_given(maker: str, sign: float) -> None:
+    """np.float32(2π) is 2π + 1.7e-7 as float64: a float32 sensor's full turn, refused before as "beyond a full turn"
+    with a hint to convert degrees. It is read as given (not clipped to 2π): its error is that of a reading of 0 less
+    float32's rounding, the difference of the two float64 numbers (exact, Sterbenz)."""
+    x, landmark = np.array([1.0, 2.0, 0.3, 0.5, 0.1, 0.0]), np.array([4.0, -1.0])
+    turn = np.float32(sign * 2 * np.pi)
+    rounding = float(turn) - sign * 2 * np.pi  # 1.7e-7 either way round
+    assert abs(rounding) > 1e-7
+    one, zero = _bearing_makers()[maker](turn), _bearing_makers()[maker](0.0)
+    assert getattr(one, "inner", one).measured[0] == float(turn)  # the reading kept as given (PoseReading wraps one)
+    np.testing.assert_allclose(one.error(x, landmark)[0], zero.error(x, landmark)[0] - rounding, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("maker", sorted(_bearing_makers()))
+def test_a_bearing_just_past_a_full_turn_is_refused_with_both_readings_of_it(maker: str) -> None:
+    """The next float32 after 2π, and 2π + 1e-4 in float64, are past a full turn: refused, naming the value, the
+    bound and both remedies, degrees and the wrapped radians (math.remainder, the oracle)."""
+    for value in (float(np.nextafter(np.float32(2 * np.pi), np.float32(7.0))), 2 * np.pi + 1e-4):
+        with pytest.raises(sr.SteamError) as caught:
+            _bearing_makers()[maker](value)
+        message = str(caught.value)
+        assert f"={value!r}" in message and f"{float(np.float32(2 * np.pi))!r}: 2π as float32 rounds it" in message
+        assert f"np.radians({value!r}) = {np.radians(value):.6g}" in message, message
+        assert f"math.remainder({value!r}, 2 * math.pi) = {math.remainder(value, 2 * math.pi):.6g}" in message
 
 
 @pytest.mark.parametrize("solver", ["graph check", "batch", "incremental"])

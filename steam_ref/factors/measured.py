@@ -88,18 +88,24 @@ def range_reading(name: str, measured: float) -> NDArray:
     return r
 
 
-MAX_BEARING = 2 * math.pi  # rad: a bearing reading beyond a full turn either way is no sensor's, most often degrees
+# rad: a bearing beyond a full turn either way is no sensor's, most often degrees. The bound is 2π as float32 rounds it
+# (up, by 1.7e-7): a float32 sensor's full turn, np.float32(2π), is a reading of a full turn, not one past it.
+MAX_BEARING = float(np.float32(2 * math.pi))
 
 
 def bearing_reading(name: str, measured: float) -> NDArray:
     """A bearing reading as a (1,) vector: a finite angle (one number) in radians, within a full turn either way
-    (abs(b) <= 2π covers both a sensor's [-π, π) and its [0, 2π)). A larger one is refused, not wrapped: it is almost
-    always degrees (a reading of 90 is a quarter turn in degrees, 14 turns in radians), and the message says so."""
+    (abs(b) <= 2π covers both a sensor's [-π, π) and its [0, 2π]; the bound is 2π as float32 rounds it,
+    :data:`MAX_BEARING`, so a float32 reading of a full turn is read as given, not clipped). A larger one is refused,
+    not wrapped: it is almost always degrees (a reading of 90 is a quarter turn in degrees, 14 turns in radians), or
+    radians past a full turn, and the message gives both ways to say what was meant."""
     b = measured_scalar(measured, name)
     if abs(b[0]) > MAX_BEARING:
         value = float(b[0])
         raise SteamError(
-            f"a bearing is in radians, within a full turn (abs({name}) <= 2π), got {name}={value!r}: if it is in "
-            f"degrees, give np.radians({value!r}) = {math.radians(value):.6g}"
+            f"a bearing is in radians, within a full turn (abs({name}) <= 2π, or {MAX_BEARING!r}: 2π as float32 "
+            f"rounds it), got {name}={value!r}: if it is in degrees, give np.radians({value!r}) = "
+            f"{math.radians(value):.6g}; if it is radians past a full turn, give it wrapped, "
+            f"math.remainder({value!r}, 2 * math.pi) = {math.remainder(value, 2 * math.pi):.6g}"
         )
     return b

@@ -323,8 +323,9 @@ class BearingFactor(_LandmarkReading):
 
         ``BearingFactor.create(state, landmark, measured, sigma, *, loss=None, state_dim=6)``
 
-    ``state``: ``X(i)``; ``landmark``: ``L(j)``; ``measured``: the bearing b (rad, within a full turn: abs(b) <= 2π): 0 straight ahead (along the
-    heading θ), positive counter-clockwise (to the robot's left); ``sigma``: its standard deviation (rad).
+    ``state``: ``X(i)``; ``landmark``: ``L(j)``; ``measured``: the bearing b (rad, within a full turn: abs(b) <= 2π,
+    as float32 rounds it): 0 straight ahead (along the heading θ), positive counter-clockwise (to the robot's left);
+    ``sigma``: its standard deviation (rad).
     Conventions (frames, units): docs/api.md.
 
     Error:  e = wrap(atan2(ℓy - y, ℓx - x) - θ - b),   wrap to [-π, π)
@@ -344,7 +345,7 @@ class BearingRangeFactor(StateMeasurement):
 
         ``BearingRangeFactor.create(state, landmark, bearing, range_, noise, *, loss=None, state_dim=6)``
 
-    ``state``: ``X(i)``; ``landmark``: ``L(j)``; ``bearing``: b (rad, abs(b) <= 2π) in the robot frame, 0 straight ahead,
+    ``state``: ``X(i)``; ``landmark``: ``L(j)``; ``bearing``: b (rad, abs(b) <= 2π, as float32 rounds it) in the robot frame, 0 straight ahead,
     positive counter-clockwise (to the left); ``range_``: r (m, not negative); ``noise``: sigmas (2,) or a
     covariance (2, 2) of [b, r]. Conventions (frames, units): docs/api.md.
 
