@@ -31,6 +31,7 @@ LAYERS: dict[str, int] = {
     "steam_ref._package": 0,  # the installed version and the lazy-name rule every lazy package uses; stdlib only
     "steam_ref.errors": 0,
     "steam_ref.arguments": 0,
+    "steam_ref.files": 0,  # a file written whole or not at all (temporary, then os.replace): imports only errors
     "steam_ref.choices": 0,  # the names a user picks from and the defaults help quotes; imports nothing: the CLI's parser reads it
     "steam_ref.plot": 1,  # a leaf: draws plain arrays, imports only errors, so any layer may draw
     "steam_ref.manifold": 1,  # how an estimate moves (x ⊕ δ, x ⊖ x0), a variable's kind: imports only errors
@@ -71,7 +72,7 @@ LAYERS: dict[str, int] = {
     "steam_ref.paper": 12,  # its __init__ re-exports the layer's main names
     # tools
     "steam_ref.conformance": 13,
-    "steam_ref.homework": 13,  # the tutorials as markable homework: handouts and the marking run; imports errors (0)
+    "steam_ref.homework": 13,  # the tutorials as markable homework: handouts and the marking run; imports errors, files (0)
     "steam_ref.cli": 14,
     "steam_ref.__main__": 14,
     "steam_ref": 15,  # the facade: names load lazily from the layers; nothing imports it

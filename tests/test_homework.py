@@ -7,6 +7,7 @@ submission; bad input is one line and exit code 2. (The tutorials themselves: te
 from __future__ import annotations
 
 import copy
+import errno
 import json
 import os
 import re
@@ -279,6 +280,33 @@ def test_two_notebooks_of_one_name_are_refused_not_one_handout_written_over_the_
         out, err = capsys.readouterr()
         assert (code, out) == (2, "") and len(err.strip().splitlines()) == 1 and said in err, err
         assert not (course / "out").exists()
+
+
+@pytest.mark.parametrize("failure", ["a full disk", "an interrupt"])
+def test_a_handout_cut_short_leaves_the_previous_file_and_no_temporary(course, monkeypatch, capsys, failure):
+    """The handout's write fails half-way (``Path.write_text`` writes half the text, then raises): it was written in
+    place, leaving half a handout and losing the one there. Now the handout there is as it was, no temporary is
+    left, and the command answers in one line: exit code 2 naming --out and the file, or 130 for an interrupt."""
+    previous = (course / "handout" / "tiny.ipynb").read_bytes()
+    raised = OSError(errno.ENOSPC, os.strerror(errno.ENOSPC)) if failure == "a full disk" else KeyboardInterrupt()
+    write_text = Path.write_text
+
+    def half_then_fail(self, data, *args, **kwargs):
+        write_text(self, data[: len(data) // 2], *args, **kwargs)
+        raise raised
+
+    monkeypatch.setattr(Path, "write_text", half_then_fail)
+    code = main(["homework", "handout", str(course / "teacher"), "--out", str(course / "handout")])
+    monkeypatch.undo()
+    out, err = capsys.readouterr()
+    assert (course / "handout" / "tiny.ipynb").read_bytes() == previous
+    assert sorted(os.listdir(course / "handout")) == ["tiny.ipynb"]
+    assert out == "" and len(err.strip().splitlines()) == 1, err
+    if failure == "a full disk":
+        assert code == 2 and f"--out: cannot write '{course / 'handout' / 'tiny.ipynb'}'" in err, err
+        assert os.strerror(errno.ENOSPC) in err and "what was there is left as it was" in err, err
+    else:
+        assert code == 130 and "interrupted" in err, err
 
 
 MALFORMED = {

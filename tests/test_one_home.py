@@ -9,6 +9,8 @@
 - **A settings class's replace with an unknown-field check** is ``arguments.replace_fields``.
 - **A package's lazy names** (PEP 562: a name loaded from its module on first use) are ``_package.lazy_names``'; no
   package writes its own ``__getattr__`` or ``__dir__`` (tests/test_lazy_names.py checks the rule itself).
+- **A file written whole or not at all** (a temporary beside it, then ``os.replace``) is ``files.replace_file``:
+  the command's outputs and the homework's handouts both write through it.
 - **A stream's fixed-lag rule** (what is stamped when, a forgotten landmark's re-entry) is ``paper.solvers``'.
 - **No tracker numbers** in code, tests, docs, benchmarks or tutorials: a clone cannot open them.
 """
@@ -237,6 +239,19 @@ def test_a_packages_lazy_names_are_loaded_by_the_one_rule():
         package = importlib.import_module(name)
         assert package.__getattr__.__qualname__ == "lazy_names.<locals>.__getattr__", name
         assert package.__dir__.__qualname__ == "lazy_names.<locals>.__dir__", name
+
+
+def test_a_file_written_whole_is_written_by_replace_file_alone():
+    """``os.replace`` is called in ``files/replace.py`` and nowhere else but the conformance kit's export, which moves
+    a whole staged folder (no file), so a writer that must not leave half a file reuses ``files.replace_file``."""
+    found = [
+        f"{p.relative_to(ROOT)}:{n}"
+        for p in _python_files()
+        if p.relative_to(PACKAGE).as_posix() not in ("files/replace.py", "conformance/command.py")
+        for n, line in enumerate(p.read_text(encoding="utf-8").splitlines(), 1)
+        if "os.replace(" in line
+    ]
+    assert not found, f"a temporary-and-replace write written again (use files.replace_file): {found}"
 
 
 def test_a_streams_fixed_lag_rule_is_written_once_for_both_streams():

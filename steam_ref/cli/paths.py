@@ -14,11 +14,9 @@ The checks load no solver and no NumPy: a command checks its outputs before its 
 from __future__ import annotations
 
 import argparse
-import contextlib
 import errno
 import importlib.util
 import os
-import secrets
 import stat
 import tempfile
 from collections.abc import Callable
@@ -26,6 +24,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from ..errors import SteamError
+from ..files import replace_file
 
 if TYPE_CHECKING:
     import numpy as np
@@ -196,31 +195,15 @@ def check_outputs_not_inputs(outputs: dict[str, str | None], inputs: list[Path])
 
 
 def write_output(path: str, option: str, write: Callable[[str], object]) -> str:
-    """Write an output ``path`` checked by :func:`check_output`: ``write(name)`` writes a new file beside
-    its real target (a link is followed and stays a link), which then replaces it in one step. Returns the
+    """Write an output ``path`` checked by :func:`check_output` by ``write(name)``, through
+    :func:`~steam_ref.files.replace_file` (a new file beside its real target replaces it in one step). Returns the
     line saying where it went (``--save-estimates``: "estimates written to /abs/path"), for the text output.
 
     A failure (a full disk, ...) leaves what was at ``path`` as it was and is a SteamError naming the
     option and the path. A file that was there keeps its permission bits.
     """
     refuse_dangling(path, option)  # checked before the run; a link made dangling since is refused too
-    real = Path(os.path.realpath(path))
-    # the temporary's name ends in the whole name, so it keeps the extension a writer goes by (np.savez adds
-    # ".npz" to a name without one, matplotlib picks its format by it) even for a dotfile such as ".npz"
-    temporary = real.parent / f".{os.getpid()}.{secrets.token_hex(4)}.{real.name}"
-    try:
-        os.close(os.open(temporary, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o666))  # the umask applies
-        write(str(temporary))
-        if real.exists():
-            os.chmod(temporary, stat.S_IMODE(os.stat(real).st_mode))
-        os.replace(temporary, real)
-    except OSError as err:
-        raise SteamError(
-            f"{option}: cannot write {path!r} ({err.strerror or err}); what was there is left as it was"
-        ) from None
-    finally:
-        with contextlib.suppress(OSError):
-            os.unlink(temporary)
+    replace_file(path, write, option)
     return f"\n{option.removeprefix('--').removeprefix('save-').replace('-', ' ')} written to {os.path.abspath(path)}"
 
 

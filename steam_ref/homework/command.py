@@ -18,10 +18,12 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 from ..errors import SteamError
+from ..files import replace_file
 from .exercises import handout, read_notebook
 from .marking import SubmissionMark, Tutorial, load_tutorials, mark_submission, requirements, tutorial_of
 
@@ -52,6 +54,11 @@ def _notebooks(paths: list[str], what: str) -> list[tuple[Path, str]]:
     return found
 
 
+def _writer(text: str) -> Callable[[str], object]:
+    """What writes ``text`` to a file of the given name (for :func:`~steam_ref.files.replace_file`)."""
+    return lambda name: Path(name).write_text(text, encoding="utf-8")
+
+
 def _handout(args: argparse.Namespace) -> int:
     sources = _notebooks(args.notebooks, "handout")
     made = [(path, handout(read_notebook(path), path.name)) for path, _ in sources]  # all checked before any write
@@ -77,10 +84,10 @@ def _handout(args: argparse.Namespace) -> int:
             )
     try:
         out.mkdir(parents=True, exist_ok=True)
-        for path, nb in made:
-            (out / path.name).write_text(json.dumps(nb, indent=1, ensure_ascii=False) + "\n", encoding="utf-8")
     except OSError as exc:
         raise SteamError(f"cannot write the handouts to {args.out!r}: {exc.strerror or exc}") from None
+    for path, nb in made:  # each whole or not at all: a full disk or an interrupt leaves the file that was there
+        replace_file(out / path.name, _writer(json.dumps(nb, indent=1, ensure_ascii=False) + "\n"), "--out")
     print(f"wrote {len(made)} handout{'s' * (len(made) != 1)} to {out} (answers empty, no solution, no marking check)")
     return 0
 
