@@ -28,6 +28,7 @@ from __future__ import annotations
 import json
 import os
 import re
+import sys
 from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
@@ -52,8 +53,14 @@ def _key(item: Any) -> str:
 
 
 def _text_of(path: str | os.PathLike) -> str:
-    """The file's text; DataError naming the line of a byte that is not UTF-8."""
-    raw = Path(path).read_bytes()
+    """The file's text; DataError naming the file when it cannot be read (a folder, missing, not readable) and the
+    line of a byte that is not UTF-8."""
+    try:
+        raw = Path(path).read_bytes()
+    except IsADirectoryError:
+        raise DataError(f"{path}: a folder, not a results file; give the JSONL file a sweep wrote") from None
+    except OSError as err:
+        raise DataError(f"{path}: cannot read it ({err.strerror or err})") from None
     try:
         return raw.decode("utf-8")
     except UnicodeDecodeError as exc:
@@ -61,23 +68,37 @@ def _text_of(path: str | os.PathLike) -> str:
         raise DataError(f"{path}, line {line}: byte {raw[exc.start]:#04x} is not UTF-8 text") from None
 
 
+def _json(text: str) -> tuple[Any, str]:
+    """(the JSON value of one line, "") or (None, what is wrong with it): not JSON, an integer past Python's digit
+    limit, nesting past its recursion limit. Never raises: a line is judged by its caller, naming file and line."""
+    try:
+        return json.loads(text), ""
+    except json.JSONDecodeError as err:
+        return None, f"not JSON ({err.msg})"
+    except ValueError:  # an integer of more than sys.get_int_max_str_digits() digits
+        return None, f"not readable JSON (an integer of more than {sys.get_int_max_str_digits()} digits)"
+    except RecursionError:
+        return None, "not readable JSON (nested deeper than the reader's recursion limit)"
+
+
 def read_results(
     path: str | os.PathLike, study: dict, check: Callable[[Any, Any], None] | None = None
 ) -> dict[str, Any]:
-    """The results a JSONL file holds, by item (its JSON text): DataError naming the file and line when the
-    file was written by another study, has an unreadable line other than a last one cut short, a result
-    ``check(item, result)`` refuses (it raises SteamError saying why), or an item on two lines with
-    different results."""
+    """The results a JSONL file holds, by item (its JSON text): DataError naming the file, and the line, when the
+    file cannot be read (a folder, missing, not readable), its first line is not a study line or was written by
+    another study, it has an unreadable line other than a last one cut short (not JSON, JSON of another shape, an
+    integer or a nesting past what Python's reader takes), a result ``check(item, result)`` refuses (it raises
+    SteamError saying why), or an item on two lines with different results."""
     lines = _text_of(path).split("\n")
     if not lines or not lines[0].strip():
         raise DataError(f"{path}: empty, no study line; remove it or give another file")
-    try:
-        head = json.loads(lines[0])
-    except json.JSONDecodeError:
-        raise DataError(f"{path}, line 1: not a study line") from None
-    if not isinstance(head, dict) or head.get("study") != json.loads(json.dumps(study)):
+    head, wrong = _json(lines[0])
+    if wrong or not isinstance(head, dict) or "study" not in head:
+        what = wrong or f"{json.dumps(head)[:80]}, not an object holding 'study'"
+        raise DataError(f"{path}, line 1: not a study line: {what}; give the JSONL file a sweep wrote")
+    if head["study"] != json.loads(json.dumps(study)):
         raise DataError(
-            f"{path} was written by another study ({json.dumps(head.get('study') if isinstance(head, dict) else head)[:200]}); "
+            f"{path} was written by another study ({json.dumps(head['study'])[:200]}); "
             f"this one is {json.dumps(study)[:200]}: give another file"
         )
     done: dict[str, Any] = {}
@@ -86,15 +107,14 @@ def read_results(
     for number, line in enumerate(lines[1:], start=2):
         if not line.strip():
             continue
-        try:
-            row = json.loads(line)
-            if not isinstance(row, dict) or set(row) != {"item", "result"}:
-                raise KeyError("item")
-            key = _key(row["item"])
-        except (json.JSONDecodeError, KeyError, TypeError, ValueError):
+        row, wrong = _json(line)
+        if not wrong and (not isinstance(row, dict) or set(row) != {"item", "result"}):
+            wrong = "not an object holding 'item' and 'result'"
+        if wrong:
             if number - 1 == last:  # cut short while being written: that item runs again
                 continue
-            raise DataError(f"{path}, line {number}: not a result line ({line[:80]!r})") from None
+            raise DataError(f"{path}, line {number}: not a result line ({line[:80]!r}): {wrong}")
+        key = _key(row["item"])
         if check is not None:
             try:
                 check(row["item"], row["result"])
