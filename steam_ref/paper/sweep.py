@@ -15,7 +15,7 @@ parameters) through joblib: loky worker processes by default, or joblib's ``dask
   ``{"item": ..., "result": ...}``, flushed) after a first line ``{"study": ...}`` describing the study.
   ``resume=True`` reads the file back, checks it was written by the same study, and runs only the items
   it lacks; a last line cut short by an interruption is ignored (and left in the file, followed by a line
-  break), any other unreadable line is an error naming it: text that is not UTF-8 or not JSON, a line
+  break), any other unreadable line is an error naming it: text that is not UTF-8 or not JSON (or JSON past Python's reader's limits), a line
   without ``item`` and ``result``, or a result that ``check`` (the caller's test of one result) refuses.
   An item on two lines is refused, naming both, unless the two lines are the same result (a run repeated
   after an interruption gives the same figures, seed for seed): a result is never picked by its position.
