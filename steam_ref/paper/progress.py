@@ -26,7 +26,7 @@ import threading
 from collections.abc import Iterator
 from typing import Any
 
-__all__ = ["bar", "display", "say", "stream_label", "wanted", "working"]
+__all__ = ["bar", "display", "drawn_here_only", "say", "stream_label", "wanted", "working"]
 
 
 def wanted(asked: bool | None, json_output: bool = False) -> bool:
@@ -93,6 +93,16 @@ def bar(total: int | None, label: str, enabled: bool, unit: str = "it") -> Any:
     from tqdm import tqdm
 
     return tqdm(total=total, desc=label, disable=not enabled, mininterval=0.5, file=display(), unit=unit)
+
+
+def drawn_here_only() -> None:
+    """Bars in this process lock one another out with a thread lock, not tqdm's default, a multiprocessing
+    semaphore: for a sweep's worker process (:mod:`steam_ref.paper.sweep`), whose bars are silent and shared with no
+    other process, and which a Ctrl-C kills: a semaphore it made would be left registered with the resource tracker,
+    which then warns of it on stderr after the command's one line."""
+    from tqdm import tqdm
+
+    tqdm.set_lock(threading.RLock())
 
 
 def say(line: str, enabled: bool) -> None:

@@ -21,21 +21,35 @@ parameters) through joblib: loky worker processes by default, or joblib's ``dask
   after an interruption gives the same figures, seed for seed): a result is never picked by its position.
 - **Dask**: a ``scheduler`` address is checked before any work (``host:port`` or ``tcp://host:port``);
   a log that already holds every item runs nothing and starts no cluster.
+- **Interrupts**: only this process answers Ctrl-C or SIGTERM (a terminal's Ctrl-C and ``timeout``'s SIGTERM
+  reach the whole process group): the worker processes it starts ignore both (loky's through
+  :func:`_worker_start`, a local Dask cluster's through :func:`dask_setup`), and the interrupt that stops the sweep
+  kills its loky workers and waits for them (joblib's generator closed), or closes the Dask cluster, before it
+  goes on to the caller, a second one meanwhile held until they are gone. So the command's one line is all
+  stderr gets: no worker's traceback, no resource tracker's warning of a semaphore left behind (a worker's bars
+  lock with a thread lock, :func:`~steam_ref.paper.progress.drawn_here_only`), no worker left running. The
+  results already logged stay, and resuming runs the rest.
 """
 
 from __future__ import annotations
 
+import contextlib
 import json
+import logging
 import os
 import re
+import signal
 import sys
-from collections.abc import Callable, Iterable
+import threading
+import warnings
+from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 from typing import Any
 
 from ..arguments import is_integer
 from ..errors import DataError, SteamError
 from ..linear.threads import blas_threads
+from . import progress
 
 __all__ = ["BACKENDS", "run_sweep", "read_results"]
 
@@ -46,6 +60,46 @@ def _limited(function: Callable[[Any], Any], item: Any) -> tuple[Any, Any]:
     """``function(item)`` with one BLAS/OpenMP thread; returns (item, result)."""
     with blas_threads(1):
         return item, function(item)
+
+
+# The signals a command answers (Ctrl-C; SIGTERM from kill, timeout or a batch scheduler): its parent process alone.
+_INTERRUPTS = (signal.SIGINT, signal.SIGTERM)
+
+
+def _worker_start() -> None:
+    """What a loky worker process does first: ignore Ctrl-C and SIGTERM (the parent answers them and kills its
+    workers), and lock its bars with a thread lock (a semaphore would outlive the worker it is killed with)."""
+    for interrupt in _INTERRUPTS:
+        signal.signal(interrupt, signal.SIG_IGN)
+    progress.drawn_here_only()
+
+
+def dask_setup(worker: Any) -> None:  # noqa: ARG001 (Dask's preload hook: called with the worker)
+    """The preload of a local Dask cluster's worker processes (Dask calls a preloaded module's ``dask_setup``, in
+    the worker process's main thread): as :func:`_worker_start` for loky's."""
+    _worker_start()
+
+
+@contextlib.contextmanager
+def _held() -> Iterator[None]:
+    """Ctrl-C and SIGTERM held while the block runs (stopping the workers), then delivered: a second interrupt
+    cannot leave a worker running. In the main thread only, where Python runs its signal handlers."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    before = signal.pthread_sigmask(signal.SIG_BLOCK, _INTERRUPTS)
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, before)
+
+
+def _stop(outputs: Any) -> None:
+    """Stop a sweep that will not be read to its end: joblib's generator closed, which kills its loky workers and
+    waits for them; its warning that the runs not read were cancelled says what the caller asked for."""
+    with _held(), warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        outputs.close()
 
 
 def _key(item: Any) -> str:
@@ -191,24 +245,34 @@ def run_sweep(
             return results
         if backend == "dask":
             client, cluster = _dask_client(scheduler, jobs)
-        config = joblib.parallel_config(backend="dask") if backend == "dask" else joblib.parallel_config("loky")
+        config = (
+            joblib.parallel_config(backend="dask")
+            if backend == "dask"
+            else joblib.parallel_config("loky", initializer=_worker_start)
+        )
         with config:
             workers = min(jobs, len(todo)) if backend == "loky" else -1  # no idle worker started for nothing
             run = joblib.Parallel(n_jobs=workers, return_as="generator_unordered")
-            for item, result in run(joblib.delayed(_limited)(function, item) for item in todo):
-                results[_key(item)] = result
-                if stream is not None:
-                    stream.write(_line(item, result) + "\n")  # a result that is not JSON is refused
-                    stream.flush()
-                if on_result is not None:
-                    on_result(item, result)
+            outputs = run(joblib.delayed(_limited)(function, item) for item in todo)
+            try:
+                for item, result in outputs:
+                    results[_key(item)] = result
+                    if stream is not None:
+                        stream.write(_line(item, result) + "\n")  # a result that is not JSON is refused
+                        stream.flush()
+                    if on_result is not None:
+                        on_result(item, result)
+            except BaseException:  # Ctrl-C, SIGTERM or an error, wherever it landed: no run goes on
+                _stop(outputs)
+                raise
     finally:
         if stream is not None:
             stream.close()
-        if client is not None:
-            client.close()
-        if cluster is not None:
-            cluster.close()
+        with _held():
+            if client is not None:
+                client.close()
+            if cluster is not None:
+                cluster.close()
     return results
 
 
@@ -248,7 +312,8 @@ def _dask_client(scheduler: str | None, jobs: int):
             return Client(scheduler, timeout=10), None
         except (OSError, TimeoutError, ValueError) as err:
             raise SteamError(f"cannot reach the Dask scheduler at {scheduler!r} ({err})") from None
-    cluster = LocalCluster(
-        n_workers=jobs, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None
-    )
+    cluster = LocalCluster(  # its workers preload this module: dask_setup; its warnings (a task cancelled) unsaid
+        n_workers=jobs, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None,
+        preload=[__name__], silence_logs=logging.ERROR,
+    )  # fmt: skip
     return Client(cluster), cluster

@@ -1,0 +1,126 @@
+"""A parallel sweep (``steam-ref consistency --jobs 2``, joblib's loky workers) stopped by SIGTERM (``kill``) or by
+Ctrl-C (SIGINT to the whole process group, as a terminal sends it): the command's one line on stderr and its exit
+code, no worker process left running, and its results file still read back, each result the one a serial run gives.
+
+(Each worker made a multiprocessing semaphore, tqdm's lock for its silent bars; killed with it, the worker left
+it registered with the resource tracker, which wrote "There appear to be 2 leaked semaphore objects to clean up at
+shutdown" and a line of source after the command's line. With Ctrl-C the workers took the interrupt too.)
+"""
+
+from __future__ import annotations
+
+import functools
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from steam_ref.cli.commands import build_parser
+from steam_ref.cli.consistency import _study
+from steam_ref.paper.consistency import check_result, run_seed
+from steam_ref.paper.sweep import read_results
+
+# Small tasks, far more seeds than run before the signal: the sweep is running when it comes.
+ARGV = ["consistency", "--seeds", "2000", "--steps", "12", "--landmarks", "3", "--jobs", "2", "--no-progress"]
+
+
+def _children() -> dict[int, list[int]]:
+    """Every process's children, by pid, from /proc (psutil is not among the test extras)."""
+    children: dict[int, list[int]] = {}
+    for entry in Path("/proc").iterdir():
+        if not entry.name.isdigit():
+            continue
+        try:
+            stat = (entry / "stat").read_text()
+        except OSError:  # gone meanwhile
+            continue
+        parent = int(stat.rsplit(")", 1)[1].split()[1])  # the field after the state; the name may hold ')'
+        children.setdefault(parent, []).append(int(entry.name))
+    return children
+
+
+def _descendants(pid: int) -> list[int]:
+    children, found, todo = _children(), [], [pid]
+    while todo:
+        for child in children.get(todo.pop(), []):
+            found.append(child)
+            todo.append(child)
+    return found
+
+
+def _running(pid: int) -> bool:
+    """The process exists and is not a zombie (ended, not yet reaped)."""
+    try:
+        return (Path("/proc") / str(pid) / "stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
+def _workers(pids: list[int]) -> list[int]:
+    found = []
+    for pid in pids:
+        try:
+            if b"LokyProcess" in (Path("/proc") / str(pid) / "cmdline").read_bytes():
+                found.append(pid)
+        except OSError:
+            pass
+    return found
+
+
+@pytest.mark.skipif(sys.platform != "linux", reason="reads the processes from /proc")
+@pytest.mark.parametrize(
+    ("name", "group", "code", "line"),
+    [("SIGTERM", False, 143, "steam-ref: terminated"), ("SIGINT", True, 130, "steam-ref: interrupted")],
+    ids=["sigterm", "ctrl-c to the group"],
+)
+def test_an_interrupted_parallel_sweep_answers_in_one_line_and_leaves_no_worker(tmp_path, name, group, code, line):
+    log = tmp_path / "runs.jsonl"
+    env = os.environ | {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1"}
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "steam_ref", *ARGV, "--log", str(log)],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+        start_new_session=True,  # a process group of its own, as a terminal gives a command
+    )
+    started: list[int] = []
+    try:
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline:  # until the workers run and a result is in the file
+            started = _descendants(proc.pid)
+            if len(_workers(started)) == 2 and log.exists() and log.read_text().count("\n") >= 2:
+                break
+            assert proc.poll() is None, "the sweep ended before it could be stopped"
+            time.sleep(0.05)
+        else:
+            pytest.fail("no result within 60 s")
+        started = _descendants(proc.pid)  # the workers and the resource trackers
+        signal_number = getattr(signal, name)
+        if group:
+            os.killpg(proc.pid, signal_number)
+        else:
+            proc.send_signal(signal_number)
+        _, err = proc.communicate(timeout=60)
+        deadline = time.monotonic() + 3
+        while any(map(_running, started)) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        left = [pid for pid in started if _running(pid)]
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+        for pid in started:  # only what this test started, by pid
+            if _running(pid):
+                os.kill(pid, signal.SIGKILL)
+    assert (proc.returncode, err) == (code, line + "\n")
+    assert left == [], f"worker processes still running after {name}: {left}"
+    study = _study(build_parser("consistency").parse_args(ARGV))
+    done = read_results(log, study.describe(), functools.partial(check_result, study))
+    assert done, "no result kept"
+    first = min(done, key=int)
+    assert done[first] == run_seed(study, int(first))  # the seed's serial run, in this process
