@@ -22,8 +22,9 @@ parameters) through joblib: loky worker processes by default, or joblib's ``dask
 - **Dask**: a ``scheduler`` address is checked before any work (``host:port`` or ``tcp://host:port``);
   a log that already holds every item runs nothing and starts no cluster.
 - **Interrupts**: only this process answers Ctrl-C or SIGTERM (a terminal's Ctrl-C and ``timeout``'s SIGTERM
-  reach the whole process group): the worker processes it starts ignore both (loky's through
-  :func:`_worker_start`, a local Dask cluster's through :func:`dask_setup`), and the interrupt that stops the sweep
+  reach the whole process group): the worker processes it starts inherit both held (:func:`_held`), so none
+  is hit while it starts, then ignore both (loky's through :func:`_worker_start`, a local Dask cluster's through
+  :func:`dask_setup`), and the interrupt that stops the sweep
   kills its loky workers and waits for them (joblib's generator closed), or closes the Dask cluster, before it
   goes on to the caller, a second one meanwhile held until they are gone. So the command's one line is all
   stderr gets: no worker's traceback, no resource tracker's warning of a semaphore left behind (a worker's bars
@@ -82,8 +83,9 @@ def dask_setup(worker: Any) -> None:  # noqa: ARG001 (Dask's preload hook: calle
 
 @contextlib.contextmanager
 def _held() -> Iterator[None]:
-    """Ctrl-C and SIGTERM held while the block runs (stopping the workers), then delivered: a second interrupt
-    cannot leave a worker running. In the main thread only, where Python runs its signal handlers."""
+    """Ctrl-C and SIGTERM held while the block runs, then delivered: a process started meanwhile inherits them held
+    (a worker, hit as it starts, would write its traceback), and one stopping the workers cannot be cut short (a
+    worker left running). In the main thread only, where Python runs its signal handlers."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
@@ -92,6 +94,18 @@ def _held() -> Iterator[None]:
         yield
     finally:
         signal.pthread_sigmask(signal.SIG_SETMASK, before)
+
+
+def _start_trackers() -> None:
+    """The resource trackers of multiprocessing and loky started, if they are not: starting one unblocks Ctrl-C and
+    SIGTERM in the thread that starts it (the tracker ignores both), so they are started before the signals are held
+    for the workers' start (:func:`_held`), and every worker starts with both held from its first line."""
+    from multiprocessing import resource_tracker
+
+    from joblib.externals.loky.backend import resource_tracker as loky_tracker
+
+    resource_tracker.ensure_running()
+    loky_tracker.ensure_running()
 
 
 def _stop(outputs: Any) -> None:
@@ -243,8 +257,10 @@ def run_sweep(
     try:
         if not todo:  # every item is in the log: nothing to run, no cluster (joblib's dask backend needs one)
             return results
+        _start_trackers()
         if backend == "dask":
-            client, cluster = _dask_client(scheduler, jobs)
+            with _held():  # as loky's below
+                client, cluster = _dask_client(scheduler, jobs)
         config = (
             joblib.parallel_config(backend="dask")
             if backend == "dask"
@@ -253,8 +269,10 @@ def run_sweep(
         with config:
             workers = min(jobs, len(todo)) if backend == "loky" else -1  # no idle worker started for nothing
             run = joblib.Parallel(n_jobs=workers, return_as="generator_unordered")
-            outputs = run(joblib.delayed(_limited)(function, item) for item in todo)
+            outputs = None
             try:
+                with _held():  # the workers start here, inheriting the signals held: none is hit as it starts
+                    outputs = run(joblib.delayed(_limited)(function, item) for item in todo)
                 for item, result in outputs:
                     results[_key(item)] = result
                     if stream is not None:
@@ -263,7 +281,8 @@ def run_sweep(
                     if on_result is not None:
                         on_result(item, result)
             except BaseException:  # Ctrl-C, SIGTERM or an error, wherever it landed: no run goes on
-                _stop(outputs)
+                if outputs is not None:
+                    _stop(outputs)
                 raise
     finally:
         if stream is not None:
