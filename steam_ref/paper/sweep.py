@@ -257,9 +257,11 @@ def run_sweep(
     try:
         if not todo:  # every item is in the log: nothing to run, no cluster (joblib's dask backend needs one)
             return results
-        _start_trackers()
+        parallel = backend == "dask" or min(jobs, len(todo)) > 1  # else joblib runs each item here, one by one
+        if parallel:
+            _start_trackers()
         if backend == "dask":
-            with _held():  # as loky's below
+            with _held() if scheduler is None else contextlib.nullcontext():  # a local cluster's start: as loky's
                 client, cluster = _dask_client(scheduler, jobs)
         config = (
             joblib.parallel_config(backend="dask")
@@ -271,7 +273,9 @@ def run_sweep(
             run = joblib.Parallel(n_jobs=workers, return_as="generator_unordered")
             outputs = None
             try:
-                with _held():  # the workers start here, inheriting the signals held: none is hit as it starts
+                # the workers start here, inheriting the signals held: none is hit as it starts (when they run here,
+                # nothing is held: Ctrl-C stops the first run as any other)
+                with _held() if parallel else contextlib.nullcontext():
                     outputs = run(joblib.delayed(_limited)(function, item) for item in todo)
                 for item, result in outputs:
                     results[_key(item)] = result
