@@ -55,10 +55,6 @@ def check_model(model: object, name: str = "model") -> str:
     return str(model)
 
 
-def _mm(a: NDArray, b: NDArray) -> NDArray:
-    return np.einsum("...ij,...jk->...ik", a, b)
-
-
 def _mv(a: NDArray, v: NDArray) -> NDArray:
     return np.einsum("...ij,...j->...i", a, v)
 
@@ -183,9 +179,9 @@ def interpolate(
     x, N, ad = _from_local(x1, gamma, model, group)
     e1 = np.zeros(x1.shape[:-1] + (2 * d, 2 * d))
     e1[..., d:, d:] = np.eye(d)  # ∂γ₁/∂x₁
-    J1 = _mm(N, _mm(lam, e1) + _mm(psi, g21))  # [DER 11.16]
+    J1 = N @ ((lam @ e1) + (psi @ g21))  # [DER 11.16]
     J1[..., :d, :d] += ad
-    return x, J1, _mm(N, _mm(psi, g22))  # [DER 11.16]
+    return x, J1, (N @ (psi @ g22))  # [DER 11.16]
 
 
 def interpolate_covariance(
@@ -248,7 +244,7 @@ def extrapolate(x1: NDArray, t1: float, t: float, *, group: LieGroup) -> tuple[N
     x, N, ad = _from_local(x1, _ahead(x1, s, group), "local-variable", group)
     dgamma = np.zeros(x1.shape[:-1] + (2 * d, 2 * d))
     dgamma[..., :d, d:], dgamma[..., d:, d:] = s * np.eye(d), np.eye(d)
-    J = _mm(N, dgamma)
+    J = N @ dgamma
     J[..., :d, :d] += ad
     return x, J
 

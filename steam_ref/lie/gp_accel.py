@@ -40,10 +40,6 @@ __all__ = [
 ]
 
 
-def _mm(a: NDArray, b: NDArray) -> NDArray:
-    return np.einsum("...ij,...jk->...ik", a, b)
-
-
 def _mv(a: NDArray, v: NDArray) -> NDArray:
     return np.einsum("...ij,...j->...i", a, v)
 
@@ -85,13 +81,13 @@ def local_variables(
     if not jacobians:
         return gamma
     K = group.jr_inverse_times_hessian(xi, w2, rate)
-    dxi_accel = K + _mm(G, G) + group.jr_inverse_times_jacobian(xi, a2)  # ∂ξ̈/∂ξ  [DER 14.4]
+    dxi_accel = K + (G @ G) + group.jr_inverse_times_jacobian(xi, a2)  # ∂ξ̈/∂ξ  [DER 14.4]
     dj_rate, _ = group.jr_derivatives(xi, rate)
-    dw_accel = -_mm(jinv, _mm(dj_rate, jinv)) + _mm(G, jinv)  # ∂ξ̈/∂ϖ₂
-    d1 = _mm(jinv, H1)  # ∂ξ/∂δT₁
+    dw_accel = -(jinv @ (dj_rate @ jinv)) + (G @ jinv)  # ∂ξ̈/∂ϖ₂
+    d1 = jinv @ H1  # ∂ξ/∂δT₁
     zero = np.zeros(xi.shape + (d,))
-    g21 = _rows((d1, zero, zero), (_mm(G, d1), zero, zero), (_mm(dxi_accel, d1), zero, zero))
-    g22 = _rows((jinv, zero, zero), (_mm(G, jinv), jinv, zero), (_mm(dxi_accel, jinv), dw_accel, jinv))
+    g21 = _rows((d1, zero, zero), ((G @ d1), zero, zero), ((dxi_accel @ d1), zero, zero))
+    g22 = _rows((jinv, zero, zero), ((G @ jinv), jinv, zero), ((dxi_accel @ jinv), dw_accel, jinv))
     return gamma, g21, g22
 
 
@@ -153,9 +149,9 @@ def interpolate(
     d = group.dim
     e1 = np.zeros(x1.shape[:-1] + (3 * d, 3 * d))
     e1[..., d:, d:] = np.eye(2 * d)  # ∂γ₁/∂x₁
-    J1 = _mm(N, _mm(lam, e1) + _mm(psi, g21))
+    J1 = N @ ((lam @ e1) + (psi @ g21))
     J1[..., :d, :d] += ad
-    return x, J1, _mm(N, _mm(psi, g22))
+    return x, J1, (N @ (psi @ g22))
 
 
 def _gram(J: NDArray, P: NDArray, N: NDArray, Q: NDArray) -> NDArray:
@@ -191,7 +187,7 @@ def extrapolate(x1: NDArray, phi: NDArray, offset: NDArray, *, group: LieGroup) 
     x, N, ad = from_local(x1, _mv(phi, local_start(x1, group)) + offset, group)
     e1 = np.zeros(x1.shape[:-1] + (3 * d, 3 * d))
     e1[..., d:, d:] = np.eye(2 * d)
-    J = _mm(N, _mm(phi, e1))
+    J = N @ (phi @ e1)
     J[..., :d, :d] += ad
     return x, J
 

@@ -59,10 +59,6 @@ def matrix_of(rows: list[list[NDArray | float]], like: NDArray) -> NDArray:
     return out
 
 
-def _mm(a: NDArray, b: NDArray) -> NDArray:
-    return np.einsum("...ij,...jk->...ik", a, b)
-
-
 def _mv(a: NDArray, v: NDArray) -> NDArray:
     return np.einsum("...ij,...j->...i", a, v)
 
@@ -201,7 +197,7 @@ class LieGroup(ABC):
     def jr_inverse_times_jacobian(self, xi: ArrayLike, v: ArrayLike) -> NDArray:
         """∂(J_r(ξ)⁻¹ v)/∂ξ (..., dim, dim), exact: d(J⁻¹) = -J⁻¹ dJ J⁻¹, so it is -J⁻¹ ∂(J_r(ξ) u)/∂ξ at u = J⁻¹ v."""
         jinv = self.right_jacobian_inverse(xi)
-        return -_mm(jinv, self.jr_times_jacobian(xi, _mv(jinv, np.asarray(v, dtype=float))))
+        return -(jinv @ self.jr_times_jacobian(xi, _mv(jinv, np.asarray(v, dtype=float))))
 
     @overload
     def log_between(
@@ -230,7 +226,7 @@ class LieGroup(ABC):
         rel, Ha, _ = self.between(a, b, jacobians=True)
         xi = self.log(rel)
         jinv = self.right_jacobian_inverse(xi)
-        return xi, _mv(jinv, v), _mm(jinv, Ha), jinv, self.jr_inverse_times_jacobian(xi, v)
+        return xi, _mv(jinv, v), (jinv @ Ha), jinv, self.jr_inverse_times_jacobian(xi, v)
 
     def compose_exp(self, a: ArrayLike, xi: ArrayLike) -> NDArray:
         """a Exp(ξ): the element ``a`` moved by ξ in its right tangent (a state's retraction, ``lie.state``). Here
@@ -286,10 +282,10 @@ class LieGroup(ABC):
         dj_u, _ = self.jr_derivatives(xi, u)
         inner = (
             self.jr_times_hessian(xi, f, u)
-            + _mm(dj_u, G)
+            + (dj_u @ G)
             + self.jr_times_jacobian(xi, _mv(G, np.asarray(u, dtype=float)))
         )
-        return -_mm(jinv, inner)
+        return -(jinv @ inner)
 
     def _eye(self, shape: tuple[int, ...]) -> NDArray:
         return np.broadcast_to(np.eye(self.dim), shape + (self.dim, self.dim)).copy()
