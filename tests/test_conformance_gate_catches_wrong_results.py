@@ -159,3 +159,60 @@ def test_a_misspelt_kit_version_key_is_named_not_silently_read_as_kit_v1(tmp_pat
         f"warning: {tmp_path / 'gp' / 'results.json'}: 'kit_verison' is not a key of a results file, not read "
         "(its keys: kit_version, cases)" in out.splitlines()
     ), out
+
+
+SIGN_HINT = (
+    "every entry is minus the expected one: a flipped sign (README conventions 'residual': e = h(theta) - y, the GP "
+    "prior's e = x_i - Phi x_(i-1) - v_i; --conventions paper-sign takes [YIB Eq. 22]'s for gp_prior)"
+)
+
+
+def test_a_flipped_sign_is_named_as_one_and_not_as_a_swap_with_b(tmp_path, capsys, kit_results):
+    """A port with Eq. 22's sign for the SE(2) prior (no paper-sign alternative there) or a measurement written
+    y - h: every entry is minus the expected one, and the line says so. b = -W e, so a flipped whitened_error is
+    also the expected b: the sign, not a swap, is the hint there."""
+    se2 = kit_results(SHIPPED, "se2")
+    case = se2["prior_local_variable_fast"]
+    for q in ("error", "H_0", "H_1"):
+        case[q] = (-np.array(case[q])).tolist()
+    code, lines = check(tmp_path / "se2", capsys, "se2", se2)
+    head = fail_line(lines, "se2", "prior_local_variable_fast")
+    assert code == 1 and head.startswith("FAIL se2/prior_local_variable_fast: error worst |diff| "), head
+    assert head.endswith(f"; {SIGN_HINT} (likely cause: first failing in computation order; 2 more failing)"), head
+    factors = kit_results(SHIPPED, "factors")
+    factors["range"]["whitened_error"] = (-np.array(factors["range"]["whitened_error"])).tolist()
+    code, lines = check(tmp_path / "factors", capsys, "factors", factors)
+    head = fail_line(lines, "factors", "range")
+    assert code == 1 and head.endswith(SIGN_HINT) and "swapped" not in head, head
+
+
+def test_jacobian_columns_in_another_order_are_named_with_the_permutation(tmp_path, capsys, kit_results):
+    """A port whose state is [y, x, ...] (or whose Jacobian columns are permuted): the columns it wrote are the
+    expected ones in another order, and the line gives the order."""
+    factors = kit_results(SHIPPED, "factors")
+    h0 = np.array(factors["range"]["H_0"])
+    assert h0[0, 0] != h0[0, 1]  # else the swap would be right
+    factors["range"]["H_0"] = h0[:, [1, 0, 2, 3, 4, 5]].tolist()
+    code, lines = check(tmp_path, capsys, "factors", factors)
+    head = fail_line(lines, "factors", "range")
+    assert code == 1 and head.startswith("FAIL factors/range: H_0 worst |diff| "), head
+    assert head.endswith(
+        "; its columns are the expected columns [1, 0, 2, 3, 4, 5] in that order: an ordering differs (README "
+        "conventions 'state', 'jacobians': a state is [x, y, theta, x_dot, y_dot, theta_dot], H_k for the k-th key)"
+    ), head
+
+
+def test_lambda_and_psi_swapped_are_named_as_a_swap(tmp_path, capsys, kit_results):
+    """Λ and Ψ of Eq. 16/18 handed in each other's place: Lambda fails first, and equals the expected Psi."""
+    gp = kit_results(SHIPPED, "gp")
+    case = gp["interp_tau1.1"]
+    case["Lambda"], case["Psi"] = case["Psi"], case["Lambda"]
+    code, lines = check(tmp_path, capsys, "gp", gp)
+    head = fail_line(lines, "gp", "interp_tau1.1")
+    assert code == 1 and head.startswith("FAIL gp/interp_tau1.1: Lambda worst |diff| "), head
+    assert head.endswith(
+        "; equals the expected Psi: the two swapped? (likely cause: first failing in computation order; 1 more failing)"
+    ), head
+    assert any(
+        line.startswith("  Psi ") and line.endswith("; equals the expected Lambda: the two swapped?") for line in lines
+    )

@@ -221,17 +221,62 @@ def compare_quantity(expected, got, tolerance, name: str) -> list[Failure]:
         )
     at = _where(tuple(int(j) for j in np.unravel_index(int(flat[0]), diff.shape))) if diff.ndim else ""
     bad = int(np.count_nonzero(diff > allowed))
-    turns = round(worst / (2 * math.pi))
-    hint = (
-        f"; {turns} x 2 pi off: an angle brought into another range (README conventions 'angles', 'se2')"
-        if turns and abs(worst - turns * 2 * math.pi) <= allowed
-        else ""
-    )
     head = (
         f"{name} worst |diff| {worst:.3g}{' at ' + at if at else ''} > tolerance {allowed:.3g} "
-        f"(atol {atol:g} + rtol {rtol:g} x max|expected| {scale:.3g}); {bad} of {diff.size} entries past it{hint}"
+        f"(atol {atol:g} + rtol {rtol:g} x max|expected| {scale:.3g}); {bad} of {diff.size} entries past it{_hint(exp, g, worst, allowed)}"
     )
     return [(worst / allowed if allowed > 0 else math.inf, head, tuple(details))]
+
+
+def _permutation(expected: np.ndarray, got: np.ndarray, allowed: float) -> list[int] | None:
+    """p with got[j] = expected[p[j]] (rows of a 2-D array, entries of a vector) within ``allowed``; None if none."""
+    free = list(range(len(expected)))
+    p = []
+    for row in got:
+        j = next((j for j in free if float(np.abs(expected[j] - row).max()) <= allowed), None)
+        if j is None:
+            return None
+        free.remove(j)
+        p.append(j)
+    return p
+
+
+def _hint(expected: np.ndarray, got: np.ndarray, worst: float, allowed: float) -> str:
+    """What a failing numeric quantity's pattern points at: a whole number of turns off, a flipped sign, or the
+    expected entries (a vector's entries, a matrix's columns or rows) in another order."""
+    turns = round(worst / (2 * math.pi))
+    if turns and abs(worst - turns * 2 * math.pi) <= allowed:
+        return f"; {turns} x 2 pi off: an angle brought into another range (README conventions 'angles', 'se2')"
+    if float(np.abs(got + expected).max()) <= allowed:
+        return (
+            "; every entry is minus the expected one: a flipped sign (README conventions 'residual': e = h(theta) - y, "
+            "the GP prior's e = x_i - Phi x_(i-1) - v_i; --conventions paper-sign takes [YIB Eq. 22]'s for gp_prior)"
+        )
+    for axis, what in ((1, "columns"), (0, "rows")) if got.ndim == 2 else ((0, "entries"),) if got.ndim == 1 else ():
+        p = _permutation(np.moveaxis(expected, axis, 0), np.moveaxis(got, axis, 0), allowed)
+        if p is not None:
+            return (
+                f"; its {what} are the expected {what} {p} in that order: an ordering differs (README conventions "
+                "'state', 'jacobians': a state is [x, y, theta, x_dot, y_dot, theta_dot], H_k for the k-th key)"
+            )
+    return ""
+
+
+def _equals_another(case: Mapping, expected: Mapping, name: str, got) -> str:
+    """'; equals the expected Psi: the two swapped?' when a failing quantity's value passes as another of the case's
+    quantities (same tolerance rule, that quantity's tolerance); '' otherwise, and '' for a value that is minus its
+    own expected one (b = -W e: a flipped whitened_error equals b, and the sign is the hint there)."""
+    if np.shape(got) == np.shape(expected[name]) and not compare_quantity(
+        -np.asarray(expected[name], float), got, case["tolerance"][name], name
+    ):
+        return ""
+    for other in computation_order(case):
+        tolerance = case["tolerance"][other]
+        if other == name or tolerance == "exact" or isinstance(expected[other], Mapping):
+            continue
+        if np.shape(expected[other]) == np.shape(got) and not compare_quantity(expected[other], got, tolerance, other):
+            return f"; equals the expected {other}: the two swapped?"
+    return ""
 
 
 def computation_order(case: Mapping) -> list[str]:
@@ -285,7 +330,11 @@ def check_cases(
                 failures.append((math.inf, f"{q} is missing from the results", ()))
             else:
                 expected = alternative.get(q, case["expected"][q])
-                failures += compare_quantity(expected, got[q], case["tolerance"][q], q)
+                failed = compare_quantity(expected, got[q], case["tolerance"][q], q)
+                if len(failed) == 1 and not isinstance(expected, Mapping) and case["tolerance"][q] != "exact":
+                    swapped = _equals_another(case, {**case["expected"], **alternative}, q, got[q])
+                    failed = [(failed[0][0], failed[0][1] + swapped, failed[0][2])]
+                failures += failed
         report.outcomes.append(Outcome(suite, case["name"], tuple(failures)))
     report.unknown += [f"{suite}/{name}" for name in results if name not in known]
     return report
