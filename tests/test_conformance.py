@@ -228,6 +228,56 @@ def test_the_readme_names_every_kind_input_and_factor_spec_of_every_shipped_case
     assert not absent, sorted(set(absent))
 
 
+def test_the_readmes_interpolation_and_prediction_as_written_give_every_wnoa_case_of_the_gp_suite():
+    """The README said "[YIB Eq. 16, 18]" for Lambda, Psi, x_tau, cov_tau and the prediction and wrote none of them
+    out, though it says a port needs nothing outside the kit (an outsider porting the interpolation had to open the
+    paper, and guess from which end tau is measured and what cov_tau adds). Its section 'Interpolation and
+    prediction' writes them out; computed here as written, they give the kit's independent expected values (the
+    dense kernel's conditioning, not Eq. 16) within each tolerance."""
+    readme = export_readme()
+    section = readme[readme.index("\n## Interpolation and prediction\n") : readme.index("\n## Outputs\n")]
+    for line in (
+        "Psi(tau)    = Q(tau - t1) Phi(t2 - tau)^T Q(t2 - t1)^-1",
+        "Lambda(tau) = Phi(tau - t1) - Psi(tau) Phi(t2 - t1)",
+        "x_tau       = Lambda(tau) x1 + Psi(tau) x2",
+        "cov_tau = [Lambda Psi] P [Lambda Psi]^T + Q(tau - t1) - Psi(tau) Phi(t2 - tau) Q(tau - t1)",
+        "x_t = Phi(t - t1) x1, cov_t = Phi(t - t1) cov1 Phi(t - t1)^T + Q(t - t1)",
+    ):
+        assert line in section, line
+
+    def phi(s):
+        return np.block([[np.eye(3), s * np.eye(3)], [np.zeros((3, 3)), np.eye(3)]])
+
+    def q(s, qc):
+        return np.kron(np.array([[s**3 / 3, s**2 / 2], [s**2 / 2, s]]), np.asarray(qc, float))
+
+    checked = []
+    for case in read_suite(SHIPPED, "gp")["cases"]:
+        i = case["inputs"]
+        if i["kind"] in ("interpolation", "interpolation_covariance"):
+            t1, t2, tau, qc = i["t1"], i["t2"], i["tau"], i["qc"]
+            psi = q(tau - t1, qc) @ phi(t2 - tau).T @ np.linalg.inv(q(t2 - t1, qc))
+            lam = phi(tau - t1) - psi @ phi(t2 - t1)
+            if i["kind"] == "interpolation":
+                got = {"Lambda": lam, "Psi": psi, "x_tau": lam @ i["x1"] + psi @ i["x2"]}
+            else:
+                both = np.hstack([lam, psi])
+                cond = q(tau - t1, qc) - psi @ phi(t2 - tau) @ q(tau - t1, qc)
+                got = {"cov_tau": both @ np.asarray(i["joint_cov"]) @ both.T + cond}
+        elif i["kind"] == "extrapolation":
+            f = phi(i["t"] - i["t1"])
+            got = {"x_t": f @ i["x1"], "cov_t": f @ np.asarray(i["cov1"]) @ f.T + q(i["t"] - i["t1"], i["qc"])}
+        else:
+            continue
+        for name, value in got.items():
+            assert not compare_quantity(case["expected"][name], value.tolist(), case["tolerance"][name], name), (
+                case["name"],
+                name,
+            )
+            checked.append(f"{case['name']}/{name}")
+    assert len(checked) == 3 * 3 + 2 + 2, checked
+
+
 def test_the_readme_says_where_each_numbered_quantity_counts_from_as_the_kit_numbers_them():
     """A port names its quantities as the kit does, and the kit counts two ways: H_k, A_k from 0 over a factor's
     keys (H_0 the first key), estimate_k and every per-update quantity from 1 over the updates (J_1, J_2 are of

@@ -16,7 +16,23 @@ from .kitio import KIT_VERSION, SUITES
 from .paper_spec import PROCEDURE, SETUP_FIELDS
 from .readme_rigid import EXACT_TIER, RIGID
 
-__all__ = ["export_readme", "FACTOR_TABLE", "QUANTITIES", "SUITE_INPUTS", "FIXED_LAG", "LIE_GROUP"]
+__all__ = ["export_readme", "FACTOR_TABLE", "QUANTITIES", "SUITE_INPUTS", "FIXED_LAG", "LIE_GROUP", "GP_INTERPOLATION"]
+
+GP_INTERPOLATION = """What the gp suite's WNOA interpolation, its covariance and the prediction compute (and the `interpolated`
+factor's x(tau)), with Phi(s) and Q(s) the WNOA matrices of an elapsed time s (conventions, gp_prior):
+
+    Psi(tau)    = Q(tau - t1) Phi(t2 - tau)^T Q(t2 - t1)^-1
+    Lambda(tau) = Phi(tau - t1) - Psi(tau) Phi(t2 - t1)                    [YIB Eq. 16]
+    x_tau       = Lambda(tau) x1 + Psi(tau) x2                             [YIB Eq. 18; the prior mean cancels]
+
+Q_tau of Eq. 16 is Q(tau - t1), measured from the earlier state, and Phi(t_i, tau) is Phi(t2 - tau) (a port that
+measures tau from t2 passes interp_tau1.3 alone: its tau is the midpoint). With joint_cov P the covariance of [x1; x2],
+
+    cov_tau = [Lambda Psi] P [Lambda Psi]^T + Q(tau - t1) - Psi(tau) Phi(t2 - tau) Q(tau - t1)
+
+(the second part is the GP's own conditional covariance of x(tau) given x1, x2). The prediction after the last
+state: x_t = Phi(t - t1) x1, cov_t = Phi(t - t1) cov1 Phi(t - t1)^T + Q(t - t1).
+"""
 
 FACTOR_TABLE = [  # type, keys, fields, error e (prediction minus measurement)
     ("gp_prior", "x1, x2", "dt, qc", "x2 - Phi(dt) x1, Sigma = Q(dt) [YIB Eq. 22, 30-31]"),
@@ -261,12 +277,13 @@ def export_readme(version: int = KIT_VERSION) -> str:
 Golden inputs and expected outputs for checking an implementation of "Incremental Sparse GP
 Regression for Continuous-time Trajectory Estimation & Mapping" (Yan, Indelman, Boots) against
 steam_ref. Any language that reads JSON can use it; `*/expected.npz` repeats the expected arrays for
-NumPy. This README writes out every definition the cases compute from: the conventions, the fixed-lag marginal factor
-(section 'Fixed-lag smoothing'), the groups SE(2), SO(3), SE(3) and their GP priors (sections 'SE(2)', 'SE(3)':
-the local-variable GP, both residuals, WNOJ, the interpolated mean and covariance). Why those Jacobians and
-covariances are what they are is derived in steam_ref's docs/derivations.md (§10 fixed lag, §11 the GP on a Lie
-group, §14 WNOJ on a group), which this kit does not hold and a port does not need: every Jacobian of the kit is the
-derivative of a function defined here, in the retraction defined here.
+NumPy. This README writes out every definition the cases compute from: the conventions, the GP's interpolation and
+prediction (section 'Interpolation and prediction'), the fixed-lag marginal factor (section 'Fixed-lag smoothing'),
+the groups SE(2), SO(3), SE(3) and their GP priors (sections 'SE(2)', 'SE(3)': the local-variable GP, both
+residuals, WNOJ, the interpolated mean and covariance). Why those Jacobians and covariances are what they are is
+derived in steam_ref's docs/derivations.md (§10 fixed lag, §11 the GP on a Lie group, §14 WNOJ on a group), which
+this kit does not hold and a port does not need: every Jacobian of the kit is the derivative of a function defined
+here, in the retraction defined here.
 
 ## Files
 
@@ -293,7 +310,9 @@ this exported folder instead of the installed steam_ref's own copy of the kit th
 A numeric quantity passes when max|got - expected| <= atol + rtol * max|expected| over its entries;
 an exact one must be equal (lists of cliques unordered; JSON has one number type, so a count written 189.0 is
 189). {EXACT_TIER} Every failing quantity is printed with its
-worst entries (index, expected, got), and said to be 2 pi k off when it is; the first failing quantity in computation order is flagged as
+worst entries (index, expected, got), and said to be 2 pi k off, minus the expected value (a flipped sign), the
+expected entries, columns or rows in another order (the permutation given), or another quantity's expected value
+(Lambda for Psi, H_0 for H_1) when it is; the first failing quantity in computation order is flagged as
 the likely cause; a structure that differs is printed item by item. Exit 0: every case of the gate
 passed; 1: a case failed or has no result (unless `--allow-missing`), or no case passed at all (even with
 `--allow-missing`: nothing was shown to conform); 2: bad input (a malformed file, names one line). A quantity
@@ -307,6 +326,10 @@ error: the rest is checked.
 Alternatives that `check --conventions NAME...` accepts for the quantities that depend on them:
 
 {_bullets(CONVENTION_ALTERNATIVES.items())}
+
+`paper-sign` covers the vector-space GP prior (`gp_prior` factors, their rows in the linear suite). The se2 and
+se3 suites' priors have no sign alternative: their error is e = g2 - Phi(dt) g1 as the sections 'SE(2)' and
+'SE(3)' define it, and their quantities depend on no convention but half_turn.
 
 ## Inputs
 
@@ -328,6 +351,9 @@ manifold; the se2 suite alone takes them in the right tangent of SE(2) states, R
 block per key in the spec's key order; for `interpolated`, the chain rule through Lambda, Psi.
 W is the upper-triangular square root of Sigma^-1 (conventions, whitening).
 
+## Interpolation and prediction
+
+{GP_INTERPOLATION}
 ## Outputs
 
 {_bullets(QUANTITIES.items())}
