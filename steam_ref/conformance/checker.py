@@ -266,6 +266,10 @@ def _equals_another(case: Mapping, expected: Mapping, name: str, got) -> str:
     """'; equals the expected Psi: the two swapped?' when a failing quantity's value passes as another of the case's
     quantities (same tolerance rule, that quantity's tolerance); '' otherwise, and '' for a value that is minus its
     own expected one (b = -W e: a flipped whitened_error equals b, and the sign is the hint there)."""
+    try:
+        got = np.asarray(got, dtype=float)
+    except (TypeError, ValueError, OverflowError):
+        return ""  # not numbers: compare_quantity said so
     if np.shape(got) == np.shape(expected[name]) and not compare_quantity(
         -np.asarray(expected[name], float), got, case["tolerance"][name], name
     ):
