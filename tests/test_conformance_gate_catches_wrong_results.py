@@ -1,7 +1,8 @@
 """The gate against the ways a port goes wrong, each failure naming what an engineer needs to find the bug.
 
 Each test edits steam_ref's correct results into a wrong port's (a Jacobian block of the wrong sign, a value off by
-ten times its tolerance, a heading 2π off, a transposed Jacobian) and checks that ``check`` fails the case and names
+ten times its tolerance, a heading 2π off, a transposed Jacobian, a flipped sign, Jacobian columns in another
+order, Λ and Ψ swapped) and checks that ``check`` fails the case and names
 the case, the quantity, the entry, the expected and the got value and the tolerance; and the other way, that what
 is right within the documented rules passes: a value off by half its tolerance, an integral count written as a
 double (``189.0``: JSON has one number type). The tolerance is recomputed here from the kit's ``{atol, rtol}`` and

@@ -8,7 +8,9 @@ lists of names in order. A case passes when all its quantities do.
 
 Every failing quantity is reported with its worst entries (index, expected, got); the first one in
 the case's computation order (its ``quantities`` list, else its ``tolerance`` order) is flagged as
-the likely cause, since a wrong Φ also makes everything computed from it wrong. A structure that
+the likely cause, since a wrong Φ also makes everything computed from it wrong. A quantity's pattern is named
+when it has one: 2π k off, minus the expected value, its entries (columns, rows) in another order, or another
+quantity's expected value (Λ for Ψ). A structure that
 differs is printed in full: the items expected but not got, and got but not expected.
 
 With conventions (``paper-sign``, ``symmetric-whitener``; kit v5 ``signed-half-turn``), a quantity that depends
