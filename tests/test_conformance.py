@@ -13,6 +13,7 @@ import ast
 import copy
 import fnmatch
 import json
+import math
 import re
 import subprocess
 import sys
@@ -22,6 +23,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import scipy.io
+import scipy.linalg
 import tomllib
 from cli_runs import runner
 from requirements import optional_import
@@ -276,6 +278,137 @@ def test_the_readmes_interpolation_and_prediction_as_written_give_every_wnoa_cas
             )
             checked.append(f"{case['name']}/{name}")
     assert len(checked) == 3 * 3 + 2 + 2, checked
+
+
+def _as_python(formula: str) -> str:
+    """A README formula as Python: ``s^3`` is ``s**3``, ``s^5 S_pp`` and ``2 x E`` products."""
+    return re.sub(r"(?<=[\w)]) (?=[\w(])", "*", formula.replace("^", "**"))
+
+
+def _readme_motion_priors() -> tuple[str, dict[str, dict[str, tuple[str, str]]], dict[str, str]]:
+    """The README's section 'Motion priors' and its matrices as written: for each model, each
+    ``NAME = [[...]] (x) RIGHT`` (NAME Phi(s), Q(s), Q(s)^-1 or A) as (Python expression, RIGHT), and Singer's S_kl
+    lines the same way, read as Python with ``^`` as ``**`` and a product written ``a b`` as ``a*b``. Nothing here
+    comes from steam_ref's gp/ code."""
+    readme = export_readme()
+    section = readme[readme.index("\n## Motion priors\n") : readme.index("\n## Interpolation and prediction\n")]
+    models: dict[str, dict[str, tuple[str, str]]] = {}
+    for chunk in re.split(r"\n(?=\*\*)", section)[1:]:  # one paragraph group per model, from its bold name
+        found = re.findall(r"(Phi\(s\)|Q\(s\)\^-1|Q\(s\)|A) *= (\[\[[^=]*?\]\]) \(x\)\s*(I|Qc\^-1|Qc)\b", chunk)
+        models[chunk[2 : chunk.index("**", 2)]] = {name: (_as_python(m), right) for name, m, right in found}
+    singer_s = {
+        name: _as_python(expr)
+        for line in section.splitlines()
+        if line.startswith("    S_")
+        for name, expr in (part.split(" = ") for part in re.split(r" {3,}", line.strip()))
+    }
+    return section, models, singer_s
+
+
+@pytest.mark.parametrize("version", sorted(KITS))
+def test_the_readmes_motion_priors_as_written_give_every_wnoa_wnoj_singer_and_lti_case_of_the_gp_suite(version):
+    """The README wrote out the WNOA prior's Phi and Q only (conventions, gp_prior) and cited [YIB Eq. 14, 16-17, 23]
+    for the rest, though it says a port needs nothing outside the kit: the gp suite's WNOA Q^-1 and W, WNOJ's Phi,
+    Q, Q^-1, Singer's Phi and Q (and what its alpha is: a rate, not a time constant), a general LTI SDE's Q and v_i,
+    and Singer's interpolation had no formula a port could compute them from, nor the block order of the state.
+    Its section 'Motion priors' writes them out; read here as written (each matrix evaluated from the README's own
+    text, W, Van Loan and the series transcribed), they give every such case's expected values, the dense oracle's
+    expm and quadrature (not these closed forms), within each tolerance, in every kit; and each Phi is expm(A s) of
+    the A the README writes."""
+    section, models, singer_s = _readme_motion_priors()
+    assert set(models) == {"WNOA", "WNOJ", "Singer", "General LTI"}, models
+    for name in ("WNOA", "WNOJ"):
+        assert set(models[name]) >= {"Phi(s)", "Q(s)", "Q(s)^-1"}, (name, models[name])
+    assert set(models["Singer"]) >= {"Phi(s)", "Q(s)", "A"} and set(models["WNOJ"]) >= {"A"}, models
+    assert set(singer_s) == {"S_pp", "S_pv", "S_pa", "S_vv", "S_va", "S_aa"}, singer_s
+    for line in (
+        "expm([[-A, F Qc F^T], [0, A^T]] s) = [[E11, E12], [0, E22]],   Q(s) = E22^T E12",
+        "expm([[A, v], [0, 0]] s) = [[Phi(s), v_i], [0, 1]]",
+        "the transpose\nof the lower Cholesky factor L of Q(s)^-1 = L L^T (equivalently U^-1 for Q(s) = U U^T with U upper",
+        "S_kl(z) = sum_n (-z)^n / (k + l + n + 1) sum_(i=0..n) 1 / ((i + k)! (n - i + l)!), with k, l = 2, 1, 0",
+    ):
+        assert line in section, line
+
+    def matrix(model: str, name: str, s: float, qc, alpha: float = 0.0) -> np.ndarray:
+        env: dict[str, float] = {"s": s, "alpha": alpha, "z": alpha * s, "E": np.exp(-alpha * s)}
+        if model == "Singer":
+            env |= {n: eval(e, {"__builtins__": {}}, env) for n, e in singer_s.items()}
+        expr, right = models[model][name]
+        qc = np.asarray(qc, float)
+        factor = {"I": np.eye(3), "Qc": qc, "Qc^-1": np.linalg.inv(qc)}[right]
+        return np.kron(np.array(eval(expr, {"__builtins__": {}}, env), float), factor)
+
+    def singer_q_by_series(alpha: float, s: float, qc) -> np.ndarray:
+        """Q(s) of Singer's model by the README's series for S_kl (24 terms), k, l = 2, 1, 0 for p, v, a."""
+        z, order = alpha * s, (2, 1, 0)
+        S = [
+            [
+                sum(
+                    (-z) ** n
+                    / (k + l + n + 1)
+                    * sum(1 / (math.factorial(i + k) * math.factorial(n - i + l)) for i in range(n + 1))
+                    for n in range(24)
+                )
+                * s ** (k + l + 1)
+                for l in order
+            ]
+            for k in order
+        ]
+        return np.kron(np.array(S), np.asarray(qc, float))
+
+    checked = []
+    for case in read_suite(KITS[version], "gp")["cases"]:
+        i = case["inputs"]
+        kind = i["kind"]
+        if kind == "wnoa":
+            qinv = matrix("WNOA", "Q(s)^-1", i["dt"], i["qc"])
+            w = np.linalg.cholesky(qinv).T
+            q = matrix("WNOA", "Q(s)", i["dt"], i["qc"])
+            u = np.linalg.cholesky(q[::-1, ::-1])[::-1, ::-1]  # Q = U U^T, U upper
+            np.testing.assert_allclose(np.linalg.inv(u), w, rtol=1e-9, atol=1e-9 * abs(w).max())
+            got = {"Phi": matrix("WNOA", "Phi(s)", i["dt"], i["qc"]), "Q": q, "Qinv": qinv, "W": w}
+        elif kind == "wnoj":
+            got = {
+                n: matrix("WNOJ", f, i["dt"], i["qc"])
+                for n, f in (("Phi", "Phi(s)"), ("Q", "Q(s)"), ("Qinv", "Q(s)^-1"))
+            }
+        elif kind == "singer":
+            got = {n: matrix("Singer", f, i["dt"], i["qc"], i["alpha"]) for n, f in (("Phi", "Phi(s)"), ("Q", "Q(s)"))}
+            if i["alpha"] * i["dt"] <= 1:  # where the README says to sum the series
+                by_series = singer_q_by_series(i["alpha"], i["dt"], i["qc"]).tolist()
+                assert not compare_quantity(case["expected"]["Q"], by_series, case["tolerance"]["Q"], "Q"), case
+                checked.append(f"{case['name']}/Q by the series")
+        elif kind == "lti":
+            A, F, qc, v, dt = (np.asarray(i[k], float) for k in ("A", "F", "qc", "v", "dt"))
+            n = len(A)
+            e = scipy.linalg.expm(np.block([[-A, F @ qc @ F.T], [np.zeros((n, n)), A.T]]) * dt)
+            aug = scipy.linalg.expm(np.block([[A, v[:, None]], [np.zeros((1, n + 1))]]) * dt)
+            got = {"Phi": scipy.linalg.expm(A * dt), "Q": e[n:, n:].T @ e[:n, n:], "v_i": aug[:n, n]}
+            np.testing.assert_allclose(aug[:n, :n], got["Phi"], rtol=1e-14)
+        elif kind == "singer_interpolation":
+            t1, t2, tau, qc, alpha = i["t1"], i["t2"], i["tau"], i["qc"], i["alpha"]
+
+            def phi(s, qc=qc, alpha=alpha):
+                return matrix("Singer", "Phi(s)", s, qc, alpha)
+
+            def q(s, qc=qc, alpha=alpha):
+                return matrix("Singer", "Q(s)", s, qc, alpha)
+
+            psi = q(tau - t1) @ phi(t2 - tau).T @ np.linalg.inv(q(t2 - t1))
+            lam = phi(tau - t1) - psi @ phi(t2 - t1)
+            got = {"Lambda": lam, "Psi": psi, "x_tau": lam @ i["x1"] + psi @ i["x2"]}
+        else:
+            continue
+        if kind in ("wnoj", "singer"):  # Phi(s) as written is expm(A s) of the A the README writes
+            a = matrix(kind.upper() if kind == "wnoj" else "Singer", "A", 1.0, i["qc"], i.get("alpha", 0.0))
+            np.testing.assert_allclose(got["Phi"], scipy.linalg.expm(a * i["dt"]), rtol=1e-13, atol=1e-15)
+        for name, value in got.items():
+            assert not compare_quantity(case["expected"][name], value.tolist(), case["tolerance"][name], name), (
+                case["name"],
+                name,
+            )
+            checked.append(f"{case['name']}/{name}")
+    assert len(checked) == 4 * 4 + 3 + 2 * 2 + 1 + 2 * 3 + 3, checked
 
 
 def test_the_readme_says_where_each_numbered_quantity_counts_from_as_the_kit_numbers_them():

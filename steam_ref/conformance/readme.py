@@ -4,9 +4,9 @@
 check them, every convention (with the alternatives ``check --conventions`` accepts), the inputs of
 each suite, every factor's error, Jacobian convention, inputs and outputs, the tree-edit ordering
 rule with a worked example, the fixed-lag marginal factor derived (the cases cite it, so it is here,
-not in steam_ref's docs/derivations.md), the Lie groups of the se2 and se3 suites written out (sections "SE(2)",
-"SE(3)", :mod:`.readme_rigid`), and the
-paper suite's set-up and procedure.
+not in steam_ref's docs/derivations.md), the motion priors and the GP's interpolation and prediction written out (sections
+"Motion priors", "Interpolation and prediction", :mod:`.readme_gp`), the Lie groups of the se2 and se3 suites written
+out (sections "SE(2)", "SE(3)", :mod:`.readme_rigid`), and the paper suite's set-up and procedure.
 """
 
 from __future__ import annotations
@@ -14,25 +14,19 @@ from __future__ import annotations
 from .conventions import CONVENTION_ALTERNATIVES, CONVENTIONS, RESULTS_LAYOUT, TREE_EDIT_EXAMPLE
 from .kitio import KIT_VERSION, SUITES
 from .paper_spec import PROCEDURE, SETUP_FIELDS
+from .readme_gp import GP_INTERPOLATION, GP_MODELS
 from .readme_rigid import EXACT_TIER, RIGID
 
-__all__ = ["export_readme", "FACTOR_TABLE", "QUANTITIES", "SUITE_INPUTS", "FIXED_LAG", "LIE_GROUP", "GP_INTERPOLATION"]
-
-GP_INTERPOLATION = """What the gp suite's WNOA interpolation, its covariance and the prediction compute (and the `interpolated`
-factor's x(tau)), with Phi(s) and Q(s) the WNOA matrices of an elapsed time s (conventions, gp_prior):
-
-    Psi(tau)    = Q(tau - t1) Phi(t2 - tau)^T Q(t2 - t1)^-1
-    Lambda(tau) = Phi(tau - t1) - Psi(tau) Phi(t2 - t1)                    [YIB Eq. 16]
-    x_tau       = Lambda(tau) x1 + Psi(tau) x2                             [YIB Eq. 18; the prior mean cancels]
-
-Q_tau of Eq. 16 is Q(tau - t1), measured from the earlier state, and Phi(t_i, tau) is Phi(t2 - tau) (a port that
-measures tau from t2 passes interp_tau1.3 alone: its tau is the midpoint). With joint_cov P the covariance of [x1; x2],
-
-    cov_tau = [Lambda Psi] P [Lambda Psi]^T + Q(tau - t1) - Psi(tau) Phi(t2 - tau) Q(tau - t1)
-
-(the second part is the GP's own conditional covariance of x(tau) given x1, x2). The prediction after the last
-state: x_t = Phi(t - t1) x1, cov_t = Phi(t - t1) cov1 Phi(t - t1)^T + Q(t - t1).
-"""
+__all__ = [
+    "export_readme",
+    "FACTOR_TABLE",
+    "QUANTITIES",
+    "SUITE_INPUTS",
+    "FIXED_LAG",
+    "LIE_GROUP",
+    "GP_INTERPOLATION",
+    "GP_MODELS",
+]
 
 FACTOR_TABLE = [  # type, keys, fields, error e (prediction minus measurement)
     ("gp_prior", "x1, x2", "dt, qc", "x2 - Phi(dt) x1, Sigma = Q(dt) [YIB Eq. 22, 30-31]"),
@@ -277,11 +271,13 @@ def export_readme(version: int = KIT_VERSION) -> str:
 Golden inputs and expected outputs for checking an implementation of "Incremental Sparse GP
 Regression for Continuous-time Trajectory Estimation & Mapping" (Yan, Indelman, Boots) against
 steam_ref. Any language that reads JSON can use it; `*/expected.npz` repeats the expected arrays for
-NumPy. This README writes out every definition the cases compute from: the conventions, the GP's interpolation and
+NumPy. This README writes out every definition the cases compute from: the conventions, the motion priors' Phi, Q,
+Q^-1, W and v_i (section 'Motion priors': WNOA, WNOJ, Singer, a general LTI SDE), the GP's interpolation and
 prediction (section 'Interpolation and prediction'), the fixed-lag marginal factor (section 'Fixed-lag smoothing'),
 the groups SE(2), SO(3), SE(3) and their GP priors (sections 'SE(2)', 'SE(3)': the local-variable GP, both
-residuals, WNOJ, the interpolated mean and covariance). Why those Jacobians and covariances are what they are is
-derived in steam_ref's docs/derivations.md (§10 fixed lag, §11 the GP on a Lie group, §14 WNOJ on a group), which
+residuals, WNOJ, the interpolated mean and covariance). Why those formulas, Jacobians and covariances are what they
+are is derived in steam_ref's docs/derivations.md (§1 and §6 the priors in closed form, §3 interpolation, §7
+prediction, §10 fixed lag, §11 the GP on a Lie group, §14 WNOJ on a group), which
 this kit does not hold and a port does not need: every Jacobian of the kit is the derivative of a function defined
 here, in the retraction defined here.
 
@@ -351,6 +347,9 @@ manifold; the se2 suite alone takes them in the right tangent of SE(2) states, R
 block per key in the spec's key order; for `interpolated`, the chain rule through Lambda, Psi.
 W is the upper-triangular square root of Sigma^-1 (conventions, whitening).
 
+## Motion priors
+
+{GP_MODELS}
 ## Interpolation and prediction
 
 {GP_INTERPOLATION}
