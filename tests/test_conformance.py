@@ -230,7 +230,8 @@ def test_the_readme_names_every_kind_input_and_factor_spec_of_every_shipped_case
     assert not absent, sorted(set(absent))
 
 
-def test_the_readmes_interpolation_and_prediction_as_written_give_every_wnoa_case_of_the_gp_suite():
+@pytest.mark.parametrize("version", sorted(KITS))
+def test_the_readmes_interpolation_and_prediction_as_written_give_every_wnoa_case_of_the_gp_suite(version):
     """The README said "[YIB Eq. 16, 18]" for Lambda, Psi, x_tau, cov_tau and the prediction and wrote none of them
     out, though it says a port needs nothing outside the kit (an outsider porting the interpolation had to open the
     paper, and guess from which end tau is measured and what cov_tau adds). Its section 'Interpolation and
@@ -254,7 +255,7 @@ def test_the_readmes_interpolation_and_prediction_as_written_give_every_wnoa_cas
         return np.kron(np.array([[s**3 / 3, s**2 / 2], [s**2 / 2, s]]), np.asarray(qc, float))
 
     checked = []
-    for case in read_suite(SHIPPED, "gp")["cases"]:
+    for case in read_suite(KITS[version], "gp")["cases"]:
         i = case["inputs"]
         if i["kind"] in ("interpolation", "interpolation_covariance"):
             t1, t2, tau, qc = i["t1"], i["t2"], i["tau"], i["qc"]
@@ -386,16 +387,13 @@ def test_the_readmes_motion_priors_as_written_give_every_wnoa_wnoj_singer_and_lt
             got = {"Phi": scipy.linalg.expm(A * dt), "Q": e[n:, n:].T @ e[:n, n:], "v_i": aug[:n, n]}
             np.testing.assert_allclose(aug[:n, :n], got["Phi"], rtol=1e-14)
         elif kind == "singer_interpolation":
-            t1, t2, tau, qc, alpha = i["t1"], i["t2"], i["tau"], i["qc"], i["alpha"]
-
-            def phi(s, qc=qc, alpha=alpha):
-                return matrix("Singer", "Phi(s)", s, qc, alpha)
-
-            def q(s, qc=qc, alpha=alpha):
-                return matrix("Singer", "Q(s)", s, qc, alpha)
-
-            psi = q(tau - t1) @ phi(t2 - tau).T @ np.linalg.inv(q(t2 - t1))
-            lam = phi(tau - t1) - psi @ phi(t2 - t1)
+            t1, t2, tau = i["t1"], i["t2"], i["tau"]
+            phi_, q_ = (
+                {s: matrix("Singer", f, s, i["qc"], i["alpha"]) for s in (tau - t1, t2 - tau, t2 - t1)}
+                for f in ("Phi(s)", "Q(s)")
+            )
+            psi = q_[tau - t1] @ phi_[t2 - tau].T @ np.linalg.inv(q_[t2 - t1])
+            lam = phi_[tau - t1] - psi @ phi_[t2 - t1]
             got = {"Lambda": lam, "Psi": psi, "x_tau": lam @ i["x1"] + psi @ i["x2"]}
         else:
             continue
@@ -446,7 +444,7 @@ def test_the_docs_show_the_kits_readme_and_point_to_its_inputs_factors_and_group
     pages.write_kit_readme(tmp_path)
     assert (tmp_path / "readme.md").read_text() == export_readme()
     docs = (ROOT / "docs" / "conformance.md").read_text()
-    for section in ("inputs", "factors", "outputs", "se-2", "se-3"):
+    for section in ("inputs", "factors", "outputs", "se-2", "se-3", "motion-priors", "interpolation-and-prediction"):
         assert f"(kit/readme.md#{section})" in docs, section
     assert "kit/readme\n```" in docs  # in the page's toctree
     assert "| `gp_prior` |" not in docs  # the factor table lives in the README alone

@@ -216,7 +216,8 @@ xi21 is the Log of the relative pose, never theta2 - theta1 unwrapped (case `pri
 The two models agree when xi21's angle is small and part as it grows (`prior_*_fast`).
 
 **The local GP between two states.** At t1 < tau < t2, g(tau) = Lambda(tau) g1 + Psi(tau) g2 with the
-vector-space WNOA interpolation matrices [YIB Eq. 16, 18] of the model's g2; then x(tau) = (T1 Exp(xi(tau)),
+vector-space WNOA interpolation matrices [YIB Eq. 16, 18] (section 'Interpolation and prediction') of the model's
+g2; then x(tau) = (T1 Exp(xi(tau)),
 J_r(xi(tau)) xi_dot(tau)) ('simplified': w(tau) = xi_dot(tau)). J_k = d x(tau) / d d_k, x(tau) read in its own right
 tangent. The covariance (case `interpolation_covariance_local_variable`) is first order: with P = joint_cov the
 covariance of [d1; d2], N = d x(tau) / d g(tau) and Q_tau the local GP's conditional covariance of g(tau) given g1,

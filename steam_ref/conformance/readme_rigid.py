@@ -50,7 +50,8 @@ u (STEAM keeps only the first-order term of it: that port fails `wnoj_prior_fast
 J_r(xi) xi_ddot.
 
 **Interpolation, its covariance, extrapolation.** As the section 'SE(2)': g(tau) = Lambda g1 + Psi g2 with the
-vector-space matrices of the model (WNOA or WNOJ) **of tau - t1 and t2 - tau** (the cases have t1 = 2.5: absolute
+vector-space matrices of the model (WNOA or WNOJ: sections 'Motion priors', 'Interpolation and prediction') **of
+tau - t1 and t2 - tau** (the cases have t1 = 2.5: absolute
 times in their place fail), mapped back as above; cov_tau = [J_1 J_2] P [J_1 J_2]^T + N Q_tau N^T, N = dx(tau)/dg(tau),
 Q_tau the conditional covariance of g(tau) given g1, g2. Both terms are congruences of positive semi-definite
 matrices, so cov_tau is positive semi-definite as computed: nothing is clipped (`interpolation_covariance_near_a_state`:
