@@ -72,7 +72,7 @@ its alpha for `singer_interpolation`, WNOJ for the se3 suite's WNOJ local GP):
 
     Psi(tau)    = Q(tau - t1) Phi(t2 - tau)^T Q(t2 - t1)^-1
     Lambda(tau) = Phi(tau - t1) - Psi(tau) Phi(t2 - t1)                    [YIB Eq. 16]
-    x_tau       = Lambda(tau) x1 + Psi(tau) x2                             [YIB Eq. 18; the prior mean cancels]
+    x_tau       = Lambda(tau) x1 + Psi(tau) x2                             [YIB Eq. 18] (prior mean cancels)
 
 Q_tau of Eq. 16 is Q(tau - t1), measured from the earlier state, and Phi(t_i, tau) is Phi(t2 - tau) (a port that
 measures tau from t2 passes interp_tau1.3 alone: its tau is the midpoint). With joint_cov P the covariance of [x1; x2],
