@@ -32,7 +32,7 @@ from ..choices import RESIDUALS
 from ..errors import SteamError
 from ..gp.interpolate import conditional_covariance, interpolation_matrices
 from ..gp.prior import check_qc, process_noise, transition
-from .group import LieGroup
+from .group import LieGroup, mv
 
 __all__ = [
     "MODELS",
@@ -53,10 +53,6 @@ def check_model(model: object, name: str = "model") -> str:
     if model not in MODELS:
         raise SteamError(f"{name} must be one of {', '.join(repr(m) for m in MODELS)}, got {name}={model!r}")
     return str(model)
-
-
-def _mv(a: NDArray, v: NDArray) -> NDArray:
-    return np.einsum("...ij,...j->...i", a, v)
 
 
 def _blocks(tl: NDArray, tr: NDArray, bl: NDArray, br: NDArray) -> NDArray:
@@ -120,7 +116,7 @@ def _from_local(
     xi, xidot = gamma[..., :d], gamma[..., d:]
     local = model == "local-variable"
     jr = group.right_jacobian(xi) if local or jacobians else np.empty(0)
-    twist = _mv(jr, xidot) if local else xidot  # ϖ(τ) = J_r(ξ(τ)) ξ̇(τ)  [DER 11.10]
+    twist = mv(jr, xidot) if local else xidot  # ϖ(τ) = J_r(ξ(τ)) ξ̇(τ)  [DER 11.10]
     if not jacobians:
         return np.concatenate([group.compose(x1[..., :n], group.exp(xi)), twist], axis=-1)
     pose, ad, _ = group.compose(x1[..., :n], group.exp(xi), jacobians=True)  # T(τ) = T₁ Exp(ξ(τ))  [DER 11.10]
@@ -173,9 +169,9 @@ def interpolate(
     gamma1 = np.concatenate([np.zeros(x1.shape[:-1] + (d,)), x1[..., n:]], axis=-1)  # γ₁ = [0; ϖ₁]
     if not jacobians:
         gamma2 = local_variables(x1, x2, model, group=group, jacobians=False)
-        return _from_local(x1, _mv(lam, gamma1) + _mv(psi, gamma2), model, group, jacobians=False)  # [YIB Eq. 18]
+        return _from_local(x1, mv(lam, gamma1) + mv(psi, gamma2), model, group, jacobians=False)  # [YIB Eq. 18]
     gamma2, g21, g22 = local_variables(x1, x2, model, group=group)
-    gamma = _mv(lam, gamma1) + _mv(psi, gamma2)  # [YIB Eq. 18]
+    gamma = mv(lam, gamma1) + mv(psi, gamma2)  # [YIB Eq. 18]
     x, N, ad = _from_local(x1, gamma, model, group)
     e1 = np.zeros(x1.shape[:-1] + (2 * d, 2 * d))
     e1[..., d:, d:] = np.eye(d)  # ∂γ₁/∂x₁

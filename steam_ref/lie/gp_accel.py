@@ -25,7 +25,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..arguments import check_covariance, real_array
-from .group import LieGroup
+from .group import LieGroup, mv
 
 __all__ = [
     "local_start",
@@ -38,10 +38,6 @@ __all__ = [
     "extrapolate",
     "extrapolate_covariance",
 ]
-
-
-def _mv(a: NDArray, v: NDArray) -> NDArray:
-    return np.einsum("...ij,...j->...i", a, v)
 
 
 def _rows(*rows: tuple[NDArray, NDArray, NDArray]) -> NDArray:
@@ -74,9 +70,9 @@ def local_variables(
     rel, H1, _ = group.between(T1, T2, jacobians=True)
     xi = group.log(rel)  # ξ₂₁ = Log(T₁⁻¹ T₂)
     jinv = group.right_jacobian_inverse(xi)
-    rate = _mv(jinv, w2)  # ξ̇ = J⁻¹ ϖ₂
+    rate = mv(jinv, w2)  # ξ̇ = J⁻¹ ϖ₂
     G = group.jr_inverse_times_jacobian(xi, w2)
-    accel = _mv(G, rate) + _mv(jinv, a2)  # ξ̈ = G ξ̇ + J⁻¹ ϖ̇₂  [DER 14.1]
+    accel = mv(G, rate) + mv(jinv, a2)  # ξ̈ = G ξ̇ + J⁻¹ ϖ̇₂  [DER 14.1]
     gamma = np.concatenate([xi, rate, accel], axis=-1)
     if not jacobians:
         return gamma
@@ -109,7 +105,7 @@ def from_local(
     xi, rate, accel = gamma[..., :d], gamma[..., d : 2 * d], gamma[..., 2 * d :]
     jr = group.right_jacobian(xi)
     H = group.jr_times_jacobian(xi, rate)
-    state = [group.compose(x1[..., :n], group.exp(xi)), _mv(jr, rate), _mv(H, rate) + _mv(jr, accel)]
+    state = [group.compose(x1[..., :n], group.exp(xi)), mv(jr, rate), mv(H, rate) + mv(jr, accel)]
     if not jacobians:
         return np.concatenate(state, axis=-1)
     _, ad, _ = group.compose(x1[..., :n], group.exp(xi), jacobians=True)
@@ -123,7 +119,7 @@ def from_local(
 def prior_error(x1: NDArray, x2: NDArray, phi: NDArray, offset: NDArray, *, group: LieGroup) -> NDArray:
     """e = γ₂ - Φ(Δt) γ₁ - v(Δt): the prior's residual in the local variables.  [YIB Eq. 22; DER 14.1]"""
     gamma2 = local_variables(x1, x2, group=group, jacobians=False)
-    return gamma2 - _mv(phi, local_start(x1, group)) - offset
+    return gamma2 - mv(phi, local_start(x1, group)) - offset
 
 
 def prior_jacobians(x1: NDArray, x2: NDArray, phi: NDArray, *, group: LieGroup) -> tuple[NDArray, NDArray]:
@@ -143,9 +139,9 @@ def interpolate(
     gamma1 = local_start(x1, group)
     if not jacobians:
         gamma2 = local_variables(x1, x2, group=group, jacobians=False)
-        return from_local(x1, _mv(lam, gamma1) + _mv(psi, gamma2) + offset, group, jacobians=False)
+        return from_local(x1, mv(lam, gamma1) + mv(psi, gamma2) + offset, group, jacobians=False)
     gamma2, g21, g22 = local_variables(x1, x2, group=group)
-    x, N, ad = from_local(x1, _mv(lam, gamma1) + _mv(psi, gamma2) + offset, group)
+    x, N, ad = from_local(x1, mv(lam, gamma1) + mv(psi, gamma2) + offset, group)
     d = group.dim
     e1 = np.zeros(x1.shape[:-1] + (3 * d, 3 * d))
     e1[..., d:, d:] = np.eye(2 * d)  # ∂γ₁/∂x₁
@@ -175,7 +171,7 @@ def interpolate_covariance(
     [δ₁; δ₂], ``q_cond`` the local GP's Cov(γ(τ) | γ₁, γ₂) (``gp.interpolate.conditional_covariance``).  [DER 14.6]"""
     d = group.dim
     x, J1, J2 = interpolate(x1, x2, lam, psi, offset, group=group)
-    gamma = _mv(lam, local_start(x1, group)) + _mv(psi, local_variables(x1, x2, group=group, jacobians=False)) + offset
+    gamma = mv(lam, local_start(x1, group)) + mv(psi, local_variables(x1, x2, group=group, jacobians=False)) + offset
     _, N, _ = from_local(x1, gamma, group)
     P = check_covariance("joint_cov", real_array("joint_cov", joint_cov), 6 * d)
     return x, _gram(np.hstack([J1, J2]), P, N, q_cond)
@@ -184,7 +180,7 @@ def interpolate_covariance(
 def extrapolate(x1: NDArray, phi: NDArray, offset: NDArray, *, group: LieGroup) -> tuple[NDArray, NDArray]:
     """The prediction x(t) from γ(t) = Φ(t - t₁) γ₁ + v [YIB Eq. 22] and ∂x(t)/∂x₁ = N Φ ∂γ₁/∂x₁ + diag(Ad, 0, 0)."""
     d = group.dim
-    x, N, ad = from_local(x1, _mv(phi, local_start(x1, group)) + offset, group)
+    x, N, ad = from_local(x1, mv(phi, local_start(x1, group)) + offset, group)
     e1 = np.zeros(x1.shape[:-1] + (3 * d, 3 * d))
     e1[..., d:, d:] = np.eye(2 * d)
     J = N @ (phi @ e1)
@@ -197,6 +193,6 @@ def extrapolate_covariance(
 ) -> tuple[NDArray, NDArray]:
     """The prediction x(t) and its covariance J P₁ Jᵀ + N Q(t - t₁) Nᵀ.  [YIB Eq. 17, 22; DER 14.6]"""
     x, J = extrapolate(x1, phi, offset, group=group)
-    _, N, _ = from_local(x1, _mv(phi, local_start(x1, group)) + offset, group)
+    _, N, _ = from_local(x1, mv(phi, local_start(x1, group)) + offset, group)
     P = check_covariance("cov1", real_array("cov1", cov1), 3 * group.dim)
     return x, _gram(J, P, N, q)

@@ -46,7 +46,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..arguments import finite, real_array
 from ..errors import ShapeError, SteamError
 
-__all__ = ["LieGroup", "check_group", "matrix_of"]
+__all__ = ["LieGroup", "check_group", "matrix_of", "mv"]
 
 
 def matrix_of(rows: list[list[NDArray | float]], like: NDArray) -> NDArray:
@@ -59,7 +59,9 @@ def matrix_of(rows: list[list[NDArray | float]], like: NDArray) -> NDArray:
     return out
 
 
-def _mv(a: NDArray, v: NDArray) -> NDArray:
+def mv(a: NDArray, v: NDArray) -> NDArray:
+    """a v for stacks of matrices (..., n, m) and vectors (..., m), broadcast over the leading axes (einsum: for a
+    stack of small matrices, faster than matmul on the vectors as columns; a stack of matrices times matrices is ``@``)."""
     return np.einsum("...ij,...j->...i", a, v)
 
 
@@ -197,7 +199,7 @@ class LieGroup(ABC):
     def jr_inverse_times_jacobian(self, xi: ArrayLike, v: ArrayLike) -> NDArray:
         """∂(J_r(ξ)⁻¹ v)/∂ξ (..., dim, dim), exact: d(J⁻¹) = -J⁻¹ dJ J⁻¹, so it is -J⁻¹ ∂(J_r(ξ) u)/∂ξ at u = J⁻¹ v."""
         jinv = self.right_jacobian_inverse(xi)
-        return -(jinv @ self.jr_times_jacobian(xi, _mv(jinv, np.asarray(v, dtype=float))))
+        return -(jinv @ self.jr_times_jacobian(xi, mv(jinv, np.asarray(v, dtype=float))))
 
     @overload
     def log_between(
@@ -222,11 +224,11 @@ class LieGroup(ABC):
         """:meth:`log_between` of checked elements and twist: here from the group's methods in turn."""
         if not jacobians:
             xi = self.log(self._between(a, b))
-            return xi, _mv(self.right_jacobian_inverse(xi), v)
+            return xi, mv(self.right_jacobian_inverse(xi), v)
         rel, Ha, _ = self.between(a, b, jacobians=True)
         xi = self.log(rel)
         jinv = self.right_jacobian_inverse(xi)
-        return xi, _mv(jinv, v), (jinv @ Ha), jinv, self.jr_inverse_times_jacobian(xi, v)
+        return xi, mv(jinv, v), (jinv @ Ha), jinv, self.jr_inverse_times_jacobian(xi, v)
 
     def compose_exp(self, a: ArrayLike, xi: ArrayLike) -> NDArray:
         """a Exp(ξ): the element ``a`` moved by ξ in its right tangent (a state's retraction, ``lie.state``). Here
@@ -268,7 +270,7 @@ class LieGroup(ABC):
     def jr_times_hessian(self, xi: ArrayLike, v: ArrayLike, u: ArrayLike) -> NDArray:
         """∂/∂ξ [∂(J_r(ξ) v)/∂ξ u] at fixed u and v (..., dim, dim): column j is D²J[u, e_j] v, exact.  [DER 14.2]"""
         _, second = self.jr_derivatives(xi, u)
-        return np.swapaxes(_mv(second, np.asarray(v, dtype=float)[..., None, :]), -1, -2)
+        return np.swapaxes(mv(second, np.asarray(v, dtype=float)[..., None, :]), -1, -2)
 
     def jr_inverse_times_hessian(self, xi: ArrayLike, v: ArrayLike, u: ArrayLike) -> NDArray:
         """∂/∂ξ [∂(J_r(ξ)⁻¹ v)/∂ξ u] at fixed u and v (..., dim, dim), exact.  [DER 14.3]
@@ -277,13 +279,11 @@ class LieGroup(ABC):
         and DJ[w] z = ∂(J z)/∂ξ w, Df[w] = ∂(J⁻¹ v)/∂ξ w.
         """
         jinv = self.right_jacobian_inverse(xi)
-        f = _mv(jinv, np.asarray(v, dtype=float))
+        f = mv(jinv, np.asarray(v, dtype=float))
         G = self.jr_inverse_times_jacobian(xi, v)
         dj_u, _ = self.jr_derivatives(xi, u)
         inner = (
-            self.jr_times_hessian(xi, f, u)
-            + (dj_u @ G)
-            + self.jr_times_jacobian(xi, _mv(G, np.asarray(u, dtype=float)))
+            self.jr_times_hessian(xi, f, u) + (dj_u @ G) + self.jr_times_jacobian(xi, mv(G, np.asarray(u, dtype=float)))
         )
         return -(jinv @ inner)
 
