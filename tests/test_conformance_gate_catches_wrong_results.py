@@ -2,7 +2,7 @@
 
 Each test edits steam_ref's correct results into a wrong port's (a Jacobian block of the wrong sign, a value off by
 ten times its tolerance, a heading 2π off, a transposed Jacobian, a flipped sign, Jacobian columns in another
-order, Λ and Ψ swapped) and checks that ``check`` fails the case and names
+order, Φ and Q of a state stacked axis by axis, Λ and Ψ swapped) and checks that ``check`` fails the case and names
 the case, the quantity, the entry, the expected and the got value and the tolerance; and the other way, that what
 is right within the documented rules passes: a value off by half its tolerance, an integral count written as a
 double (``189.0``: JSON has one number type). The tolerance is recomputed here from the kit's ``{atol, rtol}`` and
@@ -20,6 +20,7 @@ import pytest
 from cli_runs import runner
 
 from steam_ref.conformance import KIT_VERSION, KITS, SHIPPED
+from steam_ref.conformance.checker import compare_quantity
 from steam_ref.conformance.kitio import read_suite
 from steam_ref.conformance.readme import export_readme
 
@@ -201,6 +202,90 @@ def test_jacobian_columns_in_another_order_are_named_with_the_permutation(tmp_pa
         "; its columns are the expected columns [1, 0, 2, 3, 4, 5] in that order: an ordering differs (README "
         "conventions 'state', 'jacobians': a state is [x, y, theta, x_dot, y_dot, theta_dot], H_k for the k-th key)"
     ), head
+
+
+AXIS_BY_AXIS = "; its rows and columns are the expected ones in the order p = {} (the same permutation on both): a "
+AXIS_BY_AXIS_WHY = (
+    "state stacked in another order (README conventions 'state': x = [p; p_dot] block by block, p = [x, y, theta], "
+    "not axis by axis)"
+)
+
+
+def named_symmetric_permutation(message: str) -> list[int]:
+    """The p of the symmetric-permutation hint in a failure's headline."""
+    assert message.endswith(AXIS_BY_AXIS_WHY), message
+    return json.loads(message.split("in the order p = ")[1].split(" (the same")[0])
+
+
+def test_phi_q_and_qinv_of_a_state_stacked_axis_by_axis_are_named_with_the_permutation(tmp_path, capsys, kit_results):
+    """A port whose WNOJ state is [x, x_dot, x_ddot, y, ...] (axis by axis) rather than the kit's [p; p_dot; p_ddot]
+    writes Φ, Q, Q⁻¹ with rows and columns both permuted, got = expected[p][:, p]; no one-axis order fits, and
+    Φ's diagonal is all ones (a diagonal match cannot place a row): the line names p."""
+    gp = kit_results(SHIPPED, "gp")
+    case = gp["wnoj_dt0.4"]
+    p = [0, 3, 6, 1, 4, 7, 2, 5, 8]  # got's k-th entry is the kit's p[k]-th: x, x_dot, x_ddot, y, ...
+    for q in ("Phi", "Q", "Qinv"):
+        case[q] = np.array(case[q])[np.ix_(p, p)].tolist()
+    code, lines = check(tmp_path, capsys, "gp", gp)
+    head = fail_line(lines, "gp", "wnoj_dt0.4")
+    assert code == 1 and head.startswith("FAIL gp/wnoj_dt0.4: Phi worst |diff| "), head
+    assert head.endswith(
+        AXIS_BY_AXIS.format(p)
+        + AXIS_BY_AXIS_WHY
+        + " (likely cause: first failing in computation order; 2 more failing)"
+    ), head
+    for q in ("Q", "Qinv"):
+        assert any(
+            line.startswith(f"  {q} ") and line.endswith(AXIS_BY_AXIS.format(p) + AXIS_BY_AXIS_WHY) for line in lines
+        )
+
+
+def test_an_isotropic_qc_repeating_the_diagonal_still_names_a_permutation_that_reproduces_the_port(tmp_path):
+    """Q of WNOA with Qc = q I [YIB Eq. 17] (written out here: Q = [[dt^3/3, dt^2/2], [dt^2/2, dt]] kron q I) has each
+    diagonal value three times, and relabelling the axes leaves it unchanged, so more than one p is right: the one
+    named must be a permutation that reproduces the port's matrix within tolerance, checked here by indexing."""
+    dt, q = 0.7, 0.3
+    expected = np.kron([[dt**3 / 3, dt**2 / 2], [dt**2 / 2, dt]], q * np.eye(3))
+    got = expected[np.ix_([4, 1, 5, 2, 3, 0], [4, 1, 5, 2, 3, 0])]  # [y_dot, y, theta_dot, theta, x_dot, x]
+    tolerance = {"atol": 0.0, "rtol": 1e-12}
+    ((_, head, _),) = compare_quantity(expected.tolist(), got.tolist(), tolerance, "Q")
+    named = named_symmetric_permutation(head)
+    assert sorted(named) == list(range(6)) and named != list(range(6)), head
+    assert np.abs(got - expected[np.ix_(named, named)]).max() <= 1e-12 * np.abs(expected).max(), head
+
+
+def test_a_thirty_by_thirty_matrix_is_searched_and_one_with_no_permutation_fails_fast_with_no_hint():
+    """To the kit's largest square quantity (linear's 28 x 28): a permuted random 30 x 30 is named; the same with
+    one entry off, and a 3-regular graph's adjacency against another's (a Möbius ladder and a prism, not
+    isomorphic: the search is graph isomorphism there, millions of partial orders) fail within a second, no hint."""
+    import time
+
+    rng = np.random.default_rng(7)
+    n, tolerance = 30, {"atol": 1e-12, "rtol": 0.0}
+    expected = rng.standard_normal((n, n))
+    p = [int(i) for i in rng.permutation(n)]
+    got = expected[np.ix_(p, p)]
+    ((_, head, _),) = compare_quantity(expected.tolist(), got.tolist(), tolerance, "R")
+    assert head.endswith(AXIS_BY_AXIS.format(p) + AXIS_BY_AXIS_WHY), head
+    off = got.copy()
+    off[3, 5] += 1e-3
+
+    def ring(edges) -> np.ndarray:
+        a = np.zeros((n, n))
+        for i, j in edges:
+            a[i, j] = a[j, i] = 1.0
+        return a
+
+    moebius = ring([(i, (i + 1) % n) for i in range(n)] + [(i, i + 15) for i in range(15)])
+    prism = ring(
+        [(i, (i + 1) % 15) for i in range(15)]
+        + [(15 + i, 15 + (i + 1) % 15) for i in range(15)]
+        + [(i, i + 15) for i in range(15)]
+    )
+    for exp, wrong in ((expected, off), (moebius, prism)):
+        start = time.perf_counter()
+        ((_, head, _),) = compare_quantity(exp.tolist(), wrong.tolist(), tolerance, "R")
+        assert time.perf_counter() - start < 1.0 and head.endswith("entries past it"), head
 
 
 def test_lambda_and_psi_swapped_are_named_as_a_swap(tmp_path, capsys, kit_results):
