@@ -15,8 +15,9 @@ exports it, checks results laid out like it, and checks the installed code again
 - :mod:`.differences`: the 8th-order central-difference stencil the tests and benchmarks check Jacobians with;
 - :mod:`.spec` (every suite's specs), :mod:`.runner` (the table of case type → steam_ref's answer),
   :mod:`.solvers` (steam_ref's solvers on a case's problem): steam_ref's own results for a case;
-- :mod:`.checker`: comparison within tolerance; :mod:`.gate`: a results folder against a whole kit
-  (nothing missing); :mod:`.validate`: the form of kit and results files; :mod:`.readme`: the exported README;
+- :mod:`.checker`: comparison within tolerance (:mod:`.hints`: the pattern a failing quantity is named by);
+  :mod:`.gate`: a results folder against a whole kit (nothing missing); :mod:`.validate`: the form of kit and
+  results files; :mod:`.readme`: the exported README;
   :mod:`.build`: building the kit and ``selftest``;
 - :mod:`.command`: the ``steam-ref conformance`` subcommands.
 """
