@@ -44,7 +44,7 @@ from ..dead_reckoning import integrate_odometry
 from ..errors import DataError
 from .table import check_time_origin, frozen_table, ids_text, number_text, rows_of
 
-__all__ = ["LandmarkDataset", "LANDMARK_COLUMNS", "READING_TABLES", "RANGE_SLACK_SIGMAS"]
+__all__ = ["LandmarkDataset", "LANDMARK_COLUMNS", "READING_TABLES", "RANGE_SLACK_SIGMAS", "check_integer_ids"]
 
 _TIME_TOL = 1e-6  # [s] a reading's time and its pose's must agree to this
 LANDMARK_COLUMNS = {  # table -> column names
@@ -154,7 +154,7 @@ class LandmarkDataset:
             raise DataError(
                 f"pose times must increase strictly: poses row {k} has t={number_text(t[k])} after t={number_text(t[k - 1])} at row {k - 1}"
             )
-        _check_integer_ids("poses", self.poses[:, 1], 1)
+        check_integer_ids("poses", self.poses[:, 1], 1)
         if len(self.odometry) != n - 1:
             raise DataError(
                 f"odometry has {len(self.odometry)} rows but poses has {n}: expected {n - 1} (row k ends at pose k + 1)"
@@ -189,7 +189,7 @@ class LandmarkDataset:
                 )
 
     def _check_landmark_ids(self) -> None:
-        _check_integer_ids("landmarks", self.landmarks[:, 0], 0)
+        check_integer_ids("landmarks", self.landmarks[:, 0], 0)
         if self.landmark_ids is None:
             read = [getattr(self, name)[:, 1] for name in READING_TABLES]
             ids = np.unique(np.concatenate([*read, self.landmarks[:, 0]]))
@@ -198,7 +198,7 @@ class LandmarkDataset:
             bad = np.argwhere(~np.isfinite(ids))
             if bad.size:
                 raise DataError(f"landmark_ids[{int(bad[0, 0])}] is {ids[int(bad[0, 0])]}: every value must be finite")
-            _check_integer_ids("landmark_ids", ids, None)
+            check_integer_ids("landmark_ids", ids, None)
         ids = ids.astype(int)
         ids.setflags(write=False)
         object.__setattr__(self, "landmark_ids", ids)
@@ -324,7 +324,7 @@ def _ranges_agree(a: NDArray, r: NDArray, sigma: NDArray) -> bool:
     return bool(np.all((r - a - k_sigma)[1:] <= below - margin) and np.all((r + a + k_sigma)[1:] >= above + margin))
 
 
-def _check_integer_ids(name: str, ids: ArrayLike, column: int | None) -> None:
+def check_integer_ids(name: str, ids: ArrayLike, column: int | None) -> None:
     """Integer and unique ids; DataError naming ``name[row, column]`` (or ``name[row]``) otherwise."""
     ids = np.asarray(ids, dtype=float)
     where = (lambda k: f"{name}[{k}, {column}]") if column is not None else (lambda k: f"{name}[{k}]")

@@ -32,7 +32,7 @@ from ..lie.points import point_dim, position, rotation_part, to_body
 from ..lie.state import group_state
 from ..manifold import Manifold
 from ..motion import MotionPrior, motion_prior
-from .landmarks import _check_integer_ids
+from .landmarks import check_integer_ids
 from .table import ids_text, number_text, rows_of
 
 __all__ = ["RigidReadings", "RigidSample", "sample_rigid_task", "generate_rigid", "RIGID_NOISE", "RIGID_QC"]
@@ -249,7 +249,7 @@ def generate_rigid(n_steps: int = RIGID_STEPS, seed: int = 0) -> RigidReadings:
 def _check_landmarks(data: RigidReadings) -> None:
     """``data``'s landmarks: integer ids, each surveyed once; every range's and body-frame point's landmark among
     them (a reading of an id not surveyed, 0.5 or 99, was read as landmark 0 or failed with a KeyError)."""
-    _check_integer_ids("landmarks", data.landmarks[:, 0], 0)
+    check_integer_ids("landmarks", data.landmarks[:, 0], 0)
     known = data.landmarks[:, 0]
     for table in ("ranges", "points"):
         ids = getattr(data, table)[:, 1]
