@@ -107,19 +107,25 @@ class SolverView:
         check_past(self.past)
 
     def estimate_of(self, key: Key) -> NDArray:
+        """The solver's estimate of ``key``, a forgotten one read as this view's ``past``."""
         return self.solver.estimate_of(key, past=self.past)
 
     def estimates_of(self, keys: Sequence[Key]) -> dict[Key, NDArray]:
+        """The solver's estimate of each of ``keys``, read as this view's ``past``."""
         return self.solver.estimates_of(keys, past=self.past)
 
     def estimate(self) -> Values:
+        """The solver's estimate of every variable, read as this view's ``past``."""
         return self.solver.estimate(past=self.past)
 
     def marginal_covariances(self, keys: Sequence[Key]) -> dict[Key, NDArray]:
+        """The solver's marginal covariance of each of ``keys`` (``past`` does not enter)."""
         return self.solver.marginal_covariances(keys)
 
     def joint_covariance(self, keys: Sequence[Key]) -> NDArray:
+        """The solver's joint marginal covariance of ``keys``, in the order given."""
         return self.solver.joint_covariance(keys)
 
     def joint_covariances(self, groups: Sequence[Sequence[Key]]) -> list[NDArray]:
+        """The solver's joint marginal covariance of each group of keys."""
         return self.solver.joint_covariances(groups)
