@@ -272,3 +272,68 @@ def test_the_equations_page_links_each_equation_and_step_to_the_api_entries_citi
         assert links, f"{anchor}: no link into the API pages"
         for target, name in set(links):
             assert f'id="{name}"' in (_site() / target).read_text(), f"{anchor} links {target}#{name}, not there"
+
+
+# --- what the pages say, read beside the code (no browser) ------------------------------------------------------
+
+PAGES = ["README.md"] + [
+    f"docs/{name}.md"
+    for name in ("api", "architecture", "background", "bayes_tree", "conformance", "derivations", "index", "tutorials")
+]
+# A section of derivations.md named from another page: "derivations §16", "[derivations.md](...), section 12".
+_SECTION_REFERENCE = re.compile(r"derivations[^§\n]{0,90}?(?:§ ?|section )(\d+)")
+# Words that name one derivation, and the words its section's title holds.
+_TOPICS = {
+    "fit_qc": "Qc from data",
+    "fit-qc": "Qc from data",
+    "maximum likelihood": "Qc from data",
+    "maximum-likelihood": "Qc from data",
+    "runs_needed": "Monte Carlo runs",
+    "MAX_CONDITION": "smallest time gap",
+}
+
+
+def _derivation_titles() -> dict[int, str]:
+    text = (REPO_ROOT / "docs" / "derivations.md").read_text()
+    return {int(n): title for n, title in re.findall(r"^## (\d+)\. (.*)$", text, flags=re.M)}
+
+
+def test_each_section_of_the_derivations_a_page_names_is_the_one_about_its_topic():
+    """A reference to a section of derivations.md names a section that exists; after a name of one derivation
+    (fit_qc, runs_needed, MAX_CONDITION) on the same line, the next reference names that derivation's section
+    (api.md and architecture.md sent the Qc fit to §14, the priors with an acceleration, when it is §16)."""
+    titles = _derivation_titles()
+    assert any("Qc from data" in t for t in titles.values()), titles
+    checked = 0
+    for page in PAGES:
+        for number, line in enumerate((REPO_ROOT / page).read_text().splitlines(), 1):
+            references = [(m.start(), int(m.group(1))) for m in _SECTION_REFERENCE.finditer(line)]
+            for _, section in references:
+                assert section in titles, f"{page}:{number} names derivations §{section}, which does not exist"
+            for word, topic in _TOPICS.items():
+                for hit in re.finditer(re.escape(word), line):
+                    after = [section for start, section in references if start > hit.start()]
+                    if after:
+                        checked += 1
+                        assert topic in titles[after[0]], (
+                            f"{page}:{number}: {word} is derived in the section on {topic!r}, "
+                            f"not §{after[0]} ({titles[after[0]]})"
+                        )
+    assert checked >= 3, "the references to the derivations were not found"
+
+
+def test_the_api_page_gives_the_se3_priors_state_as_the_prior_holds_it():
+    """api.md's "On SE(3)" names the group the 'se3' prior is built on and its state's size: a pose of SE3V
+    ([t; φ], as many numbers as its tangent) and its body twist, 6 + 6 numbers (it said SE3 and 18)."""
+    import numpy as np
+
+    import steam_ref as sr
+    from steam_ref.lie import SE3V
+
+    text = (REPO_ROOT / "docs" / "api.md").read_text()
+    bullet = re.search(r"\*\*On SE\(3\)\*\*.*?(?=\n- )", text, flags=re.S)
+    assert bullet, "api.md has no bullet on SE(3)"
+    group, numbers = re.search(r"LieGroupWnoa\((\w+), qc, residual\).*?(\d+) numbers", bullet.group(0), re.S).groups()
+    assert group == "SE3V" and int(numbers) == SE3V.size + SE3V.dim == 12
+    prior = sr.motion_prior("se3", np.eye(6))
+    assert prior.group is SE3V and prior.state_dim == int(numbers)
