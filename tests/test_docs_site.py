@@ -328,12 +328,14 @@ def test_the_api_page_gives_the_se3_priors_state_as_the_prior_holds_it():
     import numpy as np
 
     import steam_ref as sr
-    from steam_ref.lie import SE3V
+    from steam_ref.lie import SE3V, GroupState
 
     text = (REPO_ROOT / "docs" / "api.md").read_text()
     bullet = re.search(r"\*\*On SE\(3\)\*\*.*?(?=\n- )", text, flags=re.S)
     assert bullet, "api.md has no bullet on SE(3)"
-    group, numbers = re.search(r"LieGroupWnoa\((\w+), qc, residual\).*?(\d+) numbers", bullet.group(0), re.S).groups()
+    said = re.search(r"LieGroupWnoa\((\w+), qc, residual\).*?(\d+) numbers", bullet.group(0), re.S)
+    assert said, "api.md's bullet on SE(3) does not name the prior's class and its state's size"
+    group, numbers = said.groups()
     assert group == "SE3V" and int(numbers) == SE3V.size + SE3V.dim == 12
     prior = sr.motion_prior("se3", np.eye(6))
-    assert prior.group is SE3V and prior.state_dim == int(numbers)
+    assert prior.kind is GroupState(SE3V) and prior.state_dim == int(numbers)
