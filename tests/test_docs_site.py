@@ -339,3 +339,20 @@ def test_the_api_page_gives_the_se3_priors_state_as_the_prior_holds_it():
     assert group == "SE3V" and int(numbers) == SE3V.size + SE3V.dim == 12
     prior = sr.motion_prior("se3", np.eye(6))
     assert prior.kind is GroupState(SE3V) and prior.state_dim == int(numbers)
+
+
+def test_the_conformance_page_counts_the_plaza_states_the_paper_case_stores():
+    """conformance.md's paper suite stores Plaza's estimate "at every 10th state and the last, N of 9,658": states
+    0, 10, ..., 9,650 and 9,657, 967 (it said 966), as many as the shipped case holds."""
+    import numpy as np
+
+    from steam_ref.conformance import KIT_VERSION, KITS
+
+    text = (REPO_ROOT / "docs" / "conformance.md").read_text()
+    said = re.search(r"every 10th state and the last, ([\d,]+) of ([\d,]+)\)", text)
+    assert said, "conformance.md no longer says how many Plaza states the paper case stores"
+    stored, total = (int(n.replace(",", "")) for n in said.groups())
+    assert total == 9658
+    assert stored == len(set(range(0, total, 10)) | {total - 1}) == 967
+    with np.load(KITS[KIT_VERSION] / "paper" / "expected.npz") as expected:
+        assert expected["plaza_btgp1/poses"].shape == (stored, 3)

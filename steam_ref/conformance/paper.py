@@ -4,7 +4,7 @@ The expected values are the authors' own final estimates (``authors/*_full_data_
 ``XinyanGT/online-gpslam-code``, MATLAB + GTSAM 3.2), so they are independent of steam_ref. The
 inputs are the data files (named, with their sha256: they are the paper's published data, too large
 to copy into the kit) and the set-up of the authors' scripts. Plaza's estimate is stored at every
-10th state and the last (966 of 9,658 states) to keep the kit small; its RMSE is over all states.
+10th state and the last (967 of 9,658 states) to keep the kit small; its RMSE is over all states.
 The tolerances are what steam_ref's own runs must meet against the authors' (docs/experiments.md,
 "Fidelity"): a faithful port of the paper's method should land as close.
 """
