@@ -560,3 +560,30 @@ def test_the_marginal_factor_of_an_aged_state_lands_on_the_kept_landmark():
 def test_a_bad_keep_is_refused_naming_it(keep):
     with pytest.raises(SteamError, match=re.escape(f"keep={keep!r}")):
         FixedLagSmoother(1.0, keep=keep)
+
+
+def test_the_marginal_factors_moved_right_hand_side_is_exact_on_a_vector_and_first_estimate_on_a_group():
+    """derivations §10, (10.4): relinearized at θ̄′, the frozen factor is A δ′ - (b - A (θ̄′ ⊖ θ̄⁰)) in δ′ about θ̄′.
+    On a vector state that is its error exactly. On an SE(2) state, where θ ⊖ θ̄⁰ is a Log, its value at θ̄′ is
+    exact but its Jacobian A is not the error's slope there (A J_r⁻¹ would be): the gap grows in proportion to
+    the step (the page said the shift was exact, "steam_ref's states are vectors", before states on a group
+    were marginalized)."""
+    from steam_ref.lie import SE2_STATE
+
+    rng = np.random.default_rng(5)
+    A, b = rng.standard_normal((6, 6)), rng.standard_normal(6)
+    theta0 = np.array([0.3, -0.2, 0.4, 0.5, 0.1, -0.2])
+    direction = rng.standard_normal(6)
+    for kind in (VECTOR, SE2_STATE):
+        factor = MarginalFactor((X(0),), np.eye(6), A=A, b=b, theta0=theta0, dims=(6,), kinds=(kind,))
+        moved = kind.retract(theta0, 0.3 * rng.standard_normal(6))
+        gaps = []
+        for h in (0.0, 1e-2, 1e-3):
+            step = h * direction
+            model = A @ step - (b - A @ kind.local(theta0, moved))
+            gaps.append(np.abs(factor.error(kind.retract(moved, step)) - model).max())
+        assert gaps[0] < 1e-12, gaps  # the value at θ̄′: exact on both
+        if kind is VECTOR:
+            assert max(gaps) < 1e-12, gaps
+        else:
+            assert gaps[1] > 1e-4 and 8 < gaps[1] / gaps[2] < 12, gaps  # first order in the step
