@@ -356,3 +356,31 @@ def test_the_conformance_page_counts_the_plaza_states_the_paper_case_stores():
     assert stored == len(set(range(0, total, 10)) | {total - 1}) == 967
     with np.load(KITS[KIT_VERSION] / "paper" / "expected.npz") as expected:
         assert expected["plaza_btgp1/poses"].shape == (stored, 3)
+
+
+def test_the_conformance_pages_failing_case_is_what_check_prints(tmp_path):
+    """conformance.md's "Messages point at the bug" block is what `check` prints for a port whose Λ[0, 3] of
+    gp/interp_tau1.1 is 0.001 off (and x̄(τ)[0] 0.0008): results made from the current kit's own expected values
+    (the oracle's), those two entries moved. The block's expected values were kit v4's, a few ulps from v5's."""
+    import json
+
+    import numpy as np
+
+    from steam_ref.conformance import KIT_VERSION, SHIPPED, check_directory
+
+    text = (REPO_ROOT / "docs" / "conformance.md").read_text()
+    block = re.search(r"\n\n(    FAIL gp/interp_tau1\.1:.*?)\n\n", text, flags=re.S)
+    assert block, "conformance.md's failing-case example was not found"
+    with np.load(SHIPPED / "gp" / "expected.npz") as expected:
+        got = {key.split("/", 1)[1]: expected[key].copy() for key in expected.files if key.startswith("interp_tau1.1/")}
+    got["Lambda"][0, 3] += 0.001
+    got["x_tau"][0] += 0.0008
+    (tmp_path / "gp").mkdir()
+    results = {"kit_version": KIT_VERSION, "cases": {"interp_tau1.1": {k: v.tolist() for k, v in got.items()}}}
+    (tmp_path / "gp" / "results.json").write_text(json.dumps(results))
+    printed = check_directory(tmp_path, only=["gp"], allow_missing=True).lines()
+    for line in block.group(1).splitlines():
+        shown = re.escape(line[4:]).replace(re.escape("(...)"), r"\(.*")
+        assert any(re.fullmatch(shown, p) for p in printed), f"check does not print {line[4:]!r}:\n" + "\n".join(
+            printed
+        )
