@@ -359,7 +359,7 @@ class LieGroup(ABC):
 
     def _not_planar(self, what: str) -> str:
         return (
-            f"{self!r} holds no planar pose, so it has no {what}: a planar front end, reading or evaluation "
+            f"{self!r} holds no planar pose, so it cannot give {what}: a planar front end, reading or evaluation "
             f"needs a group that says how (SE2 does)"
         )
 
