@@ -93,3 +93,28 @@ def test_a_missing_authors_run_names_the_data_set_that_fetches_it(name, fetch, t
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
     with pytest.raises(DataError, match=f"authors/{AUTHORS_RUNS[name]} not found.*`steam-ref data fetch {fetch}`"):
         find_authors_file(name, data_dir=tmp_path)
+
+
+def test_the_printed_covariance_differences_keep_two_significant_digits():
+    """The text of ``steam-ref fidelity`` prints each relative difference of the marginals so that it reads back to
+    two significant digits. Plaza's are 2e-5 at the median (pose and velocity) and 6e-5 for the landmarks, which a
+    fixed two decimals of a percent printed as 0.00 % and 0.01 %: as if the marginals were equal, or 2x off."""
+    import re
+
+    from steam_ref.cli.explain import fidelity_text
+
+    figures = {  # Plaza's, from scipy.io.loadmat of the authors' file against a saved run (not from compare)
+        "pose_cov_median": 1.981879e-05,
+        "pose_cov_max": 0.002279446,
+        "velocity_cov_median": 1.767587e-05,
+        "velocity_cov_max": 0.03846184,
+        "landmark_cov_max": 5.686965e-05,
+    }
+    row = figures | {"dataset": "plaza", "n_states": 9658, "pose_rms_m": 0.00118, "pose_max_m": 0.00622}
+    row |= {"pose_max_at": 9369, "landmark_max_m": 5e-05, "rmse_m": 0.33827, "authors_rmse_m": 0.33823}
+    row |= {"total_s": 54.6, "authors_total_s": 140.39}
+    line = fidelity_text(row).splitlines()[-1]
+    printed = [float(p) / 100 for p in re.findall(r"([0-9.e+-]+)%", line)]
+    assert len(printed) == len(figures), line
+    for (name, value), got in zip(figures.items(), printed, strict=True):
+        assert got == pytest.approx(value, rel=0.05), (name, line)

@@ -201,13 +201,20 @@ def _mm(metres: float) -> str:
     return f"{1000 * metres:.2f} mm"
 
 
+def _percent(fraction: float) -> str:
+    """A small relative difference in percent to two significant digits: a fixed two decimals printed Plaza's
+    median 0.0020 % as 0.00 %, as if the marginals were equal."""
+    return f"{100 * fraction:.2g}%"
+
+
 def fidelity_text(row: dict) -> str:
     cov = (
         ""
         if row["pose_cov_median"] is None
         else (
-            f"\n  marginal covariances, relative difference: pose median {row['pose_cov_median']:.2%} (max {row['pose_cov_max']:.2%}), "
-            f"velocity median {row['velocity_cov_median']:.2%} (max {row['velocity_cov_max']:.2%}), landmarks max {row['landmark_cov_max']:.2%}"
+            f"\n  marginal covariances, relative difference: pose median {_percent(row['pose_cov_median'])} "
+            f"(max {_percent(row['pose_cov_max'])}), velocity median {_percent(row['velocity_cov_median'])} "
+            f"(max {_percent(row['velocity_cov_max'])}), landmarks max {_percent(row['landmark_cov_max'])}"
         )
     )
     return (
