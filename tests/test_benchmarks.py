@@ -158,3 +158,13 @@ def test_phases_benchmark_profiles_both_trees_phase_by_phase(tmp_path):
     spec.loader.exec_module(bench)
     with pytest.raises(SystemExit, match="not from the tree"):
         bench.child("synthetic", 1, 10, tmp_path)
+
+
+def test_tree_fill_benchmark_builds_gtsams_cliques_when_told(shared_data, tmp_path):
+    """docs/conformance.md quotes the fill of both trees: the preset's merged cliques (the default) and GTSAM's
+    (``--amalgamation-zeros 0``), whose count is ISAM2::treeNnz's. Merging fewer, larger cliques stores zeros."""
+    (merged,) = _rows("tree_fill.py", "--datasets", "paper-synthetic", cwd=tmp_path)
+    (gtsams,) = _rows("tree_fill.py", "--datasets", "paper-synthetic", "--amalgamation-zeros", "0", cwd=tmp_path)
+    assert merged["amalgamation_zeros"] == 0.3 and gtsams["amalgamation_zeros"] == 0.0
+    assert merged["updates"] == gtsams["updates"] and merged["states"] == gtsams["states"] == 1501
+    assert gtsams["cliques_final"] > merged["cliques_final"] and gtsams["nnz_final"] < merged["nnz_final"]
