@@ -28,7 +28,7 @@ mpl.use("Agg")
 import matplotlib.pyplot as plt
 
 from steam_ref.choices import parse_decimal
-from steam_ref.datasets import load_dataset
+from steam_ref.datasets import load_range_dataset
 from steam_ref.errors import SteamError
 from steam_ref.linear.amalgamation import zero_fraction
 from steam_ref.paper.online import StreamingEstimator
@@ -41,7 +41,7 @@ PRESET = {"paper-synthetic": "synthetic", "plaza": "plaza"}
 
 
 def run(dataset: str, amalgamation_zeros: float | None = None) -> dict:
-    data = load_dataset(dataset)
+    data = load_range_dataset(dataset)
     setup = PaperSetup.named(PRESET[dataset]).with_schedule(every=1)  # BTGP/1
     if amalgamation_zeros is not None:
         setup = setup.with_isam2(amalgamation_zeros=amalgamation_zeros)
