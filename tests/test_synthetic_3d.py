@@ -84,6 +84,22 @@ def test_a_run_on_the_generated_set_beats_its_yardsticks_and_lies_within_a_few_s
     assert "fixed-lag" in summary and "pose_anees" not in truth["fixed-lag"]
 
 
+def test_a_runs_report_counts_every_table_of_readings_it_reads(capsys):
+    """The JSON's ``readings`` count each table the set gives the solvers (fixes, gyro, ranges, landmark points), as
+    the generator with the same steps and seed holds them: a table left out of the report read as none."""
+    code, out, err = run(capsys, "--dataset", "synthetic-3d", "--steps", 12, "--seed", 1, "--json")
+    assert code == 0, err
+    data = generate_rigid(12, seed=1)
+    tables = {
+        "position_fixes": data.positions,
+        "gyro": data.gyro,
+        "ranges": data.ranges,
+        "landmark_points": data.points,
+    }
+    assert json.loads(out)["readings"] == {name: len(rows) for name, rows in tables.items()}
+    assert len(data.ranges) > 0 and len(data.points) > 0  # the generated set has both
+
+
 def test_the_text_report_says_the_figures_against_the_truth(capsys):
     code, out, _ = run(capsys, "--dataset", "synthetic-3d", "--steps", 8)
     assert code == 0

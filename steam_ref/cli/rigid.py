@@ -143,7 +143,12 @@ def run_rigid(args: argparse.Namespace, *, batch_only: bool = False) -> int:
         "prior": name,
         "qc": np.diag(qc).tolist(),
         "states": len(data.state_times),
-        "readings": {"position_fixes": len(data.positions), "gyro": len(data.gyro)},
+        "readings": {  # every table a run reads (the held-out fixes: below)
+            "position_fixes": len(data.positions),
+            "gyro": len(data.gyro),
+            "ranges": len(data.ranges),
+            "landmark_points": len(data.points),
+        },
         "held_out_fixes": len(straight),
         "lacks": data.lacks,
         "straight_line": _figures(straight),
