@@ -112,9 +112,10 @@ def test_the_printed_covariance_differences_keep_two_significant_digits():
     }
     row = figures | {"dataset": "plaza", "n_states": 9658, "pose_rms_m": 0.00118, "pose_max_m": 0.00622}
     row |= {"pose_max_at": 9369, "landmark_max_m": 5e-05, "rmse_m": 0.33827, "authors_rmse_m": 0.33823}
-    row |= {"total_s": 54.6, "authors_total_s": 140.39}
+    row |= {"total_s": 54.6, "authors_total_s": 140.39, "heading_max_rad": 0.0017631}
     line = fidelity_text(row).splitlines()[-1]
     printed = [float(p) / 100 for p in re.findall(r"([0-9.e+-]+)%", line)]
     assert len(printed) == len(figures), line
     for (name, value), got in zip(figures.items(), printed, strict=True):
         assert got == pytest.approx(value, rel=0.05), (name, line)
+    assert "heading max 1.8 mrad" in fidelity_text(row).splitlines()[0]  # the JSON's heading_max_rad, said in the text

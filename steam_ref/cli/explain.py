@@ -219,7 +219,8 @@ def fidelity_text(row: dict) -> str:
     )
     return (
         f"{row['dataset']}: {row['n_states']} states; distance to the authors' estimate RMS {_mm(row['pose_rms_m'])}, "
-        f"max {_mm(row['pose_max_m'])} at pose {row['pose_max_at']}; landmarks max {_mm(row['landmark_max_m'])}\n"
+        f"max {_mm(row['pose_max_m'])} at pose {row['pose_max_at']}, heading max {1000 * row['heading_max_rad']:.2g} "
+        f"mrad; landmarks max {_mm(row['landmark_max_m'])}\n"
         f"  position RMSE {row['rmse_m']:.5f} m (authors {row['authors_rmse_m']:.5f} m); {row['total_s']} s "
         f"(authors' MATLAB + GTSAM 3.2: {row['authors_total_s']} s)" + cov
     )
