@@ -72,7 +72,9 @@ def run(args: argparse.Namespace) -> int:
                 truth,
                 positions,
                 landmarks_true=data.landmarks[:, 1:3] if len(data.landmarks) else None,
-                title=f"batch on {args.dataset}",
+                landmarks_estimated={k.index: result.values[k][:2] for k in result.values.landmarks()},
+                estimate_label=f"{BATCH_ORDERINGS[args.ordering]} estimate",
+                title=explain.plot_title(summary, n, readings.n_poses),
                 path=name,
             ),
         )

@@ -105,8 +105,11 @@ def run(args: argparse.Namespace) -> int:
         curves = [k for k in study.kinds if "per_state" in first[k]]
         per_pose = {name: {k: row[k]["per_state"] for k in curves} for name, row in summary["estimators"].items()}
         bands = {k: tuple(first[k]["band"]) for k in curves}
+        title = f"ANEES on {args.dataset} tasks ({args.prior} prior), {summary['n_seeds']} runs: 95 % band shaded"
         where = write_output(
-            args.plot, "--plot", lambda name: plot_anees(per_pose, bands, n_runs=summary["n_seeds"], path=name)
+            args.plot,
+            "--plot",
+            lambda name: plot_anees(per_pose, bands, n_runs=summary["n_seeds"], title=title, path=name),
         )
     for row in summary["estimators"].values():  # the per-pose curves are for the plot
         for kind in study.kinds:

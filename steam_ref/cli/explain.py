@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ..choices import BATCH_ORDERINGS
 from ..datasets import LandmarkDataset, RangeDataset
 from ..datasets.registry import DATASETS, file_digest
 from ..paper.progress import wanted as progress_wanted
@@ -172,9 +173,16 @@ def _lag_text(s: dict) -> str:
     return text
 
 
-def plot_title(s: dict) -> str:
-    """The title of ``run --plot``: the run and its score."""
-    run = f"{s['method'].upper()}/{s['every']} on {s['dataset']}"
+def plot_title(s: dict, n_poses: int, n_in_data: int) -> str:
+    """The title of ``run --plot`` and ``batch --plot``: the run (a batch solve's summary has an ``ordering``),
+    its ``n_poses`` when it stopped short of the data set's ``n_in_data``, and its score as printed."""
+    batch = "ordering" in s
+    run = f"batch {BATCH_ORDERINGS[s['ordering']]}" if batch else f"{s['method'].upper()}/{s['every']}"
+    run += f" on {s['dataset']}"
+    if n_poses < n_in_data:
+        run += f" (first {n_poses} of {n_in_data} poses)"
+    if s.get("rmse_m") is None and "batch_distance_median_m" not in s:
+        return f"{run}: not scored (no ground truth)"
     if "batch_distance_median_m" in s:
         return f"{run}: median {s['batch_distance_unrotated_median_m']} m from the batch optimum (map turned)"
     return f"{run}: position RMSE {s['rmse_m']} m"

@@ -46,7 +46,8 @@ def run(args: argparse.Namespace) -> int:
             else explain.fidelity_text(row) + "\n" + explain.data_lines(row | {"data_note": None})
         )
     if args.plot:
-        where = write_plot(args, lambda name: plot_fidelity(distances, path=name))
+        title = f"BTGP/1 against the authors' saved run, pose by pose: {', '.join(distances)}"
+        where = write_plot(args, lambda name: plot_fidelity(distances, title=title, path=name))
         if where:
             print(where.strip())
     return 0

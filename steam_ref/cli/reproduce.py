@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 
 from ..errors import SteamError
 from ..paper.experiments import reproduce
@@ -15,10 +16,18 @@ __all__ = ["run"]
 def run(args: argparse.Namespace) -> int:
     """Run the experiments, write the plots and the table, print the table."""
     check_out_folder(args.out, "--out")
+    written: list[str] = []  # each file, and whether it replaced one that was there
     try:
         shown = explain.progress_wanted(args.progress, False)
-        table = reproduce(args.out, quick=args.quick, data_dir=args.data_dir, jobs=args.jobs, progress=shown)
+        table = reproduce(
+            args.out,
+            quick=args.quick,
+            data_dir=args.data_dir,
+            jobs=args.jobs,
+            progress=shown,
+            wrote=lambda path, replaced: written.append(f"{path.name} (replaced)" if replaced else path.name),
+        )
     except OSError as err:  # a full disk while writing the plots or the table
         raise SteamError(f"--out: cannot write {err.filename or args.out!r} ({err.strerror or err})") from None
-    print(table)
+    print(table + f"\nwritten to {os.path.abspath(args.out)}: {', '.join(written)}")
     return 0

@@ -133,7 +133,7 @@ def run(args: argparse.Namespace) -> int:
         if score is not None:
             reference = np.array([score.batch.values[X(int(i))][:2] for i in score.poses])
         else:
-            reference = None if data.ground_truth is None else data.ground_truth[:, 1:3]
+            reference = None if data.ground_truth is None else data.ground_truth[:n, 1:3]  # the poses run
         where += write_plot(
             args,
             lambda name: plot_trajectory(
@@ -141,10 +141,10 @@ def run(args: argparse.Namespace) -> int:
                 result.trajectory[:, :2],
                 landmarks_true=data.landmarks[:, 1:3] if len(data.landmarks) else None,
                 landmarks_estimated=result.landmarks,
-                dead_reckoning=data.dead_reckoning[:, 1:3],
+                dead_reckoning=data.dead_reckoning[:n, 1:3],
                 estimate_label=f"{result.method.upper()} estimate",
                 truth_label="ground truth" if score is None else "batch optimum",
-                title=explain.plot_title(summary),
+                title=explain.plot_title(summary, n, result.n_poses_total),
                 path=name,
             ),
         )

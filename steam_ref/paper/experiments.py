@@ -18,7 +18,8 @@ from __future__ import annotations
 
 import functools
 import json
-from collections.abc import Sequence
+import os
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -26,6 +27,7 @@ import numpy as np
 
 from ..datasets import LandmarkDataset, RangeDataset, load_range_dataset
 from ..errors import DataError
+from ..files import replace_file
 from ..linear.threads import limited
 from ..plot.figures import plot_interpolation_tradeoff, plot_timing, plot_trajectory
 from .fidelity import AUTHORS_RUNS, Fidelity, compare, load_authors_run
@@ -268,6 +270,49 @@ def results_table(experiments: list[Experiment], notes: Sequence[str] = ()) -> s
 
 # --- Everything ---------------------------------------------------------------------------------
 
+# The paper's figures each data set of reproduce draws, in order: (the timing and interpolation figure, the
+# trajectory figure), synthetic first, then Plaza.  [YIB Sec. IV]
+PAPER_FIGURES = (("Fig. 3", "Fig. 1"), ("Fig. 4", "Fig. 2"))
+
+
+def _write(path: Path, write: Callable[[str], object], wrote: Callable[[Path, bool], object] | None) -> None:
+    """``path`` written whole or not at all (:func:`~steam_ref.files.replace_file`); ``wrote(path, replaced)``
+    told, ``replaced`` True when a file was there before."""
+    replaced = os.path.exists(path)
+    replace_file(path, write, "reproduce")
+    if wrote is not None:
+        wrote(path, replaced)
+
+
+def _draw_experiment(exp: Experiment, figure: str, coverage: str, path: str) -> None:
+    """Fig. 3/4 of one data set: cumulative time (left), RMSE and total time against the skip (right)."""
+    from matplotlib.figure import Figure
+
+    fig_ = Figure(figsize=(15, 4.4))
+    axes = fig_.subplots(1, 3)
+    plot_timing(exp.timing, axes[0], title=f"{exp.name}: cumulative computation time")
+    plot_interpolation_tradeoff(exp.with_interp, exp.without_interp, axes[1:], name=exp.name)
+    fig_.suptitle(f"{figure} of the paper reproduced: {exp.name}{coverage}")
+    fig_.tight_layout()
+    fig_.savefig(path, dpi=110, format="png")
+
+
+def _draw_trajectory(exp: Experiment, figure: str, coverage: str, path: str) -> None:
+    """Fig. 1/2 of one data set: BTGP/1's estimate (with interpolation, skip 1) over the poses it covered."""
+    run, data = exp.with_interp[1], exp.data
+    n = len(run.trajectory)
+    rmse = "" if run.rmse_m is None or not np.isfinite(run.rmse_m) else f", position RMSE {run.rmse_m:.3f} m"
+    plot_trajectory(
+        None if data.ground_truth is None else data.ground_truth[:n, 1:3],
+        run.trajectory[:, :2],
+        landmarks_true=data.landmarks[:, 1:3] if len(data.landmarks) else None,
+        landmarks_estimated=run.landmarks,
+        dead_reckoning=data.dead_reckoning[:n, 1:3],
+        estimate_label=f"{run.method.upper()} estimate",
+        title=f"{figure} of the paper reproduced: {exp.name}{coverage}\n{run.method.upper()}/1{rmse}",
+        path=path,
+    )
+
 
 def _datasets(data_dir: str | None) -> tuple[list[tuple[str, RangeDataset, PaperSetup]], list[str]]:
     """paper-synthetic (else the generated task) and Plaza (if found)."""
@@ -293,17 +338,16 @@ def reproduce(
     progress: bool = True,
     data_sets: list[tuple[str, RangeDataset | LandmarkDataset, PaperSetup]] | None = None,
     jobs: int = 1,
+    wrote: Callable[[Path, bool], object] | None = None,
 ) -> str:
-    """Run Fig. 3/4's experiments; write ``fig3.png``/``fig4.png``, ``runs.jsonl`` and ``results.md``
-    to ``out``; return the Markdown table. ``quick``: 1,000-pose prefixes and 20 s budgets.
+    """Run Fig. 3/4's experiments; write ``fig3.png``/``fig4.png`` (each titled by the paper's figure it
+    reproduces), the trajectories ``fig3_trajectory.png``/``fig4_trajectory.png`` (as Fig. 1/2), ``runs.jsonl``
+    and ``results.md`` to ``out``, each whole or not at all (a file there is replaced only by a complete one),
+    telling ``wrote(path, replaced)`` after each; return the Markdown table. ``quick``: 1,000-pose prefixes
+    and 20 s budgets.
     ``data_sets`` (name, data, set-up) replaces the paper's two data sets. ``jobs`` > 1: the accuracy
     runs (the interpolation sweep) run that many at a time (:func:`~steam_ref.paper.sweep.run_sweep`),
     and every timing run runs alone, one after another, each in a fresh process."""
-    import matplotlib as mpl
-
-    mpl.use("Agg")
-    import matplotlib.pyplot as plt
-
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     sets: list[tuple[str, RangeDataset | LandmarkDataset, PaperSetup]]
@@ -329,36 +373,25 @@ def reproduce(
             "under that load); every timing run (PB, PBVR, BTGP) ran alone, one after another, each in a fresh "
             "process, so its times and peak memory are its own"
         )
-    experiments = []
-    with open(out / "runs.jsonl", "w") as log:
-        # not strict: data_sets may hold a single set (then no fig4)
-        for (name, data, setup), fig in zip(sets, ("fig3", "fig4"), strict=False):
-            exp = Experiment(name, data, setup)
-            if jobs > 1:
-                parallel_experiments(exp, jobs, batch_budget_s=budget, max_poses=prefix)
-            else:
-                timing_experiment(exp, batch_budget_s=budget, max_poses=prefix, progress=progress)
-                interpolation_experiment(exp, max_poses=prefix, progress=progress)
-            published = published_run_experiment(exp, max_poses=prefix, progress=progress, data_dir=data_dir)
-            for r in [*exp.timing.values(), *exp.with_interp.values(), *exp.without_interp.values(), published]:
-                log.write(json.dumps(r.summary(name)) + "\n")
-            fig_, axes = plt.subplots(1, 3, figsize=(15, 4))
-            plot_timing(exp.timing, axes[0], title=f"{name}: computation time")
-            plot_interpolation_tradeoff(exp.with_interp, exp.without_interp, axes[1:], name=name)
-            fig_.tight_layout()
-            fig_.savefig(out / f"{fig}.png", dpi=110)
-            plt.close(fig_)
-            run = exp.with_interp[1]
-            plot_trajectory(
-                None if data.ground_truth is None else data.ground_truth[:, 1:3],
-                run.trajectory[:, :2],
-                landmarks_true=data.landmarks[:, 1:3] if len(data.landmarks) else None,
-                landmarks_estimated=run.landmarks,
-                dead_reckoning=data.dead_reckoning[:, 1:3],
-                estimate_label=f"{run.method.upper()} estimate",
-                path=str(out / f"{fig}_trajectory.png"),
-            )
-            experiments.append(exp)
+    experiments, log = [], []
+    # not strict: data_sets may hold a single set (then no fig4)
+    for (name, data, setup), fig, (figure, path_figure) in zip(sets, ("fig3", "fig4"), PAPER_FIGURES, strict=False):
+        exp = Experiment(name, data, setup)
+        if jobs > 1:
+            parallel_experiments(exp, jobs, batch_budget_s=budget, max_poses=prefix)
+        else:
+            timing_experiment(exp, batch_budget_s=budget, max_poses=prefix, progress=progress)
+            interpolation_experiment(exp, max_poses=prefix, progress=progress)
+        published = published_run_experiment(exp, max_poses=prefix, progress=progress, data_dir=data_dir)
+        for r in [*exp.timing.values(), *exp.with_interp.values(), *exp.without_interp.values(), published]:
+            log.append(json.dumps(r.summary(name)) + "\n")
+        n_data = len(data.dead_reckoning)
+        covered = len(exp.with_interp[1].trajectory)
+        coverage = f" (first {covered} of {n_data} poses)" if covered < n_data else ""
+        _write(out / f"{fig}.png", functools.partial(_draw_experiment, exp, figure, coverage), wrote)
+        _write(out / f"{fig}_trajectory.png", functools.partial(_draw_trajectory, exp, path_figure, coverage), wrote)
+        experiments.append(exp)
+    _write(out / "runs.jsonl", lambda name: Path(name).write_text("".join(log)), wrote)
     table = results_table(experiments, notes)
-    (out / "results.md").write_text(table)
+    _write(out / "results.md", lambda name: Path(name).write_text(table), wrote)
     return table

@@ -47,11 +47,16 @@ def save(axes: Any, path: str | None) -> Any:
 
 
 def plain_log_ticks(ax: Any) -> None:
-    """Label the log y axis of ``ax`` with plain numbers (2, 3, 10), not matplotlib's default 2×10⁰."""
+    """Label the log y axis of ``ax`` with plain numbers (0.6, 2, 3, 10), not matplotlib's default 2×10⁰, nor
+    the 6e-01 its LogFormatter writes below 1 and above 10,000."""
     from matplotlib.ticker import LogFormatter
 
-    ax.yaxis.set_major_formatter(LogFormatter(labelOnlyBase=False))
-    ax.yaxis.set_minor_formatter(LogFormatter(labelOnlyBase=False, minor_thresholds=(2, 0.5)))
+    class Plain(LogFormatter):
+        def _num_to_string(self, x: float, *_range: float) -> str:  # vmin, vmax unused
+            return f"{x:g}"
+
+    ax.yaxis.set_major_formatter(Plain(labelOnlyBase=False))
+    ax.yaxis.set_minor_formatter(Plain(labelOnlyBase=False, minor_thresholds=(2, 0.5)))
 
 
 def array(name: str, a: ArrayLike, ndim: int, columns: int | None = None) -> np.ndarray:

@@ -155,13 +155,20 @@ def plot_trajectory(
     """Top view of a run, as Fig. 2: estimated positions against ground truth and dead reckoning,
     true and estimated landmarks.
 
-    truth_xy, estimate_xy, dead_reckoning: (n, 2) positions (truth may be None, or another reference:
-    ``truth_label`` names it, e.g. "batch optimum"); landmarks_true: (k, 2); landmarks_estimated:
-    (k, 2), or a mapping landmark id → (2,).
+    estimate_xy, dead_reckoning: (n, 2) positions at the same n poses, those the run covered (a ShapeError
+    otherwise: dead reckoning over the whole data set beside a run of its first poses would spread the figure over
+    ground the run never reached); truth_xy: (n, 2) ground truth at those poses, or None, or another reference
+    at poses of its own (``truth_label`` names it, e.g. "batch optimum"), which must not outnumber them;
+    landmarks_true: (k, 2); landmarks_estimated: (k, 2), or a mapping landmark id → (2,).
     """
     estimate_xy = _array("estimate_xy", estimate_xy, 2, columns=2)
     truth_xy = None if truth_xy is None else _array("truth_xy", truth_xy, 2, columns=2)
     dead_reckoning = None if dead_reckoning is None else _array("dead_reckoning", dead_reckoning, 2, columns=2)
+    n = len(estimate_xy)
+    if dead_reckoning is not None and len(dead_reckoning) != n:
+        raise ShapeError(f"dead_reckoning must have the estimate's {n} poses, got {len(dead_reckoning)}")
+    if truth_xy is not None and len(truth_xy) > n:
+        raise ShapeError(f"truth_xy must have at most the estimate's {n} poses, got {len(truth_xy)}")
     marks_true, marks_est = _xy("landmarks_true", landmarks_true), _xy("landmarks_estimated", landmarks_estimated)
     ax = _axes(ax, path, figsize=(6, 6))
     # The estimate is drawn first, the reference over it (thin, dashed, on top): where the two agree, both
@@ -239,9 +246,15 @@ def plot_interpolation_tradeoff(
         axes[0].plot(skips, [runs[k].rmse_m for k in skips], style, label=label)
         axes[1].plot(skips, [runs[k].total_s for k in skips], style, label=label)
     head = f"{name}: " if name else ""
-    axes[0].set(xlabel="time steps between estimated states", ylabel="RMSE (m)", title=f"{head}RMSE")
-    axes[1].set(xlabel="time steps between estimated states", ylabel="time (s)", title=f"{head}computation time")
+    axes[0].set(xlabel="time steps between estimated states", ylabel="position RMSE (m)", title=f"{head}RMSE")
+    axes[1].set(
+        xlabel="time steps between estimated states",
+        ylabel="total computation time (s)",
+        title=f"{head}total computation time",
+    )
+    skips = sorted({*with_interpolation, *(without_interpolation or {})})
     for ax in axes:
+        ax.set_xticks(skips, [str(k) for k in skips])  # the skips run, not 2.5 or 7.5 time steps
         ax.legend(fontsize=8)
         ax.grid(True, alpha=0.3)
     return _save(axes, path)
@@ -254,18 +267,21 @@ def plot_fidelity(
     tolerance_m: float | None = 0.02,
     reference: str = "the authors' estimate",
     log: bool = False,
+    title: str | None = None,
     path: str | None = None,
 ) -> Any:
     """Distance from a run's estimate to the authors' saved estimate (or another ``reference``, e.g. "the
     batch optimum") at every pose, one line per data set or run (name → (n,) metres, pose by pose), with
-    the tolerance drawn as a dashed line; ``log`` for a logarithmic axis."""
+    the tolerance drawn as a dashed line labelled as one; ``log`` for a logarithmic axis."""
     millimetres = {name: 1000 * _array(f"distances[{name!r}]", d, 1) for name, d in distances.items()}
     ax = _axes(ax, path, figsize=(7, 3))
     for name, d in millimetres.items():
         ax.plot(np.arange(len(d)), d, lw=0.8, label=name)
     if tolerance_m is not None:
-        ax.axhline(1000 * tolerance_m, color="0.4", ls="--", lw=0.8, label=f"{1000 * tolerance_m:g} mm")
+        ax.axhline(1000 * tolerance_m, color="0.4", ls="--", lw=0.8, label=f"tolerance {1000 * tolerance_m:g} mm")
     ax.set(xlabel="pose", ylabel=f"distance to {reference} (mm)", yscale="log" if log else "linear")
+    if title:
+        ax.set_title(title)
     ax.legend(fontsize=8)
     ax.grid(True, alpha=0.3)
     return _save(ax, path)
@@ -276,10 +292,12 @@ def plot_anees(
     bands: Mapping[str, tuple[float, float]],
     *,
     n_runs: int | None = None,
+    title: str | None = None,
     path: str | None = None,
 ) -> Any:
     """ANEES at every pose of each estimator (name → kind → (n,)), one panel per kind ('pose',
-    'velocity'), on a log axis, with the kind's two-sided band (kind → (low, high)) shaded."""
+    'velocity'), on a log axis, with the kind's two-sided band (kind → (low, high)) shaded; the legend
+    beside the panels, where it hides no curve; ``title`` over them."""
     kinds = list(bands)
     ax = _axes(None, path, nrows=len(kinds), ncols=1, figsize=(8, 2.6 * len(kinds)), sharex=True, squeeze=False)
     for row, kind in zip(ax[:, 0], kinds, strict=True):
@@ -293,6 +311,8 @@ def plot_anees(
         row.set(yscale="log", ylabel=f"ANEES, {kind}{runs}")
         _plain_log_ticks(row)
         row.grid(True, alpha=0.3)
-    ax[0, 0].legend(fontsize=7, ncol=2)
+    ax[0, 0].legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
     ax[-1, 0].set_xlabel("pose")
+    if title:
+        ax[0, 0].set_title(title)
     return _save(ax, path)
