@@ -26,6 +26,7 @@ from matplotlib.colors import to_rgba  # noqa: E402
 
 from steam_ref import plot  # noqa: E402
 from steam_ref.bayes_tree.symbolic import CliqueTree, build_cliques  # noqa: E402
+from steam_ref.errors import ShapeError  # noqa: E402
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 TOY = [("a", "c"), ("b", "c"), ("c", "d"), ("d", "e"), ("d", "f"), ("e", "f")]
@@ -275,3 +276,53 @@ def test_saving_given_axes_closes_their_figure(tmp_path):
     plot.plot_trajectory(np.zeros((3, 2)), np.ones((3, 2)), ax=ax, path=str(tmp_path / "t.png"))
     assert fig.number not in plt.get_fignums()
     assert (tmp_path / "t.png").read_bytes()[:8] == PNG_SIGNATURE
+
+
+# --- what a reader needs to read a figure -----------------------------------------------------
+
+
+def test_plot_trajectory_refuses_a_dead_reckoning_or_truth_beyond_the_estimates_poses(rng):
+    """A run of a data set's first poses beside the whole set's dead reckoning or truth: the figure spread over
+    ground the run never reached (the axes fit the longer curve), with nothing saying so."""
+    estimate = rng.normal(size=(5, 2))
+    with pytest.raises(ShapeError, match="dead_reckoning must have the estimate's 5 poses, got 9"):
+        plot.plot_trajectory(None, estimate, dead_reckoning=rng.normal(size=(9, 2)))
+    with pytest.raises(ShapeError, match="truth_xy must have at most the estimate's 5 poses, got 9"):
+        plot.plot_trajectory(rng.normal(size=(9, 2)), estimate)
+    ax = plot.plot_trajectory(estimate[::2], estimate, truth_label="batch optimum")  # a reference at states only
+    np.testing.assert_array_equal(line(ax, "batch optimum"), estimate[::2])
+
+
+def test_plot_anees_writes_ticks_below_one_as_plain_numbers_and_keeps_its_legend_off_the_curves():
+    """An ANEES of 0.6 (an underconfident estimator) read '6e-01'; the legend sat over the curves it names."""
+    low = np.geomspace(0.5, 3.0, 30)
+    per_pose = {name: {"pose": low * (1 + 0.1 * k)} for k, name in enumerate(["a", "b", "c", "d", "e", "f"])}
+    axes = plot.plot_anees(per_pose, {"pose": (1.7, 4.7)}, n_runs=10, title="ANEES on the task")
+    ax = axes[0, 0]
+    ax.figure.canvas.draw()
+    labels = [t.get_text() for t in ax.yaxis.get_ticklabels(which="both") if t.get_text()]
+    assert "0.6" in labels and not any("e" in s for s in labels), labels
+    legend = ax.get_legend()
+    assert [t.get_text() for t in legend.get_texts()][1:] == list(per_pose)
+    renderer = ax.figure.canvas.get_renderer()
+    assert legend.get_window_extent(renderer).x0 >= ax.get_window_extent(renderer).x1  # beside the panel
+    assert ax.get_title() == "ANEES on the task"
+
+
+def test_plot_fidelity_names_its_tolerance_line_and_takes_a_title(rng):
+    """The dashed line's legend read '20 mm': a reader could not tell it from a data set."""
+    d = rng.uniform(0, 0.004, 50)
+    ax = plot.plot_fidelity({"paper-synthetic": d}, tolerance_m=0.02, title="BTGP/1 against the authors' run")
+    assert [t.get_text() for t in ax.get_legend().get_texts()] == ["paper-synthetic", "tolerance 20 mm"]
+    np.testing.assert_allclose(line(ax, "paper-synthetic")[:, 1], 1000 * d)
+    assert ax.get_title() == "BTGP/1 against the authors' run"
+
+
+def test_plot_interpolation_tradeoff_ticks_the_skips_run_and_names_total_time():
+    """Its x axis read 2.5, 7.5, 12.5 time steps (never run); its time panel was titled as the timing panel."""
+    runs = {k: SimpleNamespace(rmse_m=0.1 * k, total_s=10.0 / k) for k in (1, 2, 3, 5, 10, 20)}
+    rmse_ax, time_ax = plot.plot_interpolation_tradeoff(runs, runs, name="plaza")
+    for ax in (rmse_ax, time_ax):
+        assert list(ax.get_xticks()) == [1, 2, 3, 5, 10, 20]
+    assert time_ax.get_title() == "plaza: total computation time"
+    assert time_ax.get_ylabel() == "total computation time (s)" and rmse_ax.get_ylabel() == "position RMSE (m)"
