@@ -20,7 +20,7 @@ from cli_runs import runner
 from requirements import skip_or_fail
 
 from steam_ref.cli import explain
-from steam_ref.datasets import generate_synthetic, gtsam_data_dir
+from steam_ref.datasets import generate_synthetic, gtsam_data_dir, load_range_dataset
 
 _cli = runner()
 
@@ -115,5 +115,6 @@ def test_run_plot_has_a_title_with_the_rmse(capsys, tmp_path, monkeypatch):
     monkeypatch.setattr(plt, "close", lambda fig=None: drawn.setdefault("title", fig.axes[0].get_title()))
     out, _ = _run(capsys, "run", "--max-poses", "40", "--json", "--plot", str(tmp_path / "run.png"))
     rmse = json.loads(out)["rmse_m"]
-    assert drawn["title"] == f"BTGP/1 on synthetic: position RMSE {rmse} m"
+    total = load_range_dataset("synthetic").n_poses  # the prefix run is said to be one
+    assert drawn["title"] == f"BTGP/1 on synthetic (first 40 of {total} poses): position RMSE {rmse} m"
     assert (tmp_path / "run.png").read_bytes()[:4] == b"\x89PNG"
