@@ -126,8 +126,13 @@ def test_reproduce_titles_each_figure_by_the_papers_figure_and_reports_what_it_w
         ("results.md", True),  # the user's file was there: the caller is told it was replaced
     ]
     assert saved["fig3"]._suptitle.get_text() == "Fig. 3 of the paper reproduced: small"
-    left, _, total = saved["fig3"].axes
-    assert left.get_title() == "small: cumulative computation time"
+    upper, lower, _, total = saved["fig3"].axes  # the paper's two left graphs, then its right panels
+    assert upper.get_title() == "small: computation time per step" and upper.get_ylabel() == "time per step (s)"
+    assert lower.get_title() == "small: cumulative computation time"
+    drawn = {ln.get_label(): ln.get_color() for ln in upper.lines}  # the same runs in the same colours, named below
+    assert drawn == {ln.get_label(): ln.get_color() for ln in lower.lines} and len(drawn) == len(
+        lower.get_legend().texts
+    )
     assert total.get_title() == "small: total computation time" and total.get_ylabel() == "total computation time (s)"
     trajectory = saved["fig3_trajectory"].axes[0]
     assert trajectory.get_title().startswith("Fig. 1 of the paper reproduced: small\nBTGP/1, position RMSE ")

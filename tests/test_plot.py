@@ -126,6 +126,21 @@ def test_plot_timing_draws_each_runs_cumulative_time(rng):
     assert ax.get_yscale() == "log"
 
 
+def test_plot_timing_per_step_draws_each_steps_own_time_and_leaves_an_idle_step_a_gap(rng):
+    """The paper's upper left graph (Fig. 3/4): each step's own time, the differences of the cumulative times
+    (the first step's from 0); a step that took no time (no reading, no update) is a gap on the log axis."""
+    own = rng.uniform(0.1, 1, 8)
+    own[3:5] = 0.0  # two idle steps: the 'gap' of the paper's Fig. 4
+    runs = {"BTGP/1": SimpleNamespace(cumulative_s=np.cumsum(own), completed=True)}
+    ax = plot.plot_timing(runs, per_step=True)
+    drawn = line(ax, "BTGP/1")
+    np.testing.assert_array_equal(drawn[:, 0], np.arange(8))
+    busy = own > 0
+    np.testing.assert_allclose(drawn[busy, 1], own[busy], rtol=1e-12)
+    assert np.isnan(drawn[~busy, 1]).all()
+    assert ax.get_ylabel() == "time per step (s)" and ax.get_yscale() == "log"
+
+
 def test_plot_timing_tags_only_runs_cut_by_their_budget(rng):
     """reproduce --quick runs stop at the prefix they were given: that is not a budget (every run was tagged)."""
     cumulative = np.cumsum(rng.uniform(0.1, 1, 5))

@@ -285,13 +285,18 @@ def _write(path: Path, write: Callable[[str], object], wrote: Callable[[Path, bo
 
 
 def _draw_experiment(exp: Experiment, figure: str, coverage: str, path: str) -> None:
-    """Fig. 3/4 of one data set: cumulative time (left), RMSE and total time against the skip (right)."""
+    """Fig. 3/4 of one data set: time per step (left, upper) and cumulative time (left, lower), as the paper's
+    left graphs; RMSE and total time against the skip (right)."""
     from matplotlib.figure import Figure
 
-    fig_ = Figure(figsize=(15, 4.4))
-    axes = fig_.subplots(1, 3)
-    plot_timing(exp.timing, axes[0], title=f"{exp.name}: cumulative computation time")
-    plot_interpolation_tradeoff(exp.with_interp, exp.without_interp, axes[1:], name=exp.name)
+    fig_ = Figure(figsize=(15, 7))
+    grid = fig_.add_gridspec(2, 3)
+    upper, lower = fig_.add_subplot(grid[0, 0]), fig_.add_subplot(grid[1, 0])
+    plot_timing(exp.timing, upper, per_step=True, title=f"{exp.name}: computation time per step")
+    upper.get_legend().remove()  # the runs in the same colours as the graph below, whose legend names them
+    plot_timing(exp.timing, lower, title=f"{exp.name}: cumulative computation time")
+    right = [fig_.add_subplot(grid[:, 1]), fig_.add_subplot(grid[:, 2])]
+    plot_interpolation_tradeoff(exp.with_interp, exp.without_interp, right, name=exp.name)
     fig_.suptitle(f"{figure} of the paper reproduced: {exp.name}{coverage}")
     fig_.tight_layout()
     fig_.savefig(path, dpi=110, format="png")

@@ -196,21 +196,34 @@ def _ran_its_course(run: Any) -> bool:
     return bool(run.completed) or (limit is not None and steps >= limit)
 
 
-def plot_timing(runs: Mapping[str, Any], ax: Any = None, *, title: str | None = None, path: str | None = None) -> Any:
-    """Cumulative computation time against time step, one line per run (Fig. 3/4, left).
+def plot_timing(
+    runs: Mapping[str, Any],
+    ax: Any = None,
+    *,
+    per_step: bool = False,
+    title: str | None = None,
+    path: str | None = None,
+) -> Any:
+    """Computation time against time step, one line per run (Fig. 3/4, left): cumulative, or with ``per_step``
+    each step's own time (the paper's upper graph, whose 'gap' is a stretch without range readings).
 
     runs: label → run, any object with ``cumulative_s`` ((n_steps,) seconds after each processed
     step) and ``completed`` (False: cut short), e.g. :class:`steam_ref.paper.online.RunResult`. A run
     cut short by its time budget is marked "(budget)" in the legend; one that stopped at the prefix it
     was asked for (``options.max_poses``, as ``reproduce --quick`` runs) is not cut short by anything.
+    A step's own time is the rise of the cumulative time over it; a step that took no measurable time is left
+    out of the log axis (a gap), not drawn at an invented floor.
     """
     for label, run in runs.items():
         _attributes(f"runs[{label!r}]", run, "cumulative_s", "completed")
     ax = _axes(ax, path, figsize=(5, 4))
     for label, run in runs.items():
         cumulative = np.asarray(run.cumulative_s, dtype=float)
-        ax.plot(np.arange(len(cumulative)), cumulative, label=label + ("" if _ran_its_course(run) else " (budget)"))
-    ax.set(xlabel="time step", ylabel="cumulative time (s)", yscale="log")
+        seconds = np.diff(cumulative, prepend=0.0) if per_step else cumulative
+        if per_step:
+            seconds = np.where(seconds > 0, seconds, np.nan)  # no time measured: a gap on the log axis
+        ax.plot(np.arange(len(seconds)), seconds, label=label + ("" if _ran_its_course(run) else " (budget)"))
+    ax.set(xlabel="time step", ylabel="time per step (s)" if per_step else "cumulative time (s)", yscale="log")
     if title:
         ax.set_title(title)
     ax.legend(fontsize=8)
