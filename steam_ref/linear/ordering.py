@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import heapq
 import os
-from collections.abc import Iterable, Iterator, Mapping, Sequence
+from collections.abc import Container, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -61,10 +61,8 @@ def have_cholmod() -> bool:
 
 
 def sparse_backend(backend: str | None = None) -> str:
-    """Which sparse Cholesky/AMD runs: 'cholmod' or 'superlu'.
-
-    ``backend`` overrides; otherwise ``STEAM_REF_SPARSE_BACKEND``, otherwise CHOLMOD if installed.
-    """
+    """Which sparse Cholesky/AMD runs, 'cholmod' or 'superlu': ``backend``, otherwise ``STEAM_REF_SPARSE_BACKEND``,
+    otherwise CHOLMOD if installed."""
     choice = backend or os.environ.get("STEAM_REF_SPARSE_BACKEND", "") or ("cholmod" if have_cholmod() else "superlu")
     if choice not in ("cholmod", "superlu"):
         raise SteamError(f"unknown sparse backend {choice!r}; use 'cholmod' or 'superlu'")
@@ -88,7 +86,7 @@ class Ordering:
 
     keys: tuple[Key, ...]  # variables in elimination order
     dims: tuple[int, ...]  # size of each
-    offsets: NDArray = field(init=False)  # first column of each variable, (n,)
+    offsets: NDArray = field(init=False, repr=False)  # first column of each variable, (n,)
     offset_of: dict[Key, int] = field(init=False, repr=False)  # key → first column
     position: dict[Key, int] = field(init=False, repr=False)  # key → place in the order
     dim_array: NDArray = field(init=False, repr=False)  # ``dims`` as an int array, (n,)
@@ -151,8 +149,7 @@ def xl_ordering(keys: Iterable[Key], dims: Mapping[Key, int]) -> Ordering:
     keys = key_list("keys", keys)
     states = sorted((k for k in keys if k.symbol == "x"), key=lambda k: k.index)
     others = sorted((k for k in keys if k.symbol != "x"), key=lambda k: (k.symbol, k.index))
-    ordered = states + others
-    return Ordering(tuple(ordered), _sizes(ordered, dims))
+    return Ordering(tuple(states + others), _sizes(states + others, dims))
 
 
 def variable_adjacency(keys: Sequence[Key], factor_keys: Iterable[tuple[Key, ...]]) -> sp.csc_matrix:
@@ -294,11 +291,14 @@ def min_degree_keys(
     return order
 
 
-def check_constrained(constrained: object) -> Mapping[Key, float] | None:
+def check_constrained(constrained: object, held: Container[Key]) -> Mapping[Key, float] | None:
     """``constrained`` (GTSAM's ``constrainedKeys``: :func:`min_degree_keys`'s ``first``) of an update or a
-    marginalization, SteamError unless a mapping key -> number or None (each rank is checked when its key is ordered)."""
+    marginalization: SteamError unless a mapping key -> number or None (each rank is checked when its key is ordered);
+    UnknownVariableError naming a key not in ``held``, the variables the solver holds or is given."""
     if constrained is not None and not isinstance(constrained, Mapping):
         raise SteamError(f"constrained must be a mapping key -> number or None, got {constrained!r:.80}")
+    if constrained and (stranger := next((k for k in constrained if k not in held), None)) is not None:
+        raise UnknownVariableError(f"constrained names {stranger!r}, which the solver neither holds nor is given")
     return constrained
 
 
