@@ -19,7 +19,6 @@ it is made: a failed or interrupted update leaves the solver as it was.
 from __future__ import annotations
 
 import time
-from collections import ChainMap
 from collections.abc import Iterable, Iterator, Mapping
 from contextlib import AbstractContextManager, contextmanager
 from dataclasses import dataclass, field
@@ -188,7 +187,7 @@ class IncrementalSolver:
             F_new = check_factors("new_factors", new_factors)
             check_new_values(new_values)
             theta_new, kinds = self._checked_update(F_new, {} if new_values is None else new_values)
-            check_constrained(constrained, ChainMap(theta_new, self.state.dims))  # held or added
+            check_constrained(constrained, theta_new, self.state.dims)  # added or held
         # an error, or Ctrl-C (KeyboardInterrupt) at any point: all undone; the BLAS limit is left inside the transaction
         with self.state.transaction(), limit():
             return self._update(F_new, theta_new, kinds, relinearize, constrained, timer)

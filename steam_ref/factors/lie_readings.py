@@ -20,7 +20,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..arguments import number
-from ..errors import SteamError
+from ..errors import ShapeError, SteamError
 from ..gp.interpolate import interpolation_matrices, interpolation_matrices_many
 from ..gp.prior import check_qc
 from ..lie import GroupState, LieGroup
@@ -34,9 +34,23 @@ from .lie_prior import BetweenGroupStates, OneGroupState
 from .measured import measured_vector
 from .measurements import BearingFactor, BearingRangeFactor, RangeFactor
 
-__all__ = ["PoseReading", "BodyVelocityFactor", "LieInterpolatedFactor"]
+__all__ = ["PoseReading", "BodyVelocityFactor", "LieInterpolatedFactor", "check_pose_reading"]
 
 _POSE_READINGS = (RangeFactor, BearingFactor, BearingRangeFactor)
+
+
+def check_pose_reading(reading: object, size: int) -> Factor:
+    """``reading`` itself when it is a range, bearing or bearing-range factor made for a state of ``size`` numbers
+    (``state_dim=size``): what a motion prior's ``pose_reading`` and :class:`PoseReading` take; SteamError (ShapeError
+    for the size) naming it otherwise."""
+    if not isinstance(reading, _POSE_READINGS):
+        raise SteamError(f"a pose reading is a range, bearing or bearing-range factor, got {reading!r:.120}")
+    if reading.key_dims[0] != size:
+        raise ShapeError(
+            f"{type(reading).__name__} on {reading.keys[0]!r} was made for a state of {reading.key_dims[0]} numbers, "
+            f"the state here has {size}: make it with state_dim={size}"
+        )
+    return reading
 
 
 @dataclass(frozen=True, eq=False)
@@ -57,15 +71,13 @@ class PoseReading(Factor):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        if not isinstance(self.inner, _POSE_READINGS):
-            raise SteamError(f"PoseReading wraps a range, bearing or bearing-range factor, got {self.inner!r}")
         group = check_group(self.group)
-        size = GroupState(group, self.derivatives).size
-        if (group.size, group.dim) != (3, 3) or self.inner.key_dims[0] != size:
+        if (group.size, group.dim) != (3, 3):
             raise SteamError(
-                f"PoseReading reads a planar pose [px, py, θ] of a {size}-number state; {group!r} stores {group.size} "
-                f"numbers with a {group.dim}-d tangent and the reading's state has {self.inner.key_dims[0]}"
+                f"PoseReading reads a planar pose [px, py, θ]; {group!r} stores {group.size} numbers with a "
+                f"{group.dim}-d tangent"
             )
+        check_pose_reading(self.inner, GroupState(group, self.derivatives).size)
 
     @classmethod
     def _wrap(cls, inner: Factor, group: LieGroup) -> PoseReading:

@@ -291,13 +291,13 @@ def min_degree_keys(
     return order
 
 
-def check_constrained(constrained: object, held: Container[Key]) -> Mapping[Key, float] | None:
+def check_constrained(constrained: object, *held: Container[Key]) -> Mapping[Key, float] | None:
     """``constrained`` (GTSAM's ``constrainedKeys``: :func:`min_degree_keys`'s ``first``) of an update or a
     marginalization: SteamError unless a mapping key -> number or None (each rank is checked when its key is ordered);
-    UnknownVariableError naming a key not in ``held``, the variables the solver holds or is given."""
+    UnknownVariableError naming a key in none of ``held``, the variables the solver holds or is given."""
     if constrained is not None and not isinstance(constrained, Mapping):
         raise SteamError(f"constrained must be a mapping key -> number or None, got {constrained!r:.80}")
-    if constrained and (stranger := next((k for k in constrained if k not in held), None)) is not None:
+    if constrained and (stranger := next((k for k in constrained if not any(k in h for h in held)), None)) is not None:
         raise UnknownVariableError(f"constrained names {stranger!r}, which the solver neither holds nor is given")
     return constrained
 

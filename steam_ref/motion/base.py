@@ -160,15 +160,18 @@ class MotionPrior(ABC):
         return f"<motion prior {self.name}: states of {self.state_dim} numbers, kind {self.kind!r}>"
 
 
-def sigma_blocks(name: str, sigmas: Sequence[ArrayLike], blocks: int, size: int = 3) -> list[NDArray]:
-    """The first ``blocks`` of ``sigmas`` (pose, velocity, acceleration, ...) as (size,) float arrays (3 on a
-    plane; a group's tangent dim on a group)."""
+def sigma_blocks(name: str, sigmas: Sequence[ArrayLike] | NDArray, blocks: int, size: int = 3) -> list[NDArray]:
+    """The first ``blocks`` of ``sigmas`` (pose, velocity, acceleration, ...; a sequence, or an array of one block a
+    row) as (size,) float arrays (3 on a plane; a group's tangent dim on a group), each numbers only
+    (:func:`~steam_ref.arguments.real_array`)."""
+    if isinstance(sigmas, np.ndarray) and sigmas.ndim == 2:
+        sigmas = list(sigmas)
     if isinstance(sigmas, (str, bytes)) or not isinstance(sigmas, Sequence) or len(sigmas) < blocks:
         raise SteamError(
             f"{name} must be a sequence of at least {blocks} blocks of {size} sigmas (pose, velocity, ...), "
             f"got {sigmas!r:.80}"
         )
-    out = [np.asarray(s, dtype=float) for s in sigmas[:blocks]]
+    out = [real_array(f"{name}[{k}]", s) for k, s in enumerate(sigmas[:blocks])]
     for k, s in enumerate(out):
         if s.shape != (size,) or not np.all(np.isfinite(s)) or np.any(s <= 0):
             raise SteamError(f"{name}[{k}] must be {size} finite numbers > 0, got {s.tolist()!r}")

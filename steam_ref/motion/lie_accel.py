@@ -24,7 +24,8 @@ from ..arguments import number
 from ..errors import DataError, ShapeError, SteamError
 from ..factors import Factor
 from ..factors.lie_prior import LieAccelInterpolatedFactor, LieAccelPriorFactor, LieStatePrior
-from ..factors.lie_readings import BodyVelocityFactor, PoseReading
+from ..factors.lie_readings import BodyVelocityFactor, PoseReading, check_pose_reading
+from ..factors.measured import measured_vector
 from ..gp.interpolate import conditional_covariance, interpolation_terms
 from ..gp.sde import LinearSDE, check_sde
 from ..lie import GroupState, LieGroup, gp_accel
@@ -78,6 +79,7 @@ class LieGroupAccelPrior(MotionPrior):
         return BodyVelocityFactor.create(key, measured, sigmas, group=self.group, derivatives=2)  # e = ϖ - z
 
     def pose_reading(self, reading: Factor) -> Factor:
+        reading = check_pose_reading(reading, self.state_dim)
         return PoseReading(
             reading.keys, reading.sqrt_information, inner=reading, loss=reading.loss, group=self.group, derivatives=2
         )
@@ -85,6 +87,7 @@ class LieGroupAccelPrior(MotionPrior):
     def first_state_prior(self, key: Key, pose: NDArray, velocity: NDArray, sigmas: Sequence[ArrayLike]) -> Factor:
         """Pose at the group's element of ``pose``, twist at ``velocity``, acceleration at zero; the sigmas (three
         blocks of dim numbers) read in the tangent at that mean."""
+        pose, velocity = measured_vector(pose, 3, "pose"), measured_vector(velocity, self.group.dim, "velocity")
         mean = np.concatenate([self.group.from_planar(pose), velocity, np.zeros(self.group.dim)])
         blocks = sigma_blocks("sigmas", sigmas, 3, self.group.dim)
         return LieStatePrior.create(key, mean, np.concatenate(blocks), group=self.group, derivatives=2)

@@ -28,11 +28,13 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..arguments import time_step
 from ..dead_reckoning import wrap_angle
 from ..errors import DataError, ShapeError
 from ..factors import Factor
 from ..factors.lie_prior import LiePriorFactor, LieStatePrior
-from ..factors.lie_readings import BodyVelocityFactor, LieInterpolatedFactor, PoseReading
+from ..factors.lie_readings import BodyVelocityFactor, LieInterpolatedFactor, PoseReading, check_pose_reading
+from ..factors.measured import measured_vector
 from ..gp.interpolate import interpolation_matrices
 from ..gp.prior import check_qc, process_noise
 from ..lie import GroupState, LieGroup
@@ -91,6 +93,7 @@ class LieGroupWnoa(MotionPrior):
         return BodyVelocityFactor.create(key, measured, sigmas, group=self.group)  # e = ϖ - z
 
     def pose_reading(self, reading: Factor) -> Factor:
+        reading = check_pose_reading(reading, self.state_dim)
         return PoseReading(
             reading.keys, reading.sqrt_information, inner=reading, loss=reading.loss, group=self.group
         )  # [DER 11.14]
@@ -98,6 +101,7 @@ class LieGroupWnoa(MotionPrior):
     def first_state_prior(self, key: Key, pose: NDArray, velocity: NDArray, sigmas: Sequence[ArrayLike]) -> Factor:
         """Pose at the group's element of ``pose`` (SE(2): θ wrapped), twist at ``velocity``; the sigmas (each
         block dim numbers) read in the tangent at that mean (the pose's in the body frame)."""
+        pose, velocity = measured_vector(pose, 3, "pose"), measured_vector(velocity, self.group.dim, "velocity")
         mean = np.concatenate([self.group.from_planar(pose), velocity])
         blocks = sigma_blocks("sigmas", sigmas, 2, self.group.dim)
         return LieStatePrior.create(key, mean, np.concatenate(blocks), group=self.group)
@@ -133,8 +137,8 @@ class LieGroupWnoa(MotionPrior):
         """The group's element of the pose (SE(2): θ wrapped), and the body twist (``group.body_twist``; SE(2):
         R(θ)ᵀ [ẋ, ẏ]) of the backward difference with its heading rate from the heading change wrapped to
         [-π, π) (a step turns less than half a turn; no ±2π: the scripts' Pose2 quirk belongs to the vector state)."""
-        element = self.group.from_planar(pose)
-        velocity = np.array(world_velocity, dtype=float)
+        element, dt = self.group.from_planar(measured_vector(pose, 3, "pose")), time_step(dt)
+        velocity = measured_vector(world_velocity, 3, "world_velocity")
         velocity[2] = wrap_angle(velocity[2] * dt) / dt
         return np.concatenate([element, self.group.body_twist(element, velocity)])
 

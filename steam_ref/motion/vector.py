@@ -18,9 +18,12 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..arguments import time_step
 from ..dead_reckoning import wrap_angle
 from ..errors import SteamError
 from ..factors import Factor, GPPriorFactor, InterpolatedFactor, PriorFactor, VelocityFactor
+from ..factors.lie_readings import check_pose_reading
+from ..factors.measured import measured_vector
 from ..gp.interpolate import (
     extrapolate_covariance_sde,
     extrapolate_state_sde,
@@ -92,10 +95,11 @@ class VectorPrior(MotionPrior):
         return VelocityFactor.create(key, measured, sigmas, state_dim=self.state_dim)  # [YIB Eq. 32]
 
     def pose_reading(self, reading: Factor) -> Factor:
-        return reading  # it reads [x, y, θ] from the front of the state as it is
+        return check_pose_reading(reading, self.state_dim)  # it reads [x, y, θ] from the front of the state as it is
 
     def first_state_prior(self, key: Key, pose: NDArray, velocity: NDArray, sigmas: Sequence[ArrayLike]) -> Factor:
         blocks = self.state_dim // 3
+        pose, velocity = measured_vector(pose, 3, "pose"), measured_vector(velocity, 3, "velocity")
         mean = np.concatenate([pose, velocity, np.zeros(self.state_dim - 6)])
         return PriorFactor.create(key, mean, np.concatenate(sigma_blocks("sigmas", sigmas, blocks)))  # [YIB Eq. 4-5]
 
@@ -130,8 +134,10 @@ class VectorPrior(MotionPrior):
 
     # --- a new state's value ------------------------------------------------------------------------
 
-    def initial_state(self, pose: NDArray, world_velocity: NDArray, dt: float) -> NDArray:  # noqa: ARG002 (as it is)
-        return np.concatenate([pose, world_velocity, np.zeros(self.state_dim - 6)])
+    def initial_state(self, pose: NDArray, world_velocity: NDArray, dt: float) -> NDArray:
+        time_step(dt)  # the step just made, > 0 as for every prior (a vector state keeps the velocity as it is)
+        pose, velocity = measured_vector(pose, 3, "pose"), measured_vector(world_velocity, 3, "world_velocity")
+        return np.concatenate([pose, velocity, np.zeros(self.state_dim - 6)])
 
     # --- evaluation -------------------------------------------------------------------------------------
 
