@@ -56,6 +56,7 @@ from .linear.conditional import Conditional
 from .linear.ordering import Ordering, make_ordering
 from .linear.system import LinearSystem
 from .linear.threads import limited
+from .manifold import Manifold
 from .variables import Key, Values, as_values, check_key, key_list
 
 if TYPE_CHECKING:
@@ -201,6 +202,10 @@ class SparseCovariances:
         out = self.values[check_key("key", key)].view()
         out.flags.writeable = False
         return out
+
+    def kind_of(self, key: Key) -> Manifold:
+        """How one variable's estimate moves (:mod:`steam_ref.manifold`), as a solver's ``kind_of(key)``."""
+        return self.values.kind(check_key("key", key))
 
     def _kept(self) -> tuple[Factor, ...]:
         if not self.factors:

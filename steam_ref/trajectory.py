@@ -45,7 +45,7 @@ from .errors import ShapeError, SteamError, UnknownVariableError
 from .gp.clock import Clock
 from .gp.sde import LinearSDE
 from .motion import MotionPrior, as_motion_prior
-from .variables import Key, Values, X, key_list
+from .variables import Key, Values, X, key_list, kind_clash
 
 __all__ = ["Trajectory", "Covariances", "Estimates"]
 
@@ -64,6 +64,9 @@ class Estimates(Protocol):
     def joint_covariance(self, keys: Sequence[Key]) -> NDArray: ...
 
     def joint_covariances(self, groups: Sequence[Sequence[Key]]) -> list[NDArray]: ...
+
+    # Optional, read where the solver has it (every solver of the package does): ``kind_of(key)``, the kind it holds a
+    # variable as, which must be the prior's (a vector state read by the SE(2) prior was silently read wrong).
 
 
 _READS = ("estimate_of", "estimate")  # what every query needs; the covariance queries are checked when called
@@ -165,10 +168,15 @@ class Trajectory:
         self.prior = as_motion_prior(prior)  # everything that differs between priors
         self.n = self.prior.state_dim  # size of a state
         if self.states:  # the newest state: a fixed-lag smoother still holds it
-            size = np.shape(solver.estimate_of(X(self.states[-1])))
+            newest = X(self.states[-1])
+            size = np.shape(solver.estimate_of(newest))
             if size != (self.n,):
-                raise ShapeError(
-                    f"the prior has states of {self.n} numbers, the solver's {X(self.states[-1])!r} has shape {size}"
+                raise ShapeError(f"the prior has states of {self.n} numbers, the solver's {newest!r} has shape {size}")
+            kind_of = getattr(solver, "kind_of", None)  # optional (the protocol's comment)
+            held = kind_of(newest) if callable(kind_of) else self.prior.kind
+            if held is not self.prior.kind and held != self.prior.kind:
+                raise kind_clash(
+                    newest, held, "the solver", self.prior.kind, f"the trajectory's {self.prior.name} prior"
                 )
 
     def _read(self, t: float | str, read, *args):

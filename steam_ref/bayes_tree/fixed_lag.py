@@ -183,6 +183,7 @@ class FixedLagSmoother:
     factors = property(lambda self: self.solver.factors, doc="Every factor (a marginalized one's slot None).")
     linearization_point = property(lambda self: self.solver.linearization_point, doc="θ̄ of the window (a copy).")
     __len__ = lambda self: len(self.solver)  # the variables in the window
+    kind_of = lambda self, key: self.solver.kind_of(self._known([check_key("key", key)], "the kind of")[0])
 
     def holds(self, key: Key) -> bool:
         """True when ``key`` is in the window."""

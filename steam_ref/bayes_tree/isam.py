@@ -105,10 +105,8 @@ class IncrementalSolver:
     # --- queries ----------------------------------------------------------------------------
 
     def estimate(self) -> Values:
-        """The current estimate θ̄ ⊕ δ of every variable (a snapshot; the arrays are read-only).
-
-        Only the variables whose δ changed since the last call are recomputed.
-        """
+        """The current estimate θ̄ ⊕ δ of every variable (a snapshot; the arrays are read-only); only the variables
+        whose δ changed since the last call are recomputed."""
         return Values.adopt(self.state.all_estimates(), self.state.kinds)  # the arrays are never written in place
 
     def estimate_of(self, key: Key) -> NDArray:
@@ -141,6 +139,12 @@ class IncrementalSolver:
     def holds(self, key: Key) -> bool:
         """True when ``key`` is a variable of the solver."""
         return key in self.state.dims
+
+    def kind_of(self, key: Key) -> Manifold:
+        """How one variable moves (:mod:`steam_ref.manifold`), the kind its factors gave it."""
+        if not self.holds(check_key("key", key)):
+            raise UnknownVariableError(f"variable {key!r} is not in the solver")
+        return self.state.kinds[key]
 
     def marginal_covariance(self, key: Key) -> NDArray:
         """Cov(δθ_key) (d, d) of the current linear system, from the Bayes tree, in the tangent at
