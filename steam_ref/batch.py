@@ -100,10 +100,10 @@ class BatchResult(SparseCovariances):
 
     values: Values  # final estimate
     initial_cost: float  # cost at the initial estimate
-    iterations: list[Iteration] = field(default_factory=list)  # one per iteration
+    iterations: list[Iteration] = field(default_factory=list, repr=False)  # one per iteration
     converged: bool = False  # a stopping rule was met AND the returned estimate passed the stationarity check
     reason: str = ""  # which rule stopped it, and what the check found
-    ordering: Ordering | None = None  # elimination order used
+    ordering: Ordering | None = field(default=None, repr=False)  # elimination order used
     factor_nnz: int = 0  # nonzeros of the Cholesky factor under that ordering
     backend: str = ""  # sparse Cholesky backend
     stationarity: Stationarity | None = None  # the check at the returned estimate (None: not checked)

@@ -179,6 +179,15 @@ class Trajectory:
                     newest, held, "the solver", self.prior.kind, f"the trajectory's {self.prior.name} prior"
                 )
 
+    def __repr__(self) -> str:
+        if not self.states:
+            return f"<Trajectory of no state, {self.prior.name} prior>"
+        first, last = self.states[0], self.states[-1]
+        return (
+            f"<Trajectory of {len(self.states)} states, x{first}..x{last} at {self.times[first]:.6g}..{self.times[last]:.6g}"
+            f" s, {self.prior.name} prior of {self.n} numbers a state; at(t): the state at t s from the first state on>"
+        )
+
     def _read(self, t: float | str, read, *args):
         """``read(*args)`` of the solver; a state it no longer holds is an UnknownVariableError naming the time ``t``
         (or what needed it)."""

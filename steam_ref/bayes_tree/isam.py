@@ -66,15 +66,16 @@ class PhaseTimer:
 
 @dataclass(frozen=True, kw_only=True)
 class UpdateReport:
-    """What one update did, so a notebook can show the affected top of the tree (built by keyword only)."""
+    """What one update did, so a notebook can show the affected top of the tree (built by keyword only); its repr
+    leaves out the six tuples of ids and keys, as long as the tree on a first update (read them by name)."""
 
     step: int  # number of this update, from 1
-    removed_cliques: tuple[int, ...]  # ids of the cliques taken off the top (ids of the tree before)
-    new_cliques: tuple[int, ...]  # ids of the cliques made by re-elimination
-    orphans: tuple[int, ...]  # ids of the subtrees kept and reattached
-    relinearized: tuple[Key, ...]  # θ_rl: variables whose linearization point moved
-    reeliminated: tuple[Key, ...]  # variables eliminated anew, in elimination order (frontals of the new cliques)
-    updated: tuple[Key, ...]  # variables whose increment δ (hence estimate) was recomputed
+    removed_cliques: tuple[int, ...] = field(repr=False)  # ids of the cliques taken off the top (of the tree before)
+    new_cliques: tuple[int, ...] = field(repr=False)  # ids of the cliques made by re-elimination
+    orphans: tuple[int, ...] = field(repr=False)  # ids of the subtrees kept and reattached
+    relinearized: tuple[Key, ...] = field(repr=False)  # θ_rl: variables whose linearization point moved
+    reeliminated: tuple[Key, ...] = field(repr=False)  # eliminated anew, in order (frontals of the new cliques)
+    updated: tuple[Key, ...] = field(repr=False)  # variables whose increment δ (hence estimate) was recomputed
     linearized_factors: int  # factors linearized in this update (the new ones included)
     backsubstituted_cliques: int  # cliques whose conditional was solved
     time_s: float  # wall time of the whole update
@@ -86,8 +87,7 @@ class IncrementalSolver:
     """iSAM2 on the Bayes tree: BTGP's incremental solver.  [YIB Alg. 1, K12 Alg. 6]
 
     ``params`` (default :class:`ISAM2Params`, GTSAM's defaults) sets the relinearization and wildfire thresholds;
-    keyword ``changes`` override its fields, so ``IncrementalSolver(relinearize_skip=1, wildfire_threshold=0)`` works as
-    well.
+    keyword ``changes`` override its fields, so ``IncrementalSolver(relinearize_skip=1, wildfire_threshold=0)`` works.
     """
 
     def __init__(self, params: ISAM2Params | None = None, **changes: object) -> None:
