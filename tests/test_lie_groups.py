@@ -439,6 +439,31 @@ def test_every_kernel_checks_its_inputs_shapes(group):
         group.exp("1, 2, 3")
 
 
+def test_the_planar_calls_check_their_inputs_shapes(group):
+    """The planar calls (a group that writes them: SE(2)) refuse a 4-vector pose, element or twist and a 2-number
+    velocity, naming it, as the kernels do (they took the 4-vector and handed it on, or failed with IndexError), and a
+    pose that is no number or is NaN (from_planar is how a pose enters a state)."""
+    if type(group).from_planar is LieGroup.from_planar:  # the group writes no planar pose (the test above)
+        return
+    a, long_a, long_xi = group.identity(), np.zeros(group.size + 1), np.zeros(group.dim + 1)
+    with pytest.raises(ShapeError, match=r"^pose must be a planar pose \[x, y, θ\] of .* got shape \(4,\)"):
+        group.from_planar(np.zeros(4))
+    with pytest.raises(ShapeError, match=r"^pose must be an array of numbers, got pose='abc'"):
+        group.from_planar("abc")
+    with pytest.raises(ShapeError, match=r"^pose must be finite, but pose\[2\] = nan"):
+        group.from_planar([0.0, 0.0, np.nan])
+    with pytest.raises(ShapeError, match=r"^a must be an element of"):
+        group.to_planar(long_a)
+    with pytest.raises(ShapeError, match=r"^velocity must be a planar velocity .* got shape \(2,\)"):
+        group.body_twist(a, [1.0, 0.0])
+    with pytest.raises(ShapeError, match=r"^a must be an element of"):
+        group.body_twist(long_a, [1.0, 0.0, 0.0])
+    with pytest.raises(ShapeError, match=r"^twist must be a twist of"):
+        group.world_velocity(a, long_xi)
+    poses = np.array([[1.0, 2.0, 3.5], [0.0, 0.0, -0.5]])  # stacks still pass, θ wrapped
+    np.testing.assert_allclose(group.to_planar(group.from_planar(poses)), [[1.0, 2.0, 3.5 - 2 * np.pi], poses[1]])
+
+
 # --- the angle sweep against 50 digits -----------------------------------------------------------------
 
 

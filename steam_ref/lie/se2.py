@@ -21,6 +21,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..arguments import finite
 from ..dead_reckoning import wrap_angle
 from ..errors import ShapeError, SteamError
 from .group import LieGroup, matrix_of
@@ -241,17 +242,17 @@ class SE2Group(LieGroup):
     def from_planar(self, pose: ArrayLike) -> NDArray:
         """[x, y, θ] with θ taken to (-π, π] as -wrap_angle(-θ) (``dead_reckoning``: the heading a planar front
         end has always handed a state, bit for bit; :func:`wrap` may differ from it in the last bit)."""
-        pose = np.array(pose, dtype=float)
+        pose = finite("pose", np.array(self._as_last("pose", pose, 3, "a planar pose [x, y, θ]")))  # a copy
         pose[..., 2] = -wrap_angle(-pose[..., 2])
         return pose
 
     def to_planar(self, a: ArrayLike) -> NDArray:
         """The pose [x, y, θ] as it is."""
-        return np.array(a, dtype=float)
+        return np.array(self._elements("a", a))
 
     def body_twist(self, a: ArrayLike, velocity: ArrayLike) -> NDArray:
         """[R(θ)ᵀ [ẋ, ẏ]; θ̇]: the velocity in the robot's own frame (forward, lateral, yaw rate)."""
-        a, v = np.asarray(a, dtype=float), np.asarray(velocity, dtype=float)
+        a, v = self._elements("a", a), self._as_last("velocity", velocity, 3, "a planar velocity [ẋ, ẏ, θ̇]")
         c, s = _rot(a[..., 2])
         if a.ndim == 1 and v.shape == (3,):  # one state (a front end's new one): the same products in Python's floats
             (v1, v2, v3), cf, sf = v.tolist(), float(c), float(s)
@@ -260,7 +261,7 @@ class SE2Group(LieGroup):
 
     def world_velocity(self, a: ArrayLike, twist: ArrayLike) -> NDArray:
         """[R(θ) [vx, vy]; ω]: the body twist in the world frame."""
-        a, w = np.asarray(a, dtype=float), np.asarray(twist, dtype=float)
+        a, w = self._elements("a", a), self._twists("twist", twist)
         c, s = _rot(a[..., 2])
         return _stacked([c * w[..., 0] - s * w[..., 1], s * w[..., 0] + c * w[..., 1], w[..., 2]])
 
