@@ -48,6 +48,13 @@ class Key(_KeyFields):
 
     __slots__ = ()
 
+    def __new__(cls, symbol: str, index: int) -> Key:
+        """The rules of :func:`X` and :func:`L` for any symbol: one character of 8 bits (GTSAM's ``Symbol.chr()``)
+        and an integer index of magnitude below 2⁵⁶ (:data:`INDEX_BITS`)."""
+        if not isinstance(symbol, str) or len(symbol) != 1 or ord(symbol) > 255:
+            raise SteamError(f"a key's symbol is one character of 8 bits (GTSAM's Symbol.chr()), got {symbol!r:.40}")
+        return super().__new__(cls, symbol, _index("Key", index))
+
     def __repr__(self) -> str:
         return f"{self.symbol}{self.index}"
 

@@ -501,6 +501,12 @@ CASES = [
     ("Tukey c=[1]", lambda: sr.Tukey([1]), SteamError, r"got c=\[1\]"),
     ("X(1.5) truncated", lambda: X(1.5), SteamError, r"X takes an integer index, got 1.5"),
     ("X(True)", lambda: X(True), SteamError, r"got True"),
+    # sr.Key is public: a key made by hand followed X's rules for nothing (x1.5, xTrue, a 2**70 index, a symbol 'xx')
+    ("Key('x', 1.5)", lambda: sr.Key("x", 1.5), SteamError, r"Key takes an integer index, got 1.5"),
+    ("Key('x', True)", lambda: sr.Key("x", True), SteamError, r"Key takes an integer index, got True"),
+    ("Key('x', 2**70)", lambda: sr.Key("x", 2**70), SteamError, r"Key takes an index of magnitude below 2\*\*56"),
+    ("Key('xx', 1)", lambda: sr.Key("xx", 1), SteamError, r"a key's symbol is one character of 8 bits .*got 'xx'"),
+    ("Key(0, 1)", lambda: sr.Key(0, 1), SteamError, r"a key's symbol is one character of 8 bits .*got 0"),
     ("L('a')", lambda: L("a"), SteamError, r"L takes an integer index, got 'a'"),
     ("X(nan)", lambda: X(np.nan), SteamError, r"got nan"),
     (
