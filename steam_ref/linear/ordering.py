@@ -171,9 +171,7 @@ def _places(index: Mapping[Key, int], factor_keys: Iterable[Sequence[Key]], amon
         return [list(map(place, keys)) for keys in factor_keys]  # one pass in C: a list per factor, no generator
     except KeyError as exc:
         missing = exc.args[0]
-    i, keys = next(
-        ((i, keys) for i, keys in enumerate(factor_keys) if missing in keys), ("?", "a key")
-    )  # an iterator is spent
+    i, keys = next(((i, keys) for i, keys in enumerate(factor_keys) if missing in keys), ("?", "a key"))
     raise UnknownVariableError(
         f"factor_keys[{i}] = {keys!r} names {missing!r}, which is not among the {among} to order"
     )
@@ -212,8 +210,7 @@ def constrained_min_degree(
     last: Iterable[Key] = (),
 ) -> Ordering:
     """A greedy minimum-degree elimination order with the variables in ``last`` eliminated last, as an
-    :class:`Ordering` (:func:`min_degree_keys` gives the keys alone, as an incremental update needs them).
-    """
+    :class:`Ordering` (:func:`min_degree_keys` gives the keys alone, as an incremental update needs them)."""
     order = min_degree_keys(variables, dims, factor_keys, last)
     return Ordering(tuple(order), tuple(dims[k] for k in order))
 
@@ -294,10 +291,13 @@ def min_degree_keys(
 def check_constrained(constrained: object, *held: Container[Key]) -> Mapping[Key, float] | None:
     """``constrained`` (GTSAM's ``constrainedKeys``: :func:`min_degree_keys`'s ``first``) of an update or a
     marginalization: SteamError unless a mapping key -> number or None (each rank is checked when its key is ordered);
-    UnknownVariableError naming a key in none of ``held``, the variables the solver holds or is given."""
+    UnknownVariableError naming a key in none of ``held`` (the variables the solver holds or is given), but in a
+    :class:`KeysBelow`, a smoother's own held timestamps, read at the cost of the keys looked up: never walked."""
     if constrained is not None and not isinstance(constrained, Mapping):
         raise SteamError(f"constrained must be a mapping key -> number or None, got {constrained!r:.80}")
-    if constrained and (stranger := next((k for k in constrained if not any(k in h for h in held)), None)) is not None:
+    if isinstance(constrained, KeysBelow) or not constrained:
+        return constrained
+    if (stranger := next((k for k in constrained if not any(k in h for h in held)), None)) is not None:
         raise UnknownVariableError(f"constrained names {stranger!r}, which the solver neither holds nor is given")
     return constrained
 
