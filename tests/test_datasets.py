@@ -700,3 +700,24 @@ def test_generator_rejects_bad_arguments() -> None:
         generate_synthetic(qc=np.eye(3))
     with pytest.raises(SteamError, match=r"landmark_distance"):
         generate_synthetic(landmark_distance=(5.0, 2.0))
+
+
+def test_help_on_a_data_set_class_gives_its_tables_columns() -> None:
+    """``help(sr.RangeDataset)`` and ``help(sr.LandmarkDataset)`` (what a user building one from their own arrays
+    reads) name every table with its shape and columns; the layout was in the modules' docstrings only."""
+    from steam_ref.datasets.landmarks import LANDMARK_COLUMNS
+
+    range_doc = RangeDataset.__doc__ or ""
+    for table, shape in [
+        ("ground_truth", "(n_poses, 4)"),
+        ("odometry", "(n_poses - 1, 3)"),
+        ("dead_reckoning", "(n_poses, 4)"),
+        ("landmarks", "(n_landmarks, 3)"),
+        ("ranges", "(n_ranges, 4)"),
+    ]:
+        assert re.search(rf"^\s+{table}\s+\w+\s+{re.escape(shape)}\s+\S", range_doc, re.M), table
+    landmark_doc = datasets.LandmarkDataset.__doc__ or ""
+    for table, columns in LANDMARK_COLUMNS.items():
+        row = re.search(rf"^\s+{table}\s+\(([^)]*)\)\s+(.*)$", landmark_doc, re.M)
+        assert row is not None, table
+        assert row.group(1).endswith(f", {len(columns)}"), (table, row.group(1))

@@ -3,17 +3,8 @@
 :class:`~steam_ref.datasets.RangeDataset` is the CMU range-only layout: ground truth, odometry as
 distance and turn, surveyed landmarks. Other data sets have bearings or bearing-ranges, odometry
 with a sideways part, landmarks whose positions nobody surveyed, and no ground truth (Victoria
-Park). They are a :class:`LandmarkDataset`, one row per record:
-
-    poses                (n_poses, 2)      time, the source's id of the pose
-    odometry             (n_poses - 1, 4)  time, dx, dy, dθ: pose k + 1 in the frame of pose k (a Pose2 between)
-    odometry_covariance  (n_poses - 1, 6)  its covariance, upper triangle by rows: c11 c12 c13 c22 c23 c33
-    ranges               (n, 4)            time, landmark id, range, sigma
-    bearings             (n, 4)            time, landmark id, bearing, sigma
-    bearing_ranges       (n, 6)            time, landmark id, bearing, range, sigma of the bearing, of the range
-    landmark_ids         (m,)              every landmark of the data set
-    landmarks            (k, 3)            id, x, y of the landmarks with a surveyed position (k may be 0)
-    ground_truth         (n_poses, 4)      time, x, y, heading, or None
+Park). They are a :class:`LandmarkDataset`, one row per record (the table of columns is the class's
+docstring, what ``help(steam_ref.LandmarkDataset)`` shows).
 
 Conventions: odometry row k ends at pose k + 1 and carries its time; a reading is taken at a pose
 (its time is that pose's, to 1 µs) and belongs to it; bearings are in the robot frame, measured
@@ -66,7 +57,21 @@ _UPPER = np.array([[0, 1, 2], [1, 3, 4], [2, 4, 5]])  # (3, 3) entry -> column o
 
 @dataclass(frozen=True, eq=False)
 class LandmarkDataset:
-    """A planar SLAM data set: odometry, landmark readings of any kind; arrays are read-only float64 copies."""
+    """A planar SLAM data set: odometry, landmark readings of any kind; arrays are read-only float64 copies. One row
+    per record (seconds, metres, radians; :data:`LANDMARK_COLUMNS` names the columns)::
+
+        poses                (n_poses, 2)      time, the source's id of the pose
+        odometry             (n_poses - 1, 4)  time, dx, dy, dθ: pose k + 1 in the frame of pose k (a Pose2 between)
+        odometry_covariance  (n_poses - 1, 6)  its covariance, upper triangle by rows: c11 c12 c13 c22 c23 c33
+        ranges               (n, 4)            time, landmark id, range, sigma
+        bearings             (n, 4)            time, landmark id, bearing, sigma
+        bearing_ranges       (n, 6)            time, landmark id, bearing, range, sigma of the bearing, of the range
+        landmark_ids         (m,)              every landmark of the data set
+        landmarks            (k, 3)            id, x, y of the landmarks with a surveyed position (k may be 0)
+        ground_truth         (n_poses, 4)      time, x, y, heading, or None
+
+    Odometry row k ends at pose k + 1; a reading is taken at a pose (the module docstring has the conventions and
+    the checks)."""
 
     name: str  # short label, e.g. "victoria-park"
     poses: NDArray = field(repr=False)  # (n_poses, 2): time, source id

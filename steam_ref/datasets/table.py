@@ -1,12 +1,7 @@
 """RangeDataset: a 2-D range-only SLAM data set in the CMU layout, and its checks.  [YIB Sec. IV]
 
-Every source ends up as a :class:`RangeDataset` in the CMU range-only layout (one row per record):
-
-    ground_truth    GT   (n_poses, 4)      time, x, y, heading
-    odometry        DR   (n_poses - 1, 3)  time, distance travelled, heading change
-    dead_reckoning  DRp  (n_poses, 4)      time, x, y, heading
-    landmarks       TL   (n_landmarks, 3)  id, x, y
-    ranges          TD   (n_ranges, 4)     time, sender id, landmark id, range
+Every source ends up as a :class:`RangeDataset` in the CMU range-only layout (one row per record; the table of
+columns is the class's docstring, what ``help(steam_ref.RangeDataset)`` shows).
 
 Conventions, checked on the reference files (see ``data/README.md`` for the figures):
 
@@ -60,7 +55,16 @@ def number_text(value: float) -> str:
 
 @dataclass(frozen=True, eq=False)
 class RangeDataset:
-    """A 2-D range-only SLAM data set in the CMU layout; arrays are read-only float64 copies.
+    """A 2-D range-only SLAM data set in the CMU layout; arrays are read-only float64 copies. One row per record
+    (seconds, metres, radians)::
+
+        ground_truth    GT   (n_poses, 4)      time, x, y, heading
+        odometry        DR   (n_poses - 1, 3)  time, distance travelled, heading change
+        dead_reckoning  DRp  (n_poses, 4)      time, x, y, heading
+        landmarks       TL   (n_landmarks, 3)  id, x, y
+        ranges          TD   (n_ranges, 4)     time, sender id, landmark id, range
+
+    Odometry row k ends at pose k + 1 (the module docstring has the conventions).
 
     Checked on construction: table shapes (ShapeError); finite values, at least two poses (one
     odometry step), strictly increasing pose times (in ground truth and in dead reckoning),
