@@ -71,3 +71,13 @@ def test_a_trajectory_prints_its_states_span_and_prior():
         f"<Trajectory of 10 states, x0..x9 at 0..{times[-1]:.6g} s, wnoa prior of 6 numbers a state; "
         "at(t): the state at t s from the first state on>"
     )
+
+
+def test_a_pose_error_prints_its_statistics_with_units_not_every_error():
+    truth = np.column_stack([np.arange(50.0), np.zeros(50), np.zeros(50)])
+    estimate = truth + [0.3, -0.4, 0.05]
+    text = repr(sr.ape(truth, estimate))
+    rmse = np.sqrt(np.mean(np.sum((estimate - truth)[:, :2] ** 2, axis=1)))  # brute force: 0.5 m at every pose
+    assert text.startswith(f"PoseError(n=50, translation RMSE {rmse:.6g} m (mean {rmse:.6g}, median {rmse:.6g}, max")
+    assert f"heading RMSE {0.05:.6g} rad (max {0.05:.6g})" in text
+    assert "array([0.5" not in text and len(text) < 300

@@ -101,6 +101,13 @@ class PoseError:
     def to_dict(self) -> dict:
         return {"translation_m": self.translation_stats.to_dict(), "heading_rad": self.heading_stats.to_dict()}
 
+    def __repr__(self) -> str:  # the statistics with their units; the errors of each pose are the fields
+        t, h = self.translation_stats, self.heading_stats
+        return (
+            f"PoseError(n={t.n}, translation RMSE {t.rmse:.6g} m (mean {t.mean:.6g}, median {t.median:.6g}, max "
+            f"{t.max:.6g}), heading RMSE {h.rmse:.6g} rad (max {h.max:.6g}), alignment={self.alignment!r})"
+        )
+
 
 def _same_shape(truth: object, estimate: object) -> tuple[NDArray, NDArray]:
     truth, estimate = planar_poses("truth", truth), planar_poses("estimate", estimate)
