@@ -109,3 +109,43 @@ def test_a_pose_reading_must_be_a_landmark_reading_made_for_the_priors_state(nam
         prior.pose_reading(wrong)  # the vector priors returned it, to fail at the solve as a size clash
     right = BearingFactor.create(X(3), L(0), 0.5, 0.1, state_dim=prior.state_dim)
     assert prior.pose_reading(right).keys == (X(3), L(0))
+
+
+def _reading(prior):
+    """A range at a time with no state (its placeholder key X(-1)), as the prior's interpolated factor takes it."""
+    return prior.pose_reading(RangeFactor.create(X(-1), L(0), 5.0, 0.1, state_dim=prior.state_dim))
+
+
+@pytest.mark.parametrize("name", PLANAR)
+def test_a_reading_between_states_that_is_not_a_factor_is_refused_naming_it(name):
+    # The group priors failed with AttributeError ('str' object has no attribute 'key_kinds').
+    prior = motion_prior(name, QC)
+    with pytest.raises(SteamError, match=r"^inner must be a Factor \(a reading such as a RangeFactor\), got inner='r'"):
+        prior.interpolated_factor("r", X(0), X(1), 0.0, 1.0, 0.5)
+    with pytest.raises(SteamError, match=r"^inners\[1\] is a str \('r'\), not a Factor"):
+        prior.interpolated_factors([_reading(prior), "r"], X(0), X(1), 0.0, 1.0, [0.25, 0.5])
+
+
+BAD_TAUS = [
+    ("one time too few", [0.5], r"^taus must hold one time per reading of inners \(2\), got shape \(1,\)"),
+    ("a table", [[0.25, 0.5]], r"^taus must hold one time per reading of inners \(2\), got shape \(1, 2\)"),
+    ("a string", "0.25 0.5", r"^taus must be an array of numbers, got the string taus='0.25 0.5'"),
+    ("NaN", [0.25, np.nan], r"^taus must be finite, but taus\[1\] = nan"),
+]
+
+
+@pytest.mark.parametrize("name", PLANAR)
+@pytest.mark.parametrize(("what", "taus", "message"), BAD_TAUS, ids=[c[0] for c in BAD_TAUS])
+def test_times_that_do_not_pair_with_the_readings_are_refused(name, what, taus, message):
+    # The vector priors failed with zip's ValueError or NumPy's TypeError ("iteration over a 0-d array").
+    del what
+    prior = motion_prior(name, QC)
+    with pytest.raises(ShapeError, match=message):
+        prior.interpolated_factors([_reading(prior)] * 2, X(0), X(1), 0.0, 1.0, taus)
+    one_by_one = [prior.interpolated_factor(_reading(prior), X(0), X(1), 0.0, 1.0, t) for t in (0.25, 0.5)]
+    together = prior.interpolated_factors([_reading(prior)] * 2, X(0), X(1), 0.0, 1.0, [0.25, 0.5])
+    x = prior.initial_state([1.0, 2.0, 0.3], [1.0, 0.0, 0.1], 1.0)
+    for a, b in zip(one_by_one, together, strict=True):  # what is accepted still gives the same factors
+        np.testing.assert_allclose(
+            b.error(x, x + 0.01, np.array([4.0, 1.0])), a.error(x, x + 0.01, np.array([4.0, 1.0]))
+        )

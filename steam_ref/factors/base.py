@@ -146,6 +146,14 @@ def wrong_size(factor: object, key: Key, dim: int, have: int, held: str = "value
     )
 
 
+def check_factor(name: str, factor: object) -> Factor:
+    """``factor`` itself if it is a Factor (one reading, the inner one of an interpolated factor); SteamError naming
+    ``name`` otherwise."""
+    if not isinstance(factor, Factor):
+        raise SteamError(f"{name} must be a Factor (a reading such as a RangeFactor), got {name}={factor!r:.80}")
+    return factor
+
+
 def check_factors(name: str, factors: object) -> list[Factor]:
     """The factors of a Factor or an iterable of factors, as a list; SteamError naming the first non-factor."""
     if isinstance(factors, Factor):

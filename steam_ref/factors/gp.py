@@ -19,7 +19,7 @@ from ..gp.interpolate import interpolation_terms
 from ..gp.prior import process_noise_sqrt_information, transition
 from ..gp.sde import LinearSDE, as_sde, check_prior, check_sde
 from ..variables import Key, key_list
-from .base import FLOAT_TYPES, Factor, Memo, apply, identity_stack, sqrt_information
+from .base import FLOAT_TYPES, Factor, Memo, apply, check_factor, identity_stack, sqrt_information
 from .measured import measured_vector
 
 __all__ = ["GPPriorFactor", "gp_prior_factors", "InterpolatedFactor"]
@@ -212,9 +212,7 @@ class InterpolatedFactor(Factor):
 
         ``prior`` is Qc (the paper's WNOA prior) or any :class:`~steam_ref.gp.LinearSDE`.
         """
-        if not isinstance(inner, Factor):
-            raise SteamError(f"inner must be a Factor (the measurement at tau), got inner={inner!r}")
-        if isinstance(inner, InterpolatedFactor):
+        if isinstance(check_factor("inner", inner), InterpolatedFactor):
             raise SteamError("an interpolated factor cannot wrap another interpolated factor")
         prior = check_prior(prior)
         t1, t2, tau = number("t1", t1), number("t2", t2), number("tau", tau)  # floats, not float32 (NumPy 2)

@@ -37,7 +37,7 @@ from ..lie.points import point_dim
 from ..manifold import VECTOR, Manifold
 from ..robust import RobustLoss
 from ..variables import Key
-from .base import Factor, sqrt_information
+from .base import Factor, check_factor, sqrt_information
 from .gp import consecutive_gaps
 
 __all__ = ["LiePriorFactor", "lie_prior_factors", "LieStatePrior", "LieAccelPriorFactor", "LieAccelInterpolatedFactor"]
@@ -254,7 +254,7 @@ class BetweenGroupStates(Factor):
     @classmethod
     def check_inner(cls, inner: Factor, kind: Manifold) -> None:
         """SteamError unless ``inner`` reads one state of ``kind`` (any reading: lie_readings, point_readings)."""
-        if inner.key_kinds[0] is not kind:
+        if check_factor("inner", inner).key_kinds[0] is not kind:
             raise SteamError(f"inner must read a state of kind {kind!r} (the reading at tau), got {inner!r}")
 
     @property

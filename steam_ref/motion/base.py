@@ -25,13 +25,13 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..arguments import finite, real_array
 from ..errors import ShapeError, SteamError
-from ..factors import Factor, InterpolatedFactor
+from ..factors import Factor, InterpolatedFactor, check_factors
 from ..factors.lie_prior import LieAccelInterpolatedFactor
 from ..factors.lie_readings import LieInterpolatedFactor, PoseReading
 from ..manifold import Manifold
 from ..variables import Key
 
-__all__ = ["MotionPrior", "reading_inside", "is_interpolated", "sigma_blocks"]
+__all__ = ["MotionPrior", "reading_inside", "is_interpolated", "sigma_blocks", "readings_at"]
 
 _INTERPOLATED = (InterpolatedFactor, LieInterpolatedFactor, LieAccelInterpolatedFactor)
 _WRAPPERS = (*_INTERPOLATED, PoseReading)  # the factors a prior wraps a reading in
@@ -70,7 +70,8 @@ class MotionPrior(ABC):
         """:meth:`interpolated_factor` of each of ``inners`` at its time in ``taus`` (n,), all between the same two
         states: the same factors, which a prior may form in one call (``LieGroupWnoa``: every Λ(τ), Ψ(τ) at once).
         [YIB Eq. 29]"""
-        return [self.interpolated_factor(f, a, b, ta, tb, t) for f, t in zip(inners, np.asarray(taus), strict=True)]
+        inners, taus = readings_at("inners", inners, taus)
+        return [self.interpolated_factor(f, a, b, ta, tb, t) for f, t in zip(inners, taus, strict=True)]
 
     @abstractmethod
     def velocity_reading(self, key: Key, measured: NDArray, sigmas: NDArray) -> Factor:
@@ -158,6 +159,15 @@ class MotionPrior(ABC):
 
     def __repr__(self) -> str:
         return f"<motion prior {self.name}: states of {self.state_dim} numbers, kind {self.kind!r}>"
+
+
+def readings_at(name: str, inners: object, taus: object) -> tuple[list[Factor], NDArray]:
+    """``inners`` as a list of factors (:func:`~steam_ref.factors.check_factors`) and ``taus`` as a float array of one
+    finite time each, what :meth:`MotionPrior.interpolated_factors` takes; SteamError naming what does not fit."""
+    factors, times = check_factors(name, inners), finite("taus", real_array("taus", taus))
+    if times.shape != (len(factors),):
+        raise ShapeError(f"taus must hold one time per reading of {name} ({len(factors)}), got shape {times.shape}")
+    return factors, times
 
 
 def sigma_blocks(name: str, sigmas: Sequence[ArrayLike] | NDArray, blocks: int, size: int = 3) -> list[NDArray]:

@@ -41,7 +41,7 @@ from ..lie import GroupState, LieGroup
 from ..lie import gp as lie_gp
 from ..lie.group import check_group
 from ..variables import Key
-from .base import MotionPrior, sigma_blocks
+from .base import MotionPrior, readings_at, sigma_blocks
 
 __all__ = ["LieGroupWnoa", "RESIDUALS"]
 
@@ -83,6 +83,7 @@ class LieGroupWnoa(MotionPrior):
     def interpolated_factors(
         self, inners: Sequence[Factor], a: Key, b: Key, ta: float, tb: float, taus: ArrayLike
     ) -> list[Factor]:
+        inners, taus = readings_at("inners", inners, taus)
         for inner in inners:
             LieInterpolatedFactor.check_inner(inner, self.kind)
         return list(
