@@ -81,3 +81,19 @@ def test_a_pose_error_prints_its_statistics_with_units_not_every_error():
     assert text.startswith(f"PoseError(n=50, translation RMSE {rmse:.6g} m (mean {rmse:.6g}, median {rmse:.6g}, max")
     assert f"heading RMSE {0.05:.6g} rad (max {0.05:.6g})" in text
     assert "array([0.5" not in text and len(text) < 300
+
+
+def test_the_incremental_solvers_print_what_they_hold():
+    graph, values, times = _problem(10)
+    solver = sr.IncrementalSolver()
+    assert repr(solver) == "<IncrementalSolver after 0 updates: 0 variables, 0 factors, 0 cliques>"
+    solver.update(graph.factors, values)
+    n_cliques = len(solver.tree.cliques)
+    assert repr(solver) == (
+        f"<IncrementalSolver after 1 updates: 11 variables, {len(graph.factors)} factors, {n_cliques} cliques>"
+    )
+    window = sr.FixedLagSmoother(1.0)
+    window.update(graph.factors, values, timestamps={X(i): float(times[i]) for i in range(10)})
+    gone = sum(window.was_marginalized(X(i)) for i in range(10))  # the states older than the lag: counted one by one
+    assert gone == sum(times < times[-1] - 1.0) > 0
+    assert repr(window) == f"<FixedLagSmoother of lag 1 s, {gone} marginalized: {window.solver!r}>"

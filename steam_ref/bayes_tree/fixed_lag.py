@@ -185,6 +185,9 @@ class FixedLagSmoother:
     __len__ = lambda self: len(self.solver)  # the variables in the window
     kind_of = lambda self, key: self.solver.kind_of(self._known([check_key("key", key)], "the kind of")[0])
 
+    def __repr__(self) -> str:
+        return f"<FixedLagSmoother of lag {self.lag:g} s, {self.n_marginalized} marginalized: {self.solver!r}>"
+
     def holds(self, key: Key) -> bool:
         """True when ``key`` is in the window."""
         return self.solver.holds(key)

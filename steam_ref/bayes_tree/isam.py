@@ -168,6 +168,10 @@ class IncrementalSolver:
     def __len__(self) -> int:
         return len(self.state.dims)
 
+    def __repr__(self) -> str:  # what it holds; its settings are ``params``
+        held = f"{len(self)} variables, {self.state.n_factors} factors, {len(self.tree)} cliques"
+        return f"<IncrementalSolver after {self.state.steps} updates: {held}>"
+
     # --- the update -------------------------------------------------------------------------
 
     def update(

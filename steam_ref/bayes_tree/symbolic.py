@@ -44,8 +44,7 @@ def symbolic_elimination(order: Sequence[V], factor_keys: Sequence[Sequence[V]])
     eliminations, and leaves one new factor on sᵢ = (their variables) − {θᵢ}  [YIB Eq. 24]. The new
     factor is in turn adjacent to the first-eliminated variable of sᵢ, θᵢ's parent.
     Returns ``(separators, owner)``: variable → sᵢ (in elimination order), and for each factor the
-    first of its variables in ``order``.
-    """
+    first of its variables in ``order``."""
     separators, owner = _elimination_game(order := list(order), factor_keys)
     named = {v: tuple(map(order.__getitem__, s)) for v, s in zip(order, separators, strict=True)}
     return named, [order[i] for i in owner]
@@ -81,8 +80,7 @@ def build_cliques(
     Conditionals are visited in reverse elimination order. P(θᵢ | sᵢ) joins the clique C of its
     parent (the clique holding sᵢ's first variable as a frontal) when sᵢ equals all of C's
     variables; otherwise it starts a new child clique of C (or a new root when sᵢ is empty).
-    ``zeros`` > 0: cliques then merge into their parents (``dims``: :mod:`steam_ref.linear.amalgamation`).
-    """
+    ``zeros`` > 0: cliques then merge into their parents (``dims``: :mod:`steam_ref.linear.amalgamation`)."""
     separators, owner = _elimination_game(order := list(order), factor_keys)
     clique_of = [0] * len(order)  # place → the clique where it is frontal
     frontals: list[list[int]] = []  # per clique, the places of its frontals in reverse elimination order
@@ -129,8 +127,7 @@ class CliqueTree(Generic[C]):
     """A forest of cliques with integer ids, and the edits iSAM2 makes to it.  [K12 Alg. 3-4]
 
     Holds any clique objects with ``frontals`` and ``separator`` (symbolic or numeric). Each edit
-    costs time proportional to the cliques it touches, never to the size of the tree.
-    """
+    costs time proportional to the cliques it touches, never to the size of the tree."""
 
     def __init__(self, log: UndoLog | None = None) -> None:
         self.cliques: dict[int, C] = {}  # id → clique
@@ -213,8 +210,7 @@ class CliqueTree(Generic[C]):
         """Every clique holding ``variable``, frontal or in its separator.  [K12 Alg. 5]
 
         They form a subtree rooted at the clique where it is frontal (running intersection), so
-        a walk down from there that stops at cliques without it finds them all.
-        """
+        a walk down from there that stops at cliques without it finds them all."""
         top = self.clique_containing(variable)
         found, stack = [], [top]
         while stack:
@@ -244,8 +240,7 @@ class CliqueTree(Generic[C]):
 
         Returns ``(removed, orphans)``: id → clique of each removed clique (in the order found),
         and the ids of the children of removed cliques that were not removed. Orphans stay in the
-        tree, detached (parent None, not roots), until :meth:`attach` hangs them back.
-        """
+        tree, detached (parent None, not roots), until :meth:`attach` hangs them back."""
         removed: dict[int, C] = {}
         for first in start:
             c: int | None = first
@@ -265,8 +260,7 @@ class CliqueTree(Generic[C]):
         that is not (a root when there is none). Returns child → its new parent.
 
         Marginalizing leaves (:mod:`.marginalization`): the caller vouches that every such child's separator lies
-        within its new parent's variables (it holds none of the deleted frontals).
-        """
+        within its new parent's variables (it holds none of the deleted frontals)."""
         gone = set(cids)
         moved: dict[int, int | None] = {}
         for c in gone:
@@ -288,8 +282,7 @@ class CliqueTree(Generic[C]):
     def snapshot(self) -> CliqueTree[C]:
         """A structural copy (cliques shared, links copied), e.g. the tree "before" an update to draw.
 
-        Later edits of this tree leave the copy as it was; the copy is a plain :class:`CliqueTree`.
-        """
+        Later edits of this tree leave the copy as it was; the copy is a plain :class:`CliqueTree`."""
         out: CliqueTree[C] = CliqueTree()
         out.cliques, out.parent, out.roots = dict(self.cliques), dict(self.parent), dict(self.roots)
         out.children = {c: list(ch) for c, ch in self.children.items()}
@@ -328,8 +321,7 @@ class CliqueTree(Generic[C]):
 
         Checks: links are consistent; each variable is frontal in exactly one clique; each
         separator lies within the parent clique's variables; the cliques holding any one
-        variable form a connected subtree (running intersection); roots have empty separators.
-        """
+        variable form a connected subtree (running intersection); roots have empty separators."""
         out: list[str] = []
         frontal_count: dict = {}
         for cid, clique in self.cliques.items():
