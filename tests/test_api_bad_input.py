@@ -1059,24 +1059,6 @@ CASES = [
         r"the rank of x0 among the keys eliminated first must be a real number, got .*'first'",
     ),
     (
-        "IncrementalSolver.update constrained names a key never added",
-        lambda: sr.IncrementalSolver().update(*two_states(), constrained={X(0): 0, X(99): 1}),
-        UnknownVariableError,
-        r"constrained names x99, which the solver neither holds nor is given",
-    ),
-    (
-        "IncrementalSolver.update constrained names a key not in the affected top",
-        lambda: solver().update([sr.PriorFactor.create(X(1), ONES, 1.0)], constrained={L(3): 0}),
-        UnknownVariableError,
-        r"constrained names l3, which the solver neither holds nor is given",
-    ),
-    (
-        "IncrementalSolver.marginalize_leaves constrained names a key never added",
-        lambda: solver().marginalize_leaves([X(0)], constrained={X(7): 0}),
-        UnknownVariableError,
-        r"constrained names x7, which the solver neither holds nor is given",
-    ),
-    (
         "IncrementalSolver.marginalize_leaves constrained not a mapping",
         lambda: solver().marginalize_leaves([X(0)], constrained=[X(1)]),
         SteamError,

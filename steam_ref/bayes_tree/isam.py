@@ -186,16 +186,17 @@ class IncrementalSolver:
 
         Each new variable is of the kind its factors declare (``new_values`` may be a plain mapping). ``relinearize``
         False skips this update's fluid relinearization; ``constrained`` (GTSAM's ``constrainedKeys``): keys to
-        eliminate first, by increasing number (:func:`~steam_ref.linear.ordering.min_degree_keys`). Raises
+        eliminate first, by increasing number (:func:`~steam_ref.linear.ordering.min_degree_keys`); as in GTSAM, a key
+        this update does not re-eliminate, held or not, is ignored (one ranking of all states serves every update). Raises
         :class:`SteamError` subclasses on bad input (a new value for a held variable, a factor naming a variable with
         no value, a variable left unconstrained, a :class:`~steam_ref.errors.KindError`...), the solver as it was."""
         timer = PhaseTimer()
         with timer("check"):
             flag("relinearize", relinearize)
+            check_constrained(constrained)
             F_new = check_factors("new_factors", new_factors)
             check_new_values(new_values)
             theta_new, kinds = self._checked_update(F_new, {} if new_values is None else new_values)
-            check_constrained(constrained, theta_new, self.state.dims)  # added or held
         # an error, or Ctrl-C (KeyboardInterrupt) at any point: all undone; the BLAS limit is left inside the transaction
         with self.state.transaction(), limit():
             return self._update(F_new, theta_new, kinds, relinearize, constrained, timer)

@@ -133,7 +133,7 @@ def marginalize_keys(
     the tree cached (step 2, the same marginal to rounding, with no elimination). One transaction: on any failure
     or interruption (Ctrl-C) the state is left as it was."""
     drop_list = list(dict.fromkeys(key_list("keys", keys)))  # a key named twice is marginalized once (as GTSAM)
-    check_constrained(constrained, state.dims)
+    check_constrained(constrained)
     flag("keep_conditionals", keep_conditionals)
     for k in drop_list:
         if k not in state.dims:

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import heapq
 import os
-from collections.abc import Container, Iterable, Iterator, Mapping, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -61,8 +61,10 @@ def have_cholmod() -> bool:
 
 
 def sparse_backend(backend: str | None = None) -> str:
-    """Which sparse Cholesky/AMD runs, 'cholmod' or 'superlu': ``backend``, otherwise ``STEAM_REF_SPARSE_BACKEND``,
-    otherwise CHOLMOD if installed."""
+    """Which sparse Cholesky/AMD runs: 'cholmod' or 'superlu'.
+
+    ``backend`` overrides; otherwise ``STEAM_REF_SPARSE_BACKEND``, otherwise CHOLMOD if installed.
+    """
     choice = backend or os.environ.get("STEAM_REF_SPARSE_BACKEND", "") or ("cholmod" if have_cholmod() else "superlu")
     if choice not in ("cholmod", "superlu"):
         raise SteamError(f"unknown sparse backend {choice!r}; use 'cholmod' or 'superlu'")
@@ -149,7 +151,8 @@ def xl_ordering(keys: Iterable[Key], dims: Mapping[Key, int]) -> Ordering:
     keys = key_list("keys", keys)
     states = sorted((k for k in keys if k.symbol == "x"), key=lambda k: k.index)
     others = sorted((k for k in keys if k.symbol != "x"), key=lambda k: (k.symbol, k.index))
-    return Ordering(tuple(states + others), _sizes(states + others, dims))
+    ordered = states + others
+    return Ordering(tuple(ordered), _sizes(ordered, dims))
 
 
 def variable_adjacency(keys: Sequence[Key], factor_keys: Iterable[tuple[Key, ...]]) -> sp.csc_matrix:
@@ -171,7 +174,9 @@ def _places(index: Mapping[Key, int], factor_keys: Iterable[Sequence[Key]], amon
         return [list(map(place, keys)) for keys in factor_keys]  # one pass in C: a list per factor, no generator
     except KeyError as exc:
         missing = exc.args[0]
-    i, keys = next(((i, keys) for i, keys in enumerate(factor_keys) if missing in keys), ("?", "a key"))
+    i, keys = next(
+        ((i, keys) for i, keys in enumerate(factor_keys) if missing in keys), ("?", "a key")
+    )  # an iterator is spent
     raise UnknownVariableError(
         f"factor_keys[{i}] = {keys!r} names {missing!r}, which is not among the {among} to order"
     )
@@ -210,7 +215,8 @@ def constrained_min_degree(
     last: Iterable[Key] = (),
 ) -> Ordering:
     """A greedy minimum-degree elimination order with the variables in ``last`` eliminated last, as an
-    :class:`Ordering` (:func:`min_degree_keys` gives the keys alone, as an incremental update needs them)."""
+    :class:`Ordering` (:func:`min_degree_keys` gives the keys alone, as an incremental update needs them).
+    """
     order = min_degree_keys(variables, dims, factor_keys, last)
     return Ordering(tuple(order), tuple(dims[k] for k in order))
 
@@ -288,17 +294,11 @@ def min_degree_keys(
     return order
 
 
-def check_constrained(constrained: object, *held: Container[Key]) -> Mapping[Key, float] | None:
+def check_constrained(constrained: object) -> Mapping[Key, float] | None:
     """``constrained`` (GTSAM's ``constrainedKeys``: :func:`min_degree_keys`'s ``first``) of an update or a
-    marginalization: SteamError unless a mapping key -> number or None (each rank is checked when its key is ordered);
-    UnknownVariableError naming a key in none of ``held`` (the variables the solver holds or is given), but in a
-    :class:`KeysBelow`, a smoother's own held timestamps, read at the cost of the keys looked up: never walked."""
+    marginalization, SteamError unless a mapping key -> number or None (each rank is checked when its key is ordered)."""
     if constrained is not None and not isinstance(constrained, Mapping):
         raise SteamError(f"constrained must be a mapping key -> number or None, got {constrained!r:.80}")
-    if isinstance(constrained, KeysBelow) or not constrained:
-        return constrained
-    if (stranger := next((k for k in constrained if not any(k in h for h in held)), None)) is not None:
-        raise UnknownVariableError(f"constrained names {stranger!r}, which the solver neither holds nor is given")
     return constrained
 
 
