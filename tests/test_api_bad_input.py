@@ -1059,6 +1059,18 @@ CASES = [
         r"the rank of x0 among the keys eliminated first must be a real number, got .*'first'",
     ),
     (
+        "IncrementalSolver.update constrained rank not a number, its key not re-eliminated",
+        lambda: solver().update([sr.PriorFactor.create(X(1), ONES, 1.0)], constrained={L(5): "first"}),
+        SteamError,
+        r"the rank of l5 among the keys eliminated first must be a real number, got .*'first'",
+    ),
+    (
+        "IncrementalSolver.marginalize_leaves constrained rank a bool",
+        lambda: solver().marginalize_leaves([X(0)], constrained={X(7): True}),
+        SteamError,
+        r"the rank of x7 among the keys eliminated first must be a real number, got .*True",
+    ),
+    (
         "IncrementalSolver.marginalize_leaves constrained not a mapping",
         lambda: solver().marginalize_leaves([X(0)], constrained=[X(1)]),
         SteamError,

@@ -61,10 +61,8 @@ def have_cholmod() -> bool:
 
 
 def sparse_backend(backend: str | None = None) -> str:
-    """Which sparse Cholesky/AMD runs: 'cholmod' or 'superlu'.
-
-    ``backend`` overrides; otherwise ``STEAM_REF_SPARSE_BACKEND``, otherwise CHOLMOD if installed.
-    """
+    """Which sparse Cholesky/AMD runs, 'cholmod' or 'superlu': ``backend``, otherwise ``STEAM_REF_SPARSE_BACKEND``,
+    otherwise CHOLMOD if installed."""
     choice = backend or os.environ.get("STEAM_REF_SPARSE_BACKEND", "") or ("cholmod" if have_cholmod() else "superlu")
     if choice not in ("cholmod", "superlu"):
         raise SteamError(f"unknown sparse backend {choice!r}; use 'cholmod' or 'superlu'")
@@ -151,8 +149,7 @@ def xl_ordering(keys: Iterable[Key], dims: Mapping[Key, int]) -> Ordering:
     keys = key_list("keys", keys)
     states = sorted((k for k in keys if k.symbol == "x"), key=lambda k: k.index)
     others = sorted((k for k in keys if k.symbol != "x"), key=lambda k: (k.symbol, k.index))
-    ordered = states + others
-    return Ordering(tuple(ordered), _sizes(ordered, dims))
+    return Ordering(tuple(states + others), _sizes(states + others, dims))
 
 
 def variable_adjacency(keys: Sequence[Key], factor_keys: Iterable[tuple[Key, ...]]) -> sp.csc_matrix:
@@ -174,9 +171,7 @@ def _places(index: Mapping[Key, int], factor_keys: Iterable[Sequence[Key]], amon
         return [list(map(place, keys)) for keys in factor_keys]  # one pass in C: a list per factor, no generator
     except KeyError as exc:
         missing = exc.args[0]
-    i, keys = next(
-        ((i, keys) for i, keys in enumerate(factor_keys) if missing in keys), ("?", "a key")
-    )  # an iterator is spent
+    i, keys = next(((i, keys) for i, keys in enumerate(factor_keys) if missing in keys), ("?", "a key"))
     raise UnknownVariableError(
         f"factor_keys[{i}] = {keys!r} names {missing!r}, which is not among the {among} to order"
     )
@@ -215,8 +210,7 @@ def constrained_min_degree(
     last: Iterable[Key] = (),
 ) -> Ordering:
     """A greedy minimum-degree elimination order with the variables in ``last`` eliminated last, as an
-    :class:`Ordering` (:func:`min_degree_keys` gives the keys alone, as an incremental update needs them).
-    """
+    :class:`Ordering` (:func:`min_degree_keys` gives the keys alone, as an incremental update needs them)."""
     order = min_degree_keys(variables, dims, factor_keys, last)
     return Ordering(tuple(order), tuple(dims[k] for k in order))
 
@@ -296,20 +290,25 @@ def min_degree_keys(
 
 def check_constrained(constrained: object) -> Mapping[Key, float] | None:
     """``constrained`` (GTSAM's ``constrainedKeys``: :func:`min_degree_keys`'s ``first``) of an update or a
-    marginalization, SteamError unless a mapping key -> number or None (each rank is checked when its key is ordered)."""
+    marginalization, SteamError unless a mapping key -> number (every rank, its key ordered now or not) or None; a
+    :class:`KeysBelow` (a smoother's timestamps, floats, read at the cost of the keys looked up) is not walked."""
     if constrained is not None and not isinstance(constrained, Mapping):
         raise SteamError(f"constrained must be a mapping key -> number or None, got {constrained!r:.80}")
+    for k, r in () if constrained is None or isinstance(constrained, KeysBelow) else constrained.items():
+        _rank(k, r)
     return constrained
+
+
+def _rank(key: Key, r: object) -> float:
+    """A rank of ``first``: a float as it is (the smoother's timestamps), anything else checked to be a number."""
+    return r if type(r) is float else number(f"the rank of {key!r} among the keys eliminated first", r)
 
 
 def _first_then_min_degree(
     variables: list[Key], dims: Mapping[Key, int], factor_keys: Iterable[Sequence[Key]], last: list[Key], first: Mapping
 ) -> list[Key]:
     """:func:`min_degree_keys` with ``first`` (its docstring)."""
-    rank = {k: r for k in variables if (r := first.get(k)) is not None}  # one look-up a variable
-    for k, r in rank.items():
-        if type(r) is not float:  # a float passes as it is (the smoother's timestamps); anything else is checked
-            rank[k] = number(f"the rank of {k!r} among the keys eliminated first", r)
+    rank = {k: _rank(k, r) for k in variables if (r := first.get(k)) is not None}  # one look-up a variable
     early = sorted((k for k in rank if k not in last), key=rank.__getitem__)
     if not early:
         return min_degree_keys(variables, dims, factor_keys, last)
