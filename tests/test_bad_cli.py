@@ -25,7 +25,13 @@ def _never(*args, **kwargs):
 
 @pytest.fixture(autouse=True)
 def no_runs(monkeypatch: pytest.MonkeyPatch) -> None:
-    for name in ("run.StreamingEstimator", "batch.sequential_batch", "reproduce.reproduce", "fidelity.compare"):
+    for name in (
+        "run.StreamingEstimator",
+        "batch.sequential_batch",
+        "reproduce.reproduce",
+        "fidelity.compare",
+        "consistency.run_sweep",
+    ):
         monkeypatch.setattr(f"steam_ref.cli.{name}", _never)
     monkeypatch.setattr("steam_ref.cli.batch.build_problem", _never)
 
@@ -115,6 +121,13 @@ BAD = {
     ),
     "path-without-preset-batch": (["batch", "--dataset", "{good}"], "is a path: say which parameters"),
     "cut-text": (["run", "--dataset", "{cut}", "--preset", "synthetic"], "T_TD.txt line 5: the last line does not end"),
+    # BTGP's own options with a method that has no Bayes tree and no iSAM2: refused, not passed over
+    "relinearize-threshold-pb": (["run", "--method", "pb", "--relinearize-threshold", "0.1"], "needs --method btgp"),
+    "relinearize-skip-pbvr": (["run", "--method", "pbvr", "--relinearize-skip", "3"], "--relinearize-skip sets"),
+    "amalgamation-zeros-pb": (["run", "--method", "pb", "--amalgamation-zeros", "0"], "--amalgamation-zeros sets"),
+    # --turn by the one rule for numbers, as every other number (it was float(): 0.1_5 ran as 0.15)
+    "turn-underscore": (["consistency", "--prior", "se2", "--turn", "0.1_5", "--seeds", "1"], "--turn"),
+    "turn-blank": (["consistency", "--prior", "se2", "--turn", " 0.5", "--seeds", "1"], "--turn"),
     "newline-in-value": (["run", "--every", "1", "x\ny"], "x\\ny"),
     "subcommand": (["frobnicate"], "frobnicate"),
 }

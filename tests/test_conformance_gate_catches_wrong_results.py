@@ -108,6 +108,17 @@ def test_an_se2_heading_two_pi_off_fails_as_the_readme_promises_headings_in_minu
     assert head.endswith("1 x 2 pi off: an angle brought into another range (README conventions 'angles', 'se2')"), head
 
 
+def test_a_value_of_1e308_is_not_called_a_whole_number_of_turns_off(tmp_path, capsys, kit_results):
+    """Float64's spacing at 1e308 is about 2e292: every value there is a multiple of 2π to float64's precision, so
+    the hint cannot tell a turn from anything else (it said "1591549430918953...x 2 pi off"); no hint claims it."""
+    results = kit_results(SHIPPED, "factors")
+    results["bearing"]["error"][0] = 1e308
+    code, lines = check(tmp_path, capsys, "factors", results)
+    head = fail_line(lines, "factors", "bearing")
+    assert code == 1 and head.startswith("FAIL factors/bearing: error worst |diff| 1e+308 at [0] > "), head
+    assert "pi off" not in head and head.endswith("1 of 1 entries past it"), head
+
+
 def test_a_transposed_jacobian_fails_square_by_its_entries_and_rectangular_by_its_shape(tmp_path, capsys, kit_results):
     se2 = kit_results(SHIPPED, "se2")
     h0 = np.array(se2["prior_local_variable_fast"]["H_0"])

@@ -336,3 +336,15 @@ def test_a_download_is_cut_at_the_registrys_size(mirror, tmp_path):
         builtins.open = builtins_open
     assert [p for p in (tmp_path / "c").rglob("*") if p.is_file()] == []
     assert written and max(written) <= 119_549, written
+
+
+def test_an_empty_base_url_is_refused_not_passed_over_for_the_environments(mirror, own_cache, capsys, monkeypatch):
+    """``--base-url ''`` names no server: refused, where it was read as not given and the files came from
+    $STEAM_REF_DATA_URL's mirror (or the authors' repository) instead."""
+    url, _ = mirror
+    monkeypatch.setenv(fetching.DATA_URL_ENV, url)
+    code, out, err = _cli(capsys, "data", "fetch", "paper-synthetic", "--base-url", "")
+    assert (
+        code == 2 and out == "" and err == "steam-ref: error: the base URL '' is not an http:// or https:// address\n"
+    )
+    assert not (own_cache / "Syn_theta_Plaza.mat").exists()

@@ -97,7 +97,8 @@ def pattern_hint(expected: np.ndarray, got: np.ndarray, worst: float, allowed: f
     show. A state-by-state matrix of a state stacked in another order has both axes moved, fits no one-axis order,
     and reaches the symmetric hint. The one-axis checks are also cheap, the symmetric one a bounded search."""
     turns = round(worst / (2 * math.pi))
-    if turns and abs(worst - turns * 2 * math.pi) <= allowed:
+    # only where float64 resolves ``allowed`` at ``worst``: past that (1e308) every value is a whole number of turns
+    if turns and math.ulp(worst) <= allowed and abs(worst - turns * 2 * math.pi) <= allowed:
         return f"; {turns} x 2 pi off: an angle brought into another range (README conventions 'angles', 'se2')"
     if float(np.abs(got + expected).max()) <= allowed:
         return (

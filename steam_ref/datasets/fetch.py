@@ -166,7 +166,7 @@ def base_url(given: str | None = None) -> str:
     """``given``, else ``$STEAM_REF_DATA_URL``, else :data:`DEFAULT_BASE_URL`; its path with one trailing slash.
     DataError, naming it (credentials masked), when it is not an http:// or https:// address with a host
     and, if it gives one, a numeric port."""
-    url = given or os.environ.get(DATA_URL_ENV) or DEFAULT_BASE_URL
+    url = given if given is not None else os.environ.get(DATA_URL_ENV) or DEFAULT_BASE_URL  # --base-url '' is refused
     try:
         parts = urllib.parse.urlsplit(url)
         parts.port  # noqa: B018 -- a port that is not a number in 0-65535 raises ValueError here

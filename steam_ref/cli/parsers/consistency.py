@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 
 from ...choices import CONSISTENCY_STUDIES, RESIDUALS
 from ..args import (
@@ -12,6 +13,7 @@ from ..args import (
     jobs_count,
     landmarks_count,
     non_negative_int,
+    scale,
     seeds_count,
     steps_count,
 )
@@ -40,7 +42,7 @@ def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
     )
     parser.add_argument(
         "--turn",
-        type=float,
+        type=scale(-math.pi, math.pi, "a yaw rate in rad a step"),  # the one rule for numbers; ±π: cli.consistency
         default=None,
         help="--prior se2: the task's yaw rate at the start, rad a step (default 0; 1.0 is the fast-turning task)",
     )

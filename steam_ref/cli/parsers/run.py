@@ -212,6 +212,16 @@ def _zero_fraction(text: str) -> float:
         raise argparse.ArgumentTypeError(f"expected a fraction >= 0 and < 1, got {text!r}") from None
 
 
+# run's options that only BTGP reads (None: not given), by what each is: given with --method pb or pbvr, which keep no
+# Bayes tree and run no iSAM2 (paper.solvers.make_solver gives them neither), each would be passed over in silence
+_BTGP_ONLY = {
+    "tree_dot": "writes BTGP's Bayes tree",
+    "relinearize_threshold": "sets BTGP's iSAM2 relinearization",
+    "relinearize_skip": "sets BTGP's iSAM2 relinearization",
+    "amalgamation_zeros": "sets how BTGP's iSAM2 merges the Bayes tree's cliques",
+}
+
+
 def outputs(args: argparse.Namespace) -> dict[str, str | None]:
     """The files a planar ``run`` writes, by option (None: not asked for)."""
     return {
@@ -224,8 +234,8 @@ def outputs(args: argparse.Namespace) -> dict[str, str | None]:
 
 def check(args: argparse.Namespace) -> None:
     """What ``run`` checks before it reads or solves anything, in its order, with no solver loaded: the prior against
-    the data set's space; then, for a planar set, each output path and their being apart, ``--tree-dot``'s method,
-    and the data set's preset (for a PATH, the data search finds it: a name that is neither a set nor a file is
+    the data set's space; then, for a planar set, each output path and their being apart, the method of BTGP's own
+    options (``_BTGP_ONLY``), and the data set's preset (for a PATH, the data search finds it: a name that is neither a set nor a file is
     refused here). :func:`steam_ref.cli.commands.main` calls it before it loads the command's module, and
     :func:`steam_ref.cli.run.run` first: each check reads the arguments and the file system only."""
     check_prior_fits(args.dataset, args.prior)  # a 3-D prior on a planar set, or a planar prior on a 3-D set
@@ -237,6 +247,8 @@ def check(args: argparse.Namespace) -> None:
     check_output(args.plot, ".png", "--plot")
     check_output(args.tree_dot, ".dot", "--tree-dot")
     check_outputs_apart(outputs(args))
-    if args.tree_dot and args.method != "btgp":
-        raise SteamError(f"--tree-dot writes BTGP's Bayes tree: it needs --method btgp, got --method {args.method}")
+    for name, what in _BTGP_ONLY.items():  # PB and PBVR re-solve in batch: no tree, no iSAM2 to set
+        if getattr(args, name) is not None and args.method != "btgp":
+            option = f"--{name.replace('_', '-')}"
+            raise SteamError(f"{option} {what}: it needs --method btgp, got --method {args.method}")
     preset_of(args)
