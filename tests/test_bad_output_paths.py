@@ -234,3 +234,27 @@ def test_out_folder_that_is_not_a_folder_says_what_it_is(tmp_path: Path, kind: s
         out.symlink_to(out)
     with pytest.raises(SteamError, match=needle):
         check_out_folder(str(out), "--out")
+
+
+@pytest.mark.parametrize("name", ["runs.jsonl", "fig3.png", "fig4_trajectory.png", "results.md"])
+@pytest.mark.parametrize("leaf_kind", ["fifo", "folder", "dangling-link"])
+def test_a_file_reproduce_writes_in_its_out_folder_is_checked_before_the_runs(
+    tmp_path: Path, monkeypatch, capsys, name: str, leaf_kind: str
+) -> None:
+    """``reproduce --out DIR`` writes its files in DIR after the runs (half an hour and more): a folder there failed
+    the write at the end (a named pipe once hung it); each is refused first, naming it, and nothing changes."""
+    monkeypatch.setattr("steam_ref.cli.reproduce.reproduce", _reached)  # the runs start here
+    stem, suffix = os.path.splitext(name)
+    path = make(tmp_path, "folder", leaf_kind, stem, suffix)
+    before = snapshot(tmp_path)
+    signal.setitimer(signal.ITIMER_REAL, 20)
+    try:
+        code = cli.main(["reproduce", "--quick", "--out", str(Path(path).parent)])
+    except Reached:
+        code = None
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+    out, err = capsys.readouterr()
+    assert code == 2 and out == "" and len(err.splitlines()) == 1, err
+    assert err.startswith(f"steam-ref: error: --out: {path!r} is ") and "Traceback" not in err, err
+    assert snapshot(tmp_path) == before

@@ -58,6 +58,23 @@ def test_reproduce_writes_plots_runs_and_table(reproduced):
         assert re.search(rf"\| small \| {skip} \| ", table), skip
 
 
+def test_an_interrupted_reproduce_leaves_the_files_of_the_last_one_whole(small, tmp_path, monkeypatch):
+    """Ctrl-C in the runs (hours of them) leaves the folder's runs.jsonl and results.md as they were (the log was once
+    opened, and emptied, before the first run): each is replaced whole once made; none is left behind."""
+    for name in ("runs.jsonl", "results.md"):
+        (tmp_path / name).write_text(f"yesterday's {name}\n")
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr("steam_ref.paper.experiments.interpolation_experiment", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        reproduce(tmp_path, progress=False, data_sets=[("small", small, SETUP)])
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["results.md", "runs.jsonl"]
+    for name in ("runs.jsonl", "results.md"):
+        assert (tmp_path / name).read_text() == f"yesterday's {name}\n"
+
+
 def test_table_figures_match_the_runs(small):
     """Speed ratios, interpolated fractions, time saved and RMSE changes recomputed from the runs."""
     exp = Experiment("small", small, SETUP)

@@ -6,9 +6,9 @@ import argparse
 import os
 
 from ..errors import SteamError
-from ..paper.experiments import reproduce
+from ..paper.experiments import REPRODUCED_FILES, reproduce
 from . import explain
-from .paths import check_out_folder
+from .paths import check_out_folder, check_output
 
 __all__ = ["run"]
 
@@ -16,6 +16,8 @@ __all__ = ["run"]
 def run(args: argparse.Namespace) -> int:
     """Run the experiments, write the plots and the table, print the table."""
     check_out_folder(args.out, "--out")
+    for name in REPRODUCED_FILES if os.path.isdir(args.out) else ():  # a named pipe there would block, a folder
+        check_output(os.path.join(args.out, name), os.path.splitext(name)[1], "--out")  # fail hours later
     written: list[str] = []  # each file, and whether it replaced one that was there
     try:
         shown = explain.progress_wanted(args.progress, False)
