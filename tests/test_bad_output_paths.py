@@ -258,3 +258,33 @@ def test_a_file_reproduce_writes_in_its_out_folder_is_checked_before_the_runs(
     assert code == 2 and out == "" and len(err.splitlines()) == 1, err
     assert err.startswith(f"steam-ref: error: --out: {path!r} is ") and "Traceback" not in err, err
     assert snapshot(tmp_path) == before
+
+
+@pytest.mark.parametrize(("kind", "needle"), [("fifo", "is a named pipe, not"), ("file", "is a file, not")])
+def test_conformance_build_out_that_is_not_a_folder_is_named_before_the_build(tmp_path, capsys, kind, needle) -> None:
+    """``conformance build --out`` by the one folder check (it was "[Errno 17] File exists: '...'")."""
+    out = tmp_path / "kit"
+    if kind == "fifo":
+        os.mkfifo(out)
+    else:
+        out.write_text("x")
+    code = cli.main(["conformance", "build", "--out", str(out)])
+    _, err = capsys.readouterr()
+    assert code == 2 and err == f"steam-ref: error: --out: {str(out)!r} {needle} a folder\n", err
+
+
+def test_conformance_build_replaces_a_named_pipe_in_its_kit_not_blocks_on_it(tmp_path: Path) -> None:
+    """A kit file is written beside its place and moved over it whole: a named pipe at gp/cases.json (the build
+    opened it to write, and waited for a reader forever) is replaced by the suite's file, and nothing is left behind."""
+    from steam_ref.conformance.build import build_kit
+    from steam_ref.conformance.kitio import read_suite
+
+    (tmp_path / "gp").mkdir()
+    os.mkfifo(tmp_path / "gp" / "cases.json")
+    signal.setitimer(signal.ITIMER_REAL, 120)
+    try:
+        build_kit(tmp_path)
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+    assert read_suite(tmp_path, "gp")["suite"] == "gp"
+    assert not list(tmp_path.rglob(".*")), "a temporary file was left behind"

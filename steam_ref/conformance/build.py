@@ -24,6 +24,7 @@ import numpy as np
 import scipy
 
 from ..errors import SteamError
+from ..files import replace_file
 from .cases import SUITE_DOCS, Case, suite_cases
 from .checker import Outcome, Report, check_cases, compare_quantity
 from .conventions import CONVENTION_ALTERNATIVES, CONVENTIONS, RESULTS_LAYOUT, depends_on
@@ -164,11 +165,17 @@ def _write_suite(out: Path, suite: str, records: list[dict]) -> None:
         and _unchanged(stored["cases"], records)
     ):
         return
-    write_json(
-        out / suite / "cases.json",
-        {"suite": suite, "kit_version": KIT_VERSION, "description": SUITE_DOCS[suite], "cases": records},
-    )
-    write_npz(out / suite / "expected.npz", records)
+    cases = {"suite": suite, "kit_version": KIT_VERSION, "description": SUITE_DOCS[suite], "cases": records}
+    (out / suite).mkdir(parents=True, exist_ok=True)
+    _replace(out / suite / "cases.json", lambda name: write_json(name, cases))
+    _replace(out / suite / "expected.npz", lambda name: write_npz(name, records))
+
+
+def _replace(path: Path, write) -> None:
+    """A kit file written by ``write(path)`` beside ``path`` and moved over it whole (steam_ref.files.replace_file):
+    an interrupt or a full disk leaves the file as it was, and a named pipe there is replaced, not written (which
+    blocked the build)."""
+    replace_file(path, lambda name: write(Path(name)), "conformance build")
 
 
 def build_kit(
@@ -238,7 +245,7 @@ def build_kit(
         "suites": suites,
         "files": files,
     }
-    write_json(out / "index.json", index)
+    _replace(out / "index.json", lambda name: write_json(name, index))
     return index
 
 

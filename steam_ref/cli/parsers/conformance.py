@@ -10,8 +10,9 @@ import argparse
 
 from ...choices import CONFORMANCE_CONVENTIONS, CONFORMANCE_SUITES
 from ..args import add_data_dir, path
+from ..paths import check_out_folder
 
-__all__ = ["add_parser"]
+__all__ = ["add_parser", "check"]
 
 _path = path("a folder")  # an empty path is refused (args.path)
 
@@ -96,3 +97,10 @@ def add_parser(sub) -> argparse.ArgumentParser:
     )
     add_data_dir(bld, PAPER_FILES)
     return conf
+
+
+def check(args: argparse.Namespace) -> None:
+    """Before the kit's machinery loads: ``build --out`` is a folder that exists and can be written, or can be made
+    (:func:`~steam_ref.cli.paths.check_out_folder`: a named pipe or a file there is named, not "[Errno 17]")."""
+    if args.conformance_command == "build" and args.out is not None:
+        check_out_folder(args.out, "--out")
