@@ -42,7 +42,13 @@ def add_parser(sub) -> argparse.ArgumentParser:
     )
     chk.add_argument("results", metavar="RESULTS_DIR", type=_path, help="a folder with <suite>/results.json")
     chk.add_argument(
-        "--only", nargs="+", choices=CONFORMANCE_SUITES, default=None, metavar="SUITE", help="check these suites only"
+        "--only",
+        nargs="+",
+        action="extend",  # given twice, both lists: the first was dropped in silence
+        choices=CONFORMANCE_SUITES,
+        default=None,
+        metavar="SUITE",
+        help="check these suites only",
     )
     chk.add_argument("--suite", choices=CONFORMANCE_SUITES, default=None, help="the same as --only SUITE (one suite)")
     chk.add_argument(
@@ -59,8 +65,9 @@ def add_parser(sub) -> argparse.ArgumentParser:
     chk.add_argument(
         "--conventions",
         nargs="+",
+        action="extend",  # given twice, both lists
         choices=CONFORMANCE_CONVENTIONS,
-        default=(),
+        default=[],  # extend copies a list default, never a tuple
         metavar="NAME",
         help="compare convention-dependent quantities under these documented alternatives: "
         + ", ".join(CONFORMANCE_CONVENTIONS),
