@@ -282,6 +282,24 @@ def test_two_notebooks_of_one_name_are_refused_not_one_handout_written_over_the_
         assert not (course / "out").exists()
 
 
+def test_two_submissions_of_one_name_are_refused_not_marked_under_one_name(course, capsys, monkeypatch):
+    """``mark ann/ bob/``, each with tiny.ipynb: both were marked and reported as 'tiny.ipynb', which student scored
+    what untold; a notebook given twice was marked twice. Now refused as the handout refuses them, before any marking."""
+    optional_import("nbclient", "notebooks")
+    optional_import("ipykernel", "notebooks")
+
+    def never(*args, **kwargs):
+        raise AssertionError("a submission was marked although the input was bad")
+
+    monkeypatch.setattr("steam_ref.homework.command.mark_submission", never)
+    ann, bob = (_submit(course, name, {}) for name in ("ann", "bob"))
+    clash = f"'{ann}' and '{bob}' would both be reported as 'tiny.ipynb' (give the folder holding both"
+    for given, said in (([ann.parent, bob.parent], clash), ([ann.parent, ann], f"'{ann}' is given twice")):
+        code = main(["homework", "mark", *map(str, given), "--source", str(course / "teacher")])
+        out, err = capsys.readouterr()
+        assert (code, out) == (2, "") and len(err.strip().splitlines()) == 1 and f"error: mark: {said}" in err, err
+
+
 @pytest.mark.parametrize("failure", ["a full disk", "an interrupt"])
 def test_a_handout_cut_short_leaves_the_previous_file_and_no_temporary(course, monkeypatch, capsys, failure):
     """The handout's write fails half-way (``Path.write_text`` writes half the text, then raises): it was written in

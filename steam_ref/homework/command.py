@@ -30,10 +30,29 @@ from .marking import SubmissionMark, Tutorial, load_tutorials, mark_submission, 
 __all__ = ["run"]
 
 
-def _notebooks(paths: list[str], what: str) -> list[tuple[Path, str]]:
+def _notebooks(paths: list[str], what: str, clash: Callable[[Path, str], str]) -> list[tuple[Path, str]]:
     """Each notebook given or under a folder given, with the name the report shows; SteamError for a path that
     does not exist, a file that is not a .ipynb, a folder with none. A folder's .ipynb that is no file (a pipe, a link
-    to nothing) is kept: reading it says so (a submission scores 0 saying why; a teacher's notebook is refused)."""
+    to nothing) is kept: reading it says so (a submission scores 0 saying why; a teacher's notebook is refused).
+
+    Each notebook once, under its own name: a file given twice, or two files whose ``clash(path, shown)`` is the same
+    text (what the command makes of each: a handout's file, a mark's report line) is a SteamError naming both."""
+    found = _found(paths, what)
+    first: dict[str, Path] = {}
+    for path, shown in found:
+        seen = first.setdefault(clash(path, shown), path)
+        if seen is not path:
+            twice = (
+                f"{str(path)!r} is given twice"
+                if seen.resolve() == path.resolve()
+                else f"{str(seen)!r} and {str(path)!r} {clash(path, shown)}"
+            )
+            raise SteamError(f"{what}: {twice}; give each notebook once, under its own name")
+    return found
+
+
+def _found(paths: list[str], what: str) -> list[tuple[Path, str]]:
+    """The notebooks of :func:`_notebooks`, as given."""
     found = []
     for text in paths:
         path = Path(text)
@@ -60,19 +79,12 @@ def _writer(text: str) -> Callable[[str], object]:
 
 
 def _handout(args: argparse.Namespace) -> int:
-    sources = _notebooks(args.notebooks, "handout")
-    made = [(path, handout(read_notebook(path), path.name)) for path, _ in sources]  # all checked before any write
     out = Path(args.out)
-    first: dict[str, Path] = {}
-    for path, _ in made:  # each handout is named as its notebook: two of one name would leave one, in silence
-        seen = first.setdefault(path.name, path)
-        if seen is not path:
-            twice = (
-                f"{str(path)!r} is given twice"
-                if seen.resolve() == path.resolve()
-                else f"{str(seen)!r} and {str(path)!r} would both be written to {str(out / path.name)!r}"
-            )
-            raise SteamError(f"handout: {twice}; give each notebook once, under its own name")
+    # each handout is named as its notebook: two of one name would leave one, in silence
+    sources = _notebooks(
+        args.notebooks, "handout", lambda path, _: f"would both be written to {str(out / path.name)!r}"
+    )
+    made = [(path, handout(read_notebook(path), path.name)) for path, _ in sources]  # all checked before any write
     if out.exists() and not out.is_dir():
         raise SteamError(f"--out {args.out!r} is a file, not a folder")
     for path, _ in made:
@@ -116,7 +128,14 @@ def _print(marks: list[SubmissionMark]) -> None:
 def _mark(args: argparse.Namespace) -> int:
     requirements()
     tutorials = load_tutorials(Path(args.source))
-    files = _notebooks(args.submissions, "mark")
+    # a submission is reported by its name: two of one name (alice/01.ipynb, bob/01.ipynb) could not be told apart
+    files = _notebooks(
+        args.submissions,
+        "mark",
+        lambda _, shown: (
+            f"would both be reported as {shown!r} (give the folder holding both: each is then shown by its path in it)"
+        ),
+    )
     _check_given(args.submissions, tutorials)
     marks = []
     with ThreadPoolExecutor(max_workers=args.jobs) as pool:  # each submission runs in its own kernel process
