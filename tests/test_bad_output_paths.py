@@ -288,3 +288,20 @@ def test_conformance_build_replaces_a_named_pipe_in_its_kit_not_blocks_on_it(tmp
         signal.setitimer(signal.ITIMER_REAL, 0)
     assert read_suite(tmp_path, "gp")["suite"] == "gp"
     assert not list(tmp_path.rglob(".*")), "a temporary file was left behind"
+
+
+def test_conformance_build_into_a_kit_of_another_version_is_refused_and_leaves_it(tmp_path: Path, capsys) -> None:
+    """``build --out`` the folder of kit v4 rewrote its suites as v5 and kept its paper suite under the v5 index:
+    the old kit lost, a mixed one in its place. Refused, every file as it was."""
+    import shutil
+
+    from steam_ref.conformance import KIT_VERSION, KITS
+
+    old = tmp_path / "v4"
+    shutil.copytree(KITS[KIT_VERSION - 1], old)
+    before = snapshot(tmp_path)
+    code = cli.main(["conformance", "build", "--out", str(old)])
+    _, err = capsys.readouterr()
+    assert code == 2 and len(err.splitlines()) == 1, err
+    assert f"{str(old)!r} holds the conformance kit v{KIT_VERSION - 1}: building v{KIT_VERSION} there" in err, err
+    assert snapshot(tmp_path) == before

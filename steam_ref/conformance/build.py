@@ -178,6 +178,21 @@ def _replace(path: Path, write) -> None:
     replace_file(path, lambda name: write(Path(name)), "conformance build")
 
 
+def _refuse_another_version(out: Path) -> None:
+    """SteamError when ``out`` holds a kit of another version (its index.json says so): building this version there
+    would replace its suites and keep its paper suite under this version's index (``--out`` the folder of kit v4,
+    ``conformance/v4``, left a v5 kit with v4's paper cases). A folder without a kit's readable index is built into."""
+    try:
+        version = read_json(out / "index.json").get("kit_version")
+    except (SteamError, AttributeError):
+        return
+    if version not in (None, KIT_VERSION):
+        raise SteamError(
+            f"{str(out)!r} holds the conformance kit v{version}: building v{KIT_VERSION} there would replace it; "
+            "give a new or empty folder"
+        )
+
+
 def build_kit(
     out: str | os.PathLike | None = None, *, paper: bool = False, data_dir: str | os.PathLike | None = None
 ) -> dict:
@@ -196,6 +211,7 @@ def build_kit(
             "with --out DIR (out= in Python), or build in a clone of the repository"
         )
     out = Path(SHIPPED if out is None else out)
+    _refuse_another_version(out)
     out.mkdir(parents=True, exist_ok=True)
     for suite in DATA_FREE:
         _write_suite(out, suite, _suite_records(suite))
