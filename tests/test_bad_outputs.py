@@ -199,6 +199,21 @@ def test_an_output_onto_the_file_stdout_goes_to_is_refused(tmp_path):
 
 
 @pytest.mark.parametrize(
+    ("argv", "target", "option"),
+    [(["fidelity", "--plot", "{d}/f.png"], "f.png", "--plot"), (["reproduce", "--out", "{d}"], "results.md", "--out")],
+)
+def test_fidelity_and_reproduce_refuse_to_write_over_the_file_stdout_goes_to(tmp_path, argv, target, option):
+    """``fidelity --plot f.png > f.png`` (and ``reproduce --out d > d/results.md``) replaced the printed figures with
+    the figure after the run; refused first, as run, batch and consistency refuse it (in seconds: the runs take
+    minutes)."""
+    with open(tmp_path / target, "wb") as stdout:
+        args = [a.format(d=tmp_path) for a in argv]
+        proc = run_module(*args, "--no-progress", stdout=stdout, stderr=subprocess.PIPE, timeout=60)
+    assert proc.returncode == 2 and proc.stderr.count("\n") == 1, proc.stderr
+    assert f"{option}: '{tmp_path / target}' is the file stdout is redirected to" in proc.stderr, proc.stderr
+
+
+@pytest.mark.parametrize(
     ("argv", "needle"),
     [
         (["--save-trajectory", "{d}/a.png", "--plot", "{d}/a.png"], "both name"),

@@ -15,7 +15,7 @@ from ..paper.presets import PaperSetup
 from ..plot.figures import plot_fidelity
 from . import explain
 from .args import preset_for
-from .paths import check_output, write_plot
+from .paths import check_output, check_outputs_apart, write_plot
 from .streams import json_line
 
 __all__ = ["run"]
@@ -25,6 +25,7 @@ def run(args: argparse.Namespace) -> int:
     """BTGP/1 with the paper's set-up against the authors' saved run of each data set."""
 
     check_output(args.plot, ".png", "--plot")
+    check_outputs_apart({"--plot": args.plot})  # not the file stdout or stderr goes to
     distances = {}
     for name in AUTHORS_RUNS if args.dataset == "all" else [args.dataset]:
         find_authors_file(name, args.data_dir)  # before loading: gtsam's Plaza files are not the authors' data

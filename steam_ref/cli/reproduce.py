@@ -8,7 +8,7 @@ import os
 from ..errors import SteamError
 from ..paper.experiments import REPRODUCED_FILES, reproduce
 from . import explain
-from .paths import check_out_folder, check_output
+from .paths import check_out_folder, check_output, check_outputs_apart
 
 __all__ = ["run"]
 
@@ -16,8 +16,9 @@ __all__ = ["run"]
 def run(args: argparse.Namespace) -> int:
     """Run the experiments, write the plots and the table, print the table."""
     check_out_folder(args.out, "--out")
-    for name in REPRODUCED_FILES if os.path.isdir(args.out) else ():  # a named pipe there would block, a folder
-        check_output(os.path.join(args.out, name), os.path.splitext(name)[1], "--out")  # fail hours later
+    for name in REPRODUCED_FILES if os.path.isdir(args.out) else ():  # a folder there would fail the write after
+        check_output(os.path.join(args.out, name), os.path.splitext(name)[1], "--out")  # the runs
+        check_outputs_apart({"--out": os.path.join(args.out, name)})  # nor the file stdout goes to
     written: list[str] = []  # each file, and whether it replaced one that was there
     try:
         shown = explain.progress_wanted(args.progress, False)
