@@ -128,6 +128,10 @@ BAD = {
     # --turn by the one rule for numbers, as every other number (it was float(): 0.1_5 ran as 0.15)
     "turn-underscore": (["consistency", "--prior", "se2", "--turn", "0.1_5", "--seeds", "1"], "--turn"),
     "turn-blank": (["consistency", "--prior", "se2", "--turn", " 0.5", "--seeds", "1"], "--turn"),
+    # an option given twice with two values: argparse kept the last, the first dropped in silence
+    "lag-twice": (["run", "--lag", "1", "--lag", "2"], "argument --lag: given twice, 1.0 and 2.0: give it once"),
+    "dataset-twice": (["batch", "--dataset", "plaza", "--dataset", "synthetic"], "--dataset: given twice"),
+    "out-twice": (["reproduce", "--out", "{root}/a", "--out", "{root}/b"], "--out: given twice"),
     "newline-in-value": (["run", "--every", "1", "x\ny"], "x\\ny"),
     "subcommand": (["frobnicate"], "frobnicate"),
 }
@@ -203,3 +207,13 @@ def test_the_module_as_a_user_runs_it(places, argv, needle) -> None:
     proc = run_module(*argv, timeout=120)
     assert proc.returncode == 2 and proc.stdout == ""
     assert len(proc.stderr.splitlines()) == 1 and needle in proc.stderr and "Traceback" not in proc.stderr
+
+
+def test_an_option_given_twice_with_one_value_is_taken_and_each_parse_is_its_own() -> None:
+    """The same value twice loses nothing: taken. A parser parses again from nothing: a value of an earlier parse is
+    not a first value of the next."""
+    from steam_ref.cli.commands import build_parser
+
+    parser = build_parser("run")
+    assert parser.parse_args(["run", "--lag", "1", "--lag", "1"]).lag == 1.0
+    assert parser.parse_args(["run", "--lag", "2"]).lag == 2.0

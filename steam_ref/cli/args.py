@@ -25,6 +25,7 @@ from ..choices import DECIMAL, MOTION_PRIOR_NAMES, PRESETS, RESIDUALS, parse_dec
 from ..datasets.registry import DATASETS, loadable
 from ..datasets.search import data_dir_help, dataset_path
 from ..errors import SteamError
+from .once import StoreOnce
 
 __all__ = [
     "MAX_JOBS",
@@ -93,6 +94,8 @@ class Parser(argparse.ArgumentParser):
         kwargs.setdefault("formatter_class", argparse.RawDescriptionHelpFormatter)  # an example stays one line
         super().__init__(*args, **kwargs)
         self._negative_number_matcher = re.compile(f"^-(?:{DECIMAL.pattern.removeprefix('[+-]?')})$")
+        for name in (None, "store"):  # an option given twice with two values is refused (cli/once.py)
+            self.register("action", name, StoreOnce)
 
     def add_subparsers(self, **kwargs: Any) -> Any:
         """argparse's subcommands, each ``add_parser`` given :func:`_command_help`'s keywords."""
@@ -188,24 +191,19 @@ MAX_SEEDS = 100_000  # Monte Carlo runs (the default is 200): each is a whole ta
 
 steps_count = number(int, 0, strict=True, upper=MAX_STEPS, why="the generated task is held in memory")
 
-
 landmarks_count = number(int, 0, strict=True, upper=MAX_LANDMARKS, why="the generated task is held in memory")
 
-
 seeds_count = number(int, 0, strict=True, upper=MAX_SEEDS, why="each run is a whole task")
-
 
 jobs_count = number(int, 0, strict=True, upper=MAX_JOBS, why="each is a worker process of its own")
 
 
 positive_int = number(int, 0, strict=True)
 
-
 non_negative_int = number(int, 0, strict=False)
 
 
 positive_float = number(float, 0, strict=True)
-
 
 non_negative_float = number(float, 0, strict=False)
 
