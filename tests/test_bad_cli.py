@@ -132,6 +132,14 @@ BAD = {
     "lag-twice": (["run", "--lag", "1", "--lag", "2"], "argument --lag: given twice, 1.0 and 2.0: give it once"),
     "dataset-twice": (["batch", "--dataset", "plaza", "--dataset", "synthetic"], "--dataset: given twice"),
     "out-twice": (["reproduce", "--out", "{root}/a", "--out", "{root}/b"], "--out: given twice"),
+    "switch-both-ways": (
+        ["run", "--interpolate", "--no-interpolate"],
+        "given twice, --interpolate and --no-interpolate",
+    ),
+    "progress-both-ways": (
+        ["conformance", "selftest", "--no-progress", "--progress"],
+        "--progress/--no-progress: given",
+    ),
     "newline-in-value": (["run", "--every", "1", "x\ny"], "x\\ny"),
     "subcommand": (["frobnicate"], "frobnicate"),
 }
@@ -217,3 +225,5 @@ def test_an_option_given_twice_with_one_value_is_taken_and_each_parse_is_its_own
     parser = build_parser("run")
     assert parser.parse_args(["run", "--lag", "1", "--lag", "1"]).lag == 1.0
     assert parser.parse_args(["run", "--lag", "2"]).lag == 2.0
+    assert parser.parse_args(["run", "--no-progress", "--no-progress"]).progress is False
+    assert parser.parse_args(["run", "--progress"]).progress is True

@@ -25,7 +25,7 @@ from ..choices import DECIMAL, MOTION_PRIOR_NAMES, PRESETS, RESIDUALS, parse_dec
 from ..datasets.registry import DATASETS, loadable
 from ..datasets.search import data_dir_help, dataset_path
 from ..errors import SteamError
-from .once import StoreOnce
+from .once import StoreOnce, SwitchOnce
 
 __all__ = [
     "MAX_JOBS",
@@ -320,7 +320,7 @@ def add_progress(parser: argparse.ArgumentParser) -> None:
     """``--progress`` / ``--no-progress`` (steam_ref.paper.progress.wanted reads it)."""
     parser.add_argument(
         "--progress",
-        action=argparse.BooleanOptionalAction,
+        action=SwitchOnce,
         default=None,
         help="a progress bar on stderr (default: on when stderr is a terminal and without --json)",
     )

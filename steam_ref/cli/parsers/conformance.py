@@ -10,6 +10,7 @@ import argparse
 
 from ...choices import CONFORMANCE_CONVENTIONS, CONFORMANCE_SUITES
 from ..args import add_data_dir, path
+from ..once import SwitchOnce
 from ..paths import check_out_folder
 
 __all__ = ["add_parser", "check"]
@@ -89,7 +90,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
     add_data_dir(st, PAPER_FILES)  # the one --data-dir of every command (args.folder: an existing folder)
     st.add_argument(
         "--progress",
-        action=argparse.BooleanOptionalAction,
+        action=SwitchOnce,
         default=None,
         help="the paper suite's progress bars on stderr (default: on when stderr is a terminal)",
     )

@@ -38,6 +38,7 @@ from ..args import (
     scale,
     steps_count,
 )
+from ..once import SwitchOnce
 from ..paths import check_output, check_outputs_apart, check_trajectory_output
 
 __all__ = ["add_parser", "check", "outputs"]
@@ -70,7 +71,7 @@ def add_parser(sub: Subparsers) -> argparse.ArgumentParser:
     parser.add_argument("--skip", type=positive_int, default=1, help="time steps between estimated states")
     parser.add_argument(
         "--interpolate",
-        action=argparse.BooleanOptionalAction,
+        action=SwitchOnce,
         default=True,
         help="interpolate readings between states (Eq. 29) or drop them",
     )
