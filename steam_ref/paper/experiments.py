@@ -52,8 +52,6 @@ __all__ = [
 
 SKIPS = (1, 2, 3, 5, 10, 20)  # time-step differences between estimated states (Fig. 3/4, right)
 TIMING_RUNS = (("pb", 1), ("pb", 10), ("pbvr", 1), ("pbvr", 10), ("btgp", 1), ("btgp", 10))
-# what reproduce writes in its folder, each whole or not at all: the command checks every one before the runs (a
-# folder there would fail the write hours later, a dangling link would make a file where it points)
 REPRODUCED_FILES = ("runs.jsonl", "fig3.png", "fig3_trajectory.png", "fig4.png", "fig4_trajectory.png", "results.md")
 
 
