@@ -29,7 +29,7 @@ from ..datasets import LandmarkDataset, RangeDataset, load_range_dataset
 from ..errors import DataError
 from ..files import replace_file
 from ..linear.threads import limited
-from ..plot.figures import plot_interpolation_tradeoff, plot_timing, plot_trajectory
+from ..plot.figures import plot_timing_and_tradeoff, plot_trajectory
 from .fidelity import AUTHORS_RUNS, Fidelity, compare, load_authors_run
 from .online import RunResult, run_online
 from .options import StreamOptions
@@ -286,22 +286,10 @@ def _write(path: Path, write: Callable[[str], object], wrote: Callable[[Path, bo
         wrote(path, replaced)
 
 
-def _draw_experiment(exp: Experiment, figure: str, coverage: str, path: str) -> None:
-    """Fig. 3/4 of one data set: time per step (left, upper) and cumulative time (left, lower), as the paper's
-    left graphs; RMSE and total time against the skip (right)."""
-    from matplotlib.figure import Figure
-
-    fig_ = Figure(figsize=(15, 7))
-    grid = fig_.add_gridspec(2, 3)
-    upper, lower = fig_.add_subplot(grid[0, 0]), fig_.add_subplot(grid[1, 0])
-    plot_timing(exp.timing, upper, per_step=True, title=f"{exp.name}: computation time per step")
-    upper.get_legend().remove()  # the runs in the same colours as the graph below, whose legend names them
-    plot_timing(exp.timing, lower, title=f"{exp.name}: cumulative computation time")
-    right = [fig_.add_subplot(grid[:, 1]), fig_.add_subplot(grid[:, 2])]
-    plot_interpolation_tradeoff(exp.with_interp, exp.without_interp, right, name=exp.name)
-    fig_.suptitle(f"{figure} of the paper reproduced: {exp.name}{coverage}")
-    fig_.tight_layout()
-    fig_.savefig(path, dpi=110, format="png")
+def _draw_timing(exp: Experiment, figure: str, coverage: str, path: str) -> None:
+    """Fig. 3/4 of one data set (:func:`~steam_ref.plot.figures.plot_timing_and_tradeoff`)."""
+    title = f"{figure} of the paper reproduced: {exp.name}{coverage}"
+    plot_timing_and_tradeoff(exp.timing, exp.with_interp, exp.without_interp, name=exp.name, title=title, path=path)
 
 
 def _draw_trajectory(exp: Experiment, figure: str, coverage: str, path: str) -> None:
@@ -395,7 +383,7 @@ def reproduce(
         n_data = len(data.dead_reckoning)
         covered = len(exp.with_interp[1].trajectory)
         coverage = f" (first {covered} of {n_data} poses)" if covered < n_data else ""
-        _write(out / f"{fig}.png", functools.partial(_draw_experiment, exp, figure, coverage), wrote)
+        _write(out / f"{fig}.png", functools.partial(_draw_timing, exp, figure, coverage), wrote)
         _write(out / f"{fig}_trajectory.png", functools.partial(_draw_trajectory, exp, path_figure, coverage), wrote)
         experiments.append(exp)
     _write(out / "runs.jsonl", lambda name: Path(name).write_text("".join(log)), wrote)

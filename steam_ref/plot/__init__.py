@@ -19,6 +19,7 @@ from .figures import (
     plot_sparsity,
     plot_state_samples,
     plot_timing,
+    plot_timing_and_tradeoff,
     plot_trajectory,
 )
 from .tree import draw_spy, draw_tree, draw_update, tree_layout
@@ -30,6 +31,7 @@ __all__ = [
     "plot_interpolation",
     "plot_trajectory",
     "plot_timing",
+    "plot_timing_and_tradeoff",
     "plot_interpolation_tradeoff",
     "plot_fidelity",
     "tree_layout",

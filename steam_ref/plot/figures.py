@@ -9,7 +9,7 @@ them; with ``path`` it also saves the figure there (PNG by the suffix) and close
 - the GP prior and its interpolation: :func:`plot_state_samples`, :func:`plot_matrix`,
   :func:`plot_sparsity`, :func:`plot_interpolation`;
 - a run: :func:`plot_trajectory` (top view, as Fig. 2), :func:`plot_timing` (Fig. 3/4, left),
-  :func:`plot_interpolation_tradeoff` (Fig. 3/4, right), :func:`plot_fidelity` (distance to the
+  :func:`plot_interpolation_tradeoff` (Fig. 3/4, right), :func:`plot_timing_and_tradeoff` (Fig. 3/4 whole), :func:`plot_fidelity` (distance to the
   authors' estimate, pose by pose);
 - the Bayes tree: :func:`tree_layout`, :func:`draw_tree`, :func:`draw_update` (an update as
   before/after [K12 Fig. 3-4]), :func:`draw_spy` (its R factor), in :mod:`steam_ref.plot.tree`.
@@ -38,6 +38,7 @@ __all__ = [
     "plot_interpolation",
     "plot_trajectory",
     "plot_timing",
+    "plot_timing_and_tradeoff",
     "plot_interpolation_tradeoff",
     "plot_fidelity",
     "plot_anees",
@@ -228,6 +229,41 @@ def plot_timing(
         ax.set_title(title)
     ax.legend(fontsize=8)
     return _save(ax, path)
+
+
+def plot_timing_and_tradeoff(
+    timing: Mapping[str, Any],
+    with_interpolation: Mapping[int, Any],
+    without_interpolation: Mapping[int, Any] | None = None,
+    *,
+    name: str = "",
+    title: str | None = None,
+    path: str | None = None,
+) -> Any:
+    """Fig. 3/4 whole, on a new figure: the paper's two left graphs, each step's own time above and the cumulative
+    time below (:func:`plot_timing`, one legend for both: the same runs in the same colours), and the RMSE and
+    total time against the skip on the right (:func:`plot_interpolation_tradeoff`). ``title`` heads the figure.
+    Returns the four axes (upper, lower, RMSE, total time)."""
+    if path is not None:  # only saving: a bare Figure, no GUI backend needed
+        from matplotlib.figure import Figure
+
+        fig = Figure(figsize=(15, 7))
+    else:
+        import matplotlib.pyplot as plt
+
+        fig = plt.figure(figsize=(15, 7))
+    grid = fig.add_gridspec(2, 3)
+    upper, lower = fig.add_subplot(grid[0, 0]), fig.add_subplot(grid[1, 0])
+    plot_timing(timing, upper, per_step=True, title=f"{name}: computation time per step")
+    if (legend := upper.get_legend()) is not None:
+        legend.remove()  # the graph below names the same runs
+    plot_timing(timing, lower, title=f"{name}: cumulative computation time")
+    right = [fig.add_subplot(grid[:, 1]), fig.add_subplot(grid[:, 2])]
+    plot_interpolation_tradeoff(with_interpolation, without_interpolation, right, name=name)
+    if title:
+        fig.suptitle(title)
+    fig.tight_layout()
+    return _save(np.array([upper, lower, *right], dtype=object), path)
 
 
 def plot_interpolation_tradeoff(
