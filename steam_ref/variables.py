@@ -28,6 +28,7 @@ __all__ = [
     "INDEX_BITS",
     "Values",
     "check_key",
+    "check_symbol",
     "check_roles",
     "key_list",
     "as_values",
@@ -51,15 +52,21 @@ class Key(_KeyFields):
     def __new__(cls, symbol: str, index: int) -> Key:
         """The rules of :func:`X` and :func:`L` for any symbol: one character of 8 bits (GTSAM's ``Symbol.chr()``)
         and an integer index of magnitude below 2⁵⁶ (:data:`INDEX_BITS`)."""
-        if not isinstance(symbol, str) or len(symbol) != 1 or ord(symbol) > 255:
-            raise SteamError(f"a key's symbol is one character of 8 bits (GTSAM's Symbol.chr()), got {symbol!r:.40}")
-        return super().__new__(cls, symbol, _index("Key", index))
+        return super().__new__(cls, check_symbol(symbol), _index("Key", index))
 
     def __repr__(self) -> str:
         return f"{self.symbol}{self.index}"
 
     def __str__(self) -> str:
         return f"{self.symbol}{self.index}"
+
+
+def check_symbol(symbol: object, what: str = "a key's symbol") -> str:
+    """``symbol`` if a :class:`Key` can have it: one character of 8 bits (GTSAM's ``Symbol.chr()``); SteamError
+    naming ``what`` and the value otherwise. What a key, and every table keyed by a key's symbol, takes."""
+    if not isinstance(symbol, str) or len(symbol) != 1 or ord(symbol) > 255:
+        raise SteamError(f"{what} is one character of 8 bits (GTSAM's Symbol.chr()), got {symbol!r:.40}")
+    return symbol
 
 
 # GTSAM's Symbol packs a key into 64 bits: its character in the top 8, its index in the low 56

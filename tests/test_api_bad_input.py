@@ -840,13 +840,25 @@ CASES = [
         "ISAM2Params blocks keyed by an int (never matched)",
         lambda: sr.ISAM2Params(relinearize_blocks={3: (3, 3)}),
         SteamError,
-        r"keyed by a key's symbol.*got the key 3",
+        r"a key of relinearize_blocks \(a key's symbol.*got 3$",
+    ),
+    (
+        "ISAM2Params thresholds keyed by a symbol no key can have (never matched)",
+        lambda: sr.ISAM2Params(relinearize_threshold={"x": 0.1, "xx": 0.5}),
+        SteamError,
+        r"a key of relinearize_threshold \(a key's symbol.*\) is one character of 8 bits .*got 'xx'",
+    ),
+    (
+        "ISAM2Params blocks keyed by a symbol no key can have (never matched)",
+        lambda: sr.ISAM2Params(relinearize_blocks={"pose": (3, 3)}),
+        SteamError,
+        r"a key of relinearize_blocks \(a key's symbol.*\) is one character of 8 bits .*got 'pose'",
     ),
     (
         "ISAM2Params thresholds keyed by an int (never matched)",
         lambda: sr.ISAM2Params(relinearize_threshold={3: 0.1}),
         SteamError,
-        r"got the key 3",
+        r"a key of relinearize_threshold \(a key's symbol.*got 3$",
     ),
     # --- trajectory, results, dead_reckoning -----------------------------------------------------------------
     (

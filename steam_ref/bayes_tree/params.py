@@ -18,13 +18,14 @@ from ..arguments import integer, is_integer, number, replace_fields
 from ..choices import GTSAM_RELINEARIZE_SKIP, GTSAM_RELINEARIZE_THRESHOLD
 from ..errors import ShapeError, SteamError
 from ..linear.amalgamation import zero_fraction
+from ..variables import check_symbol
 
 __all__ = ["ISAM2Params"]
 
 
 def _blocks(symbol: str, sizes: object) -> tuple[int, ...]:
     """Block sizes as a tuple of positive ints; SteamError naming them otherwise."""
-    _symbol("relinearize_blocks", symbol)
+    check_symbol(symbol, "a key of relinearize_blocks (a key's symbol, such as 'x' or 'l')")
     bad = SteamError(f"relinearize_blocks[{symbol!r}] must be positive integer block sizes, got {sizes!r}")
     if isinstance(sizes, (str, bytes)) or not isinstance(sizes, (tuple, list, np.ndarray)) or not len(sizes):
         raise bad
@@ -32,13 +33,6 @@ def _blocks(symbol: str, sizes: object) -> tuple[int, ...]:
         return tuple(integer("a block size", n, minimum=1) for n in sizes)
     except SteamError:
         raise bad from None
-
-
-def _symbol(field: str, symbol: object) -> str:
-    """A key's symbol ('x', 'l'): a string, else the entry would never match."""
-    if not isinstance(symbol, str):
-        raise SteamError(f"{field} is keyed by a key's symbol, a string such as 'x' or 'l'; got the key {symbol!r}")
-    return symbol
 
 
 def _threshold(value: object, name: str) -> float:
@@ -77,7 +71,9 @@ class ISAM2Params:
         t = self.relinearize_threshold
         if isinstance(t, Mapping):
             t = {
-                _symbol("relinearize_threshold", symbol): _threshold(v, f"relinearize_threshold[{symbol!r}]")
+                check_symbol(symbol, "a key of relinearize_threshold (a key's symbol, such as 'x' or 'l')"): _threshold(
+                    v, f"relinearize_threshold[{symbol!r}]"
+                )
                 for symbol, v in t.items()
             }
         else:
