@@ -414,6 +414,11 @@ def test_run_says_where_each_file_went(capsys, small_mat, tmp_path):
     code, out, err = _run_small(capsys, path, *argv, "--json")
     assert code == 0, err
     assert len(out.strip().splitlines()) == 1
+    code, out, err = _run_small(capsys, path, *argv)  # every file there now: each line says it replaced one
+    assert code == 0, err
+    lines = out.splitlines()
+    for what, file in zip(("estimates", "trajectory", "tree dot"), files.values(), strict=True):
+        assert f"{what} written to {file.resolve()} (replaced the file there)" in lines
 
 
 @pytest.mark.parametrize("command", ["data", "conformance", "homework"])

@@ -197,14 +197,17 @@ def check_outputs_not_inputs(outputs: dict[str, str | None], inputs: list[Path])
 def write_output(path: str, option: str, write: Callable[[str], object]) -> str:
     """Write an output ``path`` checked by :func:`check_output` by ``write(name)``, through
     :func:`~steam_ref.files.replace_file` (a new file beside its real target replaces it in one step). Returns the
-    line saying where it went (``--save-estimates``: "estimates written to /abs/path"), for the text output.
+    line saying where it went (``--save-estimates``: "estimates written to /abs/path", and "(replaced the file
+    there)" when one was), for the text output.
 
     A failure (a full disk, ...) leaves what was at ``path`` as it was and is a SteamError naming the
     option and the path. A file that was there keeps its permission bits.
     """
     refuse_dangling(path, option)  # checked before the run; a link made dangling since is refused too
+    replaced = " (replaced the file there)" if os.path.exists(path) else ""
     replace_file(path, write, option)
-    return f"\n{option.removeprefix('--').removeprefix('save-').replace('-', ' ')} written to {os.path.abspath(path)}"
+    what = option.removeprefix("--").removeprefix("save-").replace("-", " ")
+    return f"\n{what} written to {os.path.abspath(path)}{replaced}"
 
 
 def check_out_folder(path: str, option: str) -> None:
