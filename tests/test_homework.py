@@ -445,6 +445,36 @@ def test_an_answer_that_rebinds_a_name_the_marking_reads_scores_0_and_the_next_e
         assert not re.search(r"\d", message), message  # what is wrong, never a value
 
 
+
+def test_an_answer_that_sets_a_modules_function_the_marking_calls_scores_0_and_it_is_put_back(tmp_path, capsys):
+    """An answer could set an attribute of a module the marking checks call (``np.allclose = lambda *a, **k:
+    True``, ``builtins.abs = ...``) instead of rebinding a name: the guard kept only names, so the patch stood for the
+    rest of the run and every later marking check passed, a wrong cube (x², 4 at -2 where x³ is -8) scoring full
+    marks. Now the answer that sets it scores 0 naming it, and the lesson's function is put back for the checks
+    after it."""
+    optional_import("nbclient", "notebooks")
+    optional_import("ipykernel", "notebooks")
+    (tmp_path / "teacher").mkdir()
+    (tmp_path / "teacher" / "tiny.ipynb").write_text(json.dumps(_teacher_reading_the_lesson()))
+    assert main(["homework", "handout", str(tmp_path / "teacher"), "--out", str(tmp_path / "handout")]) == 0
+    capsys.readouterr()
+    wrong_cube = "def cube(x):\n    return x * x"  # x² is x³ at 0 (the check) and wrong at -2 (the marking check)
+    submissions = {
+        "patches-numpy": {"s1": "import numpy\nnumpy.allclose = lambda *a, **k: True\nsquare = 9", "s2": wrong_cube},
+        "patches-a-builtin": {"s1": "import builtins\nbuiltins.abs = lambda x: 0\nsquare = 10", "s2": wrong_cube},
+    }
+    for name, answers in submissions.items():
+        _submit(tmp_path, name, answers)
+    argv = ["--source", str(tmp_path / "teacher"), "--timeout", "60", "--jobs", "2", "--json"]
+    assert main(["homework", "mark", str(tmp_path / "submitted"), *argv]) == 0
+    marks = {m["submission"].split("/")[0]: m for m in json.loads(capsys.readouterr().out)["submissions"]}
+    got = {name: [(e["score"], e["status"]) for e in m["exercises"]] for name, m in marks.items()}
+    assert got == {name: [(0, "failed"), (0, "failed")] for name in submissions}, got
+    for name, patched in (("patches-numpy", "np.allclose"), ("patches-a-builtin", "builtins.abs")):
+        first, second = (e["message"] for e in marks[name]["exercises"])
+        assert f"the answer rebinds `{patched}`" in first, (name, first)
+        assert "cube is wrong" in second, (name, second)  # the lesson's np.allclose back for the cube's check
+
 # Each case: the kind an exercise asks for, the right value, an answer holding it in some type, and what the marking
 # says of that type (None: accepted). The marking check reads any of them as the right numbers (``close`` below), so
 # before the kinds were checked every one scored its point.

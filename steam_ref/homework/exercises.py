@@ -75,7 +75,7 @@ class Exercise:
     solution_id: str
     check_id: str
     names: tuple[str, ...]  # what the solution defines and the checks read: what the answer must define
-    reads: tuple[str, ...] = ()  # every name the checks read, sorted: the answer's and the lesson's
+    reads: tuple[str, ...] = ()  # every name the checks read, and attribute chain (np.allclose) off one, sorted
     kinds: tuple[tuple[str, str], ...] = ()  # each of names with its kind (.kinds.KINDS), as the solution declares
 
     @property
@@ -193,7 +193,8 @@ def _bound(body: list[ast.stmt]) -> list[str]:
 
 def _read(code: str) -> set[str]:
     """Names a cell reads that it does not bind itself (nor as a loop or comprehension variable, a function's
-    parameter, a function or class it defines, a name it imports)."""
+    parameter, a function or class it defines, a name it imports), and each attribute chain it reads off one
+    (``np.allclose``, ``np.linalg.slogdet``)."""
     tree = ast.parse(code)
     nodes = [n for n in ast.walk(tree) if isinstance(n, ast.Name)]
     bound = {n.id for n in nodes if isinstance(n.ctx, ast.Store)} | {
@@ -204,7 +205,20 @@ def _read(code: str) -> set[str]:
             bound.add(node.name)
         elif isinstance(node, (ast.Import, ast.ImportFrom)):
             bound |= {(a.asname or a.name).split(".")[0] for a in node.names}
-    return {n.id for n in nodes if isinstance(n.ctx, ast.Load)} - bound
+    read = {n.id for n in nodes if isinstance(n.ctx, ast.Load)} - bound
+    chains = {_chain(a) for a in ast.walk(tree) if isinstance(a, ast.Attribute) and isinstance(a.ctx, ast.Load)}
+    return read | {c for c in chains if c and c.split(".")[0] in read}
+
+
+def _chain(node: ast.expr) -> str | None:
+    """``np.linalg.slogdet`` for that attribute read off a name, None for one read off anything else (a call's
+    result, a subscript)."""
+    if isinstance(node, ast.Name):
+        return node.id
+    if isinstance(node, ast.Attribute):
+        root = _chain(node.value)
+        return None if root is None else f"{root}.{node.attr}"
+    return None
 
 
 def _reads(nb: dict, checks: list[int]) -> set[str]:

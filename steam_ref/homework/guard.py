@@ -4,8 +4,10 @@ A marking check compares an answer with the lesson's own names (tutorial 09's ``
 that rebound one would be compared with itself, and a wrong answer with its own wrong helper would pass. The marking
 run (:mod:`.marking`) puts a cell of KEEP before each answer and one of PUT_BACK after it: PUT_BACK puts back what the
 answer rebound, changed in place (an array) or shadowed (a builtin the checks call) and fails naming it, so that
-exercise scores 0 and its checks and the exercises after it see the lesson's values. An equal value bound again
-(``n = 24`` where the lesson has 24, ``import numpy as np``) is no change.
+exercise scores 0 and its checks and the exercises after it see the lesson's values. The same holds for a module's
+attribute the checks read (``np.allclose = lambda *a, **k: True`` would pass every later check) and for a builtin
+set on the builtins module. An equal value bound again (``n = 24`` where the lesson has 24, ``import numpy as np``)
+is no change.
 """
 
 from __future__ import annotations
@@ -20,14 +22,25 @@ KEPT = "__steam_ref_kept__"
 KEEP = """\
 def __steam_ref_keep__(names, scope):
     import builtins
+    import types
     kept = {{}}
     for name in names:
-        if name in scope:
+        root, *path = name.split(".")
+        if path:  # an attribute chain: each link a module holds (np.allclose, np.linalg), as (module, attribute, value)
+            owner = scope.get(root)
+            for i, attribute in enumerate(path):
+                if not isinstance(owner, types.ModuleType) or not hasattr(owner, attribute):
+                    break
+                value = getattr(owner, attribute)
+                kept[".".join([root, *path[: i + 1]])] = (owner, attribute, value)
+                owner = value
+        elif name in scope:
             value = scope[name]
             saved = value.copy() if type(value).__name__ == "ndarray" and hasattr(value, "copy") else None
             kept[name] = (value, saved)
         elif hasattr(builtins, name):
             kept[name] = None
+            kept["builtins." + name] = (builtins, name, getattr(builtins, name))
     return kept
 
 
@@ -43,6 +56,12 @@ def __steam_ref_put_back__(kept, scope):
     plain = (bool, int, float, complex, str, bytes, type(None)) + ((numpy.generic,) if numpy else ())
     changed = []
     for name, was in kept.items():
+        if "." in name:  # a module's attribute: the answer must not set it
+            owner, attribute, value = was
+            if getattr(owner, attribute, kept) is not value:
+                changed.append(name)
+                setattr(owner, attribute, value)
+            continue
         if was is None:  # a builtin: the answer must not shadow it
             if name in scope:
                 changed.append(name)
@@ -79,6 +98,6 @@ finally:
 
 def guarded(exercises: Sequence[Exercise]) -> tuple[str, ...]:
     """The lesson's names an answer must leave as they are: those any of a tutorial's ``exercises``' checks read, none
-    an answer's."""
+    an answer's, and the attribute chains the checks read off them (``np.allclose``)."""
     answers = {n for e in exercises for n in e.names}
-    return tuple(sorted({n for e in exercises for n in e.reads} - answers))
+    return tuple(sorted({n for e in exercises for n in e.reads if n.split(".")[0] not in answers}))
