@@ -445,7 +445,6 @@ def test_an_answer_that_rebinds_a_name_the_marking_reads_scores_0_and_the_next_e
         assert not re.search(r"\d", message), message  # what is wrong, never a value
 
 
-
 def test_an_answer_that_sets_a_modules_function_the_marking_calls_scores_0_and_it_is_put_back(tmp_path, capsys):
     """An answer could set an attribute of a module the marking checks call (``np.allclose = lambda *a, **k:
     True``, ``builtins.abs = ...``) instead of rebinding a name: the guard kept only names, so the patch stood for the
@@ -474,6 +473,7 @@ def test_an_answer_that_sets_a_modules_function_the_marking_calls_scores_0_and_i
         first, second = (e["message"] for e in marks[name]["exercises"])
         assert f"the answer rebinds `{patched}`" in first, (name, first)
         assert "cube is wrong" in second, (name, second)  # the lesson's np.allclose back for the cube's check
+
 
 # Each case: the kind an exercise asks for, the right value, an answer holding it in some type, and what the marking
 # says of that type (None: accepted). The marking check reads any of them as the right numbers (``close`` below), so
