@@ -761,3 +761,35 @@ def test_the_kind_check_cell_is_made_without_parsing_so_marking_threads_cannot_r
     scope = {"answer": 1 + 0j}
     with pytest.raises(AssertionError, match=r"`answer` is a complex, not a real number"):
         exec(compile(cell, "<check>", "exec"), scope)
+
+
+def test_mark_csv_writes_a_grade_book_row_per_submission_with_each_exercises_points(course, capsys):
+    """``--csv`` writes the marks as a grade book, one row per submission (its score and each exercise's points),
+    replacing a file there whole; the rows are what the exercises' own answers give: base squared and a cube."""
+    optional_import("nbclient", "notebooks")
+    optional_import("ipykernel", "notebooks")
+    cube = "cube = lambda x: x * x * x"
+    _submit(course, "ann", {"s1": "square = base * base", "s2": cube})
+    _submit(course, "bob", {"s1": "square = 2 * base", "s2": "cube = lambda x: x * x"})
+    book = course / "grades.csv"
+    book.write_text("last term's grades\n")
+    argv = ["--source", str(course / "teacher"), "--timeout", "60", "--csv", str(book)]
+    assert main(["homework", "mark", str(course / "submitted"), *argv]) == 0
+    assert f"grade book written to {book.resolve()}" in capsys.readouterr().out.splitlines()
+    import csv
+
+    rows = {r["submission"].split("/")[0]: r for r in csv.DictReader(book.read_text().splitlines())}
+    assert set(rows) == {"ann", "bob"}
+    got = {name: (r["score"], r["out_of"], r["exercise 1"], r["exercise 2"]) for name, r in rows.items()}
+    assert got == {"ann": ("2", "2", "1", "1"), "bob": ("0", "2", "0", "0")}
+    assert rows["ann"]["lost"] == "" and rows["bob"]["lost"].startswith("exercise 1 failed: marking check: square is")
+    assert "exercise 2 failed" in rows["bob"]["lost"] and rows["bob"]["tutorial"] == "tiny"
+
+
+@pytest.mark.parametrize(
+    ("csv_path", "says"),
+    [("grades.txt", "--csv expects a .csv file name"), ("missing/grades.csv", "folder '.*missing' does not exist")],
+)
+def test_mark_csv_that_cannot_be_written_is_refused_before_any_kernel_starts(course, capsys, csv_path, says):
+    assert main(["homework", "mark", str(course), "--csv", str(course / csv_path)]) == 2
+    assert re.search(says, capsys.readouterr().err)

@@ -2,12 +2,14 @@
 
     steam-ref homework handout NOTEBOOK_OR_FOLDER... [--out DIR]
     steam-ref homework mark SUBMISSION_OR_FOLDER... [--source DIR] [--timeout SECONDS] [--jobs N] [--json]
+                                                    [--csv FILE]
 
 ``handout`` writes each teacher's notebook (a folder: every notebook in it) to ``DIR`` (default ``handout``)
 with each solution an empty answer cell and no marking check (:func:`~steam_ref.homework.exercises.handout`).
 ``mark`` marks every notebook given or found under a folder against the teacher's notebooks in ``--source``
 (default ``tutorials``), ``--jobs`` at once: one line per submission with its score, one per exercise with its point and, if it
-lost it, why; ``--json`` prints the same as one JSON document. Exit code 0 once every submission is marked
+lost it, why; ``--json`` prints the same as one JSON document; ``--csv`` also writes a grade book, one row per
+submission (:func:`grade_book`). Exit code 0 once every submission is marked
 (a submission that cannot be read scores 0, saying why), 2 on bad input: a path that does not exist, a file
 given that is not a notebook (one over ``exercises.MAX_BYTES`` too, refused unread) or a handout of none of the
 teacher's notebooks, a folder with no notebook.
@@ -16,6 +18,8 @@ teacher's notebooks, a folder with no notebook.
 from __future__ import annotations
 
 import argparse
+import csv
+import io
 import json
 import sys
 from collections.abc import Callable
@@ -27,7 +31,7 @@ from ..files import replace_file
 from .exercises import handout, read_notebook
 from .marking import SubmissionMark, Tutorial, load_tutorials, mark_submission, requirements, tutorial_of
 
-__all__ = ["run"]
+__all__ = ["run", "grade_book"]
 
 
 def _notebooks(paths: list[str], what: str, clash: Callable[[Path, str], str]) -> list[tuple[Path, str]]:
@@ -125,6 +129,32 @@ def _print(marks: list[SubmissionMark]) -> None:
             print(f"  note: {note}")
 
 
+def grade_book(marks: list[SubmissionMark]) -> str:
+    """The marks as CSV, one row per submission, to paste into a grade book: ``submission``, ``tutorial``,
+    ``score``, ``out_of``, the points of each exercise (``exercise N``: empty where the submission's tutorial has no
+    exercise N), ``lost`` (each exercise that lost a point, its status and why, joined by " | ") and ``error`` (why
+    the submission could not be marked at all)."""
+    numbers = sorted({e.number for m in marks for e in m.exercises})
+    out = io.StringIO()
+    rows = csv.writer(out, lineterminator="\n")
+    rows.writerow(["submission", "tutorial", "score", "out_of", *(f"exercise {n}" for n in numbers), "lost", "error"])
+    for m in marks:
+        points = {e.number: e.score for e in m.exercises}
+        lost = " | ".join(f"exercise {e.number} {e.status}: {e.message}" for e in m.exercises if e.score < e.out_of)
+        rows.writerow(
+            [
+                m.submission,
+                m.tutorial or "",
+                m.score,
+                m.out_of,
+                *(points.get(n, "") for n in numbers),
+                lost,
+                m.error or "",
+            ]
+        )
+    return out.getvalue()
+
+
 def _mark(args: argparse.Namespace) -> int:
     requirements()
     tutorials = load_tutorials(Path(args.source))
@@ -143,10 +173,14 @@ def _mark(args: argparse.Namespace) -> int:
             marks.append(mark)
             if not args.json:
                 _print([mark])
+    if args.csv is not None:  # whole or not at all: an interrupt or a full disk leaves the file that was there
+        replace_file(Path(args.csv), _writer(grade_book(marks)), "--csv")
     if args.json:
         total = {"submissions": [m.as_dict() for m in marks]}
         json.dump(total, sys.stdout, ensure_ascii=False)
         print()
+    elif args.csv is not None:
+        print(f"grade book written to {Path(args.csv).resolve()}")
     return 0
 
 

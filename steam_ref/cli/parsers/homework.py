@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 
 from ..args import jobs_count, number, path
+from ..paths import check_output, check_outputs_apart
 
 __all__ = ["add_parser"]
 
@@ -57,4 +58,18 @@ def add_parser(sub) -> argparse.ArgumentParser:
         "--jobs", type=jobs_count, default=1, help="submissions marked at once, each in its own kernel (default 1)"
     )
     mark.add_argument("--json", action="store_true", help="print the marks as one JSON document")
+    mark.add_argument(
+        "--csv",
+        type=_path,
+        metavar="FILE.csv",
+        help="also write a grade book: one row per submission, its score and each exercise's points",
+    )
     return hw
+
+
+def check(args: argparse.Namespace) -> None:
+    """Before any kernel starts: ``mark --csv`` is a file that can be written (:func:`~steam_ref.cli.paths.check_output`),
+    not the file stdout goes to."""
+    if args.homework_command == "mark" and args.csv is not None:
+        check_output(args.csv, ".csv", "--csv")
+        check_outputs_apart({"--csv": args.csv})
