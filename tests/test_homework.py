@@ -396,6 +396,22 @@ def _teacher_reading_the_lesson() -> dict:
     return nb
 
 
+def _mark_the_lesson_readers(tmp_path: Path, capsys, submissions: dict[str, dict[str, str]]) -> dict[str, dict]:
+    """Hand out :func:`_teacher_reading_the_lesson`, submit each student's answers (by answer cell id), mark them all
+    and return each student's mark as ``--json`` gives it."""
+    optional_import("nbclient", "notebooks")
+    optional_import("ipykernel", "notebooks")
+    (tmp_path / "teacher").mkdir()
+    (tmp_path / "teacher" / "tiny.ipynb").write_text(json.dumps(_teacher_reading_the_lesson()))
+    assert main(["homework", "handout", str(tmp_path / "teacher"), "--out", str(tmp_path / "handout")]) == 0
+    capsys.readouterr()
+    for name, answers in submissions.items():
+        _submit(tmp_path, name, answers)
+    argv = ["--source", str(tmp_path / "teacher"), "--timeout", "60", "--jobs", "2", "--json"]
+    assert main(["homework", "mark", str(tmp_path / "submitted"), *argv]) == 0
+    return {m["submission"].split("/")[0]: m for m in json.loads(capsys.readouterr().out)["submissions"]}
+
+
 def test_an_answer_that_rebinds_a_name_the_marking_reads_scores_0_and_the_next_exercise_is_marked_fairly(
     tmp_path, capsys
 ):
@@ -406,12 +422,6 @@ def test_an_answer_that_rebinds_a_name_the_marking_reads_scores_0_and_the_next_e
     in place or shadowing the builtin ``abs`` passed a wrong answer too. Now each scores 0 naming the name, the
     lesson's value is put back, and exercise 2 is marked against it; an equal value bound again (``base = 3``, a
     second ``import numpy as np``) changes nothing."""
-    optional_import("nbclient", "notebooks")
-    optional_import("ipykernel", "notebooks")
-    (tmp_path / "teacher").mkdir()
-    (tmp_path / "teacher" / "tiny.ipynb").write_text(json.dumps(_teacher_reading_the_lesson()))
-    assert main(["homework", "handout", str(tmp_path / "teacher"), "--out", str(tmp_path / "handout")]) == 0
-    capsys.readouterr()
     cube = "import numpy as np\n\n\ndef cube(x):\n    return x**3"
     submissions = {
         "right": {"s1": "base = 3\nsquare = base * base", "s2": cube},
@@ -420,11 +430,7 @@ def test_an_answer_that_rebinds_a_name_the_marking_reads_scores_0_and_the_next_e
         "mutates": {"s1": "square = 9", "s2": "points[:] = 0.0\ncube = lambda x: x * x"},
         "shadows-a-builtin": {"s1": "abs = lambda x: 0\nsquare = 10", "s2": cube},
     }
-    for name, answers in submissions.items():
-        _submit(tmp_path, name, answers)
-    argv = ["--source", str(tmp_path / "teacher"), "--timeout", "60", "--jobs", "2", "--json"]
-    assert main(["homework", "mark", str(tmp_path / "submitted"), *argv]) == 0
-    marks = {m["submission"].split("/")[0]: m for m in json.loads(capsys.readouterr().out)["submissions"]}
+    marks = _mark_the_lesson_readers(tmp_path, capsys, submissions)
     got = {name: [(e["score"], e["status"]) for e in m["exercises"]] for name, m in marks.items()}
     assert got == {
         "right": [(1, "passed"), (1, "passed")],
@@ -451,22 +457,12 @@ def test_an_answer_that_sets_a_modules_function_the_marking_calls_scores_0_and_i
     rest of the run and every later marking check passed, a wrong cube (x², 4 at -2 where x³ is -8) scoring full
     marks. Now the answer that sets it scores 0 naming it, and the lesson's function is put back for the checks
     after it."""
-    optional_import("nbclient", "notebooks")
-    optional_import("ipykernel", "notebooks")
-    (tmp_path / "teacher").mkdir()
-    (tmp_path / "teacher" / "tiny.ipynb").write_text(json.dumps(_teacher_reading_the_lesson()))
-    assert main(["homework", "handout", str(tmp_path / "teacher"), "--out", str(tmp_path / "handout")]) == 0
-    capsys.readouterr()
     wrong_cube = "def cube(x):\n    return x * x"  # x² is x³ at 0 (the check) and wrong at -2 (the marking check)
     submissions = {
         "patches-numpy": {"s1": "import numpy\nnumpy.allclose = lambda *a, **k: True\nsquare = 9", "s2": wrong_cube},
         "patches-a-builtin": {"s1": "import builtins\nbuiltins.abs = lambda x: 0\nsquare = 10", "s2": wrong_cube},
     }
-    for name, answers in submissions.items():
-        _submit(tmp_path, name, answers)
-    argv = ["--source", str(tmp_path / "teacher"), "--timeout", "60", "--jobs", "2", "--json"]
-    assert main(["homework", "mark", str(tmp_path / "submitted"), *argv]) == 0
-    marks = {m["submission"].split("/")[0]: m for m in json.loads(capsys.readouterr().out)["submissions"]}
+    marks = _mark_the_lesson_readers(tmp_path, capsys, submissions)
     got = {name: [(e["score"], e["status"]) for e in m["exercises"]] for name, m in marks.items()}
     assert got == {name: [(0, "failed"), (0, "failed")] for name in submissions}, got
     for name, patched in (("patches-numpy", "np.allclose"), ("patches-a-builtin", "builtins.abs")):
