@@ -191,6 +191,9 @@ def test_one_scalar_elimination_is_eq_25(rng):
     r = (a_dagger @ np.hstack([A1, A2])).ravel()
     np.testing.assert_allclose(clique.S.ravel() / clique.R[0, 0], r, rtol=1e-12)
     np.testing.assert_allclose(clique.d / clique.R[0, 0], a_dagger @ b, rtol=1e-12)
+    g, G = clique.solved  # the solved form back-substitution uses: G is the paper's rᵀ, g its d
+    np.testing.assert_allclose(G.ravel(), r, rtol=1e-12)
+    np.testing.assert_allclose(g, a_dagger @ b, rtol=1e-12)
     # the factor left on the separator: ‖A_s s - b‖² minimized over θ, i.e. projected off a  [YIB Eq. 24]
     P = np.eye(5) - a @ a_dagger
     As, bs = np.hstack(clique.marginal.blocks), clique.marginal.rhs

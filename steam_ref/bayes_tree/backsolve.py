@@ -12,7 +12,7 @@
 Changes are judged per variable (the newest state moving must not mark the landmarks of its clique changed).
 Each new δ is checked against the variable's relinearization threshold β here, the only place δ changes: the
 candidates of the next fluid relinearization [K12 Alg. 5; YIB Alg. 1 step 7]. Both tests take max abs(·) of a
-variable's 2 to 6 numbers (and its change) in Python floats, at half the cost of NumPy's calls (the same when finite).
+variable's 2 to 18 numbers (and its change) in Python floats, at half the cost of NumPy's calls (the same when finite).
 (A variant solving a tree level at a time in stacked NumPy calls was removed, slower: docs/experiments.md.)
 """
 

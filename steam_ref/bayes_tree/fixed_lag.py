@@ -96,7 +96,7 @@ class FixedLagSmoother:
         return report
 
     def _leaving(self) -> KeysBelow | None:
-        """Once the window is full, the aging variables older than the newest, to eliminate first (GTSAM's order)."""
+        """To eliminate first: the timed keys older than the newest, once one was forgotten (before: plain iSAM2)."""
         return KeysBelow(self._times, self.newest) if self.n_marginalized else None
 
     def _forget_old(self, log: UndoLog, step: int, fresh: Iterable[Key], times: dict[Key, float]) -> None:

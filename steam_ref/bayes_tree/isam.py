@@ -243,7 +243,7 @@ class IncrementalSolver:
         # 4a. Remove the cliques of θ_aff and their ascendants; the orphans stay. [YIB step 2]
         with timer("remove"):
             removed, orphans = self._remove_top(theta_nf, theta_rl)
-        # 4b. Linearize the factors of the removed part that are new or touch θ_rl. [YIB step 3, Eq. 9]
+        # 4b. Linearize the factors of the removed part that are new or touch θ_rl. [YIB step 3, Eq. 9, 29]
         with timer("linearize"):
             fids = [j for c in removed.values() for j in c.factors] + new_ids
             n_linearized = self._relinearize(fids, set(theta_rl))

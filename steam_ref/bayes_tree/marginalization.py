@@ -18,9 +18,9 @@ tree, in the update's style:
    them is already the Bayes tree of p(Θ): the cliques above are conditionals of Θ only, computed with
    the cut cliques' cached factor f(S) [YIB Eq. 24], the marginal (Eq. 10.3). They are cut off; a child
    holding no variable of D hangs under the nearest clique left, with its own f(S); the Schur complement
-   of D's own factors (Eq. 10.1-10.2) becomes a :class:`MarginalFactor` of the clique that eliminates its
-   first variable, for that clique's next re-elimination. (When the cut cliques are whole subtrees it
-   equals their tops' f(S), which ``reuse_marginals`` takes as it is, with no elimination.)
+   of D's own factors (Eq. 10.1-10.2) becomes a :class:`MarginalFactor` of the clique that eliminates the
+   first-eliminated of its variables, for that clique's next re-elimination. (When the cut cliques are whole
+   subtrees it equals their tops' f(S), which ``reuse_marginals`` takes as it is, with no elimination.)
 3. *Otherwise: re-eliminate the affected part with D first.* (GTSAM's ``marginalizeLeaves`` needs D in
    leaves; an ordering with D first puts it there.) The cliques of D and their ascendants are removed,
    as an update removes its top [K12 Alg. 4]. D is eliminated first from the factors adjacent to it
@@ -65,7 +65,7 @@ class MarginalizationReport:
     new_cliques: tuple[int, ...]  # ids of the cliques made by re-elimination (none for leaves)
     dropped_factors: tuple[int, ...]  # ids of the factors that touched the keys, now gone
     marginal_factors: tuple[int, ...]  # ids of the MarginalFactors added on the separators
-    estimates: dict[Key, NDArray]  # each key's estimate θ̄ + δ at the moment it was marginalized
+    estimates: dict[Key, NDArray]  # each key's estimate θ̄ ⊕ δ at the moment it was marginalized
     conditionals: tuple[ForgottenConditional, ...] = ()  # P(v | S) of each key, if asked for (``keep_conditionals``)
 
 
@@ -150,7 +150,7 @@ def _marginalize(
     """Steps 1-3 of the module docstring, inside a transaction; ``keys`` in their order (a set's is PYTHONHASHSEED's)."""
     tree, drop = state.tree, set(keys)
     whole = cuttable(tree, drop) if reuse else []
-    whole = whole if sum(len(tree.cliques[c].frontals) for c in whole) == len(drop) else []  # all of D, or the rest
+    whole = whole if sum(len(tree.cliques[c].frontals) for c in whole) == len(drop) else []  # only if they are all of D
     cids = whole or list(dict.fromkeys(c for v in keys for c in tree.cliques_involving(v)))  # step 1
     dropped = [j for c in cids for j in tree.cliques[c].factors if not drop.isdisjoint(state.factors[j].keys)]
     inside = set(cids)
@@ -162,7 +162,7 @@ def _marginalize(
     else:
         adjacent = [state.cached(j) for j in dropped]
         variables = list(dict.fromkeys(k for f in adjacent for k in f.keys))
-        last = [k for k in variables if k not in drop]  # D first, the rest last: one variable needs no ordering (/1)
+        last = [k for k in variables if k not in drop]  # D first, the rest last: a lone key is first with no ordering
         order = keys if len(keys) == 1 else min_degree_keys(variables, state.dims, [f.keys for f in adjacent], last)
         order_drop = order[: len(drop)]
         conditionals: list[Clique] | None = [] if keep else None

@@ -43,7 +43,7 @@ class Conditional(Protocol):
     @property
     def frontals(self) -> tuple[Key, ...]: ...  # F, in elimination order
     @property
-    def separator(self) -> tuple[Key, ...]: ...  # S, in elimination order
+    def separator(self) -> tuple[Key, ...]: ...  # S, in the order of the elimination that made it
     @property
     def frontal_dims(self) -> tuple[int, ...]: ...  # size of each frontal variable
     @property
@@ -54,7 +54,7 @@ class Conditional(Protocol):
     def S(self) -> NDArray: ...  # (n_f, n_s)
 
 
-RANK_TOLERANCE = 1e-12  # a pivot |Rᵢᵢ| below this times the largest |entry| means a free direction
+RANK_TOLERANCE = 1e-12  # a pivot abs(Rᵢᵢ) ≤ this times max(1, largest abs entry of [A | b]) means a free direction
 _below_diagonal = functools.cache(functools.partial(np.tri, k=-1, dtype=bool))  # (rows, cols): np.triu's mask
 _largest = np.maximum.reduce  # the ufunc itself: ndarray.max's Python wrapper costs more than the reduction
 
@@ -64,7 +64,7 @@ class Clique:
     """P(F | S) ∝ exp(-½ ‖R δ_F + S δ_S - d‖²), and the factor on S its elimination left.  [YIB Eq. 25]"""
 
     frontals: tuple[Key, ...]  # F, eliminated here, in elimination order
-    separator: tuple[Key, ...]  # S, shared with the parent clique, in elimination order
+    separator: tuple[Key, ...]  # S, shared with the parent, in its elimination's order (an orphan keeps its own)
     frontal_dims: tuple[int, ...]  # size of each frontal variable
     separator_dims: tuple[int, ...]  # size of each separator variable
     R: NDArray  # (n_f, n_f) upper triangular
@@ -191,7 +191,7 @@ def eliminate_clique(
     if rows < nf:  # fewer rows than frontal unknowns
         raise underdetermined(M, frontals, dims, rows)
     tolerance = RANK_TOLERANCE * max(_largest(np.abs(M), axis=None), 1.0)  # read before the QR overwrites M
-    qr, _, _, _ = lapack.dgeqrf(M, overwrite_a=True)  # Q R = [A_F A_S | b]: Gram-Schmidt on the columns, in place
+    qr, _, _, _ = lapack.dgeqrf(M, overwrite_a=True)  # Q R = M, Householder, in place (Gram-Schmidt's R, to signs)
     R = qr if rows <= ncol else qr[:ncol]
     R[_below_diagonal(*R.shape)] = 0.0  # np.triu in place, its mask made once per shape
     pivots = R.diagonal()[:nf].tolist()  # Python's min over a few numbers costs less than NumPy's calls
