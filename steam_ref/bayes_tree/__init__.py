@@ -3,7 +3,7 @@
 - :mod:`.symbolic`: orderings → cliques, and clique surgery, structure only (the orderings
   themselves, iSAM2's constrained minimum degree included, are in :mod:`steam_ref.linear.ordering`);
 - :mod:`.tree`: :class:`Clique` (a Gaussian conditional), :class:`BayesTree`, elimination and
-  back-substitution;
+  back-substitution; :mod:`.dot`: the tree as GTSAM's ``dot()`` text, and its fill ``tree_nnz``;
 - :mod:`.params`: :class:`ISAM2Params`, the solver's thresholds (GTSAM's defaults);
 - :mod:`.undo` and :mod:`.state`: the one undo log, and :class:`~.state.SolverState`, every store of a solver;
 - :mod:`.isam`: :class:`IncrementalSolver`, the update of Algorithm 1 (steps 2-7), and its public
