@@ -71,6 +71,34 @@ def test_nees_is_the_dense_quadratic_form(rng):
         nees(e[:2], np.stack([np.eye(3), -np.eye(3)]))
 
 
+@pytest.mark.parametrize("d", [2, 3, 6])
+def test_nees_of_a_stack_is_each_row_alone_bit_for_bit(rng, d):
+    """The stacked Cholesky, solve and product give each row's ‖L⁻¹ e‖² exactly as one row at a time: the study's
+    figures did not move when the loop went (a sum of squares instead of the dot would differ in the last bit)."""
+    a = rng.normal(size=(300, d, d)) * 10.0 ** rng.uniform(-4, 2, size=(300, 1, 1))
+    P = a @ np.swapaxes(a, 1, 2) + 1e-3 * np.eye(d)
+    P = (P + np.swapaxes(P, 1, 2)) / 2
+    e = rng.normal(size=(300, d)) * 10.0 ** rng.uniform(-3, 1, size=(300, 1))
+    one_at_a_time = []
+    for k in range(300):
+        w = np.linalg.solve(np.linalg.cholesky(P[k]), e[k])
+        one_at_a_time.append(float(w @ w))
+    np.testing.assert_array_equal(nees(e, P), one_at_a_time)
+    assert nees(np.zeros((0, d)), np.zeros((0, d, d))).shape == (0,)
+
+
+def test_nees_names_the_offending_row_of_a_long_stack():
+    P = np.tile(np.eye(3), (10, 1, 1))
+    bad = P.copy()
+    bad[7] = np.diag([1.0, -1.0, 1.0])  # symmetric, not positive definite
+    with pytest.raises(NumericalError, match="covariance 7 is not positive definite"):
+        nees(np.ones((10, 3)), bad)
+    bad = P.copy()
+    bad[4, 0, 2] = 0.5  # not symmetric (row 4 only)
+    with pytest.raises(SteamError, match=r"covariances\[4\] must be symmetric"):
+        nees(np.ones((10, 3)), bad)
+
+
 def test_chi2_band_equals_the_tables():
     """χ² quantiles from the tables (Abramowitz and Stegun 26.4): χ²₁ 0.025 / 0.975 and χ²₃₀ 0.025 / 0.975."""
     lo, hi = chi2_band(1, 1)
