@@ -28,6 +28,7 @@ from ..errors import SteamError, UnknownVariableError
 from ..factors import Factor, check_factors
 from ..linear.ordering import KeysBelow
 from ..linear.threads import limit
+from ..manifold import Manifold
 from ..variables import Key, Values, check_key, check_new_values, key_list
 from .history import History, Marginalized
 from .isam import IncrementalSolver, UpdateReport
@@ -183,7 +184,10 @@ class FixedLagSmoother:
     factors = property(lambda self: self.solver.factors, doc="Every factor (a marginalized one's slot None).")
     linearization_point = property(lambda self: self.solver.linearization_point, doc="θ̄ of the window (a copy).")
     __len__ = lambda self: len(self.solver)  # the variables in the window
-    kind_of = lambda self, key: self.solver.kind_of(self._known([check_key("key", key)], "the kind of")[0])
+
+    def kind_of(self, key: Key) -> Manifold:
+        """How one variable of the window moves, as ``IncrementalSolver.kind_of``; a forgotten one is named so."""
+        return self.solver.kind_of(self._known([check_key("key", key)], "the kind of")[0])
 
     def __repr__(self) -> str:
         return f"<FixedLagSmoother of lag {self.lag:g} s, {self.n_marginalized} marginalized: {self.solver!r}>"
