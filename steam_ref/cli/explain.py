@@ -216,6 +216,8 @@ def _percent(fraction: float) -> str:
 
 
 def fidelity_text(row: dict) -> str:
+    """``steam-ref fidelity``'s summary of one data set's ``row`` (:meth:`~steam_ref.paper.fidelity.Fidelity.to_dict`
+    with the run's and the authors' seconds): distances in mm, the heading in mrad, the marginals' differences."""
     cov = (
         ""
         if row["pose_cov_median"] is None
