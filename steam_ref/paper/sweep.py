@@ -28,7 +28,8 @@ parameters) through joblib: loky worker processes by default, or joblib's ``dask
   kills its loky workers and waits for them (joblib's generator closed), or closes the Dask cluster, before it
   goes on to the caller, a second one meanwhile held until they are gone. So the command's one line is all
   stderr gets: no worker's traceback, no resource tracker's warning of a semaphore left behind (a worker's bars
-  lock with a thread lock, :func:`~steam_ref.paper.progress.drawn_here_only`), no worker left running. The
+  lock with a thread lock, :func:`~steam_ref.paper.progress.drawn_here_only`; the feeder threads of the queues
+  the stop closed are waited for, :func:`_stop`), no worker left running. The
   results already logged stay, and resuming runs the rest.
 """
 
@@ -42,6 +43,7 @@ import re
 import signal
 import sys
 import threading
+import time
 import warnings
 from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
@@ -108,12 +110,27 @@ def _start_trackers() -> None:
     loky_tracker.ensure_running()
 
 
+# How long stopping a sweep waits for the feeder threads of the queues it closed (they end in milliseconds).
+_FEEDER_WAIT_S = 1.0
+
+
 def _stop(outputs: Any) -> None:
     """Stop a sweep that will not be read to its end: joblib's generator closed, which kills its loky workers and
-    waits for them; its warning that the runs not read were cancelled says what the caller asked for."""
+    waits for them; its warning that the runs not read were cancelled says what the caller asked for.
+
+    Then the feeder threads of the queues that closes are waited for (:data:`_FEEDER_WAIT_S` in all). Loky does not
+    join the feeder of a queue this process made, so one can still be finishing when the command exits; that
+    daemon thread then drops the last reference to its queue during the interpreter's shutdown, the queue's lock
+    is unlinked there but its tracker is never told, and the tracker's warning of a "leaked semlock" followed the
+    command's one line (one Ctrl-C in ~14, ``tests/test_interrupted_parallel_sweep.py``). A feeder of another
+    queue of the caller's, still open, costs that wait once."""
     with _held(), warnings.catch_warnings():
         warnings.simplefilter("ignore")
         outputs.close()
+        deadline = time.monotonic() + _FEEDER_WAIT_S
+        for thread in threading.enumerate():
+            if thread.name == "QueueFeederThread" and thread is not threading.current_thread():
+                thread.join(max(0.0, deadline - time.monotonic()))
 
 
 def _key(item: Any) -> str:
