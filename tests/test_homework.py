@@ -11,10 +11,14 @@ import errno
 import json
 import os
 import re
+import signal
+import subprocess
+import sys
 import time
 from pathlib import Path
 
 import pytest
+from processes import command_line, descendants, running
 from requirements import optional_import
 
 from steam_ref.cli.commands import main
@@ -789,3 +793,52 @@ def test_mark_csv_writes_a_grade_book_row_per_submission_with_each_exercises_poi
 def test_mark_csv_that_cannot_be_written_is_refused_before_any_kernel_starts(course, capsys, csv_path, says):
     assert main(["homework", "mark", str(course), "--csv", str(course / csv_path)]) == 2
     assert re.search(says, capsys.readouterr().err)
+
+
+@pytest.mark.skipif(sys.platform != "linux", reason="reads the processes from /proc")
+@pytest.mark.parametrize(("name", "code", "line"), [("SIGINT", 130, "interrupted"), ("SIGTERM", 143, "terminated")])
+def test_marking_stopped_by_ctrl_c_or_sigterm_ends_at_once_and_leaves_no_kernel(course, name, code, line):
+    """Two submissions whose answers sleep a minute, marked two at a time under a 100 s limit, stopped once both
+    kernels run: the command's one line, its exit code, and every kernel gone within seconds. A kernel runs in a
+    session of its own, which a terminal's Ctrl-C never reaches: before, the command waited for every cell to run
+    out its limit (here a minute)."""
+    optional_import("nbclient", "notebooks")
+    optional_import("ipykernel", "notebooks")
+    slow = {"s1": "import time\ntime.sleep(60)\nsquare = 9", "s2": "cube = lambda x: x**3"}
+    _submit(course, "ann", slow)
+    _submit(course, "bob", slow)
+    argv = ["homework", "mark", str(course / "submitted"), "--source", str(course / "teacher"), "--timeout", "100"]
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "steam_ref", *argv, "--jobs", "2"],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,  # a process group of its own, as a terminal gives a command
+    )
+    kernels: list[int] = []
+    try:
+        deadline = time.monotonic() + 60
+        while len(kernels) < 2 and time.monotonic() < deadline:  # both kernels up (each starts in a second or two)
+            kernels = [pid for pid in descendants(proc.pid) if "ipykernel" in command_line(pid)]
+            assert proc.poll() is None, "the marking ended before it could be stopped"
+            time.sleep(0.1)
+        assert len(kernels) == 2, "the two kernels did not start within 60 s"
+        time.sleep(2)  # the answers' cells are running
+        began = time.monotonic()
+        os.killpg(proc.pid, getattr(signal, name))  # Ctrl-C reaches the whole group; SIGTERM too, here
+        _, err = proc.communicate(timeout=30)
+        took = time.monotonic() - began
+        deadline = time.monotonic() + 3
+        while any(map(running, kernels)) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        left = [pid for pid in kernels if running(pid)]
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+        for pid in kernels:  # only what this test started, by pid
+            if running(pid):
+                os.kill(pid, signal.SIGKILL)
+    assert (proc.returncode, err) == (code, f"steam-ref: {line}\n")
+    assert left == [], f"kernels still running after {name}: {left}"
+    assert took < 15, f"the marking took {took:.1f} s to stop"  # a kernel's death is seen within a second or two

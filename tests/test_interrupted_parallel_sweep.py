@@ -15,9 +15,9 @@ import signal
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 import pytest
+from processes import command_line, descendants, running
 
 from steam_ref.cli.commands import build_parser
 from steam_ref.cli.consistency import _study
@@ -28,47 +28,8 @@ from steam_ref.paper.sweep import read_results
 ARGV = ["consistency", "--seeds", "2000", "--steps", "12", "--landmarks", "3", "--jobs", "2", "--no-progress"]
 
 
-def _children() -> dict[int, list[int]]:
-    """Every process's children, by pid, from /proc (psutil is not among the test extras)."""
-    children: dict[int, list[int]] = {}
-    for entry in Path("/proc").iterdir():
-        if not entry.name.isdigit():
-            continue
-        try:
-            stat = (entry / "stat").read_text()
-        except OSError:  # gone meanwhile
-            continue
-        parent = int(stat.rsplit(")", 1)[1].split()[1])  # the field after the state; the name may hold ')'
-        children.setdefault(parent, []).append(int(entry.name))
-    return children
-
-
-def _descendants(pid: int) -> list[int]:
-    children, found, todo = _children(), [], [pid]
-    while todo:
-        for child in children.get(todo.pop(), []):
-            found.append(child)
-            todo.append(child)
-    return found
-
-
-def _running(pid: int) -> bool:
-    """The process exists and is not a zombie (ended, not yet reaped)."""
-    try:
-        return (Path("/proc") / str(pid) / "stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
-    except OSError:
-        return False
-
-
 def _workers(pids: list[int]) -> list[int]:
-    found = []
-    for pid in pids:
-        try:
-            if b"LokyProcess" in (Path("/proc") / str(pid) / "cmdline").read_bytes():
-                found.append(pid)
-        except OSError:
-            pass
-    return found
+    return [pid for pid in pids if "LokyProcess" in command_line(pid)]
 
 
 @pytest.mark.skipif(sys.platform != "linux", reason="reads the processes from /proc")
@@ -100,7 +61,7 @@ def test_an_interrupted_parallel_sweep_answers_in_one_line_and_leaves_no_worker(
     try:
         deadline = time.monotonic() + 60
         while time.monotonic() < deadline:  # until the workers run and a result is in the file
-            started = _descendants(proc.pid)
+            started = descendants(proc.pid)
             if len(_workers(started)) == 2 and (early or (log.exists() and log.read_text().count("\n") >= 2)):
                 break
             assert proc.poll() is None, "the sweep ended before it could be stopped"
@@ -108,7 +69,7 @@ def test_an_interrupted_parallel_sweep_answers_in_one_line_and_leaves_no_worker(
         else:
             pytest.fail("no result within 60 s")
         time.sleep(0.3 if early else 0)
-        started = _descendants(proc.pid)  # the workers and the resource trackers
+        started = descendants(proc.pid)  # the workers and the resource trackers
         signal_number = getattr(signal, name)
         if group:
             os.killpg(proc.pid, signal_number)
@@ -116,15 +77,15 @@ def test_an_interrupted_parallel_sweep_answers_in_one_line_and_leaves_no_worker(
             proc.send_signal(signal_number)
         _, err = proc.communicate(timeout=60)
         deadline = time.monotonic() + 3
-        while any(map(_running, started)) and time.monotonic() < deadline:
+        while any(map(running, started)) and time.monotonic() < deadline:
             time.sleep(0.05)
-        left = [pid for pid in started if _running(pid)]
+        left = [pid for pid in started if running(pid)]
     finally:
         if proc.poll() is None:
             proc.kill()
             proc.wait()
         for pid in started:  # only what this test started, by pid
-            if _running(pid):
+            if running(pid):
                 os.kill(pid, signal.SIGKILL)
     assert (proc.returncode, err) == (code, line + "\n")
     assert left == [], f"worker processes still running after {name}: {left}"

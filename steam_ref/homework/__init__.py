@@ -13,7 +13,7 @@ Running notebooks needs nbformat, nbclient and ipykernel (the ``notebooks`` extr
 """
 
 from .exercises import Exercise, exercises, handout, read_notebook
-from .marking import ExerciseMark, SubmissionMark, load_tutorials, mark_submission
+from .marking import ExerciseMark, Stopped, SubmissionMark, load_tutorials, mark_submission, stop_marking
 
 __all__ = [
     "Exercise",
@@ -24,4 +24,6 @@ __all__ = [
     "SubmissionMark",
     "load_tutorials",
     "mark_submission",
+    "stop_marking",
+    "Stopped",
 ]

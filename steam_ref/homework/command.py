@@ -22,6 +22,7 @@ import csv
 import io
 import json
 import sys
+import threading
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
@@ -29,7 +30,15 @@ from pathlib import Path
 from ..errors import SteamError
 from ..files import replace_file
 from .exercises import handout, read_notebook
-from .marking import SubmissionMark, Tutorial, load_tutorials, mark_submission, requirements, tutorial_of
+from .marking import (
+    SubmissionMark,
+    Tutorial,
+    load_tutorials,
+    mark_submission,
+    requirements,
+    stop_marking,
+    tutorial_of,
+)
 
 __all__ = ["run", "grade_book"]
 
@@ -168,11 +177,18 @@ def _mark(args: argparse.Namespace) -> int:
     )
     _check_given(args.submissions, tutorials)
     marks = []
-    with ThreadPoolExecutor(max_workers=args.jobs) as pool:  # each submission runs in its own kernel process
-        for mark in pool.map(lambda f: mark_submission(f[0], f[1], tutorials, args.timeout), files):
+    stop = threading.Event()
+    pool = ThreadPoolExecutor(max_workers=args.jobs)  # each submission runs in its own kernel process
+    try:
+        for mark in pool.map(lambda f: mark_submission(f[0], f[1], tutorials, args.timeout, stop=stop), files):
             marks.append(mark)
             if not args.json:
                 _print([mark])
+    except BaseException:  # Ctrl-C, SIGTERM: no kernel runs on, no submission starts
+        stop_marking(stop)
+        raise
+    finally:
+        pool.shutdown(cancel_futures=True)
     if args.csv is not None:  # whole or not at all: an interrupt or a full disk leaves the file that was there
         replace_file(Path(args.csv), _writer(grade_book(marks)), "--csv")
     if args.json:

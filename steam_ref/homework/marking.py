@@ -21,6 +21,7 @@ from __future__ import annotations
 import copy
 import re
 import subprocess
+import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -33,11 +34,13 @@ from .kinds import check_cell
 
 __all__ = [
     "ExerciseMark",
+    "Stopped",
     "SubmissionMark",
     "Tutorial",
     "load_tutorials",
     "mark_submission",
     "requirements",
+    "stop_marking",
     "tutorial_of",
 ]
 
@@ -198,9 +201,39 @@ def _named(cells: list[_Cell], tutorial: Tutorial, i: int) -> str:
     return f"exercise {tutorial.exercises[c.exercise].number}'s {role}"
 
 
-def _run(cells: list[_Cell], tutorial: Tutorial, timeout: int) -> tuple[dict[int, tuple[str, str] | None], str | None]:
+class Stopped(Exception):
+    """A marking run ended because the ``stop`` it obeys was set (:func:`stop_marking`): it gives no mark."""
+
+
+# The kernel of each marking run in progress, with the stop it obeys: what stop_marking kills.
+_RUNS: dict[int, tuple[threading.Event, Any]] = {}
+_RUNS_LOCK = threading.Lock()
+
+
+def stop_marking(stop: threading.Event) -> None:
+    """Set ``stop`` and kill the kernel of every run that obeys it, so that each ends at once, raising
+    :class:`Stopped`; a run still starting its kernel kills it as soon as it is up. (Ctrl-C while marking: a
+    kernel runs in a session of its own, which a terminal's Ctrl-C never reaches, and its cells would run on to
+    their time limits.)"""
+    with _RUNS_LOCK:
+        stop.set()
+        kernels = [km for obeys, km in _RUNS.values() if obeys is stop]
+    for km in kernels:
+        _kill(km)
+
+
+def _kill(km: Any) -> None:
+    """Kill the process of a kernel manager's kernel, if it has one (from any thread)."""
+    process = getattr(getattr(km, "provisioner", None), "process", None)
+    if process is not None:
+        process.kill()  # a no-op once it has been reaped
+
+
+def _run(
+    cells: list[_Cell], tutorial: Tutorial, timeout: int, stop: threading.Event | None = None
+) -> tuple[dict[int, tuple[str, str] | None], str | None]:
     """Run the cells in a fresh kernel: for each code cell that ran, None (no error) or (error name, message);
-    and why the run stopped early, if it did."""
+    and why the run stopped early, if it did. :class:`Stopped` once ``stop`` is set (:func:`stop_marking`)."""
     import asyncio  # here, not at the top: a run of the CLI loads this module and need not load asyncio
 
     import nbclient
@@ -224,7 +257,7 @@ def _run(cells: list[_Cell], tutorial: Tutorial, timeout: int) -> tuple[dict[int
         c = cells[i]
         return timeout - spent.get(c.exercise, 0.0) if c.role == "answer" and c.exercise is not None else timeout
 
-    class Stop(Exception):
+    class DeafCell(Exception):  # a cell ran on after the interrupt at its limit: its kernel was killed
         pass
 
     async def alive() -> bool:
@@ -258,7 +291,18 @@ def _run(cells: list[_Cell], tutorial: Tutorial, timeout: int) -> tuple[dict[int
             outcomes[cell_index] = (IGNORED, f"still running {GRACE} s after the interrupt; the kernel was killed")
             assert client.km is not None  # alive
             await ensure_async(client.km.shutdown_kernel(now=True))
-            raise Stop(cell_index)
+            raise DeafCell(cell_index)
+
+    async def up(notebook: Any) -> None:  # noqa: ARG001 (nbclient's hook: the kernel is up, no cell has run)
+        if stop is None:
+            return
+        with _RUNS_LOCK:  # registered, or refused: stop_marking sets stop and reads the runs under this lock
+            stopping = stop.is_set()
+            if not stopping:
+                _RUNS[id(client)] = (stop, client.km)
+        if stopping:
+            _kill(client.km)
+            raise Stopped
 
     client = nbclient.NotebookClient(
         nbformat.from_dict(nb),
@@ -271,6 +315,7 @@ def _run(cells: list[_Cell], tutorial: Tutorial, timeout: int) -> tuple[dict[int
         iopub_timeout=GRACE,
         record_timing=True,
         resources={"metadata": {"path": str(tutorial.folder)}},
+        on_notebook_start=up,
         on_cell_start=start,
         on_cell_executed=executed,
     )
@@ -278,8 +323,8 @@ def _run(cells: list[_Cell], tutorial: Tutorial, timeout: int) -> tuple[dict[int
     try:
         # a loop of its own, closed at the end, in whichever thread marks; the kernel's log lines go nowhere
         asyncio.run(client.async_execute(stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
-    except Stop as stop:
-        deaf = _named(cells, tutorial, stop.args[0])
+    except DeafCell as ended:
+        deaf = _named(cells, tutorial, ended.args[0])
         stopped = f"the run stopped: {deaf} ignored the interrupt at its {timeout} s limit, so the kernel was killed"
     except DeadKernelError:
         stopped = DIED
@@ -287,6 +332,11 @@ def _run(cells: list[_Cell], tutorial: Tutorial, timeout: int) -> tuple[dict[int
         # a kernel that dies while nbclient (re)connects is a RuntimeError "Kernel died before replying ..."
         died = "kernel died" in str(exc).lower()
         stopped = DIED if died else _one_line(f"the run stopped: {type(exc).__name__}: {exc}")
+    finally:
+        with _RUNS_LOCK:
+            _RUNS.pop(id(client), None)
+    if stop is not None and stop.is_set():  # its kernel killed by stop_marking: no mark, whatever the run said
+        raise Stopped
     return outcomes, stopped
 
 
@@ -327,8 +377,11 @@ def tutorial_of(path: Path, nb: dict | None, tutorials: dict[str, Tutorial]) -> 
     return next((name for name in sorted(tutorials, key=len, reverse=True) if name in path.stem), None)
 
 
-def mark_submission(path: Path, shown: str, tutorials: dict[str, Tutorial], timeout: int) -> SubmissionMark:
-    """Mark the notebook at ``path`` (named ``shown`` in the report); never raises for a bad submission."""
+def mark_submission(
+    path: Path, shown: str, tutorials: dict[str, Tutorial], timeout: int, *, stop: threading.Event | None = None
+) -> SubmissionMark:
+    """Mark the notebook at ``path`` (named ``shown`` in the report); never raises for a bad submission. With a
+    ``stop``, :func:`stop_marking` ends the run at once, and this raises :class:`Stopped`."""
     try:
         nb: dict | None = read_notebook(path)
         problem = None
@@ -345,7 +398,7 @@ def mark_submission(path: Path, shown: str, tutorials: dict[str, Tutorial], time
         )
         return SubmissionMark(shown, name, zero, error=_one_line(problem or ""))
     cells, missing = _assemble(tutorial, nb)
-    outcomes, stopped = _run(cells, tutorial, timeout)
+    outcomes, stopped = _run(cells, tutorial, timeout, stop)
     marks = []
     for k, e in enumerate(tutorial.exercises):
         status, message = _verdict(k, cells, outcomes, stopped, timeout)
