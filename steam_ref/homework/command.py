@@ -36,9 +36,9 @@ from .marking import (
     load_tutorials,
     mark_submission,
     requirements,
-    stop_marking,
     tutorial_of,
 )
+from .stopping import stop_marking
 
 __all__ = ["run", "grade_book"]
 

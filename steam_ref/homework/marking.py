@@ -28,19 +28,18 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import SteamError
+from . import stopping
 from .exercises import Exercise, answer_cells, exercises, handout_of, read_notebook, source
 from .guard import KEEP, KEPT, PUT_BACK, guarded
 from .kinds import check_cell
 
 __all__ = [
     "ExerciseMark",
-    "Stopped",
     "SubmissionMark",
     "Tutorial",
     "load_tutorials",
     "mark_submission",
     "requirements",
-    "stop_marking",
     "tutorial_of",
 ]
 
@@ -201,39 +200,11 @@ def _named(cells: list[_Cell], tutorial: Tutorial, i: int) -> str:
     return f"exercise {tutorial.exercises[c.exercise].number}'s {role}"
 
 
-class Stopped(Exception):
-    """A marking run ended because the ``stop`` it obeys was set (:func:`stop_marking`): it gives no mark."""
-
-
-# The kernel of each marking run in progress, with the stop it obeys: what stop_marking kills.
-_RUNS: dict[int, tuple[threading.Event, Any]] = {}
-_RUNS_LOCK = threading.Lock()
-
-
-def stop_marking(stop: threading.Event) -> None:
-    """Set ``stop`` and kill the kernel of every run that obeys it, so that each ends at once, raising
-    :class:`Stopped`; a run still starting its kernel kills it as soon as it is up. (Ctrl-C while marking: a
-    kernel runs in a session of its own, which a terminal's Ctrl-C never reaches, and its cells would run on to
-    their time limits.)"""
-    with _RUNS_LOCK:
-        stop.set()
-        kernels = [km for obeys, km in _RUNS.values() if obeys is stop]
-    for km in kernels:
-        _kill(km)
-
-
-def _kill(km: Any) -> None:
-    """Kill the process of a kernel manager's kernel, if it has one (from any thread)."""
-    process = getattr(getattr(km, "provisioner", None), "process", None)
-    if process is not None:
-        process.kill()  # a no-op once it has been reaped
-
-
 def _run(
     cells: list[_Cell], tutorial: Tutorial, timeout: int, stop: threading.Event | None = None
 ) -> tuple[dict[int, tuple[str, str] | None], str | None]:
     """Run the cells in a fresh kernel: for each code cell that ran, None (no error) or (error name, message);
-    and why the run stopped early, if it did. :class:`Stopped` once ``stop`` is set (:func:`stop_marking`)."""
+    and why the run stopped early, if it did. :class:`~.stopping.Stopped` once ``stop`` is set (:func:`~.stopping.stop_marking`)."""
     import asyncio  # here, not at the top: a run of the CLI loads this module and need not load asyncio
 
     import nbclient
@@ -294,15 +265,8 @@ def _run(
             raise DeafCell(cell_index)
 
     async def up(notebook: Any) -> None:  # noqa: ARG001 (nbclient's hook: the kernel is up, no cell has run)
-        if stop is None:
-            return
-        with _RUNS_LOCK:  # registered, or refused: stop_marking sets stop and reads the runs under this lock
-            stopping = stop.is_set()
-            if not stopping:
-                _RUNS[id(client)] = (stop, client.km)
-        if stopping:
-            _kill(client.km)
-            raise Stopped
+        if stop is not None:
+            stopping.started(stop, id(client), client.km)
 
     client = nbclient.NotebookClient(
         nbformat.from_dict(nb),
@@ -333,10 +297,9 @@ def _run(
         died = "kernel died" in str(exc).lower()
         stopped = DIED if died else _one_line(f"the run stopped: {type(exc).__name__}: {exc}")
     finally:
-        with _RUNS_LOCK:
-            _RUNS.pop(id(client), None)
+        stopping.ended(id(client))
     if stop is not None and stop.is_set():  # its kernel killed by stop_marking: no mark, whatever the run said
-        raise Stopped
+        raise stopping.Stopped
     return outcomes, stopped
 
 
@@ -381,7 +344,7 @@ def mark_submission(
     path: Path, shown: str, tutorials: dict[str, Tutorial], timeout: int, *, stop: threading.Event | None = None
 ) -> SubmissionMark:
     """Mark the notebook at ``path`` (named ``shown`` in the report); never raises for a bad submission. With a
-    ``stop``, :func:`stop_marking` ends the run at once, and this raises :class:`Stopped`."""
+    ``stop``, :func:`~.stopping.stop_marking` ends the run at once, and this raises :class:`~.stopping.Stopped`."""
     try:
         nb: dict | None = read_notebook(path)
         problem = None
