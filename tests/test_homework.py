@@ -471,7 +471,8 @@ def test_an_answer_that_sets_a_modules_function_the_marking_calls_scores_0_and_i
     assert got == {name: [(0, "failed"), (0, "failed")] for name in submissions}, got
     for name, patched in (("patches-numpy", "np.allclose"), ("patches-a-builtin", "builtins.abs")):
         first, second = (e["message"] for e in marks[name]["exercises"])
-        assert f"the answer rebinds `{patched}`" in first, (name, first)
+        said = f"the answer sets `{patched}`, which the marking checks call (put back for them): leave it as it is"
+        assert said in first, (name, first)  # not "give yours another name": it set the module's own
         assert "cube is wrong" in second, (name, second)  # the lesson's np.allclose back for the cube's check
 
 

@@ -3,8 +3,9 @@
 A marking check compares an answer with the lesson's own names (tutorial 09's ``chi2_band``, 00's ``qc``): an answer
 that rebound one would be compared with itself, and a wrong answer with its own wrong helper would pass. The marking
 run (:mod:`.marking`) puts a cell of KEEP before each answer and one of PUT_BACK after it: PUT_BACK puts back what the
-answer rebound, changed in place (an array) or shadowed (a builtin the checks call) and fails naming it, so that
-exercise scores 0 and its checks and the exercises after it see the lesson's values. The same holds for a module's
+answer rebound, changed in place (an array), shadowed (a builtin the checks call) or set (a module's function the
+checks call) and fails naming it, so that exercise scores 0 and its checks and the exercises after it see the
+lesson's values. The same holds for a module's
 attribute the checks read (``np.allclose = lambda *a, **k: True`` would pass every later check) and for a builtin
 set on the builtins module. An equal value bound again (``n = 24`` where the lesson has 24, ``import numpy as np``)
 is no change.
@@ -54,12 +55,12 @@ def __steam_ref_put_back__(kept, scope):
     except ImportError:
         numpy = None
     plain = (bool, int, float, complex, str, bytes, type(None)) + ((numpy.generic,) if numpy else ())
-    changed = []
+    changed, patched = [], []
     for name, was in kept.items():
         if "." in name:  # a module's attribute: the answer must not set it
             owner, attribute, value = was
             if getattr(owner, attribute, kept) is not value:
-                changed.append(name)
+                patched.append(name)
                 setattr(owner, attribute, value)
             continue
         if was is None:  # a builtin: the answer must not shadow it
@@ -82,11 +83,17 @@ def __steam_ref_put_back__(kept, scope):
         if not same:
             changed.append(name)
             scope[name] = value
-    named = ", ".join(f"`{{name}}`" for name in changed)
-    assert not changed, (
-        f"the answer rebinds {{named}}, which the marking checks read from the lesson (put back for them): "
-        "give yours another name and leave the lesson's as they are"
-    )
+    said = []
+    if changed:
+        named = ", ".join(f"`{{name}}`" for name in changed)
+        said.append(
+            f"the answer rebinds {{named}}, which the marking checks read from the lesson (put back for them): "
+            "give yours another name and leave the lesson's as they are"
+        )
+    if patched:
+        named = ", ".join(f"`{{name}}`" for name in patched)
+        said.append(f"the answer sets {{named}}, which the marking checks call (put back for them): leave it as it is")
+    assert not said, "; ".join(said)
 
 
 try:
