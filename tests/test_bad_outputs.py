@@ -149,6 +149,26 @@ def test_the_module_on_an_ascii_stdout_is_not_a_traceback():
     assert b"\\u03b1" in proc.stdout
 
 
+@pytest.mark.skipif(sys.platform != "linux", reason="a file name of any bytes")
+def test_a_file_name_that_is_not_utf8_shows_its_byte_not_pythons_surrogate(tmp_path):
+    """A byte of a file name that is not UTF-8 (0xff) is held by Python as the lone surrogate U+DCFF, which both an
+    error's line (quoting the path's repr) and stdout (printing the path) wrote as ``\\udcff``. Both now show the
+    byte, ``\\xff``, as Python shows it in ``os.fsencode(path)``; a name holding the text ``\\udcff`` stays itself."""
+    folder = os.fsencode(tmp_path)
+    env = {**os.environ, "MPLBACKEND": "Agg", "PYTHONPATH": str(Path(__file__).resolve().parents[1])}  # bytes argv:
+    # run_module's arguments are str
+    base = [sys.executable, "-m", "steam_ref", "run", "--dataset", "synthetic", "--steps", "5", "--plot"]
+    proc = subprocess.run([*base, folder + b"/\xff/x.png"], env=env, capture_output=True, timeout=120)
+    assert proc.returncode == 2
+    assert b"folder '" + folder + b"/\\xff' does not exist" in proc.stderr, proc.stderr
+    proc = subprocess.run([*base, folder + b"/\xffx.png"], env=env, capture_output=True, timeout=120)
+    assert proc.returncode == 0 and proc.stderr == b"", proc.stderr
+    assert b"plot written to " + folder + b"/\\xffx.png" in proc.stdout, proc.stdout
+    assert (tmp_path / os.fsdecode(b"\xffx.png")).is_file()
+    proc = subprocess.run([*base, folder + b"/\\udcffy/x.png"], env=env, capture_output=True, timeout=120)
+    assert b"folder '" + folder + b"/\\\\udcffy' does not exist" in proc.stderr, proc.stderr  # its repr's \\
+
+
 # -- stdout closed, a pipe closed by its reader, outputs onto stdout --
 
 

@@ -1,8 +1,10 @@
 """stdout and stderr of the ``steam-ref`` command: what it prints can always be printed, or fails in one line.
 
 - :func:`make_encodable`: a character the stream's encoding lacks (``α`` on an ASCII or cp1252 stdout) is
-  written as its backslash escape, never a ``UnicodeEncodeError``;
-- :func:`one_line`: an error message on one line however odd the input it quotes;
+  written as its backslash escape, never a ``UnicodeEncodeError``; a byte of a path that is not UTF-8 (Python
+  holds it as a lone surrogate, U+DC80 to U+DCFF) as the byte, ``\\xff``, not ``\\udcff``;
+- :func:`one_line`: an error message on one line however odd the input it quotes, a path's byte that is not
+  UTF-8 shown as that byte (``'\\xff.png'``) whether the message quotes the path itself or its ``repr``;
 - :func:`json_line`: a summary as one line of JSON, refusing (and naming) a NaN or an infinity rather
   than writing ``NaN``/``Infinity``, which is not JSON;
 - :func:`quiet_stdout`: after stdout's reader went away (``| head``), the interpreter's last flush is sent
@@ -17,10 +19,12 @@ Imports nothing but the standard library and steam_ref's errors: the entry point
 
 from __future__ import annotations
 
+import codecs
 import contextlib
 import json
 import math
 import os
+import re
 import sys
 import warnings
 from collections.abc import Iterator
@@ -30,17 +34,43 @@ from ..errors import SteamError
 __all__ = ["complain", "make_encodable", "one_line", "json_line", "quiet_stdout", "warning_lines"]
 
 
+def _byte_of(c: str) -> str | None:
+    """``\\xNN`` for a lone surrogate U+DC80 to U+DCFF, the byte NN of a file name that is not UTF-8 (Python's
+    ``surrogateescape``); None for any other character."""
+    return f"\\x{ord(c) - 0xDC00:02x}" if "\udc80" <= c <= "\udcff" else None
+
+
+def _escape(error: UnicodeError) -> tuple[str, int]:
+    """The ``steam_ref.escape`` error handler: a file name's byte as ``\\xNN``, anything else as
+    ``backslashreplace`` writes it."""
+    if not isinstance(error, UnicodeEncodeError):
+        raise error
+    bad = error.object[error.start : error.end]
+    return "".join(_byte_of(c) or c.encode("ascii", "backslashreplace").decode() for c in bad), error.end
+
+
+codecs.register_error("steam_ref.escape", _escape)
+
+# A repr's escape of such a surrogate, "\udcff", not itself escaped (preceded by an even number of backslashes).
+_SURROGATE_REPR = re.compile(r"(?<!\\)((?:\\\\)*)\\udc([89a-f][0-9a-f])")
+
+
 def make_encodable(stream: object) -> None:
-    """Make ``stream`` write what its encoding lacks as backslash escapes (a stream that cannot is left)."""
+    """Make ``stream`` write what its encoding lacks as backslash escapes, a file name's byte that is not UTF-8 as
+    ``\\xNN`` (a stream that cannot is left)."""
     reconfigure = getattr(stream, "reconfigure", None)
     if reconfigure is not None:
         with contextlib.suppress(ValueError, OSError):  # closed, or a stream that forbids it
-            reconfigure(errors="backslashreplace")
+            reconfigure(errors="steam_ref.escape")
 
 
 def one_line(message: str) -> str:
-    """``message`` with its line breaks escaped: an error is one line however odd the input it quotes."""
-    return "".join(c if c.isprintable() or c == "\t" else repr(c)[1:-1] for c in message) or "(no message)"
+    """``message`` with its line breaks escaped: an error is one line however odd the input it quotes; a file name's
+    byte that is not UTF-8 shows as ``\\xNN``, quoted as it is or by its ``repr`` (which writes ``\\udcNN``)."""
+    text = (
+        "".join(c if c.isprintable() or c == "\t" else _byte_of(c) or repr(c)[1:-1] for c in message) or "(no message)"
+    )
+    return _SURROGATE_REPR.sub(r"\1\\x\2", text)
 
 
 def json_line(summary: dict) -> str:
