@@ -204,7 +204,8 @@ def _run(
     cells: list[_Cell], tutorial: Tutorial, timeout: int, stop: threading.Event | None = None
 ) -> tuple[dict[int, tuple[str, str] | None], str | None]:
     """Run the cells in a fresh kernel: for each code cell that ran, None (no error) or (error name, message);
-    and why the run stopped early, if it did. :class:`~.stopping.Stopped` once ``stop`` is set (:func:`~.stopping.stop_marking`)."""
+    and why the run stopped early, if it did. :class:`~.stopping.Stopped` once ``stop`` is set
+    (:func:`~.stopping.stop_marking`)."""
     import asyncio  # here, not at the top: a run of the CLI loads this module and need not load asyncio
 
     import nbclient
