@@ -78,7 +78,7 @@ def matrices(kind, sde, qc, t1, t2, tau):
 # --- Λ, Ψ: the only nonzero blocks of K(τ)K⁻¹  [YIB Eq. 12, 16] ---------------------------------
 
 
-@pytest.mark.parametrize("kind", ["wnoa", "random"])
+@pytest.mark.parametrize("kind", ["wnoa", "wnoj", "singer", "random"])
 def test_lambda_psi_are_the_blocks_of_dense_k_tau_k_inv(rng, kind):
     sde, qc, est, taus, intervals, all_times, K, _ = dense_problem(rng, kind)
     n, M = sde.n, est.size
@@ -92,6 +92,30 @@ def test_lambda_psi_are_the_blocks_of_dense_k_tau_k_inv(rng, kind):
         expected = np.zeros((n, M * n))
         expected[:, (i - 1) * n : i * n], expected[:, i * n : (i + 1) * n] = lam, psi  # [YIB Eq. 16]
         np.testing.assert_allclose(G, expected, rtol=1e-8, atol=tol)
+
+
+@pytest.mark.parametrize("u", [2.0**-20, 0.125, 1365 / 4096, 0.5, 0.875, 1 - 2.0**-20])  # 1365/4096 ≈ 1/3 - 8e-5
+def test_wnoa_lambda_psi_are_the_hand_derived_polynomials(u):
+    """With s = τ - t₁, r = t₂ - τ, Δt = s + r (derivations §3; Qc cancels):
+    Λ = [[r²(r + 3s)/Δt³, r²s/Δt²], [-6rs/Δt³, r(r - 2s)/Δt²]] ⊗ I, Ψ = [[s²(s + 3r)/Δt³, -rs²/Δt²], [6rs/Δt³,
+    s(s - 2r)/Δt²]] ⊗ I: Λ₂₂ = (1 - u)(1 - 3u), u = s/Δt, the sign change ``gp.interpolate._lambda_psi`` names.
+    Each entry to its relative precision next to either state; Λ₂₂ near its root to the matrix's scale. Times are
+    dyadic, so s, r and Δt are exact and the only rounding is the code's."""
+    d, t1, dt = 2, 0.5, 2.0
+    s, r = u * dt, (1 - u) * dt
+    lam, psi = interpolation_matrices(t1, t1 + dt, t1 + s, np.diag([0.3, 7.0]))
+    want_lam = np.array(
+        [[r * r * (r + 3 * s) / dt**3, r * r * s / dt**2], [-6 * r * s / dt**3, r * (r - 2 * s) / dt**2]]
+    )
+    want_psi = np.array(
+        [[s * s * (s + 3 * r) / dt**3, -r * s * s / dt**2], [6 * r * s / dt**3, s * (s - 2 * r) / dt**2]]
+    )
+    assert want_lam[1, 1] == pytest.approx((1 - u) * (1 - 3 * u), rel=1e-14)
+    for got, want, root in ((lam, want_lam, (1, 1)), (psi, want_psi, None)):
+        tol = 1e-13 * np.abs(want)
+        if root is not None:
+            tol[root] += 1e-15 * np.abs(want).max()  # a sign change inside the interval: to the matrix's scale
+        np.testing.assert_array_less(np.abs(got - np.kron(want, np.eye(d))), np.kron(tol, np.eye(d)) + 1e-300)
 
 
 @pytest.mark.parametrize("d", [1, 3])

@@ -3,6 +3,8 @@ the dense GP kernel.  [YIB Eq. 14, 16, 17, 22]"""
 
 import numpy as np
 import pytest
+import scipy.integrate
+import scipy.linalg
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from oracles import gp_kernel, random_spd, sde_process_noise, sde_transition
@@ -18,6 +20,7 @@ from steam_ref.gp import (
     wnoj_process_noise_inverse,
     wnoj_transition,
 )
+from steam_ref.gp.models import SINGER_LARGEST_ALPHA_DT
 
 # Hand-derived, independent of the code's series table (docs/derivations.md, section 6):
 # Q_rc = Δt^(k_r + k_c + 1) S_rc(x) ⊗ Qc, k = (2, 1, 0), S(x) = S0 - x S1 + O(x²)
@@ -85,12 +88,32 @@ def test_closed_forms_equal_expm_and_van_loan(rng, d):
 
 @pytest.mark.parametrize("x", [8.0, 20.0, 60.0])
 def test_singer_q_at_large_alpha_dt_equals_quadrature(rng, x):
-    """Where Van Loan loses digits (≈ e^{2αΔt}·eps relative), the closed form still equals Eq. 17."""
+    """Where Van Loan loses digits (≈ e^{αΔt}·eps relative), the closed form still equals Eq. 17."""
     sde, dt = LinearSDE.singer(random_spd(rng, 2), x / 1.1), 1.1
     reference = sde_process_noise(sde, dt)  # [YIB Eq. 17] by quad_vec
     np.testing.assert_allclose(
         normalised(sde.process_noise(dt), reference), normalised(reference, reference), rtol=0, atol=1e-12
     )
+
+
+def test_singers_stiffness_beside_wnoj_is_largest_in_the_twist_and_sqrt_of_one_over_eps_at_the_limit():
+    """Per axis over Δt = 1 at x = αΔt ≫ 1, WNOJ's variances over Singer's are 3x²/20 (pose), x²/3 (twist) and 2x
+    (acceleration), to O(1/x): the twist's is the largest, the one ``SINGER_LARGEST_ALPHA_DT`` holds to sqrt(1/eps)
+    (the comment above it). Oracles: Singer's Q by quadrature of [YIB Eq. 17] with Φ from expm, WNOJ's the
+    hand-derived S(0); the code's closed form must equal the quadrature there too."""
+    x = SINGER_LARGEST_ALPHA_DT
+    A = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.0, 0.0, -x]])  # α = x, Δt = 1, one axis, Qc = 1
+
+    def integrand(s: float) -> np.ndarray:
+        g = scipy.linalg.expm(A * s)[:, 2]  # Φ(s) F, the noise's column after s
+        return np.outer(g, g)
+
+    singer, _ = scipy.integrate.quad_vec(integrand, 0.0, 1.0, epsrel=1e-11, epsabs=0.0, points=[1 / x, 10 / x, 100 / x])
+    np.testing.assert_allclose(singer_process_noise(1.0, x, np.eye(1)), singer, rtol=1e-9, atol=0)
+    ratios = np.diag(S0) / np.diag(singer)
+    np.testing.assert_allclose(ratios, [3 * x * x / 20, x * x / 3, 2 * x], rtol=5 / x)
+    assert int(np.argmax(ratios)) == 1
+    assert abs(ratios.max() * np.sqrt(np.finfo(float).eps) - 1) < 5 / x
 
 
 def test_transition_closed_form_for_negative_and_zero_dt(rng):

@@ -4,7 +4,8 @@ state as if a PriorFactor were missing.
 
 Oracles: the solver's own verdicts on a drawn 3-D task (a clean solve with every warning an error, or the breakdown
 the old message blamed on a missing prior), and the limit written out from float64's epsilon, as derived in
-``steam_ref.gp.models`` (the prior holds the pose and twist (αΔt)²/3 times as stiffly as WNOJ; at most sqrt(1/eps)).
+``steam_ref.gp.models`` (the prior holds the twist (αΔt)²/3 times as stiffly as WNOJ, more than any other block; at
+most sqrt(1/eps)).
 """
 
 from __future__ import annotations

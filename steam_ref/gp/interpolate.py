@@ -157,7 +157,7 @@ def _lambda_psi(
     """Λ(τ) and Ψ(τ) of [YIB Eq. 16] from τ - t₁, t₂ - τ and t₂ - t₁ (floats, or (n,) arrays all on the same side of
     the middle), with ``noise`` giving Q, ``phi`` Φ of a step (negative ones too) and ``times_q2_inv`` M ↦ M Q₂⁻¹:
     each entry to its relative precision at every τ, next to either state too, but where the entry itself changes
-    sign inside the interval (WNOA's Λ₂₂ = (1 - s)(1 - 3s), s = (τ - t₁)/(t₂ - t₁)): there, to the matrix's scale
+    sign inside the interval (WNOA's Λ₂₂ = (1 - u)(1 - 3u), u = (τ - t₁)/(t₂ - t₁)): there, to the matrix's scale
     (derivations §3).
 
     Q₂ = Φ(t₂, τ) Q_τ Φ(t₂, τ)ᵀ + Q(t₂ - τ) splits Φ(τ, t₂) = Φ(t₂, τ)⁻¹ in two parts,

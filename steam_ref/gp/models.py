@@ -54,7 +54,7 @@ __all__ = [
 
 _SERIES_TERMS = 24  # |x| ≤ 1: the n-th term is below 2ⁿ / (n + 4)!, under 1e-18 of S at n = 24
 _SERIES_RADIUS = 1.0  # beyond it the closed forms lose at most ~30 ulp to cancellation
-_FAR = 1e15  # x beyond it: e⁻ˣ = 0 in float64, and S in powers of 1/x (x⁵ in the closed forms overflows from 1.2e61)
+_FAR = 1e15  # x beyond it: e⁻ˣ = 0 in float64, and S in powers of 1/x (x⁵ in the closed forms overflows from 4.5e61)
 
 # φ_k(z) = Σₙ zⁿ / (n + k)!, k = 0, 1, 2
 _PHI_SERIES = np.array([[1.0 / factorial(n + k) for n in range(_SERIES_TERMS)] for k in range(3)])
@@ -202,11 +202,12 @@ def singer_process_noise(dt: float, alpha: float, qc: ArrayLike) -> NDArray:
 
 
 # Singer's prior over Δt with x = αΔt ≫ 1 (S(x) above in y = 1/x): Q_vv → Δt Qc/α² = Δt³ Qc/x², Q_pp → Δt³ Qc/(3α²),
-# Q_aa → Qc/(2α): the prior holds the pose and twist about x²/3 times as stiffly as WNOJ with the same Qc over the same
-# Δt (Q_vv of WNOJ is Δt³ Qc/3), the acceleration only x/2 times. Beyond sqrt(1/eps) = 6.7e7 that stiffness leaves
-# float64 unable to resolve the readings beside the prior (the rule of the CLI's --qc-scale): the elimination breaks
-# down, or its answer is ill-conditioned. So x²/3 <= sqrt(1/eps), x <= 1.4e4 (a 3-D task of 10 states, 1 s apart:
-# clean at x = 1.4e4, ill-conditioned at 3.3e4, broken down at 1e6, blaming a state as if a prior were missing).
+# Q_aa → Qc/(2α): against WNOJ with the same Qc over the same Δt (Q_vv = Δt³ Qc/3, Q_pp = Δt⁵ Qc/20, Q_aa = Δt Qc) the
+# prior holds the twist x²/3 times as stiffly, the pose 3x²/20 times, the acceleration only 2x times; the twist's
+# x²/3 is the largest. Beyond sqrt(1/eps) = 6.7e7 that stiffness leaves float64 unable to resolve the readings beside
+# the prior (the rule of the CLI's --qc-scale): the elimination breaks down, or its answer is ill-conditioned. So
+# x²/3 <= sqrt(1/eps), x <= 1.4e4 (a 3-D task of 10 states, 1 s apart: clean at x = 1.4e4, ill-conditioned at 3.3e4,
+# broken down at 1e6, blaming a state as if a prior were missing).
 SINGER_LARGEST_ALPHA_DT = float(np.sqrt(3 / np.sqrt(np.finfo(float).eps)))
 
 
@@ -218,7 +219,7 @@ def check_singer_step(dt: float, alpha: float) -> None:
     if x > SINGER_LARGEST_ALPHA_DT:
         raise NumericalError(
             f"Singer's prior with time_constant={1 / alpha:.3g} (alpha={alpha:.3g}) over an interval dt={dt!r}: "
-            f"alpha*dt = {x:.3g} makes its Q(dt) hold the pose and twist {x * x / 3:.2g} times as stiffly as WNOJ's "
+            f"alpha*dt = {x:.3g} makes its Q(dt) hold the twist {x * x / 3:.2g} times as stiffly as WNOJ's "
             f"with the same Qc, beyond float64's resolution beside the readings (alpha*dt <= "
             f"{SINGER_LARGEST_ALPHA_DT:.3g}); give a time constant of at least {dt / SINGER_LARGEST_ALPHA_DT:.3g} "
             f"on the prior's clock, or the WNOA prior the model tends to"
