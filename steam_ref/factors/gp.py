@@ -2,7 +2,7 @@
 
 :class:`GPPriorFactor` links two consecutive estimated states (Eq. 22-23); :class:`InterpolatedFactor`
 moves a measurement taken at a time τ between two states onto those states through the GP
-interpolation Λ(τ), Ψ(τ) (Eq. 18-19, 29). Both work for any state size 2d.
+interpolation Λ(τ), Ψ(τ) (Eq. 18-19, 29). Both work for any state size n (2d for WNOA, 3d for WNOJ and Singer).
 """
 
 from __future__ import annotations
@@ -38,24 +38,26 @@ class GPPriorFactor(Factor):
         GPPriorFactor.from_sde(key1, key2, dt, sde)     WNOJ, Singer, any LTI SDE (steam_ref.gp.LinearSDE)
         GPPriorFactor.from_matrices(key1, key2, phi, q, v=None)
 
-    ``key1``, ``key2``: the states ``X(i-1)``, ``X(i)``, each [x, y, θ, ẋ, ẏ, θ̇] (velocity in the world
-    frame); ``dt`` > 0: the time between them (s); ``qc``: Qc, the (3, 3) power spectral density of the
-    acceleration noise, in m²/s³ for x, y and rad²/s³ for θ (docs/api.md, "Conventions", says how to choose
-    it). For a whole trajectory, :func:`gp_prior_factors` makes them all.
+    ``key1``, ``key2``: the states ``X(i-1)``, ``X(i)``, each [x, y, θ, ẋ, ẏ, θ̇] for the paper's prior (velocity
+    in the world frame; WNOJ and Singer append [ẍ, ÿ, θ̈]); ``dt`` > 0: the time between them (s); ``qc``: Qc, the
+    (d, d) power spectral density of the acceleration noise, the paper's (3, 3) in m²/s³ for x, y and rad²/s³ for θ
+    (docs/api.md, "Conventions", says how to choose it). For a whole trajectory, :func:`gp_prior_factors` makes them
+    all.
 
     Error:  e = xᵢ - Φ(Δt) xᵢ₋₁ - vᵢ,   Σ = Qᵢ = Q(Δt)
     (WNOA: Φ(Δt) = [[I, Δt I], [0, I]], vᵢ = 0, Q(Δt) = [[Δt³/3 Qc, Δt²/2 Qc], [Δt²/2 Qc, Δt Qc]])
     """
 
-    phi: NDArray  # Φ(tᵢ, tᵢ₋₁), (2d, 2d)
-    v: NDArray  # vᵢ of Eq. 23, (2d,)
+    phi: NDArray  # Φ(tᵢ, tᵢ₋₁), (n, n)
+    v: NDArray  # vᵢ of Eq. 23, (n,)
 
     _batched: ClassVar[tuple[str, ...]] = ("sqrt_information", "phi", "v")
     n_states: ClassVar[int | None] = 2  # two states, whatever the constructor
 
     @classmethod
     def wnoa(cls, key1: Key, key2: Key, dt: float, qc: NDArray) -> GPPriorFactor:
-        """The white-noise-on-acceleration prior over a gap dt (s) > 0; qc: Qc (3, 3).  [YIB Eq. 22, 30-31]"""
+        """The white-noise-on-acceleration prior over a gap dt (s) > 0; qc: Qc (d, d), the paper's (3, 3).
+        [YIB Eq. 22, 30-31]"""
         # a dt met before with this Qc: checked then
         made = _BY_GAP.get((dt, id(qc))) if type(dt) in FLOAT_TYPES else None
         if made is None:

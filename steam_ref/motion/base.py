@@ -8,10 +8,12 @@ front end, :class:`~steam_ref.trajectory.Trajectory`, the samplers, the consiste
 ask it, and never test which prior they hold; a new prior is a new subclass (docs/architecture.md, "Add a
 motion prior").
 
-Conventions shared by every prior (docs/api.md, "Motion priors"): a state is a flat 1-D array whose first three
-numbers are the planar pose [x, y, θ] in the world frame; the next three are its velocity, in the frame the prior
-says (the world frame's [ẋ, ẏ, θ̇] for a vector-space prior, the body twist [vx, vy, ω] on a Lie group); a
-covariance of a state is that of its tangent under the prior's ``kind`` (:class:`~steam_ref.manifold.Manifold`).
+Conventions shared by every prior (docs/api.md, "Choose a motion prior"): a state is a flat 1-D array. On the
+plane its first three numbers are the pose [x, y, θ] in the world frame and the next three its velocity, in the frame
+the prior says (the world frame's [ẋ, ẏ, θ̇] for a vector-space prior, the body twist [vx, vy, ω] on SE(2)); on any
+group it is the group's element, then its body twist (and the twist's rate: ``GroupState(group, 2)``), so on SE(3)
+[t; φ; ϖ]. A covariance of a state is that of its tangent under the prior's ``kind``
+(:class:`~steam_ref.manifold.Manifold`).
 Times are on the prior's clock (the model's times of :class:`~steam_ref.gp.clock.Clock`).
 """
 
@@ -40,7 +42,7 @@ _WRAPPERS = (*_INTERPOLATED, PoseReading)  # the factors a prior wraps a reading
 class MotionPrior(ABC):
     """One motion prior: everything that differs between priors (module docstring).
 
-    Every instance sets ``name`` (what a user calls it: 'wnoa', 'wnoj', 'singer', 'se2'), ``kind`` (how a
+    Every instance sets ``name`` (what a user calls it: 'wnoa', 'wnoj', 'singer', 'se2', 'se3-wnoj', ...), ``kind`` (how a
     state moves under a solver), ``state_dim`` (numbers in a state), ``qc`` (the (d, d) power spectral density
     of the white noise that drives it [YIB Eq. 14]) and ``state_names`` (a name for each number of a state, as
     files write them). The methods come in five groups: its factors, the state at any time, a new state's
@@ -85,8 +87,9 @@ class MotionPrior(ABC):
     @abstractmethod
     def first_state_prior(self, key: Key, pose: NDArray, velocity: NDArray, sigmas: Sequence[ArrayLike]) -> Factor:
         """The prior on the first state: its pose at ``pose`` [x, y, θ], its velocity at ``velocity`` (in the
-        frame the state holds it), any higher derivative at zero; ``sigmas`` the (3,) sigmas of each block in
-        order (pose, velocity, acceleration, ...), at least as many blocks as the state has."""
+        frame the state holds it), any higher derivative at zero; ``sigmas`` the sigmas of each block in order (pose,
+        velocity, acceleration, ...; 3 numbers a block on the plane, the group's dim on a group), at least as many
+        blocks as the state has."""
 
     # --- the state at any time ----------------------------------------------------------------------
 

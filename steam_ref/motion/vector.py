@@ -101,7 +101,7 @@ class VectorPrior(MotionPrior):
         blocks = self.state_dim // 3
         pose, velocity = measured_vector(pose, 3, "pose"), measured_vector(velocity, 3, "velocity")
         mean = np.concatenate([pose, velocity, np.zeros(self.state_dim - 6)])
-        return PriorFactor.create(key, mean, np.concatenate(sigma_blocks("sigmas", sigmas, blocks)))  # [YIB Eq. 4-5]
+        return PriorFactor.create(key, mean, np.concatenate(sigma_blocks("sigmas", sigmas, blocks)))  # [YIB Eq. 3, 5]
 
     # --- the state at any time ----------------------------------------------------------------------
 
