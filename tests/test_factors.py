@@ -90,6 +90,32 @@ def test_gp_prior_error_is_eq22(rng):
     np.testing.assert_allclose(np.sum(f.whitened_error(x1, x2) ** 2), e @ np.linalg.solve(q, e), rtol=1e-10)
 
 
+def _wnoa_information(dt: float, qc: np.ndarray) -> np.ndarray:
+    """Q(Δt)⁻¹ of the WNOA prior, Q written out  [YIB Eq. 17; derivations §1]."""
+    return np.linalg.inv(np.block([[dt**3 / 3 * qc, dt**2 / 2 * qc], [dt**2 / 2 * qc, dt * qc]]))
+
+
+@pytest.mark.parametrize("how", ["a read-only view of a writeable array", "made writeable, changed, read-only again"])
+def test_a_wnoa_prior_factor_whitens_by_the_values_qc_holds_now(how):
+    """A read-only Qc met before whose values changed since (through the writeable array it views, or made
+    writeable again): the factor whitens by Q(Δt) of its values now, not the first ones (the memo keyed by Qc's
+    identity gave the old W back)."""
+    dt, base = 0.37, np.diag([0.5, 0.25, 2.0])
+    if how.startswith("a read-only view"):
+        qc = base.view()
+        qc.flags.writeable = False
+    else:
+        qc = base
+        qc.flags.writeable = False
+    before = sr.GPPriorFactor.wnoa(X1, X2, dt, qc).sqrt_information
+    np.testing.assert_allclose(before.T @ before, _wnoa_information(dt, np.array(qc)), rtol=1e-10)
+    base.flags.writeable = True
+    base[:] = np.diag([3.0, 0.1, 0.7])
+    qc.flags.writeable = False
+    W = sr.GPPriorFactor.wnoa(X1, X2, dt, qc).sqrt_information
+    np.testing.assert_allclose(W.T @ W, _wnoa_information(dt, np.array(qc)), rtol=1e-10)
+
+
 def test_measurement_models_by_hand():
     x = np.array([1.0, 2.0, np.pi / 6, 0.4, -0.2, 0.05])
     c, s = np.cos(np.pi / 6), np.sin(np.pi / 6)

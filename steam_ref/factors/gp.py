@@ -58,16 +58,21 @@ class GPPriorFactor(Factor):
     def wnoa(cls, key1: Key, key2: Key, dt: float, qc: NDArray) -> GPPriorFactor:
         """The white-noise-on-acceleration prior over a gap dt (s) > 0; qc: Qc (d, d), the paper's (3, 3).
         [YIB Eq. 22, 30-31]"""
-        # a dt met before with this Qc: checked then
-        made = _BY_GAP.get((dt, id(qc))) if type(dt) in FLOAT_TYPES else None
+        # a dt met before with this Qc holding the same values (a read-only view of a writeable array, or an array
+        # made writeable again, may have changed since): checked then
+        key = (dt, id(qc))
+        made = _BY_GAP.get(key) if type(dt) in FLOAT_TYPES else None
+        if made is not None and made[4] != qc.tobytes():
+            del _BY_GAP[key]
+            made = None
         if made is None:
             w = process_noise_sqrt_information(dt, qc)  # WᵀW = Qᵢ⁻¹, memoised per (dt, Qc)
             d = w.shape[0] // 2
             v = np.zeros(2 * d)
             v.flags.writeable = False  # shared by every factor of this gap, as W and Φ are
-            made = (qc, w, transition(dt, d), v)
+            made = (qc, w, transition(dt, d), v, None)
             if type(dt) in FLOAT_TYPES and type(qc) is np.ndarray and not qc.flags.writeable:
-                _BY_GAP.keep((dt, id(qc)), made)  # the memo holds Qc: an id in it is still its
+                made = _BY_GAP.keep(key, (*made[:4], qc.tobytes()))  # the memo holds Qc: an id in it is still its
         return cls((key1, key2), made[1], phi=made[2], v=made[3])
 
     @classmethod
@@ -140,7 +145,7 @@ class GPPriorFactor(Factor):
         return made[2]
 
 
-_BY_GAP = Memo()  # (Qc, W, Φ, v) of ``wnoa`` by (dt, id of a read-only Qc)
+_BY_GAP = Memo()  # (Qc, W, Φ, v, Qc's bytes) of ``wnoa`` by (dt, id of a read-only Qc)
 _WHITENED = Memo()  # (W, Φ, blocks) by the ids of W and Φ: a stream's priors share a few gaps; past the memo's size,
 # new ones go the linearization's usual way
 
