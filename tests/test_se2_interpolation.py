@@ -1,14 +1,16 @@
 """The local GP on SE(2) (steam_ref.lie.gp): the interpolated mean against brute force (the states at
-the ends, a constant-twist path), its Jacobians against central differences, its covariance and the
+the ends, a constant-twist path, the dense local GP's conditional mean), its Jacobians against central differences, its covariance and the
 extrapolation's against Monte Carlo through the exact nonlinear maps."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
+import scipy.linalg
+from oracles import gp_kernel
 
 from steam_ref.errors import SteamError
-from steam_ref.gp import interpolate_covariance, interpolation_matrices, process_noise
+from steam_ref.gp import LinearSDE, interpolate_covariance, interpolation_matrices, process_noise
 from steam_ref.lie import SE2, SE2_STATE
 from steam_ref.lie.gp import (
     extrapolate,
@@ -17,6 +19,7 @@ from steam_ref.lie.gp import (
     local_variables,
 )
 from steam_ref.lie.gp import interpolate_covariance as lie_interpolate_covariance
+from steam_ref.motion.lie_group import LieGroupWnoa
 
 QC = np.diag([0.3, 0.2, 0.5])
 X1 = np.array([1.0, 2.0, 2.9, 0.8, 0.1, 0.9])
@@ -62,6 +65,53 @@ def test_on_a_constant_twist_the_mean_lies_on_the_path(model):
         np.testing.assert_allclose(x[3:], twist, atol=1e-14)
         pred = extrapolate(x1, 0.0, tau, group=SE2)[0]
         np.testing.assert_allclose(pred, np.r_[path, twist], atol=1e-14)
+
+
+def _matrix(pose):
+    """The 3 × 3 matrix of a planar pose [x, y, θ], written out."""
+    c, s = np.cos(pose[2]), np.sin(pose[2])
+    return np.array([[c, -s, pose[0]], [s, c, pose[1]], [0.0, 0.0, 1.0]])
+
+
+def _hat(xi):
+    return np.array([[0.0, -xi[2], xi[0]], [xi[2], 0.0, xi[1]], [0.0, 0.0, 0.0]])
+
+
+def _log(T):
+    L = np.real(scipy.linalg.logm(T))
+    return np.array([L[0, 2], L[1, 2], L[1, 0]])
+
+
+def _jr(xi, h=1e-5):
+    """J_r(ξ) by central differences of Exp(ξ + δ) = Exp(ξ) Exp(J_r(ξ) δ), matrices by expm and logm."""
+    E_inv = np.linalg.inv(scipy.linalg.expm(_hat(xi)))
+    return np.stack(
+        [(_log(E_inv @ scipy.linalg.expm(_hat(xi + h * e))) - _log(E_inv @ scipy.linalg.expm(_hat(xi - h * e)))) / (2 * h)
+         for e in np.eye(3)],
+        axis=-1,
+    )  # fmt: skip
+
+
+@pytest.mark.parametrize("model", MODELS)
+@pytest.mark.parametrize("tau", [0.35, 1.0, 1.6])
+def test_the_motion_priors_mean_is_the_dense_local_gps_conditional_mean(model, tau):
+    """``LieGroupWnoa(SE2).interpolate`` = (T₁ Exp(ξ(τ)), J_r(ξ(τ)) ξ̇(τ)) (simplified: ξ̇(τ)) with γ(τ) the posterior
+    mean [YIB Eq. 12] of the local WNOA GP given γ₁ = [0; ϖ₁] and γ₂ = [ξ₂₁; J_r(ξ₂₁)⁻¹ ϖ₂] (simplified: ϖ₂)
+    [DER 11.10, 11.15]. Oracles: the dense kernel by quadrature over t₁, τ, t₂; Exp and Log by expm and logm of
+    3 × 3 matrices; J_r by central differences."""
+    t1, t2 = 0.0, 2.0
+    xi21 = _log(np.linalg.inv(_matrix(X1)) @ _matrix(X2))
+    rate2 = np.linalg.solve(_jr(xi21), X2[3:]) if model == "local-variable" else X2[3:]
+    gamma_ends = np.concatenate([np.zeros(3), X1[3:], xi21, rate2])  # [γ₁; γ₂]
+    K = gp_kernel(np.array([t1, tau, t2]), LinearSDE.wnoa(QC).general(), np.eye(6))
+    ends, mid = np.r_[0:6, 12:18], np.r_[6:12]
+    gamma = K[np.ix_(mid, ends)] @ np.linalg.solve(K[np.ix_(ends, ends)], gamma_ends)  # [YIB Eq. 12], μ = 0
+    T = _matrix(X1) @ scipy.linalg.expm(_hat(gamma[:3]))
+    twist = _jr(gamma[:3]) @ gamma[3:] if model == "local-variable" else gamma[3:]
+    got = LieGroupWnoa(SE2, QC, model).interpolate(t1, X1, t2, X2, tau)
+    np.testing.assert_allclose(got[:2], T[:2, 2], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(got[2], np.arctan2(T[1, 0], T[0, 0]), rtol=0, atol=1e-9)
+    np.testing.assert_allclose(got[3:], twist, rtol=0, atol=1e-8)
 
 
 @pytest.mark.parametrize("model", MODELS)
