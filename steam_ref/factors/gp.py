@@ -156,8 +156,8 @@ def gp_prior_factors(keys: list[Key], times: NDArray, prior: NDArray | LinearSDE
     ``keys``: any iterable of M state keys (``[X(0), X(1), ...]``), each state [x, y, θ, ẋ, ẏ, θ̇] (velocity in
     the world frame); ``times``: their M times (s); ``prior``: Qc of the paper's WNOA prior, a (3, 3) power
     spectral density in m²/s³ (x, y) and rad²/s³ (θ), or any :class:`~steam_ref.gp.LinearSDE`. With Qc, factor i
-    is ``GPPriorFactor.wnoa(keys[i], keys[i+1], times[i+1] - times[i], qc)``, error xᵢ₊₁ - Φ xᵢ (``from_sde``
-    with a LinearSDE). What Qc means and how to choose it: docs/api.md, "Conventions".
+    is ``GPPriorFactor.wnoa(keys[i], keys[i+1], times[i+1] - times[i], qc)``, error xᵢ₊₁ - Φ xᵢ (``from_sde`` with a
+    LinearSDE, error xᵢ₊₁ - Φ xᵢ - vᵢ). What Qc means and how to choose it: docs/api.md, "Conventions".
     """
     keys, gaps = consecutive_gaps(keys, times)
     sde = as_sde(prior)
