@@ -843,3 +843,18 @@ def test_marking_stopped_by_ctrl_c_or_sigterm_ends_at_once_and_leaves_no_kernel(
     assert (proc.returncode, err) == (code, f"steam-ref: {line}\n")
     assert left == [], f"kernels still running after {name}: {left}"
     assert took < 15, f"the marking took {took:.1f} s to stop"  # a kernel's death is seen within a second or two
+
+
+@pytest.mark.parametrize("stop", ["yes", True, 1])
+def test_a_stop_that_is_not_an_event_is_refused_naming_it(course, stop):
+    """``stop=`` of ``mark_submission`` and ``stop_marking``: a threading.Event; anything else was an AttributeError
+    (``'str' object has no attribute 'set'``) from deep inside, or, for ``mark_submission``, only when it was read."""
+    from steam_ref.homework import load_tutorials, mark_submission, stop_marking
+
+    said = re.escape(f"stop must be a threading.Event or None, got stop={stop!r}")
+    with pytest.raises(SteamError, match=said):
+        stop_marking(stop)
+    tutorials = load_tutorials(course / "teacher")
+    path = _submit(course, "ann", {"s1": "square = 9", "s2": "cube = lambda x: x**3"})
+    with pytest.raises(SteamError, match=said):
+        mark_submission(path, "ann", tutorials, 10, stop=stop)

@@ -346,6 +346,7 @@ def mark_submission(
 ) -> SubmissionMark:
     """Mark the notebook at ``path`` (named ``shown`` in the report); never raises for a bad submission. With a
     ``stop``, :func:`~.stopping.stop_marking` ends the run at once, and this raises :class:`~.stopping.Stopped`."""
+    stopping.check_stop(stop)
     try:
         nb: dict | None = read_notebook(path)
         problem = None

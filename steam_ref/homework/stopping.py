@@ -11,7 +11,9 @@ from __future__ import annotations
 import threading
 from typing import Any
 
-__all__ = ["Stopped", "stop_marking", "started", "ended"]
+from ..errors import SteamError
+
+__all__ = ["Stopped", "check_stop", "stop_marking", "started", "ended"]
 
 
 class Stopped(Exception):
@@ -27,12 +29,19 @@ def stop_marking(stop: threading.Event) -> None:
     """Set ``stop`` and kill the kernel of every run that obeys it, so that each ends at once, raising
     :class:`Stopped`; a run still starting its kernel kills it as soon as it is up. (Ctrl-C while marking: a
     kernel runs in a session of its own, which a terminal's Ctrl-C never reaches, and its cells would run on to
-    their time limits.)"""
+    their time limits.) SteamError naming ``stop`` unless it is a :class:`threading.Event`."""
+    check_stop(stop)
     with _RUNS_LOCK:
         stop.set()
         kernels = [km for obeys, km in _RUNS.values() if obeys is stop]
     for km in kernels:
         _kill(km)
+
+
+def check_stop(stop: object) -> None:
+    """SteamError naming ``stop`` unless it is a :class:`threading.Event` (or None: a run nothing stops)."""
+    if stop is not None and not isinstance(stop, threading.Event):
+        raise SteamError(f"stop must be a threading.Event or None, got stop={stop!r}")
 
 
 def _kill(km: Any) -> None:
