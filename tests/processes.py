@@ -3,6 +3,10 @@ descendants, and whether one still runs, so that a test can check that an interr
 
 from __future__ import annotations
 
+import os
+import signal
+import subprocess
+import time
 from pathlib import Path
 
 
@@ -45,3 +49,21 @@ def command_line(pid: int) -> str:
         return (Path("/proc") / str(pid) / "cmdline").read_bytes().replace(b"\0", b" ").decode(errors="replace")
     except OSError:
         return ""
+
+
+def left_running(pids: list[int], wait_s: float = 3.0) -> list[int]:
+    """Those of ``pids`` still running after up to ``wait_s`` seconds for them to end."""
+    deadline = time.monotonic() + wait_s
+    while any(map(running, pids)) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    return [pid for pid in pids if running(pid)]
+
+
+def clean_up(proc: subprocess.Popen, pids: list[int]) -> None:
+    """Kill ``proc`` if it still runs and every one of ``pids`` that does: only what a test started, by pid."""
+    if proc.poll() is None:
+        proc.kill()
+        proc.wait()
+    for pid in pids:
+        if running(pid):
+            os.kill(pid, signal.SIGKILL)

@@ -18,7 +18,7 @@ import time
 from pathlib import Path
 
 import pytest
-from processes import command_line, descendants, running
+from processes import clean_up, command_line, descendants, left_running
 from requirements import optional_import
 
 from steam_ref.cli.commands import main
@@ -829,17 +829,9 @@ def test_marking_stopped_by_ctrl_c_or_sigterm_ends_at_once_and_leaves_no_kernel(
         os.killpg(proc.pid, getattr(signal, name))  # Ctrl-C reaches the whole group; SIGTERM too, here
         _, err = proc.communicate(timeout=30)
         took = time.monotonic() - began
-        deadline = time.monotonic() + 3
-        while any(map(running, kernels)) and time.monotonic() < deadline:
-            time.sleep(0.05)
-        left = [pid for pid in kernels if running(pid)]
+        left = left_running(kernels)
     finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait()
-        for pid in kernels:  # only what this test started, by pid
-            if running(pid):
-                os.kill(pid, signal.SIGKILL)
+        clean_up(proc, kernels)
     assert (proc.returncode, err) == (code, f"steam-ref: {line}\n")
     assert left == [], f"kernels still running after {name}: {left}"
     assert took < 15, f"the marking took {took:.1f} s to stop"  # a kernel's death is seen within a second or two

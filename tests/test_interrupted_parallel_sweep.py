@@ -17,7 +17,7 @@ import sys
 import time
 
 import pytest
-from processes import command_line, descendants, running
+from processes import clean_up, command_line, descendants, left_running
 
 from steam_ref.cli.commands import build_parser
 from steam_ref.cli.consistency import _study
@@ -76,17 +76,9 @@ def test_an_interrupted_parallel_sweep_answers_in_one_line_and_leaves_no_worker(
         else:
             proc.send_signal(signal_number)
         _, err = proc.communicate(timeout=60)
-        deadline = time.monotonic() + 3
-        while any(map(running, started)) and time.monotonic() < deadline:
-            time.sleep(0.05)
-        left = [pid for pid in started if running(pid)]
+        left = left_running(started)
     finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait()
-        for pid in started:  # only what this test started, by pid
-            if running(pid):
-                os.kill(pid, signal.SIGKILL)
+        clean_up(proc, started)
     assert (proc.returncode, err) == (code, line + "\n")
     assert left == [], f"worker processes still running after {name}: {left}"
     study = _study(build_parser("consistency").parse_args(ARGV))
