@@ -30,14 +30,7 @@ from pathlib import Path
 from ..errors import SteamError
 from ..files import replace_file
 from .exercises import handout, read_notebook
-from .marking import (
-    SubmissionMark,
-    Tutorial,
-    load_tutorials,
-    mark_submission,
-    requirements,
-    tutorial_of,
-)
+from .marking import SubmissionMark, Tutorial, load_tutorials, mark_submission, requirements, tutorial_of
 from .stopping import stop_marking
 
 __all__ = ["run", "grade_book"]
