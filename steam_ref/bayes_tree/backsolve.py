@@ -5,9 +5,9 @@
 1. Start at the roots of the re-eliminated top of the tree; its cliques are always solved.
 2. For the current clique, compute the frontal variables from the separator's current solution,
    δ_F = R⁻¹(d - S δ_S) [YIB Eq. 25], as g - G δ_S: ``Clique.solved`` keeps g = R⁻¹d and G = R⁻¹S (the paper's rᵀ).
-3. If a frontal variable changed by at least the wildfire threshold α (α = 0: always), descend into the
-   children whose separator holds it; a re-made clique is entered in any case. Otherwise stop. (A leaf has no
-   children to decide on: its variables' changes are not measured.)
+3. Enter each child whose separator holds a variable that changed by at least the wildfire threshold α, here or
+   in an ascendant (α = 0: every child; a re-made clique in any case); skip the others, and so their subtrees.
+   (A leaf has no children to decide on: its variables' changes are not measured.)
 
 Changes are judged per variable (the newest state moving must not mark the landmarks of its clique changed).
 Each new δ is checked against the variable's relinearization threshold β here, the only place δ changes: the

@@ -237,7 +237,11 @@ def min_degree_keys(
     ``first`` (GTSAM's ``constrainedKeys``): the variables it names (and ``last`` does not) are eliminated before
     all others, in increasing order of the number it maps each to (ties in the order of ``variables``), and the
     rest by minimum degree on the graph their elimination leaves: a fixed-lag smoother puts the variables next to
-    leave its window there, so that they sit in leaf cliques and are cut off with no re-elimination.
+    leave its window there, so that they sit in leaf cliques and are cut off with no re-elimination. GTSAM's
+    numbers are CCOLAMD groups instead: a group is ordered within itself by fill, a key the map leaves out is in
+    group 0 (among the first), and the map replaces iSAM2's rule of the new factors' keys last
+    (``ISAM2::recalculateIncremental``); here each number ranks its keys, a key left out comes after them, and
+    ``last`` still holds.
     """
     if first is not None:
         return _first_then_min_degree(list(variables), dims, factor_keys, list(last), first)
