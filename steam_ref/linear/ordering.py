@@ -234,14 +234,11 @@ def min_degree_keys(
     constrained ordering iSAM2 obtains from CCOLAMD, which keeps the variables touched by new
     factors near the root so the next update removes little of the tree.  [K12 Sec. 5]
 
-    ``first`` (GTSAM's ``constrainedKeys``): the variables it names (and ``last`` does not) are eliminated before
-    all others, in increasing order of the number it maps each to (ties in the order of ``variables``), and the
+    ``first`` (after GTSAM's ``constrainedKeys``): the variables it names (and ``last`` does not) are eliminated
+    before all others, in increasing order of the number it maps each to (ties in the order of ``variables``), the
     rest by minimum degree on the graph their elimination leaves: a fixed-lag smoother puts the variables next to
-    leave its window there, so that they sit in leaf cliques and are cut off with no re-elimination. GTSAM's
-    numbers are CCOLAMD groups instead: a group is ordered within itself by fill, a key the map leaves out is in
-    group 0 (among the first), and the map replaces iSAM2's rule of the new factors' keys last
-    (``ISAM2::recalculateIncremental``); here each number ranks its keys, a key left out comes after them, and
-    ``last`` still holds.
+    leave its window there, to sit in leaf cliques, cut off with no re-elimination. GTSAM's numbers are CCOLAMD
+    groups (each ordered by fill, a key left out in group 0) that replace iSAM2's new keys last; ``last`` holds here.
     """
     if first is not None:
         return _first_then_min_degree(list(variables), dims, factor_keys, list(last), first)
