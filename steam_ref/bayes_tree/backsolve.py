@@ -10,10 +10,10 @@
    (A leaf has no children to decide on: its variables' changes are not measured.)
 
 Changes are judged per variable (the newest state moving must not mark the landmarks of its clique changed).
-Each new δ is checked against the variable's relinearization threshold β here, the only place δ changes: the
-candidates of the next fluid relinearization [K12 Alg. 5; YIB Alg. 1 step 7]. Both tests take max abs(·) of a
-variable's 2 to 18 numbers (and its change) in Python floats, at half the cost of NumPy's calls (the same when finite).
-(A variant solving a tree level at a time in stacked NumPy calls was removed, slower: docs/experiments.md.)
+Each new δ is checked against its variable's threshold β here, where every δ is solved (a relinearization moves δ
+into θ̄ and clears the candidates): the candidates of the next fluid relinearization [K12 Alg. 5; YIB Alg. 1 step 7].
+Both tests take max abs(·) of a variable's 2 to 18 numbers (and its change) in Python floats, at half NumPy's cost
+(equal when finite). (A level-at-a-time variant in stacked NumPy calls was removed, slower: docs/experiments.md.)
 """
 
 from __future__ import annotations
