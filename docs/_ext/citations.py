@@ -5,7 +5,7 @@ A citation is a bracket on one line holding the tag ``YIB``, alone or among othe
     [YIB Eq. 17]   [YIB Eq. 24-25]   [YIB Eq. 2, 6, 26-27]   [YIB Eq. 13, 28; 18, 29]
     [YIB Alg. 1]   [YIB Alg. 1 step 7]   [YIB Alg. 1 steps 2-5]   [YIB step 6]   [YIB Eq. 25, step 6]
     [YIB Sec. III-A, Eq. 24-25]   [YIB Fig. 2-4]   [YIB Sec. IV, Table I]   [YIB]
-    [DER 11.18; YIB Eq. 17]   [K12 Alg. 4, YIB steps 2-5]   [YIB Eq. 11; derivations §1]   [YIB Eq. 11: prose]
+    [DER 11.18; YIB Eq. 17]   [K12 Alg. 6, YIB steps 2-5]   [YIB Eq. 11; derivations §1]   [YIB Eq. 11: prose]
 
 After ``YIB`` come items separated by commas or semicolons: ``Eq.`` with numbers and ranges (a bare number
 or range after it continues the list), ``Alg. 1`` with its ``step``/``steps``, a bare ``step``/``steps`` (of

@@ -1,10 +1,10 @@
-"""Incremental updates of the Bayes tree: iSAM2, the paper's Algorithm 1.  [YIB Alg. 1, K12 Alg. 6]
+"""Incremental updates of the Bayes tree: iSAM2, the paper's Algorithm 1.  [YIB Alg. 1, K12 Alg. 4]
 
-One :meth:`IncrementalSolver.update` is one step of [K12 Alg. 6], and ``_update`` lists its steps in that numbering,
+One :meth:`IncrementalSolver.update` is one step of [K12 Alg. 4], and ``_update`` lists its steps in that numbering,
 each with its step of [YIB Alg. 1]: (1-2) store the new factors F′ and variables; (3) fluid relinearization
 [K12 Alg. 5] of θ_rl, the variables whose δ reached the threshold β, which [YIB] numbers 7, the end of the previous round: iSAM2
 collects the candidates while computing δ and moves θ̄ at the start of the next update (every
-``relinearize_skip``-th); (4) redo the top of the tree for θ_aff = θ_nf ∪ θ_rl [K12 Alg. 4, YIB steps 2-5]: remove the
+``relinearize_skip``-th); (4) redo the top of the tree for θ_aff = θ_nf ∪ θ_rl [K12 Alg. 6, YIB steps 2-5]: remove the
 cliques holding θ_aff and their ascendants, linearize the factors of the removed part that are new or touch θ_rl (the
 others keep their cached linearization), add the orphans' cached marginal factors f(S), order with the variables of F′
 last, eliminate, attach back the orphans; (5) partial back-substitution, descending only where δ changes by at least
@@ -84,7 +84,7 @@ class UpdateReport:
 
 
 class IncrementalSolver:
-    """iSAM2 on the Bayes tree: BTGP's incremental solver.  [YIB Alg. 1, K12 Alg. 6]
+    """iSAM2 on the Bayes tree: BTGP's incremental solver.  [YIB Alg. 1, K12 Alg. 4]
 
     ``params`` (default :class:`ISAM2Params`, GTSAM's defaults) sets the relinearization and wildfire thresholds;
     keyword ``changes`` override its fields, so ``IncrementalSolver(relinearize_skip=1, wildfire_threshold=0)`` works.
@@ -182,7 +182,7 @@ class IncrementalSolver:
         relinearize: bool = True,
         constrained: Mapping[Key, float] | None = None,
     ) -> UpdateReport:
-        """Add factors and variables, and update the tree and the estimate.  [YIB Alg. 1, K12 Alg. 6]
+        """Add factors and variables, and update the tree and the estimate.  [YIB Alg. 1, K12 Alg. 4]
 
         Each new variable is of the kind its factors declare (``new_values`` may be a plain mapping). ``relinearize``
         False skips this update's fluid relinearization; ``constrained`` (GTSAM's ``constrainedKeys``): keys to
@@ -225,7 +225,7 @@ class IncrementalSolver:
         constrained: Mapping[Key, float] | None,
         timer: PhaseTimer,
     ) -> UpdateReport:
-        """One step of iSAM2, numbered as [K12 Alg. 6], with the steps of [YIB Alg. 1] (module docstring)."""
+        """One step of iSAM2, numbered as [K12 Alg. 4], with the steps of [YIB Alg. 1] (module docstring)."""
         state = self.state
         state.steps += 1
         # 1-2. F ← F ∪ F′, Θ ← Θ ∪ Θ′ (θ̄ = initial value, δ = 0); θ_nf: the variables of F′.   [YIB step 1]
@@ -239,7 +239,7 @@ class IncrementalSolver:
         with timer("relinearize"):
             due = relinearize and state.steps % self.params.relinearize_skip == 0
             theta_rl = self._fluid_relinearization() if due else []
-        # 4. Redo the top of the tree for θ_aff = θ_nf ∪ θ_rl.                  [K12 Alg. 4; YIB steps 2-5]
+        # 4. Redo the top of the tree for θ_aff = θ_nf ∪ θ_rl.                  [K12 Alg. 6; YIB steps 2-5]
         # 4a. Remove the cliques of θ_aff and their ascendants; the orphans stay. [YIB step 2]
         with timer("remove"):
             removed, orphans = self._remove_top(theta_nf, theta_rl)
@@ -248,7 +248,7 @@ class IncrementalSolver:
             fids = [j for c in removed.values() for j in c.factors] + new_ids
             n_linearized = self._relinearize(fids, set(theta_rl))
         # 4c. Add the cached marginal factors f(S) of the orphans.                [YIB step 4]
-        # 4d. Order the removed part by constrained minimum degree, θ_nf last.    [K12 Sec. 5]
+        # 4d. Order the removed part by constrained minimum degree, θ_nf last.    [K12 Sec. 4.2]
         with timer("order"):
             linear = [state.cached(j) for j in fids] + [self.tree.cliques[o].marginal for o in orphans]
             variables = [k for c in removed.values() for k in c.frontals] + list(theta_new)
@@ -330,7 +330,7 @@ class IncrementalSolver:
         return theta_rl
 
     def _remove_top(self, theta_nf: list[Key], theta_rl: list[Key]) -> tuple[dict[int, Clique], list[int]]:
-        """Remove the cliques of θ_aff = θ_nf ∪ θ_rl and their ascendants: ``(removed, orphans)``.  [K12 Alg. 4]
+        """Remove the cliques of θ_aff = θ_nf ∪ θ_rl and their ascendants: ``(removed, orphans)``.  [K12 Alg. 6]
         A variable of θ_nf affects the clique where it is frontal (a new one is in none yet); a relinearized one
         every clique holding it, whose conditionals were computed at its old θ̄."""
         start = [self.tree.frontal_of[k] for k in theta_nf if k in self.tree.frontal_of]

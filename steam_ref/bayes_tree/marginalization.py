@@ -23,7 +23,7 @@ tree, in the update's style:
    subtrees it equals their tops' f(S), which ``reuse_marginals`` takes as it is, with no elimination.)
 3. *Otherwise: re-eliminate the affected part with D first.* (GTSAM's ``marginalizeLeaves`` needs D in
    leaves; an ordering with D first puts it there.) The cliques of D and their ascendants are removed,
-   as an update removes its top [K12 Alg. 4]. D is eliminated first from the factors adjacent to it
+   as an update removes its top [K12 Alg. 6]. D is eliminated first from the factors adjacent to it
    (Eq. 10.1-10.2, one variable at a time), its conditionals are dropped, and the rest of the removed
    part is eliminated as an update would, from its remaining factors, the marginal factors and the
    orphans' cached f(S), with the old root's variables kept last (and the caller's ``constrained`` first);

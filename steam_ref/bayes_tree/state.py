@@ -1,4 +1,4 @@
-"""Everything an incremental solver holds, in one object with one undo log.  [K12 Alg. 6]
+"""Everything an incremental solver holds, in one object with one undo log.  [K12 Alg. 4]
 
 :class:`SolverState` owns the Bayes tree and every per-factor and per-variable store (listed once, in
 :attr:`SolverState.STORES`), with the operations every step needs: add or drop a variable, append or drop

@@ -189,7 +189,7 @@ class CliqueTree(Generic[C]):
         owners: Sequence[int] = (),
     ) -> list[int]:
         """Add the cliques of one elimination (children first; ``parents`` index into the list) and hang each
-        orphan under ``cliques[owner]``, the new clique that eliminated its cached f(S) ([K12 Alg. 4], its last step);
+        orphan under ``cliques[owner]``, the new clique that eliminated its cached f(S) ([K12 Alg. 6], its last step);
         returns the new ids."""
         ids: list[int | None] = [None] * len(cliques)
         for i in reversed(range(len(cliques))):  # parents before children

@@ -1,5 +1,5 @@
 """Every variable ordering of steam_ref: natural, XL (the paper's PB), AMD (PBVR) and the
-constrained minimum degree of iSAM2.  [YIB Sec. III, IV, K12 Sec. 5]
+constrained minimum degree of iSAM2.  [YIB Sec. III, IV, K12 Sec. 4.2]
 
 An ordering is the order in which variables are eliminated, i.e. the order of the column blocks
 of A and of the rows/columns of 𝓘. Natural keeps the order given; XL puts every trajectory state
@@ -232,7 +232,7 @@ def min_degree_keys(
     not AMD's approximation. Ties go to the variable listed first in ``variables``. Variables in
     ``last`` are ordered among themselves by minimum degree too, after all others: this is the
     constrained ordering iSAM2 obtains from CCOLAMD, which keeps the variables touched by new
-    factors near the root so the next update removes little of the tree.  [K12 Sec. 5]
+    factors near the root so the next update removes little of the tree.  [K12 Sec. 4.2]
 
     ``first`` (after GTSAM's ``constrainedKeys``): the variables it names (and ``last`` does not) are eliminated
     before all others, in increasing order of the number it maps each to (ties in the order of ``variables``), the
