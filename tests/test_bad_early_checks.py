@@ -242,3 +242,18 @@ def test_check_stationarity_refuses_a_value_no_factor_names():
     wider = make_ordering("natural", [X(0), L(0), X(7)], {X(0): 6, L(0): 2, X(7): 6}, [[X(0), L(0), X(7)]])
     with pytest.raises(SteamError, match=r"x7"):  # an ordering of a variable no factor names: named too
         check_stationarity(factors, values, wider)
+
+
+def test_check_stationarity_takes_an_ordering_by_name_as_gauss_newton_does():
+    """docs/api.md lists ``check_stationarity(graph, values, ordering)`` beside ``gauss_newton(..., ordering='amd')``;
+    a name was refused ("ordering must be an Ordering"). By name it checks exactly what the named ordering checks."""
+    factors, values, _ = _two_variables()
+    graph = sr.FactorGraph(factors)
+    exact = ("cost", "predicted_decrease", "gradient_norm")  # the condition is a randomized estimate (onenormest)
+    for name in ("natural", "xl", "amd"):
+        ordering = make_ordering(name, graph.keys(), sr.Values(values).dims(), [f.keys for f in graph])
+        expected = check_stationarity(factors, values, ordering)
+        found = check_stationarity(factors, values, name)
+        assert [getattr(found, f) for f in exact] == [getattr(expected, f) for f in exact], name
+    with pytest.raises(SteamError, match=r"unknown ordering 'colamd'"):
+        check_stationarity(factors, values, "colamd")
