@@ -9,7 +9,7 @@ steam_ref's otherwise), refuses to write a kit that steam_ref fails, and writes 
 :func:`selftest` regenerates every case from the shipped inputs with the installed code and checks
 it against the shipped expected values: steam_ref's results, the oracle's (for independent cases),
 and that the inputs defined in :mod:`.cases` are still the shipped ones. The paper suite runs only
-when asked (two full runs, about a minute).
+when asked (two full runs, about half a minute).
 """
 
 from __future__ import annotations
@@ -330,7 +330,7 @@ def selftest(
         check_cases("paper", cases, results, report)
     else:
         report.notes.append(
-            f"paper suite not run ({', '.join(c['name'] for c in cases)}: two full BTGP/1 runs, about a minute): "
+            f"paper suite not run ({', '.join(c['name'] for c in cases)}: two full BTGP/1 runs, about half a minute): "
             "add --paper"
         )
     return report

@@ -85,7 +85,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
         example="steam-ref conformance selftest",
     )
     st.add_argument(
-        "--paper", action="store_true", help="also run the paper suite (BTGP/1 on both data sets, about a minute)"
+        "--paper", action="store_true", help="also run the paper suite (BTGP/1 on both data sets, about half a minute)"
     )
     add_data_dir(st, PAPER_FILES)  # the one --data-dir of every command (args.folder: an existing folder)
     st.add_argument(
