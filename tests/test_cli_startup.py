@@ -115,6 +115,22 @@ def test_a_bad_argument_is_one_line_and_exit_2_without_scipy_sparse_or_the_solve
     assert not loaded, f"steam-ref {' '.join(argv)} loaded {loaded[:8]}"
 
 
+UNKNOWN = [
+    (("run", "extra"), "unrecognized arguments: extra (see 'steam-ref run --help')"),
+    (("run", "--nonsense"), "unrecognized arguments: --nonsense (see 'steam-ref run --help')"),
+    (("conformance", "check", "a", "b"), "unrecognized arguments: b (see 'steam-ref conformance check --help')"),
+    (("data", "fetch", "plaza", "--bogus"), "unrecognized arguments: --bogus (see 'steam-ref data fetch --help')"),
+]
+
+
+@pytest.mark.parametrize(("argv", "says"), UNKNOWN, ids=[" ".join(a) for a, _ in UNKNOWN])
+def test_an_unknown_argument_points_at_its_own_commands_help(argv, says):
+    """argparse hands a subcommand's unknown arguments up to the top parser, whose line said
+    ``(see 'steam-ref --help')``: the page that lists the commands, not the options the user was typing."""
+    got = _parse_only(*argv)
+    assert got["code"] == 2 and got["out"] == "" and got["err"] == f"steam-ref: error: {says}\n", got
+
+
 def test_the_probe_sees_what_a_command_that_runs_loads():
     """The check above could pass by looking at nothing: a command that runs loads the solvers, and the probe says so."""
     # refused by run's module, once loaded: --lag forgets the covariances --save-estimates writes
