@@ -158,19 +158,14 @@ def _scaled_condition(info: sp.csc_matrix, chol: SparseCholesky) -> float:
 
 
 def check_stationarity(
-    graph: FactorGraph | Iterable[Factor],
-    values: Values | Mapping,
-    ordering: str | Ordering,
-    backend: str | None = None,
+    graph: FactorGraph | Iterable[Factor], values: Mapping, ordering: str | Ordering, backend: str | None = None
 ) -> Stationarity:
     """How far ``values`` is from a stationary point of the cost, and whether float64 can tell.
 
-    Linearizes at θ̄ and computes the Gauss-Newton step δ = 𝓘⁻¹Aᵀb: its model decrease ½ (Aᵀb)ᵀδ is
-    what one more iteration would gain, a scale-free measure of the gradient Aᵀb (zero exactly at a
-    stationary point). The condition estimate says whether that step means anything. ``graph``, ``values``
-    and ``ordering`` (a name or an :class:`Ordering`) as :func:`gauss_newton` takes them; a value no factor names
-    is refused (the check would say nothing of it).
-    """
+    Linearizes at θ̄ and computes the Gauss-Newton step δ = 𝓘⁻¹Aᵀb: its model decrease ½ (Aᵀb)ᵀδ is what one more
+    iteration would gain, a scale-free measure of the gradient Aᵀb (zero exactly at a stationary point). The condition
+    estimate says whether that step means anything. ``graph``, ``values`` and ``ordering`` (a name or an Ordering) as
+    :func:`gauss_newton` takes them; a value no factor names is refused (the check would say nothing of it)."""
     graph, values = graph if isinstance(graph, FactorGraph) else FactorGraph(graph), as_values("values", values)
     if extra := set(values).difference(graph.keys()):
         raise SteamError(f"check_stationarity: variable {min(extra, key=repr)!r} has a value but no factor names it")

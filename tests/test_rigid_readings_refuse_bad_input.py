@@ -15,10 +15,10 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from steam_ref.datasets.rigid import RIGID_QC, generate_rigid
-from steam_ref.errors import DataError, ShapeError
+from steam_ref.datasets.rigid import RIGID_QC, generate_rigid, sample_rigid_task
+from steam_ref.errors import DataError, ShapeError, SteamError
 from steam_ref.motion import motion_prior
-from steam_ref.paper.rigid import solve_rigid
+from steam_ref.paper.rigid import held_out_errors, solve_rigid, straight_line_errors
 
 
 @pytest.fixture(scope="module")
@@ -81,3 +81,19 @@ def test_first_values_of_the_wrong_shape_are_a_shape_error_naming_initial(data, 
     rows ran, the last never read."""
     with pytest.raises(ShapeError, match=rf"initial must be \(13, 12\).*got shape \({shape[0]}, {shape[1]}\)"):
         solve_rigid(data, motion_prior("se3", RIGID_QC), method, initial=np.zeros(shape))
+
+
+def test_a_sample_given_where_its_readings_are_meant_is_refused_naming_data():
+    """docs/api.md names ``sample_rigid_task`` (which draws a task with its truth) and ``solve_rigid(data, ...)`` in
+    one breath; the sample itself given as ``data`` failed with AttributeError: 'RigidSample' object has no
+    attribute 'on' (and ``straight_line_errors`` with one on 'state_times')."""
+    prior = motion_prior("se3", RIGID_QC)
+    sample = sample_rigid_task(prior, 6, 3, 0)
+    says = r"data must be a RigidReadings \(a RigidSample's readings are its \.data\), got a RigidSample"
+    with pytest.raises(SteamError, match=says):
+        solve_rigid(sample, prior)
+    with pytest.raises(SteamError, match=says):
+        straight_line_errors(sample)
+    with pytest.raises(SteamError, match=says):
+        held_out_errors(sample, prior, sample.states)
+    assert solve_rigid(sample.data, prior).states.shape == sample.states.shape  # its readings, as meant

@@ -97,28 +97,13 @@ class Parser(argparse.ArgumentParser):
         for name in (None, "store"):  # an option given twice with two values is refused (cli/once.py)
             self.register("action", name, StoreOnce)
 
-    is_command = False  # a subcommand's parser (`steam-ref run`, `steam-ref conformance check`), not the top one
-
     def add_subparsers(self, **kwargs: Any) -> Any:
         """argparse's subcommands, each ``add_parser`` given :func:`_command_help`'s keywords."""
         commands = super().add_subparsers(**kwargs)
         plain = commands.add_parser
-
-        def add_parser(name: str, **options: Any) -> argparse.ArgumentParser:
-            parser = plain(name, **_command_help(options))
-            parser.is_command = True
-            return parser
-
-        commands.add_parser = add_parser  # type: ignore[method-assign]  # argparse's action class is private
+        # this action's own add_parser (argparse's action class is private: not subclassed)
+        commands.add_parser = lambda name, **options: plain(name, **_command_help(options))  # type: ignore[method-assign]
         return commands
-
-    def parse_known_args(self, args: Any = None, namespace: Any = None) -> Any:
-        """argparse's, but a subcommand refuses what it does not know itself, pointing at its own ``--help``
-        (argparse hands it up to the top parser, whose error named ``steam-ref --help``)."""
-        parsed, extras = super().parse_known_args(args, namespace)
-        if extras and self.is_command:
-            self.error(f"unrecognized arguments: {' '.join(extras)}")
-        return parsed, extras
 
     def error(self, message: str) -> None:  # type: ignore[override]
         raise SteamError(f"{message} (see '{self.prog} --help')")

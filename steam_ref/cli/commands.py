@@ -36,6 +36,7 @@ import sys
 import threading
 from collections.abc import Sequence
 from importlib import import_module
+from typing import Any
 
 from .._package import __version__
 from ..errors import SteamError, SteamWarning
@@ -47,6 +48,17 @@ __all__ = ["COMMANDS", "Terminated", "build_parser", "main"]
 
 class Terminated(KeyboardInterrupt):
     """SIGTERM, raised where the command is, as Ctrl-C's KeyboardInterrupt is (and caught where it is)."""
+
+
+class Command(Parser):
+    """A subcommand's parser (its own subcommands' too): it refuses an argument it does not know itself, pointing at
+    its own ``--help``; argparse hands it up to the top parser, whose error said ``see 'steam-ref --help'``."""
+
+    def parse_known_args(self, args: Any = None, namespace: Any = None) -> Any:
+        parsed, extras = super().parse_known_args(args, namespace)
+        if extras:
+            self.error(f"unrecognized arguments: {' '.join(extras)}")
+        return parsed, extras
 
 
 def _terminate(signum: int, frame: object) -> None:  # noqa: ARG001 (a signal handler's signature)
@@ -95,7 +107,7 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
         "example: steam-ref run --dataset plaza --max-poses 200",
     )
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
-    sub = parser.add_subparsers(dest="command", parser_class=Parser, required=True)
+    sub = parser.add_subparsers(dest="command", parser_class=Command, required=True)
     for name in [command] if command in COMMANDS else COMMANDS:
         options, runs = COMMANDS[name]
         module = import_module(options)

@@ -39,7 +39,7 @@ from ..graph import FactorGraph
 from ..lie.points import position
 from ..lie.state import group_state
 from ..linear.threads import limited
-from ..motion import MotionPrior, motion_prior
+from ..motion import MotionPrior, as_motion_prior, motion_prior
 from ..variables import Key, L, Values, X
 from .solvers import BayesTreeSolver, FixedLagTreeSolver, forget_landmarks
 
@@ -182,7 +182,8 @@ def solve_rigid(
     state's estimate is the one it had at the end of the update that forgot it)."""
     if method not in METHODS:
         raise SteamError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
-    data = data.on(prior.kind)  # the data's first values as the prior's states
+    prior = as_motion_prior(prior)
+    data = _readings(data).on(prior.kind)  # the data's first values as the prior's states
     n = len(data.state_times)
     initial = data.initial_states if initial is None else initial
     if method == "batch":
@@ -254,6 +255,14 @@ def _positions_at(data: RigidReadings, prior: MotionPrior, states: NDArray, time
     return np.array(out)
 
 
+def _readings(data: object) -> RigidReadings:
+    """``data`` if it is a :class:`RigidReadings`, else a SteamError saying what it is."""
+    if isinstance(data, RigidReadings):
+        return data
+    hint = " (a RigidSample's readings are its .data)" if isinstance(data, RigidSample) else ""
+    raise SteamError(f"data must be a RigidReadings{hint}, got a {type(data).__name__}")
+
+
 def held_out_errors(data: RigidReadings, prior: MotionPrior, states: NDArray) -> NDArray:
     """The distance (m) between each held-out fix inside the states' span and the kept fixes' span (the fixes
     :func:`straight_line_errors` scores) and the GP-interpolated position."""
@@ -284,6 +293,7 @@ def straight_line_at(data: RigidReadings, times: NDArray) -> NDArray:
 def _inside(data: RigidReadings) -> NDArray:
     """The held-out fixes strictly inside the states' span and the kept fixes' (where the straight line is drawn):
     none without a kept fix."""
+    data = _readings(data)
     t, rows = data.state_times, data.held_out
     fixes = data.positions[:, 0]
     if not len(fixes):  # no kept fix: no span (min() of nothing was a NumPy ValueError)
