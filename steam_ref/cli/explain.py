@@ -110,6 +110,28 @@ def _yardstick(s: dict) -> str:
     return f"\n  yardstick: {'; '.join(parts)}" if parts else ""
 
 
+WORSE_THAN_ODOMETRY = 2.0  # an RMSE over this times dead reckoning's gets a note (_worse_than_odometry)
+
+
+def _worse_than_odometry(s: dict) -> str:
+    """A note when the estimate is over twice as far from the truth as dead reckoning on the same poses (short of
+    that, odometry over a short prefix can be as good as any estimate): a streamed estimate can lag the optimum of its
+    own readings, and the output must not leave that unsaid."""
+    rmse, dead = s.get("rmse_m"), s.get("dead_reckoning_rmse_m")
+    if rmse is None or dead is None or not rmse > WORSE_THAN_ODOMETRY * dead:
+        return ""
+    note = f"\n  NOTE: over {WORSE_THAN_ODOMETRY:g} times as far from the truth as odometry alone"
+    if s.get("converged_at_end"):
+        return note + ", at the checked optimum of its own readings"
+    if "lag_s" in s:  # a window forgets its past: there is no optimum of all the readings to converge to
+        return note
+    why = " (iSAM2 relinearizes a variable only once its step reaches the threshold)" if s["method"] == "btgp" else ""
+    return (
+        f"{note}. A streamed estimate can lag the optimum of its own readings{why}: --converge-at-end iterates the "
+        "final estimate to the optimum and checks it"
+    )
+
+
 def rmse_text(rmse_m: float | None, n_poses: int, detail: str = "") -> str:
     """The line saying what a run's or a batch solve's RMSE is, or that a data set without ground truth is
     not scored."""
@@ -148,7 +170,7 @@ def run_text(s: dict) -> str:
         at_states = (
             "" if s["n_estimated_states"] == s["n_poses"] else f" ({s['rmse_estimated_m']} m at the estimated states)"
         )
-        score = rmse_text(s["rmse_m"], s["n_poses"], at_states) + _yardstick(s)
+        score = rmse_text(s["rmse_m"], s["n_poses"], at_states) + _yardstick(s) + _worse_than_odometry(s)
     convergence = ""
     if "convergence_s" in s:
         verdict = "converged" if s["converged_at_end"] else "NOT converged: see the warning"
