@@ -34,7 +34,7 @@ from .factors import Factor
 from .graph import FactorGraph
 from .linear.cholesky import SparseCholesky, Symbolic
 from .linear.ordering import Ordering, make_ordering, sparse_backend
-from .linear.system import LinearSystem, linearize
+from .linear.system import LinearSystem
 from .linear.threads import limited
 from .variables import Key, Values, as_values
 
@@ -125,7 +125,7 @@ def _step(
 ) -> tuple[dict[Key, NDArray], float, int]:
     """Linearize, solve (𝓘 + λ diag 𝓘) δ = Aᵀb; return δ (ordered), cost at θ̄, factor nnz (``symbolic``: reused
     analysis, the pattern is the same at every iteration)."""
-    groups = linearize(graph.factors, values)  # h(θ̄ + δθ) ≈ h(θ̄) + H δθ  [YIB Eq. 9]
+    groups = graph.batches().linearize(values)  # h(θ̄ + δθ) ≈ h(θ̄) + H δθ  [YIB Eq. 9]
     system = LinearSystem.from_groups(groups, ordering)
     info, rhs = system.information()  # 𝓘 = P⁻¹ + Hᵀ R⁻¹ H and b, whitened: AᵀA and Aᵀb  [YIB Eq. 11]
     if damping > 0:
@@ -171,7 +171,7 @@ def check_stationarity(
         raise SteamError(f"check_stationarity: variable {min(extra, key=repr)!r} has a value but no factor names it")
     backend = sparse_backend(backend)
     ordering = make_ordering(ordering, graph.keys(), values.dims(), [f.keys for f in graph], backend)
-    groups = linearize(graph.factors, values)  # [YIB Eq. 9]
+    groups = graph.batches().linearize(values)  # [YIB Eq. 9]
     info, rhs = LinearSystem.from_groups(groups, ordering).information()
     chol = SparseCholesky.factor(info, ordering, backend, check_symmetry=False)  # AᵀA  [YIB Eq. 11]
     delta = chol.solve(rhs)  # δθ* = 𝓘⁻¹ b  [YIB Eq. 11]

@@ -8,11 +8,12 @@ evaluated by the linearization layer (:func:`steam_ref.linear.system.linearize`)
 
 from __future__ import annotations
 
+import operator
 from collections.abc import Iterable, Iterator
 
 from .errors import UnknownVariableError
 from .factors import Factor, check_factors, kinds_of, wrong_size
-from .linear.system import linearize
+from .linear.system import Batches
 from .manifold import Manifold
 from .variables import Key, Values, as_values
 
@@ -25,6 +26,7 @@ class FactorGraph:
     def __init__(self, factors: Iterable[Factor] = ()):
         self.factors: list[Factor] = []  # add factors with :meth:`add`, which keeps the kinds
         self._kinds: dict[Key, Manifold] = {}  # the kind of each variable, as its factors declare it
+        self._batches: Batches | None = None  # the factors grouped and stacked, when last asked (batches())
         self.add(factors)
 
     def add(self, factors: Factor | Iterable[Factor]) -> None:
@@ -76,7 +78,20 @@ class FactorGraph:
     def error(self, values: Values) -> float:
         """The cost Σ ρᵢ(‖Wᵢeᵢ‖) of Eq. 6 at the given estimates: ρ(s) = s²/2 for a plain factor,
         its robust loss otherwise (GTSAM's convention). ``values``: a Values or any mapping key → vector."""
-        return sum(group.cost for group in linearize(self.factors, values, jacobians=False))
+        return self.batches().cost(values)
+
+    def batches(self) -> Batches:
+        """The factors grouped by type and stacked (:class:`~steam_ref.linear.system.Batches`), what every
+        linearization of them reads: made again only when the factors are no longer those it was made of (one
+        object for one), so that a batch solve's iterations and costs group them once."""
+        made = self._batches
+        if (
+            made is None
+            or len(made.factors) != len(self.factors)
+            or not all(map(operator.is_, made.factors, self.factors))
+        ):
+            made = self._batches = Batches(self.factors)
+        return made
 
     def __repr__(self) -> str:
         return f"FactorGraph({len(self)} factors)"

@@ -287,7 +287,10 @@ class Values(Mapping):
 
     def stack(self, keys: Iterable[Key]) -> NDArray:
         """Estimates of several variables of one size as rows of an (n, dim) array."""
-        rows = [self[k] for k in keys]
+        try:
+            rows = list(map(self._data.__getitem__, keys))  # a call of __getitem__ per key costs twice this
+        except KeyError as exc:
+            raise UnknownVariableError(f"no estimate for variable {exc.args[0]!r}") from None
         try:
             out = np.array(rows)  # np.stack's result at a fifth of its call cost (a linearization's hot path)
         except ValueError:  # a ragged list
@@ -299,19 +302,20 @@ class Values(Mapping):
 
     def retract(self, delta: Mapping[Key, NDArray]) -> Values:
         """θ̄ ⊕ δθ: a new Values with each variable moved by its kind's retraction, one call per kind.  [YIB Eq. 11]"""
-        out = self.copy()
         steps = {}
         for key, step in delta.items():
-            if np.shape(step) != self[key].shape:
-                raise ShapeError(f"the update of {key!r} has shape {np.shape(step)}, its estimate {self[key].shape}")
-            steps[key] = np.asarray(step)
+            step = np.asarray(step)
+            if step.shape != self[key].shape:
+                raise ShapeError(f"the update of {key!r} has shape {step.shape}, its estimate {self[key].shape}")
+            steps[key] = step
+        data = {k: v if k in steps else v.copy() for k, v in self._data.items()}  # a moved one is replaced below
         for kind, keys in by_kind(steps, self._kinds):
             moved = kind.retract_many([self._data[k] for k in keys], [steps[k] for k in keys])
-            for key, x in zip(keys, moved, strict=True):
-                if not np.all(np.isfinite(x)):
-                    raise NumericalError(f"the update of {key!r} is not finite: {self[key]} ⊕ {steps[key]}")
-                out._data[key] = x
-        return out
+            if moved and not np.isfinite(np.concatenate(moved)).all():  # one check per kind; the key only then
+                key = next(k for k, x in zip(keys, moved, strict=True) if not np.all(np.isfinite(x)))
+                raise NumericalError(f"the update of {key!r} is not finite: {self[key]} ⊕ {steps[key]}")
+            data.update(zip(keys, moved, strict=True))
+        return Values._holding(data, dict(self._kinds))
 
     def local(self, other: Mapping[Key, NDArray]) -> dict[Key, NDArray]:
         """other ⊖ self for each key of ``other``, by this Values' kinds, one call per kind."""

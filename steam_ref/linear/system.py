@@ -24,7 +24,7 @@ from ..factors import Factor, check_factors, wrong_size
 from ..variables import Key, Values, as_values
 from .ordering import Ordering
 
-__all__ = ["LinearizedGroup", "linearize", "whitened_norms", "LinearSystem", "GaussianFactor"]
+__all__ = ["LinearizedGroup", "Batches", "linearize", "whitened_norms", "LinearSystem", "GaussianFactor"]
 
 
 @dataclass(frozen=True)
@@ -75,8 +75,9 @@ def _group_by_type(factors: Sequence[Factor]) -> list[list[int]]:
     return list(groups.values())
 
 
-def _variables(values: Values, group: list[Factor]) -> list[NDArray]:
-    """The estimates each key slot of a group of factors reads, as (n, dₖ) arrays (a group of one: views)."""
+def _variables(values: Values, group: list[Factor], slot_keys: tuple[list[Key], ...]) -> list[NDArray]:
+    """The estimates each key slot of a group of factors reads, as (n, dₖ) arrays (a group of one: views);
+    ``slot_keys[k]`` the keys of slot k, factor by factor."""
     if len(group) == 1:  # a view costs a tenth of a copy; a size that differs is named below
         xs = [values[k][None] for k in group[0].keys]
         for one, d in zip(xs, group[0].key_dims, strict=True):
@@ -85,8 +86,7 @@ def _variables(values: Values, group: list[Factor]) -> list[NDArray]:
         else:
             return xs
     xs = []
-    for slot, dim in enumerate(group[0].key_dims):
-        keys = [f.keys[slot] for f in group]
+    for keys, dim in zip(slot_keys, group[0].key_dims, strict=True):
         try:
             x = values.stack(keys)
         except ValueError:  # estimates of different sizes
@@ -133,10 +133,75 @@ def whitened_norms(factors: Sequence[Factor], values: Values) -> NDArray:
                 continue
             group = [factors[i] for i in ids]
             batch = type(group[0]).stack(group)
-            e = _whitened(batch, batch.error(*_variables(values, group)))
+            slot_keys = tuple([f.keys[slot] for f in group] for slot in range(len(group[0].keys)))
+            e = _whitened(batch, batch.error(*_variables(values, group, slot_keys)))
             for i, norm in zip(ids, np.sqrt(np.add.reduce(e * e, axis=1)).tolist(), strict=True):
                 out[i] = norm  # np.linalg.norm(e, axis=1)
     return np.array([norm if norm == norm else math.inf for norm in out])  # a norm is ≥ 0, inf or NaN (read as inf)
+
+
+class Batches:
+    """``factors`` grouped by batch signature, each group stacked into one factor: the part of :func:`linearize`
+    that does not depend on the estimates. Made once, it serves every linearization of the same factors (a batch
+    solve's iterations and their costs), each then one evaluation per group; the factors are read when it is made,
+    so a Batches is of the factors as they were then."""
+
+    def __init__(self, factors: Sequence[Factor]):
+        self.factors = list(factors)  # in the order given: a failure names a factor by its position here
+        # (positions, the factors, stacked, the keys of each slot factor by factor), one per signature
+        self.groups: list[tuple[NDArray, list[Factor], Factor, tuple[list[Key], ...]]] = []
+        for ids in _group_by_type(self.factors):
+            group = [self.factors[i] for i in ids]
+            slot_keys = tuple([f.keys[slot] for f in group] for slot in range(len(group[0].keys)))
+            self.groups.append((np.asarray(ids), group, type(group[0]).stack(group), slot_keys))
+
+    def cost(self, values: Values) -> float:
+        """The cost Σ ρᵢ(‖Wᵢeᵢ‖) of Eq. 6 at ``values`` (:meth:`linearize` without Jacobians)."""
+        return sum(group.cost for group in self.linearize(values, jacobians=False))
+
+    def linearize(self, values: Values, *, jacobians: bool = True) -> list[LinearizedGroup]:
+        """:func:`linearize` of the factors at ``values``."""
+        values = as_values("values", values)
+        out, failures = [], []
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # checked group by group, just below
+            for ids, group, batch, slot_keys in self.groups:
+                xs = _variables(values, group, slot_keys)
+                fixed = group[0].whitened_jacobians() if jacobians and len(ids) == 1 else None  # a linear factor's
+                if fixed is None:
+                    error, H = batch.error_and_jacobians(*xs) if jacobians else (batch.error(*xs), None)
+                    WH = None if H is None else tuple([batch.sqrt_information @ J for J in H])  # Σ^-½ H_i
+                else:  # made once, finite
+                    error, WH = batch.error(*xs), tuple([A[None] for A in fixed])
+                e = _whitened(batch, error)
+                s = np.sqrt(np.add.reduce(e * e, axis=1))  # ‖e‖ row by row, as np.linalg.norm(e, axis=1) sums it
+                if batch.loss is None:  # √w = 1: A_i = Σ^-½ H_i, b_i = -Σ^-½ e, the products by 1 left out
+                    costs = 0.5 * s**2
+                    Js = WH
+                    rhs = -e
+                else:
+                    weight, costs = batch.loss.weight_and_rho(s)
+                    scale = np.sqrt(weight)
+                    Js = None if WH is None else tuple([scale[:, None, None] * A for A in WH])  # A_i = √w Σ^-½ H_i
+                    rhs = -scale[:, None] * e  # b_i = -√w Σ^-½ e(θ̄): ‖A_i δθ - b_i‖² is the term  [YIB Eq. 9-10, 21]
+                # one sum is finite only if every number in it is (or it overflowed: then the search finds nothing);
+                # without a loss, ½‖e‖² is finite only if e is, and blocks made once are finite
+                checked = () if Js is None or (fixed is not None and batch.loss is None) else Js
+                total = (0.0 if batch.loss is None else _total(e)) + _total(costs)
+                for J in checked:
+                    total += _total(J)
+                if not math.isfinite(total):
+                    hit = _first_non_finite(e, costs, Js)
+                    if hit is not None:
+                        failures.append((int(ids[hit[0]]), hit[1]))
+                out.append(LinearizedGroup(ids, [f.keys for f in group], Js, rhs, costs))
+        if failures:
+            i, what = min(failures)
+            f = self.factors[i]
+            at = ", ".join(f"{k!r} = {values[k].tolist()}" for k in f.keys)
+            raise NumericalError(
+                f"factor {i} ({type(f).__name__} on {', '.join(map(repr, f.keys))}) has a non-finite {what} at {at}"
+            )
+        return out
 
 
 def linearize(factors: Sequence[Factor], values: Values, *, jacobians: bool = True) -> list[LinearizedGroup]:
@@ -145,51 +210,11 @@ def linearize(factors: Sequence[Factor], values: Values, *, jacobians: bool = Tr
     A type with one factor is a batch of one read through views; a linear factor alone gives its whitened
     Jacobians made once (:meth:`~steam_ref.factors.Factor.whitened_jacobians`, the GP prior's W(-Φ) and W).
     Raises :class:`~steam_ref.errors.NumericalError` naming the first factor (in the order given)
-    whose error or Jacobian is NaN or inf at ``values``: an overflowing reading, say.
+    whose error or Jacobian is NaN or inf at ``values``: an overflowing reading, say. A solve linearizing the
+    same factors again and again groups and stacks them once (:class:`Batches`).
     """
-    values = as_values("values", values)
-    out, failures = [], []
-    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # checked group by group, just below
-        for ids in _group_by_type(factors):
-            group = [factors[i] for i in ids]
-            batch = type(group[0]).stack(group)
-            xs = _variables(values, group)
-            fixed = group[0].whitened_jacobians() if jacobians and len(ids) == 1 else None  # a linear factor's
-            if fixed is None:
-                error, H = batch.error_and_jacobians(*xs) if jacobians else (batch.error(*xs), None)
-                WH = None if H is None else tuple([batch.sqrt_information @ J for J in H])  # Σ^-½ H_i
-            else:  # made once, finite
-                error, WH = batch.error(*xs), tuple([A[None] for A in fixed])
-            e = _whitened(batch, error)
-            s = np.sqrt(np.add.reduce(e * e, axis=1))  # ‖e‖ row by row, as np.linalg.norm(e, axis=1) sums it
-            if batch.loss is None:  # √w = 1: A_i = Σ^-½ H_i, b_i = -Σ^-½ e, the products by 1 left out
-                costs = 0.5 * s**2
-                Js = WH
-                rhs = -e
-            else:
-                weight, costs = batch.loss.weight_and_rho(s)
-                scale = np.sqrt(weight)
-                Js = None if WH is None else tuple([scale[:, None, None] * A for A in WH])  # A_i = √w Σ^-½ H_i
-                rhs = -scale[:, None] * e  # b_i = -√w Σ^-½ e(θ̄): ‖A_i δθ - b_i‖² is the term  [YIB Eq. 9-10, 21]
-            # one sum is finite only if every number in it is (or it overflowed: then the search finds nothing);
-            # without a loss, ½‖e‖² is finite only if e is, and blocks made once are finite
-            checked = () if Js is None or (fixed is not None and batch.loss is None) else Js
-            total = (0.0 if batch.loss is None else _total(e)) + _total(costs)
-            for J in checked:
-                total += _total(J)
-            if not math.isfinite(total):
-                hit = _first_non_finite(e, costs, Js)
-                if hit is not None:
-                    failures.append((ids[hit[0]], hit[1]))
-            out.append(LinearizedGroup(np.asarray(ids), [f.keys for f in group], Js, rhs, costs))
-    if failures:
-        i, what = min(failures)
-        f = factors[i]
-        at = ", ".join(f"{k!r} = {values[k].tolist()}" for k in f.keys)
-        raise NumericalError(
-            f"factor {i} ({type(f).__name__} on {', '.join(map(repr, f.keys))}) has a non-finite {what} at {at}"
-        )
-    return out
+    values = as_values("values", values)  # refused before the factors are grouped, as it always was
+    return Batches(factors).linearize(values, jacobians=jacobians)
 
 
 @dataclass(frozen=True)
