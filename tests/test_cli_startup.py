@@ -115,11 +115,17 @@ def test_a_bad_argument_is_one_line_and_exit_2_without_scipy_sparse_or_the_solve
     assert not loaded, f"steam-ref {' '.join(argv)} loaded {loaded[:8]}"
 
 
+BEFORE = (
+    "unrecognized arguments: {} before a command: a command comes first, its options after it "
+    "(as in 'steam-ref run --max-poses 200'; see 'steam-ref --help')"
+)
 UNKNOWN = [
     (("run", "extra"), "unrecognized arguments: extra (see 'steam-ref run --help')"),
     (("run", "--nonsense"), "unrecognized arguments: --nonsense (see 'steam-ref run --help')"),
     (("conformance", "check", "a", "b"), "unrecognized arguments: b (see 'steam-ref conformance check --help')"),
     (("data", "fetch", "plaza", "--bogus"), "unrecognized arguments: --bogus (see 'steam-ref data fetch --help')"),
+    (("--bogus",), BEFORE.format("--bogus")),  # it said: the following arguments are required: command
+    (("--dataset", "plaza"), BEFORE.format("--dataset")),  # it said: invalid choice: 'plaza' (choose from ...)
 ]
 
 

@@ -122,7 +122,18 @@ def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     try:
         argv = argv or ["run"]  # no command at all runs the main job
-        args = build_parser(argv[0]).parse_args(argv)
+        try:
+            args = build_parser(argv[0]).parse_args(argv)
+        except SteamError as exc:  # argparse reads an option before any command as a missing or an unknown command
+            said = str(exc)
+            if argv[0].startswith("-") and said.startswith(
+                ("the following arguments are required: command", "argument command:")
+            ):
+                raise SteamError(
+                    f"unrecognized arguments: {argv[0]} before a command: a command comes first, its options after it "
+                    "(as in 'steam-ref run --max-poses 200'; see 'steam-ref --help')"
+                ) from None
+            raise
         if args.check is not None:  # what the command checks before anything is read, with no solver loaded
             args.check(args)
         command = import_module(args.runs)  # the command's machinery loads only now, its arguments parsed
