@@ -315,7 +315,7 @@ class Values(Mapping):
                 key = next(k for k, x in zip(keys, moved, strict=True) if not np.all(np.isfinite(x)))
                 raise NumericalError(f"the update of {key!r} is not finite: {self[key]} ⊕ {steps[key]}")
             data.update(zip(keys, moved, strict=True))
-        return Values._holding(data, dict(self._kinds))
+        return self._holding(data, dict(self._kinds))
 
     def local(self, other: Mapping[Key, NDArray]) -> dict[Key, NDArray]:
         """other ⊖ self for each key of ``other``, by this Values' kinds, one call per kind."""
