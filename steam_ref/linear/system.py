@@ -75,6 +75,12 @@ def _group_by_type(factors: Sequence[Factor]) -> list[list[int]]:
     return list(groups.values())
 
 
+def _slot_keys(group: list[Factor]) -> tuple[list[Key], ...]:
+    """The keys of each key slot of a group of factors of one signature, factor by factor (what :func:`_variables`
+    stacks)."""
+    return tuple([f.keys[slot] for f in group] for slot in range(len(group[0].keys)))
+
+
 def _variables(values: Values, group: list[Factor], slot_keys: tuple[list[Key], ...]) -> list[NDArray]:
     """The estimates each key slot of a group of factors reads, as (n, dₖ) arrays (a group of one: views);
     ``slot_keys[k]`` the keys of slot k, factor by factor."""
@@ -133,7 +139,7 @@ def whitened_norms(factors: Sequence[Factor], values: Values) -> NDArray:
                 continue
             group = [factors[i] for i in ids]
             batch = type(group[0]).stack(group)
-            slot_keys = tuple([f.keys[slot] for f in group] for slot in range(len(group[0].keys)))
+            slot_keys = _slot_keys(group)
             e = _whitened(batch, batch.error(*_variables(values, group, slot_keys)))
             for i, norm in zip(ids, np.sqrt(np.add.reduce(e * e, axis=1)).tolist(), strict=True):
                 out[i] = norm  # np.linalg.norm(e, axis=1)
@@ -152,7 +158,7 @@ class Batches:
         self.groups: list[tuple[NDArray, list[Factor], Factor, tuple[list[Key], ...]]] = []
         for ids in _group_by_type(self.factors):
             group = [self.factors[i] for i in ids]
-            slot_keys = tuple([f.keys[slot] for f in group] for slot in range(len(group[0].keys)))
+            slot_keys = _slot_keys(group)
             self.groups.append((np.asarray(ids), group, type(group[0]).stack(group), slot_keys))
 
     def cost(self, values: Values) -> float:
