@@ -75,10 +75,14 @@ BLOCK = 1024  # states read at once by Trajectory.at_every_pose
 
 @dataclass(frozen=True)
 class Covariances:
-    """Final marginal covariances of a run, in the order of its times and landmark ids."""
+    """Final marginal covariances of a run, in the order of its times and landmark ids, each in the coordinates of
+    the prior's state covariance (its ``kind``'s tangent): [x, y, θ] and [ẋ, ẏ, θ̇] in the world frame for a
+    vector-space prior; on SE(2) the right tangent at the estimate, the pose block in the body frame and the
+    velocity block the body twist's [vx, vy, ω] (``lie.world_position_covariance`` turns a position block to the
+    world frame)."""
 
-    pose: NDArray  # (n, 3, 3) of [x, y, θ] at every covered pose
-    velocity: NDArray  # (n, 3, 3) of [ẋ, ẏ, θ̇] at every covered pose
+    pose: NDArray  # (n, 3, 3) of the pose at every covered pose
+    velocity: NDArray  # (n, 3, 3) of the velocity at every covered pose
     landmark: NDArray  # (m, 2, 2) of each landmark, in the order of ``landmark_ids``
     landmark_ids: tuple[int, ...]  # (m,) the landmarks' ids
 
@@ -290,7 +294,8 @@ class Trajectory:
 
     def covariances(self, landmarks: Sequence[Key]) -> Covariances:
         """Marginal covariances at every pose of the span (interpolated between states; row k is pose
-        states[0] + k, as in :meth:`at_every_pose`) and of ``landmarks``."""
+        states[0] + k, as in :meth:`at_every_pose`) and of ``landmarks``, in the prior's coordinates
+        (:class:`Covariances`: on SE(2), body frame)."""
         solved, landmarks = self.states, key_list("landmarks", landmarks, distinct=True)
         d = self.prior.qc.shape[0]  # p's size: a pose [x, y, θ] and its rates come first in every planar state
         if d != 3:
