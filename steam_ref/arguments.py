@@ -41,6 +41,7 @@ __all__ = [
     "replace_fields",
     "real_array",
     "finite",
+    "asymmetric",
     "check_covariance",
     "DECIMAL",
     "DIGITS",
@@ -149,6 +150,12 @@ def finite(name: str, a: NDArray) -> NDArray:
     return a
 
 
+def asymmetric(P: NDArray) -> NDArray:
+    """Which of the (..., n, n) matrices ``P`` are not symmetric to 1e-10 of their largest entry (a bool per matrix):
+    the one symmetry rule of a covariance handed in."""
+    return np.abs(P - np.swapaxes(P, -1, -2)).max(axis=(-2, -1)) > 1e-10 * np.abs(P).max(axis=(-2, -1))
+
+
 def check_covariance(name: str, P: NDArray, n: int) -> NDArray:
     """``P`` itself if it can be a covariance: (n, n), finite, symmetric (to 1e-10 of its largest entry),
     no negative variance. Positive definiteness is not checked: a computed covariance may be
@@ -156,9 +163,8 @@ def check_covariance(name: str, P: NDArray, n: int) -> NDArray:
     if P.shape != (n, n):
         raise ShapeError(f"{name} must be a finite ({n}, {n}) matrix, got shape {P.shape}")
     finite(name, P)
-    asymmetry = np.abs(P - P.T)
-    if asymmetry.max() > 1e-10 * np.abs(P).max():
-        i, j = np.unravel_index(int(np.argmax(asymmetry)), P.shape)
+    if asymmetric(P):
+        i, j = np.unravel_index(int(np.argmax(np.abs(P - P.T))), P.shape)
         raise SteamError(
             f"{name} must be symmetric, but {name}[{i}, {j}] = {float(P[i, j])!r} "
             f"and {name}[{j}, {i}] = {float(P[j, i])!r}"

@@ -29,7 +29,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.special import gammaincinv
 
-from ..arguments import finite, is_integer, number, real_array
+from ..arguments import asymmetric, finite, is_integer, number, real_array
 from ..dead_reckoning import wrap_angle
 from ..errors import NumericalError, ShapeError, SteamError
 
@@ -74,9 +74,9 @@ def nees(errors: NDArray, covariances: NDArray) -> NDArray:
     if len(e) == 0:
         return np.zeros(0)
     # Cholesky reads one triangle only: [[1, 5], [0, 1]] would pass as the identity
-    asymmetric = np.abs(P - np.swapaxes(P, 1, 2)).max(axis=(1, 2)) > 1e-10 * np.abs(P).max(axis=(1, 2))
-    if asymmetric.any():
-        k = int(np.argmax(asymmetric))
+    unsymmetric = asymmetric(P)
+    if unsymmetric.any():
+        k = int(np.argmax(unsymmetric))
         raise SteamError(f"nees: covariances[{k}] must be symmetric, got {P[k].tolist()}")
     try:
         lower = np.linalg.cholesky(P)
