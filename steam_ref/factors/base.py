@@ -21,7 +21,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.linalg import lapack
 
-from ..arguments import finite, real_array
+from ..arguments import asymmetric, finite, real_array
 from ..errors import NumericalError, ShapeError, SteamError
 from ..manifold import VECTOR, Manifold
 from ..robust import RobustLoss
@@ -113,7 +113,7 @@ def sqrt_information(noise: NDArray | float, m: int, name: str = "noise") -> NDA
         W.flags.writeable = False
         return _SIGMA_WEIGHTS.keep(memo, W)
     if noise.shape == (m, m):
-        if not np.allclose(noise, noise.T, rtol=0.0, atol=1e-12 * np.max(np.abs(noise))):
+        if asymmetric(noise):
             i, j = np.unravel_index(np.argmax(np.abs(noise - noise.T)), noise.shape)
             raise SteamError(
                 f"{name} (a covariance) is not symmetric: entry ({i}, {j}) = {float(noise[i, j])!r} "

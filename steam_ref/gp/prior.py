@@ -19,7 +19,7 @@ import numpy as np
 import scipy.linalg
 from numpy.typing import ArrayLike, NDArray
 
-from ..arguments import integer, real_array, time_step
+from ..arguments import asymmetric, integer, real_array, time_step
 from ..errors import NumericalError, ShapeError, SteamError
 
 __all__ = [
@@ -74,9 +74,8 @@ def _checked_qc(d: int, data: bytes) -> NDArray:
     qc = np.frombuffer(data, dtype=float).reshape(d, d)  # read-only view of the bytes
     if not np.all(np.isfinite(qc)):
         raise ShapeError(f"Qc must be a finite square matrix, got {qc.tolist()}")
-    asymmetric = np.abs(qc - qc.T).max() > 1e-10 * np.abs(qc).max()  # relative: Qc's units are the user's
     eigenvalues = np.linalg.eigvalsh(qc)
-    if asymmetric or np.any(eigenvalues <= 0):
+    if asymmetric(qc) or np.any(eigenvalues <= 0):  # relative to its largest entry: Qc's units are the user's
         raise SteamError(f"Qc must be symmetric positive definite, got {qc.tolist()}")
     if eigenvalues.min() < np.finfo(float).tiny:  # a subnormal variance: Qc⁻¹, and every Q⁻¹, overflows
         raise SteamError(
