@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from ..arguments import asymmetric
 from ..datasets import RangeDataset, read_mat
 from ..datasets.registry import DATASETS
 from ..datasets.search import find_named, not_found
@@ -31,7 +32,6 @@ from .results import RunResult, position_rmse
 
 __all__ = [
     "AUTHORS_RUNS",
-    "COVARIANCE_SYMMETRY",
     "AuthorsRun",
     "Fidelity",
     "find_authors_file",
@@ -99,9 +99,6 @@ def _table(path: Path, m: dict, key: str, columns: int, rows: int | None = None)
     return value
 
 
-COVARIANCE_SYMMETRY = 1e-9  # |C - Cᵀ| allowed, relative to max |C| (the authors' files: below 1e-15)
-
-
 def _covariances(path: Path, cells: NDArray, what: str, d: int) -> NDArray:
     """(n, d, d) from a column of MATLAB cells, each a finite, symmetric, positive definite d x d."""
     for k, cell in enumerate(cells):
@@ -109,14 +106,12 @@ def _covariances(path: Path, cells: NDArray, what: str, d: int) -> NDArray:
         if c.dtype.kind not in "biuf" or c.shape != (d, d) or not np.all(np.isfinite(c)):
             raise DataError(f"{path}: {what} {k} must be a finite {d}x{d} matrix, got {c.dtype} of shape {c.shape}")
     out = np.stack([np.asarray(c, dtype=float) for c in cells]) if len(cells) else np.zeros((0, d, d))
-    size = np.abs(out).max(axis=(1, 2), initial=0.0)
-    asym = np.abs(out - out.transpose(0, 2, 1)).max(axis=(1, 2), initial=0.0)
-    bad = np.flatnonzero(asym > COVARIANCE_SYMMETRY * size)
+    bad = np.flatnonzero(asymmetric(out))  # the authors' files: below 1e-15 of the largest entry
     if bad.size:
         k = int(bad[0])
+        asym, size = np.abs(out[k] - out[k].T).max(), np.abs(out[k]).max()
         raise DataError(
-            f"{path}: {what} {k} is not symmetric (|C - Cᵀ| up to {asym[k]:.3g}, |C| up to {size[k]:.3g}): "
-            "not a covariance"
+            f"{path}: {what} {k} is not symmetric (|C - Cᵀ| up to {asym:.3g}, |C| up to {size:.3g}): not a covariance"
         )
     low = np.linalg.eigvalsh(out).min(axis=1, initial=np.inf) if len(out) else np.zeros(0)
     bad = np.flatnonzero(low <= 0)
@@ -161,7 +156,7 @@ def load_authors_run(name: str, data: RangeDataset, data_dir: str | os.PathLike 
     """The authors' saved run on data set ``name`` ('plaza' or 'paper-synthetic'), checked against ``data``.
 
     Every array must be numeric, finite and of the expected shape, and each saved marginal a
-    symmetric (to :data:`COVARIANCE_SYMMETRY`) positive definite matrix; else DataError naming it."""
+    symmetric (:func:`~steam_ref.arguments.asymmetric`) positive definite matrix; else DataError naming it."""
     path = find_authors_file(name, data_dir)
     m = _read(path)
     poses = _check_same_data(path, m, data)
