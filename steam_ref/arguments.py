@@ -42,6 +42,7 @@ __all__ = [
     "real_array",
     "finite",
     "asymmetric",
+    "most_asymmetric",
     "check_covariance",
     "DECIMAL",
     "DIGITS",
@@ -156,6 +157,12 @@ def asymmetric(P: NDArray) -> NDArray:
     return np.abs(P - np.swapaxes(P, -1, -2)).max(axis=(-2, -1)) > 1e-10 * np.abs(P).max(axis=(-2, -1))
 
 
+def most_asymmetric(P: NDArray) -> tuple[int, int]:
+    """The entry (i, j) of a square ``P`` where P and Pᵀ differ most (the one an error message names)."""
+    i, j = np.unravel_index(int(np.argmax(np.abs(P - P.T))), P.shape)
+    return int(i), int(j)
+
+
 def check_covariance(name: str, P: NDArray, n: int) -> NDArray:
     """``P`` itself if it can be a covariance: (n, n), finite, symmetric (to 1e-10 of its largest entry),
     no negative variance. Positive definiteness is not checked: a computed covariance may be
@@ -164,7 +171,7 @@ def check_covariance(name: str, P: NDArray, n: int) -> NDArray:
         raise ShapeError(f"{name} must be a finite ({n}, {n}) matrix, got shape {P.shape}")
     finite(name, P)
     if asymmetric(P):
-        i, j = np.unravel_index(int(np.argmax(np.abs(P - P.T))), P.shape)
+        i, j = most_asymmetric(P)
         raise SteamError(
             f"{name} must be symmetric, but {name}[{i}, {j}] = {float(P[i, j])!r} "
             f"and {name}[{j}, {i}] = {float(P[j, i])!r}"

@@ -7,6 +7,7 @@
 - **What an integer is** is stated once, ``arguments.is_integer``; no module of the package spells the
   check again (the conformance kit's oracle and its file format keep their own code, by design).
 - **A settings class's replace with an unknown-field check** is ``arguments.replace_fields``.
+- **What a symmetric covariance is** (to 1e-10 of its largest entry) is ``arguments.asymmetric``.
 - **A package's lazy names** (PEP 562: a name loaded from its module on first use) are ``_package.lazy_names``'; no
   package writes its own ``__getattr__`` or ``__dir__`` (tests/test_lazy_names.py checks the rule itself).
 - **A file written whole or not at all** (a temporary beside it, then ``os.replace``) is ``files.replace_file``:
@@ -155,6 +156,18 @@ def test_what_a_flag_is_is_stated_once():
     for v in (1, "no", None, [], 0.0):
         with pytest.raises(SteamError, match=f"^f must be True or False, got f={re.escape(repr(v))}$"):
             arguments.flag("f", v)
+
+
+def test_what_a_symmetric_covariance_is_is_stated_once():
+    """``abs(P - P.T)`` (or with ``swapaxes`` / ``transpose``) and ``allclose(P, P.T)``, outside arguments.py: a matrix
+    handed in as a covariance, a factor's noise, Qc or the authors' saved marginals is judged by
+    ``arguments.asymmetric``, 1e-10 of its largest entry."""
+    found = _spelled_outside_arguments(
+        r"abs\(\s*(\w+)\s*-\s*(?:\1\.T\b|np\.swapaxes\(\s*\1\b|\1\.transpose\()|allclose\(\s*(\w+)\s*,\s*\2\.T\b"
+    )
+    assert not found, f"the symmetry rule of a covariance, written again (use arguments.asymmetric): {found}"
+    P = np.array([[[2.0, 1.0], [1.0, 3.0]], [[2.0, 1.0], [1.0 + 5e-10, 3.0]], [[2.0, 1.0], [1.0 + 2e-10, 3.0]]])
+    assert arguments.asymmetric(P).tolist() == [False, True, False]  # 5e-10 and 2e-10 against 1e-10 x 3
 
 
 def test_replace_with_an_unknown_field_check_is_written_once():

@@ -21,7 +21,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.linalg import lapack
 
-from ..arguments import asymmetric, finite, real_array
+from ..arguments import asymmetric, finite, most_asymmetric, real_array
 from ..errors import NumericalError, ShapeError, SteamError
 from ..manifold import VECTOR, Manifold
 from ..robust import RobustLoss
@@ -114,7 +114,7 @@ def sqrt_information(noise: NDArray | float, m: int, name: str = "noise") -> NDA
         return _SIGMA_WEIGHTS.keep(memo, W)
     if noise.shape == (m, m):
         if asymmetric(noise):
-            i, j = np.unravel_index(np.argmax(np.abs(noise - noise.T)), noise.shape)
+            i, j = most_asymmetric(noise)
             raise SteamError(
                 f"{name} (a covariance) is not symmetric: entry ({i}, {j}) = {float(noise[i, j])!r} "
                 f"but ({j}, {i}) = {float(noise[j, i])!r}"
