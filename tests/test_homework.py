@@ -161,6 +161,30 @@ def test_marking_scores_each_exercise_on_its_own_and_never_stops_on_a_bad_submis
     assert "9" not in said["wrong"] + said["edits-the-check"]  # the value the marking check knows is never shown
 
 
+def test_an_answer_that_binds_the_right_value_then_raises_or_runs_over_its_limit_scores_0(course, capsys):
+    """docs/tutorials.md: an answer that raises or runs over its time limit scores 0 for that exercise. An answer
+    that bound the right value before it raised (scratch code left below it) or before it hung (a forgotten loop)
+    scored its point: an exercise passed when its checks did, whatever its answer's own cells had done."""
+    optional_import("nbclient", "notebooks")
+    optional_import("ipykernel", "notebooks")
+    cube = "cube = lambda x: x**3"
+    _submit(course, "then-raises", {"s1": "square = base * base\nraise RuntimeError('not finished')", "s2": cube})
+    _submit(course, "then-hangs", {"s1": "square = base * base\nwhile True:\n    pass", "s2": cube})
+    _submit(course, "then-raises-in-a-cell-added", {"s1": "square = base * base", "s2": cube}, added={"s1": "1 / 0"})
+    argv = ["--source", str(course / "teacher"), "--timeout", str(LIMIT), "--json"]
+    assert main(["homework", "mark", str(course / "submitted"), *argv]) == 0
+    marks = {m["submission"].split("/")[0]: m for m in json.loads(capsys.readouterr().out)["submissions"]}
+    got = {name: [(e["score"], e["status"], e["message"]) for e in m["exercises"]] for name, m in marks.items()}
+    assert got == {
+        "then-raises": [(0, "error", "the answer raised RuntimeError: not finished"), (1, "passed", "")],
+        "then-hangs": [(0, "timeout", f"the answer ran longer than {LIMIT} s and was stopped"), (1, "passed", "")],
+        "then-raises-in-a-cell-added": [
+            (0, "error", "the answer raised ZeroDivisionError: division by zero"),
+            (1, "passed", ""),
+        ],
+    }
+
+
 def test_a_cell_that_ignores_the_interrupt_costs_its_limit_and_the_grace_then_its_kernel_is_killed(course, capsys):
     """A submission whose answer ignores SIGINT is marked in a right submission's time (measured just before, in
     the same sitting: the kernel's start under whatever load) plus its cell's limit and GRACE seconds; the report

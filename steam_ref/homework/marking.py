@@ -9,8 +9,8 @@ kind its solution declares (:mod:`.kinds`: a complex array for an array of reals
 exercise too, naming both. It runs in a fresh kernel (nbclient) in the teacher's notebook's folder, every cell of
 the teacher's under a time limit and each answer too, its cells sharing it (however many a student adds, an answer
 runs the limit at most); a cell that raises or runs over it is recorded and the run goes on, so one exercise's
-failure costs that exercise only. An exercise scores its point when its check and marking checks ran without an
-error. A kernel that dies (``os._exit``) ends the run, and so does a
+failure costs that exercise only. An exercise scores its point when its answer ran without an error or a timeout
+and its check and marking checks ran without an error. A kernel that dies (``os._exit``) ends the run, and so does a
 cell that ignores the interrupt at its time limit (it catches KeyboardInterrupt, ignores SIGINT or blocks where a
 signal cannot reach it): a kernel not idle ``GRACE`` seconds after the interrupt is killed, so such a cell costs its
 limit plus ``GRACE`` seconds, and what had not run scores 0, saying why.
@@ -307,12 +307,15 @@ def _run(
 def _verdict(
     k: int, cells: list[_Cell], outcomes: dict[int, tuple[str, str] | None], stopped: str | None, timeout: int
 ) -> tuple[str, str]:
-    """(status, message) of exercise ``k`` from what its cells did: passed when every check ran without an
-    error; else the first of its cells that failed (the answer's error or timeout, then a check's), else why its
-    checks did not run."""
+    """(status, message) of exercise ``k`` from what its cells did: passed when its answer ran without an error
+    or a timeout and every check ran without an error; else the first of its cells that failed (the answer's error
+    or timeout, then a check's), else why its checks did not run. An answer that binds the right values and then
+    raises or runs over its limit scores 0 too (docs/tutorials.md: an answer that raises or runs over its time
+    limit scores 0)."""
     mine = [(i, c.role) for i, c in enumerate(cells) if c.exercise == k]
     checks = [i for i, role in mine if role in ("check", "hidden", "guard")]
-    if all(i in outcomes and outcomes[i] is None for i in checks):
+    answered = all(outcomes.get(i) is None for i, role in mine if role == "answer")  # a cell not run: none failed
+    if answered and all(i in outcomes and outcomes[i] is None for i in checks):
         return "passed", ""
     failed = [(i, role, outcomes[i]) for i, role in mine if outcomes.get(i) is not None]
     if not failed:
