@@ -136,6 +136,47 @@ def test_at_least_two_exercises_each_with_its_solution_check_and_marking_check(p
         assert not unnamed, f"{path.name}: the checks of {e.label} read {unnamed}, which its task does not ask for"
 
 
+CLOSE = ("allclose", "isclose", "assert_allclose")  # NumPy's comparisons, each with default tolerances
+
+
+def _unwritten_tolerances(code: str) -> list[str]:
+    """Each call of np.allclose, np.isclose or np.testing.assert_allclose in ``code`` that leaves its rtol or its
+    atol to NumPy's default (1e-5 and 1e-8; assert_allclose's 1e-7 and 0), as the call's text."""
+    found = []
+    for node in ast.walk(ast.parse(code)):
+        if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr in CLOSE:
+            named = {k.arg for k in node.keywords}
+            if not {"rtol", "atol"} <= named:
+                found.append(ast.get_source_segment(code, node) or node.func.attr)
+    return found
+
+
+def test_the_tolerance_finder_sees_a_default_left_to_numpy():
+    found = _unwritten_tolerances(
+        "np.allclose(a, b, atol=1e-12)\nnp.isclose(a, b, rtol=1e-9)\nnp.testing.assert_allclose(a, b)\n"
+        "np.allclose(a, b, rtol=1e-12, atol=0)\nnp.isclose(a, b, 1e-9, 0)"
+    )
+    assert found == [
+        "np.allclose(a, b, atol=1e-12)",
+        "np.isclose(a, b, rtol=1e-9)",
+        "np.testing.assert_allclose(a, b)",
+        "np.isclose(a, b, 1e-9, 0)",  # positional tolerances are not written out by name: refused too
+    ]
+
+
+@pytest.mark.parametrize("path", TUTORIALS, ids=[p.stem for p in TUTORIALS])
+def test_each_marking_check_writes_out_both_tolerances_of_each_comparison(path):
+    """docs/tutorials.md: a marking check compares at the precision a right answer reaches, each tolerance written in
+    it, so an answer right to a few digits fails. A comparison that names only ``atol=1e-12`` compares at NumPy's
+    unseen rtol of 1e-5 as well: tutorial 00's velocity_jacobian off by a relative 1e-6 scored its point
+    (test_a_teacher_marks_a_right_and_a_wrong_submission_of_tutorial_00), and a teacher reading the check saw 1e-12."""
+    nb = json.loads(path.read_text())
+    for e in exercises(nb, path.name):
+        for i in e.hidden:
+            unwritten = _unwritten_tolerances(source(nb["cells"][i]))
+            assert not unwritten, f"{path.name}: {e.label}'s marking check leaves a tolerance to NumPy: {unwritten}"
+
+
 def _size(node: ast.AST) -> int:
     return sum(1 for n in ast.walk(node) if not isinstance(n, ast.expr_context))
 
@@ -275,7 +316,9 @@ def test_the_handout_keeps_the_lesson_tasks_and_checks_and_nothing_of_the_answer
 def test_a_teacher_marks_a_right_and_a_wrong_submission_of_tutorial_00(handouts):
     """A right answer to every exercise scores full marks; a plausible wrong one (exercise 1's error with its
     sign flipped, which the handout's check cannot see: the cost is the same) scores 0 there and full marks
-    elsewhere, with a message that says what is wrong without the expected value."""
+    elsewhere, with a message that says what is wrong without the expected value; so does exercise 2's Jacobian
+    off by a relative 1e-6, which the handout's check (central differences) passes and the marking check compared at
+    NumPy's unseen rtol of 1e-5."""
     optional_import("nbclient", "notebooks")
     optional_import("ipykernel", "notebooks")
     name = "00_solve_your_own_problem.ipynb"
@@ -285,7 +328,16 @@ def test_a_teacher_marks_a_right_and_a_wrong_submission_of_tutorial_00(handouts)
         "return x_next - transition_matrix(dt) @ x_prev", "return transition_matrix(dt) @ x_prev - x_next"
     )
     assert flipped != solutions["exercise-1-solution"]
-    for student, answers in (("right", solutions), ("wrong", {**solutions, "exercise-1-solution": flipped})):
+    # exercise 2's Jacobian right to 6 digits: its check (central differences) passes, the marking check must not
+    nearly = solutions["exercise-2-solution"] + (
+        "\n_exact_jacobian = velocity_jacobian\n\n\ndef velocity_jacobian(x):\n    return _exact_jacobian(x) * (1 + 1e-6)\n"
+    )
+    students = (
+        ("right", solutions),
+        ("wrong", {**solutions, "exercise-1-solution": flipped}),
+        ("nearly", {**solutions, "exercise-2-solution": nearly}),
+    )
+    for student, answers in students:
         nb = json.loads((handouts / "handout" / name).read_text())
         for cell in nb["cells"]:
             cell["source"] = answers.get(cell["id"], cell["source"])
@@ -297,6 +349,10 @@ def test_a_teacher_marks_a_right_and_a_wrong_submission_of_tutorial_00(handouts)
     marks = {m["submission"].split("/")[0]: m for m in json.loads(done.stdout)["submissions"]}
     assert [(e["number"], e["score"]) for e in marks["right"]["exercises"]] == [(1, 1), (2, 1), (3, 1)], marks["right"]
     assert [(e["number"], e["score"]) for e in marks["wrong"]["exercises"]] == [(1, 0), (2, 1), (3, 1)], marks["wrong"]
+    nearly_marks = marks["nearly"]["exercises"]
+    assert [(e["number"], e["score"]) for e in nearly_marks] == [(1, 1), (2, 0), (3, 1)], nearly_marks
+    said = nearly_marks[1]["message"]
+    assert said.startswith("marking check: velocity_jacobian is not ∂e/∂x"), said
     message = marks["wrong"]["exercises"][0]["message"]
     assert message.startswith("marking check: prior_error is not Eq. 22's") and not re.search(r"\d\.\d", message)
 
