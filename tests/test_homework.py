@@ -479,6 +479,79 @@ def test_an_answer_that_rebinds_a_name_the_marking_reads_scores_0_and_the_next_e
         assert not re.search(r"\d", message), message  # what is wrong, never a value
 
 
+def _teacher_of_an_estimate() -> dict:
+    """A lesson whose object holds arrays (as tutorial 00's ``batch.values`` holds the estimates): exercise 1 asks for a
+    function ``twice`` and the estimate doubled, exercise 2 for the sum of the estimate."""
+    setup = (
+        "import numpy as np\nfrom types import SimpleNamespace\n\n"
+        "estimate = SimpleNamespace(values={'x0': np.array([1.0, 2.0])})"
+    )
+    hidden1 = (
+        "assert np.allclose(twice(np.array([1.0, -3.0])), [2.0, -6.0], rtol=0, atol=0), 'twice is not 2 x'\n"
+        "assert np.allclose(doubled, 2 * estimate.values['x0'], rtol=0, atol=0), 'doubled is not twice the estimate'"
+    )
+    cells = [
+        _cell("code", "setup", setup),
+        _cell("markdown", "t1", "### Exercise 1 · Twice\n\nWrite `twice(x)`; store `doubled`.", ("exercise",)),
+        _cell(
+            "code",
+            "s1",
+            "def twice(x):\n    return 2 * x\n\n\ndoubled = twice(estimate.values['x0'])",
+            ("solution", "hide-cell"),
+            {"twice": "function", "doubled": "array"},
+        ),
+        _cell(
+            "code", "c1", "assert np.shape(twice(estimate.values['x0'])) == (2,), 'twice keeps the shape'", ("check",)
+        ),
+        _cell("code", "h1", hidden1, ("hidden-check", "remove-cell")),
+        _cell("markdown", "t2", "### Exercise 2 · Total\n\nStore the sum of the estimate in `total`.", ("exercise",)),
+        _cell(
+            "code", "s2", "total = float(estimate.values['x0'].sum())", ("solution", "hide-cell"), {"total": "number"}
+        ),
+        _cell("code", "c2", "assert isinstance(total, float), 'total is a float'", ("check",)),
+        _cell(
+            "code", "h2", "assert total == 3.0, 'total is not the sum of the estimate'", ("hidden-check", "remove-cell")
+        ),
+    ]
+    kernel = {"name": "python3", "display_name": "Python 3", "language": "python"}
+    return {"cells": cells, "metadata": {"kernelspec": kernel}, "nbformat": 4, "nbformat_minor": 5}
+
+
+def test_a_function_that_changes_an_array_the_lesson_holds_costs_its_own_exercise_not_a_later_one(tmp_path, capsys):
+    """An answer whose function changes its argument in place, called on an array an object of the lesson holds (tutorial
+    00: a prior_error that did ``x_prev[:3] += dt * x_prev[3:]`` on ``batch.values[X(i)]``), changed the lesson's
+    estimate: the guard kept the lesson's names and its top-level arrays only, so exercise 2's right answer, read off
+    the changed estimate, scored 0 (tutorial 00's exercise 3 lost its point so). Now the arrays the lesson's objects
+    hold are kept around each answer and its checks and put back, and the answer's own exercise scores 0, naming the
+    object, whether the answer itself (``doubled = twice(...)``) or a check calling its function changed them."""
+    optional_import("nbclient", "notebooks")
+    optional_import("ipykernel", "notebooks")
+    (tmp_path / "teacher").mkdir()
+    (tmp_path / "teacher" / "tiny.ipynb").write_text(json.dumps(_teacher_of_an_estimate()))
+    assert main(["homework", "handout", str(tmp_path / "teacher"), "--out", str(tmp_path / "handout")]) == 0
+    capsys.readouterr()
+    total = "total = float(estimate.values['x0'].sum())"
+    in_place = "def twice(x):\n    x *= 2\n    return x\n\n\n"
+    submissions = {
+        "right": {"s1": "def twice(x):\n    return 2 * x\n\n\ndoubled = twice(estimate.values['x0'])", "s2": total},
+        "changes-it-in-the-answer": {"s1": in_place + "doubled = twice(estimate.values['x0'])", "s2": total},
+        "changes-it-in-the-check": {"s1": in_place + "doubled = 2 * estimate.values['x0']", "s2": total},
+    }
+    for name, answers in submissions.items():
+        _submit(tmp_path, name, answers)
+    argv = ["--source", str(tmp_path / "teacher"), "--timeout", "60", "--jobs", "2", "--json"]
+    assert main(["homework", "mark", str(tmp_path / "submitted"), *argv]) == 0
+    marks = {m["submission"].split("/")[0]: m for m in json.loads(capsys.readouterr().out)["submissions"]}
+    got = {name: [(e["score"], e["status"]) for e in m["exercises"]] for name, m in marks.items()}
+    assert got == {
+        "right": [(1, "passed"), (1, "passed")],
+        "changes-it-in-the-answer": [(0, "failed"), (1, "passed")],
+        "changes-it-in-the-check": [(0, "failed"), (1, "passed")],
+    }, got
+    said = marks["changes-it-in-the-answer"]["exercises"][0]["message"]
+    assert said.startswith("the answer changes in place an array held by `estimate`"), said
+
+
 def test_an_answer_that_sets_a_modules_function_the_marking_calls_scores_0_and_it_is_put_back(tmp_path, capsys):
     """An answer could set an attribute of a module the marking checks call (``np.allclose = lambda *a, **k:
     True``, ``builtins.abs = ...``) instead of rebinding a name: the guard kept only names, so the patch stood for the

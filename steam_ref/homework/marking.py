@@ -3,17 +3,18 @@
 A submission contributes only its answers (the code cells between each task and its check). The notebook that runs
 is the teacher's: its lesson cells, the student's answer where the solution was, then the teacher's check and
 marking checks, so an edited or deleted check changes nothing; the lesson's names the checks read (:mod:`.guard`)
-are kept around each answer, and one it rebinds, changes in place or shadows (a builtin) is put back and costs that
-exercise, named, so no check compares an answer with the answer's own helper; an answer of another type than the
-kind its solution declares (:mod:`.kinds`: a complex array for an array of reals, a string for a number) costs that
-exercise too, naming both. It runs in a fresh kernel (nbclient) in the teacher's notebook's folder, every cell of
-the teacher's under a time limit and each answer too, its cells sharing it (however many a student adds, an answer
-runs the limit at most); a cell that raises or runs over it is recorded and the run goes on, so one exercise's
-failure costs that exercise only. An exercise scores its point when its answer ran without an error or a timeout
-and its check and marking checks ran without an error. A kernel that dies (``os._exit``) ends the run, and so does a
-cell that ignores the interrupt at its time limit (it catches KeyboardInterrupt, ignores SIGINT or blocks where a
-signal cannot reach it): a kernel not idle ``GRACE`` seconds after the interrupt is killed, so such a cell costs its
-limit plus ``GRACE`` seconds, and what had not run scores 0, saying why.
+are kept around each answer and its checks, and one it rebinds, changes in place (an array, or one an object holds)
+or shadows (a builtin) is put back and costs that exercise, named, so no check compares an answer with the answer's
+own helper; an answer of another type than the kind its solution declares (:mod:`.kinds`: a complex array for an
+array of reals, a string for a number) costs that exercise too, naming both. It runs in a fresh kernel (nbclient) in
+the teacher's notebook's folder, every cell of the teacher's under a time limit and each answer too, its cells
+sharing it (however many a student adds, an answer runs the limit at most); a cell that raises or runs over it is
+recorded and the run goes on, so one exercise's failure costs that exercise only. An exercise scores its point when
+its answer ran without an error or a timeout and its check and marking checks ran without an error. A kernel that
+dies (``os._exit``) ends the run, and so does a cell that ignores the interrupt at its time limit (it catches
+KeyboardInterrupt, ignores SIGINT or blocks where a signal cannot reach it): a kernel not idle ``GRACE`` seconds
+after the interrupt is killed, so such a cell costs its limit plus ``GRACE`` seconds, and what had not run scores 0,
+saying why.
 """
 
 from __future__ import annotations
@@ -168,17 +169,20 @@ def _assemble(tutorial: Tutorial, submission: dict) -> tuple[list[_Cell], dict[i
     cells: list[_Cell] = []
     missing: dict[int, str | None] = {}
     kept = guarded(tutorial.exercises)
+    last_check = {(e.hidden or (e.check,))[-1]: n for n, e in enumerate(tutorial.exercises)}
     for i, cell in enumerate(tutorial.notebook["cells"]):
         k, role = role_of.get(i, (None, "lesson"))
         if role != "answer":
             cells.append(_Cell(copy.deepcopy(cell), k, role))
+            if i in last_check:  # the checks called the answer's functions on the lesson's values: put them back
+                cells.append(_Cell(_code(PUT_BACK.format(kept=KEPT, forget=f", {KEPT}")), k, "guard"))
             continue
         assert k is not None
         answer = answer_cells(submission, tutorial.exercises[k], k)
         missing[k] = _written(answer)
         cells.append(_Cell(_code(KEEP.format(kept=KEPT, names=kept)), k, "guard"))
         cells += [_Cell(copy.deepcopy(c), k, "answer") for c in answer or []]
-        cells.append(_Cell(_code(PUT_BACK.format(kept=KEPT)), k, "guard"))
+        cells.append(_Cell(_code(PUT_BACK.format(kept=KEPT, forget="")), k, "guard"))
         cells.append(_Cell(_code(check_cell(dict(tutorial.exercises[k].kinds))), k, "guard"))
     for n, c in enumerate(cells):
         c.cell["id"] = f"marking-{n}"  # unique, whatever the student copied
