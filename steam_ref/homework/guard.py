@@ -48,14 +48,17 @@ def __steam_ref_held__(value, depth=6, most=200_000):
             continue
         if level >= depth:
             continue
-        if isinstance(item, dict):
-            inner = list(item.values())
-        elif isinstance(item, (list, tuple, set, frozenset)):
-            inner = list(item)
-        else:
-            inner = list(getattr(item, "__dict__", {{}}).values())
-            slots = [n for k in type(item).__mro__ for n in getattr(k, "__slots__", ()) if isinstance(n, str)]
-            inner += [getattr(item, n) for n in slots if n not in ("__dict__", "__weakref__") and hasattr(item, n)]
+        try:  # an object whose attributes cannot be read (a proxy's __getattr__ raising) holds nothing we keep
+            if isinstance(item, dict):
+                inner = list(item.values())
+            elif isinstance(item, (list, tuple, set, frozenset)):
+                inner = list(item)
+            else:
+                inner = list(getattr(item, "__dict__", {{}}).values())
+                slots = [n for k in type(item).__mro__ for n in getattr(k, "__slots__", ()) if isinstance(n, str)]
+                inner += [getattr(item, n) for n in slots if n not in ("__dict__", "__weakref__") and hasattr(item, n)]
+        except Exception:
+            continue
         todo += [(x, level + 1) for x in inner]
     return held
 
@@ -130,7 +133,10 @@ def __steam_ref_put_back__(kept, scope):
                 equal = bool(numpy.array_equal(array, copy))
             if not equal:
                 inside = True
-                array[...] = copy
+                try:
+                    array[...] = copy
+                except ValueError:  # made read-only since: nothing to put back into
+                    pass
         if inside and same:
             altered.append(name)
     said = []
