@@ -318,7 +318,7 @@ def test_a_teacher_marks_a_right_and_a_wrong_submission_of_tutorial_00(handouts)
     sign flipped, which the handout's check cannot see: the cost is the same) scores 0 there and full marks
     elsewhere, with a message that says what is wrong without the expected value; so does exercise 2's Jacobian
     off by a relative 1e-6, which the handout's check (central differences) passes and the marking check compared at
-    NumPy's unseen rtol of 1e-5."""
+    NumPy's unseen rtol of 1e-5, and exercise 1's cost returned as a 1 × 1 matrix (the right number, boxed)."""
     optional_import("nbclient", "notebooks")
     optional_import("ipykernel", "notebooks")
     name = "00_solve_your_own_problem.ipynb"
@@ -332,10 +332,19 @@ def test_a_teacher_marks_a_right_and_a_wrong_submission_of_tutorial_00(handouts)
     nearly = solutions["exercise-2-solution"] + (
         "\n_exact_jacobian = velocity_jacobian\n\n\ndef velocity_jacobian(x):\n    return _exact_jacobian(x) * (1 + 1e-6)\n"
     )
+    # exercise 1's cost as a 1 × 1 matrix (eᵀ Q⁻¹ e of a row and a column), prior_costs flattened: the numbers are
+    # right, the handout's check (abs, isclose) takes it, the task asks for a number
+    boxed = (
+        solutions["exercise-1-solution"]
+        .replace("return 0.5 * e @ np.linalg.solve(Q, e)", "return 0.5 * e[None, :] @ np.linalg.solve(Q, e[:, None])")
+        .replace("prior_costs = np.array(", "prior_costs = np.ravel(")
+    )
+    assert boxed.count("e[None, :]") == 1 and boxed.count("np.ravel(") == 1
     students = (
         ("right", solutions),
         ("wrong", {**solutions, "exercise-1-solution": flipped}),
         ("nearly", {**solutions, "exercise-2-solution": nearly}),
+        ("boxed", {**solutions, "exercise-1-solution": boxed}),
     )
     for student, answers in students:
         nb = json.loads((handouts / "handout" / name).read_text())
@@ -353,6 +362,9 @@ def test_a_teacher_marks_a_right_and_a_wrong_submission_of_tutorial_00(handouts)
     assert [(e["number"], e["score"]) for e in nearly_marks] == [(1, 1), (2, 0), (3, 1)], nearly_marks
     said = nearly_marks[1]["message"]
     assert said.startswith("marking check: velocity_jacobian is not ∂e/∂x"), said
+    boxed_marks = marks["boxed"]["exercises"]
+    assert [(e["number"], e["score"]) for e in boxed_marks] == [(1, 0), (2, 1), (3, 1)], boxed_marks
+    assert boxed_marks[0]["message"] == "marking check: prior_cost must return one number, not an array of one"
     message = marks["wrong"]["exercises"][0]["message"]
     assert message.startswith("marking check: prior_error is not Eq. 22's") and not re.search(r"\d\.\d", message)
 
