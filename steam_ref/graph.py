@@ -36,6 +36,13 @@ class FactorGraph:
         self._kinds.update(kinds_of(new, self._kinds, "the graph's factors"))
         self.factors.extend(new)
 
+    def copy(self) -> FactorGraph:
+        """Another graph of the same factors (the factors themselves are shared: they never change), which
+        :meth:`add` extends without changing this one."""
+        out = FactorGraph()
+        out.factors, out._kinds, out._batches = list(self.factors), dict(self._kinds), self._batches
+        return out
+
     def kinds(self) -> dict[Key, Manifold]:
         """The kind of every variable, as its factors declare it (a copy)."""
         return dict(self._kinds)

@@ -44,6 +44,7 @@ from steam_ref.linear import (
 from steam_ref.linear import solve as linear_solve
 from steam_ref.manifold import VECTOR
 from steam_ref.paper.results import position_rmse
+from steam_ref.paper.solvers import FixedLagTreeSolver, make_solver
 from steam_ref.trajectory import Trajectory
 
 QC = np.diag([0.1, 0.2, 0.3])
@@ -1252,6 +1253,80 @@ def test_a_failed_update_rolls_back_exactly(make_failure, error, relinearize_ski
         report, twin_report = s.update(*chain_step(i)), twin.update(*chain_step(i))
         assert report.step == twin_report.step
     assert_same_state(state_of(s), state_of(twin))
+
+
+STREAM_SOLVERS = {
+    "pb": lambda: make_solver("pb"),
+    "pbvr": lambda: make_solver("pbvr"),
+    "btgp": lambda: make_solver("btgp"),
+    "btgp-lag": lambda: make_solver("btgp", lag=2.5, times=np.arange(10.0)),
+}
+
+
+def stream_state(s) -> dict:
+    """What a stream solver answers: every estimate, and the marginal covariance of every variable it holds (the
+    fixed-lag one's window), copied."""
+    estimate = s.estimate()
+    held = [k for k in estimate if not isinstance(s, FixedLagTreeSolver) or s.retired(k) is None]
+    return {"estimate": {k: estimate[k].copy() for k in estimate}, "marginals": s.marginal_covariances(held)}
+
+
+def interrupted(i: int):
+    """A good update cut short by Ctrl-C inside the solve (see solve_interrupted)."""
+    return chain_step(i)
+
+
+@pytest.mark.parametrize(
+    ("make_failure", "error"),
+    [
+        (lonely_landmark, UnderdeterminedError),
+        (overflowing_value, NumericalError),
+        (checked_input, UnknownVariableError),
+        (interrupted, KeyboardInterrupt),
+    ],
+)
+@pytest.mark.parametrize("method", sorted(STREAM_SOLVERS))
+def test_a_failed_stream_update_leaves_every_stream_solver_as_it_was(make_failure, error, method, monkeypatch):
+    """PB and PBVR kept the failed update's factors and values before their Gauss-Newton ran, so one refused update
+    (a landmark one range cannot place) failed every later one too; now each stream solver answers after a failed
+    or interrupted update (Ctrl-C in the solve) exactly as one that never saw it, and the next good updates agree."""
+    s, twin = STREAM_SOLVERS[method](), STREAM_SOLVERS[method]()
+    for i in range(4):
+        for solver_ in (s, twin):
+            solver_.update(*as_stream_update(chain_step(i)))
+    before = stream_state(s)
+    if error is KeyboardInterrupt:
+        solve = (
+            "steam_ref.paper.solvers.gauss_newton"
+            if method.startswith("pb")
+            else "steam_ref.bayes_tree.isam.backsubstitute"
+        )
+
+        def ctrl_c(*args, **kwargs):
+            raise KeyboardInterrupt("Ctrl-C in the solve")
+
+        monkeypatch.setattr(solve, ctrl_c)
+    with pytest.raises(error):
+        s.update(*as_stream_update(make_failure(4)))
+    monkeypatch.undo()
+    assert_same_stream_state(stream_state(s), before)
+    for i in (4, 5):
+        s.update(*as_stream_update(chain_step(i)))
+        twin.update(*as_stream_update(chain_step(i)))
+    assert_same_stream_state(stream_state(s), stream_state(twin))
+
+
+def as_stream_update(update: tuple[list, dict]) -> tuple[list, sr.Values]:
+    """An update as a stream gives it: the new values a Values."""
+    factors, values = update
+    return factors, sr.Values(values)
+
+
+def assert_same_stream_state(a: dict, b: dict) -> None:
+    for name in ("estimate", "marginals"):
+        assert list(a[name]) == list(b[name]), name
+        for k in a[name]:
+            np.testing.assert_array_equal(a[name][k], b[name][k], err_msg=f"{name}[{k}]")
 
 
 # --- property tests: the GP functions never raise anything but SteamError ----------------------------

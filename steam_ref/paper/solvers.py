@@ -70,19 +70,23 @@ class PeriodicBatchSolver(OnlineSolver):
         self.iterations: list[int] = []  # Gauss-Newton iterations of each update
 
     def update(self, factors: list[Factor], values: Values) -> None:
-        self.graph.add(factors)
+        """Gauss-Newton over every factor so far and ``factors``, from the estimate and ``values``. The new graph and
+        estimate are made aside and kept only once the solve returns: a failed or interrupted update (an
+        UnderdeterminedError, Ctrl-C) leaves the solver as it was."""
+        graph, start = self.graph.copy(), self.values.copy()
+        graph.add(factors)
         for k in values:
-            self.values.insert(k, values[k], values.kind(k))
+            start.insert(k, values[k], values.kind(k))
         # check=False: the paper's PB stops on GTSAM's rule alone, and timing it is the point.
         result = gauss_newton(
-            self.graph,
-            self.values,
+            graph,
+            start,
             ordering=self.ordering,
             check=False,
             relative_tolerance=self.relative_tolerance,
             max_iterations=self.max_iterations,
         )
-        self.values = result.values
+        self.graph, self.values = graph, result.values  # one line: the update is kept whole or not at all
         self.iterations.append(len(result.iterations))
 
     def estimate_of(self, key: Key, *, past: str = "lagged") -> NDArray:
