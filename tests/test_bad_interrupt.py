@@ -5,7 +5,8 @@ for byte), then propagates; the next valid update then gives what an uninterrupt
 Three ways in: a real SIGINT from a timer thread during a large update (where it lands is up to the
 clock); a KeyboardInterrupt raised by a trace function at the n-th executed line of the update, for
 lines spread over the whole update (every phase, deterministic); and a second Ctrl-C during the
-rollback itself.
+rollback itself. A stream (``StreamingEstimator.step``) stopped once its front end took a pose refuses to go on,
+naming the pose; stopped before, it goes on as if never stopped.
 """
 
 from __future__ import annotations
@@ -446,3 +447,82 @@ def test_sigterm_stops_a_command_as_ctrl_c_does_in_one_line(tmp_path) -> None:
     _, err = proc.communicate(timeout=60)
     assert (proc.returncode, err) == (143, "steam-ref: terminated\n")
     assert not out.exists()
+
+
+STOPS = {  # where a Ctrl-C lands inside StreamingEstimator.step, each after the front end took the pose
+    "in the solver's update (undone whole)": "steam_ref.bayes_tree.isam.backsubstitute",
+    "after the solver's update, before the stream records it": "steam_ref.paper.online.forget_landmarks",
+    "in the front end, before the pose's readings are pending": "steam_ref.paper.frontend.FrontEnd._landmark_factors",
+}
+
+
+def _step_until_interrupted(stream) -> int:
+    """Step ``stream`` until a step raises KeyboardInterrupt; the pose that step took."""
+    while not stream.done:
+        pose = stream.front.n_processed
+        try:
+            stream.step()
+        except KeyboardInterrupt:
+            return pose
+    raise AssertionError("no step was interrupted")
+
+
+@pytest.mark.parametrize("where", sorted(STOPS))
+def test_a_stream_stopped_inside_a_step_refuses_to_go_on_and_names_the_pose(where, monkeypatch) -> None:
+    """A Ctrl-C inside StreamingEstimator.step, once its front end took the pose, went on silently: in the front end
+    the next step dropped the pose's readings; in the solver's update (undone) the next update gave them late; after
+    it, every later step failed naming a state as given twice. Now every later step is refused, naming the pose and
+    the interrupt, and the queries answer for what the solver holds (the stream's estimate before the step, when
+    the solver's update was undone)."""
+    from steam_ref.datasets import generate_synthetic
+    from steam_ref.paper.online import StreamingEstimator
+    from steam_ref.paper.options import StreamOptions
+    from steam_ref.paper.presets import PaperSetup
+    from steam_ref.paper.readings import Readings
+
+    setup = PaperSetup.synthetic().with_schedule(every=1)
+    readings = Readings.from_dataset(generate_synthetic(n_steps=30, n_landmarks=8, seed=3, range_sigma=0.3), setup)
+    stream, twin = (StreamingEstimator(readings, setup, StreamOptions(method="btgp")) for _ in range(2))
+    for _ in range(12):
+        stream.step()
+        twin.step()
+
+    def ctrl_c(*args, **kwargs):
+        raise KeyboardInterrupt("Ctrl-C")
+
+    monkeypatch.setattr(STOPS[where], ctrl_c)
+    pose = _step_until_interrupted(stream)  # the first pose with a landmark reading, or (every=1) an update
+    monkeypatch.undo()
+    with pytest.raises(steam_ref.SteamError, match=f"the step of pose {pose} was stopped by KeyboardInterrupt"):
+        stream.step()
+    if where.startswith("in the solver"):
+        while twin.front.n_processed < pose:
+            twin.step()
+        np.testing.assert_array_equal(stream.trajectory()[1], twin.trajectory()[1])
+
+
+def test_a_stream_stopped_before_its_front_end_takes_the_pose_goes_on_as_if_never_stopped(monkeypatch) -> None:
+    """A Ctrl-C as step() begins, before the front end took the pose, changes nothing: the stream goes on, and its
+    run equals one never stopped, to the bit."""
+    from steam_ref.datasets import generate_synthetic
+    from steam_ref.paper.frontend import FrontEnd
+    from steam_ref.paper.online import StreamingEstimator
+    from steam_ref.paper.options import StreamOptions
+    from steam_ref.paper.presets import PaperSetup
+    from steam_ref.paper.readings import Readings
+
+    setup = PaperSetup.synthetic().with_schedule(every=1)
+    readings = Readings.from_dataset(generate_synthetic(n_steps=30, n_landmarks=8, seed=3, range_sigma=0.3), setup)
+    stream, twin = (StreamingEstimator(readings, setup, StreamOptions(method="btgp")) for _ in range(2))
+    for _ in range(12):
+        stream.step()
+    monkeypatch.setattr(FrontEnd, "step", lambda self: (_ for _ in ()).throw(KeyboardInterrupt("Ctrl-C")))
+    with pytest.raises(KeyboardInterrupt):
+        stream.step()
+    monkeypatch.undo()
+    while not stream.done:
+        stream.step()
+    while not twin.done:
+        twin.step()
+    np.testing.assert_array_equal(stream.trajectory()[1], twin.trajectory()[1])
+    assert list(stream.update_steps) == list(twin.update_steps)

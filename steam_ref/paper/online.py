@@ -120,6 +120,7 @@ class StreamingEstimator:
         self.update_steps = array("q")  # pose at which each solver update ran
         self.update_seconds = array("d")  # wall time of each solver update
         self.divergence = DivergenceCheck()  # readings beyond any noise, a diverging estimate (paper.divergence)
+        self.broken: str | None = None  # a step that failed or was interrupted, and why: no step may follow
 
     def _new_solver(self) -> OnlineSolver:
         o = self.options
@@ -150,7 +151,27 @@ class StreamingEstimator:
         return self.front.done
 
     def step(self) -> None:
-        """Process the readings of the next pose; update the solver when the schedule says so."""
+        """Process the readings of the next pose; update the solver when the schedule says so.
+
+        A step that fails or is interrupted (Ctrl-C) may stop between the front end and the solver (the pose's
+        readings taken but not given, or the solver updated but not told to the front end): the estimator then
+        refuses every later step, naming the pose and the cause, where going on would drop those readings or give
+        them twice. Its queries still answer for what the solver holds (an iSAM2 update itself is undone whole)."""
+        if self.broken is not None:
+            raise SteamError(
+                f"{self.broken}: the front end and the solver may disagree on what was given, so this stream cannot "
+                "go on; its queries answer for what the solver holds, and a new StreamingEstimator runs it again"
+            )
+        pose = self.front.n_processed
+        try:
+            self._step()
+        except BaseException as err:
+            if self.front.n_processed != pose:  # the front end took the pose (before that, nothing has changed)
+                self.broken = f"the step of pose {pose} was stopped by {type(err).__name__}: {err}"
+            raise
+
+    def _step(self) -> None:
+        """:meth:`step`'s work."""
         start = time.perf_counter()
         new = self.front.step()
         self._pending.extend(new.factors)
