@@ -228,6 +228,19 @@ def test_the_plaza_text_style_loads(tmp_path: Path) -> None:
 
 
 @pytest.mark.parametrize("table", list(CMU))
+def test_a_logical_mat_table_is_refused_not_read_as_zeros_and_ones(tmp_path: Path, table: str) -> None:
+    """A MATLAB logical matrix (a table saved as a comparison, ``TD > 0``) was read as the numbers 0 and 1; an array
+    of booleans is no array of numbers (steam_ref.arguments), so it is refused naming the file and the table."""
+    arrays = SMALL.to_cmu_arrays()
+    arrays[table] = arrays[table] > 0
+    path = _save(tmp_path / f"{table}.mat", **arrays)
+    with pytest.raises(
+        DataError, match=rf"{re.escape(str(path))}: {table} is not a numeric matrix \(got an array of bool\)"
+    ):
+        load_cmu_mat(path)
+
+
+@pytest.mark.parametrize("table", list(CMU))
 def test_each_mat_table_transposed(tmp_path: Path, table: str) -> None:
     arrays = SMALL.to_cmu_arrays()
     arrays[table] = arrays[table].T

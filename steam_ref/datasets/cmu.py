@@ -90,7 +90,7 @@ def _mat_table(content: dict[str, NDArray], key: str, path: Path) -> NDArray:
     if key not in content:
         raise DataError(f"{path}: no array {key!r} (it holds {sorted(content) or 'nothing'})")
     value = content[key]
-    if not isinstance(value, np.ndarray) or value.dtype.kind not in "biuf":
+    if not isinstance(value, np.ndarray) or value.dtype.kind not in "iuf":  # a logical matrix is not 0s and 1s
         got = f"an array of {value.dtype}" if isinstance(value, np.ndarray) else f"a {type(value).__name__}"
         raise DataError(f"{path}: {key} is not a numeric matrix (got {got})")
     if value.dtype.kind in "iu":  # an integer beyond 2^53 would become another integer as float64, in silence

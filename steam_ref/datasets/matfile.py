@@ -227,7 +227,8 @@ def check_mat_structure(raw: bytes, where: str, max_bytes: int | None = None) ->
 
 
 def read_mat(path: str | os.PathLike, max_bytes: int | None = None) -> dict[str, NDArray]:
-    """The arrays of a MATLAB v5 file (names starting with ``__`` left out); DataError naming the file
+    """The arrays of a MATLAB v5 file (names starting with ``__`` left out; a logical matrix as booleans, which
+    scipy reads as uint8); DataError naming the file
     when it is missing, not a file, larger than ``max_bytes`` on disk or once inflated (default
     :func:`max_mat_bytes`), corrupt (:func:`check_mat_structure`) or unreadable by scipy."""
     path = Path(path)
@@ -244,7 +245,10 @@ def read_mat(path: str | os.PathLike, max_bytes: int | None = None) -> dict[str,
     check_mat_structure(raw, str(path), limit)
     try:
         content = scipy.io.loadmat(io.BytesIO(raw))
+        logical = {name for name, _, cls in scipy.io.whosmat(io.BytesIO(raw)) if cls == "logical"}
     except Exception as err:  # scipy raises ValueError, OSError, TypeError, zlib errors, MemoryError...
         reason = f"{type(err).__name__}: {err}"
         raise DataError(f"{path}: cannot read it as a MATLAB .mat file ({reason})") from None
+    for name in logical & content.keys():  # scipy reads a logical matrix as uint8: it is booleans, not numbers
+        content[name] = content[name].astype(bool)
     return {k: v for k, v in content.items() if not k.startswith("__") and isinstance(k, str)}
