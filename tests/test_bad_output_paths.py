@@ -16,7 +16,9 @@ import os
 import signal
 from pathlib import Path
 
+import numpy as np
 import pytest
+import scipy.io
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -305,3 +307,29 @@ def test_conformance_build_into_a_kit_of_another_version_is_refused_and_leaves_i
     assert code == 2 and len(err.splitlines()) == 1, err
     assert f"{str(old)!r} holds the conformance kit v{KIT_VERSION - 1}: building v{KIT_VERSION} there" in err, err
     assert snapshot(tmp_path) == before
+
+
+@pytest.mark.parametrize("command", ["run", "batch"])
+def test_save_trajectory_refuses_to_replace_a_binary_file_and_replaces_a_text_one(tmp_path, capsys, command):
+    """``--save-trajectory`` takes any name (TUM and KITTI files have no suffix of their own), and it replaced whatever
+    was there: ``--dataset synthetic --save-trajectory Syn_theta_Plaza.mat`` wrote text over the paper's data set (the
+    run read another file, so the check of the inputs passed). A file with a NUL byte in its first 4 KiB is never a
+    trajectory the command wrote: refused in one line, byte for byte as it was; a text file is still replaced."""
+    data = tmp_path / "Syn_theta_Plaza.mat"
+    scipy.io.savemat(data, {"GT": np.arange(12.0).reshape(3, 4)})
+    before = data.read_bytes()
+    argv = [command, "--dataset", "synthetic", "--max-poses", "4", "--no-progress", "--save-trajectory"]
+    code = cli.main([*argv, str(data)])
+    out, err = capsys.readouterr()
+    assert code == 2 and out == "" and len(err.splitlines()) == 1, err
+    assert f"--save-trajectory: {str(data)!r} holds binary data, not a trajectory" in err
+    assert data.read_bytes() == before
+    old = tmp_path / "trajectory.txt"
+    old.write_text("0 0 0 0 0 0 0 1\n")
+    assert cli.main([*argv, str(old)]) == 0, capsys.readouterr().err
+    assert [line.split()[0] for line in old.read_text().splitlines() if not line.startswith("#")] == [
+        "1",
+        "2",
+        "3",
+        "4",
+    ]

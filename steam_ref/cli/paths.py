@@ -239,8 +239,23 @@ def check_out_folder(path: str, option: str) -> None:
 
 
 def check_trajectory_output(args: argparse.Namespace) -> None:
-    """--save-trajectory FILE checked before the run; --trajectory-format needs it (alone it would do nothing)."""
+    """--save-trajectory FILE checked before the run; --trajectory-format needs it (alone it would do nothing).
+
+    The file's name may end in anything (a TUM or KITTI file has no suffix of its own), so an existing file is
+    replaced only if it is text: one with a NUL byte in its first 4 KiB (a .mat data set, an .npz, a picture) is
+    never a trajectory this command wrote, and replacing it would lose it."""
     check_output(args.save_trajectory, "", "--save-trajectory")
+    if args.save_trajectory is not None and os.path.isfile(args.save_trajectory):  # a regular file: no pipe opened
+        try:
+            with open(args.save_trajectory, "rb") as existing:
+                binary = b"\0" in existing.read(4096)
+        except OSError as err:
+            raise _refuse_path("--save-trajectory", args.save_trajectory, err) from None
+        if binary:
+            raise SteamError(
+                f"--save-trajectory: {args.save_trajectory!r} holds binary data, not a trajectory (a data set, an "
+                "array file, a picture?): replacing it would lose it; give another file, or remove it first"
+            )
     if args.trajectory_format is not None and args.save_trajectory is None:
         raise SteamError(
             f"--trajectory-format {args.trajectory_format} is the format of --save-trajectory FILE: give it"
