@@ -12,6 +12,9 @@ or a SteamError, never another exception.
 from __future__ import annotations
 
 import math
+import os
+import re
+import tempfile
 
 import numpy as np
 import pytest
@@ -20,7 +23,7 @@ from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 import steam_ref as sr
-from steam_ref import L, X, covariance, dead_reckoning, gp, plot
+from steam_ref import L, X, covariance, dead_reckoning, evaluate, gp, plot
 from steam_ref.bayes_tree import marginalize
 from steam_ref.errors import (
     KindError,
@@ -1106,6 +1109,18 @@ CASES = [
         lambda: marginalize(solver(), [X(0)], keep_conditionals=None),
         SteamError,
         r"keep_conditionals must be True or False, got keep_conditionals=None",
+    ),
+    (  # an IsADirectoryError from np.savetxt, which had opened (and emptied) a file given before writing it
+        "write_tum to a folder",
+        lambda: sr.write_tum(tempfile.gettempdir(), [0.0], [[0.0, 0.0, 0.0]]),
+        SteamError,
+        rf"write_tum: cannot write {re.escape(repr(tempfile.gettempdir()))} \(Is a directory\)",
+    ),
+    (
+        "write_kitti into a missing folder",
+        lambda: evaluate.write_kitti(os.path.join(tempfile.gettempdir(), "no such folder", "a.txt"), [[0.0, 0.0, 0.0]]),
+        SteamError,
+        r"write_kitti: cannot write .*no such folder/a\.txt' \(No such file or directory\)",
     ),
 ]
 

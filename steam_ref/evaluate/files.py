@@ -40,6 +40,7 @@ from ..arguments import parse_decimal, real_array
 from ..datasets.textfile import text_lines
 from ..dead_reckoning import wrap_angle
 from ..errors import DataError, ShapeError, SteamError
+from ..files import replace_file
 from ..lie import LieGroup
 from ..lie.group import check_group
 from ..lie.points import point_dim
@@ -113,14 +114,21 @@ def write_tum(path: str | os.PathLike, times: object, poses: object, *, group: L
         M = _matrices(_in_3d(group), poses)
         t = _times(times, len(M))
         rows = np.column_stack([t, M[:, :3, 3], _quaternion_of(M[:, :3, :3])])
-        np.savetxt(path, rows, fmt="%.17g", header="timestamp tx ty tz qx qy qz qw")
+        _write_rows(path, rows, "write_tum", header="timestamp tx ty tz qx qy qz qw")
         return
     poses = planar_poses("poses", poses)
     t = _times(times, len(poses))
     half = poses[:, 2] / 2
     zero = np.zeros(len(poses))
     rows = np.column_stack([t, poses[:, 0], poses[:, 1], zero, zero, zero, np.sin(half), np.cos(half)])
-    np.savetxt(path, rows, fmt="%.17g", header="timestamp tx ty tz qx qy qz qw (planar: z = 0, rotation about z)")
+    _write_rows(path, rows, "write_tum", header="timestamp tx ty tz qx qy qz qw (planar: z = 0, rotation about z)")
+
+
+def _write_rows(path: str | os.PathLike, rows: NDArray, what: str, header: str = "") -> None:
+    """``rows`` written to ``path``, 17 significant digits a number, whole or not at all (:func:`replace_file`): a
+    folder, a missing folder or a full disk is a SteamError starting with ``what`` and naming the path, and leaves
+    what was there as it was."""
+    replace_file(path, lambda name: np.savetxt(name, rows, fmt="%.17g", header=header), what)
 
 
 def _table(path: str | os.PathLike, columns: int, what: str) -> NDArray:
@@ -212,13 +220,13 @@ def write_kitti(path: str | os.PathLike, poses: object, *, group: LieGroup | Non
     (SE3V, SE3) poses in 3-D (n, group.size)."""
     if group is not None:
         M = _matrices(_in_3d(group), poses)
-        np.savetxt(path, M[:, :3, :].reshape(-1, 12), fmt="%.17g")
+        _write_rows(path, M[:, :3, :].reshape(-1, 12), "write_kitti")
         return
     poses = planar_poses("poses", poses)
     c, s = np.cos(poses[:, 2]), np.sin(poses[:, 2])
     zero, one = np.zeros(len(poses)), np.ones(len(poses))
     rows = np.column_stack([c, -s, zero, poses[:, 0], s, c, zero, poses[:, 1], zero, zero, one, zero])
-    np.savetxt(path, rows, fmt="%.17g")
+    _write_rows(path, rows, "write_kitti")
 
 
 def read_kitti(path: str | os.PathLike, *, group: LieGroup | None = None) -> NDArray:
