@@ -39,6 +39,7 @@ __all__ = [
     "is_integer",
     "flag",
     "replace_fields",
+    "instance",
     "real_array",
     "finite",
     "asymmetric",
@@ -121,6 +122,14 @@ def replace_fields(instance: _D, changes: dict[str, Any]) -> _D:
     if unknown:
         raise SteamError(f"{type(instance).__name__} has no field {unknown[0]!r}; the fields are {sorted(names)}")
     return dataclasses.replace(instance, **changes)  # type: ignore[type-var]
+
+
+def instance(name: str, value: object, cls: type[_D], how: str) -> _D:
+    """``value`` itself when it is a ``cls`` (a set-up, a settings object); SteamError naming ``name``, the class and
+    ``how`` one is made otherwise (a string, a dict or None given for one failed far from where it was given)."""
+    if not isinstance(value, cls):
+        raise SteamError(f"{name} must be a {cls.__name__} ({how}), got {name}={_show(value)}")
+    return value
 
 
 def real_array(name: str, value: object) -> NDArray:

@@ -46,6 +46,7 @@ from steam_ref.linear import (
 )
 from steam_ref.linear import solve as linear_solve
 from steam_ref.manifold import VECTOR
+from steam_ref.paper.online import StreamingEstimator
 from steam_ref.paper.results import position_rmse
 from steam_ref.paper.solvers import FixedLagTreeSolver, make_solver
 from steam_ref.trajectory import Trajectory
@@ -1109,6 +1110,30 @@ CASES = [
         lambda: marginalize(solver(), [X(0)], keep_conditionals=None),
         SteamError,
         r"keep_conditionals must be True or False, got keep_conditionals=None",
+    ),
+    (  # an AttributeError ('NoneType' object has no attribute 'clock') from inside the readings
+        "run_online setup=None",
+        lambda: sr.run_online(sr.generate_synthetic(5, 2, seed=1), None),
+        SteamError,
+        r"setup must be a PaperSetup \(PaperSetup.synthetic\(\), .*got setup=None",
+    ),
+    (  # an AttributeError ('dict' object has no attribute 'layout') from the front end
+        "run_online options a dict",
+        lambda: sr.run_online(sr.generate_synthetic(5, 2, seed=1), sr.PaperSetup.synthetic(), {"method": "pb"}),
+        SteamError,
+        r"options must be a StreamOptions \(StreamOptions\(method=.*got options=\{'method': 'pb'\}",
+    ),
+    (  # an AttributeError ('RangeDataset' object has no attribute 'range_rows')
+        "StreamingEstimator given a data set",
+        lambda: StreamingEstimator(sr.generate_synthetic(5, 2, seed=1), sr.PaperSetup.synthetic(), sr.StreamOptions()),
+        SteamError,
+        r"readings must be a Readings \(Readings.from_dataset\(data, setup\).*got readings=RangeDataset",
+    ),
+    (  # accepted: a string is true, so 'no' asked for the covariances
+        "run_online covariances='no'",
+        lambda: sr.run_online(sr.generate_synthetic(5, 2, seed=1), sr.PaperSetup.synthetic(), covariances="no"),
+        SteamError,
+        r"covariances must be True or False, got covariances='no'",
     ),
     (  # an IsADirectoryError from np.savetxt, which had opened (and emptied) a file given before writing it
         "write_tum to a folder",

@@ -23,6 +23,7 @@ from functools import partial
 import numpy as np
 from numpy.typing import NDArray
 
+from ..arguments import flag, instance
 from ..batch import BatchResult, levenberg_marquardt
 from ..errors import ConvergenceWarning, SteamError
 from ..graph import FactorGraph
@@ -35,12 +36,14 @@ from .divergence import DivergenceCheck
 from .frontend import FrontEnd, NewStep
 from .online_solver import OnlineSolver, SolverView
 from .options import StreamOptions
-from .presets import PaperSetup, Schedule
+from .presets import SETUP_HOW, PaperSetup, Schedule
 from .readings import Readings
 from .results import RunResult, peak_rss_mb, scored
 from .solvers import forget_landmarks, make_solver
 
 __all__ = ["ScheduleClock", "StreamingEstimator", "run_online"]
+
+OPTIONS_HOW = "StreamOptions(method=..., ...): the run-time choices"  # how a stream's options are made
 
 
 class ScheduleClock:
@@ -102,6 +105,9 @@ class StreamingEstimator:
         *,
         name: str | None = None,  # the data set's, for the progress bar
     ):
+        instance("readings", readings, Readings, "Readings.from_dataset(data, setup); run_online takes a data set")
+        instance("setup", setup, PaperSetup, SETUP_HOW)
+        instance("options", options, StreamOptions, OPTIONS_HOW)
         if solver is not None and options.converge_at_end:
             raise SteamError(
                 "converge_at_end rebuilds steam_ref's own solver at the optimum: it cannot finish a solver passed in"
@@ -267,7 +273,7 @@ class StreamingEstimator:
     def run(self, ground_truth: NDArray | None = None, *, covariances: bool = False) -> RunResult:
         """Process the stream to its end (or the time budget); ``ground_truth`` (n_poses, ≥3) with x,
         y in columns 1-2 (the CMU GT layout) gives the RMSE; ``covariances`` adds the final marginals."""
-        if covariances and self.options.lag is not None:  # before the run, not after it
+        if flag("covariances", covariances) and self.options.lag is not None:  # before the run, not after it
             raise SteamError(
                 f"covariances=True gives every state's final marginal covariance, which lag={self.options.lag!r} "
                 "forgets: drop one of them"
@@ -340,7 +346,7 @@ def run_online(
     ``options`` default to :class:`StreamOptions`'s defaults; keyword ``changes`` override fields. A data
     set's ground truth, when it has one, gives the RMSE; :class:`Readings` carry none.
     """
-    options = StreamOptions() if options is None else options
+    options = StreamOptions() if options is None else instance("options", options, StreamOptions, OPTIONS_HOW)
     options = options.replace(**changes) if changes else options
     if isinstance(data, Readings):
         readings, truth = data, None

@@ -39,6 +39,7 @@ from ..robust import Tukey
 
 __all__ = [
     "PaperSetup",
+    "SETUP_HOW",
     "Schedule",
     "RANGE_ATTACHMENTS",
     "DEPARTURES",
@@ -91,6 +92,9 @@ class Schedule:
     def replace(self, **changes) -> Schedule:
         """A copy with some fields changed; SteamError names an unknown field (:func:`~steam_ref.arguments.replace_fields`)."""
         return replace_fields(self, changes)
+
+
+SETUP_HOW = "PaperSetup.synthetic(), .plaza(), .victoria_park() or PaperSetup.named(name)"  # how one is made
 
 
 @dataclass(frozen=True)

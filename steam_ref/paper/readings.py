@@ -22,11 +22,11 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from numpy.typing import NDArray
 
-from ..arguments import is_integer
+from ..arguments import instance, is_integer
 from ..datasets import LandmarkDataset, RangeDataset
 from ..errors import DataError, SteamError
 from ..gp.clock import Clock
-from .presets import RANGE_ATTACHMENTS, PaperSetup
+from .presets import RANGE_ATTACHMENTS, SETUP_HOW, PaperSetup
 
 __all__ = [
     "Readings",
@@ -179,6 +179,7 @@ class Readings:
     @classmethod
     def from_dataset(cls, data: RangeDataset | LandmarkDataset, setup: PaperSetup) -> Readings:
         """Convert a data set following the paper's scripts (see the module docstring)."""
+        instance("setup", setup, PaperSetup, SETUP_HOW)
         if isinstance(data, LandmarkDataset):
             return cls._from_landmark_dataset(data, setup)
         if not isinstance(data, RangeDataset):
