@@ -72,6 +72,25 @@ def test_a_scale_outside_what_float64_resolves_is_blamed_on_its_option(monkeypat
         assert code == 2 and len(err.splitlines()) == 1 and option in err and f"from {low:g} to {high:g}" in err
 
 
+@pytest.mark.parametrize(
+    "option", ["--relinearize-threshold", "--amalgamation-zeros", "--lag-batch", "--time-budget", "--lag"]
+)
+@pytest.mark.parametrize("text", ["1e-400", "0.5e-330", "-2e-999"])
+def test_a_number_float64_reads_as_zero_is_refused_not_read_as_zero(capsys, option, text) -> None:
+    """'--relinearize-threshold 1e-400' was read as 0 (relinearize at every update), '--lag-batch 1e-400' as no batch,
+    '--amalgamation-zeros 1e-400' as none: a number the user wrote other than 0 became 0 in silence. Now refused in
+    one line naming the option and what float64 makes of it; a 0 written as 0 (0, 0e5, 0.000) is still 0."""
+    lag = ["--lag", "5"] if option == "--lag-batch" else []
+    code, err = _run(capsys, ["run", "--dataset", "missing.mat", *lag, f"{option}={text}"])
+    assert code == 2 and len(err.splitlines()) == 1, err
+    assert f"argument {option}:" in err and f"got {text!r}" in err, err
+    if option not in ("--time-budget", "--lag"):  # > 0: refused as 0 is
+        assert "which float64 cannot hold (it reads as 0)" in err, err
+        for zero in ("0", "0e5", "0.000", "-0"):
+            code, err = _run(capsys, ["run", "--dataset", "missing.mat", *lag, f"{option}={zero}"])
+            assert code == 2 and "missing.mat" in err and option not in err, err
+
+
 @pytest.mark.parametrize("prior", ["wnoa", "wnoj"])
 def test_a_singer_time_constant_with_another_prior_is_refused(monkeypatch, capsys, prior) -> None:
     monkeypatch.setattr("steam_ref.cli.fidelity.run_online", _never)

@@ -32,6 +32,7 @@ from ..args import (
     check_steps,
     is_rigid,
     non_negative_float,
+    not_underflowed,
     positive_float,
     positive_int,
     preset_of,
@@ -207,10 +208,11 @@ def _zero_fraction(text: str) -> float:
     """An argparse type: a number in [0, 1) (:func:`~steam_ref.linear.amalgamation.zero_fraction`)."""
     from ...linear.amalgamation import zero_fraction  # its home, loaded only when --amalgamation-zeros is given
 
+    what = "a fraction >= 0 and < 1"
     try:
-        return zero_fraction(parse_decimal(text))
+        return not_underflowed(text, zero_fraction(parse_decimal(text)), what)
     except SteamError:
-        raise argparse.ArgumentTypeError(f"expected a fraction >= 0 and < 1, got {text!r}") from None
+        raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}") from None
 
 
 # run's options that only BTGP reads (None: not given), by what each is: given with --method pb or pbvr, which keep no
