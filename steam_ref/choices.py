@@ -42,6 +42,7 @@ __all__ = [
     "RESIDUALS",
     "SINGER_TIME_CONSTANT",
     "parse_decimal",
+    "underflowed",
 ]
 
 DECIMAL = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")  # a plain decimal number
@@ -53,6 +54,13 @@ def parse_decimal(text: str, convert: type = float) -> float | int | None:
     :data:`DIGITS` for ``convert=int``), or None when it is not one: ``1_0`` and ``５`` are not numbers here."""
     rule = DIGITS if convert is int else DECIMAL
     return convert(text) if isinstance(text, str) and rule.fullmatch(text) else None
+
+
+def underflowed(text: str, value: float) -> str:
+    """ "" unless ``text`` writes a number other than 0 that float64 reads as ``value`` 0 ('1e-400'); then the words
+    saying so. A threshold, a fraction or a batch of 0 is another setting than a tiny one: a command refuses it."""
+    written_zero = value != 0 or not any(c in "123456789" for c in text.lower().partition("e")[0])
+    return "" if written_zero else ", which float64 cannot hold (it reads as 0)"
 
 
 @dataclass(frozen=True)

@@ -21,7 +21,7 @@ import re
 from pathlib import Path
 from typing import Any, Protocol
 
-from ..choices import DECIMAL, MOTION_PRIOR_NAMES, PRESETS, RESIDUALS, parse_decimal
+from ..choices import DECIMAL, MOTION_PRIOR_NAMES, PRESETS, RESIDUALS, parse_decimal, underflowed
 from ..datasets.registry import DATASETS, loadable
 from ..datasets.search import data_dir_help, dataset_path
 from ..errors import SteamError
@@ -33,7 +33,6 @@ __all__ = [
     "MAX_SEEDS",
     "MAX_STEPS",
     "QC_SCALES",
-    "not_underflowed",
     "SINGER_TIME_CONSTANTS",
     "Parser",
     "add_data_dir",
@@ -118,19 +117,13 @@ def number(convert: type, lower: float, *, strict: bool, upper: float = math.inf
 
     def parse(text: str):
         value = parse_decimal(text, convert)
+        if value is not None and (lost := underflowed(text, value)):  # '1e-400' is not 0
+            raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}{lost}")
         if value is None or not math.isfinite(value) or value < lower or (strict and value == lower) or value > upper:
             raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}")
-        return not_underflowed(text, value, what)
+        return value
 
     return parse
-
-
-def not_underflowed(text: str, value: float, what: str) -> float:
-    """``value``, unless ``text`` writes a number other than 0 that float64 reads as 0 ('1e-400'): a threshold, a
-    fraction or a batch of 0 is another setting than a tiny one, so it is refused (expected ``what``), not read as 0."""
-    if value == 0 and any(c in "123456789" for c in text.lower().partition("e")[0]):
-        raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}, which float64 cannot hold (it reads as 0)")
-    return value
 
 
 def scale(lower: float, upper: float, why: str):
@@ -140,7 +133,7 @@ def scale(lower: float, upper: float, why: str):
         value = parse_decimal(text)
         if value is None or not (math.isfinite(value) and lower <= value <= upper):
             raise argparse.ArgumentTypeError(f"expected a number from {lower:g} to {upper:g}, got {text!r} ({why})")
-        return not_underflowed(text, value, f"a number from {lower:g} to {upper:g}")
+        return value
 
     return parse
 

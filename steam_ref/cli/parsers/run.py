@@ -14,6 +14,7 @@ from ...choices import (
     PRESETS,
     SINGER_TIME_CONSTANT,
     parse_decimal,
+    underflowed,
 )
 from ...errors import SteamError
 from ..args import (
@@ -32,7 +33,6 @@ from ..args import (
     check_steps,
     is_rigid,
     non_negative_float,
-    not_underflowed,
     positive_float,
     positive_int,
     preset_of,
@@ -210,9 +210,12 @@ def _zero_fraction(text: str) -> float:
 
     what = "a fraction >= 0 and < 1"
     try:
-        return not_underflowed(text, zero_fraction(parse_decimal(text)), what)
+        z = zero_fraction(parse_decimal(text))
     except SteamError:
         raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}") from None
+    if lost := underflowed(text, z):  # '1e-400' is not 0
+        raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}{lost}")
+    return z
 
 
 # run's options that only BTGP reads (None: not given), by what each is: given with --method pb or pbvr, which keep no
