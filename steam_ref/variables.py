@@ -11,7 +11,7 @@ nothing of steam_ref but its errors, :mod:`.arguments` and :mod:`.manifold`.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Iterator, Mapping
+from collections.abc import Container, Iterable, Iterator, Mapping
 from typing import NamedTuple
 
 import numpy as np
@@ -379,10 +379,14 @@ def key_list(name: str, keys: object, *, distinct: bool = False) -> list[Key]:
     return out
 
 
-def check_new_values(new_values: object) -> None:
-    """SteamError unless ``new_values`` is a mapping key → vector or None (what a solver's update accepts)."""
+def check_new_values(new_values: object, held: Container[Key] = ()) -> None:
+    """SteamError unless ``new_values`` is a mapping key → vector or None (what a solver's update accepts) giving no
+    variable of ``held`` (those the solver has) a value: an update brings the first estimates of new variables."""
     if new_values is not None and not isinstance(new_values, Mapping):
         raise SteamError(f"new_values must be a mapping key -> vector (a dict or a Values) or None, got {new_values!r}")
+    for k in new_values or ():
+        if k in held:
+            raise SteamError(f"variable {k!r} already has a value; an update cannot give it a new one")
 
 
 def as_values(name: str, values: object) -> Values:

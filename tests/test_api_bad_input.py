@@ -1265,6 +1265,13 @@ def checked_input(i: int):
     return factors + [sr.VelocityFactor.create(X(50), [1.0, 0.0, 0.0], 0.5)], values
 
 
+def value_again(i: int):
+    """Bad input found before anything changes: a new value for a variable the solver holds (PB and PBVR took it in
+    place of their estimate)."""
+    factors, values = chain_step(i)
+    return factors, {**values, X(i - 1): np.zeros(6)}
+
+
 @pytest.mark.parametrize(
     ("make_failure", "error"),
     [
@@ -1322,6 +1329,7 @@ def interrupted(i: int):
         (lonely_landmark, UnderdeterminedError),
         (overflowing_value, NumericalError),
         (checked_input, UnknownVariableError),
+        (value_again, SteamError),
         (interrupted, KeyboardInterrupt),
     ],
 )

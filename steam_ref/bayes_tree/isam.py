@@ -195,7 +195,7 @@ class IncrementalSolver:
             flag("relinearize", relinearize)
             check_constrained(constrained)
             F_new = check_factors("new_factors", new_factors)
-            check_new_values(new_values)
+            check_new_values(new_values, self.state.dims)
             theta_new, kinds = self._checked_update(F_new, {} if new_values is None else new_values)
         # an error, or Ctrl-C (KeyboardInterrupt) at any point: all undone; the BLAS limit is left inside the transaction
         with self.state.transaction(), limit():
@@ -281,8 +281,6 @@ class IncrementalSolver:
                 raise SteamError(
                     f"new_values has the key {k!r}, which is not a variable key (make one with X(i) or L(j))"
                 )
-            if k in self.state.dims:
-                raise SteamError(f"variable {k!r} already has a value; an update cannot give it a new one")
             x = real_array(f"new_values[{k!r}]", v)
             if x.ndim != 1 or x.shape[0] == 0:
                 raise ShapeError(f"new_values[{k!r}] must be a non-empty 1-D vector, got shape {x.shape}")

@@ -25,7 +25,7 @@ from ..covariance import sparse_joint_covariance, sparse_joint_covariances, spar
 from ..errors import SteamError
 from ..factors import Factor
 from ..graph import FactorGraph
-from ..variables import Key, Values, X
+from ..variables import Key, Values, X, check_new_values
 from .online_solver import OnlineSolver, check_past
 
 __all__ = [
@@ -73,6 +73,7 @@ class PeriodicBatchSolver(OnlineSolver):
         """Gauss-Newton over every factor so far and ``factors``, from the estimate and ``values``. The new graph and
         estimate are made aside and kept only once the solve returns: a failed or interrupted update (an
         UnderdeterminedError, Ctrl-C) leaves the solver as it was."""
+        check_new_values(values, self.values)
         graph, start = self.graph.copy(), self.values.copy()
         graph.add(factors)
         for k in values:
