@@ -56,9 +56,9 @@ def parse_decimal(text: str, convert: type = float) -> float | int | None:
     return convert(text) if isinstance(text, str) and rule.fullmatch(text) else None
 
 
-def underflowed(text: str, value: float) -> str:
-    """ "" unless ``text`` writes a number other than 0 that float64 reads as ``value`` 0 ('1e-400'); then the words
-    saying so. A threshold, a fraction or a batch of 0 is another setting than a tiny one: a command refuses it."""
+def underflowed(text: str, value: float | None) -> str:
+    """ "" unless ``text`` writes a number other than 0 that float64 reads as ``value`` 0 ('1e-400'; None, not read as
+    a number: ""); then the words saying so. A threshold, a fraction or a batch of 0 is another setting than a tiny one: a command refuses it."""
     written_zero = value != 0 or not any(c in "123456789" for c in text.lower().partition("e")[0])
     return "" if written_zero else ", which float64 cannot hold (it reads as 0)"
 

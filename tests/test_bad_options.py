@@ -91,6 +91,19 @@ def test_a_number_float64_reads_as_zero_is_refused_not_read_as_zero(capsys, opti
             assert code == 2 and "missing.mat" in err and option not in err, err
 
 
+@pytest.mark.parametrize("text", ["1e-400", "-2e-999"])
+def test_a_scale_float64_reads_as_zero_is_refused_not_read_as_zero(capsys, text) -> None:
+    """The same rule for a number in a range that holds 0 (cli.args.scale: 'consistency --turn'): '--turn 1e-400' was
+    read as a turn of 0 in silence. Refused by the parser, before --prior is looked at; a 0 written as 0 passes it
+    (and is then refused by --prior wnoa, which takes no --turn)."""
+    code, err = _run(capsys, ["consistency", "--prior", "wnoa", f"--turn={text}"])
+    assert code == 2 and len(err.splitlines()) == 1, err
+    assert "argument --turn:" in err and f"got {text!r}, which float64 cannot hold (it reads as 0)" in err, err
+    for zero in ("0", "0e5", "-0"):
+        code, err = _run(capsys, ["consistency", "--prior", "wnoa", f"--turn={zero}"])
+        assert code == 2 and "--turn applies to" in err and "float64" not in err, err
+
+
 @pytest.mark.parametrize("prior", ["wnoa", "wnoj"])
 def test_a_singer_time_constant_with_another_prior_is_refused(monkeypatch, capsys, prior) -> None:
     monkeypatch.setattr("steam_ref.cli.fidelity.run_online", _never)

@@ -128,11 +128,13 @@ def number(convert: type, lower: float, *, strict: bool, upper: float = math.inf
 
 def scale(lower: float, upper: float, why: str):
     """An argparse type: a finite number in [lower, upper] (outside it, ``why``)."""
+    what = f"a number from {lower:g} to {upper:g}"
 
     def parse(text: str) -> float:
         value = parse_decimal(text)
-        if value is None or not (math.isfinite(value) and lower <= value <= upper):
-            raise argparse.ArgumentTypeError(f"expected a number from {lower:g} to {upper:g}, got {text!r} ({why})")
+        lost = underflowed(text, value)  # '--turn 1e-400' is not 0
+        if lost or value is None or not (math.isfinite(value) and lower <= value <= upper):
+            raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}{lost} ({why})")
         return value
 
     return parse
@@ -179,14 +181,12 @@ SINGER_TIME_CONSTANTS = (1e-6, 1e8)
 # steps × landmarks distances, 0.6 GB at 20,000 steps with the default density (the paper's task has 1,500).
 MAX_STEPS = 20_000
 
-
 MAX_LANDMARKS = 10_000
 
 
 # Worker processes (--jobs): each is a Python with NumPy and SciPy loaded (~100 MB) on a core of its own; past this a
 # typo (--jobs 100000) would spend minutes spawning workers, and a count past C's int is loky's OverflowError.
 MAX_JOBS = 64
-
 
 MAX_SEEDS = 100_000  # Monte Carlo runs (the default is 200): each is a whole task, and a line of the log
 
