@@ -333,3 +333,16 @@ def test_save_trajectory_refuses_to_replace_a_binary_file_and_replaces_a_text_on
         "3",
         "4",
     ]
+
+
+@pytest.mark.parametrize("length", [232, 255])
+def test_save_trajectory_to_a_long_name_is_written(tmp_path, capsys, length):
+    """A name of up to 255 bytes is a name: --save-trajectory wrote one of 232 before write_tum went through
+    files.replace_file too, then refused it ('write_tum: cannot write' a temporary's temporary, 259 bytes long);
+    one of 255 was refused by either temporary alone. Now the temporaries keep the name's end within 255 bytes."""
+    out = tmp_path / ("t" * (length - 4) + ".txt")
+    argv = ["run", "--dataset", "synthetic", "--max-poses", "4", "--no-progress", "--save-trajectory", str(out)]
+    assert cli.main(argv) == 0, capsys.readouterr().err
+    rows = [line.split() for line in out.read_text().splitlines() if not line.startswith("#")]
+    assert [row[0] for row in rows] == ["1", "2", "3", "4"] and all(len(row) == 8 for row in rows)
+    assert sorted(p.name for p in tmp_path.iterdir()) == [out.name]  # no temporary left

@@ -13,6 +13,8 @@ from ..errors import SteamError
 
 __all__ = ["replace_file"]
 
+NAME_MAX = 255  # bytes in a file's name (Linux, macOS; Windows: 255 characters)
+
 
 def replace_file(path: str | os.PathLike[str], write: Callable[[str], object], what: str) -> None:
     """Write ``path`` by ``write(name)``, which writes a new file ``name`` beside its real target (a link is followed
@@ -25,8 +27,12 @@ def replace_file(path: str | os.PathLike[str], write: Callable[[str], object], w
     """
     real = Path(os.path.realpath(path))
     # the temporary's name ends in the whole name, so it keeps the extension a writer goes by (np.savez adds
-    # ".npz" to a name without one, matplotlib picks its format by it) even for a dotfile such as ".npz"
-    temporary = real.parent / f".{os.getpid()}.{secrets.token_hex(4)}.{real.name}"
+    # ".npz" to a name without one, matplotlib picks its format by it) even for a dotfile such as ".npz"; of a long
+    # name, its end within NAME_MAX bytes (a temporary's own temporary, write_tum's inside --save-trajectory's, too)
+    prefix, tail = f".{os.getpid()}.{secrets.token_hex(4)}.", real.name
+    while len(os.fsencode(prefix + tail)) > NAME_MAX:
+        tail = tail[1:]
+    temporary = real.parent / (prefix + tail)
     try:
         os.close(os.open(temporary, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o666))  # the umask applies
         write(str(temporary))
