@@ -22,6 +22,7 @@ import scipy.io
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+import steam_ref as sr
 from steam_ref.cli import commands as cli
 from steam_ref.cli.paths import check_out_folder, check_output, write_output
 from steam_ref.errors import SteamError
@@ -346,3 +347,20 @@ def test_save_trajectory_to_a_long_name_is_written(tmp_path, capsys, length):
     rows = [line.split() for line in out.read_text().splitlines() if not line.startswith("#")]
     assert [row[0] for row in rows] == ["1", "2", "3", "4"] and all(len(row) == 8 for row in rows)
     assert sorted(p.name for p in tmp_path.iterdir()) == [out.name]  # no temporary left
+
+
+def test_write_tum_onto_a_folder_is_refused_as_a_folder_before_any_temporary(tmp_path, monkeypatch):
+    """write_tum(folder) made its temporary in the folder's parent first and failed only at the replace: as root it
+    said 'Is a directory', as anyone else (a parent they cannot write, such as / above /tmp) 'Permission denied', in
+    a folder they never named. A folder is refused before any file is made (os.open: the parent not writable)."""
+    target = tmp_path / "out"
+    target.mkdir()
+
+    def unwritable(*args, **kwargs):
+        raise PermissionError(13, "Permission denied")
+
+    monkeypatch.setattr(os, "open", unwritable)
+    with pytest.raises(SteamError, match=r"write_tum: cannot write .*out' \(Is a directory\)"):
+        sr.write_tum(target, [0.0], [[0.0, 0.0, 0.0]])
+    monkeypatch.undo()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out"] and not any(target.iterdir())

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
 import secrets
 import stat
@@ -26,6 +27,8 @@ def replace_file(path: str | os.PathLike[str], write: Callable[[str], object], w
     permission bits; a new one gets the umask's.
     """
     real = Path(os.path.realpath(path))
+    if real.is_dir():  # refused before a temporary is made beside it, in a folder the caller never named
+        raise SteamError(f"{what}: cannot write {str(path)!r} ({os.strerror(errno.EISDIR)}); it is a folder")
     # the temporary's name ends in the whole name, so it keeps the extension a writer goes by (np.savez adds
     # ".npz" to a name without one, matplotlib picks its format by it) even for a dotfile such as ".npz"; of a long
     # name, its end within NAME_MAX bytes (a temporary's own temporary, write_tum's inside --save-trajectory's, too)
