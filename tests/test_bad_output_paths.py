@@ -364,3 +364,23 @@ def test_write_tum_onto_a_folder_is_refused_as_a_folder_before_any_temporary(tmp
         sr.write_tum(target, [0.0], [[0.0, 0.0, 0.0]])
     monkeypatch.undo()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out"] and not any(target.iterdir())
+
+
+def test_save_trajectory_on_a_full_disk_names_the_option_and_the_file_not_a_temporary(tmp_path, capsys, monkeypatch):
+    """Once write_tum went through files.replace_file itself, --save-trajectory's failure (a full disk) said
+    'write_tum: cannot write' a hidden temporary ('.1234.89abcdef.traj.txt') in place of the option and the file
+    the user gave; write_tum called on replace_file's own temporary now writes it in place, so the one message is
+    the option's, and the file there is left as it was."""
+    out = tmp_path / "traj.txt"
+    out.write_text("0 0 0 0 0 0 0 1\n")
+
+    def full(*args, **kwargs):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(np, "savetxt", full)
+    argv = ["run", "--dataset", "synthetic", "--max-poses", "4", "--no-progress", "--save-trajectory", str(out)]
+    assert cli.main(argv) == 2
+    err = capsys.readouterr().err
+    assert len(err.splitlines()) == 1, err
+    assert f"--save-trajectory: cannot write {str(out)!r} ({os.strerror(errno.ENOSPC)})" in err, err
+    assert out.read_text() == "0 0 0 0 0 0 0 1\n" and sorted(p.name for p in tmp_path.iterdir()) == ["traj.txt"]

@@ -15,6 +15,7 @@ from ..errors import SteamError
 __all__ = ["replace_file"]
 
 NAME_MAX = 255  # bytes in a file's name (Linux, macOS; Windows: 255 characters)
+_WRITING: set[Path] = set()  # the temporaries being written now: one is already written whole or not at all
 
 
 def replace_file(path: str | os.PathLike[str], write: Callable[[str], object], what: str) -> None:
@@ -27,17 +28,21 @@ def replace_file(path: str | os.PathLike[str], write: Callable[[str], object], w
     permission bits; a new one gets the umask's.
     """
     real = Path(os.path.realpath(path))
+    if real in _WRITING:  # a writer that replaces its file (write_tum) called on ours: one temporary, one message
+        write(str(path))
+        return
     if real.is_dir():  # refused before a temporary is made beside it, in a folder the caller never named
         raise SteamError(f"{what}: cannot write {str(path)!r} ({os.strerror(errno.EISDIR)}); it is a folder")
     # the temporary's name ends in the whole name, so it keeps the extension a writer goes by (np.savez adds
     # ".npz" to a name without one, matplotlib picks its format by it) even for a dotfile such as ".npz"; of a long
-    # name, its end within NAME_MAX bytes (a temporary's own temporary, write_tum's inside --save-trajectory's, too)
+    # name, its end within NAME_MAX bytes
     prefix, tail = f".{os.getpid()}.{secrets.token_hex(4)}.", real.name
     while len(os.fsencode(prefix + tail)) > NAME_MAX:
         tail = tail[1:]
     temporary = real.parent / (prefix + tail)
     try:
         os.close(os.open(temporary, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o666))  # the umask applies
+        _WRITING.add(temporary)
         write(str(temporary))
         if real.exists():
             os.chmod(temporary, stat.S_IMODE(os.stat(real).st_mode))
@@ -47,5 +52,6 @@ def replace_file(path: str | os.PathLike[str], write: Callable[[str], object], w
             f"{what}: cannot write {str(path)!r} ({err.strerror or err}); what was there is left as it was"
         ) from None
     finally:
+        _WRITING.discard(temporary)
         with contextlib.suppress(OSError):
             os.unlink(temporary)
