@@ -36,6 +36,7 @@ def __steam_ref_held__(value, depth=6, most=200_000):
     if numpy is None:
         return []
     opaque = (types.ModuleType, type, types.FunctionType, types.BuiltinFunctionType, types.MethodType, str, bytes)
+    opaque += (bool, int, float, complex, type(None), numpy.generic)  # a number holds no array: not walked into
     held, seen, todo = [], set(), [(value, 0)]
     while todo and len(held) < most:
         item, level = todo.pop()
@@ -59,7 +60,7 @@ def __steam_ref_held__(value, depth=6, most=200_000):
                 inner += [getattr(item, n) for n in slots if n not in ("__dict__", "__weakref__") and hasattr(item, n)]
         except Exception:
             continue
-        todo += [(x, level + 1) for x in inner]
+        todo += [(x, level + 1) for x in inner if not isinstance(x, opaque)]
     return held
 
 
