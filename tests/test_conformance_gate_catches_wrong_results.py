@@ -125,9 +125,9 @@ def test_a_transposed_jacobian_fails_square_by_its_entries_and_rectangular_by_it
     assert not np.allclose(h0, h0.T)  # else a transpose would be right
     se2["prior_local_variable_fast"]["H_0"] = h0.T.tolist()
     code, lines = check(tmp_path / "square", capsys, "se2", se2)
-    assert code == 1 and fail_line(lines, "se2", "prior_local_variable_fast").startswith(
-        "FAIL se2/prior_local_variable_fast: H_0 worst |diff| "
-    ), lines
+    head = fail_line(lines, "se2", "prior_local_variable_fast")
+    assert code == 1 and head.startswith("FAIL se2/prior_local_variable_fast: H_0 worst |diff| "), lines
+    assert TRANSPOSED_HINT in head, head  # the old check printed the entries and no hint
     factors = kit_results(SHIPPED, "factors")
     factors["range"]["H_0"] = np.array(factors["range"]["H_0"]).T.tolist()
     code, lines = check(tmp_path / "rectangular", capsys, "factors", factors)
@@ -135,6 +135,56 @@ def test_a_transposed_jacobian_fails_square_by_its_entries_and_rectangular_by_it
         "FAIL factors/range: H_0 has shape (6, 1), expected (1, 6): transposed? (arrays are nested lists, row-major: "
         "a Jacobian has a row per error entry)"
     )
+
+
+TRANSPOSED_HINT = "; it is the expected matrix transposed (got = expected^T): a transposed Jacobian, whitener or R"
+
+
+@pytest.mark.parametrize(("name", "quantity"), [("gp_prior_diag_qc", "H_0"), ("bearing_range", "H_1")])
+def test_a_square_transposed_jacobian_of_the_factors_suite_is_named_as_transposed(
+    tmp_path, capsys, kit_results, name, quantity
+):
+    """An outside port wrote H_0 of the GP prior as -Phi^T and the 2 x 2 landmark block of bearing_range
+    transposed. The old check named the first a state stacked in another order (-Phi^T is -Phi's block rows and
+    columns swapped, p = [3, 4, 5, 0, 1, 2]) and gave the second no hint at all."""
+    factors = kit_results(SHIPPED, "factors")
+    h = np.array(factors[name][quantity])
+    assert h.shape[0] == h.shape[1] and not np.allclose(h, h.T)
+    factors[name][quantity] = h.T.tolist()
+    code, lines = check(tmp_path, capsys, "factors", factors)
+    head = fail_line(lines, "factors", name)
+    assert code == 1 and head.startswith(f"FAIL factors/{name}: {quantity} worst |diff| "), head
+    assert TRANSPOSED_HINT in head and "stacked in another order" not in head, head
+
+
+def test_q_with_the_wrong_power_of_dt_is_named_as_one_common_factor(tmp_path, capsys, kit_results):
+    """A port writing WNOA's Q position block dt^2/3 Qc for dt^3/3 Qc [YIB Eq. 17] scales exactly the failing
+    entries by 1/dt (2 at dt = 0.5); the old check printed them with no hint. Q is written out here from Eq. 17,
+    not read from the kit."""
+    gp = kit_results(SHIPPED, "gp")
+    case = kit_case("gp", "wnoa_dt0.5")
+    dt, qc = case["inputs"]["dt"], np.array(case["inputs"]["qc"])
+    wrong = np.kron([[dt**2 / 3, dt**2 / 2], [dt**2 / 2, dt]], qc)
+    gp["wnoa_dt0.5"]["Q"] = wrong.tolist()
+    code, lines = check(tmp_path, capsys, "gp", gp)
+    head = fail_line(lines, "gp", "wnoa_dt0.5")
+    assert code == 1 and head.startswith("FAIL gp/wnoa_dt0.5: Q worst |diff| "), head
+    assert "; the 3 failing entries are the expected ones times 2 (one common factor): a wrong constant or power" in (
+        head
+    ), head
+
+
+def test_a_result_rounded_through_float32_is_named_as_single_precision(tmp_path, capsys, kit_results):
+    """A port that keeps Phi in float32 writes 0.10000000149011612 for 0.1: off by 1.5e-9, past rtol 1e-13. The
+    old check printed the entries alone; every entry being a float32 number is what says where to look."""
+    gp = kit_results(SHIPPED, "gp")
+    phi = np.array(gp["wnoa_dt0.1"]["Phi"])
+    gp["wnoa_dt0.1"]["Phi"] = phi.astype(np.float32).astype(float).tolist()
+    code, lines = check(tmp_path, capsys, "gp", gp)
+    head = fail_line(lines, "gp", "wnoa_dt0.1")
+    assert code == 1 and head.startswith("FAIL gp/wnoa_dt0.1: Phi worst |diff| 1.49e-09 at [0, 3] "), head
+    assert "; every entry got is a float32 value: single precision somewhere" in head, head
+    assert "    Phi[0, 3]: expected 0.1, got 0.10000000149011612 (|diff| 1.49e-09)" in lines, lines
 
 
 def test_an_integral_count_written_as_a_double_is_the_same_json_number_and_passes(tmp_path, capsys, kit_results):

@@ -1,6 +1,7 @@
 """What a failing numeric quantity's pattern points at, named after its count by :mod:`.checker`: a whole number
-of turns off, a flipped sign, the expected entries (columns, rows) in another order, or a square matrix's rows and
-columns both in another order by the same permutation (docs/conformance.md)."""
+of turns off, a flipped sign, the transpose, the expected entries (columns, rows) in another order, a square
+matrix's rows and columns both in another order by the same permutation, the failing entries all scaled by one
+factor, or every entry a float32 value (docs/conformance.md)."""
 
 from __future__ import annotations
 
@@ -87,9 +88,14 @@ def _symmetric_permutation(expected: np.ndarray, got: np.ndarray, allowed: float
 
 def pattern_hint(expected: np.ndarray, got: np.ndarray, worst: float, allowed: float) -> str:
     """What a failing numeric quantity's pattern points at: a whole number of turns off, a flipped sign, the
-    expected entries (a vector's entries, a matrix's columns or rows) in another order, or a square matrix's rows
-    and columns both in another order by the same permutation (Φ, Q, Q⁻¹, W or a covariance of a state stacked
-    axis by axis, [x, x_dot, y, ...], against the kit's [x, y, theta, x_dot, ...]).
+    transpose of a square matrix, the expected entries (a vector's entries, a matrix's columns or rows) in another
+    order, a square matrix's rows and columns both in another order by the same permutation (Φ, Q, Q⁻¹, W or a
+    covariance of a state stacked axis by axis, [x, x_dot, y, ...], against the kit's [x, y, theta, x_dot, ...]), the
+    failing entries all the expected ones times one factor, or every entry a float32 value.
+
+    The transpose is tried before the orders: a transposed Jacobian is the commoner port bug, and the transpose of
+    a block matrix such as the GP prior's H_0 = -Phi = -[[I, dt I], [0, I]] is also its block rows and columns
+    swapped, which the symmetric search would name as a state stacked in another order.
 
     One axis is tried before both because it is the narrower claim, that one axis is where the kit has it: when a
     matrix fits both (a structured one, e.g. with all rows equal, where A[:, p] = A[p][:, p]), the data cannot tell the two apart and
@@ -105,6 +111,12 @@ def pattern_hint(expected: np.ndarray, got: np.ndarray, worst: float, allowed: f
             "; every entry is minus the expected one: a flipped sign (README conventions 'residual': e = h(theta) - y, "
             "the GP prior's e = x_i - Phi x_(i-1) - v_i; --conventions paper-sign takes [YIB Eq. 22]'s for gp_prior)"
         )
+    if got.ndim == 2 and got.shape[0] == got.shape[1] and float(np.abs(got - expected.T).max()) <= allowed:
+        return (
+            "; it is the expected matrix transposed (got = expected^T): a transposed Jacobian, whitener or R "
+            "(README conventions 'jacobians': H_k = de/dx_k has a row per error entry; 'whitening': W upper "
+            "triangular; arrays are nested lists, row-major)"
+        )
     for axis, what in ((1, "columns"), (0, "rows")) if got.ndim == 2 else ((0, "entries"),) if got.ndim == 1 else ():
         p = _permutation(np.moveaxis(expected, axis, 0), np.moveaxis(got, axis, 0), allowed)
         if p is not None:
@@ -119,4 +131,39 @@ def pattern_hint(expected: np.ndarray, got: np.ndarray, worst: float, allowed: f
             "state stacked in another order (README conventions 'state': x = [p; p_dot] block by block, "
             "p = [x, y, theta], not axis by axis)"
         )
-    return ""
+    return _common_factor(expected, got, allowed) or _single_precision(expected, got)
+
+
+def _common_factor(expected: np.ndarray, got: np.ndarray, allowed: float) -> str:
+    """The failing entries (two or more, none of them expected near 0) all the expected ones times one factor c,
+    c not 1 or -1: a wrong constant or power (Q's dt^3/3 written dt^2/3 scales its position block by 1/dt, a
+    covariance where a sigma belongs, a cost without its 1/2)."""
+    failing = np.abs(got - expected) > allowed
+    exp, g = expected[failing], got[failing]
+    if exp.size < 2 or float(np.abs(exp).min()) <= allowed:
+        return ""
+    c = float(exp @ g / (exp @ exp))
+    if not math.isfinite(c) or float(np.abs(g - c * exp).max()) > allowed or min(abs(c - 1), abs(c + 1)) < 1e-6:
+        return ""
+    every = (
+        "every entry is the expected one" if failing.all() else f"the {exp.size} failing entries are the expected ones"
+    )
+    return (
+        f"; {every} times {c:.6g} (one common factor): a wrong constant or power of dt, or a "
+        "variance where a sigma belongs"
+    )
+
+
+def _single_precision(expected: np.ndarray, got: np.ndarray) -> str:
+    """Every entry got is a float32 number (a double that single precision represents exactly) and the expected
+    ones are not all: the result went through float32, whose relative rounding (6e-8) is past the kit's
+    tolerances."""
+    with np.errstate(over="ignore"):
+        exact = bool(np.all(got.astype(np.float32).astype(np.float64) == got))
+        kit = bool(np.all(expected.astype(np.float32).astype(np.float64) == expected))
+    if not exact or kit:
+        return ""
+    return (
+        "; every entry got is a float32 value: single precision somewhere (rounding 6e-8 relative), and the kit's "
+        "tolerances need float64 (README conventions 'floats')"
+    )

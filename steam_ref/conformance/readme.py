@@ -308,10 +308,13 @@ A numeric quantity passes when max|got - expected| <= atol + rtol * max|expected
 an exact one must be equal (lists of cliques unordered; JSON has one number type, so a count written 189.0 is
 189). {EXACT_TIER} Every failing quantity is printed with its
 worst entries (index, expected, got), and said to be 2 pi k off, minus the expected value (a flipped sign), the
+expected square matrix transposed (a transposed Jacobian or W), the
 expected entries, columns or rows in another order (the permutation given), a square matrix's rows and columns
 both in another order by the same permutation p, got = expected[p][:, p] (a state stacked in another order, as
-axis by axis: Phi, Q, Q^-1, W or a covariance; p given), or another quantity's expected value
-(Lambda for Psi, H_0 for H_1) when it is; the first failing quantity in computation order is flagged as
+axis by axis: Phi, Q, Q^-1, W or a covariance; p given), the failing entries all the expected ones times one
+factor (a wrong constant or power of dt; the factor given), every entry a float32 value (single precision
+somewhere), or another quantity's expected value (Lambda for Psi, H_0 for H_1)
+when it is; the first failing quantity in computation order is flagged as
 the likely cause; a structure that differs is printed item by item. Exit 0: every case of the gate
 passed; 1: a case failed or has no result (unless `--allow-missing`), or no case passed at all (even with
 `--allow-missing`: nothing was shown to conform); 2: bad input (a malformed file, names one line). A quantity
