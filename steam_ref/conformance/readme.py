@@ -317,7 +317,8 @@ somewhere), or another quantity's expected value (Lambda for Psi, H_0 for H_1)
 when it is; the first failing quantity in computation order is flagged as
 the likely cause; a structure that differs is printed item by item. Exit 0: every case of the gate
 passed; 1: a case failed or has no result (unless `--allow-missing`), or no case passed at all (even with
-`--allow-missing`: nothing was shown to conform); 2: bad input (a malformed file, names one line). A quantity
+`--allow-missing`: nothing was shown to conform); 2: bad input (a malformed file, a NaN or an Infinity among
+the results included: one line names the file, case and quantity, and nothing else is checked). A quantity
 a case does not have, or a key of a results file other than kit_version and cases, is a warning line, not an
 error: the rest is checked.
 
