@@ -41,7 +41,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .arguments import finite, flag, number, real_array
-from .errors import ShapeError, SteamError, UnknownVariableError
+from .errors import ClockError, ShapeError, SteamError, UnknownVariableError
 from .gp.clock import Clock
 from .gp.sde import LinearSDE
 from .motion import MotionPrior, as_motion_prior
@@ -222,9 +222,10 @@ class Trajectory:
         """The state at time t, or the two states around it."""
         t = number("t", t)
         times, solved = self.times, self.states
-        if not solved or not times[solved[0]] <= t <= times[solved[-1]]:
-            span = "no solved state yet" if not solved else f"[{times[solved[0]]:g}, {times[solved[-1]]:g}]"
-            raise SteamError(f"time t={t!r} is outside the estimated span {span}")
+        if not solved:
+            raise SteamError(f"time t={t!r} is outside the estimated span: no solved state yet")
+        if not times[solved[0]] <= t <= times[solved[-1]]:
+            raise ClockError(f"time t={t!r} is outside the estimated span [{times[solved[0]]:g}, {times[solved[-1]]:g}]")
         j = int(np.searchsorted(times[solved], t))
         return solved[j] if times[solved[j]] == t else (solved[j - 1], solved[j])
 
@@ -236,8 +237,8 @@ class Trajectory:
         t = number("t", t)
         flag("covariance", covariance)
         solved, times = self.states, self.times
-        if solved and t < times[solved[0]]:
-            raise SteamError(
+        if solved and t < times[solved[0]]:  # a ClockError, as states_at's (errors.ClockError: one meaning)
+            raise ClockError(
                 f"time t={t!r} is before the first estimated state at t={times[solved[0]]:g}: the GP prior starts "
                 f"there, so queries need t >= {times[solved[0]]:g} (after the last state, at t={times[solved[-1]]:g}, "
                 "the prior extrapolates)"

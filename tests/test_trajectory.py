@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from oracles import condition_gaussian, gp_kernel, gp_mean, random_spd
 
-from steam_ref.errors import SteamError
+from steam_ref.errors import ClockError, SteamError
 from steam_ref.gp import LinearSDE
 from steam_ref.trajectory import Trajectory
 from steam_ref.variables import X
@@ -75,9 +75,11 @@ def test_covariance_grows_after_the_last_state(dense):
 def test_query_before_the_first_state_names_t_and_the_range(dense):
     qc, solver, _ = dense
     traj = Trajectory(solver, STATES[1:], POSE_TIMES, qc)  # first state at t = 1.1
-    for t in (0.5, -3.0):
-        with pytest.raises(SteamError, match=rf"t={t}.*t >= 1\.1"):
+    for t in (0.5, -3.0):  # a ClockError, as steam_ref.evaluate.states_at's: sr.ClockError catches either
+        with pytest.raises(ClockError, match=rf"t={t}.*t >= 1\.1"):
             traj.at(t)
+        with pytest.raises(ClockError, match=rf"t={t} is outside the estimated span \[1\.1, 3\]"):
+            traj.neighbours(t)
     with pytest.raises(SteamError, match="no solved state yet"):
         Trajectory(solver, [], POSE_TIMES, qc).at(1.0)
     with pytest.raises(SteamError, match="t=nan"):
