@@ -225,7 +225,9 @@ class Trajectory:
         if not solved:
             raise SteamError(f"time t={t!r} is outside the estimated span: no solved state yet")
         if not times[solved[0]] <= t <= times[solved[-1]]:
-            raise ClockError(f"time t={t!r} is outside the estimated span [{times[solved[0]]:g}, {times[solved[-1]]:g}]")
+            raise ClockError(
+                f"time t={t!r} is outside the estimated span [{times[solved[0]]:g}, {times[solved[-1]]:g}]"
+            )
         j = int(np.searchsorted(times[solved], t))
         return solved[j] if times[solved[j]] == t else (solved[j - 1], solved[j])
 
