@@ -236,3 +236,30 @@ def test_an_unreachable_server_says_where_to_put_the_file_fetched_elsewhere(cach
     Path(said[1]).parent.mkdir(parents=True, exist_ok=True)
     shutil.copyfile(shared_data / FILE, said[1])
     assert len(load_dataset(NAME).ground_truth) > 0
+
+
+def test_an_unreachable_server_names_every_file_of_the_fetch_not_only_the_first(cache, shared_data):
+    """A fetch of two sets with no connection stopped at the first file and named it alone: a user without a connection
+    learnt of the next file only after copying the first by hand and fetching again. Now the message names every file
+    of the fetch still absent, its URL and where to copy it; copying each as it says completes the fetch offline (the
+    files found there, sha256 checked, nothing downloaded)."""
+    with socket.socket() as probe:  # a port free now, so nothing answers on it
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    base, names = f"http://127.0.0.1:{port}/", [NAME, "authors-synthetic"]
+    with pytest.raises(DataError) as caught:
+        fetching.fetch(names, base=base)
+    message = str(caught.value)
+    assert "\n" not in message, message
+    first = re.search(rf"cannot fetch {re.escape(base)}(\S+): .* copy the file to (\S+) ", message)
+    assert first is not None, message
+    said = {first[1]: first[2]} | dict(re.findall(rf"{re.escape(base)}(\S+) to (\S+?)(?:;|$)", message))
+    assert said == {FILE: str(cache / FILE), "Syn_full_data_run.mat": str(cache / "authors" / "Syn_full_data_run.mat")}
+    for remote, path in said.items():
+        published = shared_data / ("authors" if remote != FILE else "") / remote
+        Path(path).parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(published, path)
+    assert fetching.fetch(names, base=base) == {
+        NAME: [cache / FILE],
+        "authors-synthetic": [cache / "authors" / "Syn_full_data_run.mat"],
+    }

@@ -193,12 +193,16 @@ def _try_again(name: str) -> str:
     )
 
 
-def _by_hand(f: DataFile, target: Path) -> str:
+def _by_hand(f: DataFile, target: Path, others: list[tuple[str, Path]]) -> str:
     """What to do where this machine cannot reach the server at all: the file fetched elsewhere, put where the search
-    path (:func:`~steam_ref.datasets.search.default_data_dirs`) reads it, checked there at every read."""
+    path (:func:`~steam_ref.datasets.search.default_data_dirs`) reads it, checked there at every read; and the same for
+    ``others`` (URL, path), the files of the same fetch after it, still absent (one trip to a connected machine, not
+    one per file)."""
+    rest = "; ".join(f"{where} to {path}" for where, path in others)
     return (
         f"where this machine has no connection to it, download that URL on one that has and copy the file to {target} "
         f"(or to {f.local} in a folder given as --data-dir, data_dir= in Python, or $STEAM_REF_DATA_DIR)"
+        + (f"; this fetch's other files, not fetched either, the same way: {rest}" if rest else "")
     )
 
 
@@ -233,7 +237,7 @@ def fetch(
     is left in the cache; an unreachable host, a download cut short or an HTTP error is a DataError of one line.
     Each says what to do: nothing was kept, ``steam-ref data fetch NAME`` tries again, ``--base-url`` or
     ``$STEAM_REF_DATA_URL`` names another server, and a host that cannot be reached at all, where to copy the file
-    downloaded on another machine (a cache folder that cannot be written: XDG_CACHE_HOME). The gtsam wheel's
+    downloaded on another machine, and every later file of the fetch still absent with it (a cache folder that cannot be written: XDG_CACHE_HOME). The gtsam wheel's
     sets are not fetched: asking for one is a DataError saying to ``pip install gtsam``. In the default cache folder,
     the temporary files of downloads killed more than :data:`STALE_AFTER` seconds ago are removed (module docstring).
     """
@@ -264,7 +268,13 @@ def fetch(
     import pooch  # here, not at the top: every command loads this module, only a download needs pooch (~4 MB)
 
     pooch.get_logger().setLevel(logging.WARNING)  # the caller says what was fetched
-    return {s.name: [_fetch_file(s.name, f, url, folder, progress) for f in s.files] for s in sets}
+    order = [(s.name, f) for s in sets for f in s.files]
+    got: dict[str, list[Path]] = {s.name: [] for s in sets}
+    for i, (name, f) in enumerate(order):
+        later = dict.fromkeys(g for _, g in order[i + 1 :] if g != f and not os.path.lexists(folder / g.local))
+        others = [(shown_url(file_url(url, g.remote)), folder / g.local) for g in later]
+        got[name].append(_fetch_file(name, f, url, folder, progress, others))
+    return got
 
 
 def _remove_stale_temporaries(folder: Path) -> None:
@@ -316,8 +326,9 @@ def _capped_download(limit: int, progress: bool):
     return download
 
 
-def _fetch_file(name: str, f: DataFile, url: str, folder: Path, progress: bool) -> Path:
-    """One file of data set ``name`` into ``folder``, verified; DataError of one line saying what to do."""
+def _fetch_file(name: str, f: DataFile, url: str, folder: Path, progress: bool, others: list[tuple[str, Path]]) -> Path:
+    """One file of data set ``name`` into ``folder``, verified; DataError of one line saying what to do (where the
+    server cannot be reached, for ``others`` too: the (URL, path) of the fetch's files after it, still absent)."""
     import pooch
     import requests
 
@@ -342,7 +353,7 @@ def _fetch_file(name: str, f: DataFile, url: str, folder: Path, progress: bool) 
     except requests.exceptions.RequestException as exc:  # before ValueError: requests' InvalidURL is both
         reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         unreachable = isinstance(exc, requests.exceptions.ConnectionError | requests.exceptions.Timeout)
-        by_hand = f"; {_by_hand(f, target)}" if unreachable else ""
+        by_hand = f"; {_by_hand(f, target, others)}" if unreachable else ""
         raise DataError(f"cannot fetch {where}: {type(exc).__name__}: {shown_url(reason)}; {again}{by_hand}") from None
     except ValueError as exc:  # pooch: the downloaded file's hash differs (pooch has deleted the download)
         got = _HASH.search(str(exc))
