@@ -237,8 +237,9 @@ def fetch(
     is left in the cache; an unreachable host, a download cut short or an HTTP error is a DataError of one line.
     Each says what to do: nothing was kept, ``steam-ref data fetch NAME`` tries again, ``--base-url`` or
     ``$STEAM_REF_DATA_URL`` names another server, and a host that cannot be reached at all, where to copy the file
-    downloaded on another machine, and every later file of the fetch still absent with it (a cache folder that cannot be written: XDG_CACHE_HOME). The gtsam wheel's
-    sets are not fetched: asking for one is a DataError saying to ``pip install gtsam``. In the default cache folder,
+    downloaded on another machine, and every later file of the fetch still absent with it (a cache folder that
+    cannot be written: XDG_CACHE_HOME). The gtsam wheel's sets are not fetched: asking for one is a DataError saying
+    to ``pip install gtsam``. In the default cache folder,
     the temporary files of downloads killed more than :data:`STALE_AFTER` seconds ago are removed (module docstring).
     """
     wanted = list(names) if names else [n for n, s in DATASETS.items() if s.fetchable]
