@@ -67,3 +67,15 @@ def clean_up(proc: subprocess.Popen, pids: list[int]) -> None:
     for pid in pids:
         if running(pid):
             os.kill(pid, signal.SIGKILL)
+
+
+def popen_in_a_terminal_session(args: list[str], **kwargs) -> subprocess.Popen:
+    """``subprocess.Popen(args, **kwargs)`` in a process group of its own, as a terminal gives a command, and with
+    Ctrl-C (SIGINT) at its default, as a terminal gives it. A process inherits an ignored signal: pytest started as
+    a background job of a non-interactive shell (``pytest ... &`` in a script) ignores SIGINT, and so would the
+    command, which then runs on after the test's Ctrl-C until the test kills it."""
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)  # a handler, unlike an ignore, ends at exec
+    try:
+        return subprocess.Popen(args, start_new_session=True, **kwargs)
+    finally:
+        signal.signal(signal.SIGINT, before)

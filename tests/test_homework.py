@@ -18,7 +18,7 @@ import time
 from pathlib import Path
 
 import pytest
-from processes import clean_up, command_line, descendants, left_running
+from processes import clean_up, command_line, descendants, left_running, popen_in_a_terminal_session
 from requirements import optional_import
 
 from steam_ref.cli.commands import main
@@ -906,12 +906,11 @@ def test_marking_stopped_by_ctrl_c_or_sigterm_ends_at_once_and_leaves_no_kernel(
     _submit(course, "ann", slow)
     _submit(course, "bob", slow)
     argv = ["homework", "mark", str(course / "submitted"), "--source", str(course / "teacher"), "--timeout", "100"]
-    proc = subprocess.Popen(
+    proc = popen_in_a_terminal_session(
         [sys.executable, "-m", "steam_ref", *argv, "--jobs", "2"],
         stdout=subprocess.DEVNULL,
         stderr=subprocess.PIPE,
         text=True,
-        start_new_session=True,  # a process group of its own, as a terminal gives a command
     )
     kernels: list[int] = []
     try:

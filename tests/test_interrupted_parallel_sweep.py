@@ -17,7 +17,7 @@ import sys
 import time
 
 import pytest
-from processes import clean_up, command_line, descendants, left_running
+from processes import clean_up, command_line, descendants, left_running, popen_in_a_terminal_session
 
 from steam_ref.cli.commands import build_parser
 from steam_ref.cli.consistency import _study
@@ -49,13 +49,12 @@ def test_an_interrupted_parallel_sweep_answers_in_one_line_and_leaves_no_worker(
     any result (a worker hit then wrote its traceback: it had not yet reached the line that ignores the signal)."""
     log = tmp_path / "runs.jsonl"
     env = os.environ | {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1"}
-    proc = subprocess.Popen(
+    proc = popen_in_a_terminal_session(
         [sys.executable, "-m", "steam_ref", *ARGV, "--log", str(log)],
         stdout=subprocess.DEVNULL,
         stderr=subprocess.PIPE,
         text=True,
         env=env,
-        start_new_session=True,  # a process group of its own, as a terminal gives a command
     )
     started: list[int] = []
     try:
