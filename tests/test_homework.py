@@ -71,6 +71,16 @@ def course(tmp_path):
     return tmp_path
 
 
+def _marks(capsys) -> dict:
+    """The marks ``homework mark --json`` printed, by submission (the name of its folder)."""
+    return {m["submission"].split("/")[0]: m for m in json.loads(capsys.readouterr().out)["submissions"]}
+
+
+def _scores(marks: dict) -> dict:
+    """Each submission's (score, status) of every exercise."""
+    return {name: [(e["score"], e["status"]) for e in m["exercises"]] for name, m in marks.items()}
+
+
 def _submit(course: Path, name: str, answers: dict[str, str], added: dict[str, str] | None = None) -> Path:
     """A student's copy of the handout with the answer cells (by their ids) filled in, and a code cell ``added``
     below the cell of each id given."""
@@ -133,8 +143,8 @@ def test_marking_scores_each_exercise_on_its_own_and_never_stops_on_a_bad_submis
     # one line of arithmetic, milliseconds even on a loaded machine); a cell that ignores the interrupt costs 3 s more.
     argv = ["--source", str(course / "teacher"), "--timeout", str(LIMIT), "--jobs", "3", "--json"]
     assert main(["homework", "mark", str(course / "submitted"), *argv]) == 0
-    marks = {m["submission"].split("/")[0]: m for m in json.loads(capsys.readouterr().out)["submissions"]}
-    got = {name: [(e["score"], e["status"]) for e in m["exercises"]] for name, m in marks.items()}
+    marks = _marks(capsys)
+    got = _scores(marks)
     assert got == {
         "right": [(1, "passed"), (1, "passed")],
         "wrong": [(0, "failed"), (1, "passed")],
@@ -173,7 +183,7 @@ def test_an_answer_that_binds_the_right_value_then_raises_or_runs_over_its_limit
     _submit(course, "then-raises-in-a-cell-added", {"s1": "square = base * base", "s2": cube}, added={"s1": "1 / 0"})
     argv = ["--source", str(course / "teacher"), "--timeout", str(LIMIT), "--json"]
     assert main(["homework", "mark", str(course / "submitted"), *argv]) == 0
-    marks = {m["submission"].split("/")[0]: m for m in json.loads(capsys.readouterr().out)["submissions"]}
+    marks = _marks(capsys)
     got = {name: [(e["score"], e["status"], e["message"]) for e in m["exercises"]] for name, m in marks.items()}
     assert got == {
         "then-raises": [(0, "error", "the answer raised RuntimeError: not finished"), (1, "passed", "")],
@@ -437,7 +447,7 @@ def _mark_the_lesson_readers(tmp_path: Path, capsys, submissions: dict[str, dict
         _submit(tmp_path, name, answers)
     argv = ["--source", str(tmp_path / "teacher"), "--timeout", "60", "--jobs", "2", "--json"]
     assert main(["homework", "mark", str(tmp_path / "submitted"), *argv]) == 0
-    return {m["submission"].split("/")[0]: m for m in json.loads(capsys.readouterr().out)["submissions"]}
+    return _marks(capsys)
 
 
 def test_an_answer_that_rebinds_a_name_the_marking_reads_scores_0_and_the_next_exercise_is_marked_fairly(
@@ -459,7 +469,7 @@ def test_an_answer_that_rebinds_a_name_the_marking_reads_scores_0_and_the_next_e
         "shadows-a-builtin": {"s1": "abs = lambda x: 0\nsquare = 10", "s2": cube},
     }
     marks = _mark_the_lesson_readers(tmp_path, capsys, submissions)
-    got = {name: [(e["score"], e["status"]) for e in m["exercises"]] for name, m in marks.items()}
+    got = _scores(marks)
     assert got == {
         "right": [(1, "passed"), (1, "passed")],
         "own-helper": [(0, "failed"), (1, "passed")],
@@ -541,8 +551,8 @@ def test_a_function_that_changes_an_array_the_lesson_holds_costs_its_own_exercis
         _submit(tmp_path, name, answers)
     argv = ["--source", str(tmp_path / "teacher"), "--timeout", "60", "--jobs", "2", "--json"]
     assert main(["homework", "mark", str(tmp_path / "submitted"), *argv]) == 0
-    marks = {m["submission"].split("/")[0]: m for m in json.loads(capsys.readouterr().out)["submissions"]}
-    got = {name: [(e["score"], e["status"]) for e in m["exercises"]] for name, m in marks.items()}
+    marks = _marks(capsys)
+    got = _scores(marks)
     assert got == {
         "right": [(1, "passed"), (1, "passed")],
         "changes-it-in-the-answer": [(0, "failed"), (1, "passed")],
@@ -564,7 +574,7 @@ def test_an_answer_that_sets_a_modules_function_the_marking_calls_scores_0_and_i
         "patches-a-builtin": {"s1": "import builtins\nbuiltins.abs = lambda x: 0\nsquare = 10", "s2": wrong_cube},
     }
     marks = _mark_the_lesson_readers(tmp_path, capsys, submissions)
-    got = {name: [(e["score"], e["status"]) for e in m["exercises"]] for name, m in marks.items()}
+    got = _scores(marks)
     assert got == {name: [(0, "failed"), (0, "failed")] for name in submissions}, got
     for name, patched in (("patches-numpy", "np.allclose"), ("patches-a-builtin", "builtins.abs")):
         first, second = (e["message"] for e in marks[name]["exercises"])
